@@ -1,0 +1,70 @@
+//! The `Backend` trait: small and object-safe (DESIGN 3), so `Box<dyn Backend>` gives
+//! run-time backend choice. A backend owns kernels and resources; core owns algorithms.
+
+use crate::recording::{Buf, Recording, ResourceId};
+
+/// What a backend's device can do (queried, not cfg'd).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Capabilities {
+    /// Human-readable device name.
+    pub device: String,
+    pub hardware_ray_tracing: bool,
+    pub float_atomics: bool,
+    pub int64_atomics: bool,
+    pub timestamps: bool,
+    /// Largest single buffer the device accepts (bytes).
+    pub max_buffer_bytes: u64,
+}
+
+/// Wall or device time of one executed kernel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTime {
+    pub kernel: &'static str,
+    pub seconds: f64,
+}
+
+/// Typed backend failures; backends never panic on these.
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    #[error("backend '{backend}' is not available: {reason}")]
+    Unavailable { backend: String, reason: String },
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    #[error("out of memory allocating {bytes} bytes for {what}")]
+    OutOfMemory { bytes: u64, what: String },
+    #[error("unknown resource {0:?} (freed or never created)")]
+    MissingResource(ResourceId),
+    #[error("bad kernel argument: {0}")]
+    BadArgument(String),
+    #[error("device lost: {0}")]
+    DeviceLost(String),
+    #[error("driver error: {0}")]
+    Driver(String),
+}
+
+/// A compute backend.
+pub trait Backend {
+    /// Short name used on the command line (`cpu`, `opencl`, ...).
+    fn name(&self) -> &'static str;
+    fn capabilities(&self) -> Capabilities;
+    /// Names of the registry kernels this backend implements.
+    fn kernels(&self) -> Vec<&'static str>;
+    /// Executes every step in order; returns the time of each kernel step.
+    fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError>;
+    /// Reads a buffer's bytes back to the host.
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError>;
+}
+
+/// Reads a typed buffer back.
+pub fn read_buf<T: bytemuck::Pod>(backend: &mut dyn Backend, buf: Buf<T>) -> Result<Vec<T>, BackendError> {
+    let bytes = backend.read(buf.id)?;
+    if bytes.len() as u64 != buf.bytes() {
+        return Err(BackendError::BadArgument(format!(
+            "buffer {:?} holds {} bytes, expected {}",
+            buf.id,
+            bytes.len(),
+            buf.bytes()
+        )));
+    }
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
+}

@@ -1,0 +1,151 @@
+//! Ray-geometry primitives shared by every backend: triangle intersection, robust ray
+//! origins, bounding boxes. World space, scene units.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// Ray-triangle hit: distance `t` along the (unit) ray and barycentrics `(u, v)` of
+/// vertices 1 and 2 (vertex 0 has weight `1 - u - v`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleHit {
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// Moller-Trumbore ray-triangle intersection, two-sided. Returns a hit with
+/// `t_min < t < t_max`. Degenerate (zero-area) triangles never hit: their determinant is 0.
+#[inline]
+pub fn intersect_triangle(
+    origin: Vec3,
+    dir: Vec3,
+    v0: Vec3,
+    v1: Vec3,
+    v2: Vec3,
+    t_min: f32,
+    t_max: f32,
+) -> Option<TriangleHit> {
+    let e1 = v1 - v0;
+    let e2 = v2 - v0;
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let s = origin - v0;
+    let u = s.dot(p) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = dir.dot(q) * inv_det;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = e2.dot(q) * inv_det;
+    if t > t_min && t < t_max {
+        Some(TriangleHit { t, u, v })
+    } else {
+        None
+    }
+}
+
+/// Scale-aware ray origin offset (Waechter and Binder, Ray Tracing Gems ch. 6): moves
+/// `p` off the surface with geometric normal `n` (pointing to the side the new ray
+/// leaves from) by a fixed number of float ULPs, so that it works at every scene scale;
+/// near the origin, where ULPs are tiny, a small absolute offset is used instead.
+#[inline]
+pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
+    const ORIGIN: f32 = 1.0 / 32.0;
+    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+    const INT_SCALE: f32 = 256.0;
+    let off = |pc: f32, nc: f32| -> f32 {
+        let of_i = (INT_SCALE * nc) as i32;
+        let bits = pc.to_bits() as i32;
+        let moved = f32::from_bits(bits.wrapping_add(if pc < 0.0 { -of_i } else { of_i }) as u32);
+        if pc.abs() < ORIGIN {
+            pc + FLOAT_SCALE * nc
+        } else {
+            moved
+        }
+    };
+    Vec3::new(off(p.x, n.x), off(p.y, n.y), off(p.z, n.z))
+}
+
+/// Axis-aligned box in world space.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The empty box (min = +inf, max = -inf); grows with [`Aabb::grow`].
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    pub fn union(self, o: Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
+    }
+
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+
+    pub fn corners(&self) -> [Vec3; 8] {
+        let (a, b) = (self.min, self.max);
+        [
+            Vec3::new(a.x, a.y, a.z),
+            Vec3::new(b.x, a.y, a.z),
+            Vec3::new(a.x, b.y, a.z),
+            Vec3::new(b.x, b.y, a.z),
+            Vec3::new(a.x, a.y, b.z),
+            Vec3::new(b.x, a.y, b.z),
+            Vec3::new(a.x, b.y, b.z),
+            Vec3::new(b.x, b.y, b.z),
+        ]
+    }
+
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_hit_and_miss() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let h = intersect_triangle(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z, a, b, c, 0.0, 10.0).unwrap();
+        assert!((h.t - 1.0).abs() < 1e-6 && (h.u - 0.25).abs() < 1e-6 && (h.v - 0.25).abs() < 1e-6);
+        assert!(intersect_triangle(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z, a, b, c, 0.0, 10.0).is_none());
+        // degenerate triangle
+        assert!(intersect_triangle(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z, a, a, c, 0.0, 10.0).is_none());
+    }
+
+    #[test]
+    fn offset_moves_to_the_normal_side_at_every_scale() {
+        for &s in &[1e-4f32, 1.0, 1e5, 1e6] {
+            let p = Vec3::new(s, -s, 0.3 * s);
+            let n = Vec3::new(0.0, 1.0, 0.0);
+            let o = offset_ray_origin(p, n);
+            assert!(o.y > p.y, "scale {s}");
+            assert!((o.y - p.y) <= 1e-3 * s.max(1.0), "scale {s}: {}", o.y - p.y);
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! Optics shared by every backend: reflection, refraction, Fresnel, Beer-Lambert
+//! absorption and Cauchy dispersion (seed 001, "the material model shared by all
+//! techniques"). Shader ports mirror these functions by name.
+//!
+//! Conventions: directions are unit vectors in world space; `incident` points *towards*
+//! the surface (the direction the light travels); `normal` is a unit normal on the side
+//! the light comes from (`dot(incident, normal) < 0`). `eta` is the relative index of
+//! refraction `n_incident / n_transmitted`.
+
+use glam::Vec3;
+
+/// Mirror reflection of `incident` about `normal`: `d - 2 (d . n) n`.
+#[inline]
+pub fn reflect(incident: Vec3, normal: Vec3) -> Vec3 {
+    incident - 2.0 * incident.dot(normal) * normal
+}
+
+/// Snell refraction of `incident` through a surface with `normal` facing the incident
+/// side and relative index `eta = n_i / n_t`. Returns `None` on total internal
+/// reflection. At `eta == 1` the result is `incident` (up to rounding).
+#[inline]
+pub fn refract(incident: Vec3, normal: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = -incident.dot(normal);
+    // cos_t^2 = 1 - eta^2 (1 - cos_i^2), written so that eta = 1 gives cos_i^2 exactly
+    // (no cancellation near IOR 1 and at grazing angles).
+    let cos2_t = (1.0 - eta * eta) + eta * eta * cos_i * cos_i;
+    if cos2_t < 0.0 {
+        return None;
+    }
+    let cos_t = cos2_t.sqrt();
+    Some(eta * incident + (eta * cos_i - cos_t) * normal)
+}
+
+/// Exact unpolarised Fresnel reflectance of a dielectric interface (average of the s and p
+/// reflectances). `cos_i` is the cosine of the incidence angle (clamped to [0, 1]),
+/// `eta = n_i / n_t`. Returns 1 beyond the critical angle (total internal reflection).
+#[inline]
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let cos2_t = (1.0 - eta * eta) + eta * eta * cos_i * cos_i; // as in `refract`
+    if cos2_t <= 0.0 {
+        return 1.0;
+    }
+    let cos_t = cos2_t.sqrt();
+    // r_s = (n_i cos_i - n_t cos_t) / (n_i cos_i + n_t cos_t), divided through by n_t.
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    (0.5 * (r_s * r_s + r_p * r_p)).clamp(0.0, 1.0)
+}
+
+/// Schlick's approximation as written in seed 001 (`SchlickReflectAmount`): when light
+/// goes into a lower index (`eta > 1`) the transmitted cosine is used, and total internal
+/// reflection returns 1.
+#[inline]
+pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
+    // r0 = ((n1 - n2) / (n1 + n2))^2 = ((eta - 1) / (eta + 1))^2
+    let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    let mut cos_x = cos_i.clamp(0.0, 1.0);
+    if eta > 1.0 {
+        let sin2_t = eta * eta * (1.0 - cos_x * cos_x);
+        if sin2_t > 1.0 {
+            return 1.0;
+        }
+        cos_x = (1.0 - sin2_t).sqrt();
+    }
+    let x = 1.0 - cos_x;
+    r0 + (1.0 - r0) * x * x * x * x * x
+}
+
+/// Beer-Lambert transmittance `exp(-sigma_a * distance)` per channel; `sigma_a` in
+/// 1/scene-unit, `distance` in scene units.
+#[inline]
+pub fn beer_lambert(sigma_a: Vec3, distance: f32) -> Vec3 {
+    Vec3::new(
+        (-sigma_a.x * distance).exp(),
+        (-sigma_a.y * distance).exp(),
+        (-sigma_a.z * distance).exp(),
+    )
+}
+
+/// Wavelength in micrometres that represents each RGB channel for dispersion.
+pub const CHANNEL_WAVELENGTH_UM: [f32; 3] = [0.65, 0.55, 0.45];
+
+/// Reference wavelength (micrometres) at which a material's nominal `ior` is given.
+pub const REFERENCE_WAVELENGTH_UM: f32 = 0.55;
+
+/// Cauchy's equation `n(lambda) = A + B / lambda^2` (seed 001 section 3.3), `lambda` in
+/// micrometres, `B` in um^2. The material's nominal `ior` is `n` at
+/// [`REFERENCE_WAVELENGTH_UM`], so `A = ior - B / 0.55^2` and `B = 0` gives `ior` at every
+/// wavelength.
+#[inline]
+pub fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
+    let a = ior - cauchy_b / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM);
+    a + cauchy_b / (wavelength_um * wavelength_um)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(theta: f32) -> Vec3 {
+        // incident direction at angle theta from the normal (0, 1, 0), travelling down.
+        Vec3::new(theta.sin(), -theta.cos(), 0.0)
+    }
+
+    #[test]
+    fn fresnel_normal_incidence_closed_form() {
+        for &n in &[1.0f32, 1.33, 1.5, 2.4, 4.0] {
+            let expect = ((n - 1.0) / (n + 1.0)).powi(2);
+            assert!((fresnel_dielectric(1.0, 1.0 / n) - expect).abs() < 1e-6);
+            assert!((fresnel_dielectric(1.0, n) - expect).abs() < 1e-6);
+            assert!((fresnel_schlick(1.0, 1.0 / n) - expect).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn fresnel_against_closed_form_s_p() {
+        // Closed form in angles (Hecht): r_s = -sin(ti - tt)/sin(ti + tt),
+        // r_p = tan(ti - tt)/tan(ti + tt); compared in f64.
+        let n = 1.5f64;
+        for i in 1..89 {
+            let ti = (i as f64).to_radians();
+            let tt = (ti.sin() / n).asin();
+            let rs = -(ti - tt).sin() / (ti + tt).sin();
+            let rp = (ti - tt).tan() / (ti + tt).tan();
+            let expect = 0.5 * (rs * rs + rp * rp);
+            let got = fresnel_dielectric(ti.cos() as f32, (1.0 / n) as f32) as f64;
+            assert!((got - expect).abs() < 2e-6, "angle {i}: {got} vs {expect}");
+        }
+    }
+
+    #[test]
+    fn reflectance_plus_transmittance_is_one_and_tir_is_total() {
+        for &eta in &[0.5f32, 1.0 / 1.5, 1.0, 1.33, 1.5, 2.5] {
+            let critical = if eta > 1.0 { (1.0 / eta).asin() } else { f32::INFINITY };
+            for i in 0..=900 {
+                let theta = (i as f32 / 10.0).to_radians();
+                let r = fresnel_dielectric(theta.cos(), eta);
+                let t = 1.0 - r;
+                assert!((0.0..=1.0).contains(&r) && (0.0..=1.0).contains(&t));
+                assert!((r + t - 1.0).abs() < 1e-7);
+                if theta > critical + 1e-4 {
+                    assert_eq!(r, 1.0, "beyond critical angle eta {eta} theta {theta}");
+                    assert!(refract(dir(theta), Vec3::Y, eta).is_none());
+                    assert_eq!(fresnel_schlick(theta.cos(), eta), 1.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn refraction_at_unit_ior_is_identity() {
+        for i in 0..90 {
+            let d = dir((i as f32).to_radians());
+            let t = refract(d, Vec3::Y, 1.0).unwrap();
+            assert!((t - d).length() < 1e-6);
+            assert!(fresnel_dielectric(d.dot(-Vec3::Y), 1.0) < 1e-12);
+        }
+    }
+
+    #[test]
+    fn refraction_obeys_snell() {
+        let eta = 1.0 / 1.5;
+        for i in 0..90 {
+            let ti = (i as f32).to_radians();
+            let t = refract(dir(ti), Vec3::Y, eta).unwrap();
+            assert!((t.length() - 1.0).abs() < 1e-5);
+            let sin_t = t.x;
+            assert!((sin_t - eta * ti.sin()).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn cauchy_reference_and_zero_b() {
+        assert_eq!(cauchy_ior(1.5, 0.0, 0.45), 1.5);
+        assert!((cauchy_ior(1.5, 0.01, 0.55) - 1.5).abs() < 1e-6);
+        assert!(cauchy_ior(1.5, 0.01, 0.45) > cauchy_ior(1.5, 0.01, 0.65));
+    }
+
+    #[test]
+    fn beer_lambert_limits() {
+        assert_eq!(beer_lambert(Vec3::ZERO, 10.0), Vec3::ONE);
+        let t = beer_lambert(Vec3::splat(1e6), 1.0);
+        assert_eq!(t, Vec3::ZERO);
+        assert!(t.is_finite());
+    }
+}

@@ -1,0 +1,242 @@
+//! The scene file format: JSON, exactly the serde form of [`Scene`] (see
+//! `docs/scene-format.md`). `caustica scenes --export NAME` prints a built-in scene in it.
+//!
+//! Every malformed or physically invalid input is rejected with a [`SceneFileError`] that
+//! names the file, the line and column, and the reason.
+
+use super::Scene;
+use std::fmt;
+use std::path::Path;
+
+/// A scene file that could not be read, parsed or validated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneFileError {
+    /// The file (or `<builtin>` / `<string>`).
+    pub file: String,
+    /// 1-based line and column of the offending value; 0 when unknown.
+    pub line: usize,
+    pub column: usize,
+    /// What is wrong, including the field path for validation problems.
+    pub reason: String,
+}
+
+impl fmt::Display for SceneFileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line > 0 {
+            write!(f, "{}:{}:{}: {}", self.file, self.line, self.column, self.reason)
+        } else {
+            write!(f, "{}: {}", self.file, self.reason)
+        }
+    }
+}
+
+impl std::error::Error for SceneFileError {}
+
+/// Reads, parses and validates a scene file.
+pub fn load_scene_file(path: &Path) -> Result<Scene, SceneFileError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneFileError { file: file.clone(), line: 0, column: 0, reason: format!("cannot read: {e}") })?;
+    parse_scene(&text, &file)
+}
+
+/// Parses and validates scene JSON; `file` names the source in errors. On a validation
+/// failure the first problem is reported (with its line) and the count of the others.
+pub fn parse_scene(text: &str, file: &str) -> Result<Scene, SceneFileError> {
+    let scene: Scene = serde_json::from_str(text).map_err(|e| SceneFileError {
+        file: file.into(),
+        line: e.line(),
+        column: e.column(),
+        reason: e.to_string().split(" at line ").next().unwrap_or_default().to_string(),
+    })?;
+    if let Err(problems) = scene.validate() {
+        let first = &problems[0];
+        let (line, column) = locate(text, &first.path).unwrap_or((0, 0));
+        let more = if problems.len() > 1 { format!(" (and {} more problems)", problems.len() - 1) } else { String::new() };
+        return Err(SceneFileError {
+            file: file.into(),
+            line,
+            column,
+            reason: format!("{}: {}{more}", first.path, first.reason),
+        });
+    }
+    Ok(scene)
+}
+
+/// The scene as pretty-printed JSON in the file format.
+pub fn to_json(scene: &Scene) -> String {
+    serde_json::to_string_pretty(scene).expect("scene serialisation cannot fail")
+}
+
+enum Seg<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+fn split_path(path: &str) -> Vec<Seg<'_>> {
+    let mut segs = Vec::new();
+    for part in path.split('.') {
+        let (key, rest) = part.split_at(part.find('[').unwrap_or(part.len()));
+        if !key.is_empty() {
+            segs.push(Seg::Key(key));
+        }
+        for idx in rest.split('[').filter(|s| !s.is_empty()) {
+            if let Ok(i) = idx.trim_end_matches(']').parse() {
+                segs.push(Seg::Index(i));
+            }
+        }
+    }
+    segs
+}
+
+/// 1-based (line, column) of the value at `path` in JSON `text`: a minimal scanner that
+/// walks objects and arrays without building values. Returns the deepest position found.
+fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
+    let b = text.as_bytes();
+    let segs = split_path(path);
+    let mut pos = skip_ws(b, 0);
+    for seg in &segs {
+        pos = match (seg, b.get(pos)?) {
+            (Seg::Key(k), b'{') => find_member(b, pos, |key, _| key == *k)?,
+            (Seg::Index(i), b'[') => find_member(b, pos, |_, n| n == *i)?,
+            _ => break,
+        };
+    }
+    let before = &text[..pos.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.len() - before.rfind('\n').map_or(0, |p| p + 1) + 1;
+    Some((line, column))
+}
+
+fn skip_ws(b: &[u8], mut p: usize) -> usize {
+    while p < b.len() && b[p].is_ascii_whitespace() {
+        p += 1;
+    }
+    p
+}
+
+/// Scans the object or array starting at `p` and returns the start of the member value
+/// for which `pick(key, index)` holds (keys are "" in arrays).
+fn find_member(b: &[u8], p: usize, pick: impl Fn(&str, usize) -> bool) -> Option<usize> {
+    let is_obj = b[p] == b'{';
+    let mut p = skip_ws(b, p + 1);
+    let mut n = 0;
+    while p < b.len() && b[p] != b'}' && b[p] != b']' {
+        let mut key = "";
+        if is_obj {
+            let end = skip_string(b, p)?;
+            key = std::str::from_utf8(&b[p + 1..end - 1]).ok()?;
+            p = skip_ws(b, end);
+            if b.get(p) != Some(&b':') {
+                return None;
+            }
+            p = skip_ws(b, p + 1);
+        }
+        if pick(key, n) {
+            return Some(p);
+        }
+        p = skip_ws(b, skip_value(b, p)?);
+        if b.get(p) == Some(&b',') {
+            p = skip_ws(b, p + 1);
+        }
+        n += 1;
+    }
+    None
+}
+
+fn skip_string(b: &[u8], mut p: usize) -> Option<usize> {
+    p += 1;
+    while p < b.len() {
+        match b[p] {
+            b'\\' => p += 2,
+            b'"' => return Some(p + 1),
+            _ => p += 1,
+        }
+    }
+    None
+}
+
+fn skip_value(b: &[u8], p: usize) -> Option<usize> {
+    match *b.get(p)? {
+        b'"' => skip_string(b, p),
+        b'{' | b'[' => {
+            let mut depth = 0usize;
+            let mut q = p;
+            while q < b.len() {
+                match b[q] {
+                    b'"' => {
+                        q = skip_string(b, q)?;
+                        continue;
+                    }
+                    b'{' | b'[' => depth += 1,
+                    b'}' | b']' => {
+                        depth -= 1;
+                        if depth == 0 {
+                            return Some(q + 1);
+                        }
+                    }
+                    _ => {}
+                }
+                q += 1;
+            }
+            None
+        }
+        _ => {
+            let mut q = p;
+            while q < b.len() && !matches!(b[q], b',' | b'}' | b']') && !b[q].is_ascii_whitespace() {
+                q += 1;
+            }
+            Some(q)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin::{builtin, BUILTIN_SCENES};
+
+    #[test]
+    fn every_builtin_round_trips_and_validates() {
+        for name in BUILTIN_SCENES {
+            let s = builtin(name).unwrap();
+            s.validate().unwrap_or_else(|p| panic!("{name}: {p:?}"));
+            let back = parse_scene(&to_json(&s), name).unwrap();
+            assert_eq!(back, s, "{name}");
+        }
+    }
+
+    #[test]
+    fn negative_ior_names_its_line() {
+        let mut text = to_json(&builtin("sphere").unwrap());
+        text = text.replace("\"ior\": 1.5", "\"ior\": -1.5");
+        let e = parse_scene(&text, "s.json").unwrap_err();
+        let line = text.lines().position(|l| l.contains("-1.5")).unwrap() + 1;
+        assert_eq!(e.line, line, "{e}");
+        assert!(e.reason.contains("materials.glass.ior"), "{e}");
+        assert!(e.to_string().starts_with(&format!("s.json:{line}:")), "{e}");
+    }
+
+    #[test]
+    fn syntax_errors_and_nan_have_lines() {
+        let text = to_json(&builtin("sphere").unwrap()).replace("\"ior\": 1.5", "\"ior\": NaN");
+        let e = parse_scene(&text, "s.json").unwrap_err();
+        assert!(e.line > 1, "{e}");
+        let e = parse_scene("{\n \"name\": 3 }", "x").unwrap_err();
+        assert_eq!(e.line, 2, "{e}");
+    }
+
+    #[test]
+    fn zero_direction_and_empty_mesh_are_rejected() {
+        let mut s = builtin("sphere-sun").unwrap();
+        if let crate::scene::Light::Directional { direction, .. } = &mut s.lights[0] {
+            *direction = glam::Vec3::ZERO;
+        }
+        let e = parse_scene(&to_json(&s), "f").unwrap_err();
+        assert!(e.reason.contains("lights[0].direction") && e.line > 0, "{e}");
+        let mut s = builtin("sphere").unwrap();
+        s.objects[0].shape = crate::scene::Shape::Mesh { positions: vec![], normals: vec![], uvs: vec![], indices: vec![] };
+        let e = parse_scene(&to_json(&s), "f").unwrap_err();
+        assert!(e.reason.contains("empty mesh"), "{e}");
+    }
+}

@@ -1,0 +1,96 @@
+//! Per-frame statistics: time per pass, photon accounting, fixed-point health, memory.
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Why photons were not stored in the screen-space photon map (seed 000 section 30.3.1.2
+/// lists four conditions; escaped and bounce-limit photons are counted apart).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Discards {
+    /// Reached a diffuse surface without any specular interaction (direct light).
+    pub no_specular: u64,
+    /// Left the scene without hitting anything.
+    pub escaped: u64,
+    /// Power fell below the negligible threshold (absorption, reflectance).
+    pub negligible_power: u64,
+    /// Still bouncing at the bounce limit.
+    pub bounce_limit: u64,
+    /// Landed outside the view (or behind the camera).
+    pub off_screen: u64,
+    /// Landed where the G-buffer sees another surface (depth test failed).
+    pub depth_mismatch: u64,
+}
+
+/// A pass that ran, with its time.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct PassStat {
+    pub name: String,
+    /// Sum over all its dispatches this frame (milliseconds, host wall time or device
+    /// timestamps as `timing` says).
+    pub ms: f64,
+    pub dispatches: u32,
+}
+
+/// A pass that did not run, and why.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SkippedPass {
+    pub name: String,
+    pub reason: String,
+}
+
+/// Everything measured about one frame.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FrameStats {
+    pub technique: String,
+    pub backend: String,
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    /// Wall time of the whole frame (ms), including host work and readback of counters.
+    pub frame_ms: f64,
+    /// "host wall clock" or "device timestamps".
+    pub timing: String,
+    pub passes: Vec<PassStat>,
+    pub skipped: Vec<SkippedPass>,
+    pub photons_emitted: u64,
+    /// Ray segments traced for photons (every bounce counts).
+    pub photon_rays_traced: u64,
+    /// Photons that ended on a diffuse surface after at least one specular interaction.
+    pub photons_stored: u64,
+    /// Stored photons that passed the screen tests and were added to the photon map.
+    pub photons_deposited: u64,
+    pub discarded: Discards,
+    /// Emitted flux (W per channel) over all emission domains.
+    pub emitted_flux: [f64; 3],
+    /// Flux of the stored photons (W per channel), from the fixed-point counters.
+    pub stored_flux: [f64; 3],
+    /// Photon channel values clamped in the fixed-point deposit (never silent).
+    pub fixed_point_saturated: u64,
+    /// Positive photon channel values that rounded to zero units.
+    pub fixed_point_underflow: u64,
+    /// Flux quantum of the fixed-point deposit (W).
+    pub flux_quantum: f64,
+    /// Device bytes held by the technique this frame (peak).
+    pub bytes_allocated: u64,
+    pub batches: u32,
+    /// Per-pass timing by kernel name (ms), for quick lookup.
+    pub pass_ms: BTreeMap<String, f64>,
+}
+
+impl FrameStats {
+    /// Adds a kernel time to its pass.
+    pub fn add_pass_time(&mut self, name: &str, seconds: f64) {
+        let ms = seconds * 1e3;
+        if let Some(p) = self.passes.iter_mut().find(|p| p.name == name) {
+            p.ms += ms;
+            p.dispatches += 1;
+        } else {
+            self.passes.push(PassStat { name: name.into(), ms, dispatches: 1 });
+        }
+        *self.pass_ms.entry(name.into()).or_default() += ms;
+    }
+
+    pub fn skip(&mut self, name: &str, reason: impl Into<String>) {
+        self.skipped.push(SkippedPass { name: name.into(), reason: reason.into() });
+    }
+}
