@@ -98,11 +98,18 @@ pub struct GBufferTexel {
     pub material: u32,
     pub uv: [f32; 2],
     pub view_distance: f32,
-    pub _pad: u32,
+    /// Bit flags, see [`gbuffer_flags`].
+    pub flags: u32,
 }
 
 /// Sentinel material index for G-buffer texels that see no geometry.
 pub const NO_MATERIAL: u32 = u32::MAX;
+
+/// `GBufferTexel::flags` bits.
+pub mod gbuffer_flags {
+    /// The pixel sees a diffuse surface: it can receive photons.
+    pub const RECEIVER: u32 = 1;
+}
 
 /// A stored photon (32 bytes): where it stopped on a diffuse surface, its flux (W per
 /// channel), the length of its last traced segment (scene units, the "hit distance" of seed

@@ -94,6 +94,33 @@ pub fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
     a + cauchy_b / (wavelength_um * wavelength_um)
 }
 
+/// Outcome of a photon meeting a smooth dielectric.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DielectricScatter {
+    pub direction: Vec3,
+    pub reflected: bool,
+}
+
+/// Chooses reflection with probability equal to the exact Fresnel reflectance and
+/// refraction otherwise, so that photon power stays constant (the expectation is right).
+/// `shading_normal` may face either side; `entering` says whether the ray arrives from
+/// outside the object (decided by the geometric normal); `ior` is the object's index and
+/// `xi` a uniform number in [0, 1). Total internal reflection always reflects.
+#[inline]
+pub fn dielectric_scatter(incident: Vec3, shading_normal: Vec3, entering: bool, ior: f32, xi: f32) -> DielectricScatter {
+    let facing = if incident.dot(shading_normal) < 0.0 { shading_normal } else { -shading_normal };
+    let eta = if entering { 1.0 / ior } else { ior };
+    let cos_i = -incident.dot(facing);
+    let f = fresnel_dielectric(cos_i, eta);
+    if xi < f {
+        return DielectricScatter { direction: reflect(incident, facing), reflected: true };
+    }
+    match refract(incident, facing, eta) {
+        Some(t) => DielectricScatter { direction: t.normalize(), reflected: false },
+        None => DielectricScatter { direction: reflect(incident, facing), reflected: true },
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

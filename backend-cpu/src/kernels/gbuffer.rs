@@ -1,0 +1,37 @@
+//! `primary_gbuffer`: one camera ray per pixel; writes the first hit's position, view
+//! depth, shading normal (turned to the camera), albedo, roughness (1 diffuse, 0 specular),
+//! uv, material and the RECEIVER flag for diffuse surfaces. Misses get depth 0 and
+//! material `NO_MATERIAL`.
+
+use crate::traversal::SceneView;
+use caustica_core::gpu::{camera_ray, gbuffer_flags, material_kind, GBufferTexel, GpuCamera, NO_MATERIAL};
+use glam::Vec3;
+use rayon::prelude::*;
+
+pub fn primary_gbuffer(scene: &SceneView, cam: &GpuCamera) -> Vec<GBufferTexel> {
+    let (w, h) = (cam.width, cam.height);
+    (0..w * h).into_par_iter().map(|i| gbuffer_texel(scene, cam, i % w, i / w)).collect()
+}
+
+fn gbuffer_texel(scene: &SceneView, cam: &GpuCamera, px: u32, py: u32) -> GBufferTexel {
+    let dir = camera_ray(cam, px, py);
+    let origin = Vec3::from(cam.position);
+    let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+        return GBufferTexel { material: NO_MATERIAL, ..Default::default() };
+    };
+    let (s, m) = scene.surface(&hit);
+    let n = if s.shading_normal.dot(dir) > 0.0 { -s.shading_normal } else { s.shading_normal };
+    let diffuse = m.kind == material_kind::DIFFUSE;
+    let tri = &scene.triangles[hit.triangle as usize];
+    GBufferTexel {
+        position: s.position.to_array(),
+        depth: hit.t * dir.dot(Vec3::from(cam.forward)),
+        normal: n.to_array(),
+        roughness: if diffuse { 1.0 } else { 0.0 },
+        albedo: [m.color[0], m.color[1], m.color[2]],
+        material: tri.material,
+        uv: s.uv.to_array(),
+        view_distance: hit.t,
+        flags: if diffuse { gbuffer_flags::RECEIVER } else { 0 },
+    }
+}

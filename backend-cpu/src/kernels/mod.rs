@@ -1,0 +1,59 @@
+//! The CPU kernels, one module per registry kernel (`prepare_scene` is
+//! [`crate::traversal::adopt_bvh`]).
+
+pub mod composite;
+pub mod deposit_screen;
+pub mod direct_light;
+pub mod gather;
+pub mod gbuffer;
+pub mod trace_photons;
+
+use caustica_core::fixed_point::join_u64;
+use caustica_core::gpu::counter;
+
+/// Registry kernels implemented here.
+pub const IMPLEMENTED: &[&str] = &[
+    "prepare_scene",
+    "primary_gbuffer",
+    "direct_light",
+    "trace_photons",
+    "deposit_screen",
+    "resolve_caustics",
+    "tile_hit_distance",
+    "bilateral_gather",
+    "composite",
+];
+
+/// Photon counters accumulated per worker and merged (sums are order-independent).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Counters {
+    pub words: [u64; counter::WORDS],
+}
+
+impl Counters {
+    pub fn bump(&mut self, word: usize) {
+        self.words[word] += 1;
+    }
+
+    pub fn merge(mut self, o: Counters) -> Counters {
+        for (a, b) in self.words.iter_mut().zip(o.words) {
+            *a += b;
+        }
+        self
+    }
+
+    /// Adds to the device counter buffer: 32-bit counters wrap like the GPU atomics would
+    /// (batches keep them far below 2^32), 64-bit (lo, hi) pairs carry.
+    pub fn add_to(&self, buf: &mut [u32]) {
+        let pairs = [counter::RAYS, counter::STORED_FLUX, counter::STORED_FLUX + 2, counter::STORED_FLUX + 4];
+        for (i, &v) in self.words.iter().enumerate() {
+            if pairs.contains(&i) {
+                let sum = join_u64([buf[i], buf[i + 1]]).wrapping_add(v);
+                buf[i] = sum as u32;
+                buf[i + 1] = (sum >> 32) as u32;
+            } else if !pairs.iter().any(|&p| i == p + 1) && i < buf.len() {
+                buf[i] = buf[i].wrapping_add(v as u32);
+            }
+        }
+    }
+}

@@ -1,0 +1,165 @@
+//! `trace_photons` (seed 000 sections 30.3.1.1-2): emits photon `first + i` of the light's
+//! stratified grid, traces it through mirrors and dielectrics and stores it where it first
+//! meets a diffuse surface, provided it met at least one specular surface on the way.
+//!
+//! Per interaction: mirrors scale power by their reflectance; dielectrics reflect with
+//! probability equal to the exact Fresnel reflectance and refract otherwise (power kept),
+//! total internal reflection always reflects; Beer-Lambert attenuates power over segments
+//! travelled inside a dielectric; a dispersive dielectric gives the photon one colour
+//! channel (chosen uniformly, power x3 in that channel) and that channel's Cauchy IOR.
+//! Paths end at a diffuse surface, on escape, at `max_bounces` segments, or when the
+//! largest channel drops below `min_relative_power` of the emitted flux.
+//!
+//! Random dimensions: bounce 0 dims 0, 1 = grid jitter; bounce b dim 2 = Fresnel choice,
+//! dim 3 = dispersion channel.
+
+use super::Counters;
+use crate::traversal::SceneView;
+use caustica_core::device_scene::spot_falloff;
+use caustica_core::fixed_point::quantize;
+use caustica_core::geometry::offset_ray_origin;
+use caustica_core::gpu::{counter, emission_kind, light_kind, material_kind, Photon, TraceParams};
+use caustica_core::optics::{beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM};
+use caustica_core::packing::pack_unit_vector;
+use caustica_core::rng::random_f32;
+use caustica_core::sampling::{stratified_cell, to_world, uniform_cone};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+/// Stored photons in photon order, plus the batch's counters.
+pub struct TraceResult {
+    pub photons: Vec<Photon>,
+    pub counters: Counters,
+}
+
+/// How one photon path ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PathEnd {
+    Stored(Photon),
+    NoSpecular,
+    Escaped,
+    Negligible,
+    BounceLimit,
+}
+
+pub fn trace_photons(scene: &SceneView, p: &TraceParams) -> TraceResult {
+    const CHUNK: u32 = 4096;
+    let chunks = p.count.div_ceil(CHUNK);
+    let parts: Vec<(Vec<Photon>, Counters)> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut photons = Vec::new();
+            let mut counters = Counters::default();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(p.count) {
+                let (end, rays) = trace_photon(scene, p, p.first + i);
+                counters.words[counter::RAYS] += rays as u64;
+                match end {
+                    PathEnd::Stored(ph) => {
+                        counters.bump(counter::STORED);
+                        for ch in 0..3 {
+                            counters.words[counter::STORED_FLUX + 2 * ch] += quantize(ph.flux[ch], p.flux_quantum).units as u64;
+                        }
+                        photons.push(ph);
+                    }
+                    PathEnd::NoSpecular => counters.bump(counter::NO_SPECULAR),
+                    PathEnd::Escaped => counters.bump(counter::ESCAPED),
+                    PathEnd::Negligible => counters.bump(counter::NEGLIGIBLE),
+                    PathEnd::BounceLimit => counters.bump(counter::BOUNCE_LIMIT),
+                }
+            }
+            (photons, counters)
+        })
+        .collect();
+    let mut photons = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
+    let mut counters = Counters::default();
+    for (ph, c) in parts {
+        photons.extend(ph);
+        counters = counters.merge(c);
+    }
+    TraceResult { photons, counters }
+}
+
+/// The emitted ray and flux of photon `index` (global index in the light's grid).
+pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec3, Vec3) {
+    let ix = index % p.grid_w;
+    let iy = index / p.grid_w;
+    let jitter = Vec2::new(random_f32(p.seed, index, 0, 0), random_f32(p.seed, index, 0, 1));
+    let u = stratified_cell(ix, iy, p.grid_w, p.grid_h, jitter);
+    let flux = Vec3::from_slice(&p.photon_flux[..3]);
+    let axis = Vec3::from_slice(&p.axis[..3]);
+    if p.emission == emission_kind::RECTANGLE {
+        let origin = Vec3::from_slice(&p.origin[..3]) + u.x * Vec3::from_slice(&p.rect_u[..3]) + u.y * Vec3::from_slice(&p.rect_v[..3]);
+        return (origin, axis, flux);
+    }
+    let dir = to_world(uniform_cone(u, p.origin[3]), axis);
+    let light = &scene.lights[p.light as usize];
+    let falloff = if light.kind == light_kind::SPOT {
+        spot_falloff(dir.dot(Vec3::from_slice(&light.direction[..3])), light.cos_inner, light.cos_outer)
+    } else {
+        1.0
+    };
+    (Vec3::from_slice(&p.origin[..3]), dir, flux * falloff)
+}
+
+/// Traces one photon; returns how it ended and the number of ray segments traced.
+pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd, u32) {
+    let (mut origin, mut dir, mut flux) = emit_photon(scene, p, index);
+    let emitted_max = Vec3::from_slice(&p.photon_flux[..3]).max_element();
+    let min_power = p.photon_flux[3] * emitted_max;
+    if flux.max_element() <= 0.0 || flux.max_element() < min_power {
+        return (PathEnd::Negligible, 0);
+    }
+    let mut channel: Option<usize> = None;
+    let mut specular = 0u32;
+    for bounce in 0..p.max_bounces {
+        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+            return (PathEnd::Escaped, bounce + 1);
+        };
+        let (s, m) = scene.surface(&hit);
+        let entering = dir.dot(s.geometric_normal) < 0.0;
+        if m.kind == material_kind::DIELECTRIC && !entering {
+            flux *= beer_lambert(Vec3::from_slice(&m.absorption[..3]), hit.t);
+        }
+        match m.kind {
+            material_kind::DIFFUSE => {
+                if specular == 0 {
+                    return (PathEnd::NoSpecular, bounce + 1);
+                }
+                let ph = Photon { position: s.position.to_array(), hit_distance: hit.t, flux: flux.to_array(), direction: pack_unit_vector(dir) };
+                return (PathEnd::Stored(ph), bounce + 1);
+            }
+            material_kind::MIRROR => {
+                flux *= Vec3::from_slice(&m.color[..3]);
+                let n = if s.shading_normal.dot(dir) > 0.0 { -s.shading_normal } else { s.shading_normal };
+                dir = reflect(dir, n).normalize();
+            }
+            _ => {
+                let mut ior = m.ior;
+                if m.cauchy_b != 0.0 {
+                    let c = match channel {
+                        Some(c) => c,
+                        None => {
+                            // First dispersive surface: keep one channel, x3 so that the
+                            // expected flux per channel is unchanged.
+                            let c = ((random_f32(p.seed, index, bounce, 3) * 3.0) as usize).min(2);
+                            let mut one = [0.0; 3];
+                            one[c] = flux[c] * 3.0;
+                            flux = Vec3::from(one);
+                            channel = Some(c);
+                            c
+                        }
+                    };
+                    ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[c]);
+                }
+                dir = dielectric_scatter(dir, s.shading_normal, entering, ior, random_f32(p.seed, index, bounce, 2)).direction;
+            }
+        }
+        specular += 1;
+        if flux.max_element() < min_power || flux.max_element() <= 0.0 {
+            return (PathEnd::Negligible, bounce + 1);
+        }
+        let side = if dir.dot(s.geometric_normal) > 0.0 { s.geometric_normal } else { -s.geometric_normal };
+        origin = offset_ray_origin(s.position, side);
+    }
+    (PathEnd::BounceLimit, p.max_bounces)
+}

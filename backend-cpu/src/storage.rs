@@ -1,0 +1,84 @@
+//! Host buffers: 8-byte aligned byte storage, viewed as typed slices or as `AtomicU64`s.
+
+use caustica_core::backend::BackendError;
+use std::sync::atomic::AtomicU64;
+
+pub(crate) struct Storage {
+    words: Vec<u64>,
+    bytes: usize,
+}
+
+const _: () = assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<u64>());
+
+impl Storage {
+    /// A zero-filled buffer; allocation failure is a typed out-of-memory error.
+    pub fn zeroed(bytes: u64, label: &str) -> Result<Storage, BackendError> {
+        let oom = || BackendError::OutOfMemory { bytes, what: label.to_string() };
+        let n = usize::try_from(bytes.div_ceil(8)).map_err(|_| oom())?;
+        let mut words = Vec::new();
+        words.try_reserve_exact(n).map_err(|_| oom())?;
+        words.resize(n, 0);
+        Ok(Storage { words, bytes: bytes as usize })
+    }
+
+    pub fn bytes(&self) -> &[u8] {
+        &bytemuck::cast_slice(&self.words)[..self.bytes]
+    }
+
+    fn bytes_mut(&mut self) -> &mut [u8] {
+        &mut bytemuck::cast_slice_mut(&mut self.words)[..self.bytes]
+    }
+
+    pub fn clear(&mut self) {
+        self.words.fill(0);
+    }
+
+    /// The first `len` elements as `T`.
+    pub fn as_slice<T: bytemuck::Pod>(&self, len: u32) -> Result<&[T], BackendError> {
+        let need = len as usize * std::mem::size_of::<T>();
+        if need > self.bytes {
+            return Err(BackendError::BadArgument(format!("buffer of {} bytes read as {need}", self.bytes)));
+        }
+        Ok(bytemuck::cast_slice(&self.bytes()[..need]))
+    }
+
+    pub fn as_mut_slice<T: bytemuck::Pod>(&mut self, len: u32) -> Result<&mut [T], BackendError> {
+        let need = len as usize * std::mem::size_of::<T>();
+        if need > self.bytes {
+            return Err(BackendError::BadArgument(format!("buffer of {} bytes written as {need}", self.bytes)));
+        }
+        Ok(bytemuck::cast_slice_mut(&mut self.bytes_mut()[..need]))
+    }
+
+    /// Replaces the whole contents; sizes must match.
+    pub fn write_all<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<(), BackendError> {
+        let src: &[u8] = bytemuck::cast_slice(data);
+        if src.len() != self.bytes {
+            return Err(BackendError::BadArgument(format!("{} bytes written to a buffer of {}", src.len(), self.bytes)));
+        }
+        self.bytes_mut().copy_from_slice(src);
+        Ok(())
+    }
+
+    /// Writes `data` at the start of the buffer.
+    pub fn write_prefix<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<(), BackendError> {
+        let src: &[u8] = bytemuck::cast_slice(data);
+        if src.len() > self.bytes {
+            return Err(BackendError::BadArgument(format!("{} bytes written to a buffer of {}", src.len(), self.bytes)));
+        }
+        self.bytes_mut()[..src.len()].copy_from_slice(src);
+        Ok(())
+    }
+
+    /// The first `bytes` bytes as atomics (shared access: kernels add concurrently).
+    pub fn as_atomic_u64(&self, bytes: u64) -> Result<&[AtomicU64], BackendError> {
+        if bytes as usize > self.bytes || bytes % 8 != 0 {
+            return Err(BackendError::BadArgument("atomic view out of range".into()));
+        }
+        let words = &self.words[..bytes as usize / 8];
+        // SAFETY: AtomicU64 has the size and (asserted above) alignment of u64; the slice is
+        // only accessed through atomics while this shared borrow lives, and u64 has no
+        // invalid bit patterns.
+        Ok(unsafe { &*(words as *const [u64] as *const [AtomicU64]) })
+    }
+}

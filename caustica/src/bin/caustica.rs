@@ -1,0 +1,196 @@
+//! The `caustica` command line: `render`, `scenes`, `backends`.
+
+use caustica::output::{write_exr, write_png};
+use caustica::scene::{builtin, format};
+use caustica::{open_backend, Scene, Sspm, SspmSettings};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "caustica", version, about = "Real-time photon-mapping techniques for caustics")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render one frame of a scene and write EXR images, a PNG and stats.json.
+    Render {
+        /// Built-in scene name (see `caustica scenes`) or a scene file (JSON).
+        #[arg(long, default_value = "sphere")]
+        scene: String,
+        /// Technique: sspm.
+        #[arg(long, default_value = "sspm")]
+        technique: String,
+        /// Backend: auto, cpu, vulkan, wgpu, opencl (see `caustica backends`).
+        #[arg(long, default_value = "cpu")]
+        backend: String,
+        /// Photon grid per light, WxH (e.g. 1024x1024).
+        #[arg(long, default_value = "1024x1024", value_parser = parse_grid)]
+        photons: (u32, u32),
+        /// Image size WxH (default: the scene camera's).
+        #[arg(long, value_parser = parse_grid)]
+        size: Option<(u32, u32)>,
+        /// Frame seed of the random numbers.
+        #[arg(long)]
+        seed: Option<u32>,
+        /// Exposure multiplier for the PNG (EXR files are linear and unscaled).
+        #[arg(long, default_value_t = 1.0)]
+        exposure: f32,
+        /// Settings file (JSON, fields of SspmSettings) applied before the flags above.
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+    },
+    /// List the built-in scenes, or print one in the scene file format.
+    Scenes {
+        /// Print this built-in scene as JSON (save it, edit it, load it with --scene FILE).
+        #[arg(long)]
+        export: Option<String>,
+    },
+    /// List every backend and whether it works on this machine.
+    Backends,
+}
+
+fn parse_grid(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WxH (e.g. 1024x1024)"))?;
+    let p = |t: &str| t.trim().parse::<u32>().map_err(|_| format!("'{s}' is not WxH with positive integers"));
+    let (w, h) = (p(a)?, p(b)?);
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}': both sizes must be at least 1"));
+    }
+    Ok((w, h))
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+                e.exit();
+            }
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad arguments").trim_start_matches("error: ");
+            eprintln!("error: {first} (see caustica --help)");
+            return ExitCode::from(2);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", e.replace('\n', " "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load_scene(arg: &str) -> Result<Scene, String> {
+    if let Some(s) = builtin::builtin(arg) {
+        return Ok(s);
+    }
+    let path = Path::new(arg);
+    if path.exists() {
+        return format::load_scene_file(path).map_err(|e| e.to_string());
+    }
+    Err(format!("unknown scene '{arg}': not a built-in scene ({}) and no such file", builtin::BUILTIN_SCENES.join(", ")))
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Scenes { export: Some(name) } => {
+            let s = builtin::builtin(&name)
+                .ok_or_else(|| format!("unknown scene '{name}'; built-in scenes: {}", builtin::BUILTIN_SCENES.join(", ")))?;
+            println!("{}", format::to_json(&s));
+            Ok(())
+        }
+        Command::Scenes { export: None } => {
+            for name in builtin::BUILTIN_SCENES {
+                let s = builtin::builtin(name).expect("listed scene exists");
+                println!("{name:<12} {}", s.description);
+            }
+            Ok(())
+        }
+        Command::Backends => {
+            for b in caustica::backend_statuses() {
+                match b.available {
+                    Ok(dev) => println!("{:<8} available    {dev}", b.name),
+                    Err(why) => println!("{:<8} unavailable  {why}", b.name),
+                }
+            }
+            Ok(())
+        }
+        Command::Render { scene, technique, backend, photons, size, seed, exposure, settings, out } => {
+            if technique != "sspm" {
+                return Err(format!("unknown technique '{technique}'; available: sspm"));
+            }
+            if !(exposure > 0.0 && exposure.is_finite()) {
+                return Err("--exposure must be a positive number".into());
+            }
+            let mut scene = load_scene(&scene)?;
+            if let Some((w, h)) = size {
+                scene.camera.width = w;
+                scene.camera.height = h;
+            }
+            let mut s: SspmSettings = match settings {
+                Some(p) => {
+                    let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?
+                }
+                None => SspmSettings::default(),
+            };
+            (s.photons_w, s.photons_h) = photons;
+            if let Some(seed) = seed {
+                s.seed = seed;
+            }
+            let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
+            let mut sspm = Sspm::new(be.as_mut(), &scene, s.clone()).map_err(|e| e.to_string())?;
+            let bar = ProgressBar::new(0);
+            bar.set_style(
+                ProgressStyle::with_template("{spinner} photons {human_pos}/{human_len} [{bar:30}] {eta}")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            );
+            let stats = sspm
+                .frame(be.as_mut(), &mut |p| {
+                    bar.set_length(p.photons_total);
+                    bar.set_position(p.photons_done);
+                })
+                .map_err(|e| e.to_string())?;
+            bar.finish_and_clear();
+            std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+            let imgs = sspm.images();
+            for (name, handle) in [
+                ("composite", imgs.composite),
+                ("caustics_raw", imgs.raw_caustics),
+                ("caustics_filtered", imgs.filtered_caustics),
+                ("direct", imgs.direct),
+            ] {
+                let img = sspm.read_image(be.as_mut(), handle).map_err(|e| e.to_string())?;
+                write_exr(&out.join(format!("{}_{name}.exr", scene.name)), &img)?;
+                if name == "composite" {
+                    write_png(&out.join(format!("{}_composite.png", scene.name)), &img, exposure)?;
+                }
+            }
+            let doc = serde_json::json!({ "scene": scene.name, "settings": s, "stats": stats });
+            let path = out.join("stats.json");
+            std::fs::write(&path, serde_json::to_string_pretty(&doc).expect("stats serialise"))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            println!(
+                "{}: {} photons emitted, {} stored, {} deposited; {:.1} ms; wrote {}",
+                scene.name,
+                stats.photons_emitted,
+                stats.photons_stored,
+                stats.photons_deposited,
+                stats.frame_ms,
+                out.display()
+            );
+            Ok(())
+        }
+    }
+}
