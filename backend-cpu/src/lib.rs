@@ -40,46 +40,71 @@ impl CpuBackend {
             .num_threads(threads)
             .thread_name(|i| format!("caustica-cpu-{i}"))
             .build()
-            .map_err(|e| BackendError::Unavailable { backend: "cpu".into(), reason: e.to_string() })?;
+            .map_err(|e| BackendError::Unavailable {
+                backend: "cpu".into(),
+                reason: e.to_string(),
+            })?;
         let threads = pool.current_num_threads();
-        Ok(CpuBackend { buffers: HashMap::new(), bvhs: HashMap::new(), pool: Arc::new(pool), threads })
+        Ok(CpuBackend {
+            buffers: HashMap::new(),
+            bvhs: HashMap::new(),
+            pool: Arc::new(pool),
+            threads,
+        })
     }
 
     fn run_kernel(&mut self, k: &Kernel) -> Result<(), BackendError> {
         use kernels::*;
         if let Kernel::PrepareScene { scene } = k {
-            let nodes = self.get(scene.bvh_nodes.id)?.as_slice::<[u32; 4]>(scene.bvh_nodes.len)?;
+            let nodes = self
+                .get(scene.bvh_nodes.id)?
+                .as_slice::<[u32; 4]>(scene.bvh_nodes.len)?;
             let bvh = traversal::adopt_bvh(nodes)?;
             self.bvhs.insert(scene.bvh_nodes.id, Arc::new(bvh));
             return Ok(());
         }
         let bufs = &self.buffers;
         let get = |id: ResourceId| bufs.get(&id).ok_or(BackendError::MissingResource(id));
-        let view = |s: &caustica_core::recording::SceneArgs| -> Result<SceneView<'_>, BackendError> {
-            let bvh = self
-                .bvhs
-                .get(&s.bvh_nodes.id)
-                .ok_or_else(|| BackendError::BadArgument("scene used before prepare_scene".into()))?;
-            Ok(SceneView {
-                vertices: get(s.vertices.id)?.as_slice(s.vertices.len)?,
-                triangles: get(s.triangles.id)?.as_slice(s.triangles.len)?,
-                materials: get(s.materials.id)?.as_slice(s.materials.len)?,
-                lights: get(s.lights.id)?.as_slice(s.lights.len)?,
-                bvh,
-            })
-        };
+        let view =
+            |s: &caustica_core::recording::SceneArgs| -> Result<SceneView<'_>, BackendError> {
+                let bvh = self.bvhs.get(&s.bvh_nodes.id).ok_or_else(|| {
+                    BackendError::BadArgument("scene used before prepare_scene".into())
+                })?;
+                Ok(SceneView {
+                    vertices: get(s.vertices.id)?.as_slice(s.vertices.len)?,
+                    triangles: get(s.triangles.id)?.as_slice(s.triangles.len)?,
+                    materials: get(s.materials.id)?.as_slice(s.materials.len)?,
+                    lights: get(s.lights.id)?.as_slice(s.lights.len)?,
+                    bvh,
+                })
+            };
         match k {
             Kernel::PrepareScene { .. } => unreachable!("handled above"),
-            Kernel::PrimaryGbuffer { scene, camera, gbuffer } => {
+            Kernel::PrimaryGbuffer {
+                scene,
+                camera,
+                gbuffer,
+            } => {
                 let out = gbuffer::primary_gbuffer(&view(scene)?, camera);
                 self.put(gbuffer.id, &out)
             }
-            Kernel::DirectLight { scene, params, gbuffer, out } => {
+            Kernel::DirectLight {
+                scene,
+                params,
+                gbuffer,
+                out,
+            } => {
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
                 let img = direct_light::direct_light(&view(scene)?, params, g);
                 self.put(out.id, &img)
             }
-            Kernel::TracePhotons { scene, params, photons, photon_count, counters } => {
+            Kernel::TracePhotons {
+                scene,
+                params,
+                photons,
+                photon_count,
+                counters,
+            } => {
                 let result = trace_photons::trace_photons(&view(scene)?, params);
                 if result.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(
@@ -89,39 +114,71 @@ impl CpuBackend {
                     )));
                 }
                 self.get_mut(photons.id)?.write_prefix(&result.photons)?;
-                self.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] = result.photons.len() as u32;
-                result.counters.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+                self.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] =
+                    result.photons.len() as u32;
+                result
+                    .counters
+                    .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }
-            Kernel::DepositScreen { params, gbuffer, photons, photon_count, counters, photon_map } => {
+            Kernel::DepositScreen {
+                params,
+                gbuffer,
+                photons,
+                photon_count,
+                counters,
+                photon_map,
+            } => {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
                 let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
-                let bufs_map = self.buffers.get(&photon_map.id).ok_or(BackendError::MissingResource(photon_map.id))?;
+                let bufs_map = self
+                    .buffers
+                    .get(&photon_map.id)
+                    .ok_or(BackendError::MissingResource(photon_map.id))?;
                 let atomics = bufs_map.as_atomic_u64(photon_map.bytes())?;
                 let c = deposit_screen::deposit_screen(params, g, ph, atomics);
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }
-            Kernel::ResolveCaustics { params, gbuffer, photon_map, out } => {
+            Kernel::ResolveCaustics {
+                params,
+                gbuffer,
+                photon_map,
+                out,
+            } => {
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
                 let m = get(photon_map.id)?.as_slice(photon_map.len)?;
                 let img = deposit_screen::resolve_caustics(params, g, m);
                 self.put(out.id, &img)
             }
-            Kernel::TileHitDistance { params, photon_map, tiles } => {
+            Kernel::TileHitDistance {
+                params,
+                photon_map,
+                tiles,
+            } => {
                 let m = get(photon_map.id)?.as_slice(photon_map.len)?;
                 let t = gather::tile_hit_distance(params, m);
                 self.put(tiles.id, &t)
             }
-            Kernel::BilateralGather { params, gbuffer, tiles, input, out } => {
+            Kernel::BilateralGather {
+                params,
+                gbuffer,
+                tiles,
+                input,
+                out,
+            } => {
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
                 let t = get(tiles.id)?.as_slice(tiles.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 let img = gather::bilateral_gather(params, g, t, i);
                 self.put(out.id, &img)
             }
-            Kernel::Composite { direct, caustics, out } => {
+            Kernel::Composite {
+                direct,
+                caustics,
+                out,
+            } => {
                 let d = get(direct.id)?.as_slice(direct.len)?;
                 let c = get(caustics.id)?.as_slice(caustics.len)?;
                 let img = composite::composite(d, c);
@@ -131,11 +188,15 @@ impl CpuBackend {
     }
 
     fn get(&self, id: ResourceId) -> Result<&Storage, BackendError> {
-        self.buffers.get(&id).ok_or(BackendError::MissingResource(id))
+        self.buffers
+            .get(&id)
+            .ok_or(BackendError::MissingResource(id))
     }
 
     fn get_mut(&mut self, id: ResourceId) -> Result<&mut Storage, BackendError> {
-        self.buffers.get_mut(&id).ok_or(BackendError::MissingResource(id))
+        self.buffers
+            .get_mut(&id)
+            .ok_or(BackendError::MissingResource(id))
     }
 
     fn put<T: bytemuck::Pod>(&mut self, id: ResourceId, data: &[T]) -> Result<(), BackendError> {
@@ -185,7 +246,10 @@ impl Backend for CpuBackend {
                     // Run inside our pool so the thread count is the backend's.
                     let pool = Arc::clone(&self.pool);
                     pool.install(|| self.run_kernel(k))?;
-                    times.push(PassTime { kernel: k.name(), seconds: t0.elapsed().as_secs_f64() });
+                    times.push(PassTime {
+                        kernel: k.name(),
+                        seconds: t0.elapsed().as_secs_f64(),
+                    });
                 }
             }
         }

@@ -13,12 +13,18 @@ const _: () = assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<
 impl Storage {
     /// A zero-filled buffer; allocation failure is a typed out-of-memory error.
     pub fn zeroed(bytes: u64, label: &str) -> Result<Storage, BackendError> {
-        let oom = || BackendError::OutOfMemory { bytes, what: label.to_string() };
+        let oom = || BackendError::OutOfMemory {
+            bytes,
+            what: label.to_string(),
+        };
         let n = usize::try_from(bytes.div_ceil(8)).map_err(|_| oom())?;
         let mut words = Vec::new();
         words.try_reserve_exact(n).map_err(|_| oom())?;
         words.resize(n, 0);
-        Ok(Storage { words, bytes: bytes as usize })
+        Ok(Storage {
+            words,
+            bytes: bytes as usize,
+        })
     }
 
     pub fn bytes(&self) -> &[u8] {
@@ -37,7 +43,10 @@ impl Storage {
     pub fn as_slice<T: bytemuck::Pod>(&self, len: u32) -> Result<&[T], BackendError> {
         let need = len as usize * std::mem::size_of::<T>();
         if need > self.bytes {
-            return Err(BackendError::BadArgument(format!("buffer of {} bytes read as {need}", self.bytes)));
+            return Err(BackendError::BadArgument(format!(
+                "buffer of {} bytes read as {need}",
+                self.bytes
+            )));
         }
         Ok(bytemuck::cast_slice(&self.bytes()[..need]))
     }
@@ -45,7 +54,10 @@ impl Storage {
     pub fn as_mut_slice<T: bytemuck::Pod>(&mut self, len: u32) -> Result<&mut [T], BackendError> {
         let need = len as usize * std::mem::size_of::<T>();
         if need > self.bytes {
-            return Err(BackendError::BadArgument(format!("buffer of {} bytes written as {need}", self.bytes)));
+            return Err(BackendError::BadArgument(format!(
+                "buffer of {} bytes written as {need}",
+                self.bytes
+            )));
         }
         Ok(bytemuck::cast_slice_mut(&mut self.bytes_mut()[..need]))
     }
@@ -54,7 +66,11 @@ impl Storage {
     pub fn write_all<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<(), BackendError> {
         let src: &[u8] = bytemuck::cast_slice(data);
         if src.len() != self.bytes {
-            return Err(BackendError::BadArgument(format!("{} bytes written to a buffer of {}", src.len(), self.bytes)));
+            return Err(BackendError::BadArgument(format!(
+                "{} bytes written to a buffer of {}",
+                src.len(),
+                self.bytes
+            )));
         }
         self.bytes_mut().copy_from_slice(src);
         Ok(())
@@ -64,7 +80,11 @@ impl Storage {
     pub fn write_prefix<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<(), BackendError> {
         let src: &[u8] = bytemuck::cast_slice(data);
         if src.len() > self.bytes {
-            return Err(BackendError::BadArgument(format!("{} bytes written to a buffer of {}", src.len(), self.bytes)));
+            return Err(BackendError::BadArgument(format!(
+                "{} bytes written to a buffer of {}",
+                src.len(),
+                self.bytes
+            )));
         }
         self.bytes_mut()[..src.len()].copy_from_slice(src);
         Ok(())

@@ -30,10 +30,34 @@ pub struct Hit {
 /// Builds an obvhs `CwBvh` from the uploaded node array (5 x `[u32; 4]` per node).
 pub fn adopt_bvh(nodes: &[[u32; 4]]) -> Result<CwBvh, BackendError> {
     if nodes.len() % 5 != 0 {
-        return Err(BackendError::BadArgument("BVH node buffer is not a whole number of 80-byte nodes".into()));
+        return Err(BackendError::BadArgument(
+            "BVH node buffer is not a whole number of 80-byte nodes".into(),
+        ));
     }
-    let nodes: Vec<CwBvhNode> = bytemuck::pod_collect_to_vec(bytemuck::cast_slice::<[u32; 4], u8>(nodes));
-    Ok(CwBvh { nodes, primitive_indices: Vec::new(), total_aabb: obvhs::aabb::Aabb::INVALID, exact_node_aabbs: None, uses_spatial_splits: false })
+    let nodes: Vec<CwBvhNode> =
+        bytemuck::pod_collect_to_vec(bytemuck::cast_slice::<[u32; 4], u8>(nodes));
+    Ok(CwBvh {
+        nodes,
+        primitive_indices: Vec::new(),
+        total_aabb: obvhs::aabb::Aabb::INVALID,
+        exact_node_aabbs: None,
+        uses_spatial_splits: false,
+    })
+}
+
+/// The obvhs ray for a traversal. obvhs's `safe_inverse` maps a zero direction component
+/// to +-1/EPSILON (8.4e6), which makes its slab test reject boxes for axis-aligned rays far
+/// from the node origin (seen: a directional light straight down missed everything); a
+/// zero component is replaced by +-1e-30 so its inverse is effectively infinite. Only
+/// node culling sees this ray; triangles are tested with the exact direction.
+fn traversal_ray(origin: Vec3, dir: Vec3, t_max: f32) -> Ray {
+    let fix = |c: f32| if c == 0.0 { 1e-30f32.copysign(c) } else { c };
+    Ray::new(
+        Vec3A::from(origin),
+        Vec3A::new(fix(dir.x), fix(dir.y), fix(dir.z)),
+        0.0,
+        t_max,
+    )
 }
 
 impl SceneView<'_> {
@@ -48,7 +72,7 @@ impl SceneView<'_> {
         if self.bvh.nodes.is_empty() {
             return None;
         }
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, t_max);
+        let ray = traversal_ray(origin, dir, t_max);
         let mut hit = RayHit::none();
         let (mut u, mut v) = (0.0, 0.0);
         let found = self.bvh.ray_traverse(ray, &mut hit, |r, prim| {
@@ -63,7 +87,12 @@ impl SceneView<'_> {
             }
         });
         // `u, v` belong to the last accepted (closest) hit: obvhs only lowers tmax.
-        found.then_some(Hit { t: hit.t, triangle: hit.primitive_id, u, v })
+        found.then_some(Hit {
+            t: hit.t,
+            triangle: hit.primitive_id,
+            u,
+            v,
+        })
     }
 
     /// True when something lies on the ray before `t_max`.
@@ -71,7 +100,7 @@ impl SceneView<'_> {
         if self.bvh.nodes.is_empty() {
             return false;
         }
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, t_max);
+        let ray = traversal_ray(origin, dir, t_max);
         !self.bvh.ray_traverse_miss(ray, |r, prim| {
             let (a, b, c) = self.tri(prim as u32);
             intersect_triangle(origin, dir, a, b, c, 0.0, r.tmax).map_or(f32::INFINITY, |h| h.t)
@@ -82,6 +111,9 @@ impl SceneView<'_> {
     pub fn surface(&self, hit: &Hit) -> (SurfacePoint, &GpuMaterial) {
         let t = &self.triangles[hit.triangle as usize];
         let v = |k: usize| &self.vertices[t.indices[k] as usize];
-        (surface_point(v(0), v(1), v(2), hit.u, hit.v), &self.materials[t.material as usize])
+        (
+            surface_point(v(0), v(1), v(2), hit.u, hit.v),
+            &self.materials[t.material as usize],
+        )
     }
 }

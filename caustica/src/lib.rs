@@ -40,7 +40,10 @@ pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
                     Err(e) => last = Some(e),
                 }
             }
-            Err(last.unwrap_or_else(|| BackendError::Unavailable { backend: "auto".into(), reason: "no backend".into() }))
+            Err(last.unwrap_or_else(|| BackendError::Unavailable {
+                backend: "auto".into(),
+                reason: "no backend".into(),
+            }))
         }
         #[cfg(feature = "cpu")]
         "cpu" => Ok(Box::new(caustica_cpu::CpuBackend::new()?)),
@@ -49,10 +52,16 @@ pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
             reason: "not implemented yet (see the README's backend table)".into(),
         }),
         #[cfg(not(feature = "cpu"))]
-        "cpu" => Err(BackendError::Unavailable { backend: name.into(), reason: "not compiled in (cargo feature `cpu`)".into() }),
+        "cpu" => Err(BackendError::Unavailable {
+            backend: name.into(),
+            reason: "not compiled in (cargo feature `cpu`)".into(),
+        }),
         _ => Err(BackendError::Unavailable {
             backend: name.into(),
-            reason: format!("unknown backend; choose one of auto, {}", BACKEND_NAMES.join(", ")),
+            reason: format!(
+                "unknown backend; choose one of auto, {}",
+                BACKEND_NAMES.join(", ")
+            ),
         }),
     }
 }
@@ -63,7 +72,13 @@ pub fn backend_statuses() -> Vec<BackendStatus> {
         .iter()
         .map(|&name| {
             let compiled = name == "cpu" && cfg!(feature = "cpu");
-            BackendStatus { name, compiled, available: open_backend(name).map(|b| b.capabilities().device).map_err(|e| e.to_string()) }
+            BackendStatus {
+                name,
+                compiled,
+                available: open_backend(name)
+                    .map(|b| b.capabilities().device)
+                    .map_err(|e| e.to_string()),
+            }
         })
         .collect()
 }

@@ -56,7 +56,10 @@ pub trait Backend {
 }
 
 /// Reads a typed buffer back.
-pub fn read_buf<T: bytemuck::Pod>(backend: &mut dyn Backend, buf: Buf<T>) -> Result<Vec<T>, BackendError> {
+pub fn read_buf<T: bytemuck::Pod>(
+    backend: &mut dyn Backend,
+    buf: Buf<T>,
+) -> Result<Vec<T>, BackendError> {
     let bytes = backend.read(buf.id)?;
     if bytes.len() as u64 != buf.bytes() {
         return Err(BackendError::BadArgument(format!(

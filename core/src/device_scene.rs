@@ -59,13 +59,28 @@ impl DeviceScene {
                 });
             }
             for t in &m.indices {
-                tris.push(GpuTriangle { indices: t.map(|i| i + base), material: mat });
+                tris.push(GpuTriangle {
+                    indices: t.map(|i| i + base),
+                    material: mat,
+                });
             }
         }
-        let has_dispersion = scene.materials.values().any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
+        let has_dispersion = scene
+            .materials
+            .values()
+            .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
         let lights = scene.lights.iter().map(gpu_light).collect();
         let (triangles, bvh_nodes) = build_bvh(&vertices, tris);
-        DeviceScene { vertices, triangles, materials, lights, bvh_nodes, bounds, caster_bounds, has_dispersion }
+        DeviceScene {
+            vertices,
+            triangles,
+            materials,
+            lights,
+            bvh_nodes,
+            bounds,
+            caster_bounds,
+            has_dispersion,
+        }
     }
 
     /// Number of CWBVH nodes.
@@ -76,25 +91,43 @@ impl DeviceScene {
 
 fn build_bvh(vertices: &[GpuVertex], tris: Vec<GpuTriangle>) -> (Vec<GpuTriangle>, Vec<[u32; 4]>) {
     let p = |i: u32| Vec3A::from(vertices[i as usize].position);
-    let obvhs_tris: Vec<Triangle> =
-        tris.iter().map(|t| Triangle { v0: p(t.indices[0]), v1: p(t.indices[1]), v2: p(t.indices[2]) }).collect();
+    let obvhs_tris: Vec<Triangle> = tris
+        .iter()
+        .map(|t| Triangle {
+            v0: p(t.indices[0]),
+            v1: p(t.indices[1]),
+            v2: p(t.indices[2]),
+        })
+        .collect();
     let mut build_time = Duration::ZERO;
     let bvh = build_cwbvh_from_tris(&obvhs_tris, BvhBuildParams::medium_build(), &mut build_time);
     // Reorder triangles into leaf order; leaf slots then index triangles directly.
-    let ordered: Vec<GpuTriangle> = bvh.primitive_indices.iter().map(|&i| tris[i as usize]).collect();
+    let ordered: Vec<GpuTriangle> = bvh
+        .primitive_indices
+        .iter()
+        .map(|&i| tris[i as usize])
+        .collect();
     let nodes: &[[u32; 4]] = bytemuck::cast_slice::<CwBvhNode, [u32; 4]>(&bvh.nodes);
     (ordered, nodes.to_vec())
 }
 
 fn gpu_material(m: &Material) -> GpuMaterial {
     match m {
-        Material::Diffuse { albedo } => {
-            GpuMaterial { kind: material_kind::DIFFUSE, color: albedo.extend(0.0).to_array(), ..Default::default() }
-        }
-        Material::Mirror { reflectance } => {
-            GpuMaterial { kind: material_kind::MIRROR, color: reflectance.extend(0.0).to_array(), ..Default::default() }
-        }
-        Material::Dielectric { ior, cauchy_b, absorption } => GpuMaterial {
+        Material::Diffuse { albedo } => GpuMaterial {
+            kind: material_kind::DIFFUSE,
+            color: albedo.extend(0.0).to_array(),
+            ..Default::default()
+        },
+        Material::Mirror { reflectance } => GpuMaterial {
+            kind: material_kind::MIRROR,
+            color: reflectance.extend(0.0).to_array(),
+            ..Default::default()
+        },
+        Material::Dielectric {
+            ior,
+            cauchy_b,
+            absorption,
+        } => GpuMaterial {
             kind: material_kind::DIELECTRIC,
             ior: *ior,
             cauchy_b: *cauchy_b,
@@ -107,7 +140,10 @@ fn gpu_material(m: &Material) -> GpuMaterial {
 
 fn gpu_light(l: &Light) -> GpuLight {
     match l {
-        Light::Point { position, intensity } => GpuLight {
+        Light::Point {
+            position,
+            intensity,
+        } => GpuLight {
             kind: light_kind::POINT,
             cos_inner: -1.0,
             cos_outer: -1.0,
@@ -115,7 +151,13 @@ fn gpu_light(l: &Light) -> GpuLight {
             intensity: intensity.extend(0.0).to_array(),
             ..Default::default()
         },
-        Light::Spot { position, direction, intensity, inner_angle_deg, outer_angle_deg } => GpuLight {
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            inner_angle_deg,
+            outer_angle_deg,
+        } => GpuLight {
             kind: light_kind::SPOT,
             cos_inner: inner_angle_deg.to_radians().cos(),
             cos_outer: outer_angle_deg.to_radians().cos(),
@@ -124,7 +166,11 @@ fn gpu_light(l: &Light) -> GpuLight {
             intensity: intensity.extend(0.0).to_array(),
             ..Default::default()
         },
-        Light::Directional { direction, irradiance, .. } => GpuLight {
+        Light::Directional {
+            direction,
+            irradiance,
+            ..
+        } => GpuLight {
             kind: light_kind::DIRECTIONAL,
             direction: direction.normalize().extend(0.0).to_array(),
             intensity: irradiance.extend(0.0).to_array(),

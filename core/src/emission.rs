@@ -50,16 +50,34 @@ pub enum NoEmission {
 }
 
 /// The emission domain of `light` given the casters' and the scene's bounds.
-pub fn emission_domain(light: &Light, casters: Aabb, scene: Aabb, point: PointEmission) -> Result<EmissionDomain, NoEmission> {
+pub fn emission_domain(
+    light: &Light,
+    casters: Aabb,
+    scene: Aabb,
+    point: PointEmission,
+) -> Result<EmissionDomain, NoEmission> {
     match light {
-        Light::Point { position, intensity } | Light::Spot { position, intensity, .. } => {
+        Light::Point {
+            position,
+            intensity,
+        }
+        | Light::Spot {
+            position,
+            intensity,
+            ..
+        } => {
             if intensity.max_element() <= 0.0 {
                 return Err(NoEmission::ZeroPower);
             }
             if casters.is_empty() {
                 return Err(NoEmission::NoCasters);
             }
-            let (axis, cos_max) = if let Light::Spot { direction, outer_angle_deg, .. } = light {
+            let (axis, cos_max) = if let Light::Spot {
+                direction,
+                outer_angle_deg,
+                ..
+            } = light
+            {
                 (direction.normalize(), outer_angle_deg.to_radians().cos())
             } else {
                 let c = casters.center();
@@ -84,7 +102,11 @@ pub fn emission_domain(light: &Light, casters: Aabb, scene: Aabb, point: PointEm
                 flux: *intensity * omega,
             })
         }
-        Light::Directional { direction, irradiance, projection_volume } => {
+        Light::Directional {
+            direction,
+            irradiance,
+            projection_volume,
+        } => {
             if irradiance.max_element() <= 0.0 {
                 return Err(NoEmission::ZeroPower);
             }

@@ -23,14 +23,26 @@ pub struct Quantized {
 pub fn quantize(value: f32, quantum: f32) -> Quantized {
     let x = value / quantum;
     if !(x > 0.0) {
-        return Quantized { units: 0, underflow: false, saturated: false };
+        return Quantized {
+            units: 0,
+            underflow: false,
+            saturated: false,
+        };
     }
     let r = (x + 0.5).floor();
     if r >= 4_294_967_295.0 {
-        return Quantized { units: u32::MAX, underflow: false, saturated: true };
+        return Quantized {
+            units: u32::MAX,
+            underflow: false,
+            saturated: true,
+        };
     }
     let units = r as u32;
-    Quantized { units, underflow: units == 0, saturated: false }
+    Quantized {
+        units,
+        underflow: units == 0,
+        saturated: false,
+    }
 }
 
 /// Joins a (lo, hi) pair of u32 words into a u64.

@@ -16,7 +16,13 @@
 /// 000 Eq. 4: world-space area (scene units^2) of one pixel at view depth `depth` on a
 /// plane parallel to the image plane.
 #[inline]
-pub fn pixel_footprint(depth: f32, width: u32, height: u32, tan_half_fov_x: f32, tan_half_fov_y: f32) -> f32 {
+pub fn pixel_footprint(
+    depth: f32,
+    width: u32,
+    height: u32,
+    tan_half_fov_x: f32,
+    tan_half_fov_y: f32,
+) -> f32 {
     let sx = 2.0 * depth * tan_half_fov_x / width as f32;
     let sy = 2.0 * depth * tan_half_fov_y / height as f32;
     sx * sy

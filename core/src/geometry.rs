@@ -87,10 +87,24 @@ pub struct SurfacePoint {
 
 /// Interpolates the surface at barycentrics (`u`, `v`) of the triangle (`a`, `b`, `c`).
 #[inline]
-pub fn surface_point(a: &crate::gpu::GpuVertex, b: &crate::gpu::GpuVertex, c: &crate::gpu::GpuVertex, u: f32, v: f32) -> SurfacePoint {
+pub fn surface_point(
+    a: &crate::gpu::GpuVertex,
+    b: &crate::gpu::GpuVertex,
+    c: &crate::gpu::GpuVertex,
+    u: f32,
+    v: f32,
+) -> SurfacePoint {
     let w = 1.0 - u - v;
-    let (pa, pb, pc) = (Vec3::from(a.position), Vec3::from(b.position), Vec3::from(c.position));
-    let (na, nb, nc) = (Vec3::from(a.normal), Vec3::from(b.normal), Vec3::from(c.normal));
+    let (pa, pb, pc) = (
+        Vec3::from(a.position),
+        Vec3::from(b.position),
+        Vec3::from(c.position),
+    );
+    let (na, nb, nc) = (
+        Vec3::from(a.normal),
+        Vec3::from(b.normal),
+        Vec3::from(c.normal),
+    );
     let mut ng = (pb - pa).cross(pc - pa).normalize_or(Vec3::Y);
     let n_sum = na + nb + nc;
     if ng.dot(n_sum) < 0.0 {
@@ -117,7 +131,10 @@ pub struct Aabb {
 
 impl Aabb {
     /// The empty box (min = +inf, max = -inf); grows with [`Aabb::grow`].
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
 
     pub fn grow(&mut self, p: Vec3) {
         self.min = self.min.min(p);
@@ -125,7 +142,10 @@ impl Aabb {
     }
 
     pub fn union(self, o: Aabb) -> Aabb {
-        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -166,11 +186,16 @@ mod tests {
     #[test]
     fn triangle_hit_and_miss() {
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        let h = intersect_triangle(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z, a, b, c, 0.0, 10.0).unwrap();
+        let h =
+            intersect_triangle(Vec3::new(0.25, 0.25, 1.0), -Vec3::Z, a, b, c, 0.0, 10.0).unwrap();
         assert!((h.t - 1.0).abs() < 1e-6 && (h.u - 0.25).abs() < 1e-6 && (h.v - 0.25).abs() < 1e-6);
-        assert!(intersect_triangle(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z, a, b, c, 0.0, 10.0).is_none());
+        assert!(
+            intersect_triangle(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z, a, b, c, 0.0, 10.0).is_none()
+        );
         // degenerate triangle
-        assert!(intersect_triangle(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z, a, a, c, 0.0, 10.0).is_none());
+        assert!(
+            intersect_triangle(Vec3::new(0.0, 0.0, 1.0), -Vec3::Z, a, a, c, 0.0, 10.0).is_none()
+        );
     }
 
     #[test]

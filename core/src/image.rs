@@ -11,7 +11,11 @@ pub struct Image {
 impl Image {
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Image {
         assert_eq!(pixels.len(), (width * height) as usize);
-        Image { width, height, pixels }
+        Image {
+            width,
+            height,
+            pixels,
+        }
     }
 
     pub fn at(&self, x: u32, y: u32) -> [f32; 4] {

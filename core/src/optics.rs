@@ -107,17 +107,36 @@ pub struct DielectricScatter {
 /// outside the object (decided by the geometric normal); `ior` is the object's index and
 /// `xi` a uniform number in [0, 1). Total internal reflection always reflects.
 #[inline]
-pub fn dielectric_scatter(incident: Vec3, shading_normal: Vec3, entering: bool, ior: f32, xi: f32) -> DielectricScatter {
-    let facing = if incident.dot(shading_normal) < 0.0 { shading_normal } else { -shading_normal };
+pub fn dielectric_scatter(
+    incident: Vec3,
+    shading_normal: Vec3,
+    entering: bool,
+    ior: f32,
+    xi: f32,
+) -> DielectricScatter {
+    let facing = if incident.dot(shading_normal) < 0.0 {
+        shading_normal
+    } else {
+        -shading_normal
+    };
     let eta = if entering { 1.0 / ior } else { ior };
     let cos_i = -incident.dot(facing);
     let f = fresnel_dielectric(cos_i, eta);
     if xi < f {
-        return DielectricScatter { direction: reflect(incident, facing), reflected: true };
+        return DielectricScatter {
+            direction: reflect(incident, facing),
+            reflected: true,
+        };
     }
     match refract(incident, facing, eta) {
-        Some(t) => DielectricScatter { direction: t.normalize(), reflected: false },
-        None => DielectricScatter { direction: reflect(incident, facing), reflected: true },
+        Some(t) => DielectricScatter {
+            direction: t.normalize(),
+            reflected: false,
+        },
+        None => DielectricScatter {
+            direction: reflect(incident, facing),
+            reflected: true,
+        },
     }
 }
 
@@ -159,7 +178,11 @@ mod tests {
     #[test]
     fn reflectance_plus_transmittance_is_one_and_tir_is_total() {
         for &eta in &[0.5f32, 1.0 / 1.5, 1.0, 1.33, 1.5, 2.5] {
-            let critical = if eta > 1.0 { (1.0 / eta).asin() } else { f32::INFINITY };
+            let critical = if eta > 1.0 {
+                (1.0 / eta).asin()
+            } else {
+                f32::INFINITY
+            };
             for i in 0..=900 {
                 let theta = (i as f32 / 10.0).to_radians();
                 let r = fresnel_dielectric(theta.cos(), eta);

@@ -62,12 +62,27 @@ pub enum Kernel {
     /// Makes the uploaded scene traceable (builds or adopts the acceleration structure).
     PrepareScene { scene: SceneArgs },
     /// Primary visibility: one camera ray per pixel, writes the G-buffer.
-    PrimaryGbuffer { scene: SceneArgs, camera: GpuCamera, gbuffer: Buf<GBufferTexel> },
+    PrimaryGbuffer {
+        scene: SceneArgs,
+        camera: GpuCamera,
+        gbuffer: Buf<GBufferTexel>,
+    },
     /// Direct lighting with shadow rays (and specular chains from mirror/glass pixels).
-    DirectLight { scene: SceneArgs, params: DirectParams, gbuffer: Buf<GBufferTexel>, out: ImageBuf },
+    DirectLight {
+        scene: SceneArgs,
+        params: DirectParams,
+        gbuffer: Buf<GBufferTexel>,
+        out: ImageBuf,
+    },
     /// Emits and traces photons `params.first .. first + count` of one light; appends
     /// stored photons to `photons` at `photon_count[0]` and adds to `counters`.
-    TracePhotons { scene: SceneArgs, params: TraceParams, photons: Buf<Photon>, photon_count: Buf<u32>, counters: Buf<u32> },
+    TracePhotons {
+        scene: SceneArgs,
+        params: TraceParams,
+        photons: Buf<Photon>,
+        photon_count: Buf<u32>,
+        counters: Buf<u32>,
+    },
     /// Projects the `photon_count[0]` stored photons to screen and adds them in fixed
     /// point to the screen-space photon map.
     DepositScreen {
@@ -80,13 +95,32 @@ pub enum Kernel {
     },
     /// Converts the fixed-point photon map to radiance (seed 000 Eq. 5); `out.a` holds the
     /// mean hit distance of the pixel's photons (0 without photons).
-    ResolveCaustics { params: DepositParams, gbuffer: Buf<GBufferTexel>, photon_map: Buf<DepositTexel>, out: ImageBuf },
+    ResolveCaustics {
+        params: DepositParams,
+        gbuffer: Buf<GBufferTexel>,
+        photon_map: Buf<DepositTexel>,
+        out: ImageBuf,
+    },
     /// Mean hit distance per `tile_size^2` tile (photon-weighted; 0 for empty tiles).
-    TileHitDistance { params: GatherParams, photon_map: Buf<DepositTexel>, tiles: Buf<f32> },
+    TileHitDistance {
+        params: GatherParams,
+        photon_map: Buf<DepositTexel>,
+        tiles: Buf<f32>,
+    },
     /// One direction of the separable edge-aware bilateral photon gather.
-    BilateralGather { params: GatherParams, gbuffer: Buf<GBufferTexel>, tiles: Buf<f32>, input: ImageBuf, out: ImageBuf },
+    BilateralGather {
+        params: GatherParams,
+        gbuffer: Buf<GBufferTexel>,
+        tiles: Buf<f32>,
+        input: ImageBuf,
+        out: ImageBuf,
+    },
     /// `out = direct + caustics` (rgb; a = 1).
-    Composite { direct: ImageBuf, caustics: ImageBuf, out: ImageBuf },
+    Composite {
+        direct: ImageBuf,
+        caustics: ImageBuf,
+        out: ImageBuf,
+    },
 }
 
 impl Kernel {
@@ -110,9 +144,17 @@ impl Kernel {
 #[derive(Clone, Debug)]
 pub enum Step {
     /// Creates a zero-filled buffer of `bytes` bytes.
-    Create { id: ResourceId, bytes: u64, label: &'static str },
+    Create {
+        id: ResourceId,
+        bytes: u64,
+        label: &'static str,
+    },
     /// Creates (or replaces) a buffer holding `data`.
-    Upload { id: ResourceId, data: Vec<u8>, label: &'static str },
+    Upload {
+        id: ResourceId,
+        data: Vec<u8>,
+        label: &'static str,
+    },
     /// Fills an existing buffer with zeros.
     Clear { id: ResourceId },
     /// Runs a kernel.
@@ -134,15 +176,31 @@ impl Recording {
 
     /// Records creation of a zeroed buffer of `len` elements.
     pub fn create<T>(&mut self, len: u32, label: &'static str) -> Buf<T> {
-        let buf = Buf { id: ResourceId::fresh(), len, _t: PhantomData };
-        self.steps.push(Step::Create { id: buf.id, bytes: buf.bytes(), label });
+        let buf = Buf {
+            id: ResourceId::fresh(),
+            len,
+            _t: PhantomData,
+        };
+        self.steps.push(Step::Create {
+            id: buf.id,
+            bytes: buf.bytes(),
+            label,
+        });
         buf
     }
 
     /// Records an upload of `data` into a new buffer.
     pub fn upload<T: bytemuck::Pod>(&mut self, data: &[T], label: &'static str) -> Buf<T> {
-        let buf = Buf { id: ResourceId::fresh(), len: data.len() as u32, _t: PhantomData };
-        self.steps.push(Step::Upload { id: buf.id, data: bytemuck::cast_slice(data).to_vec(), label });
+        let buf = Buf {
+            id: ResourceId::fresh(),
+            len: data.len() as u32,
+            _t: PhantomData,
+        };
+        self.steps.push(Step::Upload {
+            id: buf.id,
+            data: bytemuck::cast_slice(data).to_vec(),
+            label,
+        });
         buf
     }
 

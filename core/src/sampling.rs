@@ -66,7 +66,13 @@ mod tests {
 
     #[test]
     fn basis_is_orthonormal() {
-        for &n in &[Vec3::X, Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::new(1.0, -2.0, 0.3).normalize()] {
+        for &n in &[
+            Vec3::X,
+            Vec3::Y,
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(1.0, -2.0, 0.3).normalize(),
+        ] {
             let (t, b) = orthonormal_basis(n);
             assert!(t.dot(b).abs() < 1e-6 && t.dot(n).abs() < 1e-6 && b.dot(n).abs() < 1e-6);
             assert!((t.length() - 1.0).abs() < 1e-6 && (b.length() - 1.0).abs() < 1e-6);

@@ -106,7 +106,10 @@ impl SspmSettings {
         if !(self.roughness >= 0.0 && self.roughness.is_finite()) {
             return bad("roughness must be >= 0");
         }
-        for (name, v) in [("hit_distance_min", self.hit_distance_min), ("hit_distance_max", self.hit_distance_max)] {
+        for (name, v) in [
+            ("hit_distance_min", self.hit_distance_min),
+            ("hit_distance_max", self.hit_distance_max),
+        ] {
             if let Some(v) = v {
                 if !(v > 0.0 && v.is_finite()) {
                     return bad(&format!("{name} must be > 0"));
@@ -121,7 +124,9 @@ impl SspmSettings {
         if self.max_radius_px > 256 {
             return bad("max_radius_px must be <= 256");
         }
-        if !(self.sigma_depth > 0.0 && self.sigma_depth.is_finite()) || !(self.normal_power >= 0.0 && self.normal_power.is_finite()) {
+        if !(self.sigma_depth > 0.0 && self.sigma_depth.is_finite())
+            || !(self.normal_power >= 0.0 && self.normal_power.is_finite())
+        {
             return bad("sigma_depth must be > 0 and normal_power >= 0");
         }
         if self.tile_size == 0 || self.tile_size > 256 {
@@ -185,9 +190,15 @@ pub struct Sspm {
 
 impl Sspm {
     /// Validates the scene and settings, uploads the scene and creates the frame buffers.
-    pub fn new(backend: &mut dyn Backend, scene: &Scene, settings: SspmSettings) -> Result<Sspm, Error> {
+    pub fn new(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: SspmSettings,
+    ) -> Result<Sspm, Error> {
         settings.validate()?;
-        scene.validate().map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        scene
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
         let ds = DeviceScene::build(scene);
         let mut rec = Recording::new();
         let scene_args = SceneArgs {
@@ -203,18 +214,31 @@ impl Sspm {
         let mut skipped_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
             match emission_domain(l, ds.caster_bounds, ds.bounds, settings.point_emission) {
-                Ok(domain) => work.push(LightWork { index: i as u32, domain }),
+                Ok(domain) => work.push(LightWork {
+                    index: i as u32,
+                    domain,
+                }),
                 Err(why) => skipped_lights.push((i as u32, why)),
             }
         }
         let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
         let dispersion_gain = if ds.has_dispersion { 3.0 } else { 1.0 };
-        let max_photon_flux =
-            work.iter().map(|w| w.domain.flux.max_element() / photons_per_light).fold(0.0f32, f32::max) * dispersion_gain;
-        let flux_quantum = if max_photon_flux > 0.0 { max_photon_flux / FLUX_QUANTA_PER_MAX_PHOTON } else { 1.0 };
+        let max_photon_flux = work
+            .iter()
+            .map(|w| w.domain.flux.max_element() / photons_per_light)
+            .fold(0.0f32, f32::max)
+            * dispersion_gain;
+        let flux_quantum = if max_photon_flux > 0.0 {
+            max_photon_flux / FLUX_QUANTA_PER_MAX_PHOTON
+        } else {
+            1.0
+        };
         let diag = ds.bounds.diagonal().max(f32::MIN_POSITIVE);
         let hit_distance_min = settings.hit_distance_min.unwrap_or(0.05 * diag);
-        let hit_distance_max = settings.hit_distance_max.unwrap_or(0.5 * diag).max(hit_distance_min);
+        let hit_distance_max = settings
+            .hit_distance_max
+            .unwrap_or(0.5 * diag)
+            .max(hit_distance_min);
 
         let camera = GpuCamera::from_camera(&scene.camera);
         let (w, h) = (camera.width, camera.height);
@@ -293,7 +317,11 @@ impl Sspm {
     }
 
     /// Renders one frame. `progress` is called after every photon batch.
-    pub fn frame(&mut self, backend: &mut dyn Backend, progress: &mut dyn FnMut(Progress)) -> Result<FrameStats, Error> {
+    pub fn frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error> {
         let start = Instant::now();
         let caps = backend.capabilities();
         let mut stats = FrameStats {
@@ -302,7 +330,11 @@ impl Sspm {
             device: caps.device.clone(),
             width: self.camera.width,
             height: self.camera.height,
-            timing: if caps.timestamps { "device timestamps".into() } else { "host wall clock".into() },
+            timing: if caps.timestamps {
+                "device timestamps".into()
+            } else {
+                "host wall clock".into()
+            },
             flux_quantum: self.flux_quantum as f64,
             bytes_allocated: self.bytes,
             ..Default::default()
@@ -318,7 +350,11 @@ impl Sspm {
 
         // 1. visibility and direct light
         let mut rec = Recording::new();
-        rec.kernel(Kernel::PrimaryGbuffer { scene: self.scene, camera: cam, gbuffer: self.gbuffer });
+        rec.kernel(Kernel::PrimaryGbuffer {
+            scene: self.scene,
+            camera: cam,
+            gbuffer: self.gbuffer,
+        });
         rec.kernel(Kernel::DirectLight {
             scene: self.scene,
             params: DirectParams {
@@ -374,7 +410,9 @@ impl Sspm {
                             axis: d.axis.extend(0.0).to_array(),
                             rect_u: d.rect_u.extend(0.0).to_array(),
                             rect_v: d.rect_v.extend(0.0).to_array(),
-                            photon_flux: photon_flux.extend(self.settings.min_relative_power).to_array(),
+                            photon_flux: photon_flux
+                                .extend(self.settings.min_relative_power)
+                                .to_array(),
                             flux_quantum: self.flux_quantum,
                             _pad: [0; 3],
                         },
@@ -394,7 +432,10 @@ impl Sspm {
                     stats.batches += 1;
                     first += count as u64;
                     done += count as u64;
-                    progress(Progress { photons_done: done, photons_total: total });
+                    progress(Progress {
+                        photons_done: done,
+                        photons_total: total,
+                    });
                 }
             }
         }
@@ -421,7 +462,11 @@ impl Sspm {
                 photon_map: self.photon_map,
                 out: self.images.raw_caustics,
             });
-            rec.kernel(Kernel::TileHitDistance { params: gather, photon_map: self.photon_map, tiles: self.tiles });
+            rec.kernel(Kernel::TileHitDistance {
+                params: gather,
+                photon_map: self.photon_map,
+                tiles: self.tiles,
+            });
             rec.kernel(Kernel::BilateralGather {
                 params: gather,
                 gbuffer: self.gbuffer,
@@ -437,7 +482,12 @@ impl Sspm {
                 out: self.images.filtered_caustics,
             });
         } else {
-            for pass in ["deposit_screen", "resolve_caustics", "tile_hit_distance", "bilateral_gather"] {
+            for pass in [
+                "deposit_screen",
+                "resolve_caustics",
+                "tile_hit_distance",
+                "bilateral_gather",
+            ] {
                 stats.skip(pass, "no light emits photons");
             }
             rec.clear(self.images.raw_caustics);
@@ -465,13 +515,19 @@ impl Sspm {
         stats.fixed_point_saturated = c[counter::SATURATED] as u64;
         stats.photon_rays_traced = c64(counter::RAYS);
         for ch in 0..3 {
-            stats.stored_flux[ch] = c64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
+            stats.stored_flux[ch] =
+                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(stats)
     }
 
-    fn run(&self, backend: &mut dyn Backend, rec: &Recording, stats: &mut FrameStats) -> Result<(), Error> {
+    fn run(
+        &self,
+        backend: &mut dyn Backend,
+        rec: &Recording,
+        stats: &mut FrameStats,
+    ) -> Result<(), Error> {
         for t in backend.execute(rec)? {
             stats.add_pass_time(t.kernel, t.seconds);
         }
@@ -498,7 +554,12 @@ impl Sspm {
         rec.free(self.counters);
         rec.free(self.tiles);
         rec.free(self.scratch);
-        for img in [self.images.composite, self.images.direct, self.images.raw_caustics, self.images.filtered_caustics] {
+        for img in [
+            self.images.composite,
+            self.images.direct,
+            self.images.raw_caustics,
+            self.images.filtered_caustics,
+        ] {
             rec.free(img);
         }
         if let Some((p, c)) = self.photons {

@@ -85,12 +85,19 @@ impl FrameStats {
             p.ms += ms;
             p.dispatches += 1;
         } else {
-            self.passes.push(PassStat { name: name.into(), ms, dispatches: 1 });
+            self.passes.push(PassStat {
+                name: name.into(),
+                ms,
+                dispatches: 1,
+            });
         }
         *self.pass_ms.entry(name.into()).or_default() += ms;
     }
 
     pub fn skip(&mut self, name: &str, reason: impl Into<String>) {
-        self.skipped.push(SkippedPass { name: name.into(), reason: reason.into() });
+        self.skipped.push(SkippedPass {
+            name: name.into(),
+            reason: reason.into(),
+        });
     }
 }

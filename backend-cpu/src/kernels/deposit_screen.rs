@@ -14,7 +14,9 @@
 use super::Counters;
 use caustica_core::fixed_point::{join_u64, quantize};
 use caustica_core::footprint::{pixel_footprint, pixel_surface_area};
-use caustica_core::gpu::{camera_ray, counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon};
+use caustica_core::gpu::{
+    camera_ray, counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon,
+};
 use caustica_core::packing::unpack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -23,7 +25,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// u64 words per `DepositTexel`: flux r, g, b, hit distance, photon count.
 const WORDS: usize = 5;
 
-pub fn deposit_screen(p: &DepositParams, gbuffer: &[GBufferTexel], photons: &[Photon], map: &[AtomicU64]) -> Counters {
+pub fn deposit_screen(
+    p: &DepositParams,
+    gbuffer: &[GBufferTexel],
+    photons: &[Photon],
+    map: &[AtomicU64],
+) -> Counters {
     photons
         .par_chunks(4096)
         .map(|chunk| {
@@ -36,7 +43,13 @@ pub fn deposit_screen(p: &DepositParams, gbuffer: &[GBufferTexel], photons: &[Ph
         .reduce(Counters::default, Counters::merge)
 }
 
-fn deposit_photon(p: &DepositParams, gbuffer: &[GBufferTexel], ph: &Photon, map: &[AtomicU64], c: &mut Counters) {
+fn deposit_photon(
+    p: &DepositParams,
+    gbuffer: &[GBufferTexel],
+    ph: &Photon,
+    map: &[AtomicU64],
+    c: &mut Counters,
+) {
     let pos = Vec3::from(ph.position);
     let Some((px, py, z)) = caustica_core::gpu::project_to_pixel(&p.camera, pos) else {
         c.bump(counter::OFF_SCREEN);
@@ -45,7 +58,10 @@ fn deposit_photon(p: &DepositParams, gbuffer: &[GBufferTexel], ph: &Photon, map:
     let pix = (py * p.camera.width + px) as usize;
     let g = &gbuffer[pix];
     let arrives_in_front = unpack_unit_vector(ph.direction).dot(Vec3::from(g.normal)) < 0.0;
-    if g.flags & gbuffer_flags::RECEIVER == 0 || (z - g.depth).abs() > p.depth_tolerance * g.depth || !arrives_in_front {
+    if g.flags & gbuffer_flags::RECEIVER == 0
+        || (z - g.depth).abs() > p.depth_tolerance * g.depth
+        || !arrives_in_front
+    {
         c.bump(counter::DEPTH_MISMATCH);
         return;
     }
@@ -62,12 +78,19 @@ fn deposit_photon(p: &DepositParams, gbuffer: &[GBufferTexel], ph: &Photon, map:
             map[base + ch].fetch_add(q.units as u64, Ordering::Relaxed);
         }
     }
-    map[base + 3].fetch_add(quantize(ph.hit_distance, p.hit_distance_quantum).units as u64, Ordering::Relaxed);
+    map[base + 3].fetch_add(
+        quantize(ph.hit_distance, p.hit_distance_quantum).units as u64,
+        Ordering::Relaxed,
+    );
     map[base + 4].fetch_add(1, Ordering::Relaxed);
     c.bump(counter::DEPOSITED);
 }
 
-pub fn resolve_caustics(p: &DepositParams, gbuffer: &[GBufferTexel], map: &[DepositTexel]) -> Vec<[f32; 4]> {
+pub fn resolve_caustics(
+    p: &DepositParams,
+    gbuffer: &[GBufferTexel],
+    map: &[DepositTexel],
+) -> Vec<[f32; 4]> {
     let cam = &p.camera;
     gbuffer
         .par_iter()
@@ -80,11 +103,22 @@ pub fn resolve_caustics(p: &DepositParams, gbuffer: &[GBufferTexel], map: &[Depo
             }
             let i = i as u32;
             let ray = camera_ray(cam, i % cam.width, i / cam.width);
-            let footprint = pixel_footprint(g.depth, cam.width, cam.height, cam.tan_half_fov_x, cam.tan_half_fov_y);
-            let area = pixel_surface_area(footprint, ray.dot(Vec3::from(cam.forward)), ray.dot(Vec3::from(g.normal)));
+            let footprint = pixel_footprint(
+                g.depth,
+                cam.width,
+                cam.height,
+                cam.tan_half_fov_x,
+                cam.tan_half_fov_y,
+            );
+            let area = pixel_surface_area(
+                footprint,
+                ray.dot(Vec3::from(cam.forward)),
+                ray.dot(Vec3::from(g.normal)),
+            );
             let scale = p.flux_quantum as f64 / (std::f64::consts::PI * area as f64);
             let l = |ch: usize| (join_u64(t.flux[ch]) as f64 * scale * g.albedo[ch] as f64) as f32;
-            let hit = (join_u64(t.hit_distance) as f64 * p.hit_distance_quantum as f64 / n as f64) as f32;
+            let hit =
+                (join_u64(t.hit_distance) as f64 * p.hit_distance_quantum as f64 / n as f64) as f32;
             [l(0), l(1), l(2), hit]
         })
         .collect()

@@ -14,7 +14,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-pub fn direct_light(scene: &SceneView, p: &DirectParams, gbuffer: &[GBufferTexel]) -> Vec<[f32; 4]> {
+pub fn direct_light(
+    scene: &SceneView,
+    p: &DirectParams,
+    gbuffer: &[GBufferTexel],
+) -> Vec<[f32; 4]> {
     let w = p.camera.width;
     gbuffer
         .par_iter()
@@ -26,10 +30,21 @@ pub fn direct_light(scene: &SceneView, p: &DirectParams, gbuffer: &[GBufferTexel
             let l = if g.flags & caustica_core::gpu::gbuffer_flags::RECEIVER != 0 {
                 // The G-buffer normal faces the camera; the geometric normal is not stored,
                 // so the shadow ray starts from the shading normal's side.
-                shade_diffuse(scene, Vec3::from(g.position), Vec3::from(g.normal), Vec3::from(g.normal), Vec3::from(g.albedo))
+                shade_diffuse(
+                    scene,
+                    Vec3::from(g.position),
+                    Vec3::from(g.normal),
+                    Vec3::from(g.normal),
+                    Vec3::from(g.albedo),
+                )
             } else {
                 let i = i as u32;
-                specular_chain(scene, p, Vec3::from(p.camera.position), camera_ray(&p.camera, i % w, i / w))
+                specular_chain(
+                    scene,
+                    p,
+                    Vec3::from(p.camera.position),
+                    camera_ray(&p.camera, i % w, i / w),
+                )
             };
             [l.x, l.y, l.z, 1.0]
         })
@@ -42,7 +57,9 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
     let mut e = Vec3::ZERO; // irradiance, W/m^2
     for light in scene.lights {
         let (wi, dist, scale) = match light.kind {
-            light_kind::DIRECTIONAL => (-Vec3::from_slice(&light.direction[..3]), f32::INFINITY, 1.0),
+            light_kind::DIRECTIONAL => {
+                (-Vec3::from_slice(&light.direction[..3]), f32::INFINITY, 1.0)
+            }
             _ => {
                 let to = Vec3::from_slice(&light.position[..3]) - pos;
                 let d2 = to.length_squared();
@@ -52,7 +69,11 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
                 let d = d2.sqrt();
                 let wi = to / d;
                 let falloff = if light.kind == light_kind::SPOT {
-                    spot_falloff((-wi).dot(Vec3::from_slice(&light.direction[..3])), light.cos_inner, light.cos_outer)
+                    spot_falloff(
+                        (-wi).dot(Vec3::from_slice(&light.direction[..3])),
+                        light.cos_inner,
+                        light.cos_outer,
+                    )
                 } else {
                     1.0
                 };
@@ -64,7 +85,11 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
             continue;
         }
         let origin = offset_ray_origin(pos, ng);
-        let t_max = if dist.is_finite() { (origin - Vec3::from_slice(&light.position[..3])).length() * (1.0 - 1e-5) } else { f32::INFINITY };
+        let t_max = if dist.is_finite() {
+            (origin - Vec3::from_slice(&light.position[..3])).length() * (1.0 - 1e-5)
+        } else {
+            f32::INFINITY
+        };
         if scene.occluded(origin, wi, t_max) {
             continue;
         }
@@ -79,37 +104,77 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
     let mut l = Vec3::ZERO;
     let mut stack = vec![(origin, dir, Vec3::ONE, 0u32)];
     while let Some((o, d, weight, depth)) = stack.pop() {
-        let Some(hit) = scene.closest_hit(o, d, f32::INFINITY) else { continue };
+        let Some(hit) = scene.closest_hit(o, d, f32::INFINITY) else {
+            continue;
+        };
         let (s, m) = scene.surface(&hit);
         let entering = d.dot(s.geometric_normal) < 0.0;
         let mut weight = weight;
         if m.kind == material_kind::DIELECTRIC && !entering {
             weight *= beer_lambert(Vec3::from_slice(&m.absorption[..3]), hit.t);
         }
-        let ng_view = if entering { s.geometric_normal } else { -s.geometric_normal };
+        let ng_view = if entering {
+            s.geometric_normal
+        } else {
+            -s.geometric_normal
+        };
         match m.kind {
             material_kind::DIFFUSE => {
-                let n = if s.shading_normal.dot(d) > 0.0 { -s.shading_normal } else { s.shading_normal };
-                l += weight * shade_diffuse(scene, s.position, n, ng_view, Vec3::from_slice(&m.color[..3]));
+                let n = if s.shading_normal.dot(d) > 0.0 {
+                    -s.shading_normal
+                } else {
+                    s.shading_normal
+                };
+                l += weight
+                    * shade_diffuse(
+                        scene,
+                        s.position,
+                        n,
+                        ng_view,
+                        Vec3::from_slice(&m.color[..3]),
+                    );
             }
             _ if depth >= p.max_specular_depth => {}
             material_kind::MIRROR => {
                 let w = weight * Vec3::from_slice(&m.color[..3]);
                 if w.max_element() >= p.min_weight {
-                    let n = if s.shading_normal.dot(d) > 0.0 { -s.shading_normal } else { s.shading_normal };
-                    stack.push((offset_ray_origin(s.position, ng_view), reflect(d, n), w, depth + 1));
+                    let n = if s.shading_normal.dot(d) > 0.0 {
+                        -s.shading_normal
+                    } else {
+                        s.shading_normal
+                    };
+                    stack.push((
+                        offset_ray_origin(s.position, ng_view),
+                        reflect(d, n),
+                        w,
+                        depth + 1,
+                    ));
                 }
             }
             _ => {
-                let facing = if s.shading_normal.dot(d) > 0.0 { -s.shading_normal } else { s.shading_normal };
+                let facing = if s.shading_normal.dot(d) > 0.0 {
+                    -s.shading_normal
+                } else {
+                    s.shading_normal
+                };
                 let eta = if entering { 1.0 / m.ior } else { m.ior };
                 let f = fresnel_dielectric(-d.dot(facing), eta);
                 if weight.max_element() * f >= p.min_weight {
-                    stack.push((offset_ray_origin(s.position, ng_view), reflect(d, facing), weight * f, depth + 1));
+                    stack.push((
+                        offset_ray_origin(s.position, ng_view),
+                        reflect(d, facing),
+                        weight * f,
+                        depth + 1,
+                    ));
                 }
                 if let Some(t) = refract(d, facing, eta) {
                     if weight.max_element() * (1.0 - f) >= p.min_weight {
-                        stack.push((offset_ray_origin(s.position, -ng_view), t.normalize(), weight * (1.0 - f), depth + 1));
+                        stack.push((
+                            offset_ray_origin(s.position, -ng_view),
+                            t.normalize(),
+                            weight * (1.0 - f),
+                            depth + 1,
+                        ));
                     }
                 }
             }

@@ -42,19 +42,39 @@ pub fn tile_hit_distance(p: &GatherParams, map: &[DepositTexel]) -> Vec<f32> {
 
 /// Gather radius in pixels at a receiver pixel.
 pub fn gather_radius_px(p: &GatherParams, g: &GBufferTexel, tile_hit_distance: f32) -> f32 {
-    let d = if tile_hit_distance > 0.0 { tile_hit_distance } else { p.hit_distance_min };
+    let d = if tile_hit_distance > 0.0 {
+        tile_hit_distance
+    } else {
+        p.hit_distance_min
+    };
     let d = d.clamp(p.hit_distance_min, p.hit_distance_max);
     let world = p.roughness * d;
     let c = &p.camera;
-    let pixel = pixel_footprint(g.depth, c.width, c.height, c.tan_half_fov_x, c.tan_half_fov_y).sqrt();
+    let pixel = pixel_footprint(
+        g.depth,
+        c.width,
+        c.height,
+        c.tan_half_fov_x,
+        c.tan_half_fov_y,
+    )
+    .sqrt();
     if !(pixel > 0.0) {
         return 0.0;
     }
     (world / pixel).min(p.max_radius_px as f32)
 }
 
-pub fn bilateral_gather(p: &GatherParams, gbuffer: &[GBufferTexel], tiles: &[f32], input: &[[f32; 4]]) -> Vec<[f32; 4]> {
-    let (w, h, ts) = (p.camera.width as i32, p.camera.height as i32, p.tile_size as i32);
+pub fn bilateral_gather(
+    p: &GatherParams,
+    gbuffer: &[GBufferTexel],
+    tiles: &[f32],
+    input: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
+    let (w, h, ts) = (
+        p.camera.width as i32,
+        p.camera.height as i32,
+        p.tile_size as i32,
+    );
     let tw = (w + ts - 1) / ts;
     (0..w * h)
         .into_par_iter()
@@ -81,7 +101,11 @@ pub fn bilateral_gather(p: &GatherParams, gbuffer: &[GBufferTexel], tiles: &[f32
                 }
                 let ws = (-(k * k) as f32 * inv_2s2).exp();
                 let wd = (-(gq.depth - g.depth).abs() / (p.sigma_depth * g.depth)).exp();
-                let wn = if p.normal_power > 0.0 { n.dot(Vec3::from(gq.normal)).max(0.0).powf(p.normal_power) } else { 1.0 };
+                let wn = if p.normal_power > 0.0 {
+                    n.dot(Vec3::from(gq.normal)).max(0.0).powf(p.normal_power)
+                } else {
+                    1.0
+                };
                 let wgt = ws * wd * wn;
                 sum += wgt * Vec3::from_slice(&input[q][..3]);
                 wsum += wgt;

@@ -4,23 +4,35 @@
 //! material `NO_MATERIAL`.
 
 use crate::traversal::SceneView;
-use caustica_core::gpu::{camera_ray, gbuffer_flags, material_kind, GBufferTexel, GpuCamera, NO_MATERIAL};
+use caustica_core::gpu::{
+    camera_ray, gbuffer_flags, material_kind, GBufferTexel, GpuCamera, NO_MATERIAL,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 
 pub fn primary_gbuffer(scene: &SceneView, cam: &GpuCamera) -> Vec<GBufferTexel> {
     let (w, h) = (cam.width, cam.height);
-    (0..w * h).into_par_iter().map(|i| gbuffer_texel(scene, cam, i % w, i / w)).collect()
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| gbuffer_texel(scene, cam, i % w, i / w))
+        .collect()
 }
 
 fn gbuffer_texel(scene: &SceneView, cam: &GpuCamera, px: u32, py: u32) -> GBufferTexel {
     let dir = camera_ray(cam, px, py);
     let origin = Vec3::from(cam.position);
     let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
-        return GBufferTexel { material: NO_MATERIAL, ..Default::default() };
+        return GBufferTexel {
+            material: NO_MATERIAL,
+            ..Default::default()
+        };
     };
     let (s, m) = scene.surface(&hit);
-    let n = if s.shading_normal.dot(dir) > 0.0 { -s.shading_normal } else { s.shading_normal };
+    let n = if s.shading_normal.dot(dir) > 0.0 {
+        -s.shading_normal
+    } else {
+        s.shading_normal
+    };
     let diffuse = m.kind == material_kind::DIFFUSE;
     let tri = &scene.triangles[hit.triangle as usize];
     GBufferTexel {

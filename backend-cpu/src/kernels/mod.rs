@@ -45,7 +45,12 @@ impl Counters {
     /// Adds to the device counter buffer: 32-bit counters wrap like the GPU atomics would
     /// (batches keep them far below 2^32), 64-bit (lo, hi) pairs carry.
     pub fn add_to(&self, buf: &mut [u32]) {
-        let pairs = [counter::RAYS, counter::STORED_FLUX, counter::STORED_FLUX + 2, counter::STORED_FLUX + 4];
+        let pairs = [
+            counter::RAYS,
+            counter::STORED_FLUX,
+            counter::STORED_FLUX + 2,
+            counter::STORED_FLUX + 4,
+        ];
         for (i, &v) in self.words.iter().enumerate() {
             if pairs.contains(&i) {
                 let sum = join_u64([buf[i], buf[i + 1]]).wrapping_add(v);

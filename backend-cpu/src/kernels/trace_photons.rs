@@ -19,7 +19,9 @@ use caustica_core::device_scene::spot_falloff;
 use caustica_core::fixed_point::quantize;
 use caustica_core::geometry::offset_ray_origin;
 use caustica_core::gpu::{counter, emission_kind, light_kind, material_kind, Photon, TraceParams};
-use caustica_core::optics::{beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM};
+use caustica_core::optics::{
+    beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
+};
 use caustica_core::packing::pack_unit_vector;
 use caustica_core::rng::random_f32;
 use caustica_core::sampling::{stratified_cell, to_world, uniform_cone};
@@ -57,7 +59,8 @@ pub fn trace_photons(scene: &SceneView, p: &TraceParams) -> TraceResult {
                     PathEnd::Stored(ph) => {
                         counters.bump(counter::STORED);
                         for ch in 0..3 {
-                            counters.words[counter::STORED_FLUX + 2 * ch] += quantize(ph.flux[ch], p.flux_quantum).units as u64;
+                            counters.words[counter::STORED_FLUX + 2 * ch] +=
+                                quantize(ph.flux[ch], p.flux_quantum).units as u64;
                         }
                         photons.push(ph);
                     }
@@ -83,18 +86,27 @@ pub fn trace_photons(scene: &SceneView, p: &TraceParams) -> TraceResult {
 pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec3, Vec3) {
     let ix = index % p.grid_w;
     let iy = index / p.grid_w;
-    let jitter = Vec2::new(random_f32(p.seed, index, 0, 0), random_f32(p.seed, index, 0, 1));
+    let jitter = Vec2::new(
+        random_f32(p.seed, index, 0, 0),
+        random_f32(p.seed, index, 0, 1),
+    );
     let u = stratified_cell(ix, iy, p.grid_w, p.grid_h, jitter);
     let flux = Vec3::from_slice(&p.photon_flux[..3]);
     let axis = Vec3::from_slice(&p.axis[..3]);
     if p.emission == emission_kind::RECTANGLE {
-        let origin = Vec3::from_slice(&p.origin[..3]) + u.x * Vec3::from_slice(&p.rect_u[..3]) + u.y * Vec3::from_slice(&p.rect_v[..3]);
+        let origin = Vec3::from_slice(&p.origin[..3])
+            + u.x * Vec3::from_slice(&p.rect_u[..3])
+            + u.y * Vec3::from_slice(&p.rect_v[..3]);
         return (origin, axis, flux);
     }
     let dir = to_world(uniform_cone(u, p.origin[3]), axis);
     let light = &scene.lights[p.light as usize];
     let falloff = if light.kind == light_kind::SPOT {
-        spot_falloff(dir.dot(Vec3::from_slice(&light.direction[..3])), light.cos_inner, light.cos_outer)
+        spot_falloff(
+            dir.dot(Vec3::from_slice(&light.direction[..3])),
+            light.cos_inner,
+            light.cos_outer,
+        )
     } else {
         1.0
     };
@@ -125,12 +137,21 @@ pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd,
                 if specular == 0 {
                     return (PathEnd::NoSpecular, bounce + 1);
                 }
-                let ph = Photon { position: s.position.to_array(), hit_distance: hit.t, flux: flux.to_array(), direction: pack_unit_vector(dir) };
+                let ph = Photon {
+                    position: s.position.to_array(),
+                    hit_distance: hit.t,
+                    flux: flux.to_array(),
+                    direction: pack_unit_vector(dir),
+                };
                 return (PathEnd::Stored(ph), bounce + 1);
             }
             material_kind::MIRROR => {
                 flux *= Vec3::from_slice(&m.color[..3]);
-                let n = if s.shading_normal.dot(dir) > 0.0 { -s.shading_normal } else { s.shading_normal };
+                let n = if s.shading_normal.dot(dir) > 0.0 {
+                    -s.shading_normal
+                } else {
+                    s.shading_normal
+                };
                 dir = reflect(dir, n).normalize();
             }
             _ => {
@@ -151,14 +172,25 @@ pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd,
                     };
                     ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[c]);
                 }
-                dir = dielectric_scatter(dir, s.shading_normal, entering, ior, random_f32(p.seed, index, bounce, 2)).direction;
+                dir = dielectric_scatter(
+                    dir,
+                    s.shading_normal,
+                    entering,
+                    ior,
+                    random_f32(p.seed, index, bounce, 2),
+                )
+                .direction;
             }
         }
         specular += 1;
         if flux.max_element() < min_power || flux.max_element() <= 0.0 {
             return (PathEnd::Negligible, bounce + 1);
         }
-        let side = if dir.dot(s.geometric_normal) > 0.0 { s.geometric_normal } else { -s.geometric_normal };
+        let side = if dir.dot(s.geometric_normal) > 0.0 {
+            s.geometric_normal
+        } else {
+            -s.geometric_normal
+        };
         origin = offset_ray_origin(s.position, side);
     }
     (PathEnd::BounceLimit, p.max_bounces)

@@ -9,7 +9,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "caustica", version, about = "Real-time photon-mapping techniques for caustics")]
+#[command(
+    name = "caustica",
+    version,
+    about = "Real-time photon-mapping techniques for caustics"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -58,8 +62,14 @@ enum Command {
 }
 
 fn parse_grid(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WxH (e.g. 1024x1024)"))?;
-    let p = |t: &str| t.trim().parse::<u32>().map_err(|_| format!("'{s}' is not WxH with positive integers"));
+    let (a, b) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WxH (e.g. 1024x1024)"))?;
+    let p = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{s}' is not WxH with positive integers"))
+    };
     let (w, h) = (p(a)?, p(b)?);
     if w == 0 || h == 0 {
         return Err(format!("'{s}': both sizes must be at least 1"));
@@ -72,11 +82,20 @@ fn main() -> ExitCode {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;
-            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
                 e.exit();
             }
             let text = e.to_string();
-            let first = text.lines().next().unwrap_or("bad arguments").trim_start_matches("error: ");
+            let first = text
+                .lines()
+                .next()
+                .unwrap_or("bad arguments")
+                .trim_start_matches("error: ");
             eprintln!("error: {first} (see caustica --help)");
             return ExitCode::from(2);
         }
@@ -98,14 +117,21 @@ fn load_scene(arg: &str) -> Result<Scene, String> {
     if path.exists() {
         return format::load_scene_file(path).map_err(|e| e.to_string());
     }
-    Err(format!("unknown scene '{arg}': not a built-in scene ({}) and no such file", builtin::BUILTIN_SCENES.join(", ")))
+    Err(format!(
+        "unknown scene '{arg}': not a built-in scene ({}) and no such file",
+        builtin::BUILTIN_SCENES.join(", ")
+    ))
 }
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Scenes { export: Some(name) } => {
-            let s = builtin::builtin(&name)
-                .ok_or_else(|| format!("unknown scene '{name}'; built-in scenes: {}", builtin::BUILTIN_SCENES.join(", ")))?;
+            let s = builtin::builtin(&name).ok_or_else(|| {
+                format!(
+                    "unknown scene '{name}'; built-in scenes: {}",
+                    builtin::BUILTIN_SCENES.join(", ")
+                )
+            })?;
             println!("{}", format::to_json(&s));
             Ok(())
         }
@@ -125,7 +151,17 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }
-        Command::Render { scene, technique, backend, photons, size, seed, exposure, settings, out } => {
+        Command::Render {
+            scene,
+            technique,
+            backend,
+            photons,
+            size,
+            seed,
+            exposure,
+            settings,
+            out,
+        } => {
             if technique != "sspm" {
                 return Err(format!("unknown technique '{technique}'; available: sspm"));
             }
@@ -139,7 +175,8 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             let mut s: SspmSettings = match settings {
                 Some(p) => {
-                    let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                    let text =
+                        std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
                     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?
                 }
                 None => SspmSettings::default(),
@@ -152,9 +189,11 @@ fn run(cli: Cli) -> Result<(), String> {
             let mut sspm = Sspm::new(be.as_mut(), &scene, s.clone()).map_err(|e| e.to_string())?;
             let bar = ProgressBar::new(0);
             bar.set_style(
-                ProgressStyle::with_template("{spinner} photons {human_pos}/{human_len} [{bar:30}] {eta}")
-                    .expect("valid template")
-                    .progress_chars("=> "),
+                ProgressStyle::with_template(
+                    "{spinner} photons {human_pos}/{human_len} [{bar:30}] {eta}",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
             );
             let stats = sspm
                 .frame(be.as_mut(), &mut |p| {
@@ -171,16 +210,25 @@ fn run(cli: Cli) -> Result<(), String> {
                 ("caustics_filtered", imgs.filtered_caustics),
                 ("direct", imgs.direct),
             ] {
-                let img = sspm.read_image(be.as_mut(), handle).map_err(|e| e.to_string())?;
+                let img = sspm
+                    .read_image(be.as_mut(), handle)
+                    .map_err(|e| e.to_string())?;
                 write_exr(&out.join(format!("{}_{name}.exr", scene.name)), &img)?;
                 if name == "composite" {
-                    write_png(&out.join(format!("{}_composite.png", scene.name)), &img, exposure)?;
+                    write_png(
+                        &out.join(format!("{}_composite.png", scene.name)),
+                        &img,
+                        exposure,
+                    )?;
                 }
             }
             let doc = serde_json::json!({ "scene": scene.name, "settings": s, "stats": stats });
             let path = out.join("stats.json");
-            std::fs::write(&path, serde_json::to_string_pretty(&doc).expect("stats serialise"))
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+            std::fs::write(
+                &path,
+                serde_json::to_string_pretty(&doc).expect("stats serialise"),
+            )
+            .map_err(|e| format!("{}: {e}", path.display()))?;
             println!(
                 "{}: {} photons emitted, {} stored, {} deposited; {:.1} ms; wrote {}",
                 scene.name,

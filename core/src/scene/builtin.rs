@@ -7,7 +7,16 @@ use glam::{Vec2, Vec3};
 use std::collections::BTreeMap;
 
 /// Names of the built-in scenes, in the order `caustica scenes` lists them.
-pub const BUILTIN_SCENES: [&str; 8] = ["sphere", "sphere-sun", "ring", "cornell", "pool", "prism", "jelly", "plain"];
+pub const BUILTIN_SCENES: [&str; 8] = [
+    "sphere",
+    "sphere-sun",
+    "ring",
+    "cornell",
+    "pool",
+    "prism",
+    "jelly",
+    "plain",
+];
 
 /// The built-in scene called `name`, or `None`.
 pub fn builtin(name: &str) -> Option<Scene> {
@@ -30,24 +39,45 @@ pub const DEFAULT_WIDTH: u32 = 960;
 pub const DEFAULT_HEIGHT: u32 = 540;
 
 fn camera(position: Vec3, target: Vec3, fov_y_deg: f32) -> Camera {
-    Camera { position, target, up: Vec3::Y, fov_y_deg, width: DEFAULT_WIDTH, height: DEFAULT_HEIGHT }
+    Camera {
+        position,
+        target,
+        up: Vec3::Y,
+        fov_y_deg,
+        width: DEFAULT_WIDTH,
+        height: DEFAULT_HEIGHT,
+    }
 }
 
 fn obj(name: &str, material: &str, shape: Shape) -> Object {
-    Object { name: name.into(), material: material.into(), shape }
+    Object {
+        name: name.into(),
+        material: material.into(),
+        shape,
+    }
 }
 
 fn diffuse(a: f32) -> Material {
-    Material::Diffuse { albedo: Vec3::splat(a) }
+    Material::Diffuse {
+        albedo: Vec3::splat(a),
+    }
 }
 
 fn glass(ior: f32) -> Material {
-    Material::Dielectric { ior, cauchy_b: 0.0, absorption: Vec3::ZERO }
+    Material::Dielectric {
+        ior,
+        cauchy_b: 0.0,
+        absorption: Vec3::ZERO,
+    }
 }
 
 /// Floor quad of half-size `h` in the plane y = `y`, normal +y.
 fn floor(h: f32, y: f32) -> Shape {
-    Shape::Quad { center: Vec3::new(0.0, y, 0.0), u: Vec3::new(h, 0.0, 0.0), v: Vec3::new(0.0, 0.0, -h) }
+    Shape::Quad {
+        center: Vec3::new(0.0, y, 0.0),
+        u: Vec3::new(h, 0.0, 0.0),
+        v: Vec3::new(0.0, 0.0, -h),
+    }
 }
 
 /// `sphere`: white diffuse plane 4 x 4 centred at the origin in y = 0 (albedo 0.8); glass
@@ -73,11 +103,15 @@ pub fn sphere() -> Scene {
 pub fn sphere_sun() -> Scene {
     let mut s = sphere();
     s.name = "sphere-sun".into();
-    s.description = "The sphere scene under a directional light straight down, irradiance 1 W/m^2".into();
+    s.description =
+        "The sphere scene under a directional light straight down, irradiance 1 W/m^2".into();
     s.lights = vec![Light::Directional {
         direction: -Vec3::Y,
         irradiance: Vec3::ONE,
-        projection_volume: Some(Aabb { min: Vec3::new(-0.55, 0.45, -0.55), max: Vec3::new(0.55, 1.55, 0.55) }),
+        projection_volume: Some(Aabb {
+            min: Vec3::new(-0.55, 0.45, -0.55),
+            max: Vec3::new(0.55, 1.55, 0.55),
+        }),
     }];
     s
 }
@@ -93,13 +127,32 @@ pub fn ring() -> Scene {
         camera: camera(Vec3::new(0.0, 3.6, 2.2), Vec3::ZERO, 45.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.8)),
-            ("gold".into(), Material::Mirror { reflectance: Vec3::new(0.95, 0.8, 0.45) }),
+            (
+                "gold".into(),
+                Material::Mirror {
+                    reflectance: Vec3::new(0.95, 0.8, 0.45),
+                },
+            ),
         ]),
         objects: vec![
             obj("plane", "white", floor(2.0, 0.0)),
-            obj("ring", "gold", Shape::Ring { center: Vec3::ZERO, radius: 1.0, thickness: 0.04, height: 0.25, segments: 256 }),
+            obj(
+                "ring",
+                "gold",
+                Shape::Ring {
+                    center: Vec3::ZERO,
+                    radius: 1.0,
+                    thickness: 0.04,
+                    height: 0.25,
+                    segments: 256,
+                },
+            ),
         ],
-        lights: vec![Light::Directional { direction: Vec3::new(1.0, -0.45, 0.0), irradiance: Vec3::splat(3.0), projection_volume: None }],
+        lights: vec![Light::Directional {
+            direction: Vec3::new(1.0, -0.45, 0.0),
+            irradiance: Vec3::splat(3.0),
+            projection_volume: None,
+        }],
     }
 }
 
@@ -112,25 +165,76 @@ pub fn cornell() -> Scene {
     let q = |c: Vec3, u: Vec3, v: Vec3| Shape::Quad { center: c, u, v };
     Scene {
         name: "cornell".into(),
-        description: "Cornell box with a glass and a mirror sphere, point light near the ceiling".into(),
+        description: "Cornell box with a glass and a mirror sphere, point light near the ceiling"
+            .into(),
         camera: camera(Vec3::new(0.0, 1.0, 3.6), Vec3::new(0.0, 1.0, 0.0), 40.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.75)),
-            ("red".into(), Material::Diffuse { albedo: Vec3::new(0.75, 0.12, 0.1) }),
-            ("green".into(), Material::Diffuse { albedo: Vec3::new(0.12, 0.6, 0.15) }),
+            (
+                "red".into(),
+                Material::Diffuse {
+                    albedo: Vec3::new(0.75, 0.12, 0.1),
+                },
+            ),
+            (
+                "green".into(),
+                Material::Diffuse {
+                    albedo: Vec3::new(0.12, 0.6, 0.15),
+                },
+            ),
             ("glass".into(), glass(1.5)),
-            ("mirror".into(), Material::Mirror { reflectance: Vec3::splat(0.95) }),
+            (
+                "mirror".into(),
+                Material::Mirror {
+                    reflectance: Vec3::splat(0.95),
+                },
+            ),
         ]),
         objects: vec![
             obj("floor", "white", q(Vec3::ZERO, Vec3::X, -Vec3::Z)),
-            obj("ceiling", "white", q(Vec3::new(0.0, 2.0, 0.0), Vec3::X, Vec3::Z)),
-            obj("back", "white", q(Vec3::new(0.0, 1.0, -1.0), Vec3::X, Vec3::Y)),
-            obj("left", "red", q(Vec3::new(-1.0, 1.0, 0.0), Vec3::Y, Vec3::Z)),
-            obj("right", "green", q(Vec3::new(1.0, 1.0, 0.0), Vec3::Y, -Vec3::Z)),
-            obj("glass ball", "glass", Shape::Sphere { center: Vec3::new(-0.45, 0.35, -0.25), radius: 0.35, segments: 128 }),
-            obj("mirror ball", "mirror", Shape::Sphere { center: Vec3::new(0.45, 0.35, 0.3), radius: 0.35, segments: 128 }),
+            obj(
+                "ceiling",
+                "white",
+                q(Vec3::new(0.0, 2.0, 0.0), Vec3::X, Vec3::Z),
+            ),
+            obj(
+                "back",
+                "white",
+                q(Vec3::new(0.0, 1.0, -1.0), Vec3::X, Vec3::Y),
+            ),
+            obj(
+                "left",
+                "red",
+                q(Vec3::new(-1.0, 1.0, 0.0), Vec3::Y, Vec3::Z),
+            ),
+            obj(
+                "right",
+                "green",
+                q(Vec3::new(1.0, 1.0, 0.0), Vec3::Y, -Vec3::Z),
+            ),
+            obj(
+                "glass ball",
+                "glass",
+                Shape::Sphere {
+                    center: Vec3::new(-0.45, 0.35, -0.25),
+                    radius: 0.35,
+                    segments: 128,
+                },
+            ),
+            obj(
+                "mirror ball",
+                "mirror",
+                Shape::Sphere {
+                    center: Vec3::new(0.45, 0.35, 0.3),
+                    radius: 0.35,
+                    segments: 128,
+                },
+            ),
         ],
-        lights: vec![Light::Point { position: Vec3::new(0.0, 1.9, 0.0), intensity: Vec3::splat(3.0) }],
+        lights: vec![Light::Point {
+            position: Vec3::new(0.0, 1.9, 0.0),
+            intensity: Vec3::splat(3.0),
+        }],
     }
 }
 
@@ -145,7 +249,12 @@ pub fn pool() -> Scene {
         description: "Wavy water surface (IOR 1.33) over a pool floor, sun from above".into(),
         camera: camera(Vec3::new(0.0, 2.6, 3.2), Vec3::new(0.0, -0.8, 0.0), 45.0),
         materials: BTreeMap::from([
-            ("tiles".into(), Material::Diffuse { albedo: Vec3::new(0.6, 0.75, 0.8) }),
+            (
+                "tiles".into(),
+                Material::Diffuse {
+                    albedo: Vec3::new(0.6, 0.75, 0.8),
+                },
+            ),
             ("water".into(), glass(1.33)),
         ]),
         objects: vec![
@@ -158,14 +267,33 @@ pub fn pool() -> Scene {
                     size: Vec2::splat(4.0),
                     resolution: 160,
                     waves: vec![
-                        Wave { amplitude: 0.03, wavelength: 1.3, direction: Vec2::new(1.0, 0.3), phase: 0.0 },
-                        Wave { amplitude: 0.02, wavelength: 0.8, direction: Vec2::new(-0.4, 1.0), phase: 1.0 },
-                        Wave { amplitude: 0.02, wavelength: 0.6, direction: Vec2::new(0.7, -0.7), phase: 2.0 },
+                        Wave {
+                            amplitude: 0.03,
+                            wavelength: 1.3,
+                            direction: Vec2::new(1.0, 0.3),
+                            phase: 0.0,
+                        },
+                        Wave {
+                            amplitude: 0.02,
+                            wavelength: 0.8,
+                            direction: Vec2::new(-0.4, 1.0),
+                            phase: 1.0,
+                        },
+                        Wave {
+                            amplitude: 0.02,
+                            wavelength: 0.6,
+                            direction: Vec2::new(0.7, -0.7),
+                            phase: 2.0,
+                        },
                     ],
                 },
             ),
         ],
-        lights: vec![Light::Directional { direction: Vec3::new(0.15, -1.0, 0.1), irradiance: Vec3::splat(2.0), projection_volume: None }],
+        lights: vec![Light::Directional {
+            direction: Vec3::new(0.15, -1.0, 0.1),
+            irradiance: Vec3::splat(2.0),
+            projection_volume: None,
+        }],
     }
 }
 
@@ -180,13 +308,32 @@ pub fn prism() -> Scene {
         camera: camera(Vec3::new(0.6, 3.0, 2.8), Vec3::new(0.6, 0.0, 0.0), 45.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.8)),
-            ("flint".into(), Material::Dielectric { ior: 1.5, cauchy_b: 0.04, absorption: Vec3::ZERO }),
+            (
+                "flint".into(),
+                Material::Dielectric {
+                    ior: 1.5,
+                    cauchy_b: 0.04,
+                    absorption: Vec3::ZERO,
+                },
+            ),
         ]),
         objects: vec![
             obj("plane", "white", floor(2.0, 0.0)),
-            obj("prism", "flint", Shape::Prism { center: Vec3::new(0.0, 0.7, 0.0), side: 0.6, length: 1.0 }),
+            obj(
+                "prism",
+                "flint",
+                Shape::Prism {
+                    center: Vec3::new(0.0, 0.7, 0.0),
+                    side: 0.6,
+                    length: 1.0,
+                },
+            ),
         ],
-        lights: vec![Light::Directional { direction: Vec3::new(1.0, -0.3, 0.0), irradiance: Vec3::splat(4.0), projection_volume: None }],
+        lights: vec![Light::Directional {
+            direction: Vec3::new(1.0, -0.3, 0.0),
+            irradiance: Vec3::splat(4.0),
+            projection_volume: None,
+        }],
     }
 }
 
@@ -200,13 +347,31 @@ pub fn jelly() -> Scene {
         camera: camera(Vec3::new(0.0, 4.0, 3.0), Vec3::ZERO, 45.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.8)),
-            ("jelly".into(), Material::Dielectric { ior: 1.35, cauchy_b: 0.0, absorption: Vec3::new(0.2, 2.5, 3.5) }),
+            (
+                "jelly".into(),
+                Material::Dielectric {
+                    ior: 1.35,
+                    cauchy_b: 0.0,
+                    absorption: Vec3::new(0.2, 2.5, 3.5),
+                },
+            ),
         ]),
         objects: vec![
             obj("plane", "white", floor(2.0, 0.0)),
-            obj("jelly", "jelly", Shape::Sphere { center: Vec3::new(0.0, 0.9, 0.0), radius: 0.5, segments: 128 }),
+            obj(
+                "jelly",
+                "jelly",
+                Shape::Sphere {
+                    center: Vec3::new(0.0, 0.9, 0.0),
+                    radius: 0.5,
+                    segments: 128,
+                },
+            ),
         ],
-        lights: vec![Light::Point { position: Vec3::new(0.4, 3.0, 0.2), intensity: Vec3::splat(10.0) }],
+        lights: vec![Light::Point {
+            position: Vec3::new(0.4, 3.0, 0.2),
+            intensity: Vec3::splat(10.0),
+        }],
     }
 }
 
@@ -220,14 +385,42 @@ pub fn plain() -> Scene {
         camera: camera(Vec3::new(0.0, 4.0, 3.0), Vec3::ZERO, 45.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.8)),
-            ("orange".into(), Material::Diffuse { albedo: Vec3::new(0.8, 0.4, 0.1) }),
-            ("blue".into(), Material::Diffuse { albedo: Vec3::new(0.1, 0.2, 0.8) }),
+            (
+                "orange".into(),
+                Material::Diffuse {
+                    albedo: Vec3::new(0.8, 0.4, 0.1),
+                },
+            ),
+            (
+                "blue".into(),
+                Material::Diffuse {
+                    albedo: Vec3::new(0.1, 0.2, 0.8),
+                },
+            ),
         ]),
         objects: vec![
             obj("plane", "white", floor(2.0, 0.0)),
-            obj("box", "orange", Shape::Cuboid { min: Vec3::new(-0.9, 0.0, -0.4), max: Vec3::new(-0.3, 0.6, 0.2) }),
-            obj("ball", "blue", Shape::Sphere { center: Vec3::new(0.6, 0.4, 0.0), radius: 0.4, segments: 64 }),
+            obj(
+                "box",
+                "orange",
+                Shape::Cuboid {
+                    min: Vec3::new(-0.9, 0.0, -0.4),
+                    max: Vec3::new(-0.3, 0.6, 0.2),
+                },
+            ),
+            obj(
+                "ball",
+                "blue",
+                Shape::Sphere {
+                    center: Vec3::new(0.6, 0.4, 0.0),
+                    radius: 0.4,
+                    segments: 64,
+                },
+            ),
         ],
-        lights: vec![Light::Point { position: Vec3::new(0.0, 3.0, 1.0), intensity: Vec3::splat(10.0) }],
+        lights: vec![Light::Point {
+            position: Vec3::new(0.0, 3.0, 1.0),
+            intensity: Vec3::splat(10.0),
+        }],
     }
 }

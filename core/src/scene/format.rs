@@ -23,7 +23,11 @@ pub struct SceneFileError {
 impl fmt::Display for SceneFileError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.line > 0 {
-            write!(f, "{}:{}:{}: {}", self.file, self.line, self.column, self.reason)
+            write!(
+                f,
+                "{}:{}:{}: {}",
+                self.file, self.line, self.column, self.reason
+            )
         } else {
             write!(f, "{}: {}", self.file, self.reason)
         }
@@ -35,8 +39,12 @@ impl std::error::Error for SceneFileError {}
 /// Reads, parses and validates a scene file.
 pub fn load_scene_file(path: &Path) -> Result<Scene, SceneFileError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SceneFileError { file: file.clone(), line: 0, column: 0, reason: format!("cannot read: {e}") })?;
+    let text = std::fs::read_to_string(path).map_err(|e| SceneFileError {
+        file: file.clone(),
+        line: 0,
+        column: 0,
+        reason: format!("cannot read: {e}"),
+    })?;
     parse_scene(&text, &file)
 }
 
@@ -47,12 +55,21 @@ pub fn parse_scene(text: &str, file: &str) -> Result<Scene, SceneFileError> {
         file: file.into(),
         line: e.line(),
         column: e.column(),
-        reason: e.to_string().split(" at line ").next().unwrap_or_default().to_string(),
+        reason: e
+            .to_string()
+            .split(" at line ")
+            .next()
+            .unwrap_or_default()
+            .to_string(),
     })?;
     if let Err(problems) = scene.validate() {
         let first = &problems[0];
         let (line, column) = locate(text, &first.path).unwrap_or((0, 0));
-        let more = if problems.len() > 1 { format!(" (and {} more problems)", problems.len() - 1) } else { String::new() };
+        let more = if problems.len() > 1 {
+            format!(" (and {} more problems)", problems.len() - 1)
+        } else {
+            String::new()
+        };
         return Err(SceneFileError {
             file: file.into(),
             line,
@@ -183,7 +200,8 @@ fn skip_value(b: &[u8], p: usize) -> Option<usize> {
         }
         _ => {
             let mut q = p;
-            while q < b.len() && !matches!(b[q], b',' | b'}' | b']') && !b[q].is_ascii_whitespace() {
+            while q < b.len() && !matches!(b[q], b',' | b'}' | b']') && !b[q].is_ascii_whitespace()
+            {
                 q += 1;
             }
             Some(q)
@@ -233,9 +251,17 @@ mod tests {
             *direction = glam::Vec3::ZERO;
         }
         let e = parse_scene(&to_json(&s), "f").unwrap_err();
-        assert!(e.reason.contains("lights[0].direction") && e.line > 0, "{e}");
+        assert!(
+            e.reason.contains("lights[0].direction") && e.line > 0,
+            "{e}"
+        );
         let mut s = builtin("sphere").unwrap();
-        s.objects[0].shape = crate::scene::Shape::Mesh { positions: vec![], normals: vec![], uvs: vec![], indices: vec![] };
+        s.objects[0].shape = crate::scene::Shape::Mesh {
+            positions: vec![],
+            normals: vec![],
+            uvs: vec![],
+            indices: vec![],
+        };
         let e = parse_scene(&to_json(&s), "f").unwrap_err();
         assert!(e.reason.contains("empty mesh"), "{e}");
     }

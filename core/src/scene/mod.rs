@@ -115,20 +115,41 @@ pub enum Shape {
         indices: Vec<[u32; 3]>,
     },
     /// UV sphere with smooth normals: `segments` around, `segments / 2` rings.
-    Sphere { center: Vec3, radius: f32, #[serde(default = "default_segments")] segments: u32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        #[serde(default = "default_segments")]
+        segments: u32,
+    },
     /// Parallelogram `center + s*u + t*v`, `s, t` in [-1, 1]; normal `u x v`.
     Quad { center: Vec3, u: Vec3, v: Vec3 },
     /// Axis-aligned box, outward normals.
     Cuboid { min: Vec3, max: Vec3 },
     /// Thick-walled vertical ring (a short tube) around `center`, inner radius `radius`,
     /// wall `thickness`, height `height`, standing on `center.y`.
-    Ring { center: Vec3, radius: f32, thickness: f32, height: f32, #[serde(default = "default_segments")] segments: u32 },
+    Ring {
+        center: Vec3,
+        radius: f32,
+        thickness: f32,
+        height: f32,
+        #[serde(default = "default_segments")]
+        segments: u32,
+    },
     /// Prism with an equilateral triangular cross-section of side `side` in the xy plane,
     /// extruded along z by `length`, centred at `center`.
-    Prism { center: Vec3, side: f32, length: f32 },
+    Prism {
+        center: Vec3,
+        side: f32,
+        length: f32,
+    },
     /// Height field `y = center.y + sum of waves` over a `size.x` x `size.y` rectangle in
     /// xz, `resolution` quads per side; a single (open) surface with normals up.
-    HeightField { center: Vec3, size: Vec2, resolution: u32, waves: Vec<Wave> },
+    HeightField {
+        center: Vec3,
+        size: Vec2,
+        resolution: u32,
+        waves: Vec<Wave>,
+    },
 }
 
 fn default_segments() -> u32 {
@@ -155,7 +176,13 @@ pub enum Light {
     Point { position: Vec3, intensity: Vec3 },
     /// Point light restricted to a cone around `direction`: full intensity inside
     /// `inner_angle_deg`, smoothstep falloff to zero at `outer_angle_deg` (half-angles).
-    Spot { position: Vec3, direction: Vec3, intensity: Vec3, inner_angle_deg: f32, outer_angle_deg: f32 },
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Vec3,
+        inner_angle_deg: f32,
+        outer_angle_deg: f32,
+    },
     /// Parallel light travelling along `direction` with `irradiance` W/m^2 on a surface
     /// facing it. Photons are emitted over the rectangle onto which `projection_volume`
     /// (a box around the caustic casters, seed 000 Fig. 30-2) projects; when absent, the
@@ -200,7 +227,11 @@ impl Scene {
     pub fn caster_bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
         for o in &self.objects {
-            if self.materials.get(&o.material).is_some_and(Material::is_specular) {
+            if self
+                .materials
+                .get(&o.material)
+                .is_some_and(Material::is_specular)
+            {
                 for p in shapes::tessellate(&o.shape).positions {
                     b.grow(p);
                 }

@@ -9,26 +9,57 @@ use std::f32::consts::{PI, TAU};
 pub fn tessellate(shape: &Shape) -> TriangleMesh {
     let mut m = TriangleMesh::default();
     match shape {
-        Shape::Mesh { positions, normals, uvs, indices } => {
+        Shape::Mesh {
+            positions,
+            normals,
+            uvs,
+            indices,
+        } => {
             m.positions = positions.clone();
             m.indices = indices.clone();
-            m.uvs = if uvs.len() == positions.len() { uvs.clone() } else { vec![Vec2::ZERO; positions.len()] };
+            m.uvs = if uvs.len() == positions.len() {
+                uvs.clone()
+            } else {
+                vec![Vec2::ZERO; positions.len()]
+            };
             m.normals = if normals.len() == positions.len() {
                 normals.clone()
             } else {
                 flat_vertex_normals(positions, indices)
             };
         }
-        Shape::Sphere { center, radius, segments } => sphere(&mut m, *center, *radius, (*segments).max(3)),
+        Shape::Sphere {
+            center,
+            radius,
+            segments,
+        } => sphere(&mut m, *center, *radius, (*segments).max(3)),
         Shape::Quad { center, u, v } => quad(&mut m, *center - *u - *v, 2.0 * *u, 2.0 * *v),
         Shape::Cuboid { min, max } => cuboid(&mut m, *min, *max),
-        Shape::Ring { center, radius, thickness, height, segments } => {
-            ring(&mut m, *center, *radius, *thickness, *height, (*segments).max(3))
-        }
-        Shape::Prism { center, side, length } => prism(&mut m, *center, *side, *length),
-        Shape::HeightField { center, size, resolution, waves } => {
-            height_field(&mut m, *center, *size, (*resolution).max(1), waves)
-        }
+        Shape::Ring {
+            center,
+            radius,
+            thickness,
+            height,
+            segments,
+        } => ring(
+            &mut m,
+            *center,
+            *radius,
+            *thickness,
+            *height,
+            (*segments).max(3),
+        ),
+        Shape::Prism {
+            center,
+            side,
+            length,
+        } => prism(&mut m, *center, *side, *length),
+        Shape::HeightField {
+            center,
+            size,
+            resolution,
+            waves,
+        } => height_field(&mut m, *center, *size, (*resolution).max(1), waves),
     }
     m
 }
@@ -69,10 +100,17 @@ fn sphere(m: &mut TriangleMesh, c: Vec3, r: f32, segments: u32) {
         let theta = PI * i as f32 / rings as f32;
         for j in 0..=segments {
             let phi = TAU * j as f32 / segments as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
             m.positions.push(c + r * n);
             m.normals.push(n);
-            m.uvs.push(Vec2::new(j as f32 / segments as f32, i as f32 / rings as f32));
+            m.uvs.push(Vec2::new(
+                j as f32 / segments as f32,
+                i as f32 / rings as f32,
+            ));
         }
     }
     let row = segments + 1;
@@ -105,7 +143,10 @@ fn cuboid(m: &mut TriangleMesh, lo: Vec3, hi: Vec3) {
 fn ring(m: &mut TriangleMesh, c: Vec3, r: f32, thick: f32, h: f32, segments: u32) {
     let ro = r + thick;
     for j in 0..segments {
-        let (p0, p1) = (TAU * j as f32 / segments as f32, TAU * (j + 1) as f32 / segments as f32);
+        let (p0, p1) = (
+            TAU * j as f32 / segments as f32,
+            TAU * (j + 1) as f32 / segments as f32,
+        );
         let d0 = Vec3::new(p0.cos(), 0.0, p0.sin());
         let d1 = Vec3::new(p1.cos(), 0.0, p1.sin());
         let u0 = j as f32 / segments as f32;
@@ -118,15 +159,35 @@ fn ring(m: &mut TriangleMesh, c: Vec3, r: f32, thick: f32, h: f32, segments: u32
             for (k, (p, n)) in ps.iter().zip(ns).enumerate() {
                 m.positions.push(*p);
                 m.normals.push(n);
-                m.uvs.push(Vec2::new(if k == 0 || k == 3 { u0 } else { u1 }, if k < 2 { 0.0 } else { 1.0 }));
+                m.uvs.push(Vec2::new(
+                    if k == 0 || k == 3 { u0 } else { u1 },
+                    if k < 2 { 0.0 } else { 1.0 },
+                ));
             }
             m.indices.push([base, base + 1, base + 2]);
             m.indices.push([base, base + 2, base + 3]);
         };
-        face([c + d0 * ro, c + d1 * ro, c + d1 * ro + up, c + d0 * ro + up], [d0, d1, d1, d0]);
-        face([c + d1 * r, c + d0 * r, c + d0 * r + up, c + d1 * r + up], [-d1, -d0, -d0, -d1]);
-        face([c + d0 * r + up, c + d0 * ro + up, c + d1 * ro + up, c + d1 * r + up], [Vec3::Y; 4]);
-        face([c + d1 * r, c + d1 * ro, c + d0 * ro, c + d0 * r], [-Vec3::Y; 4]);
+        face(
+            [c + d0 * ro, c + d1 * ro, c + d1 * ro + up, c + d0 * ro + up],
+            [d0, d1, d1, d0],
+        );
+        face(
+            [c + d1 * r, c + d0 * r, c + d0 * r + up, c + d1 * r + up],
+            [-d1, -d0, -d0, -d1],
+        );
+        face(
+            [
+                c + d0 * r + up,
+                c + d0 * ro + up,
+                c + d1 * ro + up,
+                c + d1 * r + up,
+            ],
+            [Vec3::Y; 4],
+        );
+        face(
+            [c + d1 * r, c + d1 * ro, c + d0 * ro, c + d0 * r],
+            [-Vec3::Y; 4],
+        );
     }
 }
 
@@ -205,7 +266,10 @@ mod tests {
             let ng = (b - a).cross(c - a);
             let centroid = (a + b + c) / 3.0;
             if ng.length() > 0.0 {
-                assert!(ng.dot(centroid - center) > 0.0, "inward-wound triangle at {centroid}");
+                assert!(
+                    ng.dot(centroid - center) > 0.0,
+                    "inward-wound triangle at {centroid}"
+                );
             }
         }
         for (p, n) in m.positions.iter().zip(&m.normals) {
@@ -216,14 +280,38 @@ mod tests {
     #[test]
     fn closed_shapes_face_outward() {
         let c = Vec3::new(0.5, 1.0, -0.2);
-        check_outward(&tessellate(&Shape::Sphere { center: c, radius: 0.5, segments: 16 }), c);
-        check_outward(&tessellate(&Shape::Cuboid { min: c - 0.3, max: c + 0.4 }), c + 0.05);
-        check_outward(&tessellate(&Shape::Prism { center: c, side: 1.0, length: 2.0 }), c);
+        check_outward(
+            &tessellate(&Shape::Sphere {
+                center: c,
+                radius: 0.5,
+                segments: 16,
+            }),
+            c,
+        );
+        check_outward(
+            &tessellate(&Shape::Cuboid {
+                min: c - 0.3,
+                max: c + 0.4,
+            }),
+            c + 0.05,
+        );
+        check_outward(
+            &tessellate(&Shape::Prism {
+                center: c,
+                side: 1.0,
+                length: 2.0,
+            }),
+            c,
+        );
     }
 
     #[test]
     fn sphere_has_no_degenerate_triangles() {
-        let m = tessellate(&Shape::Sphere { center: Vec3::ZERO, radius: 1.0, segments: 24 });
+        let m = tessellate(&Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+            segments: 24,
+        });
         for t in &m.indices {
             let [a, b, c] = t.map(|i| m.positions[i as usize]);
             assert!((b - a).cross(c - a).length() > 1e-6);

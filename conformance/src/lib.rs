@@ -1,0 +1,58 @@
+//! Conformance helpers: open every backend named in `CAUSTICA_REQUIRE_BACKENDS` (a missing
+//! one is a failure, not a skip) and render small frames for comparison. Today only the
+//! CPU backend exists; the OpenCL, wgpu and Vulkan issues add theirs here.
+
+use caustica_core::{Backend, Scene, Sspm, SspmSettings};
+
+/// Backends found on this machine (name, backend). Panics, loudly, when a backend listed
+/// in `CAUSTICA_REQUIRE_BACKENDS` cannot be opened.
+pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
+    let required = std::env::var("CAUSTICA_REQUIRE_BACKENDS").unwrap_or_default();
+    let mut out: Vec<(&'static str, Box<dyn Backend>)> = Vec::new();
+    match caustica_cpu::CpuBackend::new() {
+        Ok(b) => out.push(("cpu", Box::new(b))),
+        Err(e) => eprintln!("SKIPPING cpu backend: {e}"),
+    }
+    for name in required.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        assert!(
+            out.iter().any(|(n, _)| *n == name),
+            "required backend '{name}' is not available on this machine"
+        );
+    }
+    out
+}
+
+/// Small test settings: a `n x n` photon grid.
+pub fn small_settings(n: u32) -> SspmSettings {
+    SspmSettings {
+        photons_w: n,
+        photons_h: n,
+        ..SspmSettings::default()
+    }
+}
+
+/// Renders one frame at `w x h` and returns (stats, composite, raw, filtered, direct).
+pub fn render(
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    settings: SspmSettings,
+    w: u32,
+    h: u32,
+) -> (caustica_core::FrameStats, Vec<caustica_core::image::Image>) {
+    let mut scene = scene.clone();
+    scene.camera.width = w;
+    scene.camera.height = h;
+    let mut s = Sspm::new(backend, &scene, settings).expect("valid scene");
+    let stats = s.frame(backend, &mut |_| {}).expect("frame");
+    let im = s.images();
+    let imgs = [
+        im.composite,
+        im.raw_caustics,
+        im.filtered_caustics,
+        im.direct,
+    ]
+    .into_iter()
+    .map(|h| s.read_image(backend, h).expect("read"))
+    .collect();
+    (stats, imgs)
+}
