@@ -1,3 +1,5 @@
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// `!(x > 0.0)` is deliberate: true for NaN.
 //! caustica CPU backend: every kernel of the registry on the host, with rayon for data
 //! parallelism and obvhs for BVH traversal. It is the readable reference the other
 //! backends are tested against; each kernel lives in its own module under [`kernels`] and

@@ -92,7 +92,7 @@ impl Storage {
 
     /// The first `bytes` bytes as atomics (shared access: kernels add concurrently).
     pub fn as_atomic_u64(&self, bytes: u64) -> Result<&[AtomicU64], BackendError> {
-        if bytes as usize > self.bytes || bytes % 8 != 0 {
+        if bytes as usize > self.bytes || !bytes.is_multiple_of(8) {
             return Err(BackendError::BadArgument("atomic view out of range".into()));
         }
         let words = &self.words[..bytes as usize / 8];

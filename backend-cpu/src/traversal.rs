@@ -29,7 +29,7 @@ pub struct Hit {
 
 /// Builds an obvhs `CwBvh` from the uploaded node array (5 x `[u32; 4]` per node).
 pub fn adopt_bvh(nodes: &[[u32; 4]]) -> Result<CwBvh, BackendError> {
-    if nodes.len() % 5 != 0 {
+    if !nodes.len().is_multiple_of(5) {
         return Err(BackendError::BadArgument(
             "BVH node buffer is not a whole number of 80-byte nodes".into(),
         ));

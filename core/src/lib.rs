@@ -1,3 +1,5 @@
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::nonminimal_bool)]
+// NaN-rejecting comparisons such as `!(x > 0.0)` are deliberate: they are true for NaN.
 //! caustica core: the scene model, the scalar math every backend shares, the `#[repr(C)]`
 //! data layouts, the [`Backend`](backend::Backend) trait with its kernel registry, and the
 //! techniques as recordings of passes. Core depends on no backend.

@@ -122,7 +122,6 @@ pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd,
         return (PathEnd::Negligible, 0);
     }
     let mut channel: Option<usize> = None;
-    let mut specular = 0u32;
     for bounce in 0..p.max_bounces {
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
             return (PathEnd::Escaped, bounce + 1);
@@ -134,7 +133,9 @@ pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd,
         }
         match m.kind {
             material_kind::DIFFUSE => {
-                if specular == 0 {
+                if bounce == 0 {
+                    // every earlier segment ended at a mirror or dielectric, so bounce 0
+                    // is the only path without a specular interaction
                     return (PathEnd::NoSpecular, bounce + 1);
                 }
                 let ph = Photon {
@@ -182,7 +183,6 @@ pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd,
                 .direction;
             }
         }
-        specular += 1;
         if flux.max_element() < min_power || flux.max_element() <= 0.0 {
             return (PathEnd::Negligible, bounce + 1);
         }
