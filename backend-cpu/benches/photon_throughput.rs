@@ -1,1 +1,99 @@
-fn main() {}
+//! CPU photon paths per second on `sphere` and `cornell`, next to raw obvhs traversal of
+//! the same rays (each photon's emitted ray, closest hit with obvhs's own triangle test)
+//! in the same run. Run: `cargo bench -p caustica-cpu --bench photon_throughput`.
+//! Criterion's throughput is "elements" = photon paths (trace) or rays (raw).
+
+use caustica_core::device_scene::DeviceScene;
+use caustica_core::emission::{emission_domain, PointEmission};
+use caustica_core::gpu::TraceParams;
+use caustica_core::scene::builtin::builtin;
+use caustica_cpu::kernels::trace_photons::{emit_photon, trace_photons};
+use caustica_cpu::traversal::{adopt_bvh, SceneView};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use glam::Vec3A;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use rayon::prelude::*;
+
+fn bench(c: &mut Criterion) {
+    let n = 256u32;
+    for name in ["sphere", "cornell"] {
+        let scene = builtin(name).unwrap();
+        let ds = DeviceScene::build(&scene);
+        let bvh = adopt_bvh(&ds.bvh_nodes).unwrap();
+        let view = SceneView {
+            vertices: &ds.vertices,
+            triangles: &ds.triangles,
+            materials: &ds.materials,
+            lights: &ds.lights,
+            bvh: &bvh,
+        };
+        let d = emission_domain(
+            &scene.lights[0],
+            ds.caster_bounds,
+            ds.bounds,
+            PointEmission::CasterCone,
+        )
+        .unwrap();
+        let params = TraceParams {
+            light: 0,
+            emission: d.kind,
+            grid_w: n,
+            grid_h: n,
+            first: 0,
+            count: n * n,
+            seed: 1,
+            max_bounces: 12,
+            origin: d.origin.extend(d.cos_max).to_array(),
+            axis: d.axis.extend(0.0).to_array(),
+            rect_u: d.rect_u.extend(0.0).to_array(),
+            rect_v: d.rect_v.extend(0.0).to_array(),
+            photon_flux: (d.flux / (n * n) as f32).extend(1e-4).to_array(),
+            flux_quantum: 1e-9,
+            _pad: [0; 3],
+        };
+        let tris: Vec<Triangle> = ds
+            .triangles
+            .iter()
+            .map(|t| {
+                let p = |k: usize| Vec3A::from(ds.vertices[t.indices[k] as usize].position);
+                Triangle {
+                    v0: p(0),
+                    v1: p(1),
+                    v2: p(2),
+                }
+            })
+            .collect();
+        let rays: Vec<Ray> = (0..n * n)
+            .map(|i| {
+                let (o, dir, _) = emit_photon(&view, &params, i);
+                Ray::new_inf(Vec3A::from(o), Vec3A::from(dir))
+            })
+            .collect();
+        let mut g = c.benchmark_group(name);
+        g.throughput(Throughput::Elements((n * n) as u64));
+        g.sample_size(10);
+        g.bench_function("trace_photons (paths)", |b| {
+            b.iter(|| trace_photons(&view, &params).photons.len())
+        });
+        g.bench_function("raw obvhs closest hit (rays)", |b| {
+            b.iter(|| {
+                rays.par_iter()
+                    .map(|r| {
+                        let mut hit = RayHit::none();
+                        bvh.ray_traverse(*r, &mut hit, |ray, id| tris[id].intersect(ray)) as u32
+                    })
+                    .sum::<u32>()
+            })
+        });
+        let rays_per_path = {
+            let r = trace_photons(&view, &params);
+            r.counters.words[caustica_core::gpu::counter::RAYS] as f64 / (n * n) as f64
+        };
+        eprintln!("{name}: {rays_per_path:.2} ray segments per photon path");
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -63,14 +63,13 @@ fn ball_lens_focus_matches_paraxial_optics() {
 
 /// The flux the `sphere` caustic stores equals what an independent integration over the
 /// analytic sphere predicts. The light is on the axis above the centre, so every photon
-/// path stays in its meridional plane: for emission polar angle theta the incidence angle
-/// i follows from geometry, the ray refracts to r, and each exit k >= 1 leaves with weight
-/// (1 - F)^2 F^(k-1) (F = Fresnel at i) in a direction deviated by
-/// 2(i - r) + (k - 1)(pi - 2r); the external reflection has weight F. Each outgoing ray is
-/// followed to the plane y = 0 and counted if it lands inside the 4 x 4 square (azimuth
-/// integrated numerically). Tolerance 2%: Monte Carlo noise of ~90k hitting photons
-/// (<0.5% at 3 sigma), tessellation of the sphere (area and normals, ~0.1%), paths beyond
-/// k = 6 exits ignored by the integral (F^6 < 1e-6 of the flux).
+/// path stays in its meridional plane: an f64 2-D tracer written here (its own Snell and
+/// Fresnel) follows the external reflection (weight F) and up to 6 internal chords (exit k
+/// leaves with (1 - F)^2 F^(k-1), Stokes), each outgoing ray to the plane y = 0, counted
+/// when it lands inside the 4 x 4 square (azimuth integrated numerically).
+/// Tolerance 2%: Monte Carlo noise of the ~10k photons reaching the sphere through the
+/// stratified 512^2 cone (stratification keeps it well below 1%), tessellation of the
+/// sphere (area and normals, ~0.1%), paths beyond 6 internal chords (F^6 < 1e-6).
 #[test]
 fn sphere_caustic_flux_matches_numerical_integration() {
     let scene = builtin::sphere();
