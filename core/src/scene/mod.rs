@@ -195,7 +195,8 @@ pub enum Light {
     },
 }
 
-/// A scene tessellated to triangles, ready to be flattened for a device.
+/// A shape tessellated to triangles. Scene-wide bounds (all geometry, caustic casters)
+/// are computed once, by `device_scene::DeviceScene::build`.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
@@ -209,39 +210,5 @@ impl Scene {
     /// found, each with the path of the offending field (e.g. `materials.glass.ior`).
     pub fn validate(&self) -> Result<(), Vec<Problem>> {
         validate::validate(self)
-    }
-
-    /// Bounding box of all objects (world space).
-    pub fn bounds(&self) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        for o in &self.objects {
-            for p in shapes::tessellate(&o.shape).positions {
-                b.grow(p);
-            }
-        }
-        b
-    }
-
-    /// Bounding box of the objects with a specular (mirror or dielectric) material: the
-    /// caustic casters. Empty when the scene has none.
-    pub fn caster_bounds(&self) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        for o in &self.objects {
-            if self
-                .materials
-                .get(&o.material)
-                .is_some_and(Material::is_specular)
-            {
-                for p in shapes::tessellate(&o.shape).positions {
-                    b.grow(p);
-                }
-            }
-        }
-        b
-    }
-
-    /// True when any object has a mirror or dielectric material.
-    pub fn has_specular(&self) -> bool {
-        !self.caster_bounds().is_empty()
     }
 }
