@@ -114,7 +114,19 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
 }
 
 /// Traces one photon; returns how it ended and the number of ray segments traced.
+#[inline]
 pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd, u32) {
+    trace_photon_observed(scene, p, index, &mut |_, _| {})
+}
+
+/// [`trace_photon`], calling `on_segment(origin, direction)` before each ray segment is
+/// traced (the benchmark uses it to replay exactly the same rays through raw obvhs).
+pub fn trace_photon_observed(
+    scene: &SceneView,
+    p: &TraceParams,
+    index: u32,
+    on_segment: &mut impl FnMut(Vec3, Vec3),
+) -> (PathEnd, u32) {
     let (mut origin, mut dir, mut flux) = emit_photon(scene, p, index);
     let emitted_max = Vec3::from_slice(&p.photon_flux[..3]).max_element();
     let min_power = p.photon_flux[3] * emitted_max;
@@ -123,6 +135,7 @@ pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd,
     }
     let mut channel: Option<usize> = None;
     for bounce in 0..p.max_bounces {
+        on_segment(origin, dir);
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
             return (PathEnd::Escaped, bounce + 1);
         };

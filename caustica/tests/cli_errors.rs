@@ -1,0 +1,107 @@
+//! The binary's contract for bad input: one line on stderr, a non-zero exit, no panic.
+//! Each case runs the real `caustica` executable.
+
+use std::process::{Command, Output};
+
+fn caustica(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_caustica"))
+        .args(args)
+        .output()
+        .expect("the caustica binary runs")
+}
+
+/// Asserts a clean failure whose message contains `needle`.
+fn fails_cleanly(args: &[&str], needle: &str) {
+    let out = caustica(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    assert_ne!(out.status.code(), Some(101), "{args:?} panicked: {stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{args:?}: expected '{needle}' in: {stderr}"
+    );
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "{args:?}: error is not one line: {stderr}"
+    );
+}
+
+fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("caustica-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn unknown_scene() {
+    fails_cleanly(&["render", "--scene", "no-such-scene"], "no-such-scene");
+}
+
+#[test]
+fn zero_photon_grid() {
+    fails_cleanly(&["render", "--scene", "sphere", "--photons", "0x5"], "0x5");
+}
+
+#[test]
+fn unknown_backend() {
+    fails_cleanly(
+        &["render", "--scene", "sphere", "--backend", "quantum"],
+        "quantum",
+    );
+}
+
+#[test]
+fn truncated_scene_file() {
+    let path = temp_file("truncated.json", "{ \"camera\": { \"position\": [0, 1");
+    fails_cleanly(
+        &["render", "--scene", path.to_str().unwrap()],
+        "truncated.json",
+    );
+}
+
+#[test]
+fn negative_ior_names_its_line() {
+    let exported = caustica(&["scenes", "--export", "sphere"]);
+    assert!(exported.status.success());
+    let text = String::from_utf8(exported.stdout).unwrap();
+    let bad = text.replacen("\"ior\": 1.5", "\"ior\": -1.5", 1);
+    assert_ne!(
+        bad, text,
+        "the exported sphere scene has an \"ior\": 1.5 field"
+    );
+    let line = bad.lines().position(|l| l.contains("-1.5")).unwrap() + 1;
+    let path = temp_file("negative_ior.json", &bad);
+    fails_cleanly(
+        &["render", "--scene", path.to_str().unwrap()],
+        &format!("negative_ior.json:{line}:"),
+    );
+}
+
+#[test]
+fn exported_scene_loads_back() {
+    let exported = caustica(&["scenes", "--export", "ring"]);
+    assert!(exported.status.success());
+    let path = temp_file("ring.json", &String::from_utf8(exported.stdout).unwrap());
+    let out_dir = path.with_file_name("ring-out");
+    let out = caustica(&[
+        "render",
+        "--scene",
+        path.to_str().unwrap(),
+        "--photons",
+        "32x32",
+        "--size",
+        "64x36",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out_dir.join("stats.json").exists());
+}
