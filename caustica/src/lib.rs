@@ -47,7 +47,9 @@ pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
         }
         #[cfg(feature = "cpu")]
         "cpu" => Ok(Box::new(caustica_cpu::CpuBackend::new()?)),
-        "vulkan" | "wgpu" | "opencl" => Err(BackendError::Unavailable {
+        #[cfg(feature = "opencl")]
+        "opencl" => Ok(Box::new(caustica_opencl::OpenClBackend::new()?)),
+        "vulkan" | "wgpu" => Err(BackendError::Unavailable {
             backend: name.into(),
             reason: "not implemented yet (see the README's backend table)".into(),
         }),
@@ -55,6 +57,11 @@ pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
         "cpu" => Err(BackendError::Unavailable {
             backend: name.into(),
             reason: "not compiled in (cargo feature `cpu`)".into(),
+        }),
+        #[cfg(not(feature = "opencl"))]
+        "opencl" => Err(BackendError::Unavailable {
+            backend: name.into(),
+            reason: "not compiled in (cargo feature `opencl`)".into(),
         }),
         _ => Err(BackendError::Unavailable {
             backend: name.into(),
@@ -71,7 +78,8 @@ pub fn backend_statuses() -> Vec<BackendStatus> {
     BACKEND_NAMES
         .iter()
         .map(|&name| {
-            let compiled = name == "cpu" && cfg!(feature = "cpu");
+            let compiled = (name == "cpu" && cfg!(feature = "cpu"))
+                || (name == "opencl" && cfg!(feature = "opencl"));
             BackendStatus {
                 name,
                 compiled,

@@ -1,6 +1,6 @@
 //! Conformance helpers: open every backend named in `CAUSTICA_REQUIRE_BACKENDS` (a missing
-//! one is a failure, not a skip) and render small frames for comparison. Today only the
-//! CPU backend exists; the OpenCL, wgpu and Vulkan issues add theirs here.
+//! one is a failure, not a skip) and render small frames for comparison. Backends: cpu,
+//! opencl; the wgpu and Vulkan issues add theirs here.
 
 use caustica_core::{Backend, Scene, Sspm, SspmSettings};
 
@@ -12,6 +12,13 @@ pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
     match caustica_cpu::CpuBackend::new() {
         Ok(b) => out.push(("cpu", Box::new(b))),
         Err(e) => eprintln!("SKIPPING cpu backend: {e}"),
+    }
+    match caustica_opencl::OpenClBackend::new() {
+        Ok(b) => {
+            eprintln!("opencl backend: {}", b.device().name);
+            out.push(("opencl", Box::new(b)));
+        }
+        Err(e) => eprintln!("SKIPPING opencl backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
     }
     for name in required.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         assert!(

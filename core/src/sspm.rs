@@ -135,9 +135,19 @@ impl SspmSettings {
         if self.max_photons_per_batch == 0 {
             return bad("max_photons_per_batch must be >= 1");
         }
+        if self.max_specular_depth > MAX_SPECULAR_DEPTH {
+            return bad(&format!(
+                "max_specular_depth must be <= {MAX_SPECULAR_DEPTH}"
+            ));
+        }
         Ok(())
     }
 }
+
+/// Largest `max_specular_depth`: GPU kernels walk the specular ray tree with a fixed
+/// stack of `MAX_SPECULAR_DEPTH + 1` entries (a depth-first walk of a binary tree of depth
+/// `d` holds at most `d + 1` pending rays).
+pub const MAX_SPECULAR_DEPTH: u32 = 30;
 
 /// Device images of a frame (handles; read them with [`Sspm::read_image`]).
 #[derive(Clone, Copy, Debug)]

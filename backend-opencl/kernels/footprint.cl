@@ -1,0 +1,15 @@
+// Mirror of core/src/footprint.rs: 000 Eq. 4 pixel footprint and its obliquity correction.
+
+#define MIN_COSINE 1e-4f
+
+// 000 Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
+inline float pixel_footprint(float depth, uint width, uint height, float tan_half_fov_x,
+                             float tan_half_fov_y) {
+    float sx = 2.0f * depth * tan_half_fov_x / (float)width;
+    float sy = 2.0f * depth * tan_half_fov_y / (float)height;
+    return sx * sy;
+}
+
+inline float pixel_surface_area(float footprint, float cos_axis, float cos_normal) {
+    return footprint * fabs(cos_axis) / fmax(fabs(cos_normal), MIN_COSINE);
+}

@@ -1,0 +1,53 @@
+// Mirror of core/src/optics.rs: reflection, refraction, exact Fresnel, Beer-Lambert,
+// Cauchy dispersion and the photon's reflect-or-refract choice.
+
+inline float3 reflect(float3 incident, float3 normal) {
+    return incident - 2.0f * dot3(incident, normal) * normal;
+}
+
+// Refracted (unnormalised) direction; returns false on total internal reflection.
+inline bool refract(float3 incident, float3 normal, float eta, float3* out) {
+    float cos_i = -dot3(incident, normal);
+    float cos2_t = (1.0f - eta * eta) + eta * eta * cos_i * cos_i;
+    if (cos2_t < 0.0f) return false;
+    float cos_t = sqrt(cos2_t);
+    *out = eta * incident + (eta * cos_i - cos_t) * normal;
+    return true;
+}
+
+inline float fresnel_dielectric(float cos_i, float eta) {
+    cos_i = clampf(cos_i, 0.0f, 1.0f);
+    float cos2_t = (1.0f - eta * eta) + eta * eta * cos_i * cos_i;
+    if (cos2_t <= 0.0f) return 1.0f;
+    float cos_t = sqrt(cos2_t);
+    float r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return clampf(0.5f * (r_s * r_s + r_p * r_p), 0.0f, 1.0f);
+}
+
+inline float3 beer_lambert(float3 sigma_a, float distance) {
+    return (float3)(exp(-sigma_a.x * distance), exp(-sigma_a.y * distance),
+                    exp(-sigma_a.z * distance));
+}
+
+// Wavelengths (micrometres) of the red, green and blue photon channels.
+__constant float CHANNEL_WAVELENGTH_UM[3] = {0.65f, 0.55f, 0.45f};
+#define REFERENCE_WAVELENGTH_UM 0.55f
+
+inline float cauchy_ior(float ior, float cauchy_b, float wavelength_um) {
+    float a = ior - cauchy_b / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM);
+    return a + cauchy_b / (wavelength_um * wavelength_um);
+}
+
+// Reflects with probability = Fresnel reflectance (`xi` uniform in [0, 1)), else refracts.
+inline float3 dielectric_scatter(float3 incident, float3 shading_normal, bool entering,
+                                 float ior, float xi) {
+    float3 facing = dot3(incident, shading_normal) < 0.0f ? shading_normal : -shading_normal;
+    float eta = entering ? 1.0f / ior : ior;
+    float cos_i = -dot3(incident, facing);
+    float f = fresnel_dielectric(cos_i, eta);
+    if (xi < f) return reflect(incident, facing);
+    float3 t;
+    if (refract(incident, facing, eta, &t)) return normalize3(t);
+    return reflect(incident, facing);
+}

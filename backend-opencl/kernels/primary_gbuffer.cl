@@ -1,0 +1,36 @@
+// primary_gbuffer: one camera ray per pixel; mirror of backend-cpu/src/kernels/gbuffer.rs.
+
+__kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
+                              __global GBufferTexel* gbuffer) {
+    uint i = get_global_id(0);
+    if (i >= cam->width * cam->height) return;
+    uint px = i % cam->width, py = i / cam->width;
+    float3 dir = camera_ray(cam, px, py);
+    float3 origin = load3g(cam->position);
+    GBufferTexel g;
+    for (int k = 0; k < 16; k++) ((float*)&g)[k] = 0.0f;
+    Hit hit;
+    if (!closest_hit(nodes, node_count, vertices, triangles, origin, dir, INFINITY, &hit)) {
+        g.material = NO_MATERIAL;
+        gbuffer[i] = g;
+        return;
+    }
+    SurfacePoint s = hit_surface(vertices, triangles, &hit);
+    uint mat = triangles[hit.triangle].material;
+    __global const GpuMaterial* m = &materials[mat];
+    float3 n = facing_normal(s.shading_normal, dir);
+    bool diffuse = m->kind == MATERIAL_DIFFUSE;
+    store3(g.position, s.position);
+    g.depth = hit.t * dot3(dir, load3g(cam->forward));
+    store3(g.normal, n);
+    g.roughness = diffuse ? 1.0f : 0.0f;
+    g.albedo[0] = m->color[0];
+    g.albedo[1] = m->color[1];
+    g.albedo[2] = m->color[2];
+    g.material = mat;
+    g.uv[0] = s.uv.x;
+    g.uv[1] = s.uv.y;
+    g.view_distance = hit.t;
+    g.flags = diffuse ? GBUFFER_RECEIVER : 0u;
+    gbuffer[i] = g;
+}

@@ -1,0 +1,27 @@
+// Mirror of core/src/sampling.rs: equal-area warps of the unit square.
+
+inline float2 stratified_cell(uint ix, uint iy, uint grid_w, uint grid_h, float2 jitter) {
+    return (float2)(((float)ix + jitter.x) / (float)grid_w, ((float)iy + jitter.y) / (float)grid_h);
+}
+
+inline float3 uniform_cone(float2 u, float cos_max) {
+    float cos_t = 1.0f - u.x * (1.0f - cos_max);
+    float sin_t = sqrt(fmax(1.0f - cos_t * cos_t, 0.0f));
+    float phi = TAU_F * u.y;
+    return (float3)(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
+// Duff et al. 2017 orthonormal basis; returns t, writes b.
+inline float3 orthonormal_basis(float3 n, float3* b_out) {
+    float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n.z);
+    float b = n.x * n.y * a;
+    *b_out = (float3)(b, sign + n.y * n.y * a, -n.y);
+    return (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+}
+
+inline float3 to_world(float3 v, float3 n) {
+    float3 b;
+    float3 t = orthonormal_basis(n, &b);
+    return t * v.x + b * v.y + n * v.z;
+}

@@ -1,0 +1,50 @@
+// The scene as kernels see it (core::recording::SceneArgs), and the camera helpers of
+// core/src/gpu.rs (camera_ray, project_to_pixel).
+
+#define SCENE_PARAMS                                                                       \
+    __global const GpuVertex *vertices, __global const GpuTriangle *triangles,            \
+        __global const GpuMaterial *materials, __global const GpuLight *lights,            \
+        __global const uint4 *nodes, uint node_count
+#define SCENE_ARGS vertices, triangles, materials, lights, nodes, node_count
+
+inline float3 camera_ray(__global const GpuCamera* cam, uint px, uint py) {
+    float sx = (2.0f * ((float)px + 0.5f) / (float)cam->width - 1.0f) * cam->tan_half_fov_x;
+    float sy = (1.0f - 2.0f * ((float)py + 0.5f) / (float)cam->height) * cam->tan_half_fov_y;
+    return normalize3(load3g(cam->forward) + sx * load3g(cam->right) + sy * load3g(cam->up));
+}
+
+// Pixel containing world point `p` and its view depth; false behind the camera or off
+// screen.
+inline bool project_to_pixel(__global const GpuCamera* cam, float3 p, uint* px, uint* py,
+                             float* depth) {
+    float3 v = p - load3g(cam->position);
+    float z = dot3(v, load3g(cam->forward));
+    if (isnan(z) || z <= 0.0f) return false;
+    float sx = dot3(v, load3g(cam->right)) / (z * cam->tan_half_fov_x);
+    float sy = dot3(v, load3g(cam->up)) / (z * cam->tan_half_fov_y);
+    float fx = (sx + 1.0f) * 0.5f * (float)cam->width;
+    float fy = (1.0f - sy) * 0.5f * (float)cam->height;
+    if (!(fx >= 0.0f && fy >= 0.0f && fx < (float)cam->width && fy < (float)cam->height))
+        return false;
+    *px = (uint)fx;
+    *py = (uint)fy;
+    *depth = z;
+    return true;
+}
+
+inline SurfacePoint hit_surface(__global const GpuVertex* vertices,
+                                __global const GpuTriangle* triangles, const Hit* hit) {
+    __global const GpuTriangle* t = &triangles[hit->triangle];
+    return surface_point(&vertices[t->indices[0]], &vertices[t->indices[1]],
+                         &vertices[t->indices[2]], hit->u, hit->v);
+}
+
+// core::device_scene::spot_falloff: smoothstep between the outer and inner cone.
+inline float spot_falloff(float cos_theta, float cos_inner, float cos_outer) {
+    if (cos_theta >= cos_inner) return 1.0f;
+    if (cos_theta <= cos_outer) return 0.0f;
+    float t = clampf((cos_theta - cos_outer) / (cos_inner - cos_outer), 0.0f, 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+inline float3 facing_normal(float3 n, float3 dir) { return dot3(n, dir) > 0.0f ? -n : n; }

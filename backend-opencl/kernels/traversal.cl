@@ -1,0 +1,171 @@
+// Software traversal of core's flattened BVH: obvhs's compressed wide BVH8 (Ylitie et al.
+// 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs"), each
+// 80-byte node uploaded as five uint4:
+//   [0].xyz  p, the node grid origin (float bits)      [0].w  e[0..3] exponents, imask
+//   [1].x    child_base_idx  [1].y primitive_base_idx  [1].zw child_meta[8]
+//   [2]      child_min_x[8], child_max_x[8]            [3] y planes   [4] z planes
+// The node test, child order and primitive order are those of the CPU backend's obvhs
+// traversal, so both find the same closest hit; triangles are stored in leaf order, so
+// a primitive index is a triangle index. Mirrors backend-cpu/src/traversal.rs.
+
+// obvhs's cull epsilon: a child box is entered only where t >= 1e-4.
+#define CWBVH_EPSILON 0.0001f
+#define TRAVERSAL_STACK_SIZE 32
+
+typedef struct {
+    float t;
+    uint triangle;
+    float u;
+    float v;
+} Hit;
+
+// obvhs's `safe_inverse`.
+inline float safe_inverse(float x) {
+    return fabs(x) <= FLT_EPSILON ? (x < 0.0f || (x == 0.0f && signbit(x)) ? -1.0f : 1.0f) / FLT_EPSILON
+                                  : 1.0f / x;
+}
+
+// A zero direction component becomes +-1e-30 (sign kept) for node culling only, as the CPU
+// backend's `traversal_ray`, so that the slab test's side choice matches the inverse.
+inline float traversal_component(float c) { return c == 0.0f ? copysign(1e-30f, c) : c; }
+
+inline uint octant_inv4(float3 d) {
+    return (d.x < 0.0f ? 0u : 0x04040404u) | (d.y < 0.0f ? 0u : 0x02020202u) |
+           (d.z < 0.0f ? 0u : 0x01010101u);
+}
+
+inline uint byte_of(ulong x, uint b) { return (uint)(x >> (b * 8u)) & 0xFFu; }
+
+inline uint firstbithigh(uint x) { return 31u - clz(x); }
+
+// Hit mask of a node's children: inner children set a bit in the top byte (at their
+// octant-ordered slot), leaves their unary primitive count in the low 24 bits.
+inline uint cwbvh_node_hits(__global const uint4* nodes, uint index, float3 origin,
+                            float3 dir, float3 inv_dir, float t_max, uint oct_inv4) {
+    uint4 n0 = nodes[index * 5u + 0u];
+    uint4 n1 = nodes[index * 5u + 1u];
+    uint4 nx = nodes[index * 5u + 2u];
+    uint4 ny = nodes[index * 5u + 3u];
+    uint4 nz = nodes[index * 5u + 4u];
+    float3 p = (float3)(as_float(n0.x), as_float(n0.y), as_float(n0.z));
+    float3 extent = (float3)(as_float((n0.w & 0xFFu) << 23), as_float(((n0.w >> 8) & 0xFFu) << 23),
+                             as_float(((n0.w >> 16) & 0xFFu) << 23));
+    float3 adj_dir_inv = extent * inv_dir;
+    float3 adj_origin = (p - origin) * inv_dir;
+
+    ulong meta8 = (ulong)n1.z | ((ulong)n1.w << 32);
+    ulong oct_inv8 = (ulong)oct_inv4 | ((ulong)oct_inv4 << 32);
+    ulong is_inner8 = (meta8 & (meta8 << 1)) & 0x1010101010101010ul;
+    ulong inner_mask8 = (is_inner8 >> 4) * 0xfful;
+    ulong bit_index8 = (meta8 ^ (oct_inv8 & inner_mask8)) & 0x1f1f1f1f1f1f1f1ful;
+    ulong child_bits8 = (meta8 >> 5) & 0x0707070707070707ul;
+
+    ulong min_x = (ulong)nx.x | ((ulong)nx.y << 32), max_x = (ulong)nx.z | ((ulong)nx.w << 32);
+    ulong min_y = (ulong)ny.x | ((ulong)ny.y << 32), max_y = (ulong)ny.z | ((ulong)ny.w << 32);
+    ulong min_z = (ulong)nz.x | ((ulong)nz.y << 32), max_z = (ulong)nz.z | ((ulong)nz.w << 32);
+    bool rdx = dir.x < 0.0f, rdy = dir.y < 0.0f, rdz = dir.z < 0.0f;
+
+    uint hit_mask = 0u;
+    for (uint child = 0u; child < 8u; child++) {
+        float lo_x = (float)byte_of(rdx ? max_x : min_x, child);
+        float hi_x = (float)byte_of(rdx ? min_x : max_x, child);
+        float lo_y = (float)byte_of(rdy ? max_y : min_y, child);
+        float hi_y = (float)byte_of(rdy ? min_y : max_y, child);
+        float lo_z = (float)byte_of(rdz ? max_z : min_z, child);
+        float hi_z = (float)byte_of(rdz ? min_z : max_z, child);
+        float3 tmin3 = (float3)(lo_x, lo_y, lo_z) * adj_dir_inv + adj_origin;
+        float3 tmax3 = (float3)(hi_x, hi_y, hi_z) * adj_dir_inv + adj_origin;
+        float tmin = fmax(fmax(fmax(tmin3.x, tmin3.y), tmin3.z), CWBVH_EPSILON);
+        float tmax = fmin(fmin(fmin(tmax3.x, tmax3.y), tmax3.z), t_max);
+        if (tmin <= tmax) {
+            hit_mask |= byte_of(child_bits8, child) << byte_of(bit_index8, child);
+        }
+    }
+    return hit_mask;
+}
+
+inline void triangle_positions(__global const GpuVertex* vertices,
+                               __global const GpuTriangle* triangles, uint i, float3* a,
+                               float3* b, float3* c) {
+    __global const GpuTriangle* t = &triangles[i];
+    *a = load3g(vertices[t->indices[0]].position);
+    *b = load3g(vertices[t->indices[1]].position);
+    *c = load3g(vertices[t->indices[2]].position);
+}
+
+// Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true).
+inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
+                           __global const GpuVertex* vertices,
+                           __global const GpuTriangle* triangles, float3 origin, float3 dir,
+                           float t_max, bool any_hit, Hit* hit) {
+    if (node_count == 0u) return false;
+    float3 tdir = (float3)(traversal_component(dir.x), traversal_component(dir.y),
+                           traversal_component(dir.z));
+    float3 inv_dir = (float3)(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z));
+    uint oct_inv4 = octant_inv4(tdir);
+    uint2 stack[TRAVERSAL_STACK_SIZE];
+    uint sp = 0u;
+    uint2 current_group = (uint2)(0u, 0x80000000u);
+    uint2 primitive_group = (uint2)(0u, 0u);
+    bool found = false;
+    float closest = t_max;
+    for (;;) {
+        while (primitive_group.y != 0u) {
+            uint bit = firstbithigh(primitive_group.y);
+            primitive_group.y &= ~(1u << bit);
+            uint prim = primitive_group.x + bit;
+            float3 a, b, c;
+            triangle_positions(vertices, triangles, prim, &a, &b, &c);
+            TriangleHit h;
+            if (intersect_triangle(origin, dir, a, b, c, 0.0f, closest, &h) && h.t < closest) {
+                found = true;
+                closest = h.t;
+                hit->t = h.t;
+                hit->triangle = prim;
+                hit->u = h.u;
+                hit->v = h.v;
+                if (any_hit) return true;
+            }
+        }
+        primitive_group = (uint2)(0u, 0u);
+        if ((current_group.y & 0xff000000u) != 0u) {
+            uint hits_imask = current_group.y;
+            uint child_index_offset = firstbithigh(hits_imask);
+            uint child_index_base = current_group.x;
+            current_group.y &= ~(1u << child_index_offset);
+            if ((current_group.y & 0xff000000u) != 0u) {
+                // obvhs's BVH8 depth stays far below the stack size; a deeper tree
+                // (degenerate input) loses the group rather than writing out of bounds.
+                if (sp < TRAVERSAL_STACK_SIZE) stack[sp++] = current_group;
+            }
+            uint slot_index = (child_index_offset - 24u) ^ (oct_inv4 & 0xffu);
+            uint relative_index = popcount(hits_imask & ~(0xffffffffu << slot_index));
+            uint child = child_index_base + relative_index;
+            uint hitmask = cwbvh_node_hits(nodes, child, origin, tdir, inv_dir, closest, oct_inv4);
+            uint4 n0 = nodes[child * 5u + 0u];
+            uint4 n1 = nodes[child * 5u + 1u];
+            current_group = (uint2)(n1.x, (hitmask & 0xff000000u) | (n0.w >> 24));
+            primitive_group = (uint2)(n1.y, hitmask & 0x00ffffffu);
+        } else {
+            current_group = (uint2)(0u, 0u);
+        }
+        if (primitive_group.y == 0u && (current_group.y & 0xff000000u) == 0u) {
+            if (sp == 0u) break;
+            current_group = stack[--sp];
+        }
+    }
+    return found;
+}
+
+inline bool closest_hit(__global const uint4* nodes, uint node_count,
+                        __global const GpuVertex* vertices, __global const GpuTriangle* triangles,
+                        float3 origin, float3 dir, float t_max, Hit* hit) {
+    return traverse_cwbvh(nodes, node_count, vertices, triangles, origin, dir, t_max, false, hit);
+}
+
+inline bool occluded(__global const uint4* nodes, uint node_count,
+                     __global const GpuVertex* vertices, __global const GpuTriangle* triangles,
+                     float3 origin, float3 dir, float t_max) {
+    Hit h;
+    return traverse_cwbvh(nodes, node_count, vertices, triangles, origin, dir, t_max, true, &h);
+}

@@ -1,0 +1,249 @@
+//! caustica OpenCL backend: every registry kernel in OpenCL C 1.2 (`kernels/<kernel>.cl`,
+//! functions named as core's scalar functions), software traversal of core's flattened
+//! CWBVH, the counter-based RNG and the fixed-point deposit with 32-bit atomics. Runs on
+//! any OpenCL platform: PoCL on CPUs, NVIDIA's driver on the GPU machine.
+//!
+//! Buffers stay on the device between passes and recordings; data comes back only
+//! through [`Backend::read`]. Kernel times are device timestamps (profiling events).
+
+mod device;
+mod dispatch;
+mod error;
+pub mod program;
+
+use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::recording::{Recording, ResourceId, Step};
+use device::DeviceState;
+pub use device::{list_devices, DeviceSummary};
+use error::cl_error;
+use ocl::core::{self, CommandQueue, CommandQueueProperties, Event, Mem, MemFlags};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// A device buffer and its logical size in bytes (OpenCL buffers are at least 4 bytes).
+struct DeviceBuffer {
+    mem: Mem,
+    bytes: u64,
+}
+
+/// The OpenCL backend.
+pub struct OpenClBackend {
+    state: Arc<DeviceState>,
+    queue: CommandQueue,
+    buffers: HashMap<ResourceId, DeviceBuffer>,
+}
+
+impl OpenClBackend {
+    /// Opens the chosen device (`CAUSTICA_OPENCL_DEVICE=N`, else the first GPU, else the
+    /// first device). No loader, platform or device, or a failed kernel build, is an error.
+    pub fn new() -> Result<OpenClBackend, BackendError> {
+        let (platform, device) = device::choose_device()?;
+        let state = device::device_state(platform, device)?;
+        let queue = core::create_command_queue(
+            &state.context,
+            state.device,
+            Some(CommandQueueProperties::PROFILING_ENABLE),
+        )
+        .map_err(cl_error("creating the command queue"))?;
+        Ok(OpenClBackend {
+            state,
+            queue,
+            buffers: HashMap::new(),
+        })
+    }
+
+    /// The device in use.
+    pub fn device(&self) -> &DeviceSummary {
+        &self.state.info
+    }
+
+    /// `sizeof` of every shared struct as the device compiler lays it out, in the order
+    /// of `kernels/types.cl`'s `struct_sizes` (checked against Rust's `size_of` in tests).
+    pub fn device_struct_sizes(&mut self) -> Result<Vec<u32>, BackendError> {
+        let mem = unsafe {
+            core::create_buffer::<_, u32>(&self.state.context, MemFlags::READ_WRITE, 16, None)
+        }
+        .map_err(cl_error("creating a buffer"))?;
+        let kernel = core::create_kernel(&self.state.program, "struct_sizes")
+            .map_err(cl_error("creating a kernel"))?;
+        core::set_kernel_arg(&kernel, 0, ocl::core::ArgVal::mem(&mem))
+            .map_err(cl_error("setting a kernel argument"))?;
+        let mut out = vec![0u32; 16];
+        unsafe {
+            core::enqueue_kernel(
+                &self.queue,
+                &kernel,
+                1,
+                None,
+                &[1, 1, 1],
+                None,
+                None::<Event>,
+                None::<&mut Event>,
+            )
+            .map_err(cl_error("struct_sizes"))?;
+            core::enqueue_read_buffer(
+                &self.queue,
+                &mem,
+                true,
+                0,
+                &mut out,
+                None::<Event>,
+                None::<&mut Event>,
+            )
+            .map_err(cl_error("reading a buffer"))?;
+        }
+        out.truncate(12);
+        Ok(out)
+    }
+
+    /// Compiles `src` on this backend's device (diagnostics and tests: the error of a
+    /// failed build carries the driver's build log).
+    pub fn build_test_program(&self, src: &str) -> Result<(), BackendError> {
+        program::build_source(&self.state.context, self.state.device, src).map(|_| ())
+    }
+
+    fn create(
+        &mut self,
+        id: ResourceId,
+        bytes: u64,
+        label: &str,
+        data: Option<&[u8]>,
+    ) -> Result<(), BackendError> {
+        let oom = || BackendError::OutOfMemory {
+            bytes,
+            what: format!(
+                "{label} (device allows {} bytes per buffer)",
+                self.state.info.max_alloc_bytes
+            ),
+        };
+        if bytes > self.state.info.max_alloc_bytes {
+            return Err(oom());
+        }
+        let size = usize::try_from(bytes.max(4)).map_err(|_| oom())?;
+        // Drop a replaced buffer first so that its memory is free for the new one.
+        self.buffers.remove(&id);
+        let mem = unsafe {
+            core::create_buffer::<_, u8>(&self.state.context, MemFlags::READ_WRITE, size, None)
+        }
+        .map_err(cl_error("creating a buffer"))?;
+        match data {
+            Some(d) if !d.is_empty() => unsafe {
+                core::enqueue_write_buffer(
+                    &self.queue,
+                    &mem,
+                    true,
+                    0,
+                    d,
+                    None::<Event>,
+                    None::<&mut Event>,
+                )
+                .map_err(cl_error("uploading a buffer"))?;
+            },
+            _ => self.fill_zero(&mem, size)?,
+        }
+        self.buffers.insert(id, DeviceBuffer { mem, bytes });
+        Ok(())
+    }
+
+    fn fill_zero(&self, mem: &Mem, size: usize) -> Result<(), BackendError> {
+        core::enqueue_fill_buffer(
+            &self.queue,
+            mem,
+            0u8,
+            0,
+            size,
+            None::<Event>,
+            None::<&mut Event>,
+            None,
+        )
+        .map_err(cl_error("clearing a buffer"))
+    }
+
+    fn buffer(&self, id: ResourceId) -> Result<&DeviceBuffer, BackendError> {
+        self.buffers
+            .get(&id)
+            .ok_or(BackendError::MissingResource(id))
+    }
+}
+
+impl Backend for OpenClBackend {
+    fn name(&self) -> &'static str {
+        "opencl"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        let i = &self.state.info;
+        Capabilities {
+            device: format!("{} ({}, {})", i.name, i.platform, i.version),
+            hardware_ray_tracing: false,
+            float_atomics: false,
+            int64_atomics: i.int64_atomics,
+            timestamps: true,
+            max_buffer_bytes: i.max_alloc_bytes,
+        }
+    }
+
+    fn kernels(&self) -> Vec<&'static str> {
+        dispatch::IMPLEMENTED.to_vec()
+    }
+
+    fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        let mut pending: Vec<(&'static str, Event)> = Vec::new();
+        for step in &recording.steps {
+            match step {
+                Step::Create { id, bytes, label } => self.create(*id, *bytes, label, None)?,
+                Step::Upload { id, data, label } => {
+                    self.create(*id, data.len() as u64, label, Some(data))?
+                }
+                Step::Clear { id } => {
+                    let b = self.buffer(*id)?;
+                    self.fill_zero(&b.mem, b.bytes.max(4) as usize)?;
+                }
+                Step::Free { id } => {
+                    self.buffers.remove(id);
+                }
+                Step::Kernel(k) => {
+                    if let Some(event) = dispatch::run(self, k)? {
+                        pending.push((k.name(), event));
+                    }
+                }
+            }
+        }
+        core::finish(&self.queue).map_err(cl_error("waiting for the device"))?;
+        pending
+            .into_iter()
+            .map(|(kernel, e)| {
+                let t = |what| {
+                    core::get_event_profiling_info(&e, what)
+                        .and_then(|r| r.time())
+                        .map_err(cl_error("reading a kernel timestamp"))
+                };
+                let (start, end) = (t(core::ProfilingInfo::Start)?, t(core::ProfilingInfo::End)?);
+                Ok(PassTime {
+                    kernel,
+                    seconds: end.saturating_sub(start) as f64 * 1e-9,
+                })
+            })
+            .collect()
+    }
+
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        let b = self.buffer(id)?;
+        let mut out = vec![0u8; b.bytes as usize];
+        if !out.is_empty() {
+            unsafe {
+                core::enqueue_read_buffer(
+                    &self.queue,
+                    &b.mem,
+                    true,
+                    0,
+                    &mut out,
+                    None::<Event>,
+                    None::<&mut Event>,
+                )
+                .map_err(cl_error("reading a buffer"))?;
+            }
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,46 @@
+//! The OpenCL program builds on this machine's platform, and the device compiler lays out
+//! every shared struct with Rust's sizes. Fails loudly when no OpenCL platform exists
+//! (CI installs PoCL with scripts/install-drivers.sh).
+
+use caustica_core::gpu::*;
+use caustica_opencl::OpenClBackend;
+use std::mem::size_of;
+
+#[test]
+fn struct_sizes_match_core() {
+    let mut b = OpenClBackend::new().unwrap_or_else(|e| panic!("OpenCL backend unavailable: {e}"));
+    eprintln!("OpenCL device: {:?}", b.device());
+    let sizes = b.device_struct_sizes().unwrap();
+    let expect = [
+        ("GpuVertex", size_of::<GpuVertex>()),
+        ("GpuTriangle", size_of::<GpuTriangle>()),
+        ("GpuMaterial", size_of::<GpuMaterial>()),
+        ("GpuLight", size_of::<GpuLight>()),
+        ("GpuCamera", size_of::<GpuCamera>()),
+        ("GBufferTexel", size_of::<GBufferTexel>()),
+        ("Photon", size_of::<Photon>()),
+        ("DepositTexel", size_of::<DepositTexel>()),
+        ("TraceParams", size_of::<TraceParams>()),
+        ("DepositParams", size_of::<DepositParams>()),
+        ("GatherParams", size_of::<GatherParams>()),
+        ("DirectParams", size_of::<DirectParams>()),
+    ];
+    for ((name, rust), cl) in expect.iter().zip(&sizes) {
+        assert_eq!(*rust as u32, *cl, "{name}: Rust {rust} bytes, OpenCL {cl}");
+    }
+}
+
+#[test]
+fn build_failure_returns_the_log() {
+    let b = OpenClBackend::new().unwrap();
+    let err =
+        b.build_test_program("__kernel void broken(__global uint* x) { x[0] = undefined_name; }");
+    let msg = err
+        .err()
+        .expect("a broken kernel does not build")
+        .to_string();
+    assert!(
+        msg.contains("build log") && msg.contains("undefined_name"),
+        "{msg}"
+    );
+}
