@@ -12,7 +12,6 @@
 
 use caustica_core::device_scene::DeviceScene;
 use caustica_core::emission::{emission_domain, PointEmission};
-use caustica_core::gpu::TraceParams;
 use caustica_core::scene::builtin::builtin;
 use caustica_cpu::kernels::trace_photons::{emit_photon, trace_photon_observed, trace_photons};
 use caustica_cpu::traversal::{adopt_bvh, SceneView};
@@ -42,23 +41,7 @@ fn bench(c: &mut Criterion) {
             PointEmission::CasterCone,
         )
         .unwrap();
-        let params = TraceParams {
-            light: 0,
-            emission: d.kind,
-            grid_w: n,
-            grid_h: n,
-            first: 0,
-            count: n * n,
-            seed: 1,
-            max_bounces: 12,
-            origin: d.origin.extend(d.cos_max).to_array(),
-            axis: d.axis.extend(0.0).to_array(),
-            rect_u: d.rect_u.extend(0.0).to_array(),
-            rect_v: d.rect_v.extend(0.0).to_array(),
-            photon_flux: (d.flux / (n * n) as f32).extend(1e-4).to_array(),
-            flux_quantum: 1e-9,
-            _pad: [0; 3],
-        };
+        let params = d.trace_params(0, (n, n), (0, n * n), 1, 12, 1e-4, 1e-9);
         let tris: Vec<Triangle> = ds
             .triangles
             .iter()

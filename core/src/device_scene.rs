@@ -84,6 +84,22 @@ impl DeviceScene {
     }
 
     /// Number of CWBVH nodes.
+    /// Records the upload of every scene buffer and the `prepare_scene` kernel.
+    pub fn record_upload(
+        &self,
+        rec: &mut crate::recording::Recording,
+    ) -> crate::recording::SceneArgs {
+        let scene = crate::recording::SceneArgs {
+            vertices: rec.upload(&self.vertices, "vertices"),
+            triangles: rec.upload(&self.triangles, "triangles"),
+            materials: rec.upload(&self.materials, "materials"),
+            lights: rec.upload(&self.lights, "lights"),
+            bvh_nodes: rec.upload(&self.bvh_nodes, "bvh nodes"),
+        };
+        rec.kernel(crate::recording::Kernel::PrepareScene { scene });
+        scene
+    }
+
     pub fn bvh_node_count(&self) -> usize {
         self.bvh_nodes.len() / BVH_NODE_VEC4S
     }

@@ -42,6 +42,44 @@ pub struct EmissionDomain {
     pub flux: Vec3,
 }
 
+impl EmissionDomain {
+    /// Parameters of a `trace_photons` dispatch over photons `first .. first + count` of
+    /// the `grid.0 x grid.1` grid of light `light`: flux per photon is the domain's flux
+    /// over the grid (000 Eqs. 1 and 3).
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_params(
+        &self,
+        light: u32,
+        grid: (u32, u32),
+        (first, count): (u32, u32),
+        seed: u32,
+        max_bounces: u32,
+        min_relative_power: f32,
+        flux_quantum: f32,
+    ) -> crate::gpu::TraceParams {
+        let per_light = grid.0 as u64 * grid.1 as u64;
+        crate::gpu::TraceParams {
+            light,
+            emission: self.kind,
+            grid_w: grid.0,
+            grid_h: grid.1,
+            first,
+            count,
+            seed,
+            max_bounces,
+            origin: self.origin.extend(self.cos_max).to_array(),
+            axis: self.axis.extend(0.0).to_array(),
+            rect_u: self.rect_u.extend(0.0).to_array(),
+            rect_v: self.rect_v.extend(0.0).to_array(),
+            photon_flux: (self.flux / per_light as f32)
+                .extend(min_relative_power)
+                .to_array(),
+            flux_quantum,
+            _pad: [0; 3],
+        }
+    }
+}
+
 /// Why a light emits no photons.
 #[derive(Clone, Debug, PartialEq)]
 pub enum NoEmission {

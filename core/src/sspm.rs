@@ -211,14 +211,7 @@ impl Sspm {
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
         let ds = DeviceScene::build(scene);
         let mut rec = Recording::new();
-        let scene_args = SceneArgs {
-            vertices: rec.upload(&ds.vertices, "vertices"),
-            triangles: rec.upload(&ds.triangles, "triangles"),
-            materials: rec.upload(&ds.materials, "materials"),
-            lights: rec.upload(&ds.lights, "lights"),
-            bvh_nodes: rec.upload(&ds.bvh_nodes, "bvh nodes"),
-        };
-        rec.kernel(Kernel::PrepareScene { scene: scene_args });
+        let scene_args = ds.record_upload(&mut rec);
 
         let mut work = Vec::new();
         let mut skipped_lights = Vec::new();
@@ -399,7 +392,6 @@ impl Sspm {
                 for c in 0..3 {
                     stats.emitted_flux[c] += d.flux[c] as f64;
                 }
-                let photon_flux = d.flux / per_light as f32;
                 let mut first = 0u64;
                 while first < per_light {
                     let count = (per_light - first).min(photons.len as u64) as u32;
@@ -407,25 +399,15 @@ impl Sspm {
                     rec.clear(photon_count);
                     rec.kernel(Kernel::TracePhotons {
                         scene: self.scene,
-                        params: TraceParams {
-                            light: w.index,
-                            emission: d.kind,
-                            grid_w: self.settings.photons_w,
-                            grid_h: self.settings.photons_h,
-                            first: first as u32,
-                            count,
-                            seed: self.settings.seed ^ pcg_hash(w.index.wrapping_add(0x6c62_272e)),
-                            max_bounces: self.settings.max_bounces,
-                            origin: d.origin.extend(d.cos_max).to_array(),
-                            axis: d.axis.extend(0.0).to_array(),
-                            rect_u: d.rect_u.extend(0.0).to_array(),
-                            rect_v: d.rect_v.extend(0.0).to_array(),
-                            photon_flux: photon_flux
-                                .extend(self.settings.min_relative_power)
-                                .to_array(),
-                            flux_quantum: self.flux_quantum,
-                            _pad: [0; 3],
-                        },
+                        params: d.trace_params(
+                            w.index,
+                            (self.settings.photons_w, self.settings.photons_h),
+                            (first as u32, count),
+                            self.settings.seed ^ pcg_hash(w.index.wrapping_add(0x6c62_272e)),
+                            self.settings.max_bounces,
+                            self.settings.min_relative_power,
+                            self.flux_quantum,
+                        ),
                         photons,
                         photon_count,
                         counters: self.counters,
