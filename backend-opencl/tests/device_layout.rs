@@ -44,3 +44,26 @@ fn build_failure_returns_the_log() {
         "{msg}"
     );
 }
+
+#[test]
+fn oversized_buffer_is_out_of_memory() {
+    use caustica_core::backend::{Backend, BackendError};
+    use caustica_core::recording::Recording;
+    let mut b = OpenClBackend::new().unwrap();
+    let max = b.capabilities().max_buffer_bytes;
+    let mut rec = Recording::new();
+    // More elements of 16 bytes than the device allows in one buffer.
+    let n = (max / 16 + 1).min(u32::MAX as u64) as u32;
+    let _ = rec.create::<[f32; 4]>(n, "too big");
+    if (n as u64) * 16 <= max {
+        eprintln!("device allows {max} bytes: a u32-counted buffer cannot exceed it");
+        return;
+    }
+    match b.execute(&rec) {
+        Err(BackendError::OutOfMemory { bytes, what }) => {
+            assert_eq!(bytes, n as u64 * 16);
+            assert!(what.contains("too big"), "{what}");
+        }
+        other => panic!("expected OutOfMemory, got {other:?}"),
+    }
+}
