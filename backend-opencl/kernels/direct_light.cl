@@ -45,6 +45,15 @@ typedef struct {
     uint depth;
 } ChainRay;
 
+inline ChainRay chain_ray(float3 origin, float3 dir, float3 weight, uint depth) {
+    ChainRay r;
+    r.origin = origin;
+    r.dir = dir;
+    r.weight = weight;
+    r.depth = depth;
+    return r;
+}
+
 // Radiance along a camera ray that meets mirrors and glass: the ray tree is walked
 // depth first with an explicit stack, in the CPU's order (last pushed, first popped).
 inline float3 specular_chain(SCENE_PARAMS, __global const DirectParams* p, float3 origin,
@@ -52,7 +61,7 @@ inline float3 specular_chain(SCENE_PARAMS, __global const DirectParams* p, float
     ChainRay stack[MAX_SPECULAR_DEPTH + 2];
     uint sp = 0u;
     float3 l = (float3)(0.0f);
-    stack[sp++] = (ChainRay){origin, dir, (float3)(1.0f), 0u};
+    stack[sp++] = chain_ray(origin, dir, (float3)(1.0f), 0u);
     while (sp > 0u) {
         ChainRay r = stack[--sp];
         Hit hit;
@@ -74,23 +83,23 @@ inline float3 specular_chain(SCENE_PARAMS, __global const DirectParams* p, float
             float3 w = weight * load3g(m->color);
             if (max_element3(w) >= p->min_weight && sp < MAX_SPECULAR_DEPTH + 2) {
                 float3 n = facing_normal(s.shading_normal, r.dir);
-                stack[sp++] = (ChainRay){offset_ray_origin(s.position, ng_view),
-                                         reflect(r.dir, n), w, r.depth + 1u};
+                stack[sp++] = chain_ray(offset_ray_origin(s.position, ng_view),
+                                         reflect(r.dir, n), w, r.depth + 1u);
             }
         } else {
             float3 facing = facing_normal(s.shading_normal, r.dir);
             float eta = entering ? 1.0f / m->ior : m->ior;
             float f = fresnel_dielectric(-dot3(r.dir, facing), eta);
             if (max_element3(weight) * f >= p->min_weight && sp < MAX_SPECULAR_DEPTH + 2) {
-                stack[sp++] = (ChainRay){offset_ray_origin(s.position, ng_view),
-                                         reflect(r.dir, facing), weight * f, r.depth + 1u};
+                stack[sp++] = chain_ray(offset_ray_origin(s.position, ng_view),
+                                         reflect(r.dir, facing), weight * f, r.depth + 1u);
             }
             float3 t;
             if (refract(r.dir, facing, eta, &t)) {
                 if (max_element3(weight) * (1.0f - f) >= p->min_weight &&
                     sp < MAX_SPECULAR_DEPTH + 2) {
-                    stack[sp++] = (ChainRay){offset_ray_origin(s.position, -ng_view),
-                                             normalize3(t), weight * (1.0f - f), r.depth + 1u};
+                    stack[sp++] = chain_ray(offset_ray_origin(s.position, -ng_view),
+                                             normalize3(t), weight * (1.0f - f), r.depth + 1u);
                 }
             }
         }
