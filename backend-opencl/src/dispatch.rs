@@ -73,7 +73,7 @@ impl<'a> Launch<'a> {
     }
 
     fn scene(&mut self, s: &SceneArgs) -> Result<&mut Self, BackendError> {
-        if s.bvh_nodes.len % 5 != 0 {
+        if !s.bvh_nodes.len.is_multiple_of(5) {
             return Err(BackendError::BadArgument(
                 "BVH node buffer is not a whole number of 80-byte nodes".into(),
             ));

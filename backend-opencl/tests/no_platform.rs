@@ -20,5 +20,9 @@ fn no_platform_is_a_typed_error() {
         Err(e) => panic!("expected Unavailable, got {e}"),
         Ok(_) => panic!("an empty vendor directory still gave a platform"),
     }
-    assert!(t0.elapsed().as_secs() < 5, "discovery waited {:?}", t0.elapsed());
+    assert!(
+        t0.elapsed().as_secs() < 5,
+        "discovery waited {:?}",
+        t0.elapsed()
+    );
 }

@@ -1,6 +1,13 @@
 //! Conformance helpers: open every backend named in `CAUSTICA_REQUIRE_BACKENDS` (a missing
 //! one is a failure, not a skip) and render small frames for comparison. Backends: cpu,
 //! opencl; the wgpu and Vulkan issues add theirs here.
+//!
+//! [`strategies`]: proptest strategies for valid scenes and small settings. [`compare`]:
+//! backend-generic comparisons with the CPU reference, per kernel and per technique, with
+//! every tolerance argued (used by `tests/cross_backend.rs`).
+
+pub mod compare;
+pub mod strategies;
 
 use caustica_core::{Backend, Scene, Sspm, SspmSettings};
 

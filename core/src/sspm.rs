@@ -171,9 +171,137 @@ pub struct Progress {
     pub photons_total: u64,
 }
 
-struct LightWork {
-    index: u32,
-    domain: EmissionDomain,
+/// What a frame's kernels are parameterised with, derived from the scene and settings
+/// before any work: each light's emission domain (or why it emits nothing), the
+/// fixed-point quanta and the gather's hit-distance clamp. [`Sspm`] records its kernels
+/// with these; tests that drive single kernels build the same parameters from them.
+#[derive(Clone, Debug)]
+pub struct FrameConstants {
+    /// (light index, emission domain) of every light that emits photons.
+    pub domains: Vec<(u32, EmissionDomain)>,
+    /// Lights that emit no photons, and why.
+    pub skipped_lights: Vec<(u32, NoEmission)>,
+    /// Flux per fixed-point unit (W): the brightest photon of the frame (x3 when a
+    /// dispersive material can concentrate a photon into one channel) is 2^24 units.
+    pub flux_quantum: f32,
+    /// Hit distance per fixed-point unit (scene units): the scene diagonal is 2^24 units.
+    pub hit_distance_quantum: f32,
+    /// Clamp of the gather's hit distance (scene units; defaults 5% and 50% of the scene
+    /// diagonal).
+    pub hit_distance_min: f32,
+    pub hit_distance_max: f32,
+}
+
+impl FrameConstants {
+    pub fn new(scene: &Scene, ds: &DeviceScene, settings: &SspmSettings) -> FrameConstants {
+        let mut domains = Vec::new();
+        let mut skipped_lights = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            match emission_domain(l, ds.caster_bounds, ds.bounds, settings.point_emission) {
+                Ok(domain) => domains.push((i as u32, domain)),
+                Err(why) => skipped_lights.push((i as u32, why)),
+            }
+        }
+        let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
+        let dispersion_gain = if ds.has_dispersion { 3.0 } else { 1.0 };
+        let max_photon_flux = domains
+            .iter()
+            .map(|(_, d)| d.flux.max_element() / photons_per_light)
+            .fold(0.0f32, f32::max)
+            * dispersion_gain;
+        let flux_quantum = if max_photon_flux > 0.0 {
+            max_photon_flux / FLUX_QUANTA_PER_MAX_PHOTON
+        } else {
+            1.0
+        };
+        let diag = ds.bounds.diagonal().max(f32::MIN_POSITIVE);
+        let hit_distance_min = settings.hit_distance_min.unwrap_or(0.05 * diag);
+        FrameConstants {
+            domains,
+            skipped_lights,
+            flux_quantum,
+            hit_distance_quantum: diag / FLUX_QUANTA_PER_MAX_PHOTON,
+            hit_distance_min,
+            hit_distance_max: settings
+                .hit_distance_max
+                .unwrap_or(0.5 * diag)
+                .max(hit_distance_min),
+        }
+    }
+
+    /// `trace_photons` parameters for photons `first .. first + count` of light `light`
+    /// with emission domain `d`: the light's seed is the frame seed hashed with its index.
+    pub fn trace_params(
+        &self,
+        settings: &SspmSettings,
+        light: u32,
+        d: &EmissionDomain,
+        first: u32,
+        count: u32,
+    ) -> TraceParams {
+        d.trace_params(
+            light,
+            (settings.photons_w, settings.photons_h),
+            (first, count),
+            settings.seed ^ pcg_hash(light.wrapping_add(0x6c62_272e)),
+            settings.max_bounces,
+            settings.min_relative_power,
+            self.flux_quantum,
+        )
+    }
+
+    /// `deposit_screen` / `resolve_caustics` parameters.
+    pub fn deposit_params(
+        &self,
+        camera: GpuCamera,
+        settings: &SspmSettings,
+        photon_capacity: u32,
+    ) -> DepositParams {
+        DepositParams {
+            camera,
+            flux_quantum: self.flux_quantum,
+            hit_distance_quantum: self.hit_distance_quantum,
+            depth_tolerance: settings.depth_tolerance,
+            photon_capacity,
+        }
+    }
+
+    /// `tile_hit_distance` / `bilateral_gather` parameters (`axis` 0: horizontal pass).
+    pub fn gather_params(
+        &self,
+        camera: GpuCamera,
+        settings: &SspmSettings,
+        axis: u32,
+    ) -> GatherParams {
+        GatherParams {
+            camera,
+            roughness: settings.roughness,
+            hit_distance_min: self.hit_distance_min,
+            hit_distance_max: self.hit_distance_max,
+            max_radius_px: settings.max_radius_px,
+            sigma_depth: settings.sigma_depth,
+            normal_power: settings.normal_power,
+            axis,
+            tile_size: settings.tile_size,
+            hit_distance_quantum: self.hit_distance_quantum,
+            _pad: [0; 3],
+        }
+    }
+
+    /// `direct_light` parameters.
+    pub fn direct_params(
+        camera: GpuCamera,
+        light_count: u32,
+        settings: &SspmSettings,
+    ) -> DirectParams {
+        DirectParams {
+            camera,
+            light_count,
+            max_specular_depth: settings.max_specular_depth,
+            min_weight: 1e-3,
+            _pad: 0,
+        }
+    }
 }
 
 /// Screen-space photon mapping on one backend, for one scene.
@@ -182,12 +310,7 @@ pub struct Sspm {
     scene: SceneArgs,
     camera: GpuCamera,
     light_count: u32,
-    work: Vec<LightWork>,
-    skipped_lights: Vec<(u32, NoEmission)>,
-    flux_quantum: f32,
-    hit_distance_quantum: f32,
-    hit_distance_min: f32,
-    hit_distance_max: f32,
+    constants: FrameConstants,
     gbuffer: Buf<GBufferTexel>,
     photon_map: Buf<DepositTexel>,
     photons: Option<(Buf<Photon>, Buf<u32>)>,
@@ -213,35 +336,8 @@ impl Sspm {
         let mut rec = Recording::new();
         let scene_args = ds.record_upload(&mut rec);
 
-        let mut work = Vec::new();
-        let mut skipped_lights = Vec::new();
-        for (i, l) in scene.lights.iter().enumerate() {
-            match emission_domain(l, ds.caster_bounds, ds.bounds, settings.point_emission) {
-                Ok(domain) => work.push(LightWork {
-                    index: i as u32,
-                    domain,
-                }),
-                Err(why) => skipped_lights.push((i as u32, why)),
-            }
-        }
+        let constants = FrameConstants::new(scene, &ds, &settings);
         let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
-        let dispersion_gain = if ds.has_dispersion { 3.0 } else { 1.0 };
-        let max_photon_flux = work
-            .iter()
-            .map(|w| w.domain.flux.max_element() / photons_per_light)
-            .fold(0.0f32, f32::max)
-            * dispersion_gain;
-        let flux_quantum = if max_photon_flux > 0.0 {
-            max_photon_flux / FLUX_QUANTA_PER_MAX_PHOTON
-        } else {
-            1.0
-        };
-        let diag = ds.bounds.diagonal().max(f32::MIN_POSITIVE);
-        let hit_distance_min = settings.hit_distance_min.unwrap_or(0.05 * diag);
-        let hit_distance_max = settings
-            .hit_distance_max
-            .unwrap_or(0.5 * diag)
-            .max(hit_distance_min);
 
         let camera = GpuCamera::from_camera(&scene.camera);
         let (w, h) = (camera.width, camera.height);
@@ -261,7 +357,7 @@ impl Sspm {
             filtered_caustics: rec.create(pixels, "filtered caustics"),
         };
         // The photon buffer exists only when some light emits photons.
-        let photons = if work.is_empty() {
+        let photons = if constants.domains.is_empty() {
             None
         } else {
             let total = photons_per_light as u64;
@@ -282,12 +378,7 @@ impl Sspm {
             scene: scene_args,
             camera,
             light_count: scene.lights.len() as u32,
-            work,
-            skipped_lights,
-            flux_quantum,
-            hit_distance_quantum: diag / FLUX_QUANTA_PER_MAX_PHOTON,
-            hit_distance_min,
-            hit_distance_max,
+            constants,
             gbuffer,
             photon_map,
             photons,
@@ -338,18 +429,14 @@ impl Sspm {
             } else {
                 "host wall clock".into()
             },
-            flux_quantum: self.flux_quantum as f64,
+            flux_quantum: self.constants.flux_quantum as f64,
             bytes_allocated: self.bytes,
             ..Default::default()
         };
         let cam = self.camera;
-        let deposit_params = DepositParams {
-            camera: cam,
-            flux_quantum: self.flux_quantum,
-            hit_distance_quantum: self.hit_distance_quantum,
-            depth_tolerance: self.settings.depth_tolerance,
-            photon_capacity: self.photons.map_or(0, |p| p.0.len),
-        };
+        let deposit_params =
+            self.constants
+                .deposit_params(cam, &self.settings, self.photons.map_or(0, |p| p.0.len));
 
         // 1. visibility and direct light
         let mut rec = Recording::new();
@@ -360,13 +447,7 @@ impl Sspm {
         });
         rec.kernel(Kernel::DirectLight {
             scene: self.scene,
-            params: DirectParams {
-                camera: cam,
-                light_count: self.light_count,
-                max_specular_depth: self.settings.max_specular_depth,
-                min_weight: 1e-3,
-                _pad: 0,
-            },
+            params: FrameConstants::direct_params(cam, self.light_count, &self.settings),
             gbuffer: self.gbuffer,
             out: self.images.direct,
         });
@@ -375,7 +456,7 @@ impl Sspm {
         self.run(backend, &rec, &mut stats)?;
 
         // 2. photons, in batches
-        for (light, why) in &self.skipped_lights {
+        for (light, why) in &self.constants.skipped_lights {
             let reason = match why {
                 NoEmission::NoCasters => "no specular surface (caustic caster) in the scene",
                 NoEmission::ZeroPower => "light has zero power",
@@ -383,11 +464,10 @@ impl Sspm {
             stats.skip(&format!("trace_photons[light {light}]"), reason);
         }
         let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
-        let total = per_light * self.work.len() as u64;
+        let total = per_light * self.constants.domains.len() as u64;
         let mut done = 0u64;
         if let Some((photons, photon_count)) = self.photons {
-            for w in &self.work {
-                let d = &w.domain;
+            for (light, d) in &self.constants.domains {
                 stats.photons_emitted += per_light;
                 for c in 0..3 {
                     stats.emitted_flux[c] += d.flux[c] as f64;
@@ -399,14 +479,12 @@ impl Sspm {
                     rec.clear(photon_count);
                     rec.kernel(Kernel::TracePhotons {
                         scene: self.scene,
-                        params: d.trace_params(
-                            w.index,
-                            (self.settings.photons_w, self.settings.photons_h),
-                            (first as u32, count),
-                            self.settings.seed ^ pcg_hash(w.index.wrapping_add(0x6c62_272e)),
-                            self.settings.max_bounces,
-                            self.settings.min_relative_power,
-                            self.flux_quantum,
+                        params: self.constants.trace_params(
+                            &self.settings,
+                            *light,
+                            d,
+                            first as u32,
+                            count,
                         ),
                         photons,
                         photon_count,
@@ -434,19 +512,7 @@ impl Sspm {
 
         // 3. resolve, gather, composite
         let mut rec = Recording::new();
-        let gather = GatherParams {
-            camera: cam,
-            roughness: self.settings.roughness,
-            hit_distance_min: self.hit_distance_min,
-            hit_distance_max: self.hit_distance_max,
-            max_radius_px: self.settings.max_radius_px,
-            sigma_depth: self.settings.sigma_depth,
-            normal_power: self.settings.normal_power,
-            axis: 0,
-            tile_size: self.settings.tile_size,
-            hit_distance_quantum: self.hit_distance_quantum,
-            _pad: [0; 3],
-        };
+        let gather = self.constants.gather_params(cam, &self.settings, 0);
         if self.photons.is_some() {
             rec.kernel(Kernel::ResolveCaustics {
                 params: deposit_params,
@@ -508,7 +574,7 @@ impl Sspm {
         stats.photon_rays_traced = c64(counter::RAYS);
         for ch in 0..3 {
             stats.stored_flux[ch] =
-                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
+                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.constants.flux_quantum as f64;
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(stats)

@@ -1,0 +1,400 @@
+//! The cross-backend suite, itself tested. Two promises of `caustica_conformance::compare`
+//! are checked with "mutant" backends that wrap the CPU backend, so they run on any machine:
+//!
+//! - a backend that differs from the CPU only by rounding passes every comparison: the
+//!   `UlpNoise` mutant nudges every float input of every kernel (vertices, normals, camera,
+//!   emission domain, photon flux, filter parameters) by up to 2 ulps, as a device's
+//!   different division, sqrt, sin/cos or FMA contraction would, and lets the chaotic photon
+//!   paths diverge where they really do. The tolerances must absorb that;
+//! - a backend with a real but small fault fails the comparison that covers the kernel:
+//!   depth written as distance, 3% of the photons lost, photon flux 2% low, one fixed-point
+//!   unit lost per texel, radiance 1e-4 high, one ulp in the composite, and so on.
+
+use caustica_conformance::compare::{
+    self, builtin_small, check_composite, check_deposit, check_direct, check_frame, check_gather,
+    check_gbuffer, check_kernel_cases, check_trace, kernel_cases, Candidate, KernelCheck, Report,
+};
+use caustica_conformance::{small_settings, strategies};
+use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::fixed_point::{join_u64, quantize};
+use caustica_core::gpu::{
+    counter, DepositTexel, GBufferTexel, GpuCamera, GpuVertex, Photon, NO_MATERIAL,
+};
+use caustica_core::recording::{Kernel, Recording, ResourceId, Step};
+use caustica_core::rng::pcg_hash;
+use caustica_core::scene::builtin::BUILTIN_SCENES;
+use caustica_cpu::CpuBackend;
+use proptest::strategy::{Strategy, ValueTree};
+use proptest::test_runner::TestRunner;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Mutation {
+    /// Correct, with different rounding: float inputs nudged by up to 2 ulps.
+    UlpNoise,
+    /// `primary_gbuffer` writes the view distance as the view depth.
+    GbufferDepthIsDistance,
+    /// `trace_photons` loses every 30th stored photon (counted as escaped).
+    DropPhotons,
+    /// `trace_photons` stores photons with 2% less flux.
+    PhotonFluxLow,
+    /// `deposit_screen` loses one fixed-point unit of red in every texel it touches.
+    DepositOffByOne,
+    /// `resolve_caustics` radiance 1e-4 too high.
+    ResolveHigh,
+    /// `tile_hit_distance` 1e-4 too high.
+    TilesHigh,
+    /// `bilateral_gather` 1e-4 too high.
+    GatherHigh,
+    /// `direct_light` 1e-3 too high.
+    DirectHigh,
+    /// `composite` one ulp off in one channel.
+    CompositeUlp,
+}
+
+/// The CPU backend with a [`Mutation`].
+struct Mutant {
+    inner: CpuBackend,
+    mutation: Mutation,
+}
+
+/// `x` moved by -2..=2 ulps, the amount a pure function of `x` (so equal inputs, such as a
+/// vertex shared by two triangles, move alike and meshes stay watertight).
+fn nudge(x: f32) -> f32 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let k = (pcg_hash(x.to_bits()) % 5) as i32 - 2;
+    f32::from_bits((x.to_bits() as i32).wrapping_add(k) as u32)
+}
+
+fn nudge_all<const N: usize>(v: &mut [f32; N]) {
+    for x in v {
+        *x = nudge(*x);
+    }
+}
+
+fn nudge_camera(c: &mut GpuCamera) {
+    nudge_all(&mut c.position);
+    nudge_all(&mut c.forward);
+    nudge_all(&mut c.right);
+    nudge_all(&mut c.up);
+    c.tan_half_fov_x = nudge(c.tan_half_fov_x);
+    c.tan_half_fov_y = nudge(c.tan_half_fov_y);
+}
+
+impl Mutant {
+    fn candidate(mutation: Mutation) -> Candidate {
+        let inner = CpuBackend::new().unwrap();
+        Candidate {
+            name: format!("mutant[{mutation:?}]"),
+            device: inner.capabilities().device,
+            backend: Box::new(Mutant { inner, mutation }),
+        }
+    }
+
+    /// Rounding noise on a step's inputs.
+    fn perturb(step: &mut Step) {
+        match step {
+            Step::Upload { data, label, .. } if *label == "vertices" => {
+                let mut v: Vec<GpuVertex> = bytemuck::pod_collect_to_vec(data);
+                for x in &mut v {
+                    nudge_all(&mut x.position);
+                    nudge_all(&mut x.normal);
+                }
+                *data = bytemuck::cast_slice(&v).to_vec();
+            }
+            Step::Kernel(k) => match k {
+                Kernel::PrimaryGbuffer { camera, .. } => nudge_camera(camera),
+                Kernel::DirectLight { params, .. } => nudge_camera(&mut params.camera),
+                Kernel::TracePhotons { params, .. } => {
+                    nudge_all(&mut params.origin);
+                    nudge_all(&mut params.axis);
+                    nudge_all(&mut params.rect_u);
+                    nudge_all(&mut params.rect_v);
+                    for c in 0..3 {
+                        params.photon_flux[c] = nudge(params.photon_flux[c]);
+                    }
+                }
+                Kernel::DepositScreen { params, .. } | Kernel::ResolveCaustics { params, .. } => {
+                    nudge_camera(&mut params.camera)
+                }
+                Kernel::TileHitDistance { params, .. } | Kernel::BilateralGather { params, .. } => {
+                    nudge_camera(&mut params.camera);
+                    params.roughness = nudge(params.roughness);
+                    params.sigma_depth = nudge(params.sigma_depth);
+                    params.normal_power = nudge(params.normal_power);
+                }
+                _ => {}
+            },
+            _ => {}
+        }
+    }
+
+    /// Reads buffer `id` as `T`s, lets `f` change them, writes them back.
+    fn modify<T: bytemuck::Pod>(
+        &mut self,
+        id: ResourceId,
+        f: impl FnOnce(&mut Vec<T>),
+    ) -> Result<(), BackendError> {
+        let mut v: Vec<T> = bytemuck::pod_collect_to_vec(&self.inner.read(id)?);
+        f(&mut v);
+        let rec = Recording {
+            steps: vec![Step::Upload {
+                id,
+                data: bytemuck::cast_slice(&v).to_vec(),
+                label: "mutated",
+            }],
+        };
+        self.inner.execute(&rec).map(|_| ())
+    }
+
+    /// A fault in a kernel's output.
+    fn fault(&mut self, k: &Kernel) -> Result<(), BackendError> {
+        let scale = |v: &mut Vec<[f32; 4]>, s: f32| {
+            for p in v {
+                for c in &mut p[..3] {
+                    *c *= s;
+                }
+            }
+        };
+        match (self.mutation, k) {
+            (Mutation::GbufferDepthIsDistance, Kernel::PrimaryGbuffer { gbuffer, .. }) => {
+                self.modify::<GBufferTexel>(gbuffer.id, |g| {
+                    for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
+                        t.depth = t.view_distance;
+                    }
+                })
+            }
+            (
+                Mutation::DropPhotons,
+                Kernel::TracePhotons {
+                    params,
+                    photons,
+                    photon_count,
+                    counters,
+                    ..
+                },
+            ) => {
+                let n =
+                    bytemuck::pod_collect_to_vec::<u8, u32>(&self.inner.read(photon_count.id)?)[0];
+                let all: Vec<Photon> = bytemuck::pod_collect_to_vec(&self.inner.read(photons.id)?);
+                let (mut kept, mut dropped) = (Vec::new(), Vec::new());
+                for (i, p) in all[..n as usize].iter().enumerate() {
+                    if i % 30 == 29 {
+                        dropped.push(*p)
+                    } else {
+                        kept.push(*p)
+                    }
+                }
+                let q = params.flux_quantum;
+                let kept_n = kept.len() as u32;
+                self.modify::<Photon>(photons.id, |v| v[..kept.len()].copy_from_slice(&kept))?;
+                self.modify::<u32>(photon_count.id, |v| v[0] = kept_n)?;
+                self.modify::<u32>(counters.id, |c| {
+                    c[counter::STORED] -= dropped.len() as u32;
+                    c[counter::ESCAPED] += dropped.len() as u32;
+                    for ch in 0..3 {
+                        let w = counter::STORED_FLUX + 2 * ch;
+                        let units: u64 = dropped
+                            .iter()
+                            .map(|p| quantize(p.flux[ch], q).units as u64)
+                            .sum();
+                        let s = join_u64([c[w], c[w + 1]]) - units;
+                        c[w] = s as u32;
+                        c[w + 1] = (s >> 32) as u32;
+                    }
+                })
+            }
+            (Mutation::PhotonFluxLow, Kernel::TracePhotons { photons, .. }) => self
+                .modify::<Photon>(photons.id, |v| {
+                    for p in v {
+                        for c in &mut p.flux {
+                            *c *= 0.98;
+                        }
+                    }
+                }),
+            (Mutation::DepositOffByOne, Kernel::DepositScreen { photon_map, .. }) => {
+                self.modify::<DepositTexel>(photon_map.id, |m| {
+                    for t in m.iter_mut().filter(|t| t.flux[0][0] > 0) {
+                        t.flux[0][0] -= 1;
+                    }
+                })
+            }
+            (Mutation::ResolveHigh, Kernel::ResolveCaustics { out, .. }) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
+            }
+            (Mutation::TilesHigh, Kernel::TileHitDistance { tiles, .. }) => {
+                self.modify::<f32>(tiles.id, |v| {
+                    for t in v {
+                        *t *= 1.0 + 1e-4;
+                    }
+                })
+            }
+            (Mutation::GatherHigh, Kernel::BilateralGather { out, .. }) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
+            }
+            (Mutation::DirectHigh, Kernel::DirectLight { out, .. }) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
+            }
+            (Mutation::CompositeUlp, Kernel::Composite { out, .. }) => {
+                self.modify::<[f32; 4]>(out.id, |v| {
+                    if let Some(p) = v.iter_mut().find(|p| p[0] > 0.0) {
+                        p[0] = f32::from_bits(p[0].to_bits() + 1);
+                    }
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Backend for Mutant {
+    fn name(&self) -> &'static str {
+        "mutant"
+    }
+    fn capabilities(&self) -> Capabilities {
+        self.inner.capabilities()
+    }
+    fn kernels(&self) -> Vec<&'static str> {
+        self.inner.kernels()
+    }
+    fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        let mut times = Vec::new();
+        for step in &recording.steps {
+            let mut step = step.clone();
+            if self.mutation == Mutation::UlpNoise {
+                Self::perturb(&mut step);
+            }
+            let one = Recording {
+                steps: vec![step.clone()],
+            };
+            times.extend(self.inner.execute(&one)?);
+            if let Step::Kernel(k) = &step {
+                self.fault(k)?;
+            }
+        }
+        Ok(times)
+    }
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        self.inner.read(id)
+    }
+}
+
+/// Every check of the suite, by name.
+fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
+    vec![
+        (
+            "primary_gbuffer",
+            Box::new(|fx, _, r, c| check_gbuffer(fx, r, c)),
+        ),
+        (
+            "trace_photons",
+            Box::new(|fx, _, r, c| check_trace(fx, r, c)),
+        ),
+        ("deposit_screen + resolve_caustics", Box::new(check_deposit)),
+        (
+            "tile_hit_distance + bilateral_gather",
+            Box::new(check_gather),
+        ),
+        ("direct_light", Box::new(check_direct)),
+        ("composite", Box::new(|_, i, r, c| check_composite(i, r, c))),
+    ]
+}
+
+/// Rounding differences (the `UlpNoise` mutant) pass every per-kernel check on every
+/// kernel case, and whole frames on every built-in scene and on eight generated scenes.
+#[test]
+fn rounding_differences_pass_every_comparison() {
+    let mut report = Report::new("UlpNoise mutant, every check");
+    let mut reference = compare::reference();
+    let mut cand = Mutant::candidate(Mutation::UlpNoise);
+    let cases = kernel_cases();
+    for (_, check) in kernel_checks() {
+        check_kernel_cases(
+            &mut report,
+            &mut reference,
+            &mut cand,
+            &cases,
+            check.as_ref(),
+        );
+    }
+    let mut frames: Vec<(String, _, _)> = BUILTIN_SCENES
+        .iter()
+        .map(|n| (n.to_string(), builtin_small(n), small_settings(64)))
+        .collect();
+    let mut runner = TestRunner::deterministic();
+    let strategy = (strategies::scene(), strategies::sspm_settings());
+    for i in 0..8 {
+        let (scene, settings) = strategy.new_tree(&mut runner).unwrap().current();
+        frames.push((format!("generated frame #{i}"), scene, settings));
+    }
+    for (name, scene, settings) in &frames {
+        match check_frame(&mut reference, cand.backend.as_mut(), scene, settings) {
+            Ok(v) => report.add(&cand.name, name, v),
+            Err(e) => report.error(&cand.name, name, e),
+        }
+    }
+    report.finish();
+}
+
+/// Each fault makes the check that covers its kernel fail on every scene where that kernel
+/// has work (the glass ball, the Cornell box, the absorbing jelly).
+#[test]
+fn each_fault_fails_the_check_of_its_kernel() {
+    let scenes = ["sphere", "cornell", "jelly"];
+    let cases: Vec<_> = kernel_cases()
+        .into_iter()
+        .filter(|(n, _, _)| scenes.contains(&n.as_str()))
+        .collect();
+    let checks = kernel_checks();
+    let check = |name: &str| checks.iter().find(|(n, _)| *n == name).unwrap().1.as_ref();
+    let mut reference = compare::reference();
+    let mut missed = Vec::new();
+    for (mutation, kernel) in [
+        (Mutation::GbufferDepthIsDistance, "primary_gbuffer"),
+        (Mutation::DropPhotons, "trace_photons"),
+        (Mutation::PhotonFluxLow, "trace_photons"),
+        (
+            Mutation::DepositOffByOne,
+            "deposit_screen + resolve_caustics",
+        ),
+        (Mutation::ResolveHigh, "deposit_screen + resolve_caustics"),
+        (Mutation::TilesHigh, "tile_hit_distance + bilateral_gather"),
+        (Mutation::GatherHigh, "tile_hit_distance + bilateral_gather"),
+        (Mutation::DirectHigh, "direct_light"),
+        (Mutation::CompositeUlp, "composite"),
+    ] {
+        let mut report = Report::new(kernel);
+        let mut cand = Mutant::candidate(mutation);
+        check_kernel_cases(
+            &mut report,
+            &mut reference,
+            &mut cand,
+            &cases,
+            check(kernel),
+        );
+        let passed = report.passed_cases();
+        if !passed.is_empty() {
+            missed.push(format!("{mutation:?} passed {kernel} on {passed:?}"));
+        }
+    }
+    // Lost photons also fail the whole-frame comparison.
+    let mut cand = Mutant::candidate(Mutation::DropPhotons);
+    for name in scenes {
+        let v = check_frame(
+            &mut reference,
+            cand.backend.as_mut(),
+            &builtin_small(name),
+            &small_settings(64),
+        )
+        .unwrap();
+        if v.passed() {
+            missed.push(format!("DropPhotons passed the frame comparison on {name}"));
+        }
+    }
+    assert!(
+        missed.is_empty(),
+        "faults the suite did not catch:\n{}",
+        missed.join("\n")
+    );
+}
