@@ -184,7 +184,7 @@ impl Backend for OpenClBackend {
     }
 
     fn kernels(&self) -> Vec<&'static str> {
-        dispatch::IMPLEMENTED.to_vec()
+        caustica_core::launch::all_kernel_names()
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {

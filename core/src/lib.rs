@@ -19,6 +19,7 @@ pub mod geometry;
 pub mod gpu;
 pub mod image;
 pub mod kernels;
+pub mod launch;
 pub mod optics;
 pub mod packing;
 pub mod recording;

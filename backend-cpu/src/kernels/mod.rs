@@ -11,19 +11,6 @@ pub mod trace_photons;
 use caustica_core::fixed_point::join_u64;
 use caustica_core::gpu::counter;
 
-/// Registry kernels implemented here.
-pub const IMPLEMENTED: &[&str] = &[
-    "prepare_scene",
-    "primary_gbuffer",
-    "direct_light",
-    "trace_photons",
-    "deposit_screen",
-    "resolve_caustics",
-    "tile_hit_distance",
-    "bilateral_gather",
-    "composite",
-];
-
 /// Photon counters accumulated per worker and merged (sums are order-independent).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Counters {
