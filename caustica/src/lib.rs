@@ -49,7 +49,14 @@ pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
         "cpu" => Ok(Box::new(caustica_cpu::CpuBackend::new()?)),
         #[cfg(feature = "opencl")]
         "opencl" => Ok(Box::new(caustica_opencl::OpenClBackend::new()?)),
-        "vulkan" | "wgpu" => Err(BackendError::Unavailable {
+        #[cfg(feature = "wgpu")]
+        "wgpu" => Ok(Box::new(caustica_wgpu::WgpuBackend::new()?)),
+        #[cfg(not(feature = "wgpu"))]
+        "wgpu" => Err(BackendError::Unavailable {
+            backend: name.into(),
+            reason: "not compiled in (cargo feature `wgpu`)".into(),
+        }),
+        "vulkan" => Err(BackendError::Unavailable {
             backend: name.into(),
             reason: "not implemented yet (see the README's backend table)".into(),
         }),
@@ -79,7 +86,8 @@ pub fn backend_statuses() -> Vec<BackendStatus> {
         .iter()
         .map(|&name| {
             let compiled = (name == "cpu" && cfg!(feature = "cpu"))
-                || (name == "opencl" && cfg!(feature = "opencl"));
+                || (name == "opencl" && cfg!(feature = "opencl"))
+                || (name == "wgpu" && cfg!(feature = "wgpu"));
             BackendStatus {
                 name,
                 compiled,

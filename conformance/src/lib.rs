@@ -1,6 +1,6 @@
 //! Conformance helpers: open every backend named in `CAUSTICA_REQUIRE_BACKENDS` (a missing
 //! one is a failure, not a skip) and render small frames for comparison. Backends: cpu,
-//! opencl; the wgpu and Vulkan issues add theirs here.
+//! opencl, wgpu; the Vulkan issue adds its own here.
 //!
 //! [`strategies`]: proptest strategies for valid scenes and small settings. [`compare`]:
 //! backend-generic comparisons with the CPU reference, per kernel and per technique, with
@@ -26,6 +26,13 @@ pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
             out.push(("opencl", Box::new(b)));
         }
         Err(e) => eprintln!("SKIPPING opencl backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
+    }
+    match caustica_wgpu::WgpuBackend::new() {
+        Ok(b) => {
+            eprintln!("wgpu backend: {}", b.capabilities().device);
+            out.push(("wgpu", Box::new(b)));
+        }
+        Err(e) => eprintln!("SKIPPING wgpu backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
     }
     for name in required.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         assert!(

@@ -1,0 +1,92 @@
+//! Embedding caustica in a wgpu renderer, headless: the "renderer" below owns the wgpu
+//! device, queue and an `Rgba16Float` texture; caustica renders the `sphere` scene's
+//! caustics on that device and writes them into the renderer's texture, which the
+//! renderer then reads back here to show that the texels arrived.
+//! Run: `cargo run --release -p caustica-wgpu --example embed_headless`.
+
+use caustica_core::scene::builtin::builtin;
+use caustica_core::{Sspm, SspmSettings};
+use caustica_wgpu::WgpuBackend;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // --- the host renderer's own device and texture -------------------------------
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::PRIMARY,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let adapter =
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))?;
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: adapter.limits(),
+        required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+        ..Default::default()
+    }))?;
+    let (w, h) = (320u32, 180u32);
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("renderer's caustics texture"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba16Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+
+    // --- caustica on the renderer's device -----------------------------------------
+    let name = adapter.get_info().name;
+    let mut backend = WgpuBackend::from_device(device.clone(), queue.clone(), &name)?;
+    let mut scene = builtin("sphere").ok_or("no sphere scene")?;
+    scene.camera.width = w;
+    scene.camera.height = h;
+    let settings = SspmSettings {
+        photons_w: 512,
+        photons_h: 512,
+        ..SspmSettings::default()
+    };
+    let mut sspm = Sspm::new(&mut backend, &scene, settings)?;
+    let stats = sspm.frame(&mut backend, &mut |_| {})?;
+    backend.write_image_to_texture(sspm.images().filtered_caustics, &texture)?;
+    println!(
+        "{name}: {} photons stored, {} deposited, frame {:.1} ms ({})",
+        stats.photons_stored, stats.photons_deposited, stats.frame_ms, stats.timing
+    );
+
+    // --- the renderer reads its texture back (only to show that it was written) ------
+    let row = (w * 8).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: (row * h) as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    queue.submit([enc.finish()]);
+    staging.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    device.poll(wgpu::PollType::wait_indefinitely())?;
+    let data = staging.slice(..).get_mapped_range()?;
+    let lit = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (y * row + x * 8) as usize))
+        .filter(|&o| u16::from_le_bytes([data[o], data[o + 1]]) != 0)
+        .count();
+    println!("texture: {lit} of {} texels carry caustic radiance", w * h);
+    Ok(())
+}

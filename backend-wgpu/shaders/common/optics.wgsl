@@ -1,0 +1,63 @@
+// Mirror of core/src/optics.rs and backend-opencl/kernels/optics.cl: reflection,
+// refraction, exact Fresnel, Beer-Lambert, Cauchy dispersion and the photon's
+// reflect-or-refract choice. (These `reflect` and `refract` shadow WGSL's built-ins on
+// purpose: same formulas, but in core's operation order.)
+
+fn reflect(incident: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
+    return incident - 2.0 * dot3(incident, normal) * normal;
+}
+
+// Refracted (unnormalised) direction; returns false on total internal reflection.
+fn refract(incident: vec3<f32>, normal: vec3<f32>, eta: f32, out_dir: ptr<function, vec3<f32>>) -> bool {
+    let cos_i = -dot3(incident, normal);
+    let cos2_t = (1.0 - eta * eta) + eta * eta * cos_i * cos_i;
+    if (cos2_t < 0.0) {
+        return false;
+    }
+    let cos_t = sqrt(cos2_t);
+    *out_dir = eta * incident + (eta * cos_i - cos_t) * normal;
+    return true;
+}
+
+fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
+    let cos_i = clampf(cos_i_in, 0.0, 1.0);
+    let cos2_t = (1.0 - eta * eta) + eta * eta * cos_i * cos_i;
+    if (cos2_t <= 0.0) {
+        return 1.0;
+    }
+    let cos_t = sqrt(cos2_t);
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return clampf(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
+}
+
+fn beer_lambert(sigma_a: vec3<f32>, distance: f32) -> vec3<f32> {
+    return vec3<f32>(exp(-sigma_a.x * distance), exp(-sigma_a.y * distance),
+                     exp(-sigma_a.z * distance));
+}
+
+// Wavelengths (micrometres) of the red, green and blue photon channels.
+const CHANNEL_WAVELENGTH_UM = array<f32, 3>(0.65f, 0.55f, 0.45f);
+const REFERENCE_WAVELENGTH_UM: f32 = 0.55f;
+
+fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
+    let a = ior - cauchy_b / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM);
+    return a + cauchy_b / (wavelength_um * wavelength_um);
+}
+
+// Reflects with probability = Fresnel reflectance (`xi` uniform in [0, 1)), else refracts.
+fn dielectric_scatter(incident: vec3<f32>, shading_normal: vec3<f32>, entering: bool, ior: f32,
+                      xi: f32) -> vec3<f32> {
+    let facing = select(-shading_normal, shading_normal, dot3(incident, shading_normal) < 0.0);
+    let eta = select(ior, 1.0 / ior, entering);
+    let cos_i = -dot3(incident, facing);
+    let f = fresnel_dielectric(cos_i, eta);
+    if (xi < f) {
+        return reflect(incident, facing);
+    }
+    var t: vec3<f32>;
+    if (refract(incident, facing, eta, &t)) {
+        return normalize3(t);
+    }
+    return reflect(incident, facing);
+}

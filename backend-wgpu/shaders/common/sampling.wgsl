@@ -1,0 +1,30 @@
+// Mirror of core/src/sampling.rs and backend-opencl/kernels/sampling.cl: equal-area warps
+// of the unit square.
+
+fn stratified_cell(ix: u32, iy: u32, grid_w: u32, grid_h: u32, jitter: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>((f32(ix) + jitter.x) / f32(grid_w), (f32(iy) + jitter.y) / f32(grid_h));
+}
+
+// sin and cos: WGSL bounds their error only absolutely (2^-11 on [-pi, pi]); drivers do
+// much better, but not Rust's libm (see types.wgsl).
+fn uniform_cone(u: vec2<f32>, cos_max: f32) -> vec3<f32> {
+    let cos_t = 1.0 - u.x * (1.0 - cos_max);
+    let sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    let phi = TAU_F * u.y;
+    return vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
+// Duff et al. 2017 orthonormal basis; returns t, writes b.
+fn orthonormal_basis(n: vec3<f32>, b_out: ptr<function, vec3<f32>>) -> vec3<f32> {
+    let sgn = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    *b_out = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
+    return vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+}
+
+fn to_world(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var b: vec3<f32>;
+    let t = orthonormal_basis(n, &b);
+    return t * v.x + b * v.y + n * v.z;
+}

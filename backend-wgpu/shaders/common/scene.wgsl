@@ -1,0 +1,49 @@
+// The camera helpers of core/src/gpu.rs (camera_ray, project_to_pixel) and the small
+// scene helpers of backend-opencl/kernels/scene.cl. scene.cl's SCENE_PARAMS/SCENE_ARGS
+// macros have no WGSL counterpart: the scene is the kernel's module-scope bindings
+// `vertices`, `triangles`, `materials`, `lights`, `nodes`. scene.cl's hit_surface is in
+// traversal.wgsl, so that this file reads no binding and kernels without a scene can use it.
+
+fn camera_ray(cam: GpuCamera, px: u32, py: u32) -> vec3<f32> {
+    let sx = (2.0 * (f32(px) + 0.5) / f32(cam.width) - 1.0) * cam.tan_half_fov_x;
+    let sy = (1.0 - 2.0 * (f32(py) + 0.5) / f32(cam.height)) * cam.tan_half_fov_y;
+    return normalize3(cam.forward + sx * cam.right + sy * cam.up);
+}
+
+// Pixel containing world point `p` and its view depth; false behind the camera or off
+// screen.
+fn project_to_pixel(cam: GpuCamera, p: vec3<f32>, px: ptr<function, u32>,
+                    py: ptr<function, u32>, depth: ptr<function, f32>) -> bool {
+    let v = p - cam.position;
+    let z = dot3(v, cam.forward);
+    if (is_nan_f32(z) || z <= 0.0) {
+        return false;
+    }
+    let sx = dot3(v, cam.right) / (z * cam.tan_half_fov_x);
+    let sy = dot3(v, cam.up) / (z * cam.tan_half_fov_y);
+    let fx = (sx + 1.0) * 0.5 * f32(cam.width);
+    let fy = (1.0 - sy) * 0.5 * f32(cam.height);
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < f32(cam.width) && fy < f32(cam.height))) {
+        return false;
+    }
+    *px = u32(fx);
+    *py = u32(fy);
+    *depth = z;
+    return true;
+}
+
+// core::device_scene::spot_falloff: smoothstep between the outer and inner cone.
+fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    if (cos_theta >= cos_inner) {
+        return 1.0;
+    }
+    if (cos_theta <= cos_outer) {
+        return 0.0;
+    }
+    let t = clampf((cos_theta - cos_outer) / (cos_inner - cos_outer), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+fn facing_normal(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    return select(n, -n, dot3(n, dir) > 0.0);
+}

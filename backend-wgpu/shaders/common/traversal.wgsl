@@ -1,0 +1,219 @@
+// Software traversal of core's flattened BVH: obvhs's compressed wide BVH8 (Ylitie et al.
+// 2017, "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs"), each
+// 80-byte node uploaded as five vec4<u32>:
+//   [0].xyz  p, the node grid origin (float bits)      [0].w  e[0..3] exponents, imask
+//   [1].x    child_base_idx  [1].y primitive_base_idx  [1].zw child_meta[8]
+//   [2]      child_min_x[8], child_max_x[8]            [3] y planes   [4] z planes
+// The node test, child order and primitive order are those of the CPU backend's obvhs
+// traversal, so both find the same closest hit; triangles are stored in leaf order, so a
+// primitive index is a triangle index. Mirror of backend-opencl/kernels/traversal.cl and
+// backend-cpu/src/traversal.rs.
+//
+// Reads the kernel's module-scope bindings `nodes` (array<vec4<u32>>, 5 per node; the
+// node count is arrayLength(&nodes) / 5, 0 for the host's 16-byte dummy), `vertices`
+// and `triangles`.
+
+// obvhs's cull epsilon: a child box is entered only where t >= 1e-4.
+const CWBVH_EPSILON: f32 = 0.0001f;
+const TRAVERSAL_STACK_SIZE: u32 = 32u;
+const FLT_EPSILON: f32 = 0x1p-23f;
+
+struct Hit {
+    t: f32,
+    triangle: u32,
+    u: f32,
+    v: f32,
+}
+
+// obvhs's `safe_inverse`.
+fn safe_inverse(x: f32) -> f32 {
+    if (abs(x) <= FLT_EPSILON) {
+        return select(1.0, -1.0, x < 0.0 || (x == 0.0 && sign_bit_f32(x))) / FLT_EPSILON;
+    }
+    return 1.0 / x;
+}
+
+// A zero direction component becomes +-1e-30 (sign kept) for node culling only, as the CPU
+// backend's `traversal_ray`, so that the slab test's side choice matches the inverse.
+fn traversal_component(c: f32) -> f32 {
+    return select(c, copysign_f32(1e-30f, c), c == 0.0);
+}
+
+fn octant_inv4(d: vec3<f32>) -> u32 {
+    return select(0x04040404u, 0u, d.x < 0.0) | select(0x02020202u, 0u, d.y < 0.0) |
+           select(0x01010101u, 0u, d.z < 0.0);
+}
+
+// Byte `b` (0..7) of the little-endian u64 whose halves are `lo`, `hi`: OpenCL's
+// `byte_of((ulong)lo | ((ulong)hi << 32), b)`.
+fn byte_of(lo: u32, hi: u32, b: u32) -> u32 {
+    return (select(lo, hi, b >= 4u) >> ((b & 3u) * 8u)) & 0xFFu;
+}
+
+fn firstbithigh(x: u32) -> u32 {
+    return 31u - countLeadingZeros(x);
+}
+
+// Hit mask of a node's children: inner children set a bit in the top byte (at their
+// octant-ordered slot), leaves their unary primitive count in the low 24 bits.
+//
+// The OpenCL (and obvhs) code decodes all eight children's meta bytes at once in u64
+// lanes; WGSL has no u64, so each child's byte `m = byte_of(meta)` is decoded alone. The
+// per-byte form is the same function because each 64-bit expression reads and writes
+// only bits of the byte it produces:
+//   is_inner8   = (meta8 & (meta8 << 1)) & 0x1010..10: bit 8k+4 of `meta8 << 1` is bit
+//                 8k+3 of meta8 (same byte; the bit shifted in from the byte below lands
+//                 on bit 8k, which the mask drops), so byte k = (m & (m << 1)) & 0x10.
+//   inner_mask8 = (is_inner8 >> 4) * 0xff: the shift moves bit 8k+4 to 8k (same byte),
+//                 leaving 0 or 1 per byte, and 1 * 0xff fits a byte, so the product has
+//                 no carries between bytes: byte k = (is_inner >> 4) * 0xff.
+//   bit_index8  = (meta8 ^ (oct_inv8 & inner_mask8)) & 0x1f..1f: &, ^ are bitwise, and
+//                 byte k of oct_inv8 = (oct_inv4 << 32 | oct_inv4) is byte k & 3 of
+//                 oct_inv4: byte k = (m ^ (byte_of(oct_inv4, oct_inv4, k) & mask)) & 0x1f.
+//   child_bits8 = (meta8 >> 5) & 0x0707..07: bits 8k..8k+2 of the shift are bits
+//                 8k+5..8k+7 of meta8 (same byte; bits from byte k+1 land on 8k+3 and up,
+//                 which the mask drops): byte k = (m >> 5) & 7.
+// The child planes are bytes of the (lo, hi) halves as well, so byte_of reads them.
+fn cwbvh_node_hits(index: u32, origin: vec3<f32>, dir: vec3<f32>, inv_dir: vec3<f32>,
+                   t_max: f32, oct_inv4: u32) -> u32 {
+    let n0 = nodes[index * 5u + 0u];
+    let n1 = nodes[index * 5u + 1u];
+    let nx = nodes[index * 5u + 2u];
+    let ny = nodes[index * 5u + 3u];
+    let nz = nodes[index * 5u + 4u];
+    let p = vec3<f32>(bitcast<f32>(n0.x), bitcast<f32>(n0.y), bitcast<f32>(n0.z));
+    let extent = vec3<f32>(bitcast<f32>((n0.w & 0xFFu) << 23u),
+                           bitcast<f32>(((n0.w >> 8u) & 0xFFu) << 23u),
+                           bitcast<f32>(((n0.w >> 16u) & 0xFFu) << 23u));
+    let adj_dir_inv = extent * inv_dir;
+    let adj_origin = (p - origin) * inv_dir;
+    let rdx = dir.x < 0.0;
+    let rdy = dir.y < 0.0;
+    let rdz = dir.z < 0.0;
+
+    var hit_mask = 0u;
+    for (var child = 0u; child < 8u; child++) {
+        // (min planes are the .xy halves, max planes the .zw halves)
+        let lo_x = f32(select(byte_of(nx.x, nx.y, child), byte_of(nx.z, nx.w, child), rdx));
+        let hi_x = f32(select(byte_of(nx.z, nx.w, child), byte_of(nx.x, nx.y, child), rdx));
+        let lo_y = f32(select(byte_of(ny.x, ny.y, child), byte_of(ny.z, ny.w, child), rdy));
+        let hi_y = f32(select(byte_of(ny.z, ny.w, child), byte_of(ny.x, ny.y, child), rdy));
+        let lo_z = f32(select(byte_of(nz.x, nz.y, child), byte_of(nz.z, nz.w, child), rdz));
+        let hi_z = f32(select(byte_of(nz.z, nz.w, child), byte_of(nz.x, nz.y, child), rdz));
+        let tmin3 = vec3<f32>(lo_x, lo_y, lo_z) * adj_dir_inv + adj_origin;
+        let tmax3 = vec3<f32>(hi_x, hi_y, hi_z) * adj_dir_inv + adj_origin;
+        let tmin = max(max(max(tmin3.x, tmin3.y), tmin3.z), CWBVH_EPSILON);
+        let tmax = min(min(min(tmax3.x, tmax3.y), tmax3.z), t_max);
+        if (tmin <= tmax) {
+            let m = byte_of(n1.z, n1.w, child);
+            let is_inner = (m & (m << 1u)) & 0x10u;
+            let inner_mask = (is_inner >> 4u) * 0xffu;
+            let bit_index = (m ^ (byte_of(oct_inv4, oct_inv4, child) & inner_mask)) & 0x1fu;
+            let child_bits = (m >> 5u) & 0x07u;
+            hit_mask |= child_bits << bit_index;
+        }
+    }
+    return hit_mask;
+}
+
+fn triangle_positions(i: u32, a: ptr<function, vec3<f32>>, b: ptr<function, vec3<f32>>,
+                      c: ptr<function, vec3<f32>>) {
+    let t = triangles[i];
+    *a = vertices[t.indices[0]].position;
+    *b = vertices[t.indices[1]].position;
+    *c = vertices[t.indices[2]].position;
+}
+
+// Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true). `t_max`
+// NO_T_MAX stands for OpenCL's INFINITY.
+fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
+                  hit: ptr<function, Hit>) -> bool {
+    let node_count = arrayLength(&nodes) / 5u;
+    if (node_count == 0u) {
+        return false;
+    }
+    let tdir = vec3<f32>(traversal_component(dir.x), traversal_component(dir.y),
+                         traversal_component(dir.z));
+    let inv_dir = vec3<f32>(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z));
+    let oct_inv4 = octant_inv4(tdir);
+    var stack: array<vec2<u32>, TRAVERSAL_STACK_SIZE>;
+    var sp = 0u;
+    var current_group = vec2<u32>(0u, 0x80000000u);
+    var primitive_group = vec2<u32>(0u, 0u);
+    var found = false;
+    var closest = t_max;
+    loop {
+        while (primitive_group.y != 0u) {
+            let bit = firstbithigh(primitive_group.y);
+            primitive_group.y &= ~(1u << bit);
+            let prim = primitive_group.x + bit;
+            var a: vec3<f32>;
+            var b: vec3<f32>;
+            var c: vec3<f32>;
+            triangle_positions(prim, &a, &b, &c);
+            var h: TriangleHit;
+            if (intersect_triangle(origin, dir, a, b, c, 0.0, closest, &h) && h.t < closest) {
+                found = true;
+                closest = h.t;
+                (*hit).t = h.t;
+                (*hit).triangle = prim;
+                (*hit).u = h.u;
+                (*hit).v = h.v;
+                if (any_hit) {
+                    return true;
+                }
+            }
+        }
+        primitive_group = vec2<u32>(0u, 0u);
+        if ((current_group.y & 0xff000000u) != 0u) {
+            let hits_imask = current_group.y;
+            let child_index_offset = firstbithigh(hits_imask);
+            let child_index_base = current_group.x;
+            current_group.y &= ~(1u << child_index_offset);
+            if ((current_group.y & 0xff000000u) != 0u) {
+                // obvhs's BVH8 depth stays far below the stack size; a deeper tree
+                // (degenerate input) loses the group rather than writing out of bounds.
+                if (sp < TRAVERSAL_STACK_SIZE) {
+                    stack[sp] = current_group;
+                    sp += 1u;
+                }
+            }
+            let slot_index = (child_index_offset - 24u) ^ (oct_inv4 & 0xffu);
+            let relative_index = countOneBits(hits_imask & ~(0xffffffffu << slot_index));
+            let child = child_index_base + relative_index;
+            let hitmask = cwbvh_node_hits(child, origin, tdir, inv_dir, closest, oct_inv4);
+            let n0 = nodes[child * 5u + 0u];
+            let n1 = nodes[child * 5u + 1u];
+            current_group = vec2<u32>(n1.x, (hitmask & 0xff000000u) | (n0.w >> 24u));
+            primitive_group = vec2<u32>(n1.y, hitmask & 0x00ffffffu);
+        } else {
+            current_group = vec2<u32>(0u, 0u);
+        }
+        if (primitive_group.y == 0u && (current_group.y & 0xff000000u) == 0u) {
+            if (sp == 0u) {
+                break;
+            }
+            sp -= 1u;
+            current_group = stack[sp];
+        }
+    }
+    return found;
+}
+
+fn closest_hit(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, hit: ptr<function, Hit>) -> bool {
+    return traverse_cwbvh(origin, dir, t_max, false, hit);
+}
+
+fn occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
+    var h: Hit;
+    return traverse_cwbvh(origin, dir, t_max, true, &h);
+}
+
+// The surface at a hit (scene.cl's hit_surface; here because it reads the `vertices` and
+// `triangles` bindings, which kernels without a scene, such as deposit_screen, do not
+// declare, and scene.wgsl is shared with those).
+fn hit_surface(hit: Hit) -> SurfacePoint {
+    let t = triangles[hit.triangle];
+    return surface_point(vertices[t.indices[0]], vertices[t.indices[1]],
+                         vertices[t.indices[2]], hit.u, hit.v);
+}

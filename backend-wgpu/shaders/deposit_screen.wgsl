@@ -1,0 +1,79 @@
+// needs: types vector packing fixed_point scene
+// deposit_screen (seed 000 section 30.3.1.3): each stored photon is projected to its pixel
+// and added in fixed point if the pixel sees a diffuse surface at a consistent depth and
+// the photon arrives on the side the camera sees. Mirror of
+// backend-opencl/kernels/deposit_screen.cl and backend-cpu/src/kernels/deposit_screen.rs;
+// 64-bit sums are (lo, hi) u32 atomics with carry, so the map is bitwise identical to the
+// CPU's for the same photons.
+
+@group(0) @binding(0) var<uniform> params: DepositParams;
+@group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
+@group(0) @binding(2) var<storage, read> photons: array<Photon>;
+@group(0) @binding(3) var<storage, read> photon_count: array<u32>;
+@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> photon_map: array<atomic<u32>>;
+
+// The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
+var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
+
+// photon_map[k, k + 1] += (lo, hi): fixed_point.cl's atomic_add_u64_global on the map.
+fn atomic_add_u64_photon_map(k: u32, lo: u32, hi: u32) {
+    let old = atomicAdd(&photon_map[k], lo);
+    let carry = u64_carry(old, lo);
+    if (hi + carry != 0u) {
+        atomicAdd(&photon_map[k + 1u], hi + carry);
+    }
+}
+
+// `li`: local invocation index. Called by every invocation of the group (the counter
+// helpers hold barriers).
+fn deposit_screen(i: u32, li: u32) {
+    counters_clear_local(li);
+    let p = params;
+    // The OpenCL kernel's `photon_capacity` argument is the photon buffer's length.
+    let photon_capacity = arrayLength(&photons);
+    if (i < min(photon_count[0], photon_capacity)) {
+        let ph = photons[i];
+        var px: u32;
+        var py: u32;
+        var z: f32;
+        if (!project_to_pixel(p.camera, ph.position, &px, &py, &z)) {
+            atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
+        } else {
+            let pix = py * p.camera.width + px;
+            let g = gbuffer[pix];
+            let arrives_in_front = dot3(unpack_unit_vector(ph.direction), g.normal) < 0.0;
+            if ((g.flags & GBUFFER_RECEIVER) == 0u ||
+                abs(z - g.depth) > p.depth_tolerance * g.depth || !arrives_in_front) {
+                atomicAdd(&lc[COUNTER_DEPTH_MISMATCH], 1u);
+            } else {
+                let t = pix * DEPOSIT_TEXEL_WORDS;
+                for (var ch = 0u; ch < 3u; ch++) {
+                    let q = quantize(ph.flux[ch], p.flux_quantum);
+                    if (q.underflow) {
+                        atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
+                    }
+                    if (q.saturated) {
+                        atomicAdd(&lc[COUNTER_SATURATED], 1u);
+                    }
+                    if (q.units != 0u) {
+                        atomic_add_u64_photon_map(t + DEPOSIT_FLUX + 2u * ch, q.units, 0u);
+                    }
+                }
+                atomic_add_u64_photon_map(t + DEPOSIT_HIT_DISTANCE,
+                                          quantize(ph.hit_distance, p.hit_distance_quantum).units, 0u);
+                atomic_add_u64_photon_map(t + DEPOSIT_PHOTONS, 1u, 0u);
+                atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
+            }
+        }
+    }
+    counters_flush_local(li);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    // No early return: every invocation reaches the barriers in deposit_screen.
+    deposit_screen(i, li);
+}

@@ -1,0 +1,162 @@
+// needs: types vector optics geometry traversal scene
+// direct_light: radiance from the lights with shadow rays; mirror and glass pixels follow
+// their specular ray tree. Mirror of backend-opencl/kernels/direct_light.cl and
+// backend-cpu/src/kernels/direct_light.rs.
+
+@group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
+@group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
+@group(0) @binding(2) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(3) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(4) var<storage, read> nodes: array<vec4<u32>>;
+@group(0) @binding(5) var<uniform> params: DirectParams;
+@group(0) @binding(6) var<storage, read> gbuffer: array<GBufferTexel>;
+@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
+
+// Reflected radiance of a Lambertian surface at `pos` (shading normal `n`, geometric
+// normal `ng`, both on the viewer's side), lit by every light with shadow rays.
+fn shade_diffuse(light_count: u32, pos: vec3<f32>, n: vec3<f32>, ng: vec3<f32>,
+                 albedo: vec3<f32>) -> vec3<f32> {
+    var e = vec3<f32>(0.0); // irradiance, W/m^2
+    for (var k = 0u; k < light_count; k++) {
+        let light = lights[k];
+        var wi: vec3<f32>;
+        var dist: f32;
+        var scale: f32;
+        let lpos = light.position.xyz;
+        if (light.kind == LIGHT_DIRECTIONAL) {
+            wi = -light.direction.xyz;
+            dist = NO_T_MAX; // OpenCL: INFINITY
+            scale = 1.0;
+        } else {
+            let to = lpos - pos;
+            let d2 = dot3(to, to);
+            if (d2 <= 0.0) {
+                continue;
+            }
+            let d = sqrt(d2);
+            wi = to / d;
+            var falloff = 1.0;
+            if (light.kind == LIGHT_SPOT) {
+                falloff = spot_falloff(dot3(-wi, light.direction.xyz), light.cos_inner,
+                                       light.cos_outer);
+            }
+            dist = d;
+            scale = falloff / d2;
+        }
+        let cos_t = dot3(n, wi);
+        if (cos_t <= 0.0 || scale <= 0.0 || dot3(ng, wi) <= 0.0) {
+            continue;
+        }
+        let origin = offset_ray_origin(pos, ng);
+        // OpenCL's isfinite(dist): false exactly for the directional sentinel (and for an
+        // infinite or NaN distance, as there).
+        var t_max = NO_T_MAX;
+        if (dist < NO_T_MAX) {
+            t_max = length3(origin - lpos) * (1.0f - 1e-5f);
+        }
+        if (occluded(origin, wi, t_max)) {
+            continue;
+        }
+        e += light.intensity.xyz * (scale * cos_t);
+    }
+    return albedo / PI_F * e;
+}
+
+struct ChainRay {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+    depth: u32,
+}
+
+fn chain_ray(origin: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> ChainRay {
+    return ChainRay(origin, dir, weight, depth);
+}
+
+const SPECULAR_STACK_SIZE: u32 = MAX_SPECULAR_DEPTH + 2u;
+
+// Radiance along a camera ray that meets mirrors and glass: the ray tree is walked depth
+// first with an explicit stack, in the CPU's order (last pushed, first popped).
+fn specular_chain(p: DirectParams, origin: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    var stack: array<ChainRay, SPECULAR_STACK_SIZE>;
+    var sp = 0u;
+    var l = vec3<f32>(0.0);
+    stack[sp] = chain_ray(origin, dir, vec3<f32>(1.0), 0u);
+    sp += 1u;
+    while (sp > 0u) {
+        sp -= 1u;
+        let r = stack[sp];
+        var hit: Hit;
+        if (!closest_hit(r.origin, r.dir, NO_T_MAX, &hit)) {
+            continue;
+        }
+        let s = hit_surface(hit);
+        let m = materials[triangles[hit.triangle].material];
+        let entering = dot3(r.dir, s.geometric_normal) < 0.0;
+        var weight = r.weight;
+        if (m.kind == MATERIAL_DIELECTRIC && !entering) {
+            weight *= beer_lambert(m.absorption.xyz, hit.t);
+        }
+        let ng_view = select(-s.geometric_normal, s.geometric_normal, entering);
+        if (m.kind == MATERIAL_DIFFUSE) {
+            let n = facing_normal(s.shading_normal, r.dir);
+            l += weight * shade_diffuse(p.light_count, s.position, n, ng_view, m.color.xyz);
+        } else if (r.depth >= p.max_specular_depth) {
+        } else if (m.kind == MATERIAL_MIRROR) {
+            let w = weight * m.color.xyz;
+            if (max_element3(w) >= p.min_weight && sp < SPECULAR_STACK_SIZE) {
+                let n = facing_normal(s.shading_normal, r.dir);
+                stack[sp] = chain_ray(offset_ray_origin(s.position, ng_view), reflect(r.dir, n),
+                                      w, r.depth + 1u);
+                sp += 1u;
+            }
+        } else {
+            let facing = facing_normal(s.shading_normal, r.dir);
+            let eta = select(m.ior, 1.0 / m.ior, entering);
+            let f = fresnel_dielectric(-dot3(r.dir, facing), eta);
+            if (max_element3(weight) * f >= p.min_weight && sp < SPECULAR_STACK_SIZE) {
+                stack[sp] = chain_ray(offset_ray_origin(s.position, ng_view),
+                                      reflect(r.dir, facing), weight * f, r.depth + 1u);
+                sp += 1u;
+            }
+            var t: vec3<f32>;
+            if (refract(r.dir, facing, eta, &t)) {
+                if (max_element3(weight) * (1.0 - f) >= p.min_weight &&
+                    sp < SPECULAR_STACK_SIZE) {
+                    stack[sp] = chain_ray(offset_ray_origin(s.position, -ng_view),
+                                          normalize3(t), weight * (1.0 - f), r.depth + 1u);
+                    sp += 1u;
+                }
+            }
+        }
+    }
+    return l;
+}
+
+fn direct_light(i: u32) {
+    let p = params;
+    let w = p.camera.width;
+    if (i >= w * p.camera.height) {
+        return;
+    }
+    let g = gbuffer[i];
+    if (g.depth <= 0.0) {
+        out[i] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        return;
+    }
+    var l: vec3<f32>;
+    if ((g.flags & GBUFFER_RECEIVER) != 0u) {
+        let n = g.normal;
+        l = shade_diffuse(p.light_count, g.position, n, n, g.albedo);
+    } else {
+        l = specular_chain(p, p.camera.position, camera_ray(p.camera, i % w, i / w));
+    }
+    out[i] = vec4<f32>(l, 1.0);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    direct_light(i);
+}

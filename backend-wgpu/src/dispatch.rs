@@ -1,0 +1,196 @@
+//! Registry kernels to wgpu compute passes: core's [`Launch`] description (buffers and
+//! parameter blocks in the binding order of each `shaders/<kernel>.wgsl`; counts are
+//! derived in WGSL with `arrayLength`), 2-D workgroup grids for launches beyond 65535
+//! groups, and per-pass timestamps.
+
+use crate::WgpuBackend;
+use caustica_core::backend::{BackendError, PassTime};
+use caustica_core::launch::{check_buffer, Launch, LaunchArg};
+use caustica_core::recording::Kernel;
+use wgpu::util::DeviceExt;
+
+/// Threads per workgroup (`@workgroup_size(64)` in every kernel).
+const WORKGROUP: u64 = 64;
+
+/// Per-pass timing: a timestamp pair per kernel where the device has timestamp queries,
+/// else host times of kernels submitted alone.
+pub struct Timer {
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    passes: Vec<&'static str>,
+    host: Vec<f64>,
+    period_ns: f32,
+}
+
+impl Timer {
+    pub fn new(b: &WgpuBackend, kernels: u32) -> Timer {
+        let queries = (b.timestamps && kernels > 0).then(|| {
+            let set = b.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2 * kernels,
+            });
+            let resolve = b.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp resolve"),
+                size: 16 * kernels as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve)
+        });
+        Timer {
+            queries,
+            passes: Vec::new(),
+            host: Vec::new(),
+            period_ns: b.queue.get_timestamp_period(),
+        }
+    }
+
+    fn writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let i = self.passes.len() as u32;
+        self.queries
+            .as_ref()
+            .map(|(set, _)| wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: Some(2 * i),
+                end_of_pass_write_index: Some(2 * i + 1),
+            })
+    }
+
+    pub fn host_time(&mut self, seconds: f64) {
+        self.host.push(seconds);
+    }
+
+    pub fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
+        if let Some((set, buf)) = &self.queries {
+            if !self.passes.is_empty() {
+                enc.resolve_query_set(set, 0..2 * self.passes.len() as u32, buf, 0);
+            }
+        }
+    }
+
+    pub fn finish(self, b: &WgpuBackend) -> Result<Vec<PassTime>, BackendError> {
+        match &self.queries {
+            Some((_, buf)) if !self.passes.is_empty() => {
+                let raw = b.read_buffer(buf, 16 * self.passes.len() as u64)?;
+                let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&raw);
+                Ok(self
+                    .passes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, k)| PassTime {
+                        kernel: k,
+                        seconds: ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64
+                            * self.period_ns as f64
+                            * 1e-9,
+                    })
+                    .collect())
+            }
+            _ => Ok(self
+                .passes
+                .iter()
+                .zip(self.host.iter().chain(std::iter::repeat(&0.0)))
+                .map(|(k, s)| PassTime {
+                    kernel: k,
+                    seconds: *s,
+                })
+                .collect()),
+        }
+    }
+}
+
+/// Records one registry kernel into `enc`.
+pub fn record(
+    b: &WgpuBackend,
+    enc: &mut wgpu::CommandEncoder,
+    timer: &mut Timer,
+    k: &Kernel,
+) -> Result<(), BackendError> {
+    let Some(Launch {
+        kernel: name,
+        threads,
+        args,
+    }) = k.launch()?
+    else {
+        return Ok(());
+    };
+    let max_binding = b.limits.max_storage_buffer_binding_size as u64;
+    let mut uniforms = Vec::new();
+    for a in &args {
+        match a {
+            LaunchArg::Buffer {
+                id, bytes, what, ..
+            } => {
+                check_buffer(a, b.get(*id)?.bytes)?;
+                if *bytes > max_binding {
+                    return Err(BackendError::OutOfMemory {
+                        bytes: *bytes,
+                        what: format!("{what}: the adapter binds at most {max_binding} bytes"),
+                    });
+                }
+            }
+            LaunchArg::Params(p) => uniforms.push(b.device.create_buffer_init(
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("kernel parameters"),
+                    contents: p,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                },
+            )),
+            LaunchArg::Count(_) => {}
+        }
+    }
+    if threads == 0 {
+        return Ok(());
+    }
+    let groups = threads.div_ceil(WORKGROUP);
+    let max = b.limits.max_compute_workgroups_per_dimension as u64;
+    let x = groups.min(max);
+    let y = groups.div_ceil(x);
+    if y > max {
+        return Err(BackendError::BadArgument(format!(
+            "{name}: {threads} threads exceed a {max} x {max} grid of workgroups"
+        )));
+    }
+    let pipeline = b
+        .pipelines
+        .get(name)
+        .ok_or_else(|| BackendError::Unsupported(name.into()))?;
+    let mut entries = Vec::with_capacity(args.len());
+    let mut next_uniform = uniforms.iter();
+    for a in &args {
+        let resource = match a {
+            LaunchArg::Buffer { id, bytes, .. } => {
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &b.get(*id)?.buffer,
+                    offset: 0,
+                    // an empty buffer binds as one 16-byte dummy element
+                    size: std::num::NonZeroU64::new((*bytes).max(16)),
+                })
+            }
+            LaunchArg::Params(_) => next_uniform
+                .next()
+                .ok_or_else(|| BackendError::Driver("parameter block missing".into()))?
+                .as_entire_binding(),
+            LaunchArg::Count(_) => continue,
+        };
+        entries.push(wgpu::BindGroupEntry {
+            binding: entries.len() as u32,
+            resource,
+        });
+    }
+    let group = b.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(name),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    });
+    {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(name),
+            timestamp_writes: timer.writes(),
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(x as u32, y as u32, 1);
+    }
+    timer.passes.push(name);
+    Ok(())
+}

@@ -1,0 +1,371 @@
+//! caustica wgpu backend: every registry kernel as a WGSL compute shader
+//! (`shaders/<kernel>.wgsl`, functions named as core's scalar functions), software
+//! traversal of core's flattened CWBVH, u32 atomics for the fixed-point deposit.
+//!
+//! Pipelines are created once, buffers stay on the device between passes and recordings,
+//! data comes back only through [`Backend::read`]. Per-pass GPU timestamps are used where
+//! the adapter has `TIMESTAMP_QUERY`; otherwise each kernel is submitted alone and timed
+//! by the host. Embedding: [`WgpuBackend::from_device`] takes the caller's device and
+//! queue, and [`WgpuBackend::write_image_to_texture`] writes a result image (the
+//! caustics, say) into the caller's texture.
+
+mod dispatch;
+pub mod shaders;
+mod texture;
+
+use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::recording::{Recording, ResourceId, Step};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// A device buffer and its logical size in bytes (wgpu buffers here are at least 16
+/// bytes, and bindings of an empty buffer use a 16-byte dummy).
+struct DeviceBuffer {
+    buffer: wgpu::Buffer,
+    bytes: u64,
+}
+
+/// The wgpu backend.
+pub struct WgpuBackend {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    description: String,
+    limits: wgpu::Limits,
+    timestamps: bool,
+    pipelines: HashMap<&'static str, wgpu::ComputePipeline>,
+    texture_pipelines: HashMap<wgpu::TextureFormat, wgpu::ComputePipeline>,
+    buffers: HashMap<ResourceId, DeviceBuffer>,
+    /// Errors wgpu reports outside an error scope (validation, device loss).
+    uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+fn unavailable(reason: impl Into<String>) -> BackendError {
+    BackendError::Unavailable {
+        backend: "wgpu".into(),
+        reason: reason.into(),
+    }
+}
+
+/// Every adapter wgpu finds on the native compute backends (Vulkan, Metal, DX12), with
+/// its description.
+pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
+    let instance = instance();
+    pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY))
+        .iter()
+        .map(|a| a.get_info())
+        .collect()
+}
+
+fn instance() -> wgpu::Instance {
+    wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::PRIMARY,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    })
+}
+
+/// Preference among adapters: discrete, integrated, virtual GPU, then CPU (lavapipe).
+fn adapter_rank(info: &wgpu::AdapterInfo) -> u32 {
+    match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
+
+impl WgpuBackend {
+    /// Opens an adapter (`CAUSTICA_WGPU_ADAPTER=N` picks the N-th of [`list_adapters`];
+    /// otherwise a GPU before a CPU adapter such as lavapipe) with the adapter's own
+    /// limits and, where offered, timestamp queries.
+    pub fn new() -> Result<WgpuBackend, BackendError> {
+        let instance = instance();
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY));
+        if adapters.is_empty() {
+            return Err(unavailable(
+                "no Vulkan/Metal/DX12 adapter; install a GPU driver or Mesa's lavapipe \
+                 (scripts/install-drivers.sh)",
+            ));
+        }
+        let adapter = match std::env::var("CAUSTICA_WGPU_ADAPTER") {
+            Ok(v) => {
+                let n: usize = v.trim().parse().map_err(|_| {
+                    unavailable(format!("CAUSTICA_WGPU_ADAPTER='{v}' is not a number"))
+                })?;
+                if n >= adapters.len() {
+                    return Err(unavailable(format!(
+                        "CAUSTICA_WGPU_ADAPTER={n}, but there are {} adapters",
+                        adapters.len()
+                    )));
+                }
+                adapters.swap_remove(n)
+            }
+            Err(_) => {
+                adapters.sort_by_key(|a| adapter_rank(&a.get_info()));
+                adapters.swap_remove(0)
+            }
+        };
+        let info = adapter.get_info();
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("caustica"),
+            required_features: features,
+            // lavapipe's acceleration-structure minimums exceed wgpu's defaults (DESIGN 8)
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| unavailable(format!("{} refused a device: {e}", info.name)))?;
+        let description = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
+        WgpuBackend::from_device(device, queue, &description)
+    }
+
+    /// Embeds the backend in a caller's renderer: uses the caller's `device` and `queue`
+    /// (its features and limits; timestamps when the device has `TIMESTAMP_QUERY`).
+    /// `description` names the device in [`Capabilities`].
+    pub fn from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        description: &str,
+    ) -> Result<WgpuBackend, BackendError> {
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&uncaptured);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        let mut pipelines = HashMap::new();
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        for (name, _) in shaders::KERNELS {
+            let src = shaders::module_source(name).map_err(BackendError::Driver)?;
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(name),
+                source: wgpu::ShaderSource::Wgsl(src.into()),
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(name),
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            pipelines.insert(*name, pipeline);
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(BackendError::Driver(format!(
+                "WGSL pipeline creation failed: {e}"
+            )));
+        }
+        Ok(WgpuBackend {
+            limits: device.limits(),
+            timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
+            device,
+            queue,
+            description: description.to_string(),
+            pipelines,
+            texture_pipelines: HashMap::new(),
+            buffers: HashMap::new(),
+            uncaptured,
+        })
+    }
+
+    /// The device and queue in use (for a caller that embeds the backend).
+    pub fn device(&self) -> (&wgpu::Device, &wgpu::Queue) {
+        (&self.device, &self.queue)
+    }
+
+    /// The wgpu buffer behind a resource, for a caller that binds results directly.
+    pub fn buffer(&self, id: ResourceId) -> Option<&wgpu::Buffer> {
+        self.buffers.get(&id).map(|b| &b.buffer)
+    }
+
+    fn get(&self, id: ResourceId) -> Result<&DeviceBuffer, BackendError> {
+        self.buffers
+            .get(&id)
+            .ok_or(BackendError::MissingResource(id))
+    }
+
+    /// Takes the errors wgpu reported since the last call.
+    fn check_uncaptured(&self) -> Result<(), BackendError> {
+        let mut v = self.uncaptured.lock().unwrap_or_else(|e| e.into_inner());
+        if v.is_empty() {
+            return Ok(());
+        }
+        let all = v.join("; ");
+        v.clear();
+        Err(if all.contains("lost") {
+            BackendError::DeviceLost(all)
+        } else {
+            BackendError::Driver(all)
+        })
+    }
+
+    fn wait(&self) -> Result<(), BackendError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| BackendError::DeviceLost(e.to_string()))?;
+        self.check_uncaptured()
+    }
+
+    fn create(
+        &mut self,
+        id: ResourceId,
+        bytes: u64,
+        label: &str,
+        data: Option<&[u8]>,
+    ) -> Result<(), BackendError> {
+        let size = bytes.max(16).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        if size > self.limits.max_buffer_size {
+            return Err(BackendError::OutOfMemory {
+                bytes,
+                what: format!(
+                    "{label} (adapter allows {} bytes per buffer)",
+                    self.limits.max_buffer_size
+                ),
+            });
+        }
+        self.buffers.remove(&id);
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: data.is_some(),
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(BackendError::OutOfMemory {
+                bytes,
+                what: format!("{label}: {e}"),
+            });
+        }
+        if let Some(d) = data {
+            {
+                let mut view = buffer
+                    .slice(..)
+                    .get_mapped_range_mut()
+                    .map_err(|e| BackendError::Driver(format!("mapping {label}: {e}")))?;
+                view.slice(..d.len()).copy_from_slice(d);
+            }
+            buffer.unmap();
+        }
+        // wgpu zero-initialises new buffers.
+        self.buffers.insert(id, DeviceBuffer { buffer, bytes });
+        Ok(())
+    }
+
+    /// Copies `bytes` of `buffer` to the host.
+    fn read_buffer(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, BackendError> {
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let size = bytes.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        let result = Arc::new(Mutex::new(None));
+        let r2 = Arc::clone(&result);
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            if let Ok(mut g) = r2.lock() {
+                *g = Some(r);
+            }
+        });
+        self.wait()?;
+        match result.lock().ok().and_then(|mut g| g.take()) {
+            Some(Ok(())) => {}
+            Some(Err(e)) => {
+                return Err(BackendError::Driver(format!(
+                    "mapping a readback buffer: {e}"
+                )))
+            }
+            None => return Err(BackendError::Driver("readback did not complete".into())),
+        }
+        let out = {
+            let view = slice
+                .get_mapped_range()
+                .map_err(|e| BackendError::Driver(format!("reading back: {e}")))?;
+            view[..bytes as usize].to_vec()
+        };
+        staging.unmap();
+        Ok(out)
+    }
+}
+
+impl Backend for WgpuBackend {
+    fn name(&self) -> &'static str {
+        "wgpu"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            device: self.description.clone(),
+            hardware_ray_tracing: false,
+            float_atomics: false,
+            int64_atomics: false,
+            timestamps: self.timestamps,
+            max_buffer_bytes: self
+                .limits
+                .max_buffer_size
+                .min(self.limits.max_storage_buffer_binding_size as u64),
+        }
+    }
+
+    fn kernels(&self) -> Vec<&'static str> {
+        caustica_core::launch::all_kernel_names()
+    }
+
+    fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        self.check_uncaptured()?;
+        let kernels = recording
+            .steps
+            .iter()
+            .filter(|s| matches!(s, Step::Kernel(_)))
+            .count() as u32;
+        let mut timer = dispatch::Timer::new(self, kernels);
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        for step in &recording.steps {
+            match step {
+                Step::Create { id, bytes, label } => self.create(*id, *bytes, label, None)?,
+                Step::Upload { id, data, label } => {
+                    self.create(*id, data.len() as u64, label, Some(data))?
+                }
+                Step::Clear { id } => enc.clear_buffer(&self.get(*id)?.buffer, 0, None),
+                Step::Free { id } => {
+                    self.buffers.remove(id);
+                }
+                Step::Kernel(k) => {
+                    dispatch::record(self, &mut enc, &mut timer, k)?;
+                    if !self.timestamps {
+                        // No GPU timestamps: each kernel runs alone, timed by the host.
+                        let done = std::mem::replace(
+                            &mut enc,
+                            self.device.create_command_encoder(&Default::default()),
+                        );
+                        let t0 = std::time::Instant::now();
+                        self.queue.submit([done.finish()]);
+                        self.wait()?;
+                        timer.host_time(t0.elapsed().as_secs_f64());
+                    }
+                }
+            }
+        }
+        timer.resolve(&mut enc);
+        self.queue.submit([enc.finish()]);
+        self.wait()?;
+        timer.finish(self)
+    }
+
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        let b = self.get(id)?;
+        self.read_buffer(&b.buffer, b.bytes)
+    }
+}

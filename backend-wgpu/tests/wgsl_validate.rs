@@ -1,0 +1,552 @@
+//! Every WGSL kernel module, assembled as the host assembles it (the shared files named by
+//! the kernel's `// needs:` line, in order, then the kernel file), parses and validates
+//! with naga; the shared structs' WGSL layouts equal core's `#[repr(C)]` layouts byte for
+//! byte (DESIGN 3: "layout is tested, not commented"); each kernel's bindings are those the
+//! host binds (group 0, in order, with the address space and access it expects).
+//!
+//! The files are read from disk rather than through the crate so that a failure names the
+//! file and the line.
+
+use caustica_core::gpu;
+use naga::valid::{Capabilities, ValidationFlags, Validator};
+use std::collections::BTreeSet;
+use std::mem::{offset_of, size_of};
+use std::path::PathBuf;
+
+const KERNELS: &[&str] = &[
+    "primary_gbuffer",
+    "direct_light",
+    "trace_photons",
+    "deposit_screen",
+    "resolve_caustics",
+    "tile_hit_distance",
+    "bilateral_gather",
+    "composite",
+];
+
+const COMMON: &[&str] = &[
+    "types",
+    "vector",
+    "rng",
+    "sampling",
+    "optics",
+    "packing",
+    "geometry",
+    "footprint",
+    "fixed_point",
+    "traversal",
+    "scene",
+];
+
+fn shader_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("shaders")
+}
+
+fn read(path: &PathBuf) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The shared files named by a kernel file's `// needs:` line.
+fn needs(kernel: &str, text: &str) -> Vec<String> {
+    let line = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("// needs:"))
+        .unwrap_or_else(|| panic!("{kernel}.wgsl has no `// needs:` line"));
+    line.split_whitespace().map(str::to_owned).collect()
+}
+
+/// The module text of `kernel`, exactly as the host assembles it.
+fn assemble(kernel: &str) -> String {
+    let text = read(&shader_dir().join(format!("{kernel}.wgsl")));
+    let mut out = String::new();
+    for n in needs(kernel, &text) {
+        assert!(
+            COMMON.contains(&n.as_str()),
+            "{kernel}.wgsl needs unknown shared file '{n}'"
+        );
+        out.push_str(&format!("// ---- common/{n}.wgsl\n"));
+        out.push_str(&read(
+            &shader_dir().join("common").join(format!("{n}.wgsl")),
+        ));
+        out.push('\n');
+    }
+    out.push_str(&format!("// ---- {kernel}.wgsl\n"));
+    out.push_str(&text);
+    out
+}
+
+/// Parses and validates one kernel module; panics with naga's report on failure.
+fn validated_module(kernel: &str) -> naga::Module {
+    let src = assemble(kernel);
+    let path = format!("{kernel}.wgsl (assembled)");
+    let module = match naga::front::wgsl::parse_str(&src) {
+        Ok(m) => m,
+        Err(e) => panic!(
+            "{kernel}: WGSL parse error\n{}",
+            e.emit_to_string_with_path(&src, &path)
+        ),
+    };
+    let mut validator = Validator::new(ValidationFlags::all(), Capabilities::default());
+    if let Err(e) = validator.validate(&module) {
+        panic!(
+            "{kernel}: naga validation error\n{}",
+            e.emit_to_string_with_path(&src, &path)
+        );
+    }
+    module
+}
+
+#[test]
+fn kernels_parse_and_validate() {
+    let mut failures = Vec::new();
+    for k in KERNELS {
+        if let Err(e) = std::panic::catch_unwind(|| validated_module(k)) {
+            let msg = e
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            failures.push(msg);
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+#[test]
+fn every_kernel_has_one_entry_point_main_with_workgroup_64() {
+    for k in KERNELS {
+        let m = validated_module(k);
+        assert_eq!(m.entry_points.len(), 1, "{k}: entry points");
+        let ep = &m.entry_points[0];
+        assert_eq!(ep.name, "main", "{k}");
+        assert_eq!(ep.stage, naga::ShaderStage::Compute, "{k}");
+        assert_eq!(ep.workgroup_size, [64, 1, 1], "{k}");
+    }
+}
+
+/// One Rust field: name, byte offset, byte size.
+type Field = (&'static str, usize, usize);
+
+macro_rules! rust_layout {
+    ($t:ident { $($f:ident),* $(,)? }) => {{
+        let v = gpu::$t::default();
+        let _ = &v;
+        (
+            stringify!($t),
+            size_of::<gpu::$t>(),
+            vec![$((stringify!($f), offset_of!(gpu::$t, $f), std::mem::size_of_val(&v.$f))),*],
+        )
+    }};
+}
+
+fn rust_layouts() -> Vec<(&'static str, usize, Vec<Field>)> {
+    vec![
+        rust_layout!(GpuVertex {
+            position,
+            u,
+            normal,
+            v
+        }),
+        rust_layout!(GpuTriangle { indices, material }),
+        rust_layout!(GpuMaterial {
+            kind,
+            ior,
+            cauchy_b,
+            _pad,
+            color,
+            absorption
+        }),
+        rust_layout!(GpuLight {
+            kind,
+            cos_inner,
+            cos_outer,
+            _pad,
+            position,
+            direction,
+            intensity
+        }),
+        rust_layout!(GpuCamera {
+            position,
+            tan_half_fov_x,
+            forward,
+            tan_half_fov_y,
+            right,
+            width,
+            up,
+            height
+        }),
+        rust_layout!(GBufferTexel {
+            position,
+            depth,
+            normal,
+            roughness,
+            albedo,
+            material,
+            uv,
+            view_distance,
+            flags
+        }),
+        rust_layout!(Photon {
+            position,
+            hit_distance,
+            flux,
+            direction
+        }),
+        rust_layout!(TraceParams {
+            light,
+            emission,
+            grid_w,
+            grid_h,
+            first,
+            count,
+            seed,
+            max_bounces,
+            origin,
+            axis,
+            rect_u,
+            rect_v,
+            photon_flux,
+            flux_quantum,
+            _pad
+        }),
+        rust_layout!(DepositParams {
+            camera,
+            flux_quantum,
+            hit_distance_quantum,
+            depth_tolerance,
+            photon_capacity
+        }),
+        rust_layout!(GatherParams {
+            camera,
+            roughness,
+            hit_distance_min,
+            hit_distance_max,
+            max_radius_px,
+            sigma_depth,
+            normal_power,
+            axis,
+            tile_size,
+            hit_distance_quantum,
+            _pad
+        }),
+        rust_layout!(DirectParams {
+            camera,
+            light_count,
+            max_specular_depth,
+            min_weight,
+            _pad
+        }),
+    ]
+}
+
+/// A WGSL member name mapped to (Rust field, byte offset within it): `_pad0/_pad1/_pad2`
+/// are the words of Rust's `_pad: [u32; 3]`.
+fn rust_field_of(member: &str) -> (&str, usize) {
+    match member.strip_prefix("_pad") {
+        Some(d) if !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()) => {
+            ("_pad", 4 * d.parse::<usize>().unwrap())
+        }
+        _ => (member, 0),
+    }
+}
+
+#[test]
+fn struct_layouts_match_core() {
+    let rust = rust_layouts();
+    let mut seen = BTreeSet::new();
+    for k in KERNELS {
+        let m = validated_module(k);
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(m.to_ctx()).expect("layouter");
+        for (handle, ty) in m.types.iter() {
+            let naga::TypeInner::Struct { members, span } = &ty.inner else {
+                continue;
+            };
+            let Some(name) = ty.name.as_deref() else {
+                continue;
+            };
+            let Some((_, rsize, rfields)) = rust.iter().find(|(n, _, _)| *n == name) else {
+                continue;
+            };
+            let what = format!("{k}: struct {name}");
+            assert_eq!(
+                *span as usize, *rsize,
+                "{what}: size (WGSL span vs size_of)"
+            );
+            assert_eq!(
+                layouter[handle].size as usize, *rsize,
+                "{what}: layouter size"
+            );
+            let mut covered: BTreeSet<(&str, usize)> = BTreeSet::new();
+            for mem in members {
+                let mname = mem.name.as_deref().unwrap_or("<unnamed>");
+                let (field, within) = rust_field_of(mname);
+                let Some(&(_, roff, rsz)) = rfields.iter().find(|(f, _, _)| *f == field) else {
+                    panic!("{what}: member {mname} has no Rust field {field}");
+                };
+                let msize = layouter[mem.ty].size as usize;
+                assert_eq!(
+                    mem.offset as usize,
+                    roff + within,
+                    "{what}.{mname}: offset (WGSL vs offset_of!({name}, {field}) + {within})"
+                );
+                assert!(
+                    within + msize <= rsz,
+                    "{what}.{mname}: {msize} bytes at +{within} overrun Rust's {rsz}-byte {field}"
+                );
+                // a `_padN` member is one u32 word of Rust's pad array; others are whole
+                let expect = if field != mname { 4 } else { rsz };
+                assert_eq!(
+                    msize, expect,
+                    "{what}.{mname}: size (WGSL vs Rust's {field})"
+                );
+                for b in within..within + msize {
+                    assert!(
+                        covered.insert((field, b)),
+                        "{what}.{mname}: overlapping members"
+                    );
+                }
+            }
+            for (f, _, sz) in rfields {
+                for b in 0..*sz {
+                    assert!(
+                        covered.contains(&(*f, b)),
+                        "{what}: Rust field {f} byte {b} has no WGSL member"
+                    );
+                }
+            }
+            seen.insert(name.to_owned());
+        }
+    }
+    let missing: Vec<_> = rust
+        .iter()
+        .map(|(n, _, _)| *n)
+        .filter(|n| !seen.contains(*n))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "structs not found in any module: {missing:?}"
+    );
+}
+
+/// How the host binds a buffer.
+#[derive(Debug, PartialEq, Clone, Copy)]
+enum Kind {
+    /// `var<storage, read>`
+    Read,
+    /// `var<storage, read_write>`
+    ReadWrite,
+    /// `var<uniform>`
+    Uniform,
+}
+
+const SCENE: [(&str, Kind); 5] = [
+    ("vertices", Kind::Read),
+    ("triangles", Kind::Read),
+    ("materials", Kind::Read),
+    ("lights", Kind::Read),
+    ("nodes", Kind::Read),
+];
+
+fn expected_bindings(kernel: &str) -> Vec<(&'static str, Kind)> {
+    use Kind::*;
+    let scene = |rest: &[(&'static str, Kind)]| SCENE.iter().chain(rest).copied().collect();
+    match kernel {
+        "primary_gbuffer" => scene(&[("camera", Uniform), ("gbuffer", ReadWrite)]),
+        "direct_light" => scene(&[("params", Uniform), ("gbuffer", Read), ("out", ReadWrite)]),
+        "trace_photons" => scene(&[
+            ("params", Uniform),
+            ("photons", ReadWrite),
+            ("photon_count", ReadWrite),
+            ("counters", ReadWrite),
+        ]),
+        "deposit_screen" => vec![
+            ("params", Uniform),
+            ("gbuffer", Read),
+            ("photons", Read),
+            ("photon_count", Read),
+            ("counters", ReadWrite),
+            ("photon_map", ReadWrite),
+        ],
+        "resolve_caustics" => vec![
+            ("params", Uniform),
+            ("gbuffer", Read),
+            ("photon_map", Read),
+            ("out", ReadWrite),
+        ],
+        "tile_hit_distance" => {
+            vec![
+                ("params", Uniform),
+                ("photon_map", Read),
+                ("tiles", ReadWrite),
+            ]
+        }
+        "bilateral_gather" => vec![
+            ("params", Uniform),
+            ("gbuffer", Read),
+            ("tiles", Read),
+            ("input", Read),
+            ("out", ReadWrite),
+        ],
+        "composite" => vec![("direct", Read), ("caustics", Read), ("out", ReadWrite)],
+        _ => unreachable!(),
+    }
+}
+
+/// Bindings are group 0, numbered 0.. in the host's order, and every one is used by the
+/// entry point (wgpu derives the bind group layout from the bindings the entry point
+/// uses; an unused one would be missing from it).
+#[test]
+fn bindings_match_the_host() {
+    for k in KERNELS {
+        let m = validated_module(k);
+        let info = Validator::new(ValidationFlags::all(), Capabilities::default())
+            .validate(&m)
+            .unwrap();
+        let ep_info = info.get_entry_point(0);
+        let mut got = Vec::new();
+        for (h, var) in m.global_variables.iter() {
+            let Some(b) = &var.binding else { continue };
+            let kind = match var.space {
+                naga::AddressSpace::Uniform => Kind::Uniform,
+                naga::AddressSpace::Storage { access } => {
+                    if access.contains(naga::StorageAccess::STORE) {
+                        Kind::ReadWrite
+                    } else {
+                        Kind::Read
+                    }
+                }
+                other => panic!("{k}: binding {} in address space {other:?}", b.binding),
+            };
+            assert_eq!(b.group, 0, "{k}: group");
+            assert!(
+                !ep_info[h].is_empty(),
+                "{k}: binding {} unused by main",
+                b.binding
+            );
+            got.push((b.binding, var.name.clone().unwrap_or_default(), kind));
+        }
+        got.sort_by_key(|g| g.0);
+        let want = expected_bindings(k);
+        let got_list: Vec<_> = got.iter().map(|(i, n, kd)| (*i, n.as_str(), *kd)).collect();
+        let want_list: Vec<_> = want
+            .iter()
+            .enumerate()
+            .map(|(i, (n, kd))| (i as u32, *n, *kd))
+            .collect();
+        assert_eq!(got_list, want_list, "{k}: bindings");
+    }
+}
+
+/// Shared files declare no bindings (the kernel file owns its binding list).
+#[test]
+fn common_files_declare_no_bindings() {
+    for n in COMMON {
+        let text = read(&shader_dir().join("common").join(format!("{n}.wgsl")));
+        for (line_no, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            assert!(
+                !code.contains("@binding") && !code.contains("@group"),
+                "common/{n}.wgsl:{}: declares a binding",
+                line_no + 1
+            );
+        }
+    }
+}
+
+/// True when `block` holds a `return` anywhere inside it.
+fn may_return(block: &naga::Block) -> bool {
+    use naga::Statement as S;
+    block.iter().any(|s| match s {
+        S::Return { .. } => true,
+        S::Block(b) => may_return(b),
+        S::If { accept, reject, .. } => may_return(accept) || may_return(reject),
+        S::Loop {
+            body, continuing, ..
+        } => may_return(body) || may_return(continuing),
+        S::Switch { cases, .. } => cases.iter().any(|c| may_return(&c.body)),
+        _ => false,
+    })
+}
+
+/// Every call of `f` (a barrier function) or barrier statement in `block`, as
+/// (top level, index in block).
+fn barrier_sites(
+    block: &naga::Block,
+    barrier_fns: &BTreeSet<naga::Handle<naga::Function>>,
+    top: bool,
+    out: &mut Vec<(bool, usize)>,
+) {
+    use naga::Statement as S;
+    for (i, s) in block.iter().enumerate() {
+        match s {
+            S::ControlBarrier(_) | S::MemoryBarrier(_) => out.push((top, i)),
+            S::Call { function, .. } if barrier_fns.contains(function) => out.push((top, i)),
+            S::Block(b) => barrier_sites(b, barrier_fns, false, out),
+            S::If { accept, reject, .. } => {
+                barrier_sites(accept, barrier_fns, false, out);
+                barrier_sites(reject, barrier_fns, false, out);
+            }
+            S::Loop {
+                body, continuing, ..
+            } => {
+                barrier_sites(body, barrier_fns, false, out);
+                barrier_sites(continuing, barrier_fns, false, out);
+            }
+            S::Switch { cases, .. } => {
+                for c in cases {
+                    barrier_sites(&c.body, barrier_fns, false, out);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// naga 30 does not enforce WGSL's rule that barriers sit in uniform control flow (its
+/// uniformity analysis only reports expressions), but Tint does, and a barrier that some
+/// invocations skip hangs or corrupts the group. This is the simple sufficient form the
+/// kernels follow: a barrier, or a call of a function that holds one, only at the top
+/// level of a function body (not inside an if, loop or switch) and after no `return`.
+#[test]
+fn barriers_in_uniform_control_flow() {
+    for k in KERNELS {
+        let m = validated_module(k);
+        // functions that hold a barrier, directly or through calls (fixed point)
+        let mut barrier_fns = BTreeSet::new();
+        loop {
+            let before = barrier_fns.len();
+            for (h, f) in m.functions.iter() {
+                let mut sites = Vec::new();
+                barrier_sites(&f.body, &barrier_fns, true, &mut sites);
+                if !sites.is_empty() {
+                    barrier_fns.insert(h);
+                }
+            }
+            if barrier_fns.len() == before {
+                break;
+            }
+        }
+        let bodies = m
+            .functions
+            .iter()
+            .map(|(_, f)| f)
+            .chain(m.entry_points.iter().map(|e| &e.function));
+        for f in bodies {
+            let name = f.name.as_deref().unwrap_or("?");
+            let mut sites = Vec::new();
+            barrier_sites(&f.body, &barrier_fns, true, &mut sites);
+            for (top, i) in sites {
+                assert!(
+                    top,
+                    "{k}: {name}: barrier (or barrier function call) inside control flow"
+                );
+                let before = naga::Block::from_vec(f.body.iter().take(i).cloned().collect());
+                assert!(
+                    !may_return(&before),
+                    "{k}: {name}: barrier after a possible return"
+                );
+            }
+        }
+    }
+}
