@@ -10,12 +10,12 @@ use caustica_core::recording::ImageBuf;
 fn source(format: &str) -> String {
     format!(
         "@group(0) @binding(0) var<storage, read> image: array<vec4<f32>>;\n\
-         @group(0) @binding(1) var target: texture_storage_2d<{format}, write>;\n\
+         @group(0) @binding(1) var dest: texture_storage_2d<{format}, write>;\n\
          @compute @workgroup_size(8, 8)\n\
          fn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
-             let size = textureDimensions(target);\n\
+             let size = textureDimensions(dest);\n\
              if (id.x >= size.x || id.y >= size.y) {{ return; }}\n\
-             textureStore(target, vec2<i32>(id.xy), image[id.y * size.x + id.x]);\n\
+             textureStore(dest, vec2<i32>(id.xy), image[id.y * size.x + id.x]);\n\
          }}\n"
     )
 }
@@ -104,5 +104,22 @@ impl WgpuBackend {
         }
         self.queue.submit([enc.finish()]);
         self.check_uncaptured()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn copy_shader_validates_for_both_formats() {
+        for f in ["rgba16float", "rgba32float"] {
+            let module = naga::front::wgsl::parse_str(&super::source(f))
+                .unwrap_or_else(|e| panic!("{f}: {e}"));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::default(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{f}: {e:?}"));
+        }
     }
 }
