@@ -22,21 +22,39 @@ if [ "${1:-}" = "--build" ]; then
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
         cp "$exe" ".devbin/$t"
     done
-    exe=$(cargo bench -p caustica-opencl --bench photon_throughput --no-run --message-format=json 2>/dev/null |
-          grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
-    cp "$exe" .devbin/opencl_photon_throughput
+    for spec in "caustica-opencl:photon_throughput:opencl_photon_throughput" "caustica:sspm_frame:sspm_frame"; do
+        IFS=: read -r pkg bench name <<<"$spec"
+        exe=$(cargo bench -p "$pkg" --bench "$bench" --no-run --message-format=json 2>/dev/null |
+              grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
+        cp "$exe" ".devbin/$name"
+    done
+    cargo build --release -p caustica-wgpu --example embed_headless
+    cp target/release/examples/embed_headless .devbin/
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
-          .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput
+          .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
+          .devbin/sspm_frame .devbin/embed_headless
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
+    (cd .devbin && ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
     du -sh .devbin
     exit 0
 fi
 
+# Sections to run (default: all): opencl wgpu frames
+SECTIONS=${*:-opencl wgpu frames}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
 B=$PWD/.devbin
 dpkg -x "$B"/ocl-icd-libopencl1_*.deb /tmp/ocl
+# Vulkan loader and GL dispatch libraries (the NVIDIA Vulkan ICD, libGLX_nvidia, needs
+# libglvnd), unpacked into / as the device tool's README says.
+for f in "$B"/libvulkan1_*.deb "$B"/libglvnd0_*.deb "$B"/libegl1_*.deb "$B"/libopengl0_*.deb \
+         "$B"/libgl1_*.deb "$B"/libglx0_*.deb "$B"/libgles2_*.deb; do
+    [ -f "$f" ] && dpkg -x "$f" /
+done
+ldconfig
 export LD_LIBRARY_PATH=/tmp/ocl/usr/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+[ -f "$icd" ] && export VK_DRIVER_FILES=$icd
 lib=$(find / -xdev \( -name 'libnvidia-opencl.so.1' -o -name 'libnvidia-opencl.so.*' \) 2>/dev/null | head -n 1)
 mkdir -p /etc/OpenCL/vendors
 echo "$lib" > /etc/OpenCL/vendors/nvidia.icd
@@ -44,18 +62,21 @@ echo "ICD: $lib"
 nvidia-smi -L
 run() { echo "=== $*"; "$@" 2>&1 | tee -a "$OUT/log.txt"; echo "=== exit ${PIPESTATUS[0]}"; }
 cd "$B"
+has() { case " $SECTIONS " in *" $1 "*) return 0;; esac; return 1; }
 run ./caustica backends
-run ./device_layout
-CAUSTICA_REQUIRE_BACKENDS=cpu,opencl run ./cross_backend
-CAUSTICA_REQUIRE_BACKENDS=cpu,opencl run ./cpu_reference
-run ./optics_closed_form
-run ./backend_diff 960x540 512x512
-CAUSTICA_BENCH_GRID=1024 run ./opencl_photon_throughput --bench
-for s in sphere cornell; do
-    for b in opencl cpu; do
-        run ./caustica render --scene $s --backend $b --photons 2048x2048 --size 1920x1080 --out "/tmp/r/$s-$b"
-        # the second frame: programs built, caches warm
-        run ./caustica render --scene $s --backend $b --photons 2048x2048 --size 1920x1080 --out "/tmp/r/$s-$b"
-        cp "/tmp/r/$s-$b/stats.json" "$OUT/$s-$b.json"
-    done
-done
+if has opencl; then
+    run ./device_layout
+    run env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl ./cross_backend
+    run env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl ./cpu_reference
+    run ./optics_closed_form
+    run ./backend_diff 960x540 512x512
+    run env CAUSTICA_BENCH_GRID=1024 ./opencl_photon_throughput --bench
+fi
+if has wgpu; then
+    run env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu ./cross_backend
+    run ./backend_diff 960x540 512x512
+    run ./embed_headless
+fi
+if has frames; then
+    run env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-wgpu,opencl} ./sspm_frame --bench
+fi

@@ -40,7 +40,7 @@
 use crate::strategies::MIN_CURVATURE_RADIUS;
 use caustica_core::backend::{read_buf, Backend, BackendError};
 use caustica_core::device_scene::DeviceScene;
-use caustica_core::fixed_point::{join_u64, FLUX_QUANTA_PER_MAX_PHOTON};
+use caustica_core::fixed_point::{join_u64, MAX_PHOTON_QUANTA};
 use caustica_core::footprint::MIN_COSINE;
 use caustica_core::gpu::{
     camera_ray, counter, gbuffer_flags, DepositTexel, GBufferTexel, GpuCamera, Photon, NO_MATERIAL,
@@ -1033,7 +1033,7 @@ pub fn check_trace(
             )
         });
         // Flux: the diverged photons' whole flux plus rounding of the others.
-        let max_photon_flux = fx.constants.flux_quantum as f64 * FLUX_QUANTA_PER_MAX_PHOTON as f64;
+        let max_photon_flux = fx.constants.max_photon_flux as f64;
         let (fa, fb) = (flux_sum(&pa), flux_sum(&pb));
         for ch in 0..3 {
             let bound = allow as f64 * max_photon_flux + PHOTON_FLUX_REL * fa[ch].max(fb[ch]);
@@ -1052,8 +1052,8 @@ pub fn check_trace(
                 ])
             };
             let dq = (q(&ca) as i64 - q(&cb) as i64).unsigned_abs() as f64;
-            let bound_q = allow as f64 * FLUX_QUANTA_PER_MAX_PHOTON as f64
-                + n as f64 * (1.0 + PHOTON_FLUX_REL * FLUX_QUANTA_PER_MAX_PHOTON as f64);
+            let max_q = max_photon_flux / fx.constants.flux_quantum as f64;
+            let bound_q = allow as f64 * max_q + n as f64 * (1.0 + PHOTON_FLUX_REL * max_q);
             v.check(dq <= bound_q, || {
                 format!(
                     "stored-flux counter[{ch}] {} vs cpu {} (allowed {bound_q:.3e})",
@@ -1554,7 +1554,7 @@ pub fn compare_frames(scene: &Scene, a: &Frame, b: &Frame) -> Verdict {
             )
         },
     );
-    let max_photon_flux = sa.flux_quantum * FLUX_QUANTA_PER_MAX_PHOTON as f64;
+    let max_photon_flux = sa.flux_quantum * MAX_PHOTON_QUANTA as f64;
     for ch in 0..3 {
         let (x, y) = (sa.stored_flux[ch], sb.stored_flux[ch]);
         let bound = allow_stored as f64 * max_photon_flux + PHOTON_FLUX_REL * x.max(y);

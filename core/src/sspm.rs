@@ -14,7 +14,7 @@
 use crate::backend::{read_buf, Backend};
 use crate::device_scene::DeviceScene;
 use crate::emission::{emission_domain, EmissionDomain, NoEmission, PointEmission};
-use crate::fixed_point::{join_u64, FLUX_QUANTA_PER_MAX_PHOTON};
+use crate::fixed_point::{join_u64, power_of_two_quantum};
 use crate::gpu::*;
 use crate::image::Image;
 use crate::recording::{Buf, ImageBuf, Kernel, Recording, SceneArgs};
@@ -181,10 +181,16 @@ pub struct FrameConstants {
     pub domains: Vec<(u32, EmissionDomain)>,
     /// Lights that emit no photons, and why.
     pub skipped_lights: Vec<(u32, NoEmission)>,
-    /// Flux per fixed-point unit (W): the brightest photon of the frame (x3 when a
-    /// dispersive material can concentrate a photon into one channel) is 2^24 units.
+    /// Flux of the brightest photon the frame can store (W, one channel): the largest
+    /// per-photon emitted flux, x3 when a dispersive material can concentrate a photon
+    /// into one channel.
+    pub max_photon_flux: f32,
+    /// Flux per fixed-point unit (W), a power of two: the brightest photon of the frame
+    /// (x3 when a dispersive material can concentrate a photon into one channel) is
+    /// 2^24 to 2^25 units.
     pub flux_quantum: f32,
-    /// Hit distance per fixed-point unit (scene units): the scene diagonal is 2^24 units.
+    /// Hit distance per fixed-point unit (scene units), a power of two: the scene diagonal
+    /// is 2^24 to 2^25 units.
     pub hit_distance_quantum: f32,
     /// Clamp of the gather's hit distance (scene units; defaults 5% and 50% of the scene
     /// diagonal).
@@ -209,18 +215,15 @@ impl FrameConstants {
             .map(|(_, d)| d.flux.max_element() / photons_per_light)
             .fold(0.0f32, f32::max)
             * dispersion_gain;
-        let flux_quantum = if max_photon_flux > 0.0 {
-            max_photon_flux / FLUX_QUANTA_PER_MAX_PHOTON
-        } else {
-            1.0
-        };
+        let flux_quantum = power_of_two_quantum(max_photon_flux);
         let diag = ds.bounds.diagonal().max(f32::MIN_POSITIVE);
         let hit_distance_min = settings.hit_distance_min.unwrap_or(0.05 * diag);
         FrameConstants {
             domains,
             skipped_lights,
+            max_photon_flux,
             flux_quantum,
-            hit_distance_quantum: diag / FLUX_QUANTA_PER_MAX_PHOTON,
+            hit_distance_quantum: power_of_two_quantum(diag),
             hit_distance_min,
             hit_distance_max: settings
                 .hit_distance_max
