@@ -162,8 +162,8 @@ pub fn record(
                 wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &b.get(*id)?.buffer,
                     offset: 0,
-                    // an empty buffer binds as one 16-byte dummy element
-                    size: std::num::NonZeroU64::new((*bytes).max(16)),
+                    // an empty buffer binds as a dummy of MIN_BINDING_BYTES
+                    size: std::num::NonZeroU64::new((*bytes).max(crate::MIN_BINDING_BYTES)),
                 })
             }
             LaunchArg::Params(_) => next_uniform

@@ -18,8 +18,14 @@ use caustica_core::recording::{Recording, ResourceId, Step};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// A device buffer and its logical size in bytes (wgpu buffers here are at least 16
-/// bytes, and bindings of an empty buffer use a 16-byte dummy).
+/// Smallest buffer and binding: one element of the largest array element type a kernel
+/// binds (`GpuLight`, 64 bytes), since wgpu requires a runtime-sized array binding to hold
+/// one element. Kernels never read the dummy: counts come from parameters, and
+/// `arrayLength(&nodes) / 5` of a 64-byte dummy is 0.
+pub(crate) const MIN_BINDING_BYTES: u64 = 64;
+
+/// A device buffer and its logical size in bytes (at least `MIN_BINDING_BYTES` are
+/// allocated, and an empty buffer binds as that dummy).
 struct DeviceBuffer {
     buffer: wgpu::Buffer,
     bytes: u64,
@@ -215,7 +221,9 @@ impl WgpuBackend {
         label: &str,
         data: Option<&[u8]>,
     ) -> Result<(), BackendError> {
-        let size = bytes.max(16).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        let size = bytes
+            .max(MIN_BINDING_BYTES)
+            .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
         if size > self.limits.max_buffer_size {
             return Err(BackendError::OutOfMemory {
                 bytes,

@@ -86,7 +86,9 @@ impl WgpuBackend {
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer,
                         offset: 0,
-                        size: std::num::NonZeroU64::new(image.bytes().max(16)),
+                        size: std::num::NonZeroU64::new(
+                            image.bytes().max(crate::MIN_BINDING_BYTES),
+                        ),
                     }),
                 },
                 wgpu::BindGroupEntry {

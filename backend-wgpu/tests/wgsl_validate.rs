@@ -130,7 +130,6 @@ type Field = (&'static str, usize, usize);
 macro_rules! rust_layout {
     ($t:ident { $($f:ident),* $(,)? }) => {{
         let v = gpu::$t::default();
-        let _ = &v;
         (
             stringify!($t),
             size_of::<gpu::$t>(),
@@ -269,6 +268,13 @@ fn struct_layouts_match_core() {
                 continue;
             };
             let what = format!("{k}: struct {name}");
+            // Pod structs have no implicit padding: the listed fields must fill the struct
+            // (a Rust field missing from the list above fails here)
+            let listed: usize = rfields.iter().map(|f| f.2).sum();
+            assert_eq!(
+                listed, *rsize,
+                "{name}: the Rust field list here is incomplete"
+            );
             assert_eq!(
                 *span as usize, *rsize,
                 "{what}: size (WGSL span vs size_of)"
