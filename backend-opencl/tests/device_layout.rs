@@ -35,10 +35,7 @@ fn build_failure_returns_the_log() {
     let b = OpenClBackend::new().unwrap();
     let err =
         b.build_test_program("__kernel void broken(__global uint* x) { x[0] = undefined_name; }");
-    let msg = err
-        .err()
-        .expect("a broken kernel does not build")
-        .to_string();
+    let msg = err.expect_err("a broken kernel does not build").to_string();
     assert!(
         msg.contains("build log") && msg.contains("undefined_name"),
         "{msg}"

@@ -113,7 +113,7 @@ pub fn record(
     else {
         return Ok(());
     };
-    let max_binding = b.limits.max_storage_buffer_binding_size as u64;
+    let max_binding = b.limits.max_storage_buffer_binding_size;
     let mut uniforms = Vec::new();
     for a in &args {
         match a {

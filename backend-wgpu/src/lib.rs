@@ -323,7 +323,7 @@ impl Backend for WgpuBackend {
             max_buffer_bytes: self
                 .limits
                 .max_buffer_size
-                .min(self.limits.max_storage_buffer_binding_size as u64),
+                .min(self.limits.max_storage_buffer_binding_size),
         }
     }
 
