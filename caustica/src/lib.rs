@@ -13,6 +13,8 @@
 //! ```
 
 pub mod output;
+pub mod reference;
+pub mod report;
 
 pub use caustica_core::*;
 

@@ -1,6 +1,6 @@
 //! Writing frames: linear EXR for data, tone-mapped sRGB PNG for looking, JSON stats.
 
-use caustica_core::image::Image;
+use caustica_core::image::{tone_map, Image};
 use std::path::Path;
 
 /// Writes a linear RGBA f32 OpenEXR file.
@@ -11,19 +11,6 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
         (p[0], p[1], p[2], p[3])
     })
     .map_err(|e| format!("{}: {e}", path.display()))
-}
-
-/// Narkowicz's ACES filmic fit, then the sRGB transfer function, after `exposure`.
-pub fn tone_map(linear: f32, exposure: f32) -> u8 {
-    let x = (linear * exposure).max(0.0);
-    let x = if x.is_finite() { x } else { 0.0 };
-    let y = ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
-    let s = if y <= 0.003_130_8 {
-        12.92 * y
-    } else {
-        1.055 * y.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
 }
 
 /// Writes a tone-mapped 8-bit sRGB PNG.

@@ -43,3 +43,16 @@ impl Image {
 pub fn luminance(rgb: [f32; 3]) -> f32 {
     0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
+
+/// Narkowicz's ACES filmic fit, then the sRGB transfer function, after `exposure`.
+pub fn tone_map(linear: f32, exposure: f32) -> u8 {
+    let x = (linear * exposure).max(0.0);
+    let x = if x.is_finite() { x } else { 0.0 };
+    let y = ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
+    let s = if y <= 0.003_130_8 {
+        12.92 * y
+    } else {
+        1.055 * y.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}

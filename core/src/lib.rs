@@ -20,6 +20,7 @@ pub mod gpu;
 pub mod image;
 pub mod kernels;
 pub mod launch;
+pub mod metrics;
 pub mod optics;
 pub mod packing;
 pub mod recording;

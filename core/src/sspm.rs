@@ -322,6 +322,7 @@ pub struct Sspm {
     scratch: ImageBuf,
     images: FrameImages,
     bytes: u64,
+    reference: Option<Image>,
 }
 
 impl Sspm {
@@ -390,7 +391,14 @@ impl Sspm {
             scratch,
             images,
             bytes,
+            reference: None,
         })
+    }
+
+    /// Sets the frame seed of the next frames (progressive rendering, repeated
+    /// measurements); nothing else of the settings can change after `new`.
+    pub fn set_seed(&mut self, seed: u32) {
+        self.settings.seed = seed;
     }
 
     pub fn settings(&self) -> &SspmSettings {
@@ -580,6 +588,10 @@ impl Sspm {
                 c64(counter::STORED_FLUX + 2 * ch) as f64 * self.constants.flux_quantum as f64;
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(r) = &self.reference {
+            let filtered = self.read_image(backend, self.images.filtered_caustics)?;
+            stats.error = Some(crate::metrics::compare(&filtered, r));
+        }
         Ok(stats)
     }
 
@@ -596,6 +608,22 @@ impl Sspm {
     }
 
     /// Reads one of the frame's images back to the host.
+    /// Sets (or clears) the reference image of the caustics (linear radiance, the frame's
+    /// size): every later [`Sspm::frame`] reads its filtered caustics back and puts their
+    /// error against it in [`FrameStats::error`].
+    pub fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
+        if let Some(r) = &reference {
+            if (r.width, r.height) != (self.images.width, self.images.height) {
+                return Err(Error::InvalidParameter(format!(
+                    "reference is {}x{}, the frame {}x{}",
+                    r.width, r.height, self.images.width, self.images.height
+                )));
+            }
+        }
+        self.reference = reference;
+        Ok(())
+    }
+
     pub fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
         let px = read_buf(backend, image)?;
         Ok(Image::new(self.images.width, self.images.height, px))

@@ -75,6 +75,9 @@ pub struct FrameStats {
     pub batches: u32,
     /// Per-pass timing by kernel name (ms), for quick lookup.
     pub pass_ms: BTreeMap<String, f64>,
+    /// Error of the filtered caustics against the reference set with
+    /// `Sspm::set_reference` (computed after the frame; not part of `frame_ms`).
+    pub error: Option<crate::metrics::ErrorStats>,
 }
 
 impl FrameStats {

@@ -1,4 +1,4 @@
-//! The `caustica` command line: `render`, `scenes`, `backends`.
+//! The `caustica` command line: `render`, `scenes`, `backends`, `report`.
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
@@ -59,6 +59,40 @@ enum Command {
     },
     /// List every backend and whether it works on this machine.
     Backends,
+    /// Error against run time for every scene x technique x backend x photon budget:
+    /// prints a table, writes report.json and a log-log plot per scene.
+    Report {
+        /// Comma-separated scenes (built-in names or scene files).
+        #[arg(long, default_value = "sphere,cornell")]
+        scenes: String,
+        /// Comma-separated techniques.
+        #[arg(long, default_value = "sspm")]
+        techniques: String,
+        /// Comma-separated backends.
+        #[arg(long, default_value = "cpu")]
+        backends: String,
+        /// Comma-separated photon grids per light.
+        #[arg(long, default_value = "256x256,512x512,1024x1024")]
+        budgets: String,
+        /// Frames measured per combination (after one warm-up frame), seeds 1..=N.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Image size WxH of the measurements and the references.
+        #[arg(long, default_value = "480x270", value_parser = parse_grid)]
+        size: (u32, u32),
+        /// Relative standard error at which a reference counts as converged.
+        #[arg(long, default_value_t = 0.02)]
+        reference_noise: f64,
+        /// Frame cap of a reference (1024x1024 photons per frame).
+        #[arg(long, default_value_t = 256)]
+        reference_frames: u32,
+        /// Reference cache directory (default: OUT/references).
+        #[arg(long)]
+        cache: Option<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "report")]
+        out: PathBuf,
+    },
 }
 
 fn parse_grid(s: &str) -> Result<(u32, u32), String> {
@@ -149,6 +183,67 @@ fn run(cli: Cli) -> Result<(), String> {
                     Err(why) => println!("{:<8} unavailable  {why}", b.name),
                 }
             }
+            Ok(())
+        }
+        Command::Report {
+            scenes,
+            techniques,
+            backends,
+            budgets,
+            repeats,
+            size,
+            reference_noise,
+            reference_frames,
+            cache,
+            out,
+        } => {
+            let list = |s: &str| -> Vec<String> {
+                s.split(',')
+                    .map(|t| t.trim().to_string())
+                    .filter(|t| !t.is_empty())
+                    .collect()
+            };
+            let plan = caustica::report::ReportPlan {
+                scenes: list(&scenes)
+                    .iter()
+                    .map(|s| load_scene(s))
+                    .collect::<Result<_, _>>()?,
+                techniques: list(&techniques),
+                backends: list(&backends),
+                budgets: list(&budgets)
+                    .iter()
+                    .map(|b| parse_grid(b))
+                    .collect::<Result<_, _>>()?,
+                repeats,
+                reference: caustica::reference::ReferenceSpec {
+                    width: size.0,
+                    height: size.1,
+                    target_noise: reference_noise,
+                    max_frames: reference_frames,
+                    ..Default::default()
+                },
+            };
+            if !(reference_noise > 0.0 && reference_noise < 1.0) {
+                return Err("--reference-noise must be in (0, 1)".into());
+            }
+            std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+            let cache = cache.unwrap_or_else(|| out.join("references"));
+            let records = caustica::report::run(&plan, &cache, &mut |line| eprintln!("{line}"))?;
+            print!("{}", caustica::report::table(&records));
+            let path = out.join("report.json");
+            std::fs::write(
+                &path,
+                serde_json::to_string_pretty(&records).map_err(|e| e.to_string())?,
+            )
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+            for scene in &plan.scenes {
+                let png = out.join(format!("error_vs_time_{}.png", scene.name));
+                match caustica::report::plot(&records, &scene.name, &png) {
+                    Ok(()) => eprintln!("wrote {}", png.display()),
+                    Err(e) => eprintln!("no plot for {}: {e}", scene.name),
+                }
+            }
+            eprintln!("wrote {}", path.display());
             Ok(())
         }
         Command::Render {

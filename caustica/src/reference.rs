@@ -1,0 +1,231 @@
+//! Reference images for error measurement (DESIGN 7): the converged answer of Sspm's
+//! estimator, i.e. the progressive mean of the *unfiltered* screen-space photon deposit
+//! (raw caustics) over frames with different seeds, computed on the CPU backend until the
+//! relative standard error of the mean over the caustic pixels falls below a stated noise
+//! level (or a frame cap is hit, which the reference records). Cached on disk as EXR with
+//! a JSON sidecar (photon count, frames, reached noise, scene hash) and recomputed when the
+//! scene, the image size or the reference settings change.
+
+use caustica_core::image::{luminance, Image};
+use caustica_core::metrics::MASK_FRACTION;
+use caustica_core::{Backend, Scene, Sspm, SspmSettings};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// How a reference is computed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceSpec {
+    pub width: u32,
+    pub height: u32,
+    /// Photon grid side per light and frame.
+    pub photons_side: u32,
+    /// Stop when the relative standard error of the mean (RMS over the caustic pixels,
+    /// relative to the RMS of the mean) is at most this.
+    pub target_noise: f64,
+    /// Stop after this many frames whatever the noise (recorded in the sidecar).
+    pub max_frames: u32,
+}
+
+impl Default for ReferenceSpec {
+    fn default() -> Self {
+        ReferenceSpec {
+            width: 480,
+            height: 270,
+            photons_side: 1024,
+            target_noise: 0.02,
+            max_frames: 256,
+        }
+    }
+}
+
+/// A reference image and how it was made.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceInfo {
+    pub scene: String,
+    pub scene_hash: String,
+    pub spec: ReferenceSpec,
+    pub photons: u64,
+    pub frames: u32,
+    /// Relative standard error reached.
+    pub noise: f64,
+}
+
+pub struct Reference {
+    pub image: Image,
+    pub info: ReferenceInfo,
+}
+
+/// FNV-1a (64 bit) of the scene file text, the image size and the reference settings: a
+/// reference is reused only for exactly the same inputs.
+pub fn scene_hash(scene: &Scene, spec: &ReferenceSpec) -> String {
+    let text = format!(
+        "{}|{}x{}|{}|{}|{}",
+        caustica_core::scene::format::to_json(scene),
+        spec.width,
+        spec.height,
+        spec.photons_side,
+        spec.target_noise,
+        spec.max_frames
+    );
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+fn paths(dir: &Path, scene: &str, hash: &str) -> (PathBuf, PathBuf) {
+    let stem = format!("{scene}-{hash}");
+    (
+        dir.join(format!("{stem}.exr")),
+        dir.join(format!("{stem}.json")),
+    )
+}
+
+fn read_exr(path: &Path) -> Result<Image, String> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| {
+            let (w, h) = (res.width(), res.height());
+            (w, vec![[0.0f32; 4]; w * h])
+        },
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a];
+        },
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let size = img.layer_data.size;
+    let (_, pixels) = img.layer_data.channel_data.pixels;
+    Ok(caustica_core::image::Image::new(
+        size.width() as u32,
+        size.height() as u32,
+        pixels,
+    ))
+}
+
+/// Loads the cached reference of `scene`, or computes it on `backend` (the CPU backend
+/// by convention) and caches it; `progress(frames_done, max_frames, noise)` after each
+/// frame.
+pub fn load_or_compute(
+    dir: &Path,
+    scene: &Scene,
+    spec: &ReferenceSpec,
+    backend: &mut dyn Backend,
+    progress: &mut dyn FnMut(u32, u32, f64),
+) -> Result<Reference, String> {
+    let hash = scene_hash(scene, spec);
+    let (exr_path, json_path) = paths(dir, &scene.name, &hash);
+    if let (Ok(text), true) = (std::fs::read_to_string(&json_path), exr_path.exists()) {
+        if let Ok(info) = serde_json::from_str::<ReferenceInfo>(&text) {
+            if info.scene_hash == hash {
+                return Ok(Reference {
+                    image: read_exr(&exr_path)?,
+                    info,
+                });
+            }
+        }
+    }
+    let r = compute(scene, spec, backend, progress, hash)?;
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    crate::output::write_exr(&exr_path, &r.image)?;
+    let text = serde_json::to_string_pretty(&r.info).map_err(|e| e.to_string())?;
+    std::fs::write(&json_path, text).map_err(|e| format!("{}: {e}", json_path.display()))?;
+    Ok(r)
+}
+
+/// Progressive mean of the raw caustics over frames with seeds 1, 2, ...; `scene_hash`
+/// is recorded in the reference's info.
+pub fn compute(
+    scene: &Scene,
+    spec: &ReferenceSpec,
+    backend: &mut dyn Backend,
+    progress: &mut dyn FnMut(u32, u32, f64),
+    scene_hash: String,
+) -> Result<Reference, String> {
+    let mut scene = scene.clone();
+    scene.camera.width = spec.width;
+    scene.camera.height = spec.height;
+    let settings = SspmSettings {
+        photons_w: spec.photons_side,
+        photons_h: spec.photons_side,
+        ..SspmSettings::default()
+    };
+    let mut sspm = Sspm::new(backend, &scene, settings).map_err(|e| e.to_string())?;
+    let n = (spec.width * spec.height) as usize;
+    let mut sum = vec![[0.0f64; 3]; n];
+    let mut sum2 = vec![[0.0f64; 3]; n];
+    let (mut frames, mut photons, mut noise) = (0u32, 0u64, f64::INFINITY);
+    while frames < spec.max_frames.max(2) {
+        sspm.set_seed(frames + 1);
+        let stats = sspm
+            .frame(backend, &mut |_| {})
+            .map_err(|e| e.to_string())?;
+        photons += stats.photons_emitted;
+        let raw = sspm
+            .read_image(backend, sspm.images().raw_caustics)
+            .map_err(|e| e.to_string())?;
+        for (i, p) in raw.pixels.iter().enumerate() {
+            for c in 0..3 {
+                let v = p[c] as f64;
+                sum[i][c] += v;
+                sum2[i][c] += v * v;
+            }
+        }
+        frames += 1;
+        noise = relative_standard_error(&sum, &sum2, frames);
+        progress(frames, spec.max_frames, noise);
+        if frames >= 4 && noise <= spec.target_noise {
+            break;
+        }
+    }
+    sspm.free(backend).map_err(|e| e.to_string())?;
+    let k = frames as f64;
+    let pixels = sum
+        .iter()
+        .map(|s| [(s[0] / k) as f32, (s[1] / k) as f32, (s[2] / k) as f32, 1.0])
+        .collect();
+    Ok(Reference {
+        image: Image::new(spec.width, spec.height, pixels),
+        info: ReferenceInfo {
+            scene: scene.name.clone(),
+            scene_hash,
+            spec: spec.clone(),
+            photons,
+            frames,
+            noise,
+        },
+    })
+}
+
+/// RMS standard error of the per-pixel means over the caustic pixels (mask from the
+/// current mean, as metrics::CausticMask), relative to the RMS of the means.
+fn relative_standard_error(sum: &[[f64; 3]], sum2: &[[f64; 3]], k: u32) -> f64 {
+    if k < 2 {
+        return f64::INFINITY;
+    }
+    let k = k as f64;
+    let lum: Vec<f64> = sum
+        .iter()
+        .map(|s| luminance([(s[0] / k) as f32, (s[1] / k) as f32, (s[2] / k) as f32]) as f64)
+        .collect();
+    let max = lum.iter().copied().fold(0.0f64, f64::max);
+    let (mut var, mut sq) = (0.0f64, 0.0f64);
+    for (i, (s, s2)) in sum.iter().zip(sum2).enumerate() {
+        if !(max > 0.0 && lum[i] > MASK_FRACTION as f64 * max) {
+            continue;
+        }
+        for c in 0..3 {
+            let mean = s[c] / k;
+            let sample_var = ((s2[c] / k - mean * mean) * k / (k - 1.0)).max(0.0);
+            var += sample_var / k; // variance of the mean
+            sq += mean * mean;
+        }
+    }
+    if sq > 0.0 {
+        (var / sq).sqrt()
+    } else {
+        0.0
+    }
+}

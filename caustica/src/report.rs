@@ -1,0 +1,336 @@
+//! Error against run time (DESIGN 7): for every scene x technique x backend x photon
+//! budget, the median frame time and per-pass times over repeated frames (device
+//! timestamps where the backend has them) and the error of the filtered caustics against
+//! the scene's reference, with bias and variance over the repeats' seeds. Writes one JSON
+//! record per combination and a log-log plot of relative MSE against frame time per scene.
+
+use crate::reference::{self, ReferenceSpec};
+use caustica_core::image::Image;
+use caustica_core::metrics::{bias_variance, CausticMask};
+use caustica_core::{Scene, Sspm, SspmSettings};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One measured combination.
+#[derive(Clone, Debug, Serialize)]
+pub struct Record {
+    pub scene: String,
+    pub technique: String,
+    pub backend: String,
+    pub device: String,
+    /// Photon grid per light.
+    pub budget: String,
+    pub photons: u64,
+    pub width: u32,
+    pub height: u32,
+    pub repeats: usize,
+    /// "device timestamps" or "host wall clock" (per-pass times).
+    pub timing: String,
+    /// Median whole-frame host wall time (ms).
+    pub frame_ms: f64,
+    /// Median per-pass times (ms).
+    pub pass_ms: BTreeMap<String, f64>,
+    /// Median over repeats of the filtered caustics' error against the reference.
+    pub relative_mse: f64,
+    /// The same for the raw (unfiltered) caustics: the estimator's own noise, without the
+    /// gather's blur.
+    pub raw_relative_mse: f64,
+    pub rmse: f64,
+    pub flip: Option<f64>,
+    /// Over the repeats (seeds 1..=repeats).
+    pub relative_bias: f64,
+    pub relative_variance: f64,
+    pub reference_photons: u64,
+    pub reference_noise: f64,
+}
+
+/// What to measure.
+pub struct ReportPlan {
+    pub scenes: Vec<Scene>,
+    pub techniques: Vec<String>,
+    pub backends: Vec<String>,
+    pub budgets: Vec<(u32, u32)>,
+    pub repeats: usize,
+    pub reference: ReferenceSpec,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Runs the plan; references are cached under `cache`. `log` receives progress lines.
+pub fn run(
+    plan: &ReportPlan,
+    cache: &Path,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<Record>, String> {
+    for t in &plan.techniques {
+        if t != "sspm" {
+            return Err(format!("unknown technique '{t}'; available: sspm"));
+        }
+    }
+    let mut cpu = crate::open_backend("cpu").map_err(|e| e.to_string())?;
+    let mut records = Vec::new();
+    for scene in &plan.scenes {
+        log(&format!(
+            "{}: reference ({}x{}, target noise {})",
+            scene.name, plan.reference.width, plan.reference.height, plan.reference.target_noise
+        ));
+        let r = reference::load_or_compute(
+            cache,
+            scene,
+            &plan.reference,
+            cpu.as_mut(),
+            &mut |k, max, noise| {
+                if k % 8 == 0 || k == max {
+                    log(&format!("  reference frame {k}/{max}: noise {noise:.4}"));
+                }
+            },
+        )?;
+        log(&format!(
+            "  reference: {} photons over {} frames, noise {:.4}",
+            r.info.photons, r.info.frames, r.info.noise
+        ));
+        let mut scene = scene.clone();
+        scene.camera.width = plan.reference.width;
+        scene.camera.height = plan.reference.height;
+        let mask = CausticMask::from_reference(&r.image);
+        for technique in &plan.techniques {
+            for backend_name in &plan.backends {
+                let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
+                for &(pw, ph) in &plan.budgets {
+                    let settings = SspmSettings {
+                        photons_w: pw,
+                        photons_h: ph,
+                        ..SspmSettings::default()
+                    };
+                    let mut sspm =
+                        Sspm::new(backend.as_mut(), &scene, settings).map_err(|e| e.to_string())?;
+                    sspm.set_reference(Some(r.image.clone()))
+                        .map_err(|e| e.to_string())?;
+                    // warm-up frame (pipeline caches, first-touch allocations)
+                    sspm.frame(backend.as_mut(), &mut |_| {})
+                        .map_err(|e| e.to_string())?;
+                    let (mut frame_ms, mut rel, mut rmse, mut flip) =
+                        (vec![], vec![], vec![], vec![]);
+                    let mut raw_rel = vec![];
+                    let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+                    let mut images: Vec<Image> = Vec::new();
+                    let (mut timing, mut photons, mut device) = (String::new(), 0, String::new());
+                    for k in 0..plan.repeats.max(1) {
+                        sspm.set_seed(k as u32 + 1);
+                        let st = sspm
+                            .frame(backend.as_mut(), &mut |_| {})
+                            .map_err(|e| e.to_string())?;
+                        frame_ms.push(st.frame_ms);
+                        for (p, ms) in &st.pass_ms {
+                            passes.entry(p.clone()).or_default().push(*ms);
+                        }
+                        if let Some(e) = &st.error {
+                            rel.push(e.relative_mse);
+                            rmse.push(e.rmse);
+                            if let Some(f) = e.flip {
+                                flip.push(f);
+                            }
+                        }
+                        images.push(
+                            sspm.read_image(backend.as_mut(), sspm.images().filtered_caustics)
+                                .map_err(|e| e.to_string())?,
+                        );
+                        let raw = sspm
+                            .read_image(backend.as_mut(), sspm.images().raw_caustics)
+                            .map_err(|e| e.to_string())?;
+                        raw_rel.push(caustica_core::metrics::relative_mse(&raw, &r.image, &mask));
+                        (timing, photons, device) =
+                            (st.timing.clone(), st.photons_emitted, st.device.clone());
+                    }
+                    sspm.free(backend.as_mut()).map_err(|e| e.to_string())?;
+                    let bv = bias_variance(&images, &r.image, &mask);
+                    let rec = Record {
+                        scene: scene.name.clone(),
+                        technique: technique.clone(),
+                        backend: backend_name.clone(),
+                        device,
+                        budget: format!("{pw}x{ph}"),
+                        photons,
+                        width: scene.camera.width,
+                        height: scene.camera.height,
+                        repeats: plan.repeats.max(1),
+                        timing,
+                        frame_ms: median(&mut frame_ms),
+                        pass_ms: passes
+                            .into_iter()
+                            .map(|(k, mut v)| (k, median(&mut v)))
+                            .collect(),
+                        relative_mse: median(&mut rel),
+                        raw_relative_mse: median(&mut raw_rel),
+                        rmse: median(&mut rmse),
+                        flip: (!flip.is_empty()).then(|| median(&mut flip)),
+                        relative_bias: bv.relative_bias,
+                        relative_variance: bv.relative_variance,
+                        reference_photons: r.info.photons,
+                        reference_noise: r.info.noise,
+                    };
+                    log(&format!(
+                        "  {technique}/{backend_name} {pw}x{ph}: {:.2} ms, relMSE {:.4}",
+                        rec.frame_ms, rec.relative_mse
+                    ));
+                    records.push(rec);
+                }
+            }
+        }
+    }
+    Ok(records)
+}
+
+/// The records as a fixed-width table.
+pub fn table(records: &[Record]) -> String {
+    let mut s = format!(
+        "{:<10} {:<9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>7} {:>9} {:>10} {:>10}\n",
+        "scene",
+        "technique",
+        "backend",
+        "budget",
+        "frame ms",
+        "relMSE",
+        "RMSE",
+        "FLIP",
+        "bias",
+        "variance",
+        "raw relMSE"
+    );
+    for r in records {
+        s.push_str(&format!(
+            "{:<10} {:<9} {:<8} {:>10} {:>10.2} {:>10.4} {:>9.3e} {:>7} {:>+9.4} {:>10.4} {:>10.4}\n",
+            r.scene,
+            r.technique,
+            r.backend,
+            r.budget,
+            r.frame_ms,
+            r.relative_mse,
+            r.rmse,
+            r.flip.map_or("-".into(), |f| format!("{f:.4}")),
+            r.relative_bias,
+            r.relative_variance,
+            r.raw_relative_mse
+        ));
+    }
+    s
+}
+
+/// Whole decades around the data, so that every log axis has labelled ticks.
+fn decade_below(x: f64) -> f64 {
+    10f64.powf(x.log10().floor())
+}
+
+fn decade_above(x: f64) -> f64 {
+    10f64.powf(x.log10().ceil()).max(decade_below(x) * 10.0)
+}
+
+/// Log-log plot of relative MSE against frame time, one curve per technique x backend,
+/// for `scene`'s records. Needs a TrueType font (DejaVu Sans from fonts-dejavu-core).
+pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> {
+    use plotters::prelude::*;
+    let font = ["/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"]
+        .iter()
+        .find_map(|p| std::fs::read(p).ok())
+        .ok_or("no DejaVuSans.ttf for the plot's text (install fonts-dejavu-core)")?;
+    let font: &'static [u8] = Box::leak(font.into_boxed_slice());
+    plotters::style::register_font("sans-serif", FontStyle::Normal, font)
+        .map_err(|_| "could not load the plot font".to_string())?;
+    let rs: Vec<&Record> = records
+        .iter()
+        .filter(|r| r.scene == scene && r.frame_ms > 0.0 && r.relative_mse > 0.0)
+        .collect();
+    if rs.is_empty() {
+        return Err(format!(
+            "no records with positive time and error for {scene}"
+        ));
+    }
+    let (tmin, tmax) = rs.iter().fold((f64::MAX, 0.0f64), |(a, b), r| {
+        (a.min(r.frame_ms), b.max(r.frame_ms))
+    });
+    let (emin, emax) = rs.iter().fold((f64::MAX, 0.0f64), |(a, b), r| {
+        let raw = if r.raw_relative_mse > 0.0 {
+            r.raw_relative_mse
+        } else {
+            r.relative_mse
+        };
+        (
+            a.min(r.relative_mse).min(raw),
+            b.max(r.relative_mse).max(raw),
+        )
+    });
+    let root = BitMapBackend::new(path, (800, 560)).into_drawing_area();
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("{scene}: caustic error against frame time"),
+            ("sans-serif", 22),
+        )
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d(
+            (decade_below(tmin)..decade_above(tmax)).log_scale(),
+            (decade_below(emin)..decade_above(emax)).log_scale(),
+        )
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("frame time (ms)")
+        .y_desc("relative MSE (solid: filtered caustics, dashed: raw)")
+        .label_style(("sans-serif", 14))
+        .x_labels(8)
+        .y_labels(8)
+        .x_label_formatter(&|v| format!("{v:.3}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|e| err(&e))?;
+    let mut curves: BTreeMap<String, Vec<(f64, f64, f64)>> = BTreeMap::new();
+    for r in rs {
+        curves
+            .entry(format!("{} / {}", r.technique, r.backend))
+            .or_default()
+            .push((r.frame_ms, r.relative_mse, r.raw_relative_mse));
+    }
+    for (i, (name, mut all)) in curves.into_iter().enumerate() {
+        all.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let color = Palette99::pick(i).to_rgba();
+        let raw: Vec<(f64, f64)> = all
+            .iter()
+            .filter(|p| p.2 > 0.0)
+            .map(|p| (p.0, p.2))
+            .collect();
+        chart
+            .draw_series(DashedLineSeries::new(raw, 6, 4, color.stroke_width(1)))
+            .map_err(|e| err(&e))?;
+        let pts: Vec<(f64, f64)> = all.iter().map(|p| (p.0, p.1)).collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+            .map_err(|e| err(&e))?
+            .label(name)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(pts.into_iter().map(|p| Circle::new(p, 4, color.filled())))
+            .map_err(|e| err(&e))?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
