@@ -58,9 +58,12 @@ pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
             backend: name.into(),
             reason: "not compiled in (cargo feature `wgpu`)".into(),
         }),
+        #[cfg(feature = "vulkan")]
+        "vulkan" => Ok(Box::new(caustica_vulkan::VulkanBackend::new()?)),
+        #[cfg(not(feature = "vulkan"))]
         "vulkan" => Err(BackendError::Unavailable {
             backend: name.into(),
-            reason: "not implemented yet (see the README's backend table)".into(),
+            reason: "not compiled in (cargo feature `vulkan`)".into(),
         }),
         #[cfg(not(feature = "cpu"))]
         "cpu" => Err(BackendError::Unavailable {
@@ -89,7 +92,8 @@ pub fn backend_statuses() -> Vec<BackendStatus> {
         .map(|&name| {
             let compiled = (name == "cpu" && cfg!(feature = "cpu"))
                 || (name == "opencl" && cfg!(feature = "opencl"))
-                || (name == "wgpu" && cfg!(feature = "wgpu"));
+                || (name == "wgpu" && cfg!(feature = "wgpu"))
+                || (name == "vulkan" && cfg!(feature = "vulkan"));
             BackendStatus {
                 name,
                 compiled,

@@ -1,6 +1,6 @@
 //! Conformance helpers: open every backend named in `CAUSTICA_REQUIRE_BACKENDS` (a missing
 //! one is a failure, not a skip) and render small frames for comparison. Backends: cpu,
-//! opencl, wgpu; the Vulkan issue adds its own here.
+//! opencl, wgpu, vulkan.
 //!
 //! [`strategies`]: proptest strategies for valid scenes and small settings. [`compare`]:
 //! backend-generic comparisons with the CPU reference, per kernel and per technique, with
@@ -33,6 +33,23 @@ pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
             out.push(("wgpu", Box::new(b)));
         }
         Err(e) => eprintln!("SKIPPING wgpu backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
+    }
+    // The conformance suite runs Vulkan under the Khronos validation layer where it is
+    // installed: any validation error fails the step that caused it.
+    match caustica_vulkan::VulkanBackend::with_validation(true) {
+        Ok(b) => {
+            eprintln!(
+                "vulkan backend: {} (validation layer {})",
+                b.capabilities().device,
+                if b.validation_active() {
+                    "on"
+                } else {
+                    "NOT INSTALLED"
+                }
+            );
+            out.push(("vulkan", Box::new(b)));
+        }
+        Err(e) => eprintln!("SKIPPING vulkan backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
     }
     for name in required.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         assert!(

@@ -1,0 +1,7 @@
+#version 460
+#extension GL_EXT_ray_tracing : require
+// Miss of shadow rays: the light is visible.
+
+layout(location = 1) rayPayloadInEXT uint shadow_visible;
+
+void main() { shadow_visible = 1u; }

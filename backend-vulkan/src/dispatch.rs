@@ -1,0 +1,532 @@
+//! Recordings to Vulkan command buffers: buffer steps as fills and staged copies, kernels
+//! as ray-tracing launches (G-buffer, direct light, photons) or compute dispatches (the
+//! rest), each bound with core's launch description, separated by full memory barriers
+//! and bracketed by timestamps. `prepare_scene` reads the triangles back and has the
+//! driver build the acceleration structures.
+
+use crate::accel::SceneAccel;
+use crate::context::{vk_error, Context};
+use crate::memory::Buffer;
+use crate::pipelines::{self, spirv, Pipeline};
+use crate::{is_kernel, DeviceBuffer, VulkanBackend, MIN_BINDING_BYTES};
+use ash::vk;
+use caustica_core::backend::{BackendError, PassTime};
+use caustica_core::gpu::{GpuTriangle, GpuVertex};
+use caustica_core::launch::{check_buffer, LaunchArg};
+use caustica_core::recording::{Kernel, Recording, SceneArgs, Step};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+const S: vk::DescriptorType = vk::DescriptorType::STORAGE_BUFFER;
+const U: vk::DescriptorType = vk::DescriptorType::UNIFORM_BUFFER;
+const AS: vk::DescriptorType = vk::DescriptorType::ACCELERATION_STRUCTURE_KHR;
+
+/// Threads per workgroup of the WGSL compute kernels.
+const WORKGROUP: u64 = 64;
+/// Width of a ray-generation launch grid (`i = y * width + x` in the shaders).
+const RAYGEN_WIDTH: u64 = 8192;
+
+/// Every pipeline, created once. Ray-tracing kernels bind the TLAS at 0, the scene's
+/// vertices, triangles, materials and lights at 1-4, their parameters at 5 and their
+/// buffers from 6; compute kernels bind core's launch arguments in order (counts are
+/// derived in the shaders). `trace_photons` adds into 64 counter banks that
+/// `reduce_counters` folds into the frame's counters.
+pub fn create_pipelines(
+    ctx: &Arc<Context>,
+) -> Result<HashMap<&'static str, Pipeline>, BackendError> {
+    let mut p = HashMap::new();
+    p.insert(
+        "primary_gbuffer",
+        pipelines::ray_tracing(ctx, spirv::PRIMARY_GBUFFER, vec![AS, S, S, S, S, U, S])?,
+    );
+    p.insert(
+        "direct_light",
+        pipelines::ray_tracing(ctx, spirv::DIRECT_LIGHT, vec![AS, S, S, S, S, U, S, S])?,
+    );
+    p.insert(
+        "trace_photons",
+        pipelines::ray_tracing(ctx, spirv::TRACE_PHOTONS, vec![AS, S, S, S, S, U, S, S, S])?,
+    );
+    let compute: [(&'static str, Vec<vk::DescriptorType>); 5] = [
+        ("deposit_screen", vec![U, S, S, S, S, S]),
+        ("resolve_caustics", vec![U, S, S, S]),
+        ("tile_hit_distance", vec![U, S, S]),
+        ("bilateral_gather", vec![U, S, S, S, S]),
+        ("composite", vec![S, S, S]),
+    ];
+    for (name, bindings) in compute {
+        p.insert(
+            name,
+            pipelines::compute(ctx, &pipelines::wgsl_to_spirv(name)?, bindings)?,
+        );
+    }
+    let reduce = ash::util::read_spv(&mut std::io::Cursor::new(spirv::REDUCE_COUNTERS))
+        .map_err(|e| BackendError::Driver(format!("bad SPIR-V: {e}")))?;
+    p.insert(
+        "reduce_counters",
+        pipelines::compute(ctx, &reduce, vec![S, S])?,
+    );
+    Ok(p)
+}
+
+fn barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
+    let m = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+        .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)];
+    unsafe {
+        d.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::ALL_COMMANDS,
+            vk::PipelineStageFlags::ALL_COMMANDS,
+            vk::DependencyFlags::empty(),
+            &m,
+            &[],
+            &[],
+        )
+    };
+}
+
+enum Desc {
+    Tlas(vk::AccelerationStructureKHR),
+    Storage(vk::Buffer, u64),
+    Uniform(vk::Buffer, u64),
+}
+
+/// Per-execute state: the command buffer being recorded and what must outlive it.
+struct Frame {
+    cmd: vk::CommandBuffer,
+    retired: Vec<Buffer>,
+    retired_scenes: Vec<SceneAccel>,
+    descriptor_pool: vk::DescriptorPool,
+    queries: Option<vk::QueryPool>,
+    passes: Vec<&'static str>,
+}
+
+pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, BackendError> {
+    let kernels = rec.steps.iter().filter(|s| is_kernel(s)).count() as u32;
+    let d = b.ctx.device.clone();
+    let sets = 2 * kernels.max(1);
+    let sizes = [
+        vk::DescriptorPoolSize::default()
+            .ty(S)
+            .descriptor_count(10 * sets),
+        vk::DescriptorPoolSize::default()
+            .ty(U)
+            .descriptor_count(sets),
+        vk::DescriptorPoolSize::default()
+            .ty(AS)
+            .descriptor_count(sets),
+    ];
+    let descriptor_pool = unsafe {
+        d.create_descriptor_pool(
+            &vk::DescriptorPoolCreateInfo::default()
+                .max_sets(sets)
+                .pool_sizes(&sizes),
+            None,
+        )
+    }
+    .map_err(vk_error("creating a descriptor pool"))?;
+    let queries = if b.ctx.timestamps && kernels > 0 {
+        match unsafe {
+            d.create_query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::TIMESTAMP)
+                    .query_count(2 * kernels),
+                None,
+            )
+        } {
+            Ok(q) => Some(q),
+            Err(e) => {
+                unsafe { d.destroy_descriptor_pool(descriptor_pool, None) };
+                return Err(vk_error("creating a query pool")(e));
+            }
+        }
+    } else {
+        None
+    };
+    let mut frame = Frame {
+        cmd: vk::CommandBuffer::null(),
+        retired: Vec::new(),
+        retired_scenes: Vec::new(),
+        descriptor_pool,
+        queries,
+        passes: Vec::new(),
+    };
+    let result = record_all(b, rec, &mut frame, kernels);
+    // whatever happened, wait for the device before the frame's objects go
+    if frame.cmd != vk::CommandBuffer::null() {
+        let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+        let submitted = b.submit_and_wait(cmd);
+        if result.is_ok() {
+            submitted?;
+        }
+    }
+    let times = result.and_then(|_| read_times(&b.ctx, &frame));
+    unsafe {
+        let _ = d.queue_wait_idle(b.ctx.queue);
+        if let Some(q) = frame.queries {
+            d.destroy_query_pool(q, None);
+        }
+        d.destroy_descriptor_pool(frame.descriptor_pool, None);
+    }
+    drop(frame.retired);
+    drop(frame.retired_scenes);
+    times
+}
+
+fn read_times(ctx: &Context, frame: &Frame) -> Result<Vec<PassTime>, BackendError> {
+    let Some(q) = frame.queries else {
+        return Ok(frame
+            .passes
+            .iter()
+            .map(|k| PassTime {
+                kernel: k,
+                seconds: 0.0,
+            })
+            .collect());
+    };
+    if frame.passes.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut ticks = vec![0u64; 2 * frame.passes.len()];
+    unsafe {
+        ctx.device.get_query_pool_results(
+            q,
+            0,
+            &mut ticks,
+            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+        )
+    }
+    .map_err(vk_error("reading timestamps"))?;
+    let period = ctx.limits.timestamp_period as f64;
+    Ok(frame
+        .passes
+        .iter()
+        .enumerate()
+        .map(|(i, k)| PassTime {
+            kernel: k,
+            seconds: ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64 * period * 1e-9,
+        })
+        .collect())
+}
+
+fn record_all(
+    b: &mut VulkanBackend,
+    rec: &Recording,
+    frame: &mut Frame,
+    kernels: u32,
+) -> Result<(), BackendError> {
+    let d = b.ctx.device.clone();
+    frame.cmd = b.begin()?;
+    if let Some(q) = frame.queries {
+        unsafe { d.cmd_reset_query_pool(frame.cmd, q, 0, 2 * kernels) };
+    }
+    for step in &rec.steps {
+        match step {
+            Step::Create { id, bytes, label } => {
+                let buffer = b.new_storage(*bytes, label)?;
+                unsafe { d.cmd_fill_buffer(frame.cmd, buffer.buffer, 0, vk::WHOLE_SIZE, 0) };
+                if let Some(old) = b.buffers.insert(
+                    *id,
+                    DeviceBuffer {
+                        buffer,
+                        bytes: *bytes,
+                    },
+                ) {
+                    frame.retired.push(old.buffer);
+                }
+                barrier(&d, frame.cmd);
+            }
+            Step::Upload { id, data, label } => {
+                let buffer = b.new_storage(data.len() as u64, label)?;
+                if !data.is_empty() {
+                    let staging = Buffer::with_data(
+                        &b.ctx,
+                        data,
+                        vk::BufferUsageFlags::TRANSFER_SRC,
+                        "upload staging",
+                    )?;
+                    unsafe {
+                        d.cmd_copy_buffer(
+                            frame.cmd,
+                            staging.buffer,
+                            buffer.buffer,
+                            &[vk::BufferCopy::default().size(data.len() as u64)],
+                        )
+                    };
+                    frame.retired.push(staging);
+                }
+                if let Some(old) = b.buffers.insert(
+                    *id,
+                    DeviceBuffer {
+                        buffer,
+                        bytes: data.len() as u64,
+                    },
+                ) {
+                    frame.retired.push(old.buffer);
+                }
+                barrier(&d, frame.cmd);
+            }
+            Step::Clear { id } => {
+                let buf = b.get(*id)?.buffer.buffer;
+                unsafe { d.cmd_fill_buffer(frame.cmd, buf, 0, vk::WHOLE_SIZE, 0) };
+                barrier(&d, frame.cmd);
+            }
+            Step::Free { id } => {
+                if let Some(old) = b.buffers.remove(id) {
+                    frame.retired.push(old.buffer);
+                }
+                if let Some(s) = b.scenes.remove(id) {
+                    frame.retired_scenes.push(s);
+                }
+            }
+            Step::Kernel(Kernel::PrepareScene { scene }) => {
+                Kernel::PrepareScene { scene: *scene }.launch()?;
+                // The build reads the uploads: finish what is recorded, then build.
+                let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+                b.submit_and_wait(cmd)?;
+                prepare_scene(b, scene)?;
+                frame.cmd = b.begin()?;
+            }
+            Step::Kernel(k) => record_kernel(b, frame, k)?,
+        }
+    }
+    Ok(())
+}
+
+fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), BackendError> {
+    let tri_bytes = b.read_device(
+        b.get(scene.triangles.id)?.buffer.buffer,
+        scene.triangles.bytes(),
+    )?;
+    let triangles: Vec<GpuTriangle> = bytemuck::pod_collect_to_vec(&tri_bytes);
+    let vertex_count = scene.vertices.len;
+    if triangles
+        .iter()
+        .flat_map(|t| t.indices)
+        .any(|i| i >= vertex_count)
+    {
+        return Err(BackendError::BadArgument(
+            "a triangle indexes past the vertex buffer".into(),
+        ));
+    }
+    debug_assert_eq!(std::mem::size_of::<GpuVertex>(), 32);
+    let shared: &VulkanBackend = b;
+    let vertices = &shared.get(scene.vertices.id)?.buffer;
+    let accel = SceneAccel::build(
+        &shared.ctx,
+        &|f| shared.one_shot(f),
+        vertices,
+        vertex_count,
+        &triangles,
+    )?;
+    if let Some(old) = b.scenes.insert(scene.bvh_nodes.id, accel) {
+        drop(old); // the device is idle here: prepare_scene waited for it
+    }
+    Ok(())
+}
+
+fn scene_of(k: &Kernel) -> Option<&SceneArgs> {
+    match k {
+        Kernel::PrimaryGbuffer { scene, .. }
+        | Kernel::DirectLight { scene, .. }
+        | Kernel::TracePhotons { scene, .. } => Some(scene),
+        _ => None,
+    }
+}
+
+fn record_kernel(b: &VulkanBackend, frame: &mut Frame, k: &Kernel) -> Result<(), BackendError> {
+    let d = &b.ctx.device;
+    let Some(launch) = k.launch()? else {
+        return Ok(());
+    };
+    let pipeline = b
+        .pipelines
+        .get(launch.kernel)
+        .ok_or_else(|| BackendError::Unsupported(launch.kernel.into()))?;
+    let scene = scene_of(k);
+    let counters = match k {
+        Kernel::TracePhotons { counters, .. } => Some(counters.id),
+        _ => None,
+    };
+    let mut descs = Vec::new();
+    if let Some(s) = scene {
+        let accel = b
+            .scenes
+            .get(&s.bvh_nodes.id)
+            .ok_or_else(|| BackendError::BadArgument("scene used before prepare_scene".into()))?;
+        descs.push(Desc::Tlas(accel.tlas.handle));
+    }
+    for a in &launch.args {
+        match a {
+            LaunchArg::Count(_) => {}
+            LaunchArg::Buffer { id, .. } if scene.is_some_and(|s| s.bvh_nodes.id == *id) => {}
+            LaunchArg::Buffer { id, .. } if counters == Some(*id) => {
+                check_buffer(a, b.get(*id)?.bytes)?;
+                descs.push(Desc::Storage(
+                    b.counter_banks.buffer,
+                    crate::COUNTER_BANK_BYTES,
+                ));
+            }
+            LaunchArg::Buffer { id, bytes, .. } => {
+                check_buffer(a, b.get(*id)?.bytes)?;
+                descs.push(Desc::Storage(
+                    b.get(*id)?.buffer.buffer,
+                    (*bytes).max(MIN_BINDING_BYTES),
+                ));
+            }
+            LaunchArg::Params(p) => {
+                let u = Buffer::with_data(
+                    &b.ctx,
+                    p,
+                    vk::BufferUsageFlags::UNIFORM_BUFFER,
+                    "kernel parameters",
+                )?;
+                descs.push(Desc::Uniform(u.buffer, p.len() as u64));
+                frame.retired.push(u);
+            }
+        }
+    }
+    if descs.len() != pipeline.bindings.len() {
+        return Err(BackendError::Driver(format!(
+            "{}: {} descriptors for {} bindings",
+            launch.kernel,
+            descs.len(),
+            pipeline.bindings.len()
+        )));
+    }
+    let set = bind_set(b, frame, pipeline, &descs)?;
+    let index = frame.passes.len() as u32;
+    if let Some(q) = frame.queries {
+        unsafe {
+            d.cmd_write_timestamp(frame.cmd, vk::PipelineStageFlags::TOP_OF_PIPE, q, 2 * index)
+        };
+    }
+    let n = launch.threads;
+    unsafe {
+        d.cmd_bind_pipeline(frame.cmd, pipeline.bind_point, pipeline.pipeline);
+        d.cmd_bind_descriptor_sets(
+            frame.cmd,
+            pipeline.bind_point,
+            pipeline.layout,
+            0,
+            &[set],
+            &[],
+        );
+    }
+    if n > 0 {
+        if let Some(sbt) = &pipeline.sbt {
+            let w = n.min(RAYGEN_WIDTH);
+            let h = n.div_ceil(w);
+            unsafe {
+                b.ctx.rt.cmd_trace_rays(
+                    frame.cmd,
+                    &sbt.raygen,
+                    &sbt.miss,
+                    &sbt.hit,
+                    &sbt.callable,
+                    w as u32,
+                    h as u32,
+                    1,
+                )
+            };
+        } else {
+            let groups = n.div_ceil(WORKGROUP);
+            let max = b.ctx.limits.max_compute_work_group_count[0] as u64;
+            let x = groups.min(max);
+            let y = groups.div_ceil(x);
+            if y > b.ctx.limits.max_compute_work_group_count[1] as u64 {
+                return Err(BackendError::BadArgument(format!(
+                    "{}: {n} threads",
+                    launch.kernel
+                )));
+            }
+            unsafe { d.cmd_dispatch(frame.cmd, x as u32, y as u32, 1) };
+        }
+    }
+    if let Some(c) = counters {
+        barrier(d, frame.cmd);
+        let reduce = &b.pipelines["reduce_counters"];
+        let descs = [
+            Desc::Storage(b.counter_banks.buffer, crate::COUNTER_BANK_BYTES),
+            Desc::Storage(b.get(c)?.buffer.buffer, 80),
+        ];
+        let set = bind_set(b, frame, reduce, &descs)?;
+        unsafe {
+            d.cmd_bind_pipeline(frame.cmd, reduce.bind_point, reduce.pipeline);
+            d.cmd_bind_descriptor_sets(frame.cmd, reduce.bind_point, reduce.layout, 0, &[set], &[]);
+            d.cmd_dispatch(frame.cmd, 1, 1, 1);
+        }
+    }
+    if let Some(q) = frame.queries {
+        unsafe {
+            d.cmd_write_timestamp(
+                frame.cmd,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                q,
+                2 * index + 1,
+            )
+        };
+    }
+    frame.passes.push(launch.kernel);
+    barrier(d, frame.cmd);
+    Ok(())
+}
+
+fn bind_set(
+    b: &VulkanBackend,
+    frame: &Frame,
+    pipeline: &Pipeline,
+    descs: &[Desc],
+) -> Result<vk::DescriptorSet, BackendError> {
+    let d = &b.ctx.device;
+    let layouts = [pipeline.set_layout];
+    let set = unsafe {
+        d.allocate_descriptor_sets(
+            &vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(frame.descriptor_pool)
+                .set_layouts(&layouts),
+        )
+    }
+    .map_err(vk_error("allocating a descriptor set"))?[0];
+    let mut buffer_infos = Vec::new();
+    let mut tlas = Vec::new();
+    for desc in descs {
+        match desc {
+            Desc::Storage(buf, range) | Desc::Uniform(buf, range) => {
+                buffer_infos.push([vk::DescriptorBufferInfo::default()
+                    .buffer(*buf)
+                    .offset(0)
+                    .range(*range)])
+            }
+            Desc::Tlas(h) => tlas.push([*h]),
+        }
+    }
+    let mut as_writes: Vec<_> = tlas
+        .iter()
+        .map(|h| {
+            vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(h)
+        })
+        .collect();
+    let mut writes = Vec::new();
+    let (mut bi, mut ai) = (buffer_infos.iter(), as_writes.iter_mut());
+    for (i, desc) in descs.iter().enumerate() {
+        let w = vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(i as u32);
+        writes.push(match desc {
+            Desc::Storage(..) => w
+                .descriptor_type(S)
+                .buffer_info(bi.next().expect("one info per buffer")),
+            Desc::Uniform(..) => w
+                .descriptor_type(U)
+                .buffer_info(bi.next().expect("one info per buffer")),
+            Desc::Tlas(_) => {
+                let a = ai.next().expect("one write per TLAS");
+                w.descriptor_type(AS).descriptor_count(1).push_next(a)
+            }
+        });
+    }
+    unsafe { d.update_descriptor_sets(&writes, &[]) };
+    Ok(set)
+}

@@ -1,0 +1,301 @@
+//! caustica Vulkan backend (ash): the driver builds the acceleration structures
+//! (VK_KHR_acceleration_structure) and ray-tracing pipelines (VK_KHR_ray_tracing_pipeline)
+//! trace the G-buffer, the shadow rays of direct light and the photons; the other kernels
+//! are compute pipelines made from the wgpu backend's WGSL through naga's SPIR-V writer.
+//!
+//! Buffers stay on the device between passes and recordings; reads come back only through
+//! [`Backend::read`]. Pass times are device timestamps. With
+//! `CAUSTICA_VULKAN_VALIDATION=1` (the conformance suite sets it) the Khronos validation
+//! layer is enabled where installed, and any validation error fails the `execute` during
+//! which it was reported. Every Vulkan failure is a typed error; every object is destroyed
+//! on drop. Embedding: [`VulkanBackend::from_raw`] takes a caller's instance and device.
+
+mod accel;
+mod context;
+mod dispatch;
+mod memory;
+mod pipelines;
+
+use ash::vk;
+use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::recording::{Recording, ResourceId, Step};
+use context::{vk_error, Context};
+use memory::Buffer;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+pub use context::DEVICE_EXTENSIONS;
+
+/// Smallest buffer and descriptor range: one element of the largest array element a
+/// kernel binds (`GpuLight`, 64 bytes); kernels never read the dummy of an empty buffer.
+const MIN_BINDING_BYTES: u64 = 64;
+
+/// Words of the photon counters (core::gpu::counter::WORDS) times the 64 banks that ray
+/// generation shaders add into to spread their atomics.
+const COUNTER_BANK_BYTES: u64 = 64 * 20 * 4;
+
+struct DeviceBuffer {
+    buffer: Buffer,
+    bytes: u64,
+}
+
+/// The Vulkan backend.
+pub struct VulkanBackend {
+    // field order is drop order: everything before `ctx`, which destroys the device
+    buffers: HashMap<ResourceId, DeviceBuffer>,
+    scenes: HashMap<ResourceId, accel::SceneAccel>,
+    pipelines: HashMap<&'static str, pipelines::Pipeline>,
+    counter_banks: Buffer,
+    pool: vk::CommandPool,
+    fence: vk::Fence,
+    ctx: Arc<Context>,
+}
+
+impl VulkanBackend {
+    /// Opens the first device with ray-tracing pipelines (`CAUSTICA_VULKAN_DEVICE=N`
+    /// picks one); `CAUSTICA_VULKAN_VALIDATION=1` enables the validation layer.
+    pub fn new() -> Result<VulkanBackend, BackendError> {
+        let validation = std::env::var("CAUSTICA_VULKAN_VALIDATION").is_ok_and(|v| v != "0");
+        VulkanBackend::with_validation(validation)
+    }
+
+    /// As [`VulkanBackend::new`], with the Khronos validation layer on or off (on: used
+    /// where installed, and any validation error fails the `execute` that caused it).
+    pub fn with_validation(validation: bool) -> Result<VulkanBackend, BackendError> {
+        VulkanBackend::with_context(Context::new(validation)?)
+    }
+
+    /// Whether the validation layer is active on this backend's instance.
+    pub fn validation_active(&self) -> bool {
+        self.ctx.validation_active()
+    }
+
+    /// Embeds the backend in a caller's renderer. `device` must have been created from
+    /// `physical` with [`DEVICE_EXTENSIONS`] and the features `bufferDeviceAddress`,
+    /// `scalarBlockLayout`, `accelerationStructure` and `rayTracingPipeline`; the backend
+    /// uses queue 0 of `queue_family` (which must support compute) and destroys only what
+    /// it created.
+    pub fn from_raw(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        physical: vk::PhysicalDevice,
+        device: ash::Device,
+        queue_family: u32,
+    ) -> Result<VulkanBackend, BackendError> {
+        VulkanBackend::with_context(Context::adopt(
+            entry,
+            instance,
+            physical,
+            device,
+            queue_family,
+        )?)
+    }
+
+    fn with_context(ctx: Context) -> Result<VulkanBackend, BackendError> {
+        let ctx = Arc::new(ctx);
+        let d = &ctx.device;
+        let pool = unsafe {
+            d.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(ctx.queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+        }
+        .map_err(vk_error("creating a command pool"))?;
+        let fence = match unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) } {
+            Ok(f) => f,
+            Err(e) => {
+                unsafe { d.destroy_command_pool(pool, None) };
+                return Err(vk_error("creating a fence")(e));
+            }
+        };
+        let counter_banks = Buffer::new(
+            &ctx,
+            COUNTER_BANK_BYTES,
+            memory::storage_usage(),
+            false,
+            "counter banks",
+        );
+        let counter_banks = match counter_banks {
+            Ok(b) => b,
+            Err(e) => {
+                unsafe {
+                    d.destroy_fence(fence, None);
+                    d.destroy_command_pool(pool, None);
+                }
+                return Err(e);
+            }
+        };
+        let mut backend = VulkanBackend {
+            buffers: HashMap::new(),
+            scenes: HashMap::new(),
+            pipelines: HashMap::new(),
+            counter_banks,
+            pool,
+            fence,
+            ctx,
+        };
+        backend.pipelines = dispatch::create_pipelines(&backend.ctx)?;
+        // the banks start at zero; the reduce pass leaves them zeroed after every use
+        let banks = backend.counter_banks.buffer;
+        backend.one_shot(&|cmd| unsafe {
+            backend
+                .ctx
+                .device
+                .cmd_fill_buffer(cmd, banks, 0, vk::WHOLE_SIZE, 0)
+        })?;
+        Ok(backend)
+    }
+
+    /// Records `f` into a fresh command buffer, submits it and waits.
+    fn one_shot(&self, f: &dyn Fn(vk::CommandBuffer)) -> Result<(), BackendError> {
+        let cmd = self.begin()?;
+        f(cmd);
+        self.submit_and_wait(cmd)
+    }
+
+    fn begin(&self) -> Result<vk::CommandBuffer, BackendError> {
+        let d = &self.ctx.device;
+        let cmd = unsafe {
+            d.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(self.pool)
+                    .level(vk::CommandBufferLevel::PRIMARY)
+                    .command_buffer_count(1),
+            )
+        }
+        .map_err(vk_error("allocating a command buffer"))?[0];
+        unsafe {
+            d.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+        }
+        .map_err(vk_error("beginning a command buffer"))?;
+        Ok(cmd)
+    }
+
+    fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<(), BackendError> {
+        let d = &self.ctx.device;
+        let result = (|| unsafe {
+            d.end_command_buffer(cmd)
+                .map_err(vk_error("ending a command buffer"))?;
+            let cmds = [cmd];
+            d.queue_submit(
+                self.ctx.queue,
+                &[vk::SubmitInfo::default().command_buffers(&cmds)],
+                self.fence,
+            )
+            .map_err(vk_error("vkQueueSubmit"))?;
+            d.wait_for_fences(&[self.fence], true, u64::MAX)
+                .map_err(vk_error("waiting for the device"))?;
+            d.reset_fences(&[self.fence])
+                .map_err(vk_error("resetting a fence"))
+        })();
+        unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        result?;
+        self.check_validation()
+    }
+
+    fn check_validation(&self) -> Result<(), BackendError> {
+        let errors = self.ctx.take_validation_errors();
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            Err(BackendError::Driver(format!(
+                "Vulkan validation: {}",
+                errors.join(" | ")
+            )))
+        }
+    }
+
+    fn get(&self, id: ResourceId) -> Result<&DeviceBuffer, BackendError> {
+        self.buffers
+            .get(&id)
+            .ok_or(BackendError::MissingResource(id))
+    }
+
+    fn new_storage(&self, bytes: u64, what: &str) -> Result<Buffer, BackendError> {
+        Buffer::new(
+            &self.ctx,
+            bytes.max(MIN_BINDING_BYTES),
+            memory::storage_usage(),
+            false,
+            what,
+        )
+    }
+
+    /// Copies `bytes` of a device buffer to the host.
+    fn read_device(&self, buffer: vk::Buffer, bytes: u64) -> Result<Vec<u8>, BackendError> {
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = Buffer::new(
+            &self.ctx,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            true,
+            "readback",
+        )?;
+        let dst = staging.buffer;
+        self.one_shot(&|cmd| unsafe {
+            self.ctx.device.cmd_copy_buffer(
+                cmd,
+                buffer,
+                dst,
+                &[vk::BufferCopy::default().size(bytes)],
+            )
+        })?;
+        Ok(staging.read(bytes as usize))
+    }
+}
+
+impl Drop for VulkanBackend {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.ctx.device.queue_wait_idle(self.ctx.queue);
+            self.ctx.device.destroy_fence(self.fence, None);
+            self.ctx.device.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+impl Backend for VulkanBackend {
+    fn name(&self) -> &'static str {
+        "vulkan"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        Capabilities {
+            device: self.ctx.name.clone(),
+            hardware_ray_tracing: true,
+            float_atomics: false,
+            int64_atomics: false,
+            timestamps: self.ctx.timestamps,
+            max_buffer_bytes: self
+                .ctx
+                .max_allocation
+                .min(self.ctx.limits.max_storage_buffer_range as u64),
+        }
+    }
+
+    fn kernels(&self) -> Vec<&'static str> {
+        caustica_core::launch::all_kernel_names()
+    }
+
+    fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        dispatch::execute(self, recording)
+    }
+
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        let b = self.get(id)?;
+        self.read_device(b.buffer.buffer, b.bytes)
+    }
+}
+
+/// Steps other than kernels, shared by the recording loop.
+fn is_kernel(s: &Step) -> bool {
+    matches!(s, Step::Kernel(_))
+}

@@ -1,0 +1,340 @@
+//! Pipelines: ray-tracing pipelines (ray generation, closest-hit and miss stages from the
+//! GLSL sources under `shaders/`, compiled to SPIR-V kept in `spirv/`) with their shader
+//! binding tables, and compute pipelines for the other kernels, from the wgpu backend's
+//! WGSL through naga's SPIR-V writer (one source for both backends).
+
+use crate::context::{vk_error, Context};
+use crate::memory::Buffer;
+use ash::vk;
+use caustica_core::backend::BackendError;
+use std::sync::Arc;
+
+/// The WGSL kernels and their assembly, shared with the wgpu backend (same file).
+#[path = "../../backend-wgpu/src/shaders.rs"]
+mod wgsl;
+
+/// SPIR-V of the GLSL stages (see `scripts/compile-shaders.sh`).
+pub mod spirv {
+    pub const PRIMARY_GBUFFER: &[u8] = include_bytes!("../spirv/primary_gbuffer.rgen.spv");
+    pub const DIRECT_LIGHT: &[u8] = include_bytes!("../spirv/direct_light.rgen.spv");
+    pub const TRACE_PHOTONS: &[u8] = include_bytes!("../spirv/trace_photons.rgen.spv");
+    pub const CLOSEST_HIT: &[u8] = include_bytes!("../spirv/closest_hit.rchit.spv");
+    pub const MISS: &[u8] = include_bytes!("../spirv/miss.rmiss.spv");
+    pub const SHADOW_MISS: &[u8] = include_bytes!("../spirv/shadow_miss.rmiss.spv");
+    pub const REDUCE_COUNTERS: &[u8] = include_bytes!("../spirv/reduce_counters.comp.spv");
+}
+
+/// The shader binding table: ray generation, two miss records, one hit group.
+pub struct Sbt {
+    _buffer: Buffer,
+    pub raygen: vk::StridedDeviceAddressRegionKHR,
+    pub miss: vk::StridedDeviceAddressRegionKHR,
+    pub hit: vk::StridedDeviceAddressRegionKHR,
+    pub callable: vk::StridedDeviceAddressRegionKHR,
+}
+
+/// A pipeline with its layouts.
+pub struct Pipeline {
+    ctx: Arc<Context>,
+    pub pipeline: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub set_layout: vk::DescriptorSetLayout,
+    pub bindings: Vec<vk::DescriptorType>,
+    pub bind_point: vk::PipelineBindPoint,
+    pub sbt: Option<Sbt>,
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        unsafe {
+            let d = &self.ctx.device;
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+fn shader_module(ctx: &Context, code: &[u32]) -> Result<vk::ShaderModule, BackendError> {
+    unsafe {
+        ctx.device
+            .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
+    }
+    .map_err(vk_error("creating a shader module"))
+}
+
+fn words(bytes: &[u8]) -> Result<Vec<u32>, BackendError> {
+    ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+        .map_err(|e| BackendError::Driver(format!("bad SPIR-V: {e}")))
+}
+
+fn layouts(
+    ctx: &Context,
+    bindings: &[vk::DescriptorType],
+    stages: vk::ShaderStageFlags,
+) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout), BackendError> {
+    let b: Vec<_> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(*t)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let set_layout = unsafe {
+        ctx.device.create_descriptor_set_layout(
+            &vk::DescriptorSetLayoutCreateInfo::default().bindings(&b),
+            None,
+        )
+    }
+    .map_err(vk_error("creating a descriptor set layout"))?;
+    let sets = [set_layout];
+    let layout = unsafe {
+        ctx.device.create_pipeline_layout(
+            &vk::PipelineLayoutCreateInfo::default().set_layouts(&sets),
+            None,
+        )
+    };
+    match layout {
+        Ok(l) => Ok((set_layout, l)),
+        Err(e) => {
+            unsafe { ctx.device.destroy_descriptor_set_layout(set_layout, None) };
+            Err(vk_error("creating a pipeline layout")(e))
+        }
+    }
+}
+
+/// A compute pipeline from SPIR-V with entry point `main`.
+pub fn compute(
+    ctx: &Arc<Context>,
+    code: &[u32],
+    bindings: Vec<vk::DescriptorType>,
+) -> Result<Pipeline, BackendError> {
+    let (set_layout, layout) = layouts(ctx, &bindings, vk::ShaderStageFlags::COMPUTE)?;
+    let module = shader_module(ctx, code)?;
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module)
+        .name(c"main");
+    let created = unsafe {
+        ctx.device.create_compute_pipelines(
+            vk::PipelineCache::null(),
+            &[vk::ComputePipelineCreateInfo::default()
+                .stage(stage)
+                .layout(layout)],
+            None,
+        )
+    };
+    unsafe { ctx.device.destroy_shader_module(module, None) };
+    let pipeline = match created {
+        Ok(p) => p[0],
+        Err((_, e)) => {
+            unsafe {
+                ctx.device.destroy_pipeline_layout(layout, None);
+                ctx.device.destroy_descriptor_set_layout(set_layout, None);
+            }
+            return Err(vk_error("creating a compute pipeline")(e));
+        }
+    };
+    Ok(Pipeline {
+        ctx: Arc::clone(ctx),
+        pipeline,
+        layout,
+        set_layout,
+        bindings,
+        bind_point: vk::PipelineBindPoint::COMPUTE,
+        sbt: None,
+    })
+}
+
+/// SPIR-V of the wgpu backend's WGSL kernel `name`, through naga.
+pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
+    let src = wgsl::module_source(name).map_err(BackendError::Driver)?;
+    let module = naga::front::wgsl::parse_str(&src)
+        .map_err(|e| BackendError::Driver(format!("{name}.wgsl: {}", e.emit_to_string(&src))))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| BackendError::Driver(format!("{name}.wgsl does not validate: {e:?}")))?;
+    let options = naga::back::spv::Options {
+        lang_version: (1, 3),
+        ..Default::default()
+    };
+    let pipeline = naga::back::spv::PipelineOptions {
+        shader_stage: naga::ShaderStage::Compute,
+        entry_point: "main".into(),
+    };
+    naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
+        .map_err(|e| BackendError::Driver(format!("{name}: SPIR-V output: {e}")))
+}
+
+/// A ray-tracing pipeline: ray generation `raygen`, miss (closest), miss (shadow), and a
+/// triangle hit group with the closest-hit stage; recursion depth 1.
+pub fn ray_tracing(
+    ctx: &Arc<Context>,
+    raygen: &[u8],
+    bindings: Vec<vk::DescriptorType>,
+) -> Result<Pipeline, BackendError> {
+    let stages_all = vk::ShaderStageFlags::RAYGEN_KHR
+        | vk::ShaderStageFlags::MISS_KHR
+        | vk::ShaderStageFlags::CLOSEST_HIT_KHR;
+    let (set_layout, layout) = layouts(ctx, &bindings, stages_all)?;
+    let codes = [
+        (vk::ShaderStageFlags::RAYGEN_KHR, words(raygen)?),
+        (vk::ShaderStageFlags::MISS_KHR, words(spirv::MISS)?),
+        (vk::ShaderStageFlags::MISS_KHR, words(spirv::SHADOW_MISS)?),
+        (
+            vk::ShaderStageFlags::CLOSEST_HIT_KHR,
+            words(spirv::CLOSEST_HIT)?,
+        ),
+    ];
+    let mut modules = Vec::new();
+    for (_, c) in &codes {
+        match shader_module(ctx, c) {
+            Ok(m) => modules.push(m),
+            Err(e) => {
+                unsafe {
+                    for m in &modules {
+                        ctx.device.destroy_shader_module(*m, None);
+                    }
+                    ctx.device.destroy_pipeline_layout(layout, None);
+                    ctx.device.destroy_descriptor_set_layout(set_layout, None);
+                }
+                return Err(e);
+            }
+        }
+    }
+    let stages: Vec<_> = codes
+        .iter()
+        .zip(&modules)
+        .map(|((s, _), m)| {
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(*s)
+                .module(*m)
+                .name(c"main")
+        })
+        .collect();
+    let general = |i: u32| {
+        vk::RayTracingShaderGroupCreateInfoKHR::default()
+            .ty(vk::RayTracingShaderGroupTypeKHR::GENERAL)
+            .general_shader(i)
+            .closest_hit_shader(vk::SHADER_UNUSED_KHR)
+            .any_hit_shader(vk::SHADER_UNUSED_KHR)
+            .intersection_shader(vk::SHADER_UNUSED_KHR)
+    };
+    let groups = [
+        general(0),
+        general(1),
+        general(2),
+        vk::RayTracingShaderGroupCreateInfoKHR::default()
+            .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
+            .general_shader(vk::SHADER_UNUSED_KHR)
+            .closest_hit_shader(3)
+            .any_hit_shader(vk::SHADER_UNUSED_KHR)
+            .intersection_shader(vk::SHADER_UNUSED_KHR),
+    ];
+    let created = unsafe {
+        ctx.rt.create_ray_tracing_pipelines(
+            vk::DeferredOperationKHR::null(),
+            vk::PipelineCache::null(),
+            &[vk::RayTracingPipelineCreateInfoKHR::default()
+                .stages(&stages)
+                .groups(&groups)
+                .max_pipeline_ray_recursion_depth(1)
+                .layout(layout)],
+            None,
+        )
+    };
+    unsafe {
+        for m in &modules {
+            ctx.device.destroy_shader_module(*m, None);
+        }
+    }
+    let pipeline = match created {
+        Ok(p) => p[0],
+        Err((_, e)) => {
+            unsafe {
+                ctx.device.destroy_pipeline_layout(layout, None);
+                ctx.device.destroy_descriptor_set_layout(set_layout, None);
+            }
+            return Err(vk_error("creating a ray-tracing pipeline")(e));
+        }
+    };
+    let mut p = Pipeline {
+        ctx: Arc::clone(ctx),
+        pipeline,
+        layout,
+        set_layout,
+        bindings,
+        bind_point: vk::PipelineBindPoint::RAY_TRACING_KHR,
+        sbt: None,
+    };
+    p.sbt = Some(binding_table(ctx, pipeline, groups.len() as u32)?);
+    Ok(p)
+}
+
+/// Shader binding table: each region starts at `shaderGroupBaseAlignment` of the device
+/// address; records are `shaderGroupHandleAlignment`-aligned; the ray generation region's
+/// size equals its stride (DESIGN 8).
+fn binding_table(
+    ctx: &Arc<Context>,
+    pipeline: vk::Pipeline,
+    groups: u32,
+) -> Result<Sbt, BackendError> {
+    let p = ctx.rt_props;
+    let handle = p.handle_size as u64;
+    let record = handle.next_multiple_of(p.handle_alignment.max(1) as u64);
+    let base = p.base_alignment.max(1) as u64;
+    let handles = unsafe {
+        ctx.rt.get_ray_tracing_shader_group_handles(
+            pipeline,
+            0,
+            groups,
+            (groups as u64 * handle) as usize,
+        )
+    }
+    .map_err(vk_error("reading shader group handles"))?;
+    let raygen_size = record.next_multiple_of(base);
+    let miss_size = (2 * record).next_multiple_of(base);
+    let hit_size = record.next_multiple_of(base);
+    let total = base + raygen_size + miss_size + hit_size;
+    let buffer = Buffer::new(
+        ctx,
+        total,
+        vk::BufferUsageFlags::SHADER_BINDING_TABLE_KHR
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+        true,
+        "shader binding table",
+    )?;
+    let address = buffer.address();
+    let start = address.next_multiple_of(base);
+    let offset = (start - address) as usize;
+    let h = |i: usize| &handles[i * handle as usize..(i + 1) * handle as usize];
+    buffer.write(offset, h(0));
+    let miss_at = offset + raygen_size as usize;
+    buffer.write(miss_at, h(1));
+    buffer.write(miss_at + record as usize, h(2));
+    let hit_at = miss_at + miss_size as usize;
+    buffer.write(hit_at, h(3));
+    Ok(Sbt {
+        raygen: vk::StridedDeviceAddressRegionKHR::default()
+            .device_address(start)
+            .stride(raygen_size)
+            .size(raygen_size),
+        miss: vk::StridedDeviceAddressRegionKHR::default()
+            .device_address(start + raygen_size)
+            .stride(record)
+            .size(miss_size),
+        hit: vk::StridedDeviceAddressRegionKHR::default()
+            .device_address(start + raygen_size + miss_size)
+            .stride(record)
+            .size(hit_size),
+        callable: vk::StridedDeviceAddressRegionKHR::default(),
+        _buffer: buffer,
+    })
+}
