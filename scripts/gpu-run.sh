@@ -16,7 +16,8 @@ if [ "${1:-}" = "--build" ]; then
     cargo build --release -p caustica-conformance --example backend_diff
     cp target/release/examples/backend_diff .devbin/
     for spec in "caustica-opencl:device_layout" "caustica-conformance:cross_backend" \
-                "caustica-conformance:cpu_reference" "caustica-conformance:optics_closed_form"; do
+                "caustica-conformance:cpu_reference" "caustica-conformance:optics_closed_form" \
+                "caustica-vulkan:vulkan_backend"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
@@ -32,15 +33,15 @@ if [ "${1:-}" = "--build" ]; then
     cp target/release/examples/embed_headless .devbin/
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
-          .devbin/sspm_frame .devbin/embed_headless
+          .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
     (cd .devbin && ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
     du -sh .devbin
     exit 0
 fi
 
-# Sections to run (default: all): opencl wgpu frames
-SECTIONS=${*:-opencl wgpu frames}
+# Sections to run (default: all): opencl wgpu vulkan frames
+SECTIONS=${*:-opencl wgpu vulkan frames}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
 B=$PWD/.devbin
@@ -77,6 +78,12 @@ if has wgpu; then
     run ./backend_diff 960x540 512x512
     run ./embed_headless
 fi
+if has vulkan; then
+    run ./vulkan_backend
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
+    run ./backend_diff 960x540 512x512
+fi
 if has frames; then
-    run env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-wgpu,opencl} ./sspm_frame --bench
+    run env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
 fi

@@ -1,15 +1,18 @@
 #version 460
 #extension GL_EXT_ray_tracing : require
-// Closest hit of every ray-tracing kernel: distance, triangle (= gl_PrimitiveID, the
-// triangle buffer's order) and barycentrics (weights 1-u-v, u, v of vertices 0, 1, 2,
-// core's convention).
+#extension GL_GOOGLE_include_directive : require
+// The closest-hit stage of every ray-tracing kernel (hit group 0): the hit distance, the
+// triangle (gl_PrimitiveID: the BLAS holds the triangles in the triangle buffer's order)
+// and the barycentrics (u, v), weights 1 - u - v, u, v of vertices 0, 1, 2, core's
+// convention (geometry.rs, Moller-Trumbore's u and v).
 
-struct HitPayload { float t; uint triangle; vec2 bary; };
+#include "common/types.glsl"
+
 layout(location = 0) rayPayloadInEXT HitPayload hit_payload;
 hitAttributeEXT vec2 bary;
 
 void main() {
     hit_payload.t = gl_HitTEXT;
-    hit_payload.triangle = gl_PrimitiveID;
+    hit_payload.triangle = uint(gl_PrimitiveID);
     hit_payload.bary = bary;
 }

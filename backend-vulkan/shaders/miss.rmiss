@@ -1,8 +1,10 @@
 #version 460
 #extension GL_EXT_ray_tracing : require
-// Miss of closest-hit rays: no triangle.
+#extension GL_GOOGLE_include_directive : require
+// Miss stage 0, closest-hit rays (trace.glsl's closest_hit): no triangle.
 
-struct HitPayload { float t; uint triangle; vec2 bary; };
+#include "common/types.glsl"
+
 layout(location = 0) rayPayloadInEXT HitPayload hit_payload;
 
-void main() { hit_payload.triangle = 0xffffffffu; }
+void main() { hit_payload.triangle = NO_HIT; }

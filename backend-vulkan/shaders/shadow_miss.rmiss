@@ -1,6 +1,7 @@
 #version 460
 #extension GL_EXT_ray_tracing : require
-// Miss of shadow rays: the light is visible.
+// Miss stage 1, shadow rays (trace.glsl's occluded): nothing in the way, the light is
+// visible.
 
 layout(location = 1) rayPayloadInEXT uint shadow_visible;
 

@@ -17,6 +17,29 @@ pub const DEVICE_EXTENSIONS: [&CStr; 3] = [
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
+/// Serialises backend creation (instance, device, pipelines) and destruction in the process: two threads
+/// creating Vulkan backends at once hung in NVIDIA's driver (seen on the H100 with the
+/// test harness's parallel tests).
+pub(crate) static LIFECYCLE: Mutex<()> = Mutex::new(());
+
+thread_local! {
+    /// Whether this thread holds `LIFECYCLE` (a context dropped while its backend is
+    /// being created must not lock it again).
+    pub(crate) static IN_LIFECYCLE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` holding `LIFECYCLE`.
+pub(crate) fn serialised<T>(f: impl FnOnce() -> T) -> T {
+    if IN_LIFECYCLE.with(|c| c.get()) {
+        return f();
+    }
+    let _guard = LIFECYCLE.lock().unwrap_or_else(|e| e.into_inner());
+    IN_LIFECYCLE.with(|c| c.set(true));
+    let out = f();
+    IN_LIFECYCLE.with(|c| c.set(false));
+    out
+}
+
 /// Vulkan result to a typed error.
 pub fn vk_error(what: &'static str) -> impl Fn(vk::Result) -> BackendError {
     move |r| match r {
@@ -392,13 +415,13 @@ impl Drop for Context {
         if !self.owned {
             return;
         }
-        unsafe {
+        serialised(|| unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_device(None);
             if let Some((l, m)) = &self.debug {
                 l.destroy_debug_utils_messenger(*m, None);
             }
             self.instance.destroy_instance(None);
-        }
+        })
     }
 }

@@ -62,7 +62,9 @@ impl VulkanBackend {
     /// As [`VulkanBackend::new`], with the Khronos validation layer on or off (on: used
     /// where installed, and any validation error fails the `execute` that caused it).
     pub fn with_validation(validation: bool) -> Result<VulkanBackend, BackendError> {
-        VulkanBackend::with_context(Context::new(validation)?)
+        // instance, device and pipelines are created one backend at a time (see
+        // `context::LIFECYCLE`)
+        context::serialised(|| VulkanBackend::with_context(Context::new(validation)?))
     }
 
     /// Whether the validation layer is active on this backend's instance.

@@ -1,43 +1,50 @@
-// The scene bindings of every ray-tracing kernel and the hardware replacements of the
-// software traversal's closest_hit / occluded: traceRayEXT against the driver-built TLAS.
-// BLAS primitive order is the triangle buffer's order, so gl_PrimitiveID is the triangle.
+// The scene as kernels see it (core::recording::SceneArgs) and the camera helpers of
+// core/src/gpu.rs (camera_ray, project_to_pixel). Mirror of backend-opencl/kernels/
+// scene.cl: its SCENE_PARAMS become the bindings below (the same numbers in every ray
+// generation stage: 0 the TLAS (trace.glsl), 1 vertices, 2 triangles, 3 materials; 4 the
+// lights, declared by the kernels that read them), and the BVH nodes give way to the TLAS.
 
-layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
 layout(set = 0, binding = 1, scalar) readonly buffer Vertices { GpuVertex vertices[]; };
 layout(set = 0, binding = 2, scalar) readonly buffer Triangles { GpuTriangle triangles[]; };
 layout(set = 0, binding = 3, scalar) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 4, scalar) readonly buffer Lights { GpuLight lights[]; };
 
-struct HitPayload { float t; uint triangle; vec2 bary; };
-layout(location = 0) rayPayloadEXT HitPayload hit_payload;
-layout(location = 1) rayPayloadEXT uint shadow_visible;
-
-struct Hit { float t; uint triangle; float u; float v; };
-
-// Closest hit with 0 <= t <= t_max (the software traversal takes 0 < t < t_max: a hit at
-// exactly t = 0 or t_max is the one difference; ray origins are offset off surfaces).
-bool closest_hit(vec3 origin, vec3 dir, float t_max, out Hit hit) {
-    hit_payload.triangle = 0xffffffffu;
-    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT, 0xff, 0, 0, 0, origin, 0.0, dir, t_max, 0);
-    hit.t = hit_payload.t;
-    hit.triangle = hit_payload.triangle;
-    hit.u = hit_payload.bary.x;
-    hit.v = hit_payload.bary.y;
-    return hit_payload.triangle != 0xffffffffu;
+precise vec3 camera_ray(GpuCamera cam, uint px, uint py) {
+    float sx = (2.0 * (float(px) + 0.5) / float(cam.width) - 1.0) * cam.tan_half_fov_x;
+    float sy = (1.0 - 2.0 * (float(py) + 0.5) / float(cam.height)) * cam.tan_half_fov_y;
+    vec3 d = cam.forward + sx * cam.right + sy * cam.up;
+    return normalize3(d);
 }
 
-bool occluded(vec3 origin, vec3 dir, float t_max) {
-    shadow_visible = 0u;
-    traceRayEXT(tlas,
-                gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT,
-                0xff, 0, 0, 1, origin, 0.0, dir, t_max, 1);
-    return shadow_visible == 0u;
+// Pixel containing world point `p` and its view depth; false behind the camera or off
+// screen.
+bool project_to_pixel(GpuCamera cam, vec3 p, out uint px, out uint py, precise out float depth) {
+    precise vec3 v = p - cam.position;
+    precise float z = dot3(v, cam.forward);
+    if (is_nan(z) || z <= 0.0) return false;
+    precise float sx = dot3(v, cam.right) / (z * cam.tan_half_fov_x);
+    precise float sy = dot3(v, cam.up) / (z * cam.tan_half_fov_y);
+    precise float fx = (sx + 1.0) * 0.5 * float(cam.width);
+    precise float fy = (1.0 - sy) * 0.5 * float(cam.height);
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < float(cam.width) && fy < float(cam.height)))
+        return false;
+    px = uint(fx);
+    py = uint(fy);
+    depth = z;
+    return true;
 }
 
 SurfacePoint hit_surface(Hit hit) {
     GpuTriangle t = triangles[hit.triangle];
-    return surface_point(vertices[t.indices.x], vertices[t.indices.y], vertices[t.indices.z], hit.u, hit.v);
+    return surface_point(vertices[t.indices.x], vertices[t.indices.y], vertices[t.indices.z],
+                         hit.u, hit.v);
 }
 
-// Launch index: the host launches (min(n, 8192), ceil(n / 8192), 1).
-uint launch_index() { return gl_LaunchIDEXT.y * gl_LaunchSizeEXT.x + gl_LaunchIDEXT.x; }
+// core::device_scene::spot_falloff: smoothstep between the outer and inner cone.
+precise float spot_falloff(float cos_theta, float cos_inner, float cos_outer) {
+    if (cos_theta >= cos_inner) return 1.0;
+    if (cos_theta <= cos_outer) return 0.0;
+    float t = clampf((cos_theta - cos_outer) / (cos_inner - cos_outer), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+vec3 facing_normal(vec3 n, vec3 dir) { return dot3(n, dir) > 0.0 ? -n : n; }

@@ -1,0 +1,28 @@
+// Mirror of core/src/sampling.rs and backend-opencl/kernels/sampling.cl: equal-area warps
+// of the unit square.
+
+precise vec2 stratified_cell(uint ix, uint iy, uint grid_w, uint grid_h, vec2 jitter) {
+    return vec2((float(ix) + jitter.x) / float(grid_w), (float(iy) + jitter.y) / float(grid_h));
+}
+
+precise vec3 uniform_cone(vec2 u, float cos_max) {
+    float cos_t = 1.0 - u.x * (1.0 - cos_max);
+    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    float phi = TAU_F * u.y;
+    return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
+// Duff et al. 2017 orthonormal basis; returns t, writes b.
+precise vec3 orthonormal_basis(vec3 n, precise out vec3 b_out) {
+    float sign = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sign + n.z);
+    float b = n.x * n.y * a;
+    b_out = vec3(b, sign + n.y * n.y * a, -n.y);
+    return vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+}
+
+precise vec3 to_world(vec3 v, vec3 n) {
+    vec3 b;
+    vec3 t = orthonormal_basis(n, b);
+    return t * v.x + b * v.y + n * v.z;
+}
