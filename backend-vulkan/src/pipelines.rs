@@ -107,6 +107,14 @@ fn layouts(
     }
 }
 
+/// Releases the layouts of a pipeline whose creation failed.
+fn destroy_layouts(ctx: &Context, set_layout: vk::DescriptorSetLayout, layout: vk::PipelineLayout) {
+    unsafe {
+        ctx.device.destroy_pipeline_layout(layout, None);
+        ctx.device.destroy_descriptor_set_layout(set_layout, None);
+    }
+}
+
 /// A compute pipeline from SPIR-V with entry point `main`.
 pub fn compute(
     ctx: &Arc<Context>,
@@ -132,10 +140,7 @@ pub fn compute(
     let pipeline = match created {
         Ok(p) => p[0],
         Err((_, e)) => {
-            unsafe {
-                ctx.device.destroy_pipeline_layout(layout, None);
-                ctx.device.destroy_descriptor_set_layout(set_layout, None);
-            }
+            destroy_layouts(ctx, set_layout, layout);
             return Err(vk_error("creating a compute pipeline")(e));
         }
     };
@@ -198,13 +203,10 @@ pub fn ray_tracing(
         match shader_module(ctx, c) {
             Ok(m) => modules.push(m),
             Err(e) => {
-                unsafe {
-                    for m in &modules {
-                        ctx.device.destroy_shader_module(*m, None);
-                    }
-                    ctx.device.destroy_pipeline_layout(layout, None);
-                    ctx.device.destroy_descriptor_set_layout(set_layout, None);
+                for m in &modules {
+                    unsafe { ctx.device.destroy_shader_module(*m, None) };
                 }
+                destroy_layouts(ctx, set_layout, layout);
                 return Err(e);
             }
         }
@@ -258,10 +260,7 @@ pub fn ray_tracing(
     let pipeline = match created {
         Ok(p) => p[0],
         Err((_, e)) => {
-            unsafe {
-                ctx.device.destroy_pipeline_layout(layout, None);
-                ctx.device.destroy_descriptor_set_layout(set_layout, None);
-            }
+            destroy_layouts(ctx, set_layout, layout);
             return Err(vk_error("creating a ray-tracing pipeline")(e));
         }
     };
