@@ -243,7 +243,14 @@ impl Context {
                 return Err(e);
             }
         };
-        let mut ctx = Self::assemble(entry, instance, physical, device, queue_family, true);
+        let mut ctx = Self::assemble(
+            entry,
+            instance,
+            physical,
+            device,
+            (queue_family, None),
+            true,
+        );
         ctx.debug = debug;
         ctx.validation = validation_log;
         Ok(ctx)
@@ -324,10 +331,10 @@ impl Context {
         instance: ash::Instance,
         physical: vk::PhysicalDevice,
         device: ash::Device,
-        queue_family: u32,
+        (queue_family, queue): (u32, Option<vk::Queue>),
         owned: bool,
     ) -> Context {
-        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let queue = queue.unwrap_or_else(|| unsafe { device.get_device_queue(queue_family, 0) });
         let accel = ash::khr::acceleration_structure::Device::new(&instance, &device);
         let rt = ash::khr::ray_tracing_pipeline::Device::new(&instance, &device);
         let (rt_props, limits, max_allocation) = rt_properties(&instance, physical);
@@ -374,6 +381,7 @@ impl Context {
         physical: vk::PhysicalDevice,
         device: ash::Device,
         queue_family: u32,
+        queue: vk::Queue,
     ) -> Result<Context, BackendError> {
         has_extensions(&instance, physical)
             .map_err(|e| BackendError::Unsupported(format!("the caller's device: {e}")))?;
@@ -382,7 +390,7 @@ impl Context {
             instance,
             physical,
             device,
-            queue_family,
+            (queue_family, Some(queue)),
             false,
         ))
     }

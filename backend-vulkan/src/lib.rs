@@ -72,25 +72,30 @@ impl VulkanBackend {
         self.ctx.validation_active()
     }
 
-    /// Embeds the backend in a caller's renderer. `device` must have been created from
-    /// `physical` with [`DEVICE_EXTENSIONS`] and the features `bufferDeviceAddress`,
-    /// `scalarBlockLayout`, `accelerationStructure` and `rayTracingPipeline`; the backend
-    /// uses queue 0 of `queue_family` (which must support compute) and destroys only what
-    /// it created.
+    /// Embeds the backend in a caller's renderer: its instance, physical device, device
+    /// and a queue of `queue_family` (which must support compute). `device` must have
+    /// been created from `physical` with [`DEVICE_EXTENSIONS`] and the features
+    /// `bufferDeviceAddress`, `scalarBlockLayout`, `accelerationStructure` and
+    /// `rayTracingPipeline`. The backend submits to `queue` (the caller must not use it
+    /// from another thread meanwhile) and destroys only what it created.
     pub fn from_raw(
         entry: ash::Entry,
         instance: ash::Instance,
         physical: vk::PhysicalDevice,
         device: ash::Device,
         queue_family: u32,
+        queue: vk::Queue,
     ) -> Result<VulkanBackend, BackendError> {
-        VulkanBackend::with_context(Context::adopt(
-            entry,
-            instance,
-            physical,
-            device,
-            queue_family,
-        )?)
+        context::serialised(|| {
+            VulkanBackend::with_context(Context::adopt(
+                entry,
+                instance,
+                physical,
+                device,
+                queue_family,
+                queue,
+            )?)
+        })
     }
 
     fn with_context(ctx: Context) -> Result<VulkanBackend, BackendError> {
