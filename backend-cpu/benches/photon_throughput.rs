@@ -42,6 +42,8 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
         let params = d.trace_params(0, (n, n), (0, n * n), 1, 12, 1e-4, 1e-9);
+        // the variant a frame of this scene runs (the frame plan's)
+        let variant = caustica_core::plan::SceneFeatures::of(&scene).trace_variant();
         let tris: Vec<Triangle> = ds
             .triangles
             .iter()
@@ -85,7 +87,7 @@ fn bench(c: &mut Criterion) {
         g.throughput(Throughput::Elements((n * n) as u64));
         g.sample_size(10);
         g.bench_function("trace_photons (paths)", |b| {
-            b.iter(|| trace_photons(&view, &params).photons.len())
+            b.iter(|| trace_photons(&view, &params, variant).photons.len())
         });
         g.bench_function("raw obvhs, every segment (paths)", |b| {
             b.iter(|| raw(&segments))

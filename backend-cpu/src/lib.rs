@@ -28,6 +28,8 @@ pub struct CpuBackend {
     bvhs: HashMap<ResourceId, Arc<obvhs::cwbvh::CwBvh>>,
     pool: Arc<rayon::ThreadPool>,
     threads: usize,
+    /// Labels of the kernel variants run so far (see [`Backend::variants`]).
+    variants: std::collections::BTreeSet<String>,
 }
 
 impl CpuBackend {
@@ -52,6 +54,7 @@ impl CpuBackend {
             bvhs: HashMap::new(),
             pool: Arc::new(pool),
             threads,
+            variants: Default::default(),
         })
     }
 
@@ -102,12 +105,13 @@ impl CpuBackend {
             }
             Kernel::TracePhotons {
                 scene,
+                variant,
                 params,
                 photons,
                 photon_count,
                 counters,
             } => {
-                let result = trace_photons::trace_photons(&view(scene)?, params);
+                let result = trace_photons::trace_photons(&view(scene)?, params, *variant);
                 if result.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(
                         "photon buffer holds {} photons, batch stored {}",
@@ -245,6 +249,9 @@ impl Backend for CpuBackend {
                     self.bvhs.remove(id);
                 }
                 Step::Kernel(k) => {
+                    if let Some(l) = k.launch()?.filter(|l| !l.constants.is_empty()) {
+                        self.variants.insert(l.variant_label());
+                    }
                     let t0 = Instant::now();
                     // Run inside our pool so the thread count is the backend's.
                     let pool = Arc::clone(&self.pool);
@@ -261,5 +268,9 @@ impl Backend for CpuBackend {
 
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         Ok(self.get(id)?.bytes().to_vec())
+    }
+
+    fn variants(&self) -> Vec<String> {
+        self.variants.iter().cloned().collect()
     }
 }

@@ -47,6 +47,7 @@ fn bench(c: &mut Criterion) {
         trace.clear(photon_count);
         trace.kernel(Kernel::TracePhotons {
             scene: scene_args,
+            variant: caustica_core::plan::SceneFeatures::of(&scene).trace_variant(),
             params: d.trace_params(0, (n, n), (0, n * n), 1, 12, 1e-4, 1e-9),
             photons,
             photon_count,

@@ -5,6 +5,19 @@
 // Stored photons are appended in arrival order (an atomic slot counter): the set of
 // photons equals the CPU's, their order does not, and every later sum is order-free.
 
+// Compiled variants (DESIGN 3): the host builds this file with `-D DIELECTRIC=0/1
+// -D DISPERSION=0/1 -D ABSORPTION=0/1` (core's TraceVariant); a switch at 0 compiles its
+// material feature out. Without defines every feature is in.
+#ifndef DIELECTRIC
+#define DIELECTRIC 1
+#endif
+#ifndef DISPERSION
+#define DISPERSION 1
+#endif
+#ifndef ABSORPTION
+#define ABSORPTION 1
+#endif
+
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
 #define PATH_ESCAPED 2
@@ -54,7 +67,7 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
         SurfacePoint s = hit_surface(vertices, triangles, &hit);
         __global const GpuMaterial* m = &materials[triangles[hit.triangle].material];
         bool entering = dot3(dir, s.geometric_normal) < 0.0f;
-        if (m->kind == MATERIAL_DIELECTRIC && !entering)
+        if (ABSORPTION && m->kind == MATERIAL_DIELECTRIC && !entering)
             flux *= beer_lambert(load3g(m->absorption), hit.t);
         if (m->kind == MATERIAL_DIFFUSE) {
             // every earlier segment ended at a mirror or dielectric
@@ -68,9 +81,9 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
             flux *= load3g(m->color);
             float3 n = facing_normal(s.shading_normal, dir);
             dir = normalize3(reflect(dir, n));
-        } else {
+        } else if (DIELECTRIC) {
             float ior = m->ior;
-            if (m->cauchy_b != 0.0f) {
+            if (DISPERSION && m->cauchy_b != 0.0f) {
                 if (channel < 0) {
                     // First dispersive surface: keep one channel, x3 so that the expected
                     // flux per channel is unchanged.
@@ -84,6 +97,7 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
                                      random_f32(p->seed, index, bounce, 2u));
         }
+        // (a variant without DIELECTRIC is never run on a dielectric: the frame plan)
         if (max_element3(flux) < min_power || max_element3(flux) <= 0.0f) return PATH_NEGLIGIBLE;
         float3 side = dot3(dir, s.geometric_normal) > 0.0f ? s.geometric_normal : -s.geometric_normal;
         origin = offset_ray_origin(s.position, side);

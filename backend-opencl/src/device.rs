@@ -12,12 +12,37 @@ use ocl::core::{
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// A device with its shared context and built program.
+/// A device with its shared context and built programs.
 pub struct DeviceState {
     pub device: DeviceId,
     pub context: core::Context,
+    /// Every kernel without variants.
     pub program: core::Program,
+    /// Programs of kernel variants by label, built on first use.
+    variants: Mutex<HashMap<String, core::Program>>,
     pub info: DeviceSummary,
+}
+
+impl DeviceState {
+    /// The program holding variant `constants` of `kernel` (the base program for a
+    /// kernel without switches), building it on first use.
+    pub fn program_for(
+        &self,
+        kernel: &str,
+        constants: &[(&'static str, bool)],
+    ) -> Result<core::Program, BackendError> {
+        if constants.is_empty() {
+            return Ok(self.program.clone());
+        }
+        let label = caustica_core::kernels::variant_label(kernel, constants);
+        let mut map = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = map.get(&label) {
+            return Ok(p.clone());
+        }
+        let p = program::build_variant(&self.context, self.device, kernel, constants)?;
+        map.insert(label, p.clone());
+        Ok(p)
+    }
 }
 
 /// What the backend reports about its device.
@@ -155,6 +180,7 @@ pub fn device_state(
         device,
         context,
         program,
+        variants: Mutex::new(HashMap::new()),
         info,
     });
     map.insert(key, Arc::clone(&state));

@@ -17,8 +17,12 @@ pub fn run(b: &OpenClBackend, k: &Kernel) -> Result<Option<Event>, BackendError>
     let Some(launch) = k.launch()? else {
         return Ok(None);
     };
+    if !launch.constants.is_empty() {
+        b.note_variant(launch.variant_label());
+    }
     let Launch {
         kernel: name,
+        constants,
         threads,
         args,
     } = launch;
@@ -45,8 +49,8 @@ pub fn run(b: &OpenClBackend, k: &Kernel) -> Result<Option<Event>, BackendError>
     if threads == 0 {
         return Ok(None);
     }
-    let kernel =
-        core::create_kernel(&b.state.program, name).map_err(cl_error("creating a kernel"))?;
+    let program = b.state.program_for(name, &constants)?;
+    let kernel = core::create_kernel(&program, name).map_err(cl_error("creating a kernel"))?;
     let mut next_params = params.iter();
     for (index, a) in args.iter().enumerate() {
         let v = match a {

@@ -31,9 +31,18 @@ pub struct OpenClBackend {
     state: Arc<DeviceState>,
     queue: CommandQueue,
     buffers: HashMap<ResourceId, DeviceBuffer>,
+    /// Labels of the kernel variants this backend has run (their programs are built once
+    /// per device and shared, see [`device::DeviceState::program_for`]).
+    variants: std::sync::Mutex<std::collections::BTreeSet<String>>,
 }
 
 impl OpenClBackend {
+    /// Records that a launch ran variant `label`.
+    fn note_variant(&self, label: String) {
+        let mut v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        v.insert(label);
+    }
+
     /// Opens the chosen device (`CAUSTICA_OPENCL_DEVICE=N`, else the first GPU, else the
     /// first device). No loader, platform or device, or a failed kernel build, is an error.
     pub fn new() -> Result<OpenClBackend, BackendError> {
@@ -49,6 +58,7 @@ impl OpenClBackend {
             state,
             queue,
             buffers: HashMap::new(),
+            variants: Default::default(),
         })
     }
 
@@ -245,5 +255,10 @@ impl Backend for OpenClBackend {
             }
         }
         Ok(out)
+    }
+
+    fn variants(&self) -> Vec<String> {
+        let v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        v.iter().cloned().collect()
     }
 }

@@ -31,21 +31,15 @@ const RAYGEN_WIDTH: u64 = 8192;
 /// buffers from 6; compute kernels bind core's launch arguments in order (counts are
 /// derived in the shaders). `trace_photons` adds into 64 counter banks that
 /// `reduce_counters` folds into the frame's counters.
-pub fn create_pipelines(
-    ctx: &Arc<Context>,
-) -> Result<HashMap<&'static str, Pipeline>, BackendError> {
+pub fn create_pipelines(ctx: &Arc<Context>) -> Result<HashMap<String, Pipeline>, BackendError> {
     let mut p = HashMap::new();
     p.insert(
-        "primary_gbuffer",
-        pipelines::ray_tracing(ctx, spirv::PRIMARY_GBUFFER, vec![AS, S, S, S, S, U, S])?,
+        "primary_gbuffer".into(),
+        pipelines::ray_tracing(ctx, spirv::PRIMARY_GBUFFER, vec![AS, S, S, S, S, U, S], &[])?,
     );
     p.insert(
-        "direct_light",
-        pipelines::ray_tracing(ctx, spirv::DIRECT_LIGHT, vec![AS, S, S, S, S, U, S, S])?,
-    );
-    p.insert(
-        "trace_photons",
-        pipelines::ray_tracing(ctx, spirv::TRACE_PHOTONS, vec![AS, S, S, S, S, U, S, S, S])?,
+        "direct_light".into(),
+        pipelines::ray_tracing(ctx, spirv::DIRECT_LIGHT, vec![AS, S, S, S, S, U, S, S], &[])?,
     );
     let compute: [(&'static str, Vec<vk::DescriptorType>); 5] = [
         ("deposit_screen", vec![U, S, S, S, S, S]),
@@ -56,17 +50,45 @@ pub fn create_pipelines(
     ];
     for (name, bindings) in compute {
         p.insert(
-            name,
+            name.into(),
             pipelines::compute(ctx, &pipelines::wgsl_to_spirv(name)?, bindings)?,
         );
     }
     let reduce = ash::util::read_spv(&mut std::io::Cursor::new(spirv::REDUCE_COUNTERS))
         .map_err(|e| BackendError::Driver(format!("bad SPIR-V: {e}")))?;
     p.insert(
-        "reduce_counters",
+        "reduce_counters".into(),
         pipelines::compute(ctx, &reduce, vec![S, S])?,
     );
     Ok(p)
+}
+
+/// Creates the pipeline of every kernel variant `rec` launches that does not exist yet
+/// (`trace_photons`: one ray-tracing pipeline per `TraceVariant`, specialization
+/// constants 0..3), one backend at a time (see `context::LIFECYCLE`).
+fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), BackendError> {
+    for step in &rec.steps {
+        let Step::Kernel(k) = step else { continue };
+        let Some(launch) = k.launch()? else { continue };
+        let label = launch.variant_label();
+        if launch.constants.is_empty() || b.pipelines.contains_key(&label) {
+            continue;
+        }
+        let (raygen, bindings) = match launch.kernel {
+            "trace_photons" => (spirv::TRACE_PHOTONS, vec![AS, S, S, S, S, U, S, S, S]),
+            other => {
+                return Err(BackendError::Unsupported(format!(
+                    "{other} has no variants"
+                )))
+            }
+        };
+        let ctx = Arc::clone(&b.ctx);
+        let p = crate::context::serialised(|| {
+            pipelines::ray_tracing(&ctx, raygen, bindings, &launch.constants)
+        })?;
+        b.pipelines.insert(label, p);
+    }
+    Ok(())
 }
 
 fn barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
@@ -103,6 +125,7 @@ struct Frame {
 }
 
 pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, BackendError> {
+    ensure_variants(b, rec)?;
     let kernels = rec.steps.iter().filter(|s| is_kernel(s)).count() as u32;
     let d = b.ctx.device.clone();
     let sets = 2 * kernels.max(1);
@@ -340,10 +363,11 @@ fn record_kernel(b: &VulkanBackend, frame: &mut Frame, k: &Kernel) -> Result<(),
     let Some(launch) = k.launch()? else {
         return Ok(());
     };
+    let label = launch.variant_label();
     let pipeline = b
         .pipelines
-        .get(launch.kernel)
-        .ok_or_else(|| BackendError::Unsupported(launch.kernel.into()))?;
+        .get(&label)
+        .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
     let scene = scene_of(k);
     let counters = match k {
         Kernel::TracePhotons { counters, .. } => Some(counters.id),

@@ -44,7 +44,8 @@ pub struct VulkanBackend {
     // field order is drop order: everything before `ctx`, which destroys the device
     buffers: HashMap<ResourceId, DeviceBuffer>,
     scenes: HashMap<ResourceId, accel::SceneAccel>,
-    pipelines: HashMap<&'static str, pipelines::Pipeline>,
+    /// Pipelines by variant label (`kernel` or `kernel[SWITCH=0/1,...]`).
+    pipelines: HashMap<String, pipelines::Pipeline>,
     counter_banks: Buffer,
     pool: vk::CommandPool,
     fence: vk::Fence,
@@ -299,6 +300,17 @@ impl Backend for VulkanBackend {
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         let b = self.get(id)?;
         self.read_device(b.buffer.buffer, b.bytes)
+    }
+
+    fn variants(&self) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .pipelines
+            .keys()
+            .filter(|k| k.contains('['))
+            .cloned()
+            .collect();
+        v.sort();
+        v
     }
 }
 

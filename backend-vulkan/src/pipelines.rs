@@ -157,6 +157,13 @@ pub fn compute(
 
 /// SPIR-V of the wgpu backend's WGSL kernel `name`, through naga.
 pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
+    if wgsl::VARIANT_KERNELS.contains(&name) {
+        // override constants are resolved per variant; Vulkan runs these kernels as
+        // ray-tracing pipelines with specialization constants instead
+        return Err(BackendError::Unsupported(format!(
+            "{name}.wgsl has compiled variants; Vulkan builds it from GLSL"
+        )));
+    }
     let src = wgsl::module_source(name).map_err(BackendError::Driver)?;
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| BackendError::Driver(format!("{name}.wgsl: {}", e.emit_to_string(&src))))?;
@@ -180,11 +187,27 @@ pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
 
 /// A ray-tracing pipeline: ray generation `raygen`, miss (closest), miss (shadow), and a
 /// triangle hit group with the closest-hit stage; recursion depth 1.
+/// A ray-tracing pipeline of ray generation stage `raygen` (with the shared miss and
+/// closest-hit stages); `specialization` sets the raygen's boolean specialization
+/// constants, constant id = index (a kernel variant, core's `TraceVariant`).
 pub fn ray_tracing(
     ctx: &Arc<Context>,
     raygen: &[u8],
     bindings: Vec<vk::DescriptorType>,
+    specialization: &[(&'static str, bool)],
 ) -> Result<Pipeline, BackendError> {
+    let spec_data: Vec<u32> = specialization.iter().map(|(_, v)| *v as u32).collect();
+    let spec_entries: Vec<vk::SpecializationMapEntry> = (0..spec_data.len() as u32)
+        .map(|i| {
+            vk::SpecializationMapEntry::default()
+                .constant_id(i)
+                .offset(4 * i)
+                .size(4)
+        })
+        .collect();
+    let spec_info = vk::SpecializationInfo::default()
+        .map_entries(&spec_entries)
+        .data(bytemuck::cast_slice(&spec_data));
     let stages_all = vk::ShaderStageFlags::RAYGEN_KHR
         | vk::ShaderStageFlags::MISS_KHR
         | vk::ShaderStageFlags::CLOSEST_HIT_KHR;
@@ -215,10 +238,15 @@ pub fn ray_tracing(
         .iter()
         .zip(&modules)
         .map(|((s, _), m)| {
-            vk::PipelineShaderStageCreateInfo::default()
+            let info = vk::PipelineShaderStageCreateInfo::default()
                 .stage(*s)
                 .module(*m)
-                .name(c"main")
+                .name(c"main");
+            if *s == vk::ShaderStageFlags::RAYGEN_KHR && !spec_data.is_empty() {
+                info.specialization_info(&spec_info)
+            } else {
+                info
+            }
         })
         .collect();
     let general = |i: u32| {

@@ -5,7 +5,7 @@
 //! Run: `cargo run --release -p caustica-wgpu --example embed_headless`.
 
 use caustica_core::scene::builtin::builtin;
-use caustica_core::{Sspm, SspmSettings};
+use caustica_core::{Outputs, Sspm, SspmSettings};
 use caustica_wgpu::WgpuBackend;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -48,11 +48,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let settings = SspmSettings {
         photons_w: 512,
         photons_h: 512,
+        // the renderer does its own direct light: no direct_light or composite pass
+        outputs: Outputs::CAUSTICS_ONLY,
         ..SspmSettings::default()
     };
     let mut sspm = Sspm::new(&mut backend, &scene, settings)?;
     let stats = sspm.frame(&mut backend, &mut |_| {})?;
-    backend.write_image_to_texture(sspm.images().filtered_caustics, &texture)?;
+    // `None` when no light reaches a caustic caster (the caustics are zero)
+    let caustics = sspm
+        .images()
+        .filtered_caustics
+        .ok_or("no light reaches a caustic caster")?;
+    backend.write_image_to_texture(caustics, &texture)?;
     println!(
         "{name}: {} photons stored, {} deposited, frame {:.1} ms ({})",
         stats.photons_stored, stats.photons_deposited, stats.frame_ms, stats.timing

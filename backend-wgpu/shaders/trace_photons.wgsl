@@ -6,6 +6,13 @@
 // (same random dimensions, same decisions). Stored photons are appended in arrival order
 // (an atomic slot counter): the set of photons equals the CPU's, their order does not,
 // and every later sum is order-free.
+//
+// Compiled variants (DESIGN 3): pipeline-overridable constants named as core's
+// TraceVariant switches; false compiles a material feature out. The backend builds one
+// pipeline per variant a frame plan asks for.
+override DIELECTRIC: bool = true;
+override DISPERSION: bool = true;
+override ABSORPTION: bool = true;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -74,7 +81,7 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
         let s = hit_surface(hit);
         let m = materials[triangles[hit.triangle].material];
         let entering = dot3(dir, s.geometric_normal) < 0.0;
-        if (m.kind == MATERIAL_DIELECTRIC && !entering) {
+        if (ABSORPTION && m.kind == MATERIAL_DIELECTRIC && !entering) {
             flux *= beer_lambert(m.absorption.xyz, hit.t);
         }
         if (m.kind == MATERIAL_DIFFUSE) {
@@ -91,9 +98,9 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
             flux *= m.color.xyz;
             let n = facing_normal(s.shading_normal, dir);
             dir = normalize3(reflect(dir, n));
-        } else {
+        } else if (DIELECTRIC) {
             var ior = m.ior;
-            if (m.cauchy_b != 0.0) {
+            if (DISPERSION && m.cauchy_b != 0.0) {
                 if (channel < 0) {
                     // First dispersive surface: keep one channel, x3 so that the expected
                     // flux per channel is unchanged.

@@ -105,14 +105,16 @@ pub fn record(
     timer: &mut Timer,
     k: &Kernel,
 ) -> Result<(), BackendError> {
-    let Some(Launch {
+    let Some(launch) = k.launch()? else {
+        return Ok(());
+    };
+    let label = launch.variant_label();
+    let Launch {
         kernel: name,
         threads,
         args,
-    }) = k.launch()?
-    else {
-        return Ok(());
-    };
+        ..
+    } = launch;
     let max_binding = b.limits.max_storage_buffer_binding_size;
     let mut uniforms = Vec::new();
     for a in &args {
@@ -152,8 +154,8 @@ pub fn record(
     }
     let pipeline = b
         .pipelines
-        .get(name)
-        .ok_or_else(|| BackendError::Unsupported(name.into()))?;
+        .get(&label)
+        .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
     let mut entries = Vec::with_capacity(args.len());
     let mut next_uniform = uniforms.iter();
     for a in &args {

@@ -14,6 +14,7 @@ pub mod shaders;
 mod texture;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::launch::Launch;
 use caustica_core::recording::{Recording, ResourceId, Step};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -38,11 +39,48 @@ pub struct WgpuBackend {
     description: String,
     limits: wgpu::Limits,
     timestamps: bool,
-    pipelines: HashMap<&'static str, wgpu::ComputePipeline>,
+    /// Pipelines by variant label (`kernel` or `kernel[SWITCH=0/1,...]`).
+    pipelines: HashMap<String, wgpu::ComputePipeline>,
     texture_pipelines: HashMap<wgpu::TextureFormat, wgpu::ComputePipeline>,
     buffers: HashMap<ResourceId, DeviceBuffer>,
     /// Errors wgpu reports outside an error scope (validation, device loss).
     uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+/// Compiles kernel `name` with its override constants set to `constants`; a WGSL or
+/// pipeline validation error is a typed error.
+fn create_pipeline(
+    device: &wgpu::Device,
+    name: &str,
+    constants: &[(&'static str, bool)],
+) -> Result<wgpu::ComputePipeline, BackendError> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let src = shaders::module_source(name).map_err(BackendError::Driver)?;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    });
+    let overrides: Vec<(&str, f64)> = constants
+        .iter()
+        .map(|(n, v)| (*n, if *v { 1.0 } else { 0.0 }))
+        .collect();
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(name),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &overrides,
+            ..Default::default()
+        },
+        cache: None,
+    });
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(BackendError::Driver(format!(
+            "WGSL pipeline creation failed ({name}): {e}"
+        )));
+    }
+    Ok(pipeline)
 }
 
 fn unavailable(reason: impl Into<String>) -> BackendError {
@@ -141,27 +179,10 @@ impl WgpuBackend {
             }
         }));
         let mut pipelines = HashMap::new();
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         for (name, _) in shaders::KERNELS {
-            let src = shaders::module_source(name).map_err(BackendError::Driver)?;
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(name),
-                source: wgpu::ShaderSource::Wgsl(src.into()),
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(name),
-                layout: None,
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            pipelines.insert(*name, pipeline);
-        }
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(BackendError::Driver(format!(
-                "WGSL pipeline creation failed: {e}"
-            )));
+            if !shaders::VARIANT_KERNELS.contains(name) {
+                pipelines.insert(name.to_string(), create_pipeline(&device, name, &[])?);
+            }
         }
         Ok(WgpuBackend {
             limits: device.limits(),
@@ -174,6 +195,16 @@ impl WgpuBackend {
             buffers: HashMap::new(),
             uncaptured,
         })
+    }
+
+    /// Builds the pipeline of a launch's variant unless it exists.
+    fn ensure_pipeline(&mut self, launch: &Launch) -> Result<(), BackendError> {
+        let label = launch.variant_label();
+        if !self.pipelines.contains_key(&label) {
+            let p = create_pipeline(&self.device, launch.kernel, &launch.constants)?;
+            self.pipelines.insert(label, p);
+        }
+        Ok(())
     }
 
     /// The device and queue in use (for a caller that embeds the backend).
@@ -351,6 +382,9 @@ impl Backend for WgpuBackend {
                     self.buffers.remove(id);
                 }
                 Step::Kernel(k) => {
+                    if let Some(l) = k.launch()? {
+                        self.ensure_pipeline(&l)?;
+                    }
                     dispatch::record(self, &mut enc, &mut timer, k)?;
                     if !self.timestamps {
                         // No GPU timestamps: each kernel runs alone, timed by the host.
@@ -375,5 +409,16 @@ impl Backend for WgpuBackend {
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         let b = self.get(id)?;
         self.read_buffer(&b.buffer, b.bytes)
+    }
+
+    fn variants(&self) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .pipelines
+            .keys()
+            .filter(|k| k.contains('['))
+            .cloned()
+            .collect();
+        v.sort();
+        v
     }
 }

@@ -57,6 +57,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     ("composite", include_str!("../shaders/composite.wgsl")),
 ];
 
+/// Kernels with compiled variants (pipeline-overridable constants named as core's
+/// `TraceVariant` switches): one pipeline per variant, built when first launched.
+pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
+
 /// The complete module text of kernel `name`, or why it cannot be assembled.
 pub fn module_source(name: &str) -> Result<String, String> {
     let (_, kernel) = KERNELS

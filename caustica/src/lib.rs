@@ -2,12 +2,12 @@
 //! backend trait and run on the backend chosen at run time.
 //!
 //! ```no_run
-//! use caustica::{open_backend, scene::builtin, Sspm, SspmSettings};
+//! use caustica::{open_backend, scene::builtin, Output, Sspm, SspmSettings};
 //! let mut backend = open_backend("cpu").unwrap();
 //! let scene = builtin::builtin("sphere").unwrap();
 //! let mut sspm = Sspm::new(backend.as_mut(), &scene, SspmSettings::default()).unwrap();
 //! let stats = sspm.frame(backend.as_mut(), &mut |_| {}).unwrap();
-//! let image = sspm.read_image(backend.as_mut(), sspm.images().composite).unwrap();
+//! let image = sspm.read_output(backend.as_mut(), Output::Composite).unwrap();
 //! println!("{} photons stored, {:.1} ms", stats.photons_stored, stats.frame_ms);
 //! # let _ = image;
 //! ```

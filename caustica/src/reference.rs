@@ -164,7 +164,7 @@ pub fn compute(
             .map_err(|e| e.to_string())?;
         photons += stats.photons_emitted;
         let raw = sspm
-            .read_image(backend, sspm.images().raw_caustics)
+            .read_output(backend, caustica_core::Output::RawCaustics)
             .map_err(|e| e.to_string())?;
         for (i, p) in raw.pixels.iter().enumerate() {
             for c in 0..3 {

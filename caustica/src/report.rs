@@ -139,11 +139,14 @@ pub fn run(
                             }
                         }
                         images.push(
-                            sspm.read_image(backend.as_mut(), sspm.images().filtered_caustics)
-                                .map_err(|e| e.to_string())?,
+                            sspm.read_output(
+                                backend.as_mut(),
+                                caustica_core::Output::FilteredCaustics,
+                            )
+                            .map_err(|e| e.to_string())?,
                         );
                         let raw = sspm
-                            .read_image(backend.as_mut(), sspm.images().raw_caustics)
+                            .read_output(backend.as_mut(), caustica_core::Output::RawCaustics)
                             .map_err(|e| e.to_string())?;
                         raw_rel.push(caustica_core::metrics::relative_mse(&raw, &r.image, &mask));
                         (timing, photons, device) =

@@ -49,7 +49,7 @@ use caustica_core::image::Image;
 use caustica_core::recording::{Kernel, Recording, SceneArgs, Step};
 use caustica_core::scene::Scene;
 use caustica_core::sspm::FrameConstants;
-use caustica_core::{FrameStats, Sspm, SspmSettings};
+use caustica_core::{FrameStats, Output, Sspm, SspmSettings};
 use caustica_cpu::CpuBackend;
 use glam::Vec3;
 use std::collections::HashMap;
@@ -537,6 +537,8 @@ impl Fixture {
         let counters = rec.create(counter::WORDS as u32, "counters");
         rec.kernel(Kernel::TracePhotons {
             scene: self.args,
+            // the variant a frame of this scene runs (the plan's)
+            variant: caustica_core::plan::SceneFeatures::of(&self.scene).trace_variant(),
             params,
             photons,
             photon_count,
@@ -1428,14 +1430,13 @@ pub fn render_frame(
     let err = |e: caustica_core::Error| format!("sspm on backend {name}: {e}");
     let mut s = Sspm::new(b, scene, settings.clone()).map_err(err)?;
     let stats = s.frame(b, &mut |_| {}).map_err(err)?;
-    let im = s.images();
     let frame = Frame {
         stats,
         gbuffer: read_buf(b, s.gbuffer()).map_err(|e| format!("reading the G-buffer: {e}"))?,
-        composite: s.read_image(b, im.composite).map_err(err)?,
-        raw: s.read_image(b, im.raw_caustics).map_err(err)?,
-        filtered: s.read_image(b, im.filtered_caustics).map_err(err)?,
-        direct: s.read_image(b, im.direct).map_err(err)?,
+        composite: s.read_output(b, Output::Composite).map_err(err)?,
+        raw: s.read_output(b, Output::RawCaustics).map_err(err)?,
+        filtered: s.read_output(b, Output::FilteredCaustics).map_err(err)?,
+        direct: s.read_output(b, Output::Direct).map_err(err)?,
     };
     s.free(b).map_err(err)?;
     Ok(frame)

@@ -9,7 +9,7 @@
 pub mod compare;
 pub mod strategies;
 
-use caustica_core::{Backend, Scene, Sspm, SspmSettings};
+use caustica_core::{Backend, Output, Scene, Sspm, SspmSettings};
 
 /// Backends found on this machine (name, backend). Panics, loudly, when a backend listed
 /// in `CAUSTICA_REQUIRE_BACKENDS` cannot be opened.
@@ -82,15 +82,14 @@ pub fn render(
     scene.camera.height = h;
     let mut s = Sspm::new(backend, &scene, settings).expect("valid scene");
     let stats = s.frame(backend, &mut |_| {}).expect("frame");
-    let im = s.images();
     let imgs = [
-        im.composite,
-        im.raw_caustics,
-        im.filtered_caustics,
-        im.direct,
+        Output::Composite,
+        Output::RawCaustics,
+        Output::FilteredCaustics,
+        Output::Direct,
     ]
     .into_iter()
-    .map(|h| s.read_image(backend, h).expect("read"))
+    .map(|o| s.read_output(backend, o).expect("read"))
     .collect();
     (stats, imgs)
 }

@@ -466,6 +466,7 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
             max_specular_depth,
             seed,
             max_photons_per_batch: batch,
+            ..SspmSettings::default()
         },
     )
 }

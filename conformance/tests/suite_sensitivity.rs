@@ -278,6 +278,9 @@ impl Backend for Mutant {
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         self.inner.read(id)
     }
+    fn variants(&self) -> Vec<String> {
+        self.inner.variants()
+    }
 }
 
 /// Every check of the suite, by name.

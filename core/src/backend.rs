@@ -53,6 +53,11 @@ pub trait Backend {
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError>;
     /// Reads a buffer's bytes back to the host.
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError>;
+    /// Labels of the kernel variants this backend has compiled so far (GPU backends:
+    /// pipelines/programs built on demand; CPU: the monomorphised variants it has run),
+    /// as [`crate::kernels::variant_label`] writes them. Conformance checks that a scene
+    /// compiles no variant it does not need.
+    fn variants(&self) -> Vec<String>;
 }
 
 /// Reads a typed buffer back.

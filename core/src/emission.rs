@@ -10,7 +10,12 @@
 //!   the light direction, `E * a_l / (pw ph)` (Eq. 3), rays starting up-light of the scene.
 //!
 //! Photons outside the caster cone cannot meet a specular surface first, so leaving them
-//! out removes no caustic photon (they would all be dropped as direct light).
+//! out removes no caustic photon (they would all be dropped as direct light). For the
+//! same reason a spot light emits into the narrower of its outer cone and the caster
+//! cone, and a spot light whose cone misses the casters' bounding sphere, or a
+//! directional light whose projection volume misses the casters' box, emits nothing
+//! ([`NoEmission::MissesCasters`]; the frame plan's light-frustum test). With pruning
+//! off, [`unpruned_domain`] gives such lights their whole domain instead.
 
 use crate::geometry::Aabb;
 use crate::gpu::emission_kind;
@@ -83,104 +88,195 @@ impl EmissionDomain {
 /// Why a light emits no photons.
 #[derive(Clone, Debug, PartialEq)]
 pub enum NoEmission {
+    /// The scene has no mirror or dielectric (nothing can cast a caustic).
     NoCasters,
+    /// The light's intensity or irradiance is zero in every channel.
     ZeroPower,
+    /// The light's frustum (spot cone, directional projection volume) misses every
+    /// caster.
+    MissesCasters,
 }
 
-/// The emission domain of `light` given the casters' and the scene's bounds.
+impl NoEmission {
+    /// The reason as the frame stats print it.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            NoEmission::NoCasters => "no specular surface (caustic caster) in the scene",
+            NoEmission::ZeroPower => "light has zero power",
+            NoEmission::MissesCasters => "light frustum misses every caustic caster",
+        }
+    }
+}
+
+/// Cone from `apex` that bounds the sphere around `casters` (axis, cosine of the half
+/// angle), or `None` when `apex` is inside that sphere.
+fn caster_cone(apex: Vec3, casters: Aabb) -> Option<(Vec3, f32)> {
+    let c = casters.center();
+    let r = 0.5 * casters.diagonal();
+    let to = c - apex;
+    let dist = to.length();
+    (dist > r * 1.0001).then(|| (to / dist, (1.0 - (r / dist).powi(2)).max(0.0).sqrt()))
+}
+
+fn cone_domain(position: Vec3, intensity: Vec3, axis: Vec3, cos_max: f32) -> EmissionDomain {
+    let omega = cone_solid_angle(cos_max);
+    EmissionDomain {
+        kind: emission_kind::CONE,
+        origin: position,
+        axis,
+        cos_max,
+        rect_u: Vec3::ZERO,
+        rect_v: Vec3::ZERO,
+        measure: omega,
+        flux: intensity * omega,
+    }
+}
+
+/// The rectangle domain of a directional light covering `volume` (000 Eq. 3): the
+/// projection of `volume` along `direction`, starting up-light of `scene` and `volume`.
+fn rectangle_domain(
+    direction: Vec3,
+    irradiance: Vec3,
+    volume: Aabb,
+    scene: Aabb,
+) -> EmissionDomain {
+    let d = direction.normalize();
+    let (t, b) = orthonormal_basis(d);
+    let (mut s0, mut s1, mut u0, mut u1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+    for c in volume.corners() {
+        s0 = s0.min(c.dot(t));
+        s1 = s1.max(c.dot(t));
+        u0 = u0.min(c.dot(b));
+        u1 = u1.max(c.dot(b));
+    }
+    // Start plane up-light of everything, so occluders above the volume count.
+    let mut h0 = f32::MAX;
+    for c in scene.union(volume).corners() {
+        h0 = h0.min(c.dot(d));
+    }
+    let span = scene.union(volume).diagonal().max(f32::MIN_POSITIVE);
+    h0 -= 1e-3 * span;
+    let rect_u = t * (s1 - s0);
+    let rect_v = b * (u1 - u0);
+    let area = (s1 - s0) * (u1 - u0);
+    EmissionDomain {
+        kind: emission_kind::RECTANGLE,
+        origin: t * s0 + b * u0 + d * h0,
+        axis: d,
+        cos_max: 1.0,
+        rect_u,
+        rect_v,
+        measure: area,
+        flux: irradiance * area,
+    }
+}
+
+/// True when two boxes share a point (touching counts).
+fn boxes_overlap(a: Aabb, b: Aabb) -> bool {
+    a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
+}
+
+/// The whole domain of a light, ignoring the casters (pruning off): a point light's
+/// sphere, a spot light's outer cone, a directional light's projection volume (the scene
+/// bounds when it has none). `None` only for a directional light in an empty scene.
+pub fn unpruned_domain(light: &Light, scene: Aabb) -> Option<EmissionDomain> {
+    match light {
+        Light::Point {
+            position,
+            intensity,
+        } => Some(cone_domain(*position, *intensity, Vec3::Z, -1.0)),
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            outer_angle_deg,
+            ..
+        } => Some(cone_domain(
+            *position,
+            *intensity,
+            direction.normalize(),
+            outer_angle_deg.to_radians().cos(),
+        )),
+        Light::Directional {
+            direction,
+            irradiance,
+            projection_volume,
+        } => {
+            let volume = projection_volume.unwrap_or(scene);
+            (!volume.is_empty()).then(|| rectangle_domain(*direction, *irradiance, volume, scene))
+        }
+    }
+}
+
+/// The emission domain of `light` given the casters' and the scene's bounds, or why it
+/// emits nothing.
 pub fn emission_domain(
     light: &Light,
     casters: Aabb,
     scene: Aabb,
     point: PointEmission,
 ) -> Result<EmissionDomain, NoEmission> {
+    let power = match light {
+        Light::Point { intensity, .. } | Light::Spot { intensity, .. } => *intensity,
+        Light::Directional { irradiance, .. } => *irradiance,
+    };
+    if power.max_element() <= 0.0 {
+        return Err(NoEmission::ZeroPower);
+    }
+    if casters.is_empty() {
+        return Err(NoEmission::NoCasters);
+    }
     match light {
         Light::Point {
             position,
             intensity,
-        }
-        | Light::Spot {
+        } => Ok(match caster_cone(*position, casters) {
+            Some((axis, cos_max)) if point == PointEmission::CasterCone => {
+                cone_domain(*position, *intensity, axis, cos_max)
+            }
+            _ => cone_domain(*position, *intensity, Vec3::Z, -1.0),
+        }),
+        Light::Spot {
             position,
+            direction,
             intensity,
+            outer_angle_deg,
             ..
         } => {
-            if intensity.max_element() <= 0.0 {
-                return Err(NoEmission::ZeroPower);
-            }
-            if casters.is_empty() {
-                return Err(NoEmission::NoCasters);
-            }
-            let (axis, cos_max) = if let Light::Spot {
-                direction,
-                outer_angle_deg,
-                ..
-            } = light
-            {
-                (direction.normalize(), outer_angle_deg.to_radians().cos())
-            } else {
-                let c = casters.center();
-                let r = 0.5 * casters.diagonal();
-                let to = c - *position;
-                let dist = to.length();
-                if point == PointEmission::CasterCone && dist > r * 1.0001 {
-                    (to / dist, (1.0 - (r / dist).powi(2)).max(0.0).sqrt())
-                } else {
-                    (Vec3::Z, -1.0)
-                }
+            let spot_axis = direction.normalize();
+            let cos_spot = outer_angle_deg.to_radians().cos();
+            let Some((axis, cos_caster)) = caster_cone(*position, casters) else {
+                // the light is among the casters: its whole cone may meet one
+                return Ok(cone_domain(*position, *intensity, spot_axis, cos_spot));
             };
-            let omega = cone_solid_angle(cos_max);
-            Ok(EmissionDomain {
-                kind: emission_kind::CONE,
-                origin: *position,
-                axis,
-                cos_max,
-                rect_u: Vec3::ZERO,
-                rect_v: Vec3::ZERO,
-                measure: omega,
-                flux: *intensity * omega,
-            })
+            // Cones miss when the angle between the axes exceeds the sum of the half
+            // angles (with a 1e-3 rad margin for f32 acos; a near miss emits).
+            let between = spot_axis.dot(axis).clamp(-1.0, 1.0).acos();
+            if between > cos_spot.acos() + cos_caster.acos() + 1e-3 {
+                return Err(NoEmission::MissesCasters);
+            }
+            // Both cones hold every photon that can meet a caster: use the narrower.
+            Ok(
+                if point == PointEmission::CasterCone && cos_caster > cos_spot {
+                    cone_domain(*position, *intensity, axis, cos_caster)
+                } else {
+                    cone_domain(*position, *intensity, spot_axis, cos_spot)
+                },
+            )
         }
         Light::Directional {
             direction,
             irradiance,
             projection_volume,
         } => {
-            if irradiance.max_element() <= 0.0 {
-                return Err(NoEmission::ZeroPower);
-            }
             let volume = projection_volume.unwrap_or(casters);
-            if volume.is_empty() || casters.is_empty() {
+            if volume.is_empty() {
                 return Err(NoEmission::NoCasters);
             }
-            let d = direction.normalize();
-            let (t, b) = orthonormal_basis(d);
-            let (mut s0, mut s1, mut u0, mut u1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
-            for c in volume.corners() {
-                s0 = s0.min(c.dot(t));
-                s1 = s1.max(c.dot(t));
-                u0 = u0.min(c.dot(b));
-                u1 = u1.max(c.dot(b));
+            if !boxes_overlap(volume, casters) {
+                return Err(NoEmission::MissesCasters);
             }
-            // Start plane up-light of everything, so occluders above the volume count.
-            let mut h0 = f32::MAX;
-            for c in scene.union(volume).corners() {
-                h0 = h0.min(c.dot(d));
-            }
-            let span = scene.union(volume).diagonal().max(f32::MIN_POSITIVE);
-            h0 -= 1e-3 * span;
-            let rect_u = t * (s1 - s0);
-            let rect_v = b * (u1 - u0);
-            let area = (s1 - s0) * (u1 - u0);
-            Ok(EmissionDomain {
-                kind: emission_kind::RECTANGLE,
-                origin: t * s0 + b * u0 + d * h0,
-                axis: d,
-                cos_max: 1.0,
-                rect_u,
-                rect_v,
-                measure: area,
-                flux: *irradiance * area,
-            })
+            Ok(rectangle_domain(*direction, *irradiance, volume, scene))
         }
     }
 }

@@ -80,3 +80,51 @@ pub const KERNELS: &[KernelInfo] = &[
         used_by: "all",
     },
 ];
+
+/// A compiled variant of `trace_photons` (DESIGN 3: feature variants are compiled, not
+/// branched). Each switch removes a material feature from the kernel; the frame plan
+/// turns on only what the scene's objects use. Backends compile it as WGSL
+/// pipeline-overridable constants, Vulkan specialization constants (ids in
+/// [`TraceVariant::constants`] order), OpenCL `-D` defines and CPU const generics, each
+/// under the names of [`TraceVariant::constants`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub struct TraceVariant {
+    /// Dielectric interfaces (Fresnel reflect/refract, total internal reflection).
+    pub dielectric: bool,
+    /// Cauchy dispersion (one colour channel per photon after its first dispersive hit).
+    pub dispersion: bool,
+    /// Beer-Lambert absorption inside dielectrics.
+    pub absorption: bool,
+}
+
+impl TraceVariant {
+    /// Every feature compiled in (what a frame uses with pruning off).
+    pub const ALL: TraceVariant = TraceVariant {
+        dielectric: true,
+        dispersion: true,
+        absorption: true,
+    };
+
+    /// `(name, value)` of each switch, in specialization-constant id order.
+    pub fn constants(&self) -> [(&'static str, bool); 3] {
+        [
+            ("DIELECTRIC", self.dielectric),
+            ("DISPERSION", self.dispersion),
+            ("ABSORPTION", self.absorption),
+        ]
+    }
+}
+
+/// The name a backend lists a compiled kernel variant under, e.g.
+/// `trace_photons[DIELECTRIC=1,DISPERSION=0,ABSORPTION=0]`; a kernel without switches is
+/// its bare name.
+pub fn variant_label(kernel: &str, constants: &[(&'static str, bool)]) -> String {
+    if constants.is_empty() {
+        return kernel.to_string();
+    }
+    let parts: Vec<String> = constants
+        .iter()
+        .map(|(n, v)| format!("{n}={}", *v as u32))
+        .collect();
+    format!("{kernel}[{}]", parts.join(","))
+}

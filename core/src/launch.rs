@@ -32,8 +32,18 @@ pub enum LaunchArg {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Launch {
     pub kernel: &'static str,
+    /// Compiled switches of this launch's variant (empty for kernels without variants);
+    /// see [`crate::kernels::TraceVariant`].
+    pub constants: Vec<(&'static str, bool)>,
     pub threads: u64,
     pub args: Vec<LaunchArg>,
+}
+
+impl Launch {
+    /// The variant's label (`kernel[NAME=0,...]`), the key of a backend's pipeline cache.
+    pub fn variant_label(&self) -> String {
+        crate::kernels::variant_label(self.kernel, &self.constants)
+    }
 }
 
 const GBUFFER_TEXEL: u64 = size_of::<GBufferTexel>() as u64;
@@ -103,6 +113,7 @@ impl Kernel {
     /// traverse the uploaded node array as it is; only its shape is checked).
     pub fn launch(&self) -> Result<Option<Launch>, BackendError> {
         let mut a = Args(Vec::new());
+        let mut constants = Vec::new();
         let threads = match self {
             Kernel::PrepareScene { scene } => {
                 a.scene(scene)?;
@@ -146,6 +157,7 @@ impl Kernel {
             }
             Kernel::TracePhotons {
                 scene,
+                variant,
                 params,
                 photons,
                 photon_count,
@@ -166,6 +178,7 @@ impl Kernel {
                     .count(photons.len)
                     .buf(*photon_count, 4, "photon count")
                     .buf(*counters, COUNTERS, "counters");
+                constants = variant.constants().to_vec();
                 params.count as u64
             }
             Kernel::DepositScreen {
@@ -245,6 +258,7 @@ impl Kernel {
         };
         Ok(Some(Launch {
             kernel: self.name(),
+            constants,
             threads,
             args: a.0,
         }))

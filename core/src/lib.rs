@@ -8,7 +8,7 @@
 //! [`rng`], [`packing`], [`footprint`] (seed 000 Eq. 4), [`geometry`], [`fixed_point`],
 //! [`scene`], [`device_scene`] (flattened arrays + CWBVH), [`gpu`] (shared structs),
 //! [`emission`] (photon emission domains), [`recording`], [`backend`], [`kernels`],
-//! [`sspm`] (the technique), [`stats`], [`image`].
+//! [`plan`] (the frame plan: passes, variants, buffers), [`sspm`] (the technique), [`stats`], [`image`].
 
 pub mod backend;
 pub mod device_scene;
@@ -23,6 +23,7 @@ pub mod launch;
 pub mod metrics;
 pub mod optics;
 pub mod packing;
+pub mod plan;
 pub mod recording;
 pub mod rng;
 pub mod sampling;
@@ -31,6 +32,7 @@ pub mod sspm;
 pub mod stats;
 
 pub use backend::{Backend, BackendError, Capabilities};
+pub use plan::{FramePlan, Output, Outputs};
 pub use scene::Scene;
 pub use sspm::{Sspm, SspmSettings};
 pub use stats::FrameStats;

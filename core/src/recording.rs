@@ -78,6 +78,9 @@ pub enum Kernel {
     /// stored photons to `photons` at `photon_count[0]` and adds to `counters`.
     TracePhotons {
         scene: SceneArgs,
+        /// The compiled variant to run (the frame plan's; it must cover every material
+        /// feature of the scene).
+        variant: crate::kernels::TraceVariant,
         params: TraceParams,
         photons: Buf<Photon>,
         photon_count: Buf<u32>,

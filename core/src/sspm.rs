@@ -13,11 +13,14 @@
 
 use crate::backend::{read_buf, Backend};
 use crate::device_scene::DeviceScene;
-use crate::emission::{emission_domain, EmissionDomain, NoEmission, PointEmission};
+use crate::emission::{
+    emission_domain, unpruned_domain, EmissionDomain, NoEmission, PointEmission,
+};
 use crate::fixed_point::{join_u64, power_of_two_quantum};
 use crate::gpu::*;
 use crate::image::Image;
-use crate::recording::{Buf, ImageBuf, Kernel, Recording, SceneArgs};
+use crate::plan::{FramePlan, Output, Outputs};
+use crate::recording::{Buf, ImageBuf, Kernel, Recording, ResourceId, SceneArgs, Step};
 use crate::rng::pcg_hash;
 use crate::scene::Scene;
 use crate::stats::FrameStats;
@@ -61,6 +64,12 @@ pub struct SspmSettings {
     pub seed: u32,
     /// Memory limit: photons traced per batch (photon buffer = 32 bytes each).
     pub max_photons_per_batch: u32,
+    /// The images the caller wants; passes and buffers that no requested image needs are
+    /// left out (see [`crate::plan`]).
+    pub outputs: Outputs,
+    /// Leave out passes, kernel features, buffers and lights the scene and outputs do
+    /// not need (default). Off: everything runs, the baseline pruning is checked against.
+    pub prune: bool,
 }
 
 impl Default for SspmSettings {
@@ -82,6 +91,8 @@ impl Default for SspmSettings {
             max_specular_depth: 6,
             seed: 0x5350_4d31,
             max_photons_per_batch: 1 << 20,
+            outputs: Outputs::default(),
+            prune: true,
         }
     }
 }
@@ -132,6 +143,9 @@ impl SspmSettings {
         if self.tile_size == 0 || self.tile_size > 256 {
             return bad("tile_size must be in 1..=256");
         }
+        if !self.outputs.any() {
+            return bad("outputs: at least one output must be requested");
+        }
         if self.max_photons_per_batch == 0 {
             return bad("max_photons_per_batch must be >= 1");
         }
@@ -149,19 +163,34 @@ impl SspmSettings {
 /// `d` holds at most `d + 1` pending rays).
 pub const MAX_SPECULAR_DEPTH: u32 = 30;
 
-/// Device images of a frame (handles; read them with [`Sspm::read_image`]).
+/// Device images of a frame (handles; read them with [`Sspm::read_output`]). An image
+/// is `None` when it was not requested, or when the plan knows it is zero (no light emits
+/// photons): [`Sspm::read_output`] then returns zeros without a device buffer.
 #[derive(Clone, Copy, Debug)]
 pub struct FrameImages {
     pub width: u32,
     pub height: u32,
-    /// Direct light + filtered caustics.
-    pub composite: ImageBuf,
+    /// Direct light + filtered caustics (the direct image's handle when there are no
+    /// caustics).
+    pub composite: Option<ImageBuf>,
     /// Direct light only (shadow rays, specular chains from mirror/glass pixels).
-    pub direct: ImageBuf,
+    pub direct: Option<ImageBuf>,
     /// Caustic radiance straight from the photon map (alpha: mean hit distance).
-    pub raw_caustics: ImageBuf,
+    pub raw_caustics: Option<ImageBuf>,
     /// Caustic radiance after the bilateral gather.
-    pub filtered_caustics: ImageBuf,
+    pub filtered_caustics: Option<ImageBuf>,
+}
+
+impl FrameImages {
+    /// The handle of `output`, if it has a device buffer.
+    pub fn get(&self, output: Output) -> Option<ImageBuf> {
+        match output {
+            Output::Composite => self.composite,
+            Output::Direct => self.direct,
+            Output::RawCaustics => self.raw_caustics,
+            Output::FilteredCaustics => self.filtered_caustics,
+        }
+    }
 }
 
 /// Progress of a frame's photon work.
@@ -181,6 +210,8 @@ pub struct FrameConstants {
     pub domains: Vec<(u32, EmissionDomain)>,
     /// Lights that emit no photons, and why.
     pub skipped_lights: Vec<(u32, NoEmission)>,
+    /// Lights in `domains` that emit their whole domain only because pruning is off.
+    pub unpruned: Vec<u32>,
     /// Flux of the brightest photon the frame can store (W, one channel): the largest
     /// per-photon emitted flux, x3 when a dispersive material can concentrate a photon
     /// into one channel.
@@ -202,16 +233,28 @@ impl FrameConstants {
     pub fn new(scene: &Scene, ds: &DeviceScene, settings: &SspmSettings) -> FrameConstants {
         let mut domains = Vec::new();
         let mut skipped_lights = Vec::new();
+        let mut unpruned = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
+            let i = i as u32;
             match emission_domain(l, ds.caster_bounds, ds.bounds, settings.point_emission) {
-                Ok(domain) => domains.push((i as u32, domain)),
-                Err(why) => skipped_lights.push((i as u32, why)),
+                Ok(domain) => domains.push((i, domain)),
+                Err(why) => match unpruned_domain(l, ds.bounds).filter(|_| !settings.prune) {
+                    Some(domain) => {
+                        domains.push((i, domain));
+                        unpruned.push(i);
+                    }
+                    None => skipped_lights.push((i, why)),
+                },
             }
         }
         let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
         let dispersion_gain = if ds.has_dispersion { 3.0 } else { 1.0 };
+        // Lights that emit only because pruning is off store no photon (that is why the
+        // plan prunes them), so the quantum ignores them and stays the pruned frame's:
+        // pruning on and off give the same fixed-point sums.
         let max_photon_flux = domains
             .iter()
+            .filter(|(i, _)| !unpruned.contains(i))
             .map(|(_, d)| d.flux.max_element() / photons_per_light)
             .fold(0.0f32, f32::max)
             * dispersion_gain;
@@ -221,6 +264,7 @@ impl FrameConstants {
         FrameConstants {
             domains,
             skipped_lights,
+            unpruned,
             max_photon_flux,
             flux_quantum,
             hit_distance_quantum: power_of_two_quantum(diag),
@@ -307,6 +351,22 @@ impl FrameConstants {
     }
 }
 
+/// Device buffers of the photon passes (exist only when some light emits photons).
+#[derive(Clone, Copy, Debug)]
+struct PhotonBuffers {
+    photons: Buf<Photon>,
+    photon_count: Buf<u32>,
+    photon_map: Buf<DepositTexel>,
+    counters: Buf<u32>,
+}
+
+/// Device buffers of the gather (exist only when filtered caustics are needed).
+#[derive(Clone, Copy, Debug)]
+struct GatherBuffers {
+    tiles: Buf<f32>,
+    scratch: ImageBuf,
+}
+
 /// Screen-space photon mapping on one backend, for one scene.
 pub struct Sspm {
     settings: SspmSettings,
@@ -314,19 +374,22 @@ pub struct Sspm {
     camera: GpuCamera,
     light_count: u32,
     constants: FrameConstants,
+    plan: FramePlan,
     gbuffer: Buf<GBufferTexel>,
-    photon_map: Buf<DepositTexel>,
-    photons: Option<(Buf<Photon>, Buf<u32>)>,
-    counters: Buf<u32>,
-    tiles: Buf<f32>,
-    scratch: ImageBuf,
+    photon: Option<PhotonBuffers>,
+    gather: Option<GatherBuffers>,
     images: FrameImages,
+    /// Every image buffer the plan created, by [`Output`], requested or not.
+    image_buffers: [Option<ImageBuf>; 4],
+    /// Every buffer this technique created (freed by [`Sspm::free`]).
+    owned: Vec<ResourceId>,
     bytes: u64,
     reference: Option<Image>,
 }
 
 impl Sspm {
-    /// Validates the scene and settings, uploads the scene and creates the frame buffers.
+    /// Validates the scene and settings, plans the frame ([`crate::plan`]), uploads the
+    /// scene and creates the buffers the plan needs.
     pub fn new(
         backend: &mut dyn Backend,
         scene: &Scene,
@@ -341,40 +404,73 @@ impl Sspm {
         let scene_args = ds.record_upload(&mut rec);
 
         let constants = FrameConstants::new(scene, &ds, &settings);
-        let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
+        let mut plan = FramePlan::new(scene, &constants, settings.outputs, settings.prune);
+        let needs = plan.needs();
+        let out = settings.outputs;
+        let keep = |requested: bool| requested || !settings.prune;
 
         let camera = GpuCamera::from_camera(&scene.camera);
         let (w, h) = (camera.width, camera.height);
         let pixels = w * h;
-        let tiles_len = w.div_ceil(settings.tile_size) * h.div_ceil(settings.tile_size);
         let gbuffer = rec.create(pixels, "gbuffer");
-        let photon_map = rec.create(pixels, "screen photon map");
-        let counters = rec.create(counter::WORDS as u32, "photon counters");
-        let tiles = rec.create(tiles_len, "hit distance tiles");
-        let scratch = rec.create(pixels, "gather scratch");
+        let direct = needs
+            .direct_light
+            .then(|| rec.create(pixels, "direct image"));
+        let photon = needs.photons.then(|| {
+            let per_light = settings.photons_w as u64 * settings.photons_h as u64;
+            let cap = per_light.min(settings.max_photons_per_batch as u64) as u32;
+            PhotonBuffers {
+                photons: rec.create(cap, "photons"),
+                photon_count: rec.create(1, "photon count"),
+                photon_map: rec.create(pixels, "screen photon map"),
+                counters: rec.create(counter::WORDS as u32, "photon counters"),
+            }
+        });
+        let raw_caustics = needs
+            .photons
+            .then(|| rec.create(pixels, "raw caustics image"));
+        let gather = needs.gather.then(|| GatherBuffers {
+            tiles: rec.create(
+                w.div_ceil(settings.tile_size) * h.div_ceil(settings.tile_size),
+                "hit distance tiles",
+            ),
+            scratch: rec.create(pixels, "gather scratch image"),
+        });
+        let filtered_caustics = needs
+            .gather
+            .then(|| rec.create(pixels, "filtered caustics image"));
+        let own_composite = needs
+            .composite
+            .then(|| rec.create(pixels, "composite image"));
+        let composite = if own_composite.is_some() {
+            own_composite
+        } else if out.composite {
+            direct // no caustics: the composite is the direct image
+        } else {
+            None
+        };
         let images = FrameImages {
             width: w,
             height: h,
-            composite: rec.create(pixels, "composite"),
-            direct: rec.create(pixels, "direct"),
-            raw_caustics: rec.create(pixels, "raw caustics"),
-            filtered_caustics: rec.create(pixels, "filtered caustics"),
-        };
-        // The photon buffer exists only when some light emits photons.
-        let photons = if constants.domains.is_empty() {
-            None
-        } else {
-            let total = photons_per_light as u64;
-            let cap = total.min(settings.max_photons_per_batch as u64) as u32;
-            Some((rec.create(cap, "photons"), rec.create(1, "photon count")))
+            composite,
+            direct: direct.filter(|_| keep(out.direct)),
+            raw_caustics: raw_caustics.filter(|_| keep(out.raw_caustics)),
+            filtered_caustics: filtered_caustics.filter(|_| keep(out.filtered_caustics)),
         };
         let mut bytes = 0u64;
+        let mut owned = Vec::new();
         for s in &rec.steps {
-            match s {
-                crate::recording::Step::Create { bytes: b, .. } => bytes += b,
-                crate::recording::Step::Upload { data, .. } => bytes += data.len() as u64,
-                _ => {}
-            }
+            let (id, b, label) = match s {
+                Step::Create { id, bytes, label } => (*id, *bytes, *label),
+                Step::Upload { id, data, label } => (*id, data.len() as u64, *label),
+                _ => continue,
+            };
+            bytes += b;
+            owned.push(id);
+            plan.buffers.push(crate::plan::BufferPlan {
+                name: label.into(),
+                bytes: b,
+            });
         }
         backend.execute(&rec)?;
         Ok(Sspm {
@@ -383,16 +479,22 @@ impl Sspm {
             camera,
             light_count: scene.lights.len() as u32,
             constants,
+            plan,
             gbuffer,
-            photon_map,
-            photons,
-            counters,
-            tiles,
-            scratch,
+            photon,
+            gather,
             images,
+            image_buffers: [own_composite, direct, raw_caustics, filtered_caustics],
+            owned,
             bytes,
             reference: None,
         })
+    }
+
+    /// The frame plan: passes run and skipped with reasons, the photon kernel's variant,
+    /// the lights that emit, the buffers created.
+    pub fn plan(&self) -> &FramePlan {
+        &self.plan
     }
 
     /// Sets the frame seed of the next frames (progressive rendering, repeated
@@ -418,10 +520,11 @@ impl Sspm {
     /// The stored-photon buffer and its count (absent when no light emits photons). After
     /// a frame they hold the last batch.
     pub fn photon_buffers(&self) -> Option<(Buf<Photon>, Buf<u32>)> {
-        self.photons
+        self.photon.map(|p| (p.photons, p.photon_count))
     }
 
-    /// Renders one frame. `progress` is called after every photon batch.
+    /// Renders one frame: the planned passes, nothing else. `progress` is called after
+    /// every photon batch.
     pub fn frame(
         &mut self,
         backend: &mut dyn Backend,
@@ -442,12 +545,13 @@ impl Sspm {
             },
             flux_quantum: self.constants.flux_quantum as f64,
             bytes_allocated: self.bytes,
+            plan: Some(self.plan.clone()),
             ..Default::default()
         };
+        for p in self.plan.passes.iter().filter(|p| !p.runs) {
+            stats.skip(&p.name, p.reason.clone());
+        }
         let cam = self.camera;
-        let deposit_params =
-            self.constants
-                .deposit_params(cam, &self.settings, self.photons.map_or(0, |p| p.0.len));
 
         // 1. visibility and direct light
         let mut rec = Recording::new();
@@ -456,28 +560,32 @@ impl Sspm {
             camera: cam,
             gbuffer: self.gbuffer,
         });
-        rec.kernel(Kernel::DirectLight {
-            scene: self.scene,
-            params: FrameConstants::direct_params(cam, self.light_count, &self.settings),
-            gbuffer: self.gbuffer,
-            out: self.images.direct,
-        });
-        rec.clear(self.photon_map);
-        rec.clear(self.counters);
+        if let Some(direct) = self.direct_image() {
+            rec.kernel(Kernel::DirectLight {
+                scene: self.scene,
+                params: FrameConstants::direct_params(cam, self.light_count, &self.settings),
+                gbuffer: self.gbuffer,
+                out: direct,
+            });
+        }
+        if let Some(p) = self.photon {
+            rec.clear(p.photon_map);
+            rec.clear(p.counters);
+        }
         self.run(backend, &rec, &mut stats)?;
 
-        // 2. photons, in batches
-        for (light, why) in &self.constants.skipped_lights {
-            let reason = match why {
-                NoEmission::NoCasters => "no specular surface (caustic caster) in the scene",
-                NoEmission::ZeroPower => "light has zero power",
-            };
-            stats.skip(&format!("trace_photons[light {light}]"), reason);
-        }
-        let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
-        let total = per_light * self.constants.domains.len() as u64;
-        let mut done = 0u64;
-        if let Some((photons, photon_count)) = self.photons {
+        // 2. photons, per emitting light, in batches
+        if let (Some(p), Some(variant)) = (self.photon, self.plan.trace_variant) {
+            stats.variants.push(crate::kernels::variant_label(
+                "trace_photons",
+                &variant.constants(),
+            ));
+            let deposit_params = self
+                .constants
+                .deposit_params(cam, &self.settings, p.photons.len);
+            let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+            let total = per_light * self.constants.domains.len() as u64;
+            let mut done = 0u64;
             for (light, d) in &self.constants.domains {
                 stats.photons_emitted += per_light;
                 for c in 0..3 {
@@ -485,11 +593,12 @@ impl Sspm {
                 }
                 let mut first = 0u64;
                 while first < per_light {
-                    let count = (per_light - first).min(photons.len as u64) as u32;
+                    let count = (per_light - first).min(p.photons.len as u64) as u32;
                     let mut rec = Recording::new();
-                    rec.clear(photon_count);
+                    rec.clear(p.photon_count);
                     rec.kernel(Kernel::TracePhotons {
                         scene: self.scene,
+                        variant,
                         params: self.constants.trace_params(
                             &self.settings,
                             *light,
@@ -497,17 +606,17 @@ impl Sspm {
                             first as u32,
                             count,
                         ),
-                        photons,
-                        photon_count,
-                        counters: self.counters,
+                        photons: p.photons,
+                        photon_count: p.photon_count,
+                        counters: p.counters,
                     });
                     rec.kernel(Kernel::DepositScreen {
                         params: deposit_params,
                         gbuffer: self.gbuffer,
-                        photons,
-                        photon_count,
-                        counters: self.counters,
-                        photon_map: self.photon_map,
+                        photons: p.photons,
+                        photon_count: p.photon_count,
+                        counters: p.counters,
+                        photon_map: p.photon_map,
                     });
                     self.run(backend, &rec, &mut stats)?;
                     stats.batches += 1;
@@ -519,80 +628,95 @@ impl Sspm {
                     });
                 }
             }
-        }
 
-        // 3. resolve, gather, composite
-        let mut rec = Recording::new();
-        let gather = self.constants.gather_params(cam, &self.settings, 0);
-        if self.photons.is_some() {
+            // 3. resolve, gather, composite
+            let mut rec = Recording::new();
+            let raw = self.raw_image().expect("planned with the photon passes");
             rec.kernel(Kernel::ResolveCaustics {
                 params: deposit_params,
                 gbuffer: self.gbuffer,
-                photon_map: self.photon_map,
-                out: self.images.raw_caustics,
+                photon_map: p.photon_map,
+                out: raw,
             });
-            rec.kernel(Kernel::TileHitDistance {
-                params: gather,
-                photon_map: self.photon_map,
-                tiles: self.tiles,
-            });
-            rec.kernel(Kernel::BilateralGather {
-                params: gather,
-                gbuffer: self.gbuffer,
-                tiles: self.tiles,
-                input: self.images.raw_caustics,
-                out: self.scratch,
-            });
-            rec.kernel(Kernel::BilateralGather {
-                params: GatherParams { axis: 1, ..gather },
-                gbuffer: self.gbuffer,
-                tiles: self.tiles,
-                input: self.scratch,
-                out: self.images.filtered_caustics,
-            });
-        } else {
-            for pass in [
-                "deposit_screen",
-                "resolve_caustics",
-                "tile_hit_distance",
-                "bilateral_gather",
-            ] {
-                stats.skip(pass, "no light emits photons");
+            if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
+                let gather = self.constants.gather_params(cam, &self.settings, 0);
+                rec.kernel(Kernel::TileHitDistance {
+                    params: gather,
+                    photon_map: p.photon_map,
+                    tiles: g.tiles,
+                });
+                rec.kernel(Kernel::BilateralGather {
+                    params: gather,
+                    gbuffer: self.gbuffer,
+                    tiles: g.tiles,
+                    input: raw,
+                    out: g.scratch,
+                });
+                rec.kernel(Kernel::BilateralGather {
+                    params: GatherParams { axis: 1, ..gather },
+                    gbuffer: self.gbuffer,
+                    tiles: g.tiles,
+                    input: g.scratch,
+                    out: filtered,
+                });
+                if let (true, Some(direct), Some(out)) = (
+                    self.plan.needs().composite,
+                    self.direct_image(),
+                    self.images.composite,
+                ) {
+                    rec.kernel(Kernel::Composite {
+                        direct,
+                        caustics: filtered,
+                        out,
+                    });
+                }
             }
-            rec.clear(self.images.raw_caustics);
-            rec.clear(self.images.filtered_caustics);
-        }
-        rec.kernel(Kernel::Composite {
-            direct: self.images.direct,
-            caustics: self.images.filtered_caustics,
-            out: self.images.composite,
-        });
-        self.run(backend, &rec, &mut stats)?;
+            self.run(backend, &rec, &mut stats)?;
 
-        // 4. counters
-        let c = read_buf(backend, self.counters)?;
-        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
-        stats.photons_stored = c[counter::STORED] as u64;
-        stats.photons_deposited = c[counter::DEPOSITED] as u64;
-        stats.discarded.no_specular = c[counter::NO_SPECULAR] as u64;
-        stats.discarded.escaped = c[counter::ESCAPED] as u64;
-        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
-        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
-        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
-        stats.discarded.depth_mismatch = c[counter::DEPTH_MISMATCH] as u64;
-        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
-        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
-        stats.photon_rays_traced = c64(counter::RAYS);
-        for ch in 0..3 {
-            stats.stored_flux[ch] =
-                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.constants.flux_quantum as f64;
+            // 4. counters
+            let c = read_buf(backend, p.counters)?;
+            let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
+            stats.photons_stored = c[counter::STORED] as u64;
+            stats.photons_deposited = c[counter::DEPOSITED] as u64;
+            stats.discarded.no_specular = c[counter::NO_SPECULAR] as u64;
+            stats.discarded.escaped = c[counter::ESCAPED] as u64;
+            stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
+            stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
+            stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
+            stats.discarded.depth_mismatch = c[counter::DEPTH_MISMATCH] as u64;
+            stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
+            stats.fixed_point_saturated = c[counter::SATURATED] as u64;
+            stats.photon_rays_traced = c64(counter::RAYS);
+            for ch in 0..3 {
+                stats.stored_flux[ch] =
+                    c64(counter::STORED_FLUX + 2 * ch) as f64 * self.constants.flux_quantum as f64;
+            }
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = &self.reference {
-            let filtered = self.read_image(backend, self.images.filtered_caustics)?;
+            let filtered = self.read_output(backend, Output::FilteredCaustics)?;
             stats.error = Some(crate::metrics::compare(&filtered, r));
         }
         Ok(stats)
+    }
+
+    /// The direct-light image buffer (also when only the composite needs it).
+    fn direct_image(&self) -> Option<ImageBuf> {
+        self.internal(Output::Direct)
+    }
+
+    fn raw_image(&self) -> Option<ImageBuf> {
+        self.internal(Output::RawCaustics)
+    }
+
+    fn filtered_image(&self) -> Option<ImageBuf> {
+        self.internal(Output::FilteredCaustics)
+    }
+
+    /// An image's buffer whether or not the caller asked for it (the composite needs the
+    /// direct and filtered images): recovered from the buffers the plan created.
+    fn internal(&self, output: Output) -> Option<ImageBuf> {
+        self.image_buffers[output as usize]
     }
 
     fn run(
@@ -607,7 +731,6 @@ impl Sspm {
         Ok(())
     }
 
-    /// Reads one of the frame's images back to the host.
     /// Sets (or clears) the reference image of the caustics (linear radiance, the frame's
     /// size): every later [`Sspm::frame`] reads its filtered caustics back and puts their
     /// error against it in [`FrameStats::error`].
@@ -624,36 +747,37 @@ impl Sspm {
         Ok(())
     }
 
+    /// Reads a device image back to the host.
     pub fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
         let px = read_buf(backend, image)?;
         Ok(Image::new(self.images.width, self.images.height, px))
     }
 
+    /// Reads one of the frame's outputs back. An output the plan knows to be zero (no
+    /// light emits photons) has no device buffer and reads as zeros; one that was not
+    /// requested in [`SspmSettings::outputs`] is an error.
+    pub fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        if !output.requested(&self.settings.outputs) {
+            return Err(Error::InvalidParameter(format!(
+                "output '{}' was not requested (SspmSettings::outputs)",
+                output.stem()
+            )));
+        }
+        match self.images.get(output) {
+            Some(h) => self.read_image(backend, h),
+            None => Ok(Image::new(
+                self.images.width,
+                self.images.height,
+                vec![[0.0; 4]; self.images.width as usize * self.images.height as usize],
+            )),
+        }
+    }
+
     /// Releases every device buffer of this technique.
     pub fn free(self, backend: &mut dyn Backend) -> Result<(), Error> {
         let mut rec = Recording::new();
-        let s = self.scene;
-        rec.free(s.vertices);
-        rec.free(s.triangles);
-        rec.free(s.materials);
-        rec.free(s.lights);
-        rec.free(s.bvh_nodes);
-        rec.free(self.gbuffer);
-        rec.free(self.photon_map);
-        rec.free(self.counters);
-        rec.free(self.tiles);
-        rec.free(self.scratch);
-        for img in [
-            self.images.composite,
-            self.images.direct,
-            self.images.raw_caustics,
-            self.images.filtered_caustics,
-        ] {
-            rec.free(img);
-        }
-        if let Some((p, c)) = self.photons {
-            rec.free(p);
-            rec.free(c);
+        for id in self.owned {
+            rec.steps.push(Step::Free { id });
         }
         backend.execute(&rec)?;
         Ok(())

@@ -51,7 +51,13 @@ pub struct FrameStats {
     /// "host wall clock" or "device timestamps".
     pub timing: String,
     pub passes: Vec<PassStat>,
+    /// Passes the frame plan left out, each with its reason.
     pub skipped: Vec<SkippedPass>,
+    /// Compiled kernel variants the frame ran (`kernel[SWITCH=0/1,...]`).
+    pub variants: Vec<String>,
+    /// The frame plan: every pass with why it runs or not, the lights that emit, the
+    /// scene's material features, the requested outputs and the buffers created.
+    pub plan: Option<crate::plan::FramePlan>,
     pub photons_emitted: u64,
     /// Ray segments traced for photons (every bounce counts).
     pub photon_rays_traced: u64,

@@ -12,6 +12,12 @@
 //!
 //! Random dimensions: bounce 0 dims 0, 1 = grid jitter; bounce b dim 2 = Fresnel choice,
 //! dim 3 = dispersion channel.
+//!
+//! Variants (DESIGN 3): the const generics `DIELECTRIC`, `DISPERSION` and `ABSORPTION`
+//! compile the dielectric, Cauchy-dispersion and Beer-Lambert code in or out, as the
+//! shader ports do with override constants, specialization constants and `-D` defines;
+//! [`trace_photons`] picks the monomorphisation of core's [`TraceVariant`]. A variant
+//! without a feature is only run on scenes without it (the frame plan's guarantee).
 
 use super::Counters;
 use crate::traversal::SceneView;
@@ -19,6 +25,7 @@ use caustica_core::device_scene::spot_falloff;
 use caustica_core::fixed_point::quantize;
 use caustica_core::geometry::offset_ray_origin;
 use caustica_core::gpu::{counter, emission_kind, light_kind, material_kind, Photon, TraceParams};
+use caustica_core::kernels::TraceVariant;
 use caustica_core::optics::{
     beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
 };
@@ -44,7 +51,24 @@ pub enum PathEnd {
     BounceLimit,
 }
 
-pub fn trace_photons(scene: &SceneView, p: &TraceParams) -> TraceResult {
+/// Traces the batch with the monomorphised variant `variant`.
+pub fn trace_photons(scene: &SceneView, p: &TraceParams, variant: TraceVariant) -> TraceResult {
+    match (variant.dielectric, variant.dispersion, variant.absorption) {
+        (false, false, false) => trace_batch::<false, false, false>(scene, p),
+        (false, false, true) => trace_batch::<false, false, true>(scene, p),
+        (false, true, false) => trace_batch::<false, true, false>(scene, p),
+        (false, true, true) => trace_batch::<false, true, true>(scene, p),
+        (true, false, false) => trace_batch::<true, false, false>(scene, p),
+        (true, false, true) => trace_batch::<true, false, true>(scene, p),
+        (true, true, false) => trace_batch::<true, true, false>(scene, p),
+        (true, true, true) => trace_batch::<true, true, true>(scene, p),
+    }
+}
+
+fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(
+    scene: &SceneView,
+    p: &TraceParams,
+) -> TraceResult {
     const CHUNK: u32 = 4096;
     let chunks = p.count.div_ceil(CHUNK);
     let parts: Vec<(Vec<Photon>, Counters)> = (0..chunks)
@@ -53,7 +77,12 @@ pub fn trace_photons(scene: &SceneView, p: &TraceParams) -> TraceResult {
             let mut photons = Vec::new();
             let mut counters = Counters::default();
             for i in c * CHUNK..((c + 1) * CHUNK).min(p.count) {
-                let (end, rays) = trace_photon(scene, p, p.first + i);
+                let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
+                    scene,
+                    p,
+                    p.first + i,
+                    &mut |_, _| {},
+                );
                 counters.words[counter::RAYS] += rays as u64;
                 match end {
                     PathEnd::Stored(ph) => {
@@ -113,15 +142,31 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
     (Vec3::from_slice(&p.origin[..3]), dir, flux * falloff)
 }
 
-/// Traces one photon; returns how it ended and the number of ray segments traced.
-#[inline]
+/// Traces one photon with every feature compiled in; returns how it ended and the number
+/// of ray segments traced.
 pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd, u32) {
-    trace_photon_observed(scene, p, index, &mut |_, _| {})
+    trace_photon_variant::<true, true, true>(scene, p, index, &mut |_, _| {})
 }
 
-/// [`trace_photon`], calling `on_segment(origin, direction)` before each ray segment is
-/// traced (the benchmark uses it to replay exactly the same rays through raw obvhs).
+/// [`trace_photon`] with every feature, calling `on_segment(origin, direction)` before each
+/// ray segment is traced (the benchmark uses it to replay exactly the same rays through
+/// raw obvhs).
 pub fn trace_photon_observed(
+    scene: &SceneView,
+    p: &TraceParams,
+    index: u32,
+    on_segment: &mut impl FnMut(Vec3, Vec3),
+) -> (PathEnd, u32) {
+    trace_photon_variant::<true, true, true>(scene, p, index, on_segment)
+}
+
+/// One photon path of a compiled variant.
+#[inline]
+pub fn trace_photon_variant<
+    const DIELECTRIC: bool,
+    const DISPERSION: bool,
+    const ABSORPTION: bool,
+>(
     scene: &SceneView,
     p: &TraceParams,
     index: u32,
@@ -141,7 +186,7 @@ pub fn trace_photon_observed(
         };
         let (s, m) = scene.surface(&hit);
         let entering = dir.dot(s.geometric_normal) < 0.0;
-        if m.kind == material_kind::DIELECTRIC && !entering {
+        if ABSORPTION && m.kind == material_kind::DIELECTRIC && !entering {
             flux *= beer_lambert(Vec3::from_slice(&m.absorption[..3]), hit.t);
         }
         match m.kind {
@@ -168,9 +213,9 @@ pub fn trace_photon_observed(
                 };
                 dir = reflect(dir, n).normalize();
             }
-            _ => {
+            _ if DIELECTRIC => {
                 let mut ior = m.ior;
-                if m.cauchy_b != 0.0 {
+                if DISPERSION && m.cauchy_b != 0.0 {
                     let c = match channel {
                         Some(c) => c,
                         None => {
@@ -195,6 +240,8 @@ pub fn trace_photon_observed(
                 )
                 .direction;
             }
+            // not compiled in: the plan never runs this variant on a dielectric
+            _ => {}
         }
         if flux.max_element() < min_power || flux.max_element() <= 0.0 {
             return (PathEnd::Negligible, bounce + 1);

@@ -2,7 +2,7 @@
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
-use caustica::{open_backend, Scene, Sspm, SspmSettings};
+use caustica::{open_backend, Output, Scene, Sspm, SspmSettings};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -298,15 +298,13 @@ fn run(cli: Cli) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             bar.finish_and_clear();
             std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-            let imgs = sspm.images();
-            for (name, handle) in [
-                ("composite", imgs.composite),
-                ("caustics_raw", imgs.raw_caustics),
-                ("caustics_filtered", imgs.filtered_caustics),
-                ("direct", imgs.direct),
-            ] {
+            for output in Output::ALL
+                .into_iter()
+                .filter(|o| o.requested(&sspm.settings().outputs))
+            {
+                let name = output.stem();
                 let img = sspm
-                    .read_image(be.as_mut(), handle)
+                    .read_output(be.as_mut(), output)
                     .map_err(|e| e.to_string())?;
                 write_exr(&out.join(format!("{}_{name}.exr", scene.name)), &img)?;
                 if name == "composite" {
