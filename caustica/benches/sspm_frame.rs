@@ -3,15 +3,26 @@
 //! warm-up frame, and the DESIGN 9 budget line trace + deposit + gather (resolve, tiles
 //! and both bilateral passes). Device timestamps where the backend has them.
 //!
+//! Then `plain` (no caster, issue 8): the host wall time of a whole Sspm frame, whose plan
+//! runs only the G-buffer and direct light, against a recording of those two kernels
+//! alone on the same backend, medians with their min..max spread: the frame plan's
+//! overhead must be within that noise.
+//!
 //! `cargo bench -p caustica --bench sspm_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS=wgpu,vulkan` (default: every backend that opens
 //! here), `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZE=WxH`,
 //! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048).
 
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica_core::device_scene::DeviceScene;
+use caustica_core::gpu::GpuCamera;
+use caustica_core::recording::{Kernel, Recording};
 use caustica_core::scene::builtin::builtin;
-use caustica_core::{Sspm, SspmSettings};
+use caustica_core::scene::Scene;
+use caustica_core::sspm::FrameConstants;
+use caustica_core::{Backend, Sspm, SspmSettings};
 use std::collections::BTreeMap;
+use std::time::Instant;
 
 /// The passes of DESIGN 9's "trace + store + gather" budget.
 const BUDGET_PASSES: &[&str] = &[
@@ -116,5 +127,91 @@ fn main() {
             }
             let _ = sspm.free(backend.as_mut());
         }
+        let mut plain = builtin("plain").expect("built-in scene");
+        plain.camera.width = w;
+        plain.camera.height = h;
+        match plain_against_direct(backend.as_mut(), &plain, frames) {
+            Ok(((mut f, fs), (mut d, ds))) => println!(
+                "\n{name} / plain: Sspm frame {:.3} ms [{:.3}..{:.3}], G-buffer + direct light \
+                 alone {:.3} ms [{:.3}..{:.3}] (host wall, median [min..max] of {frames})",
+                median(&mut f),
+                fs.0,
+                fs.1,
+                median(&mut d),
+                ds.0,
+                ds.1
+            ),
+            Err(e) => println!("{name} / plain: {e}"),
+        }
     }
+}
+
+type Times = (Vec<f64>, (f64, f64));
+
+fn spread(v: Vec<f64>) -> Times {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(0.0, f64::max);
+    (v, (lo, hi))
+}
+
+/// Host wall times (ms) of `frames` Sspm frames of `scene` and of as many executions of
+/// a recording with only `primary_gbuffer` and `direct_light`, each after a warm-up.
+fn plain_against_direct(
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    frames: usize,
+) -> Result<(Times, Times), caustica_core::Error> {
+    let settings = SspmSettings::default();
+    let mut sspm = Sspm::new(backend, scene, settings.clone())?;
+    let mut frame = Vec::new();
+    for i in 0..=frames {
+        let ms = sspm.frame(backend, &mut |_| {})?.frame_ms;
+        if i > 0 {
+            frame.push(ms);
+        }
+    }
+    sspm.free(backend)?;
+
+    let ds = DeviceScene::build(scene);
+    let mut setup = Recording::new();
+    let args = ds.record_upload(&mut setup);
+    let camera = GpuCamera::from_camera(&scene.camera);
+    let pixels = camera.width * camera.height;
+    let gbuffer = setup.create(pixels, "gbuffer");
+    let out = setup.create(pixels, "direct image");
+    backend.execute(&setup)?;
+    let mut rec = Recording::new();
+    rec.kernel(Kernel::PrimaryGbuffer {
+        scene: args,
+        camera,
+        gbuffer,
+    });
+    rec.kernel(Kernel::DirectLight {
+        scene: args,
+        params: FrameConstants::direct_params(camera, scene.lights.len() as u32, &settings),
+        gbuffer,
+        out,
+    });
+    let mut direct = Vec::new();
+    for i in 0..=frames {
+        let t0 = Instant::now();
+        backend.execute(&rec)?;
+        if i > 0 {
+            direct.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    let mut free = Recording::new();
+    for id in [
+        args.vertices.id,
+        args.triangles.id,
+        args.materials.id,
+        args.lights.id,
+    ] {
+        free.steps.push(caustica_core::recording::Step::Free { id });
+    }
+    free.free(args.bvh_nodes);
+    free.free(gbuffer);
+    free.free(out);
+    backend.execute(&free)?;
+    Ok((spread(frame), spread(direct)))
 }

@@ -105,3 +105,58 @@ fn exported_scene_loads_back() {
     );
     assert!(out_dir.join("stats.json").exists());
 }
+
+/// `stats.json` of the `plain` scene (no caster) lists the passes that ran and those the
+/// frame plan skipped, each with its reason (issue 8).
+#[test]
+fn stats_json_lists_passes_run_and_skipped_with_reasons() {
+    let out_dir = std::env::temp_dir().join(format!("caustica-plain-{}", std::process::id()));
+    let out = caustica(&[
+        "render",
+        "--scene",
+        "plain",
+        "--photons",
+        "16x16",
+        "--size",
+        "32x18",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(out_dir.join("stats.json")).expect("stats.json");
+    let doc: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
+    let stats = &doc["stats"];
+    let names = |key: &str| -> Vec<String> {
+        stats[key]
+            .as_array()
+            .unwrap_or_else(|| panic!("stats.{key} is not a list: {text}"))
+            .iter()
+            .map(|p| p["name"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let ran = names("passes");
+    assert!(ran.contains(&"primary_gbuffer".to_string()), "{ran:?}");
+    assert!(ran.contains(&"direct_light".to_string()), "{ran:?}");
+    assert!(!ran.contains(&"trace_photons".to_string()), "{ran:?}");
+    for p in stats["skipped"].as_array().unwrap() {
+        assert!(!p["reason"].as_str().unwrap().is_empty(), "{p}");
+    }
+    assert!(names("skipped").contains(&"trace_photons".to_string()));
+    let plan = stats["plan"]["passes"]
+        .as_array()
+        .expect("stats.plan.passes");
+    assert!(plan.len() >= 8, "{plan:?}");
+    for p in plan {
+        assert!(
+            p["runs"].is_boolean() && !p["reason"].as_str().unwrap().is_empty(),
+            "{p}"
+        );
+    }
+    // the caustic images of a frame without caustics are still written (zeros)
+    assert!(out_dir.join("plain_caustics_filtered.exr").exists());
+    let _ = std::fs::remove_dir_all(&out_dir);
+}

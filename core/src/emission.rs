@@ -280,3 +280,82 @@ pub fn emission_domain(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ball() -> Aabb {
+        Aabb {
+            min: Vec3::splat(-0.5),
+            max: Vec3::splat(0.5),
+        }
+    }
+
+    fn spot(direction: Vec3, outer_angle_deg: f32) -> Light {
+        Light::Spot {
+            position: Vec3::new(0.0, 4.0, 0.0),
+            direction,
+            intensity: Vec3::ONE,
+            inner_angle_deg: 0.5 * outer_angle_deg,
+            outer_angle_deg,
+        }
+    }
+
+    #[test]
+    fn spot_aimed_away_from_the_casters_emits_nothing() {
+        let scene = ball().union(Aabb {
+            min: Vec3::splat(-5.0),
+            max: Vec3::splat(5.0),
+        });
+        let e = emission_domain(
+            &spot(Vec3::Y, 30.0),
+            ball(),
+            scene,
+            PointEmission::CasterCone,
+        );
+        assert_eq!(e, Err(NoEmission::MissesCasters));
+        // with pruning off it emits its outer cone
+        let d = unpruned_domain(&spot(Vec3::Y, 30.0), scene).unwrap();
+        assert!((d.cos_max - 30f32.to_radians().cos()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn wide_spot_emits_only_into_the_caster_cone() {
+        let scene = ball();
+        let d = emission_domain(
+            &spot(-Vec3::Y, 80.0),
+            ball(),
+            scene,
+            PointEmission::CasterCone,
+        )
+        .unwrap();
+        // caster sphere radius sqrt(3)/2 at distance 4
+        let want = (1.0 - (0.75f32 / 16.0)).sqrt();
+        assert!((d.cos_max - want).abs() < 1e-6, "{}", d.cos_max);
+        assert!((d.flux.x - cone_solid_angle(want)).abs() < 1e-6);
+        // a narrow spot keeps its own cone
+        let d = emission_domain(
+            &spot(-Vec3::Y, 5.0),
+            ball(),
+            scene,
+            PointEmission::CasterCone,
+        )
+        .unwrap();
+        assert!((d.cos_max - 5f32.to_radians().cos()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn projection_volume_away_from_the_casters_emits_nothing() {
+        let light = Light::Directional {
+            direction: -Vec3::Y,
+            irradiance: Vec3::ONE,
+            projection_volume: Some(Aabb {
+                min: Vec3::splat(2.0),
+                max: Vec3::splat(3.0),
+            }),
+        };
+        let e = emission_domain(&light, ball(), ball(), PointEmission::CasterCone);
+        assert_eq!(e, Err(NoEmission::MissesCasters));
+    }
+}
