@@ -8,7 +8,8 @@
 //!   paths diverge where they really do. The tolerances must absorb that;
 //! - a backend with a real but small fault fails the comparison that covers the kernel:
 //!   depth written as distance, 3% of the photons lost, photon flux 2% low, one fixed-point
-//!   unit lost per texel, radiance 1e-4 high, one ulp in the composite, and so on.
+//!   unit lost per texel, radiance 1e-4 high, one ulp in the composite, a photon kernel
+//!   that ignores its compiled variant switches, and so on.
 
 use caustica_conformance::compare::{
     self, builtin_small, check_composite, check_deposit, check_direct, check_frame, check_gather,
@@ -49,6 +50,9 @@ enum Mutation {
     DirectHigh,
     /// `composite` one ulp off in one channel.
     CompositeUlp,
+    /// `trace_photons` runs a compiled variant without dispersion and absorption, whatever
+    /// the frame plan asked for (a backend that ignores the variant switches).
+    VariantWithoutFeatures,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -265,6 +269,14 @@ impl Backend for Mutant {
             if self.mutation == Mutation::UlpNoise {
                 Self::perturb(&mut step);
             }
+            if let (
+                Mutation::VariantWithoutFeatures,
+                Step::Kernel(Kernel::TracePhotons { variant, .. }),
+            ) = (self.mutation, &mut step)
+            {
+                variant.dispersion = false;
+                variant.absorption = false;
+            }
             let one = Recording {
                 steps: vec![step.clone()],
             };
@@ -380,6 +392,28 @@ fn each_fault_fails_the_check_of_its_kernel() {
         if !passed.is_empty() {
             missed.push(format!("{mutation:?} passed {kernel} on {passed:?}"));
         }
+    }
+    // A backend that ignores the variant's switches fails trace_photons on the scenes
+    // whose features it drops: the absorbing jelly and the dispersive prism.
+    let variant_cases: Vec<_> = kernel_cases()
+        .into_iter()
+        .filter(|(n, _, _)| n == "jelly" || n == "prism")
+        .collect();
+    assert_eq!(variant_cases.len(), 2, "jelly and prism are kernel cases");
+    let mut report = Report::new("trace_photons");
+    let mut cand = Mutant::candidate(Mutation::VariantWithoutFeatures);
+    check_kernel_cases(
+        &mut report,
+        &mut reference,
+        &mut cand,
+        &variant_cases,
+        check("trace_photons"),
+    );
+    let passed = report.passed_cases();
+    if !passed.is_empty() {
+        missed.push(format!(
+            "VariantWithoutFeatures passed trace_photons on {passed:?}"
+        ));
     }
     // Lost photons also fail the whole-frame comparison.
     let mut cand = Mutant::candidate(Mutation::DropPhotons);
