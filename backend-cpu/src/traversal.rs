@@ -1,13 +1,62 @@
-//! Ray queries on the host: obvhs CWBVH traversal over core's flattened node array, with
-//! core's `intersect_triangle` as the leaf test (the same function the shader ports
-//! mirror). Triangles are in BVH leaf order, so a leaf's primitive index is the triangle.
+//! Ray queries on the host: obvhs CWBVH traversal (its `traverse!` loop) over core's
+//! flattened node array, with core's `intersect_triangle` as the leaf test (the same
+//! function the shader ports mirror). Triangles are in BVH leaf order, so a leaf's
+//! primitive index is the triangle.
+//!
+//! The node test is [`node_hits`], obvhs's `intersect_ray_basic` with one change: a child
+//! box is entered when its exit distance is >= 0 (`CWBVH_T_MIN`), where obvhs clamps the
+//! entry distance to its `EPSILON = 1e-4` and so culls every box closer than 1e-4 scene
+//! units. That lost whole hits in scenes at 1e-4 scale (issue 7, `scale-1e-4`). The
+//! OpenCL and WGSL traversals (`cwbvh_node_hits`) make the same test.
 
 use caustica_core::backend::BackendError;
 use caustica_core::geometry::{intersect_triangle, surface_point, SurfacePoint};
 use caustica_core::gpu::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
-use glam::{Vec3, Vec3A};
+// `UVec2`: named by obvhs's `traverse!` macro at its call site.
+use glam::{UVec2, Vec3, Vec3A};
+use obvhs::cwbvh::node::extract_byte64;
 use obvhs::cwbvh::{node::CwBvhNode, CwBvh};
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
+
+/// Smallest exit distance of a child box that is entered (scene units): 0, i.e. boxes
+/// behind the ray origin are culled, and nothing else (obvhs: 1e-4).
+pub const CWBVH_T_MIN: f32 = 0.0;
+
+/// Hit mask of `node`'s children for `ray` (obvhs's `CwBvhNode::intersect_ray_basic` with
+/// the entry clamp [`CWBVH_T_MIN`]): inner children set a bit in the top byte at their
+/// octant-ordered slot, leaves their unary primitive count in the low 24 bits.
+#[inline(always)]
+pub fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
+    let adj_dir_inv = node.compute_extent() * ray.inv_direction;
+    let adj_origin = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    let (rdx, rdy, rdz) = (
+        ray.direction.x < 0.0,
+        ray.direction.y < 0.0,
+        ray.direction.z < 0.0,
+    );
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut hit_mask = 0;
+    for child in 0..8 {
+        let pick = |neg: bool, lo: &[u8; 8], hi: &[u8; 8]| {
+            if neg {
+                (hi[child] as f32, lo[child] as f32)
+            } else {
+                (lo[child] as f32, hi[child] as f32)
+            }
+        };
+        let (x0, x1) = pick(rdx, &node.child_min_x, &node.child_max_x);
+        let (y0, y1) = pick(rdy, &node.child_min_y, &node.child_max_y);
+        let (z0, z1) = pick(rdz, &node.child_min_z, &node.child_max_z);
+        let tmin3 = Vec3A::new(x0, y0, z0) * adj_dir_inv + adj_origin;
+        let tmax3 = Vec3A::new(x1, y1, z1) * adj_dir_inv + adj_origin;
+        let tmin = tmin3.max_element().max(CWBVH_T_MIN);
+        let tmax = tmax3.min_element().min(ray.tmax);
+        if tmin <= tmax {
+            hit_mask |= extract_byte64(child_bits8, child) << extract_byte64(bit_index8, child);
+        }
+    }
+    hit_mask
+}
 
 /// Borrowed view of a prepared scene.
 pub struct SceneView<'a> {
@@ -72,27 +121,30 @@ impl SceneView<'_> {
         if self.bvh.nodes.is_empty() {
             return None;
         }
-        let ray = traversal_ray(origin, dir, t_max);
-        let mut hit = RayHit::none();
-        let (mut u, mut v) = (0.0, 0.0);
-        let found = self.bvh.ray_traverse(ray, &mut hit, |r, prim| {
-            let (a, b, c) = self.tri(prim as u32);
-            match intersect_triangle(origin, dir, a, b, c, 0.0, r.tmax) {
-                Some(h) => {
-                    u = h.u;
-                    v = h.v;
-                    h.t
+        let mut ray = traversal_ray(origin, dir, t_max);
+        let mut best: Option<Hit> = None;
+        let mut state = self.bvh.new_traversal(ray.direction);
+        let mut node;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            node_hits(node, &ray, state.oct_inv4),
+            {
+                let prim = state.primitive_id;
+                let (a, b, c) = self.tri(prim);
+                if let Some(h) = intersect_triangle(origin, dir, a, b, c, 0.0, ray.tmax) {
+                    ray.tmax = h.t;
+                    best = Some(Hit {
+                        t: h.t,
+                        triangle: prim,
+                        u: h.u,
+                        v: h.v,
+                    });
                 }
-                None => f32::INFINITY,
             }
-        });
-        // `u, v` belong to the last accepted (closest) hit: obvhs only lowers tmax.
-        found.then_some(Hit {
-            t: hit.t,
-            triangle: hit.primitive_id,
-            u,
-            v,
-        })
+        );
+        best
     }
 
     /// True when something lies on the ray before `t_max`.
@@ -101,10 +153,23 @@ impl SceneView<'_> {
             return false;
         }
         let ray = traversal_ray(origin, dir, t_max);
-        !self.bvh.ray_traverse_miss(ray, |r, prim| {
-            let (a, b, c) = self.tri(prim as u32);
-            intersect_triangle(origin, dir, a, b, c, 0.0, r.tmax).map_or(f32::INFINITY, |h| h.t)
-        })
+        let mut hit = false;
+        let mut state = self.bvh.new_traversal(ray.direction);
+        let mut node;
+        obvhs::traverse!(
+            self.bvh,
+            node,
+            state,
+            node_hits(node, &ray, state.oct_inv4),
+            {
+                let (a, b, c) = self.tri(state.primitive_id);
+                if intersect_triangle(origin, dir, a, b, c, 0.0, ray.tmax).is_some() {
+                    hit = true;
+                    break;
+                }
+            }
+        );
+        hit
     }
 
     /// Surface at a hit.

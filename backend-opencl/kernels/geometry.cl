@@ -27,21 +27,14 @@ inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, 
     return false;
 }
 
-inline float offset_component(float pc, float nc) {
-    const float ORIGIN = 1.0f / 32.0f;
-    const float FLOAT_SCALE = 1.0f / 65536.0f;
-    const float INT_SCALE = 256.0f;
-    // Rust's `as i32` saturates; |INT_SCALE * nc| <= 256 here.
-    int of_i = (int)(INT_SCALE * nc);
-    int bits = as_int(pc);
-    // wrapping integer add, as Rust's `wrapping_add`
-    float moved = as_float((int)((uint)bits + (uint)(pc < 0.0f ? -of_i : of_i)));
-    return fabs(pc) < ORIGIN ? pc + FLOAT_SCALE * nc : moved;
-}
+// Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.
+#define OFFSET_REL (1.0f / 32768.0f)
+#define OFFSET_MIN_SCALE 7.888609e-31f
 
 inline float3 offset_ray_origin(float3 p, float3 n) {
-    return (float3)(offset_component(p.x, n.x), offset_component(p.y, n.y),
-                    offset_component(p.z, n.z));
+    float m = fmax(fmax(fabs(p.x), fabs(p.y)), fmax(fabs(p.z), OFFSET_MIN_SCALE));
+    float d = m * OFFSET_REL;
+    return p + n * d;
 }
 
 typedef struct {

@@ -8,8 +8,10 @@
 // traversal, so both find the same closest hit; triangles are stored in leaf order, so
 // a primitive index is a triangle index. Mirrors backend-cpu/src/traversal.rs.
 
-// obvhs's cull epsilon: a child box is entered only where t >= 1e-4.
-#define CWBVH_EPSILON 0.0001f
+// Child boxes are entered where their exit t >= CWBVH_T_MIN = 0. obvhs clamps the entry t
+// to 1e-4 (its EPSILON), which culls every box closer than 1e-4 units: whole scenes at
+// 1e-4 scale lost their hits (issue 7). Mirrors backend-cpu/src/traversal.rs.
+#define CWBVH_T_MIN 0.0f
 #define TRAVERSAL_STACK_SIZE 32
 
 typedef struct {
@@ -75,7 +77,7 @@ inline uint cwbvh_node_hits(__global const uint4* nodes, uint index, float3 orig
         float hi_z = (float)byte_of(rdz ? min_z : max_z, child);
         float3 tmin3 = (float3)(lo_x, lo_y, lo_z) * adj_dir_inv + adj_origin;
         float3 tmax3 = (float3)(hi_x, hi_y, hi_z) * adj_dir_inv + adj_origin;
-        float tmin = fmax(fmax(fmax(tmin3.x, tmin3.y), tmin3.z), CWBVH_EPSILON);
+        float tmin = fmax(fmax(fmax(tmin3.x, tmin3.y), tmin3.z), CWBVH_T_MIN);
         float tmax = fmin(fmin(fmin(tmax3.x, tmax3.y), tmax3.z), t_max);
         if (tmin <= tmax) {
             hit_mask |= byte_of(child_bits8, child) << byte_of(bit_index8, child);

@@ -7,6 +7,7 @@
 //! every tolerance argued (used by `tests/cross_backend.rs`).
 
 pub mod compare;
+pub mod stiff;
 pub mod strategies;
 
 use caustica_core::{Backend, Output, Scene, Sspm, SspmSettings};

@@ -51,26 +51,39 @@ pub fn intersect_triangle(
     }
 }
 
-/// Scale-aware ray origin offset (Waechter and Binder, Ray Tracing Gems ch. 6): moves
-/// `p` off the surface with geometric normal `n` (pointing to the side the new ray
-/// leaves from) by a fixed number of float ULPs, so that it works at every scene scale;
-/// near the origin, where ULPs are tiny, a small absolute offset is used instead.
+/// Relative size of the ray origin offset: `2^-15` of the point's largest coordinate, i.e.
+/// 256 ulps of it (`ulp(m) <= m 2^-23`).
+pub const OFFSET_REL: f32 = 1.0 / 32768.0;
+
+/// Smallest coordinate scale the offset uses (`2^-100`), so that a point exactly at the
+/// origin still moves (by `2^-115`, a normal f32).
+pub const OFFSET_MIN_SCALE: f32 = 7.888_609e-31;
+
+/// Scale-aware ray origin offset: moves `p` off the surface with unit geometric normal `n`
+/// (pointing to the side the new ray leaves from) by `OFFSET_REL * m`, where `m` is the
+/// largest magnitude among `p`'s coordinates.
+///
+/// Why: a hit point interpolated from a triangle's vertices, or found by a ray from an
+/// origin of similar magnitude, is off the surface by a few ulps of the coordinates
+/// involved, i.e. a few `m 2^-23` in *every* component (the barycentrics' errors spread
+/// along the edges). Waechter and Binder (Ray Tracing Gems ch. 6) offset each component by
+/// 256 ulps of itself, but below a fixed `1/32` they switch to a fixed absolute `1/65536`:
+/// that assumes unit-size scenes, and at 1e-4 units it moved origins by 30% of a 5e-5 ball
+/// (issue 7's `scale-1e-4` case). Here the whole offset scales with the point: rounding
+/// the sum `p + n d` errs by at most `ulp(m) / 2` per component, `< 2^-8 d` along `n`, so
+/// the origin always leaves the surface by nearly `d`, at every scale from 2^-100 to 2^127.
+/// The cost: on a surface far from the origin whose own coordinate is small (a floor at
+/// y = 0.5 seen at x = 1e6) the offset is 256 ulps of the *large* coordinate, more than
+/// that surface's own error needs; features smaller than `2^-15 |p|` cannot be resolved
+/// there (f32 itself only resolves `2^-23 |p|`).
 #[inline]
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-    let off = |pc: f32, nc: f32| -> f32 {
-        let of_i = (INT_SCALE * nc) as i32;
-        let bits = pc.to_bits() as i32;
-        let moved = f32::from_bits(bits.wrapping_add(if pc < 0.0 { -of_i } else { of_i }) as u32);
-        if pc.abs() < ORIGIN {
-            pc + FLOAT_SCALE * nc
-        } else {
-            moved
-        }
-    };
-    Vec3::new(off(p.x, n.x), off(p.y, n.y), off(p.z, n.z))
+    let m =
+        p.x.abs()
+            .max(p.y.abs())
+            .max(p.z.abs().max(OFFSET_MIN_SCALE));
+    let d = m * OFFSET_REL;
+    p + n * d
 }
 
 /// A point on a triangle, interpolated from its vertices (world space).
@@ -200,12 +213,16 @@ mod tests {
 
     #[test]
     fn offset_moves_to_the_normal_side_at_every_scale() {
-        for &s in &[1e-4f32, 1.0, 1e5, 1e6] {
+        let n = Vec3::new(0.0, 0.6, 0.8);
+        for &s in &[1e-30f32, 1e-4, 1.0, 1e5, 1e6, 1e30] {
             let p = Vec3::new(s, -s, 0.3 * s);
-            let n = Vec3::new(0.0, 1.0, 0.0);
             let o = offset_ray_origin(p, n);
-            assert!(o.y > p.y, "scale {s}");
-            assert!((o.y - p.y) <= 1e-3 * s.max(1.0), "scale {s}: {}", o.y - p.y);
+            let along = (o - p).dot(n);
+            // Moves by the stated amount (within the sum's rounding), relative to the scale.
+            assert!(along > 0.99 * OFFSET_REL * s, "scale {s}: {along}");
+            assert!(along < 1.01 * OFFSET_REL * s, "scale {s}: {along}");
         }
+        let o = offset_ray_origin(Vec3::ZERO, Vec3::Y);
+        assert!(o.y > 0.0 && o.y.is_normal());
     }
 }

@@ -30,21 +30,15 @@ bool intersect_triangle(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float 
     return false;
 }
 
-precise float offset_component(float pc, float nc) {
-    const float ORIGIN = 1.0 / 32.0;
-    const float FLOAT_SCALE = 1.0 / 65536.0;
-    const float INT_SCALE = 256.0;
-    // Rust's `as i32` saturates; |INT_SCALE * nc| <= 256 here, so int() is exact.
-    int of_i = int(INT_SCALE * nc);
-    int bits = floatBitsToInt(pc);
-    // wrapping integer add, as Rust's `wrapping_add` (GLSL int addition wraps)
-    float moved = intBitsToFloat(bits + (pc < 0.0 ? -of_i : of_i));
-    return abs(pc) < ORIGIN ? pc + FLOAT_SCALE * nc : moved;
-}
+// Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.
+const float OFFSET_REL = 1.0 / 32768.0;
+const float OFFSET_MIN_SCALE = 7.888609e-31;
 
 vec3 offset_ray_origin(vec3 p, vec3 n) {
-    return vec3(offset_component(p.x, n.x), offset_component(p.y, n.y),
-                offset_component(p.z, n.z));
+    float m = max(max(abs(p.x), abs(p.y)), max(abs(p.z), OFFSET_MIN_SCALE));
+    precise float d = m * OFFSET_REL;
+    precise vec3 o = p + n * d;
+    return o;
 }
 
 struct SurfacePoint {

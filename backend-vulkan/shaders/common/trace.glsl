@@ -8,8 +8,8 @@
 //   t = 0 counts here and not on the CPU (kernels offset ray origins off surfaces, so it
 //   does not arise), and so does one exactly at t_max;
 // - the driver's watertight triangle test rounds t, u and v its own way (and may decide
-//   hits on an edge or vertex differently); the software traversal's 1e-4 box-cull
-//   epsilon has no counterpart;
+//   hits on an edge or vertex differently); like the software traversal (which no
+//   longer has obvhs's 1e-4 box-cull epsilon), it culls no box in front of the origin;
 // - "no t_max" (OpenCL's INFINITY) is NO_T_MAX = f32::MAX: traceRayEXT needs finite values.
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;

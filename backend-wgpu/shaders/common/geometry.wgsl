@@ -38,24 +38,14 @@ fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3
     return false;
 }
 
-fn offset_component(pc: f32, nc: f32) -> f32 {
-    const ORIGIN: f32 = 1.0f / 32.0f;
-    const FLOAT_SCALE: f32 = 1.0f / 65536.0f;
-    const INT_SCALE: f32 = 256.0f;
-    // Rust's `as i32` saturates; |INT_SCALE * nc| <= 256 here, so i32() is exact.
-    let of_i = i32(INT_SCALE * nc);
-    let bits = bitcast<i32>(pc);
-    // wrapping integer add, as Rust's `wrapping_add`
-    let moved = bitcast<f32>(bitcast<u32>(bits) + bitcast<u32>(select(of_i, -of_i, pc < 0.0)));
-    if (abs(pc) < ORIGIN) {
-        return pc + FLOAT_SCALE * nc;
-    }
-    return moved;
-}
+// Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.
+const OFFSET_REL: f32 = 1.0f / 32768.0f;
+const OFFSET_MIN_SCALE: f32 = 7.888609e-31f;
 
 fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(offset_component(p.x, n.x), offset_component(p.y, n.y),
-                     offset_component(p.z, n.z));
+    let m = max(max(abs(p.x), abs(p.y)), max(abs(p.z), OFFSET_MIN_SCALE));
+    let d = m * OFFSET_REL;
+    return p + n * d;
 }
 
 struct SurfacePoint {

@@ -13,8 +13,10 @@
 // node count is arrayLength(&nodes) / 5, 0 for the host's 16-byte dummy), `vertices`
 // and `triangles`.
 
-// obvhs's cull epsilon: a child box is entered only where t >= 1e-4.
-const CWBVH_EPSILON: f32 = 0.0001f;
+// Child boxes are entered where their exit t >= CWBVH_T_MIN = 0. obvhs clamps the entry t
+// to 1e-4 (its EPSILON), which culls every box closer than 1e-4 units: whole scenes at
+// 1e-4 scale lost their hits (issue 7). Mirrors backend-cpu/src/traversal.rs.
+const CWBVH_T_MIN: f32 = 0.0f;
 const TRAVERSAL_STACK_SIZE: u32 = 32u;
 const FLT_EPSILON: f32 = 0x1p-23f;
 
@@ -102,7 +104,7 @@ fn cwbvh_node_hits(index: u32, origin: vec3<f32>, dir: vec3<f32>, inv_dir: vec3<
         let hi_z = f32(select(byte_of(nz.z, nz.w, child), byte_of(nz.x, nz.y, child), rdz));
         let tmin3 = vec3<f32>(lo_x, lo_y, lo_z) * adj_dir_inv + adj_origin;
         let tmax3 = vec3<f32>(hi_x, hi_y, hi_z) * adj_dir_inv + adj_origin;
-        let tmin = max(max(max(tmin3.x, tmin3.y), tmin3.z), CWBVH_EPSILON);
+        let tmin = max(max(max(tmin3.x, tmin3.y), tmin3.z), CWBVH_T_MIN);
         let tmax = min(min(min(tmax3.x, tmax3.y), tmax3.z), t_max);
         if (tmin <= tmax) {
             let m = byte_of(n1.z, n1.w, child);

@@ -82,7 +82,12 @@ fn flat_vertex_normals(positions: &[Vec3], indices: &[[u32; 3]]) -> Vec<Vec3> {
 
 /// Parallelogram from `origin` spanned by `du`, `dv`, normal `du x dv`, own vertices.
 fn quad(m: &mut TriangleMesh, origin: Vec3, du: Vec3, dv: Vec3) {
-    let n = du.cross(dv).normalize_or(Vec3::Y);
+    // Unit edges first, so that tiny quads (|du x dv|^2 below f32's range) keep their
+    // normal.
+    let n = du
+        .normalize_or_zero()
+        .cross(dv.normalize_or_zero())
+        .normalize_or(Vec3::Y);
     let base = m.positions.len() as u32;
     for (s, t) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
         m.positions.push(origin + s * du + t * dv);

@@ -202,7 +202,11 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 c.finite3(&format!("{sp}.center"), *center);
                 if c.finite3(&format!("{sp}.u"), *u)
                     && c.finite3(&format!("{sp}.v"), *v)
-                    && u.cross(*v).length_squared() == 0.0
+                    // unit vectors first: at 1e-10 units |u x v|^2 underflows to 0
+                    && u.normalize_or_zero()
+                        .cross(v.normalize_or_zero())
+                        .length_squared()
+                        == 0.0
                 {
                     c.fail(&sp, "u and v span no area");
                 }
