@@ -1,27 +1,53 @@
-// Mirror of core/src/geometry.rs: Moller-Trumbore, the scale-aware ray offset
-// (Waechter and Binder) and surface interpolation.
+// Mirror of core/src/geometry.rs: the watertight ray-triangle test, the scale-aware ray
+// origin offset and surface interpolation.
 
 typedef struct { float t; float u; float v; } TriangleHit;
 
+// Component k (0, 1, 2) of v: OpenCL C cannot index a vector at run time.
+inline float component3(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+
+// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
+// core::geometry::intersect_triangle, operation by operation (FP_CONTRACT is off).
 inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, float3 v2,
                                float t_min, float t_max, TriangleHit* hit) {
-    float3 e1 = v1 - v0;
-    float3 e2 = v2 - v0;
-    float3 p = cross3(dir, e2);
-    float det = dot3(e1, p);
+    float3 ad = fabs(dir);
+    int kz = (ad.x >= ad.y && ad.x >= ad.z) ? 0 : (ad.y >= ad.z ? 1 : 2);
+    int kx = (kz + 1) % 3;
+    int ky = (kx + 1) % 3;
+    float dz = component3(dir, kz);
+    if (dz < 0.0f) {
+        int k = kx;
+        kx = ky;
+        ky = k;
+    }
+    if (!(dz != 0.0f)) return false;
+    float sx = component3(dir, kx) / dz;
+    float sy = component3(dir, ky) / dz;
+    float sz = 1.0f / dz;
+    float3 a = v0 - origin;
+    float3 b = v1 - origin;
+    float3 c = v2 - origin;
+    float ax = component3(a, kx) - sx * component3(a, kz);
+    float ay = component3(a, ky) - sy * component3(a, kz);
+    float bx = component3(b, kx) - sx * component3(b, kz);
+    float by = component3(b, ky) - sy * component3(b, kz);
+    float cx = component3(c, kx) - sx * component3(c, kz);
+    float cy = component3(c, ky) - sy * component3(c, kz);
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
+    float det = u + v + w;
     if (det == 0.0f || !isfinite(det)) return false;
+    float az = sz * component3(a, kz);
+    float bz = sz * component3(b, kz);
+    float cz = sz * component3(c, kz);
     float inv_det = 1.0f / det;
-    float3 s = origin - v0;
-    float u = dot3(s, p) * inv_det;
-    if (!(u >= 0.0f && u <= 1.0f)) return false;
-    float3 q = cross3(s, e1);
-    float v = dot3(dir, q) * inv_det;
-    if (v < 0.0f || u + v > 1.0f) return false;
-    float t = dot3(e2, q) * inv_det;
+    float t = (u * az + v * bz + w * cz) * inv_det;
     if (t > t_min && t < t_max) {
         hit->t = t;
-        hit->u = u;
-        hit->v = v;
+        hit->u = v * inv_det;
+        hit->v = w * inv_det;
         return true;
     }
     return false;

@@ -13,8 +13,22 @@ pub struct TriangleHit {
     pub v: f32,
 }
 
-/// Moller-Trumbore ray-triangle intersection, two-sided. Returns a hit with
-/// `t_min < t < t_max`. Degenerate (zero-area) triangles never hit: their determinant is 0.
+/// Watertight ray-triangle intersection (Woop, Benthin and Wald, "Watertight
+/// Ray/Triangle Intersection", JCGT 2013), two-sided. Returns a hit with
+/// `t_min < t < t_max`.
+///
+/// The ray is made the +z axis of a sheared frame: `kz` is the direction's largest
+/// component, `kx`, `ky` the next two (swapped when `dir[kz] < 0` to keep the winding),
+/// and each vertex relative to the origin is sheared to `(x - Sx z, y - Sy z)` with
+/// `Sx = dir[kx] / dir[kz]`, `Sy = dir[ky] / dir[kz]`. The 2-D edge functions `U, V, W` of
+/// those points are the unnormalised barycentrics of `v0, v1, v2`; the ray hits when they
+/// share a sign (zero counts as either). Two triangles sharing an edge compute that edge's
+/// function from the same two sheared vertices with the operands swapped, so the values
+/// are exact negations (no fused multiply-add anywhere, in Rust or in the ports) and no
+/// ray passes between them: the property the Moller-Trumbore test lacked (a photon could
+/// slip through a floor's diagonal). Zero-area triangles never hit (`U + V + W = 0`); the
+/// paper's double-precision recomputation of zero edge functions is left out (WGSL has no
+/// f64), so a ray exactly through an edge hits both triangles, which keeps it watertight.
 #[inline]
 pub fn intersect_triangle(
     origin: Vec3,
@@ -25,27 +39,55 @@ pub fn intersect_triangle(
     t_min: f32,
     t_max: f32,
 ) -> Option<TriangleHit> {
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let p = dir.cross(e2);
-    let det = e1.dot(p);
+    let ad = dir.abs();
+    let kz = if ad.x >= ad.y && ad.x >= ad.z {
+        0
+    } else if ad.y >= ad.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if dir[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    if !(dir[kz] != 0.0) {
+        return None;
+    }
+    let sx = dir[kx] / dir[kz];
+    let sy = dir[ky] / dir[kz];
+    let sz = 1.0 / dir[kz];
+    let a = v0 - origin;
+    let b = v1 - origin;
+    let c = v2 - origin;
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
     if det == 0.0 || !det.is_finite() {
         return None;
     }
+    let az = sz * a[kz];
+    let bz = sz * b[kz];
+    let cz = sz * c[kz];
     let inv_det = 1.0 / det;
-    let s = origin - v0;
-    let u = s.dot(p) * inv_det;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = dir.dot(q) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv_det;
+    let t = (u * az + v * bz + w * cz) * inv_det;
     if t > t_min && t < t_max {
-        Some(TriangleHit { t, u, v })
+        Some(TriangleHit {
+            t,
+            u: v * inv_det,
+            v: w * inv_det,
+        })
     } else {
         None
     }

@@ -1,30 +1,52 @@
-// Mirror of core/src/geometry.rs and backend-opencl/kernels/geometry.cl: Moller-Trumbore,
-// the scale-aware ray offset (Waechter and Binder) and surface interpolation. The ray
+// Mirror of core/src/geometry.rs and backend-opencl/kernels/geometry.cl: the watertight
+// ray-triangle test, the scale-aware ray origin offset and surface interpolation. The ray
 // tracing kernels let the hardware intersect triangles (trace.glsl); intersect_triangle
 // is kept for side-by-side reading and for kernels that test one triangle.
 
 struct TriangleHit { float t; float u; float v; };
 
+// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
+// core::geometry::intersect_triangle (the hardware's own triangle test is watertight too).
 bool intersect_triangle(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float t_min,
                         float t_max, out TriangleHit hit) {
-    precise vec3 e1 = v1 - v0;
-    precise vec3 e2 = v2 - v0;
-    vec3 p = cross3(dir, e2);
-    float det = dot3(e1, p);
+    vec3 ad = abs(dir);
+    int kz = (ad.x >= ad.y && ad.x >= ad.z) ? 0 : (ad.y >= ad.z ? 1 : 2);
+    int kx = (kz + 1) % 3;
+    int ky = (kx + 1) % 3;
+    float dz = dir[kz];
+    if (dz < 0.0) {
+        int k = kx;
+        kx = ky;
+        ky = k;
+    }
+    if (!(dz != 0.0)) return false;
+    precise float sx = dir[kx] / dz;
+    precise float sy = dir[ky] / dz;
+    precise float sz = 1.0 / dz;
+    precise vec3 a = v0 - origin;
+    precise vec3 b = v1 - origin;
+    precise vec3 c = v2 - origin;
+    precise float ax = a[kx] - sx * a[kz];
+    precise float ay = a[ky] - sy * a[kz];
+    precise float bx = b[kx] - sx * b[kz];
+    precise float by = b[ky] - sy * b[kz];
+    precise float cx = c[kx] - sx * c[kz];
+    precise float cy = c[ky] - sy * c[kz];
+    precise float u = cx * by - cy * bx;
+    precise float v = ax * cy - ay * cx;
+    precise float w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
+    precise float det = u + v + w;
     if (det == 0.0 || !is_finite(det)) return false;
+    precise float az = sz * a[kz];
+    precise float bz = sz * b[kz];
+    precise float cz = sz * c[kz];
     precise float inv_det = 1.0 / det;
-    precise vec3 s = origin - v0;
-    precise float u = dot3(s, p) * inv_det;
-    if (!(u >= 0.0 && u <= 1.0)) return false;
-    vec3 q = cross3(s, e1);
-    precise float v = dot3(dir, q) * inv_det;
-    precise float u_plus_v = u + v;
-    if (v < 0.0 || u_plus_v > 1.0) return false;
-    precise float t = dot3(e2, q) * inv_det;
+    precise float t = (u * az + v * bz + w * cz) * inv_det;
     if (t > t_min && t < t_max) {
         hit.t = t;
-        hit.u = u;
-        hit.v = v;
+        hit.u = v * inv_det;
+        hit.v = w * inv_det;
         return true;
     }
     return false;

@@ -1,5 +1,5 @@
-// Mirror of core/src/geometry.rs and backend-opencl/kernels/geometry.cl: Moller-Trumbore,
-// the scale-aware ray offset (Waechter and Binder) and surface interpolation.
+// Mirror of core/src/geometry.rs and backend-opencl/kernels/geometry.cl: the watertight
+// ray-triangle test, the scale-aware ray origin offset and surface interpolation.
 
 struct TriangleHit {
     t: f32,
@@ -7,32 +7,60 @@ struct TriangleHit {
     v: f32,
 }
 
+// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
+// core::geometry::intersect_triangle, operation by operation.
 fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3<f32>,
                       v2: vec3<f32>, t_min: f32, t_max: f32,
                       hit: ptr<function, TriangleHit>) -> bool {
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let p = cross3(dir, e2);
-    let det = dot3(e1, p);
+    let ad = abs(dir);
+    var kz = 2;
+    if (ad.x >= ad.y && ad.x >= ad.z) {
+        kz = 0;
+    } else if (ad.y >= ad.z) {
+        kz = 1;
+    }
+    var kx = (kz + 1) % 3;
+    var ky = (kx + 1) % 3;
+    let dz = dir[kz];
+    if (dz < 0.0) {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    if (!(dz != 0.0)) {
+        return false;
+    }
+    let sx = dir[kx] / dz;
+    let sy = dir[ky] / dz;
+    let sz = 1.0 / dz;
+    let a = v0 - origin;
+    let b = v1 - origin;
+    let c = v2 - origin;
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return false;
+    }
+    let det = u + v + w;
     if (det == 0.0 || !is_finite_f32(det)) {
         return false;
     }
+    let az = sz * a[kz];
+    let bz = sz * b[kz];
+    let cz = sz * c[kz];
     let inv_det = 1.0 / det;
-    let s = origin - v0;
-    let u = dot3(s, p) * inv_det;
-    if (!(u >= 0.0 && u <= 1.0)) {
-        return false;
-    }
-    let q = cross3(s, e1);
-    let v = dot3(dir, q) * inv_det;
-    if (v < 0.0 || u + v > 1.0) {
-        return false;
-    }
-    let t = dot3(e2, q) * inv_det;
+    let t = (u * az + v * bz + w * cz) * inv_det;
     if (t > t_min && t < t_max) {
         (*hit).t = t;
-        (*hit).u = u;
-        (*hit).v = v;
+        (*hit).u = v * inv_det;
+        (*hit).v = w * inv_det;
         return true;
     }
     return false;
