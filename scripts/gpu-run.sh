@@ -17,7 +17,8 @@ if [ "${1:-}" = "--build" ]; then
     cp target/release/examples/backend_diff .devbin/
     for spec in "caustica-opencl:device_layout" "caustica-conformance:cross_backend" \
                 "caustica-conformance:cpu_reference" "caustica-conformance:optics_closed_form" \
-                "caustica-vulkan:vulkan_backend"; do
+                "caustica-vulkan:vulkan_backend" "caustica-conformance:frame_plan" \
+                "caustica-conformance:stiff_cases"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
@@ -31,17 +32,20 @@ if [ "${1:-}" = "--build" ]; then
     done
     cargo build --release -p caustica-wgpu --example embed_headless
     cp target/release/examples/embed_headless .devbin/
+    cargo build --release -p caustica-conformance --example stiff_table
+    cp target/release/examples/stiff_table .devbin/
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
-          .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend
+          .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend .devbin/frame_plan \
+          .devbin/stiff_cases .devbin/stiff_table
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
     (cd .devbin && ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
     du -sh .devbin
     exit 0
 fi
 
-# Sections to run (default: all): opencl wgpu vulkan frames
-SECTIONS=${*:-opencl wgpu vulkan frames}
+# Sections to run (default: all): opencl wgpu vulkan plan stiff frames
+SECTIONS=${*:-opencl wgpu vulkan plan stiff frames}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
 B=$PWD/.devbin
@@ -80,9 +84,17 @@ if has wgpu; then
 fi
 if has vulkan; then
     run ./vulkan_backend
-    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend
+    # the parallel run is known to hang NVIDIA's driver (see the issue notes): bounded
+    run timeout 60 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
     run ./backend_diff 960x540 512x512
+fi
+if has plan; then
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./frame_plan --test-threads=1
+fi
+if has stiff; then
+    run timeout 400 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1 --include-ignored
+    run timeout 300 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_table "$OUT/stability-gpu.md" --heavy
 fi
 if has frames; then
     run env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
