@@ -1,5 +1,6 @@
 //! Ray queries on the host: obvhs CWBVH traversal (its `traverse!` loop) over core's
-//! flattened node array, with core's `intersect_triangle` as the leaf test (the same
+//! flattened node array, with core's watertight `intersect_triangle` (its per-ray part `WatertightRay` set up once
+//! per ray) as the leaf test (the same
 //! function the shader ports mirror). Triangles are in BVH leaf order, so a leaf's
 //! primitive index is the triangle.
 //!
@@ -10,7 +11,7 @@
 //! OpenCL and WGSL traversals (`cwbvh_node_hits`) make the same test.
 
 use caustica_core::backend::BackendError;
-use caustica_core::geometry::{intersect_triangle, surface_point, SurfacePoint};
+use caustica_core::geometry::{surface_point, SurfacePoint, WatertightRay};
 use caustica_core::gpu::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
 // `UVec2`: named by obvhs's `traverse!` macro at its call site.
 use glam::{UVec2, Vec3, Vec3A};
@@ -25,33 +26,43 @@ pub const CWBVH_T_MIN: f32 = 0.0;
 /// Hit mask of `node`'s children for `ray` (obvhs's `CwBvhNode::intersect_ray_basic` with
 /// the entry clamp [`CWBVH_T_MIN`]): inner children set a bit in the top byte at their
 /// octant-ordered slot, leaves their unary primitive count in the low 24 bits.
+/// The (near, far) quantized bounds of one axis for a ray whose direction is negative
+/// (`neg`) or not along it.
+#[inline(always)]
+fn axis<'a>(neg: bool, lo: &'a [u8; 8], hi: &'a [u8; 8]) -> (&'a [u8; 8], &'a [u8; 8]) {
+    if neg {
+        (hi, lo)
+    } else {
+        (lo, hi)
+    }
+}
+
 #[inline(always)]
 pub fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
-    let adj_dir_inv = node.compute_extent() * ray.inv_direction;
-    let adj_origin = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
-    let (rdx, rdy, rdz) = (
-        ray.direction.x < 0.0,
-        ray.direction.y < 0.0,
-        ray.direction.z < 0.0,
-    );
+    let scale = node.compute_extent() * ray.inv_direction;
+    let offset = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    // Per axis, the quantized child bounds the ray meets first (near) and last (far).
+    let (near_x, far_x) = axis(ray.direction.x < 0.0, &node.child_min_x, &node.child_max_x);
+    let (near_y, far_y) = axis(ray.direction.y < 0.0, &node.child_min_y, &node.child_max_y);
+    let (near_z, far_z) = axis(ray.direction.z < 0.0, &node.child_min_z, &node.child_max_z);
+    // The eight slab tests as straight-line array code (the compiler vectorises it);
+    // the same operations, in the same order, as the OpenCL and WGSL `cwbvh_node_hits`.
+    let mut entered = [false; 8];
+    for child in 0..8 {
+        let tmin = (near_x[child] as f32 * scale.x + offset.x)
+            .max(near_y[child] as f32 * scale.y + offset.y)
+            .max(near_z[child] as f32 * scale.z + offset.z)
+            .max(CWBVH_T_MIN);
+        let tmax = (far_x[child] as f32 * scale.x + offset.x)
+            .min(far_y[child] as f32 * scale.y + offset.y)
+            .min(far_z[child] as f32 * scale.z + offset.z)
+            .min(ray.tmax);
+        entered[child] = tmin <= tmax;
+    }
     let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
     let mut hit_mask = 0;
-    for child in 0..8 {
-        let pick = |neg: bool, lo: &[u8; 8], hi: &[u8; 8]| {
-            if neg {
-                (hi[child] as f32, lo[child] as f32)
-            } else {
-                (lo[child] as f32, hi[child] as f32)
-            }
-        };
-        let (x0, x1) = pick(rdx, &node.child_min_x, &node.child_max_x);
-        let (y0, y1) = pick(rdy, &node.child_min_y, &node.child_max_y);
-        let (z0, z1) = pick(rdz, &node.child_min_z, &node.child_max_z);
-        let tmin3 = Vec3A::new(x0, y0, z0) * adj_dir_inv + adj_origin;
-        let tmax3 = Vec3A::new(x1, y1, z1) * adj_dir_inv + adj_origin;
-        let tmin = tmin3.max_element().max(CWBVH_T_MIN);
-        let tmax = tmax3.min_element().min(ray.tmax);
-        if tmin <= tmax {
+    for (child, e) in entered.into_iter().enumerate() {
+        if e {
             hit_mask |= extract_byte64(child_bits8, child) << extract_byte64(bit_index8, child);
         }
     }
@@ -121,6 +132,7 @@ impl SceneView<'_> {
         if self.bvh.nodes.is_empty() {
             return None;
         }
+        let watertight = WatertightRay::new(origin, dir)?;
         let mut ray = traversal_ray(origin, dir, t_max);
         let mut best: Option<Hit> = None;
         let mut state = self.bvh.new_traversal(ray.direction);
@@ -133,7 +145,7 @@ impl SceneView<'_> {
             {
                 let prim = state.primitive_id;
                 let (a, b, c) = self.tri(prim);
-                if let Some(h) = intersect_triangle(origin, dir, a, b, c, 0.0, ray.tmax) {
+                if let Some(h) = watertight.intersect(a, b, c, 0.0, ray.tmax) {
                     ray.tmax = h.t;
                     best = Some(Hit {
                         t: h.t,
@@ -152,6 +164,9 @@ impl SceneView<'_> {
         if self.bvh.nodes.is_empty() {
             return false;
         }
+        let Some(watertight) = WatertightRay::new(origin, dir) else {
+            return false;
+        };
         let ray = traversal_ray(origin, dir, t_max);
         let mut hit = false;
         let mut state = self.bvh.new_traversal(ray.direction);
@@ -163,7 +178,7 @@ impl SceneView<'_> {
             node_hits(node, &ray, state.oct_inv4),
             {
                 let (a, b, c) = self.tri(state.primitive_id);
-                if intersect_triangle(origin, dir, a, b, c, 0.0, ray.tmax).is_some() {
+                if watertight.intersect(a, b, c, 0.0, ray.tmax).is_some() {
                     hit = true;
                     break;
                 }

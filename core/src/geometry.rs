@@ -39,57 +39,92 @@ pub fn intersect_triangle(
     t_min: f32,
     t_max: f32,
 ) -> Option<TriangleHit> {
-    let ad = dir.abs();
-    let kz = if ad.x >= ad.y && ad.x >= ad.z {
-        0
-    } else if ad.y >= ad.z {
-        1
-    } else {
-        2
-    };
-    let mut kx = (kz + 1) % 3;
-    let mut ky = (kx + 1) % 3;
-    if dir[kz] < 0.0 {
-        std::mem::swap(&mut kx, &mut ky);
-    }
-    if !(dir[kz] != 0.0) {
-        return None;
-    }
-    let sx = dir[kx] / dir[kz];
-    let sy = dir[ky] / dir[kz];
-    let sz = 1.0 / dir[kz];
-    let a = v0 - origin;
-    let b = v1 - origin;
-    let c = v2 - origin;
-    let ax = a[kx] - sx * a[kz];
-    let ay = a[ky] - sy * a[kz];
-    let bx = b[kx] - sx * b[kz];
-    let by = b[ky] - sy * b[kz];
-    let cx = c[kx] - sx * c[kz];
-    let cy = c[ky] - sy * c[kz];
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-        return None;
-    }
-    let det = u + v + w;
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let az = sz * a[kz];
-    let bz = sz * b[kz];
-    let cz = sz * c[kz];
-    let inv_det = 1.0 / det;
-    let t = (u * az + v * bz + w * cz) * inv_det;
-    if t > t_min && t < t_max {
-        Some(TriangleHit {
-            t,
-            u: v * inv_det,
-            v: w * inv_det,
+    WatertightRay::new(origin, dir)?.intersect(v0, v1, v2, t_min, t_max)
+}
+
+/// The per-ray part of [`intersect_triangle`], computed once for every triangle a ray is
+/// tested against (the CPU traversal): the permutation `(kx, ky, kz)` and the shear
+/// `(Sx, Sy, Sz)`. Results are bitwise those of [`intersect_triangle`].
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay {
+    origin: Vec3,
+    k: [usize; 3],
+    shear: [f32; 3],
+}
+
+impl WatertightRay {
+    /// `None` for a zero (or NaN) direction, which hits nothing.
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3) -> Option<WatertightRay> {
+        let ad = dir.abs();
+        let kz = if ad.x >= ad.y && ad.x >= ad.z {
+            0
+        } else if ad.y >= ad.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        let d = dir.to_array();
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        if !(d[kz] != 0.0) {
+            return None;
+        }
+        Some(WatertightRay {
+            origin,
+            k: [kx, ky, kz],
+            shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
         })
-    } else {
-        None
+    }
+
+    /// The hit with triangle `v0, v1, v2` in `t_min < t < t_max`, if any.
+    #[inline]
+    pub fn intersect(
+        &self,
+        v0: Vec3,
+        v1: Vec3,
+        v2: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.shear;
+        let a = (v0 - self.origin).to_array();
+        let b = (v1 - self.origin).to_array();
+        let c = (v2 - self.origin).to_array();
+        let ax = a[kx] - sx * a[kz];
+        let ay = a[ky] - sy * a[kz];
+        let bx = b[kx] - sx * b[kz];
+        let by = b[ky] - sy * b[kz];
+        let cx = c[kx] - sx * c[kz];
+        let cy = c[ky] - sy * c[kz];
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let az = sz * a[kz];
+        let bz = sz * b[kz];
+        let cz = sz * c[kz];
+        let inv_det = 1.0 / det;
+        let t = (u * az + v * bz + w * cz) * inv_det;
+        if t > t_min && t < t_max {
+            Some(TriangleHit {
+                t,
+                u: v * inv_det,
+                v: w * inv_det,
+            })
+        } else {
+            None
+        }
     }
 }
 
