@@ -26,6 +26,9 @@ struct DeviceBuffer {
     bytes: u64,
 }
 
+/// Largest single fill command (bytes): 1 GiB.
+const FILL_CHUNK: usize = 1 << 30;
+
 /// The OpenCL backend.
 pub struct OpenClBackend {
     state: Arc<DeviceState>,
@@ -155,18 +158,27 @@ impl OpenClBackend {
         Ok(())
     }
 
+    /// Zeroes `size` bytes of `mem`, in fills of at most [`FILL_CHUNK`] bytes: NVIDIA's
+    /// OpenCL faults (CL_NV_INVALID_MEM_ACCESS) filling a 4 GiB buffer in one command
+    /// (seen with the 8192x8192 G-buffer, issue 7).
     fn fill_zero(&self, mem: &Mem, size: usize) -> Result<(), BackendError> {
-        core::enqueue_fill_buffer(
-            &self.queue,
-            mem,
-            0u8,
-            0,
-            size,
-            None::<Event>,
-            None::<&mut Event>,
-            None,
-        )
-        .map_err(cl_error("clearing a buffer"))
+        let mut offset = 0;
+        while offset < size {
+            let n = (size - offset).min(FILL_CHUNK);
+            core::enqueue_fill_buffer(
+                &self.queue,
+                mem,
+                0u8,
+                offset,
+                n,
+                None::<Event>,
+                None::<&mut Event>,
+                None,
+            )
+            .map_err(cl_error("clearing a buffer"))?;
+            offset += n;
+        }
+        Ok(())
     }
 
     fn buffer(&self, id: ResourceId) -> Result<&DeviceBuffer, BackendError> {

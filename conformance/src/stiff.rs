@@ -39,13 +39,13 @@
 //!   ~1.5e-23 and ~5e8 scene units^2.
 
 use crate::compare::{self, divergence_allowance, relative_l2, Frame, Verdict};
-use caustica_core::backend::Backend;
+use caustica_core::backend::{Backend, BackendError};
 use caustica_core::footprint::{pixel_footprint, pixel_surface_area};
-use caustica_core::gpu::{camera_ray, gbuffer_flags, GpuCamera};
+use caustica_core::gpu::{camera_ray, gbuffer_flags, GBufferTexel, GpuCamera};
 use caustica_core::optics::fresnel_dielectric;
 use caustica_core::scene::builtin;
 use caustica_core::scene::{Aabb, Light, Material, Object, Scene, Shape};
-use caustica_core::SspmSettings;
+use caustica_core::{Sspm, SspmSettings};
 use glam::Vec3;
 
 /// One stiff case: what it is, what must hold, and how to run it on a backend.
@@ -145,7 +145,7 @@ pub fn catalogue() -> Vec<StiffCase> {
     v.push(StiffCase {
         group: "degenerate",
         name: "image-8192x8192",
-        expectation: "8192x8192 image of a cheap scene: finite, bounded",
+        expectation: "8192x8192 image of a cheap scene: finite, bounded; where the device binds less than the 4 GiB G-buffer (NVIDIA Vulkan: 2^32 - 1 bytes), Sspm::new returns OutOfMemory naming it",
         run: image_8192,
         heavy: true,
     });
@@ -1274,6 +1274,26 @@ fn cheap_scene((w, h): (u32, u32)) -> Scene {
 fn image_8192(b: &mut dyn Backend) -> Result<Outcome, String> {
     let scene = cheap_scene((8192, 8192));
     let mut v = Verdict::new("8192^2");
+    // The G-buffer of 8192^2 pixels is 64 B x 2^26 = 2^32 bytes. A device whose largest
+    // buffer or storage binding is smaller (NVIDIA's Vulkan: maxStorageBufferRange =
+    // 2^32 - 1) must refuse the frame in `Sspm::new` with OutOfMemory naming the buffer
+    // and the limit: a typed error, never a panic or an out-of-range binding.
+    let gbuffer_bytes = 8192u64 * 8192 * std::mem::size_of::<GBufferTexel>() as u64;
+    let largest = b.capabilities().max_buffer_bytes;
+    if gbuffer_bytes > largest {
+        return match Sspm::new(b, &scene, settings(64)) {
+            Err(caustica_core::Error::Backend(BackendError::OutOfMemory { bytes, what })) => {
+                v.check(bytes == gbuffer_bytes && what.contains("gbuffer"), || {
+                    format!("OutOfMemory for {bytes} bytes of '{what}', not the G-buffer")
+                });
+                outcome(format!("OutOfMemory: G-buffer {bytes} B > {largest} B"), v)
+            }
+            Err(e) => Err(format!("expected OutOfMemory for the G-buffer, got: {e}")),
+            Ok(_) => Err(format!(
+                "a {gbuffer_bytes}-byte G-buffer was accepted by a device binding {largest} bytes"
+            )),
+        };
+    }
     // No cpu comparison frame here (it would double the ~10 GiB of frame buffers).
     let (stats, imgs) = crate::render(b, &scene, settings(64), 8192, 8192);
     for (i, im) in imgs.iter().enumerate() {

@@ -315,3 +315,75 @@ fn assert_same_frame(backend: &str, scene: &str, a: &Run, b: &Run) {
         );
     }
 }
+
+/// A backend whose device binds at most `max` bytes per buffer (the CPU otherwise), and
+/// that counts the recordings it executes.
+struct Limited {
+    inner: caustica_cpu::CpuBackend,
+    max: u64,
+    executed: usize,
+}
+
+impl Backend for Limited {
+    fn name(&self) -> &'static str {
+        "limited"
+    }
+    fn capabilities(&self) -> caustica_core::Capabilities {
+        caustica_core::Capabilities {
+            max_buffer_bytes: self.max,
+            ..self.inner.capabilities()
+        }
+    }
+    fn kernels(&self) -> Vec<&'static str> {
+        self.inner.kernels()
+    }
+    fn execute(
+        &mut self,
+        r: &caustica_core::recording::Recording,
+    ) -> Result<Vec<caustica_core::backend::PassTime>, caustica_core::BackendError> {
+        self.executed += 1;
+        self.inner.execute(r)
+    }
+    fn read(
+        &mut self,
+        id: caustica_core::recording::ResourceId,
+    ) -> Result<Vec<u8>, caustica_core::BackendError> {
+        self.inner.read(id)
+    }
+    fn variants(&self) -> Vec<String> {
+        self.inner.variants()
+    }
+}
+
+/// A planned buffer larger than the device's largest buffer (or storage binding) is a
+/// typed OutOfMemory error from `Sspm::new` naming that buffer, before anything is
+/// uploaded: the 8192x8192 G-buffer (2^32 bytes) on NVIDIA's Vulkan (2^32 - 1) is the
+/// real case (`docs/stability.md`).
+#[test]
+fn oversized_buffer_is_a_typed_error_before_any_work() {
+    // large enough that the G-buffer is the largest buffer (the sphere's vertices are
+    // 0.6 MB)
+    let mut scene = small("sphere");
+    scene.camera.width = 640;
+    scene.camera.height = 360;
+    let gbuffer = 640 * 360 * 64;
+    let mut b = Limited {
+        inner: caustica_cpu::CpuBackend::new().unwrap(),
+        max: gbuffer - 1,
+        executed: 0,
+    };
+    match Sspm::new(&mut b, &scene, settings(true)) {
+        Err(caustica_core::Error::Backend(caustica_core::BackendError::OutOfMemory {
+            bytes,
+            what,
+        })) => {
+            assert_eq!(bytes, gbuffer);
+            assert!(what.contains("gbuffer") && what.contains("limited"), "{what}");
+        }
+        Err(e) => panic!("expected OutOfMemory, got {e}"),
+        Ok(_) => panic!("a {gbuffer}-byte G-buffer passed a {}-byte device", gbuffer - 1),
+    }
+    assert_eq!(b.executed, 0, "work was recorded before the error");
+    b.max = gbuffer;
+    assert!(Sspm::new(&mut b, &scene, settings(true)).is_ok());
+}

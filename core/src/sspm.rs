@@ -459,12 +459,25 @@ impl Sspm {
         };
         let mut bytes = 0u64;
         let mut owned = Vec::new();
+        // Every planned buffer must fit the device's largest buffer (and, on wgpu and
+        // Vulkan, its largest storage binding): checked before any work, so that an
+        // oversized frame is a typed error naming the buffer, never an invalid binding.
+        let largest = backend.capabilities().max_buffer_bytes;
         for s in &rec.steps {
             let (id, b, label) = match s {
                 Step::Create { id, bytes, label } => (*id, *bytes, *label),
                 Step::Upload { id, data, label } => (*id, data.len() as u64, *label),
                 _ => continue,
             };
+            if b > largest {
+                return Err(Error::Backend(crate::BackendError::OutOfMemory {
+                    bytes: b,
+                    what: format!(
+                        "{label}: the {} backend's device binds at most {largest} bytes per buffer",
+                        backend.name()
+                    ),
+                }));
+            }
             bytes += b;
             owned.push(id);
             plan.buffers.push(crate::plan::BufferPlan {
