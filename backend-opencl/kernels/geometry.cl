@@ -6,42 +6,58 @@ typedef struct { float t; float u; float v; } TriangleHit;
 // Component k (0, 1, 2) of v: OpenCL C cannot index a vector at run time.
 inline float component3(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 
-// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
-// core::geometry::intersect_triangle, operation by operation (FP_CONTRACT is off).
-inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, float3 v2,
-                               float t_min, float t_max, TriangleHit* hit) {
+// Per-ray part of the watertight test (mirror of core::geometry::WatertightRay): the
+// permutation (kx, ky, kz) and the shear (sx, sy, sz); valid = false for a zero direction.
+typedef struct {
+    float3 origin;
+    int kx, ky, kz;
+    float sx, sy, sz;
+    bool valid;
+} WatertightRay;
+
+inline WatertightRay watertight_ray(float3 origin, float3 dir) {
+    WatertightRay r;
     float3 ad = fabs(dir);
-    int kz = (ad.x >= ad.y && ad.x >= ad.z) ? 0 : (ad.y >= ad.z ? 1 : 2);
-    int kx = (kz + 1) % 3;
-    int ky = (kx + 1) % 3;
-    float dz = component3(dir, kz);
+    r.kz = (ad.x >= ad.y && ad.x >= ad.z) ? 0 : (ad.y >= ad.z ? 1 : 2);
+    r.kx = (r.kz + 1) % 3;
+    r.ky = (r.kx + 1) % 3;
+    float dz = component3(dir, r.kz);
     if (dz < 0.0f) {
-        int k = kx;
-        kx = ky;
-        ky = k;
+        int k = r.kx;
+        r.kx = r.ky;
+        r.ky = k;
     }
-    if (!(dz != 0.0f)) return false;
-    float sx = component3(dir, kx) / dz;
-    float sy = component3(dir, ky) / dz;
-    float sz = 1.0f / dz;
-    float3 a = v0 - origin;
-    float3 b = v1 - origin;
-    float3 c = v2 - origin;
-    float ax = component3(a, kx) - sx * component3(a, kz);
-    float ay = component3(a, ky) - sy * component3(a, kz);
-    float bx = component3(b, kx) - sx * component3(b, kz);
-    float by = component3(b, ky) - sy * component3(b, kz);
-    float cx = component3(c, kx) - sx * component3(c, kz);
-    float cy = component3(c, ky) - sy * component3(c, kz);
+    r.origin = origin;
+    r.valid = dz != 0.0f;
+    r.sx = component3(dir, r.kx) / dz;
+    r.sy = component3(dir, r.ky) / dz;
+    r.sz = 1.0f / dz;
+    return r;
+}
+
+// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
+// core::geometry::WatertightRay::intersect, operation by operation (FP_CONTRACT is off).
+inline bool intersect_watertight(const WatertightRay* r, float3 v0, float3 v1, float3 v2,
+                                 float t_min, float t_max, TriangleHit* hit) {
+    if (!r->valid) return false;
+    float3 a = v0 - r->origin;
+    float3 b = v1 - r->origin;
+    float3 c = v2 - r->origin;
+    float ax = component3(a, r->kx) - r->sx * component3(a, r->kz);
+    float ay = component3(a, r->ky) - r->sy * component3(a, r->kz);
+    float bx = component3(b, r->kx) - r->sx * component3(b, r->kz);
+    float by = component3(b, r->ky) - r->sy * component3(b, r->kz);
+    float cx = component3(c, r->kx) - r->sx * component3(c, r->kz);
+    float cy = component3(c, r->ky) - r->sy * component3(c, r->kz);
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
     float det = u + v + w;
     if (det == 0.0f || !isfinite(det)) return false;
-    float az = sz * component3(a, kz);
-    float bz = sz * component3(b, kz);
-    float cz = sz * component3(c, kz);
+    float az = r->sz * component3(a, r->kz);
+    float bz = r->sz * component3(b, r->kz);
+    float cz = r->sz * component3(c, r->kz);
     float inv_det = 1.0f / det;
     float t = (u * az + v * bz + w * cz) * inv_det;
     if (t > t_min && t < t_max) {
@@ -51,6 +67,13 @@ inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, 
         return true;
     }
     return false;
+}
+
+// One triangle, one ray (core::geometry::intersect_triangle).
+inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, float3 v2,
+                               float t_min, float t_max, TriangleHit* hit) {
+    WatertightRay r = watertight_ray(origin, dir);
+    return intersect_watertight(&r, v0, v1, v2, t_min, t_max, hit);
 }
 
 // Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.

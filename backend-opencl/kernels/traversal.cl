@@ -105,6 +105,7 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                            traversal_component(dir.z));
     float3 inv_dir = (float3)(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z));
     uint oct_inv4 = octant_inv4(tdir);
+    WatertightRay wray = watertight_ray(origin, dir);
     uint2 stack[TRAVERSAL_STACK_SIZE];
     uint sp = 0u;
     uint2 current_group = (uint2)(0u, 0x80000000u);
@@ -119,7 +120,7 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
             float3 a, b, c;
             triangle_positions(vertices, triangles, prim, &a, &b, &c);
             TriangleHit h;
-            if (intersect_triangle(origin, dir, a, b, c, 0.0f, closest, &h) && h.t < closest) {
+            if (intersect_watertight(&wray, a, b, c, 0.0f, closest, &h) && h.t < closest) {
                 found = true;
                 closest = h.t;
                 hit->t = h.t;

@@ -7,11 +7,20 @@ struct TriangleHit {
     v: f32,
 }
 
-// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
-// core::geometry::intersect_triangle, operation by operation.
-fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3<f32>,
-                      v2: vec3<f32>, t_min: f32, t_max: f32,
-                      hit: ptr<function, TriangleHit>) -> bool {
+// Per-ray part of the watertight test (mirror of core::geometry::WatertightRay): the
+// permutation (kx, ky, kz) and the shear (sx, sy, sz); valid = false for a zero direction.
+struct WatertightRay {
+    origin: vec3<f32>,
+    kx: i32,
+    ky: i32,
+    kz: i32,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+    valid: bool,
+}
+
+fn watertight_ray(origin: vec3<f32>, dir: vec3<f32>) -> WatertightRay {
     let ad = abs(dir);
     var kz = 2;
     if (ad.x >= ad.y && ad.x >= ad.z) {
@@ -27,15 +36,26 @@ fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3
         kx = ky;
         ky = k;
     }
-    if (!(dz != 0.0)) {
+    return WatertightRay(origin, kx, ky, kz, dir[kx] / dz, dir[ky] / dz, 1.0 / dz, dz != 0.0);
+}
+
+// Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
+// core::geometry::WatertightRay::intersect, operation by operation.
+fn intersect_watertight(r: ptr<function, WatertightRay>, v0: vec3<f32>, v1: vec3<f32>,
+                        v2: vec3<f32>, t_min: f32, t_max: f32,
+                        hit: ptr<function, TriangleHit>) -> bool {
+    if (!(*r).valid) {
         return false;
     }
-    let sx = dir[kx] / dz;
-    let sy = dir[ky] / dz;
-    let sz = 1.0 / dz;
-    let a = v0 - origin;
-    let b = v1 - origin;
-    let c = v2 - origin;
+    let kx = (*r).kx;
+    let ky = (*r).ky;
+    let kz = (*r).kz;
+    let sx = (*r).sx;
+    let sy = (*r).sy;
+    let sz = (*r).sz;
+    let a = v0 - (*r).origin;
+    let b = v1 - (*r).origin;
+    let c = v2 - (*r).origin;
     let ax = a[kx] - sx * a[kz];
     let ay = a[ky] - sy * a[kz];
     let bx = b[kx] - sx * b[kz];
@@ -64,6 +84,14 @@ fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3
         return true;
     }
     return false;
+}
+
+// One triangle, one ray (core::geometry::intersect_triangle).
+fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3<f32>,
+                      v2: vec3<f32>, t_min: f32, t_max: f32,
+                      hit: ptr<function, TriangleHit>) -> bool {
+    var r = watertight_ray(origin, dir);
+    return intersect_watertight(&r, v0, v1, v2, t_min, t_max, hit);
 }
 
 // Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.

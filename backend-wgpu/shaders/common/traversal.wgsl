@@ -138,6 +138,7 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
                          traversal_component(dir.z));
     let inv_dir = vec3<f32>(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z));
     let oct_inv4 = octant_inv4(tdir);
+    var wray = watertight_ray(origin, dir);
     var stack: array<vec2<u32>, TRAVERSAL_STACK_SIZE>;
     var sp = 0u;
     var current_group = vec2<u32>(0u, 0x80000000u);
@@ -154,7 +155,7 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
             var c: vec3<f32>;
             triangle_positions(prim, &a, &b, &c);
             var h: TriangleHit;
-            if (intersect_triangle(origin, dir, a, b, c, 0.0, closest, &h) && h.t < closest) {
+            if (intersect_watertight(&wray, a, b, c, 0.0, closest, &h) && h.t < closest) {
                 found = true;
                 closest = h.t;
                 (*hit).t = h.t;
