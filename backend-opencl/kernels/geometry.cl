@@ -98,7 +98,7 @@ inline SurfacePoint surface_point(__global const GpuVertex* a, __global const Gp
     float w = 1.0f - u - v;
     float3 pa = load3g(a->position), pb = load3g(b->position), pc = load3g(c->position);
     float3 na = load3g(a->normal), nb = load3g(b->normal), nc = load3g(c->normal);
-    float3 ng = normalize_or(cross3(pb - pa, pc - pa), (float3)(0.0f, 1.0f, 0.0f));
+    float3 ng = normalize_scaled(cross3(pb - pa, pc - pa), (float3)(0.0f, 1.0f, 0.0f));
     float3 n_sum = na + nb + nc;
     if (dot3(ng, n_sum) < 0.0f) ng = -ng;
     float3 ns = normalize_or(w * na + u * nb + v * nc, ng);

@@ -20,6 +20,13 @@ inline float3 normalize_or(float3 a, float3 fallback) {
 // glam's max_element: `if a > b { a } else { b }`, y and z first.
 inline float gt_max(float a, float b) { return a > b ? a : b; }
 inline float max_element3(float3 a) { return gt_max(a.x, gt_max(a.y, a.z)); }
+// core::geometry::normalize_scaled: normalised after division by the largest |component|,
+// so that no squared length is subnormal (flushed to zero on some devices).
+inline float3 normalize_scaled(float3 v, float3 fallback) {
+    float scale = 1.0f / max_element3(fabs(v));
+    if (!(isfinite(scale) && scale > 0.0f)) return fallback;
+    return normalize_or(v * scale, fallback);
+}
 inline bool all_finite3(float3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 // Rust's f32::clamp for ordered bounds (NaN passes through, as in Rust).
 inline float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }

@@ -163,6 +163,21 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     p + n * d
 }
 
+/// `v / |v|`, computed as `w / |w|` with `w = v / max|v_i|` so that the squared length
+/// neither underflows nor overflows; `fallback` for a zero, non-finite or subnormal-sized
+/// `v`. The edge cross product of a triangle 1e-11 across is ~1e-22 per component and its
+/// squared length ~1e-44, a subnormal that devices flushing subnormals to zero (NVIDIA's
+/// Vulkan) turn into 0: the plain normalisation then fell back to +y on such devices only
+/// (issue 7's `near-plane` case).
+#[inline]
+pub fn normalize_scaled(v: Vec3, fallback: Vec3) -> Vec3 {
+    let scale = 1.0 / v.abs().max_element();
+    if !(scale.is_finite() && scale > 0.0) {
+        return fallback;
+    }
+    (v * scale).normalize_or(fallback)
+}
+
 /// A point on a triangle, interpolated from its vertices (world space).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
@@ -195,7 +210,7 @@ pub fn surface_point(
         Vec3::from(b.normal),
         Vec3::from(c.normal),
     );
-    let mut ng = (pb - pa).cross(pc - pa).normalize_or(Vec3::Y);
+    let mut ng = normalize_scaled((pb - pa).cross(pc - pa), Vec3::Y);
     let n_sum = na + nb + nc;
     if ng.dot(n_sum) < 0.0 {
         ng = -ng;

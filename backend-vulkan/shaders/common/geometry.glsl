@@ -76,7 +76,7 @@ SurfacePoint surface_point(GpuVertex a, GpuVertex b, GpuVertex c, float u, float
     vec3 pa = a.position, pb = b.position, pc = c.position;
     vec3 na = a.normal, nb = b.normal, nc = c.normal;
     precise vec3 edge_b = pb - pa, edge_c = pc - pa;
-    vec3 ng = normalize_or(cross3(edge_b, edge_c), vec3(0.0, 1.0, 0.0));
+    vec3 ng = normalize_scaled(cross3(edge_b, edge_c), vec3(0.0, 1.0, 0.0));
     precise vec3 n_sum = na + nb + nc;
     if (dot3(ng, n_sum) < 0.0) ng = -ng;
     precise vec3 ns_interpolated = w * na + u * nb + v * nc;

@@ -23,6 +23,14 @@ precise vec3 normalize_or(vec3 a, vec3 fallback) {
 // glam's max_element: `if a > b { a } else { b }`, y and z first.
 float gt_max(float a, float b) { return a > b ? a : b; }
 float max_element3(vec3 a) { return gt_max(a.x, gt_max(a.y, a.z)); }
+// core::geometry::normalize_scaled: normalised after division by the largest |component|,
+// so that no squared length is subnormal (NVIDIA's Vulkan flushes those to zero).
+vec3 normalize_scaled(vec3 v, vec3 fallback) {
+    precise float scale = 1.0 / max_element3(abs(v));
+    if (!(is_finite(scale) && scale > 0.0)) return fallback;
+    precise vec3 scaled = v * scale;
+    return normalize_or(scaled, fallback);
+}
 bool all_finite3(vec3 a) { return is_finite(a.x) && is_finite(a.y) && is_finite(a.z); }
 // Rust's f32::clamp for ordered bounds (NaN passes through, as in Rust).
 float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }

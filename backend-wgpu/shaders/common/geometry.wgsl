@@ -121,7 +121,7 @@ fn surface_point(a: GpuVertex, b: GpuVertex, c: GpuVertex, u: f32, v: f32) -> Su
     let na = a.normal;
     let nb = b.normal;
     let nc = c.normal;
-    var ng = normalize_or(cross3(pb - pa, pc - pa), vec3<f32>(0.0, 1.0, 0.0));
+    var ng = normalize_scaled(cross3(pb - pa, pc - pa), vec3<f32>(0.0, 1.0, 0.0));
     let n_sum = na + nb + nc;
     if (dot3(ng, n_sum) < 0.0) {
         ng = -ng;

@@ -55,6 +55,16 @@ fn max_element3(a: vec3<f32>) -> f32 {
     return gt_max(a.x, gt_max(a.y, a.z));
 }
 
+// core::geometry::normalize_scaled: normalised after division by the largest |component|,
+// so that no squared length is subnormal (NVIDIA's Vulkan flushes those to zero).
+fn normalize_scaled(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let scale = 1.0 / max_element3(abs(v));
+    if (!(is_finite_f32(scale) && scale > 0.0)) {
+        return fallback;
+    }
+    return normalize_or(v * scale, fallback);
+}
+
 fn all_finite3(a: vec3<f32>) -> bool {
     return is_finite_f32(a.x) && is_finite_f32(a.y) && is_finite_f32(a.z);
 }
