@@ -303,14 +303,7 @@ impl Backend for VulkanBackend {
     }
 
     fn variants(&self) -> Vec<String> {
-        let mut v: Vec<String> = self
-            .pipelines
-            .keys()
-            .filter(|k| k.contains('['))
-            .cloned()
-            .collect();
-        v.sort();
-        v
+        caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
 }
 

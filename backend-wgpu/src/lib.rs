@@ -412,13 +412,6 @@ impl Backend for WgpuBackend {
     }
 
     fn variants(&self) -> Vec<String> {
-        let mut v: Vec<String> = self
-            .pipelines
-            .keys()
-            .filter(|k| k.contains('['))
-            .cloned()
-            .collect();
-        v.sort();
-        v
+        caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
 }

@@ -40,8 +40,8 @@
 
 use crate::compare::{self, divergence_allowance, relative_l2, Frame, Verdict};
 use caustica_core::backend::{Backend, BackendError};
-use caustica_core::footprint::{pixel_footprint, pixel_surface_area};
-use caustica_core::gpu::{camera_ray, gbuffer_flags, GBufferTexel, GpuCamera};
+use caustica_core::footprint::gbuffer_pixel_area;
+use caustica_core::gpu::{gbuffer_flags, GBufferTexel, GpuCamera};
 use caustica_core::optics::fresnel_dielectric;
 use caustica_core::scene::builtin;
 use caustica_core::scene::{Aabb, Light, Material, Object, Scene, Shape};
@@ -828,22 +828,8 @@ fn footprint_rule(scene: &Scene, f: &Frame, v: &mut Verdict) -> f64 {
         if g.flags & gbuffer_flags::RECEIVER == 0 || g.albedo[1] == 0.0 {
             continue;
         }
-        let i = i as u32;
-        let ray = camera_ray(&cam, i % cam.width, i / cam.width);
-        let fp = pixel_footprint(
-            g.depth,
-            cam.width,
-            cam.height,
-            cam.tan_half_fov_x,
-            cam.tan_half_fov_y,
-        );
-        let area = pixel_surface_area(
-            fp,
-            ray.dot(Vec3::from(cam.forward)),
-            ray.dot(Vec3::from(g.normal)),
-        ) as f64;
-        let flux =
-            f.raw.pixels[i as usize][1] as f64 * area * std::f64::consts::PI / g.albedo[1] as f64;
+        let area = gbuffer_pixel_area(&cam, i as u32, g) as f64;
+        let flux = f.raw.pixels[i][1] as f64 * area * std::f64::consts::PI / g.albedo[1] as f64;
         if !flux.is_finite() || flux > stored * (1.0 + compare::RESOLVE_REL as f64) {
             bad += 1;
         }

@@ -378,10 +378,16 @@ fn oversized_buffer_is_a_typed_error_before_any_work() {
             what,
         })) => {
             assert_eq!(bytes, gbuffer);
-            assert!(what.contains("gbuffer") && what.contains("limited"), "{what}");
+            assert!(
+                what.contains("gbuffer") && what.contains("limited"),
+                "{what}"
+            );
         }
         Err(e) => panic!("expected OutOfMemory, got {e}"),
-        Ok(_) => panic!("a {gbuffer}-byte G-buffer passed a {}-byte device", gbuffer - 1),
+        Ok(_) => panic!(
+            "a {gbuffer}-byte G-buffer passed a {}-byte device",
+            gbuffer - 1
+        ),
     }
     assert_eq!(b.executed, 0, "work was recorded before the error");
     b.max = gbuffer;

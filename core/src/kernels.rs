@@ -128,3 +128,15 @@ pub fn variant_label(kernel: &str, constants: &[(&'static str, bool)]) -> String
         .collect();
     format!("{kernel}[{}]", parts.join(","))
 }
+
+/// The labels with switches among a pipeline cache's keys, sorted: what a GPU backend's
+/// `Backend::variants` lists.
+pub fn variant_labels<'a>(keys: impl IntoIterator<Item = &'a String>) -> Vec<String> {
+    let mut v: Vec<String> = keys
+        .into_iter()
+        .filter(|k| k.contains('['))
+        .cloned()
+        .collect();
+    v.sort();
+    v
+}

@@ -13,9 +13,9 @@
 
 use super::Counters;
 use caustica_core::fixed_point::{join_u64, quantize};
-use caustica_core::footprint::{pixel_footprint, pixel_surface_area};
+use caustica_core::footprint::gbuffer_pixel_area;
 use caustica_core::gpu::{
-    camera_ray, counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon,
+    counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon,
 };
 use caustica_core::packing::unpack_unit_vector;
 use glam::Vec3;
@@ -101,20 +101,7 @@ pub fn resolve_caustics(
             if n == 0 || g.flags & gbuffer_flags::RECEIVER == 0 {
                 return [0.0; 4];
             }
-            let i = i as u32;
-            let ray = camera_ray(cam, i % cam.width, i / cam.width);
-            let footprint = pixel_footprint(
-                g.depth,
-                cam.width,
-                cam.height,
-                cam.tan_half_fov_x,
-                cam.tan_half_fov_y,
-            );
-            let area = pixel_surface_area(
-                footprint,
-                ray.dot(Vec3::from(cam.forward)),
-                ray.dot(Vec3::from(g.normal)),
-            );
+            let area = gbuffer_pixel_area(cam, i as u32, g);
             let scale = p.flux_quantum as f64 / (std::f64::consts::PI * area as f64);
             let l = |ch: usize| (join_u64(t.flux[ch]) as f64 * scale * g.albedo[ch] as f64) as f32;
             let hit =
