@@ -89,7 +89,7 @@ fn main() {
     let _ = writeln!(
         md,
         "\nProduced by `CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan cargo run --release -p \
-         caustica-conformance --example stiff_table{}` (this machine: 2 cores, PoCL, lavapipe). \
+         caustica-conformance --example stiff_table{}` on the devices listed above. \
          The same catalogue is the test `conformance/tests/stiff_cases.rs`.",
         if heavy_everywhere { " -- --heavy" } else { "" }
     );
