@@ -176,6 +176,19 @@ naming the case and the backend.
   ray/triangle determinant (~ edge^2) leaves f32's normal range: outside the library's
   geometric range, which is also why a pixel footprint below f32's normal range cannot
   receive photons in a representable scene.
+- **Watertight triangle test** (`core::geometry::intersect_triangle`, Woop, Benthin and
+  Wald 2013, in every software port): triangles sharing an edge compute its edge function
+  as exact negations, so no ray passes between them. Moller-Trumbore let photons slip
+  through the 2e6-wide floor's diagonal in `far-plane`, where the hardware-traced Vulkan
+  backend (watertight) disagreed with the others.
+- **Geometric normals** are normalised after division by their largest component
+  (`normalize_scaled`): the edge cross product of a triangle ~1e-11 across has a subnormal
+  squared length, which NVIDIA's Vulkan flushes to zero (`near-plane` failed there only).
+- **Device limits**: every planned buffer is checked against the device's largest buffer
+  and storage binding in `Sspm::new`; a frame that does not fit is a typed `OutOfMemory`
+  naming the buffer. The 8192x8192 G-buffer is 2^32 bytes: NVIDIA's Vulkan binds 2^32 - 1
+  (and wgpu 2 GiB) there, so those two refuse it (`docs/stability-h100.md`); OpenCL fills
+  large buffers in 1 GiB commands (NVIDIA faulted on one 4 GiB fill).
 - Degenerate-size checks (`Scene::validate` for quads, quad tessellation) use unit
   vectors, so they no longer underflow for scenes below ~1e-10 units.
 
