@@ -129,6 +129,18 @@ impl SceneView<'_> {
 
     /// Closest intersection along the unit ray with `0 < t < t_max`.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+        self.traverse(origin, dir, t_max, false)
+    }
+
+    /// True when something lies on the ray before `t_max`.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        self.traverse(origin, dir, t_max, true).is_some()
+    }
+
+    /// The closest hit in `0 < t < t_max`, or with `any_hit` the first one found (as the
+    /// ports' `traverse_cwbvh`).
+    #[inline(always)]
+    fn traverse(&self, origin: Vec3, dir: Vec3, t_max: f32, any_hit: bool) -> Option<Hit> {
         if self.bvh.nodes.is_empty() {
             return None;
         }
@@ -153,38 +165,13 @@ impl SceneView<'_> {
                         u: h.u,
                         v: h.v,
                     });
+                    if any_hit {
+                        break;
+                    }
                 }
             }
         );
         best
-    }
-
-    /// True when something lies on the ray before `t_max`.
-    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        if self.bvh.nodes.is_empty() {
-            return false;
-        }
-        let Some(watertight) = WatertightRay::new(origin, dir) else {
-            return false;
-        };
-        let ray = traversal_ray(origin, dir, t_max);
-        let mut hit = false;
-        let mut state = self.bvh.new_traversal(ray.direction);
-        let mut node;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node_hits(node, &ray, state.oct_inv4),
-            {
-                let (a, b, c) = self.tri(state.primitive_id);
-                if watertight.intersect(a, b, c, 0.0, ray.tmax).is_some() {
-                    hit = true;
-                    break;
-                }
-            }
-        );
-        hit
     }
 
     /// Surface at a hit.
