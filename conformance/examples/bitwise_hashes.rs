@@ -1,0 +1,69 @@
+//! Prints a 64-bit FNV-1a hash of every output image, the G-buffer, the last photon batch
+//! and the photon counters of every built-in scene on every backend found, one line each:
+//! `backend<TAB>device<TAB>scene<TAB>item<TAB>hash`. Refactors that must not change a bit
+//! compare this output before and after (`conformance/baselines/`).
+//!
+//! `cargo run --release -p caustica-conformance --example bitwise_hashes > hashes.tsv`
+
+use caustica_conformance::{backends, small_settings};
+use caustica_core::backend::read_buf;
+use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
+use caustica_core::{Output, Sspm};
+
+/// FNV-1a, 64-bit: stable across Rust versions (std's hasher is not promised to be).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in bytes {
+        h ^= *b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+fn main() {
+    let mut all = backends();
+    for name in BUILTIN_SCENES {
+        let mut scene = builtin(name).expect("built-in scene");
+        scene.camera.width = 320;
+        scene.camera.height = 180;
+        for (bname, backend) in all.iter_mut() {
+            let device = backend.capabilities().device;
+            let settings = caustica_core::SspmSettings {
+                // several batches per light: batching must not change a bit either
+                max_photons_per_batch: 20_000,
+                ..small_settings(256)
+            };
+            let mut s = Sspm::new(backend.as_mut(), &scene, settings).expect("valid scene");
+            let stats = s.frame(backend.as_mut(), &mut |_| {}).expect("frame");
+            let mut line = |item: &str, bytes: &[u8]| {
+                println!("{bname}\t{device}\t{name}\t{item}\t{:016x}", fnv1a(bytes));
+            };
+            for o in Output::ALL {
+                let img = s.read_output(backend.as_mut(), o).expect("read");
+                line(o.stem(), bytemuck::cast_slice(&img.pixels));
+            }
+            let g = read_buf(backend.as_mut(), s.gbuffer()).expect("gbuffer");
+            line("gbuffer", bytemuck::cast_slice(&g));
+            if let Some((p, n)) = s.photon_buffers() {
+                let n = read_buf(backend.as_mut(), n).expect("count")[0] as usize;
+                let p = read_buf(backend.as_mut(), p).expect("photons");
+                line("last_batch_photons", bytemuck::cast_slice(&p[..n.min(p.len())]));
+            }
+            let counters = format!(
+                "{} {} {} {:?} {:?} {:?} {} {} {}",
+                stats.photons_emitted,
+                stats.photons_stored,
+                stats.photons_deposited,
+                stats.discarded,
+                stats.stored_flux,
+                stats.emitted_flux,
+                stats.fixed_point_saturated,
+                stats.fixed_point_underflow,
+                stats.photon_rays_traced,
+            );
+            line("counters", counters.as_bytes());
+            println!("{bname}\t{device}\t{name}\tcounters_text\t{counters}");
+            s.free(backend.as_mut()).expect("free");
+        }
+    }
+}
