@@ -10,8 +10,8 @@
 //! - `raw obvhs, first segments`: only each path's emitted ray (coherent, cheaper), for
 //!   reference.
 
-use caustica_core::device_scene::DeviceScene;
-use caustica_core::emission::{emission_domain, PointEmission};
+use caustica_core::device::device_scene::DeviceScene;
+use caustica_core::frame::emission::{emission_domain, PointEmission};
 use caustica_core::scene::builtin::builtin;
 use caustica_cpu::kernels::trace_photons::{emit_photon, trace_photon_observed, trace_photons};
 use caustica_cpu::traversal::{adopt_bvh, SceneView};
@@ -43,7 +43,7 @@ fn bench(c: &mut Criterion) {
         .unwrap();
         let params = d.trace_params(0, (n, n), (0, n * n), 1, 12, 1e-4, 1e-9);
         // the variant a frame of this scene runs (the frame plan's)
-        let variant = caustica_core::plan::SceneFeatures::of(&scene).trace_variant();
+        let variant = caustica_core::frame::plan::SceneFeatures::of(&scene).trace_variant();
         let tris: Vec<Triangle> = ds
             .triangles
             .iter()

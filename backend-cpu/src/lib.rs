@@ -13,8 +13,11 @@ pub mod kernels;
 mod storage;
 pub mod traversal;
 
+use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::recording::{Kernel, Recording, ResourceId, Step};
+use caustica_core::device::handle::ResourceId;
+use caustica_core::kernels::Kernel;
+use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -60,7 +63,7 @@ impl CpuBackend {
 
     fn run_kernel(&mut self, k: &Kernel) -> Result<(), BackendError> {
         use kernels::*;
-        if let Kernel::PrepareScene { scene } = k {
+        if let Kernel::PrepareScene(PrepareScene { scene }) = k {
             let nodes = self
                 .get(scene.bvh_nodes.id)?
                 .as_slice::<[u32; 4]>(scene.bvh_nodes.len)?;
@@ -71,7 +74,7 @@ impl CpuBackend {
         let bufs = &self.buffers;
         let get = |id: ResourceId| bufs.get(&id).ok_or(BackendError::MissingResource(id));
         let view =
-            |s: &caustica_core::recording::SceneArgs| -> Result<SceneView<'_>, BackendError> {
+            |s: &caustica_core::device::handle::SceneArgs| -> Result<SceneView<'_>, BackendError> {
                 let bvh = self.bvhs.get(&s.bvh_nodes.id).ok_or_else(|| {
                     BackendError::BadArgument("scene used before prepare_scene".into())
                 })?;
@@ -84,33 +87,33 @@ impl CpuBackend {
                 })
             };
         match k {
-            Kernel::PrepareScene { .. } => unreachable!("handled above"),
-            Kernel::PrimaryGbuffer {
+            Kernel::PrepareScene(PrepareScene { .. }) => unreachable!("handled above"),
+            Kernel::PrimaryGbuffer(PrimaryGbuffer {
                 scene,
                 camera,
                 gbuffer,
-            } => {
+            }) => {
                 let out = gbuffer::primary_gbuffer(&view(scene)?, camera);
                 self.put(gbuffer.id, &out)
             }
-            Kernel::DirectLight {
+            Kernel::DirectLight(DirectLight {
                 scene,
                 params,
                 gbuffer,
                 out,
-            } => {
+            }) => {
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
                 let img = direct_light::direct_light(&view(scene)?, params, g);
                 self.put(out.id, &img)
             }
-            Kernel::TracePhotons {
+            Kernel::TracePhotons(TracePhotons {
                 scene,
                 variant,
                 params,
                 photons,
                 photon_count,
                 counters,
-            } => {
+            }) => {
                 let result = trace_photons::trace_photons(&view(scene)?, params, *variant);
                 if result.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(
@@ -127,14 +130,14 @@ impl CpuBackend {
                     .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }
-            Kernel::DepositScreen {
+            Kernel::DepositScreen(DepositScreen {
                 params,
                 gbuffer,
                 photons,
                 photon_count,
                 counters,
                 photon_map,
-            } => {
+            }) => {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
                 let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
@@ -147,44 +150,44 @@ impl CpuBackend {
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }
-            Kernel::ResolveCaustics {
+            Kernel::ResolveCaustics(ResolveCaustics {
                 params,
                 gbuffer,
                 photon_map,
                 out,
-            } => {
+            }) => {
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
                 let m = get(photon_map.id)?.as_slice(photon_map.len)?;
                 let img = deposit_screen::resolve_caustics(params, g, m);
                 self.put(out.id, &img)
             }
-            Kernel::TileHitDistance {
+            Kernel::TileHitDistance(TileHitDistance {
                 params,
                 photon_map,
                 tiles,
-            } => {
+            }) => {
                 let m = get(photon_map.id)?.as_slice(photon_map.len)?;
                 let t = gather::tile_hit_distance(params, m);
                 self.put(tiles.id, &t)
             }
-            Kernel::BilateralGather {
+            Kernel::BilateralGather(BilateralGather {
                 params,
                 gbuffer,
                 tiles,
                 input,
                 out,
-            } => {
+            }) => {
                 let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
                 let t = get(tiles.id)?.as_slice(tiles.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 let img = gather::bilateral_gather(params, g, t, i);
                 self.put(out.id, &img)
             }
-            Kernel::Composite {
+            Kernel::Composite(Composite {
                 direct,
                 caustics,
                 out,
-            } => {
+            }) => {
                 let d = get(direct.id)?.as_slice(direct.len)?;
                 let c = get(caustics.id)?.as_slice(caustics.len)?;
                 let img = composite::composite(d, c);
@@ -228,7 +231,7 @@ impl Backend for CpuBackend {
 
     fn kernels(&self) -> Vec<&'static str> {
         // `run_kernel` matches every `Kernel` variant: the compiler holds it to the registry.
-        caustica_core::launch::all_kernel_names()
+        caustica_core::kernels::all_kernel_names()
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
@@ -255,7 +258,7 @@ impl Backend for CpuBackend {
                     let t0 = Instant::now();
                     // Run inside our pool so the thread count is the backend's.
                     let pool = Arc::clone(&self.pool);
-                    pool.install(|| self.run_kernel(k))?;
+                    pool.install(|| self.run_kernel(&k.kernel))?;
                     times.push(PassTime {
                         kernel: k.name(),
                         seconds: t0.elapsed().as_secs_f64(),

@@ -11,8 +11,9 @@
 //! OpenCL and WGSL traversals (`cwbvh_node_hits`) make the same test.
 
 use caustica_core::backend::BackendError;
-use caustica_core::geometry::{surface_point, SurfacePoint, WatertightRay};
-use caustica_core::gpu::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
+use caustica_core::device::layout::{surface_point, SurfacePoint};
+use caustica_core::math::geometry::WatertightRay;
+use caustica_core::device::layout::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
 // `UVec2`: named by obvhs's `traverse!` macro at its call site.
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::cwbvh::node::extract_byte64;

@@ -5,11 +5,13 @@
 //! (`CAUSTICA_BENCH_GRID=1024` for a bigger grid on a GPU; default 256).
 //! Criterion's "elements" are photon paths.
 
+use caustica_core::kernels::{TracePhotons};
 use caustica_core::backend::Backend;
-use caustica_core::device_scene::DeviceScene;
-use caustica_core::emission::{emission_domain, PointEmission};
-use caustica_core::gpu::{counter, Photon};
-use caustica_core::recording::{Kernel, Recording};
+use caustica_core::device::device_scene::DeviceScene;
+use caustica_core::frame::emission::{emission_domain, PointEmission};
+use caustica_core::device::layout::{counter, Photon};
+use caustica_core::kernels::Kernel;
+use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
 use caustica_opencl::OpenClBackend;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -45,14 +47,14 @@ fn bench(c: &mut Criterion) {
         backend.execute(&setup).unwrap();
         let mut trace = Recording::new();
         trace.clear(photon_count);
-        trace.kernel(Kernel::TracePhotons {
+        trace.kernel(Kernel::TracePhotons(TracePhotons {
             scene: scene_args,
-            variant: caustica_core::plan::SceneFeatures::of(&scene).trace_variant(),
+            variant: caustica_core::frame::plan::SceneFeatures::of(&scene).trace_variant(),
             params: d.trace_params(0, (n, n), (0, n * n), 1, 12, 1e-4, 1e-9),
             photons,
             photon_count,
             counters,
-        });
+        }));
         // warm-up (first launch compiles on some drivers), then the device timestamp
         backend.execute(&trace).unwrap();
         let device_s: f64 = (0..5)

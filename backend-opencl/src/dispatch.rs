@@ -5,8 +5,8 @@
 use crate::error::cl_error;
 use crate::OpenClBackend;
 use caustica_core::backend::BackendError;
-use caustica_core::launch::{check_buffer, Launch, LaunchArg};
-use caustica_core::recording::Kernel;
+use caustica_core::device::launch::{check_buffer, Launch, LaunchArg};
+use caustica_core::kernels::Kernel;
 use ocl::core::{self, ArgVal, Event, Mem, MemFlags};
 
 /// Threads per work-group (core's registry: 64 for every kernel).

@@ -12,7 +12,8 @@ mod error;
 pub mod program;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::recording::{Recording, ResourceId, Step};
+use caustica_core::device::handle::ResourceId;
+use caustica_core::recording::{Recording, Step};
 use device::DeviceState;
 pub use device::{list_devices, DeviceSummary};
 use error::cl_error;
@@ -206,7 +207,7 @@ impl Backend for OpenClBackend {
     }
 
     fn kernels(&self) -> Vec<&'static str> {
-        caustica_core::launch::all_kernel_names()
+        caustica_core::kernels::all_kernel_names()
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {

@@ -2,7 +2,7 @@
 //! every shared struct with Rust's sizes. Fails loudly when no OpenCL platform exists
 //! (CI installs PoCL with scripts/install-drivers.sh).
 
-use caustica_core::gpu::*;
+use caustica_core::device::layout::*;
 use caustica_opencl::OpenClBackend;
 use std::mem::size_of;
 

@@ -8,7 +8,7 @@ use crate::context::{vk_error, Context};
 use crate::memory::Buffer;
 use ash::vk;
 use caustica_core::backend::BackendError;
-use caustica_core::gpu::{GpuTriangle, GpuVertex};
+use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use std::sync::Arc;
 
 /// Records a closure into a fresh command buffer, submits it and waits.

@@ -10,10 +10,13 @@ use crate::memory::Buffer;
 use crate::pipelines::{self, spirv, Pipeline};
 use crate::{is_kernel, DeviceBuffer, VulkanBackend, MIN_BINDING_BYTES};
 use ash::vk;
+use caustica_core::kernels::{DirectLight, PrepareScene, PrimaryGbuffer, TracePhotons};
 use caustica_core::backend::{BackendError, PassTime};
-use caustica_core::gpu::{GpuTriangle, GpuVertex};
-use caustica_core::launch::{check_buffer, LaunchArg};
-use caustica_core::recording::{Kernel, Recording, SceneArgs, Step};
+use caustica_core::device::layout::{GpuTriangle, GpuVertex};
+use caustica_core::device::launch::{check_buffer, LaunchArg};
+use caustica_core::device::handle::SceneArgs;
+use caustica_core::kernels::Kernel;
+use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -303,8 +306,8 @@ fn record_all(
                     frame.retired_scenes.push(s);
                 }
             }
-            Step::Kernel(Kernel::PrepareScene { scene }) => {
-                Kernel::PrepareScene { scene: *scene }.launch()?;
+            Step::Kernel(Kernel::PrepareScene(PrepareScene { scene })) => {
+                Kernel::PrepareScene(PrepareScene { scene: *scene }).launch()?;
                 // The build reads the uploads: finish what is recorded, then build.
                 let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
                 b.submit_and_wait(cmd)?;
@@ -351,9 +354,9 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
 
 fn scene_of(k: &Kernel) -> Option<&SceneArgs> {
     match k {
-        Kernel::PrimaryGbuffer { scene, .. }
-        | Kernel::DirectLight { scene, .. }
-        | Kernel::TracePhotons { scene, .. } => Some(scene),
+        Kernel::PrimaryGbuffer(PrimaryGbuffer { scene, .. })
+        | Kernel::DirectLight(DirectLight { scene, .. })
+        | Kernel::TracePhotons(TracePhotons { scene, .. }) => Some(scene),
         _ => None,
     }
 }
@@ -370,7 +373,7 @@ fn record_kernel(b: &VulkanBackend, frame: &mut Frame, k: &Kernel) -> Result<(),
         .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
     let scene = scene_of(k);
     let counters = match k {
-        Kernel::TracePhotons { counters, .. } => Some(counters.id),
+        Kernel::TracePhotons(TracePhotons { counters, .. }) => Some(counters.id),
         _ => None,
     };
     let mut descs = Vec::new();

@@ -18,7 +18,8 @@ mod pipelines;
 
 use ash::vk;
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::recording::{Recording, ResourceId, Step};
+use caustica_core::device::handle::ResourceId;
+use caustica_core::recording::{Recording, Step};
 use context::{vk_error, Context};
 use memory::Buffer;
 use std::collections::HashMap;
@@ -290,7 +291,7 @@ impl Backend for VulkanBackend {
     }
 
     fn kernels(&self) -> Vec<&'static str> {
-        caustica_core::launch::all_kernel_names()
+        caustica_core::kernels::all_kernel_names()
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {

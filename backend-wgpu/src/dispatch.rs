@@ -5,8 +5,8 @@
 
 use crate::WgpuBackend;
 use caustica_core::backend::{BackendError, PassTime};
-use caustica_core::launch::{check_buffer, Launch, LaunchArg};
-use caustica_core::recording::Kernel;
+use caustica_core::device::launch::{check_buffer, Launch, LaunchArg};
+use caustica_core::kernels::Kernel;
 use wgpu::util::DeviceExt;
 
 /// Threads per workgroup (`@workgroup_size(64)` in every kernel).

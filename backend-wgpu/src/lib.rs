@@ -14,8 +14,9 @@ pub mod shaders;
 mod texture;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::launch::Launch;
-use caustica_core::recording::{Recording, ResourceId, Step};
+use caustica_core::device::launch::Launch;
+use caustica_core::device::handle::ResourceId;
+use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
@@ -359,7 +360,7 @@ impl Backend for WgpuBackend {
     }
 
     fn kernels(&self) -> Vec<&'static str> {
-        caustica_core::launch::all_kernel_names()
+        caustica_core::kernels::all_kernel_names()
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {

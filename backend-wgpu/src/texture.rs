@@ -4,7 +4,7 @@
 
 use crate::WgpuBackend;
 use caustica_core::backend::BackendError;
-use caustica_core::recording::ImageBuf;
+use caustica_core::device::handle::ImageBuf;
 
 /// The copy shader for a storage texture format.
 fn source(format: &str) -> String {

@@ -7,7 +7,7 @@
 //! The files are read from disk rather than through the crate so that a failure names the
 //! file and the line.
 
-use caustica_core::gpu;
+use caustica_core::device::layout;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};

@@ -14,12 +14,14 @@
 //! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048).
 
 use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::device_scene::DeviceScene;
-use caustica_core::gpu::GpuCamera;
-use caustica_core::recording::{Kernel, Recording};
+use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
+use caustica_core::device::device_scene::DeviceScene;
+use caustica_core::device::layout::GpuCamera;
+use caustica_core::kernels::Kernel;
+use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
-use caustica_core::sspm::FrameConstants;
+use caustica_core::techniques::sspm::FrameConstants;
 use caustica_core::{Backend, Sspm, SspmSettings};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -181,17 +183,17 @@ fn plain_against_direct(
     let out = setup.create(pixels, "direct image");
     backend.execute(&setup)?;
     let mut rec = Recording::new();
-    rec.kernel(Kernel::PrimaryGbuffer {
+    rec.kernel(Kernel::PrimaryGbuffer(PrimaryGbuffer {
         scene: args,
         camera,
         gbuffer,
-    });
-    rec.kernel(Kernel::DirectLight {
+    }));
+    rec.kernel(Kernel::DirectLight(DirectLight {
         scene: args,
         params: FrameConstants::direct_params(camera, scene.lights.len() as u32, &settings),
         gbuffer,
         out,
-    });
+    }));
     let mut direct = Vec::new();
     for i in 0..=frames {
         let t0 = Instant::now();

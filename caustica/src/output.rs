@@ -1,6 +1,6 @@
 //! Writing frames: linear EXR for data, tone-mapped sRGB PNG for looking, JSON stats.
 
-use caustica_core::image::{tone_map, Image};
+use caustica_core::frame::image::{tone_map, Image};
 use std::path::Path;
 
 /// Writes a linear RGBA f32 OpenEXR file.

@@ -6,8 +6,8 @@
 //! a JSON sidecar (photon count, frames, reached noise, scene hash) and recomputed when the
 //! scene, the image size or the reference settings change.
 
-use caustica_core::image::{luminance, Image};
-use caustica_core::metrics::MASK_FRACTION;
+use caustica_core::frame::image::{luminance, Image};
+use caustica_core::frame::metrics::MASK_FRACTION;
 use caustica_core::{Backend, Scene, Sspm, SspmSettings};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -98,7 +98,7 @@ fn read_exr(path: &Path) -> Result<Image, String> {
     .map_err(|e| format!("{}: {e}", path.display()))?;
     let size = img.layer_data.size;
     let (_, pixels) = img.layer_data.channel_data.pixels;
-    Ok(caustica_core::image::Image::new(
+    Ok(caustica_core::frame::image::Image::new(
         size.width() as u32,
         size.height() as u32,
         pixels,

@@ -5,8 +5,8 @@
 //! record per combination and a log-log plot of relative MSE against frame time per scene.
 
 use crate::reference::{self, ReferenceSpec};
-use caustica_core::image::Image;
-use caustica_core::metrics::{bias_variance, CausticMask};
+use caustica_core::frame::image::Image;
+use caustica_core::frame::metrics::{bias_variance, CausticMask};
 use caustica_core::{Scene, Sspm, SspmSettings};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -148,7 +148,7 @@ pub fn run(
                         let raw = sspm
                             .read_output(backend.as_mut(), caustica_core::Output::RawCaustics)
                             .map_err(|e| e.to_string())?;
-                        raw_rel.push(caustica_core::metrics::relative_mse(&raw, &r.image, &mask));
+                        raw_rel.push(caustica_core::frame::metrics::relative_mse(&raw, &r.image, &mask));
                         (timing, photons, device) =
                             (st.timing.clone(), st.photons_emitted, st.device.clone());
                     }

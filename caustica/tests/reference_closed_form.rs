@@ -52,20 +52,20 @@ fn half_flux_radius_at(floor_y: f32) -> f64 {
     let mut cam = scene.camera.clone();
     cam.width = spec.width;
     cam.height = spec.height;
-    let g = caustica_core::gpu::GpuCamera::from_camera(&cam);
+    let g = caustica_core::device::layout::GpuCamera::from_camera(&cam);
     let origin = Vec3::from(g.position);
     let mut samples: Vec<(f64, f64)> = Vec::new(); // (radius, flux weight)
     for py in 0..spec.height {
         for px in 0..spec.width {
-            let d = caustica_core::gpu::camera_ray(&g, px, py);
+            let d = caustica_core::device::layout::camera_ray(&g, px, py);
             if d.y >= 0.0 {
                 continue;
             }
             let t = (floor_y - origin.y) / d.y;
             let p = origin + t * d;
             let depth = t * d.dot(Vec3::from(g.forward));
-            let area = caustica_core::footprint::pixel_surface_area(
-                caustica_core::footprint::pixel_footprint(
+            let area = caustica_core::math::footprint::pixel_surface_area(
+                caustica_core::math::footprint::pixel_footprint(
                     depth,
                     g.width,
                     g.height,

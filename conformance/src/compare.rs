@@ -38,17 +38,20 @@
 //! the backend, in the CPU reference, or in an argument here, to be understood first.
 
 use crate::strategies::MIN_CURVATURE_RADIUS;
+use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
 use caustica_core::backend::{read_buf, Backend, BackendError};
-use caustica_core::device_scene::DeviceScene;
-use caustica_core::fixed_point::{join_u64, MAX_PHOTON_QUANTA};
-use caustica_core::footprint::MIN_COSINE;
-use caustica_core::gpu::{
+use caustica_core::device::device_scene::DeviceScene;
+use caustica_core::math::fixed_point::{join_u64, MAX_PHOTON_QUANTA};
+use caustica_core::math::footprint::MIN_COSINE;
+use caustica_core::device::layout::{
     camera_ray, counter, gbuffer_flags, DepositTexel, GBufferTexel, GpuCamera, Photon, NO_MATERIAL,
 };
-use caustica_core::image::Image;
-use caustica_core::recording::{Kernel, Recording, SceneArgs, Step};
+use caustica_core::frame::image::Image;
+use caustica_core::device::handle::SceneArgs;
+use caustica_core::kernels::Kernel;
+use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::Scene;
-use caustica_core::sspm::FrameConstants;
+use caustica_core::techniques::sspm::FrameConstants;
 use caustica_core::{FrameStats, Output, Sspm, SspmSettings};
 use caustica_cpu::CpuBackend;
 use glam::Vec3;
@@ -511,11 +514,11 @@ impl Fixture {
     pub fn run_gbuffer(&self, b: &mut dyn Backend) -> Result<Vec<GBufferTexel>, String> {
         let mut rec = Recording::new();
         let g = rec.create(self.pixels(), "gbuffer");
-        rec.kernel(Kernel::PrimaryGbuffer {
+        rec.kernel(Kernel::PrimaryGbuffer(PrimaryGbuffer {
             scene: self.args,
             camera: self.camera,
             gbuffer: g,
-        });
+        }));
         run_and_free(b, "primary_gbuffer", &rec, |b| read_buf(b, g))
     }
 
@@ -535,15 +538,15 @@ impl Fixture {
         let photons = rec.create(count, "photons");
         let photon_count = rec.create(1, "photon count");
         let counters = rec.create(counter::WORDS as u32, "counters");
-        rec.kernel(Kernel::TracePhotons {
+        rec.kernel(Kernel::TracePhotons(TracePhotons {
             scene: self.args,
             // the variant a frame of this scene runs (the plan's)
-            variant: caustica_core::plan::SceneFeatures::of(&self.scene).trace_variant(),
+            variant: caustica_core::frame::plan::SceneFeatures::of(&self.scene).trace_variant(),
             params,
             photons,
             photon_count,
             counters,
-        });
+        }));
         run_and_free(b, "trace_photons", &rec, |b| {
             let n = read_buf(b, photon_count)?[0] as usize;
             let mut ph = read_buf(b, photons)?;
@@ -575,20 +578,20 @@ impl Fixture {
         let params = self
             .constants
             .deposit_params(self.camera, &self.settings, ph.len);
-        rec.kernel(Kernel::DepositScreen {
+        rec.kernel(Kernel::DepositScreen(DepositScreen {
             params,
             gbuffer: g,
             photons: ph,
             photon_count: count,
             counters,
             photon_map: map,
-        });
-        rec.kernel(Kernel::ResolveCaustics {
+        }));
+        rec.kernel(Kernel::ResolveCaustics(ResolveCaustics {
             params,
             gbuffer: g,
             photon_map: map,
             out,
-        });
+        }));
         run_and_free(b, "deposit_screen + resolve_caustics", &rec, |b| {
             Ok(DepositOutput {
                 photon_map: read_buf(b, map)?,
@@ -603,11 +606,11 @@ impl Fixture {
         let mut rec = Recording::new();
         let m = rec.upload(map, "photon map");
         let tiles = rec.create(self.tiles_len(), "tiles");
-        rec.kernel(Kernel::TileHitDistance {
+        rec.kernel(Kernel::TileHitDistance(TileHitDistance {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
             photon_map: m,
             tiles,
-        });
+        }));
         run_and_free(b, "tile_hit_distance", &rec, |b| read_buf(b, tiles))
     }
 
@@ -625,7 +628,7 @@ impl Fixture {
         let t = rec.upload(tiles, "tiles");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
-        rec.kernel(Kernel::BilateralGather {
+        rec.kernel(Kernel::BilateralGather(BilateralGather {
             params: self
                 .constants
                 .gather_params(self.camera, &self.settings, axis),
@@ -633,7 +636,7 @@ impl Fixture {
             tiles: t,
             input: i,
             out,
-        });
+        }));
         run_and_free(b, "bilateral_gather", &rec, |b| read_buf(b, out))
     }
 
@@ -646,7 +649,7 @@ impl Fixture {
         let mut rec = Recording::new();
         let g = rec.upload(gbuffer, "gbuffer");
         let out = rec.create(self.pixels(), "direct");
-        rec.kernel(Kernel::DirectLight {
+        rec.kernel(Kernel::DirectLight(DirectLight {
             scene: self.args,
             params: FrameConstants::direct_params(
                 self.camera,
@@ -655,7 +658,7 @@ impl Fixture {
             ),
             gbuffer: g,
             out,
-        });
+        }));
         run_and_free(b, "direct_light", &rec, |b| read_buf(b, out))
     }
 }
@@ -670,11 +673,11 @@ pub fn run_composite(
     let d = rec.upload(direct, "direct");
     let c = rec.upload(caustics, "caustics");
     let out = rec.create(direct.len() as u32, "composite");
-    rec.kernel(Kernel::Composite {
+    rec.kernel(Kernel::Composite(Composite {
         direct: d,
         caustics: c,
         out,
-    });
+    }));
     run_and_free(b, "composite", &rec, |b| read_buf(b, out))
 }
 

@@ -40,9 +40,9 @@
 
 use crate::compare::{self, divergence_allowance, relative_l2, Frame, Verdict};
 use caustica_core::backend::{Backend, BackendError};
-use caustica_core::footprint::gbuffer_pixel_area;
-use caustica_core::gpu::{gbuffer_flags, GBufferTexel, GpuCamera};
-use caustica_core::optics::fresnel_dielectric;
+use caustica_core::device::layout::gbuffer_pixel_area;
+use caustica_core::device::layout::{gbuffer_flags, GBufferTexel, GpuCamera};
+use caustica_core::math::optics::fresnel_dielectric;
 use caustica_core::scene::builtin;
 use caustica_core::scene::{Aabb, Light, Material, Object, Scene, Shape};
 use caustica_core::{Sspm, SspmSettings};
@@ -668,7 +668,7 @@ fn nested_glass_in_water(b: &mut dyn Backend) -> Result<Outcome, String> {
     let f = run_checked(b, &scene, &settings(64), &mut v)?;
     let cam = GpuCamera::from_camera(&scene.camera);
     let Some((px, py, _)) =
-        caustica_core::gpu::project_to_pixel(&cam, Vec3::new(0.0, floor_y, 0.0))
+        caustica_core::device::layout::project_to_pixel(&cam, Vec3::new(0.0, floor_y, 0.0))
     else {
         return Err("focus not on screen".into());
     };
@@ -962,10 +962,10 @@ fn scale_case(b: &mut dyn Backend, s: f32, o: Vec3, extra_rel: f64) -> Result<Ou
         ("filtered", &r.filtered, &f.filtered),
     ] {
         let e = relative_l2(&x.pixels, &y.pixels, Some(&agree));
-        let mse = caustica_core::metrics::relative_mse(
+        let mse = caustica_core::frame::metrics::relative_mse(
             y,
             x,
-            &caustica_core::metrics::CausticMask::from_reference(x),
+            &caustica_core::frame::metrics::CausticMask::from_reference(x),
         );
         v.check(e <= bound, || {
             format!("{name} caustics: relative L2 {e:.3e} vs unscaled (allowed {bound:.3e})")

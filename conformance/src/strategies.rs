@@ -17,7 +17,7 @@
 //!
 //! Each case renders, so keep case counts small ([`config`]).
 
-use caustica_core::emission::PointEmission;
+use caustica_core::frame::emission::PointEmission;
 use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape};
 use caustica_core::SspmSettings;
 use glam::Vec3;

@@ -13,7 +13,7 @@
 
 use caustica_conformance::backends;
 use caustica_core::kernels::variant_label;
-use caustica_core::plan::{Output, Outputs};
+use caustica_core::frame::plan::{Output, Outputs};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Light;
 use caustica_core::{Backend, FrameStats, Scene, Sspm, SspmSettings};
@@ -158,7 +158,7 @@ fn each_scene_compiles_only_the_variant_it_needs() {
     for (name, mut b) in backends() {
         for scene_name in BUILTIN_SCENES {
             let scene = small(scene_name);
-            let f = caustica_core::plan::SceneFeatures::of(&scene);
+            let f = caustica_core::frame::plan::SceneFeatures::of(&scene);
             let r = run(b.as_mut(), &scene, settings(true));
             let want = variant_label("trace_photons", &f.trace_variant().constants());
             if r.stats.photons_emitted == 0 {
@@ -346,7 +346,7 @@ impl Backend for Limited {
     }
     fn read(
         &mut self,
-        id: caustica_core::recording::ResourceId,
+        id: caustica_core::device::handle::ResourceId,
     ) -> Result<Vec<u8>, caustica_core::BackendError> {
         self.inner.read(id)
     }

@@ -2,7 +2,7 @@
 
 use caustica_conformance::render;
 use caustica_core::backend::read_buf;
-use caustica_core::packing::unpack_unit_vector;
+use caustica_core::math::packing::unpack_unit_vector;
 use caustica_core::scene::{builtin, Aabb, Light};
 use caustica_core::{Sspm, SspmSettings};
 use caustica_cpu::CpuBackend;

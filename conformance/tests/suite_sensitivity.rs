@@ -16,13 +16,16 @@ use caustica_conformance::compare::{
     check_gbuffer, check_kernel_cases, check_trace, kernel_cases, Candidate, KernelCheck, Report,
 };
 use caustica_conformance::{small_settings, strategies};
+use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::fixed_point::{join_u64, quantize};
-use caustica_core::gpu::{
+use caustica_core::math::fixed_point::{join_u64, quantize};
+use caustica_core::device::layout::{
     counter, DepositTexel, GBufferTexel, GpuCamera, GpuVertex, Photon, NO_MATERIAL,
 };
-use caustica_core::recording::{Kernel, Recording, ResourceId, Step};
-use caustica_core::rng::pcg_hash;
+use caustica_core::device::handle::ResourceId;
+use caustica_core::kernels::Kernel;
+use caustica_core::recording::{Recording, Step};
+use caustica_core::math::rng::pcg_hash;
 use caustica_core::scene::builtin::BUILTIN_SCENES;
 use caustica_cpu::CpuBackend;
 use proptest::strategy::{Strategy, ValueTree};
@@ -108,9 +111,9 @@ impl Mutant {
                 *data = bytemuck::cast_slice(&v).to_vec();
             }
             Step::Kernel(k) => match k {
-                Kernel::PrimaryGbuffer { camera, .. } => nudge_camera(camera),
-                Kernel::DirectLight { params, .. } => nudge_camera(&mut params.camera),
-                Kernel::TracePhotons { params, .. } => {
+                Kernel::PrimaryGbuffer(PrimaryGbuffer { camera, .. }) => nudge_camera(camera),
+                Kernel::DirectLight(DirectLight { params, .. }) => nudge_camera(&mut params.camera),
+                Kernel::TracePhotons(TracePhotons { params, .. }) => {
                     nudge_all(&mut params.origin);
                     nudge_all(&mut params.axis);
                     nudge_all(&mut params.rect_u);
@@ -119,10 +122,10 @@ impl Mutant {
                         params.photon_flux[c] = nudge(params.photon_flux[c]);
                     }
                 }
-                Kernel::DepositScreen { params, .. } | Kernel::ResolveCaustics { params, .. } => {
+                Kernel::DepositScreen(DepositScreen { params, .. }) | Kernel::ResolveCaustics(ResolveCaustics { params, .. }) => {
                     nudge_camera(&mut params.camera)
                 }
-                Kernel::TileHitDistance { params, .. } | Kernel::BilateralGather { params, .. } => {
+                Kernel::TileHitDistance(TileHitDistance { params, .. }) | Kernel::BilateralGather(BilateralGather { params, .. }) => {
                     nudge_camera(&mut params.camera);
                     params.roughness = nudge(params.roughness);
                     params.sigma_depth = nudge(params.sigma_depth);
@@ -162,7 +165,7 @@ impl Mutant {
             }
         };
         match (self.mutation, k) {
-            (Mutation::GbufferDepthIsDistance, Kernel::PrimaryGbuffer { gbuffer, .. }) => {
+            (Mutation::GbufferDepthIsDistance, Kernel::PrimaryGbuffer(PrimaryGbuffer { gbuffer, .. })) => {
                 self.modify::<GBufferTexel>(gbuffer.id, |g| {
                     for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
                         t.depth = t.view_distance;
@@ -171,13 +174,13 @@ impl Mutant {
             }
             (
                 Mutation::DropPhotons,
-                Kernel::TracePhotons {
+                Kernel::TracePhotons(TracePhotons {
                     params,
                     photons,
                     photon_count,
                     counters,
                     ..
-                },
+                }),
             ) => {
                 let n =
                     bytemuck::pod_collect_to_vec::<u8, u32>(&self.inner.read(photon_count.id)?)[0];
@@ -209,7 +212,7 @@ impl Mutant {
                     }
                 })
             }
-            (Mutation::PhotonFluxLow, Kernel::TracePhotons { photons, .. }) => self
+            (Mutation::PhotonFluxLow, Kernel::TracePhotons(TracePhotons { photons, .. })) => self
                 .modify::<Photon>(photons.id, |v| {
                     for p in v {
                         for c in &mut p.flux {
@@ -217,30 +220,30 @@ impl Mutant {
                         }
                     }
                 }),
-            (Mutation::DepositOffByOne, Kernel::DepositScreen { photon_map, .. }) => {
+            (Mutation::DepositOffByOne, Kernel::DepositScreen(DepositScreen { photon_map, .. })) => {
                 self.modify::<DepositTexel>(photon_map.id, |m| {
                     for t in m.iter_mut().filter(|t| t.flux[0][0] > 0) {
                         t.flux[0][0] -= 1;
                     }
                 })
             }
-            (Mutation::ResolveHigh, Kernel::ResolveCaustics { out, .. }) => {
+            (Mutation::ResolveHigh, Kernel::ResolveCaustics(ResolveCaustics { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
-            (Mutation::TilesHigh, Kernel::TileHitDistance { tiles, .. }) => {
+            (Mutation::TilesHigh, Kernel::TileHitDistance(TileHitDistance { tiles, .. })) => {
                 self.modify::<f32>(tiles.id, |v| {
                     for t in v {
                         *t *= 1.0 + 1e-4;
                     }
                 })
             }
-            (Mutation::GatherHigh, Kernel::BilateralGather { out, .. }) => {
+            (Mutation::GatherHigh, Kernel::BilateralGather(BilateralGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
-            (Mutation::DirectHigh, Kernel::DirectLight { out, .. }) => {
+            (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
-            (Mutation::CompositeUlp, Kernel::Composite { out, .. }) => {
+            (Mutation::CompositeUlp, Kernel::Composite(Composite { out, .. })) => {
                 self.modify::<[f32; 4]>(out.id, |v| {
                     if let Some(p) = v.iter_mut().find(|p| p[0] > 0.0) {
                         p[0] = f32::from_bits(p[0].to_bits() + 1);
@@ -271,7 +274,7 @@ impl Backend for Mutant {
             }
             if let (
                 Mutation::VariantWithoutFeatures,
-                Step::Kernel(Kernel::TracePhotons { variant, .. }),
+                Step::Kernel(Kernel::TracePhotons(TracePhotons { variant, .. })),
             ) = (self.mutation, &mut step)
             {
                 variant.dispersion = false;

@@ -1,7 +1,9 @@
 //! The `Backend` trait: small and object-safe (DESIGN 3), so `Box<dyn Backend>` gives
 //! run-time backend choice. A backend owns kernels and resources; core owns algorithms.
 
-use crate::recording::{Buf, Recording, ResourceId};
+pub use crate::device::error::BackendError;
+use crate::device::handle::{Buf, ResourceId};
+use crate::recording::Recording;
 
 /// What a backend's device can do (queried, not cfg'd).
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -21,25 +23,6 @@ pub struct Capabilities {
 pub struct PassTime {
     pub kernel: &'static str,
     pub seconds: f64,
-}
-
-/// Typed backend failures; backends never panic on these.
-#[derive(Debug, thiserror::Error)]
-pub enum BackendError {
-    #[error("backend '{backend}' is not available: {reason}")]
-    Unavailable { backend: String, reason: String },
-    #[error("unsupported: {0}")]
-    Unsupported(String),
-    #[error("out of memory allocating {bytes} bytes for {what}")]
-    OutOfMemory { bytes: u64, what: String },
-    #[error("unknown resource {0:?} (freed or never created)")]
-    MissingResource(ResourceId),
-    #[error("bad kernel argument: {0}")]
-    BadArgument(String),
-    #[error("device lost: {0}")]
-    DeviceLost(String),
-    #[error("driver error: {0}")]
-    Driver(String),
 }
 
 /// A compute backend.

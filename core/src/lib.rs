@@ -1,49 +1,34 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::nonminimal_bool)]
 // NaN-rejecting comparisons such as `!(x > 0.0)` are deliberate: they are true for NaN.
-//! caustica core: the scene model, the scalar math every backend shares, the `#[repr(C)]`
-//! data layouts, the [`Backend`](backend::Backend) trait with its kernel registry, and the
-//! techniques as recordings of passes. Core depends on no backend.
+//! caustica core: the techniques written once against the [`Backend`](backend::Backend)
+//! trait. Core depends on no backend. It is built in layers; a lower layer never imports
+//! a higher one:
 //!
-//! Module map: [`optics`] (reflect, refract, Fresnel, Beer, Cauchy), [`sampling`],
-//! [`rng`], [`packing`], [`footprint`] (seed 000 Eq. 4), [`geometry`], [`fixed_point`],
-//! [`scene`], [`device_scene`] (flattened arrays + CWBVH), [`gpu`] (shared structs),
-//! [`emission`] (photon emission domains), [`recording`], [`backend`], [`kernels`],
-//! [`plan`] (the frame plan: passes, variants, buffers), [`sspm`] (the technique), [`stats`], [`image`].
+//! 1. [`math`]: scalar optics, sampling, RNG, packing, pixel footprint, geometry, fixed
+//!    point; every shader port mirrors these functions by name.
+//! 2. [`scene`]: the scene model, built-in scenes, the JSON format, validation.
+//! 3. [`device`]: Pod element layouts shared with the shaders, the flattened scene with
+//!    its CWBVH, typed buffer handles, lowered launches, typed device errors.
+//! 4. [`kernels`]: the one list of kernels, one file per kernel declaration.
+//! 5. [`recording`] and [`backend`]: the `Recording` core builds and the object-safe
+//!    `Backend` trait that executes it.
+//! 6. [`frame`]: what every technique shares (the `Technique` seam, plans, stats,
+//!    allocation, temporal resources, emission, images, metrics).
+//! 7. [`techniques`]: one folder per technique and the one registry of names.
 
 pub mod backend;
-pub mod device_scene;
-pub mod emission;
-pub mod fixed_point;
-pub mod footprint;
-pub mod geometry;
-pub mod gpu;
-pub mod image;
+pub mod device;
+pub mod frame;
 pub mod kernels;
-pub mod launch;
-pub mod metrics;
-pub mod optics;
-pub mod packing;
-pub mod plan;
+pub mod math;
 pub mod recording;
-pub mod rng;
-pub mod sampling;
 pub mod scene;
-pub mod sspm;
-pub mod stats;
+pub mod techniques;
 
 pub use backend::{Backend, BackendError, Capabilities};
-pub use plan::{FramePlan, Output, Outputs};
+pub use frame::error::Error;
+pub use frame::plan::FramePlan;
+pub use frame::stats::FrameStats;
+pub use frame::technique::{OutputInfo, Progress, Technique};
 pub use scene::Scene;
-pub use sspm::{Sspm, SspmSettings};
-pub use stats::FrameStats;
-
-/// Errors of the library's front door.
-#[derive(Debug, thiserror::Error)]
-pub enum Error {
-    #[error("invalid scene: {0}")]
-    InvalidScene(String),
-    #[error("invalid parameter: {0}")]
-    InvalidParameter(String),
-    #[error(transparent)]
-    Backend(#[from] BackendError),
-}
+pub use techniques::sspm::{Output, Outputs, Sspm, SspmSettings};

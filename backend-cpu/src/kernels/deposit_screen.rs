@@ -9,15 +9,15 @@
 //!
 //! Resolve: radiance `L = (albedo / pi) * Phi / A`, where `Phi` is the pixel's summed flux
 //! and `A` the surface area the pixel covers (Eq. 4 footprint corrected for obliquity,
-//! see `caustica_core::footprint`). Alpha: mean hit distance of the pixel's photons.
+//! see `caustica_core::math::footprint`). Alpha: mean hit distance of the pixel's photons.
 
 use super::Counters;
-use caustica_core::fixed_point::{join_u64, quantize};
-use caustica_core::footprint::gbuffer_pixel_area;
-use caustica_core::gpu::{
+use caustica_core::math::fixed_point::{join_u64, quantize};
+use caustica_core::device::layout::gbuffer_pixel_area;
+use caustica_core::device::layout::{
     counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon,
 };
-use caustica_core::packing::unpack_unit_vector;
+use caustica_core::math::packing::unpack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -51,7 +51,7 @@ fn deposit_photon(
     c: &mut Counters,
 ) {
     let pos = Vec3::from(ph.position);
-    let Some((px, py, z)) = caustica_core::gpu::project_to_pixel(&p.camera, pos) else {
+    let Some((px, py, z)) = caustica_core::device::layout::project_to_pixel(&p.camera, pos) else {
         c.bump(counter::OFF_SCREEN);
         return;
     };

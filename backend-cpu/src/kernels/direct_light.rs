@@ -6,10 +6,10 @@
 //! Output: radiance W/(sr m^2), alpha 1.
 
 use crate::traversal::SceneView;
-use caustica_core::device_scene::spot_falloff;
-use caustica_core::geometry::offset_ray_origin;
-use caustica_core::gpu::{camera_ray, light_kind, material_kind, DirectParams, GBufferTexel};
-use caustica_core::optics::{beer_lambert, fresnel_dielectric, reflect, refract};
+use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::math::geometry::offset_ray_origin;
+use caustica_core::device::layout::{camera_ray, light_kind, material_kind, DirectParams, GBufferTexel};
+use caustica_core::math::optics::{beer_lambert, fresnel_dielectric, reflect, refract};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -27,7 +27,7 @@ pub fn direct_light(
             if g.depth <= 0.0 {
                 return [0.0, 0.0, 0.0, 1.0];
             }
-            let l = if g.flags & caustica_core::gpu::gbuffer_flags::RECEIVER != 0 {
+            let l = if g.flags & caustica_core::device::layout::gbuffer_flags::RECEIVER != 0 {
                 // The G-buffer normal faces the camera; the geometric normal is not stored,
                 // so the shadow ray starts from the shading normal's side.
                 shade_diffuse(

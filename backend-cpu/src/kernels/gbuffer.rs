@@ -4,7 +4,7 @@
 //! material `NO_MATERIAL`.
 
 use crate::traversal::SceneView;
-use caustica_core::gpu::{
+use caustica_core::device::layout::{
     camera_ray, gbuffer_flags, material_kind, GBufferTexel, GpuCamera, NO_MATERIAL,
 };
 use glam::Vec3;

@@ -21,17 +21,17 @@
 
 use super::Counters;
 use crate::traversal::SceneView;
-use caustica_core::device_scene::spot_falloff;
-use caustica_core::fixed_point::quantize;
-use caustica_core::geometry::offset_ray_origin;
-use caustica_core::gpu::{counter, emission_kind, light_kind, material_kind, Photon, TraceParams};
+use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::math::fixed_point::quantize;
+use caustica_core::math::geometry::offset_ray_origin;
+use caustica_core::device::layout::{counter, emission_kind, light_kind, material_kind, Photon, TraceParams};
 use caustica_core::kernels::TraceVariant;
-use caustica_core::optics::{
+use caustica_core::math::optics::{
     beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
 };
-use caustica_core::packing::pack_unit_vector;
-use caustica_core::rng::random_f32;
-use caustica_core::sampling::{stratified_cell, to_world, uniform_cone};
+use caustica_core::math::packing::pack_unit_vector;
+use caustica_core::math::rng::random_f32;
+use caustica_core::math::sampling::{stratified_cell, to_world, uniform_cone};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 

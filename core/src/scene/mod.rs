@@ -15,7 +15,7 @@ use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-pub use crate::geometry::Aabb;
+pub use crate::math::geometry::Aabb;
 pub use validate::Problem;
 
 /// A complete scene: what the file format holds and what built-in scenes produce.

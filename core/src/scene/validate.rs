@@ -116,8 +116,8 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 }
                 if c.finite(&format!("{p}.cauchy_b"), *cauchy_b) {
                     // n must stay positive over the visible channels
-                    for wl in crate::optics::CHANNEL_WAVELENGTH_UM {
-                        if crate::optics::cauchy_ior(*ior, *cauchy_b, wl) <= 0.0 {
+                    for wl in crate::math::optics::CHANNEL_WAVELENGTH_UM {
+                        if crate::math::optics::cauchy_ior(*ior, *cauchy_b, wl) <= 0.0 {
                             c.fail(
                                 format!("{p}.cauchy_b"),
                                 format!("makes the index <= 0 at {wl} um"),

@@ -57,7 +57,7 @@ pub struct FrameStats {
     pub variants: Vec<String>,
     /// The frame plan: every pass with why it runs or not, the lights that emit, the
     /// scene's material features, the requested outputs and the buffers created.
-    pub plan: Option<crate::plan::FramePlan>,
+    pub plan: Option<crate::frame::plan::FramePlan>,
     pub photons_emitted: u64,
     /// Ray segments traced for photons (every bounce counts).
     pub photon_rays_traced: u64,
@@ -83,7 +83,7 @@ pub struct FrameStats {
     pub pass_ms: BTreeMap<String, f64>,
     /// Error of the filtered caustics against the reference set with
     /// `Sspm::set_reference` (computed after the frame; not part of `frame_ms`).
-    pub error: Option<crate::metrics::ErrorStats>,
+    pub error: Option<crate::frame::metrics::ErrorStats>,
 }
 
 impl FrameStats {

@@ -9,10 +9,10 @@
 //!   `sum_mask sum_rgb (mean_k x_k - r) / sum_mask sum_rgb r` and relative variance
 //!   `sum_mask sum_rgb var_k(x_k) / sum_mask sum_rgb r^2` (sample variance, K - 1);
 //! - FLIP (Andersson et al. 2020, LDR-FLIP through the maintained `nv-flip` crate): both
-//!   images tone-mapped with [`crate::image::tone_map`] at the exposure that maps the
+//!   images tone-mapped with [`crate::frame::image::tone_map`] at the exposure that maps the
 //!   reference's 99th-percentile masked luminance to 1, FLIP's mean over the mask.
 
-use crate::image::{luminance, tone_map, Image};
+use crate::frame::image::{luminance, tone_map, Image};
 use serde::Serialize;
 
 /// Pixels that receive caustics: reference luminance above `MASK_FRACTION` of its

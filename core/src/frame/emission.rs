@@ -17,9 +17,9 @@
 //! ([`NoEmission::MissesCasters`]; the frame plan's light-frustum test). With pruning
 //! off, [`unpruned_domain`] gives such lights their whole domain instead.
 
-use crate::geometry::Aabb;
-use crate::gpu::emission_kind;
-use crate::sampling::{cone_solid_angle, orthonormal_basis};
+use crate::math::geometry::Aabb;
+use crate::device::layout::emission_kind;
+use crate::math::sampling::{cone_solid_angle, orthonormal_basis};
 use crate::scene::Light;
 use glam::Vec3;
 
@@ -61,9 +61,9 @@ impl EmissionDomain {
         max_bounces: u32,
         min_relative_power: f32,
         flux_quantum: f32,
-    ) -> crate::gpu::TraceParams {
+    ) -> crate::device::layout::TraceParams {
         let per_light = grid.0 as u64 * grid.1 as u64;
-        crate::gpu::TraceParams {
+        crate::device::layout::TraceParams {
             light,
             emission: self.kind,
             grid_w: grid.0,

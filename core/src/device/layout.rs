@@ -6,6 +6,7 @@
 //! along the camera's forward axis); pixel coordinates have (0, 0) at the top-left.
 
 use bytemuck::{Pod, Zeroable};
+use crate::math::geometry::normalize_scaled;
 use glam::Vec3;
 
 /// Mesh vertex: world position and unit shading normal; uv split across the two `w`s.
@@ -286,6 +287,82 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
         return None;
     }
     Some((fx as u32, fy as u32, z))
+}
+
+// ---- functions over the layouts (shader ports mirror them by name)
+
+/// A point on a triangle, interpolated from its vertices (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub position: Vec3,
+    /// Unit geometric normal, turned to the side of the interpolated vertex normals (for
+    /// closed shapes: outward). Used to tell inside from outside and to offset rays.
+    pub geometric_normal: Vec3,
+    /// Unit interpolated shading normal (same side as `geometric_normal`).
+    pub shading_normal: Vec3,
+    pub uv: glam::Vec2,
+}
+
+/// Interpolates the surface at barycentrics (`u`, `v`) of the triangle (`a`, `b`, `c`).
+#[inline]
+pub fn surface_point(
+    a: &GpuVertex,
+    b: &GpuVertex,
+    c: &GpuVertex,
+    u: f32,
+    v: f32,
+) -> SurfacePoint {
+    let w = 1.0 - u - v;
+    let (pa, pb, pc) = (
+        Vec3::from(a.position),
+        Vec3::from(b.position),
+        Vec3::from(c.position),
+    );
+    let (na, nb, nc) = (
+        Vec3::from(a.normal),
+        Vec3::from(b.normal),
+        Vec3::from(c.normal),
+    );
+    let mut ng = normalize_scaled((pb - pa).cross(pc - pa), Vec3::Y);
+    let n_sum = na + nb + nc;
+    if ng.dot(n_sum) < 0.0 {
+        ng = -ng;
+    }
+    let mut ns = (w * na + u * nb + v * nc).normalize_or(ng);
+    if !ns.is_finite() {
+        ns = ng;
+    }
+    SurfacePoint {
+        position: w * pa + u * pb + v * pc,
+        geometric_normal: ng,
+        shading_normal: ns,
+        uv: glam::Vec2::new(w * a.u + u * b.u + v * c.u, w * a.v + u * b.v + v * c.v),
+    }
+}
+
+
+/// Surface area (scene units^2) that pixel `index` (row-major) of `cam` covers on the
+/// surface its G-buffer texel `g` sees: the footprint at the texel's view depth (Eq. 4)
+/// over the view and surface cosines ([`pixel_surface_area`]). Resolve divides a
+/// pixel's flux by it.
+pub fn gbuffer_pixel_area(
+    cam: &GpuCamera,
+    index: u32,
+    g: &GBufferTexel,
+) -> f32 {
+    let ray = camera_ray(cam, index % cam.width, index / cam.width);
+    let footprint = crate::math::footprint::pixel_footprint(
+        g.depth,
+        cam.width,
+        cam.height,
+        cam.tan_half_fov_x,
+        cam.tan_half_fov_y,
+    );
+    crate::math::footprint::pixel_surface_area(
+        footprint,
+        ray.dot(glam::Vec3::from(cam.forward)),
+        ray.dot(glam::Vec3::from(g.normal)),
+    )
 }
 
 #[cfg(test)]

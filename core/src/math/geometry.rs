@@ -178,55 +178,6 @@ pub fn normalize_scaled(v: Vec3, fallback: Vec3) -> Vec3 {
     (v * scale).normalize_or(fallback)
 }
 
-/// A point on a triangle, interpolated from its vertices (world space).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfacePoint {
-    pub position: Vec3,
-    /// Unit geometric normal, turned to the side of the interpolated vertex normals (for
-    /// closed shapes: outward). Used to tell inside from outside and to offset rays.
-    pub geometric_normal: Vec3,
-    /// Unit interpolated shading normal (same side as `geometric_normal`).
-    pub shading_normal: Vec3,
-    pub uv: glam::Vec2,
-}
-
-/// Interpolates the surface at barycentrics (`u`, `v`) of the triangle (`a`, `b`, `c`).
-#[inline]
-pub fn surface_point(
-    a: &crate::gpu::GpuVertex,
-    b: &crate::gpu::GpuVertex,
-    c: &crate::gpu::GpuVertex,
-    u: f32,
-    v: f32,
-) -> SurfacePoint {
-    let w = 1.0 - u - v;
-    let (pa, pb, pc) = (
-        Vec3::from(a.position),
-        Vec3::from(b.position),
-        Vec3::from(c.position),
-    );
-    let (na, nb, nc) = (
-        Vec3::from(a.normal),
-        Vec3::from(b.normal),
-        Vec3::from(c.normal),
-    );
-    let mut ng = normalize_scaled((pb - pa).cross(pc - pa), Vec3::Y);
-    let n_sum = na + nb + nc;
-    if ng.dot(n_sum) < 0.0 {
-        ng = -ng;
-    }
-    let mut ns = (w * na + u * nb + v * nc).normalize_or(ng);
-    if !ns.is_finite() {
-        ns = ng;
-    }
-    SurfacePoint {
-        position: w * pa + u * pb + v * pc,
-        geometric_normal: ng,
-        shading_normal: ns,
-        uv: glam::Vec2::new(w * a.u + u * b.u + v * c.u, w * a.v + u * b.v + v * c.v),
-    }
-}
-
 /// Axis-aligned box in world space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Aabb {

@@ -3,7 +3,7 @@
 //! uploaded as 5 x `[u32; 4]`). Triangles are reordered into BVH leaf order, so the
 //! BVH's primitive index *is* the triangle index on every backend.
 
-use crate::gpu::{light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
+use crate::device::layout::{light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
 use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene};
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};
@@ -84,22 +84,6 @@ impl DeviceScene {
     }
 
     /// Number of CWBVH nodes.
-    /// Records the upload of every scene buffer and the `prepare_scene` kernel.
-    pub fn record_upload(
-        &self,
-        rec: &mut crate::recording::Recording,
-    ) -> crate::recording::SceneArgs {
-        let scene = crate::recording::SceneArgs {
-            vertices: rec.upload(&self.vertices, "vertices"),
-            triangles: rec.upload(&self.triangles, "triangles"),
-            materials: rec.upload(&self.materials, "materials"),
-            lights: rec.upload(&self.lights, "lights"),
-            bvh_nodes: rec.upload(&self.bvh_nodes, "bvh nodes"),
-        };
-        rec.kernel(crate::recording::Kernel::PrepareScene { scene });
-        scene
-    }
-
     pub fn bvh_node_count(&self) -> usize {
         self.bvh_nodes.len() / BVH_NODE_VEC4S
     }
@@ -154,7 +138,8 @@ fn gpu_material(m: &Material) -> GpuMaterial {
     }
 }
 
-fn gpu_light(l: &Light) -> GpuLight {
+/// A light as the kernels read it (intensity in W/sr or irradiance in W/m^2 per channel).
+pub fn gpu_light(l: &Light) -> GpuLight {
     match l {
         Light::Point {
             position,

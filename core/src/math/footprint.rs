@@ -39,30 +39,6 @@ pub fn pixel_surface_area(footprint: f32, cos_axis: f32, cos_normal: f32) -> f32
     footprint * cos_axis.abs() / cos_normal.abs().max(MIN_COSINE)
 }
 
-/// Surface area (scene units^2) that pixel `index` (row-major) of `cam` covers on the
-/// surface its G-buffer texel `g` sees: the footprint at the texel's view depth (Eq. 4)
-/// over the view and surface cosines ([`pixel_surface_area`]). Resolve divides a
-/// pixel's flux by it.
-pub fn gbuffer_pixel_area(
-    cam: &crate::gpu::GpuCamera,
-    index: u32,
-    g: &crate::gpu::GBufferTexel,
-) -> f32 {
-    let ray = crate::gpu::camera_ray(cam, index % cam.width, index / cam.width);
-    let footprint = pixel_footprint(
-        g.depth,
-        cam.width,
-        cam.height,
-        cam.tan_half_fov_x,
-        cam.tan_half_fov_y,
-    );
-    pixel_surface_area(
-        footprint,
-        ray.dot(glam::Vec3::from(cam.forward)),
-        ray.dot(glam::Vec3::from(g.normal)),
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,66 @@
+//! Opaque typed handles to device resources (DESIGN 3: an id plus `PhantomData`, as
+//! kajiya's render-graph handles). A [`Buf`] names a buffer a backend holds; core never
+//! sees device memory, only these ids.
+
+use crate::device::layout::*;
+use std::marker::PhantomData;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Opaque id of a device resource, unique in the process.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ResourceId(pub u32);
+
+static NEXT_ID: AtomicU32 = AtomicU32::new(1);
+
+impl ResourceId {
+    pub(crate) fn fresh() -> ResourceId {
+        ResourceId(NEXT_ID.fetch_add(1, Ordering::Relaxed))
+    }
+}
+
+/// Typed handle to a device buffer of `len` elements of `T`.
+#[derive(Debug)]
+pub struct Buf<T> {
+    pub id: ResourceId,
+    pub len: u32,
+    _t: PhantomData<fn() -> T>,
+}
+
+impl<T> Clone for Buf<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Buf<T> {}
+
+impl<T> Buf<T> {
+    /// A handle with a fresh process-unique id (a recording hands it out with the step
+    /// that creates the buffer).
+    pub(crate) fn fresh(len: u32) -> Buf<T> {
+        Buf {
+            id: ResourceId::fresh(),
+            len,
+            _t: PhantomData,
+        }
+    }
+
+    /// Size in bytes.
+    pub fn bytes(&self) -> u64 {
+        self.len as u64 * std::mem::size_of::<T>() as u64
+    }
+}
+
+/// A linear HDR image on the device: `width * height` RGBA f32 texels, row-major from the
+/// top-left. Radiance in W/(sr m^2) per channel unless stated otherwise.
+pub type ImageBuf = Buf<[f32; 4]>;
+
+/// Scene buffers made by `prepare_scene`.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneArgs {
+    pub vertices: Buf<GpuVertex>,
+    pub triangles: Buf<GpuTriangle>,
+    pub materials: Buf<GpuMaterial>,
+    pub lights: Buf<GpuLight>,
+    pub bvh_nodes: Buf<[u32; 4]>,
+}
+

@@ -1,0 +1,18 @@
+//! Errors of the library's front door: what a technique's `new`, `frame` and updates
+//! return.
+
+use crate::device::error::BackendError;
+
+/// Errors of the library's front door.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("invalid scene: {0}")]
+    /// The scene failed validation (the message names the offending path).
+    InvalidScene(String),
+    #[error("invalid parameter: {0}")]
+    /// A setting or argument is out of range (the message names it).
+    InvalidParameter(String),
+    #[error(transparent)]
+    /// The backend failed (driver, memory, device lost, ...).
+    Backend(#[from] BackendError),
+}

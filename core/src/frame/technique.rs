@@ -1,0 +1,100 @@
+//! The seam every technique implements, so that the library, the CLI, `report`,
+//! references, benches and conformance create and drive any technique the same way
+//! (by name through [`crate::techniques::create`]), without naming its type.
+
+use crate::backend::Backend;
+use crate::frame::error::Error;
+use crate::frame::image::Image;
+use crate::frame::plan::FramePlan;
+use crate::frame::stats::FrameStats;
+use crate::scene::{Camera, Light};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Progress of a frame's photon work (called after every batch).
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    pub photons_done: u64,
+    pub photons_total: u64,
+}
+
+/// One output image of a technique.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct OutputInfo {
+    /// Name (also the file-name stem): `composite`, `direct`, `caustics_raw`, ...
+    pub name: &'static str,
+    /// What it holds (all outputs are linear radiance, W/(sr m^2) per channel).
+    pub description: &'static str,
+    /// Whether the caller asked for it (only requested outputs can be read).
+    pub requested: bool,
+}
+
+/// A technique on one backend, for one scene: created by [`crate::techniques::create`]
+/// (or its own typed `new`), it owns its device buffers until [`Technique::free`].
+pub trait Technique {
+    /// Registry name (`sspm`, ...).
+    fn name(&self) -> &'static str;
+
+    /// Renders one frame: the planned passes, nothing else. `progress` is called after
+    /// every photon batch.
+    fn frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error>;
+
+    /// Every output of the technique, requested or not, in a fixed order.
+    fn outputs(&self) -> Vec<OutputInfo>;
+
+    /// Reads output `name` back (linear radiance, the camera's size). An output that was
+    /// not requested is an error.
+    fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error>;
+
+    /// The technique's estimate after its filter and its unfiltered estimate (output
+    /// names): what error-against-time measurements compare with a reference.
+    fn estimate_outputs(&self) -> (&'static str, &'static str);
+
+    /// The settings in effect (serialised form, as `create` accepts them).
+    fn settings_json(&self) -> serde_json::Value;
+
+    /// Sets the frame seed of the next frames (progressive rendering, repeated runs).
+    fn set_seed(&mut self, seed: u32);
+
+    /// Moves the camera for the next frames. The image size must stay the same (device
+    /// images are sized by it).
+    fn set_camera(&mut self, camera: &Camera) -> Result<(), Error>;
+
+    /// Replaces the scene's lights for the next frames (same number of lights), without
+    /// rebuilding geometry.
+    fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error>;
+
+    /// Sets (or clears) the reference image of the filtered estimate: every later frame
+    /// puts its error against it in [`FrameStats::error`].
+    fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error>;
+
+    /// The frame plan: passes run and skipped with reasons, lights, variants, buffers.
+    fn plan(&self) -> &FramePlan;
+
+    /// Releases every device buffer of the technique.
+    fn free(self: Box<Self>, backend: &mut dyn Backend) -> Result<(), Error>;
+}
+
+static LEAKED_BUFFERS: AtomicU64 = AtomicU64::new(0);
+
+/// Device buffers of techniques dropped without `free`, in this process. A technique
+/// does not hold its backend, so it cannot free on `Drop`; it reports instead.
+pub fn leaked_buffers() -> u64 {
+    LEAKED_BUFFERS.load(Ordering::Relaxed)
+}
+
+/// What a technique's `Drop` calls when it still owns device buffers: counts them in
+/// [`leaked_buffers`] and says so on stderr, never silently.
+pub fn report_leak(technique: &str, buffers: usize, bytes: u64) {
+    if buffers == 0 {
+        return;
+    }
+    LEAKED_BUFFERS.fetch_add(buffers as u64, Ordering::Relaxed);
+    eprintln!(
+        "caustica: {technique} dropped without free(): {buffers} device buffers ({bytes} bytes) \
+         stay allocated until the backend is dropped"
+    );
+}

@@ -1,0 +1,51 @@
+//! `bilateral_gather`: one direction of the separable edge-aware photon gather (seed 000
+//! section 30.3.2).
+
+use super::{bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, ImageBuf};
+use crate::device::layout::{GBufferTexel, GatherParams};
+
+/// One direction (`params.axis` 0: horizontal, 1: vertical) of the separable edge-aware
+/// bilateral gather of caustic radiance: radius from the tile's hit distance
+/// (`params.roughness` x clamped distance, in pixels at the texel's depth), depth and
+/// normal weights from the G-buffer, normalised. Reads `input`, writes `out` (radiance).
+#[derive(Clone, Copy, Debug)]
+pub struct BilateralGather {
+    pub params: GatherParams,
+    pub gbuffer: Buf<GBufferTexel>,
+    pub tiles: Buf<f32>,
+    pub input: ImageBuf,
+    pub out: ImageBuf,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "params", kind: Params },
+    Binding { name: "gbuffer", kind: Read },
+    Binding { name: "tiles", kind: Read },
+    Binding { name: "input", kind: Read },
+    Binding { name: "out", kind: ReadWrite },
+];
+
+impl KernelDecl for BilateralGather {
+    const INFO: KernelInfo = KernelInfo {
+        name: "bilateral_gather",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: false,
+        switches: &[],
+        used_by: "Sspm",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let c = &self.params.camera;
+        let n = texels(c.width, c.height);
+        let nt = tiles(c.width, c.height, self.params.tile_size)?;
+        a.params("params", &self.params)?
+            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .buf("tiles", self.tiles, nt * 4)?
+            .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+        Ok(Some(n))
+    }
+}

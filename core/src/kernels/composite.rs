@@ -1,0 +1,40 @@
+//! `composite`: direct light plus caustics (seed 000 section 30.3.3).
+
+use super::{bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::ImageBuf;
+
+/// `out.rgb = direct.rgb + caustics.rgb`, `out.a = 1` (radiance, W/(sr m^2)).
+#[derive(Clone, Copy, Debug)]
+pub struct Composite {
+    pub direct: ImageBuf,
+    pub caustics: ImageBuf,
+    pub out: ImageBuf,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "texels", kind: Count },
+    Binding { name: "direct", kind: Read },
+    Binding { name: "caustics", kind: Read },
+    Binding { name: "out", kind: ReadWrite },
+];
+
+impl KernelDecl for Composite {
+    const INFO: KernelInfo = KernelInfo {
+        name: "composite",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: false,
+        switches: &[],
+        used_by: "all",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let n = self.out.len as u64;
+        a.count("texels", self.out.len)?
+            .buf("direct", self.direct, n * bytes::IMAGE_TEXEL)?
+            .buf("caustics", self.caustics, n * bytes::IMAGE_TEXEL)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+        Ok(Some(n))
+    }
+}

@@ -1,0 +1,59 @@
+//! `deposit_screen`: one photon -> one pixel (seed 000 section 30.3.1.3).
+
+use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::Buf;
+use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel, Photon};
+
+/// Projects each of the `photon_count[0]` stored photons to the screen and, when it lands
+/// on a receiver pixel whose G-buffer depth matches (relative `params.depth_tolerance`),
+/// adds its flux and hit distance in fixed point (`params.flux_quantum`,
+/// `params.hit_distance_quantum`) to the screen-space photon map with integer atomics;
+/// off-screen and depth-mismatched photons are counted in `counters`.
+#[derive(Clone, Copy, Debug)]
+pub struct DepositScreen {
+    pub params: DepositParams,
+    pub gbuffer: Buf<GBufferTexel>,
+    pub photons: Buf<Photon>,
+    pub photon_count: Buf<u32>,
+    pub counters: Buf<u32>,
+    pub photon_map: Buf<DepositTexel>,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "params", kind: Params },
+    Binding { name: "gbuffer", kind: Read },
+    Binding { name: "photons", kind: Read },
+    Binding { name: "photon_capacity", kind: Count },
+    Binding { name: "photon_count", kind: Read },
+    Binding { name: "counters", kind: ReadWrite },
+    Binding { name: "photon_map", kind: ReadWrite },
+];
+
+impl KernelDecl for DepositScreen {
+    const INFO: KernelInfo = KernelInfo {
+        name: "deposit_screen",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: false,
+        switches: &[],
+        used_by: "Sspm",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let n = texels(self.params.camera.width, self.params.camera.height);
+        a.params("params", &self.params)?
+            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .buf(
+                "photons",
+                self.photons,
+                self.photons.len as u64 * bytes::PHOTON,
+            )?
+            .count("photon_capacity", self.photons.len)?
+            .buf("photon_count", self.photon_count, 4)?
+            .buf("counters", self.counters, bytes::COUNTERS)?
+            .buf("photon_map", self.photon_map, n * bytes::MAP_TEXEL)?;
+        // one work-item per photon slot; the kernel reads how many are filled
+        Ok(Some(self.photons.len as u64))
+    }
+}

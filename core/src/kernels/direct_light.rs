@@ -1,0 +1,67 @@
+//! `direct_light`: shadow-ray traced direct lighting.
+
+use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, ImageBuf, SceneArgs};
+use crate::device::layout::{DirectParams, GBufferTexel};
+
+/// Largest `max_specular_depth`: GPU kernels walk the specular ray tree with a fixed
+/// stack of `MAX_SPECULAR_DEPTH + 1` entries (a depth-first walk of a binary tree of depth
+/// `d` holds at most `d + 1` pending rays).
+pub const MAX_SPECULAR_DEPTH: u32 = 30;
+
+/// Direct lighting with shadow rays at every diffuse G-buffer texel, and specular chains
+/// (mirror reflection, Fresnel-weighted reflection and refraction) from mirror and glass
+/// pixels up to `params.max_specular_depth`. Reads: scene, G-buffer. Writes: `out`,
+/// radiance in W/(sr m^2) per channel, alpha 1.
+#[derive(Clone, Copy, Debug)]
+pub struct DirectLight {
+    pub scene: SceneArgs,
+    pub params: DirectParams,
+    pub gbuffer: Buf<GBufferTexel>,
+    pub out: ImageBuf,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "vertices", kind: Read },
+    Binding { name: "triangles", kind: Read },
+    Binding { name: "materials", kind: Read },
+    Binding { name: "lights", kind: Read },
+    Binding { name: "bvh_nodes", kind: Read },
+    Binding { name: "bvh_node_count", kind: Count },
+    Binding { name: "params", kind: Params },
+    Binding { name: "gbuffer", kind: Read },
+    Binding { name: "out", kind: ReadWrite },
+];
+
+impl KernelDecl for DirectLight {
+    const INFO: KernelInfo = KernelInfo {
+        name: "direct_light",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: true,
+        switches: &[],
+        used_by: "all",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let p = &self.params;
+        if p.max_specular_depth > MAX_SPECULAR_DEPTH {
+            return Err(BackendError::BadArgument(format!(
+                "direct_light: max_specular_depth {} exceeds {MAX_SPECULAR_DEPTH}",
+                p.max_specular_depth
+            )));
+        }
+        if p.light_count > self.scene.lights.len {
+            return Err(BackendError::BadArgument(
+                "direct_light: light_count exceeds the light buffer".into(),
+            ));
+        }
+        let n = texels(p.camera.width, p.camera.height);
+        a.scene(&self.scene)?
+            .params("params", p)?
+            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+        Ok(Some(n))
+    }
+}

@@ -1,0 +1,405 @@
+//! The one list of kernels (DESIGN 3). Each kernel is declared once, in its own file
+//! (`kernels/<name>.rs`): a struct of typed arguments whose doc comment is the kernel's
+//! contract (what it reads and writes, units, spaces), and a [`KernelDecl`] impl giving
+//! its name, its bindings in launch order with their access, its workgroup size, its
+//! compiled switches and its lowering (argument checks, buffer sizes, thread count).
+//!
+//! From the list in [`kernel_list!`] below everything else is derived: the [`Kernel`] enum
+//! a [`crate::recording::Recording`] carries, the registry [`KERNELS`], the lowering of a
+//! recorded kernel to a [`Launch`] (checked binding by binding against the declaration),
+//! the Vulkan descriptor types ([`KernelInfo::descriptor_bindings`]) and the WGSL binding
+//! table the shader crate's validation test expects ([`KernelInfo::wgsl_bindings`]). The
+//! CPU backend matches [`Kernel`] exhaustively, so a new kernel without a CPU arm does
+//! not compile.
+//!
+//! Adding a kernel: a file here, one line in [`kernel_list!`], then its CPU function, WGSL,
+//! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
+
+mod bilateral_gather;
+mod composite;
+mod deposit_screen;
+mod direct_light;
+mod prepare_scene;
+mod primary_gbuffer;
+mod resolve_caustics;
+mod tile_hit_distance;
+mod trace_photons;
+
+pub use bilateral_gather::BilateralGather;
+pub use composite::Composite;
+pub use deposit_screen::DepositScreen;
+pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
+pub use prepare_scene::PrepareScene;
+pub use primary_gbuffer::PrimaryGbuffer;
+pub use resolve_caustics::ResolveCaustics;
+pub use tile_hit_distance::TileHitDistance;
+pub use trace_photons::{TracePhotons, TraceVariant};
+
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, SceneArgs};
+pub use crate::device::launch::{variant_label, variant_labels};
+use crate::device::launch::{Launch, LaunchArg};
+
+/// How a kernel binds one of its launch arguments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindingKind {
+    /// A `#[repr(C)]` parameter block: a uniform buffer in WGSL and Vulkan, a small
+    /// read-only buffer in OpenCL, a struct on the CPU.
+    Params,
+    /// A device buffer the kernel only reads.
+    Read,
+    /// A device buffer the kernel writes (or reads and writes, atomics included).
+    ReadWrite,
+    /// An element count passed as a scalar to OpenCL C; WGSL and GLSL derive it from the
+    /// length of the buffer before it, so they bind nothing for it.
+    Count,
+}
+
+/// One launch argument of a kernel, in the order of its OpenCL C signature.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub name: &'static str,
+    pub kind: BindingKind,
+}
+
+const fn bind(name: &'static str, kind: BindingKind) -> Binding {
+    Binding { name, kind }
+}
+
+/// The scene's buffers as every traced kernel binds them first: vertices, triangles,
+/// materials, lights, the CWBVH nodes and their count. Vulkan replaces `bvh_nodes` (and
+/// its count) with the driver-built acceleration structure at binding 0.
+pub const SCENE_BINDINGS: [Binding; 6] = [
+    bind("vertices", BindingKind::Read),
+    bind("triangles", BindingKind::Read),
+    bind("materials", BindingKind::Read),
+    bind("lights", BindingKind::Read),
+    bind("bvh_nodes", BindingKind::Read),
+    bind("bvh_node_count", BindingKind::Count),
+];
+
+/// A kernel's declaration: everything a backend needs to know about it but its code.
+#[derive(Clone, Copy, Debug)]
+pub struct KernelInfo {
+    pub name: &'static str,
+    /// Launch arguments in order (the OpenCL C signature; WGSL and GLSL skip counts).
+    pub bindings: &'static [Binding],
+    /// Threads per workgroup on GPU backends (1-D); compute shaders declare the same.
+    pub workgroup_size: u32,
+    /// Traces rays against the scene: a ray-tracing pipeline on Vulkan, a software CWBVH
+    /// traversal elsewhere.
+    pub traced: bool,
+    /// Compiled switches (DESIGN 3: variants are compiled, not branched), in
+    /// specialization-constant id order.
+    pub switches: &'static [&'static str],
+    /// Techniques that use it.
+    pub used_by: &'static str,
+}
+
+/// A binding as the GPU shading languages see it (counts dropped).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShaderBinding {
+    /// The scene's acceleration structure (Vulkan ray-tracing kernels, binding 0).
+    AccelerationStructure,
+    Uniform,
+    StorageRead,
+    StorageReadWrite,
+}
+
+impl KernelInfo {
+    /// The bindings of the WGSL module (`@group(0) @binding(i)` in order): every launch
+    /// argument but counts.
+    pub fn wgsl_bindings(&self) -> Vec<(&'static str, ShaderBinding)> {
+        self.bindings
+            .iter()
+            .filter_map(|b| shader_binding(b.kind).map(|k| (b.name, k)))
+            .collect()
+    }
+
+    /// The descriptor bindings of the kernel's Vulkan pipeline: ray-traced kernels bind
+    /// the acceleration structure at 0 in place of the CWBVH nodes; compute kernels (the
+    /// WGSL through naga) bind exactly [`KernelInfo::wgsl_bindings`].
+    pub fn descriptor_bindings(&self) -> Vec<ShaderBinding> {
+        let mut out = Vec::new();
+        if self.traced {
+            out.push(ShaderBinding::AccelerationStructure);
+        }
+        for b in self.bindings {
+            if self.traced && b.name == "bvh_nodes" {
+                continue;
+            }
+            if let Some(k) = shader_binding(b.kind) {
+                out.push(k);
+            }
+        }
+        out
+    }
+}
+
+fn shader_binding(kind: BindingKind) -> Option<ShaderBinding> {
+    match kind {
+        BindingKind::Params => Some(ShaderBinding::Uniform),
+        BindingKind::Read => Some(ShaderBinding::StorageRead),
+        BindingKind::ReadWrite => Some(ShaderBinding::StorageReadWrite),
+        BindingKind::Count => None,
+    }
+}
+
+/// Implemented by each kernel's argument struct, in its own file.
+pub trait KernelDecl {
+    const INFO: KernelInfo;
+
+    /// Pushes the launch arguments in declaration order onto `args` (each push is checked
+    /// against [`KernelInfo::bindings`]) and returns the number of threads, or `None` for
+    /// a kernel that launches nothing on GPU-style backends (`prepare_scene`).
+    fn lower(&self, args: &mut Args) -> Result<Option<u64>, BackendError>;
+
+    /// Values of [`KernelInfo::switches`], in order (small enumerations; 0/1 for flags).
+    fn switch_values(&self) -> Vec<u32> {
+        Vec::new()
+    }
+}
+
+/// The launch arguments of one kernel under construction, checked against its declaration:
+/// a push whose name or kind differs from the next declared binding is an error, so a
+/// declaration and its lowering cannot drift apart.
+pub struct Args {
+    info: &'static KernelInfo,
+    args: Vec<LaunchArg>,
+}
+
+fn bad(why: String) -> BackendError {
+    BackendError::BadArgument(why)
+}
+
+impl Args {
+    fn expect(&mut self, name: &'static str, kind: BindingKind) -> Result<(), BackendError> {
+        let i = self.args.len();
+        match self.info.bindings.get(i) {
+            Some(b) if b.name == name && b.kind == kind => Ok(()),
+            other => Err(bad(format!(
+                "{}: argument {i} lowered as {name} ({kind:?}), declared as {other:?}",
+                self.info.name
+            ))),
+        }
+    }
+
+    /// A device buffer that the launch reads or writes up to `need` bytes of (at least its
+    /// whole logical size).
+    pub fn buf<T>(
+        &mut self,
+        name: &'static str,
+        b: Buf<T>,
+        need: u64,
+    ) -> Result<&mut Self, BackendError> {
+        let kind = self
+            .info
+            .bindings
+            .get(self.args.len())
+            .map(|b| b.kind)
+            .filter(|k| matches!(k, BindingKind::Read | BindingKind::ReadWrite))
+            .unwrap_or(BindingKind::Read);
+        self.expect(name, kind)?;
+        self.args.push(LaunchArg::Buffer {
+            id: b.id,
+            bytes: b.bytes(),
+            need: need.max(b.bytes()),
+            what: name,
+        });
+        Ok(self)
+    }
+
+    /// A parameter block.
+    pub fn params<T: bytemuck::Pod>(
+        &mut self,
+        name: &'static str,
+        p: &T,
+    ) -> Result<&mut Self, BackendError> {
+        self.expect(name, BindingKind::Params)?;
+        self.args
+            .push(LaunchArg::Params(bytemuck::bytes_of(p).to_vec()));
+        Ok(self)
+    }
+
+    /// An element count.
+    pub fn count(&mut self, name: &'static str, n: u32) -> Result<&mut Self, BackendError> {
+        self.expect(name, BindingKind::Count)?;
+        self.args.push(LaunchArg::Count(n));
+        Ok(self)
+    }
+
+    /// The scene's [`SCENE_BINDINGS`].
+    pub fn scene(&mut self, s: &SceneArgs) -> Result<&mut Self, BackendError> {
+        if !s.bvh_nodes.len.is_multiple_of(5) {
+            return Err(bad(
+                "BVH node buffer is not a whole number of 80-byte nodes".into(),
+            ));
+        }
+        self.buf("vertices", s.vertices, 0)?
+            .buf("triangles", s.triangles, 0)?
+            .buf("materials", s.materials, 0)?
+            .buf("lights", s.lights, 0)?
+            .buf("bvh_nodes", s.bvh_nodes, 0)?
+            .count("bvh_node_count", s.bvh_nodes.len / 5)
+    }
+}
+
+/// Texels of a `w x h` image.
+pub(crate) fn texels(w: u32, h: u32) -> u64 {
+    w as u64 * h as u64
+}
+
+/// Tiles of `tile_size^2` pixels covering a `w x h` image.
+pub(crate) fn tiles(w: u32, h: u32, tile_size: u32) -> Result<u64, BackendError> {
+    if tile_size == 0 {
+        return Err(bad("tile_size is 0".into()));
+    }
+    Ok(texels(w.div_ceil(tile_size), h.div_ceil(tile_size)))
+}
+
+/// Element sizes the lowerings size buffers with (bytes).
+pub(crate) mod bytes {
+    use crate::device::layout::{counter, DepositTexel, GBufferTexel, Photon};
+    use std::mem::size_of;
+    pub const GBUFFER_TEXEL: u64 = size_of::<GBufferTexel>() as u64;
+    pub const IMAGE_TEXEL: u64 = 16;
+    pub const MAP_TEXEL: u64 = size_of::<DepositTexel>() as u64;
+    pub const PHOTON: u64 = size_of::<Photon>() as u64;
+    pub const COUNTERS: u64 = 4 * counter::WORDS as u64;
+}
+
+/// The one list: `Variant => module`. Generates [`Kernel`], [`KERNELS`], `From<...>` for
+/// each argument struct, and the lowering dispatch.
+macro_rules! kernel_list {
+    ($($variant:ident => $module:ident),* $(,)?) => {
+        /// One kernel dispatch with its typed arguments (see each struct for its contract).
+        #[derive(Clone, Debug)]
+        pub enum Kernel {
+            $($variant($variant),)*
+        }
+
+        /// Every kernel of the library, in list order.
+        pub const KERNELS: &[KernelInfo] = &[$(<$variant as KernelDecl>::INFO,)*];
+
+        $(impl From<$variant> for Kernel {
+            fn from(k: $variant) -> Kernel {
+                Kernel::$variant(k)
+            }
+        })*
+
+        impl Kernel {
+            /// The declaration of this kernel.
+            pub fn info(&self) -> &'static KernelInfo {
+                match self {
+                    $(Kernel::$variant(_) => &<$variant as KernelDecl>::INFO,)*
+                }
+            }
+
+            fn lower_into(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+                match self {
+                    $(Kernel::$variant(k) => k.lower(a),)*
+                }
+            }
+
+            fn switch_values(&self) -> Vec<u32> {
+                match self {
+                    $(Kernel::$variant(k) => k.switch_values(),)*
+                }
+            }
+        }
+    };
+}
+
+kernel_list! {
+    PrepareScene => prepare_scene,
+    PrimaryGbuffer => primary_gbuffer,
+    DirectLight => direct_light,
+    TracePhotons => trace_photons,
+    DepositScreen => deposit_screen,
+    ResolveCaustics => resolve_caustics,
+    TileHitDistance => tile_hit_distance,
+    BilateralGather => bilateral_gather,
+    Composite => composite,
+}
+
+impl Kernel {
+    /// The registry name of this kernel.
+    pub fn name(&self) -> &'static str {
+        self.info().name
+    }
+
+    /// Lowers the kernel to its launch: arguments in declaration order with the bytes
+    /// each buffer must hold, the thread count and the switch values; `None` for
+    /// `prepare_scene` (GPU-style backends traverse the uploaded node array as it is;
+    /// only its shape is checked). A [`crate::recording::Recording`] lowers each kernel
+    /// once, when it is recorded.
+    pub fn launch(&self) -> Result<Option<Launch>, BackendError> {
+        let info = self.info();
+        let mut a = Args {
+            info,
+            args: Vec::new(),
+        };
+        let Some(threads) = self.lower_into(&mut a)? else {
+            return Ok(None);
+        };
+        if a.args.len() != info.bindings.len() {
+            return Err(bad(format!(
+                "{}: lowered {} arguments, declared {}",
+                info.name,
+                a.args.len(),
+                info.bindings.len()
+            )));
+        }
+        let values = self.switch_values();
+        if values.len() != info.switches.len() {
+            return Err(bad(format!(
+                "{}: {} switch values for {} switches",
+                info.name,
+                values.len(),
+                info.switches.len()
+            )));
+        }
+        Ok(Some(Launch {
+            kernel: info.name,
+            constants: info.switches.iter().copied().zip(values).collect(),
+            threads,
+            workgroup_size: info.workgroup_size,
+            args: a.args,
+        }))
+    }
+}
+
+/// The declaration of kernel `name`.
+pub fn kernel_info(name: &str) -> Option<&'static KernelInfo> {
+    KERNELS.iter().find(|k| k.name == name)
+}
+
+/// Registry kernel names, in list order.
+pub fn all_kernel_names() -> Vec<&'static str> {
+    KERNELS.iter().map(|k| k.name).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_snake_case() {
+        let names = all_kernel_names();
+        for (i, n) in names.iter().enumerate() {
+            assert!(!names[..i].contains(n), "{n} listed twice");
+            assert!(n.chars().all(|c| c.is_ascii_lowercase() || c == '_'));
+        }
+    }
+
+    #[test]
+    fn traced_kernels_bind_the_scene_first() {
+        for k in KERNELS.iter().filter(|k| k.traced) {
+            assert_eq!(&k.bindings[..6], &SCENE_BINDINGS, "{}", k.name);
+            assert_eq!(
+                k.descriptor_bindings()[0],
+                ShaderBinding::AccelerationStructure
+            );
+        }
+    }
+}

@@ -1,0 +1,47 @@
+//! `primary_gbuffer`: primary visibility.
+
+use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, SceneArgs};
+use crate::device::layout::{GBufferTexel, GpuCamera};
+
+/// Primary visibility: one camera ray per pixel (through the pixel centre, world space),
+/// writes the G-buffer texel of its first hit (view depth, position, shading normal turned
+/// to the camera, albedo, roughness, uv, material; `depth = 0` on a miss).
+/// Reads: scene, camera. Writes: `gbuffer` (`camera.width * camera.height` texels).
+#[derive(Clone, Copy, Debug)]
+pub struct PrimaryGbuffer {
+    pub scene: SceneArgs,
+    pub camera: GpuCamera,
+    pub gbuffer: Buf<GBufferTexel>,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "vertices", kind: Read },
+    Binding { name: "triangles", kind: Read },
+    Binding { name: "materials", kind: Read },
+    Binding { name: "lights", kind: Read },
+    Binding { name: "bvh_nodes", kind: Read },
+    Binding { name: "bvh_node_count", kind: Count },
+    Binding { name: "camera", kind: Params },
+    Binding { name: "gbuffer", kind: ReadWrite },
+];
+
+impl KernelDecl for PrimaryGbuffer {
+    const INFO: KernelInfo = KernelInfo {
+        name: "primary_gbuffer",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: true,
+        switches: &[],
+        used_by: "all",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let n = texels(self.camera.width, self.camera.height);
+        a.scene(&self.scene)?
+            .params("camera", &self.camera)?
+            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?;
+        Ok(Some(n))
+    }
+}

@@ -1,0 +1,45 @@
+//! `resolve_caustics`: fixed-point photon map -> caustic radiance (seed 000 Eq. 5).
+
+use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, ImageBuf};
+use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel};
+
+/// Converts the fixed-point screen-space photon map to caustic radiance: flux over the
+/// pixel's surface area (seed 000 Eq. 4-5) times the diffuse BRDF, W/(sr m^2) per
+/// channel; `out.a` holds the mean hit distance of the pixel's photons (scene units, 0
+/// without photons).
+#[derive(Clone, Copy, Debug)]
+pub struct ResolveCaustics {
+    pub params: DepositParams,
+    pub gbuffer: Buf<GBufferTexel>,
+    pub photon_map: Buf<DepositTexel>,
+    pub out: ImageBuf,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "params", kind: Params },
+    Binding { name: "gbuffer", kind: Read },
+    Binding { name: "photon_map", kind: Read },
+    Binding { name: "out", kind: ReadWrite },
+];
+
+impl KernelDecl for ResolveCaustics {
+    const INFO: KernelInfo = KernelInfo {
+        name: "resolve_caustics",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: false,
+        switches: &[],
+        used_by: "Sspm",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let n = texels(self.params.camera.width, self.params.camera.height);
+        a.params("params", &self.params)?
+            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .buf("photon_map", self.photon_map, n * bytes::MAP_TEXEL)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+        Ok(Some(n))
+    }
+}

@@ -1,0 +1,42 @@
+//! `tile_hit_distance`: mean photon hit distance per tile (seed 000 section 30.3.2).
+
+use super::{bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::Buf;
+use crate::device::layout::{DepositTexel, GatherParams};
+
+/// Mean hit distance (scene units) per `params.tile_size^2` tile of the screen-space
+/// photon map, photon-weighted; 0 for tiles without photons. The gather's radius follows it.
+#[derive(Clone, Copy, Debug)]
+pub struct TileHitDistance {
+    pub params: GatherParams,
+    pub photon_map: Buf<DepositTexel>,
+    pub tiles: Buf<f32>,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "params", kind: Params },
+    Binding { name: "photon_map", kind: Read },
+    Binding { name: "tiles", kind: ReadWrite },
+];
+
+impl KernelDecl for TileHitDistance {
+    const INFO: KernelInfo = KernelInfo {
+        name: "tile_hit_distance",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: false,
+        switches: &[],
+        used_by: "Sspm",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let c = &self.params.camera;
+        let n = texels(c.width, c.height);
+        let nt = tiles(c.width, c.height, self.params.tile_size)?;
+        a.params("params", &self.params)?
+            .buf("photon_map", self.photon_map, n * bytes::MAP_TEXEL)?
+            .buf("tiles", self.tiles, nt * 4)?;
+        Ok(Some(nt))
+    }
+}

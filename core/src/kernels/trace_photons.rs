@@ -1,0 +1,119 @@
+//! `trace_photons`: emit, trace through specular chains, store.
+
+use super::{bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, SceneArgs};
+use crate::device::layout::{Photon, TraceParams};
+
+/// Emits and traces photons `params.first .. first + count` of light `params.light` from
+/// its emission domain through specular chains (mirror, Fresnel reflect/refract, total
+/// internal reflection, Beer-Lambert, Cauchy dispersion as the variant allows); appends
+/// each photon that ends on a diffuse surface after at least one specular interaction to
+/// `photons` at `photon_count[0]` (world-space position, flux in W per channel, last
+/// segment length) and adds the photon accounting to `counters`
+/// ([`crate::device::layout::counter`]).
+#[derive(Clone, Copy, Debug)]
+pub struct TracePhotons {
+    pub scene: SceneArgs,
+    /// The compiled variant to run (the frame plan's; it must cover every material
+    /// feature of the scene).
+    pub variant: TraceVariant,
+    pub params: TraceParams,
+    pub photons: Buf<Photon>,
+    pub photon_count: Buf<u32>,
+    pub counters: Buf<u32>,
+}
+
+const BINDINGS: &[Binding] = &[
+    Binding { name: "vertices", kind: Read },
+    Binding { name: "triangles", kind: Read },
+    Binding { name: "materials", kind: Read },
+    Binding { name: "lights", kind: Read },
+    Binding { name: "bvh_nodes", kind: Read },
+    Binding { name: "bvh_node_count", kind: Count },
+    Binding { name: "params", kind: Params },
+    Binding { name: "photons", kind: ReadWrite },
+    Binding { name: "photon_capacity", kind: Count },
+    Binding { name: "photon_count", kind: ReadWrite },
+    Binding { name: "counters", kind: ReadWrite },
+];
+
+impl KernelDecl for TracePhotons {
+    const INFO: KernelInfo = KernelInfo {
+        name: "trace_photons",
+        bindings: BINDINGS,
+        workgroup_size: 64,
+        traced: true,
+        switches: &TraceVariant::SWITCHES,
+        used_by: "Sspm",
+    };
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let p = &self.params;
+        if p.count > self.photons.len {
+            return Err(BackendError::BadArgument(format!(
+                "photon buffer holds {} photons, the batch traces {}",
+                self.photons.len, p.count
+            )));
+        }
+        if p.light >= self.scene.lights.len {
+            return Err(BackendError::BadArgument(
+                "trace_photons: light index out of range".into(),
+            ));
+        }
+        a.scene(&self.scene)?
+            .params("params", p)?
+            .buf("photons", self.photons, 0)?
+            .count("photon_capacity", self.photons.len)?
+            .buf("photon_count", self.photon_count, 4)?
+            .buf("counters", self.counters, bytes::COUNTERS)?;
+        Ok(Some(p.count as u64))
+    }
+
+    fn switch_values(&self) -> Vec<u32> {
+        self.variant.values().to_vec()
+    }
+}
+
+/// A compiled variant of `trace_photons` (DESIGN 3: feature variants are compiled, not
+/// branched). Each switch removes a material feature from the kernel; the frame plan
+/// turns on only what the scene's objects use. Backends compile it as WGSL
+/// pipeline-overridable constants, Vulkan specialization constants (ids in
+/// [`TraceVariant::SWITCHES`] order), OpenCL `-D` defines and CPU const generics, each
+/// under the names of [`TraceVariant::SWITCHES`]. Switch values are `u32` so that small
+/// enumerations (emission source, store policy) can join the flags.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub struct TraceVariant {
+    /// Dielectric interfaces (Fresnel reflect/refract, total internal reflection).
+    pub dielectric: bool,
+    /// Cauchy dispersion (one colour channel per photon after its first dispersive hit).
+    pub dispersion: bool,
+    /// Beer-Lambert absorption inside dielectrics.
+    pub absorption: bool,
+}
+
+impl TraceVariant {
+    /// Switch names, in specialization-constant id order.
+    pub const SWITCHES: [&'static str; 3] = ["DIELECTRIC", "DISPERSION", "ABSORPTION"];
+
+    /// Every feature compiled in (what a frame uses with pruning off).
+    pub const ALL: TraceVariant = TraceVariant {
+        dielectric: true,
+        dispersion: true,
+        absorption: true,
+    };
+
+    /// Switch values in [`TraceVariant::SWITCHES`] order.
+    pub fn values(&self) -> [u32; 3] {
+        [
+            self.dielectric as u32,
+            self.dispersion as u32,
+            self.absorption as u32,
+        ]
+    }
+
+    /// `(name, value)` of each switch, in specialization-constant id order.
+    pub fn constants(&self) -> Vec<(&'static str, u32)> {
+        Self::SWITCHES.iter().copied().zip(self.values()).collect()
+    }
+}

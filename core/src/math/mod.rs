@@ -1,0 +1,10 @@
+//! Scalar math every backend shares (DESIGN 3): each shader port (WGSL, OpenCL C, GLSL)
+//! mirrors these functions by name. Depends on nothing else in the crate.
+
+pub mod fixed_point;
+pub mod footprint;
+pub mod geometry;
+pub mod optics;
+pub mod packing;
+pub mod rng;
+pub mod sampling;

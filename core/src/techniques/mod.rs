@@ -1,0 +1,72 @@
+//! The techniques, one folder each, and the one place that maps technique names to
+//! types ([`TECHNIQUES`]). The library, the CLI, `report`, references, benches and
+//! conformance create techniques by name through [`create`] and drive them through
+//! [`crate::frame::technique::Technique`].
+
+pub mod sspm;
+
+use crate::backend::Backend;
+use crate::frame::error::Error;
+use crate::frame::technique::Technique;
+use crate::scene::Scene;
+
+/// A registered technique.
+#[derive(Clone, Copy)]
+pub struct TechniqueEntry {
+    /// Name on the command line and in reports.
+    pub name: &'static str,
+    /// One line: what it is and where it comes from.
+    pub title: &'static str,
+    /// Creates it on `backend` for `scene` with `settings`, a JSON object of the
+    /// technique's settings fields (missing fields take their defaults; every technique
+    /// accepts `photons_w`, `photons_h` and `seed`).
+    pub create: fn(&mut dyn Backend, &Scene, &serde_json::Value) -> Result<Box<dyn Technique>, Error>,
+    /// The default settings (serialised).
+    pub default_settings: fn() -> serde_json::Value,
+}
+
+/// Every technique, by name: the registry.
+pub const TECHNIQUES: &[TechniqueEntry] = &[TechniqueEntry {
+    name: "sspm",
+    title: "screen-space photon mapping (seed 000, Kim, Ray Tracing Gems ch. 30)",
+    create: sspm::create,
+    default_settings: || {
+        serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
+    },
+}];
+
+/// Names of every registered technique.
+pub fn technique_names() -> Vec<&'static str> {
+    TECHNIQUES.iter().map(|t| t.name).collect()
+}
+
+/// Creates technique `name` (see [`TechniqueEntry::create`]).
+pub fn create(
+    name: &str,
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    settings: &serde_json::Value,
+) -> Result<Box<dyn Technique>, Error> {
+    let entry = TECHNIQUES.iter().find(|t| t.name == name).ok_or_else(|| {
+        Error::InvalidParameter(format!(
+            "unknown technique '{name}'; available: {}",
+            technique_names().join(", ")
+        ))
+    })?;
+    (entry.create)(backend, scene, settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_technique_takes_the_common_settings() {
+        for t in TECHNIQUES {
+            let d = (t.default_settings)();
+            for key in ["photons_w", "photons_h", "seed"] {
+                assert!(d.get(key).is_some(), "{} lacks {key}", t.name);
+            }
+        }
+    }
+}

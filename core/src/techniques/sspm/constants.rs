@@ -1,0 +1,180 @@
+//! What Sspm's kernels are parameterised with, derived before any work.
+
+use super::settings::SspmSettings;
+use crate::device::device_scene::DeviceScene;
+use crate::device::layout::*;
+use crate::frame::emission::{emission_domain, unpruned_domain, EmissionDomain, NoEmission};
+use crate::math::fixed_point::power_of_two_quantum;
+use crate::math::geometry::Aabb;
+use crate::math::rng::pcg_hash;
+use crate::scene::Scene;
+
+/// What a frame's kernels are parameterised with, derived from the scene and settings
+/// before any work: each light's emission domain (or why it emits nothing), the
+/// fixed-point quanta and the gather's hit-distance clamp. [`Sspm`] records its kernels
+/// with these; tests that drive single kernels build the same parameters from them.
+#[derive(Clone, Debug)]
+pub struct FrameConstants {
+    /// (light index, emission domain) of every light that emits photons.
+    pub domains: Vec<(u32, EmissionDomain)>,
+    /// Lights that emit no photons, and why.
+    pub skipped_lights: Vec<(u32, NoEmission)>,
+    /// Lights in `domains` that emit their whole domain only because pruning is off.
+    pub unpruned: Vec<u32>,
+    /// Flux of the brightest photon the frame can store (W, one channel): the largest
+    /// per-photon emitted flux, x3 when a dispersive material can concentrate a photon
+    /// into one channel.
+    pub max_photon_flux: f32,
+    /// Flux per fixed-point unit (W), a power of two: the brightest photon of the frame
+    /// (x3 when a dispersive material can concentrate a photon into one channel) is
+    /// 2^24 to 2^25 units.
+    pub flux_quantum: f32,
+    /// Hit distance per fixed-point unit (scene units), a power of two: the scene diagonal
+    /// is 2^24 to 2^25 units.
+    pub hit_distance_quantum: f32,
+    /// Clamp of the gather's hit distance (scene units; defaults 5% and 50% of the scene
+    /// diagonal).
+    pub hit_distance_min: f32,
+    pub hit_distance_max: f32,
+}
+
+impl FrameConstants {
+    pub fn new(scene: &Scene, ds: &DeviceScene, settings: &SspmSettings) -> FrameConstants {
+        Self::for_bounds(
+            scene,
+            ds.bounds,
+            ds.caster_bounds,
+            ds.has_dispersion,
+            settings,
+        )
+    }
+
+    /// [`FrameConstants::new`] from the device scene's bounds (scene, casters) and whether
+    /// a material disperses: what a light update re-plans with.
+    pub fn for_bounds(
+        scene: &Scene,
+        bounds: Aabb,
+        caster_bounds: Aabb,
+        has_dispersion: bool,
+        settings: &SspmSettings,
+    ) -> FrameConstants {
+        let mut domains = Vec::new();
+        let mut skipped_lights = Vec::new();
+        let mut unpruned = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            let i = i as u32;
+            match emission_domain(l, caster_bounds, bounds, settings.point_emission) {
+                Ok(domain) => domains.push((i, domain)),
+                Err(why) => match unpruned_domain(l, bounds).filter(|_| !settings.prune) {
+                    Some(domain) => {
+                        domains.push((i, domain));
+                        unpruned.push(i);
+                    }
+                    None => skipped_lights.push((i, why)),
+                },
+            }
+        }
+        let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
+        let dispersion_gain = if has_dispersion { 3.0 } else { 1.0 };
+        // Lights that emit only because pruning is off store no photon (that is why the
+        // plan prunes them), so the quantum ignores them and stays the pruned frame's:
+        // pruning on and off give the same fixed-point sums.
+        let max_photon_flux = domains
+            .iter()
+            .filter(|(i, _)| !unpruned.contains(i))
+            .map(|(_, d)| d.flux.max_element() / photons_per_light)
+            .fold(0.0f32, f32::max)
+            * dispersion_gain;
+        let flux_quantum = power_of_two_quantum(max_photon_flux);
+        let diag = bounds.diagonal().max(f32::MIN_POSITIVE);
+        let hit_distance_min = settings.hit_distance_min.unwrap_or(0.05 * diag);
+        FrameConstants {
+            domains,
+            skipped_lights,
+            unpruned,
+            max_photon_flux,
+            flux_quantum,
+            hit_distance_quantum: power_of_two_quantum(diag),
+            hit_distance_min,
+            hit_distance_max: settings
+                .hit_distance_max
+                .unwrap_or(0.5 * diag)
+                .max(hit_distance_min),
+        }
+    }
+
+    /// `trace_photons` parameters for photons `first .. first + count` of light `light`
+    /// with emission domain `d`: the light's seed is the frame seed hashed with its index.
+    pub fn trace_params(
+        &self,
+        settings: &SspmSettings,
+        light: u32,
+        d: &EmissionDomain,
+        first: u32,
+        count: u32,
+    ) -> TraceParams {
+        d.trace_params(
+            light,
+            (settings.photons_w, settings.photons_h),
+            (first, count),
+            settings.seed ^ pcg_hash(light.wrapping_add(0x6c62_272e)),
+            settings.max_bounces,
+            settings.min_relative_power,
+            self.flux_quantum,
+        )
+    }
+
+    /// `deposit_screen` / `resolve_caustics` parameters.
+    pub fn deposit_params(
+        &self,
+        camera: GpuCamera,
+        settings: &SspmSettings,
+        photon_capacity: u32,
+    ) -> DepositParams {
+        DepositParams {
+            camera,
+            flux_quantum: self.flux_quantum,
+            hit_distance_quantum: self.hit_distance_quantum,
+            depth_tolerance: settings.depth_tolerance,
+            photon_capacity,
+        }
+    }
+
+    /// `tile_hit_distance` / `bilateral_gather` parameters (`axis` 0: horizontal pass).
+    pub fn gather_params(
+        &self,
+        camera: GpuCamera,
+        settings: &SspmSettings,
+        axis: u32,
+    ) -> GatherParams {
+        GatherParams {
+            camera,
+            roughness: settings.roughness,
+            hit_distance_min: self.hit_distance_min,
+            hit_distance_max: self.hit_distance_max,
+            max_radius_px: settings.max_radius_px,
+            sigma_depth: settings.sigma_depth,
+            normal_power: settings.normal_power,
+            axis,
+            tile_size: settings.tile_size,
+            hit_distance_quantum: self.hit_distance_quantum,
+            _pad: [0; 3],
+        }
+    }
+
+    /// `direct_light` parameters.
+    pub fn direct_params(
+        camera: GpuCamera,
+        light_count: u32,
+        settings: &SspmSettings,
+    ) -> DirectParams {
+        DirectParams {
+            camera,
+            light_count,
+            max_specular_depth: settings.max_specular_depth,
+            min_weight: 1e-3,
+            _pad: 0,
+        }
+    }
+}
+

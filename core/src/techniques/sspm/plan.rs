@@ -1,0 +1,160 @@
+//! Sspm's frame plan: which of its passes run for the scene, its lights and the requested
+//! outputs, and why ([`crate::frame::plan`] holds the shared vocabulary).
+
+use super::constants::FrameConstants;
+use super::outputs::Outputs;
+use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
+use crate::kernels::TraceVariant;
+use crate::scene::Scene;
+
+/// What the passes of a plan need, as flags (the technique creates buffers from them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Needs {
+    pub direct_light: bool,
+    pub photons: bool,
+    pub gather: bool,
+    pub composite: bool,
+}
+
+/// Plans a frame of Sspm for `scene` with emission already decided in `constants`.
+pub fn plan_frame(
+        scene: &Scene,
+        constants: &FrameConstants,
+        outputs: Outputs,
+        prune: bool,
+    ) -> FramePlan {
+        let features = SceneFeatures::of(scene);
+        let mut lights: Vec<LightPlan> = constants
+            .domains
+            .iter()
+            .map(|(i, _)| LightPlan {
+                light: *i,
+                emits: true,
+                reason: if constants.unpruned.contains(i) {
+                    "pruning off: emits its whole domain".into()
+                } else {
+                    "its emission domain reaches a caustic caster".into()
+                },
+            })
+            .collect();
+        lights.extend(constants.skipped_lights.iter().map(|(i, why)| LightPlan {
+            light: *i,
+            emits: false,
+            reason: why.reason().into(),
+        }));
+        lights.sort_by_key(|l| l.light);
+
+        let emits = !constants.domains.is_empty();
+        let n = Needs::of(outputs, emits, prune);
+        let mut passes = Vec::new();
+        let mut pass = |name: &str, runs: bool, reason: &str| {
+            passes.push(PassPlan {
+                name: name.into(),
+                runs,
+                reason: reason.into(),
+            })
+        };
+        let off = "pruning off: every pass runs";
+        let why_photons = if !prune {
+            off
+        } else if !emits {
+            "no light emits photons"
+        } else if !(outputs.composite || outputs.raw_caustics || outputs.filtered_caustics) {
+            "no caustic output requested"
+        } else {
+            "a light reaches a caustic caster and a caustic output is requested"
+        };
+        pass(
+            "primary_gbuffer",
+            true,
+            "every output is shaded from the G-buffer",
+        );
+        pass(
+            "direct_light",
+            n.direct_light,
+            if !prune {
+                off
+            } else if n.direct_light {
+                "direct or composite output requested"
+            } else {
+                "neither direct nor composite output requested"
+            },
+        );
+        pass("trace_photons", n.photons, why_photons);
+        pass("deposit_screen", n.photons, why_photons);
+        pass("resolve_caustics", n.photons, why_photons);
+        let why_gather = if !prune {
+            off
+        } else if !n.photons {
+            why_photons
+        } else if n.gather {
+            "filtered caustics or composite requested"
+        } else {
+            "neither filtered caustics nor composite requested"
+        };
+        pass("tile_hit_distance", n.gather, why_gather);
+        pass("bilateral_gather", n.gather, why_gather);
+        pass(
+            "composite",
+            n.composite,
+            if !prune {
+                off
+            } else if !outputs.composite {
+                "composite not requested"
+            } else if n.composite {
+                "composite requested"
+            } else {
+                "no caustics: the composite is the direct image"
+            },
+        );
+        FramePlan {
+            prune,
+            features,
+            outputs: outputs.names(),
+            lights,
+            trace_variant: n.photons.then(|| {
+                if prune {
+                    features.trace_variant()
+                } else {
+                    TraceVariant::ALL
+                }
+            }),
+            passes,
+            buffers: Vec::new(),
+        }
+    }
+
+
+impl Needs {
+    /// The needs of a plan made by [`plan_frame`] (which pass groups run).
+    pub fn of_plan(plan: &FramePlan) -> Needs {
+        Needs {
+            direct_light: plan.runs("direct_light"),
+            photons: plan.runs("trace_photons"),
+            gather: plan.runs("bilateral_gather"),
+            composite: plan.runs("composite"),
+        }
+    }
+}
+
+impl Needs {
+    /// Which pass groups run for `outputs`, given whether any light emits.
+    pub fn of(outputs: Outputs, emits: bool, prune: bool) -> Needs {
+        if !prune {
+            return Needs {
+                direct_light: true,
+                photons: true,
+                gather: true,
+                composite: true,
+            };
+        }
+        let photons =
+            emits && (outputs.composite || outputs.raw_caustics || outputs.filtered_caustics);
+        Needs {
+            direct_light: outputs.direct || outputs.composite,
+            photons,
+            gather: photons && (outputs.filtered_caustics || outputs.composite),
+            composite: photons && outputs.composite,
+        }
+    }
+}

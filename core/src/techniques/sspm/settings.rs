@@ -1,0 +1,138 @@
+//! Every parameter of Sspm, with its defaults and validation.
+
+use super::outputs::Outputs;
+use crate::frame::emission::PointEmission;
+use crate::frame::error::Error;
+use crate::kernels::MAX_SPECULAR_DEPTH;
+use serde::{Deserialize, Serialize};
+
+/// Every parameter of the technique; defaults from seed 000 where it gives them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SspmSettings {
+    /// Photon grid per light, `pw x ph` (seed 000: 2k x 2k in its figures).
+    pub photons_w: u32,
+    pub photons_h: u32,
+    /// Maximum ray segments per photon path.
+    pub max_bounces: u32,
+    /// A photon whose largest channel falls below this fraction of its emitted flux is
+    /// dropped as negligible (seed 000 condition 1).
+    pub min_relative_power: f32,
+    /// Point-light emission domain.
+    pub point_emission: PointEmission,
+    /// Relative view-depth tolerance of the store test (condition 3).
+    pub depth_tolerance: f32,
+    /// Gather blur per unit hit distance (the source's denoiser "roughness", 0.07).
+    pub roughness: f32,
+    /// Hit-distance clamp (scene units); `None`: 5% and 50% of the scene's diagonal (the
+    /// source clamps to [300, 2000] in its scene units and asks for a per-scene choice).
+    pub hit_distance_min: Option<f32>,
+    pub hit_distance_max: Option<f32>,
+    /// Largest gather radius in pixels.
+    pub max_radius_px: u32,
+    /// Bilateral depth weight `exp(-|dz| / (sigma_depth z))`.
+    pub sigma_depth: f32,
+    /// Bilateral normal weight exponent (0 disables it).
+    pub normal_power: f32,
+    /// Tile size (pixels) of the hit-distance tiles that set the gather radius.
+    pub tile_size: u32,
+    /// Longest specular chain followed from a mirror/glass pixel in `direct_light`.
+    pub max_specular_depth: u32,
+    /// Frame seed of the counter-based RNG.
+    pub seed: u32,
+    /// Memory limit: photons traced per batch (photon buffer = 32 bytes each).
+    pub max_photons_per_batch: u32,
+    /// The images the caller wants; passes and buffers that no requested image needs are
+    /// left out (see [`crate::frame::plan`]).
+    pub outputs: Outputs,
+    /// Leave out passes, kernel features, buffers and lights the scene and outputs do
+    /// not need (default). Off: everything runs, the baseline pruning is checked against.
+    pub prune: bool,
+}
+
+impl Default for SspmSettings {
+    fn default() -> Self {
+        SspmSettings {
+            photons_w: 1024,
+            photons_h: 1024,
+            max_bounces: 12,
+            min_relative_power: 1e-4,
+            point_emission: PointEmission::CasterCone,
+            depth_tolerance: 0.01,
+            roughness: 0.07,
+            hit_distance_min: None,
+            hit_distance_max: None,
+            max_radius_px: 16,
+            sigma_depth: 0.02,
+            normal_power: 8.0,
+            tile_size: 8,
+            max_specular_depth: 6,
+            seed: 0x5350_4d31,
+            max_photons_per_batch: 1 << 20,
+            outputs: Outputs::default(),
+            prune: true,
+        }
+    }
+}
+
+impl SspmSettings {
+    /// Rejects parameters that cannot give a meaningful frame.
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |what: &str| Err(Error::InvalidParameter(what.to_string()));
+        let total = self.photons_w as u64 * self.photons_h as u64;
+        if self.photons_w == 0 || self.photons_h == 0 || total > u32::MAX as u64 {
+            return bad("photon grid must be at least 1x1 and at most 2^32 - 1 photons per light");
+        }
+        if self.max_bounces == 0 || self.max_bounces > 1024 {
+            return bad("max_bounces must be in 1..=1024");
+        }
+        if !(self.min_relative_power >= 0.0 && self.min_relative_power < 1.0) {
+            return bad("min_relative_power must be in [0, 1)");
+        }
+        if !(self.depth_tolerance > 0.0 && self.depth_tolerance.is_finite()) {
+            return bad("depth_tolerance must be > 0");
+        }
+        if !(self.roughness >= 0.0 && self.roughness.is_finite()) {
+            return bad("roughness must be >= 0");
+        }
+        for (name, v) in [
+            ("hit_distance_min", self.hit_distance_min),
+            ("hit_distance_max", self.hit_distance_max),
+        ] {
+            if let Some(v) = v {
+                if !(v > 0.0 && v.is_finite()) {
+                    return bad(&format!("{name} must be > 0"));
+                }
+            }
+        }
+        if let (Some(a), Some(b)) = (self.hit_distance_min, self.hit_distance_max) {
+            if a > b {
+                return bad("hit_distance_min exceeds hit_distance_max");
+            }
+        }
+        if self.max_radius_px > 256 {
+            return bad("max_radius_px must be <= 256");
+        }
+        if !(self.sigma_depth > 0.0 && self.sigma_depth.is_finite())
+            || !(self.normal_power >= 0.0 && self.normal_power.is_finite())
+        {
+            return bad("sigma_depth must be > 0 and normal_power >= 0");
+        }
+        if self.tile_size == 0 || self.tile_size > 256 {
+            return bad("tile_size must be in 1..=256");
+        }
+        if !self.outputs.any() {
+            return bad("outputs: at least one output must be requested");
+        }
+        if self.max_photons_per_batch == 0 {
+            return bad("max_photons_per_batch must be >= 1");
+        }
+        if self.max_specular_depth > MAX_SPECULAR_DEPTH {
+            return bad(&format!(
+                "max_specular_depth must be <= {MAX_SPECULAR_DEPTH}"
+            ));
+        }
+        Ok(())
+    }
+}
+
