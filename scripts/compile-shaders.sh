@@ -14,6 +14,8 @@
 #      every float operation (types.glsl says why): the kernels must round as the Rust
 #      reference, which never fuses a * b + c;
 #   4. records one line in spirv/SOURCES.sha256.
+# The struct layouts in the result are then checked against core's by
+# backend-vulkan/tests/glsl_layouts.rs (cargo test -p caustica-vulkan).
 #
 # Hash rule (backend-vulkan/tests/spirv_sources.rs recomputes it), one line per stage:
 #   <sha256 of: the stage file's bytes, followed by the bytes of every file in

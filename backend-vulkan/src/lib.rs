@@ -1,7 +1,8 @@
 //! caustica Vulkan backend (ash): the driver builds the acceleration structures
 //! (VK_KHR_acceleration_structure) and ray-tracing pipelines (VK_KHR_ray_tracing_pipeline)
 //! trace the G-buffer, the shadow rays of direct light and the photons; the other kernels
-//! are compute pipelines made from the wgpu backend's WGSL through naga's SPIR-V writer.
+//! are compute pipelines made from the WGSL kernels of `caustica-shaders` (the wgpu
+//! backend's source) through naga's SPIR-V writer.
 //!
 //! Buffers stay on the device between passes and recordings; reads come back only through
 //! [`Backend::read`]. Pass times are device timestamps. With

@@ -1,7 +1,8 @@
 //! Pipelines: ray-tracing pipelines (ray generation, closest-hit and miss stages from the
 //! GLSL sources under `shaders/`, compiled to SPIR-V kept in `spirv/`) with their shader
-//! binding tables, and compute pipelines for the other kernels, from the wgpu backend's
-//! WGSL through naga's SPIR-V writer (one source for both backends).
+//! binding tables, and compute pipelines for the other kernels, from the WGSL of the
+//! `caustica-shaders` crate through naga's SPIR-V writer (one source for this backend and
+//! the wgpu backend).
 
 use crate::context::{vk_error, Context};
 use crate::memory::Buffer;
@@ -9,9 +10,7 @@ use ash::vk;
 use caustica_core::backend::BackendError;
 use std::sync::Arc;
 
-/// The WGSL kernels and their assembly, shared with the wgpu backend (same file).
-#[path = "../../backend-wgpu/src/shaders.rs"]
-mod wgsl;
+use caustica_shaders as wgsl;
 
 /// SPIR-V of the GLSL stages (see `scripts/compile-shaders.sh`).
 pub mod spirv {
@@ -155,7 +154,8 @@ pub fn compute(
     })
 }
 
-/// SPIR-V of the wgpu backend's WGSL kernel `name`, through naga.
+/// SPIR-V of WGSL kernel `name` (`caustica-shaders`, as the wgpu backend runs it), through
+/// naga.
 pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
     if wgsl::VARIANT_KERNELS.contains(&name) {
         // override constants are resolved per variant; Vulkan runs these kernels as

@@ -1,7 +1,7 @@
 //! Registry kernels to wgpu compute passes: core's [`Launch`] description (buffers and
-//! parameter blocks in the binding order of each `shaders/<kernel>.wgsl`; counts are
-//! derived in WGSL with `arrayLength`), 2-D workgroup grids for launches beyond 65535
-//! groups, and per-pass timestamps.
+//! parameter blocks in the binding order of each kernel's `wgsl/<kernel>.wgsl` in
+//! `caustica-shaders`; counts are derived in WGSL with `arrayLength`), 2-D workgroup grids
+//! for launches beyond 65535 groups, and per-pass timestamps.
 
 use crate::WgpuBackend;
 use caustica_core::backend::{BackendError, PassTime};

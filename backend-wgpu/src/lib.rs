@@ -1,6 +1,7 @@
-//! caustica wgpu backend: every registry kernel as a WGSL compute shader
-//! (`shaders/<kernel>.wgsl`, functions named as core's scalar functions), software
-//! traversal of core's flattened CWBVH, u32 atomics for the fixed-point deposit.
+//! caustica wgpu backend: every registry kernel as a WGSL compute shader (the
+//! `caustica-shaders` crate's `wgsl/<kernel>.wgsl`, functions named as core's scalar
+//! functions), software traversal of core's flattened CWBVH, u32 atomics for the
+//! fixed-point deposit.
 //!
 //! Pipelines are created once, buffers stay on the device between passes and recordings,
 //! data comes back only through [`Backend::read`]. Per-pass GPU timestamps are used where
@@ -10,13 +11,13 @@
 //! caustics, say) into the caller's texture.
 
 mod dispatch;
-pub mod shaders;
 mod texture;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::device::launch::Launch;
 use caustica_core::device::handle::ResourceId;
+use caustica_core::device::launch::Launch;
 use caustica_core::recording::{Recording, Step};
+use caustica_shaders as shaders;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 

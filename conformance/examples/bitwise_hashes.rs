@@ -1,5 +1,5 @@
 //! Prints a 64-bit FNV-1a hash of every output image, the G-buffer, the last photon batch
-//! and the photon counters of every built-in scene on every backend found, one line each:
+//! (as a sorted multiset) and the photon counters of every built-in scene on every backend found, one line each:
 //! `backend<TAB>device<TAB>scene<TAB>item<TAB>hash`. Refactors that must not change a bit
 //! compare this output before and after (`conformance/baselines/`).
 //!
@@ -47,7 +47,14 @@ fn main() {
             if let Some((p, n)) = s.photon_buffers() {
                 let n = read_buf(backend.as_mut(), n).expect("count")[0] as usize;
                 let p = read_buf(backend.as_mut(), p).expect("photons");
-                line("last_batch_photons", bytemuck::cast_slice(&p[..n.min(p.len())]));
+                // GPU backends append photons in atomic order, which varies run to run:
+                // hash the (deterministic) multiset, sorted by bytes.
+                let mut rows: Vec<&[u8]> = p[..n.min(p.len())]
+                    .iter()
+                    .map(bytemuck::bytes_of)
+                    .collect();
+                rows.sort_unstable();
+                line("last_batch_photons", &rows.concat());
             }
             let counters = format!(
                 "{} {} {} {:?} {:?} {:?} {} {} {}",

@@ -1,83 +1,69 @@
-//! Every WGSL kernel module, assembled as the host assembles it (the shared files named by
-//! the kernel's `// needs:` line, in order, then the kernel file), parses and validates
-//! with naga; the shared structs' WGSL layouts equal core's `#[repr(C)]` layouts byte for
-//! byte (DESIGN 3: "layout is tested, not commented"); each kernel's bindings are those the
-//! host binds (group 0, in order, with the address space and access it expects).
-//!
-//! The files are read from disk rather than through the crate so that a failure names the
-//! file and the line.
+//! Every WGSL kernel module, assembled by [`caustica_shaders::module_source`] as both GPU
+//! backends assemble it (the shared files named by the kernel's `// needs:` line, in
+//! order, then the kernel file), parses and validates with naga; the shared structs' WGSL
+//! layouts equal core's `#[repr(C)]` layouts byte for byte (DESIGN 3: "layout is tested,
+//! not commented"); each kernel's bindings are those the host binds (group 0, in order,
+//! with the address space and access it expects); the crate's tables list every file
+//! under `wgsl/`.
 
-use caustica_core::device::layout;
+use caustica_core::device::layout as gpu;
+use caustica_shaders::{module_source, COMMON, KERNELS};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};
-use std::path::PathBuf;
+use std::path::Path;
 
-const KERNELS: &[&str] = &[
-    "primary_gbuffer",
-    "direct_light",
-    "trace_photons",
-    "deposit_screen",
-    "resolve_caustics",
-    "tile_hit_distance",
-    "bilateral_gather",
-    "composite",
-];
-
-const COMMON: &[&str] = &[
-    "types",
-    "vector",
-    "rng",
-    "sampling",
-    "optics",
-    "packing",
-    "geometry",
-    "footprint",
-    "fixed_point",
-    "traversal",
-    "scene",
-];
-
-fn shader_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("shaders")
+/// Stems of the `.wgsl` files directly in `dir`, sorted.
+fn wgsl_stems(dir: &Path) -> Vec<String> {
+    let mut stems: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| {
+            assert_eq!(
+                p.extension().and_then(|x| x.to_str()),
+                Some("wgsl"),
+                "{}: not a .wgsl file",
+                p.display()
+            );
+            p.file_stem().unwrap().to_str().unwrap().to_owned()
+        })
+        .collect();
+    stems.sort();
+    stems
 }
 
-fn read(path: &PathBuf) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-/// The shared files named by a kernel file's `// needs:` line.
-fn needs(kernel: &str, text: &str) -> Vec<String> {
-    let line = text
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("// needs:"))
-        .unwrap_or_else(|| panic!("{kernel}.wgsl has no `// needs:` line"));
-    line.split_whitespace().map(str::to_owned).collect()
-}
-
-/// The module text of `kernel`, exactly as the host assembles it.
-fn assemble(kernel: &str) -> String {
-    let text = read(&shader_dir().join(format!("{kernel}.wgsl")));
-    let mut out = String::new();
-    for n in needs(kernel, &text) {
-        assert!(
-            COMMON.contains(&n.as_str()),
-            "{kernel}.wgsl needs unknown shared file '{n}'"
-        );
-        out.push_str(&format!("// ---- common/{n}.wgsl\n"));
-        out.push_str(&read(
-            &shader_dir().join("common").join(format!("{n}.wgsl")),
-        ));
-        out.push('\n');
+/// `KERNELS` lists every file in `wgsl/` and `COMMON` every file in `wgsl/common/`, once
+/// each, with the file's text: a file added without a table row (or a row left behind by
+/// a removed file) fails here.
+#[test]
+fn tables_list_every_file() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+    for (table, rows, dir) in [
+        ("KERNELS", KERNELS, dir.clone()),
+        ("COMMON", COMMON, dir.join("common")),
+    ] {
+        let mut names: Vec<String> = rows.iter().map(|(n, _)| n.to_string()).collect();
+        names.sort();
+        let unique: BTreeSet<&String> = names.iter().collect();
+        assert_eq!(unique.len(), names.len(), "{table}: a name twice");
+        assert_eq!(names, wgsl_stems(&dir), "{table} vs {}", dir.display());
+        for (n, text) in rows {
+            let path = dir.join(format!("{n}.wgsl"));
+            let disk = std::fs::read_to_string(&path).unwrap();
+            assert_eq!(*text, disk, "{}: table text differs", path.display());
+        }
     }
-    out.push_str(&format!("// ---- {kernel}.wgsl\n"));
-    out.push_str(&text);
-    out
+}
+
+/// The registry kernel names, in table order.
+fn kernels() -> impl Iterator<Item = &'static str> {
+    KERNELS.iter().map(|(n, _)| *n)
 }
 
 /// Parses and validates one kernel module; panics with naga's report on failure.
 fn validated_module(kernel: &str) -> naga::Module {
-    let src = assemble(kernel);
+    let src = module_source(kernel).unwrap_or_else(|e| panic!("{kernel}: {e}"));
     let path = format!("{kernel}.wgsl (assembled)");
     let module = match naga::front::wgsl::parse_str(&src) {
         Ok(m) => m,
@@ -99,7 +85,7 @@ fn validated_module(kernel: &str) -> naga::Module {
 #[test]
 fn kernels_parse_and_validate() {
     let mut failures = Vec::new();
-    for k in KERNELS {
+    for k in kernels() {
         if let Err(e) = std::panic::catch_unwind(|| validated_module(k)) {
             let msg = e
                 .downcast_ref::<String>()
@@ -114,7 +100,7 @@ fn kernels_parse_and_validate() {
 
 #[test]
 fn every_kernel_has_one_entry_point_main_with_workgroup_64() {
-    for k in KERNELS {
+    for k in kernels() {
         let m = validated_module(k);
         assert_eq!(m.entry_points.len(), 1, "{k}: entry points");
         let ep = &m.entry_points[0];
@@ -253,7 +239,7 @@ fn rust_field_of(member: &str) -> (&str, usize) {
 fn struct_layouts_match_core() {
     let rust = rust_layouts();
     let mut seen = BTreeSet::new();
-    for k in KERNELS {
+    for k in kernels() {
         let m = validated_module(k);
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(m.to_ctx()).expect("layouter");
@@ -395,7 +381,7 @@ fn expected_bindings(kernel: &str) -> Vec<(&'static str, Kind)> {
             ("out", ReadWrite),
         ],
         "composite" => vec![("direct", Read), ("caustics", Read), ("out", ReadWrite)],
-        _ => unreachable!(),
+        other => panic!("{other}: no expected bindings listed here"),
     }
 }
 
@@ -404,7 +390,7 @@ fn expected_bindings(kernel: &str) -> Vec<(&'static str, Kind)> {
 /// uses; an unused one would be missing from it).
 #[test]
 fn bindings_match_the_host() {
-    for k in KERNELS {
+    for k in kernels() {
         let m = validated_module(k);
         let info = Validator::new(ValidationFlags::all(), Capabilities::default())
             .validate(&m)
@@ -447,8 +433,7 @@ fn bindings_match_the_host() {
 /// Shared files declare no bindings (the kernel file owns its binding list).
 #[test]
 fn common_files_declare_no_bindings() {
-    for n in COMMON {
-        let text = read(&shader_dir().join("common").join(format!("{n}.wgsl")));
+    for (n, text) in COMMON {
         for (line_no, line) in text.lines().enumerate() {
             let code = line.split("//").next().unwrap_or("");
             assert!(
@@ -516,7 +501,7 @@ fn barrier_sites(
 /// level of a function body (not inside an if, loop or switch) and after no `return`.
 #[test]
 fn barriers_in_uniform_control_flow() {
-    for k in KERNELS {
+    for k in kernels() {
         let m = validated_module(k);
         // functions that hold a barrier, directly or through calls (fixed point)
         let mut barrier_fns = BTreeSet::new();

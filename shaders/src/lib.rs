@@ -1,0 +1,102 @@
+//! caustica's WGSL kernels, the one shader source of the wgpu backend and of the Vulkan
+//! backend's compute kernels (which compile it to SPIR-V with naga).
+//!
+//! Files: `wgsl/<kernel>.wgsl`, one per registry kernel, and `wgsl/common/<name>.wgsl`,
+//! the shared files (mirrors of core's scalar functions, function by function with the
+//! same names, and of core's `#[repr(C)]` Pod structs). A kernel file's first
+//! `// needs:` line names the shared files it uses, in order; its module is those files
+//! followed by the kernel file (see [`assemble`]). Shared files declare no bindings: the
+//! kernel file owns its binding list.
+//!
+//! Every file is compiled into the crate with `include_str!`, so the crate needs nothing
+//! at run time. Its tests (`tests/wgsl_validate.rs`) validate every module with naga and
+//! compare the WGSL struct layouts with core's `size_of`/`offset_of!`.
+
+/// The shared WGSL files, as (name, text): `name` is the file stem under `wgsl/common/`
+/// and the word a kernel's `// needs:` line uses for it.
+pub const COMMON: &[(&str, &str)] = &[
+    ("types", include_str!("../wgsl/common/types.wgsl")),
+    ("vector", include_str!("../wgsl/common/vector.wgsl")),
+    ("rng", include_str!("../wgsl/common/rng.wgsl")),
+    ("sampling", include_str!("../wgsl/common/sampling.wgsl")),
+    ("optics", include_str!("../wgsl/common/optics.wgsl")),
+    ("packing", include_str!("../wgsl/common/packing.wgsl")),
+    ("geometry", include_str!("../wgsl/common/geometry.wgsl")),
+    ("footprint", include_str!("../wgsl/common/footprint.wgsl")),
+    (
+        "fixed_point",
+        include_str!("../wgsl/common/fixed_point.wgsl"),
+    ),
+    ("traversal", include_str!("../wgsl/common/traversal.wgsl")),
+    ("scene", include_str!("../wgsl/common/scene.wgsl")),
+];
+
+/// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
+pub const KERNELS: &[(&str, &str)] = &[
+    (
+        "primary_gbuffer",
+        include_str!("../wgsl/primary_gbuffer.wgsl"),
+    ),
+    ("direct_light", include_str!("../wgsl/direct_light.wgsl")),
+    ("trace_photons", include_str!("../wgsl/trace_photons.wgsl")),
+    (
+        "deposit_screen",
+        include_str!("../wgsl/deposit_screen.wgsl"),
+    ),
+    (
+        "resolve_caustics",
+        include_str!("../wgsl/resolve_caustics.wgsl"),
+    ),
+    (
+        "tile_hit_distance",
+        include_str!("../wgsl/tile_hit_distance.wgsl"),
+    ),
+    (
+        "bilateral_gather",
+        include_str!("../wgsl/bilateral_gather.wgsl"),
+    ),
+    ("composite", include_str!("../wgsl/composite.wgsl")),
+];
+
+/// The kernels with compiled variants: their modules declare pipeline-overridable
+/// constants named as core's `TraceVariant` switches, so the wgpu backend builds one
+/// pipeline per variant when that variant is first launched (the others are built when
+/// the backend is created). The Vulkan backend does not compile these from WGSL: it runs
+/// them as GLSL ray-tracing stages with specialization constants.
+pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
+
+/// The complete module text of kernel `name` (its `// needs:` files, then the kernel
+/// file; see [`assemble`]), or why there is none: no kernel of that name, or a bad
+/// `// needs:` line.
+pub fn module_source(name: &str) -> Result<String, String> {
+    let (_, kernel) = KERNELS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .ok_or_else(|| format!("no WGSL kernel named {name}"))?;
+    assemble(name, kernel)
+}
+
+/// The module text of kernel file `text` (named `name` in messages and in the module's
+/// section comments): each shared file that the first `// needs:` line of `text` names,
+/// in that order, preceded by a `// ---- common/<file>.wgsl` line and followed by a
+/// newline, then `// ---- <name>.wgsl` and `text`. Fails when `text` has no `// needs:`
+/// line or names a file that is not in [`COMMON`].
+pub fn assemble(name: &str, text: &str) -> Result<String, String> {
+    let needs = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("// needs:"))
+        .ok_or_else(|| format!("{name}.wgsl has no `// needs:` line"))?;
+    let mut out = String::new();
+    for n in needs.split_whitespace() {
+        let (_, src) = COMMON
+            .iter()
+            .find(|(c, _)| *c == n)
+            .ok_or_else(|| format!("{name}.wgsl needs unknown shared file '{n}'"))?;
+        out.push_str(&format!("// ---- common/{n}.wgsl\n"));
+        out.push_str(src);
+        out.push('\n');
+    }
+    out.push_str(&format!("// ---- {name}.wgsl\n"));
+    out.push_str(text);
+    Ok(out)
+}
