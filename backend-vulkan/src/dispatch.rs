@@ -16,7 +16,8 @@ use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use caustica_core::device::launch::{check_buffer, LaunchArg};
 use caustica_core::device::handle::SceneArgs;
 use caustica_core::kernels::Kernel;
-use caustica_core::recording::{Recording, Step};
+use caustica_core::kernels::{KernelInfo, ShaderBinding, KERNELS};
+use caustica_core::recording::{RecordedKernel, Recording, Step};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -24,38 +25,49 @@ const S: vk::DescriptorType = vk::DescriptorType::STORAGE_BUFFER;
 const U: vk::DescriptorType = vk::DescriptorType::UNIFORM_BUFFER;
 const AS: vk::DescriptorType = vk::DescriptorType::ACCELERATION_STRUCTURE_KHR;
 
-/// Threads per workgroup of the WGSL compute kernels.
-const WORKGROUP: u64 = 64;
+/// The Vulkan descriptor type of a binding as core's kernel declaration states it.
+fn descriptor_type(b: ShaderBinding) -> vk::DescriptorType {
+    match b {
+        ShaderBinding::AccelerationStructure => AS,
+        ShaderBinding::Uniform => U,
+        ShaderBinding::StorageRead | ShaderBinding::StorageReadWrite => S,
+    }
+}
+
+/// The descriptor types of kernel `info`'s pipeline, derived from its declaration
+/// ([`KernelInfo::descriptor_bindings`]).
+fn descriptor_types(info: &KernelInfo) -> Vec<vk::DescriptorType> {
+    info.descriptor_bindings()
+        .into_iter()
+        .map(descriptor_type)
+        .collect()
+}
+
 /// Width of a ray-generation launch grid (`i = y * width + x` in the shaders).
 const RAYGEN_WIDTH: u64 = 8192;
 
-/// Every pipeline, created once. Ray-tracing kernels bind the TLAS at 0, the scene's
-/// vertices, triangles, materials and lights at 1-4, their parameters at 5 and their
-/// buffers from 6; compute kernels bind core's launch arguments in order (counts are
-/// derived in the shaders). `trace_photons` adds into 64 counter banks that
-/// `reduce_counters` folds into the frame's counters.
+/// Every pipeline without compiled switches, created once, from core's kernel list:
+/// traced kernels as ray-tracing pipelines (GLSL ray generation stage, binding the TLAS at
+/// 0 in place of the CWBVH nodes), the others as compute pipelines from the WGSL through
+/// naga; bindings from each kernel's declaration. Kernels with switches are built per
+/// variant on first use ([`ensure_variants`]). `trace_photons` adds into 64 counter banks
+/// that `reduce_counters` folds into the frame's counters.
 pub fn create_pipelines(ctx: &Arc<Context>) -> Result<HashMap<String, Pipeline>, BackendError> {
     let mut p = HashMap::new();
-    p.insert(
-        "primary_gbuffer".into(),
-        pipelines::ray_tracing(ctx, spirv::PRIMARY_GBUFFER, vec![AS, S, S, S, S, U, S], &[])?,
-    );
-    p.insert(
-        "direct_light".into(),
-        pipelines::ray_tracing(ctx, spirv::DIRECT_LIGHT, vec![AS, S, S, S, S, U, S, S], &[])?,
-    );
-    let compute: [(&'static str, Vec<vk::DescriptorType>); 5] = [
-        ("deposit_screen", vec![U, S, S, S, S, S]),
-        ("resolve_caustics", vec![U, S, S, S]),
-        ("tile_hit_distance", vec![U, S, S]),
-        ("bilateral_gather", vec![U, S, S, S, S]),
-        ("composite", vec![S, S, S]),
-    ];
-    for (name, bindings) in compute {
-        p.insert(
-            name.into(),
-            pipelines::compute(ctx, &pipelines::wgsl_to_spirv(name)?, bindings)?,
-        );
+    for info in KERNELS {
+        if info.name == "prepare_scene" || !info.switches.is_empty() {
+            continue;
+        }
+        let bindings = descriptor_types(info);
+        let pipeline = if info.traced {
+            let raygen = spirv::raygen(info.name).ok_or_else(|| {
+                BackendError::Unsupported(format!("{}: no ray generation stage", info.name))
+            })?;
+            pipelines::ray_tracing(ctx, raygen, bindings, &[])?
+        } else {
+            pipelines::compute(ctx, &pipelines::wgsl_to_spirv(info.name)?, bindings)?
+        };
+        p.insert(info.name.to_string(), pipeline);
     }
     let reduce = ash::util::read_spv(&mut std::io::Cursor::new(spirv::REDUCE_COUNTERS))
         .map_err(|e| BackendError::Driver(format!("bad SPIR-V: {e}")))?;
@@ -68,7 +80,7 @@ pub fn create_pipelines(ctx: &Arc<Context>) -> Result<HashMap<String, Pipeline>,
 
 /// Creates the pipeline of every kernel variant `rec` launches that does not exist yet
 /// (`trace_photons`: one ray-tracing pipeline per `TraceVariant`, specialization
-/// constants 0..3), one backend at a time (see `context::LIFECYCLE`).
+/// constants in switch order), one backend at a time (see `context::LIFECYCLE`).
 fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), BackendError> {
     for step in &rec.steps {
         let Step::Kernel(k) = step else { continue };
@@ -77,17 +89,18 @@ fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), Backend
         if launch.constants.is_empty() || b.pipelines.contains_key(&label) {
             continue;
         }
-        let (raygen, bindings) = match launch.kernel {
-            "trace_photons" => (spirv::TRACE_PHOTONS, vec![AS, S, S, S, S, U, S, S, S]),
-            other => {
-                return Err(BackendError::Unsupported(format!(
-                    "{other} has no variants"
-                )))
-            }
-        };
+        let info = k.kernel.info();
+        let raygen = spirv::raygen(info.name)
+            .filter(|_| info.traced)
+            .ok_or_else(|| {
+                BackendError::Unsupported(format!(
+                    "{}: variants exist only for ray-traced kernels",
+                    info.name
+                ))
+            })?;
         let ctx = Arc::clone(&b.ctx);
         let p = crate::context::serialised(|| {
-            pipelines::ray_tracing(&ctx, raygen, bindings, &launch.constants)
+            pipelines::ray_tracing(&ctx, raygen, descriptor_types(info), &launch.constants)
         })?;
         b.pipelines.insert(label, p);
     }
@@ -306,8 +319,13 @@ fn record_all(
                     frame.retired_scenes.push(s);
                 }
             }
-            Step::Kernel(Kernel::PrepareScene(PrepareScene { scene })) => {
-                Kernel::PrepareScene(PrepareScene { scene: *scene }).launch()?;
+            Step::Kernel(RecordedKernel {
+                kernel: Kernel::PrepareScene(PrepareScene { scene }),
+                ..
+            }) => {
+                if let Step::Kernel(k) = step {
+                    k.launch()?; // the node buffer's shape is checked
+                }
                 // The build reads the uploads: finish what is recorded, then build.
                 let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
                 b.submit_and_wait(cmd)?;
@@ -361,7 +379,11 @@ fn scene_of(k: &Kernel) -> Option<&SceneArgs> {
     }
 }
 
-fn record_kernel(b: &VulkanBackend, frame: &mut Frame, k: &Kernel) -> Result<(), BackendError> {
+fn record_kernel(
+    b: &VulkanBackend,
+    frame: &mut Frame,
+    k: &RecordedKernel,
+) -> Result<(), BackendError> {
     let d = &b.ctx.device;
     let Some(launch) = k.launch()? else {
         return Ok(());
@@ -371,8 +393,8 @@ fn record_kernel(b: &VulkanBackend, frame: &mut Frame, k: &Kernel) -> Result<(),
         .pipelines
         .get(&label)
         .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
-    let scene = scene_of(k);
-    let counters = match k {
+    let scene = scene_of(&k.kernel);
+    let counters = match &k.kernel {
         Kernel::TracePhotons(TracePhotons { counters, .. }) => Some(counters.id),
         _ => None,
     };
@@ -458,7 +480,7 @@ fn record_kernel(b: &VulkanBackend, frame: &mut Frame, k: &Kernel) -> Result<(),
                 )
             };
         } else {
-            let groups = n.div_ceil(WORKGROUP);
+            let groups = n.div_ceil(launch.workgroup_size as u64);
             let max = b.ctx.limits.max_compute_work_group_count[0] as u64;
             let x = groups.min(max);
             let y = groups.div_ceil(x);

@@ -21,6 +21,16 @@ pub mod spirv {
     pub const MISS: &[u8] = include_bytes!("../spirv/miss.rmiss.spv");
     pub const SHADOW_MISS: &[u8] = include_bytes!("../spirv/shadow_miss.rmiss.spv");
     pub const REDUCE_COUNTERS: &[u8] = include_bytes!("../spirv/reduce_counters.comp.spv");
+
+    /// The ray generation stage of traced kernel `name` (`shaders/<name>.rgen`).
+    pub fn raygen(name: &str) -> Option<&'static [u8]> {
+        match name {
+            "primary_gbuffer" => Some(PRIMARY_GBUFFER),
+            "direct_light" => Some(DIRECT_LIGHT),
+            "trace_photons" => Some(TRACE_PHOTONS),
+            _ => None,
+        }
+    }
 }
 
 /// The shader binding table: ray generation, two miss records, one hit group.
@@ -185,18 +195,17 @@ pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
         .map_err(|e| BackendError::Driver(format!("{name}: SPIR-V output: {e}")))
 }
 
-/// A ray-tracing pipeline: ray generation `raygen`, miss (closest), miss (shadow), and a
-/// triangle hit group with the closest-hit stage; recursion depth 1.
 /// A ray-tracing pipeline of ray generation stage `raygen` (with the shared miss and
-/// closest-hit stages); `specialization` sets the raygen's boolean specialization
-/// constants, constant id = index (a kernel variant, core's `TraceVariant`).
+/// closest-hit stages); `specialization` sets the raygen's specialization constants
+/// (32-bit; GLSL `bool` constants read 0/1), constant id = index (a kernel variant, core's
+/// `TraceVariant`).
 pub fn ray_tracing(
     ctx: &Arc<Context>,
     raygen: &[u8],
     bindings: Vec<vk::DescriptorType>,
-    specialization: &[(&'static str, bool)],
+    specialization: &[(&'static str, u32)],
 ) -> Result<Pipeline, BackendError> {
-    let spec_data: Vec<u32> = specialization.iter().map(|(_, v)| *v as u32).collect();
+    let spec_data: Vec<u32> = specialization.iter().map(|(_, v)| *v).collect();
     let spec_entries: Vec<vk::SpecializationMapEntry> = (0..spec_data.len() as u32)
         .map(|i| {
             vk::SpecializationMapEntry::default()

@@ -6,11 +6,10 @@
 use crate::WgpuBackend;
 use caustica_core::backend::{BackendError, PassTime};
 use caustica_core::device::launch::{check_buffer, Launch, LaunchArg};
-use caustica_core::kernels::Kernel;
+use caustica_core::recording::RecordedKernel;
 use wgpu::util::DeviceExt;
 
-/// Threads per workgroup (`@workgroup_size(64)` in every kernel).
-const WORKGROUP: u64 = 64;
+
 
 /// Per-pass timing: a timestamp pair per kernel where the device has timestamp queries,
 /// else host times of kernels submitted alone.
@@ -103,7 +102,7 @@ pub fn record(
     b: &WgpuBackend,
     enc: &mut wgpu::CommandEncoder,
     timer: &mut Timer,
-    k: &Kernel,
+    k: &RecordedKernel,
 ) -> Result<(), BackendError> {
     let Some(launch) = k.launch()? else {
         return Ok(());
@@ -112,12 +111,14 @@ pub fn record(
     let Launch {
         kernel: name,
         threads,
+        workgroup_size,
         args,
         ..
     } = launch;
+    let (name, threads) = (*name, *threads);
     let max_binding = b.limits.max_storage_buffer_binding_size;
     let mut uniforms = Vec::new();
-    for a in &args {
+    for a in args {
         match a {
             LaunchArg::Buffer {
                 id, bytes, what, ..
@@ -143,7 +144,7 @@ pub fn record(
     if threads == 0 {
         return Ok(());
     }
-    let groups = threads.div_ceil(WORKGROUP);
+    let groups = threads.div_ceil(*workgroup_size as u64);
     let max = b.limits.max_compute_workgroups_per_dimension as u64;
     let x = groups.min(max);
     let y = groups.div_ceil(x);
@@ -158,7 +159,7 @@ pub fn record(
         .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
     let mut entries = Vec::with_capacity(args.len());
     let mut next_uniform = uniforms.iter();
-    for a in &args {
+    for a in args {
         let resource = match a {
             LaunchArg::Buffer { id, bytes, .. } => {
                 wgpu::BindingResource::Buffer(wgpu::BufferBinding {

@@ -54,7 +54,7 @@ pub struct WgpuBackend {
 fn create_pipeline(
     device: &wgpu::Device,
     name: &str,
-    constants: &[(&'static str, bool)],
+    constants: &[(&'static str, u32)],
 ) -> Result<wgpu::ComputePipeline, BackendError> {
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let src = shaders::module_source(name).map_err(BackendError::Driver)?;
@@ -64,7 +64,7 @@ fn create_pipeline(
     });
     let overrides: Vec<(&str, f64)> = constants
         .iter()
-        .map(|(n, v)| (*n, if *v { 1.0 } else { 0.0 }))
+        .map(|(n, v)| (*n, *v as f64))
         .collect();
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(name),
@@ -385,7 +385,7 @@ impl Backend for WgpuBackend {
                 }
                 Step::Kernel(k) => {
                     if let Some(l) = k.launch()? {
-                        self.ensure_pipeline(&l)?;
+                        self.ensure_pipeline(l)?;
                     }
                     dispatch::record(self, &mut enc, &mut timer, k)?;
                     if !self.timestamps {
