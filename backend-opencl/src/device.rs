@@ -61,7 +61,7 @@ pub struct DeviceSummary {
     pub name: String,
     /// Platform name (`CL_PLATFORM_NAME`).
     pub platform: String,
-    /// OpenCL version the device reports (`CL_DEVICE_VERSION`).
+    /// OpenCL version the device supports, `major.minor` (from `CL_DEVICE_VERSION`).
     pub version: String,
     /// Whether the device is a GPU.
     pub is_gpu: bool,
@@ -130,11 +130,29 @@ pub fn list_devices() -> Result<Vec<(Platform, Device)>, BackendError> {
     Ok(out)
 }
 
+/// The `major.minor` of a `CL_DEVICE_VERSION` string (`OpenCL<space><major.minor><space>
+/// <vendor-specific information>`, e.g. `3.0` for PoCL's `OpenCL 3.0 PoCL HSTR: ...`),
+/// or the whole string, trimmed, when it does not have that form.
+fn opencl_version(s: &str) -> String {
+    let mut words = s.split_whitespace();
+    if let (Some(w), Some(v)) = (words.next(), words.next()) {
+        let numbers = v.split_once('.').filter(|(major, minor)| {
+            [major, minor]
+                .iter()
+                .all(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+        });
+        if w.eq_ignore_ascii_case("opencl") && numbers.is_some() {
+            return v.to_string();
+        }
+    }
+    s.trim().to_string()
+}
+
 /// Queries what [`DeviceSummary`] holds.
 fn summary(platform: Platform, device: Device) -> Result<DeviceSummary, BackendError> {
     let info = cl_error("device info");
     let name = device.name().map_err(&info)?;
-    let version = device.version().map_err(&info)?;
+    let version = opencl_version(&device.version().map_err(&info)?);
     let extensions = device.extensions().map_err(&info)?;
     let is_gpu = device.dev_type().map_err(&info)? & CL_DEVICE_TYPE_GPU != 0;
     let max_alloc_bytes = device.max_mem_alloc_size().map_err(&info)?;
@@ -143,7 +161,7 @@ fn summary(platform: Platform, device: Device) -> Result<DeviceSummary, BackendE
     Ok(DeviceSummary {
         name: name.trim().to_string(),
         platform: platform_name.trim().to_string(),
-        version: version.trim().to_string(),
+        version,
         is_gpu,
         max_alloc_bytes,
         global_mem_bytes,
@@ -208,4 +226,18 @@ pub fn device_state(platform: Platform, device: Device) -> Result<Arc<DeviceStat
     });
     map.insert(key, Arc::clone(&state));
     Ok(state)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::opencl_version;
+
+    #[test]
+    fn device_version_is_major_minor() {
+        let pocl = "OpenCL 3.0 PoCL HSTR: pthread-x86_64-pc-linux-gnu-haswell";
+        assert_eq!(opencl_version(pocl), "3.0");
+        assert_eq!(opencl_version("OpenCL 3.0 CUDA"), "3.0");
+        assert_eq!(opencl_version("OpenCL 1.2"), "1.2");
+        assert_eq!(opencl_version(" something else "), "something else");
+    }
 }
