@@ -1,6 +1,7 @@
 #!/bin/sh
 # Installs what caustica's backends need on Debian bookworm (DESIGN 8), idempotently:
-#   OpenCL: PoCL (pocl-opencl-icd) and the ICD loader (ocl-icd-opencl-dev), from bookworm;
+#   OpenCL: PoCL (pocl-opencl-icd) and the ICD loader (ocl-icd-libopencl1; the backend
+#   opens libOpenCL.so.1 at run time, so no dev package is needed), from bookworm;
 #   Vulkan/wgpu: Mesa's lavapipe with ray tracing (mesa-vulkan-drivers from
 #   bookworm-backports), the Vulkan loader and the Khronos validation layer.
 # Run as root it installs what is missing and does nothing when all is there; run as
@@ -8,7 +9,7 @@
 # of the machine's existing bookworm source, so no mirror host name is written here.
 set -eu
 
-BOOKWORM_PKGS="pocl-opencl-icd ocl-icd-opencl-dev clinfo libvulkan1 vulkan-tools vulkan-validationlayers"
+BOOKWORM_PKGS="pocl-opencl-icd ocl-icd-libopencl1 clinfo libvulkan1 vulkan-tools vulkan-validationlayers"
 BACKPORTS_PKGS="mesa-vulkan-drivers"
 BACKPORTS_LIST=/etc/apt/sources.list.d/caustica-bookworm-backports.sources
 

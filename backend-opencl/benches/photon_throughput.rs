@@ -40,7 +40,7 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
         let mut setup = Recording::new();
-        let scene_args = ds.record_upload(&mut setup);
+        let scene_args = setup.upload_scene(&ds);
         let photons = setup.create::<Photon>(n * n, "photons");
         let photon_count = setup.create::<u32>(1, "photon count");
         let counters = setup.create::<u32>(counter::WORDS as u32, "counters");

@@ -2,24 +2,28 @@
 //! device are typed errors), the choice of device, and one shared context + built
 //! program per device, so that a program is compiled once per device and source.
 
-use crate::error::cl_error;
+use crate::error::{cl_error, status_text};
 use crate::program;
 use caustica_core::backend::BackendError;
-use ocl::core::{
-    self, ContextProperties, DeviceId, DeviceInfo, DeviceInfoResult, DeviceType, PlatformId,
-    PlatformInfo,
-};
+use opencl3::context::Context;
+use opencl3::device::{Device, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_GPU};
+use opencl3::platform::{get_platforms, Platform};
+use opencl3::program::Program;
+use opencl3::types::cl_context_properties;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// A device with its shared context and built programs.
 pub struct DeviceState {
-    pub device: DeviceId,
-    pub context: core::Context,
+    /// The device.
+    pub device: Device,
+    /// The context of this device alone (on its platform).
+    pub context: Context,
     /// Every kernel without variants.
-    pub program: core::Program,
+    pub program: Arc<Program>,
     /// Programs of kernel variants by label, built on first use.
-    variants: Mutex<HashMap<String, core::Program>>,
+    variants: Mutex<HashMap<String, Arc<Program>>>,
+    /// What the backend reports about the device.
     pub info: DeviceSummary,
 }
 
@@ -29,18 +33,23 @@ impl DeviceState {
     pub fn program_for(
         &self,
         kernel: &str,
-        constants: &[(&'static str, bool)],
-    ) -> Result<core::Program, BackendError> {
+        constants: &[(&'static str, u32)],
+    ) -> Result<Arc<Program>, BackendError> {
         if constants.is_empty() {
-            return Ok(self.program.clone());
+            return Ok(Arc::clone(&self.program));
         }
         let label = caustica_core::kernels::variant_label(kernel, constants);
         let mut map = self.variants.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(p) = map.get(&label) {
-            return Ok(p.clone());
+            return Ok(Arc::clone(p));
         }
-        let p = program::build_variant(&self.context, self.device, kernel, constants)?;
-        map.insert(label, p.clone());
+        let p = Arc::new(program::build_variant(
+            &self.context,
+            self.device.id(),
+            kernel,
+            constants,
+        )?);
+        map.insert(label, Arc::clone(&p));
         Ok(p)
     }
 }
@@ -48,16 +57,25 @@ impl DeviceState {
 /// What the backend reports about its device.
 #[derive(Clone, Debug)]
 pub struct DeviceSummary {
+    /// Device name (`CL_DEVICE_NAME`).
     pub name: String,
+    /// Platform name (`CL_PLATFORM_NAME`).
     pub platform: String,
+    /// OpenCL version the device supports, `major.minor` (from `CL_DEVICE_VERSION`).
     pub version: String,
+    /// Whether the device is a GPU.
     pub is_gpu: bool,
+    /// Largest single buffer, bytes (`CL_DEVICE_MAX_MEM_ALLOC_SIZE`).
     pub max_alloc_bytes: u64,
+    /// Device memory, bytes (`CL_DEVICE_GLOBAL_MEM_SIZE`).
     pub global_mem_bytes: u64,
+    /// `cl_khr_int64_base_atomics` is offered.
     pub int64_atomics: bool,
+    /// `cl_khr_fp64` is offered.
     pub fp64: bool,
 }
 
+/// The backend's `Unavailable` error with `reason`.
 fn unavailable(reason: impl Into<String>) -> BackendError {
     BackendError::Unavailable {
         backend: "opencl".into(),
@@ -69,25 +87,41 @@ fn unavailable(reason: impl Into<String>) -> BackendError {
 /// two threads with CL_DEVICE_NOT_FOUND for one of them (seen in the test harness).
 static DISCOVERY: Mutex<()> = Mutex::new(());
 
-/// Every (platform, device) pair, in platform order.
-pub fn list_devices() -> Result<Vec<(PlatformId, DeviceId)>, BackendError> {
-    let _guard = DISCOVERY.lock().unwrap_or_else(|e| e.into_inner());
-    // Ask the ICD loader first, directly: ocl's `get_platform_ids` sleeps and retries for
-    // 10 s when no platform is installed.
-    let mut n: ocl::core::ffi::cl_uint = 0;
-    let status = unsafe { ocl::core::ffi::clGetPlatformIDs(0, std::ptr::null_mut(), &mut n) };
-    if status != 0 || n == 0 {
-        return Err(unavailable(format!(
-            "no OpenCL platform (clGetPlatformIDs returned {status}, {n} platforms); \
-             install an ICD such as pocl-opencl-icd (scripts/install-drivers.sh) or a GPU driver"
-        )));
+/// Opens the OpenCL ICD loader (`libOpenCL.so.1`, or the paths in `OPENCL_DYLIB_PATH`)
+/// once per process; a missing loader is `Unavailable` with what to install.
+fn open_loader() -> Result<(), BackendError> {
+    match cl3::load_library() {
+        Ok(_) => Ok(()),
+        Err(e) => Err(unavailable(format!(
+            "the OpenCL ICD loader (libOpenCL.so.1) was not found or could not be opened \
+             ({e}): install ocl-icd-libopencl1 (scripts/install-drivers.sh) or a GPU \
+             driver's OpenCL loader, or name the loader's path in OPENCL_DYLIB_PATH"
+        ))),
     }
-    let platforms = core::get_platform_ids().map_err(|e| unavailable(e.to_string()))?;
+}
+
+/// Every (platform, device) pair, in platform order.
+pub fn list_devices() -> Result<Vec<(Platform, Device)>, BackendError> {
+    let _guard = DISCOVERY.lock().unwrap_or_else(|e| e.into_inner());
+    open_loader()?;
+    let platforms = match get_platforms() {
+        Ok(p) if !p.is_empty() => p,
+        r => {
+            let status = match r {
+                Err(e) => status_text(e.0),
+                Ok(_) => "0 platforms".into(),
+            };
+            return Err(unavailable(format!(
+                "no OpenCL platform (clGetPlatformIDs: {status}); install an ICD such as \
+                 pocl-opencl-icd (scripts/install-drivers.sh) or a GPU driver"
+            )));
+        }
+    };
     let mut out = Vec::new();
     for p in platforms {
         // A platform without devices answers CL_DEVICE_NOT_FOUND: skip it.
-        if let Ok(devices) = core::get_device_ids(p, Some(DeviceType::ALL), None) {
-            out.extend(devices.into_iter().map(|d| (p, d)));
+        if let Ok(devices) = p.get_devices(CL_DEVICE_TYPE_ALL) {
+            out.extend(devices.into_iter().map(|d| (p, Device::new(d))));
         }
     }
     if out.is_empty() {
@@ -96,29 +130,38 @@ pub fn list_devices() -> Result<Vec<(PlatformId, DeviceId)>, BackendError> {
     Ok(out)
 }
 
-fn summary(platform: PlatformId, device: DeviceId) -> Result<DeviceSummary, BackendError> {
-    let info =
-        |what: DeviceInfo| core::get_device_info(device, what).map_err(cl_error("device info"));
-    let name = info(DeviceInfo::Name)?.to_string();
-    let version = info(DeviceInfo::Version)?.to_string();
-    let extensions = info(DeviceInfo::Extensions)?.to_string();
-    let is_gpu =
-        matches!(info(DeviceInfo::Type)?, DeviceInfoResult::Type(t) if t.contains(DeviceType::GPU));
-    let max_alloc_bytes = match info(DeviceInfo::MaxMemAllocSize)? {
-        DeviceInfoResult::MaxMemAllocSize(b) => b,
-        _ => 0,
-    };
-    let global_mem_bytes = match info(DeviceInfo::GlobalMemSize)? {
-        DeviceInfoResult::GlobalMemSize(b) => b,
-        _ => 0,
-    };
-    let platform_name = core::get_platform_info(platform, PlatformInfo::Name)
-        .map(|r| r.to_string())
-        .unwrap_or_default();
+/// The `major.minor` of a `CL_DEVICE_VERSION` string (`OpenCL<space><major.minor><space>
+/// <vendor-specific information>`, e.g. `3.0` for PoCL's `OpenCL 3.0 PoCL HSTR: ...`),
+/// or the whole string, trimmed, when it does not have that form.
+fn opencl_version(s: &str) -> String {
+    let mut words = s.split_whitespace();
+    if let (Some(w), Some(v)) = (words.next(), words.next()) {
+        let numbers = v.split_once('.').filter(|(major, minor)| {
+            [major, minor]
+                .iter()
+                .all(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+        });
+        if w.eq_ignore_ascii_case("opencl") && numbers.is_some() {
+            return v.to_string();
+        }
+    }
+    s.trim().to_string()
+}
+
+/// Queries what [`DeviceSummary`] holds.
+fn summary(platform: Platform, device: Device) -> Result<DeviceSummary, BackendError> {
+    let info = cl_error("device info");
+    let name = device.name().map_err(&info)?;
+    let version = opencl_version(&device.version().map_err(&info)?);
+    let extensions = device.extensions().map_err(&info)?;
+    let is_gpu = device.dev_type().map_err(&info)? & CL_DEVICE_TYPE_GPU != 0;
+    let max_alloc_bytes = device.max_mem_alloc_size().map_err(&info)?;
+    let global_mem_bytes = device.global_mem_size().map_err(&info)?;
+    let platform_name = platform.name().unwrap_or_default();
     Ok(DeviceSummary {
         name: name.trim().to_string(),
         platform: platform_name.trim().to_string(),
-        version: version.trim().to_string(),
+        version,
         is_gpu,
         max_alloc_bytes,
         global_mem_bytes,
@@ -129,7 +172,7 @@ fn summary(platform: PlatformId, device: DeviceId) -> Result<DeviceSummary, Back
 
 /// The device to use: `CAUSTICA_OPENCL_DEVICE=N` picks the N-th device of
 /// [`list_devices`]; otherwise the first GPU, else the first device.
-pub fn choose_device() -> Result<(PlatformId, DeviceId), BackendError> {
+pub fn choose_device() -> Result<(Platform, Device), BackendError> {
     let devices = list_devices()?;
     if let Ok(v) = std::env::var("CAUSTICA_OPENCL_DEVICE") {
         let n: usize = v.trim().parse().map_err(|_| {
@@ -152,30 +195,28 @@ pub fn choose_device() -> Result<(PlatformId, DeviceId), BackendError> {
     Ok(devices[0])
 }
 
+/// Device states by device id (as an address), one per device and process.
 type Registry = Mutex<HashMap<usize, Arc<DeviceState>>>;
 
 /// The shared state of a device: context and program are created once per process and
 /// device (the program cache), then shared by every backend on that device.
-pub fn device_state(
-    platform: PlatformId,
-    device: DeviceId,
-) -> Result<Arc<DeviceState>, BackendError> {
+pub fn device_state(platform: Platform, device: Device) -> Result<Arc<DeviceState>, BackendError> {
     static REGISTRY: OnceLock<Registry> = OnceLock::new();
     let registry = REGISTRY.get_or_init(Default::default);
-    let key = {
-        use ocl::core::ClDeviceIdPtr;
-        device.as_ptr() as usize
-    };
+    let key = device.id() as usize;
     let mut map = registry.lock().unwrap_or_else(|e| e.into_inner());
     if let Some(s) = map.get(&key) {
         return Ok(Arc::clone(s));
     }
     let info = summary(platform, device)?;
-    let mut props = ContextProperties::new();
-    props.set_platform(platform);
-    let context = core::create_context(Some(&props), &[device], None, None)
+    let props: [cl_context_properties; 3] = [
+        cl3::context::CL_CONTEXT_PLATFORM as cl_context_properties,
+        platform.id() as cl_context_properties,
+        0,
+    ];
+    let context = Context::from_devices(&[device.id()], &props, None, std::ptr::null_mut())
         .map_err(cl_error("creating the context"))?;
-    let program = program::build(&context, device)?;
+    let program = Arc::new(program::build(&context, device.id())?);
     let state = Arc::new(DeviceState {
         device,
         context,
@@ -185,4 +226,18 @@ pub fn device_state(
     });
     map.insert(key, Arc::clone(&state));
     Ok(state)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::opencl_version;
+
+    #[test]
+    fn device_version_is_major_minor() {
+        let pocl = "OpenCL 3.0 PoCL HSTR: pthread-x86_64-pc-linux-gnu-haswell";
+        assert_eq!(opencl_version(pocl), "3.0");
+        assert_eq!(opencl_version("OpenCL 3.0 CUDA"), "3.0");
+        assert_eq!(opencl_version("OpenCL 1.2"), "1.2");
+        assert_eq!(opencl_version(" something else "), "something else");
+    }
 }

@@ -6,14 +6,13 @@ use crate::error::cl_error;
 use crate::OpenClBackend;
 use caustica_core::backend::BackendError;
 use caustica_core::device::launch::{check_buffer, Launch, LaunchArg};
-use caustica_core::kernels::Kernel;
-use ocl::core::{self, ArgVal, Event, Mem, MemFlags};
-
-/// Threads per work-group (core's registry: 64 for every kernel).
-const WORKGROUP: usize = 64;
+use caustica_core::recording::RecordedKernel;
+use opencl3::event::Event;
+use opencl3::kernel::Kernel as ClKernel;
+use opencl3::memory::{Buffer, ClMem, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_ONLY};
 
 /// Enqueues one registry kernel; returns its profiling event (`None` if it did no work).
-pub fn run(b: &OpenClBackend, k: &Kernel) -> Result<Option<Event>, BackendError> {
+pub fn run(b: &OpenClBackend, k: &RecordedKernel) -> Result<Option<Event>, BackendError> {
     let Some(launch) = k.launch()? else {
         return Ok(None);
     };
@@ -24,21 +23,25 @@ pub fn run(b: &OpenClBackend, k: &Kernel) -> Result<Option<Event>, BackendError>
         kernel: name,
         constants,
         threads,
+        workgroup_size,
         args,
     } = launch;
+    let (name, threads, group) = (*name, *threads, *workgroup_size as usize);
     // Parameter blocks live until the launch is enqueued; OpenCL keeps a memory object
     // alive until the commands that use it have finished.
-    let mut params: Vec<Mem> = Vec::new();
-    for a in &args {
+    let mut params: Vec<Buffer<u8>> = Vec::new();
+    for a in args {
         match a {
             LaunchArg::Buffer { id, .. } => check_buffer(a, b.buffer(*id)?.bytes)?,
             LaunchArg::Params(bytes) => params.push(
+                // COPY_HOST_PTR: the driver copies `bytes` during the call and never
+                // writes through the pointer.
                 unsafe {
-                    core::create_buffer(
+                    Buffer::<u8>::create(
                         &b.state.context,
-                        MemFlags::READ_ONLY | MemFlags::COPY_HOST_PTR,
+                        CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                         bytes.len(),
-                        Some(bytes.as_slice()),
+                        bytes.as_ptr() as *mut std::ffi::c_void,
                     )
                 }
                 .map_err(cl_error("uploading kernel parameters"))?,
@@ -49,37 +52,42 @@ pub fn run(b: &OpenClBackend, k: &Kernel) -> Result<Option<Event>, BackendError>
     if threads == 0 {
         return Ok(None);
     }
-    let program = b.state.program_for(name, &constants)?;
-    let kernel = core::create_kernel(&program, name).map_err(cl_error("creating a kernel"))?;
+    let program = b.state.program_for(name, constants)?;
+    let kernel = ClKernel::create(&program, name).map_err(cl_error("creating a kernel"))?;
     let mut next_params = params.iter();
     for (index, a) in args.iter().enumerate() {
-        let v = match a {
-            LaunchArg::Buffer { id, .. } => ArgVal::mem(&b.buffer(*id)?.mem),
-            LaunchArg::Params(_) => ArgVal::mem(
-                next_params
+        let index = index as u32;
+        // Buffers are passed as their `cl_mem` handle, counts as a 32-bit scalar.
+        let set = match a {
+            LaunchArg::Buffer { id, .. } => {
+                let mem = b.buffer(*id)?.mem.get();
+                unsafe { kernel.set_arg(index, &mem) }
+            }
+            LaunchArg::Params(_) => {
+                let mem = next_params
                     .next()
-                    .ok_or_else(|| BackendError::Driver("parameter block missing".into()))?,
-            ),
-            LaunchArg::Count(n) => ArgVal::scalar(n),
+                    .ok_or_else(|| BackendError::Driver("parameter block missing".into()))?
+                    .get();
+                unsafe { kernel.set_arg(index, &mem) }
+            }
+            LaunchArg::Count(n) => unsafe { kernel.set_arg(index, n) },
         };
-        core::set_kernel_arg(&kernel, index as u32, v)
-            .map_err(cl_error("setting a kernel argument"))?;
+        set.map_err(cl_error("setting a kernel argument"))?;
     }
     let global = usize::try_from(threads)
         .ok()
-        .and_then(|t| t.checked_next_multiple_of(WORKGROUP))
+        .and_then(|t| t.checked_next_multiple_of(group))
         .ok_or_else(|| BackendError::BadArgument(format!("{name}: {threads} threads")))?;
-    let mut event = Event::null();
-    unsafe {
-        core::enqueue_kernel(
-            &b.queue,
-            &kernel,
+    let global_size: [usize; 3] = [global, 1, 1];
+    let local_size: [usize; 3] = [group, 1, 1];
+    let event = unsafe {
+        b.queue.enqueue_nd_range_kernel(
+            kernel.get(),
             1,
-            None,
-            &[global, 1, 1],
-            Some([WORKGROUP, 1, 1]),
-            None::<Event>,
-            Some(&mut event),
+            std::ptr::null(),
+            global_size.as_ptr(),
+            local_size.as_ptr(),
+            &[],
         )
     }
     .map_err(cl_error(name))?;

@@ -1,7 +1,14 @@
-//! caustica OpenCL backend: every registry kernel in OpenCL C 1.2 (`kernels/<kernel>.cl`,
-//! functions named as core's scalar functions), software traversal of core's flattened
-//! CWBVH, the counter-based RNG and the fixed-point deposit with 32-bit atomics. Runs on
-//! any OpenCL platform: PoCL on CPUs, NVIDIA's driver on the GPU machine.
+//! caustica OpenCL backend: every registry kernel in OpenCL C 1.2 (`kernels/<kernel>.cl`
+//! beside the shared files of `kernels/common/`, functions named as core's scalar
+//! functions), software traversal of core's flattened CWBVH, the counter-based RNG and the
+//! fixed-point deposit with 32-bit atomics. Runs on any OpenCL platform: PoCL on CPUs,
+//! NVIDIA's driver on the GPU machine.
+//!
+//! The OpenCL API comes through `opencl3`/`cl3` with their `dynamic` feature: the ICD
+//! loader (`libOpenCL.so.1`, from Debian's `ocl-icd-libopencl1`) is opened with `dlopen`
+//! on first use, not linked, so a binary with this backend starts on a machine without
+//! OpenCL and this backend reports itself unavailable there (no loader, no platform or no
+//! device), with what to install. No development package is needed to build it.
 //!
 //! Buffers stay on the device between passes and recordings; data comes back only
 //! through [`Backend::read`]. Kernel times are device timestamps (profiling events).
@@ -17,13 +24,17 @@ use caustica_core::recording::{Recording, Step};
 use device::DeviceState;
 pub use device::{list_devices, DeviceSummary};
 use error::cl_error;
-use ocl::core::{self, CommandQueue, CommandQueueProperties, Event, Mem, MemFlags};
+use opencl3::command_queue::{CommandQueue, CL_QUEUE_PROFILING_ENABLE};
+use opencl3::event::Event;
+use opencl3::kernel::Kernel;
+use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_WRITE};
+use opencl3::types::CL_BLOCKING;
 use std::collections::HashMap;
 use std::sync::Arc;
 
 /// A device buffer and its logical size in bytes (OpenCL buffers are at least 4 bytes).
 struct DeviceBuffer {
-    mem: Mem,
+    mem: Buffer<u8>,
     bytes: u64,
 }
 
@@ -52,11 +63,11 @@ impl OpenClBackend {
     pub fn new() -> Result<OpenClBackend, BackendError> {
         let (platform, device) = device::choose_device()?;
         let state = device::device_state(platform, device)?;
-        let queue = core::create_command_queue(
-            &state.context,
-            state.device,
-            Some(CommandQueueProperties::PROFILING_ENABLE),
-        )
+        // clCreateCommandQueue (OpenCL 1.2): PoCL's and NVIDIA's platforms both have it.
+        #[allow(deprecated)]
+        let queue = unsafe {
+            CommandQueue::create(&state.context, state.device.id(), CL_QUEUE_PROFILING_ENABLE)
+        }
         .map_err(cl_error("creating the command queue"))?;
         Ok(OpenClBackend {
             state,
@@ -72,39 +83,37 @@ impl OpenClBackend {
     }
 
     /// `sizeof` of every shared struct as the device compiler lays it out, in the order
-    /// of `kernels/types.cl`'s `struct_sizes` (checked against Rust's `size_of` in tests).
+    /// of `kernels/common/types.cl`'s `struct_sizes` (checked against Rust's `size_of` in
+    /// tests).
     pub fn device_struct_sizes(&mut self) -> Result<Vec<u32>, BackendError> {
         let mem = unsafe {
-            core::create_buffer::<_, u32>(&self.state.context, MemFlags::READ_WRITE, 16, None)
+            Buffer::<u32>::create(
+                &self.state.context,
+                CL_MEM_READ_WRITE,
+                16,
+                std::ptr::null_mut(),
+            )
         }
         .map_err(cl_error("creating a buffer"))?;
-        let kernel = core::create_kernel(&self.state.program, "struct_sizes")
+        let kernel = Kernel::create(&self.state.program, "struct_sizes")
             .map_err(cl_error("creating a kernel"))?;
-        core::set_kernel_arg(&kernel, 0, ocl::core::ArgVal::mem(&mem))
-            .map_err(cl_error("setting a kernel argument"))?;
+        unsafe { kernel.set_arg(0, &mem.get()) }.map_err(cl_error("setting a kernel argument"))?;
         let mut out = vec![0u32; 16];
+        let global: [usize; 3] = [1, 1, 1];
         unsafe {
-            core::enqueue_kernel(
-                &self.queue,
-                &kernel,
-                1,
-                None,
-                &[1, 1, 1],
-                None,
-                None::<Event>,
-                None::<&mut Event>,
-            )
-            .map_err(cl_error("struct_sizes"))?;
-            core::enqueue_read_buffer(
-                &self.queue,
-                &mem,
-                true,
-                0,
-                &mut out,
-                None::<Event>,
-                None::<&mut Event>,
-            )
-            .map_err(cl_error("reading a buffer"))?;
+            self.queue
+                .enqueue_nd_range_kernel(
+                    kernel.get(),
+                    1,
+                    std::ptr::null(),
+                    global.as_ptr(),
+                    std::ptr::null(),
+                    &[],
+                )
+                .map_err(cl_error("struct_sizes"))?;
+            self.queue
+                .enqueue_read_buffer(&mem, CL_BLOCKING, 0, &mut out, &[])
+                .map_err(cl_error("reading a buffer"))?;
         }
         out.truncate(12);
         Ok(out)
@@ -113,9 +122,10 @@ impl OpenClBackend {
     /// Compiles `src` on this backend's device (diagnostics and tests: the error of a
     /// failed build carries the driver's build log).
     pub fn build_test_program(&self, src: &str) -> Result<(), BackendError> {
-        program::build_source(&self.state.context, self.state.device, src).map(|_| ())
+        program::build_source(&self.state.context, self.state.device.id(), src).map(|_| ())
     }
 
+    /// Creates buffer `id` of `bytes` bytes (at least 4), uploading `data` or zeroing it.
     fn create(
         &mut self,
         id: ResourceId,
@@ -136,57 +146,47 @@ impl OpenClBackend {
         let size = usize::try_from(bytes.max(4)).map_err(|_| oom())?;
         // Drop a replaced buffer first so that its memory is free for the new one.
         self.buffers.remove(&id);
-        let mem = unsafe {
-            core::create_buffer::<_, u8>(&self.state.context, MemFlags::READ_WRITE, size, None)
+        let mut mem = unsafe {
+            Buffer::<u8>::create(
+                &self.state.context,
+                CL_MEM_READ_WRITE,
+                size,
+                std::ptr::null_mut(),
+            )
         }
         .map_err(cl_error("creating a buffer"))?;
         match data {
             Some(d) if !d.is_empty() => unsafe {
-                core::enqueue_write_buffer(
-                    &self.queue,
-                    &mem,
-                    true,
-                    0,
-                    d,
-                    None::<Event>,
-                    None::<&mut Event>,
-                )
-                .map_err(cl_error("uploading a buffer"))?;
+                self.queue
+                    .enqueue_write_buffer(&mut mem, CL_BLOCKING, 0, d, &[])
+                    .map_err(cl_error("uploading a buffer"))?;
             },
-            _ => self.fill_zero(&mem, size)?,
+            _ => fill_zero(&self.queue, &mut mem, size)?,
         }
         self.buffers.insert(id, DeviceBuffer { mem, bytes });
         Ok(())
     }
 
-    /// Zeroes `size` bytes of `mem`, in fills of at most [`FILL_CHUNK`] bytes: NVIDIA's
-    /// OpenCL faults (CL_NV_INVALID_MEM_ACCESS) filling a 4 GiB buffer in one command
-    /// (seen with the 8192x8192 G-buffer, issue 7).
-    fn fill_zero(&self, mem: &Mem, size: usize) -> Result<(), BackendError> {
-        let mut offset = 0;
-        while offset < size {
-            let n = (size - offset).min(FILL_CHUNK);
-            core::enqueue_fill_buffer(
-                &self.queue,
-                mem,
-                0u8,
-                offset,
-                n,
-                None::<Event>,
-                None::<&mut Event>,
-                None,
-            )
-            .map_err(cl_error("clearing a buffer"))?;
-            offset += n;
-        }
-        Ok(())
-    }
-
+    /// The buffer `id`, or `MissingResource`.
     fn buffer(&self, id: ResourceId) -> Result<&DeviceBuffer, BackendError> {
         self.buffers
             .get(&id)
             .ok_or(BackendError::MissingResource(id))
     }
+}
+
+/// Zeroes `size` bytes of `mem`, in fills of at most [`FILL_CHUNK`] bytes: NVIDIA's
+/// OpenCL faults (CL_NV_INVALID_MEM_ACCESS) filling a 4 GiB buffer in one command
+/// (seen with the 8192x8192 G-buffer, issue 7).
+fn fill_zero(queue: &CommandQueue, mem: &mut Buffer<u8>, size: usize) -> Result<(), BackendError> {
+    let mut offset = 0;
+    while offset < size {
+        let n = (size - offset).min(FILL_CHUNK);
+        unsafe { queue.enqueue_fill_buffer(mem, &[0u8], offset, n, &[]) }
+            .map_err(cl_error("clearing a buffer"))?;
+        offset += n;
+    }
+    Ok(())
 }
 
 impl Backend for OpenClBackend {
@@ -219,8 +219,11 @@ impl Backend for OpenClBackend {
                     self.create(*id, data.len() as u64, label, Some(data))?
                 }
                 Step::Clear { id } => {
-                    let b = self.buffer(*id)?;
-                    self.fill_zero(&b.mem, b.bytes.max(4) as usize)?;
+                    let b = self
+                        .buffers
+                        .get_mut(id)
+                        .ok_or(BackendError::MissingResource(*id))?;
+                    fill_zero(&self.queue, &mut b.mem, b.bytes.max(4) as usize)?;
                 }
                 Step::Free { id } => {
                     self.buffers.remove(id);
@@ -232,16 +235,18 @@ impl Backend for OpenClBackend {
                 }
             }
         }
-        core::finish(&self.queue).map_err(cl_error("waiting for the device"))?;
+        self.queue
+            .finish()
+            .map_err(cl_error("waiting for the device"))?;
         pending
             .into_iter()
             .map(|(kernel, e)| {
-                let t = |what| {
-                    core::get_event_profiling_info(&e, what)
-                        .and_then(|r| r.time())
-                        .map_err(cl_error("reading a kernel timestamp"))
-                };
-                let (start, end) = (t(core::ProfilingInfo::Start)?, t(core::ProfilingInfo::End)?);
+                let start = e
+                    .profiling_command_start()
+                    .map_err(cl_error("reading a kernel timestamp"))?;
+                let end = e
+                    .profiling_command_end()
+                    .map_err(cl_error("reading a kernel timestamp"))?;
                 Ok(PassTime {
                     kernel,
                     seconds: end.saturating_sub(start) as f64 * 1e-9,
@@ -255,16 +260,9 @@ impl Backend for OpenClBackend {
         let mut out = vec![0u8; b.bytes as usize];
         if !out.is_empty() {
             unsafe {
-                core::enqueue_read_buffer(
-                    &self.queue,
-                    &b.mem,
-                    true,
-                    0,
-                    &mut out,
-                    None::<Event>,
-                    None::<&mut Event>,
-                )
-                .map_err(cl_error("reading a buffer"))?;
+                self.queue
+                    .enqueue_read_buffer(&b.mem, CL_BLOCKING, 0, &mut out, &[])
+                    .map_err(cl_error("reading a buffer"))?;
             }
         }
         Ok(out)

@@ -1,115 +1,127 @@
-//! The OpenCL C programs: the shared headers (mirrors of core's scalar functions and Pod
-//! structs) and one file per registry kernel under `kernels/`. Kernels without variants
-//! are compiled together as one program; a kernel with compiled variants
-//! ([`VARIANT_KERNELS`], DESIGN 3) gets one program per variant, the headers and its file
-//! built with `-D NAME=0/1` for each switch, only when a launch first asks for it.
+//! The OpenCL C programs: the shared files under `kernels/common/` (mirrors of core's
+//! scalar functions and Pod structs, [`COMMON`]) and one file per registry kernel directly
+//! under `kernels/` ([`KERNELS`]). Kernels without variants are compiled together as one
+//! program; a kernel with compiled variants ([`VARIANT_KERNELS`], DESIGN 3) gets one
+//! program per variant, the common files and its own file built with `-D NAME=0/1` for
+//! each switch, only when a launch first asks for it.
 //! A failed build is a typed error carrying the driver's build log.
 
+use crate::error::{cl_error, status_text};
 use caustica_core::backend::BackendError;
-use ocl::core::{
-    self, DeviceId, DeviceInfo, DeviceInfoResult, ProgramBuildInfo, ProgramBuildInfoResult,
-};
-use std::ffi::CString;
+use opencl3::context::Context;
+use opencl3::device::{Device, CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT};
+use opencl3::program::Program;
+use opencl3::types::cl_device_id;
 
-/// Sources in dependency order: headers first, then one file per kernel.
-pub const SOURCES: &[(&str, &str)] = &[
-    ("types.cl", include_str!("../kernels/types.cl")),
-    ("vector.cl", include_str!("../kernels/vector.cl")),
-    ("rng.cl", include_str!("../kernels/rng.cl")),
-    ("sampling.cl", include_str!("../kernels/sampling.cl")),
-    ("optics.cl", include_str!("../kernels/optics.cl")),
-    ("packing.cl", include_str!("../kernels/packing.cl")),
-    ("geometry.cl", include_str!("../kernels/geometry.cl")),
-    ("footprint.cl", include_str!("../kernels/footprint.cl")),
-    ("fixed_point.cl", include_str!("../kernels/fixed_point.cl")),
-    ("traversal.cl", include_str!("../kernels/traversal.cl")),
-    ("scene.cl", include_str!("../kernels/scene.cl")),
+/// The shared files of `kernels/common/`, in dependency order (a file uses only the ones
+/// before it): `(file name, text)`.
+pub const COMMON: &[(&str, &str)] = &[
+    ("types.cl", include_str!("../kernels/common/types.cl")),
+    ("vector.cl", include_str!("../kernels/common/vector.cl")),
+    ("rng.cl", include_str!("../kernels/common/rng.cl")),
+    ("sampling.cl", include_str!("../kernels/common/sampling.cl")),
+    ("optics.cl", include_str!("../kernels/common/optics.cl")),
+    ("packing.cl", include_str!("../kernels/common/packing.cl")),
+    ("geometry.cl", include_str!("../kernels/common/geometry.cl")),
     (
-        "primary_gbuffer.cl",
+        "footprint.cl",
+        include_str!("../kernels/common/footprint.cl"),
+    ),
+    (
+        "fixed_point.cl",
+        include_str!("../kernels/common/fixed_point.cl"),
+    ),
+    (
+        "traversal.cl",
+        include_str!("../kernels/common/traversal.cl"),
+    ),
+    ("scene.cl", include_str!("../kernels/common/scene.cl")),
+];
+
+/// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
+/// the order they are appended to the program text.
+pub const KERNELS: &[(&str, &str)] = &[
+    (
+        "primary_gbuffer",
         include_str!("../kernels/primary_gbuffer.cl"),
     ),
+    ("direct_light", include_str!("../kernels/direct_light.cl")),
+    ("trace_photons", include_str!("../kernels/trace_photons.cl")),
     (
-        "direct_light.cl",
-        include_str!("../kernels/direct_light.cl"),
-    ),
-    (
-        "trace_photons.cl",
-        include_str!("../kernels/trace_photons.cl"),
-    ),
-    (
-        "deposit_screen.cl",
+        "deposit_screen",
         include_str!("../kernels/deposit_screen.cl"),
     ),
     (
-        "resolve_caustics.cl",
+        "resolve_caustics",
         include_str!("../kernels/resolve_caustics.cl"),
     ),
     (
-        "tile_hit_distance.cl",
+        "tile_hit_distance",
         include_str!("../kernels/tile_hit_distance.cl"),
     ),
     (
-        "bilateral_gather.cl",
+        "bilateral_gather",
         include_str!("../kernels/bilateral_gather.cl"),
     ),
-    ("composite.cl", include_str!("../kernels/composite.cl")),
+    ("composite", include_str!("../kernels/composite.cl")),
 ];
 
 /// Kernels compiled per variant, in programs of their own.
 pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 
-/// Number of shared header files at the start of [`SOURCES`].
-const HEADERS: usize = 11;
-
-fn append(s: &mut String, name: &str, text: &str) {
-    s.push_str(&format!("#line 1 \"{name}\"\n"));
+/// Appends one file to a program text, introduced by a `#line` naming it so that build
+/// logs point at the file and line.
+fn append(s: &mut String, file: &str, text: &str) {
+    s.push_str(&format!("#line 1 \"{file}\"\n"));
     s.push_str(text);
     s.push('\n');
 }
 
-/// The text of the program of every kernel without variants, each file introduced by a
-/// `#line` so that build logs name it.
+/// Appends every common file, in [`COMMON`] order.
+fn append_common(s: &mut String) {
+    for (file, text) in COMMON {
+        append(s, file, text);
+    }
+}
+
+/// The text of the program of every kernel without variants: the common files, then the
+/// kernel files in [`KERNELS`] order, each introduced by a `#line` so that build logs
+/// name it.
 pub fn source() -> String {
     let mut s = String::new();
-    for (name, text) in SOURCES {
-        if !VARIANT_KERNELS
-            .iter()
-            .any(|k| name.strip_suffix(".cl") == Some(k))
-        {
-            append(&mut s, name, text);
+    append_common(&mut s);
+    for (kernel, text) in KERNELS {
+        if !VARIANT_KERNELS.contains(kernel) {
+            append(&mut s, &format!("{kernel}.cl"), text);
         }
     }
     s
 }
 
-/// The text of the program of one variant kernel: the headers and its file.
+/// The text of the program of one variant kernel: the common files and its file (`None`
+/// for a name without a kernel file).
 pub fn variant_source(kernel: &str) -> Option<String> {
-    let file = format!("{kernel}.cl");
-    let (name, text) = SOURCES[HEADERS..].iter().find(|(n, _)| *n == file)?;
+    let (name, text) = KERNELS.iter().find(|(n, _)| *n == kernel)?;
     let mut s = String::new();
-    for (h, t) in &SOURCES[..HEADERS] {
-        append(&mut s, h, t);
-    }
-    append(&mut s, name, text);
+    append_common(&mut s);
+    append(&mut s, &format!("{name}.cl"), text);
     Some(s)
 }
 
-/// `-D NAME=0/1` for every switch of a variant.
-pub fn defines(constants: &[(&str, bool)]) -> String {
+/// `-D NAME=value` for every switch of a variant (0/1 for flags).
+pub fn defines(constants: &[(&str, u32)]) -> String {
     constants
         .iter()
-        .map(|(n, v)| format!(" -D {n}={}", *v as u32))
+        .map(|(n, v)| format!(" -D {n}={v}"))
         .collect()
 }
 
 /// Build options: OpenCL C 1.2, IEEE-exact division and square root where the device
 /// offers them (the Rust reference rounds both correctly), never fast math.
-pub fn options(device: DeviceId) -> String {
+pub fn options(device: cl_device_id) -> String {
     let mut o = String::from("-cl-std=CL1.2");
-    if let Ok(DeviceInfoResult::SingleFpConfig(c)) =
-        core::get_device_info(device, DeviceInfo::SingleFpConfig)
-    {
-        if c.contains(core::DeviceFpConfig::CORRECTLY_ROUNDED_DIVIDE_SQRT) {
+    if let Ok(c) = Device::new(device).single_fp_config() {
+        if c & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT != 0 {
             o.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
         }
     }
@@ -117,17 +129,17 @@ pub fn options(device: DeviceId) -> String {
 }
 
 /// Compiles [`source`] for `device`.
-pub fn build(context: &core::Context, device: DeviceId) -> Result<core::Program, BackendError> {
+pub fn build(context: &Context, device: cl_device_id) -> Result<Program, BackendError> {
     build_source(context, device, &source())
 }
 
 /// Compiles the program of variant `constants` of `kernel` for `device`.
 pub fn build_variant(
-    context: &core::Context,
-    device: DeviceId,
+    context: &Context,
+    device: cl_device_id,
     kernel: &str,
-    constants: &[(&str, bool)],
-) -> Result<core::Program, BackendError> {
+    constants: &[(&str, u32)],
+) -> Result<Program, BackendError> {
     let src = variant_source(kernel)
         .ok_or_else(|| BackendError::Unsupported(format!("{kernel} has no variants")))?;
     build_with(context, device, &src, &defines(constants))
@@ -135,37 +147,83 @@ pub fn build_variant(
 
 /// Compiles `src` for `device`; a failure returns the driver's build log.
 pub fn build_source(
-    context: &core::Context,
-    device: DeviceId,
+    context: &Context,
+    device: cl_device_id,
     src: &str,
-) -> Result<core::Program, BackendError> {
+) -> Result<Program, BackendError> {
     build_with(context, device, src, "")
 }
 
+/// Compiles `src` for `device` with [`options`] followed by `extra_options`.
 fn build_with(
-    context: &core::Context,
-    device: DeviceId,
+    context: &Context,
+    device: cl_device_id,
     src: &str,
     extra_options: &str,
-) -> Result<core::Program, BackendError> {
-    let text =
-        CString::new(src).map_err(|_| BackendError::Driver("NUL in OpenCL source".into()))?;
-    let program = core::create_program_with_source(context, &[text])
-        .map_err(|e| BackendError::Driver(format!("creating the OpenCL program: {e}")))?;
-    let opts = CString::new(options(device) + extra_options)
-        .map_err(|_| BackendError::Driver("NUL in OpenCL build options".into()))?;
-    if let Err(e) = core::build_program(&program, Some(&[device]), &opts, None, None) {
-        let log = match core::get_program_build_info(&program, device, ProgramBuildInfo::BuildLog) {
-            Ok(ProgramBuildInfoResult::BuildLog(l)) => l,
-            _ => String::new(),
-        };
+) -> Result<Program, BackendError> {
+    if src.contains('\0') {
+        return Err(BackendError::Driver("NUL in OpenCL source".into()));
+    }
+    let opts = options(device) + extra_options;
+    // opencl3's `Program::build` panics on a NUL in the options: refuse it here.
+    if opts.contains('\0') {
+        return Err(BackendError::Driver("NUL in OpenCL build options".into()));
+    }
+    let mut program = Program::create_from_source(context, src)
+        .map_err(cl_error("creating the OpenCL program"))?;
+    if let Err(e) = program.build(&[device], &opts) {
+        let log = program.get_build_log(device).unwrap_or_default();
         return Err(BackendError::Driver(format!(
             "OpenCL kernel build failed: {}\n--- build log ---\n{}",
-            e.api_status()
-                .map(|s| format!("{s:?}"))
-                .unwrap_or_else(|| e.to_string()),
+            status_text(e.0),
             log.trim()
         )));
     }
     Ok(program)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every registry kernel that launches device code has exactly one kernel file, and
+    /// every kernel file is a registry kernel. `prepare_scene` launches nothing here (core
+    /// hands it a flattened BVH already in buffers: `Launch` is `None`), so it has no file.
+    #[test]
+    fn kernel_files_match_the_registry() {
+        let mut registry: Vec<&str> = caustica_core::kernels::all_kernel_names()
+            .into_iter()
+            .filter(|k| *k != "prepare_scene")
+            .collect();
+        let mut files: Vec<&str> = KERNELS.iter().map(|(n, _)| *n).collect();
+        registry.sort_unstable();
+        files.sort_unstable();
+        assert_eq!(files, registry);
+        for k in VARIANT_KERNELS {
+            assert!(files.contains(k), "variant kernel {k} has no file");
+        }
+    }
+
+    /// The common files and kernel files are the files of `kernels/common/` and
+    /// `kernels/`, so a new file cannot be forgotten in the tables.
+    #[test]
+    fn tables_list_every_file() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("kernels");
+        let names = |d: &std::path::Path| {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .filter_map(|e| e.ok())
+                .filter(|e| e.path().is_file())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        let mut common: Vec<String> = COMMON.iter().map(|(f, _)| f.to_string()).collect();
+        common.sort();
+        assert_eq!(names(&dir.join("common")), common);
+        let mut kernels: Vec<String> = KERNELS.iter().map(|(k, _)| format!("{k}.cl")).collect();
+        kernels.sort();
+        assert_eq!(names(&dir), kernels);
+    }
 }

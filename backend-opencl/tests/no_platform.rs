@@ -1,7 +1,9 @@
 //! Without any OpenCL platform the backend is `Unavailable` with a reason that says what
-//! to install, not a panic and not ocl's 10-second retry loop. The ICD loader is pointed
-//! at an empty vendor directory (ocl-icd's `OCL_ICD_VENDORS`) before its first use, which
-//! is why this test has a binary of its own.
+//! to install, not a panic and not a retry loop (the `ocl` crate this backend once used
+//! slept 10 s). The ICD loader is pointed at an empty vendor directory (ocl-icd's
+//! `OCL_ICD_VENDORS`) before its first use, which is why this test has a binary of its
+//! own. A missing loader itself is checked by `scripts/check-no-opencl-link.sh`, which
+//! hides it in a private mount namespace.
 
 use caustica_core::backend::BackendError;
 use caustica_opencl::OpenClBackend;

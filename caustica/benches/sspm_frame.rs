@@ -176,7 +176,7 @@ fn plain_against_direct(
 
     let ds = DeviceScene::build(scene);
     let mut setup = Recording::new();
-    let args = ds.record_upload(&mut setup);
+    let args = setup.upload_scene(&ds);
     let camera = GpuCamera::from_camera(&scene.camera);
     let pixels = camera.width * camera.height;
     let gbuffer = setup.create(pixels, "gbuffer");
