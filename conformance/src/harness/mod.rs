@@ -11,11 +11,11 @@
 //!   photon statistics (emitted equal, stored and deposited within a path-divergence
 //!   allowance, total flux) and image relative L2 error.
 //!
-//! Modules: [`candidates`] (the backends found, the reference and the candidates),
-//! [`verdict`] (verdicts and reports), [`tolerance`] (every tolerance with its argument),
-//! [`fixture`] (fixed inputs and the drivers that run one kernel on them), [`cases`] (the
-//! scenes the suite runs), [`measure`] (numbers the checks measure) and [`quirks`] (known
-//! device quirks, as data).
+//! Modules: [`candidates`](mod@candidates) (the backends found, the reference and the
+//! candidates), [`verdict`] (verdicts and reports), [`tolerance`] (every tolerance with its
+//! argument), [`fixture`] (fixed inputs and the drivers that run one kernel on them),
+//! [`cases`] (the scenes the suite runs), [`measure`] (numbers the checks measure) and
+//! [`quirks`] (known device quirks, as data).
 
 pub mod candidates;
 pub mod cases;

@@ -16,7 +16,7 @@
 //! Conventions stated and tested here (see also `docs/stability.md`):
 //! - **Relative IOR.** A dielectric's `ior` is relative to the medium *around the object*:
 //!   glass (1.5) inside water (1.33) is an object of `ior = 1.5 / 1.33`. A kernel only ever
-//!   sees one interface at a time, so nesting composes: [`nested_glass_in_water`] checks
+//!   sees one interface at a time, so nesting composes: `nested_glass_in_water` checks
 //!   that a glass ball inside a water ball focuses where the closed form says.
 //! - **Absorption in nested media.** Beer-Lambert is applied to a segment that ends on an
 //!   *exiting* hit of a dielectric, with that dielectric's coefficient. A segment inside
@@ -30,25 +30,20 @@
 //!   brightest photon (`2^24 <= max / quantum < 2^25`), so the absolute light intensity
 //!   only has to fit f32 (tested at 1e-6 and 1e9 W/sr). Within one frame, a photon dimmer
 //!   than `2^-25` of the brightest rounds to zero and is counted as underflow
-//!   ([`dynamic_range_mixed`]); saturation cannot occur (the brightest photon is < 2^25
+//!   (`dynamic_range_mixed`); saturation cannot occur (the brightest photon is < 2^25
 //!   units) and is checked to be zero everywhere.
 //! - **Pixel footprint.** A pixel's radiance is `albedo / pi * Phi / A` with `A` its
 //!   surface footprint (`core::footprint`), so `L * A * pi / albedo = Phi`: a pixel's
 //!   contribution is bounded by the flux deposited in it, whatever its depth. The cases
-//!   [`near_plane`] and [`far_plane`] check this bound and finiteness at footprints of
+//!   `near_plane` and `far_plane` check this bound and finiteness at footprints of
 //!   ~1.5e-23 and ~5e8 scene units^2.
 //!
-//! One file per group of the catalogue ([`optics`], [`screen`], [`scale`], [`range`],
-//! [`degenerate`], [`termination`]), beside the shared machinery: [`runner`] (the universal
-//! checks and the comparison with the reference), [`scenes`] (scene builders) and
-//! [`closed_form`] (bounds computed independently of the ray tracer).
+//! One file per group of the catalogue (`optics.rs`, `screen.rs`, `scale.rs`, `range.rs`,
+//! `degenerate.rs`, `termination.rs`), beside the shared machinery: `runner.rs` (the
+//! universal checks and the comparison with the reference), `scenes.rs` (scene builders)
+//! and `closed_form.rs` (bounds computed independently of the ray tracer).
 //!
 //! [`compare_frames`]: crate::techniques::sspm::compare_frames
-//! [`universal`]: runner::universal
-//! [`nested_glass_in_water`]: optics::nested_glass_in_water
-//! [`dynamic_range_mixed`]: range::dynamic_range_mixed
-//! [`near_plane`]: screen::near_plane
-//! [`far_plane`]: screen::far_plane
 
 mod closed_form;
 mod degenerate;

@@ -10,7 +10,7 @@ use caustica_core::backend::Backend;
 use caustica_core::scene::{Material, Scene};
 use caustica_core::SspmSettings;
 
-/// Universal checks of one frame (module docs).
+/// Universal checks of one frame (listed in the [`stiff`](super) module docs).
 pub fn universal(scene: &Scene, f: &Frame) -> Verdict {
     let mut v = Verdict::new("universal");
     for (name, img) in [
