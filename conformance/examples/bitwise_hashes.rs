@@ -35,7 +35,7 @@ fn main() {
             };
             let mut s = Sspm::new(backend.as_mut(), &scene, settings).expect("valid scene");
             let stats = s.frame(backend.as_mut(), &mut |_| {}).expect("frame");
-            let mut line = |item: &str, bytes: &[u8]| {
+            let line = |item: &str, bytes: &[u8]| {
                 println!("{bname}\t{device}\t{name}\t{item}\t{:016x}", fnv1a(bytes));
             };
             for o in Output::ALL {
