@@ -49,10 +49,8 @@ fn main() {
                 let p = read_buf(backend.as_mut(), p).expect("photons");
                 // GPU backends append photons in atomic order, which varies run to run:
                 // hash the (deterministic) multiset, sorted by bytes.
-                let mut rows: Vec<&[u8]> = p[..n.min(p.len())]
-                    .iter()
-                    .map(bytemuck::bytes_of)
-                    .collect();
+                let mut rows: Vec<&[u8]> =
+                    p[..n.min(p.len())].iter().map(bytemuck::bytes_of).collect();
                 rows.sort_unstable();
                 line("last_batch_photons", &rows.concat());
             }
