@@ -258,7 +258,7 @@ impl Backend for CpuBackend {
                     let t0 = Instant::now();
                     // Run inside our pool so the thread count is the backend's.
                     let pool = Arc::clone(&self.pool);
-                    pool.install(|| self.run_kernel(&k.kernel))?;
+                    pool.install(|| self.run_kernel(k.kernel()))?;
                     times.push(PassTime {
                         kernel: k.name(),
                         seconds: t0.elapsed().as_secs_f64(),

@@ -89,7 +89,7 @@ fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), Backend
         if launch.constants.is_empty() || b.pipelines.contains_key(&label) {
             continue;
         }
-        let info = k.kernel.info();
+        let info = k.kernel().info();
         let raygen = spirv::raygen(info.name)
             .filter(|_| info.traced)
             .ok_or_else(|| {
@@ -319,20 +319,18 @@ fn record_all(
                     frame.retired_scenes.push(s);
                 }
             }
-            Step::Kernel(RecordedKernel {
-                kernel: Kernel::PrepareScene(PrepareScene { scene }),
-                ..
-            }) => {
-                if let Step::Kernel(k) = step {
+            Step::Kernel(k) => {
+                if let Kernel::PrepareScene(PrepareScene { scene }) = k.kernel() {
                     k.launch()?; // the node buffer's shape is checked
+                    // The build reads the uploads: finish what is recorded, then build.
+                    let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+                    b.submit_and_wait(cmd)?;
+                    prepare_scene(b, scene)?;
+                    frame.cmd = b.begin()?;
+                } else {
+                    record_kernel(b, frame, k)?
                 }
-                // The build reads the uploads: finish what is recorded, then build.
-                let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
-                b.submit_and_wait(cmd)?;
-                prepare_scene(b, scene)?;
-                frame.cmd = b.begin()?;
             }
-            Step::Kernel(k) => record_kernel(b, frame, k)?,
         }
     }
     Ok(())
@@ -393,8 +391,8 @@ fn record_kernel(
         .pipelines
         .get(&label)
         .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
-    let scene = scene_of(&k.kernel);
-    let counters = match &k.kernel {
+    let scene = scene_of(k.kernel());
+    let counters = match k.kernel() {
         Kernel::TracePhotons(TracePhotons { counters, .. }) => Some(counters.id),
         _ => None,
     };

@@ -35,7 +35,7 @@ fn main() {
             };
             let mut s = Sspm::new(backend.as_mut(), &scene, settings).expect("valid scene");
             let stats = s.frame(backend.as_mut(), &mut |_| {}).expect("frame");
-            let mut line = |item: &str, bytes: &[u8]| {
+            let line = |item: &str, bytes: &[u8]| {
                 println!("{bname}\t{device}\t{name}\t{item}\t{:016x}", fnv1a(bytes));
             };
             for o in Output::ALL {
@@ -49,10 +49,8 @@ fn main() {
                 let p = read_buf(backend.as_mut(), p).expect("photons");
                 // GPU backends append photons in atomic order, which varies run to run:
                 // hash the (deterministic) multiset, sorted by bytes.
-                let mut rows: Vec<&[u8]> = p[..n.min(p.len())]
-                    .iter()
-                    .map(bytemuck::bytes_of)
-                    .collect();
+                let mut rows: Vec<&[u8]> =
+                    p[..n.min(p.len())].iter().map(bytemuck::bytes_of).collect();
                 rows.sort_unstable();
                 line("last_batch_photons", &rows.concat());
             }

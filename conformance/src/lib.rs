@@ -1,65 +1,26 @@
-//! Conformance helpers: open every backend named in `CAUSTICA_REQUIRE_BACKENDS` (a missing
-//! one is a failure, not a skip) and render small frames for comparison. Backends: cpu,
-//! opencl, wgpu, vulkan.
+//! Conformance: every backend checked against the CPU reference (DESIGN 3 and 4).
+//! Backends: cpu, opencl, wgpu, vulkan; [`backends`] opens every one this machine has (one
+//! named in `CAUSTICA_REQUIRE_BACKENDS` that cannot be opened is a failure, not a skip).
 //!
-//! [`strategies`]: proptest strategies for valid scenes and small settings. [`compare`]:
-//! backend-generic comparisons with the CPU reference, per kernel and per technique, with
-//! every tolerance argued (used by `tests/cross_backend.rs`).
+//! - [`harness`]: the backends under test, verdicts and reports, every tolerance with its
+//!   floating-point argument, the fixed inputs and the drivers that run one kernel on them,
+//!   the case lists and the table of known device quirks.
+//! - [`kernels`]: one check per kernel, on fixed inputs.
+//! - [`techniques`]: whole frames of a technique compared with the reference's.
+//! - [`stiff`]: the catalogue of stiff and extreme cases.
+//! - [`strategies`]: proptest strategies for valid scenes and small settings.
+//!
+//! Used by `tests/cross_backend.rs`, `tests/stiff_cases.rs` and `tests/suite_sensitivity.rs`.
 
-pub mod compare;
+pub mod harness;
+pub mod kernels;
 pub mod stiff;
 pub mod strategies;
+pub mod techniques;
+
+pub use harness::candidates::backends;
 
 use caustica_core::{Backend, Output, Scene, Sspm, SspmSettings};
-
-/// Backends found on this machine (name, backend). Panics, loudly, when a backend listed
-/// in `CAUSTICA_REQUIRE_BACKENDS` cannot be opened.
-pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
-    let required = std::env::var("CAUSTICA_REQUIRE_BACKENDS").unwrap_or_default();
-    let mut out: Vec<(&'static str, Box<dyn Backend>)> = Vec::new();
-    match caustica_cpu::CpuBackend::new() {
-        Ok(b) => out.push(("cpu", Box::new(b))),
-        Err(e) => eprintln!("SKIPPING cpu backend: {e}"),
-    }
-    match caustica_opencl::OpenClBackend::new() {
-        Ok(b) => {
-            eprintln!("opencl backend: {}", b.device().name);
-            out.push(("opencl", Box::new(b)));
-        }
-        Err(e) => eprintln!("SKIPPING opencl backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
-    }
-    match caustica_wgpu::WgpuBackend::new() {
-        Ok(b) => {
-            eprintln!("wgpu backend: {}", b.capabilities().device);
-            out.push(("wgpu", Box::new(b)));
-        }
-        Err(e) => eprintln!("SKIPPING wgpu backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
-    }
-    // The conformance suite runs Vulkan under the Khronos validation layer where it is
-    // installed: any validation error fails the step that caused it.
-    match caustica_vulkan::VulkanBackend::with_validation(true) {
-        Ok(b) => {
-            eprintln!(
-                "vulkan backend: {} (validation layer {})",
-                b.capabilities().device,
-                if b.validation_active() {
-                    "on"
-                } else {
-                    "NOT INSTALLED"
-                }
-            );
-            out.push(("vulkan", Box::new(b)));
-        }
-        Err(e) => eprintln!("SKIPPING vulkan backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
-    }
-    for name in required.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        assert!(
-            out.iter().any(|(n, _)| *n == name),
-            "required backend '{name}' is not available on this machine"
-        );
-    }
-    out
-}
 
 /// Small test settings: a `n x n` photon grid.
 pub fn small_settings(n: u32) -> SspmSettings {

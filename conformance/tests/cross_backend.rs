@@ -8,13 +8,16 @@
 //! the scene is uploaded to both backends, and every kernel after the first runs on the
 //! *CPU's* intermediate buffers uploaded to both, so only the kernel under test differs.
 //! Per technique: whole Sspm frames on every built-in scene and on proptest scenes.
-//! The checks and the argument behind every tolerance are in
-//! `caustica_conformance::compare`; the scene strategies in `strategies`.
+//! The checks are in `caustica_conformance::kernels` (one file per kernel) and
+//! `caustica_conformance::techniques`, the argument behind every tolerance in
+//! `caustica_conformance::harness::tolerance`, the scene strategies in `strategies`.
 
-use caustica_conformance::compare::{
-    self, builtin_small, check_composite, check_deposit, check_direct, check_frame, check_gather,
-    check_gbuffer, check_kernel_cases, check_trace, kernel_cases, KernelCheck, Report,
+use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
+use caustica_conformance::kernels::{
+    check_composite, check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
+    check_trace, KernelCheck,
 };
+use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
 use caustica_core::scene::builtin::BUILTIN_SCENES;
 use proptest::test_runner::{TestCaseError, TestRunner};
@@ -23,9 +26,9 @@ use std::cell::RefCell;
 /// Runs `check` for every candidate backend on every kernel case and reports.
 fn kernel_test(test: &str, check: &KernelCheck) {
     let mut report = Report::new(test);
-    let mut reference = compare::reference();
+    let mut reference = harness::reference();
     let cases = kernel_cases();
-    for mut cand in compare::candidates(test) {
+    for mut cand in harness::candidates(test) {
         check_kernel_cases(&mut report, &mut reference, &mut cand, &cases, check);
     }
     report.finish();
@@ -75,13 +78,13 @@ fn composite_is_exact() {
 }
 
 /// Whole Sspm frames on every built-in scene (96x55, 64x64 photons per light): photon
-/// statistics and image errors as `compare::compare_frames` argues.
+/// statistics and image errors as `techniques::sspm::compare_frames` argues.
 #[test]
 fn sspm_matches_cpu_on_every_builtin_scene() {
     let test = "sspm on built-in scenes";
     let mut report = Report::new(test);
-    let mut reference = compare::reference();
-    for mut cand in compare::candidates(test) {
+    let mut reference = harness::reference();
+    for mut cand in harness::candidates(test) {
         for name in BUILTIN_SCENES {
             let scene = builtin_small(name);
             let settings = small_settings(64);
@@ -101,8 +104,8 @@ fn sspm_matches_cpu_on_every_builtin_scene() {
 #[test]
 fn sspm_matches_cpu_on_random_scenes() {
     let test = "sspm on generated scenes";
-    let reference = RefCell::new(compare::reference());
-    for cand in compare::candidates(test) {
+    let reference = RefCell::new(harness::reference());
+    for cand in harness::candidates(test) {
         let name = cand.name.clone();
         let backend = RefCell::new(cand.backend);
         let mut runner = TestRunner::new(strategies::config());
@@ -126,7 +129,7 @@ fn sspm_matches_cpu_on_random_scenes() {
         if let Err(e) = result {
             panic!("{name}: {e}");
         }
-        compare::loud(&format!(
+        harness::loud(&format!(
             "{test}: {name} agrees with cpu on {} generated cases",
             strategies::config().cases
         ));

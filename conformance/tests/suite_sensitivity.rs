@@ -1,5 +1,6 @@
-//! The cross-backend suite, itself tested. Two promises of `caustica_conformance::compare`
-//! are checked with "mutant" backends that wrap the CPU backend, so they run on any machine:
+//! The cross-backend suite, itself tested. Two promises of the checks in
+//! `caustica_conformance::kernels` and `caustica_conformance::techniques` are checked with
+//! "mutant" backends that wrap the CPU backend, so they run on any machine:
 //!
 //! - a backend that differs from the CPU only by rounding passes every comparison: the
 //!   `UlpNoise` mutant nudges every float input of every kernel (vertices, normals, camera,
@@ -11,10 +12,12 @@
 //!   unit lost per texel, radiance 1e-4 high, one ulp in the composite, a photon kernel
 //!   that ignores its compiled variant switches, and so on.
 
-use caustica_conformance::compare::{
-    self, builtin_small, check_composite, check_deposit, check_direct, check_frame, check_gather,
-    check_gbuffer, check_kernel_cases, check_trace, kernel_cases, Candidate, KernelCheck, Report,
+use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
+use caustica_conformance::kernels::{
+    check_composite, check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
+    check_trace, KernelCheck,
 };
+use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
 use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
@@ -110,7 +113,7 @@ impl Mutant {
                 }
                 *data = bytemuck::cast_slice(&v).to_vec();
             }
-            Step::Kernel(k) => match k {
+            Step::Kernel(k) => k.modify(|k| match k {
                 Kernel::PrimaryGbuffer(PrimaryGbuffer { camera, .. }) => nudge_camera(camera),
                 Kernel::DirectLight(DirectLight { params, .. }) => nudge_camera(&mut params.camera),
                 Kernel::TracePhotons(TracePhotons { params, .. }) => {
@@ -132,7 +135,7 @@ impl Mutant {
                     params.normal_power = nudge(params.normal_power);
                 }
                 _ => {}
-            },
+            }),
             _ => {}
         }
     }
@@ -272,20 +275,20 @@ impl Backend for Mutant {
             if self.mutation == Mutation::UlpNoise {
                 Self::perturb(&mut step);
             }
-            if let (
-                Mutation::VariantWithoutFeatures,
-                Step::Kernel(Kernel::TracePhotons(TracePhotons { variant, .. })),
-            ) = (self.mutation, &mut step)
-            {
-                variant.dispersion = false;
-                variant.absorption = false;
+            if let (Mutation::VariantWithoutFeatures, Step::Kernel(k)) = (self.mutation, &mut step) {
+                k.modify(|k| {
+                    if let Kernel::TracePhotons(TracePhotons { variant, .. }) = k {
+                        variant.dispersion = false;
+                        variant.absorption = false;
+                    }
+                });
             }
             let one = Recording {
                 steps: vec![step.clone()],
             };
             times.extend(self.inner.execute(&one)?);
             if let Step::Kernel(k) = &step {
-                self.fault(k)?;
+                self.fault(k.kernel())?;
             }
         }
         Ok(times)
@@ -324,7 +327,7 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
 #[test]
 fn rounding_differences_pass_every_comparison() {
     let mut report = Report::new("UlpNoise mutant, every check");
-    let mut reference = compare::reference();
+    let mut reference = harness::reference();
     let mut cand = Mutant::candidate(Mutation::UlpNoise);
     let cases = kernel_cases();
     for (_, check) in kernel_checks() {
@@ -366,7 +369,7 @@ fn each_fault_fails_the_check_of_its_kernel() {
         .collect();
     let checks = kernel_checks();
     let check = |name: &str| checks.iter().find(|(n, _)| *n == name).unwrap().1.as_ref();
-    let mut reference = compare::reference();
+    let mut reference = harness::reference();
     let mut missed = Vec::new();
     for (mutation, kernel) in [
         (Mutation::GbufferDepthIsDistance, "primary_gbuffer"),

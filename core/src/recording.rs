@@ -13,7 +13,7 @@ use crate::kernels::{Kernel, PrepareScene};
 /// recorded (an argument error surfaces when the recording is executed).
 #[derive(Clone, Debug)]
 pub struct RecordedKernel {
-    pub kernel: Kernel,
+    kernel: Kernel,
     lowered: Result<Option<Launch>, BackendError>,
 }
 
@@ -30,6 +30,18 @@ impl RecordedKernel {
             Ok(l) => Ok(l.as_ref()),
             Err(e) => Err(e.clone()),
         }
+    }
+
+    /// The kernel's typed arguments.
+    pub fn kernel(&self) -> &Kernel {
+        &self.kernel
+    }
+
+    /// Changes the kernel's arguments and lowers it again (tools that rewrite recordings,
+    /// such as conformance's mutant backends).
+    pub fn modify(&mut self, f: impl FnOnce(&mut Kernel)) {
+        f(&mut self.kernel);
+        self.lowered = self.kernel.launch();
     }
 
     /// The registry name of the kernel.

@@ -1,0 +1,142 @@
+//! `primary_gbuffer`: texel by texel on the fixture's scene and camera. Materials must agree
+//! on [`GBUFFER_MATERIAL_AGREEMENT`] of the pixels; positions, depths, normals and uvs within
+//! the ulp-derived tolerances on [`GBUFFER_GEOMETRY_AGREEMENT`] of the rest; fields copied
+//! from the material table exactly.
+
+use crate::harness::fixture::Fixture;
+use crate::harness::measure::{pct, v3};
+use crate::harness::tolerance::{
+    GBUFFER_GEOMETRY_AGREEMENT, GBUFFER_MATERIAL_AGREEMENT, GBUFFER_MIN_COS, GBUFFER_POSITION_REL,
+    NORMAL_GRADIENT, UV_GRADIENT,
+};
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::Backend;
+use caustica_core::device::layout::{camera_ray, GBufferTexel, GpuCamera, NO_MATERIAL};
+
+/// Texel-by-texel comparison of two G-buffers of camera `cam` (reference first); also
+/// returns which pixels agree (material equal and geometry within tolerance).
+pub fn compare_gbuffers(
+    cam: &GpuCamera,
+    reference: &[GBufferTexel],
+    candidate: &[GBufferTexel],
+) -> (Verdict, Vec<bool>) {
+    let mut v = Verdict::new("primary_gbuffer");
+    let mut agree = vec![false; reference.len()];
+    if !v.check(reference.len() == candidate.len(), || {
+        format!("{} texels, expected {}", candidate.len(), reference.len())
+    }) {
+        return (v, agree);
+    }
+    let n = reference.len() as u64;
+    let (mut same_material, mut hits, mut geometry_ok) = (0u64, 0u64, 0u64);
+    let mut worst = (0.0f32, String::new());
+    let mut exact_mismatch = Vec::new();
+    for (i, (a, b)) in reference.iter().zip(candidate).enumerate() {
+        if a.material != b.material {
+            continue;
+        }
+        same_material += 1;
+        let (x, y) = (i as u32 % cam.width, i as u32 / cam.width);
+        if a.material == NO_MATERIAL {
+            // a miss writes depth 0, no flags; the rest is unspecified
+            if b.depth == 0.0 && b.flags == 0 {
+                agree[i] = true;
+            } else if exact_mismatch.len() < 3 {
+                exact_mismatch.push(format!(
+                    "({x},{y}) miss with depth {} flags {}",
+                    b.depth, b.flags
+                ));
+            }
+            continue;
+        }
+        hits += 1;
+        // Exactly copied fields: material table entries and flags derived from them.
+        if a.flags != b.flags || a.albedo != b.albedo || a.roughness != b.roughness {
+            if exact_mismatch.len() < 3 {
+                exact_mismatch.push(format!(
+                    "({x},{y}) flags/albedo/roughness {:?}/{:?}/{} vs cpu {:?}/{:?}/{}",
+                    b.flags, b.albedo, b.roughness, a.flags, a.albedo, a.roughness
+                ));
+            }
+            continue;
+        }
+        let ray = camera_ray(cam, x, y);
+        let cos = ray.dot(v3(a.normal)).abs().max(GBUFFER_MIN_COS);
+        let tol =
+            GBUFFER_POSITION_REL * (a.view_distance / cos + v3(a.position).abs().max_element());
+        let errs = [
+            (v3(a.position) - v3(b.position)).abs().max_element() / tol,
+            (a.depth - b.depth).abs() / tol,
+            (a.view_distance - b.view_distance).abs() / tol,
+            (v3(a.normal) - v3(b.normal)).abs().max_element() / (1e-5 + NORMAL_GRADIENT * tol),
+            (glam::Vec2::from(a.uv) - glam::Vec2::from(b.uv))
+                .abs()
+                .max_element()
+                / (1e-5 + UV_GRADIENT * tol),
+        ];
+        let e = errs.iter().fold(
+            0.0f32,
+            |m, &x| if x.is_nan() { f32::INFINITY } else { m.max(x) },
+        );
+        if e <= 1.0 {
+            geometry_ok += 1;
+            agree[i] = true;
+        }
+        if e > worst.0 {
+            worst = (
+                e,
+                format!(
+                    "({x},{y}): position {:?} vs cpu {:?}, normal {:?} vs {:?}, depth {} vs {}",
+                    b.position, a.position, b.normal, a.normal, b.depth, a.depth
+                ),
+            );
+        }
+    }
+    v.note(format!(
+        "material agrees on {same_material}/{n} ({:.3}%); geometry within tolerance on \
+         {geometry_ok}/{hits} hit pixels; worst error {:.3} of tolerance",
+        pct(same_material, n),
+        worst.0
+    ));
+    v.check(
+        same_material as f64 >= GBUFFER_MATERIAL_AGREEMENT * n as f64,
+        || {
+            format!(
+                "material id agrees on only {:.3}% of pixels (need {}%)",
+                pct(same_material, n),
+                100.0 * GBUFFER_MATERIAL_AGREEMENT
+            )
+        },
+    );
+    v.check(exact_mismatch.is_empty(), || {
+        format!(
+            "fields that must be exact differ: {}",
+            exact_mismatch.join("; ")
+        )
+    });
+    v.check(
+        geometry_ok as f64 >= GBUFFER_GEOMETRY_AGREEMENT * hits as f64,
+        || {
+            format!(
+                "geometry within tolerance on only {:.3}% of same-material pixels (need {}%); \
+             worst {:.3e} x tolerance at {}",
+                pct(geometry_ok, hits),
+                100.0 * GBUFFER_GEOMETRY_AGREEMENT,
+                worst.0,
+                worst.1
+            )
+        },
+    );
+    (v, agree)
+}
+
+/// `primary_gbuffer` on the fixture's scene and camera.
+pub fn check_gbuffer(
+    fx: &Fixture,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let a = fx.run_gbuffer(r)?;
+    let b = fx.run_gbuffer(c)?;
+    Ok(compare_gbuffers(&fx.camera, &a, &b).0)
+}

@@ -1,0 +1,231 @@
+//! `trace_photons`: the stored photons of every emitting light, compared as multisets. Counts
+//! and every path-end counter within the path-divergence allowance, flux sums and the
+//! fixed-point stored-flux counter within the diverged photons' flux, and
+//! [`PHOTON_MATCH`] of each backend's photons matched by one of the other's within
+//! [`PHOTON_POSITION_REL`] of the scene diagonal, in both directions.
+
+use crate::harness::fixture::Fixture;
+use crate::harness::measure::v3;
+use crate::harness::tolerance::{
+    divergence_allowance, photon_flux_match_rel, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL,
+};
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::Backend;
+use caustica_core::math::fixed_point::join_u64;
+use caustica_core::device::layout::{counter, Photon};
+use glam::Vec3;
+use std::collections::HashMap;
+
+/// Spatial hash of photons for "is there a matching photon nearby" queries.
+struct PhotonGrid<'a> {
+    cell: f32,
+    cells: HashMap<[i32; 3], Vec<&'a Photon>>,
+}
+
+impl<'a> PhotonGrid<'a> {
+    fn new(photons: &'a [Photon], tol: f32) -> PhotonGrid<'a> {
+        let cell = tol.max(f32::MIN_POSITIVE);
+        let mut cells: HashMap<[i32; 3], Vec<&Photon>> = HashMap::new();
+        for p in photons {
+            cells
+                .entry(Self::key(v3(p.position), cell))
+                .or_default()
+                .push(p);
+        }
+        PhotonGrid { cell, cells }
+    }
+
+    fn key(p: Vec3, cell: f32) -> [i32; 3] {
+        let k = (p / cell).floor();
+        [k.x as i32, k.y as i32, k.z as i32]
+    }
+
+    /// True when a photon lies within `tol` of `p` with every flux channel within
+    /// `flux_rel` (relative) of `p`'s.
+    fn has_match(&self, p: &Photon, tol: f32, flux_rel: f32) -> bool {
+        let pos = v3(p.position);
+        let k = Self::key(pos, self.cell);
+        let flux_ok = |q: &Photon| {
+            (0..3).all(|c| {
+                (p.flux[c] - q.flux[c]).abs() <= flux_rel * p.flux[c].abs().max(q.flux[c].abs())
+            })
+        };
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = self.cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        if v.iter()
+                            .any(|q| v3(q.position).distance(pos) <= tol && flux_ok(q))
+                        {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Number of photons of `a` with no match in `b` (see [`PhotonGrid::has_match`]).
+fn unmatched(a: &[Photon], b: &[Photon], tol: f32, flux_rel: f32) -> u64 {
+    let grid = PhotonGrid::new(b, tol);
+    a.iter()
+        .filter(|p| !grid.has_match(p, tol, flux_rel))
+        .count() as u64
+}
+
+fn flux_sum(photons: &[Photon]) -> [f64; 3] {
+    let mut s = [0.0f64; 3];
+    for p in photons {
+        for (c, v) in s.iter_mut().enumerate() {
+            *v += p.flux[c] as f64;
+        }
+    }
+    s
+}
+
+/// Checks the accounting of one backend's trace counters for `emitted` photons.
+fn trace_accounting(v: &mut Verdict, who: &str, counters: &[u32], stored: usize, emitted: u64) {
+    let ends = [
+        counter::STORED,
+        counter::NO_SPECULAR,
+        counter::ESCAPED,
+        counter::NEGLIGIBLE,
+        counter::BOUNCE_LIMIT,
+    ];
+    let sum: u64 = ends.iter().map(|&i| counters[i] as u64).sum();
+    v.check(sum == emitted, || {
+        format!("{who}: path ends add up to {sum}, {emitted} photons were emitted")
+    });
+    v.check(counters[counter::STORED] as usize == stored, || {
+        format!(
+            "{who}: STORED counter {} but {stored} photons in the buffer",
+            counters[counter::STORED]
+        )
+    });
+    for w in [
+        counter::OFF_SCREEN,
+        counter::DEPTH_MISMATCH,
+        counter::DEPOSITED,
+        counter::UNDERFLOW,
+        counter::SATURATED,
+    ] {
+        v.check(counters[w] == 0, || {
+            format!("{who}: trace_photons wrote deposit counter word {w}")
+        });
+    }
+}
+
+/// `trace_photons` for every emitting light of the fixture, compared as multisets.
+pub fn check_trace(
+    fx: &Fixture,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut all = Verdict::new("trace_photons");
+    if fx.constants.domains.is_empty() {
+        all.note("no light emits photons (no caster): nothing to trace");
+        return Ok(all);
+    }
+    let emitted = fx.settings.photons_w as u64 * fx.settings.photons_h as u64;
+    let tol = PHOTON_POSITION_REL * fx.ds.bounds.diagonal();
+    let flux_rel = photon_flux_match_rel(&fx.scene, tol);
+    for k in 0..fx.constants.domains.len() {
+        let light = fx.constants.domains[k].0;
+        let (pa, ca) = fx.run_trace(r, k)?;
+        let (pb, cb) = fx.run_trace(c, k)?;
+        let mut v = Verdict::new(format!("light {light}"));
+        trace_accounting(&mut v, "cpu", &ca, pa.len(), emitted);
+        trace_accounting(&mut v, "candidate", &cb, pb.len(), emitted);
+        let n = pa.len().max(pb.len()) as u64;
+        let allow = divergence_allowance(n);
+        let d = (pa.len() as i64 - pb.len() as i64).unsigned_abs();
+        v.check(d <= allow, || {
+            format!(
+                "stored {} photons, cpu {} (allowed difference {allow})",
+                pb.len(),
+                pa.len()
+            )
+        });
+        // Every path ends in one category: a diverged path moves one count between two.
+        let allow_paths = divergence_allowance(emitted);
+        for (w, name) in [
+            (counter::NO_SPECULAR, "no_specular"),
+            (counter::ESCAPED, "escaped"),
+            (counter::NEGLIGIBLE, "negligible"),
+            (counter::BOUNCE_LIMIT, "bounce_limit"),
+        ] {
+            let d = (ca[w] as i64 - cb[w] as i64).unsigned_abs();
+            v.check(d <= allow_paths, || {
+                format!(
+                    "{name}: {} vs cpu {} (allowed difference {allow_paths})",
+                    cb[w], ca[w]
+                )
+            });
+        }
+        // Ray segments: a diverged path may trace up to max_bounces more or fewer.
+        let rays = |c: &[u32]| join_u64([c[counter::RAYS], c[counter::RAYS + 1]]);
+        let d = (rays(&ca) as i64 - rays(&cb) as i64).unsigned_abs();
+        let allow_rays = allow_paths * fx.settings.max_bounces as u64;
+        v.check(d <= allow_rays, || {
+            format!(
+                "rays traced {} vs cpu {} (allowed {allow_rays})",
+                rays(&cb),
+                rays(&ca)
+            )
+        });
+        // Flux: the diverged photons' whole flux plus rounding of the others.
+        let max_photon_flux = fx.constants.max_photon_flux as f64;
+        let (fa, fb) = (flux_sum(&pa), flux_sum(&pb));
+        for ch in 0..3 {
+            let bound = allow as f64 * max_photon_flux + PHOTON_FLUX_REL * fa[ch].max(fb[ch]);
+            v.check((fa[ch] - fb[ch]).abs() <= bound, || {
+                format!(
+                    "flux[{ch}] {:.6e} vs cpu {:.6e} (allowed {bound:.3e})",
+                    fb[ch], fa[ch]
+                )
+            });
+            // The fixed-point stored-flux counter (units of the quantum, <= 2^24 per
+            // photon) follows the same argument, plus one rounding unit per photon.
+            let q = |c: &[u32]| {
+                join_u64([
+                    c[counter::STORED_FLUX + 2 * ch],
+                    c[counter::STORED_FLUX + 2 * ch + 1],
+                ])
+            };
+            let dq = (q(&ca) as i64 - q(&cb) as i64).unsigned_abs() as f64;
+            let max_q = max_photon_flux / fx.constants.flux_quantum as f64;
+            let bound_q = allow as f64 * max_q + n as f64 * (1.0 + PHOTON_FLUX_REL * max_q);
+            v.check(dq <= bound_q, || {
+                format!(
+                    "stored-flux counter[{ch}] {} vs cpu {} (allowed {bound_q:.3e})",
+                    q(&cb),
+                    q(&ca)
+                )
+            });
+        }
+        // Multiset match in both directions, on position and flux.
+        let (ua, ub) = (
+            unmatched(&pb, &pa, tol, flux_rel),
+            unmatched(&pa, &pb, tol, flux_rel),
+        );
+        for (u, len, who) in [(ua, pb.len(), "candidate"), (ub, pa.len(), "cpu")] {
+            let allowed = ((1.0 - PHOTON_MATCH) * len as f64).ceil() as u64 + 2;
+            v.check(u <= allowed, || {
+                format!(
+                    "{u} of {len} {who} photons have no counterpart within {tol:.2e} (allowed {allowed})"
+                )
+            });
+        }
+        v.note(format!(
+            "stored {} vs cpu {}; unmatched {ua} / {ub} within {tol:.2e}; flux {:.4e} vs {:.4e}",
+            pb.len(),
+            pa.len(),
+            fb.iter().sum::<f64>(),
+            fa.iter().sum::<f64>()
+        ));
+        all.absorb(v);
+    }
+    Ok(all)
+}
