@@ -14,7 +14,7 @@ mod storage;
 pub mod traversal;
 
 use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
-use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{DeviceType, Backend, BackendError, Capabilities, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::kernels::Kernel;
 use caustica_core::recording::{Recording, Step};
@@ -221,6 +221,7 @@ impl Backend for CpuBackend {
     fn capabilities(&self) -> Capabilities {
         Capabilities {
             device: format!("host CPU, {} threads (rayon + obvhs)", self.threads),
+            device_type: DeviceType::Cpu,
             hardware_ray_tracing: false,
             float_atomics: false,
             int64_atomics: true,
@@ -229,10 +230,6 @@ impl Backend for CpuBackend {
         }
     }
 
-    fn kernels(&self) -> Vec<&'static str> {
-        // `run_kernel` matches every `Kernel` variant: the compiler holds it to the registry.
-        caustica_core::kernels::all_kernel_names()
-    }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         let mut times = Vec::new();

@@ -4,9 +4,9 @@
 
 use crate::error::{cl_error, status_text};
 use crate::program;
-use caustica_core::backend::BackendError;
+use caustica_core::backend::{BackendError, DeviceType};
 use opencl3::context::Context;
-use opencl3::device::{Device, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_GPU};
+use opencl3::device::{Device, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU};
 use opencl3::platform::{get_platforms, Platform};
 use opencl3::program::Program;
 use opencl3::types::cl_context_properties;
@@ -65,6 +65,9 @@ pub struct DeviceSummary {
     pub version: String,
     /// Whether the device is a GPU.
     pub is_gpu: bool,
+    /// GPU (integrated when it shares host memory), or a CPU device (a GPU API in
+    /// software, as PoCL's).
+    pub device_type: DeviceType,
     /// Largest single buffer, bytes (`CL_DEVICE_MAX_MEM_ALLOC_SIZE`).
     pub max_alloc_bytes: u64,
     /// Device memory, bytes (`CL_DEVICE_GLOBAL_MEM_SIZE`).
@@ -155,6 +158,17 @@ fn summary(platform: Platform, device: Device) -> Result<DeviceSummary, BackendE
     let version = opencl_version(&device.version().map_err(&info)?);
     let extensions = device.extensions().map_err(&info)?;
     let is_gpu = device.dev_type().map_err(&info)? & CL_DEVICE_TYPE_GPU != 0;
+    let device_type = if is_gpu {
+        if device.host_unified_memory().unwrap_or(false) {
+            DeviceType::IntegratedGpu
+        } else {
+            DeviceType::DiscreteGpu
+        }
+    } else if device.dev_type().map_err(&info)? & CL_DEVICE_TYPE_CPU != 0 {
+        DeviceType::SoftwareGpu
+    } else {
+        DeviceType::Other
+    };
     let max_alloc_bytes = device.max_mem_alloc_size().map_err(&info)?;
     let global_mem_bytes = device.global_mem_size().map_err(&info)?;
     let platform_name = platform.name().unwrap_or_default();
@@ -163,6 +177,7 @@ fn summary(platform: Platform, device: Device) -> Result<DeviceSummary, BackendE
         platform: platform_name.trim().to_string(),
         version,
         is_gpu,
+        device_type,
         max_alloc_bytes,
         global_mem_bytes,
         int64_atomics: extensions.contains("cl_khr_int64_base_atomics"),

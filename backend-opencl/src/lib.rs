@@ -198,6 +198,7 @@ impl Backend for OpenClBackend {
         let i = &self.state.info;
         Capabilities {
             device: format!("{} ({}, {})", i.name, i.platform, i.version),
+            device_type: i.device_type,
             hardware_ray_tracing: false,
             float_atomics: false,
             int64_atomics: i.int64_atomics,
@@ -206,9 +207,6 @@ impl Backend for OpenClBackend {
         }
     }
 
-    fn kernels(&self) -> Vec<&'static str> {
-        caustica_core::kernels::all_kernel_names()
-    }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         let mut pending: Vec<(&'static str, Event)> = Vec::new();

@@ -106,6 +106,8 @@ pub struct Context {
     pub max_allocation: u64,
     pub timestamps: bool,
     pub name: String,
+    /// The physical device's type.
+    pub device_type: vk::PhysicalDeviceType,
     pub validation: ValidationLog,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     /// Whether instance and device are ours to destroy.
@@ -351,6 +353,7 @@ impl Context {
             .is_some_and(|f| f.timestamp_valid_bits > 0)
             && limits.timestamp_period > 0.0;
         let name = device_name(&instance, physical);
+        let device_type = unsafe { instance.get_physical_device_properties(physical) }.device_type;
         Context {
             _entry: entry,
             instance,
@@ -365,6 +368,7 @@ impl Context {
             max_allocation,
             timestamps,
             name,
+            device_type,
             validation: Arc::new(Mutex::new(Vec::new())),
             debug: None,
             owned,

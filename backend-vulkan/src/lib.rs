@@ -18,7 +18,7 @@ mod memory;
 mod pipelines;
 
 use ash::vk;
-use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{DeviceType, Backend, BackendError, Capabilities, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::recording::{Recording, Step};
 use context::{vk_error, Context};
@@ -280,6 +280,13 @@ impl Backend for VulkanBackend {
     fn capabilities(&self) -> Capabilities {
         Capabilities {
             device: self.ctx.name.clone(),
+            device_type: match self.ctx.device_type {
+                vk::PhysicalDeviceType::DISCRETE_GPU => DeviceType::DiscreteGpu,
+                vk::PhysicalDeviceType::INTEGRATED_GPU => DeviceType::IntegratedGpu,
+                vk::PhysicalDeviceType::VIRTUAL_GPU => DeviceType::VirtualGpu,
+                vk::PhysicalDeviceType::CPU => DeviceType::SoftwareGpu,
+                _ => DeviceType::Other,
+            },
             hardware_ray_tracing: true,
             float_atomics: false,
             int64_atomics: false,
@@ -291,9 +298,6 @@ impl Backend for VulkanBackend {
         }
     }
 
-    fn kernels(&self) -> Vec<&'static str> {
-        caustica_core::kernels::all_kernel_names()
-    }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         dispatch::execute(self, recording)

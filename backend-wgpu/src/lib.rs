@@ -13,7 +13,7 @@
 mod dispatch;
 mod texture;
 
-use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{DeviceType, Backend, BackendError, Capabilities, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::launch::Launch;
 use caustica_core::recording::{Recording, Step};
@@ -39,6 +39,8 @@ pub struct WgpuBackend {
     device: wgpu::Device,
     queue: wgpu::Queue,
     description: String,
+    /// The adapter's type (`Other` for a caller's device, whose adapter is not known).
+    device_type: DeviceType,
     limits: wgpu::Limits,
     timestamps: bool,
     /// Pipelines by variant label (`kernel` or `kernel[SWITCH=0/1,...]`).
@@ -162,7 +164,15 @@ impl WgpuBackend {
         }))
         .map_err(|e| unavailable(format!("{} refused a device: {e}", info.name)))?;
         let description = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
-        WgpuBackend::from_device(device, queue, &description)
+        let mut b = WgpuBackend::from_device(device, queue, &description)?;
+        b.device_type = match info.device_type {
+            wgpu::DeviceType::DiscreteGpu => DeviceType::DiscreteGpu,
+            wgpu::DeviceType::IntegratedGpu => DeviceType::IntegratedGpu,
+            wgpu::DeviceType::VirtualGpu => DeviceType::VirtualGpu,
+            wgpu::DeviceType::Cpu => DeviceType::SoftwareGpu,
+            wgpu::DeviceType::Other => DeviceType::Other,
+        };
+        Ok(b)
     }
 
     /// Embeds the backend in a caller's renderer: uses the caller's `device` and `queue`
@@ -192,6 +202,7 @@ impl WgpuBackend {
             device,
             queue,
             description: description.to_string(),
+            device_type: DeviceType::Other,
             pipelines,
             texture_pipelines: HashMap::new(),
             buffers: HashMap::new(),
@@ -349,6 +360,7 @@ impl Backend for WgpuBackend {
     fn capabilities(&self) -> Capabilities {
         Capabilities {
             device: self.description.clone(),
+            device_type: self.device_type,
             hardware_ray_tracing: false,
             float_atomics: false,
             int64_atomics: false,
@@ -360,9 +372,6 @@ impl Backend for WgpuBackend {
         }
     }
 
-    fn kernels(&self) -> Vec<&'static str> {
-        caustica_core::kernels::all_kernel_names()
-    }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         self.check_uncaptured()?;

@@ -1,23 +1,8 @@
 //! Properties of the reference backend that every other backend will be held to.
 
 use caustica_conformance::{backends, render, small_settings};
-use caustica_core::kernels::KERNELS;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_cpu::CpuBackend;
-
-#[test]
-fn every_backend_implements_every_kernel() {
-    for (name, b) in backends() {
-        let have = b.kernels();
-        for k in KERNELS {
-            assert!(
-                have.contains(&k.name),
-                "backend {name} lacks kernel {}",
-                k.name
-            );
-        }
-    }
-}
 
 #[test]
 fn every_builtin_scene_renders_finite_and_conserves_energy() {

@@ -334,9 +334,6 @@ impl Backend for Limited {
             ..self.inner.capabilities()
         }
     }
-    fn kernels(&self) -> Vec<&'static str> {
-        self.inner.kernels()
-    }
     fn execute(
         &mut self,
         r: &caustica_core::recording::Recording,

@@ -265,9 +265,6 @@ impl Backend for Mutant {
     fn capabilities(&self) -> Capabilities {
         self.inner.capabilities()
     }
-    fn kernels(&self) -> Vec<&'static str> {
-        self.inner.kernels()
-    }
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         let mut times = Vec::new();
         for step in &recording.steps {

@@ -25,7 +25,7 @@ pub mod recording;
 pub mod scene;
 pub mod techniques;
 
-pub use backend::{Backend, BackendError, Capabilities};
+pub use backend::{Backend, BackendError, Capabilities, DeviceType};
 pub use frame::error::Error;
 pub use frame::plan::FramePlan;
 pub use frame::stats::FrameStats;
