@@ -1,80 +1,162 @@
 //! caustica: real-time photon-mapping techniques for caustics, written once against a
-//! backend trait and run on the backend chosen at run time.
+//! small backend trait and run on the backend chosen at run time (CPU, OpenCL, wgpu or
+//! Vulkan).
 //!
 //! ```no_run
-//! use caustica::{open_backend, scene::builtin, Output, Sspm, SspmSettings};
-//! let mut backend = open_backend("cpu").unwrap();
-//! let scene = builtin::builtin("sphere").unwrap();
-//! let mut sspm = Sspm::new(backend.as_mut(), &scene, SspmSettings::default()).unwrap();
-//! let stats = sspm.frame(backend.as_mut(), &mut |_| {}).unwrap();
-//! let image = sspm.read_output(backend.as_mut(), Output::Composite).unwrap();
+//! use caustica::{open_backend, scene::builtin, Sspm, SspmSettings, Output};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let mut backend = open_backend("auto")?; // a hardware GPU, else the CPU backend
+//! let scene = builtin::builtin("sphere").expect("built-in scene");
+//! let mut sspm = Sspm::new(backend.as_mut(), &scene, SspmSettings::default())?;
+//! let stats = sspm.frame(backend.as_mut(), &mut |_| {})?;
+//! let image = sspm.read_output(backend.as_mut(), Output::Composite)?; // linear radiance
 //! println!("{} photons stored, {:.1} ms", stats.photons_stored, stats.frame_ms);
+//! sspm.free(backend.as_mut())?;
 //! # let _ = image;
+//! # Ok(())
+//! # }
 //! ```
+//!
+//! Any technique by name, without naming its type: [`techniques::create`] returns a
+//! `Box<dyn` [`Technique`]`>`; [`techniques::TECHNIQUES`] lists them.
+//!
+//! What is here: scenes ([`scene`]: the model, built-ins, the JSON format), opening a
+//! backend ([`open_backend`], [`backend_statuses`]), the techniques with their settings
+//! and outputs, frame statistics, errors, host images and their files ([`output`]), error
+//! metrics ([`metrics`]) and references ([`reference`]); each backend's own API behind its
+//! cargo feature in [`backends`] (embedding into a host's wgpu or Vulkan device);
+//! `glam`, `wgpu` and `ash` as caustica uses them. Backend authors find the kernel list,
+//! recordings, device layouts and shared math under [`internals`]. With the `report`
+//! feature, [`report`] measures error against run time.
+
+#![warn(missing_docs)]
 
 pub mod output;
 pub mod reference;
+#[cfg(feature = "report")]
 pub mod report;
 
-pub use caustica_core::*;
+pub use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType};
+pub use caustica_core::frame::error::Error;
+pub use caustica_core::frame::image::Image;
+pub use caustica_core::frame::metrics;
+pub use caustica_core::frame::plan::FramePlan;
+pub use caustica_core::frame::stats::FrameStats;
+pub use caustica_core::frame::technique::{OutputInfo, Progress, Technique};
+pub use caustica_core::scene;
+pub use caustica_core::scene::Scene;
+pub use caustica_core::techniques::sspm::{Output, Outputs, Sspm, SspmSettings};
+
+/// The techniques: the registry ([`techniques::TECHNIQUES`], [`techniques::create`]) and
+/// one module per technique.
+pub mod techniques {
+    pub use caustica_core::techniques::{
+        create, sspm, technique_names, TechniqueEntry, TECHNIQUES,
+    };
+}
+
+/// For backend authors and tools: the kernel list and its declarations, recordings,
+/// device layouts and handles, the frame machinery and the scalar math every shader
+/// mirrors. Not needed to use a technique.
+pub mod internals {
+    pub use caustica_core::{backend, device, frame, kernels, math, recording};
+}
+
+/// Each backend's own API (embedding into a host's device, device choice), behind its
+/// cargo feature.
+pub mod backends {
+    #[cfg(feature = "cpu")]
+    pub use caustica_cpu as cpu;
+    #[cfg(feature = "opencl")]
+    pub use caustica_opencl as opencl;
+    #[cfg(feature = "vulkan")]
+    pub use caustica_vulkan as vulkan;
+    #[cfg(feature = "wgpu")]
+    pub use caustica_wgpu as wgpu;
+}
+
+#[cfg(feature = "vulkan")]
+pub use ash;
+pub use glam;
+#[cfg(feature = "wgpu")]
+pub use wgpu;
 
 /// A backend this build knows about, and whether it works on this machine.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BackendStatus {
+    /// Backend name (`cpu`, `opencl`, `wgpu`, `vulkan`).
     pub name: &'static str,
     /// Compiled into this build (cargo feature).
     pub compiled: bool,
-    /// `Ok(device description)` when it opened, else why not.
-    pub available: Result<String, String>,
+    /// `Ok((device description, device type))` when it opened, else why not.
+    pub available: Result<(String, DeviceType), String>,
 }
 
-/// Every backend of the project, in preference order for `auto`.
+/// Every backend of the project.
 pub const BACKEND_NAMES: [&str; 4] = ["vulkan", "wgpu", "opencl", "cpu"];
 
-/// Opens a backend by name (`cpu`, ...; `auto` = the first in [`BACKEND_NAMES`] that works).
+/// Opens a backend by name: `cpu`, `opencl`, `wgpu`, `vulkan`, or `auto`, which opens
+/// every backend that works here and keeps the best by [`DeviceType::auto_rank`]: a
+/// hardware GPU (discrete before integrated; on one device, the backends in
+/// [`BACKEND_NAMES`] order), then the native CPU backend, then GPU APIs emulated on the
+/// CPU (lavapipe, PoCL).
 pub fn open_backend(name: &str) -> Result<Box<dyn Backend>, BackendError> {
-    match name {
-        "auto" => {
-            let mut last = None;
-            for n in BACKEND_NAMES {
-                match open_backend(n) {
-                    Ok(b) => return Ok(b),
-                    Err(e) => last = Some(e),
+    if name != "auto" {
+        return open_named(name);
+    }
+    let mut best: Option<(u32, Box<dyn Backend>)> = None;
+    let mut why = Vec::new();
+    for n in BACKEND_NAMES {
+        match open_named(n) {
+            Ok(b) => {
+                let rank = b.capabilities().device_type.auto_rank();
+                if best.as_ref().is_none_or(|(r, _)| rank < *r) {
+                    best = Some((rank, b));
                 }
             }
-            Err(last.unwrap_or_else(|| BackendError::Unavailable {
-                backend: "auto".into(),
-                reason: "no backend".into(),
-            }))
+            Err(e) => why.push(e.to_string()),
         }
+    }
+    best.map(|(_, b)| b)
+        .ok_or_else(|| BackendError::Unavailable {
+            backend: "auto".into(),
+            reason: format!("no backend opened: {}", why.join("; ")),
+        })
+}
+
+/// The order in which `auto` prefers the backends that open here (best first), with
+/// their device types.
+pub fn auto_order() -> Vec<(&'static str, DeviceType)> {
+    let mut v: Vec<(&'static str, DeviceType)> = BACKEND_NAMES
+        .iter()
+        .filter_map(|&n| {
+            open_named(n)
+                .ok()
+                .map(|b| (n, b.capabilities().device_type))
+        })
+        .collect();
+    v.sort_by_key(|(_, t)| t.auto_rank()); // stable: BACKEND_NAMES order within a type
+    v
+}
+
+fn not_compiled(name: &str) -> BackendError {
+    BackendError::Unavailable {
+        backend: name.into(),
+        reason: format!("not compiled in (cargo feature `{name}`)"),
+    }
+}
+
+fn open_named(name: &str) -> Result<Box<dyn Backend>, BackendError> {
+    match name {
         #[cfg(feature = "cpu")]
         "cpu" => Ok(Box::new(caustica_cpu::CpuBackend::new()?)),
         #[cfg(feature = "opencl")]
         "opencl" => Ok(Box::new(caustica_opencl::OpenClBackend::new()?)),
         #[cfg(feature = "wgpu")]
         "wgpu" => Ok(Box::new(caustica_wgpu::WgpuBackend::new()?)),
-        #[cfg(not(feature = "wgpu"))]
-        "wgpu" => Err(BackendError::Unavailable {
-            backend: name.into(),
-            reason: "not compiled in (cargo feature `wgpu`)".into(),
-        }),
         #[cfg(feature = "vulkan")]
         "vulkan" => Ok(Box::new(caustica_vulkan::VulkanBackend::new()?)),
-        #[cfg(not(feature = "vulkan"))]
-        "vulkan" => Err(BackendError::Unavailable {
-            backend: name.into(),
-            reason: "not compiled in (cargo feature `vulkan`)".into(),
-        }),
-        #[cfg(not(feature = "cpu"))]
-        "cpu" => Err(BackendError::Unavailable {
-            backend: name.into(),
-            reason: "not compiled in (cargo feature `cpu`)".into(),
-        }),
-        #[cfg(not(feature = "opencl"))]
-        "opencl" => Err(BackendError::Unavailable {
-            backend: name.into(),
-            reason: "not compiled in (cargo feature `opencl`)".into(),
-        }),
+        n if BACKEND_NAMES.contains(&n) => Err(not_compiled(n)),
         _ => Err(BackendError::Unavailable {
             backend: name.into(),
             reason: format!(
@@ -90,15 +172,15 @@ pub fn backend_statuses() -> Vec<BackendStatus> {
     BACKEND_NAMES
         .iter()
         .map(|&name| {
-            let compiled = (name == "cpu" && cfg!(feature = "cpu"))
-                || (name == "opencl" && cfg!(feature = "opencl"))
-                || (name == "wgpu" && cfg!(feature = "wgpu"))
-                || (name == "vulkan" && cfg!(feature = "vulkan"));
+            let opened = open_named(name);
             BackendStatus {
                 name,
-                compiled,
-                available: open_backend(name)
-                    .map(|b| b.capabilities().device)
+                compiled: !matches!(&opened, Err(BackendError::Unavailable { reason, .. }) if reason.starts_with("not compiled")),
+                available: opened
+                    .map(|b| {
+                        let c = b.capabilities();
+                        (c.device, c.device_type)
+                    })
                     .map_err(|e| e.to_string()),
             }
         })

@@ -1,6 +1,7 @@
-//! Reference images for error measurement (DESIGN 7): the converged answer of Sspm's
-//! estimator, i.e. the progressive mean of the *unfiltered* screen-space photon deposit
-//! (raw caustics) over frames with different seeds, computed on the CPU backend until the
+//! Reference images for error measurement: the converged answer of a technique's
+//! estimator (by default Sspm's, whose path class, light -> specular -> diffuse receiver,
+//! the caustic techniques share), i.e. the progressive mean of its *unfiltered* estimate
+//! (for Sspm the raw screen-space photon deposit) over frames with different seeds, computed on the CPU backend until the
 //! relative standard error of the mean over the caustic pixels falls below a stated noise
 //! level (or a frame cap is hit, which the reference records). Cached on disk as EXR with
 //! a JSON sidecar (photon count, frames, reached noise, scene hash) and recomputed when the
@@ -8,14 +9,20 @@
 
 use caustica_core::frame::image::{luminance, Image};
 use caustica_core::frame::metrics::MASK_FRACTION;
-use caustica_core::{Backend, Scene, Sspm, SspmSettings};
+use caustica_core::techniques::create;
+use caustica_core::{Backend, Scene};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// How a reference is computed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ReferenceSpec {
+    /// The technique whose unfiltered estimate converges to the reference (registry name).
+    #[serde(default = "default_technique")]
+    pub technique: String,
+    /// Image size (pixels).
     pub width: u32,
+    /// Image size (pixels).
     pub height: u32,
     /// Photon grid side per light and frame.
     pub photons_side: u32,
@@ -26,9 +33,14 @@ pub struct ReferenceSpec {
     pub max_frames: u32,
 }
 
+fn default_technique() -> String {
+    "sspm".into()
+}
+
 impl Default for ReferenceSpec {
     fn default() -> Self {
         ReferenceSpec {
+            technique: default_technique(),
             width: 480,
             height: 270,
             photons_side: 1024,
@@ -41,17 +53,25 @@ impl Default for ReferenceSpec {
 /// A reference image and how it was made.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ReferenceInfo {
+    /// Scene name.
     pub scene: String,
+    /// [`scene_hash`] of the inputs: the cache key.
     pub scene_hash: String,
+    /// How it was computed.
     pub spec: ReferenceSpec,
+    /// Photons emitted over all frames.
     pub photons: u64,
+    /// Frames averaged.
     pub frames: u32,
     /// Relative standard error reached.
     pub noise: f64,
 }
 
+/// A converged reference: the mean image (linear radiance) and how it was made.
 pub struct Reference {
+    /// Mean of the unfiltered estimate over the frames (W/(sr m^2) per channel).
     pub image: Image,
+    /// How it was made.
     pub info: ReferenceInfo,
 }
 
@@ -67,6 +87,12 @@ pub fn scene_hash(scene: &Scene, spec: &ReferenceSpec) -> String {
         spec.target_noise,
         spec.max_frames
     );
+    // Another technique's estimate is another reference (Sspm's keeps its old key).
+    let text = if spec.technique == "sspm" {
+        text
+    } else {
+        format!("{text}|{}", spec.technique)
+    };
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in text.bytes() {
         h ^= b as u64;
@@ -147,12 +173,13 @@ pub fn compute(
     let mut scene = scene.clone();
     scene.camera.width = spec.width;
     scene.camera.height = spec.height;
-    let settings = SspmSettings {
-        photons_w: spec.photons_side,
-        photons_h: spec.photons_side,
-        ..SspmSettings::default()
-    };
-    let mut sspm = Sspm::new(backend, &scene, settings).map_err(|e| e.to_string())?;
+    let settings = serde_json::json!({
+        "photons_w": spec.photons_side,
+        "photons_h": spec.photons_side,
+    });
+    let mut sspm =
+        create(&spec.technique, backend, &scene, &settings).map_err(|e| e.to_string())?;
+    let (_, raw_output) = sspm.estimate_outputs();
     let n = (spec.width * spec.height) as usize;
     let mut sum = vec![[0.0f64; 3]; n];
     let mut sum2 = vec![[0.0f64; 3]; n];
@@ -164,7 +191,7 @@ pub fn compute(
             .map_err(|e| e.to_string())?;
         photons += stats.photons_emitted;
         let raw = sspm
-            .read_output(backend, caustica_core::Output::RawCaustics)
+            .read_output(backend, raw_output)
             .map_err(|e| e.to_string())?;
         for (i, p) in raw.pixels.iter().enumerate() {
             for c in 0..3 {

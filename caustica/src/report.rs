@@ -1,5 +1,5 @@
 //! Error against run time (DESIGN 7): for every scene x technique x backend x photon
-//! budget, the median frame time and per-pass times over repeated frames (device
+//! budget (any registered technique, created by name), the median frame time and per-pass times over repeated frames (device
 //! timestamps where the backend has them) and the error of the filtered caustics against
 //! the scene's reference, with bias and variance over the repeats' seeds. Writes one JSON
 //! record per combination and a log-log plot of relative MSE against frame time per scene.
@@ -7,7 +7,8 @@
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::{bias_variance, CausticMask};
-use caustica_core::{Scene, Sspm, SspmSettings};
+use caustica_core::techniques::{create, technique_names};
+use caustica_core::Scene;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -15,15 +16,23 @@ use std::path::Path;
 /// One measured combination.
 #[derive(Clone, Debug, Serialize)]
 pub struct Record {
+    /// Scene name.
     pub scene: String,
+    /// Technique name.
     pub technique: String,
+    /// Backend name.
     pub backend: String,
+    /// Device description.
     pub device: String,
     /// Photon grid per light.
     pub budget: String,
+    /// Photons emitted per frame.
     pub photons: u64,
+    /// Image size (pixels).
     pub width: u32,
+    /// Image size (pixels).
     pub height: u32,
+    /// Frames measured.
     pub repeats: usize,
     /// "device timestamps" or "host wall clock" (per-pass times).
     pub timing: String,
@@ -36,22 +45,33 @@ pub struct Record {
     /// The same for the raw (unfiltered) caustics: the estimator's own noise, without the
     /// gather's blur.
     pub raw_relative_mse: f64,
+    /// Median RMSE against the reference (radiance units).
     pub rmse: f64,
+    /// Median mean FLIP over the caustic pixels (with the `flip` feature).
     pub flip: Option<f64>,
-    /// Over the repeats (seeds 1..=repeats).
+    /// Relative bias of the mean over the repeats (seeds 1..=repeats).
     pub relative_bias: f64,
+    /// Relative variance over the repeats.
     pub relative_variance: f64,
+    /// Photons behind the reference.
     pub reference_photons: u64,
+    /// Relative standard error the reference reached.
     pub reference_noise: f64,
 }
 
 /// What to measure.
 pub struct ReportPlan {
+    /// Scenes (their cameras' sizes are replaced by the reference's).
     pub scenes: Vec<Scene>,
+    /// Technique names.
     pub techniques: Vec<String>,
+    /// Backend names.
     pub backends: Vec<String>,
+    /// Photon grids per light.
     pub budgets: Vec<(u32, u32)>,
+    /// Frames measured per combination (after a warm-up).
     pub repeats: usize,
+    /// How references are computed.
     pub reference: ReferenceSpec,
 }
 
@@ -70,8 +90,11 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Record>, String> {
     for t in &plan.techniques {
-        if t != "sspm" {
-            return Err(format!("unknown technique '{t}'; available: sspm"));
+        if !technique_names().contains(&t.as_str()) {
+            return Err(format!(
+                "unknown technique '{t}'; available: {}",
+                technique_names().join(", ")
+            ));
         }
     }
     let mut cpu = crate::open_backend("cpu").map_err(|e| e.to_string())?;
@@ -104,13 +127,10 @@ pub fn run(
             for backend_name in &plan.backends {
                 let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
                 for &(pw, ph) in &plan.budgets {
-                    let settings = SspmSettings {
-                        photons_w: pw,
-                        photons_h: ph,
-                        ..SspmSettings::default()
-                    };
-                    let mut sspm =
-                        Sspm::new(backend.as_mut(), &scene, settings).map_err(|e| e.to_string())?;
+                    let settings = serde_json::json!({ "photons_w": pw, "photons_h": ph });
+                    let mut sspm = create(technique, backend.as_mut(), &scene, &settings)
+                        .map_err(|e| e.to_string())?;
+                    let (filtered_output, raw_output) = sspm.estimate_outputs();
                     sspm.set_reference(Some(r.image.clone()))
                         .map_err(|e| e.to_string())?;
                     // warm-up frame (pipeline caches, first-touch allocations)
@@ -139,14 +159,11 @@ pub fn run(
                             }
                         }
                         images.push(
-                            sspm.read_output(
-                                backend.as_mut(),
-                                caustica_core::Output::FilteredCaustics,
-                            )
-                            .map_err(|e| e.to_string())?,
+                            sspm.read_output(backend.as_mut(), filtered_output)
+                                .map_err(|e| e.to_string())?,
                         );
                         let raw = sspm
-                            .read_output(backend.as_mut(), caustica_core::Output::RawCaustics)
+                            .read_output(backend.as_mut(), raw_output)
                             .map_err(|e| e.to_string())?;
                         raw_rel.push(caustica_core::frame::metrics::relative_mse(&raw, &r.image, &mask));
                         (timing, photons, device) =

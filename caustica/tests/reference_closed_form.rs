@@ -37,6 +37,7 @@ fn half_flux_radius_at(floor_y: f32) -> f64 {
     scene.camera.target = Vec3::new(0.0, floor_y, 0.0);
     scene.camera.fov_y_deg = 6.0;
     let spec = ReferenceSpec {
+        technique: "sspm".into(),
         width: 160,
         height: 160,
         photons_side: 256,

@@ -2,7 +2,8 @@
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
-use caustica::{open_backend, Output, Scene, Sspm, SspmSettings};
+use caustica::techniques::{create, technique_names, TECHNIQUES};
+use caustica::{open_backend, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -26,7 +27,7 @@ enum Command {
         /// Built-in scene name (see `caustica scenes`) or a scene file (JSON).
         #[arg(long, default_value = "sphere")]
         scene: String,
-        /// Technique: sspm.
+        /// Technique (see `caustica techniques`).
         #[arg(long, default_value = "sspm")]
         technique: String,
         /// Backend: auto, cpu, vulkan, wgpu, opencl (see `caustica backends`).
@@ -44,7 +45,8 @@ enum Command {
         /// Exposure multiplier for the PNG (EXR files are linear and unscaled).
         #[arg(long, default_value_t = 1.0)]
         exposure: f32,
-        /// Settings file (JSON, fields of SspmSettings) applied before the flags above.
+        /// Settings file (JSON object of the technique's settings fields, e.g. SspmSettings)
+        /// applied before the flags above.
         #[arg(long)]
         settings: Option<PathBuf>,
         /// Output directory.
@@ -57,8 +59,11 @@ enum Command {
         #[arg(long)]
         export: Option<String>,
     },
-    /// List every backend and whether it works on this machine.
+    /// List every backend, whether it works on this machine, its device type and the
+    /// order in which `--backend auto` prefers them.
     Backends,
+    /// List the techniques.
+    Techniques,
     /// Error against run time for every scene x technique x backend x photon budget:
     /// prints a table, writes report.json and a log-log plot per scene.
     Report {
@@ -179,9 +184,24 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Backends => {
             for b in caustica::backend_statuses() {
                 match b.available {
-                    Ok(dev) => println!("{:<8} available    {dev}", b.name),
+                    Ok((dev, t)) => println!("{:<8} available    {:<24} {dev}", b.name, t.label()),
                     Err(why) => println!("{:<8} unavailable  {why}", b.name),
                 }
+            }
+            let order: Vec<String> = caustica::auto_order()
+                .iter()
+                .map(|(n, t)| format!("{n} ({})", t.label()))
+                .collect();
+            println!(
+                "auto prefers: {} (hardware GPU, then the native CPU backend, then GPU APIs \
+                 emulated on the CPU)",
+                if order.is_empty() { "nothing: no backend opens".to_string() } else { order.join(" > ") }
+            );
+            Ok(())
+        }
+        Command::Techniques => {
+            for t in TECHNIQUES {
+                println!("{:<12} {}", t.name, t.title);
             }
             Ok(())
         }
@@ -257,8 +277,11 @@ fn run(cli: Cli) -> Result<(), String> {
             settings,
             out,
         } => {
-            if technique != "sspm" {
-                return Err(format!("unknown technique '{technique}'; available: sspm"));
+            if !technique_names().contains(&technique.as_str()) {
+                return Err(format!(
+                    "unknown technique '{technique}'; available: {}",
+                    technique_names().join(", ")
+                ));
             }
             if !(exposure > 0.0 && exposure.is_finite()) {
                 return Err("--exposure must be a positive number".into());
@@ -268,20 +291,22 @@ fn run(cli: Cli) -> Result<(), String> {
                 scene.camera.width = w;
                 scene.camera.height = h;
             }
-            let mut s: SspmSettings = match settings {
+            let mut s: serde_json::Map<String, serde_json::Value> = match settings {
                 Some(p) => {
                     let text =
                         std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
                     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?
                 }
-                None => SspmSettings::default(),
+                None => serde_json::Map::new(),
             };
-            (s.photons_w, s.photons_h) = photons;
+            s.insert("photons_w".into(), photons.0.into());
+            s.insert("photons_h".into(), photons.1.into());
             if let Some(seed) = seed {
-                s.seed = seed;
+                s.insert("seed".into(), seed.into());
             }
             let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
-            let mut sspm = Sspm::new(be.as_mut(), &scene, s.clone()).map_err(|e| e.to_string())?;
+            let mut t = create(&technique, be.as_mut(), &scene, &serde_json::Value::Object(s))
+                .map_err(|e| e.to_string())?;
             let bar = ProgressBar::new(0);
             bar.set_style(
                 ProgressStyle::with_template(
@@ -290,7 +315,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 .expect("valid template")
                 .progress_chars("=> "),
             );
-            let stats = sspm
+            let stats = t
                 .frame(be.as_mut(), &mut |p| {
                     bar.set_length(p.photons_total);
                     bar.set_position(p.photons_done);
@@ -298,13 +323,10 @@ fn run(cli: Cli) -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             bar.finish_and_clear();
             std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-            for output in Output::ALL
-                .into_iter()
-                .filter(|o| o.requested(&sspm.settings().outputs))
-            {
-                let name = output.stem();
-                let img = sspm
-                    .read_output(be.as_mut(), output)
+            for output in t.outputs().into_iter().filter(|o| o.requested) {
+                let name = output.name;
+                let img = t
+                    .read_output(be.as_mut(), name)
                     .map_err(|e| e.to_string())?;
                 write_exr(&out.join(format!("{}_{name}.exr", scene.name)), &img)?;
                 if name == "composite" {
@@ -315,7 +337,9 @@ fn run(cli: Cli) -> Result<(), String> {
                     )?;
                 }
             }
-            let doc = serde_json::json!({ "scene": scene.name, "settings": s, "stats": stats });
+            let s = t.settings_json();
+            t.free(be.as_mut()).map_err(|e| e.to_string())?;
+            let doc = serde_json::json!({ "scene": scene.name, "technique": technique, "settings": s, "stats": stats });
             let path = out.join("stats.json");
             std::fs::write(
                 &path,
