@@ -14,10 +14,10 @@
 //! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048).
 
 use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
 use caustica_core::device::device_scene::DeviceScene;
 use caustica_core::device::layout::GpuCamera;
 use caustica_core::kernels::Kernel;
+use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
 use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;

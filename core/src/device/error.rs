@@ -20,4 +20,3 @@ pub enum BackendError {
     #[error("driver error: {0}")]
     Driver(String),
 }
-

@@ -63,4 +63,3 @@ pub struct SceneArgs {
     pub lights: Buf<GpuLight>,
     pub bvh_nodes: Buf<[u32; 4]>,
 }
-

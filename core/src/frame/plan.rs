@@ -107,4 +107,3 @@ impl FramePlan {
         self.buffers.iter().any(|b| b.name.contains(what))
     }
 }
-
