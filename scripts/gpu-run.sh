@@ -40,6 +40,8 @@ if [ "${1:-}" = "--build" ]; then
           .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend .devbin/frame_plan \
           .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
           .devbin/technique_seam
+    # what the device tool carries must stay under 64 MiB: the binaries travel gzipped
+    (cd .devbin && for f in *; do case $f in *.deb|*.gz) ;; *) gzip -9 -f "$f" ;; esac; done)
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
     (cd .devbin && ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
     du -sh .devbin
@@ -51,6 +53,8 @@ SECTIONS=${*:-opencl wgpu vulkan plan stiff frames}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
 B=$PWD/.devbin
+for f in "$B"/*.gz; do [ -f "$f" ] && gunzip -f "$f"; done
+chmod +x "$B"/* 2>/dev/null
 dpkg -x "$B"/ocl-icd-libopencl1_*.deb /tmp/ocl
 # Vulkan loader and GL dispatch libraries (the NVIDIA Vulkan ICD, libGLX_nvidia, needs
 # libglvnd), unpacked into / as the device tool's README says.

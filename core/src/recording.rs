@@ -51,6 +51,9 @@ impl RecordedKernel {
 }
 
 /// One step of a recording.
+// A kernel step carries its lowered launch inline (a few hundred bytes): recordings hold
+// tens of steps, and boxing each kernel would only add an allocation per dispatch.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Step {
     /// Creates a zero-filled buffer of `bytes` bytes.

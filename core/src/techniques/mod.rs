@@ -10,6 +10,11 @@ use crate::frame::error::Error;
 use crate::frame::technique::Technique;
 use crate::scene::Scene;
 
+/// A technique's constructor: on `backend`, for `scene`, with `settings` (a JSON object
+/// of the technique's settings fields).
+pub type CreateFn =
+    fn(&mut dyn Backend, &Scene, &serde_json::Value) -> Result<Box<dyn Technique>, Error>;
+
 /// A registered technique.
 #[derive(Clone, Copy)]
 pub struct TechniqueEntry {
