@@ -7,8 +7,9 @@
 //! struct's layout, read from the SPIR-V's Offset and ArrayStride decorations (a small
 //! reader below: OpTypeStruct, OpMemberDecorate Offset, OpDecorate ArrayStride, the scalar,
 //! vector and array types), is flattened to its 4-byte scalars and compared, scalar by
-//! scalar (byte offset and float/unsigned kind), with core's `offset_of!` and field types;
-//! its size (array stride, or extent in a uniform block) with `size_of`. The blocks are
+//! scalar (byte offset and float/unsigned kind), with core's layout table
+//! (`caustica_core::device::layout_table`: `offset_of!` and the field types); its size
+//! (array stride, or extent in a uniform block) with `size_of`. The blocks are
 //! declared `layout(scalar)`; types.glsl also says that the same structs lay out
 //! identically under std430 (and the uniform-block structs under std140), so those rules
 //! are computed from the SPIR-V types and compared with the decorated offsets too.
@@ -18,13 +19,12 @@
 //! (and so checked) or listed in [`NOT_BOUND`] with the reason. A sensitivity test moves
 //! each checked Offset and ArrayStride decoration by 4 bytes and requires a failure.
 
-use caustica_core::device::layout as gpu;
+use caustica_core::device::layout_table as table;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
-use std::mem::{offset_of, size_of};
 use std::path::Path;
 
 // ---------------------------------------------------------------------------------------
-// Core's side: every 4-byte scalar of a Pod struct, from `offset_of!` and the field types.
+// Core's side: every 4-byte scalar of a Pod struct, from core's layout table.
 
 /// The kind of a 4-byte scalar.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,165 +42,6 @@ struct Leaf {
     path: String,
 }
 
-/// A Rust type whose bytes are 4-byte scalars: lists them at `base`.
-trait Leaves {
-    fn leaves(base: usize, path: &str, out: &mut Vec<Leaf>);
-}
-
-impl Leaves for f32 {
-    fn leaves(base: usize, path: &str, out: &mut Vec<Leaf>) {
-        out.push(Leaf {
-            offset: base,
-            kind: Scalar::F32,
-            path: path.to_owned(),
-        });
-    }
-}
-
-impl Leaves for u32 {
-    fn leaves(base: usize, path: &str, out: &mut Vec<Leaf>) {
-        out.push(Leaf {
-            offset: base,
-            kind: Scalar::U32,
-            path: path.to_owned(),
-        });
-    }
-}
-
-impl<T: Leaves, const N: usize> Leaves for [T; N] {
-    fn leaves(base: usize, path: &str, out: &mut Vec<Leaf>) {
-        for i in 0..N {
-            T::leaves(base + i * size_of::<T>(), &format!("{path}[{i}]"), out);
-        }
-    }
-}
-
-/// The leaves of the field whose value is `_v` (names the field's type without spelling it).
-fn field_leaves<T: Leaves>(_v: &T, base: usize, path: &str, out: &mut Vec<Leaf>) {
-    T::leaves(base, path, out)
-}
-
-/// Implements [`Leaves`] for a core struct from its field list; [`core_struct`] checks that
-/// the list covers every byte.
-macro_rules! pod_leaves {
-    ($t:ident { $($f:ident),* $(,)? }) => {
-        impl Leaves for gpu::$t {
-            fn leaves(base: usize, path: &str, out: &mut Vec<Leaf>) {
-                let v = gpu::$t::default();
-                $(
-                    field_leaves(
-                        &v.$f,
-                        base + offset_of!(gpu::$t, $f),
-                        &format!("{path}.{}", stringify!($f)),
-                        out,
-                    );
-                )*
-            }
-        }
-    };
-}
-
-pod_leaves!(GpuVertex {
-    position,
-    u,
-    normal,
-    v
-});
-pod_leaves!(GpuTriangle { indices, material });
-pod_leaves!(GpuMaterial {
-    kind,
-    ior,
-    cauchy_b,
-    _pad,
-    color,
-    absorption
-});
-pod_leaves!(GpuLight {
-    kind,
-    cos_inner,
-    cos_outer,
-    _pad,
-    position,
-    direction,
-    intensity
-});
-pod_leaves!(GpuCamera {
-    position,
-    tan_half_fov_x,
-    forward,
-    tan_half_fov_y,
-    right,
-    width,
-    up,
-    height
-});
-pod_leaves!(GBufferTexel {
-    position,
-    depth,
-    normal,
-    roughness,
-    albedo,
-    material,
-    uv,
-    view_distance,
-    flags
-});
-pod_leaves!(Photon {
-    position,
-    hit_distance,
-    flux,
-    direction
-});
-pod_leaves!(DepositTexel {
-    flux,
-    hit_distance,
-    photons
-});
-pod_leaves!(TraceParams {
-    light,
-    emission,
-    grid_w,
-    grid_h,
-    first,
-    count,
-    seed,
-    max_bounces,
-    origin,
-    axis,
-    rect_u,
-    rect_v,
-    photon_flux,
-    flux_quantum,
-    _pad
-});
-pod_leaves!(DepositParams {
-    camera,
-    flux_quantum,
-    hit_distance_quantum,
-    depth_tolerance,
-    photon_capacity
-});
-pod_leaves!(GatherParams {
-    camera,
-    roughness,
-    hit_distance_min,
-    hit_distance_max,
-    max_radius_px,
-    sigma_depth,
-    normal_power,
-    axis,
-    tile_size,
-    hit_distance_quantum,
-    _pad
-});
-pod_leaves!(DirectParams {
-    camera,
-    light_count,
-    max_specular_depth,
-    min_weight,
-    _pad
-});
-
 /// A core struct's name, `size_of` and scalars.
 struct CoreStruct {
     name: &'static str,
@@ -208,40 +49,40 @@ struct CoreStruct {
     leaves: Vec<Leaf>,
 }
 
-/// The layout of core struct `T`, after checking that its listed fields fill it (a Pod
-/// struct has no padding, so a field missing from a `pod_leaves!` list fails here).
-fn core_struct<T: Leaves>(name: &'static str) -> CoreStruct {
-    let mut leaves = Vec::new();
-    T::leaves(0, name, &mut leaves);
-    let words: BTreeSet<usize> = leaves.iter().map(|l| l.offset).collect();
-    assert!(
-        words.len() == leaves.len() && words.iter().copied().eq((0..size_of::<T>()).step_by(4)),
-        "{name}: the field list here does not cover its {} bytes once",
-        size_of::<T>()
-    );
-    CoreStruct {
-        name,
-        size: size_of::<T>(),
-        leaves,
-    }
-}
-
-/// Every core Pod struct that types.glsl mirrors.
+/// Every core Pod struct that types.glsl mirrors: core's layout table
+/// (`caustica_core::device::layout_table`, built with `offset_of!` and `size_of`), each
+/// flattened to its 4-byte scalars (nested structs expanded), after checking that the
+/// scalars cover its bytes once (a Pod struct has no padding).
 fn core_structs() -> Vec<CoreStruct> {
-    vec![
-        core_struct::<gpu::GpuVertex>("GpuVertex"),
-        core_struct::<gpu::GpuTriangle>("GpuTriangle"),
-        core_struct::<gpu::GpuMaterial>("GpuMaterial"),
-        core_struct::<gpu::GpuLight>("GpuLight"),
-        core_struct::<gpu::GpuCamera>("GpuCamera"),
-        core_struct::<gpu::GBufferTexel>("GBufferTexel"),
-        core_struct::<gpu::Photon>("Photon"),
-        core_struct::<gpu::DepositTexel>("DepositTexel"),
-        core_struct::<gpu::TraceParams>("TraceParams"),
-        core_struct::<gpu::DepositParams>("DepositParams"),
-        core_struct::<gpu::GatherParams>("GatherParams"),
-        core_struct::<gpu::DirectParams>("DirectParams"),
-    ]
+    table::structs()
+        .iter()
+        .map(|s| {
+            let leaves: Vec<Leaf> = s
+                .leaves()
+                .into_iter()
+                .map(|l| Leaf {
+                    offset: l.offset,
+                    kind: match l.scalar {
+                        table::Scalar::F32 => Scalar::F32,
+                        table::Scalar::U32 => Scalar::U32,
+                    },
+                    path: l.path,
+                })
+                .collect();
+            let words: BTreeSet<usize> = leaves.iter().map(|l| l.offset).collect();
+            assert!(
+                words.len() == leaves.len() && words.iter().copied().eq((0..s.size).step_by(4)),
+                "{}: core's table does not cover its {} bytes once",
+                s.name,
+                s.size
+            );
+            CoreStruct {
+                name: s.name,
+                size: s.size,
+                leaves,
+            }
+        })
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------

@@ -6,12 +6,11 @@
 //! with the address space and access it expects); the crate's tables list every file
 //! under `wgsl/`.
 
-use caustica_core::device::layout as gpu;
+use caustica_core::device::layout_table as table;
 use caustica_core::kernels::{kernel_info, ShaderBinding};
 use caustica_shaders::{module_source, COMMON, KERNELS};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use std::collections::BTreeSet;
-use std::mem::{offset_of, size_of};
 use std::path::Path;
 
 /// Stems of the `.wgsl` files directly in `dir`, sorted.
@@ -115,115 +114,33 @@ fn every_kernel_has_one_entry_point_main_with_its_declared_workgroup_size() {
 /// One Rust field: name, byte offset, byte size.
 type Field = (&'static str, usize, usize);
 
-macro_rules! rust_layout {
-    ($t:ident { $($f:ident),* $(,)? }) => {{
-        let v = gpu::$t::default();
-        (
-            stringify!($t),
-            size_of::<gpu::$t>(),
-            vec![$((stringify!($f), offset_of!(gpu::$t, $f), std::mem::size_of_val(&v.$f))),*],
-        )
-    }};
-}
+/// Structs of core's layout table that no WGSL module declares, with the reason.
+const NOT_IN_WGSL: &[(&str, &str)] = &[(
+    "DepositTexel",
+    "the WGSL kernels address the deposit buffer as flat u32 words (atomics), not as a struct",
+)];
 
+/// Core's layouts (from `caustica_core::device::layout_table`, built with `offset_of!` and
+/// `size_of`) of every struct the WGSL mirrors: name, size, fields.
 fn rust_layouts() -> Vec<(&'static str, usize, Vec<Field>)> {
-    vec![
-        rust_layout!(GpuVertex {
-            position,
-            u,
-            normal,
-            v
-        }),
-        rust_layout!(GpuTriangle { indices, material }),
-        rust_layout!(GpuMaterial {
-            kind,
-            ior,
-            cauchy_b,
-            _pad,
-            color,
-            absorption
-        }),
-        rust_layout!(GpuLight {
-            kind,
-            cos_inner,
-            cos_outer,
-            _pad,
-            position,
-            direction,
-            intensity
-        }),
-        rust_layout!(GpuCamera {
-            position,
-            tan_half_fov_x,
-            forward,
-            tan_half_fov_y,
-            right,
-            width,
-            up,
-            height
-        }),
-        rust_layout!(GBufferTexel {
-            position,
-            depth,
-            normal,
-            roughness,
-            albedo,
-            material,
-            uv,
-            view_distance,
-            flags
-        }),
-        rust_layout!(Photon {
-            position,
-            hit_distance,
-            flux,
-            direction
-        }),
-        rust_layout!(TraceParams {
-            light,
-            emission,
-            grid_w,
-            grid_h,
-            first,
-            count,
-            seed,
-            max_bounces,
-            origin,
-            axis,
-            rect_u,
-            rect_v,
-            photon_flux,
-            flux_quantum,
-            _pad
-        }),
-        rust_layout!(DepositParams {
-            camera,
-            flux_quantum,
-            hit_distance_quantum,
-            depth_tolerance,
-            photon_capacity
-        }),
-        rust_layout!(GatherParams {
-            camera,
-            roughness,
-            hit_distance_min,
-            hit_distance_max,
-            max_radius_px,
-            sigma_depth,
-            normal_power,
-            axis,
-            tile_size,
-            hit_distance_quantum,
-            _pad
-        }),
-        rust_layout!(DirectParams {
-            camera,
-            light_count,
-            max_specular_depth,
-            min_weight,
-            _pad
-        }),
-    ]
+    for (n, _) in NOT_IN_WGSL {
+        assert!(
+            table::find(n).is_some(),
+            "NOT_IN_WGSL names {n}, not in core's table"
+        );
+    }
+    table::structs()
+        .iter()
+        .filter(|s| !NOT_IN_WGSL.iter().any(|(n, _)| *n == s.name))
+        .map(|s| {
+            let fields = s
+                .fields
+                .iter()
+                .map(|f| (f.name, f.offset, f.size))
+                .collect();
+            (s.name, s.size, fields)
+        })
+        .collect()
 }
 
 /// A WGSL member name mapped to (Rust field, byte offset within it): `_pad0/_pad1/_pad2`

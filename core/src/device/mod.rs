@@ -1,14 +1,17 @@
 //! The device layer: what crosses to a backend. [`layout`]: the `#[repr(C)]` Pod element
 //! layouts shared with every shader (and the functions over them that shaders mirror);
-//! [`device_scene`]: a scene flattened to those layouts with its CWBVH; [`handle`]: typed
-//! opaque buffer handles; [`launch`]: a lowered kernel launch; [`error`]: typed failures.
-//! Imports only [`crate::math`] and [`crate::scene`].
+//! [`layout_table`]: a description of those layouts (fields, offsets, 4-byte leaves) that
+//! the shader crates' layout tests compare with; [`device_scene`]: a scene flattened to
+//! those layouts with its CWBVH; [`handle`]: typed opaque buffer handles; [`launch`]: a
+//! lowered kernel launch; [`error`]: typed failures. Imports only [`crate::math`] and
+//! [`crate::scene`].
 
 pub mod device_scene;
 pub mod error;
 pub mod handle;
 pub mod launch;
 pub mod layout;
+pub mod layout_table;
 
 pub use device_scene::DeviceScene;
 pub use error::BackendError;
