@@ -1,4 +1,4 @@
-//! Backend-neutral recordings (DESIGN 3, "core records, backends execute"): typed steps
+//! Backend-neutral recordings ("core records, backends execute"): typed steps
 //! over opaque typed handles ([`crate::device::handle`]). Core builds a [`Recording`], a
 //! backend executes it; data stays on the device between steps and recordings until
 //! freed, and is read back only through [`crate::backend::Backend::read`].

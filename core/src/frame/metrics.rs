@@ -1,4 +1,4 @@
-//! Error metrics against a reference image (DESIGN 7): all over the pixels that receive
+//! Error metrics against a reference image: all over the pixels that receive
 //! caustics, the mask taken from the reference. Images are linear radiance
 //! (W/(sr m^2) per channel); sums are f64.
 //!

@@ -1,4 +1,4 @@
-//! The frame plan (DESIGN 3, "leave out what a scene does not need"), the part every
+//! The frame plan ("leave out what a scene does not need"), the part every
 //! technique shares: derived from the scene and the settings before any work, it says
 //! which lights emit photons (and why the others do not), which material features the
 //! photon kernel needs (its compiled variant), which outputs the caller asked for, which

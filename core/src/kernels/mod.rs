@@ -1,4 +1,4 @@
-//! The one list of kernels (DESIGN 3). Each kernel is declared once, in its own file
+//! The one list of kernels. Each kernel is declared once, in its own file
 //! (`kernels/<name>.rs`): a struct of typed arguments whose doc comment is the kernel's
 //! contract (what it reads and writes, units, spaces), and a [`KernelDecl`] impl giving
 //! its name, its bindings in launch order with their access, its workgroup size, its
@@ -13,7 +13,7 @@
 //! not compile.
 //!
 //! Adding a kernel: a file here, one line in [`kernel_list!`], then its CPU function, WGSL,
-//! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
+//! OpenCL C (and GLSL stage if traced) and conformance check.
 
 mod bilateral_gather;
 mod composite;
@@ -89,7 +89,7 @@ pub struct KernelInfo {
     /// Traces rays against the scene: a ray-tracing pipeline on Vulkan, a software CWBVH
     /// traversal elsewhere.
     pub traced: bool,
-    /// Compiled switches (DESIGN 3: variants are compiled, not branched), in
+    /// Compiled switches (variants are compiled, not branched), in
     /// specialization-constant id order.
     pub switches: &'static [&'static str],
     /// Techniques that use it.

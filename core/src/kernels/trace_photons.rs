@@ -75,7 +75,7 @@ impl KernelDecl for TracePhotons {
     }
 }
 
-/// A compiled variant of `trace_photons` (DESIGN 3: feature variants are compiled, not
+/// A compiled variant of `trace_photons` (feature variants are compiled, not
 /// branched). Each switch removes a material feature from the kernel; the frame plan
 /// turns on only what the scene's objects use. Backends compile it as WGSL
 /// pipeline-overridable constants, Vulkan specialization constants (ids in

@@ -1,4 +1,4 @@
-//! Fixed-point photon accumulation (DESIGN 4). Flux is summed as integers in units of a
+//! Fixed-point photon accumulation. Flux is summed as integers in units of a
 //! per-frame *flux quantum*, so sums are exact, order-independent and bitwise reproducible
 //! on every backend and thread count. A photon contributes `round(flux / quantum)` per
 //! channel: at most `u32::MAX` (larger is clamped and counted as saturation) and, when
