@@ -28,8 +28,11 @@ pub fn power_of_two_quantum(max_value: f32) -> f32 {
 /// Outcome of quantizing one value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Quantized {
+    /// `round(value / quantum)`, clamped to `u32::MAX`; 0 for negative or NaN values.
     pub units: u32,
+    /// A positive value rounded to zero units.
     pub underflow: bool,
+    /// The value was clamped to `u32::MAX` units.
     pub saturated: bool,
 }
 

@@ -13,8 +13,9 @@ use std::path::Path;
 pub struct SceneFileError {
     /// The file (or `<builtin>` / `<string>`).
     pub file: String,
-    /// 1-based line and column of the offending value; 0 when unknown.
+    /// 1-based line of the offending value; 0 when unknown.
     pub line: usize,
+    /// 1-based column of the offending value; 0 when unknown.
     pub column: usize,
     /// What is wrong, including the field path for validation problems.
     pub reason: String,

@@ -32,13 +32,16 @@ pub struct FrameConstants {
     /// Hit distance per fixed-point unit (scene units), a power of two: the scene diagonal
     /// is 2^24 to 2^25 units.
     pub hit_distance_quantum: f32,
-    /// Clamp of the gather's hit distance (scene units; defaults 5% and 50% of the scene
+    /// Lower clamp of the gather's hit distance (scene units; default 5% of the scene
     /// diagonal).
     pub hit_distance_min: f32,
+    /// Upper clamp of the gather's hit distance (scene units; default 50% of the scene
+    /// diagonal, never below `hit_distance_min`).
     pub hit_distance_max: f32,
 }
 
 impl FrameConstants {
+    /// Derives the constants from the scene, its device scene and the settings.
     pub fn new(scene: &Scene, ds: &DeviceScene, settings: &SspmSettings) -> FrameConstants {
         Self::for_bounds(
             scene,
