@@ -55,31 +55,45 @@ impl RecordedKernel {
 pub enum Step {
     /// Creates a zero-filled buffer of `bytes` bytes.
     Create {
+        /// Handle of the new buffer.
         id: ResourceId,
+        /// Its size (bytes).
         bytes: u64,
+        /// Its name, for errors, the frame plan and debuggers.
         label: &'static str,
     },
     /// Creates (or replaces) a buffer holding `data`.
     Upload {
+        /// Handle of the buffer.
         id: ResourceId,
+        /// The bytes it holds afterwards.
         data: Vec<u8>,
+        /// Its name, for errors, the frame plan and debuggers.
         label: &'static str,
     },
     /// Fills an existing buffer with zeros.
-    Clear { id: ResourceId },
+    Clear {
+        /// Handle of the buffer.
+        id: ResourceId,
+    },
     /// Runs a kernel.
     Kernel(RecordedKernel),
     /// Releases a buffer.
-    Free { id: ResourceId },
+    Free {
+        /// Handle of the buffer.
+        id: ResourceId,
+    },
 }
 
 /// An ordered list of steps.
 #[derive(Clone, Debug, Default)]
 pub struct Recording {
+    /// The steps, executed in order.
     pub steps: Vec<Step>,
 }
 
 impl Recording {
+    /// An empty recording.
     pub fn new() -> Recording {
         Recording::default()
     }
@@ -142,6 +156,7 @@ impl Recording {
         scene
     }
 
+    /// Records zero-filling `buf`.
     pub fn clear<T>(&mut self, buf: Buf<T>) {
         self.steps.push(Step::Clear { id: buf.id });
     }
@@ -151,6 +166,7 @@ impl Recording {
         self.steps.push(Step::Kernel(RecordedKernel::new(k.into())));
     }
 
+    /// Records the release of `buf`.
     pub fn free<T>(&mut self, buf: Buf<T>) {
         self.steps.push(Step::Free { id: buf.id });
     }

@@ -58,7 +58,9 @@ pub enum BindingKind {
 /// One launch argument of a kernel, in the order of its OpenCL C signature.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
+    /// Name of the argument: its OpenCL C parameter and WGSL binding.
     pub name: &'static str,
+    /// How it is bound.
     pub kind: BindingKind,
 }
 
@@ -81,6 +83,7 @@ pub const SCENE_BINDINGS: [Binding; 6] = [
 /// A kernel's declaration: everything a backend needs to know about it but its code.
 #[derive(Clone, Copy, Debug)]
 pub struct KernelInfo {
+    /// Registry name; also the stem of the kernel's shader files.
     pub name: &'static str,
     /// Launch arguments in order (the OpenCL C signature; WGSL and GLSL skip counts).
     pub bindings: &'static [Binding],
@@ -101,8 +104,11 @@ pub struct KernelInfo {
 pub enum ShaderBinding {
     /// The scene's acceleration structure (Vulkan ray-tracing kernels, binding 0).
     AccelerationStructure,
+    /// A uniform buffer: the kernel's parameter block.
     Uniform,
+    /// A read-only storage buffer.
     StorageRead,
+    /// A read-write storage buffer.
     StorageReadWrite,
 }
 
@@ -147,6 +153,7 @@ fn shader_binding(kind: BindingKind) -> Option<ShaderBinding> {
 
 /// Implemented by each kernel's argument struct, in its own file.
 pub trait KernelDecl {
+    /// The kernel's declaration.
     const INFO: KernelInfo;
 
     /// Pushes the launch arguments in declaration order onto `args` (each push is checked
@@ -275,7 +282,10 @@ macro_rules! kernel_list {
         /// One kernel dispatch with its typed arguments (see each struct for its contract).
         #[derive(Clone, Debug)]
         pub enum Kernel {
-            $($variant($variant),)*
+            $(
+                #[doc = concat!("The `", stringify!($module), "` kernel with its arguments ([`", stringify!($variant), "`]).")]
+                $variant($variant),
+            )*
         }
 
         /// Every kernel of the library, in list order.
