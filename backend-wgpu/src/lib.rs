@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! caustica wgpu backend: every registry kernel as a WGSL compute shader (the
 //! `caustica-shaders` crate's `wgsl/<kernel>.wgsl`, functions named as core's scalar
 //! functions), software traversal of core's flattened CWBVH, u32 atomics for the

@@ -37,17 +37,24 @@ use rayon::prelude::*;
 
 /// Stored photons in photon order, plus the batch's counters.
 pub struct TraceResult {
+    /// Stored photons, in photon order.
     pub photons: Vec<Photon>,
+    /// The batch's photon accounting.
     pub counters: Counters,
 }
 
 /// How one photon path ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PathEnd {
+    /// Stored on a diffuse surface after at least one specular interaction.
     Stored(Photon),
+    /// Reached a diffuse surface without a specular interaction (direct light).
     NoSpecular,
+    /// Left the scene.
     Escaped,
+    /// Power fell below the negligible threshold (or was zero at emission).
     Negligible,
+    /// Still travelling after `max_bounces` segments.
     BounceLimit,
 }
 
