@@ -18,7 +18,8 @@ if [ "${1:-}" = "--build" ]; then
     for spec in "caustica-opencl:device_layout" "caustica-conformance:cross_backend" \
                 "caustica-conformance:cpu_reference" "caustica-conformance:optics_closed_form" \
                 "caustica-vulkan:vulkan_backend" "caustica-conformance:frame_plan" \
-                "caustica-conformance:stiff_cases"; do
+                "caustica-conformance:stiff_cases" "caustica-conformance:every_kernel_dispatched" \
+                "caustica-conformance:technique_seam"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
@@ -37,7 +38,8 @@ if [ "${1:-}" = "--build" ]; then
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
           .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend .devbin/frame_plan \
-          .devbin/stiff_cases .devbin/stiff_table
+          .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
+          .devbin/technique_seam
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
     (cd .devbin && ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
     du -sh .devbin
@@ -91,6 +93,9 @@ if has vulkan; then
 fi
 if has plan; then
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./frame_plan --test-threads=1
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./every_kernel_dispatched --test-threads=1
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./technique_seam --test-threads=1
+    run timeout 60 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cpu_reference --test-threads=1
 fi
 if has stiff; then
     run timeout 400 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1 --include-ignored

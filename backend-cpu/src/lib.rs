@@ -14,10 +14,13 @@ pub mod kernels;
 mod storage;
 pub mod traversal;
 
-use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
-use caustica_core::backend::{DeviceType, Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::kernels::Kernel;
+use caustica_core::kernels::{
+    BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer,
+    ResolveCaustics, TileHitDistance, TracePhotons,
+};
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -230,7 +233,6 @@ impl Backend for CpuBackend {
             max_buffer_bytes: isize::MAX as u64,
         }
     }
-
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         let mut times = Vec::new();

@@ -12,8 +12,8 @@
 
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{surface_point, SurfacePoint};
-use caustica_core::math::geometry::WatertightRay;
 use caustica_core::device::layout::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
+use caustica_core::math::geometry::WatertightRay;
 // `UVec2`: named by obvhs's `traverse!` macro at its call site.
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::cwbvh::node::extract_byte64;

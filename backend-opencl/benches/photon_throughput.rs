@@ -5,12 +5,12 @@
 //! (`CAUSTICA_BENCH_GRID=1024` for a bigger grid on a GPU; default 256).
 //! Criterion's "elements" are photon paths.
 
-use caustica_core::kernels::{TracePhotons};
 use caustica_core::backend::Backend;
 use caustica_core::device::device_scene::DeviceScene;
-use caustica_core::frame::emission::{emission_domain, PointEmission};
 use caustica_core::device::layout::{counter, Photon};
+use caustica_core::frame::emission::{emission_domain, PointEmission};
 use caustica_core::kernels::Kernel;
+use caustica_core::kernels::TracePhotons;
 use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
 use caustica_opencl::OpenClBackend;

@@ -208,7 +208,6 @@ impl Backend for OpenClBackend {
         }
     }
 
-
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         let mut pending: Vec<(&'static str, Event)> = Vec::new();
         for step in &recording.steps {

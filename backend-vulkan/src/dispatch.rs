@@ -10,12 +10,12 @@ use crate::memory::Buffer;
 use crate::pipelines::{self, spirv, Pipeline};
 use crate::{is_kernel, DeviceBuffer, VulkanBackend, MIN_BINDING_BYTES};
 use ash::vk;
-use caustica_core::kernels::{DirectLight, PrepareScene, PrimaryGbuffer, TracePhotons};
 use caustica_core::backend::{BackendError, PassTime};
-use caustica_core::device::layout::{GpuTriangle, GpuVertex};
-use caustica_core::device::launch::{check_buffer, LaunchArg};
 use caustica_core::device::handle::SceneArgs;
+use caustica_core::device::launch::{check_buffer, LaunchArg};
+use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use caustica_core::kernels::Kernel;
+use caustica_core::kernels::{DirectLight, PrepareScene, PrimaryGbuffer, TracePhotons};
 use caustica_core::kernels::{KernelInfo, ShaderBinding, KERNELS};
 use caustica_core::recording::{RecordedKernel, Recording, Step};
 use std::collections::HashMap;
@@ -322,7 +322,7 @@ fn record_all(
             Step::Kernel(k) => {
                 if let Kernel::PrepareScene(PrepareScene { scene }) = k.kernel() {
                     k.launch()?; // the node buffer's shape is checked
-                    // The build reads the uploads: finish what is recorded, then build.
+                                 // The build reads the uploads: finish what is recorded, then build.
                     let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
                     b.submit_and_wait(cmd)?;
                     prepare_scene(b, scene)?;

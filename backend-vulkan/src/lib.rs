@@ -19,7 +19,7 @@ mod memory;
 mod pipelines;
 
 use ash::vk;
-use caustica_core::backend::{DeviceType, Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::recording::{Recording, Step};
 use context::{vk_error, Context};
@@ -298,7 +298,6 @@ impl Backend for VulkanBackend {
                 .min(self.ctx.limits.max_storage_buffer_range as u64),
         }
     }
-
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         dispatch::execute(self, recording)

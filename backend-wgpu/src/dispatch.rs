@@ -9,8 +9,6 @@ use caustica_core::device::launch::{check_buffer, Launch, LaunchArg};
 use caustica_core::recording::RecordedKernel;
 use wgpu::util::DeviceExt;
 
-
-
 /// Per-pass timing: a timestamp pair per kernel where the device has timestamp queries,
 /// else host times of kernels submitted alone.
 pub struct Timer {

@@ -14,7 +14,7 @@
 mod dispatch;
 mod texture;
 
-use caustica_core::backend::{DeviceType, Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::launch::Launch;
 use caustica_core::recording::{Recording, Step};
@@ -65,10 +65,7 @@ fn create_pipeline(
         label: Some(name),
         source: wgpu::ShaderSource::Wgsl(src.into()),
     });
-    let overrides: Vec<(&str, f64)> = constants
-        .iter()
-        .map(|(n, v)| (*n, *v as f64))
-        .collect();
+    let overrides: Vec<(&str, f64)> = constants.iter().map(|(n, v)| (*n, *v as f64)).collect();
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(name),
         layout: None,
@@ -372,7 +369,6 @@ impl Backend for WgpuBackend {
                 .min(self.limits.max_storage_buffer_binding_size),
         }
     }
-
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         self.check_uncaptured()?;

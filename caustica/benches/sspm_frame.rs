@@ -14,15 +14,16 @@
 //! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048).
 
 use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
 use caustica_core::device::device_scene::DeviceScene;
 use caustica_core::device::layout::GpuCamera;
-use caustica_core::kernels::Kernel;
+
+use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
 use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
+use caustica_core::techniques::create;
 use caustica_core::techniques::sspm::FrameConstants;
-use caustica_core::{Backend, Sspm, SspmSettings};
+use caustica_core::{Backend, SspmSettings};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -75,12 +76,8 @@ fn main() {
             let mut scene = builtin(scene_name).expect("built-in scene");
             scene.camera.width = w;
             scene.camera.height = h;
-            let settings = SspmSettings {
-                photons_w: side,
-                photons_h: side,
-                ..SspmSettings::default()
-            };
-            let mut sspm = match Sspm::new(backend.as_mut(), &scene, settings) {
+            let settings = serde_json::json!({ "photons_w": side, "photons_h": side });
+            let mut sspm = match create("sspm", backend.as_mut(), &scene, &settings) {
                 Ok(s) => s,
                 Err(e) => {
                     println!("{name}/{scene_name}: {e}");
@@ -164,7 +161,7 @@ fn plain_against_direct(
     frames: usize,
 ) -> Result<(Times, Times), caustica_core::Error> {
     let settings = SspmSettings::default();
-    let mut sspm = Sspm::new(backend, scene, settings.clone())?;
+    let mut sspm = create("sspm", backend, scene, &serde_json::json!({}))?;
     let mut frame = Vec::new();
     for i in 0..=frames {
         let ms = sspm.frame(backend, &mut |_| {})?.frame_ms;
@@ -183,17 +180,17 @@ fn plain_against_direct(
     let out = setup.create(pixels, "direct image");
     backend.execute(&setup)?;
     let mut rec = Recording::new();
-    rec.kernel(Kernel::PrimaryGbuffer(PrimaryGbuffer {
+    rec.kernel(PrimaryGbuffer {
         scene: args,
         camera,
         gbuffer,
-    }));
-    rec.kernel(Kernel::DirectLight(DirectLight {
+    });
+    rec.kernel(DirectLight {
         scene: args,
         params: FrameConstants::direct_params(camera, scene.lights.len() as u32, &settings),
         gbuffer,
         out,
-    }));
+    });
     let mut direct = Vec::new();
     for i in 0..=frames {
         let t0 = Instant::now();

@@ -165,7 +165,9 @@ pub fn run(
                         let raw = sspm
                             .read_output(backend.as_mut(), raw_output)
                             .map_err(|e| e.to_string())?;
-                        raw_rel.push(caustica_core::frame::metrics::relative_mse(&raw, &r.image, &mask));
+                        raw_rel.push(caustica_core::frame::metrics::relative_mse(
+                            &raw, &r.image, &mask,
+                        ));
                         (timing, photons, device) =
                             (st.timing.clone(), st.photons_emitted, st.device.clone());
                     }

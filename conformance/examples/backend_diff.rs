@@ -15,7 +15,10 @@ fn parse(s: Option<String>, default: (u32, u32)) -> (u32, u32) {
 }
 
 /// sqrt(sum |a - b|^2 / sum |b|^2) over rgb (0 when both are black).
-fn relative_l2(a: &caustica_core::frame::image::Image, b: &caustica_core::frame::image::Image) -> f64 {
+fn relative_l2(
+    a: &caustica_core::frame::image::Image,
+    b: &caustica_core::frame::image::Image,
+) -> f64 {
     let (mut num, mut den) = (0.0f64, 0.0f64);
     for (p, q) in a.pixels.iter().zip(&b.pixels) {
         for c in 0..3 {

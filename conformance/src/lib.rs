@@ -38,7 +38,10 @@ pub fn render(
     settings: SspmSettings,
     w: u32,
     h: u32,
-) -> (caustica_core::FrameStats, Vec<caustica_core::frame::image::Image>) {
+) -> (
+    caustica_core::FrameStats,
+    Vec<caustica_core::frame::image::Image>,
+) {
     let mut scene = scene.clone();
     scene.camera.width = w;
     scene.camera.height = h;

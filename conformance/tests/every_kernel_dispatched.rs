@@ -34,6 +34,9 @@ fn every_backend_dispatches_every_declared_kernel() {
                 stats.passes.iter().map(|p| &p.name).collect::<Vec<_>>()
             );
         }
-        assert!(stats.photons_stored > 0, "{name}: traced kernels saw no scene");
+        assert!(
+            stats.photons_stored > 0,
+            "{name}: traced kernels saw no scene"
+        );
     }
 }

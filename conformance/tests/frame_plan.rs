@@ -13,9 +13,9 @@
 
 use caustica_conformance::backends;
 use caustica_core::kernels::variant_label;
-use caustica_core::techniques::sspm::{Output, Outputs};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Light;
+use caustica_core::techniques::sspm::{Output, Outputs};
 use caustica_core::{Backend, FrameStats, Scene, Sspm, SspmSettings};
 use glam::Vec3;
 

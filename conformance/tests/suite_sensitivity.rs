@@ -19,16 +19,19 @@ use caustica_conformance::kernels::{
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
-use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
 use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
-use caustica_core::math::fixed_point::{join_u64, quantize};
+use caustica_core::device::handle::ResourceId;
 use caustica_core::device::layout::{
     counter, DepositTexel, GBufferTexel, GpuCamera, GpuVertex, Photon, NO_MATERIAL,
 };
-use caustica_core::device::handle::ResourceId;
 use caustica_core::kernels::Kernel;
-use caustica_core::recording::{Recording, Step};
+use caustica_core::kernels::{
+    BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
+    TileHitDistance, TracePhotons,
+};
+use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::rng::pcg_hash;
+use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::builtin::BUILTIN_SCENES;
 use caustica_cpu::CpuBackend;
 use proptest::strategy::{Strategy, ValueTree};
@@ -125,10 +128,12 @@ impl Mutant {
                         params.photon_flux[c] = nudge(params.photon_flux[c]);
                     }
                 }
-                Kernel::DepositScreen(DepositScreen { params, .. }) | Kernel::ResolveCaustics(ResolveCaustics { params, .. }) => {
+                Kernel::DepositScreen(DepositScreen { params, .. })
+                | Kernel::ResolveCaustics(ResolveCaustics { params, .. }) => {
                     nudge_camera(&mut params.camera)
                 }
-                Kernel::TileHitDistance(TileHitDistance { params, .. }) | Kernel::BilateralGather(BilateralGather { params, .. }) => {
+                Kernel::TileHitDistance(TileHitDistance { params, .. })
+                | Kernel::BilateralGather(BilateralGather { params, .. }) => {
                     nudge_camera(&mut params.camera);
                     params.roughness = nudge(params.roughness);
                     params.sigma_depth = nudge(params.sigma_depth);
@@ -168,13 +173,14 @@ impl Mutant {
             }
         };
         match (self.mutation, k) {
-            (Mutation::GbufferDepthIsDistance, Kernel::PrimaryGbuffer(PrimaryGbuffer { gbuffer, .. })) => {
-                self.modify::<GBufferTexel>(gbuffer.id, |g| {
-                    for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
-                        t.depth = t.view_distance;
-                    }
-                })
-            }
+            (
+                Mutation::GbufferDepthIsDistance,
+                Kernel::PrimaryGbuffer(PrimaryGbuffer { gbuffer, .. }),
+            ) => self.modify::<GBufferTexel>(gbuffer.id, |g| {
+                for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
+                    t.depth = t.view_distance;
+                }
+            }),
             (
                 Mutation::DropPhotons,
                 Kernel::TracePhotons(TracePhotons {
@@ -215,21 +221,23 @@ impl Mutant {
                     }
                 })
             }
-            (Mutation::PhotonFluxLow, Kernel::TracePhotons(TracePhotons { photons, .. })) => self
-                .modify::<Photon>(photons.id, |v| {
+            (Mutation::PhotonFluxLow, Kernel::TracePhotons(TracePhotons { photons, .. })) => {
+                self.modify::<Photon>(photons.id, |v| {
                     for p in v {
                         for c in &mut p.flux {
                             *c *= 0.98;
                         }
                     }
-                }),
-            (Mutation::DepositOffByOne, Kernel::DepositScreen(DepositScreen { photon_map, .. })) => {
-                self.modify::<DepositTexel>(photon_map.id, |m| {
-                    for t in m.iter_mut().filter(|t| t.flux[0][0] > 0) {
-                        t.flux[0][0] -= 1;
-                    }
                 })
             }
+            (
+                Mutation::DepositOffByOne,
+                Kernel::DepositScreen(DepositScreen { photon_map, .. }),
+            ) => self.modify::<DepositTexel>(photon_map.id, |m| {
+                for t in m.iter_mut().filter(|t| t.flux[0][0] > 0) {
+                    t.flux[0][0] -= 1;
+                }
+            }),
             (Mutation::ResolveHigh, Kernel::ResolveCaustics(ResolveCaustics { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
@@ -246,13 +254,12 @@ impl Mutant {
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
-            (Mutation::CompositeUlp, Kernel::Composite(Composite { out, .. })) => {
-                self.modify::<[f32; 4]>(out.id, |v| {
+            (Mutation::CompositeUlp, Kernel::Composite(Composite { out, .. })) => self
+                .modify::<[f32; 4]>(out.id, |v| {
                     if let Some(p) = v.iter_mut().find(|p| p[0] > 0.0) {
                         p[0] = f32::from_bits(p[0].to_bits() + 1);
                     }
-                })
-            }
+                }),
             _ => Ok(()),
         }
     }
@@ -272,7 +279,8 @@ impl Backend for Mutant {
             if self.mutation == Mutation::UlpNoise {
                 Self::perturb(&mut step);
             }
-            if let (Mutation::VariantWithoutFeatures, Step::Kernel(k)) = (self.mutation, &mut step) {
+            if let (Mutation::VariantWithoutFeatures, Step::Kernel(k)) = (self.mutation, &mut step)
+            {
                 k.modify(|k| {
                     if let Kernel::TracePhotons(TracePhotons { variant, .. }) = k {
                         variant.dispersion = false;

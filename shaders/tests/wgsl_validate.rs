@@ -7,6 +7,7 @@
 //! under `wgsl/`.
 
 use caustica_core::device::layout as gpu;
+use caustica_core::kernels::{kernel_info, ShaderBinding};
 use caustica_shaders::{module_source, COMMON, KERNELS};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use std::collections::BTreeSet;
@@ -99,14 +100,15 @@ fn kernels_parse_and_validate() {
 }
 
 #[test]
-fn every_kernel_has_one_entry_point_main_with_workgroup_64() {
+fn every_kernel_has_one_entry_point_main_with_its_declared_workgroup_size() {
     for k in kernels() {
         let m = validated_module(k);
         assert_eq!(m.entry_points.len(), 1, "{k}: entry points");
         let ep = &m.entry_points[0];
         assert_eq!(ep.name, "main", "{k}");
         assert_eq!(ep.stage, naga::ShaderStage::Compute, "{k}");
-        assert_eq!(ep.workgroup_size, [64, 1, 1], "{k}");
+        let declared = kernel_info(k).expect("declared kernel").workgroup_size;
+        assert_eq!(ep.workgroup_size, [declared, 1, 1], "{k}");
     }
 }
 
@@ -332,56 +334,34 @@ enum Kind {
     Uniform,
 }
 
-const SCENE: [(&str, Kind); 5] = [
-    ("vertices", Kind::Read),
-    ("triangles", Kind::Read),
-    ("materials", Kind::Read),
-    ("lights", Kind::Read),
-    ("nodes", Kind::Read),
-];
-
+/// The bindings the host binds, derived from the kernel's declaration in core
+/// (`caustica_core::kernels`, counts dropped): the WGSL must declare exactly these.
 fn expected_bindings(kernel: &str) -> Vec<(&'static str, Kind)> {
-    use Kind::*;
-    let scene = |rest: &[(&'static str, Kind)]| SCENE.iter().chain(rest).copied().collect();
-    match kernel {
-        "primary_gbuffer" => scene(&[("camera", Uniform), ("gbuffer", ReadWrite)]),
-        "direct_light" => scene(&[("params", Uniform), ("gbuffer", Read), ("out", ReadWrite)]),
-        "trace_photons" => scene(&[
-            ("params", Uniform),
-            ("photons", ReadWrite),
-            ("photon_count", ReadWrite),
-            ("counters", ReadWrite),
-        ]),
-        "deposit_screen" => vec![
-            ("params", Uniform),
-            ("gbuffer", Read),
-            ("photons", Read),
-            ("photon_count", Read),
-            ("counters", ReadWrite),
-            ("photon_map", ReadWrite),
-        ],
-        "resolve_caustics" => vec![
-            ("params", Uniform),
-            ("gbuffer", Read),
-            ("photon_map", Read),
-            ("out", ReadWrite),
-        ],
-        "tile_hit_distance" => {
-            vec![
-                ("params", Uniform),
-                ("photon_map", Read),
-                ("tiles", ReadWrite),
-            ]
+    let info = kernel_info(kernel).unwrap_or_else(|| panic!("{kernel}: not in core's kernel list"));
+    info.wgsl_bindings()
+        .into_iter()
+        .map(|(name, b)| {
+            let kind = match b {
+                ShaderBinding::Uniform => Kind::Uniform,
+                ShaderBinding::StorageRead => Kind::Read,
+                ShaderBinding::StorageReadWrite => Kind::ReadWrite,
+                ShaderBinding::AccelerationStructure => {
+                    panic!("{kernel}: WGSL binds no acceleration structure")
+                }
+            };
+            (name, kind)
+        })
+        .collect()
+}
+
+/// Every kernel of core's list that launches work has a WGSL module here.
+#[test]
+fn every_declared_kernel_has_a_module() {
+    for k in caustica_core::kernels::KERNELS {
+        if k.name == "prepare_scene" {
+            continue; // launches nothing on GPU-style backends
         }
-        "bilateral_gather" => vec![
-            ("params", Uniform),
-            ("gbuffer", Read),
-            ("tiles", Read),
-            ("input", Read),
-            ("out", ReadWrite),
-        ],
-        "composite" => vec![("direct", Read), ("caustics", Read), ("out", ReadWrite)],
-        other => panic!("{other}: no expected bindings listed here"),
+        assert!(kernels().any(|n| n == k.name), "{}: no WGSL module", k.name);
     }
 }
 

@@ -12,11 +12,11 @@
 //! see `caustica_core::math::footprint`). Alpha: mean hit distance of the pixel's photons.
 
 use super::Counters;
-use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::device::layout::gbuffer_pixel_area;
 use caustica_core::device::layout::{
     counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon,
 };
+use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::packing::unpack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;

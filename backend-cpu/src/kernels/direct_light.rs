@@ -7,8 +7,10 @@
 
 use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::device::layout::{
+    camera_ray, light_kind, material_kind, DirectParams, GBufferTexel,
+};
 use caustica_core::math::geometry::offset_ray_origin;
-use caustica_core::device::layout::{camera_ray, light_kind, material_kind, DirectParams, GBufferTexel};
 use caustica_core::math::optics::{beer_lambert, fresnel_dielectric, reflect, refract};
 use glam::Vec3;
 use rayon::prelude::*;

@@ -10,9 +10,9 @@
 //! `max(0, n . n')^normal_power`; only RECEIVER pixels take part. Two 1-D passes
 //! (horizontal then vertical) approximate the 2-D filter.
 
+use caustica_core::device::layout::{gbuffer_flags, DepositTexel, GBufferTexel, GatherParams};
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::footprint::pixel_footprint;
-use caustica_core::device::layout::{gbuffer_flags, DepositTexel, GBufferTexel, GatherParams};
 use glam::Vec3;
 use rayon::prelude::*;
 

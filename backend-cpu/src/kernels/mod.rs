@@ -8,8 +8,8 @@ pub mod gather;
 pub mod gbuffer;
 pub mod trace_photons;
 
-use caustica_core::math::fixed_point::join_u64;
 use caustica_core::device::layout::counter;
+use caustica_core::math::fixed_point::join_u64;
 
 /// Photon counters accumulated per worker and merged (sums are order-independent).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -22,10 +22,12 @@
 use super::Counters;
 use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::device::layout::{
+    counter, emission_kind, light_kind, material_kind, Photon, TraceParams,
+};
+use caustica_core::kernels::TraceVariant;
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::geometry::offset_ray_origin;
-use caustica_core::device::layout::{counter, emission_kind, light_kind, material_kind, Photon, TraceParams};
-use caustica_core::kernels::TraceVariant;
 use caustica_core::math::optics::{
     beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
 };

@@ -195,7 +195,11 @@ fn run(cli: Cli) -> Result<(), String> {
             println!(
                 "auto prefers: {} (hardware GPU, then the native CPU backend, then GPU APIs \
                  emulated on the CPU)",
-                if order.is_empty() { "nothing: no backend opens".to_string() } else { order.join(" > ") }
+                if order.is_empty() {
+                    "nothing: no backend opens".to_string()
+                } else {
+                    order.join(" > ")
+                }
             );
             Ok(())
         }
@@ -305,8 +309,13 @@ fn run(cli: Cli) -> Result<(), String> {
                 s.insert("seed".into(), seed.into());
             }
             let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
-            let mut t = create(&technique, be.as_mut(), &scene, &serde_json::Value::Object(s))
-                .map_err(|e| e.to_string())?;
+            let mut t = create(
+                &technique,
+                be.as_mut(),
+                &scene,
+                &serde_json::Value::Object(s),
+            )
+            .map_err(|e| e.to_string())?;
             let bar = ProgressBar::new(0);
             bar.set_style(
                 ProgressStyle::with_template(

@@ -5,12 +5,15 @@
 //! the reference computes it: the inputs the per-kernel checks upload to both backends, so
 //! that only the kernel under test can make the outputs differ.
 
-use caustica_core::kernels::{BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons};
 use caustica_core::backend::{read_buf, Backend, BackendError};
 use caustica_core::device::device_scene::DeviceScene;
-use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GpuCamera, Photon};
 use caustica_core::device::handle::SceneArgs;
+use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GpuCamera, Photon};
 use caustica_core::kernels::Kernel;
+use caustica_core::kernels::{
+    BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
+    TileHitDistance, TracePhotons,
+};
 use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::Scene;
 use caustica_core::techniques::sspm::FrameConstants;

@@ -10,8 +10,8 @@ use crate::harness::fixture::{Fixture, ReferenceInputs};
 use crate::harness::tolerance::{DEPOSIT_PHOTON_CHANGES, DEPOSIT_TEXEL_AGREEMENT};
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
-use caustica_core::math::fixed_point::join_u64;
 use caustica_core::device::layout::counter;
+use caustica_core::math::fixed_point::join_u64;
 
 /// `deposit_screen` + `resolve_caustics` on the reference's G-buffer and photon list.
 pub fn check_deposit(

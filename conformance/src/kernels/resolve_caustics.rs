@@ -5,9 +5,11 @@
 use crate::harness::measure::v3;
 use crate::harness::tolerance::{RESOLVE_COS_REL, RESOLVE_REL};
 use crate::harness::verdict::Verdict;
+use caustica_core::device::layout::{
+    camera_ray, gbuffer_flags, DepositTexel, GBufferTexel, GpuCamera,
+};
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::footprint::MIN_COSINE;
-use caustica_core::device::layout::{camera_ray, gbuffer_flags, DepositTexel, GBufferTexel, GpuCamera};
 
 /// Compares the raw caustics of two backends (`reference` and `candidate`: each one's photon
 /// map and `resolve_caustics` output on the same `gbuffer` of camera `cam`) on the texels

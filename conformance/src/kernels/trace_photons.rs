@@ -11,8 +11,8 @@ use crate::harness::tolerance::{
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
-use caustica_core::math::fixed_point::join_u64;
 use caustica_core::device::layout::{counter, Photon};
+use caustica_core::math::fixed_point::join_u64;
 use glam::Vec3;
 use std::collections::HashMap;
 

@@ -9,9 +9,9 @@ use crate::harness::verdict::Verdict;
 use crate::kernels::direct_light::compare_direct;
 use crate::kernels::primary_gbuffer::compare_gbuffers;
 use caustica_core::backend::{read_buf, Backend};
-use caustica_core::math::fixed_point::MAX_PHOTON_QUANTA;
 use caustica_core::device::layout::{GBufferTexel, GpuCamera};
 use caustica_core::frame::image::Image;
+use caustica_core::math::fixed_point::MAX_PHOTON_QUANTA;
 use caustica_core::scene::Scene;
 use caustica_core::{FrameStats, Output, Sspm, SspmSettings};
 

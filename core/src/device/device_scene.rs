@@ -3,7 +3,9 @@
 //! uploaded as 5 x `[u32; 4]`). Triangles are reordered into BVH leaf order, so the
 //! BVH's primitive index *is* the triangle index on every backend.
 
-use crate::device::layout::{light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
+use crate::device::layout::{
+    light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
+};
 use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene};
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};

@@ -40,4 +40,3 @@ pub enum BackendError {
     #[error("driver error: {0}")]
     Driver(String),
 }
-

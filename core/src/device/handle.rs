@@ -70,4 +70,3 @@ pub struct SceneArgs {
     /// CWBVH nodes, 5 x `[u32; 4]` (80 bytes) each.
     pub bvh_nodes: Buf<[u32; 4]>,
 }
-

@@ -89,4 +89,3 @@ pub fn variant_labels<'a>(keys: impl IntoIterator<Item = &'a String>) -> Vec<Str
     v.sort();
     v
 }
-

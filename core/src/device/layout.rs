@@ -5,8 +5,8 @@
 //! Spaces: positions and directions are world space; `depth` is view depth (distance
 //! along the camera's forward axis); pixel coordinates have (0, 0) at the top-left.
 
-use bytemuck::{Pod, Zeroable};
 use crate::math::geometry::normalize_scaled;
+use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 /// Mesh vertex: world position and unit shading normal; uv split across the two `w`s.
@@ -388,13 +388,7 @@ pub struct SurfacePoint {
 
 /// Interpolates the surface at barycentrics (`u`, `v`) of the triangle (`a`, `b`, `c`).
 #[inline]
-pub fn surface_point(
-    a: &GpuVertex,
-    b: &GpuVertex,
-    c: &GpuVertex,
-    u: f32,
-    v: f32,
-) -> SurfacePoint {
+pub fn surface_point(a: &GpuVertex, b: &GpuVertex, c: &GpuVertex, u: f32, v: f32) -> SurfacePoint {
     let w = 1.0 - u - v;
     let (pa, pb, pc) = (
         Vec3::from(a.position),
@@ -423,16 +417,11 @@ pub fn surface_point(
     }
 }
 
-
 /// Surface area (scene units^2) that pixel `index` (row-major) of `cam` covers on the
 /// surface its G-buffer texel `g` sees: the footprint at the texel's view depth (Eq. 4)
 /// over the view and surface cosines ([`pixel_surface_area`]). Resolve divides a
 /// pixel's flux by it.
-pub fn gbuffer_pixel_area(
-    cam: &GpuCamera,
-    index: u32,
-    g: &GBufferTexel,
-) -> f32 {
+pub fn gbuffer_pixel_area(cam: &GpuCamera, index: u32, g: &GBufferTexel) -> f32 {
     let ray = camera_ray(cam, index % cam.width, index / cam.width);
     let footprint = crate::math::footprint::pixel_footprint(
         g.depth,

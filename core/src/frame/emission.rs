@@ -17,8 +17,8 @@
 //! ([`NoEmission::MissesCasters`]; the frame plan's light-frustum test). With pruning
 //! off, [`unpruned_domain`] gives such lights their whole domain instead.
 
-use crate::math::geometry::Aabb;
 use crate::device::layout::emission_kind;
+use crate::math::geometry::Aabb;
 use crate::math::sampling::{cone_solid_angle, orthonormal_basis};
 use crate::scene::Light;
 use glam::Vec3;

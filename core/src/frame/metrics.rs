@@ -13,7 +13,9 @@
 //!   images tone-mapped with [`crate::frame::image::tone_map`] at the exposure that maps the
 //!   reference's 99th-percentile masked luminance to 1, FLIP's mean over the mask.
 
-use crate::frame::image::{luminance, tone_map, Image};
+#[cfg(feature = "flip")]
+use crate::frame::image::tone_map;
+use crate::frame::image::{luminance, Image};
 use serde::Serialize;
 
 /// Pixels that receive caustics: reference luminance above `MASK_FRACTION` of its

@@ -120,4 +120,3 @@ impl FramePlan {
         self.buffers.iter().any(|b| b.name.contains(what))
     }
 }
-

@@ -25,11 +25,26 @@ pub struct BilateralGather {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "params", kind: Params },
-    Binding { name: "gbuffer", kind: Read },
-    Binding { name: "tiles", kind: Read },
-    Binding { name: "input", kind: Read },
-    Binding { name: "out", kind: ReadWrite },
+    Binding {
+        name: "params",
+        kind: Params,
+    },
+    Binding {
+        name: "gbuffer",
+        kind: Read,
+    },
+    Binding {
+        name: "tiles",
+        kind: Read,
+    },
+    Binding {
+        name: "input",
+        kind: Read,
+    },
+    Binding {
+        name: "out",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for BilateralGather {

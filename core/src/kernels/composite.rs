@@ -16,10 +16,22 @@ pub struct Composite {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "texels", kind: Count },
-    Binding { name: "direct", kind: Read },
-    Binding { name: "caustics", kind: Read },
-    Binding { name: "out", kind: ReadWrite },
+    Binding {
+        name: "texels",
+        kind: Count,
+    },
+    Binding {
+        name: "direct",
+        kind: Read,
+    },
+    Binding {
+        name: "caustics",
+        kind: Read,
+    },
+    Binding {
+        name: "out",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for Composite {

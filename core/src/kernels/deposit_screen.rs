@@ -27,13 +27,34 @@ pub struct DepositScreen {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "params", kind: Params },
-    Binding { name: "gbuffer", kind: Read },
-    Binding { name: "photons", kind: Read },
-    Binding { name: "photon_capacity", kind: Count },
-    Binding { name: "photon_count", kind: Read },
-    Binding { name: "counters", kind: ReadWrite },
-    Binding { name: "photon_map", kind: ReadWrite },
+    Binding {
+        name: "params",
+        kind: Params,
+    },
+    Binding {
+        name: "gbuffer",
+        kind: Read,
+    },
+    Binding {
+        name: "photons",
+        kind: Read,
+    },
+    Binding {
+        name: "photon_capacity",
+        kind: Count,
+    },
+    Binding {
+        name: "photon_count",
+        kind: Read,
+    },
+    Binding {
+        name: "counters",
+        kind: ReadWrite,
+    },
+    Binding {
+        name: "photon_map",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for DepositScreen {

@@ -27,15 +27,42 @@ pub struct DirectLight {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "vertices", kind: Read },
-    Binding { name: "triangles", kind: Read },
-    Binding { name: "materials", kind: Read },
-    Binding { name: "lights", kind: Read },
-    Binding { name: "bvh_nodes", kind: Read },
-    Binding { name: "bvh_node_count", kind: Count },
-    Binding { name: "params", kind: Params },
-    Binding { name: "gbuffer", kind: Read },
-    Binding { name: "out", kind: ReadWrite },
+    Binding {
+        name: "vertices",
+        kind: Read,
+    },
+    Binding {
+        name: "triangles",
+        kind: Read,
+    },
+    Binding {
+        name: "materials",
+        kind: Read,
+    },
+    Binding {
+        name: "lights",
+        kind: Read,
+    },
+    Binding {
+        name: "nodes",
+        kind: Read,
+    },
+    Binding {
+        name: "bvh_node_count",
+        kind: Count,
+    },
+    Binding {
+        name: "params",
+        kind: Params,
+    },
+    Binding {
+        name: "gbuffer",
+        kind: Read,
+    },
+    Binding {
+        name: "out",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for DirectLight {

@@ -76,7 +76,7 @@ pub const SCENE_BINDINGS: [Binding; 6] = [
     bind("triangles", BindingKind::Read),
     bind("materials", BindingKind::Read),
     bind("lights", BindingKind::Read),
-    bind("bvh_nodes", BindingKind::Read),
+    bind("nodes", BindingKind::Read),
     bind("bvh_node_count", BindingKind::Count),
 ];
 
@@ -131,7 +131,7 @@ impl KernelInfo {
             out.push(ShaderBinding::AccelerationStructure);
         }
         for b in self.bindings {
-            if self.traced && b.name == "bvh_nodes" {
+            if self.traced && b.name == "nodes" {
                 continue;
             }
             if let Some(k) = shader_binding(b.kind) {
@@ -246,7 +246,7 @@ impl Args {
             .buf("triangles", s.triangles, 0)?
             .buf("materials", s.materials, 0)?
             .buf("lights", s.lights, 0)?
-            .buf("bvh_nodes", s.bvh_nodes, 0)?
+            .buf("nodes", s.bvh_nodes, 0)?
             .count("bvh_node_count", s.bvh_nodes.len / 5)
     }
 }

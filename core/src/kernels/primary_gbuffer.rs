@@ -20,14 +20,38 @@ pub struct PrimaryGbuffer {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "vertices", kind: Read },
-    Binding { name: "triangles", kind: Read },
-    Binding { name: "materials", kind: Read },
-    Binding { name: "lights", kind: Read },
-    Binding { name: "bvh_nodes", kind: Read },
-    Binding { name: "bvh_node_count", kind: Count },
-    Binding { name: "camera", kind: Params },
-    Binding { name: "gbuffer", kind: ReadWrite },
+    Binding {
+        name: "vertices",
+        kind: Read,
+    },
+    Binding {
+        name: "triangles",
+        kind: Read,
+    },
+    Binding {
+        name: "materials",
+        kind: Read,
+    },
+    Binding {
+        name: "lights",
+        kind: Read,
+    },
+    Binding {
+        name: "nodes",
+        kind: Read,
+    },
+    Binding {
+        name: "bvh_node_count",
+        kind: Count,
+    },
+    Binding {
+        name: "camera",
+        kind: Params,
+    },
+    Binding {
+        name: "gbuffer",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for PrimaryGbuffer {
@@ -42,9 +66,11 @@ impl KernelDecl for PrimaryGbuffer {
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.camera.width, self.camera.height);
-        a.scene(&self.scene)?
-            .params("camera", &self.camera)?
-            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?;
+        a.scene(&self.scene)?.params("camera", &self.camera)?.buf(
+            "gbuffer",
+            self.gbuffer,
+            n * bytes::GBUFFER_TEXEL,
+        )?;
         Ok(Some(n))
     }
 }

@@ -22,10 +22,22 @@ pub struct ResolveCaustics {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "params", kind: Params },
-    Binding { name: "gbuffer", kind: Read },
-    Binding { name: "photon_map", kind: Read },
-    Binding { name: "out", kind: ReadWrite },
+    Binding {
+        name: "params",
+        kind: Params,
+    },
+    Binding {
+        name: "gbuffer",
+        kind: Read,
+    },
+    Binding {
+        name: "photon_map",
+        kind: Read,
+    },
+    Binding {
+        name: "out",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for ResolveCaustics {

@@ -18,9 +18,18 @@ pub struct TileHitDistance {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "params", kind: Params },
-    Binding { name: "photon_map", kind: Read },
-    Binding { name: "tiles", kind: ReadWrite },
+    Binding {
+        name: "params",
+        kind: Params,
+    },
+    Binding {
+        name: "photon_map",
+        kind: Read,
+    },
+    Binding {
+        name: "tiles",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for TileHitDistance {

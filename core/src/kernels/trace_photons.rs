@@ -30,17 +30,50 @@ pub struct TracePhotons {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding { name: "vertices", kind: Read },
-    Binding { name: "triangles", kind: Read },
-    Binding { name: "materials", kind: Read },
-    Binding { name: "lights", kind: Read },
-    Binding { name: "bvh_nodes", kind: Read },
-    Binding { name: "bvh_node_count", kind: Count },
-    Binding { name: "params", kind: Params },
-    Binding { name: "photons", kind: ReadWrite },
-    Binding { name: "photon_capacity", kind: Count },
-    Binding { name: "photon_count", kind: ReadWrite },
-    Binding { name: "counters", kind: ReadWrite },
+    Binding {
+        name: "vertices",
+        kind: Read,
+    },
+    Binding {
+        name: "triangles",
+        kind: Read,
+    },
+    Binding {
+        name: "materials",
+        kind: Read,
+    },
+    Binding {
+        name: "lights",
+        kind: Read,
+    },
+    Binding {
+        name: "nodes",
+        kind: Read,
+    },
+    Binding {
+        name: "bvh_node_count",
+        kind: Count,
+    },
+    Binding {
+        name: "params",
+        kind: Params,
+    },
+    Binding {
+        name: "photons",
+        kind: ReadWrite,
+    },
+    Binding {
+        name: "photon_capacity",
+        kind: Count,
+    },
+    Binding {
+        name: "photon_count",
+        kind: ReadWrite,
+    },
+    Binding {
+        name: "counters",
+        kind: ReadWrite,
+    },
 ];
 
 impl KernelDecl for TracePhotons {

@@ -528,7 +528,12 @@ impl Sspm {
             b.has_dispersion,
             &self.settings,
         );
-        let mut plan = plan_frame(&model, &constants, self.settings.outputs, self.settings.prune);
+        let mut plan = plan_frame(
+            &model,
+            &constants,
+            self.settings.outputs,
+            self.settings.prune,
+        );
         if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) {
             return Err(Error::InvalidParameter(
                 "the new lights change which passes run (photon passes start or stop): \
@@ -592,10 +597,7 @@ impl Technique for Sspm {
     }
 
     fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        (
-            Output::FilteredCaustics.stem(),
-            Output::RawCaustics.stem(),
-        )
+        (Output::FilteredCaustics.stem(), Output::RawCaustics.stem())
     }
 
     fn settings_json(&self) -> serde_json::Value {

@@ -22,112 +22,111 @@ pub struct Needs {
 
 /// Plans a frame of Sspm for `scene` with emission already decided in `constants`.
 pub fn plan_frame(
-        scene: &Scene,
-        constants: &FrameConstants,
-        outputs: Outputs,
-        prune: bool,
-    ) -> FramePlan {
-        let features = SceneFeatures::of(scene);
-        let mut lights: Vec<LightPlan> = constants
-            .domains
-            .iter()
-            .map(|(i, _)| LightPlan {
-                light: *i,
-                emits: true,
-                reason: if constants.unpruned.contains(i) {
-                    "pruning off: emits its whole domain".into()
-                } else {
-                    "its emission domain reaches a caustic caster".into()
-                },
-            })
-            .collect();
-        lights.extend(constants.skipped_lights.iter().map(|(i, why)| LightPlan {
+    scene: &Scene,
+    constants: &FrameConstants,
+    outputs: Outputs,
+    prune: bool,
+) -> FramePlan {
+    let features = SceneFeatures::of(scene);
+    let mut lights: Vec<LightPlan> = constants
+        .domains
+        .iter()
+        .map(|(i, _)| LightPlan {
             light: *i,
-            emits: false,
-            reason: why.reason().into(),
-        }));
-        lights.sort_by_key(|l| l.light);
+            emits: true,
+            reason: if constants.unpruned.contains(i) {
+                "pruning off: emits its whole domain".into()
+            } else {
+                "its emission domain reaches a caustic caster".into()
+            },
+        })
+        .collect();
+    lights.extend(constants.skipped_lights.iter().map(|(i, why)| LightPlan {
+        light: *i,
+        emits: false,
+        reason: why.reason().into(),
+    }));
+    lights.sort_by_key(|l| l.light);
 
-        let emits = !constants.domains.is_empty();
-        let n = Needs::of(outputs, emits, prune);
-        let mut passes = Vec::new();
-        let mut pass = |name: &str, runs: bool, reason: &str| {
-            passes.push(PassPlan {
-                name: name.into(),
-                runs,
-                reason: reason.into(),
-            })
-        };
-        let off = "pruning off: every pass runs";
-        let why_photons = if !prune {
+    let emits = !constants.domains.is_empty();
+    let n = Needs::of(outputs, emits, prune);
+    let mut passes = Vec::new();
+    let mut pass = |name: &str, runs: bool, reason: &str| {
+        passes.push(PassPlan {
+            name: name.into(),
+            runs,
+            reason: reason.into(),
+        })
+    };
+    let off = "pruning off: every pass runs";
+    let why_photons = if !prune {
+        off
+    } else if !emits {
+        "no light emits photons"
+    } else if !(outputs.composite || outputs.raw_caustics || outputs.filtered_caustics) {
+        "no caustic output requested"
+    } else {
+        "a light reaches a caustic caster and a caustic output is requested"
+    };
+    pass(
+        "primary_gbuffer",
+        true,
+        "every output is shaded from the G-buffer",
+    );
+    pass(
+        "direct_light",
+        n.direct_light,
+        if !prune {
             off
-        } else if !emits {
-            "no light emits photons"
-        } else if !(outputs.composite || outputs.raw_caustics || outputs.filtered_caustics) {
-            "no caustic output requested"
+        } else if n.direct_light {
+            "direct or composite output requested"
         } else {
-            "a light reaches a caustic caster and a caustic output is requested"
-        };
-        pass(
-            "primary_gbuffer",
-            true,
-            "every output is shaded from the G-buffer",
-        );
-        pass(
-            "direct_light",
-            n.direct_light,
-            if !prune {
-                off
-            } else if n.direct_light {
-                "direct or composite output requested"
-            } else {
-                "neither direct nor composite output requested"
-            },
-        );
-        pass("trace_photons", n.photons, why_photons);
-        pass("deposit_screen", n.photons, why_photons);
-        pass("resolve_caustics", n.photons, why_photons);
-        let why_gather = if !prune {
+            "neither direct nor composite output requested"
+        },
+    );
+    pass("trace_photons", n.photons, why_photons);
+    pass("deposit_screen", n.photons, why_photons);
+    pass("resolve_caustics", n.photons, why_photons);
+    let why_gather = if !prune {
+        off
+    } else if !n.photons {
+        why_photons
+    } else if n.gather {
+        "filtered caustics or composite requested"
+    } else {
+        "neither filtered caustics nor composite requested"
+    };
+    pass("tile_hit_distance", n.gather, why_gather);
+    pass("bilateral_gather", n.gather, why_gather);
+    pass(
+        "composite",
+        n.composite,
+        if !prune {
             off
-        } else if !n.photons {
-            why_photons
-        } else if n.gather {
-            "filtered caustics or composite requested"
+        } else if !outputs.composite {
+            "composite not requested"
+        } else if n.composite {
+            "composite requested"
         } else {
-            "neither filtered caustics nor composite requested"
-        };
-        pass("tile_hit_distance", n.gather, why_gather);
-        pass("bilateral_gather", n.gather, why_gather);
-        pass(
-            "composite",
-            n.composite,
-            if !prune {
-                off
-            } else if !outputs.composite {
-                "composite not requested"
-            } else if n.composite {
-                "composite requested"
+            "no caustics: the composite is the direct image"
+        },
+    );
+    FramePlan {
+        prune,
+        features,
+        outputs: outputs.names(),
+        lights,
+        trace_variant: n.photons.then(|| {
+            if prune {
+                features.trace_variant()
             } else {
-                "no caustics: the composite is the direct image"
-            },
-        );
-        FramePlan {
-            prune,
-            features,
-            outputs: outputs.names(),
-            lights,
-            trace_variant: n.photons.then(|| {
-                if prune {
-                    features.trace_variant()
-                } else {
-                    TraceVariant::ALL
-                }
-            }),
-            passes,
-            buffers: Vec::new(),
-        }
+                TraceVariant::ALL
+            }
+        }),
+        passes,
+        buffers: Vec::new(),
     }
-
+}
 
 impl Needs {
     /// The needs of a plan made by [`plan_frame`] (which pass groups run).

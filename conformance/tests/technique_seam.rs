@@ -1,0 +1,140 @@
+//! The `Technique` seam on every backend: a technique created by name runs a frame and
+//! lists and reads its outputs; moving the camera or the lights between frames (no
+//! rebuild) gives bitwise the frame a technique created for the moved scene gives; a
+//! technique dropped without `free` is reported, never silently leaked.
+
+use caustica_conformance::backends;
+use caustica_core::frame::technique::leaked_buffers;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::{Light, Scene};
+use caustica_core::techniques::{create, technique_names};
+use caustica_core::{Backend, Technique};
+use glam::Vec3;
+
+fn small(name: &str) -> Scene {
+    let mut s = builtin(name).expect("built-in scene");
+    s.camera.width = 64;
+    s.camera.height = 36;
+    s
+}
+
+fn settings() -> serde_json::Value {
+    serde_json::json!({ "photons_w": 64, "photons_h": 64 })
+}
+
+/// Every requested output of one frame, by name.
+fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
+    t.frame(b, &mut |_| {}).expect("frame");
+    t.outputs()
+        .into_iter()
+        .filter(|o| o.requested)
+        .map(|o| {
+            let img = t.read_output(b, o.name).expect("read");
+            (o.name.to_string(), img.pixels)
+        })
+        .collect()
+}
+
+#[test]
+fn every_technique_by_name_renders_and_lists_its_outputs() {
+    for (bname, mut b) in backends() {
+        for name in technique_names() {
+            let mut t = create(name, b.as_mut(), &small("sphere"), &settings()).expect("create");
+            assert_eq!(t.name(), name);
+            let outs = frame_outputs(t.as_mut(), b.as_mut());
+            assert!(!outs.is_empty(), "{bname}/{name}: no output");
+            for (o, px) in &outs {
+                assert_eq!(px.len(), 64 * 36, "{bname}/{name}/{o}");
+                assert!(
+                    px.iter().flatten().all(|v| v.is_finite()),
+                    "{bname}/{name}/{o}"
+                );
+            }
+            let (filtered, raw) = t.estimate_outputs();
+            assert!(outs.iter().any(|(o, _)| o == filtered) && outs.iter().any(|(o, _)| o == raw));
+            assert!(t.read_output(b.as_mut(), "no_such_output").is_err());
+            t.free(b.as_mut()).expect("free");
+        }
+        assert!(create(
+            "no_such_technique",
+            b.as_mut(),
+            &small("sphere"),
+            &settings()
+        )
+        .is_err());
+        assert!(
+            create(
+                "sspm",
+                b.as_mut(),
+                &small("sphere"),
+                &serde_json::json!({"photons_ww": 1})
+            )
+            .is_err(),
+            "{bname}: a misspelt setting must be an error"
+        );
+    }
+}
+
+#[test]
+fn moved_camera_and_lights_equal_a_fresh_technique_bitwise() {
+    for (bname, mut b) in backends() {
+        let scene = small("sphere");
+        let mut moved = scene.clone();
+        moved.camera.position += Vec3::new(0.3, 0.1, -0.2);
+        for l in &mut moved.lights {
+            match l {
+                Light::Point {
+                    position,
+                    intensity,
+                } => {
+                    *position += Vec3::new(0.2, 0.0, 0.1);
+                    *intensity *= 1.5;
+                }
+                Light::Spot { position, .. } => *position += Vec3::new(0.2, 0.0, 0.1),
+                Light::Directional { irradiance, .. } => *irradiance *= 1.5,
+            }
+        }
+        let mut fresh = create("sspm", b.as_mut(), &moved, &settings()).expect("create");
+        let want = frame_outputs(fresh.as_mut(), b.as_mut());
+        fresh.free(b.as_mut()).expect("free");
+
+        let mut t = create("sspm", b.as_mut(), &scene, &settings()).expect("create");
+        frame_outputs(t.as_mut(), b.as_mut()); // a frame before the move
+        t.set_camera(&moved.camera).expect("set_camera");
+        t.set_lights(b.as_mut(), &moved.lights).expect("set_lights");
+        let got = frame_outputs(t.as_mut(), b.as_mut());
+        assert_eq!(
+            got, want,
+            "{bname}: moved technique differs from a fresh one"
+        );
+
+        let mut bigger = moved.camera.clone();
+        bigger.width *= 2;
+        assert!(
+            t.set_camera(&bigger).is_err(),
+            "{bname}: image size cannot change"
+        );
+        assert!(
+            t.set_lights(b.as_mut(), &[]).is_err(),
+            "{bname}: light count cannot change"
+        );
+        t.free(b.as_mut()).expect("free");
+    }
+}
+
+#[test]
+fn a_technique_dropped_without_free_is_reported() {
+    let (_, mut b) = backends().into_iter().next().expect("the cpu backend");
+    let before = leaked_buffers();
+    let t = create("sspm", b.as_mut(), &small("sphere"), &settings()).expect("create");
+    drop(t);
+    assert!(leaked_buffers() > before, "the leak was not counted");
+    let t = create("sspm", b.as_mut(), &small("sphere"), &settings()).expect("create");
+    let after_drop = leaked_buffers();
+    t.free(b.as_mut()).expect("free");
+    assert_eq!(
+        leaked_buffers(),
+        after_drop,
+        "free() must not count as a leak"
+    );
+}
