@@ -13,7 +13,7 @@
 //! not compile.
 //!
 //! Adding a kernel: a file here, one line in [`kernel_list!`], then its CPU function, WGSL,
-//! OpenCL C (and GLSL stage if traced) and conformance check.
+//! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
 
 mod bilateral_gather;
 mod composite;

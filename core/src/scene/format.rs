@@ -1,5 +1,7 @@
-//! The scene file format: JSON, exactly the serde form of [`Scene`] (see
-//! `docs/scene-format.md`). `caustica scenes --export NAME` prints a built-in scene in it.
+//! The scene file format: JSON, exactly the serde form of [`Scene`]: materials, shapes and
+//! lights are objects tagged by `"type"` (snake_case variant names), unknown fields are
+//! rejected and fields with defaults may be left out. `caustica scenes --export NAME`
+//! prints a built-in scene in it.
 //!
 //! Every malformed or physically invalid input is rejected with a [`SceneFileError`] that
 //! names the file, the line and column, and the reason.
