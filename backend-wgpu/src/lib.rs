@@ -156,7 +156,7 @@ impl WgpuBackend {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("caustica"),
             required_features: features,
-            // lavapipe's acceleration-structure minimums exceed wgpu's defaults (DESIGN 8)
+            // lavapipe's acceleration-structure minimums exceed wgpu's defaults
             required_limits: adapter.limits(),
             ..Default::default()
         }))

@@ -13,7 +13,7 @@
 //! Random dimensions: bounce 0 dims 0, 1 = grid jitter; bounce b dim 2 = Fresnel choice,
 //! dim 3 = dispersion channel.
 //!
-//! Variants (DESIGN 3): the const generics `DIELECTRIC`, `DISPERSION` and `ABSORPTION`
+//! Variants (compiled, not branched): the const generics `DIELECTRIC`, `DISPERSION` and `ABSORPTION`
 //! compile the dielectric, Cauchy-dispersion and Beer-Lambert code in or out, as the
 //! shader ports do with override constants, specialization constants and `-D` defines;
 //! [`trace_photons`] picks the monomorphisation of core's [`TraceVariant`]. A variant
