@@ -419,7 +419,7 @@ pub fn surface_point(a: &GpuVertex, b: &GpuVertex, c: &GpuVertex, u: f32, v: f32
 
 /// Surface area (scene units^2) that pixel `index` (row-major) of `cam` covers on the
 /// surface its G-buffer texel `g` sees: the footprint at the texel's view depth (Eq. 4)
-/// over the view and surface cosines ([`pixel_surface_area`]). Resolve divides a
+/// over the view and surface cosines ([`pixel_surface_area`](crate::math::footprint::pixel_surface_area)). Resolve divides a
 /// pixel's flux by it.
 pub fn gbuffer_pixel_area(cam: &GpuCamera, index: u32, g: &GBufferTexel) -> f32 {
     let ray = camera_ray(cam, index % cam.width, index / cam.width);

@@ -4,7 +4,7 @@
 //! its name, its bindings in launch order with their access, its workgroup size, its
 //! compiled switches and its lowering (argument checks, buffer sizes, thread count).
 //!
-//! From the list in [`kernel_list!`] below everything else is derived: the [`Kernel`] enum
+//! From the list in `kernel_list!` below everything else is derived: the [`Kernel`] enum
 //! a [`crate::recording::Recording`] carries, the registry [`KERNELS`], the lowering of a
 //! recorded kernel to a [`Launch`] (checked binding by binding against the declaration),
 //! the Vulkan descriptor types ([`KernelInfo::descriptor_bindings`]) and the WGSL binding
@@ -12,7 +12,7 @@
 //! CPU backend matches [`Kernel`] exhaustively, so a new kernel without a CPU arm does
 //! not compile.
 //!
-//! Adding a kernel: a file here, one line in [`kernel_list!`], then its CPU function, WGSL,
+//! Adding a kernel: a file here, one line in `kernel_list!`, then its CPU function, WGSL,
 //! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
 
 mod bilateral_gather;

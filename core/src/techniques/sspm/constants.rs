@@ -11,7 +11,7 @@ use crate::scene::Scene;
 
 /// What a frame's kernels are parameterised with, derived from the scene and settings
 /// before any work: each light's emission domain (or why it emits nothing), the
-/// fixed-point quanta and the gather's hit-distance clamp. [`Sspm`] records its kernels
+/// fixed-point quanta and the gather's hit-distance clamp. [`Sspm`](super::Sspm) records its kernels
 /// with these; tests that drive single kernels build the same parameters from them.
 #[derive(Clone, Debug)]
 pub struct FrameConstants {
