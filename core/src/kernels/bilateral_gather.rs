@@ -1,7 +1,7 @@
 //! `bilateral_gather`: one direction of the separable edge-aware photon gather (seed 000
 //! section 30.3.2).
 
-use super::{bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, ImageBuf};
 use crate::device::layout::{GBufferTexel, GatherParams};
@@ -25,26 +25,11 @@ pub struct BilateralGather {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "params",
-        kind: Params,
-    },
-    Binding {
-        name: "gbuffer",
-        kind: Read,
-    },
-    Binding {
-        name: "tiles",
-        kind: Read,
-    },
-    Binding {
-        name: "input",
-        kind: Read,
-    },
-    Binding {
-        name: "out",
-        kind: ReadWrite,
-    },
+    bind("params", Params),
+    bind("gbuffer", Read),
+    bind("tiles", Read),
+    bind("input", Read),
+    bind("out", ReadWrite),
 ];
 
 impl KernelDecl for BilateralGather {

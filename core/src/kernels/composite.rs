@@ -1,6 +1,6 @@
 //! `composite`: direct light plus caustics (seed 000 section 30.3.3).
 
-use super::{bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::ImageBuf;
 
@@ -16,22 +16,10 @@ pub struct Composite {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "texels",
-        kind: Count,
-    },
-    Binding {
-        name: "direct",
-        kind: Read,
-    },
-    Binding {
-        name: "caustics",
-        kind: Read,
-    },
-    Binding {
-        name: "out",
-        kind: ReadWrite,
-    },
+    bind("texels", Count),
+    bind("direct", Read),
+    bind("caustics", Read),
+    bind("out", ReadWrite),
 ];
 
 impl KernelDecl for Composite {

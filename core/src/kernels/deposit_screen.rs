@@ -1,6 +1,6 @@
 //! `deposit_screen`: one photon -> one pixel (seed 000 section 30.3.1.3).
 
-use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::Buf;
 use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel, Photon};
@@ -27,34 +27,13 @@ pub struct DepositScreen {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "params",
-        kind: Params,
-    },
-    Binding {
-        name: "gbuffer",
-        kind: Read,
-    },
-    Binding {
-        name: "photons",
-        kind: Read,
-    },
-    Binding {
-        name: "photon_capacity",
-        kind: Count,
-    },
-    Binding {
-        name: "photon_count",
-        kind: Read,
-    },
-    Binding {
-        name: "counters",
-        kind: ReadWrite,
-    },
-    Binding {
-        name: "photon_map",
-        kind: ReadWrite,
-    },
+    bind("params", Params),
+    bind("gbuffer", Read),
+    bind("photons", Read),
+    bind("photon_capacity", Count),
+    bind("photon_count", Read),
+    bind("counters", ReadWrite),
+    bind("photon_map", ReadWrite),
 ];
 
 impl KernelDecl for DepositScreen {

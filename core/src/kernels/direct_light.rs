@@ -1,6 +1,8 @@
 //! `direct_light`: shadow-ray traced direct lighting.
 
-use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{
+    bind, bytes, texels, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo,
+};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, ImageBuf, SceneArgs};
 use crate::device::layout::{DirectParams, GBufferTexel};
@@ -26,49 +28,16 @@ pub struct DirectLight {
     pub out: ImageBuf,
 }
 
-const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "vertices",
-        kind: Read,
-    },
-    Binding {
-        name: "triangles",
-        kind: Read,
-    },
-    Binding {
-        name: "materials",
-        kind: Read,
-    },
-    Binding {
-        name: "lights",
-        kind: Read,
-    },
-    Binding {
-        name: "nodes",
-        kind: Read,
-    },
-    Binding {
-        name: "bvh_node_count",
-        kind: Count,
-    },
-    Binding {
-        name: "params",
-        kind: Params,
-    },
-    Binding {
-        name: "gbuffer",
-        kind: Read,
-    },
-    Binding {
-        name: "out",
-        kind: ReadWrite,
-    },
-];
+const BINDINGS: [Binding; 9] = with_scene([
+    bind("params", Params),
+    bind("gbuffer", Read),
+    bind("out", ReadWrite),
+]);
 
 impl KernelDecl for DirectLight {
     const INFO: KernelInfo = KernelInfo {
         name: "direct_light",
-        bindings: BINDINGS,
+        bindings: &BINDINGS,
         workgroup_size: 64,
         traced: true,
         switches: &[],

@@ -64,7 +64,8 @@ pub struct Binding {
     pub kind: BindingKind,
 }
 
-const fn bind(name: &'static str, kind: BindingKind) -> Binding {
+/// A binding (shorthand for the declarations).
+pub const fn bind(name: &'static str, kind: BindingKind) -> Binding {
     Binding { name, kind }
 }
 
@@ -79,6 +80,24 @@ pub const SCENE_BINDINGS: [Binding; 6] = [
     bind("nodes", BindingKind::Read),
     bind("bvh_node_count", BindingKind::Count),
 ];
+
+/// [`SCENE_BINDINGS`] followed by `rest`: the bindings of a traced kernel. `N` must be
+/// `6 + M` (checked when the constant is evaluated, i.e. at compile time).
+pub const fn with_scene<const M: usize, const N: usize>(rest: [Binding; M]) -> [Binding; N] {
+    assert!(N == SCENE_BINDINGS.len() + M, "with_scene: N must be 6 + M");
+    let mut out = [bind("", BindingKind::Count); N];
+    let mut i = 0;
+    while i < SCENE_BINDINGS.len() {
+        out[i] = SCENE_BINDINGS[i];
+        i += 1;
+    }
+    let mut j = 0;
+    while j < M {
+        out[SCENE_BINDINGS.len() + j] = rest[j];
+        j += 1;
+    }
+    out
+}
 
 /// A kernel's declaration: everything a backend needs to know about it but its code.
 #[derive(Clone, Copy, Debug)]

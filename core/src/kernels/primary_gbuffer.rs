@@ -1,6 +1,8 @@
 //! `primary_gbuffer`: primary visibility.
 
-use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{
+    bind, bytes, texels, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo,
+};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, SceneArgs};
 use crate::device::layout::{GBufferTexel, GpuCamera};
@@ -19,45 +21,12 @@ pub struct PrimaryGbuffer {
     pub gbuffer: Buf<GBufferTexel>,
 }
 
-const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "vertices",
-        kind: Read,
-    },
-    Binding {
-        name: "triangles",
-        kind: Read,
-    },
-    Binding {
-        name: "materials",
-        kind: Read,
-    },
-    Binding {
-        name: "lights",
-        kind: Read,
-    },
-    Binding {
-        name: "nodes",
-        kind: Read,
-    },
-    Binding {
-        name: "bvh_node_count",
-        kind: Count,
-    },
-    Binding {
-        name: "camera",
-        kind: Params,
-    },
-    Binding {
-        name: "gbuffer",
-        kind: ReadWrite,
-    },
-];
+const BINDINGS: [Binding; 8] = with_scene([bind("camera", Params), bind("gbuffer", ReadWrite)]);
 
 impl KernelDecl for PrimaryGbuffer {
     const INFO: KernelInfo = KernelInfo {
         name: "primary_gbuffer",
-        bindings: BINDINGS,
+        bindings: &BINDINGS,
         workgroup_size: 64,
         traced: true,
         switches: &[],

@@ -1,6 +1,6 @@
 //! `resolve_caustics`: fixed-point photon map -> caustic radiance (seed 000 Eq. 5).
 
-use super::{bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, ImageBuf};
 use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel};
@@ -22,22 +22,10 @@ pub struct ResolveCaustics {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "params",
-        kind: Params,
-    },
-    Binding {
-        name: "gbuffer",
-        kind: Read,
-    },
-    Binding {
-        name: "photon_map",
-        kind: Read,
-    },
-    Binding {
-        name: "out",
-        kind: ReadWrite,
-    },
+    bind("params", Params),
+    bind("gbuffer", Read),
+    bind("photon_map", Read),
+    bind("out", ReadWrite),
 ];
 
 impl KernelDecl for ResolveCaustics {

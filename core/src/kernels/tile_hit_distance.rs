@@ -1,6 +1,6 @@
 //! `tile_hit_distance`: mean photon hit distance per tile (seed 000 section 30.3.2).
 
-use super::{bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::Buf;
 use crate::device::layout::{DepositTexel, GatherParams};
@@ -18,18 +18,9 @@ pub struct TileHitDistance {
 }
 
 const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "params",
-        kind: Params,
-    },
-    Binding {
-        name: "photon_map",
-        kind: Read,
-    },
-    Binding {
-        name: "tiles",
-        kind: ReadWrite,
-    },
+    bind("params", Params),
+    bind("photon_map", Read),
+    bind("tiles", ReadWrite),
 ];
 
 impl KernelDecl for TileHitDistance {

@@ -1,6 +1,6 @@
 //! `trace_photons`: emit, trace through specular chains, store.
 
-use super::{bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, SceneArgs};
 use crate::device::layout::{Photon, TraceParams};
@@ -29,57 +29,18 @@ pub struct TracePhotons {
     pub counters: Buf<u32>,
 }
 
-const BINDINGS: &[Binding] = &[
-    Binding {
-        name: "vertices",
-        kind: Read,
-    },
-    Binding {
-        name: "triangles",
-        kind: Read,
-    },
-    Binding {
-        name: "materials",
-        kind: Read,
-    },
-    Binding {
-        name: "lights",
-        kind: Read,
-    },
-    Binding {
-        name: "nodes",
-        kind: Read,
-    },
-    Binding {
-        name: "bvh_node_count",
-        kind: Count,
-    },
-    Binding {
-        name: "params",
-        kind: Params,
-    },
-    Binding {
-        name: "photons",
-        kind: ReadWrite,
-    },
-    Binding {
-        name: "photon_capacity",
-        kind: Count,
-    },
-    Binding {
-        name: "photon_count",
-        kind: ReadWrite,
-    },
-    Binding {
-        name: "counters",
-        kind: ReadWrite,
-    },
-];
+const BINDINGS: [Binding; 11] = with_scene([
+    bind("params", Params),
+    bind("photons", ReadWrite),
+    bind("photon_capacity", Count),
+    bind("photon_count", ReadWrite),
+    bind("counters", ReadWrite),
+]);
 
 impl KernelDecl for TracePhotons {
     const INFO: KernelInfo = KernelInfo {
         name: "trace_photons",
-        bindings: BINDINGS,
+        bindings: &BINDINGS,
         workgroup_size: 64,
         traced: true,
         switches: &TraceVariant::SWITCHES,
