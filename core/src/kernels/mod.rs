@@ -70,7 +70,7 @@ pub const fn bind(name: &'static str, kind: BindingKind) -> Binding {
 }
 
 /// The scene's buffers as every traced kernel binds them first: vertices, triangles,
-/// materials, lights, the CWBVH nodes and their count. Vulkan replaces `bvh_nodes` (and
+/// materials, lights, the CWBVH nodes and their count. Vulkan replaces `nodes` (and
 /// its count) with the driver-built acceleration structure at binding 0.
 pub const SCENE_BINDINGS: [Binding; 6] = [
     bind("vertices", BindingKind::Read),
