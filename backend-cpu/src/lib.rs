@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // `!(x > 0.0)` is deliberate: true for NaN.
 //! caustica CPU backend: every kernel of the registry on the host, with rayon for data

@@ -24,9 +24,6 @@ use obvhs::ray::Ray;
 /// behind the ray origin are culled, and nothing else (obvhs: 1e-4).
 pub const CWBVH_T_MIN: f32 = 0.0;
 
-/// Hit mask of `node`'s children for `ray` (obvhs's `CwBvhNode::intersect_ray_basic` with
-/// the entry clamp [`CWBVH_T_MIN`]): inner children set a bit in the top byte at their
-/// octant-ordered slot, leaves their unary primitive count in the low 24 bits.
 /// The (near, far) quantized bounds of one axis for a ray whose direction is negative
 /// (`neg`) or not along it.
 #[inline(always)]
@@ -38,6 +35,11 @@ fn axis<'a>(neg: bool, lo: &'a [u8; 8], hi: &'a [u8; 8]) -> (&'a [u8; 8], &'a [u
     }
 }
 
+/// Hit mask of `node`'s children for `ray` (obvhs's `CwBvhNode::intersect_ray_basic` with
+/// the entry clamp [`CWBVH_T_MIN`]): inner children set a bit in the top byte at their
+/// octant-ordered slot, leaves their unary primitive count in the low 24 bits.
+/// `oct_inv4` is the ray's inverted octant replicated into each byte (obvhs's
+/// `ray_get_octant_inv4`).
 #[inline(always)]
 pub fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
     let scale = node.compute_extent() * ray.inv_direction;
@@ -72,19 +74,28 @@ pub fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
 
 /// Borrowed view of a prepared scene.
 pub struct SceneView<'a> {
+    /// Mesh vertices (world space).
     pub vertices: &'a [GpuVertex],
+    /// Triangles in BVH leaf order.
     pub triangles: &'a [GpuTriangle],
+    /// Material table.
     pub materials: &'a [GpuMaterial],
+    /// Every light of the scene.
     pub lights: &'a [GpuLight],
+    /// The CWBVH adopted by `prepare_scene` (its leaves index `triangles` directly).
     pub bvh: &'a CwBvh,
 }
 
 /// Closest hit: distance, triangle and barycentrics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// Distance along the unit ray (scene units).
     pub t: f32,
+    /// Index of the triangle hit.
     pub triangle: u32,
+    /// Barycentric weight of the triangle's vertex 1.
     pub u: f32,
+    /// Barycentric weight of the triangle's vertex 2.
     pub v: f32,
 }
 

@@ -5,7 +5,7 @@
 // Stored photons are appended in arrival order (an atomic slot counter): the set of
 // photons equals the CPU's, their order does not, and every later sum is order-free.
 
-// Compiled variants (DESIGN 3): the host builds this file with `-D DIELECTRIC=0/1
+// Compiled variants (not branches): the host builds this file with `-D DIELECTRIC=0/1
 // -D DISPERSION=0/1 -D ABSORPTION=0/1` (core's TraceVariant); a switch at 0 compiles its
 // material feature out. Without defines every feature is in.
 #ifndef DIELECTRIC

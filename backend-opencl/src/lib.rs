@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! caustica OpenCL backend: every registry kernel in OpenCL C 1.2 (`kernels/<kernel>.cl`
 //! beside the shared files of `kernels/common/`, functions named as core's scalar
 //! functions), software traversal of core's flattened CWBVH, the counter-based RNG and the

@@ -1,7 +1,7 @@
 //! The OpenCL C programs: the shared files under `kernels/common/` (mirrors of core's
 //! scalar functions and Pod structs, [`COMMON`]) and one file per registry kernel directly
 //! under `kernels/` ([`KERNELS`]). Kernels without variants are compiled together as one
-//! program; a kernel with compiled variants ([`VARIANT_KERNELS`], DESIGN 3) gets one
+//! program; a kernel with compiled variants ([`VARIANT_KERNELS`]) gets one
 //! program per variant, the common files and its own file built with `-D NAME=0/1` for
 //! each switch, only when a launch first asks for it.
 //! A failed build is a typed error carrying the driver's build log.

@@ -136,7 +136,7 @@ impl SceneAccel {
                 device_address: vertices.address(),
             })
             .vertex_stride(std::mem::size_of::<GpuVertex>() as u64)
-            // the highest vertex index, not the count (DESIGN 8)
+            // the highest vertex index, not the count
             .max_vertex(vertex_count.saturating_sub(1))
             .index_type(vk::IndexType::UINT32)
             .index_data(vk::DeviceOrHostAddressConstKHR {

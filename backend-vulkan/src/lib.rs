@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! caustica Vulkan backend (ash): the driver builds the acceleration structures
 //! (VK_KHR_acceleration_structure) and ray-tracing pipelines (VK_KHR_ray_tracing_pipeline)
 //! trace the G-buffer, the shadow rays of direct light and the photons; the other kernels

@@ -316,7 +316,7 @@ pub fn ray_tracing(
 
 /// Shader binding table: each region starts at `shaderGroupBaseAlignment` of the device
 /// address; records are `shaderGroupHandleAlignment`-aligned; the ray generation region's
-/// size equals its stride (DESIGN 8).
+/// size equals its stride (rules of `vkCmdTraceRaysKHR`).
 fn binding_table(
     ctx: &Arc<Context>,
     pipeline: vk::Pipeline,

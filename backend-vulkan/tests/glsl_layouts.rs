@@ -1,5 +1,5 @@
 //! The GLSL mirrors of core's Pod structs (`shaders/common/types.glsl`) have core's layout
-//! in the SPIR-V this backend loads (DESIGN 3: "layout is tested, not commented").
+//! in the SPIR-V this backend loads (layout is tested, not commented).
 //!
 //! The stages are compiled with `glslc -O`, which strips every OpName, so a struct is
 //! found by where it is bound: [`BOUND`] names, for every descriptor binding of every

@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! caustica wgpu backend: every registry kernel as a WGSL compute shader (the
 //! `caustica-shaders` crate's `wgsl/<kernel>.wgsl`, functions named as core's scalar
 //! functions), software traversal of core's flattened CWBVH, u32 atomics for the
@@ -155,7 +156,7 @@ impl WgpuBackend {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("caustica"),
             required_features: features,
-            // lavapipe's acceleration-structure minimums exceed wgpu's defaults (DESIGN 8)
+            // lavapipe's acceleration-structure minimums exceed wgpu's defaults
             required_limits: adapter.limits(),
             ..Default::default()
         }))

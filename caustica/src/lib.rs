@@ -23,7 +23,7 @@
 //! What is here: scenes ([`scene`]: the model, built-ins, the JSON format), opening a
 //! backend ([`open_backend`], [`backend_statuses`]), the techniques with their settings
 //! and outputs, frame statistics, errors, host images and their files ([`output`]), error
-//! metrics ([`metrics`]) and references ([`reference`]); each backend's own API behind its
+//! metrics ([`metrics`]) and references ([`reference`](mod@reference)); each backend's own API behind its
 //! cargo feature in [`backends`] (embedding into a host's wgpu or Vulkan device);
 //! `glam`, `wgpu` and `ash` as caustica uses them. Backend authors find the kernel list,
 //! recordings, device layouts and shared math under [`internals`]. With the `report`

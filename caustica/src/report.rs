@@ -1,4 +1,4 @@
-//! Error against run time (DESIGN 7): for every scene x technique x backend x photon
+//! Error against run time: for every scene x technique x backend x photon
 //! budget (any registered technique, created by name), the median frame time and per-pass times over repeated frames (device
 //! timestamps where the backend has them) and the error of the filtered caustics against
 //! the scene's reference, with bias and variance over the repeats' seeds. Writes one JSON

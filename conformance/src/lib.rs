@@ -1,4 +1,4 @@
-//! Conformance: every backend checked against the CPU reference (DESIGN 3 and 4).
+//! Conformance: every backend checked against the CPU reference.
 //! Backends: cpu, opencl, wgpu, vulkan; [`backends`] opens every one this machine has (one
 //! named in `CAUSTICA_REQUIRE_BACKENDS` that cannot be opened is a failure, not a skip).
 //!

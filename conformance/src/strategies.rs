@@ -1,4 +1,4 @@
-//! Proptest strategies for valid [`Scene`]s and small [`SspmSettings`] (DESIGN 3, 4: the
+//! Proptest strategies for valid [`Scene`]s and small [`SspmSettings`] (the
 //! cross-backend suite renders random scenes on every backend and compares with the CPU).
 //!
 //! A generated scene is a diffuse ground quad (y = 0, normal +y) under 1-3 caustic casters

@@ -1,4 +1,4 @@
-//! Cross-backend conformance (DESIGN 3 and 4). Every test is declared once, generic over
+//! Cross-backend conformance. Every test is declared once, generic over
 //! `&mut dyn Backend`, and runs for every backend of `caustica_conformance::backends()`
 //! except cpu, compared with the CPU reference (`CpuBackend::new()`). With only cpu on the
 //! machine a fresh 1-thread CPU backend stands in, so that the comparisons still run and

@@ -1,4 +1,4 @@
-//! The frame plan on every backend (issue 8, DESIGN 3 "leave out what a scene does not
+//! The frame plan on every backend (issue 8, "leave out what a scene does not
 //! need"): a scene without casters runs no photon pass and allocates no photon buffer; a
 //! scene compiles only the `trace_photons` variant its materials need; a light whose
 //! frustum misses every caster emits nothing; and pruning changes no result.

@@ -1,5 +1,6 @@
-//! The `Backend` trait: small and object-safe (DESIGN 3), so `Box<dyn Backend>` gives
-//! run-time backend choice. A backend owns kernels and resources; core owns algorithms.
+//! The `Backend` trait: small and object-safe, so `Box<dyn Backend>` gives run-time
+//! backend choice without generics leaking into user code. A backend owns kernels and
+//! resources; core owns algorithms.
 
 pub use crate::device::error::BackendError;
 use crate::device::handle::{Buf, ResourceId};
@@ -68,9 +69,16 @@ pub struct Capabilities {
     pub device: String,
     /// What kind of device it is.
     pub device_type: DeviceType,
+    /// Rays are traced by the driver's ray-tracing pipeline (Vulkan) rather than by a
+    /// software CWBVH traversal in a compute kernel.
     pub hardware_ray_tracing: bool,
+    /// Kernels use floating-point atomic adds (the photon map does not need them: it sums
+    /// in integer fixed point).
     pub float_atomics: bool,
+    /// The device offers 64-bit integer atomics (informational: the GPU kernels add 64-bit
+    /// sums as (lo, hi) pairs of `u32` words with a carry, which gives the same result).
     pub int64_atomics: bool,
+    /// Kernel times ([`PassTime`]) are device timestamps; otherwise host wall clock.
     pub timestamps: bool,
     /// Largest single buffer the device accepts (bytes).
     pub max_buffer_bytes: u64,
@@ -79,7 +87,10 @@ pub struct Capabilities {
 /// Wall or device time of one executed kernel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTime {
+    /// Registry name of the kernel.
     pub kernel: &'static str,
+    /// Its time in seconds (device timestamps or host wall clock, see
+    /// [`Capabilities::timestamps`]).
     pub seconds: f64,
 }
 
@@ -87,6 +98,7 @@ pub struct PassTime {
 pub trait Backend {
     /// Short name used on the command line (`cpu`, `opencl`, ...).
     fn name(&self) -> &'static str;
+    /// What the device can do, queried from the driver.
     fn capabilities(&self) -> Capabilities;
     /// Executes every step in order; returns the time of each kernel step.
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError>;

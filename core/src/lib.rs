@@ -1,7 +1,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::nonminimal_bool)]
 #![warn(missing_docs)]
 // NaN-rejecting comparisons such as `!(x > 0.0)` are deliberate: they are true for NaN.
-//! caustica core: the techniques written once against the [`Backend`](backend::Backend)
+//! caustica core: the techniques written once against the [`Backend`]
 //! trait. Core depends on no backend. It is built in layers; a lower layer never imports
 //! a higher one:
 //!

@@ -1,4 +1,4 @@
-//! Backend-neutral recordings (DESIGN 3, "core records, backends execute"): typed steps
+//! Backend-neutral recordings ("core records, backends execute"): typed steps
 //! over opaque typed handles ([`crate::device::handle`]). Core builds a [`Recording`], a
 //! backend executes it; data stays on the device between steps and recordings until
 //! freed, and is read back only through [`crate::backend::Backend::read`].
@@ -58,31 +58,45 @@ impl RecordedKernel {
 pub enum Step {
     /// Creates a zero-filled buffer of `bytes` bytes.
     Create {
+        /// Handle of the new buffer.
         id: ResourceId,
+        /// Its size (bytes).
         bytes: u64,
+        /// Its name, for errors, the frame plan and debuggers.
         label: &'static str,
     },
     /// Creates (or replaces) a buffer holding `data`.
     Upload {
+        /// Handle of the buffer.
         id: ResourceId,
+        /// The bytes it holds afterwards.
         data: Vec<u8>,
+        /// Its name, for errors, the frame plan and debuggers.
         label: &'static str,
     },
     /// Fills an existing buffer with zeros.
-    Clear { id: ResourceId },
+    Clear {
+        /// Handle of the buffer.
+        id: ResourceId,
+    },
     /// Runs a kernel.
     Kernel(RecordedKernel),
     /// Releases a buffer.
-    Free { id: ResourceId },
+    Free {
+        /// Handle of the buffer.
+        id: ResourceId,
+    },
 }
 
 /// An ordered list of steps.
 #[derive(Clone, Debug, Default)]
 pub struct Recording {
+    /// The steps, executed in order.
     pub steps: Vec<Step>,
 }
 
 impl Recording {
+    /// An empty recording.
     pub fn new() -> Recording {
         Recording::default()
     }
@@ -145,6 +159,7 @@ impl Recording {
         scene
     }
 
+    /// Records zero-filling `buf`.
     pub fn clear<T>(&mut self, buf: Buf<T>) {
         self.steps.push(Step::Clear { id: buf.id });
     }
@@ -154,6 +169,7 @@ impl Recording {
         self.steps.push(Step::Kernel(RecordedKernel::new(k.into())));
     }
 
+    /// Records the release of `buf`.
     pub fn free<T>(&mut self, buf: Buf<T>) {
         self.steps.push(Step::Free { id: buf.id });
     }

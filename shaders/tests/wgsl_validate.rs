@@ -1,8 +1,8 @@
 //! Every WGSL kernel module, assembled by [`caustica_shaders::module_source`] as both GPU
 //! backends assemble it (the shared files named by the kernel's `// needs:` line, in
 //! order, then the kernel file), parses and validates with naga; the shared structs' WGSL
-//! layouts equal core's `#[repr(C)]` layouts byte for byte (DESIGN 3: "layout is tested,
-//! not commented"); each kernel's bindings are those the host binds (group 0, in order,
+//! layouts equal core's `#[repr(C)]` layouts byte for byte (layout is tested,
+//! not commented); each kernel's bindings are those the host binds (group 0, in order,
 //! with the address space and access it expects); the crate's tables list every file
 //! under `wgsl/`.
 

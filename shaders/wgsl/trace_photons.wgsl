@@ -7,7 +7,7 @@
 // (an atomic slot counter): the set of photons equals the CPU's, their order does not,
 // and every later sum is order-free.
 //
-// Compiled variants (DESIGN 3): pipeline-overridable constants named as core's
+// Compiled variants (not branches): pipeline-overridable constants named as core's
 // TraceVariant switches; false compiles a material feature out. The backend builds one
 // pipeline per variant a frame plan asks for.
 override DIELECTRIC: bool = true;

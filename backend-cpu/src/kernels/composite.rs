@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+/// `direct + caustics` per texel (radiance, W/(sr m^2)), alpha 1.
 pub fn composite(direct: &[[f32; 4]], caustics: &[[f32; 4]]) -> Vec<[f32; 4]> {
     direct
         .par_iter()

@@ -25,6 +25,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// u64 words per `DepositTexel`: flux r, g, b, hit distance, photon count.
 const WORDS: usize = 5;
 
+/// Deposits every photon of `photons` into `map` (five `u64` words per pixel: flux r, g,
+/// b in flux quanta, hit distance in hit-distance quanta, photon count) and returns the
+/// counters it adds to (off screen, depth mismatch, deposited, underflow, saturated).
 pub fn deposit_screen(
     p: &DepositParams,
     gbuffer: &[GBufferTexel],
@@ -86,6 +89,9 @@ fn deposit_photon(
     c.bump(counter::DEPOSITED);
 }
 
+/// Caustic radiance per pixel from the photon map (W/(sr m^2) per channel); alpha: the
+/// mean hit distance of the pixel's photons (scene units). Zero where the pixel has no
+/// photons or sees no diffuse surface.
 pub fn resolve_caustics(
     p: &DepositParams,
     gbuffer: &[GBufferTexel],

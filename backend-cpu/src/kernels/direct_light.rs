@@ -16,6 +16,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
+/// Direct radiance per pixel (W/(sr m^2) per channel), alpha 1: diffuse pixels shaded with
+/// shadow rays, mirror and glass pixels through their specular chain, black where the
+/// pixel sees nothing.
 pub fn direct_light(
     scene: &SceneView,
     p: &DirectParams,

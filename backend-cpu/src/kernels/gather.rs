@@ -16,6 +16,8 @@ use caustica_core::math::footprint::pixel_footprint;
 use glam::Vec3;
 use rayon::prelude::*;
 
+/// Photon-weighted mean hit distance (scene units) per `tile_size^2` tile, row-major; 0 for
+/// tiles without photons.
 pub fn tile_hit_distance(p: &GatherParams, map: &[DepositTexel]) -> Vec<f32> {
     let (w, h, ts) = (p.camera.width, p.camera.height, p.tile_size);
     let (tw, th) = (w.div_ceil(ts), h.div_ceil(ts));
@@ -64,6 +66,9 @@ pub fn gather_radius_px(p: &GatherParams, g: &GBufferTexel, tile_hit_distance: f
     (world / pixel).min(p.max_radius_px as f32)
 }
 
+/// One pass (`p.axis`) of the edge-aware gather of `input` (caustic radiance): receiver
+/// pixels get the normalised weighted mean of their receiver neighbours, other pixels 0;
+/// alpha is copied from `input`.
 pub fn bilateral_gather(
     p: &GatherParams,
     gbuffer: &[GBufferTexel],

@@ -10,6 +10,7 @@ use caustica_core::device::layout::{
 use glam::Vec3;
 use rayon::prelude::*;
 
+/// The G-buffer of `cam`: one texel per pixel, row-major from the top-left.
 pub fn primary_gbuffer(scene: &SceneView, cam: &GpuCamera) -> Vec<GBufferTexel> {
     let (w, h) = (cam.width, cam.height);
     (0..w * h)

@@ -14,14 +14,18 @@ use caustica_core::math::fixed_point::join_u64;
 /// Photon counters accumulated per worker and merged (sums are order-independent).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Counters {
+    /// Counts indexed like the device counter buffer ([`counter`]); a 64-bit counter sums
+    /// in its first word and leaves the second unused.
     pub words: [u64; counter::WORDS],
 }
 
 impl Counters {
+    /// Adds one to counter `word`.
     pub fn bump(&mut self, word: usize) {
         self.words[word] += 1;
     }
 
+    /// The sum of two sets of counters.
     pub fn merge(mut self, o: Counters) -> Counters {
         for (a, b) in self.words.iter_mut().zip(o.words) {
             *a += b;

@@ -13,7 +13,7 @@
 //! Random dimensions: bounce 0 dims 0, 1 = grid jitter; bounce b dim 2 = Fresnel choice,
 //! dim 3 = dispersion channel.
 //!
-//! Variants (DESIGN 3): the const generics `DIELECTRIC`, `DISPERSION` and `ABSORPTION`
+//! Variants (compiled, not branched): the const generics `DIELECTRIC`, `DISPERSION` and `ABSORPTION`
 //! compile the dielectric, Cauchy-dispersion and Beer-Lambert code in or out, as the
 //! shader ports do with override constants, specialization constants and `-D` defines;
 //! [`trace_photons`] picks the monomorphisation of core's [`TraceVariant`]. A variant
@@ -39,17 +39,24 @@ use rayon::prelude::*;
 
 /// Stored photons in photon order, plus the batch's counters.
 pub struct TraceResult {
+    /// Stored photons, in photon order.
     pub photons: Vec<Photon>,
+    /// The batch's photon accounting.
     pub counters: Counters,
 }
 
 /// How one photon path ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PathEnd {
+    /// Stored on a diffuse surface after at least one specular interaction.
     Stored(Photon),
+    /// Reached a diffuse surface without a specular interaction (direct light).
     NoSpecular,
+    /// Left the scene.
     Escaped,
+    /// Power fell below the negligible threshold (or was zero at emission).
     Negligible,
+    /// Still travelling after `max_bounces` segments.
     BounceLimit,
 }
 

@@ -1,6 +1,6 @@
-// Mirror of core/src/fixed_point.rs, and 64-bit sums from 32-bit atomics: a u64 is a
+// Mirror of core/src/math/fixed_point.rs, and 64-bit sums from 32-bit atomics: a u64 is a
 // (lo, hi) pair of u32 words; adding to lo and carrying into hi gives the same final sum,
-// in any order, as a 64-bit atomic add (DESIGN 4).
+// in any order, as a 64-bit atomic add: the deposit stays exact and order-independent.
 
 typedef struct {
     uint units;

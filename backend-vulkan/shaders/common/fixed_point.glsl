@@ -1,7 +1,7 @@
-// Mirror of core/src/fixed_point.rs and backend-opencl/kernels/fixed_point.cl, and 64-bit
+// Mirror of core/src/math/fixed_point.rs and backend-opencl/kernels/common/fixed_point.cl, and 64-bit
 // sums from 32-bit atomics: a u64 is a (lo, hi) pair of u32 words; adding to lo and
 // carrying into hi gives the same final sum, in any order, as a 64-bit atomic add
-// (DESIGN 4).
+// (exact and order-independent).
 //
 // GLSL functions cannot take a pointer to buffer memory, so the atomic helpers of
 // fixed_point.cl live beside the buffer they add into: trace_photons.rgen's

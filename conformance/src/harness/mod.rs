@@ -1,6 +1,7 @@
-//! What every comparison with the CPU reference shares (DESIGN 3 and 4).
+//! What every comparison with the CPU reference shares.
 //!
-//! The suite compares at two levels, as DESIGN 4 asks:
+//! The suite compares at two levels, because floating point differs between devices and
+//! refraction chains are chaotic (a tiny difference can send one photon elsewhere):
 //!
 //! - **per kernel, on fixed inputs** ([`crate::kernels`]): each kernel is driven through a
 //!   `Recording` on both backends with *the same* input buffers (the scene, and for the

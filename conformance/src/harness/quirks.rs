@@ -1,5 +1,4 @@
-//! Known device quirks, as data (DESIGN 3: "known device quirks kept as data (backend,
-//! device substring, reason), not as cfgs").
+//! Known device quirks, kept as data (backend, device substring, reason), not as cfgs.
 //!
 //! A [`Quirk`] holds one case back on the backend and devices it names; [`quirk`] is the
 //! one function the suite asks, and no other code path of the suite is keyed on a backend's

@@ -25,7 +25,7 @@
 //! - Integer sums (the fixed-point photon map and counters) are exact and
 //!   order-independent on every backend: inputs that agree give bitwise-equal sums.
 //!
-//! A tolerance is never widened to make a backend pass (DESIGN 4): a failure is a bug in
+//! A tolerance is never widened to make a backend pass: a failure is a bug in
 //! the backend, in the CPU reference, or in an argument here, to be understood first.
 
 use crate::strategies::MIN_CURVATURE_RADIUS;

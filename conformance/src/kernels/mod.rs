@@ -1,4 +1,5 @@
-//! Per-kernel checks on fixed inputs (DESIGN 4): one file per kernel, each comparing the
+//! Per-kernel checks on fixed inputs (the first level of comparison, see
+//! [`crate::harness`]): one file per kernel, each comparing the
 //! kernel's outputs on a candidate with the reference's, on the same input buffers
 //! ([`crate::harness::fixture`]), with the tolerances of [`crate::harness::tolerance`].
 //!

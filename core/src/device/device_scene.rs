@@ -1,4 +1,4 @@
-//! A scene flattened into the `Pod` arrays every backend uploads (DESIGN 3): vertices,
+//! A scene flattened into the `Pod` arrays every backend uploads: vertices,
 //! triangles, materials, lights and an obvhs compressed wide BVH (CWBVH, 80-byte nodes
 //! uploaded as 5 x `[u32; 4]`). Triangles are reordered into BVH leaf order, so the
 //! BVH's primitive index *is* the triangle index on every backend.
@@ -16,20 +16,26 @@ use std::time::Duration;
 /// Flattened scene arrays, ready for upload.
 #[derive(Clone, Debug)]
 pub struct DeviceScene {
+    /// Vertices of every tessellated object (world space).
     pub vertices: Vec<GpuVertex>,
+    /// Triangles in BVH leaf order (the BVH's primitive index is the triangle index).
     pub triangles: Vec<GpuTriangle>,
+    /// Materials in name order (the scene's `BTreeMap`), indexed by `GpuTriangle::material`.
     pub materials: Vec<GpuMaterial>,
+    /// Lights in scene order.
     pub lights: Vec<GpuLight>,
     /// CWBVH nodes, each 5 x `[u32; 4]` (80 bytes).
     pub bvh_nodes: Vec<[u32; 4]>,
-    /// Bounds of all geometry and of the caustic casters (specular objects).
+    /// Bounds of all geometry (world space).
     pub bounds: Aabb,
+    /// Bounds of the caustic casters, the mirror and dielectric objects (world space; empty
+    /// when there are none).
     pub caster_bounds: Aabb,
     /// True when some dielectric has a non-zero Cauchy B.
     pub has_dispersion: bool,
 }
 
-/// Words per CWBVH node in `bvh_nodes`.
+/// `[u32; 4]` vectors per CWBVH node in `bvh_nodes` (80 bytes).
 pub const BVH_NODE_VEC4S: usize = 5;
 
 impl DeviceScene {

@@ -1,4 +1,4 @@
-//! Opaque typed handles to device resources (DESIGN 3: an id plus `PhantomData`, as
+//! Opaque typed handles to device resources (an id plus `PhantomData`, as
 //! kajiya's render-graph handles). A [`Buf`] names a buffer a backend holds; core never
 //! sees device memory, only these ids.
 
@@ -21,7 +21,9 @@ impl ResourceId {
 /// Typed handle to a device buffer of `len` elements of `T`.
 #[derive(Debug)]
 pub struct Buf<T> {
+    /// The resource's id, by which the backend holds the buffer.
     pub id: ResourceId,
+    /// Number of `T` elements.
     pub len: u32,
     _t: PhantomData<fn() -> T>,
 }
@@ -57,9 +59,14 @@ pub type ImageBuf = Buf<[f32; 4]>;
 /// Scene buffers made by `prepare_scene`.
 #[derive(Clone, Copy, Debug)]
 pub struct SceneArgs {
+    /// Mesh vertices ([`GpuVertex`]).
     pub vertices: Buf<GpuVertex>,
+    /// Triangles in BVH leaf order ([`GpuTriangle`]).
     pub triangles: Buf<GpuTriangle>,
+    /// Material table ([`GpuMaterial`]).
     pub materials: Buf<GpuMaterial>,
+    /// Lights ([`GpuLight`]).
     pub lights: Buf<GpuLight>,
+    /// CWBVH nodes, 5 x `[u32; 4]` (80 bytes) each.
     pub bvh_nodes: Buf<[u32; 4]>,
 }

@@ -13,9 +13,13 @@ pub enum LaunchArg {
     /// A device buffer, bound with its logical size `bytes`; the launch reads or writes
     /// up to `need` bytes of it.
     Buffer {
+        /// The buffer.
         id: ResourceId,
+        /// Its logical size (bytes): elements x element size.
         bytes: u64,
+        /// Bytes the launch may read or write; the buffer must hold at least this many.
         need: u64,
+        /// Name of the binding (for error messages).
         what: &'static str,
     },
     /// A parameter block (`#[repr(C)]` Pod bytes): a uniform buffer in WGSL, a small
@@ -30,13 +34,16 @@ pub enum LaunchArg {
 /// excess of the last group).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Launch {
+    /// Registry name of the kernel.
     pub kernel: &'static str,
     /// Compiled switches of this launch's variant (empty for kernels without variants);
     /// see [`crate::kernels::TraceVariant`].
     pub constants: Vec<(&'static str, u32)>,
+    /// Number of work-items (one per pixel, photon slot or tile, as the kernel declares).
     pub threads: u64,
     /// Threads per workgroup (the kernel's declared size; its shaders declare the same).
     pub workgroup_size: u32,
+    /// Arguments in declaration order.
     pub args: Vec<LaunchArg>,
 }
 

@@ -1,5 +1,5 @@
-//! `#[repr(C)]` + `bytemuck::Pod` data shared with every backend's kernels (DESIGN 3).
-//! Every struct is built from 4-byte scalars and 16-byte-aligned groups so that WGSL,
+//! `#[repr(C)]` + `bytemuck::Pod` data shared with every backend's kernels, defined once
+//! here. Every struct is built from 4-byte scalars and 16-byte-aligned groups so that WGSL,
 //! GLSL std430 and OpenCL C see the same layout; sizes are asserted below.
 //!
 //! Spaces: positions and directions are world space; `depth` is view depth (distance
@@ -13,9 +13,13 @@ use glam::Vec3;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuVertex {
+    /// World-space position (scene units).
     pub position: [f32; 3],
+    /// Texture coordinate u.
     pub u: f32,
+    /// Unit shading normal (world space); closed shapes point it outward.
     pub normal: [f32; 3],
+    /// Texture coordinate v.
     pub v: f32,
 }
 
@@ -23,14 +27,19 @@ pub struct GpuVertex {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
+    /// Indices of the three vertices in the vertex array.
     pub indices: [u32; 3],
+    /// Index into the material table (the scene's materials in name order).
     pub material: u32,
 }
 
 /// `GpuMaterial::kind` values.
 pub mod material_kind {
+    /// Lambertian receiver: stores photons, shaded by `direct_light`.
     pub const DIFFUSE: u32 = 0;
+    /// Perfect specular reflector (a caustic caster).
     pub const MIRROR: u32 = 1;
+    /// Smooth refracting interface such as glass or water (a caustic caster).
     pub const DIELECTRIC: u32 = 2;
 }
 
@@ -39,33 +48,49 @@ pub mod material_kind {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
+    /// One of [`material_kind`].
     pub kind: u32,
+    /// Index of refraction at 550 nm relative to the surrounding medium (dielectrics).
     pub ior: f32,
+    /// Cauchy coefficient `B` (um^2) of `n(lambda) = A + B / lambda^2`; 0: no dispersion.
     pub cauchy_b: f32,
+    /// Padding to the 16-byte boundary.
     pub _pad: u32,
+    /// rgb: diffuse albedo or mirror reflectance per channel in [0, 1] (1 for dielectrics); `w` unused.
     pub color: [f32; 4],
+    /// rgb: Beer-Lambert absorption coefficient inside a dielectric (1/scene unit); `w` unused.
     pub absorption: [f32; 4],
 }
 
 /// `GpuLight::kind` values.
 pub mod light_kind {
+    /// Isotropic point light.
     pub const POINT: u32 = 0;
+    /// Point light restricted to a cone with a smooth falloff.
     pub const SPOT: u32 = 1;
+    /// Parallel light from infinitely far away.
     pub const DIRECTIONAL: u32 = 2;
 }
 
 /// Light: `position` (point, spot), unit `direction` the light travels (spot axis,
-/// directional), `radiance_scale` = intensity in W/sr (point, spot) or irradiance in W/m^2
+/// directional), `intensity` in W/sr (point, spot) or irradiance in W/m^2
 /// (directional); spot cone cosines.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
+    /// One of [`light_kind`].
     pub kind: u32,
+    /// Cosine of the spot's inner half-angle (full intensity inside); -1 for point lights.
     pub cos_inner: f32,
+    /// Cosine of the spot's outer half-angle (zero intensity outside); -1 for point lights.
     pub cos_outer: f32,
+    /// Padding to the 16-byte boundary.
     pub _pad: u32,
+    /// World-space position, `w = 1` (point and spot lights; unused for directional).
     pub position: [f32; 4],
+    /// Unit world-space direction the light travels, `w = 0` (spot axis, directional).
     pub direction: [f32; 4],
+    /// rgb: intensity in W/sr (point, spot) or irradiance in W/m^2 (directional); `w` unused.
     pub intensity: [f32; 4],
 }
 
@@ -74,13 +99,21 @@ pub struct GpuLight {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCamera {
+    /// Eye position (world space).
     pub position: [f32; 3],
+    /// Tangent of half the horizontal field of view.
     pub tan_half_fov_x: f32,
+    /// Unit viewing direction (world space); view depth is measured along it.
     pub forward: [f32; 3],
+    /// Tangent of half the vertical field of view.
     pub tan_half_fov_y: f32,
+    /// Unit right vector (world space): screen x grows along it.
     pub right: [f32; 3],
+    /// Image width (pixels).
     pub width: u32,
+    /// Unit up vector (world space), orthogonal to `forward` and `right`: screen y grows against it.
     pub up: [f32; 3],
+    /// Image height (pixels).
     pub height: u32,
 }
 
@@ -91,13 +124,21 @@ pub struct GpuCamera {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GBufferTexel {
+    /// World-space position of the first hit.
     pub position: [f32; 3],
+    /// View depth of the first hit (scene units); 0 on a miss.
     pub depth: f32,
+    /// Unit shading normal (world space), turned towards the camera.
     pub normal: [f32; 3],
+    /// 1 for diffuse surfaces, 0 for mirrors and dielectrics.
     pub roughness: f32,
+    /// The material's `color`: diffuse albedo, mirror reflectance, 1 for dielectrics.
     pub albedo: [f32; 3],
+    /// Index into the material table; [`NO_MATERIAL`] on a miss.
     pub material: u32,
+    /// Interpolated texture coordinates.
     pub uv: [f32; 2],
+    /// Distance from the eye to the first hit along the pixel's ray (scene units).
     pub view_distance: f32,
     /// Bit flags, see [`gbuffer_flags`].
     pub flags: u32,
@@ -119,9 +160,13 @@ pub mod gbuffer_flags {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Photon {
+    /// World-space point where the photon met the diffuse surface.
     pub position: [f32; 3],
+    /// Length of the photon's last segment (scene units).
     pub hit_distance: f32,
+    /// Flux carried by the photon (W per channel).
     pub flux: [f32; 3],
+    /// Unit direction of travel as it arrived (world space), packed octahedrally.
     pub direction: u32,
 }
 
@@ -132,8 +177,11 @@ pub struct Photon {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct DepositTexel {
+    /// Summed flux per channel (r, g, b), in flux quanta.
     pub flux: [[u32; 2]; 3],
+    /// Summed hit distance of the deposited photons, in hit-distance quanta.
     pub hit_distance: [u32; 2],
+    /// Number of photons deposited in the pixel.
     pub photons: [u32; 2],
 }
 
@@ -150,25 +198,36 @@ pub mod emission_kind {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TraceParams {
+    /// Index of the emitting light in the light buffer.
     pub light: u32,
+    /// One of [`emission_kind`]: the shape of the emission domain.
     pub emission: u32,
+    /// Width of the light's stratified emission grid (photons).
     pub grid_w: u32,
+    /// Height of the light's stratified emission grid (photons).
     pub grid_h: u32,
+    /// Grid index of the batch's first photon (row-major).
     pub first: u32,
+    /// Photons in this batch (one thread each).
     pub count: u32,
+    /// The light's RNG seed (the frame seed hashed with the light index).
     pub seed: u32,
+    /// Longest photon path, in ray segments.
     pub max_bounces: u32,
     /// Cone apex / rectangle corner (world); `w`: cosine of the cone half-angle.
     pub origin: [f32; 4],
     /// Cone axis / ray direction (unit, world); `w` unused.
     pub axis: [f32; 4],
+    /// Rectangle edge `u` (world, scene units; whole edge, not half); `w` unused; zero for cones.
     pub rect_u: [f32; 4],
+    /// Rectangle edge `v` (world, scene units; whole edge, not half); `w` unused; zero for cones.
     pub rect_v: [f32; 4],
     /// Flux of each photon at emission (W per channel; seed 000 Eqs. 1 and 3); `w`: the
     /// relative power below which a photon is dropped as negligible.
     pub photon_flux: [f32; 4],
     /// Flux quantum (W) of the fixed-point stored-flux counters.
     pub flux_quantum: f32,
+    /// Padding to the 16-byte boundary.
     pub _pad: [u32; 3],
 }
 
@@ -176,6 +235,7 @@ pub struct TraceParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct DepositParams {
+    /// The frame's camera (projects photons to pixels, gives the pixel footprint).
     pub camera: GpuCamera,
     /// Flux per fixed-point unit (W).
     pub flux_quantum: f32,
@@ -184,6 +244,7 @@ pub struct DepositParams {
     /// A photon is stored only if its view depth is within `depth_tolerance * depth` of the
     /// G-buffer depth at its pixel.
     pub depth_tolerance: f32,
+    /// Slots in the photon buffer (photons per batch at most).
     pub photon_capacity: u32,
 }
 
@@ -192,11 +253,15 @@ pub struct DepositParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GatherParams {
+    /// The frame's camera (pixel size at a depth, image size).
     pub camera: GpuCamera,
     /// World-space blur radius per unit hit distance (the source's "roughness", 0.07).
     pub roughness: f32,
+    /// Lower clamp of the tile's mean hit distance (scene units).
     pub hit_distance_min: f32,
+    /// Upper clamp of the tile's mean hit distance (scene units).
     pub hit_distance_max: f32,
+    /// Largest gather radius (pixels).
     pub max_radius_px: u32,
     /// Depth weight `exp(-|dz| / (sigma_depth * z))`.
     pub sigma_depth: f32,
@@ -204,8 +269,11 @@ pub struct GatherParams {
     pub normal_power: f32,
     /// 0: horizontal pass, 1: vertical pass.
     pub axis: u32,
+    /// Edge of the square hit-distance tiles (pixels).
     pub tile_size: u32,
+    /// Hit distance per fixed-point unit of the photon map (scene units).
     pub hit_distance_quantum: f32,
+    /// Padding to the 16-byte boundary.
     pub _pad: [u32; 3],
 }
 
@@ -213,26 +281,39 @@ pub struct GatherParams {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct DirectParams {
+    /// The frame's camera (one ray per pixel for mirror and glass pixels).
     pub camera: GpuCamera,
+    /// Number of lights in the light buffer to shade with.
     pub light_count: u32,
     /// Longest specular chain followed from a mirror/glass pixel to a diffuse surface.
     pub max_specular_depth: u32,
     /// Chains whose weight falls below this are cut.
     pub min_weight: f32,
+    /// Padding to the 16-byte boundary.
     pub _pad: u32,
 }
 
 /// Word offsets into the photon counter buffer (`u32` words; 64-bit sums as lo, hi).
 pub mod counter {
+    /// Photons stored on a diffuse surface after at least one specular interaction.
     pub const STORED: usize = 0;
+    /// Photons that reached a diffuse surface without a specular interaction (direct light).
     pub const NO_SPECULAR: usize = 1;
+    /// Photons that left the scene.
     pub const ESCAPED: usize = 2;
+    /// Photons dropped when their power fell below the negligible threshold.
     pub const NEGLIGIBLE: usize = 3;
+    /// Photons still travelling after `max_bounces` segments.
     pub const BOUNCE_LIMIT: usize = 4;
+    /// Stored photons that project outside the view or behind the camera.
     pub const OFF_SCREEN: usize = 5;
+    /// Stored photons rejected at their pixel: not a receiver, depth mismatch, or arriving from behind.
     pub const DEPTH_MISMATCH: usize = 6;
+    /// Stored photons added to the screen-space photon map.
     pub const DEPOSITED: usize = 7;
+    /// Positive photon channel values that rounded to zero flux quanta.
     pub const UNDERFLOW: usize = 8;
+    /// Photon channel values clamped to `u32::MAX` flux quanta.
     pub const SATURATED: usize = 9;
     /// u64: ray segments traced.
     pub const RAYS: usize = 10;
@@ -294,12 +375,14 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
 /// A point on a triangle, interpolated from its vertices (world space).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
+    /// World-space position (scene units).
     pub position: Vec3,
     /// Unit geometric normal, turned to the side of the interpolated vertex normals (for
     /// closed shapes: outward). Used to tell inside from outside and to offset rays.
     pub geometric_normal: Vec3,
     /// Unit interpolated shading normal (same side as `geometric_normal`).
     pub shading_normal: Vec3,
+    /// Interpolated texture coordinates.
     pub uv: glam::Vec2,
 }
 
@@ -336,7 +419,7 @@ pub fn surface_point(a: &GpuVertex, b: &GpuVertex, c: &GpuVertex, u: f32, v: f32
 
 /// Surface area (scene units^2) that pixel `index` (row-major) of `cam` covers on the
 /// surface its G-buffer texel `g` sees: the footprint at the texel's view depth (Eq. 4)
-/// over the view and surface cosines ([`pixel_surface_area`]). Resolve divides a
+/// over the view and surface cosines ([`pixel_surface_area`](crate::math::footprint::pixel_surface_area)). Resolve divides a
 /// pixel's flux by it.
 pub fn gbuffer_pixel_area(cam: &GpuCamera, index: u32, g: &GBufferTexel) -> f32 {
     let ray = camera_ray(cam, index % cam.width, index / cam.width);

@@ -28,20 +28,29 @@ use glam::Vec3;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PointEmission {
+    /// The whole sphere of directions, as the source's pseudocode.
     Sphere,
+    /// The cone from the light that bounds the casters' bounding sphere (the whole sphere
+    /// when the light is inside it).
     CasterCone,
 }
 
 /// Emission domain of one light, in the form of `TraceParams` fields.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionDomain {
+    /// One of [`emission_kind`]: cone or rectangle.
     pub kind: u32,
+    /// Cone apex (the light's position) or rectangle corner (world space).
     pub origin: Vec3,
+    /// Unit cone axis, or the rays' direction for a rectangle (world space).
     pub axis: Vec3,
+    /// Cosine of the cone's half-angle (-1: the whole sphere; 1 for rectangles).
     pub cos_max: f32,
+    /// First rectangle edge (world space, scene units; zero for cones).
     pub rect_u: Vec3,
+    /// Second rectangle edge (world space, scene units; zero for cones).
     pub rect_v: Vec3,
-    /// Solid angle (cone) or area (rectangle) covered by the domain.
+    /// Solid angle (cone, sr) or area (rectangle, scene units^2) covered by the domain.
     pub measure: f32,
     /// Flux of the whole domain (W per channel) before spot falloff.
     pub flux: Vec3,

@@ -3,12 +3,16 @@
 /// Linear RGBA f32 image, row-major from the top-left.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Width (pixels).
     pub width: u32,
+    /// Height (pixels).
     pub height: u32,
+    /// `width * height` texels, row-major from the top-left (linear RGBA).
     pub pixels: Vec<[f32; 4]>,
 }
 
 impl Image {
+    /// An image from its pixels; panics unless `pixels.len() == width * height`.
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Image {
         assert_eq!(pixels.len(), (width * height) as usize);
         Image {
@@ -18,6 +22,7 @@ impl Image {
         }
     }
 
+    /// The pixel at column `x`, row `y` (from the top-left).
     pub fn at(&self, x: u32, y: u32) -> [f32; 4] {
         self.pixels[(y * self.width + x) as usize]
     }

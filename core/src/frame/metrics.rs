@@ -1,4 +1,4 @@
-//! Error metrics against a reference image (DESIGN 7): all over the pixels that receive
+//! Error metrics against a reference image: all over the pixels that receive
 //! caustics, the mask taken from the reference. Images are linear radiance
 //! (W/(sr m^2) per channel); sums are f64.
 //!
@@ -25,11 +25,14 @@ pub const MASK_FRACTION: f32 = 1e-4;
 /// The caustic mask of a reference.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CausticMask {
+    /// Per pixel (row-major): whether it belongs to the mask.
     pub inside: Vec<bool>,
+    /// Number of pixels in the mask.
     pub count: usize,
 }
 
 impl CausticMask {
+    /// The pixels whose reference luminance exceeds [`MASK_FRACTION`] of its maximum.
     pub fn from_reference(r: &Image) -> CausticMask {
         let lum: Vec<f32> = r
             .pixels
@@ -57,12 +60,14 @@ impl CausticMask {
 /// Error of one image against a reference.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct ErrorStats {
+    /// Relative MSE over the mask (dimensionless; 0 perfect, 1 as wrong as a black image).
     pub relative_mse: f64,
     /// W/(sr m^2).
     pub rmse: f64,
     /// Mean LDR-FLIP over the mask (0 identical, 1 maximally different); `None` when the
     /// mask is empty.
     pub flip: Option<f64>,
+    /// Pixels in the caustic mask.
     pub mask_pixels: usize,
 }
 
@@ -104,11 +109,16 @@ pub fn rmse(x: &Image, r: &Image, mask: &CausticMask) -> f64 {
 /// Relative bias and variance of repeated renders (different seeds) against a reference.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct BiasVariance {
+    /// `sum (mean_k x_k - r) / sum r` over the mask and rgb (dimensionless, signed).
     pub relative_bias: f64,
+    /// `sum var_k(x_k) / sum r^2` over the mask and rgb (sample variance, dimensionless).
     pub relative_variance: f64,
+    /// Number of renders `K`.
     pub samples: usize,
 }
 
+/// Relative bias and variance of `samples` (renders with different seeds) against
+/// reference `r` over `mask` (0 for both when the mask's reference is black).
 pub fn bias_variance(samples: &[Image], r: &Image, mask: &CausticMask) -> BiasVariance {
     let k = samples.len();
     let (mut bias, mut var, mut sum_r, mut sum_r2) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);

@@ -1,4 +1,4 @@
-//! The frame plan (DESIGN 3, "leave out what a scene does not need"), the part every
+//! The frame plan ("leave out what a scene does not need"), the part every
 //! technique shares: derived from the scene and the settings before any work, it says
 //! which lights emit photons (and why the others do not), which material features the
 //! photon kernel needs (its compiled variant), which outputs the caller asked for, which
@@ -17,7 +17,9 @@ use serde::Serialize;
 /// Material features used by the scene's objects (materials no object uses do not count).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct SceneFeatures {
+    /// Some object is a mirror.
     pub mirrors: bool,
+    /// Some object is a dielectric.
     pub dielectrics: bool,
     /// A dielectric with a non-zero Cauchy B.
     pub dispersion: bool,
@@ -26,6 +28,7 @@ pub struct SceneFeatures {
 }
 
 impl SceneFeatures {
+    /// The features of the materials the scene's objects use.
     pub fn of(scene: &Scene) -> SceneFeatures {
         let mut f = SceneFeatures::default();
         for o in &scene.objects {
@@ -59,23 +62,31 @@ impl SceneFeatures {
 /// Whether a light emits photons this frame, and why (not).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct LightPlan {
+    /// Index of the light in [`Scene::lights`].
     pub light: u32,
+    /// Whether it emits photons this frame.
     pub emits: bool,
+    /// Why it emits or not, in words.
     pub reason: String,
 }
 
 /// A pass of the frame: whether it runs, and why.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PassPlan {
+    /// Kernel name of the pass.
     pub name: String,
+    /// Whether it runs this frame.
     pub runs: bool,
+    /// Why it runs or not, in words.
     pub reason: String,
 }
 
 /// A device buffer the technique created (name and bytes).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BufferPlan {
+    /// The buffer's label.
     pub name: String,
+    /// Its size (bytes).
     pub bytes: u64,
 }
 
@@ -84,9 +95,11 @@ pub struct BufferPlan {
 pub struct FramePlan {
     /// False: pruning off (every pass, buffer and feature; the comparison baseline).
     pub prune: bool,
+    /// Material features of the scene's objects.
     pub features: SceneFeatures,
     /// The outputs the caller asked for, by name.
     pub outputs: Vec<String>,
+    /// Every light of the scene, in order, with whether it emits and why.
     pub lights: Vec<LightPlan>,
     /// The `trace_photons` variant the photon passes run (`None`: no photon pass).
     pub trace_variant: Option<TraceVariant>,

@@ -17,39 +17,50 @@ pub struct Discards {
     pub bounce_limit: u64,
     /// Landed outside the view (or behind the camera).
     pub off_screen: u64,
-    /// Landed where the G-buffer sees another surface (depth test failed).
+    /// Landed on a pixel that sees no diffuse surface, another surface (depth test
+    /// failed), or the surface's back side.
     pub depth_mismatch: u64,
 }
 
 /// A pass that ran, with its time.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct PassStat {
+    /// Kernel name of the pass.
     pub name: String,
     /// Sum over all its dispatches this frame (milliseconds, host wall time or device
     /// timestamps as `timing` says).
     pub ms: f64,
+    /// Number of dispatches this frame.
     pub dispatches: u32,
 }
 
 /// A pass that did not run, and why.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct SkippedPass {
+    /// Kernel name of the pass.
     pub name: String,
+    /// Why it did not run.
     pub reason: String,
 }
 
 /// Everything measured about one frame.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrameStats {
+    /// Registry name of the technique (`sspm`, ...).
     pub technique: String,
+    /// Name of the backend (`cpu`, `opencl`, `wgpu`, `vulkan`).
     pub backend: String,
+    /// The device's name, as the backend reports it.
     pub device: String,
+    /// Image width (pixels).
     pub width: u32,
+    /// Image height (pixels).
     pub height: u32,
     /// Wall time of the whole frame (ms), including host work and readback of counters.
     pub frame_ms: f64,
     /// "host wall clock" or "device timestamps".
     pub timing: String,
+    /// The passes that ran, in the order they first ran, with their times.
     pub passes: Vec<PassStat>,
     /// Passes the frame plan left out, each with its reason.
     pub skipped: Vec<SkippedPass>,
@@ -58,6 +69,7 @@ pub struct FrameStats {
     /// The frame plan: every pass with why it runs or not, the lights that emit, the
     /// scene's material features, the requested outputs and the buffers created.
     pub plan: Option<crate::frame::plan::FramePlan>,
+    /// Photons emitted: the photon grid size times the number of emitting lights.
     pub photons_emitted: u64,
     /// Ray segments traced for photons (every bounce counts).
     pub photon_rays_traced: u64,
@@ -65,6 +77,7 @@ pub struct FrameStats {
     pub photons_stored: u64,
     /// Stored photons that passed the screen tests and were added to the photon map.
     pub photons_deposited: u64,
+    /// Photons neither stored nor deposited, by reason.
     pub discarded: Discards,
     /// Emitted flux (W per channel) over all emission domains.
     pub emitted_flux: [f64; 3],
@@ -78,6 +91,7 @@ pub struct FrameStats {
     pub flux_quantum: f64,
     /// Device bytes held by the technique this frame (peak).
     pub bytes_allocated: u64,
+    /// Trace-and-deposit batches run.
     pub batches: u32,
     /// Per-pass timing by kernel name (ms), for quick lookup.
     pub pass_ms: BTreeMap<String, f64>,
@@ -103,6 +117,7 @@ impl FrameStats {
         *self.pass_ms.entry(name.into()).or_default() += ms;
     }
 
+    /// Records pass `name` as skipped, with its reason.
     pub fn skip(&mut self, name: &str, reason: impl Into<String>) {
         self.skipped.push(SkippedPass {
             name: name.into(),

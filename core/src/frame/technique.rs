@@ -13,7 +13,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Progress of a frame's photon work (called after every batch).
 #[derive(Clone, Copy, Debug)]
 pub struct Progress {
+    /// Photons traced and deposited so far this frame.
     pub photons_done: u64,
+    /// Photons the frame emits in all.
     pub photons_total: u64,
 }
 

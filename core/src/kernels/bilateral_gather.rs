@@ -12,10 +12,15 @@ use crate::device::layout::{GBufferTexel, GatherParams};
 /// normal weights from the G-buffer, normalised. Reads `input`, writes `out` (radiance).
 #[derive(Clone, Copy, Debug)]
 pub struct BilateralGather {
+    /// Gather parameters; `axis` picks the pass direction.
     pub params: GatherParams,
+    /// The frame's G-buffer (depth, normal, receiver flag).
     pub gbuffer: Buf<GBufferTexel>,
+    /// Mean hit distance per tile from `tile_hit_distance` (scene units).
     pub tiles: Buf<f32>,
+    /// Caustic radiance to filter (W/(sr m^2) per channel); its alpha is passed through.
     pub input: ImageBuf,
+    /// Filtered caustic radiance; alpha copied from `input`.
     pub out: ImageBuf,
 }
 

@@ -7,8 +7,11 @@ use crate::device::handle::ImageBuf;
 /// `out.rgb = direct.rgb + caustics.rgb`, `out.a = 1` (radiance, W/(sr m^2)).
 #[derive(Clone, Copy, Debug)]
 pub struct Composite {
+    /// Direct-light radiance.
     pub direct: ImageBuf,
+    /// Caustic radiance (the filtered caustics).
     pub caustics: ImageBuf,
+    /// The sum.
     pub out: ImageBuf,
 }
 

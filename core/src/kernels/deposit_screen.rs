@@ -12,11 +12,17 @@ use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel, Photon};
 /// off-screen and depth-mismatched photons are counted in `counters`.
 #[derive(Clone, Copy, Debug)]
 pub struct DepositScreen {
+    /// Camera, fixed-point quanta, depth tolerance and photon capacity.
     pub params: DepositParams,
+    /// The frame's G-buffer (receiver flag, depth, normal per pixel).
     pub gbuffer: Buf<GBufferTexel>,
+    /// The batch's stored photons.
     pub photons: Buf<Photon>,
+    /// `[0]`: number of photons in `photons`.
     pub photon_count: Buf<u32>,
+    /// Photon counters ([`crate::device::layout::counter`]) the kernel adds to.
     pub counters: Buf<u32>,
+    /// Screen-space photon map, one texel per pixel, summed over the frame's batches.
     pub photon_map: Buf<DepositTexel>,
 }
 

@@ -18,9 +18,13 @@ pub const MAX_SPECULAR_DEPTH: u32 = 30;
 /// radiance in W/(sr m^2) per channel, alpha 1.
 #[derive(Clone, Copy, Debug)]
 pub struct DirectLight {
+    /// The uploaded scene.
     pub scene: SceneArgs,
+    /// Camera, light count and specular-chain limits.
     pub params: DirectParams,
+    /// The frame's G-buffer.
     pub gbuffer: Buf<GBufferTexel>,
+    /// Direct radiance (W/(sr m^2) per channel), alpha 1.
     pub out: ImageBuf,
 }
 

@@ -1,10 +1,10 @@
-//! The one list of kernels (DESIGN 3). Each kernel is declared once, in its own file
+//! The one list of kernels. Each kernel is declared once, in its own file
 //! (`kernels/<name>.rs`): a struct of typed arguments whose doc comment is the kernel's
 //! contract (what it reads and writes, units, spaces), and a [`KernelDecl`] impl giving
 //! its name, its bindings in launch order with their access, its workgroup size, its
 //! compiled switches and its lowering (argument checks, buffer sizes, thread count).
 //!
-//! From the list in [`kernel_list!`] below everything else is derived: the [`Kernel`] enum
+//! From the list in `kernel_list!` below everything else is derived: the [`Kernel`] enum
 //! a [`crate::recording::Recording`] carries, the registry [`KERNELS`], the lowering of a
 //! recorded kernel to a [`Launch`] (checked binding by binding against the declaration),
 //! the Vulkan descriptor types ([`KernelInfo::descriptor_bindings`]) and the WGSL binding
@@ -12,7 +12,7 @@
 //! CPU backend matches [`Kernel`] exhaustively, so a new kernel without a CPU arm does
 //! not compile.
 //!
-//! Adding a kernel: a file here, one line in [`kernel_list!`], then its CPU function, WGSL,
+//! Adding a kernel: a file here, one line in `kernel_list!`, then its CPU function, WGSL,
 //! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
 
 mod bilateral_gather;
@@ -58,7 +58,9 @@ pub enum BindingKind {
 /// One launch argument of a kernel, in the order of its OpenCL C signature.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
+    /// Name of the argument: its OpenCL C parameter and WGSL binding.
     pub name: &'static str,
+    /// How it is bound.
     pub kind: BindingKind,
 }
 
@@ -68,7 +70,7 @@ pub const fn bind(name: &'static str, kind: BindingKind) -> Binding {
 }
 
 /// The scene's buffers as every traced kernel binds them first: vertices, triangles,
-/// materials, lights, the CWBVH nodes and their count. Vulkan replaces `bvh_nodes` (and
+/// materials, lights, the CWBVH nodes and their count. Vulkan replaces `nodes` (and
 /// its count) with the driver-built acceleration structure at binding 0.
 pub const SCENE_BINDINGS: [Binding; 6] = [
     bind("vertices", BindingKind::Read),
@@ -100,6 +102,7 @@ pub const fn with_scene<const M: usize, const N: usize>(rest: [Binding; M]) -> [
 /// A kernel's declaration: everything a backend needs to know about it but its code.
 #[derive(Clone, Copy, Debug)]
 pub struct KernelInfo {
+    /// Registry name; also the stem of the kernel's shader files.
     pub name: &'static str,
     /// Launch arguments in order (the OpenCL C signature; WGSL and GLSL skip counts).
     pub bindings: &'static [Binding],
@@ -108,7 +111,7 @@ pub struct KernelInfo {
     /// Traces rays against the scene: a ray-tracing pipeline on Vulkan, a software CWBVH
     /// traversal elsewhere.
     pub traced: bool,
-    /// Compiled switches (DESIGN 3: variants are compiled, not branched), in
+    /// Compiled switches (variants are compiled, not branched), in
     /// specialization-constant id order.
     pub switches: &'static [&'static str],
     /// Techniques that use it.
@@ -120,8 +123,11 @@ pub struct KernelInfo {
 pub enum ShaderBinding {
     /// The scene's acceleration structure (Vulkan ray-tracing kernels, binding 0).
     AccelerationStructure,
+    /// A uniform buffer: the kernel's parameter block.
     Uniform,
+    /// A read-only storage buffer.
     StorageRead,
+    /// A read-write storage buffer.
     StorageReadWrite,
 }
 
@@ -166,6 +172,7 @@ fn shader_binding(kind: BindingKind) -> Option<ShaderBinding> {
 
 /// Implemented by each kernel's argument struct, in its own file.
 pub trait KernelDecl {
+    /// The kernel's declaration.
     const INFO: KernelInfo;
 
     /// Pushes the launch arguments in declaration order onto `args` (each push is checked
@@ -294,7 +301,10 @@ macro_rules! kernel_list {
         /// One kernel dispatch with its typed arguments (see each struct for its contract).
         #[derive(Clone, Debug)]
         pub enum Kernel {
-            $($variant($variant),)*
+            $(
+                #[doc = concat!("The `", stringify!($module), "` kernel with its arguments ([`", stringify!($variant), "`]).")]
+                $variant($variant),
+            )*
         }
 
         /// Every kernel of the library, in list order.

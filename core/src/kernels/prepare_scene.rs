@@ -11,6 +11,7 @@ use crate::device::handle::SceneArgs;
 /// acceleration structure.
 #[derive(Clone, Copy, Debug)]
 pub struct PrepareScene {
+    /// The uploaded scene buffers.
     pub scene: SceneArgs,
 }
 

@@ -13,8 +13,11 @@ use crate::device::layout::{GBufferTexel, GpuCamera};
 /// Reads: scene, camera. Writes: `gbuffer` (`camera.width * camera.height` texels).
 #[derive(Clone, Copy, Debug)]
 pub struct PrimaryGbuffer {
+    /// The uploaded scene.
     pub scene: SceneArgs,
+    /// The frame's camera.
     pub camera: GpuCamera,
+    /// Output: one texel per pixel, row-major from the top-left.
     pub gbuffer: Buf<GBufferTexel>,
 }
 

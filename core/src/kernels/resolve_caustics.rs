@@ -11,9 +11,13 @@ use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel};
 /// without photons).
 #[derive(Clone, Copy, Debug)]
 pub struct ResolveCaustics {
+    /// The deposit's parameters (camera, quanta) the photon map was built with.
     pub params: DepositParams,
+    /// The frame's G-buffer (receiver flag, depth, normal, albedo).
     pub gbuffer: Buf<GBufferTexel>,
+    /// The screen-space photon map.
     pub photon_map: Buf<DepositTexel>,
+    /// Caustic radiance (W/(sr m^2) per channel); alpha: mean hit distance (scene units).
     pub out: ImageBuf,
 }
 

@@ -9,8 +9,11 @@ use crate::device::layout::{DepositTexel, GatherParams};
 /// photon map, photon-weighted; 0 for tiles without photons. The gather's radius follows it.
 #[derive(Clone, Copy, Debug)]
 pub struct TileHitDistance {
+    /// Gather parameters (camera, tile size, hit-distance quantum).
     pub params: GatherParams,
+    /// The screen-space photon map.
     pub photon_map: Buf<DepositTexel>,
+    /// Output: mean hit distance per tile (scene units), row-major.
     pub tiles: Buf<f32>,
 }
 

@@ -14,13 +14,18 @@ use crate::device::layout::{Photon, TraceParams};
 /// ([`crate::device::layout::counter`]).
 #[derive(Clone, Copy, Debug)]
 pub struct TracePhotons {
+    /// The uploaded scene.
     pub scene: SceneArgs,
     /// The compiled variant to run (the frame plan's; it must cover every material
     /// feature of the scene).
     pub variant: TraceVariant,
+    /// The batch: light, emission domain, photon range, seed, flux per photon.
     pub params: TraceParams,
+    /// Output: stored photons, appended.
     pub photons: Buf<Photon>,
+    /// `[0]`: next free slot in `photons`, incremented atomically (the caller clears it).
     pub photon_count: Buf<u32>,
+    /// Photon counters ([`crate::device::layout::counter`]) the kernel adds to.
     pub counters: Buf<u32>,
 }
 
@@ -69,7 +74,7 @@ impl KernelDecl for TracePhotons {
     }
 }
 
-/// A compiled variant of `trace_photons` (DESIGN 3: feature variants are compiled, not
+/// A compiled variant of `trace_photons` (feature variants are compiled, not
 /// branched). Each switch removes a material feature from the kernel; the frame plan
 /// turns on only what the scene's objects use. Backends compile it as WGSL
 /// pipeline-overridable constants, Vulkan specialization constants (ids in

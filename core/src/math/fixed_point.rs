@@ -1,4 +1,4 @@
-//! Fixed-point photon accumulation (DESIGN 4). Flux is summed as integers in units of a
+//! Fixed-point photon accumulation. Flux is summed as integers in units of a
 //! per-frame *flux quantum*, so sums are exact, order-independent and bitwise reproducible
 //! on every backend and thread count. A photon contributes `round(flux / quantum)` per
 //! channel: at most `u32::MAX` (larger is clamped and counted as saturation) and, when
@@ -28,8 +28,11 @@ pub fn power_of_two_quantum(max_value: f32) -> f32 {
 /// Outcome of quantizing one value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Quantized {
+    /// `round(value / quantum)`, clamped to `u32::MAX`; 0 for negative or NaN values.
     pub units: u32,
+    /// A positive value rounded to zero units.
     pub underflow: bool,
+    /// The value was clamped to `u32::MAX` units.
     pub saturated: bool,
 }
 

@@ -8,8 +8,11 @@ use serde::{Deserialize, Serialize};
 /// vertices 1 and 2 (vertex 0 has weight `1 - u - v`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleHit {
+    /// Distance along the ray (scene units for a unit direction).
     pub t: f32,
+    /// Barycentric weight of vertex 1.
     pub u: f32,
+    /// Barycentric weight of vertex 2.
     pub v: f32,
 }
 
@@ -181,7 +184,9 @@ pub fn normalize_scaled(v: Vec3, fallback: Vec3) -> Vec3 {
 /// Axis-aligned box in world space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Aabb {
+    /// Minimum corner.
     pub min: Vec3,
+    /// Maximum corner.
     pub max: Vec3,
 }
 
@@ -192,11 +197,13 @@ impl Aabb {
         max: Vec3::splat(f32::NEG_INFINITY),
     };
 
+    /// Grows the box to contain `p`.
     pub fn grow(&mut self, p: Vec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
 
+    /// The smallest box containing both boxes.
     pub fn union(self, o: Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),
@@ -204,18 +211,22 @@ impl Aabb {
         }
     }
 
+    /// True when the box holds no point (`min` above `max` on some axis, or NaN).
     pub fn is_empty(&self) -> bool {
         !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
     }
 
+    /// The centre point.
     pub fn center(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }
 
+    /// Length of the diagonal (scene units).
     pub fn diagonal(&self) -> f32 {
         (self.max - self.min).length()
     }
 
+    /// The eight corners.
     pub fn corners(&self) -> [Vec3; 8] {
         let (a, b) = (self.min, self.max);
         [
@@ -230,6 +241,7 @@ impl Aabb {
         ]
     }
 
+    /// True when `p` lies inside the box or on its boundary.
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }

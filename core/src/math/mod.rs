@@ -1,4 +1,4 @@
-//! Scalar math every backend shares (DESIGN 3): each shader port (WGSL, OpenCL C, GLSL)
+//! Scalar math every backend shares: each shader port (WGSL, OpenCL C, GLSL)
 //! mirrors these functions by name. Depends on nothing else in the crate.
 
 pub mod fixed_point;

@@ -97,7 +97,10 @@ pub fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
 /// Outcome of a photon meeting a smooth dielectric.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DielectricScatter {
+    /// Outgoing direction (unit when the incident direction is unit).
     pub direction: Vec3,
+    /// True for reflection (Fresnel choice or total internal reflection), false for
+    /// refraction.
     pub reflected: bool,
 }
 

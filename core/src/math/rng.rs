@@ -1,4 +1,4 @@
-//! Counter-based random numbers (DESIGN 4): every random number is a pure function of
+//! Counter-based random numbers: every random number is a pure function of
 //! (frame seed, photon index, bounce, dimension), so all backends draw the same numbers
 //! and a result does not depend on thread count or scheduling.
 

@@ -1,5 +1,7 @@
-//! The scene file format: JSON, exactly the serde form of [`Scene`] (see
-//! `docs/scene-format.md`). `caustica scenes --export NAME` prints a built-in scene in it.
+//! The scene file format: JSON, exactly the serde form of [`Scene`]: materials, shapes and
+//! lights are objects tagged by `"type"` (snake_case variant names), unknown fields are
+//! rejected and fields with defaults may be left out. `caustica scenes --export NAME`
+//! prints a built-in scene in it.
 //!
 //! Every malformed or physically invalid input is rejected with a [`SceneFileError`] that
 //! names the file, the line and column, and the reason.
@@ -13,8 +15,9 @@ use std::path::Path;
 pub struct SceneFileError {
     /// The file (or `<builtin>` / `<string>`).
     pub file: String,
-    /// 1-based line and column of the offending value; 0 when unknown.
+    /// 1-based line of the offending value; 0 when unknown.
     pub line: usize,
+    /// 1-based column of the offending value; 0 when unknown.
     pub column: usize,
     /// What is wrong, including the field path for validation problems.
     pub reason: String,

@@ -27,10 +27,13 @@ pub struct Scene {
     /// Free text: what the scene shows and its geometry.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub description: String,
+    /// The viewpoint and the image size.
     pub camera: Camera,
     /// Materials by name; objects refer to them by name.
     pub materials: BTreeMap<String, Material>,
+    /// The geometry, each shape with its material (at least one).
     pub objects: Vec<Object>,
+    /// The light sources (at least one).
     pub lights: Vec<Light>,
 }
 
@@ -39,12 +42,19 @@ pub struct Scene {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Camera {
+    /// Eye position (world space).
     pub position: Vec3,
+    /// Point the camera looks at (world space).
     pub target: Vec3,
+    /// Approximate up direction (world space, default +y); must not be parallel to the view
+    /// direction. The camera's frame is re-orthogonalised from it.
     #[serde(default = "default_up")]
     pub up: Vec3,
+    /// Full vertical field of view (degrees, in (0, 179)).
     pub fov_y_deg: f32,
+    /// Image width (pixels, 1..=16384).
     pub width: u32,
+    /// Image height (pixels, 1..=16384).
     pub height: u32,
 }
 
@@ -58,18 +68,27 @@ fn default_up() -> Vec3 {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Material {
     /// Lambertian reflector, BRDF `albedo / pi`; albedo per channel in [0, 1].
-    Diffuse { albedo: Vec3 },
+    Diffuse {
+        /// Diffuse reflectance per channel, in [0, 1].
+        albedo: Vec3,
+    },
     /// Perfect specular reflector with per-channel reflectance in [0, 1].
-    Mirror { reflectance: Vec3 },
+    Mirror {
+        /// Reflectance per channel, in [0, 1].
+        reflectance: Vec3,
+    },
     /// Smooth dielectric interface (glass, water). `ior` is the index of refraction at
     /// 550 nm relative to the surrounding medium (vacuum/air = 1); `cauchy_b` (um^2) makes
     /// it dispersive, `n(lambda) = A + B / lambda^2` with `A = ior - B / 0.55^2`;
     /// `absorption` is the Beer-Lambert coefficient per channel per scene unit inside
     /// the object.
     Dielectric {
+        /// Index of refraction at 550 nm relative to the surrounding medium (> 0).
         ior: f32,
+        /// Cauchy coefficient `B` (um^2); 0 (the default) means no dispersion.
         #[serde(default, skip_serializing_if = "is_zero")]
         cauchy_b: f32,
+        /// Beer-Lambert absorption coefficient per channel (1/scene unit, >= 0; default 0).
         #[serde(default, skip_serializing_if = "is_zero3")]
         absorption: Vec3,
     },
@@ -93,8 +112,11 @@ impl Material {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Object {
+    /// Descriptive name of the object.
     pub name: String,
+    /// Name of its material, a key of [`Scene::materials`].
     pub material: String,
+    /// Its geometry.
     pub shape: Shape,
 }
 
@@ -104,50 +126,82 @@ pub struct Object {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Shape {
-    /// Explicit triangle mesh; `normals` and `uvs` are per vertex and optional (flat
-    /// normals and zero uvs when absent).
+    /// Explicit triangle mesh; `normals` and `uvs` are per vertex and optional (when
+    /// absent: each vertex gets the area-weighted average of its faces' normals, uvs are
+    /// zero).
     Mesh {
+        /// Vertex positions (world space, scene units).
         positions: Vec<Vec3>,
+        /// Per-vertex shading normals (world space; normalised on upload), or empty.
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
         normals: Vec<Vec3>,
+        /// Per-vertex texture coordinates, or empty.
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
         uvs: Vec<Vec2>,
+        /// Triangles as triples of indices into `positions`.
         indices: Vec<[u32; 3]>,
     },
     /// UV sphere with smooth normals: `segments` around, `segments / 2` rings.
     Sphere {
+        /// Centre (world space).
         center: Vec3,
+        /// Radius (scene units, > 0).
         radius: f32,
+        /// Subdivisions around the equator (3..=4096, default 96).
         #[serde(default = "default_segments")]
         segments: u32,
     },
     /// Parallelogram `center + s*u + t*v`, `s, t` in [-1, 1]; normal `u x v`.
-    Quad { center: Vec3, u: Vec3, v: Vec3 },
+    Quad {
+        /// Centre (world space).
+        center: Vec3,
+        /// Half-edge vector along `s` (scene units).
+        u: Vec3,
+        /// Half-edge vector along `t` (scene units).
+        v: Vec3,
+    },
     /// Axis-aligned box, outward normals.
-    Cuboid { min: Vec3, max: Vec3 },
+    Cuboid {
+        /// Minimum corner (world space).
+        min: Vec3,
+        /// Maximum corner (world space), above `min` on every axis.
+        max: Vec3,
+    },
     /// Thick-walled vertical ring (a short tube) around `center`, inner radius `radius`,
     /// wall `thickness`, height `height`, standing on `center.y`.
     Ring {
+        /// Centre of the ring's base circle (world space).
         center: Vec3,
+        /// Inner radius (scene units, > 0).
         radius: f32,
+        /// Wall thickness (scene units, > 0): the outer radius is `radius + thickness`.
         thickness: f32,
+        /// Height along +y (scene units, > 0).
         height: f32,
+        /// Subdivisions around the axis (3..=8192, default 96).
         #[serde(default = "default_segments")]
         segments: u32,
     },
     /// Prism with an equilateral triangular cross-section of side `side` in the xy plane,
     /// extruded along z by `length`, centred at `center`.
     Prism {
+        /// Centroid of the prism (world space).
         center: Vec3,
+        /// Side of the triangular cross-section (scene units, > 0).
         side: f32,
+        /// Extent along z (scene units, > 0).
         length: f32,
     },
     /// Height field `y = center.y + sum of waves` over a `size.x` x `size.y` rectangle in
     /// xz, `resolution` quads per side; a single (open) surface with normals up.
     HeightField {
+        /// Centre of the field (world space); wave heights are added to `center.y`.
         center: Vec3,
+        /// Extent along x and z (scene units, > 0).
         size: Vec2,
+        /// Quads per side (1..=4096).
         resolution: u32,
+        /// The sinusoids summed into the height.
         waves: Vec<Wave>,
     },
 }
@@ -161,9 +215,13 @@ fn default_segments() -> u32 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wave {
+    /// Amplitude (scene units).
     pub amplitude: f32,
+    /// Wavelength (scene units, > 0).
     pub wavelength: f32,
+    /// Direction of travel in the xz plane (need not be unit length).
     pub direction: Vec2,
+    /// Phase offset (radians, default 0).
     #[serde(default)]
     pub phase: f32,
 }
@@ -173,14 +231,24 @@ pub struct Wave {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Light {
     /// Isotropic point light, `intensity` in W/sr per channel; total flux `4 pi I`.
-    Point { position: Vec3, intensity: Vec3 },
+    Point {
+        /// Position (world space).
+        position: Vec3,
+        /// Intensity (W/sr per channel, >= 0).
+        intensity: Vec3,
+    },
     /// Point light restricted to a cone around `direction`: full intensity inside
     /// `inner_angle_deg`, smoothstep falloff to zero at `outer_angle_deg` (half-angles).
     Spot {
+        /// Position (world space).
         position: Vec3,
+        /// Cone axis, the direction the light shines (world space; need not be unit length).
         direction: Vec3,
+        /// Intensity on the axis (W/sr per channel, >= 0).
         intensity: Vec3,
+        /// Half-angle of full intensity (degrees, in [0, `outer_angle_deg`]).
         inner_angle_deg: f32,
+        /// Half-angle at which the intensity reaches zero (degrees, in (0, 180]).
         outer_angle_deg: f32,
     },
     /// Parallel light travelling along `direction` with `irradiance` W/m^2 on a surface
@@ -188,8 +256,11 @@ pub enum Light {
     /// (a box around the caustic casters, seed 000 Fig. 30-2) projects; when absent, the
     /// box around every specular object is used.
     Directional {
+        /// Direction the light travels (world space; need not be unit length).
         direction: Vec3,
+        /// Irradiance on a surface facing the light (W/m^2 per channel, >= 0).
         irradiance: Vec3,
+        /// Box (world space) whose projection along `direction` is the emission rectangle.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         projection_volume: Option<Aabb>,
     },
@@ -199,9 +270,13 @@ pub enum Light {
 /// are computed once, by `device_scene::DeviceScene::build`.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleMesh {
+    /// Vertex positions (world space).
     pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (outward for closed shapes).
     pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates.
     pub uvs: Vec<Vec2>,
+    /// Triangles as triples of vertex indices.
     pub indices: Vec<[u32; 3]>,
 }
 

@@ -8,7 +8,9 @@ use glam::{Vec2, Vec3};
 /// `reason` says what is wrong with it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Problem {
+    /// Path of the offending field, e.g. `objects[2].shape.radius`.
     pub path: String,
+    /// What is wrong with it.
     pub reason: String,
 }
 

@@ -11,7 +11,7 @@ use crate::scene::Scene;
 
 /// What a frame's kernels are parameterised with, derived from the scene and settings
 /// before any work: each light's emission domain (or why it emits nothing), the
-/// fixed-point quanta and the gather's hit-distance clamp. [`Sspm`] records its kernels
+/// fixed-point quanta and the gather's hit-distance clamp. [`Sspm`](super::Sspm) records its kernels
 /// with these; tests that drive single kernels build the same parameters from them.
 #[derive(Clone, Debug)]
 pub struct FrameConstants {
@@ -32,13 +32,16 @@ pub struct FrameConstants {
     /// Hit distance per fixed-point unit (scene units), a power of two: the scene diagonal
     /// is 2^24 to 2^25 units.
     pub hit_distance_quantum: f32,
-    /// Clamp of the gather's hit distance (scene units; defaults 5% and 50% of the scene
+    /// Lower clamp of the gather's hit distance (scene units; default 5% of the scene
     /// diagonal).
     pub hit_distance_min: f32,
+    /// Upper clamp of the gather's hit distance (scene units; default 50% of the scene
+    /// diagonal, never below `hit_distance_min`).
     pub hit_distance_max: f32,
 }
 
 impl FrameConstants {
+    /// Derives the constants from the scene, its device scene and the settings.
     pub fn new(scene: &Scene, ds: &DeviceScene, settings: &SspmSettings) -> FrameConstants {
         Self::for_bounds(
             scene,

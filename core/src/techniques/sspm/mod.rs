@@ -198,6 +198,7 @@ impl Sspm {
         self.settings.seed = seed;
     }
 
+    /// The settings in effect.
     pub fn settings(&self) -> &SspmSettings {
         &self.settings
     }

@@ -47,6 +47,7 @@ impl Outputs {
             .collect()
     }
 
+    /// Whether at least one output is requested.
     pub fn any(&self) -> bool {
         self.composite || self.direct || self.raw_caustics || self.filtered_caustics
     }
@@ -56,13 +57,19 @@ impl Outputs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Output {
+    /// Direct light + filtered caustics.
     Composite,
+    /// Direct light alone (shadow rays, specular chains from mirror and glass pixels).
     Direct,
+    /// Caustic radiance straight from the screen-space photon map (alpha: mean hit
+    /// distance).
     RawCaustics,
+    /// Caustic radiance after the bilateral gather.
     FilteredCaustics,
 }
 
 impl Output {
+    /// Every output, in the fixed order of [`crate::frame::technique::Technique::outputs`].
     pub const ALL: [Output; 4] = [
         Output::Composite,
         Output::Direct,
@@ -111,7 +118,9 @@ impl Output {
 /// photons): [`super::Sspm::read_output`] then returns zeros without a device buffer.
 #[derive(Clone, Copy, Debug)]
 pub struct FrameImages {
+    /// Image width (pixels).
     pub width: u32,
+    /// Image height (pixels).
     pub height: u32,
     /// Direct light + filtered caustics (the direct image's handle when there are no
     /// caustics).

@@ -10,9 +10,13 @@ use crate::scene::Scene;
 /// What the passes of a plan need, as flags (the technique creates buffers from them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Needs {
+    /// `direct_light` runs.
     pub direct_light: bool,
+    /// The photon passes run: `trace_photons`, `deposit_screen`, `resolve_caustics`.
     pub photons: bool,
+    /// The gather runs: `tile_hit_distance` and both `bilateral_gather` passes.
     pub gather: bool,
+    /// `composite` runs.
     pub composite: bool,
 }
 

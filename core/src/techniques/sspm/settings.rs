@@ -10,8 +10,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SspmSettings {
-    /// Photon grid per light, `pw x ph` (seed 000: 2k x 2k in its figures).
+    /// Photon grid width per light (photons); each light emits `photons_w x photons_h`
+    /// photons (seed 000: 2k x 2k in its figures).
     pub photons_w: u32,
+    /// Photon grid height per light (photons).
     pub photons_h: u32,
     /// Maximum ray segments per photon path.
     pub max_bounces: u32,
@@ -24,9 +26,10 @@ pub struct SspmSettings {
     pub depth_tolerance: f32,
     /// Gather blur per unit hit distance (the source's denoiser "roughness", 0.07).
     pub roughness: f32,
-    /// Hit-distance clamp (scene units); `None`: 5% and 50% of the scene's diagonal (the
+    /// Lower hit-distance clamp (scene units); `None`: 5% of the scene's diagonal (the
     /// source clamps to [300, 2000] in its scene units and asks for a per-scene choice).
     pub hit_distance_min: Option<f32>,
+    /// Upper hit-distance clamp (scene units); `None`: 50% of the scene's diagonal.
     pub hit_distance_max: Option<f32>,
     /// Largest gather radius in pixels.
     pub max_radius_px: u32,
