@@ -1,6 +1,6 @@
 #!/bin/sh
 # Checks that a built `caustica` binary neither links nor needs the OpenCL ICD loader
-# (DESIGN 2: a default build links no driver library; the OpenCL backend opens
+# (a default build links no driver library; the OpenCL backend opens
 # libOpenCL.so.1 at run time):
 #   (a) readelf shows no libOpenCL among the binary's NEEDED libraries;
 #   (b) with every libOpenCL.so* on this machine hidden (an empty file bind-mounted over

@@ -1,6 +1,6 @@
 #!/bin/sh
 # Regenerates backend-vulkan/spirv/ from the GLSL under backend-vulkan/shaders/, so that
-# building the crate needs no shader compiler (DESIGN 3). Needs glslc (shaderc; Debian:
+# building the crate needs no shader compiler. Needs glslc (shaderc; Debian:
 # apt-get install glslc); spirv-val and spirv-dis (apt-get install spirv-tools) are used
 # when present.
 #

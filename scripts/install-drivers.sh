@@ -1,5 +1,5 @@
 #!/bin/sh
-# Installs what caustica's backends need on Debian bookworm (DESIGN 8), idempotently:
+# Installs what caustica's backends need on Debian bookworm, idempotently:
 #   OpenCL: PoCL (pocl-opencl-icd) and the ICD loader (ocl-icd-libopencl1; the backend
 #   opens libOpenCL.so.1 at run time, so no dev package is needed), from bookworm;
 #   Vulkan/wgpu: Mesa's lavapipe with ray tracing (mesa-vulkan-drivers from

@@ -25,8 +25,7 @@ pub struct TechniqueEntry {
     /// Creates it on `backend` for `scene` with `settings`, a JSON object of the
     /// technique's settings fields (missing fields take their defaults; every technique
     /// accepts `photons_w`, `photons_h` and `seed`).
-    pub create:
-        fn(&mut dyn Backend, &Scene, &serde_json::Value) -> Result<Box<dyn Technique>, Error>,
+    pub create: CreateFn,
     /// The default settings (serialised).
     pub default_settings: fn() -> serde_json::Value,
 }
