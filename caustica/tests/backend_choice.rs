@@ -6,7 +6,10 @@ use caustica::{auto_order, backend_statuses, open_backend, DeviceType};
 #[test]
 fn auto_opens_the_first_of_its_order_and_the_order_ranks_device_types() {
     let order = auto_order();
-    assert!(!order.is_empty(), "no backend opens (the cpu backend always should)");
+    assert!(
+        !order.is_empty(),
+        "no backend opens (the cpu backend always should)"
+    );
     for w in order.windows(2) {
         assert!(w[0].1.auto_rank() <= w[1].1.auto_rank(), "{order:?}");
     }
@@ -14,10 +17,16 @@ fn auto_opens_the_first_of_its_order_and_the_order_ranks_device_types() {
     assert_eq!(chosen.name(), order[0].0);
     assert_eq!(chosen.capabilities().device_type, order[0].1);
     // The native CPU backend comes before any software GPU.
-    let cpu = order.iter().position(|(n, _)| *n == "cpu").expect("cpu opens");
+    let cpu = order
+        .iter()
+        .position(|(n, _)| *n == "cpu")
+        .expect("cpu opens");
     for (i, (n, t)) in order.iter().enumerate() {
         if *t == DeviceType::SoftwareGpu {
-            assert!(i > cpu, "{n} ({t:?}) ranked before the cpu backend: {order:?}");
+            assert!(
+                i > cpu,
+                "{n} ({t:?}) ranked before the cpu backend: {order:?}"
+            );
         }
     }
 }
@@ -26,7 +35,12 @@ fn auto_opens_the_first_of_its_order_and_the_order_ranks_device_types() {
 fn every_backend_states_its_device_type() {
     for s in backend_statuses() {
         if let Ok((_, t)) = &s.available {
-            assert_ne!(*t, DeviceType::Other, "{} does not say what it runs on", s.name);
+            assert_ne!(
+                *t,
+                DeviceType::Other,
+                "{} does not say what it runs on",
+                s.name
+            );
         }
     }
     assert!(DeviceType::Cpu.auto_rank() < DeviceType::SoftwareGpu.auto_rank());

@@ -10,10 +10,10 @@ use caustica_core::SspmSettings;
 /// box's four wall-ceiling and wall-floor edges project exactly onto the image diagonals
 /// through the centre, `px - py = (width - height) / 2` in pixel units; with an even
 /// difference (96x54) some 100 pixel centres lie exactly on an edge shared by two faces,
-/// where the closest hit is a tie that any rounding difference breaks either way (or, the
-/// ray/triangle test not being watertight, lets the ray escape between the faces): seen
-/// with the `UlpNoise` mutant of `tests/suite_sensitivity.rs`, 15 such pixels changed
-/// material. No pixel centre is on those diagonals when the difference is odd.
+/// where the closest hit is a tie that any rounding difference breaks either way (this was
+/// seen before the triangle test became watertight, when such rays could also slip
+/// between the faces, with the `UlpNoise` mutant of `tests/suite_sensitivity.rs`: 15 such
+/// pixels changed material). No pixel centre is on those diagonals when the difference is odd.
 pub const BUILTIN_SIZE: (u32, u32) = (96, 55);
 
 /// Built-in scene `name` at `BUILTIN_SIZE`.

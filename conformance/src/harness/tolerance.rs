@@ -37,9 +37,10 @@ pub const F32_ROUNDOFF: f64 = 5.960_464_477_539_063e-8;
 /// `primary_gbuffer`: fraction of pixels whose material id must agree (99.5%).
 ///
 /// A pixel's material can differ only where its camera ray passes within a few ulps of a
-/// silhouette or of a triangle edge (core's Moller-Trumbore test is not watertight, so a
-/// ray exactly through a shared edge may slip between both triangles, which a watertight
-/// hardware test never does). The camera ray is a handful of operations ending in a
+/// silhouette or of a triangle edge: a ray through an edge shared by two faces hits one of
+/// them (the triangle test is watertight on every backend, Woop, Benthin and Wald 2013, as
+/// Vulkan's hardware test is), but which one is a tie that a rounding difference in the
+/// ray may break either way, and the faces' materials may differ. The camera ray is a handful of operations ending in a
 /// normalisation (3-ulp sqrt, 2.5-ulp divide): directions agree to ~5e-7 rad, which at
 /// these resolutions (~0.01 rad per pixel) is ~5e-5 of a pixel. For cameras in general
 /// position the expected number of affected pixels is far below one per image; 0.5% is

@@ -235,7 +235,6 @@ pub fn find(name: &str) -> Option<&'static StructLayout> {
 mod tests {
     use super::*;
     use std::collections::BTreeSet;
-    use std::path::Path;
 
     /// Fields are contiguous from 0 to `size_of` (no implicit gap: padding is an explicit
     /// `_pad` field; no overlap); each field's size is its elements' sizes; nested structs
@@ -276,45 +275,5 @@ mod tests {
         assert_eq!(t.field("flux").unwrap().dims, vec![3, 2]);
         assert_eq!(t.leaves()[3].path, "DepositTexel.flux[1][1]");
         assert_eq!(t.leaves()[3].offset, 12);
-    }
-
-    /// The names of the structs declared in a shared shader types file (`struct Name`).
-    fn declared_structs(file: &str) -> BTreeSet<String> {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(file);
-        let text =
-            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        text.lines()
-            .map(|l| l.split("//").next().unwrap_or("").trim_start())
-            .filter_map(|l| l.strip_prefix("struct "))
-            .map(|rest| {
-                rest.split(|c: char| !c.is_alphanumeric() && c != '_')
-                    .next()
-                    .unwrap()
-                    .to_owned()
-            })
-            .collect()
-    }
-
-    /// The table names every struct that the shaders' shared types files mirror, and each
-    /// of its structs is mirrored by at least one of them.
-    #[test]
-    fn table_names_every_struct_the_shaders_use() {
-        // shader-only structs: never in a buffer, so no core layout
-        const SHADER_ONLY: &[&str] = &["HitPayload"];
-        let wgsl = declared_structs("shaders/wgsl/common/types.wgsl");
-        let glsl = declared_structs("backend-vulkan/shaders/common/types.glsl");
-        let table: BTreeSet<String> = structs().iter().map(|s| s.name.to_owned()).collect();
-        for name in wgsl.iter().chain(&glsl) {
-            assert!(
-                table.contains(name) || SHADER_ONLY.contains(&name.as_str()),
-                "{name}: a shader struct missing from the layout table"
-            );
-        }
-        for name in &table {
-            assert!(
-                wgsl.contains(name) || glsl.contains(name),
-                "{name}: in the table but mirrored by no shader"
-            );
-        }
     }
 }
