@@ -191,7 +191,7 @@ naming the case and the backend.
 - **Device limits**: every planned buffer is checked against the device's largest buffer
   and storage binding in `Sspm::new`; a frame that does not fit is a typed `OutOfMemory`
   naming the buffer. The 8192x8192 G-buffer is 2^32 bytes: NVIDIA's Vulkan binds 2^32 - 1
-  (and wgpu 2 GiB) there, so those two refuse it (`docs/stability-h100.md`); OpenCL fills
+  (and wgpu 2 GiB) there, so those two refuse it (`docs/stability-h200.md`); OpenCL fills
   large buffers in 1 GiB commands (NVIDIA faulted on one 4 GiB fill).
 - Degenerate-size checks (`Scene::validate` for quads, quad tessellation) use unit
   vectors, so they no longer underflow for scenes below ~1e-10 units.
