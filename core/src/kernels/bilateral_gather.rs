@@ -33,14 +33,7 @@ const BINDINGS: &[Binding] = &[
 ];
 
 impl KernelDecl for BilateralGather {
-    const INFO: KernelInfo = KernelInfo {
-        name: "bilateral_gather",
-        bindings: BINDINGS,
-        workgroup_size: 64,
-        traced: false,
-        switches: &[],
-        used_by: "Sspm",
-    };
+    const INFO: KernelInfo = KernelInfo::compute("bilateral_gather", BINDINGS, "Sspm");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let c = &self.params.camera;

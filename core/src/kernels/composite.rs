@@ -23,14 +23,7 @@ const BINDINGS: &[Binding] = &[
 ];
 
 impl KernelDecl for Composite {
-    const INFO: KernelInfo = KernelInfo {
-        name: "composite",
-        bindings: BINDINGS,
-        workgroup_size: 64,
-        traced: false,
-        switches: &[],
-        used_by: "all",
-    };
+    const INFO: KernelInfo = KernelInfo::compute("composite", BINDINGS, "all");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = self.out.len as u64;

@@ -37,14 +37,7 @@ const BINDINGS: &[Binding] = &[
 ];
 
 impl KernelDecl for DepositScreen {
-    const INFO: KernelInfo = KernelInfo {
-        name: "deposit_screen",
-        bindings: BINDINGS,
-        workgroup_size: 64,
-        traced: false,
-        switches: &[],
-        used_by: "Sspm",
-    };
+    const INFO: KernelInfo = KernelInfo::compute("deposit_screen", BINDINGS, "Sspm");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.params.camera.width, self.params.camera.height);

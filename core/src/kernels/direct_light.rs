@@ -35,14 +35,7 @@ const BINDINGS: [Binding; 9] = with_scene([
 ]);
 
 impl KernelDecl for DirectLight {
-    const INFO: KernelInfo = KernelInfo {
-        name: "direct_light",
-        bindings: &BINDINGS,
-        workgroup_size: 64,
-        traced: true,
-        switches: &[],
-        used_by: "all",
-    };
+    const INFO: KernelInfo = KernelInfo::traced("direct_light", &BINDINGS, &[], "all");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;

@@ -118,6 +118,45 @@ pub struct KernelInfo {
     pub used_by: &'static str,
 }
 
+/// Threads per workgroup of the kernels that do not say otherwise.
+pub const DEFAULT_WORKGROUP_SIZE: u32 = 64;
+
+impl KernelInfo {
+    /// A compute kernel (no ray tracing, no switches) of [`DEFAULT_WORKGROUP_SIZE`].
+    pub const fn compute(
+        name: &'static str,
+        bindings: &'static [Binding],
+        used_by: &'static str,
+    ) -> KernelInfo {
+        KernelInfo {
+            name,
+            bindings,
+            workgroup_size: DEFAULT_WORKGROUP_SIZE,
+            traced: false,
+            switches: &[],
+            used_by,
+        }
+    }
+
+    /// A kernel that traces rays against the scene (bindings from [`with_scene`]), of
+    /// [`DEFAULT_WORKGROUP_SIZE`], with compiled `switches`.
+    pub const fn traced(
+        name: &'static str,
+        bindings: &'static [Binding],
+        switches: &'static [&'static str],
+        used_by: &'static str,
+    ) -> KernelInfo {
+        KernelInfo {
+            name,
+            bindings,
+            workgroup_size: DEFAULT_WORKGROUP_SIZE,
+            traced: true,
+            switches,
+            used_by,
+        }
+    }
+}
+
 /// A binding as the GPU shading languages see it (counts dropped).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShaderBinding {

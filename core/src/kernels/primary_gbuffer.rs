@@ -24,14 +24,7 @@ pub struct PrimaryGbuffer {
 const BINDINGS: [Binding; 8] = with_scene([bind("camera", Params), bind("gbuffer", ReadWrite)]);
 
 impl KernelDecl for PrimaryGbuffer {
-    const INFO: KernelInfo = KernelInfo {
-        name: "primary_gbuffer",
-        bindings: &BINDINGS,
-        workgroup_size: 64,
-        traced: true,
-        switches: &[],
-        used_by: "all",
-    };
+    const INFO: KernelInfo = KernelInfo::traced("primary_gbuffer", &BINDINGS, &[], "all");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.camera.width, self.camera.height);

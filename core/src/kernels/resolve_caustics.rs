@@ -29,14 +29,7 @@ const BINDINGS: &[Binding] = &[
 ];
 
 impl KernelDecl for ResolveCaustics {
-    const INFO: KernelInfo = KernelInfo {
-        name: "resolve_caustics",
-        bindings: BINDINGS,
-        workgroup_size: 64,
-        traced: false,
-        switches: &[],
-        used_by: "Sspm",
-    };
+    const INFO: KernelInfo = KernelInfo::compute("resolve_caustics", BINDINGS, "Sspm");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.params.camera.width, self.params.camera.height);

@@ -24,14 +24,7 @@ const BINDINGS: &[Binding] = &[
 ];
 
 impl KernelDecl for TileHitDistance {
-    const INFO: KernelInfo = KernelInfo {
-        name: "tile_hit_distance",
-        bindings: BINDINGS,
-        workgroup_size: 64,
-        traced: false,
-        switches: &[],
-        used_by: "Sspm",
-    };
+    const INFO: KernelInfo = KernelInfo::compute("tile_hit_distance", BINDINGS, "Sspm");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let c = &self.params.camera;

@@ -38,14 +38,8 @@ const BINDINGS: [Binding; 11] = with_scene([
 ]);
 
 impl KernelDecl for TracePhotons {
-    const INFO: KernelInfo = KernelInfo {
-        name: "trace_photons",
-        bindings: &BINDINGS,
-        workgroup_size: 64,
-        traced: true,
-        switches: &TraceVariant::SWITCHES,
-        used_by: "Sspm",
-    };
+    const INFO: KernelInfo =
+        KernelInfo::traced("trace_photons", &BINDINGS, &TraceVariant::SWITCHES, "Sspm");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
