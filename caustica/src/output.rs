@@ -3,14 +3,63 @@
 use caustica_core::frame::image::{tone_map, Image};
 use std::path::Path;
 
-/// Writes a linear RGBA f32 OpenEXR file.
+/// Writes a linear RGBA f32 OpenEXR file: RLE-compressed 64x64 tiles stored in increasing
+/// order by one thread, so two identical images give byte-identical files (hash-based
+/// caches and golden files work).
 pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
+    use exr::prelude::*;
     let w = img.width as usize;
-    exr::prelude::write_rgba_file(path, w, img.height as usize, |x, y| {
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
         let p = img.pixels[y * w + x];
         (p[0], p[1], p[2], p[3])
-    })
-    .map_err(|e| format!("{}: {e}", path.display()))
+    });
+    let encoding = Encoding {
+        line_order: LineOrder::Increasing,
+        ..Encoding::FAST_LOSSLESS
+    };
+    Image::from_encoded_channels((w, img.height as usize), encoding, channels)
+        .write()
+        .non_parallel()
+        .to_file(path)
+        .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// A file-name stem made from `name` (a scene name from a scene file, say) that cannot
+/// leave the output folder: ASCII letters, digits, `-`, `_` and inner `.` are kept, every
+/// other character (separators, NUL, `..` at the start, non-ASCII) becomes `_`, the result
+/// is at most 64 characters, and an empty result is `scene`.
+pub fn file_stem(name: &str) -> String {
+    let mut s: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    // no leading dot: no `..`, no hidden file
+    while s.starts_with('.') {
+        s.replace_range(0..1, "_");
+    }
+    s.truncate(64);
+    if s.is_empty() {
+        "scene".into()
+    } else {
+        s
+    }
+}
+
+/// Creates the output folder `dir` and checks that a file can be written there, before
+/// any work whose results would be written there.
+pub fn prepare_output_dir(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("--out {}: {e}", dir.display()))?;
+    let probe = dir.join(format!(".caustica-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .map_err(|e| format!("--out {}: not writable: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 /// Writes a tone-mapped 8-bit sRGB PNG.
@@ -26,4 +75,55 @@ pub fn write_png(path: &Path, img: &Image, exposure: f32) -> Result<(), String> 
     }
     buf.save(path)
         .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stems_stay_inside_the_folder() {
+        for (name, want) in [
+            ("sphere", "sphere"),
+            ("../x", "_._x"),
+            ("/etc/passwd", "_etc_passwd"),
+            ("a/b\\c", "a_b_c"),
+            ("..", "_."),
+            (".hidden", "_hidden"),
+            ("nul\0byte", "nul_byte"),
+            ("", "scene"),
+            ("caf\u{e9}", "caf_"),
+        ] {
+            assert_eq!(file_stem(name), want, "{name:?}");
+        }
+        assert_eq!(file_stem(&"x".repeat(300)).len(), 64);
+        for name in ["../x", "/abs", "a/../../b", "..\\x"] {
+            let p = Path::new("out").join(format!("{}_composite.exr", file_stem(name)));
+            assert_eq!(p.parent(), Some(Path::new("out")), "{name}");
+        }
+    }
+
+    #[test]
+    fn identical_images_give_identical_exr_files() {
+        let px: Vec<[f32; 4]> = (0..200 * 130)
+            .map(|i| [i as f32 * 1e-3, (i % 7) as f32, 0.5, 1.0])
+            .collect();
+        let img = Image::new(200, 130, px);
+        let dir = std::env::temp_dir().join(format!("caustica-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+        write_exr(&a, &img).unwrap();
+        write_exr(&b, &img).unwrap();
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+        let back = exr::prelude::read_first_rgba_layer_from_file(
+            &a,
+            |r, _| vec![[0f32; 4]; r.width() * r.height()],
+            |px: &mut Vec<[f32; 4]>, p, (r, g, bl, al): (f32, f32, f32, f32)| {
+                px[p.y() * 200 + p.x()] = [r, g, bl, al]
+            },
+        )
+        .unwrap();
+        assert_eq!(back.layer_data.channel_data.pixels, img.pixels);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -102,7 +102,7 @@ pub fn scene_hash(scene: &Scene, spec: &ReferenceSpec) -> String {
 }
 
 fn paths(dir: &Path, scene: &str, hash: &str) -> (PathBuf, PathBuf) {
-    let stem = format!("{scene}-{hash}");
+    let stem = format!("{}-{hash}", crate::output::file_stem(scene));
     (
         dir.join(format!("{stem}.exr")),
         dir.join(format!("{stem}.json")),

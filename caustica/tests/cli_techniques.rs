@@ -68,3 +68,76 @@ fn a_small_report_measures_the_technique_by_name() {
     assert!(rel.is_finite() && raw.is_finite() && rel >= 0.0, "{r}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn report_arguments_are_checked_before_any_reference_is_rendered() {
+    let dir = std::env::temp_dir().join(format!("caustica-report-args-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--scenes", ""], "--scenes lists nothing"),
+        (vec!["--backends", " , "], "--backends lists nothing"),
+        (vec!["--budgets", ""], "--budgets lists nothing"),
+        (vec!["--repeats", "0"], "--repeats must be at least 1"),
+        (vec!["--backends", "bogus"], "unknown backend"),
+    ] {
+        let mut cmd = vec!["report", "--out", d];
+        cmd.extend(args.iter().copied());
+        let out = caustica(&cmd);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{cmd:?}");
+        assert!(err.contains(needle), "{cmd:?}: {err}");
+        // failed before the reference cache (and the output folder) were written
+        assert!(
+            !dir.join("references").exists(),
+            "{cmd:?} rendered a reference"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_settings_files_photon_grid_is_kept_unless_the_flag_is_given() {
+    let dir = std::env::temp_dir().join(format!("caustica-grid-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let settings = dir.join("settings.json");
+    std::fs::write(&settings, r#"{"photons_w": 32, "photons_h": 16}"#).unwrap();
+    let stats = |extra: &[&str]| -> serde_json::Value {
+        let out_dir = dir.join("out");
+        let mut cmd = vec![
+            "render",
+            "--backend",
+            "cpu",
+            "--size",
+            "16x9",
+            "--settings",
+            settings.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ];
+        cmd.extend(extra.iter().copied());
+        let out = caustica(&cmd);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap()).unwrap()
+    };
+    let s = stats(&[]);
+    assert_eq!(
+        (
+            s["settings"]["photons_w"].as_u64(),
+            s["settings"]["photons_h"].as_u64()
+        ),
+        (Some(32), Some(16))
+    );
+    let s = stats(&["--photons", "8x8"]);
+    assert_eq!(
+        (
+            s["settings"]["photons_w"].as_u64(),
+            s["settings"]["photons_h"].as_u64()
+        ),
+        (Some(8), Some(8))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

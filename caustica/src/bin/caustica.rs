@@ -33,9 +33,9 @@ enum Command {
         /// Backend: auto, cpu, vulkan, wgpu, opencl (see `caustica backends`).
         #[arg(long, default_value = "cpu")]
         backend: String,
-        /// Photon grid per light, WxH (e.g. 1024x1024).
-        #[arg(long, default_value = "1024x1024", value_parser = parse_grid)]
-        photons: (u32, u32),
+        /// Photon grid per light, WxH (default: the settings file's, else 1024x1024).
+        #[arg(long, value_parser = parse_grid)]
+        photons: Option<(u32, u32)>,
         /// Image size WxH (default: the scene camera's).
         #[arg(long, value_parser = parse_grid)]
         size: Option<(u32, u32)>,
@@ -250,7 +250,32 @@ fn run(cli: Cli) -> Result<(), String> {
             if !(reference_noise > 0.0 && reference_noise < 1.0) {
                 return Err("--reference-noise must be in (0, 1)".into());
             }
-            std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+            // everything that can be checked is checked before any reference is rendered
+            for (flag, empty) in [
+                ("--scenes", plan.scenes.is_empty()),
+                ("--techniques", plan.techniques.is_empty()),
+                ("--backends", plan.backends.is_empty()),
+                ("--budgets", plan.budgets.is_empty()),
+            ] {
+                if empty {
+                    return Err(format!("{flag} lists nothing"));
+                }
+            }
+            if repeats == 0 {
+                return Err("--repeats must be at least 1".into());
+            }
+            for t in &plan.techniques {
+                if !technique_names().contains(&t.as_str()) {
+                    return Err(format!(
+                        "unknown technique '{t}'; available: {}",
+                        technique_names().join(", ")
+                    ));
+                }
+            }
+            for b in &plan.backends {
+                open_backend(b).map_err(|e| e.to_string())?;
+            }
+            caustica::output::prepare_output_dir(&out)?;
             let cache = cache.unwrap_or_else(|| out.join("references"));
             let records = caustica::report::run(&plan, &cache, &mut |line| eprintln!("{line}"))?;
             print!("{}", caustica::report::table(&records));
@@ -261,7 +286,10 @@ fn run(cli: Cli) -> Result<(), String> {
             )
             .map_err(|e| format!("{}: {e}", path.display()))?;
             for scene in &plan.scenes {
-                let png = out.join(format!("error_vs_time_{}.png", scene.name));
+                let png = out.join(format!(
+                    "error_vs_time_{}.png",
+                    caustica::output::file_stem(&scene.name)
+                ));
                 match caustica::report::plot(&records, &scene.name, &png) {
                     Ok(()) => eprintln!("wrote {}", png.display()),
                     Err(e) => eprintln!("no plot for {}: {e}", scene.name),
@@ -303,11 +331,19 @@ fn run(cli: Cli) -> Result<(), String> {
                 }
                 None => serde_json::Map::new(),
             };
-            s.insert("photons_w".into(), photons.0.into());
-            s.insert("photons_h".into(), photons.1.into());
+            // the flag overrides the settings file; neither: 1024x1024
+            let (pw, ph) = photons.unwrap_or((1024, 1024));
+            if photons.is_some() || !s.contains_key("photons_w") {
+                s.insert("photons_w".into(), pw.into());
+            }
+            if photons.is_some() || !s.contains_key("photons_h") {
+                s.insert("photons_h".into(), ph.into());
+            }
             if let Some(seed) = seed {
                 s.insert("seed".into(), seed.into());
             }
+            caustica::output::prepare_output_dir(&out)?;
+            let stem = caustica::output::file_stem(&scene.name);
             let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
             let mut t = create(
                 &technique,
@@ -331,19 +367,14 @@ fn run(cli: Cli) -> Result<(), String> {
                 })
                 .map_err(|e| e.to_string())?;
             bar.finish_and_clear();
-            std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
             for output in t.outputs().into_iter().filter(|o| o.requested) {
                 let name = output.name;
                 let img = t
                     .read_output(be.as_mut(), name)
                     .map_err(|e| e.to_string())?;
-                write_exr(&out.join(format!("{}_{name}.exr", scene.name)), &img)?;
+                write_exr(&out.join(format!("{stem}_{name}.exr")), &img)?;
                 if name == "composite" {
-                    write_png(
-                        &out.join(format!("{}_composite.png", scene.name)),
-                        &img,
-                        exposure,
-                    )?;
+                    write_png(&out.join(format!("{stem}_composite.png")), &img, exposure)?;
                 }
             }
             let s = t.settings_json();
