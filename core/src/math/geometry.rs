@@ -183,6 +183,7 @@ pub fn normalize_scaled(v: Vec3, fallback: Vec3) -> Vec3 {
 
 /// Axis-aligned box in world space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Aabb {
     /// Minimum corner.
     pub min: Vec3,

@@ -228,6 +228,38 @@ mod tests {
     }
 
     #[test]
+    fn duplicate_materials_and_unknown_box_fields_are_errors() {
+        let text = to_json(&builtin("sphere").unwrap());
+        // the same material name twice in the materials object
+        let first = text.find("\"materials\": {").expect("materials") + "\"materials\": {".len();
+        let dup = format!(
+            "{}\"glass\": {{\"type\": \"diffuse\", \"albedo\": [0.5, 0.5, 0.5]}},{}",
+            &text[..first],
+            &text[first..]
+        );
+        assert!(dup.matches("\"glass\"").count() >= 2, "{dup}");
+        let e = parse_scene(&dup, "s.json").unwrap_err();
+        assert!(
+            e.reason.contains("material 'glass' is defined twice"),
+            "{e}"
+        );
+        assert!(e.line > 0);
+        let mut s = builtin("sphere-sun").unwrap();
+        if let crate::scene::Light::Directional {
+            projection_volume, ..
+        } = &mut s.lights[0]
+        {
+            *projection_volume = Some(crate::math::geometry::Aabb {
+                min: glam::Vec3::splat(-1.0),
+                max: glam::Vec3::splat(1.0),
+            });
+        }
+        let text = to_json(&s).replacen("\"min\":", "\"mni\": [0, 0, 0], \"min\":", 1);
+        let e = parse_scene(&text, "s.json").unwrap_err();
+        assert!(e.reason.contains("unknown field `mni`"), "{e}");
+    }
+
+    #[test]
     fn negative_ior_names_its_line() {
         let mut text = to_json(&builtin("sphere").unwrap());
         text = text.replace("\"ior\": 1.5", "\"ior\": -1.5");

@@ -29,7 +29,9 @@ pub struct Scene {
     pub description: String,
     /// The viewpoint and the image size.
     pub camera: Camera,
-    /// Materials by name; objects refer to them by name.
+    /// Materials by name; objects refer to them by name. A name given twice in a file is
+    /// an error (not "the last one wins").
+    #[serde(deserialize_with = "unique_keys")]
     pub materials: BTreeMap<String, Material>,
     /// The geometry, each shape with its material (at least one).
     pub objects: Vec<Object>,
@@ -286,4 +288,35 @@ impl Scene {
     pub fn validate(&self) -> Result<(), Vec<Problem>> {
         validate::validate(self)
     }
+}
+
+/// Deserialises a map, refusing a key that appears twice (serde's maps keep the last).
+fn unique_keys<'de, D, V>(d: D) -> Result<BTreeMap<String, V>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    V: Deserialize<'de>,
+{
+    struct Unique<V>(std::marker::PhantomData<V>);
+    impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for Unique<V> {
+        type Value = BTreeMap<String, V>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map of materials by name")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut m: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some((k, v)) = m.next_entry::<String, V>()? {
+                if out.contains_key(&k) {
+                    return Err(serde::de::Error::custom(format!(
+                        "material '{k}' is defined twice"
+                    )));
+                }
+                out.insert(k, v);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Unique(std::marker::PhantomData))
 }
