@@ -26,7 +26,7 @@ fn bench(c: &mut Criterion) {
     let n = 256u32;
     for name in ["sphere", "cornell"] {
         let scene = builtin(name).unwrap();
-        let ds = DeviceScene::build(&scene);
+        let ds = DeviceScene::build(&scene, Default::default()).expect("built-in scene builds");
         let bvh = adopt_bvh(&ds.bvh_nodes).unwrap();
         let view = SceneView {
             vertices: &ds.vertices,

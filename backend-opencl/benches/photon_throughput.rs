@@ -31,7 +31,7 @@ fn bench(c: &mut Criterion) {
     eprintln!("device: {}", backend.capabilities().device);
     for name in ["sphere", "cornell"] {
         let scene = builtin(name).unwrap();
-        let ds = DeviceScene::build(&scene);
+        let ds = DeviceScene::build(&scene, Default::default()).expect("built-in scene builds");
         let d = emission_domain(
             &scene.lights[0],
             ds.caster_bounds,

@@ -50,6 +50,6 @@ __kernel void bilateral_gather(__global const GatherParams* p,
         sum += wgt * input[q].xyz;
         wsum += wgt;
     }
-    float3 o = wsum > 0.0f ? sum / wsum : (float3)(0.0f);
+    float3 o = wsum > 0.0f ? saturate_radiance3(sum / wsum) : (float3)(0.0f);
     out[i] = (float4)(o, input[i].w);
 }

@@ -5,5 +5,5 @@ __kernel void composite(uint texels, __global const float4* direct,
                         __global const float4* caustics, __global float4* out) {
     uint i = get_global_id(0);
     if (i >= texels) return;
-    out[i] = (float4)(direct[i].xyz + caustics[i].xyz, 1.0f);
+    out[i] = (float4)(saturate_radiance3(direct[i].xyz + caustics[i].xyz), 1.0f);
 }

@@ -26,14 +26,14 @@ inline float3 shade_diffuse(SCENE_PARAMS, uint light_count, float3 pos, float3 n
                                                light->cos_inner, light->cos_outer)
                                 : 1.0f;
             dist = d;
-            scale = falloff / d2;
+            scale = saturate_radiance(falloff / d2);
         }
         float cos_t = dot3(n, wi);
         if (cos_t <= 0.0f || scale <= 0.0f || dot3(ng, wi) <= 0.0f) continue;
         float3 origin = offset_ray_origin(pos, ng);
         float t_max = isfinite(dist) ? length3(origin - lpos) * (1.0f - 1e-5f) : INFINITY;
         if (occluded(nodes, node_count, vertices, triangles, origin, wi, t_max)) continue;
-        e += load3g(light->intensity) * (scale * cos_t);
+        e = saturate_radiance3(e + load3g(light->intensity) * (scale * cos_t));
     }
     return albedo / PI_F * e;
 }
@@ -126,5 +126,5 @@ __kernel void direct_light(SCENE_PARAMS, __global const DirectParams* p,
         l = specular_chain(SCENE_ARGS, p, load3g(p->camera.position),
                            camera_ray(&p->camera, i % w, i / w));
     }
-    out[i] = (float4)(l, 1.0f);
+    out[i] = (float4)(saturate_radiance3(l), 1.0f);
 }

@@ -14,6 +14,10 @@ typedef float wide_t;
 #define WIDE_PI PI_F
 #endif
 
+// saturate_radiance in the wide type: at most FLT_MAX, so that times an albedo in [0, 1]
+// and cast to float it stays finite (CPU: deposit_screen.rs::saturate_wide).
+inline wide_t saturate_wide(wide_t x) { return fmin(x, (wide_t)RADIANCE_MAX); }
+
 inline wide_t join_u64_wide(uint lo, uint hi) {
 #ifdef cl_khr_fp64
     return (double)((ulong)lo | ((ulong)hi << 32));
@@ -39,12 +43,12 @@ __kernel void resolve_caustics(__global const DepositParams* p,
                                       cam->tan_half_fov_y);
     float area = pixel_surface_area(footprint, dot3(ray, load3g(cam->forward)),
                                     dot3(ray, load3g(g->normal)));
-    wide_t scale = (wide_t)p->flux_quantum / (WIDE_PI * (wide_t)area);
+    wide_t scale = saturate_wide((wide_t)p->flux_quantum / (WIDE_PI * (wide_t)area));
     wide_t n = join_u64_wide(t[8], t[9]);
     float4 l;
-    l.x = (float)(join_u64_wide(t[0], t[1]) * scale * (wide_t)g->albedo[0]);
-    l.y = (float)(join_u64_wide(t[2], t[3]) * scale * (wide_t)g->albedo[1]);
-    l.z = (float)(join_u64_wide(t[4], t[5]) * scale * (wide_t)g->albedo[2]);
+    l.x = (float)(saturate_wide(join_u64_wide(t[0], t[1]) * scale) * (wide_t)g->albedo[0]);
+    l.y = (float)(saturate_wide(join_u64_wide(t[2], t[3]) * scale) * (wide_t)g->albedo[1]);
+    l.z = (float)(saturate_wide(join_u64_wide(t[4], t[5]) * scale) * (wide_t)g->albedo[2]);
     l.w = (float)(join_u64_wide(t[6], t[7]) * (wide_t)p->hit_distance_quantum / n);
     out[i] = l;
 }

@@ -172,7 +172,7 @@ fn plain_against_direct(
     }
     sspm.free(backend)?;
 
-    let ds = DeviceScene::build(scene);
+    let ds = DeviceScene::build(scene, Default::default()).map_err(caustica_core::Error::from)?;
     let mut setup = Recording::new();
     let args = setup.upload_scene(&ds);
     let camera = GpuCamera::from_camera(&scene.camera);

@@ -1,4 +1,4 @@
-// needs: types vector footprint
+// needs: types vector optics footprint
 // bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
 // photon gather. Mirror of backend-opencl/kernels/bilateral_gather.cl and
 // backend-cpu/src/kernels/gather.rs.
@@ -71,7 +71,7 @@ fn bilateral_gather(index: u32) {
     }
     var o = vec3<f32>(0.0);
     if (wsum > 0.0) {
-        o = sum / wsum;
+        o = saturate_radiance3(sum / wsum);
     }
     out[i] = vec4<f32>(o, input[i].w);
 }

@@ -1,4 +1,4 @@
-// needs: types
+// needs: types vector optics
 // composite (seed 000 section 30.3.3): direct light + gathered caustics, alpha 1. Mirror
 // of backend-opencl/kernels/composite.cl and backend-cpu/src/kernels/composite.rs. The
 // texel count (the OpenCL `texels` argument) is the output's length.
@@ -12,7 +12,7 @@ fn composite(i: u32) {
     if (i >= texels) {
         return;
     }
-    out[i] = vec4<f32>(direct[i].xyz + caustics[i].xyz, 1.0);
+    out[i] = vec4<f32>(saturate_radiance3(direct[i].xyz + caustics[i].xyz), 1.0);
 }
 
 @compute @workgroup_size(64)

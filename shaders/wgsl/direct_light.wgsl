@@ -41,7 +41,7 @@ fn shade_diffuse(light_count: u32, pos: vec3<f32>, n: vec3<f32>, ng: vec3<f32>,
                                        light.cos_outer);
             }
             dist = d;
-            scale = falloff / d2;
+            scale = saturate_radiance(falloff / d2);
         }
         let cos_t = dot3(n, wi);
         if (cos_t <= 0.0 || scale <= 0.0 || dot3(ng, wi) <= 0.0) {
@@ -57,7 +57,7 @@ fn shade_diffuse(light_count: u32, pos: vec3<f32>, n: vec3<f32>, ng: vec3<f32>,
         if (occluded(origin, wi, t_max)) {
             continue;
         }
-        e += light.intensity.xyz * (scale * cos_t);
+        e = saturate_radiance3(e + light.intensity.xyz * (scale * cos_t));
     }
     return albedo / PI_F * e;
 }
@@ -151,7 +151,7 @@ fn direct_light(i: u32) {
     } else {
         l = specular_chain(p, p.camera.position, camera_ray(p.camera, i % w, i / w));
     }
-    out[i] = vec4<f32>(l, 1.0);
+    out[i] = vec4<f32>(saturate_radiance3(l), 1.0);
 }
 
 @compute @workgroup_size(64)

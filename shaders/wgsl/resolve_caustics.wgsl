@@ -1,4 +1,4 @@
-// needs: types vector footprint scene
+// needs: types vector optics footprint scene
 // resolve_caustics (seed 000 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
 // fixed-point flux sum; alpha = mean hit distance. Mirror of
 // backend-opencl/kernels/resolve_caustics.cl without cl_khr_fp64 (WGSL has no f64): the
@@ -35,12 +35,12 @@ fn resolve_caustics(i: u32) {
     let footprint = pixel_footprint(g.depth, cam.width, cam.height, cam.tan_half_fov_x,
                                     cam.tan_half_fov_y);
     let area = pixel_surface_area(footprint, dot3(ray, cam.forward), dot3(ray, g.normal));
-    let scale = p.flux_quantum / (WIDE_PI * area);
+    let scale = saturate_radiance(p.flux_quantum / (WIDE_PI * area));
     let n = join_u64_wide(photon_map[t + 8u], photon_map[t + 9u]);
     var l: vec4<f32>;
-    l.x = join_u64_wide(photon_map[t + 0u], photon_map[t + 1u]) * scale * g.albedo.x;
-    l.y = join_u64_wide(photon_map[t + 2u], photon_map[t + 3u]) * scale * g.albedo.y;
-    l.z = join_u64_wide(photon_map[t + 4u], photon_map[t + 5u]) * scale * g.albedo.z;
+    l.x = saturate_radiance(join_u64_wide(photon_map[t + 0u], photon_map[t + 1u]) * scale) * g.albedo.x;
+    l.y = saturate_radiance(join_u64_wide(photon_map[t + 2u], photon_map[t + 3u]) * scale) * g.albedo.y;
+    l.z = saturate_radiance(join_u64_wide(photon_map[t + 4u], photon_map[t + 5u]) * scale) * g.albedo.z;
     l.w = join_u64_wide(photon_map[t + 6u], photon_map[t + 7u]) * p.hit_distance_quantum / n;
     out[i] = l;
 }

@@ -108,11 +108,19 @@ pub fn resolve_caustics(
                 return [0.0; 4];
             }
             let area = gbuffer_pixel_area(cam, i as u32, g);
-            let scale = p.flux_quantum as f64 / (std::f64::consts::PI * area as f64);
-            let l = |ch: usize| (join_u64(t.flux[ch]) as f64 * scale * g.albedo[ch] as f64) as f32;
+            let scale = saturate_wide(p.flux_quantum as f64 / (std::f64::consts::PI * area as f64));
+            let l = |ch: usize| {
+                (saturate_wide(join_u64(t.flux[ch]) as f64 * scale) * g.albedo[ch] as f64) as f32
+            };
             let hit =
                 (join_u64(t.hit_distance) as f64 * p.hit_distance_quantum as f64 / n as f64) as f32;
             [l(0), l(1), l(2), hit]
         })
         .collect()
+}
+
+/// `saturate_radiance` in the resolve's wide (f64) arithmetic: at most f32::MAX, so the
+/// product with an albedo in [0, 1] and the cast to f32 stay finite.
+fn saturate_wide(x: f64) -> f64 {
+    x.min(caustica_core::math::optics::RADIANCE_MAX as f64)
 }

@@ -11,7 +11,9 @@ use caustica_core::device::layout::{
     camera_ray, light_kind, material_kind, DirectParams, GBufferTexel,
 };
 use caustica_core::math::geometry::offset_ray_origin;
-use caustica_core::math::optics::{beer_lambert, fresnel_dielectric, reflect, refract};
+use caustica_core::math::optics::{
+    beer_lambert, fresnel_dielectric, reflect, refract, saturate_radiance, saturate_radiance3,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -51,6 +53,7 @@ pub fn direct_light(
                     camera_ray(&p.camera, i % w, i / w),
                 )
             };
+            let l = saturate_radiance3(l);
             [l.x, l.y, l.z, 1.0]
         })
         .collect()
@@ -82,7 +85,7 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
                 } else {
                     1.0
                 };
-                (wi, d, falloff / d2)
+                (wi, d, saturate_radiance(falloff / d2))
             }
         };
         let cos = n.dot(wi);
@@ -98,7 +101,7 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
         if scene.occluded(origin, wi, t_max) {
             continue;
         }
-        e += Vec3::from_slice(&light.intensity[..3]) * (scale * cos);
+        e = saturate_radiance3(e + Vec3::from_slice(&light.intensity[..3]) * (scale * cos));
     }
     albedo / PI * e
 }

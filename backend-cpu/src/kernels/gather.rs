@@ -115,7 +115,11 @@ pub fn bilateral_gather(
                 sum += wgt * Vec3::from_slice(&input[q][..3]);
                 wsum += wgt;
             }
-            let o = if wsum > 0.0 { sum / wsum } else { Vec3::ZERO };
+            let o = if wsum > 0.0 {
+                caustica_core::math::optics::saturate_radiance3(sum / wsum)
+            } else {
+                Vec3::ZERO
+            };
             [o.x, o.y, o.z, input[i as usize][3]]
         })
         .collect()

@@ -51,3 +51,11 @@ inline float3 dielectric_scatter(float3 incident, float3 shading_normal, bool en
     if (refract(incident, facing, eta, &t)) return normalize3(t);
     return reflect(incident, facing);
 }
+
+// Largest radiance, irradiance or scale factor a kernel carries: f32::MAX (core:
+// optics::RADIANCE_MAX). Overflow saturates instead of becoming Inf (and Inf * 0 = NaN).
+#define RADIANCE_MAX FLT_MAX
+
+inline float saturate_radiance(float x) { return fmin(x, RADIANCE_MAX); }
+
+inline float3 saturate_radiance3(float3 v) { return fmin(v, (float3)(RADIANCE_MAX)); }

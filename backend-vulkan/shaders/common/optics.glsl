@@ -59,3 +59,11 @@ precise vec3 dielectric_scatter(vec3 incident, vec3 shading_normal, bool enterin
     if (refract3(incident, facing, eta, t)) return normalize3(t);
     return reflect3(incident, facing);
 }
+
+// Largest radiance, irradiance or scale factor a kernel carries: f32::MAX (core:
+// optics::RADIANCE_MAX). Overflow saturates instead of becoming Inf (and Inf * 0 = NaN).
+const float RADIANCE_MAX = 3.402823466e+38;
+
+float saturate_radiance(float x) { return min(x, RADIANCE_MAX); }
+
+vec3 saturate_radiance3(vec3 v) { return min(v, vec3(RADIANCE_MAX)); }

@@ -71,7 +71,8 @@ impl Fixture {
         settings
             .validate()
             .map_err(|e| format!("invalid settings: {e}"))?;
-        let ds = DeviceScene::build(scene);
+        let ds = DeviceScene::build(scene, Default::default())
+            .map_err(|e| format!("scene {name} does not build: {e}"))?;
         let mut rec = Recording::new();
         let args = rec.upload_scene(&ds);
         reference

@@ -6,6 +6,9 @@
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
 };
+use crate::scene::limits::{
+    is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
+};
 use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene};
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};
@@ -33,26 +36,116 @@ pub struct DeviceScene {
     pub caster_bounds: Aabb,
     /// True when some dielectric has a non-zero Cauchy B.
     pub has_dispersion: bool,
+    /// Triangles dropped because their area is zero in f32.
+    pub degenerate_triangles: u64,
 }
 
 /// `[u32; 4]` vectors per CWBVH node in `bvh_nodes` (80 bytes).
 pub const BVH_NODE_VEC4S: usize = 5;
 
+/// Why a scene could not be flattened: a problem of the scene (named by its field path)
+/// or host memory that could not be reserved.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The scene is unusable as given (`path` names the field, as validation does).
+    #[error("{path}: {reason}")]
+    Scene {
+        /// Field path, e.g. `objects[2].shape`.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A host allocation failed (`try_reserve`).
+    #[error("out of host memory allocating {bytes} bytes for {what}")]
+    HostMemory {
+        /// Size requested (bytes).
+        bytes: u64,
+        /// What the memory was for.
+        what: String,
+    },
+}
+
+/// Budgets of a scene build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildBudget {
+    /// Most triangles the tessellated scene may have (default
+    /// [`DEFAULT_MAX_TRIANGLES`]).
+    pub max_triangles: u64,
+}
+
+impl Default for BuildBudget {
+    fn default() -> Self {
+        BuildBudget {
+            max_triangles: DEFAULT_MAX_TRIANGLES,
+        }
+    }
+}
+
 impl DeviceScene {
     /// Tessellates, flattens and builds the BVH. The scene must have passed
-    /// [`Scene::validate`].
-    pub fn build(scene: &Scene) -> DeviceScene {
+    /// [`Scene::validate`]. Before anything is allocated, the triangle count (computed
+    /// from the shapes) is checked against `budget`; triangles of zero area in f32 are
+    /// dropped (counted in [`DeviceScene::degenerate_triangles`]); an object left with
+    /// no triangle, or more than [`MAX_COINCIDENT_TRIANGLES`] triangles with one bounding
+    /// box, is an error.
+    pub fn build(scene: &Scene, budget: BuildBudget) -> Result<DeviceScene, BuildError> {
         let names: Vec<&String> = scene.materials.keys().collect();
         let materials = scene.materials.values().map(gpu_material).collect();
-        let mut vertices = Vec::new();
-        let mut tris = Vec::new();
+        let (mut vertex_total, mut triangle_total) = (0u64, 0u64);
+        for o in &scene.objects {
+            let (v, t) = tessellated_size(&o.shape);
+            vertex_total += v;
+            triangle_total += t;
+        }
+        if triangle_total > budget.max_triangles {
+            return Err(BuildError::Scene {
+                path: "objects".into(),
+                reason: format!(
+                    "the scene tessellates to {triangle_total} triangles, over the budget of \
+                     {} (setting max_triangles; about 200 bytes of host memory each)",
+                    budget.max_triangles
+                ),
+            });
+        }
+        if vertex_total > u32::MAX as u64 {
+            return Err(BuildError::Scene {
+                path: "objects".into(),
+                reason: format!("{vertex_total} vertices; at most 2^32 - 1 can be indexed"),
+            });
+        }
+        let mut vertices: Vec<GpuVertex> = Vec::new();
+        let mut tris: Vec<GpuTriangle> = Vec::new();
+        reserve(&mut vertices, vertex_total, "scene vertices")?;
+        reserve(&mut tris, triangle_total, "scene triangles")?;
         let mut bounds = Aabb::EMPTY;
         let mut caster_bounds = Aabb::EMPTY;
-        for o in &scene.objects {
+        let mut degenerate_triangles = 0u64;
+        for (k, o) in scene.objects.iter().enumerate() {
             let mat = names.iter().position(|n| **n == o.material).unwrap_or(0) as u32;
             let specular = scene.materials[&o.material].is_specular();
             let m = tessellate(&o.shape);
             let base = vertices.len() as u32;
+            let kept_before = tris.len();
+            for t in &m.indices {
+                if is_degenerate(&m, *t) {
+                    degenerate_triangles += 1;
+                } else {
+                    tris.push(GpuTriangle {
+                        indices: t.map(|i| i + base),
+                        material: mat,
+                    });
+                }
+            }
+            if tris.len() == kept_before {
+                return Err(BuildError::Scene {
+                    path: format!("objects[{k}].shape"),
+                    reason: format!(
+                        "all {} triangles have zero area in f32 (the shape collapses to a \
+                         point or a line)",
+                        m.indices.len()
+                    ),
+                });
+            }
             for i in 0..m.positions.len() {
                 let p = m.positions[i];
                 bounds.grow(p);
@@ -66,20 +159,15 @@ impl DeviceScene {
                     v: m.uvs[i].y,
                 });
             }
-            for t in &m.indices {
-                tris.push(GpuTriangle {
-                    indices: t.map(|i| i + base),
-                    material: mat,
-                });
-            }
         }
+        check_coincident(scene, &vertices, &tris)?;
         let has_dispersion = scene
             .materials
             .values()
             .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
         let lights = scene.lights.iter().map(gpu_light).collect();
-        let (triangles, bvh_nodes) = build_bvh(&vertices, tris);
-        DeviceScene {
+        let (triangles, bvh_nodes) = build_bvh(&vertices, tris)?;
+        Ok(DeviceScene {
             vertices,
             triangles,
             materials,
@@ -88,7 +176,8 @@ impl DeviceScene {
             bounds,
             caster_bounds,
             has_dispersion,
-        }
+            degenerate_triangles,
+        })
     }
 
     /// Number of CWBVH nodes.
@@ -97,26 +186,91 @@ impl DeviceScene {
     }
 }
 
-fn build_bvh(vertices: &[GpuVertex], tris: Vec<GpuTriangle>) -> (Vec<GpuTriangle>, Vec<[u32; 4]>) {
-    let p = |i: u32| Vec3A::from(vertices[i as usize].position);
-    let obvhs_tris: Vec<Triangle> = tris
-        .iter()
-        .map(|t| Triangle {
-            v0: p(t.indices[0]),
-            v1: p(t.indices[1]),
-            v2: p(t.indices[2]),
+/// Reserves room for `n` more elements, or says how much memory was missing.
+fn reserve<T>(v: &mut Vec<T>, n: u64, what: &str) -> Result<(), BuildError> {
+    let bytes = n.saturating_mul(std::mem::size_of::<T>() as u64);
+    usize::try_from(n)
+        .ok()
+        .and_then(|n| v.try_reserve_exact(n).ok())
+        .ok_or_else(|| BuildError::HostMemory {
+            bytes,
+            what: what.into(),
         })
-        .collect();
+}
+
+/// Refuses more than [`MAX_COINCIDENT_TRIANGLES`] triangles with one bounding box (the
+/// BVH build is quadratic in them). Boxes are compared through a 64-bit hash of their
+/// six coordinates' bits, sorted; a hash collision could only make the check stricter.
+fn check_coincident(
+    scene: &Scene,
+    vertices: &[GpuVertex],
+    tris: &[GpuTriangle],
+) -> Result<(), BuildError> {
+    let mut keys: Vec<(u64, u32)> = Vec::new();
+    reserve(&mut keys, tris.len() as u64, "coincident-triangle check")?;
+    for (i, t) in tris.iter().enumerate() {
+        let mut b = Aabb::EMPTY;
+        for v in t.indices {
+            b.grow(Vec3::from(vertices[v as usize].position));
+        }
+        let mut h = 0xcbf2_9ce4_8422_2325u64; // FNV-1a over the bits
+        for x in b.min.to_array().into_iter().chain(b.max.to_array()) {
+            h = (h ^ x.to_bits() as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+        keys.push((h, i as u32));
+    }
+    keys.sort_unstable();
+    let mut run = 1u32;
+    for w in keys.windows(2) {
+        run = if w[0].0 == w[1].0 { run + 1 } else { 1 };
+        if run > MAX_COINCIDENT_TRIANGLES {
+            // name the object owning the triangle (objects are contiguous, in order)
+            let first = tris[w[1].1 as usize].indices[0] as u64;
+            let mut end = 0u64;
+            let mut object = 0;
+            for (k, o) in scene.objects.iter().enumerate() {
+                end += tessellated_size(&o.shape).0;
+                if first < end {
+                    object = k;
+                    break;
+                }
+            }
+            return Err(BuildError::Scene {
+                path: format!("objects[{object}].shape"),
+                reason: format!(
+                    "more than {MAX_COINCIDENT_TRIANGLES} triangles share one bounding box \
+                     (coincident geometry); the BVH build degrades quadratically on it"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn build_bvh(
+    vertices: &[GpuVertex],
+    tris: Vec<GpuTriangle>,
+) -> Result<(Vec<GpuTriangle>, Vec<[u32; 4]>), BuildError> {
+    let p = |i: u32| Vec3A::from(vertices[i as usize].position);
+    let mut obvhs_tris: Vec<Triangle> = Vec::new();
+    reserve(&mut obvhs_tris, tris.len() as u64, "BVH build triangles")?;
+    obvhs_tris.extend(tris.iter().map(|t| Triangle {
+        v0: p(t.indices[0]),
+        v1: p(t.indices[1]),
+        v2: p(t.indices[2]),
+    }));
     let mut build_time = Duration::ZERO;
     let bvh = build_cwbvh_from_tris(&obvhs_tris, BvhBuildParams::medium_build(), &mut build_time);
+    drop(obvhs_tris);
     // Reorder triangles into leaf order; leaf slots then index triangles directly.
-    let ordered: Vec<GpuTriangle> = bvh
-        .primitive_indices
-        .iter()
-        .map(|&i| tris[i as usize])
-        .collect();
+    let mut ordered: Vec<GpuTriangle> = Vec::new();
+    reserve(&mut ordered, tris.len() as u64, "BVH-ordered triangles")?;
+    ordered.extend(bvh.primitive_indices.iter().map(|&i| tris[i as usize]));
     let nodes: &[[u32; 4]] = bytemuck::cast_slice::<CwBvhNode, [u32; 4]>(&bvh.nodes);
-    (ordered, nodes.to_vec())
+    let mut out: Vec<[u32; 4]> = Vec::new();
+    reserve(&mut out, nodes.len() as u64, "BVH nodes")?;
+    out.extend_from_slice(nodes);
+    Ok((ordered, out))
 }
 
 fn gpu_material(m: &Material) -> GpuMaterial {

@@ -1,6 +1,7 @@
 //! Errors of the library's front door: what a technique's `new`, `frame` and updates
 //! return.
 
+use crate::device::device_scene::BuildError;
 use crate::device::error::BackendError;
 
 /// Errors of the library's front door.
@@ -15,4 +16,16 @@ pub enum Error {
     #[error(transparent)]
     /// The backend failed (driver, memory, device lost, ...).
     Backend(#[from] BackendError),
+}
+
+impl From<BuildError> for Error {
+    fn from(e: BuildError) -> Error {
+        match e {
+            BuildError::Scene { .. } => Error::InvalidScene(e.to_string()),
+            BuildError::HostMemory { bytes, what } => Error::Backend(BackendError::OutOfMemory {
+                bytes,
+                what: format!("{what} (host memory)"),
+            }),
+        }
+    }
 }

@@ -89,6 +89,9 @@ pub struct FrameStats {
     pub fixed_point_underflow: u64,
     /// Flux quantum of the fixed-point deposit (W).
     pub flux_quantum: f64,
+    /// Triangles of the scene dropped before the BVH build because their area is zero in
+    /// f32 (collapsed vertices; see [`crate::scene::limits`]).
+    pub degenerate_triangles: u64,
     /// Device bytes held by the technique this frame (peak).
     pub bytes_allocated: u64,
     /// Trace-and-deposit batches run.

@@ -8,6 +8,7 @@
 
 pub mod builtin;
 pub mod format;
+pub mod limits;
 pub mod shapes;
 mod validate;
 

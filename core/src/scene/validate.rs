@@ -1,6 +1,10 @@
 //! Physical and structural validation of a [`Scene`]: every problem is reported with the
 //! path of the offending field, so the file loader can point at its line.
 
+use super::limits::{
+    MAX_COORDINATE, MAX_INTENSITY, MAX_IOR, MAX_LENGTH, MAX_LIGHTS, MIN_EXTENT_PER_POSITION,
+    MIN_IOR, MIN_LENGTH,
+};
 use super::{Light, Material, Scene, Shape};
 use glam::{Vec2, Vec3};
 
@@ -42,11 +46,6 @@ impl Check {
         }
         true
     }
-    fn positive(&mut self, path: &str, v: f32) {
-        if self.finite(path, v) && v <= 0.0 {
-            self.fail(path, format!("must be > 0, got {v}"));
-        }
-    }
     fn nonneg3(&mut self, path: &str, v: Vec3) {
         if self.finite3(path, v) && v.min_element() < 0.0 {
             self.fail(path, "must not be negative");
@@ -61,8 +60,78 @@ impl Check {
         }
     }
     fn direction(&mut self, path: &str, v: Vec3) {
-        if self.finite3(path, v) && v.length_squared() < 1e-20 {
+        if self.coord3(path, v) && v.length_squared() < 1e-20 {
             self.fail(path, "zero-length direction");
+        }
+    }
+    /// A point (or a vector of point size): finite, every coordinate within
+    /// `MAX_COORDINATE` (2^40, see `limits`).
+    fn coord3(&mut self, path: &str, v: Vec3) -> bool {
+        if !self.finite3(path, v) {
+            return false;
+        }
+        if v.abs().max_element() > MAX_COORDINATE {
+            self.fail(
+                path,
+                format!(
+                    "coordinate {:e} is beyond the bound +-{MAX_COORDINATE:e} (2^40) that keeps \
+                     f32 products of three lengths finite",
+                    v.abs().max_element()
+                ),
+            );
+            return false;
+        }
+        true
+    }
+    /// A length (radius, side, ...): finite, in [MIN_LENGTH, MAX_LENGTH] (2^-40, 2^41).
+    fn length(&mut self, path: &str, v: f32) -> bool {
+        if !self.finite(path, v) {
+            return false;
+        }
+        if !(MIN_LENGTH..=MAX_LENGTH).contains(&v) {
+            self.fail(
+                path,
+                format!(
+                    "must be in [{MIN_LENGTH:e}, {MAX_LENGTH:e}] (2^-40 to 2^41 scene units), \
+                     got {v:e}"
+                ),
+            );
+            return false;
+        }
+        true
+    }
+    /// A shape around `center` reaching `reach` from it (both valid) with smallest feature
+    /// `extent`: it must stay inside the coordinate bound and span at least 2^-16 of its
+    /// centre's largest coordinate (128 f32 ulps there), or its vertices collapse.
+    fn placed(&mut self, path: &str, center: Vec3, reach: f32, extent: f32) {
+        let c = center.abs().max_element();
+        if c + reach > MAX_COORDINATE {
+            self.fail(
+                path,
+                format!(
+                    "reaches {:e} from the origin, beyond the coordinate bound {MAX_COORDINATE:e}",
+                    c + reach
+                ),
+            );
+        } else if extent < c * MIN_EXTENT_PER_POSITION {
+            self.fail(
+                path,
+                format!(
+                    "is {extent:e} across at {c:e} from the origin: below f32 resolution there \
+                     (at least 2^-16 of the distance, {:e}, is needed or its vertices collapse)",
+                    c * MIN_EXTENT_PER_POSITION
+                ),
+            );
+        }
+    }
+    /// A non-negative per-channel quantity at most `bound`.
+    fn bounded3(&mut self, path: &str, v: Vec3, bound: f32, what: &str) {
+        self.nonneg3(path, v);
+        if v.is_finite() && v.max_element() > bound {
+            self.fail(
+                path,
+                format!("{what} {:e} exceeds the bound {bound:e}", v.max_element()),
+            );
         }
     }
 }
@@ -73,17 +142,15 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
     };
     // camera
     let cam = &s.camera;
-    c.finite3("camera.position", cam.position);
-    c.finite3("camera.target", cam.target);
+    c.coord3("camera.position", cam.position);
+    c.coord3("camera.target", cam.target);
     c.direction("camera.up", cam.up);
     if (cam.target - cam.position).length_squared() < 1e-20 {
         c.fail("camera.target", "camera target equals its position");
     } else if cam.up.is_finite()
-        && (cam.target - cam.position)
-            .normalize()
-            .cross(cam.up.normalize_or_zero())
-            .length()
-            < 1e-6
+        && cam.target.is_finite()
+        && cam.position.is_finite()
+        && unit(cam.target - cam.position).cross(unit(cam.up)).length() < 1e-6
     {
         c.fail("camera.up", "up is parallel to the view direction");
     }
@@ -110,25 +177,37 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 cauchy_b,
                 absorption,
             } => {
-                if c.finite(&format!("{p}.ior"), *ior) && *ior <= 0.0 {
+                if c.finite(&format!("{p}.ior"), *ior) && !(MIN_IOR..=MAX_IOR).contains(ior) {
                     c.fail(
                         format!("{p}.ior"),
-                        format!("index of refraction must be > 0, got {ior}"),
+                        format!(
+                            "index of refraction must be in [{MIN_IOR:e}, {MAX_IOR:e}] \
+                             (2^-20 to 2^20, so eta^2 stays finite), got {ior:e}"
+                        ),
                     );
                 }
                 if c.finite(&format!("{p}.cauchy_b"), *cauchy_b) {
                     // n must stay positive over the visible channels
                     for wl in crate::math::optics::CHANNEL_WAVELENGTH_UM {
-                        if crate::math::optics::cauchy_ior(*ior, *cauchy_b, wl) <= 0.0 {
+                        let n = crate::math::optics::cauchy_ior(*ior, *cauchy_b, wl);
+                        if !(MIN_IOR..=MAX_IOR).contains(&n) {
                             c.fail(
                                 format!("{p}.cauchy_b"),
-                                format!("makes the index <= 0 at {wl} um"),
+                                format!(
+                                    "makes the index {n:e} at {wl} um, outside \
+                                     [{MIN_IOR:e}, {MAX_IOR:e}]"
+                                ),
                             );
                             break;
                         }
                     }
                 }
-                c.nonneg3(&format!("{p}.absorption"), *absorption);
+                c.bounded3(
+                    &format!("{p}.absorption"),
+                    *absorption,
+                    MAX_INTENSITY,
+                    "absorption",
+                );
             }
         }
     }
@@ -156,7 +235,7 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                     c.fail(&sp, "empty mesh (no positions or no triangles)");
                 }
                 for (k, v) in positions.iter().enumerate() {
-                    c.finite3(&format!("{sp}.positions[{k}]"), *v);
+                    c.coord3(&format!("{sp}.positions[{k}]"), *v);
                 }
                 if !normals.is_empty() && normals.len() != positions.len() {
                     c.fail(
@@ -194,16 +273,27 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 radius,
                 segments,
             } => {
-                c.finite3(&format!("{sp}.center"), *center);
-                c.positive(&format!("{sp}.radius"), *radius);
+                if c.coord3(&format!("{sp}.center"), *center)
+                    & c.length(&format!("{sp}.radius"), *radius)
+                {
+                    c.placed(&sp, *center, *radius, *radius);
+                }
                 if !(3..=4096).contains(segments) {
                     c.fail(format!("{sp}.segments"), "must be in 3..=4096");
                 }
             }
             Shape::Quad { center, u, v } => {
-                c.finite3(&format!("{sp}.center"), *center);
-                if c.finite3(&format!("{sp}.u"), *u)
-                    && c.finite3(&format!("{sp}.v"), *v)
+                let placed = c.coord3(&format!("{sp}.center"), *center);
+                let (u_ok, v_ok) = (
+                    c.coord3(&format!("{sp}.u"), *u),
+                    c.coord3(&format!("{sp}.v"), *v),
+                );
+                if placed && u_ok && v_ok {
+                    let (ua, va) = (u.abs().max_element(), v.abs().max_element());
+                    c.placed(&sp, *center, ua + va, ua.min(va));
+                }
+                if u_ok
+                    && v_ok
                     // unit vectors first: at 1e-10 units |u x v|^2 underflows to 0
                     && u.normalize_or_zero()
                         .cross(v.normalize_or_zero())
@@ -214,11 +304,13 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 }
             }
             Shape::Cuboid { min, max } => {
-                if c.finite3(&format!("{sp}.min"), *min)
-                    && c.finite3(&format!("{sp}.max"), *max)
-                    && !(max.cmpgt(*min).all())
-                {
-                    c.fail(format!("{sp}.max"), "max must exceed min on every axis");
+                if c.coord3(&format!("{sp}.min"), *min) & c.coord3(&format!("{sp}.max"), *max) {
+                    if !(max.cmpgt(*min).all()) {
+                        c.fail(format!("{sp}.max"), "max must exceed min on every axis");
+                    } else {
+                        let center = (*min + *max) * 0.5;
+                        c.placed(&sp, center, 0.0, (*max - *min).min_element());
+                    }
                 }
             }
             Shape::Ring {
@@ -228,10 +320,18 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 height,
                 segments,
             } => {
-                c.finite3(&format!("{sp}.center"), *center);
-                c.positive(&format!("{sp}.radius"), *radius);
-                c.positive(&format!("{sp}.thickness"), *thickness);
-                c.positive(&format!("{sp}.height"), *height);
+                let ok = c.coord3(&format!("{sp}.center"), *center)
+                    & c.length(&format!("{sp}.radius"), *radius)
+                    & c.length(&format!("{sp}.thickness"), *thickness)
+                    & c.length(&format!("{sp}.height"), *height);
+                if ok {
+                    c.placed(
+                        &sp,
+                        *center,
+                        radius + thickness + height,
+                        radius.min(*thickness).min(*height),
+                    );
+                }
                 if !(3..=8192).contains(segments) {
                     c.fail(format!("{sp}.segments"), "must be in 3..=8192");
                 }
@@ -241,9 +341,12 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 side,
                 length,
             } => {
-                c.finite3(&format!("{sp}.center"), *center);
-                c.positive(&format!("{sp}.side"), *side);
-                c.positive(&format!("{sp}.length"), *length);
+                let ok = c.coord3(&format!("{sp}.center"), *center)
+                    & c.length(&format!("{sp}.side"), *side)
+                    & c.length(&format!("{sp}.length"), *length);
+                if ok {
+                    c.placed(&sp, *center, side + length, side.min(*length));
+                }
             }
             Shape::HeightField {
                 center,
@@ -251,21 +354,45 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 resolution,
                 waves,
             } => {
-                c.finite3(&format!("{sp}.center"), *center);
+                let mut ok = c.coord3(&format!("{sp}.center"), *center);
                 if !(size.is_finite() && size.cmpgt(Vec2::ZERO).all()) {
                     c.fail(format!("{sp}.size"), "must be positive and finite");
+                    ok = false;
+                } else {
+                    ok &= c.length(&format!("{sp}.size"), size.max_element())
+                        & c.length(&format!("{sp}.size"), size.min_element());
+                }
+                let amplitude: f32 = waves.iter().map(|w| w.amplitude.abs()).sum();
+                if ok && amplitude.is_finite() {
+                    c.placed(
+                        &sp,
+                        *center,
+                        size.max_element() + amplitude,
+                        size.min_element(),
+                    );
                 }
                 if !(1..=4096).contains(resolution) {
                     c.fail(format!("{sp}.resolution"), "must be in 1..=4096");
                 }
                 for (k, w) in waves.iter().enumerate() {
-                    c.finite(&format!("{sp}.waves[{k}].amplitude"), w.amplitude);
-                    c.positive(&format!("{sp}.waves[{k}].wavelength"), w.wavelength);
+                    if c.finite(&format!("{sp}.waves[{k}].amplitude"), w.amplitude)
+                        && w.amplitude.abs() > MAX_LENGTH
+                    {
+                        c.fail(
+                            format!("{sp}.waves[{k}].amplitude"),
+                            format!("must be within +-{MAX_LENGTH:e} (2^41)"),
+                        );
+                    }
+                    c.length(&format!("{sp}.waves[{k}].wavelength"), w.wavelength);
                     c.finite(&format!("{sp}.waves[{k}].phase"), w.phase);
-                    if !(w.direction.is_finite() && w.direction.length_squared() > 0.0) {
+                    let d = w.direction;
+                    if !(d.is_finite()
+                        && d.abs().max_element() <= MAX_COORDINATE
+                        && d.length_squared() > 1e-20)
+                    {
                         c.fail(
                             format!("{sp}.waves[{k}].direction"),
-                            "zero-length or non-finite direction",
+                            "zero-length, non-finite or out-of-bound direction",
                         );
                     }
                 }
@@ -276,6 +403,16 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
     if s.lights.is_empty() {
         c.fail("lights", "the scene has no lights");
     }
+    if s.lights.len() > MAX_LIGHTS {
+        c.fail(
+            "lights",
+            format!(
+                "{} lights; at most {MAX_LIGHTS} (each costs a photon pass and a shadow ray \
+                 per pixel)",
+                s.lights.len()
+            ),
+        );
+    }
     for (i, l) in s.lights.iter().enumerate() {
         let p = format!("lights[{i}]");
         match l {
@@ -283,8 +420,13 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 position,
                 intensity,
             } => {
-                c.finite3(&format!("{p}.position"), *position);
-                c.nonneg3(&format!("{p}.intensity"), *intensity);
+                c.coord3(&format!("{p}.position"), *position);
+                c.bounded3(
+                    &format!("{p}.intensity"),
+                    *intensity,
+                    MAX_INTENSITY,
+                    "intensity",
+                );
             }
             Light::Spot {
                 position,
@@ -293,9 +435,14 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 inner_angle_deg,
                 outer_angle_deg,
             } => {
-                c.finite3(&format!("{p}.position"), *position);
+                c.coord3(&format!("{p}.position"), *position);
                 c.direction(&format!("{p}.direction"), *direction);
-                c.nonneg3(&format!("{p}.intensity"), *intensity);
+                c.bounded3(
+                    &format!("{p}.intensity"),
+                    *intensity,
+                    MAX_INTENSITY,
+                    "intensity",
+                );
                 if c.finite(&format!("{p}.outer_angle_deg"), *outer_angle_deg)
                     && !(*outer_angle_deg > 0.0 && *outer_angle_deg <= 180.0)
                 {
@@ -319,11 +466,15 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 projection_volume,
             } => {
                 c.direction(&format!("{p}.direction"), *direction);
-                c.nonneg3(&format!("{p}.irradiance"), *irradiance);
+                c.bounded3(
+                    &format!("{p}.irradiance"),
+                    *irradiance,
+                    MAX_INTENSITY,
+                    "irradiance",
+                );
                 if let Some(b) = projection_volume {
                     let pv = format!("{p}.projection_volume");
-                    if c.finite3(&format!("{pv}.min"), b.min)
-                        && c.finite3(&format!("{pv}.max"), b.max)
+                    if c.coord3(&format!("{pv}.min"), b.min) & c.coord3(&format!("{pv}.max"), b.max)
                         && !b.max.cmpge(b.min).all()
                     {
                         c.fail(format!("{pv}.max"), "max must not be below min");
@@ -336,5 +487,15 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
         Ok(())
     } else {
         Err(c.problems)
+    }
+}
+
+/// `v` scaled to unit length without overflow (largest component first).
+fn unit(v: Vec3) -> Vec3 {
+    let m = v.abs().max_element();
+    if m > 0.0 {
+        (v / m).normalize_or_zero()
+    } else {
+        Vec3::ZERO
     }
 }

@@ -61,3 +61,15 @@ fn dielectric_scatter(incident: vec3<f32>, shading_normal: vec3<f32>, entering: 
     }
     return reflect(incident, facing);
 }
+
+// Largest radiance, irradiance or scale factor a kernel carries: f32::MAX (core:
+// optics::RADIANCE_MAX). Overflow saturates instead of becoming Inf (and Inf * 0 = NaN).
+const RADIANCE_MAX: f32 = 0x1.fffffep+127f;
+
+fn saturate_radiance(x: f32) -> f32 {
+    return min(x, RADIANCE_MAX);
+}
+
+fn saturate_radiance3(v: vec3<f32>) -> vec3<f32> {
+    return min(v, vec3<f32>(RADIANCE_MAX));
+}

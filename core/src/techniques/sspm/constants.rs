@@ -52,6 +52,23 @@ impl FrameConstants {
         )
     }
 
+    /// Refuses a light whose emitted flux is not finite or over
+    /// [`crate::scene::limits::MAX_LIGHT_FLUX`] (a directional light's irradiance times a
+    /// huge projection area), naming the light.
+    pub fn check_light_flux(&self) -> Result<(), crate::frame::error::Error> {
+        use crate::scene::limits::MAX_LIGHT_FLUX;
+        for (i, d) in &self.domains {
+            let f = d.flux.max_element();
+            if !(f.is_finite() && f <= MAX_LIGHT_FLUX) {
+                return Err(crate::frame::error::Error::InvalidScene(format!(
+                    "lights[{i}]: emits {f:e} W per channel into its emission domain, over \
+                     the bound {MAX_LIGHT_FLUX:e} W (2^100) that keeps a frame's flux finite"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// [`FrameConstants::new`] from the device scene's bounds (scene, casters) and whether
     /// a material disperses: what a light update re-plans with.
     pub fn for_bounds(

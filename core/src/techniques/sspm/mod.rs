@@ -22,7 +22,7 @@ pub use plan::{plan_frame, Needs};
 pub use settings::SspmSettings;
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::DeviceScene;
+use crate::device::device_scene::{BuildBudget, DeviceScene};
 use crate::device::handle::{Buf, ImageBuf, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -87,6 +87,8 @@ struct SceneBounds {
     bounds: crate::math::geometry::Aabb,
     caster_bounds: crate::math::geometry::Aabb,
     has_dispersion: bool,
+    /// Triangles the build dropped for zero area in f32.
+    degenerate_triangles: u64,
 }
 
 impl Sspm {
@@ -101,11 +103,17 @@ impl Sspm {
         scene
             .validate()
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-        let ds = DeviceScene::build(scene);
+        let ds = DeviceScene::build(
+            scene,
+            BuildBudget {
+                max_triangles: settings.max_triangles,
+            },
+        )?;
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
 
         let constants = FrameConstants::new(scene, &ds, &settings);
+        constants.check_light_flux()?;
         let mut plan = plan_frame(scene, &constants, settings.outputs, settings.prune);
         let needs = Needs::of_plan(&plan);
         let out = settings.outputs;
@@ -182,6 +190,7 @@ impl Sspm {
                 bounds: ds.bounds,
                 caster_bounds: ds.caster_bounds,
                 has_dispersion: ds.has_dispersion,
+                degenerate_triangles: ds.degenerate_triangles,
             },
         })
     }
@@ -241,6 +250,7 @@ impl Sspm {
             },
             flux_quantum: self.constants.flux_quantum as f64,
             bytes_allocated: self.bytes,
+            degenerate_triangles: self.bounds.degenerate_triangles,
             plan: Some(self.plan.clone()),
             ..Default::default()
         };
@@ -528,6 +538,7 @@ impl Sspm {
             b.has_dispersion,
             &self.settings,
         );
+        constants.check_light_flux()?;
         let mut plan = plan_frame(
             &model,
             &constants,

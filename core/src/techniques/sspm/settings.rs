@@ -51,6 +51,9 @@ pub struct SspmSettings {
     /// Leave out passes, kernel features, buffers and lights the scene and outputs do
     /// not need (default). Off: everything runs, the baseline pruning is checked against.
     pub prune: bool,
+    /// Most triangles the tessellated scene may have; checked before anything is
+    /// allocated (default [`crate::scene::limits::DEFAULT_MAX_TRIANGLES`], 2^24).
+    pub max_triangles: u64,
 }
 
 impl Default for SspmSettings {
@@ -74,6 +77,7 @@ impl Default for SspmSettings {
             max_photons_per_batch: 1 << 20,
             outputs: Outputs::default(),
             prune: true,
+            max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
         }
     }
 }
@@ -85,6 +89,9 @@ impl SspmSettings {
         let total = self.photons_w as u64 * self.photons_h as u64;
         if self.photons_w == 0 || self.photons_h == 0 || total > u32::MAX as u64 {
             return bad("photon grid must be at least 1x1 and at most 2^32 - 1 photons per light");
+        }
+        if self.max_triangles == 0 {
+            return bad("max_triangles must be >= 1");
         }
         if self.max_bounces == 0 || self.max_bounces > 1024 {
             return bad("max_bounces must be in 1..=1024");
