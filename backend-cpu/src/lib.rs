@@ -231,6 +231,7 @@ impl Backend for CpuBackend {
             int64_atomics: true,
             timestamps: false,
             max_buffer_bytes: isize::MAX as u64,
+            max_buffer_limit: "host address space",
         }
     }
 

@@ -15,7 +15,7 @@ impl Storage {
     pub fn zeroed(bytes: u64, label: &str) -> Result<Storage, BackendError> {
         let oom = || BackendError::OutOfMemory {
             bytes,
-            what: label.to_string(),
+            what: format!("{label} (host memory)"),
         };
         let n = usize::try_from(bytes.div_ceil(8)).map_err(|_| oom())?;
         let mut words = Vec::new();

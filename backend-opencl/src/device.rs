@@ -68,6 +68,9 @@ pub struct DeviceSummary {
     /// GPU (integrated when it shares host memory), or a CPU device (a GPU API in
     /// software, as PoCL's).
     pub device_type: DeviceType,
+    /// Device buffers live in host memory (a CPU device such as PoCL's, or a GPU with
+    /// `CL_DEVICE_HOST_UNIFIED_MEMORY`).
+    pub host_memory: bool,
     /// Largest single buffer, bytes (`CL_DEVICE_MAX_MEM_ALLOC_SIZE`).
     pub max_alloc_bytes: u64,
     /// Device memory, bytes (`CL_DEVICE_GLOBAL_MEM_SIZE`).
@@ -178,6 +181,7 @@ fn summary(platform: Platform, device: Device) -> Result<DeviceSummary, BackendE
         version,
         is_gpu,
         device_type,
+        host_memory: device_type != DeviceType::DiscreteGpu,
         max_alloc_bytes,
         global_mem_bytes,
         int64_atomics: extensions.contains("cl_khr_int64_base_atomics"),

@@ -137,7 +137,8 @@ impl OpenClBackend {
         let oom = || BackendError::OutOfMemory {
             bytes,
             what: format!(
-                "{label} (device allows {} bytes per buffer)",
+                "{label} (over the device allocation size, CL_DEVICE_MAX_MEM_ALLOC_SIZE = {} \
+                 bytes)",
                 self.state.info.max_alloc_bytes
             ),
         };
@@ -145,6 +146,21 @@ impl OpenClBackend {
             return Err(oom());
         }
         let size = usize::try_from(bytes.max(4)).map_err(|_| oom())?;
+        if self.state.info.host_memory {
+            // PoCL backs a buffer with host memory and aborts the process (an assertion in
+            // pocl_util.c) when that allocation fails: reserve the same size here first
+            // (address space only, nothing is touched) and report failure as an error.
+            let mut probe: Vec<u8> = Vec::new();
+            probe
+                .try_reserve_exact(size)
+                .map_err(|_| BackendError::OutOfMemory {
+                    bytes,
+                    what: format!(
+                        "{label} (host memory: this OpenCL device keeps its buffers in host \
+                         memory, and {bytes} bytes could not be reserved)"
+                    ),
+                })?;
+        }
         // Drop a replaced buffer first so that its memory is free for the new one.
         self.buffers.remove(&id);
         let mut mem = unsafe {
@@ -205,6 +221,7 @@ impl Backend for OpenClBackend {
             int64_atomics: i.int64_atomics,
             timestamps: true,
             max_buffer_bytes: i.max_alloc_bytes,
+            max_buffer_limit: "device allocation size (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
         }
     }
 

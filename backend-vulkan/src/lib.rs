@@ -296,6 +296,13 @@ impl Backend for VulkanBackend {
                 .ctx
                 .max_allocation
                 .min(self.ctx.limits.max_storage_buffer_range as u64),
+            max_buffer_limit: if self.ctx.max_allocation
+                < self.ctx.limits.max_storage_buffer_range as u64
+            {
+                "device allocation size (maxMemoryAllocationSize)"
+            } else {
+                "storage-binding size (maxStorageBufferRange)"
+            },
         }
     }
 

@@ -367,6 +367,13 @@ impl Backend for WgpuBackend {
                 .limits
                 .max_buffer_size
                 .min(self.limits.max_storage_buffer_binding_size),
+            max_buffer_limit: if self.limits.max_buffer_size
+                < self.limits.max_storage_buffer_binding_size
+            {
+                "device allocation size (max_buffer_size)"
+            } else {
+                "storage-binding size (max_storage_buffer_binding_size)"
+            },
         }
     }
 

@@ -80,8 +80,12 @@ pub struct Capabilities {
     pub int64_atomics: bool,
     /// Kernel times ([`PassTime`]) are device timestamps; otherwise host wall clock.
     pub timestamps: bool,
-    /// Largest single buffer the device accepts (bytes).
+    /// Largest single buffer a kernel can use (bytes): the smaller of the device's largest
+    /// allocation and its largest storage binding.
     pub max_buffer_bytes: u64,
+    /// Which limit `max_buffer_bytes` is, in words (e.g. "storage-binding size
+    /// (maxStorageBufferRange)"), for error messages.
+    pub max_buffer_limit: &'static str,
 }
 
 /// Wall or device time of one executed kernel.

@@ -37,7 +37,7 @@ enum Command {
         #[arg(long, value_parser = parse_grid)]
         photons: Option<(u32, u32)>,
         /// Image size WxH (default: the scene camera's).
-        #[arg(long, value_parser = parse_grid)]
+        #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
         /// Frame seed of the random numbers.
         #[arg(long)]
@@ -83,7 +83,7 @@ enum Command {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
         /// Image size WxH of the measurements and the references.
-        #[arg(long, default_value = "480x270", value_parser = parse_grid)]
+        #[arg(long, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
         /// Relative standard error at which a reference counts as converged.
         #[arg(long, default_value_t = 0.02)]
@@ -112,6 +112,16 @@ fn parse_grid(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = (p(a)?, p(b)?);
     if w == 0 || h == 0 {
         return Err(format!("'{s}': both sizes must be at least 1"));
+    }
+    Ok((w, h))
+}
+
+/// `--size WxH`: a grid whose sides fit a camera (1..=16384 pixels, as the scene format's
+/// `camera.width` and `camera.height`), so that the flag, not the camera, is named.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = parse_grid(s)?;
+    if w > 16384 || h > 16384 {
+        return Err(format!("'{s}': an image side must be at most 16384 pixels"));
     }
     Ok((w, h))
 }

@@ -20,13 +20,16 @@ pub struct Allocation {
 }
 
 /// Checks every buffer that `rec` creates or uploads against the device's largest buffer
-/// (and, on wgpu and Vulkan, its largest storage binding) and returns them, before `rec`
-/// is executed.
+/// (its allocation limit or, on wgpu and Vulkan, its storage-binding size, whichever is
+/// smaller) and returns them, before `rec` is executed. `frame` is the image size: when
+/// a per-pixel buffer is too large, the error says which frame size would fit.
 pub fn planned_allocation(
     backend: &dyn Backend,
     rec: &Recording,
+    frame: Option<(u32, u32)>,
 ) -> Result<Allocation, BackendError> {
-    let largest = backend.capabilities().max_buffer_bytes;
+    let caps = backend.capabilities();
+    let largest = caps.max_buffer_bytes;
     let mut a = Allocation::default();
     for s in &rec.steps {
         let (id, b, label) = match s {
@@ -35,11 +38,16 @@ pub fn planned_allocation(
             _ => continue,
         };
         if b > largest {
+            let fit = frame
+                .and_then(|(w, h)| fitting_frame(w, h, b, largest))
+                .map(|(fw, fh)| format!("; at this aspect ratio a frame of {fw}x{fh} fits"))
+                .unwrap_or_default();
             return Err(BackendError::OutOfMemory {
                 bytes: b,
                 what: format!(
-                    "{label}: the {} backend's device binds at most {largest} bytes per buffer",
-                    backend.name()
+                    "{label}: over the {} backend's {} of {largest} bytes per buffer{fit}",
+                    backend.name(),
+                    caps.max_buffer_limit
                 ),
             });
         }
@@ -51,4 +59,42 @@ pub fn planned_allocation(
         });
     }
     Ok(a)
+}
+
+/// The largest `w' x h'` of aspect `w : h` whose per-pixel buffer (`bytes` for `w x h`
+/// pixels, so `bytes / (w h)` per pixel) fits in `limit`; None when `bytes` is not a
+/// per-pixel buffer of that frame or nothing fits.
+pub fn fitting_frame(w: u32, h: u32, bytes: u64, limit: u64) -> Option<(u32, u32)> {
+    let pixels = w as u64 * h as u64;
+    if pixels == 0 || bytes % pixels != 0 {
+        return None;
+    }
+    let per_pixel = bytes / pixels;
+    let max_pixels = limit / per_pixel;
+    let scale = (max_pixels as f64 / pixels as f64).sqrt();
+    let (mut fw, mut fh) = (
+        (w as f64 * scale).floor() as u64,
+        (h as f64 * scale).floor() as u64,
+    );
+    while fw * fh > max_pixels && fw > 0 && fh > 0 {
+        // rounding of the square root: shrink until it fits
+        fw -= 1;
+        fh = fh.min(fw * h as u64 / w as u64 + 1);
+    }
+    (fw > 0 && fh > 0).then_some((fw as u32, fh as u32))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fitting_frame;
+
+    #[test]
+    fn fitting_frame_fits_and_keeps_the_aspect() {
+        // lavapipe: 128 MiB per binding, 64-byte G-buffer texels at 2560x1440
+        let (w, h) = fitting_frame(2560, 1440, 2560 * 1440 * 64, 128 << 20).unwrap();
+        assert!(w as u64 * h as u64 * 64 <= 128 << 20);
+        assert!((w as f64 / h as f64 - 16.0 / 9.0).abs() < 0.01);
+        assert!(w >= 1900, "{w}x{h}");
+        assert_eq!(fitting_frame(10, 10, 101, 50), None);
+    }
 }

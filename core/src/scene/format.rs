@@ -42,11 +42,30 @@ impl std::error::Error for SceneFileError {}
 /// Reads, parses and validates a scene file.
 pub fn load_scene_file(path: &Path) -> Result<Scene, SceneFileError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneFileError {
+    let fail = |reason: String| SceneFileError {
         file: file.clone(),
         line: 0,
         column: 0,
-        reason: format!("cannot read: {e}"),
+        reason,
+    };
+    // Read at most one byte past the limit: a huge file, a pipe or /dev/zero is refused
+    // after MAX_SCENE_FILE_BYTES, not after filling memory.
+    let limit = super::limits::MAX_SCENE_FILE_BYTES;
+    let f = std::fs::File::open(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(f, limit + 1), &mut bytes)
+        .map_err(|e| fail(format!("cannot read: {e}")))?;
+    if bytes.len() as u64 > limit {
+        return Err(fail(format!(
+            "larger than the {} MiB a scene file may have",
+            limit >> 20
+        )));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        fail(format!(
+            "not UTF-8 text (byte {})",
+            e.utf8_error().valid_up_to()
+        ))
     })?;
     parse_scene(&text, &file)
 }

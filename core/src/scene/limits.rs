@@ -102,3 +102,69 @@ pub fn is_degenerate(m: &TriangleMesh, t: [u32; 3]) -> bool {
     let n = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
     !(n.is_finite() && n != glam::Vec3::ZERO)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::shapes::tessellate;
+    use crate::scene::Wave;
+    use glam::{Vec2, Vec3};
+
+    #[test]
+    fn tessellated_size_is_what_tessellate_makes() {
+        let shapes = [
+            Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                segments: 3,
+            },
+            Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                segments: 97,
+            },
+            Shape::Quad {
+                center: Vec3::ZERO,
+                u: Vec3::X,
+                v: Vec3::Z,
+            },
+            Shape::Cuboid {
+                min: Vec3::ZERO,
+                max: Vec3::ONE,
+            },
+            Shape::Ring {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                thickness: 0.1,
+                height: 0.2,
+                segments: 5,
+            },
+            Shape::Prism {
+                center: Vec3::ZERO,
+                side: 1.0,
+                length: 2.0,
+            },
+            Shape::HeightField {
+                center: Vec3::ZERO,
+                size: Vec2::ONE,
+                resolution: 7,
+                waves: vec![Wave {
+                    amplitude: 0.1,
+                    wavelength: 0.5,
+                    direction: Vec2::X,
+                    phase: 0.0,
+                }],
+            },
+        ];
+        for s in &shapes {
+            let m = tessellate(s);
+            assert_eq!(
+                tessellated_size(s),
+                (m.positions.len() as u64, m.indices.len() as u64),
+                "{s:?}"
+            );
+            // procedural shapes at sane sizes have no degenerate triangle
+            assert!(!m.indices.iter().any(|t| is_degenerate(&m, *t)), "{s:?}");
+        }
+    }
+}

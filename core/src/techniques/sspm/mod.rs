@@ -167,7 +167,7 @@ impl Sspm {
             raw_caustics: raw_caustics.filter(|_| keep(out.raw_caustics)),
             filtered_caustics: filtered_caustics.filter(|_| keep(out.filtered_caustics)),
         };
-        let allocation = planned_allocation(backend, &rec)?;
+        let allocation = planned_allocation(backend, &rec, Some((w, h)))?;
         plan.buffers = allocation.buffers;
         backend.execute(&rec)?;
         Ok(Sspm {
