@@ -160,3 +160,49 @@ fn stats_json_lists_passes_run_and_skipped_with_reasons() {
     assert!(out_dir.join("plain_caustics_filtered.exr").exists());
     let _ = std::fs::remove_dir_all(&out_dir);
 }
+
+#[test]
+fn size_over_the_camera_bound_names_the_flag() {
+    fails_cleanly(
+        &["render", "--scene", "sphere", "--size", "100000x100000"],
+        "--size",
+    );
+}
+
+/// PoCL backs every buffer with host memory and aborted the process when it could not
+/// (`pocl_util.c: Assertion 'p->mem_ptr != NULL'`). Under an 8 GB address-space limit an
+/// 8192x8192 frame of `sphere` (a 4.3 GB G-buffer, a 2.7 GB photon map, 1 GB images) must end in a one-line out-of-memory error.
+#[test]
+fn opencl_out_of_host_memory_is_an_error_not_an_abort() {
+    let probe = caustica(&["backends"]);
+    let listing = String::from_utf8_lossy(&probe.stdout).to_string();
+    let required = std::env::var("CAUSTICA_REQUIRE_BACKENDS").unwrap_or_default();
+    if !listing
+        .lines()
+        .any(|l| l.starts_with("opencl") && !l.contains("unavailable"))
+    {
+        assert!(
+            !required.contains("opencl"),
+            "opencl is required but not available: {listing}"
+        );
+        eprintln!("SKIPPING: no OpenCL device here: {listing}");
+        return;
+    }
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 8000000 && exec '{}' render --scene sphere --backend opencl \
+             --size 8192x8192 --photons 16x16 --out '{}'",
+            env!("CARGO_BIN_EXE_caustica"),
+            std::env::temp_dir()
+                .join(format!("caustica-oom-{}", std::process::id()))
+                .display()
+        ))
+        .output()
+        .expect("sh runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "not a clean failure: {stderr}");
+    assert!(stderr.contains("out of memory"), "{stderr}");
+    assert!(stderr.contains("host memory"), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+}
