@@ -271,7 +271,10 @@ impl Backend for CpuBackend {
     }
 
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
-        Ok(self.get(id)?.bytes().to_vec())
+        let src = self.get(id)?.bytes();
+        let mut out = caustica_core::device::host_bytes(src.len() as u64, "reading a buffer back")?;
+        out.copy_from_slice(src);
+        Ok(out)
     }
 
     fn variants(&self) -> Vec<String> {

@@ -272,7 +272,7 @@ impl Backend for OpenClBackend {
 
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         let b = self.buffer(id)?;
-        let mut out = vec![0u8; b.bytes as usize];
+        let mut out = caustica_core::device::host_bytes(b.bytes, "reading a buffer back")?;
         if !out.is_empty() {
             unsafe {
                 self.queue

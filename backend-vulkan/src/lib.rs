@@ -259,7 +259,7 @@ impl VulkanBackend {
                 &[vk::BufferCopy::default().size(bytes)],
             )
         })?;
-        Ok(staging.read(bytes as usize))
+        staging.read(bytes as usize)
     }
 }
 

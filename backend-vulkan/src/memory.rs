@@ -136,13 +136,16 @@ impl Buffer {
     }
 
     /// Reads `len` bytes of a host-visible buffer.
-    pub fn read(&self, len: usize) -> Vec<u8> {
-        let mut out = vec![0u8; len.min(self.size as usize)];
+    pub fn read(&self, len: usize) -> Result<Vec<u8>, BackendError> {
+        let mut out = caustica_core::device::host_bytes(
+            len.min(self.size as usize) as u64,
+            "reading a buffer back",
+        )?;
         if let Some(p) = self.mapped {
             // SAFETY: the mapping covers `size` bytes.
             unsafe { std::ptr::copy_nonoverlapping(p, out.as_mut_ptr(), out.len()) };
         }
-        out
+        Ok(out)
     }
 
     pub fn address(&self) -> vk::DeviceAddress {

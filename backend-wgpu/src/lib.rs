@@ -343,7 +343,9 @@ impl WgpuBackend {
             let view = slice
                 .get_mapped_range()
                 .map_err(|e| BackendError::Driver(format!("reading back: {e}")))?;
-            view[..bytes as usize].to_vec()
+            let mut out = caustica_core::device::host_bytes(bytes, "reading a buffer back")?;
+            out.copy_from_slice(&view[..bytes as usize]);
+            out
         };
         staging.unmap();
         Ok(out)

@@ -40,3 +40,18 @@ pub enum BackendError {
     #[error("driver error: {0}")]
     Driver(String),
 }
+
+/// A zeroed host buffer of `bytes` bytes for `what`, or [`BackendError::OutOfMemory`]
+/// naming host memory: what every backend reads device buffers back into, so that a
+/// readback the host cannot hold is an error, not an abort.
+pub fn host_bytes(bytes: u64, what: &str) -> Result<Vec<u8>, BackendError> {
+    let oom = || BackendError::OutOfMemory {
+        bytes,
+        what: format!("{what} (host memory)"),
+    };
+    let n = usize::try_from(bytes).map_err(|_| oom())?;
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| oom())?;
+    v.resize(n, 0);
+    Ok(v)
+}

@@ -14,5 +14,5 @@ pub mod layout;
 pub mod layout_table;
 
 pub use device_scene::DeviceScene;
-pub use error::BackendError;
+pub use error::{host_bytes, BackendError};
 pub use handle::{Buf, ImageBuf, ResourceId, SceneArgs};
