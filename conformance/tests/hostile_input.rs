@@ -616,6 +616,7 @@ static NOT_A_SCENE: AtomicUsize = AtomicUsize::new(0);
 static INVALID: AtomicUsize = AtomicUsize::new(0);
 static REFUSED: AtomicUsize = AtomicUsize::new(0);
 static RENDERED: AtomicUsize = AtomicUsize::new(0);
+static SLOWEST_MS: AtomicUsize = AtomicUsize::new(0);
 
 proptest! {
     #![proptest_config(ProptestConfig {
@@ -659,6 +660,7 @@ proptest! {
             }
         }
         let secs = t0.elapsed();
+        SLOWEST_MS.fetch_max(secs.as_millis() as usize, Ordering::Relaxed);
         prop_assert!(secs < CASE_BOUND, "{mutations:?} took {secs:?}");
         let counts = [&NOT_A_SCENE, &INVALID, &REFUSED, &RENDERED]
             .map(|c| c.load(Ordering::Relaxed));
@@ -667,8 +669,12 @@ proptest! {
             eprintln!(
                 "fuzz: {total} files: {} not a scene (syntax, type, missing or unknown \
                  field; located), {} refused by validation, {} refused by the build or \
-                 creation, {} rendered finite",
-                counts[0], counts[1], counts[2], counts[3]
+                 creation, {} rendered finite; slowest case {} ms",
+                counts[0],
+                counts[1],
+                counts[2],
+                counts[3],
+                SLOWEST_MS.load(Ordering::Relaxed)
             );
         }
     }
