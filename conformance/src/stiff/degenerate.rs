@@ -172,7 +172,9 @@ pub(super) fn photons_1(b: &mut dyn Backend) -> Result<Outcome, String> {
 
 /// A cheap scene for the huge cases: a vertical mirror quad standing on the plane's far
 /// side, point light above.
-fn cheap_scene((w, h): (u32, u32)) -> Scene {
+/// The built-in sphere scene at `w x h` with the sphere replaced by a mirror quad: a
+/// handful of triangles, so that a frame's cost is its pixels (large-frame cases).
+pub fn cheap_scene((w, h): (u32, u32)) -> Scene {
     let mut s = sized(builtin::sphere(), (w, h));
     s.materials.insert(
         "mirror".into(),

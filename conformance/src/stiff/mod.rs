@@ -55,6 +55,7 @@ mod scenes;
 mod screen;
 mod termination;
 
+pub use degenerate::cheap_scene;
 pub use runner::universal;
 pub use scenes::transform_scene;
 
