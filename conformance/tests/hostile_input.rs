@@ -663,7 +663,7 @@ proptest! {
         let counts = [&NOT_A_SCENE, &INVALID, &REFUSED, &RENDERED]
             .map(|c| c.load(Ordering::Relaxed));
         let total: usize = counts.iter().sum();
-        if total % 256 == 0 {
+        if total.is_multiple_of(256) {
             eprintln!(
                 "fuzz: {total} files: {} not a scene (syntax, type, missing or unknown \
                  field; located), {} refused by validation, {} refused by the build or \

@@ -66,7 +66,7 @@ pub fn planned_allocation(
 /// per-pixel buffer of that frame or nothing fits.
 pub fn fitting_frame(w: u32, h: u32, bytes: u64, limit: u64) -> Option<(u32, u32)> {
     let pixels = w as u64 * h as u64;
-    if pixels == 0 || bytes % pixels != 0 {
+    if pixels == 0 || !bytes.is_multiple_of(pixels) {
         return None;
     }
     let per_pixel = bytes / pixels;

@@ -143,6 +143,24 @@ pub fn dielectric_scatter(
     }
 }
 
+/// Largest radiance, irradiance or radiometric scale factor a kernel carries (f32::MAX).
+/// A value that overflows (a light touching a surface: `I / d^2` with `d -> 0`; a pixel
+/// footprint that flushes to zero) saturates here instead of becoming Inf, so that a
+/// zero channel times it stays 0, never NaN (see `scene::limits`).
+pub const RADIANCE_MAX: f32 = f32::MAX;
+
+/// `min(x, RADIANCE_MAX)`: Inf saturates to f32::MAX; finite values pass unchanged.
+#[inline]
+pub fn saturate_radiance(x: f32) -> f32 {
+    x.min(RADIANCE_MAX)
+}
+
+/// [`saturate_radiance`] per channel.
+#[inline]
+pub fn saturate_radiance3(v: Vec3) -> Vec3 {
+    v.min(Vec3::splat(RADIANCE_MAX))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -237,22 +255,4 @@ mod tests {
         assert_eq!(t, Vec3::ZERO);
         assert!(t.is_finite());
     }
-}
-
-/// Largest radiance, irradiance or radiometric scale factor a kernel carries (f32::MAX).
-/// A value that overflows (a light touching a surface: `I / d^2` with `d -> 0`; a pixel
-/// footprint that flushes to zero) saturates here instead of becoming Inf, so that a
-/// zero channel times it stays 0, never NaN (see `scene::limits`).
-pub const RADIANCE_MAX: f32 = f32::MAX;
-
-/// `min(x, RADIANCE_MAX)`: Inf saturates to f32::MAX; finite values pass unchanged.
-#[inline]
-pub fn saturate_radiance(x: f32) -> f32 {
-    x.min(RADIANCE_MAX)
-}
-
-/// [`saturate_radiance`] per channel.
-#[inline]
-pub fn saturate_radiance3(v: Vec3) -> Vec3 {
-    v.min(Vec3::splat(RADIANCE_MAX))
 }
