@@ -187,26 +187,18 @@ impl Recording {
     /// Records an upload of G-buffer texels into new planes.
     pub fn upload_gbuffer(&mut self, texels: &[GBufferTexel]) -> GBufferPlanes {
         let planes = gbuffer_to_planes(texels);
-        let mut k = 0;
         GBufferPlanes {
-            planes: GBUFFER_LABELS.map(|label| {
-                k += 1;
-                self.upload(&planes[k - 1], label)
-            }),
+            planes: std::array::from_fn(|k| self.upload(&planes[k], GBUFFER_LABELS[k])),
         }
     }
 
     /// Records creation of a zeroed screen photon map of `pixels` texels, as its planes.
     pub fn create_photon_map(&mut self, pixels: u32) -> PhotonMapPlanes {
-        let mut k = 0;
+        // at most 4 words a pixel: 4 x 16384^2 (the largest camera) fits a u32 length
         PhotonMapPlanes {
-            planes: PHOTON_MAP_LABELS.map(|label| {
-                k += 1;
-                // at most 4 words per pixel: 4 x 16384^2 (the largest camera) fits a u32
-                self.create(
-                    pixels.saturating_mul(DEPOSIT_PLANE_WORDS[k - 1] as u32),
-                    label,
-                )
+            planes: std::array::from_fn(|k| {
+                let words = pixels.saturating_mul(DEPOSIT_PLANE_WORDS[k] as u32);
+                self.create(words, PHOTON_MAP_LABELS[k])
             }),
         }
     }
@@ -214,12 +206,8 @@ impl Recording {
     /// Records an upload of photon-map texels into new planes.
     pub fn upload_photon_map(&mut self, texels: &[DepositTexel]) -> PhotonMapPlanes {
         let planes = deposit_to_planes(texels);
-        let mut k = 0;
         PhotonMapPlanes {
-            planes: PHOTON_MAP_LABELS.map(|label| {
-                k += 1;
-                self.upload(&planes[k - 1], label)
-            }),
+            planes: std::array::from_fn(|k| self.upload(&planes[k], PHOTON_MAP_LABELS[k])),
         }
     }
 
