@@ -15,7 +15,8 @@ mod storage;
 pub mod traversal;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
-use caustica_core::device::handle::ResourceId;
+use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};
+use caustica_core::device::layout::{GBufferView, PhotonMapView};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer,
@@ -98,7 +99,21 @@ impl CpuBackend {
                 gbuffer,
             }) => {
                 let out = gbuffer::primary_gbuffer(&view(scene)?, camera);
-                self.put(gbuffer.id, &out)
+                // plane by plane, with no second copy of the G-buffer (8192^2: 4 GiB)
+                for (k, b) in gbuffer.planes.iter().enumerate() {
+                    use rayon::prelude::*;
+                    let plane = self.get_mut(b.id)?.as_mut_slice(b.len)?;
+                    if plane.len() != out.len() {
+                        return Err(BackendError::BadArgument(
+                            "G-buffer plane and camera differ in size".into(),
+                        ));
+                    }
+                    plane
+                        .par_iter_mut()
+                        .zip(out.par_iter())
+                        .for_each(|(p, t): (&mut [u32; 4], _)| *p = t.to_planes()[k]);
+                }
+                Ok(())
             }
             Kernel::DirectLight(DirectLight {
                 scene,
@@ -106,7 +121,7 @@ impl CpuBackend {
                 gbuffer,
                 out,
             }) => {
-                let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
+                let g = self.gbuffer(gbuffer)?;
                 let img = direct_light::direct_light(&view(scene)?, params, g);
                 self.put(out.id, &img)
             }
@@ -144,12 +159,13 @@ impl CpuBackend {
             }) => {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
                 let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
-                let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
-                let bufs_map = self
-                    .buffers
-                    .get(&photon_map.id)
-                    .ok_or(BackendError::MissingResource(photon_map.id))?;
-                let atomics = bufs_map.as_atomic_u64(photon_map.bytes())?;
+                let g = self.gbuffer(gbuffer)?;
+                let [a, b, c] = photon_map.planes;
+                let atomics = [
+                    get(a.id)?.as_atomic_u64(a.bytes())?,
+                    get(b.id)?.as_atomic_u64(b.bytes())?,
+                    get(c.id)?.as_atomic_u64(c.bytes())?,
+                ];
                 let c = deposit_screen::deposit_screen(params, g, ph, atomics);
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
@@ -160,8 +176,8 @@ impl CpuBackend {
                 photon_map,
                 out,
             }) => {
-                let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
-                let m = get(photon_map.id)?.as_slice(photon_map.len)?;
+                let g = self.gbuffer(gbuffer)?;
+                let m = self.photon_map(photon_map)?;
                 let img = deposit_screen::resolve_caustics(params, g, m);
                 self.put(out.id, &img)
             }
@@ -170,7 +186,7 @@ impl CpuBackend {
                 photon_map,
                 tiles,
             }) => {
-                let m = get(photon_map.id)?.as_slice(photon_map.len)?;
+                let m = self.photon_map(photon_map)?;
                 let t = gather::tile_hit_distance(params, m);
                 self.put(tiles.id, &t)
             }
@@ -181,7 +197,7 @@ impl CpuBackend {
                 input,
                 out,
             }) => {
-                let g = get(gbuffer.id)?.as_slice(gbuffer.len)?;
+                let g = self.gbuffer(gbuffer)?;
                 let t = get(tiles.id)?.as_slice(tiles.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 let img = gather::bilateral_gather(params, g, t, i);
@@ -198,6 +214,31 @@ impl CpuBackend {
                 self.put(out.id, &img)
             }
         }
+    }
+
+    /// The G-buffer's planes (the kernels read texels through the view).
+    fn gbuffer(&self, g: &GBufferPlanes) -> Result<GBufferView<'_>, BackendError> {
+        let [a, b, c, d] = g.planes;
+        Ok(GBufferView {
+            planes: [
+                self.get(a.id)?.as_slice(a.len)?,
+                self.get(b.id)?.as_slice(b.len)?,
+                self.get(c.id)?.as_slice(c.len)?,
+                self.get(d.id)?.as_slice(d.len)?,
+            ],
+        })
+    }
+
+    /// The photon map's planes.
+    fn photon_map(&self, m: &PhotonMapPlanes) -> Result<PhotonMapView<'_>, BackendError> {
+        let [a, b, c] = m.planes;
+        Ok(PhotonMapView {
+            planes: [
+                self.get(a.id)?.as_slice(a.len)?,
+                self.get(b.id)?.as_slice(b.len)?,
+                self.get(c.id)?.as_slice(c.len)?,
+            ],
+        })
     }
 
     fn get(&self, id: ResourceId) -> Result<&Storage, BackendError> {

@@ -5,11 +5,11 @@
 // carry, so the map is bitwise identical to the CPU's for the same photons.
 
 __kernel void deposit_screen(__global const DepositParams* p,
-                             __global const GBufferTexel* gbuffer,
+                             GBUFFER_PARAMS(__global const),
                              __global const Photon* photons, uint photon_capacity,
                              __global const uint* photon_count,
                              volatile __global uint* counters,
-                             volatile __global uint* photon_map) {
+                             PHOTON_MAP_PARAMS(volatile __global)) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
@@ -21,21 +21,22 @@ __kernel void deposit_screen(__global const DepositParams* p,
             atomic_inc(&lc[COUNTER_OFF_SCREEN]);
         } else {
             uint pix = py * p->camera.width + px;
-            __global const GBufferTexel* g = &gbuffer[pix];
-            bool arrives_in_front = dot3(unpack_unit_vector(ph.direction), load3g(g->normal)) < 0.0f;
+            GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, pix);
+            const GBufferTexel* g = &gt;
+            bool arrives_in_front = dot3(unpack_unit_vector(ph.direction), load3(g->normal)) < 0.0f;
             if ((g->flags & GBUFFER_RECEIVER) == 0u ||
                 fabs(z - g->depth) > p->depth_tolerance * g->depth || !arrives_in_front) {
                 atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
             } else {
-                volatile __global uint* t = &photon_map[pix * 10u];
                 for (uint ch = 0u; ch < 3u; ch++) {
                     Quantized q = quantize(ph.flux[ch], p->flux_quantum);
                     if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
                     if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
-                    if (q.units != 0u) atomic_add_u64_global(&t[2u * ch], q.units, 0u);
+                    if (q.units != 0u) atomic_add_u64_photon_map(PHOTON_MAP_ARGS, pix, 2u * ch, q.units, 0u);
                 }
-                atomic_add_u64_global(&t[6], quantize(ph.hit_distance, p->hit_distance_quantum).units, 0u);
-                atomic_add_u64_global(&t[8], 1u, 0u);
+                atomic_add_u64_photon_map(PHOTON_MAP_ARGS, pix, 6u,
+                                          quantize(ph.hit_distance, p->hit_distance_quantum).units, 0u);
+                atomic_add_u64_photon_map(PHOTON_MAP_ARGS, pix, 8u, 1u, 0u);
                 atomic_inc(&lc[COUNTER_DEPOSITED]);
             }
         }

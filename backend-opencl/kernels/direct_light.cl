@@ -108,20 +108,21 @@ inline float3 specular_chain(SCENE_PARAMS, __global const DirectParams* p, float
 }
 
 __kernel void direct_light(SCENE_PARAMS, __global const DirectParams* p,
-                           __global const GBufferTexel* gbuffer, __global float4* out) {
+                           GBUFFER_PARAMS(__global const), __global float4* out) {
     uint i = get_global_id(0);
     uint w = p->camera.width;
     if (i >= w * p->camera.height) return;
-    __global const GBufferTexel* g = &gbuffer[i];
+    GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, i);
+    const GBufferTexel* g = &gt;
     if (g->depth <= 0.0f) {
         out[i] = (float4)(0.0f, 0.0f, 0.0f, 1.0f);
         return;
     }
     float3 l;
     if ((g->flags & GBUFFER_RECEIVER) != 0u) {
-        float3 n = load3g(g->normal);
-        l = shade_diffuse(SCENE_ARGS, p->light_count, load3g(g->position), n, n,
-                          load3g(g->albedo));
+        float3 n = load3(g->normal);
+        l = shade_diffuse(SCENE_ARGS, p->light_count, load3(g->position), n, n,
+                          load3(g->albedo));
     } else {
         l = specular_chain(SCENE_ARGS, p, load3g(p->camera.position),
                            camera_ray(&p->camera, i % w, i / w));

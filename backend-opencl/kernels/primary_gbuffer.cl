@@ -1,7 +1,7 @@
 // primary_gbuffer: one camera ray per pixel; mirror of backend-cpu/src/kernels/gbuffer.rs.
 
 __kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
-                              __global GBufferTexel* gbuffer) {
+                              GBUFFER_PARAMS(__global)) {
     uint i = get_global_id(0);
     if (i >= cam->width * cam->height) return;
     uint px = i % cam->width, py = i / cam->width;
@@ -12,7 +12,7 @@ __kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
     Hit hit;
     if (!closest_hit(nodes, node_count, vertices, triangles, origin, dir, INFINITY, &hit)) {
         g.material = NO_MATERIAL;
-        gbuffer[i] = g;
+        store_gbuffer(GBUFFER_ARGS, i, &g);
         return;
     }
     SurfacePoint s = hit_surface(vertices, triangles, &hit);
@@ -32,5 +32,5 @@ __kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
     g.uv[1] = s.uv.y;
     g.view_distance = hit.t;
     g.flags = diffuse ? GBUFFER_RECEIVER : 0u;
-    gbuffer[i] = g;
+    store_gbuffer(GBUFFER_ARGS, i, &g);
 }

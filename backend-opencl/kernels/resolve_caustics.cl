@@ -27,13 +27,15 @@ inline wide_t join_u64_wide(uint lo, uint hi) {
 }
 
 __kernel void resolve_caustics(__global const DepositParams* p,
-                               __global const GBufferTexel* gbuffer,
-                               __global const uint* photon_map, __global float4* out) {
+                               GBUFFER_PARAMS(__global const),
+                               PHOTON_MAP_PARAMS(__global const), __global float4* out) {
     uint i = get_global_id(0);
     __global const GpuCamera* cam = &p->camera;
     if (i >= cam->width * cam->height) return;
-    __global const uint* t = &photon_map[i * 10u];
-    __global const GBufferTexel* g = &gbuffer[i];
+    GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, i);
+    const GBufferTexel* g = &gt;
+    uint t[10];
+    for (uint k = 0u; k < 10u; k++) t[k] = photon_map_word(PHOTON_MAP_ARGS, i, k);
     if ((t[8] == 0u && t[9] == 0u) || (g->flags & GBUFFER_RECEIVER) == 0u) {
         out[i] = (float4)(0.0f);
         return;
@@ -42,7 +44,7 @@ __kernel void resolve_caustics(__global const DepositParams* p,
     float footprint = pixel_footprint(g->depth, cam->width, cam->height, cam->tan_half_fov_x,
                                       cam->tan_half_fov_y);
     float area = pixel_surface_area(footprint, dot3(ray, load3g(cam->forward)),
-                                    dot3(ray, load3g(g->normal)));
+                                    dot3(ray, load3(g->normal)));
     wide_t scale = saturate_wide((wide_t)p->flux_quantum / (WIDE_PI * (wide_t)area));
     wide_t n = join_u64_wide(t[8], t[9]);
     float4 l;

@@ -1,8 +1,8 @@
 // tile_hit_distance (seed 000 section 30.3.2): photon-weighted mean hit distance per
 // tile_size^2 tile, 0 for empty tiles. Mirror of backend-cpu/src/kernels/gather.rs.
 
-__kernel void tile_hit_distance(__global const GatherParams* p, __global const uint* photon_map,
-                                __global float* tiles) {
+__kernel void tile_hit_distance(__global const GatherParams* p,
+                                PHOTON_MAP_PARAMS(__global const), __global float* tiles) {
     uint w = p->camera.width, h = p->camera.height, ts = p->tile_size;
     uint tw = (w + ts - 1u) / ts, th = (h + ts - 1u) / ts;
     uint t = get_global_id(0);
@@ -11,9 +11,11 @@ __kernel void tile_hit_distance(__global const GatherParams* p, __global const u
     ulong sum = 0ul, n = 0ul;
     for (uint y = ty * ts; y < min((ty + 1u) * ts, h); y++) {
         for (uint x = tx * ts; x < min((tx + 1u) * ts, w); x++) {
-            __global const uint* m = &photon_map[(y * w + x) * 10u];
-            sum += (ulong)m[6] | ((ulong)m[7] << 32);
-            n += (ulong)m[8] | ((ulong)m[9] << 32);
+            uint m = y * w + x;
+            sum += (ulong)photon_map_word(PHOTON_MAP_ARGS, m, 6u) |
+                   ((ulong)photon_map_word(PHOTON_MAP_ARGS, m, 7u) << 32);
+            n += (ulong)photon_map_word(PHOTON_MAP_ARGS, m, 8u) |
+                 ((ulong)photon_map_word(PHOTON_MAP_ARGS, m, 9u) << 32);
         }
     }
     if (n == 0ul) {

@@ -36,6 +36,7 @@ pub const COMMON: &[(&str, &str)] = &[
         include_str!("../kernels/common/traversal.cl"),
     ),
     ("scene.cl", include_str!("../kernels/common/scene.cl")),
+    ("planes.cl", include_str!("../kernels/common/planes.cl")),
 ];
 
 /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in

@@ -145,10 +145,28 @@ pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, 
     let kernels = rec.steps.iter().filter(|s| is_kernel(s)).count() as u32;
     let d = b.ctx.device.clone();
     let sets = 2 * kernels.max(1);
+    // storage descriptors per set: the most any kernel of the list binds (the G-buffer
+    // and photon map count one per plane)
+    let storage_per_set = KERNELS
+        .iter()
+        .map(|k| {
+            k.descriptor_bindings()
+                .iter()
+                .filter(|b| {
+                    matches!(
+                        b,
+                        ShaderBinding::StorageRead | ShaderBinding::StorageReadWrite
+                    )
+                })
+                .count() as u32
+        })
+        .max()
+        .unwrap_or(0)
+        .max(1);
     let sizes = [
         vk::DescriptorPoolSize::default()
             .ty(S)
-            .descriptor_count(10 * sets),
+            .descriptor_count(storage_per_set * sets),
         vk::DescriptorPoolSize::default()
             .ty(U)
             .descriptor_count(sets),

@@ -119,8 +119,6 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
     ("direct_light.rgen", 5, Holds::Member, "DirectParams"),
     ("trace_photons.rgen", 5, Holds::Member, "TraceParams"),
     // outputs and inputs
-    ("primary_gbuffer.rgen", 6, Holds::Elements, "GBufferTexel"),
-    ("direct_light.rgen", 6, Holds::Elements, "GBufferTexel"),
     ("trace_photons.rgen", 6, Holds::Elements, "Photon"),
 ];
 
@@ -128,6 +126,11 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
 /// (glslang emits no type for an unused declaration), so nothing here can check them;
 /// the test fails if one gets bound somewhere without a [`BOUND`] row.
 const NOT_BOUND: &[(&str, &str)] = &[
+    (
+        "GBufferTexel",
+        "bound as four planes of uvec4 (core's GBUFFER_PLANES, 16 bytes a pixel each) and \
+         assembled by bit casts in common/gbuffer.glsl, so it lives only in registers",
+    ),
     (
         "DepositTexel",
         "deposit_screen, resolve_caustics and tile_hit_distance run on Vulkan as compute \

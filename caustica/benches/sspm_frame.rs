@@ -177,7 +177,7 @@ fn plain_against_direct(
     let args = setup.upload_scene(&ds);
     let camera = GpuCamera::from_camera(&scene.camera);
     let pixels = camera.width * camera.height;
-    let gbuffer = setup.create(pixels, "gbuffer");
+    let gbuffer = setup.create_gbuffer(pixels);
     let out = setup.create(pixels, "direct image");
     backend.execute(&setup)?;
     let mut rec = Recording::new();
@@ -210,7 +210,9 @@ fn plain_against_direct(
         free.steps.push(caustica_core::recording::Step::Free { id });
     }
     free.free(args.bvh_nodes);
-    free.free(gbuffer);
+    for p in gbuffer.planes {
+        free.free(p);
+    }
     free.free(out);
     backend.execute(&free)?;
     Ok((spread(frame), spread(direct)))

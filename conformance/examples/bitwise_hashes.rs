@@ -6,7 +6,7 @@
 //! `cargo run --release -p caustica-conformance --example bitwise_hashes > hashes.tsv`
 
 use caustica_conformance::{backends, small_settings};
-use caustica_core::backend::read_buf;
+use caustica_core::backend::{read_buf, read_gbuffer};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::{Output, Sspm};
 
@@ -42,7 +42,8 @@ fn main() {
                 let img = s.read_output(backend.as_mut(), o).expect("read");
                 line(o.stem(), bytemuck::cast_slice(&img.pixels));
             }
-            let g = read_buf(backend.as_mut(), s.gbuffer()).expect("gbuffer");
+            // the texels assembled from the planes: the same bytes as before the split
+            let g = read_gbuffer(backend.as_mut(), &s.gbuffer()).expect("gbuffer");
             line("gbuffer", bytemuck::cast_slice(&g));
             if let Some((p, n)) = s.photon_buffers() {
                 let n = read_buf(backend.as_mut(), n).expect("count")[0] as usize;

@@ -19,10 +19,11 @@ use caustica_conformance::kernels::{
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
-use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{read_gbuffer, Backend, BackendError, Capabilities, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::layout::{
-    counter, DepositTexel, GBufferTexel, GpuCamera, GpuVertex, Photon, NO_MATERIAL,
+    counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GpuCamera, GpuVertex, Photon,
+    DEPOSIT_PLANE_WORDS, NO_MATERIAL,
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
@@ -176,11 +177,17 @@ impl Mutant {
             (
                 Mutation::GbufferDepthIsDistance,
                 Kernel::PrimaryGbuffer(PrimaryGbuffer { gbuffer, .. }),
-            ) => self.modify::<GBufferTexel>(gbuffer.id, |g| {
+            ) => {
+                // the texels assembled from the planes, changed, split again
+                let mut g = read_gbuffer(&mut self.inner, gbuffer)?;
                 for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
                     t.depth = t.view_distance;
                 }
-            }),
+                for (b, p) in gbuffer.planes.iter().zip(gbuffer_to_planes(&g)) {
+                    self.modify::<GBufferPlaneTexel>(b.id, |v| *v = p)?;
+                }
+                Ok(())
+            }
             (
                 Mutation::DropPhotons,
                 Kernel::TracePhotons(TracePhotons {
@@ -233,11 +240,15 @@ impl Mutant {
             (
                 Mutation::DepositOffByOne,
                 Kernel::DepositScreen(DepositScreen { photon_map, .. }),
-            ) => self.modify::<DepositTexel>(photon_map.id, |m| {
-                for t in m.iter_mut().filter(|t| t.flux[0][0] > 0) {
-                    t.flux[0][0] -= 1;
-                }
-            }),
+            ) => {
+                // word 0 (flux r, lo) of every texel: plane 0, index 4 * pixel
+                let (k, _) = deposit_word(0, 0);
+                self.modify::<u32>(photon_map.planes[k].id, |m| {
+                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
+                        t[0] -= 1;
+                    }
+                })
+            }
             (Mutation::ResolveHigh, Kernel::ResolveCaustics(ResolveCaustics { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }

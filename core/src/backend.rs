@@ -3,7 +3,8 @@
 //! resources; core owns algorithms.
 
 pub use crate::device::error::BackendError;
-use crate::device::handle::{Buf, ResourceId};
+use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, ResourceId};
+use crate::device::layout::{deposit_from_planes, gbuffer_from_planes, DepositTexel, GBufferTexel};
 use crate::recording::Recording;
 
 /// What kind of device a backend runs on (what `auto` chooses by).
@@ -130,4 +131,35 @@ pub fn read_buf<T: bytemuck::Pod>(
         )));
     }
     Ok(bytemuck::pod_collect_to_vec(&bytes))
+}
+
+/// Reads the G-buffer's planes back and assembles its texels
+/// ([`crate::device::layout::gbuffer_from_planes`]).
+pub fn read_gbuffer(
+    backend: &mut dyn Backend,
+    g: &GBufferPlanes,
+) -> Result<Vec<GBufferTexel>, BackendError> {
+    let [a, b, c, d] = g.planes;
+    let (a, b, c, d) = (
+        read_buf(backend, a)?,
+        read_buf(backend, b)?,
+        read_buf(backend, c)?,
+        read_buf(backend, d)?,
+    );
+    Ok(gbuffer_from_planes([&a, &b, &c, &d]))
+}
+
+/// Reads the screen photon map's planes back and assembles its texels
+/// ([`crate::device::layout::deposit_from_planes`]).
+pub fn read_photon_map(
+    backend: &mut dyn Backend,
+    m: &PhotonMapPlanes,
+) -> Result<Vec<DepositTexel>, BackendError> {
+    let [a, b, c] = m.planes;
+    let (a, b, c) = (
+        read_buf(backend, a)?,
+        read_buf(backend, b)?,
+        read_buf(backend, c)?,
+    );
+    Ok(deposit_from_planes([&a, &b, &c]))
 }

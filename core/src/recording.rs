@@ -5,8 +5,11 @@
 
 use crate::device::device_scene::DeviceScene;
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, ResourceId, SceneArgs};
+use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::launch::Launch;
+use crate::device::layout::{
+    deposit_to_planes, gbuffer_to_planes, DepositTexel, GBufferTexel, DEPOSIT_PLANE_WORDS,
+};
 use crate::kernels::{Kernel, PrepareScene};
 
 /// A kernel as recorded: its typed arguments and their lowering, done once when it was
@@ -88,6 +91,21 @@ pub enum Step {
     },
 }
 
+/// Labels of the G-buffer's planes (errors and the frame plan name them).
+pub const GBUFFER_LABELS: [&str; 4] = [
+    "gbuffer plane 0 (position, depth)",
+    "gbuffer plane 1 (normal, roughness)",
+    "gbuffer plane 2 (albedo, material)",
+    "gbuffer plane 3 (uv, view distance, flags)",
+];
+
+/// Labels of the screen photon map's planes.
+pub const PHOTON_MAP_LABELS: [&str; 3] = [
+    "screen photon map plane 0 (flux r, g)",
+    "screen photon map plane 1 (flux b, hit distance)",
+    "screen photon map plane 2 (photons)",
+];
+
 /// An ordered list of steps.
 #[derive(Clone, Debug, Default)]
 pub struct Recording {
@@ -157,6 +175,47 @@ impl Recording {
         };
         self.kernel(PrepareScene { scene });
         scene
+    }
+
+    /// Records creation of a zeroed G-buffer of `pixels` texels, as its planes.
+    pub fn create_gbuffer(&mut self, pixels: u32) -> GBufferPlanes {
+        GBufferPlanes {
+            planes: GBUFFER_LABELS.map(|label| self.create(pixels, label)),
+        }
+    }
+
+    /// Records an upload of G-buffer texels into new planes.
+    pub fn upload_gbuffer(&mut self, texels: &[GBufferTexel]) -> GBufferPlanes {
+        let planes = gbuffer_to_planes(texels);
+        GBufferPlanes {
+            planes: std::array::from_fn(|k| self.upload(&planes[k], GBUFFER_LABELS[k])),
+        }
+    }
+
+    /// Records creation of a zeroed screen photon map of `pixels` texels, as its planes.
+    pub fn create_photon_map(&mut self, pixels: u32) -> PhotonMapPlanes {
+        // at most 4 words a pixel: 4 x 16384^2 (the largest camera) fits a u32 length
+        PhotonMapPlanes {
+            planes: std::array::from_fn(|k| {
+                let words = pixels.saturating_mul(DEPOSIT_PLANE_WORDS[k] as u32);
+                self.create(words, PHOTON_MAP_LABELS[k])
+            }),
+        }
+    }
+
+    /// Records an upload of photon-map texels into new planes.
+    pub fn upload_photon_map(&mut self, texels: &[DepositTexel]) -> PhotonMapPlanes {
+        let planes = deposit_to_planes(texels);
+        PhotonMapPlanes {
+            planes: std::array::from_fn(|k| self.upload(&planes[k], PHOTON_MAP_LABELS[k])),
+        }
+    }
+
+    /// Records zero-filling every plane of the photon map.
+    pub fn clear_photon_map(&mut self, m: &PhotonMapPlanes) {
+        for p in m.planes {
+            self.clear(p);
+        }
     }
 
     /// Records zero-filling `buf`.

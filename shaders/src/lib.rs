@@ -29,6 +29,8 @@ pub const COMMON: &[(&str, &str)] = &[
     ),
     ("traversal", include_str!("../wgsl/common/traversal.wgsl")),
     ("scene", include_str!("../wgsl/common/scene.wgsl")),
+    ("gbuffer", include_str!("../wgsl/common/gbuffer.wgsl")),
+    ("photon_map", include_str!("../wgsl/common/photon_map.wgsl")),
 ];
 
 /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).

@@ -1,13 +1,16 @@
-// needs: types vector optics footprint
+// needs: types vector optics footprint gbuffer
 // bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
 // photon gather. Mirror of backend-opencl/kernels/bilateral_gather.cl and
 // backend-cpu/src/kernels/gather.rs.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
-@group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
-@group(0) @binding(2) var<storage, read> tiles: array<f32>;
-@group(0) @binding(3) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(5) var<storage, read> tiles: array<f32>;
+@group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
 
 // Gather radius in pixels at a receiver pixel.
 fn gather_radius_px(p: GatherParams, g: GBufferTexel, tile_hit_distance: f32) -> f32 {
@@ -35,7 +38,7 @@ fn bilateral_gather(index: u32) {
     }
     let x = i % w;
     let y = i / w;
-    let g = gbuffer[i];
+    let g = load_gbuffer(u32(i));
     if ((g.flags & GBUFFER_RECEIVER) == 0u) {
         out[i] = vec4<f32>(0.0, 0.0, 0.0, input[i].w);
         return;
@@ -54,7 +57,7 @@ fn bilateral_gather(index: u32) {
             continue;
         }
         let q = qy * w + qx;
-        let gq = gbuffer[q];
+        let gq = load_gbuffer(u32(q));
         if ((gq.flags & GBUFFER_RECEIVER) == 0u) {
             continue;
         }

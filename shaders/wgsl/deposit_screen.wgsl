@@ -1,4 +1,4 @@
-// needs: types vector packing fixed_point scene
+// needs: types vector packing fixed_point scene gbuffer
 // deposit_screen (seed 000 section 30.3.1.3): each stored photon is projected to its pixel
 // and added in fixed point if the pixel sees a diffuse surface at a consistent depth and
 // the photon arrives on the side the camera sees. Mirror of
@@ -7,21 +7,39 @@
 // CPU's for the same photons.
 
 @group(0) @binding(0) var<uniform> params: DepositParams;
-@group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
-@group(0) @binding(2) var<storage, read> photons: array<Photon>;
-@group(0) @binding(3) var<storage, read> photon_count: array<u32>;
-@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read_write> photon_map: array<atomic<u32>>;
+@group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(5) var<storage, read> photons: array<Photon>;
+@group(0) @binding(6) var<storage, read> photon_count: array<u32>;
+@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> photon_map2: array<atomic<u32>>;
 
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
-// photon_map[k, k + 1] += (lo, hi): fixed_point.cl's atomic_add_u64_global on the map.
-fn atomic_add_u64_photon_map(k: u32, lo: u32, hi: u32) {
-    let old = atomicAdd(&photon_map[k], lo);
+// atomicAdd on the photon-map plane `at.x`, index `at.y` (deposit_word's result).
+fn atomic_add_photon_map(at: vec2<u32>, v: u32) -> u32 {
+    if (at.x == 0u) {
+        return atomicAdd(&photon_map0[at.y], v);
+    }
+    if (at.x == 1u) {
+        return atomicAdd(&photon_map1[at.y], v);
+    }
+    return atomicAdd(&photon_map2[at.y], v);
+}
+
+// Words (word, word + 1) of pixel `pixel`'s texel += (lo, hi): fixed_point.cl's
+// atomic_add_u64_global on the map. A pair never straddles two planes.
+fn atomic_add_u64_photon_map(pixel: u32, word: u32, lo: u32, hi: u32) {
+    let at = deposit_word(pixel, word);
+    let old = atomic_add_photon_map(at, lo);
     let carry = u64_carry(old, lo);
     if (hi + carry != 0u) {
-        atomicAdd(&photon_map[k + 1u], hi + carry);
+        atomic_add_photon_map(vec2<u32>(at.x, at.y + 1u), hi + carry);
     }
 }
 
@@ -41,13 +59,12 @@ fn deposit_screen(i: u32, li: u32) {
             atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
         } else {
             let pix = py * p.camera.width + px;
-            let g = gbuffer[pix];
+            let g = load_gbuffer(pix);
             let arrives_in_front = dot3(unpack_unit_vector(ph.direction), g.normal) < 0.0;
             if ((g.flags & GBUFFER_RECEIVER) == 0u ||
                 abs(z - g.depth) > p.depth_tolerance * g.depth || !arrives_in_front) {
                 atomicAdd(&lc[COUNTER_DEPTH_MISMATCH], 1u);
             } else {
-                let t = pix * DEPOSIT_TEXEL_WORDS;
                 for (var ch = 0u; ch < 3u; ch++) {
                     let q = quantize(ph.flux[ch], p.flux_quantum);
                     if (q.underflow) {
@@ -57,12 +74,12 @@ fn deposit_screen(i: u32, li: u32) {
                         atomicAdd(&lc[COUNTER_SATURATED], 1u);
                     }
                     if (q.units != 0u) {
-                        atomic_add_u64_photon_map(t + DEPOSIT_FLUX + 2u * ch, q.units, 0u);
+                        atomic_add_u64_photon_map(pix, DEPOSIT_FLUX + 2u * ch, q.units, 0u);
                     }
                 }
-                atomic_add_u64_photon_map(t + DEPOSIT_HIT_DISTANCE,
+                atomic_add_u64_photon_map(pix, DEPOSIT_HIT_DISTANCE,
                                           quantize(ph.hit_distance, p.hit_distance_quantum).units, 0u);
-                atomic_add_u64_photon_map(t + DEPOSIT_PHOTONS, 1u, 0u);
+                atomic_add_u64_photon_map(pix, DEPOSIT_PHOTONS, 1u, 0u);
                 atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
             }
         }

@@ -1,4 +1,4 @@
-// needs: types vector optics geometry traversal scene
+// needs: types vector optics geometry traversal scene gbuffer
 // direct_light: radiance from the lights with shadow rays; mirror and glass pixels follow
 // their specular ray tree. Mirror of backend-opencl/kernels/direct_light.cl and
 // backend-cpu/src/kernels/direct_light.rs.
@@ -9,8 +9,11 @@
 @group(0) @binding(3) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(4) var<storage, read> nodes: array<vec4<u32>>;
 @group(0) @binding(5) var<uniform> params: DirectParams;
-@group(0) @binding(6) var<storage, read> gbuffer: array<GBufferTexel>;
-@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(7) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(8) var<storage, read> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(9) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(10) var<storage, read_write> out: array<vec4<f32>>;
 
 // Reflected radiance of a Lambertian surface at `pos` (shading normal `n`, geometric
 // normal `ng`, both on the viewer's side), lit by every light with shadow rays.
@@ -139,7 +142,7 @@ fn direct_light(i: u32) {
     if (i >= w * p.camera.height) {
         return;
     }
-    let g = gbuffer[i];
+    let g = load_gbuffer(i);
     if (g.depth <= 0.0) {
         out[i] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
         return;

@@ -8,7 +8,19 @@
 @group(0) @binding(3) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(4) var<storage, read> nodes: array<vec4<u32>>;
 @group(0) @binding(5) var<uniform> camera: GpuCamera;
-@group(0) @binding(6) var<storage, read_write> gbuffer: array<GBufferTexel>;
+@group(0) @binding(6) var<storage, read_write> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(7) var<storage, read_write> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(8) var<storage, read_write> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(9) var<storage, read_write> gbuffer3: array<vec4<u32>>;
+
+// Writes the texel of pixel `i` into the G-buffer's planes (core's
+// GBufferTexel::to_planes; load_gbuffer in common/gbuffer.wgsl reads them back).
+fn store_gbuffer(i: u32, g: GBufferTexel) {
+    gbuffer0[i] = vec4<u32>(bitcast<vec3<u32>>(g.position), bitcast<u32>(g.depth));
+    gbuffer1[i] = vec4<u32>(bitcast<vec3<u32>>(g.normal), bitcast<u32>(g.roughness));
+    gbuffer2[i] = vec4<u32>(bitcast<vec3<u32>>(g.albedo), g.material);
+    gbuffer3[i] = vec4<u32>(bitcast<vec2<u32>>(g.uv), bitcast<u32>(g.view_distance), g.flags);
+}
 
 fn primary_gbuffer(i: u32) {
     let cam = camera;
@@ -23,7 +35,7 @@ fn primary_gbuffer(i: u32) {
     var hit: Hit;
     if (!closest_hit(origin, dir, NO_T_MAX, &hit)) {
         g.material = NO_MATERIAL;
-        gbuffer[i] = g;
+        store_gbuffer(i, g);
         return;
     }
     let s = hit_surface(hit);
@@ -40,7 +52,7 @@ fn primary_gbuffer(i: u32) {
     g.uv = s.uv;
     g.view_distance = hit.t;
     g.flags = select(0u, GBUFFER_RECEIVER, diffuse);
-    gbuffer[i] = g;
+    store_gbuffer(i, g);
 }
 
 @compute @workgroup_size(64)

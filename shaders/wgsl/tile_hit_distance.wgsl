@@ -1,4 +1,4 @@
-// needs: types
+// needs: types photon_map
 // tile_hit_distance (seed 000 section 30.3.2): photon-weighted mean hit distance per
 // tile_size^2 tile, 0 for empty tiles. Mirror of backend-opencl/kernels/
 // tile_hit_distance.cl and backend-cpu/src/kernels/gather.rs. The u64 sums are (lo, hi)
@@ -7,8 +7,10 @@
 // f64: a few f32 roundings away).
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
-@group(0) @binding(1) var<storage, read> photon_map: array<u32>;
-@group(0) @binding(2) var<storage, read_write> tiles: array<f32>;
+@group(0) @binding(1) var<storage, read> photon_map0: array<u32>;
+@group(0) @binding(2) var<storage, read> photon_map1: array<u32>;
+@group(0) @binding(3) var<storage, read> photon_map2: array<u32>;
+@group(0) @binding(4) var<storage, read_write> tiles: array<f32>;
 
 // (lo, hi) u64 pair plus (lo, hi): the OpenCL `ulong +=` (wrapping, as ulong).
 fn add_u64(a: vec2<u32>, lo: u32, hi: u32) -> vec2<u32> {
@@ -38,9 +40,9 @@ fn tile_hit_distance(t: u32) {
     var n = vec2<u32>(0u, 0u);
     for (var y = ty * ts; y < min((ty + 1u) * ts, h); y++) {
         for (var x = tx * ts; x < min((tx + 1u) * ts, w); x++) {
-            let m = (y * w + x) * DEPOSIT_TEXEL_WORDS;
-            sum = add_u64(sum, photon_map[m + 6u], photon_map[m + 7u]);
-            n = add_u64(n, photon_map[m + 8u], photon_map[m + 9u]);
+            let m = y * w + x;
+            sum = add_u64(sum, photon_map_word(m, 6u), photon_map_word(m, 7u));
+            n = add_u64(n, photon_map_word(m, 8u), photon_map_word(m, 9u));
         }
     }
     if (n.x == 0u && n.y == 0u) {

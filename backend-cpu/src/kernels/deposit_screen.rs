@@ -14,7 +14,8 @@
 use super::Counters;
 use caustica_core::device::layout::gbuffer_pixel_area;
 use caustica_core::device::layout::{
-    counter, gbuffer_flags, DepositParams, DepositTexel, GBufferTexel, Photon,
+    counter, deposit_word, gbuffer_flags, DepositParams, GBufferView, Photon, PhotonMapView,
+    DEPOSIT_PLANES,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::packing::unpack_unit_vector;
@@ -22,24 +23,32 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// u64 words per `DepositTexel`: flux r, g, b, hit distance, photon count.
-const WORDS: usize = 5;
+/// The photon map's planes as `u64` atomics (see [`deposit_word`]).
+pub type MapPlanes<'a> = [&'a [AtomicU64]; DEPOSIT_PLANES];
 
-/// Deposits every photon of `photons` into `map` (five `u64` words per pixel: flux r, g,
-/// b in flux quanta, hit distance in hit-distance quanta, photon count) and returns the
-/// counters it adds to (off screen, depth mismatch, deposited, underflow, saturated).
+/// `map[pixel].words[word, word + 1] += v` (a little-endian u64 at an even `word`), on
+/// the plane that holds the word ([`deposit_word`]); the planes hold whole pairs.
+fn atomic_add_u64_photon_map(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
+    let (k, at) = deposit_word(pixel, word);
+    map[k][at / 2].fetch_add(v, Ordering::Relaxed);
+}
+
+/// Deposits every photon of `photons` into `map` (five `u64` sums per pixel: flux r, g,
+/// b in flux quanta, hit distance in hit-distance quanta, photon count; stored in planes)
+/// and returns the counters it adds to (off screen, depth mismatch, deposited, underflow,
+/// saturated).
 pub fn deposit_screen(
     p: &DepositParams,
-    gbuffer: &[GBufferTexel],
+    gbuffer: GBufferView,
     photons: &[Photon],
-    map: &[AtomicU64],
+    map: MapPlanes,
 ) -> Counters {
     photons
         .par_chunks(4096)
         .map(|chunk| {
             let mut c = Counters::default();
             for ph in chunk {
-                deposit_photon(p, gbuffer, ph, map, &mut c);
+                deposit_photon(p, &gbuffer, ph, &map, &mut c);
             }
             c
         })
@@ -48,9 +57,9 @@ pub fn deposit_screen(
 
 fn deposit_photon(
     p: &DepositParams,
-    gbuffer: &[GBufferTexel],
+    gbuffer: &GBufferView,
     ph: &Photon,
-    map: &[AtomicU64],
+    map: &MapPlanes,
     c: &mut Counters,
 ) {
     let pos = Vec3::from(ph.position);
@@ -59,7 +68,7 @@ fn deposit_photon(
         return;
     };
     let pix = (py * p.camera.width + px) as usize;
-    let g = &gbuffer[pix];
+    let g = &gbuffer.load_gbuffer(pix);
     let arrives_in_front = unpack_unit_vector(ph.direction).dot(Vec3::from(g.normal)) < 0.0;
     if g.flags & gbuffer_flags::RECEIVER == 0
         || (z - g.depth).abs() > p.depth_tolerance * g.depth
@@ -68,7 +77,7 @@ fn deposit_photon(
         c.bump(counter::DEPTH_MISMATCH);
         return;
     }
-    let base = pix * WORDS;
+    let pixel = pix as u32;
     for ch in 0..3 {
         let q = quantize(ph.flux[ch], p.flux_quantum);
         if q.underflow {
@@ -78,14 +87,16 @@ fn deposit_photon(
             c.bump(counter::SATURATED);
         }
         if q.units != 0 {
-            map[base + ch].fetch_add(q.units as u64, Ordering::Relaxed);
+            atomic_add_u64_photon_map(map, pixel, 2 * ch as u32, q.units as u64);
         }
     }
-    map[base + 3].fetch_add(
+    atomic_add_u64_photon_map(
+        map,
+        pixel,
+        6,
         quantize(ph.hit_distance, p.hit_distance_quantum).units as u64,
-        Ordering::Relaxed,
     );
-    map[base + 4].fetch_add(1, Ordering::Relaxed);
+    atomic_add_u64_photon_map(map, pixel, 8, 1);
     c.bump(counter::DEPOSITED);
 }
 
@@ -94,15 +105,14 @@ fn deposit_photon(
 /// photons or sees no diffuse surface.
 pub fn resolve_caustics(
     p: &DepositParams,
-    gbuffer: &[GBufferTexel],
-    map: &[DepositTexel],
+    gbuffer: GBufferView,
+    map: PhotonMapView,
 ) -> Vec<[f32; 4]> {
     let cam = &p.camera;
-    gbuffer
-        .par_iter()
-        .zip(map.par_iter())
-        .enumerate()
-        .map(|(i, (g, t))| {
+    (0..gbuffer.len().min(map.len()))
+        .into_par_iter()
+        .map(|i| {
+            let (g, t) = (&gbuffer.load_gbuffer(i), &map.load(i));
             let n = join_u64(t.photons);
             if n == 0 || g.flags & gbuffer_flags::RECEIVER == 0 {
                 return [0.0; 4];

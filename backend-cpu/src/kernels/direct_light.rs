@@ -8,7 +8,7 @@
 use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
-    camera_ray, light_kind, material_kind, DirectParams, GBufferTexel,
+    camera_ray, light_kind, material_kind, DirectParams, GBufferView,
 };
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::optics::{
@@ -21,16 +21,12 @@ use std::f32::consts::PI;
 /// Direct radiance per pixel (W/(sr m^2) per channel), alpha 1: diffuse pixels shaded with
 /// shadow rays, mirror and glass pixels through their specular chain, black where the
 /// pixel sees nothing.
-pub fn direct_light(
-    scene: &SceneView,
-    p: &DirectParams,
-    gbuffer: &[GBufferTexel],
-) -> Vec<[f32; 4]> {
+pub fn direct_light(scene: &SceneView, p: &DirectParams, gbuffer: GBufferView) -> Vec<[f32; 4]> {
     let w = p.camera.width;
-    gbuffer
-        .par_iter()
-        .enumerate()
-        .map(|(i, g)| {
+    (0..gbuffer.len())
+        .into_par_iter()
+        .map(|i| {
+            let g = &gbuffer.load_gbuffer(i);
             if g.depth <= 0.0 {
                 return [0.0, 0.0, 0.0, 1.0];
             }

@@ -10,7 +10,9 @@
 //! `max(0, n . n')^normal_power`; only RECEIVER pixels take part. Two 1-D passes
 //! (horizontal then vertical) approximate the 2-D filter.
 
-use caustica_core::device::layout::{gbuffer_flags, DepositTexel, GBufferTexel, GatherParams};
+use caustica_core::device::layout::{
+    gbuffer_flags, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
+};
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::footprint::pixel_footprint;
 use glam::Vec3;
@@ -18,7 +20,7 @@ use rayon::prelude::*;
 
 /// Photon-weighted mean hit distance (scene units) per `tile_size^2` tile, row-major; 0 for
 /// tiles without photons.
-pub fn tile_hit_distance(p: &GatherParams, map: &[DepositTexel]) -> Vec<f32> {
+pub fn tile_hit_distance(p: &GatherParams, map: PhotonMapView) -> Vec<f32> {
     let (w, h, ts) = (p.camera.width, p.camera.height, p.tile_size);
     let (tw, th) = (w.div_ceil(ts), h.div_ceil(ts));
     (0..tw * th)
@@ -28,7 +30,7 @@ pub fn tile_hit_distance(p: &GatherParams, map: &[DepositTexel]) -> Vec<f32> {
             let (mut sum, mut n) = (0u64, 0u64);
             for y in ty * ts..((ty + 1) * ts).min(h) {
                 for x in tx * ts..((tx + 1) * ts).min(w) {
-                    let m = &map[(y * w + x) as usize];
+                    let m = &map.load((y * w + x) as usize);
                     sum += join_u64(m.hit_distance);
                     n += join_u64(m.photons);
                 }
@@ -71,7 +73,7 @@ pub fn gather_radius_px(p: &GatherParams, g: &GBufferTexel, tile_hit_distance: f
 /// alpha is copied from `input`.
 pub fn bilateral_gather(
     p: &GatherParams,
-    gbuffer: &[GBufferTexel],
+    gbuffer: GBufferView,
     tiles: &[f32],
     input: &[[f32; 4]],
 ) -> Vec<[f32; 4]> {
@@ -85,7 +87,7 @@ pub fn bilateral_gather(
         .into_par_iter()
         .map(|i| {
             let (x, y) = (i % w, i / w);
-            let g = &gbuffer[i as usize];
+            let g = &gbuffer.load_gbuffer(i as usize);
             if g.flags & gbuffer_flags::RECEIVER == 0 {
                 return [0.0, 0.0, 0.0, input[i as usize][3]];
             }
@@ -100,7 +102,7 @@ pub fn bilateral_gather(
                     continue;
                 }
                 let q = (qy * w + qx) as usize;
-                let gq = &gbuffer[q];
+                let gq = &gbuffer.load_gbuffer(q);
                 if gq.flags & gbuffer_flags::RECEIVER == 0 {
                     continue;
                 }

@@ -5,7 +5,7 @@
 //! the reference computes it: the inputs the per-kernel checks upload to both backends, so
 //! that only the kernel under test can make the outputs differ.
 
-use caustica_core::backend::{read_buf, Backend, BackendError};
+use caustica_core::backend::{read_buf, read_gbuffer, read_photon_map, Backend, BackendError};
 use caustica_core::device::device_scene::DeviceScene;
 use caustica_core::device::handle::SceneArgs;
 use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GpuCamera, Photon};
@@ -117,13 +117,13 @@ impl Fixture {
     /// Runs `primary_gbuffer` on `b`.
     pub fn run_gbuffer(&self, b: &mut dyn Backend) -> Result<Vec<GBufferTexel>, String> {
         let mut rec = Recording::new();
-        let g = rec.create(self.pixels(), "gbuffer");
+        let g = rec.create_gbuffer(self.pixels());
         rec.kernel(Kernel::PrimaryGbuffer(PrimaryGbuffer {
             scene: self.args,
             camera: self.camera,
             gbuffer: g,
         }));
-        run_and_free(b, "primary_gbuffer", &rec, |b| read_buf(b, g))
+        run_and_free(b, "primary_gbuffer", &rec, |b| read_gbuffer(b, &g))
     }
 
     /// Runs `trace_photons` for every photon of light `domains[k]` in one batch; returns
@@ -168,7 +168,7 @@ impl Fixture {
         photons: &[Photon],
     ) -> Result<DepositOutput, String> {
         let mut rec = Recording::new();
-        let g = rec.upload(gbuffer, "gbuffer");
+        let g = rec.upload_gbuffer(gbuffer);
         // A zero-length buffer is not a valid device buffer everywhere: keep one slot.
         let ph = if photons.is_empty() {
             rec.upload(&[Photon::default()], "photons")
@@ -177,7 +177,7 @@ impl Fixture {
         };
         let count = rec.upload(&[photons.len() as u32], "photon count");
         let counters = rec.create(counter::WORDS as u32, "counters");
-        let map = rec.create(self.pixels(), "photon map");
+        let map = rec.create_photon_map(self.pixels());
         let out = rec.create(self.pixels(), "raw caustics");
         let params = self
             .constants
@@ -198,7 +198,7 @@ impl Fixture {
         }));
         run_and_free(b, "deposit_screen + resolve_caustics", &rec, |b| {
             Ok(DepositOutput {
-                photon_map: read_buf(b, map)?,
+                photon_map: read_photon_map(b, &map)?,
                 counters: read_buf(b, counters)?,
                 raw: read_buf(b, out)?,
             })
@@ -208,7 +208,7 @@ impl Fixture {
     /// Runs `tile_hit_distance` on `b`.
     pub fn run_tiles(&self, b: &mut dyn Backend, map: &[DepositTexel]) -> Result<Vec<f32>, String> {
         let mut rec = Recording::new();
-        let m = rec.upload(map, "photon map");
+        let m = rec.upload_photon_map(map);
         let tiles = rec.create(self.tiles_len(), "tiles");
         rec.kernel(Kernel::TileHitDistance(TileHitDistance {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
@@ -228,7 +228,7 @@ impl Fixture {
         input: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
-        let g = rec.upload(gbuffer, "gbuffer");
+        let g = rec.upload_gbuffer(gbuffer);
         let t = rec.upload(tiles, "tiles");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
@@ -251,7 +251,7 @@ impl Fixture {
         gbuffer: &[GBufferTexel],
     ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
-        let g = rec.upload(gbuffer, "gbuffer");
+        let g = rec.upload_gbuffer(gbuffer);
         let out = rec.create(self.pixels(), "direct");
         rec.kernel(Kernel::DirectLight(DirectLight {
             scene: self.args,

@@ -23,10 +23,10 @@ pub struct Quirk {
     pub reason: &'static str,
 }
 
-/// The stiff catalogue's two heavy cases (an 8192x8192 image: a 4 GiB G-buffer and ~10 GiB
-/// of frame buffers; 2^26 photons in 64 batches, run twice) take minutes and ~10 GiB of host
-/// memory on the CI machine's software drivers (lavapipe under Vulkan and wgpu, PoCL under
-/// OpenCL). They are held back on *every* device of those backends, not only on the
+/// The stiff catalogue's two heavy cases (an 8192x8192 image: a 4 GiB G-buffer in four
+/// 1 GiB planes and ~10 GiB of frame buffers; 2^26 photons in 64 batches, run twice) take
+/// minutes and ~10 GiB of host memory on the CI machine's software drivers (lavapipe under
+/// Vulkan and wgpu, PoCL under OpenCL). They are held back on *every* device of those backends, not only on the
 /// software ones, as the suite did before this table (`backend == "cpu"`): narrowing the
 /// rows to llvmpipe and PoCL devices would run them by default on a GPU machine, a change
 /// of what the default test runs. A GPU machine runs them with the ignored test

@@ -8,7 +8,7 @@ use crate::harness::tolerance::{divergence_allowance, PATH_DIVERGENCE, PHOTON_FL
 use crate::harness::verdict::Verdict;
 use crate::kernels::direct_light::compare_direct;
 use crate::kernels::primary_gbuffer::compare_gbuffers;
-use caustica_core::backend::{read_buf, Backend};
+use caustica_core::backend::{read_gbuffer, Backend};
 use caustica_core::device::layout::{GBufferTexel, GpuCamera};
 use caustica_core::frame::image::Image;
 use caustica_core::math::fixed_point::MAX_PHOTON_QUANTA;
@@ -37,7 +37,7 @@ pub fn render_frame(
     let stats = s.frame(b, &mut |_| {}).map_err(err)?;
     let frame = Frame {
         stats,
-        gbuffer: read_buf(b, s.gbuffer()).map_err(|e| format!("reading the G-buffer: {e}"))?,
+        gbuffer: read_gbuffer(b, &s.gbuffer()).map_err(|e| format!("reading the G-buffer: {e}"))?,
         composite: s.read_output(b, Output::Composite).map_err(err)?,
         raw: s.read_output(b, Output::RawCaustics).map_err(err)?,
         filtered: s.read_output(b, Output::FilteredCaustics).map_err(err)?,

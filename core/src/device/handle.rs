@@ -70,3 +70,54 @@ pub struct SceneArgs {
     /// CWBVH nodes, 5 x `[u32; 4]` (80 bytes) each.
     pub bvh_nodes: Buf<[u32; 4]>,
 }
+
+/// The frame's G-buffer as [`GBUFFER_PLANES`] device buffers of 16 bytes per pixel (see
+/// [`GBufferTexel::to_planes`]): kernels bind the planes in order, each a storage buffer
+/// no larger than an RGBA f32 image.
+#[derive(Clone, Copy, Debug)]
+pub struct GBufferPlanes {
+    /// Plane `k`: bytes `16k .. 16k + 16` of every pixel's texel.
+    pub planes: [Buf<GBufferPlaneTexel>; GBUFFER_PLANES],
+}
+
+impl GBufferPlanes {
+    /// Texels (pixels) per plane.
+    pub fn len(&self) -> u32 {
+        self.planes[0].len
+    }
+
+    /// Whether the planes hold no texel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Size in bytes of all planes.
+    pub fn bytes(&self) -> u64 {
+        self.planes.iter().map(|p| p.bytes()).sum()
+    }
+}
+
+/// The screen photon map as [`DEPOSIT_PLANES`] device buffers of u32 words
+/// (`DEPOSIT_PLANE_WORDS[k]` per pixel; see [`deposit_word`]).
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonMapPlanes {
+    /// Plane `k`: words `DEPOSIT_PLANE_FIRST[k] ..` of every pixel's [`DepositTexel`].
+    pub planes: [Buf<u32>; DEPOSIT_PLANES],
+}
+
+impl PhotonMapPlanes {
+    /// Texels (pixels) per plane.
+    pub fn len(&self) -> u32 {
+        self.planes[0].len / DEPOSIT_PLANE_WORDS[0] as u32
+    }
+
+    /// Whether the planes hold no texel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Size in bytes of all planes.
+    pub fn bytes(&self) -> u64 {
+        self.planes.iter().map(|p| p.bytes()).sum()
+    }
+}

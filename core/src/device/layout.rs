@@ -144,6 +144,66 @@ pub struct GBufferTexel {
     pub flags: u32,
 }
 
+/// The G-buffer is stored as [`GBUFFER_PLANES`] planes of 16 bytes per pixel, so that no
+/// per-pixel buffer is larger than an RGBA f32 image (a device's storage-binding limit
+/// then bounds the frame at 16 bytes per pixel, not 64): plane `k` of pixel `i` holds
+/// bytes `16k .. 16k + 16` of its [`GBufferTexel`] as four u32 words (0: position, depth;
+/// 1: normal, roughness; 2: albedo, material; 3: uv, view_distance, flags). The split is
+/// a copy of bits, so the assembled texel is bitwise the texel.
+pub const GBUFFER_PLANES: usize = 4;
+
+/// One pixel of one G-buffer plane (16 bytes).
+pub type GBufferPlaneTexel = [u32; 4];
+
+impl GBufferTexel {
+    /// The texel's [`GBUFFER_PLANES`] plane texels (its bytes in order, 16 a plane).
+    pub fn to_planes(&self) -> [GBufferPlaneTexel; GBUFFER_PLANES] {
+        bytemuck::cast(*self)
+    }
+
+    /// The texel whose plane texels are `p` (the inverse of [`GBufferTexel::to_planes`]).
+    pub fn from_planes(p: [GBufferPlaneTexel; GBUFFER_PLANES]) -> GBufferTexel {
+        bytemuck::cast(p)
+    }
+}
+
+/// The G-buffer's planes as host slices: what the CPU kernels read texels from (the
+/// shaders' `load_gbuffer`), without assembling a copy of the whole G-buffer.
+#[derive(Clone, Copy, Debug)]
+pub struct GBufferView<'a> {
+    /// Plane `k` of every pixel.
+    pub planes: [&'a [GBufferPlaneTexel]; GBUFFER_PLANES],
+}
+
+impl GBufferView<'_> {
+    /// Texels (the shortest plane's length).
+    pub fn len(&self) -> usize {
+        self.planes.iter().map(|p| p.len()).min().unwrap_or(0)
+    }
+
+    /// Whether it holds no texel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The texel of pixel `i`, assembled from the planes.
+    pub fn load_gbuffer(&self, i: usize) -> GBufferTexel {
+        GBufferTexel::from_planes(self.planes.map(|p| p[i]))
+    }
+}
+
+/// Assembles the G-buffer texels from its planes (each `pixels` texels long; the
+/// shortest plane bounds the result).
+pub fn gbuffer_from_planes(planes: [&[GBufferPlaneTexel]; GBUFFER_PLANES]) -> Vec<GBufferTexel> {
+    let v = GBufferView { planes };
+    (0..v.len()).map(|i| v.load_gbuffer(i)).collect()
+}
+
+/// Splits G-buffer texels into their planes (see [`GBUFFER_PLANES`]).
+pub fn gbuffer_to_planes(texels: &[GBufferTexel]) -> [Vec<GBufferPlaneTexel>; GBUFFER_PLANES] {
+    std::array::from_fn(|k| texels.iter().map(|t| t.to_planes()[k]).collect())
+}
+
 /// Sentinel material index for G-buffer texels that see no geometry.
 pub const NO_MATERIAL: u32 = u32::MAX;
 
@@ -183,6 +243,89 @@ pub struct DepositTexel {
     pub hit_distance: [u32; 2],
     /// Number of photons deposited in the pixel.
     pub photons: [u32; 2],
+}
+
+/// u32 words of a [`DepositTexel`].
+pub const DEPOSIT_TEXEL_WORDS: usize = 10;
+
+/// The screen photon map is stored as planes of at most 4 words (16 bytes) per pixel:
+/// plane `k` of pixel `i` holds words `DEPOSIT_PLANE_FIRST[k] ..` `+ DEPOSIT_PLANE_WORDS[k]`
+/// of its [`DepositTexel`] (flux r, g; flux b, hit distance; photons). No (lo, hi) pair
+/// straddles two planes, so the atomic carry stays in one buffer.
+pub const DEPOSIT_PLANES: usize = 3;
+/// Words per pixel of each photon-map plane.
+pub const DEPOSIT_PLANE_WORDS: [usize; DEPOSIT_PLANES] = [4, 4, 2];
+/// First texel word of each photon-map plane.
+pub const DEPOSIT_PLANE_FIRST: [usize; DEPOSIT_PLANES] = [0, 4, 8];
+
+/// Photon-map plane and index in it of word `word` of pixel `pixel`: the one accessor
+/// every kernel reaches the planes through.
+pub fn deposit_word(pixel: u32, word: u32) -> (usize, usize) {
+    let k = word as usize / 4;
+    (
+        k,
+        pixel as usize * DEPOSIT_PLANE_WORDS[k] + (word as usize - DEPOSIT_PLANE_FIRST[k]),
+    )
+}
+
+impl DepositTexel {
+    /// The texel's words in order.
+    pub fn words(&self) -> [u32; DEPOSIT_TEXEL_WORDS] {
+        bytemuck::cast(*self)
+    }
+}
+
+/// The photon map's planes as host slices (the CPU kernels read texels from them).
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonMapView<'a> {
+    /// Plane `k`: `DEPOSIT_PLANE_WORDS[k]` words per pixel.
+    pub planes: [&'a [u32]; DEPOSIT_PLANES],
+}
+
+impl PhotonMapView<'_> {
+    /// Texels (the shortest plane's, in pixels).
+    pub fn len(&self) -> usize {
+        (0..DEPOSIT_PLANES)
+            .map(|k| self.planes[k].len() / DEPOSIT_PLANE_WORDS[k])
+            .min()
+            .unwrap_or(0)
+    }
+
+    /// Whether it holds no texel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Word `word` of pixel `pixel`'s texel.
+    pub fn photon_map_word(&self, pixel: u32, word: u32) -> u32 {
+        let (k, at) = deposit_word(pixel, word);
+        self.planes[k][at]
+    }
+
+    /// The texel of pixel `i`, assembled from the planes.
+    pub fn load(&self, i: usize) -> DepositTexel {
+        let w: [u32; DEPOSIT_TEXEL_WORDS] =
+            std::array::from_fn(|j| self.photon_map_word(i as u32, j as u32));
+        bytemuck::cast(w)
+    }
+}
+
+/// Assembles the photon-map texels from its planes (plane `k` holds
+/// `DEPOSIT_PLANE_WORDS[k]` words per pixel).
+pub fn deposit_from_planes(planes: [&[u32]; DEPOSIT_PLANES]) -> Vec<DepositTexel> {
+    let v = PhotonMapView { planes };
+    (0..v.len()).map(|i| v.load(i)).collect()
+}
+
+/// Splits photon-map texels into their planes (see [`DEPOSIT_PLANES`]).
+pub fn deposit_to_planes(texels: &[DepositTexel]) -> [Vec<u32>; DEPOSIT_PLANES] {
+    std::array::from_fn(|k| {
+        let (first, n) = (DEPOSIT_PLANE_FIRST[k], DEPOSIT_PLANE_WORDS[k]);
+        texels
+            .iter()
+            .flat_map(|t| t.words()[first..first + n].to_vec())
+            .collect()
+    })
 }
 
 /// `TraceParams::emission` values.
@@ -456,6 +599,42 @@ mod tests {
         assert_eq!(size_of::<DepositParams>() % 16, 0);
         assert_eq!(size_of::<GatherParams>() % 16, 0);
         assert_eq!(size_of::<DirectParams>() % 16, 0);
+    }
+
+    #[test]
+    fn planes_assemble_bitwise() {
+        let g = GBufferTexel {
+            position: [1.0, f32::from_bits(0x7fc0_0001), -0.0],
+            depth: 2.5,
+            normal: [0.0, 1.0, 0.0],
+            roughness: 1.0,
+            albedo: [0.25, 0.5, 0.75],
+            material: NO_MATERIAL,
+            uv: [0.125, 0.875],
+            view_distance: 3.0,
+            flags: gbuffer_flags::RECEIVER,
+        };
+        let p = g.to_planes();
+        assert_eq!(p[0][3], 2.5f32.to_bits());
+        assert_eq!(p[2][3], NO_MATERIAL);
+        assert_eq!(p[3][3], gbuffer_flags::RECEIVER);
+        let planes = gbuffer_to_planes(&[g, g]);
+        let back = gbuffer_from_planes([&planes[0], &planes[1], &planes[2], &planes[3]]);
+        assert_eq!(
+            bytemuck::cast_slice::<_, u8>(&back),
+            bytemuck::cast_slice::<_, u8>(&[g, g])
+        );
+        let d: DepositTexel = bytemuck::cast(std::array::from_fn::<u32, 10, _>(|i| i as u32 + 1));
+        let e: DepositTexel = bytemuck::cast(std::array::from_fn::<u32, 10, _>(|i| 100 + i as u32));
+        let planes = deposit_to_planes(&[d, e]);
+        assert_eq!(planes[0], vec![1, 2, 3, 4, 100, 101, 102, 103]);
+        assert_eq!(planes[2], vec![9, 10, 108, 109]);
+        assert_eq!(
+            deposit_from_planes([&planes[0], &planes[1], &planes[2]]),
+            vec![d, e]
+        );
+        assert_eq!(deposit_word(1, 9), (2, 3));
+        assert_eq!(deposit_word(1, 6), (1, 6));
     }
 
     #[test]

@@ -3,8 +3,8 @@
 
 use super::{bind, bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, ImageBuf};
-use crate::device::layout::{GBufferTexel, GatherParams};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
+use crate::device::layout::GatherParams;
 
 /// One direction (`params.axis` 0: horizontal, 1: vertical) of the separable edge-aware
 /// bilateral gather of caustic radiance: radius from the tile's hit distance
@@ -15,7 +15,7 @@ pub struct BilateralGather {
     /// Gather parameters; `axis` picks the pass direction.
     pub params: GatherParams,
     /// The frame's G-buffer (depth, normal, receiver flag).
-    pub gbuffer: Buf<GBufferTexel>,
+    pub gbuffer: GBufferPlanes,
     /// Mean hit distance per tile from `tile_hit_distance` (scene units).
     pub tiles: Buf<f32>,
     /// Caustic radiance to filter (W/(sr m^2) per channel); its alpha is passed through.
@@ -26,7 +26,10 @@ pub struct BilateralGather {
 
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
-    bind("gbuffer", Read),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer2", Read),
+    bind("gbuffer3", Read),
     bind("tiles", Read),
     bind("input", Read),
     bind("out", ReadWrite),
@@ -40,7 +43,7 @@ impl KernelDecl for BilateralGather {
         let n = texels(c.width, c.height);
         let nt = tiles(c.width, c.height, self.params.tile_size)?;
         a.params("params", &self.params)?
-            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .gbuffer(&self.gbuffer, n)?
             .buf("tiles", self.tiles, nt * 4)?
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;

@@ -2,8 +2,8 @@
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::Buf;
-use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel, Photon};
+use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes};
+use crate::device::layout::{DepositParams, Photon};
 
 /// Projects each of the `photon_count[0]` stored photons to the screen and, when it lands
 /// on a receiver pixel whose G-buffer depth matches (relative `params.depth_tolerance`),
@@ -14,26 +14,32 @@ use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel, Photon};
 pub struct DepositScreen {
     /// Camera, fixed-point quanta, depth tolerance and photon capacity.
     pub params: DepositParams,
-    /// The frame's G-buffer (receiver flag, depth, normal per pixel).
-    pub gbuffer: Buf<GBufferTexel>,
+    /// The frame's G-buffer planes (receiver flag, depth, normal per pixel).
+    pub gbuffer: GBufferPlanes,
     /// The batch's stored photons.
     pub photons: Buf<Photon>,
     /// `[0]`: number of photons in `photons`.
     pub photon_count: Buf<u32>,
     /// Photon counters ([`crate::device::layout::counter`]) the kernel adds to.
     pub counters: Buf<u32>,
-    /// Screen-space photon map, one texel per pixel, summed over the frame's batches.
-    pub photon_map: Buf<DepositTexel>,
+    /// Screen-space photon map planes, one texel per pixel, summed over the frame's
+    /// batches.
+    pub photon_map: PhotonMapPlanes,
 }
 
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
-    bind("gbuffer", Read),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer2", Read),
+    bind("gbuffer3", Read),
     bind("photons", Read),
     bind("photon_capacity", Count),
     bind("photon_count", Read),
     bind("counters", ReadWrite),
-    bind("photon_map", ReadWrite),
+    bind("photon_map0", ReadWrite),
+    bind("photon_map1", ReadWrite),
+    bind("photon_map2", ReadWrite),
 ];
 
 impl KernelDecl for DepositScreen {
@@ -42,7 +48,7 @@ impl KernelDecl for DepositScreen {
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.params.camera.width, self.params.camera.height);
         a.params("params", &self.params)?
-            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .gbuffer(&self.gbuffer, n)?
             .buf(
                 "photons",
                 self.photons,
@@ -51,7 +57,7 @@ impl KernelDecl for DepositScreen {
             .count("photon_capacity", self.photons.len)?
             .buf("photon_count", self.photon_count, 4)?
             .buf("counters", self.counters, bytes::COUNTERS)?
-            .buf("photon_map", self.photon_map, n * bytes::MAP_TEXEL)?;
+            .photon_map(&self.photon_map, n)?;
         // one work-item per photon slot; the kernel reads how many are filled
         Ok(Some(self.photons.len as u64))
     }

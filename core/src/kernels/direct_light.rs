@@ -4,8 +4,8 @@ use super::{
     bind, bytes, texels, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo,
 };
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, ImageBuf, SceneArgs};
-use crate::device::layout::{DirectParams, GBufferTexel};
+use crate::device::handle::{GBufferPlanes, ImageBuf, SceneArgs};
+use crate::device::layout::DirectParams;
 
 /// Largest `max_specular_depth`: GPU kernels walk the specular ray tree with a fixed
 /// stack of `MAX_SPECULAR_DEPTH + 1` entries (a depth-first walk of a binary tree of depth
@@ -23,14 +23,17 @@ pub struct DirectLight {
     /// Camera, light count and specular-chain limits.
     pub params: DirectParams,
     /// The frame's G-buffer.
-    pub gbuffer: Buf<GBufferTexel>,
+    pub gbuffer: GBufferPlanes,
     /// Direct radiance (W/(sr m^2) per channel), alpha 1.
     pub out: ImageBuf,
 }
 
-const BINDINGS: [Binding; 9] = with_scene([
+const BINDINGS: [Binding; 12] = with_scene([
     bind("params", Params),
-    bind("gbuffer", Read),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer2", Read),
+    bind("gbuffer3", Read),
     bind("out", ReadWrite),
 ]);
 
@@ -53,7 +56,7 @@ impl KernelDecl for DirectLight {
         let n = texels(p.camera.width, p.camera.height);
         a.scene(&self.scene)?
             .params("params", p)?
-            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
+            .gbuffer(&self.gbuffer, n)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
         Ok(Some(n))
     }

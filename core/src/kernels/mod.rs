@@ -36,7 +36,7 @@ pub use tile_hit_distance::TileHitDistance;
 pub use trace_photons::{TracePhotons, TraceVariant};
 
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, SceneArgs};
+use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 pub use crate::device::launch::{variant_label, variant_labels};
 use crate::device::launch::{Launch, LaunchArg};
 
@@ -309,6 +309,36 @@ impl Args {
     }
 }
 
+/// Binding names of the G-buffer's planes, in launch order.
+pub const GBUFFER_BINDINGS: [&str; 4] = ["gbuffer0", "gbuffer1", "gbuffer2", "gbuffer3"];
+
+/// Binding names of the screen photon map's planes, in launch order.
+pub const PHOTON_MAP_BINDINGS: [&str; 3] = ["photon_map0", "photon_map1", "photon_map2"];
+
+impl Args {
+    /// The G-buffer's planes ([`GBUFFER_BINDINGS`]), each holding `pixels` texels.
+    pub fn gbuffer(&mut self, g: &GBufferPlanes, pixels: u64) -> Result<&mut Self, BackendError> {
+        for (name, p) in GBUFFER_BINDINGS.into_iter().zip(g.planes) {
+            self.buf(name, p, pixels * bytes::GBUFFER_PLANE_TEXEL)?;
+        }
+        Ok(self)
+    }
+
+    /// The screen photon map's planes ([`PHOTON_MAP_BINDINGS`]), each holding `pixels`
+    /// texels.
+    pub fn photon_map(
+        &mut self,
+        m: &PhotonMapPlanes,
+        pixels: u64,
+    ) -> Result<&mut Self, BackendError> {
+        for (k, (name, p)) in PHOTON_MAP_BINDINGS.into_iter().zip(m.planes).enumerate() {
+            let words = crate::device::layout::DEPOSIT_PLANE_WORDS[k] as u64;
+            self.buf(name, p, pixels * words * 4)?;
+        }
+        Ok(self)
+    }
+}
+
 /// Texels of a `w x h` image.
 pub(crate) fn texels(w: u32, h: u32) -> u64 {
     w as u64 * h as u64
@@ -324,11 +354,10 @@ pub(crate) fn tiles(w: u32, h: u32, tile_size: u32) -> Result<u64, BackendError>
 
 /// Element sizes the lowerings size buffers with (bytes).
 pub(crate) mod bytes {
-    use crate::device::layout::{counter, DepositTexel, GBufferTexel, Photon};
+    use crate::device::layout::{counter, GBufferPlaneTexel, Photon};
     use std::mem::size_of;
-    pub const GBUFFER_TEXEL: u64 = size_of::<GBufferTexel>() as u64;
+    pub const GBUFFER_PLANE_TEXEL: u64 = size_of::<GBufferPlaneTexel>() as u64;
     pub const IMAGE_TEXEL: u64 = 16;
-    pub const MAP_TEXEL: u64 = size_of::<DepositTexel>() as u64;
     pub const PHOTON: u64 = size_of::<Photon>() as u64;
     pub const COUNTERS: u64 = 4 * counter::WORDS as u64;
 }

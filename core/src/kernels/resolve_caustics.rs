@@ -2,8 +2,8 @@
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, ImageBuf};
-use crate::device::layout::{DepositParams, DepositTexel, GBufferTexel};
+use crate::device::handle::{GBufferPlanes, ImageBuf, PhotonMapPlanes};
+use crate::device::layout::DepositParams;
 
 /// Converts the fixed-point screen-space photon map to caustic radiance: flux over the
 /// pixel's surface area (seed 000 Eq. 4-5) times the diffuse BRDF, W/(sr m^2) per
@@ -14,17 +14,22 @@ pub struct ResolveCaustics {
     /// The deposit's parameters (camera, quanta) the photon map was built with.
     pub params: DepositParams,
     /// The frame's G-buffer (receiver flag, depth, normal, albedo).
-    pub gbuffer: Buf<GBufferTexel>,
+    pub gbuffer: GBufferPlanes,
     /// The screen-space photon map.
-    pub photon_map: Buf<DepositTexel>,
+    pub photon_map: PhotonMapPlanes,
     /// Caustic radiance (W/(sr m^2) per channel); alpha: mean hit distance (scene units).
     pub out: ImageBuf,
 }
 
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
-    bind("gbuffer", Read),
-    bind("photon_map", Read),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer2", Read),
+    bind("gbuffer3", Read),
+    bind("photon_map0", Read),
+    bind("photon_map1", Read),
+    bind("photon_map2", Read),
     bind("out", ReadWrite),
 ];
 
@@ -34,8 +39,8 @@ impl KernelDecl for ResolveCaustics {
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.params.camera.width, self.params.camera.height);
         a.params("params", &self.params)?
-            .buf("gbuffer", self.gbuffer, n * bytes::GBUFFER_TEXEL)?
-            .buf("photon_map", self.photon_map, n * bytes::MAP_TEXEL)?
+            .gbuffer(&self.gbuffer, n)?
+            .photon_map(&self.photon_map, n)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
         Ok(Some(n))
     }

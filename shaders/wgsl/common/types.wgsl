@@ -79,12 +79,20 @@ struct Photon {
     direction: u32,
 }
 
-// DepositTexel (core::gpu::DepositTexel) is not a struct here: the photon map is a flat
-// array of u32, DEPOSIT_TEXEL_WORDS per pixel, five u64 sums as (lo, hi) words.
+// DepositTexel (core::gpu::DepositTexel) is not a struct here: the photon map is u32
+// words, DEPOSIT_TEXEL_WORDS per pixel, five u64 sums as (lo, hi) words, stored in planes
+// of at most 4 words a pixel (core's DEPOSIT_PLANES: words 0-3, 4-7, 8-9).
 const DEPOSIT_TEXEL_WORDS: u32 = 10u;
 const DEPOSIT_FLUX: u32 = 0u; // r, g, b at words 0, 2, 4
 const DEPOSIT_HIT_DISTANCE: u32 = 6u;
 const DEPOSIT_PHOTONS: u32 = 8u;
+
+// core's deposit_word: (plane, index in the plane) of word `word` of pixel `pixel`.
+fn deposit_word(pixel: u32, word: u32) -> vec2<u32> {
+    let k = word / 4u;
+    let n = select(4u, 2u, k == 2u);
+    return vec2<u32>(k, pixel * n + (word - 4u * k));
+}
 
 struct TraceParams {
     light: u32,

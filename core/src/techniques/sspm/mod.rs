@@ -23,7 +23,7 @@ pub use settings::SspmSettings;
 
 use crate::backend::{read_buf, Backend};
 use crate::device::device_scene::{BuildBudget, DeviceScene};
-use crate::device::handle::{Buf, ImageBuf, ResourceId, SceneArgs};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
 use crate::frame::error::Error;
@@ -45,7 +45,7 @@ use std::time::Instant;
 struct PhotonBuffers {
     photons: Buf<Photon>,
     photon_count: Buf<u32>,
-    photon_map: Buf<DepositTexel>,
+    photon_map: PhotonMapPlanes,
     counters: Buf<u32>,
 }
 
@@ -64,7 +64,7 @@ pub struct Sspm {
     light_count: u32,
     constants: FrameConstants,
     plan: FramePlan,
-    gbuffer: Buf<GBufferTexel>,
+    gbuffer: GBufferPlanes,
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
     images: FrameImages,
@@ -122,7 +122,7 @@ impl Sspm {
         let camera = GpuCamera::from_camera(&scene.camera);
         let (w, h) = (camera.width, camera.height);
         let pixels = w * h;
-        let gbuffer = rec.create(pixels, "gbuffer");
+        let gbuffer = rec.create_gbuffer(pixels);
         let direct = needs
             .direct_light
             .then(|| rec.create(pixels, "direct image"));
@@ -132,7 +132,7 @@ impl Sspm {
             PhotonBuffers {
                 photons: rec.create(cap, "photons"),
                 photon_count: rec.create(1, "photon count"),
-                photon_map: rec.create(pixels, "screen photon map"),
+                photon_map: rec.create_photon_map(pixels),
                 counters: rec.create(counter::WORDS as u32, "photon counters"),
             }
         });
@@ -217,8 +217,9 @@ impl Sspm {
         self.images
     }
 
-    /// The G-buffer handle (for conformance and embedding).
-    pub fn gbuffer(&self) -> Buf<GBufferTexel> {
+    /// The G-buffer's planes (for conformance and embedding; read them back assembled
+    /// with [`crate::backend::read_gbuffer`]).
+    pub fn gbuffer(&self) -> GBufferPlanes {
         self.gbuffer
     }
 
@@ -275,7 +276,7 @@ impl Sspm {
             });
         }
         if let Some(p) = self.photon {
-            rec.clear(p.photon_map);
+            rec.clear_photon_map(&p.photon_map);
             rec.clear(p.counters);
         }
         self.run(backend, &rec, &mut stats)?;

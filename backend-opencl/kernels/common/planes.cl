@@ -1,0 +1,72 @@
+// The G-buffer and the screen photon map in planes (core::device::layout::GBUFFER_PLANES,
+// DEPOSIT_PLANES), so that no per-pixel buffer is over 16 bytes a pixel. G-buffer plane k
+// of pixel i holds bytes 16k .. 16k + 16 of its GBufferTexel as a uint4 (the texel's bits:
+// as_float / as_uint, so the assembled texel is bitwise the texel). The photon map's
+// planes hold words 0-3, 4-7 (4 a pixel) and 8-9 (2 a pixel) of its DepositTexel; no
+// (lo, hi) pair straddles two planes.
+
+#define GBUFFER_PARAMS(q) q uint4* gbuffer0, q uint4* gbuffer1, q uint4* gbuffer2, q uint4* gbuffer3
+#define GBUFFER_ARGS gbuffer0, gbuffer1, gbuffer2, gbuffer3
+#define PHOTON_MAP_PARAMS(q) q uint* photon_map0, q uint* photon_map1, q uint* photon_map2
+#define PHOTON_MAP_ARGS photon_map0, photon_map1, photon_map2
+
+// core's GBufferTexel::from_planes.
+inline GBufferTexel gbuffer_from_planes(uint4 p0, uint4 p1, uint4 p2, uint4 p3) {
+    GBufferTexel g;
+    g.position[0] = as_float(p0.x);
+    g.position[1] = as_float(p0.y);
+    g.position[2] = as_float(p0.z);
+    g.depth = as_float(p0.w);
+    g.normal[0] = as_float(p1.x);
+    g.normal[1] = as_float(p1.y);
+    g.normal[2] = as_float(p1.z);
+    g.roughness = as_float(p1.w);
+    g.albedo[0] = as_float(p2.x);
+    g.albedo[1] = as_float(p2.y);
+    g.albedo[2] = as_float(p2.z);
+    g.material = p2.w;
+    g.uv[0] = as_float(p3.x);
+    g.uv[1] = as_float(p3.y);
+    g.view_distance = as_float(p3.z);
+    g.flags = p3.w;
+    return g;
+}
+
+// The texel of pixel `i`, assembled from the planes.
+inline GBufferTexel load_gbuffer(GBUFFER_PARAMS(__global const), uint i) {
+    return gbuffer_from_planes(gbuffer0[i], gbuffer1[i], gbuffer2[i], gbuffer3[i]);
+}
+
+// Writes the texel of pixel `i` into the planes (core's GBufferTexel::to_planes).
+inline void store_gbuffer(GBUFFER_PARAMS(__global), uint i, const GBufferTexel* g) {
+    gbuffer0[i] = (uint4)(as_uint(g->position[0]), as_uint(g->position[1]),
+                          as_uint(g->position[2]), as_uint(g->depth));
+    gbuffer1[i] = (uint4)(as_uint(g->normal[0]), as_uint(g->normal[1]), as_uint(g->normal[2]),
+                          as_uint(g->roughness));
+    gbuffer2[i] = (uint4)(as_uint(g->albedo[0]), as_uint(g->albedo[1]), as_uint(g->albedo[2]),
+                          g->material);
+    gbuffer3[i] = (uint4)(as_uint(g->uv[0]), as_uint(g->uv[1]), as_uint(g->view_distance),
+                          g->flags);
+}
+
+// core's deposit_word: (plane, index in the plane) of word `word` of pixel `pixel`.
+inline uint2 deposit_word(uint pixel, uint word) {
+    uint k = word / 4u;
+    uint n = k == 2u ? 2u : 4u;
+    return (uint2)(k, pixel * n + (word - 4u * k));
+}
+
+// Word `word` of pixel `pixel`'s DepositTexel.
+inline uint photon_map_word(PHOTON_MAP_PARAMS(__global const), uint pixel, uint word) {
+    uint2 at = deposit_word(pixel, word);
+    return at.x == 0u ? photon_map0[at.y] : at.x == 1u ? photon_map1[at.y] : photon_map2[at.y];
+}
+
+// Words (word, word + 1) of pixel `pixel`'s texel += (lo, hi), with carry.
+inline void atomic_add_u64_photon_map(PHOTON_MAP_PARAMS(volatile __global), uint pixel,
+                                      uint word, uint lo, uint hi) {
+    uint2 at = deposit_word(pixel, word);
+    volatile __global uint* plane = at.x == 0u ? photon_map0 : at.x == 1u ? photon_map1
+                                                                         : photon_map2;
+    atomic_add_u64_global(&plane[at.y], lo, hi);
+}
