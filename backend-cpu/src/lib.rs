@@ -16,7 +16,7 @@ pub mod traversal;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};
-use caustica_core::device::layout::{GBufferView, PhotonMapView};
+use caustica_core::device::layout::{GBufferTexel, GBufferView, Photon, PhotonMapView};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer,
@@ -98,6 +98,8 @@ impl CpuBackend {
                 camera,
                 gbuffer,
             }) => {
+                let pixels = camera.width as u64 * camera.height as u64;
+                reserve_temporary::<GBufferTexel>(pixels, "the G-buffer")?;
                 let out = gbuffer::primary_gbuffer(&view(scene)?, camera);
                 // plane by plane, with no second copy of the G-buffer (8192^2: 4 GiB)
                 for (k, b) in gbuffer.planes.iter().enumerate() {
@@ -122,6 +124,7 @@ impl CpuBackend {
                 out,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the direct image")?;
                 let img = direct_light::direct_light(&view(scene)?, params, g);
                 self.put(out.id, &img)
             }
@@ -133,6 +136,7 @@ impl CpuBackend {
                 photon_count,
                 counters,
             }) => {
+                reserve_temporary::<Photon>(params.count as u64, "a photon batch")?;
                 let result = trace_photons::trace_photons(&view(scene)?, params, *variant);
                 if result.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(
@@ -178,6 +182,7 @@ impl CpuBackend {
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let m = self.photon_map(photon_map)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the raw caustics image")?;
                 let img = deposit_screen::resolve_caustics(params, g, m);
                 self.put(out.id, &img)
             }
@@ -187,6 +192,7 @@ impl CpuBackend {
                 tiles,
             }) => {
                 let m = self.photon_map(photon_map)?;
+                reserve_temporary::<f32>(tiles.len as u64, "the hit-distance tiles")?;
                 let t = gather::tile_hit_distance(params, m);
                 self.put(tiles.id, &t)
             }
@@ -200,6 +206,7 @@ impl CpuBackend {
                 let g = self.gbuffer(gbuffer)?;
                 let t = get(tiles.id)?.as_slice(tiles.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
                 let img = gather::bilateral_gather(params, g, t, i);
                 self.put(out.id, &img)
             }
@@ -210,6 +217,7 @@ impl CpuBackend {
             }) => {
                 let d = get(direct.id)?.as_slice(direct.len)?;
                 let c = get(caustics.id)?.as_slice(caustics.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the composite")?;
                 let img = composite::composite(d, c);
                 self.put(out.id, &img)
             }
@@ -321,4 +329,20 @@ impl Backend for CpuBackend {
     fn variants(&self) -> Vec<String> {
         self.variants.iter().cloned().collect()
     }
+}
+
+/// The CPU kernels build their result in a temporary vector (rayon's `collect`, which
+/// aborts when the host cannot give it) before it is copied into the destination buffer:
+/// reserve that much first, so that out of host memory is an error. The reservation is
+/// released at once (address space only, nothing is touched); the kernel's own
+/// allocation then finds the room.
+fn reserve_temporary<T>(count: u64, what: &str) -> Result<(), BackendError> {
+    let bytes = count.saturating_mul(std::mem::size_of::<T>() as u64);
+    let oom = || BackendError::OutOfMemory {
+        bytes,
+        what: format!("{what} (host memory, the CPU kernel's result)"),
+    };
+    let n = usize::try_from(bytes).map_err(|_| oom())?;
+    let mut probe: Vec<u8> = Vec::new();
+    probe.try_reserve_exact(n).map_err(|_| oom())
 }
