@@ -190,9 +190,11 @@ naming the case and the backend.
   squared length, which NVIDIA's Vulkan flushes to zero (`near-plane` failed there only).
 - **Device limits**: every planned buffer is checked against the device's largest buffer
   and storage binding in `Sspm::new`; a frame that does not fit is a typed `OutOfMemory`
-  naming the buffer. The 8192x8192 G-buffer is 2^32 bytes: NVIDIA's Vulkan binds 2^32 - 1
-  (and wgpu 2 GiB) there, so those two refuse it (`docs/stability-h200.md`); OpenCL fills
-  large buffers in 1 GiB commands (NVIDIA faulted on one 4 GiB fill).
+  naming the buffer, the limit and the frame size that would fit. Per-pixel buffers are
+  stored in planes of at most 16 B/px (the 64-byte G-buffer in 4, the photon map in 3),
+  so 8192x8192 (1 GiB planes) renders on NVIDIA's Vulkan, wgpu and OpenCL (H200:
+  `docs/gpu/h200-issue14-stiff.log`) and 3840x2160 fits lavapipe's 128 MiB bindings.
+  OpenCL fills large buffers in 1 GiB commands (NVIDIA faulted on one 4 GiB fill).
 - Degenerate-size checks (`Scene::validate` for quads, quad tessellation) use unit
   vectors, so they no longer underflow for scenes below ~1e-10 units.
 
