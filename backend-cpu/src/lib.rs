@@ -19,8 +19,8 @@ use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};
 use caustica_core::device::layout::{GBufferTexel, GBufferView, Photon, PhotonMapView};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, Composite, DepositScreen, DirectLight, PrepareScene, PrimaryGbuffer,
-    ResolveCaustics, TileHitDistance, TracePhotons,
+    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
+    PhotonCountTable, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -208,6 +208,52 @@ impl CpuBackend {
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
                 let img = gather::bilateral_gather(params, g, t, i);
+                self.put(out.id, &img)
+            }
+            Kernel::PhotonCountTable(PhotonCountTable {
+                params,
+                photon_map,
+                table,
+            }) => {
+                if params.axis == 0 {
+                    let rows = {
+                        let m = self.photon_map(photon_map)?;
+                        reserve_temporary::<u32>(table.len as u64, "the photon count table")?;
+                        let mut rows = vec![0u32; table.len as usize];
+                        density_gather::photon_count_rows(params, m, &mut rows);
+                        rows
+                    };
+                    self.put(table.id, &rows)
+                } else {
+                    let t = self.get_mut(table.id)?.as_mut_slice(table.len)?;
+                    density_gather::photon_count_columns(params, t);
+                    Ok(())
+                }
+            }
+            Kernel::GatherFootprint(GatherFootprint {
+                params,
+                gbuffer,
+                photon_map,
+                table,
+                out,
+            }) => {
+                let g = self.gbuffer(gbuffer)?;
+                let m = self.photon_map(photon_map)?;
+                let t = get(table.id)?.as_slice(table.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
+                let img = density_gather::gather_footprint(params, g, m, t);
+                self.put(out.id, &img)
+            }
+            Kernel::DensityGather(DensityGather {
+                params,
+                gbuffer,
+                input,
+                out,
+            }) => {
+                let g = self.gbuffer(gbuffer)?;
+                let i = get(input.id)?.as_slice(input.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
+                let img = density_gather::density_gather(params, g, i);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {

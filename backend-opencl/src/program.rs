@@ -37,6 +37,10 @@ pub const COMMON: &[(&str, &str)] = &[
     ),
     ("scene.cl", include_str!("../kernels/common/scene.cl")),
     ("planes.cl", include_str!("../kernels/common/planes.cl")),
+    (
+        "density_gather.cl",
+        include_str!("../kernels/common/density_gather.cl"),
+    ),
 ];
 
 /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
@@ -63,6 +67,18 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "bilateral_gather",
         include_str!("../kernels/bilateral_gather.cl"),
+    ),
+    (
+        "photon_count_table",
+        include_str!("../kernels/photon_count_table.cl"),
+    ),
+    (
+        "gather_footprint",
+        include_str!("../kernels/gather_footprint.cl"),
+    ),
+    (
+        "density_gather",
+        include_str!("../kernels/density_gather.cl"),
     ),
     ("composite", include_str!("../kernels/composite.cl")),
 ];

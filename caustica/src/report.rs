@@ -20,6 +20,8 @@ pub struct Record {
     pub scene: String,
     /// Technique name.
     pub technique: String,
+    /// The caustic filter (Sspm's `filter` setting: `density` or `bilateral`).
+    pub filter: String,
     /// Backend name.
     pub backend: String,
     /// Device description.
@@ -69,6 +71,11 @@ pub struct ReportPlan {
     pub backends: Vec<String>,
     /// Photon grids per light.
     pub budgets: Vec<(u32, u32)>,
+    /// Caustic filters to compare (Sspm's `filter` setting), each measured on its own.
+    pub filters: Vec<String>,
+    /// Settings every combination starts from (a JSON object of the technique's fields;
+    /// the budget and the filter are set over it).
+    pub settings: serde_json::Map<String, serde_json::Value>,
     /// Frames measured per combination (after a warm-up).
     pub repeats: usize,
     /// How references are computed.
@@ -126,8 +133,16 @@ pub fn run(
         for technique in &plan.techniques {
             for backend_name in &plan.backends {
                 let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
-                for &(pw, ph) in &plan.budgets {
-                    let settings = serde_json::json!({ "photons_w": pw, "photons_h": ph });
+                for (filter, &(pw, ph)) in plan
+                    .filters
+                    .iter()
+                    .flat_map(|f| plan.budgets.iter().map(move |b| (f, b)))
+                {
+                    let mut settings = plan.settings.clone();
+                    settings.insert("photons_w".into(), pw.into());
+                    settings.insert("photons_h".into(), ph.into());
+                    settings.insert("filter".into(), filter.as_str().into());
+                    let settings = serde_json::Value::Object(settings);
                     let mut sspm = create(technique, backend.as_mut(), &scene, &settings)
                         .map_err(|e| e.to_string())?;
                     let (filtered_output, raw_output) = sspm.estimate_outputs();
@@ -176,6 +191,7 @@ pub fn run(
                     let rec = Record {
                         scene: scene.name.clone(),
                         technique: technique.clone(),
+                        filter: filter.clone(),
                         backend: backend_name.clone(),
                         device,
                         budget: format!("{pw}x{ph}"),
@@ -199,8 +215,8 @@ pub fn run(
                         reference_noise: r.info.noise,
                     };
                     log(&format!(
-                        "  {technique}/{backend_name} {pw}x{ph}: {:.2} ms, relMSE {:.4}",
-                        rec.frame_ms, rec.relative_mse
+                        "  {technique}/{filter}/{backend_name} {pw}x{ph}: {:.2} ms, relMSE {:.5} (raw {:.5})",
+                        rec.frame_ms, rec.relative_mse, rec.raw_relative_mse
                     ));
                     records.push(rec);
                 }
@@ -213,9 +229,10 @@ pub fn run(
 /// The records as a fixed-width table.
 pub fn table(records: &[Record]) -> String {
     let mut s = format!(
-        "{:<10} {:<9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>7} {:>9} {:>10} {:>10}\n",
+        "{:<10} {:<9} {:<9} {:<8} {:>10} {:>10} {:>10} {:>9} {:>7} {:>9} {:>10} {:>10}\n",
         "scene",
         "technique",
+        "filter",
         "backend",
         "budget",
         "frame ms",
@@ -228,9 +245,10 @@ pub fn table(records: &[Record]) -> String {
     );
     for r in records {
         s.push_str(&format!(
-            "{:<10} {:<9} {:<8} {:>10} {:>10.2} {:>10.4} {:>9.3e} {:>7} {:>+9.4} {:>10.4} {:>10.4}\n",
+            "{:<10} {:<9} {:<9} {:<8} {:>10} {:>10.2} {:>10.6} {:>9.3e} {:>7} {:>+9.4} {:>10.6} {:>10.6}\n",
             r.scene,
             r.technique,
+            r.filter,
             r.backend,
             r.budget,
             r.frame_ms,
@@ -318,7 +336,7 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
     let mut curves: BTreeMap<String, Vec<(f64, f64, f64)>> = BTreeMap::new();
     for r in rs {
         curves
-            .entry(format!("{} / {}", r.technique, r.backend))
+            .entry(format!("{} {} / {}", r.technique, r.filter, r.backend))
             .or_default()
             .push((r.frame_ms, r.relative_mse, r.raw_relative_mse));
     }

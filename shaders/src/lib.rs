@@ -31,6 +31,10 @@ pub const COMMON: &[(&str, &str)] = &[
     ("scene", include_str!("../wgsl/common/scene.wgsl")),
     ("gbuffer", include_str!("../wgsl/common/gbuffer.wgsl")),
     ("photon_map", include_str!("../wgsl/common/photon_map.wgsl")),
+    (
+        "density_gather",
+        include_str!("../wgsl/common/density_gather.wgsl"),
+    ),
 ];
 
 /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
@@ -56,6 +60,18 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "bilateral_gather",
         include_str!("../wgsl/bilateral_gather.wgsl"),
+    ),
+    (
+        "photon_count_table",
+        include_str!("../wgsl/photon_count_table.wgsl"),
+    ),
+    (
+        "gather_footprint",
+        include_str!("../wgsl/gather_footprint.wgsl"),
+    ),
+    (
+        "density_gather",
+        include_str!("../wgsl/density_gather.wgsl"),
     ),
     ("composite", include_str!("../wgsl/composite.wgsl")),
 ];

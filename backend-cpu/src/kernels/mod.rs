@@ -2,6 +2,7 @@
 //! [`crate::traversal::adopt_bvh`]).
 
 pub mod composite;
+pub mod density_gather;
 pub mod deposit_screen;
 pub mod direct_light;
 pub mod gather;

@@ -49,6 +49,10 @@ enum Command {
         /// applied before the flags above.
         #[arg(long)]
         settings: Option<PathBuf>,
+        /// Sspm's caustic filter: density (default: adapts to the photons, keeps the flux)
+        /// or bilateral (the seed's).
+        #[arg(long, value_parser = ["density", "bilateral"])]
+        filter: Option<String>,
         /// Output directory.
         #[arg(long, default_value = "out")]
         out: PathBuf,
@@ -94,10 +98,29 @@ enum Command {
         /// Reference cache directory (default: OUT/references).
         #[arg(long)]
         cache: Option<PathBuf>,
+        /// Comma-separated caustic filters to compare (Sspm's `filter` setting: density,
+        /// bilateral).
+        #[arg(long, default_value = "density")]
+        filters: String,
+        /// Settings file every combination starts from (JSON object of the technique's
+        /// settings fields); the budget and the filter are set over it.
+        #[arg(long)]
+        settings: Option<PathBuf>,
         /// Output directory.
         #[arg(long, default_value = "report")]
         out: PathBuf,
     },
+}
+
+/// A settings file: a JSON object of a technique's settings fields (none: empty).
+fn read_settings(
+    path: Option<&std::path::Path>,
+) -> Result<serde_json::Map<String, serde_json::Value>, String> {
+    let Some(p) = path else {
+        return Ok(serde_json::Map::new());
+    };
+    let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))
 }
 
 fn parse_grid(s: &str) -> Result<(u32, u32), String> {
@@ -229,6 +252,8 @@ fn run(cli: Cli) -> Result<(), String> {
             reference_noise,
             reference_frames,
             cache,
+            filters,
+            settings,
             out,
         } => {
             let list = |s: &str| -> Vec<String> {
@@ -248,6 +273,8 @@ fn run(cli: Cli) -> Result<(), String> {
                     .iter()
                     .map(|b| parse_grid(b))
                     .collect::<Result<_, _>>()?,
+                filters: list(&filters),
+                settings: read_settings(settings.as_deref())?,
                 repeats,
                 reference: caustica::reference::ReferenceSpec {
                     width: size.0,
@@ -266,6 +293,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 ("--techniques", plan.techniques.is_empty()),
                 ("--backends", plan.backends.is_empty()),
                 ("--budgets", plan.budgets.is_empty()),
+                ("--filters", plan.filters.is_empty()),
             ] {
                 if empty {
                     return Err(format!("{flag} lists nothing"));
@@ -317,6 +345,7 @@ fn run(cli: Cli) -> Result<(), String> {
             seed,
             exposure,
             settings,
+            filter,
             out,
         } => {
             if !technique_names().contains(&technique.as_str()) {
@@ -333,14 +362,10 @@ fn run(cli: Cli) -> Result<(), String> {
                 scene.camera.width = w;
                 scene.camera.height = h;
             }
-            let mut s: serde_json::Map<String, serde_json::Value> = match settings {
-                Some(p) => {
-                    let text =
-                        std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
-                    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))?
-                }
-                None => serde_json::Map::new(),
-            };
+            let mut s = read_settings(settings.as_deref())?;
+            if let Some(f) = filter {
+                s.insert("filter".into(), f.into());
+            }
             // the flag overrides the settings file; neither: 1024x1024
             let (pw, ph) = photons.unwrap_or((1024, 1024));
             if photons.is_some() || !s.contains_key("photons_w") {

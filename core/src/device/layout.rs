@@ -416,8 +416,13 @@ pub struct GatherParams {
     pub tile_size: u32,
     /// Hit distance per fixed-point unit of the photon map (scene units).
     pub hit_distance_quantum: f32,
+    /// Density gather: photons `k` whose nearest-neighbour window sets a pixel's radius
+    /// (see [`crate::math::density_gather`]).
+    pub knn_photons: u32,
+    /// Flux per fixed-point unit of the photon map (W).
+    pub flux_quantum: f32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 3],
+    pub _pad: u32,
 }
 
 /// Parameters of `direct_light`.

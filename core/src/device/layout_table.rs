@@ -213,7 +213,8 @@ table! {
     DepositParams { camera, flux_quantum, hit_distance_quantum, depth_tolerance, photon_capacity }
     GatherParams {
         camera, roughness, hit_distance_min, hit_distance_max, max_radius_px,
-        sigma_depth, normal_power, axis, tile_size, hit_distance_quantum, _pad
+        sigma_depth, normal_power, axis, tile_size, hit_distance_quantum, knn_photons,
+        flux_quantum, _pad
     }
     DirectParams { camera, light_count, max_specular_depth, min_weight, _pad }
 }

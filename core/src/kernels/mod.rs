@@ -17,8 +17,11 @@
 
 mod bilateral_gather;
 mod composite;
+mod density_gather;
 mod deposit_screen;
 mod direct_light;
+mod gather_footprint;
+mod photon_count_table;
 mod prepare_scene;
 mod primary_gbuffer;
 mod resolve_caustics;
@@ -27,8 +30,11 @@ mod trace_photons;
 
 pub use bilateral_gather::BilateralGather;
 pub use composite::Composite;
+pub use density_gather::DensityGather;
 pub use deposit_screen::DepositScreen;
 pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
+pub use gather_footprint::GatherFootprint;
+pub use photon_count_table::PhotonCountTable;
 pub use prepare_scene::PrepareScene;
 pub use primary_gbuffer::PrimaryGbuffer;
 pub use resolve_caustics::ResolveCaustics;
@@ -324,6 +330,23 @@ impl Args {
         Ok(self)
     }
 
+    /// The G-buffer planes a gather reads of its neighbours (0: depth, 1: normal, 3:
+    /// flags), each holding `pixels` texels.
+    pub fn gather_gbuffer(
+        &mut self,
+        g: &GBufferPlanes,
+        pixels: u64,
+    ) -> Result<&mut Self, BackendError> {
+        for k in [0, 1, 3] {
+            self.buf(
+                GBUFFER_BINDINGS[k],
+                g.planes[k],
+                pixels * bytes::GBUFFER_PLANE_TEXEL,
+            )?;
+        }
+        Ok(self)
+    }
+
     /// The screen photon map's planes ([`PHOTON_MAP_BINDINGS`]), each holding `pixels`
     /// texels.
     pub fn photon_map(
@@ -416,6 +439,9 @@ kernel_list! {
     ResolveCaustics => resolve_caustics,
     TileHitDistance => tile_hit_distance,
     BilateralGather => bilateral_gather,
+    PhotonCountTable => photon_count_table,
+    GatherFootprint => gather_footprint,
+    DensityGather => density_gather,
     Composite => composite,
 }
 

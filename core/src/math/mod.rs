@@ -1,6 +1,7 @@
 //! Scalar math every backend shares: each shader port (WGSL, OpenCL C, GLSL)
 //! mirrors these functions by name. Depends on nothing else in the crate.
 
+pub mod density_gather;
 pub mod fixed_point;
 pub mod footprint;
 pub mod geometry;

@@ -133,9 +133,9 @@ struct GatherParams {
     axis: u32,
     tile_size: u32,
     hit_distance_quantum: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    knn_photons: u32,
+    flux_quantum: f32,
+    _pad: u32,
 }
 
 struct DirectParams {

@@ -178,7 +178,9 @@ impl FrameConstants {
             axis,
             tile_size: settings.tile_size,
             hit_distance_quantum: self.hit_distance_quantum,
-            _pad: [0; 3],
+            knn_photons: settings.knn_photons,
+            flux_quantum: self.flux_quantum,
+            _pad: 0,
         }
     }
 

@@ -4,8 +4,11 @@
 //! 2. per light and per batch: `trace_photons` (emit, trace through specular chains, store
 //!    photons on diffuse surfaces after >= 1 specular interaction) then `deposit_screen`
 //!    (one photon -> one pixel, fixed-point integer sums; section 30.3.1.3);
-//! 3. `resolve_caustics` (flux -> radiance, Eq. 5), `tile_hit_distance`, two
-//!    `bilateral_gather` passes (section 30.3.2), `composite` (section 30.3.3).
+//! 3. `resolve_caustics` (flux -> radiance, Eq. 5: the raw caustics), the filter, then
+//!    `composite` (section 30.3.3). The filter ([`GatherFilter`]) is by default the
+//!    density-adaptive, flux-keeping gather (`photon_count_table` twice,
+//!    `gather_footprint`, `density_gather` twice; [`crate::math::density_gather`]), or the
+//!    seed's `tile_hit_distance` and two `bilateral_gather` passes (section 30.3.2).
 //!
 //! Photons are processed in batches of at most `max_photons_per_batch`, so the photon
 //! buffer never exceeds `32 * max_photons_per_batch` bytes; every batch is deposited before
@@ -19,7 +22,7 @@ mod settings;
 pub use constants::FrameConstants;
 pub use outputs::{FrameImages, Output, Outputs};
 pub use plan::{plan_frame, Needs};
-pub use settings::SspmSettings;
+pub use settings::{GatherFilter, SspmSettings};
 
 use crate::backend::{read_buf, Backend};
 use crate::device::device_scene::{BuildBudget, DeviceScene};
@@ -32,8 +35,8 @@ use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
-    BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
-    TileHitDistance, TracePhotons,
+    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
@@ -49,11 +52,15 @@ struct PhotonBuffers {
     counters: Buf<u32>,
 }
 
-/// Device buffers of the gather (exist only when filtered caustics are needed).
+/// Device buffers of the filter (exist only when filtered caustics are needed).
 #[derive(Clone, Copy, Debug)]
-struct GatherBuffers {
-    tiles: Buf<f32>,
-    scratch: ImageBuf,
+enum GatherBuffers {
+    /// The density gather: the photon counts' summed-area table and the image between
+    /// its two passes (the footprint pass writes into the filtered image, which the
+    /// last pass overwrites).
+    Density { table: Buf<u32>, scratch: ImageBuf },
+    /// The bilateral gather: hit-distance tiles and the image between its two passes.
+    Bilateral { tiles: Buf<f32>, scratch: ImageBuf },
 }
 
 /// Screen-space photon mapping on one backend, for one scene.
@@ -114,7 +121,13 @@ impl Sspm {
 
         let constants = FrameConstants::new(scene, &ds, &settings);
         constants.check_light_flux()?;
-        let mut plan = plan_frame(scene, &constants, settings.outputs, settings.prune);
+        let mut plan = plan_frame(
+            scene,
+            &constants,
+            settings.outputs,
+            settings.prune,
+            settings.filter,
+        );
         let needs = Needs::of_plan(&plan);
         let out = settings.outputs;
         let keep = |requested: bool| requested || !settings.prune;
@@ -139,12 +152,18 @@ impl Sspm {
         let raw_caustics = needs
             .photons
             .then(|| rec.create(pixels, "raw caustics image"));
-        let gather = needs.gather.then(|| GatherBuffers {
-            tiles: rec.create(
-                w.div_ceil(settings.tile_size) * h.div_ceil(settings.tile_size),
-                "hit distance tiles",
-            ),
-            scratch: rec.create(pixels, "gather scratch image"),
+        let gather = needs.gather.then(|| match settings.filter {
+            GatherFilter::Density => GatherBuffers::Density {
+                table: rec.create(pixels, "photon count table"),
+                scratch: rec.create(pixels, "gather scratch image"),
+            },
+            GatherFilter::Bilateral => GatherBuffers::Bilateral {
+                tiles: rec.create(
+                    w.div_ceil(settings.tile_size) * h.div_ceil(settings.tile_size),
+                    "hit distance tiles",
+                ),
+                scratch: rec.create(pixels, "gather scratch image"),
+            },
         });
         let filtered_caustics = needs
             .gather
@@ -347,25 +366,58 @@ impl Sspm {
             });
             if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
                 let gather = self.constants.gather_params(cam, &self.settings, 0);
-                rec.kernel(TileHitDistance {
-                    params: gather,
-                    photon_map: p.photon_map,
-                    tiles: g.tiles,
-                });
-                rec.kernel(BilateralGather {
-                    params: gather,
-                    gbuffer: self.gbuffer,
-                    tiles: g.tiles,
-                    input: raw,
-                    out: g.scratch,
-                });
-                rec.kernel(BilateralGather {
-                    params: GatherParams { axis: 1, ..gather },
-                    gbuffer: self.gbuffer,
-                    tiles: g.tiles,
-                    input: g.scratch,
-                    out: filtered,
-                });
+                let columns = GatherParams { axis: 1, ..gather };
+                match g {
+                    GatherBuffers::Density { table, scratch } => {
+                        for params in [gather, columns] {
+                            rec.kernel(PhotonCountTable {
+                                params,
+                                photon_map: p.photon_map,
+                                table,
+                            });
+                        }
+                        rec.kernel(GatherFootprint {
+                            params: gather,
+                            gbuffer: self.gbuffer,
+                            photon_map: p.photon_map,
+                            table,
+                            out: filtered,
+                        });
+                        rec.kernel(DensityGather {
+                            params: gather,
+                            gbuffer: self.gbuffer,
+                            input: filtered,
+                            out: scratch,
+                        });
+                        rec.kernel(DensityGather {
+                            params: columns,
+                            gbuffer: self.gbuffer,
+                            input: scratch,
+                            out: filtered,
+                        });
+                    }
+                    GatherBuffers::Bilateral { tiles, scratch } => {
+                        rec.kernel(TileHitDistance {
+                            params: gather,
+                            photon_map: p.photon_map,
+                            tiles,
+                        });
+                        rec.kernel(BilateralGather {
+                            params: gather,
+                            gbuffer: self.gbuffer,
+                            tiles,
+                            input: raw,
+                            out: scratch,
+                        });
+                        rec.kernel(BilateralGather {
+                            params: columns,
+                            gbuffer: self.gbuffer,
+                            tiles,
+                            input: scratch,
+                            out: filtered,
+                        });
+                    }
+                }
                 if let (true, Some(direct), Some(out)) = (
                     Needs::of_plan(&self.plan).composite,
                     self.direct_image(),
@@ -545,6 +597,7 @@ impl Sspm {
             &constants,
             self.settings.outputs,
             self.settings.prune,
+            self.settings.filter,
         );
         if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) {
             return Err(Error::InvalidParameter(

@@ -3,6 +3,7 @@
 
 use super::constants::FrameConstants;
 use super::outputs::Outputs;
+use super::settings::GatherFilter;
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::kernels::TraceVariant;
 use crate::scene::Scene;
@@ -14,7 +15,9 @@ pub struct Needs {
     pub direct_light: bool,
     /// The photon passes run: `trace_photons`, `deposit_screen`, `resolve_caustics`.
     pub photons: bool,
-    /// The gather runs: `tile_hit_distance` and both `bilateral_gather` passes.
+    /// The filter runs: `photon_count_table`, `gather_footprint` and `density_gather`
+    /// (twice each but the footprint), or `tile_hit_distance` and both
+    /// `bilateral_gather` passes, as [`GatherFilter`] says.
     pub gather: bool,
     /// `composite` runs.
     pub composite: bool,
@@ -26,6 +29,7 @@ pub fn plan_frame(
     constants: &FrameConstants,
     outputs: Outputs,
     prune: bool,
+    filter: GatherFilter,
 ) -> FramePlan {
     let features = SceneFeatures::of(scene);
     let mut lights: Vec<LightPlan> = constants
@@ -96,8 +100,22 @@ pub fn plan_frame(
     } else {
         "neither filtered caustics nor composite requested"
     };
-    pass("tile_hit_distance", n.gather, why_gather);
-    pass("bilateral_gather", n.gather, why_gather);
+    let density = filter == GatherFilter::Density;
+    let other = |chosen: bool| {
+        if chosen {
+            why_gather
+        } else if density {
+            "filter is density: the bilateral gather's passes never run"
+        } else {
+            "filter is bilateral: the density gather's passes never run"
+        }
+    };
+    for name in ["photon_count_table", "gather_footprint", "density_gather"] {
+        pass(name, n.gather && density, other(density));
+    }
+    for name in ["tile_hit_distance", "bilateral_gather"] {
+        pass(name, n.gather && !density, other(!density));
+    }
     pass(
         "composite",
         n.composite,
@@ -134,7 +152,7 @@ impl Needs {
         Needs {
             direct_light: plan.runs("direct_light"),
             photons: plan.runs("trace_photons"),
-            gather: plan.runs("bilateral_gather"),
+            gather: plan.runs("density_gather") || plan.runs("bilateral_gather"),
             composite: plan.runs("composite"),
         }
     }

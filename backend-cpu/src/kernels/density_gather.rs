@@ -1,0 +1,155 @@
+//! The density-adaptive, scatter-normalised caustic gather: `photon_count_table`,
+//! `gather_footprint` and `density_gather` (method and sources in
+//! `caustica_core::math::density_gather`).
+
+use caustica_core::device::layout::{
+    gbuffer_flags, gbuffer_pixel_area, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
+};
+use caustica_core::math::density_gather::{
+    clamped_photon_count, edge_weight, footprint_radius, footprint_weight, join_u64_wide,
+};
+use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+/// Axis 0 of `photon_count_table`: per row, the inclusive prefix sums of the clamped
+/// photon counts (wrapping `u32`), row-major.
+pub fn photon_count_rows(p: &GatherParams, map: PhotonMapView, table: &mut [u32]) {
+    let w = p.camera.width as usize;
+    table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut sum = 0u32;
+        for (x, t) in row.iter_mut().enumerate() {
+            let i = (y * w + x) as u32;
+            let n = clamped_photon_count(
+                map.photon_map_word(i, 8),
+                map.photon_map_word(i, 9),
+                p.knn_photons,
+            );
+            sum = sum.wrapping_add(n);
+            *t = sum;
+        }
+    });
+}
+
+/// Axis 1 of `photon_count_table`: the row sums become the summed-area table in place
+/// (column prefix sums, wrapping `u32`).
+pub fn photon_count_columns(p: &GatherParams, table: &mut [u32]) {
+    let w = p.camera.width as usize;
+    for y in 1..p.camera.height as usize {
+        let (above, row) = table[(y - 1) * w..(y + 1) * w].split_at_mut(w);
+        for (t, a) in row.iter_mut().zip(above.iter()) {
+            *t = t.wrapping_add(*a);
+        }
+    }
+}
+
+fn is_receiver(g: &GBufferTexel) -> bool {
+    g.flags & gbuffer_flags::RECEIVER != 0
+}
+
+/// Normaliser of a source at `i` with radius `r`: the sum of its weights over the
+/// receivers of its row (`axis` 0) or column (1) inside the image (itself included).
+fn normaliser(p: &GatherParams, g: &GBufferView, i: i32, r: f32, axis: u32) -> f32 {
+    let (w, h) = (p.camera.width as i32, p.camera.height as i32);
+    let (x, y) = (i % w, i / w);
+    let gi = g.load_gbuffer(i as usize);
+    let reach = p.max_radius_px as i32;
+    let mut sum = 0.0f32;
+    for d in -reach..=reach {
+        let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };
+        if qx < 0 || qy < 0 || qx >= w || qy >= h {
+            continue;
+        }
+        let gq = g.load_gbuffer((qy * w + qx) as usize);
+        if !is_receiver(&gq) {
+            continue;
+        }
+        sum += footprint_weight(d, r)
+            * edge_weight(
+                gi.depth,
+                gi.normal,
+                gq.depth,
+                gq.normal,
+                p.sigma_depth,
+                p.normal_power,
+            );
+    }
+    sum
+}
+
+/// `gather_footprint`: per receiver pixel `(F / W_row, r)` (W per channel, pixels); 0
+/// elsewhere.
+pub fn gather_footprint(
+    p: &GatherParams,
+    g: GBufferView,
+    map: PhotonMapView,
+    table: &[u32],
+) -> Vec<[f32; 4]> {
+    let (w, h) = (p.camera.width as i32, p.camera.height as i32);
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            if !is_receiver(&g.load_gbuffer(i as usize)) {
+                return [0.0; 4];
+            }
+            let r = footprint_radius(table, w, h, i % w, i / w, p.knn_photons, p.max_radius_px);
+            let inv = 1.0 / normaliser(p, &g, i, r, 0);
+            let word = |k: u32| map.photon_map_word(i as u32, k);
+            let flux = |c: u32| join_u64_wide(word(2 * c), word(2 * c + 1)) * p.flux_quantum;
+            [flux(0) * inv, flux(1) * inv, flux(2) * inv, r]
+        })
+        .collect()
+}
+
+/// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
+/// `caustica_core::kernels::DensityGather`).
+pub fn density_gather(p: &GatherParams, g: GBufferView, input: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    let (w, h) = (p.camera.width as i32, p.camera.height as i32);
+    let reach = p.max_radius_px as i32;
+    (0..w * h)
+        .into_par_iter()
+        .map(|j| {
+            let gj = g.load_gbuffer(j as usize);
+            if !is_receiver(&gj) {
+                return [0.0; 4];
+            }
+            let (x, y) = (j % w, j / w);
+            let mut sum = Vec3::ZERO;
+            for d in -reach..=reach {
+                let (qx, qy) = if p.axis == 0 { (x + d, y) } else { (x, y + d) };
+                if qx < 0 || qy < 0 || qx >= w || qy >= h {
+                    continue;
+                }
+                let q = (qy * w + qx) as usize;
+                let gq = g.load_gbuffer(q);
+                if !is_receiver(&gq) {
+                    continue;
+                }
+                // source q, destination j: the source's radius, offset j - q
+                let wgt = footprint_weight(-d, input[q][3])
+                    * edge_weight(
+                        gq.depth,
+                        gq.normal,
+                        gj.depth,
+                        gj.normal,
+                        p.sigma_depth,
+                        p.normal_power,
+                    );
+                sum += wgt * Vec3::from_slice(&input[q][..3]);
+            }
+            let r = input[j as usize][3];
+            if p.axis == 0 {
+                let s = sum / normaliser(p, &g, j, r, 1);
+                [s.x, s.y, s.z, r]
+            } else {
+                // 000 Eq. 5: L = (albedo / pi) Phi / A
+                // (the scale saturates first, so that no pixel of area 0 gives 0 / 0)
+                let area = gbuffer_pixel_area(&p.camera, j as u32, &gj);
+                let scale = saturate_radiance(1.0 / (PI * area));
+                let l = saturate_radiance3(sum * scale) * Vec3::from(gj.albedo);
+                [l.x, l.y, l.z, r]
+            }
+        })
+        .collect()
+}

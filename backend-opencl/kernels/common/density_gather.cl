@@ -1,0 +1,116 @@
+// Mirror of core/src/math/density_gather.rs (method and sources there): the scalar
+// functions of the density-adaptive, scatter-normalised caustic gather.
+
+#define MIN_WINDOW_HALF_WIDTH 1
+#define COUNT_CLAMP_PER_K 9u
+
+// Per-pixel photon count as the summed-area table holds it: min(count, 9 k).
+inline uint clamped_photon_count(uint lo, uint hi, uint k) {
+    uint clamp = COUNT_CLAMP_PER_K * k;
+    return hi != 0u ? clamp : min(lo, clamp);
+}
+
+// The summed-area table's entry at (x, y), 0 outside the image.
+inline uint table_entry(__global const uint* table, int width, int x, int y) {
+    return (x < 0 || y < 0) ? 0u : table[y * width + x];
+}
+
+// Photons in the window of half_width-width `half_width` around (x, y), clipped to the image (.x),
+// and the window's pixel count (.y). Wrapping uint sums, exact (see the CPU doc).
+inline uint2 window_photons(__global const uint* table, int w, int h, int x, int y,
+                            int half_width) {
+    int x0 = max(x - half_width, 0) - 1, y0 = max(y - half_width, 0) - 1;
+    int x1 = min(x + half_width, w - 1), y1 = min(y + half_width, h - 1);
+    uint count = table_entry(table, w, x1, y1) - table_entry(table, w, x0, y1) -
+                 table_entry(table, w, x1, y0) + table_entry(table, w, x0, y0);
+    return (uint2)(count, (uint)((x1 - x0) * (y1 - y0)));
+}
+
+// k-NN radius (pixels): sqrt(k a / c).
+inline float knn_radius(uint k, uint pixels, uint photons) {
+    return sqrt((float)k * (float)pixels / (float)photons);
+}
+
+// The gather radius (pixels) at (x, y): smallest window holding k photons, capped.
+inline float footprint_radius(__global const uint* table, int w, int h, int x, int y,
+                              uint k, uint max_radius_px) {
+    int max_radius = max((int)max_radius_px, MIN_WINDOW_HALF_WIDTH);
+    if (window_photons(table, w, h, x, y, max_radius).x < k) return (float)max_radius;
+    int lo = MIN_WINDOW_HALF_WIDTH, hi = max_radius;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (window_photons(table, w, h, x, y, mid).x >= k) {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    uint2 c = window_photons(table, w, h, x, y, lo);
+    return fmin(knn_radius(k, c.y, c.x), (float)max_radius);
+}
+
+// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0.
+inline float footprint_weight(int offset, float radius) {
+    if (offset == 0) return 1.0f;
+    float t = (float)offset / radius;
+    return fmax(1.0f - t * t, 0.0f);
+}
+
+// Edge weight between two receiver pixels (symmetric): depth and normal terms.
+inline float edge_weight(float depth_a, float3 normal_a, float depth_b, float3 normal_b,
+                         float sigma_depth, float normal_power) {
+    float wd = exp(-fabs(depth_a - depth_b) / (sigma_depth * fmin(depth_a, depth_b)));
+    if (normal_power > 0.0f) {
+        float c = normal_a.x * normal_b.x + normal_a.y * normal_b.y + normal_a.z * normal_b.z;
+        return wd * pow(fmax(c, 0.0f), normal_power);
+    }
+    return wd;
+}
+
+// hi * 2^32 + lo in f32 from the exact split (core's join_u64_wide).
+inline float join_u64_wide_f32(uint lo, uint hi) {
+    return (float)hi * 4294967296.0f + (float)lo;
+}
+
+// The G-buffer planes a gather reads of its neighbours: 0 (depth), 1 (normal), 3 (flags).
+#define GATHER_GBUFFER_PARAMS(q) q uint4* gbuffer0, q uint4* gbuffer1, q uint4* gbuffer3
+#define GATHER_GBUFFER_ARGS gbuffer0, gbuffer1, gbuffer3
+
+// What the gather needs of a G-buffer texel: receiver flag, view depth, normal (planes
+// 0, 1 and 3 only: the gather reads many neighbours).
+typedef struct {
+    uint receiver;
+    float depth;
+    float3 normal;
+} GatherTexel;
+
+inline GatherTexel load_gather_texel(GATHER_GBUFFER_PARAMS(__global const), uint i) {
+    GatherTexel t;
+    t.receiver = gbuffer3[i].w & GBUFFER_RECEIVER;
+    t.depth = as_float(gbuffer0[i].w);
+    uint4 n = gbuffer1[i];
+    t.normal = (float3)(as_float(n.x), as_float(n.y), as_float(n.z));
+    return t;
+}
+
+// Normaliser of a source at pixel (x, y) with radius r: the sum of its weights over the
+// receivers of its row (axis 0) or column (1) inside the image.
+inline float gather_normaliser(__global const GatherParams* p,
+                               GATHER_GBUFFER_PARAMS(__global const), int x, int y, float r,
+                               uint axis) {
+    int w = (int)p->camera.width, h = (int)p->camera.height;
+    GatherTexel gi = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)(y * w + x));
+    int reach = (int)p->max_radius_px;
+    float sum = 0.0f;
+    for (int d = -reach; d <= reach; d++) {
+        int qx = axis == 0u ? x + d : x;
+        int qy = axis == 0u ? y : y + d;
+        if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+        GatherTexel gq = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)(qy * w + qx));
+        if (gq.receiver == 0u) continue;
+        sum += footprint_weight(d, r) *
+               edge_weight(gi.depth, gi.normal, gq.depth, gq.normal, p->sigma_depth,
+                           p->normal_power);
+    }
+    return sum;
+}

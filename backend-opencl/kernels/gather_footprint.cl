@@ -1,0 +1,28 @@
+// gather_footprint: per receiver pixel its k-NN gather radius and its flux over its row
+// normaliser (core/src/math/density_gather.rs). Mirror of
+// backend-cpu/src/kernels/density_gather.rs.
+
+__kernel void gather_footprint(__global const GatherParams* p,
+                               GATHER_GBUFFER_PARAMS(__global const),
+                               PHOTON_MAP_PARAMS(__global const), __global const uint* table,
+                               __global float4* out) {
+    int w = (int)p->camera.width, h = (int)p->camera.height;
+    int i = (int)get_global_id(0);
+    if (i >= w * h) return;
+    if ((gbuffer3[i].w & GBUFFER_RECEIVER) == 0u) {
+        out[i] = (float4)(0.0f);
+        return;
+    }
+    int x = i % w, y = i / w;
+    float r = footprint_radius(table, w, h, x, y, p->knn_photons, p->max_radius_px);
+    float inv = 1.0f / gather_normaliser(p, GATHER_GBUFFER_ARGS, x, y, r, 0u);
+    float4 o;
+    o.x = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 0u),
+                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 1u)) * p->flux_quantum * inv;
+    o.y = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 2u),
+                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 3u)) * p->flux_quantum * inv;
+    o.z = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 4u),
+                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 5u)) * p->flux_quantum * inv;
+    o.w = r;
+    out[i] = o;
+}

@@ -1,0 +1,56 @@
+//! `density_gather`: one direction of the scatter-normalised, density-adaptive caustic
+//! gather (see `crate::math::density_gather`).
+
+use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{GBufferPlanes, ImageBuf};
+use crate::device::layout::GatherParams;
+
+/// One pass of the separable gather. Every receiver pixel `j` sums, over the receivers
+/// `i` of its row (`params.axis` 0) or column (1) inside the image,
+/// `input[i].rgb * footprint_weight(j - i, input[i].a) * edge_weight(i, j)`: the sources'
+/// normalised flux spread with each source's own radius.
+///
+/// - Axis 0 reads `gather_footprint`'s `(F / W_row, r)` and writes `(S_j / W_col(j), r_j)`,
+///   where `W_col(j)` is pixel `j`'s normaliser over its column with its own radius: the
+///   column pass's sources, already normalised.
+/// - Axis 1 reads that and writes caustic radiance `L = (albedo / pi) S_j / A_j`
+///   (W/(sr m^2) per channel, 000 Eq. 5 with the pixel's surface area `A_j`); alpha: the
+///   pixel's gather radius (pixels).
+///
+/// Non-receiver pixels get 0.
+#[derive(Clone, Copy, Debug)]
+pub struct DensityGather {
+    /// Gather parameters; `axis` picks the pass.
+    pub params: GatherParams,
+    /// The frame's G-buffer (receiver flag, depth, normal, albedo).
+    pub gbuffer: GBufferPlanes,
+    /// Normalised flux and radius per pixel (W per channel; pixels).
+    pub input: ImageBuf,
+    /// Axis 0: normalised flux and radius; axis 1: caustic radiance and radius.
+    pub out: ImageBuf,
+}
+
+const BINDINGS: &[Binding] = &[
+    bind("params", Params),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer2", Read),
+    bind("gbuffer3", Read),
+    bind("input", Read),
+    bind("out", ReadWrite),
+];
+
+impl KernelDecl for DensityGather {
+    const INFO: KernelInfo = KernelInfo::compute("density_gather", BINDINGS, "Sspm");
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let c = &self.params.camera;
+        let n = texels(c.width, c.height);
+        a.params("params", &self.params)?
+            .gbuffer(&self.gbuffer, n)?
+            .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+        Ok(Some(n))
+    }
+}

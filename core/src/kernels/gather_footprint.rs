@@ -1,0 +1,55 @@
+//! `gather_footprint`: each pixel's density-adaptive gather radius and its flux
+//! normalised for the row pass (see `crate::math::density_gather`).
+
+use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
+use crate::device::layout::GatherParams;
+
+/// For every receiver pixel `i`: the radius `r_i` (pixels) of the smallest window holding
+/// `params.knn_photons` photons (`footprint_radius` on the summed-area table), and the
+/// pixel's deposited flux `F_i` (W per channel, from the photon map's fixed-point sums)
+/// divided by its row normaliser `W_i = sum_d footprint_weight(d, r_i) edge_weight(i, i+d)`
+/// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)`; other
+/// pixels get 0.
+#[derive(Clone, Copy, Debug)]
+pub struct GatherFootprint {
+    /// Gather parameters (camera, `knn_photons`, `max_radius_px`, edge weights,
+    /// `flux_quantum`).
+    pub params: GatherParams,
+    /// The frame's G-buffer (receiver flag, depth, normal: planes 0, 1 and 3 are bound).
+    pub gbuffer: GBufferPlanes,
+    /// The screen-space photon map (flux sums).
+    pub photon_map: PhotonMapPlanes,
+    /// The summed-area table from `photon_count_table`.
+    pub table: Buf<u32>,
+    /// Per pixel `(F / W_row, radius)`: W per channel, pixels.
+    pub out: ImageBuf,
+}
+
+const BINDINGS: &[Binding] = &[
+    bind("params", Params),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer3", Read),
+    bind("photon_map0", Read),
+    bind("photon_map1", Read),
+    bind("photon_map2", Read),
+    bind("table", Read),
+    bind("out", ReadWrite),
+];
+
+impl KernelDecl for GatherFootprint {
+    const INFO: KernelInfo = KernelInfo::compute("gather_footprint", BINDINGS, "Sspm");
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let c = &self.params.camera;
+        let n = texels(c.width, c.height);
+        a.params("params", &self.params)?
+            .gather_gbuffer(&self.gbuffer, n)?
+            .photon_map(&self.photon_map, n)?
+            .buf("table", self.table, n * 4)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+        Ok(Some(n))
+    }
+}

@@ -1,0 +1,79 @@
+// Mirror of core/src/math/density_gather.rs (method and sources there) and
+// backend-opencl/kernels/common/density_gather.cl: the weights of the density-adaptive,
+// scatter-normalised caustic gather. A kernel that needs this file binds the G-buffer's
+// planes 0, 1 and 3 (`gbuffer0`, `gbuffer1`, `gbuffer3`, see gbuffer.wgsl). The summed-area table's functions (table_entry, window_photons,
+// footprint_radius) live in gather_footprint.wgsl, the one kernel that binds the table,
+// and clamped_photon_count in photon_count_table.wgsl, which binds no G-buffer.
+
+const MIN_WINDOW_HALF_WIDTH: i32 = 1;
+
+// k-NN radius (pixels): sqrt(k a / c).
+fn knn_radius(k: u32, pixels: u32, photons: u32) -> f32 {
+    return sqrt(f32(k) * f32(pixels) / f32(photons));
+}
+
+// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0.
+fn footprint_weight(offset: i32, radius: f32) -> f32 {
+    if (offset == 0) {
+        return 1.0;
+    }
+    let t = f32(offset) / radius;
+    return max(1.0 - t * t, 0.0);
+}
+
+// Edge weight between two receiver pixels (symmetric): depth and normal terms. WGSL's
+// pow is exp2(y * log2(x)) in accuracy, looser than Rust's powf.
+fn edge_weight(depth_a: f32, normal_a: vec3<f32>, depth_b: f32, normal_b: vec3<f32>,
+               sigma_depth: f32, normal_power: f32) -> f32 {
+    let wd = exp(-abs(depth_a - depth_b) / (sigma_depth * min(depth_a, depth_b)));
+    if (normal_power > 0.0) {
+        let c = normal_a.x * normal_b.x + normal_a.y * normal_b.y + normal_a.z * normal_b.z;
+        return wd * pow(max(c, 0.0), normal_power);
+    }
+    return wd;
+}
+
+// hi * 2^32 + lo in f32 from the exact split (core's join_u64_wide).
+fn join_u64_wide(lo: u32, hi: u32) -> f32 {
+    return f32(hi) * 4294967296.0f + f32(lo);
+}
+
+// What the gather needs of a G-buffer texel (planes 0, 1 and 3 only).
+struct GatherTexel {
+    receiver: u32,
+    depth: f32,
+    normal: vec3<f32>,
+}
+
+fn load_gather_texel(i: u32) -> GatherTexel {
+    var t: GatherTexel;
+    t.receiver = gbuffer3[i].w & GBUFFER_RECEIVER;
+    t.depth = bitcast<f32>(gbuffer0[i].w);
+    t.normal = bitcast<vec3<f32>>(gbuffer1[i].xyz);
+    return t;
+}
+
+// Normaliser of a source at pixel (x, y) with radius r: the sum of its weights over the
+// receivers of its row (axis 0) or column (1) inside the image.
+fn gather_normaliser(p: GatherParams, x: i32, y: i32, r: f32, axis: u32) -> f32 {
+    let w = i32(p.camera.width);
+    let h = i32(p.camera.height);
+    let gi = load_gather_texel(u32(y * w + x));
+    let reach = i32(p.max_radius_px);
+    var sum = 0.0;
+    for (var d = -reach; d <= reach; d++) {
+        let qx = select(x, x + d, axis == 0u);
+        let qy = select(y + d, y, axis == 0u);
+        if (qx < 0 || qy < 0 || qx >= w || qy >= h) {
+            continue;
+        }
+        let gq = load_gather_texel(u32(qy * w + qx));
+        if (gq.receiver == 0u) {
+            continue;
+        }
+        sum += footprint_weight(d, r) *
+               edge_weight(gi.depth, gi.normal, gq.depth, gq.normal, p.sigma_depth,
+                           p.normal_power);
+    }
+    return sum;
+}

@@ -1,0 +1,72 @@
+// needs: types vector optics footprint scene gbuffer density_gather
+// density_gather: one direction of the scatter-normalised, density-adaptive caustic
+// gather (core/src/math/density_gather.rs; the contract in core/src/kernels/
+// density_gather.rs). Mirror of backend-opencl/kernels/density_gather.cl and
+// backend-cpu/src/kernels/density_gather.rs.
+
+@group(0) @binding(0) var<uniform> params: GatherParams;
+@group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(5) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
+
+fn density_gather(index: u32) {
+    let p = params;
+    let w = i32(p.camera.width);
+    let h = i32(p.camera.height);
+    let j = i32(index);
+    if (j >= w * h) {
+        return;
+    }
+    let gj = load_gather_texel(u32(j));
+    if (gj.receiver == 0u) {
+        out[j] = vec4<f32>(0.0);
+        return;
+    }
+    let x = j % w;
+    let y = j / w;
+    let reach = i32(p.max_radius_px);
+    var sum = vec3<f32>(0.0);
+    for (var d = -reach; d <= reach; d++) {
+        let qx = select(x, x + d, p.axis == 0u);
+        let qy = select(y + d, y, p.axis == 0u);
+        if (qx < 0 || qy < 0 || qx >= w || qy >= h) {
+            continue;
+        }
+        let q = qy * w + qx;
+        let gq = load_gather_texel(u32(q));
+        if (gq.receiver == 0u) {
+            continue;
+        }
+        // source q, destination j: the source's radius, offset j - q
+        let s = input[q];
+        let wgt = footprint_weight(-d, s.w) *
+                  edge_weight(gq.depth, gq.normal, gj.depth, gj.normal, p.sigma_depth,
+                              p.normal_power);
+        sum += wgt * s.xyz;
+    }
+    let r = input[j].w;
+    if (p.axis == 0u) {
+        out[j] = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
+    } else {
+        // 000 Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
+        let g = load_gbuffer(u32(j));
+        let cam = p.camera;
+        let ray = camera_ray(cam, u32(x), u32(y));
+        let footprint = pixel_footprint(g.depth, cam.width, cam.height, cam.tan_half_fov_x,
+                                        cam.tan_half_fov_y);
+        let area = pixel_surface_area(footprint, dot3(ray, cam.forward), dot3(ray, g.normal));
+        let scale = saturate_radiance(1.0 / (PI_F * area));
+        let l = saturate_radiance3(sum * scale) * g.albedo;
+        out[j] = vec4<f32>(l, r);
+    }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    density_gather(i);
+}

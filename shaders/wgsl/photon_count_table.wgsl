@@ -1,0 +1,54 @@
+// needs: types photon_map
+// photon_count_table: one direction of the summed-area table of the photon counts
+// clamped at 9 k (core/src/math/density_gather.rs). Mirror of
+// backend-opencl/kernels/photon_count_table.cl and backend-cpu/src/kernels/
+// density_gather.rs. Axis 0: a thread per row; 1: a thread per column, in place.
+// Wrapping u32 sums: exact, the same bits on every backend.
+
+@group(0) @binding(0) var<uniform> params: GatherParams;
+@group(0) @binding(1) var<storage, read> photon_map0: array<u32>;
+@group(0) @binding(2) var<storage, read> photon_map1: array<u32>;
+@group(0) @binding(3) var<storage, read> photon_map2: array<u32>;
+@group(0) @binding(4) var<storage, read_write> table: array<u32>;
+
+const COUNT_CLAMP_PER_K: u32 = 9u;
+
+// Per-pixel photon count as the summed-area table holds it: min(count, 9 k).
+fn clamped_photon_count(lo: u32, hi: u32, k: u32) -> u32 {
+    let clamp = COUNT_CLAMP_PER_K * k;
+    return select(min(lo, clamp), clamp, hi != 0u);
+}
+
+fn photon_count_table(t: u32) {
+    let p = params;
+    let w = p.camera.width;
+    let h = p.camera.height;
+    if (p.axis == 0u) {
+        if (t >= h) {
+            return;
+        }
+        var sum = 0u;
+        for (var x = 0u; x < w; x++) {
+            let i = t * w + x;
+            sum += clamped_photon_count(photon_map_word(i, 8u), photon_map_word(i, 9u),
+                                        p.knn_photons);
+            table[i] = sum;
+        }
+    } else {
+        if (t >= w) {
+            return;
+        }
+        var sum = 0u;
+        for (var y = 0u; y < h; y++) {
+            sum += table[y * w + t];
+            table[y * w + t] = sum;
+        }
+    }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    photon_count_table(i);
+}
