@@ -19,7 +19,7 @@
 
 use caustica_core::frame::emission::PointEmission;
 use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape};
-use caustica_core::SspmSettings;
+use caustica_core::{GatherFilter, SspmSettings};
 use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -444,11 +444,22 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
         prop_oneof![1 => Just(0.0f32), 3 => 1.0f32..=16.0],
         prop_oneof![Just(4u32), Just(8), Just(16), 3u32..=13],
         1u32..=6,
+        prop_oneof![3 => Just(GatherFilter::Density), 1 => Just(GatherFilter::Bilateral)],
+        prop_oneof![Just(16u32), 1u32..=64],
     );
     (photons, filter).prop_map(
         |(
             (w, h, max_bounces, min_relative_power, point_emission, depth_tolerance, seed, batch),
-            (roughness, max_radius_px, sigma_depth, normal_power, tile_size, max_specular_depth),
+            (
+                roughness,
+                max_radius_px,
+                sigma_depth,
+                normal_power,
+                tile_size,
+                max_specular_depth,
+                filter,
+                knn_photons,
+            ),
         )| SspmSettings {
             photons_w: w,
             photons_h: h,
@@ -456,6 +467,8 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
             min_relative_power,
             point_emission,
             depth_tolerance,
+            filter,
+            knn_photons,
             roughness,
             hit_distance_min: None,
             hit_distance_max: None,

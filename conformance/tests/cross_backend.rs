@@ -14,8 +14,8 @@
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
-    check_composite, check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
-    check_trace, KernelCheck,
+    check_composite, check_density_gather, check_deposit, check_direct, check_gather,
+    check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -61,6 +61,17 @@ fn deposit_screen_and_resolve_match_cpu_on_the_same_photons() {
 #[test]
 fn tile_hit_distance_and_bilateral_gather_match_cpu_on_the_same_inputs() {
     kernel_test("tile_hit_distance + bilateral_gather", &check_gather);
+}
+
+/// The density gather on the CPU's photon map, G-buffer, table and intermediate images:
+/// the summed-area table bitwise, footprints and both passes within 1e-5 of what each
+/// pixel gathers.
+#[test]
+fn density_gather_matches_cpu_on_the_same_inputs() {
+    kernel_test(
+        "photon_count_table + gather_footprint + density_gather",
+        &check_density_gather,
+    );
 }
 
 /// Direct light on the CPU's G-buffer: >= 99% of pixels within 1e-4 relative.

@@ -32,4 +32,4 @@ pub use frame::plan::FramePlan;
 pub use frame::stats::FrameStats;
 pub use frame::technique::{OutputInfo, Progress, Technique};
 pub use scene::Scene;
-pub use techniques::sspm::{Output, Outputs, Sspm, SspmSettings};
+pub use techniques::sspm::{GatherFilter, Output, Outputs, Sspm, SspmSettings};

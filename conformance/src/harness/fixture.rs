@@ -11,12 +11,12 @@ use caustica_core::device::handle::SceneArgs;
 use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GpuCamera, Photon};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
-    TileHitDistance, TracePhotons,
+    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::Scene;
-use caustica_core::techniques::sspm::FrameConstants;
+use caustica_core::techniques::sspm::{FrameConstants, GatherFilter};
 use caustica_core::SspmSettings;
 
 fn backend_err(kernel: &str, b: &dyn Backend) -> impl FnOnce(BackendError) -> String {
@@ -244,6 +244,73 @@ impl Fixture {
         run_and_free(b, "bilateral_gather", &rec, |b| read_buf(b, out))
     }
 
+    /// Runs both directions of `photon_count_table` on `b` (the summed-area table).
+    pub fn run_count_table(
+        &self,
+        b: &mut dyn Backend,
+        map: &[DepositTexel],
+    ) -> Result<Vec<u32>, String> {
+        let mut rec = Recording::new();
+        let m = rec.upload_photon_map(map);
+        let table = rec.create(self.pixels(), "photon count table");
+        for axis in 0..2 {
+            rec.kernel(Kernel::PhotonCountTable(PhotonCountTable {
+                params: self
+                    .constants
+                    .gather_params(self.camera, &self.settings, axis),
+                photon_map: m,
+                table,
+            }));
+        }
+        run_and_free(b, "photon_count_table", &rec, |b| read_buf(b, table))
+    }
+
+    /// Runs `gather_footprint` on `b`.
+    pub fn run_footprint(
+        &self,
+        b: &mut dyn Backend,
+        gbuffer: &[GBufferTexel],
+        map: &[DepositTexel],
+        table: &[u32],
+    ) -> Result<Vec<[f32; 4]>, String> {
+        let mut rec = Recording::new();
+        let g = rec.upload_gbuffer(gbuffer);
+        let m = rec.upload_photon_map(map);
+        let t = rec.upload(table, "photon count table");
+        let out = rec.create(self.pixels(), "footprints");
+        rec.kernel(Kernel::GatherFootprint(GatherFootprint {
+            params: self.constants.gather_params(self.camera, &self.settings, 0),
+            gbuffer: g,
+            photon_map: m,
+            table: t,
+            out,
+        }));
+        run_and_free(b, "gather_footprint", &rec, |b| read_buf(b, out))
+    }
+
+    /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b`.
+    pub fn run_density_gather(
+        &self,
+        b: &mut dyn Backend,
+        axis: u32,
+        gbuffer: &[GBufferTexel],
+        input: &[[f32; 4]],
+    ) -> Result<Vec<[f32; 4]>, String> {
+        let mut rec = Recording::new();
+        let g = rec.upload_gbuffer(gbuffer);
+        let i = rec.upload(input, "gather input");
+        let out = rec.create(self.pixels(), "gather output");
+        rec.kernel(Kernel::DensityGather(DensityGather {
+            params: self
+                .constants
+                .gather_params(self.camera, &self.settings, axis),
+            gbuffer: g,
+            input: i,
+            out,
+        }));
+        run_and_free(b, "density_gather", &rec, |b| read_buf(b, out))
+    }
+
     /// Runs `direct_light` on `b` with the given G-buffer.
     pub fn run_direct(
         &self,
@@ -302,7 +369,14 @@ pub struct ReferenceInputs {
     pub photon_map: Vec<DepositTexel>,
     pub raw: Vec<[f32; 4]>,
     pub tiles: Vec<f32>,
-    /// Horizontal then vertical gather of `raw`.
+    /// The photon counts' summed-area table (density gather).
+    pub table: Vec<u32>,
+    /// `gather_footprint`'s output: normalised flux and radius per pixel.
+    pub footprints: Vec<[f32; 4]>,
+    /// The density gather's row pass of `footprints`.
+    pub density_rows: Vec<[f32; 4]>,
+    /// The filtered caustics with the fixture's filter (density: both passes of
+    /// `density_gather`; bilateral: horizontal then vertical gather of `raw`).
     pub filtered: Vec<[f32; 4]>,
     pub direct: Vec<[f32; 4]>,
 }
@@ -318,8 +392,16 @@ impl ReferenceInputs {
             photon_map, raw, ..
         } = fx.run_deposit(r, &gbuffer, &photons)?;
         let tiles = fx.run_tiles(r, &photon_map)?;
-        let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
-        let filtered = fx.run_gather(r, 1, &gbuffer, &tiles, &half)?;
+        let table = fx.run_count_table(r, &photon_map)?;
+        let footprints = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
+        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &footprints)?;
+        let filtered = match fx.settings.filter {
+            GatherFilter::Density => fx.run_density_gather(r, 1, &gbuffer, &density_rows)?,
+            GatherFilter::Bilateral => {
+                let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
+                fx.run_gather(r, 1, &gbuffer, &tiles, &half)?
+            }
+        };
         let direct = fx.run_direct(r, &gbuffer)?;
         Ok(ReferenceInputs {
             gbuffer,
@@ -327,6 +409,9 @@ impl ReferenceInputs {
             photon_map,
             raw,
             tiles,
+            table,
+            footprints,
+            density_rows,
             filtered,
             direct,
         })

@@ -184,6 +184,28 @@ pub const TILE_REL: f32 = 1e-5;
 /// extra tap's weight `exp(-2 ceil(r)^2 / r^2) ~ 0.13` is not small.
 pub const GATHER_REL: f32 = 1e-5;
 
+/// `gather_footprint` and `density_gather` on the same inputs: a pixel and channel agree
+/// when `|a - b| <= DENSITY_GATHER_REL * (max(|a|, |b|) + S)`, where `S` is the sum of the
+/// magnitudes the pixel gathers from (its taps' inputs, unweighted; for `gather_footprint`
+/// its own flux), converted like the output.
+///
+/// - The radius `sqrt(k a / c)` is computed from the same integers on both sides (the
+///   window search is integer arithmetic on the bitwise-equal table): two exact
+///   conversions, a product, a 2.5-ulp division and a 3-ulp sqrt, ~7 ulp ~ 4e-7.
+/// - A tap's weight is `(1 - t^2) * edge` with `t = d / r`: the Epanechnikov factor errs
+///   by ~4 ulp of 1 *absolutely* (`1 - t^2` cancels near the support's edge, where its
+///   relative error is unbounded but its value, and so its contribution, is ~0; the kernel
+///   is continuous there, so unlike the bilateral gather no tap count is ambiguous), the
+///   edge weight by ~25 ulp (`exp` 3, `pow` 16, products) relatively: each tap's weight
+///   errs by <= ~2e-6 absolutely, so the sum by <= 2e-6 `S`.
+/// - The normaliser is such a sum over <= 33 taps including the pixel itself (weight 1,
+///   so the sum is >= 1): relative error <= ~2e-6 plus its summation order, ~33 ulp ~ 2e-6.
+/// - The last pass converts flux to radiance like `resolve_caustics` ([`RESOLVE_REL`],
+///   [`RESOLVE_COS_REL`] on top, added by the check).
+///
+/// ~6e-6 in all; 1e-5.
+pub const DENSITY_GATHER_REL: f32 = 1e-5;
+
 /// `direct_light` on the same G-buffer: a pixel agrees when
 /// `|a - b| <= DIRECT_REL * max(|a|, |b|) + DIRECT_FLOOR * (channel maximum)`.
 ///

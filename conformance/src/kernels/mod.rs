@@ -8,13 +8,16 @@
 //! backend's *own* photon map, on the texels whose sums agree ([`check_deposit`]; the two
 //! comparisons are in [`deposit_screen`] and [`resolve_caustics`]); `tile_hit_distance` and
 //! `bilateral_gather` share one verdict ([`check_gather`]), though each compares on the
-//! reference's inputs ([`tile_hit_distance`], [`bilateral_gather`]).
+//! reference's inputs ([`tile_hit_distance`], [`bilateral_gather`]); so do the density
+//! gather's `photon_count_table`, `gather_footprint` and `density_gather`
+//! ([`check_density_gather`]).
 //!
 //! [`check_kernel_cases`] runs one check for a candidate over the fixed cases
 //! ([`crate::harness::kernel_cases`]).
 
 pub mod bilateral_gather;
 pub mod composite;
+pub mod density_gather;
 pub mod deposit_screen;
 pub mod direct_light;
 pub mod primary_gbuffer;
@@ -24,6 +27,7 @@ pub mod trace_photons;
 
 pub use bilateral_gather::check_gather;
 pub use composite::check_composite;
+pub use density_gather::check_density_gather;
 pub use deposit_screen::check_deposit;
 pub use direct_light::check_direct;
 pub use primary_gbuffer::{check_gbuffer, compare_gbuffers};

@@ -1,0 +1,169 @@
+//! The density gather's three kernels on the reference's inputs, in one verdict:
+//! `photon_count_table` (the summed-area table: integer sums, bitwise equal),
+//! `gather_footprint` (radius and normalised flux) and both `density_gather` passes,
+//! each within [`DENSITY_GATHER_REL`] of the magnitudes it gathers (the argument is
+//! there), the radius it passes through bitwise equal.
+
+use crate::harness::fixture::{Fixture, ReferenceInputs};
+use crate::harness::tolerance::{DENSITY_GATHER_REL, RESOLVE_COS_REL, RESOLVE_REL};
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::Backend;
+use caustica_core::device::layout::{gbuffer_pixel_area, GpuCamera};
+use caustica_core::math::footprint::MIN_COSINE;
+use glam::Vec3;
+
+/// Compares `a` (reference) and `b` per pixel and channel: `|a - b| <= rel(i) * (max(|a|,
+/// |b|) + gathered(i, ch))`; alpha must be bitwise equal when `alpha_exact`. Records the
+/// failures in `v` under `what`.
+fn compare(
+    v: &mut Verdict,
+    what: &str,
+    cam: &GpuCamera,
+    a: &[[f32; 4]],
+    b: &[[f32; 4]],
+    rel: &dyn Fn(usize) -> f32,
+    gathered: &dyn Fn(usize, usize) -> f32,
+    alpha_exact: bool,
+) {
+    let (mut bad, mut worst, mut first_bad) = (0u64, 0.0f32, None);
+    for i in 0..a.len() {
+        let mut e = 0.0f32;
+        for ch in 0..3 {
+            let d = (a[i][ch] - b[i][ch]).abs();
+            let bound = rel(i) * (a[i][ch].abs().max(b[i][ch].abs()) + gathered(i, ch));
+            let x = if d == 0.0 { 0.0 } else { d / bound };
+            e = e.max(if x.is_nan() { f32::INFINITY } else { x });
+        }
+        if alpha_exact && a[i][3].to_bits() != b[i][3].to_bits() {
+            e = f32::INFINITY;
+        }
+        worst = worst.max(e);
+        if e > 1.0 {
+            bad += 1;
+            first_bad.get_or_insert(format!(
+                "({}, {}): {:?} vs cpu {:?}",
+                i as u32 % cam.width,
+                i as u32 / cam.width,
+                b[i],
+                a[i]
+            ));
+        }
+    }
+    v.check(bad == 0, || {
+        format!(
+            "{what} differs on {bad} pixels, first {}",
+            first_bad.unwrap_or_default()
+        )
+    });
+    v.note(format!("{what}: worst {worst:.3} of tolerance"));
+}
+
+/// Sum over the taps of pixel `i`'s pass along `axis` (reach `max_radius_px`) of the
+/// input's channel `ch` magnitude.
+fn tap_sum(cam: &GpuCamera, reach: i32, axis: u32, input: &[[f32; 4]], i: usize, ch: usize) -> f32 {
+    let (w, h) = (cam.width as i32, cam.height as i32);
+    let (x, y) = (i as i32 % w, i as i32 / w);
+    let mut s = 0.0f32;
+    for d in -reach..=reach {
+        let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };
+        if qx >= 0 && qy >= 0 && qx < w && qy < h {
+            s += input[(qy * w + qx) as usize][ch].abs();
+        }
+    }
+    s
+}
+
+/// `photon_count_table`, `gather_footprint` and both `density_gather` passes on the
+/// reference's photon map, G-buffer, table and intermediate images.
+pub fn check_density_gather(
+    fx: &Fixture,
+    inputs: &ReferenceInputs,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("photon_count_table + gather_footprint + density_gather");
+    let cam = fx.camera;
+    let reach = fx.settings.max_radius_px as i32;
+
+    // integer sums of the same counts: bitwise
+    let ta = fx.run_count_table(r, &inputs.photon_map)?;
+    let tb = fx.run_count_table(c, &inputs.photon_map)?;
+    let differ = ta.iter().zip(&tb).filter(|(a, b)| a != b).count();
+    v.check(differ == 0, || {
+        format!(
+            "photon_count_table differs on {differ} of {} entries",
+            ta.len()
+        )
+    });
+
+    let fa = fx.run_footprint(r, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
+    let fb = fx.run_footprint(c, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
+    // the radius is ~7 ulp from the same integers: compared as a fourth channel
+    let radius: Vec<[f32; 4]> = fa.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
+    let radius_b: Vec<[f32; 4]> = fb.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
+    compare(
+        &mut v,
+        "gather_footprint radius",
+        &cam,
+        &radius,
+        &radius_b,
+        &|_| DENSITY_GATHER_REL,
+        &|_, _| 0.0,
+        false,
+    );
+    compare(
+        &mut v,
+        "gather_footprint flux",
+        &cam,
+        &fa,
+        &fb,
+        &|_| DENSITY_GATHER_REL,
+        &|_, _| 0.0,
+        false,
+    );
+
+    for axis in 0..2u32 {
+        let input = if axis == 0 {
+            &inputs.footprints
+        } else {
+            &inputs.density_rows
+        };
+        let a = fx.run_density_gather(r, axis, &inputs.gbuffer, input)?;
+        let b = fx.run_density_gather(c, axis, &inputs.gbuffer, input)?;
+        // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass
+        let to_output = |i: usize, ch: usize| -> f32 {
+            if axis == 0 {
+                return 1.0;
+            }
+            let g = &inputs.gbuffer[i];
+            let area = gbuffer_pixel_area(&cam, i as u32, g);
+            g.albedo[ch] / (std::f32::consts::PI * area)
+        };
+        let rel = |i: usize| -> f32 {
+            if axis == 0 {
+                return DENSITY_GATHER_REL;
+            }
+            let g = &inputs.gbuffer[i];
+            let ray = caustica_core::device::layout::camera_ray(
+                &cam,
+                i as u32 % cam.width,
+                i as u32 / cam.width,
+            );
+            let cos = ray.dot(Vec3::from(g.normal)).abs().max(MIN_COSINE);
+            DENSITY_GATHER_REL + RESOLVE_REL + RESOLVE_COS_REL / cos
+        };
+        let gathered =
+            |i: usize, ch: usize| tap_sum(&cam, reach, axis, input, i, ch) * to_output(i, ch);
+        compare(
+            &mut v,
+            &format!("density_gather axis {axis}"),
+            &cam,
+            &a,
+            &b,
+            &rel,
+            &gathered,
+            true,
+        );
+    }
+    Ok(v)
+}
