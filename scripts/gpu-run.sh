@@ -20,7 +20,7 @@ if [ "${1:-}" = "--build" ]; then
                 "caustica-vulkan:vulkan_backend" "caustica-conformance:frame_plan" \
                 "caustica-conformance:stiff_cases" "caustica-conformance:every_kernel_dispatched" \
                 "caustica-conformance:technique_seam" "caustica-conformance:hostile_input" \
-                "caustica-conformance:large_frames"; do
+                "caustica-conformance:large_frames" "caustica-conformance:filter_flux"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
@@ -40,7 +40,7 @@ if [ "${1:-}" = "--build" ]; then
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
           .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend .devbin/frame_plan \
           .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
-          .devbin/technique_seam .devbin/hostile_input .devbin/large_frames
+          .devbin/technique_seam .devbin/hostile_input .devbin/large_frames .devbin/filter_flux
     # what the device tool carries must stay under 64 MiB: the binaries travel gzipped
     (cd .devbin && for f in *; do case $f in *.deb|*.gz) ;; *) gzip -9 -f "$f" ;; esac; done)
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
@@ -49,8 +49,8 @@ if [ "${1:-}" = "--build" ]; then
     exit 0
 fi
 
-# Sections to run (default: all): opencl wgpu vulkan plan stiff frames hostile
-SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile}
+# Sections to run (default: all): opencl wgpu vulkan plan stiff frames hostile filter
+SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
 B=$PWD/.devbin
@@ -108,6 +108,11 @@ if has stiff; then
 fi
 if has frames; then
     run env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
+fi
+if has filter; then
+    # issue 15: the density gather keeps the raw flux on every backend (per-kernel checks
+    # run in the vulkan section's cross_backend)
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
 fi
 if has hostile; then
     # issue 14: hostile scenes on every backend, large frames, 8192x8192 where it fits

@@ -20,11 +20,14 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         int qy = p->axis == 0u ? y : y + d;
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
         int q = qy * w + qx;
+        // source q, destination j: the source's radius, offset j - q (non-receivers have
+        // radius 0 and weigh 0 but at d = 0, where j is a receiver)
+        float4 s = input[q];
+        float ws = footprint_weight(-d, s.w);
+        if (ws == 0.0f) continue;
         GatherTexel gq = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)q);
         if (gq.receiver == 0u) continue;
-        // source q, destination j: the source's radius, offset j - q
-        float4 s = input[q];
-        float wgt = footprint_weight(-d, s.w) *
+        float wgt = ws *
                     edge_weight(gq.depth, gq.normal, gj.depth, gj.normal, p->sigma_depth,
                                 p->normal_power);
         sum += wgt * s.xyz;
@@ -43,6 +46,8 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
                                         dot3(ray, load3(gt.normal)));
         float scale = saturate_radiance(1.0f / (PI_F * area));
         float3 l = saturate_radiance3(sum * scale) * load3(gt.albedo);
-        out[j] = (float4)(l, r);
+        // alpha: the radius where the filter gave light, 0 elsewhere
+        bool lit = sum.x > 0.0f || sum.y > 0.0f || sum.z > 0.0f;
+        out[j] = (float4)(l, lit ? r : 0.0f);
     }
 }

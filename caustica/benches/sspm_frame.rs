@@ -1,8 +1,10 @@
 //! One Sspm frame per backend, side by side: `sphere` and `cornell` at 1920x1080 with
 //! 2048x2048 photons (the setting of the performance targets), median per-pass times over
 //! repeated frames after a warm-up frame, and the budget line trace + deposit + gather
-//! (resolve, tiles and both bilateral passes; target on a GPU: <= 2 ms on the fastest
-//! backend). Device timestamps where the backend has them.
+//! (resolve and the filter's passes: the density gather's table, footprint and two
+//! passes, or the bilateral's tiles and two passes; target on a GPU: <= 2 ms on the
+//! fastest backend), once per caustic filter. Device timestamps where the backend has
+//! them.
 //!
 //! Then `plain` (no caster, issue 8): the host wall time of a whole Sspm frame, whose plan
 //! runs only the G-buffer and direct light, against a recording of those two kernels
@@ -12,7 +14,8 @@
 //! `cargo bench -p caustica --bench sspm_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS=wgpu,vulkan` (default: every backend that opens
 //! here), `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZE=WxH`,
-//! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048).
+//! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048), `CAUSTICA_BENCH_FILTERS=density`
+//! (default: density,bilateral).
 
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::device::device_scene::DeviceScene;
@@ -33,6 +36,9 @@ const BUDGET_PASSES: &[&str] = &[
     "trace_photons",
     "deposit_screen",
     "resolve_caustics",
+    "photon_count_table",
+    "gather_footprint",
+    "density_gather",
     "tile_hit_distance",
     "bilateral_gather",
 ];
@@ -61,6 +67,11 @@ fn main() {
         .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
         .unwrap_or((1920u32, 1080u32));
     let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
+    let filters: Vec<String> = env_or("CAUSTICA_BENCH_FILTERS", "density,bilateral")
+        .split(',')
+        .map(|f| f.trim().to_string())
+        .filter(|f| !f.is_empty())
+        .collect();
     println!(
         "Sspm frame, {w}x{h}, {side}x{side} photons, median of {frames} frames after one warm-up"
     );
@@ -73,11 +84,15 @@ fn main() {
             }
         };
         let caps = backend.capabilities();
-        for scene_name in ["sphere", "cornell"] {
+        for (scene_name, filter) in ["sphere", "cornell"]
+            .into_iter()
+            .flat_map(|s| filters.iter().map(move |f| (s, f.as_str())))
+        {
             let mut scene = builtin(scene_name).expect("built-in scene");
             scene.camera.width = w;
             scene.camera.height = h;
-            let settings = serde_json::json!({ "photons_w": side, "photons_h": side });
+            let settings =
+                serde_json::json!({ "photons_w": side, "photons_h": side, "filter": filter });
             let mut sspm = match create("sspm", backend.as_mut(), &scene, &settings) {
                 Ok(s) => s,
                 Err(e) => {
@@ -116,8 +131,8 @@ fn main() {
                 continue;
             }
             println!(
-                "\n{name} on {} / {scene_name} ({timing}): frame {:.3} ms (host wall), \
-                 trace + deposit + gather {:.3} ms",
+                "\n{name} on {} / {scene_name} / {filter} filter ({timing}): frame {:.3} ms \
+                 (host wall), trace + deposit + gather {:.3} ms",
                 caps.device,
                 median(&mut frame_ms),
                 median(&mut budget)

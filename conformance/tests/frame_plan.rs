@@ -16,7 +16,7 @@ use caustica_core::kernels::variant_label;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Light;
 use caustica_core::techniques::sspm::{Output, Outputs};
-use caustica_core::{Backend, FrameStats, Scene, Sspm, SspmSettings};
+use caustica_core::{Backend, FrameStats, GatherFilter, Scene, Sspm, SspmSettings};
 use glam::Vec3;
 
 const W: u32 = 64;
@@ -77,10 +77,13 @@ fn run(b: &mut dyn Backend, scene: &Scene, settings: SspmSettings) -> Run {
     }
 }
 
-const PHOTON_PASSES: [&str; 5] = [
+const PHOTON_PASSES: [&str; 8] = [
     "trace_photons",
     "deposit_screen",
     "resolve_caustics",
+    "photon_count_table",
+    "gather_footprint",
+    "density_gather",
     "tile_hit_distance",
     "bilateral_gather",
 ];
@@ -225,14 +228,76 @@ fn pruning_on_and_off_give_the_same_frame() {
             let scene = small(scene_name);
             let on = run(b.as_mut(), &scene, settings(true));
             let off = run(b.as_mut(), &scene, settings(false));
+            // pruning off runs every pass but those of the filter not chosen
             assert!(
-                off.stats.skipped.is_empty(),
+                off.stats
+                    .skipped
+                    .iter()
+                    .all(|p| p.reason.starts_with("filter is density")),
                 "{name}: pruning off skipped {:?}",
                 off.stats.skipped
             );
             assert_same_frame(name, scene_name, &on, &off);
         }
         eprintln!("*** {name}: pruning on and off agree bitwise on every built-in scene ***");
+    }
+}
+
+/// The filter setting picks the passes: the density gather's three kernels by default,
+/// the seed's tile and bilateral passes with `filter: bilateral`; the others are skipped
+/// with the filter as the reason, and no buffer of theirs exists.
+#[test]
+fn the_filter_setting_picks_its_passes_and_buffers() {
+    let scene = small("sphere");
+    let density = ["photon_count_table", "gather_footprint", "density_gather"];
+    let bilateral = ["tile_hit_distance", "bilateral_gather"];
+    for (name, mut b) in backends() {
+        for (filter, runs, skips, buffer, absent) in [
+            (
+                GatherFilter::Density,
+                &density[..],
+                &bilateral[..],
+                "photon count table",
+                "tiles",
+            ),
+            (
+                GatherFilter::Bilateral,
+                &bilateral[..],
+                &density[..],
+                "tiles",
+                "photon count table",
+            ),
+        ] {
+            let r = run(
+                b.as_mut(),
+                &scene,
+                SspmSettings {
+                    filter,
+                    ..settings(true)
+                },
+            );
+            for pass in runs {
+                assert!(
+                    ran(&r.stats, pass),
+                    "{name}: {filter:?}: {pass} did not run"
+                );
+            }
+            for pass in skips {
+                assert!(!ran(&r.stats, pass), "{name}: {filter:?}: {pass} ran");
+                let why = skipped_reason(&r.stats, pass).unwrap_or_default();
+                assert!(why.starts_with("filter is"), "{name}: {pass}: '{why}'");
+            }
+            assert!(
+                r.buffers.iter().any(|x| x.contains(buffer)),
+                "{name}: {:?}",
+                r.buffers
+            );
+            assert!(
+                !r.buffers.iter().any(|x| x.contains(absent)),
+                "{name}: {:?}",
+                r.buffers
+            );
+        }
     }
 }
 

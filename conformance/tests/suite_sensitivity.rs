@@ -9,13 +9,14 @@
 //!   paths diverge where they really do. The tolerances must absorb that;
 //! - a backend with a real but small fault fails the comparison that covers the kernel:
 //!   depth written as distance, 3% of the photons lost, photon flux 2% low, one fixed-point
-//!   unit lost per texel, radiance 1e-4 high, one ulp in the composite, a photon kernel
+//!   unit lost per texel, radiance 1e-4 high, a summed-area table one photon off, the
+//!   density gather's flux 1e-4 high, one ulp in the composite, a photon kernel
 //!   that ignores its compiled variant switches, and so on.
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
-    check_composite, check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
-    check_trace, KernelCheck,
+    check_composite, check_density_gather, check_deposit, check_direct, check_gather,
+    check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -27,8 +28,8 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
-    TileHitDistance, TracePhotons,
+    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::rng::pcg_hash;
@@ -56,6 +57,12 @@ enum Mutation {
     TilesHigh,
     /// `bilateral_gather` 1e-4 too high.
     GatherHigh,
+    /// `photon_count_table` one photon too many in every non-zero entry.
+    CountTableOffByOne,
+    /// `gather_footprint` flux 1e-4 too high.
+    FootprintHigh,
+    /// `density_gather` 1e-4 too high.
+    DensityGatherHigh,
     /// `direct_light` 1e-3 too high.
     DirectHigh,
     /// `composite` one ulp off in one channel.
@@ -137,6 +144,14 @@ impl Mutant {
                 | Kernel::BilateralGather(BilateralGather { params, .. }) => {
                     nudge_camera(&mut params.camera);
                     params.roughness = nudge(params.roughness);
+                    params.sigma_depth = nudge(params.sigma_depth);
+                    params.normal_power = nudge(params.normal_power);
+                }
+                Kernel::PhotonCountTable(PhotonCountTable { params, .. })
+                | Kernel::GatherFootprint(GatherFootprint { params, .. })
+                | Kernel::DensityGather(DensityGather { params, .. }) => {
+                    nudge_camera(&mut params.camera);
+                    params.flux_quantum = nudge(params.flux_quantum);
                     params.sigma_depth = nudge(params.sigma_depth);
                     params.normal_power = nudge(params.normal_power);
                 }
@@ -262,6 +277,20 @@ impl Mutant {
             (Mutation::GatherHigh, Kernel::BilateralGather(BilateralGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
+            (
+                Mutation::CountTableOffByOne,
+                Kernel::PhotonCountTable(PhotonCountTable { params, table, .. }),
+            ) if params.axis == 1 => self.modify::<u32>(table.id, |v| {
+                for t in v.iter_mut().filter(|t| **t > 0) {
+                    *t += 1;
+                }
+            }),
+            (Mutation::FootprintHigh, Kernel::GatherFootprint(GatherFootprint { out, .. })) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
+            }
+            (Mutation::DensityGatherHigh, Kernel::DensityGather(DensityGather { out, .. })) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
+            }
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
@@ -333,6 +362,10 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
             "tile_hit_distance + bilateral_gather",
             Box::new(check_gather),
         ),
+        (
+            "photon_count_table + gather_footprint + density_gather",
+            Box::new(check_density_gather),
+        ),
         ("direct_light", Box::new(check_direct)),
         ("composite", Box::new(|_, i, r, c| check_composite(i, r, c))),
     ]
@@ -398,6 +431,18 @@ fn each_fault_fails_the_check_of_its_kernel() {
         (Mutation::ResolveHigh, "deposit_screen + resolve_caustics"),
         (Mutation::TilesHigh, "tile_hit_distance + bilateral_gather"),
         (Mutation::GatherHigh, "tile_hit_distance + bilateral_gather"),
+        (
+            Mutation::CountTableOffByOne,
+            "photon_count_table + gather_footprint + density_gather",
+        ),
+        (
+            Mutation::FootprintHigh,
+            "photon_count_table + gather_footprint + density_gather",
+        ),
+        (
+            Mutation::DensityGatherHigh,
+            "photon_count_table + gather_footprint + density_gather",
+        ),
         (Mutation::DirectHigh, "direct_light"),
         (Mutation::CompositeUlp, "composite"),
     ] {

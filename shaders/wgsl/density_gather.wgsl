@@ -36,13 +36,18 @@ fn density_gather(index: u32) {
             continue;
         }
         let q = qy * w + qx;
+        // source q, destination j: the source's radius, offset j - q (non-receivers have
+        // radius 0 and weigh 0 but at d = 0, where j is a receiver)
+        let s = input[q];
+        let ws = footprint_weight(-d, s.w);
+        if (ws == 0.0) {
+            continue;
+        }
         let gq = load_gather_texel(u32(q));
         if (gq.receiver == 0u) {
             continue;
         }
-        // source q, destination j: the source's radius, offset j - q
-        let s = input[q];
-        let wgt = footprint_weight(-d, s.w) *
+        let wgt = ws *
                   edge_weight(gq.depth, gq.normal, gj.depth, gj.normal, p.sigma_depth,
                               p.normal_power);
         sum += wgt * s.xyz;
@@ -60,7 +65,9 @@ fn density_gather(index: u32) {
         let area = pixel_surface_area(footprint, dot3(ray, cam.forward), dot3(ray, g.normal));
         let scale = saturate_radiance(1.0 / (PI_F * area));
         let l = saturate_radiance3(sum * scale) * g.albedo;
-        out[j] = vec4<f32>(l, r);
+        // alpha: the radius where the filter gave light, 0 elsewhere
+        let lit = sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0;
+        out[j] = vec4<f32>(l, select(0.0, r, lit));
     }
 }
 

@@ -54,7 +54,8 @@ fn normaliser(p: &GatherParams, g: &GBufferView, i: i32, r: f32, axis: u32) -> f
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
     let (x, y) = (i % w, i / w);
     let gi = g.load_gbuffer(i as usize);
-    let reach = p.max_radius_px as i32;
+    // taps beyond the radius weigh 0: the loop stops there
+    let reach = (r.ceil() as i32).min(p.max_radius_px as i32);
     let mut sum = 0.0f32;
     for d in -reach..=reach {
         let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };
@@ -122,12 +123,17 @@ pub fn density_gather(p: &GatherParams, g: GBufferView, input: &[[f32; 4]]) -> V
                     continue;
                 }
                 let q = (qy * w + qx) as usize;
+                // source q, destination j: the source's radius, offset j - q (non-receivers
+                // have radius 0 and weigh 0 but at d = 0, where j is a receiver)
+                let ws = footprint_weight(-d, input[q][3]);
+                if ws == 0.0 {
+                    continue;
+                }
                 let gq = g.load_gbuffer(q);
                 if !is_receiver(&gq) {
                     continue;
                 }
-                // source q, destination j: the source's radius, offset j - q
-                let wgt = footprint_weight(-d, input[q][3])
+                let wgt = ws
                     * edge_weight(
                         gq.depth,
                         gq.normal,
@@ -148,7 +154,10 @@ pub fn density_gather(p: &GatherParams, g: GBufferView, input: &[[f32; 4]]) -> V
                 let area = gbuffer_pixel_area(&p.camera, j as u32, &gj);
                 let scale = saturate_radiance(1.0 / (PI * area));
                 let l = saturate_radiance3(sum * scale) * Vec3::from(gj.albedo);
-                [l.x, l.y, l.z, r]
+                // alpha: the radius where the filter gave light, 0 elsewhere (as the raw
+                // image's alpha is 0 without photons)
+                let lit = sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0;
+                [l.x, l.y, l.z, if lit { r } else { 0.0 }]
             }
         })
         .collect()

@@ -49,10 +49,13 @@ inline float footprint_radius(__global const uint* table, int w, int h, int x, i
     return fmin(knn_radius(k, c.y, c.x), (float)max_radius);
 }
 
-// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0.
+// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0, 0 where
+// |offset| >= radius (radius 0 included, with no division by 0).
 inline float footprint_weight(int offset, float radius) {
     if (offset == 0) return 1.0f;
-    float t = (float)offset / radius;
+    float d = (float)offset;
+    if (!(fabs(d) < radius)) return 0.0f;
+    float t = d / radius;
     return fmax(1.0f - t * t, 0.0f);
 }
 
@@ -100,7 +103,8 @@ inline float gather_normaliser(__global const GatherParams* p,
                                uint axis) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     GatherTexel gi = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)(y * w + x));
-    int reach = (int)p->max_radius_px;
+    // taps beyond the radius weigh 0: the loop stops there
+    int reach = min((int)ceil(r), (int)p->max_radius_px);
     float sum = 0.0f;
     for (int d = -reach; d <= reach; d++) {
         int qx = axis == 0u ? x + d : x;

@@ -66,6 +66,17 @@ fn scale_case(b: &mut dyn Backend, s: f32, o: Vec3, extra_rel: f64) -> Result<Ou
         }
     }
     v.check(r.stats.photons_stored > 0, || "nothing stored".into());
+    // The filter keeps the focus at every scale: its radius is counted in photons and
+    // pixels, never in scene units, so the focused caustic's peak survives the gather
+    // (the density gather leaves pixels holding 9 k photons in their 3x3 window as they
+    // are; 0.9 leaves room for the sparse pixels around the peak spreading into it or
+    // not).
+    let mask = caustica_core::frame::metrics::CausticMask::from_reference(&f.raw);
+    let peak = caustica_core::frame::metrics::peak_ratio(&f.filtered, &f.raw, &mask);
+    v.check(peak >= 0.9, || {
+        format!("filtered peak {peak:.3} of the raw peak: the focus was blurred")
+    });
+    key.push_str(&format!(", filtered peak {peak:.3} of raw"));
     outcome(key, v)
 }
 

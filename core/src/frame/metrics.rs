@@ -5,6 +5,7 @@
 //! - relative MSE: `sum_mask sum_rgb (x - r)^2 / sum_mask sum_rgb r^2` (dimensionless;
 //!   0 is perfect, 1 is as wrong as a black image);
 //! - RMSE: `sqrt(mean_mask mean_rgb (x - r)^2)` in radiance units;
+//! - peak ratio: `max_mask lum(x) / max_mask lum(r)` (a focused caustic kept: 1);
 //! - bias and variance over repeated seeds: relative bias
 //!   `sum_mask sum_rgb (mean_k x_k - r) / sum_mask sum_rgb r` and relative variance
 //!   `sum_mask sum_rgb var_k(x_k) / sum_mask sum_rgb r^2` (sample variance, K - 1);
@@ -103,6 +104,23 @@ pub fn rmse(x: &Image, r: &Image, mask: &CausticMask) -> f64 {
         0.0
     } else {
         (sum / (3 * mask.count) as f64).sqrt()
+    }
+}
+
+/// Peak ratio: the largest luminance of `x` over the mask divided by the reference's
+/// largest luminance (1 is a peak kept exactly; a filter that blurs a focused caustic
+/// gives < 1). 0 when the reference is black.
+pub fn peak_ratio(x: &Image, r: &Image, mask: &CausticMask) -> f64 {
+    let peak = |img: &Image| {
+        mask.pixels(img)
+            .map(|p| luminance([p[0], p[1], p[2]]) as f64)
+            .fold(0.0f64, f64::max)
+    };
+    let pr = peak(r);
+    if pr > 0.0 {
+        peak(x) / pr
+    } else {
+        0.0
     }
 }
 

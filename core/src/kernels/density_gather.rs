@@ -16,7 +16,7 @@ use crate::device::layout::GatherParams;
 ///   column pass's sources, already normalised.
 /// - Axis 1 reads that and writes caustic radiance `L = (albedo / pi) S_j / A_j`
 ///   (W/(sr m^2) per channel, 000 Eq. 5 with the pixel's surface area `A_j`); alpha: the
-///   pixel's gather radius (pixels).
+///   pixel's gather radius (pixels) where it received flux, 0 elsewhere.
 ///
 /// Non-receiver pixels get 0.
 #[derive(Clone, Copy, Debug)]

@@ -143,13 +143,18 @@ pub fn footprint_radius(
 }
 
 /// 1-D Epanechnikov weight of a pixel `offset` pixels from a source of radius `radius`:
-/// `max(0, 1 - (offset / radius)^2)`; 1 at offset 0 whatever the radius.
+/// `max(0, 1 - (offset / radius)^2)`; 1 at offset 0 whatever the radius, 0 wherever
+/// `|offset| >= radius` (also for radius 0, the non-receivers', with no division by 0).
 #[inline]
 pub fn footprint_weight(offset: i32, radius: f32) -> f32 {
     if offset == 0 {
         return 1.0;
     }
-    let t = offset as f32 / radius;
+    let d = offset as f32;
+    if !(d.abs() < radius) {
+        return 0.0;
+    }
+    let t = d / radius;
     (1.0 - t * t).max(0.0)
 }
 
@@ -223,15 +228,25 @@ mod tests {
     }
 
     #[test]
-    fn a_pixel_holding_k_photons_is_not_blurred() {
+    fn a_focused_pixel_is_not_blurred_a_sparse_one_is() {
         let k = 16;
         let mut counts = vec![0u32; 25];
+        // 9 k photons in one pixel fill its 3x3 window at the identity's density
         counts[12] = clamped_photon_count(1000, 0, k);
         let t = table_of(&counts, 5);
         let r = footprint_radius(&t, 5, 5, 2, 2, k, 16);
         assert_eq!(r, 1.0);
         assert_eq!(footprint_weight(1, r), 0.0);
         assert_eq!(footprint_weight(0, r), 1.0);
+        // k photons alone in a pixel: 16 photons over 9 pixels, radius 3
+        counts[12] = clamped_photon_count(16, 0, k);
+        let t = table_of(&counts, 5);
+        assert_eq!(footprint_radius(&t, 5, 5, 2, 2, k, 16), 3.0);
+        // at the corner the window is clipped to 2x2: 4 k photons suffice
+        let mut counts = vec![0u32; 25];
+        counts[0] = clamped_photon_count(64, 0, k);
+        let t = table_of(&counts, 5);
+        assert_eq!(footprint_radius(&t, 5, 5, 0, 0, k, 16), 1.0);
     }
 
     #[test]
@@ -267,9 +282,9 @@ mod tests {
     }
 
     #[test]
-    fn clamped_counts_saturate_at_k() {
+    fn clamped_counts_saturate_at_9k() {
         assert_eq!(clamped_photon_count(3, 0, 16), 3);
-        assert_eq!(clamped_photon_count(300, 0, 16), 16);
-        assert_eq!(clamped_photon_count(0, 1, 16), 16);
+        assert_eq!(clamped_photon_count(300, 0, 16), 144);
+        assert_eq!(clamped_photon_count(0, 1, 16), 144);
     }
 }

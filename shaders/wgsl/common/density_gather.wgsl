@@ -12,12 +12,17 @@ fn knn_radius(k: u32, pixels: u32, photons: u32) -> f32 {
     return sqrt(f32(k) * f32(pixels) / f32(photons));
 }
 
-// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0.
+// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0, 0 where
+// |offset| >= radius (radius 0 included, with no division by 0).
 fn footprint_weight(offset: i32, radius: f32) -> f32 {
     if (offset == 0) {
         return 1.0;
     }
-    let t = f32(offset) / radius;
+    let d = f32(offset);
+    if (!(abs(d) < radius)) {
+        return 0.0;
+    }
+    let t = d / radius;
     return max(1.0 - t * t, 0.0);
 }
 
@@ -59,7 +64,8 @@ fn gather_normaliser(p: GatherParams, x: i32, y: i32, r: f32, axis: u32) -> f32 
     let w = i32(p.camera.width);
     let h = i32(p.camera.height);
     let gi = load_gather_texel(u32(y * w + x));
-    let reach = i32(p.max_radius_px);
+    // taps beyond the radius weigh 0: the loop stops there
+    let reach = min(i32(ceil(r)), i32(p.max_radius_px));
     var sum = 0.0;
     for (var d = -reach; d <= reach; d++) {
         let qx = select(x, x + d, axis == 0u);

@@ -64,7 +64,8 @@ pub enum Output {
     /// Caustic radiance straight from the screen-space photon map (alpha: mean hit
     /// distance).
     RawCaustics,
-    /// Caustic radiance after the bilateral gather.
+    /// Caustic radiance after the filter (`SspmSettings::filter`; alpha: the density
+    /// gather's radius in pixels where it gave light, or the bilateral gather's mean hit distance).
     FilteredCaustics,
 }
 
@@ -129,7 +130,8 @@ pub struct FrameImages {
     pub direct: Option<ImageBuf>,
     /// Caustic radiance straight from the photon map (alpha: mean hit distance).
     pub raw_caustics: Option<ImageBuf>,
-    /// Caustic radiance after the bilateral gather.
+    /// Caustic radiance after the filter (alpha: the density gather's radius in pixels,
+    /// or the bilateral gather's mean hit distance).
     pub filtered_caustics: Option<ImageBuf>,
 }
 
