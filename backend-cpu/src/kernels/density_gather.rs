@@ -55,7 +55,7 @@ fn normaliser(p: &GatherParams, g: &GBufferView, i: i32, r: f32, axis: u32) -> f
     let (x, y) = (i % w, i / w);
     let gi = g.load_gbuffer(i as usize);
     // taps beyond the radius weigh 0: the loop stops there
-    let reach = (r.ceil() as i32).min(p.max_radius_px as i32);
+    let reach = ((r + 0.5).ceil() as i32).min(p.max_radius_px as i32);
     let mut sum = 0.0f32;
     for d in -reach..=reach {
         let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };

@@ -26,9 +26,9 @@ inline uint2 window_photons(__global const uint* table, int w, int h, int x, int
     return (uint2)(count, (uint)((x1 - x0) * (y1 - y0)));
 }
 
-// k-NN radius (pixels): sqrt(k a / c).
+// k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
 inline float knn_radius(uint k, uint pixels, uint photons) {
-    return sqrt((float)k * (float)pixels / (float)photons);
+    return 0.5f * sqrt((float)k * (float)pixels / (float)photons);
 }
 
 // The gather radius (pixels) at (x, y): smallest window holding k photons, capped.
@@ -49,14 +49,16 @@ inline float footprint_radius(__global const uint* table, int w, int h, int x, i
     return fmin(knn_radius(k, c.y, c.x), (float)max_radius);
 }
 
-// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0, 0 where
-// |offset| >= radius (radius 0 included, with no division by 0).
+// Pixel-integrated 1-D Epanechnikov weight (unit integral): (3/4) (G(u_b) - G(u_a)),
+// G(u) = u - u^3 / 3 over the pixel [offset - 1/2, offset + 1/2] / radius clipped to
+// [-1, 1]; 0 outside the support, 1 for offset 0 of a zero support.
 inline float footprint_weight(int offset, float radius) {
-    if (offset == 0) return 1.0f;
     float d = (float)offset;
-    if (!(fabs(d) < radius)) return 0.0f;
-    float t = d / radius;
-    return fmax(1.0f - t * t, 0.0f);
+    if (!(fabs(d) < radius + 0.5f)) return 0.0f;
+    if (!(radius > 0.0f)) return 1.0f;
+    float ua = fmax((d - 0.5f) / radius, -1.0f);
+    float ub = fmin((d + 0.5f) / radius, 1.0f);
+    return 0.75f * ((ub - ub * ub * ub / 3.0f) - (ua - ua * ua * ua / 3.0f));
 }
 
 // Edge weight between two receiver pixels (symmetric): depth and normal terms.
@@ -104,7 +106,7 @@ inline float gather_normaliser(__global const GatherParams* p,
     int w = (int)p->camera.width, h = (int)p->camera.height;
     GatherTexel gi = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)(y * w + x));
     // taps beyond the radius weigh 0: the loop stops there
-    int reach = min((int)ceil(r), (int)p->max_radius_px);
+    int reach = min((int)ceil(r + 0.5f), (int)p->max_radius_px);
     float sum = 0.0f;
     for (int d = -reach; d <= reach; d++) {
         int qx = axis == 0u ? x + d : x;

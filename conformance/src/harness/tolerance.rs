@@ -192,14 +192,19 @@ pub const GATHER_REL: f32 = 1e-5;
 /// - The radius `sqrt(k a / c)` is computed from the same integers on both sides (the
 ///   window search is integer arithmetic on the bitwise-equal table): two exact
 ///   conversions, a product, a 2.5-ulp division and a 3-ulp sqrt, ~7 ulp ~ 4e-7.
-/// - A tap's weight is `(1 - t^2) * edge` with `t = d / r`: the Epanechnikov factor errs
-///   by ~4 ulp of 1 *absolutely* (`1 - t^2` cancels near the support's edge, where its
-///   relative error is unbounded but its value, and so its contribution, is ~0; the kernel
-///   is continuous there, so unlike the bilateral gather no tap count is ambiguous), the
-///   edge weight by ~25 ulp (`exp` 3, `pow` 16, products) relatively: each tap's weight
-///   errs by <= ~2e-6 absolutely, so the sum by <= 2e-6 `S`.
-/// - The normaliser is such a sum over <= 33 taps including the pixel itself (weight 1,
-///   so the sum is >= 1): relative error <= ~2e-6 plus its summation order, ~33 ulp ~ 2e-6.
+/// - A tap's weight is `footprint_weight * edge`: the pixel-integrated Epanechnikov factor
+///   `(3/4) (G(u_b) - G(u_a))`, `G(u) = u - u^3/3`, `u = (d +- 1/2) / r` (two 2.5-ulp
+///   divisions, cubes, a difference of values <= 2/3) errs by ~10 ulp of 1 *absolutely*:
+///   the difference cancels near the support's edge, where its relative error is
+///   unbounded but its value, and so its contribution, is ~0 (the kernel is continuous
+///   there, so unlike the bilateral gather no tap count is ambiguous); the edge weight
+///   errs by ~25 ulp (`exp` 3, `pow` 16, products) relatively. Weights lie in `[0, 1]`, so
+///   each tap's weight errs by <= ~2e-6 absolutely, the sum by <= 2e-6 `S`.
+/// - The normaliser is such a sum over `n <= 33` taps (the pixel itself among them). Each
+///   weight's absolute error is a few ulp of the `G` values it subtracts (<= 2/3), ~2e-7,
+///   and a source's weights add up to ~1 inside a receiver (less only where the image
+///   border or an edge cuts the support, which also removes those taps): relative error
+///   ~`n` 2e-7 <= ~7e-6, plus the summation order.
 /// - The last pass converts flux to radiance like `resolve_caustics` ([`RESOLVE_REL`],
 ///   [`RESOLVE_COS_REL`] on top, added by the check).
 ///

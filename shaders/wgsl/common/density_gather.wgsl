@@ -7,23 +7,25 @@
 
 const MIN_WINDOW_HALF_WIDTH: i32 = 1;
 
-// k-NN radius (pixels): sqrt(k a / c).
+// k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
 fn knn_radius(k: u32, pixels: u32, photons: u32) -> f32 {
-    return sqrt(f32(k) * f32(pixels) / f32(photons));
+    return 0.5 * sqrt(f32(k) * f32(pixels) / f32(photons));
 }
 
-// 1-D Epanechnikov weight max(0, 1 - (offset / radius)^2); 1 at offset 0, 0 where
-// |offset| >= radius (radius 0 included, with no division by 0).
+// Pixel-integrated 1-D Epanechnikov weight (unit integral): (3/4) (G(u_b) - G(u_a)),
+// G(u) = u - u^3 / 3 over the pixel [offset - 1/2, offset + 1/2] / radius clipped to
+// [-1, 1]; 0 outside the support, 1 for offset 0 of a zero support.
 fn footprint_weight(offset: i32, radius: f32) -> f32 {
-    if (offset == 0) {
-        return 1.0;
-    }
     let d = f32(offset);
-    if (!(abs(d) < radius)) {
+    if (!(abs(d) < radius + 0.5)) {
         return 0.0;
     }
-    let t = d / radius;
-    return max(1.0 - t * t, 0.0);
+    if (!(radius > 0.0)) {
+        return 1.0;
+    }
+    let ua = max((d - 0.5) / radius, -1.0);
+    let ub = min((d + 0.5) / radius, 1.0);
+    return 0.75 * ((ub - ub * ub * ub / 3.0) - (ua - ua * ua * ua / 3.0));
 }
 
 // Edge weight between two receiver pixels (symmetric): depth and normal terms. WGSL's
@@ -65,7 +67,7 @@ fn gather_normaliser(p: GatherParams, x: i32, y: i32, r: f32, axis: u32) -> f32 
     let h = i32(p.camera.height);
     let gi = load_gather_texel(u32(y * w + x));
     // taps beyond the radius weigh 0: the loop stops there
-    let reach = min(i32(ceil(r)), i32(p.max_radius_px));
+    let reach = min(i32(ceil(r + 0.5)), i32(p.max_radius_px));
     var sum = 0.0;
     for (var d = -reach; d <= reach; d++) {
         let qx = select(x, x + d, axis == 0u);
