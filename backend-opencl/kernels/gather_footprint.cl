@@ -14,7 +14,8 @@ __kernel void gather_footprint(__global const GatherParams* p,
         return;
     }
     int x = i % w, y = i / w;
-    float r = footprint_radius(table, w, h, x, y, p->knn_photons, p->max_radius_px);
+    float r = footprint_radius(table, w, h, (int)p->table_block, x, y, p->knn_photons,
+                               p->max_radius_px);
     float inv = 1.0f / gather_normaliser(p, GATHER_GBUFFER_ARGS, x, y, r, 0u);
     float4 o;
     o.x = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 0u),

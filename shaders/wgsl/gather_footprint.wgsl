@@ -14,43 +14,57 @@
 @group(0) @binding(7) var<storage, read> table: array<u32>;
 @group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
 
-// The summed-area table's entry at (x, y), 0 outside the image.
-fn table_entry(width: i32, x: i32, y: i32) -> u32 {
-    if (x < 0 || y < 0) {
+// The blocked summed-area table's entry at (x, y), 0 left of or above the block whose
+// corner is (bx0, by0).
+fn table_entry(width: i32, bx0: i32, by0: i32, x: i32, y: i32) -> u32 {
+    if (x < bx0 || y < by0) {
         return 0u;
     }
     return table[y * width + x];
 }
 
-// Photons in the window of half_width-width `half_width` around (x, y), clipped to the image (.x),
-// and the window's pixel count (.y). Wrapping u32 sums, exact.
-fn window_photons(w: i32, h: i32, x: i32, y: i32, half_width: i32) -> vec2<u32> {
-    let x0 = max(x - half_width, 0) - 1;
-    let y0 = max(y - half_width, 0) - 1;
+// Photons in the window of half-width `half_width` around (x, y), clipped to the image
+// (.x), and the window's pixel count (.y): the rectangles it covers in each of the (at
+// most 2 x 2) blocks it overlaps. Wrapping u32 sums, exact.
+fn window_photons(w: i32, h: i32, block: i32, x: i32, y: i32, half_width: i32) -> vec2<u32> {
+    let x0 = max(x - half_width, 0);
+    let y0 = max(y - half_width, 0);
     let x1 = min(x + half_width, w - 1);
     let y1 = min(y + half_width, h - 1);
-    let count = table_entry(w, x1, y1) - table_entry(w, x0, y1) - table_entry(w, x1, y0) +
-                table_entry(w, x0, y0);
-    return vec2<u32>(count, u32((x1 - x0) * (y1 - y0)));
+    var count = 0u;
+    for (var by = y0 / block; by <= y1 / block; by++) {
+        for (var bx = x0 / block; bx <= x1 / block; bx++) {
+            let bx0 = bx * block;
+            let by0 = by * block;
+            let xa = max(x0, bx0);
+            let xb = min(x1, bx0 + block - 1);
+            let ya = max(y0, by0);
+            let yb = min(y1, by0 + block - 1);
+            count = count + table_entry(w, bx0, by0, xb, yb) - table_entry(w, bx0, by0, xa - 1, yb) -
+                    table_entry(w, bx0, by0, xb, ya - 1) + table_entry(w, bx0, by0, xa - 1, ya - 1);
+        }
+    }
+    return vec2<u32>(count, u32((x1 - x0 + 1) * (y1 - y0 + 1)));
 }
 
 // The gather radius (pixels) at (x, y): smallest window holding k photons, capped.
-fn footprint_radius(w: i32, h: i32, x: i32, y: i32, k: u32, max_radius_px: u32) -> f32 {
+fn footprint_radius(w: i32, h: i32, block: i32, x: i32, y: i32, k: u32,
+                    max_radius_px: u32) -> f32 {
     let max_radius = max(i32(max_radius_px), MIN_WINDOW_HALF_WIDTH);
-    if (window_photons(w, h, x, y, max_radius).x < k) {
+    if (window_photons(w, h, block, x, y, max_radius).x < k) {
         return f32(max_radius);
     }
     var lo = MIN_WINDOW_HALF_WIDTH;
     var hi = max_radius;
     while (lo < hi) {
         let mid = (lo + hi) / 2;
-        if (window_photons(w, h, x, y, mid).x >= k) {
+        if (window_photons(w, h, block, x, y, mid).x >= k) {
             hi = mid;
         } else {
             lo = mid + 1;
         }
     }
-    let c = window_photons(w, h, x, y, lo);
+    let c = window_photons(w, h, block, x, y, lo);
     return min(knn_radius(k, c.y, c.x), f32(max_radius));
 }
 
@@ -68,7 +82,7 @@ fn gather_footprint(index: u32) {
     }
     let x = i % w;
     let y = i / w;
-    let r = footprint_radius(w, h, x, y, p.knn_photons, p.max_radius_px);
+    let r = footprint_radius(w, h, i32(p.table_block), x, y, p.knn_photons, p.max_radius_px);
     let inv = 1.0 / gather_normaliser(p, x, y, r, 0u);
     let u = u32(i);
     var o: vec4<f32>;

@@ -1,9 +1,9 @@
 // needs: types photon_map
-// photon_count_table: one direction of the summed-area table of the photon counts
-// clamped at 9 k (core/src/math/density_gather.rs). Mirror of
+// photon_count_table: one direction of the blocked summed-area table of the photon
+// counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/photon_count_table.cl and backend-cpu/src/kernels/
-// density_gather.rs. Axis 0: a thread per row; 1: a thread per column, in place.
-// Wrapping u32 sums: exact, the same bits on every backend.
+// density_gather.rs. Axis 0: a thread per row and block; 1: a thread per column and
+// block, in place. Wrapping u32 sums: exact, the same bits on every backend.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> photon_map0: array<u32>;
@@ -23,25 +23,34 @@ fn photon_count_table(t: u32) {
     let p = params;
     let w = p.camera.width;
     let h = p.camera.height;
+    let b = p.table_block;
     if (p.axis == 0u) {
-        if (t >= h) {
+        // a thread per row and block
+        let blocks = (w + b - 1u) / b;
+        if (t >= h * blocks) {
             return;
         }
+        let y = t / blocks;
+        let x0 = (t % blocks) * b;
         var sum = 0u;
-        for (var x = 0u; x < w; x++) {
-            let i = t * w + x;
+        for (var x = x0; x < min(x0 + b, w); x++) {
+            let i = y * w + x;
             sum += clamped_photon_count(photon_map_word(i, 8u), photon_map_word(i, 9u),
                                         p.knn_photons);
             table[i] = sum;
         }
     } else {
-        if (t >= w) {
+        // a thread per column and block (neighbouring threads, neighbouring columns)
+        let blocks = (h + b - 1u) / b;
+        if (t >= w * blocks) {
             return;
         }
+        let x = t % w;
+        let y0 = (t / w) * b;
         var sum = 0u;
-        for (var y = 0u; y < h; y++) {
-            sum += table[y * w + t];
-            table[y * w + t] = sum;
+        for (var y = y0; y < min(y0 + b, h); y++) {
+            sum += table[y * w + x];
+            table[y * w + x] = sum;
         }
     }
 }

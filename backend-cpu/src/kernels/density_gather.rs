@@ -13,13 +13,16 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-/// Axis 0 of `photon_count_table`: per row, the inclusive prefix sums of the clamped
-/// photon counts (wrapping `u32`), row-major.
+/// Axis 0 of `photon_count_table`: per row and block, the inclusive prefix sums of the
+/// clamped photon counts from the block's left edge (wrapping `u32`), row-major.
 pub fn photon_count_rows(p: &GatherParams, map: PhotonMapView, table: &mut [u32]) {
-    let w = p.camera.width as usize;
+    let (w, b) = (p.camera.width as usize, p.table_block as usize);
     table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let mut sum = 0u32;
         for (x, t) in row.iter_mut().enumerate() {
+            if x % b == 0 {
+                sum = 0;
+            }
             let i = (y * w + x) as u32;
             let n = clamped_photon_count(
                 map.photon_map_word(i, 8),
@@ -32,11 +35,14 @@ pub fn photon_count_rows(p: &GatherParams, map: PhotonMapView, table: &mut [u32]
     });
 }
 
-/// Axis 1 of `photon_count_table`: the row sums become the summed-area table in place
-/// (column prefix sums, wrapping `u32`).
+/// Axis 1 of `photon_count_table`: the row sums become the blocked summed-area table in
+/// place (column prefix sums from each block's top edge, wrapping `u32`).
 pub fn photon_count_columns(p: &GatherParams, table: &mut [u32]) {
-    let w = p.camera.width as usize;
+    let (w, b) = (p.camera.width as usize, p.table_block as usize);
     for y in 1..p.camera.height as usize {
+        if y % b == 0 {
+            continue;
+        }
         let (above, row) = table[(y - 1) * w..(y + 1) * w].split_at_mut(w);
         for (t, a) in row.iter_mut().zip(above.iter()) {
             *t = t.wrapping_add(*a);
@@ -94,7 +100,16 @@ pub fn gather_footprint(
             if !is_receiver(&g.load_gbuffer(i as usize)) {
                 return [0.0; 4];
             }
-            let r = footprint_radius(table, w, h, i % w, i / w, p.knn_photons, p.max_radius_px);
+            let r = footprint_radius(
+                table,
+                w,
+                h,
+                p.table_block as i32,
+                i % w,
+                i / w,
+                p.knn_photons,
+                p.max_radius_px,
+            );
             let inv = 1.0 / normaliser(p, &g, i, r, 0);
             let word = |k: u32| map.photon_map_word(i as u32, k);
             let flux = |c: u32| join_u64_wide(word(2 * c), word(2 * c + 1)) * p.flux_quantum;

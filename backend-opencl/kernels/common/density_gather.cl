@@ -10,20 +10,33 @@ inline uint clamped_photon_count(uint lo, uint hi, uint k) {
     return hi != 0u ? clamp : min(lo, clamp);
 }
 
-// The summed-area table's entry at (x, y), 0 outside the image.
-inline uint table_entry(__global const uint* table, int width, int x, int y) {
-    return (x < 0 || y < 0) ? 0u : table[y * width + x];
+// The blocked summed-area table's entry at (x, y), 0 left of or above the block whose
+// corner is (bx0, by0).
+inline uint table_entry(__global const uint* table, int width, int bx0, int by0, int x,
+                        int y) {
+    return (x < bx0 || y < by0) ? 0u : table[y * width + x];
 }
 
-// Photons in the window of half_width-width `half_width` around (x, y), clipped to the image (.x),
-// and the window's pixel count (.y). Wrapping uint sums, exact (see the CPU doc).
-inline uint2 window_photons(__global const uint* table, int w, int h, int x, int y,
-                            int half_width) {
-    int x0 = max(x - half_width, 0) - 1, y0 = max(y - half_width, 0) - 1;
+// Photons in the window of half-width `half_width` around (x, y), clipped to the image
+// (.x), and the window's pixel count (.y): the rectangles it covers in each of the (at
+// most 2 x 2) blocks it overlaps. Wrapping uint sums, exact (see the CPU doc).
+inline uint2 window_photons(__global const uint* table, int w, int h, int block, int x,
+                            int y, int half_width) {
+    int x0 = max(x - half_width, 0), y0 = max(y - half_width, 0);
     int x1 = min(x + half_width, w - 1), y1 = min(y + half_width, h - 1);
-    uint count = table_entry(table, w, x1, y1) - table_entry(table, w, x0, y1) -
-                 table_entry(table, w, x1, y0) + table_entry(table, w, x0, y0);
-    return (uint2)(count, (uint)((x1 - x0) * (y1 - y0)));
+    uint count = 0u;
+    for (int by = y0 / block; by <= y1 / block; by++) {
+        for (int bx = x0 / block; bx <= x1 / block; bx++) {
+            int bx0 = bx * block, by0 = by * block;
+            int xa = max(x0, bx0), xb = min(x1, bx0 + block - 1);
+            int ya = max(y0, by0), yb = min(y1, by0 + block - 1);
+            count = count + table_entry(table, w, bx0, by0, xb, yb) -
+                    table_entry(table, w, bx0, by0, xa - 1, yb) -
+                    table_entry(table, w, bx0, by0, xb, ya - 1) +
+                    table_entry(table, w, bx0, by0, xa - 1, ya - 1);
+        }
+    }
+    return (uint2)(count, (uint)((x1 - x0 + 1) * (y1 - y0 + 1)));
 }
 
 // k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
@@ -32,20 +45,20 @@ inline float knn_radius(uint k, uint pixels, uint photons) {
 }
 
 // The gather radius (pixels) at (x, y): smallest window holding k photons, capped.
-inline float footprint_radius(__global const uint* table, int w, int h, int x, int y,
-                              uint k, uint max_radius_px) {
+inline float footprint_radius(__global const uint* table, int w, int h, int block, int x,
+                              int y, uint k, uint max_radius_px) {
     int max_radius = max((int)max_radius_px, MIN_WINDOW_HALF_WIDTH);
-    if (window_photons(table, w, h, x, y, max_radius).x < k) return (float)max_radius;
+    if (window_photons(table, w, h, block, x, y, max_radius).x < k) return (float)max_radius;
     int lo = MIN_WINDOW_HALF_WIDTH, hi = max_radius;
     while (lo < hi) {
         int mid = (lo + hi) / 2;
-        if (window_photons(table, w, h, x, y, mid).x >= k) {
+        if (window_photons(table, w, h, block, x, y, mid).x >= k) {
             hi = mid;
         } else {
             lo = mid + 1;
         }
     }
-    uint2 c = window_photons(table, w, h, x, y, lo);
+    uint2 c = window_photons(table, w, h, block, x, y, lo);
     return fmin(knn_radius(k, c.y, c.x), (float)max_radius);
 }
 

@@ -46,7 +46,7 @@ typedef struct {
     GpuCamera camera;
     float roughness; float hit_distance_min; float hit_distance_max; uint max_radius_px;
     float sigma_depth; float normal_power; uint axis; uint tile_size;
-    float hit_distance_quantum; uint knn_photons; float flux_quantum; uint _pad;
+    float hit_distance_quantum; uint knn_photons; float flux_quantum; uint table_block;
 } GatherParams;
 typedef struct {
     GpuCamera camera;

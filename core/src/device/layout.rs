@@ -421,8 +421,9 @@ pub struct GatherParams {
     pub knn_photons: u32,
     /// Flux per fixed-point unit of the photon map (W).
     pub flux_quantum: f32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// Edge of the square blocks of the photon-count table (pixels, a power of two
+    /// `>= 2 max_radius_px + 1`; see [`crate::math::density_gather::table_block`]).
+    pub table_block: u32,
 }
 
 /// Parameters of `direct_light`.

@@ -6,11 +6,13 @@ use crate::device::error::BackendError;
 use crate::device::handle::{Buf, PhotonMapPlanes};
 use crate::device::layout::GatherParams;
 
-/// One direction of the summed-area table of per-pixel photon counts clamped at
-/// `params.knn_photons` (`clamped_photon_count`), wrapping `u32` sums. `params.axis` 0:
-/// one thread per row writes `table[y][x] = sum_{x' <= x} count(x', y)` from the photon
-/// map; 1: one thread per column turns the row sums into the full table in place,
-/// `table[y][x] = sum_{y' <= y} table[y'][x]`.
+/// One direction of the blocked summed-area table of per-pixel photon counts clamped at
+/// `9 params.knn_photons` (`clamped_photon_count`), wrapping `u32` sums restarted at
+/// every `params.table_block` pixels (`window_photons` reads it). `params.axis` 0: one
+/// thread per row and block writes `table[y][x] = sum count(x', y)` over `x'` from the
+/// block's left edge to `x`, from the photon map; 1: one thread per column and block
+/// turns the row sums into the table in place, `table[y][x] = sum table[y'][x]` over `y'`
+/// from the block's top edge to `y`.
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonCountTable {
     /// Gather parameters (camera size, `knn_photons`, `axis`).
@@ -38,10 +40,11 @@ impl KernelDecl for PhotonCountTable {
         a.params("params", &self.params)?
             .photon_map(&self.photon_map, n)?
             .buf("table", self.table, n * 4)?;
+        let b = self.params.table_block.max(1);
         Ok(Some(if self.params.axis == 0 {
-            c.height as u64
+            c.height as u64 * c.width.div_ceil(b) as u64
         } else {
-            c.width as u64
+            c.width as u64 * c.height.div_ceil(b) as u64
         }))
     }
 }

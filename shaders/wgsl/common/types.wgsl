@@ -135,7 +135,7 @@ struct GatherParams {
     hit_distance_quantum: f32,
     knn_photons: u32,
     flux_quantum: f32,
-    _pad: u32,
+    table_block: u32,
 }
 
 struct DirectParams {

@@ -180,7 +180,7 @@ impl FrameConstants {
             hit_distance_quantum: self.hit_distance_quantum,
             knn_photons: settings.knn_photons,
             flux_quantum: self.flux_quantum,
-            _pad: 0,
+            table_block: crate::math::density_gather::table_block(settings.max_radius_px),
         }
     }
 
