@@ -236,24 +236,30 @@ impl CpuBackend {
                 photon_map,
                 table,
                 out,
+                radius,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let m = self.photon_map(photon_map)?;
                 let t = get(table.id)?.as_slice(table.len)?;
-                reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
+                // the footprint image and the radius buffer: 20 bytes a pixel
+                reserve_temporary::<[f32; 5]>(out.len as u64, "the gather footprints")?;
                 let img = density_gather::gather_footprint(params, g, m, t);
-                self.put(out.id, &img)
+                let radii: Vec<f32> = img.iter().map(|p| p[3]).collect();
+                self.put(out.id, &img)?;
+                self.put(radius.id, &radii)
             }
             Kernel::DensityGather(DensityGather {
                 params,
                 gbuffer,
+                radius,
                 input,
                 out,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
+                let r = get(radius.id)?.as_slice(radius.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = density_gather::density_gather(params, g, i);
+                let img = density_gather::density_gather(params, g, r, i);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {

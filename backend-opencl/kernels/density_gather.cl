@@ -3,7 +3,8 @@
 // density_gather.rs). Mirror of backend-cpu/src/kernels/density_gather.rs.
 
 __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__global const),
-                             __global const float4* input, __global float4* out) {
+                             __global const float* radius, __global const float4* input,
+                             __global float4* out) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int j = (int)get_global_id(0);
     if (j >= w * h) return;
@@ -22,17 +23,17 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         int q = qy * w + qx;
         // source q, destination j: the source's radius, offset j - q (non-receivers have
         // radius 0 and weigh 0 but at d = 0, where j is a receiver)
-        float4 s = input[q];
-        float ws = footprint_weight(-d, s.w);
+        float ws = footprint_weight(-d, radius[q]);
         if (ws == 0.0f) continue;
         GatherTexel gq = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)q);
         if (gq.receiver == 0u) continue;
+        float4 s = input[q];
         float wgt = ws *
                     edge_weight(gq.depth, gq.normal, gj.depth, gj.normal, p->sigma_depth,
                                 p->normal_power);
         sum += wgt * s.xyz;
     }
-    float r = input[j].w;
+    float r = radius[j];
     if (p->axis == 0u) {
         out[j] = (float4)(sum / gather_normaliser(p, GATHER_GBUFFER_ARGS, x, y, r, 1u), r);
     } else {

@@ -5,12 +5,13 @@
 __kernel void gather_footprint(__global const GatherParams* p,
                                GATHER_GBUFFER_PARAMS(__global const),
                                PHOTON_MAP_PARAMS(__global const), __global const uint* table,
-                               __global float4* out) {
+                               __global float4* out, __global float* radius) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int i = (int)get_global_id(0);
     if (i >= w * h) return;
     if ((gbuffer3[i].w & GBUFFER_RECEIVER) == 0u) {
         out[i] = (float4)(0.0f);
+        radius[i] = 0.0f;
         return;
     }
     int x = i % w, y = i / w;
@@ -26,4 +27,5 @@ __kernel void gather_footprint(__global const GatherParams* p,
                             photon_map_word(PHOTON_MAP_ARGS, (uint)i, 5u)) * p->flux_quantum * inv;
     o.w = r;
     out[i] = o;
+    radius[i] = r;
 }

@@ -9,8 +9,9 @@
 @group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
-@group(0) @binding(5) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> radius: array<f32>;
+@group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
 
 fn density_gather(index: u32) {
     let p = params;
@@ -38,8 +39,7 @@ fn density_gather(index: u32) {
         let q = qy * w + qx;
         // source q, destination j: the source's radius, offset j - q (non-receivers have
         // radius 0 and weigh 0 but at d = 0, where j is a receiver)
-        let s = input[q];
-        let ws = footprint_weight(-d, s.w);
+        let ws = footprint_weight(-d, radius[q]);
         if (ws == 0.0) {
             continue;
         }
@@ -47,12 +47,13 @@ fn density_gather(index: u32) {
         if (gq.receiver == 0u) {
             continue;
         }
+        let s = input[q];
         let wgt = ws *
                   edge_weight(gq.depth, gq.normal, gj.depth, gj.normal, p.sigma_depth,
                               p.normal_power);
         sum += wgt * s.xyz;
     }
-    let r = input[j].w;
+    let r = radius[j];
     if (p.axis == 0u) {
         out[j] = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
     } else {

@@ -13,6 +13,7 @@
 @group(0) @binding(6) var<storage, read> photon_map2: array<u32>;
 @group(0) @binding(7) var<storage, read> table: array<u32>;
 @group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> radius: array<f32>;
 
 // The blocked summed-area table's entry at (x, y), 0 left of or above the block whose
 // corner is (bx0, by0).
@@ -78,6 +79,7 @@ fn gather_footprint(index: u32) {
     }
     if ((gbuffer3[i].w & GBUFFER_RECEIVER) == 0u) {
         out[i] = vec4<f32>(0.0);
+        radius[i] = 0.0;
         return;
     }
     let x = i % w;
@@ -91,6 +93,7 @@ fn gather_footprint(index: u32) {
     o.z = join_u64_wide(photon_map_word(u, 4u), photon_map_word(u, 5u)) * p.flux_quantum * inv;
     o.w = r;
     out[i] = o;
+    radius[i] = r;
 }
 
 @compute @workgroup_size(64)

@@ -120,7 +120,12 @@ pub fn gather_footprint(
 
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
 /// `caustica_core::kernels::DensityGather`).
-pub fn density_gather(p: &GatherParams, g: GBufferView, input: &[[f32; 4]]) -> Vec<[f32; 4]> {
+pub fn density_gather(
+    p: &GatherParams,
+    g: GBufferView,
+    radius: &[f32],
+    input: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
     let reach = p.max_radius_px as i32;
     (0..w * h)
@@ -140,7 +145,7 @@ pub fn density_gather(p: &GatherParams, g: GBufferView, input: &[[f32; 4]]) -> V
                 let q = (qy * w + qx) as usize;
                 // source q, destination j: the source's radius, offset j - q (non-receivers
                 // have radius 0 and weigh 0 but at d = 0, where j is a receiver)
-                let ws = footprint_weight(-d, input[q][3]);
+                let ws = footprint_weight(-d, radius[q]);
                 if ws == 0.0 {
                     continue;
                 }
@@ -159,7 +164,7 @@ pub fn density_gather(p: &GatherParams, g: GBufferView, input: &[[f32; 4]]) -> V
                     );
                 sum += wgt * Vec3::from_slice(&input[q][..3]);
             }
-            let r = input[j as usize][3];
+            let r = radius[j as usize];
             if p.axis == 0 {
                 let s = sum / normaliser(p, &g, j, r, 1);
                 [s.x, s.y, s.z, r]

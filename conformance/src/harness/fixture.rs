@@ -265,27 +265,32 @@ impl Fixture {
         run_and_free(b, "photon_count_table", &rec, |b| read_buf(b, table))
     }
 
-    /// Runs `gather_footprint` on `b`.
+    /// Runs `gather_footprint` on `b`: the normalised flux and radius per pixel, and the
+    /// radius buffer.
     pub fn run_footprint(
         &self,
         b: &mut dyn Backend,
         gbuffer: &[GBufferTexel],
         map: &[DepositTexel],
         table: &[u32],
-    ) -> Result<Vec<[f32; 4]>, String> {
+    ) -> Result<(Vec<[f32; 4]>, Vec<f32>), String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
         let m = rec.upload_photon_map(map);
         let t = rec.upload(table, "photon count table");
         let out = rec.create(self.pixels(), "footprints");
+        let radius = rec.create(self.pixels(), "gather radius");
         rec.kernel(Kernel::GatherFootprint(GatherFootprint {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
             gbuffer: g,
             photon_map: m,
             table: t,
             out,
+            radius,
         }));
-        run_and_free(b, "gather_footprint", &rec, |b| read_buf(b, out))
+        run_and_free(b, "gather_footprint", &rec, |b| {
+            Ok((read_buf(b, out)?, read_buf(b, radius)?))
+        })
     }
 
     /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b`.
@@ -294,10 +299,12 @@ impl Fixture {
         b: &mut dyn Backend,
         axis: u32,
         gbuffer: &[GBufferTexel],
+        radius: &[f32],
         input: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
+        let r = rec.upload(radius, "gather radius");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
         rec.kernel(Kernel::DensityGather(DensityGather {
@@ -305,6 +312,7 @@ impl Fixture {
                 .constants
                 .gather_params(self.camera, &self.settings, axis),
             gbuffer: g,
+            radius: r,
             input: i,
             out,
         }));
@@ -373,6 +381,8 @@ pub struct ReferenceInputs {
     pub table: Vec<u32>,
     /// `gather_footprint`'s output: normalised flux and radius per pixel.
     pub footprints: Vec<[f32; 4]>,
+    /// `gather_footprint`'s radius buffer.
+    pub radius: Vec<f32>,
     /// The density gather's row pass of `footprints`.
     pub density_rows: Vec<[f32; 4]>,
     /// The filtered caustics with the fixture's filter (density: both passes of
@@ -393,10 +403,12 @@ impl ReferenceInputs {
         } = fx.run_deposit(r, &gbuffer, &photons)?;
         let tiles = fx.run_tiles(r, &photon_map)?;
         let table = fx.run_count_table(r, &photon_map)?;
-        let footprints = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
-        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &footprints)?;
+        let (footprints, radius) = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
+        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &radius, &footprints)?;
         let filtered = match fx.settings.filter {
-            GatherFilter::Density => fx.run_density_gather(r, 1, &gbuffer, &density_rows)?,
+            GatherFilter::Density => {
+                fx.run_density_gather(r, 1, &gbuffer, &radius, &density_rows)?
+            }
             GatherFilter::Bilateral => {
                 let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
                 fx.run_gather(r, 1, &gbuffer, &tiles, &half)?
@@ -411,6 +423,7 @@ impl ReferenceInputs {
             tiles,
             table,
             footprints,
+            radius,
             density_rows,
             filtered,
             direct,

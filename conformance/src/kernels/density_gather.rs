@@ -96,11 +96,24 @@ pub fn check_density_gather(
         )
     });
 
-    let fa = fx.run_footprint(r, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
-    let fb = fx.run_footprint(c, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
-    // the radius is ~7 ulp from the same integers: compared as a fourth channel
+    let (fa, ra) = fx.run_footprint(r, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
+    let (fb, rb) = fx.run_footprint(c, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
+    // the radius is ~7 ulp from the same integers: compared as a channel; the image's
+    // alpha and the radius buffer must hold the same radius, bit for bit
     let radius: Vec<[f32; 4]> = fa.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
     let radius_b: Vec<[f32; 4]> = fb.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
+    for (who, img, buf) in [("cpu", &fa, &ra), ("candidate", &fb, &rb)] {
+        let differ = img
+            .iter()
+            .zip(buf.iter())
+            .filter(|(p, r)| p[3].to_bits() != r.to_bits())
+            .count();
+        v.check(differ == 0, || {
+            format!(
+                "{who}: gather_footprint's radius buffer differs from its alpha on {differ} pixels"
+            )
+        });
+    }
     compare(
         &mut v,
         "gather_footprint radius",
@@ -128,8 +141,8 @@ pub fn check_density_gather(
         } else {
             &inputs.density_rows
         };
-        let a = fx.run_density_gather(r, axis, &inputs.gbuffer, input)?;
-        let b = fx.run_density_gather(c, axis, &inputs.gbuffer, input)?;
+        let a = fx.run_density_gather(r, axis, &inputs.gbuffer, &inputs.radius, input)?;
+        let b = fx.run_density_gather(c, axis, &inputs.gbuffer, &inputs.radius, input)?;
         // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass
         let to_output = |i: usize, ch: usize| -> f32 {
             if axis == 0 {

@@ -3,7 +3,7 @@
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{GBufferPlanes, ImageBuf};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
 use crate::device::layout::GatherParams;
 
 /// One pass of the separable gather. Every receiver pixel `j` sums, over the receivers
@@ -25,6 +25,9 @@ pub struct DensityGather {
     pub params: GatherParams,
     /// The frame's G-buffer (receiver flag, depth, normal, albedo).
     pub gbuffer: GBufferPlanes,
+    /// Every pixel's radius from `gather_footprint` (pixels): a tap whose source's support
+    /// misses the pixel is skipped before anything else of it is read.
+    pub radius: Buf<f32>,
     /// Normalised flux and radius per pixel (W per channel; pixels).
     pub input: ImageBuf,
     /// Axis 0: normalised flux and radius; axis 1: caustic radiance and radius.
@@ -37,6 +40,7 @@ const BINDINGS: &[Binding] = &[
     bind("gbuffer1", Read),
     bind("gbuffer2", Read),
     bind("gbuffer3", Read),
+    bind("radius", Read),
     bind("input", Read),
     bind("out", ReadWrite),
 ];
@@ -49,6 +53,7 @@ impl KernelDecl for DensityGather {
         let n = texels(c.width, c.height);
         a.params("params", &self.params)?
             .gbuffer(&self.gbuffer, n)?
+            .buf("radius", self.radius, n * 4)?
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
         Ok(Some(n))

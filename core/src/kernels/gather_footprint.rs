@@ -10,8 +10,9 @@ use crate::device::layout::GatherParams;
 /// `params.knn_photons` photons (`footprint_radius` on the summed-area table), and the
 /// pixel's deposited flux `F_i` (W per channel, from the photon map's fixed-point sums)
 /// divided by its row normaliser `W_i = sum_d footprint_weight(d, r_i) edge_weight(i, i+d)`
-/// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)`; other
-/// pixels get 0.
+/// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out` and
+/// `r_i` to `radius` (which the gather passes test before they read anything else of a
+/// tap); other pixels get 0.
 #[derive(Clone, Copy, Debug)]
 pub struct GatherFootprint {
     /// Gather parameters (camera, `knn_photons`, `max_radius_px`, edge weights,
@@ -25,6 +26,8 @@ pub struct GatherFootprint {
     pub table: Buf<u32>,
     /// Per pixel `(F / W_row, radius)`: W per channel, pixels.
     pub out: ImageBuf,
+    /// Per pixel the radius alone (pixels; 0 for non-receivers).
+    pub radius: Buf<f32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -37,6 +40,7 @@ const BINDINGS: &[Binding] = &[
     bind("photon_map2", Read),
     bind("table", Read),
     bind("out", ReadWrite),
+    bind("radius", ReadWrite),
 ];
 
 impl KernelDecl for GatherFootprint {
@@ -49,7 +53,8 @@ impl KernelDecl for GatherFootprint {
             .gather_gbuffer(&self.gbuffer, n)?
             .photon_map(&self.photon_map, n)?
             .buf("table", self.table, n * 4)?
-            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
+            .buf("radius", self.radius, n * 4)?;
         Ok(Some(n))
     }
 }

@@ -58,7 +58,11 @@ enum GatherBuffers {
     /// The density gather: the photon counts' summed-area table and the image between
     /// its two passes (the footprint pass writes into the filtered image, which the
     /// last pass overwrites).
-    Density { table: Buf<u32>, scratch: ImageBuf },
+    Density {
+        table: Buf<u32>,
+        radius: Buf<f32>,
+        scratch: ImageBuf,
+    },
     /// The bilateral gather: hit-distance tiles and the image between its two passes.
     Bilateral { tiles: Buf<f32>, scratch: ImageBuf },
 }
@@ -155,6 +159,7 @@ impl Sspm {
         let gather = needs.gather.then(|| match settings.filter {
             GatherFilter::Density => GatherBuffers::Density {
                 table: rec.create(pixels, "photon count table"),
+                radius: rec.create(pixels, "gather radius"),
                 scratch: rec.create(pixels, "gather scratch image"),
             },
             GatherFilter::Bilateral => GatherBuffers::Bilateral {
@@ -368,7 +373,11 @@ impl Sspm {
                 let gather = self.constants.gather_params(cam, &self.settings, 0);
                 let columns = GatherParams { axis: 1, ..gather };
                 match g {
-                    GatherBuffers::Density { table, scratch } => {
+                    GatherBuffers::Density {
+                        table,
+                        radius,
+                        scratch,
+                    } => {
                         for params in [gather, columns] {
                             rec.kernel(PhotonCountTable {
                                 params,
@@ -382,16 +391,19 @@ impl Sspm {
                             photon_map: p.photon_map,
                             table,
                             out: filtered,
+                            radius,
                         });
                         rec.kernel(DensityGather {
                             params: gather,
                             gbuffer: self.gbuffer,
+                            radius,
                             input: filtered,
                             out: scratch,
                         });
                         rec.kernel(DensityGather {
                             params: columns,
                             gbuffer: self.gbuffer,
+                            radius,
                             input: scratch,
                             out: filtered,
                         });
