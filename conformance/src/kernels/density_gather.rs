@@ -12,17 +12,15 @@ use caustica_core::device::layout::{gbuffer_pixel_area, GpuCamera};
 use caustica_core::math::footprint::MIN_COSINE;
 use glam::Vec3;
 
-/// Compares `a` (reference) and `b` per pixel and channel: `|a - b| <= rel(i) * (max(|a|,
-/// |b|) + gathered(i, ch))`; alpha must be bitwise equal when `alpha_exact`. Records the
-/// failures in `v` under `what`.
+/// Compares `a` (reference) and `b` per pixel and channel: `|a - b| <= rel * (max(|a|,
+/// |b|) + gathered)` with `(rel, gathered) = tol(i, ch)`; alpha must be bitwise equal
+/// when `alpha_exact`. Records the failures in `v` under `what`.
 fn compare(
     v: &mut Verdict,
     what: &str,
     cam: &GpuCamera,
-    a: &[[f32; 4]],
-    b: &[[f32; 4]],
-    rel: &dyn Fn(usize) -> f32,
-    gathered: &dyn Fn(usize, usize) -> f32,
+    (a, b): (&[[f32; 4]], &[[f32; 4]]),
+    tol: &dyn Fn(usize, usize) -> (f32, f32),
     alpha_exact: bool,
 ) {
     let (mut bad, mut worst, mut first_bad) = (0u64, 0.0f32, None);
@@ -30,7 +28,8 @@ fn compare(
         let mut e = 0.0f32;
         for ch in 0..3 {
             let d = (a[i][ch] - b[i][ch]).abs();
-            let bound = rel(i) * (a[i][ch].abs().max(b[i][ch].abs()) + gathered(i, ch));
+            let (rel, gathered) = tol(i, ch);
+            let bound = rel * (a[i][ch].abs().max(b[i][ch].abs()) + gathered);
             let x = if d == 0.0 { 0.0 } else { d / bound };
             e = e.max(if x.is_nan() { f32::INFINITY } else { x });
         }
@@ -118,20 +117,16 @@ pub fn check_density_gather(
         &mut v,
         "gather_footprint radius",
         &cam,
-        &radius,
-        &radius_b,
-        &|_| DENSITY_GATHER_REL,
-        &|_, _| 0.0,
+        (&radius, &radius_b),
+        &|_, _| (DENSITY_GATHER_REL, 0.0),
         false,
     );
     compare(
         &mut v,
         "gather_footprint flux",
         &cam,
-        &fa,
-        &fb,
-        &|_| DENSITY_GATHER_REL,
-        &|_, _| 0.0,
+        (&fa, &fb),
+        &|_, _| (DENSITY_GATHER_REL, 0.0),
         false,
     );
 
@@ -165,16 +160,18 @@ pub fn check_density_gather(
             let cos = ray.dot(Vec3::from(g.normal)).abs().max(MIN_COSINE);
             DENSITY_GATHER_REL + RESOLVE_REL + RESOLVE_COS_REL / cos
         };
-        let gathered =
-            |i: usize, ch: usize| tap_sum(&cam, reach, axis, input, i, ch) * to_output(i, ch);
+        let tol = |i: usize, ch: usize| {
+            (
+                rel(i),
+                tap_sum(&cam, reach, axis, input, i, ch) * to_output(i, ch),
+            )
+        };
         compare(
             &mut v,
             &format!("density_gather axis {axis}"),
             &cam,
-            &a,
-            &b,
-            &rel,
-            &gathered,
+            (&a, &b),
+            &tol,
             true,
         );
     }
