@@ -20,8 +20,7 @@ use caustica_core::device::layout::{GBufferTexel, GBufferView, Photon, PhotonMap
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    GatherReach, PhotonCountTable, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance,
-    TracePhotons,
+    PhotonCountTable, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -249,32 +248,18 @@ impl CpuBackend {
                 self.put(out.id, &img)?;
                 self.put(radius.id, &radii)
             }
-            Kernel::GatherReach(GatherReach {
-                params,
-                radius,
-                input,
-                tiles,
-            }) => {
-                let r = get(radius.id)?.as_slice(radius.len)?;
-                let i = get(input.id)?.as_slice(input.len)?;
-                reserve_temporary::<f32>(tiles.len as u64, "the gather reach tiles")?;
-                let t = density_gather::gather_reach(params, r, i);
-                self.put(tiles.id, &t)
-            }
             Kernel::DensityGather(DensityGather {
                 params,
                 gbuffer,
                 radius,
-                reach,
                 input,
                 out,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let r = get(radius.id)?.as_slice(radius.len)?;
-                let t = get(reach.id)?.as_slice(reach.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = density_gather::density_gather(params, g, r, t, i);
+                let img = density_gather::density_gather(params, g, r, i);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {

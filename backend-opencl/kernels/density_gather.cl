@@ -3,8 +3,8 @@
 // density_gather.rs). Mirror of backend-cpu/src/kernels/density_gather.rs.
 
 __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__global const),
-                             __global const float* radius, __global const float* reach,
-                             __global const float4* input, __global float4* out) {
+                             __global const float* radius, __global const float4* input,
+                             __global float4* out) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int j = (int)get_global_id(0);
     if (j >= w * h) return;
@@ -14,13 +14,9 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         return;
     }
     int x = j % w, y = j / w;
-    // no source with flux reaches farther (bitwise the sums of the full loop)
-    int ts = (int)p->tile_size, tw = (w + ts - 1) / ts, th = (h + ts - 1) / ts;
-    int max_radius = (int)p->max_radius_px;
-    int far = p->axis == 0u ? pass_reach(x, max_radius, ts, tw, reach, (y / ts) * tw, 1)
-                            : pass_reach(y, max_radius, ts, th, reach, x / ts, tw);
+    int reach = (int)p->max_radius_px;
     float3 sum = (float3)(0.0f);
-    for (int d = -far; d <= far; d++) {
+    for (int d = -reach; d <= reach; d++) {
         int qx = p->axis == 0u ? x + d : x;
         int qy = p->axis == 0u ? y : y + d;
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;

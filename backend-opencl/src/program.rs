@@ -76,7 +76,6 @@ pub const KERNELS: &[(&str, &str)] = &[
         "gather_footprint",
         include_str!("../kernels/gather_footprint.cl"),
     ),
-    ("gather_reach", include_str!("../kernels/gather_reach.cl")),
     (
         "density_gather",
         include_str!("../kernels/density_gather.cl"),

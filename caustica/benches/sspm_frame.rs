@@ -38,7 +38,6 @@ const BUDGET_PASSES: &[&str] = &[
     "resolve_caustics",
     "photon_count_table",
     "gather_footprint",
-    "gather_reach",
     "density_gather",
     "tile_hit_distance",
     "bilateral_gather",

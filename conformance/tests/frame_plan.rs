@@ -77,13 +77,12 @@ fn run(b: &mut dyn Backend, scene: &Scene, settings: SspmSettings) -> Run {
     }
 }
 
-const PHOTON_PASSES: [&str; 9] = [
+const PHOTON_PASSES: [&str; 8] = [
     "trace_photons",
     "deposit_screen",
     "resolve_caustics",
     "photon_count_table",
     "gather_footprint",
-    "gather_reach",
     "density_gather",
     "tile_hit_distance",
     "bilateral_gather",
@@ -250,12 +249,7 @@ fn pruning_on_and_off_give_the_same_frame() {
 #[test]
 fn the_filter_setting_picks_its_passes_and_buffers() {
     let scene = small("sphere");
-    let density = [
-        "photon_count_table",
-        "gather_footprint",
-        "gather_reach",
-        "density_gather",
-    ];
+    let density = ["photon_count_table", "gather_footprint", "density_gather"];
     let bilateral = ["tile_hit_distance", "bilateral_gather"];
     for (name, mut b) in backends() {
         for (filter, runs, skips, buffer, absent) in [
@@ -264,13 +258,13 @@ fn the_filter_setting_picks_its_passes_and_buffers() {
                 &density[..],
                 &bilateral[..],
                 "photon count table",
-                "hit distance tiles",
+                "tiles",
             ),
             (
                 GatherFilter::Bilateral,
                 &bilateral[..],
                 &density[..],
-                "hit distance tiles",
+                "tiles",
                 "photon count table",
             ),
         ] {

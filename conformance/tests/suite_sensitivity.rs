@@ -29,7 +29,7 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    GatherReach, PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::rng::pcg_hash;
@@ -63,8 +63,6 @@ enum Mutation {
     FootprintHigh,
     /// `density_gather` 1e-4 too high.
     DensityGatherHigh,
-    /// `gather_reach` half the largest radius (the passes would skip sources that reach).
-    ReachShort,
     /// `direct_light` 1e-3 too high.
     DirectHigh,
     /// `composite` one ulp off in one channel.
@@ -293,12 +291,6 @@ impl Mutant {
             (Mutation::DensityGatherHigh, Kernel::DensityGather(DensityGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
-            (Mutation::ReachShort, Kernel::GatherReach(GatherReach { tiles, .. })) => self
-                .modify::<f32>(tiles.id, |v| {
-                    for t in v {
-                        *t *= 0.5;
-                    }
-                }),
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
@@ -449,10 +441,6 @@ fn each_fault_fails_the_check_of_its_kernel() {
         ),
         (
             Mutation::DensityGatherHigh,
-            "photon_count_table + gather_footprint + density_gather",
-        ),
-        (
-            Mutation::ReachShort,
             "photon_count_table + gather_footprint + density_gather",
         ),
         (Mutation::DirectHigh, "direct_light"),

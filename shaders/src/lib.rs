@@ -69,7 +69,6 @@ pub const KERNELS: &[(&str, &str)] = &[
         "gather_footprint",
         include_str!("../wgsl/gather_footprint.wgsl"),
     ),
-    ("gather_reach", include_str!("../wgsl/gather_reach.wgsl")),
     (
         "density_gather",
         include_str!("../wgsl/density_gather.wgsl"),

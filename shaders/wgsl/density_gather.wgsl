@@ -10,22 +10,8 @@
 @group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
 @group(0) @binding(5) var<storage, read> radius: array<f32>;
-@group(0) @binding(6) var<storage, read> reach: array<f32>;
-@group(0) @binding(7) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
-
-// How far the pass must loop from pixel x along its axis (core's pass_reach): the
-// largest `reach` of the tiles its taps span, plus half a pixel, at most max_radius.
-// The tiles along the axis start at `first`, `stride` apart.
-fn pass_reach(x: i32, max_radius: i32, tile: i32, tiles: i32, first: i32, stride: i32) -> i32 {
-    let t0 = max(x - max_radius, 0) / tile;
-    let t1 = min((x + max_radius) / tile, tiles - 1);
-    var r = 0.0;
-    for (var t = t0; t <= t1; t++) {
-        r = max(r, reach[first + t * stride]);
-    }
-    return min(i32(ceil(r + 0.5)), max_radius);
-}
+@group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
 
 fn density_gather(index: u32) {
     let p = params;
@@ -42,19 +28,9 @@ fn density_gather(index: u32) {
     }
     let x = j % w;
     let y = j / w;
-    // no source with flux reaches farther (bitwise the sums of the full loop)
-    let ts = i32(p.tile_size);
-    let tw = (w + ts - 1) / ts;
-    let th = (h + ts - 1) / ts;
-    let max_radius = i32(p.max_radius_px);
-    var far = 0;
-    if (p.axis == 0u) {
-        far = pass_reach(x, max_radius, ts, tw, (y / ts) * tw, 1);
-    } else {
-        far = pass_reach(y, max_radius, ts, th, x / ts, tw);
-    }
+    let reach = i32(p.max_radius_px);
     var sum = vec3<f32>(0.0);
-    for (var d = -far; d <= far; d++) {
+    for (var d = -reach; d <= reach; d++) {
         let qx = select(x, x + d, p.axis == 0u);
         let qy = select(y + d, y, p.axis == 0u);
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) {

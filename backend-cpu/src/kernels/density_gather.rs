@@ -7,7 +7,6 @@ use caustica_core::device::layout::{
 };
 use caustica_core::math::density_gather::{
     clamped_photon_count, edge_weight, footprint_radius, footprint_weight, join_u64_wide,
-    pass_reach,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
@@ -119,43 +118,16 @@ pub fn gather_footprint(
         .collect()
 }
 
-/// `gather_reach`: per `tile_size^2` tile, the largest radius among its pixels whose
-/// `input` flux is non-zero (0 if none), row-major.
-pub fn gather_reach(p: &GatherParams, radius: &[f32], input: &[[f32; 4]]) -> Vec<f32> {
-    let (w, h, ts) = (p.camera.width, p.camera.height, p.tile_size);
-    let tw = w.div_ceil(ts);
-    (0..tw * h.div_ceil(ts))
-        .into_par_iter()
-        .map(|t| {
-            let (tx, ty) = (t % tw, t / tw);
-            let mut r = 0.0f32;
-            for y in ty * ts..((ty + 1) * ts).min(h) {
-                for x in tx * ts..((tx + 1) * ts).min(w) {
-                    let i = (y * w + x) as usize;
-                    let s = input[i];
-                    if s[0] != 0.0 || s[1] != 0.0 || s[2] != 0.0 {
-                        r = r.max(radius[i]);
-                    }
-                }
-            }
-            r
-        })
-        .collect()
-}
-
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
 /// `caustica_core::kernels::DensityGather`).
 pub fn density_gather(
     p: &GatherParams,
     g: GBufferView,
     radius: &[f32],
-    reach_tiles: &[f32],
     input: &[[f32; 4]],
 ) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
-    let ts = p.tile_size as i32;
-    let (tw, th) = ((w + ts - 1) / ts, (h + ts - 1) / ts);
-    let max_radius = p.max_radius_px as i32;
+    let reach = p.max_radius_px as i32;
     (0..w * h)
         .into_par_iter()
         .map(|j| {
@@ -164,16 +136,6 @@ pub fn density_gather(
                 return [0.0; 4];
             }
             let (x, y) = (j % w, j / w);
-            // no source with flux reaches farther (bitwise the sums of the full loop)
-            let reach = if p.axis == 0 {
-                pass_reach(x, max_radius, ts, tw, |t| {
-                    reach_tiles[((y / ts) * tw + t) as usize]
-                })
-            } else {
-                pass_reach(y, max_radius, ts, th, |t| {
-                    reach_tiles[(t * tw + x / ts) as usize]
-                })
-            };
             let mut sum = Vec3::ZERO;
             for d in -reach..=reach {
                 let (qx, qy) = if p.axis == 0 { (x + d, y) } else { (x, y + d) };

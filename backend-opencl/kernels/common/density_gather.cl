@@ -74,18 +74,6 @@ inline float footprint_weight(int offset, float radius) {
     return 0.75f * ((ub - ub * ub * ub / 3.0f) - (ua - ua * ua * ua / 3.0f));
 }
 
-// How far a density_gather pass must loop from pixel x along its axis (core's
-// pass_reach): the largest gather_reach value of the tiles its taps span, plus half a
-// pixel, at most max_radius. `reach` holds the tiles along the axis, `stride` apart.
-inline int pass_reach(int x, int max_radius, int tile, int tiles, __global const float* reach,
-                      int first, int stride) {
-    int t0 = max(x - max_radius, 0) / tile;
-    int t1 = min((x + max_radius) / tile, tiles - 1);
-    float r = 0.0f;
-    for (int t = t0; t <= t1; t++) r = fmax(r, reach[first + t * stride]);
-    return min((int)ceil(r + 0.5f), max_radius);
-}
-
 // Edge weight between two receiver pixels (symmetric): depth and normal terms.
 inline float edge_weight(float depth_a, float3 normal_a, float depth_b, float3 normal_b,
                          float sigma_depth, float normal_power) {

@@ -12,7 +12,7 @@ use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GpuCame
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    GatherReach, PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::Scene;
@@ -293,26 +293,6 @@ impl Fixture {
         })
     }
 
-    /// Runs `gather_reach` on `b` for a pass's input.
-    pub fn run_gather_reach(
-        &self,
-        b: &mut dyn Backend,
-        radius: &[f32],
-        input: &[[f32; 4]],
-    ) -> Result<Vec<f32>, String> {
-        let mut rec = Recording::new();
-        let r = rec.upload(radius, "gather radius");
-        let i = rec.upload(input, "gather input");
-        let tiles = rec.create(self.tiles_len(), "gather reach tiles");
-        rec.kernel(Kernel::GatherReach(GatherReach {
-            params: self.constants.gather_params(self.camera, &self.settings, 0),
-            radius: r,
-            input: i,
-            tiles,
-        }));
-        run_and_free(b, "gather_reach", &rec, |b| read_buf(b, tiles))
-    }
-
     /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b`.
     pub fn run_density_gather(
         &self,
@@ -320,13 +300,11 @@ impl Fixture {
         axis: u32,
         gbuffer: &[GBufferTexel],
         radius: &[f32],
-        reach: &[f32],
         input: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
         let r = rec.upload(radius, "gather radius");
-        let reach = rec.upload(reach, "gather reach tiles");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
         rec.kernel(Kernel::DensityGather(DensityGather {
@@ -335,7 +313,6 @@ impl Fixture {
                 .gather_params(self.camera, &self.settings, axis),
             gbuffer: g,
             radius: r,
-            reach,
             input: i,
             out,
         }));
@@ -406,8 +383,6 @@ pub struct ReferenceInputs {
     pub footprints: Vec<[f32; 4]>,
     /// `gather_footprint`'s radius buffer.
     pub radius: Vec<f32>,
-    /// `gather_reach` of the footprints and of the row pass (the passes' reach tiles).
-    pub reach: [Vec<f32>; 2],
     /// The density gather's row pass of `footprints`.
     pub density_rows: Vec<[f32; 4]>,
     /// The filtered caustics with the fixture's filter (density: both passes of
@@ -429,13 +404,10 @@ impl ReferenceInputs {
         let tiles = fx.run_tiles(r, &photon_map)?;
         let table = fx.run_count_table(r, &photon_map)?;
         let (footprints, radius) = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
-        let reach_rows = fx.run_gather_reach(r, &radius, &footprints)?;
-        let density_rows =
-            fx.run_density_gather(r, 0, &gbuffer, &radius, &reach_rows, &footprints)?;
-        let reach_columns = fx.run_gather_reach(r, &radius, &density_rows)?;
+        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &radius, &footprints)?;
         let filtered = match fx.settings.filter {
             GatherFilter::Density => {
-                fx.run_density_gather(r, 1, &gbuffer, &radius, &reach_columns, &density_rows)?
+                fx.run_density_gather(r, 1, &gbuffer, &radius, &density_rows)?
             }
             GatherFilter::Bilateral => {
                 let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
@@ -452,7 +424,6 @@ impl ReferenceInputs {
             table,
             footprints,
             radius,
-            reach: [reach_rows, reach_columns],
             density_rows,
             filtered,
             direct,

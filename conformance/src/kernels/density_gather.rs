@@ -1,7 +1,6 @@
-//! The density gather's four kernels on the reference's inputs, in one verdict:
+//! The density gather's three kernels on the reference's inputs, in one verdict:
 //! `photon_count_table` (the summed-area table: integer sums, bitwise equal),
-//! `gather_footprint` (radius and normalised flux), `gather_reach` (a maximum of the same
-//! floats: bitwise equal) and both `density_gather` passes,
+//! `gather_footprint` (radius and normalised flux) and both `density_gather` passes,
 //! each within [`DENSITY_GATHER_REL`] of the magnitudes it gathers (the argument is
 //! there), the radius it passes through bitwise equal.
 
@@ -137,23 +136,8 @@ pub fn check_density_gather(
         } else {
             &inputs.density_rows
         };
-        // gather_reach: a maximum of the same floats, bitwise
-        let reach_tiles = &inputs.reach[axis as usize];
-        let rb = fx.run_gather_reach(c, &inputs.radius, input)?;
-        let differ = reach_tiles
-            .iter()
-            .zip(&rb)
-            .filter(|(a, b)| a.to_bits() != b.to_bits())
-            .count();
-        v.check(differ == 0, || {
-            format!(
-                "gather_reach for axis {axis} differs on {differ} of {} tiles",
-                rb.len()
-            )
-        });
-        let (g, radius) = (&inputs.gbuffer, &inputs.radius);
-        let a = fx.run_density_gather(r, axis, g, radius, reach_tiles, input)?;
-        let b = fx.run_density_gather(c, axis, g, radius, reach_tiles, input)?;
+        let a = fx.run_density_gather(r, axis, &inputs.gbuffer, &inputs.radius, input)?;
+        let b = fx.run_density_gather(c, axis, &inputs.gbuffer, &inputs.radius, input)?;
         // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass
         let to_output = |i: usize, ch: usize| -> f32 {
             if axis == 0 {

@@ -1,7 +1,7 @@
 //! `density_gather`: one direction of the scatter-normalised, density-adaptive caustic
 //! gather (see `crate::math::density_gather`).
 
-use super::{bind, bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
 use crate::device::layout::GatherParams;
@@ -28,9 +28,6 @@ pub struct DensityGather {
     /// Every pixel's radius from `gather_footprint` (pixels): a tap whose source's support
     /// misses the pixel is skipped before anything else of it is read.
     pub radius: Buf<f32>,
-    /// `gather_reach` of this pass's input: the largest radius of a pixel with flux per
-    /// tile; the pass loops only as far as the tiles its taps span reach.
-    pub reach: Buf<f32>,
     /// Normalised flux and radius per pixel (W per channel; pixels).
     pub input: ImageBuf,
     /// Axis 0: normalised flux and radius; axis 1: caustic radiance and radius.
@@ -44,7 +41,6 @@ const BINDINGS: &[Binding] = &[
     bind("gbuffer2", Read),
     bind("gbuffer3", Read),
     bind("radius", Read),
-    bind("reach", Read),
     bind("input", Read),
     bind("out", ReadWrite),
 ];
@@ -55,11 +51,9 @@ impl KernelDecl for DensityGather {
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let c = &self.params.camera;
         let n = texels(c.width, c.height);
-        let nt = tiles(c.width, c.height, self.params.tile_size)?;
         a.params("params", &self.params)?
             .gbuffer(&self.gbuffer, n)?
             .buf("radius", self.radius, n * 4)?
-            .buf("reach", self.reach, nt * 4)?
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
         Ok(Some(n))

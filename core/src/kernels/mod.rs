@@ -21,7 +21,6 @@ mod density_gather;
 mod deposit_screen;
 mod direct_light;
 mod gather_footprint;
-mod gather_reach;
 mod photon_count_table;
 mod prepare_scene;
 mod primary_gbuffer;
@@ -35,7 +34,6 @@ pub use density_gather::DensityGather;
 pub use deposit_screen::DepositScreen;
 pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
 pub use gather_footprint::GatherFootprint;
-pub use gather_reach::GatherReach;
 pub use photon_count_table::PhotonCountTable;
 pub use prepare_scene::PrepareScene;
 pub use primary_gbuffer::PrimaryGbuffer;
@@ -443,7 +441,6 @@ kernel_list! {
     BilateralGather => bilateral_gather,
     PhotonCountTable => photon_count_table,
     GatherFootprint => gather_footprint,
-    GatherReach => gather_reach,
     DensityGather => density_gather,
     Composite => composite,
 }

@@ -198,29 +198,6 @@ pub fn footprint_weight(offset: i32, radius: f32) -> f32 {
     0.75 * ((ub - ub * ub * ub / 3.0) - (ua - ua * ua * ua / 3.0))
 }
 
-/// How far a `density_gather` pass must loop from pixel `x` along its axis (pixels, at
-/// most `max_radius`): the taps `[x - max_radius, x + max_radius]` span the tiles
-/// `(x - max_radius) / tile ..= (x + max_radius) / tile` (clipped to the image's
-/// `tiles` along the axis), and no source there reaches farther than the largest
-/// `reach` of those tiles (`gather_reach`) plus half a pixel. `tile_reach(t)` gives the
-/// tile's value.
-#[inline]
-pub fn pass_reach(
-    x: i32,
-    max_radius: i32,
-    tile: i32,
-    tiles: i32,
-    tile_reach: impl Fn(i32) -> f32,
-) -> i32 {
-    let t0 = ((x - max_radius).max(0)) / tile;
-    let t1 = ((x + max_radius) / tile).min(tiles - 1);
-    let mut r = 0.0f32;
-    for t in t0..=t1 {
-        r = r.max(tile_reach(t));
-    }
-    ((r + 0.5).ceil() as i32).min(max_radius)
-}
-
 /// Edge weight between two receiver pixels (view depths in scene units, unit normals):
 /// `exp(-|z_a - z_b| / (sigma_depth * min(z_a, z_b))) * max(0, n_a . n_b)^normal_power`
 /// (the seed's bilateral terms, 000 section 30.3.2, symmetric in `a` and `b`).

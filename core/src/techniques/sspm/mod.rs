@@ -7,8 +7,7 @@
 //! 3. `resolve_caustics` (flux -> radiance, Eq. 5: the raw caustics), the filter, then
 //!    `composite` (section 30.3.3). The filter ([`GatherFilter`]) is by default the
 //!    density-adaptive, flux-keeping gather (`photon_count_table` twice,
-//!    `gather_footprint`, then `gather_reach` and `density_gather` per direction;
-//!    [`crate::math::density_gather`]), or the
+//!    `gather_footprint`, `density_gather` twice; [`crate::math::density_gather`]), or the
 //!    seed's `tile_hit_distance` and two `bilateral_gather` passes (section 30.3.2).
 //!
 //! Photons are processed in batches of at most `max_photons_per_batch`, so the photon
@@ -37,7 +36,7 @@ use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    GatherReach, PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
@@ -62,7 +61,6 @@ enum GatherBuffers {
     Density {
         table: Buf<u32>,
         radius: Buf<f32>,
-        reach: Buf<f32>,
         scratch: ImageBuf,
     },
     /// The bilateral gather: hit-distance tiles and the image between its two passes.
@@ -162,10 +160,6 @@ impl Sspm {
             GatherFilter::Density => GatherBuffers::Density {
                 table: rec.create(pixels, "photon count table"),
                 radius: rec.create(pixels, "gather radius"),
-                reach: rec.create(
-                    w.div_ceil(settings.tile_size) * h.div_ceil(settings.tile_size),
-                    "gather reach tiles",
-                ),
                 scratch: rec.create(pixels, "gather scratch image"),
             },
             GatherFilter::Bilateral => GatherBuffers::Bilateral {
@@ -382,7 +376,6 @@ impl Sspm {
                     GatherBuffers::Density {
                         table,
                         radius,
-                        reach,
                         scratch,
                     } => {
                         for params in [gather, columns] {
@@ -400,24 +393,20 @@ impl Sspm {
                             out: filtered,
                             radius,
                         });
-                        for (params, input, out) in
-                            [(gather, filtered, scratch), (columns, scratch, filtered)]
-                        {
-                            rec.kernel(GatherReach {
-                                params,
-                                radius,
-                                input,
-                                tiles: reach,
-                            });
-                            rec.kernel(DensityGather {
-                                params,
-                                gbuffer: self.gbuffer,
-                                radius,
-                                reach,
-                                input,
-                                out,
-                            });
-                        }
+                        rec.kernel(DensityGather {
+                            params: gather,
+                            gbuffer: self.gbuffer,
+                            radius,
+                            input: filtered,
+                            out: scratch,
+                        });
+                        rec.kernel(DensityGather {
+                            params: columns,
+                            gbuffer: self.gbuffer,
+                            radius,
+                            input: scratch,
+                            out: filtered,
+                        });
                     }
                     GatherBuffers::Bilateral { tiles, scratch } => {
                         rec.kernel(TileHitDistance {

@@ -15,8 +15,8 @@ pub struct Needs {
     pub direct_light: bool,
     /// The photon passes run: `trace_photons`, `deposit_screen`, `resolve_caustics`.
     pub photons: bool,
-    /// The filter runs: `photon_count_table`, `gather_footprint`, `gather_reach` and
-    /// `density_gather` (twice each but the footprint), or `tile_hit_distance` and both
+    /// The filter runs: `photon_count_table`, `gather_footprint` and `density_gather`
+    /// (twice each but the footprint), or `tile_hit_distance` and both
     /// `bilateral_gather` passes, as [`GatherFilter`] says.
     pub gather: bool,
     /// `composite` runs.
@@ -110,12 +110,7 @@ pub fn plan_frame(
             "filter is bilateral: the density gather's passes never run"
         }
     };
-    for name in [
-        "photon_count_table",
-        "gather_footprint",
-        "gather_reach",
-        "density_gather",
-    ] {
+    for name in ["photon_count_table", "gather_footprint", "density_gather"] {
         pass(name, n.gather && density, other(density));
     }
     for name in ["tile_hit_distance", "bilateral_gather"] {
