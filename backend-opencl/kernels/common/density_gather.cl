@@ -80,7 +80,8 @@ inline float edge_weight(float depth_a, float3 normal_a, float depth_b, float3 n
     float wd = exp(-fabs(depth_a - depth_b) / (sigma_depth * fmin(depth_a, depth_b)));
     if (normal_power > 0.0f) {
         float c = normal_a.x * normal_b.x + normal_a.y * normal_b.y + normal_a.z * normal_b.z;
-        return wd * pow(fmax(c, 0.0f), normal_power);
+        // powr: pow for a non-negative base (same 16-ulp bound, no negative-base paths)
+        return wd * powr(fmax(c, 0.0f), normal_power);
     }
     return wd;
 }
