@@ -21,16 +21,6 @@ pub enum GatherFilter {
     Bilateral,
 }
 
-impl GatherFilter {
-    /// The name the settings and the CLI use.
-    pub fn name(self) -> &'static str {
-        match self {
-            GatherFilter::Density => "density",
-            GatherFilter::Bilateral => "bilateral",
-        }
-    }
-}
-
 /// Every parameter of the technique; defaults from seed 000 where it gives them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
