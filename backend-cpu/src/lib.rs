@@ -236,30 +236,31 @@ impl CpuBackend {
                 photon_map,
                 table,
                 out,
-                radius,
+                edge,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let m = self.photon_map(photon_map)?;
                 let t = get(table.id)?.as_slice(table.len)?;
-                // the footprint image and the radius buffer: 20 bytes a pixel
-                reserve_temporary::<[f32; 5]>(out.len as u64, "the gather footprints")?;
-                let img = density_gather::gather_footprint(params, g, m, t);
-                let radii: Vec<f32> = img.iter().map(|p| p[3]).collect();
+                // the footprint image and the edge texels: 32 bytes a pixel
+                reserve_temporary::<[f32; 8]>(out.len as u64, "the gather footprints")?;
+                let (img, edges) = density_gather::gather_footprint(params, g, m, t);
                 self.put(out.id, &img)?;
-                self.put(radius.id, &radii)
+                self.put(edge.id, &edges)
             }
             Kernel::DensityGather(DensityGather {
                 params,
                 gbuffer,
-                radius,
+                edge,
+                table,
                 input,
                 out,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
-                let r = get(radius.id)?.as_slice(radius.len)?;
+                let e = get(edge.id)?.as_slice(edge.len)?;
+                let t = get(table.id)?.as_slice(table.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = density_gather::density_gather(params, g, r, i);
+                let img = density_gather::density_gather(params, g, e, t, i);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {

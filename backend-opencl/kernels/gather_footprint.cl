@@ -5,27 +5,31 @@
 __kernel void gather_footprint(__global const GatherParams* p,
                                GATHER_GBUFFER_PARAMS(__global const),
                                PHOTON_MAP_PARAMS(__global const), __global const uint* table,
-                               __global float4* out, __global float* radius) {
+                               __global float4* out, __global float4* edge) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int i = (int)get_global_id(0);
     if (i >= w * h) return;
-    if ((gbuffer3[i].w & GBUFFER_RECEIVER) == 0u) {
+    GatherTexel gi = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)i);
+    edge[i] = edge_texel(gi);
+    if (gi.receiver == 0u) {
         out[i] = (float4)(0.0f);
-        radius[i] = 0.0f;
         return;
     }
     int x = i % w, y = i / w;
     float r = footprint_radius(table, w, h, (int)p->table_block, x, y, p->knn_photons,
                                p->max_radius_px);
+    float3 f;
+    f.x = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 0u),
+                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 1u)) * p->flux_quantum;
+    f.y = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 2u),
+                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 3u)) * p->flux_quantum;
+    f.z = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 4u),
+                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 5u)) * p->flux_quantum;
+    if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) {
+        // no flux to spread: no normaliser to compute
+        out[i] = (float4)(0.0f, 0.0f, 0.0f, r);
+        return;
+    }
     float inv = 1.0f / gather_normaliser(p, GATHER_GBUFFER_ARGS, x, y, r, 0u);
-    float4 o;
-    o.x = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 0u),
-                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 1u)) * p->flux_quantum * inv;
-    o.y = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 2u),
-                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 3u)) * p->flux_quantum * inv;
-    o.z = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 4u),
-                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 5u)) * p->flux_quantum * inv;
-    o.w = r;
-    out[i] = o;
-    radius[i] = r;
+    out[i] = (float4)(f.x * inv, f.y * inv, f.z * inv, r);
 }

@@ -32,6 +32,10 @@ pub const COMMON: &[(&str, &str)] = &[
     ("gbuffer", include_str!("../wgsl/common/gbuffer.wgsl")),
     ("photon_map", include_str!("../wgsl/common/photon_map.wgsl")),
     (
+        "photon_table",
+        include_str!("../wgsl/common/photon_table.wgsl"),
+    ),
+    (
         "density_gather",
         include_str!("../wgsl/common/density_gather.wgsl"),
     ),

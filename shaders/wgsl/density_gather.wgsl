@@ -1,4 +1,4 @@
-// needs: types vector optics footprint scene gbuffer density_gather
+// needs: types vector optics footprint scene gbuffer photon_table density_gather
 // density_gather: one direction of the scatter-normalised, density-adaptive caustic
 // gather (core/src/math/density_gather.rs; the contract in core/src/kernels/
 // density_gather.rs). Mirror of backend-opencl/kernels/density_gather.cl and
@@ -9,9 +9,10 @@
 @group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
-@group(0) @binding(5) var<storage, read> radius: array<f32>;
-@group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> edge: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> table: array<u32>;
+@group(0) @binding(7) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
 
 fn density_gather(index: u32) {
     let p = params;
@@ -21,14 +22,20 @@ fn density_gather(index: u32) {
     if (j >= w * h) {
         return;
     }
-    let gj = load_gather_texel(u32(j));
-    if (gj.receiver == 0u) {
+    let ej = edge[j];
+    if (!edge_texel_is_receiver(ej)) {
         out[j] = vec4<f32>(0.0);
         return;
     }
     let x = j % w;
     let y = j / w;
     let reach = i32(p.max_radius_px);
+    let r = input[j].w;
+    let dark = vec4<f32>(0.0, 0.0, 0.0, select(0.0, r, p.axis == 0u));
+    if (reach_photons(w, h, i32(p.table_block), x, y, p.axis, reach) == 0u) {
+        out[j] = dark;
+        return;
+    }
     var sum = vec3<f32>(0.0);
     for (var d = -reach; d <= reach; d++) {
         let qx = select(x, x + d, p.axis == 0u);
@@ -37,23 +44,28 @@ fn density_gather(index: u32) {
             continue;
         }
         let q = qy * w + qx;
-        // source q, destination j: the source's radius, offset j - q (non-receivers have
-        // radius 0 and weigh 0 but at d = 0, where j is a receiver)
-        let ws = footprint_weight(-d, radius[q]);
+        // source q, destination j: a source without flux adds nothing; then the source's
+        // radius at offset j - q (non-receivers hold no flux)
+        let s = input[q];
+        if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) {
+            continue;
+        }
+        let ws = footprint_weight(-d, s.w);
         if (ws == 0.0) {
             continue;
         }
-        let gq = load_gather_texel(u32(q));
-        if (gq.receiver == 0u) {
+        let eq = edge[q];
+        if (!edge_texel_is_receiver(eq)) {
             continue;
         }
-        let s = input[q];
-        let wgt = ws *
-                  edge_weight(gq.depth, gq.normal, gj.depth, gj.normal, p.sigma_depth,
-                              p.normal_power);
+        let wgt = ws * edge_weight(eq.x, eq.yzw, ej.x, ej.yzw, p.sigma_depth, p.normal_power);
         sum += wgt * s.xyz;
     }
-    let r = radius[j];
+    // (flux and weights are >= 0: a sum without a positive channel is 0)
+    if (!(sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0)) {
+        out[j] = dark;
+        return;
+    }
     if (p.axis == 0u) {
         out[j] = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
     } else {
@@ -66,9 +78,8 @@ fn density_gather(index: u32) {
         let area = pixel_surface_area(footprint, dot3(ray, cam.forward), dot3(ray, g.normal));
         let scale = saturate_radiance(1.0 / (PI_F * area));
         let l = saturate_radiance3(sum * scale) * g.albedo;
-        // alpha: the radius where the filter gave light, 0 elsewhere
-        let lit = sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0;
-        out[j] = vec4<f32>(l, select(0.0, r, lit));
+        // alpha: the radius where the filter gave light
+        out[j] = vec4<f32>(l, r);
     }
 }
 

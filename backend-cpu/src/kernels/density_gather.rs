@@ -6,7 +6,8 @@ use caustica_core::device::layout::{
     gbuffer_flags, gbuffer_pixel_area, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
 };
 use caustica_core::math::density_gather::{
-    clamped_photon_count, edge_weight, footprint_radius, footprint_weight, join_u64_wide,
+    clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight, footprint_radius,
+    footprint_weight, join_u64_wide, reach_photons,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
@@ -85,20 +86,22 @@ fn normaliser(p: &GatherParams, g: &GBufferView, i: i32, r: f32, axis: u32) -> f
     sum
 }
 
-/// `gather_footprint`: per receiver pixel `(F / W_row, r)` (W per channel, pixels); 0
-/// elsewhere.
+/// `gather_footprint`: per receiver pixel `(F / W_row, r)` (W per channel, pixels), 0
+/// elsewhere; and every pixel's edge texel.
 pub fn gather_footprint(
     p: &GatherParams,
     g: GBufferView,
     map: PhotonMapView,
     table: &[u32],
-) -> Vec<[f32; 4]> {
+) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
     (0..w * h)
         .into_par_iter()
         .map(|i| {
-            if !is_receiver(&g.load_gbuffer(i as usize)) {
-                return [0.0; 4];
+            let gi = g.load_gbuffer(i as usize);
+            let edge = edge_texel(is_receiver(&gi), gi.depth, gi.normal);
+            if !is_receiver(&gi) {
+                return ([0.0; 4], edge);
             }
             let r = footprint_radius(
                 table,
@@ -110,12 +113,17 @@ pub fn gather_footprint(
                 p.knn_photons,
                 p.max_radius_px,
             );
-            let inv = 1.0 / normaliser(p, &g, i, r, 0);
             let word = |k: u32| map.photon_map_word(i as u32, k);
             let flux = |c: u32| join_u64_wide(word(2 * c), word(2 * c + 1)) * p.flux_quantum;
-            [flux(0) * inv, flux(1) * inv, flux(2) * inv, r]
+            let f = [flux(0), flux(1), flux(2)];
+            if f == [0.0; 3] {
+                // no flux to spread: no normaliser to compute
+                return ([0.0, 0.0, 0.0, r], edge);
+            }
+            let inv = 1.0 / normaliser(p, &g, i, r, 0);
+            ([f[0] * inv, f[1] * inv, f[2] * inv, r], edge)
         })
-        .collect()
+        .unzip()
 }
 
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
@@ -123,7 +131,8 @@ pub fn gather_footprint(
 pub fn density_gather(
     p: &GatherParams,
     g: GBufferView,
-    radius: &[f32],
+    edge: &[[f32; 4]],
+    table: &[u32],
     input: &[[f32; 4]],
 ) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
@@ -131,11 +140,17 @@ pub fn density_gather(
     (0..w * h)
         .into_par_iter()
         .map(|j| {
-            let gj = g.load_gbuffer(j as usize);
-            if !is_receiver(&gj) {
+            let ej = &edge[j as usize];
+            if !edge_texel_is_receiver(ej) {
                 return [0.0; 4];
             }
             let (x, y) = (j % w, j / w);
+            let r = input[j as usize][3];
+            let dark = [0.0, 0.0, 0.0, if p.axis == 0 { r } else { 0.0 }];
+            let block = p.table_block as i32;
+            if reach_photons(table, w, h, block, x, y, p.axis, reach) == 0 {
+                return dark;
+            }
             let mut sum = Vec3::ZERO;
             for d in -reach..=reach {
                 let (qx, qy) = if p.axis == 0 { (x + d, y) } else { (x, y + d) };
@@ -143,41 +158,48 @@ pub fn density_gather(
                     continue;
                 }
                 let q = (qy * w + qx) as usize;
-                // source q, destination j: the source's radius, offset j - q (non-receivers
-                // have radius 0 and weigh 0 but at d = 0, where j is a receiver)
-                let ws = footprint_weight(-d, radius[q]);
+                // source q, destination j: a source without flux adds nothing; then the
+                // source's radius at offset j - q (non-receivers hold no flux)
+                let s = &input[q];
+                if s[0] == 0.0 && s[1] == 0.0 && s[2] == 0.0 {
+                    continue;
+                }
+                let ws = footprint_weight(-d, s[3]);
                 if ws == 0.0 {
                     continue;
                 }
-                let gq = g.load_gbuffer(q);
-                if !is_receiver(&gq) {
+                let eq = &edge[q];
+                if !edge_texel_is_receiver(eq) {
                     continue;
                 }
                 let wgt = ws
                     * edge_weight(
-                        gq.depth,
-                        gq.normal,
-                        gj.depth,
-                        gj.normal,
+                        eq[0],
+                        [eq[1], eq[2], eq[3]],
+                        ej[0],
+                        [ej[1], ej[2], ej[3]],
                         p.sigma_depth,
                         p.normal_power,
                     );
-                sum += wgt * Vec3::from_slice(&input[q][..3]);
+                sum += wgt * Vec3::from_slice(&s[..3]);
             }
-            let r = radius[j as usize];
+            // (flux and weights are >= 0: a sum without a positive channel is 0)
+            if !(sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0) {
+                return dark;
+            }
             if p.axis == 0 {
                 let s = sum / normaliser(p, &g, j, r, 1);
                 [s.x, s.y, s.z, r]
             } else {
                 // 000 Eq. 5: L = (albedo / pi) Phi / A
                 // (the scale saturates first, so that no pixel of area 0 gives 0 / 0)
+                let gj = g.load_gbuffer(j as usize);
                 let area = gbuffer_pixel_area(&p.camera, j as u32, &gj);
                 let scale = saturate_radiance(1.0 / (PI * area));
                 let l = saturate_radiance3(sum * scale) * Vec3::from(gj.albedo);
-                // alpha: the radius where the filter gave light, 0 elsewhere (as the raw
+                // alpha: the radius where the filter gave light (0 elsewhere, as the raw
                 // image's alpha is 0 without photons)
-                let lit = sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0;
-                [l.x, l.y, l.z, if lit { r } else { 0.0 }]
+                [l.x, l.y, l.z, r]
             }
         })
         .collect()

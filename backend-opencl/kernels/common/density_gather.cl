@@ -17,13 +17,10 @@ inline uint table_entry(__global const uint* table, int width, int bx0, int by0,
     return (x < bx0 || y < by0) ? 0u : table[y * width + x];
 }
 
-// Photons in the window of half-width `half_width` around (x, y), clipped to the image
-// (.x), and the window's pixel count (.y): the rectangles it covers in each of the (at
-// most 2 x 2) blocks it overlaps. Wrapping uint sums, exact (see the CPU doc).
-inline uint2 window_photons(__global const uint* table, int w, int h, int block, int x,
-                            int y, int half_width) {
-    int x0 = max(x - half_width, 0), y0 = max(y - half_width, 0);
-    int x1 = min(x + half_width, w - 1), y1 = min(y + half_width, h - 1);
+// Photons in the rectangle [x0, x1] x [y0, y1] inside the image: the parts it covers in
+// each block it overlaps, four reads each. Wrapping uint sums, exact (see the CPU doc).
+inline uint rect_photons(__global const uint* table, int w, int block, int x0, int y0,
+                         int x1, int y1) {
     uint count = 0u;
     for (int by = y0 / block; by <= y1 / block; by++) {
         for (int bx = x0 / block; bx <= x1 / block; bx++) {
@@ -36,7 +33,27 @@ inline uint2 window_photons(__global const uint* table, int w, int h, int block,
                     table_entry(table, w, bx0, by0, xa - 1, ya - 1);
         }
     }
-    return (uint2)(count, (uint)((x1 - x0 + 1) * (y1 - y0 + 1)));
+    return count;
+}
+
+// Photons in the window of half-width `half_width` around (x, y), clipped to the image
+// (.x), and the window's pixel count (.y).
+inline uint2 window_photons(__global const uint* table, int w, int h, int block, int x,
+                            int y, int half_width) {
+    int x0 = max(x - half_width, 0), y0 = max(y - half_width, 0);
+    int x1 = min(x + half_width, w - 1), y1 = min(y + half_width, h - 1);
+    return (uint2)(rect_photons(table, w, block, x0, y0, x1, y1),
+                   (uint)((x1 - x0 + 1) * (y1 - y0 + 1)));
+}
+
+// Photons whose flux can reach (x, y) in density_gather's pass `axis`: the row segment
+// x +- reach (axis 0), the square of half-width reach (1), clipped to the image.
+inline uint reach_photons(__global const uint* table, int w, int h, int block, int x, int y,
+                          uint axis, int reach) {
+    int x0 = max(x - reach, 0), x1 = min(x + reach, w - 1);
+    int y0 = axis == 0u ? y : max(y - reach, 0);
+    int y1 = axis == 0u ? y : min(y + reach, h - 1);
+    return rect_photons(table, w, block, x0, y0, x1, y1);
 }
 
 // k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
@@ -111,6 +128,18 @@ inline GatherTexel load_gather_texel(GATHER_GBUFFER_PARAMS(__global const), uint
     t.normal = (float3)(as_float(n.x), as_float(n.y), as_float(n.z));
     return t;
 }
+
+// Depth of a non-receiver's edge texel (receivers' view depths are positive).
+#define EDGE_TEXEL_NOT_RECEIVER (-1.0f)
+
+// A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
+// EDGE_TEXEL_NOT_RECEIVER elsewhere.
+inline float4 edge_texel(GatherTexel t) {
+    return t.receiver != 0u ? (float4)(t.depth, t.normal)
+                            : (float4)(EDGE_TEXEL_NOT_RECEIVER, 0.0f, 0.0f, 0.0f);
+}
+
+inline bool edge_texel_is_receiver(float4 t) { return t.x >= 0.0f; }
 
 // Normaliser of a source at pixel (x, y) with radius r: the sum of its weights over the
 // receivers of its row (axis 0) or column (1) inside the image.

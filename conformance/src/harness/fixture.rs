@@ -273,23 +273,23 @@ impl Fixture {
         gbuffer: &[GBufferTexel],
         map: &[DepositTexel],
         table: &[u32],
-    ) -> Result<(Vec<[f32; 4]>, Vec<f32>), String> {
+    ) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>), String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
         let m = rec.upload_photon_map(map);
         let t = rec.upload(table, "photon count table");
         let out = rec.create(self.pixels(), "footprints");
-        let radius = rec.create(self.pixels(), "gather radius");
+        let edge = rec.create(self.pixels(), "gather edge texels");
         rec.kernel(Kernel::GatherFootprint(GatherFootprint {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
             gbuffer: g,
             photon_map: m,
             table: t,
             out,
-            radius,
+            edge,
         }));
         run_and_free(b, "gather_footprint", &rec, |b| {
-            Ok((read_buf(b, out)?, read_buf(b, radius)?))
+            Ok((read_buf(b, out)?, read_buf(b, edge)?))
         })
     }
 
@@ -299,12 +299,14 @@ impl Fixture {
         b: &mut dyn Backend,
         axis: u32,
         gbuffer: &[GBufferTexel],
-        radius: &[f32],
+        edge: &[[f32; 4]],
+        table: &[u32],
         input: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
-        let r = rec.upload(radius, "gather radius");
+        let e = rec.upload(edge, "gather edge texels");
+        let t = rec.upload(table, "photon count table");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
         rec.kernel(Kernel::DensityGather(DensityGather {
@@ -312,7 +314,8 @@ impl Fixture {
                 .constants
                 .gather_params(self.camera, &self.settings, axis),
             gbuffer: g,
-            radius: r,
+            edge: e,
+            table: t,
             input: i,
             out,
         }));
@@ -381,8 +384,8 @@ pub struct ReferenceInputs {
     pub table: Vec<u32>,
     /// `gather_footprint`'s output: normalised flux and radius per pixel.
     pub footprints: Vec<[f32; 4]>,
-    /// `gather_footprint`'s radius buffer.
-    pub radius: Vec<f32>,
+    /// `gather_footprint`'s edge texels.
+    pub edge: Vec<[f32; 4]>,
     /// The density gather's row pass of `footprints`.
     pub density_rows: Vec<[f32; 4]>,
     /// The filtered caustics with the fixture's filter (density: both passes of
@@ -403,11 +406,11 @@ impl ReferenceInputs {
         } = fx.run_deposit(r, &gbuffer, &photons)?;
         let tiles = fx.run_tiles(r, &photon_map)?;
         let table = fx.run_count_table(r, &photon_map)?;
-        let (footprints, radius) = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
-        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &radius, &footprints)?;
+        let (footprints, edge) = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
+        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &edge, &table, &footprints)?;
         let filtered = match fx.settings.filter {
             GatherFilter::Density => {
-                fx.run_density_gather(r, 1, &gbuffer, &radius, &density_rows)?
+                fx.run_density_gather(r, 1, &gbuffer, &edge, &table, &density_rows)?
             }
             GatherFilter::Bilateral => {
                 let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
@@ -423,7 +426,7 @@ impl ReferenceInputs {
             tiles,
             table,
             footprints,
-            radius,
+            edge,
             density_rows,
             filtered,
             direct,

@@ -1,6 +1,6 @@
 //! The density gather's three kernels on the reference's inputs, in one verdict:
 //! `photon_count_table` (the summed-area table: integer sums, bitwise equal),
-//! `gather_footprint` (radius and normalised flux) and both `density_gather` passes,
+//! `gather_footprint` (radius, normalised flux and the edge texels, bitwise) and both `density_gather` passes,
 //! each within [`DENSITY_GATHER_REL`] of the magnitudes it gathers (the argument is
 //! there), the radius it passes through bitwise equal.
 
@@ -95,24 +95,21 @@ pub fn check_density_gather(
         )
     });
 
-    let (fa, ra) = fx.run_footprint(r, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
-    let (fb, rb) = fx.run_footprint(c, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
-    // the radius is ~7 ulp from the same integers: compared as a channel; the image's
-    // alpha and the radius buffer must hold the same radius, bit for bit
+    let (fa, ea) = fx.run_footprint(r, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
+    let (fb, eb) = fx.run_footprint(c, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
+    // the edge texels are copies of the G-buffer's bits (or the not-a-receiver mark):
+    // bitwise equal
+    let differ = ea
+        .iter()
+        .zip(&eb)
+        .filter(|(a, b)| a.map(f32::to_bits) != b.map(f32::to_bits))
+        .count();
+    v.check(differ == 0, || {
+        format!("gather_footprint's edge texels differ on {differ} pixels")
+    });
+    // the radius is ~7 ulp from the same integers: compared as a channel
     let radius: Vec<[f32; 4]> = fa.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
     let radius_b: Vec<[f32; 4]> = fb.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
-    for (who, img, buf) in [("cpu", &fa, &ra), ("candidate", &fb, &rb)] {
-        let differ = img
-            .iter()
-            .zip(buf.iter())
-            .filter(|(p, r)| p[3].to_bits() != r.to_bits())
-            .count();
-        v.check(differ == 0, || {
-            format!(
-                "{who}: gather_footprint's radius buffer differs from its alpha on {differ} pixels"
-            )
-        });
-    }
     compare(
         &mut v,
         "gather_footprint radius",
@@ -136,8 +133,9 @@ pub fn check_density_gather(
         } else {
             &inputs.density_rows
         };
-        let a = fx.run_density_gather(r, axis, &inputs.gbuffer, &inputs.radius, input)?;
-        let b = fx.run_density_gather(c, axis, &inputs.gbuffer, &inputs.radius, input)?;
+        let (g, e, t) = (&inputs.gbuffer, &inputs.edge, &inputs.table);
+        let a = fx.run_density_gather(r, axis, g, e, t, input)?;
+        let b = fx.run_density_gather(c, axis, g, e, t, input)?;
         // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass
         let to_output = |i: usize, ch: usize| -> f32 {
             if axis == 0 {

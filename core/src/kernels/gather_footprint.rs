@@ -10,9 +10,11 @@ use crate::device::layout::GatherParams;
 /// `params.knn_photons` photons (`footprint_radius` on the summed-area table), and the
 /// pixel's deposited flux `F_i` (W per channel, from the photon map's fixed-point sums)
 /// divided by its row normaliser `W_i = sum_d footprint_weight(d, r_i) edge_weight(i, i+d)`
-/// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out` and
-/// `r_i` to `radius` (which the gather passes test before they read anything else of a
-/// tap); other pixels get 0.
+/// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out`
+/// (other pixels get 0; a pixel without flux gets `(0, 0, 0, r_i)` without its normaliser
+/// being computed), and every pixel's edge texel (`math::density_gather::edge_texel`:
+/// depth and normal, the G-buffer's bits, or the not-a-receiver mark) to `edge`, which the
+/// gather passes read instead of three G-buffer planes a tap.
 #[derive(Clone, Copy, Debug)]
 pub struct GatherFootprint {
     /// Gather parameters (camera, `knn_photons`, `max_radius_px`, edge weights,
@@ -26,8 +28,9 @@ pub struct GatherFootprint {
     pub table: Buf<u32>,
     /// Per pixel `(F / W_row, radius)`: W per channel, pixels.
     pub out: ImageBuf,
-    /// Per pixel the radius alone (pixels; 0 for non-receivers).
-    pub radius: Buf<f32>,
+    /// Per pixel the edge texel `(view depth, world normal)` (scene units; -1 depth: not a
+    /// receiver).
+    pub edge: ImageBuf,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -40,7 +43,7 @@ const BINDINGS: &[Binding] = &[
     bind("photon_map2", Read),
     bind("table", Read),
     bind("out", ReadWrite),
-    bind("radius", ReadWrite),
+    bind("edge", ReadWrite),
 ];
 
 impl KernelDecl for GatherFootprint {
@@ -54,7 +57,7 @@ impl KernelDecl for GatherFootprint {
             .photon_map(&self.photon_map, n)?
             .buf("table", self.table, n * 4)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
-            .buf("radius", self.radius, n * 4)?;
+            .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?;
         Ok(Some(n))
     }
 }

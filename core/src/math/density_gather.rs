@@ -96,24 +96,14 @@ pub fn table_entry(table: &[u32], width: i32, bx0: i32, by0: i32, x: i32, y: i32
     }
 }
 
-/// Photons (clamped per pixel, see [`clamped_photon_count`]) in the window of half-width
-/// `half_width` around `(x, y)`, clipped to the image, and the window's pixel count. The
-/// table is summed per `block x block` block (one short scan per block row and column
-/// instead of one per image row, which took 0.9 ms at 1920x1080 on an H200), so a window
-/// adds the rectangles it covers in each of the (at most 2 x 2) blocks it overlaps, four
-/// reads each. Wrapping sums: exact for any window of fewer than 2^32 photons.
+/// Photons (clamped per pixel, see [`clamped_photon_count`]) in the rectangle
+/// `[x0, x1] x [y0, y1]` (inside the image, `x0 <= x1`, `y0 <= y1`). The table is summed
+/// per `block x block` block (one short scan per block row and column instead of one per
+/// image row, which took 0.9 ms at 1920x1080 on an H200), so a rectangle adds the parts
+/// it covers in each block it overlaps (at most 2 x 2 for the gather's windows), four
+/// reads each. Wrapping sums: exact for any rectangle of fewer than 2^32 photons.
 #[inline]
-pub fn window_photons(
-    table: &[u32],
-    w: i32,
-    h: i32,
-    block: i32,
-    x: i32,
-    y: i32,
-    half_width: i32,
-) -> (u32, u32) {
-    let (x0, y0) = ((x - half_width).max(0), (y - half_width).max(0));
-    let (x1, y1) = ((x + half_width).min(w - 1), (y + half_width).min(h - 1));
+pub fn rect_photons(table: &[u32], w: i32, block: i32, x0: i32, y0: i32, x1: i32, y1: i32) -> u32 {
     let mut count = 0u32;
     for by in y0 / block..=y1 / block {
         for bx in x0 / block..=x1 / block {
@@ -127,7 +117,77 @@ pub fn window_photons(
                 .wrapping_add(table_entry(table, w, bx0, by0, xa - 1, ya - 1));
         }
     }
+    count
+}
+
+/// Photons in the window of half-width `half_width` around `(x, y)`, clipped to the
+/// image ([`rect_photons`]), and the window's pixel count.
+#[inline]
+pub fn window_photons(
+    table: &[u32],
+    w: i32,
+    h: i32,
+    block: i32,
+    x: i32,
+    y: i32,
+    half_width: i32,
+) -> (u32, u32) {
+    let (x0, y0) = ((x - half_width).max(0), (y - half_width).max(0));
+    let (x1, y1) = ((x + half_width).min(w - 1), (y + half_width).min(h - 1));
+    let count = rect_photons(table, w, block, x0, y0, x1, y1);
     (count, ((x1 - x0 + 1) * (y1 - y0 + 1)) as u32)
+}
+
+/// Photons whose flux can reach pixel `(x, y)` in pass `axis` of `density_gather`, whose
+/// taps lie within `reach` pixels: those in the row segment `x +- reach` (axis 0), and in
+/// the square of half-width `reach` (axis 1, whose sources are the row pass's outputs,
+/// each the flux of its own row segment), clipped to the image. A deposit adds a photon
+/// to its pixel's count whenever it adds flux, so where this is 0 every source the pass
+/// would read holds no flux and the pixel's sum is exactly 0: the pass skips the pixel's
+/// taps (the dark part of the screen then costs one table lookup a pixel).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn reach_photons(
+    table: &[u32],
+    w: i32,
+    h: i32,
+    block: i32,
+    x: i32,
+    y: i32,
+    axis: u32,
+    reach: i32,
+) -> u32 {
+    let (x0, x1) = ((x - reach).max(0), (x + reach).min(w - 1));
+    let (y0, y1) = if axis == 0 {
+        (y, y)
+    } else {
+        ((y - reach).max(0), (y + reach).min(h - 1))
+    };
+    rect_photons(table, w, block, x0, y0, x1, y1)
+}
+
+/// Depth an edge texel holds for a pixel that is not a receiver (receivers' view depths
+/// are positive).
+pub const EDGE_TEXEL_NOT_RECEIVER: f32 = -1.0;
+
+/// A pixel's edge texel: what [`edge_weight`] reads of it, `(depth, normal)` (view depth
+/// in scene units, world-space unit normal), with depth [`EDGE_TEXEL_NOT_RECEIVER`] where
+/// the pixel is not a receiver. `gather_footprint` writes one per pixel so that the gather
+/// passes read one 16-byte texel a tap instead of three G-buffer planes; the values are
+/// the G-buffer's own bits.
+#[inline]
+pub fn edge_texel(receiver: bool, depth: f32, normal: [f32; 3]) -> [f32; 4] {
+    if receiver {
+        [depth, normal[0], normal[1], normal[2]]
+    } else {
+        [EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0]
+    }
+}
+
+/// Whether an edge texel is a receiver's ([`edge_texel`]).
+#[inline]
+pub fn edge_texel_is_receiver(t: &[f32; 4]) -> bool {
+    t[0] >= 0.0
 }
 
 /// k-NN radius (pixels): half the side of the square that holds `k` photons at the

@@ -1,9 +1,9 @@
 // Mirror of core/src/math/density_gather.rs (method and sources there) and
 // backend-opencl/kernels/common/density_gather.cl: the weights of the density-adaptive,
 // scatter-normalised caustic gather. A kernel that needs this file binds the G-buffer's
-// planes 0, 1 and 3 (`gbuffer0`, `gbuffer1`, `gbuffer3`, see gbuffer.wgsl). The summed-area table's functions (table_entry, window_photons,
-// footprint_radius) live in gather_footprint.wgsl, the one kernel that binds the table,
-// and clamped_photon_count in photon_count_table.wgsl, which binds no G-buffer.
+// planes 0, 1 and 3 (`gbuffer0`, `gbuffer1`, `gbuffer3`, see gbuffer.wgsl). The summed-area table's functions are in photon_table.wgsl,
+// footprint_radius in gather_footprint.wgsl, and clamped_photon_count in
+// photon_count_table.wgsl, which binds no G-buffer.
 
 const MIN_WINDOW_HALF_WIDTH: i32 = 1;
 
@@ -58,6 +58,22 @@ fn load_gather_texel(i: u32) -> GatherTexel {
     t.depth = bitcast<f32>(gbuffer0[i].w);
     t.normal = bitcast<vec3<f32>>(gbuffer1[i].xyz);
     return t;
+}
+
+// Depth of a non-receiver's edge texel (receivers' view depths are positive).
+const EDGE_TEXEL_NOT_RECEIVER: f32 = -1.0;
+
+// A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
+// EDGE_TEXEL_NOT_RECEIVER elsewhere.
+fn edge_texel(t: GatherTexel) -> vec4<f32> {
+    if (t.receiver != 0u) {
+        return vec4<f32>(t.depth, t.normal);
+    }
+    return vec4<f32>(EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0);
+}
+
+fn edge_texel_is_receiver(t: vec4<f32>) -> bool {
+    return t.x >= 0.0;
 }
 
 // Normaliser of a source at pixel (x, y) with radius r: the sum of its weights over the

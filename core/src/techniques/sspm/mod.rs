@@ -55,12 +55,12 @@ struct PhotonBuffers {
 /// Device buffers of the filter (exist only when filtered caustics are needed).
 #[derive(Clone, Copy, Debug)]
 enum GatherBuffers {
-    /// The density gather: the photon counts' summed-area table and the image between
-    /// its two passes (the footprint pass writes into the filtered image, which the
-    /// last pass overwrites).
+    /// The density gather: the photon counts' summed-area table, the edge texels and the
+    /// image between its two passes (the footprint pass writes into the filtered image,
+    /// which the last pass overwrites).
     Density {
         table: Buf<u32>,
-        radius: Buf<f32>,
+        edge: ImageBuf,
         scratch: ImageBuf,
     },
     /// The bilateral gather: hit-distance tiles and the image between its two passes.
@@ -159,7 +159,7 @@ impl Sspm {
         let gather = needs.gather.then(|| match settings.filter {
             GatherFilter::Density => GatherBuffers::Density {
                 table: rec.create(pixels, "photon count table"),
-                radius: rec.create(pixels, "gather radius"),
+                edge: rec.create(pixels, "gather edge texels"),
                 scratch: rec.create(pixels, "gather scratch image"),
             },
             GatherFilter::Bilateral => GatherBuffers::Bilateral {
@@ -375,7 +375,7 @@ impl Sspm {
                 match g {
                     GatherBuffers::Density {
                         table,
-                        radius,
+                        edge,
                         scratch,
                     } => {
                         for params in [gather, columns] {
@@ -391,19 +391,21 @@ impl Sspm {
                             photon_map: p.photon_map,
                             table,
                             out: filtered,
-                            radius,
+                            edge,
                         });
                         rec.kernel(DensityGather {
                             params: gather,
                             gbuffer: self.gbuffer,
-                            radius,
+                            edge,
+                            table,
                             input: filtered,
                             out: scratch,
                         });
                         rec.kernel(DensityGather {
                             params: columns,
                             gbuffer: self.gbuffer,
-                            radius,
+                            edge,
+                            table,
                             input: scratch,
                             out: filtered,
                         });
