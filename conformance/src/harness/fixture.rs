@@ -19,6 +19,9 @@ use caustica_core::scene::Scene;
 use caustica_core::techniques::sspm::{FrameConstants, GatherFilter};
 use caustica_core::SspmSettings;
 
+/// An edge texel of the density gather (`math::density_gather::edge_texel`).
+pub type EdgeTexel = [f32; 4];
+
 fn backend_err(kernel: &str, b: &dyn Backend) -> impl FnOnce(BackendError) -> String {
     let name = b.name();
     let kernel = kernel.to_string();
@@ -273,7 +276,7 @@ impl Fixture {
         gbuffer: &[GBufferTexel],
         map: &[DepositTexel],
         table: &[u32],
-    ) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>), String> {
+    ) -> Result<(Vec<[f32; 4]>, Vec<EdgeTexel>), String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
         let m = rec.upload_photon_map(map);
@@ -385,7 +388,7 @@ pub struct ReferenceInputs {
     /// `gather_footprint`'s output: normalised flux and radius per pixel.
     pub footprints: Vec<[f32; 4]>,
     /// `gather_footprint`'s edge texels.
-    pub edge: Vec<[f32; 4]>,
+    pub edge: Vec<EdgeTexel>,
     /// The density gather's row pass of `footprints`.
     pub density_rows: Vec<[f32; 4]>,
     /// The filtered caustics with the fixture's filter (density: both passes of
