@@ -214,6 +214,8 @@ impl CpuBackend {
                 params,
                 photon_map,
                 table,
+                gbuffer,
+                edge,
             }) => {
                 if params.axis == 0 {
                     let rows = {
@@ -225,42 +227,42 @@ impl CpuBackend {
                     };
                     self.put(table.id, &rows)
                 } else {
+                    let edges = {
+                        let g = self.gbuffer(gbuffer)?;
+                        reserve_temporary::<[f32; 4]>(edge.len as u64, "the edge texels")?;
+                        density_gather::edge_texels(g, edge.len as usize)
+                    };
                     let t = self.get_mut(table.id)?.as_mut_slice(table.len)?;
                     density_gather::photon_count_columns(params, t);
-                    Ok(())
+                    self.put(edge.id, &edges)
                 }
             }
             Kernel::GatherFootprint(GatherFootprint {
                 params,
-                gbuffer,
                 photon_map,
                 table,
-                out,
                 edge,
+                out,
             }) => {
-                let g = self.gbuffer(gbuffer)?;
                 let m = self.photon_map(photon_map)?;
                 let t = get(table.id)?.as_slice(table.len)?;
-                // the footprint image and the edge texels: 32 bytes a pixel
-                reserve_temporary::<[f32; 8]>(out.len as u64, "the gather footprints")?;
-                let (img, edges) = density_gather::gather_footprint(params, g, m, t);
-                self.put(out.id, &img)?;
-                self.put(edge.id, &edges)
+                let e = get(edge.id)?.as_slice(edge.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
+                let img = density_gather::gather_footprint(params, e, m, t);
+                self.put(out.id, &img)
             }
             Kernel::DensityGather(DensityGather {
                 params,
                 gbuffer,
                 edge,
-                table,
                 input,
                 out,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let e = get(edge.id)?.as_slice(edge.len)?;
-                let t = get(table.id)?.as_slice(table.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = density_gather::density_gather(params, g, e, t, i);
+                let img = density_gather::density_gather(params, g, e, i);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {

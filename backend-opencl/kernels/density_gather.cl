@@ -3,24 +3,26 @@
 // density_gather.rs). Mirror of backend-cpu/src/kernels/density_gather.rs.
 
 __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__global const),
-                             __global const float4* edge, __global const uint* table,
-                             __global const float4* input, __global float4* out) {
+                             __global const float4* edge, __global const float4* input,
+                             __global float4* out) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
-    int j = (int)get_global_id(0);
-    if (j >= w * h) return;
+    int x, y;
+    if (p->axis == 0u) {
+        int i = (int)get_global_id(0);
+        if (i >= w * h) return;
+        x = i % w;
+        y = i / w;
+    } else if (!column_pass_pixel((uint)get_global_id(0), (uint)w, (uint)h, &x, &y)) {
+        return;
+    }
+    int j = y * w + x;
     float4 ej = edge[j];
     if (!edge_texel_is_receiver(ej)) {
         out[j] = (float4)(0.0f);
         return;
     }
-    int x = j % w, y = j / w;
     int reach = (int)p->max_radius_px;
     float r = input[j].w;
-    float4 dark = (float4)(0.0f, 0.0f, 0.0f, p->axis == 0u ? r : 0.0f);
-    if (reach_photons(table, w, h, (int)p->table_block, x, y, p->axis, reach) == 0u) {
-        out[j] = dark;
-        return;
-    }
     float3 sum = (float3)(0.0f);
     for (int d = -reach; d <= reach; d++) {
         int qx = p->axis == 0u ? x + d : x;
@@ -35,17 +37,16 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         if (ws == 0.0f) continue;
         float4 eq = edge[q];
         if (!edge_texel_is_receiver(eq)) continue;
-        float wgt = ws * edge_weight(eq.x, eq.yzw, ej.x, ej.yzw, p->sigma_depth,
-                                     p->normal_power);
+        float wgt = ws * edge_weight_of(p, eq, ej);
         sum += wgt * s.xyz;
     }
     // (flux and weights are >= 0: a sum without a positive channel is 0)
     if (!(sum.x > 0.0f || sum.y > 0.0f || sum.z > 0.0f)) {
-        out[j] = dark;
+        out[j] = (float4)(0.0f, 0.0f, 0.0f, p->axis == 0u ? r : 0.0f);
         return;
     }
     if (p->axis == 0u) {
-        out[j] = (float4)(sum / gather_normaliser(p, GATHER_GBUFFER_ARGS, x, y, r, 1u), r);
+        out[j] = (float4)(sum / gather_normaliser(p, edge, x, y, r, 1u), r);
     } else {
         // 000 Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
         GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, (uint)j);

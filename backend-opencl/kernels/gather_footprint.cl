@@ -3,15 +3,12 @@
 // backend-cpu/src/kernels/density_gather.rs.
 
 __kernel void gather_footprint(__global const GatherParams* p,
-                               GATHER_GBUFFER_PARAMS(__global const),
                                PHOTON_MAP_PARAMS(__global const), __global const uint* table,
-                               __global float4* out, __global float4* edge) {
+                               __global const float4* edge, __global float4* out) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int i = (int)get_global_id(0);
     if (i >= w * h) return;
-    GatherTexel gi = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)i);
-    edge[i] = edge_texel(gi);
-    if (gi.receiver == 0u) {
+    if (!edge_texel_is_receiver(edge[i])) {
         out[i] = (float4)(0.0f);
         return;
     }
@@ -30,6 +27,6 @@ __kernel void gather_footprint(__global const GatherParams* p,
         out[i] = (float4)(0.0f, 0.0f, 0.0f, r);
         return;
     }
-    float inv = 1.0f / gather_normaliser(p, GATHER_GBUFFER_ARGS, x, y, r, 0u);
+    float inv = 1.0f / gather_normaliser(p, edge, x, y, r, 0u);
     out[i] = (float4)(f.x * inv, f.y * inv, f.z * inv, r);
 }

@@ -2,10 +2,11 @@
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-cpu/src/kernels/density_gather.rs. Axis 0: a thread per row and block; 1: a
 // thread per column and block, in place. Wrapping uint sums: exact, the same bits on
-// every backend.
+// every backend. Axis 1 also writes every pixel's edge texel.
 
 __kernel void photon_count_table(__global const GatherParams* p,
-                                 PHOTON_MAP_PARAMS(__global const), __global uint* table) {
+                                 PHOTON_MAP_PARAMS(__global const), __global uint* table,
+                                 GATHER_GBUFFER_PARAMS(__global const), __global float4* edge) {
     uint w = p->camera.width, h = p->camera.height, b = p->table_block;
     uint t = get_global_id(0);
     if (p->axis == 0u) {
@@ -31,6 +32,7 @@ __kernel void photon_count_table(__global const GatherParams* p,
         for (uint y = y0; y < min(y0 + b, h); y++) {
             sum += table[y * w + x];
             table[y * w + x] = sum;
+            edge[y * w + x] = edge_texel(load_gather_texel(GATHER_GBUFFER_ARGS, y * w + x));
         }
     }
 }

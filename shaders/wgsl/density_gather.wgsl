@@ -1,4 +1,4 @@
-// needs: types vector optics footprint scene gbuffer photon_table density_gather
+// needs: types vector optics footprint scene gbuffer density_gather
 // density_gather: one direction of the scatter-normalised, density-adaptive caustic
 // gather (core/src/math/density_gather.rs; the contract in core/src/kernels/
 // density_gather.rs). Mirror of backend-opencl/kernels/density_gather.cl and
@@ -10,32 +10,39 @@
 @group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
 @group(0) @binding(5) var<storage, read> edge: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> table: array<u32>;
-@group(0) @binding(7) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
 
 fn density_gather(index: u32) {
     let p = params;
     let w = i32(p.camera.width);
     let h = i32(p.camera.height);
-    let j = i32(index);
-    if (j >= w * h) {
-        return;
+    var x: i32;
+    var y: i32;
+    if (p.axis == 0u) {
+        let i = i32(index);
+        if (i >= w * h) {
+            return;
+        }
+        x = i % w;
+        y = i / w;
+    } else {
+        let c = column_pass_pixel(index, p.camera.width);
+        if (c.x >= p.camera.width || c.y >= p.camera.height) {
+            return;
+        }
+        x = i32(c.x);
+        y = i32(c.y);
     }
+    let j = y * w + x;
     let ej = edge[j];
     if (!edge_texel_is_receiver(ej)) {
         out[j] = vec4<f32>(0.0);
         return;
     }
-    let x = j % w;
-    let y = j / w;
     let reach = i32(p.max_radius_px);
     let r = input[j].w;
     let dark = vec4<f32>(0.0, 0.0, 0.0, select(0.0, r, p.axis == 0u));
-    if (reach_photons(w, h, i32(p.table_block), x, y, p.axis, reach) == 0u) {
-        out[j] = dark;
-        return;
-    }
     var sum = vec3<f32>(0.0);
     for (var d = -reach; d <= reach; d++) {
         let qx = select(x, x + d, p.axis == 0u);
@@ -58,7 +65,7 @@ fn density_gather(index: u32) {
         if (!edge_texel_is_receiver(eq)) {
             continue;
         }
-        let wgt = ws * edge_weight(eq.x, eq.yzw, ej.x, ej.yzw, p.sigma_depth, p.normal_power);
+        let wgt = ws * edge_weight_of(p, eq, ej);
         sum += wgt * s.xyz;
     }
     // (flux and weights are >= 0: a sum without a positive channel is 0)

@@ -5,35 +5,35 @@
 // density_gather.rs.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
-@group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;
-@group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
-@group(0) @binding(3) var<storage, read> gbuffer3: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> photon_map0: array<u32>;
-@group(0) @binding(5) var<storage, read> photon_map1: array<u32>;
-@group(0) @binding(6) var<storage, read> photon_map2: array<u32>;
-@group(0) @binding(7) var<storage, read> table: array<u32>;
-@group(0) @binding(8) var<storage, read_write> out: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read_write> edge: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> photon_map0: array<u32>;
+@group(0) @binding(2) var<storage, read> photon_map1: array<u32>;
+@group(0) @binding(3) var<storage, read> photon_map2: array<u32>;
+@group(0) @binding(4) var<storage, read> table: array<u32>;
+@group(0) @binding(5) var<storage, read> edge: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
 
 // The gather radius (pixels) at (x, y): smallest window holding k photons, capped.
 fn footprint_radius(w: i32, h: i32, block: i32, x: i32, y: i32, k: u32,
                     max_radius_px: u32) -> f32 {
     let max_radius = max(i32(max_radius_px), MIN_WINDOW_HALF_WIDTH);
-    if (window_photons(w, h, block, x, y, max_radius).x < k) {
+    // (count, pixels) of the window at hi, the smallest half-width known to hold k
+    var at_hi = window_photons(w, h, block, x, y, max_radius);
+    if (at_hi.x < k) {
         return f32(max_radius);
     }
     var lo = MIN_WINDOW_HALF_WIDTH;
     var hi = max_radius;
     while (lo < hi) {
         let mid = (lo + hi) / 2;
-        if (window_photons(w, h, block, x, y, mid).x >= k) {
+        let c = window_photons(w, h, block, x, y, mid);
+        if (c.x >= k) {
             hi = mid;
+            at_hi = c;
         } else {
             lo = mid + 1;
         }
     }
-    let c = window_photons(w, h, block, x, y, lo);
-    return min(knn_radius(k, c.y, c.x), f32(max_radius));
+    return min(knn_radius(k, at_hi.y, at_hi.x), f32(max_radius));
 }
 
 fn gather_footprint(index: u32) {
@@ -44,9 +44,7 @@ fn gather_footprint(index: u32) {
     if (i >= w * h) {
         return;
     }
-    let gi = load_gather_texel(u32(i));
-    edge[i] = edge_texel(gi);
-    if (gi.receiver == 0u) {
+    if (!edge_texel_is_receiver(edge[i])) {
         out[i] = vec4<f32>(0.0);
         return;
     }

@@ -3,13 +3,18 @@
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/photon_count_table.cl and backend-cpu/src/kernels/
 // density_gather.rs. Axis 0: a thread per row and block; 1: a thread per column and
-// block, in place. Wrapping u32 sums: exact, the same bits on every backend.
+// block, in place, and every pixel's edge texel. Wrapping u32 sums: exact, the same bits
+// on every backend.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> photon_map0: array<u32>;
 @group(0) @binding(2) var<storage, read> photon_map1: array<u32>;
 @group(0) @binding(3) var<storage, read> photon_map2: array<u32>;
 @group(0) @binding(4) var<storage, read_write> table: array<u32>;
+@group(0) @binding(5) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(6) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(7) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(8) var<storage, read_write> edge: array<vec4<f32>>;
 
 const COUNT_CLAMP_PER_K: u32 = 9u;
 
@@ -18,6 +23,34 @@ fn clamped_photon_count(lo: u32, hi: u32, k: u32) -> u32 {
     let clamp = COUNT_CLAMP_PER_K * k;
     return select(min(lo, clamp), clamp, hi != 0u);
 }
+
+// What the gather needs of a G-buffer texel (planes 0, 1 and 3 only).
+struct GatherTexel {
+    receiver: u32,
+    depth: f32,
+    normal: vec3<f32>,
+}
+
+fn load_gather_texel(i: u32) -> GatherTexel {
+    var t: GatherTexel;
+    t.receiver = gbuffer3[i].w & GBUFFER_RECEIVER;
+    t.depth = bitcast<f32>(gbuffer0[i].w);
+    t.normal = bitcast<vec3<f32>>(gbuffer1[i].xyz);
+    return t;
+}
+
+// Depth of a non-receiver's edge texel (receivers' view depths are positive).
+const EDGE_TEXEL_NOT_RECEIVER: f32 = -1.0;
+
+// A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
+// EDGE_TEXEL_NOT_RECEIVER elsewhere.
+fn edge_texel(t: GatherTexel) -> vec4<f32> {
+    if (t.receiver != 0u) {
+        return vec4<f32>(t.depth, t.normal);
+    }
+    return vec4<f32>(EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0);
+}
+
 
 fn photon_count_table(t: u32) {
     let p = params;
@@ -51,6 +84,7 @@ fn photon_count_table(t: u32) {
         for (var y = y0; y < min(y0 + b, h); y++) {
             sum += table[y * w + x];
             table[y * w + x] = sum;
+            edge[y * w + x] = edge_texel(load_gather_texel(y * w + x));
         }
     }
 }

@@ -7,7 +7,7 @@ use caustica_core::device::layout::{
 };
 use caustica_core::math::density_gather::{
     clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight, footprint_radius,
-    footprint_weight, join_u64_wide, reach_photons,
+    footprint_weight, join_u64_wide,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
@@ -51,16 +51,27 @@ pub fn photon_count_columns(p: &GatherParams, table: &mut [u32]) {
     }
 }
 
+/// The rest of axis 1 of `photon_count_table`: every pixel's edge texel.
+pub fn edge_texels(g: GBufferView, pixels: usize) -> Vec<[f32; 4]> {
+    (0..pixels)
+        .into_par_iter()
+        .map(|i| {
+            let gi = g.load_gbuffer(i);
+            edge_texel(is_receiver(&gi), gi.depth, gi.normal)
+        })
+        .collect()
+}
+
 fn is_receiver(g: &GBufferTexel) -> bool {
     g.flags & gbuffer_flags::RECEIVER != 0
 }
 
 /// Normaliser of a source at `i` with radius `r`: the sum of its weights over the
 /// receivers of its row (`axis` 0) or column (1) inside the image (itself included).
-fn normaliser(p: &GatherParams, g: &GBufferView, i: i32, r: f32, axis: u32) -> f32 {
+fn normaliser(p: &GatherParams, edge: &[[f32; 4]], i: i32, r: f32, axis: u32) -> f32 {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
     let (x, y) = (i % w, i / w);
-    let gi = g.load_gbuffer(i as usize);
+    let ei = &edge[i as usize];
     // taps beyond the radius weigh 0: the loop stops there
     let reach = ((r + 0.5).ceil() as i32).min(p.max_radius_px as i32);
     let mut sum = 0.0f32;
@@ -69,39 +80,41 @@ fn normaliser(p: &GatherParams, g: &GBufferView, i: i32, r: f32, axis: u32) -> f
         if qx < 0 || qy < 0 || qx >= w || qy >= h {
             continue;
         }
-        let gq = g.load_gbuffer((qy * w + qx) as usize);
-        if !is_receiver(&gq) {
+        let eq = &edge[(qy * w + qx) as usize];
+        if !edge_texel_is_receiver(eq) {
             continue;
         }
-        sum += footprint_weight(d, r)
-            * edge_weight(
-                gi.depth,
-                gi.normal,
-                gq.depth,
-                gq.normal,
-                p.sigma_depth,
-                p.normal_power,
-            );
+        sum += footprint_weight(d, r) * edge_weight_of(p, ei, eq);
     }
     sum
 }
 
+/// [`edge_weight`] between two edge texels.
+fn edge_weight_of(p: &GatherParams, a: &[f32; 4], b: &[f32; 4]) -> f32 {
+    edge_weight(
+        a[0],
+        [a[1], a[2], a[3]],
+        b[0],
+        [b[1], b[2], b[3]],
+        p.sigma_depth,
+        p.normal_power,
+    )
+}
+
 /// `gather_footprint`: per receiver pixel `(F / W_row, r)` (W per channel, pixels), 0
-/// elsewhere; and every pixel's edge texel.
+/// elsewhere.
 pub fn gather_footprint(
     p: &GatherParams,
-    g: GBufferView,
+    edge: &[[f32; 4]],
     map: PhotonMapView,
     table: &[u32],
-) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
     (0..w * h)
         .into_par_iter()
         .map(|i| {
-            let gi = g.load_gbuffer(i as usize);
-            let edge = edge_texel(is_receiver(&gi), gi.depth, gi.normal);
-            if !is_receiver(&gi) {
-                return ([0.0; 4], edge);
+            if !edge_texel_is_receiver(&edge[i as usize]) {
+                return [0.0; 4];
             }
             let r = footprint_radius(
                 table,
@@ -118,12 +131,12 @@ pub fn gather_footprint(
             let f = [flux(0), flux(1), flux(2)];
             if f == [0.0; 3] {
                 // no flux to spread: no normaliser to compute
-                return ([0.0, 0.0, 0.0, r], edge);
+                return [0.0, 0.0, 0.0, r];
             }
-            let inv = 1.0 / normaliser(p, &g, i, r, 0);
-            ([f[0] * inv, f[1] * inv, f[2] * inv, r], edge)
+            let inv = 1.0 / normaliser(p, edge, i, r, 0);
+            [f[0] * inv, f[1] * inv, f[2] * inv, r]
         })
-        .unzip()
+        .collect()
 }
 
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
@@ -132,7 +145,6 @@ pub fn density_gather(
     p: &GatherParams,
     g: GBufferView,
     edge: &[[f32; 4]],
-    table: &[u32],
     input: &[[f32; 4]],
 ) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
@@ -146,11 +158,6 @@ pub fn density_gather(
             }
             let (x, y) = (j % w, j / w);
             let r = input[j as usize][3];
-            let dark = [0.0, 0.0, 0.0, if p.axis == 0 { r } else { 0.0 }];
-            let block = p.table_block as i32;
-            if reach_photons(table, w, h, block, x, y, p.axis, reach) == 0 {
-                return dark;
-            }
             let mut sum = Vec3::ZERO;
             for d in -reach..=reach {
                 let (qx, qy) = if p.axis == 0 { (x + d, y) } else { (x, y + d) };
@@ -172,23 +179,14 @@ pub fn density_gather(
                 if !edge_texel_is_receiver(eq) {
                     continue;
                 }
-                let wgt = ws
-                    * edge_weight(
-                        eq[0],
-                        [eq[1], eq[2], eq[3]],
-                        ej[0],
-                        [ej[1], ej[2], ej[3]],
-                        p.sigma_depth,
-                        p.normal_power,
-                    );
-                sum += wgt * Vec3::from_slice(&s[..3]);
+                sum += ws * edge_weight_of(p, eq, ej) * Vec3::from_slice(&s[..3]);
             }
             // (flux and weights are >= 0: a sum without a positive channel is 0)
             if !(sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0) {
-                return dark;
+                return [0.0, 0.0, 0.0, if p.axis == 0 { r } else { 0.0 }];
             }
             if p.axis == 0 {
-                let s = sum / normaliser(p, &g, j, r, 1);
+                let s = sum / normaliser(p, edge, j, r, 1);
                 [s.x, s.y, s.z, r]
             } else {
                 // 000 Eq. 5: L = (albedo / pi) Phi / A

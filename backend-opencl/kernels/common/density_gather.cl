@@ -19,11 +19,13 @@ inline uint table_entry(__global const uint* table, int width, int bx0, int by0,
 
 // Photons in the rectangle [x0, x1] x [y0, y1] inside the image: the parts it covers in
 // each block it overlaps, four reads each. Wrapping uint sums, exact (see the CPU doc).
+// `block` is a power of two: block indices are shifts of the (non-negative) coordinates.
 inline uint rect_photons(__global const uint* table, int w, int block, int x0, int y0,
                          int x1, int y1) {
+    int shift = 31 - (int)clz((uint)block);
     uint count = 0u;
-    for (int by = y0 / block; by <= y1 / block; by++) {
-        for (int bx = x0 / block; bx <= x1 / block; bx++) {
+    for (int by = y0 >> shift; by <= y1 >> shift; by++) {
+        for (int bx = x0 >> shift; bx <= x1 >> shift; bx++) {
             int bx0 = bx * block, by0 = by * block;
             int xa = max(x0, bx0), xb = min(x1, bx0 + block - 1);
             int ya = max(y0, by0), yb = min(y1, by0 + block - 1);
@@ -46,16 +48,6 @@ inline uint2 window_photons(__global const uint* table, int w, int h, int block,
                    (uint)((x1 - x0 + 1) * (y1 - y0 + 1)));
 }
 
-// Photons whose flux can reach (x, y) in density_gather's pass `axis`: the row segment
-// x +- reach (axis 0), the square of half-width reach (1), clipped to the image.
-inline uint reach_photons(__global const uint* table, int w, int h, int block, int x, int y,
-                          uint axis, int reach) {
-    int x0 = max(x - reach, 0), x1 = min(x + reach, w - 1);
-    int y0 = axis == 0u ? y : max(y - reach, 0);
-    int y1 = axis == 0u ? y : min(y + reach, h - 1);
-    return rect_photons(table, w, block, x0, y0, x1, y1);
-}
-
 // k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
 inline float knn_radius(uint k, uint pixels, uint photons) {
     return 0.5f * sqrt((float)k * (float)pixels / (float)photons);
@@ -65,18 +57,21 @@ inline float knn_radius(uint k, uint pixels, uint photons) {
 inline float footprint_radius(__global const uint* table, int w, int h, int block, int x,
                               int y, uint k, uint max_radius_px) {
     int max_radius = max((int)max_radius_px, MIN_WINDOW_HALF_WIDTH);
-    if (window_photons(table, w, h, block, x, y, max_radius).x < k) return (float)max_radius;
+    // (count, pixels) of the window at hi, the smallest half-width known to hold k
+    uint2 at_hi = window_photons(table, w, h, block, x, y, max_radius);
+    if (at_hi.x < k) return (float)max_radius;
     int lo = MIN_WINDOW_HALF_WIDTH, hi = max_radius;
     while (lo < hi) {
         int mid = (lo + hi) / 2;
-        if (window_photons(table, w, h, block, x, y, mid).x >= k) {
+        uint2 c = window_photons(table, w, h, block, x, y, mid);
+        if (c.x >= k) {
             hi = mid;
+            at_hi = c;
         } else {
             lo = mid + 1;
         }
     }
-    uint2 c = window_photons(table, w, h, block, x, y, lo);
-    return fmin(knn_radius(k, c.y, c.x), (float)max_radius);
+    return fmin(knn_radius(k, at_hi.y, at_hi.x), (float)max_radius);
 }
 
 // Pixel-integrated 1-D Epanechnikov weight (unit integral): (3/4) (G(u_b) - G(u_a)),
@@ -141,13 +136,17 @@ inline float4 edge_texel(GatherTexel t) {
 
 inline bool edge_texel_is_receiver(float4 t) { return t.x >= 0.0f; }
 
+// Edge weight between two edge texels.
+inline float edge_weight_of(__global const GatherParams* p, float4 a, float4 b) {
+    return edge_weight(a.x, a.yzw, b.x, b.yzw, p->sigma_depth, p->normal_power);
+}
+
 // Normaliser of a source at pixel (x, y) with radius r: the sum of its weights over the
 // receivers of its row (axis 0) or column (1) inside the image.
-inline float gather_normaliser(__global const GatherParams* p,
-                               GATHER_GBUFFER_PARAMS(__global const), int x, int y, float r,
-                               uint axis) {
+inline float gather_normaliser(__global const GatherParams* p, __global const float4* edge,
+                               int x, int y, float r, uint axis) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
-    GatherTexel gi = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)(y * w + x));
+    float4 ei = edge[y * w + x];
     // taps beyond the radius weigh 0: the loop stops there
     int reach = min((int)ceil(r + 0.5f), (int)p->max_radius_px);
     float sum = 0.0f;
@@ -155,11 +154,23 @@ inline float gather_normaliser(__global const GatherParams* p,
         int qx = axis == 0u ? x + d : x;
         int qy = axis == 0u ? y : y + d;
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-        GatherTexel gq = load_gather_texel(GATHER_GBUFFER_ARGS, (uint)(qy * w + qx));
-        if (gq.receiver == 0u) continue;
-        sum += footprint_weight(d, r) *
-               edge_weight(gi.depth, gi.normal, gq.depth, gq.normal, p->sigma_depth,
-                           p->normal_power);
+        float4 eq = edge[qy * w + qx];
+        if (!edge_texel_is_receiver(eq)) continue;
+        sum += footprint_weight(d, r) * edge_weight_of(p, ei, eq);
     }
     return sum;
+}
+
+// The pixel thread t of density_gather's column pass takes: 8 x 8 tiles, 64 threads
+// each (core's column_pass_pixel); false for the padding of edge tiles.
+#define COLUMN_PASS_TILE 8u
+inline bool column_pass_pixel(uint t, uint w, uint h, int* x, int* y) {
+    uint tile = t / (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
+    uint l = t % (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
+    uint tiles_x = (w + COLUMN_PASS_TILE - 1u) / COLUMN_PASS_TILE;
+    uint px = (tile % tiles_x) * COLUMN_PASS_TILE + l % COLUMN_PASS_TILE;
+    uint py = (tile / tiles_x) * COLUMN_PASS_TILE + l / COLUMN_PASS_TILE;
+    *x = (int)px;
+    *y = (int)py;
+    return px < w && py < h;
 }

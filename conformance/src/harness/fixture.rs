@@ -251,11 +251,14 @@ impl Fixture {
     pub fn run_count_table(
         &self,
         b: &mut dyn Backend,
+        gbuffer: &[GBufferTexel],
         map: &[DepositTexel],
-    ) -> Result<Vec<u32>, String> {
+    ) -> Result<(Vec<u32>, Vec<EdgeTexel>), String> {
         let mut rec = Recording::new();
+        let g = rec.upload_gbuffer(gbuffer);
         let m = rec.upload_photon_map(map);
         let table = rec.create(self.pixels(), "photon count table");
+        let edge = rec.create(self.pixels(), "gather edge texels");
         for axis in 0..2 {
             rec.kernel(Kernel::PhotonCountTable(PhotonCountTable {
                 params: self
@@ -263,37 +266,36 @@ impl Fixture {
                     .gather_params(self.camera, &self.settings, axis),
                 photon_map: m,
                 table,
+                gbuffer: g,
+                edge,
             }));
         }
-        run_and_free(b, "photon_count_table", &rec, |b| read_buf(b, table))
+        run_and_free(b, "photon_count_table", &rec, |b| {
+            Ok((read_buf(b, table)?, read_buf(b, edge)?))
+        })
     }
 
-    /// Runs `gather_footprint` on `b`: the normalised flux and radius per pixel, and the
-    /// radius buffer.
+    /// Runs `gather_footprint` on `b`: the normalised flux and radius per pixel.
     pub fn run_footprint(
         &self,
         b: &mut dyn Backend,
-        gbuffer: &[GBufferTexel],
+        edge: &[EdgeTexel],
         map: &[DepositTexel],
         table: &[u32],
-    ) -> Result<(Vec<[f32; 4]>, Vec<EdgeTexel>), String> {
+    ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
-        let g = rec.upload_gbuffer(gbuffer);
+        let e = rec.upload(edge, "gather edge texels");
         let m = rec.upload_photon_map(map);
         let t = rec.upload(table, "photon count table");
         let out = rec.create(self.pixels(), "footprints");
-        let edge = rec.create(self.pixels(), "gather edge texels");
         rec.kernel(Kernel::GatherFootprint(GatherFootprint {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
-            gbuffer: g,
             photon_map: m,
             table: t,
+            edge: e,
             out,
-            edge,
         }));
-        run_and_free(b, "gather_footprint", &rec, |b| {
-            Ok((read_buf(b, out)?, read_buf(b, edge)?))
-        })
+        run_and_free(b, "gather_footprint", &rec, |b| read_buf(b, out))
     }
 
     /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b`.
@@ -302,14 +304,12 @@ impl Fixture {
         b: &mut dyn Backend,
         axis: u32,
         gbuffer: &[GBufferTexel],
-        edge: &[[f32; 4]],
-        table: &[u32],
+        edge: &[EdgeTexel],
         input: &[[f32; 4]],
     ) -> Result<Vec<[f32; 4]>, String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
         let e = rec.upload(edge, "gather edge texels");
-        let t = rec.upload(table, "photon count table");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
         rec.kernel(Kernel::DensityGather(DensityGather {
@@ -318,7 +318,6 @@ impl Fixture {
                 .gather_params(self.camera, &self.settings, axis),
             gbuffer: g,
             edge: e,
-            table: t,
             input: i,
             out,
         }));
@@ -387,7 +386,7 @@ pub struct ReferenceInputs {
     pub table: Vec<u32>,
     /// `gather_footprint`'s output: normalised flux and radius per pixel.
     pub footprints: Vec<[f32; 4]>,
-    /// `gather_footprint`'s edge texels.
+    /// `photon_count_table`'s edge texels.
     pub edge: Vec<EdgeTexel>,
     /// The density gather's row pass of `footprints`.
     pub density_rows: Vec<[f32; 4]>,
@@ -408,13 +407,11 @@ impl ReferenceInputs {
             photon_map, raw, ..
         } = fx.run_deposit(r, &gbuffer, &photons)?;
         let tiles = fx.run_tiles(r, &photon_map)?;
-        let table = fx.run_count_table(r, &photon_map)?;
-        let (footprints, edge) = fx.run_footprint(r, &gbuffer, &photon_map, &table)?;
-        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &edge, &table, &footprints)?;
+        let (table, edge) = fx.run_count_table(r, &gbuffer, &photon_map)?;
+        let footprints = fx.run_footprint(r, &edge, &photon_map, &table)?;
+        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &edge, &footprints)?;
         let filtered = match fx.settings.filter {
-            GatherFilter::Density => {
-                fx.run_density_gather(r, 1, &gbuffer, &edge, &table, &density_rows)?
-            }
+            GatherFilter::Density => fx.run_density_gather(r, 1, &gbuffer, &edge, &density_rows)?,
             GatherFilter::Bilateral => {
                 let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
                 fx.run_gather(r, 1, &gbuffer, &tiles, &half)?

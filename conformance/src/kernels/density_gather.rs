@@ -1,6 +1,6 @@
 //! The density gather's three kernels on the reference's inputs, in one verdict:
-//! `photon_count_table` (the summed-area table: integer sums, bitwise equal),
-//! `gather_footprint` (radius, normalised flux and the edge texels, bitwise) and both `density_gather` passes,
+//! `photon_count_table` (the summed-area table, integer sums, and the edge texels, copies: bitwise equal),
+//! `gather_footprint` (radius and normalised flux) and both `density_gather` passes,
 //! each within [`DENSITY_GATHER_REL`] of the magnitudes it gathers (the argument is
 //! there), the radius it passes through bitwise equal.
 
@@ -84,9 +84,10 @@ pub fn check_density_gather(
     let cam = fx.camera;
     let reach = fx.settings.max_radius_px as i32;
 
-    // integer sums of the same counts: bitwise
-    let ta = fx.run_count_table(r, &inputs.photon_map)?;
-    let tb = fx.run_count_table(c, &inputs.photon_map)?;
+    // integer sums of the same counts: bitwise; the edge texels are copies of the
+    // G-buffer's bits (or the not-a-receiver mark): bitwise
+    let (ta, ea) = fx.run_count_table(r, &inputs.gbuffer, &inputs.photon_map)?;
+    let (tb, eb) = fx.run_count_table(c, &inputs.gbuffer, &inputs.photon_map)?;
     let differ = ta.iter().zip(&tb).filter(|(a, b)| a != b).count();
     v.check(differ == 0, || {
         format!(
@@ -94,19 +95,17 @@ pub fn check_density_gather(
             ta.len()
         )
     });
-
-    let (fa, ea) = fx.run_footprint(r, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
-    let (fb, eb) = fx.run_footprint(c, &inputs.gbuffer, &inputs.photon_map, &inputs.table)?;
-    // the edge texels are copies of the G-buffer's bits (or the not-a-receiver mark):
-    // bitwise equal
     let differ = ea
         .iter()
         .zip(&eb)
         .filter(|(a, b)| a.map(f32::to_bits) != b.map(f32::to_bits))
         .count();
     v.check(differ == 0, || {
-        format!("gather_footprint's edge texels differ on {differ} pixels")
+        format!("photon_count_table's edge texels differ on {differ} pixels")
     });
+
+    let fa = fx.run_footprint(r, &inputs.edge, &inputs.photon_map, &inputs.table)?;
+    let fb = fx.run_footprint(c, &inputs.edge, &inputs.photon_map, &inputs.table)?;
     // the radius is ~7 ulp from the same integers: compared as a channel
     let radius: Vec<[f32; 4]> = fa.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
     let radius_b: Vec<[f32; 4]> = fb.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
@@ -133,9 +132,9 @@ pub fn check_density_gather(
         } else {
             &inputs.density_rows
         };
-        let (g, e, t) = (&inputs.gbuffer, &inputs.edge, &inputs.table);
-        let a = fx.run_density_gather(r, axis, g, e, t, input)?;
-        let b = fx.run_density_gather(c, axis, g, e, t, input)?;
+        let (g, e) = (&inputs.gbuffer, &inputs.edge);
+        let a = fx.run_density_gather(r, axis, g, e, input)?;
+        let b = fx.run_density_gather(c, axis, g, e, input)?;
         // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass
         let to_output = |i: usize, ch: usize| -> f32 {
             if axis == 0 {

@@ -3,17 +3,17 @@
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
+use crate::device::handle::{GBufferPlanes, ImageBuf};
 use crate::device::layout::GatherParams;
+use crate::math::density_gather::column_pass_threads;
 
 /// One pass of the separable gather. Every receiver pixel `j` sums, over the receivers
 /// `i` of its row (`params.axis` 0) or column (1) inside the image,
 /// `input[i].rgb * footprint_weight(j - i, input[i].a) * edge_weight(i, j)`: the sources'
 /// normalised flux spread with each source's own radius (a source without flux is
-/// skipped before its weights are computed, and a pixel whose reach holds no photon in
-/// the count table, `math::density_gather::reach_photons`, skips its taps: its sum is 0).
-/// Edge weights read the edge texels `gather_footprint` wrote; pixel `j`'s own radius is
-/// `input[j].a`.
+/// skipped before its weights are computed). Edge weights read the edge texels
+/// `photon_count_table` wrote; pixel `j`'s own radius is `input[j].a`. The column pass
+/// hands pixels to threads in 8 x 8 tiles (`math::density_gather::column_pass_pixel`).
 ///
 /// - Axis 0 reads `gather_footprint`'s `(F / W_row, r)` and writes `(S_j / W_col(j), r_j)`,
 ///   where `W_col(j)` is pixel `j`'s normaliser over its column with its own radius: the
@@ -29,10 +29,8 @@ pub struct DensityGather {
     pub params: GatherParams,
     /// The frame's G-buffer (receiver flag, depth, normal, albedo).
     pub gbuffer: GBufferPlanes,
-    /// Every pixel's edge texel from `gather_footprint` (view depth, world normal).
+    /// Every pixel's edge texel from `photon_count_table` (view depth, world normal).
     pub edge: ImageBuf,
-    /// The photon-count table from `photon_count_table`.
-    pub table: Buf<u32>,
     /// Normalised flux and radius per pixel (W per channel; pixels).
     pub input: ImageBuf,
     /// Axis 0: normalised flux and radius; axis 1: caustic radiance and radius.
@@ -46,7 +44,6 @@ const BINDINGS: &[Binding] = &[
     bind("gbuffer2", Read),
     bind("gbuffer3", Read),
     bind("edge", Read),
-    bind("table", Read),
     bind("input", Read),
     bind("out", ReadWrite),
 ];
@@ -60,9 +57,12 @@ impl KernelDecl for DensityGather {
         a.params("params", &self.params)?
             .gbuffer(&self.gbuffer, n)?
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?
-            .buf("table", self.table, n * 4)?
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
-        Ok(Some(n))
+        Ok(Some(if self.params.axis == 1 {
+            column_pass_threads(c.width, c.height)
+        } else {
+            n
+        }))
     }
 }

@@ -3,7 +3,7 @@
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
+use crate::device::handle::{Buf, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::GatherParams;
 
 /// For every receiver pixel `i`: the radius `r_i` (pixels) of the smallest window holding
@@ -12,38 +12,31 @@ use crate::device::layout::GatherParams;
 /// divided by its row normaliser `W_i = sum_d footprint_weight(d, r_i) edge_weight(i, i+d)`
 /// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out`
 /// (other pixels get 0; a pixel without flux gets `(0, 0, 0, r_i)` without its normaliser
-/// being computed), and every pixel's edge texel (`math::density_gather::edge_texel`:
-/// depth and normal, the G-buffer's bits, or the not-a-receiver mark) to `edge`, which the
-/// gather passes read instead of three G-buffer planes a tap.
+/// being computed). Receivers, depths and normals come from the edge texels
+/// `photon_count_table` wrote.
 #[derive(Clone, Copy, Debug)]
 pub struct GatherFootprint {
     /// Gather parameters (camera, `knn_photons`, `max_radius_px`, edge weights,
     /// `flux_quantum`).
     pub params: GatherParams,
-    /// The frame's G-buffer (receiver flag, depth, normal: planes 0, 1 and 3 are bound).
-    pub gbuffer: GBufferPlanes,
     /// The screen-space photon map (flux sums).
     pub photon_map: PhotonMapPlanes,
     /// The summed-area table from `photon_count_table`.
     pub table: Buf<u32>,
     /// Per pixel `(F / W_row, radius)`: W per channel, pixels.
     pub out: ImageBuf,
-    /// Per pixel the edge texel `(view depth, world normal)` (scene units; -1 depth: not a
-    /// receiver).
+    /// Per pixel the edge texel from `photon_count_table`.
     pub edge: ImageBuf,
 }
 
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
-    bind("gbuffer0", Read),
-    bind("gbuffer1", Read),
-    bind("gbuffer3", Read),
     bind("photon_map0", Read),
     bind("photon_map1", Read),
     bind("photon_map2", Read),
     bind("table", Read),
+    bind("edge", Read),
     bind("out", ReadWrite),
-    bind("edge", ReadWrite),
 ];
 
 impl KernelDecl for GatherFootprint {
@@ -53,11 +46,10 @@ impl KernelDecl for GatherFootprint {
         let c = &self.params.camera;
         let n = texels(c.width, c.height);
         a.params("params", &self.params)?
-            .gather_gbuffer(&self.gbuffer, n)?
             .photon_map(&self.photon_map, n)?
             .buf("table", self.table, n * 4)?
-            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
-            .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?;
+            .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
         Ok(Some(n))
     }
 }

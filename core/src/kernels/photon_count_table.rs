@@ -1,9 +1,9 @@
 //! `photon_count_table`: summed-area table of the photon counts (the density gather's
 //! nearest-neighbour windows, see `crate::math::density_gather`).
 
-use super::{bind, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, PhotonMapPlanes};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::GatherParams;
 
 /// One direction of the blocked summed-area table of per-pixel photon counts clamped at
@@ -12,7 +12,11 @@ use crate::device::layout::GatherParams;
 /// thread per row and block writes `table[y][x] = sum count(x', y)` over `x'` from the
 /// block's left edge to `x`, from the photon map; 1: one thread per column and block
 /// turns the row sums into the table in place, `table[y][x] = sum table[y'][x]` over `y'`
-/// from the block's top edge to `y`.
+/// from the block's top edge to `y`, and writes every pixel's edge texel
+/// (`math::density_gather::edge_texel`: the G-buffer's depth and normal, or the
+/// not-a-receiver mark), which `gather_footprint` and `density_gather` read instead of
+/// three G-buffer planes a tap (written here, one pass ahead of its first reader, and with
+/// neighbouring threads on neighbouring pixels).
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonCountTable {
     /// Gather parameters (camera size, `knn_photons`, `axis`).
@@ -21,6 +25,12 @@ pub struct PhotonCountTable {
     pub photon_map: PhotonMapPlanes,
     /// The table, one `u32` per pixel, row-major.
     pub table: Buf<u32>,
+    /// The frame's G-buffer (receiver flag, depth, normal: planes 0, 1 and 3 are bound;
+    /// read by axis 1 only).
+    pub gbuffer: GBufferPlanes,
+    /// Per pixel the edge texel `(view depth, world normal)` (scene units; depth -1: not a
+    /// receiver); written by axis 1.
+    pub edge: ImageBuf,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -29,6 +39,10 @@ const BINDINGS: &[Binding] = &[
     bind("photon_map1", Read),
     bind("photon_map2", Read),
     bind("table", ReadWrite),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer3", Read),
+    bind("edge", ReadWrite),
 ];
 
 impl KernelDecl for PhotonCountTable {
@@ -39,7 +53,9 @@ impl KernelDecl for PhotonCountTable {
         let n = texels(c.width, c.height);
         a.params("params", &self.params)?
             .photon_map(&self.photon_map, n)?
-            .buf("table", self.table, n * 4)?;
+            .buf("table", self.table, n * 4)?
+            .gather_gbuffer(&self.gbuffer, n)?
+            .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?;
         let b = self.params.table_block.max(1);
         Ok(Some(if self.params.axis == 0 {
             c.height as u64 * c.width.div_ceil(b) as u64

@@ -102,11 +102,14 @@ pub fn table_entry(table: &[u32], width: i32, bx0: i32, by0: i32, x: i32, y: i32
 /// image row, which took 0.9 ms at 1920x1080 on an H200), so a rectangle adds the parts
 /// it covers in each block it overlaps (at most 2 x 2 for the gather's windows), four
 /// reads each. Wrapping sums: exact for any rectangle of fewer than 2^32 photons.
+/// `block` is a power of two ([`table_block`]): block indices are shifts of the
+/// (non-negative) coordinates, `log2 block = 31 - leading_zeros(block)`, not divisions.
 #[inline]
 pub fn rect_photons(table: &[u32], w: i32, block: i32, x0: i32, y0: i32, x1: i32, y1: i32) -> u32 {
+    let shift = 31 - (block as u32).leading_zeros();
     let mut count = 0u32;
-    for by in y0 / block..=y1 / block {
-        for bx in x0 / block..=x1 / block {
+    for by in y0 >> shift..=y1 >> shift {
+        for bx in x0 >> shift..=x1 >> shift {
             let (bx0, by0) = (bx * block, by * block);
             let (xa, xb) = (x0.max(bx0), x1.min(bx0 + block - 1));
             let (ya, yb) = (y0.max(by0), y1.min(by0 + block - 1));
@@ -138,34 +141,6 @@ pub fn window_photons(
     (count, ((x1 - x0 + 1) * (y1 - y0 + 1)) as u32)
 }
 
-/// Photons whose flux can reach pixel `(x, y)` in pass `axis` of `density_gather`, whose
-/// taps lie within `reach` pixels: those in the row segment `x +- reach` (axis 0), and in
-/// the square of half-width `reach` (axis 1, whose sources are the row pass's outputs,
-/// each the flux of its own row segment), clipped to the image. A deposit adds a photon
-/// to its pixel's count whenever it adds flux, so where this is 0 every source the pass
-/// would read holds no flux and the pixel's sum is exactly 0: the pass skips the pixel's
-/// taps (the dark part of the screen then costs one table lookup a pixel).
-#[allow(clippy::too_many_arguments)]
-#[inline]
-pub fn reach_photons(
-    table: &[u32],
-    w: i32,
-    h: i32,
-    block: i32,
-    x: i32,
-    y: i32,
-    axis: u32,
-    reach: i32,
-) -> u32 {
-    let (x0, x1) = ((x - reach).max(0), (x + reach).min(w - 1));
-    let (y0, y1) = if axis == 0 {
-        (y, y)
-    } else {
-        ((y - reach).max(0), (y + reach).min(h - 1))
-    };
-    rect_photons(table, w, block, x0, y0, x1, y1)
-}
-
 /// Depth an edge texel holds for a pixel that is not a receiver (receivers' view depths
 /// are positive).
 pub const EDGE_TEXEL_NOT_RECEIVER: f32 = -1.0;
@@ -188,6 +163,30 @@ pub fn edge_texel(receiver: bool, depth: f32, normal: [f32; 3]) -> [f32; 4] {
 #[inline]
 pub fn edge_texel_is_receiver(t: &[f32; 4]) -> bool {
     t[0] >= 0.0
+}
+
+/// Edge of the square pixel tiles in which `density_gather`'s column pass hands pixels to
+/// threads: 64 consecutive threads (a workgroup) take one 8 x 8 tile, so a workgroup reads
+/// its columns' `8 + 2 reach` rows once instead of every thread of a 64-pixel row segment
+/// reading its own column (measured on an H200, see the README).
+pub const COLUMN_PASS_TILE: u32 = 8;
+
+/// Threads the column pass launches for a `w x h` image: 64 per 8 x 8 tile, the edge tiles
+/// padded.
+pub fn column_pass_threads(w: u32, h: u32) -> u64 {
+    let t = COLUMN_PASS_TILE;
+    w.div_ceil(t) as u64 * h.div_ceil(t) as u64 * (t * t) as u64
+}
+
+/// The pixel `(x, y)` that thread `t` of the column pass takes (tile `t / 64` in row-major
+/// tile order, pixel `t % 64` row-major inside it), `None` for the padding of edge tiles.
+pub fn column_pass_pixel(t: u64, w: u32, h: u32) -> Option<(u32, u32)> {
+    let e = COLUMN_PASS_TILE as u64;
+    let (tile, l) = (t / (e * e), t % (e * e));
+    let tiles_x = w.div_ceil(COLUMN_PASS_TILE) as u64;
+    let x = (tile % tiles_x) * e + l % e;
+    let y = (tile / tiles_x) * e + l / e;
+    (x < w as u64 && y < h as u64).then_some((x as u32, y as u32))
 }
 
 /// k-NN radius (pixels): half the side of the square that holds `k` photons at the
@@ -213,21 +212,23 @@ pub fn footprint_radius(
     max_radius: u32,
 ) -> f32 {
     let max_radius = (max_radius as i32).max(MIN_WINDOW_HALF_WIDTH);
-    let (c, _) = window_photons(table, w, h, block, x, y, max_radius);
-    if c < k {
+    // (count, pixels) of the window at `hi`, the smallest half-width known to hold k
+    let mut at_hi = window_photons(table, w, h, block, x, y, max_radius);
+    if at_hi.0 < k {
         return max_radius as f32;
     }
     let (mut lo, mut hi) = (MIN_WINDOW_HALF_WIDTH, max_radius);
     while lo < hi {
         let mid = (lo + hi) / 2;
-        if window_photons(table, w, h, block, x, y, mid).0 >= k {
+        let c = window_photons(table, w, h, block, x, y, mid);
+        if c.0 >= k {
             hi = mid;
+            at_hi = c;
         } else {
             lo = mid + 1;
         }
     }
-    let (c, a) = window_photons(table, w, h, block, x, y, lo);
-    knn_radius(k, a, c).min(max_radius as f32)
+    knn_radius(k, at_hi.1, at_hi.0).min(max_radius as f32)
 }
 
 /// 1-D weight of the pixel `offset` pixels from a source whose kernel has support
@@ -289,6 +290,19 @@ pub fn join_u64_wide(lo: u32, hi: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_column_pass_takes_every_pixel_once() {
+        for (w, h) in [(1, 1), (8, 8), (9, 7), (33, 17), (64, 3)] {
+            let mut seen = vec![0u32; (w * h) as usize];
+            for t in 0..column_pass_threads(w, h) {
+                if let Some((x, y)) = column_pass_pixel(t, w, h) {
+                    seen[(y * w + x) as usize] += 1;
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{w}x{h}: {seen:?}");
+        }
+    }
 
     /// The blocked table of `counts` (`block x block` blocks).
     fn table_of(counts: &[u32], w: usize, block: usize) -> Vec<u32> {

@@ -1,9 +1,10 @@
 // Mirror of core/src/math/density_gather.rs (method and sources there) and
 // backend-opencl/kernels/common/density_gather.cl: the weights of the density-adaptive,
-// scatter-normalised caustic gather. A kernel that needs this file binds the G-buffer's
-// planes 0, 1 and 3 (`gbuffer0`, `gbuffer1`, `gbuffer3`, see gbuffer.wgsl). The summed-area table's functions are in photon_table.wgsl,
-// footprint_radius in gather_footprint.wgsl, and clamped_photon_count in
-// photon_count_table.wgsl, which binds no G-buffer.
+// scatter-normalised caustic gather. A kernel that needs this file binds the edge
+// texels (`edge`, array<vec4<f32>>). The summed-area table's functions are in
+// photon_table.wgsl, footprint_radius in gather_footprint.wgsl; clamped_photon_count and
+// edge_texel in photon_count_table.wgsl, the one kernel that reads the photon counts and
+// writes the edge texels.
 
 const MIN_WINDOW_HALF_WIDTH: i32 = 1;
 
@@ -45,43 +46,23 @@ fn join_u64_wide(lo: u32, hi: u32) -> f32 {
     return f32(hi) * 4294967296.0f + f32(lo);
 }
 
-// What the gather needs of a G-buffer texel (planes 0, 1 and 3 only).
-struct GatherTexel {
-    receiver: u32,
-    depth: f32,
-    normal: vec3<f32>,
-}
-
-fn load_gather_texel(i: u32) -> GatherTexel {
-    var t: GatherTexel;
-    t.receiver = gbuffer3[i].w & GBUFFER_RECEIVER;
-    t.depth = bitcast<f32>(gbuffer0[i].w);
-    t.normal = bitcast<vec3<f32>>(gbuffer1[i].xyz);
-    return t;
-}
-
-// Depth of a non-receiver's edge texel (receivers' view depths are positive).
-const EDGE_TEXEL_NOT_RECEIVER: f32 = -1.0;
-
-// A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
-// EDGE_TEXEL_NOT_RECEIVER elsewhere.
-fn edge_texel(t: GatherTexel) -> vec4<f32> {
-    if (t.receiver != 0u) {
-        return vec4<f32>(t.depth, t.normal);
-    }
-    return vec4<f32>(EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0);
-}
-
+// Whether an edge texel is a receiver's (a non-receiver's depth is -1, receivers' view
+// depths are positive; photon_count_table.wgsl writes them).
 fn edge_texel_is_receiver(t: vec4<f32>) -> bool {
     return t.x >= 0.0;
 }
 
+// Edge weight between two edge texels.
+fn edge_weight_of(p: GatherParams, a: vec4<f32>, b: vec4<f32>) -> f32 {
+    return edge_weight(a.x, a.yzw, b.x, b.yzw, p.sigma_depth, p.normal_power);
+}
+
 // Normaliser of a source at pixel (x, y) with radius r: the sum of its weights over the
-// receivers of its row (axis 0) or column (1) inside the image.
+// receivers of its row (axis 0) or column (1) inside the image. Reads `edge`.
 fn gather_normaliser(p: GatherParams, x: i32, y: i32, r: f32, axis: u32) -> f32 {
     let w = i32(p.camera.width);
     let h = i32(p.camera.height);
-    let gi = load_gather_texel(u32(y * w + x));
+    let ei = edge[y * w + x];
     // taps beyond the radius weigh 0: the loop stops there
     let reach = min(i32(ceil(r + 0.5)), i32(p.max_radius_px));
     var sum = 0.0;
@@ -91,13 +72,22 @@ fn gather_normaliser(p: GatherParams, x: i32, y: i32, r: f32, axis: u32) -> f32 
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) {
             continue;
         }
-        let gq = load_gather_texel(u32(qy * w + qx));
-        if (gq.receiver == 0u) {
+        let eq = edge[qy * w + qx];
+        if (!edge_texel_is_receiver(eq)) {
             continue;
         }
-        sum += footprint_weight(d, r) *
-               edge_weight(gi.depth, gi.normal, gq.depth, gq.normal, p.sigma_depth,
-                           p.normal_power);
+        sum += footprint_weight(d, r) * edge_weight_of(p, ei, eq);
     }
     return sum;
+}
+
+// The pixel thread t of density_gather's column pass takes: 8 x 8 tiles, 64 threads each
+// (core's column_pass_pixel); x >= w or y >= h for the padding of edge tiles.
+const COLUMN_PASS_TILE: u32 = 8u;
+fn column_pass_pixel(t: u32, w: u32) -> vec2<u32> {
+    let tile = t / (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
+    let l = t % (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
+    let tiles_x = (w + COLUMN_PASS_TILE - 1u) / COLUMN_PASS_TILE;
+    return vec2<u32>((tile % tiles_x) * COLUMN_PASS_TILE + l % COLUMN_PASS_TILE,
+                     (tile / tiles_x) * COLUMN_PASS_TILE + l / COLUMN_PASS_TILE);
 }

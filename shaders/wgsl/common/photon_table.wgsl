@@ -1,5 +1,4 @@
-// Mirror of core/src/math/density_gather.rs (rect_photons, window_photons,
-// reach_photons) and backend-opencl/kernels/common/density_gather.cl: counting photons
+// Mirror of core/src/math/density_gather.rs (rect_photons, window_photons) and backend-opencl/kernels/common/density_gather.cl: counting photons
 // in the blocked summed-area table of the photon counts. A kernel that needs this file
 // binds `table` (array<u32>, from photon_count_table).
 
@@ -13,11 +12,13 @@ fn table_entry(width: i32, bx0: i32, by0: i32, x: i32, y: i32) -> u32 {
 }
 
 // Photons in the rectangle [x0, x1] x [y0, y1] inside the image: the parts it covers in
-// each block it overlaps, four reads each. Wrapping u32 sums, exact.
+// each block it overlaps, four reads each. Wrapping u32 sums, exact. `block` is a power
+// of two: block indices are shifts of the (non-negative) coordinates.
 fn rect_photons(w: i32, block: i32, x0: i32, y0: i32, x1: i32, y1: i32) -> u32 {
+    let shift = 31u - countLeadingZeros(u32(block));
     var count = 0u;
-    for (var by = y0 / block; by <= y1 / block; by++) {
-        for (var bx = x0 / block; bx <= x1 / block; bx++) {
+    for (var by = y0 >> shift; by <= y1 >> shift; by++) {
+        for (var bx = x0 >> shift; bx <= x1 >> shift; bx++) {
             let bx0 = bx * block;
             let by0 = by * block;
             let xa = max(x0, bx0);
@@ -39,14 +40,4 @@ fn window_photons(w: i32, h: i32, block: i32, x: i32, y: i32, half_width: i32) -
     let x1 = min(x + half_width, w - 1);
     let y1 = min(y + half_width, h - 1);
     return vec2<u32>(rect_photons(w, block, x0, y0, x1, y1), u32((x1 - x0 + 1) * (y1 - y0 + 1)));
-}
-
-// Photons whose flux can reach (x, y) in density_gather's pass `axis`: the row segment
-// x +- reach (axis 0), the square of half-width reach (1), clipped to the image.
-fn reach_photons(w: i32, h: i32, block: i32, x: i32, y: i32, axis: u32, reach: i32) -> u32 {
-    let x0 = max(x - reach, 0);
-    let x1 = min(x + reach, w - 1);
-    let y0 = select(max(y - reach, 0), y, axis == 0u);
-    let y1 = select(min(y + reach, h - 1), y, axis == 0u);
-    return rect_photons(w, block, x0, y0, x1, y1);
 }

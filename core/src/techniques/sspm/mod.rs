@@ -383,11 +383,12 @@ impl Sspm {
                                 params,
                                 photon_map: p.photon_map,
                                 table,
+                                gbuffer: self.gbuffer,
+                                edge,
                             });
                         }
                         rec.kernel(GatherFootprint {
                             params: gather,
-                            gbuffer: self.gbuffer,
                             photon_map: p.photon_map,
                             table,
                             out: filtered,
@@ -397,7 +398,6 @@ impl Sspm {
                             params: gather,
                             gbuffer: self.gbuffer,
                             edge,
-                            table,
                             input: filtered,
                             out: scratch,
                         });
@@ -405,7 +405,6 @@ impl Sspm {
                             params: columns,
                             gbuffer: self.gbuffer,
                             edge,
-                            table,
                             input: scratch,
                             out: filtered,
                         });
