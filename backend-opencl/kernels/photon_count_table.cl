@@ -23,8 +23,10 @@ __kernel void photon_count_table(__global const GatherParams* p,
             table[i] = sum;
         }
     } else {
-        // a thread per column and block: x = t % w (neighbouring threads, neighbouring
+        // a thread per pixel writes its edge texel; the first w x blocks also scan, a
+        // thread per column and block: x = t % w (neighbouring threads, neighbouring
         // columns), block = t / w
+        if (t < w * h) edge[t] = edge_texel(load_gather_texel(GATHER_GBUFFER_ARGS, t));
         uint blocks = (h + b - 1u) / b;
         if (t >= w * blocks) return;
         uint x = t % w, y0 = (t / w) * b;
@@ -32,7 +34,6 @@ __kernel void photon_count_table(__global const GatherParams* p,
         for (uint y = y0; y < min(y0 + b, h); y++) {
             sum += table[y * w + x];
             table[y * w + x] = sum;
-            edge[y * w + x] = edge_texel(load_gather_texel(GATHER_GBUFFER_ARGS, y * w + x));
         }
     }
 }

@@ -73,7 +73,11 @@ fn photon_count_table(t: u32) {
             table[i] = sum;
         }
     } else {
-        // a thread per column and block (neighbouring threads, neighbouring columns)
+        // a thread per pixel writes its edge texel; the first w x blocks also scan, a
+        // thread per column and block (neighbouring threads, neighbouring columns)
+        if (t < w * h) {
+            edge[t] = edge_texel(load_gather_texel(t));
+        }
         let blocks = (h + b - 1u) / b;
         if (t >= w * blocks) {
             return;
@@ -84,7 +88,6 @@ fn photon_count_table(t: u32) {
         for (var y = y0; y < min(y0 + b, h); y++) {
             sum += table[y * w + x];
             table[y * w + x] = sum;
-            edge[y * w + x] = edge_texel(load_gather_texel(y * w + x));
         }
     }
 }
