@@ -1,13 +1,15 @@
 //! What every technique shares: the [`technique::Technique`] seam, the frame plan of
 //! passes and buffers with reasons ([`plan`]), frame statistics ([`stats`]), planned
 //! allocation with the device-limit check ([`allocation`]), temporal (ping-pong)
-//! resources ([`temporal`]), photon emission domains ([`emission`]), host images
-//! ([`image`]) and error metrics against a reference ([`metrics`]). Knows no technique.
+//! resources ([`temporal`]), photon emission domains ([`emission`]), light view planes
+//! ([`light_view_plane`]), host images ([`image`]) and error metrics against a reference
+//! ([`metrics`]). Knows no technique.
 
 pub mod allocation;
 pub mod emission;
 pub mod error;
 pub mod image;
+pub mod light_view_plane;
 pub mod metrics;
 pub mod plan;
 pub mod stats;
