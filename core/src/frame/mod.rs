@@ -2,10 +2,11 @@
 //! passes and buffers with reasons ([`plan`]), frame statistics ([`stats`]), planned
 //! allocation with the device-limit check ([`allocation`]), temporal (ping-pong)
 //! resources ([`temporal`]), photon emission domains ([`emission`]), light view planes
-//! ([`light_view_plane`]), host images ([`image`]) and error metrics against a reference
+//! ([`light_view_plane`]), the caustic atlas ([`caustic_atlas`]), host images ([`image`]) and error metrics against a reference
 //! ([`metrics`]). Knows no technique.
 
 pub mod allocation;
+pub mod caustic_atlas;
 pub mod emission;
 pub mod error;
 pub mod image;

@@ -134,15 +134,28 @@ fn sphere(m: &mut TriangleMesh, c: Vec3, r: f32, segments: u32) {
     }
 }
 
+/// A box's six faces. Their uvs do not overlap (a caustic map addresses a receiver by
+/// its uvs, `frame::caustic_atlas`): face `k` fills cell `(k mod 3, k div 3)` of a 3 x 2
+/// grid over `[0, 1]^2`.
 fn cuboid(m: &mut TriangleMesh, lo: Vec3, hi: Vec3) {
     let d = hi - lo;
     let (x, y, z) = (Vec3::X * d.x, Vec3::Y * d.y, Vec3::Z * d.z);
-    quad(m, lo, y, x); // -z
-    quad(m, lo + z, x, y); // +z
-    quad(m, lo, z, y); // -x
-    quad(m, lo + x, y, z); // +x
-    quad(m, lo, x, z); // -y
-    quad(m, lo + y, z, x); // +y
+    let faces = [
+        (lo, y, x),     // -z
+        (lo + z, x, y), // +z
+        (lo, z, y),     // -x
+        (lo + x, y, z), // +x
+        (lo, x, z),     // -y
+        (lo + y, z, x), // +y
+    ];
+    for (k, (origin, du, dv)) in faces.into_iter().enumerate() {
+        let first = m.uvs.len();
+        quad(m, origin, du, dv);
+        let cell = Vec2::new((k % 3) as f32 / 3.0, (k / 3) as f32 / 2.0);
+        for uv in &mut m.uvs[first..] {
+            *uv = cell + *uv * Vec2::new(1.0 / 3.0, 0.5);
+        }
+    }
 }
 
 fn ring(m: &mut TriangleMesh, c: Vec3, r: f32, thick: f32, h: f32, segments: u32) {

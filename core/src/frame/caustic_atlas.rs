@@ -1,0 +1,460 @@
+//! The caustic atlas (seed 001 section 3.2, "render caustic map"): one texture in which
+//! every diffuse receiver owns a square tile, addressed by the receiver's UVs, so that a
+//! photon landing on a receiver deposits into the texel under its hit's UV and any camera
+//! path ending on that receiver reads it back (CausticMap's final pass, AdaptiveCaustics'
+//! default deposit target).
+//!
+//! **Tile sizes.** 001 gives every receiver its own map; one atlas (default 2048 x 2048,
+//! the source's map size) holds them all here, each receiver's tile side proportional to
+//! the square root of its world area, so that every receiver gets (about) the same *texel
+//! density* `rho` (texels per scene unit^2). [`plan_atlas`] finds the largest `rho` whose
+//! tiles, `side = max(1, floor(sqrt(rho A)))`, fit the atlas by shelf packing (tiles by
+//! decreasing side, left to right in rows as tall as their first tile), by bisection on
+//! `rho`; the plan states `rho` and each tile's own density `side^2 / A`.
+//!
+//! **Texel area.** A receiver's UVs in `[0, 1]^2` map onto its tile, `texel = tile corner
+//! + uv * side`. On a triangle the map from UV to world is affine, so every texel inside
+//! the triangle covers the same world area, `A_world / (A_uv side^2)` (the UV-to-world
+//! Jacobian's determinant over the tile's texels per UV unit^2): [`texel_world_area`].
+//! The map stores irradiance, a photon's flux over that area (W/m^2 per channel).
+//!
+//! **UVs must not overlap.** Two triangles sharing a texel would both deposit into it and
+//! the caustic would be counted twice where either is seen. [`receiver_coverage`] tests
+//! every texel centre of a tile against the receiver's UV triangles and refuses a receiver
+//! whose UVs overlap, leave `[0, 1]^2`, or are missing (a triangle of zero UV area but
+//! non-zero world area), naming it: a clear error, never a silently doubled caustic. (An
+//! automatic per-triangle atlas for such meshes is left for later: TODO(issue 16).)
+
+use glam::{Vec2, Vec3};
+
+/// Default atlas size (texels a side), the source's caustic map size.
+pub const DEFAULT_ATLAS_SIDE: u32 = 2048;
+
+/// One receiver's square tile in the atlas (texel coordinates).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AtlasTile {
+    /// Index of the receiver in the list given to [`plan_atlas`].
+    pub receiver: u32,
+    /// Column of the tile's first texel.
+    pub x: u32,
+    /// Row of the tile's first texel.
+    pub y: u32,
+    /// Side (texels).
+    pub side: u32,
+}
+
+/// Where every receiver's tile lies, and the texel density that sized them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AtlasPlan {
+    /// Atlas width and height (texels).
+    pub size: (u32, u32),
+    /// One tile per receiver, in receiver order.
+    pub tiles: Vec<AtlasTile>,
+    /// The density the tiles were sized for (texels per scene unit^2); a tile's own
+    /// density, `side^2 / area`, is at most this (the side is rounded down) and at least
+    /// this for receivers so small that they get one texel.
+    pub texels_per_unit_area: f64,
+}
+
+/// Why a set of receivers gets no atlas.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AtlasError {
+    /// The atlas has no texel, or a receiver's area is not a finite number > 0.
+    BadInput(String),
+    /// Even one texel per receiver does not fit (more receivers than texels).
+    TooManyReceivers {
+        /// Receivers asked for.
+        receivers: usize,
+        /// Texels in the atlas.
+        texels: u64,
+    },
+    /// A receiver's UVs cannot address a caustic map (named, with the reason).
+    BadUvs {
+        /// Index of the receiver.
+        receiver: u32,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl std::fmt::Display for AtlasError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AtlasError::BadInput(s) => write!(f, "caustic atlas: {s}"),
+            AtlasError::TooManyReceivers { receivers, texels } => write!(
+                f,
+                "caustic atlas: {receivers} receivers do not fit {texels} texels, one each"
+            ),
+            AtlasError::BadUvs { receiver, reason } => {
+                write!(f, "caustic atlas: receiver {receiver}: {reason}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for AtlasError {}
+
+/// Tile side for a receiver of world area `area` at density `rho`.
+fn tile_side(area: f64, rho: f64, max_side: u32) -> u32 {
+    ((rho * area).sqrt().floor() as u64).clamp(1, max_side as u64) as u32
+}
+
+/// Shelf-packs squares of the given sides (any order) into `size`; `None` if they do not
+/// fit. Tiles go by decreasing side (ties by receiver), left to right, in shelves as tall
+/// as their first tile.
+fn shelf_pack(sides: &[u32], size: (u32, u32)) -> Option<Vec<AtlasTile>> {
+    let mut order: Vec<usize> = (0..sides.len()).collect();
+    order.sort_by_key(|&i| (std::cmp::Reverse(sides[i]), i));
+    let mut tiles = vec![
+        AtlasTile {
+            receiver: 0,
+            x: 0,
+            y: 0,
+            side: 0
+        };
+        sides.len()
+    ];
+    let (mut x, mut y, mut shelf) = (0u64, 0u64, 0u64);
+    for i in order {
+        let s = sides[i] as u64;
+        if x + s > size.0 as u64 {
+            // next shelf
+            y += shelf;
+            x = 0;
+            shelf = 0;
+        }
+        if shelf == 0 {
+            shelf = s;
+        }
+        if x + s > size.0 as u64 || y + s > size.1 as u64 {
+            return None;
+        }
+        tiles[i] = AtlasTile {
+            receiver: i as u32,
+            x: x as u32,
+            y: y as u32,
+            side: s as u32,
+        };
+        x += s;
+    }
+    Some(tiles)
+}
+
+/// Plans an atlas of `size` texels for receivers of the given world areas (scene
+/// units^2): the largest texel density whose tiles fit (see the module doc).
+pub fn plan_atlas(areas: &[f64], size: (u32, u32)) -> Result<AtlasPlan, AtlasError> {
+    if size.0 == 0 || size.1 == 0 {
+        return Err(AtlasError::BadInput("the atlas has no texel".into()));
+    }
+    if let Some(i) = areas.iter().position(|a| !(a.is_finite() && *a > 0.0)) {
+        return Err(AtlasError::BadInput(format!(
+            "receiver {i} has world area {}, not a finite number > 0",
+            areas[i]
+        )));
+    }
+    let texels = size.0 as u64 * size.1 as u64;
+    if areas.len() as u64 > texels {
+        return Err(AtlasError::TooManyReceivers {
+            receivers: areas.len(),
+            texels,
+        });
+    }
+    let max_side = size.0.min(size.1);
+    let pack = |rho: f64| {
+        let sides: Vec<u32> = areas.iter().map(|&a| tile_side(a, rho, max_side)).collect();
+        shelf_pack(&sides, size)
+    };
+    // bisection on log rho between a density that fits (the tiles' total area a quarter
+    // of the atlas, or else every tile one texel) and the density at which the smallest
+    // receiver's tile would reach the atlas side (no tile grows beyond it)
+    let total: f64 = areas.iter().sum();
+    let min_area = areas.iter().cloned().fold(f64::INFINITY, f64::min);
+    let (mut lo, mut hi) = (
+        (0.25 * texels as f64 / total).max(f64::MIN_POSITIVE),
+        1.01 * (max_side as f64).powi(2) / min_area,
+    );
+    if pack(lo).is_none() {
+        lo = f64::MIN_POSITIVE; // every tile one texel: fits, as receivers <= texels
+    }
+    for _ in 0..200 {
+        let mid = (lo * hi).sqrt();
+        if !(mid > lo && mid < hi) {
+            break;
+        }
+        if pack(mid).is_some() {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let tiles = pack(lo).ok_or(AtlasError::TooManyReceivers {
+        receivers: areas.len(),
+        texels,
+    })?;
+    Ok(AtlasPlan {
+        size,
+        tiles,
+        texels_per_unit_area: lo,
+    })
+}
+
+/// World area (scene units^2) each texel of `tile_side` texels a side covers inside a
+/// triangle with world corners `p` and UV corners `t`: `A_world / (A_uv side^2)`; `None`
+/// where the triangle has no UV area.
+pub fn texel_world_area(p: [Vec3; 3], t: [Vec2; 3], tile_side: u32) -> Option<f32> {
+    let a_world = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+    let a_uv = 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs();
+    let texels = a_uv * (tile_side as f32) * (tile_side as f32);
+    (texels > 0.0).then(|| a_world / texels)
+}
+
+/// The texel of a tile under UV `uv` (clamped to the tile).
+pub fn uv_texel(tile: &AtlasTile, uv: Vec2) -> (u32, u32) {
+    let s = tile.side as f32;
+    let cx = ((uv.x * s).floor().max(0.0) as u32).min(tile.side - 1);
+    let cy = ((uv.y * s).floor().max(0.0) as u32).min(tile.side - 1);
+    (tile.x + cx, tile.y + cy)
+}
+
+/// Which texels of a receiver's `side x side` tile its UV triangles cover (row-major,
+/// `true` where a texel centre lies inside a triangle, edges included), or why its UVs
+/// cannot address a caustic map: a UV outside `[0, 1]^2`, a triangle of zero UV area but
+/// non-zero world area (missing UVs), or two triangles covering one texel centre (overlap).
+pub fn receiver_coverage(
+    receiver: u32,
+    triangles: &[([Vec3; 3], [Vec2; 3])],
+    side: u32,
+) -> Result<Vec<bool>, AtlasError> {
+    let bad = |reason: String| AtlasError::BadUvs { receiver, reason };
+    let mut owner = vec![u32::MAX; side as usize * side as usize];
+    let s = side as f32;
+    for (k, (p, t)) in triangles.iter().enumerate() {
+        if t.iter()
+            .any(|uv| !(uv.x >= 0.0 && uv.x <= 1.0 && uv.y >= 0.0 && uv.y <= 1.0))
+        {
+            return Err(bad(format!(
+                "triangle {k} has a UV outside [0, 1]^2: {t:?}"
+            )));
+        }
+        let a_world = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+        let twice_uv = (t[1] - t[0]).perp_dot(t[2] - t[0]);
+        if twice_uv == 0.0 {
+            if a_world > 0.0 {
+                return Err(bad(format!(
+                    "triangle {k} has no UV area (missing or degenerate UVs)"
+                )));
+            }
+            continue; // degenerate in the world too: covers nothing
+        }
+        // texel centres inside the triangle's UV box
+        let lo = t[0].min(t[1]).min(t[2]) * s;
+        let hi = t[0].max(t[1]).max(t[2]) * s;
+        let (x0, y0) = (
+            (lo.x - 0.5).ceil().max(0.0) as u32,
+            (lo.y - 0.5).ceil().max(0.0) as u32,
+        );
+        let (x1, y1) = (
+            ((hi.x - 0.5).floor().min(s - 1.0)).max(-1.0),
+            ((hi.y - 0.5).floor().min(s - 1.0)).max(-1.0),
+        );
+        if x1 < 0.0 || y1 < 0.0 {
+            continue;
+        }
+        for y in y0..=y1 as u32 {
+            for x in x0..=x1 as u32 {
+                let c = Vec2::new((x as f32 + 0.5) / s, (y as f32 + 0.5) / s);
+                if inside_triangle(c, t, twice_uv) {
+                    let o = &mut owner[(y * side + x) as usize];
+                    if *o != u32::MAX {
+                        return Err(bad(format!(
+                            "UVs overlap: triangles {} and {k} both cover texel ({x}, {y}) \
+                             of its {side}x{side} tile",
+                            *o
+                        )));
+                    }
+                    *o = k as u32;
+                }
+            }
+        }
+    }
+    Ok(owner.into_iter().map(|o| o != u32::MAX).collect())
+}
+
+/// Whether `c` lies in UV triangle `t` (edges included, except the top-left rule: a point
+/// on an edge shared by two triangles belongs to one of them only).
+fn inside_triangle(c: Vec2, t: &[Vec2; 3], twice_area: f32) -> bool {
+    let sign = twice_area.signum();
+    let mut inside = true;
+    for e in 0..3 {
+        let (a, b) = (t[e], t[(e + 1) % 3]);
+        let w = (b - a).perp_dot(c - a) * sign;
+        // top-left rule on the oriented edge: on the edge counts only for edges whose
+        // direction (in the triangle's winding) points down or left
+        let d = (b - a) * sign;
+        let owns_edge = d.y < 0.0 || (d.y == 0.0 && d.x > 0.0);
+        inside &= w > 0.0 || (w == 0.0 && owns_edge);
+    }
+    inside
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn overlaps(a: &AtlasTile, b: &AtlasTile) -> bool {
+        a.x < b.x + b.side && b.x < a.x + a.side && a.y < b.y + b.side && b.y < a.y + a.side
+    }
+
+    #[test]
+    fn tiles_fit_without_overlap_and_follow_the_area() {
+        let areas = [16.0, 4.0, 4.0, 1.0, 0.25, 9.0, 1e-6];
+        let plan = plan_atlas(&areas, (256, 256)).unwrap();
+        for (i, a) in plan.tiles.iter().enumerate() {
+            assert_eq!(a.receiver, i as u32);
+            assert!(a.x + a.side <= 256 && a.y + a.side <= 256);
+            for b in &plan.tiles[i + 1..] {
+                assert!(!overlaps(a, b), "{a:?} {b:?}");
+            }
+        }
+        // side ~ sqrt(area): 16 -> 4x the side of 1
+        let s = |i: usize| plan.tiles[i].side as f64;
+        assert!((s(0) / s(3) - 4.0).abs() < 0.1, "{:?}", plan.tiles);
+        assert!((s(1) - s(2)).abs() < 1.0);
+        // the tiny receiver still gets one texel
+        assert_eq!(plan.tiles[6].side, 1);
+        // the density is the largest that fits: a little more does not
+        let rho = plan.texels_per_unit_area;
+        let sides: Vec<u32> = areas
+            .iter()
+            .map(|&a| tile_side(a, rho * 1.02, 256))
+            .collect();
+        assert!(shelf_pack(&sides, (256, 256)).is_none() || sides.iter().all(|&s| s == 256));
+        // and fills a good part of the atlas
+        let used: u64 = plan
+            .tiles
+            .iter()
+            .map(|t| t.side as u64 * t.side as u64)
+            .sum();
+        assert!(used as f64 > 0.4 * 256.0 * 256.0, "used {used}");
+    }
+
+    #[test]
+    fn bad_inputs_are_errors_not_panics() {
+        assert!(matches!(
+            plan_atlas(&[1.0], (0, 4)),
+            Err(AtlasError::BadInput(_))
+        ));
+        assert!(matches!(
+            plan_atlas(&[0.0], (4, 4)),
+            Err(AtlasError::BadInput(_))
+        ));
+        assert!(matches!(
+            plan_atlas(&[f64::NAN], (4, 4)),
+            Err(AtlasError::BadInput(_))
+        ));
+        assert!(matches!(
+            plan_atlas(&[1.0; 17], (4, 4)),
+            Err(AtlasError::TooManyReceivers { .. })
+        ));
+        // exactly one texel each fits
+        let p = plan_atlas(&[1.0; 16], (4, 4)).unwrap();
+        assert!(p.tiles.iter().all(|t| t.side == 1));
+        // a 1x1 atlas with one receiver
+        assert_eq!(plan_atlas(&[3.0], (1, 1)).unwrap().tiles[0].side, 1);
+    }
+
+    /// A unit square in the world (z = 0) split into two triangles, UVs = xy.
+    fn square() -> Vec<([Vec3; 3], [Vec2; 3])> {
+        let p = |x: f32, y: f32| (Vec3::new(x, y, 0.0), Vec2::new(x, y));
+        let q = [p(0.0, 0.0), p(1.0, 0.0), p(1.0, 1.0), p(0.0, 1.0)];
+        vec![
+            ([q[0].0, q[1].0, q[2].0], [q[0].1, q[1].1, q[2].1]),
+            ([q[0].0, q[2].0, q[3].0], [q[0].1, q[2].1, q[3].1]),
+        ]
+    }
+
+    #[test]
+    fn a_square_covers_its_whole_tile_once() {
+        for side in [1, 2, 7, 64] {
+            let c = receiver_coverage(0, &square(), side).unwrap();
+            assert!(c.iter().all(|&b| b), "side {side}");
+        }
+        // texel area: 1 m^2 over side^2 texels
+        let (p, t) = square()[0];
+        assert!((texel_world_area(p, t, 64).unwrap() - 1.0 / 4096.0).abs() < 1e-9);
+        // scaled world: 3 m x 2 m on the same UVs
+        let p3 = p.map(|v| v * Vec3::new(3.0, 2.0, 1.0));
+        assert!((texel_world_area(p3, t, 64).unwrap() - 6.0 / 4096.0).abs() < 1e-8);
+    }
+
+    #[test]
+    fn overlapping_missing_and_outside_uvs_are_refused() {
+        let mut twice = square();
+        twice.push(square()[0]);
+        let e = receiver_coverage(3, &twice, 16).unwrap_err();
+        assert!(matches!(e, AtlasError::BadUvs { receiver: 3, .. }), "{e}");
+        assert!(e.to_string().contains("overlap"), "{e}");
+
+        let mut flat = square();
+        flat[1].1 = [Vec2::ZERO; 3];
+        let e = receiver_coverage(0, &flat, 16).unwrap_err();
+        assert!(e.to_string().contains("no UV area"), "{e}");
+
+        let mut outside = square();
+        outside[0].1[1] = Vec2::new(1.5, 0.0);
+        let e = receiver_coverage(0, &outside, 16).unwrap_err();
+        assert!(e.to_string().contains("outside"), "{e}");
+    }
+
+    #[test]
+    fn every_built_in_receiver_has_uvs_that_address_a_caustic_map() {
+        use crate::scene::builtin::{builtin, BUILTIN_SCENES};
+        use crate::scene::shapes::tessellate;
+        for name in BUILTIN_SCENES {
+            let scene = builtin(name).unwrap();
+            let mut areas = Vec::new();
+            for (k, o) in scene.objects.iter().enumerate() {
+                if scene.materials[&o.material].is_specular() {
+                    continue;
+                }
+                let m = tessellate(&o.shape);
+                let tris: Vec<([Vec3; 3], [Vec2; 3])> = m
+                    .indices
+                    .iter()
+                    .map(|t| {
+                        let i = t.map(|i| i as usize);
+                        (i.map(|i| m.positions[i]), i.map(|i| m.uvs[i]))
+                    })
+                    .collect();
+                for side in [1, 64, 256] {
+                    if let Err(e) = receiver_coverage(k as u32, &tris, side) {
+                        panic!("{name}: object '{}' at {side}^2: {e}", o.name);
+                    }
+                }
+                areas.push(
+                    tris.iter()
+                        .map(|(p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
+                        .sum::<f64>(),
+                );
+            }
+            if !areas.is_empty() {
+                let plan = plan_atlas(&areas, (DEFAULT_ATLAS_SIDE, DEFAULT_ATLAS_SIDE)).unwrap();
+                assert_eq!(plan.tiles.len(), areas.len(), "{name}");
+            }
+        }
+    }
+
+    #[test]
+    fn uv_texels_stay_in_their_tile() {
+        let t = AtlasTile {
+            receiver: 0,
+            x: 10,
+            y: 20,
+            side: 8,
+        };
+        assert_eq!(uv_texel(&t, Vec2::ZERO), (10, 20));
+        assert_eq!(uv_texel(&t, Vec2::ONE), (17, 27));
+        assert_eq!(uv_texel(&t, Vec2::new(0.5, 0.124)), (14, 20));
+        assert_eq!(uv_texel(&t, Vec2::new(-1.0, 2.0)), (10, 27));
+    }
+}
