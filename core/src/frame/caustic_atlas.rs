@@ -12,8 +12,8 @@
 //! decreasing side, left to right in rows as tall as their first tile), by bisection on
 //! `rho`; the plan states `rho` and each tile's own density `side^2 / A`.
 //!
-//! **Texel area.** A receiver's UVs in `[0, 1]^2` map onto its tile, `texel = tile corner
-//! + uv * side`. On a triangle the map from UV to world is affine, so every texel inside
+//! **Texel area.** A receiver's UVs in `[0, 1]^2` map onto its tile, `texel = corner +
+//! uv * side`. On a triangle the map from UV to world is affine, so every texel inside
 //! the triangle covers the same world area, `A_world / (A_uv side^2)` (the UV-to-world
 //! Jacobian's determinant over the tile's texels per UV unit^2): [`texel_world_area`].
 //! The map stores irradiance, a photon's flux over that area (W/m^2 per channel).
