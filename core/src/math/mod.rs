@@ -5,6 +5,7 @@ pub mod density_gather;
 pub mod fixed_point;
 pub mod footprint;
 pub mod geometry;
+pub mod map_gather;
 pub mod optics;
 pub mod packing;
 pub mod rng;
