@@ -31,6 +31,8 @@
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "gltf")]
+pub mod gltf_scene;
 pub mod output;
 pub mod reference;
 #[cfg(feature = "report")]

@@ -59,9 +59,13 @@ enum Command {
     },
     /// List the built-in scenes, or print one in the scene file format.
     Scenes {
-        /// Print this built-in scene as JSON (save it, edit it, load it with --scene FILE).
+        /// Print this built-in scene (save it, edit it, load it with --scene FILE).
         #[arg(long)]
         export: Option<String>,
+        /// Format of --export: json (caustica's scene format) or gltf (glTF 2.0, one
+        /// embedded buffer, for other tools).
+        #[arg(long, default_value = "json")]
+        format: String,
     },
     /// List every backend, whether it works on this machine, its device type and the
     /// order in which `--backend auto` prefers them.
@@ -187,6 +191,16 @@ fn load_scene(arg: &str) -> Result<Scene, String> {
     }
     let path = Path::new(arg);
     if path.exists() {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+            let im = caustica::gltf_scene::load_gltf(path).map_err(|e| e.to_string())?;
+            for w in &im.warnings {
+                eprintln!("warning: {w}");
+            }
+            return Ok(im.scene);
+        }
         return format::load_scene_file(path).map_err(|e| e.to_string());
     }
     Err(format!(
@@ -197,17 +211,24 @@ fn load_scene(arg: &str) -> Result<Scene, String> {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
-        Command::Scenes { export: Some(name) } => {
+        Command::Scenes {
+            export: Some(name),
+            format: fmt,
+        } => {
             let s = builtin::builtin(&name).ok_or_else(|| {
                 format!(
                     "unknown scene '{name}'; built-in scenes: {}",
                     builtin::BUILTIN_SCENES.join(", ")
                 )
             })?;
-            println!("{}", format::to_json(&s));
+            match fmt.as_str() {
+                "json" => println!("{}", format::to_json(&s)),
+                "gltf" => println!("{}", caustica::gltf_scene::scene_to_gltf(&s)),
+                other => return Err(format!("unknown --format '{other}': json or gltf")),
+            }
             Ok(())
         }
-        Command::Scenes { export: None } => {
+        Command::Scenes { export: None, .. } => {
             for name in builtin::BUILTIN_SCENES {
                 let s = builtin::builtin(name).expect("listed scene exists");
                 println!("{name:<12} {}", s.description);

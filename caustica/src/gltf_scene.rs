@@ -1,0 +1,1054 @@
+//! glTF 2.0 scenes in and out (the `gltf` feature): [`load_gltf`] reads `.gltf` (buffers
+//! embedded as data URIs or in files beside it) and `.glb` into a [`Scene`] with the
+//! warnings of what caustica cannot represent; [`scene_to_gltf`] writes any scene as a
+//! self-contained `.gltf` (one embedded buffer), so caustica's scenes open in other tools.
+//!
+//! **What is read.** The default scene's node hierarchy, with each node's world transform
+//! applied to its meshes (positions by the matrix, normals by its inverse transpose, the
+//! winding reversed where the determinant is negative so that normals stay outward).
+//! Instances are flattened into one object per node and primitive: caustica has no
+//! instancing yet (issue 19's update API will keep them as instances). Triangle
+//! primitives (lists, strips and fans); points and lines are skipped with a warning.
+//! Missing normals are generated as the area-weighted average of the faces around each
+//! vertex (`scene::shapes`); missing UVs stay missing (Sspm needs none; CausticMap's atlas
+//! refuses such a receiver by name). The first perspective camera met in the hierarchy
+//! (its image size from `extras.caustica`, else 960 pixels wide at its aspect ratio), or
+//! a default camera framing the scene, with a warning.
+//!
+//! **Lights** (KHR_lights_punctual): photometric to radiometric with the luminous
+//! efficacy [`LUMINOUS_EFFICACY_LM_PER_W`] = 683 lm/W, the constant that defines the
+//! candela (monochromatic light at 540 THz, 555 nm): point and spot intensity in cd
+//! (lm/sr) becomes W/sr, directional illuminance in lux (lm/m^2) becomes W/m^2, per
+//! channel `color * intensity / 683`. 683 is the largest efficacy any light can have, so
+//! a broadband light carries more watts than this says; it is what glTF exporters use
+//! (Blender writes W as `W * 683 / (4 pi)` cd for point lights), so caustica reads their
+//! files back at the power they were made with. Spot cone angles are half-angles in
+//! radians in glTF, degrees here; a light's `range` has no counterpart (warned).
+//!
+//! **Materials.** `KHR_materials_transmission` with factor 1 becomes a dielectric with
+//! the `KHR_materials_ior` index (default 1.5) and Beer-Lambert absorption
+//! `sigma = -ln(attenuationColor) / attenuationDistance` per channel from
+//! `KHR_materials_volume` (0 for an infinite distance); `KHR_materials_dispersion`'s
+//! `dispersion = 20 / V_d` (Abbe number) becomes a Cauchy `B` (see [`cauchy_b_from_abbe`]).
+//! Metallic 1 with roughness at most [`MIRROR_MAX_ROUGHNESS`] becomes a mirror of
+//! reflectance `baseColorFactor`; everything else is diffuse with albedo
+//! `baseColorFactor`. What cannot be represented is listed in the warnings, per file:
+//! textures, partial transmission (below 1: a dielectric from 0.5 up, else diffuse), thin
+//! walls (transmission without a volume: traced as a solid), rough glass or metal,
+//! metallic factors between 0 and 1, emission, alpha blending and masking.
+
+use caustica_core::math::optics::REFERENCE_WAVELENGTH_UM;
+use caustica_core::scene::format::SceneFileError;
+use caustica_core::scene::shapes::tessellate;
+use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape};
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Luminous efficacy (lm/W) assumed to turn glTF's photometric light units into watts:
+/// 683, the definition of the candela (see the module doc).
+pub const LUMINOUS_EFFICACY_LM_PER_W: f32 = 683.0;
+
+/// Largest glTF roughness still read as a perfect mirror (metals) or smooth glass
+/// (transmission): below 0.05 a GGX lobe's width is under about 3 degrees, which a
+/// caustic of a perfect reflector resolves no differently at the scenes' scales.
+pub const MIRROR_MAX_ROUGHNESS: f32 = 0.05;
+
+/// Wavelengths (micrometres) of the Fraunhofer lines that define the Abbe number
+/// `V_d = (n_d - 1) / (n_F - n_C)`: d (587.6 nm, where glTF's `ior` is given), F
+/// (486.1 nm), C (656.3 nm).
+pub const FRAUNHOFER_D_UM: f32 = 0.5876;
+/// Fraunhofer F line (micrometres).
+pub const FRAUNHOFER_F_UM: f32 = 0.4861;
+/// Fraunhofer C line (micrometres).
+pub const FRAUNHOFER_C_UM: f32 = 0.6563;
+
+/// A glTF file read into a scene, with what it holds that caustica cannot represent.
+#[derive(Clone, Debug)]
+pub struct GltfImport {
+    /// The scene (validated).
+    pub scene: Scene,
+    /// One line per thing dropped or approximated, naming the glTF element.
+    pub warnings: Vec<String>,
+}
+
+/// Cauchy `B` (um^2) of a glass with index `n_d` at 587.6 nm and Abbe number `abbe`.
+/// With `n(l) = A + B / l^2`, `n_F - n_C = B (1 / l_F^2 - 1 / l_C^2)` and
+/// `V_d = (n_d - 1) / (n_F - n_C)`, so `B = (n_d - 1) / (V_d (1 / l_F^2 - 1 / l_C^2))`
+/// (0.0042 um^2 for BK7: n_d 1.5168, V_d 64.17). Returns 0 for `abbe` 0 or infinite (no
+/// dispersion).
+pub fn cauchy_b_from_abbe(n_d: f32, abbe: f32) -> f32 {
+    if !(abbe.is_finite() && abbe > 0.0) {
+        return 0.0;
+    }
+    let k = 1.0 / (FRAUNHOFER_F_UM * FRAUNHOFER_F_UM) - 1.0 / (FRAUNHOFER_C_UM * FRAUNHOFER_C_UM);
+    (n_d - 1.0) / (abbe * k)
+}
+
+/// caustica's `ior` (at [`REFERENCE_WAVELENGTH_UM`], 550 nm) of a Cauchy glass given at
+/// the d line: `n(0.55) = n_d + B (1 / 0.55^2 - 1 / 0.5876^2)`.
+pub fn ior_at_reference(n_d: f32, cauchy_b: f32) -> f32 {
+    n_d + cauchy_b
+        * (1.0 / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM)
+            - 1.0 / (FRAUNHOFER_D_UM * FRAUNHOFER_D_UM))
+}
+
+/// Reads a `.gltf` or `.glb` file (see the module doc).
+pub fn load_gltf(path: &Path) -> Result<GltfImport, SceneFileError> {
+    let file = path.display().to_string();
+    let limit = caustica_core::scene::limits::MAX_SCENE_FILE_BYTES;
+    let fail = |reason: String| located(&file, reason);
+    let f = std::fs::File::open(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(f, limit + 1), &mut bytes)
+        .map_err(|e| fail(format!("cannot read: {e}")))?;
+    if bytes.len() as u64 > limit {
+        return Err(fail(format!(
+            "larger than the {} MiB a scene file may have",
+            limit >> 20
+        )));
+    }
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "gltf".into());
+    parse_gltf(&bytes, &file, &name, path.parent())
+}
+
+fn located(file: &str, reason: String) -> SceneFileError {
+    SceneFileError {
+        file: file.into(),
+        line: 0,
+        column: 0,
+        reason,
+    }
+}
+
+/// Parses glTF (JSON or GLB bytes) into a scene named `name`; `file` names the source in
+/// errors and warnings, `dir` is where relative buffer URIs are looked up (none: only
+/// embedded buffers).
+pub fn parse_gltf(
+    bytes: &[u8],
+    file: &str,
+    name: &str,
+    dir: Option<&Path>,
+) -> Result<GltfImport, SceneFileError> {
+    let fail = |reason: String| located(file, reason);
+    let doc = gltf::Gltf::from_slice(bytes).map_err(|e| match e {
+        gltf::Error::Deserialize(j) => SceneFileError {
+            file: file.into(),
+            line: j.line(),
+            column: j.column(),
+            reason: format!("not glTF: {j}"),
+        },
+        gltf::Error::Validation(v) => {
+            let (path, err) = &v[0];
+            fail(format!(
+                "invalid glTF at {path}: {err}{}",
+                if v.len() > 1 {
+                    format!(" (and {} more problems)", v.len() - 1)
+                } else {
+                    String::new()
+                }
+            ))
+        }
+        other => fail(format!("not glTF: {other}")),
+    })?;
+    let buffers = resolve_buffers(&doc, dir).map_err(&fail)?;
+    check_accessors(&doc, &buffers).map_err(&fail)?;
+    let mut im = Importer {
+        buffers: &buffers,
+        warnings: Vec::new(),
+        materials: BTreeMap::new(),
+        material_names: BTreeMap::new(),
+        objects: Vec::new(),
+        lights: Vec::new(),
+        camera: None,
+        bounds: Aabb::EMPTY,
+    };
+    for ext in doc.extensions_required() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            im.warnings.push(format!(
+                "required extension {ext} is not supported: its data is ignored"
+            ));
+        }
+    }
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| fail("the file has no scene".into()))?;
+    for node in scene.nodes() {
+        im.visit(&node, Mat4::IDENTITY).map_err(&fail)?;
+    }
+    if im.objects.is_empty() {
+        return Err(fail("the scene has no triangle mesh".into()));
+    }
+    if im.lights.is_empty() {
+        return Err(fail(
+            "the scene has no KHR_lights_punctual light (caustica needs at least one)".into(),
+        ));
+    }
+    let camera = match im.camera.take() {
+        Some(c) => c,
+        None => {
+            im.warnings
+                .push("no perspective camera: a default one frames the scene".into());
+            default_camera(im.bounds)
+        }
+    };
+    let scene = Scene {
+        name: name.into(),
+        description: format!("imported from {file}"),
+        camera,
+        materials: im.materials,
+        objects: im.objects,
+        lights: im.lights,
+    };
+    if let Err(problems) = scene.validate() {
+        return Err(fail(format!(
+            "the imported scene is invalid: {}: {}{}",
+            problems[0].path,
+            problems[0].reason,
+            if problems.len() > 1 {
+                format!(" (and {} more problems)", problems.len() - 1)
+            } else {
+                String::new()
+            }
+        )));
+    }
+    Ok(GltfImport {
+        scene,
+        warnings: im
+            .warnings
+            .into_iter()
+            .map(|w| format!("{file}: {w}"))
+            .collect(),
+    })
+}
+
+/// Extensions this reader understands (others are ignored, with a warning when required).
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_volume",
+    "KHR_materials_dispersion",
+];
+
+/// Every buffer's bytes: the GLB chunk, a base64 data URI, or a file relative to `dir`.
+fn resolve_buffers(doc: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Vec<u8>>, String> {
+    let mut out = Vec::new();
+    for b in doc.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => doc
+                .blob
+                .clone()
+                .ok_or_else(|| format!("buffers[{}] refers to a missing GLB chunk", b.index()))?,
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (_, payload) = rest.split_once(";base64,").ok_or_else(|| {
+                        format!("buffers[{}]: a data URI that is not base64", b.index())
+                    })?;
+                    base64_decode(payload)
+                        .ok_or_else(|| format!("buffers[{}]: bad base64", b.index()))?
+                } else {
+                    let dir = dir.ok_or_else(|| {
+                        format!(
+                            "buffers[{}]: external file '{uri}' but no directory",
+                            b.index()
+                        )
+                    })?;
+                    let p = dir.join(percent_decode(uri));
+                    std::fs::read(&p).map_err(|e| {
+                        format!("buffers[{}]: cannot read {}: {e}", b.index(), p.display())
+                    })?
+                }
+            }
+        };
+        if data.len() < b.length() {
+            return Err(format!(
+                "buffers[{}] holds {} bytes, {} declared",
+                b.index(),
+                data.len(),
+                b.length()
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// Every buffer view inside its buffer, every accessor inside its view: a reader never
+/// reads past the data (the `gltf` crate's validation does not check ranges).
+fn check_accessors(doc: &gltf::Gltf, buffers: &[Vec<u8>]) -> Result<(), String> {
+    for v in doc.views() {
+        let end = v.offset() as u64 + v.length() as u64;
+        let have = buffers.get(v.buffer().index()).map_or(0, |b| b.len()) as u64;
+        if end > have {
+            return Err(format!(
+                "bufferViews[{}] ends at byte {end} of buffers[{}], which holds {have}",
+                v.index(),
+                v.buffer().index()
+            ));
+        }
+    }
+    for a in doc.accessors() {
+        if a.sparse().is_some() {
+            return Err(format!(
+                "accessors[{}]: sparse accessors are not supported",
+                a.index()
+            ));
+        }
+        let Some(v) = a.view() else { continue };
+        if a.count() == 0 {
+            continue;
+        }
+        let size = a.size() as u64;
+        let stride = v.stride().map_or(size, |s| s as u64);
+        let end = a.offset() as u64 + (a.count() as u64 - 1) * stride + size;
+        if end > v.length() as u64 {
+            return Err(format!(
+                "accessors[{}]: {} elements end at byte {end} of bufferViews[{}], which holds {}",
+                a.index(),
+                a.count(),
+                v.index(),
+                v.length()
+            ));
+        }
+    }
+    Ok(())
+}
+
+struct Importer<'b> {
+    buffers: &'b [Vec<u8>],
+    warnings: Vec<String>,
+    materials: BTreeMap<String, Material>,
+    /// glTF material index (None: the default material) -> caustica name.
+    material_names: BTreeMap<Option<usize>, String>,
+    objects: Vec<Object>,
+    lights: Vec<Light>,
+    camera: Option<Camera>,
+    bounds: Aabb,
+}
+
+impl Importer<'_> {
+    fn visit(&mut self, node: &gltf::Node, parent: Mat4) -> Result<(), String> {
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        let label = match node.name() {
+            Some(n) => format!("nodes[{}] '{n}'", node.index()),
+            None => format!("nodes[{}]", node.index()),
+        };
+        if let Some(mesh) = node.mesh() {
+            self.mesh(&mesh, world, &label)?;
+        }
+        if let Some(light) = node.light() {
+            self.light(&light, world, &label);
+        }
+        if let Some(cam) = node.camera() {
+            self.camera(&cam, world, &label);
+        }
+        for child in node.children() {
+            self.visit(&child, world)?;
+        }
+        Ok(())
+    }
+
+    fn mesh(&mut self, mesh: &gltf::Mesh, world: Mat4, label: &str) -> Result<(), String> {
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let flip = Mat3::from_mat4(world).determinant() < 0.0;
+        for prim in mesh.primitives() {
+            let at = format!("{label} mesh {} primitive {}", mesh.index(), prim.index());
+            let reader = prim.reader(|b| self.buffers.get(b.index()).map(|v| v.as_slice()));
+            let Some(positions) = reader.read_positions() else {
+                self.warnings.push(format!("{at}: no POSITION, skipped"));
+                continue;
+            };
+            let positions: Vec<Vec3> = positions
+                .map(|p| world.transform_point3(Vec3::from(p)))
+                .collect();
+            let n = positions.len();
+            let normals: Vec<Vec3> = match reader.read_normals() {
+                // (no renormalisation here: the upload normalises shading normals)
+                Some(it) => it.map(|v| normal_matrix * Vec3::from(v)).collect(),
+                None => Vec::new(),
+            };
+            let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
+                Some(t) => t.into_f32().map(Vec2::from).collect(),
+                None => Vec::new(),
+            };
+            let flat: Vec<u32> = match reader.read_indices() {
+                Some(ix) => ix.into_u32().collect(),
+                None => (0..n as u32).collect(),
+            };
+            if let Some(bad) = flat.iter().find(|&&i| i as usize >= n) {
+                return Err(format!("{at}: index {bad} beyond its {n} vertices"));
+            }
+            use gltf::mesh::Mode;
+            let mut tris: Vec<[u32; 3]> = match prim.mode() {
+                Mode::Triangles => flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                Mode::TriangleStrip => (2..flat.len())
+                    .map(|k| {
+                        if k % 2 == 0 {
+                            [flat[k - 2], flat[k - 1], flat[k]]
+                        } else {
+                            [flat[k - 1], flat[k - 2], flat[k]]
+                        }
+                    })
+                    .collect(),
+                Mode::TriangleFan => (2..flat.len())
+                    .map(|k| [flat[0], flat[k - 1], flat[k]])
+                    .collect(),
+                other => {
+                    self.warnings.push(format!(
+                        "{at}: {other:?} primitives are not surfaces, skipped"
+                    ));
+                    continue;
+                }
+            };
+            if flip {
+                for t in &mut tris {
+                    t.swap(1, 2);
+                }
+            }
+            if tris.is_empty() {
+                continue;
+            }
+            for p in &positions {
+                self.bounds.grow(*p);
+            }
+            let material = self.material(prim.material());
+            self.objects.push(Object {
+                name: at,
+                material,
+                shape: Shape::Mesh {
+                    positions,
+                    normals: if normals.len() == n {
+                        normals
+                    } else {
+                        Vec::new()
+                    },
+                    uvs: if uvs.len() == n { uvs } else { Vec::new() },
+                    indices: tris,
+                },
+            });
+        }
+        Ok(())
+    }
+
+    /// The caustica material name for glTF material `m` (mapped once).
+    fn material(&mut self, m: gltf::Material) -> String {
+        if let Some(n) = self.material_names.get(&m.index()) {
+            return n.clone();
+        }
+        let base = match (m.index(), m.name()) {
+            (_, Some(n)) if !n.is_empty() => n.to_string(),
+            (Some(i), _) => format!("material{i}"),
+            (None, _) => "default".into(),
+        };
+        let mut name = base.clone();
+        let mut k = 1;
+        while self.materials.contains_key(&name) {
+            k += 1;
+            name = format!("{base}#{k}");
+        }
+        let at = match m.index() {
+            Some(i) => format!("materials[{i}] '{name}'"),
+            None => "the default material".into(),
+        };
+        let mat = map_material(&m, &at, &mut self.warnings);
+        self.materials.insert(name.clone(), mat);
+        self.material_names.insert(m.index(), name.clone());
+        name
+    }
+
+    fn light(&mut self, light: &gltf::khr_lights_punctual::Light, world: Mat4, label: &str) {
+        let extras = caustica_extras(light.extras());
+        let power = exact_vec3(
+            extras.as_ref(),
+            "power",
+            Vec3::from(light.color()) * light.intensity() / LUMINOUS_EFFICACY_LM_PER_W,
+        );
+        let position = world.transform_point3(Vec3::ZERO);
+        // caustica's own direction vector (any length) where it points the same way
+        let derived = world
+            .transform_vector3(Vec3::NEG_Z)
+            .normalize_or(Vec3::NEG_Y);
+        let direction = match extras.as_ref().and_then(|e| vec3_of(e.get("direction")?)) {
+            Some(d) if (d.normalize_or_zero() - derived).length() < AGREE => d,
+            _ => derived,
+        };
+        if light.range().is_some() {
+            self.warnings.push(format!(
+                "{label}: light range has no counterpart (inverse-square without cut-off)"
+            ));
+        }
+        use gltf::khr_lights_punctual::Kind;
+        self.lights.push(match light.kind() {
+            Kind::Point => Light::Point {
+                position,
+                intensity: power,
+            },
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => Light::Spot {
+                position,
+                direction,
+                intensity: power,
+                inner_angle_deg: inner_cone_angle.to_degrees(),
+                outer_angle_deg: outer_cone_angle.to_degrees(),
+            },
+            Kind::Directional => Light::Directional {
+                direction,
+                irradiance: power,
+                projection_volume: extras
+                    .and_then(|e| serde_json::from_value(e.get("projection_volume")?.clone()).ok()),
+            },
+        });
+    }
+
+    fn camera(&mut self, cam: &gltf::Camera, world: Mat4, label: &str) {
+        if self.camera.is_some() {
+            self.warnings.push(format!(
+                "{label}: a further camera, ignored (the first one is used)"
+            ));
+            return;
+        }
+        let gltf::camera::Projection::Perspective(p) = cam.projection() else {
+            self.warnings.push(format!(
+                "{label}: orthographic camera not supported (caustica's camera is a pinhole)"
+            ));
+            return;
+        };
+        let extras = caustica_extras(cam.extras());
+        let size = extras
+            .as_ref()
+            .and_then(|e| Some((e.get("width")?.as_u64()?, e.get("height")?.as_u64()?)));
+        let (width, height) = match size {
+            Some((w, h)) => (w as u32, h as u32),
+            None => {
+                let aspect = p.aspect_ratio().unwrap_or(16.0 / 9.0);
+                (960, ((960.0 / aspect).round() as u32).max(1))
+            }
+        };
+        let e = extras.as_ref();
+        let position = world.transform_point3(Vec3::ZERO);
+        let forward = world
+            .transform_vector3(Vec3::NEG_Z)
+            .normalize_or(Vec3::NEG_Z);
+        // caustica's own target (any point along the view) where it agrees with the node
+        let target = match e.and_then(|e| vec3_of(e.get("target")?)) {
+            Some(t) if ((t - position).normalize_or_zero() - forward).length() < AGREE => t,
+            _ => position + forward,
+        };
+        // caustica's own up (any vector in the plane of the view's up) where it agrees
+        let derived_up = world.transform_vector3(Vec3::Y).normalize_or(Vec3::Y);
+        let up = match e.and_then(|e| vec3_of(e.get("up")?)) {
+            Some(u) => {
+                let r = forward.cross(u).normalize_or_zero();
+                if (r.cross(forward) - derived_up).length() < AGREE {
+                    u
+                } else {
+                    derived_up
+                }
+            }
+            None => derived_up,
+        };
+        let fov = p.yfov().to_degrees();
+        let fov_y_deg = match e.and_then(|e| e.get("fov_y_deg")?.as_f64()) {
+            Some(f) if (f as f32 - fov).abs() <= AGREE * fov => f as f32,
+            _ => fov,
+        };
+        self.camera = Some(Camera {
+            position,
+            target,
+            up,
+            fov_y_deg,
+            width,
+            height,
+        });
+    }
+}
+
+/// How closely a value in `extras.caustica` must agree with the one the standard fields
+/// give (relative) to be used instead: caustica writes its exact values there (a light's
+/// power through the factor 683, a direction through a quaternion, lose a few ulp), and
+/// a file edited in another tool, whose standard fields then disagree, is read from the
+/// standard fields.
+const AGREE: f32 = 1e-4;
+
+fn vec3_of(v: &Value) -> Option<Vec3> {
+    let a = v.as_array()?;
+    Some(Vec3::new(
+        a.first()?.as_f64()? as f32,
+        a.get(1)?.as_f64()? as f32,
+        a.get(2)?.as_f64()? as f32,
+    ))
+}
+
+/// `extras.caustica[key]` where it agrees with `derived` within [`AGREE`], else `derived`.
+fn exact_vec3(extras: Option<&serde_json::Map<String, Value>>, key: &str, derived: Vec3) -> Vec3 {
+    match extras.and_then(|e| vec3_of(e.get(key)?)) {
+        Some(v) if (v - derived).length() <= AGREE * derived.length().max(v.length()) => v,
+        _ => derived,
+    }
+}
+
+/// `extras.caustica` of a glTF element, where caustica keeps what glTF has no field for.
+fn caustica_extras(extras: &gltf::json::Extras) -> Option<serde_json::Map<String, Value>> {
+    let raw = extras.as_ref()?;
+    let v: Value = serde_json::from_str(raw.get()).ok()?;
+    v.get("caustica")?.as_object().cloned()
+}
+
+fn map_material(m: &gltf::Material, at: &str, warn: &mut Vec<String>) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let base = pbr.base_color_factor();
+    let color = Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE);
+    let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
+    let mut textures = Vec::new();
+    if pbr.base_color_texture().is_some() {
+        textures.push("baseColorTexture");
+    }
+    if pbr.metallic_roughness_texture().is_some() {
+        textures.push("metallicRoughnessTexture");
+    }
+    if m.normal_texture().is_some() {
+        textures.push("normalTexture");
+    }
+    if m.occlusion_texture().is_some() {
+        textures.push("occlusionTexture");
+    }
+    if m.emissive_texture().is_some() {
+        textures.push("emissiveTexture");
+    }
+    if m.transmission()
+        .and_then(|t| t.transmission_texture())
+        .is_some()
+    {
+        textures.push("transmissionTexture");
+    }
+    if m.volume().and_then(|v| v.thickness_texture()).is_some() {
+        textures.push("thicknessTexture");
+    }
+    if !textures.is_empty() {
+        warn.push(format!(
+            "{at}: textures are not supported, factors used instead: {}",
+            textures.join(", ")
+        ));
+    }
+    if m.emissive_factor() != [0.0; 3] {
+        warn.push(format!("{at}: emission ignored (only lights emit here)"));
+    }
+    if !matches!(m.alpha_mode(), gltf::material::AlphaMode::Opaque) || base[3] < 1.0 {
+        warn.push(format!(
+            "{at}: alpha (blend, mask or alpha < 1) ignored: opaque"
+        ));
+    }
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    if transmission > 0.0 {
+        if transmission < 1.0 {
+            warn.push(format!(
+                "{at}: partial transmission {transmission} not supported: {}",
+                if transmission >= 0.5 {
+                    "traced as a dielectric"
+                } else {
+                    "diffuse"
+                }
+            ));
+        }
+        if transmission >= 0.5 {
+            if roughness > MIRROR_MAX_ROUGHNESS {
+                warn.push(format!(
+                    "{at}: roughness {roughness} on glass not supported: traced as smooth"
+                ));
+            }
+            let n_d = m.ior().unwrap_or(1.5);
+            let abbe = m
+                .extension_value("KHR_materials_dispersion")
+                .and_then(|d| d.get("dispersion")?.as_f64())
+                .filter(|d| *d > 0.0)
+                .map(|d| (20.0 / d) as f32);
+            let cauchy_b = abbe.map_or(0.0, |v| cauchy_b_from_abbe(n_d, v));
+            let absorption = match m.volume() {
+                Some(v) => {
+                    let d = v.attenuation_distance();
+                    let c = Vec3::from(v.attenuation_color());
+                    if d.is_finite() && d > 0.0 {
+                        Vec3::new(
+                            -c.x.max(f32::MIN_POSITIVE).ln(),
+                            -c.y.max(f32::MIN_POSITIVE).ln(),
+                            -c.z.max(f32::MIN_POSITIVE).ln(),
+                        ) / d
+                    } else {
+                        Vec3::ZERO
+                    }
+                }
+                None => {
+                    warn.push(format!(
+                        "{at}: transmission without KHR_materials_volume is thin-walled in \
+                         glTF: traced as a solid dielectric"
+                    ));
+                    Vec3::ZERO
+                }
+            };
+            // caustica's own values (extras.caustica) where the standard fields agree
+            let e = caustica_extras(m.extras());
+            let e = e.as_ref();
+            let ior = ior_at_reference(n_d, cauchy_b);
+            let ior = match e.and_then(|e| e.get("ior")?.as_f64()) {
+                Some(x) if (x as f32 - ior).abs() <= AGREE * ior => x as f32,
+                _ => ior,
+            };
+            let cauchy_b = match e.and_then(|e| e.get("cauchy_b")?.as_f64()) {
+                Some(x) if (x as f32 - cauchy_b).abs() <= AGREE * cauchy_b.abs() => x as f32,
+                _ => cauchy_b,
+            };
+            let absorption = exact_vec3(e, "absorption", absorption);
+            return Material::Dielectric {
+                ior,
+                cauchy_b,
+                absorption,
+            };
+        }
+    }
+    if metallic >= 0.5 && roughness <= MIRROR_MAX_ROUGHNESS {
+        if metallic < 1.0 {
+            warn.push(format!("{at}: metallic {metallic} read as a mirror"));
+        }
+        return Material::Mirror { reflectance: color };
+    }
+    if metallic > 0.0 {
+        warn.push(format!(
+            "{at}: metallic {metallic} with roughness {roughness} read as diffuse"
+        ));
+    }
+    Material::Diffuse { albedo: color }
+}
+
+fn default_camera(bounds: Aabb) -> Camera {
+    let c = bounds.center();
+    let r = (0.5 * bounds.diagonal()).max(1e-3);
+    Camera {
+        position: c + Vec3::new(0.0, 0.6, 1.6) * r * 1.8,
+        target: c,
+        up: Vec3::Y,
+        fov_y_deg: 45.0,
+        width: 960,
+        height: 540,
+    }
+}
+
+// ---- export ----
+
+/// The scene as a self-contained glTF 2.0 document (`.gltf` JSON with one embedded
+/// buffer): every object tessellated into a mesh in world space (one node each), the
+/// materials by the inverse of the import mapping (absorption as attenuation colour
+/// `exp(-sigma / max sigma)` at distance `1 / max sigma`; dispersion as
+/// `KHR_materials_dispersion`), the lights with `KHR_lights_punctual` (times 683), the
+/// camera as a perspective camera; image size and a directional light's projection
+/// volume in `extras.caustica`.
+pub fn scene_to_gltf(scene: &Scene) -> String {
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut push = |bytes: &[u8], target: u32, acc: Value| -> usize {
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target}));
+        bin.extend_from_slice(bytes);
+        let mut a = acc;
+        a["bufferView"] = json!(views.len() - 1);
+        accessors.push(a);
+        accessors.len() - 1
+    };
+    let names: Vec<&String> = scene.materials.keys().collect();
+    let mut meshes = Vec::new();
+    let mut nodes = Vec::new();
+    let mut root = Vec::new();
+    for o in &scene.objects {
+        let m = tessellate(&o.shape);
+        let n = m.positions.len();
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for p in &m.positions {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let f32s = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+        let pos: Vec<f32> = m.positions.iter().flat_map(|p| p.to_array()).collect();
+        let nor: Vec<f32> = m.normals.iter().flat_map(|p| p.to_array()).collect();
+        let uv: Vec<f32> = m.uvs.iter().flat_map(|p| p.to_array()).collect();
+        let idx: Vec<u8> = m
+            .indices
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let a_pos = push(
+            &f32s(&pos),
+            34962,
+            json!({"componentType": 5126, "count": n, "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()}),
+        );
+        let mut attributes = json!({"POSITION": a_pos});
+        if m.normals.len() == n {
+            attributes["NORMAL"] = json!(push(
+                &f32s(&nor),
+                34962,
+                json!({"componentType": 5126, "count": n, "type": "VEC3"})
+            ));
+        }
+        if m.uvs.len() == n {
+            attributes["TEXCOORD_0"] = json!(push(
+                &f32s(&uv),
+                34962,
+                json!({"componentType": 5126, "count": n, "type": "VEC2"})
+            ));
+        }
+        let a_idx = push(
+            &idx,
+            34963,
+            json!({"componentType": 5125, "count": m.indices.len() * 3, "type": "SCALAR"}),
+        );
+        let mat = names.iter().position(|k| **k == o.material).unwrap_or(0);
+        meshes.push(json!({"name": o.name, "primitives": [{"attributes": attributes, "indices": a_idx, "material": mat, "mode": 4}]}));
+        root.push(nodes.len());
+        nodes.push(json!({"name": o.name, "mesh": meshes.len() - 1}));
+    }
+    let mut ext_used = std::collections::BTreeSet::new();
+    let materials: Vec<Value> = scene
+        .materials
+        .iter()
+        .map(|(name, m)| material_json(name, m, &mut ext_used))
+        .collect();
+    // lights
+    let mut lights = Vec::new();
+    for (k, l) in scene.lights.iter().enumerate() {
+        let (kind, power, pos, dir) = match l {
+            Light::Point {
+                position,
+                intensity,
+            } => ("point", *intensity, *position, Vec3::NEG_Y),
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                ..
+            } => ("spot", *intensity, *position, direction.normalize()),
+            Light::Directional {
+                direction,
+                irradiance,
+                ..
+            } => (
+                "directional",
+                *irradiance,
+                Vec3::ZERO,
+                direction.normalize(),
+            ),
+        };
+        let peak = power.max_element();
+        let color = if peak > 0.0 { power / peak } else { Vec3::ONE };
+        let mut lj = json!({"name": format!("light{k}"), "type": kind, "color": color.to_array(), "intensity": peak * LUMINOUS_EFFICACY_LM_PER_W});
+        if let Light::Spot {
+            inner_angle_deg,
+            outer_angle_deg,
+            ..
+        } = l
+        {
+            lj["spot"] = json!({"innerConeAngle": inner_angle_deg.to_radians(), "outerConeAngle": outer_angle_deg.to_radians()});
+        }
+        let own_dir = match l {
+            Light::Spot { direction, .. } | Light::Directional { direction, .. } => *direction,
+            Light::Point { .. } => dir,
+        };
+        let mut exact = json!({"power": power.to_array(), "direction": own_dir.to_array()});
+        if let Light::Directional {
+            projection_volume: Some(v),
+            ..
+        } = l
+        {
+            exact["projection_volume"] = json!(v);
+        }
+        lj["extras"] = json!({"caustica": exact});
+        lights.push(lj);
+        let rot = Quat::from_rotation_arc(Vec3::NEG_Z, dir);
+        root.push(nodes.len());
+        nodes.push(json!({"name": format!("light{k}"), "translation": pos.to_array(), "rotation": rot.to_array(), "extensions": {"KHR_lights_punctual": {"light": k}}}));
+    }
+    ext_used.insert("KHR_lights_punctual");
+    // camera: -z forward, +y up
+    let c = &scene.camera;
+    let f = (c.target - c.position).normalize();
+    let r = f.cross(c.up).normalize();
+    let u = r.cross(f);
+    let rot = Quat::from_mat3(&Mat3::from_cols(r, u, -f)).normalize();
+    root.push(nodes.len());
+    nodes.push(json!({"name": "camera", "camera": 0, "translation": c.position.to_array(), "rotation": rot.to_array()}));
+    let camera = json!({"type": "perspective", "perspective": {"yfov": c.fov_y_deg.to_radians(), "aspectRatio": c.width as f32 / c.height as f32, "znear": 1e-3},
+        "extras": {"caustica": {"width": c.width, "height": c.height, "target": c.target.to_array(), "up": c.up.to_array(), "fov_y_deg": c.fov_y_deg}}});
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("caustica ", env!("CARGO_PKG_VERSION"))},
+        "extensionsUsed": ext_used.iter().collect::<Vec<_>>(),
+        "extensions": {"KHR_lights_punctual": {"lights": lights}},
+        "scene": 0,
+        "scenes": [{"name": scene.name, "nodes": root}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "cameras": [camera],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", base64_encode(&bin))}],
+    });
+    serde_json::to_string_pretty(&doc).expect("glTF serialisation cannot fail")
+}
+
+fn material_json(
+    name: &str,
+    m: &Material,
+    ext: &mut std::collections::BTreeSet<&'static str>,
+) -> Value {
+    match m {
+        Material::Diffuse { albedo } => {
+            json!({"name": name, "pbrMetallicRoughness": {"baseColorFactor": [albedo.x, albedo.y, albedo.z, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}})
+        }
+        Material::Mirror { reflectance } => {
+            json!({"name": name, "pbrMetallicRoughness": {"baseColorFactor": [reflectance.x, reflectance.y, reflectance.z, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0}})
+        }
+        Material::Dielectric {
+            ior,
+            cauchy_b,
+            absorption,
+        } => {
+            ext.insert("KHR_materials_transmission");
+            ext.insert("KHR_materials_ior");
+            ext.insert("KHR_materials_volume");
+            // back from 550 nm to the d line
+            let n_d = ior
+                - cauchy_b
+                    * (1.0 / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM)
+                        - 1.0 / (FRAUNHOFER_D_UM * FRAUNHOFER_D_UM));
+            let mut e = json!({
+                "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_ior": {"ior": n_d},
+            });
+            let s = absorption.max_element();
+            if s > 0.0 {
+                let c = (-*absorption / s).exp();
+                e["KHR_materials_volume"] = json!({"thicknessFactor": 1.0, "attenuationDistance": 1.0 / s, "attenuationColor": c.to_array()});
+            } else {
+                e["KHR_materials_volume"] = json!({"thicknessFactor": 1.0});
+            }
+            if *cauchy_b > 0.0 {
+                ext.insert("KHR_materials_dispersion");
+                let k = 1.0 / (FRAUNHOFER_F_UM * FRAUNHOFER_F_UM)
+                    - 1.0 / (FRAUNHOFER_C_UM * FRAUNHOFER_C_UM);
+                let abbe = (n_d - 1.0) / (cauchy_b * k);
+                e["KHR_materials_dispersion"] = json!({"dispersion": 20.0 / abbe});
+            }
+            json!({"name": name, "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0}, "extensions": e,
+                "extras": {"caustica": {"ior": ior, "cauchy_b": cauchy_b, "absorption": absorption.to_array()}}})
+        }
+    }
+}
+
+// ---- base64 and URIs ----
+
+const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+fn base64_encode(data: &[u8]) -> String {
+    let mut s = String::with_capacity(data.len().div_ceil(3) * 4);
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            if k <= c.len() {
+                s.push(B64[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+fn base64_decode(s: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(s.len() / 4 * 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for ch in s.bytes() {
+        let v = match ch {
+            b'A'..=b'Z' => ch - b'A',
+            b'a'..=b'z' => ch - b'a' + 26,
+            b'0'..=b'9' => ch - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            b'=' => break,
+            b' ' | b'\n' | b'\r' | b'\t' => continue,
+            _ => return None,
+        } as u32;
+        acc = acc << 6 | v;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Some(out)
+}
+
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let Ok(v) = u8::from_str_radix(&s[i + 1..i + 3], 16) {
+                out.push(v);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_round_trips() {
+        for len in 0..20 {
+            let v: Vec<u8> = (0..len).map(|i| (i * 37 + 11) as u8).collect();
+            assert_eq!(base64_decode(&base64_encode(&v)).unwrap(), v);
+        }
+        assert_eq!(base64_encode(b"Man"), "TWFu");
+        assert_eq!(base64_encode(b"Ma"), "TWE=");
+    }
+
+    #[test]
+    fn bk7_abbe_number_gives_its_cauchy_b() {
+        // BK7: n_d 1.5168, V_d 64.17; Cauchy fit B ~ 0.0042 um^2
+        let b = cauchy_b_from_abbe(1.5168, 64.17);
+        assert!((b - 0.00420).abs() < 0.0001, "{b}");
+        // and back: n_F - n_C from B gives the Abbe number
+        let nf_nc = b
+            * (1.0 / (FRAUNHOFER_F_UM * FRAUNHOFER_F_UM)
+                - 1.0 / (FRAUNHOFER_C_UM * FRAUNHOFER_C_UM));
+        assert!(((1.5168 - 1.0) / nf_nc - 64.17).abs() < 1e-3);
+        assert_eq!(cauchy_b_from_abbe(1.5, 0.0), 0.0);
+    }
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
+        assert_eq!(percent_decode("plain.bin"), "plain.bin");
+        assert_eq!(percent_decode("bad%2"), "bad%2");
+    }
+}
