@@ -206,3 +206,31 @@ fn opencl_out_of_host_memory_is_an_error_not_an_abort() {
     assert!(stderr.contains("host memory"), "{stderr}");
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
 }
+
+#[test]
+fn gltf_scenes_export_render_and_fail_cleanly() {
+    // export a built-in scene as glTF, render it on the CPU
+    let out = caustica(&["scenes", "--export", "sphere", "--format", "gltf"]);
+    assert!(out.status.success());
+    let path = temp_file("sphere.gltf", &String::from_utf8(out.stdout).unwrap());
+    let dir = path.with_extension("out");
+    let r = caustica(&[
+        "render",
+        "--scene",
+        path.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--size",
+        "64x48",
+        "--photons",
+        "64x64",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(dir.join("sphere_composite.exr").exists());
+    // a broken glTF: one located line
+    let bad = temp_file("bad.gltf", "{\"asset\": {\"version\": \"2.0\"},\n oops}");
+    fails_cleanly(&["render", "--scene", bad.to_str().unwrap()], "bad.gltf:2:");
+    fails_cleanly(&["scenes", "--export", "sphere", "--format", "obj"], "json or gltf");
+}
