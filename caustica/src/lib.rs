@@ -37,6 +37,7 @@ pub mod output;
 pub mod reference;
 #[cfg(feature = "report")]
 pub mod report;
+pub mod scene_file;
 
 pub use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType};
 pub use caustica_core::frame::error::Error;

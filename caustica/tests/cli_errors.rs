@@ -232,5 +232,8 @@ fn gltf_scenes_export_render_and_fail_cleanly() {
     // a broken glTF: one located line
     let bad = temp_file("bad.gltf", "{\"asset\": {\"version\": \"2.0\"},\n oops}");
     fails_cleanly(&["render", "--scene", bad.to_str().unwrap()], "bad.gltf:2:");
-    fails_cleanly(&["scenes", "--export", "sphere", "--format", "obj"], "json or gltf");
+    fails_cleanly(
+        &["scenes", "--export", "sphere", "--format", "obj"],
+        "json or gltf",
+    );
 }

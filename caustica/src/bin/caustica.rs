@@ -191,17 +191,11 @@ fn load_scene(arg: &str) -> Result<Scene, String> {
     }
     let path = Path::new(arg);
     if path.exists() {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if matches!(ext.as_deref(), Some("gltf" | "glb")) {
-            let im = caustica::gltf_scene::load_gltf(path).map_err(|e| e.to_string())?;
-            for w in &im.warnings {
-                eprintln!("warning: {w}");
-            }
-            return Ok(im.scene);
+        let loaded = caustica::scene_file::load_scene_file(path).map_err(|e| e.to_string())?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
         }
-        return format::load_scene_file(path).map_err(|e| e.to_string());
+        return Ok(loaded.scene);
     }
     Err(format!(
         "unknown scene '{arg}': not a built-in scene ({}) and no such file",

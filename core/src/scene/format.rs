@@ -41,6 +41,12 @@ impl std::error::Error for SceneFileError {}
 
 /// Reads, parses and validates a scene file.
 pub fn load_scene_file(path: &Path) -> Result<Scene, SceneFileError> {
+    let text = read_scene_text(path)?;
+    parse_scene(&text, &path.display().to_string())
+}
+
+/// A scene file's text: at most [`super::limits::MAX_SCENE_FILE_BYTES`], UTF-8.
+pub fn read_scene_text(path: &Path) -> Result<String, SceneFileError> {
     let file = path.display().to_string();
     let fail = |reason: String| SceneFileError {
         file: file.clone(),
@@ -61,19 +67,30 @@ pub fn load_scene_file(path: &Path) -> Result<Scene, SceneFileError> {
             limit >> 20
         )));
     }
-    let text = String::from_utf8(bytes).map_err(|e| {
+    String::from_utf8(bytes).map_err(|e| {
         fail(format!(
             "not UTF-8 text (byte {})",
             e.utf8_error().valid_up_to()
         ))
-    })?;
-    parse_scene(&text, &file)
+    })
 }
 
 /// Parses and validates scene JSON; `file` names the source in errors. On a validation
 /// failure the first problem is reported (with its line) and the count of the others.
 pub fn parse_scene(text: &str, file: &str) -> Result<Scene, SceneFileError> {
-    let scene: Scene = serde_json::from_str(text).map_err(|e| SceneFileError {
+    parse_scene_resolving(text, file, &mut |_| {
+        Err("OBJ files need caustica's `obj` feature (its scene loader reads them)".into())
+    })
+}
+
+/// [`parse_scene`], with every [`super::Shape::ObjFile`] replaced by `load(path)` before
+/// validation; a failed load is reported at the shape's `path` in `text`.
+pub fn parse_scene_resolving(
+    text: &str,
+    file: &str,
+    load: &mut dyn FnMut(&str) -> Result<super::Shape, String>,
+) -> Result<Scene, SceneFileError> {
+    let mut scene: Scene = serde_json::from_str(text).map_err(|e| SceneFileError {
         file: file.into(),
         line: e.line(),
         column: e.column(),
@@ -84,6 +101,20 @@ pub fn parse_scene(text: &str, file: &str) -> Result<Scene, SceneFileError> {
             .unwrap_or_default()
             .to_string(),
     })?;
+    for (i, o) in scene.objects.iter_mut().enumerate() {
+        if let super::Shape::ObjFile { path } = &o.shape {
+            let at = format!("objects[{i}].shape.path");
+            o.shape = load(path).map_err(|reason| {
+                let (line, column) = locate(text, &at).unwrap_or((0, 0));
+                SceneFileError {
+                    file: file.into(),
+                    line,
+                    column,
+                    reason: format!("{at}: {reason}"),
+                }
+            })?;
+        }
+    }
     if let Err(problems) = scene.validate() {
         let first = &problems[0];
         let (line, column) = locate(text, &first.path).unwrap_or((0, 0));

@@ -73,6 +73,7 @@ pub fn tessellated_size(shape: &Shape) -> (u64, u64) {
         Shape::Mesh {
             positions, indices, ..
         } => (positions.len() as u64, indices.len() as u64),
+        Shape::ObjFile { .. } => (0, 0),
         Shape::Sphere { segments, .. } => {
             let s = (*segments).max(3) as u64;
             let rings = (s / 2).max(2);

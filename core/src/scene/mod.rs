@@ -144,6 +144,16 @@ pub enum Shape {
         /// Triangles as triples of indices into `positions`.
         indices: Vec<[u32; 3]>,
     },
+    /// A triangle mesh in a Wavefront OBJ file (path relative to the scene file), loaded
+    /// by the facade's scene loader (`caustica::scene_file`, the `obj` feature), which
+    /// replaces it with a [`Shape::Mesh`] before validation: vertex positions in world
+    /// space, its normals and UVs where the file has them, faces triangulated, `.mtl`
+    /// materials not read (the object's `material` applies). A scene that still holds one
+    /// fails validation.
+    ObjFile {
+        /// Path of the `.obj` file, relative to the scene file's directory.
+        path: String,
+    },
     /// UV sphere with smooth normals: `segments` around, `segments / 2` rings.
     Sphere {
         /// Centre (world space).

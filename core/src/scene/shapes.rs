@@ -28,6 +28,8 @@ pub fn tessellate(shape: &Shape) -> TriangleMesh {
                 flat_vertex_normals(positions, indices)
             };
         }
+        // not loaded: validation refuses it before anything tessellates it
+        Shape::ObjFile { .. } => {}
         Shape::Sphere {
             center,
             radius,

@@ -225,6 +225,13 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
         }
         let sp = format!("{p}.shape");
         match &o.shape {
+            Shape::ObjFile { path } => c.fail(
+                format!("{sp}.path"),
+                format!(
+                    "OBJ file '{path}' not loaded (load the scene with caustica's scene \
+                     loader, built with the `obj` feature)"
+                ),
+            ),
             Shape::Mesh {
                 positions,
                 normals,
