@@ -13,7 +13,8 @@
 //! vertex (`scene::shapes`); missing UVs stay missing (Sspm needs none; CausticMap's atlas
 //! refuses such a receiver by name). The first perspective camera met in the hierarchy
 //! (its image size from `extras.caustica`, else 960 pixels wide at its aspect ratio), or
-//! a default camera framing the scene, with a warning.
+//! a default camera framing the scene, with a warning; a scene without lights (assets lit
+//! by an environment map) gets a default directional light, with a warning.
 //!
 //! **Lights** (KHR_lights_punctual): photometric to radiometric with the luminous
 //! efficacy [`LUMINOUS_EFFICACY_LM_PER_W`] = 683 lm/W, the constant that defines the
@@ -54,6 +55,12 @@ pub const LUMINOUS_EFFICACY_LM_PER_W: f32 = 683.0;
 /// (transmission): below 0.05 a GGX lobe's width is under about 3 degrees, which a
 /// caustic of a perfect reflector resolves no differently at the scenes' scales.
 pub const MIRROR_MAX_ROUGHNESS: f32 = 0.05;
+
+/// The light a glTF file without `KHR_lights_punctual` lights gets (with a warning): a
+/// directional light of this irradiance (W/m^2 per channel)...
+pub const DEFAULT_SUN_IRRADIANCE: f32 = 3.0;
+/// ... travelling along this direction (steeply down, a little sideways).
+pub const DEFAULT_SUN_DIRECTION: Vec3 = Vec3::new(0.3, -1.0, 0.2);
 
 /// Wavelengths (micrometres) of the Fraunhofer lines that define the Abbe number
 /// `V_d = (n_d - 1) / (n_F - n_C)`: d (587.6 nm, where glTF's `ior` is given), F
@@ -185,9 +192,16 @@ pub fn parse_gltf(
         return Err(fail("the scene has no triangle mesh".into()));
     }
     if im.lights.is_empty() {
-        return Err(fail(
-            "the scene has no KHR_lights_punctual light (caustica needs at least one)".into(),
+        // many assets rely on an environment map, which caustica does not have
+        im.warnings.push(format!(
+            "no KHR_lights_punctual light: a default directional light is added \
+             ({DEFAULT_SUN_IRRADIANCE} W/m^2 per channel, from above)"
         ));
+        im.lights.push(Light::Directional {
+            direction: DEFAULT_SUN_DIRECTION,
+            irradiance: Vec3::splat(DEFAULT_SUN_IRRADIANCE),
+            projection_volume: None,
+        });
     }
     let camera = match im.camera.take() {
         Some(c) => c,

@@ -355,14 +355,19 @@ fn bad_files_get_one_line_located_errors() {
     .unwrap_err();
     assert_eq!((e.file.as_str(), e.line), ("bad.gltf", 3), "{e}");
     assert!(!e.to_string().contains('\n'));
-    // no light
+    // no light: a default sun, with a warning
     let mut doc: serde_json::Value = serde_json::from_str(&instanced_document()).unwrap();
     doc["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
-    let e = parse_gltf(doc.to_string().as_bytes(), "dark.gltf", "t", None).unwrap_err();
-    assert!(
-        e.to_string().contains("no KHR_lights_punctual light"),
-        "{e}"
-    );
+    let im = parse_gltf(doc.to_string().as_bytes(), "dark.gltf", "t", None).unwrap();
+    assert!(im
+        .warnings
+        .iter()
+        .any(|w| w.contains("no KHR_lights_punctual light")));
+    assert!(matches!(im.scene.lights[..], [Light::Directional { .. }]));
+    // no mesh at all
+    doc["scenes"][0]["nodes"] = serde_json::json!([2]);
+    let e = parse_gltf(doc.to_string().as_bytes(), "empty.gltf", "t", None).unwrap_err();
+    assert!(e.to_string().contains("no triangle mesh"), "{e}");
     // an index beyond the vertices
     let mut doc: serde_json::Value = serde_json::from_str(&instanced_document()).unwrap();
     doc["accessors"][2]["count"] = serde_json::json!(7);
@@ -432,4 +437,41 @@ fn edits_in_other_tools_win_over_causticas_extras() {
         .materials
         .values()
         .any(|m| matches!(m, Material::Dielectric { ior, .. } if (*ior - 1.33).abs() < 1e-6)));
+}
+
+/// The Khronos glTF sample assets with transmission, volume and dispersion, rendered when
+/// a checkout of <https://github.com/KhronosGroup/glTF-Sample-Assets> is named by
+/// `CAUSTICA_GLTF_SAMPLES`; skipped, loudly, when it is not (it is not vendored here: the
+/// repository is about 1 GB).
+#[test]
+fn khronos_sample_assets_load_and_render_when_present() {
+    let Ok(root) = std::env::var("CAUSTICA_GLTF_SAMPLES") else {
+        eprintln!(
+            "*** SKIPPED: set CAUSTICA_GLTF_SAMPLES to a glTF-Sample-Assets checkout to render \
+             DispersionTest, DragonAttenuation, TransmissionTest, AttenuationTest, IORTestGrid ***"
+        );
+        return;
+    };
+    for name in [
+        "DispersionTest",
+        "DragonAttenuation",
+        "TransmissionTest",
+        "AttenuationTest",
+        "IORTestGrid",
+    ] {
+        let path = std::path::Path::new(&root).join(format!("Models/{name}/glTF/{name}.gltf"));
+        let im = caustica::gltf_scene::load_gltf(&path).unwrap_or_else(|e| panic!("{e}"));
+        for w in &im.warnings {
+            eprintln!("warning: {w}");
+        }
+        let img = render(&im.scene);
+        assert!(
+            img.iter().flatten().all(|v| v.is_finite()),
+            "{name}: non-finite pixel"
+        );
+        assert!(
+            img.iter().any(|p| p[0] + p[1] + p[2] > 0.0),
+            "{name}: black"
+        );
+    }
 }
