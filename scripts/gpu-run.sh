@@ -32,13 +32,13 @@ if [ "${1:-}" = "--build" ]; then
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
         cp "$exe" ".devbin/$name"
     done
-    cargo build --release -p caustica-wgpu --example embed_headless
-    cp target/release/examples/embed_headless .devbin/
+    cargo build --release -p caustica --examples
+    for ex in embed_wgpu embed_ash render_png; do cp "target/release/examples/$ex" .devbin/; done
     cargo build --release -p caustica-conformance --example stiff_table
     cp target/release/examples/stiff_table .devbin/
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
-          .devbin/sspm_frame .devbin/embed_headless .devbin/vulkan_backend .devbin/frame_plan \
+          .devbin/sspm_frame .devbin/embed_wgpu .devbin/embed_ash .devbin/render_png .devbin/vulkan_backend .devbin/frame_plan \
           .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
           .devbin/technique_seam .devbin/hostile_input .devbin/large_frames .devbin/filter_flux
     # what the device tool carries must stay under 64 MiB: the binaries travel gzipped
@@ -87,10 +87,11 @@ fi
 if has wgpu; then
     run env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu ./cross_backend
     run ./backend_diff 960x540 512x512
-    run ./embed_headless
+    run timeout 60 ./embed_wgpu 1920x1080 2048
 fi
 if has vulkan; then
     run ./vulkan_backend
+    run timeout 60 ./embed_ash 1920x1080 2048
     # the parallel run is known to hang NVIDIA's driver (see the issue notes): bounded
     run timeout 60 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1

@@ -1,12 +1,15 @@
 //! Embedding caustica in a wgpu renderer, headless: the "renderer" below owns the wgpu
 //! device, queue and an `Rgba16Float` texture; caustica renders the `sphere` scene's
 //! caustics on that device and writes them into the renderer's texture, which the
-//! renderer then reads back here to show that the texels arrived.
-//! Run: `cargo run --release -p caustica-wgpu --example embed_headless`.
+//! renderer then reads back here to show that the texels arrived. `frame` still submits
+//! and waits on the renderer's queue (recording into the host's own encoder without a
+//! CPU wait is issue 19's frame loop).
+//! Run: `cargo run --release -p caustica --example embed_wgpu -- [WxH] [PHOTONS]`.
 
-use caustica_core::scene::builtin::builtin;
-use caustica_core::{Outputs, Sspm, SspmSettings};
-use caustica_wgpu::WgpuBackend;
+use caustica::backends::wgpu::WgpuBackend;
+use caustica::scene::builtin::builtin;
+use caustica::wgpu;
+use caustica::{Outputs, Sspm, SspmSettings};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // --- the host renderer's own device and texture -------------------------------
@@ -21,7 +24,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
         ..Default::default()
     }))?;
-    let (w, h) = (320u32, 180u32);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (w, h): (u32, u32) = match args.first() {
+        Some(s) => {
+            let (a, b) = s.split_once('x').ok_or("size is WxH")?;
+            (a.parse()?, b.parse()?)
+        }
+        None => (320, 180),
+    };
+    let side: u32 = args.get(1).map_or(Ok(512), |s| s.parse())?;
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("renderer's caustics texture"),
         size: wgpu::Extent3d {
@@ -46,8 +57,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scene.camera.width = w;
     scene.camera.height = h;
     let settings = SspmSettings {
-        photons_w: 512,
-        photons_h: 512,
+        photons_w: side,
+        photons_h: side,
         // the renderer does its own direct light: no direct_light or composite pass
         outputs: Outputs::CAUSTICS_ONLY,
         ..SspmSettings::default()
@@ -60,6 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .filtered_caustics
         .ok_or("no light reaches a caustic caster")?;
     backend.write_image_to_texture(caustics, &texture)?;
+    sspm.free(&mut backend)?;
     println!(
         "{name}: {} photons stored, {} deposited, frame {:.1} ms ({})",
         stats.photons_stored, stats.photons_deposited, stats.frame_ms, stats.timing
