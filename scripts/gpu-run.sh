@@ -49,7 +49,7 @@ if [ "${1:-}" = "--build" ]; then
     exit 0
 fi
 
-# Sections to run (default: all): opencl wgpu vulkan plan stiff frames hostile filter
+# Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -114,6 +114,23 @@ if has filter; then
     # issue 15: the density gather keeps the raw flux on every backend (per-kernel checks
     # run in the vulkan section's cross_backend)
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
+fi
+if has hang; then
+    # issue 19 point 5: which backends, run in parallel threads of one process, hang
+    # NVIDIA's driver. HANG_SKIPS lists the CAUSTICA_SKIP_BACKENDS values to try (space-
+    # separated, "-" for none), HANG_RUNS the runs of each; every run is bounded.
+    for skip in ${HANG_SKIPS:-- wgpu vulkan opencl}; do
+        [ "$skip" = "-" ] && skip=""
+        for k in $(seq 1 "${HANG_RUNS:-3}"); do
+            start=$(date +%s)
+            env CAUSTICA_SKIP_BACKENDS="$skip" timeout "${HANG_TIMEOUT:-40}" ./cross_backend \
+                > /tmp/hang.log 2>&1
+            rc=$?
+            last=$(grep -E '^test |\*\*\*' /tmp/hang.log | tail -n 1)
+            echo "hang: skip=[$skip] run $k: exit $rc after $(( $(date +%s) - start )) s; last line: $last" |
+                tee -a "$OUT/log.txt"
+        done
+    done
 fi
 if has hostile; then
     # issue 14: hostile scenes on every backend, large frames, 8192x8192 where it fits

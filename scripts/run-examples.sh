@@ -4,7 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p caustica --examples
-ex=target/release/examples
+target=${CARGO_TARGET_DIR:-target}
+ex=$target/release/examples
 run() { echo "== example: $*"; timeout 300 "$ex/$@"; }
 # a backend picked at run time, on every backend this machine has
 for backend in cpu opencl wgpu vulkan; do
@@ -15,7 +16,7 @@ run scene_in_code 96x54 128
 run load_gltf
 # a glTF file from the CLI's exporter, through the example's file argument
 mkdir -p out/examples
-target/release/caustica scenes --export jelly --format gltf > out/examples/jelly.gltf
+"$target/release/caustica" scenes --export jelly --format gltf > out/examples/jelly.gltf
 run load_gltf out/examples/jelly.gltf 96x54 128
 run embed_wgpu 96x54 128
 run embed_ash 96x54 64

@@ -12,23 +12,45 @@ use std::io::Write;
 pub const REFERENCE_BACKEND: &str = "cpu";
 
 /// Backends found on this machine (name, backend). Panics, loudly, when a backend listed
-/// in `CAUSTICA_REQUIRE_BACKENDS` cannot be opened.
+/// in `CAUSTICA_REQUIRE_BACKENDS` cannot be opened. `CAUSTICA_SKIP_BACKENDS` (a diagnosis
+/// aid, e.g. to find which backends hang together; CI never sets it) leaves the named
+/// backends unopened, loudly; naming one that is also required is a failure.
 pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
     let required = std::env::var("CAUSTICA_REQUIRE_BACKENDS").unwrap_or_default();
+    let skip = std::env::var("CAUSTICA_SKIP_BACKENDS").unwrap_or_default();
+    let skipped = |name: &str| {
+        let s = skip.split(',').map(str::trim).any(|s| s == name);
+        if s {
+            assert!(
+                !required.split(',').map(str::trim).any(|r| r == name),
+                "backend '{name}' is both required and skipped"
+            );
+            loud(&format!("SKIPPING {name} backend: CAUSTICA_SKIP_BACKENDS"));
+        }
+        s
+    };
     let mut out: Vec<(&'static str, Box<dyn Backend>)> = Vec::new();
     match caustica_cpu::CpuBackend::new() {
         Ok(b) => out.push(("cpu", Box::new(b))),
         Err(e) => eprintln!("SKIPPING cpu backend: {e}"),
     }
-    match caustica_opencl::OpenClBackend::new() {
-        Ok(b) => {
+    match (!skipped("opencl"))
+        .then(caustica_opencl::OpenClBackend::new)
+        .transpose()
+    {
+        Ok(None) => {}
+        Ok(Some(b)) => {
             eprintln!("opencl backend: {}", b.device().name);
             out.push(("opencl", Box::new(b)));
         }
         Err(e) => eprintln!("SKIPPING opencl backend (set CAUSTICA_REQUIRE_BACKENDS to fail): {e}"),
     }
-    match caustica_wgpu::WgpuBackend::new() {
-        Ok(b) => {
+    match (!skipped("wgpu"))
+        .then(caustica_wgpu::WgpuBackend::new)
+        .transpose()
+    {
+        Ok(None) => {}
+        Ok(Some(b)) => {
             eprintln!("wgpu backend: {}", b.capabilities().device);
             out.push(("wgpu", Box::new(b)));
         }
@@ -36,8 +58,12 @@ pub fn backends() -> Vec<(&'static str, Box<dyn Backend>)> {
     }
     // The conformance suite runs Vulkan under the Khronos validation layer where it is
     // installed: any validation error fails the step that caused it.
-    match caustica_vulkan::VulkanBackend::with_validation(true) {
-        Ok(b) => {
+    match (!skipped("vulkan"))
+        .then(|| caustica_vulkan::VulkanBackend::with_validation(true))
+        .transpose()
+    {
+        Ok(None) => {}
+        Ok(Some(b)) => {
             eprintln!(
                 "vulkan backend: {} (validation layer {})",
                 b.capabilities().device,
