@@ -17,11 +17,27 @@ pub const DEVICE_EXTENSIONS: [&CStr; 3] = [
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
-/// Runs `f` holding the process's device-lifecycle lock (`caustica_core::device::
-/// lifecycle`, shared with the wgpu backend): backend creation (instance, device,
-/// pipelines) and destruction.
+/// Serialises backend creation (instance, device, pipelines) and destruction in the process: two threads
+/// creating Vulkan backends at once hung in NVIDIA's driver (seen on the H100 with the
+/// test harness's parallel tests).
+pub(crate) static LIFECYCLE: Mutex<()> = Mutex::new(());
+
+thread_local! {
+    /// Whether this thread holds `LIFECYCLE` (a context dropped while its backend is
+    /// being created must not lock it again).
+    pub(crate) static IN_LIFECYCLE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` holding `LIFECYCLE`.
 pub(crate) fn serialised<T>(f: impl FnOnce() -> T) -> T {
-    caustica_core::device::lifecycle::serialised(f)
+    if IN_LIFECYCLE.with(|c| c.get()) {
+        return f();
+    }
+    let _guard = LIFECYCLE.lock().unwrap_or_else(|e| e.into_inner());
+    IN_LIFECYCLE.with(|c| c.set(true));
+    let out = f();
+    IN_LIFECYCLE.with(|c| c.set(false));
+    out
 }
 
 /// Vulkan result to a typed error.

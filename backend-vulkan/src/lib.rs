@@ -67,7 +67,7 @@ impl VulkanBackend {
     /// where installed, and any validation error fails the `execute` that caused it).
     pub fn with_validation(validation: bool) -> Result<VulkanBackend, BackendError> {
         // instance, device and pipelines are created one backend at a time (see
-        // `caustica_core::device::lifecycle`)
+        // `context::LIFECYCLE`)
         context::serialised(|| VulkanBackend::with_context(Context::new(validation)?))
     }
 

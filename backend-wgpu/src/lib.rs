@@ -17,11 +17,9 @@ mod texture;
 use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::launch::Launch;
-use caustica_core::device::lifecycle;
 use caustica_core::recording::{Recording, Step};
 use caustica_shaders as shaders;
 use std::collections::HashMap;
-use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex};
 
 /// Smallest buffer and binding: one element of the largest array element type a kernel
@@ -39,9 +37,8 @@ struct DeviceBuffer {
 
 /// The wgpu backend.
 pub struct WgpuBackend {
-    /// Dropped by hand, under the device-lifecycle lock (see `Drop`).
-    device: ManuallyDrop<wgpu::Device>,
-    queue: ManuallyDrop<wgpu::Queue>,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
     description: String,
     /// The adapter's type (`Other` for a caller's device, whose adapter is not known).
     device_type: DeviceType,
@@ -58,15 +55,6 @@ pub struct WgpuBackend {
 /// Compiles kernel `name` with its override constants set to `constants`; a WGSL or
 /// pipeline validation error is a typed error.
 fn create_pipeline(
-    device: &wgpu::Device,
-    name: &str,
-    constants: &[(&'static str, u32)],
-) -> Result<wgpu::ComputePipeline, BackendError> {
-    // pipeline compilation is device-lifecycle work (see `lifecycle`)
-    lifecycle::serialised(|| create_pipeline_now(device, name, constants))
-}
-
-fn create_pipeline_now(
     device: &wgpu::Device,
     name: &str,
     constants: &[(&'static str, u32)],
@@ -132,33 +120,11 @@ fn adapter_rank(info: &wgpu::AdapterInfo) -> u32 {
     }
 }
 
-/// The device is destroyed (when this holds its last reference) under the process's
-/// device-lifecycle lock, after everything created on it.
-impl Drop for WgpuBackend {
-    fn drop(&mut self) {
-        lifecycle::serialised(|| {
-            self.pipelines.clear();
-            self.texture_pipelines.clear();
-            self.buffers.clear();
-            // SAFETY: dropped exactly once, here; nothing uses them afterwards
-            unsafe {
-                ManuallyDrop::drop(&mut self.queue);
-                ManuallyDrop::drop(&mut self.device);
-            }
-        })
-    }
-}
-
 impl WgpuBackend {
     /// Opens an adapter (`CAUSTICA_WGPU_ADAPTER=N` picks the N-th of [`list_adapters`];
     /// otherwise a GPU before a CPU adapter such as lavapipe) with the adapter's own
     /// limits and, where offered, timestamp queries.
     pub fn new() -> Result<WgpuBackend, BackendError> {
-        // instance, adapter and device creation: device-lifecycle work (see `lifecycle`)
-        lifecycle::serialised(WgpuBackend::open)
-    }
-
-    fn open() -> Result<WgpuBackend, BackendError> {
         let instance = instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY));
         if adapters.is_empty() {
@@ -231,8 +197,8 @@ impl WgpuBackend {
         Ok(WgpuBackend {
             limits: device.limits(),
             timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
-            device: ManuallyDrop::new(device),
-            queue: ManuallyDrop::new(queue),
+            device,
+            queue,
             description: description.to_string(),
             device_type: DeviceType::Other,
             pipelines,

@@ -56,24 +56,22 @@ impl WgpuBackend {
             ));
         }
         if !self.texture_pipelines.contains_key(&format) {
-            // pipeline compilation is device-lifecycle work (`caustica_core::device::lifecycle`)
-            let pipeline = caustica_core::device::lifecycle::serialised(|| {
-                let module = self
-                    .device
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some("write_image_to_texture"),
-                        source: wgpu::ShaderSource::Wgsl(source(name).into()),
-                    });
-                self.device
-                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some("write_image_to_texture"),
-                        layout: None,
-                        module: &module,
-                        entry_point: Some("main"),
-                        compilation_options: Default::default(),
-                        cache: None,
-                    })
-            });
+            let module = self
+                .device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("write_image_to_texture"),
+                    source: wgpu::ShaderSource::Wgsl(source(name).into()),
+                });
+            let pipeline = self
+                .device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("write_image_to_texture"),
+                    layout: None,
+                    module: &module,
+                    entry_point: Some("main"),
+                    compilation_options: Default::default(),
+                    cache: None,
+                });
             self.texture_pipelines.insert(format, pipeline);
         }
         let pipeline = &self.texture_pipelines[&format];

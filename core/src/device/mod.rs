@@ -3,7 +3,7 @@
 //! [`layout_table`]: a description of those layouts (fields, offsets, 4-byte leaves) that
 //! the shader crates' layout tests compare with; [`device_scene`]: a scene flattened to
 //! those layouts with its CWBVH; [`handle`]: typed opaque buffer handles; [`launch`]: a
-//! lowered kernel launch; [`lifecycle`]: the process's device-lifecycle lock; [`error`]: typed failures. Imports only [`crate::math`] and
+//! lowered kernel launch; [`error`]: typed failures. Imports only [`crate::math`] and
 //! [`crate::scene`].
 
 pub mod device_scene;
@@ -12,7 +12,6 @@ pub mod handle;
 pub mod launch;
 pub mod layout;
 pub mod layout_table;
-pub mod lifecycle;
 
 pub use device_scene::DeviceScene;
 pub use error::{host_bytes, BackendError};
