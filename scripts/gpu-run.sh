@@ -132,6 +132,27 @@ if has hang; then
         done
     done
 fi
+if has hangdiag; then
+    # issue 19 point 5: what a hung parallel run is doing: GPU utilisation and every
+    # thread's kernel wait channel and state, 25 s into a run that has not finished
+    for k in $(seq 1 "${HANG_RUNS:-8}"); do
+        ./cross_backend > /tmp/hangdiag.log 2>&1 &
+        pid=$!
+        for s in $(seq 1 25); do kill -0 "$pid" 2>/dev/null || break; sleep 1; done
+        if kill -0 "$pid" 2>/dev/null; then
+            echo "hangdiag: run $k hung; last line: $(grep -E '^test |\*\*\*' /tmp/hangdiag.log | tail -n 1)" | tee -a "$OUT/log.txt"
+            nvidia-smi --query-gpu=utilization.gpu,memory.used --format=csv | tee -a "$OUT/log.txt"
+            for t in /proc/$pid/task/*; do
+                echo "thread $(basename "$t") $(cat "$t/comm") state=$(awk '{print $3}' "$t/stat") wchan=$(cat "$t/wchan" 2>/dev/null)"
+            done | tee -a "$OUT/log.txt"
+            dmesg 2>/dev/null | grep -i xid | tail -n 5 | tee -a "$OUT/log.txt"
+            kill -9 "$pid"
+            break
+        fi
+        wait "$pid"
+        echo "hangdiag: run $k finished" | tee -a "$OUT/log.txt"
+    done
+fi
 if has hostile; then
     # issue 14: hostile scenes on every backend, large frames, 8192x8192 where it fits
     run timeout 240 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./hostile_input --test-threads=1
