@@ -1,14 +1,17 @@
 //! The `Technique` seam on every backend: a technique created by name runs a frame and
 //! lists and reads its outputs; moving the camera or the lights between frames (no
-//! rebuild) gives bitwise the frame a technique created for the moved scene gives; a
+//! rebuild) gives bitwise the frame a technique created for the moved scene gives; so do
+//! new settings and a new image size (the frame's buffers remade, the scene kept); a
 //! technique dropped without `free` is reported, never silently leaked.
 
 use caustica_conformance::backends;
 use caustica_core::frame::technique::leaked_buffers;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::{Light, Scene};
+use caustica_core::techniques::sspm::GatherFilter;
 use caustica_core::techniques::{create, technique_names};
 use caustica_core::{Backend, Technique};
+use caustica_core::{Sspm, SspmSettings};
 use glam::Vec3;
 
 fn small(name: &str) -> Scene {
@@ -100,7 +103,7 @@ fn moved_camera_and_lights_equal_a_fresh_technique_bitwise() {
 
         let mut t = create("sspm", b.as_mut(), &scene, &settings()).expect("create");
         frame_outputs(t.as_mut(), b.as_mut()); // a frame before the move
-        t.set_camera(&moved.camera).expect("set_camera");
+        t.set_camera(b.as_mut(), &moved.camera).expect("set_camera");
         t.set_lights(b.as_mut(), &moved.lights).expect("set_lights");
         let got = frame_outputs(t.as_mut(), b.as_mut());
         assert_eq!(
@@ -108,15 +111,70 @@ fn moved_camera_and_lights_equal_a_fresh_technique_bitwise() {
             "{bname}: moved technique differs from a fresh one"
         );
 
-        let mut bigger = moved.camera.clone();
-        bigger.width *= 2;
-        assert!(
-            t.set_camera(&bigger).is_err(),
-            "{bname}: image size cannot change"
-        );
         assert!(
             t.set_lights(b.as_mut(), &[]).is_err(),
             "{bname}: light count cannot change"
+        );
+        t.free(b.as_mut()).expect("free");
+    }
+}
+
+/// Every requested output of one Sspm frame, by name.
+fn sspm_outputs(t: &mut Sspm, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
+    frame_outputs(t, b)
+}
+
+#[test]
+fn new_settings_and_image_size_equal_a_fresh_technique_bitwise() {
+    for (bname, mut b) in backends() {
+        let scene = small("cornell");
+        let before = SspmSettings {
+            photons_w: 48,
+            photons_h: 40,
+            filter: GatherFilter::Bilateral,
+            ..SspmSettings::default()
+        };
+        let after = SspmSettings {
+            photons_w: 96,
+            photons_h: 64,
+            filter: GatherFilter::Density,
+            knn_photons: 16,
+            max_radius_px: 8,
+            ..SspmSettings::default()
+        };
+        let mut bigger = scene.clone();
+        bigger.camera.width = 80;
+        bigger.camera.height = 50;
+
+        let mut fresh = Sspm::new(b.as_mut(), &scene, after.clone()).expect("new");
+        let want = sspm_outputs(&mut fresh, b.as_mut());
+        fresh.free(b.as_mut()).expect("free");
+        let mut fresh = Sspm::new(b.as_mut(), &bigger, after.clone()).expect("new");
+        let want_bigger = sspm_outputs(&mut fresh, b.as_mut());
+        fresh.free(b.as_mut()).expect("free");
+
+        let mut t = Sspm::new(b.as_mut(), &scene, before).expect("new");
+        sspm_outputs(&mut t, b.as_mut()); // a frame with the old settings
+        t.set_settings(b.as_mut(), after.clone())
+            .expect("set_settings");
+        assert!(
+            sspm_outputs(&mut t, b.as_mut()) == want,
+            "{bname}: new settings differ from a fresh technique"
+        );
+        t.set_camera(b.as_mut(), &bigger.camera).expect("resize");
+        assert!(
+            sspm_outputs(&mut t, b.as_mut()) == want_bigger,
+            "{bname}: a new image size differs from a fresh technique"
+        );
+        // a budget the built scene does not fit is refused, and nothing changes
+        let tight = SspmSettings {
+            max_triangles: 1,
+            ..after.clone()
+        };
+        assert!(t.set_settings(b.as_mut(), tight).is_err(), "{bname}");
+        assert!(
+            sspm_outputs(&mut t, b.as_mut()) == want_bigger,
+            "{bname}: a refused update changed the frame"
         );
         t.free(b.as_mut()).expect("free");
     }

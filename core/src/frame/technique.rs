@@ -61,9 +61,9 @@ pub trait Technique {
     /// Sets the frame seed of the next frames (progressive rendering, repeated runs).
     fn set_seed(&mut self, seed: u32);
 
-    /// Moves the camera for the next frames. The image size must stay the same (device
-    /// images are sized by it).
-    fn set_camera(&mut self, camera: &Camera) -> Result<(), Error>;
+    /// Moves the camera for the next frames; a new image size remakes only what depends on
+    /// it (the frame's images and per-pixel buffers), never the uploaded scene.
+    fn set_camera(&mut self, backend: &mut dyn Backend, camera: &Camera) -> Result<(), Error>;
 
     /// Replaces the scene's lights for the next frames (same number of lights), without
     /// rebuilding geometry.

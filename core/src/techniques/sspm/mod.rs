@@ -81,9 +81,14 @@ pub struct Sspm {
     images: FrameImages,
     /// Every image buffer the plan created, by [`Output`], requested or not.
     image_buffers: [Option<ImageBuf>; 4],
-    /// Every buffer this technique created (freed by [`Sspm::free`]).
+    /// The frame's buffers (freed by [`Sspm::free`], remade when the settings or the
+    /// image size change) and the bytes of all buffers, the scene's included.
     owned: Vec<ResourceId>,
     bytes: u64,
+    /// The uploaded scene's buffers, their plan entries and bytes.
+    scene_owned: Vec<ResourceId>,
+    scene_buffers: Vec<crate::frame::plan::BufferPlan>,
+    scene_bytes: u64,
     reference: Option<Image>,
     /// The scene model (re-planned when lights change).
     model: Scene,
@@ -100,6 +105,23 @@ struct SceneBounds {
     has_dispersion: bool,
     /// Triangles the build dropped for zero area in f32.
     degenerate_triangles: u64,
+    /// Triangles uploaded (what `max_triangles` is checked against).
+    triangles: u64,
+}
+
+/// The per-frame resources a scene's settings and image size decide (everything but the
+/// uploaded scene): rebuilt by [`Sspm::set_settings`] and by a camera of a new size.
+struct FrameParts {
+    camera: GpuCamera,
+    constants: FrameConstants,
+    plan: FramePlan,
+    gbuffer: GBufferPlanes,
+    photon: Option<PhotonBuffers>,
+    gather: Option<GatherBuffers>,
+    images: FrameImages,
+    image_buffers: [Option<ImageBuf>; 4],
+    owned: Vec<ResourceId>,
+    bytes: u64,
 }
 
 impl Sspm {
@@ -120,10 +142,73 @@ impl Sspm {
                 max_triangles: settings.max_triangles,
             },
         )?;
+        let bounds = SceneBounds {
+            bounds: ds.bounds,
+            caster_bounds: ds.caster_bounds,
+            has_dispersion: ds.has_dispersion,
+            degenerate_triangles: ds.degenerate_triangles,
+            triangles: ds.triangles.len() as u64,
+        };
+        // the frame's constants first: a light whose flux is out of range is refused
+        // before anything is uploaded
+        FrameConstants::new(scene, &ds, &settings).check_light_flux()?;
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
+        let scene_allocation = planned_allocation(backend, &rec, None)?;
+        // every buffer checked against the device before any work runs
+        let (parts, frame_rec) =
+            Sspm::build_frame(backend, bounds, &scene_allocation.buffers, scene, &settings)?;
+        backend.execute(&rec)?;
+        if let Err(e) = backend.execute(&frame_rec) {
+            // nothing of this technique may outlive a failed `new`
+            let mut free = Recording::new();
+            for id in scene_allocation.owned.iter().chain(&parts.owned) {
+                free.steps.push(Step::Free { id: *id });
+            }
+            let _ = backend.execute(&free);
+            return Err(e.into());
+        }
+        Ok(Sspm {
+            settings,
+            scene: scene_args,
+            camera: parts.camera,
+            light_count: scene.lights.len() as u32,
+            constants: parts.constants,
+            plan: parts.plan,
+            gbuffer: parts.gbuffer,
+            photon: parts.photon,
+            gather: parts.gather,
+            images: parts.images,
+            image_buffers: parts.image_buffers,
+            owned: parts.owned,
+            bytes: scene_allocation.bytes + parts.bytes,
+            scene_owned: scene_allocation.owned,
+            scene_buffers: scene_allocation.buffers,
+            scene_bytes: scene_allocation.bytes,
+            reference: None,
+            model: scene.clone(),
+            bounds,
+        })
+    }
 
-        let constants = FrameConstants::new(scene, &ds, &settings);
+    /// Plans the frame of `scene` with `settings` and records the creation of its buffers,
+    /// each checked against the device (the scene is uploaded, or about to be: `bounds`
+    /// and `scene_buffers` describe it); the caller executes the recording.
+    fn build_frame(
+        backend: &mut dyn Backend,
+        bounds: SceneBounds,
+        scene_buffers: &[crate::frame::plan::BufferPlan],
+        scene: &Scene,
+        settings: &SspmSettings,
+    ) -> Result<(FrameParts, Recording), Error> {
+        let b = bounds;
+        let constants = FrameConstants::for_bounds(
+            scene,
+            b.bounds,
+            b.caster_bounds,
+            b.has_dispersion,
+            settings,
+        );
         constants.check_light_flux()?;
         let mut plan = plan_frame(
             scene,
@@ -136,6 +221,7 @@ impl Sspm {
         let out = settings.outputs;
         let keep = |requested: bool| requested || !settings.prune;
 
+        let mut rec = Recording::new();
         let camera = GpuCamera::from_camera(&scene.camera);
         let (w, h) = (camera.width, camera.height);
         let pixels = w * h;
@@ -192,13 +278,13 @@ impl Sspm {
             filtered_caustics: filtered_caustics.filter(|_| keep(out.filtered_caustics)),
         };
         let allocation = planned_allocation(backend, &rec, Some((w, h)))?;
-        plan.buffers = allocation.buffers;
-        backend.execute(&rec)?;
-        Ok(Sspm {
-            settings,
-            scene: scene_args,
+        plan.buffers = scene_buffers
+            .iter()
+            .cloned()
+            .chain(allocation.buffers)
+            .collect();
+        let parts = FrameParts {
             camera,
-            light_count: scene.lights.len() as u32,
             constants,
             plan,
             gbuffer,
@@ -208,15 +294,85 @@ impl Sspm {
             image_buffers: [own_composite, direct, raw_caustics, filtered_caustics],
             owned: allocation.owned,
             bytes: allocation.bytes,
-            reference: None,
-            model: scene.clone(),
-            bounds: SceneBounds {
-                bounds: ds.bounds,
-                caster_bounds: ds.caster_bounds,
-                has_dispersion: ds.has_dispersion,
-                degenerate_triangles: ds.degenerate_triangles,
-            },
-        })
+        };
+        Ok((parts, rec))
+    }
+
+    fn install(&mut self, p: FrameParts) {
+        self.camera = p.camera;
+        self.constants = p.constants;
+        self.plan = p.plan;
+        self.gbuffer = p.gbuffer;
+        self.photon = p.photon;
+        self.gather = p.gather;
+        self.images = p.images;
+        self.image_buffers = p.image_buffers;
+        self.owned = p.owned;
+        self.bytes = self.scene_bytes + p.bytes;
+    }
+
+    /// Frees the frame's buffers (not the scene's).
+    fn free_frame(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let mut rec = Recording::new();
+        for id in std::mem::take(&mut self.owned) {
+            rec.steps.push(Step::Free { id });
+        }
+        self.bytes = self.scene_bytes;
+        self.photon = None;
+        self.gather = None;
+        self.image_buffers = [None; 4];
+        backend.execute(&rec)?;
+        Ok(())
+    }
+
+    /// Replaces the frame's resources with those of `model` and `settings`: frees the old
+    /// ones first (the two never hold memory at once) and, if the new ones cannot be
+    /// made, rebuilds the old ones and returns why.
+    fn rebuild_frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        model: Scene,
+        settings: SspmSettings,
+    ) -> Result<(), Error> {
+        self.free_frame(backend)?;
+        let (b, buffers) = (self.bounds, self.scene_buffers.clone());
+        match Sspm::build_frame(backend, b, &buffers, &model, &settings)
+            .and_then(|(parts, rec)| Ok(backend.execute(&rec).map(|_| parts)?))
+        {
+            Ok(parts) => {
+                self.install(parts);
+                self.model = model;
+                self.settings = settings;
+                Ok(())
+            }
+            Err(e) => {
+                let old = self.model.clone();
+                let (parts, rec) = Sspm::build_frame(backend, b, &buffers, &old, &self.settings)?;
+                backend.execute(&rec)?;
+                self.install(parts);
+                Err(e)
+            }
+        }
+    }
+
+    /// Changes the settings for the next frames without uploading the scene again: the
+    /// frame is re-planned and its buffers (photons, G-buffer, images, filter) are made
+    /// anew for the new settings. `max_triangles` may change only to a budget the built
+    /// scene fits. On an error the technique keeps its old settings.
+    pub fn set_settings(
+        &mut self,
+        backend: &mut dyn Backend,
+        settings: SspmSettings,
+    ) -> Result<(), Error> {
+        settings.validate()?;
+        if self.bounds.triangles > settings.max_triangles {
+            return Err(Error::InvalidParameter(format!(
+                "max_triangles {} is below the scene's {} triangles: create the technique again",
+                settings.max_triangles, self.bounds.triangles
+            )));
+        }
+        let model = self.model.clone();
+        self.rebuild_frame(backend, model, settings)
     }
 
     /// The frame plan: passes run and skipped with reasons, the photon kernel's variant,
@@ -548,27 +704,33 @@ impl Sspm {
     /// Releases every device buffer of this technique.
     pub fn free(mut self, backend: &mut dyn Backend) -> Result<(), Error> {
         let mut rec = Recording::new();
-        for id in std::mem::take(&mut self.owned) {
+        let scene = std::mem::take(&mut self.scene_owned);
+        for id in std::mem::take(&mut self.owned).into_iter().chain(scene) {
             rec.steps.push(Step::Free { id });
         }
         backend.execute(&rec)?;
         Ok(())
     }
 
-    /// Moves the camera for the next frames (the image size must not change: the device
-    /// images are sized by it). No buffer is rebuilt.
-    pub fn set_camera(&mut self, camera: &crate::scene::Camera) -> Result<(), Error> {
-        if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
-            return Err(Error::InvalidParameter(format!(
-                "camera is {}x{}, the frame's images {}x{}: a new image size needs a new technique",
-                camera.width, camera.height, self.camera.width, self.camera.height
-            )));
-        }
+    /// Moves the camera for the next frames. At the same image size no buffer is rebuilt;
+    /// a new size remakes the frame's buffers (G-buffer, photon map, images, filter) and
+    /// nothing of the scene, and clears the reference image (it has the old size).
+    pub fn set_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: &crate::scene::Camera,
+    ) -> Result<(), Error> {
         let mut model = self.model.clone();
         model.camera = camera.clone();
         model
             .validate()
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
+            let settings = self.settings.clone();
+            self.rebuild_frame(backend, model, settings)?;
+            self.reference = None;
+            return Ok(());
+        }
         self.camera = GpuCamera::from_camera(camera);
         self.model = model;
         Ok(())
@@ -636,7 +798,11 @@ impl Sspm {
 
 impl Drop for Sspm {
     fn drop(&mut self) {
-        crate::frame::technique::report_leak("sspm", self.owned.len(), self.bytes);
+        crate::frame::technique::report_leak(
+            "sspm",
+            self.owned.len() + self.scene_owned.len(),
+            self.bytes,
+        );
     }
 }
 
@@ -686,8 +852,12 @@ impl Technique for Sspm {
         Sspm::set_seed(self, seed)
     }
 
-    fn set_camera(&mut self, camera: &crate::scene::Camera) -> Result<(), Error> {
-        Sspm::set_camera(self, camera)
+    fn set_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: &crate::scene::Camera,
+    ) -> Result<(), Error> {
+        Sspm::set_camera(self, backend, camera)
     }
 
     fn set_lights(
