@@ -65,8 +65,8 @@ pub trait Technique {
     /// it (the frame's images and per-pixel buffers), never the uploaded scene.
     fn set_camera(&mut self, backend: &mut dyn Backend, camera: &Camera) -> Result<(), Error>;
 
-    /// Replaces the scene's lights for the next frames (same number of lights), without
-    /// rebuilding geometry.
+    /// Replaces the scene's lights for the next frames (moved, re-powered, added or
+    /// removed), without rebuilding geometry.
     fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error>;
 
     /// Sets (or clears) the reference image of the filtered estimate: every later frame

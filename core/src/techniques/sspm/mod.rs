@@ -736,23 +736,17 @@ impl Sspm {
         Ok(())
     }
 
-    /// Replaces the lights for the next frames (as many as before): uploads them into the
-    /// existing light buffer and re-plans emission (domains, flux quantum, which lights
-    /// emit) without rebuilding geometry. Lights that would need passes or buffers the
-    /// frame was not planned with (e.g. the first light to reach a caster in a scene whose
-    /// lights all missed) are an error: create the technique again.
+    /// Replaces the lights for the next frames without rebuilding geometry. With as many
+    /// lights as before and the same passes, the lights are uploaded into the existing
+    /// buffer and emission is re-planned (no buffer is made); lights added or removed, or
+    /// lights that start or stop photon passes (the first to reach a caster, the last to
+    /// stop), replace the light buffer and remake the frame's resources (see
+    /// [`Sspm::set_settings`]). The geometry and its acceleration structure stay.
     pub fn set_lights(
         &mut self,
         backend: &mut dyn Backend,
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
-        if lights.len() != self.model.lights.len() {
-            return Err(Error::InvalidParameter(format!(
-                "{} lights given, the scene has {}: the light count cannot change",
-                lights.len(),
-                self.model.lights.len()
-            )));
-        }
         let mut model = self.model.clone();
         model.lights = lights.to_vec();
         model
@@ -774,24 +768,81 @@ impl Sspm {
             self.settings.prune,
             self.settings.filter,
         );
-        if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) {
-            return Err(Error::InvalidParameter(
-                "the new lights change which passes run (photon passes start or stop): \
-                 create the technique again"
-                    .into(),
-            ));
-        }
-        plan.buffers = std::mem::take(&mut self.plan.buffers);
         let gpu: Vec<GpuLight> = lights
             .iter()
             .map(crate::device::device_scene::gpu_light)
             .collect();
+        if lights.len() != self.model.lights.len()
+            || Needs::of_plan(&plan) != Needs::of_plan(&self.plan)
+        {
+            return self.replace_lights(backend, model, &gpu);
+        }
+        plan.buffers = std::mem::take(&mut self.plan.buffers);
         let mut rec = Recording::new();
         rec.update(self.scene.lights, &gpu, "lights")?;
         backend.execute(&rec)?;
         self.model = model;
         self.constants = constants;
         self.plan = plan;
+        Ok(())
+    }
+
+    /// A light buffer of the new size, then the frame remade for `model`; if the frame
+    /// cannot be remade, the old lights come back (the frame is rebuilt for them by
+    /// `rebuild_frame`) and the error is returned.
+    fn replace_lights(
+        &mut self,
+        backend: &mut dyn Backend,
+        model: Scene,
+        gpu: &[GpuLight],
+    ) -> Result<(), Error> {
+        self.swap_light_buffer(backend, gpu)?;
+        let settings = self.settings.clone();
+        if let Err(e) = self.rebuild_frame(backend, model, settings) {
+            let old: Vec<GpuLight> = self
+                .model
+                .lights
+                .iter()
+                .map(crate::device::device_scene::gpu_light)
+                .collect();
+            self.swap_light_buffer(backend, &old)?;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Replaces the scene's light buffer with one holding `gpu`.
+    fn swap_light_buffer(
+        &mut self,
+        backend: &mut dyn Backend,
+        gpu: &[GpuLight],
+    ) -> Result<(), Error> {
+        let old = self.scene.lights;
+        let mut rec = Recording::new();
+        let new = rec.upload(gpu, "lights");
+        let alloc = planned_allocation(backend, &rec, None)?;
+        rec.steps.push(Step::Free { id: old.id });
+        backend.execute(&rec)?;
+        self.scene.lights = new;
+        for id in &mut self.scene_owned {
+            if *id == old.id {
+                *id = new.id;
+            }
+        }
+        let old_bytes = old.len as u64 * std::mem::size_of::<GpuLight>() as u64;
+        self.scene_bytes = self.scene_bytes - old_bytes + alloc.bytes;
+        self.bytes = self.bytes - old_bytes + alloc.bytes;
+        for b in &mut self.scene_buffers {
+            if b.name == "lights" {
+                b.bytes = alloc.bytes;
+            }
+        }
+        for b in &mut self.plan.buffers {
+            if b.name == "lights" {
+                b.bytes = alloc.bytes;
+            }
+        }
+        self.light_count = gpu.len() as u32;
         Ok(())
     }
 }
