@@ -61,6 +61,64 @@ pub struct Camera {
     pub height: u32,
 }
 
+impl Camera {
+    /// The camera a host holds as matrices: `view` maps world to view space (right-handed,
+    /// looking down -z with +y up, as `Mat4::look_at_rh`), `projection` is a symmetric
+    /// perspective projection (as `Mat4::perspective_rh`, `perspective_rh_gl` or an
+    /// infinite one; a Vulkan-style flipped y is accepted) whose vertical field of view is
+    /// `2 atan(1 / projection[1][1])`. Refused with the reason: an orthographic or
+    /// off-centre projection (caustica's camera is a centred pinhole), a view that is not
+    /// invertible, or an aspect ratio that disagrees with `width / height` by more than
+    /// 0.1% (caustica's pixels are square).
+    pub fn from_view_projection(
+        view: glam::Mat4,
+        projection: glam::Mat4,
+        width: u32,
+        height: u32,
+    ) -> Result<Camera, String> {
+        let p = projection;
+        if p.w_axis.w != 0.0 || p.z_axis.w >= 0.0 {
+            return Err("not a perspective projection (caustica's camera is a pinhole)".into());
+        }
+        if p.z_axis.x.abs() > 1e-6 || p.z_axis.y.abs() > 1e-6 {
+            return Err("an off-centre projection: caustica's camera is a centred pinhole".into());
+        }
+        let fy = p.y_axis.y.abs();
+        let fx = p.x_axis.x.abs();
+        if !(fy.is_finite() && fy > 0.0 && fx.is_finite() && fx > 0.0) {
+            return Err("the projection's focal terms are not finite and positive".into());
+        }
+        if width == 0 || height == 0 {
+            return Err("the image has no pixel".into());
+        }
+        let aspect = fy / fx;
+        let want = width as f32 / height as f32;
+        if (aspect / want - 1.0).abs() > 1e-3 {
+            return Err(format!(
+                "the projection's aspect ratio {aspect} is not the image's {want} (pixels are square)"
+            ));
+        }
+        if view.determinant().abs() < f32::MIN_POSITIVE || !view.is_finite() {
+            return Err("the view matrix is not invertible".into());
+        }
+        let inv = view.inverse();
+        let position = inv.w_axis.truncate();
+        let forward = (-inv.z_axis.truncate()).normalize_or_zero();
+        let up = inv.y_axis.truncate().normalize_or_zero();
+        if forward == Vec3::ZERO || up == Vec3::ZERO {
+            return Err("the view matrix has no forward or up direction".into());
+        }
+        Ok(Camera {
+            position,
+            target: position + forward,
+            up,
+            fov_y_deg: (2.0 * (1.0 / fy).atan()).to_degrees(),
+            width,
+            height,
+        })
+    }
+}
+
 fn default_up() -> Vec3 {
     Vec3::Y
 }
@@ -330,4 +388,63 @@ where
         }
     }
     d.deserialize_map(Unique(std::marker::PhantomData))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::layout::GpuCamera;
+    use glam::camera::rh::proj::{directx, opengl, vulkan};
+    use glam::camera::rh::view::look_at_mat4;
+    use glam::Mat4;
+
+    #[test]
+    fn a_camera_from_host_matrices_is_the_look_at_camera() {
+        let eye = Vec3::new(0.6, 3.0, 2.8);
+        let target = Vec3::new(0.1, 0.7, -0.2);
+        let (w, h) = (640u32, 360u32);
+        let fov = 38.0f32;
+        let view = look_at_mat4(eye, target, Vec3::Y);
+        let aspect = w as f32 / h as f32;
+        for proj in [
+            directx::perspective(fov.to_radians(), aspect, 0.01, 100.0),
+            opengl::perspective(fov.to_radians(), aspect, 0.01, 100.0),
+            // Vulkan's clip space flips y: the camera is the same
+            vulkan::perspective(fov.to_radians(), aspect, 0.01, 100.0),
+            vulkan::perspective_infinite_reverse(fov.to_radians(), aspect, 0.01),
+        ] {
+            let c = Camera::from_view_projection(view, proj, w, h).unwrap();
+            let want = GpuCamera::from_camera(&Camera {
+                position: eye,
+                target,
+                up: Vec3::Y,
+                fov_y_deg: fov,
+                width: w,
+                height: h,
+            });
+            let got = GpuCamera::from_camera(&c);
+            let v = |a: [f32; 3]| Vec3::from(a);
+            assert!((v(got.position) - v(want.position)).length() < 1e-5);
+            assert!((v(got.forward) - v(want.forward)).length() < 1e-6);
+            assert!((v(got.right) - v(want.right)).length() < 1e-6);
+            assert!((v(got.up) - v(want.up)).length() < 1e-6);
+            assert!((got.tan_half_fov_y / want.tan_half_fov_y - 1.0).abs() < 1e-6);
+            assert!((got.tan_half_fov_x / want.tan_half_fov_x - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn projections_a_pinhole_cannot_take_are_refused() {
+        let view = look_at_mat4(Vec3::new(0.0, 1.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let ortho = opengl::orthographic(-1.0, 1.0, -1.0, 1.0, 0.1, 10.0);
+        assert!(Camera::from_view_projection(view, ortho, 64, 64).is_err());
+        let skewed = opengl::frustum(-0.5, 1.0, -0.5, 0.5, 0.1, 10.0);
+        assert!(Camera::from_view_projection(view, skewed, 64, 64).is_err());
+        let wide = directx::perspective(1.0, 2.0, 0.1, 10.0);
+        assert!(
+            Camera::from_view_projection(view, wide, 64, 64).is_err(),
+            "aspect"
+        );
+        assert!(Camera::from_view_projection(Mat4::ZERO, wide, 128, 64).is_err());
+    }
 }
