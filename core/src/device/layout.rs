@@ -589,6 +589,46 @@ pub fn gbuffer_pixel_area(cam: &GpuCamera, index: u32, g: &GBufferTexel) -> f32 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_camera_from_host_matrices_is_the_look_at_camera() {
+        let eye = Vec3::new(0.6, 3.0, 2.8);
+        let target = Vec3::new(0.1, 0.7, -0.2);
+        let (w, h) = (640u32, 360u32);
+        let fov = 38.0f32;
+        let view = glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y);
+        let aspect = w as f32 / h as f32;
+        for proj in [
+            glam::camera::rh::proj::directx::perspective(fov.to_radians(), aspect, 0.01, 100.0),
+            glam::camera::rh::proj::opengl::perspective(fov.to_radians(), aspect, 0.01, 100.0),
+            // Vulkan's clip space flips y: the camera is the same
+            glam::camera::rh::proj::vulkan::perspective(fov.to_radians(), aspect, 0.01, 100.0),
+            glam::camera::rh::proj::vulkan::perspective_infinite_reverse(
+                fov.to_radians(),
+                aspect,
+                0.01,
+            ),
+        ] {
+            let c = crate::scene::Camera::from_view_projection(view, proj, w, h).unwrap();
+            let want = GpuCamera::from_camera(&crate::scene::Camera {
+                position: eye,
+                target,
+                up: Vec3::Y,
+                fov_y_deg: fov,
+                width: w,
+                height: h,
+            });
+            let got = GpuCamera::from_camera(&c);
+            let v = |a: [f32; 3]| Vec3::from(a);
+            assert!((v(got.position) - v(want.position)).length() < 1e-5);
+            assert!((v(got.forward) - v(want.forward)).length() < 1e-6);
+            assert!((v(got.right) - v(want.right)).length() < 1e-6);
+            assert!((v(got.up) - v(want.up)).length() < 1e-6);
+            assert!((got.tan_half_fov_y / want.tan_half_fov_y - 1.0).abs() < 1e-6);
+            assert!((got.tan_half_fov_x / want.tan_half_fov_x - 1.0).abs() < 1e-6);
+        }
+    }
+
     use std::mem::size_of;
 
     #[test]
