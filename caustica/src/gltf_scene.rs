@@ -104,18 +104,7 @@ pub fn ior_at_reference(n_d: f32, cauchy_b: f32) -> f32 {
 /// Reads a `.gltf` or `.glb` file (see the module doc).
 pub fn load_gltf(path: &Path) -> Result<GltfImport, SceneFileError> {
     let file = path.display().to_string();
-    let limit = caustica_core::scene::limits::MAX_SCENE_FILE_BYTES;
-    let fail = |reason: String| located(&file, reason);
-    let f = std::fs::File::open(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut std::io::Read::take(f, limit + 1), &mut bytes)
-        .map_err(|e| fail(format!("cannot read: {e}")))?;
-    if bytes.len() as u64 > limit {
-        return Err(fail(format!(
-            "larger than the {} MiB a scene file may have",
-            limit >> 20
-        )));
-    }
+    let bytes = caustica_core::scene::format::read_scene_bytes(path)?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -68,19 +68,7 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene, SceneFileError> {
 #[cfg(feature = "obj")]
 pub fn load_obj(path: &Path) -> Result<caustica_core::scene::Shape, String> {
     use glam::{Vec2, Vec3};
-    let limit = caustica_core::scene::limits::MAX_SCENE_FILE_BYTES;
-    let f =
-        std::fs::File::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut std::io::Read::take(f, limit + 1), &mut bytes)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    if bytes.len() as u64 > limit {
-        return Err(format!(
-            "{} is larger than the {} MiB a scene file may have",
-            path.display(),
-            limit >> 20
-        ));
-    }
+    let bytes = caustica_core::scene::format::read_scene_bytes(path).map_err(|e| e.to_string())?;
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,

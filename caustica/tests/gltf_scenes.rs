@@ -5,12 +5,12 @@
 //! located errors; what caustica cannot represent comes back as warnings.
 #![cfg(feature = "gltf")]
 
+mod common;
+
 use caustica::gltf_scene::{parse_gltf, scene_to_gltf, LUMINOUS_EFFICACY_LM_PER_W};
 use caustica::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica::scene::shapes::tessellate;
-use caustica::scene::{Light, Material, Scene, Shape};
-use caustica::{Output, Sspm, SspmSettings};
-use caustica_cpu::CpuBackend;
+use caustica::scene::{Light, Material, Shape};
 use glam::Vec3;
 
 fn rel(a: f32, b: f32) -> f32 {
@@ -85,23 +85,6 @@ fn light_power(l: &Light) -> Vec3 {
     }
 }
 
-fn render(scene: &Scene) -> Vec<[f32; 4]> {
-    let mut scene = scene.clone();
-    scene.camera.width = 96;
-    scene.camera.height = 64;
-    let mut b = CpuBackend::new().unwrap();
-    let settings = SspmSettings {
-        photons_w: 128,
-        photons_h: 128,
-        ..SspmSettings::default()
-    };
-    let mut t = Sspm::new(&mut b, &scene, settings).unwrap();
-    t.frame(&mut b, &mut |_| {}).unwrap();
-    let img = t.read_output(&mut b, Output::Composite).unwrap();
-    t.free(&mut b).unwrap();
-    img.pixels
-}
-
 /// Relative L2 difference of two images over every channel.
 fn image_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
     let (mut d, mut n) = (0.0f64, 0.0f64);
@@ -121,7 +104,7 @@ fn gltf_twins_render_as_their_json_scenes() {
     for name in ["sphere", "jelly", "prism", "cornell"] {
         let s = builtin(name).unwrap();
         let twin = import(&scene_to_gltf(&s)).scene;
-        let (a, b) = (render(&s), render(&twin));
+        let (a, b) = (common::render_small(&s), common::render_small(&twin));
         // the same triangles, materials, lights and camera (caustica's exact values in
         // extras.caustica, which agree with the standard fields): bitwise the same frame
         let d = image_difference(&a, &b);
@@ -273,7 +256,7 @@ fn the_instanced_scene_renders_as_its_json_twin() {
     // the JSON twin: the same meshes, built from the transformed corners by hand
     let json = caustica::scene::format::to_json(&s);
     let twin = caustica::scene::format::parse_scene(&json, "twin.json").unwrap();
-    let (a, b) = (render(&s), render(&twin));
+    let (a, b) = (common::render_small(&s), common::render_small(&twin));
     assert!(
         a == b,
         "the JSON round trip of an imported scene renders bitwise the same"
@@ -464,7 +447,7 @@ fn khronos_sample_assets_load_and_render_when_present() {
         for w in &im.warnings {
             eprintln!("warning: {w}");
         }
-        let img = render(&im.scene);
+        let img = common::render_small(&im.scene);
         assert!(
             img.iter().flatten().all(|v| v.is_finite()),
             "{name}: non-finite pixel"

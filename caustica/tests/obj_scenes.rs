@@ -4,12 +4,12 @@
 //! are errors located at the shape's `path`.
 #![cfg(feature = "obj")]
 
+mod common;
+
 use caustica::scene::builtin::builtin;
 use caustica::scene::shapes::tessellate;
 use caustica::scene::{Object, Shape};
 use caustica::scene_file::load_scene_file;
-use caustica::{Output, Sspm, SspmSettings};
-use caustica_cpu::CpuBackend;
 use std::fmt::Write;
 
 fn dir() -> std::path::PathBuf {
@@ -55,23 +55,6 @@ fn scene_with_obj(d: &std::path::Path) -> (caustica::Scene, caustica::Scene) {
     (with_obj, inline)
 }
 
-fn render(scene: &caustica::Scene) -> Vec<[f32; 4]> {
-    let mut scene = scene.clone();
-    scene.camera.width = 96;
-    scene.camera.height = 64;
-    let mut b = CpuBackend::new().unwrap();
-    let settings = SspmSettings {
-        photons_w: 128,
-        photons_h: 128,
-        ..SspmSettings::default()
-    };
-    let mut t = Sspm::new(&mut b, &scene, settings).unwrap();
-    t.frame(&mut b, &mut |_| {}).unwrap();
-    let img = t.read_output(&mut b, Output::Composite).unwrap();
-    t.free(&mut b).unwrap();
-    img.pixels
-}
-
 #[test]
 fn an_obj_ball_renders_as_its_inline_mesh() {
     let d = dir();
@@ -111,7 +94,7 @@ fn an_obj_ball_renders_as_its_inline_mesh() {
         other => panic!("{other:?}"),
     }
     assert!(
-        render(&loaded.scene) == render(&inline),
+        common::render_small(&loaded.scene) == common::render_small(&inline),
         "the OBJ scene renders differently"
     );
 }

@@ -45,17 +45,16 @@ pub fn load_scene_file(path: &Path) -> Result<Scene, SceneFileError> {
     parse_scene(&text, &path.display().to_string())
 }
 
-/// A scene file's text: at most [`super::limits::MAX_SCENE_FILE_BYTES`], UTF-8.
-pub fn read_scene_text(path: &Path) -> Result<String, SceneFileError> {
-    let file = path.display().to_string();
+/// A scene file's bytes (JSON, glTF, GLB, OBJ), read with a limit: at most
+/// [`super::limits::MAX_SCENE_FILE_BYTES`], so a huge file, a pipe or /dev/zero is refused
+/// after that many bytes, not after filling memory.
+pub fn read_scene_bytes(path: &Path) -> Result<Vec<u8>, SceneFileError> {
     let fail = |reason: String| SceneFileError {
-        file: file.clone(),
+        file: path.display().to_string(),
         line: 0,
         column: 0,
         reason,
     };
-    // Read at most one byte past the limit: a huge file, a pipe or /dev/zero is refused
-    // after MAX_SCENE_FILE_BYTES, not after filling memory.
     let limit = super::limits::MAX_SCENE_FILE_BYTES;
     let f = std::fs::File::open(path).map_err(|e| fail(format!("cannot read: {e}")))?;
     let mut bytes = Vec::new();
@@ -67,6 +66,18 @@ pub fn read_scene_text(path: &Path) -> Result<String, SceneFileError> {
             limit >> 20
         )));
     }
+    Ok(bytes)
+}
+
+/// A scene file's text: [`read_scene_bytes`], UTF-8.
+pub fn read_scene_text(path: &Path) -> Result<String, SceneFileError> {
+    let bytes = read_scene_bytes(path)?;
+    let fail = |reason: String| SceneFileError {
+        file: path.display().to_string(),
+        line: 0,
+        column: 0,
+        reason,
+    };
     String::from_utf8(bytes).map_err(|e| {
         fail(format!(
             "not UTF-8 text (byte {})",
