@@ -19,8 +19,9 @@ use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};
 use caustica_core::device::layout::{GBufferTexel, GBufferView, Photon, PhotonMapView};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    PhotonCountTable, PrepareScene, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
+    DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene, PrimaryGbuffer,
+    ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -263,6 +264,60 @@ impl CpuBackend {
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
                 let img = density_gather::density_gather(params, g, e, i);
+                self.put(out.id, &img)
+            }
+            Kernel::DepositAtlas(DepositAtlas {
+                params,
+                triangle_tiles,
+                tiles,
+                photons,
+                photon_count,
+                counters,
+                atlas,
+            }) => {
+                let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
+                let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
+                let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
+                let tl = get(tiles.id)?.as_slice(tiles.len)?;
+                let [a, b, c] = atlas.planes;
+                let atomics = [
+                    get(a.id)?.as_atomic_u64(a.bytes())?,
+                    get(b.id)?.as_atomic_u64(b.bytes())?,
+                    get(c.id)?.as_atomic_u64(c.bytes())?,
+                ];
+                let c = caustic_map::deposit_atlas(params, tt, tl, ph, atomics);
+                c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+                Ok(())
+            }
+            Kernel::GatherCausticMap(GatherCausticMap {
+                params,
+                texels,
+                tiles,
+                atlas,
+                out,
+            }) => {
+                let tx = get(texels.id)?.as_slice(texels.len)?;
+                let tl = get(tiles.id)?.as_slice(tiles.len)?;
+                let m = self.photon_map(atlas)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the caustic map")?;
+                let img = caustic_map::gather_caustic_map(params, tx, tl, m);
+                self.put(out.id, &img)
+            }
+            Kernel::CausticMapLookup(CausticMapLookup {
+                scene,
+                params,
+                triangle_tiles,
+                tiles,
+                texels,
+                map,
+                out,
+            }) => {
+                let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
+                let tl = get(tiles.id)?.as_slice(tiles.len)?;
+                let tx = get(texels.id)?.as_slice(texels.len)?;
+                let m = get(map.id)?.as_slice(map.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the caustics image")?;
+                let img = caustic_map::caustic_map_lookup(&view(scene)?, params, tt, tl, tx, m);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {

@@ -28,7 +28,7 @@ pub type MapPlanes<'a> = [&'a [AtomicU64]; DEPOSIT_PLANES];
 
 /// `map[pixel].words[word, word + 1] += v` (a little-endian u64 at an even `word`), on
 /// the plane that holds the word ([`deposit_word`]); the planes hold whole pairs.
-fn atomic_add_u64_photon_map(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
+pub fn atomic_add_u64_photon_map(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
     let (k, at) = deposit_word(pixel, word);
     map[k][at / 2].fetch_add(v, Ordering::Relaxed);
 }

@@ -5,10 +5,10 @@
 //! absorption inside dielectrics) to the diffuse surfaces they show. Background: black.
 //! Output: radiance W/(sr m^2), alpha 1.
 
-use crate::traversal::SceneView;
+use crate::traversal::{Hit, SceneView};
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
-    camera_ray, light_kind, material_kind, DirectParams, GBufferView,
+    camera_ray, light_kind, material_kind, DirectParams, GBufferView, GpuMaterial, SurfacePoint,
 };
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::optics::{
@@ -105,6 +105,39 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
 /// Radiance arriving along a camera ray that meets mirrors and glass: the ray tree is
 /// walked with an explicit stack.
 fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) -> Vec3 {
+    specular_tree(
+        scene,
+        p.max_specular_depth,
+        p.min_weight,
+        origin,
+        dir,
+        |_, s, m, n, ng_view| {
+            shade_diffuse(
+                scene,
+                s.position,
+                n,
+                ng_view,
+                Vec3::from_slice(&m.color[..3]),
+            )
+        },
+    )
+}
+
+/// The specular ray tree from `origin` along `dir` (`direct_light` and
+/// `caustic_map_lookup` walk it alike): depth first with an explicit stack (last pushed,
+/// first popped), both Fresnel branches of a dielectric, mirrors scaled by their
+/// reflectance, Beer-Lambert inside dielectrics, branches below `min_weight` or past
+/// `max_depth` specular surfaces cut. At every diffuse surface it meets, adds
+/// `weight * diffuse_end(hit, surface, material, n, ng_view)` (`n` the shading normal
+/// and `ng_view` the geometric normal, both turned to the arriving ray).
+pub fn specular_tree(
+    scene: &SceneView,
+    max_depth: u32,
+    min_weight: f32,
+    origin: Vec3,
+    dir: Vec3,
+    diffuse_end: impl Fn(&Hit, &SurfacePoint, &GpuMaterial, Vec3, Vec3) -> Vec3,
+) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut stack = vec![(origin, dir, Vec3::ONE, 0u32)];
     while let Some((o, d, weight, depth)) = stack.pop() {
@@ -129,19 +162,12 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
                 } else {
                     s.shading_normal
                 };
-                l += weight
-                    * shade_diffuse(
-                        scene,
-                        s.position,
-                        n,
-                        ng_view,
-                        Vec3::from_slice(&m.color[..3]),
-                    );
+                l += weight * diffuse_end(&hit, &s, m, n, ng_view);
             }
-            _ if depth >= p.max_specular_depth => {}
+            _ if depth >= max_depth => {}
             material_kind::MIRROR => {
                 let w = weight * Vec3::from_slice(&m.color[..3]);
-                if w.max_element() >= p.min_weight {
+                if w.max_element() >= min_weight {
                     let n = if s.shading_normal.dot(d) > 0.0 {
                         -s.shading_normal
                     } else {
@@ -163,7 +189,7 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
                 };
                 let eta = if entering { 1.0 / m.ior } else { m.ior };
                 let f = fresnel_dielectric(-d.dot(facing), eta);
-                if weight.max_element() * f >= p.min_weight {
+                if weight.max_element() * f >= min_weight {
                     stack.push((
                         offset_ray_origin(s.position, ng_view),
                         reflect(d, facing),
@@ -172,7 +198,7 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
                     ));
                 }
                 if let Some(t) = refract(d, facing, eta) {
-                    if weight.max_element() * (1.0 - f) >= p.min_weight {
+                    if weight.max_element() * (1.0 - f) >= min_weight {
                         stack.push((
                             offset_ray_origin(s.position, -ng_view),
                             t.normalize(),

@@ -10,6 +10,11 @@
 //! Paths end at a diffuse surface, on escape, at `max_bounces` segments, or when the
 //! largest channel drops below `min_relative_power` of the emitted flux.
 //!
+//! Emission: a cone (equal-area warp), a rectangle of parallel rays, or a light view plane
+//! (seed 001: the pinhole ray through a jittered point of the photon's texel, flux `I x`
+//! the texel's solid angle). Store: world space (Sspm) or, with the variant's
+//! `surface_store`, the hit's uv and triangle (CausticMap's atlas).
+//!
 //! Random dimensions: bounce 0 dims 0, 1 = grid jitter; bounce b dim 2 = Fresnel choice,
 //! dim 3 = dispersion channel.
 //!
@@ -23,7 +28,7 @@ use super::Counters;
 use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
-    counter, emission_kind, light_kind, material_kind, Photon, TraceParams,
+    counter, emission_kind, light_kind, material_kind, photon_store, Photon, TraceParams,
 };
 use caustica_core::kernels::TraceVariant;
 use caustica_core::math::fixed_point::quantize;
@@ -33,7 +38,9 @@ use caustica_core::math::optics::{
 };
 use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::rng::random_f32;
-use caustica_core::math::sampling::{stratified_cell, to_world, uniform_cone};
+use caustica_core::math::sampling::{
+    stratified_cell, to_world, uniform_cone, view_plane_direction, view_plane_texel_weight,
+};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -62,21 +69,27 @@ pub enum PathEnd {
 
 /// Traces the batch with the monomorphised variant `variant`.
 pub fn trace_photons(scene: &SceneView, p: &TraceParams, variant: TraceVariant) -> TraceResult {
+    let s = if variant.surface_store {
+        photon_store::SURFACE
+    } else {
+        photon_store::WORLD
+    };
     match (variant.dielectric, variant.dispersion, variant.absorption) {
-        (false, false, false) => trace_batch::<false, false, false>(scene, p),
-        (false, false, true) => trace_batch::<false, false, true>(scene, p),
-        (false, true, false) => trace_batch::<false, true, false>(scene, p),
-        (false, true, true) => trace_batch::<false, true, true>(scene, p),
-        (true, false, false) => trace_batch::<true, false, false>(scene, p),
-        (true, false, true) => trace_batch::<true, false, true>(scene, p),
-        (true, true, false) => trace_batch::<true, true, false>(scene, p),
-        (true, true, true) => trace_batch::<true, true, true>(scene, p),
+        (false, false, false) => trace_batch::<false, false, false>(scene, p, s),
+        (false, false, true) => trace_batch::<false, false, true>(scene, p, s),
+        (false, true, false) => trace_batch::<false, true, false>(scene, p, s),
+        (false, true, true) => trace_batch::<false, true, true>(scene, p, s),
+        (true, false, false) => trace_batch::<true, false, false>(scene, p, s),
+        (true, false, true) => trace_batch::<true, false, true>(scene, p, s),
+        (true, true, false) => trace_batch::<true, true, false>(scene, p, s),
+        (true, true, true) => trace_batch::<true, true, true>(scene, p, s),
     }
 }
 
 fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(
     scene: &SceneView,
     p: &TraceParams,
+    store: u32,
 ) -> TraceResult {
     const CHUNK: u32 = 4096;
     let chunks = p.count.div_ceil(CHUNK);
@@ -90,6 +103,7 @@ fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION:
                     scene,
                     p,
                     p.first + i,
+                    store,
                     &mut |_, _| {},
                 );
                 counters.words[counter::RAYS] += rays as u64;
@@ -137,7 +151,18 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
             + u.y * Vec3::from_slice(&p.rect_v[..3]);
         return (origin, axis, flux);
     }
-    let dir = to_world(uniform_cone(u, p.origin[3]), axis);
+    let (dir, flux) = if p.emission == emission_kind::VIEW_PLANE {
+        let dir = view_plane_direction(
+            axis,
+            Vec3::from_slice(&p.rect_u[..3]),
+            Vec3::from_slice(&p.rect_v[..3]),
+            u,
+        );
+        let w = view_plane_texel_weight(ix, iy, p.grid_w, p.grid_h, p.rect_u[3], p.rect_v[3]);
+        (dir, flux * w)
+    } else {
+        (to_world(uniform_cone(u, p.origin[3]), axis), flux)
+    };
     let light = &scene.lights[p.light as usize];
     let falloff = if light.kind == light_kind::SPOT {
         spot_falloff(
@@ -154,7 +179,7 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
 /// Traces one photon with every feature compiled in; returns how it ended and the number
 /// of ray segments traced.
 pub fn trace_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (PathEnd, u32) {
-    trace_photon_variant::<true, true, true>(scene, p, index, &mut |_, _| {})
+    trace_photon_variant::<true, true, true>(scene, p, index, photon_store::WORLD, &mut |_, _| {})
 }
 
 /// [`trace_photon`] with every feature, calling `on_segment(origin, direction)` before each
@@ -166,7 +191,7 @@ pub fn trace_photon_observed(
     index: u32,
     on_segment: &mut impl FnMut(Vec3, Vec3),
 ) -> (PathEnd, u32) {
-    trace_photon_variant::<true, true, true>(scene, p, index, on_segment)
+    trace_photon_variant::<true, true, true>(scene, p, index, photon_store::WORLD, on_segment)
 }
 
 /// One photon path of a compiled variant.
@@ -179,6 +204,7 @@ pub fn trace_photon_variant<
     scene: &SceneView,
     p: &TraceParams,
     index: u32,
+    store: u32,
     on_segment: &mut impl FnMut(Vec3, Vec3),
 ) -> (PathEnd, u32) {
     let (mut origin, mut dir, mut flux) = emit_photon(scene, p, index);
@@ -205,11 +231,20 @@ pub fn trace_photon_variant<
                     // is the only path without a specular interaction
                     return (PathEnd::NoSpecular, bounce + 1);
                 }
-                let ph = Photon {
-                    position: s.position.to_array(),
-                    hit_distance: hit.t,
-                    flux: flux.to_array(),
-                    direction: pack_unit_vector(dir),
+                let ph = if store == photon_store::SURFACE {
+                    Photon {
+                        position: [s.uv.x, s.uv.y, 0.0],
+                        hit_distance: hit.t,
+                        flux: flux.to_array(),
+                        direction: hit.triangle,
+                    }
+                } else {
+                    Photon {
+                        position: s.position.to_array(),
+                        hit_distance: hit.t,
+                        flux: flux.to_array(),
+                        direction: pack_unit_vector(dir),
+                    }
                 };
                 return (PathEnd::Stored(ph), bounce + 1);
             }

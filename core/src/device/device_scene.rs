@@ -38,6 +38,9 @@ pub struct DeviceScene {
     pub has_dispersion: bool,
     /// Triangles dropped because their area is zero in f32.
     pub degenerate_triangles: u64,
+    /// Per triangle (in `triangles`' order): the index of the scene object it came from
+    /// (host only: CausticMap's atlas assigns receivers' triangles to tiles with it).
+    pub triangle_objects: Vec<u32>,
 }
 
 /// `[u32; 4]` vectors per CWBVH node in `bvh_nodes` (80 bytes).
@@ -120,6 +123,8 @@ impl DeviceScene {
         let mut bounds = Aabb::EMPTY;
         let mut caster_bounds = Aabb::EMPTY;
         let mut degenerate_triangles = 0u64;
+        let mut objects: Vec<u32> = Vec::new();
+        reserve(&mut objects, triangle_total, "triangle objects")?;
         for (k, o) in scene.objects.iter().enumerate() {
             let mat = names.iter().position(|n| **n == o.material).unwrap_or(0) as u32;
             let specular = scene.materials[&o.material].is_specular();
@@ -134,6 +139,7 @@ impl DeviceScene {
                         indices: t.map(|i| i + base),
                         material: mat,
                     });
+                    objects.push(k as u32);
                 }
             }
             if tris.len() == kept_before {
@@ -166,7 +172,8 @@ impl DeviceScene {
             .values()
             .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
         let lights = scene.lights.iter().map(gpu_light).collect();
-        let (triangles, bvh_nodes) = build_bvh(&vertices, tris)?;
+        let (triangles, bvh_nodes, order) = build_bvh(&vertices, tris)?;
+        let triangle_objects = order.iter().map(|&i| objects[i as usize]).collect();
         Ok(DeviceScene {
             vertices,
             triangles,
@@ -177,6 +184,7 @@ impl DeviceScene {
             caster_bounds,
             has_dispersion,
             degenerate_triangles,
+            triangle_objects,
         })
     }
 
@@ -250,7 +258,7 @@ fn check_coincident(
 fn build_bvh(
     vertices: &[GpuVertex],
     tris: Vec<GpuTriangle>,
-) -> Result<(Vec<GpuTriangle>, Vec<[u32; 4]>), BuildError> {
+) -> Result<(Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>), BuildError> {
     let p = |i: u32| Vec3A::from(vertices[i as usize].position);
     let mut obvhs_tris: Vec<Triangle> = Vec::new();
     reserve(&mut obvhs_tris, tris.len() as u64, "BVH build triangles")?;
@@ -270,7 +278,7 @@ fn build_bvh(
     let mut out: Vec<[u32; 4]> = Vec::new();
     reserve(&mut out, nodes.len() as u64, "BVH nodes")?;
     out.extend_from_slice(nodes);
-    Ok((ordered, out))
+    Ok((ordered, out, bvh.primitive_indices))
 }
 
 fn gpu_material(m: &Material) -> GpuMaterial {

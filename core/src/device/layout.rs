@@ -334,6 +334,75 @@ pub mod emission_kind {
     pub const CONE: u32 = 0;
     /// Parallel rays from the rectangle `origin + s*rect_u + t*rect_v`, s, t in [0, 1).
     pub const RECTANGLE: u32 = 1;
+    /// A perspective light view plane (seed 001 section 3.1): rays from the pinhole
+    /// `origin` through `axis + ndc.x * rect_u + ndc.y * rect_v` with `ndc = (2 s - 1,
+    /// 1 - 2 t)`, s, t in [0, 1) (row 0 at the top); `rect_u.w`, `rect_v.w` hold the
+    /// tangents of the half fields of view (`rect_u`, `rect_v` are the plane's unit right
+    /// and up vectors scaled by them). Photon flux: `photon_flux` (the flux of a texel at
+    /// the plane's centre, `I * dx * dy`) times the texel's
+    /// [`view_plane_texel_weight`](crate::math::sampling::view_plane_texel_weight) and a
+    /// spot light's falloff.
+    pub const VIEW_PLANE: u32 = 2;
+}
+
+/// What `trace_photons` writes into a [`Photon`] (its `SURFACE_STORE` switch).
+pub mod photon_store {
+    /// World space (Sspm): `position` is the world-space hit point, `direction` the
+    /// packed direction of travel.
+    pub const WORLD: u32 = 0;
+    /// Texture space (CausticMap): `position.x, .y` hold the hit's interpolated uv
+    /// (`.z` = 0) and `direction` the index of the triangle it landed on; `flux` and
+    /// `hit_distance` as in world space.
+    pub const SURFACE: u32 = 1;
+}
+
+/// Sentinel tile index: a triangle that is no receiver, an atlas texel outside every
+/// tile.
+pub const NO_TILE: u32 = u32::MAX;
+
+/// One receiver's square tile of the caustic atlas as the kernels read it (texels):
+/// `[x, y, side, receiver object index]`.
+pub type AtlasTileTexel = [u32; 4];
+
+/// One atlas texel as the kernels read it: `[world area (f32 bits, scene units^2; 0 where
+/// no UV triangle of the receiver covers the texel centre), tile index (`NO_TILE`
+/// outside every tile)]`.
+pub type AtlasTexel = [u32; 2];
+
+/// Parameters of `deposit_atlas` and `gather_caustic_map` (the caustic atlas, seed 001).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AtlasParams {
+    /// Atlas width (texels).
+    pub width: u32,
+    /// Atlas height (texels).
+    pub height: u32,
+    /// Flux per fixed-point unit (W).
+    pub flux_quantum: f32,
+    /// Hit distance per fixed-point unit (scene units).
+    pub hit_distance_quantum: f32,
+    /// Slots in the photon buffer.
+    pub photon_capacity: u32,
+    /// Width `N` of the gather window (odd; 1: no gather, the raw map).
+    pub gather_width: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 2],
+}
+
+/// Parameters of `caustic_map_lookup`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MapLookupParams {
+    /// The frame's camera.
+    pub camera: GpuCamera,
+    /// Atlas width (texels).
+    pub atlas_width: u32,
+    /// Longest specular chain followed from the camera to a diffuse surface.
+    pub max_specular_depth: u32,
+    /// Chains whose weight falls below this are cut.
+    pub min_weight: f32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: u32,
 }
 
 /// Parameters of one `trace_photons` dispatch: photons `first .. first + count` of the
@@ -645,6 +714,8 @@ mod tests {
         assert_eq!(size_of::<DepositParams>() % 16, 0);
         assert_eq!(size_of::<GatherParams>() % 16, 0);
         assert_eq!(size_of::<DirectParams>() % 16, 0);
+        assert_eq!(size_of::<AtlasParams>(), 32);
+        assert_eq!(size_of::<MapLookupParams>(), 80);
     }
 
     #[test]

@@ -25,6 +25,8 @@
 //! non-zero world area), naming it: a clear error, never a silently doubled caustic. (An
 //! automatic per-triangle atlas for such meshes is left for later: TODO(issue 16).)
 
+use crate::device::device_scene::DeviceScene;
+use crate::device::layout::{AtlasTexel, AtlasTileTexel, NO_TILE};
 use glam::{Vec2, Vec3};
 
 /// Default atlas size (texels a side), the source's caustic map size.
@@ -225,6 +227,19 @@ pub fn receiver_coverage(
     triangles: &[([Vec3; 3], [Vec2; 3])],
     side: u32,
 ) -> Result<Vec<bool>, AtlasError> {
+    Ok(receiver_owners(receiver, triangles, side)?
+        .into_iter()
+        .map(|o| o != u32::MAX)
+        .collect())
+}
+
+/// [`receiver_coverage`] naming the triangle (index into `triangles`) that covers each
+/// texel centre, `u32::MAX` where none does.
+pub fn receiver_owners(
+    receiver: u32,
+    triangles: &[([Vec3; 3], [Vec2; 3])],
+    side: u32,
+) -> Result<Vec<u32>, AtlasError> {
     let bad = |reason: String| AtlasError::BadUvs { receiver, reason };
     let mut owner = vec![u32::MAX; side as usize * side as usize];
     let s = side as f32;
@@ -277,7 +292,102 @@ pub fn receiver_coverage(
             }
         }
     }
-    Ok(owner.into_iter().map(|o| o != u32::MAX).collect())
+    Ok(owner)
+}
+
+/// The atlas as the kernels read it (`deposit_atlas`, `gather_caustic_map`,
+/// `caustic_map_lookup`): the plan, each tile, each scene triangle's tile and each atlas
+/// texel's world area and tile.
+#[derive(Clone, Debug)]
+pub struct AtlasLayout {
+    /// Where the tiles lie and the texel density.
+    pub plan: AtlasPlan,
+    /// Scene object index of each receiver (receiver `i` owns tile `i`).
+    pub receivers: Vec<u32>,
+    /// Per tile: `[x, y, side, receiver object]`.
+    pub tiles: Vec<AtlasTileTexel>,
+    /// Per scene triangle (device order): its tile, or [`NO_TILE`].
+    pub triangle_tiles: Vec<u32>,
+    /// Per atlas texel (row-major): `[world area bits, tile]` ([`AtlasTexel`]).
+    pub texels: Vec<AtlasTexel>,
+    /// Texels some UV triangle covers.
+    pub covered_texels: u64,
+}
+
+/// Lays out the atlas of `size` texels for the scene objects flagged in `receiver` (one
+/// flag per scene object): tiles by world area ([`plan_atlas`]), every texel centre
+/// tested against the receiver's UV triangles ([`receiver_owners`]: overlapping, missing
+/// or out-of-range UVs are refused, naming the receiver by its object index), and each
+/// covered texel's world area from its triangle's UV-to-world Jacobian
+/// ([`texel_world_area`]).
+pub fn atlas_layout(
+    ds: &DeviceScene,
+    receiver: &[bool],
+    size: (u32, u32),
+) -> Result<AtlasLayout, AtlasError> {
+    let receivers: Vec<u32> = (0..receiver.len() as u32)
+        .filter(|&o| receiver[o as usize])
+        .collect();
+    let slot_of = |o: u32| receivers.iter().position(|&r| r == o);
+    let mut tris: Vec<Vec<(usize, [Vec3; 3], [Vec2; 3])>> = vec![Vec::new(); receivers.len()];
+    for (t, (tri, &o)) in ds.triangles.iter().zip(&ds.triangle_objects).enumerate() {
+        if let Some(r) = slot_of(o) {
+            let v = tri.indices.map(|i| ds.vertices[i as usize]);
+            tris[r].push((
+                t,
+                v.map(|v| Vec3::from(v.position)),
+                v.map(|v| Vec2::new(v.u, v.v)),
+            ));
+        }
+    }
+    let areas: Vec<f64> = tris
+        .iter()
+        .map(|ts| {
+            ts.iter()
+                .map(|(_, p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
+                .sum()
+        })
+        .collect();
+    let plan = plan_atlas(&areas, size)?;
+    let atlas_texels = size.0 as usize * size.1 as usize;
+    let mut texels: Vec<AtlasTexel> = Vec::new();
+    texels.try_reserve_exact(atlas_texels).map_err(|_| {
+        AtlasError::BadInput(format!("no host memory for {atlas_texels} atlas texels"))
+    })?;
+    texels.resize(atlas_texels, [0, NO_TILE]);
+    let mut triangle_tiles = vec![NO_TILE; ds.triangles.len()];
+    let mut tiles = Vec::with_capacity(plan.tiles.len());
+    let mut covered_texels = 0u64;
+    for (r, tile) in plan.tiles.iter().enumerate() {
+        tiles.push([tile.x, tile.y, tile.side, receivers[r]]);
+        let local: Vec<([Vec3; 3], [Vec2; 3])> = tris[r].iter().map(|(_, p, t)| (*p, *t)).collect();
+        let owners = receiver_owners(receivers[r], &local, tile.side)?;
+        for (t, _, _) in &tris[r] {
+            triangle_tiles[*t] = r as u32;
+        }
+        for ty in 0..tile.side {
+            for tx in 0..tile.side {
+                let i = (tile.y + ty) as usize * size.0 as usize + (tile.x + tx) as usize;
+                let owner = owners[(ty * tile.side + tx) as usize];
+                let area = if owner == u32::MAX {
+                    0.0
+                } else {
+                    let (p, t) = &local[owner as usize];
+                    texel_world_area(*p, *t, tile.side).unwrap_or(0.0)
+                };
+                covered_texels += (area > 0.0) as u64;
+                texels[i] = [area.to_bits(), r as u32];
+            }
+        }
+    }
+    Ok(AtlasLayout {
+        plan,
+        receivers,
+        tiles,
+        triangle_tiles,
+        texels,
+        covered_texels,
+    })
 }
 
 /// Whether `c` lies in UV triangle `t` (edges included, except the top-left rule: a point

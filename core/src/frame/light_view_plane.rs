@@ -35,9 +35,10 @@
 //! therefore in physical units: summed over the plane, the photons carry exactly the flux
 //! the light sends through it.
 
+use crate::device::layout::{emission_kind, TraceParams};
 use crate::frame::emission::{emission_domain, EmissionDomain, NoEmission, PointEmission};
 use crate::math::geometry::Aabb;
-use crate::math::sampling::orthonormal_basis;
+use crate::math::sampling::{orthonormal_basis, view_plane_texel_weight};
 use crate::scene::Light;
 use glam::Vec3;
 
@@ -130,9 +131,15 @@ impl LightViewPlane {
         let (dx, dy) = (2.0 * self.half_extent.0 / w, 2.0 * self.half_extent.1 / h);
         match self.projection {
             ViewPlaneProjection::Perspective => {
-                let (a, b) = self.texel_plane_point(i, j);
-                let q = 1.0 + a * a + b * b;
-                dx * dy / (q * q.sqrt())
+                dx * dy
+                    * view_plane_texel_weight(
+                        i,
+                        j,
+                        self.resolution.0,
+                        self.resolution.1,
+                        self.half_extent.0,
+                        self.half_extent.1,
+                    )
             }
             ViewPlaneProjection::Orthographic => dx * dy,
         }
@@ -160,6 +167,60 @@ impl LightViewPlane {
     /// Texels on the plane.
     pub fn texels(&self) -> u64 {
         self.resolution.0 as u64 * self.resolution.1 as u64
+    }
+
+    /// Parameters of a `trace_photons` dispatch over texels `first .. first + count`
+    /// (row-major) of this plane, one photon each, jittered inside its texel by the
+    /// `seed`'s random numbers: a perspective plane as
+    /// [`emission_kind::VIEW_PLANE`](crate::device::layout::emission_kind::VIEW_PLANE)
+    /// (photon flux `I * Omega_texel`, the kernel weighting the centre texel's flux by
+    /// `view_plane_texel_weight`), an orthographic one as a rectangle of parallel rays
+    /// (photon flux `E * A_texel`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn trace_params(
+        &self,
+        light: u32,
+        (first, count): (u32, u32),
+        seed: u32,
+        max_bounces: u32,
+        min_relative_power: f32,
+        flux_quantum: f32,
+    ) -> TraceParams {
+        let (hx, hy) = self.half_extent;
+        let (w, h) = self.resolution;
+        let texel = (2.0 * hx / w as f32) * (2.0 * hy / h as f32);
+        let (emission, origin, rect_u, rect_v) = match self.projection {
+            ViewPlaneProjection::Perspective => (
+                emission_kind::VIEW_PLANE,
+                self.origin,
+                (self.u * hx).extend(hx),
+                (self.v * hy).extend(hy),
+            ),
+            ViewPlaneProjection::Orthographic => (
+                emission_kind::RECTANGLE,
+                // corner at ndc (-1, 1): row 0 at the top, as on the perspective plane
+                self.origin - hx * self.u + hy * self.v,
+                (2.0 * hx * self.u).extend(0.0),
+                (-2.0 * hy * self.v).extend(0.0),
+            ),
+        };
+        TraceParams {
+            light,
+            emission,
+            grid_w: w,
+            grid_h: h,
+            first,
+            count,
+            seed,
+            max_bounces,
+            origin: origin.extend(1.0).to_array(),
+            axis: self.w.extend(0.0).to_array(),
+            rect_u: rect_u.to_array(),
+            rect_v: rect_v.to_array(),
+            photon_flux: (self.power * texel).extend(min_relative_power).to_array(),
+            flux_quantum,
+            _pad: [0; 3],
+        }
     }
 }
 

@@ -55,6 +55,7 @@ impl SceneFeatures {
             dielectric: self.dielectrics,
             dispersion: self.dispersion,
             absorption: self.absorption,
+            surface_store: false,
         }
     }
 }

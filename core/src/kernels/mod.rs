@@ -16,10 +16,13 @@
 //! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
 
 mod bilateral_gather;
+mod caustic_map_lookup;
 mod composite;
 mod density_gather;
+mod deposit_atlas;
 mod deposit_screen;
 mod direct_light;
+mod gather_caustic_map;
 mod gather_footprint;
 mod photon_count_table;
 mod prepare_scene;
@@ -29,10 +32,13 @@ mod tile_hit_distance;
 mod trace_photons;
 
 pub use bilateral_gather::BilateralGather;
+pub use caustic_map_lookup::CausticMapLookup;
 pub use composite::Composite;
 pub use density_gather::DensityGather;
+pub use deposit_atlas::DepositAtlas;
 pub use deposit_screen::DepositScreen;
 pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
+pub use gather_caustic_map::GatherCausticMap;
 pub use gather_footprint::GatherFootprint;
 pub use photon_count_table::PhotonCountTable;
 pub use prepare_scene::PrepareScene;
@@ -443,6 +449,9 @@ kernel_list! {
     GatherFootprint => gather_footprint,
     DensityGather => density_gather,
     Composite => composite,
+    DepositAtlas => deposit_atlas,
+    GatherCausticMap => gather_caustic_map,
+    CausticMapLookup => caustic_map_lookup,
 }
 
 impl Kernel {

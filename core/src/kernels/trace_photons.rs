@@ -6,11 +6,12 @@ use crate::device::handle::{Buf, SceneArgs};
 use crate::device::layout::{Photon, TraceParams};
 
 /// Emits and traces photons `params.first .. first + count` of light `params.light` from
-/// its emission domain through specular chains (mirror, Fresnel reflect/refract, total
-/// internal reflection, Beer-Lambert, Cauchy dispersion as the variant allows); appends
-/// each photon that ends on a diffuse surface after at least one specular interaction to
-/// `photons` at `photon_count[0]` (world-space position, flux in W per channel, last
-/// segment length) and adds the photon accounting to `counters`
+/// its emission domain (cone, rectangle or light view plane) through specular chains
+/// (mirror, Fresnel reflect/refract, total internal reflection, Beer-Lambert, Cauchy
+/// dispersion as the variant allows); appends each photon that ends on a diffuse surface
+/// after at least one specular interaction to `photons` at `photon_count[0]` (world-space
+/// position, or uv and triangle with the variant's `surface_store`; flux in W per
+/// channel; last segment length) and adds the photon accounting to `counters`
 /// ([`crate::device::layout::counter`]).
 #[derive(Clone, Copy, Debug)]
 pub struct TracePhotons {
@@ -38,8 +39,12 @@ const BINDINGS: [Binding; 11] = with_scene([
 ]);
 
 impl KernelDecl for TracePhotons {
-    const INFO: KernelInfo =
-        KernelInfo::traced("trace_photons", &BINDINGS, &TraceVariant::SWITCHES, "Sspm");
+    const INFO: KernelInfo = KernelInfo::traced(
+        "trace_photons",
+        &BINDINGS,
+        &TraceVariant::SWITCHES,
+        "Sspm, CausticMap",
+    );
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
@@ -83,25 +88,32 @@ pub struct TraceVariant {
     pub dispersion: bool,
     /// Beer-Lambert absorption inside dielectrics.
     pub absorption: bool,
+    /// Stores photons in texture space (uv and triangle,
+    /// [`photon_store::SURFACE`](crate::device::layout::photon_store::SURFACE)) for the
+    /// caustic atlas, instead of world space (Sspm's screen deposit).
+    pub surface_store: bool,
 }
 
 impl TraceVariant {
     /// Switch names, in specialization-constant id order.
-    pub const SWITCHES: [&'static str; 3] = ["DIELECTRIC", "DISPERSION", "ABSORPTION"];
+    pub const SWITCHES: [&'static str; 4] =
+        ["DIELECTRIC", "DISPERSION", "ABSORPTION", "SURFACE_STORE"];
 
     /// Every feature compiled in (what a frame uses with pruning off).
     pub const ALL: TraceVariant = TraceVariant {
         dielectric: true,
         dispersion: true,
         absorption: true,
+        surface_store: false,
     };
 
     /// Switch values in [`TraceVariant::SWITCHES`] order.
-    pub fn values(&self) -> [u32; 3] {
+    pub fn values(&self) -> [u32; 4] {
         [
             self.dielectric as u32,
             self.dispersion as u32,
             self.absorption as u32,
+            self.surface_store as u32,
         ]
     }
 

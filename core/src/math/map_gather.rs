@@ -24,7 +24,7 @@
 //! (irradiance times the texel's world area) and converts back with the destination's
 //! area.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// 001's default window: 3 x 3 on a 2048^2 map.
 pub const DEFAULT_GATHER_WIDTH: u32 = 3;
@@ -92,6 +92,128 @@ pub fn source_gather_texel(map: &[Vec3], side: u32, x: u32, y: u32, n: u32) -> V
     sum / ((n * n) as f32 + h as f32)
 }
 
+/// The atlas texel (row-major index in an atlas `atlas_width` texels wide) under `uv`
+/// on tile `tile = [x, y, side, _]`: `corner + floor(uv * side)`, clamped to the tile
+/// (`frame::caustic_atlas::uv_texel`).
+#[inline]
+pub fn atlas_texel_index(tile: [u32; 4], uv: Vec2, atlas_width: u32) -> u32 {
+    let s = tile[2] as f32;
+    let cx = ((uv.x * s).floor().max(0.0) as u32).min(tile[2] - 1);
+    let cy = ((uv.y * s).floor().max(0.0) as u32).min(tile[2] - 1);
+    (tile[1] + cy) * atlas_width + tile[0] + cx
+}
+
+/// A (lo, hi) fixed-point sum as f32: `f32(hi) * 2^32 + f32(lo)` (exact in the parts
+/// where they fit 24 bits; two roundings otherwise), what every backend computes the
+/// same way (WGSL has no 64-bit integers nor f64).
+#[inline]
+pub fn join_u64_f32(lo: u32, hi: u32) -> f32 {
+    hi as f32 * 4294967296.0 + lo as f32
+}
+
+/// The window of width `n` (odd) around texel `(x, y)` clipped to tile `[x0, y0, side,
+/// _]`: `(first column, last column, first row, last row)`, inclusive, atlas texels.
+#[inline]
+pub fn tile_window(tile: [u32; 4], x: u32, y: u32, n: u32) -> (u32, u32, u32, u32) {
+    let h = n / 2;
+    let (x0, y0, s) = (tile[0], tile[1], tile[2]);
+    (
+        x.saturating_sub(h).max(x0),
+        (x + h).min(x0 + s - 1),
+        y.saturating_sub(h).max(y0),
+        (y + h).min(y0 + s - 1),
+    )
+}
+
+/// One texel of the flux-keeping `n x n` gather in the form a kernel runs it (one thread
+/// per destination texel `t = (x, y)` of tile `tile`): `sum_s Phi_s / c_s` over the
+/// sources `s` of `t`'s window inside the tile, `c_s` the covered texels of `s`'s window
+/// (a source whose window covers nothing keeps its flux), over `t`'s world area: the
+/// irradiance (W/m^2 per channel) of [`gather_tile_flux`] at `t`, 0 where `t` is not
+/// covered. `flux(i)` is texel `i`'s flux (W), `area(i)` its world area (0: uncovered).
+pub fn gather_caustic_texel(
+    tile: [u32; 4],
+    x: u32,
+    y: u32,
+    n: u32,
+    atlas_width: u32,
+    flux: impl Fn(u32) -> Vec3,
+    area: impl Fn(u32) -> f32,
+) -> Vec3 {
+    let t = y * atlas_width + x;
+    let area_t = area(t);
+    let (ax, bx, ay, by) = tile_window(tile, x, y, n);
+    let mut sum = Vec3::ZERO;
+    for qy in ay..=by {
+        for qx in ax..=bx {
+            let q = qy * atlas_width + qx;
+            let f = flux(q);
+            if f == Vec3::ZERO {
+                continue;
+            }
+            let (cx0, cx1, cy0, cy1) = tile_window(tile, qx, qy, n);
+            let mut c = 0u32;
+            for sy in cy0..=cy1 {
+                for sx in cx0..=cx1 {
+                    c += (area(sy * atlas_width + sx) > 0.0) as u32;
+                }
+            }
+            if c == 0 {
+                if q == t {
+                    sum += f;
+                }
+            } else if area_t > 0.0 {
+                sum += f / c as f32;
+            }
+        }
+    }
+    if area_t > 0.0 {
+        sum / area_t
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// Bilinear lookup of the caustic map at `uv` on tile `tile` (atlas `atlas_width` texels
+/// wide): the four texels around `uv * side - 0.5`, clamped to the tile, each weighted by
+/// its bilinear weight if covered (`area(i) > 0`), renormalised by the covered weights
+/// (so that texels outside the receiver's UV triangles, which hold no irradiance, do not
+/// darken its edges and seams). `map(i)` is texel `i`'s irradiance (W/m^2).
+pub fn sample_caustic_map(
+    tile: [u32; 4],
+    uv: Vec2,
+    atlas_width: u32,
+    map: impl Fn(u32) -> Vec3,
+    area: impl Fn(u32) -> f32,
+) -> Vec3 {
+    let s = tile[2] as f32;
+    let fx = (uv.x * s - 0.5).clamp(0.0, s - 1.0);
+    let fy = (uv.y * s - 0.5).clamp(0.0, s - 1.0);
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (wx, wy) = (fx - x0, fy - y0);
+    let (ix0, iy0) = (x0 as u32, y0 as u32);
+    let (ix1, iy1) = ((ix0 + 1).min(tile[2] - 1), (iy0 + 1).min(tile[2] - 1));
+    let mut sum = Vec3::ZERO;
+    let mut wsum = 0.0f32;
+    for (ix, iy, w) in [
+        (ix0, iy0, (1.0 - wx) * (1.0 - wy)),
+        (ix1, iy0, wx * (1.0 - wy)),
+        (ix0, iy1, (1.0 - wx) * wy),
+        (ix1, iy1, wx * wy),
+    ] {
+        let i = (tile[1] + iy) * atlas_width + tile[0] + ix;
+        if area(i) > 0.0 && w > 0.0 {
+            sum += w * map(i);
+            wsum += w;
+        }
+    }
+    if wsum > 0.0 {
+        sum / wsum
+    } else {
+        Vec3::ZERO
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -156,5 +278,59 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_kernel_form_is_the_tile_gather_over_the_area() {
+        // a 6x6 tile at (3, 2) of a 12-wide atlas, random coverage and areas
+        let (w, tile) = (12u32, [3u32, 2, 6, 0]);
+        let mut k = 0u32;
+        let mut rnd = || {
+            k += 1;
+            random_f32(11, k, 0, 0)
+        };
+        let len = (w * 10) as usize;
+        let area: Vec<f32> = (0..len)
+            .map(|_| if rnd() > 0.25 { 0.5 + rnd() } else { 0.0 })
+            .collect();
+        let flux: Vec<Vec3> = (0..len).map(|_| Vec3::splat(rnd())).collect();
+        let at = |x: u32, y: u32| ((tile[1] + y) * w + tile[0] + x) as usize;
+        let tile_flux: Vec<Vec3> = (0..36).map(|i| flux[at(i % 6, i / 6)]).collect();
+        let covered: Vec<bool> = (0..36).map(|i| area[at(i % 6, i / 6)] > 0.0).collect();
+        let want = gather_tile_flux(&tile_flux, &covered, 6, 3);
+        for i in 0..36u32 {
+            let (x, y) = (tile[0] + i % 6, tile[1] + i / 6);
+            let e =
+                gather_caustic_texel(tile, x, y, 3, w, |q| flux[q as usize], |q| area[q as usize]);
+            let a = area[at(i % 6, i / 6)];
+            let f = if a > 0.0 {
+                want[i as usize] / a
+            } else {
+                Vec3::ZERO
+            };
+            assert!(
+                (e - f).length() <= 1e-5 * f.length().max(1.0),
+                "texel {i}: {e} vs {f}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_lookup_is_exact_on_a_uniform_map_and_ignores_uncovered_texels() {
+        let (w, tile) = (8u32, [2u32, 1, 4, 0]);
+        let area: Vec<f32> = (0..64)
+            .map(|i| if i % 8 == 5 { 0.0 } else { 1.0 })
+            .collect();
+        for (u, v) in [(0.0, 0.0), (0.3, 0.7), (0.99, 0.5), (0.5, 1.0)] {
+            let e = sample_caustic_map(
+                tile,
+                Vec2::new(u, v),
+                w,
+                |_| Vec3::splat(2.0),
+                |i| area[i as usize],
+            );
+            assert_eq!(e, Vec3::splat(2.0));
+        }
+        assert_eq!(atlas_texel_index(tile, Vec2::new(1.0, 0.0), w), 8 + 2 + 3);
     }
 }

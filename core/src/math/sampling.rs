@@ -34,6 +34,30 @@ pub fn uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
 }
 
+/// Unit direction through point `u` in [0,1)^2 of a perspective light view plane (seed
+/// 001 section 3.1, its garbled ray formula corrected as `frame::light_view_plane` says):
+/// `normalize(axis + ndc.x * right + ndc.y * up)` with `ndc = (2 u.x - 1, 1 - 2 u.y)` (row
+/// 0 at the top); `right` and `up` are the plane's unit vectors scaled by the tangents of
+/// the half fields of view (world space).
+#[inline]
+pub fn view_plane_direction(axis: Vec3, right: Vec3, up: Vec3, u: Vec2) -> Vec3 {
+    let ndc = Vec2::new(2.0 * u.x - 1.0, 1.0 - 2.0 * u.y);
+    (axis + ndc.x * right + ndc.y * up).normalize()
+}
+
+/// Solid angle of texel (`ix`, `iy`) of a `w x h` perspective view plane with half-extent
+/// tangents `tan_x`, `tan_y`, over that of a texel at the plane's centre: `1 / q^(3/2)`
+/// with `q = 1 + a^2 + b^2` at the texel's centre `(a, b)` in tangent units (the
+/// integrand of `dx dy / (1 + x^2 + y^2)^(3/2)`, midpoint rule; error bound in
+/// `frame::light_view_plane`).
+#[inline]
+pub fn view_plane_texel_weight(ix: u32, iy: u32, w: u32, h: u32, tan_x: f32, tan_y: f32) -> f32 {
+    let a = (2.0 * (ix as f32 + 0.5) / w as f32 - 1.0) * tan_x;
+    let b = (1.0 - 2.0 * (iy as f32 + 0.5) / h as f32) * tan_y;
+    let q = 1.0 + a * a + b * b;
+    1.0 / (q * q.sqrt())
+}
+
 /// Solid angle (sr) of a cone with half-angle `acos(cos_max)`.
 #[inline]
 pub fn cone_solid_angle(cos_max: f32) -> f32 {

@@ -3,6 +3,7 @@
 //! conformance create techniques by name through [`create`] and drive them through
 //! [`crate::frame::technique::Technique`].
 
+pub mod caustic_map;
 pub mod sspm;
 
 use crate::backend::Backend;
@@ -31,14 +32,25 @@ pub struct TechniqueEntry {
 }
 
 /// Every technique, by name: the registry.
-pub const TECHNIQUES: &[TechniqueEntry] = &[TechniqueEntry {
-    name: "sspm",
-    title: "screen-space photon mapping (seed 000, Kim, Ray Tracing Gems ch. 30)",
-    create: sspm::create,
-    default_settings: || {
-        serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
+pub const TECHNIQUES: &[TechniqueEntry] = &[
+    TechniqueEntry {
+        name: "sspm",
+        title: "screen-space photon mapping (seed 000, Kim, Ray Tracing Gems ch. 30)",
+        create: sspm::create,
+        default_settings: || {
+            serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
+        },
     },
-}];
+    TechniqueEntry {
+        name: "caustic-map",
+        title: "texture-space caustic maps from light view planes (seed 001)",
+        create: caustic_map::create,
+        default_settings: || {
+            serde_json::to_value(caustic_map::CausticMapSettings::default())
+                .unwrap_or(serde_json::Value::Null)
+        },
+    },
+];
 
 /// Names of every registered technique.
 pub fn technique_names() -> Vec<&'static str> {

@@ -1,0 +1,149 @@
+//! CausticMap's kernels (seed 001): `deposit_atlas` (texture-space photons into the
+//! atlas's fixed-point sums), `gather_caustic_map` (the flux-keeping N x N gather as
+//! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
+//! `math::map_gather`; these are loops over it.
+
+use super::deposit_screen::{atomic_add_u64_photon_map, MapPlanes};
+use super::direct_light::specular_tree;
+use super::Counters;
+use crate::traversal::SceneView;
+use caustica_core::device::layout::{
+    camera_ray, counter, AtlasParams, AtlasTexel, AtlasTileTexel, MapLookupParams, Photon,
+    PhotonMapView, NO_TILE,
+};
+use caustica_core::math::fixed_point::quantize;
+use caustica_core::math::map_gather::{
+    atlas_texel_index, gather_caustic_texel, join_u64_f32, sample_caustic_map,
+};
+use caustica_core::math::optics::saturate_radiance3;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+/// Deposits every texture-space photon into the atlas sums (flux r, g, b in flux quanta,
+/// hit distance in its quanta, a count), and returns the counters it adds to (off
+/// screen: the photon's triangle has no tile; deposited; underflow; saturated).
+pub fn deposit_atlas(
+    p: &AtlasParams,
+    triangle_tiles: &[u32],
+    tiles: &[AtlasTileTexel],
+    photons: &[Photon],
+    map: MapPlanes,
+) -> Counters {
+    photons
+        .par_chunks(4096)
+        .map(|chunk| {
+            let mut c = Counters::default();
+            for ph in chunk {
+                let tri = ph.direction as usize;
+                let tile = triangle_tiles.get(tri).copied().unwrap_or(NO_TILE);
+                if tile == NO_TILE || tile as usize >= tiles.len() {
+                    c.bump(counter::OFF_SCREEN);
+                    continue;
+                }
+                let uv = Vec2::new(ph.position[0], ph.position[1]);
+                let texel = atlas_texel_index(tiles[tile as usize], uv, p.width);
+                for ch in 0..3 {
+                    let q = quantize(ph.flux[ch], p.flux_quantum);
+                    if q.underflow {
+                        c.bump(counter::UNDERFLOW);
+                    }
+                    if q.saturated {
+                        c.bump(counter::SATURATED);
+                    }
+                    if q.units != 0 {
+                        atomic_add_u64_photon_map(&map, texel, 2 * ch as u32, q.units as u64);
+                    }
+                }
+                let hd = quantize(ph.hit_distance, p.hit_distance_quantum).units as u64;
+                atomic_add_u64_photon_map(&map, texel, 6, hd);
+                atomic_add_u64_photon_map(&map, texel, 8, 1);
+                c.bump(counter::DEPOSITED);
+            }
+            c
+        })
+        .reduce(Counters::default, Counters::merge)
+}
+
+/// The flux (W per channel) of atlas texel `i`'s fixed-point sums.
+pub fn atlas_flux(map: &PhotonMapView, i: u32, quantum: f32) -> Vec3 {
+    let ch = |c: u32| {
+        join_u64_f32(
+            map.photon_map_word(i, 2 * c),
+            map.photon_map_word(i, 2 * c + 1),
+        ) * quantum
+    };
+    Vec3::new(ch(0), ch(1), ch(2))
+}
+
+/// The caustic map: irradiance (W/m^2 per channel, alpha 1) per atlas texel.
+pub fn gather_caustic_map(
+    p: &AtlasParams,
+    texels: &[AtlasTexel],
+    tiles: &[AtlasTileTexel],
+    map: PhotonMapView,
+) -> Vec<[f32; 4]> {
+    let n = p.width as usize * p.height as usize;
+    (0..n as u32)
+        .into_par_iter()
+        .map(|t| {
+            let tile = texels[t as usize][1];
+            if tile == NO_TILE || tile as usize >= tiles.len() {
+                return [0.0, 0.0, 0.0, 1.0];
+            }
+            let e = gather_caustic_texel(
+                tiles[tile as usize],
+                t % p.width,
+                t / p.width,
+                p.gather_width,
+                p.width,
+                |q| atlas_flux(&map, q, p.flux_quantum),
+                |q| f32::from_bits(texels[q as usize][0]),
+            );
+            [e.x, e.y, e.z, 1.0]
+        })
+        .collect()
+}
+
+/// Caustic radiance per pixel (W/(sr m^2), alpha 1): the camera ray's specular tree
+/// reading the caustic map at every diffuse end.
+#[allow(clippy::too_many_arguments)]
+pub fn caustic_map_lookup(
+    scene: &SceneView,
+    p: &MapLookupParams,
+    triangle_tiles: &[u32],
+    tiles: &[AtlasTileTexel],
+    texels: &[AtlasTexel],
+    map: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
+    let cam = &p.camera;
+    let (w, h) = (cam.width, cam.height);
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let l = specular_tree(
+                scene,
+                p.max_specular_depth,
+                p.min_weight,
+                Vec3::from(cam.position),
+                camera_ray(cam, i % w, i / w),
+                |hit, s, m, _, _| {
+                    let tile = triangle_tiles[hit.triangle as usize];
+                    if tile == NO_TILE {
+                        return Vec3::ZERO;
+                    }
+                    let e = sample_caustic_map(
+                        tiles[tile as usize],
+                        s.uv,
+                        p.atlas_width,
+                        |q| Vec3::from_slice(&map[q as usize][..3]),
+                        |q| f32::from_bits(texels[q as usize][0]),
+                    );
+                    Vec3::from_slice(&m.color[..3]) / PI * e
+                },
+            );
+            let l = saturate_radiance3(l);
+            [l.x, l.y, l.z, 1.0]
+        })
+        .collect()
+}

@@ -1,0 +1,101 @@
+//! CausticMap's emission (seed 001 section 3.1): each light's view planes aimed at the
+//! caustic casters, and the fixed-point quantum of the frame's flux.
+
+use super::settings::CausticMapSettings;
+use crate::frame::emission::NoEmission;
+use crate::frame::light_view_plane::{light_view_planes, LightViewPlane};
+use crate::math::fixed_point::power_of_two_quantum;
+use crate::math::geometry::Aabb;
+use crate::math::rng::pcg_hash;
+use crate::scene::Scene;
+
+/// The light view planes of a frame and what its fixed-point sums are scaled by.
+#[derive(Clone, Debug)]
+pub struct Emission {
+    /// (light index, plane index of that light, plane) of every plane that emits.
+    pub planes: Vec<(u32, u32, LightViewPlane)>,
+    /// Lights that emit nothing, and why.
+    pub skipped_lights: Vec<(u32, NoEmission)>,
+    /// Flux per fixed-point unit (W), a power of two: the brightest photon (a plane's
+    /// centre texel, x3 where a dispersive material can concentrate it into one channel)
+    /// is 2^24 to 2^25 units.
+    pub flux_quantum: f32,
+    /// Hit distance per fixed-point unit (scene units): the scene diagonal is 2^24 to
+    /// 2^25 units.
+    pub hit_distance_quantum: f32,
+}
+
+impl Emission {
+    /// The planes of every light of `scene` (bounded by `bounds`, casters in `casters`)
+    /// at the settings' resolution: one plane of `photons_w x photons_h` texels, or six
+    /// cube faces of `photons_w / sqrt 6 x photons_h / sqrt 6`.
+    pub fn new(
+        scene: &Scene,
+        bounds: Aabb,
+        casters: Aabb,
+        has_dispersion: bool,
+        s: &CausticMapSettings,
+    ) -> Emission {
+        let mut planes = Vec::new();
+        let mut skipped_lights = Vec::new();
+        for (i, l) in scene.lights.iter().enumerate() {
+            match light_view_planes(l, casters, bounds, s.photons_w) {
+                Ok(ps) => {
+                    let cube = ps.len() > 1;
+                    for (k, mut p) in ps.into_iter().enumerate() {
+                        p.resolution = if cube {
+                            let side = |n: u32| ((n as f64 / 6f64.sqrt()).round() as u32).max(1);
+                            (side(s.photons_w), side(s.photons_h))
+                        } else {
+                            (s.photons_w, s.photons_h)
+                        };
+                        planes.push((i as u32, k as u32, p));
+                    }
+                }
+                Err(why) => skipped_lights.push((i as u32, why)),
+            }
+        }
+        let gain = if has_dispersion { 3.0 } else { 1.0 };
+        let max_photon_flux = planes
+            .iter()
+            .map(|(_, _, p)| {
+                let (hx, hy) = p.half_extent;
+                let texel = (2.0 * hx / p.resolution.0 as f32) * (2.0 * hy / p.resolution.1 as f32);
+                p.power.max_element() * texel
+            })
+            .fold(0.0f32, f32::max)
+            * gain;
+        Emission {
+            planes,
+            skipped_lights,
+            flux_quantum: power_of_two_quantum(max_photon_flux),
+            hit_distance_quantum: power_of_two_quantum(bounds.diagonal().max(f32::MIN_POSITIVE)),
+        }
+    }
+
+    /// The RNG seed of plane `plane` of light `light`: the frame seed hashed with both.
+    pub fn plane_seed(seed: u32, light: u32, plane: u32) -> u32 {
+        seed ^ pcg_hash(
+            light
+                .wrapping_mul(8)
+                .wrapping_add(plane)
+                .wrapping_add(0x4341_5553),
+        )
+    }
+
+    /// Refuses a plane whose total flux is not finite or over
+    /// [`crate::scene::limits::MAX_LIGHT_FLUX`], naming the light.
+    pub fn check_light_flux(&self) -> Result<(), crate::frame::error::Error> {
+        use crate::scene::limits::MAX_LIGHT_FLUX;
+        for (i, _, p) in &self.planes {
+            let f = (p.power.max_element() as f64 * p.plane_measure()) as f32;
+            if !(f.is_finite() && f <= MAX_LIGHT_FLUX) {
+                return Err(crate::frame::error::Error::InvalidScene(format!(
+                    "lights[{i}]: emits {f:e} W per channel through its light view plane, over \
+                     the bound {MAX_LIGHT_FLUX:e} W (2^100) that keeps a frame's flux finite"
+                )));
+            }
+        }
+        Ok(())
+    }
+}

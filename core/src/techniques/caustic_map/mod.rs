@@ -1,0 +1,947 @@
+//! CausticMap (seed 001, "Real-time caustics via texture-space photon mapping"): photons
+//! shot from each light's view plane ([`crate::frame::light_view_plane`]) deposit into a
+//! caustic atlas in the receivers' texture space ([`crate::frame::caustic_atlas`]), which
+//! the final pass samples wherever a camera path ends on a receiver (directly, in a
+//! mirror or through glass). Passes:
+//!
+//! 1. photon work, only when the atlas is stale (new lights, settings or seed; never for
+//!    a camera move): per light view plane and per batch `trace_photons` (the
+//!    `SURFACE_STORE` variant: uv and triangle) then `deposit_atlas` (fixed-point sums per
+//!    atlas texel), then `gather_caustic_map` (001's N x N gather, fixed to keep flux, as
+//!    irradiance; and N = 1 for the raw map when asked);
+//! 2. every frame: `primary_gbuffer` and `direct_light` (as Sspm), `caustic_map_lookup`
+//!    (the camera's specular ray tree reading the map) and `composite`.
+//!
+//! Not built yet (TODO(issue 16)): 001's deterministic Fresnel split (both branches
+//! traced with weights R and 1 - R) and its three-ray dispersion split; photons follow
+//! Sspm's stochastic Fresnel choice and one colour channel per dispersive photon, which
+//! has the same expectation. The energy-conserving adaptive gather of issue 11 on the
+//! atlas; pruning atlas tiles of receivers no photon can reach.
+
+mod emission;
+mod settings;
+
+pub use emission::Emission;
+pub use settings::{CausticMapOutputs, CausticMapSettings, MAX_ATLAS_SIZE};
+
+use crate::backend::{read_buf, Backend};
+use crate::device::device_scene::{BuildBudget, DeviceScene};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
+use crate::device::layout::*;
+use crate::frame::allocation::planned_allocation;
+use crate::frame::caustic_atlas::{atlas_layout, AtlasLayout};
+use crate::frame::error::Error;
+use crate::frame::image::Image;
+use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
+use crate::frame::stats::FrameStats;
+use crate::frame::technique::{OutputInfo, Progress, Technique};
+use crate::kernels::{
+    CausticMapLookup, Composite, DepositAtlas, DirectLight, GatherCausticMap, PrimaryGbuffer,
+    TracePhotons, TraceVariant,
+};
+use crate::math::fixed_point::join_u64;
+use crate::recording::{Recording, Step};
+use crate::scene::{Material, Scene};
+use std::time::Instant;
+
+/// The device side of the caustic atlas (exists when the scene has casters, receivers
+/// and a light that emits, or with pruning off).
+#[derive(Clone, Copy, Debug)]
+struct AtlasBuffers {
+    triangle_tiles: Buf<u32>,
+    tiles: Buf<AtlasTileTexel>,
+    texels: Buf<AtlasTexel>,
+    sums: PhotonMapPlanes,
+    map: ImageBuf,
+    raw_map: Option<ImageBuf>,
+    photons: Buf<Photon>,
+    photon_count: Buf<u32>,
+    counters: Buf<u32>,
+}
+
+/// The frame's camera-sized images.
+#[derive(Clone, Copy, Debug, Default)]
+struct Images {
+    gbuffer: Option<GBufferPlanes>,
+    direct: Option<ImageBuf>,
+    raw: Option<ImageBuf>,
+    filtered: Option<ImageBuf>,
+    composite: Option<ImageBuf>,
+}
+
+/// One output image of CausticMap: the names are Sspm's, so that both write the same
+/// files, plus the atlas.
+const OUTPUTS: [(&str, &str); 5] = [
+    (
+        "composite",
+        "direct light + caustics from the gathered caustic map",
+    ),
+    (
+        "direct",
+        "direct light alone (shadow rays, specular chains)",
+    ),
+    (
+        "caustics_raw",
+        "caustic radiance from the raw caustic map, as the camera sees it",
+    ),
+    (
+        "caustics_filtered",
+        "caustic radiance from the gathered caustic map, as the camera sees it",
+    ),
+    (
+        "caustic_atlas",
+        "the gathered caustic map: irradiance (W/m^2) per atlas texel",
+    ),
+];
+
+/// CausticMap on one backend, for one scene.
+pub struct CausticMap {
+    settings: CausticMapSettings,
+    model: Scene,
+    scene: SceneArgs,
+    bounds: crate::math::geometry::Aabb,
+    caster_bounds: crate::math::geometry::Aabb,
+    has_dispersion: bool,
+    degenerate_triangles: u64,
+    camera: GpuCamera,
+    emission: Emission,
+    variant: TraceVariant,
+    layout_summary: String,
+    plan: FramePlan,
+    atlas: Option<AtlasBuffers>,
+    images: Images,
+    /// The atlas holds the photons of the current lights, settings and seed.
+    atlas_valid: bool,
+    /// Stats of the last photon pass (what a camera-only frame reports it reuses).
+    scene_owned: Vec<ResourceId>,
+    atlas_owned: Vec<ResourceId>,
+    image_owned: Vec<ResourceId>,
+    scene_bytes: u64,
+    atlas_bytes: u64,
+    image_bytes: u64,
+    reference: Option<Image>,
+}
+
+impl CausticMap {
+    /// Validates the scene and settings, uploads the scene, lays out the atlas and
+    /// creates the buffers the plan needs.
+    pub fn new(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: CausticMapSettings,
+    ) -> Result<CausticMap, Error> {
+        settings.validate()?;
+        scene
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let ds = DeviceScene::build(
+            scene,
+            BuildBudget {
+                max_triangles: settings.max_triangles,
+            },
+        )?;
+        let emission = Emission::new(
+            scene,
+            ds.bounds,
+            ds.caster_bounds,
+            ds.has_dispersion,
+            &settings,
+        );
+        emission.check_light_flux()?;
+        let receiver: Vec<bool> = scene
+            .objects
+            .iter()
+            .map(|o| {
+                matches!(
+                    scene.materials.get(&o.material),
+                    Some(Material::Diffuse { .. })
+                )
+            })
+            .collect();
+        let features = SceneFeatures::of(scene);
+        let casters = features.mirrors || features.dielectrics;
+        let emits = !emission.planes.is_empty();
+        let wants_caustics = {
+            let o = &settings.outputs;
+            o.composite || o.raw_caustics || o.filtered_caustics || o.atlas
+        };
+        let has_receivers = receiver.iter().any(|r| *r);
+        let with_atlas = casters
+            && has_receivers
+            && (emits || !settings.prune)
+            && (wants_caustics || !settings.prune);
+        let layout = if with_atlas {
+            Some(
+                atlas_layout(&ds, &receiver, (settings.atlas_size, settings.atlas_size)).map_err(
+                    |e| match e {
+                        crate::frame::caustic_atlas::AtlasError::BadUvs { receiver, reason } => {
+                            Error::InvalidScene(format!(
+                                "objects[{receiver}] ('{}'): its UVs cannot address a caustic \
+                                 map: {reason}",
+                                scene.objects[receiver as usize].name
+                            ))
+                        }
+                        other => Error::InvalidScene(other.to_string()),
+                    },
+                )?,
+            )
+        } else {
+            None
+        };
+        let mut variant = features.trace_variant();
+        variant.surface_store = true;
+        let mut rec = Recording::new();
+        let scene_args = rec.upload_scene(&ds);
+        let scene_alloc = planned_allocation(backend, &rec, None)?;
+        backend.execute(&rec)?;
+        let mut t = CausticMap {
+            settings,
+            model: scene.clone(),
+            scene: scene_args,
+            bounds: ds.bounds,
+            caster_bounds: ds.caster_bounds,
+            has_dispersion: ds.has_dispersion,
+            degenerate_triangles: ds.degenerate_triangles,
+            camera: GpuCamera::from_camera(&scene.camera),
+            emission,
+            variant,
+            layout_summary: String::new(),
+            plan: FramePlan {
+                prune: true,
+                features,
+                outputs: Vec::new(),
+                lights: Vec::new(),
+                trace_variant: None,
+                passes: Vec::new(),
+                buffers: scene_alloc.buffers,
+            },
+            atlas: None,
+            images: Images::default(),
+            atlas_valid: false,
+            scene_owned: scene_alloc.owned,
+            atlas_owned: Vec::new(),
+            image_owned: Vec::new(),
+            scene_bytes: scene_alloc.bytes,
+            atlas_bytes: 0,
+            image_bytes: 0,
+            reference: None,
+        };
+        let made = (|| {
+            if let Some(l) = &layout {
+                t.make_atlas(backend, l)?;
+            }
+            t.make_images(backend)
+        })();
+        if let Err(e) = made {
+            let _ = t.free_all(backend);
+            return Err(e);
+        }
+        t.replan(casters, has_receivers);
+        Ok(t)
+    }
+
+    /// Uploads the atlas layout and creates the atlas's sums, maps and photon buffers.
+    fn make_atlas(&mut self, backend: &mut dyn Backend, l: &AtlasLayout) -> Result<(), Error> {
+        let s = &self.settings;
+        let texels = l.texels.len() as u32;
+        let per_plane = self
+            .emission
+            .planes
+            .iter()
+            .map(|(_, _, p)| p.texels())
+            .max()
+            .unwrap_or(1);
+        let cap = per_plane.min(s.max_photons_per_batch as u64).max(1) as u32;
+        let mut rec = Recording::new();
+        let a = AtlasBuffers {
+            triangle_tiles: rec.upload(&l.triangle_tiles, "atlas triangle tiles"),
+            tiles: rec.upload(&l.tiles, "atlas tiles"),
+            texels: rec.upload(&l.texels, "atlas texels"),
+            sums: rec.create_photon_map(texels),
+            map: rec.create(texels, "caustic map"),
+            raw_map: (s.outputs.raw_caustics || !s.prune)
+                .then(|| rec.create(texels, "raw caustic map")),
+            photons: rec.create(cap, "photons"),
+            photon_count: rec.create(1, "photon count"),
+            counters: rec.create(counter::WORDS as u32, "photon counters"),
+        };
+        let alloc = planned_allocation(backend, &rec, None)?;
+        backend.execute(&rec)?;
+        self.atlas = Some(a);
+        self.atlas_owned = alloc.owned;
+        self.atlas_bytes = alloc.bytes;
+        self.plan.buffers.extend(alloc.buffers);
+        self.layout_summary = format!(
+            "{} tiles in {}x{} texels at {:.4} texels per scene unit^2, {} texels covered",
+            l.tiles.len(),
+            l.plan.size.0,
+            l.plan.size.1,
+            l.plan.texels_per_unit_area,
+            l.covered_texels
+        );
+        Ok(())
+    }
+
+    /// Creates the camera-sized images the outputs need.
+    fn make_images(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let o = self.settings.outputs;
+        let keep = |x: bool| x || !self.settings.prune;
+        let pixels = self.camera.width * self.camera.height;
+        let caustics = self.atlas.is_some();
+        let mut rec = Recording::new();
+        let direct_needed = keep(o.direct || o.composite);
+        let images = Images {
+            gbuffer: direct_needed.then(|| rec.create_gbuffer(pixels)),
+            direct: direct_needed.then(|| rec.create(pixels, "direct image")),
+            raw: (caustics && keep(o.raw_caustics))
+                .then(|| rec.create(pixels, "raw caustics image")),
+            filtered: (caustics && keep(o.filtered_caustics || o.composite))
+                .then(|| rec.create(pixels, "filtered caustics image")),
+            composite: (caustics && keep(o.composite))
+                .then(|| rec.create(pixels, "composite image")),
+        };
+        let alloc =
+            planned_allocation(backend, &rec, Some((self.camera.width, self.camera.height)))?;
+        backend.execute(&rec)?;
+        self.images = images;
+        self.image_owned = alloc.owned;
+        self.image_bytes = alloc.bytes;
+        self.plan
+            .buffers
+            .retain(|b| !b.name.contains("image") && !b.name.starts_with("gbuffer"));
+        self.plan.buffers.extend(alloc.buffers);
+        Ok(())
+    }
+
+    fn free_ids(backend: &mut dyn Backend, ids: Vec<ResourceId>) -> Result<(), Error> {
+        let mut rec = Recording::new();
+        for id in ids {
+            rec.steps.push(Step::Free { id });
+        }
+        backend.execute(&rec)?;
+        Ok(())
+    }
+
+    fn free_all(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let ids: Vec<ResourceId> = std::mem::take(&mut self.image_owned)
+            .into_iter()
+            .chain(std::mem::take(&mut self.atlas_owned))
+            .chain(std::mem::take(&mut self.scene_owned))
+            .collect();
+        self.atlas = None;
+        self.images = Images::default();
+        Self::free_ids(backend, ids)
+    }
+
+    /// The frame plan from the emission, the atlas and the images.
+    fn replan(&mut self, casters: bool, receivers: bool) {
+        let mut lights: Vec<LightPlan> = self
+            .emission
+            .planes
+            .iter()
+            .filter(|(_, k, _)| *k == 0)
+            .map(|(i, _, _)| LightPlan {
+                light: *i,
+                emits: true,
+                reason: "its light view plane sees a caustic caster".into(),
+            })
+            .collect();
+        lights.extend(
+            self.emission
+                .skipped_lights
+                .iter()
+                .map(|(i, why)| LightPlan {
+                    light: *i,
+                    emits: false,
+                    reason: why.reason().into(),
+                }),
+        );
+        lights.sort_by_key(|l| l.light);
+        let atlas = self.atlas.is_some();
+        let photons = atlas && !self.emission.planes.is_empty();
+        let why_no_atlas = if !casters {
+            "no specular surface (caustic caster) in the scene"
+        } else if !receivers {
+            "no diffuse receiver in the scene"
+        } else if self.emission.planes.is_empty() {
+            "no light emits photons towards a caster"
+        } else {
+            "no caustic output was requested"
+        };
+        let mut passes = Vec::new();
+        let mut pass = |name: &str, runs: bool, yes: &str, no: &str| {
+            passes.push(PassPlan {
+                name: name.into(),
+                runs,
+                reason: if runs { yes.into() } else { no.into() },
+            });
+        };
+        let i = self.images;
+        pass(
+            "primary_gbuffer",
+            i.gbuffer.is_some(),
+            "direct light reads the G-buffer",
+            "neither direct light nor the composite was requested",
+        );
+        pass(
+            "direct_light",
+            i.direct.is_some(),
+            "direct or composite requested",
+            "neither direct light nor the composite was requested",
+        );
+        let layout = format!("the caustic atlas: {}", self.layout_summary);
+        for name in ["trace_photons", "deposit_atlas", "gather_caustic_map"] {
+            pass(
+                name,
+                photons,
+                &format!("when the atlas is stale (lights, settings or seed changed); {layout}"),
+                why_no_atlas,
+            );
+        }
+        pass(
+            "caustic_map_lookup",
+            i.filtered.is_some() || i.raw.is_some(),
+            "caustics seen by the camera were requested",
+            if atlas {
+                "no camera-space caustic output was requested"
+            } else {
+                why_no_atlas
+            },
+        );
+        pass(
+            "composite",
+            i.composite.is_some(),
+            "composite requested",
+            if atlas {
+                "composite not requested"
+            } else {
+                why_no_atlas
+            },
+        );
+        let o = self.settings.outputs;
+        self.plan = FramePlan {
+            prune: self.settings.prune,
+            features: self.plan.features,
+            outputs: OUTPUTS
+                .iter()
+                .zip([
+                    o.composite,
+                    o.direct,
+                    o.raw_caustics,
+                    o.filtered_caustics,
+                    o.atlas,
+                ])
+                .filter(|(_, r)| *r)
+                .map(|((n, _), _)| n.to_string())
+                .collect(),
+            lights,
+            trace_variant: photons.then_some(self.variant),
+            passes,
+            buffers: std::mem::take(&mut self.plan.buffers),
+        };
+    }
+
+    fn run(
+        backend: &mut dyn Backend,
+        rec: &Recording,
+        stats: &mut FrameStats,
+    ) -> Result<(), Error> {
+        for t in backend.execute(rec)? {
+            stats.add_pass_time(t.kernel, t.seconds);
+        }
+        Ok(())
+    }
+
+    fn atlas_params(&self, a: &AtlasBuffers, gather_width: u32) -> AtlasParams {
+        AtlasParams {
+            width: self.settings.atlas_size,
+            height: self.settings.atlas_size,
+            flux_quantum: self.emission.flux_quantum,
+            hit_distance_quantum: self.emission.hit_distance_quantum,
+            photon_capacity: a.photons.len,
+            gather_width,
+            _pad: [0; 2],
+        }
+    }
+
+    /// The photon passes: clear the atlas, trace and deposit every plane in batches,
+    /// gather. Fills the photon accounting of `stats`.
+    fn photon_pass(
+        &mut self,
+        backend: &mut dyn Backend,
+        a: AtlasBuffers,
+        stats: &mut FrameStats,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<(), Error> {
+        let s = self.settings.clone();
+        let mut rec = Recording::new();
+        rec.clear_photon_map(&a.sums);
+        rec.clear(a.counters);
+        Self::run(backend, &rec, stats)?;
+        stats.variants.push(crate::kernels::variant_label(
+            "trace_photons",
+            &self.variant.constants(),
+        ));
+        let total: u64 = self
+            .emission
+            .planes
+            .iter()
+            .map(|(_, _, p)| p.texels())
+            .sum();
+        let mut done = 0u64;
+        let deposit = self.atlas_params(&a, 1);
+        for (light, k, plane) in &self.emission.planes {
+            let n = plane.texels();
+            stats.photons_emitted += n;
+            let flux = plane.power.as_dvec3() * plane.plane_measure();
+            for c in 0..3 {
+                stats.emitted_flux[c] += flux[c];
+            }
+            let mut first = 0u64;
+            while first < n {
+                let count = (n - first).min(a.photons.len as u64) as u32;
+                let mut rec = Recording::new();
+                rec.clear(a.photon_count);
+                rec.kernel(TracePhotons {
+                    scene: self.scene,
+                    variant: self.variant,
+                    params: plane.trace_params(
+                        *light,
+                        (first as u32, count),
+                        Emission::plane_seed(s.seed, *light, *k),
+                        s.max_bounces,
+                        s.min_relative_power,
+                        self.emission.flux_quantum,
+                    ),
+                    photons: a.photons,
+                    photon_count: a.photon_count,
+                    counters: a.counters,
+                });
+                rec.kernel(DepositAtlas {
+                    params: deposit,
+                    triangle_tiles: a.triangle_tiles,
+                    tiles: a.tiles,
+                    photons: a.photons,
+                    photon_count: a.photon_count,
+                    counters: a.counters,
+                    atlas: a.sums,
+                });
+                Self::run(backend, &rec, stats)?;
+                stats.batches += 1;
+                first += count as u64;
+                done += count as u64;
+                progress(Progress {
+                    photons_done: done,
+                    photons_total: total,
+                });
+            }
+        }
+        let mut rec = Recording::new();
+        rec.kernel(GatherCausticMap {
+            params: self.atlas_params(&a, s.gather_width),
+            texels: a.texels,
+            tiles: a.tiles,
+            atlas: a.sums,
+            out: a.map,
+        });
+        if let Some(raw) = a.raw_map {
+            rec.kernel(GatherCausticMap {
+                params: deposit,
+                texels: a.texels,
+                tiles: a.tiles,
+                atlas: a.sums,
+                out: raw,
+            });
+        }
+        Self::run(backend, &rec, stats)?;
+        let c = read_buf(backend, a.counters)?;
+        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
+        stats.photons_stored = c[counter::STORED] as u64;
+        stats.photons_deposited = c[counter::DEPOSITED] as u64;
+        stats.discarded.no_specular = c[counter::NO_SPECULAR] as u64;
+        stats.discarded.escaped = c[counter::ESCAPED] as u64;
+        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
+        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
+        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
+        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
+        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
+        stats.photon_rays_traced = c64(counter::RAYS);
+        for ch in 0..3 {
+            stats.stored_flux[ch] =
+                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
+        }
+        self.atlas_valid = true;
+        Ok(())
+    }
+
+    /// Renders one frame: the photon passes only when the atlas is stale, then the
+    /// camera's passes.
+    pub fn frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error> {
+        let start = Instant::now();
+        let caps = backend.capabilities();
+        let mut stats = FrameStats {
+            technique: "caustic-map".into(),
+            backend: backend.name().into(),
+            device: caps.device.clone(),
+            width: self.camera.width,
+            height: self.camera.height,
+            timing: if caps.timestamps {
+                "device timestamps".into()
+            } else {
+                "host wall clock".into()
+            },
+            flux_quantum: self.emission.flux_quantum as f64,
+            bytes_allocated: self.scene_bytes + self.atlas_bytes + self.image_bytes,
+            degenerate_triangles: self.degenerate_triangles,
+            plan: Some(self.plan.clone()),
+            ..Default::default()
+        };
+        for p in self.plan.passes.iter().filter(|p| !p.runs) {
+            stats.skip(&p.name, p.reason.clone());
+        }
+        let photons = self.plan.trace_variant.is_some();
+        match self.atlas {
+            Some(a) if photons && !self.atlas_valid => {
+                self.photon_pass(backend, a, &mut stats, progress)?
+            }
+            Some(_) if photons => {
+                for name in ["trace_photons", "deposit_atlas", "gather_caustic_map"] {
+                    stats.skip(
+                        name,
+                        "only the camera changed since the caustic atlas was made: it is reused",
+                    );
+                }
+            }
+            _ => {}
+        }
+        let cam = self.camera;
+        let i = self.images;
+        let mut rec = Recording::new();
+        if let (Some(g), Some(direct)) = (i.gbuffer, i.direct) {
+            rec.kernel(PrimaryGbuffer {
+                scene: self.scene,
+                camera: cam,
+                gbuffer: g,
+            });
+            rec.kernel(DirectLight {
+                scene: self.scene,
+                params: DirectParams {
+                    camera: cam,
+                    light_count: self.model.lights.len() as u32,
+                    max_specular_depth: self.settings.max_specular_depth,
+                    min_weight: 1e-3,
+                    _pad: 0,
+                },
+                gbuffer: g,
+                out: direct,
+            });
+        }
+        if let Some(a) = self.atlas {
+            let params = MapLookupParams {
+                camera: cam,
+                atlas_width: self.settings.atlas_size,
+                max_specular_depth: self.settings.max_specular_depth,
+                min_weight: 1e-3,
+                _pad: 0,
+            };
+            for (map, out) in [(Some(a.map), i.filtered), (a.raw_map, i.raw)] {
+                if let (Some(map), Some(out)) = (map, out) {
+                    rec.kernel(CausticMapLookup {
+                        scene: self.scene,
+                        params,
+                        triangle_tiles: a.triangle_tiles,
+                        tiles: a.tiles,
+                        texels: a.texels,
+                        map,
+                        out,
+                    });
+                }
+            }
+            if let (Some(direct), Some(filtered), Some(out)) = (i.direct, i.filtered, i.composite) {
+                rec.kernel(Composite {
+                    direct,
+                    caustics: filtered,
+                    out,
+                });
+            }
+        }
+        Self::run(backend, &rec, &mut stats)?;
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(r) = &self.reference {
+            let filtered = self.read_output(backend, "caustics_filtered")?;
+            stats.error = Some(crate::frame::metrics::compare(&filtered, r));
+        }
+        Ok(stats)
+    }
+
+    fn requested(&self, name: &str) -> bool {
+        let o = &self.settings.outputs;
+        match name {
+            "composite" => o.composite,
+            "direct" => o.direct,
+            "caustics_raw" => o.raw_caustics,
+            "caustics_filtered" => o.filtered_caustics,
+            "caustic_atlas" => o.atlas,
+            _ => false,
+        }
+    }
+
+    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
+    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
+    /// zeros.
+    pub fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
+        if !OUTPUTS.iter().any(|(n, _)| *n == name) {
+            return Err(Error::InvalidParameter(format!(
+                "caustic-map has no output '{name}'; outputs: {}",
+                OUTPUTS.map(|(n, _)| n).join(", ")
+            )));
+        }
+        if !self.requested(name) {
+            return Err(Error::InvalidParameter(format!(
+                "output '{name}' was not requested (CausticMapSettings::outputs)"
+            )));
+        }
+        let (w, h) = (self.camera.width, self.camera.height);
+        let i = self.images;
+        let buf = match name {
+            "composite" => i.composite.or(i.direct),
+            "direct" => i.direct,
+            "caustics_raw" => i.raw,
+            "caustics_filtered" => i.filtered,
+            _ => {
+                let side = self.settings.atlas_size;
+                return match self.atlas {
+                    Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
+                    None => Ok(Image::new(
+                        side,
+                        side,
+                        vec![[0.0; 4]; side as usize * side as usize],
+                    )),
+                };
+            }
+        };
+        match buf {
+            Some(b) => Ok(Image::new(w, h, read_buf(backend, b)?)),
+            None => Ok(Image::new(w, h, vec![[0.0; 4]; w as usize * h as usize])),
+        }
+    }
+
+    /// The settings in effect.
+    pub fn settings(&self) -> &CausticMapSettings {
+        &self.settings
+    }
+
+    /// Moves the camera. The atlas stays valid (no photon pass on the next frame); a new
+    /// image size remakes only the camera-sized images.
+    pub fn set_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: &crate::scene::Camera,
+    ) -> Result<(), Error> {
+        let mut model = self.model.clone();
+        model.camera = camera.clone();
+        model
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let new = GpuCamera::from_camera(camera);
+        let resized = (new.width, new.height) != (self.camera.width, self.camera.height);
+        self.camera = new;
+        self.model = model;
+        if resized {
+            Self::free_ids(backend, std::mem::take(&mut self.image_owned))?;
+            self.images = Images::default();
+            self.make_images(backend)?;
+            self.reference = None;
+        }
+        Ok(())
+    }
+
+    /// Replaces the lights (same number: uploaded into the light buffer; else a new light
+    /// buffer); the geometry, its acceleration structure and the atlas layout stay, the
+    /// atlas is remade on the next frame.
+    pub fn set_lights(
+        &mut self,
+        backend: &mut dyn Backend,
+        lights: &[crate::scene::Light],
+    ) -> Result<(), Error> {
+        let mut model = self.model.clone();
+        model.lights = lights.to_vec();
+        model
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let emission = Emission::new(
+            &model,
+            self.bounds,
+            self.caster_bounds,
+            self.has_dispersion,
+            &self.settings,
+        );
+        emission.check_light_flux()?;
+        let per_plane = emission
+            .planes
+            .iter()
+            .map(|(_, _, p)| p.texels())
+            .max()
+            .unwrap_or(0);
+        let had_photons = self.plan.trace_variant.is_some();
+        if (emission.planes.is_empty() == had_photons && self.settings.prune)
+            || self.atlas.is_some_and(|a| {
+                per_plane.min(self.settings.max_photons_per_batch as u64) > a.photons.len as u64
+            })
+        {
+            // the passes or buffer sizes change: build anew on the same backend
+            let settings = self.settings.clone();
+            let fresh = CausticMap::new(backend, &model, settings)?;
+            let old = std::mem::replace(self, fresh);
+            let reference = old.reference.clone();
+            old.free(backend)?;
+            self.reference = reference;
+            return Ok(());
+        }
+        let gpu: Vec<GpuLight> = lights
+            .iter()
+            .map(crate::device::device_scene::gpu_light)
+            .collect();
+        let mut rec = Recording::new();
+        if gpu.len() as u32 == self.scene.lights.len {
+            rec.update(self.scene.lights, &gpu, "lights")?;
+            backend.execute(&rec)?;
+        } else {
+            let new = rec.upload(&gpu, "lights");
+            planned_allocation(backend, &rec, None)?;
+            rec.steps.push(Step::Free {
+                id: self.scene.lights.id,
+            });
+            backend.execute(&rec)?;
+            for id in &mut self.scene_owned {
+                if *id == self.scene.lights.id {
+                    *id = new.id;
+                }
+            }
+            self.scene.lights = new;
+        }
+        self.model = model;
+        self.emission = emission;
+        self.atlas_valid = false;
+        let f = self.plan.features;
+        self.replan(f.mirrors || f.dielectrics, true);
+        Ok(())
+    }
+
+    /// Sets the frame seed; the atlas is remade on the next frame.
+    pub fn set_seed(&mut self, seed: u32) {
+        if seed != self.settings.seed {
+            self.settings.seed = seed;
+            self.atlas_valid = false;
+        }
+    }
+
+    /// Releases every device buffer.
+    pub fn free(mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        self.free_all(backend)
+    }
+}
+
+impl Drop for CausticMap {
+    fn drop(&mut self) {
+        crate::frame::technique::report_leak(
+            "caustic-map",
+            self.scene_owned.len() + self.atlas_owned.len() + self.image_owned.len(),
+            self.scene_bytes + self.atlas_bytes + self.image_bytes,
+        );
+    }
+}
+
+impl Technique for CausticMap {
+    fn name(&self) -> &'static str {
+        "caustic-map"
+    }
+
+    fn frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error> {
+        CausticMap::frame(self, backend, progress)
+    }
+
+    fn outputs(&self) -> Vec<OutputInfo> {
+        OUTPUTS
+            .iter()
+            .map(|(name, description)| OutputInfo {
+                name,
+                description,
+                requested: self.requested(name),
+            })
+            .collect()
+    }
+
+    fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
+        CausticMap::read_output(self, backend, name)
+    }
+
+    fn estimate_outputs(&self) -> (&'static str, &'static str) {
+        ("caustics_filtered", "caustics_raw")
+    }
+
+    fn settings_json(&self) -> serde_json::Value {
+        serde_json::to_value(&self.settings).unwrap_or(serde_json::Value::Null)
+    }
+
+    fn set_seed(&mut self, seed: u32) {
+        CausticMap::set_seed(self, seed)
+    }
+
+    fn set_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: &crate::scene::Camera,
+    ) -> Result<(), Error> {
+        CausticMap::set_camera(self, backend, camera)
+    }
+
+    fn set_lights(
+        &mut self,
+        backend: &mut dyn Backend,
+        lights: &[crate::scene::Light],
+    ) -> Result<(), Error> {
+        CausticMap::set_lights(self, backend, lights)
+    }
+
+    fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
+        if let Some(r) = &reference {
+            if (r.width, r.height) != (self.camera.width, self.camera.height) {
+                return Err(Error::InvalidParameter(format!(
+                    "reference is {}x{}, the frame {}x{}",
+                    r.width, r.height, self.camera.width, self.camera.height
+                )));
+            }
+        }
+        self.reference = reference;
+        Ok(())
+    }
+
+    fn plan(&self) -> &FramePlan {
+        &self.plan
+    }
+
+    fn free(self: Box<Self>, backend: &mut dyn Backend) -> Result<(), Error> {
+        CausticMap::free(*self, backend)
+    }
+}
+
+/// The registry's constructor: `settings` is a JSON object of [`CausticMapSettings`]
+/// fields (missing fields take their defaults, unknown ones are an error).
+pub fn create(
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    settings: &serde_json::Value,
+) -> Result<Box<dyn Technique>, Error> {
+    let settings: CausticMapSettings = serde_json::from_value(settings.clone())
+        .map_err(|e| Error::InvalidParameter(format!("caustic-map settings: {e}")))?;
+    Ok(Box::new(CausticMap::new(backend, scene, settings)?))
+}

@@ -1,0 +1,136 @@
+//! Every parameter of CausticMap, with its defaults and validation.
+
+use crate::frame::caustic_atlas::DEFAULT_ATLAS_SIDE;
+use crate::frame::error::Error;
+use crate::kernels::MAX_SPECULAR_DEPTH;
+use crate::math::map_gather::DEFAULT_GATHER_WIDTH;
+use serde::{Deserialize, Serialize};
+
+/// The images a caller asks a frame for (all by default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CausticMapOutputs {
+    /// Direct light + filtered caustics.
+    pub composite: bool,
+    /// Direct light alone.
+    pub direct: bool,
+    /// Caustic radiance from the raw caustic map (no gather), as the camera sees it.
+    pub raw_caustics: bool,
+    /// Caustic radiance from the gathered caustic map, as the camera sees it.
+    pub filtered_caustics: bool,
+    /// The gathered caustic map itself (irradiance per atlas texel).
+    pub atlas: bool,
+}
+
+impl Default for CausticMapOutputs {
+    fn default() -> Self {
+        CausticMapOutputs {
+            composite: true,
+            direct: true,
+            raw_caustics: true,
+            filtered_caustics: true,
+            atlas: true,
+        }
+    }
+}
+
+impl CausticMapOutputs {
+    /// Whether at least one output is requested.
+    pub fn any(&self) -> bool {
+        self.composite || self.direct || self.raw_caustics || self.filtered_caustics || self.atlas
+    }
+}
+
+/// CausticMap's settings (seed 001; defaults from its section 4 where it gives them).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CausticMapSettings {
+    /// Light view plane texels along u, per light (one photon each; a light among the
+    /// casters gets six cube faces of `photons_w / sqrt 6` texels a side).
+    pub photons_w: u32,
+    /// Light view plane texels along v, per light.
+    pub photons_h: u32,
+    /// Side of the caustic atlas (texels; 001's map size, 2048).
+    pub atlas_size: u32,
+    /// Width N of the flux-keeping N x N gather (odd; 001's default 3; 1: no gather).
+    pub gather_width: u32,
+    /// Longest photon path, in ray segments.
+    pub max_bounces: u32,
+    /// A photon is dropped once its largest channel falls below this fraction of the
+    /// flux of the plane's centre texel.
+    pub min_relative_power: f32,
+    /// Longest specular chain the final pass follows from the camera.
+    pub max_specular_depth: u32,
+    /// Frame seed (photon jitter and Fresnel choices).
+    pub seed: u32,
+    /// Photons traced and deposited per batch (bounds the photon buffer at 32 bytes
+    /// each).
+    pub max_photons_per_batch: u32,
+    /// The images to produce.
+    pub outputs: CausticMapOutputs,
+    /// Leave out passes and buffers the requested outputs and the scene do not need.
+    pub prune: bool,
+    /// Largest scene, in triangles, the technique accepts.
+    pub max_triangles: u64,
+}
+
+impl Default for CausticMapSettings {
+    fn default() -> Self {
+        CausticMapSettings {
+            photons_w: 1024,
+            photons_h: 1024,
+            atlas_size: DEFAULT_ATLAS_SIDE,
+            gather_width: DEFAULT_GATHER_WIDTH,
+            max_bounces: 12,
+            min_relative_power: 1e-4,
+            max_specular_depth: 6,
+            seed: 0x434d_4150,
+            max_photons_per_batch: 1 << 20,
+            outputs: CausticMapOutputs::default(),
+            prune: true,
+            max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
+        }
+    }
+}
+
+/// Largest atlas side: 16384^2 texels (the sums alone are 10 GiB there; the planned
+/// allocation refuses what the device cannot hold).
+pub const MAX_ATLAS_SIZE: u32 = 16384;
+
+impl CausticMapSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |what: String| Err(Error::InvalidParameter(what));
+        let total = self.photons_w as u64 * self.photons_h as u64;
+        if self.photons_w == 0 || self.photons_h == 0 || total > u32::MAX as u64 {
+            return bad("light view plane must be at least 1x1 and at most 2^32 - 1 texels".into());
+        }
+        if self.atlas_size == 0 || self.atlas_size > MAX_ATLAS_SIZE {
+            return bad(format!("atlas_size must be in 1..={MAX_ATLAS_SIZE}"));
+        }
+        if self.gather_width % 2 == 0 || self.gather_width > 31 {
+            return bad("gather_width must be odd and at most 31".into());
+        }
+        if self.max_bounces == 0 || self.max_bounces > 1024 {
+            return bad("max_bounces must be in 1..=1024".into());
+        }
+        if !(self.min_relative_power >= 0.0 && self.min_relative_power < 1.0) {
+            return bad("min_relative_power must be in [0, 1)".into());
+        }
+        if self.max_specular_depth > MAX_SPECULAR_DEPTH {
+            return bad(format!(
+                "max_specular_depth must be <= {MAX_SPECULAR_DEPTH}"
+            ));
+        }
+        if self.max_photons_per_batch == 0 {
+            return bad("max_photons_per_batch must be >= 1".into());
+        }
+        if self.max_triangles == 0 {
+            return bad("max_triangles must be >= 1".into());
+        }
+        if !self.outputs.any() {
+            return bad("outputs: at least one output must be requested".into());
+        }
+        Ok(())
+    }
+}
