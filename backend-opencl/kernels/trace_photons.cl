@@ -17,6 +17,11 @@
 #ifndef ABSORPTION
 #define ABSORPTION 1
 #endif
+// Store policy (core's photon_store): 0 stores world space (Sspm), 1 the hit's uv and
+// triangle (CausticMap's atlas).
+#ifndef SURFACE_STORE
+#define SURFACE_STORE 0
+#endif
 
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
@@ -38,7 +43,13 @@ inline void emit_photon(__global const GpuLight* lights, __global const TracePar
         *dir = axis;
         return;
     }
-    *dir = to_world(uniform_cone(u, p->origin[3]), axis);
+    if (p->emission == EMISSION_VIEW_PLANE) {
+        *dir = view_plane_direction(axis, load3g(p->rect_u), load3g(p->rect_v), u);
+        *flux = *flux * view_plane_texel_weight(ix, iy, p->grid_w, p->grid_h, p->rect_u[3],
+                                                p->rect_v[3]);
+    } else {
+        *dir = to_world(uniform_cone(u, p->origin[3]), axis);
+    }
     __global const GpuLight* light = &lights[p->light];
     float falloff = light->kind == LIGHT_SPOT
                         ? spot_falloff(dot3(*dir, load3g(light->direction)), light->cos_inner,
@@ -72,10 +83,15 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
         if (m->kind == MATERIAL_DIFFUSE) {
             // every earlier segment ended at a mirror or dielectric
             if (bounce == 0u) return PATH_NO_SPECULAR;
-            store3(ph->position, s.position);
             ph->hit_distance = hit.t;
             store3(ph->flux, flux);
-            ph->direction = pack_unit_vector(dir);
+            if (SURFACE_STORE) {
+                store3(ph->position, (float3)(s.uv.x, s.uv.y, 0.0f));
+                ph->direction = hit.triangle;
+            } else {
+                store3(ph->position, s.position);
+                ph->direction = pack_unit_vector(dir);
+            }
             return PATH_STORED;
         } else if (m->kind == MATERIAL_MIRROR) {
             flux *= load3g(m->color);

@@ -41,6 +41,14 @@ pub const COMMON: &[(&str, &str)] = &[
         "density_gather.cl",
         include_str!("../kernels/common/density_gather.cl"),
     ),
+    (
+        "map_gather.cl",
+        include_str!("../kernels/common/map_gather.cl"),
+    ),
+    (
+        "specular_tree.cl",
+        include_str!("../kernels/common/specular_tree.cl"),
+    ),
 ];
 
 /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
@@ -81,6 +89,15 @@ pub const KERNELS: &[(&str, &str)] = &[
         include_str!("../kernels/density_gather.cl"),
     ),
     ("composite", include_str!("../kernels/composite.cl")),
+    ("deposit_atlas", include_str!("../kernels/deposit_atlas.cl")),
+    (
+        "gather_caustic_map",
+        include_str!("../kernels/gather_caustic_map.cl"),
+    ),
+    (
+        "caustic_map_lookup",
+        include_str!("../kernels/caustic_map_lookup.cl"),
+    ),
 ];
 
 /// Kernels compiled per variant, in programs of their own.

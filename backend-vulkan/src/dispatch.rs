@@ -15,8 +15,8 @@ use caustica_core::device::handle::SceneArgs;
 use caustica_core::device::launch::{check_buffer, LaunchArg};
 use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use caustica_core::kernels::Kernel;
-use caustica_core::kernels::{DirectLight, PrepareScene, PrimaryGbuffer, TracePhotons};
 use caustica_core::kernels::{KernelInfo, ShaderBinding, KERNELS};
+use caustica_core::kernels::{PrepareScene, TracePhotons};
 use caustica_core::recording::{RecordedKernel, Recording, Step};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -387,12 +387,7 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
 }
 
 fn scene_of(k: &Kernel) -> Option<&SceneArgs> {
-    match k {
-        Kernel::PrimaryGbuffer(PrimaryGbuffer { scene, .. })
-        | Kernel::DirectLight(DirectLight { scene, .. })
-        | Kernel::TracePhotons(TracePhotons { scene, .. }) => Some(scene),
-        _ => None,
-    }
+    k.scene()
 }
 
 fn record_kernel(
@@ -410,6 +405,12 @@ fn record_kernel(
         .get(&label)
         .ok_or_else(|| BackendError::Unsupported(label.clone()))?;
     let scene = scene_of(k.kernel());
+    if k.kernel().info().traced && scene.is_none() {
+        return Err(BackendError::BadArgument(format!(
+            "{}: a traced kernel must name its scene (KernelDecl::scene)",
+            label
+        )));
+    }
     let counters = match k.kernel() {
         Kernel::TracePhotons(TracePhotons { counters, .. }) => Some(counters.id),
         _ => None,

@@ -17,6 +17,7 @@ pub mod spirv {
     pub const PRIMARY_GBUFFER: &[u8] = include_bytes!("../spirv/primary_gbuffer.rgen.spv");
     pub const DIRECT_LIGHT: &[u8] = include_bytes!("../spirv/direct_light.rgen.spv");
     pub const TRACE_PHOTONS: &[u8] = include_bytes!("../spirv/trace_photons.rgen.spv");
+    pub const CAUSTIC_MAP_LOOKUP: &[u8] = include_bytes!("../spirv/caustic_map_lookup.rgen.spv");
     pub const CLOSEST_HIT: &[u8] = include_bytes!("../spirv/closest_hit.rchit.spv");
     pub const MISS: &[u8] = include_bytes!("../spirv/miss.rmiss.spv");
     pub const SHADOW_MISS: &[u8] = include_bytes!("../spirv/shadow_miss.rmiss.spv");
@@ -28,6 +29,7 @@ pub mod spirv {
             "primary_gbuffer" => Some(PRIMARY_GBUFFER),
             "direct_light" => Some(DIRECT_LIGHT),
             "trace_photons" => Some(TRACE_PHOTONS),
+            "caustic_map_lookup" => Some(CAUSTIC_MAP_LOOKUP),
             _ => None,
         }
     }

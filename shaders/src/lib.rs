@@ -39,6 +39,17 @@ pub const COMMON: &[(&str, &str)] = &[
         "density_gather",
         include_str!("../wgsl/common/density_gather.wgsl"),
     ),
+    (
+        "photon_map_add",
+        include_str!("../wgsl/common/photon_map_add.wgsl"),
+    ),
+    (
+        "specular_tree",
+        include_str!("../wgsl/common/specular_tree.wgsl"),
+    ),
+    ("atlas", include_str!("../wgsl/common/atlas.wgsl")),
+    ("map_gather", include_str!("../wgsl/common/map_gather.wgsl")),
+    ("map_lookup", include_str!("../wgsl/common/map_lookup.wgsl")),
 ];
 
 /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
@@ -78,6 +89,15 @@ pub const KERNELS: &[(&str, &str)] = &[
         include_str!("../wgsl/density_gather.wgsl"),
     ),
     ("composite", include_str!("../wgsl/composite.wgsl")),
+    ("deposit_atlas", include_str!("../wgsl/deposit_atlas.wgsl")),
+    (
+        "gather_caustic_map",
+        include_str!("../wgsl/gather_caustic_map.wgsl"),
+    ),
+    (
+        "caustic_map_lookup",
+        include_str!("../wgsl/caustic_map_lookup.wgsl"),
+    ),
 ];
 
 /// The kernels with compiled variants: their modules declare pipeline-overridable

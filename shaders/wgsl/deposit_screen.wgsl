@@ -1,4 +1,4 @@
-// needs: types vector packing fixed_point scene gbuffer
+// needs: types vector packing fixed_point scene gbuffer photon_map_add
 // deposit_screen (seed 000 section 30.3.1.3): each stored photon is projected to its pixel
 // and added in fixed point if the pixel sees a diffuse surface at a consistent depth and
 // the photon arrives on the side the camera sees. Mirror of
@@ -20,28 +20,6 @@
 
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
-
-// atomicAdd on the photon-map plane `at.x`, index `at.y` (deposit_word's result).
-fn atomic_add_photon_map(at: vec2<u32>, v: u32) -> u32 {
-    if (at.x == 0u) {
-        return atomicAdd(&photon_map0[at.y], v);
-    }
-    if (at.x == 1u) {
-        return atomicAdd(&photon_map1[at.y], v);
-    }
-    return atomicAdd(&photon_map2[at.y], v);
-}
-
-// Words (word, word + 1) of pixel `pixel`'s texel += (lo, hi): fixed_point.cl's
-// atomic_add_u64_global on the map. A pair never straddles two planes.
-fn atomic_add_u64_photon_map(pixel: u32, word: u32, lo: u32, hi: u32) {
-    let at = deposit_word(pixel, word);
-    let old = atomic_add_photon_map(at, lo);
-    let carry = u64_carry(old, lo);
-    if (hi + carry != 0u) {
-        atomic_add_photon_map(vec2<u32>(at.x, at.y + 1u), hi + carry);
-    }
-}
 
 // `li`: local invocation index. Called by every invocation of the group (the counter
 // helpers hold barriers).

@@ -1,4 +1,4 @@
-// needs: types vector optics geometry traversal scene gbuffer
+// needs: types vector optics geometry traversal scene gbuffer specular_tree
 // direct_light: radiance from the lights with shadow rays; mirror and glass pixels follow
 // their specular ray tree. Mirror of backend-opencl/kernels/direct_light.cl and
 // backend-cpu/src/kernels/direct_light.rs.
@@ -65,75 +65,10 @@ fn shade_diffuse(light_count: u32, pos: vec3<f32>, n: vec3<f32>, ng: vec3<f32>,
     return albedo / PI_F * e;
 }
 
-struct ChainRay {
-    origin: vec3<f32>,
-    dir: vec3<f32>,
-    weight: vec3<f32>,
-    depth: u32,
-}
-
-fn chain_ray(origin: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> ChainRay {
-    return ChainRay(origin, dir, weight, depth);
-}
-
-const SPECULAR_STACK_SIZE: u32 = MAX_SPECULAR_DEPTH + 2u;
-
-// Radiance along a camera ray that meets mirrors and glass: the ray tree is walked depth
-// first with an explicit stack, in the CPU's order (last pushed, first popped).
-fn specular_chain(p: DirectParams, origin: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
-    var stack: array<ChainRay, SPECULAR_STACK_SIZE>;
-    var sp = 0u;
-    var l = vec3<f32>(0.0);
-    stack[sp] = chain_ray(origin, dir, vec3<f32>(1.0), 0u);
-    sp += 1u;
-    while (sp > 0u) {
-        sp -= 1u;
-        let r = stack[sp];
-        var hit: Hit;
-        if (!closest_hit(r.origin, r.dir, NO_T_MAX, &hit)) {
-            continue;
-        }
-        let s = hit_surface(hit);
-        let m = materials[triangles[hit.triangle].material];
-        let entering = dot3(r.dir, s.geometric_normal) < 0.0;
-        var weight = r.weight;
-        if (m.kind == MATERIAL_DIELECTRIC && !entering) {
-            weight *= beer_lambert(m.absorption.xyz, hit.t);
-        }
-        let ng_view = select(-s.geometric_normal, s.geometric_normal, entering);
-        if (m.kind == MATERIAL_DIFFUSE) {
-            let n = facing_normal(s.shading_normal, r.dir);
-            l += weight * shade_diffuse(p.light_count, s.position, n, ng_view, m.color.xyz);
-        } else if (r.depth >= p.max_specular_depth) {
-        } else if (m.kind == MATERIAL_MIRROR) {
-            let w = weight * m.color.xyz;
-            if (max_element3(w) >= p.min_weight && sp < SPECULAR_STACK_SIZE) {
-                let n = facing_normal(s.shading_normal, r.dir);
-                stack[sp] = chain_ray(offset_ray_origin(s.position, ng_view), reflect(r.dir, n),
-                                      w, r.depth + 1u);
-                sp += 1u;
-            }
-        } else {
-            let facing = facing_normal(s.shading_normal, r.dir);
-            let eta = select(m.ior, 1.0 / m.ior, entering);
-            let f = fresnel_dielectric(-dot3(r.dir, facing), eta);
-            if (max_element3(weight) * f >= p.min_weight && sp < SPECULAR_STACK_SIZE) {
-                stack[sp] = chain_ray(offset_ray_origin(s.position, ng_view),
-                                      reflect(r.dir, facing), weight * f, r.depth + 1u);
-                sp += 1u;
-            }
-            var t: vec3<f32>;
-            if (refract(r.dir, facing, eta, &t)) {
-                if (max_element3(weight) * (1.0 - f) >= p.min_weight &&
-                    sp < SPECULAR_STACK_SIZE) {
-                    stack[sp] = chain_ray(offset_ray_origin(s.position, -ng_view),
-                                          normalize3(t), weight * (1.0 - f), r.depth + 1u);
-                    sp += 1u;
-                }
-            }
-        }
-    }
-    return l;
+// The specular tree's diffuse end (common/specular_tree.wgsl): the lights' shading.
+fn diffuse_end(hit: Hit, s: SurfacePoint, m: GpuMaterial, n: vec3<f32>,
+               ng_view: vec3<f32>) -> vec3<f32> {
+    return shade_diffuse(params.light_count, s.position, n, ng_view, m.color.xyz);
 }
 
 fn direct_light(i: u32) {
@@ -152,7 +87,8 @@ fn direct_light(i: u32) {
         let n = g.normal;
         l = shade_diffuse(p.light_count, g.position, n, n, g.albedo);
     } else {
-        l = specular_chain(p, p.camera.position, camera_ray(p.camera, i % w, i / w));
+        l = specular_tree(p.max_specular_depth, p.min_weight, p.camera.position,
+                          camera_ray(p.camera, i % w, i / w));
     }
     out[i] = vec4<f32>(saturate_radiance3(l), 1.0);
 }

@@ -13,6 +13,9 @@
 override DIELECTRIC: bool = true;
 override DISPERSION: bool = true;
 override ABSORPTION: bool = true;
+// Store policy (core's photon_store): false stores world space (Sspm), true the hit's uv
+// and triangle (CausticMap's atlas).
+override SURFACE_STORE: bool = false;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -47,7 +50,12 @@ fn emit_photon(p: TraceParams, index: u32, origin: ptr<function, vec3<f32>>,
         *dir = axis;
         return;
     }
-    *dir = to_world(uniform_cone(u, p.origin.w), axis);
+    if (p.emission == EMISSION_VIEW_PLANE) {
+        *dir = view_plane_direction(axis, p.rect_u.xyz, p.rect_v.xyz, u);
+        *flux = *flux * view_plane_texel_weight(ix, iy, p.grid_w, p.grid_h, p.rect_u.w, p.rect_v.w);
+    } else {
+        *dir = to_world(uniform_cone(u, p.origin.w), axis);
+    }
     let light = lights[p.light];
     var falloff = 1.0;
     if (light.kind == LIGHT_SPOT) {
@@ -89,10 +97,15 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
             if (bounce == 0u) {
                 return PATH_NO_SPECULAR;
             }
-            (*ph).position = s.position;
             (*ph).hit_distance = hit.t;
             (*ph).flux = flux;
-            (*ph).direction = pack_unit_vector(dir);
+            if (SURFACE_STORE) {
+                (*ph).position = vec3<f32>(s.uv.x, s.uv.y, 0.0);
+                (*ph).direction = hit.triangle;
+            } else {
+                (*ph).position = s.position;
+                (*ph).direction = pack_unit_vector(dir);
+            }
             return PATH_STORED;
         } else if (m.kind == MATERIAL_MIRROR) {
             flux *= m.color.xyz;

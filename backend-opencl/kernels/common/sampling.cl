@@ -25,3 +25,19 @@ inline float3 to_world(float3 v, float3 n) {
     float3 t = orthonormal_basis(n, &b);
     return t * v.x + b * v.y + n * v.z;
 }
+
+// core::math::sampling::view_plane_direction (seed 001 section 3.1): the pinhole ray
+// through point `u` of a perspective light view plane.
+inline float3 view_plane_direction(float3 axis, float3 right, float3 up, float2 u) {
+    float2 ndc = (float2)(2.0f * u.x - 1.0f, 1.0f - 2.0f * u.y);
+    return normalize3(axis + ndc.x * right + ndc.y * up);
+}
+
+// core::math::sampling::view_plane_texel_weight: texel (ix, iy)'s solid angle over the
+// centre texel's, 1 / q^(3/2).
+inline float view_plane_texel_weight(uint ix, uint iy, uint w, uint h, float tan_x, float tan_y) {
+    float a = (2.0f * ((float)ix + 0.5f) / (float)w - 1.0f) * tan_x;
+    float b = (1.0f - 2.0f * ((float)iy + 0.5f) / (float)h) * tan_y;
+    float q = 1.0f + a * a + b * b;
+    return 1.0f / (q * sqrt(q));
+}

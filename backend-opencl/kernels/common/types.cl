@@ -52,6 +52,14 @@ typedef struct {
     GpuCamera camera;
     uint light_count; uint max_specular_depth; float min_weight; uint _pad;
 } DirectParams;
+typedef struct {
+    uint width; uint height; float flux_quantum; float hit_distance_quantum;
+    uint photon_capacity; uint gather_width; uint _pad0; uint _pad1;
+} AtlasParams;
+typedef struct {
+    GpuCamera camera;
+    uint atlas_width; uint max_specular_depth; float min_weight; uint _pad;
+} MapLookupParams;
 
 // core::gpu constants
 #define MATERIAL_DIFFUSE 0u
@@ -62,6 +70,8 @@ typedef struct {
 #define LIGHT_DIRECTIONAL 2u
 #define EMISSION_CONE 0u
 #define EMISSION_RECTANGLE 1u
+#define EMISSION_VIEW_PLANE 2u
+#define NO_TILE 0xffffffffu
 #define GBUFFER_RECEIVER 1u
 #define NO_MATERIAL 0xffffffffu
 // core::gpu::counter word offsets

@@ -26,3 +26,19 @@ precise vec3 to_world(vec3 v, vec3 n) {
     vec3 t = orthonormal_basis(n, b);
     return t * v.x + b * v.y + n * v.z;
 }
+
+// core::math::sampling::view_plane_direction (seed 001 section 3.1): the pinhole ray
+// through point `u` of a perspective light view plane.
+precise vec3 view_plane_direction(vec3 axis, vec3 right, vec3 up, vec2 u) {
+    vec2 ndc = vec2(2.0 * u.x - 1.0, 1.0 - 2.0 * u.y);
+    return normalize3(axis + ndc.x * right + ndc.y * up);
+}
+
+// core::math::sampling::view_plane_texel_weight: texel (ix, iy)'s solid angle over the
+// centre texel's, 1 / q^(3/2).
+precise float view_plane_texel_weight(uint ix, uint iy, uint w, uint h, float tan_x, float tan_y) {
+    float a = (2.0 * (float(ix) + 0.5) / float(w) - 1.0) * tan_x;
+    float b = (1.0 - 2.0 * (float(iy) + 0.5) / float(h)) * tan_y;
+    float q = 1.0 + a * a + b * b;
+    return 1.0 / (q * sqrt(q));
+}

@@ -89,6 +89,11 @@ struct DirectParams {
     uint light_count; uint max_specular_depth; float min_weight; uint _pad;
 };
 
+struct MapLookupParams {
+    GpuCamera camera;
+    uint atlas_width; uint max_specular_depth; float min_weight; uint _pad;
+};
+
 // The closest-hit payload (location 0) shared by the ray generation, closest-hit and miss
 // stages: hit distance, triangle index (NO_HIT on a miss) and the barycentrics (u, v) of
 // vertices 1 and 2 (vertex 0 weighs 1 - u - v), core's convention.
@@ -104,6 +109,8 @@ const uint LIGHT_SPOT = 1u;
 const uint LIGHT_DIRECTIONAL = 2u;
 const uint EMISSION_CONE = 0u;
 const uint EMISSION_RECTANGLE = 1u;
+const uint EMISSION_VIEW_PLANE = 2u;
+const uint NO_TILE = 0xffffffffu;
 const uint GBUFFER_RECEIVER = 1u;
 const uint NO_MATERIAL = 0xffffffffu;
 // core::gpu::counter word offsets

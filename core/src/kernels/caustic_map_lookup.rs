@@ -43,6 +43,10 @@ const BINDINGS: [Binding; 12] = with_scene([
 impl KernelDecl for CausticMapLookup {
     const INFO: KernelInfo = KernelInfo::traced("caustic_map_lookup", &BINDINGS, &[], "CausticMap");
 
+    fn scene(&self) -> Option<&SceneArgs> {
+        Some(&self.scene)
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         let n = super::texels(p.camera.width, p.camera.height);

@@ -40,6 +40,10 @@ const BINDINGS: [Binding; 12] = with_scene([
 impl KernelDecl for DirectLight {
     const INFO: KernelInfo = KernelInfo::traced("direct_light", &BINDINGS, &[], "all");
 
+    fn scene(&self) -> Option<&SceneArgs> {
+        Some(&self.scene)
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         if p.max_specular_depth > MAX_SPECULAR_DEPTH {

@@ -235,6 +235,12 @@ pub trait KernelDecl {
     fn switch_values(&self) -> Vec<u32> {
         Vec::new()
     }
+
+    /// The scene a traced kernel traces against (`None` for compute kernels; every
+    /// traced kernel overrides it, as a test checks).
+    fn scene(&self) -> Option<&SceneArgs> {
+        None
+    }
 }
 
 /// The launch arguments of one kernel under construction, checked against its declaration:
@@ -430,6 +436,13 @@ macro_rules! kernel_list {
             fn switch_values(&self) -> Vec<u32> {
                 match self {
                     $(Kernel::$variant(k) => k.switch_values(),)*
+                }
+            }
+
+            /// The scene a traced kernel traces against (`None` for compute kernels).
+            pub fn scene(&self) -> Option<&SceneArgs> {
+                match self {
+                    $(Kernel::$variant(k) => KernelDecl::scene(k),)*
                 }
             }
         }

@@ -30,6 +30,10 @@ const BINDINGS: [Binding; 11] = with_scene([
 impl KernelDecl for PrimaryGbuffer {
     const INFO: KernelInfo = KernelInfo::traced("primary_gbuffer", &BINDINGS, &[], "all");
 
+    fn scene(&self) -> Option<&SceneArgs> {
+        Some(&self.scene)
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.camera.width, self.camera.height);
         a.scene(&self.scene)?

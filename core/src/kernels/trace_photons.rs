@@ -46,6 +46,10 @@ impl KernelDecl for TracePhotons {
         "Sspm, CausticMap",
     );
 
+    fn scene(&self) -> Option<&SceneArgs> {
+        Some(&self.scene)
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         if p.count > self.photons.len {

@@ -28,3 +28,19 @@ fn to_world(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let t = orthonormal_basis(n, &b);
     return t * v.x + b * v.y + n * v.z;
 }
+
+// core::math::sampling::view_plane_direction (seed 001 section 3.1): the pinhole ray
+// through point `u` of a perspective light view plane.
+fn view_plane_direction(axis: vec3<f32>, right: vec3<f32>, up: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let ndc = vec2<f32>(2.0 * u.x - 1.0, 1.0 - 2.0 * u.y);
+    return normalize3(axis + ndc.x * right + ndc.y * up);
+}
+
+// core::math::sampling::view_plane_texel_weight: texel (ix, iy)'s solid angle over the
+// centre texel's, 1 / q^(3/2).
+fn view_plane_texel_weight(ix: u32, iy: u32, w: u32, h: u32, tan_x: f32, tan_y: f32) -> f32 {
+    let a = (2.0 * (f32(ix) + 0.5) / f32(w) - 1.0) * tan_x;
+    let b = (1.0 - 2.0 * (f32(iy) + 0.5) / f32(h)) * tan_y;
+    let q = 1.0 + a * a + b * b;
+    return 1.0 / (q * sqrt(q));
+}

@@ -138,6 +138,25 @@ struct GatherParams {
     table_block: u32,
 }
 
+struct AtlasParams {
+    width: u32,
+    height: u32,
+    flux_quantum: f32,
+    hit_distance_quantum: f32,
+    photon_capacity: u32,
+    gather_width: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct MapLookupParams {
+    camera: GpuCamera,
+    atlas_width: u32,
+    max_specular_depth: u32,
+    min_weight: f32,
+    _pad: u32,
+}
+
 struct DirectParams {
     camera: GpuCamera,
     light_count: u32,
@@ -155,6 +174,8 @@ const LIGHT_SPOT: u32 = 1u;
 const LIGHT_DIRECTIONAL: u32 = 2u;
 const EMISSION_CONE: u32 = 0u;
 const EMISSION_RECTANGLE: u32 = 1u;
+const EMISSION_VIEW_PLANE: u32 = 2u;
+const NO_TILE: u32 = 0xffffffffu;
 const GBUFFER_RECEIVER: u32 = 1u;
 const NO_MATERIAL: u32 = 0xffffffffu;
 // core::gpu::counter word offsets

@@ -1,0 +1,20 @@
+// Mirror of core::math::map_gather's texel addressing (the caustic atlas, seed 001).
+
+fn atlas_texel_index(tile: vec4<u32>, uv: vec2<f32>, atlas_width: u32) -> u32 {
+    let s = f32(tile.z);
+    let cx = min(u32(max(floor(uv.x * s), 0.0)), tile.z - 1u);
+    let cy = min(u32(max(floor(uv.y * s), 0.0)), tile.z - 1u);
+    return (tile.y + cy) * atlas_width + tile.x + cx;
+}
+
+fn join_u64_f32(lo: u32, hi: u32) -> f32 {
+    return f32(hi) * 4294967296.0f + f32(lo);
+}
+
+// (first column, last column, first row, last row), inclusive.
+fn tile_window(tile: vec4<u32>, x: u32, y: u32, n: u32) -> vec4<u32> {
+    let h = n / 2u;
+    return vec4<u32>(max(select(0u, x - h, x >= h), tile.x), min(x + h, tile.x + tile.z - 1u),
+                     max(select(0u, y - h, y >= h), tile.y), min(y + h, tile.y + tile.z - 1u));
+}
+

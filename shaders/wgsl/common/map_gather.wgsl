@@ -1,0 +1,39 @@
+// Mirror of core::math::map_gather::gather_caustic_texel (seed 001's N x N gather, fixed to
+// keep flux). Reads the atlas through functions the kernel module defines:
+// `atlas_area(i)` (texel i's world area, 0 where uncovered) and `atlas_flux(i)` (its
+// flux, W).
+
+fn gather_caustic_texel(tile: vec4<u32>, x: u32, y: u32, n: u32, atlas_width: u32) -> vec3<f32> {
+    let t = y * atlas_width + x;
+    let area_t = atlas_area(t);
+    let win = tile_window(tile, x, y, n);
+    var sum = vec3<f32>(0.0);
+    for (var qy = win.z; qy <= win.w; qy++) {
+        for (var qx = win.x; qx <= win.y; qx++) {
+            let q = qy * atlas_width + qx;
+            let f = atlas_flux(q);
+            if (all(f == vec3<f32>(0.0))) {
+                continue;
+            }
+            let cw = tile_window(tile, qx, qy, n);
+            var c = 0u;
+            for (var sy = cw.z; sy <= cw.w; sy++) {
+                for (var sx = cw.x; sx <= cw.y; sx++) {
+                    c += select(0u, 1u, atlas_area(sy * atlas_width + sx) > 0.0);
+                }
+            }
+            if (c == 0u) {
+                if (q == t) {
+                    sum += f;
+                }
+            } else if (area_t > 0.0) {
+                sum += f / f32(c);
+            }
+        }
+    }
+    if (area_t > 0.0) {
+        return sum / area_t;
+    }
+    return vec3<f32>(0.0);
+}
+
