@@ -14,8 +14,8 @@
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
-    check_composite, check_density_gather, check_deposit, check_direct, check_gather,
-    check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
+    check_caustic_map, check_composite, check_density_gather, check_deposit, check_direct,
+    check_gather, check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -81,6 +81,13 @@ fn direct_light_matches_cpu_on_the_same_gbuffer() {
 }
 
 /// Composite of the CPU's direct and filtered images: bitwise equal.
+/// CausticMap's kernels on the same inputs: the atlas sums bitwise, the gather per texel,
+/// the lookup per pixel (`kernels::caustic_map` argues each bound).
+#[test]
+fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
+    kernel_test("caustic map kernels", &check_caustic_map);
+}
+
 #[test]
 fn composite_is_exact() {
     kernel_test("composite", &|_, inputs, r, c| {

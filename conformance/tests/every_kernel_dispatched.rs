@@ -1,6 +1,6 @@
-//! Every declared kernel is really dispatched by every backend: two frames of `prism`
+//! Every declared kernel is really dispatched by every backend: two Sspm frames of `prism`
 //! (glass with dispersion) with pruning off, one per caustic filter (density, bilateral),
-//! run every pass of the kernel list between them, and each
+//! and one CausticMap frame (a 64x64 atlas), run every pass of the kernel list between them, and each
 //! backend's own pass timings must name every kernel that launches work, at least once.
 //! `prepare_scene` launches nothing on the GPU-style backends; that it did its job shows
 //! in the traced kernels having run on the prepared scene (they fail without it).
@@ -35,6 +35,23 @@ fn every_backend_dispatches_every_declared_kernel() {
             );
             passes.extend(stats.passes);
         }
+        let settings = caustica_core::techniques::caustic_map::CausticMapSettings {
+            photons_w: 64,
+            photons_h: 64,
+            atlas_size: 64,
+            prune: false,
+            ..Default::default()
+        };
+        let mut t =
+            caustica_core::techniques::caustic_map::CausticMap::new(b.as_mut(), &scene, settings)
+                .expect("valid scene");
+        let stats = t.frame(b.as_mut(), &mut |_| {}).expect("frame");
+        t.free(b.as_mut()).expect("free");
+        assert!(
+            stats.photons_deposited > 0,
+            "{name}: caustic map saw no photon"
+        );
+        passes.extend(stats.passes);
         for k in KERNELS.iter().filter(|k| k.name != "prepare_scene") {
             let pass = passes.iter().find(|p| p.name == k.name);
             assert!(

@@ -29,7 +29,7 @@ fn backend_err(kernel: &str, b: &dyn Backend) -> impl FnOnce(BackendError) -> St
 }
 
 /// Executes `rec`, reads what `read` asks for, then frees every buffer `rec` created.
-fn run_and_free<T>(
+pub fn run_and_free<T>(
     b: &mut dyn Backend,
     what: &str,
     rec: &Recording,

@@ -16,6 +16,7 @@
 //! ([`crate::harness::kernel_cases`]).
 
 pub mod bilateral_gather;
+pub mod caustic_map;
 pub mod composite;
 pub mod density_gather;
 pub mod deposit_screen;
@@ -26,6 +27,7 @@ pub mod tile_hit_distance;
 pub mod trace_photons;
 
 pub use bilateral_gather::check_gather;
+pub use caustic_map::check_caustic_map;
 pub use composite::check_composite;
 pub use density_gather::check_density_gather;
 pub use deposit_screen::check_deposit;

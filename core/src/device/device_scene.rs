@@ -255,10 +255,11 @@ fn check_coincident(
     Ok(())
 }
 
-fn build_bvh(
-    vertices: &[GpuVertex],
-    tris: Vec<GpuTriangle>,
-) -> Result<(Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>), BuildError> {
+/// The triangles in leaf order, the CWBVH nodes, and for each ordered triangle its index
+/// in the input.
+type BvhBuild = (Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>);
+
+fn build_bvh(vertices: &[GpuVertex], tris: Vec<GpuTriangle>) -> Result<BvhBuild, BuildError> {
     let p = |i: u32| Vec3A::from(vertices[i as usize].position);
     let mut obvhs_tris: Vec<Triangle> = Vec::new();
     reserve(&mut obvhs_tris, tris.len() as u64, "BVH build triangles")?;

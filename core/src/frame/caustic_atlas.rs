@@ -314,6 +314,9 @@ pub struct AtlasLayout {
     pub covered_texels: u64,
 }
 
+/// A receiver's triangle: its scene index, world corners and UV corners.
+type ReceiverTriangle = (usize, [Vec3; 3], [Vec2; 3]);
+
 /// Lays out the atlas of `size` texels for the scene objects flagged in `receiver` (one
 /// flag per scene object): tiles by world area ([`plan_atlas`]), every texel centre
 /// tested against the receiver's UV triangles ([`receiver_owners`]: overlapping, missing
@@ -329,7 +332,7 @@ pub fn atlas_layout(
         .filter(|&o| receiver[o as usize])
         .collect();
     let slot_of = |o: u32| receivers.iter().position(|&r| r == o);
-    let mut tris: Vec<Vec<(usize, [Vec3; 3], [Vec2; 3])>> = vec![Vec::new(); receivers.len()];
+    let mut tris: Vec<Vec<ReceiverTriangle>> = vec![Vec::new(); receivers.len()];
     for (t, (tri, &o)) in ds.triangles.iter().zip(&ds.triangle_objects).enumerate() {
         if let Some(r) = slot_of(o) {
             let v = tri.indices.map(|i| ds.vertices[i as usize]);

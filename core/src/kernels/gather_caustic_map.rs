@@ -41,7 +41,7 @@ impl KernelDecl for GatherCausticMap {
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         let n = super::texels(p.width, p.height);
-        if p.gather_width == 0 || p.gather_width % 2 == 0 {
+        if p.gather_width == 0 || p.gather_width.is_multiple_of(2) {
             return Err(BackendError::BadArgument(format!(
                 "gather_caustic_map: gather width {} is not odd",
                 p.gather_width

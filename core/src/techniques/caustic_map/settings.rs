@@ -108,7 +108,7 @@ impl CausticMapSettings {
         if self.atlas_size == 0 || self.atlas_size > MAX_ATLAS_SIZE {
             return bad(format!("atlas_size must be in 1..={MAX_ATLAS_SIZE}"));
         }
-        if self.gather_width % 2 == 0 || self.gather_width > 31 {
+        if self.gather_width.is_multiple_of(2) || self.gather_width > 31 {
             return bad("gather_width must be odd and at most 31".into());
         }
         if self.max_bounces == 0 || self.max_bounces > 1024 {

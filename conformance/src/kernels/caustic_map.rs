@@ -1,0 +1,255 @@
+//! CausticMap's kernels (`deposit_atlas`, `gather_caustic_map`, `caustic_map_lookup`),
+//! checked together on the same inputs ([`check_caustic_map`]): the fixture's scene gets
+//! a 64x64 caustic atlas over its diffuse receivers (no atlas, nothing to check, where it
+//! has none or their UVs cannot address one); each kernel after the first runs on the
+//! CPU's output uploaded to both backends, so only the kernel under test differs.
+//!
+//! - `deposit_atlas`, on 4096 generated texture-space photons (uv anywhere in `[0, 1]^2`,
+//!   triangles of receivers and of casters, fluxes over 12 binary orders): the sums are
+//!   integer atomics of the same quanta, so the atlas and the counters must be **bitwise**
+//!   equal.
+//! - `gather_caustic_map` (N = 3, and N = 1: the raw map) on the CPU's sums: per texel a
+//!   sum of at most `N^2` sources, each converted exactly (a power-of-two quantum times a
+//!   u64 split in two exact f32 parts and one rounding) and divided by a count and by the
+//!   area, i.e. at most `N^2 + 3` roundings of `2^-24` each, plus WGSL/SPIR-V's division
+//!   (2.5 ulp): relative `GATHER_REL` (1e-5 >> 14 ulp) of the texel's value, absolute
+//!   `1e-30` for zero texels.
+//! - `caustic_map_lookup` on the CPU's gathered map: `direct_light`'s specular tree
+//!   (the same walk, its tolerance argued there: `DIRECT_REL` per pixel on
+//!   `DIRECT_AGREEMENT` of the pixels, where a ray that grazes an edge may take the other
+//!   triangle) ending in a bilinear lookup of four texels (7 roundings).
+
+use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
+use crate::harness::tolerance::{DIRECT_AGREEMENT, DIRECT_FLOOR, DIRECT_REL, GATHER_REL};
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::{read_buf, read_photon_map, Backend};
+use caustica_core::device::layout::*;
+use caustica_core::frame::caustic_atlas::{atlas_layout, AtlasLayout};
+use caustica_core::kernels::{CausticMapLookup, DepositAtlas, GatherCausticMap};
+use caustica_core::math::rng::random_f32;
+use caustica_core::recording::Recording;
+use caustica_core::scene::Material;
+
+/// Side of the checked atlas (texels).
+pub const CHECK_ATLAS: u32 = 64;
+
+fn layout(fx: &Fixture) -> Option<AtlasLayout> {
+    let receiver: Vec<bool> = fx
+        .scene
+        .objects
+        .iter()
+        .map(|o| {
+            matches!(
+                fx.scene.materials.get(&o.material),
+                Some(Material::Diffuse { .. })
+            )
+        })
+        .collect();
+    if !receiver.iter().any(|r| *r) {
+        return None;
+    }
+    atlas_layout(&fx.ds, &receiver, (CHECK_ATLAS, CHECK_ATLAS)).ok()
+}
+
+/// Texture-space photons: three in four on a receiver's triangle, the others on any
+/// triangle (casters have no tile).
+fn photons(l: &AtlasLayout, n: u32) -> Vec<Photon> {
+    let tris = l.triangle_tiles.len() as u32;
+    let receivers: Vec<u32> = (0..tris)
+        .filter(|&t| l.triangle_tiles[t as usize] != NO_TILE)
+        .collect();
+    (0..n)
+        .map(|i| {
+            let r = |d| random_f32(0xa71a5, i, 0, d);
+            let pick = |pool: u32| ((r(6) * pool as f32) as u32).min(pool - 1);
+            Photon {
+                position: [r(0), r(1), 0.0],
+                hit_distance: r(2) * 3.0,
+                flux: [r(3), r(4), r(5)].map(|x| x * 2f32.powi(-((i % 12) as i32))),
+                direction: if i % 4 != 0 && !receivers.is_empty() {
+                    receivers[pick(receivers.len() as u32) as usize]
+                } else {
+                    pick(tris)
+                },
+            }
+        })
+        .collect()
+}
+
+fn params(l: &AtlasLayout, n: u32, capacity: u32) -> AtlasParams {
+    AtlasParams {
+        width: l.plan.size.0,
+        height: l.plan.size.1,
+        flux_quantum: 2f32.powi(-24),
+        hit_distance_quantum: 2f32.powi(-20),
+        photon_capacity: capacity,
+        gather_width: n,
+        _pad: [0; 2],
+    }
+}
+
+/// Runs `deposit_atlas` on `b`: the atlas sums and the counters.
+fn run_deposit(
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    ph: &[Photon],
+) -> Result<(Vec<DepositTexel>, Vec<u32>), String> {
+    let mut rec = Recording::new();
+    let photons = rec.upload(ph, "photons");
+    let count = rec.upload(&[ph.len() as u32], "photon count");
+    let counters = rec.upload(&[0u32; counter::WORDS], "counters");
+    let atlas = rec.create_photon_map(l.texels.len() as u32);
+    rec.clear_photon_map(&atlas);
+    let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
+    let tiles = rec.upload(&l.tiles, "tiles");
+    rec.kernel(DepositAtlas {
+        params: params(l, 1, ph.len() as u32),
+        triangle_tiles,
+        tiles,
+        photons,
+        photon_count: count,
+        counters,
+        atlas,
+    });
+    run_and_free(b, "deposit_atlas", &rec, |b| {
+        Ok((read_photon_map(b, &atlas)?, read_buf(b, counters)?))
+    })
+}
+
+/// Runs `gather_caustic_map` of width `n` on `b` over `sums`.
+fn run_gather(
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    sums: &[DepositTexel],
+    n: u32,
+) -> Result<Vec<[f32; 4]>, String> {
+    let mut rec = Recording::new();
+    let out = rec.create(l.texels.len() as u32, "caustic map");
+    let texels = rec.upload(&l.texels, "texels");
+    let tiles = rec.upload(&l.tiles, "tiles");
+    let atlas = rec.upload_photon_map(sums);
+    rec.kernel(GatherCausticMap {
+        params: params(l, n, 1),
+        texels,
+        tiles,
+        atlas,
+        out,
+    });
+    run_and_free(b, "gather_caustic_map", &rec, |b| read_buf(b, out))
+}
+
+/// Runs `caustic_map_lookup` on `b` over `map`.
+fn run_lookup(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    map: &[[f32; 4]],
+) -> Result<Vec<[f32; 4]>, String> {
+    let mut rec = Recording::new();
+    let out = rec.create(fx.pixels(), "caustics");
+    let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
+    let tiles = rec.upload(&l.tiles, "tiles");
+    let texels = rec.upload(&l.texels, "texels");
+    let map = rec.upload(map, "map");
+    rec.kernel(CausticMapLookup {
+        scene: fx.args,
+        params: MapLookupParams {
+            camera: fx.camera,
+            atlas_width: l.plan.size.0,
+            max_specular_depth: fx.settings.max_specular_depth,
+            min_weight: 1e-3,
+            _pad: 0,
+        },
+        triangle_tiles,
+        tiles,
+        texels,
+        map,
+        out,
+    });
+    run_and_free(b, "caustic_map_lookup", &rec, |b| read_buf(b, out))
+}
+
+/// The three kernels on the fixture's scene (see the module doc).
+pub fn check_caustic_map(
+    fx: &Fixture,
+    _inputs: &ReferenceInputs,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("deposit_atlas + gather_caustic_map + caustic_map_lookup");
+    let Some(l) = layout(fx) else {
+        return Ok(v);
+    };
+    let ph = photons(&l, 4096);
+    let (sa, ca) = run_deposit(r, &l, &ph)?;
+    let (sb, cb) = run_deposit(c, &l, &ph)?;
+    let deposited = ca[counter::DEPOSITED] as u64;
+    v.check(
+        deposited + ca[counter::OFF_SCREEN] as u64 == ph.len() as u64,
+        || {
+            format!(
+                "cpu: deposited + no tile = {} + {}, {} photons",
+                deposited,
+                ca[counter::OFF_SCREEN],
+                ph.len()
+            )
+        },
+    );
+    v.check(deposited > 0, || {
+        "no photon landed on a receiver tile".into()
+    });
+    v.check(ca == cb, || {
+        format!("deposit counters differ: cpu {ca:?}, candidate {cb:?}")
+    });
+    let equal = sa.iter().zip(&sb).filter(|(a, b)| a == b).count();
+    v.check(equal == sa.len(), || {
+        format!(
+            "{} of {} atlas texels differ (integer atomics must agree bitwise)",
+            sa.len() - equal,
+            sa.len()
+        )
+    });
+    let mut gathered = Vec::new();
+    for n in [3u32, 1] {
+        let ga = run_gather(r, &l, &sa, n)?;
+        let gb = run_gather(c, &l, &sa, n)?;
+        let bad = ga
+            .iter()
+            .zip(&gb)
+            .filter(|(a, b)| {
+                (0..4).any(|k| {
+                    (a[k] - b[k]).abs() > GATHER_REL * a[k].abs() + 1e-30 || !b[k].is_finite()
+                })
+            })
+            .count();
+        let lit = ga.iter().filter(|t| t[0] > 0.0).count();
+        v.check(lit > 0, || format!("N = {n}: the gathered map is dark"));
+        v.check(bad == 0, || {
+            format!(
+                "N = {n}: {bad} of {} texels differ by more than {GATHER_REL} relative",
+                ga.len()
+            )
+        });
+        gathered.push(ga);
+    }
+    let la = run_lookup(fx, r, &l, &gathered[0])?;
+    let lb = run_lookup(fx, c, &l, &gathered[0])?;
+    let agree = la
+        .iter()
+        .zip(&lb)
+        .filter(|(a, b)| {
+            (0..3).all(|k| (a[k] - b[k]).abs() <= DIRECT_REL * a[k].abs() + DIRECT_FLOOR)
+        })
+        .count();
+    let frac = agree as f64 / la.len().max(1) as f64;
+    v.check(frac >= DIRECT_AGREEMENT, || {
+        format!(
+            "caustic_map_lookup: {:.4} of pixels agree, need {DIRECT_AGREEMENT}",
+            frac
+        )
+    });
+    v.check(lb.iter().all(|p| p.iter().all(|x| x.is_finite())), || {
+        "lookup: a non-finite pixel".into()
+    });
+    Ok(v)
+}
