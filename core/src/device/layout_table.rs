@@ -9,8 +9,8 @@
 //! the struct without `..`, so a field added to a struct and not here does not compile.
 
 use super::layout::{
-    DepositParams, DepositTexel, DirectParams, GBufferTexel, GatherParams, GpuCamera, GpuLight,
-    GpuMaterial, GpuTriangle, GpuVertex, Photon, TraceParams,
+    AtlasParams, DepositParams, DepositTexel, DirectParams, GBufferTexel, GatherParams, GpuCamera,
+    GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams, Photon, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -217,6 +217,10 @@ table! {
         flux_quantum, table_block
     }
     DirectParams { camera, light_count, max_specular_depth, min_weight, _pad }
+    AtlasParams {
+        width, height, flux_quantum, hit_distance_quantum, photon_capacity, gather_width, _pad
+    }
+    MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, _pad }
 }
 
 static TABLE: LazyLock<Vec<StructLayout>> = LazyLock::new(build);
