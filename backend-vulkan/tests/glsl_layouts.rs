@@ -111,6 +111,9 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
     ("trace_photons.rgen", 1, Holds::Elements, "GpuVertex"),
     ("trace_photons.rgen", 2, Holds::Elements, "GpuTriangle"),
     ("trace_photons.rgen", 3, Holds::Elements, "GpuMaterial"),
+    ("caustic_map_lookup.rgen", 1, Holds::Elements, "GpuVertex"),
+    ("caustic_map_lookup.rgen", 2, Holds::Elements, "GpuTriangle"),
+    ("caustic_map_lookup.rgen", 3, Holds::Elements, "GpuMaterial"),
     // lights
     ("direct_light.rgen", 4, Holds::Elements, "GpuLight"),
     ("trace_photons.rgen", 4, Holds::Elements, "GpuLight"),
@@ -118,6 +121,12 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
     ("primary_gbuffer.rgen", 5, Holds::Member, "GpuCamera"),
     ("direct_light.rgen", 5, Holds::Member, "DirectParams"),
     ("trace_photons.rgen", 5, Holds::Member, "TraceParams"),
+    (
+        "caustic_map_lookup.rgen",
+        5,
+        Holds::Member,
+        "MapLookupParams",
+    ),
     // outputs and inputs
     ("trace_photons.rgen", 6, Holds::Elements, "Photon"),
 ];
@@ -126,6 +135,11 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
 /// (glslang emits no type for an unused declaration), so nothing here can check them;
 /// the test fails if one gets bound somewhere without a [`BOUND`] row.
 const NOT_BOUND: &[(&str, &str)] = &[
+    (
+        "AtlasParams",
+        "deposit_atlas and gather_caustic_map run on Vulkan as compute pipelines from \
+         caustica-shaders' WGSL, whose layouts that crate's tests check",
+    ),
     (
         "GBufferTexel",
         "bound as four planes of uvec4 (core's GBUFFER_PLANES, 16 bytes a pixel each) and \

@@ -25,15 +25,21 @@ fn settings() -> serde_json::Value {
     serde_json::json!({ "photons_w": 64, "photons_h": 64 })
 }
 
-/// Every requested output of one frame, by name.
+/// Every requested camera-space output of one frame, by name (the others, such as
+/// CausticMap's atlas, are checked for finiteness here).
 fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
     t.frame(b, &mut |_| {}).expect("frame");
     t.outputs()
         .into_iter()
         .filter(|o| o.requested)
-        .map(|o| {
+        .filter_map(|o| {
             let img = t.read_output(b, o.name).expect("read");
-            (o.name.to_string(), img.pixels)
+            if o.camera_space {
+                Some((o.name.to_string(), img.pixels))
+            } else {
+                assert!(img.all_finite(), "{}: not finite", o.name);
+                None
+            }
         })
         .collect()
 }

@@ -89,6 +89,11 @@ struct DirectParams {
     uint light_count; uint max_specular_depth; float min_weight; uint _pad;
 };
 
+struct AtlasParams {
+    uint width; uint height; float flux_quantum; float hit_distance_quantum;
+    uint photon_capacity; uint gather_width; uint _pad0; uint _pad1;
+};
+
 struct MapLookupParams {
     GpuCamera camera;
     uint atlas_width; uint max_specular_depth; float min_weight; uint _pad;

@@ -28,6 +28,9 @@ pub struct OutputInfo {
     pub description: &'static str,
     /// Whether the caller asked for it (only requested outputs can be read).
     pub requested: bool,
+    /// Whether it is a camera-space image of the frame's size (radiance per pixel); false
+    /// for data in another space (CausticMap's atlas: irradiance per atlas texel).
+    pub camera_space: bool,
 }
 
 /// A technique on one backend, for one scene: created by [`crate::techniques::create`]
@@ -47,8 +50,9 @@ pub trait Technique {
     /// Every output of the technique, requested or not, in a fixed order.
     fn outputs(&self) -> Vec<OutputInfo>;
 
-    /// Reads output `name` back (linear radiance, the camera's size). An output that was
-    /// not requested is an error.
+    /// Reads output `name` back: linear radiance of the camera's size for camera-space
+    /// outputs ([`OutputInfo::camera_space`]), the technique's own data otherwise. An
+    /// output that was not requested is an error.
     fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error>;
 
     /// The technique's estimate after its filter and its unfiltered estimate (output

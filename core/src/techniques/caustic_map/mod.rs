@@ -876,6 +876,7 @@ impl Technique for CausticMap {
                 name,
                 description,
                 requested: self.requested(name),
+                camera_space: *name != "caustic_atlas",
             })
             .collect()
     }

@@ -877,6 +877,7 @@ impl Technique for Sspm {
                 name: o.stem(),
                 description: o.description(),
                 requested: o.requested(&self.settings.outputs),
+                camera_space: true,
             })
             .collect()
     }
