@@ -45,6 +45,7 @@
 //!
 //! [`compare_frames`]: crate::techniques::sspm::compare_frames
 
+mod caustic_map;
 mod closed_form;
 mod degenerate;
 mod optics;
@@ -163,6 +164,20 @@ pub fn catalogue() -> Vec<StiffCase> {
             "1 photon per light: emitted 1, finite, bounded"),
         case!("termination", "facing-mirrors", termination::facing_mirrors,
             "Two facing mirrors of reflectance 1: paths end at the bounce limit (bounce_limit > 0), stored <= emitted"),
+        case!("caustic-map", "atlas-1x1", caustic_map::atlas_1x1,
+            "CausticMap with a 1x1 atlas (one texel for the floor): finite, accounted, agrees with cpu"),
+        case!("caustic-map", "atlas-16384", caustic_map::atlas_16384,
+            "CausticMap with a 16384^2 atlas (20 GiB) under the default max_atlas_bytes (4 GiB): a typed OutOfMemory naming the setting, before any work"),
+        case!("caustic-map", "grazing-receiver", caustic_map::grazing_receiver,
+            "Sun 2 degrees above the floor through the ball: finite, accounted, stored <= emitted, agrees with cpu"),
+        case!("caustic-map", "tiny-receiver", caustic_map::tiny_receiver,
+            "A 1e-6 units^2 receiver beside the floor (texels of near-zero world area): finite, accounted, agrees with cpu"),
+        case!("caustic-map", "uv-seams", caustic_map::uv_seams,
+            "A box receiver (six UV islands, seams between them): the 3x3 gather keeps the atlas's irradiance sum within 5% of the raw map's, agrees with cpu"),
+        case!("caustic-map", "overlapping-uvs", caustic_map::overlapping_uvs,
+            "A receiver mesh whose triangles share UVs: a typed InvalidScene naming the object and the overlap"),
+        case!("caustic-map", "ior-extremes", caustic_map::ball_glass,
+            "Ball of IOR 1.0001 and 4 over the floor: finite, accounted, agrees with cpu"),
     ];
     v.push(StiffCase {
         group: "degenerate",

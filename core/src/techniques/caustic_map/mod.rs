@@ -22,7 +22,7 @@ mod emission;
 mod settings;
 
 pub use emission::Emission;
-pub use settings::{CausticMapOutputs, CausticMapSettings, MAX_ATLAS_SIZE};
+pub use settings::{CausticMapOutputs, CausticMapSettings, ATLAS_BYTES_PER_TEXEL, MAX_ATLAS_SIZE};
 
 use crate::backend::{read_buf, Backend};
 use crate::device::device_scene::{BuildBudget, DeviceScene};
@@ -170,6 +170,19 @@ impl CausticMap {
             && has_receivers
             && (emits || !settings.prune)
             && (wants_caustics || !settings.prune);
+        if with_atlas {
+            if settings.atlas_bytes() > settings.max_atlas_bytes {
+                return Err(crate::device::error::BackendError::OutOfMemory {
+                    bytes: settings.atlas_bytes(),
+                    what: format!(
+                        "caustic atlas of {0}x{0} texels: over max_atlas_bytes ({1} bytes); a \
+                         smaller atlas_size, or a larger max_atlas_bytes where the device holds it",
+                        settings.atlas_size, settings.max_atlas_bytes
+                    ),
+                }
+                .into());
+            }
+        }
         let layout = if with_atlas {
             Some(
                 atlas_layout(&ds, &receiver, (settings.atlas_size, settings.atlas_size)).map_err(

@@ -72,6 +72,11 @@ pub struct CausticMapSettings {
     pub prune: bool,
     /// Largest scene, in triangles, the technique accepts.
     pub max_triangles: u64,
+    /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), the
+    /// gathered and raw maps (16 B each) and the texel table (8 B). A larger atlas is a
+    /// typed out-of-memory error before any work (default 4 GiB: a 2048^2 atlas takes
+    /// 320 MiB, 4096^2 1.25 GiB, 16384^2 20 GiB).
+    pub max_atlas_bytes: u64,
 }
 
 impl Default for CausticMapSettings {
@@ -89,13 +94,25 @@ impl Default for CausticMapSettings {
             outputs: CausticMapOutputs::default(),
             prune: true,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
+            max_atlas_bytes: 4 << 30,
         }
     }
 }
 
-/// Largest atlas side: 16384^2 texels (the sums alone are 10 GiB there; the planned
-/// allocation refuses what the device cannot hold).
+/// Largest atlas side: 16384^2 texels (the sums alone are 10 GiB there; `max_atlas_bytes`
+/// and the planned allocation refuse what the device cannot hold).
 pub const MAX_ATLAS_SIZE: u32 = 16384;
+
+/// Device bytes per atlas texel: sums (40), gathered map (16), raw map (16), texel
+/// table (8).
+pub const ATLAS_BYTES_PER_TEXEL: u64 = 80;
+
+impl CausticMapSettings {
+    /// Device bytes of the atlas at these settings (see [`ATLAS_BYTES_PER_TEXEL`]).
+    pub fn atlas_bytes(&self) -> u64 {
+        (self.atlas_size as u64).pow(2) * ATLAS_BYTES_PER_TEXEL
+    }
+}
 
 impl CausticMapSettings {
     /// Checks every field's range.

@@ -1,0 +1,306 @@
+//! The caustic-map group: CausticMap's own extremes (issue 16), on every backend. Each case
+//! runs a CausticMap frame and checks ([`checked`]): every output finite (camera images and
+//! the atlas); photon accounting (path ends add up to the emitted photons, atlas outcomes to
+//! the stored ones); stored flux at most the emitted flux plus the fixed-point rounding; no
+//! saturation; and on a backend other than cpu, against the CPU's frame: emitted counts
+//! and flux equal, stored counts within the path-divergence allowance, and the atlas's
+//! relative L2 error within `sqrt(2 k / n) + 1e-4` (`k` the allowance, `n` the deposited
+//! photons: a diverged photon moves its flux from one texel to another, the argument of
+//! `techniques::sspm::compare_frames`).
+
+use super::runner::outcome;
+use super::scenes::{glass, obj, sphere_scene};
+use super::Outcome;
+use crate::harness::candidates::{reference, REFERENCE_BACKEND};
+use crate::harness::measure::relative_l2;
+use crate::harness::tolerance::divergence_allowance;
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::{Backend, BackendError};
+use caustica_core::frame::image::Image;
+use caustica_core::scene::{Light, Material, Scene, Shape};
+use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{Error, FrameStats};
+use glam::{Vec2, Vec3};
+
+/// What a CausticMap frame gives the checks.
+pub struct MapFrame {
+    pub stats: FrameStats,
+    pub atlas: Image,
+    pub caustics: Image,
+    pub composite: Image,
+}
+
+fn settings(atlas: u32) -> CausticMapSettings {
+    CausticMapSettings {
+        photons_w: 128,
+        photons_h: 128,
+        atlas_size: atlas,
+        ..Default::default()
+    }
+}
+
+/// Renders one CausticMap frame on `b`.
+pub fn render(
+    b: &mut dyn Backend,
+    scene: &Scene,
+    s: &CausticMapSettings,
+) -> Result<MapFrame, Error> {
+    let mut t = CausticMap::new(b, scene, s.clone())?;
+    let stats = t.frame(b, &mut |_| {})?;
+    let f = MapFrame {
+        stats,
+        atlas: t.read_output(b, "caustic_atlas")?,
+        caustics: t.read_output(b, "caustics_filtered")?,
+        composite: t.read_output(b, "composite")?,
+    };
+    t.free(b)?;
+    Ok(f)
+}
+
+/// The universal checks and the comparison with the CPU (see the module doc).
+fn checked(
+    b: &mut dyn Backend,
+    scene: &Scene,
+    s: &CausticMapSettings,
+    v: &mut Verdict,
+) -> Result<MapFrame, String> {
+    let f = render(b, scene, s).map_err(|e| e.to_string())?;
+    for (name, img) in [
+        ("atlas", &f.atlas),
+        ("caustics", &f.caustics),
+        ("composite", &f.composite),
+    ] {
+        v.check(img.all_finite(), || format!("{name} has NaN/Inf"));
+    }
+    let st = &f.stats;
+    let d = &st.discarded;
+    let ends = st.photons_stored + d.no_specular + d.escaped + d.negligible_power + d.bounce_limit;
+    v.check(ends == st.photons_emitted, || {
+        format!("path ends {ends}, emitted {}", st.photons_emitted)
+    });
+    v.check(
+        st.photons_deposited + d.off_screen == st.photons_stored,
+        || {
+            format!(
+                "atlas outcomes {} + {}, stored {}",
+                st.photons_deposited, d.off_screen, st.photons_stored
+            )
+        },
+    );
+    let rounding = 0.5 * st.flux_quantum * st.photons_stored as f64;
+    let dispersive = scene
+        .materials
+        .values()
+        .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
+    let (stored, emitted): (f64, f64) = if dispersive {
+        (st.stored_flux.iter().sum(), st.emitted_flux.iter().sum())
+    } else {
+        (st.stored_flux[0], st.emitted_flux[0])
+    };
+    v.check(stored <= emitted * (1.0 + 1e-6) + 3.0 * rounding, || {
+        format!("stored flux {stored:e} over emitted {emitted:e}")
+    });
+    v.check(st.fixed_point_saturated == 0, || {
+        "fixed-point saturation".into()
+    });
+    if b.name() != REFERENCE_BACKEND {
+        let mut cpu = reference();
+        let r = render(&mut cpu, scene, s).map_err(|e| format!("cpu: {e}"))?;
+        let rs = &r.stats;
+        v.check(rs.photons_emitted == st.photons_emitted, || {
+            "emitted counts differ".into()
+        });
+        v.check(rs.emitted_flux == st.emitted_flux, || {
+            "emitted flux differs".into()
+        });
+        let k = divergence_allowance(rs.photons_stored);
+        v.check(rs.photons_stored.abs_diff(st.photons_stored) <= k, || {
+            format!(
+                "stored {} vs cpu {} (allowance {k})",
+                st.photons_stored, rs.photons_stored
+            )
+        });
+        let n = rs.photons_deposited.max(1) as f64;
+        let bound = (2.0 * k as f64 / n).sqrt() + 1e-4;
+        let e = relative_l2(&r.atlas.pixels, &f.atlas.pixels, None);
+        v.check(e <= bound || rs.photons_deposited == 0, || {
+            format!("atlas relative L2 {e:.2e} vs cpu over {bound:.2e}")
+        });
+        v.note(format!("atlas rel L2 vs cpu {e:.1e}"));
+    }
+    Ok(f)
+}
+
+pub(super) fn atlas_1x1(b: &mut dyn Backend) -> Result<Outcome, String> {
+    let mut v = Verdict::new("1x1 atlas");
+    let f = checked(b, &sphere_scene(), &settings(1), &mut v)?;
+    // the floor's one texel holds every deposited photon's flux over the floor's area
+    v.check(f.stats.photons_deposited > 0, || "nothing deposited".into());
+    outcome(format!("texel irradiance {:.3e}", f.atlas.pixels[0][0]), v)
+}
+
+pub(super) fn atlas_16384(b: &mut dyn Backend) -> Result<Outcome, String> {
+    let mut v = Verdict::new("16384^2 atlas");
+    match CausticMap::new(b, &sphere_scene(), settings(16384)) {
+        Err(Error::Backend(BackendError::OutOfMemory { bytes, what })) => {
+            v.check(what.contains("max_atlas_bytes"), || {
+                format!("the error does not say why: {what}")
+            });
+            outcome(format!("OutOfMemory {bytes} bytes"), v)
+        }
+        Err(e) => Err(format!(
+            "16384^2 atlas: expected a typed OutOfMemory, got {e}"
+        )),
+        Ok(t) => {
+            let _ = t.free(b);
+            Err("16384^2 atlas under the default max_atlas_bytes was accepted".into())
+        }
+    }
+}
+
+pub(super) fn grazing_receiver(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // the sun 2 degrees above the floor through the ball: the caustic is a long streak
+    // on the floor; a texel's photons arrive at cos 0.035
+    let mut scene = sphere_scene();
+    let a = 2f32.to_radians();
+    scene.lights = vec![Light::Directional {
+        direction: Vec3::new(a.cos(), -a.sin(), 0.0),
+        irradiance: Vec3::ONE,
+        projection_volume: None,
+    }];
+    let mut v = Verdict::new("grazing receiver");
+    let f = checked(b, &scene, &settings(256), &mut v)?;
+    outcome(format!("deposited {}", f.stats.photons_deposited), v)
+}
+
+pub(super) fn tiny_receiver(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // a receiver of 1e-6 units^2 beside the floor: its one texel has near-zero area
+    // (irradiance = flux / 1e-6), finite
+    let mut scene = sphere_scene();
+    let m = scene.objects[0].material.clone();
+    scene.objects.push(obj(
+        "speck",
+        &m,
+        Shape::Quad {
+            center: Vec3::new(0.0, 0.001, 0.0),
+            u: Vec3::new(0.0005, 0.0, 0.0),
+            v: Vec3::new(0.0, 0.0, 0.0005),
+        },
+    ));
+    let mut v = Verdict::new("tiny receiver");
+    let f = checked(b, &scene, &settings(256), &mut v)?;
+    outcome(format!("deposited {}", f.stats.photons_deposited), v)
+}
+
+pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // A white box as the only receiver under the ball: its six faces are a 3x2 grid of UV
+    // islands filling its tile, with seams between faces of different sizes (so texels of
+    // different world areas meet there). The gather stays within the tile and keeps the
+    // flux: sum E x texel area over the atlas equals the stored flux, for the 3x3 gather
+    // and the raw map alike. Every texel centre is covered and every stored photon lands
+    // on the box, so the only differences are f32 roundings: the u64 sum to f32 (2^-24),
+    // the division by the area and the product with it again (2 x 2^-24), summed in f64:
+    // relative 1e-5 is > 40 times that.
+    let mut scene = sphere_scene();
+    scene.objects[0].shape = Shape::Cuboid {
+        min: Vec3::new(-2.0, -0.5, -2.0),
+        max: Vec3::new(2.0, 0.0, 2.0),
+    };
+    let ds = caustica_core::device::device_scene::DeviceScene::build(&scene, Default::default())
+        .map_err(|e| e.to_string())?;
+    let receiver: Vec<bool> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            matches!(
+                scene.materials.get(&o.material),
+                Some(Material::Diffuse { .. })
+            )
+        })
+        .collect();
+    let layout = caustica_core::frame::caustic_atlas::atlas_layout(&ds, &receiver, (256, 256))
+        .map_err(|e| e.to_string())?;
+    let flux = |img: &Image| -> f64 {
+        img.pixels
+            .iter()
+            .zip(&layout.texels)
+            .map(|(p, t)| p[0] as f64 * f32::from_bits(t[0]) as f64)
+            .sum()
+    };
+    let mut v = Verdict::new("uv seams");
+    let f = checked(b, &scene, &settings(256), &mut v)?;
+    let raw = checked(
+        b,
+        &scene,
+        &CausticMapSettings {
+            gather_width: 1,
+            ..settings(256)
+        },
+        &mut v,
+    )?;
+    let stored = f.stats.stored_flux[0];
+    let (g, r) = (flux(&f.atlas), flux(&raw.atlas));
+    v.check(stored > 0.0, || "nothing stored".into());
+    for (what, x) in [("gathered", g), ("raw", r)] {
+        v.check(((x - stored) / stored).abs() < 1e-5, || {
+            format!("{what} map flux {x:.7e} vs stored {stored:.7e}")
+        });
+    }
+    outcome(format!("gathered / stored {:.7}", g / stored), v)
+}
+
+pub(super) fn overlapping_uvs(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // a receiver mesh whose two triangles share their UVs: a typed InvalidScene naming it
+    let mut scene = sphere_scene();
+    let m = scene.objects[0].material.clone();
+    scene.objects[0] = obj(
+        "folded floor",
+        &m,
+        Shape::Mesh {
+            positions: vec![
+                Vec3::new(-2.0, 0.0, 2.0),
+                Vec3::new(2.0, 0.0, 2.0),
+                Vec3::new(2.0, 0.0, -2.0),
+                Vec3::new(-2.0, 0.0, -2.0),
+            ],
+            normals: Vec::new(),
+            uvs: vec![
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(1.0, 1.0),
+                Vec2::new(1.0, 0.0),
+            ],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+        },
+    );
+    let mut v = Verdict::new("overlapping uvs");
+    match CausticMap::new(b, &scene, settings(64)) {
+        Err(Error::InvalidScene(why)) => {
+            v.check(
+                why.contains("folded floor") && why.contains("overlap"),
+                || format!("unclear: {why}"),
+            );
+            outcome("InvalidScene".into(), v)
+        }
+        Err(e) => Err(format!("expected InvalidScene, got {e}")),
+        Ok(t) => {
+            let _ = t.free(b);
+            Err("overlapping UVs were accepted".into())
+        }
+    }
+}
+
+pub(super) fn ball_glass(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // IOR near 1 and very high on the caster: finite, accounted, agrees with cpu
+    let mut v = Verdict::new("ior extremes");
+    for ior in [1.0001f32, 4.0] {
+        let mut scene = sphere_scene();
+        for m in scene.materials.values_mut() {
+            if matches!(m, Material::Dielectric { .. }) {
+                *m = glass(ior);
+            }
+        }
+        checked(b, &scene, &settings(128), &mut v)?;
+    }
+    outcome("ior 1.0001 and 4".into(), v)
+}
