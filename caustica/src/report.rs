@@ -7,7 +7,10 @@
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::{bias_variance, peak_ratio, relative_mse, CausticMask};
-use caustica_core::techniques::{create, technique_names};
+use caustica_core::techniques::{create, technique_names, TECHNIQUES};
+
+/// The filter label of a technique that has no `filter` setting (its own filter runs).
+pub const OWN_FILTER: &str = "own";
 use caustica_core::Scene;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -136,17 +139,28 @@ pub fn run(
         scene.camera.height = plan.reference.height;
         let mask = CausticMask::from_reference(&r.image);
         for technique in &plan.techniques {
+            // a technique without Sspm's `filter` setting runs its own filter once
+            let has_filter = TECHNIQUES
+                .iter()
+                .find(|t| t.name == technique)
+                .is_some_and(|t| (t.default_settings)().get("filter").is_some());
+            let filters: Vec<String> = if has_filter {
+                plan.filters.clone()
+            } else {
+                vec![OWN_FILTER.to_string()]
+            };
             for backend_name in &plan.backends {
                 let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
-                for (filter, &(pw, ph)) in plan
-                    .filters
+                for (filter, &(pw, ph)) in filters
                     .iter()
                     .flat_map(|f| plan.budgets.iter().map(move |b| (f, b)))
                 {
                     let mut settings = plan.settings.clone();
                     settings.insert("photons_w".into(), pw.into());
                     settings.insert("photons_h".into(), ph.into());
-                    settings.insert("filter".into(), filter.as_str().into());
+                    if has_filter {
+                        settings.insert("filter".into(), filter.as_str().into());
+                    }
                     let settings = serde_json::Value::Object(settings);
                     let mut sspm = create(technique, backend.as_mut(), &scene, &settings)
                         .map_err(|e| e.to_string())?;

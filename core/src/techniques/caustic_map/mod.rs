@@ -170,18 +170,16 @@ impl CausticMap {
             && has_receivers
             && (emits || !settings.prune)
             && (wants_caustics || !settings.prune);
-        if with_atlas {
-            if settings.atlas_bytes() > settings.max_atlas_bytes {
-                return Err(crate::device::error::BackendError::OutOfMemory {
-                    bytes: settings.atlas_bytes(),
-                    what: format!(
-                        "caustic atlas of {0}x{0} texels: over max_atlas_bytes ({1} bytes); a \
-                         smaller atlas_size, or a larger max_atlas_bytes where the device holds it",
-                        settings.atlas_size, settings.max_atlas_bytes
-                    ),
-                }
-                .into());
+        if with_atlas && settings.atlas_bytes() > settings.max_atlas_bytes {
+            return Err(crate::device::error::BackendError::OutOfMemory {
+                bytes: settings.atlas_bytes(),
+                what: format!(
+                    "caustic atlas of {0}x{0} texels: over max_atlas_bytes ({1} bytes); a \
+                     smaller atlas_size, or a larger max_atlas_bytes where the device holds it",
+                    settings.atlas_size, settings.max_atlas_bytes
+                ),
             }
+            .into());
         }
         let layout = if with_atlas {
             Some(
