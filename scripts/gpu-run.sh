@@ -20,13 +20,15 @@ if [ "${1:-}" = "--build" ]; then
                 "caustica-vulkan:vulkan_backend" "caustica-conformance:frame_plan" \
                 "caustica-conformance:stiff_cases" "caustica-conformance:every_kernel_dispatched" \
                 "caustica-conformance:technique_seam" "caustica-conformance:hostile_input" \
-                "caustica-conformance:large_frames" "caustica-conformance:filter_flux"; do
+                "caustica-conformance:large_frames" "caustica-conformance:filter_flux" \
+                "caustica-conformance:caustic_map_frames"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
         cp "$exe" ".devbin/$t"
     done
-    for spec in "caustica-opencl:photon_throughput:opencl_photon_throughput" "caustica:sspm_frame:sspm_frame"; do
+    for spec in "caustica-opencl:photon_throughput:opencl_photon_throughput" "caustica:sspm_frame:sspm_frame" \
+                "caustica:caustic_map_frame:caustic_map_frame"; do
         IFS=: read -r pkg bench name <<<"$spec"
         exe=$(cargo bench -p "$pkg" --bench "$bench" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
@@ -40,7 +42,8 @@ if [ "${1:-}" = "--build" ]; then
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
           .devbin/sspm_frame .devbin/embed_wgpu .devbin/embed_ash .devbin/render_png .devbin/vulkan_backend .devbin/frame_plan \
           .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
-          .devbin/technique_seam .devbin/hostile_input .devbin/large_frames .devbin/filter_flux
+          .devbin/technique_seam .devbin/hostile_input .devbin/large_frames .devbin/filter_flux \
+          .devbin/caustic_map_frames .devbin/caustic_map_frame
     # what the device tool carries must stay under 64 MiB: the binaries travel gzipped
     (cd .devbin && for f in *; do case $f in *.deb|*.gz) ;; *) gzip -9 -f "$f" ;; esac; done)
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
@@ -49,8 +52,9 @@ if [ "${1:-}" = "--build" ]; then
     exit 0
 fi
 
-# Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter hang
-SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter}
+# Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
+# causticmap hang
+SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
 B=$PWD/.devbin
@@ -114,6 +118,14 @@ if has filter; then
     # issue 15: the density gather keeps the raw flux on every backend (per-kernel checks
     # run in the vulkan section's cross_backend)
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
+fi
+if has causticmap; then
+    # issue 16: CausticMap's kernels and frames against the CPU on every backend, its stiff
+    # cases, and its frame times at seed 001's three settings
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend caustic --test-threads=1
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./caustic_map_frames --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1 --nocapture
+    run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./caustic_map_frame --bench
 fi
 if has hang; then
     # issue 19 point 5: which backends, run in parallel threads of one process, hang

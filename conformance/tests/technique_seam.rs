@@ -1,6 +1,7 @@
 //! The `Technique` seam on every backend: a technique created by name runs a frame and
 //! lists and reads its outputs; moving the camera or the lights between frames (no
-//! rebuild) gives bitwise the frame a technique created for the moved scene gives; so do
+//! rebuild), and adding or removing lights, gives, for every technique, bitwise the frame
+//! a technique created for the moved scene gives; so do
 //! new settings and a new image size (the frame's buffers remade, the scene kept); a
 //! technique dropped without `free` is reported, never silently leaked.
 
@@ -23,6 +24,15 @@ fn small(name: &str) -> Scene {
 
 fn settings() -> serde_json::Value {
     serde_json::json!({ "photons_w": 64, "photons_h": 64 })
+}
+
+/// [`settings`] for technique `name` (CausticMap at a 128^2 atlas).
+fn settings_for(name: &str) -> serde_json::Value {
+    if name == "caustic-map" {
+        serde_json::json!({ "photons_w": 64, "photons_h": 64, "atlas_size": 128 })
+    } else {
+        settings()
+    }
 }
 
 /// Every requested camera-space output of one frame, by name (the others, such as
@@ -103,25 +113,27 @@ fn moved_camera_and_lights_equal_a_fresh_technique_bitwise() {
                 Light::Directional { irradiance, .. } => *irradiance *= 1.5,
             }
         }
-        let mut fresh = create("sspm", b.as_mut(), &moved, &settings()).expect("create");
-        let want = frame_outputs(fresh.as_mut(), b.as_mut());
-        fresh.free(b.as_mut()).expect("free");
+        for name in technique_names() {
+            let mut fresh = create(name, b.as_mut(), &moved, &settings_for(name)).expect("create");
+            let want = frame_outputs(fresh.as_mut(), b.as_mut());
+            fresh.free(b.as_mut()).expect("free");
 
-        let mut t = create("sspm", b.as_mut(), &scene, &settings()).expect("create");
-        frame_outputs(t.as_mut(), b.as_mut()); // a frame before the move
-        t.set_camera(b.as_mut(), &moved.camera).expect("set_camera");
-        t.set_lights(b.as_mut(), &moved.lights).expect("set_lights");
-        let got = frame_outputs(t.as_mut(), b.as_mut());
-        assert_eq!(
-            got, want,
-            "{bname}: moved technique differs from a fresh one"
-        );
+            let mut t = create(name, b.as_mut(), &scene, &settings_for(name)).expect("create");
+            frame_outputs(t.as_mut(), b.as_mut()); // a frame before the move
+            t.set_camera(b.as_mut(), &moved.camera).expect("set_camera");
+            t.set_lights(b.as_mut(), &moved.lights).expect("set_lights");
+            let got = frame_outputs(t.as_mut(), b.as_mut());
+            assert_eq!(
+                got, want,
+                "{bname}/{name}: moved technique differs from a fresh one"
+            );
 
-        assert!(
-            t.set_lights(b.as_mut(), &[]).is_err(),
-            "{bname}: a scene needs a light"
-        );
-        t.free(b.as_mut()).expect("free");
+            assert!(
+                t.set_lights(b.as_mut(), &[]).is_err(),
+                "{bname}/{name}: a scene needs a light"
+            );
+            t.free(b.as_mut()).expect("free");
+        }
     }
 }
 
@@ -198,29 +210,31 @@ fn lights_added_and_removed_equal_a_fresh_technique_bitwise() {
             inner_angle_deg: 15.0,
             outer_angle_deg: 30.0,
         });
-        let fresh_outputs = |b: &mut dyn Backend, s: &Scene| {
-            let mut t = create("sspm", b, s, &settings()).expect("create");
-            let out = frame_outputs(t.as_mut(), b);
-            t.free(b).expect("free");
-            out
-        };
-        let (want_more, want_one) = (
-            fresh_outputs(b.as_mut(), &more),
-            fresh_outputs(b.as_mut(), &scene),
-        );
-        let mut t = create("sspm", b.as_mut(), &scene, &settings()).expect("create");
-        frame_outputs(t.as_mut(), b.as_mut());
-        t.set_lights(b.as_mut(), &more.lights).expect("add a light");
-        assert!(
-            frame_outputs(t.as_mut(), b.as_mut()) == want_more,
-            "{bname}: a light added differs from a fresh technique"
-        );
-        t.set_lights(b.as_mut(), &scene.lights).expect("remove it");
-        assert!(
-            frame_outputs(t.as_mut(), b.as_mut()) == want_one,
-            "{bname}: a light removed differs from a fresh technique"
-        );
-        t.free(b.as_mut()).expect("free");
+        for name in technique_names() {
+            let fresh_outputs = |b: &mut dyn Backend, s: &Scene| {
+                let mut t = create(name, b, s, &settings_for(name)).expect("create");
+                let out = frame_outputs(t.as_mut(), b);
+                t.free(b).expect("free");
+                out
+            };
+            let (want_more, want_one) = (
+                fresh_outputs(b.as_mut(), &more),
+                fresh_outputs(b.as_mut(), &scene),
+            );
+            let mut t = create(name, b.as_mut(), &scene, &settings_for(name)).expect("create");
+            frame_outputs(t.as_mut(), b.as_mut());
+            t.set_lights(b.as_mut(), &more.lights).expect("add a light");
+            assert!(
+                frame_outputs(t.as_mut(), b.as_mut()) == want_more,
+                "{bname}/{name}: a light added differs from a fresh technique"
+            );
+            t.set_lights(b.as_mut(), &scene.lights).expect("remove it");
+            assert!(
+                frame_outputs(t.as_mut(), b.as_mut()) == want_one,
+                "{bname}/{name}: a light removed differs from a fresh technique"
+            );
+            t.free(b.as_mut()).expect("free");
+        }
     }
 }
 

@@ -1,4 +1,4 @@
-// needs: types vector optics geometry traversal scene specular_tree map_lookup
+// needs: types vector optics geometry traversal scene atlas specular_tree map_lookup
 // caustic_map_lookup (seed 001 section 3.3): the camera ray's specular tree reads the
 // caustic map of each diffuse surface it ends on. Mirror of
 // backend-opencl/kernels/caustic_map_lookup.cl, backend-vulkan/shaders/caustic_map_lookup.rgen
@@ -26,12 +26,16 @@ fn map_irradiance(i: u32) -> vec3<f32> {
 
 // The specular tree's diffuse end (common/specular_tree.wgsl): the caustic map.
 fn diffuse_end(hit: Hit, s: SurfacePoint, m: GpuMaterial, n: vec3<f32>,
-               ng_view: vec3<f32>) -> vec3<f32> {
+               ng_view: vec3<f32>, distance: f32, cos_in: f32) -> vec3<f32> {
     let tile = triangle_tiles[hit.triangle];
     if (tile == NO_TILE) {
         return vec3<f32>(0.0);
     }
-    let e = sample_caustic_map(tiles[tile], s.uv, params.atlas_width);
+    let t = tiles[tile];
+    let texel = atlas_texel_index(t, s.uv, params.atlas_width);
+    let pixel_angle = 2.0 * params.camera.tan_half_fov_y / f32(params.camera.height);
+    let footprint = footprint_texels(pixel_angle, distance, cos_in, atlas_area(texel));
+    let e = sample_caustic_map(t, s.uv, footprint, params.atlas_width);
     return m.color.xyz / PI_F * e;
 }
 

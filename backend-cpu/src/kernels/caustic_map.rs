@@ -13,7 +13,7 @@ use caustica_core::device::layout::{
 };
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::map_gather::{
-    atlas_texel_index, gather_caustic_texel, join_u64_f32, sample_caustic_map,
+    atlas_texel_index, footprint_texels, gather_caustic_texel, join_u64_f32, sample_caustic_map,
 };
 use caustica_core::math::optics::saturate_radiance3;
 use glam::{Vec2, Vec3};
@@ -118,6 +118,7 @@ pub fn caustic_map_lookup(
 ) -> Vec<[f32; 4]> {
     let cam = &p.camera;
     let (w, h) = (cam.width, cam.height);
+    let pixel_angle = 2.0 * cam.tan_half_fov_y / h as f32;
     (0..w * h)
         .into_par_iter()
         .map(|i| {
@@ -127,14 +128,23 @@ pub fn caustic_map_lookup(
                 p.min_weight,
                 Vec3::from(cam.position),
                 camera_ray(cam, i % w, i / w),
-                |hit, s, m, _, _| {
+                |hit, s, m, _, _, distance, cos| {
                     let tile = triangle_tiles[hit.triangle as usize];
                     if tile == NO_TILE {
                         return Vec3::ZERO;
                     }
+                    let t = tiles[tile as usize];
+                    let texel = atlas_texel_index(t, s.uv, p.atlas_width);
+                    let footprint = footprint_texels(
+                        pixel_angle,
+                        distance,
+                        cos,
+                        f32::from_bits(texels[texel as usize][0]),
+                    );
                     let e = sample_caustic_map(
-                        tiles[tile as usize],
+                        t,
                         s.uv,
+                        footprint,
                         p.atlas_width,
                         |q| Vec3::from_slice(&map[q as usize][..3]),
                         |q| f32::from_bits(texels[q as usize][0]),

@@ -111,7 +111,7 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
         p.min_weight,
         origin,
         dir,
-        |_, s, m, n, ng_view| {
+        |_, s, m, n, ng_view, _, _| {
             shade_diffuse(
                 scene,
                 s.position,
@@ -128,19 +128,21 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
 /// first popped), both Fresnel branches of a dielectric, mirrors scaled by their
 /// reflectance, Beer-Lambert inside dielectrics, branches below `min_weight` or past
 /// `max_depth` specular surfaces cut. At every diffuse surface it meets, adds
-/// `weight * diffuse_end(hit, surface, material, n, ng_view)` (`n` the shading normal
-/// and `ng_view` the geometric normal, both turned to the arriving ray).
+/// `weight * diffuse_end(hit, surface, material, n, ng_view, distance, cos)` (`n` the
+/// shading normal and `ng_view` the geometric normal, both turned to the arriving ray;
+/// `distance` the length of the path from `origin` to the surface, over all its segments;
+/// `cos` the cosine between the arriving ray and `n`).
 pub fn specular_tree(
     scene: &SceneView,
     max_depth: u32,
     min_weight: f32,
     origin: Vec3,
     dir: Vec3,
-    diffuse_end: impl Fn(&Hit, &SurfacePoint, &GpuMaterial, Vec3, Vec3) -> Vec3,
+    diffuse_end: impl Fn(&Hit, &SurfacePoint, &GpuMaterial, Vec3, Vec3, f32, f32) -> Vec3,
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
-    let mut stack = vec![(origin, dir, Vec3::ONE, 0u32)];
-    while let Some((o, d, weight, depth)) = stack.pop() {
+    let mut stack = vec![(origin, dir, Vec3::ONE, 0u32, 0.0f32)];
+    while let Some((o, d, weight, depth, dist)) = stack.pop() {
         let Some(hit) = scene.closest_hit(o, d, f32::INFINITY) else {
             continue;
         };
@@ -162,7 +164,7 @@ pub fn specular_tree(
                 } else {
                     s.shading_normal
                 };
-                l += weight * diffuse_end(&hit, &s, m, n, ng_view);
+                l += weight * diffuse_end(&hit, &s, m, n, ng_view, dist + hit.t, -d.dot(n));
             }
             _ if depth >= max_depth => {}
             material_kind::MIRROR => {
@@ -178,6 +180,7 @@ pub fn specular_tree(
                         reflect(d, n),
                         w,
                         depth + 1,
+                        dist + hit.t,
                     ));
                 }
             }
@@ -195,6 +198,7 @@ pub fn specular_tree(
                         reflect(d, facing),
                         weight * f,
                         depth + 1,
+                        dist + hit.t,
                     ));
                 }
                 if let Some(t) = refract(d, facing, eta) {
@@ -204,6 +208,7 @@ pub fn specular_tree(
                             t.normalize(),
                             weight * (1.0 - f),
                             depth + 1,
+                            dist + hit.t,
                         ));
                     }
                 }

@@ -55,11 +55,38 @@ inline float3 gather_caustic_texel(__global const uint2* texels, PHOTON_MAP_PARA
     return area_t > 0.0f ? sum / area_t : (float3)(0.0f);
 }
 
+#define MAX_FOOTPRINT_TEXELS 32.0f
+
+inline float footprint_texels(float pixel_angle, float distance, float cos_in, float texel_area) {
+    float w = pixel_angle * distance;
+    float area = w * w / fmax(fabs(cos_in), 1e-3f);
+    return texel_area > 0.0f ? sqrt(area / texel_area) : 0.0f;
+}
+
 inline float3 sample_caustic_map(__global const uint2* texels, __global const float4* map,
-                                 uint4 tile, float2 uv, uint atlas_width) {
+                                 uint4 tile, float2 uv, float footprint, uint atlas_width) {
     float s = (float)tile.z;
     float fx = clamp(uv.x * s - 0.5f, 0.0f, s - 1.0f);
     float fy = clamp(uv.y * s - 0.5f, 0.0f, s - 1.0f);
+    if (footprint > 1.0f) {
+        float h = 0.5f * fmin(footprint, MAX_FOOTPRINT_TEXELS);
+        uint bx0 = (uint)fmax(ceil(fx - h), 0.0f);
+        uint bx1 = (uint)fmin(ceil(fx + h) - 1.0f, s - 1.0f);
+        uint by0 = (uint)fmax(ceil(fy - h), 0.0f);
+        uint by1 = (uint)fmin(ceil(fy + h) - 1.0f, s - 1.0f);
+        float3 bsum = (float3)(0.0f);
+        uint n = 0u;
+        for (uint y = by0; y <= by1; y++) {
+            for (uint x = bx0; x <= bx1; x++) {
+                uint i = (tile.y + y) * atlas_width + tile.x + x;
+                if (atlas_area(texels, i) > 0.0f) {
+                    bsum += map[i].xyz;
+                    n++;
+                }
+            }
+        }
+        if (n > 0u) return bsum / (float)n;
+    }
     float x0 = floor(fx);
     float y0 = floor(fy);
     float wx = fx - x0;

@@ -3,7 +3,8 @@
 // CPU's order (last pushed, first popped): both Fresnel branches of a dielectric, mirrors
 // scaled by their reflectance, Beer-Lambert inside dielectrics, branches below
 // `min_weight` or past `max_depth` specular surfaces cut. At each diffuse surface it adds
-// `weight *` the kernel's diffuse end (`DiffuseEnd`: the lights' shading for direct_light,
+// `weight *` the kernel's diffuse end (given the path's length over all its segments and
+// the cosine between the arriving ray and the normal) (`DiffuseEnd`: the lights' shading for direct_light,
 // the caustic map for caustic_map_lookup; OpenCL C has no function pointers).
 
 // Reflected radiance of a Lambertian surface at `pos` (shading normal `n`, geometric
@@ -48,14 +49,16 @@ typedef struct {
     float3 dir;
     float3 weight;
     uint depth;
+    float dist; // distance travelled from the tree's origin to `origin`
 } ChainRay;
 
-inline ChainRay chain_ray(float3 origin, float3 dir, float3 weight, uint depth) {
+inline ChainRay chain_ray(float3 origin, float3 dir, float3 weight, uint depth, float dist) {
     ChainRay r;
     r.origin = origin;
     r.dir = dir;
     r.weight = weight;
     r.depth = depth;
+    r.dist = dist;
     return r;
 }
 
@@ -68,6 +71,7 @@ typedef struct {
     __global const uint2* texels;
     __global const float4* map;
     uint atlas_width;
+    float pixel_angle;
 } DiffuseEnd;
 
 inline DiffuseEnd diffuse_end_direct(uint light_count) {
@@ -78,18 +82,23 @@ inline DiffuseEnd diffuse_end_direct(uint light_count) {
     e.texels = 0;
     e.map = 0;
     e.atlas_width = 0u;
+    e.pixel_angle = 0.0f;
     return e;
 }
 
 inline float3 diffuse_end(SCENE_PARAMS, const DiffuseEnd* e, const Hit* hit,
                           const SurfacePoint* s, __global const GpuMaterial* m, float3 n,
-                          float3 ng_view) {
+                          float3 ng_view, float distance, float cos_in) {
     if (e->triangle_tiles == 0)
         return shade_diffuse(SCENE_ARGS, e->light_count, s->position, n, ng_view,
                              load3g(m->color));
     uint tile = e->triangle_tiles[hit->triangle];
     if (tile == NO_TILE) return (float3)(0.0f);
-    float3 irradiance = sample_caustic_map(e->texels, e->map, e->tiles[tile], s->uv,
+    uint4 t = e->tiles[tile];
+    uint texel = atlas_texel_index(t, s->uv, e->atlas_width);
+    float footprint = footprint_texels(e->pixel_angle, distance, cos_in,
+                                       atlas_area(e->texels, texel));
+    float3 irradiance = sample_caustic_map(e->texels, e->map, t, s->uv, footprint,
                                            e->atlas_width);
     return load3g(m->color) / PI_F * irradiance;
 }
@@ -99,7 +108,7 @@ inline float3 specular_tree(SCENE_PARAMS, const DiffuseEnd* end, uint max_depth,
     ChainRay stack[MAX_SPECULAR_DEPTH + 2];
     uint sp = 0u;
     float3 l = (float3)(0.0f);
-    stack[sp++] = chain_ray(origin, dir, (float3)(1.0f), 0u);
+    stack[sp++] = chain_ray(origin, dir, (float3)(1.0f), 0u, 0.0f);
     while (sp > 0u) {
         ChainRay r = stack[--sp];
         Hit hit;
@@ -114,14 +123,15 @@ inline float3 specular_tree(SCENE_PARAMS, const DiffuseEnd* end, uint max_depth,
         float3 ng_view = entering ? s.geometric_normal : -s.geometric_normal;
         if (m->kind == MATERIAL_DIFFUSE) {
             float3 n = facing_normal(s.shading_normal, r.dir);
-            l += weight * diffuse_end(SCENE_ARGS, end, &hit, &s, m, n, ng_view);
+            l += weight * diffuse_end(SCENE_ARGS, end, &hit, &s, m, n, ng_view, r.dist + hit.t,
+                                      -dot3(r.dir, n));
         } else if (r.depth >= max_depth) {
         } else if (m->kind == MATERIAL_MIRROR) {
             float3 w = weight * load3g(m->color);
             if (max_element3(w) >= min_weight && sp < MAX_SPECULAR_DEPTH + 2) {
                 float3 n = facing_normal(s.shading_normal, r.dir);
                 stack[sp++] = chain_ray(offset_ray_origin(s.position, ng_view),
-                                         reflect(r.dir, n), w, r.depth + 1u);
+                                         reflect(r.dir, n), w, r.depth + 1u, r.dist + hit.t);
             }
         } else {
             float3 facing = facing_normal(s.shading_normal, r.dir);
@@ -129,14 +139,16 @@ inline float3 specular_tree(SCENE_PARAMS, const DiffuseEnd* end, uint max_depth,
             float f = fresnel_dielectric(-dot3(r.dir, facing), eta);
             if (max_element3(weight) * f >= min_weight && sp < MAX_SPECULAR_DEPTH + 2) {
                 stack[sp++] = chain_ray(offset_ray_origin(s.position, ng_view),
-                                         reflect(r.dir, facing), weight * f, r.depth + 1u);
+                                         reflect(r.dir, facing), weight * f, r.depth + 1u,
+                                         r.dist + hit.t);
             }
             float3 t;
             if (refract(r.dir, facing, eta, &t)) {
                 if (max_element3(weight) * (1.0f - f) >= min_weight &&
                     sp < MAX_SPECULAR_DEPTH + 2) {
                     stack[sp++] = chain_ray(offset_ray_origin(s.position, -ng_view),
-                                             normalize3(t), weight * (1.0f - f), r.depth + 1u);
+                                             normalize3(t), weight * (1.0f - f), r.depth + 1u,
+                                             r.dist + hit.t);
                 }
             }
         }

@@ -1,6 +1,8 @@
 // The specular ray tree of a camera ray (backend-cpu direct_light::specular_tree), shared
 // by direct_light and caustic_map_lookup. The including stage defines
-// `vec3 diffuse_end(Hit hit, SurfacePoint s, GpuMaterial m, vec3 n, vec3 ng_view)` first:
+// `vec3 diffuse_end(Hit hit, SurfacePoint s, GpuMaterial m, vec3 n, vec3 ng_view,
+// float distance, float cos_in)` first (distance: the path's length over all its
+// segments; cos_in: between the arriving ray and n):
 // what a diffuse end adds, times the branch's weight (the lights' shading, or the caustic
 // map).
 
@@ -9,6 +11,7 @@ struct ChainRay {
     vec3 dir;
     vec3 weight;
     uint depth;
+    float dist; // distance travelled from the tree's origin to `origin`
 };
 
 // OpenCL's chain_ray(origin, dir, weight, depth) is the struct constructor ChainRay(...)
@@ -22,7 +25,7 @@ precise vec3 specular_tree(uint max_depth, float min_weight, vec3 origin, vec3 d
     ChainRay stack[MAX_SPECULAR_DEPTH + 2u];
     uint sp = 0u;
     vec3 l = vec3(0.0);
-    stack[sp++] = ChainRay(origin, dir, vec3(1.0), 0u);
+    stack[sp++] = ChainRay(origin, dir, vec3(1.0), 0u, 0.0);
     while (sp > 0u) {
         ChainRay r = stack[--sp];
         Hit hit;
@@ -36,14 +39,15 @@ precise vec3 specular_tree(uint max_depth, float min_weight, vec3 origin, vec3 d
         vec3 ng_view = entering ? s.geometric_normal : -s.geometric_normal;
         if (m.kind == MATERIAL_DIFFUSE) {
             vec3 n = facing_normal(s.shading_normal, r.dir);
-            l += weight * diffuse_end(hit, s, m, n, ng_view);
+            precise float dist_in = r.dist + hit.t;
+            l += weight * diffuse_end(hit, s, m, n, ng_view, dist_in, -dot3(r.dir, n));
         } else if (r.depth >= max_depth) {
         } else if (m.kind == MATERIAL_MIRROR) {
             precise vec3 w = weight * m.color.xyz;
             if (max_element3(w) >= min_weight && sp < MAX_SPECULAR_DEPTH + 2u) {
                 vec3 n = facing_normal(s.shading_normal, r.dir);
                 stack[sp++] = ChainRay(offset_ray_origin(s.position, ng_view),
-                                       reflect3(r.dir, n), w, r.depth + 1u);
+                                       reflect3(r.dir, n), w, r.depth + 1u, r.dist + hit.t);
             }
         } else {
             vec3 facing = facing_normal(s.shading_normal, r.dir);
@@ -53,7 +57,8 @@ precise vec3 specular_tree(uint max_depth, float min_weight, vec3 origin, vec3 d
             if (reflected >= min_weight && sp < MAX_SPECULAR_DEPTH + 2u) {
                 precise vec3 w = weight * f;
                 stack[sp++] = ChainRay(offset_ray_origin(s.position, ng_view),
-                                       reflect3(r.dir, facing), w, r.depth + 1u);
+                                       reflect3(r.dir, facing), w, r.depth + 1u,
+                                       r.dist + hit.t);
             }
             vec3 t;
             if (refract3(r.dir, facing, eta, t)) {
@@ -61,7 +66,7 @@ precise vec3 specular_tree(uint max_depth, float min_weight, vec3 origin, vec3 d
                 if (transmitted >= min_weight && sp < MAX_SPECULAR_DEPTH + 2u) {
                     precise vec3 w = weight * (1.0 - f);
                     stack[sp++] = ChainRay(offset_ray_origin(s.position, -ng_view),
-                                           normalize3(t), w, r.depth + 1u);
+                                           normalize3(t), w, r.depth + 1u, r.dist + hit.t);
                 }
             }
         }

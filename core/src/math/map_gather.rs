@@ -174,14 +174,41 @@ pub fn gather_caustic_texel(
     }
 }
 
-/// Bilinear lookup of the caustic map at `uv` on tile `tile` (atlas `atlas_width` texels
-/// wide): the four texels around `uv * side - 0.5`, clamped to the tile, each weighted by
-/// its bilinear weight if covered (`area(i) > 0`), renormalised by the covered weights
-/// (so that texels outside the receiver's UV triangles, which hold no irradiance, do not
-/// darken its edges and seams). `map(i)` is texel `i`'s irradiance (W/m^2).
+/// Widest footprint (texels a side) the lookup averages; wider footprints are averaged
+/// over this many (a distant receiver then aliases, as a texture without mip levels).
+pub const MAX_FOOTPRINT_TEXELS: f32 = 32.0;
+
+/// Side (atlas texels) of a pixel's footprint on a receiver: the pixel's cone of angular
+/// size `pixel_angle` (radians, `2 tan(fov_y / 2) / height`) at `distance` along the camera
+/// path (scene units, summed over its segments: a ray cone unfolded through mirrors and
+/// glass, their curvature ignored) covers `(pixel_angle distance)^2 / cos` of the surface
+/// (`cos` between the arriving ray and the normal, floored at 1e-3), i.e. that area over
+/// `texel_area` texels, as a square.
+#[inline]
+pub fn footprint_texels(pixel_angle: f32, distance: f32, cos: f32, texel_area: f32) -> f32 {
+    let w = pixel_angle * distance;
+    let area = w * w / cos.abs().max(1e-3);
+    if texel_area > 0.0 {
+        (area / texel_area).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The caustic map at `uv` on tile `tile` (atlas `atlas_width` texels wide), filtered over
+/// a pixel's footprint of `footprint` texels a side ([`footprint_texels`]): where it is at
+/// most 1 texel, bilinear over the four texels around `uv * side - 0.5` (clamped to the
+/// tile), each weighted by its bilinear weight if covered (`area(i) > 0`) and renormalised
+/// by the covered weights; where it is wider, the mean of the covered texels whose centres
+/// lie in the square `[f - side / 2, f + side / 2)` (at most [`MAX_FOOTPRINT_TEXELS`] a
+/// side) around `f = uv * side_of_tile - 0.5`, so that a
+/// caustic sharper than a pixel is integrated over the pixel as a screen-space deposit
+/// integrates it, not point-sampled. Texels outside the receiver's UV triangles hold no
+/// irradiance and are left out of both. `map(i)` is texel `i`'s irradiance (W/m^2).
 pub fn sample_caustic_map(
     tile: [u32; 4],
     uv: Vec2,
+    footprint: f32,
     atlas_width: u32,
     map: impl Fn(u32) -> Vec3,
     area: impl Fn(u32) -> f32,
@@ -189,6 +216,27 @@ pub fn sample_caustic_map(
     let s = tile[2] as f32;
     let fx = (uv.x * s - 0.5).clamp(0.0, s - 1.0);
     let fy = (uv.y * s - 0.5).clamp(0.0, s - 1.0);
+    if footprint > 1.0 {
+        let h = 0.5 * footprint.min(MAX_FOOTPRINT_TEXELS);
+        let x0 = (fx - h).ceil().max(0.0) as u32;
+        let x1 = (((fx + h).ceil() - 1.0).min(s - 1.0)) as u32;
+        let y0 = (fy - h).ceil().max(0.0) as u32;
+        let y1 = (((fy + h).ceil() - 1.0).min(s - 1.0)) as u32;
+        let mut sum = Vec3::ZERO;
+        let mut n = 0u32;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let i = (tile[1] + y) * atlas_width + tile[0] + x;
+                if area(i) > 0.0 {
+                    sum += map(i);
+                    n += 1;
+                }
+            }
+        }
+        if n > 0 {
+            return sum / n as f32;
+        }
+    }
     let (x0, y0) = (fx.floor(), fy.floor());
     let (wx, wy) = (fx - x0, fy - y0);
     let (ix0, iy0) = (x0 as u32, y0 as u32);
@@ -322,15 +370,39 @@ mod tests {
             .map(|i| if i % 8 == 5 { 0.0 } else { 1.0 })
             .collect();
         for (u, v) in [(0.0, 0.0), (0.3, 0.7), (0.8, 0.5), (0.5, 1.0)] {
-            let e = sample_caustic_map(
-                tile,
-                Vec2::new(u, v),
-                w,
-                |_| Vec3::splat(2.0),
-                |i| area[i as usize],
-            );
-            assert_eq!(e, Vec3::splat(2.0));
+            for fp in [0.0, 1.0, 2.5, 7.0, 100.0] {
+                let e = sample_caustic_map(
+                    tile,
+                    Vec2::new(u, v),
+                    fp,
+                    w,
+                    |_| Vec3::splat(2.0),
+                    |i| area[i as usize],
+                );
+                assert_eq!(e, Vec3::splat(2.0), "uv ({u}, {v}), footprint {fp}");
+            }
         }
         assert_eq!(atlas_texel_index(tile, Vec2::new(1.0, 0.0), w), 8 + 2 + 3);
+    }
+
+    #[test]
+    fn a_wide_footprint_integrates_a_one_texel_caustic() {
+        // all the flux in one texel of a 16x16 tile: a footprint of 4 texels averages it
+        // over the 4x4 texels around uv, as a pixel of that size would see it
+        let (w, tile) = (16u32, [0u32, 0, 16, 0]);
+        let map = |i: u32| {
+            if i == 8 * 16 + 8 {
+                Vec3::splat(16.0)
+            } else {
+                Vec3::ZERO
+            }
+        };
+        let uv = Vec2::new(8.5 / 16.0, 8.5 / 16.0);
+        let point = sample_caustic_map(tile, uv, 1.0, w, map, |_| 1.0);
+        let wide = sample_caustic_map(tile, uv, 4.0, w, map, |_| 1.0);
+        assert_eq!(point, Vec3::splat(16.0));
+        // texel centres in [6, 10): 4x4 texels
+        assert_eq!(wide, Vec3::splat(1.0));
+        assert!((footprint_texels(0.01, 2.0, 1.0, 1e-4) - 2.0).abs() < 1e-5);
     }
 }
