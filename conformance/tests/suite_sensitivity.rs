@@ -10,13 +10,14 @@
 //! - a backend with a real but small fault fails the comparison that covers the kernel:
 //!   depth written as distance, 3% of the photons lost, photon flux 2% low, one fixed-point
 //!   unit lost per texel, radiance 1e-4 high, a summed-area table one photon off, the
-//!   density gather's flux 1e-4 high, one ulp in the composite, a photon kernel
+//!   density gather's flux 1e-4 high, one ulp in the composite, the caustic atlas one unit
+//!   low, the caustic map's gather 1e-4 high, its lookup 1e-3 high, a photon kernel
 //!   that ignores its compiled variant switches, and so on.
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
-    check_composite, check_density_gather, check_deposit, check_direct, check_gather,
-    check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
+    check_caustic_map, check_composite, check_density_gather, check_deposit, check_direct,
+    check_gather, check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -28,8 +29,9 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
+    DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrimaryGbuffer,
+    ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::rng::pcg_hash;
@@ -67,6 +69,12 @@ enum Mutation {
     DirectHigh,
     /// `composite` one ulp off in one channel.
     CompositeUlp,
+    /// `deposit_atlas` loses one fixed-point unit of red in every atlas texel it touches.
+    AtlasDepositOffByOne,
+    /// `gather_caustic_map` 1e-4 too high.
+    MapGatherHigh,
+    /// `caustic_map_lookup` 1e-3 too high.
+    MapLookupHigh,
     /// `trace_photons` runs a compiled variant without dispersion and absorption, whatever
     /// the frame plan asked for (a backend that ignores the variant switches).
     VariantWithoutFeatures,
@@ -127,6 +135,9 @@ impl Mutant {
             Step::Kernel(k) => k.modify(|k| match k {
                 Kernel::PrimaryGbuffer(PrimaryGbuffer { camera, .. }) => nudge_camera(camera),
                 Kernel::DirectLight(DirectLight { params, .. }) => nudge_camera(&mut params.camera),
+                Kernel::CausticMapLookup(CausticMapLookup { params, .. }) => {
+                    nudge_camera(&mut params.camera)
+                }
                 Kernel::TracePhotons(TracePhotons { params, .. }) => {
                     nudge_all(&mut params.origin);
                     nudge_all(&mut params.axis);
@@ -291,6 +302,20 @@ impl Mutant {
             (Mutation::DensityGatherHigh, Kernel::DensityGather(DensityGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
+            (Mutation::AtlasDepositOffByOne, Kernel::DepositAtlas(DepositAtlas { atlas, .. })) => {
+                let (k, _) = deposit_word(0, 0);
+                self.modify::<u32>(atlas.planes[k].id, |m| {
+                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
+                        t[0] -= 1;
+                    }
+                })
+            }
+            (Mutation::MapGatherHigh, Kernel::GatherCausticMap(GatherCausticMap { out, .. })) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
+            }
+            (Mutation::MapLookupHigh, Kernel::CausticMapLookup(CausticMapLookup { out, .. })) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
+            }
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
@@ -368,6 +393,10 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
         ),
         ("direct_light", Box::new(check_direct)),
         ("composite", Box::new(|_, i, r, c| check_composite(i, r, c))),
+        (
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            Box::new(check_caustic_map),
+        ),
     ]
 }
 
@@ -445,6 +474,18 @@ fn each_fault_fails_the_check_of_its_kernel() {
         ),
         (Mutation::DirectHigh, "direct_light"),
         (Mutation::CompositeUlp, "composite"),
+        (
+            Mutation::AtlasDepositOffByOne,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::MapGatherHigh,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::MapLookupHigh,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
     ] {
         let mut report = Report::new(kernel);
         let mut cand = Mutant::candidate(mutation);
