@@ -22,6 +22,10 @@
 #ifndef SURFACE_STORE
 #define SURFACE_STORE 0
 #endif
+// Seed 001's deterministic splits (core's TraceVariant::fresnel_split).
+#ifndef FRESNEL_SPLIT
+#define FRESNEL_SPLIT 0
+#endif
 
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
@@ -122,6 +126,190 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
     return PATH_BOUNCE_LIMIT;
 }
 
+// Adds one path end to the photon buffer and the work-group's counters.
+inline void record_end(int end, const Photon* ph, float flux_quantum, __global Photon* photons,
+                       uint photon_capacity, volatile __global uint* photon_count,
+                       __local uint* lc) {
+    if (end == PATH_STORED) {
+        uint slot = atomic_inc(photon_count);
+        // The host never dispatches more photons than the buffer holds.
+        if (slot < photon_capacity) photons[slot] = *ph;
+        atomic_inc(&lc[COUNTER_STORED]);
+        for (uint ch = 0u; ch < 3u; ch++) {
+            uint units = quantize(ph->flux[ch], flux_quantum).units;
+            if (units != 0u) atomic_add_u64_local(&lc[COUNTER_STORED_FLUX + 2u * ch], units);
+        }
+    } else {
+        atomic_inc(&lc[end == PATH_NO_SPECULAR  ? COUNTER_NO_SPECULAR
+                      : end == PATH_ESCAPED     ? COUNTER_ESCAPED
+                      : end == PATH_NEGLIGIBLE  ? COUNTER_NEGLIGIBLE
+                                                : COUNTER_BOUNCE_LIMIT]);
+    }
+}
+
+// The photon a path stores at surface `s` of `hit` (world or texture space).
+inline Photon stored_photon(const SurfacePoint* s, const Hit* hit, float3 flux, float3 dir) {
+    Photon ph;
+    ph.hit_distance = hit->t;
+    store3(ph.flux, flux);
+    if (SURFACE_STORE) {
+        store3(ph.position, (float3)(s->uv.x, s->uv.y, 0.0f));
+        ph.direction = hit->triangle;
+    } else {
+        store3(ph.position, s->position);
+        ph.direction = pack_unit_vector(dir);
+    }
+    return ph;
+}
+
+typedef struct {
+    float3 origin;
+    float3 dir;
+    float3 flux;
+    uint bounce;
+    int channel;
+} Branch;
+
+inline Branch branch(float3 origin, float3 dir, float3 flux, uint bounce, int channel) {
+    Branch b;
+    b.origin = origin;
+    b.dir = dir;
+    b.flux = flux;
+    b.bounce = bounce;
+    b.channel = channel;
+    return b;
+}
+
+#define RECORD(end, ph) record_end(end, ph, p->flux_quantum, photons, photon_capacity, photon_count, lc)
+
+// One emitted photon with seed 001's deterministic splits (backend-cpu
+// trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
+// end; returns the ray segments traced, writes the branches added.
+inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint index,
+                               __global Photon* photons, uint photon_capacity,
+                               volatile __global uint* photon_count, __local uint* lc,
+                               uint* splits) {
+    float3 origin, dir, flux;
+    emit_photon(lights, p, index, &origin, &dir, &flux);
+    float emitted_max = max_element3(load3g(p->photon_flux));
+    float min_power = p->photon_flux[3] * emitted_max;
+    Photon none;
+    *splits = 0u;
+    if (max_element3(flux) <= 0.0f || max_element3(flux) < min_power) {
+        RECORD(PATH_NEGLIGIBLE, &none);
+        return 0u;
+    }
+    uint budget = clamp(p->split_budget, 1u, (uint)MAX_SPLIT_BRANCHES);
+    Branch stack[MAX_SPLIT_BRANCHES];
+    uint sp = 0u;
+    stack[sp++] = branch(origin, dir, flux, 0u, -1);
+    uint rays = 0u, branches = 1u;
+    while (sp > 0u) {
+        Branch b = stack[--sp];
+        for (;;) {
+            if (b.bounce >= p->max_bounces) {
+                RECORD(PATH_BOUNCE_LIMIT, &none);
+                break;
+            }
+            rays++;
+            Hit hit;
+            if (!closest_hit(nodes, node_count, vertices, triangles, b.origin, b.dir, INFINITY, &hit)) {
+                RECORD(PATH_ESCAPED, &none);
+                break;
+            }
+            SurfacePoint s = hit_surface(vertices, triangles, &hit);
+            __global const GpuMaterial* m = &materials[triangles[hit.triangle].material];
+            bool entering = dot3(b.dir, s.geometric_normal) < 0.0f;
+            if (ABSORPTION && m->kind == MATERIAL_DIELECTRIC && !entering)
+                b.flux *= beer_lambert(load3g(m->absorption), hit.t);
+            uint bounce = b.bounce;
+            b.bounce += 1u;
+            float3 facing = facing_normal(s.shading_normal, b.dir);
+            if (m->kind == MATERIAL_DIFFUSE) {
+                if (bounce == 0u) {
+                    RECORD(PATH_NO_SPECULAR, &none);
+                } else {
+                    Photon ph = stored_photon(&s, &hit, b.flux, b.dir);
+                    RECORD(PATH_STORED, &ph);
+                }
+                break;
+            }
+            if (m->kind == MATERIAL_MIRROR) {
+                b.flux *= load3g(m->color);
+                b.dir = normalize3(reflect(b.dir, facing));
+                if (max_element3(b.flux) < min_power || max_element3(b.flux) <= 0.0f) {
+                    RECORD(PATH_NEGLIGIBLE, &none);
+                    break;
+                }
+                float3 side = dot3(b.dir, s.geometric_normal) > 0.0f ? s.geometric_normal
+                                                                     : -s.geometric_normal;
+                b.origin = offset_ray_origin(s.position, side);
+                continue;
+            }
+            // a dielectric: the lanes this surface continues, each split by its Fresnel
+            Branch lanes[3] = {b, b, b};
+            uint n_lanes = 1u;
+            if (DISPERSION && m->cauchy_b != 0.0f && b.channel < 0) {
+                if (branches + 2u <= budget) {
+                    branches += 2u;
+                    n_lanes = 3u;
+                    lanes[0].flux = (float3)(b.flux.x, 0.0f, 0.0f);
+                    lanes[0].channel = 0;
+                    lanes[1].flux = (float3)(0.0f, b.flux.y, 0.0f);
+                    lanes[1].channel = 1;
+                    lanes[2].flux = (float3)(0.0f, 0.0f, b.flux.z);
+                    lanes[2].channel = 2;
+                } else {
+                    int c = min((int)(random_f32(p->seed, index, bounce, 3u) * 3.0f), 2);
+                    float one[3] = {0.0f, 0.0f, 0.0f};
+                    one[c] = (c == 0 ? b.flux.x : c == 1 ? b.flux.y : b.flux.z) * 3.0f;
+                    lanes[0].flux = load3(one);
+                    lanes[0].channel = c;
+                }
+            }
+            for (uint k = 0u; k < n_lanes; k++) {
+                Branch lane = lanes[k];
+                float ior = m->ior;
+                if (DISPERSION && m->cauchy_b != 0.0f && lane.channel >= 0)
+                    ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[lane.channel]);
+                float eta = entering ? 1.0f / ior : ior;
+                float f = fresnel_dielectric(-dot3(b.dir, facing), eta);
+                float3 reflected = reflect(b.dir, facing);
+                float3 cdir[2] = {reflected, reflected};
+                float3 cflux[2] = {lane.flux, lane.flux};
+                uint n_children = 1u;
+                float3 t;
+                if (refract(b.dir, facing, eta, &t)) {
+                    if (branches < budget) {
+                        branches += 1u;
+                        cflux[0] = lane.flux * f;
+                        cdir[1] = normalize3(t);
+                        cflux[1] = lane.flux * (1.0f - f);
+                        n_children = 2u;
+                    } else if (random_f32(p->seed, index, bounce, 2u) >= f) {
+                        cdir[0] = normalize3(t);
+                    }
+                }
+                for (uint j = 0u; j < n_children; j++) {
+                    float3 cf = cflux[j];
+                    if (max_element3(cf) < min_power || max_element3(cf) <= 0.0f) {
+                        RECORD(PATH_NEGLIGIBLE, &none);
+                        continue;
+                    }
+                    float3 side = dot3(cdir[j], s.geometric_normal) > 0.0f ? s.geometric_normal
+                                                                          : -s.geometric_normal;
+                    if (sp < MAX_SPLIT_BRANCHES)
+                        stack[sp++] = branch(offset_ray_origin(s.position, side), cdir[j], cf,
+                                             b.bounce, lane.channel);
+                }
+            }
+            break;
+        }
+    }
+    *splits = branches - 1u;
+    return rays;
+}
+
 __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
                             __global Photon* photons, uint photon_capacity,
                             volatile __global uint* photon_count,
@@ -130,24 +318,18 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < p->count) {
-        Photon ph;
-        uint rays;
-        int end = trace_photon(SCENE_ARGS, p, p->first + i, &ph, &rays);
-        atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
-        if (end == PATH_STORED) {
-            uint slot = atomic_inc(photon_count);
-            // The host never dispatches more photons than the buffer holds.
-            if (slot < photon_capacity) photons[slot] = ph;
-            atomic_inc(&lc[COUNTER_STORED]);
-            for (uint ch = 0u; ch < 3u; ch++) {
-                uint units = quantize(ph.flux[ch], p->flux_quantum).units;
-                if (units != 0u) atomic_add_u64_local(&lc[COUNTER_STORED_FLUX + 2u * ch], units);
-            }
+        if (FRESNEL_SPLIT) {
+            uint splits;
+            uint rays = trace_photon_split(SCENE_ARGS, p, p->first + i, photons, photon_capacity,
+                                           photon_count, lc, &splits);
+            atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
+            atomic_add(&lc[COUNTER_SPLITS], splits);
         } else {
-            atomic_inc(&lc[end == PATH_NO_SPECULAR  ? COUNTER_NO_SPECULAR
-                          : end == PATH_ESCAPED     ? COUNTER_ESCAPED
-                          : end == PATH_NEGLIGIBLE  ? COUNTER_NEGLIGIBLE
-                                                    : COUNTER_BOUNCE_LIMIT]);
+            Photon ph;
+            uint rays;
+            int end = trace_photon(SCENE_ARGS, p, p->first + i, &ph, &rays);
+            atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
+            RECORD(end, &ph);
         }
     }
     counters_flush_local(lc, counters);

@@ -16,6 +16,10 @@ override ABSORPTION: bool = true;
 // Store policy (core's photon_store): false stores world space (Sspm), true the hit's uv
 // and triangle (CausticMap's atlas).
 override SURFACE_STORE: bool = false;
+// Seed 001's deterministic splits (core's TraceVariant::fresnel_split): both Fresnel
+// branches and three one-channel branches at the first dispersive surface, up to
+// params.split_budget branches per photon.
+override FRESNEL_SPLIT: bool = false;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -139,40 +143,208 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
     return PATH_BOUNCE_LIMIT;
 }
 
+// The photon a path stores at surface `s` of `hit` (world or texture space).
+fn stored_photon(s: SurfacePoint, hit: Hit, flux: vec3<f32>, dir: vec3<f32>) -> Photon {
+    var ph: Photon;
+    ph.hit_distance = hit.t;
+    ph.flux = flux;
+    if (SURFACE_STORE) {
+        ph.position = vec3<f32>(s.uv.x, s.uv.y, 0.0);
+        ph.direction = hit.triangle;
+    } else {
+        ph.position = s.position;
+        ph.direction = pack_unit_vector(dir);
+    }
+    return ph;
+}
+
+// Adds one path end to the photon buffer and the work-group's counters.
+fn record_end(end: i32, ph: Photon, flux_quantum: f32) {
+    if (end == PATH_STORED) {
+        let slot = atomicAdd(&photon_count[0], 1u);
+        // The host never dispatches more photons than the buffer holds.
+        if (slot < arrayLength(&photons)) {
+            photons[slot] = ph;
+        }
+        atomicAdd(&lc[COUNTER_STORED], 1u);
+        for (var ch = 0u; ch < 3u; ch++) {
+            let units = quantize(ph.flux[ch], flux_quantum).units;
+            if (units != 0u) {
+                atomic_add_u64_local(COUNTER_STORED_FLUX + 2u * ch, units);
+            }
+        }
+    } else {
+        var word = COUNTER_BOUNCE_LIMIT;
+        if (end == PATH_NO_SPECULAR) {
+            word = COUNTER_NO_SPECULAR;
+        } else if (end == PATH_ESCAPED) {
+            word = COUNTER_ESCAPED;
+        } else if (end == PATH_NEGLIGIBLE) {
+            word = COUNTER_NEGLIGIBLE;
+        }
+        atomicAdd(&lc[word], 1u);
+    }
+}
+
+struct Branch {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    flux: vec3<f32>,
+    bounce: u32,
+    channel: i32,
+}
+
+// One emitted photon with seed 001's deterministic splits (backend-cpu
+// trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
+// end; returns the ray segments traced, writes the branches added.
+fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) -> u32 {
+    var origin: vec3<f32>;
+    var dir: vec3<f32>;
+    var flux: vec3<f32>;
+    emit_photon(p, index, &origin, &dir, &flux);
+    let emitted_max = max_element3(p.photon_flux.xyz);
+    let min_power = p.photon_flux.w * emitted_max;
+    var none: Photon;
+    *splits = 0u;
+    if (max_element3(flux) <= 0.0 || max_element3(flux) < min_power) {
+        record_end(PATH_NEGLIGIBLE, none, p.flux_quantum);
+        return 0u;
+    }
+    let budget = clamp(p.split_budget, 1u, MAX_SPLIT_BRANCHES);
+    var stack: array<Branch, MAX_SPLIT_BRANCHES>;
+    var sp = 0u;
+    stack[sp] = Branch(origin, dir, flux, 0u, -1);
+    sp += 1u;
+    var rays = 0u;
+    var branches = 1u;
+    while (sp > 0u) {
+        sp -= 1u;
+        var b = stack[sp];
+        loop {
+            if (b.bounce >= p.max_bounces) {
+                record_end(PATH_BOUNCE_LIMIT, none, p.flux_quantum);
+                break;
+            }
+            rays += 1u;
+            var hit: Hit;
+            if (!closest_hit(b.origin, b.dir, NO_T_MAX, &hit)) {
+                record_end(PATH_ESCAPED, none, p.flux_quantum);
+                break;
+            }
+            let s = hit_surface(hit);
+            let m = materials[triangles[hit.triangle].material];
+            let entering = dot3(b.dir, s.geometric_normal) < 0.0;
+            if (ABSORPTION && m.kind == MATERIAL_DIELECTRIC && !entering) {
+                b.flux *= beer_lambert(m.absorption.xyz, hit.t);
+            }
+            let bounce = b.bounce;
+            b.bounce += 1u;
+            let facing = facing_normal(s.shading_normal, b.dir);
+            if (m.kind == MATERIAL_DIFFUSE) {
+                if (bounce == 0u) {
+                    record_end(PATH_NO_SPECULAR, none, p.flux_quantum);
+                } else {
+                    record_end(PATH_STORED, stored_photon(s, hit, b.flux, b.dir), p.flux_quantum);
+                }
+                break;
+            }
+            if (m.kind == MATERIAL_MIRROR) {
+                b.flux *= m.color.xyz;
+                b.dir = normalize3(reflect(b.dir, facing));
+                if (max_element3(b.flux) < min_power || max_element3(b.flux) <= 0.0) {
+                    record_end(PATH_NEGLIGIBLE, none, p.flux_quantum);
+                    break;
+                }
+                let side = select(-s.geometric_normal, s.geometric_normal,
+                                  dot3(b.dir, s.geometric_normal) > 0.0);
+                b.origin = offset_ray_origin(s.position, side);
+                continue;
+            }
+            // a dielectric: the lanes this surface continues (one per channel at the first
+            // dispersive surface while the budget allows), each split by its own Fresnel
+            var lanes = array<Branch, 3>(b, b, b);
+            var n_lanes = 1u;
+            if (DISPERSION && m.cauchy_b != 0.0 && b.channel < 0) {
+                if (branches + 2u <= budget) {
+                    branches += 2u;
+                    n_lanes = 3u;
+                    lanes[0].flux = vec3<f32>(b.flux.x, 0.0, 0.0);
+                    lanes[0].channel = 0;
+                    lanes[1].flux = vec3<f32>(0.0, b.flux.y, 0.0);
+                    lanes[1].channel = 1;
+                    lanes[2].flux = vec3<f32>(0.0, 0.0, b.flux.z);
+                    lanes[2].channel = 2;
+                } else {
+                    let c = min(i32(random_f32(p.seed, index, bounce, 3u) * 3.0), 2);
+                    var one = vec3<f32>(0.0, 0.0, 0.0);
+                    one[c] = select(select(b.flux.z, b.flux.y, c == 1), b.flux.x, c == 0) * 3.0;
+                    lanes[0].flux = one;
+                    lanes[0].channel = c;
+                }
+            }
+            for (var k = 0u; k < n_lanes; k++) {
+                let lane = lanes[k];
+                var ior = m.ior;
+                if (DISPERSION && m.cauchy_b != 0.0 && lane.channel >= 0) {
+                    ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[lane.channel]);
+                }
+                let eta = select(ior, 1.0 / ior, entering);
+                let f = fresnel_dielectric(-dot3(b.dir, facing), eta);
+                let reflected = reflect(b.dir, facing);
+                var cdir = array<vec3<f32>, 2>(reflected, reflected);
+                var cflux = array<vec3<f32>, 2>(lane.flux, lane.flux);
+                var n_children = 1u;
+                var t: vec3<f32>;
+                if (refract(b.dir, facing, eta, &t)) {
+                    if (branches < budget) {
+                        branches += 1u;
+                        cflux[0] = lane.flux * f;
+                        cdir[1] = normalize3(t);
+                        cflux[1] = lane.flux * (1.0 - f);
+                        n_children = 2u;
+                    } else if (random_f32(p.seed, index, bounce, 2u) >= f) {
+                        cdir[0] = normalize3(t);
+                    }
+                }
+                for (var j = 0u; j < n_children; j++) {
+                    let cf = cflux[j];
+                    if (max_element3(cf) < min_power || max_element3(cf) <= 0.0) {
+                        record_end(PATH_NEGLIGIBLE, none, p.flux_quantum);
+                        continue;
+                    }
+                    let side = select(-s.geometric_normal, s.geometric_normal,
+                                      dot3(cdir[j], s.geometric_normal) > 0.0);
+                    if (sp < MAX_SPLIT_BRANCHES) {
+                        stack[sp] = Branch(offset_ray_origin(s.position, side), cdir[j], cf,
+                                           b.bounce, lane.channel);
+                        sp += 1u;
+                    }
+                }
+            }
+            break;
+        }
+    }
+    *splits = branches - 1u;
+    return rays;
+}
+
 // `li`: local invocation index. Called by every invocation of the group (the counter
 // helpers hold barriers); invocations past the batch only take part in them.
 fn trace_photons(i: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
-    let photon_capacity = arrayLength(&photons);
     if (i < p.count) {
-        var ph: Photon;
-        var rays: u32;
-        let end = trace_photon(p, p.first + i, &ph, &rays);
-        atomic_add_u64_local(COUNTER_RAYS, rays);
-        if (end == PATH_STORED) {
-            let slot = atomicAdd(&photon_count[0], 1u);
-            // The host never dispatches more photons than the buffer holds.
-            if (slot < photon_capacity) {
-                photons[slot] = ph;
-            }
-            atomicAdd(&lc[COUNTER_STORED], 1u);
-            for (var ch = 0u; ch < 3u; ch++) {
-                let units = quantize(ph.flux[ch], p.flux_quantum).units;
-                if (units != 0u) {
-                    atomic_add_u64_local(COUNTER_STORED_FLUX + 2u * ch, units);
-                }
-            }
+        if (FRESNEL_SPLIT) {
+            var splits: u32;
+            let rays = trace_photon_split(p, p.first + i, &splits);
+            atomic_add_u64_local(COUNTER_RAYS, rays);
+            atomicAdd(&lc[COUNTER_SPLITS], splits);
         } else {
-            var word = COUNTER_BOUNCE_LIMIT;
-            if (end == PATH_NO_SPECULAR) {
-                word = COUNTER_NO_SPECULAR;
-            } else if (end == PATH_ESCAPED) {
-                word = COUNTER_ESCAPED;
-            } else if (end == PATH_NEGLIGIBLE) {
-                word = COUNTER_NEGLIGIBLE;
-            }
-            atomicAdd(&lc[word], 1u);
+            var ph: Photon;
+            var rays: u32;
+            let end = trace_photon(p, p.first + i, &ph, &rays);
+            atomic_add_u64_local(COUNTER_RAYS, rays);
+            record_end(end, ph, p.flux_quantum);
         }
     }
     counters_flush_local(li);

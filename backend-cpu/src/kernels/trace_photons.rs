@@ -25,16 +25,18 @@
 //! without a feature is only run on scenes without it (the frame plan's guarantee).
 
 use super::Counters;
-use crate::traversal::SceneView;
+use crate::traversal::{Hit, SceneView};
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
-    counter, emission_kind, light_kind, material_kind, photon_store, Photon, TraceParams,
+    counter, emission_kind, light_kind, material_kind, photon_store, Photon, SurfacePoint,
+    TraceParams, MAX_SPLIT_BRANCHES,
 };
 use caustica_core::kernels::TraceVariant;
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::optics::{
-    beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
+    beer_lambert, cauchy_ior, dielectric_scatter, fresnel_dielectric, reflect, refract,
+    CHANNEL_WAVELENGTH_UM,
 };
 use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::rng::random_f32;
@@ -74,6 +76,14 @@ pub fn trace_photons(scene: &SceneView, p: &TraceParams, variant: TraceVariant) 
     } else {
         photon_store::WORLD
     };
+    if variant.fresnel_split {
+        return match (variant.dispersion, variant.absorption) {
+            (false, false) => split_batch::<false, false>(scene, p, s),
+            (false, true) => split_batch::<false, true>(scene, p, s),
+            (true, false) => split_batch::<true, false>(scene, p, s),
+            (true, true) => split_batch::<true, true>(scene, p, s),
+        };
+    }
     match (variant.dielectric, variant.dispersion, variant.absorption) {
         (false, false, false) => trace_batch::<false, false, false>(scene, p, s),
         (false, false, true) => trace_batch::<false, false, true>(scene, p, s),
@@ -84,6 +94,246 @@ pub fn trace_photons(scene: &SceneView, p: &TraceParams, variant: TraceVariant) 
         (true, true, false) => trace_batch::<true, true, false>(scene, p, s),
         (true, true, true) => trace_batch::<true, true, true>(scene, p, s),
     }
+}
+
+/// Adds one path end to the batch's photons and counters.
+fn count_end(end: PathEnd, p: &TraceParams, photons: &mut Vec<Photon>, counters: &mut Counters) {
+    match end {
+        PathEnd::Stored(ph) => {
+            counters.bump(counter::STORED);
+            for ch in 0..3 {
+                counters.words[counter::STORED_FLUX + 2 * ch] +=
+                    quantize(ph.flux[ch], p.flux_quantum).units as u64;
+            }
+            photons.push(ph);
+        }
+        PathEnd::NoSpecular => counters.bump(counter::NO_SPECULAR),
+        PathEnd::Escaped => counters.bump(counter::ESCAPED),
+        PathEnd::Negligible => counters.bump(counter::NEGLIGIBLE),
+        PathEnd::BounceLimit => counters.bump(counter::BOUNCE_LIMIT),
+    }
+}
+
+/// The batch with the deterministic splits ([`trace_photon_split`]).
+fn split_batch<const DISPERSION: bool, const ABSORPTION: bool>(
+    scene: &SceneView,
+    p: &TraceParams,
+    store: u32,
+) -> TraceResult {
+    const CHUNK: u32 = 1024;
+    let chunks = p.count.div_ceil(CHUNK);
+    let parts: Vec<(Vec<Photon>, Counters)> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut photons = Vec::new();
+            let mut counters = Counters::default();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(p.count) {
+                let (rays, splits) = trace_photon_split::<DISPERSION, ABSORPTION>(
+                    scene,
+                    p,
+                    p.first + i,
+                    store,
+                    &mut |end| count_end(end, p, &mut photons, &mut counters),
+                );
+                counters.words[counter::RAYS] += rays as u64;
+                counters.words[counter::SPLITS] += splits as u64;
+            }
+            (photons, counters)
+        })
+        .collect();
+    let mut photons = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
+    let mut counters = Counters::default();
+    for (ph, c) in parts {
+        photons.extend(ph);
+        counters = counters.merge(c);
+    }
+    TraceResult { photons, counters }
+}
+
+/// A branch of a split photon: where it continues, its flux, the segments traced so far
+/// and its colour channel (-1: all three).
+#[derive(Clone, Copy, Debug)]
+struct Branch {
+    origin: Vec3,
+    dir: Vec3,
+    flux: Vec3,
+    bounce: u32,
+    channel: i32,
+}
+
+/// The photon a path stores at surface `s` of `hit` (world or texture space).
+fn stored_photon(store: u32, s: &SurfacePoint, hit: &Hit, flux: Vec3, dir: Vec3) -> Photon {
+    if store == photon_store::SURFACE {
+        Photon {
+            position: [s.uv.x, s.uv.y, 0.0],
+            hit_distance: hit.t,
+            flux: flux.to_array(),
+            direction: hit.triangle,
+        }
+    } else {
+        Photon {
+            position: s.position.to_array(),
+            hit_distance: hit.t,
+            flux: flux.to_array(),
+            direction: pack_unit_vector(dir),
+        }
+    }
+}
+
+/// One emitted photon with seed 001's deterministic splits (the variant's `FRESNEL_SPLIT`):
+/// at a dielectric both the reflected branch (flux x R, exact Fresnel) and the refracted
+/// one (x (1 - R)) go on (total internal reflection: the reflected one with all the flux);
+/// at the first dispersive surface three branches go on, one per colour channel with that
+/// channel's flux and Cauchy IOR (each then splits at this surface by its own Fresnel).
+/// Branches are walked depth first (last pushed, first popped; children pushed reflected
+/// first); once `split_budget` branches exist, further interactions make Sspm's stochastic
+/// choice instead (same random dimensions: bounce b dim 2 Fresnel, dim 3 channel), so one
+/// photon stores at most `split_budget` photons. Calls `on_end` for every branch's end;
+/// returns the ray segments traced and the branches added.
+pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
+    scene: &SceneView,
+    p: &TraceParams,
+    index: u32,
+    store: u32,
+    on_end: &mut impl FnMut(PathEnd),
+) -> (u32, u32) {
+    let (origin, dir, flux) = emit_photon(scene, p, index);
+    let emitted_max = Vec3::from_slice(&p.photon_flux[..3]).max_element();
+    let min_power = p.photon_flux[3] * emitted_max;
+    if flux.max_element() <= 0.0 || flux.max_element() < min_power {
+        on_end(PathEnd::Negligible);
+        return (0, 0);
+    }
+    let budget = p.split_budget.clamp(1, MAX_SPLIT_BRANCHES);
+    let mut stack = vec![Branch {
+        origin,
+        dir,
+        flux,
+        bounce: 0,
+        channel: -1,
+    }];
+    let (mut rays, mut branches) = (0u32, 1u32);
+    'branch: while let Some(mut b) = stack.pop() {
+        loop {
+            if b.bounce >= p.max_bounces {
+                on_end(PathEnd::BounceLimit);
+                continue 'branch;
+            }
+            rays += 1;
+            let Some(hit) = scene.closest_hit(b.origin, b.dir, f32::INFINITY) else {
+                on_end(PathEnd::Escaped);
+                continue 'branch;
+            };
+            let (s, m) = scene.surface(&hit);
+            let entering = b.dir.dot(s.geometric_normal) < 0.0;
+            if ABSORPTION && m.kind == material_kind::DIELECTRIC && !entering {
+                b.flux *= beer_lambert(Vec3::from_slice(&m.absorption[..3]), hit.t);
+            }
+            let bounce = b.bounce;
+            b.bounce += 1;
+            let facing = if s.shading_normal.dot(b.dir) > 0.0 {
+                -s.shading_normal
+            } else {
+                s.shading_normal
+            };
+            match m.kind {
+                material_kind::DIFFUSE => {
+                    on_end(if bounce == 0 {
+                        PathEnd::NoSpecular
+                    } else {
+                        PathEnd::Stored(stored_photon(store, &s, &hit, b.flux, b.dir))
+                    });
+                    continue 'branch;
+                }
+                material_kind::MIRROR => {
+                    b.flux *= Vec3::from_slice(&m.color[..3]);
+                    b.dir = reflect(b.dir, facing).normalize();
+                    if b.flux.max_element() < min_power || b.flux.max_element() <= 0.0 {
+                        on_end(PathEnd::Negligible);
+                        continue 'branch;
+                    }
+                    let side = if b.dir.dot(s.geometric_normal) > 0.0 {
+                        s.geometric_normal
+                    } else {
+                        -s.geometric_normal
+                    };
+                    b.origin = offset_ray_origin(s.position, side);
+                }
+                _ => {
+                    // the branches this surface continues: one per channel at the first
+                    // dispersive surface (while the budget allows), else this one
+                    let mut lanes = [b; 3];
+                    let mut n_lanes = 1;
+                    if DISPERSION && m.cauchy_b != 0.0 && b.channel < 0 {
+                        if branches + 2 <= budget {
+                            branches += 2;
+                            n_lanes = 3;
+                            for (c, lane) in lanes.iter_mut().enumerate() {
+                                let mut one = [0.0; 3];
+                                one[c] = b.flux[c];
+                                lane.flux = Vec3::from(one);
+                                lane.channel = c as i32;
+                            }
+                        } else {
+                            let c = ((random_f32(p.seed, index, bounce, 3) * 3.0) as usize).min(2);
+                            let mut one = [0.0; 3];
+                            one[c] = b.flux[c] * 3.0;
+                            lanes[0].flux = Vec3::from(one);
+                            lanes[0].channel = c as i32;
+                        }
+                    }
+                    for lane in &lanes[..n_lanes] {
+                        let ior = if DISPERSION && m.cauchy_b != 0.0 && lane.channel >= 0 {
+                            cauchy_ior(
+                                m.ior,
+                                m.cauchy_b,
+                                CHANNEL_WAVELENGTH_UM[lane.channel as usize],
+                            )
+                        } else {
+                            m.ior
+                        };
+                        let eta = if entering { 1.0 / ior } else { ior };
+                        let f = fresnel_dielectric(-b.dir.dot(facing), eta);
+                        let reflected = reflect(b.dir, facing);
+                        let mut children = [(reflected, lane.flux); 2];
+                        let mut n_children = 1;
+                        if let Some(t) = refract(b.dir, facing, eta) {
+                            if branches < budget {
+                                branches += 1;
+                                children = [
+                                    (reflected, lane.flux * f),
+                                    (t.normalize(), lane.flux * (1.0 - f)),
+                                ];
+                                n_children = 2;
+                            } else if random_f32(p.seed, index, bounce, 2) >= f {
+                                children[0] = (t.normalize(), lane.flux);
+                            }
+                        }
+                        for &(dir, flux) in &children[..n_children] {
+                            if flux.max_element() < min_power || flux.max_element() <= 0.0 {
+                                on_end(PathEnd::Negligible);
+                                continue;
+                            }
+                            let side = if dir.dot(s.geometric_normal) > 0.0 {
+                                s.geometric_normal
+                            } else {
+                                -s.geometric_normal
+                            };
+                            stack.push(Branch {
+                                origin: offset_ray_origin(s.position, side),
+                                dir,
+                                flux,
+                                bounce: b.bounce,
+                                channel: lane.channel,
+                            });
+                        }
+                    }
+                    continue 'branch;
+                }
+            }
+        }
+    }
+    (rays, branches - 1)
 }
 
 fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(

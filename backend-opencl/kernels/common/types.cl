@@ -36,7 +36,7 @@ typedef struct {
     uint light; uint emission; uint grid_w; uint grid_h;
     uint first; uint count; uint seed; uint max_bounces;
     float origin[4]; float axis[4]; float rect_u[4]; float rect_v[4]; float photon_flux[4];
-    float flux_quantum; uint _pad[3];
+    float flux_quantum; uint split_budget; uint _pad[2];
 } TraceParams;
 typedef struct {
     GpuCamera camera;
@@ -87,6 +87,8 @@ typedef struct {
 #define COUNTER_SATURATED 9
 #define COUNTER_RAYS 10
 #define COUNTER_STORED_FLUX 12
+#define COUNTER_SPLITS 18
+#define MAX_SPLIT_BRANCHES 32 // core::device::layout::MAX_SPLIT_BRANCHES
 #define COUNTER_WORDS 20
 
 #define MAX_SPECULAR_DEPTH 30 // core::sspm::MAX_SPECULAR_DEPTH

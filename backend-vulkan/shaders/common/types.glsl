@@ -72,7 +72,7 @@ struct TraceParams {
     uint light; uint emission; uint grid_w; uint grid_h;
     uint first; uint count; uint seed; uint max_bounces;
     vec4 origin; vec4 axis; vec4 rect_u; vec4 rect_v; vec4 photon_flux;
-    float flux_quantum; uint _pad0; uint _pad1; uint _pad2;
+    float flux_quantum; uint split_budget; uint _pad0; uint _pad1;
 };
 struct DepositParams {
     GpuCamera camera;
@@ -131,6 +131,8 @@ const uint COUNTER_UNDERFLOW = 8u;
 const uint COUNTER_SATURATED = 9u;
 const uint COUNTER_RAYS = 10u;
 const uint COUNTER_STORED_FLUX = 12u;
+const uint COUNTER_SPLITS = 18u;
+const uint MAX_SPLIT_BRANCHES = 32u; // core::device::layout::MAX_SPLIT_BRANCHES
 const uint COUNTER_WORDS = 20u;
 
 const uint MAX_SPECULAR_DEPTH = 30u; // core::sspm::MAX_SPECULAR_DEPTH

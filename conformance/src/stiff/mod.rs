@@ -176,6 +176,8 @@ pub fn catalogue() -> Vec<StiffCase> {
             "A box receiver (six UV islands, seams between them): the 3x3 gather keeps the atlas's irradiance sum within 5% of the raw map's, agrees with cpu"),
         case!("caustic-map", "overlapping-uvs", caustic_map::overlapping_uvs,
             "A receiver mesh whose triangles share UVs: a typed InvalidScene naming the object and the overlap"),
+        case!("caustic-map", "dispersion-split", caustic_map::dispersion_split,
+            "The dispersive prism with 001's deterministic splits and with the stochastic choice: accounted (path ends = emitted + splits), both agree with cpu, and they store the same flux per channel within 3%"),
         case!("caustic-map", "ior-extremes", caustic_map::ball_glass,
             "Ball of IOR 1.0001 and 4 over the floor: finite, accounted, agrees with cpu"),
     ];

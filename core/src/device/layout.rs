@@ -439,9 +439,15 @@ pub struct TraceParams {
     pub photon_flux: [f32; 4],
     /// Flux quantum (W) of the fixed-point stored-flux counters.
     pub flux_quantum: f32,
+    /// With the variant's `FRESNEL_SPLIT`: the most branches (hence stored photons) one
+    /// emitted photon may split into (1..=[`MAX_SPLIT_BRANCHES`]); unused otherwise.
+    pub split_budget: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
+
+/// Largest [`TraceParams::split_budget`]: the depth of the kernels' branch stacks.
+pub const MAX_SPLIT_BRANCHES: u32 = 32;
 
 /// Parameters of `deposit_screen` and `resolve_caustics`.
 #[repr(C)]
@@ -537,6 +543,10 @@ pub mod counter {
     pub const RAYS: usize = 10;
     /// 3 x u64: stored flux per channel, in flux quanta.
     pub const STORED_FLUX: usize = 12;
+    /// Branches added by `trace_photons`' deterministic splits (`FRESNEL_SPLIT`): the path
+    /// ends (stored, no specular, escaped, negligible, bounce limit) add up to the
+    /// photons emitted plus these.
+    pub const SPLITS: usize = 18;
     /// Number of u32 words.
     pub const WORDS: usize = 20;
 }

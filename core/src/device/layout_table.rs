@@ -208,7 +208,7 @@ table! {
     DepositTexel { flux, hit_distance, photons }
     TraceParams {
         light, emission, grid_w, grid_h, first, count, seed, max_bounces,
-        origin, axis, rect_u, rect_v, photon_flux, flux_quantum, _pad
+        origin, axis, rect_u, rect_v, photon_flux, flux_quantum, split_budget, _pad
     }
     DepositParams { camera, flux_quantum, hit_distance_quantum, depth_tolerance, photon_capacity }
     GatherParams {

@@ -89,7 +89,8 @@ impl EmissionDomain {
                 .extend(min_relative_power)
                 .to_array(),
             flux_quantum,
-            _pad: [0; 3],
+            split_budget: 1,
+            _pad: [0; 2],
         }
     }
 }

@@ -219,7 +219,8 @@ impl LightViewPlane {
             rect_v: rect_v.to_array(),
             photon_flux: (self.power * texel).extend(min_relative_power).to_array(),
             flux_quantum,
-            _pad: [0; 3],
+            split_budget: 1,
+            _pad: [0; 2],
         }
     }
 }

@@ -56,6 +56,7 @@ impl SceneFeatures {
             dispersion: self.dispersion,
             absorption: self.absorption,
             surface_store: false,
+            fresnel_split: false,
         }
     }
 }

@@ -75,6 +75,9 @@ pub struct FrameStats {
     pub photon_rays_traced: u64,
     /// Photons that ended on a diffuse surface after at least one specular interaction.
     pub photons_stored: u64,
+    /// Branches added by deterministic splits (CausticMap's `fresnel_split`): the path
+    /// ends add up to `photons_emitted + photon_splits`.
+    pub photon_splits: u64,
     /// Stored photons that passed the screen tests and were added to the photon map.
     pub photons_deposited: u64,
     /// Photons neither stored nor deposited, by reason.

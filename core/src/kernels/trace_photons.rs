@@ -52,9 +52,24 @@ impl KernelDecl for TracePhotons {
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
-        if p.count > self.photons.len {
+        if self.variant.fresnel_split
+            && !(1..=crate::device::layout::MAX_SPLIT_BRANCHES).contains(&p.split_budget)
+        {
             return Err(BackendError::BadArgument(format!(
-                "photon buffer holds {} photons, the batch traces {}",
+                "trace_photons: split budget {} outside 1..={}",
+                p.split_budget,
+                crate::device::layout::MAX_SPLIT_BRANCHES
+            )));
+        }
+        let per_photon = if self.variant.fresnel_split {
+            p.split_budget as u64
+        } else {
+            1
+        };
+        if p.count as u64 * per_photon > self.photons.len as u64 {
+            return Err(BackendError::BadArgument(format!(
+                "photon buffer holds {} photons, the batch traces {} (x {per_photon} branches \
+                 at most)",
                 self.photons.len, p.count
             )));
         }
@@ -96,12 +111,22 @@ pub struct TraceVariant {
     /// [`photon_store::SURFACE`](crate::device::layout::photon_store::SURFACE)) for the
     /// caustic atlas, instead of world space (Sspm's screen deposit).
     pub surface_store: bool,
+    /// Seed 001's deterministic splits: a dielectric sends both a reflected (flux x R) and
+    /// a refracted (x (1 - R)) branch, and the first dispersive surface three one-channel
+    /// branches, up to `TraceParams::split_budget` branches per emitted photon (beyond it,
+    /// the stochastic choice); otherwise Sspm's stochastic Fresnel and channel choices.
+    pub fresnel_split: bool,
 }
 
 impl TraceVariant {
     /// Switch names, in specialization-constant id order.
-    pub const SWITCHES: [&'static str; 4] =
-        ["DIELECTRIC", "DISPERSION", "ABSORPTION", "SURFACE_STORE"];
+    pub const SWITCHES: [&'static str; 5] = [
+        "DIELECTRIC",
+        "DISPERSION",
+        "ABSORPTION",
+        "SURFACE_STORE",
+        "FRESNEL_SPLIT",
+    ];
 
     /// Every feature compiled in (what a frame uses with pruning off).
     pub const ALL: TraceVariant = TraceVariant {
@@ -109,15 +134,17 @@ impl TraceVariant {
         dispersion: true,
         absorption: true,
         surface_store: false,
+        fresnel_split: false,
     };
 
     /// Switch values in [`TraceVariant::SWITCHES`] order.
-    pub fn values(&self) -> [u32; 4] {
+    pub fn values(&self) -> [u32; 5] {
         [
             self.dielectric as u32,
             self.dispersion as u32,
             self.absorption as u32,
             self.surface_store as u32,
+            self.fresnel_split as u32,
         ]
     }
 

@@ -109,9 +109,9 @@ struct TraceParams {
     rect_v: vec4<f32>,
     photon_flux: vec4<f32>,
     flux_quantum: f32,
+    split_budget: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 struct DepositParams {
@@ -191,6 +191,8 @@ const COUNTER_UNDERFLOW: u32 = 8u;
 const COUNTER_SATURATED: u32 = 9u;
 const COUNTER_RAYS: u32 = 10u;
 const COUNTER_STORED_FLUX: u32 = 12u;
+const COUNTER_SPLITS: u32 = 18u;
+const MAX_SPLIT_BRANCHES: u32 = 32u; // core::device::layout::MAX_SPLIT_BRANCHES
 const COUNTER_WORDS: u32 = 20u;
 
 const MAX_SPECULAR_DEPTH: u32 = 30u; // core::sspm::MAX_SPECULAR_DEPTH

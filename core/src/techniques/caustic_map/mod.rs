@@ -22,7 +22,9 @@ mod emission;
 mod settings;
 
 pub use emission::Emission;
-pub use settings::{CausticMapOutputs, CausticMapSettings, ATLAS_BYTES_PER_TEXEL, MAX_ATLAS_SIZE};
+pub use settings::{
+    CausticMapOutputs, CausticMapSettings, FresnelSplit, ATLAS_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
+};
 
 use crate::backend::{read_buf, Backend};
 use crate::device::device_scene::{BuildBudget, DeviceScene};
@@ -201,6 +203,9 @@ impl CausticMap {
         };
         let mut variant = features.trace_variant();
         variant.surface_store = true;
+        // the split only changes dielectrics: a scene without one runs the plain variant
+        variant.fresnel_split =
+            settings.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
         let scene_alloc = planned_allocation(backend, &rec, None)?;
@@ -263,6 +268,12 @@ impl CausticMap {
             .max()
             .unwrap_or(1);
         let cap = per_plane.min(s.max_photons_per_batch as u64).max(1) as u32;
+        // photons a batch traces: the split stores up to split_budget per photon
+        let cap = if self.variant.fresnel_split {
+            cap.max(s.split_budget)
+        } else {
+            cap
+        };
         let mut rec = Recording::new();
         let a = AtlasBuffers {
             triangle_tiles: rec.upload(&l.triangle_tiles, "atlas triangle tiles"),
@@ -509,21 +520,29 @@ impl CausticMap {
                 stats.emitted_flux[c] += flux[c];
             }
             let mut first = 0u64;
+            let per_batch = if self.variant.fresnel_split {
+                (a.photons.len / s.split_budget).max(1) as u64
+            } else {
+                a.photons.len as u64
+            };
             while first < n {
-                let count = (n - first).min(a.photons.len as u64) as u32;
+                let count = (n - first).min(per_batch) as u32;
                 let mut rec = Recording::new();
                 rec.clear(a.photon_count);
                 rec.kernel(TracePhotons {
                     scene: self.scene,
                     variant: self.variant,
-                    params: plane.trace_params(
-                        *light,
-                        (first as u32, count),
-                        Emission::plane_seed(s.seed, *light, *k),
-                        s.max_bounces,
-                        s.min_relative_power,
-                        self.emission.flux_quantum,
-                    ),
+                    params: TraceParams {
+                        split_budget: s.split_budget,
+                        ..plane.trace_params(
+                            *light,
+                            (first as u32, count),
+                            Emission::plane_seed(s.seed, *light, *k),
+                            s.max_bounces,
+                            s.min_relative_power,
+                            self.emission.flux_quantum,
+                        )
+                    },
                     photons: a.photons,
                     photon_count: a.photon_count,
                     counters: a.counters,
@@ -577,6 +596,7 @@ impl CausticMap {
         stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
         stats.fixed_point_saturated = c[counter::SATURATED] as u64;
         stats.photon_rays_traced = c64(counter::RAYS);
+        stats.photon_splits = c[counter::SPLITS] as u64;
         for ch in 0..3 {
             stats.stored_flux[ch] =
                 c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
