@@ -5,7 +5,8 @@
 //! bounces" is read as n specular interactions: `max_bounces = n + 1` ray segments and
 //! `max_specular_depth = n` for the camera's tree.
 //!
-//! Per setting and backend, after a warm-up frame: the median over frames that remake the
+//! Per setting, Fresnel split (deterministic, the default; stochastic) and backend, after
+//! a warm-up frame: the median over frames that remake the
 //! atlas (a new seed each) of every pass and of the budget line emission + trace + splat +
 //! gather (`trace_photons`, `deposit_atlas`, `gather_caustic_map`; target on the H200:
 //! <= 2 ms at 2048^2 photons and a 2048^2 map), and the median host wall time of a
@@ -20,7 +21,9 @@ use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::limits::tessellated_size;
 use caustica_core::scene::{Scene, Shape};
-use caustica_core::techniques::caustic_map::{CausticMap, CausticMapOutputs, CausticMapSettings};
+use caustica_core::techniques::caustic_map::{
+    CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit,
+};
 use std::collections::BTreeMap;
 
 const BUDGET_PASSES: &[&str] = &["trace_photons", "deposit_atlas", "gather_caustic_map"];
@@ -96,7 +99,10 @@ fn main() {
             }
         };
         let device = backend.capabilities().device;
-        for &k in &picked {
+        for (&k, split) in picked
+            .iter()
+            .flat_map(|k| [FresnelSplit::Deterministic, FresnelSplit::Stochastic].map(|s| (k, s)))
+        {
             let (tris, bounces, atlas, size) = SETTINGS[k];
             let (scene, total) = scene_with(tris, size);
             let settings = CausticMapSettings {
@@ -105,6 +111,7 @@ fn main() {
                 atlas_size: atlas,
                 max_bounces: bounces + 1,
                 max_specular_depth: bounces,
+                fresnel_split: split,
                 outputs: CausticMapOutputs {
                     composite: true,
                     direct: false,
@@ -164,7 +171,7 @@ fn main() {
                 continue;
             }
             println!(
-                "\n{name} on {device} / setting {k}: glass ball of {total} triangles ({tris} asked), \
+                "\n{name} on {device} / setting {k} / {split:?} split: glass ball of {total} triangles ({tris} asked), \
                  {bounces} bounces, {atlas}^2 atlas, {}x{} ({timing}): frame {:.3} ms (host wall), \
                  emission + trace + splat + gather {:.3} ms, camera-only frame {:.3} ms (host wall)",
                 size.0,

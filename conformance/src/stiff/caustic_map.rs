@@ -318,12 +318,21 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
     let mut scene = caustica_core::scene::builtin::builtin("prism").expect("built-in");
     (scene.camera.width, scene.camera.height) = super::SIZE;
     let mut v = Verdict::new("dispersion split");
-    let split = checked(b, &scene, &settings(128), &mut v)?;
+    use caustica_core::techniques::caustic_map::FresnelSplit;
+    let split = checked(
+        b,
+        &scene,
+        &CausticMapSettings {
+            fresnel_split: FresnelSplit::Deterministic,
+            ..settings(128)
+        },
+        &mut v,
+    )?;
     let stochastic = checked(
         b,
         &scene,
         &CausticMapSettings {
-            fresnel_split: caustica_core::techniques::caustic_map::FresnelSplit::Stochastic,
+            fresnel_split: FresnelSplit::Stochastic,
             ..settings(128)
         },
         &mut v,

@@ -48,14 +48,16 @@ pub enum FresnelSplit {
     /// Seed 001's intensity split: both the reflected (flux x R) and the refracted (x 1 - R)
     /// branch are traced, and the first dispersive surface sends three one-channel
     /// branches, up to `split_budget` branches per photon (the stochastic choice beyond).
-    /// The default: it is the source's method, and it takes the noise of the Fresnel and
-    /// channel choices out of the map (a glass ball's dim reflected photons, ~4% of the
-    /// flux, reach the map as many small photons instead of a few full ones), for about
-    /// one more stored photon per glass hit.
-    #[default]
+    /// It takes the noise of the Fresnel and channel choices out of the map (on the CPU,
+    /// `docs/report-caustic-map`: about 8x less variance at the same photon count, for
+    /// about 3x the time), but on the H200 it costs 3 to 6x the trace time (10 to 44 ms
+    /// against 3 to 8 ms for 2048^2 photons, `docs/gpu/h200-issue16-caustic-map-split.log`):
+    /// for offline quality, not the real-time default.
     Deterministic,
     /// Sspm's: reflect with probability R, else refract, flux kept; one channel (x3) per
-    /// photon at the first dispersive surface. One stored photon per emitted photon.
+    /// photon at the first dispersive surface. One stored photon per emitted photon, the
+    /// same expectation as the split. The default, for the real-time budget (see above).
+    #[default]
     Stochastic,
 }
 
@@ -110,7 +112,7 @@ impl Default for CausticMapSettings {
             photons_h: 1024,
             atlas_size: DEFAULT_ATLAS_SIDE,
             gather_width: DEFAULT_GATHER_WIDTH,
-            fresnel_split: FresnelSplit::Deterministic,
+            fresnel_split: FresnelSplit::Stochastic,
             split_budget: 8,
             max_bounces: 12,
             min_relative_power: 1e-4,
