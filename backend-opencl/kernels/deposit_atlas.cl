@@ -18,17 +18,8 @@ __kernel void deposit_atlas(__global const AtlasParams* p, __global const uint* 
         } else {
             uint texel = atlas_texel_index(tiles[tile], (float2)(ph.position[0], ph.position[1]),
                                            p->width);
-            for (uint ch = 0u; ch < 3u; ch++) {
-                Quantized q = quantize(ph.flux[ch], p->flux_quantum);
-                if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
-                if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
-                if (q.units != 0u)
-                    atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 2u * ch, q.units, 0u);
-            }
-            atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 6u,
-                                      quantize(ph.hit_distance, p->hit_distance_quantum).units, 0u);
-            atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 8u, 1u, 0u);
-            atomic_inc(&lc[COUNTER_DEPOSITED]);
+            deposit_photon_texel(PHOTON_MAP_ARGS, lc, texel, &ph, p->flux_quantum,
+                                 p->hit_distance_quantum);
         }
     }
     counters_flush_local(lc, counters);

@@ -28,16 +28,8 @@ __kernel void deposit_screen(__global const DepositParams* p,
                 fabs(z - g->depth) > p->depth_tolerance * g->depth || !arrives_in_front) {
                 atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
             } else {
-                for (uint ch = 0u; ch < 3u; ch++) {
-                    Quantized q = quantize(ph.flux[ch], p->flux_quantum);
-                    if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
-                    if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
-                    if (q.units != 0u) atomic_add_u64_photon_map(PHOTON_MAP_ARGS, pix, 2u * ch, q.units, 0u);
-                }
-                atomic_add_u64_photon_map(PHOTON_MAP_ARGS, pix, 6u,
-                                          quantize(ph.hit_distance, p->hit_distance_quantum).units, 0u);
-                atomic_add_u64_photon_map(PHOTON_MAP_ARGS, pix, 8u, 1u, 0u);
-                atomic_inc(&lc[COUNTER_DEPOSITED]);
+                deposit_photon_texel(PHOTON_MAP_ARGS, lc, pix, &ph, p->flux_quantum,
+                                     p->hit_distance_quantum);
             }
         }
     }

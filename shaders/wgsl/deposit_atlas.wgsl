@@ -30,22 +30,7 @@ fn deposit_atlas(i: u32, li: u32) {
             atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
         } else {
             let texel = atlas_texel_index(tiles[tile], ph.position.xy, p.width);
-            for (var ch = 0u; ch < 3u; ch++) {
-                let q = quantize(ph.flux[ch], p.flux_quantum);
-                if (q.underflow) {
-                    atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
-                }
-                if (q.saturated) {
-                    atomicAdd(&lc[COUNTER_SATURATED], 1u);
-                }
-                if (q.units != 0u) {
-                    atomic_add_u64_photon_map(texel, DEPOSIT_FLUX + 2u * ch, q.units, 0u);
-                }
-            }
-            atomic_add_u64_photon_map(texel, DEPOSIT_HIT_DISTANCE,
-                                      quantize(ph.hit_distance, p.hit_distance_quantum).units, 0u);
-            atomic_add_u64_photon_map(texel, DEPOSIT_PHOTONS, 1u, 0u);
-            atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
+            deposit_photon_texel(texel, ph, p.flux_quantum, p.hit_distance_quantum);
         }
     }
     counters_flush_local(li);

@@ -43,22 +43,7 @@ fn deposit_screen(i: u32, li: u32) {
                 abs(z - g.depth) > p.depth_tolerance * g.depth || !arrives_in_front) {
                 atomicAdd(&lc[COUNTER_DEPTH_MISMATCH], 1u);
             } else {
-                for (var ch = 0u; ch < 3u; ch++) {
-                    let q = quantize(ph.flux[ch], p.flux_quantum);
-                    if (q.underflow) {
-                        atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
-                    }
-                    if (q.saturated) {
-                        atomicAdd(&lc[COUNTER_SATURATED], 1u);
-                    }
-                    if (q.units != 0u) {
-                        atomic_add_u64_photon_map(pix, DEPOSIT_FLUX + 2u * ch, q.units, 0u);
-                    }
-                }
-                atomic_add_u64_photon_map(pix, DEPOSIT_HIT_DISTANCE,
-                                          quantize(ph.hit_distance, p.hit_distance_quantum).units, 0u);
-                atomic_add_u64_photon_map(pix, DEPOSIT_PHOTONS, 1u, 0u);
-                atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
+                deposit_photon_texel(pix, ph, p.flux_quantum, p.hit_distance_quantum);
             }
         }
     }

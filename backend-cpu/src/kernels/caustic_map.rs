@@ -3,7 +3,7 @@
 //! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
 //! `math::map_gather`; these are loops over it.
 
-use super::deposit_screen::{atomic_add_u64_photon_map, MapPlanes};
+use super::deposit_screen::{deposit_photon_texel, MapPlanes};
 use super::direct_light::specular_tree;
 use super::Counters;
 use crate::traversal::SceneView;
@@ -11,7 +11,6 @@ use caustica_core::device::layout::{
     camera_ray, counter, AtlasParams, AtlasTexel, AtlasTileTexel, MapLookupParams, Photon,
     PhotonMapView, NO_TILE,
 };
-use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::map_gather::{
     atlas_texel_index, footprint_texels, gather_caustic_texel, join_u64_f32, sample_caustic_map,
 };
@@ -43,22 +42,14 @@ pub fn deposit_atlas(
                 }
                 let uv = Vec2::new(ph.position[0], ph.position[1]);
                 let texel = atlas_texel_index(tiles[tile as usize], uv, p.width);
-                for ch in 0..3 {
-                    let q = quantize(ph.flux[ch], p.flux_quantum);
-                    if q.underflow {
-                        c.bump(counter::UNDERFLOW);
-                    }
-                    if q.saturated {
-                        c.bump(counter::SATURATED);
-                    }
-                    if q.units != 0 {
-                        atomic_add_u64_photon_map(&map, texel, 2 * ch as u32, q.units as u64);
-                    }
-                }
-                let hd = quantize(ph.hit_distance, p.hit_distance_quantum).units as u64;
-                atomic_add_u64_photon_map(&map, texel, 6, hd);
-                atomic_add_u64_photon_map(&map, texel, 8, 1);
-                c.bump(counter::DEPOSITED);
+                deposit_photon_texel(
+                    &map,
+                    texel,
+                    ph,
+                    p.flux_quantum,
+                    p.hit_distance_quantum,
+                    &mut c,
+                );
             }
             c
         })

@@ -28,7 +28,7 @@ pub type MapPlanes<'a> = [&'a [AtomicU64]; DEPOSIT_PLANES];
 
 /// `map[pixel].words[word, word + 1] += v` (a little-endian u64 at an even `word`), on
 /// the plane that holds the word ([`deposit_word`]); the planes hold whole pairs.
-pub fn atomic_add_u64_photon_map(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
+fn atomic_add_u64_photon_map(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
     let (k, at) = deposit_word(pixel, word);
     map[k][at / 2].fetch_add(v, Ordering::Relaxed);
 }
@@ -77,9 +77,30 @@ fn deposit_photon(
         c.bump(counter::DEPTH_MISMATCH);
         return;
     }
-    let pixel = pix as u32;
+    deposit_photon_texel(
+        map,
+        pix as u32,
+        ph,
+        p.flux_quantum,
+        p.hit_distance_quantum,
+        c,
+    );
+}
+
+/// Adds photon `ph` to texel `texel` of a photon map (a screen pixel or an atlas texel):
+/// its flux per channel in `flux_quantum` units, its hit distance in
+/// `hit_distance_quantum` units and a count, with 64-bit integer atomics; counts underflow,
+/// saturation and the deposit in `c`.
+pub fn deposit_photon_texel(
+    map: &MapPlanes,
+    texel: u32,
+    ph: &Photon,
+    flux_quantum: f32,
+    hit_distance_quantum: f32,
+    c: &mut Counters,
+) {
     for ch in 0..3 {
-        let q = quantize(ph.flux[ch], p.flux_quantum);
+        let q = quantize(ph.flux[ch], flux_quantum);
         if q.underflow {
             c.bump(counter::UNDERFLOW);
         }
@@ -87,16 +108,12 @@ fn deposit_photon(
             c.bump(counter::SATURATED);
         }
         if q.units != 0 {
-            atomic_add_u64_photon_map(map, pixel, 2 * ch as u32, q.units as u64);
+            atomic_add_u64_photon_map(map, texel, 2 * ch as u32, q.units as u64);
         }
     }
-    atomic_add_u64_photon_map(
-        map,
-        pixel,
-        6,
-        quantize(ph.hit_distance, p.hit_distance_quantum).units as u64,
-    );
-    atomic_add_u64_photon_map(map, pixel, 8, 1);
+    let hd = quantize(ph.hit_distance, hit_distance_quantum).units as u64;
+    atomic_add_u64_photon_map(map, texel, 6, hd);
+    atomic_add_u64_photon_map(map, texel, 8, 1);
     c.bump(counter::DEPOSITED);
 }
 

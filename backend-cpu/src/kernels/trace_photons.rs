@@ -114,29 +114,29 @@ fn count_end(end: PathEnd, p: &TraceParams, photons: &mut Vec<Photon>, counters:
     }
 }
 
-/// The batch with the deterministic splits ([`trace_photon_split`]).
-fn split_batch<const DISPERSION: bool, const ABSORPTION: bool>(
-    scene: &SceneView,
+/// Traces photons `first .. first + count` of the batch in parallel chunks of `chunk`:
+/// `photon(index, on_end, counters)` traces one emitted photon, calling `on_end` for each
+/// path end (one, or one per branch of a split) and adding its rays (and splits) to the
+/// counters; stored photons come back in photon order.
+fn batch(
     p: &TraceParams,
-    store: u32,
+    chunk: u32,
+    photon: impl Fn(u32, &mut dyn FnMut(PathEnd), &mut Counters) + Sync,
 ) -> TraceResult {
-    const CHUNK: u32 = 1024;
-    let chunks = p.count.div_ceil(CHUNK);
+    let chunks = p.count.div_ceil(chunk);
     let parts: Vec<(Vec<Photon>, Counters)> = (0..chunks)
         .into_par_iter()
         .map(|c| {
             let mut photons = Vec::new();
             let mut counters = Counters::default();
-            for i in c * CHUNK..((c + 1) * CHUNK).min(p.count) {
-                let (rays, splits) = trace_photon_split::<DISPERSION, ABSORPTION>(
-                    scene,
-                    p,
+            for i in c * chunk..((c + 1) * chunk).min(p.count) {
+                let mut ends = Counters::default();
+                photon(
                     p.first + i,
-                    store,
-                    &mut |end| count_end(end, p, &mut photons, &mut counters),
+                    &mut |end| count_end(end, p, &mut photons, &mut ends),
+                    &mut counters,
                 );
-                counters.words[counter::RAYS] += rays as u64;
-                counters.words[counter::SPLITS] += splits as u64;
+                counters = counters.merge(ends);
             }
             (photons, counters)
         })
@@ -148,6 +148,22 @@ fn split_batch<const DISPERSION: bool, const ABSORPTION: bool>(
         counters = counters.merge(c);
     }
     TraceResult { photons, counters }
+}
+
+/// The batch with the deterministic splits ([`trace_photon_split`]).
+fn split_batch<const DISPERSION: bool, const ABSORPTION: bool>(
+    scene: &SceneView,
+    p: &TraceParams,
+    store: u32,
+) -> TraceResult {
+    batch(p, 1024, |index, on_end, counters| {
+        let (rays, splits) =
+            trace_photon_split::<DISPERSION, ABSORPTION>(scene, p, index, store, &mut |e| {
+                on_end(e)
+            });
+        counters.words[counter::RAYS] += rays as u64;
+        counters.words[counter::SPLITS] += splits as u64;
+    })
 }
 
 /// A branch of a split photon: where it continues, its flux, the segments traced so far
@@ -341,47 +357,17 @@ fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION:
     p: &TraceParams,
     store: u32,
 ) -> TraceResult {
-    const CHUNK: u32 = 4096;
-    let chunks = p.count.div_ceil(CHUNK);
-    let parts: Vec<(Vec<Photon>, Counters)> = (0..chunks)
-        .into_par_iter()
-        .map(|c| {
-            let mut photons = Vec::new();
-            let mut counters = Counters::default();
-            for i in c * CHUNK..((c + 1) * CHUNK).min(p.count) {
-                let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
-                    scene,
-                    p,
-                    p.first + i,
-                    store,
-                    &mut |_, _| {},
-                );
-                counters.words[counter::RAYS] += rays as u64;
-                match end {
-                    PathEnd::Stored(ph) => {
-                        counters.bump(counter::STORED);
-                        for ch in 0..3 {
-                            counters.words[counter::STORED_FLUX + 2 * ch] +=
-                                quantize(ph.flux[ch], p.flux_quantum).units as u64;
-                        }
-                        photons.push(ph);
-                    }
-                    PathEnd::NoSpecular => counters.bump(counter::NO_SPECULAR),
-                    PathEnd::Escaped => counters.bump(counter::ESCAPED),
-                    PathEnd::Negligible => counters.bump(counter::NEGLIGIBLE),
-                    PathEnd::BounceLimit => counters.bump(counter::BOUNCE_LIMIT),
-                }
-            }
-            (photons, counters)
-        })
-        .collect();
-    let mut photons = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
-    let mut counters = Counters::default();
-    for (ph, c) in parts {
-        photons.extend(ph);
-        counters = counters.merge(c);
-    }
-    TraceResult { photons, counters }
+    batch(p, 4096, |index, on_end, counters| {
+        let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
+            scene,
+            p,
+            index,
+            store,
+            &mut |_, _| {},
+        );
+        counters.words[counter::RAYS] += rays as u64;
+        on_end(end);
+    })
 }
 
 /// The emitted ray and flux of photon `index` (global index in the light's grid).

@@ -1,6 +1,7 @@
 // Fixed-point adds into the photon map's planes (core::device::layout::DEPOSIT_PLANES), for
 // the kernels that deposit (deposit_screen, deposit_atlas): the kernel declares
-// `photon_map0`, `photon_map1`, `photon_map2` as `array<atomic<u32>>`.
+// `photon_map0`, `photon_map1`, `photon_map2` as `array<atomic<u32>>` and the work-group
+// counters `lc`.
 
 // atomicAdd on the photon-map plane `at.x`, index `at.y` (deposit_word's result).
 fn atomic_add_photon_map(at: vec2<u32>, v: u32) -> u32 {
@@ -22,4 +23,26 @@ fn atomic_add_u64_photon_map(pixel: u32, word: u32, lo: u32, hi: u32) {
     if (hi + carry != 0u) {
         atomic_add_photon_map(vec2<u32>(at.x, at.y + 1u), hi + carry);
     }
+}
+
+// backend-cpu deposit_screen.rs::deposit_photon_texel: photon `ph` added to texel `texel`
+// (a screen pixel or an atlas texel): flux per channel, hit distance and a count in fixed
+// point; underflow, saturation and the deposit counted in `lc`.
+fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_quantum: f32) {
+    for (var ch = 0u; ch < 3u; ch++) {
+        let q = quantize(ph.flux[ch], flux_quantum);
+        if (q.underflow) {
+            atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
+        }
+        if (q.saturated) {
+            atomicAdd(&lc[COUNTER_SATURATED], 1u);
+        }
+        if (q.units != 0u) {
+            atomic_add_u64_photon_map(texel, DEPOSIT_FLUX + 2u * ch, q.units, 0u);
+        }
+    }
+    atomic_add_u64_photon_map(texel, DEPOSIT_HIT_DISTANCE,
+                              quantize(ph.hit_distance, hit_distance_quantum).units, 0u);
+    atomic_add_u64_photon_map(texel, DEPOSIT_PHOTONS, 1u, 0u);
+    atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
 }
