@@ -114,7 +114,7 @@ pub struct CausticMap {
     images: Images,
     /// The atlas holds the photons of the current lights, settings and seed.
     atlas_valid: bool,
-    /// Stats of the last photon pass (what a camera-only frame reports it reuses).
+    /// Device buffers owned, by lifetime: the uploaded scene, the atlas, the camera images.
     scene_owned: Vec<ResourceId>,
     atlas_owned: Vec<ResourceId>,
     image_owned: Vec<ResourceId>,
