@@ -18,6 +18,7 @@ __kernel void caustic_map_lookup(SCENE_PARAMS, __global const MapLookupParams* p
     end.atlas_width = p->atlas_width;
     end.pixel_angle = 2.0f * p->camera.tan_half_fov_y / (float)p->camera.height;
     float3 l = specular_tree(SCENE_ARGS, &end, p->max_specular_depth, p->min_weight,
+                          p->fresnel_model,
                              load3g(p->camera.position), camera_ray(&p->camera, i % w, i / w));
     out[i] = (float4)(saturate_radiance3(l), 1.0f);
 }

@@ -21,6 +21,7 @@ __kernel void direct_light(SCENE_PARAMS, __global const DirectParams* p,
     } else {
         DiffuseEnd end = diffuse_end_direct(p->light_count);
         l = specular_tree(SCENE_ARGS, &end, p->max_specular_depth, p->min_weight,
+                          p->fresnel_model,
                           load3g(p->camera.position), camera_ray(&p->camera, i % w, i / w));
     }
     out[i] = (float4)(saturate_radiance3(l), 1.0f);

@@ -115,7 +115,7 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
                 ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
             }
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
-                                     random_f32(p->seed, index, bounce, 2u));
+                                     random_f32(p->seed, index, bounce, 2u), p->fresnel_model);
         }
         // (a variant without DIELECTRIC is never run on a dielectric: the frame plan)
         if (max_element3(flux) < min_power || max_element3(flux) <= 0.0f) return PATH_NEGLIGIBLE;
@@ -273,7 +273,7 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
                 if (DISPERSION && m->cauchy_b != 0.0f && lane.channel >= 0)
                     ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[lane.channel]);
                 float eta = entering ? 1.0f / ior : ior;
-                float f = fresnel_dielectric(-dot3(b.dir, facing), eta);
+                float f = fresnel_reflectance(-dot3(b.dir, facing), eta, p->fresnel_model);
                 float3 reflected = reflect(b.dir, facing);
                 float3 cdir[2] = {reflected, reflected};
                 float3 cflux[2] = {lane.flux, lane.flux};

@@ -47,7 +47,7 @@ fn caustic_map_lookup(i: u32) {
     }
     // `lights` is part of every traced kernel's scene bindings; the lookup needs none.
     let unused = arrayLength(&lights);
-    let l = specular_tree(p.max_specular_depth, p.min_weight, p.camera.position,
+    let l = specular_tree(p.max_specular_depth, p.min_weight, p.fresnel_model, p.camera.position,
                           camera_ray(p.camera, i % w, i / w));
     out[i] = vec4<f32>(saturate_radiance3(l), 1.0);
 }

@@ -87,7 +87,7 @@ fn direct_light(i: u32) {
         let n = g.normal;
         l = shade_diffuse(p.light_count, g.position, n, n, g.albedo);
     } else {
-        l = specular_tree(p.max_specular_depth, p.min_weight, p.camera.position,
+        l = specular_tree(p.max_specular_depth, p.min_weight, p.fresnel_model, p.camera.position,
                           camera_ray(p.camera, i % w, i / w));
     }
     out[i] = vec4<f32>(saturate_radiance3(l), 1.0);

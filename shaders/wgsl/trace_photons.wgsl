@@ -130,7 +130,7 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
                 ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
             }
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
-                                     random_f32(p.seed, index, bounce, 2u));
+                                     random_f32(p.seed, index, bounce, 2u), p.fresnel_model);
         }
         if (max_element3(flux) < min_power || max_element3(flux) <= 0.0) {
             return PATH_NEGLIGIBLE;
@@ -289,7 +289,7 @@ fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) ->
                     ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[lane.channel]);
                 }
                 let eta = select(ior, 1.0 / ior, entering);
-                let f = fresnel_dielectric(-dot3(b.dir, facing), eta);
+                let f = fresnel_reflectance(-dot3(b.dir, facing), eta, p.fresnel_model);
                 let reflected = reflect(b.dir, facing);
                 var cdir = array<vec3<f32>, 2>(reflected, reflected);
                 var cflux = array<vec3<f32>, 2>(lane.flux, lane.flux);

@@ -117,6 +117,7 @@ pub fn caustic_map_lookup(
                 scene,
                 p.max_specular_depth,
                 p.min_weight,
+                p.fresnel_model,
                 Vec3::from(cam.position),
                 camera_ray(cam, i % w, i / w),
                 |hit, s, m, _, _, distance, cos| {

@@ -12,7 +12,7 @@ use caustica_core::device::layout::{
 };
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::optics::{
-    beer_lambert, fresnel_dielectric, reflect, refract, saturate_radiance, saturate_radiance3,
+    beer_lambert, fresnel_reflectance, reflect, refract, saturate_radiance, saturate_radiance3,
 };
 use glam::Vec3;
 use rayon::prelude::*;
@@ -109,6 +109,7 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
         scene,
         p.max_specular_depth,
         p.min_weight,
+        p.fresnel_model,
         origin,
         dir,
         |_, s, m, n, ng_view, _, _| {
@@ -126,7 +127,8 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
 /// The specular ray tree from `origin` along `dir` (`direct_light` and
 /// `caustic_map_lookup` walk it alike): depth first with an explicit stack (last pushed,
 /// first popped), both Fresnel branches of a dielectric, mirrors scaled by their
-/// reflectance, Beer-Lambert inside dielectrics, branches below `min_weight` or past
+/// reflectance, Beer-Lambert inside dielectrics (reflectance of `fresnel_model`, one of
+/// `math::optics::fresnel_model`), branches below `min_weight` or past
 /// `max_depth` specular surfaces cut. At every diffuse surface it meets, adds
 /// `weight * diffuse_end(hit, surface, material, n, ng_view, distance, cos)` (`n` the
 /// shading normal and `ng_view` the geometric normal, both turned to the arriving ray;
@@ -136,6 +138,7 @@ pub fn specular_tree(
     scene: &SceneView,
     max_depth: u32,
     min_weight: f32,
+    fresnel_model: u32,
     origin: Vec3,
     dir: Vec3,
     diffuse_end: impl Fn(&Hit, &SurfacePoint, &GpuMaterial, Vec3, Vec3, f32, f32) -> Vec3,
@@ -191,7 +194,7 @@ pub fn specular_tree(
                     s.shading_normal
                 };
                 let eta = if entering { 1.0 / m.ior } else { m.ior };
-                let f = fresnel_dielectric(-d.dot(facing), eta);
+                let f = fresnel_reflectance(-d.dot(facing), eta, fresnel_model);
                 if weight.max_element() * f >= min_weight {
                     stack.push((
                         offset_ray_origin(s.position, ng_view),

@@ -35,7 +35,7 @@ use caustica_core::kernels::TraceVariant;
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::optics::{
-    beer_lambert, cauchy_ior, dielectric_scatter, fresnel_dielectric, reflect, refract,
+    beer_lambert, cauchy_ior, dielectric_scatter, fresnel_reflectance, reflect, refract,
     CHANNEL_WAVELENGTH_UM,
 };
 use caustica_core::math::packing::pack_unit_vector;
@@ -309,7 +309,7 @@ pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
                             m.ior
                         };
                         let eta = if entering { 1.0 / ior } else { ior };
-                        let f = fresnel_dielectric(-b.dir.dot(facing), eta);
+                        let f = fresnel_reflectance(-b.dir.dot(facing), eta, p.fresnel_model);
                         let reflected = reflect(b.dir, facing);
                         let mut children = [(reflected, lane.flux); 2];
                         let mut n_children = 1;
@@ -517,6 +517,7 @@ pub fn trace_photon_variant<
                     entering,
                     ior,
                     random_f32(p.seed, index, bounce, 2),
+                    p.fresnel_model,
                 )
                 .direction;
             }

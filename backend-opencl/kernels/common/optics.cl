@@ -25,6 +25,29 @@ inline float fresnel_dielectric(float cos_i, float eta) {
     return clampf(0.5f * (r_s * r_s + r_p * r_p), 0.0f, 1.0f);
 }
 
+// Seed 001's Schlick approximation (core: optics::fresnel_schlick): the transmitted
+// cosine when light goes into the lower index, 1 under total internal reflection.
+inline float fresnel_schlick(float cos_i, float eta) {
+    float q = (eta - 1.0f) / (eta + 1.0f);
+    float r0 = q * q;
+    float cos_x = clampf(cos_i, 0.0f, 1.0f);
+    if (eta > 1.0f) {
+        float sin2_t = eta * eta * (1.0f - cos_x * cos_x);
+        if (sin2_t > 1.0f) return 1.0f;
+        cos_x = sqrt(1.0f - sin2_t);
+    }
+    float x = 1.0f - cos_x;
+    return r0 + (1.0f - r0) * x * x * x * x * x;
+}
+
+// core: optics::fresnel_model values
+#define FRESNEL_SCHLICK 1u
+
+// The reflectance under `model` (core: optics::fresnel_reflectance).
+inline float fresnel_reflectance(float cos_i, float eta, uint model) {
+    return model == FRESNEL_SCHLICK ? fresnel_schlick(cos_i, eta) : fresnel_dielectric(cos_i, eta);
+}
+
 inline float3 beer_lambert(float3 sigma_a, float distance) {
     return (float3)(exp(-sigma_a.x * distance), exp(-sigma_a.y * distance),
                     exp(-sigma_a.z * distance));
@@ -39,13 +62,14 @@ inline float cauchy_ior(float ior, float cauchy_b, float wavelength_um) {
     return a + cauchy_b / (wavelength_um * wavelength_um);
 }
 
-// Reflects with probability = Fresnel reflectance (`xi` uniform in [0, 1)), else refracts.
+// Reflects with probability = Fresnel reflectance of `model` (`xi` uniform in [0, 1)),
+// else refracts.
 inline float3 dielectric_scatter(float3 incident, float3 shading_normal, bool entering,
-                                 float ior, float xi) {
+                                 float ior, float xi, uint model) {
     float3 facing = dot3(incident, shading_normal) < 0.0f ? shading_normal : -shading_normal;
     float eta = entering ? 1.0f / ior : ior;
     float cos_i = -dot3(incident, facing);
-    float f = fresnel_dielectric(cos_i, eta);
+    float f = fresnel_reflectance(cos_i, eta, model);
     if (xi < f) return reflect(incident, facing);
     float3 t;
     if (refract(incident, facing, eta, &t)) return normalize3(t);

@@ -104,7 +104,8 @@ inline float3 diffuse_end(SCENE_PARAMS, const DiffuseEnd* e, const Hit* hit,
 }
 
 inline float3 specular_tree(SCENE_PARAMS, const DiffuseEnd* end, uint max_depth,
-                            float min_weight, float3 origin, float3 dir) {
+                            float min_weight, uint fresnel_model, float3 origin,
+                            float3 dir) {
     ChainRay stack[MAX_SPECULAR_DEPTH + 2];
     uint sp = 0u;
     float3 l = (float3)(0.0f);
@@ -136,7 +137,7 @@ inline float3 specular_tree(SCENE_PARAMS, const DiffuseEnd* end, uint max_depth,
         } else {
             float3 facing = facing_normal(s.shading_normal, r.dir);
             float eta = entering ? 1.0f / m->ior : m->ior;
-            float f = fresnel_dielectric(-dot3(r.dir, facing), eta);
+            float f = fresnel_reflectance(-dot3(r.dir, facing), eta, fresnel_model);
             if (max_element3(weight) * f >= min_weight && sp < MAX_SPECULAR_DEPTH + 2) {
                 stack[sp++] = chain_ray(offset_ray_origin(s.position, ng_view),
                                          reflect(r.dir, facing), weight * f, r.depth + 1u,

@@ -36,7 +36,7 @@ typedef struct {
     uint light; uint emission; uint grid_w; uint grid_h;
     uint first; uint count; uint seed; uint max_bounces;
     float origin[4]; float axis[4]; float rect_u[4]; float rect_v[4]; float photon_flux[4];
-    float flux_quantum; uint split_budget; uint _pad[2];
+    float flux_quantum; uint split_budget; uint fresnel_model; uint _pad;
 } TraceParams;
 typedef struct {
     GpuCamera camera;
@@ -50,7 +50,7 @@ typedef struct {
 } GatherParams;
 typedef struct {
     GpuCamera camera;
-    uint light_count; uint max_specular_depth; float min_weight; uint _pad;
+    uint light_count; uint max_specular_depth; float min_weight; uint fresnel_model;
 } DirectParams;
 typedef struct {
     uint width; uint height; float flux_quantum; float hit_distance_quantum;
@@ -58,7 +58,7 @@ typedef struct {
 } AtlasParams;
 typedef struct {
     GpuCamera camera;
-    uint atlas_width; uint max_specular_depth; float min_weight; uint _pad;
+    uint atlas_width; uint max_specular_depth; float min_weight; uint fresnel_model;
 } MapLookupParams;
 
 // core::gpu constants

@@ -28,6 +28,30 @@ precise float fresnel_dielectric(float cos_i, float eta) {
     return clampf(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
 }
 
+// Seed 001's Schlick approximation (core: optics::fresnel_schlick): the transmitted
+// cosine when light goes into the lower index, 1 under total internal reflection.
+precise float fresnel_schlick(float cos_i, float eta) {
+    float q = (eta - 1.0) / (eta + 1.0);
+    float r0 = q * q;
+    float cos_x = clampf(cos_i, 0.0, 1.0);
+    if (eta > 1.0) {
+        float sin2_t = eta * eta * (1.0 - cos_x * cos_x);
+        if (sin2_t > 1.0) return 1.0;
+        cos_x = sqrt(1.0 - sin2_t);
+    }
+    float x = 1.0 - cos_x;
+    return r0 + (1.0 - r0) * x * x * x * x * x;
+}
+
+// core: optics::fresnel_model values
+const uint FRESNEL_SCHLICK = 1u;
+
+// The reflectance under `model` (core: optics::fresnel_reflectance).
+precise float fresnel_reflectance(float cos_i, float eta, uint model) {
+    if (model == FRESNEL_SCHLICK) return fresnel_schlick(cos_i, eta);
+    return fresnel_dielectric(cos_i, eta);
+}
+
 precise vec3 beer_lambert(vec3 sigma_a, float distance) {
     return vec3(exp(-sigma_a.x * distance), exp(-sigma_a.y * distance),
                 exp(-sigma_a.z * distance));
@@ -46,14 +70,15 @@ precise float cauchy_ior(float ior, float cauchy_b, float wavelength_um) {
     return a + cauchy_b / (wavelength_um * wavelength_um);
 }
 
-// Reflects with probability = Fresnel reflectance (`xi` uniform in [0, 1)), else refracts.
+// Reflects with probability = Fresnel reflectance of `model` (`xi` uniform in [0, 1)),
+// else refracts.
 precise vec3 dielectric_scatter(vec3 incident, vec3 shading_normal, bool entering, float ior,
-                                float xi) {
+                                float xi, uint model) {
     vec3 facing = dot3(incident, shading_normal) < 0.0 ? shading_normal : -shading_normal;
     // precise: eta reaches the result only through calls, where glslang stops propagating
     precise float eta = entering ? 1.0 / ior : ior;
     float cos_i = -dot3(incident, facing);
-    float f = fresnel_dielectric(cos_i, eta);
+    float f = fresnel_reflectance(cos_i, eta, model);
     if (xi < f) return reflect3(incident, facing);
     vec3 t;
     if (refract3(incident, facing, eta, t)) return normalize3(t);

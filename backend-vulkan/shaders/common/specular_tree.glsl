@@ -21,7 +21,8 @@ struct ChainRay {
 
 // Radiance along a camera ray that meets mirrors and glass: the ray tree is walked
 // depth first with an explicit stack, in the CPU's order (last pushed, first popped).
-precise vec3 specular_tree(uint max_depth, float min_weight, vec3 origin, vec3 dir) {
+precise vec3 specular_tree(uint max_depth, float min_weight, uint fresnel_model, vec3 origin,
+                           vec3 dir) {
     ChainRay stack[MAX_SPECULAR_DEPTH + 2u];
     uint sp = 0u;
     vec3 l = vec3(0.0);
@@ -52,7 +53,7 @@ precise vec3 specular_tree(uint max_depth, float min_weight, vec3 origin, vec3 d
         } else {
             vec3 facing = facing_normal(s.shading_normal, r.dir);
             precise float eta = entering ? 1.0 / m.ior : m.ior;
-            float f = fresnel_dielectric(-dot3(r.dir, facing), eta);
+            float f = fresnel_reflectance(-dot3(r.dir, facing), eta, fresnel_model);
             precise float reflected = max_element3(weight) * f;
             if (reflected >= min_weight && sp < MAX_SPECULAR_DEPTH + 2u) {
                 precise vec3 w = weight * f;

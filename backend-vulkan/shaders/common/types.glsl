@@ -22,14 +22,15 @@
 //   DepositTexel  40: words 0 (10 x u32)
 //   TraceParams  128: light 0, emission 4, grid_w 8, grid_h 12, first 16, count 20,
 //                     seed 24, max_bounces 28, origin 32, axis 48, rect_u 64, rect_v 80,
-//                     photon_flux 96, flux_quantum 112, _pad 116..128
+//                     photon_flux 96, flux_quantum 112, split_budget 116,
+//                     fresnel_model 120, _pad 124
 //   DepositParams 80: camera 0, flux_quantum 64, hit_distance_quantum 68,
 //                     depth_tolerance 72, photon_capacity 76
 //   GatherParams 112: camera 0, roughness 64, hit_distance_min 68, hit_distance_max 72,
 //                     max_radius_px 76, sigma_depth 80, normal_power 84, axis 88,
 //                     tile_size 92, hit_distance_quantum 96, _pad 100..112
 //   DirectParams  80: camera 0, light_count 64, max_specular_depth 68, min_weight 72,
-//                     _pad 76
+//                     fresnel_model 76
 // Spaces: world positions and directions; `depth` is view depth; pixel (0, 0) top-left.
 //
 // Floating point: the OpenCL port compiles with FP_CONTRACT OFF so that every product
@@ -72,7 +73,7 @@ struct TraceParams {
     uint light; uint emission; uint grid_w; uint grid_h;
     uint first; uint count; uint seed; uint max_bounces;
     vec4 origin; vec4 axis; vec4 rect_u; vec4 rect_v; vec4 photon_flux;
-    float flux_quantum; uint split_budget; uint _pad0; uint _pad1;
+    float flux_quantum; uint split_budget; uint fresnel_model; uint _pad;
 };
 struct DepositParams {
     GpuCamera camera;
@@ -86,7 +87,7 @@ struct GatherParams {
 };
 struct DirectParams {
     GpuCamera camera;
-    uint light_count; uint max_specular_depth; float min_weight; uint _pad;
+    uint light_count; uint max_specular_depth; float min_weight; uint fresnel_model;
 };
 
 struct AtlasParams {
@@ -96,7 +97,7 @@ struct AtlasParams {
 
 struct MapLookupParams {
     GpuCamera camera;
-    uint atlas_width; uint max_specular_depth; float min_weight; uint _pad;
+    uint atlas_width; uint max_specular_depth; float min_weight; uint fresnel_model;
 };
 
 // The closest-hit payload (location 0) shared by the ray generation, closest-hit and miss

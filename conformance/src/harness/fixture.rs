@@ -8,7 +8,9 @@
 use caustica_core::backend::{read_buf, read_gbuffer, read_photon_map, Backend, BackendError};
 use caustica_core::device::device_scene::DeviceScene;
 use caustica_core::device::handle::SceneArgs;
-use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GpuCamera, Photon};
+use caustica_core::device::layout::{
+    counter, DepositTexel, GBufferTexel, GpuCamera, Photon, TraceParams,
+};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
@@ -136,11 +138,23 @@ impl Fixture {
         b: &mut dyn Backend,
         k: usize,
     ) -> Result<(Vec<Photon>, Vec<u32>), String> {
+        self.run_trace_with(b, k, |_| {})
+    }
+
+    /// [`Fixture::run_trace`] with the dispatch's parameters edited by `edit` first (for
+    /// example another `fresnel_model`).
+    pub fn run_trace_with(
+        &self,
+        b: &mut dyn Backend,
+        k: usize,
+        edit: impl Fn(&mut TraceParams),
+    ) -> Result<(Vec<Photon>, Vec<u32>), String> {
         let (light, d) = &self.constants.domains[k];
         let count = self.settings.photons_w * self.settings.photons_h;
-        let params = self
+        let mut params = self
             .constants
             .trace_params(&self.settings, *light, d, 0, count);
+        edit(&mut params);
         let mut rec = Recording::new();
         let photons = rec.create(count, "photons");
         let photon_count = rec.create(1, "photon count");

@@ -17,7 +17,8 @@
 //! - `caustic_map_lookup` on the CPU's gathered map: `direct_light`'s specular tree
 //!   (the same walk, its tolerance argued there: `DIRECT_REL` per pixel on
 //!   `DIRECT_AGREEMENT` of the pixels, where a ray that grazes an edge may take the other
-//!   triangle) ending in a bilinear lookup of four texels (7 roundings).
+//!   triangle) ending in a bilinear lookup of four texels (7 roundings); under both
+//!   reflectance models (exact and Schlick).
 
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
 use crate::harness::tolerance::{DIRECT_AGREEMENT, DIRECT_FLOOR, DIRECT_REL, GATHER_REL};
@@ -26,6 +27,7 @@ use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
 use caustica_core::frame::caustic_atlas::{atlas_layout, AtlasLayout};
 use caustica_core::kernels::{CausticMapLookup, DepositAtlas, GatherCausticMap};
+use caustica_core::math::optics::fresnel_model;
 use caustica_core::math::rng::random_f32;
 use caustica_core::recording::Recording;
 use caustica_core::scene::Material;
@@ -138,12 +140,13 @@ fn run_gather(
     run_and_free(b, "gather_caustic_map", &rec, |b| read_buf(b, out))
 }
 
-/// Runs `caustic_map_lookup` on `b` over `map`.
+/// Runs `caustic_map_lookup` on `b` over `map`, dielectrics under `fresnel_model`.
 fn run_lookup(
     fx: &Fixture,
     b: &mut dyn Backend,
     l: &AtlasLayout,
     map: &[[f32; 4]],
+    fresnel_model: u32,
 ) -> Result<Vec<[f32; 4]>, String> {
     let mut rec = Recording::new();
     let out = rec.create(fx.pixels(), "caustics");
@@ -158,7 +161,7 @@ fn run_lookup(
             atlas_width: l.plan.size.0,
             max_specular_depth: fx.settings.max_specular_depth,
             min_weight: 1e-3,
-            _pad: 0,
+            fresnel_model,
         },
         triangle_tiles,
         tiles,
@@ -232,24 +235,27 @@ pub fn check_caustic_map(
         });
         gathered.push(ga);
     }
-    let la = run_lookup(fx, r, &l, &gathered[0])?;
-    let lb = run_lookup(fx, c, &l, &gathered[0])?;
-    let agree = la
-        .iter()
-        .zip(&lb)
-        .filter(|(a, b)| {
-            (0..3).all(|k| (a[k] - b[k]).abs() <= DIRECT_REL * a[k].abs() + DIRECT_FLOOR)
-        })
-        .count();
-    let frac = agree as f64 / la.len().max(1) as f64;
-    v.check(frac >= DIRECT_AGREEMENT, || {
-        format!(
-            "caustic_map_lookup: {:.4} of pixels agree, need {DIRECT_AGREEMENT}",
-            frac
-        )
-    });
-    v.check(lb.iter().all(|p| p.iter().all(|x| x.is_finite())), || {
-        "lookup: a non-finite pixel".into()
-    });
+    // both reflectance models of the specular chain (the exact default, seed 001's Schlick)
+    for model in [fresnel_model::EXACT, fresnel_model::SCHLICK] {
+        let la = run_lookup(fx, r, &l, &gathered[0], model)?;
+        let lb = run_lookup(fx, c, &l, &gathered[0], model)?;
+        let agree = la
+            .iter()
+            .zip(&lb)
+            .filter(|(a, b)| {
+                (0..3).all(|k| (a[k] - b[k]).abs() <= DIRECT_REL * a[k].abs() + DIRECT_FLOOR)
+            })
+            .count();
+        let frac = agree as f64 / la.len().max(1) as f64;
+        v.check(frac >= DIRECT_AGREEMENT, || {
+            format!(
+                "caustic_map_lookup (fresnel_model {model}): {frac:.4} of pixels agree, need \
+                 {DIRECT_AGREEMENT}"
+            )
+        });
+        v.check(lb.iter().all(|p| p.iter().all(|x| x.is_finite())), || {
+            format!("lookup (fresnel_model {model}): a non-finite pixel")
+        });
+    }
     Ok(v)
 }

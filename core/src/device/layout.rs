@@ -401,8 +401,9 @@ pub struct MapLookupParams {
     pub max_specular_depth: u32,
     /// Chains whose weight falls below this are cut.
     pub min_weight: f32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// Reflectance of dielectric interfaces on the chain, one of
+    /// [`fresnel_model`](crate::math::optics::fresnel_model).
+    pub fresnel_model: u32,
 }
 
 /// Parameters of one `trace_photons` dispatch: photons `first .. first + count` of the
@@ -442,8 +443,11 @@ pub struct TraceParams {
     /// With the variant's `FRESNEL_SPLIT`: the most branches (hence stored photons) one
     /// emitted photon may split into (1..=[`MAX_SPLIT_BRANCHES`]); unused otherwise.
     pub split_budget: u32,
+    /// Reflectance of dielectric interfaces, one of
+    /// [`fresnel_model`](crate::math::optics::fresnel_model).
+    pub fresnel_model: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// Largest [`TraceParams::split_budget`]: the depth of the kernels' branch stacks.
@@ -513,8 +517,9 @@ pub struct DirectParams {
     pub max_specular_depth: u32,
     /// Chains whose weight falls below this are cut.
     pub min_weight: f32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// Reflectance of dielectric interfaces on the chain, one of
+    /// [`fresnel_model`](crate::math::optics::fresnel_model).
+    pub fresnel_model: u32,
 }
 
 /// Word offsets into the photon counter buffer (`u32` words; 64-bit sums as lo, hi).

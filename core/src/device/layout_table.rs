@@ -208,7 +208,7 @@ table! {
     DepositTexel { flux, hit_distance, photons }
     TraceParams {
         light, emission, grid_w, grid_h, first, count, seed, max_bounces,
-        origin, axis, rect_u, rect_v, photon_flux, flux_quantum, split_budget, _pad
+        origin, axis, rect_u, rect_v, photon_flux, flux_quantum, split_budget, fresnel_model, _pad
     }
     DepositParams { camera, flux_quantum, hit_distance_quantum, depth_tolerance, photon_capacity }
     GatherParams {
@@ -216,11 +216,11 @@ table! {
         sigma_depth, normal_power, axis, tile_size, hit_distance_quantum, knn_photons,
         flux_quantum, table_block
     }
-    DirectParams { camera, light_count, max_specular_depth, min_weight, _pad }
+    DirectParams { camera, light_count, max_specular_depth, min_weight, fresnel_model }
     AtlasParams {
         width, height, flux_quantum, hit_distance_quantum, photon_capacity, gather_width, _pad
     }
-    MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, _pad }
+    MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, fresnel_model }
 }
 
 static TABLE: LazyLock<Vec<StructLayout>> = LazyLock::new(build);

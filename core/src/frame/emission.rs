@@ -90,7 +90,8 @@ impl EmissionDomain {
                 .to_array(),
             flux_quantum,
             split_budget: 1,
-            _pad: [0; 2],
+            fresnel_model: crate::math::optics::fresnel_model::EXACT,
+            _pad: 0,
         }
     }
 }

@@ -220,7 +220,8 @@ impl LightViewPlane {
             photon_flux: (self.power * texel).extend(min_relative_power).to_array(),
             flux_quantum,
             split_budget: 1,
-            _pad: [0; 2],
+            fresnel_model: crate::math::optics::fresnel_model::EXACT,
+            _pad: 0,
         }
     }
 }

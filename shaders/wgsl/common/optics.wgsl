@@ -31,6 +31,34 @@ fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
     return clampf(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
 }
 
+// Seed 001's Schlick approximation (core: optics::fresnel_schlick): the transmitted
+// cosine when light goes into the lower index, 1 under total internal reflection.
+fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
+    let q = (eta - 1.0) / (eta + 1.0);
+    let r0 = q * q;
+    var cos_x = clampf(cos_i, 0.0, 1.0);
+    if (eta > 1.0) {
+        let sin2_t = eta * eta * (1.0 - cos_x * cos_x);
+        if (sin2_t > 1.0) {
+            return 1.0;
+        }
+        cos_x = sqrt(1.0 - sin2_t);
+    }
+    let x = 1.0 - cos_x;
+    return r0 + (1.0 - r0) * x * x * x * x * x;
+}
+
+// core: optics::fresnel_model values
+const FRESNEL_SCHLICK: u32 = 1u;
+
+// The reflectance under `model` (core: optics::fresnel_reflectance).
+fn fresnel_reflectance(cos_i: f32, eta: f32, model: u32) -> f32 {
+    if (model == FRESNEL_SCHLICK) {
+        return fresnel_schlick(cos_i, eta);
+    }
+    return fresnel_dielectric(cos_i, eta);
+}
+
 fn beer_lambert(sigma_a: vec3<f32>, distance: f32) -> vec3<f32> {
     return vec3<f32>(exp(-sigma_a.x * distance), exp(-sigma_a.y * distance),
                      exp(-sigma_a.z * distance));
@@ -45,13 +73,14 @@ fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
     return a + cauchy_b / (wavelength_um * wavelength_um);
 }
 
-// Reflects with probability = Fresnel reflectance (`xi` uniform in [0, 1)), else refracts.
+// Reflects with probability = Fresnel reflectance of `model` (`xi` uniform in [0, 1)),
+// else refracts.
 fn dielectric_scatter(incident: vec3<f32>, shading_normal: vec3<f32>, entering: bool, ior: f32,
-                      xi: f32) -> vec3<f32> {
+                      xi: f32, model: u32) -> vec3<f32> {
     let facing = select(-shading_normal, shading_normal, dot3(incident, shading_normal) < 0.0);
     let eta = select(ior, 1.0 / ior, entering);
     let cos_i = -dot3(incident, facing);
-    let f = fresnel_dielectric(cos_i, eta);
+    let f = fresnel_reflectance(cos_i, eta, model);
     if (xi < f) {
         return reflect(incident, facing);
     }

@@ -23,7 +23,8 @@ fn chain_ray(origin: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32,
 
 const SPECULAR_STACK_SIZE: u32 = MAX_SPECULAR_DEPTH + 2u;
 
-fn specular_tree(max_depth: u32, min_weight: f32, origin: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+fn specular_tree(max_depth: u32, min_weight: f32, fresnel_model: u32, origin: vec3<f32>,
+                 dir: vec3<f32>) -> vec3<f32> {
     var stack: array<ChainRay, SPECULAR_STACK_SIZE>;
     var sp = 0u;
     var l = vec3<f32>(0.0);
@@ -59,7 +60,7 @@ fn specular_tree(max_depth: u32, min_weight: f32, origin: vec3<f32>, dir: vec3<f
         } else {
             let facing = facing_normal(s.shading_normal, r.dir);
             let eta = select(m.ior, 1.0 / m.ior, entering);
-            let f = fresnel_dielectric(-dot3(r.dir, facing), eta);
+            let f = fresnel_reflectance(-dot3(r.dir, facing), eta, fresnel_model);
             if (max_element3(weight) * f >= min_weight && sp < SPECULAR_STACK_SIZE) {
                 stack[sp] = chain_ray(offset_ray_origin(s.position, ng_view),
                                       reflect(r.dir, facing), weight * f, r.depth + 1u,

@@ -110,8 +110,8 @@ struct TraceParams {
     photon_flux: vec4<f32>,
     flux_quantum: f32,
     split_budget: u32,
-    _pad0: u32,
-    _pad1: u32,
+    fresnel_model: u32,
+    _pad: u32,
 }
 
 struct DepositParams {
@@ -154,7 +154,7 @@ struct MapLookupParams {
     atlas_width: u32,
     max_specular_depth: u32,
     min_weight: f32,
-    _pad: u32,
+    fresnel_model: u32,
 }
 
 struct DirectParams {
@@ -162,7 +162,7 @@ struct DirectParams {
     light_count: u32,
     max_specular_depth: u32,
     min_weight: f32,
-    _pad: u32,
+    fresnel_model: u32,
 }
 
 // core::gpu constants

@@ -23,7 +23,8 @@ mod settings;
 
 pub use emission::Emission;
 pub use settings::{
-    CausticMapOutputs, CausticMapSettings, FresnelSplit, ATLAS_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
+    CausticMapOutputs, CausticMapSettings, FresnelModel, FresnelSplit, ATLAS_BYTES_PER_TEXEL,
+    MAX_ATLAS_SIZE,
 };
 
 use crate::backend::{read_buf, Backend};
@@ -534,6 +535,7 @@ impl CausticMap {
                     variant: self.variant,
                     params: TraceParams {
                         split_budget: s.split_budget,
+                        fresnel_model: s.fresnel.kernel_value(),
                         ..plane.trace_params(
                             *light,
                             (first as u32, count),
@@ -665,7 +667,7 @@ impl CausticMap {
                     light_count: self.model.lights.len() as u32,
                     max_specular_depth: self.settings.max_specular_depth,
                     min_weight: 1e-3,
-                    _pad: 0,
+                    fresnel_model: self.settings.fresnel.kernel_value(),
                 },
                 gbuffer: g,
                 out: direct,
@@ -677,7 +679,7 @@ impl CausticMap {
                 atlas_width: self.settings.atlas_size,
                 max_specular_depth: self.settings.max_specular_depth,
                 min_weight: 1e-3,
-                _pad: 0,
+                fresnel_model: self.settings.fresnel.kernel_value(),
             };
             for (map, out) in [(Some(a.map), i.filtered), (a.raw_map, i.raw)] {
                 if let (Some(map), Some(out)) = (map, out) {

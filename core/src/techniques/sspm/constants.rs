@@ -195,7 +195,7 @@ impl FrameConstants {
             light_count,
             max_specular_depth: settings.max_specular_depth,
             min_weight: 1e-3,
-            _pad: 0,
+            fresnel_model: crate::math::optics::fresnel_model::EXACT,
         }
     }
 }
