@@ -9,11 +9,14 @@
 //! - [`techniques`]: whole frames of a technique compared with the reference's.
 //! - [`stiff`]: the catalogue of stiff and extreme cases.
 //! - [`strategies`]: proptest strategies for valid scenes and small settings.
+//! - [`sphere_optics`]: the `sphere` scene's exact optics in f64 (closed-form anchor and
+//!   traced reference).
 //!
 //! Used by `tests/cross_backend.rs`, `tests/stiff_cases.rs` and `tests/suite_sensitivity.rs`.
 
 pub mod harness;
 pub mod kernels;
+pub mod sphere_optics;
 pub mod stiff;
 pub mod strategies;
 pub mod techniques;

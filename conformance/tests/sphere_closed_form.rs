@@ -1,203 +1,23 @@
 //! The `sphere` scene's caustic in closed form, as an anchor for every technique (issue
-//! 15, point 6): a point light of I = 10 W/sr per channel at (0, 3, 0), a glass ball
-//! (n = 1.5, R = 0.5) centred at (0, 1, 0), a 4 x 4 diffuse plane at y = 0.
-//!
-//! Derivation. The scene is rotationally symmetric about the y axis, so every ray from
-//! the light stays in its meridional plane: a ray leaving at angle theta from -y meets
-//! the ball when sin(theta) <= R / d (d = 2), carries flux I dOmega with
-//! dOmega = 2 pi d(cos theta), and splits at each interface into a reflected part
-//! (unpolarised Fresnel, the mean of the s and p reflectances) and a refracted part (Snell).
-//! Inside a sphere every internal incidence angle equals the entry refraction angle, so
-//! there is no total internal reflection and the internal chain is a geometric series;
-//! it is followed until the weight is below 1e-15 (at most 10^5 orders). Each part leaving the ball downwards
-//! lands on y = 0 at distance rho from the axis; on the square plane [-2, 2]^2 a ring of
-//! radius rho keeps the fraction of its azimuths inside the square (1 for rho <= 2;
-//! (asin(2/rho) - acos(2/rho)) / (pi/2) up to 2 sqrt 2). The integral over cos(theta) is
-//! a midpoint sum of 2^21 rays (the integrand has jumps where rho crosses a radius, so the
-//! error is O(1/N): below 1e-6 relative).
+//! 15, point 6). The derivation and the exact optics are in
+//! `caustica_conformance::sphere_optics`.
 //!
 //! Numbers (per channel): total caustic flux on the plane ~1.749 W (all internal orders),
 //! 1.665 W straight through (two refractions), 0.079 W reflected off the outside; 0.737 W
 //! within rho < 0.02 and 1.097 W within rho < 0.1 of the axis. The test derives them and
 //! checks them against those figures, then checks the stored photons of Sspm's trace on
-//! the CPU backend (the raw deposit's input) against the derived values.
+//! the CPU backend (the raw deposit's input) against the derived values, under the exact
+//! reflectance and under Schlick's.
 
 use caustica_conformance::harness::fixture::Fixture;
+use caustica_conformance::sphere_optics::{
+    anchor, landings, Fresnel, CENTRE_Y, INTENSITY, LIGHT_Y, RADII, RADIUS,
+};
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::sspm::SspmSettings;
 use caustica_cpu::CpuBackend;
 use std::f64::consts::PI;
-
-const N_GLASS: f64 = 1.5;
-const RADIUS: f64 = 0.5;
-const CENTRE_Y: f64 = 1.0;
-const LIGHT_Y: f64 = 3.0;
-const INTENSITY: f64 = 10.0;
-const PLANE_HALF: f64 = 2.0;
-
-/// Which reflectance the interfaces have.
-#[derive(Clone, Copy, PartialEq)]
-enum Fresnel {
-    /// The exact unpolarised reflectance (caustica's default, the published figures).
-    Exact,
-    /// Schlick's approximation as seed 001 uses it (CausticMap's `fresnel: schlick`).
-    Schlick,
-}
-
-/// Reflectance, light going from index `n1` into `n2` at incidence cosine `cos_i`, 1
-/// beyond the critical angle. Exact: the mean of R_s and R_p. Schlick: `R0 + (1 - R0)
-/// (1 - cos)^5` with `R0 = ((n1 - n2) / (n1 + n2))^2` and the cosine on the side of the
-/// lower index (the transmitted one when `n1 > n2`).
-fn fresnel(model: Fresnel, cos_i: f64, n1: f64, n2: f64) -> f64 {
-    let sin_t = n1 / n2 * (1.0 - cos_i * cos_i).max(0.0).sqrt();
-    if sin_t >= 1.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin_t * sin_t).sqrt();
-    if model == Fresnel::Schlick {
-        let r0 = ((n1 - n2) / (n1 + n2)).powi(2);
-        let c = if n1 > n2 { cos_t } else { cos_i };
-        return r0 + (1.0 - r0) * (1.0 - c).powi(5);
-    }
-    let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
-    let rp = (n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i);
-    0.5 * (rs * rs + rp * rp)
-}
-
-/// Snell: the refracted unit direction of unit `d` through unit normal `n` (facing
-/// against `d`), `eta = n1 / n2`.
-fn refract(d: [f64; 2], n: [f64; 2], eta: f64) -> [f64; 2] {
-    let cos_i = -(d[0] * n[0] + d[1] * n[1]);
-    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-    let c = eta * cos_i - k.sqrt();
-    [eta * d[0] + c * n[0], eta * d[1] + c * n[1]]
-}
-
-fn reflect(d: [f64; 2], n: [f64; 2]) -> [f64; 2] {
-    let dn = d[0] * n[0] + d[1] * n[1];
-    [d[0] - 2.0 * dn * n[0], d[1] - 2.0 * dn * n[1]]
-}
-
-/// How a path reached the plane.
-#[derive(Clone, Copy, PartialEq)]
-enum Path {
-    ReflectedOutside,
-    StraightThrough,
-    InternalReflections,
-}
-
-/// Every part of the ray leaving the light downwards at `sin_theta` that lands on y = 0:
-/// (distance from the axis, fraction of the ray's flux, path).
-fn landings(model: Fresnel, sin_theta: f64) -> Vec<(f64, f64, Path)> {
-    let cos_theta = (1.0 - sin_theta * sin_theta).sqrt();
-    let d = [sin_theta, -cos_theta];
-    let o = [0.0, LIGHT_Y];
-    // first hit: |o + t d - c|^2 = R^2
-    let oc = [o[0], o[1] - CENTRE_Y];
-    let b = oc[0] * d[0] + oc[1] * d[1];
-    let disc = b * b - (oc[0] * oc[0] + oc[1] * oc[1] - RADIUS * RADIUS);
-    if disc < 0.0 {
-        return vec![];
-    }
-    let t = -b - disc.sqrt();
-    let mut p = [o[0] + t * d[0], o[1] + t * d[1]];
-    let mut n = [p[0] / RADIUS, (p[1] - CENTRE_Y) / RADIUS];
-    let mut out = Vec::new();
-    let land = |p: [f64; 2], d: [f64; 2]| -> Option<f64> {
-        (d[1] < 0.0).then(|| (p[0] + (0.0 - p[1]) / d[1] * d[0]).abs())
-    };
-    let cos_i = -(d[0] * n[0] + d[1] * n[1]);
-    let r0 = fresnel(model, cos_i, 1.0, N_GLASS);
-    if let Some(rho) = land(p, reflect(d, n)) {
-        out.push((rho, r0, Path::ReflectedOutside));
-    }
-    let mut w = 1.0 - r0;
-    let mut dir = refract(d, n, 1.0 / N_GLASS);
-    let mut k = 0;
-    // Near the silhouette the internal reflectance tends to 1 and the chain to an
-    // infinite one; 10^5 orders (or a reflectance rounded to 1) end it: what is left
-    // there is a measure-zero set of rays.
-    while w > 1e-15 && k < 100_000 {
-        // next hit from inside: the chord through p along dir
-        let pc = [p[0], p[1] - CENTRE_Y];
-        let t = -2.0 * (pc[0] * dir[0] + pc[1] * dir[1]);
-        p = [p[0] + t * dir[0], p[1] + t * dir[1]];
-        n = [p[0] / RADIUS, (p[1] - CENTRE_Y) / RADIUS];
-        let cos_i = dir[0] * n[0] + dir[1] * n[1];
-        let r = fresnel(model, cos_i, N_GLASS, 1.0);
-        let exit = refract(dir, [-n[0], -n[1]], N_GLASS);
-        if let Some(rho) = land(p, exit) {
-            let kind = if k == 0 {
-                Path::StraightThrough
-            } else {
-                Path::InternalReflections
-            };
-            out.push((rho, w * (1.0 - r), kind));
-        }
-        if r >= 1.0 {
-            break;
-        }
-        w *= r;
-        dir = reflect(dir, [-n[0], -n[1]]);
-        k += 1;
-    }
-    out
-}
-
-/// Fraction of a ring of radius `rho` (centred on the axis) inside the square plane.
-fn on_square(rho: f64) -> f64 {
-    if rho <= PLANE_HALF {
-        1.0
-    } else if rho < PLANE_HALF * 2f64.sqrt() {
-        ((PLANE_HALF / rho).asin() - (PLANE_HALF / rho).acos()) / (PI / 2.0)
-    } else {
-        0.0
-    }
-}
-
-/// The anchor numbers (W per channel).
-struct Anchor {
-    total: f64,
-    straight: f64,
-    reflected: f64,
-    /// Flux within rho < r, for each radius of `RADII`.
-    within: Vec<f64>,
-}
-
-const RADII: [f64; 2] = [0.02, 0.1];
-
-fn anchor(model: Fresnel, samples: usize) -> Anchor {
-    let sin_max = RADIUS / (LIGHT_Y - CENTRE_Y);
-    let cos_min = (1.0 - sin_max * sin_max).sqrt();
-    let d_cos = (1.0 - cos_min) / samples as f64;
-    let mut a = Anchor {
-        total: 0.0,
-        straight: 0.0,
-        reflected: 0.0,
-        within: vec![0.0; RADII.len()],
-    };
-    for i in 0..samples {
-        let cos_theta = cos_min + (i as f64 + 0.5) * d_cos;
-        let sin_theta = (1.0 - cos_theta * cos_theta).sqrt();
-        let flux = INTENSITY * 2.0 * PI * d_cos;
-        for (rho, w, path) in landings(model, sin_theta) {
-            let f = flux * w * on_square(rho);
-            a.total += f;
-            match path {
-                Path::StraightThrough => a.straight += f,
-                Path::ReflectedOutside => a.reflected += f,
-                Path::InternalReflections => {}
-            }
-            for (k, r) in RADII.iter().enumerate() {
-                if rho < *r {
-                    a.within[k] += flux * w;
-                }
-            }
-        }
-    }
-    a
-}
 
 #[test]
 fn sphere_caustic_closed_form_matches_the_published_figures() {
