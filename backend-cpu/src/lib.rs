@@ -16,7 +16,9 @@ pub mod traversal;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};
-use caustica_core::device::layout::{GBufferTexel, GBufferView, Photon, PhotonMapView};
+use caustica_core::device::layout::{
+    gather_surface, GBufferTexel, GBufferView, Photon, PhotonMapView,
+};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
@@ -227,6 +229,11 @@ impl CpuBackend {
                         rows
                     };
                     self.put(table.id, &rows)
+                } else if params.surface == gather_surface::ATLAS {
+                    // the atlas's edge texels come with its layout
+                    let t = self.get_mut(table.id)?.as_mut_slice(table.len)?;
+                    density_gather::photon_count_columns(params, t);
+                    Ok(())
                 } else {
                     let edges = {
                         let g = self.gbuffer(gbuffer)?;

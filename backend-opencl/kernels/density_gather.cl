@@ -47,6 +47,10 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
     }
     if (p->axis == 0u) {
         out[j] = (float4)(sum / gather_normaliser(p, edge, x, y, r, 1u), r);
+    } else if (p->surface == GATHER_SURFACE_ATLAS) {
+        // irradiance E = Phi / A over the texel's world area (its edge texel's y)
+        float3 e = saturate_radiance3(sum * saturate_radiance(1.0f / ej.y));
+        out[j] = (float4)(e, r);
     } else {
         // 000 Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
         GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, (uint)j);

@@ -2,7 +2,8 @@
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-cpu/src/kernels/density_gather.rs. Axis 0: a thread per row and block; 1: a
 // thread per column and block, in place. Wrapping uint sums: exact, the same bits on
-// every backend. Axis 1 also writes every pixel's edge texel.
+// every backend. Axis 1 also writes every pixel's edge texel (on the screen; the atlas's
+// come with its layout).
 
 __kernel void photon_count_table(__global const GatherParams* p,
                                  PHOTON_MAP_PARAMS(__global const), __global uint* table,
@@ -26,7 +27,9 @@ __kernel void photon_count_table(__global const GatherParams* p,
         // a thread per pixel writes its edge texel; the first w x blocks also scan, a
         // thread per column and block: x = t % w (neighbouring threads, neighbouring
         // columns), block = t / w
-        if (t < w * h) edge[t] = edge_texel(load_gather_texel(GATHER_GBUFFER_ARGS, t));
+        // (the atlas's edge texels come with its layout)
+        if (t < w * h && p->surface != GATHER_SURFACE_ATLAS)
+            edge[t] = edge_texel(load_gather_texel(GATHER_GBUFFER_ARGS, t));
         uint blocks = (h + b - 1u) / b;
         if (t >= w * blocks) return;
         uint x = t % w, y0 = (t / w) * b;

@@ -5,28 +5,38 @@
 //! bounces" is read as n specular interactions: `max_bounces = n + 1` ray segments and
 //! `max_specular_depth = n` for the camera's tree.
 //!
-//! Per setting, Fresnel split (deterministic, the default; stochastic) and backend, after
-//! a warm-up frame: the median over frames that remake the
-//! atlas (a new seed each) of every pass and of the budget line emission + trace + splat +
-//! gather (`trace_photons`, `deposit_atlas`, `gather_caustic_map`; target on the H200:
-//! <= 2 ms at 2048^2 photons and a 2048^2 map), and the median host wall time of a
-//! camera-only frame (the atlas reused: G-buffer, direct light, lookup, composite).
+//! Per setting, Fresnel split (deterministic; stochastic, the default), map gather (001's
+//! box, the default; density) and backend, after a warm-up frame: the median over frames
+//! that remake the atlas (a new seed each) of every pass and of the budget line emission +
+//! trace + splat + gather (`trace_photons`, `deposit_atlas`, and `gather_caustic_map` or
+//! the density gather's `photon_count_table`, `gather_footprint`, `density_gather`; target
+//! on the H200: <= 2 ms at 2048^2 photons and a 2048^2 map), and the median host wall time
+//! of a camera-only frame (the atlas reused: G-buffer, direct light, lookup, composite).
 //!
 //! `cargo bench -p caustica --bench caustic_map_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_PHOTONS=N` (default 2048),
-//! `CAUSTICA_BENCH_SETTINGS=0,1,2` (which of the three settings).
+//! `CAUSTICA_BENCH_SETTINGS=0,1,2` (which of the three settings),
+//! `CAUSTICA_BENCH_SPLITS=deterministic,stochastic` (default both),
+//! `CAUSTICA_BENCH_GATHERS=box,density` (default box).
 
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::limits::tessellated_size;
 use caustica_core::scene::{Scene, Shape};
 use caustica_core::techniques::caustic_map::{
-    CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit,
+    CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit, MapGather,
 };
 use std::collections::BTreeMap;
 
-const BUDGET_PASSES: &[&str] = &["trace_photons", "deposit_atlas", "gather_caustic_map"];
+const BUDGET_PASSES: &[&str] = &[
+    "trace_photons",
+    "deposit_atlas",
+    "gather_caustic_map",
+    "photon_count_table",
+    "gather_footprint",
+    "density_gather",
+];
 
 /// (glass triangles, bounces, atlas side, image size): seed 001 section 4.
 const SETTINGS: [(u64, u32, u32, (u32, u32)); 3] = [
@@ -99,10 +109,23 @@ fn main() {
             }
         };
         let device = backend.capabilities().device;
-        for (&k, split) in picked
-            .iter()
-            .flat_map(|k| [FresnelSplit::Deterministic, FresnelSplit::Stochastic].map(|s| (k, s)))
-        {
+        let splits: Vec<FresnelSplit> = env_or("CAUSTICA_BENCH_SPLITS", "deterministic,stochastic")
+            .split(',')
+            .filter_map(|s| serde_json::from_value(serde_json::Value::String(s.into())).ok())
+            .collect();
+        let gathers: Vec<MapGather> = env_or("CAUSTICA_BENCH_GATHERS", "box")
+            .split(',')
+            .filter_map(|s| serde_json::from_value(serde_json::Value::String(s.into())).ok())
+            .collect();
+        let mut combos: Vec<(usize, FresnelSplit, MapGather)> = Vec::new();
+        for &k in &picked {
+            for &s in &splits {
+                for &g in &gathers {
+                    combos.push((k, s, g));
+                }
+            }
+        }
+        for &(k, split, gather) in &combos {
             let (tris, bounces, atlas, size) = SETTINGS[k];
             let (scene, total) = scene_with(tris, size);
             let settings = CausticMapSettings {
@@ -112,6 +135,7 @@ fn main() {
                 max_bounces: bounces + 1,
                 max_specular_depth: bounces,
                 fresnel_split: split,
+                gather,
                 outputs: CausticMapOutputs {
                     composite: true,
                     direct: false,
@@ -171,7 +195,7 @@ fn main() {
                 continue;
             }
             println!(
-                "\n{name} on {device} / setting {k} / {split:?} split: glass ball of {total} triangles ({tris} asked), \
+                "\n{name} on {device} / setting {k} / {split:?} split / {gather:?} gather: glass ball of {total} triangles ({tris} asked), \
                  {bounces} bounces, {atlas}^2 atlas, {}x{} ({timing}): frame {:.3} ms (host wall), \
                  emission + trace + splat + gather {:.3} ms, camera-only frame {:.3} ms (host wall)",
                 size.0,

@@ -23,7 +23,8 @@ pub struct Record {
     pub scene: String,
     /// Technique name.
     pub technique: String,
-    /// The caustic filter (Sspm's `filter` setting: `density` or `bilateral`).
+    /// The caustic filter (Sspm's `filter` setting: `density` or `bilateral`; CausticMap's
+    /// `gather`: `box` or `density`; `own` for a technique with one filter).
     pub filter: String,
     /// Backend name.
     pub backend: String,
@@ -79,7 +80,9 @@ pub struct ReportPlan {
     pub backends: Vec<String>,
     /// Photon grids per light.
     pub budgets: Vec<(u32, u32)>,
-    /// Caustic filters to compare (Sspm's `filter` setting), each measured on its own.
+    /// Caustic filters to compare (Sspm's `filter`: density, bilateral; CausticMap's
+    /// `gather`: box, density), each measured on its own; a technique runs those it has,
+    /// or its default where it has none of them.
     pub filters: Vec<String>,
     /// Settings every combination starts from (a JSON object of the technique's fields;
     /// the budget and the filter are set over it).
@@ -139,15 +142,28 @@ pub fn run(
         scene.camera.height = plan.reference.height;
         let mask = CausticMask::from_reference(&r.image);
         for technique in &plan.techniques {
-            // a technique without Sspm's `filter` setting runs its own filter once
-            let has_filter = TECHNIQUES
+            // each technique runs the asked filters it has (Sspm's `filter`, CausticMap's
+            // `gather`), its default filter where it has none of them, and a technique
+            // with one filter runs it once as "own"
+            let filter_setting = TECHNIQUES
                 .iter()
                 .find(|t| t.name == technique)
-                .is_some_and(|t| (t.default_settings)().get("filter").is_some());
-            let filters: Vec<String> = if has_filter {
-                plan.filters.clone()
-            } else {
-                vec![OWN_FILTER.to_string()]
+                .and_then(|t| t.filter_setting);
+            let filters: Vec<String> = match filter_setting {
+                Some((_, values)) => {
+                    let asked: Vec<String> = plan
+                        .filters
+                        .iter()
+                        .filter(|f| values.contains(&f.as_str()))
+                        .cloned()
+                        .collect();
+                    if asked.is_empty() {
+                        vec![values[0].to_string()]
+                    } else {
+                        asked
+                    }
+                }
+                None => vec![OWN_FILTER.to_string()],
             };
             for backend_name in &plan.backends {
                 let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
@@ -158,8 +174,8 @@ pub fn run(
                     let mut settings = plan.settings.clone();
                     settings.insert("photons_w".into(), pw.into());
                     settings.insert("photons_h".into(), ph.into());
-                    if has_filter {
-                        settings.insert("filter".into(), filter.as_str().into());
+                    if let Some((key, _)) = filter_setting {
+                        settings.insert(key.into(), filter.as_str().into());
                     }
                     let settings = serde_json::Value::Object(settings);
                     let mut sspm = create(technique, backend.as_mut(), &scene, &settings)

@@ -305,3 +305,88 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
         "pixels within 10% of the reference: {shares:?} at 1024^2 and 2048^2 photons"
     );
 }
+
+/// The density gather on the atlas (`gather: density`) keeps the raw map's flux, on every
+/// backend and every built-in scene with caustics: `sum E A` over the atlas texels (`A`
+/// the texel's world area from the layout) of the density-gathered map against the raw
+/// map's (the N = 1 box gather), per channel, within `FLUX_REL` = 1e-4. In real arithmetic
+/// they are equal: every source texel's kernel is normalised over the covered texels of
+/// its own tile, and both maps drop the flux of uncovered texels alike. In f32 each
+/// source's shares sum to its flux within the rounding of a <= 33-term sum and a division
+/// (~35 ulp, 2e-6) per pass, and `E = Phi / A` times `A` is two roundings: ~1e-5 in all
+/// (the argument of `filter_flux.rs`), hence 1e-4. Tiles with several receivers' seams
+/// (`cornell`'s boxes, `ring`'s wall, `pool`'s basin) exercise the tile borders.
+#[test]
+fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
+    use caustica_core::device::device_scene::DeviceScene;
+    use caustica_core::frame::caustic_atlas::atlas_layout;
+    use caustica_core::frame::plan::SceneFeatures;
+    use caustica_core::scene::builtin::BUILTIN_SCENES;
+    use caustica_core::scene::Material;
+    use caustica_core::techniques::caustic_map::MapGather;
+    const FLUX_REL: f64 = 1e-4;
+    let base = CausticMapSettings {
+        photons_w: 128,
+        photons_h: 128,
+        atlas_size: 256,
+        ..Default::default()
+    };
+    let mut checked = 0;
+    for (name, mut b) in backends() {
+        for scene_name in BUILTIN_SCENES {
+            let mut scene = builtin(scene_name).expect("built-in");
+            let f = SceneFeatures::of(&scene);
+            if !(f.mirrors || f.dielectrics) {
+                continue;
+            }
+            (scene.camera.width, scene.camera.height) = (32, 18);
+            let ds = DeviceScene::build(&scene, Default::default()).expect("scene");
+            let receiver: Vec<bool> = scene
+                .objects
+                .iter()
+                .map(|o| matches!(scene.materials[&o.material], Material::Diffuse { .. }))
+                .collect();
+            let layout = atlas_layout(&ds, &receiver, (256, 256)).expect("layout");
+            let atlas_flux = |s: CausticMapSettings, b: &mut dyn caustica_core::Backend| {
+                let mut t = CausticMap::new(b, &scene, s).expect("technique");
+                t.frame(b, &mut |_| {}).expect("frame");
+                let map = t.read_output(b, "caustic_atlas").expect("atlas");
+                Box::new(t).free(b).expect("free");
+                let mut flux = [0.0f64; 3];
+                for (e, t) in map.pixels.iter().zip(&layout.texels) {
+                    let area = f32::from_bits(t[0]) as f64;
+                    for c in 0..3 {
+                        flux[c] += e[c] as f64 * area;
+                    }
+                }
+                flux
+            };
+            let raw = atlas_flux(
+                CausticMapSettings {
+                    gather_width: 1,
+                    ..base.clone()
+                },
+                b.as_mut(),
+            );
+            let density = atlas_flux(
+                CausticMapSettings {
+                    gather: MapGather::Density,
+                    ..base.clone()
+                },
+                b.as_mut(),
+            );
+            for c in 0..3 {
+                let rel = density[c] / raw[c] - 1.0;
+                assert!(
+                    raw[c] > 0.0 && rel.abs() <= FLUX_REL,
+                    "{name} / {scene_name}, channel {c}: density-gathered flux {} W vs raw {} W \
+                     ({rel:+.2e})",
+                    density[c],
+                    raw[c]
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 0, "no scene with caustics was checked");
+}

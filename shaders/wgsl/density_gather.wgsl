@@ -75,6 +75,10 @@ fn density_gather(index: u32) {
     }
     if (p.axis == 0u) {
         out[j] = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
+    } else if (p.surface == GATHER_SURFACE_ATLAS) {
+        // irradiance E = Phi / A over the texel's world area (its edge texel's y)
+        let e = saturate_radiance3(sum * saturate_radiance(1.0 / ej.y));
+        out[j] = vec4<f32>(e, r);
     } else {
         // 000 Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
         let g = load_gbuffer(u32(j));

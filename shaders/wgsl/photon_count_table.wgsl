@@ -3,8 +3,8 @@
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/photon_count_table.cl and backend-cpu/src/kernels/
 // density_gather.rs. Axis 0: a thread per row and block; 1: a thread per column and
-// block, in place, and every pixel's edge texel. Wrapping u32 sums: exact, the same bits
-// on every backend.
+// block, in place, and every pixel's edge texel (on the screen; the atlas's come with its
+// layout). Wrapping u32 sums: exact, the same bits on every backend.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> photon_map0: array<u32>;
@@ -75,7 +75,8 @@ fn photon_count_table(t: u32) {
     } else {
         // a thread per pixel writes its edge texel; the first w x blocks also scan, a
         // thread per column and block (neighbouring threads, neighbouring columns)
-        if (t < w * h) {
+        // (the atlas's edge texels come with its layout)
+        if (t < w * h && p.surface != GATHER_SURFACE_ATLAS) {
             edge[t] = edge_texel(load_gather_texel(t));
         }
         let blocks = (h + b - 1u) / b;

@@ -3,7 +3,8 @@
 //! `caustica_core::math::density_gather`).
 
 use caustica_core::device::layout::{
-    gbuffer_flags, gbuffer_pixel_area, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
+    gather_surface, gbuffer_flags, gbuffer_pixel_area, GBufferTexel, GBufferView, GatherParams,
+    PhotonMapView,
 };
 use caustica_core::math::density_gather::{
     clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight, footprint_radius,
@@ -188,6 +189,11 @@ pub fn density_gather(
             if p.axis == 0 {
                 let s = sum / normaliser(p, edge, j, r, 1);
                 [s.x, s.y, s.z, r]
+            } else if p.surface == gather_surface::ATLAS {
+                // irradiance E = Phi / A over the texel's world area (its edge texel's y;
+                // > 0 on every receiver texel; the scale saturates first, as below)
+                let e = saturate_radiance3(sum * saturate_radiance(1.0 / ej[1]));
+                [e.x, e.y, e.z, r]
             } else {
                 // 000 Eq. 5: L = (albedo / pi) Phi / A
                 // (the scale saturates first, so that no pixel of area 0 gives 0 / 0)

@@ -47,6 +47,7 @@ typedef struct {
     float roughness; float hit_distance_min; float hit_distance_max; uint max_radius_px;
     float sigma_depth; float normal_power; uint axis; uint tile_size;
     float hit_distance_quantum; uint knn_photons; float flux_quantum; uint table_block;
+    uint surface; uint _pad0; uint _pad1; uint _pad2;
 } GatherParams;
 typedef struct {
     GpuCamera camera;
@@ -72,6 +73,7 @@ typedef struct {
 #define EMISSION_RECTANGLE 1u
 #define EMISSION_VIEW_PLANE 2u
 #define NO_TILE 0xffffffffu
+#define GATHER_SURFACE_ATLAS 1u // core::device::layout::gather_surface::ATLAS
 #define GBUFFER_RECEIVER 1u
 #define NO_MATERIAL 0xffffffffu
 // core::gpu::counter word offsets

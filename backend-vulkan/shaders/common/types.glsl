@@ -26,9 +26,10 @@
 //                     fresnel_model 120, _pad 124
 //   DepositParams 80: camera 0, flux_quantum 64, hit_distance_quantum 68,
 //                     depth_tolerance 72, photon_capacity 76
-//   GatherParams 112: camera 0, roughness 64, hit_distance_min 68, hit_distance_max 72,
+//   GatherParams 128: camera 0, roughness 64, hit_distance_min 68, hit_distance_max 72,
 //                     max_radius_px 76, sigma_depth 80, normal_power 84, axis 88,
-//                     tile_size 92, hit_distance_quantum 96, _pad 100..112
+//                     tile_size 92, hit_distance_quantum 96, knn_photons 100,
+//                     flux_quantum 104, table_block 108, target 112, _pad 116..128
 //   DirectParams  80: camera 0, light_count 64, max_specular_depth 68, min_weight 72,
 //                     fresnel_model 76
 // Spaces: world positions and directions; `depth` is view depth; pixel (0, 0) top-left.
@@ -83,7 +84,8 @@ struct GatherParams {
     GpuCamera camera;
     float roughness; float hit_distance_min; float hit_distance_max; uint max_radius_px;
     float sigma_depth; float normal_power; uint axis; uint tile_size;
-    float hit_distance_quantum; uint _pad0; uint _pad1; uint _pad2;
+    float hit_distance_quantum; uint knn_photons; float flux_quantum; uint table_block;
+    uint surface; uint _pad0; uint _pad1; uint _pad2;
 };
 struct DirectParams {
     GpuCamera camera;

@@ -103,7 +103,8 @@ enum Command {
         #[arg(long)]
         cache: Option<PathBuf>,
         /// Comma-separated caustic filters to compare (Sspm's `filter` setting: density,
-        /// bilateral).
+        /// bilateral; CausticMap's `gather`: box, density); each technique runs those it
+        /// has, or its default where it has none of them.
         #[arg(long, default_value = "density")]
         filters: String,
         /// Settings file every combination starts from (JSON object of the technique's

@@ -14,23 +14,33 @@
 //!   area, i.e. at most `N^2 + 3` roundings of `2^-24` each, plus WGSL/SPIR-V's division
 //!   (2.5 ulp): relative `GATHER_REL` (1e-5 >> 14 ulp) of the texel's value, absolute
 //!   `1e-30` for zero texels.
+//! - the density gather on the atlas (`gather: density`): `photon_count_table` bitwise,
+//!   `gather_footprint` and both `density_gather` passes as on the screen
+//!   ([`check_atlas_density_gather`]).
 //! - `caustic_map_lookup` on the CPU's gathered map: `direct_light`'s specular tree
 //!   (the same walk, its tolerance argued there: `DIRECT_REL` per pixel on
 //!   `DIRECT_AGREEMENT` of the pixels, where a ray that grazes an edge may take the other
 //!   triangle) ending in a bilinear lookup of four texels (7 roundings); under both
 //!   reflectance models (exact and Schlick).
 
+use super::density_gather::{compare, tap_sum};
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
+use crate::harness::tolerance::DENSITY_GATHER_REL;
 use crate::harness::tolerance::{DIRECT_AGREEMENT, DIRECT_FLOOR, DIRECT_REL, GATHER_REL};
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
 use caustica_core::frame::caustic_atlas::{atlas_layout, AtlasLayout};
-use caustica_core::kernels::{CausticMapLookup, DepositAtlas, GatherCausticMap};
+use caustica_core::kernels::{
+    CausticMapLookup, DensityGather, DepositAtlas, GatherCausticMap, GatherFootprint,
+    PhotonCountTable,
+};
+use caustica_core::math::density_gather::atlas_edge_texel;
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::math::rng::random_f32;
 use caustica_core::recording::Recording;
 use caustica_core::scene::Material;
+use caustica_core::techniques::caustic_map::{atlas_gather_params, CausticMapSettings};
 
 /// Side of the checked atlas (texels).
 pub const CHECK_ATLAS: u32 = 64;
@@ -172,6 +182,150 @@ fn run_lookup(
     run_and_free(b, "caustic_map_lookup", &rec, |b| read_buf(b, out))
 }
 
+/// Gather settings of the density check on the atlas: radii from 1/2 (where 8 photons
+/// share a 3x3 window) to the cap of 8 texels (the sparse texels).
+fn density_settings(l: &AtlasLayout) -> CausticMapSettings {
+    CausticMapSettings {
+        atlas_size: l.plan.size.0,
+        knn_photons: 8,
+        max_radius_texels: 8,
+        ..Default::default()
+    }
+}
+
+/// The density gather on the atlas (`GatherParams::surface` ATLAS): both axes of
+/// `photon_count_table` from the CPU's sums (integer sums: bitwise), `gather_footprint`
+/// on the CPU's table and both `density_gather` passes on the CPU's intermediate images,
+/// each within `DENSITY_GATHER_REL` of the magnitudes it gathers (the screen check's
+/// argument: the same sums of products, in the same order; the column pass divides by the
+/// texel's area once more, one rounding, inside the margin).
+fn check_atlas_density_gather(
+    v: &mut Verdict,
+    l: &AtlasLayout,
+    sums: &[DepositTexel],
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<(), String> {
+    let s = density_settings(l);
+    let params = |axis| atlas_gather_params(&s, 2f32.powi(-24), 2f32.powi(-20), axis);
+    let edge: Vec<[f32; 4]> = l
+        .texels
+        .iter()
+        .map(|t| atlas_edge_texel(t[1], f32::from_bits(t[0])))
+        .collect();
+    let n = edge.len() as u32;
+    let cam = params(0).camera;
+    // photon_count_table, both axes
+    let table = |b: &mut dyn Backend| {
+        let mut rec = Recording::new();
+        let m = rec.upload_photon_map(sums);
+        let table = rec.create(n, "photon count table");
+        let e = rec.upload(&edge, "atlas edge texels");
+        let g = rec.create_gbuffer(1);
+        for axis in 0..2 {
+            rec.kernel(PhotonCountTable {
+                params: params(axis),
+                photon_map: m,
+                table,
+                gbuffer: g,
+                edge: e,
+            });
+        }
+        run_and_free(b, "photon_count_table (atlas)", &rec, |b| {
+            Ok((read_buf(b, table)?, read_buf(b, e)?))
+        })
+    };
+    let (ta, ea) = table(r)?;
+    let (tb, eb) = table(c)?;
+    v.check(ta == tb, || "atlas photon_count_table differs".into());
+    v.check(
+        ea.iter()
+            .zip(&edge)
+            .all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits))
+            && eb
+                .iter()
+                .zip(&edge)
+                .all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)),
+        || "photon_count_table wrote the atlas's edge texels".into(),
+    );
+    // gather_footprint
+    let footprint = |b: &mut dyn Backend| {
+        let mut rec = Recording::new();
+        let m = rec.upload_photon_map(sums);
+        let t = rec.upload(&ta, "photon count table");
+        let e = rec.upload(&edge, "atlas edge texels");
+        let out = rec.create(n, "footprints");
+        rec.kernel(GatherFootprint {
+            params: params(0),
+            photon_map: m,
+            table: t,
+            edge: e,
+            out,
+        });
+        run_and_free(b, "gather_footprint (atlas)", &rec, |b| read_buf(b, out))
+    };
+    let (fa, fb) = (footprint(r)?, footprint(c)?);
+    let radius = |f: &[[f32; 4]]| f.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect::<Vec<_>>();
+    compare(
+        v,
+        "atlas gather_footprint radius",
+        &cam,
+        (&radius(&fa), &radius(&fb)),
+        &|_, _| (DENSITY_GATHER_REL, 0.0),
+        false,
+    );
+    compare(
+        v,
+        "atlas gather_footprint flux",
+        &cam,
+        (&fa, &fb),
+        &|_, _| (DENSITY_GATHER_REL, 0.0),
+        false,
+    );
+    // density_gather, rows on the CPU's footprints, columns on the CPU's rows
+    let pass = |b: &mut dyn Backend, axis: u32, input: &[[f32; 4]]| {
+        let mut rec = Recording::new();
+        let e = rec.upload(&edge, "atlas edge texels");
+        let i = rec.upload(input, "gather input");
+        let g = rec.create_gbuffer(1);
+        let out = rec.create(n, "gather output");
+        rec.kernel(DensityGather {
+            params: params(axis),
+            gbuffer: g,
+            edge: e,
+            input: i,
+            out,
+        });
+        run_and_free(b, "density_gather (atlas)", &rec, |b| read_buf(b, out))
+    };
+    let rows = pass(r, 0, &fa)?;
+    let mut lit = 0;
+    for (axis, input) in [(0u32, &fa), (1, &rows)] {
+        let (a, b) = (pass(r, axis, input)?, pass(c, axis, input)?);
+        if axis == 1 {
+            lit = a.iter().filter(|t| t[0] > 0.0).count();
+        }
+        let reach = s.max_radius_texels as i32;
+        // flux -> output: 1 for the rows, 1 / area for the columns' irradiance
+        let to_output = |i: usize| if axis == 0 { 1.0 } else { 1.0 / edge[i][1] };
+        compare(
+            v,
+            &format!("atlas density_gather axis {axis}"),
+            &cam,
+            (&a, &b),
+            &|i, ch| {
+                (
+                    DENSITY_GATHER_REL,
+                    tap_sum(&cam, reach, axis, input, i, ch) * to_output(i),
+                )
+            },
+            true,
+        );
+    }
+    v.check(lit > 0, || "the density-gathered atlas is dark".into());
+    Ok(())
+}
+
 /// The three kernels on the fixture's scene (see the module doc).
 pub fn check_caustic_map(
     fx: &Fixture,
@@ -235,6 +389,7 @@ pub fn check_caustic_map(
         });
         gathered.push(ga);
     }
+    check_atlas_density_gather(&mut v, &l, &sa, r, c)?;
     // both reflectance models of the specular chain (the exact default, seed 001's Schlick)
     for model in [fresnel_model::EXACT, fresnel_model::SCHLICK] {
         let la = run_lookup(fx, r, &l, &gathered[0], model)?;

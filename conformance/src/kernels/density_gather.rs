@@ -15,7 +15,7 @@ use glam::Vec3;
 /// Compares `a` (reference) and `b` per pixel and channel: `|a - b| <= rel * (max(|a|,
 /// |b|) + gathered)` with `(rel, gathered) = tol(i, ch)`; alpha must be bitwise equal
 /// when `alpha_exact`. Records the failures in `v` under `what`.
-fn compare(
+pub(crate) fn compare(
     v: &mut Verdict,
     what: &str,
     cam: &GpuCamera,
@@ -59,7 +59,14 @@ fn compare(
 
 /// Sum over the taps of pixel `i`'s pass along `axis` (reach `max_radius_px`) of the
 /// input's channel `ch` magnitude.
-fn tap_sum(cam: &GpuCamera, reach: i32, axis: u32, input: &[[f32; 4]], i: usize, ch: usize) -> f32 {
+pub(crate) fn tap_sum(
+    cam: &GpuCamera,
+    reach: i32,
+    axis: u32,
+    input: &[[f32; 4]],
+    i: usize,
+    ch: usize,
+) -> f32 {
     let (w, h) = (cam.width as i32, cam.height as i32);
     let (x, y) = (i as i32 % w, i as i32 / w);
     let mut s = 0.0f32;

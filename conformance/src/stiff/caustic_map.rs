@@ -203,7 +203,9 @@ pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
     // and the raw map alike. Every texel centre is covered and every stored photon lands
     // on the box, so the only differences are f32 roundings: the u64 sum to f32 (2^-24),
     // the division by the area and the product with it again (2 x 2^-24), summed in f64:
-    // relative 1e-5 is > 40 times that.
+    // relative 1e-5 is > 40 times that. The density gather (`gather: density`) too, within
+    // 1e-4: each of its two passes adds the rounding of a <= 33-term sum and a division per
+    // source (~35 ulp, 2e-6; the argument of `filter_flux.rs`).
     let mut scene = sphere_scene();
     scene.objects[0].shape = Shape::Cuboid {
         min: Vec3::new(-2.0, -0.5, -2.0),
@@ -241,15 +243,35 @@ pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
         },
         &mut v,
     )?;
+    let density = checked(
+        b,
+        &scene,
+        &CausticMapSettings {
+            gather: caustica_core::techniques::caustic_map::MapGather::Density,
+            ..settings(256)
+        },
+        &mut v,
+    )?;
     let stored = f.stats.stored_flux[0];
-    let (g, r) = (flux(&f.atlas), flux(&raw.atlas));
+    let (g, r, d) = (flux(&f.atlas), flux(&raw.atlas), flux(&density.atlas));
     v.check(stored > 0.0, || "nothing stored".into());
-    for (what, x) in [("gathered", g), ("raw", r)] {
-        v.check(((x - stored) / stored).abs() < 1e-5, || {
+    for (what, x, tol) in [
+        ("gathered", g, 1e-5),
+        ("raw", r, 1e-5),
+        ("density", d, 1e-4),
+    ] {
+        v.check(((x - stored) / stored).abs() < tol, || {
             format!("{what} map flux {x:.7e} vs stored {stored:.7e}")
         });
     }
-    outcome(format!("gathered / stored {:.7}", g / stored), v)
+    outcome(
+        format!(
+            "gathered / stored {:.7}, density {:.7}",
+            g / stored,
+            d / stored
+        ),
+        v,
+    )
 }
 
 pub(super) fn overlapping_uvs(b: &mut dyn Backend) -> Result<Outcome, String> {

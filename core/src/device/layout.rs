@@ -503,6 +503,26 @@ pub struct GatherParams {
     /// Edge of the square blocks of the photon-count table (pixels, a power of two
     /// `>= 2 max_radius_px + 1`; see [`crate::math::density_gather::table_block`]).
     pub table_block: u32,
+    /// The density gather's surface, one of [`gather_surface`]: the camera's screen (Sspm)
+    /// or the caustic atlas (CausticMap); `camera.width x camera.height` is the grid's size
+    /// either way.
+    pub surface: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 3],
+}
+
+/// `GatherParams::surface` values: where the density gather (`photon_count_table`,
+/// `gather_footprint`, `density_gather`) runs.
+pub mod gather_surface {
+    /// The camera's screen: edge texels from the G-buffer (written by
+    /// `photon_count_table`'s axis 1), radiance `L = (albedo / pi) Phi / A_pixel` out of
+    /// `density_gather`'s axis 1.
+    pub const SCREEN: u32 = 0;
+    /// The caustic atlas: the edge texels are the atlas's own
+    /// ([`atlas_edge_texel`](crate::math::density_gather::atlas_edge_texel), uploaded with
+    /// the layout, never written by a kernel; the G-buffer is bound but not read), and
+    /// `density_gather`'s axis 1 writes irradiance `E = Phi / A_texel`.
+    pub const ATLAS: u32 = 1;
 }
 
 /// Parameters of `direct_light`.

@@ -214,7 +214,7 @@ table! {
     GatherParams {
         camera, roughness, hit_distance_min, hit_distance_max, max_radius_px,
         sigma_depth, normal_power, axis, tile_size, hit_distance_quantum, knn_photons,
-        flux_quantum, table_block
+        flux_quantum, table_block, surface, _pad
     }
     DirectParams { camera, light_count, max_specular_depth, min_weight, fresnel_model }
     AtlasParams {

@@ -20,7 +20,12 @@ use crate::math::density_gather::column_pass_threads;
 ///   column pass's sources, already normalised.
 /// - Axis 1 reads that and writes caustic radiance `L = (albedo / pi) S_j / A_j`
 ///   (W/(sr m^2) per channel, 000 Eq. 5 with the pixel's surface area `A_j`); alpha: the
-///   pixel's gather radius (pixels) where it received flux, 0 elsewhere.
+///   pixel's gather radius (pixels) where it received flux, 0 elsewhere. On the caustic
+///   atlas (`params.surface`
+///   [`gather_surface::ATLAS`](crate::device::layout::gather_surface::ATLAS)) it writes
+///   irradiance `E = S_j / A_j` (W/m^2 per channel) with `A_j` the texel's world area
+///   from its edge texel (`math::density_gather::atlas_edge_texel`), and the G-buffer is
+///   bound but not read.
 ///
 /// Non-receiver pixels get 0.
 #[derive(Clone, Copy, Debug)]
@@ -55,7 +60,10 @@ impl KernelDecl for DensityGather {
         let c = &self.params.camera;
         let n = texels(c.width, c.height);
         a.params("params", &self.params)?
-            .gbuffer(&self.gbuffer, n)?
+            .gbuffer(
+                &self.gbuffer,
+                super::photon_count_table::gbuffer_texels(&self.params, n),
+            )?
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;

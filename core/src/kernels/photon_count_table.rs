@@ -4,7 +4,7 @@
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
-use crate::device::layout::GatherParams;
+use crate::device::layout::{gather_surface, GatherParams};
 
 /// One direction of the blocked summed-area table of per-pixel photon counts clamped at
 /// `9 params.knn_photons` (`clamped_photon_count`), wrapping `u32` sums restarted at
@@ -18,7 +18,9 @@ use crate::device::layout::GatherParams;
 /// three G-buffer planes a tap. Axis 1 launches a thread per pixel: thread `t` writes
 /// pixel `t`'s edge texel, and the first `w x blocks` threads also scan (writing the edge
 /// texels inside the scan loops cost 0.06 ms at 1920x1080 on an H200, a thread per pixel
-/// 0.02 ms).
+/// 0.02 ms). With `params.surface` [`gather_surface::ATLAS`] the grid is the caustic atlas,
+/// whose edge texels come with its layout: axis 1 only scans, and the G-buffer (any planes
+/// of at least one texel) is bound but not read.
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonCountTable {
     /// Gather parameters (camera size, `knn_photons`, `axis`).
@@ -47,6 +49,15 @@ const BINDINGS: &[Binding] = &[
     bind("edge", ReadWrite),
 ];
 
+/// Texels the bound G-buffer must hold: the screen's `n`, or one on the atlas (not read).
+pub(super) fn gbuffer_texels(p: &GatherParams, n: u64) -> u64 {
+    if p.surface == gather_surface::ATLAS {
+        1
+    } else {
+        n
+    }
+}
+
 impl KernelDecl for PhotonCountTable {
     const INFO: KernelInfo = KernelInfo::compute("photon_count_table", BINDINGS, "Sspm");
 
@@ -56,7 +67,7 @@ impl KernelDecl for PhotonCountTable {
         a.params("params", &self.params)?
             .photon_map(&self.photon_map, n)?
             .buf("table", self.table, n * 4)?
-            .gather_gbuffer(&self.gbuffer, n)?
+            .gather_gbuffer(&self.gbuffer, gbuffer_texels(&self.params, n))?
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?;
         let b = self.params.table_block.max(1);
         Ok(Some(if self.params.axis == 0 {

@@ -159,6 +159,31 @@ pub fn edge_texel(receiver: bool, depth: f32, normal: [f32; 3]) -> [f32; 4] {
     }
 }
 
+/// `sigma_depth` of the density gather on the caustic atlas: with
+/// [`atlas_edge_texel`]'s "depths" (tile + 1 >= 1) the depth term of [`edge_weight`] is
+/// `exp(-0 / (1e-30 z)) = 1` between texels of one tile and `exp(-|dt| / (1e-30 z)) <=
+/// exp(-1e30 / 2^24) = 0` (it underflows to +0 in f32, exactly, on every backend) between
+/// texels of two tiles: the gather never crosses a tile border, as 001's N x N gather
+/// does not. (1e-30 is a normal f32; with `normal_power` 0 the normal term is skipped.)
+pub const ATLAS_SIGMA_DEPTH: f32 = 1e-30;
+
+/// Most tiles an atlas may have for the density gather: tile + 1 must be exact in f32.
+pub const ATLAS_MAX_TILES: u32 = 1 << 24;
+
+/// An atlas texel's edge texel for the density gather: `(tile + 1, world area, 0, 0)` for
+/// a texel some receiver's UV triangle covers (world area > 0, scene units^2), the
+/// not-a-receiver mark elsewhere (texels outside every triangle, and outside every tile).
+/// The "depth" keeps the gather inside a tile ([`ATLAS_SIGMA_DEPTH`]); `density_gather`'s
+/// last pass divides by the area.
+#[inline]
+pub fn atlas_edge_texel(tile: u32, area: f32) -> [f32; 4] {
+    if tile < ATLAS_MAX_TILES && area > 0.0 {
+        [tile as f32 + 1.0, area, 0.0, 0.0]
+    } else {
+        [EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0]
+    }
+}
+
 /// Whether an edge texel is a receiver's ([`edge_texel`]).
 #[inline]
 pub fn edge_texel_is_receiver(t: &[f32; 4]) -> bool {
@@ -290,6 +315,35 @@ pub fn join_u64_wide(lo: u32, hi: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn atlas_edge_texels_keep_the_gather_inside_a_tile() {
+        let w = |a: [f32; 4], b: [f32; 4]| {
+            edge_weight(
+                a[0],
+                [a[1], a[2], a[3]],
+                b[0],
+                [b[1], b[2], b[3]],
+                ATLAS_SIGMA_DEPTH,
+                0.0,
+            )
+        };
+        let last = ATLAS_MAX_TILES - 1;
+        for (t, u) in [(0, 1), (1, 0), (7, 8), (last - 1, last)] {
+            let (a, b) = (atlas_edge_texel(t, 1e-6), atlas_edge_texel(u, 4.0));
+            assert!(edge_texel_is_receiver(&a) && edge_texel_is_receiver(&b));
+            assert_eq!(w(a, b), 0.0, "tiles {t} and {u}");
+            assert_eq!(w(a, atlas_edge_texel(t, 3.0)), 1.0, "tile {t}");
+        }
+        // uncovered texels, texels outside every tile, too many tiles: not receivers
+        for (t, area) in [
+            (0, 0.0),
+            (crate::device::layout::NO_TILE, 1.0),
+            (ATLAS_MAX_TILES, 1.0),
+        ] {
+            assert!(!edge_texel_is_receiver(&atlas_edge_texel(t, area)));
+        }
+    }
 
     #[test]
     fn the_column_pass_takes_every_pixel_once() {

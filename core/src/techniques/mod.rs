@@ -29,6 +29,10 @@ pub struct TechniqueEntry {
     pub create: CreateFn,
     /// The default settings (serialised).
     pub default_settings: fn() -> serde_json::Value,
+    /// The setting that picks the caustic filter, and its values (the first is the
+    /// default), so that `report` can compare filters; `None` where the technique has one
+    /// filter.
+    pub filter_setting: Option<(&'static str, &'static [&'static str])>,
 }
 
 /// Every technique, by name: the registry.
@@ -40,6 +44,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
         default_settings: || {
             serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
         },
+        filter_setting: Some(("filter", &["density", "bilateral"])),
     },
     TechniqueEntry {
         name: "caustic-map",
@@ -49,6 +54,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(caustic_map::CausticMapSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
+        filter_setting: Some(("gather", &["box", "density"])),
     },
 ];
 

@@ -136,6 +136,10 @@ struct GatherParams {
     knn_photons: u32,
     flux_quantum: f32,
     table_block: u32,
+    surface: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct AtlasParams {
@@ -176,6 +180,7 @@ const EMISSION_CONE: u32 = 0u;
 const EMISSION_RECTANGLE: u32 = 1u;
 const EMISSION_VIEW_PLANE: u32 = 2u;
 const NO_TILE: u32 = 0xffffffffu;
+const GATHER_SURFACE_ATLAS: u32 = 1u; // core::device::layout::gather_surface::ATLAS
 const GBUFFER_RECEIVER: u32 = 1u;
 const NO_MATERIAL: u32 = 0xffffffffu;
 // core::gpu::counter word offsets

@@ -8,23 +8,23 @@
 //!    a camera move): per light view plane and per batch `trace_photons` (the
 //!    `SURFACE_STORE` variant: uv and triangle) then `deposit_atlas` (fixed-point sums per
 //!    atlas texel), then `gather_caustic_map` (001's N x N gather, fixed to keep flux, as
-//!    irradiance; and N = 1 for the raw map when asked);
+//!    irradiance; and N = 1 for the raw map when asked), or with `gather: density` Sspm's
+//!    density-adaptive gather on the atlas (`photon_count_table`, `gather_footprint`,
+//!    `density_gather` twice, `GatherParams::surface` ATLAS);
 //! 2. every frame: `primary_gbuffer` and `direct_light` (as Sspm), `caustic_map_lookup`
 //!    (the camera's specular ray tree reading the map) and `composite`.
 //!
-//! Not built yet (TODO(issue 16)): 001's deterministic Fresnel split (both branches
-//! traced with weights R and 1 - R) and its three-ray dispersion split; photons follow
-//! Sspm's stochastic Fresnel choice and one colour channel per dispersive photon, which
-//! has the same expectation. The energy-conserving adaptive gather of issue 11 on the
-//! atlas; pruning atlas tiles of receivers no photon can reach.
+//! Not built yet (TODO(issue 16)): pruning atlas tiles of receivers no photon can reach
+//! (the layout is fixed before any photon is traced); an exact pixel footprint in the
+//! lookup (a cone unfolded along the path, blind to focusing by curved glass).
 
 mod emission;
 mod settings;
 
 pub use emission::Emission;
 pub use settings::{
-    CausticMapOutputs, CausticMapSettings, FresnelModel, FresnelSplit, ATLAS_BYTES_PER_TEXEL,
-    MAX_ATLAS_SIZE,
+    CausticMapOutputs, CausticMapSettings, FresnelModel, FresnelSplit, MapGather,
+    ATLAS_BYTES_PER_TEXEL, DENSITY_GATHER_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
 };
 
 use crate::backend::{read_buf, Backend};
@@ -39,8 +39,8 @@ use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
-    CausticMapLookup, Composite, DepositAtlas, DirectLight, GatherCausticMap, PrimaryGbuffer,
-    TracePhotons, TraceVariant,
+    CausticMapLookup, Composite, DensityGather, DepositAtlas, DirectLight, GatherCausticMap,
+    GatherFootprint, PhotonCountTable, PrimaryGbuffer, TracePhotons, TraceVariant,
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
@@ -60,7 +60,28 @@ struct AtlasBuffers {
     photons: Buf<Photon>,
     photon_count: Buf<u32>,
     counters: Buf<u32>,
+    density: Option<DensityBuffers>,
 }
+
+/// The density gather's buffers on the atlas (`gather: density`).
+#[derive(Clone, Copy, Debug)]
+struct DensityBuffers {
+    /// Photon-count summed-area table, a `u32` per texel.
+    table: Buf<u32>,
+    /// The atlas's edge texels (`math::density_gather::atlas_edge_texel`), uploaded once.
+    edge: ImageBuf,
+    /// `gather_footprint`'s output.
+    footprint: ImageBuf,
+    /// The row pass's output.
+    rows: ImageBuf,
+    /// A one-texel G-buffer: the kernels bind one, and on the atlas read none.
+    gbuffer: GBufferPlanes,
+}
+
+/// The photon passes of each gather, in order (the camera-only frame skips them all).
+const BOX_GATHER_PASSES: [&str; 1] = ["gather_caustic_map"];
+const DENSITY_GATHER_PASSES: [&str; 3] =
+    ["photon_count_table", "gather_footprint", "density_gather"];
 
 /// The frame's camera-sized images.
 #[derive(Clone, Copy, Debug, Default)]
@@ -96,6 +117,36 @@ const OUTPUTS: [(&str, &str); 5] = [
         "the gathered caustic map: irradiance (W/m^2) per atlas texel",
     ),
 ];
+
+/// The density gather's parameters on an atlas of `settings.atlas_size` texels a side
+/// (`gather: density`; `axis` 0: the row pass, 1: the column pass): the atlas is the
+/// grid, edge weights only keep the gather inside a tile
+/// ([`ATLAS_SIGMA_DEPTH`](crate::math::density_gather::ATLAS_SIGMA_DEPTH), no normal term),
+/// the quanta are the atlas sums'.
+pub fn atlas_gather_params(
+    settings: &CausticMapSettings,
+    flux_quantum: f32,
+    hit_distance_quantum: f32,
+    axis: u32,
+) -> GatherParams {
+    GatherParams {
+        camera: GpuCamera {
+            width: settings.atlas_size,
+            height: settings.atlas_size,
+            ..Default::default()
+        },
+        max_radius_px: settings.max_radius_texels,
+        sigma_depth: crate::math::density_gather::ATLAS_SIGMA_DEPTH,
+        normal_power: 0.0,
+        axis,
+        hit_distance_quantum,
+        knn_photons: settings.knn_photons,
+        flux_quantum,
+        table_block: crate::math::density_gather::table_block(settings.max_radius_texels),
+        surface: gather_surface::ATLAS,
+        ..Default::default()
+    }
+}
 
 /// CausticMap on one backend, for one scene.
 pub struct CausticMap {
@@ -287,6 +338,22 @@ impl CausticMap {
             photons: rec.create(cap, "photons"),
             photon_count: rec.create(1, "photon count"),
             counters: rec.create(counter::WORDS as u32, "photon counters"),
+            density: (s.gather == MapGather::Density).then(|| {
+                let edge: Vec<[f32; 4]> = l
+                    .texels
+                    .iter()
+                    .map(|t| {
+                        crate::math::density_gather::atlas_edge_texel(t[1], f32::from_bits(t[0]))
+                    })
+                    .collect();
+                DensityBuffers {
+                    table: rec.create(texels, "atlas photon count table"),
+                    edge: rec.upload(&edge, "atlas edge texels"),
+                    footprint: rec.create(texels, "atlas gather footprints"),
+                    rows: rec.create(texels, "atlas gather rows"),
+                    gbuffer: rec.create_gbuffer(1),
+                }
+            }),
         };
         let alloc = planned_allocation(backend, &rec, None)?;
         backend.execute(&rec)?;
@@ -413,12 +480,36 @@ impl CausticMap {
             "neither direct light nor the composite was requested",
         );
         let layout = format!("the caustic atlas: {}", self.layout_summary);
-        for name in ["trace_photons", "deposit_atlas", "gather_caustic_map"] {
+        let stale = format!("when the atlas is stale (lights, settings or seed changed); {layout}");
+        for name in ["trace_photons", "deposit_atlas"] {
+            pass(name, photons, &stale, why_no_atlas);
+        }
+        let density = self.atlas.is_some_and(|a| a.density.is_some());
+        let raw_map = self.atlas.is_some_and(|a| a.raw_map.is_some());
+        pass(
+            "gather_caustic_map",
+            photons && (!density || raw_map),
+            &if density {
+                format!("the raw map (N = 1), {stale}")
+            } else {
+                format!("001's N x N gather, {stale}")
+            },
+            if !photons {
+                why_no_atlas
+            } else {
+                "the density gather filters the map and no raw map was requested"
+            },
+        );
+        for name in DENSITY_GATHER_PASSES {
             pass(
                 name,
-                photons,
-                &format!("when the atlas is stale (lights, settings or seed changed); {layout}"),
-                why_no_atlas,
+                photons && density,
+                &format!("the density gather on the atlas, {stale}"),
+                if !photons {
+                    why_no_atlas
+                } else {
+                    "the map's gather is 001's N x N box (gather: box)"
+                },
             );
         }
         pass(
@@ -473,6 +564,16 @@ impl CausticMap {
             stats.add_pass_time(t.kernel, t.seconds);
         }
         Ok(())
+    }
+
+    /// The density gather's parameters on the atlas (`axis` 0: rows).
+    fn atlas_gather_params(&self, axis: u32) -> GatherParams {
+        atlas_gather_params(
+            &self.settings,
+            self.emission.flux_quantum,
+            self.emission.hit_distance_quantum,
+            axis,
+        )
     }
 
     fn atlas_params(&self, a: &AtlasBuffers, gather_width: u32) -> AtlasParams {
@@ -569,13 +670,43 @@ impl CausticMap {
             }
         }
         let mut rec = Recording::new();
-        rec.kernel(GatherCausticMap {
-            params: self.atlas_params(&a, s.gather_width),
-            texels: a.texels,
-            tiles: a.tiles,
-            atlas: a.sums,
-            out: a.map,
-        });
+        if let Some(d) = a.density {
+            let rows = self.atlas_gather_params(0);
+            let columns = self.atlas_gather_params(1);
+            for params in [rows, columns] {
+                rec.kernel(PhotonCountTable {
+                    params,
+                    photon_map: a.sums,
+                    table: d.table,
+                    gbuffer: d.gbuffer,
+                    edge: d.edge,
+                });
+            }
+            rec.kernel(GatherFootprint {
+                params: rows,
+                photon_map: a.sums,
+                table: d.table,
+                out: d.footprint,
+                edge: d.edge,
+            });
+            for (params, input, out) in [(rows, d.footprint, d.rows), (columns, d.rows, a.map)] {
+                rec.kernel(DensityGather {
+                    params,
+                    gbuffer: d.gbuffer,
+                    edge: d.edge,
+                    input,
+                    out,
+                });
+            }
+        } else {
+            rec.kernel(GatherCausticMap {
+                params: self.atlas_params(&a, s.gather_width),
+                texels: a.texels,
+                tiles: a.tiles,
+                atlas: a.sums,
+                out: a.map,
+            });
+        }
         if let Some(raw) = a.raw_map {
             rec.kernel(GatherCausticMap {
                 params: deposit,
@@ -642,7 +773,12 @@ impl CausticMap {
                 self.photon_pass(backend, a, &mut stats, progress)?
             }
             Some(_) if photons => {
-                for name in ["trace_photons", "deposit_atlas", "gather_caustic_map"] {
+                for name in ["trace_photons", "deposit_atlas"]
+                    .into_iter()
+                    .chain(BOX_GATHER_PASSES)
+                    .chain(DENSITY_GATHER_PASSES)
+                    .filter(|n| self.plan.runs(n))
+                {
                     stats.skip(
                         name,
                         "only the camera changed since the caustic atlas was made: it is reused",

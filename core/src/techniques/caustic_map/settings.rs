@@ -91,6 +91,25 @@ impl FresnelModel {
     }
 }
 
+/// How the caustic map is filtered before the final pass reads it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MapGather {
+    /// Seed 001's N x N neighbour average (`gather_width`), normalised to keep the flux,
+    /// inside each tile (`gather_caustic_map`). The default, as the source has it.
+    #[default]
+    Box,
+    /// The density-adaptive, scatter-normalised gather Sspm filters its screen with
+    /// (`crate::math::density_gather`), run on the atlas: a texel's radius follows the
+    /// photons (`knn_photons` nearest, at most `max_radius_texels`), each source texel's
+    /// kernel is normalised over the covered texels of its own tile, so the flux is kept
+    /// and no tile border is crossed; a focused caustic where photons are dense is left
+    /// as deposited. Flux deposited into a texel whose centre no UV triangle covers (at a
+    /// UV island's edge) is dropped, as the raw map drops it; the box gather spreads it
+    /// into covered neighbours.
+    Density,
+}
+
 /// CausticMap's settings (seed 001; defaults from its section 4 where it gives them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -102,8 +121,15 @@ pub struct CausticMapSettings {
     pub photons_h: u32,
     /// Side of the caustic atlas (texels; 001's map size, 2048).
     pub atlas_size: u32,
-    /// Width N of the flux-keeping N x N gather (odd; 001's default 3; 1: no gather).
+    /// The caustic map's filter: 001's N x N box (default) or the density-adaptive
+    /// gather.
+    pub gather: MapGather,
+    /// Width N of the flux-keeping N x N box gather (odd; 001's default 3; 1: no gather).
     pub gather_width: u32,
+    /// Density gather: photons `k` whose nearest-neighbour window sets a texel's radius.
+    pub knn_photons: u32,
+    /// Density gather: largest radius (texels).
+    pub max_radius_texels: u32,
     /// Deterministic (001's) or stochastic Fresnel and dispersion splits.
     pub fresnel_split: FresnelSplit,
     /// Exact Fresnel (the default) or seed 001's Schlick approximation, for the photons and
@@ -132,9 +158,11 @@ pub struct CausticMapSettings {
     /// Largest scene, in triangles, the technique accepts.
     pub max_triangles: u64,
     /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), the
-    /// gathered and raw maps (16 B each) and the texel table (8 B). A larger atlas is a
-    /// typed out-of-memory error before any work (default 4 GiB: a 2048^2 atlas takes
-    /// 320 MiB, 4096^2 1.25 GiB, 16384^2 20 GiB).
+    /// gathered and raw maps (16 B each) and the texel table (8 B); with the density
+    /// gather also its count table (4 B), edge texels and two passes' images (16 B each).
+    /// A larger atlas is a typed out-of-memory error before any work (default 4 GiB: a
+    /// 2048^2 atlas takes 320 MiB, 528 MiB with the density gather; 4096^2 1.25 GiB,
+    /// 16384^2 20 GiB).
     pub max_atlas_bytes: u64,
 }
 
@@ -144,7 +172,10 @@ impl Default for CausticMapSettings {
             photons_w: 1024,
             photons_h: 1024,
             atlas_size: DEFAULT_ATLAS_SIDE,
+            gather: MapGather::Box,
             gather_width: DEFAULT_GATHER_WIDTH,
+            knn_photons: 32,
+            max_radius_texels: 16,
             fresnel_split: FresnelSplit::Stochastic,
             fresnel: FresnelModel::Exact,
             split_budget: 8,
@@ -169,10 +200,19 @@ pub const MAX_ATLAS_SIZE: u32 = 16384;
 /// table (8).
 pub const ATLAS_BYTES_PER_TEXEL: u64 = 80;
 
+/// Device bytes per atlas texel the density gather adds: count table (4), edge texels
+/// (16), the footprint and row-pass images (16 each).
+pub const DENSITY_GATHER_BYTES_PER_TEXEL: u64 = 52;
+
 impl CausticMapSettings {
-    /// Device bytes of the atlas at these settings (see [`ATLAS_BYTES_PER_TEXEL`]).
+    /// Device bytes of the atlas at these settings (see [`ATLAS_BYTES_PER_TEXEL`] and
+    /// [`DENSITY_GATHER_BYTES_PER_TEXEL`]).
     pub fn atlas_bytes(&self) -> u64 {
-        (self.atlas_size as u64).pow(2) * ATLAS_BYTES_PER_TEXEL
+        let per_texel = match self.gather {
+            MapGather::Box => ATLAS_BYTES_PER_TEXEL,
+            MapGather::Density => ATLAS_BYTES_PER_TEXEL + DENSITY_GATHER_BYTES_PER_TEXEL,
+        };
+        (self.atlas_size as u64).pow(2) * per_texel
     }
 }
 
@@ -189,6 +229,12 @@ impl CausticMapSettings {
         }
         if self.gather_width.is_multiple_of(2) || self.gather_width > 31 {
             return bad("gather_width must be odd and at most 31".into());
+        }
+        if self.knn_photons == 0 || self.knn_photons > 1024 {
+            return bad("knn_photons must be in 1..=1024".into());
+        }
+        if self.max_radius_texels > 256 {
+            return bad("max_radius_texels must be <= 256".into());
         }
         if !(1..=crate::device::layout::MAX_SPLIT_BRANCHES).contains(&self.split_budget) {
             return bad(format!(

@@ -181,6 +181,8 @@ impl FrameConstants {
             knn_photons: settings.knn_photons,
             flux_quantum: self.flux_quantum,
             table_block: crate::math::density_gather::table_block(settings.max_radius_px),
+            surface: crate::device::layout::gather_surface::SCREEN,
+            _pad: [0; 3],
         }
     }
 
