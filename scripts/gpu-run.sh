@@ -30,8 +30,9 @@ if [ "${1:-}" = "--build" ]; then
     for spec in "caustica-opencl:photon_throughput:opencl_photon_throughput" "caustica:sspm_frame:sspm_frame" \
                 "caustica:caustic_map_frame:caustic_map_frame"; do
         IFS=: read -r pkg bench name <<<"$spec"
+        # the bench's own executable (deps/<bench>-<hash>), not a binary built with it
         exe=$(cargo bench -p "$pkg" --bench "$bench" --no-run --message-format=json 2>/dev/null |
-              grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
+              grep -o '"executable":"[^"]*/deps/'"$bench"'-[^"]*"' | tail -n 1 | cut -d'"' -f4)
         cp "$exe" ".devbin/$name"
     done
     cargo build --release -p caustica --examples
@@ -53,7 +54,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap hang
+# causticmap cmbench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -126,6 +127,10 @@ if has causticmap; then
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./caustic_map_frames --test-threads=1
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1 --nocapture
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./caustic_map_frame --bench
+fi
+if has cmbench; then
+    # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
+    run timeout 400 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./caustic_map_frame --bench
 fi
 if has hang; then
     # issue 19 point 5: which backends, run in parallel threads of one process, hang
