@@ -17,6 +17,7 @@ __kernel void caustic_map_lookup(SCENE_PARAMS, __global const MapLookupParams* p
     end.map = map;
     end.atlas_width = p->atlas_width;
     end.pixel_angle = 2.0f * p->camera.tan_half_fov_y / (float)p->camera.height;
+    end.right = load3g(p->camera.right);
     float3 l = specular_tree(SCENE_ARGS, &end, p->max_specular_depth, p->min_weight,
                           p->fresnel_model,
                              load3g(p->camera.position), camera_ray(&p->camera, i % w, i / w));

@@ -5,8 +5,8 @@
 //! bounces" is read as n specular interactions: `max_bounces = n + 1` ray segments and
 //! `max_specular_depth = n` for the camera's tree.
 //!
-//! Per setting, Fresnel split (deterministic; stochastic, the default), map gather (001's
-//! box, the default; density) and backend, after a warm-up frame: the median over frames
+//! Per setting, Fresnel split (deterministic; stochastic, the default), map gather
+//! (density, the default; 001's box) and backend, after a warm-up frame: the median over frames
 //! that remake the atlas (a new seed each) of every pass and of the budget line emission +
 //! trace + splat + gather (`trace_photons`, `deposit_atlas`, and `gather_caustic_map` or
 //! the density gather's `photon_count_table`, `gather_footprint`, `density_gather`; target
@@ -18,7 +18,7 @@
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_PHOTONS=N` (default 2048),
 //! `CAUSTICA_BENCH_SETTINGS=0,1,2` (which of the three settings),
 //! `CAUSTICA_BENCH_SPLITS=deterministic,stochastic` (default both),
-//! `CAUSTICA_BENCH_GATHERS=box,density` (default box).
+//! `CAUSTICA_BENCH_GATHERS=density,box` (default density).
 
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::scene::builtin::builtin;
@@ -113,7 +113,7 @@ fn main() {
             .split(',')
             .filter_map(|s| serde_json::from_value(serde_json::Value::String(s.into())).ok())
             .collect();
-        let gathers: Vec<MapGather> = env_or("CAUSTICA_BENCH_GATHERS", "box")
+        let gathers: Vec<MapGather> = env_or("CAUSTICA_BENCH_GATHERS", "density")
             .split(',')
             .filter_map(|s| serde_json::from_value(serde_json::Value::String(s.into())).ok())
             .collect();

@@ -102,6 +102,7 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
             CausticMapSettings {
                 photons_w: 256,
                 photons_h: 256,
+                gather: caustica_core::techniques::caustic_map::MapGather::Box,
                 gather_width: 1,
                 ..settings()
             },
@@ -216,13 +217,13 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
 /// reference's radiance).
 ///
 /// - The caustic radiance summed over those pixels is the reference's within 3%
-///   (measured: +0.9% at 1024^2 photons, +0.7% at 2048^2; the tessellated ball and the
+///   (measured: +0.8% at 1024^2 photons, +0.75% at 2048^2; the tessellated ball and the
 ///   photons' noise at the focus's edges make the rest).
 /// - The share of pixels within 10% (+ 1e-3 W/(sr m^2)) of the reference grows with the
-///   photons (0.71 at 1024^2, 0.93 at 2048^2) and is at least 0.9 at 2048^2. The misses lie
-///   next to the images of the focus, where the lookup's footprint (a cone unfolded along
-///   the path, blind to the ball's focusing) is too wide: the residual left for an exact
-///   footprint (TODO(issue 16)).
+///   photons (0.87 at 1024^2, 0.95 at 2048^2) and is at least 0.9 at 2048^2. The misses lie
+///   next to the images of the focus, where the lookup's footprint (the pixel's square
+///   unfolded along the path, blind to the ball's focusing) is too wide: the residual
+///   left for a footprint carried through curved glass (TODO(issue 16)).
 ///
 /// CPU only: the reference checks the physics; every other backend is tied to the CPU's
 /// atlas (stiff group `caustic-map`) and lookup (`cross_backend.rs`).
@@ -363,6 +364,7 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
             };
             let raw = atlas_flux(
                 CausticMapSettings {
+                    gather: MapGather::Box,
                     gather_width: 1,
                     ..base.clone()
                 },

@@ -26,16 +26,27 @@ fn map_irradiance(i: u32) -> vec3<f32> {
 
 // The specular tree's diffuse end (common/specular_tree.wgsl): the caustic map.
 fn diffuse_end(hit: Hit, s: SurfacePoint, m: GpuMaterial, n: vec3<f32>,
-               ng_view: vec3<f32>, distance: f32, cos_in: f32) -> vec3<f32> {
+               ng_view: vec3<f32>, distance: f32, cos_in: f32, dir: vec3<f32>) -> vec3<f32> {
     let tile = triangle_tiles[hit.triangle];
     if (tile == NO_TILE) {
         return vec3<f32>(0.0);
     }
     let t = tiles[tile];
-    let texel = atlas_texel_index(t, s.uv, params.atlas_width);
     let pixel_angle = 2.0 * params.camera.tan_half_fov_y / f32(params.camera.height);
-    let footprint = footprint_texels(pixel_angle, distance, cos_in, atlas_area(texel));
-    let e = sample_caustic_map(t, s.uv, footprint, params.atlas_width);
+    let tri = triangles[hit.triangle].indices;
+    let v0 = vertices[tri.x];
+    let v1 = vertices[tri.y];
+    let v2 = vertices[tri.z];
+    var extent = footprint_extent(dir, params.camera.right, pixel_angle * distance,
+                                  v0.position, v1.position, v2.position, vec2<f32>(v0.u, v0.v),
+                                  vec2<f32>(v1.u, v1.v), vec2<f32>(v2.u, v2.v), t.z);
+    if (extent.x < 0.0) {
+        // no UV Jacobian: the isotropic footprint
+        let texel = atlas_texel_index(t, s.uv, params.atlas_width);
+        extent = vec2<f32>(0.5 * footprint_texels(pixel_angle, distance, cos_in,
+                                                  atlas_area(texel)));
+    }
+    let e = sample_caustic_map(t, s.uv, extent, params.atlas_width);
     return m.color.xyz / PI_F * e;
 }
 

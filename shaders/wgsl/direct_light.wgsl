@@ -67,7 +67,7 @@ fn shade_diffuse(light_count: u32, pos: vec3<f32>, n: vec3<f32>, ng: vec3<f32>,
 
 // The specular tree's diffuse end (common/specular_tree.wgsl): the lights' shading.
 fn diffuse_end(hit: Hit, s: SurfacePoint, m: GpuMaterial, n: vec3<f32>,
-               ng_view: vec3<f32>, distance: f32, cos_in: f32) -> vec3<f32> {
+               ng_view: vec3<f32>, distance: f32, cos_in: f32, dir: vec3<f32>) -> vec3<f32> {
     return shade_diffuse(params.light_count, s.position, n, ng_view, m.color.xyz);
 }
 

@@ -12,7 +12,8 @@ use caustica_core::device::layout::{
     PhotonMapView, NO_TILE,
 };
 use caustica_core::math::map_gather::{
-    atlas_texel_index, footprint_texels, gather_caustic_texel, join_u64_f32, sample_caustic_map,
+    atlas_texel_index, footprint_extent, footprint_texels, gather_caustic_texel, join_u64_f32,
+    sample_caustic_map,
 };
 use caustica_core::math::optics::saturate_radiance3;
 use glam::{Vec2, Vec3};
@@ -120,23 +121,38 @@ pub fn caustic_map_lookup(
                 p.fresnel_model,
                 Vec3::from(cam.position),
                 camera_ray(cam, i % w, i / w),
-                |hit, s, m, _, _, distance, cos| {
+                |hit, s, m, _, _, distance, cos, dir| {
                     let tile = triangle_tiles[hit.triangle as usize];
                     if tile == NO_TILE {
                         return Vec3::ZERO;
                     }
                     let t = tiles[tile as usize];
-                    let texel = atlas_texel_index(t, s.uv, p.atlas_width);
-                    let footprint = footprint_texels(
-                        pixel_angle,
-                        distance,
-                        cos,
-                        f32::from_bits(texels[texel as usize][0]),
+                    let tri = &scene.triangles[hit.triangle as usize];
+                    let v = tri.indices.map(|k| &scene.vertices[k as usize]);
+                    let mut extent = footprint_extent(
+                        dir,
+                        Vec3::from(cam.right),
+                        pixel_angle * distance,
+                        v.map(|v| Vec3::from(v.position)),
+                        v.map(|v| Vec2::new(v.u, v.v)),
+                        t[2],
                     );
+                    if extent.x < 0.0 {
+                        // no UV Jacobian: the isotropic footprint
+                        let texel = atlas_texel_index(t, s.uv, p.atlas_width);
+                        extent = Vec2::splat(
+                            0.5 * footprint_texels(
+                                pixel_angle,
+                                distance,
+                                cos,
+                                f32::from_bits(texels[texel as usize][0]),
+                            ),
+                        );
+                    }
                     let e = sample_caustic_map(
                         t,
                         s.uv,
-                        footprint,
+                        extent,
                         p.atlas_width,
                         |q| Vec3::from_slice(&map[q as usize][..3]),
                         |q| f32::from_bits(texels[q as usize][0]),

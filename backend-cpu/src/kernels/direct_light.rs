@@ -112,7 +112,7 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
         p.fresnel_model,
         origin,
         dir,
-        |_, s, m, n, ng_view, _, _| {
+        |_, s, m, n, ng_view, _, _, _| {
             shade_diffuse(
                 scene,
                 s.position,
@@ -130,10 +130,11 @@ fn specular_chain(scene: &SceneView, p: &DirectParams, origin: Vec3, dir: Vec3) 
 /// reflectance, Beer-Lambert inside dielectrics (reflectance of `fresnel_model`, one of
 /// `math::optics::fresnel_model`), branches below `min_weight` or past
 /// `max_depth` specular surfaces cut. At every diffuse surface it meets, adds
-/// `weight * diffuse_end(hit, surface, material, n, ng_view, distance, cos)` (`n` the
-/// shading normal and `ng_view` the geometric normal, both turned to the arriving ray;
+/// `weight * diffuse_end(hit, surface, material, n, ng_view, distance, cos, dir)` (`n`
+/// the shading normal and `ng_view` the geometric normal, both turned to the arriving ray;
 /// `distance` the length of the path from `origin` to the surface, over all its segments;
-/// `cos` the cosine between the arriving ray and `n`).
+/// `cos` the cosine between the arriving ray and `n`; `dir` the arriving ray's unit
+/// direction).
 pub fn specular_tree(
     scene: &SceneView,
     max_depth: u32,
@@ -141,7 +142,7 @@ pub fn specular_tree(
     fresnel_model: u32,
     origin: Vec3,
     dir: Vec3,
-    diffuse_end: impl Fn(&Hit, &SurfacePoint, &GpuMaterial, Vec3, Vec3, f32, f32) -> Vec3,
+    diffuse_end: impl Fn(&Hit, &SurfacePoint, &GpuMaterial, Vec3, Vec3, f32, f32, Vec3) -> Vec3,
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut stack = vec![(origin, dir, Vec3::ONE, 0u32, 0.0f32)];
@@ -167,7 +168,7 @@ pub fn specular_tree(
                 } else {
                     s.shading_normal
                 };
-                l += weight * diffuse_end(&hit, &s, m, n, ng_view, dist + hit.t, -d.dot(n));
+                l += weight * diffuse_end(&hit, &s, m, n, ng_view, dist + hit.t, -d.dot(n), d);
             }
             _ if depth >= max_depth => {}
             material_kind::MIRROR => {

@@ -1,5 +1,5 @@
 // Mirror of core::math::map_gather (the caustic atlas, seed 001): texel addressing, the
-// flux-keeping N x N gather and the covered-bilinear lookup.
+// flux-keeping N x N gather and the lookup over a pixel's footprint.
 
 inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
     float s = (float)tile.z;
@@ -63,30 +63,86 @@ inline float footprint_texels(float pixel_angle, float distance, float cos_in, f
     return texel_area > 0.0f ? sqrt(area / texel_area) : 0.0f;
 }
 
+// A world vector in the triangle's plane in the tile's texels (footprint_extent's map).
+inline float2 footprint_to_texels(float3 v, float3 e1, float3 e2, float g11, float g12, float g22,
+                                  float det, float2 d1, float2 d2, uint side) {
+    float x1 = dot3(e1, v);
+    float x2 = dot3(e2, v);
+    float alpha = (g22 * x1 - g12 * x2) / det;
+    float beta = (g11 * x2 - g12 * x1) / det;
+    return (d1 * alpha + d2 * beta) * (float)side;
+}
+
+// core::math::map_gather::footprint_extent: half-extents (texels) of the rectangle that
+// bounds a pixel's footprint on a triangle (world corners p0..p2, UV corners t0..t2) of a
+// tile `side` texels wide; (-1, -1) without a UV Jacobian.
+inline float2 footprint_extent(float3 dir, float3 right, float width, float3 p0, float3 p1,
+                               float3 p2, float2 t0, float2 t1, float2 t2, uint side) {
+    float3 e1 = p1 - p0;
+    float3 e2 = p2 - p0;
+    float g11 = dot3(e1, e1);
+    float g12 = dot3(e1, e2);
+    float g22 = dot3(e2, e2);
+    float det = g11 * g22 - g12 * g12;
+    float2 d1 = t1 - t0;
+    float2 d2 = t2 - t0;
+    float3 nc = cross3(e1, e2);
+    float n_len = length3(nc);
+    if (!(det > 0.0f && n_len > 0.0f) || d1.x * d2.y - d1.y * d2.x == 0.0f)
+        return (float2)(-1.0f);
+    float3 n = nc / n_len;
+    float3 a = right - dir * dot3(right, dir);
+    if (!(dot3(a, a) > 1e-12f)) {
+        a = (float3)(1.0f, 0.0f, 0.0f) - dir * dir.x;
+        if (!(dot3(a, a) > 1e-12f)) a = (float3)(0.0f, 1.0f, 0.0f) - dir * dir.y;
+    }
+    a = a * (1.0f / sqrt(dot3(a, a)));
+    float3 b = cross3(dir, a);
+    float c = dot3(dir, n);
+    if (fabs(c) < 1e-3f) c = copysign(1e-3f, c);
+    float3 va = width * (a - dir * (dot3(n, a) / c));
+    float3 vb = width * (b - dir * (dot3(n, b) / c));
+    float2 ta = footprint_to_texels(va, e1, e2, g11, g12, g22, det, d1, d2, side);
+    float2 tb = footprint_to_texels(vb, e1, e2, g11, g12, g22, det, d1, d2, side);
+    return 0.5f * (fabs(ta) + fabs(tb));
+}
+
+// One texel's share [i, i + 1) ∩ [lo, hi) of an interval (texels).
+inline float texel_overlap(uint i, float lo, float hi) {
+    return fmax(fmin((float)i + 1.0f, hi) - fmax((float)i, lo), 0.0f);
+}
+
 inline float3 sample_caustic_map(__global const uint2* texels, __global const float4* map,
-                                 uint4 tile, float2 uv, float footprint, uint atlas_width) {
+                                 uint4 tile, float2 uv, float2 extent, uint atlas_width) {
     float s = (float)tile.z;
-    float fx = clamp(uv.x * s - 0.5f, 0.0f, s - 1.0f);
-    float fy = clamp(uv.y * s - 0.5f, 0.0f, s - 1.0f);
-    if (footprint > 1.0f) {
-        float h = 0.5f * fmin(footprint, MAX_FOOTPRINT_TEXELS);
-        uint bx0 = (uint)fmax(ceil(fx - h), 0.0f);
-        uint bx1 = (uint)fmin(ceil(fx + h) - 1.0f, s - 1.0f);
-        uint by0 = (uint)fmax(ceil(fy - h), 0.0f);
-        uint by1 = (uint)fmin(ceil(fy + h) - 1.0f, s - 1.0f);
+    if (extent.x > 0.5f || extent.y > 0.5f) {
+        float hx = clampf(extent.x, 0.5f, 0.5f * MAX_FOOTPRINT_TEXELS);
+        float hy = clampf(extent.y, 0.5f, 0.5f * MAX_FOOTPRINT_TEXELS);
+        float cx = clampf(uv.x * s, 0.0f, s);
+        float cy = clampf(uv.y * s, 0.0f, s);
+        float lx = fmax(cx - hx, 0.0f), ux = fmin(cx + hx, s);
+        float ly = fmax(cy - hy, 0.0f), uy = fmin(cy + hy, s);
+        uint bx0 = (uint)floor(lx);
+        uint bx1 = clamp((uint)ceil(ux), 1u, tile.z) - 1u;
+        uint by0 = (uint)floor(ly);
+        uint by1 = clamp((uint)ceil(uy), 1u, tile.z) - 1u;
         float3 bsum = (float3)(0.0f);
-        uint n = 0u;
+        float bw = 0.0f;
         for (uint y = by0; y <= by1; y++) {
+            float wy = texel_overlap(y, ly, uy);
             for (uint x = bx0; x <= bx1; x++) {
                 uint i = (tile.y + y) * atlas_width + tile.x + x;
-                if (atlas_area(texels, i) > 0.0f) {
-                    bsum += map[i].xyz;
-                    n++;
+                float w = texel_overlap(x, lx, ux) * wy;
+                if (atlas_area(texels, i) > 0.0f && w > 0.0f) {
+                    bsum += w * map[i].xyz;
+                    bw += w;
                 }
             }
         }
-        if (n > 0u) return bsum / (float)n;
+        if (bw > 0.0f) return bsum / bw;
     }
+    float fx = clamp(uv.x * s - 0.5f, 0.0f, s - 1.0f);
+    float fy = clamp(uv.y * s - 0.5f, 0.0f, s - 1.0f);
     float x0 = floor(fx);
     float y0 = floor(fy);
     float wx = fx - x0;

@@ -72,6 +72,7 @@ typedef struct {
     __global const float4* map;
     uint atlas_width;
     float pixel_angle;
+    float3 right;
 } DiffuseEnd;
 
 inline DiffuseEnd diffuse_end_direct(uint light_count) {
@@ -83,22 +84,34 @@ inline DiffuseEnd diffuse_end_direct(uint light_count) {
     e.map = 0;
     e.atlas_width = 0u;
     e.pixel_angle = 0.0f;
+    e.right = (float3)(0.0f);
     return e;
 }
 
 inline float3 diffuse_end(SCENE_PARAMS, const DiffuseEnd* e, const Hit* hit,
                           const SurfacePoint* s, __global const GpuMaterial* m, float3 n,
-                          float3 ng_view, float distance, float cos_in) {
+                          float3 ng_view, float distance, float cos_in, float3 dir) {
     if (e->triangle_tiles == 0)
         return shade_diffuse(SCENE_ARGS, e->light_count, s->position, n, ng_view,
                              load3g(m->color));
     uint tile = e->triangle_tiles[hit->triangle];
     if (tile == NO_TILE) return (float3)(0.0f);
     uint4 t = e->tiles[tile];
-    uint texel = atlas_texel_index(t, s->uv, e->atlas_width);
-    float footprint = footprint_texels(e->pixel_angle, distance, cos_in,
-                                       atlas_area(e->texels, texel));
-    float3 irradiance = sample_caustic_map(e->texels, e->map, t, s->uv, footprint,
+    __global const GpuTriangle* tri = &triangles[hit->triangle];
+    __global const GpuVertex* v0 = &vertices[tri->indices[0]];
+    __global const GpuVertex* v1 = &vertices[tri->indices[1]];
+    __global const GpuVertex* v2 = &vertices[tri->indices[2]];
+    float2 extent = footprint_extent(dir, e->right, e->pixel_angle * distance,
+                                     load3g(v0->position), load3g(v1->position),
+                                     load3g(v2->position), (float2)(v0->u, v0->v),
+                                     (float2)(v1->u, v1->v), (float2)(v2->u, v2->v), t.z);
+    if (extent.x < 0.0f) {
+        // no UV Jacobian: the isotropic footprint
+        uint texel = atlas_texel_index(t, s->uv, e->atlas_width);
+        extent = (float2)(0.5f * footprint_texels(e->pixel_angle, distance, cos_in,
+                                                  atlas_area(e->texels, texel)));
+    }
+    float3 irradiance = sample_caustic_map(e->texels, e->map, t, s->uv, extent,
                                            e->atlas_width);
     return load3g(m->color) / PI_F * irradiance;
 }
@@ -125,7 +138,7 @@ inline float3 specular_tree(SCENE_PARAMS, const DiffuseEnd* end, uint max_depth,
         if (m->kind == MATERIAL_DIFFUSE) {
             float3 n = facing_normal(s.shading_normal, r.dir);
             l += weight * diffuse_end(SCENE_ARGS, end, &hit, &s, m, n, ng_view, r.dist + hit.t,
-                                      -dot3(r.dir, n));
+                                      -dot3(r.dir, n), r.dir);
         } else if (r.depth >= max_depth) {
         } else if (m->kind == MATERIAL_MIRROR) {
             float3 w = weight * load3g(m->color);

@@ -1,8 +1,8 @@
 // The specular ray tree of a camera ray (backend-cpu direct_light::specular_tree), shared
 // by direct_light and caustic_map_lookup. The including stage defines
 // `vec3 diffuse_end(Hit hit, SurfacePoint s, GpuMaterial m, vec3 n, vec3 ng_view,
-// float distance, float cos_in)` first (distance: the path's length over all its
-// segments; cos_in: between the arriving ray and n):
+// float distance, float cos_in, vec3 dir)` first (distance: the path's length over all its
+// segments; cos_in: between the arriving ray and n; dir: the arriving ray's direction):
 // what a diffuse end adds, times the branch's weight (the lights' shading, or the caustic
 // map).
 
@@ -41,7 +41,7 @@ precise vec3 specular_tree(uint max_depth, float min_weight, uint fresnel_model,
         if (m.kind == MATERIAL_DIFFUSE) {
             vec3 n = facing_normal(s.shading_normal, r.dir);
             precise float dist_in = r.dist + hit.t;
-            l += weight * diffuse_end(hit, s, m, n, ng_view, dist_in, -dot3(r.dir, n));
+            l += weight * diffuse_end(hit, s, m, n, ng_view, dist_in, -dot3(r.dir, n), r.dir);
         } else if (r.depth >= max_depth) {
         } else if (m.kind == MATERIAL_MIRROR) {
             precise vec3 w = weight * m.color.xyz;

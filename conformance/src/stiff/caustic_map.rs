@@ -233,11 +233,20 @@ pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
             .sum()
     };
     let mut v = Verdict::new("uv seams");
-    let f = checked(b, &scene, &settings(256), &mut v)?;
+    let f = checked(
+        b,
+        &scene,
+        &CausticMapSettings {
+            gather: caustica_core::techniques::caustic_map::MapGather::Box,
+            ..settings(256)
+        },
+        &mut v,
+    )?;
     let raw = checked(
         b,
         &scene,
         &CausticMapSettings {
+            gather: caustica_core::techniques::caustic_map::MapGather::Box,
             gather_width: 1,
             ..settings(256)
         },

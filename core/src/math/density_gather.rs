@@ -336,11 +336,7 @@ mod tests {
             assert_eq!(w(a, atlas_edge_texel(t, 3.0)), 1.0, "tile {t}");
         }
         // uncovered texels, texels outside every tile, too many tiles: not receivers
-        for (t, area) in [
-            (0, 0.0),
-            (crate::device::layout::NO_TILE, 1.0),
-            (ATLAS_MAX_TILES, 1.0),
-        ] {
+        for (t, area) in [(0, 0.0), (u32::MAX, 1.0), (ATLAS_MAX_TILES, 1.0)] {
             assert!(!edge_texel_is_receiver(&atlas_edge_texel(t, area)));
         }
     }

@@ -195,48 +195,124 @@ pub fn footprint_texels(pixel_angle: f32, distance: f32, cos: f32, texel_area: f
     }
 }
 
-/// The caustic map at `uv` on tile `tile` (atlas `atlas_width` texels wide), filtered over
-/// a pixel's footprint of `footprint` texels a side ([`footprint_texels`]): where it is at
-/// most 1 texel, bilinear over the four texels around `uv * side - 0.5` (clamped to the
-/// tile), each weighted by its bilinear weight if covered (`area(i) > 0`) and renormalised
-/// by the covered weights; where it is wider, the mean of the covered texels whose centres
-/// lie in the square `[f - side / 2, f + side / 2)` (at most [`MAX_FOOTPRINT_TEXELS`] a
-/// side) around `f = uv * side_of_tile - 0.5`, so that a
-/// caustic sharper than a pixel is integrated over the pixel as a screen-space deposit
-/// integrates it, not point-sampled. Texels outside the receiver's UV triangles hold no
-/// irradiance and are left out of both. `map(i)` is texel `i`'s irradiance (W/m^2).
+/// Half-extents (texels, along the tile's x and y) of the axis-aligned rectangle that
+/// bounds a pixel's footprint on a receiver's triangle: the pixel's cross-section, a
+/// square of side `width` (scene units: the cone's width at the surface, `pixel_angle`
+/// times the path's length) perpendicular to the arriving unit direction `dir`, with one
+/// side along the camera's `right` made perpendicular to `dir`, projected along `dir` onto
+/// the triangle's plane (world corners `p`; so a grazing view stretches it by
+/// `1 / cos`, with `cos` floored at 1e-3), then mapped to the tile's texels by the
+/// triangle's world-to-UV map (UV corners `t`, a tile of `side` texels; the map is affine
+/// on a triangle, `uv - t0 = [t1 - t0, t2 - t0] G^-1 [e1, e2]^T (x - p0)`, `G` the Gram
+/// matrix of the edges `e1 = p1 - p0`, `e2 = p2 - p0`). The rectangle is the bound of that
+/// parallelogram, which it equals where the pixel's sides run along the tile's axes (a
+/// receiver whose UVs follow the camera's right and up, as `sphere`'s plane seen from its
+/// camera). Through mirrors and glass the square's orientation is the camera's, not the
+/// path's (a ray cone unfolded along the path, as [`footprint_texels`]). `(-1, -1)` where
+/// the triangle has no area or no UV area: the caller falls back to
+/// [`footprint_texels`].
+#[allow(clippy::too_many_arguments)]
+pub fn footprint_extent(
+    dir: Vec3,
+    right: Vec3,
+    width: f32,
+    p: [Vec3; 3],
+    t: [Vec2; 3],
+    side: u32,
+) -> Vec2 {
+    let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+    let (g11, g12, g22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let det = g11 * g22 - g12 * g12;
+    let (d1, d2) = (t[1] - t[0], t[2] - t[0]);
+    let n = e1.cross(e2);
+    let n_len = n.length();
+    if !(det > 0.0 && n_len > 0.0) || d1.perp_dot(d2) == 0.0 {
+        return Vec2::splat(-1.0);
+    }
+    let n = n / n_len;
+    // the cross-section's sides: `right` made perpendicular to `dir`, and dir x that
+    // (a camera ray is never along `right`; a mirrored one may be: then world x, or y)
+    let mut a = right - dir * right.dot(dir);
+    if !(a.dot(a) > 1e-12) {
+        a = Vec3::X - dir * dir.x;
+        if !(a.dot(a) > 1e-12) {
+            a = Vec3::Y - dir * dir.y;
+        }
+    }
+    let a = a * (1.0 / a.dot(a).sqrt());
+    let b = dir.cross(a);
+    // along `dir` onto the plane: v - dir (n . v) / (n . dir)
+    let c = dir.dot(n);
+    let c = if c.abs() < 1e-3 {
+        1e-3f32.copysign(c)
+    } else {
+        c
+    };
+    let onto = |v: Vec3| width * (v - dir * (n.dot(v) / c));
+    let to_texels = |v: Vec3| {
+        let (x1, x2) = (e1.dot(v), e2.dot(v));
+        let alpha = (g22 * x1 - g12 * x2) / det;
+        let beta = (g11 * x2 - g12 * x1) / det;
+        (d1 * alpha + d2 * beta) * side as f32
+    };
+    let (ta, tb) = (to_texels(onto(a)), to_texels(onto(b)));
+    0.5 * (ta.abs() + tb.abs())
+}
+
+/// One texel's share `[i, i + 1) ∩ [lo, hi)` of an interval (texels).
+#[inline]
+fn overlap(i: u32, lo: f32, hi: f32) -> f32 {
+    ((i as f32 + 1.0).min(hi) - (i as f32).max(lo)).max(0.0)
+}
+
+/// The caustic map at `uv` on tile `tile` (atlas `atlas_width` texels wide), averaged over
+/// a pixel's footprint, the axis-aligned rectangle of half-extents `extent` (texels,
+/// [`footprint_extent`]) centred on `uv * side` (texel `i` spans `[i, i + 1)`): where it is
+/// wider than a texel on either axis, the mean of the covered texels (`area(i) > 0`) it
+/// overlaps, each weighted by the area of its overlap (half-extents clamped to
+/// `[1/2, MAX_FOOTPRINT_TEXELS / 2]`, the rectangle to the tile), so that a caustic
+/// sharper than a pixel is integrated over the pixel, as a screen-space deposit integrates
+/// it, not point-sampled; otherwise (both half-extents at most 1/2) bilinear over the four
+/// texels around `uv * side - 0.5` (clamped to the tile), each weighted by its bilinear
+/// weight if covered and renormalised by the covered weights. Texels outside the
+/// receiver's UV triangles hold no irradiance and are left out of both. `map(i)` is texel
+/// `i`'s irradiance (W/m^2).
 pub fn sample_caustic_map(
     tile: [u32; 4],
     uv: Vec2,
-    footprint: f32,
+    extent: Vec2,
     atlas_width: u32,
     map: impl Fn(u32) -> Vec3,
     area: impl Fn(u32) -> f32,
 ) -> Vec3 {
     let s = tile[2] as f32;
-    let fx = (uv.x * s - 0.5).clamp(0.0, s - 1.0);
-    let fy = (uv.y * s - 0.5).clamp(0.0, s - 1.0);
-    if footprint > 1.0 {
-        let h = 0.5 * footprint.min(MAX_FOOTPRINT_TEXELS);
-        let x0 = (fx - h).ceil().max(0.0) as u32;
-        let x1 = (((fx + h).ceil() - 1.0).min(s - 1.0)) as u32;
-        let y0 = (fy - h).ceil().max(0.0) as u32;
-        let y1 = (((fy + h).ceil() - 1.0).min(s - 1.0)) as u32;
+    if extent.x > 0.5 || extent.y > 0.5 {
+        let hx = extent.x.clamp(0.5, 0.5 * MAX_FOOTPRINT_TEXELS);
+        let hy = extent.y.clamp(0.5, 0.5 * MAX_FOOTPRINT_TEXELS);
+        let (cx, cy) = ((uv.x * s).clamp(0.0, s), (uv.y * s).clamp(0.0, s));
+        let (lx, hx) = ((cx - hx).max(0.0), (cx + hx).min(s));
+        let (ly, hy) = ((cy - hy).max(0.0), (cy + hy).min(s));
+        let (x0, x1) = (lx.floor() as u32, (hx.ceil() as u32).clamp(1, tile[2]) - 1);
+        let (y0, y1) = (ly.floor() as u32, (hy.ceil() as u32).clamp(1, tile[2]) - 1);
         let mut sum = Vec3::ZERO;
-        let mut n = 0u32;
+        let mut wsum = 0.0f32;
         for y in y0..=y1 {
+            let wy = overlap(y, ly, hy);
             for x in x0..=x1 {
                 let i = (tile[1] + y) * atlas_width + tile[0] + x;
-                if area(i) > 0.0 {
-                    sum += map(i);
-                    n += 1;
+                let w = overlap(x, lx, hx) * wy;
+                if area(i) > 0.0 && w > 0.0 {
+                    sum += w * map(i);
+                    wsum += w;
                 }
             }
         }
-        if n > 0 {
-            return sum / n as f32;
+        if wsum > 0.0 {
+            return sum / wsum;
         }
     }
+    let fx = (uv.x * s - 0.5).clamp(0.0, s - 1.0);
+    let fy = (uv.y * s - 0.5).clamp(0.0, s - 1.0);
     let (x0, y0) = (fx.floor(), fy.floor());
     let (wx, wy) = (fx - x0, fy - y0);
     let (ix0, iy0) = (x0 as u32, y0 as u32);
@@ -374,7 +450,7 @@ mod tests {
                 let e = sample_caustic_map(
                     tile,
                     Vec2::new(u, v),
-                    fp,
+                    Vec2::new(0.5 * fp, 0.25 * fp),
                     w,
                     |_| Vec3::splat(2.0),
                     |i| area[i as usize],
@@ -398,11 +474,52 @@ mod tests {
             }
         };
         let uv = Vec2::new(8.5 / 16.0, 8.5 / 16.0);
-        let point = sample_caustic_map(tile, uv, 1.0, w, map, |_| 1.0);
-        let wide = sample_caustic_map(tile, uv, 4.0, w, map, |_| 1.0);
+        let point = sample_caustic_map(tile, uv, Vec2::splat(0.5), w, map, |_| 1.0);
+        let wide = sample_caustic_map(tile, uv, Vec2::splat(2.0), w, map, |_| 1.0);
         assert_eq!(point, Vec3::splat(16.0));
-        // texel centres in [6, 10): 4x4 texels
+        // the rectangle [6.5, 10.5)^2: 16 texels of area, the lit one inside
         assert_eq!(wide, Vec3::splat(1.0));
+        // the rectangle [8.5, 12.5) x [6.5, 10.5): the lit texel [8, 9) half inside
+        let off = Vec2::new(10.5 / 16.0, 8.5 / 16.0);
+        let half = sample_caustic_map(tile, off, Vec2::splat(2.0), w, map, |_| 1.0);
+        assert!((half.x - 0.5).abs() < 1e-6, "{half}");
+        // a rectangle, 2 texels wide and 8 tall around the lit texel
+        let tall = sample_caustic_map(tile, uv, Vec2::new(1.0, 4.0), w, map, |_| 1.0);
+        assert!((tall.x - 1.0).abs() < 1e-6, "{tall}");
         assert!((footprint_texels(0.01, 2.0, 1.0, 1e-4) - 2.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn the_footprint_extent_follows_the_view_and_the_uvs() {
+        // a unit square at z = 0 with uv = (x, y), on a 100-texel tile; a footprint of
+        // width 0.1 covers 10 texels a side seen head-on
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let t = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        let close = |a: Vec2, b: Vec2| (a - b).abs().max_element() < 1e-3;
+        let down = -Vec3::Z;
+        let e = footprint_extent(down, Vec3::X, 0.1, p, t, 100);
+        assert!(close(e, Vec2::new(5.0, 5.0)), "{e}");
+        // 60 degrees from the normal in the y-z plane: stretched 1 / cos = 2 along y
+        let (s, c) = (60f32.to_radians().sin(), 60f32.to_radians().cos());
+        let e = footprint_extent(Vec3::new(0.0, s, -c), Vec3::X, 0.1, p, t, 100);
+        assert!(close(e, Vec2::new(5.0, 10.0)), "{e}");
+        // the camera rolled by 30 degrees: the rotated square's bound
+        let r = Vec3::new(30f32.to_radians().cos(), 30f32.to_radians().sin(), 0.0);
+        let e = footprint_extent(down, r, 0.1, p, t, 100);
+        let h = 5.0 * (30f32.to_radians().cos() + 30f32.to_radians().sin());
+        assert!(close(e, Vec2::splat(h)), "{e}");
+        // UVs stretched 2x along u: twice the texels along x
+        let e = footprint_extent(
+            down,
+            Vec3::X,
+            0.1,
+            p,
+            [Vec2::ZERO, 2.0 * Vec2::X, Vec2::Y],
+            100,
+        );
+        assert!(close(e, Vec2::new(10.0, 5.0)), "{e}");
+        // no UV area: unknown
+        let e = footprint_extent(down, Vec3::X, 0.1, p, [Vec2::ZERO; 3], 100);
+        assert_eq!(e, Vec2::splat(-1.0));
     }
 }

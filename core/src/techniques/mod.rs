@@ -54,7 +54,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(caustic_map::CausticMapSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("gather", &["box", "density"])),
+        filter_setting: Some(("gather", &["density", "box"])),
     },
 ];
 

@@ -3,8 +3,8 @@
 // popped): both Fresnel branches of a dielectric, mirrors scaled by their reflectance,
 // Beer-Lambert inside dielectrics, branches below `min_weight` or past `max_depth`
 // specular surfaces cut. At each diffuse surface it adds `weight * diffuse_end(hit, s, m,
-// n, ng_view, distance, cos)` (distance: the path's length over all its segments; cos:
-// between the arriving ray and n), a function the kernel module defines (direct_light: the lights' shading;
+// n, ng_view, distance, cos, dir)` (distance: the path's length over all its segments; cos:
+// between the arriving ray and n; dir: the arriving ray's unit direction), a function the kernel module defines (direct_light: the lights' shading;
 // caustic_map_lookup: the caustic map).
 
 struct ChainRay {
@@ -47,7 +47,8 @@ fn specular_tree(max_depth: u32, min_weight: f32, fresnel_model: u32, origin: ve
         let ng_view = select(-s.geometric_normal, s.geometric_normal, entering);
         if (m.kind == MATERIAL_DIFFUSE) {
             let n = facing_normal(s.shading_normal, r.dir);
-            l += weight * diffuse_end(hit, s, m, n, ng_view, r.dist + hit.t, -dot3(r.dir, n));
+            l += weight * diffuse_end(hit, s, m, n, ng_view, r.dist + hit.t, -dot3(r.dir, n),
+                                      r.dir);
         } else if (r.depth >= max_depth) {
         } else if (m.kind == MATERIAL_MIRROR) {
             let w = weight * m.color.xyz;

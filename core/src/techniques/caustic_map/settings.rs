@@ -96,8 +96,11 @@ impl FresnelModel {
 #[serde(rename_all = "snake_case")]
 pub enum MapGather {
     /// Seed 001's N x N neighbour average (`gather_width`), normalised to keep the flux,
-    /// inside each tile (`gather_caustic_map`). The default, as the source has it.
-    #[default]
+    /// inside each tile (`gather_caustic_map`). Not the default: it blurs a focused
+    /// caustic at every photon budget, so that with the lookup's footprint rectangle the
+    /// filtered image is worse than the raw map on `sphere` (relMSE 1.3e-3 against
+    /// 8e-5 at 2048^2 photons, `docs/report-caustic-map-gather`) and on `cornell` from
+    /// 1024^2 photons on.
     Box,
     /// The density-adaptive, scatter-normalised gather Sspm filters its screen with
     /// (`crate::math::density_gather`), run on the atlas: a texel's radius follows the
@@ -106,7 +109,11 @@ pub enum MapGather {
     /// and no tile border is crossed; a focused caustic where photons are dense is left
     /// as deposited. Flux deposited into a texel whose centre no UV triangle covers (at a
     /// UV island's edge) is dropped, as the raw map drops it; the box gather spreads it
-    /// into covered neighbours.
+    /// into covered neighbours. The default: below the raw map's error at every budget
+    /// on `sphere`, `cornell` and `sphere-sun`, and converging to it
+    /// (`docs/report-caustic-map-gather`); it costs about 1.1 to 1.9 ms on the H200 at a
+    /// 2048^2 atlas against the box's 0.25 ms, and 52 more bytes a texel.
+    #[default]
     Density,
 }
 
@@ -121,8 +128,8 @@ pub struct CausticMapSettings {
     pub photons_h: u32,
     /// Side of the caustic atlas (texels; 001's map size, 2048).
     pub atlas_size: u32,
-    /// The caustic map's filter: 001's N x N box (default) or the density-adaptive
-    /// gather.
+    /// The caustic map's filter: the density-adaptive gather (default) or 001's N x N
+    /// box.
     pub gather: MapGather,
     /// Width N of the flux-keeping N x N box gather (odd; 001's default 3; 1: no gather).
     pub gather_width: u32,
@@ -161,8 +168,8 @@ pub struct CausticMapSettings {
     /// gathered and raw maps (16 B each) and the texel table (8 B); with the density
     /// gather also its count table (4 B), edge texels and two passes' images (16 B each).
     /// A larger atlas is a typed out-of-memory error before any work (default 4 GiB: a
-    /// 2048^2 atlas takes 320 MiB, 528 MiB with the density gather; 4096^2 1.25 GiB,
-    /// 16384^2 20 GiB).
+    /// 2048^2 atlas takes 528 MiB with the density gather, 320 MiB with the box; 4096^2
+    /// 2.06 GiB; 16384^2 33 GiB).
     pub max_atlas_bytes: u64,
 }
 
@@ -172,7 +179,7 @@ impl Default for CausticMapSettings {
             photons_w: 1024,
             photons_h: 1024,
             atlas_size: DEFAULT_ATLAS_SIDE,
-            gather: MapGather::Box,
+            gather: MapGather::Density,
             gather_width: DEFAULT_GATHER_WIDTH,
             knn_photons: 32,
             max_radius_texels: 16,
