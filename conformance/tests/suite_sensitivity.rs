@@ -486,6 +486,19 @@ fn each_fault_fails_the_check_of_its_kernel() {
             Mutation::MapLookupHigh,
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
         ),
+        // the density gather run on the atlas (CausticMap's default gather)
+        (
+            Mutation::CountTableOffByOne,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::FootprintHigh,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::DensityGatherHigh,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
     ] {
         let mut report = Report::new(kernel);
         let mut cand = Mutant::candidate(mutation);
