@@ -49,9 +49,10 @@ enum Command {
         /// applied before the flags above.
         #[arg(long)]
         settings: Option<PathBuf>,
-        /// Sspm's caustic filter: density (default: adapts to the photons, keeps the flux)
-        /// or bilateral (the seed's).
-        #[arg(long, value_parser = ["density", "bilateral"])]
+        /// The technique's caustic filter: Sspm's `filter`, density (default: adapts to the
+        /// photons, keeps the flux) or bilateral (the seed's); CausticMap's `gather`,
+        /// density (default) or box (seed 001's 3x3).
+        #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
         /// Output directory.
         #[arg(long, default_value = "out")]
@@ -380,7 +381,22 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             let mut s = read_settings(settings.as_deref())?;
             if let Some(f) = filter {
-                s.insert("filter".into(), f.into());
+                let setting = TECHNIQUES
+                    .iter()
+                    .find(|t| t.name == technique)
+                    .and_then(|t| t.filter_setting);
+                match setting {
+                    Some((key, values)) if values.contains(&f.as_str()) => {
+                        s.insert(key.into(), f.into());
+                    }
+                    Some((_, values)) => {
+                        return Err(format!(
+                            "--filter {f}: {technique}'s filters are {}",
+                            values.join(", ")
+                        ))
+                    }
+                    None => return Err(format!("--filter: {technique} has one filter")),
+                }
             }
             // the flag overrides the settings file; neither: 1024x1024
             let (pw, ph) = photons.unwrap_or((1024, 1024));
