@@ -60,7 +60,7 @@ impl VulkanBackend {
     /// picks one); `CAUSTICA_VULKAN_VALIDATION=1` enables the validation layer.
     pub fn new() -> Result<VulkanBackend, BackendError> {
         let validation = std::env::var("CAUSTICA_VULKAN_VALIDATION").is_ok_and(|v| v != "0");
-        VulkanBackend::with_validation(validation)
+        caustica_core::backend::driver_entry(|| VulkanBackend::with_validation(validation))
     }
 
     /// As [`VulkanBackend::new`], with the Khronos validation layer on or off (on: used
@@ -265,11 +265,11 @@ impl VulkanBackend {
 
 impl Drop for VulkanBackend {
     fn drop(&mut self) {
-        unsafe {
+        caustica_core::backend::driver_entry(|| unsafe {
             let _ = self.ctx.device.queue_wait_idle(self.ctx.queue);
             self.ctx.device.destroy_fence(self.fence, None);
             self.ctx.device.destroy_command_pool(self.pool, None);
-        }
+        })
     }
 }
 
@@ -307,12 +307,14 @@ impl Backend for VulkanBackend {
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        dispatch::execute(self, recording)
+        caustica_core::backend::driver_entry(|| dispatch::execute(self, recording))
     }
 
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
-        let b = self.get(id)?;
-        self.read_device(b.buffer.buffer, b.bytes)
+        caustica_core::backend::driver_entry(|| {
+            let b = self.get(id)?;
+            self.read_device(b.buffer.buffer, b.bytes)
+        })
     }
 
     fn variants(&self) -> Vec<String> {

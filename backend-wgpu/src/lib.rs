@@ -125,6 +125,11 @@ impl WgpuBackend {
     /// otherwise a GPU before a CPU adapter such as lavapipe) with the adapter's own
     /// limits and, where offered, timestamp queries.
     pub fn new() -> Result<WgpuBackend, BackendError> {
+        caustica_core::backend::driver_entry(WgpuBackend::open)
+    }
+
+    /// [`WgpuBackend::new`]'s body.
+    fn open() -> Result<WgpuBackend, BackendError> {
         let instance = instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY));
         if adapters.is_empty() {
@@ -380,6 +385,25 @@ impl Backend for WgpuBackend {
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        caustica_core::backend::driver_entry(|| self.execute_recording(recording))
+    }
+
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        caustica_core::backend::driver_entry(|| {
+            let b = self.get(id)?;
+            self.read_buffer(&b.buffer, b.bytes)
+        })
+    }
+
+    fn variants(&self) -> Vec<String> {
+        caustica_core::kernels::variant_labels(self.pipelines.keys())
+    }
+}
+
+impl WgpuBackend {
+    /// [`Backend::execute`]'s body (the trait method runs it under
+    /// [`caustica_core::backend::driver_entry`]).
+    fn execute_recording(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         self.check_uncaptured()?;
         let kernels = recording
             .steps
@@ -421,14 +445,5 @@ impl Backend for WgpuBackend {
         self.queue.submit([enc.finish()]);
         self.wait()?;
         timer.finish(self)
-    }
-
-    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
-        let b = self.get(id)?;
-        self.read_buffer(&b.buffer, b.bytes)
-    }
-
-    fn variants(&self) -> Vec<String> {
-        caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
 }

@@ -99,6 +99,33 @@ pub struct PassTime {
     pub seconds: f64,
 }
 
+/// Runs `f`, a call into a GPU driver (a backend's creation, `execute`, `read`, drop), one
+/// at a time in the process when `CAUSTICA_SERIALIZE_DRIVERS=1`, otherwise at once.
+///
+/// The diagnosis of issue 19 point 5 (`docs/gpu/issue19-hang.md`): the wgpu and Vulkan
+/// backends, used from parallel threads of one process, deadlock in NVIDIA's user-mode
+/// driver. Serialising creation and destruction alone did not help; this switch
+/// serialises every driver entry of both, to find out whether that does. Nested calls
+/// on one thread do not lock again.
+pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
+    use std::sync::{Mutex, OnceLock};
+    static ON: OnceLock<bool> = OnceLock::new();
+    static LOCK: Mutex<()> = Mutex::new(());
+    thread_local! {
+        static HELD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    let on =
+        *ON.get_or_init(|| std::env::var("CAUSTICA_SERIALIZE_DRIVERS").is_ok_and(|v| v == "1"));
+    if !on || HELD.with(|h| h.get()) {
+        return f();
+    }
+    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    HELD.with(|h| h.set(true));
+    let out = f();
+    HELD.with(|h| h.set(false));
+    out
+}
+
 /// A compute backend.
 pub trait Backend {
     /// Short name used on the command line (`cpu`, `opencl`, ...).
