@@ -144,7 +144,7 @@ if has hang; then
                 > /tmp/hang.log 2>&1
             rc=$?
             last=$(grep -E '^test |\*\*\*' /tmp/hang.log | tail -n 1)
-            echo "hang: serialize=${CAUSTICA_SERIALIZE_DRIVERS:-0} skip=[$skip] run $k: exit $rc after $(( $(date +%s) - start )) s; last line: $last" |
+            echo "hang: serialize=${CAUSTICA_SERIALIZE_DRIVERS:-1} skip=[$skip] run $k: exit $rc after $(( $(date +%s) - start )) s; last line: $last" |
                 tee -a "$OUT/log.txt"
         done
     done

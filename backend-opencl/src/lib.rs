@@ -62,6 +62,11 @@ impl OpenClBackend {
     /// Opens the chosen device (`CAUSTICA_OPENCL_DEVICE=N`, else the first GPU, else the
     /// first device). No loader, platform or device, or a failed kernel build, is an error.
     pub fn new() -> Result<OpenClBackend, BackendError> {
+        caustica_core::backend::driver_entry(OpenClBackend::open)
+    }
+
+    /// [`OpenClBackend::new`]'s body.
+    fn open() -> Result<OpenClBackend, BackendError> {
         let (platform, device) = device::choose_device()?;
         let state = device::device_state(platform, device)?;
         // clCreateCommandQueue (OpenCL 1.2): PoCL's and NVIDIA's platforms both have it.
@@ -226,6 +231,23 @@ impl Backend for OpenClBackend {
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        caustica_core::backend::driver_entry(|| self.execute_recording(recording))
+    }
+
+    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        caustica_core::backend::driver_entry(|| self.read_back(id))
+    }
+
+    fn variants(&self) -> Vec<String> {
+        let v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        v.iter().cloned().collect()
+    }
+}
+
+impl OpenClBackend {
+    /// [`Backend::execute`]'s body (the trait method runs it under
+    /// [`caustica_core::backend::driver_entry`]).
+    fn execute_recording(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         let mut pending: Vec<(&'static str, Event)> = Vec::new();
         for step in &recording.steps {
             match step {
@@ -270,7 +292,8 @@ impl Backend for OpenClBackend {
             .collect()
     }
 
-    fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+    /// [`Backend::read`]'s body.
+    fn read_back(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         let b = self.buffer(id)?;
         let mut out = caustica_core::device::host_bytes(b.bytes, "reading a buffer back")?;
         if !out.is_empty() {
@@ -281,10 +304,5 @@ impl Backend for OpenClBackend {
             }
         }
         Ok(out)
-    }
-
-    fn variants(&self) -> Vec<String> {
-        let v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
-        v.iter().cloned().collect()
     }
 }

@@ -37,8 +37,9 @@ struct DeviceBuffer {
 
 /// The wgpu backend.
 pub struct WgpuBackend {
-    device: wgpu::Device,
-    queue: wgpu::Queue,
+    /// Released in `Drop` inside `driver_entry` (see there), hence `ManuallyDrop`.
+    device: std::mem::ManuallyDrop<wgpu::Device>,
+    queue: std::mem::ManuallyDrop<wgpu::Queue>,
     description: String,
     /// The adapter's type (`Other` for a caller's device, whose adapter is not known).
     device_type: DeviceType,
@@ -186,6 +187,15 @@ impl WgpuBackend {
         queue: wgpu::Queue,
         description: &str,
     ) -> Result<WgpuBackend, BackendError> {
+        caustica_core::backend::driver_entry(|| Self::adopt(device, queue, description))
+    }
+
+    /// [`WgpuBackend::from_device`]'s body.
+    fn adopt(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        description: &str,
+    ) -> Result<WgpuBackend, BackendError> {
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&uncaptured);
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -202,8 +212,8 @@ impl WgpuBackend {
         Ok(WgpuBackend {
             limits: device.limits(),
             timestamps: device.features().contains(wgpu::Features::TIMESTAMP_QUERY),
-            device,
-            queue,
+            device: std::mem::ManuallyDrop::new(device),
+            queue: std::mem::ManuallyDrop::new(queue),
             description: description.to_string(),
             device_type: DeviceType::Other,
             pipelines,
@@ -354,6 +364,24 @@ impl WgpuBackend {
         };
         staging.unmap();
         Ok(out)
+    }
+}
+
+/// Releases the buffers, pipelines, queue and device inside
+/// [`caustica_core::backend::driver_entry`], so that `CAUSTICA_SERIALIZE_DRIVERS=1` covers
+/// the backend's destruction too (issue 19 point 5).
+impl Drop for WgpuBackend {
+    fn drop(&mut self) {
+        caustica_core::backend::driver_entry(|| {
+            self.buffers.clear();
+            self.pipelines.clear();
+            self.texture_pipelines.clear();
+            // SAFETY: dropped once, here; no field is used after `drop`.
+            unsafe {
+                std::mem::ManuallyDrop::drop(&mut self.queue);
+                std::mem::ManuallyDrop::drop(&mut self.device);
+            }
+        })
     }
 }
 

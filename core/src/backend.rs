@@ -100,13 +100,15 @@ pub struct PassTime {
 }
 
 /// Runs `f`, a call into a GPU driver (a backend's creation, `execute`, `read`, drop), one
-/// at a time in the process when `CAUSTICA_SERIALIZE_DRIVERS=1`, otherwise at once.
+/// at a time in the process; `CAUSTICA_SERIALIZE_DRIVERS=0` lets them run at once.
 ///
-/// The diagnosis of issue 19 point 5 (`docs/gpu/issue19-hang.md`): the wgpu and Vulkan
-/// backends, used from parallel threads of one process, deadlock in NVIDIA's user-mode
-/// driver. Serialising creation and destruction alone did not help; this switch
-/// serialises every driver entry of both, to find out whether that does. Nested calls
-/// on one thread do not lock again.
+/// Why (issue 19 point 5, `docs/gpu/issue19-hang.md`): on NVIDIA's driver, the GPU
+/// backends used from parallel threads of one process deadlock in the user-mode driver
+/// (threads asleep on its priority-inheritance locks, the GPU idle). With every driver
+/// entry of the three GPU backends serialised, 6 of 52 parallel conformance runs on the
+/// H200 hung, against 22 of 38 without: a mitigation, not a cure. A backend used alone
+/// takes an uncontended lock. Calls a host makes on its own device are not covered.
+/// Nested calls on one thread do not lock again.
 pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
     use std::sync::{Mutex, OnceLock};
     static ON: OnceLock<bool> = OnceLock::new();
