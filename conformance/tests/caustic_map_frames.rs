@@ -323,7 +323,6 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
     use caustica_core::frame::caustic_atlas::atlas_layout;
     use caustica_core::frame::plan::SceneFeatures;
     use caustica_core::scene::builtin::BUILTIN_SCENES;
-    use caustica_core::scene::Material;
     use caustica_core::techniques::caustic_map::MapGather;
     const FLUX_REL: f64 = 1e-4;
     let base = CausticMapSettings {
@@ -342,11 +341,7 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
             }
             (scene.camera.width, scene.camera.height) = (32, 18);
             let ds = DeviceScene::build(&scene, Default::default()).expect("scene");
-            let receiver: Vec<bool> = scene
-                .objects
-                .iter()
-                .map(|o| matches!(scene.materials[&o.material], Material::Diffuse { .. }))
-                .collect();
+            let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(&scene);
             let layout = atlas_layout(&ds, &receiver, (256, 256)).expect("layout");
             let atlas_flux = |s: CausticMapSettings, b: &mut dyn caustica_core::Backend| {
                 let mut t = CausticMap::new(b, &scene, s).expect("technique");

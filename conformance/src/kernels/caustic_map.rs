@@ -30,7 +30,7 @@ use crate::harness::tolerance::{DIRECT_AGREEMENT, DIRECT_FLOOR, DIRECT_REL, GATH
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
-use caustica_core::frame::caustic_atlas::{atlas_layout, AtlasLayout};
+use caustica_core::frame::caustic_atlas::{atlas_layout, atlas_receivers, AtlasLayout};
 use caustica_core::kernels::{
     CausticMapLookup, DensityGather, DepositAtlas, GatherCausticMap, GatherFootprint,
     PhotonCountTable,
@@ -39,24 +39,13 @@ use caustica_core::math::density_gather::atlas_edge_texel;
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::math::rng::random_f32;
 use caustica_core::recording::Recording;
-use caustica_core::scene::Material;
 use caustica_core::techniques::caustic_map::{atlas_gather_params, CausticMapSettings};
 
 /// Side of the checked atlas (texels).
 pub const CHECK_ATLAS: u32 = 64;
 
 fn layout(fx: &Fixture) -> Option<AtlasLayout> {
-    let receiver: Vec<bool> = fx
-        .scene
-        .objects
-        .iter()
-        .map(|o| {
-            matches!(
-                fx.scene.materials.get(&o.material),
-                Some(Material::Diffuse { .. })
-            )
-        })
-        .collect();
+    let receiver = atlas_receivers(&fx.scene);
     if !receiver.iter().any(|r| *r) {
         return None;
     }

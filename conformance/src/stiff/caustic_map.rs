@@ -213,16 +213,7 @@ pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
     };
     let ds = caustica_core::device::device_scene::DeviceScene::build(&scene, Default::default())
         .map_err(|e| e.to_string())?;
-    let receiver: Vec<bool> = scene
-        .objects
-        .iter()
-        .map(|o| {
-            matches!(
-                scene.materials.get(&o.material),
-                Some(Material::Diffuse { .. })
-            )
-        })
-        .collect();
+    let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(&scene);
     let layout = caustica_core::frame::caustic_atlas::atlas_layout(&ds, &receiver, (256, 256))
         .map_err(|e| e.to_string())?;
     let flux = |img: &Image| -> f64 {

@@ -314,6 +314,21 @@ pub struct AtlasLayout {
     pub covered_texels: u64,
 }
 
+/// Which scene objects get an atlas tile: one flag per object, true for diffuse
+/// receivers (an object whose material is missing gets none; validation refuses it).
+pub fn atlas_receivers(scene: &crate::scene::Scene) -> Vec<bool> {
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            matches!(
+                scene.materials.get(&o.material),
+                Some(crate::scene::Material::Diffuse { .. })
+            )
+        })
+        .collect()
+}
+
 /// A receiver's triangle: its scene index, world corners and UV corners.
 type ReceiverTriangle = (usize, [Vec3; 3], [Vec2; 3]);
 

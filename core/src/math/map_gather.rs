@@ -211,7 +211,6 @@ pub fn footprint_texels(pixel_angle: f32, distance: f32, cos: f32, texel_area: f
 /// path's (a ray cone unfolded along the path, as [`footprint_texels`]). `(-1, -1)` where
 /// the triangle has no area or no UV area: the caller falls back to
 /// [`footprint_texels`].
-#[allow(clippy::too_many_arguments)]
 pub fn footprint_extent(
     dir: Vec3,
     right: Vec3,

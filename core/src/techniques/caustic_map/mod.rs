@@ -44,7 +44,7 @@ use crate::kernels::{
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
-use crate::scene::{Material, Scene};
+use crate::scene::Scene;
 use std::time::Instant;
 
 /// The device side of the caustic atlas (exists when the scene has casters, receivers
@@ -202,16 +202,7 @@ impl CausticMap {
             &settings,
         );
         emission.check_light_flux()?;
-        let receiver: Vec<bool> = scene
-            .objects
-            .iter()
-            .map(|o| {
-                matches!(
-                    scene.materials.get(&o.material),
-                    Some(Material::Diffuse { .. })
-                )
-            })
-            .collect();
+        let receiver = crate::frame::caustic_atlas::atlas_receivers(scene);
         let features = SceneFeatures::of(scene);
         let casters = features.mirrors || features.dielectrics;
         let emits = !emission.planes.is_empty();
