@@ -10,8 +10,10 @@ use crate::device::layout::{AtlasTexel, AtlasTileTexel, MapLookupParams};
 /// branches, mirrors, Beer-Lambert inside glass; weights below `params.min_weight` cut,
 /// at most `params.max_specular_depth` specular surfaces; `direct_light`'s walk), and at
 /// every diffuse surface it ends on the caustic radiance `weight * albedo / pi * E(uv)`,
-/// `E` the caustic map of that surface's receiver tile sampled bilinearly at the hit's uv
-/// ([`crate::math::map_gather::sample_caustic_map`]). Output: radiance W/(sr m^2),
+/// `E` the caustic map of that surface's receiver tile averaged over the pixel's footprint
+/// rectangle ([`crate::math::map_gather::footprint_extent`],
+/// [`crate::math::map_gather::sample_caustic_map`]; bilinear where the footprint is
+/// smaller than a texel). Output: radiance W/(sr m^2),
 /// alpha 1; black where the ray meets nothing.
 #[derive(Clone, Copy, Debug)]
 pub struct CausticMapLookup {

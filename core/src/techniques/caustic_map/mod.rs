@@ -15,8 +15,8 @@
 //!    (the camera's specular ray tree reading the map) and `composite`.
 //!
 //! Not built yet (TODO(issue 16)): pruning atlas tiles of receivers no photon can reach
-//! (the layout is fixed before any photon is traced); an exact pixel footprint in the
-//! lookup (a cone unfolded along the path, blind to focusing by curved glass).
+//! (the layout is fixed before any photon is traced); a footprint carried through curved
+//! glass (the lookup unfolds the pixel's square along the path, blind to focusing).
 
 mod emission;
 mod settings;
