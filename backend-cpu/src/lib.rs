@@ -23,7 +23,7 @@ use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
     DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene, PrimaryGbuffer,
-    ResolveCaustics, TileHitDistance, TracePhotons,
+    RefineClusters, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -138,9 +138,16 @@ impl CpuBackend {
                 photons,
                 photon_count,
                 counters,
+                clusters,
             }) => {
                 reserve_temporary::<Photon>(params.count as u64, "a photon batch")?;
-                let result = trace_photons::trace_photons(&view(scene)?, params, *variant);
+                let result = match clusters.filter(|_| variant.adaptive) {
+                    Some(c) => {
+                        let list = get(c.id)?.as_slice::<u32>(c.len)?.to_vec();
+                        trace_photons::trace_cluster_slots(&view(scene)?, params, *variant, &list)
+                    }
+                    None => trace_photons::trace_photons(&view(scene)?, params, *variant),
+                };
                 if result.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(
                         "photon buffer holds {} photons, batch stored {}",
@@ -149,8 +156,10 @@ impl CpuBackend {
                     )));
                 }
                 self.get_mut(photons.id)?.write_prefix(&result.photons)?;
-                self.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] =
-                    result.photons.len() as u32;
+                if !variant.adaptive {
+                    self.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] =
+                        result.photons.len() as u32;
+                }
                 result
                     .counters
                     .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
@@ -272,6 +281,41 @@ impl CpuBackend {
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
                 let img = density_gather::density_gather(params, g, e, i);
                 self.put(out.id, &img)
+            }
+            Kernel::RefineClusters(RefineClusters {
+                params,
+                clusters,
+                photons,
+                triangle_tiles,
+                tiles,
+                children,
+                cluster_counts,
+                counters,
+                atlas,
+            }) => {
+                let list = get(clusters.id)?.as_slice(clusters.len)?;
+                let ph = get(photons.id)?.as_slice(photons.len)?;
+                let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
+                let tl = get(tiles.id)?.as_slice(tiles.len)?;
+                let [a, b, c] = atlas.planes;
+                let atomics = [
+                    get(a.id)?.as_atomic_u64(a.bytes())?,
+                    get(b.id)?.as_atomic_u64(b.bytes())?,
+                    get(c.id)?.as_atomic_u64(c.bytes())?,
+                ];
+                let r = refine_clusters::refine_clusters(params, list, ph, tt, tl, atomics);
+                r.counters
+                    .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+                let mut counts = self
+                    .get(cluster_counts.id)?
+                    .as_slice::<u32>(cluster_counts.len)?
+                    .to_vec();
+                let kids = self.get_mut(children.id)?.as_mut_slice(children.len)?;
+                refine_clusters::append_refined(&r, kids, &mut counts, params.children_capacity);
+                self.get_mut(cluster_counts.id)?
+                    .as_mut_slice::<u32>(cluster_counts.len)?
+                    .copy_from_slice(&counts);
+                Ok(())
             }
             Kernel::DepositAtlas(DepositAtlas {
                 params,

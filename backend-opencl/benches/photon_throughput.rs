@@ -54,6 +54,7 @@ fn bench(c: &mut Criterion) {
             photons,
             photon_count,
             counters,
+            clusters: None,
         }));
         // warm-up (first launch compiles on some drivers), then the device timestamp
         backend.execute(&trace).unwrap();

@@ -26,6 +26,12 @@
 #ifndef FRESNEL_SPLIT
 #define FRESNEL_SPLIT 0
 #endif
+// Seed 004's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
+// of cluster clusters[p->first + i / 4] of the p->grid_w grid and is written to slot i,
+// stored or not (core's photon_store says how); photon_count is left untouched.
+#ifndef ADAPTIVE
+#define ADAPTIVE 0
+#endif
 
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
@@ -126,6 +132,8 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
     return PATH_BOUNCE_LIMIT;
 }
 
+inline void count_end(int end, const Photon* ph, float flux_quantum, __local uint* lc);
+
 // Adds one path end to the photon buffer and the work-group's counters.
 inline void record_end(int end, const Photon* ph, float flux_quantum, __global Photon* photons,
                        uint photon_capacity, volatile __global uint* photon_count,
@@ -134,6 +142,27 @@ inline void record_end(int end, const Photon* ph, float flux_quantum, __global P
         uint slot = atomic_inc(photon_count);
         // The host never dispatches more photons than the buffer holds.
         if (slot < photon_capacity) photons[slot] = *ph;
+    }
+    count_end(end, ph, flux_quantum, lc);
+}
+
+// The slot an adaptive photon leaves (backend-cpu trace_photons.rs::cluster_slot).
+inline Photon cluster_slot(int end, uint rays, const Photon* ph) {
+    Photon s = *ph;
+    if (end == PATH_STORED) {
+        s.position[2] = 1.0f;
+        return s;
+    }
+    store3(s.position, (float3)(0.0f, 0.0f, photon_met_caster((uint)end, rays) ? 1.0f : 0.0f));
+    s.hit_distance = 0.0f;
+    store3(s.flux, (float3)(0.0f, 0.0f, 0.0f));
+    s.direction = NO_TRIANGLE;
+    return s;
+}
+
+// Adds one path end to the work-group's counters.
+inline void count_end(int end, const Photon* ph, float flux_quantum, __local uint* lc) {
+    if (end == PATH_STORED) {
         atomic_inc(&lc[COUNTER_STORED]);
         for (uint ch = 0u; ch < 3u; ch++) {
             uint units = quantize(ph->flux[ch], flux_quantum).units;
@@ -313,12 +342,20 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
 __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
                             __global Photon* photons, uint photon_capacity,
                             volatile __global uint* photon_count,
-                            volatile __global uint* counters) {
+                            volatile __global uint* counters, __global const uint* clusters) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < p->count) {
-        if (FRESNEL_SPLIT) {
+        if (ADAPTIVE) {
+            uint index = cluster_photon_index(clusters[p->first + i / 4u], i % 4u, p->grid_w);
+            Photon ph;
+            uint rays;
+            int end = trace_photon(SCENE_ARGS, p, index, &ph, &rays);
+            atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
+            if (i < photon_capacity) photons[i] = cluster_slot(end, rays, &ph);
+            count_end(end, &ph, p->flux_quantum, lc);
+        } else if (FRESNEL_SPLIT) {
             uint splits;
             uint rays = trace_photon_split(SCENE_ARGS, p, p->first + i, photons, photon_capacity,
                                            photon_count, lc, &splits);

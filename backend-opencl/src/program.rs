@@ -49,6 +49,10 @@ pub const COMMON: &[(&str, &str)] = &[
         "specular_tree.cl",
         include_str!("../kernels/common/specular_tree.cl"),
     ),
+    (
+        "photon_clusters.cl",
+        include_str!("../kernels/common/photon_clusters.cl"),
+    ),
 ];
 
 /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
@@ -97,6 +101,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "caustic_map_lookup",
         include_str!("../kernels/caustic_map_lookup.cl"),
+    ),
+    (
+        "refine_clusters",
+        include_str!("../kernels/refine_clusters.cl"),
     ),
 ];
 

@@ -50,6 +50,10 @@ pub const COMMON: &[(&str, &str)] = &[
     ("atlas", include_str!("../wgsl/common/atlas.wgsl")),
     ("map_gather", include_str!("../wgsl/common/map_gather.wgsl")),
     ("map_lookup", include_str!("../wgsl/common/map_lookup.wgsl")),
+    (
+        "photon_clusters",
+        include_str!("../wgsl/common/photon_clusters.wgsl"),
+    ),
 ];
 
 /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
@@ -97,6 +101,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "caustic_map_lookup",
         include_str!("../wgsl/caustic_map_lookup.wgsl"),
+    ),
+    (
+        "refine_clusters",
+        include_str!("../wgsl/refine_clusters.wgsl"),
     ),
 ];
 

@@ -1,4 +1,4 @@
-// needs: types vector rng sampling optics packing geometry fixed_point traversal scene
+// needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters
 // trace_photons (seed 000 sections 30.3.1.1-2): photon `first + i` of the light's
 // stratified grid is emitted, traced through mirrors and dielectrics and stored where it
 // first meets a diffuse surface after at least one specular interaction. Mirror of
@@ -20,6 +20,10 @@ override SURFACE_STORE: bool = false;
 // branches and three one-channel branches at the first dispersive surface, up to
 // params.split_budget branches per photon.
 override FRESNEL_SPLIT: bool = false;
+// Seed 004's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
+// of cluster clusters[params.first + i / 4] of the params.grid_w grid and is written to
+// slot i, stored or not (core's photon_store says how); photon_count is left untouched.
+override ADAPTIVE: bool = false;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -30,6 +34,7 @@ override FRESNEL_SPLIT: bool = false;
 @group(0) @binding(6) var<storage, read_write> photons: array<Photon>;
 @group(0) @binding(7) var<storage, read_write> photon_count: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read> clusters: array<u32>;
 
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
@@ -166,6 +171,27 @@ fn record_end(end: i32, ph: Photon, flux_quantum: f32) {
         if (slot < arrayLength(&photons)) {
             photons[slot] = ph;
         }
+    }
+    count_end(end, ph, flux_quantum);
+}
+
+// The slot an adaptive photon leaves (backend-cpu trace_photons.rs::cluster_slot).
+fn cluster_slot(end: i32, rays: u32, ph: Photon) -> Photon {
+    var s = ph;
+    if (end == PATH_STORED) {
+        s.position.z = 1.0f;
+        return s;
+    }
+    s.position = vec3<f32>(0.0f, 0.0f, select(0.0f, 1.0f, photon_met_caster(u32(end), rays)));
+    s.hit_distance = 0.0f;
+    s.flux = vec3<f32>(0.0f, 0.0f, 0.0f);
+    s.direction = NO_TRIANGLE;
+    return s;
+}
+
+// Adds one path end to the work-group's counters.
+fn count_end(end: i32, ph: Photon, flux_quantum: f32) {
+    if (end == PATH_STORED) {
         atomicAdd(&lc[COUNTER_STORED], 1u);
         for (var ch = 0u; ch < 3u; ch++) {
             let units = quantize(ph.flux[ch], flux_quantum).units;
@@ -334,7 +360,17 @@ fn trace_photons(i: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
     if (i < p.count) {
-        if (FRESNEL_SPLIT) {
+        if (ADAPTIVE) {
+            let index = cluster_photon_index(clusters[p.first + i / 4u], i % 4u, p.grid_w);
+            var ph: Photon;
+            var rays: u32;
+            let end = trace_photon(p, index, &ph, &rays);
+            atomic_add_u64_local(COUNTER_RAYS, rays);
+            if (i < arrayLength(&photons)) {
+                photons[i] = cluster_slot(end, rays, ph);
+            }
+            count_end(end, ph, p.flux_quantum);
+        } else if (FRESNEL_SPLIT) {
             var splits: u32;
             let rays = trace_photon_split(p, p.first + i, &splits);
             atomic_add_u64_local(COUNTER_RAYS, rays);

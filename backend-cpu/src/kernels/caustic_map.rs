@@ -35,14 +35,11 @@ pub fn deposit_atlas(
         .map(|chunk| {
             let mut c = Counters::default();
             for ph in chunk {
-                let tri = ph.direction as usize;
-                let tile = triangle_tiles.get(tri).copied().unwrap_or(NO_TILE);
-                if tile == NO_TILE || tile as usize >= tiles.len() {
+                let texel = atlas_photon_texel(triangle_tiles, tiles, ph, p.width);
+                if texel == NO_TILE {
                     c.bump(counter::OFF_SCREEN);
                     continue;
                 }
-                let uv = Vec2::new(ph.position[0], ph.position[1]);
-                let texel = atlas_texel_index(tiles[tile as usize], uv, p.width);
                 deposit_photon_texel(
                     &map,
                     texel,
@@ -55,6 +52,25 @@ pub fn deposit_atlas(
             c
         })
         .reduce(Counters::default, Counters::merge)
+}
+
+/// The atlas texel under texture-space photon `ph` (its uv on its triangle's receiver
+/// tile), or `NO_TILE` when its triangle has no tile.
+pub fn atlas_photon_texel(
+    triangle_tiles: &[u32],
+    tiles: &[AtlasTileTexel],
+    ph: &Photon,
+    width: u32,
+) -> u32 {
+    let tile = triangle_tiles
+        .get(ph.direction as usize)
+        .copied()
+        .unwrap_or(NO_TILE);
+    if tile == NO_TILE || tile as usize >= tiles.len() {
+        return NO_TILE;
+    }
+    let uv = Vec2::new(ph.position[0], ph.position[1]);
+    atlas_texel_index(tiles[tile as usize], uv, width)
 }
 
 /// The flux (W per channel) of atlas texel `i`'s fixed-point sums.

@@ -8,6 +8,7 @@ pub mod deposit_screen;
 pub mod direct_light;
 pub mod gather;
 pub mod gbuffer;
+pub mod refine_clusters;
 pub mod trace_photons;
 
 use caustica_core::device::layout::counter;

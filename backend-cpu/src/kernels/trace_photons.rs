@@ -39,6 +39,7 @@ use caustica_core::math::optics::{
     CHANNEL_WAVELENGTH_UM,
 };
 use caustica_core::math::packing::pack_unit_vector;
+use caustica_core::math::photon_clusters::{cluster_photon_index, photon_met_caster, NO_TRIANGLE};
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::sampling::{
     stratified_cell, to_world, uniform_cone, view_plane_direction, view_plane_texel_weight,
@@ -368,6 +369,84 @@ fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION:
         counters.words[counter::RAYS] += rays as u64;
         on_end(end);
     })
+}
+
+/// The `ADAPTIVE` variant (seed 004): photon `i` of the batch is photon `i % 4` of cluster
+/// `clusters[p.first + i / 4]` of the `p.grid_w` grid
+/// ([`cluster_photon_index`]), and goes to slot `i` whether it stored or not
+/// (`photon_store`'s adaptive slot: an empty slot has zero flux, `direction` =
+/// [`NO_TRIANGLE`] and `position.z` = 1 if the photon met a caster).
+pub fn trace_cluster_slots(
+    scene: &SceneView,
+    p: &TraceParams,
+    variant: TraceVariant,
+    clusters: &[u32],
+) -> TraceResult {
+    match (variant.dielectric, variant.dispersion, variant.absorption) {
+        (false, false, false) => cluster_batch::<false, false, false>(scene, p, clusters),
+        (false, false, true) => cluster_batch::<false, false, true>(scene, p, clusters),
+        (false, true, false) => cluster_batch::<false, true, false>(scene, p, clusters),
+        (false, true, true) => cluster_batch::<false, true, true>(scene, p, clusters),
+        (true, false, false) => cluster_batch::<true, false, false>(scene, p, clusters),
+        (true, false, true) => cluster_batch::<true, false, true>(scene, p, clusters),
+        (true, true, false) => cluster_batch::<true, true, false>(scene, p, clusters),
+        (true, true, true) => cluster_batch::<true, true, true>(scene, p, clusters),
+    }
+}
+
+/// The slot a traced cluster photon leaves (see [`trace_cluster_slots`]).
+pub fn cluster_slot(end: &PathEnd, rays: u32) -> Photon {
+    let (code, stored) = match end {
+        PathEnd::Stored(ph) => (0, Some(*ph)),
+        PathEnd::NoSpecular => (1, None),
+        PathEnd::Escaped => (2, None),
+        PathEnd::Negligible => (3, None),
+        PathEnd::BounceLimit => (4, None),
+    };
+    match stored {
+        Some(mut ph) => {
+            ph.position[2] = 1.0;
+            ph
+        }
+        None => Photon {
+            position: [0.0, 0.0, photon_met_caster(code, rays) as u32 as f32],
+            direction: NO_TRIANGLE,
+            ..Default::default()
+        },
+    }
+}
+
+fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(
+    scene: &SceneView,
+    p: &TraceParams,
+    clusters: &[u32],
+) -> TraceResult {
+    let parts: Vec<(Photon, Counters)> = (0..p.count)
+        .into_par_iter()
+        .map(|i| {
+            let cluster = clusters[(p.first + i / 4) as usize];
+            let index = cluster_photon_index(cluster, i % 4, p.grid_w);
+            let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
+                scene,
+                p,
+                index,
+                photon_store::SURFACE,
+                &mut |_, _| {},
+            );
+            let mut c = Counters::default();
+            c.words[counter::RAYS] += rays as u64;
+            let slot = cluster_slot(&end, rays);
+            count_end(end, p, &mut Vec::new(), &mut c);
+            (slot, c)
+        })
+        .collect();
+    let mut counters = Counters::default();
+    let mut photons = Vec::with_capacity(parts.len());
+    for (ph, c) in parts {
+        photons.push(ph);
+        counters = counters.merge(c);
+    }
+    TraceResult { photons, counters }
 }
 
 /// The emitted ray and flux of photon `index` (global index in the light's grid).

@@ -61,6 +61,11 @@ typedef struct {
     GpuCamera camera;
     uint atlas_width; uint max_specular_depth; float min_weight; uint fresnel_model;
 } MapLookupParams;
+typedef struct {
+    uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
+    uint finest; uint metric; uint error_from_level; uint grid_w;
+    uint first; uint count; uint children_capacity; uint _pad;
+} RefineParams;
 
 // core::gpu constants
 #define MATERIAL_DIFFUSE 0u

@@ -101,6 +101,11 @@ struct MapLookupParams {
     GpuCamera camera;
     uint atlas_width; uint max_specular_depth; float min_weight; uint fresnel_model;
 };
+struct RefineParams {
+    uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
+    uint finest; uint metric; uint error_from_level; uint grid_w;
+    uint first; uint count; uint children_capacity; uint _pad;
+};
 
 // The closest-hit payload (location 0) shared by the ray generation, closest-hit and miss
 // stages: hit distance, triangle index (NO_HIT on a miss) and the barycentrics (u, v) of

@@ -167,6 +167,7 @@ impl Fixture {
             photons,
             photon_count,
             counters,
+            clusters: None,
         }));
         run_and_free(b, "trace_photons", &rec, |b| {
             let n = read_buf(b, photon_count)?[0] as usize;

@@ -354,6 +354,11 @@ pub mod photon_store {
     /// (`.z` = 0) and `direction` the index of the triangle it landed on; `flux` and
     /// `hit_distance` as in world space.
     pub const SURFACE: u32 = 1;
+    // The `ADAPTIVE` variant of `trace_photons` stores texture space in one slot per
+    // traced photon (slot = the photon's index in the batch): a stored photon as
+    // `SURFACE` with `position.z` = 1; a photon that stored nothing with zero flux,
+    // `direction` = `photon_clusters::NO_TRIANGLE` and `position.z` = 1 if it met a
+    // caustic caster (`photon_clusters::photon_met_caster`), else 0.
 }
 
 /// Sentinel tile index: a triangle that is no receiver, an atlas texel outside every
@@ -387,6 +392,53 @@ pub struct AtlasParams {
     pub gather_width: u32,
     /// Padding to the 16-byte boundary.
     pub _pad: [u32; 2],
+}
+
+/// Parameters of `refine_clusters` (AdaptiveCaustics, seed 004 section 3.2): one batch of
+/// clusters of one level of one light view plane, traced by `trace_photons`' `ADAPTIVE`
+/// variant into one slot per photon.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RefineParams {
+    /// Atlas width (texels), for the texel under a photon's uv.
+    pub atlas_width: u32,
+    /// Flux per fixed-point unit (W).
+    pub flux_quantum: f32,
+    /// Hit distance per fixed-point unit (scene units).
+    pub hit_distance_quantum: f32,
+    /// The batch's level (0: the start grid).
+    pub level: u32,
+    /// The finest level: everything relevant left there is output.
+    pub finest: u32,
+    /// [`cluster_metric`](crate::math::photon_clusters::cluster_metric).
+    pub metric: u32,
+    /// First level at which the error metric is checked (coarser levels use the
+    /// traversal-level metric, 004 section 4.2).
+    pub error_from_level: u32,
+    /// Texels a side of the level's grid.
+    pub grid_w: u32,
+    /// First entry of the batch in the cluster list (`trace_photons` read the same).
+    pub first: u32,
+    /// Clusters in the batch (four photon slots each).
+    pub count: u32,
+    /// Entries the child list holds.
+    pub children_capacity: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: u32,
+}
+
+/// Words of `refine_clusters`' cluster counts buffer.
+pub mod cluster_count {
+    /// Entries written to the child cluster list (four per refined cluster).
+    pub const CHILDREN: usize = 0;
+    /// Clusters output (their photons deposited).
+    pub const OUTPUT: usize = 1;
+    /// Clusters discarded (every photon missed the casters).
+    pub const DISCARDED: usize = 2;
+    /// Photons deposited (stored photons of output clusters).
+    pub const OUTPUT_PHOTONS: usize = 3;
+    /// Number of u32 words.
+    pub const WORDS: usize = 4;
 }
 
 /// Parameters of `caustic_map_lookup`.

@@ -10,7 +10,8 @@
 
 use super::layout::{
     AtlasParams, DepositParams, DepositTexel, DirectParams, GBufferTexel, GatherParams, GpuCamera,
-    GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams, Photon, TraceParams,
+    GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams, Photon, RefineParams,
+    TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -221,6 +222,10 @@ table! {
         width, height, flux_quantum, hit_distance_quantum, photon_capacity, gather_width, _pad
     }
     MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, fresnel_model }
+    RefineParams {
+        atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
+        error_from_level, grid_w, first, count, children_capacity, _pad
+    }
 }
 
 static TABLE: LazyLock<Vec<StructLayout>> = LazyLock::new(build);

@@ -57,6 +57,7 @@ impl SceneFeatures {
             absorption: self.absorption,
             surface_store: false,
             fresnel_split: false,
+            adaptive: false,
         }
     }
 }

@@ -104,6 +104,32 @@ pub struct FrameStats {
     /// Error of the filtered caustics against the reference set with
     /// `Sspm::set_reference` (computed after the frame; not part of `frame_ms`).
     pub error: Option<crate::frame::metrics::ErrorStats>,
+    /// AdaptiveCaustics' traversal (seed 004); absent for the dense techniques and on
+    /// frames without photon work.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adaptive: Option<AdaptiveStats>,
+}
+
+/// The photon work of one adaptive traversal (seed 004 section 3.2, its Table 1's
+/// "photons processed"), summed over the light view planes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct AdaptiveStats {
+    /// Every photon traced, at every level.
+    pub photons_processed: u64,
+    /// Photons the dense grid at the finest level would trace (its texels).
+    pub dense_equivalent_photons: u64,
+    /// Photons traced per level (index 0: the start grid).
+    pub photons_per_level: Vec<u64>,
+    /// Photons deposited (of output clusters), per level.
+    pub photons_output_per_level: Vec<u64>,
+    /// Clusters whose photons were deposited.
+    pub clusters_output: u64,
+    /// Clusters none of whose photons met a caster.
+    pub clusters_discarded: u64,
+    /// Clusters refined into four children.
+    pub clusters_refined: u64,
+    /// Traversal steps (a trace and a refinement of one batch of one level).
+    pub steps: u32,
 }
 
 impl FrameStats {

@@ -27,6 +27,7 @@ mod gather_footprint;
 mod photon_count_table;
 mod prepare_scene;
 mod primary_gbuffer;
+mod refine_clusters;
 mod resolve_caustics;
 mod tile_hit_distance;
 mod trace_photons;
@@ -43,6 +44,7 @@ pub use gather_footprint::GatherFootprint;
 pub use photon_count_table::PhotonCountTable;
 pub use prepare_scene::PrepareScene;
 pub use primary_gbuffer::PrimaryGbuffer;
+pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
 pub use tile_hit_distance::TileHitDistance;
 pub use trace_photons::{TracePhotons, TraceVariant};
@@ -465,6 +467,7 @@ kernel_list! {
     DepositAtlas => deposit_atlas,
     GatherCausticMap => gather_caustic_map,
     CausticMapLookup => caustic_map_lookup,
+    RefineClusters => refine_clusters,
 }
 
 impl Kernel {

@@ -24,18 +24,26 @@ pub struct TracePhotons {
     pub params: TraceParams,
     /// Output: stored photons, appended.
     pub photons: Buf<Photon>,
-    /// `[0]`: next free slot in `photons`, incremented atomically (the caller clears it).
+    /// `[0]`: next free slot in `photons`, incremented atomically (the caller clears it);
+    /// the `adaptive` variant leaves it untouched.
     pub photon_count: Buf<u32>,
     /// Photon counters ([`crate::device::layout::counter`]) the kernel adds to.
     pub counters: Buf<u32>,
+    /// With the `adaptive` variant: the level's cluster list
+    /// ([`crate::math::photon_clusters`]); photon `i` of the batch is photon `i % 4` of
+    /// cluster `clusters[params.first + i / 4]` of the `params.grid_w` grid, and is
+    /// written to slot `i` of `photons` (`photon_store` says how). Otherwise `None` (the
+    /// binding then aliases the scene's triangles, read by nobody).
+    pub clusters: Option<Buf<u32>>,
 }
 
-const BINDINGS: [Binding; 11] = with_scene([
+const BINDINGS: [Binding; 12] = with_scene([
     bind("params", Params),
     bind("photons", ReadWrite),
     bind("photon_capacity", Count),
     bind("photon_count", ReadWrite),
     bind("counters", ReadWrite),
+    bind("clusters", Read),
 ]);
 
 impl KernelDecl for TracePhotons {
@@ -73,6 +81,30 @@ impl KernelDecl for TracePhotons {
                 self.photons.len, p.count
             )));
         }
+        if self.variant.adaptive {
+            let Some(c) = self.clusters else {
+                return Err(BackendError::BadArgument(
+                    "trace_photons: the adaptive variant needs a cluster list".into(),
+                ));
+            };
+            if self.variant.fresnel_split || !self.variant.surface_store {
+                return Err(BackendError::BadArgument(
+                    "trace_photons: the adaptive variant stores texture space, one photon per \
+                     slot (no deterministic split)"
+                        .into(),
+                ));
+            }
+            if !p.count.is_multiple_of(4)
+                || p.first as u64 + p.count as u64 / 4 > c.len as u64
+                || p.grid_w < 2
+                || p.grid_w != p.grid_h
+            {
+                return Err(BackendError::BadArgument(format!(
+                    "trace_photons: {} photons from cluster {} of a list of {} on a {}x{} grid",
+                    p.count, p.first, c.len, p.grid_w, p.grid_h
+                )));
+            }
+        }
         if p.light >= self.scene.lights.len {
             return Err(BackendError::BadArgument(
                 "trace_photons: light index out of range".into(),
@@ -84,6 +116,10 @@ impl KernelDecl for TracePhotons {
             .count("photon_capacity", self.photons.len)?
             .buf("photon_count", self.photon_count, 4)?
             .buf("counters", self.counters, bytes::COUNTERS)?;
+        match self.clusters {
+            Some(c) => a.buf("clusters", c, 0)?,
+            None => a.buf("clusters", self.scene.triangles, 0)?,
+        };
         Ok(Some(p.count as u64))
     }
 
@@ -116,16 +152,20 @@ pub struct TraceVariant {
     /// branches, up to `TraceParams::split_budget` branches per emitted photon (beyond it,
     /// the stochastic choice); otherwise Sspm's stochastic Fresnel and channel choices.
     pub fresnel_split: bool,
+    /// Seed 004's adaptive emission: photons come four by four from a cluster list, and
+    /// each is written to its own slot (stored or not) for `refine_clusters` to judge.
+    pub adaptive: bool,
 }
 
 impl TraceVariant {
     /// Switch names, in specialization-constant id order.
-    pub const SWITCHES: [&'static str; 5] = [
+    pub const SWITCHES: [&'static str; 6] = [
         "DIELECTRIC",
         "DISPERSION",
         "ABSORPTION",
         "SURFACE_STORE",
         "FRESNEL_SPLIT",
+        "ADAPTIVE",
     ];
 
     /// Every feature compiled in (what a frame uses with pruning off).
@@ -135,16 +175,18 @@ impl TraceVariant {
         absorption: true,
         surface_store: false,
         fresnel_split: false,
+        adaptive: false,
     };
 
     /// Switch values in [`TraceVariant::SWITCHES`] order.
-    pub fn values(&self) -> [u32; 5] {
+    pub fn values(&self) -> [u32; 6] {
         [
             self.dielectric as u32,
             self.dispersion as u32,
             self.absorption as u32,
             self.surface_store as u32,
             self.fresnel_split as u32,
+            self.adaptive as u32,
         ]
     }
 

@@ -8,5 +8,6 @@ pub mod geometry;
 pub mod map_gather;
 pub mod optics;
 pub mod packing;
+pub mod photon_clusters;
 pub mod rng;
 pub mod sampling;

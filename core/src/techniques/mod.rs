@@ -3,6 +3,7 @@
 //! conformance create techniques by name through [`create`] and drive them through
 //! [`crate::frame::technique::Technique`].
 
+pub mod adaptive_caustics;
 pub mod caustic_map;
 pub mod sspm;
 
@@ -52,6 +53,16 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
         create: caustic_map::create,
         default_settings: || {
             serde_json::to_value(caustic_map::CausticMapSettings::default())
+                .unwrap_or(serde_json::Value::Null)
+        },
+        filter_setting: Some(("gather", &["density", "box"])),
+    },
+    TechniqueEntry {
+        name: "adaptive-caustics",
+        title: "coarse-to-fine photon emission into caustic maps (seed 004)",
+        create: adaptive_caustics::create,
+        default_settings: || {
+            serde_json::to_value(adaptive_caustics::AdaptiveCausticsSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
         filter_setting: Some(("gather", &["density", "box"])),

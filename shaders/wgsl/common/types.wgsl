@@ -161,6 +161,21 @@ struct MapLookupParams {
     fresnel_model: u32,
 }
 
+struct RefineParams {
+    atlas_width: u32,
+    flux_quantum: f32,
+    hit_distance_quantum: f32,
+    level: u32,
+    finest: u32,
+    metric: u32,
+    error_from_level: u32,
+    grid_w: u32,
+    first: u32,
+    count: u32,
+    children_capacity: u32,
+    _pad: u32,
+}
+
 struct DirectParams {
     camera: GpuCamera,
     light_count: u32,

@@ -55,22 +55,35 @@ impl Emission {
                 Err(why) => skipped_lights.push((i as u32, why)),
             }
         }
+        let flux_quantum = Self::quantum_for(&planes, has_dispersion, |p| p.resolution);
+        Emission {
+            planes,
+            skipped_lights,
+            flux_quantum,
+            hit_distance_quantum: power_of_two_quantum(bounds.diagonal().max(f32::MIN_POSITIVE)),
+        }
+    }
+
+    /// The flux quantum for photons of `planes` shot on grids of `resolution(plane)`
+    /// texels: the brightest photon (a centre texel's, x3 with dispersion) is 2^24 to
+    /// 2^25 units.
+    pub fn quantum_for(
+        planes: &[(u32, u32, LightViewPlane)],
+        has_dispersion: bool,
+        resolution: impl Fn(&LightViewPlane) -> (u32, u32),
+    ) -> f32 {
         let gain = if has_dispersion { 3.0 } else { 1.0 };
         let max_photon_flux = planes
             .iter()
             .map(|(_, _, p)| {
                 let (hx, hy) = p.half_extent;
-                let texel = (2.0 * hx / p.resolution.0 as f32) * (2.0 * hy / p.resolution.1 as f32);
+                let (w, h) = resolution(p);
+                let texel = (2.0 * hx / w as f32) * (2.0 * hy / h as f32);
                 p.power.max_element() * texel
             })
             .fold(0.0f32, f32::max)
             * gain;
-        Emission {
-            planes,
-            skipped_lights,
-            flux_quantum: power_of_two_quantum(max_photon_flux),
-            hit_distance_quantum: power_of_two_quantum(bounds.diagonal().max(f32::MIN_POSITIVE)),
-        }
+        power_of_two_quantum(max_photon_flux)
     }
 
     /// The RNG seed of plane `plane` of light `light`: the frame seed hashed with both.

@@ -45,6 +45,9 @@ use crate::kernels::{
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
+use crate::techniques::adaptive_caustics::{
+    self, AdaptiveCausticsSettings, AdaptiveSetup, AtlasTarget, PhotonOptics, Traversal,
+};
 use std::time::Instant;
 
 /// The device side of the caustic atlas (exists when the scene has casters, receivers
@@ -150,6 +153,10 @@ pub fn atlas_gather_params(
 
 /// CausticMap on one backend, for one scene.
 pub struct CausticMap {
+    /// Registry name: `caustic-map`, or `adaptive-caustics` with a traversal.
+    name: &'static str,
+    /// Seed 004's hierarchical emission (AdaptiveCaustics) instead of the dense planes.
+    adaptive: Option<AdaptiveSetup>,
     settings: CausticMapSettings,
     model: Scene,
     scene: SceneArgs,
@@ -184,6 +191,17 @@ impl CausticMap {
         scene: &Scene,
         settings: CausticMapSettings,
     ) -> Result<CausticMap, Error> {
+        Self::build(backend, scene, settings, None)
+    }
+
+    /// [`CausticMap::new`], with seed 004's adaptive emission when `adaptive` is given
+    /// (AdaptiveCaustics; its settings validated by the caller).
+    pub(crate) fn build(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: CausticMapSettings,
+        adaptive: Option<AdaptiveCausticsSettings>,
+    ) -> Result<CausticMap, Error> {
         settings.validate()?;
         scene
             .validate()
@@ -194,13 +212,16 @@ impl CausticMap {
                 max_triangles: settings.max_triangles,
             },
         )?;
-        let emission = Emission::new(
+        let mut emission = Emission::new(
             scene,
             ds.bounds,
             ds.caster_bounds,
             ds.has_dispersion,
             &settings,
         );
+        if let Some(a) = &adaptive {
+            adaptive_caustics::fit_planes(&mut emission, a, ds.has_dispersion);
+        }
         emission.check_light_flux()?;
         let receiver = crate::frame::caustic_atlas::atlas_receivers(scene);
         let features = SceneFeatures::of(scene);
@@ -249,11 +270,21 @@ impl CausticMap {
         // the split only changes dielectrics: a scene without one runs the plain variant
         variant.fresnel_split =
             settings.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
+        variant.adaptive = adaptive.is_some();
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
         let scene_alloc = planned_allocation(backend, &rec, None)?;
         backend.execute(&rec)?;
         let mut t = CausticMap {
+            name: if adaptive.is_some() {
+                "adaptive-caustics"
+            } else {
+                "caustic-map"
+            },
+            adaptive: adaptive.map(|settings| AdaptiveSetup {
+                settings,
+                traversal: None,
+            }),
             settings,
             model: scene.clone(),
             scene: scene_args,
@@ -314,6 +345,9 @@ impl CausticMap {
         // photons a batch traces: the split stores up to split_budget per photon
         let cap = if self.variant.fresnel_split {
             cap.max(s.split_budget)
+        } else if self.adaptive.is_some() {
+            // the traversal traces into its own slots
+            1
         } else {
             cap
         };
@@ -346,6 +380,17 @@ impl CausticMap {
                 }
             }),
         };
+        let finest = self
+            .emission
+            .planes
+            .iter()
+            .map(|(_, _, p)| p.resolution.0)
+            .max()
+            .unwrap_or(1);
+        if let Some(ad) = &mut self.adaptive {
+            let levels = (finest / ad.settings.start_grid).max(1).ilog2();
+            ad.traversal = Some(Traversal::record(&mut rec, &ad.settings, levels));
+        }
         let alloc = planned_allocation(backend, &rec, None)?;
         backend.execute(&rec)?;
         self.atlas = Some(a);
@@ -410,6 +455,9 @@ impl CausticMap {
             .chain(std::mem::take(&mut self.scene_owned))
             .collect();
         self.atlas = None;
+        if let Some(a) = &mut self.adaptive {
+            a.traversal = None;
+        }
         self.images = Images::default();
         Self::free_ids(backend, ids)
     }
@@ -472,8 +520,27 @@ impl CausticMap {
         );
         let layout = format!("the caustic atlas: {}", self.layout_summary);
         let stale = format!("when the atlas is stale (lights, settings or seed changed); {layout}");
-        for name in ["trace_photons", "deposit_atlas"] {
-            pass(name, photons, &stale, why_no_atlas);
+        if let Some(a) = &self.adaptive {
+            let traversal = format!(
+                "seed 004's traversal ({:?} metric, {}^2 start grid, batches of {} clusters), \
+                 {stale}",
+                a.settings.metric,
+                a.settings.start_grid,
+                a.traversal.as_ref().map_or(0, |t| t.batch_clusters)
+            );
+            for name in ["trace_photons", "refine_clusters"] {
+                pass(name, photons, &traversal, why_no_atlas);
+            }
+            pass(
+                "deposit_atlas",
+                false,
+                "",
+                "adaptive emission: refine_clusters deposits the output clusters",
+            );
+        } else {
+            for name in ["trace_photons", "deposit_atlas"] {
+                pass(name, photons, &stale, why_no_atlas);
+            }
         }
         let density = self.atlas.is_some_and(|a| a.density.is_some());
         let raw_map = self.atlas.is_some_and(|a| a.raw_map.is_some());
@@ -546,7 +613,7 @@ impl CausticMap {
         };
     }
 
-    fn run(
+    pub(crate) fn run(
         backend: &mut dyn Backend,
         rec: &Recording,
         stats: &mut FrameStats,
@@ -605,13 +672,55 @@ impl CausticMap {
             .sum();
         let mut done = 0u64;
         let deposit = self.atlas_params(&a, 1);
+        let traversal = self.adaptive.as_ref().and_then(|t| t.traversal.as_ref());
+        let mut adaptive = crate::frame::stats::AdaptiveStats::default();
+        if let Some(t) = traversal {
+            let mut rec = Recording::new();
+            rec.clear(t.output_counters);
+            Self::run(backend, &rec, stats)?;
+        }
         for (light, k, plane) in &self.emission.planes {
             let n = plane.texels();
-            stats.photons_emitted += n;
             let flux = plane.power.as_dvec3() * plane.plane_measure();
             for c in 0..3 {
                 stats.emitted_flux[c] += flux[c];
             }
+            if let Some(t) = traversal {
+                let target = AtlasTarget {
+                    triangle_tiles: a.triangle_tiles,
+                    tiles: a.tiles,
+                    sums: a.sums,
+                    atlas_width: s.atlas_size,
+                    flux_quantum: self.emission.flux_quantum,
+                    hit_distance_quantum: self.emission.hit_distance_quantum,
+                    trace_counters: a.counters,
+                };
+                let optics = PhotonOptics {
+                    max_bounces: s.max_bounces,
+                    min_relative_power: s.min_relative_power,
+                    fresnel_model: s.fresnel.kernel_value(),
+                };
+                let before = adaptive.photons_processed;
+                t.run_plane(
+                    backend,
+                    self.scene,
+                    self.variant,
+                    &target,
+                    (*light, plane, Emission::plane_seed(s.seed, *light, *k)),
+                    optics,
+                    stats,
+                    &mut adaptive,
+                    &mut |traced| {
+                        progress(Progress {
+                            photons_done: (done + traced - before).min(total),
+                            photons_total: total,
+                        })
+                    },
+                )?;
+                done += adaptive.photons_processed - before;
+                continue;
+            }
+            stats.photons_emitted += n;
             let mut first = 0u64;
             let per_batch = if self.variant.fresnel_split {
                 (a.photons.len / s.split_budget).max(1) as u64
@@ -640,6 +749,7 @@ impl CausticMap {
                     photons: a.photons,
                     photon_count: a.photon_count,
                     counters: a.counters,
+                    clusters: None,
                 });
                 rec.kernel(DepositAtlas {
                     params: deposit,
@@ -725,6 +835,23 @@ impl CausticMap {
             stats.stored_flux[ch] =
                 c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
         }
+        if let Some(t) = traversal {
+            // stored, deposited and their flux: the output photons (the traced ones that
+            // were refined instead are not part of the map)
+            let o = read_buf(backend, t.output_counters)?;
+            let o64 = |i: usize| join_u64([o[i], o[i + 1]]);
+            stats.photons_emitted = adaptive.photons_processed;
+            stats.photons_stored = o[counter::STORED] as u64;
+            stats.photons_deposited = o[counter::DEPOSITED] as u64;
+            stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;
+            stats.fixed_point_underflow = o[counter::UNDERFLOW] as u64;
+            stats.fixed_point_saturated = o[counter::SATURATED] as u64;
+            for ch in 0..3 {
+                stats.stored_flux[ch] =
+                    o64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
+            }
+            stats.adaptive = Some(adaptive);
+        }
         self.atlas_valid = true;
         Ok(())
     }
@@ -739,7 +866,7 @@ impl CausticMap {
         let start = Instant::now();
         let caps = backend.capabilities();
         let mut stats = FrameStats {
-            technique: "caustic-map".into(),
+            technique: self.name.into(),
             backend: backend.name().into(),
             device: caps.device.clone(),
             width: self.camera.width,
@@ -764,7 +891,7 @@ impl CausticMap {
                 self.photon_pass(backend, a, &mut stats, progress)?
             }
             Some(_) if photons => {
-                for name in ["trace_photons", "deposit_atlas"]
+                for name in ["trace_photons", "deposit_atlas", "refine_clusters"]
                     .into_iter()
                     .chain(BOX_GATHER_PASSES)
                     .chain(DENSITY_GATHER_PASSES)
@@ -1009,7 +1136,7 @@ impl CausticMap {
 impl Drop for CausticMap {
     fn drop(&mut self) {
         crate::frame::technique::report_leak(
-            "caustic-map",
+            self.name,
             self.scene_owned.len() + self.atlas_owned.len() + self.image_owned.len(),
             self.scene_bytes + self.atlas_bytes + self.image_bytes,
         );
@@ -1018,7 +1145,7 @@ impl Drop for CausticMap {
 
 impl Technique for CausticMap {
     fn name(&self) -> &'static str {
-        "caustic-map"
+        self.name
     }
 
     fn frame(
@@ -1050,7 +1177,14 @@ impl Technique for CausticMap {
     }
 
     fn settings_json(&self) -> serde_json::Value {
-        serde_json::to_value(&self.settings).unwrap_or(serde_json::Value::Null)
+        match &self.adaptive {
+            Some(a) => serde_json::to_value(AdaptiveCausticsSettings {
+                map: self.settings.clone(),
+                ..a.settings.clone()
+            }),
+            None => serde_json::to_value(&self.settings),
+        }
+        .unwrap_or(serde_json::Value::Null)
     }
 
     fn set_seed(&mut self, seed: u32) {

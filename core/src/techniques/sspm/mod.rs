@@ -496,6 +496,7 @@ impl Sspm {
                         photons: p.photons,
                         photon_count: p.photon_count,
                         counters: p.counters,
+                        clusters: None,
                     });
                     rec.kernel(DepositScreen {
                         params: deposit_params,

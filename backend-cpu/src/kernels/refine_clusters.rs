@@ -1,0 +1,140 @@
+//! `refine_clusters` (seed 004 section 3.2, AdaptiveCaustics): one step of the adaptive
+//! traversal over a batch of traced clusters. The decisions are core's
+//! `math::photon_clusters`; the deposit is `deposit_atlas`'s.
+
+use super::caustic_map::atlas_photon_texel;
+use super::deposit_screen::{deposit_photon_texel, MapPlanes};
+use super::Counters;
+use caustica_core::device::layout::{
+    cluster_count, counter, AtlasTileTexel, Photon, RefineParams, NO_TILE,
+};
+use caustica_core::math::fixed_point::quantize;
+use caustica_core::math::photon_clusters::{cluster_fate, cluster_photon_index, NO_TRIANGLE};
+use rayon::prelude::*;
+
+/// What a batch step produced: the children appended (in cluster order: the GPU ports
+/// append in arrival order, and every later result is independent of it), the cluster
+/// counts and the photon counters of the output photons.
+pub struct Refined {
+    /// Child cluster ids, four per refined cluster.
+    pub children: Vec<u32>,
+    /// Clusters output.
+    pub output: u32,
+    /// Clusters discarded.
+    pub discarded: u32,
+    /// Photons deposited (the stored photons of output clusters).
+    pub output_photons: u32,
+    /// Photon accounting of the output photons.
+    pub counters: Counters,
+}
+
+/// Judges the batch's clusters and deposits the output ones (see core's
+/// `RefineClusters`).
+pub fn refine_clusters(
+    p: &RefineParams,
+    clusters: &[u32],
+    photons: &[Photon],
+    triangle_tiles: &[u32],
+    tiles: &[AtlasTileTexel],
+    map: MapPlanes,
+) -> Refined {
+    let parts: Vec<(u32, Option<[u32; 4]>, Counters)> = (0..p.count)
+        .into_par_iter()
+        .map(|t| {
+            let cluster = clusters[(p.first + t) as usize];
+            let slots: [Photon; 4] = std::array::from_fn(|k| photons[4 * t as usize + k]);
+            let texels = slots.map(|ph| {
+                if ph.direction == NO_TRIANGLE {
+                    None
+                } else {
+                    Some(atlas_photon_texel(
+                        triangle_tiles,
+                        tiles,
+                        &ph,
+                        p.atlas_width,
+                    ))
+                }
+            });
+            let met = slots.iter().any(|ph| ph.position[2] != 0.0);
+            let first = texels[0].unwrap_or(NO_TILE);
+            let converged = first != NO_TILE && texels.iter().all(|t| *t == Some(first));
+            let fate = cluster_fate(
+                met,
+                converged,
+                p.level,
+                p.finest,
+                p.metric,
+                p.error_from_level,
+            );
+            let mut c = Counters::default();
+            match fate {
+                caustica_core::math::photon_clusters::cluster_fate::OUTPUT => {
+                    for (ph, texel) in slots.iter().zip(texels) {
+                        let Some(texel) = texel else { continue };
+                        c.bump(counter::STORED);
+                        for ch in 0..3 {
+                            c.words[counter::STORED_FLUX + 2 * ch] +=
+                                quantize(ph.flux[ch], p.flux_quantum).units as u64;
+                        }
+                        if texel == NO_TILE {
+                            c.bump(counter::OFF_SCREEN);
+                        } else {
+                            deposit_photon_texel(
+                                &map,
+                                texel,
+                                ph,
+                                p.flux_quantum,
+                                p.hit_distance_quantum,
+                                &mut c,
+                            );
+                        }
+                    }
+                    (fate, None, c)
+                }
+                caustica_core::math::photon_clusters::cluster_fate::REFINED => (
+                    fate,
+                    Some([0, 1, 2, 3].map(|s| cluster_photon_index(cluster, s, p.grid_w))),
+                    c,
+                ),
+                _ => (fate, None, c),
+            }
+        })
+        .collect();
+    let mut r = Refined {
+        children: Vec::new(),
+        output: 0,
+        discarded: 0,
+        output_photons: 0,
+        counters: Counters::default(),
+    };
+    for (fate, children, c) in parts {
+        match fate {
+            caustica_core::math::photon_clusters::cluster_fate::OUTPUT => r.output += 1,
+            caustica_core::math::photon_clusters::cluster_fate::DISCARDED => r.discarded += 1,
+            _ => {}
+        }
+        if let Some(ch) = children {
+            r.children.extend(ch);
+        }
+        r.output_photons += c.words[counter::STORED] as u32;
+        r.counters = r.counters.merge(c);
+    }
+    r
+}
+
+/// Adds a step's results to the child list and the cluster counts buffer as the GPU
+/// ports do: children past `capacity` are counted but not written.
+pub fn append_refined(r: &Refined, children: &mut [u32], counts: &mut [u32], capacity: u32) {
+    let base = counts[cluster_count::CHILDREN];
+    for (k, &c) in r.children.iter().enumerate() {
+        let slot = base as u64 + k as u64;
+        if slot < capacity.min(children.len() as u32) as u64 {
+            children[slot as usize] = c;
+        }
+    }
+    counts[cluster_count::CHILDREN] = base.wrapping_add(r.children.len() as u32);
+    counts[cluster_count::OUTPUT] = counts[cluster_count::OUTPUT].wrapping_add(r.output);
+    counts[cluster_count::DISCARDED] = counts[cluster_count::DISCARDED].wrapping_add(r.discarded);
+    counts[cluster_count::OUTPUT_PHOTONS] =
+        counts[cluster_count::OUTPUT_PHOTONS].wrapping_add(r.output_photons);
+}

@@ -1,0 +1,31 @@
+// Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics).
+
+#define NO_TRIANGLE 0xffffffffu
+#define CLUSTER_METRIC_ERROR 1u
+#define CLUSTER_DISCARDED 0u
+#define CLUSTER_OUTPUT 1u
+#define CLUSTER_REFINED 2u
+// core::device::layout::cluster_count words
+#define CLUSTER_COUNT_CHILDREN 0
+#define CLUSTER_COUNT_OUTPUT 1
+#define CLUSTER_COUNT_DISCARDED 2
+#define CLUSTER_COUNT_OUTPUT_PHOTONS 3
+
+inline uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {
+    uint clusters_w = grid_w / 2u;
+    uint cx = cluster % clusters_w;
+    uint cy = cluster / clusters_w;
+    return (2u * cy + (sub >> 1u)) * grid_w + 2u * cx + (sub & 1u);
+}
+
+inline bool photon_met_caster(uint end, uint rays) {
+    return !(end == 1u || (end == 2u && rays <= 1u) || (end == 3u && rays == 0u));
+}
+
+inline uint cluster_fate(bool any_met_caster, bool converged, uint level, uint finest,
+                         uint metric, uint error_from_level) {
+    if (!any_met_caster) return CLUSTER_DISCARDED;
+    if (level >= finest || (metric == CLUSTER_METRIC_ERROR && level >= error_from_level && converged))
+        return CLUSTER_OUTPUT;
+    return CLUSTER_REFINED;
+}

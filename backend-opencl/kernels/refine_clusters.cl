@@ -1,0 +1,74 @@
+// refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one work-item per traced
+// cluster of the batch decides its fate from its four photon slots (discarded, output
+// into the atlas as deposit_atlas deposits, or refined into four children appended to
+// the next level's list). Mirror of backend-cpu/src/kernels/refine_clusters.rs; the atlas
+// sums and counts are bitwise the CPU's, the child list's order is not.
+
+// The atlas texel under texture-space photon `ph`, NO_TILE when its triangle has no tile
+// (backend-cpu caustic_map.rs::atlas_photon_texel).
+inline uint atlas_photon_texel(__global const uint* triangle_tiles, __global const uint4* tiles,
+                               const Photon* ph, uint atlas_width) {
+    uint tile = triangle_tiles[ph->direction];
+    if (tile == NO_TILE) return NO_TILE;
+    return atlas_texel_index(tiles[tile], (float2)(ph->position[0], ph->position[1]),
+                             atlas_width);
+}
+
+__kernel void refine_clusters(__global const RefineParams* p, __global const uint* clusters,
+                              __global const Photon* photons,
+                              __global const uint* triangle_tiles, __global const uint4* tiles,
+                              __global uint* children, volatile __global uint* cluster_counts,
+                              volatile __global uint* counters,
+                              PHOTON_MAP_PARAMS(volatile __global)) {
+    __local uint lc[COUNTER_WORDS];
+    counters_clear_local(lc);
+    uint t = get_global_id(0);
+    if (t < p->count) {
+        uint cluster = clusters[p->first + t];
+        Photon slots[4];
+        uint texels[4];
+        bool met = false;
+        uint stored = 0u;
+        for (uint k = 0u; k < 4u; k++) {
+            slots[k] = photons[4u * t + k];
+            met = met || slots[k].position[2] != 0.0f;
+            texels[k] = NO_TILE;
+            if (slots[k].direction != NO_TRIANGLE) {
+                texels[k] = atlas_photon_texel(triangle_tiles, tiles, &slots[k], p->atlas_width);
+                stored++;
+            }
+        }
+        bool converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0] &&
+                         texels[2] == texels[0] && texels[3] == texels[0];
+        uint fate = cluster_fate(met, converged, p->level, p->finest, p->metric,
+                                 p->error_from_level);
+        if (fate == CLUSTER_OUTPUT) {
+            for (uint k = 0u; k < 4u; k++) {
+                if (slots[k].direction == NO_TRIANGLE) continue;
+                atomic_inc(&lc[COUNTER_STORED]);
+                for (uint ch = 0u; ch < 3u; ch++) {
+                    uint units = quantize(slots[k].flux[ch], p->flux_quantum).units;
+                    if (units != 0u) atomic_add_u64_local(&lc[COUNTER_STORED_FLUX + 2u * ch], units);
+                }
+                if (texels[k] == NO_TILE) {
+                    atomic_inc(&lc[COUNTER_OFF_SCREEN]);
+                } else {
+                    deposit_photon_texel(PHOTON_MAP_ARGS, lc, texels[k], &slots[k],
+                                         p->flux_quantum, p->hit_distance_quantum);
+                }
+            }
+            atomic_inc(&cluster_counts[CLUSTER_COUNT_OUTPUT]);
+            atomic_add(&cluster_counts[CLUSTER_COUNT_OUTPUT_PHOTONS], stored);
+        } else if (fate == CLUSTER_DISCARDED) {
+            atomic_inc(&cluster_counts[CLUSTER_COUNT_DISCARDED]);
+        } else {
+            uint base = atomic_add(&cluster_counts[CLUSTER_COUNT_CHILDREN], 4u);
+            for (uint k = 0u; k < 4u; k++) {
+                // the host sizes every step so that this never drops a child
+                if (base + k < p->children_capacity)
+                    children[base + k] = cluster_photon_index(cluster, k, p->grid_w);
+            }
+        }
+    }
+    counters_flush_local(lc, counters);
+}

@@ -1,0 +1,15 @@
+// Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics):
+// what trace_photons' ADAPTIVE variant needs (refine_clusters runs from WGSL).
+
+const uint NO_TRIANGLE = 0xffffffffu;
+
+uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {
+    uint clusters_w = grid_w / 2u;
+    uint cx = cluster % clusters_w;
+    uint cy = cluster / clusters_w;
+    return (2u * cy + (sub >> 1u)) * grid_w + 2u * cx + (sub & 1u);
+}
+
+bool photon_met_caster(uint end, uint rays) {
+    return !(end == 1u || (end == 2u && rays <= 1u) || (end == 3u && rays == 0u));
+}

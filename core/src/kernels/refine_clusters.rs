@@ -1,0 +1,88 @@
+//! `refine_clusters`: seed 004's traversal step, one thread per traced cluster.
+
+use super::{bind, bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, PhotonMapPlanes};
+use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams};
+
+/// Judges each of the `params.count` clusters `clusters[params.first ..]` whose four
+/// photons `trace_photons`' `ADAPTIVE` variant wrote to slots `4 t .. 4 t + 4` of
+/// `photons` ([`crate::math::photon_clusters::cluster_fate`]): a cluster none of whose
+/// photons met a caster is discarded; an output cluster deposits its stored photons into
+/// the atlas exactly as `deposit_atlas` does (fixed point, order-free); a refined one
+/// appends its four children (the ids of its photons in the level grid) to `children`
+/// at `cluster_counts[CHILDREN]`. Counts clusters output and discarded in
+/// `cluster_counts`, and the deposit's photon accounting (stored, stored flux,
+/// deposited, off-atlas) in `counters`.
+#[derive(Clone, Copy, Debug)]
+pub struct RefineClusters {
+    /// The batch, level, metric and atlas quanta.
+    pub params: RefineParams,
+    /// The level's cluster list.
+    pub clusters: Buf<u32>,
+    /// The batch's photon slots (four per cluster).
+    pub photons: Buf<Photon>,
+    /// Per scene triangle: its receiver's tile, or [`crate::device::layout::NO_TILE`].
+    pub triangle_tiles: Buf<u32>,
+    /// The atlas tiles.
+    pub tiles: Buf<AtlasTileTexel>,
+    /// The next level's cluster list, appended to.
+    pub children: Buf<u32>,
+    /// [`cluster_count`] words, added to.
+    pub cluster_counts: Buf<u32>,
+    /// Photon counters ([`crate::device::layout::counter`]) of the output photons.
+    pub counters: Buf<u32>,
+    /// The atlas's fixed-point sums.
+    pub atlas: PhotonMapPlanes,
+}
+
+const BINDINGS: &[Binding] = &[
+    bind("params", Params),
+    bind("clusters", Read),
+    bind("photons", Read),
+    bind("triangle_tiles", Read),
+    bind("tiles", Read),
+    bind("children", ReadWrite),
+    bind("cluster_counts", ReadWrite),
+    bind("counters", ReadWrite),
+    bind("photon_map0", ReadWrite),
+    bind("photon_map1", ReadWrite),
+    bind("photon_map2", ReadWrite),
+];
+
+impl KernelDecl for RefineClusters {
+    const INFO: KernelInfo = KernelInfo::compute("refine_clusters", BINDINGS, "AdaptiveCaustics");
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let p = &self.params;
+        if p.first as u64 + p.count as u64 > self.clusters.len as u64
+            || 4 * p.count as u64 > self.photons.len as u64
+            || p.grid_w < 2
+        {
+            return Err(BackendError::BadArgument(format!(
+                "refine_clusters: clusters {}..+{} of {}, {} photon slots, grid {}",
+                p.first, p.count, self.clusters.len, self.photons.len, p.grid_w
+            )));
+        }
+        if p.children_capacity > self.children.len {
+            return Err(BackendError::BadArgument(
+                "refine_clusters: children_capacity over the child list".into(),
+            ));
+        }
+        let n = super::texels(p.atlas_width, p.atlas_width);
+        a.params("params", p)?
+            .buf("clusters", self.clusters, 0)?
+            .buf("photons", self.photons, 0)?
+            .buf("triangle_tiles", self.triangle_tiles, 0)?
+            .buf("tiles", self.tiles, 0)?
+            .buf("children", self.children, 0)?
+            .buf(
+                "cluster_counts",
+                self.cluster_counts,
+                4 * cluster_count::WORDS as u64,
+            )?
+            .buf("counters", self.counters, bytes::COUNTERS)?
+            .photon_map(&self.atlas, n)?;
+        Ok(Some(p.count as u64))
+    }
+}

@@ -1,0 +1,150 @@
+//! Photon clusters of adaptive emission (seed 004 section 3.2, AdaptiveCaustics): a
+//! light view plane is sampled on a pyramid of grids, level `l` having `start * 2^l`
+//! texels a side; a *cluster* at level `l` is a 2x2 block of that grid's texels (one
+//! photon each), identified by its row-major index in the grid of `grid_w / 2` clusters a
+//! side. Refining a cluster turns each of its four photons into a cluster of the next
+//! level: the photon's texel `(x, y)` at level `l` is cluster `(x, y)` at level `l + 1`, so
+//! a child cluster's id is its parent photon's index in the level grid.
+//!
+//! Every function here is mirrored by name in the WGSL (`common/photon_clusters.wgsl`),
+//! OpenCL (`common/photon_clusters.cl`) and GLSL ports.
+
+/// The traced photon's slot says nothing landed: `Photon::direction` of an empty slot.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// How a cluster is judged after its photons are traced (seed 004 sections 3.2.1-2).
+pub mod cluster_metric {
+    /// Maximal traversal level: a relevant cluster is refined until the finest level.
+    pub const LEVEL: u32 = 0;
+    /// Maximal caustic map error: a relevant cluster whose photons all landed in one
+    /// caustic-map texel is output at once, others are refined (until the finest level).
+    pub const ERROR: u32 = 1;
+}
+
+/// What becomes of a traced cluster.
+pub mod cluster_fate {
+    /// Every photon missed the caustic casters: nothing is output, nothing refined.
+    pub const DISCARDED: u32 = 0;
+    /// Its photons are deposited into the caustic map.
+    pub const OUTPUT: u32 = 1;
+    /// Four child clusters are traced at the next level instead.
+    pub const REFINED: u32 = 2;
+}
+
+/// Index, in the row-major level grid of `grid_w` texels a side, of photon `sub` (0..4:
+/// x = `sub & 1`, y = `sub >> 1`) of cluster `cluster`. It is also the id of the child
+/// cluster that photon becomes at the next level.
+#[inline]
+pub fn cluster_photon_index(cluster: u32, sub: u32, grid_w: u32) -> u32 {
+    let clusters_w = grid_w / 2;
+    let cx = cluster % clusters_w;
+    let cy = cluster / clusters_w;
+    (2 * cy + (sub >> 1)) * grid_w + 2 * cx + (sub & 1)
+}
+
+/// The seed of level `level` of a pyramid whose finest level is `finest`: the plane's own
+/// seed at the finest level (so that the photons traced there are bitwise the dense
+/// grid's), a hash of it and the level above.
+#[inline]
+pub fn cluster_level_seed(plane_seed: u32, level: u32, finest: u32) -> u32 {
+    if level >= finest {
+        plane_seed
+    } else {
+        crate::math::rng::pcg_hash(plane_seed ^ crate::math::rng::pcg_hash(0x4144_4150 + level))
+    }
+}
+
+/// Whether a photon met a caustic caster, from how its path ended (`trace_photons`'
+/// path ends: 0 stored, 1 no specular, 2 escaped, 3 negligible, 4 bounce limit) and its
+/// ray segments: it missed when its first segment reached a diffuse surface, left the
+/// scene, or when it carried no flux at emission (outside a spot's cone).
+#[inline]
+pub fn photon_met_caster(end: u32, rays: u32) -> bool {
+    !(end == 1 || (end == 2 && rays <= 1) || (end == 3 && rays == 0))
+}
+
+/// The fate of a cluster at `level` (0 = the start grid, `finest` = the last): discarded
+/// when no photon met a caster (004 condition 1); output at the finest level (the
+/// maximal traversal level, 004 3.2.1, and the error metric's third condition, 004
+/// 3.2.2); output when the error metric applies at this level (`level >=
+/// error_from_level`) and every photon landed in one caustic-map texel (`converged`,
+/// 004 3.2.2 condition 2); else refined.
+#[inline]
+pub fn cluster_fate(
+    any_met_caster: bool,
+    converged: bool,
+    level: u32,
+    finest: u32,
+    metric: u32,
+    error_from_level: u32,
+) -> u32 {
+    if !any_met_caster {
+        cluster_fate::DISCARDED
+    } else if level >= finest
+        || (metric == cluster_metric::ERROR && level >= error_from_level && converged)
+    {
+        cluster_fate::OUTPUT
+    } else {
+        cluster_fate::REFINED
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn children_tile_the_next_level_once() {
+        // every texel of the level-(l+1) grid belongs to exactly one child of one cluster
+        let grid = 16u32;
+        let mut seen = vec![0u32; (2 * grid * 2 * grid) as usize];
+        for cluster in 0..(grid / 2) * (grid / 2) {
+            for sub in 0..4 {
+                let child = cluster_photon_index(cluster, sub, grid);
+                assert!(child < grid * grid);
+                for s2 in 0..4 {
+                    seen[cluster_photon_index(child, s2, 2 * grid) as usize] += 1;
+                }
+            }
+        }
+        assert!(seen.iter().all(|&n| n == 1));
+    }
+
+    #[test]
+    fn a_child_lies_under_its_parent_photon() {
+        // photon (x, y) at grid g covers texels (2x..2x+1, 2y..2y+1) at grid 2g
+        let g = 8u32;
+        let parent = cluster_photon_index(5, 3, g);
+        let (px, py) = (parent % g, parent / g);
+        for sub in 0..4 {
+            let c = cluster_photon_index(parent, sub, 2 * g);
+            assert_eq!(((c % (2 * g)) / 2, (c / (2 * g)) / 2), (px, py));
+        }
+    }
+
+    #[test]
+    fn fates_follow_004() {
+        use cluster_fate::*;
+        use cluster_metric::*;
+        assert_eq!(cluster_fate(false, true, 5, 5, ERROR, 0), DISCARDED);
+        assert_eq!(cluster_fate(true, false, 5, 5, LEVEL, 0), OUTPUT);
+        assert_eq!(cluster_fate(true, true, 2, 5, LEVEL, 0), REFINED);
+        assert_eq!(cluster_fate(true, true, 2, 5, ERROR, 3), REFINED);
+        assert_eq!(cluster_fate(true, true, 3, 5, ERROR, 3), OUTPUT);
+        assert_eq!(cluster_fate(true, false, 3, 5, ERROR, 3), REFINED);
+        assert!(!photon_met_caster(1, 1));
+        assert!(!photon_met_caster(2, 1));
+        assert!(photon_met_caster(2, 2));
+        assert!(!photon_met_caster(3, 0));
+        assert!(photon_met_caster(3, 1));
+        assert!(photon_met_caster(0, 2));
+        assert!(photon_met_caster(4, 12));
+    }
+
+    #[test]
+    fn the_finest_level_keeps_the_plane_seed() {
+        assert_eq!(cluster_level_seed(77, 4, 4), 77);
+        assert_ne!(cluster_level_seed(77, 3, 4), 77);
+        assert_ne!(cluster_level_seed(77, 3, 4), cluster_level_seed(77, 2, 4));
+    }
+}

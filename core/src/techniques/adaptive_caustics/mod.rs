@@ -1,0 +1,102 @@
+//! AdaptiveCaustics (seed 004, Wyman and Nichols, "Adaptive Caustic Maps Using Deferred
+//! Shading"): CausticMap's light view planes sampled coarse to fine, so that photons are
+//! traced only where the casters are and, with the error metric, only where the caustic
+//! map still needs them. Everything after the photons is CausticMap's: the same atlas,
+//! gather, final pass and outputs (`caustic_map`), so the two differ only in which
+//! photons reach the map.
+//!
+//! The source emits photons by point-sampling rasterised G-buffers of the refractor from
+//! the light and refracts them in image space; here the traversal drives the exact
+//! tracer of the other techniques (`trace_photons`, its `ADAPTIVE` variant), which makes
+//! the source's G-buffer resolution question moot.
+//!
+//! Per frame with photon work, per light view plane (`traversal`): the 64^2 start grid's
+//! 2x2 clusters are traced and judged (`refine_clusters`): discarded when every photon
+//! missed the casters, output (deposited into the atlas) at the finest level or when the
+//! error metric holds, else refined into four clusters of the next level; batches of
+//! clusters under `max_traversal_bytes`. Photons output early carry their coarse texels'
+//! flux (the cluster's solid angle or area), so the map's expectation is the dense
+//! grid's; they all landed in one atlas texel, so their splat *is* the cluster's
+//! footprint at the map's resolution (004's multi-resolution map is needed only for
+//! clusters stopped before they converge, which this metric never does).
+//!
+//! Not built yet (TODO(issue 17)): Sspm's screen as a deposit target; the `spot-glass`
+//! scene and its Table-1 replication; the plane over a spot's whole cone; benchmarks.
+
+mod settings;
+mod traversal;
+
+pub use settings::{
+    AdaptiveCausticsSettings, AdaptiveMetric, LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
+};
+pub use traversal::{AtlasTarget, PhotonOptics, Traversal};
+
+use crate::backend::Backend;
+use crate::frame::error::Error;
+use crate::frame::technique::Technique;
+use crate::scene::Scene;
+use crate::techniques::caustic_map::{CausticMap, Emission};
+
+/// The traversal a [`CausticMap`] runs instead of its dense planes.
+#[derive(Clone, Debug)]
+pub(crate) struct AdaptiveSetup {
+    /// The traversal's settings (its `map` field unused: the technique's own settings
+    /// hold the map's).
+    pub settings: AdaptiveCausticsSettings,
+    /// Its device buffers, made with the atlas.
+    pub traversal: Option<Traversal>,
+}
+
+/// AdaptiveCaustics' constructor: a [`CausticMap`] whose photons come from seed 004's
+/// traversal (its registry name `adaptive-caustics`).
+pub struct AdaptiveCaustics;
+
+impl AdaptiveCaustics {
+    /// Validates `settings`, uploads the scene, lays out the atlas and makes the
+    /// traversal's buffers.
+    pub fn new(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: AdaptiveCausticsSettings,
+    ) -> Result<CausticMap, Error> {
+        settings.validate()?;
+        let map = settings.map.clone();
+        CausticMap::build(backend, scene, map, Some(settings))
+    }
+}
+
+/// Fits the planes of `emission` to the pyramid: each plane's side becomes
+/// `start_grid * 2^k` (the nearest such size to the dense plane's; a single plane's is
+/// `photons_w` exactly, a cube face's `photons_w / sqrt 6` rounded to the pyramid), and
+/// the flux quantum follows the coarsest photons that can be output (the error metric's
+/// first level, else the finest), so that they cannot saturate the fixed point.
+pub(crate) fn fit_planes(emission: &mut Emission, s: &AdaptiveCausticsSettings, dispersion: bool) {
+    let start = s.start_grid;
+    for (_, _, p) in &mut emission.planes {
+        let ratio = (p.resolution.0.max(1) as f64 / start as f64).max(1.0);
+        let k = ratio.log2().round() as u32;
+        p.resolution = (start << k, start << k);
+    }
+    let coarsest_output = |p: &crate::frame::light_view_plane::LightViewPlane| {
+        let finest = (p.resolution.0 / start).max(1).ilog2();
+        let level = match s.metric {
+            AdaptiveMetric::Level => finest,
+            AdaptiveMetric::Error => s.error_from_level().min(finest),
+        };
+        (start << level, start << level)
+    };
+    emission.flux_quantum = Emission::quantum_for(&emission.planes, dispersion, coarsest_output);
+}
+
+/// The registry's constructor: `settings` is a JSON object of
+/// [`AdaptiveCausticsSettings`] fields (CausticMap's at the top level; missing fields
+/// take their defaults, unknown ones are an error).
+pub fn create(
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    settings: &serde_json::Value,
+) -> Result<Box<dyn Technique>, Error> {
+    let settings: AdaptiveCausticsSettings = serde_json::from_value(settings.clone())
+        .map_err(|e| Error::InvalidParameter(format!("adaptive-caustics settings: {e}")))?;
+    Ok(Box::new(AdaptiveCaustics::new(backend, scene, settings)?))
+}

@@ -1,0 +1,190 @@
+//! Every parameter of AdaptiveCaustics, with its defaults and validation.
+
+use crate::frame::error::Error;
+use crate::techniques::caustic_map::{CausticMapSettings, FresnelSplit};
+use serde::{Deserialize, Serialize};
+
+/// When a relevant cluster stops being refined (seed 004 sections 3.2.1-2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AdaptiveMetric {
+    /// Maximal traversal level: every cluster that met a caster is refined down to the
+    /// finest level, where all its photons are output. The photons output are exactly the
+    /// dense grid's over the clusters kept (the same seed and jitter), so the map differs
+    /// from CausticMap's only where a coarse cluster missed a caster its finer photons
+    /// would have met.
+    Level,
+    /// Maximal caustic map error: from `error_from_grid` on, a cluster whose four photons
+    /// all stored in one caustic-map texel is output at once (its photons carry their
+    /// coarse texels' flux, the cluster's solid angle or area); the rest is refined, and
+    /// output at the finest level (004's third condition). The default: it traces the
+    /// fewest photons (004 Figure 7), and here both metrics cost one kernel per step.
+    #[default]
+    Error,
+}
+
+/// AdaptiveCaustics' settings: CausticMap's (the same atlas, gather and final pass), with
+/// `photons_w` = `photons_h` the side of the dense-equivalent grid (the finest level, a
+/// power-of-two multiple of `start_grid`), plus the traversal's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AdaptiveCausticsSettings {
+    /// The caustic map, its gather, the optics and the outputs (CausticMap's fields, at
+    /// the top level of the JSON object; `fresnel_split` must be `stochastic`).
+    #[serde(flatten)]
+    pub map: CausticMapSettings,
+    /// The stop metric.
+    pub metric: AdaptiveMetric,
+    /// Texels a side of the start grid (004 section 4.2: 64, enough photons to keep a
+    /// GPU busy from the first step; even).
+    pub start_grid: u32,
+    /// Grid side from which the error metric is checked; coarser levels use the
+    /// traversal-level metric (004 section 4.2: from 512^2 on, since coarse photons
+    /// rarely converge).
+    pub error_from_grid: u32,
+    /// Device bytes the traversal may hold (004 section 4.3): the photon slots of a batch
+    /// (128 bytes per cluster) and one cluster list per level (16 bytes per cluster of a
+    /// batch each), plus the start grid's list. The batch size follows from it; the
+    /// result is bitwise the same for any value.
+    pub max_traversal_bytes: u64,
+}
+
+impl Default for AdaptiveCausticsSettings {
+    fn default() -> Self {
+        AdaptiveCausticsSettings {
+            map: CausticMapSettings::default(),
+            metric: AdaptiveMetric::Error,
+            start_grid: 64,
+            error_from_grid: 512,
+            max_traversal_bytes: 64 << 20,
+        }
+    }
+}
+
+/// Device bytes per cluster of a batch: four 32-byte photon slots.
+pub const SLOT_BYTES_PER_CLUSTER: u64 = 128;
+/// Device bytes per cluster of a batch per level below the start grid: room for four
+/// 4-byte children.
+pub const LIST_BYTES_PER_CLUSTER: u64 = 16;
+
+impl AdaptiveCausticsSettings {
+    /// The finest level (the start grid is level 0): `photons_w = start_grid * 2^finest`.
+    pub fn finest_level(&self) -> u32 {
+        (self.map.photons_w / self.start_grid.max(1)).max(1).ilog2()
+    }
+
+    /// The first level at which the error metric is checked.
+    pub fn error_from_level(&self) -> u32 {
+        let mut l = 0;
+        while (self.start_grid as u64) << l < self.error_from_grid as u64 && l < 31 {
+            l += 1;
+        }
+        l
+    }
+
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), Error> {
+        self.map.validate()?;
+        let bad = |what: String| Err(Error::InvalidParameter(what));
+        if self.map.fresnel_split != FresnelSplit::Stochastic {
+            return bad(
+                "adaptive-caustics traces one stored photon per emitted photon: fresnel_split \
+                 must be \"stochastic\""
+                    .into(),
+            );
+        }
+        if self.start_grid < 2 || !self.start_grid.is_multiple_of(2) || self.start_grid > 4096 {
+            return bad("start_grid must be even and in 2..=4096".into());
+        }
+        let (w, h) = (self.map.photons_w, self.map.photons_h);
+        let k = self.finest_level();
+        if w != h || w < self.start_grid || (self.start_grid as u64) << k != w as u64 {
+            return bad(format!(
+                "photons_w and photons_h ({w}x{h}) must be equal and start_grid ({}) times a \
+                 power of two: the dense-equivalent grid is the finest level of the pyramid",
+                self.start_grid
+            ));
+        }
+        if w > 65536 {
+            return bad("photons_w must be <= 65536 (the cluster ids of a level fit a u32)".into());
+        }
+        if self.max_traversal_bytes < self.min_traversal_bytes() {
+            return bad(format!(
+                "max_traversal_bytes must hold the start grid's list and a batch of one \
+                 cluster: at least {} bytes",
+                self.min_traversal_bytes()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Clusters of the start grid.
+    pub fn start_clusters(&self) -> u64 {
+        (self.start_grid as u64 / 2).pow(2)
+    }
+
+    /// Fixed bytes plus one cluster's.
+    fn min_traversal_bytes(&self) -> u64 {
+        4 * self.start_clusters()
+            + SLOT_BYTES_PER_CLUSTER
+            + LIST_BYTES_PER_CLUSTER * self.finest_level() as u64
+    }
+
+    /// Clusters per batch under `max_traversal_bytes`, at most what the finest level can
+    /// need in one step (`dense_clusters`).
+    pub fn batch_clusters(&self, finest: u32, dense_clusters: u64) -> u32 {
+        let fixed = 4 * self.start_clusters();
+        let per = SLOT_BYTES_PER_CLUSTER + LIST_BYTES_PER_CLUSTER * finest as u64;
+        let c = self.max_traversal_bytes.saturating_sub(fixed) / per;
+        c.clamp(1, dense_clusters.clamp(1, u32::MAX as u64 / 4)) as u32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_takes_caustic_map_fields_at_the_top_and_refuses_unknown_ones() {
+        let s: AdaptiveCausticsSettings = serde_json::from_value(serde_json::json!({
+            "photons_w": 512, "photons_h": 512, "metric": "level", "atlas_size": 256
+        }))
+        .unwrap();
+        assert_eq!(s.map.photons_w, 512);
+        assert_eq!(s.map.atlas_size, 256);
+        assert_eq!(s.metric, AdaptiveMetric::Level);
+        assert_eq!(s.finest_level(), 3);
+        s.validate().unwrap();
+        let e = serde_json::from_value::<AdaptiveCausticsSettings>(
+            serde_json::json!({ "photon_w": 512 }),
+        );
+        assert!(e.is_err(), "an unknown field must be refused");
+    }
+
+    #[test]
+    fn the_grid_must_be_a_pyramid() {
+        let mut s = AdaptiveCausticsSettings::default();
+        s.validate().unwrap();
+        assert_eq!(s.finest_level(), 4);
+        assert_eq!(s.error_from_level(), 3);
+        s.map.photons_w = 1000;
+        s.map.photons_h = 1000;
+        assert!(s.validate().is_err());
+        s.map.photons_w = 1024;
+        s.map.photons_h = 512;
+        assert!(s.validate().is_err());
+        s.map.photons_h = 1024;
+        s.map.fresnel_split = FresnelSplit::Deterministic;
+        assert!(s.validate().is_err());
+    }
+
+    #[test]
+    fn the_batch_follows_the_byte_limit() {
+        let s = AdaptiveCausticsSettings {
+            max_traversal_bytes: 4 * 1024 + 10 * (128 + 16 * 4),
+            ..Default::default()
+        };
+        assert_eq!(s.batch_clusters(4, 1 << 20), 10);
+        assert_eq!(s.batch_clusters(4, 3), 3);
+    }
+}

@@ -1,0 +1,246 @@
+//! Seed 004's hierarchical emission on the device: the photon pyramid of one light view
+//! plane traversed in batches under a memory limit (sections 3.2 and 4.3).
+//!
+//! **Levels.** Level `l` samples the plane on a `start_grid * 2^l` grid; level 0 holds
+//! every cluster of the start grid, each deeper level a list of the clusters refined
+//! into it ([`crate::math::photon_clusters`]). One *step* takes a batch of at most
+//! `batch_clusters` clusters of one level: `trace_photons` (`ADAPTIVE` variant) traces
+//! their four photons each into slots, `refine_clusters` discards, outputs (deposits into
+//! the atlas) or refines each, appending children to the next level's list, and the host
+//! reads the four cluster counts back (the stall of a step: the next step's size).
+//!
+//! **Batches** (004 section 4.3). The traversal always steps the deepest level with
+//! clusters left, taking them from the end of its list; the level below is then empty,
+//! so a step's children (at most four per cluster) always fit a list of
+//! `4 * batch_clusters` entries, and no buffer grows with the photon count. The order
+//! changes nothing: a photon's jitter and Fresnel choices are keyed by its texel and
+//! level, and the atlas sums are exact fixed-point, so any memory limit gives bitwise
+//! the same atlas.
+
+use super::settings::AdaptiveCausticsSettings;
+use crate::backend::{read_buf, Backend};
+use crate::device::handle::{Buf, PhotonMapPlanes, SceneArgs};
+use crate::device::layout::{
+    cluster_count, counter, AtlasTileTexel, Photon, RefineParams, TraceParams,
+};
+use crate::frame::error::Error;
+use crate::frame::light_view_plane::LightViewPlane;
+use crate::frame::stats::{AdaptiveStats, FrameStats};
+use crate::kernels::{RefineClusters, TracePhotons, TraceVariant};
+use crate::math::photon_clusters::cluster_level_seed;
+use crate::recording::Recording;
+
+/// Where output photons go: CausticMap's atlas.
+#[derive(Clone, Copy, Debug)]
+pub struct AtlasTarget {
+    /// Per scene triangle: its receiver's tile.
+    pub triangle_tiles: Buf<u32>,
+    /// The atlas tiles.
+    pub tiles: Buf<AtlasTileTexel>,
+    /// The atlas's fixed-point sums.
+    pub sums: PhotonMapPlanes,
+    /// Atlas side (texels).
+    pub atlas_width: u32,
+    /// Flux per fixed-point unit (W).
+    pub flux_quantum: f32,
+    /// Hit distance per fixed-point unit (scene units).
+    pub hit_distance_quantum: f32,
+    /// Counters of the photons traced (every level).
+    pub trace_counters: Buf<u32>,
+}
+
+/// The optics of a traced photon.
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonOptics {
+    /// Longest path (segments).
+    pub max_bounces: u32,
+    /// Relative power below which a photon is dropped.
+    pub min_relative_power: f32,
+    /// `fresnel_model` of the kernels.
+    pub fresnel_model: u32,
+}
+
+/// The traversal's device buffers and sizes.
+#[derive(Clone, Debug)]
+pub struct Traversal {
+    /// The stop metric, start grid and error level.
+    pub settings: AdaptiveCausticsSettings,
+    /// Deepest level any plane reaches.
+    pub finest: u32,
+    /// Clusters per step.
+    pub batch_clusters: u32,
+    level0: Buf<u32>,
+    lists: Vec<Buf<u32>>,
+    no_children: Buf<u32>,
+    slots: Buf<Photon>,
+    counts: Buf<u32>,
+    /// Counters of the output (deposited) photons.
+    pub output_counters: Buf<u32>,
+}
+
+impl Traversal {
+    /// Records the creation of the traversal's buffers for planes down to level
+    /// `finest`.
+    pub fn record(
+        rec: &mut Recording,
+        settings: &AdaptiveCausticsSettings,
+        finest: u32,
+    ) -> Traversal {
+        let dense_clusters = ((settings.start_grid as u64) << finest).pow(2) / 4;
+        let c = settings.batch_clusters(finest, dense_clusters);
+        let ids: Vec<u32> = (0..settings.start_clusters() as u32).collect();
+        Traversal {
+            settings: settings.clone(),
+            finest,
+            batch_clusters: c,
+            level0: rec.upload(&ids, "adaptive start-grid clusters"),
+            lists: (1..=finest)
+                .map(|_| rec.create(4 * c, "adaptive cluster list"))
+                .collect(),
+            no_children: rec.create(1, "adaptive finest-level child list"),
+            slots: rec.create(4 * c, "adaptive photon slots"),
+            counts: rec.create(cluster_count::WORDS as u32, "adaptive cluster counts"),
+            output_counters: rec.create(counter::WORDS as u32, "adaptive output counters"),
+        }
+    }
+
+    /// Traverses the pyramid of `plane` (its resolution the finest level's,
+    /// `start_grid * 2^finest`) of light `light` with seed `plane_seed`: every step
+    /// traced, judged and deposited into `target`. Adds to `adaptive` and the pass times
+    /// of `stats`; calls `progress` with the photons traced so far after each step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_plane(
+        &self,
+        backend: &mut dyn Backend,
+        scene: SceneArgs,
+        variant: TraceVariant,
+        target: &AtlasTarget,
+        (light, plane, plane_seed): (u32, &LightViewPlane, u32),
+        optics: PhotonOptics,
+        stats: &mut FrameStats,
+        adaptive: &mut AdaptiveStats,
+        progress: &mut dyn FnMut(u64),
+    ) -> Result<(), Error> {
+        let s = &self.settings;
+        let finest = (plane.resolution.0 / s.start_grid).max(1).ilog2();
+        if finest > self.finest || (s.start_grid << finest) != plane.resolution.0 {
+            return Err(Error::InvalidParameter(format!(
+                "adaptive plane of {}x{} texels outside the traversal's pyramid",
+                plane.resolution.0, plane.resolution.1
+            )));
+        }
+        let levels = finest as usize + 1;
+        if adaptive.photons_per_level.len() < levels {
+            adaptive.photons_per_level.resize(levels, 0);
+            adaptive.photons_output_per_level.resize(levels, 0);
+        }
+        adaptive.dense_equivalent_photons += plane.texels();
+        let start = s.start_clusters() as u32;
+        let error_from = s.error_from_level();
+        // clusters left per level (level 0: from `cursor` to `start`)
+        let mut left = vec![0u32; levels];
+        let mut cursor = 0u32;
+        let c = self.batch_clusters;
+        loop {
+            let level = match (1..levels).rev().find(|&l| left[l] > 0) {
+                Some(l) => l,
+                None if cursor < start => 0,
+                None => break,
+            };
+            let (list, first, m) = if level == 0 {
+                let m = c.min(start - cursor);
+                (self.level0, cursor, m)
+            } else {
+                let m = c.min(left[level]);
+                (self.lists[level - 1], left[level] - m, m)
+            };
+            let (children, capacity, before) = if level < finest as usize {
+                let l = self.lists[level];
+                (l, l.len, left[level + 1])
+            } else {
+                (self.no_children, 0, 0)
+            };
+            let grid = s.start_grid << level;
+            let at_level = LightViewPlane {
+                resolution: (grid, grid),
+                ..*plane
+            };
+            let mut rec = Recording::new();
+            rec.update(self.counts, &[before, 0, 0, 0], "adaptive cluster counts")?;
+            rec.kernel(TracePhotons {
+                scene,
+                variant,
+                params: TraceParams {
+                    fresnel_model: optics.fresnel_model,
+                    ..at_level.trace_params(
+                        light,
+                        (first, 4 * m),
+                        cluster_level_seed(plane_seed, level as u32, finest),
+                        optics.max_bounces,
+                        optics.min_relative_power,
+                        target.flux_quantum,
+                    )
+                },
+                photons: self.slots,
+                photon_count: self.counts,
+                counters: target.trace_counters,
+                clusters: Some(list),
+            });
+            rec.kernel(RefineClusters {
+                params: RefineParams {
+                    atlas_width: target.atlas_width,
+                    flux_quantum: target.flux_quantum,
+                    hit_distance_quantum: target.hit_distance_quantum,
+                    level: level as u32,
+                    finest,
+                    metric: s.metric as u32,
+                    error_from_level: error_from,
+                    grid_w: grid,
+                    first,
+                    count: m,
+                    children_capacity: capacity,
+                    _pad: 0,
+                },
+                clusters: list,
+                photons: self.slots,
+                triangle_tiles: target.triangle_tiles,
+                tiles: target.tiles,
+                children,
+                cluster_counts: self.counts,
+                counters: self.output_counters,
+                atlas: target.sums,
+            });
+            for t in backend.execute(&rec)? {
+                stats.add_pass_time(t.kernel, t.seconds);
+            }
+            let counts = read_buf(backend, self.counts)?;
+            let kids = counts[cluster_count::CHILDREN];
+            if kids > capacity || kids < before {
+                return Err(Error::InvalidParameter(format!(
+                    "adaptive traversal: level {} list overflowed ({kids} of {capacity})",
+                    level + 1
+                )));
+            }
+            if level < finest as usize {
+                left[level + 1] = kids;
+            }
+            if level == 0 {
+                cursor += m;
+            } else {
+                left[level] -= m;
+            }
+            let refined = (kids - before) as u64 / 4;
+            adaptive.clusters_refined += refined;
+            adaptive.clusters_output += counts[cluster_count::OUTPUT] as u64;
+            adaptive.clusters_discarded += counts[cluster_count::DISCARDED] as u64;
+            adaptive.photons_processed += 4 * m as u64;
+            adaptive.photons_per_level[level] += 4 * m as u64;
+            adaptive.photons_output_per_level[level] +=
+                counts[cluster_count::OUTPUT_PHOTONS] as u64;
+            adaptive.steps += 1;
+            stats.batches += 1;
+            progress(adaptive.photons_processed);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,34 @@
+// Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics).
+
+const NO_TRIANGLE: u32 = 0xffffffffu;
+const CLUSTER_METRIC_ERROR: u32 = 1u;
+const CLUSTER_DISCARDED: u32 = 0u;
+const CLUSTER_OUTPUT: u32 = 1u;
+const CLUSTER_REFINED: u32 = 2u;
+// core::device::layout::cluster_count words
+const CLUSTER_COUNT_CHILDREN: u32 = 0u;
+const CLUSTER_COUNT_OUTPUT: u32 = 1u;
+const CLUSTER_COUNT_DISCARDED: u32 = 2u;
+const CLUSTER_COUNT_OUTPUT_PHOTONS: u32 = 3u;
+
+fn cluster_photon_index(cluster: u32, sub: u32, grid_w: u32) -> u32 {
+    let clusters_w = grid_w / 2u;
+    let cx = cluster % clusters_w;
+    let cy = cluster / clusters_w;
+    return (2u * cy + (sub >> 1u)) * grid_w + 2u * cx + (sub & 1u);
+}
+
+fn photon_met_caster(end: u32, rays: u32) -> bool {
+    return !(end == 1u || (end == 2u && rays <= 1u) || (end == 3u && rays == 0u));
+}
+
+fn cluster_fate(any_met_caster: bool, converged: bool, level: u32, finest: u32, metric: u32,
+                error_from_level: u32) -> u32 {
+    if (!any_met_caster) {
+        return CLUSTER_DISCARDED;
+    }
+    if (level >= finest || (metric == CLUSTER_METRIC_ERROR && level >= error_from_level && converged)) {
+        return CLUSTER_OUTPUT;
+    }
+    return CLUSTER_REFINED;
+}

@@ -1,0 +1,100 @@
+// needs: types vector fixed_point atlas photon_map_add photon_clusters
+// refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one thread per traced
+// cluster of the batch. Its four photon slots (trace_photons' ADAPTIVE variant) decide
+// its fate (core::math::photon_clusters::cluster_fate): discarded, output (its stored
+// photons deposited into the atlas exactly as deposit_atlas does) or refined (four
+// children appended to the next level's list). Mirror of
+// backend-opencl/kernels/refine_clusters.cl and backend-cpu/src/kernels/refine_clusters.rs;
+// the atlas sums and counts are bitwise the CPU's, the child list's order is not (every
+// later result is independent of it).
+
+@group(0) @binding(0) var<uniform> params: RefineParams;
+@group(0) @binding(1) var<storage, read> clusters: array<u32>;
+@group(0) @binding(2) var<storage, read> photons: array<Photon>;
+@group(0) @binding(3) var<storage, read> triangle_tiles: array<u32>;
+@group(0) @binding(4) var<storage, read> tiles: array<vec4<u32>>;
+@group(0) @binding(5) var<storage, read_write> children: array<u32>;
+@group(0) @binding(6) var<storage, read_write> cluster_counts: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> photon_map2: array<atomic<u32>>;
+
+var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
+
+// The atlas texel under texture-space photon `ph`, NO_TILE when its triangle has no tile
+// (backend-cpu caustic_map.rs::atlas_photon_texel).
+fn atlas_photon_texel(ph: Photon, atlas_width: u32) -> u32 {
+    var tile = NO_TILE;
+    if (ph.direction < arrayLength(&triangle_tiles)) {
+        tile = triangle_tiles[ph.direction];
+    }
+    if (tile == NO_TILE || tile >= arrayLength(&tiles)) {
+        return NO_TILE;
+    }
+    return atlas_texel_index(tiles[tile], ph.position.xy, atlas_width);
+}
+
+fn refine_clusters(t: u32, li: u32) {
+    counters_clear_local(li);
+    let p = params;
+    if (t < p.count) {
+        let cluster = clusters[p.first + t];
+        var slots: array<Photon, 4>;
+        var texels: array<u32, 4>;
+        var met = false;
+        var stored = 0u;
+        for (var k = 0u; k < 4u; k++) {
+            slots[k] = photons[4u * t + k];
+            met = met || slots[k].position.z != 0.0f;
+            texels[k] = NO_TILE;
+            if (slots[k].direction != NO_TRIANGLE) {
+                texels[k] = atlas_photon_texel(slots[k], p.atlas_width);
+                stored += 1u;
+            }
+        }
+        let converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0]
+            && texels[2] == texels[0] && texels[3] == texels[0];
+        let fate = cluster_fate(met, converged, p.level, p.finest, p.metric, p.error_from_level);
+        if (fate == CLUSTER_OUTPUT) {
+            for (var k = 0u; k < 4u; k++) {
+                if (slots[k].direction == NO_TRIANGLE) {
+                    continue;
+                }
+                atomicAdd(&lc[COUNTER_STORED], 1u);
+                for (var ch = 0u; ch < 3u; ch++) {
+                    let units = quantize(slots[k].flux[ch], p.flux_quantum).units;
+                    if (units != 0u) {
+                        atomic_add_u64_local(COUNTER_STORED_FLUX + 2u * ch, units);
+                    }
+                }
+                if (texels[k] == NO_TILE) {
+                    atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
+                } else {
+                    deposit_photon_texel(texels[k], slots[k], p.flux_quantum, p.hit_distance_quantum);
+                }
+            }
+            atomicAdd(&cluster_counts[CLUSTER_COUNT_OUTPUT], 1u);
+            atomicAdd(&cluster_counts[CLUSTER_COUNT_OUTPUT_PHOTONS], stored);
+        } else if (fate == CLUSTER_DISCARDED) {
+            atomicAdd(&cluster_counts[CLUSTER_COUNT_DISCARDED], 1u);
+        } else {
+            let base = atomicAdd(&cluster_counts[CLUSTER_COUNT_CHILDREN], 4u);
+            for (var k = 0u; k < 4u; k++) {
+                // the host sizes every step so that this never drops a child
+                if (base + k < min(p.children_capacity, arrayLength(&children))) {
+                    children[base + k] = cluster_photon_index(cluster, k, p.grid_w);
+                }
+            }
+        }
+    }
+    counters_flush_local(li);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let t = (wg.y * nwg.x + wg.x) * 64u + li;
+    // No early return: every invocation reaches the barriers in refine_clusters.
+    refine_clusters(t, li);
+}
