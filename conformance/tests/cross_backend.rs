@@ -14,8 +14,9 @@
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
-    check_caustic_map, check_composite, check_density_gather, check_deposit, check_direct,
-    check_gather, check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
+    check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
+    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases, check_trace,
+    KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -86,6 +87,14 @@ fn direct_light_matches_cpu_on_the_same_gbuffer() {
 #[test]
 fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
     kernel_test("caustic map kernels", &check_caustic_map);
+}
+
+/// AdaptiveCaustics' kernels on the same inputs: the adaptive trace slot by slot within
+/// the path-divergence allowance, `refine_clusters` bitwise (`kernels::adaptive_caustics`
+/// argues both).
+#[test]
+fn adaptive_caustics_kernels_match_cpu_on_the_same_inputs() {
+    kernel_test("adaptive caustics kernels", &check_adaptive_caustics);
 }
 
 #[test]

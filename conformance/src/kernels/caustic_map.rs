@@ -44,7 +44,7 @@ use caustica_core::techniques::caustic_map::{atlas_gather_params, CausticMapSett
 /// Side of the checked atlas (texels).
 pub const CHECK_ATLAS: u32 = 64;
 
-fn layout(fx: &Fixture) -> Option<AtlasLayout> {
+pub(crate) fn layout(fx: &Fixture) -> Option<AtlasLayout> {
     let receiver = atlas_receivers(&fx.scene);
     if !receiver.iter().any(|r| *r) {
         return None;

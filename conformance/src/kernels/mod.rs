@@ -15,6 +15,7 @@
 //! [`check_kernel_cases`] runs one check for a candidate over the fixed cases
 //! ([`crate::harness::kernel_cases`]).
 
+pub mod adaptive_caustics;
 pub mod bilateral_gather;
 pub mod caustic_map;
 pub mod composite;
@@ -26,6 +27,7 @@ pub mod resolve_caustics;
 pub mod tile_hit_distance;
 pub mod trace_photons;
 
+pub use adaptive_caustics::check_adaptive_caustics;
 pub use bilateral_gather::check_gather;
 pub use caustic_map::check_caustic_map;
 pub use composite::check_composite;

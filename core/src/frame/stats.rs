@@ -116,6 +116,10 @@ pub struct FrameStats {
 pub struct AdaptiveStats {
     /// Every photon traced, at every level.
     pub photons_processed: u64,
+    /// Photons the tracer stored, at every level (the output ones are `photons_stored`
+    /// of the frame): with the frame's `discarded` path ends they add up to
+    /// `photons_processed`.
+    pub photons_traced_stored: u64,
     /// Photons the dense grid at the finest level would trace (its texels).
     pub dense_equivalent_photons: u64,
     /// Photons traced per level (index 0: the start grid).

@@ -841,6 +841,7 @@ impl CausticMap {
             let o = read_buf(backend, t.output_counters)?;
             let o64 = |i: usize| join_u64([o[i], o[i + 1]]);
             stats.photons_emitted = adaptive.photons_processed;
+            adaptive.photons_traced_stored = stats.photons_stored;
             stats.photons_stored = o[counter::STORED] as u64;
             stats.photons_deposited = o[counter::DEPOSITED] as u64;
             stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;

@@ -1,0 +1,275 @@
+//! AdaptiveCaustics' kernels (`trace_photons`' `ADAPTIVE` variant and `refine_clusters`),
+//! checked on the fixture's scene with a caustic atlas laid out as for CausticMap's check
+//! ([`super::caustic_map`]): nothing to check where the scene has no receiver tile or no
+//! light sees a caster.
+//!
+//! - The adaptive trace: the first light view plane of the first light that has one, on a
+//!   32x32 grid, every one of its 256 clusters (in a shuffled list behind four unused
+//!   entries, so `first` and the list are really read): slot `i` is one photon on both
+//!   backends, so the slots are compared one by one: stored or not, met a caster or not,
+//!   its triangle and the atlas texel under its uv, its flux within
+//!   [`photon_flux_match_rel`]. A path that diverges (the argument of
+//!   [`crate::harness::tolerance::PATH_DIVERGENCE`]) or lands within a rounding of a texel
+//!   edge changes one slot, so at most [`divergence_allowance`] slots may differ. The
+//!   counters (stored, path ends) are the same photons' and get the same allowance.
+//! - `refine_clusters` on the CPU's slots (so only the kernel under test differs), at an
+//!   inner level under the error metric (discards, converged outputs and refinements all
+//!   occur on a lit scene) and at the finest level under the level metric (everything
+//!   relevant is output): integer decisions and integer atomics, so the cluster counts,
+//!   the child list as a multiset (its order is the atomics' arrival order), the atlas
+//!   sums and the counters must be **bitwise** equal.
+
+use super::caustic_map::layout;
+use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
+use crate::harness::tolerance::{divergence_allowance, photon_flux_match_rel, PHOTON_POSITION_REL};
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::{read_buf, read_photon_map, Backend};
+use caustica_core::device::layout::*;
+use caustica_core::frame::caustic_atlas::AtlasLayout;
+use caustica_core::frame::light_view_plane::{light_view_planes, LightViewPlane};
+use caustica_core::kernels::{RefineClusters, TracePhotons};
+use caustica_core::math::map_gather::atlas_texel_index;
+use caustica_core::math::photon_clusters::{cluster_metric, NO_TRIANGLE};
+use caustica_core::math::rng::pcg_hash;
+use caustica_core::recording::Recording;
+
+/// Side of the checked plane's grid.
+const GRID: u32 = 32;
+/// Unused list entries before the clusters.
+const FIRST: u32 = 4;
+
+fn plane(fx: &Fixture) -> Option<(u32, LightViewPlane)> {
+    fx.scene.lights.iter().enumerate().find_map(|(i, l)| {
+        let p = light_view_planes(l, fx.ds.caster_bounds, fx.ds.bounds, GRID).ok()?;
+        let mut p = p[0];
+        p.resolution = (GRID, GRID);
+        Some((i as u32, p))
+    })
+}
+
+/// The cluster list: `FIRST` unused entries, then every cluster of the grid, shuffled.
+fn cluster_list() -> Vec<u32> {
+    let n = (GRID / 2) * (GRID / 2);
+    let mut ids: Vec<u32> = (0..n).collect();
+    ids.sort_by_key(|&c| pcg_hash(c ^ 0x5eed));
+    let mut list = vec![n + 7; FIRST as usize];
+    list.extend(ids);
+    list
+}
+
+fn quanta() -> (f32, f32) {
+    (2f32.powi(-24), 2f32.powi(-20))
+}
+
+/// Runs the adaptive trace of every listed cluster on `b`: the slots and the counters.
+fn run_trace(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    light: u32,
+    p: &LightViewPlane,
+    list: &[u32],
+) -> Result<(Vec<Photon>, Vec<u32>), String> {
+    let count = 4 * (list.len() as u32 - FIRST);
+    let mut variant = caustica_core::frame::plan::SceneFeatures::of(&fx.scene).trace_variant();
+    variant.surface_store = true;
+    variant.adaptive = true;
+    let mut rec = Recording::new();
+    let clusters = rec.upload(list, "clusters");
+    let photons = rec.create(count, "photon slots");
+    let photon_count = rec.upload(&[0u32], "photon count");
+    let counters = rec.upload(&[0u32; counter::WORDS], "counters");
+    rec.kernel(TracePhotons {
+        scene: fx.args,
+        variant,
+        params: p.trace_params(light, (FIRST, count), 0xada9, 12, 1e-4, quanta().0),
+        photons,
+        photon_count,
+        counters,
+        clusters: Some(clusters),
+    });
+    run_and_free(b, "trace_photons (adaptive)", &rec, |b| {
+        let n = read_buf(b, photon_count)?;
+        if n[0] != 0 {
+            return Err(caustica_core::backend::BackendError::BadArgument(
+                "the adaptive trace touched photon_count".into(),
+            ));
+        }
+        Ok((read_buf(b, photons)?, read_buf(b, counters)?))
+    })
+}
+
+/// What `refine_clusters` left on a backend.
+#[derive(PartialEq, Debug)]
+struct Refined {
+    counts: Vec<u32>,
+    children: Vec<u32>,
+    counters: Vec<u32>,
+    atlas: Vec<DepositTexel>,
+}
+
+/// Children already in the list before the step (the kernel appends after them).
+const BEFORE: u32 = 7;
+
+fn run_refine(
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    list: &[u32],
+    slots: &[Photon],
+    (level, finest, metric): (u32, u32, u32),
+) -> Result<Refined, String> {
+    let count = list.len() as u32 - FIRST;
+    let capacity = BEFORE + 4 * count;
+    let (fq, hq) = quanta();
+    let mut rec = Recording::new();
+    let clusters = rec.upload(list, "clusters");
+    let photons = rec.upload(slots, "photon slots");
+    let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
+    let tiles = rec.upload(&l.tiles, "tiles");
+    let children = rec.upload(&vec![u32::MAX; capacity as usize], "children");
+    let counts = rec.upload(&[BEFORE, 0, 0, 0], "cluster counts");
+    let counters = rec.upload(&[0u32; counter::WORDS], "counters");
+    let atlas = rec.create_photon_map(l.texels.len() as u32);
+    rec.clear_photon_map(&atlas);
+    rec.kernel(RefineClusters {
+        params: RefineParams {
+            atlas_width: l.plan.size.0,
+            flux_quantum: fq,
+            hit_distance_quantum: hq,
+            level,
+            finest,
+            metric,
+            error_from_level: 0,
+            grid_w: GRID,
+            first: FIRST,
+            count,
+            children_capacity: capacity,
+            _pad: 0,
+        },
+        clusters,
+        photons,
+        triangle_tiles,
+        tiles,
+        children,
+        cluster_counts: counts,
+        counters,
+        atlas,
+    });
+    run_and_free(b, "refine_clusters", &rec, |b| {
+        let counts = read_buf(b, counts)?;
+        let mut kids = read_buf(b, children)?;
+        kids.truncate(counts[cluster_count::CHILDREN].min(capacity) as usize);
+        kids[BEFORE as usize..].sort_unstable();
+        Ok(Refined {
+            counts,
+            children: kids,
+            counters: read_buf(b, counters)?,
+            atlas: read_photon_map(b, &atlas)?,
+        })
+    })
+}
+
+/// The atlas texel of a stored slot, `NO_TILE` without a tile.
+fn texel(l: &AtlasLayout, ph: &Photon) -> u32 {
+    match l.triangle_tiles.get(ph.direction as usize) {
+        Some(&t) if t != NO_TILE => atlas_texel_index(
+            l.tiles[t as usize],
+            glam::Vec2::new(ph.position[0], ph.position[1]),
+            l.plan.size.0,
+        ),
+        _ => NO_TILE,
+    }
+}
+
+/// Both kernels on the fixture's scene (see the module doc).
+pub fn check_adaptive_caustics(
+    fx: &Fixture,
+    _inputs: &ReferenceInputs,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("trace_photons (adaptive) + refine_clusters");
+    let (Some(l), Some((light, p))) = (layout(fx), plane(fx)) else {
+        return Ok(v);
+    };
+    let list = cluster_list();
+    let (sa, ca) = run_trace(fx, r, light, &p, &list)?;
+    let (sb, cb) = run_trace(fx, c, light, &p, &list)?;
+    let n = sa.len() as u64;
+    let k = divergence_allowance(n);
+    let tol = photon_flux_match_rel(&fx.scene, PHOTON_POSITION_REL * fx.ds.bounds.diagonal());
+    let same = |a: &Photon, b: &Photon| {
+        let stored = a.direction != NO_TRIANGLE;
+        stored == (b.direction != NO_TRIANGLE)
+            && a.position[2] == b.position[2]
+            && (!stored
+                || (a.direction == b.direction
+                    && texel(&l, a) == texel(&l, b)
+                    && (0..3).all(|ch| {
+                        (a.flux[ch] - b.flux[ch]).abs()
+                            <= tol * a.flux[ch].abs().max(b.flux[ch].abs())
+                    })))
+    };
+    let differ = sa.iter().zip(&sb).filter(|(a, b)| !same(a, b)).count() as u64;
+    v.check(differ <= k, || {
+        format!("{differ} of {n} photon slots differ (allowance {k})")
+    });
+    for (word, what) in [
+        (counter::STORED, "stored"),
+        (counter::NO_SPECULAR, "no specular"),
+        (counter::ESCAPED, "escaped"),
+        (counter::NEGLIGIBLE, "negligible"),
+        (counter::BOUNCE_LIMIT, "bounce limit"),
+    ] {
+        v.check((ca[word] as u64).abs_diff(cb[word] as u64) <= k, || {
+            format!("{what}: cpu {} vs {} (allowance {k})", ca[word], cb[word])
+        });
+    }
+    let stored = sa.iter().filter(|s| s.direction != NO_TRIANGLE).count() as u64;
+    v.check(stored == ca[counter::STORED] as u64, || {
+        format!(
+            "cpu: {stored} stored slots, stored counter {}",
+            ca[counter::STORED]
+        )
+    });
+    v.note(format!("{stored} of {n} slots stored"));
+    for (what, step) in [
+        ("inner level, error metric", (1, 3, cluster_metric::ERROR)),
+        ("finest level, level metric", (2, 2, cluster_metric::LEVEL)),
+    ] {
+        let a = run_refine(r, &l, &list, &sa, step)?;
+        let b = run_refine(c, &l, &list, &sa, step)?;
+        let clusters = list.len() as u32 - FIRST;
+        let refined = (a.counts[cluster_count::CHILDREN] - BEFORE) / 4;
+        v.check(
+            refined + a.counts[cluster_count::OUTPUT] + a.counts[cluster_count::DISCARDED]
+                == clusters,
+            || {
+                format!(
+                    "{what}: cpu fates {:?} do not add up to {clusters}",
+                    a.counts
+                )
+            },
+        );
+        v.check(a.counts == b.counts, || {
+            format!(
+                "{what}: cluster counts cpu {:?} vs {:?}",
+                a.counts, b.counts
+            )
+        });
+        v.check(a.children == b.children, || {
+            format!("{what}: the child lists differ as multisets")
+        });
+        v.check(a.counters == b.counters, || {
+            format!("{what}: counters cpu {:?} vs {:?}", a.counters, b.counters)
+        });
+        let equal = a.atlas.iter().zip(&b.atlas).filter(|(x, y)| x == y).count();
+        v.check(equal == a.atlas.len(), || {
+            format!(
+                "{what}: {} of {} atlas texels differ (integer atomics must agree bitwise)",
+                a.atlas.len() - equal,
+                a.atlas.len()
+            )
+        });
+    }
+    Ok(v)
+}
