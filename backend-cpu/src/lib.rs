@@ -285,6 +285,7 @@ impl CpuBackend {
             Kernel::RefineClusters(RefineClusters {
                 params,
                 clusters,
+                caster_rects,
                 photons,
                 triangle_tiles,
                 tiles,
@@ -294,6 +295,7 @@ impl CpuBackend {
                 atlas,
             }) => {
                 let list = get(clusters.id)?.as_slice(clusters.len)?;
+                let rects = get(caster_rects.id)?.as_slice(caster_rects.len)?;
                 let ph = get(photons.id)?.as_slice(photons.len)?;
                 let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
                 let tl = get(tiles.id)?.as_slice(tiles.len)?;
@@ -303,7 +305,7 @@ impl CpuBackend {
                     get(b.id)?.as_atomic_u64(b.bytes())?,
                     get(c.id)?.as_atomic_u64(c.bytes())?,
                 ];
-                let r = refine_clusters::refine_clusters(params, list, ph, tt, tl, atomics);
+                let r = refine_clusters::refine_clusters(params, list, rects, ph, tt, tl, atomics);
                 r.counters
                     .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 let mut counts = self

@@ -10,15 +10,16 @@
 
 @group(0) @binding(0) var<uniform> params: RefineParams;
 @group(0) @binding(1) var<storage, read> clusters: array<u32>;
-@group(0) @binding(2) var<storage, read> photons: array<Photon>;
-@group(0) @binding(3) var<storage, read> triangle_tiles: array<u32>;
-@group(0) @binding(4) var<storage, read> tiles: array<vec4<u32>>;
-@group(0) @binding(5) var<storage, read_write> children: array<u32>;
-@group(0) @binding(6) var<storage, read_write> cluster_counts: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> photon_map0: array<atomic<u32>>;
-@group(0) @binding(9) var<storage, read_write> photon_map1: array<atomic<u32>>;
-@group(0) @binding(10) var<storage, read_write> photon_map2: array<atomic<u32>>;
+@group(0) @binding(2) var<storage, read> caster_rects: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> photons: array<Photon>;
+@group(0) @binding(4) var<storage, read> triangle_tiles: array<u32>;
+@group(0) @binding(5) var<storage, read> tiles: array<vec4<u32>>;
+@group(0) @binding(6) var<storage, read_write> children: array<u32>;
+@group(0) @binding(7) var<storage, read_write> cluster_counts: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> photon_map2: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
@@ -51,6 +52,11 @@ fn refine_clusters(t: u32, li: u32) {
             if (slots[k].direction != NO_TRIANGLE) {
                 texels[k] = atlas_photon_texel(slots[k], p.atlas_width);
                 stored += 1u;
+            }
+        }
+        if (p.relevance == CLUSTER_RELEVANCE_BOUNDS) {
+            for (var r = 0u; r < arrayLength(&caster_rects); r++) {
+                met = met || cluster_overlaps_rect(cluster, p.grid_w, caster_rects[r]);
             }
         }
         let converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0]

@@ -9,7 +9,9 @@ use caustica_core::device::layout::{
     cluster_count, counter, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };
 use caustica_core::math::fixed_point::quantize;
-use caustica_core::math::photon_clusters::{cluster_fate, cluster_photon_index, NO_TRIANGLE};
+use caustica_core::math::photon_clusters::{
+    cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance, NO_TRIANGLE,
+};
 use rayon::prelude::*;
 
 /// What a batch step produced: the children appended (in cluster order: the GPU ports
@@ -33,6 +35,7 @@ pub struct Refined {
 pub fn refine_clusters(
     p: &RefineParams,
     clusters: &[u32],
+    caster_rects: &[[f32; 4]],
     photons: &[Photon],
     triangle_tiles: &[u32],
     tiles: &[AtlasTileTexel],
@@ -55,7 +58,11 @@ pub fn refine_clusters(
                     ))
                 }
             });
-            let met = slots.iter().any(|ph| ph.position[2] != 0.0);
+            let met = slots.iter().any(|ph| ph.position[2] != 0.0)
+                || (p.relevance == cluster_relevance::BOUNDS
+                    && caster_rects
+                        .iter()
+                        .any(|r| cluster_overlaps_rect(cluster, p.grid_w, *r)));
             let first = texels[0].unwrap_or(NO_TILE);
             let converged = first != NO_TILE && texels.iter().all(|t| *t == Some(first));
             let fate = cluster_fate(

@@ -29,3 +29,18 @@ inline uint cluster_fate(bool any_met_caster, bool converged, uint level, uint f
         return CLUSTER_OUTPUT;
     return CLUSTER_REFINED;
 }
+
+#define CLUSTER_RELEVANCE_BOUNDS 1u
+
+inline bool cluster_overlaps_rect(uint cluster, uint grid_w, float4 rect) {
+    uint clusters_w = grid_w / 2u;
+    uint cx = cluster % clusters_w;
+    uint cy = cluster / clusters_w;
+    // 2 / grid_w, built from its exponent (exact, and no division to round)
+    float step = as_float((128u - (31u - clz(grid_w))) << 23);
+    float x0 = (float)(2u * cx) * step - 1.0f;
+    float x1 = (float)(2u * cx + 2u) * step - 1.0f;
+    float y1 = 1.0f - (float)(2u * cy) * step;
+    float y0 = 1.0f - (float)(2u * cy + 2u) * step;
+    return x0 <= rect.z && rect.x <= x1 && y0 <= rect.w && rect.y <= y1;
+}

@@ -64,7 +64,7 @@ typedef struct {
 typedef struct {
     uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
     uint finest; uint metric; uint error_from_level; uint grid_w;
-    uint first; uint count; uint children_capacity; uint _pad;
+    uint first; uint count; uint children_capacity; uint relevance;
 } RefineParams;
 
 // core::gpu constants

@@ -104,7 +104,7 @@ struct MapLookupParams {
 struct RefineParams {
     uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
     uint finest; uint metric; uint error_from_level; uint grid_w;
-    uint first; uint count; uint children_capacity; uint _pad;
+    uint first; uint count; uint children_capacity; uint relevance;
 };
 
 // The closest-hit payload (location 0) shared by the ray generation, closest-hit and miss

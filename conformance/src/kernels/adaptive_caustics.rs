@@ -14,8 +14,8 @@
 //!   counters (stored, path ends) are the same photons' and get the same allowance.
 //! - `refine_clusters` on the CPU's slots (so only the kernel under test differs), at an
 //!   inner level under the error metric (discards, converged outputs and refinements all
-//!   occur on a lit scene) and at the finest level under the level metric (everything
-//!   relevant is output): integer decisions and integer atomics, so the cluster counts,
+//!   occur on a lit scene; with 004's photon test and with the casters' projected bounds)
+//!   and at the finest level under the level metric (everything relevant is output): integer decisions and integer atomics, so the cluster counts,
 //!   the child list as a multiset (its order is the atomics' arrival order), the atlas
 //!   sums and the counters must be **bitwise** equal.
 
@@ -29,9 +29,10 @@ use caustica_core::frame::caustic_atlas::AtlasLayout;
 use caustica_core::frame::light_view_plane::{light_view_planes, LightViewPlane};
 use caustica_core::kernels::{RefineClusters, TracePhotons};
 use caustica_core::math::map_gather::atlas_texel_index;
-use caustica_core::math::photon_clusters::{cluster_metric, NO_TRIANGLE};
+use caustica_core::math::photon_clusters::{cluster_metric, cluster_relevance, NO_TRIANGLE};
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::Recording;
+use caustica_core::techniques::adaptive_caustics::{caster_boxes, caster_rects};
 
 /// Side of the checked plane's grid.
 const GRID: u32 = 32;
@@ -113,15 +114,16 @@ const BEFORE: u32 = 7;
 fn run_refine(
     b: &mut dyn Backend,
     l: &AtlasLayout,
-    list: &[u32],
+    (list, rects): (&[u32], &[[f32; 4]]),
     slots: &[Photon],
-    (level, finest, metric): (u32, u32, u32),
+    (level, finest, metric, relevance): (u32, u32, u32, u32),
 ) -> Result<Refined, String> {
     let count = list.len() as u32 - FIRST;
     let capacity = BEFORE + 4 * count;
     let (fq, hq) = quanta();
     let mut rec = Recording::new();
     let clusters = rec.upload(list, "clusters");
+    let caster_rects = rec.upload(rects, "caster rectangles");
     let photons = rec.upload(slots, "photon slots");
     let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
     let tiles = rec.upload(&l.tiles, "tiles");
@@ -143,9 +145,10 @@ fn run_refine(
             first: FIRST,
             count,
             children_capacity: capacity,
-            _pad: 0,
+            relevance,
         },
         clusters,
+        caster_rects,
         photons,
         triangle_tiles,
         tiles,
@@ -232,12 +235,23 @@ pub fn check_adaptive_caustics(
         )
     });
     v.note(format!("{stored} of {n} slots stored"));
+    let rects = caster_rects(&p, &caster_boxes(&fx.ds));
     for (what, step) in [
-        ("inner level, error metric", (1, 3, cluster_metric::ERROR)),
-        ("finest level, level metric", (2, 2, cluster_metric::LEVEL)),
+        (
+            "inner level, error metric, photon relevance",
+            (1, 3, cluster_metric::ERROR, cluster_relevance::PHOTONS),
+        ),
+        (
+            "inner level, error metric, bounds relevance",
+            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS),
+        ),
+        (
+            "finest level, level metric, bounds relevance",
+            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS),
+        ),
     ] {
-        let a = run_refine(r, &l, &list, &sa, step)?;
-        let b = run_refine(c, &l, &list, &sa, step)?;
+        let a = run_refine(r, &l, (&list, &rects), &sa, step)?;
+        let b = run_refine(c, &l, (&list, &rects), &sa, step)?;
         let clusters = list.len() as u32 - FIRST;
         let refined = (a.counts[cluster_count::CHILDREN] - BEFORE) / 4;
         v.check(

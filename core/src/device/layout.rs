@@ -423,8 +423,9 @@ pub struct RefineParams {
     pub count: u32,
     /// Entries the child list holds.
     pub children_capacity: u32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// [`cluster_relevance`](crate::math::photon_clusters::cluster_relevance): what keeps
+    /// a cluster from being discarded.
+    pub relevance: u32,
 }
 
 /// Words of `refine_clusters`' cluster counts buffer.

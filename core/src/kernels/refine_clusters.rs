@@ -7,8 +7,9 @@ use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams}
 
 /// Judges each of the `params.count` clusters `clusters[params.first ..]` whose four
 /// photons `trace_photons`' `ADAPTIVE` variant wrote to slots `4 t .. 4 t + 4` of
-/// `photons` ([`crate::math::photon_clusters::cluster_fate`]): a cluster none of whose
-/// photons met a caster is discarded; an output cluster deposits its stored photons into
+/// `photons` ([`crate::math::photon_clusters::cluster_fate`]): a cluster is discarded
+/// when none of its photons met a caster and (with `params.relevance` BOUNDS) its
+/// footprint overlaps none of `caster_rects`; an output cluster deposits its stored photons into
 /// the atlas exactly as `deposit_atlas` does (fixed point, order-free); a refined one
 /// appends its four children (the ids of its photons in the level grid) to `children`
 /// at `cluster_counts[CHILDREN]`. Counts clusters output and discarded in
@@ -20,6 +21,9 @@ pub struct RefineClusters {
     pub params: RefineParams,
     /// The level's cluster list.
     pub clusters: Buf<u32>,
+    /// The casters' bounding boxes projected on the plane: `(x0, y0, x1, y1)` in its
+    /// normalised device coordinates (`math::photon_clusters::cluster_overlaps_rect`).
+    pub caster_rects: Buf<[f32; 4]>,
     /// The batch's photon slots (four per cluster).
     pub photons: Buf<Photon>,
     /// Per scene triangle: its receiver's tile, or [`crate::device::layout::NO_TILE`].
@@ -39,6 +43,8 @@ pub struct RefineClusters {
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
     bind("clusters", Read),
+    bind("caster_rects", Read),
+    bind("caster_rect_count", Count),
     bind("photons", Read),
     bind("triangle_tiles", Read),
     bind("tiles", Read),
@@ -58,6 +64,7 @@ impl KernelDecl for RefineClusters {
         if p.first as u64 + p.count as u64 > self.clusters.len as u64
             || 4 * p.count as u64 > self.photons.len as u64
             || p.grid_w < 2
+            || !p.grid_w.is_power_of_two()
         {
             return Err(BackendError::BadArgument(format!(
                 "refine_clusters: clusters {}..+{} of {}, {} photon slots, grid {}",
@@ -72,6 +79,8 @@ impl KernelDecl for RefineClusters {
         let n = super::texels(p.atlas_width, p.atlas_width);
         a.params("params", p)?
             .buf("clusters", self.clusters, 0)?
+            .buf("caster_rects", self.caster_rects, 0)?
+            .count("caster_rect_count", self.caster_rects.len)?
             .buf("photons", self.photons, 0)?
             .buf("triangle_tiles", self.triangle_tiles, 0)?
             .buf("tiles", self.tiles, 0)?

@@ -31,6 +31,38 @@ pub mod cluster_fate {
     pub const REFINED: u32 = 2;
 }
 
+/// What keeps a traced cluster from being discarded.
+pub mod cluster_relevance {
+    /// Seed 004's test: at least one of its four photons met a caustic caster. Photons
+    /// are samples: a cluster whose coarse photons all miss can still cover a caster's
+    /// silhouette (or a caster smaller than its footprint), whose caustic is then lost.
+    pub const PHOTONS: u32 = 0;
+    /// Conservative: a photon met a caster, or the cluster's footprint on the view plane
+    /// overlaps the projection of some caster's bounding box
+    /// ([`cluster_overlaps_rect`]). No photon that could meet a caster is ever dropped,
+    /// so the level metric outputs exactly the dense grid's stored photons.
+    pub const BOUNDS: u32 = 1;
+}
+
+/// Whether cluster `cluster` of a `grid_w` grid overlaps `rect` = `(x0, y0, x1, y1)`
+/// (closed) in the view plane's normalised device coordinates: `x = 2 p.x - 1`,
+/// `y = 1 - 2 p.y` of the plane point `p` in [0, 1]^2 (row 0 at the top, as
+/// `LightViewPlane::texel_ndc`). The cluster covers its 2x2 texels; with `grid_w` a power
+/// of two every bound is exact in f32, so all backends decide alike.
+#[inline]
+pub fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: [f32; 4]) -> bool {
+    let clusters_w = grid_w / 2;
+    let cx = cluster % clusters_w;
+    let cy = cluster / clusters_w;
+    // 2 / grid_w, built from its exponent (exact, and no division a shader may round)
+    let step = f32::from_bits((128 - grid_w.ilog2()) << 23);
+    let x0 = (2 * cx) as f32 * step - 1.0;
+    let x1 = (2 * cx + 2) as f32 * step - 1.0;
+    let y1 = 1.0 - (2 * cy) as f32 * step;
+    let y0 = 1.0 - (2 * cy + 2) as f32 * step;
+    x0 <= rect[2] && rect[0] <= x1 && y0 <= rect[3] && rect[1] <= y1
+}
+
 /// Index, in the row-major level grid of `grid_w` texels a side, of photon `sub` (0..4:
 /// x = `sub & 1`, y = `sub >> 1`) of cluster `cluster`. It is also the id of the child
 /// cluster that photon becomes at the next level.
@@ -92,6 +124,18 @@ pub fn cluster_fate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cluster_covers_its_two_by_two_texels() {
+        // cluster 0 of an 8-grid: texels (0..2, 0..2), ndc x in [-1, -0.5], y in [0.5, 1]
+        assert!(cluster_overlaps_rect(0, 8, [-0.6, 0.6, -0.55, 0.7]));
+        assert!(cluster_overlaps_rect(0, 8, [-0.5, 0.5, -0.5, 0.5])); // a corner touches
+        assert!(!cluster_overlaps_rect(0, 8, [-0.49, 0.6, 0.0, 0.7]));
+        assert!(!cluster_overlaps_rect(0, 8, [-0.9, -0.2, -0.6, 0.49]));
+        // the last cluster: x in [0.5, 1], y in [-1, -0.5]
+        assert!(cluster_overlaps_rect(15, 8, [0.9, -0.9, 2.0, -0.8]));
+        assert!(!cluster_overlaps_rect(15, 8, [0.9, -0.4, 2.0, 0.0]));
+    }
 
     #[test]
     fn children_tile_the_next_level_once() {

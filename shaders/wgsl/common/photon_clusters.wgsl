@@ -32,3 +32,18 @@ fn cluster_fate(any_met_caster: bool, converged: bool, level: u32, finest: u32, 
     }
     return CLUSTER_REFINED;
 }
+
+const CLUSTER_RELEVANCE_BOUNDS: u32 = 1u;
+
+fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: vec4<f32>) -> bool {
+    let clusters_w = grid_w / 2u;
+    let cx = cluster % clusters_w;
+    let cy = cluster / clusters_w;
+    // 2 / grid_w, built from its exponent (exact, and no division to round)
+    let step = bitcast<f32>((128u - firstLeadingBit(grid_w)) << 23u);
+    let x0 = f32(2u * cx) * step - 1.0f;
+    let x1 = f32(2u * cx + 2u) * step - 1.0f;
+    let y1 = 1.0f - f32(2u * cy) * step;
+    let y0 = 1.0f - f32(2u * cy + 2u) * step;
+    return x0 <= rect.z && rect.x <= x1 && y0 <= rect.w && rect.y <= y1;
+}

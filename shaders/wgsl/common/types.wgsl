@@ -173,7 +173,7 @@ struct RefineParams {
     first: u32,
     count: u32,
     children_capacity: u32,
-    _pad: u32,
+    relevance: u32,
 }
 
 struct DirectParams {

@@ -27,9 +27,10 @@ mod settings;
 mod traversal;
 
 pub use settings::{
-    AdaptiveCausticsSettings, AdaptiveMetric, LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
+    AdaptiveCausticsSettings, AdaptiveMetric, ClusterRelevance, LIST_BYTES_PER_CLUSTER,
+    SLOT_BYTES_PER_CLUSTER,
 };
-pub use traversal::{AtlasTarget, PhotonOptics, Traversal};
+pub use traversal::{caster_rects, AtlasTarget, PhotonOptics, Traversal, EMPTY_RECT};
 
 use crate::backend::Backend;
 use crate::frame::error::Error;
@@ -45,6 +46,28 @@ pub(crate) struct AdaptiveSetup {
     pub settings: AdaptiveCausticsSettings,
     /// Its device buffers, made with the atlas.
     pub traversal: Option<Traversal>,
+    /// Bounding box of each caster object (world space).
+    pub caster_boxes: Vec<crate::math::geometry::Aabb>,
+}
+
+/// The bounding box of every caster object (mirror or dielectric) of `ds`, from its
+/// triangles.
+pub fn caster_boxes(
+    ds: &crate::device::device_scene::DeviceScene,
+) -> Vec<crate::math::geometry::Aabb> {
+    use crate::device::layout::material_kind;
+    use crate::math::geometry::Aabb;
+    let mut boxes: std::collections::BTreeMap<u32, Aabb> = Default::default();
+    for (t, obj) in ds.triangles.iter().zip(&ds.triangle_objects) {
+        if ds.materials[t.material as usize].kind == material_kind::DIFFUSE {
+            continue;
+        }
+        let b = boxes.entry(*obj).or_insert(Aabb::EMPTY);
+        for i in t.indices {
+            b.grow(glam::Vec3::from(ds.vertices[i as usize].position));
+        }
+    }
+    boxes.into_values().collect()
 }
 
 /// AdaptiveCaustics' constructor: a [`CausticMap`] whose photons come from seed 004's

@@ -24,9 +24,10 @@ use crate::device::layout::{
     cluster_count, counter, AtlasTileTexel, Photon, RefineParams, TraceParams,
 };
 use crate::frame::error::Error;
-use crate::frame::light_view_plane::LightViewPlane;
+use crate::frame::light_view_plane::{LightViewPlane, ViewPlaneProjection};
 use crate::frame::stats::{AdaptiveStats, FrameStats};
 use crate::kernels::{RefineClusters, TracePhotons, TraceVariant};
+use crate::math::geometry::Aabb;
 use crate::math::photon_clusters::cluster_level_seed;
 use crate::recording::Recording;
 
@@ -70,6 +71,10 @@ pub struct Traversal {
     /// Clusters per step.
     pub batch_clusters: u32,
     level0: Buf<u32>,
+    /// The casters' bounding boxes (world space), one per caster object.
+    caster_boxes: Vec<Aabb>,
+    /// Their projections on the current plane ([`caster_rects`]).
+    rects: Buf<[f32; 4]>,
     lists: Vec<Buf<u32>>,
     no_children: Buf<u32>,
     slots: Buf<Photon>,
@@ -85,6 +90,7 @@ impl Traversal {
         rec: &mut Recording,
         settings: &AdaptiveCausticsSettings,
         finest: u32,
+        caster_boxes: &[Aabb],
     ) -> Traversal {
         let dense_clusters = ((settings.start_grid as u64) << finest).pow(2) / 4;
         let c = settings.batch_clusters(finest, dense_clusters);
@@ -94,6 +100,11 @@ impl Traversal {
             finest,
             batch_clusters: c,
             level0: rec.upload(&ids, "adaptive start-grid clusters"),
+            caster_boxes: caster_boxes.to_vec(),
+            rects: rec.create(
+                caster_boxes.len().max(1) as u32,
+                "adaptive caster rectangles",
+            ),
             lists: (1..=finest)
                 .map(|_| rec.create(4 * c, "adaptive cluster list"))
                 .collect(),
@@ -141,6 +152,11 @@ impl Traversal {
         let mut left = vec![0u32; levels];
         let mut cursor = 0u32;
         let c = self.batch_clusters;
+        let mut rects = caster_rects(plane, &self.caster_boxes);
+        rects.resize(self.rects.len as usize, EMPTY_RECT);
+        let mut rec = Recording::new();
+        rec.update(self.rects, &rects, "adaptive caster rectangles")?;
+        backend.execute(&rec)?;
         loop {
             let level = match (1..levels).rev().find(|&l| left[l] > 0) {
                 Some(l) => l,
@@ -199,9 +215,10 @@ impl Traversal {
                     first,
                     count: m,
                     children_capacity: capacity,
-                    _pad: 0,
+                    relevance: s.relevance.kernel_value(),
                 },
                 clusters: list,
+                caster_rects: self.rects,
                 photons: self.slots,
                 triangle_tiles: target.triangle_tiles,
                 tiles: target.tiles,
@@ -243,4 +260,62 @@ impl Traversal {
         }
         Ok(())
     }
+}
+
+/// A rectangle no cluster overlaps.
+pub const EMPTY_RECT: [f32; 4] = [2.0, 2.0, -2.0, -2.0];
+
+/// The projections of `boxes` on `plane`, as `(x0, y0, x1, y1)` in its normalised device
+/// coordinates ([`crate::math::photon_clusters::cluster_overlaps_rect`]), conservative: a
+/// photon whose ray meets a box starts inside the box's rectangle. Perspective: the
+/// bounding rectangle of the corners' central projections, the whole plane when a corner
+/// lies on or behind the light's side plane, nothing when every corner does;
+/// orthographic: of their parallel projections, nothing when the box lies wholly behind
+/// the plane. Computed in f64 and widened by 1e-5 of the plane and of the bounds (far
+/// above the rounding of the kernels' ray setup, ~1e-7).
+pub fn caster_rects(plane: &LightViewPlane, boxes: &[Aabb]) -> Vec<[f32; 4]> {
+    let (o, u, v, w) = (
+        plane.origin.as_dvec3(),
+        plane.u.as_dvec3(),
+        plane.v.as_dvec3(),
+        plane.w.as_dvec3(),
+    );
+    let (hx, hy) = (plane.half_extent.0 as f64, plane.half_extent.1 as f64);
+    let perspective = plane.projection == ViewPlaneProjection::Perspective;
+    boxes
+        .iter()
+        .map(|b| {
+            let mut r = [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ];
+            let mut behind = 0;
+            for c in b.corners() {
+                let d = c.as_dvec3() - o;
+                let z = d.dot(w);
+                if z <= 0.0 {
+                    behind += 1;
+                    continue;
+                }
+                let s = if perspective { z } else { 1.0 };
+                let (x, y) = (d.dot(u) / (s * hx), d.dot(v) / (s * hy));
+                r = [r[0].min(x), r[1].min(y), r[2].max(x), r[3].max(y)];
+            }
+            if behind == 8 {
+                return EMPTY_RECT;
+            }
+            if perspective && behind > 0 {
+                return [-1e30, -1e30, 1e30, 1e30];
+            }
+            let pad = |x: f64| 1e-5 * (1.0 + x.abs());
+            [
+                (r[0] - pad(r[0])) as f32,
+                (r[1] - pad(r[1])) as f32,
+                (r[2] + pad(r[2])) as f32,
+                (r[3] + pad(r[3])) as f32,
+            ]
+        })
+        .collect()
 }

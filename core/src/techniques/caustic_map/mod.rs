@@ -284,6 +284,7 @@ impl CausticMap {
             adaptive: adaptive.map(|settings| AdaptiveSetup {
                 settings,
                 traversal: None,
+                caster_boxes: adaptive_caustics::caster_boxes(&ds),
             }),
             settings,
             model: scene.clone(),
@@ -389,7 +390,12 @@ impl CausticMap {
             .unwrap_or(1);
         if let Some(ad) = &mut self.adaptive {
             let levels = (finest / ad.settings.start_grid).max(1).ilog2();
-            ad.traversal = Some(Traversal::record(&mut rec, &ad.settings, levels));
+            ad.traversal = Some(Traversal::record(
+                &mut rec,
+                &ad.settings,
+                levels,
+                &ad.caster_boxes,
+            ));
         }
         let alloc = planned_allocation(backend, &rec, None)?;
         backend.execute(&rec)?;
