@@ -290,6 +290,7 @@ impl CpuBackend {
                 triangle_tiles,
                 tiles,
                 children,
+                converged,
                 cluster_counts,
                 counters,
                 atlas,
@@ -312,8 +313,20 @@ impl CpuBackend {
                     .get(cluster_counts.id)?
                     .as_slice::<u32>(cluster_counts.len)?
                     .to_vec();
+                let mut conv = self
+                    .get(converged.id)?
+                    .as_slice::<u32>(converged.len)?
+                    .to_vec();
                 let kids = self.get_mut(children.id)?.as_mut_slice(children.len)?;
-                refine_clusters::append_refined(&r, kids, &mut counts, params.children_capacity);
+                refine_clusters::append_refined(
+                    &r,
+                    (kids, params.children_capacity),
+                    &mut conv,
+                    &mut counts,
+                );
+                self.get_mut(converged.id)?
+                    .as_mut_slice::<u32>(converged.len)?
+                    .copy_from_slice(&conv);
                 self.get_mut(cluster_counts.id)?
                     .as_mut_slice::<u32>(cluster_counts.len)?
                     .copy_from_slice(&counts);

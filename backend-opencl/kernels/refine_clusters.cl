@@ -18,7 +18,8 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                               __global const float4* caster_rects, uint caster_rect_count,
                               __global const Photon* photons,
                               __global const uint* triangle_tiles, __global const uint4* tiles,
-                              __global uint* children, volatile __global uint* cluster_counts,
+                              __global uint* children, __global uint* converged,
+                              uint converged_capacity, volatile __global uint* cluster_counts,
                               volatile __global uint* counters,
                               PHOTON_MAP_PARAMS(volatile __global)) {
     __local uint lc[COUNTER_WORDS];
@@ -28,11 +29,11 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
         uint cluster = clusters[p->first + t];
         Photon slots[4];
         uint texels[4];
-        bool met = false;
+        bool relevant = false;
         uint stored = 0u;
         for (uint k = 0u; k < 4u; k++) {
             slots[k] = photons[4u * t + k];
-            met = met || slots[k].position[2] != 0.0f;
+            relevant = relevant || slots[k].position[2] != 0.0f;
             texels[k] = NO_TILE;
             if (slots[k].direction != NO_TRIANGLE) {
                 texels[k] = atlas_photon_texel(triangle_tiles, tiles, &slots[k], p->atlas_width);
@@ -41,12 +42,16 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
         }
         if (p->relevance == CLUSTER_RELEVANCE_BOUNDS)
             for (uint r = 0u; r < caster_rect_count; r++)
-                met = met || cluster_overlaps_rect(cluster, p->grid_w, caster_rects[r]);
+                relevant = relevant || cluster_overlaps_rect(cluster, p->grid_w, caster_rects[r]);
         bool converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0] &&
                          texels[2] == texels[0] && texels[3] == texels[0];
-        uint fate = cluster_fate(met, converged, p->level, p->finest, p->metric,
+        uint fate = cluster_fate(relevant, converged, p->level, p->finest, p->metric,
                                  p->error_from_level);
-        if (fate == CLUSTER_OUTPUT) {
+        if (fate == CLUSTER_OUTPUT && p->level < p->finest) {
+            // converged early: output later from fresh photons
+            uint slot = atomic_inc(&cluster_counts[CLUSTER_COUNT_CONVERGED]);
+            if (slot < converged_capacity) converged[slot] = cluster;
+        } else if (fate == CLUSTER_OUTPUT) {
             for (uint k = 0u; k < 4u; k++) {
                 if (slots[k].direction == NO_TRIANGLE) continue;
                 atomic_inc(&lc[COUNTER_STORED]);

@@ -15,11 +15,12 @@
 @group(0) @binding(4) var<storage, read> triangle_tiles: array<u32>;
 @group(0) @binding(5) var<storage, read> tiles: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read_write> children: array<u32>;
-@group(0) @binding(7) var<storage, read_write> cluster_counts: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(9) var<storage, read_write> photon_map0: array<atomic<u32>>;
-@group(0) @binding(10) var<storage, read_write> photon_map1: array<atomic<u32>>;
-@group(0) @binding(11) var<storage, read_write> photon_map2: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> converged: array<u32>;
+@group(0) @binding(8) var<storage, read_write> cluster_counts: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(12) var<storage, read_write> photon_map2: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
@@ -43,11 +44,11 @@ fn refine_clusters(t: u32, li: u32) {
         let cluster = clusters[p.first + t];
         var slots: array<Photon, 4>;
         var texels: array<u32, 4>;
-        var met = false;
+        var relevant = false;
         var stored = 0u;
         for (var k = 0u; k < 4u; k++) {
             slots[k] = photons[4u * t + k];
-            met = met || slots[k].position.z != 0.0f;
+            relevant = relevant || slots[k].position.z != 0.0f;
             texels[k] = NO_TILE;
             if (slots[k].direction != NO_TRIANGLE) {
                 texels[k] = atlas_photon_texel(slots[k], p.atlas_width);
@@ -56,13 +57,19 @@ fn refine_clusters(t: u32, li: u32) {
         }
         if (p.relevance == CLUSTER_RELEVANCE_BOUNDS) {
             for (var r = 0u; r < arrayLength(&caster_rects); r++) {
-                met = met || cluster_overlaps_rect(cluster, p.grid_w, caster_rects[r]);
+                relevant = relevant || cluster_overlaps_rect(cluster, p.grid_w, caster_rects[r]);
             }
         }
         let converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0]
             && texels[2] == texels[0] && texels[3] == texels[0];
-        let fate = cluster_fate(met, converged, p.level, p.finest, p.metric, p.error_from_level);
-        if (fate == CLUSTER_OUTPUT) {
+        let fate = cluster_fate(relevant, converged, p.level, p.finest, p.metric, p.error_from_level);
+        if (fate == CLUSTER_OUTPUT && p.level < p.finest) {
+            // converged early: output later from fresh photons
+            let slot = atomicAdd(&cluster_counts[CLUSTER_COUNT_CONVERGED], 1u);
+            if (slot < arrayLength(&converged)) {
+                converged[slot] = cluster;
+            }
+        } else if (fate == CLUSTER_OUTPUT) {
             for (var k = 0u; k < 4u; k++) {
                 if (slots[k].direction == NO_TRIANGLE) {
                     continue;

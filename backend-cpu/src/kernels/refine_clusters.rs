@@ -14,12 +14,26 @@ use caustica_core::math::photon_clusters::{
 };
 use rayon::prelude::*;
 
-/// What a batch step produced: the children appended (in cluster order: the GPU ports
+/// What becomes of one cluster.
+enum Step {
+    Discarded,
+    /// Deposited, with its stored photons' accounting.
+    Output(Counters),
+    /// Converged before the finest level: to be output from fresh photons.
+    Converged(u32),
+    /// Refined into four children.
+    Refined([u32; 4]),
+}
+
+/// What a batch step produced: the lists appended (in cluster order: the GPU ports
 /// append in arrival order, and every later result is independent of it), the cluster
 /// counts and the photon counters of the output photons.
+#[derive(Default)]
 pub struct Refined {
     /// Child cluster ids, four per refined cluster.
     pub children: Vec<u32>,
+    /// Clusters that converged before the finest level.
+    pub converged: Vec<u32>,
     /// Clusters output.
     pub output: u32,
     /// Clusters discarded.
@@ -41,24 +55,17 @@ pub fn refine_clusters(
     tiles: &[AtlasTileTexel],
     map: MapPlanes,
 ) -> Refined {
-    let parts: Vec<(u32, Option<[u32; 4]>, Counters)> = (0..p.count)
+    let steps: Vec<Step> = (0..p.count)
         .into_par_iter()
         .map(|t| {
             let cluster = clusters[(p.first + t) as usize];
             let slots: [Photon; 4] = std::array::from_fn(|k| photons[4 * t as usize + k]);
             let texels = slots.map(|ph| {
-                if ph.direction == NO_TRIANGLE {
-                    None
-                } else {
-                    Some(atlas_photon_texel(
-                        triangle_tiles,
-                        tiles,
-                        &ph,
-                        p.atlas_width,
-                    ))
-                }
+                (ph.direction != NO_TRIANGLE)
+                    .then(|| atlas_photon_texel(triangle_tiles, tiles, &ph, p.atlas_width))
             });
-            let met = slots.iter().any(|ph| ph.position[2] != 0.0)
+            // 004's test (a photon met a caster), or the conservative one
+            let relevant = slots.iter().any(|ph| ph.position[2] != 0.0)
                 || (p.relevance == cluster_relevance::BOUNDS
                     && caster_rects
                         .iter()
@@ -66,16 +73,19 @@ pub fn refine_clusters(
             let first = texels[0].unwrap_or(NO_TILE);
             let converged = first != NO_TILE && texels.iter().all(|t| *t == Some(first));
             let fate = cluster_fate(
-                met,
+                relevant,
                 converged,
                 p.level,
                 p.finest,
                 p.metric,
                 p.error_from_level,
             );
-            let mut c = Counters::default();
+            use caustica_core::math::photon_clusters::cluster_fate::{DISCARDED, OUTPUT};
             match fate {
-                caustica_core::math::photon_clusters::cluster_fate::OUTPUT => {
+                DISCARDED => Step::Discarded,
+                OUTPUT if p.level < p.finest => Step::Converged(cluster),
+                OUTPUT => {
+                    let mut c = Counters::default();
                     for (ph, texel) in slots.iter().zip(texels) {
                         let Some(texel) = texel else { continue };
                         c.bump(counter::STORED);
@@ -96,50 +106,60 @@ pub fn refine_clusters(
                             );
                         }
                     }
-                    (fate, None, c)
+                    Step::Output(c)
                 }
-                caustica_core::math::photon_clusters::cluster_fate::REFINED => (
-                    fate,
-                    Some([0, 1, 2, 3].map(|s| cluster_photon_index(cluster, s, p.grid_w))),
-                    c,
-                ),
-                _ => (fate, None, c),
+                _ => {
+                    Step::Refined([0, 1, 2, 3].map(|s| cluster_photon_index(cluster, s, p.grid_w)))
+                }
             }
         })
         .collect();
-    let mut r = Refined {
-        children: Vec::new(),
-        output: 0,
-        discarded: 0,
-        output_photons: 0,
-        counters: Counters::default(),
-    };
-    for (fate, children, c) in parts {
-        match fate {
-            caustica_core::math::photon_clusters::cluster_fate::OUTPUT => r.output += 1,
-            caustica_core::math::photon_clusters::cluster_fate::DISCARDED => r.discarded += 1,
-            _ => {}
+    let mut r = Refined::default();
+    for s in steps {
+        match s {
+            Step::Discarded => r.discarded += 1,
+            Step::Output(c) => {
+                r.output += 1;
+                r.output_photons += c.words[counter::STORED] as u32;
+                r.counters = r.counters.merge(c);
+            }
+            Step::Converged(c) => r.converged.push(c),
+            Step::Refined(ch) => r.children.extend(ch),
         }
-        if let Some(ch) = children {
-            r.children.extend(ch);
-        }
-        r.output_photons += c.words[counter::STORED] as u32;
-        r.counters = r.counters.merge(c);
     }
     r
 }
 
-/// Adds a step's results to the child list and the cluster counts buffer as the GPU
-/// ports do: children past `capacity` are counted but not written.
-pub fn append_refined(r: &Refined, children: &mut [u32], counts: &mut [u32], capacity: u32) {
-    let base = counts[cluster_count::CHILDREN];
-    for (k, &c) in r.children.iter().enumerate() {
+/// Appends `items` to `list` at `counts[word]` as a GPU port's atomic appends do: entries
+/// past `capacity` (or the list) are counted but not written.
+fn append(list: &mut [u32], counts: &mut [u32], word: usize, items: &[u32], capacity: u32) {
+    let base = counts[word];
+    let cap = capacity.min(list.len() as u32) as u64;
+    for (k, &c) in items.iter().enumerate() {
         let slot = base as u64 + k as u64;
-        if slot < capacity.min(children.len() as u32) as u64 {
-            children[slot as usize] = c;
+        if slot < cap {
+            list[slot as usize] = c;
         }
     }
-    counts[cluster_count::CHILDREN] = base.wrapping_add(r.children.len() as u32);
+    counts[word] = base.wrapping_add(items.len() as u32);
+}
+
+/// Adds a step's results to the child and converged lists and the cluster counts.
+pub fn append_refined(
+    r: &Refined,
+    (children, capacity): (&mut [u32], u32),
+    converged: &mut [u32],
+    counts: &mut [u32],
+) {
+    append(
+        children,
+        counts,
+        cluster_count::CHILDREN,
+        &r.children,
+        capacity,
+    );
+    let n = converged.len() as u32;
+    append(converged, counts, cluster_count::CONVERGED, &r.converged, n);
     counts[cluster_count::OUTPUT] = counts[cluster_count::OUTPUT].wrapping_add(r.output);
     counts[cluster_count::DISCARDED] = counts[cluster_count::DISCARDED].wrapping_add(r.discarded);
     counts[cluster_count::OUTPUT_PHOTONS] =

@@ -10,6 +10,7 @@
 #define CLUSTER_COUNT_OUTPUT 1
 #define CLUSTER_COUNT_DISCARDED 2
 #define CLUSTER_COUNT_OUTPUT_PHOTONS 3
+#define CLUSTER_COUNT_CONVERGED 4
 
 inline uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {
     uint clusters_w = grid_w / 2u;

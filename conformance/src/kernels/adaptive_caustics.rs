@@ -104,6 +104,7 @@ fn run_trace(
 struct Refined {
     counts: Vec<u32>,
     children: Vec<u32>,
+    converged: Vec<u32>,
     counters: Vec<u32>,
     atlas: Vec<DepositTexel>,
 }
@@ -128,7 +129,10 @@ fn run_refine(
     let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
     let tiles = rec.upload(&l.tiles, "tiles");
     let children = rec.upload(&vec![u32::MAX; capacity as usize], "children");
-    let counts = rec.upload(&[BEFORE, 0, 0, 0], "cluster counts");
+    let converged = rec.upload(&vec![u32::MAX; count as usize], "converged");
+    let mut start = [0u32; cluster_count::WORDS];
+    start[cluster_count::CHILDREN] = BEFORE;
+    let counts = rec.upload(&start, "cluster counts");
     let counters = rec.upload(&[0u32; counter::WORDS], "counters");
     let atlas = rec.create_photon_map(l.texels.len() as u32);
     rec.clear_photon_map(&atlas);
@@ -153,6 +157,7 @@ fn run_refine(
         triangle_tiles,
         tiles,
         children,
+        converged,
         cluster_counts: counts,
         counters,
         atlas,
@@ -162,9 +167,13 @@ fn run_refine(
         let mut kids = read_buf(b, children)?;
         kids.truncate(counts[cluster_count::CHILDREN].min(capacity) as usize);
         kids[BEFORE as usize..].sort_unstable();
+        let mut conv = read_buf(b, converged)?;
+        conv.truncate(counts[cluster_count::CONVERGED].min(count) as usize);
+        conv.sort_unstable();
         Ok(Refined {
             counts,
             children: kids,
+            converged: conv,
             counters: read_buf(b, counters)?,
             atlas: read_photon_map(b, &atlas)?,
         })
@@ -255,7 +264,10 @@ pub fn check_adaptive_caustics(
         let clusters = list.len() as u32 - FIRST;
         let refined = (a.counts[cluster_count::CHILDREN] - BEFORE) / 4;
         v.check(
-            refined + a.counts[cluster_count::OUTPUT] + a.counts[cluster_count::DISCARDED]
+            refined
+                + a.counts[cluster_count::OUTPUT]
+                + a.counts[cluster_count::DISCARDED]
+                + a.counts[cluster_count::CONVERGED]
                 == clusters,
             || {
                 format!(
@@ -272,6 +284,9 @@ pub fn check_adaptive_caustics(
         });
         v.check(a.children == b.children, || {
             format!("{what}: the child lists differ as multisets")
+        });
+        v.check(a.converged == b.converged, || {
+            format!("{what}: the converged lists differ as multisets")
         });
         v.check(a.counters == b.counters, || {
             format!("{what}: counters cpu {:?} vs {:?}", a.counters, b.counters)

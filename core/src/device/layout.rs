@@ -438,8 +438,11 @@ pub mod cluster_count {
     pub const DISCARDED: usize = 2;
     /// Photons deposited (stored photons of output clusters).
     pub const OUTPUT_PHOTONS: usize = 3;
+    /// Clusters that converged before the finest level, appended to the converged list
+    /// (to be output from fresh photons).
+    pub const CONVERGED: usize = 4;
     /// Number of u32 words.
-    pub const WORDS: usize = 4;
+    pub const WORDS: usize = 8;
 }
 
 /// Parameters of `caustic_map_lookup`.

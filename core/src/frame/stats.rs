@@ -132,6 +132,9 @@ pub struct AdaptiveStats {
     pub clusters_discarded: u64,
     /// Clusters refined into four children.
     pub clusters_refined: u64,
+    /// Clusters that converged before the finest level (the error metric), output from
+    /// four fresh photons each (counted in `clusters_output` too).
+    pub clusters_converged: u64,
     /// Traversal steps (a trace and a refinement of one batch of one level).
     pub steps: u32,
 }

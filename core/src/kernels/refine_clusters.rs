@@ -9,10 +9,13 @@ use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams}
 /// photons `trace_photons`' `ADAPTIVE` variant wrote to slots `4 t .. 4 t + 4` of
 /// `photons` ([`crate::math::photon_clusters::cluster_fate`]): a cluster is discarded
 /// when none of its photons met a caster and (with `params.relevance` BOUNDS) its
-/// footprint overlaps none of `caster_rects`; an output cluster deposits its stored photons into
-/// the atlas exactly as `deposit_atlas` does (fixed point, order-free); a refined one
-/// appends its four children (the ids of its photons in the level grid) to `children`
-/// at `cluster_counts[CHILDREN]`. Counts clusters output and discarded in
+/// footprint overlaps none of `caster_rects`; a cluster output at the finest level
+/// (`params.level >= params.finest`) deposits its stored photons into the atlas exactly
+/// as `deposit_atlas` does (fixed point, order-free); one that converged earlier (the
+/// error metric) is appended to `converged` at `cluster_counts[CONVERGED]`, to be output
+/// from fresh photons (see `adaptive_caustics::traversal`); a refined one appends its four
+/// children (the ids of its photons in the level grid) to `children` at
+/// `cluster_counts[CHILDREN]`. Counts clusters output and discarded in
 /// `cluster_counts`, and the deposit's photon accounting (stored, stored flux,
 /// deposited, off-atlas) in `counters`.
 #[derive(Clone, Copy, Debug)]
@@ -32,6 +35,9 @@ pub struct RefineClusters {
     pub tiles: Buf<AtlasTileTexel>,
     /// The next level's cluster list, appended to.
     pub children: Buf<u32>,
+    /// The clusters that converged before the finest level, appended to (at most
+    /// `params.count`: the host sizes it to a batch).
+    pub converged: Buf<u32>,
     /// [`cluster_count`] words, added to.
     pub cluster_counts: Buf<u32>,
     /// Photon counters ([`crate::device::layout::counter`]) of the output photons.
@@ -49,6 +55,8 @@ const BINDINGS: &[Binding] = &[
     bind("triangle_tiles", Read),
     bind("tiles", Read),
     bind("children", ReadWrite),
+    bind("converged", ReadWrite),
+    bind("converged_capacity", Count),
     bind("cluster_counts", ReadWrite),
     bind("counters", ReadWrite),
     bind("photon_map0", ReadWrite),
@@ -85,6 +93,8 @@ impl KernelDecl for RefineClusters {
             .buf("triangle_tiles", self.triangle_tiles, 0)?
             .buf("tiles", self.tiles, 0)?
             .buf("children", self.children, 0)?
+            .buf("converged", self.converged, 0)?
+            .count("converged_capacity", self.converged.len)?
             .buf(
                 "cluster_counts",
                 self.cluster_counts,

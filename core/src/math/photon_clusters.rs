@@ -86,6 +86,15 @@ pub fn cluster_level_seed(plane_seed: u32, level: u32, finest: u32) -> u32 {
     }
 }
 
+/// The seed of the fresh photons that output the clusters of `level` which converged
+/// (the error metric): independent of every level's own photons, so that the decision to
+/// stop (made on those) does not bias the flux output (see
+/// `techniques::adaptive_caustics`).
+#[inline]
+pub fn cluster_resample_seed(plane_seed: u32, level: u32) -> u32 {
+    crate::math::rng::pcg_hash(plane_seed ^ crate::math::rng::pcg_hash(0x5245_5341 + level))
+}
+
 /// Whether a photon met a caustic caster, from how its path ended (`trace_photons`'
 /// path ends: 0 stored, 1 no specular, 2 escaped, 3 negligible, 4 bounce limit) and its
 /// ray segments: it missed when its first segment reached a diffuse surface, left the
@@ -187,6 +196,8 @@ mod tests {
 
     #[test]
     fn the_finest_level_keeps_the_plane_seed() {
+        assert_ne!(cluster_resample_seed(77, 4), cluster_level_seed(77, 4, 4));
+        assert_ne!(cluster_resample_seed(77, 3), cluster_level_seed(77, 3, 4));
         assert_eq!(cluster_level_seed(77, 4, 4), 77);
         assert_ne!(cluster_level_seed(77, 3, 4), 77);
         assert_ne!(cluster_level_seed(77, 3, 4), cluster_level_seed(77, 2, 4));

@@ -10,6 +10,7 @@ const CLUSTER_COUNT_CHILDREN: u32 = 0u;
 const CLUSTER_COUNT_OUTPUT: u32 = 1u;
 const CLUSTER_COUNT_DISCARDED: u32 = 2u;
 const CLUSTER_COUNT_OUTPUT_PHOTONS: u32 = 3u;
+const CLUSTER_COUNT_CONVERGED: u32 = 4u;
 
 fn cluster_photon_index(cluster: u32, sub: u32, grid_w: u32) -> u32 {
     let clusters_w = grid_w / 2u;
