@@ -15,7 +15,7 @@ inline uint atlas_photon_texel(__global const uint* triangle_tiles, __global con
 }
 
 __kernel void refine_clusters(__global const RefineParams* p, __global const uint* clusters,
-                              __global const float4* caster_rects, uint caster_rect_count,
+                              __global const float4* caster_rects,
                               __global const Photon* photons,
                               __global const uint* triangle_tiles, __global const uint4* tiles,
                               __global uint* children, __global uint* converged,
@@ -41,11 +41,11 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
             }
         }
         if (p->relevance == CLUSTER_RELEVANCE_BOUNDS)
-            for (uint r = 0u; r < caster_rect_count; r++)
+            for (uint r = 0u; r < p->rect_count; r++)
                 relevant = relevant || cluster_overlaps_rect(cluster, p->grid_w, caster_rects[r]);
-        bool converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0] &&
+        bool one_texel = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0] &&
                          texels[2] == texels[0] && texels[3] == texels[0];
-        uint fate = cluster_fate(relevant, converged, p->level, p->finest, p->metric,
+        uint fate = cluster_fate(relevant, one_texel, p->level, p->finest, p->metric,
                                  p->error_from_level);
         if (fate == CLUSTER_OUTPUT && p->level < p->finest) {
             // converged early: output later from fresh photons

@@ -56,13 +56,13 @@ fn refine_clusters(t: u32, li: u32) {
             }
         }
         if (p.relevance == CLUSTER_RELEVANCE_BOUNDS) {
-            for (var r = 0u; r < arrayLength(&caster_rects); r++) {
+            for (var r = 0u; r < p.rect_count; r++) {
                 relevant = relevant || cluster_overlaps_rect(cluster, p.grid_w, caster_rects[r]);
             }
         }
-        let converged = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0]
+        let one_texel = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0]
             && texels[2] == texels[0] && texels[3] == texels[0];
-        let fate = cluster_fate(relevant, converged, p.level, p.finest, p.metric, p.error_from_level);
+        let fate = cluster_fate(relevant, one_texel, p.level, p.finest, p.metric, p.error_from_level);
         if (fate == CLUSTER_OUTPUT && p.level < p.finest) {
             // converged early: output later from fresh photons
             let slot = atomicAdd(&cluster_counts[CLUSTER_COUNT_CONVERGED], 1u);

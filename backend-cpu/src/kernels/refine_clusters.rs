@@ -67,7 +67,7 @@ pub fn refine_clusters(
             // 004's test (a photon met a caster), or the conservative one
             let relevant = slots.iter().any(|ph| ph.position[2] != 0.0)
                 || (p.relevance == cluster_relevance::BOUNDS
-                    && caster_rects
+                    && caster_rects[..p.rect_count as usize]
                         .iter()
                         .any(|r| cluster_overlaps_rect(cluster, p.grid_w, *r)));
             let first = texels[0].unwrap_or(NO_TILE);

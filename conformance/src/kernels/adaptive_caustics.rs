@@ -150,6 +150,8 @@ fn run_refine(
             count,
             children_capacity: capacity,
             relevance,
+            rect_count: rects.len() as u32,
+            _pad: [0; 3],
         },
         clusters,
         caster_rects,

@@ -426,6 +426,11 @@ pub struct RefineParams {
     /// [`cluster_relevance`](crate::math::photon_clusters::cluster_relevance): what keeps
     /// a cluster from being discarded.
     pub relevance: u32,
+    /// Rectangles in `caster_rects` (the buffer may hold more: a backend can round a
+    /// binding up, so kernels never take its length from the buffer).
+    pub rect_count: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 3],
 }
 
 /// Words of `refine_clusters`' cluster counts buffer.

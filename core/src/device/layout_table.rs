@@ -224,7 +224,8 @@ table! {
     MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, fresnel_model }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
-        error_from_level, grid_w, first, count, children_capacity, relevance
+        error_from_level, grid_w, first, count, children_capacity, relevance,
+        rect_count, _pad
     }
 }
 

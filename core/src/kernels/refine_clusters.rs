@@ -50,7 +50,6 @@ const BINDINGS: &[Binding] = &[
     bind("params", Params),
     bind("clusters", Read),
     bind("caster_rects", Read),
-    bind("caster_rect_count", Count),
     bind("photons", Read),
     bind("triangle_tiles", Read),
     bind("tiles", Read),
@@ -79,6 +78,11 @@ impl KernelDecl for RefineClusters {
                 p.first, p.count, self.clusters.len, self.photons.len, p.grid_w
             )));
         }
+        if p.rect_count > self.caster_rects.len {
+            return Err(BackendError::BadArgument(
+                "refine_clusters: rect_count over the rectangle buffer".into(),
+            ));
+        }
         if p.children_capacity > self.children.len {
             return Err(BackendError::BadArgument(
                 "refine_clusters: children_capacity over the child list".into(),
@@ -88,7 +92,6 @@ impl KernelDecl for RefineClusters {
         a.params("params", p)?
             .buf("clusters", self.clusters, 0)?
             .buf("caster_rects", self.caster_rects, 0)?
-            .count("caster_rect_count", self.caster_rects.len)?
             .buf("photons", self.photons, 0)?
             .buf("triangle_tiles", self.triangle_tiles, 0)?
             .buf("tiles", self.tiles, 0)?

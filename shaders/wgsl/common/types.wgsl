@@ -174,6 +174,10 @@ struct RefineParams {
     count: u32,
     children_capacity: u32,
     relevance: u32,
+    rect_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct DirectParams {

@@ -343,6 +343,8 @@ impl Traversal {
                 count: m,
                 children_capacity: capacity,
                 relevance: s.relevance.kernel_value(),
+                rect_count: self.caster_boxes.len() as u32,
+                _pad: [0; 3],
             },
             clusters: list,
             caster_rects: self.rects,

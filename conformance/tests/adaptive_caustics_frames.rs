@@ -1,0 +1,238 @@
+//! AdaptiveCaustics' frames on every backend (`backends()`: all four, required in CI):
+//!
+//! - **The level metric is the dense grid.** With the conservative relevance (casters'
+//!   projected bounds) no cluster that holds a photon able to meet a caster is discarded,
+//!   and the finest level's photons are the dense grid's (the plane's seed and jitter), so
+//!   the atlas, every image and the stored flux are **bitwise** CausticMap's at the same
+//!   photon budget, on every built-in scene and backend.
+//! - **Any memory limit gives the same frame.** Limits that cut the busiest level into 1,
+//!   2 and 16 batches (and the error metric, so that converged clusters are resampled)
+//!   give bitwise the same atlas and images: photons are keyed by texel and level, and
+//!   the sums are exact integers.
+//! - **The error metric keeps the flux.** Its stored flux equals the dense grid's within
+//!   four standard deviations of their difference, bounded from the stats (see
+//!   [`flux_tolerance`]).
+
+use caustica_conformance::backends;
+use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
+use caustica_core::scene::Scene;
+use caustica_core::techniques::adaptive_caustics::{
+    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, LIST_BYTES_PER_CLUSTER,
+    SLOT_BYTES_PER_CLUSTER,
+};
+use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{Backend, FrameStats};
+
+const OUTPUTS: [&str; 5] = [
+    "caustic_atlas",
+    "caustics_raw",
+    "caustics_filtered",
+    "composite",
+    "direct",
+];
+
+fn small(name: &str) -> Scene {
+    let mut s = builtin(name).expect("built-in");
+    (s.camera.width, s.camera.height) = (64, 36);
+    s
+}
+
+fn map(photons: u32) -> CausticMapSettings {
+    CausticMapSettings {
+        photons_w: photons,
+        photons_h: photons,
+        atlas_size: 128,
+        ..Default::default()
+    }
+}
+
+/// A frame's stats and outputs, the technique freed.
+fn render(
+    b: &mut dyn Backend,
+    mut t: CausticMap,
+) -> (FrameStats, Vec<caustica_core::frame::image::Image>) {
+    let stats = t.frame(b, &mut |_| {}).expect("frame");
+    let images = OUTPUTS
+        .iter()
+        .map(|o| t.read_output(b, o).expect("read"))
+        .collect();
+    t.free(b).expect("free");
+    (stats, images)
+}
+
+fn same_bits(
+    a: &[caustica_core::frame::image::Image],
+    b: &[caustica_core::frame::image::Image],
+) -> Option<&'static str> {
+    OUTPUTS
+        .iter()
+        .zip(a.iter().zip(b))
+        .find_map(|(name, (x, y))| {
+            let equal = x.pixels.len() == y.pixels.len()
+                && x.pixels
+                    .iter()
+                    .zip(&y.pixels)
+                    .all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits));
+            (!equal).then_some(*name)
+        })
+}
+
+#[test]
+fn the_level_metric_outputs_exactly_the_dense_grid() {
+    for (name, mut b) in backends() {
+        for scene_name in BUILTIN_SCENES {
+            let scene = small(scene_name);
+            let dense = CausticMap::new(b.as_mut(), &scene, map(256)).expect("dense");
+            let (ds, di) = render(b.as_mut(), dense);
+            let adaptive = AdaptiveCaustics::new(
+                b.as_mut(),
+                &scene,
+                AdaptiveCausticsSettings {
+                    map: map(256),
+                    metric: AdaptiveMetric::Level,
+                    start_grid: 32,
+                    ..Default::default()
+                },
+            )
+            .expect("adaptive");
+            let (s, ai) = render(b.as_mut(), adaptive);
+            let what = format!("{name} / {scene_name}");
+            assert_eq!(ds.stored_flux, s.stored_flux, "{what}: stored flux");
+            assert_eq!(
+                ds.photons_stored, s.photons_stored,
+                "{what}: stored photons"
+            );
+            if let Some(out) = same_bits(&di, &ai) {
+                panic!("{what}: {out} differs from the dense grid's");
+            }
+            if let Some(a) = &s.adaptive {
+                assert_eq!(a.dense_equivalent_photons, ds.photons_emitted, "{what}");
+                eprintln!(
+                    "{what}: {} photons traced against {} dense, {} stored",
+                    a.photons_processed, ds.photons_emitted, s.photons_stored
+                );
+            }
+        }
+    }
+}
+
+/// Bytes that make batches of `clusters` clusters at `finest` levels below a start grid
+/// of `start` (`AdaptiveCausticsSettings::batch_clusters` inverted).
+fn limit_for(clusters: u64, start: u64, finest: u64) -> u64 {
+    4 * (start / 2).pow(2) + clusters * (SLOT_BYTES_PER_CLUSTER + LIST_BYTES_PER_CLUSTER * finest)
+}
+
+#[test]
+fn any_memory_limit_gives_the_same_frame_bitwise() {
+    let settings = |bytes: u64| AdaptiveCausticsSettings {
+        map: map(256),
+        metric: AdaptiveMetric::Error,
+        start_grid: 32,
+        error_from_grid: 64,
+        max_traversal_bytes: bytes,
+        ..Default::default()
+    };
+    for (name, mut b) in backends() {
+        for scene_name in ["sphere", "cornell"] {
+            let scene = small(scene_name);
+            let one = AdaptiveCaustics::new(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
+            let (s1, i1) = render(b.as_mut(), one);
+            let a1 = s1.adaptive.clone().expect("adaptive stats");
+            assert!(
+                a1.clusters_converged > 0,
+                "{name} / {scene_name}: nothing converged"
+            );
+            // the busiest level's clusters: one batch at the large limit
+            let busiest = a1.photons_per_level.iter().max().copied().unwrap_or(0) / 4;
+            let mut steps = vec![a1.steps];
+            for parts in [2u64, 16] {
+                let c = busiest.div_ceil(parts);
+                let t = AdaptiveCaustics::new(b.as_mut(), &scene, settings(limit_for(c, 32, 3)))
+                    .expect("scene");
+                let (s, i) = render(b.as_mut(), t);
+                let what = format!("{name} / {scene_name}, batches of {c} clusters");
+                let a = s.adaptive.clone().expect("adaptive stats");
+                assert_eq!(a.photons_processed, a1.photons_processed, "{what}");
+                assert_eq!(s.stored_flux, s1.stored_flux, "{what}: stored flux");
+                if let Some(out) = same_bits(&i1, &i) {
+                    panic!("{what}: {out} differs from one batch's");
+                }
+                steps.push(a.steps);
+            }
+            assert!(
+                steps[0] < steps[1] && steps[1] < steps[2],
+                "{name} / {scene_name}: the limits did not split the traversal: steps {steps:?}"
+            );
+            eprintln!("{name} / {scene_name}: steps at 1, 2 and 16 batches {steps:?}");
+        }
+    }
+}
+
+/// Four standard deviations of (adaptive - dense) stored flux, bounded from the stats: the
+/// two estimates share the photons of every cluster refined to the finest level; they
+/// differ by the photons of the clusters the error metric stopped early: `n_l` fresh
+/// photons at level `l` against the `4^(F - l) n_l` finest photons of the same texels.
+/// Each photon's stored flux is a random variable in `[0, phi]` (`phi` the largest photon
+/// flux of its level, 3x with dispersion), so its variance is at most `phi^2 / 4`, and the
+/// photons are independent: `var <= sum_l n_l (phi_l^2 + 4^(F - l) phi_F^2) / 4` with
+/// `phi_l = 4^(F - l) phi_F`. `phi_F` is bounded by twice the mean finest-texel flux
+/// (emitted flux over the dense photons): a texel of a perspective plane of half-angle
+/// up to 60 degrees sees at most 1.5 times the mean solid angle near the axis... and less
+/// off it; 2 is a margin).
+fn flux_tolerance(s: &FrameStats, dense: &FrameStats, dispersive: bool) -> f64 {
+    let a = s.adaptive.as_ref().expect("adaptive stats");
+    let finest = a.photons_per_level.len() - 1;
+    let emitted: f64 = dense.emitted_flux.iter().sum();
+    let gain = if dispersive { 3.0 } else { 1.0 };
+    let phi_f = 2.0 * gain * emitted / dense.photons_emitted.max(1) as f64;
+    let mut var = 0.0;
+    for (l, &n) in a.photons_output_per_level.iter().enumerate().take(finest) {
+        let k = 4f64.powi((finest - l) as i32);
+        var += n as f64 * ((k * phi_f).powi(2) + k * phi_f * phi_f) / 4.0;
+    }
+    4.0 * var.sqrt()
+}
+
+#[test]
+fn the_error_metric_keeps_the_dense_grids_flux() {
+    for (name, mut b) in backends() {
+        for scene_name in BUILTIN_SCENES {
+            let scene = small(scene_name);
+            let dense = CausticMap::new(b.as_mut(), &scene, map(512)).expect("dense");
+            let (ds, _) = render(b.as_mut(), dense);
+            let adaptive = AdaptiveCaustics::new(
+                b.as_mut(),
+                &scene,
+                AdaptiveCausticsSettings {
+                    map: map(512),
+                    metric: AdaptiveMetric::Error,
+                    error_from_grid: 128,
+                    ..Default::default()
+                },
+            )
+            .expect("adaptive");
+            let (s, _) = render(b.as_mut(), adaptive);
+            let dispersive = scene.materials.values().any(|m| {
+                matches!(m, caustica_core::scene::Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0)
+            });
+            let (x, y): (f64, f64) = (s.stored_flux.iter().sum(), ds.stored_flux.iter().sum());
+            let what = format!("{name} / {scene_name}");
+            if y == 0.0 {
+                assert_eq!(x, 0.0, "{what}: light where the dense grid has none");
+                continue;
+            }
+            let tol = flux_tolerance(&s, &ds, dispersive);
+            eprintln!(
+                "{what}: error metric / dense {:.5} (tolerance {:.5}), {} of {} photons",
+                x / y,
+                tol / y,
+                s.photons_emitted,
+                ds.photons_emitted
+            );
+            assert!(
+                (x - y).abs() <= tol,
+                "{what}: stored flux {x:.6} vs dense {y:.6}, over 4 sigma = {tol:.6}"
+            );
+        }
+    }
+}
