@@ -41,7 +41,14 @@ const FIRST: u32 = 4;
 
 fn plane(fx: &Fixture) -> Option<(u32, LightViewPlane)> {
     fx.scene.lights.iter().enumerate().find_map(|(i, l)| {
-        let p = light_view_planes(l, fx.ds.caster_bounds, fx.ds.bounds, GRID).ok()?;
+        let p = light_view_planes(
+            l,
+            fx.ds.caster_bounds,
+            fx.ds.bounds,
+            GRID,
+            caustica_core::frame::emission::PointEmission::CasterCone,
+        )
+        .ok()?;
         let mut p = p[0];
         p.resolution = (GRID, GRID);
         Some((i as u32, p))

@@ -275,14 +275,17 @@ fn cube_planes(position: Vec3, power: Vec3, res: u32) -> Vec<LightViewPlane> {
 /// The light view planes of `light` aimed at the caustic casters' box `casters` in a scene
 /// bounded by `scene`, with `resolution x resolution` texels each (a cube's six faces
 /// share the budget: `resolution / sqrt(6)` texels a side, at least 1), or why the light
-/// sends no photon towards a caster.
+/// sends no photon towards a caster. `aim`: `CasterCone` fits the plane to the casters
+/// (CausticMap's default), `Sphere` covers the light's whole cone (a spot's outer cone,
+/// a point light's six cube faces: the dense baseline of seed 004's comparison).
 pub fn light_view_planes(
     light: &Light,
     casters: Aabb,
     scene: Aabb,
     resolution: u32,
+    aim: PointEmission,
 ) -> Result<Vec<LightViewPlane>, NoEmission> {
-    let domain = emission_domain(light, casters, scene, PointEmission::CasterCone)?;
+    let domain = emission_domain(light, casters, scene, aim)?;
     Ok(planes_of_domain(&domain, light, resolution))
 }
 
@@ -391,7 +394,7 @@ mod tests {
         };
         let casters = aabb(Vec3::splat(-0.5), Vec3::splat(0.5));
         let scene = aabb(Vec3::splat(-3.0), Vec3::splat(6.0));
-        let planes = light_view_planes(&light, casters, scene, 128).unwrap();
+        let planes = light_view_planes(&light, casters, scene, 128, PointEmission::CasterCone).unwrap();
         assert_eq!(planes.len(), 1);
         let p = planes[0];
         // every corner of the casters' box projects inside the plane
@@ -417,7 +420,7 @@ mod tests {
             intensity: Vec3::ONE,
         };
         let casters = aabb(Vec3::splat(-1.0), Vec3::splat(1.0));
-        let planes = light_view_planes(&light, casters, casters, 600).unwrap();
+        let planes = light_view_planes(&light, casters, casters, 600, PointEmission::CasterCone).unwrap();
         assert_eq!(planes.len(), 6);
         // the budget is shared: 600 / sqrt(6) = 245 a side
         assert!(planes.iter().all(|p| p.resolution == (245, 245)));
@@ -432,7 +435,7 @@ mod tests {
         };
         let casters = aabb(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 1.0));
         let scene = aabb(Vec3::new(-4.0, -1.0, -4.0), Vec3::new(4.0, 2.0, 4.0));
-        let p = light_view_planes(&light, casters, scene, 64).unwrap()[0];
+        let p = light_view_planes(&light, casters, scene, 64, PointEmission::CasterCone).unwrap()[0];
         assert_eq!(p.projection, ViewPlaneProjection::Orthographic);
         assert!((p.w - light_dir(&light)).length() < 1e-6);
         let total: f64 = (0..64)

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 use std::collections::BTreeMap;
 
 /// Names of the built-in scenes, in the order `caustica scenes` lists them.
-pub const BUILTIN_SCENES: [&str; 8] = [
+pub const BUILTIN_SCENES: [&str; 9] = [
     "sphere",
     "sphere-sun",
     "ring",
@@ -15,6 +15,7 @@ pub const BUILTIN_SCENES: [&str; 8] = [
     "pool",
     "prism",
     "jelly",
+    "spot-glass",
     "plain",
 ];
 
@@ -28,6 +29,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "pool" => pool(),
         "prism" => prism(),
         "jelly" => jelly(),
+        "spot-glass" => spot_glass(),
         "plain" => plain(),
         _ => return None,
     })
@@ -333,6 +335,33 @@ pub fn prism() -> Scene {
             direction: Vec3::new(1.0, -0.3, 0.0),
             irradiance: Vec3::splat(4.0),
             projection_volume: None,
+        }],
+    }
+}
+
+/// `spot-glass` (seed 004's setting: a wide light and a small, finely tessellated
+/// refractor): a spot light 30 W/sr at (0, 4, 0) shining down with a 50-degree outer
+/// (40-degree inner) half-angle over an 8 x 8 white floor (albedo 0.8) at y = 0, and a
+/// glass ball (IOR 1.5) of radius 0.4 at (0.9, 1.1, 0.3) tessellated into 50,176
+/// triangles (224 segments), which covers under 3% of the spot's cone (its solid angle
+/// `2 pi (1 - cos asin(0.4 / 3.06)) = 0.054 sr` of the cone's 2.24 sr); camera from
+/// (0, 5.5, 5.5) towards (0.4, 0, 0).
+pub fn spot_glass() -> Scene {
+    Scene {
+        name: "spot-glass".into(),
+        description: "Wide spot light (50 deg) over an 8x8 white floor, small glass ball (r 0.4, 50k triangles) off axis".into(),
+        camera: camera(Vec3::new(0.0, 5.5, 5.5), Vec3::new(0.4, 0.0, 0.0), 45.0),
+        materials: BTreeMap::from([("white".into(), diffuse(0.8)), ("glass".into(), glass(1.5))]),
+        objects: vec![
+            obj("floor", "white", floor(4.0, 0.0)),
+            obj("ball", "glass", Shape::Sphere { center: Vec3::new(0.9, 1.1, 0.3), radius: 0.4, segments: 224 }),
+        ],
+        lights: vec![Light::Spot {
+            position: Vec3::new(0.0, 4.0, 0.0),
+            direction: -Vec3::Y,
+            intensity: Vec3::splat(30.0),
+            inner_angle_deg: 40.0,
+            outer_angle_deg: 50.0,
         }],
     }
 }

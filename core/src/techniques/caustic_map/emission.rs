@@ -39,7 +39,7 @@ impl Emission {
         let mut planes = Vec::new();
         let mut skipped_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
-            match light_view_planes(l, casters, bounds, s.photons_w) {
+            match light_view_planes(l, casters, bounds, s.photons_w, s.emission_plane.aim()) {
                 Ok(ps) => {
                     let cube = ps.len() > 1;
                     for (k, mut p) in ps.into_iter().enumerate() {

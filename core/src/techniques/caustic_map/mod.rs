@@ -23,7 +23,7 @@ mod settings;
 
 pub use emission::Emission;
 pub use settings::{
-    CausticMapOutputs, CausticMapSettings, FresnelModel, FresnelSplit, MapGather,
+    CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
     ATLAS_BYTES_PER_TEXEL, DENSITY_GATHER_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
 };
 

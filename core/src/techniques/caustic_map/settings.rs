@@ -91,6 +91,30 @@ impl FresnelModel {
     }
 }
 
+/// What each light's view plane covers (seed 001 section 3.1 aims it at the casters).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EmissionPlane {
+    /// The cone (or, for a directional light, the rectangle) that bounds the casters:
+    /// every texel's photon can meet one. The default.
+    #[default]
+    Casters,
+    /// The light's whole cone: a spot light's outer cone, a point light's six cube faces
+    /// (a directional light keeps its projection volume). The dense baseline of seed
+    /// 004's comparison, where adaptive emission can discard what misses the casters.
+    LightCone,
+}
+
+impl EmissionPlane {
+    /// The emission domain's aim.
+    pub fn aim(self) -> crate::frame::emission::PointEmission {
+        match self {
+            EmissionPlane::Casters => crate::frame::emission::PointEmission::CasterCone,
+            EmissionPlane::LightCone => crate::frame::emission::PointEmission::Sphere,
+        }
+    }
+}
+
 /// How the caustic map is filtered before the final pass reads it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -126,6 +150,8 @@ pub struct CausticMapSettings {
     pub photons_w: u32,
     /// Light view plane texels along v, per light.
     pub photons_h: u32,
+    /// What the view plane covers: the casters (default) or the light's whole cone.
+    pub emission_plane: EmissionPlane,
     /// Side of the caustic atlas (texels; 001's map size, 2048).
     pub atlas_size: u32,
     /// The caustic map's filter: the density-adaptive gather (default) or 001's N x N
@@ -178,6 +204,7 @@ impl Default for CausticMapSettings {
         CausticMapSettings {
             photons_w: 1024,
             photons_h: 1024,
+            emission_plane: EmissionPlane::Casters,
             atlas_size: DEFAULT_ATLAS_SIDE,
             gather: MapGather::Density,
             gather_width: DEFAULT_GATHER_WIDTH,
