@@ -71,7 +71,9 @@ fn main() {
         "## spot-glass, plane over the spot's cone ({backend}; reference: dense {reference}^2)\n"
     );
     println!("| equivalent grid | dense photons | level metric | error metric | level / dense | error / dense | map relMSE dense | level | error | ms dense | level | error |");
-    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    println!(
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+    );
     let mut per_level = Vec::new();
     let mut n = 256;
     while n <= top {

@@ -12,26 +12,29 @@
 //!   unit lost per texel, radiance 1e-4 high, a summed-area table one photon off, the
 //!   density gather's flux 1e-4 high, one ulp in the composite, the caustic atlas one unit
 //!   low, the caustic map's gather 1e-4 high, its lookup 1e-3 high, a photon kernel
-//!   that ignores its compiled variant switches, and so on.
+//!   that ignores its compiled variant switches, adaptive photon slots rotated within
+//!   their cluster, a refined cluster's child one texel off, a converged cluster lost,
+//!   and so on.
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
-    check_caustic_map, check_composite, check_density_gather, check_deposit, check_direct,
-    check_gather, check_gbuffer, check_kernel_cases, check_trace, KernelCheck,
+    check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
+    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases, check_trace,
+    KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
 use caustica_core::backend::{read_gbuffer, Backend, BackendError, Capabilities, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::layout::{
-    counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GpuCamera, GpuVertex, Photon,
-    DEPOSIT_PLANE_WORDS, NO_MATERIAL,
+    cluster_count, counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GpuCamera,
+    GpuVertex, Photon, DEPOSIT_PLANE_WORDS, NO_MATERIAL,
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
     DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrimaryGbuffer,
-    ResolveCaustics, TileHitDistance, TracePhotons,
+    RefineClusters, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::rng::pcg_hash;
@@ -78,6 +81,12 @@ enum Mutation {
     /// `trace_photons` runs a compiled variant without dispersion and absorption, whatever
     /// the frame plan asked for (a backend that ignores the variant switches).
     VariantWithoutFeatures,
+    /// `trace_photons`' adaptive variant writes each cluster's photons rotated by one slot.
+    AdaptiveSlotsRotated,
+    /// `refine_clusters` appends every seventh child one texel off.
+    ClusterChildOff,
+    /// `refine_clusters` loses one converged cluster per step.
+    ConvergedLost,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -316,6 +325,48 @@ impl Mutant {
             (Mutation::MapLookupHigh, Kernel::CausticMapLookup(CausticMapLookup { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
+            (
+                Mutation::AdaptiveSlotsRotated,
+                Kernel::TracePhotons(TracePhotons {
+                    variant,
+                    params,
+                    photons,
+                    ..
+                }),
+            ) if variant.adaptive => {
+                let n = params.count as usize;
+                self.modify::<Photon>(photons.id, |v| {
+                    for c in v[..n].chunks_mut(4) {
+                        c.rotate_left(1);
+                    }
+                })
+            }
+            (
+                Mutation::ClusterChildOff,
+                Kernel::RefineClusters(RefineClusters {
+                    children,
+                    cluster_counts,
+                    ..
+                }),
+            ) => {
+                let n =
+                    bytemuck::pod_collect_to_vec::<u8, u32>(&self.inner.read(cluster_counts.id)?)
+                        [cluster_count::CHILDREN] as usize;
+                self.modify::<u32>(children.id, |v| {
+                    let n = n.min(v.len());
+                    for c in v[..n].iter_mut().skip(3).step_by(7) {
+                        *c = c.wrapping_add(1);
+                    }
+                })
+            }
+            (
+                Mutation::ConvergedLost,
+                Kernel::RefineClusters(RefineClusters { cluster_counts, .. }),
+            ) => self.modify::<u32>(cluster_counts.id, |v| {
+                if v[cluster_count::CONVERGED] > 0 {
+                    v[cluster_count::CONVERGED] -= 1;
+                }
+            }),
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
@@ -396,6 +447,10 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
         (
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
             Box::new(check_caustic_map),
+        ),
+        (
+            "trace_photons (adaptive) + refine_clusters",
+            Box::new(check_adaptive_caustics),
         ),
     ]
 }
@@ -498,6 +553,18 @@ fn each_fault_fails_the_check_of_its_kernel() {
         (
             Mutation::DensityGatherHigh,
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::AdaptiveSlotsRotated,
+            "trace_photons (adaptive) + refine_clusters",
+        ),
+        (
+            Mutation::ClusterChildOff,
+            "trace_photons (adaptive) + refine_clusters",
+        ),
+        (
+            Mutation::ConvergedLost,
+            "trace_photons (adaptive) + refine_clusters",
         ),
     ] {
         let mut report = Report::new(kernel);

@@ -45,7 +45,12 @@ fn adaptive(
     s: &AdaptiveCausticsSettings,
     v: &mut Verdict,
 ) -> Result<MapFrame, String> {
-    checked_with(b, scene, &|b, sc| AdaptiveCaustics::new(b, sc, s.clone()), v)
+    checked_with(
+        b,
+        scene,
+        &|b, sc| AdaptiveCaustics::new(b, sc, s.clone()),
+        v,
+    )
 }
 
 /// The level metric against the dense grid `dense` on the same backend: bitwise equal.
@@ -62,7 +67,9 @@ fn equals_dense(what: &str, a: &MapFrame, dense: &MapFrame, v: &mut Verdict) {
         .iter()
         .zip(&dense.atlas.pixels)
         .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits));
-    v.check(same, || format!("{what}: the atlas differs from the dense grid's"));
+    v.check(same, || {
+        format!("{what}: the atlas differs from the dense grid's")
+    });
 }
 
 pub(super) fn small_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
@@ -82,9 +89,19 @@ pub(super) fn small_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
     v.check(dense.stats.photons_stored > 0, || {
         "the dense grid stores nothing from the bead".into()
     });
-    let bounds = adaptive(b, &scene, &level(512, plane, ClusterRelevance::Bounds), &mut v)?;
+    let bounds = adaptive(
+        b,
+        &scene,
+        &level(512, plane, ClusterRelevance::Bounds),
+        &mut v,
+    )?;
     equals_dense("bounds", &bounds, &dense, &mut v);
-    let photons = adaptive(b, &scene, &level(512, plane, ClusterRelevance::Photons), &mut v)?;
+    let photons = adaptive(
+        b,
+        &scene,
+        &level(512, plane, ClusterRelevance::Photons),
+        &mut v,
+    )?;
     let (kept, all) = (photons.stats.stored_flux[0], dense.stats.stored_flux[0]);
     v.check(kept < all, || {
         format!("004's photon test kept the bead's caustic ({kept:e} of {all:e}): the case does not test a miss")
@@ -121,9 +138,16 @@ pub(super) fn grazing_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
     let plane = EmissionPlane::Casters;
     let mut v = Verdict::new("grazing caster");
     let dense = render(b, &scene, &map(256, plane)).map_err(|e| e.to_string())?;
-    let a = adaptive(b, &scene, &level(256, plane, ClusterRelevance::Bounds), &mut v)?;
+    let a = adaptive(
+        b,
+        &scene,
+        &level(256, plane, ClusterRelevance::Bounds),
+        &mut v,
+    )?;
     equals_dense("level metric", &a, &dense, &mut v);
-    v.check(a.stats.photons_stored > 0, || "nothing stored: the case tests nothing".into());
+    v.check(a.stats.photons_stored > 0, || {
+        "nothing stored: the case tests nothing".into()
+    });
     outcome(format!("stored {}", a.stats.photons_stored), v)
 }
 
@@ -149,7 +173,11 @@ pub(super) fn light_inside_casters(b: &mut dyn Backend) -> Result<Outcome, Strin
         &level(512, EmissionPlane::Casters, ClusterRelevance::Bounds),
         &mut v,
     )?;
-    let planes = a.stats.adaptive.as_ref().map_or(0, |s| s.dense_equivalent_photons);
+    let planes = a
+        .stats
+        .adaptive
+        .as_ref()
+        .map_or(0, |s| s.dense_equivalent_photons);
     v.check(planes == 6 * 256 * 256, || {
         format!("dense-equivalent photons {planes}, six faces of 256^2 expected")
     });

@@ -73,7 +73,12 @@ fn checked(
     s: &CausticMapSettings,
     v: &mut Verdict,
 ) -> Result<MapFrame, String> {
-    checked_with(b, scene, &|b, scene| CausticMap::new(b, scene, s.clone()), v)
+    checked_with(
+        b,
+        scene,
+        &|b, scene| CausticMap::new(b, scene, s.clone()),
+        v,
+    )
 }
 
 /// [`checked`] for the technique `make` builds. With seed 004's traversal the path ends
@@ -138,12 +143,15 @@ pub(super) fn checked_with(
         let rs = &r.stats;
         let k = divergence_allowance(rs.photons_emitted);
         let traced = if st.adaptive.is_some() { k } else { 0 };
-        v.check(rs.photons_emitted.abs_diff(st.photons_emitted) <= traced, || {
-            format!(
-                "emitted counts differ: {} vs cpu {}",
-                st.photons_emitted, rs.photons_emitted
-            )
-        });
+        v.check(
+            rs.photons_emitted.abs_diff(st.photons_emitted) <= traced,
+            || {
+                format!(
+                    "emitted counts differ: {} vs cpu {}",
+                    st.photons_emitted, rs.photons_emitted
+                )
+            },
+        );
         v.check(rs.emitted_flux == st.emitted_flux, || {
             "emitted flux differs".into()
         });

@@ -394,7 +394,8 @@ mod tests {
         };
         let casters = aabb(Vec3::splat(-0.5), Vec3::splat(0.5));
         let scene = aabb(Vec3::splat(-3.0), Vec3::splat(6.0));
-        let planes = light_view_planes(&light, casters, scene, 128, PointEmission::CasterCone).unwrap();
+        let planes =
+            light_view_planes(&light, casters, scene, 128, PointEmission::CasterCone).unwrap();
         assert_eq!(planes.len(), 1);
         let p = planes[0];
         // every corner of the casters' box projects inside the plane
@@ -420,7 +421,8 @@ mod tests {
             intensity: Vec3::ONE,
         };
         let casters = aabb(Vec3::splat(-1.0), Vec3::splat(1.0));
-        let planes = light_view_planes(&light, casters, casters, 600, PointEmission::CasterCone).unwrap();
+        let planes =
+            light_view_planes(&light, casters, casters, 600, PointEmission::CasterCone).unwrap();
         assert_eq!(planes.len(), 6);
         // the budget is shared: 600 / sqrt(6) = 245 a side
         assert!(planes.iter().all(|p| p.resolution == (245, 245)));
@@ -435,7 +437,8 @@ mod tests {
         };
         let casters = aabb(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 1.0));
         let scene = aabb(Vec3::new(-4.0, -1.0, -4.0), Vec3::new(4.0, 2.0, 4.0));
-        let p = light_view_planes(&light, casters, scene, 64, PointEmission::CasterCone).unwrap()[0];
+        let p =
+            light_view_planes(&light, casters, scene, 64, PointEmission::CasterCone).unwrap()[0];
         assert_eq!(p.projection, ViewPlaneProjection::Orthographic);
         assert!((p.w - light_dir(&light)).length() < 1e-6);
         let total: f64 = (0..64)
