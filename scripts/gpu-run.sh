@@ -21,14 +21,14 @@ if [ "${1:-}" = "--build" ]; then
                 "caustica-conformance:stiff_cases" "caustica-conformance:every_kernel_dispatched" \
                 "caustica-conformance:technique_seam" "caustica-conformance:hostile_input" \
                 "caustica-conformance:large_frames" "caustica-conformance:filter_flux" \
-                "caustica-conformance:caustic_map_frames"; do
+                "caustica-conformance:caustic_map_frames" "caustica-conformance:adaptive_caustics_frames"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
         cp "$exe" ".devbin/$t"
     done
     for spec in "caustica-opencl:photon_throughput:opencl_photon_throughput" "caustica:sspm_frame:sspm_frame" \
-                "caustica:caustic_map_frame:caustic_map_frame"; do
+                "caustica:caustic_map_frame:caustic_map_frame" "caustica:adaptive_frame:adaptive_frame"; do
         IFS=: read -r pkg bench name <<<"$spec"
         # the bench's own executable (deps/<bench>-<hash>), not a binary built with it
         exe=$(cargo bench -p "$pkg" --bench "$bench" --no-run --message-format=json 2>/dev/null |
@@ -37,14 +37,15 @@ if [ "${1:-}" = "--build" ]; then
     done
     cargo build --release -p caustica --examples
     for ex in embed_wgpu embed_ash render_png; do cp "target/release/examples/$ex" .devbin/; done
-    cargo build --release -p caustica-conformance --example stiff_table
-    cp target/release/examples/stiff_table .devbin/
+    cargo build --release -p caustica-conformance --example stiff_table --example adaptive_table
+    cp target/release/examples/stiff_table target/release/examples/adaptive_table .devbin/
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
           .devbin/cpu_reference .devbin/optics_closed_form .devbin/opencl_photon_throughput \
           .devbin/sspm_frame .devbin/embed_wgpu .devbin/embed_ash .devbin/render_png .devbin/vulkan_backend .devbin/frame_plan \
           .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
           .devbin/technique_seam .devbin/hostile_input .devbin/large_frames .devbin/filter_flux \
-          .devbin/caustic_map_frames .devbin/caustic_map_frame
+          .devbin/caustic_map_frames .devbin/caustic_map_frame .devbin/adaptive_caustics_frames \
+          .devbin/adaptive_frame .devbin/adaptive_table
     # what the device tool carries must stay under 64 MiB: the binaries travel gzipped
     (cd .devbin && for f in *; do case $f in *.deb|*.gz) ;; *) gzip -9 -f "$f" ;; esac; done)
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
@@ -54,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap cmbench hang
+# causticmap cmbench adaptive hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -127,6 +128,16 @@ if has causticmap; then
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./caustic_map_frames --test-threads=1
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1 --nocapture
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./caustic_map_frame --bench
+fi
+if has adaptive; then
+    # issue 17: AdaptiveCaustics' kernels and frames against the CPU on every backend, its
+    # stiff cases, seed 004's Table 1 on spot-glass, and adaptive vs dense frame times
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend adaptive --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./adaptive_caustics_frames --test-threads=1 --nocapture
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan \
+        STIFF_CASES=small-caster,grazing-caster,light-inside-casters ./stiff_table "$OUT/stiff-adaptive.md"
+    run timeout 240 ./adaptive_table vulkan ${ADAPTIVE_TOP:-8192} ${ADAPTIVE_REFERENCE:-16384}
+    run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./adaptive_frame
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

@@ -1,0 +1,155 @@
+//! AdaptiveCaustics against the dense light view plane (CausticMap) per backend, at 1024^2,
+//! 2048^2 and 4096^2 equivalent photons (issue 17 point 6; seed 004 found adaptive faster
+//! from 1024^2 on): `spot-glass` with the plane over the spot's whole cone (004's setting)
+//! and `sphere` with CausticMap's caster-fitted plane.
+//!
+//! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
+//! after a warm-up frame, the median over frames that remake the atlas (a new seed each)
+//! of: the photon work (every `trace_photons`, `deposit_atlas` / `refine_clusters` and
+//! gather pass, device time where the backend has timestamps), the whole frame (host wall
+//! time), the photons traced and the traversal's steps; and the photons traced per level.
+//! Pass times are summed per kernel over a frame, not per level.
+//!
+//! `cargo bench -p caustica --bench adaptive_frame`
+//! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
+//! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZES=1024,2048,4096`.
+
+use caustica::{open_backend, BACKEND_NAMES};
+use caustica_core::frame::technique::Technique;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::techniques::adaptive_caustics::{
+    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
+};
+use caustica_core::techniques::caustic_map::{
+    CausticMap, CausticMapOutputs, CausticMapSettings, EmissionPlane,
+};
+
+const PHOTON_PASSES: &[&str] = &[
+    "trace_photons",
+    "deposit_atlas",
+    "refine_clusters",
+    "gather_caustic_map",
+    "photon_count_table",
+    "gather_footprint",
+    "density_gather",
+];
+
+fn env_or(name: &str, default: &str) -> String {
+    std::env::var(name).unwrap_or_else(|_| default.to_string())
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let frames: usize = env_or("CAUSTICA_BENCH_FRAMES", "5")
+        .parse()
+        .unwrap_or(5)
+        .max(1);
+    let sizes: Vec<u32> = env_or("CAUSTICA_BENCH_SIZES", "1024,2048,4096")
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
+    println!("AdaptiveCaustics vs the dense plane, median of {frames} frames after one warm-up");
+    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let mut backend = match open_backend(name) {
+            Ok(b) => b,
+            Err(e) => {
+                println!("{name}: skipped ({e})");
+                continue;
+            }
+        };
+        let device = backend.capabilities().device;
+        for (scene_name, plane) in [
+            ("spot-glass", EmissionPlane::LightCone),
+            ("sphere", EmissionPlane::Casters),
+        ] {
+            let mut scene = builtin(scene_name).expect("built-in");
+            (scene.camera.width, scene.camera.height) = (1920, 1080);
+            for &n in &sizes {
+                let map = CausticMapSettings {
+                    photons_w: n,
+                    photons_h: n,
+                    emission_plane: plane,
+                    max_photons_per_batch: 1 << 22,
+                    outputs: CausticMapOutputs {
+                        composite: true,
+                        direct: false,
+                        raw_caustics: false,
+                        filtered_caustics: false,
+                        atlas: false,
+                    },
+                    ..Default::default()
+                };
+                for (label, metric) in [
+                    ("dense", None),
+                    ("level", Some(AdaptiveMetric::Level)),
+                    ("error", Some(AdaptiveMetric::Error)),
+                ] {
+                    let made = match metric {
+                        None => CausticMap::new(backend.as_mut(), &scene, map.clone()),
+                        Some(metric) => AdaptiveCaustics::new(
+                            backend.as_mut(),
+                            &scene,
+                            AdaptiveCausticsSettings {
+                                map: map.clone(),
+                                metric,
+                                max_traversal_bytes: 256 << 20,
+                                ..Default::default()
+                            },
+                        ),
+                    };
+                    let mut t = match made {
+                        Ok(t) => t,
+                        Err(e) => {
+                            println!("{name} / {scene_name} / {n}^2 / {label}: {e}");
+                            continue;
+                        }
+                    };
+                    let (mut work, mut frame) = (vec![], vec![]);
+                    let (mut traced, mut steps, mut levels, mut timing) =
+                        (0u64, 0u32, Vec::new(), String::new());
+                    let mut failed = false;
+                    for i in 0..=frames {
+                        t.set_seed(1 + i as u32);
+                        match t.frame(backend.as_mut(), &mut |_| {}) {
+                            Ok(st) if i > 0 => {
+                                timing = st.timing.clone();
+                                frame.push(st.frame_ms);
+                                work.push(
+                                    PHOTON_PASSES
+                                        .iter()
+                                        .filter_map(|p| st.pass_ms.get(*p))
+                                        .sum(),
+                                );
+                                traced = st.photons_emitted;
+                                if let Some(a) = &st.adaptive {
+                                    steps = a.steps;
+                                    levels = a.photons_per_level.clone();
+                                }
+                            }
+                            Ok(_) => {}
+                            Err(e) => {
+                                println!("{name} / {scene_name} / {n}^2 / {label}: {e}");
+                                failed = true;
+                                break;
+                            }
+                        }
+                    }
+                    let _ = Box::new(t).free(backend.as_mut());
+                    if failed || frame.is_empty() {
+                        continue;
+                    }
+                    println!(
+                        "{name} on {device} / {scene_name} / {n}^2 / {label}: photon work {:.3} ms ({timing}), frame {:.3} ms (host wall), {traced} photons traced, {steps} steps, per level {levels:?}",
+                        median(&mut work),
+                        median(&mut frame)
+                    );
+                }
+            }
+        }
+    }
+}
