@@ -91,7 +91,7 @@ fn main() {
                 ] {
                     let made = match metric {
                         None => CausticMap::new(backend.as_mut(), &scene, map.clone()),
-                        Some(metric) => AdaptiveCaustics::new(
+                        Some(metric) => AdaptiveCaustics::build(
                             backend.as_mut(),
                             &scene,
                             AdaptiveCausticsSettings {

@@ -34,7 +34,7 @@ fn main() {
         )];
         let mut counts = Vec::new();
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-            let mut a = AdaptiveCaustics::new(
+            let mut a = AdaptiveCaustics::build(
                 &mut b,
                 &scene,
                 AdaptiveCausticsSettings {

@@ -84,7 +84,7 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
             let scene = small(scene_name);
             let dense = CausticMap::new(b.as_mut(), &scene, map(256)).expect("dense");
             let (ds, di) = render(b.as_mut(), dense);
-            let adaptive = AdaptiveCaustics::new(
+            let adaptive = AdaptiveCaustics::build(
                 b.as_mut(),
                 &scene,
                 AdaptiveCausticsSettings {
@@ -135,7 +135,7 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
     for (name, mut b) in backends() {
         for scene_name in ["sphere", "cornell"] {
             let scene = small(scene_name);
-            let one = AdaptiveCaustics::new(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
+            let one = AdaptiveCaustics::build(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
             let (s1, i1) = render(b.as_mut(), one);
             let a1 = s1.adaptive.clone().expect("adaptive stats");
             assert!(
@@ -147,7 +147,7 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
             let mut steps = vec![a1.steps];
             for parts in [2u64, 16] {
                 let c = busiest.div_ceil(parts);
-                let t = AdaptiveCaustics::new(b.as_mut(), &scene, settings(limit_for(c, 32, 3)))
+                let t = AdaptiveCaustics::build(b.as_mut(), &scene, settings(limit_for(c, 32, 3)))
                     .expect("scene");
                 let (s, i) = render(b.as_mut(), t);
                 let what = format!("{name} / {scene_name}, batches of {c} clusters");
@@ -200,7 +200,7 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
             let scene = small(scene_name);
             let dense = CausticMap::new(b.as_mut(), &scene, map(512)).expect("dense");
             let (ds, _) = render(b.as_mut(), dense);
-            let adaptive = AdaptiveCaustics::new(
+            let adaptive = AdaptiveCaustics::build(
                 b.as_mut(),
                 &scene,
                 AdaptiveCausticsSettings {

@@ -48,7 +48,7 @@ fn adaptive(
     checked_with(
         b,
         scene,
-        &|b, sc| AdaptiveCaustics::new(b, sc, s.clone()),
+        &|b, sc| AdaptiveCaustics::build(b, sc, s.clone()),
         v,
     )
 }

@@ -70,14 +70,15 @@ pub fn caster_boxes(
     boxes.into_values().collect()
 }
 
-/// AdaptiveCaustics' constructor: a [`CausticMap`] whose photons come from seed 004's
-/// traversal (its registry name `adaptive-caustics`).
+/// AdaptiveCaustics' constructor. The technique *is* a [`CausticMap`] (the same atlas,
+/// gather, final pass, outputs and update methods) whose photons come from seed 004's
+/// traversal, and whose registry and stats name is `adaptive-caustics`.
 pub struct AdaptiveCaustics;
 
 impl AdaptiveCaustics {
     /// Validates `settings`, uploads the scene, lays out the atlas and makes the
-    /// traversal's buffers.
-    pub fn new(
+    /// traversal's buffers: the [`CausticMap`] that runs the traversal.
+    pub fn build(
         backend: &mut dyn Backend,
         scene: &Scene,
         settings: AdaptiveCausticsSettings,
@@ -121,5 +122,5 @@ pub fn create(
 ) -> Result<Box<dyn Technique>, Error> {
     let settings: AdaptiveCausticsSettings = serde_json::from_value(settings.clone())
         .map_err(|e| Error::InvalidParameter(format!("adaptive-caustics settings: {e}")))?;
-    Ok(Box::new(AdaptiveCaustics::new(backend, scene, settings)?))
+    Ok(Box::new(AdaptiveCaustics::build(backend, scene, settings)?))
 }
