@@ -81,7 +81,8 @@ fn main() {
         let (ds, da, dms) = run(b, t);
         let mut row = Vec::new();
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-            let t = AdaptiveCaustics::build(b, &scene, adaptive(n, plane, metric)).expect("adaptive");
+            let t =
+                AdaptiveCaustics::build(b, &scene, adaptive(n, plane, metric)).expect("adaptive");
             let (s, a, ms) = run(b, t);
             let st = s.adaptive.clone().unwrap_or_default();
             per_level.push((n, metric, st.photons_per_level.clone()));
@@ -122,7 +123,8 @@ fn main() {
         }
         let mut ratios = Vec::new();
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-            let t = AdaptiveCaustics::build(b, &s, adaptive(top, casters, metric)).expect("adaptive");
+            let t =
+                AdaptiveCaustics::build(b, &s, adaptive(top, casters, metric)).expect("adaptive");
             let (st, _, _) = run(b, t);
             let p = st.adaptive.map_or(0, |a| a.photons_processed);
             ratios.push(p as f64 / ds.photons_emitted as f64);

@@ -135,7 +135,8 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
     for (name, mut b) in backends() {
         for scene_name in ["sphere", "cornell"] {
             let scene = small(scene_name);
-            let one = AdaptiveCaustics::build(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
+            let one =
+                AdaptiveCaustics::build(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
             let (s1, i1) = render(b.as_mut(), one);
             let a1 = s1.adaptive.clone().expect("adaptive stats");
             assert!(

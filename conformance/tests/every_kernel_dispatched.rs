@@ -52,6 +52,30 @@ fn every_backend_dispatches_every_declared_kernel() {
             "{name}: caustic map saw no photon"
         );
         passes.extend(stats.passes);
+        // seed 004's traversal: the adaptive trace and refine_clusters
+        let adaptive = caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
+            map: caustica_core::techniques::caustic_map::CausticMapSettings {
+                photons_w: 64,
+                photons_h: 64,
+                atlas_size: 64,
+                ..Default::default()
+            },
+            start_grid: 16,
+            ..Default::default()
+        };
+        let mut t = caustica_core::techniques::adaptive_caustics::AdaptiveCaustics::build(
+            b.as_mut(),
+            &scene,
+            adaptive,
+        )
+        .expect("valid scene");
+        let stats = t.frame(b.as_mut(), &mut |_| {}).expect("frame");
+        t.free(b.as_mut()).expect("free");
+        assert!(
+            stats.photons_deposited > 0,
+            "{name}: the adaptive traversal deposited no photon"
+        );
+        passes.extend(stats.passes);
         for k in KERNELS.iter().filter(|k| k.name != "prepare_scene") {
             let pass = passes.iter().find(|p| p.name == k.name);
             assert!(

@@ -120,7 +120,6 @@ pub fn create(
     scene: &Scene,
     settings: &serde_json::Value,
 ) -> Result<Box<dyn Technique>, Error> {
-    let settings: AdaptiveCausticsSettings = serde_json::from_value(settings.clone())
-        .map_err(|e| Error::InvalidParameter(format!("adaptive-caustics settings: {e}")))?;
+    let settings = AdaptiveCausticsSettings::from_json(settings)?;
     Ok(Box::new(AdaptiveCaustics::build(backend, scene, settings)?))
 }

@@ -101,6 +101,32 @@ pub const SLOT_BYTES_PER_CLUSTER: u64 = 128;
 pub const LIST_BYTES_PER_CLUSTER: u64 = 16;
 
 impl AdaptiveCausticsSettings {
+    /// The settings from a JSON object of their fields (CausticMap's at the top level);
+    /// missing fields take their defaults, and an unknown field is an error (serde's
+    /// `deny_unknown_fields` does not reach through `flatten`, so the names are checked
+    /// here against the defaults' serialisation).
+    pub fn from_json(value: &serde_json::Value) -> Result<Self, Error> {
+        let bad =
+            |why: String| Error::InvalidParameter(format!("adaptive-caustics settings: {why}"));
+        let known = serde_json::to_value(AdaptiveCausticsSettings::default())
+            .map_err(|e| bad(e.to_string()))?;
+        if let (Some(given), Some(known)) = (value.as_object(), known.as_object()) {
+            if let Some(k) = given.keys().find(|k| !known.contains_key(*k)) {
+                let mut names: Vec<&String> = known.keys().collect();
+                names.sort();
+                return Err(bad(format!(
+                    "unknown field `{k}`, expected one of {}",
+                    names
+                        .iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+        }
+        serde_json::from_value(value.clone()).map_err(|e| bad(e.to_string()))
+    }
+
     /// The finest level (the start grid is level 0): `photons_w = start_grid * 2^finest`.
     pub fn finest_level(&self) -> u32 {
         (self.map.photons_w / self.start_grid.max(1)).max(1).ilog2()
@@ -179,7 +205,7 @@ mod tests {
 
     #[test]
     fn json_takes_caustic_map_fields_at_the_top_and_refuses_unknown_ones() {
-        let s: AdaptiveCausticsSettings = serde_json::from_value(serde_json::json!({
+        let s = AdaptiveCausticsSettings::from_json(&serde_json::json!({
             "photons_w": 512, "photons_h": 512, "metric": "level", "atlas_size": 256
         }))
         .unwrap();
@@ -188,10 +214,13 @@ mod tests {
         assert_eq!(s.metric, AdaptiveMetric::Level);
         assert_eq!(s.finest_level(), 3);
         s.validate().unwrap();
-        let e = serde_json::from_value::<AdaptiveCausticsSettings>(
-            serde_json::json!({ "photon_w": 512 }),
+        let e = AdaptiveCausticsSettings::from_json(&serde_json::json!({ "photon_w": 512 }));
+        assert!(
+            matches!(&e, Err(Error::InvalidParameter(w)) if w.contains("photon_w")),
+            "an unknown field must be refused by name: {e:?}"
         );
-        assert!(e.is_err(), "an unknown field must be refused");
+        let ok = AdaptiveCausticsSettings::from_json(&serde_json::json!({ "photons_w": 512 }));
+        assert_eq!(ok.map(|s| s.map.photons_w).ok(), Some(512));
     }
 
     #[test]
