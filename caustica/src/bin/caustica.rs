@@ -254,8 +254,9 @@ fn run(cli: Cli) -> Result<(), String> {
             Ok(())
         }
         Command::Techniques => {
+            let width = TECHNIQUES.iter().map(|t| t.name.len()).max().unwrap_or(0);
             for t in TECHNIQUES {
-                println!("{:<12} {}", t.name, t.title);
+                println!("{:<width$} {}", t.name, t.title);
             }
             Ok(())
         }
