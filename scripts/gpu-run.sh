@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap cmbench adaptive hang
+# causticmap cmbench adaptive adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -137,6 +137,10 @@ if has adaptive; then
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan \
         STIFF_CASES=small-caster,grazing-caster,light-inside-casters ./stiff_table "$OUT/stiff-adaptive.md"
     run timeout 240 ./adaptive_table vulkan ${ADAPTIVE_TOP:-8192} ${ADAPTIVE_REFERENCE:-16384}
+    run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./adaptive_frame
+fi
+if has adaptivebench; then
+    # issue 17: adaptive vs dense frame times alone, with per-level times
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./adaptive_frame
 fi
 if has cmbench; then

@@ -7,8 +7,9 @@
 //! after a warm-up frame, the median over frames that remake the atlas (a new seed each)
 //! of: the photon work (every `trace_photons`, `deposit_atlas` / `refine_clusters` and
 //! gather pass, device time where the backend has timestamps), the whole frame (host wall
-//! time), the photons traced and the traversal's steps; and the photons traced per level.
-//! Pass times are summed per kernel over a frame, not per level.
+//! time), the photons traced and the traversal's steps; and per level the photons traced
+//! and the time of its steps (`trace_photons` + `refine_clusters`, `AdaptiveStats::
+//! ms_per_level`).
 //!
 //! `cargo bench -p caustica --bench adaptive_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
@@ -112,6 +113,7 @@ fn main() {
                     let (mut work, mut frame) = (vec![], vec![]);
                     let (mut traced, mut steps, mut levels, mut timing) =
                         (0u64, 0u32, Vec::new(), String::new());
+                    let mut level_ms: Vec<Vec<f64>> = Vec::new();
                     let mut failed = false;
                     for i in 0..=frames {
                         t.set_seed(1 + i as u32);
@@ -129,6 +131,10 @@ fn main() {
                                 if let Some(a) = &st.adaptive {
                                     steps = a.steps;
                                     levels = a.photons_per_level.clone();
+                                    level_ms.resize(a.ms_per_level.len(), Vec::new());
+                                    for (v, ms) in level_ms.iter_mut().zip(&a.ms_per_level) {
+                                        v.push(*ms);
+                                    }
                                 }
                             }
                             Ok(_) => {}
@@ -143,10 +149,15 @@ fn main() {
                     if failed || frame.is_empty() {
                         continue;
                     }
+                    let per_level: Vec<String> = level_ms
+                        .iter_mut()
+                        .map(|v| format!("{:.3}", median(v)))
+                        .collect();
                     println!(
-                        "{name} on {device} / {scene_name} / {n}^2 / {label}: photon work {:.3} ms ({timing}), frame {:.3} ms (host wall), {traced} photons traced, {steps} steps, per level {levels:?}",
+                        "{name} on {device} / {scene_name} / {n}^2 / {label}: photon work {:.3} ms ({timing}), frame {:.3} ms (host wall), {traced} photons traced, {steps} steps, per level {levels:?}, ms per level (trace + refine) [{}]",
                         median(&mut work),
-                        median(&mut frame)
+                        median(&mut frame),
+                        per_level.join(", ")
                     );
                 }
             }

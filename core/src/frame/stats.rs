@@ -126,6 +126,10 @@ pub struct AdaptiveStats {
     pub photons_per_level: Vec<u64>,
     /// Photons deposited (of output clusters), per level.
     pub photons_output_per_level: Vec<u64>,
+    /// Time of each level's steps (`trace_photons` and `refine_clusters` of its batches
+    /// and of its converged clusters' fresh photons), in ms of the frame's `timing`
+    /// (device timestamps or host wall clock).
+    pub ms_per_level: Vec<f64>,
     /// Clusters whose photons were deposited.
     pub clusters_output: u64,
     /// Clusters none of whose photons met a caster.

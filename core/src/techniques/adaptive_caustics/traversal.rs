@@ -147,6 +147,7 @@ impl Traversal {
         let levels = finest as usize + 1;
         if adaptive.photons_per_level.len() < levels {
             adaptive.photons_per_level.resize(levels, 0);
+            adaptive.ms_per_level.resize(levels, 0.0);
             adaptive.photons_output_per_level.resize(levels, 0);
         }
         adaptive.dense_equivalent_photons += plane.texels();
@@ -190,7 +191,7 @@ impl Traversal {
                 children: (children, capacity, before),
                 converged: self.converged,
             };
-            self.step(
+            adaptive.ms_per_level[level] += self.step(
                 backend,
                 scene,
                 variant,
@@ -242,7 +243,7 @@ impl Traversal {
                     children: (self.no_children, 0, 0),
                     converged: self.no_converged,
                 };
-                self.step(
+                adaptive.ms_per_level[level] += self.step(
                     backend,
                     scene,
                     variant,
@@ -298,7 +299,7 @@ impl Traversal {
         optics: PhotonOptics,
         a: &StepArgs,
         stats: &mut FrameStats,
-    ) -> Result<(), Error> {
+    ) -> Result<f64, Error> {
         let s = &self.settings;
         let at_level = LightViewPlane {
             resolution: (a.grid, a.grid),
@@ -357,10 +358,12 @@ impl Traversal {
             counters: self.output_counters,
             atlas: target.sums,
         });
+        let mut ms = 0.0;
         for t in backend.execute(&rec)? {
             stats.add_pass_time(t.kernel, t.seconds);
+            ms += t.seconds * 1e3;
         }
-        Ok(())
+        Ok(ms)
     }
 }
 
