@@ -81,6 +81,16 @@ impl CpuBackend {
         }
         let bufs = &self.buffers;
         let get = |id: ResourceId| bufs.get(&id).ok_or(BackendError::MissingResource(id));
+        // a photon map's planes as the atomics the deposit kernels add to
+        let map_atomics =
+            |m: &PhotonMapPlanes| -> Result<kernels::deposit_screen::MapPlanes<'_>, BackendError> {
+                let [a, b, c] = m.planes;
+                Ok([
+                    get(a.id)?.as_atomic_u64(a.bytes())?,
+                    get(b.id)?.as_atomic_u64(b.bytes())?,
+                    get(c.id)?.as_atomic_u64(c.bytes())?,
+                ])
+            };
         let view =
             |s: &caustica_core::device::handle::SceneArgs| -> Result<SceneView<'_>, BackendError> {
                 let bvh = self.bvhs.get(&s.bvh_nodes.id).ok_or_else(|| {
@@ -176,12 +186,7 @@ impl CpuBackend {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
                 let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
                 let g = self.gbuffer(gbuffer)?;
-                let [a, b, c] = photon_map.planes;
-                let atomics = [
-                    get(a.id)?.as_atomic_u64(a.bytes())?,
-                    get(b.id)?.as_atomic_u64(b.bytes())?,
-                    get(c.id)?.as_atomic_u64(c.bytes())?,
-                ];
+                let atomics = map_atomics(photon_map)?;
                 let c = deposit_screen::deposit_screen(params, g, ph, atomics);
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
@@ -300,12 +305,7 @@ impl CpuBackend {
                 let ph = get(photons.id)?.as_slice(photons.len)?;
                 let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
                 let tl = get(tiles.id)?.as_slice(tiles.len)?;
-                let [a, b, c] = atlas.planes;
-                let atomics = [
-                    get(a.id)?.as_atomic_u64(a.bytes())?,
-                    get(b.id)?.as_atomic_u64(b.bytes())?,
-                    get(c.id)?.as_atomic_u64(c.bytes())?,
-                ];
+                let atomics = map_atomics(atlas)?;
                 let r = refine_clusters::refine_clusters(params, list, rects, ph, tt, tl, atomics);
                 r.counters
                     .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
@@ -345,12 +345,7 @@ impl CpuBackend {
                 let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
                 let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
                 let tl = get(tiles.id)?.as_slice(tiles.len)?;
-                let [a, b, c] = atlas.planes;
-                let atomics = [
-                    get(a.id)?.as_atomic_u64(a.bytes())?,
-                    get(b.id)?.as_atomic_u64(b.bytes())?,
-                    get(c.id)?.as_atomic_u64(c.bytes())?,
-                ];
+                let atomics = map_atomics(atlas)?;
                 let c = caustic_map::deposit_atlas(params, tt, tl, ph, atomics);
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())

@@ -54,11 +54,7 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
         } else if (fate == CLUSTER_OUTPUT) {
             for (uint k = 0u; k < 4u; k++) {
                 if (slots[k].direction == NO_TRIANGLE) continue;
-                atomic_inc(&lc[COUNTER_STORED]);
-                for (uint ch = 0u; ch < 3u; ch++) {
-                    uint units = quantize(slots[k].flux[ch], p->flux_quantum).units;
-                    if (units != 0u) atomic_add_u64_local(&lc[COUNTER_STORED_FLUX + 2u * ch], units);
-                }
+                count_stored(&slots[k], p->flux_quantum, lc);
                 if (texels[k] == NO_TILE) {
                     atomic_inc(&lc[COUNTER_OFF_SCREEN]);
                 } else {

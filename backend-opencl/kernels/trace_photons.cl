@@ -163,11 +163,7 @@ inline Photon cluster_slot(int end, uint rays, const Photon* ph) {
 // Adds one path end to the work-group's counters.
 inline void count_end(int end, const Photon* ph, float flux_quantum, __local uint* lc) {
     if (end == PATH_STORED) {
-        atomic_inc(&lc[COUNTER_STORED]);
-        for (uint ch = 0u; ch < 3u; ch++) {
-            uint units = quantize(ph->flux[ch], flux_quantum).units;
-            if (units != 0u) atomic_add_u64_local(&lc[COUNTER_STORED_FLUX + 2u * ch], units);
-        }
+        count_stored(ph, flux_quantum, lc);
     } else {
         atomic_inc(&lc[end == PATH_NO_SPECULAR  ? COUNTER_NO_SPECULAR
                       : end == PATH_ESCAPED     ? COUNTER_ESCAPED

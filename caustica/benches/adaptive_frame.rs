@@ -15,6 +15,7 @@
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZES=1024,2048,4096`.
 
+mod common;
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::frame::technique::Technique;
 use caustica_core::scene::builtin::builtin;
@@ -24,6 +25,7 @@ use caustica_core::techniques::adaptive_caustics::{
 use caustica_core::techniques::caustic_map::{
     CausticMap, CausticMapOutputs, CausticMapSettings, EmissionPlane,
 };
+use common::{env_or, median};
 
 const PHOTON_PASSES: &[&str] = &[
     "trace_photons",
@@ -34,15 +36,6 @@ const PHOTON_PASSES: &[&str] = &[
     "gather_footprint",
     "density_gather",
 ];
-
-fn env_or(name: &str, default: &str) -> String {
-    std::env::var(name).unwrap_or_else(|_| default.to_string())
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn main() {
     let frames: usize = env_or("CAUSTICA_BENCH_FRAMES", "5")

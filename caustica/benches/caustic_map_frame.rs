@@ -20,6 +20,7 @@
 //! `CAUSTICA_BENCH_SPLITS=deterministic,stochastic` (default both),
 //! `CAUSTICA_BENCH_GATHERS=density,box` (default density).
 
+mod common;
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::limits::tessellated_size;
@@ -27,6 +28,7 @@ use caustica_core::scene::{Scene, Shape};
 use caustica_core::techniques::caustic_map::{
     CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit, MapGather,
 };
+use common::{env_or, median};
 use std::collections::BTreeMap;
 
 const BUDGET_PASSES: &[&str] = &[
@@ -44,15 +46,6 @@ const SETTINGS: [(u64, u32, u32, (u32, u32)); 3] = [
     (70_000, 6, 2048, (1920, 1080)),
     (100_000, 4, 4096, (1920, 1080)),
 ];
-
-fn env_or(name: &str, default: &str) -> String {
-    std::env::var(name).unwrap_or_else(|_| default.to_string())
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// `sphere` with its glass ball tessellated to about `triangles` triangles (the ball's
 /// `segments` chosen for the nearest count), and the ball's triangle count.

@@ -17,9 +17,11 @@
 //! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048), `CAUSTICA_BENCH_FILTERS=density`
 //! (default: density,bilateral).
 
+mod common;
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::device::device_scene::DeviceScene;
 use caustica_core::device::layout::GpuCamera;
+use common::{env_or, median};
 
 use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
 use caustica_core::recording::Recording;
@@ -42,15 +44,6 @@ const BUDGET_PASSES: &[&str] = &[
     "tile_hit_distance",
     "bilateral_gather",
 ];
-
-fn env_or(name: &str, default: &str) -> String {
-    std::env::var(name).unwrap_or_else(|_| default.to_string())
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn main() {
     // `cargo bench` passes `--bench`; this harness takes its settings from the environment.

@@ -74,13 +74,7 @@ fn refine_clusters(t: u32, li: u32) {
                 if (slots[k].direction == NO_TRIANGLE) {
                     continue;
                 }
-                atomicAdd(&lc[COUNTER_STORED], 1u);
-                for (var ch = 0u; ch < 3u; ch++) {
-                    let units = quantize(slots[k].flux[ch], p.flux_quantum).units;
-                    if (units != 0u) {
-                        atomic_add_u64_local(COUNTER_STORED_FLUX + 2u * ch, units);
-                    }
-                }
+                count_stored(slots[k], p.flux_quantum);
                 if (texels[k] == NO_TILE) {
                     atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
                 } else {

@@ -192,13 +192,7 @@ fn cluster_slot(end: i32, rays: u32, ph: Photon) -> Photon {
 // Adds one path end to the work-group's counters.
 fn count_end(end: i32, ph: Photon, flux_quantum: f32) {
     if (end == PATH_STORED) {
-        atomicAdd(&lc[COUNTER_STORED], 1u);
-        for (var ch = 0u; ch < 3u; ch++) {
-            let units = quantize(ph.flux[ch], flux_quantum).units;
-            if (units != 0u) {
-                atomic_add_u64_local(COUNTER_STORED_FLUX + 2u * ch, units);
-            }
-        }
+        count_stored(ph, flux_quantum);
     } else {
         var word = COUNTER_BOUNCE_LIMIT;
         if (end == PATH_NO_SPECULAR) {

@@ -36,22 +36,34 @@ pub fn deposit_atlas(
             let mut c = Counters::default();
             for ph in chunk {
                 let texel = atlas_photon_texel(triangle_tiles, tiles, ph, p.width);
-                if texel == NO_TILE {
-                    c.bump(counter::OFF_SCREEN);
-                    continue;
-                }
-                deposit_photon_texel(
+                deposit_atlas_texel(
                     &map,
                     texel,
                     ph,
-                    p.flux_quantum,
-                    p.hit_distance_quantum,
+                    (p.flux_quantum, p.hit_distance_quantum),
                     &mut c,
                 );
             }
             c
         })
         .reduce(Counters::default, Counters::merge)
+}
+
+/// Adds photon `ph` to atlas texel `texel` (fixed point, `(flux, hit distance)` quanta),
+/// or counts it as off the atlas when `texel` is `NO_TILE` (its triangle has no tile):
+/// `deposit_atlas`'s and `refine_clusters`' deposit.
+pub fn deposit_atlas_texel(
+    map: &MapPlanes,
+    texel: u32,
+    ph: &Photon,
+    (flux_quantum, hit_distance_quantum): (f32, f32),
+    c: &mut Counters,
+) {
+    if texel == NO_TILE {
+        c.bump(counter::OFF_SCREEN);
+    } else {
+        deposit_photon_texel(map, texel, ph, flux_quantum, hit_distance_quantum, c);
+    }
 }
 
 /// The atlas texel under texture-space photon `ph` (its uv on its triangle's receiver

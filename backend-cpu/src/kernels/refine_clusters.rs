@@ -2,13 +2,13 @@
 //! traversal over a batch of traced clusters. The decisions are core's
 //! `math::photon_clusters`; the deposit is `deposit_atlas`'s.
 
-use super::caustic_map::atlas_photon_texel;
-use super::deposit_screen::{deposit_photon_texel, MapPlanes};
+use super::caustic_map::{atlas_photon_texel, deposit_atlas_texel};
+use super::deposit_screen::MapPlanes;
+use super::trace_photons::count_stored;
 use super::Counters;
 use caustica_core::device::layout::{
     cluster_count, counter, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };
-use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::photon_clusters::{
     cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance, NO_TRIANGLE,
 };
@@ -88,23 +88,9 @@ pub fn refine_clusters(
                     let mut c = Counters::default();
                     for (ph, texel) in slots.iter().zip(texels) {
                         let Some(texel) = texel else { continue };
-                        c.bump(counter::STORED);
-                        for ch in 0..3 {
-                            c.words[counter::STORED_FLUX + 2 * ch] +=
-                                quantize(ph.flux[ch], p.flux_quantum).units as u64;
-                        }
-                        if texel == NO_TILE {
-                            c.bump(counter::OFF_SCREEN);
-                        } else {
-                            deposit_photon_texel(
-                                &map,
-                                texel,
-                                ph,
-                                p.flux_quantum,
-                                p.hit_distance_quantum,
-                                &mut c,
-                            );
-                        }
+                        count_stored(ph, p.flux_quantum, &mut c);
+                        let quanta = (p.flux_quantum, p.hit_distance_quantum);
+                        deposit_atlas_texel(&map, texel, ph, quanta, &mut c);
                     }
                     Step::Output(c)
                 }

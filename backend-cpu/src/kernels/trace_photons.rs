@@ -97,15 +97,20 @@ pub fn trace_photons(scene: &SceneView, p: &TraceParams, variant: TraceVariant) 
     }
 }
 
+/// Counts one stored photon: `STORED` and its flux in quanta (`STORED_FLUX`).
+pub fn count_stored(ph: &Photon, flux_quantum: f32, counters: &mut Counters) {
+    counters.bump(counter::STORED);
+    for ch in 0..3 {
+        counters.words[counter::STORED_FLUX + 2 * ch] +=
+            quantize(ph.flux[ch], flux_quantum).units as u64;
+    }
+}
+
 /// Adds one path end to the batch's photons and counters.
 fn count_end(end: PathEnd, p: &TraceParams, photons: &mut Vec<Photon>, counters: &mut Counters) {
     match end {
         PathEnd::Stored(ph) => {
-            counters.bump(counter::STORED);
-            for ch in 0..3 {
-                counters.words[counter::STORED_FLUX + 2 * ch] +=
-                    quantize(ph.flux[ch], p.flux_quantum).units as u64;
-            }
+            count_stored(&ph, p.flux_quantum, counters);
             photons.push(ph);
         }
         PathEnd::NoSpecular => counters.bump(counter::NO_SPECULAR),

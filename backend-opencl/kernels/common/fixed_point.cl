@@ -34,6 +34,16 @@ inline void atomic_add_u64_local(volatile __local uint* w, uint v) {
     if (old > 0xFFFFFFFFu - v) atomic_inc(&w[1]);
 }
 
+// One stored photon into the work-group's counters `lc`: STORED and its flux in quanta
+// (backend-cpu trace_photons.rs::count_stored).
+inline void count_stored(const Photon* ph, float flux_quantum, volatile __local uint* lc) {
+    atomic_inc(&lc[COUNTER_STORED]);
+    for (uint ch = 0u; ch < 3u; ch++) {
+        uint units = quantize(ph->flux[ch], flux_quantum).units;
+        if (units != 0u) atomic_add_u64_local(&lc[COUNTER_STORED_FLUX + 2u * ch], units);
+    }
+}
+
 // The photon counters of a work-group, summed in local memory (same word layout as
 // core::gpu::counter) and added to the global counters once per group.
 inline void counters_clear_local(volatile __local uint* lc) {

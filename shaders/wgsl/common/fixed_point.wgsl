@@ -57,6 +57,18 @@ fn atomic_add_u64_local(k: u32, v: u32) {
     }
 }
 
+// One stored photon into the work-group's counters: STORED and its flux in quanta
+// (backend-cpu trace_photons.rs::count_stored).
+fn count_stored(ph: Photon, flux_quantum: f32) {
+    atomicAdd(&lc[COUNTER_STORED], 1u);
+    for (var ch = 0u; ch < 3u; ch++) {
+        let units = quantize(ph.flux[ch], flux_quantum).units;
+        if (units != 0u) {
+            atomic_add_u64_local(COUNTER_STORED_FLUX + 2u * ch, units);
+        }
+    }
+}
+
 // The photon counters of a work-group, summed in workgroup memory (same word layout as
 // core::gpu::counter) and added to the global counters once per group. `li` is the
 // local invocation index. Both functions contain a workgroupBarrier: call them from
