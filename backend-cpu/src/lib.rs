@@ -299,6 +299,8 @@ impl CpuBackend {
                 cluster_counts,
                 counters,
                 atlas,
+                output_photons,
+                output_count,
             }) => {
                 let list = get(clusters.id)?.as_slice(clusters.len)?;
                 let rects = get(caster_rects.id)?.as_slice(caster_rects.len)?;
@@ -330,6 +332,14 @@ impl CpuBackend {
                 self.get_mut(cluster_counts.id)?
                     .as_mut_slice::<u32>(cluster_counts.len)?
                     .copy_from_slice(&counts);
+                if !r.outputs.is_empty() {
+                    let mut n = self.get(output_count.id)?.as_slice::<u32>(1)?[0];
+                    let out = self
+                        .get_mut(output_photons.id)?
+                        .as_mut_slice(output_photons.len)?;
+                    refine_clusters::append_outputs(&r, out, &mut n);
+                    self.get_mut(output_count.id)?.as_mut_slice::<u32>(1)?[0] = n;
+                }
                 Ok(())
             }
             Kernel::DepositAtlas(DepositAtlas {

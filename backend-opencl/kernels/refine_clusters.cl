@@ -1,7 +1,9 @@
 // refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one work-item per traced
 // cluster of the batch decides its fate from its four photon slots (discarded, output
 // into the atlas as deposit_atlas deposits, or refined into four children appended to
-// the next level's list). Mirror of backend-cpu/src/kernels/refine_clusters.rs; the atlas
+// the next level's list). With the screen target (world-space slots) a photon's texel is
+// its pixel and an output cluster's stored photons are appended to output_photons for
+// deposit_screen. Mirror of backend-cpu/src/kernels/refine_clusters.rs; the atlas
 // sums and counts are bitwise the CPU's, the child list's order is not.
 
 // The atlas texel under texture-space photon `ph`, NO_TILE when its triangle has no tile
@@ -14,6 +16,19 @@ inline uint atlas_photon_texel(__global const uint* triangle_tiles, __global con
                              atlas_width);
 }
 
+// The texel the error metric compares: the pixel a world-space photon projects to (the
+// screen target) or the atlas texel under a texture-space photon's uv; NO_TILE off both.
+inline uint target_texel(__global const RefineParams* p, __global const uint* triangle_tiles,
+                         __global const uint4* tiles, const Photon* ph) {
+    if (p->deposit_target == CLUSTER_TARGET_SCREEN) {
+        uint px, py;
+        float depth;
+        if (!project_to_pixel(&p->camera, load3(ph->position), &px, &py, &depth)) return NO_TILE;
+        return py * p->camera.width + px;
+    }
+    return atlas_photon_texel(triangle_tiles, tiles, ph, p->atlas_width);
+}
+
 __kernel void refine_clusters(__global const RefineParams* p, __global const uint* clusters,
                               __global const float4* caster_rects,
                               __global const Photon* photons,
@@ -21,7 +36,9 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                               __global uint* children, __global uint* converged,
                               uint converged_capacity, volatile __global uint* cluster_counts,
                               volatile __global uint* counters,
-                              PHOTON_MAP_PARAMS(volatile __global)) {
+                              PHOTON_MAP_PARAMS(volatile __global),
+                              __global Photon* output_photons, uint output_capacity,
+                              volatile __global uint* output_count) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint t = get_global_id(0);
@@ -33,10 +50,10 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
         uint stored = 0u;
         for (uint k = 0u; k < 4u; k++) {
             slots[k] = photons[4u * t + k];
-            relevant = relevant || slots[k].position[2] != 0.0f;
+            relevant = relevant || slot_met_caster(slots[k].flux, slots[k].position[2]);
             texels[k] = NO_TILE;
-            if (slots[k].direction != NO_TRIANGLE) {
-                texels[k] = atlas_photon_texel(triangle_tiles, tiles, &slots[k], p->atlas_width);
+            if (slot_stored(slots[k].flux)) {
+                texels[k] = target_texel(p, triangle_tiles, tiles, &slots[k]);
                 stored++;
             }
         }
@@ -53,9 +70,13 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
             if (slot < converged_capacity) converged[slot] = cluster;
         } else if (fate == CLUSTER_OUTPUT) {
             for (uint k = 0u; k < 4u; k++) {
-                if (slots[k].direction == NO_TRIANGLE) continue;
+                if (!slot_stored(slots[k].flux)) continue;
                 count_stored(&slots[k], p->flux_quantum, lc);
-                if (texels[k] == NO_TILE) {
+                if (p->deposit_target == CLUSTER_TARGET_SCREEN) {
+                    // deposit_screen deposits (and accounts for) the listed photons
+                    uint at = atomic_inc(output_count);
+                    if (at < output_capacity) output_photons[at] = slots[k];
+                } else if (texels[k] == NO_TILE) {
                     atomic_inc(&lc[COUNTER_OFF_SCREEN]);
                 } else {
                     deposit_photon_texel(PHOTON_MAP_ARGS, lc, texels[k], &slots[k],

@@ -150,7 +150,8 @@ inline void record_end(int end, const Photon* ph, float flux_quantum, __global P
 inline Photon cluster_slot(int end, uint rays, const Photon* ph) {
     Photon s = *ph;
     if (end == PATH_STORED) {
-        s.position[2] = 1.0f;
+        // texture space marks the stored slot; world space keeps its point
+        if (SURFACE_STORE) s.position[2] = 1.0f;
         return s;
     }
     store3(s.position, (float3)(0.0f, 0.0f, photon_met_caster((uint)end, rays) ? 1.0f : 0.0f));

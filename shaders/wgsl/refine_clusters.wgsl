@@ -1,9 +1,11 @@
-// needs: types vector fixed_point atlas photon_map_add photon_clusters
+// needs: types vector fixed_point atlas photon_map_add photon_clusters scene
 // refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one thread per traced
 // cluster of the batch. Its four photon slots (trace_photons' ADAPTIVE variant) decide
 // its fate (core::math::photon_clusters::cluster_fate): discarded, output (its stored
 // photons deposited into the atlas exactly as deposit_atlas does) or refined (four
-// children appended to the next level's list). Mirror of
+// children appended to the next level's list). With the screen target (world-space
+// slots) a photon's texel is its pixel and an output cluster's stored photons are
+// appended to output_photons for deposit_screen. Mirror of
 // backend-opencl/kernels/refine_clusters.cl and backend-cpu/src/kernels/refine_clusters.rs;
 // the atlas sums and counts are bitwise the CPU's, the child list's order is not (every
 // later result is independent of it).
@@ -21,6 +23,8 @@
 @group(0) @binding(10) var<storage, read_write> photon_map0: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> photon_map1: array<atomic<u32>>;
 @group(0) @binding(12) var<storage, read_write> photon_map2: array<atomic<u32>>;
+@group(0) @binding(13) var<storage, read_write> output_photons: array<Photon>;
+@group(0) @binding(14) var<storage, read_write> output_count: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
@@ -37,6 +41,21 @@ fn atlas_photon_texel(ph: Photon, atlas_width: u32) -> u32 {
     return atlas_texel_index(tiles[tile], ph.position.xy, atlas_width);
 }
 
+// The texel the error metric compares: the pixel a world-space photon projects to (the
+// screen target) or the atlas texel under a texture-space photon's uv; NO_TILE off both.
+fn target_texel(ph: Photon, p: RefineParams) -> u32 {
+    if (p.deposit_target == CLUSTER_TARGET_SCREEN) {
+        var px: u32;
+        var py: u32;
+        var depth: f32;
+        if (!project_to_pixel(p.camera, ph.position, &px, &py, &depth)) {
+            return NO_TILE;
+        }
+        return py * p.camera.width + px;
+    }
+    return atlas_photon_texel(ph, p.atlas_width);
+}
+
 fn refine_clusters(t: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
@@ -48,10 +67,10 @@ fn refine_clusters(t: u32, li: u32) {
         var stored = 0u;
         for (var k = 0u; k < 4u; k++) {
             slots[k] = photons[4u * t + k];
-            relevant = relevant || slots[k].position.z != 0.0f;
+            relevant = relevant || slot_met_caster(slots[k].flux, slots[k].position.z);
             texels[k] = NO_TILE;
-            if (slots[k].direction != NO_TRIANGLE) {
-                texels[k] = atlas_photon_texel(slots[k], p.atlas_width);
+            if (slot_stored(slots[k].flux)) {
+                texels[k] = target_texel(slots[k], p);
                 stored += 1u;
             }
         }
@@ -71,11 +90,18 @@ fn refine_clusters(t: u32, li: u32) {
             }
         } else if (fate == CLUSTER_OUTPUT) {
             for (var k = 0u; k < 4u; k++) {
-                if (slots[k].direction == NO_TRIANGLE) {
+                if (!slot_stored(slots[k].flux)) {
                     continue;
                 }
                 count_stored(slots[k], p.flux_quantum);
-                if (texels[k] == NO_TILE) {
+                if (p.deposit_target == CLUSTER_TARGET_SCREEN) {
+                    // deposit_screen deposits (and accounts for) the listed photons
+                    let at = atomicAdd(&output_count[0], 1u);
+                    // the host sizes the list to four photons per cluster of a batch
+                    if (at < arrayLength(&output_photons)) {
+                        output_photons[at] = slots[k];
+                    }
+                } else if (texels[k] == NO_TILE) {
                     atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
                 } else {
                     deposit_photon_texel(texels[k], slots[k], p.flux_quantum, p.hit_distance_quantum);

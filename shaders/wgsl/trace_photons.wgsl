@@ -179,7 +179,10 @@ fn record_end(end: i32, ph: Photon, flux_quantum: f32) {
 fn cluster_slot(end: i32, rays: u32, ph: Photon) -> Photon {
     var s = ph;
     if (end == PATH_STORED) {
-        s.position.z = 1.0f;
+        // texture space marks the stored slot; world space keeps its point
+        if (SURFACE_STORE) {
+            s.position.z = 1.0f;
+        }
         return s;
     }
     s.position = vec3<f32>(0.0f, 0.0f, select(0.0f, 1.0f, photon_met_caster(u32(end), rays)));

@@ -1,24 +1,27 @@
 //! `refine_clusters` (seed 004 section 3.2, AdaptiveCaustics): one step of the adaptive
 //! traversal over a batch of traced clusters. The decisions are core's
-//! `math::photon_clusters`; the deposit is `deposit_atlas`'s.
+//! `math::photon_clusters`; the atlas deposit is `deposit_atlas`'s, the screen target's
+//! photons are `deposit_screen`'s input.
 
 use super::caustic_map::{atlas_photon_texel, deposit_atlas_texel};
 use super::deposit_screen::MapPlanes;
 use super::trace_photons::count_stored;
 use super::Counters;
 use caustica_core::device::layout::{
-    cluster_count, counter, AtlasTileTexel, Photon, RefineParams, NO_TILE,
+    cluster_count, counter, project_to_pixel, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };
 use caustica_core::math::photon_clusters::{
-    cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance, NO_TRIANGLE,
+    cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance, cluster_target,
+    slot_met_caster, slot_stored,
 };
 use rayon::prelude::*;
 
 /// What becomes of one cluster.
 enum Step {
     Discarded,
-    /// Deposited, with its stored photons' accounting.
-    Output(Counters),
+    /// Deposited (or, with the screen target, its stored photons listed), with their
+    /// accounting.
+    Output(Counters, Vec<Photon>),
     /// Converged before the finest level: to be output from fresh photons.
     Converged(u32),
     /// Refined into four children.
@@ -42,6 +45,8 @@ pub struct Refined {
     pub output_photons: u32,
     /// Photon accounting of the output photons.
     pub counters: Counters,
+    /// The screen target's output photons (in cluster order).
+    pub outputs: Vec<Photon>,
 }
 
 /// Judges the batch's clusters and deposits the output ones (see core's
@@ -60,12 +65,21 @@ pub fn refine_clusters(
         .map(|t| {
             let cluster = clusters[(p.first + t) as usize];
             let slots: [Photon; 4] = std::array::from_fn(|k| photons[4 * t as usize + k]);
-            let texels = slots.map(|ph| {
-                (ph.direction != NO_TRIANGLE)
-                    .then(|| atlas_photon_texel(triangle_tiles, tiles, &ph, p.atlas_width))
-            });
+            let screen = p.deposit_target == cluster_target::SCREEN;
+            // the texel the error metric compares: the pixel or the atlas texel
+            let texel_of = |ph: &Photon| {
+                if screen {
+                    project_to_pixel(&p.camera, glam::Vec3::from(ph.position))
+                        .map_or(NO_TILE, |(x, y, _)| y * p.camera.width + x)
+                } else {
+                    atlas_photon_texel(triangle_tiles, tiles, ph, p.atlas_width)
+                }
+            };
+            let texels = slots.map(|ph| slot_stored(ph.flux).then(|| texel_of(&ph)));
             // 004's test (a photon met a caster), or the conservative one
-            let relevant = slots.iter().any(|ph| ph.position[2] != 0.0)
+            let relevant = slots
+                .iter()
+                .any(|ph| slot_met_caster(ph.flux, ph.position[2]))
                 || (p.relevance == cluster_relevance::BOUNDS
                     && caster_rects[..p.rect_count as usize]
                         .iter()
@@ -86,13 +100,18 @@ pub fn refine_clusters(
                 OUTPUT if p.level < p.finest => Step::Converged(cluster),
                 OUTPUT => {
                     let mut c = Counters::default();
+                    let mut listed = Vec::new();
                     for (ph, texel) in slots.iter().zip(texels) {
                         let Some(texel) = texel else { continue };
                         count_stored(ph, p.flux_quantum, &mut c);
-                        let quanta = (p.flux_quantum, p.hit_distance_quantum);
-                        deposit_atlas_texel(&map, texel, ph, quanta, &mut c);
+                        if screen {
+                            listed.push(*ph);
+                        } else {
+                            let quanta = (p.flux_quantum, p.hit_distance_quantum);
+                            deposit_atlas_texel(&map, texel, ph, quanta, &mut c);
+                        }
                     }
-                    Step::Output(c)
+                    Step::Output(c, listed)
                 }
                 _ => {
                     Step::Refined([0, 1, 2, 3].map(|s| cluster_photon_index(cluster, s, p.grid_w)))
@@ -104,10 +123,11 @@ pub fn refine_clusters(
     for s in steps {
         match s {
             Step::Discarded => r.discarded += 1,
-            Step::Output(c) => {
+            Step::Output(c, listed) => {
                 r.output += 1;
                 r.output_photons += c.words[counter::STORED] as u32;
                 r.counters = r.counters.merge(c);
+                r.outputs.extend(listed);
             }
             Step::Converged(c) => r.converged.push(c),
             Step::Refined(ch) => r.children.extend(ch),
@@ -128,6 +148,17 @@ fn append(list: &mut [u32], counts: &mut [u32], word: usize, items: &[u32], capa
         }
     }
     counts[word] = base.wrapping_add(items.len() as u32);
+}
+
+/// Appends the screen target's output photons to `list` at `count[0]` (entries past the
+/// list are counted, not written), as the GPU ports do.
+pub fn append_outputs(r: &Refined, list: &mut [Photon], count: &mut u32) {
+    for (k, ph) in r.outputs.iter().enumerate() {
+        if let Some(slot) = list.get_mut(*count as usize + k) {
+            *slot = *ph;
+        }
+    }
+    *count = count.wrapping_add(r.outputs.len() as u32);
 }
 
 /// Adds a step's results to the child and converged lists and the cluster counts.

@@ -380,27 +380,36 @@ fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION:
 /// `clusters[p.first + i / 4]` of the `p.grid_w` grid
 /// ([`cluster_photon_index`]), and goes to slot `i` whether it stored or not
 /// (`photon_store`'s adaptive slot: an empty slot has zero flux, `direction` =
-/// [`NO_TRIANGLE`] and `position.z` = 1 if the photon met a caster).
+/// [`NO_TRIANGLE`] and `position.z` = 1 if the photon met a caster), in texture space
+/// with `variant.surface_store` (the atlas target), else in world space (the screen
+/// target).
 pub fn trace_cluster_slots(
     scene: &SceneView,
     p: &TraceParams,
     variant: TraceVariant,
     clusters: &[u32],
 ) -> TraceResult {
+    let store = if variant.surface_store {
+        photon_store::SURFACE
+    } else {
+        photon_store::WORLD
+    };
+    let c = (clusters, store);
     match (variant.dielectric, variant.dispersion, variant.absorption) {
-        (false, false, false) => cluster_batch::<false, false, false>(scene, p, clusters),
-        (false, false, true) => cluster_batch::<false, false, true>(scene, p, clusters),
-        (false, true, false) => cluster_batch::<false, true, false>(scene, p, clusters),
-        (false, true, true) => cluster_batch::<false, true, true>(scene, p, clusters),
-        (true, false, false) => cluster_batch::<true, false, false>(scene, p, clusters),
-        (true, false, true) => cluster_batch::<true, false, true>(scene, p, clusters),
-        (true, true, false) => cluster_batch::<true, true, false>(scene, p, clusters),
-        (true, true, true) => cluster_batch::<true, true, true>(scene, p, clusters),
+        (false, false, false) => cluster_batch::<false, false, false>(scene, p, c),
+        (false, false, true) => cluster_batch::<false, false, true>(scene, p, c),
+        (false, true, false) => cluster_batch::<false, true, false>(scene, p, c),
+        (false, true, true) => cluster_batch::<false, true, true>(scene, p, c),
+        (true, false, false) => cluster_batch::<true, false, false>(scene, p, c),
+        (true, false, true) => cluster_batch::<true, false, true>(scene, p, c),
+        (true, true, false) => cluster_batch::<true, true, false>(scene, p, c),
+        (true, true, true) => cluster_batch::<true, true, true>(scene, p, c),
     }
 }
 
-/// The slot a traced cluster photon leaves (see [`trace_cluster_slots`]).
-pub fn cluster_slot(end: &PathEnd, rays: u32) -> Photon {
+/// The slot a traced cluster photon leaves (see [`trace_cluster_slots`]; `store` a
+/// [`photon_store`] space).
+pub fn cluster_slot(end: &PathEnd, rays: u32, store: u32) -> Photon {
     let (code, stored) = match end {
         PathEnd::Stored(ph) => (0, Some(*ph)),
         PathEnd::NoSpecular => (1, None),
@@ -410,7 +419,9 @@ pub fn cluster_slot(end: &PathEnd, rays: u32) -> Photon {
     };
     match stored {
         Some(mut ph) => {
-            ph.position[2] = 1.0;
+            if store == photon_store::SURFACE {
+                ph.position[2] = 1.0;
+            }
             ph
         }
         None => Photon {
@@ -424,7 +435,7 @@ pub fn cluster_slot(end: &PathEnd, rays: u32) -> Photon {
 fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(
     scene: &SceneView,
     p: &TraceParams,
-    clusters: &[u32],
+    (clusters, store): (&[u32], u32),
 ) -> TraceResult {
     let parts: Vec<(Photon, Counters)> = (0..p.count)
         .into_par_iter()
@@ -435,12 +446,12 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
                 scene,
                 p,
                 index,
-                photon_store::SURFACE,
+                store,
                 &mut |_, _| {},
             );
             let mut c = Counters::default();
             c.words[counter::RAYS] += rays as u64;
-            let slot = cluster_slot(&end, rays);
+            let slot = cluster_slot(&end, rays, store);
             count_end(end, p, &mut Vec::new(), &mut c);
             (slot, c)
         })

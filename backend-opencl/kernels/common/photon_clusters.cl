@@ -32,6 +32,15 @@ inline uint cluster_fate(bool any_met_caster, bool converged, uint level, uint f
 }
 
 #define CLUSTER_RELEVANCE_BOUNDS 1u
+#define CLUSTER_TARGET_SCREEN 1u
+
+inline bool slot_stored(const float* flux) {
+    return flux[0] > 0.0f || flux[1] > 0.0f || flux[2] > 0.0f;
+}
+
+inline bool slot_met_caster(const float* flux, float position_z) {
+    return slot_stored(flux) || position_z != 0.0f;
+}
 
 inline bool cluster_overlaps_rect(uint cluster, uint grid_w, float4 rect) {
     uint clusters_w = grid_w / 2u;

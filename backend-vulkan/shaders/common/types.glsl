@@ -105,7 +105,8 @@ struct RefineParams {
     uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
     uint finest; uint metric; uint error_from_level; uint grid_w;
     uint first; uint count; uint children_capacity; uint relevance;
-    uint rect_count; uint _pad0; uint _pad1; uint _pad2;
+    uint rect_count; uint deposit_target; uint _pad0; uint _pad1;
+    GpuCamera camera;
 };
 
 // The closest-hit payload (location 0) shared by the ray generation, closest-hit and miss

@@ -29,7 +29,9 @@ use caustica_core::frame::caustic_atlas::AtlasLayout;
 use caustica_core::frame::light_view_plane::{light_view_planes, LightViewPlane};
 use caustica_core::kernels::{RefineClusters, TracePhotons};
 use caustica_core::math::map_gather::atlas_texel_index;
-use caustica_core::math::photon_clusters::{cluster_metric, cluster_relevance, NO_TRIANGLE};
+use caustica_core::math::photon_clusters::{
+    cluster_metric, cluster_relevance, cluster_target, NO_TRIANGLE,
+};
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::Recording;
 use caustica_core::techniques::adaptive_caustics::{caster_boxes, caster_rects};
@@ -143,6 +145,8 @@ fn run_refine(
     let counters = rec.upload(&[0u32; counter::WORDS], "counters");
     let atlas = rec.create_photon_map(l.texels.len() as u32);
     rec.clear_photon_map(&atlas);
+    let output_photons = rec.create(1, "unused output photons");
+    let output_count = rec.upload(&[0u32], "output count");
     rec.kernel(RefineClusters {
         params: RefineParams {
             atlas_width: l.plan.size.0,
@@ -158,7 +162,9 @@ fn run_refine(
             children_capacity: capacity,
             relevance,
             rect_count: rects.len() as u32,
-            _pad: [0; 3],
+            deposit_target: cluster_target::ATLAS,
+            _pad: [0; 2],
+            camera: GpuCamera::default(),
         },
         clusters,
         caster_rects,
@@ -170,6 +176,8 @@ fn run_refine(
         cluster_counts: counts,
         counters,
         atlas,
+        output_photons,
+        output_count,
     });
     run_and_free(b, "refine_clusters", &rec, |b| {
         let counts = read_buf(b, counts)?;

@@ -429,8 +429,15 @@ pub struct RefineParams {
     /// Rectangles in `caster_rects` (the buffer may hold more: a backend can round a
     /// binding up, so kernels never take its length from the buffer).
     pub rect_count: u32,
+    /// Where output photons go
+    /// ([`cluster_target`](crate::math::photon_clusters::cluster_target)): deposited into
+    /// the atlas, or appended (world space) for Sspm's screen deposit.
+    pub deposit_target: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
+    /// The frame's camera: with the screen target a photon's "texel" is the pixel it
+    /// projects to (`project_to_pixel`).
+    pub camera: GpuCamera,
 }
 
 /// Words of `refine_clusters`' cluster counts buffer.

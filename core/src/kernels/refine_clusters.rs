@@ -18,6 +18,13 @@ use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams}
 /// `cluster_counts[CHILDREN]`. Counts clusters output and discarded in
 /// `cluster_counts`, and the deposit's photon accounting (stored, stored flux,
 /// deposited, off-atlas) in `counters`.
+///
+/// With `params.target` = [`cluster_target::SCREEN`](crate::math::photon_clusters::cluster_target)
+/// the slots are world-space photons, a photon's "texel" (what the error metric compares)
+/// is the pixel it projects to through `params.camera`, and an output cluster's stored
+/// photons are appended to `output_photons` at `output_count[0]` (for `deposit_screen`,
+/// which reads the same count) instead of being deposited; the atlas bindings are then
+/// unused, and `output_photons` is unused with the atlas target.
 #[derive(Clone, Copy, Debug)]
 pub struct RefineClusters {
     /// The batch, level, metric and atlas quanta.
@@ -44,6 +51,11 @@ pub struct RefineClusters {
     pub counters: Buf<u32>,
     /// The atlas's fixed-point sums.
     pub atlas: PhotonMapPlanes,
+    /// The screen target's output photons (world space), appended to.
+    pub output_photons: Buf<Photon>,
+    /// `[0]`: photons in `output_photons` (entries past its length are counted, not
+    /// written; the host sizes it to four per cluster of a batch).
+    pub output_count: Buf<u32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -61,6 +73,9 @@ const BINDINGS: &[Binding] = &[
     bind("photon_map0", ReadWrite),
     bind("photon_map1", ReadWrite),
     bind("photon_map2", ReadWrite),
+    bind("output_photons", ReadWrite),
+    bind("output_capacity", Count),
+    bind("output_count", ReadWrite),
 ];
 
 impl KernelDecl for RefineClusters {
@@ -104,7 +119,10 @@ impl KernelDecl for RefineClusters {
                 4 * cluster_count::WORDS as u64,
             )?
             .buf("counters", self.counters, bytes::COUNTERS)?
-            .photon_map(&self.atlas, n)?;
+            .photon_map(&self.atlas, n)?
+            .buf("output_photons", self.output_photons, 0)?
+            .count("output_capacity", self.output_photons.len)?
+            .buf("output_count", self.output_count, 4)?;
         Ok(Some(p.count as u64))
     }
 }

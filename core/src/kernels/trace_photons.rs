@@ -87,10 +87,10 @@ impl KernelDecl for TracePhotons {
                     "trace_photons: the adaptive variant needs a cluster list".into(),
                 ));
             };
-            if self.variant.fresnel_split || !self.variant.surface_store {
+            if self.variant.fresnel_split {
                 return Err(BackendError::BadArgument(
-                    "trace_photons: the adaptive variant stores texture space, one photon per \
-                     slot (no deterministic split)"
+                    "trace_photons: the adaptive variant stores one photon per slot (no \
+                     deterministic split)"
                         .into(),
                 ));
             }

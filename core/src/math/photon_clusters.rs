@@ -44,6 +44,32 @@ pub mod cluster_relevance {
     pub const BOUNDS: u32 = 1;
 }
 
+/// Where `refine_clusters` sends the photons of the clusters it outputs (seed 004 section
+/// 3.2's "splat into the caustic map", for either technique's map).
+pub mod cluster_target {
+    /// CausticMap's atlas: a photon's texel is the atlas texel under its uv (texture-space
+    /// slots); output photons are deposited at once, as `deposit_atlas` does.
+    pub const ATLAS: u32 = 0;
+    /// Sspm's screen: a photon's texel is the pixel it projects to (world-space slots);
+    /// output photons are appended to a list that `deposit_screen` then deposits.
+    pub const SCREEN: u32 = 1;
+}
+
+/// Whether an adaptive photon slot holds a stored photon (in either space): a stored
+/// photon carries flux in some channel (`trace_photons` drops a photon whose flux fell to
+/// zero), an empty slot none.
+#[inline]
+pub fn slot_stored(flux: [f32; 3]) -> bool {
+    flux[0] > 0.0 || flux[1] > 0.0 || flux[2] > 0.0
+}
+
+/// Whether an adaptive slot's photon met a caustic caster: it stored (only photons that
+/// met a caster store), or its empty slot says so in `position.z`.
+#[inline]
+pub fn slot_met_caster(flux: [f32; 3], position_z: f32) -> bool {
+    slot_stored(flux) || position_z != 0.0
+}
+
 /// Whether cluster `cluster` of a `grid_w` grid overlaps `rect` = `(x0, y0, x1, y1)`
 /// (closed) in the view plane's normalised device coordinates: `x = 2 p.x - 1`,
 /// `y = 1 - 2 p.y` of the plane point `p` in [0, 1]^2 (row 0 at the top, as

@@ -35,6 +35,15 @@ fn cluster_fate(any_met_caster: bool, converged: bool, level: u32, finest: u32, 
 }
 
 const CLUSTER_RELEVANCE_BOUNDS: u32 = 1u;
+const CLUSTER_TARGET_SCREEN: u32 = 1u;
+
+fn slot_stored(flux: vec3<f32>) -> bool {
+    return flux.x > 0.0f || flux.y > 0.0f || flux.z > 0.0f;
+}
+
+fn slot_met_caster(flux: vec3<f32>, position_z: f32) -> bool {
+    return slot_stored(flux) || position_z != 0.0f;
+}
 
 fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: vec4<f32>) -> bool {
     let clusters_w = grid_w / 2u;

@@ -175,9 +175,10 @@ struct RefineParams {
     children_capacity: u32,
     relevance: u32,
     rect_count: u32,
+    deposit_target: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
+    camera: GpuCamera,
 }
 
 struct DirectParams {

@@ -20,23 +20,28 @@
 //! footprint at the map's resolution (004's multi-resolution map is needed only for
 //! clusters stopped before they converge, which this metric never does).
 //!
-//! Not built yet (TODO(issue 17)): Sspm's screen as a deposit target; the `spot-glass`
-//! scene and its Table-1 replication; the plane over a spot's whole cone; benchmarks.
+//! The deposit target is a setting (`deposit`): CausticMap's atlas (the default) or Sspm's
+//! screen ([`AdaptiveCaustics::build_screen`]: Sspm's frame whose photons are the
+//! traversal's, listed in world space by `refine_clusters` and deposited by
+//! `deposit_screen`; a photon's "texel" for the error metric is then its pixel).
 
 mod settings;
 mod traversal;
 
 pub use settings::{
-    AdaptiveCausticsSettings, AdaptiveMetric, ClusterRelevance, LIST_BYTES_PER_CLUSTER,
-    SLOT_BYTES_PER_CLUSTER,
+    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
+    LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
 };
-pub use traversal::{caster_rects, AtlasTarget, PhotonOptics, Traversal, EMPTY_RECT};
+pub use traversal::{
+    caster_rects, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal, EMPTY_RECT,
+};
 
 use crate::backend::Backend;
 use crate::frame::error::Error;
 use crate::frame::technique::Technique;
 use crate::scene::Scene;
 use crate::techniques::caustic_map::{CausticMap, Emission};
+use crate::techniques::sspm::Sspm;
 
 /// The traversal a [`CausticMap`] runs instead of its dense planes.
 #[derive(Clone, Debug)]
@@ -77,15 +82,35 @@ pub struct AdaptiveCaustics;
 
 impl AdaptiveCaustics {
     /// Validates `settings`, uploads the scene, lays out the atlas and makes the
-    /// traversal's buffers: the [`CausticMap`] that runs the traversal.
+    /// traversal's buffers: the [`CausticMap`] that runs the traversal (the atlas target;
+    /// [`AdaptiveCaustics::build_screen`] for the screen).
     pub fn build(
         backend: &mut dyn Backend,
         scene: &Scene,
         settings: AdaptiveCausticsSettings,
     ) -> Result<CausticMap, Error> {
         settings.validate()?;
+        if settings.deposit != AdaptiveDeposit::Atlas {
+            return Err(Error::InvalidParameter(
+                "adaptive-caustics: deposit \"screen\" makes an Sspm frame \
+                 (AdaptiveCaustics::build_screen)"
+                    .into(),
+            ));
+        }
         let map = settings.map.clone();
         CausticMap::build(backend, scene, map, Some(settings))
+    }
+
+    /// The screen target (`deposit: screen`): Sspm's frame (G-buffer, screen deposit,
+    /// resolve, filter, composite, with `settings.screen`) whose photons are the
+    /// traversal's, deposited step by step by `deposit_screen`.
+    pub fn build_screen(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        mut settings: AdaptiveCausticsSettings,
+    ) -> Result<Sspm, Error> {
+        settings.deposit = AdaptiveDeposit::Screen;
+        Sspm::with_adaptive_emission(backend, scene, settings)
     }
 }
 
@@ -121,5 +146,10 @@ pub fn create(
     settings: &serde_json::Value,
 ) -> Result<Box<dyn Technique>, Error> {
     let settings = AdaptiveCausticsSettings::from_json(settings)?;
-    Ok(Box::new(AdaptiveCaustics::build(backend, scene, settings)?))
+    Ok(match settings.deposit {
+        AdaptiveDeposit::Atlas => Box::new(AdaptiveCaustics::build(backend, scene, settings)?),
+        AdaptiveDeposit::Screen => {
+            Box::new(AdaptiveCaustics::build_screen(backend, scene, settings)?)
+        }
+    })
 }

@@ -2,6 +2,7 @@
 
 use crate::frame::error::Error;
 use crate::techniques::caustic_map::{CausticMapSettings, FresnelSplit};
+use crate::techniques::sspm::SspmSettings;
 use serde::{Deserialize, Serialize};
 
 /// When a relevant cluster stops being refined (seed 004 sections 3.2.1-2).
@@ -52,6 +53,20 @@ impl ClusterRelevance {
     }
 }
 
+/// The map the traversal's photons are deposited into (issue 17: so that a comparison
+/// can isolate what adaptive emission buys in each).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AdaptiveDeposit {
+    /// CausticMap's texture-space caustic atlas, its gather and final pass (the default:
+    /// seed 004 splats into a caustic map, and the atlas is the map kind here).
+    #[default]
+    Atlas,
+    /// Sspm's screen-space photon map, its resolve, filter and composite (the `screen`
+    /// settings): the photons of seed 000 replaced by the traversal's.
+    Screen,
+}
+
 /// AdaptiveCaustics' settings: CausticMap's (the same atlas, gather and final pass), with
 /// `photons_w` = `photons_h` the side of the dense-equivalent grid (the finest level, a
 /// power-of-two multiple of `start_grid`), plus the traversal's.
@@ -77,8 +92,17 @@ pub struct AdaptiveCausticsSettings {
     /// Device bytes the traversal may hold (004 section 4.3): the photon slots of a batch
     /// (128 bytes per cluster) and one cluster list per level (16 bytes per cluster of a
     /// batch each), plus the start grid's list. The batch size follows from it; the
-    /// result is bitwise the same for any value.
+    /// result is bitwise the same for any value. The screen target also holds a list of
+    /// the batch's output photons (another 128 bytes per cluster).
     pub max_traversal_bytes: u64,
+    /// Where output photons are deposited: `atlas` (the default) or `screen`.
+    pub deposit: AdaptiveDeposit,
+    /// Sspm's settings for the screen target: depth tolerance, filter, outputs and the
+    /// rest of what follows the deposit. The photons are the traversal's: the photon
+    /// fields (`photons_w`, `photons_h`, `max_bounces`, `min_relative_power`, `seed`,
+    /// `point_emission`, `max_photons_per_batch`, `max_triangles`) are set at the top
+    /// level and must be left at their defaults here. Unused with the atlas target.
+    pub screen: SspmSettings,
 }
 
 impl Default for AdaptiveCausticsSettings {
@@ -90,6 +114,8 @@ impl Default for AdaptiveCausticsSettings {
             start_grid: 64,
             error_from_grid: 512,
             max_traversal_bytes: 64 << 20,
+            deposit: AdaptiveDeposit::Atlas,
+            screen: SspmSettings::default(),
         }
     }
 }
@@ -125,6 +151,22 @@ impl AdaptiveCausticsSettings {
             }
         }
         serde_json::from_value(value.clone()).map_err(|e| bad(e.to_string()))
+    }
+
+    /// The Sspm settings of the screen target: `screen`, with the photon fields of the top
+    /// level (the optics of the trace; `photons_w` and `photons_h` the dense-equivalent
+    /// grid).
+    pub fn screen_settings(&self) -> SspmSettings {
+        let m = &self.map;
+        SspmSettings {
+            photons_w: m.photons_w,
+            photons_h: m.photons_h,
+            max_bounces: m.max_bounces,
+            min_relative_power: m.min_relative_power,
+            seed: m.seed,
+            max_triangles: m.max_triangles,
+            ..self.screen.clone()
+        }
     }
 
     /// The finest level (the start grid is level 0): `photons_w = start_grid * 2^finest`.
@@ -167,6 +209,34 @@ impl AdaptiveCausticsSettings {
         if w > 65536 {
             return bad("photons_w must be <= 65536 (the cluster ids of a level fit a u32)".into());
         }
+        let d = SspmSettings::default();
+        let s = &self.screen;
+        for (field, default) in [
+            ("photons_w", s.photons_w == d.photons_w),
+            ("photons_h", s.photons_h == d.photons_h),
+            ("max_bounces", s.max_bounces == d.max_bounces),
+            (
+                "min_relative_power",
+                s.min_relative_power == d.min_relative_power,
+            ),
+            ("seed", s.seed == d.seed),
+            ("point_emission", s.point_emission == d.point_emission),
+            (
+                "max_photons_per_batch",
+                s.max_photons_per_batch == d.max_photons_per_batch,
+            ),
+            ("max_triangles", s.max_triangles == d.max_triangles),
+        ] {
+            if !default {
+                return bad(format!(
+                    "screen.{field}: the photons are the traversal's; set `{field}` at the top \
+                     level (where it exists) instead"
+                ));
+            }
+        }
+        if self.deposit == AdaptiveDeposit::Screen {
+            self.screen_settings().validate()?;
+        }
         if self.max_traversal_bytes < self.min_traversal_bytes() {
             return bad(format!(
                 "max_traversal_bytes must hold the start grid's list and a batch of one \
@@ -184,16 +254,23 @@ impl AdaptiveCausticsSettings {
 
     /// Fixed bytes plus one cluster's.
     fn min_traversal_bytes(&self) -> u64 {
+        let outputs = match self.deposit {
+            AdaptiveDeposit::Screen => SLOT_BYTES_PER_CLUSTER,
+            AdaptiveDeposit::Atlas => 0,
+        };
         4 * self.start_clusters()
             + SLOT_BYTES_PER_CLUSTER
+            + outputs
             + LIST_BYTES_PER_CLUSTER * self.finest_level() as u64
     }
 
     /// Clusters per batch under `max_traversal_bytes`, at most what the finest level can
-    /// need in one step (`dense_clusters`).
-    pub fn batch_clusters(&self, finest: u32, dense_clusters: u64) -> u32 {
+    /// need in one step (`dense_clusters`); the screen target (`screen`) also holds an
+    /// output list of four photons per cluster.
+    pub fn batch_clusters(&self, finest: u32, dense_clusters: u64, screen: bool) -> u32 {
         let fixed = 4 * self.start_clusters();
-        let per = SLOT_BYTES_PER_CLUSTER + LIST_BYTES_PER_CLUSTER * finest as u64;
+        let outputs = if screen { SLOT_BYTES_PER_CLUSTER } else { 0 };
+        let per = SLOT_BYTES_PER_CLUSTER + outputs + LIST_BYTES_PER_CLUSTER * finest as u64;
         let c = self.max_traversal_bytes.saturating_sub(fixed) / per;
         c.clamp(1, dense_clusters.clamp(1, u32::MAX as u64 / 4)) as u32
     }
@@ -246,7 +323,8 @@ mod tests {
             max_traversal_bytes: 4 * 1024 + 10 * (128 + 16 * 4),
             ..Default::default()
         };
-        assert_eq!(s.batch_clusters(4, 1 << 20), 10);
-        assert_eq!(s.batch_clusters(4, 3), 3);
+        assert_eq!(s.batch_clusters(4, 1 << 20, false), 10);
+        assert_eq!(s.batch_clusters(4, 3, false), 3);
+        assert_eq!(s.batch_clusters(4, 1 << 20, true), 6);
     }
 }

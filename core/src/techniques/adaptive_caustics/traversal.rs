@@ -5,9 +5,12 @@
 //! every cluster of the start grid, each deeper level a list of the clusters refined
 //! into it ([`crate::math::photon_clusters`]). One *step* takes a batch of at most
 //! `batch_clusters` clusters of one level: `trace_photons` (`ADAPTIVE` variant) traces
-//! their four photons each into slots, `refine_clusters` discards, outputs (deposits into
-//! the atlas) or refines each, appending children to the next level's list, and the host
-//! reads the four cluster counts back (the stall of a step: the next step's size).
+//! their four photons each into slots, `refine_clusters` discards, outputs or refines
+//! each, appending children to the next level's list, and the host reads the cluster
+//! counts back (the stall of a step: the next step's size). Output photons go to a
+//! [`DepositTarget`]: deposited into CausticMap's atlas by `refine_clusters` itself, or
+//! listed (world space) and deposited into Sspm's screen photon map by `deposit_screen`
+//! in the same step.
 //!
 //! **Batches** (004 section 4.3). The traversal always steps the deepest level with
 //! clusters left, taking them from the end of its list; the level below is then empty,
@@ -19,16 +22,19 @@
 
 use super::settings::AdaptiveCausticsSettings;
 use crate::backend::{read_buf, Backend};
-use crate::device::handle::{Buf, PhotonMapPlanes, SceneArgs};
+use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::layout::{
-    cluster_count, counter, AtlasTileTexel, Photon, RefineParams, TraceParams,
+    cluster_count, counter, AtlasTileTexel, DepositParams, GpuCamera, Photon, RefineParams,
+    TraceParams,
 };
 use crate::frame::error::Error;
 use crate::frame::light_view_plane::{LightViewPlane, ViewPlaneProjection};
 use crate::frame::stats::{AdaptiveStats, FrameStats};
-use crate::kernels::{RefineClusters, TracePhotons, TraceVariant};
+use crate::kernels::{DepositScreen, RefineClusters, TracePhotons, TraceVariant};
 use crate::math::geometry::Aabb;
-use crate::math::photon_clusters::{cluster_level_seed, cluster_metric, cluster_resample_seed};
+use crate::math::photon_clusters::{
+    cluster_level_seed, cluster_metric, cluster_resample_seed, cluster_target,
+};
 use crate::recording::Recording;
 
 /// Where output photons go: CausticMap's atlas.
@@ -48,6 +54,47 @@ pub struct AtlasTarget {
     pub hit_distance_quantum: f32,
     /// Counters of the photons traced (every level).
     pub trace_counters: Buf<u32>,
+}
+
+/// Where output photons go: Sspm's screen-space photon map.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenTarget {
+    /// `deposit_screen`'s camera, quanta and depth tolerance (its `photon_capacity` is
+    /// the traversal's output list's).
+    pub deposit: DepositParams,
+    /// The frame's G-buffer.
+    pub gbuffer: GBufferPlanes,
+    /// The screen photon map's fixed-point sums.
+    pub photon_map: PhotonMapPlanes,
+    /// Counters of the photons traced (every level).
+    pub trace_counters: Buf<u32>,
+}
+
+/// Where the traversal's output photons go (seed 004's "splat into the caustic map", for
+/// either technique's map).
+#[derive(Clone, Copy, Debug)]
+pub enum DepositTarget {
+    /// CausticMap's atlas (texture-space photons, deposited by `refine_clusters`).
+    Atlas(AtlasTarget),
+    /// Sspm's screen (world-space photons, deposited by `deposit_screen`).
+    Screen(ScreenTarget),
+}
+
+impl DepositTarget {
+    /// (flux quantum, hit-distance quantum) of the target's fixed-point sums.
+    fn quanta(&self) -> (f32, f32) {
+        match self {
+            DepositTarget::Atlas(a) => (a.flux_quantum, a.hit_distance_quantum),
+            DepositTarget::Screen(s) => (s.deposit.flux_quantum, s.deposit.hit_distance_quantum),
+        }
+    }
+
+    fn trace_counters(&self) -> Buf<u32> {
+        match self {
+            DepositTarget::Atlas(a) => a.trace_counters,
+            DepositTarget::Screen(s) => s.trace_counters,
+        }
+    }
 }
 
 /// The optics of a traced photon.
@@ -83,19 +130,26 @@ pub struct Traversal {
     counts: Buf<u32>,
     /// Counters of the output (deposited) photons.
     pub output_counters: Buf<u32>,
+    /// The screen target's output list (four slots per cluster of a batch; one unused
+    /// entry with the atlas target) and its count.
+    outputs: Buf<Photon>,
+    output_count: Buf<u32>,
+    /// Stand-ins for `refine_clusters`' atlas bindings with the screen target.
+    no_atlas: Option<(Buf<u32>, Buf<AtlasTileTexel>, PhotonMapPlanes)>,
 }
 
 impl Traversal {
     /// Records the creation of the traversal's buffers for planes down to level
-    /// `finest`.
+    /// `finest`, for the atlas target or (`screen`) the screen target.
     pub fn record(
         rec: &mut Recording,
         settings: &AdaptiveCausticsSettings,
         finest: u32,
         caster_boxes: &[Aabb],
+        screen: bool,
     ) -> Traversal {
         let dense_clusters = ((settings.start_grid as u64) << finest).pow(2) / 4;
-        let c = settings.batch_clusters(finest, dense_clusters);
+        let c = settings.batch_clusters(finest, dense_clusters, screen);
         let ids: Vec<u32> = (0..settings.start_clusters() as u32).collect();
         Traversal {
             settings: settings.clone(),
@@ -116,12 +170,27 @@ impl Traversal {
             slots: rec.create(4 * c, "adaptive photon slots"),
             counts: rec.create(cluster_count::WORDS as u32, "adaptive cluster counts"),
             output_counters: rec.create(counter::WORDS as u32, "adaptive output counters"),
+            outputs: rec.create(if screen { 4 * c } else { 1 }, "adaptive output photons"),
+            output_count: rec.create(1, "adaptive output photon count"),
+            no_atlas: screen.then(|| {
+                let planes = rec.create_photon_map(1);
+                rec.clear_photon_map(&planes);
+                (
+                    rec.upload(
+                        &[crate::device::layout::NO_TILE],
+                        "adaptive no triangle tiles",
+                    ),
+                    rec.upload(&[[0u32; 4]], "adaptive no atlas tiles"),
+                    planes,
+                )
+            }),
         }
     }
 
     /// Traverses the pyramid of `plane` (its resolution the finest level's,
     /// `start_grid * 2^finest`) of light `light` with seed `plane_seed`: every step
-    /// traced, judged and deposited into `target`. Adds to `adaptive` and the pass times
+    /// traced, judged and deposited into `target` (the target this traversal was
+    /// recorded for). Adds to `adaptive` and the pass times
     /// of `stats`; calls `progress` with the photons traced so far after each step.
     #[allow(clippy::too_many_arguments)]
     pub fn run_plane(
@@ -129,7 +198,7 @@ impl Traversal {
         backend: &mut dyn Backend,
         scene: SceneArgs,
         variant: TraceVariant,
-        target: &AtlasTarget,
+        target: &DepositTarget,
         (light, plane, plane_seed): (u32, &LightViewPlane, u32),
         optics: PhotonOptics,
         stats: &mut FrameStats,
@@ -269,6 +338,37 @@ impl Traversal {
     }
 }
 
+impl Traversal {
+    /// Puts the output photons' accounting (read from `output_counters`) into `stats`
+    /// after a frame's traversal: stored, deposited and their flux are the output photons
+    /// (the traced ones that were refined instead are not part of the map), emitted the
+    /// photons traced; `adaptive` (with the photons the trace stored) goes into
+    /// `stats.adaptive`.
+    pub fn output_stats(
+        &self,
+        backend: &mut dyn Backend,
+        flux_quantum: f32,
+        stats: &mut FrameStats,
+        mut adaptive: AdaptiveStats,
+    ) -> Result<(), Error> {
+        let o = read_buf(backend, self.output_counters)?;
+        let o64 = |i: usize| crate::math::fixed_point::join_u64([o[i], o[i + 1]]);
+        stats.photons_emitted = adaptive.photons_processed;
+        adaptive.photons_traced_stored = stats.photons_stored;
+        stats.photons_stored = o[counter::STORED] as u64;
+        stats.photons_deposited = o[counter::DEPOSITED] as u64;
+        stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;
+        stats.discarded.depth_mismatch = o[counter::DEPTH_MISMATCH] as u64;
+        stats.fixed_point_underflow = o[counter::UNDERFLOW] as u64;
+        stats.fixed_point_saturated = o[counter::SATURATED] as u64;
+        for ch in 0..3 {
+            stats.stored_flux[ch] = o64(counter::STORED_FLUX + 2 * ch) as f64 * flux_quantum as f64;
+        }
+        stats.adaptive = Some(adaptive);
+        Ok(())
+    }
+}
+
 /// One traversal step's dispatch arguments.
 struct StepArgs {
     level: u32,
@@ -294,7 +394,7 @@ impl Traversal {
         backend: &mut dyn Backend,
         scene: SceneArgs,
         variant: TraceVariant,
-        target: &AtlasTarget,
+        target: &DepositTarget,
         (light, plane): (u32, &LightViewPlane),
         optics: PhotonOptics,
         a: &StepArgs,
@@ -309,8 +409,12 @@ impl Traversal {
         let (children, capacity, before) = a.children;
         let mut counts = [0u32; cluster_count::WORDS];
         counts[cluster_count::CHILDREN] = before;
+        let (flux_quantum, hit_distance_quantum) = target.quanta();
         let mut rec = Recording::new();
         rec.update(self.counts, &counts, "adaptive cluster counts")?;
+        if let DepositTarget::Screen(_) = target {
+            rec.clear(self.output_count);
+        }
         rec.kernel(TracePhotons {
             scene,
             variant,
@@ -322,19 +426,38 @@ impl Traversal {
                     a.seed,
                     optics.max_bounces,
                     optics.min_relative_power,
-                    target.flux_quantum,
+                    flux_quantum,
                 )
             },
             photons: self.slots,
             photon_count: self.counts,
-            counters: target.trace_counters,
+            counters: target.trace_counters(),
             clusters: Some(list),
         });
+        let (atlas_width, triangle_tiles, tiles, atlas, camera, kind) =
+            match (target, self.no_atlas) {
+                (DepositTarget::Atlas(a), _) => (
+                    a.atlas_width,
+                    a.triangle_tiles,
+                    a.tiles,
+                    a.sums,
+                    GpuCamera::default(),
+                    cluster_target::ATLAS,
+                ),
+                (DepositTarget::Screen(sc), Some((tt, tl, planes))) => {
+                    (1, tt, tl, planes, sc.deposit.camera, cluster_target::SCREEN)
+                }
+                (DepositTarget::Screen(_), None) => {
+                    return Err(Error::InvalidParameter(
+                        "adaptive traversal recorded for the atlas, run for the screen".into(),
+                    ))
+                }
+            };
         rec.kernel(RefineClusters {
             params: RefineParams {
-                atlas_width: target.atlas_width,
-                flux_quantum: target.flux_quantum,
-                hit_distance_quantum: target.hit_distance_quantum,
+                atlas_width,
+                flux_quantum,
+                hit_distance_quantum,
                 level: a.level,
                 finest: a.finest,
                 metric: a.metric,
@@ -345,19 +468,36 @@ impl Traversal {
                 children_capacity: capacity,
                 relevance: s.relevance.kernel_value(),
                 rect_count: self.caster_boxes.len() as u32,
-                _pad: [0; 3],
+                deposit_target: kind,
+                _pad: [0; 2],
+                camera,
             },
             clusters: list,
             caster_rects: self.rects,
             photons: self.slots,
-            triangle_tiles: target.triangle_tiles,
-            tiles: target.tiles,
+            triangle_tiles,
+            tiles,
             children,
             converged: a.converged,
             cluster_counts: self.counts,
             counters: self.output_counters,
-            atlas: target.sums,
+            atlas,
+            output_photons: self.outputs,
+            output_count: self.output_count,
         });
+        if let DepositTarget::Screen(sc) = target {
+            rec.kernel(DepositScreen {
+                params: DepositParams {
+                    photon_capacity: self.outputs.len,
+                    ..sc.deposit
+                },
+                gbuffer: sc.gbuffer,
+                photons: self.outputs,
+                photon_count: self.output_count,
+                counters: self.output_counters,
+                photon_map: sc.photon_map,
+            });
+        }
         let mut ms = 0.0;
         for t in backend.execute(&rec)? {
             stats.add_pass_time(t.kernel, t.seconds);

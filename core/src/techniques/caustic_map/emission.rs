@@ -86,6 +86,29 @@ impl Emission {
         power_of_two_quantum(max_photon_flux)
     }
 
+    /// Every light's plan: it emits when it has a plane (its view plane sees a caustic
+    /// caster), else why not.
+    pub fn light_plans(&self) -> Vec<crate::frame::plan::LightPlan> {
+        use crate::frame::plan::LightPlan;
+        let mut lights: Vec<LightPlan> = self
+            .planes
+            .iter()
+            .filter(|(_, k, _)| *k == 0)
+            .map(|(i, _, _)| LightPlan {
+                light: *i,
+                emits: true,
+                reason: "its light view plane sees a caustic caster".into(),
+            })
+            .collect();
+        lights.extend(self.skipped_lights.iter().map(|(i, why)| LightPlan {
+            light: *i,
+            emits: false,
+            reason: why.reason().into(),
+        }));
+        lights.sort_by_key(|l| l.light);
+        lights
+    }
+
     /// The RNG seed of plane `plane` of light `light`: the frame seed hashed with both.
     pub fn plane_seed(seed: u32, light: u32, plane: u32) -> u32 {
         seed ^ pcg_hash(

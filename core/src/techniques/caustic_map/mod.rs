@@ -35,7 +35,7 @@ use crate::frame::allocation::planned_allocation;
 use crate::frame::caustic_atlas::{atlas_layout, AtlasLayout};
 use crate::frame::error::Error;
 use crate::frame::image::Image;
-use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
+use crate::frame::plan::{FramePlan, PassPlan, SceneFeatures};
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
@@ -46,7 +46,8 @@ use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
 use crate::techniques::adaptive_caustics::{
-    self, AdaptiveCausticsSettings, AdaptiveSetup, AtlasTarget, PhotonOptics, Traversal,
+    self, AdaptiveCausticsSettings, AdaptiveSetup, AtlasTarget, DepositTarget, PhotonOptics,
+    Traversal,
 };
 use std::time::Instant;
 
@@ -395,6 +396,7 @@ impl CausticMap {
                 &ad.settings,
                 levels,
                 &ad.caster_boxes,
+                false,
             ));
         }
         let alloc = planned_allocation(backend, &rec, None)?;
@@ -470,28 +472,7 @@ impl CausticMap {
 
     /// The frame plan from the emission, the atlas and the images.
     fn replan(&mut self, casters: bool, receivers: bool) {
-        let mut lights: Vec<LightPlan> = self
-            .emission
-            .planes
-            .iter()
-            .filter(|(_, k, _)| *k == 0)
-            .map(|(i, _, _)| LightPlan {
-                light: *i,
-                emits: true,
-                reason: "its light view plane sees a caustic caster".into(),
-            })
-            .collect();
-        lights.extend(
-            self.emission
-                .skipped_lights
-                .iter()
-                .map(|(i, why)| LightPlan {
-                    light: *i,
-                    emits: false,
-                    reason: why.reason().into(),
-                }),
-        );
-        lights.sort_by_key(|l| l.light);
+        let lights = self.emission.light_plans();
         let atlas = self.atlas.is_some();
         let photons = atlas && !self.emission.planes.is_empty();
         let why_no_atlas = if !casters {
@@ -692,7 +673,7 @@ impl CausticMap {
                 stats.emitted_flux[c] += flux[c];
             }
             if let Some(t) = traversal {
-                let target = AtlasTarget {
+                let target = DepositTarget::Atlas(AtlasTarget {
                     triangle_tiles: a.triangle_tiles,
                     tiles: a.tiles,
                     sums: a.sums,
@@ -700,7 +681,7 @@ impl CausticMap {
                     flux_quantum: self.emission.flux_quantum,
                     hit_distance_quantum: self.emission.hit_distance_quantum,
                     trace_counters: a.counters,
-                };
+                });
                 let optics = PhotonOptics {
                     max_bounces: s.max_bounces,
                     min_relative_power: s.min_relative_power,
@@ -842,22 +823,7 @@ impl CausticMap {
                 c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
         }
         if let Some(t) = traversal {
-            // stored, deposited and their flux: the output photons (the traced ones that
-            // were refined instead are not part of the map)
-            let o = read_buf(backend, t.output_counters)?;
-            let o64 = |i: usize| join_u64([o[i], o[i + 1]]);
-            stats.photons_emitted = adaptive.photons_processed;
-            adaptive.photons_traced_stored = stats.photons_stored;
-            stats.photons_stored = o[counter::STORED] as u64;
-            stats.photons_deposited = o[counter::DEPOSITED] as u64;
-            stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;
-            stats.fixed_point_underflow = o[counter::UNDERFLOW] as u64;
-            stats.fixed_point_saturated = o[counter::SATURATED] as u64;
-            for ch in 0..3 {
-                stats.stored_flux[ch] =
-                    o64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
-            }
-            stats.adaptive = Some(adaptive);
+            t.output_stats(backend, self.emission.flux_quantum, stats, adaptive)?;
         }
         self.atlas_valid = true;
         Ok(())

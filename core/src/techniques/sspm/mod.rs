@@ -13,6 +13,11 @@
 //! Photons are processed in batches of at most `max_photons_per_batch`, so the photon
 //! buffer never exceeds `32 * max_photons_per_batch` bytes; every batch is deposited before
 //! the next is traced, so nothing is dropped when a buffer is "full".
+//!
+//! AdaptiveCaustics' screen target is this frame with step 2 replaced: seed 004's
+//! traversal of CausticMap's light view planes (`adaptive_caustics::traversal`) lists the
+//! photons it outputs and `deposit_screen` deposits them, step by step
+//! ([`Sspm::with_adaptive_emission`]).
 
 mod constants;
 mod outputs;
@@ -21,7 +26,7 @@ mod settings;
 
 pub use constants::FrameConstants;
 pub use outputs::{FrameImages, Output, Outputs};
-pub use plan::{plan_frame, Needs};
+pub use plan::{plan_frame, volume_light_plans, Needs};
 pub use settings::{GatherFilter, SspmSettings};
 
 use crate::backend::{read_buf, Backend};
@@ -41,7 +46,27 @@ use crate::kernels::{
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
+use crate::techniques::adaptive_caustics::{
+    self, AdaptiveCausticsSettings, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
+};
+use crate::techniques::caustic_map::Emission;
 use std::time::Instant;
+
+/// Seed 004's adaptive emission in place of seed 000's projection volumes (AdaptiveCaustics
+/// with the screen target): its settings and the casters' bounding boxes.
+#[derive(Clone, Debug)]
+struct AdaptiveEmission {
+    settings: AdaptiveCausticsSettings,
+    caster_boxes: Vec<crate::math::geometry::Aabb>,
+}
+
+/// The adaptive emission of one frame setup: the light view planes (fitted to the
+/// pyramid) and the traversal's buffers.
+#[derive(Clone, Debug)]
+struct AdaptiveFrame {
+    emission: Emission,
+    traversal: Traversal,
+}
 
 /// Device buffers of the photon passes (exist only when some light emits photons).
 #[derive(Clone, Copy, Debug)]
@@ -94,6 +119,9 @@ pub struct Sspm {
     model: Scene,
     /// Scene and caster bounds and whether a material disperses (from the device scene).
     bounds: SceneBounds,
+    /// AdaptiveCaustics' screen target: the traversal's settings, and its frame.
+    adaptive: Option<AdaptiveEmission>,
+    adaptive_frame: Option<AdaptiveFrame>,
 }
 
 /// What the frame constants need of the device scene, kept so that lights can change
@@ -122,6 +150,7 @@ struct FrameParts {
     image_buffers: [Option<ImageBuf>; 4],
     owned: Vec<ResourceId>,
     bytes: u64,
+    adaptive: Option<AdaptiveFrame>,
 }
 
 impl Sspm {
@@ -131,6 +160,29 @@ impl Sspm {
         backend: &mut dyn Backend,
         scene: &Scene,
         settings: SspmSettings,
+    ) -> Result<Sspm, Error> {
+        Self::build(backend, scene, settings, None)
+    }
+
+    /// AdaptiveCaustics with the screen target: Sspm's frame (G-buffer, screen deposit,
+    /// resolve, filter, composite) with `adaptive`'s traversal of CausticMap's light view
+    /// planes in place of seed 000's photons (`adaptive.screen_settings()` are the Sspm
+    /// settings).
+    pub fn with_adaptive_emission(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        adaptive: AdaptiveCausticsSettings,
+    ) -> Result<Sspm, Error> {
+        adaptive.validate()?;
+        let settings = adaptive.screen_settings();
+        Self::build(backend, scene, settings, Some(adaptive))
+    }
+
+    fn build(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: SspmSettings,
+        adaptive: Option<AdaptiveCausticsSettings>,
     ) -> Result<Sspm, Error> {
         settings.validate()?;
         scene
@@ -149,15 +201,25 @@ impl Sspm {
             degenerate_triangles: ds.degenerate_triangles,
             triangles: ds.triangles.len() as u64,
         };
+        let adaptive = adaptive.map(|settings| AdaptiveEmission {
+            settings,
+            caster_boxes: adaptive_caustics::caster_boxes(&ds),
+        });
         // the frame's constants first: a light whose flux is out of range is refused
         // before anything is uploaded
-        FrameConstants::new(scene, &ds, &settings).check_light_flux()?;
+        Sspm::frame_setup(scene, bounds, &settings, adaptive.as_ref())?;
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
         let scene_allocation = planned_allocation(backend, &rec, None)?;
         // every buffer checked against the device before any work runs
-        let (parts, frame_rec) =
-            Sspm::build_frame(backend, bounds, &scene_allocation.buffers, scene, &settings)?;
+        let (parts, frame_rec) = Sspm::build_frame(
+            backend,
+            bounds,
+            &scene_allocation.buffers,
+            scene,
+            &settings,
+            adaptive.as_ref(),
+        )?;
         backend.execute(&rec)?;
         if let Err(e) = backend.execute(&frame_rec) {
             // nothing of this technique may outlive a failed `new`
@@ -188,7 +250,66 @@ impl Sspm {
             reference: None,
             model: scene.clone(),
             bounds,
+            adaptive,
+            adaptive_frame: parts.adaptive,
         })
+    }
+
+    /// The frame constants and plan of `scene` with `settings`: seed 000's emission
+    /// domains, or (`adaptive`) the traversal's light view planes, whose flux quantum the
+    /// fixed-point sums then use. Refuses a light whose flux is out of range.
+    fn frame_setup(
+        scene: &Scene,
+        b: SceneBounds,
+        settings: &SspmSettings,
+        adaptive: Option<&AdaptiveEmission>,
+    ) -> Result<(FrameConstants, FramePlan, Option<Emission>), Error> {
+        let mut constants = FrameConstants::for_bounds(
+            scene,
+            b.bounds,
+            b.caster_bounds,
+            b.has_dispersion,
+            settings,
+        );
+        let (out, prune, filter) = (settings.outputs, settings.prune, settings.filter);
+        let Some(a) = adaptive else {
+            constants.check_light_flux()?;
+            let lights = volume_light_plans(&constants);
+            return Ok((
+                constants,
+                plan_frame(scene, lights, out, prune, filter),
+                None,
+            ));
+        };
+        let mut emission = Emission::new(
+            scene,
+            b.bounds,
+            b.caster_bounds,
+            b.has_dispersion,
+            &a.settings.map,
+        );
+        adaptive_caustics::fit_planes(&mut emission, &a.settings, b.has_dispersion);
+        emission.check_light_flux()?;
+        constants.flux_quantum = emission.flux_quantum;
+        constants.hit_distance_quantum = emission.hit_distance_quantum;
+        let mut plan = plan_frame(scene, emission.light_plans(), out, prune, filter);
+        if let Some(v) = &mut plan.trace_variant {
+            // seed 004's slots, in world space for the screen deposit
+            v.adaptive = true;
+            v.surface_store = false;
+            v.fresnel_split = false;
+        }
+        if let Some(i) = plan.passes.iter().position(|p| p.name == "trace_photons") {
+            let mut refine = plan.passes[i].clone();
+            refine.name = "refine_clusters".into();
+            if refine.runs {
+                refine.reason = "seed 004's traversal: judges the clusters and lists the \
+                                 output photons for deposit_screen"
+                    .into();
+            }
+            plan.passes.insert(i + 1, refine);
+        }
+        Ok((constants, plan, Some(emission)))
     }
 
     /// Plans the frame of `scene` with `settings` and records the creation of its buffers,
@@ -200,23 +321,9 @@ impl Sspm {
         scene_buffers: &[crate::frame::plan::BufferPlan],
         scene: &Scene,
         settings: &SspmSettings,
+        adaptive: Option<&AdaptiveEmission>,
     ) -> Result<(FrameParts, Recording), Error> {
-        let b = bounds;
-        let constants = FrameConstants::for_bounds(
-            scene,
-            b.bounds,
-            b.caster_bounds,
-            b.has_dispersion,
-            settings,
-        );
-        constants.check_light_flux()?;
-        let mut plan = plan_frame(
-            scene,
-            &constants,
-            settings.outputs,
-            settings.prune,
-            settings.filter,
-        );
+        let (constants, mut plan, emission) = Sspm::frame_setup(scene, bounds, settings, adaptive)?;
         let needs = Needs::of_plan(&plan);
         let out = settings.outputs;
         let keep = |requested: bool| requested || !settings.prune;
@@ -231,7 +338,12 @@ impl Sspm {
             .then(|| rec.create(pixels, "direct image"));
         let photon = needs.photons.then(|| {
             let per_light = settings.photons_w as u64 * settings.photons_h as u64;
-            let cap = per_light.min(settings.max_photons_per_batch as u64) as u32;
+            // with adaptive emission the traversal holds the photons (its output list)
+            let cap = if adaptive.is_some() {
+                1
+            } else {
+                per_light.min(settings.max_photons_per_batch as u64) as u32
+            };
             PhotonBuffers {
                 photons: rec.create(cap, "photons"),
                 photon_count: rec.create(1, "photon count"),
@@ -277,6 +389,24 @@ impl Sspm {
             raw_caustics: raw_caustics.filter(|_| keep(out.raw_caustics)),
             filtered_caustics: filtered_caustics.filter(|_| keep(out.filtered_caustics)),
         };
+        let adaptive = match (adaptive, emission) {
+            (Some(a), Some(emission)) if needs.photons => {
+                let finest = emission
+                    .planes
+                    .iter()
+                    .map(|(_, _, p)| p.resolution.0)
+                    .max()
+                    .unwrap_or(1);
+                let levels = (finest / a.settings.start_grid).max(1).ilog2();
+                let traversal =
+                    Traversal::record(&mut rec, &a.settings, levels, &a.caster_boxes, true);
+                Some(AdaptiveFrame {
+                    emission,
+                    traversal,
+                })
+            }
+            _ => None,
+        };
         let allocation = planned_allocation(backend, &rec, Some((w, h)))?;
         plan.buffers = scene_buffers
             .iter()
@@ -294,6 +424,7 @@ impl Sspm {
             image_buffers: [own_composite, direct, raw_caustics, filtered_caustics],
             owned: allocation.owned,
             bytes: allocation.bytes,
+            adaptive,
         };
         Ok((parts, rec))
     }
@@ -309,6 +440,7 @@ impl Sspm {
         self.image_buffers = p.image_buffers;
         self.owned = p.owned;
         self.bytes = self.scene_bytes + p.bytes;
+        self.adaptive_frame = p.adaptive;
     }
 
     /// Frees the frame's buffers (not the scene's).
@@ -320,6 +452,7 @@ impl Sspm {
         self.bytes = self.scene_bytes;
         self.photon = None;
         self.gather = None;
+        self.adaptive_frame = None;
         self.image_buffers = [None; 4];
         backend.execute(&rec)?;
         Ok(())
@@ -336,7 +469,8 @@ impl Sspm {
     ) -> Result<(), Error> {
         self.free_frame(backend)?;
         let (b, buffers) = (self.bounds, self.scene_buffers.clone());
-        match Sspm::build_frame(backend, b, &buffers, &model, &settings)
+        let adaptive = self.adaptive.clone();
+        match Sspm::build_frame(backend, b, &buffers, &model, &settings, adaptive.as_ref())
             .and_then(|(parts, rec)| Ok(backend.execute(&rec).map(|_| parts)?))
         {
             Ok(parts) => {
@@ -347,7 +481,14 @@ impl Sspm {
             }
             Err(e) => {
                 let old = self.model.clone();
-                let (parts, rec) = Sspm::build_frame(backend, b, &buffers, &old, &self.settings)?;
+                let (parts, rec) = Sspm::build_frame(
+                    backend,
+                    b,
+                    &buffers,
+                    &old,
+                    &self.settings,
+                    adaptive.as_ref(),
+                )?;
                 backend.execute(&rec)?;
                 self.install(parts);
                 Err(e)
@@ -365,6 +506,30 @@ impl Sspm {
         settings: SspmSettings,
     ) -> Result<(), Error> {
         settings.validate()?;
+        if let Some(a) = &mut self.adaptive {
+            // the photon fields are the traversal's
+            let mut next = a.settings.clone();
+            next.screen = SspmSettings {
+                photons_w: next.screen.photons_w,
+                photons_h: next.screen.photons_h,
+                max_bounces: next.screen.max_bounces,
+                min_relative_power: next.screen.min_relative_power,
+                seed: next.screen.seed,
+                point_emission: next.screen.point_emission,
+                max_photons_per_batch: next.screen.max_photons_per_batch,
+                max_triangles: next.screen.max_triangles,
+                ..settings.clone()
+            };
+            if next.screen_settings() != settings {
+                return Err(Error::InvalidParameter(
+                    "adaptive-caustics: the photon settings (photons_w, photons_h, \
+                     max_bounces, min_relative_power, seed, max_triangles) are the \
+                     traversal's and cannot change through set_settings"
+                        .into(),
+                ));
+            }
+            a.settings = next;
+        }
         if self.bounds.triangles > settings.max_triangles {
             return Err(Error::InvalidParameter(format!(
                 "max_triangles {} is below the scene's {} triangles: create the technique again",
@@ -385,6 +550,9 @@ impl Sspm {
     /// measurements); nothing else of the settings can change after `new`.
     pub fn set_seed(&mut self, seed: u32) {
         self.settings.seed = seed;
+        if let Some(a) = &mut self.adaptive {
+            a.settings.map.seed = seed;
+        }
     }
 
     /// The settings in effect.
@@ -419,7 +587,7 @@ impl Sspm {
         let start = Instant::now();
         let caps = backend.capabilities();
         let mut stats = FrameStats {
-            technique: "sspm".into(),
+            technique: self.technique_name().into(),
             backend: backend.name().into(),
             device: caps.device.clone(),
             width: self.camera.width,
@@ -473,7 +641,30 @@ impl Sspm {
             let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
             let total = per_light * self.constants.domains.len() as u64;
             let mut done = 0u64;
-            for (light, d) in &self.constants.domains {
+            let mut adaptive = crate::frame::stats::AdaptiveStats::default();
+            if let Some(a) = &self.adaptive_frame {
+                let target = DepositTarget::Screen(ScreenTarget {
+                    deposit: deposit_params,
+                    gbuffer: self.gbuffer,
+                    photon_map: p.photon_map,
+                    trace_counters: p.counters,
+                });
+                self.traverse(
+                    backend,
+                    a,
+                    variant,
+                    &target,
+                    &mut stats,
+                    &mut adaptive,
+                    progress,
+                )?;
+            }
+            let volumes = if self.adaptive_frame.is_some() {
+                &[][..]
+            } else {
+                &self.constants.domains[..]
+            };
+            for (light, d) in volumes {
                 stats.photons_emitted += per_light;
                 for c in 0..3 {
                     stats.emitted_flux[c] += d.flux[c] as f64;
@@ -620,6 +811,10 @@ impl Sspm {
                 stats.stored_flux[ch] =
                     c64(counter::STORED_FLUX + 2 * ch) as f64 * self.constants.flux_quantum as f64;
             }
+            if let Some(a) = &self.adaptive_frame {
+                let q = self.constants.flux_quantum;
+                a.traversal.output_stats(backend, q, &mut stats, adaptive)?;
+            }
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = &self.reference {
@@ -627,6 +822,64 @@ impl Sspm {
             stats.error = Some(crate::frame::metrics::compare(&filtered, r));
         }
         Ok(stats)
+    }
+
+    /// The registry and stats name: `sspm`, or `adaptive-caustics` with adaptive emission.
+    fn technique_name(&self) -> &'static str {
+        if self.adaptive.is_some() {
+            "adaptive-caustics"
+        } else {
+            "sspm"
+        }
+    }
+
+    /// Step 2 with adaptive emission: every light view plane's pyramid traversed, its
+    /// output photons deposited into the screen photon map.
+    #[allow(clippy::too_many_arguments)]
+    fn traverse(
+        &self,
+        backend: &mut dyn Backend,
+        a: &AdaptiveFrame,
+        variant: crate::kernels::TraceVariant,
+        target: &DepositTarget,
+        stats: &mut FrameStats,
+        adaptive: &mut crate::frame::stats::AdaptiveStats,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<(), Error> {
+        let s = &self.adaptive.as_ref().expect("adaptive frame").settings.map;
+        let mut rec = Recording::new();
+        rec.clear(a.traversal.output_counters);
+        self.run(backend, &rec, stats)?;
+        let total: u64 = a.emission.planes.iter().map(|(_, _, p)| p.texels()).sum();
+        let optics = PhotonOptics {
+            max_bounces: s.max_bounces,
+            min_relative_power: s.min_relative_power,
+            fresnel_model: s.fresnel.kernel_value(),
+        };
+        for (light, k, plane) in &a.emission.planes {
+            let flux = plane.power.as_dvec3() * plane.plane_measure();
+            for c in 0..3 {
+                stats.emitted_flux[c] += flux[c];
+            }
+            let before = adaptive.photons_processed;
+            a.traversal.run_plane(
+                backend,
+                self.scene,
+                variant,
+                target,
+                (*light, plane, Emission::plane_seed(s.seed, *light, *k)),
+                optics,
+                stats,
+                adaptive,
+                &mut |traced| {
+                    progress(Progress {
+                        photons_done: (traced - before).min(total),
+                        photons_total: total,
+                    })
+                },
+            )?;
+        }
+        Ok(())
     }
 
     /// The direct-light image buffer (also when only the composite needs it).
@@ -753,28 +1006,16 @@ impl Sspm {
         model
             .validate()
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-        let b = self.bounds;
-        let constants = FrameConstants::for_bounds(
-            &model,
-            b.bounds,
-            b.caster_bounds,
-            b.has_dispersion,
-            &self.settings,
-        );
-        constants.check_light_flux()?;
-        let mut plan = plan_frame(
-            &model,
-            &constants,
-            self.settings.outputs,
-            self.settings.prune,
-            self.settings.filter,
-        );
+        let (constants, mut plan, _) =
+            Sspm::frame_setup(&model, self.bounds, &self.settings, self.adaptive.as_ref())?;
         let gpu: Vec<GpuLight> = lights
             .iter()
             .map(crate::device::device_scene::gpu_light)
             .collect();
+        // the adaptive traversal's planes follow the lights: its frame is remade
         if lights.len() != self.model.lights.len()
             || Needs::of_plan(&plan) != Needs::of_plan(&self.plan)
+            || self.adaptive.is_some()
         {
             return self.replace_lights(backend, model, &gpu);
         }
@@ -851,7 +1092,7 @@ impl Sspm {
 impl Drop for Sspm {
     fn drop(&mut self) {
         crate::frame::technique::report_leak(
-            "sspm",
+            self.technique_name(),
             self.owned.len() + self.scene_owned.len(),
             self.bytes,
         );
@@ -860,7 +1101,7 @@ impl Drop for Sspm {
 
 impl Technique for Sspm {
     fn name(&self) -> &'static str {
-        "sspm"
+        self.technique_name()
     }
 
     fn frame(
@@ -898,7 +1139,11 @@ impl Technique for Sspm {
     }
 
     fn settings_json(&self) -> serde_json::Value {
-        serde_json::to_value(&self.settings).unwrap_or(serde_json::Value::Null)
+        match &self.adaptive {
+            Some(a) => serde_json::to_value(&a.settings),
+            None => serde_json::to_value(&self.settings),
+        }
+        .unwrap_or(serde_json::Value::Null)
     }
 
     fn set_seed(&mut self, seed: u32) {

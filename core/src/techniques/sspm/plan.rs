@@ -23,15 +23,9 @@ pub struct Needs {
     pub composite: bool,
 }
 
-/// Plans a frame of Sspm for `scene` with emission already decided in `constants`.
-pub fn plan_frame(
-    scene: &Scene,
-    constants: &FrameConstants,
-    outputs: Outputs,
-    prune: bool,
-    filter: GatherFilter,
-) -> FramePlan {
-    let features = SceneFeatures::of(scene);
+/// The plan of every light of `constants`' emission (seed 000's projection volumes):
+/// whether it emits and why.
+pub fn volume_light_plans(constants: &FrameConstants) -> Vec<LightPlan> {
     let mut lights: Vec<LightPlan> = constants
         .domains
         .iter()
@@ -51,8 +45,21 @@ pub fn plan_frame(
         reason: why.reason().into(),
     }));
     lights.sort_by_key(|l| l.light);
+    lights
+}
 
-    let emits = !constants.domains.is_empty();
+/// Plans a frame of Sspm for `scene` whose lights' emission is already decided
+/// (`lights`; [`volume_light_plans`] for seed 000's, or AdaptiveCaustics' light view
+/// planes).
+pub fn plan_frame(
+    scene: &Scene,
+    lights: Vec<LightPlan>,
+    outputs: Outputs,
+    prune: bool,
+    filter: GatherFilter,
+) -> FramePlan {
+    let features = SceneFeatures::of(scene);
+    let emits = lights.iter().any(|l| l.emits);
     let n = Needs::of(outputs, emits, prune);
     let mut passes = Vec::new();
     let mut pass = |name: &str, runs: bool, reason: &str| {
