@@ -12,6 +12,13 @@
 //! - **The error metric keeps the flux.** Its stored flux equals the dense grid's within
 //!   four standard deviations of their difference, bounded from the stats (see
 //!   [`flux_tolerance`]).
+//! - **The screen target deposits the traversal's photons.** With the level metric, Sspm's
+//!   screen (`deposit: screen`) receives exactly the photons the atlas target outputs:
+//!   the same traversal (cluster counts, photons per level) and bitwise the same stored
+//!   flux, every output photon accounted for by `deposit_screen` (deposited, off screen or
+//!   depth-mismatched), on every built-in scene and backend; across backends the deposit
+//!   outcomes agree within `deposit_screen`'s own allowance
+//!   (`DEPOSIT_PHOTON_CHANGES`), and the error metric keeps the flux as above.
 
 use caustica_conformance::backends;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
@@ -21,6 +28,7 @@ use caustica_core::techniques::adaptive_caustics::{
     SLOT_BYTES_PER_CLUSTER,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::techniques::sspm::Output;
 use caustica_core::{Backend, FrameStats};
 
 const OUTPUTS: [&str; 5] = [
@@ -233,6 +241,99 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
             assert!(
                 (x - y).abs() <= tol,
                 "{what}: stored flux {x:.6} vs dense {y:.6}, over 4 sigma = {tol:.6}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_screen_target_deposits_the_traversals_photons() {
+    use caustica_conformance::harness::tolerance::DEPOSIT_PHOTON_CHANGES;
+    let settings = |metric| AdaptiveCausticsSettings {
+        map: map(256),
+        metric,
+        start_grid: 32,
+        error_from_grid: 64,
+        ..Default::default()
+    };
+    let mut cpu_deposits: std::collections::HashMap<&str, u64> = Default::default();
+    for (name, mut b) in backends() {
+        for scene_name in BUILTIN_SCENES {
+            let scene = small(scene_name);
+            let what = format!("{name} / {scene_name}");
+            let atlas =
+                AdaptiveCaustics::build(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
+                    .expect("atlas target");
+            let (a, _) = render(b.as_mut(), atlas);
+            let mut screen =
+                AdaptiveCaustics::build_screen(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
+                    .expect("screen target");
+            let s = screen.frame(b.as_mut(), &mut |_| {}).expect("frame");
+            let raw = screen
+                .read_output(b.as_mut(), Output::RawCaustics)
+                .expect("raw");
+            screen.free(b.as_mut()).expect("free");
+            assert_eq!(s.technique, "adaptive-caustics", "{what}");
+            assert_eq!(a.stored_flux, s.stored_flux, "{what}: stored flux");
+            assert_eq!(a.photons_stored, s.photons_stored, "{what}: stored photons");
+            let (ta, ts) = (a.adaptive.as_ref(), s.adaptive.as_ref());
+            assert_eq!(
+                ta.map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
+                ts.map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
+                "{what}: the two targets' traversals differ"
+            );
+            let d = &s.discarded;
+            assert_eq!(
+                s.photons_deposited + d.off_screen + d.depth_mismatch,
+                s.photons_stored,
+                "{what}: output photons unaccounted for"
+            );
+            assert!(
+                raw.pixels.iter().all(|p| p.iter().all(|x| x.is_finite())),
+                "{what}: raw caustics not finite"
+            );
+            if s.photons_deposited > 0 {
+                assert!(
+                    raw.pixels.iter().any(|p| p[0] > 0.0),
+                    "{what}: photons deposited, raw image black"
+                );
+            }
+            match cpu_deposits.get(scene_name) {
+                None => {
+                    cpu_deposits.insert(scene_name, s.photons_deposited);
+                }
+                Some(&c) => {
+                    let allow =
+                        (DEPOSIT_PHOTON_CHANGES * s.photons_stored as f64).ceil() as u64 + 2;
+                    assert!(
+                        c.abs_diff(s.photons_deposited) <= allow,
+                        "{what}: {} photons deposited, the cpu {c} (allowance {allow})",
+                        s.photons_deposited
+                    );
+                }
+            }
+            // the error metric through the screen: the level metric's flux within the bound
+            let mut e =
+                AdaptiveCaustics::build_screen(b.as_mut(), &scene, settings(AdaptiveMetric::Error))
+                    .expect("screen target, error metric");
+            let es = e.frame(b.as_mut(), &mut |_| {}).expect("frame");
+            e.free(b.as_mut()).expect("free");
+            let dispersive = scene.materials.values().any(|m| {
+                matches!(m, caustica_core::scene::Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0)
+            });
+            let (x, y): (f64, f64) = (es.stored_flux.iter().sum(), s.stored_flux.iter().sum());
+            if es.adaptive.is_none() {
+                // no light reaches a caster: no photon pass runs on either
+                assert_eq!((x, y), (0.0, 0.0), "{what}: flux without a traversal");
+                continue;
+            }
+            // the bound takes the finest photon's flux from the dense-equivalent count
+            let mut dense = a.clone();
+            dense.photons_emitted = ta.map_or(0, |t| t.dense_equivalent_photons);
+            let tol = flux_tolerance(&es, &dense, dispersive);
+            assert!(
+                (x - y).abs() <= tol + 1e-9 * y,
+                "{what}: error metric on the screen stores {x}, the level metric {y} (bound {tol})"
             );
         }
     }

@@ -15,8 +15,8 @@
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
-    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases, check_trace,
-    KernelCheck,
+    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
+    check_screen_target, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -95,6 +95,15 @@ fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
 #[test]
 fn adaptive_caustics_kernels_match_cpu_on_the_same_inputs() {
     kernel_test("adaptive caustics kernels", &check_adaptive_caustics);
+}
+
+/// AdaptiveCaustics' screen target on the same inputs: the world-space adaptive trace
+/// slot by slot, `refine_clusters` with the camera bitwise where nothing is projected and
+/// within the pixel-edge allowance of `deposit_screen` where the error metric projects
+/// (`kernels::adaptive_caustics::check_screen_target` argues both).
+#[test]
+fn adaptive_caustics_screen_target_matches_cpu_on_the_same_inputs() {
+    kernel_test("adaptive caustics screen target", &check_screen_target);
 }
 
 #[test]

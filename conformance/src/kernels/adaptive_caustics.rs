@@ -18,10 +18,20 @@
 //!   and at the finest level under the level metric (everything relevant is output): integer decisions and integer atomics, so the cluster counts,
 //!   the child list as a multiset (its order is the atomics' arrival order), the atlas
 //!   sums and the counters must be **bitwise** equal.
+//! - The screen target ([`check_screen_target`]): the trace in world space (slots
+//!   compared as above, positions within [`PHOTON_POSITION_REL`] of the scene), and
+//!   `refine_clusters` on the CPU's world slots with the fixture's camera. At the finest
+//!   level nothing is projected: counts, lists, counters and the output photons (as a
+//!   multiset) must be bitwise equal. At an inner level under the error metric a
+//!   photon's pixel is a projection (two dots and a division, as `deposit_screen`'s), so
+//!   a photon within a few ulps of a pixel edge may flip a cluster between converged and
+//!   refined: at most [`DEPOSIT_PHOTON_CHANGES`] of the slots (plus 2) may change a fate.
 
 use super::caustic_map::layout;
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
-use crate::harness::tolerance::{divergence_allowance, photon_flux_match_rel, PHOTON_POSITION_REL};
+use crate::harness::tolerance::{
+    divergence_allowance, photon_flux_match_rel, DEPOSIT_PHOTON_CHANGES, PHOTON_POSITION_REL,
+};
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
@@ -30,7 +40,7 @@ use caustica_core::frame::light_view_plane::{light_view_planes, LightViewPlane};
 use caustica_core::kernels::{RefineClusters, TracePhotons};
 use caustica_core::math::map_gather::atlas_texel_index;
 use caustica_core::math::photon_clusters::{
-    cluster_metric, cluster_relevance, cluster_target, NO_TRIANGLE,
+    cluster_metric, cluster_relevance, cluster_target, slot_stored, NO_TRIANGLE,
 };
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::Recording;
@@ -75,13 +85,12 @@ fn quanta() -> (f32, f32) {
 fn run_trace(
     fx: &Fixture,
     b: &mut dyn Backend,
-    light: u32,
-    p: &LightViewPlane,
+    (light, p, surface): (u32, &LightViewPlane, bool),
     list: &[u32],
 ) -> Result<(Vec<Photon>, Vec<u32>), String> {
     let count = 4 * (list.len() as u32 - FIRST);
     let mut variant = caustica_core::frame::plan::SceneFeatures::of(&fx.scene).trace_variant();
-    variant.surface_store = true;
+    variant.surface_store = surface;
     variant.adaptive = true;
     let mut rec = Recording::new();
     let clusters = rec.upload(list, "clusters");
@@ -116,6 +125,14 @@ struct Refined {
     converged: Vec<u32>,
     counters: Vec<u32>,
     atlas: Vec<DepositTexel>,
+    /// The screen target's output photons, sorted by their bits.
+    outputs: Vec<Photon>,
+}
+
+/// The deposit target of a `refine_clusters` run: the atlas, or the screen of `camera`.
+enum Target<'a> {
+    Atlas(&'a AtlasLayout),
+    Screen(GpuCamera),
 }
 
 /// Children already in the list before the step (the kernel appends after them).
@@ -123,7 +140,7 @@ const BEFORE: u32 = 7;
 
 fn run_refine(
     b: &mut dyn Backend,
-    l: &AtlasLayout,
+    target: &Target,
     (list, rects): (&[u32], &[[f32; 4]]),
     slots: &[Photon],
     (level, finest, metric, relevance): (u32, u32, u32, u32),
@@ -135,21 +152,40 @@ fn run_refine(
     let clusters = rec.upload(list, "clusters");
     let caster_rects = rec.upload(rects, "caster rectangles");
     let photons = rec.upload(slots, "photon slots");
-    let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
-    let tiles = rec.upload(&l.tiles, "tiles");
+    let (no_tiles, no_tile_rects) = (vec![NO_TILE], vec![[0u32; 4]]);
+    let (tt, tl, atlas_texels, atlas_width, camera, kind) = match target {
+        Target::Atlas(l) => (
+            &l.triangle_tiles,
+            &l.tiles,
+            l.texels.len() as u32,
+            l.plan.size.0,
+            GpuCamera::default(),
+            cluster_target::ATLAS,
+        ),
+        Target::Screen(cam) => (
+            &no_tiles,
+            &no_tile_rects,
+            1,
+            1,
+            *cam,
+            cluster_target::SCREEN,
+        ),
+    };
+    let triangle_tiles = rec.upload(tt, "triangle tiles");
+    let tiles = rec.upload(tl, "tiles");
     let children = rec.upload(&vec![u32::MAX; capacity as usize], "children");
     let converged = rec.upload(&vec![u32::MAX; count as usize], "converged");
     let mut start = [0u32; cluster_count::WORDS];
     start[cluster_count::CHILDREN] = BEFORE;
     let counts = rec.upload(&start, "cluster counts");
     let counters = rec.upload(&[0u32; counter::WORDS], "counters");
-    let atlas = rec.create_photon_map(l.texels.len() as u32);
+    let atlas = rec.create_photon_map(atlas_texels);
     rec.clear_photon_map(&atlas);
-    let output_photons = rec.create(1, "unused output photons");
+    let output_photons = rec.upload(&vec![Photon::default(); 4 * count as usize], "outputs");
     let output_count = rec.upload(&[0u32], "output count");
     rec.kernel(RefineClusters {
         params: RefineParams {
-            atlas_width: l.plan.size.0,
+            atlas_width,
             flux_quantum: fq,
             hit_distance_quantum: hq,
             level,
@@ -162,9 +198,9 @@ fn run_refine(
             children_capacity: capacity,
             relevance,
             rect_count: rects.len() as u32,
-            deposit_target: cluster_target::ATLAS,
+            deposit_target: kind,
             _pad: [0; 2],
-            camera: GpuCamera::default(),
+            camera,
         },
         clusters,
         caster_rects,
@@ -187,7 +223,20 @@ fn run_refine(
         let mut conv = read_buf(b, converged)?;
         conv.truncate(counts[cluster_count::CONVERGED].min(count) as usize);
         conv.sort_unstable();
+        let n = read_buf(b, output_count)?[0].min(4 * count) as usize;
+        let mut outputs = read_buf(b, output_photons)?;
+        outputs.truncate(n);
+        outputs.sort_by_key(|ph| {
+            let f = |x: &[f32]| x.iter().map(|v| v.to_bits()).collect::<Vec<u32>>();
+            (
+                f(&ph.position),
+                ph.hit_distance.to_bits(),
+                f(&ph.flux),
+                ph.direction,
+            )
+        });
         Ok(Refined {
+            outputs,
             counts,
             children: kids,
             converged: conv,
@@ -221,8 +270,8 @@ pub fn check_adaptive_caustics(
         return Ok(v);
     };
     let list = cluster_list();
-    let (sa, ca) = run_trace(fx, r, light, &p, &list)?;
-    let (sb, cb) = run_trace(fx, c, light, &p, &list)?;
+    let (sa, ca) = run_trace(fx, r, (light, &p, true), &list)?;
+    let (sb, cb) = run_trace(fx, c, (light, &p, true), &list)?;
     let n = sa.len() as u64;
     let k = divergence_allowance(n);
     let tol = photon_flux_match_rel(&fx.scene, PHOTON_POSITION_REL * fx.ds.bounds.diagonal());
@@ -276,8 +325,8 @@ pub fn check_adaptive_caustics(
             (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS),
         ),
     ] {
-        let a = run_refine(r, &l, (&list, &rects), &sa, step)?;
-        let b = run_refine(c, &l, (&list, &rects), &sa, step)?;
+        let a = run_refine(r, &Target::Atlas(&l), (&list, &rects), &sa, step)?;
+        let b = run_refine(c, &Target::Atlas(&l), (&list, &rects), &sa, step)?;
         let clusters = list.len() as u32 - FIRST;
         let refined = (a.counts[cluster_count::CHILDREN] - BEFORE) / 4;
         v.check(
@@ -316,6 +365,96 @@ pub fn check_adaptive_caustics(
                 a.atlas.len()
             )
         });
+    }
+    Ok(v)
+}
+
+/// The screen target's trace and refinement (see the module doc).
+pub fn check_screen_target(
+    fx: &Fixture,
+    _inputs: &ReferenceInputs,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("trace_photons (adaptive, world) + refine_clusters (screen)");
+    let Some((light, p)) = plane(fx) else {
+        return Ok(v);
+    };
+    let list = cluster_list();
+    let (sa, _) = run_trace(fx, r, (light, &p, false), &list)?;
+    let (sb, _) = run_trace(fx, c, (light, &p, false), &list)?;
+    let n = sa.len() as u64;
+    let k = divergence_allowance(n);
+    let reach = PHOTON_POSITION_REL * fx.ds.bounds.diagonal();
+    let tol = photon_flux_match_rel(&fx.scene, reach);
+    let stored = |ph: &Photon| slot_stored(ph.flux);
+    let same = |a: &Photon, b: &Photon| {
+        stored(a) == stored(b)
+            && if stored(a) {
+                glam::Vec3::from(a.position).distance(glam::Vec3::from(b.position)) <= reach
+                    && (0..3).all(|ch| {
+                        (a.flux[ch] - b.flux[ch]).abs() <= tol * a.flux[ch].abs().max(b.flux[ch])
+                    })
+            } else {
+                a.position[2] == b.position[2]
+            }
+    };
+    let differ = sa.iter().zip(&sb).filter(|(a, b)| !same(a, b)).count() as u64;
+    v.check(differ <= k, || {
+        format!("{differ} of {n} world-space photon slots differ (allowance {k})")
+    });
+    let kept = sa.iter().filter(|s| stored(s)).count();
+    v.note(format!("{kept} of {n} world-space slots stored"));
+    let rects = caster_rects(&p, &caster_boxes(&fx.ds));
+    let screen = Target::Screen(fx.camera);
+    let clusters = list.len() as u64 - FIRST as u64;
+    for (what, step, exact) in [
+        (
+            "finest level, level metric",
+            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS),
+            true,
+        ),
+        (
+            "inner level, error metric",
+            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS),
+            false,
+        ),
+    ] {
+        let a = run_refine(r, &screen, (&list, &rects), &sa, step)?;
+        let b = run_refine(c, &screen, (&list, &rects), &sa, step)?;
+        let listed = a.outputs.len() as u32;
+        v.check(listed == a.counts[cluster_count::OUTPUT_PHOTONS], || {
+            format!(
+                "{what}: cpu listed {listed} photons, counted {:?}",
+                a.counts
+            )
+        });
+        if exact {
+            v.check(a == b, || {
+                format!(
+                    "{what}: cpu and candidate differ (counts {:?} vs {:?}, {} vs {} outputs)",
+                    a.counts,
+                    b.counts,
+                    a.outputs.len(),
+                    b.outputs.len()
+                )
+            });
+        } else {
+            // a flipped pixel moves one cluster between converged and refined
+            let allow = (DEPOSIT_PHOTON_CHANGES * n as f64).ceil() as u64 + 2;
+            let moved = (a.counts[cluster_count::CONVERGED] as u64)
+                .abs_diff(b.counts[cluster_count::CONVERGED] as u64);
+            v.check(moved <= allow.min(clusters), || {
+                format!(
+                    "{what}: converged clusters cpu {:?} vs {:?} (allowance {allow})",
+                    a.counts, b.counts
+                )
+            });
+            v.check(
+                a.counts[cluster_count::DISCARDED] == b.counts[cluster_count::DISCARDED],
+                || format!("{what}: discards differ: {:?} vs {:?}", a.counts, b.counts),
+            );
+        }
     }
     Ok(v)
 }

@@ -27,7 +27,7 @@ pub mod resolve_caustics;
 pub mod tile_hit_distance;
 pub mod trace_photons;
 
-pub use adaptive_caustics::check_adaptive_caustics;
+pub use adaptive_caustics::{check_adaptive_caustics, check_screen_target};
 pub use bilateral_gather::check_gather;
 pub use caustic_map::check_caustic_map;
 pub use composite::check_composite;
