@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap cmbench adaptive adaptivebench hang
+# causticmap cmbench adaptive adaptivescreen adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -138,6 +138,16 @@ if has adaptive; then
         STIFF_CASES=small-caster,grazing-caster,light-inside-casters ./stiff_table "$OUT/stiff-adaptive.md"
     run timeout 240 ./adaptive_table vulkan ${ADAPTIVE_TOP:-8192} ${ADAPTIVE_REFERENCE:-16384}
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./adaptive_frame
+fi
+if has adaptivescreen; then
+    # issue 17 point 4: the screen target's kernels and frames, and error against time of
+    # the three caustic techniques with both AdaptiveCaustics targets
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend adaptive --test-threads=1
+    run timeout 240 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./adaptive_caustics_frames --test-threads=1
+    run timeout 240 ./caustica report --scenes sphere,cornell --backends ${REPORT_BACKENDS:-vulkan,opencl} \
+        --techniques sspm,caustic-map,adaptive-caustics,adaptive-caustics:deposit=screen \
+        --budgets 512x512,1024x1024,2048x2048,4096x4096 --repeats 3 --reference-noise 0.01 \
+        --out "$OUT/report-adaptive-screen"
 fi
 if has adaptivebench; then
     # issue 17: adaptive vs dense frame times alone, with per-level times

@@ -74,7 +74,9 @@ pub struct Record {
 pub struct ReportPlan {
     /// Scenes (their cameras' sizes are replaced by the reference's).
     pub scenes: Vec<Scene>,
-    /// Technique names.
+    /// Technique specs: a registry name, optionally with setting overrides
+    /// (`adaptive-caustics:deposit=screen+metric=level`, see [`technique_spec`]); the
+    /// spec names the technique in the records.
     pub techniques: Vec<String>,
     /// Backend names.
     pub backends: Vec<String>,
@@ -93,6 +95,30 @@ pub struct ReportPlan {
     pub reference: ReferenceSpec,
 }
 
+/// A technique spec `name[:key=value[+key=value...]]` as (registry name, settings set over
+/// the plan's): a value that parses as JSON is taken as such (`64`, `true`), any other
+/// as a string (`screen`). Errors name the spec and the registry's techniques.
+pub fn technique_spec(
+    spec: &str,
+) -> Result<(&str, serde_json::Map<String, serde_json::Value>), String> {
+    let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
+    if !technique_names().contains(&name) {
+        return Err(format!(
+            "unknown technique '{name}' in '{spec}'; available: {}",
+            technique_names().join(", ")
+        ));
+    }
+    let mut settings = serde_json::Map::new();
+    for pair in rest.split('+').filter(|p| !p.is_empty()) {
+        let (k, v) = pair
+            .split_once('=')
+            .ok_or_else(|| format!("technique '{spec}': '{pair}' is not key=value"))?;
+        let value = serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::from(v));
+        settings.insert(k.to_string(), value);
+    }
+    Ok((name, settings))
+}
+
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
@@ -108,12 +134,7 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Record>, String> {
     for t in &plan.techniques {
-        if !technique_names().contains(&t.as_str()) {
-            return Err(format!(
-                "unknown technique '{t}'; available: {}",
-                technique_names().join(", ")
-            ));
-        }
+        technique_spec(t)?;
     }
     let mut cpu = crate::open_backend("cpu").map_err(|e| e.to_string())?;
     let mut records = Vec::new();
@@ -142,12 +163,13 @@ pub fn run(
         scene.camera.height = plan.reference.height;
         let mask = CausticMask::from_reference(&r.image);
         for technique in &plan.techniques {
+            let (name, overrides) = technique_spec(technique)?;
             // each technique runs the asked filters it has (Sspm's `filter`, CausticMap's
             // `gather`), its default filter where it has none of them, and a technique
             // with one filter runs it once as "own"
             let filter_setting = TECHNIQUES
                 .iter()
-                .find(|t| t.name == technique)
+                .find(|t| t.name == name)
                 .and_then(|t| t.filter_setting);
             let filters: Vec<String> = match filter_setting {
                 Some((_, values)) => {
@@ -172,13 +194,14 @@ pub fn run(
                     .flat_map(|f| plan.budgets.iter().map(move |b| (f, b)))
                 {
                     let mut settings = plan.settings.clone();
+                    settings.extend(overrides.clone());
                     settings.insert("photons_w".into(), pw.into());
                     settings.insert("photons_h".into(), ph.into());
                     if let Some((key, _)) = filter_setting {
                         settings.insert(key.into(), filter.as_str().into());
                     }
                     let settings = serde_json::Value::Object(settings);
-                    let mut sspm = create(technique, backend.as_mut(), &scene, &settings)
+                    let mut sspm = create(name, backend.as_mut(), &scene, &settings)
                         .map_err(|e| e.to_string())?;
                     let (filtered_output, raw_output) = sspm.estimate_outputs();
                     sspm.set_reference(Some(r.image.clone()))

@@ -17,8 +17,9 @@
 //!   the same traversal (cluster counts, photons per level) and bitwise the same stored
 //!   flux, every output photon accounted for by `deposit_screen` (deposited, off screen or
 //!   depth-mismatched), on every built-in scene and backend; across backends the deposit
-//!   outcomes agree within `deposit_screen`'s own allowance
-//!   (`DEPOSIT_PHOTON_CHANGES`), and the error metric keeps the flux as above.
+//!   outcomes agree within the allowances of what differs (each backend's own paths,
+//!   G-buffer and pixel-edge flips: `divergence_allowance`, `GBUFFER_MATERIAL_AGREEMENT`,
+//!   `DEPOSIT_PHOTON_CHANGES`), and the error metric keeps the flux as above.
 
 use caustica_conformance::backends;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
@@ -248,7 +249,9 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
 
 #[test]
 fn the_screen_target_deposits_the_traversals_photons() {
-    use caustica_conformance::harness::tolerance::DEPOSIT_PHOTON_CHANGES;
+    use caustica_conformance::harness::tolerance::{
+        divergence_allowance, DEPOSIT_PHOTON_CHANGES, GBUFFER_MATERIAL_AGREEMENT,
+    };
     let settings = |metric| AdaptiveCausticsSettings {
         map: map(256),
         metric,
@@ -303,8 +306,14 @@ fn the_screen_target_deposits_the_traversals_photons() {
                     cpu_deposits.insert(scene_name, s.photons_deposited);
                 }
                 Some(&c) => {
-                    let allow =
-                        (DEPOSIT_PHOTON_CHANGES * s.photons_stored as f64).ceil() as u64 + 2;
+                    // each backend traces its own photons (a path may diverge:
+                    // divergence_allowance) and deposits them against its own G-buffer
+                    // (a pixel's surface may differ on 1 - GBUFFER_MATERIAL_AGREEMENT of
+                    // the pixels), besides deposit_screen's own pixel-edge flips
+                    let n = s.photons_stored as f64;
+                    let allow = divergence_allowance(s.photons_stored)
+                        + ((1.0 - GBUFFER_MATERIAL_AGREEMENT + DEPOSIT_PHOTON_CHANGES) * n).ceil()
+                            as u64;
                     assert!(
                         c.abs_diff(s.photons_deposited) <= allow,
                         "{what}: {} photons deposited, the cpu {c} (allowance {allow})",

@@ -79,7 +79,8 @@ enum Command {
         /// Comma-separated scenes (built-in names or scene files).
         #[arg(long, default_value = "sphere,cornell")]
         scenes: String,
-        /// Comma-separated techniques.
+        /// Comma-separated techniques, each optionally with settings set over the others'
+        /// (`adaptive-caustics:deposit=screen+metric=level`)
         #[arg(long, default_value = "sspm")]
         techniques: String,
         /// Comma-separated backends.
@@ -321,12 +322,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 return Err("--repeats must be at least 1".into());
             }
             for t in &plan.techniques {
-                if !technique_names().contains(&t.as_str()) {
-                    return Err(format!(
-                        "unknown technique '{t}'; available: {}",
-                        technique_names().join(", ")
-                    ));
-                }
+                caustica::report::technique_spec(t)?;
             }
             for b in &plan.backends {
                 open_backend(b).map_err(|e| e.to_string())?;
