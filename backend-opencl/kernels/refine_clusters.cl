@@ -16,6 +16,45 @@ inline uint atlas_photon_texel(__global const uint* triangle_tiles, __global con
                              atlas_width);
 }
 
+// backend-cpu caustic_map.rs::deposit_atlas_footprint: photon `ph` spread over the window
+// `w` = (x0, x1, y0, y1) of a `width`-wide map, its flux units split exactly
+// (footprint_share), the hit distance and a count on every texel; one deposit counted.
+inline void deposit_photon_footprint(PHOTON_MAP_PARAMS(volatile __global), __local uint* lc,
+                                     uint4 w, uint width, const Photon* ph, float flux_quantum,
+                                     float hit_distance_quantum) {
+    uint n = (w.y - w.x + 1u) * (w.w - w.z + 1u);
+    for (uint ch = 0u; ch < 3u; ch++) {
+        Quantized q = quantize(ph->flux[ch], flux_quantum);
+        if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
+        if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
+        if (q.units == 0u) continue;
+        uint k = 0u;
+        for (uint y = w.z; y <= w.w; y++)
+            for (uint x = w.x; x <= w.y; x++) {
+                uint share = footprint_share(q.units, n, k++);
+                if (share != 0u)
+                    atomic_add_u64_photon_map(PHOTON_MAP_ARGS, y * width + x, 2u * ch, share, 0u);
+            }
+    }
+    uint hd = quantize(ph->hit_distance, hit_distance_quantum).units;
+    for (uint y = w.z; y <= w.w; y++)
+        for (uint x = w.x; x <= w.y; x++) {
+            atomic_add_u64_photon_map(PHOTON_MAP_ARGS, y * width + x, 6u, hd, 0u);
+            atomic_add_u64_photon_map(PHOTON_MAP_ARGS, y * width + x, 8u, 1u, 0u);
+        }
+    atomic_inc(&lc[COUNTER_DEPOSITED]);
+}
+
+// The tile of the receiver under texture-space photon `ph`; false without one
+// (backend-cpu caustic_map.rs::atlas_photon_tile).
+inline bool atlas_photon_tile(__global const uint* triangle_tiles, __global const uint4* tiles,
+                              const Photon* ph, uint4* tile) {
+    uint i = triangle_tiles[ph->direction];
+    if (i == NO_TILE) return false;
+    *tile = tiles[i];
+    return true;
+}
+
 // The texel the error metric compares: the pixel a world-space photon projects to (the
 // screen target) or the atlas texel under a texture-space photon's uv; NO_TILE off both.
 inline uint target_texel(__global const RefineParams* p, __global const uint* triangle_tiles,
@@ -43,7 +82,8 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
     counters_clear_local(lc);
     uint t = get_global_id(0);
     if (t < p->count) {
-        uint cluster = clusters[p->first + t];
+        uint entry = clusters[p->first + t];
+        uint cluster = entry_cluster(entry);
         Photon slots[4];
         uint texels[4];
         bool relevant = false;
@@ -60,14 +100,28 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
         if (p->relevance == CLUSTER_RELEVANCE_BOUNDS)
             for (uint r = 0u; r < p->rect_count; r++)
                 relevant = relevant || cluster_overlaps_rect(cluster, p->grid_w, caster_rects[r]);
-        bool one_texel = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0] &&
-                         texels[2] == texels[0] && texels[3] == texels[0];
-        uint fate = cluster_fate(relevant, one_texel, p->level, p->finest, p->metric,
-                                 p->error_from_level);
+        // converged: all four in one square of at most error_texels a side, on one
+        // receiver's tile (atlas) or on screen (backend-cpu refine_clusters.rs)
+        bool screen = p->deposit_target == CLUSTER_TARGET_SCREEN;
+        uint width = screen ? p->camera.width : p->atlas_width;
+        uint4 tile = (uint4)(0u);
+        bool all_in = stored == 4u && (screen || atlas_photon_tile(triangle_tiles, tiles,
+                                                                   &slots[0], &tile));
+        uint xs[4], ys[4];
+        for (uint k = 0u; k < 4u; k++) {
+            xs[k] = texels[k] % width;
+            ys[k] = texels[k] / width;
+            all_in = all_in && texels[k] != NO_TILE &&
+                     (screen || (xs[k] >= tile.x && xs[k] < tile.x + tile.z && ys[k] >= tile.y &&
+                                 ys[k] < tile.y + tile.z));
+        }
+        uint spread = all_in ? cluster_spread(xs, ys) : 0xffffffffu;
+        uint fate = cluster_fate(relevant, spread <= max(p->error_texels, 1u), p->level, p->finest,
+                                 p->metric, p->error_from_level);
         if (fate == CLUSTER_OUTPUT && p->level < p->finest) {
             // converged early: output later from fresh photons
             uint slot = atomic_inc(&cluster_counts[CLUSTER_COUNT_CONVERGED]);
-            if (slot < converged_capacity) converged[slot] = cluster;
+            if (slot < converged_capacity) converged[slot] = cluster_entry(cluster, spread);
         } else if (fate == CLUSTER_OUTPUT) {
             for (uint k = 0u; k < 4u; k++) {
                 if (!slot_stored(slots[k].flux)) continue;
@@ -78,6 +132,14 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                     if (at < output_capacity) output_photons[at] = slots[k];
                 } else if (texels[k] == NO_TILE) {
                     atomic_inc(&lc[COUNTER_OFF_SCREEN]);
+                } else if (entry_spread(entry) > 1u &&
+                           atlas_photon_tile(triangle_tiles, tiles, &slots[k], &tile)) {
+                    // a converged cluster's photon covers the cluster's footprint
+                    uint4 w = footprint_window(texels[k] % p->atlas_width,
+                                               texels[k] / p->atlas_width, entry_spread(entry),
+                                               tile);
+                    deposit_photon_footprint(PHOTON_MAP_ARGS, lc, w, p->atlas_width, &slots[k],
+                                             p->flux_quantum, p->hit_distance_quantum);
                 } else {
                     deposit_photon_texel(PHOTON_MAP_ARGS, lc, texels[k], &slots[k],
                                          p->flux_quantum, p->hit_distance_quantum);

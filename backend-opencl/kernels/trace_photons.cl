@@ -345,7 +345,8 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
     uint i = get_global_id(0);
     if (i < p->count) {
         if (ADAPTIVE) {
-            uint index = cluster_photon_index(clusters[p->first + i / 4u], i % 4u, p->grid_w);
+            uint index = cluster_photon_index(entry_cluster(clusters[p->first + i / 4u]), i % 4u,
+                                              p->grid_w);
             Photon ph;
             uint rays;
             int end = trace_photon(SCENE_ARGS, p, index, &ph, &rays);

@@ -56,11 +56,64 @@ fn target_texel(ph: Photon, p: RefineParams) -> u32 {
     return atlas_photon_texel(ph, p.atlas_width);
 }
 
+// backend-cpu caustic_map.rs::deposit_atlas_footprint: photon `ph` spread over the window
+// `w` = (x0, x1, y0, y1) of a `width`-wide map, its flux units split exactly
+// (footprint_share), the hit distance and a count on every texel; one deposit counted.
+fn deposit_photon_footprint(w: vec4<u32>, width: u32, ph: Photon, flux_quantum: f32,
+                            hit_distance_quantum: f32) {
+    let n = (w.y - w.x + 1u) * (w.w - w.z + 1u);
+    for (var ch = 0u; ch < 3u; ch++) {
+        let q = quantize(ph.flux[ch], flux_quantum);
+        if (q.underflow) {
+            atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
+        }
+        if (q.saturated) {
+            atomicAdd(&lc[COUNTER_SATURATED], 1u);
+        }
+        if (q.units == 0u) {
+            continue;
+        }
+        var k = 0u;
+        for (var y = w.z; y <= w.w; y++) {
+            for (var x = w.x; x <= w.y; x++) {
+                let share = footprint_share(q.units, n, k);
+                if (share != 0u) {
+                    atomic_add_u64_photon_map(y * width + x, DEPOSIT_FLUX + 2u * ch, share, 0u);
+                }
+                k += 1u;
+            }
+        }
+    }
+    let hd = quantize(ph.hit_distance, hit_distance_quantum).units;
+    for (var y = w.z; y <= w.w; y++) {
+        for (var x = w.x; x <= w.y; x++) {
+            atomic_add_u64_photon_map(y * width + x, DEPOSIT_HIT_DISTANCE, hd, 0u);
+            atomic_add_u64_photon_map(y * width + x, DEPOSIT_PHOTONS, 1u, 0u);
+        }
+    }
+    atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
+}
+
+// The tile of the receiver under texture-space photon `ph`; false without one
+// (backend-cpu caustic_map.rs::atlas_photon_tile).
+fn atlas_photon_tile(ph: Photon, tile: ptr<function, vec4<u32>>) -> bool {
+    if (ph.direction >= arrayLength(&triangle_tiles)) {
+        return false;
+    }
+    let i = triangle_tiles[ph.direction];
+    if (i >= arrayLength(&tiles)) {
+        return false;
+    }
+    *tile = tiles[i];
+    return true;
+}
+
 fn refine_clusters(t: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
     if (t < p.count) {
-        let cluster = clusters[p.first + t];
+        let entry = clusters[p.first + t];
+        let cluster = entry_cluster(entry);
         var slots: array<Photon, 4>;
         var texels: array<u32, 4>;
         var relevant = false;
@@ -79,14 +132,33 @@ fn refine_clusters(t: u32, li: u32) {
                 relevant = relevant || cluster_overlaps_rect(cluster, p.grid_w, caster_rects[r]);
             }
         }
-        let one_texel = stored == 4u && texels[0] != NO_TILE && texels[1] == texels[0]
-            && texels[2] == texels[0] && texels[3] == texels[0];
-        let fate = cluster_fate(relevant, one_texel, p.level, p.finest, p.metric, p.error_from_level);
+        // converged: all four in one square of at most error_texels a side, on one
+        // receiver's tile (atlas) or on screen (backend-cpu refine_clusters.rs)
+        let screen = p.deposit_target == CLUSTER_TARGET_SCREEN;
+        let width = select(p.atlas_width, p.camera.width, screen);
+        var tile: vec4<u32>;
+        var all_in = stored == 4u && (screen || atlas_photon_tile(slots[0], &tile));
+        var xs: array<u32, 4>;
+        var ys: array<u32, 4>;
+        for (var k = 0u; k < 4u; k++) {
+            xs[k] = texels[k] % width;
+            ys[k] = texels[k] / width;
+            all_in = all_in && texels[k] != NO_TILE
+                && (screen || (xs[k] >= tile.x && xs[k] < tile.x + tile.z
+                               && ys[k] >= tile.y && ys[k] < tile.y + tile.z));
+        }
+        var spread = 0xffffffffu;
+        if (all_in) {
+            spread = cluster_spread(xs, ys);
+        }
+        let converged_here = spread <= max(p.error_texels, 1u);
+        let fate = cluster_fate(relevant, converged_here, p.level, p.finest, p.metric,
+                                p.error_from_level);
         if (fate == CLUSTER_OUTPUT && p.level < p.finest) {
             // converged early: output later from fresh photons
             let slot = atomicAdd(&cluster_counts[CLUSTER_COUNT_CONVERGED], 1u);
             if (slot < arrayLength(&converged)) {
-                converged[slot] = cluster;
+                converged[slot] = cluster_entry(cluster, spread);
             }
         } else if (fate == CLUSTER_OUTPUT) {
             for (var k = 0u; k < 4u; k++) {
@@ -103,6 +175,13 @@ fn refine_clusters(t: u32, li: u32) {
                     }
                 } else if (texels[k] == NO_TILE) {
                     atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
+                } else if (entry_spread(entry) > 1u && atlas_photon_tile(slots[k], &tile)) {
+                    // a converged cluster's photon covers the cluster's footprint
+                    deposit_photon_footprint(footprint_window(texels[k] % p.atlas_width,
+                                                              texels[k] / p.atlas_width,
+                                                              entry_spread(entry), tile),
+                                             p.atlas_width, slots[k], p.flux_quantum,
+                                             p.hit_distance_quantum);
                 } else {
                     deposit_photon_texel(texels[k], slots[k], p.flux_quantum, p.hit_distance_quantum);
                 }

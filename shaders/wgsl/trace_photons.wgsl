@@ -358,7 +358,7 @@ fn trace_photons(i: u32, li: u32) {
     let p = params;
     if (i < p.count) {
         if (ADAPTIVE) {
-            let index = cluster_photon_index(clusters[p.first + i / 4u], i % 4u, p.grid_w);
+            let index = cluster_photon_index(entry_cluster(clusters[p.first + i / 4u]), i % 4u, p.grid_w);
             var ph: Photon;
             var rays: u32;
             let end = trace_photon(p, index, &ph, &rays);

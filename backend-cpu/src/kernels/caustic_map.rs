@@ -3,7 +3,7 @@
 //! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
 //! `math::map_gather`; these are loops over it.
 
-use super::deposit_screen::{deposit_photon_texel, MapPlanes};
+use super::deposit_screen::{add_photon_map_u64, deposit_photon_texel, MapPlanes};
 use super::direct_light::specular_tree;
 use super::Counters;
 use crate::traversal::SceneView;
@@ -11,11 +11,13 @@ use caustica_core::device::layout::{
     camera_ray, counter, AtlasParams, AtlasTexel, AtlasTileTexel, MapLookupParams, Photon,
     PhotonMapView, NO_TILE,
 };
+use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::map_gather::{
     atlas_texel_index, footprint_extent, footprint_texels, gather_caustic_texel, join_u64_f32,
     sample_caustic_map,
 };
 use caustica_core::math::optics::saturate_radiance3;
+use caustica_core::math::photon_clusters::{footprint_share, footprint_window};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -64,6 +66,60 @@ pub fn deposit_atlas_texel(
     } else {
         deposit_photon_texel(map, texel, ph, flux_quantum, hit_distance_quantum, c);
     }
+}
+
+/// Adds photon `ph` of a converged cluster to its footprint: the window
+/// ([`footprint_window`]) of side `spread` around atlas texel `texel` in its tile, its flux
+/// units split exactly over the window's texels ([`footprint_share`]), the hit distance
+/// and a count on each; one deposit counted.
+pub fn deposit_atlas_footprint(
+    map: &MapPlanes,
+    (tile, atlas_width, texel, spread): (AtlasTileTexel, u32, u32, u32),
+    ph: &Photon,
+    (flux_quantum, hit_distance_quantum): (f32, f32),
+    c: &mut Counters,
+) {
+    let (x0, x1, y0, y1) = footprint_window(texel % atlas_width, texel / atlas_width, spread, tile);
+    let n = (x1 - x0 + 1) * (y1 - y0 + 1);
+    let hd = quantize(ph.hit_distance, hit_distance_quantum).units as u64;
+    for ch in 0..3 {
+        let q = quantize(ph.flux[ch], flux_quantum);
+        if q.underflow {
+            c.bump(counter::UNDERFLOW);
+        }
+        if q.saturated {
+            c.bump(counter::SATURATED);
+        }
+        if q.units == 0 {
+            continue;
+        }
+        for (k, (x, y)) in (y0..=y1)
+            .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+            .enumerate()
+        {
+            let share = footprint_share(q.units, n, k as u32);
+            if share != 0 {
+                add_photon_map_u64(map, y * atlas_width + x, 2 * ch as u32, share as u64);
+            }
+        }
+    }
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            add_photon_map_u64(map, y * atlas_width + x, 6, hd);
+            add_photon_map_u64(map, y * atlas_width + x, 8, 1);
+        }
+    }
+    c.bump(counter::DEPOSITED);
+}
+
+/// The tile of the receiver under texture-space photon `ph`, if its triangle has one.
+pub fn atlas_photon_tile(
+    triangle_tiles: &[u32],
+    tiles: &[AtlasTileTexel],
+    ph: &Photon,
+) -> Option<AtlasTileTexel> {
+    let tile = *triangle_tiles.get(ph.direction as usize)?;
+    tiles.get(tile as usize).copied()
 }
 
 /// The atlas texel under texture-space photon `ph` (its uv on its triangle's receiver

@@ -28,7 +28,7 @@ pub type MapPlanes<'a> = [&'a [AtomicU64]; DEPOSIT_PLANES];
 
 /// `map[pixel].words[word, word + 1] += v` (a little-endian u64 at an even `word`), on
 /// the plane that holds the word ([`deposit_word`]); the planes hold whole pairs.
-fn atomic_add_u64_photon_map(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
+pub fn add_photon_map_u64(map: &MapPlanes, pixel: u32, word: u32, v: u64) {
     let (k, at) = deposit_word(pixel, word);
     map[k][at / 2].fetch_add(v, Ordering::Relaxed);
 }
@@ -108,12 +108,12 @@ pub fn deposit_photon_texel(
             c.bump(counter::SATURATED);
         }
         if q.units != 0 {
-            atomic_add_u64_photon_map(map, texel, 2 * ch as u32, q.units as u64);
+            add_photon_map_u64(map, texel, 2 * ch as u32, q.units as u64);
         }
     }
     let hd = quantize(ph.hit_distance, hit_distance_quantum).units as u64;
-    atomic_add_u64_photon_map(map, texel, 6, hd);
-    atomic_add_u64_photon_map(map, texel, 8, 1);
+    add_photon_map_u64(map, texel, 6, hd);
+    add_photon_map_u64(map, texel, 8, 1);
     c.bump(counter::DEPOSITED);
 }
 

@@ -3,7 +3,9 @@
 //! `math::photon_clusters`; the atlas deposit is `deposit_atlas`'s, the screen target's
 //! photons are `deposit_screen`'s input.
 
-use super::caustic_map::{atlas_photon_texel, deposit_atlas_texel};
+use super::caustic_map::{
+    atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint, deposit_atlas_texel,
+};
 use super::deposit_screen::MapPlanes;
 use super::trace_photons::count_stored;
 use super::Counters;
@@ -11,8 +13,8 @@ use caustica_core::device::layout::{
     cluster_count, counter, project_to_pixel, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };
 use caustica_core::math::photon_clusters::{
-    cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance, cluster_target,
-    slot_met_caster, slot_stored,
+    cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
+    cluster_spread, cluster_target, entry_cluster, entry_spread, slot_met_caster, slot_stored,
 };
 use rayon::prelude::*;
 
@@ -63,7 +65,8 @@ pub fn refine_clusters(
     let steps: Vec<Step> = (0..p.count)
         .into_par_iter()
         .map(|t| {
-            let cluster = clusters[(p.first + t) as usize];
+            let entry = clusters[(p.first + t) as usize];
+            let cluster = entry_cluster(entry);
             let slots: [Photon; 4] = std::array::from_fn(|k| photons[4 * t as usize + k]);
             let screen = p.deposit_target == cluster_target::SCREEN;
             // the texel the error metric compares: the pixel or the atlas texel
@@ -84,8 +87,32 @@ pub fn refine_clusters(
                     && caster_rects[..p.rect_count as usize]
                         .iter()
                         .any(|r| cluster_overlaps_rect(cluster, p.grid_w, *r)));
-            let first = texels[0].unwrap_or(NO_TILE);
-            let converged = first != NO_TILE && texels.iter().all(|t| *t == Some(first));
+            // converged: all four in one square of at most error_texels a side, on one
+            // receiver's tile (atlas) or on screen
+            let width = if screen {
+                p.camera.width
+            } else {
+                p.atlas_width
+            };
+            let tile = (!screen)
+                .then(|| atlas_photon_tile(triangle_tiles, tiles, &slots[0]))
+                .flatten();
+            let inside = |t: u32| {
+                t != NO_TILE
+                    && (screen
+                        || tile.is_some_and(|r| {
+                            let (x, y) = (t % width, t / width);
+                            x >= r[0] && x < r[0] + r[2] && y >= r[1] && y < r[1] + r[2]
+                        }))
+            };
+            let all_in = texels.iter().all(|t| t.is_some_and(inside));
+            let spread = if all_in {
+                let xy = texels.map(|t| t.unwrap_or(0));
+                cluster_spread(xy.map(|t| t % width), xy.map(|t| t / width))
+            } else {
+                u32::MAX
+            };
+            let converged = spread <= p.error_texels.max(1);
             let fate = cluster_fate(
                 relevant,
                 converged,
@@ -97,18 +124,23 @@ pub fn refine_clusters(
             use caustica_core::math::photon_clusters::cluster_fate::{DISCARDED, OUTPUT};
             match fate {
                 DISCARDED => Step::Discarded,
-                OUTPUT if p.level < p.finest => Step::Converged(cluster),
+                OUTPUT if p.level < p.finest => Step::Converged(cluster_entry(cluster, spread)),
                 OUTPUT => {
                     let mut c = Counters::default();
                     let mut listed = Vec::new();
                     for (ph, texel) in slots.iter().zip(texels) {
                         let Some(texel) = texel else { continue };
                         count_stored(ph, p.flux_quantum, &mut c);
-                        if screen {
-                            listed.push(*ph);
-                        } else {
-                            let quanta = (p.flux_quantum, p.hit_distance_quantum);
-                            deposit_atlas_texel(&map, texel, ph, quanta, &mut c);
+                        let quanta = (p.flux_quantum, p.hit_distance_quantum);
+                        let own_tile = atlas_photon_tile(triangle_tiles, tiles, ph);
+                        match (screen, own_tile) {
+                            (true, _) => listed.push(*ph),
+                            // a converged cluster's photon covers the cluster's footprint
+                            (false, Some(tile)) if entry_spread(entry) > 1 => {
+                                let at = (tile, p.atlas_width, texel, entry_spread(entry));
+                                deposit_atlas_footprint(&map, at, ph, quanta, &mut c);
+                            }
+                            (false, _) => deposit_atlas_texel(&map, texel, ph, quanta, &mut c),
                         }
                     }
                     Step::Output(c, listed)

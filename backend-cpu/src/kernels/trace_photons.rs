@@ -39,7 +39,9 @@ use caustica_core::math::optics::{
     CHANNEL_WAVELENGTH_UM,
 };
 use caustica_core::math::packing::pack_unit_vector;
-use caustica_core::math::photon_clusters::{cluster_photon_index, photon_met_caster, NO_TRIANGLE};
+use caustica_core::math::photon_clusters::{
+    cluster_photon_index, entry_cluster, photon_met_caster, NO_TRIANGLE,
+};
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::sampling::{
     stratified_cell, to_world, uniform_cone, view_plane_direction, view_plane_texel_weight,
@@ -440,7 +442,7 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
     let parts: Vec<(Photon, Counters)> = (0..p.count)
         .into_par_iter()
         .map(|i| {
-            let cluster = clusters[(p.first + i / 4) as usize];
+            let cluster = entry_cluster(clusters[(p.first + i / 4) as usize]);
             let index = cluster_photon_index(cluster, i % 4, p.grid_w);
             let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
                 scene,

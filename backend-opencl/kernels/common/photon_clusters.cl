@@ -12,6 +12,37 @@
 #define CLUSTER_COUNT_OUTPUT_PHOTONS 3
 #define CLUSTER_COUNT_CONVERGED 4
 
+#define CLUSTER_ID_MASK 0x3fffffffu
+#define MAX_ERROR_TEXELS 4u
+
+inline uint cluster_entry(uint cluster, uint spread) {
+    return (cluster & CLUSTER_ID_MASK) | ((clamp(spread, 1u, MAX_ERROR_TEXELS) - 1u) << 30u);
+}
+
+inline uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }
+
+inline uint entry_spread(uint entry) { return (entry >> 30u) + 1u; }
+
+inline uint cluster_spread(const uint* xs, const uint* ys) {
+    uint lx = xs[0], hx = xs[0], ly = ys[0], hy = ys[0];
+    for (uint k = 1u; k < 4u; k++) {
+        lx = min(lx, xs[k]); hx = max(hx, xs[k]);
+        ly = min(ly, ys[k]); hy = max(hy, ys[k]);
+    }
+    return max(hx - lx, hy - ly) + 1u;
+}
+
+// (x0, x1, y0, y1), inclusive
+inline uint4 footprint_window(uint x, uint y, uint spread, uint4 tile) {
+    uint r = spread / 2u;
+    return (uint4)(max(x >= r ? x - r : 0u, tile.x), min(x + r, tile.x + tile.z - 1u),
+                   max(y >= r ? y - r : 0u, tile.y), min(y + r, tile.y + tile.z - 1u));
+}
+
+inline uint footprint_share(uint units, uint n, uint k) {
+    return units / n + (k < units % n ? 1u : 0u);
+}
+
 inline uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {
     uint clusters_w = grid_w / 2u;
     uint cx = cluster % clusters_w;

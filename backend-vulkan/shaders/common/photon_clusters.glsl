@@ -3,6 +3,10 @@
 
 const uint NO_TRIANGLE = 0xffffffffu;
 
+const uint CLUSTER_ID_MASK = 0x3fffffffu;
+
+uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }
+
 uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {
     uint clusters_w = grid_w / 2u;
     uint cx = cluster % clusters_w;

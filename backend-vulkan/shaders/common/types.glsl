@@ -105,7 +105,7 @@ struct RefineParams {
     uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
     uint finest; uint metric; uint error_from_level; uint grid_w;
     uint first; uint count; uint children_capacity; uint relevance;
-    uint rect_count; uint deposit_target; uint _pad0; uint _pad1;
+    uint rect_count; uint deposit_target; uint error_texels; uint _pad0;
     GpuCamera camera;
 };
 

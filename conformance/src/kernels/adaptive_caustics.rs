@@ -15,7 +15,9 @@
 //! - `refine_clusters` on the CPU's slots (so only the kernel under test differs), at an
 //!   inner level under the error metric (discards, converged outputs and refinements all
 //!   occur on a lit scene; with 004's photon test and with the casters' projected bounds)
-//!   and at the finest level under the level metric (everything relevant is output): integer decisions and integer atomics, so the cluster counts,
+//!   with a tolerance of 4 texels, at the finest level under the level metric (everything
+//!   relevant is output), and outputting converged entries whose footprints (1 to 4
+//!   texels) splat over several texels: integer decisions and integer atomics, so the cluster counts,
 //!   the child list as a multiset (its order is the atomics' arrival order), the atlas
 //!   sums and the counters must be **bitwise** equal.
 //! - The screen target ([`check_screen_target`]): the trace in world space (slots
@@ -40,7 +42,8 @@ use caustica_core::frame::light_view_plane::{light_view_planes, LightViewPlane};
 use caustica_core::kernels::{RefineClusters, TracePhotons};
 use caustica_core::math::map_gather::atlas_texel_index;
 use caustica_core::math::photon_clusters::{
-    cluster_metric, cluster_relevance, cluster_target, slot_stored, NO_TRIANGLE,
+    cluster_entry, cluster_metric, cluster_relevance, cluster_target, slot_stored,
+    MAX_ERROR_TEXELS, NO_TRIANGLE,
 };
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::Recording;
@@ -143,7 +146,7 @@ fn run_refine(
     target: &Target,
     (list, rects): (&[u32], &[[f32; 4]]),
     slots: &[Photon],
-    (level, finest, metric, relevance): (u32, u32, u32, u32),
+    (level, finest, metric, relevance, error_texels): (u32, u32, u32, u32, u32),
 ) -> Result<Refined, String> {
     let count = list.len() as u32 - FIRST;
     let capacity = BEFORE + 4 * count;
@@ -199,7 +202,8 @@ fn run_refine(
             relevance,
             rect_count: rects.len() as u32,
             deposit_target: kind,
-            _pad: [0; 2],
+            error_texels,
+            _pad: 0,
             camera,
         },
         clusters,
@@ -311,22 +315,47 @@ pub fn check_adaptive_caustics(
     });
     v.note(format!("{stored} of {n} slots stored"));
     let rects = caster_rects(&p, &caster_boxes(&fx.ds));
-    for (what, step) in [
+    // converged entries as the resample step reads them: footprints of 1 to 4 texels
+    let spread_list: Vec<u32> = list
+        .iter()
+        .enumerate()
+        .map(|(i, &e)| {
+            if i < FIRST as usize {
+                e
+            } else {
+                cluster_entry(e, 1 + pcg_hash(e) % MAX_ERROR_TEXELS)
+            }
+        })
+        .collect();
+    for (what, step, list) in [
         (
             "inner level, error metric, photon relevance",
-            (1, 3, cluster_metric::ERROR, cluster_relevance::PHOTONS),
+            (1, 3, cluster_metric::ERROR, cluster_relevance::PHOTONS, 1),
+            &list,
         ),
         (
             "inner level, error metric, bounds relevance",
-            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS),
+            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS, 1),
+            &list,
+        ),
+        (
+            "inner level, error metric, 4-texel tolerance",
+            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS, 4),
+            &list,
         ),
         (
             "finest level, level metric, bounds relevance",
-            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS),
+            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS, 1),
+            &list,
+        ),
+        (
+            "converged clusters output over their footprints",
+            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS, 1),
+            &spread_list,
         ),
     ] {
-        let a = run_refine(r, &Target::Atlas(&l), (&list, &rects), &sa, step)?;
-        let b = run_refine(c, &Target::Atlas(&l), (&list, &rects), &sa, step)?;
+        let a = run_refine(r, &Target::Atlas(&l), (list, &rects), &sa, step)?;
+        let b = run_refine(c, &Target::Atlas(&l), (list, &rects), &sa, step)?;
         let clusters = list.len() as u32 - FIRST;
         let refined = (a.counts[cluster_count::CHILDREN] - BEFORE) / 4;
         v.check(
@@ -411,12 +440,12 @@ pub fn check_screen_target(
     for (what, step, exact) in [
         (
             "finest level, level metric",
-            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS),
+            (2, 2, cluster_metric::LEVEL, cluster_relevance::BOUNDS, 1),
             true,
         ),
         (
             "inner level, error metric",
-            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS),
+            (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS, 1),
             false,
         ),
     ] {

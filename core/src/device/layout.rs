@@ -433,8 +433,14 @@ pub struct RefineParams {
     /// ([`cluster_target`](crate::math::photon_clusters::cluster_target)): deposited into
     /// the atlas, or appended (world space) for Sspm's screen deposit.
     pub deposit_target: u32,
+    /// The error metric's tolerance: a cluster converges when its four photons land in a
+    /// square of at most this many texels a side (1: seed 004's one texel), and its
+    /// photons are then splatted over that footprint
+    /// ([`footprint_window`](crate::math::photon_clusters::footprint_window)); at most
+    /// [`MAX_ERROR_TEXELS`](crate::math::photon_clusters::MAX_ERROR_TEXELS).
+    pub error_texels: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
     /// The frame's camera: with the screen target a photon's "texel" is the pixel it
     /// projects to (`project_to_pixel`).
     pub camera: GpuCamera,

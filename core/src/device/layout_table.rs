@@ -225,7 +225,7 @@ table! {
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
         error_from_level, grid_w, first, count, children_capacity, relevance,
-        rect_count, deposit_target, _pad, camera
+        rect_count, deposit_target, error_texels, _pad, camera
     }
 }
 

@@ -55,6 +55,73 @@ pub mod cluster_target {
     pub const SCREEN: u32 = 1;
 }
 
+/// Largest `error_texels`: the side of a converged cluster's footprint travels in the top
+/// two bits of its list entry ([`cluster_entry`]).
+pub const MAX_ERROR_TEXELS: u32 = 4;
+/// The cluster-id bits of a list entry (ids stay below 2^30: a level grid is at most 65536
+/// texels a side, 2^30 clusters).
+pub const CLUSTER_ID_MASK: u32 = (1 << 30) - 1;
+
+/// A cluster list entry: cluster `cluster` and, for a converged cluster, the side
+/// `spread` (texels, 1..=[`MAX_ERROR_TEXELS`]) of the square its photons landed in; other
+/// entries carry 1.
+#[inline]
+pub fn cluster_entry(cluster: u32, spread: u32) -> u32 {
+    (cluster & CLUSTER_ID_MASK) | ((spread.clamp(1, MAX_ERROR_TEXELS) - 1) << 30)
+}
+
+/// The cluster of list entry `entry` ([`cluster_entry`]).
+#[inline]
+pub fn entry_cluster(entry: u32) -> u32 {
+    entry & CLUSTER_ID_MASK
+}
+
+/// The footprint side (texels) of list entry `entry` ([`cluster_entry`]).
+#[inline]
+pub fn entry_spread(entry: u32) -> u32 {
+    (entry >> 30) + 1
+}
+
+/// The side (texels) of the smallest square of map texels that holds the texels
+/// `(xs[k], ys[k])` of a cluster's four photons: 1 when all four landed in one texel
+/// (seed 004's convergence), more when they spread.
+#[inline]
+pub fn cluster_spread(xs: [u32; 4], ys: [u32; 4]) -> u32 {
+    let span = |v: [u32; 4]| {
+        let (mut lo, mut hi) = (v[0], v[0]);
+        for x in v {
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+        hi - lo
+    };
+    span(xs).max(span(ys)) + 1
+}
+
+/// The splat window of a photon of a cluster converged with footprint side `spread`
+/// (seed 004 section 3.2.2's multi-resolution map: a coarse photon covers its cluster's
+/// footprint, not one texel): the odd square of side `2 * (spread / 2) + 1` centred on
+/// its texel `(x, y)`, clipped to its receiver's tile `[x, y, side, _]`, as inclusive
+/// `(x0, x1, y0, y1)`.
+#[inline]
+pub fn footprint_window(x: u32, y: u32, spread: u32, tile: [u32; 4]) -> (u32, u32, u32, u32) {
+    let r = spread / 2;
+    let (tx1, ty1) = (tile[0] + tile[2] - 1, tile[1] + tile[2] - 1);
+    (
+        x.saturating_sub(r).max(tile[0]),
+        (x + r).min(tx1),
+        y.saturating_sub(r).max(tile[1]),
+        (y + r).min(ty1),
+    )
+}
+
+/// Texel `k`'s share (of `n` texels) of `units` fixed-point units: `units / n`, plus one for
+/// the first `units % n` texels, so the shares add up to `units` exactly.
+#[inline]
+pub fn footprint_share(units: u32, n: u32, k: u32) -> u32 {
+    units / n + (k < units % n) as u32
+}
+
 /// Whether an adaptive photon slot holds a stored photon (in either space): a stored
 /// photon carries flux in some channel (`trace_photons` drops a photon whose flux fell to
 /// zero), an empty slot none.
@@ -218,6 +285,28 @@ mod tests {
         assert!(photon_met_caster(3, 1));
         assert!(photon_met_caster(0, 2));
         assert!(photon_met_caster(4, 12));
+    }
+
+    #[test]
+    fn footprints_keep_every_unit_inside_the_tile() {
+        assert_eq!(cluster_spread([3, 3, 3, 3], [7, 7, 7, 7]), 1);
+        assert_eq!(cluster_spread([3, 4, 3, 5], [7, 7, 9, 8]), 3);
+        for spread in 1..=MAX_ERROR_TEXELS {
+            let e = cluster_entry(123_456_789 & CLUSTER_ID_MASK, spread);
+            assert_eq!(
+                (entry_cluster(e), entry_spread(e)),
+                (123_456_789 & CLUSTER_ID_MASK, spread)
+            );
+        }
+        // a texel at a tile corner keeps its window inside the tile
+        let tile = [10, 20, 8, 0];
+        assert_eq!(footprint_window(10, 27, 4, tile), (10, 12, 25, 27));
+        assert_eq!(footprint_window(13, 23, 3, tile), (12, 14, 22, 24));
+        assert_eq!(footprint_window(13, 23, 1, tile), (13, 13, 23, 23));
+        for (units, n) in [(0u32, 1u32), (7, 9), (u32::MAX, 25), (100, 3)] {
+            let sum: u64 = (0..n).map(|k| footprint_share(units, n, k) as u64).sum();
+            assert_eq!(sum, units as u64);
+        }
     }
 
     #[test]

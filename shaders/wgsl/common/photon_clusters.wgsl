@@ -12,6 +12,43 @@ const CLUSTER_COUNT_DISCARDED: u32 = 2u;
 const CLUSTER_COUNT_OUTPUT_PHOTONS: u32 = 3u;
 const CLUSTER_COUNT_CONVERGED: u32 = 4u;
 
+const CLUSTER_ID_MASK: u32 = 0x3fffffffu;
+const MAX_ERROR_TEXELS: u32 = 4u;
+
+fn cluster_entry(cluster: u32, spread: u32) -> u32 {
+    return (cluster & CLUSTER_ID_MASK) | ((clamp(spread, 1u, MAX_ERROR_TEXELS) - 1u) << 30u);
+}
+
+fn entry_cluster(entry: u32) -> u32 {
+    return entry & CLUSTER_ID_MASK;
+}
+
+fn entry_spread(entry: u32) -> u32 {
+    return (entry >> 30u) + 1u;
+}
+
+fn cluster_spread(xs: array<u32, 4>, ys: array<u32, 4>) -> u32 {
+    var lo = vec2<u32>(xs[0], ys[0]);
+    var hi = lo;
+    for (var k = 1u; k < 4u; k++) {
+        lo = min(lo, vec2<u32>(xs[k], ys[k]));
+        hi = max(hi, vec2<u32>(xs[k], ys[k]));
+    }
+    return max(hi.x - lo.x, hi.y - lo.y) + 1u;
+}
+
+// (x0, x1, y0, y1), inclusive
+fn footprint_window(x: u32, y: u32, spread: u32, tile: vec4<u32>) -> vec4<u32> {
+    let r = spread / 2u;
+    let t1 = tile.xy + vec2<u32>(tile.z - 1u, tile.z - 1u);
+    return vec4<u32>(max(select(0u, x - r, x >= r), tile.x), min(x + r, t1.x),
+                     max(select(0u, y - r, y >= r), tile.y), min(y + r, t1.y));
+}
+
+fn footprint_share(units: u32, n: u32, k: u32) -> u32 {
+    return units / n + select(0u, 1u, k < units % n);
+}
+
 fn cluster_photon_index(cluster: u32, sub: u32, grid_w: u32) -> u32 {
     let clusters_w = grid_w / 2u;
     let cx = cluster % clusters_w;

@@ -176,8 +176,8 @@ struct RefineParams {
     relevance: u32,
     rect_count: u32,
     deposit_target: u32,
+    error_texels: u32,
     _pad0: u32,
-    _pad1: u32,
     camera: GpuCamera,
 }
 

@@ -89,6 +89,14 @@ pub struct AdaptiveCausticsSettings {
     /// traversal-level metric (004 section 4.2: from 512^2 on, since coarse photons
     /// rarely converge).
     pub error_from_grid: u32,
+    /// The error metric's tolerance (texels): a cluster converges when its four photons
+    /// land in a square of at most this many caustic-map texels a side on one receiver,
+    /// and its photons are then splatted over a window that size (seed 004 section 3.2.2's
+    /// alternative: "photon divergence greater than a single texel but less than a
+    /// user-defined tolerance", with its multi-resolution map). 1 (the default) is 004's
+    /// metric: one texel, and a one-texel splat. At most 4; above 1 only with the atlas
+    /// target.
+    pub error_texels: u32,
     /// Device bytes the traversal may hold (004 section 4.3): the photon slots of a batch
     /// (128 bytes per cluster) and one cluster list per level (16 bytes per cluster of a
     /// batch each), plus the start grid's list. The batch size follows from it; the
@@ -113,6 +121,7 @@ impl Default for AdaptiveCausticsSettings {
             relevance: ClusterRelevance::Bounds,
             start_grid: 64,
             error_from_grid: 512,
+            error_texels: 1,
             max_traversal_bytes: 64 << 20,
             deposit: AdaptiveDeposit::Atlas,
             screen: SspmSettings::default(),
@@ -236,6 +245,17 @@ impl AdaptiveCausticsSettings {
         }
         if self.deposit == AdaptiveDeposit::Screen {
             self.screen_settings().validate()?;
+        }
+        let max = crate::math::photon_clusters::MAX_ERROR_TEXELS;
+        if self.error_texels == 0 || self.error_texels > max {
+            return bad(format!("error_texels must be in 1..={max}"));
+        }
+        if self.error_texels > 1 && self.deposit == AdaptiveDeposit::Screen {
+            return bad(
+                "error_texels above 1 splats converged photons over atlas texels: it needs \
+                 deposit \"atlas\""
+                    .into(),
+            );
         }
         if self.max_traversal_bytes < self.min_traversal_bytes() {
             return bad(format!(
