@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap cmbench adaptive adaptivescreen adaptivebench hang
+# causticmap cmbench adaptive adaptivescreen adaptivefootprint adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -148,6 +148,12 @@ if has adaptivescreen; then
         --techniques sspm,caustic-map,adaptive-caustics,adaptive-caustics:deposit=screen \
         --budgets 512x512,1024x1024,2048x2048,4096x4096 --repeats 3 --reference-noise 0.01 \
         --out "$OUT/report-adaptive-screen"
+fi
+if has adaptivefootprint; then
+    # issue 17 point 2: the error metric's tolerance with footprint splats, on Table 1's scene
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend adaptive --test-threads=1
+    run timeout 240 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./adaptive_caustics_frames --test-threads=1
+    run timeout 400 env ERROR_TEXELS=1,2,4 ./adaptive_table vulkan ${ADAPTIVE_TOP:-8192} ${ADAPTIVE_REFERENCE:-16384}
 fi
 if has adaptivebench; then
     # issue 17: adaptive vs dense frame times alone, with per-level times

@@ -6,7 +6,8 @@
 //! `cargo run --release -p caustica-conformance --example adaptive_table -- [BACKEND]
 //! [TOP] [REFERENCE]`: budgets 256^2 .. TOP^2 (default 2048), reference a dense grid of
 //! REFERENCE^2 photons (default 2 x TOP) on the same backend (default cpu). Prints
-//! Markdown.
+//! Markdown. With `ERROR_TEXELS=1,2,4` (default 1) it adds a table of the error metric at
+//! each tolerance (`error_texels`: footprint splats above 1).
 
 use caustica_core::frame::image::Image;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
@@ -103,6 +104,35 @@ fn main() {
             row[1].2
         );
         n *= 2;
+    }
+    let tolerances: Vec<u32> = std::env::var("ERROR_TEXELS")
+        .unwrap_or("1".into())
+        .split(',')
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    if tolerances.len() > 1 {
+        println!("\n### Error metric by tolerance (`error_texels`)\n");
+        println!("| equivalent grid | error_texels | photons / dense | map relMSE | ms |");
+        println!("| --- | ---: | ---: | ---: | ---: |");
+        let mut n = 1024;
+        while n <= top {
+            let dense = (n as f64).powi(2);
+            for &t in &tolerances {
+                let settings = AdaptiveCausticsSettings {
+                    error_texels: t,
+                    ..adaptive(n, plane, AdaptiveMetric::Error)
+                };
+                let tech = AdaptiveCaustics::build(b, &scene, settings).expect("adaptive");
+                let (s, a, ms) = run(b, tech);
+                let p = s.adaptive.map_or(0, |a| a.photons_processed) as f64;
+                println!(
+                    "| {n}^2 | {t} | {:.4} | {:.3e} | {ms:.0} |",
+                    p / dense,
+                    rel_mse(&a, &r)
+                );
+            }
+            n *= 2;
+        }
     }
     println!("\nPhotons traced per level (64^2 start grid first):\n");
     for (n, metric, levels) in per_level {
