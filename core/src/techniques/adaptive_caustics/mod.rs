@@ -16,9 +16,10 @@
 //! error metric holds, else refined into four clusters of the next level; batches of
 //! clusters under `max_traversal_bytes`. Photons output early carry their coarse texels'
 //! flux (the cluster's solid angle or area), so the map's expectation is the dense
-//! grid's; they all landed in one atlas texel, so their splat *is* the cluster's
-//! footprint at the map's resolution (004's multi-resolution map is needed only for
-//! clusters stopped before they converge, which this metric never does).
+//! grid's. With 004's one-texel metric (`error_texels: 1`) they all landed in one atlas
+//! texel, so that texel *is* the cluster's footprint; with a wider tolerance (004's
+//! alternative) each output photon is splatted over its cluster's footprint, the flux
+//! split exactly (`math::photon_clusters::footprint_window`).
 //!
 //! The deposit target is a setting (`deposit`): CausticMap's atlas (the default) or Sspm's
 //! screen ([`AdaptiveCaustics::build_screen`]: Sspm's frame whose photons are the
