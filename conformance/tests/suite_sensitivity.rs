@@ -19,8 +19,8 @@
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
-    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases, check_trace,
-    KernelCheck,
+    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
+    check_screen_target, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -37,6 +37,7 @@ use caustica_core::kernels::{
     RefineClusters, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
+use caustica_core::math::photon_clusters::entry_cluster;
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::builtin::BUILTIN_SCENES;
@@ -87,6 +88,11 @@ enum Mutation {
     ClusterChildOff,
     /// `refine_clusters` loses one converged cluster per step.
     ConvergedLost,
+    /// `refine_clusters` lists converged clusters without their footprints (the spread
+    /// bits of the error metric's tolerance).
+    FootprintSpreadLost,
+    /// `refine_clusters` (screen target) drops the last photon it lists.
+    OutputListShort,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -367,6 +373,32 @@ impl Mutant {
                     v[cluster_count::CONVERGED] -= 1;
                 }
             }),
+            (
+                Mutation::FootprintSpreadLost,
+                Kernel::RefineClusters(RefineClusters {
+                    converged,
+                    cluster_counts,
+                    ..
+                }),
+            ) => {
+                let n =
+                    bytemuck::pod_collect_to_vec::<u8, u32>(&self.inner.read(cluster_counts.id)?)
+                        [cluster_count::CONVERGED] as usize;
+                self.modify::<u32>(converged.id, |v| {
+                    let n = n.min(v.len());
+                    for e in &mut v[..n] {
+                        *e = entry_cluster(*e);
+                    }
+                })
+            }
+            (
+                Mutation::OutputListShort,
+                Kernel::RefineClusters(RefineClusters { output_count, .. }),
+            ) => self.modify::<u32>(output_count.id, |v| {
+                if v[0] > 0 {
+                    v[0] -= 1;
+                }
+            }),
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
@@ -451,6 +483,10 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
         (
             "trace_photons (adaptive) + refine_clusters",
             Box::new(check_adaptive_caustics),
+        ),
+        (
+            "trace_photons (adaptive, world) + refine_clusters (screen)",
+            Box::new(check_screen_target),
         ),
     ]
 }
@@ -565,6 +601,14 @@ fn each_fault_fails_the_check_of_its_kernel() {
         (
             Mutation::ConvergedLost,
             "trace_photons (adaptive) + refine_clusters",
+        ),
+        (
+            Mutation::FootprintSpreadLost,
+            "trace_photons (adaptive) + refine_clusters",
+        ),
+        (
+            Mutation::OutputListShort,
+            "trace_photons (adaptive, world) + refine_clusters (screen)",
         ),
     ] {
         let mut report = Report::new(kernel);
