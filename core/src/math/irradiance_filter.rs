@@ -1,0 +1,157 @@
+//! Edge-aware filtering of screen-space irradiance (seed 003 section 24.4, PhotonGi; meant
+//! to be shared with the caustic techniques): the edge-stopping weights (Eqs. 10-11), the
+//! temporal exponential moving average (Eqs. 12-13), the A-Trous wavelet iterations with
+//! variance clipping of their detail coefficients (Eqs. 14-18) and the shading-normal
+//! correction (Eq. 20). Screen space; irradiance in W/m^2 per channel.
+
+use glam::Vec3;
+
+/// The chapter's filter constants.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterConstants {
+    /// Depth weight's `sigma_z` (Eq. 10; "sigma_z = 1 was found to work well").
+    pub sigma_z: f32,
+    /// Normal weight's exponent `sigma_n` (Eq. 11; 32).
+    pub sigma_n: f32,
+    /// Largest temporal weight of the history (Eq. 13's 0.95).
+    pub alpha_max: f32,
+    /// Guard of Eq. 10's denominator against a zero depth gradient (scene units).
+    pub epsilon: f32,
+}
+
+impl Default for FilterConstants {
+    fn default() -> Self {
+        FilterConstants {
+            sigma_z: 1.0,
+            sigma_n: 32.0,
+            alpha_max: 0.95,
+            epsilon: 1e-4,
+        }
+    }
+}
+
+/// Eq. 10: `w_z(P, Q) = exp(-|z(P) - z(Q)| / (sigma_z |grad z(P) . (P - Q)| + eps))`, with
+/// `depth_step` = `grad z(P) . (P - Q)`, the depth change the plane through `P` predicts
+/// over the pixel offset to `Q` (view depth, scene units).
+#[inline]
+pub fn depth_weight(z_p: f32, z_q: f32, depth_step: f32, c: &FilterConstants) -> f32 {
+    (-(z_p - z_q).abs() / (c.sigma_z * depth_step.abs() + c.epsilon)).exp()
+}
+
+/// Eq. 11: `w_n(P, Q) = max(0, n(P) . n(Q))^sigma_n` (unit normals).
+#[inline]
+pub fn normal_weight(n_p: Vec3, n_q: Vec3, c: &FilterConstants) -> f32 {
+    n_p.dot(n_q).max(0.0).powf(c.sigma_n)
+}
+
+/// Eq. 13: the history's weight `alpha = 0.95 w_z(P, Q) w_n(P, Q)` for the current pixel
+/// `P` and its reprojection `Q` into the previous frame (0 on a camera cut or where the
+/// reprojection leaves the image: the caller passes weights of 0).
+#[inline]
+pub fn temporal_alpha(w_z: f32, w_n: f32, c: &FilterConstants) -> f32 {
+    (c.alpha_max * w_z * w_n).clamp(0.0, c.alpha_max)
+}
+
+/// Eq. 12: the exponential moving average `(1 - alpha) E + alpha E_history`.
+#[inline]
+pub fn temporal_blend(current: Vec3, history: Vec3, alpha: f32) -> Vec3 {
+    current * (1.0 - alpha) + history * alpha
+}
+
+/// Eq. 14's 1D kernel `h` of one 5x5 A-Trous iteration (`h(Q)` is the product of the two
+/// axes' taps), as the chapter gives it; the iteration normalises by `sum h w`, so its
+/// scale cancels.
+pub const ATROUS_TAPS: [f32; 5] = [1.0 / 8.0, 1.0 / 4.0, 1.0 / 2.0, 1.0 / 4.0, 1.0 / 8.0];
+
+/// Pixel offset of tap `k` (0..5) in A-Trous iteration `i`: `(k - 2) 2^i` (the taps spread
+/// by doubling, the samples between them skipped; 003 Figure 24-5).
+#[inline]
+pub fn atrous_offset(k: u32, iteration: u32) -> i32 {
+    (k as i32 - 2) << iteration
+}
+
+/// Eq. 18's bound on iteration `i`'s detail coefficients: `gamma` standard deviations of
+/// the irradiance within the spatial kernel (`mean`, `mean_sq`: the kernel's weighted
+/// mean and mean of squares per channel), the variance clipping of Salvi [12].
+#[inline]
+pub fn detail_bound(mean: Vec3, mean_sq: Vec3, gamma: f32) -> Vec3 {
+    (mean_sq - mean * mean).max(Vec3::ZERO).powf(0.5) * gamma
+}
+
+/// Eqs. 16-18: the detail coefficient `d_i = s_{i+1} - s_i` of one iteration, clipped to
+/// `[-b_i, b_i]`. Summed over the iterations and subtracted from the last scaling
+/// coefficient `s_n` it gives `E_final = s_n - sum_i clamp(d_i, -b_i, b_i)`: without
+/// clipping that is `s_0` again (Eq. 17), with it the filter keeps what the variance says
+/// is signal.
+#[inline]
+pub fn clipped_detail(s_i: Vec3, s_next: Vec3, bound: Vec3) -> Vec3 {
+    (s_next - s_i).clamp(-bound, bound)
+}
+
+/// Eq. 20's factor on `E_final f_BRDF`: the filtered mean light direction `w_i` (unit)
+/// against the shading normal instead of the geometric one,
+/// `min(max(0, w_i . n_s) / (w_i . n_g + eps), s_max)`.
+#[inline]
+pub fn shading_normal_factor(w_i: Vec3, n_s: Vec3, n_g: Vec3, s_max: f32, eps: f32) -> f32 {
+    let num = w_i.dot(n_s).max(0.0);
+    let den = w_i.dot(n_g).max(0.0) + eps;
+    (num / den).min(s_max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_stop_at_edges() {
+        let c = FilterConstants::default();
+        assert_eq!(depth_weight(2.0, 2.0, 0.0, &c), 1.0);
+        // on a slanted plane the predicted change costs e^-1 at sigma_z = 1
+        assert!((depth_weight(2.0, 2.5, 0.5, &c) - (-0.5f32 / 0.5001).exp()).abs() < 1e-6);
+        assert!(depth_weight(2.0, 3.0, 0.0, &c) < 1e-30);
+        assert_eq!(normal_weight(Vec3::Z, Vec3::Z, &c), 1.0);
+        assert_eq!(normal_weight(Vec3::Z, -Vec3::Z, &c), 0.0);
+        assert!(normal_weight(Vec3::Z, Vec3::new(0.0, 0.2, 1.0).normalize(), &c) < 0.6);
+        assert_eq!(temporal_alpha(1.0, 1.0, &c), 0.95);
+        assert_eq!(temporal_alpha(0.0, 1.0, &c), 0.0);
+        let e = temporal_blend(Vec3::ONE, Vec3::ZERO, 0.95);
+        assert!((e - Vec3::splat(0.05)).abs().max_element() < 1e-7);
+    }
+
+    #[test]
+    fn unclipped_details_give_back_the_input() {
+        // Eq. 17: s_n - sum d_i = s_0 when nothing is clipped
+        let s = [
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(1.5, 1.0, 2.0),
+            Vec3::new(1.2, 1.1, 2.5),
+        ];
+        let big = Vec3::splat(1e9);
+        let d: Vec3 = (0..2).map(|i| clipped_detail(s[i], s[i + 1], big)).sum();
+        assert!((s[2] - d - s[0]).abs().max_element() < 1e-6);
+        // a zero bound keeps the smooth s_n
+        let d0: Vec3 = (0..2)
+            .map(|i| clipped_detail(s[i], s[i + 1], Vec3::ZERO))
+            .sum();
+        assert_eq!(s[2] - d0, s[2]);
+        assert_eq!(
+            detail_bound(Vec3::splat(2.0), Vec3::splat(5.0), 2.0),
+            Vec3::splat(2.0)
+        );
+        assert_eq!(atrous_offset(0, 2), -8);
+        assert_eq!(atrous_offset(4, 0), 2);
+    }
+
+    #[test]
+    fn the_shading_normal_replaces_the_cosine() {
+        let w = Vec3::new(0.0, 0.6, 0.8);
+        assert!((shading_normal_factor(w, Vec3::Z, Vec3::Z, 4.0, 0.0) - 1.0).abs() < 1e-6);
+        let ns = Vec3::new(0.0, 0.6, 0.8);
+        assert!((shading_normal_factor(w, ns, Vec3::Z, 4.0, 0.0) - 1.25).abs() < 1e-6);
+        assert_eq!(shading_normal_factor(w, -Vec3::Z, Vec3::Z, 4.0, 0.0), 0.0);
+        assert_eq!(
+            shading_normal_factor(Vec3::Y, Vec3::Y, Vec3::Z, 4.0, 1e-4),
+            4.0
+        );
+    }
+}
