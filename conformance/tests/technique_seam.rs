@@ -26,13 +26,32 @@ fn settings() -> serde_json::Value {
     serde_json::json!({ "photons_w": 64, "photons_h": 64 })
 }
 
-/// [`settings`] for technique `name` (CausticMap at a 128^2 atlas).
+/// [`settings`] for technique `name` (CausticMap at a 128^2 atlas; AdaptiveCaustics with
+/// three levels, the error metric from the second, so that its coarse photons' quantum
+/// and pyramid are exercised).
 fn settings_for(name: &str) -> serde_json::Value {
-    if name == "caustic-map" {
-        serde_json::json!({ "photons_w": 64, "photons_h": 64, "atlas_size": 128 })
-    } else {
-        settings()
+    match name {
+        "caustic-map" => serde_json::json!({ "photons_w": 64, "photons_h": 64, "atlas_size": 128 }),
+        "adaptive-caustics" => serde_json::json!({
+            "photons_w": 256, "photons_h": 256, "atlas_size": 128, "error_from_grid": 128
+        }),
+        _ => settings(),
     }
+}
+
+/// Every registered technique with [`settings_for`], and AdaptiveCaustics' screen target.
+fn variants() -> Vec<(&'static str, serde_json::Value)> {
+    let mut v: Vec<(&'static str, serde_json::Value)> = technique_names()
+        .into_iter()
+        .map(|n| (n, settings_for(n)))
+        .collect();
+    v.push((
+        "adaptive-caustics",
+        serde_json::json!({
+            "photons_w": 256, "photons_h": 256, "error_from_grid": 128, "deposit": "screen"
+        }),
+    ));
+    v
 }
 
 /// Every requested camera-space output of one frame, by name (the others, such as
@@ -113,12 +132,12 @@ fn moved_camera_and_lights_equal_a_fresh_technique_bitwise() {
                 Light::Directional { irradiance, .. } => *irradiance *= 1.5,
             }
         }
-        for name in technique_names() {
-            let mut fresh = create(name, b.as_mut(), &moved, &settings_for(name)).expect("create");
+        for (name, settings) in variants() {
+            let mut fresh = create(name, b.as_mut(), &moved, &settings).expect("create");
             let want = frame_outputs(fresh.as_mut(), b.as_mut());
             fresh.free(b.as_mut()).expect("free");
 
-            let mut t = create(name, b.as_mut(), &scene, &settings_for(name)).expect("create");
+            let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
             frame_outputs(t.as_mut(), b.as_mut()); // a frame before the move
             t.set_camera(b.as_mut(), &moved.camera).expect("set_camera");
             t.set_lights(b.as_mut(), &moved.lights).expect("set_lights");
@@ -210,9 +229,9 @@ fn lights_added_and_removed_equal_a_fresh_technique_bitwise() {
             inner_angle_deg: 15.0,
             outer_angle_deg: 30.0,
         });
-        for name in technique_names() {
+        for (name, settings) in variants() {
             let fresh_outputs = |b: &mut dyn Backend, s: &Scene| {
-                let mut t = create(name, b, s, &settings_for(name)).expect("create");
+                let mut t = create(name, b, s, &settings).expect("create");
                 let out = frame_outputs(t.as_mut(), b);
                 t.free(b).expect("free");
                 out
@@ -221,7 +240,7 @@ fn lights_added_and_removed_equal_a_fresh_technique_bitwise() {
                 fresh_outputs(b.as_mut(), &more),
                 fresh_outputs(b.as_mut(), &scene),
             );
-            let mut t = create(name, b.as_mut(), &scene, &settings_for(name)).expect("create");
+            let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
             frame_outputs(t.as_mut(), b.as_mut());
             t.set_lights(b.as_mut(), &more.lights).expect("add a light");
             assert!(
@@ -232,6 +251,39 @@ fn lights_added_and_removed_equal_a_fresh_technique_bitwise() {
             assert!(
                 frame_outputs(t.as_mut(), b.as_mut()) == want_one,
                 "{bname}/{name}: a light removed differs from a fresh technique"
+            );
+            t.free(b.as_mut()).expect("free");
+        }
+    }
+}
+
+/// AdaptiveCaustics' light moved into the casters' bounds (inside the glass ball): its
+/// view planes become six cube faces, refitted to the traversal's pyramid with their
+/// coarse photons' quantum, exactly as a fresh technique fits them.
+#[test]
+fn adaptive_light_moved_inside_the_casters_equals_a_fresh_technique_bitwise() {
+    for (bname, mut b) in backends() {
+        let scene = small("sphere");
+        let mut inside = scene.clone();
+        inside.lights = vec![Light::Point {
+            position: Vec3::new(0.05, 1.02, -0.03),
+            intensity: Vec3::splat(2.0),
+        }];
+        for (name, settings) in variants()
+            .into_iter()
+            .filter(|(n, _)| *n == "adaptive-caustics")
+        {
+            let mut fresh = create(name, b.as_mut(), &inside, &settings).expect("create");
+            let want = frame_outputs(fresh.as_mut(), b.as_mut());
+            fresh.free(b.as_mut()).expect("free");
+            let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
+            frame_outputs(t.as_mut(), b.as_mut());
+            t.set_lights(b.as_mut(), &inside.lights)
+                .expect("set_lights");
+            let got = frame_outputs(t.as_mut(), b.as_mut());
+            assert!(
+                got == want,
+                "{bname}/{name} {settings}: differs from a fresh technique"
             );
             t.free(b.as_mut()).expect("free");
         }

@@ -1033,14 +1033,30 @@ impl CausticMap {
         model
             .validate()
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-        let emission = Emission::new(
+        let mut emission = Emission::new(
             &model,
             self.bounds,
             self.caster_bounds,
             self.has_dispersion,
             &self.settings,
         );
+        if let Some(a) = &self.adaptive {
+            // the traversal's pyramid and its coarse photons' quantum, as at creation
+            adaptive_caustics::fit_planes(&mut emission, &a.settings, self.has_dispersion);
+        }
         emission.check_light_flux()?;
+        // the traversal's buffers hold planes down to its finest level
+        let deeper = self.adaptive.as_ref().is_some_and(|a| {
+            let start = a.settings.start_grid;
+            let finest = |e: &Emission| {
+                e.planes
+                    .iter()
+                    .map(|(_, _, p)| (p.resolution.0 / start).max(1).ilog2())
+                    .max()
+                    .unwrap_or(0)
+            };
+            finest(&emission) > finest(&self.emission)
+        });
         let per_plane = emission
             .planes
             .iter()
@@ -1049,13 +1065,17 @@ impl CausticMap {
             .unwrap_or(0);
         let had_photons = self.plan.trace_variant.is_some();
         if (emission.planes.is_empty() == had_photons && self.settings.prune)
-            || self.atlas.is_some_and(|a| {
-                per_plane.min(self.settings.max_photons_per_batch as u64) > a.photons.len as u64
-            })
+            || deeper
+            || (self.adaptive.is_none()
+                && self.atlas.is_some_and(|a| {
+                    per_plane.min(self.settings.max_photons_per_batch as u64) > a.photons.len as u64
+                }))
         {
-            // the passes or buffer sizes change: build anew on the same backend
+            // the passes or buffer sizes change: build anew on the same backend (with the
+            // same traversal, for AdaptiveCaustics)
             let settings = self.settings.clone();
-            let fresh = CausticMap::new(backend, &model, settings)?;
+            let adaptive = self.adaptive.as_ref().map(|a| a.settings.clone());
+            let fresh = CausticMap::build(backend, &model, settings, adaptive)?;
             let old = std::mem::replace(self, fresh);
             let reference = old.reference.clone();
             old.free(backend)?;
