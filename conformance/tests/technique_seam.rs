@@ -290,6 +290,75 @@ fn adaptive_light_moved_inside_the_casters_equals_a_fresh_technique_bitwise() {
     }
 }
 
+/// New material parameters (the glass's IOR and the floor's albedo: the table uploaded in
+/// place), then dispersion switched on (the plan and quanta change), each equal bitwise to
+/// a fresh technique; a refused update (the floor made a mirror) leaves the frame as it
+/// was.
+#[test]
+fn new_materials_equal_a_fresh_technique_bitwise() {
+    use caustica_core::scene::Material;
+    for (bname, mut b) in backends() {
+        let scene = small("sphere");
+        let mut tuned = scene.clone();
+        if let Some(Material::Dielectric { ior, .. }) = tuned.materials.get_mut("glass") {
+            *ior = 1.4;
+        }
+        tuned.materials.insert(
+            "white".into(),
+            Material::Diffuse {
+                albedo: Vec3::new(0.7, 0.5, 0.3),
+            },
+        );
+        let mut dispersive = tuned.clone();
+        if let Some(Material::Dielectric { cauchy_b, .. }) = dispersive.materials.get_mut("glass") {
+            *cauchy_b = 0.01;
+        }
+        let mut refused = tuned.materials.clone();
+        refused.insert(
+            "white".into(),
+            Material::Mirror {
+                reflectance: Vec3::splat(0.9),
+            },
+        );
+        for (name, settings) in variants() {
+            let fresh_outputs = |b: &mut dyn Backend, s: &Scene| {
+                let mut t = create(name, b, s, &settings).expect("create");
+                let out = frame_outputs(t.as_mut(), b);
+                t.free(b).expect("free");
+                out
+            };
+            let want_tuned = fresh_outputs(b.as_mut(), &tuned);
+            let want_dispersive = fresh_outputs(b.as_mut(), &dispersive);
+            let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
+            frame_outputs(t.as_mut(), b.as_mut());
+            t.set_materials(b.as_mut(), &tuned.materials)
+                .expect("new parameters");
+            let got = frame_outputs(t.as_mut(), b.as_mut());
+            assert!(
+                got == want_tuned,
+                "{bname}/{name} {settings}: new parameters differ from a fresh technique"
+            );
+            let err = t.set_materials(b.as_mut(), &refused);
+            assert!(
+                err.is_err(),
+                "{bname}/{name}: a diffuse floor cannot become a mirror"
+            );
+            assert!(
+                frame_outputs(t.as_mut(), b.as_mut()) == want_tuned,
+                "{bname}/{name}: a refused update changed the frame"
+            );
+            t.set_materials(b.as_mut(), &dispersive.materials)
+                .expect("dispersion on");
+            let got = frame_outputs(t.as_mut(), b.as_mut());
+            assert!(
+                got == want_dispersive,
+                "{bname}/{name} {settings}: dispersion switched on differs from a fresh technique"
+            );
+            t.free(b.as_mut()).expect("free");
+        }
+    }
+}
+
 #[test]
 fn a_technique_dropped_without_free_is_reported() {
     let (_, mut b) = backends().into_iter().next().expect("the cpu backend");

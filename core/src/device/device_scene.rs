@@ -282,7 +282,8 @@ fn build_bvh(vertices: &[GpuVertex], tris: Vec<GpuTriangle>) -> Result<BvhBuild,
     Ok((ordered, out, bvh.primitive_indices))
 }
 
-fn gpu_material(m: &Material) -> GpuMaterial {
+/// A material as the kernels read it.
+pub fn gpu_material(m: &Material) -> GpuMaterial {
     match m {
         Material::Diffuse { albedo } => GpuMaterial {
             kind: material_kind::DIFFUSE,

@@ -11,6 +11,7 @@ pub mod emission;
 pub mod error;
 pub mod image;
 pub mod light_view_plane;
+pub mod material_update;
 pub mod metrics;
 pub mod plan;
 pub mod stats;

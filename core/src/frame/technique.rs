@@ -73,6 +73,15 @@ pub trait Technique {
     /// removed), without rebuilding geometry.
     fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error>;
 
+    /// Replaces the materials' parameters for the next frames without rebuilding geometry
+    /// (the same names, none switching between diffuse and specular:
+    /// [`crate::frame::material_update`]); an error leaves the technique as it was.
+    fn set_materials(
+        &mut self,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error>;
+
     /// Sets (or clears) the reference image of the filtered estimate: every later frame
     /// puts its error against it in [`FrameStats::error`].
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error>;

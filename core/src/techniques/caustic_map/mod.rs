@@ -1112,6 +1112,35 @@ impl CausticMap {
         Ok(())
     }
 
+    /// Replaces the materials' parameters for the next frames
+    /// ([`crate::frame::material_update`]): the table is uploaded in place and the atlas
+    /// remade on the next frame; when the scene's features or dispersion change (the trace
+    /// variant, the quanta), the technique is built anew on the same backend (with the
+    /// same traversal, for AdaptiveCaustics). On an error nothing changes.
+    pub fn set_materials(
+        &mut self,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error> {
+        let u = crate::frame::material_update::material_update(&self.model, materials)?;
+        if !u.same_plan {
+            let settings = self.settings.clone();
+            let adaptive = self.adaptive.as_ref().map(|a| a.settings.clone());
+            let fresh = CausticMap::build(backend, &u.model, settings, adaptive)?;
+            let old = std::mem::replace(self, fresh);
+            let reference = old.reference.clone();
+            old.free(backend)?;
+            self.reference = reference;
+            return Ok(());
+        }
+        let mut rec = Recording::new();
+        rec.update(self.scene.materials, &u.gpu, "materials")?;
+        backend.execute(&rec)?;
+        self.model = u.model;
+        self.atlas_valid = false;
+        Ok(())
+    }
+
     /// Sets the frame seed; the atlas is remade on the next frame.
     pub fn set_seed(&mut self, seed: u32) {
         if seed != self.settings.seed {
@@ -1198,6 +1227,14 @@ impl Technique for CausticMap {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         CausticMap::set_lights(self, backend, lights)
+    }
+
+    fn set_materials(
+        &mut self,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error> {
+        CausticMap::set_materials(self, backend, materials)
     }
 
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {

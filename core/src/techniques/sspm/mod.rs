@@ -1029,6 +1029,45 @@ impl Sspm {
         Ok(())
     }
 
+    /// Replaces the materials' parameters for the next frames
+    /// ([`crate::frame::material_update`]): the table is uploaded in place; when the
+    /// scene's features or dispersion change, the frame is also re-planned and its
+    /// buffers remade (the uploaded geometry stays). On an error nothing changes.
+    pub fn set_materials(
+        &mut self,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error> {
+        let u = crate::frame::material_update::material_update(&self.model, materials)?;
+        let old = self
+            .model
+            .materials
+            .values()
+            .map(crate::device::device_scene::gpu_material)
+            .collect::<Vec<_>>();
+        let mut rec = Recording::new();
+        rec.update(self.scene.materials, &u.gpu, "materials")?;
+        backend.execute(&rec)?;
+        if u.same_plan {
+            self.model = u.model;
+            return Ok(());
+        }
+        let had = self.bounds.has_dispersion;
+        self.bounds.has_dispersion = u.has_dispersion;
+        let settings = self.settings.clone();
+        if let Err(e) = self.rebuild_frame(backend, u.model, settings) {
+            // the old table and the old frame back
+            self.bounds.has_dispersion = had;
+            let mut rec = Recording::new();
+            rec.update(self.scene.materials, &old, "materials")?;
+            backend.execute(&rec)?;
+            let (model, settings) = (self.model.clone(), self.settings.clone());
+            self.rebuild_frame(backend, model, settings)?;
+            return Err(e);
+        }
+        Ok(())
+    }
+
     /// A light buffer of the new size, then the frame remade for `model`; if the frame
     /// cannot be remade, the old lights come back (the frame is rebuilt for them by
     /// `rebuild_frame`) and the error is returned.
@@ -1164,6 +1203,14 @@ impl Technique for Sspm {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         Sspm::set_lights(self, backend, lights)
+    }
+
+    fn set_materials(
+        &mut self,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error> {
+        Sspm::set_materials(self, backend, materials)
     }
 
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
