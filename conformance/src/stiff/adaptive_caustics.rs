@@ -5,6 +5,9 @@
 //! maximal-traversal-level metric with the dense grid of the same finest level on the
 //! same backend: with the conservative relevance (the casters' projected bounds) they
 //! must store the same photons, so the stored flux and the atlas are **bitwise** equal.
+//! Each case also runs the screen target (`deposit: screen`) under the same settings: it
+//! must receive exactly the atlas target's photons (bitwise the same stored flux and
+//! count), account for every one in `deposit_screen` and give finite images.
 
 use super::caustic_map::{checked_with, render, MapFrame};
 use super::runner::outcome;
@@ -53,6 +56,51 @@ fn adaptive(
     )
 }
 
+/// The screen target under `s` against the atlas target's frame `atlas` (same backend):
+/// the same photons (bitwise stored flux and count), every one accounted for by
+/// `deposit_screen`, finite images.
+fn screen_target(
+    b: &mut dyn Backend,
+    scene: &Scene,
+    s: &AdaptiveCausticsSettings,
+    atlas: &MapFrame,
+    v: &mut Verdict,
+) -> Result<(), String> {
+    use caustica_core::techniques::sspm::Output;
+    let mut t = AdaptiveCaustics::build_screen(b, scene, s.clone()).map_err(|e| e.to_string())?;
+    let st = t.frame(b, &mut |_| {}).map_err(|e| e.to_string())?;
+    let images = [
+        Output::RawCaustics,
+        Output::FilteredCaustics,
+        Output::Composite,
+    ]
+    .map(|o| t.read_output(b, o).map_err(|e| e.to_string()));
+    t.free(b).map_err(|e| e.to_string())?;
+    for img in images {
+        v.check(img?.all_finite(), || {
+            "screen target: an image is not finite".into()
+        });
+    }
+    v.check(st.stored_flux == atlas.stats.stored_flux, || {
+        format!(
+            "screen target: stored flux {:?}, the atlas target's {:?}",
+            st.stored_flux, atlas.stats.stored_flux
+        )
+    });
+    v.check(st.photons_stored == atlas.stats.photons_stored, || {
+        format!(
+            "screen target: {} photons stored, the atlas target's {}",
+            st.photons_stored, atlas.stats.photons_stored
+        )
+    });
+    let d = &st.discarded;
+    v.check(
+        st.photons_deposited + d.off_screen + d.depth_mismatch == st.photons_stored,
+        || "screen target: output photons unaccounted for by deposit_screen".into(),
+    );
+    Ok(())
+}
+
 /// The level metric against the dense grid `dense` on the same backend: bitwise equal.
 fn equals_dense(what: &str, a: &MapFrame, dense: &MapFrame, v: &mut Verdict) {
     v.check(a.stats.stored_flux == dense.stats.stored_flux, || {
@@ -96,6 +144,13 @@ pub(super) fn small_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
         &mut v,
     )?;
     equals_dense("bounds", &bounds, &dense, &mut v);
+    screen_target(
+        b,
+        &scene,
+        &level(512, plane, ClusterRelevance::Bounds),
+        &bounds,
+        &mut v,
+    )?;
     let photons = adaptive(
         b,
         &scene,
@@ -145,6 +200,13 @@ pub(super) fn grazing_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
         &mut v,
     )?;
     equals_dense("level metric", &a, &dense, &mut v);
+    screen_target(
+        b,
+        &scene,
+        &level(256, plane, ClusterRelevance::Bounds),
+        &a,
+        &mut v,
+    )?;
     v.check(a.stats.photons_stored > 0, || {
         "nothing stored: the case tests nothing".into()
     });
@@ -182,5 +244,7 @@ pub(super) fn light_inside_casters(b: &mut dyn Backend) -> Result<Outcome, Strin
         format!("dense-equivalent photons {planes}, six faces of 256^2 expected")
     });
     equals_dense("level metric", &a, &dense, &mut v);
+    let s = level(512, EmissionPlane::Casters, ClusterRelevance::Bounds);
+    screen_target(b, &scene, &s, &a, &mut v)?;
     outcome(format!("six faces, stored {}", a.stats.photons_stored), v)
 }

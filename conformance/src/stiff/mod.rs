@@ -184,11 +184,11 @@ pub fn catalogue() -> Vec<StiffCase> {
         case!("caustic-map", "schlick", caustic_map::schlick,
             "Seed 001's Schlick reflectance on sphere, split and stochastic: finite, accounted, agrees with cpu; the split's stored flux over the exact model's is the closed forms' ratio 1.0150 within 0.3%"),
         case!("adaptive-caustics", "small-caster", adaptive_caustics::small_caster,
-            "A glass bead a tenth of a start-grid cluster across under spot-glass's light, plane over the whole cone: with the casters' projected bounds (the default relevance) the level metric stores bitwise the dense grid's photons; 004's photon test loses the bead's caustic (stated, checked: stored flux below the dense grid's)"),
+            "A glass bead a tenth of a start-grid cluster across under spot-glass's light, plane over the whole cone: with the casters' projected bounds (the default relevance) the level metric stores bitwise the dense grid's photons, and the screen target the same photons; 004's photon test loses the bead's caustic (stated, checked: stored flux below the dense grid's)"),
         case!("adaptive-caustics", "grazing-caster", adaptive_caustics::grazing_caster,
-            "Sun 3 degrees above a thin glass slab (R = 0.83): photons stored on the far floor, finite, accounted, agrees with cpu; the level metric equals the dense grid bitwise"),
+            "Sun 3 degrees above a thin glass slab (R = 0.83): photons stored on the far floor, finite, accounted, agrees with cpu; the level metric equals the dense grid bitwise, the screen target receives the same photons"),
         case!("adaptive-caustics", "light-inside-casters", adaptive_caustics::light_inside_casters,
-            "Point light between two glass balls (six cube faces, each its own pyramid rounded to 256^2): finite, accounted, agrees with cpu; equals the dense grid of 256^2 faces bitwise"),
+            "Point light between two glass balls (six cube faces, each its own pyramid rounded to 256^2): finite, accounted, agrees with cpu; equals the dense grid of 256^2 faces bitwise, the screen target receives the same photons"),
     ];
     v.push(StiffCase {
         group: "degenerate",
