@@ -23,7 +23,7 @@ use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
     DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene, PrimaryGbuffer,
-    RefineClusters, ResolveCaustics, TileHitDistance, TracePhotons,
+    RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -401,6 +401,27 @@ impl CpuBackend {
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the composite")?;
                 let img = composite::composite(d, c);
                 self.put(out.id, &img)
+            }
+            Kernel::TemporalBlend(TemporalBlend {
+                params,
+                gbuffer,
+                input,
+                history,
+                history_edge,
+                out,
+                next_history,
+                next_edge,
+            }) => {
+                let g = self.gbuffer(gbuffer)?;
+                let i = get(input.id)?.as_slice(input.len)?;
+                let hi = get(history.id)?.as_slice(history.len)?;
+                let he = get(history_edge.id)?.as_slice(history_edge.len)?;
+                reserve_temporary::<[[f32; 4]; 2]>(out.len as u64, "the temporal blend")?;
+                let r = temporal_blend::temporal_blend_image(params, g, i, hi, he);
+                let (img, edge): (Vec<[f32; 4]>, Vec<[f32; 4]>) = r.into_iter().unzip();
+                self.put(out.id, &img)?;
+                self.put(next_history.id, &img)?;
+                self.put(next_edge.id, &edge)
             }
         }
     }

@@ -53,6 +53,10 @@ pub const COMMON: &[(&str, &str)] = &[
         "photon_clusters.cl",
         include_str!("../kernels/common/photon_clusters.cl"),
     ),
+    (
+        "irradiance_filter.cl",
+        include_str!("../kernels/common/irradiance_filter.cl"),
+    ),
 ];
 
 /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
@@ -105,6 +109,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "refine_clusters",
         include_str!("../kernels/refine_clusters.cl"),
+    ),
+    (
+        "temporal_blend",
+        include_str!("../kernels/temporal_blend.cl"),
     ),
 ];
 

@@ -16,7 +16,7 @@ use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
     check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
-    check_screen_target, check_trace, KernelCheck,
+    check_screen_target, check_temporal_blend, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -104,6 +104,14 @@ fn adaptive_caustics_kernels_match_cpu_on_the_same_inputs() {
 #[test]
 fn adaptive_caustics_screen_target_matches_cpu_on_the_same_inputs() {
     kernel_test("adaptive caustics screen target", &check_screen_target);
+}
+
+/// The temporal blend on the same inputs, a moved previous camera: within the tolerance of
+/// its `exp` and `pow` but at pixel-edge reprojections, the next edge texels bitwise
+/// (`kernels::temporal_blend` argues both).
+#[test]
+fn temporal_blend_matches_cpu_on_the_same_inputs() {
+    kernel_test("temporal_blend", &check_temporal_blend);
 }
 
 #[test]

@@ -54,6 +54,10 @@ pub const COMMON: &[(&str, &str)] = &[
         "photon_clusters",
         include_str!("../wgsl/common/photon_clusters.wgsl"),
     ),
+    (
+        "irradiance_filter",
+        include_str!("../wgsl/common/irradiance_filter.wgsl"),
+    ),
 ];
 
 /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
@@ -105,6 +109,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     (
         "refine_clusters",
         include_str!("../wgsl/refine_clusters.wgsl"),
+    ),
+    (
+        "temporal_blend",
+        include_str!("../wgsl/temporal_blend.wgsl"),
     ),
 ];
 

@@ -9,6 +9,7 @@ pub mod direct_light;
 pub mod gather;
 pub mod gbuffer;
 pub mod refine_clusters;
+pub mod temporal_blend;
 pub mod trace_photons;
 
 use caustica_core::device::layout::counter;

@@ -68,6 +68,12 @@ typedef struct {
     uint rect_count; uint deposit_target; uint error_texels; uint _pad0;
     GpuCamera camera;
 } RefineParams;
+typedef struct {
+    GpuCamera camera;
+    GpuCamera previous;
+    float alpha_max; float sigma_z; float sigma_n; float epsilon;
+    uint history_frames; uint _pad0; uint _pad1; uint _pad2;
+} TemporalParams;
 
 // core::gpu constants
 #define MATERIAL_DIFFUSE 0u

@@ -24,6 +24,7 @@ pub mod deposit_screen;
 pub mod direct_light;
 pub mod primary_gbuffer;
 pub mod resolve_caustics;
+pub mod temporal_blend;
 pub mod tile_hit_distance;
 pub mod trace_photons;
 
@@ -35,6 +36,7 @@ pub use density_gather::check_density_gather;
 pub use deposit_screen::check_deposit;
 pub use direct_light::check_direct;
 pub use primary_gbuffer::{check_gbuffer, compare_gbuffers};
+pub use temporal_blend::check_temporal_blend;
 pub use trace_photons::check_trace;
 
 use crate::harness::{Candidate, Fixture, ReferenceInputs, Report, Verdict};

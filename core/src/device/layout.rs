@@ -463,6 +463,29 @@ pub mod cluster_count {
     pub const WORDS: usize = 8;
 }
 
+/// Parameters of `temporal_blend` (seed 003 section 24.4.1, Eqs. 10-13): the frame's
+/// camera and the history's, the blend's constants and whether a history exists.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TemporalParams {
+    /// This frame's camera (its image size is the images').
+    pub camera: GpuCamera,
+    /// The camera the history was rendered with (reprojection target).
+    pub previous: GpuCamera,
+    /// Largest weight of the history (Eq. 13's 0.95).
+    pub alpha_max: f32,
+    /// Depth weight's `sigma_z` (Eq. 10).
+    pub sigma_z: f32,
+    /// Normal weight's exponent `sigma_n` (Eq. 11).
+    pub sigma_n: f32,
+    /// Eq. 10's guard, relative to the depth.
+    pub epsilon: f32,
+    /// Frames in the history (0: none yet, or reset: the history is not read).
+    pub history_frames: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 3],
+}
+
 /// Parameters of `caustic_map_lookup`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

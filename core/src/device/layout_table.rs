@@ -11,7 +11,7 @@
 use super::layout::{
     AtlasParams, DepositParams, DepositTexel, DirectParams, GBufferTexel, GatherParams, GpuCamera,
     GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams, Photon, RefineParams,
-    TraceParams,
+    TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -222,6 +222,9 @@ table! {
         width, height, flux_quantum, hit_distance_quantum, photon_capacity, gather_width, _pad
     }
     MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, fresnel_model }
+    TemporalParams {
+        camera, previous, alpha_max, sigma_z, sigma_n, epsilon, history_frames, _pad
+    }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
         error_from_level, grid_w, first, count, children_capacity, relevance,

@@ -29,6 +29,7 @@ mod prepare_scene;
 mod primary_gbuffer;
 mod refine_clusters;
 mod resolve_caustics;
+mod temporal_blend;
 mod tile_hit_distance;
 mod trace_photons;
 
@@ -46,6 +47,7 @@ pub use prepare_scene::PrepareScene;
 pub use primary_gbuffer::PrimaryGbuffer;
 pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
+pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
 pub use trace_photons::{TracePhotons, TraceVariant};
 
@@ -464,6 +466,7 @@ kernel_list! {
     GatherFootprint => gather_footprint,
     DensityGather => density_gather,
     Composite => composite,
+    TemporalBlend => temporal_blend,
     DepositAtlas => deposit_atlas,
     GatherCausticMap => gather_caustic_map,
     CausticMapLookup => caustic_map_lookup,

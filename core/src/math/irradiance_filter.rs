@@ -15,7 +15,8 @@ pub struct FilterConstants {
     pub sigma_n: f32,
     /// Largest temporal weight of the history (Eq. 13's 0.95).
     pub alpha_max: f32,
-    /// Guard of Eq. 10's denominator against a zero depth gradient (scene units).
+    /// Guard of Eq. 10's denominator against a zero depth gradient, relative to the depth
+    /// (so the weight does not depend on the scene's scale).
     pub epsilon: f32,
 }
 
@@ -25,17 +26,34 @@ impl Default for FilterConstants {
             sigma_z: 1.0,
             sigma_n: 32.0,
             alpha_max: 0.95,
-            epsilon: 1e-4,
+            epsilon: 1e-3,
         }
     }
 }
 
-/// Eq. 10: `w_z(P, Q) = exp(-|z(P) - z(Q)| / (sigma_z |grad z(P) . (P - Q)| + eps))`, with
-/// `depth_step` = `grad z(P) . (P - Q)`, the depth change the plane through `P` predicts
-/// over the pixel offset to `Q` (view depth, scene units).
+/// Eq. 10: `w_z(P, Q) = exp(-|z(P) - z(Q)| / (sigma_z |grad z(P) . (P - Q)| + eps z(P)))`,
+/// with `depth_step` = `grad z(P) . (P - Q)`, the depth change the plane through `P`
+/// predicts over the pixel offset to `Q` (view depth, scene units; the guard `eps` is
+/// relative to the depth).
 #[inline]
 pub fn depth_weight(z_p: f32, z_q: f32, depth_step: f32, c: &FilterConstants) -> f32 {
-    (-(z_p - z_q).abs() / (c.sigma_z * depth_step.abs() + c.epsilon)).exp()
+    (-(z_p - z_q).abs() / (c.sigma_z * depth_step.abs() + c.epsilon * z_p.abs())).exp()
+}
+
+/// The depth step Eq. 10 tolerates for a nearest-pixel reprojection: half the largest
+/// view-depth difference between the pixel (depth `z`) and its four neighbours
+/// (`neighbours`, depth <= 0 for a neighbour that is no receiver or off the image, which
+/// is skipped): the reprojected point lies within half a pixel of the history pixel's
+/// centre.
+#[inline]
+pub fn reprojection_depth_step(z: f32, neighbours: [f32; 4]) -> f32 {
+    let mut step = 0.0f32;
+    for n in neighbours {
+        if n > 0.0 {
+            step = step.max((n - z).abs());
+        }
+    }
+    0.5 * step
 }
 
 /// Eq. 11: `w_n(P, Q) = max(0, n(P) . n(Q))^sigma_n` (unit normals).
@@ -54,7 +72,7 @@ pub fn temporal_alpha(w_z: f32, w_n: f32, c: &FilterConstants) -> f32 {
 
 /// Eq. 12: the exponential moving average `(1 - alpha) E + alpha E_history`.
 #[inline]
-pub fn temporal_blend(current: Vec3, history: Vec3, alpha: f32) -> Vec3 {
+pub fn blend_with_history(current: Vec3, history: Vec3, alpha: f32) -> Vec3 {
     current * (1.0 - alpha) + history * alpha
 }
 
@@ -107,14 +125,14 @@ mod tests {
         let c = FilterConstants::default();
         assert_eq!(depth_weight(2.0, 2.0, 0.0, &c), 1.0);
         // on a slanted plane the predicted change costs e^-1 at sigma_z = 1
-        assert!((depth_weight(2.0, 2.5, 0.5, &c) - (-0.5f32 / 0.5001).exp()).abs() < 1e-6);
+        assert!((depth_weight(2.0, 2.5, 0.5, &c) - (-0.5f32 / 0.502).exp()).abs() < 1e-6);
         assert!(depth_weight(2.0, 3.0, 0.0, &c) < 1e-30);
         assert_eq!(normal_weight(Vec3::Z, Vec3::Z, &c), 1.0);
         assert_eq!(normal_weight(Vec3::Z, -Vec3::Z, &c), 0.0);
         assert!(normal_weight(Vec3::Z, Vec3::new(0.0, 0.2, 1.0).normalize(), &c) < 0.6);
         assert_eq!(temporal_alpha(1.0, 1.0, &c), 0.95);
         assert_eq!(temporal_alpha(0.0, 1.0, &c), 0.0);
-        let e = temporal_blend(Vec3::ONE, Vec3::ZERO, 0.95);
+        let e = blend_with_history(Vec3::ONE, Vec3::ZERO, 0.95);
         assert!((e - Vec3::splat(0.05)).abs().max_element() < 1e-7);
     }
 

@@ -181,6 +181,19 @@ struct RefineParams {
     camera: GpuCamera,
 }
 
+struct TemporalParams {
+    camera: GpuCamera,
+    previous: GpuCamera,
+    alpha_max: f32,
+    sigma_z: f32,
+    sigma_n: f32,
+    epsilon: f32,
+    history_frames: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
 struct DirectParams {
     camera: GpuCamera,
     light_count: u32,

@@ -39,9 +39,11 @@ use crate::frame::image::Image;
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
+use crate::frame::temporal::PingPong;
 use crate::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TemporalBlend, TileHitDistance,
+    TracePhotons,
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
@@ -77,6 +79,25 @@ struct PhotonBuffers {
     counters: Buf<u32>,
 }
 
+/// The temporal accumulation's buffers (`SspmSettings::temporal`): the history of the
+/// blended caustics and of the edge texels (ping-pong), the filter's unblended result and
+/// the camera the history was rendered with.
+#[derive(Clone, Copy, Debug)]
+struct TemporalBuffers {
+    image: PingPong<[f32; 4]>,
+    edge: PingPong<[f32; 4]>,
+    unblended: ImageBuf,
+    previous: GpuCamera,
+}
+
+impl TemporalBuffers {
+    /// Forgets the history (the next frame is not blended).
+    fn reset(&mut self) {
+        self.image.reset();
+        self.edge.reset();
+    }
+}
+
 /// Device buffers of the filter (exist only when filtered caustics are needed).
 #[derive(Clone, Copy, Debug)]
 enum GatherBuffers {
@@ -103,6 +124,7 @@ pub struct Sspm {
     gbuffer: GBufferPlanes,
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
+    temporal: Option<TemporalBuffers>,
     images: FrameImages,
     /// Every image buffer the plan created, by [`Output`], requested or not.
     image_buffers: [Option<ImageBuf>; 4],
@@ -146,6 +168,7 @@ struct FrameParts {
     gbuffer: GBufferPlanes,
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
+    temporal: Option<TemporalBuffers>,
     images: FrameImages,
     image_buffers: [Option<ImageBuf>; 4],
     owned: Vec<ResourceId>,
@@ -240,6 +263,7 @@ impl Sspm {
             gbuffer: parts.gbuffer,
             photon: parts.photon,
             gather: parts.gather,
+            temporal: parts.temporal,
             images: parts.images,
             image_buffers: parts.image_buffers,
             owned: parts.owned,
@@ -277,7 +301,7 @@ impl Sspm {
             let lights = volume_light_plans(&constants);
             return Ok((
                 constants,
-                plan_frame(scene, lights, out, prune, filter),
+                plan_frame(scene, lights, out, prune, (filter, settings.temporal)),
                 None,
             ));
         };
@@ -292,7 +316,13 @@ impl Sspm {
         emission.check_light_flux()?;
         constants.flux_quantum = emission.flux_quantum;
         constants.hit_distance_quantum = emission.hit_distance_quantum;
-        let mut plan = plan_frame(scene, emission.light_plans(), out, prune, filter);
+        let mut plan = plan_frame(
+            scene,
+            emission.light_plans(),
+            out,
+            prune,
+            (filter, settings.temporal),
+        );
         if let Some(v) = &mut plan.trace_variant {
             // seed 004's slots, in world space for the screen deposit
             v.adaptive = true;
@@ -371,6 +401,12 @@ impl Sspm {
         let filtered_caustics = needs
             .gather
             .then(|| rec.create(pixels, "filtered caustics image"));
+        let temporal = plan.runs("temporal_blend").then(|| TemporalBuffers {
+            image: PingPong::create(&mut rec, pixels, "temporal caustics history"),
+            edge: PingPong::create(&mut rec, pixels, "temporal edge history"),
+            unblended: rec.create(pixels, "unblended caustics image"),
+            previous: camera,
+        });
         let own_composite = needs
             .composite
             .then(|| rec.create(pixels, "composite image"));
@@ -420,6 +456,7 @@ impl Sspm {
             gbuffer,
             photon,
             gather,
+            temporal,
             images,
             image_buffers: [own_composite, direct, raw_caustics, filtered_caustics],
             owned: allocation.owned,
@@ -436,6 +473,7 @@ impl Sspm {
         self.gbuffer = p.gbuffer;
         self.photon = p.photon;
         self.gather = p.gather;
+        self.temporal = p.temporal;
         self.images = p.images;
         self.image_buffers = p.image_buffers;
         self.owned = p.owned;
@@ -452,6 +490,7 @@ impl Sspm {
         self.bytes = self.scene_bytes;
         self.photon = None;
         self.gather = None;
+        self.temporal = None;
         self.adaptive_frame = None;
         self.image_buffers = [None; 4];
         backend.execute(&rec)?;
@@ -718,6 +757,8 @@ impl Sspm {
                 out: raw,
             });
             if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
+                // with the temporal blend the filter's result is blended into `filtered`
+                let last = self.temporal.map_or(filtered, |t| t.unblended);
                 let gather = self.constants.gather_params(cam, &self.settings, 0);
                 let columns = GatherParams { axis: 1, ..gather };
                 match g {
@@ -754,7 +795,7 @@ impl Sspm {
                             gbuffer: self.gbuffer,
                             edge,
                             input: scratch,
-                            out: filtered,
+                            out: last,
                         });
                     }
                     GatherBuffers::Bilateral { tiles, scratch } => {
@@ -775,9 +816,31 @@ impl Sspm {
                             gbuffer: self.gbuffer,
                             tiles,
                             input: scratch,
-                            out: filtered,
+                            out: last,
                         });
                     }
+                }
+                if let Some(t) = self.temporal {
+                    let c = crate::math::irradiance_filter::FilterConstants::default();
+                    rec.kernel(TemporalBlend {
+                        params: TemporalParams {
+                            camera: cam,
+                            previous: t.previous,
+                            alpha_max: c.alpha_max,
+                            sigma_z: c.sigma_z,
+                            sigma_n: c.sigma_n,
+                            epsilon: c.epsilon,
+                            history_frames: t.image.frames.min(u32::MAX as u64) as u32,
+                            _pad: [0; 3],
+                        },
+                        gbuffer: self.gbuffer,
+                        input: t.unblended,
+                        history: t.image.history(),
+                        history_edge: t.edge.history(),
+                        out: filtered,
+                        next_history: t.image.current(),
+                        next_edge: t.edge.current(),
+                    });
                 }
                 if let (true, Some(direct), Some(out)) = (
                     Needs::of_plan(&self.plan).composite,
@@ -814,6 +877,12 @@ impl Sspm {
             if let Some(a) = &self.adaptive_frame {
                 let q = self.constants.flux_quantum;
                 a.traversal.output_stats(backend, q, &mut stats, adaptive)?;
+            }
+            // this frame's blend is the next frame's history
+            if let Some(t) = &mut self.temporal {
+                t.image.swap();
+                t.edge.swap();
+                t.previous = cam;
             }
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -1023,6 +1092,9 @@ impl Sspm {
         let mut rec = Recording::new();
         rec.update(self.scene.lights, &gpu, "lights")?;
         backend.execute(&rec)?;
+        if let Some(t) = &mut self.temporal {
+            t.reset();
+        }
         self.model = model;
         self.constants = constants;
         self.plan = plan;
@@ -1050,6 +1122,9 @@ impl Sspm {
         backend.execute(&rec)?;
         if u.same_plan {
             self.model = u.model;
+            if let Some(t) = &mut self.temporal {
+                t.reset();
+            }
             return Ok(());
         }
         let had = self.bounds.has_dispersion;

@@ -56,7 +56,7 @@ pub fn plan_frame(
     lights: Vec<LightPlan>,
     outputs: Outputs,
     prune: bool,
-    filter: GatherFilter,
+    (filter, temporal): (GatherFilter, bool),
 ) -> FramePlan {
     let features = SceneFeatures::of(scene);
     let emits = lights.iter().any(|l| l.emits);
@@ -123,6 +123,17 @@ pub fn plan_frame(
     for name in ["tile_hit_distance", "bilateral_gather"] {
         pass(name, n.gather && !density, other(!density));
     }
+    pass(
+        "temporal_blend",
+        n.gather && temporal,
+        if !n.gather {
+            why_gather
+        } else if temporal {
+            "temporal on: the filtered caustics blended with their reprojected history"
+        } else {
+            "temporal off (SspmSettings::temporal)"
+        },
+    );
     pass(
         "composite",
         n.composite,

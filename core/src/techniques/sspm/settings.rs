@@ -79,6 +79,12 @@ pub struct SspmSettings {
     /// Most triangles the tessellated scene may have; checked before anything is
     /// allocated (default [`crate::scene::limits::DEFAULT_MAX_TRIANGLES`], 2^24).
     pub max_triangles: u64,
+    /// Blends each frame's filtered caustics with the reprojected history of the earlier
+    /// frames (seed 003 section 24.4.1's temporal accumulation, the shared
+    /// `temporal_blend` pass with the chapter's constants: alpha 0.95 x depth and normal
+    /// weights). Off by default: a frame is then a function of its seed alone. The history
+    /// is forgotten when the lights, materials, settings or image size change.
+    pub temporal: bool,
 }
 
 impl Default for SspmSettings {
@@ -105,6 +111,7 @@ impl Default for SspmSettings {
             outputs: Outputs::default(),
             prune: true,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
+            temporal: false,
         }
     }
 }
