@@ -24,6 +24,8 @@ fn every_backend_dispatches_every_declared_kernel() {
             let settings = SspmSettings {
                 prune: false,
                 filter,
+                // the opt-in temporal blend, with the bilateral filter
+                temporal: filter == GatherFilter::Bilateral,
                 ..small_settings(64)
             };
             let mut s = Sspm::new(b.as_mut(), &scene, settings).expect("valid scene");

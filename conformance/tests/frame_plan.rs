@@ -228,12 +228,12 @@ fn pruning_on_and_off_give_the_same_frame() {
             let scene = small(scene_name);
             let on = run(b.as_mut(), &scene, settings(true));
             let off = run(b.as_mut(), &scene, settings(false));
-            // pruning off runs every pass but those of the filter not chosen
+            // pruning off runs every pass but those of the filter not chosen and the
+            // opt-in temporal blend (a setting, not pruning)
             assert!(
-                off.stats
-                    .skipped
-                    .iter()
-                    .all(|p| p.reason.starts_with("filter is density")),
+                off.stats.skipped.iter().all(|p| {
+                    p.reason.starts_with("filter is density") || p.name == "temporal_blend"
+                }),
                 "{name}: pruning off skipped {:?}",
                 off.stats.skipped
             );

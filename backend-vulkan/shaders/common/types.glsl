@@ -101,6 +101,12 @@ struct MapLookupParams {
     GpuCamera camera;
     uint atlas_width; uint max_specular_depth; float min_weight; uint fresnel_model;
 };
+struct TemporalParams {
+    GpuCamera camera;
+    GpuCamera previous;
+    float alpha_max; float sigma_z; float sigma_n; float epsilon;
+    uint history_frames; uint _pad0; uint _pad1; uint _pad2;
+};
 struct RefineParams {
     uint atlas_width; float flux_quantum; float hit_distance_quantum; uint level;
     uint finest; uint metric; uint error_from_level; uint grid_w;

@@ -1,0 +1,131 @@
+//! The temporal blend (seed 003 section 24.4.1) as Sspm's opt-in pass
+//! (`SspmSettings::temporal`), on every backend (`backends()`: all four, required in CI).
+//!
+//! The blend's expectation is a single frame's (an exponential moving average of frames
+//! of independent seeds), so the reference is the mean of many single frames at the same
+//! camera on the same backend. Measured as the relative L2 error over the pixels where
+//! the reference has light:
+//!
+//! - **A static camera converges.** After 48 frames the blend's error is below 0.3 of a
+//!   single frame's. The arithmetic: the moving average with alpha 0.95 started on an empty
+//!   history weighs frame 1 by 0.95^47 = 0.09 and frame `k` by 0.05 x 0.95^(48 - k), a
+//!   variance of 0.033 of one frame's (an error ratio of 0.18 in L2), plus the reference's
+//!   own noise (1/32 of a frame's variance), on both sides (measured: 0.19-0.2).
+//! - **A moved camera does not ghost.** Right after a camera move the blend reprojects its
+//!   history; where that history is wrong (disocclusions, the depth or normal test
+//!   failing) its weight drops. Its error at the new view must stay below a single frame's
+//!   there: a history blended in at the wrong place would exceed it.
+
+use caustica_conformance::backends;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::Scene;
+use caustica_core::techniques::create;
+use caustica_core::Backend;
+
+fn scene() -> Scene {
+    let mut s = builtin("sphere").expect("built-in");
+    (s.camera.width, s.camera.height) = (64, 36);
+    s
+}
+
+fn settings(temporal: bool) -> serde_json::Value {
+    serde_json::json!({ "photons_w": 96, "photons_h": 96, "temporal": temporal })
+}
+
+/// The filtered caustics of frames with seeds `seeds`, one technique, the camera of
+/// `scene` (all frames returned, in order).
+fn frames(
+    b: &mut dyn Backend,
+    scene: &Scene,
+    temporal: bool,
+    seeds: std::ops::Range<u32>,
+) -> Vec<Vec<[f32; 4]>> {
+    let mut t = create("sspm", b, scene, &settings(temporal)).expect("create");
+    let out = seeds
+        .map(|k| {
+            t.set_seed(k);
+            t.frame(b, &mut |_| {}).expect("frame");
+            t.read_output(b, "caustics_filtered").expect("read").pixels
+        })
+        .collect();
+    t.free(b).expect("free");
+    out
+}
+
+fn mean(images: &[Vec<[f32; 4]>]) -> Vec<[f32; 3]> {
+    let n = images.len() as f32;
+    (0..images[0].len())
+        .map(|i| {
+            let mut s = [0.0f32; 3];
+            for img in images {
+                for c in 0..3 {
+                    s[c] += img[i][c];
+                }
+            }
+            s.map(|x| x / n)
+        })
+        .collect()
+}
+
+/// Relative L2 error of `img` against `reference` over the reference's lit pixels.
+fn rel_l2(img: &[[f32; 4]], reference: &[[f32; 3]]) -> f64 {
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    for (p, r) in img.iter().zip(reference) {
+        for c in 0..3 {
+            num += ((p[c] - r[c]) as f64).powi(2);
+            den += (r[c] as f64).powi(2);
+        }
+    }
+    (num / den.max(f64::MIN_POSITIVE)).sqrt()
+}
+
+/// Mean single-frame error of `singles` against `reference`.
+fn single_error(singles: &[Vec<[f32; 4]>], reference: &[[f32; 3]]) -> f64 {
+    singles.iter().map(|s| rel_l2(s, reference)).sum::<f64>() / singles.len() as f64
+}
+
+#[test]
+fn a_static_camera_converges_and_a_moved_one_does_not_ghost() {
+    for (name, mut b) in backends() {
+        let b = b.as_mut();
+        let still = scene();
+        let mut moved = still.clone();
+        moved.camera.position += glam::Vec3::new(0.15, 0.05, 0.0);
+        let singles = frames(b, &still, false, 1000..1032);
+        let reference = mean(&singles);
+        let single = single_error(&singles[..8], &reference);
+
+        let mut t = create("sspm", b, &still, &settings(true)).expect("create");
+        let mut last = Vec::new();
+        for k in 0..48 {
+            t.set_seed(k);
+            t.frame(b, &mut |_| {}).expect("frame");
+            last = t.read_output(b, "caustics_filtered").expect("read").pixels;
+        }
+        let blended = rel_l2(&last, &reference);
+        eprintln!("{name}: static, 48 frames: blend {blended:.4}, single {single:.4}");
+        assert!(
+            blended < 0.3 * single,
+            "{name}: after 48 frames the blend's error {blended} is not below 0.3 x a single frame's {single}"
+        );
+        assert!(
+            last.iter().flatten().all(|x| x.is_finite()),
+            "{name}: not finite"
+        );
+
+        let singles_moved = frames(b, &moved, false, 2000..2032);
+        let reference_moved = mean(&singles_moved);
+        let single_moved = single_error(&singles_moved[..8], &reference_moved);
+        t.set_camera(b, &moved.camera).expect("move");
+        t.set_seed(99);
+        t.frame(b, &mut |_| {}).expect("frame");
+        let after = t.read_output(b, "caustics_filtered").expect("read").pixels;
+        t.free(b).expect("free");
+        let err = rel_l2(&after, &reference_moved);
+        eprintln!("{name}: first frame after the move: blend {err:.4}, single {single_moved:.4}");
+        assert!(
+            err < single_moved,
+            "{name}: after the move the blend's error {err} exceeds a single frame's {single_moved}: ghosting"
+        );
+    }
+}
