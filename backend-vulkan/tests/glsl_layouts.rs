@@ -140,7 +140,6 @@ const NOT_BOUND: &[(&str, &str)] = &[
         "temporal_blend runs on Vulkan as a compute pipeline from caustica-shaders' WGSL, \
          whose layouts that crate's tests check",
     ),
-
     (
         "RefineParams",
         "refine_clusters runs on Vulkan as a compute pipeline from caustica-shaders' WGSL, \

@@ -20,7 +20,7 @@ use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
     check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
-    check_screen_target, check_trace, KernelCheck,
+    check_screen_target, check_temporal_blend, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -34,7 +34,7 @@ use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
     DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrimaryGbuffer,
-    RefineClusters, ResolveCaustics, TileHitDistance, TracePhotons,
+    RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::photon_clusters::entry_cluster;
@@ -93,6 +93,8 @@ enum Mutation {
     FootprintSpreadLost,
     /// `refine_clusters` (screen target) drops the last photon it lists.
     OutputListShort,
+    /// `temporal_blend`'s output 1% too high.
+    TemporalHigh,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -399,6 +401,9 @@ impl Mutant {
                     v[0] -= 1;
                 }
             }),
+            (Mutation::TemporalHigh, Kernel::TemporalBlend(TemporalBlend { out, .. })) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-2))
+            }
             (Mutation::DirectHigh, Kernel::DirectLight(DirectLight { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-3))
             }
@@ -488,6 +493,7 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
             "trace_photons (adaptive, world) + refine_clusters (screen)",
             Box::new(check_screen_target),
         ),
+        ("temporal_blend", Box::new(check_temporal_blend)),
     ]
 }
 
@@ -610,6 +616,7 @@ fn each_fault_fails_the_check_of_its_kernel() {
             Mutation::OutputListShort,
             "trace_photons (adaptive, world) + refine_clusters (screen)",
         ),
+        (Mutation::TemporalHigh, "temporal_blend"),
     ] {
         let mut report = Report::new(kernel);
         let mut cand = Mutant::candidate(mutation);
