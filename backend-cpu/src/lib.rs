@@ -21,9 +21,9 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
-    DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene, PrimaryGbuffer,
-    RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
+    AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
+    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -400,6 +400,22 @@ impl CpuBackend {
                 let c = get(caustics.id)?.as_slice(caustics.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the composite")?;
                 let img = composite::composite(d, c);
+                self.put(out.id, &img)
+            }
+            Kernel::AtrousFilter(AtrousFilter {
+                params,
+                gbuffer,
+                input,
+                details,
+                out,
+            }) => {
+                let g = self.gbuffer(gbuffer)?;
+                let i = get(input.id)?.as_slice(input.len)?;
+                let d = get(details.id)?.as_slice(details.len)?;
+                reserve_temporary::<[[f32; 4]; 2]>(out.len as u64, "an A-Trous iteration")?;
+                let r = atrous_filter::atrous_filter_image(params, g, i, d);
+                let (img, det): (Vec<[f32; 4]>, Vec<[f32; 4]>) = r.into_iter().unzip();
+                self.put(details.id, &det)?;
                 self.put(out.id, &img)
             }
             Kernel::TemporalBlend(TemporalBlend {

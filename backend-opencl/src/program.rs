@@ -114,6 +114,7 @@ pub const KERNELS: &[(&str, &str)] = &[
         "temporal_blend",
         include_str!("../kernels/temporal_blend.cl"),
     ),
+    ("atrous_filter", include_str!("../kernels/atrous_filter.cl")),
 ];
 
 /// Kernels compiled per variant, in programs of their own.

@@ -14,9 +14,9 @@
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
-    check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
-    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
-    check_screen_target, check_temporal_blend, check_trace, KernelCheck,
+    check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
+    check_density_gather, check_deposit, check_direct, check_gather, check_gbuffer,
+    check_kernel_cases, check_screen_target, check_temporal_blend, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -112,6 +112,13 @@ fn adaptive_caustics_screen_target_matches_cpu_on_the_same_inputs() {
 #[test]
 fn temporal_blend_matches_cpu_on_the_same_inputs() {
     kernel_test("temporal_blend", &check_temporal_blend);
+}
+
+/// One A-Trous iteration (inner and last) on the same inputs: within the tolerance of its
+/// weights' `exp` and `pow` (`kernels::atrous_filter` argues it).
+#[test]
+fn atrous_filter_matches_cpu_on_the_same_inputs() {
+    kernel_test("atrous_filter", &check_atrous_filter);
 }
 
 #[test]

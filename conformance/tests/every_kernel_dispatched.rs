@@ -24,8 +24,14 @@ fn every_backend_dispatches_every_declared_kernel() {
             let settings = SspmSettings {
                 prune: false,
                 filter,
-                // the opt-in temporal blend, with the bilateral filter
+                // the opt-in temporal blend and A-Trous iterations, with the bilateral
+                // filter
                 temporal: filter == GatherFilter::Bilateral,
+                atrous_iterations: if filter == GatherFilter::Bilateral {
+                    2
+                } else {
+                    0
+                },
                 ..small_settings(64)
             };
             let mut s = Sspm::new(b.as_mut(), &scene, settings).expect("valid scene");

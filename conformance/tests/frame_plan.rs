@@ -232,7 +232,9 @@ fn pruning_on_and_off_give_the_same_frame() {
             // opt-in temporal blend (a setting, not pruning)
             assert!(
                 off.stats.skipped.iter().all(|p| {
-                    p.reason.starts_with("filter is density") || p.name == "temporal_blend"
+                    p.reason.starts_with("filter is density")
+                        || p.name == "temporal_blend"
+                        || p.name == "atrous_filter"
                 }),
                 "{name}: pruning off skipped {:?}",
                 off.stats.skipped

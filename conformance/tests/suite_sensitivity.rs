@@ -18,9 +18,9 @@
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
-    check_adaptive_caustics, check_caustic_map, check_composite, check_density_gather,
-    check_deposit, check_direct, check_gather, check_gbuffer, check_kernel_cases,
-    check_screen_target, check_temporal_blend, check_trace, KernelCheck,
+    check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
+    check_density_gather, check_deposit, check_direct, check_gather, check_gbuffer,
+    check_kernel_cases, check_screen_target, check_temporal_blend, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -32,9 +32,9 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas, DepositScreen,
-    DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrimaryGbuffer,
-    RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
+    AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
+    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::photon_clusters::entry_cluster;
@@ -95,6 +95,8 @@ enum Mutation {
     OutputListShort,
     /// `temporal_blend`'s output 1% too high.
     TemporalHigh,
+    /// `atrous_filter`'s output 1% too high.
+    AtrousHigh,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -401,6 +403,9 @@ impl Mutant {
                     v[0] -= 1;
                 }
             }),
+            (Mutation::AtrousHigh, Kernel::AtrousFilter(AtrousFilter { out, .. })) => {
+                self.modify(out.id, |v| scale(v, 1.0 + 1e-2))
+            }
             (Mutation::TemporalHigh, Kernel::TemporalBlend(TemporalBlend { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-2))
             }
@@ -494,6 +499,7 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
             Box::new(check_screen_target),
         ),
         ("temporal_blend", Box::new(check_temporal_blend)),
+        ("atrous_filter", Box::new(check_atrous_filter)),
     ]
 }
 
@@ -617,6 +623,7 @@ fn each_fault_fails_the_check_of_its_kernel() {
             "trace_photons (adaptive, world) + refine_clusters (screen)",
         ),
         (Mutation::TemporalHigh, "temporal_blend"),
+        (Mutation::AtrousHigh, "atrous_filter"),
     ] {
         let mut report = Report::new(kernel);
         let mut cand = Mutant::candidate(mutation);

@@ -32,6 +32,12 @@ fn settings(temporal: bool) -> serde_json::Value {
     serde_json::json!({ "photons_w": 96, "photons_h": 96, "temporal": temporal })
 }
 
+fn atrous_settings(iterations: u32, clip: f32) -> serde_json::Value {
+    serde_json::json!({
+        "photons_w": 96, "photons_h": 96, "atrous_iterations": iterations, "atrous_clip_sigmas": clip
+    })
+}
+
 /// The filtered caustics of frames with seeds `seeds`, one technique, the camera of
 /// `scene` (all frames returned, in order).
 fn frames(
@@ -127,5 +133,57 @@ fn a_static_camera_converges_and_a_moved_one_does_not_ghost() {
             err < single_moved,
             "{name}: after the move the blend's error {err} exceeds a single frame's {single_moved}: ghosting"
         );
+    }
+}
+
+/// The A-Trous iterations on single frames (no temporal blend): their error against the
+/// same reference, and the flux they keep, printed per clip bound (a measurement for the
+/// docs); every output finite, and the iterations with every detail kept (a huge clip
+/// bound) give back the input within rounding (Eq. 17).
+#[test]
+fn atrous_iterations_on_single_frames() {
+    for (name, mut b) in backends() {
+        let b = b.as_mut();
+        let still = scene();
+        let singles = frames(b, &still, false, 1000..1032);
+        let reference = mean(&singles);
+        let flux = |img: &[[f32; 4]]| img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+        let base_err = single_error(&singles[..8], &reference);
+        let base_flux: f64 = singles[..8].iter().map(|s| flux(s)).sum::<f64>();
+        for clip in [0.0f32, 1.0, 1e30] {
+            let mut t = create("sspm", b, &still, &atrous_settings(4, clip)).expect("create");
+            let mut err = 0.0;
+            let mut kept = 0.0;
+            for (k, single) in singles[..8].iter().enumerate() {
+                t.set_seed(1000 + k as u32);
+                t.frame(b, &mut |_| {}).expect("frame");
+                let img = t.read_output(b, "caustics_filtered").expect("read").pixels;
+                assert!(
+                    img.iter().flatten().all(|x| x.is_finite()),
+                    "{name}: not finite"
+                );
+                if clip > 1e20 {
+                    let close = img.iter().zip(single).all(|(p, q)| {
+                        (0..3).all(|c| {
+                            (p[c] - q[c]).abs() <= 1e-4 * q[c].abs().max(1e-3 * q[c].abs() + 1e-6)
+                        })
+                    });
+                    let worst = img
+                        .iter()
+                        .zip(single)
+                        .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).abs()).fold(0.0f32, f32::max))
+                        .fold(0.0f32, f32::max);
+                    assert!(close || worst <= 1e-4 * single.iter().flatten().fold(0.0f32, |m, x| m.max(*x)),
+                        "{name}: with every detail kept the iterations must give back the input (worst {worst})");
+                }
+                err += rel_l2(&img, &reference) / 8.0;
+                kept += flux(&img);
+            }
+            t.free(b).expect("free");
+            eprintln!(
+                "{name}: A-Trous 4 iterations, clip {clip:e}: error {err:.4} (unfiltered {base_err:.4}), flux {:.4} of the input's",
+                kept / base_flux
+            );
+        }
     }
 }

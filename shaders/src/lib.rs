@@ -114,6 +114,7 @@ pub const KERNELS: &[(&str, &str)] = &[
         "temporal_blend",
         include_str!("../wgsl/temporal_blend.wgsl"),
     ),
+    ("atrous_filter", include_str!("../wgsl/atrous_filter.wgsl")),
 ];
 
 /// The kernels with compiled variants: their modules declare pipeline-overridable

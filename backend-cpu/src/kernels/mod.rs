@@ -1,6 +1,7 @@
 //! The CPU kernels, one module per registry kernel (`prepare_scene` is
 //! [`crate::traversal::adopt_bvh`]).
 
+pub mod atrous_filter;
 pub mod caustic_map;
 pub mod composite;
 pub mod density_gather;

@@ -24,3 +24,31 @@ inline float temporal_alpha(float w_z, float w_n, float alpha_max) {
 inline float3 blend_with_history(float3 current, float3 history, float alpha) {
     return current * (1.0f - alpha) + history * alpha;
 }
+
+// 1D taps of one 5x5 A-Trous iteration (Eq. 14's h).
+__constant float ATROUS_TAPS[5] = {0.125f, 0.25f, 0.5f, 0.25f, 0.125f};
+
+inline int atrous_offset(uint k, uint iteration) { return ((int)k - 2) << iteration; }
+
+inline float depth_gradient_axis(float z, float lo, float hi) {
+    if (lo > 0.0f && hi > 0.0f) return 0.5f * (hi - lo);
+    if (hi > 0.0f) return hi - z;
+    if (lo > 0.0f) return z - lo;
+    return 0.0f;
+}
+
+inline float2 depth_gradient(float z, float4 n) {
+    return (float2)(depth_gradient_axis(z, n.x, n.y), depth_gradient_axis(z, n.z, n.w));
+}
+
+inline float3 detail_bound(float3 mean, float3 mean_sq, float gamma) {
+    return sqrt(fmax(mean_sq - mean * mean, (float3)(0.0f))) * gamma;
+}
+
+inline float3 clipped_detail(float3 s_i, float3 s_next, float3 bound) {
+    return clamp(s_next - s_i, -bound, bound);
+}
+
+inline float3 atrous_final(float3 s_n, float3 clipped_details) {
+    return fmax(s_n - clipped_details, (float3)(0.0f));
+}

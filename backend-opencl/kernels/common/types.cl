@@ -74,6 +74,11 @@ typedef struct {
     float alpha_max; float sigma_z; float sigma_n; float epsilon;
     uint history_frames; uint _pad0; uint _pad1; uint _pad2;
 } TemporalParams;
+typedef struct {
+    GpuCamera camera;
+    uint iteration; uint last; float sigma_z; float sigma_n;
+    float epsilon; float clip_sigmas; uint _pad0; uint _pad1;
+} AtrousParams;
 
 // core::gpu constants
 #define MATERIAL_DIFFUSE 0u

@@ -101,6 +101,11 @@ struct MapLookupParams {
     GpuCamera camera;
     uint atlas_width; uint max_specular_depth; float min_weight; uint fresnel_model;
 };
+struct AtrousParams {
+    GpuCamera camera;
+    uint iteration; uint last; float sigma_z; float sigma_n;
+    float epsilon; float clip_sigmas; uint _pad0; uint _pad1;
+};
 struct TemporalParams {
     GpuCamera camera;
     GpuCamera previous;

@@ -16,6 +16,7 @@
 //! ([`crate::harness::kernel_cases`]).
 
 pub mod adaptive_caustics;
+pub mod atrous_filter;
 pub mod bilateral_gather;
 pub mod caustic_map;
 pub mod composite;
@@ -29,6 +30,7 @@ pub mod tile_hit_distance;
 pub mod trace_photons;
 
 pub use adaptive_caustics::{check_adaptive_caustics, check_screen_target};
+pub use atrous_filter::check_atrous_filter;
 pub use bilateral_gather::check_gather;
 pub use caustic_map::check_caustic_map;
 pub use composite::check_composite;

@@ -486,6 +486,29 @@ pub struct TemporalParams {
     pub _pad: [u32; 3],
 }
 
+/// Parameters of one `atrous_filter` iteration (seed 003 section 24.4.2, Eqs. 14-18).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AtrousParams {
+    /// The frame's camera (its image size is the images').
+    pub camera: GpuCamera,
+    /// The iteration `i` (taps `2^i` pixels apart).
+    pub iteration: u32,
+    /// 1 on the last iteration: it writes `E_final` instead of `s_(i+1)`.
+    pub last: u32,
+    /// Depth weight's `sigma_z` (Eq. 10).
+    pub sigma_z: f32,
+    /// Normal weight's exponent `sigma_n` (Eq. 11).
+    pub sigma_n: f32,
+    /// Eq. 10's guard, relative to the depth.
+    pub epsilon: f32,
+    /// Standard deviations of the kernel's values a detail coefficient may keep (Eq. 18's
+    /// bounds `b_i`).
+    pub clip_sigmas: f32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 2],
+}
+
 /// Parameters of `caustic_map_lookup`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

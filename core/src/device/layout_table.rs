@@ -9,9 +9,9 @@
 //! the struct without `..`, so a field added to a struct and not here does not compile.
 
 use super::layout::{
-    AtlasParams, DepositParams, DepositTexel, DirectParams, GBufferTexel, GatherParams, GpuCamera,
-    GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams, Photon, RefineParams,
-    TemporalParams, TraceParams,
+    AtlasParams, AtrousParams, DepositParams, DepositTexel, DirectParams, GBufferTexel,
+    GatherParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams,
+    Photon, RefineParams, TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -222,6 +222,9 @@ table! {
         width, height, flux_quantum, hit_distance_quantum, photon_capacity, gather_width, _pad
     }
     MapLookupParams { camera, atlas_width, max_specular_depth, min_weight, fresnel_model }
+    AtrousParams {
+        camera, iteration, last, sigma_z, sigma_n, epsilon, clip_sigmas, _pad
+    }
     TemporalParams {
         camera, previous, alpha_max, sigma_z, sigma_n, epsilon, history_frames, _pad
     }

@@ -15,6 +15,7 @@
 //! Adding a kernel: a file here, one line in `kernel_list!`, then its CPU function, WGSL,
 //! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
 
+mod atrous_filter;
 mod bilateral_gather;
 mod caustic_map_lookup;
 mod composite;
@@ -33,6 +34,7 @@ mod temporal_blend;
 mod tile_hit_distance;
 mod trace_photons;
 
+pub use atrous_filter::AtrousFilter;
 pub use bilateral_gather::BilateralGather;
 pub use caustic_map_lookup::CausticMapLookup;
 pub use composite::Composite;
@@ -467,6 +469,7 @@ kernel_list! {
     DensityGather => density_gather,
     Composite => composite,
     TemporalBlend => temporal_blend,
+    AtrousFilter => atrous_filter,
     DepositAtlas => deposit_atlas,
     GatherCausticMap => gather_caustic_map,
     CausticMapLookup => caustic_map_lookup,

@@ -56,6 +56,25 @@ pub fn reprojection_depth_step(z: f32, neighbours: [f32; 4]) -> f32 {
     0.5 * step
 }
 
+/// The view-depth gradient at a pixel of depth `z` (per pixel, x then y) from its
+/// neighbours' depths `[left, right, up, down]` (<= 0: no receiver there, skipped): central
+/// differences, one-sided where one neighbour is missing, 0 where both are.
+#[inline]
+pub fn depth_gradient(z: f32, n: [f32; 4]) -> (f32, f32) {
+    let axis = |lo: f32, hi: f32| {
+        if lo > 0.0 && hi > 0.0 {
+            0.5 * (hi - lo)
+        } else if hi > 0.0 {
+            hi - z
+        } else if lo > 0.0 {
+            z - lo
+        } else {
+            0.0
+        }
+    };
+    (axis(n[0], n[1]), axis(n[2], n[3]))
+}
+
 /// Eq. 11: `w_n(P, Q) = max(0, n(P) . n(Q))^sigma_n` (unit normals).
 #[inline]
 pub fn normal_weight(n_p: Vec3, n_q: Vec3, c: &FilterConstants) -> f32 {
@@ -94,6 +113,14 @@ pub fn atrous_offset(k: u32, iteration: u32) -> i32 {
 #[inline]
 pub fn detail_bound(mean: Vec3, mean_sq: Vec3, gamma: f32) -> Vec3 {
     (mean_sq - mean * mean).max(Vec3::ZERO).powf(0.5) * gamma
+}
+
+/// Eq. 18 at the last iteration: `E_final = s_n - sum_i clamp(d_i, -b_i, b_i)`, floored at
+/// 0 (an irradiance or radiance is never negative; the clipped sum can overshoot where a
+/// lone bright pixel meets a dark neighbourhood).
+#[inline]
+pub fn atrous_final(s_n: Vec3, clipped_details: Vec3) -> Vec3 {
+    (s_n - clipped_details).max(Vec3::ZERO)
 }
 
 /// Eqs. 16-18: the detail coefficient `d_i = s_{i+1} - s_i` of one iteration, clipped to

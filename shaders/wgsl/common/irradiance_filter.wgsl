@@ -26,3 +26,40 @@ fn temporal_alpha(w_z: f32, w_n: f32, alpha_max: f32) -> f32 {
 fn blend_with_history(current: vec3<f32>, history: vec3<f32>, alpha: f32) -> vec3<f32> {
     return current * (1.0f - alpha) + history * alpha;
 }
+
+// 1D taps of one 5x5 A-Trous iteration (Eq. 14's h).
+const ATROUS_TAPS = array<f32, 5>(0.125f, 0.25f, 0.5f, 0.25f, 0.125f);
+
+fn atrous_offset(k: u32, iteration: u32) -> i32 {
+    return (i32(k) - 2) << iteration;
+}
+
+fn depth_gradient(z: f32, n: vec4<f32>) -> vec2<f32> {
+    var g: vec2<f32>;
+    for (var a = 0u; a < 2u; a++) {
+        let lo = n[2u * a];
+        let hi = n[2u * a + 1u];
+        var v = 0.0f;
+        if (lo > 0.0f && hi > 0.0f) {
+            v = 0.5f * (hi - lo);
+        } else if (hi > 0.0f) {
+            v = hi - z;
+        } else if (lo > 0.0f) {
+            v = z - lo;
+        }
+        g[a] = v;
+    }
+    return g;
+}
+
+fn detail_bound(mean: vec3<f32>, mean_sq: vec3<f32>, gamma: f32) -> vec3<f32> {
+    return sqrt(max(mean_sq - mean * mean, vec3<f32>(0.0f))) * gamma;
+}
+
+fn clipped_detail(s_i: vec3<f32>, s_next: vec3<f32>, bound: vec3<f32>) -> vec3<f32> {
+    return clamp(s_next - s_i, -bound, bound);
+}
+
+fn atrous_final(s_n: vec3<f32>, clipped_details: vec3<f32>) -> vec3<f32> {
+    return max(s_n - clipped_details, vec3<f32>(0.0f));
+}

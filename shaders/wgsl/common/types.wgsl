@@ -181,6 +181,18 @@ struct RefineParams {
     camera: GpuCamera,
 }
 
+struct AtrousParams {
+    camera: GpuCamera,
+    iteration: u32,
+    last: u32,
+    sigma_z: f32,
+    sigma_n: f32,
+    epsilon: f32,
+    clip_sigmas: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
 struct TemporalParams {
     camera: GpuCamera,
     previous: GpuCamera,

@@ -41,9 +41,9 @@ use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TemporalBlend, TileHitDistance,
-    TracePhotons,
+    AtrousFilter, BilateralGather, Composite, DensityGather, DepositScreen, DirectLight,
+    GatherFootprint, PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TemporalBlend,
+    TileHitDistance, TracePhotons,
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
@@ -90,6 +90,17 @@ struct TemporalBuffers {
     previous: GpuCamera,
 }
 
+/// The A-Trous iterations' buffers (`SspmSettings::atrous_iterations`): their input (the
+/// filtered, or blended, caustics), two images the iterations alternate between, and the
+/// running sum of clipped detail coefficients.
+#[derive(Clone, Copy, Debug)]
+struct AtrousBuffers {
+    input: ImageBuf,
+    a: ImageBuf,
+    b: ImageBuf,
+    details: ImageBuf,
+}
+
 impl TemporalBuffers {
     /// Forgets the history (the next frame is not blended).
     fn reset(&mut self) {
@@ -125,6 +136,7 @@ pub struct Sspm {
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
     temporal: Option<TemporalBuffers>,
+    atrous: Option<AtrousBuffers>,
     images: FrameImages,
     /// Every image buffer the plan created, by [`Output`], requested or not.
     image_buffers: [Option<ImageBuf>; 4],
@@ -169,6 +181,7 @@ struct FrameParts {
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
     temporal: Option<TemporalBuffers>,
+    atrous: Option<AtrousBuffers>,
     images: FrameImages,
     image_buffers: [Option<ImageBuf>; 4],
     owned: Vec<ResourceId>,
@@ -264,6 +277,7 @@ impl Sspm {
             photon: parts.photon,
             gather: parts.gather,
             temporal: parts.temporal,
+            atrous: parts.atrous,
             images: parts.images,
             image_buffers: parts.image_buffers,
             owned: parts.owned,
@@ -301,7 +315,13 @@ impl Sspm {
             let lights = volume_light_plans(&constants);
             return Ok((
                 constants,
-                plan_frame(scene, lights, out, prune, (filter, settings.temporal)),
+                plan_frame(
+                    scene,
+                    lights,
+                    out,
+                    prune,
+                    (filter, settings.temporal, settings.atrous_iterations > 0),
+                ),
                 None,
             ));
         };
@@ -321,7 +341,7 @@ impl Sspm {
             emission.light_plans(),
             out,
             prune,
-            (filter, settings.temporal),
+            (filter, settings.temporal, settings.atrous_iterations > 0),
         );
         if let Some(v) = &mut plan.trace_variant {
             // seed 004's slots, in world space for the screen deposit
@@ -407,6 +427,12 @@ impl Sspm {
             unblended: rec.create(pixels, "unblended caustics image"),
             previous: camera,
         });
+        let atrous = plan.runs("atrous_filter").then(|| AtrousBuffers {
+            input: rec.create(pixels, "A-Trous input image"),
+            a: rec.create(pixels, "A-Trous image a"),
+            b: rec.create(pixels, "A-Trous image b"),
+            details: rec.create(pixels, "A-Trous clipped details"),
+        });
         let own_composite = needs
             .composite
             .then(|| rec.create(pixels, "composite image"));
@@ -457,6 +483,7 @@ impl Sspm {
             photon,
             gather,
             temporal,
+            atrous,
             images,
             image_buffers: [own_composite, direct, raw_caustics, filtered_caustics],
             owned: allocation.owned,
@@ -474,6 +501,7 @@ impl Sspm {
         self.photon = p.photon;
         self.gather = p.gather;
         self.temporal = p.temporal;
+        self.atrous = p.atrous;
         self.images = p.images;
         self.image_buffers = p.image_buffers;
         self.owned = p.owned;
@@ -491,6 +519,7 @@ impl Sspm {
         self.photon = None;
         self.gather = None;
         self.temporal = None;
+        self.atrous = None;
         self.adaptive_frame = None;
         self.image_buffers = [None; 4];
         backend.execute(&rec)?;
@@ -757,8 +786,10 @@ impl Sspm {
                 out: raw,
             });
             if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
-                // with the temporal blend the filter's result is blended into `filtered`
-                let last = self.temporal.map_or(filtered, |t| t.unblended);
+                // the filter, then the temporal blend, then the A-Trous iterations, each
+                // opt-in; the last that runs writes `filtered`
+                let blended = self.atrous.map_or(filtered, |a| a.input);
+                let last = self.temporal.map_or(blended, |t| t.unblended);
                 let gather = self.constants.gather_params(cam, &self.settings, 0);
                 let columns = GatherParams { axis: 1, ..gather };
                 match g {
@@ -837,10 +868,41 @@ impl Sspm {
                         input: t.unblended,
                         history: t.image.history(),
                         history_edge: t.edge.history(),
-                        out: filtered,
+                        out: blended,
                         next_history: t.image.current(),
                         next_edge: t.edge.current(),
                     });
+                }
+                if let Some(a) = self.atrous {
+                    let c = crate::math::irradiance_filter::FilterConstants::default();
+                    let n = self.settings.atrous_iterations;
+                    let mut input = a.input;
+                    for i in 0..n {
+                        let out = if i + 1 == n {
+                            filtered
+                        } else if i % 2 == 0 {
+                            a.a
+                        } else {
+                            a.b
+                        };
+                        rec.kernel(AtrousFilter {
+                            params: AtrousParams {
+                                camera: cam,
+                                iteration: i,
+                                last: (i + 1 == n) as u32,
+                                sigma_z: c.sigma_z,
+                                sigma_n: c.sigma_n,
+                                epsilon: c.epsilon,
+                                clip_sigmas: self.settings.atrous_clip_sigmas,
+                                _pad: [0; 2],
+                            },
+                            gbuffer: self.gbuffer,
+                            input,
+                            details: a.details,
+                            out,
+                        });
+                        input = out;
+                    }
                 }
                 if let (true, Some(direct), Some(out)) = (
                     Needs::of_plan(&self.plan).composite,

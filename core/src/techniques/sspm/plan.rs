@@ -56,7 +56,7 @@ pub fn plan_frame(
     lights: Vec<LightPlan>,
     outputs: Outputs,
     prune: bool,
-    (filter, temporal): (GatherFilter, bool),
+    (filter, temporal, atrous): (GatherFilter, bool, bool),
 ) -> FramePlan {
     let features = SceneFeatures::of(scene);
     let emits = lights.iter().any(|l| l.emits);
@@ -132,6 +132,17 @@ pub fn plan_frame(
             "temporal on: the filtered caustics blended with their reprojected history"
         } else {
             "temporal off (SspmSettings::temporal)"
+        },
+    );
+    pass(
+        "atrous_filter",
+        n.gather && atrous,
+        if !n.gather {
+            why_gather
+        } else if atrous {
+            "atrous_iterations > 0: the caustics filtered again by A-Trous iterations"
+        } else {
+            "atrous_iterations is 0 (SspmSettings::atrous_iterations)"
         },
     );
     pass(

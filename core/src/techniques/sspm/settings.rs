@@ -85,6 +85,15 @@ pub struct SspmSettings {
     /// weights). Off by default: a frame is then a function of its seed alone. The history
     /// is forgotten when the lights, materials, settings or image size change.
     pub temporal: bool,
+    /// Iterations of the edge-avoiding A-Trous filter with variance clipping of its
+    /// detail coefficients (seed 003 section 24.4.2, the shared `atrous_filter` pass) run
+    /// on the filtered (and, with `temporal`, blended) caustics: 0 (the default) runs
+    /// none; the chapter runs 4. At most 8.
+    pub atrous_iterations: u32,
+    /// Standard deviations of the A-Trous kernel's values that a detail coefficient may
+    /// keep (Eq. 18's bounds; the chapter gives no value: 1 by default). 0 keeps none (the
+    /// smooth `s_n`); a large value keeps all (the unfiltered input).
+    pub atrous_clip_sigmas: f32,
 }
 
 impl Default for SspmSettings {
@@ -112,6 +121,8 @@ impl Default for SspmSettings {
             prune: true,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
             temporal: false,
+            atrous_iterations: 0,
+            atrous_clip_sigmas: 1.0,
         }
     }
 }
@@ -170,6 +181,12 @@ impl SspmSettings {
         }
         if !self.outputs.any() {
             return bad("outputs: at least one output must be requested");
+        }
+        if self.atrous_iterations > 8 {
+            return bad("atrous_iterations must be <= 8 (taps 128 pixels apart)");
+        }
+        if !(self.atrous_clip_sigmas >= 0.0 && self.atrous_clip_sigmas.is_finite()) {
+            return bad("atrous_clip_sigmas must be >= 0");
         }
         if self.max_photons_per_batch == 0 {
             return bad("max_photons_per_batch must be >= 1");

@@ -1,0 +1,93 @@
+//! `atrous_filter` (seed 003 section 24.4.2): one edge-avoiding A-Trous iteration with
+//! variance clipping of its detail coefficient. The weights are core's
+//! `math::irradiance_filter`; see core's `AtrousFilter` for the contract.
+
+use caustica_core::device::layout::{gbuffer_flags, AtrousParams, GBufferView};
+use caustica_core::math::irradiance_filter::{
+    atrous_final, atrous_offset, clipped_detail, depth_gradient, depth_weight, detail_bound,
+    normal_weight, FilterConstants, ATROUS_TAPS,
+};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// (out, details) per pixel.
+pub fn atrous_filter_image(
+    p: &AtrousParams,
+    gbuffer: GBufferView,
+    input: &[[f32; 4]],
+    details: &[[f32; 4]],
+) -> Vec<([f32; 4], [f32; 4])> {
+    let (w, h) = (p.camera.width as i64, p.camera.height as i64);
+    let c = FilterConstants {
+        sigma_z: p.sigma_z,
+        sigma_n: p.sigma_n,
+        alpha_max: 0.0,
+        epsilon: p.epsilon,
+    };
+    // (receiver, depth, normal) of pixel (x, y); None off the image or on a non-receiver
+    let texel = |x: i64, y: i64| {
+        if x < 0 || y < 0 || x >= w || y >= h {
+            return None;
+        }
+        let g = gbuffer.load_gbuffer((y * w + x) as usize);
+        (g.flags & gbuffer_flags::RECEIVER != 0).then(|| (g.depth, Vec3::from(g.normal)))
+    };
+    let depth = |x: i64, y: i64| texel(x, y).map_or(0.0, |t| t.0);
+    (0..(w * h) as usize)
+        .into_par_iter()
+        .map(|j| {
+            let (x, y) = (j as i64 % w, j as i64 / w);
+            let s_i = input[j];
+            let Some((z, n)) = texel(x, y) else {
+                return (s_i, [0.0; 4]);
+            };
+            let (gx, gy) = depth_gradient(
+                z,
+                [
+                    depth(x - 1, y),
+                    depth(x + 1, y),
+                    depth(x, y - 1),
+                    depth(x, y + 1),
+                ],
+            );
+            let (mut sum_w, mut sum, mut sum_sq) = (0.0f32, Vec3::ZERO, Vec3::ZERO);
+            for ky in 0..5u32 {
+                for kx in 0..5u32 {
+                    let (dx, dy) = (
+                        atrous_offset(kx, p.iteration) as i64,
+                        atrous_offset(ky, p.iteration) as i64,
+                    );
+                    let Some((zq, nq)) = texel(x + dx, y + dy) else {
+                        continue;
+                    };
+                    let step = gx * dx as f32 + gy * dy as f32;
+                    let wgt = ATROUS_TAPS[kx as usize]
+                        * ATROUS_TAPS[ky as usize]
+                        * depth_weight(z, zq, step, &c)
+                        * normal_weight(n, nq, &c);
+                    let q = input[((y + dy) * w + x + dx) as usize];
+                    let v = Vec3::new(q[0], q[1], q[2]);
+                    sum_w += wgt;
+                    sum += wgt * v;
+                    sum_sq += wgt * v * v;
+                }
+            }
+            let mean = sum / sum_w;
+            let mean_sq = sum_sq / sum_w;
+            let s = Vec3::new(s_i[0], s_i[1], s_i[2]);
+            let clipped = clipped_detail(s, mean, detail_bound(mean, mean_sq, p.clip_sigmas));
+            let before = if p.iteration == 0 {
+                Vec3::ZERO
+            } else {
+                Vec3::new(details[j][0], details[j][1], details[j][2])
+            };
+            let d = before + clipped;
+            let o = if p.last != 0 {
+                atrous_final(mean, d)
+            } else {
+                mean
+            };
+            ([o.x, o.y, o.z, s_i[3]], [d.x, d.y, d.z, 0.0])
+        })
+        .collect()
+}

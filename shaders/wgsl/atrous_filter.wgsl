@@ -1,0 +1,98 @@
+// needs: types vector irradiance_filter
+// atrous_filter (seed 003 section 24.4.2, Eqs. 14-18): one edge-avoiding A-Trous
+// iteration with variance clipping of its detail coefficient (the contract in
+// core/src/kernels/atrous_filter.rs). Mirror of backend-opencl/kernels/atrous_filter.cl
+// and backend-cpu/src/kernels/atrous_filter.rs.
+
+@group(0) @binding(0) var<uniform> params: AtrousParams;
+@group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> details: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
+
+fn is_receiver(i: u32) -> bool {
+    return (gbuffer3[i].w & GBUFFER_RECEIVER) != 0u;
+}
+
+// View depth of receiver (x, y); 0 off the image or on a non-receiver.
+fn atrous_depth(x: i32, y: i32, w: i32, h: i32) -> f32 {
+    if (x < 0 || y < 0 || x >= w || y >= h) {
+        return 0.0f;
+    }
+    let i = u32(y * w + x);
+    if (!is_receiver(i)) {
+        return 0.0f;
+    }
+    return bitcast<f32>(gbuffer0[i].w);
+}
+
+fn atrous_pixel(j: u32) {
+    let p = params;
+    let w = i32(p.camera.width);
+    let h = i32(p.camera.height);
+    if (j >= u32(w * h)) {
+        return;
+    }
+    let s_i = input[j];
+    if (!is_receiver(j)) {
+        out[j] = s_i;
+        details[j] = vec4<f32>(0.0f);
+        return;
+    }
+    let x = i32(j) % w;
+    let y = i32(j) / w;
+    let z = bitcast<f32>(gbuffer0[j].w);
+    let n = bitcast<vec3<f32>>(gbuffer1[j].xyz);
+    let g = depth_gradient(z, vec4<f32>(atrous_depth(x - 1, y, w, h), atrous_depth(x + 1, y, w, h),
+                                        atrous_depth(x, y - 1, w, h), atrous_depth(x, y + 1, w, h)));
+    var sum_w = 0.0f;
+    var sum = vec3<f32>(0.0f);
+    var sum_sq = vec3<f32>(0.0f);
+    for (var ky = 0u; ky < 5u; ky++) {
+        for (var kx = 0u; kx < 5u; kx++) {
+            let dx = atrous_offset(kx, p.iteration);
+            let dy = atrous_offset(ky, p.iteration);
+            let qx = x + dx;
+            let qy = y + dy;
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) {
+                continue;
+            }
+            let q = u32(qy * w + qx);
+            if (!is_receiver(q)) {
+                continue;
+            }
+            let zq = bitcast<f32>(gbuffer0[q].w);
+            let nq = bitcast<vec3<f32>>(gbuffer1[q].xyz);
+            let step = g.x * f32(dx) + g.y * f32(dy);
+            let wgt = ATROUS_TAPS[kx] * ATROUS_TAPS[ky] * depth_weight(z, zq, step, p.sigma_z, p.epsilon)
+                * normal_weight(n, nq, p.sigma_n);
+            let v = input[q].xyz;
+            sum_w += wgt;
+            sum += wgt * v;
+            sum_sq += wgt * v * v;
+        }
+    }
+    let mean = sum / sum_w;
+    let mean_sq = sum_sq / sum_w;
+    let clipped = clipped_detail(s_i.xyz, mean, detail_bound(mean, mean_sq, p.clip_sigmas));
+    var before = vec3<f32>(0.0f);
+    if (p.iteration > 0u) {
+        before = details[j].xyz;
+    }
+    let d = before + clipped;
+    var o = mean;
+    if (p.last != 0u) {
+        o = atrous_final(mean, d);
+    }
+    details[j] = vec4<f32>(d, 0.0f);
+    out[j] = vec4<f32>(o, s_i.w);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    atrous_pixel(i);
+}
