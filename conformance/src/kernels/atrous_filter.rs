@@ -22,13 +22,16 @@ use caustica_core::recording::Recording;
 /// doc): 100x the weights' ~1e-5.
 pub const ATROUS_REL: f32 = 1e-3;
 
+/// (output, detail sum) of one iteration.
+type Iteration = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+
 fn run(
     fx: &Fixture,
     inputs: &ReferenceInputs,
     b: &mut dyn Backend,
     (iteration, last): (u32, bool),
     details: &[[f32; 4]],
-) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>), String> {
+) -> Result<Iteration, String> {
     let c = FilterConstants::default();
     let n = inputs.filtered.len() as u32;
     let mut rec = Recording::new();

@@ -116,14 +116,14 @@ pub fn check_temporal_blend(
     let b = run(fx, inputs, c, &history, &edge)?;
     let mut differ = 0u64;
     let mut blended = 0u64;
-    for i in 0..n {
+    for (i, (x, y)) in a.0.iter().zip(&b.0).enumerate() {
         let scale = inputs.filtered[i][..3]
             .iter()
             .chain(&history[i][..3])
-            .fold(0.0f32, |m, x| m.max(x.abs()));
-        let close = (0..4).all(|ch| (a.0[i][ch] - b.0[i][ch]).abs() <= BLEND_REL * scale);
+            .fold(0.0f32, |m, v| m.max(v.abs()));
+        let close = (0..4).all(|ch| (x[ch] - y[ch]).abs() <= BLEND_REL * scale);
         differ += (!close) as u64;
-        blended += (a.0[i] != inputs.filtered[i]) as u64;
+        blended += (*x != inputs.filtered[i]) as u64;
     }
     let allow = (DEPOSIT_PHOTON_CHANGES * n as f64).ceil() as u64 + 2;
     v.check(differ <= allow, || {
