@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap cmbench adaptive adaptivescreen adaptivefootprint adaptivebench hang
+# causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -154,6 +154,15 @@ if has adaptivefootprint; then
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend adaptive --test-threads=1
     run timeout 240 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./adaptive_caustics_frames --test-threads=1
     run timeout 400 env ERROR_TEXELS=1,2,4 ./adaptive_table vulkan ${ADAPTIVE_TOP:-8192} ${ADAPTIVE_REFERENCE:-16384}
+fi
+if has shared; then
+    # the shared temporal and A-Trous passes (issue 18), set_materials and set_lights
+    # (issue 19) on the GPUs
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend temporal --test-threads=1
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend atrous --test-threads=1
+    run timeout 240 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./temporal_frames --test-threads=1 --nocapture
+    run timeout 240 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./technique_seam --test-threads=1
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./every_kernel_dispatched --test-threads=1
 fi
 if has adaptivebench; then
     # issue 17: adaptive vs dense frame times alone, with per-level times
