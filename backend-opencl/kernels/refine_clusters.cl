@@ -23,15 +23,14 @@ inline void deposit_photon_footprint(PHOTON_MAP_PARAMS(volatile __global), __loc
                                      uint4 w, uint width, const Photon* ph, float flux_quantum,
                                      float hit_distance_quantum) {
     uint n = (w.y - w.x + 1u) * (w.w - w.z + 1u);
+    uint units[3];
+    photon_flux_units(ph, flux_quantum, lc, units);
     for (uint ch = 0u; ch < 3u; ch++) {
-        Quantized q = quantize(ph->flux[ch], flux_quantum);
-        if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
-        if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
-        if (q.units == 0u) continue;
+        if (units[ch] == 0u) continue;
         uint k = 0u;
         for (uint y = w.z; y <= w.w; y++)
             for (uint x = w.x; x <= w.y; x++) {
-                uint share = footprint_share(q.units, n, k++);
+                uint share = footprint_share(units[ch], n, k++);
                 if (share != 0u)
                     atomic_add_u64_photon_map(PHOTON_MAP_ARGS, y * width + x, 2u * ch, share, 0u);
             }

@@ -62,21 +62,15 @@ fn target_texel(ph: Photon, p: RefineParams) -> u32 {
 fn deposit_photon_footprint(w: vec4<u32>, width: u32, ph: Photon, flux_quantum: f32,
                             hit_distance_quantum: f32) {
     let n = (w.y - w.x + 1u) * (w.w - w.z + 1u);
+    let units = photon_flux_units(ph, flux_quantum);
     for (var ch = 0u; ch < 3u; ch++) {
-        let q = quantize(ph.flux[ch], flux_quantum);
-        if (q.underflow) {
-            atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
-        }
-        if (q.saturated) {
-            atomicAdd(&lc[COUNTER_SATURATED], 1u);
-        }
-        if (q.units == 0u) {
+        if (units[ch] == 0u) {
             continue;
         }
         var k = 0u;
         for (var y = w.z; y <= w.w; y++) {
             for (var x = w.x; x <= w.y; x++) {
-                let share = footprint_share(q.units, n, k);
+                let share = footprint_share(units[ch], n, k);
                 if (share != 0u) {
                     atomic_add_u64_photon_map(y * width + x, DEPOSIT_FLUX + 2u * ch, share, 0u);
                 }

@@ -3,7 +3,9 @@
 //! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
 //! `math::map_gather`; these are loops over it.
 
-use super::deposit_screen::{add_photon_map_u64, deposit_photon_texel, MapPlanes};
+use super::deposit_screen::{
+    add_photon_map_u64, deposit_photon_texel, photon_flux_units, MapPlanes,
+};
 use super::direct_light::specular_tree;
 use super::Counters;
 use crate::traversal::SceneView;
@@ -82,22 +84,18 @@ pub fn deposit_atlas_footprint(
     let (x0, x1, y0, y1) = footprint_window(texel % atlas_width, texel / atlas_width, spread, tile);
     let n = (x1 - x0 + 1) * (y1 - y0 + 1);
     let hd = quantize(ph.hit_distance, hit_distance_quantum).units as u64;
-    for ch in 0..3 {
-        let q = quantize(ph.flux[ch], flux_quantum);
-        if q.underflow {
-            c.bump(counter::UNDERFLOW);
-        }
-        if q.saturated {
-            c.bump(counter::SATURATED);
-        }
-        if q.units == 0 {
+    for (ch, units) in photon_flux_units(ph, flux_quantum, c)
+        .into_iter()
+        .enumerate()
+    {
+        if units == 0 {
             continue;
         }
         for (k, (x, y)) in (y0..=y1)
             .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
             .enumerate()
         {
-            let share = footprint_share(q.units, n, k as u32);
+            let share = footprint_share(units, n, k as u32);
             if share != 0 {
                 add_photon_map_u64(map, y * atlas_width + x, 2 * ch as u32, share as u64);
             }

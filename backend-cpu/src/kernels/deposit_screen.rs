@@ -99,7 +99,24 @@ pub fn deposit_photon_texel(
     hit_distance_quantum: f32,
     c: &mut Counters,
 ) {
-    for ch in 0..3 {
+    for (ch, units) in photon_flux_units(ph, flux_quantum, c)
+        .into_iter()
+        .enumerate()
+    {
+        if units != 0 {
+            add_photon_map_u64(map, texel, 2 * ch as u32, units as u64);
+        }
+    }
+    let hd = quantize(ph.hit_distance, hit_distance_quantum).units as u64;
+    add_photon_map_u64(map, texel, 6, hd);
+    add_photon_map_u64(map, texel, 8, 1);
+    c.bump(counter::DEPOSITED);
+}
+
+/// Photon `ph`'s flux per channel in `flux_quantum` units, counting underflow and
+/// saturation in `c`: what every deposit adds.
+pub fn photon_flux_units(ph: &Photon, flux_quantum: f32, c: &mut Counters) -> [u32; 3] {
+    std::array::from_fn(|ch| {
         let q = quantize(ph.flux[ch], flux_quantum);
         if q.underflow {
             c.bump(counter::UNDERFLOW);
@@ -107,14 +124,8 @@ pub fn deposit_photon_texel(
         if q.saturated {
             c.bump(counter::SATURATED);
         }
-        if q.units != 0 {
-            add_photon_map_u64(map, texel, 2 * ch as u32, q.units as u64);
-        }
-    }
-    let hd = quantize(ph.hit_distance, hit_distance_quantum).units as u64;
-    add_photon_map_u64(map, texel, 6, hd);
-    add_photon_map_u64(map, texel, 8, 1);
-    c.bump(counter::DEPOSITED);
+        q.units
+    })
 }
 
 /// Caustic radiance per pixel from the photon map (W/(sr m^2) per channel); alpha: the

@@ -71,18 +71,28 @@ inline void atomic_add_u64_photon_map(PHOTON_MAP_PARAMS(volatile __global), uint
     atomic_add_u64_global(&plane[at.y], lo, hi);
 }
 
+// backend-cpu deposit_screen.rs::photon_flux_units: the photon's flux per channel in
+// flux quanta (into `units`), underflow and saturation counted in the work-group's `lc`.
+inline void photon_flux_units(const Photon* ph, float flux_quantum, __local uint* lc,
+                              uint* units) {
+    for (uint ch = 0u; ch < 3u; ch++) {
+        Quantized q = quantize(ph->flux[ch], flux_quantum);
+        if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
+        if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
+        units[ch] = q.units;
+    }
+}
+
 // backend-cpu deposit_screen.rs::deposit_photon_texel: photon `ph` added to texel `texel`
 // (a screen pixel or an atlas texel): flux per channel, hit distance and a count in fixed
 // point; underflow, saturation and the deposit counted in the work-group's `lc`.
 inline void deposit_photon_texel(PHOTON_MAP_PARAMS(volatile __global), __local uint* lc,
                                  uint texel, const Photon* ph, float flux_quantum,
                                  float hit_distance_quantum) {
-    for (uint ch = 0u; ch < 3u; ch++) {
-        Quantized q = quantize(ph->flux[ch], flux_quantum);
-        if (q.underflow) atomic_inc(&lc[COUNTER_UNDERFLOW]);
-        if (q.saturated) atomic_inc(&lc[COUNTER_SATURATED]);
-        if (q.units != 0u) atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 2u * ch, q.units, 0u);
-    }
+    uint units[3];
+    photon_flux_units(ph, flux_quantum, lc, units);
+    for (uint ch = 0u; ch < 3u; ch++)
+        if (units[ch] != 0u) atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 2u * ch, units[ch], 0u);
     atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 6u,
                               quantize(ph->hit_distance, hit_distance_quantum).units, 0u);
     atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 8u, 1u, 0u);

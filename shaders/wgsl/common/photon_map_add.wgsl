@@ -25,10 +25,10 @@ fn atomic_add_u64_photon_map(pixel: u32, word: u32, lo: u32, hi: u32) {
     }
 }
 
-// backend-cpu deposit_screen.rs::deposit_photon_texel: photon `ph` added to texel `texel`
-// (a screen pixel or an atlas texel): flux per channel, hit distance and a count in fixed
-// point; underflow, saturation and the deposit counted in `lc`.
-fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_quantum: f32) {
+// backend-cpu deposit_screen.rs::photon_flux_units: the photon's flux per channel in
+// flux quanta, underflow and saturation counted in `lc`.
+fn photon_flux_units(ph: Photon, flux_quantum: f32) -> vec3<u32> {
+    var units: vec3<u32>;
     for (var ch = 0u; ch < 3u; ch++) {
         let q = quantize(ph.flux[ch], flux_quantum);
         if (q.underflow) {
@@ -37,8 +37,19 @@ fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_
         if (q.saturated) {
             atomicAdd(&lc[COUNTER_SATURATED], 1u);
         }
-        if (q.units != 0u) {
-            atomic_add_u64_photon_map(texel, DEPOSIT_FLUX + 2u * ch, q.units, 0u);
+        units[ch] = q.units;
+    }
+    return units;
+}
+
+// backend-cpu deposit_screen.rs::deposit_photon_texel: photon `ph` added to texel `texel`
+// (a screen pixel or an atlas texel): flux per channel, hit distance and a count in fixed
+// point; underflow, saturation and the deposit counted in `lc`.
+fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_quantum: f32) {
+    let units = photon_flux_units(ph, flux_quantum);
+    for (var ch = 0u; ch < 3u; ch++) {
+        if (units[ch] != 0u) {
+            atomic_add_u64_photon_map(texel, DEPOSIT_FLUX + 2u * ch, units[ch], 0u);
         }
     }
     atomic_add_u64_photon_map(texel, DEPOSIT_HIT_DISTANCE,
