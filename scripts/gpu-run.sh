@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -120,6 +120,13 @@ if has filter; then
     # issue 15: the density gather keeps the raw flux on every backend (per-kernel checks
     # run in the vulkan section's cross_backend)
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
+fi
+if has countscan; then
+    # issue 15 point 4: the count table's workgroup scans against the CPU, the flux test,
+    # and the frame times of both gathers
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend density --test-threads=1
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
+    run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
 fi
 if has causticmap; then
     # issue 16: CausticMap's kernels and frames against the CPU on every backend, its stiff

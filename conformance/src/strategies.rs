@@ -439,7 +439,9 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
     );
     let filter = (
         0.02f32..=0.15,
-        2u32..=16,
+        // radii past 31 px give count-table blocks of 128 and 256 px: more than one
+        // workgroup-wide chunk per block row in the GPU scans
+        prop_oneof![3 => 2u32..=16, 1 => 32u32..=80],
         0.01f32..=0.1,
         prop_oneof![1 => Just(0.0f32), 3 => 1.0f32..=16.0],
         prop_oneof![Just(4u32), Just(8), Just(16), 3u32..=13],

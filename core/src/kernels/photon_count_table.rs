@@ -8,17 +8,14 @@ use crate::device::layout::{gather_surface, GatherParams};
 
 /// One direction of the blocked summed-area table of per-pixel photon counts clamped at
 /// `9 params.knn_photons` (`clamped_photon_count`), wrapping `u32` sums restarted at
-/// every `params.table_block` pixels (`window_photons` reads it). `params.axis` 0: one
-/// thread per row and block writes `table[y][x] = sum count(x', y)` over `x'` from the
-/// block's left edge to `x`, from the photon map; 1: one thread per column and block
-/// turns the row sums into the table in place, `table[y][x] = sum table[y'][x]` over `y'`
-/// from the block's top edge to `y`; axis 1 also writes every pixel's edge texel
-/// (`math::density_gather::edge_texel`: the G-buffer's depth and normal, or the
+/// every `params.table_block` pixels (`window_photons` reads it). `params.axis` 0:
+/// `table[y][x] = sum count(x', y)` over `x'` from the block's left edge to `x`, from the
+/// photon map; 1: the row sums become the table in place, `table[y][x] = sum table[y'][x]`
+/// over `y'` from the block's top edge to `y`; axis 1 also writes every pixel's edge
+/// texel (`math::density_gather::edge_texel`: the G-buffer's depth and normal, or the
 /// not-a-receiver mark), which `gather_footprint` and `density_gather` read instead of
-/// three G-buffer planes a tap. Axis 1 launches a thread per pixel: thread `t` writes
-/// pixel `t`'s edge texel, and the first `w x blocks` threads also scan (writing the edge
-/// texels inside the scan loops cost 0.06 ms at 1920x1080 on an H200, a thread per pixel
-/// 0.02 ms). With `params.surface` [`gather_surface::ATLAS`] the grid is the caustic atlas,
+/// three G-buffer planes a tap. The GPU ports scan in workgroups
+/// ([`count_table_threads`]); the sums are integers, so any order gives the same bits. With `params.surface` [`gather_surface::ATLAS`] the grid is the caustic atlas,
 /// whose edge texels come with its layout: axis 1 only scans, and the G-buffer (any planes
 /// of at least one texel) is bound but not read.
 #[derive(Clone, Copy, Debug)]
@@ -58,6 +55,23 @@ pub(super) fn gbuffer_texels(p: &GatherParams, n: u64) -> u64 {
     }
 }
 
+/// Threads of a `photon_count_table` launch (workgroups of
+/// [`SCAN_THREADS`](crate::math::density_gather::SCAN_THREADS)). Axis 0: a workgroup per
+/// row and block, its threads on neighbouring pixels (a thread per row and block walking
+/// its pixels was latency-bound on an H200). Axis 1: a thread per pixel for the edge
+/// texels, and a workgroup per `SCAN_COLUMNS` columns of a block, each column in
+/// `COLUMN_CHUNKS` chunks.
+pub fn count_table_threads(p: &GatherParams) -> u64 {
+    use crate::math::density_gather::{SCAN_COLUMNS, SCAN_THREADS};
+    let (w, h) = (p.camera.width as u64, p.camera.height as u64);
+    let b = p.table_block.max(1) as u64;
+    if p.axis == 0 {
+        h * w.div_ceil(b) * SCAN_THREADS as u64
+    } else {
+        (w.div_ceil(SCAN_COLUMNS as u64) * h.div_ceil(b) * SCAN_THREADS as u64).max(w * h)
+    }
+}
+
 impl KernelDecl for PhotonCountTable {
     const INFO: KernelInfo = KernelInfo::compute("photon_count_table", BINDINGS, "Sspm");
 
@@ -69,12 +83,9 @@ impl KernelDecl for PhotonCountTable {
             .buf("table", self.table, n * 4)?
             .gather_gbuffer(&self.gbuffer, gbuffer_texels(&self.params, n))?
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?;
-        let b = self.params.table_block.max(1);
-        Ok(Some(if self.params.axis == 0 {
-            c.height as u64 * c.width.div_ceil(b) as u64
-        } else {
-            // a thread per pixel for the edge texels, the first w x blocks also scan
-            (c.width as u64 * c.height.div_ceil(b) as u64).max(n)
-        }))
+        Ok(Some(count_table_threads(&self.params)))
     }
 }
+
+// The GPU scans assume a workgroup of SCAN_THREADS threads.
+const _: () = assert!(crate::math::density_gather::SCAN_THREADS == super::DEFAULT_WORKGROUP_SIZE);

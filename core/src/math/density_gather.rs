@@ -75,6 +75,16 @@ pub fn clamped_photon_count(lo: u32, hi: u32, k: u32) -> u32 {
     }
 }
 
+/// Threads of a workgroup of the GPU ports' count-table scans (the launch's default
+/// workgroup size); [`table_block`] is a multiple of it.
+pub const SCAN_THREADS: u32 = 64;
+/// Chunks a block's column is cut into by the GPU column scan (`table_block / 8` rows
+/// each), so that eight threads share a column's latency chain.
+pub const COLUMN_CHUNKS: u32 = 8;
+/// Neighbouring columns a workgroup of the GPU column scan takes: `SCAN_THREADS /
+/// COLUMN_CHUNKS`.
+pub const SCAN_COLUMNS: u32 = SCAN_THREADS / COLUMN_CHUNKS;
+
 /// Edge of the square blocks of the photon-count table (pixels): the smallest power of
 /// two that is at least 64 and holds the widest window, `2 max_radius + 1`, so that a
 /// window overlaps at most 2 x 2 blocks.
