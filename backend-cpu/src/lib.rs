@@ -17,13 +17,14 @@ pub mod traversal;
 use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};
 use caustica_core::device::layout::{
-    gather_surface, GBufferTexel, GBufferView, Photon, PhotonMapView,
+    gather_surface, GBufferTexel, GBufferView, GpuLight, Photon, PhotonMapView, RsmPhoton, RsmTexel,
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
     DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm, SplatPhotons,
+    TemporalBlend, TileHitDistance, TraceIndirect, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -417,6 +418,124 @@ impl CpuBackend {
                 let (img, det): (Vec<[f32; 4]>, Vec<[f32; 4]>) = r.into_iter().unzip();
                 self.put(details.id, &det)?;
                 self.put(out.id, &img)
+            }
+            Kernel::RsmImportance(RsmImportance {
+                params,
+                lights,
+                gbuffer,
+                texels,
+                pyramid,
+            }) => {
+                let plen = caustica_core::math::rsm::pyramid_len(params.side) as usize;
+                let f = params.face as usize;
+                if params.level == 0 {
+                    let light = *get(lights.id)?
+                        .as_slice::<GpuLight>(lights.len)?
+                        .get(params.light as usize)
+                        .ok_or_else(|| {
+                            BackendError::BadArgument("rsm_importance: no such light".into())
+                        })?;
+                    let g = self.gbuffer(gbuffer)?;
+                    let n = params.side as usize * params.side as usize;
+                    let (t, imp): (Vec<RsmTexel>, Vec<f32>) = {
+                        use rayon::prelude::*;
+                        (0..n)
+                            .into_par_iter()
+                            .map(|i| {
+                                photon_gi::rsm_texel(params, &light, &g.load_gbuffer(i), i as u32)
+                            })
+                            .unzip()
+                    };
+                    self.get_mut(texels.id)?
+                        .as_mut_slice::<RsmTexel>(texels.len)?[f * n..(f + 1) * n]
+                        .copy_from_slice(&t);
+                    self.get_mut(pyramid.id)?.as_mut_slice::<f32>(pyramid.len)?
+                        [f * plen..f * plen + n]
+                        .copy_from_slice(&imp);
+                } else {
+                    photon_gi::rsm_level(
+                        params,
+                        self.get_mut(pyramid.id)?.as_mut_slice(pyramid.len)?,
+                    );
+                }
+                Ok(())
+            }
+            Kernel::SampleRsm(SampleRsm {
+                params,
+                lights,
+                texels,
+                pyramid,
+                photons,
+            }) => {
+                let light = *get(lights.id)?
+                    .as_slice::<GpuLight>(lights.len)?
+                    .get(params.light as usize)
+                    .ok_or_else(|| BackendError::BadArgument("sample_rsm: no such light".into()))?;
+                let t = get(texels.id)?.as_slice(texels.len)?;
+                let pyr = get(pyramid.id)?.as_slice(pyramid.len)?;
+                reserve_temporary::<RsmPhoton>(params.sample_count as u64, "the RSM photons")?;
+                let out = photon_gi::sample_rsm(params, &light, t, pyr);
+                let first = params.first_sample as usize;
+                self.get_mut(photons.id)?
+                    .as_mut_slice::<RsmPhoton>(photons.len)?[first..first + out.len()]
+                    .copy_from_slice(&out);
+                Ok(())
+            }
+            Kernel::TraceIndirect(TraceIndirect {
+                scene,
+                params,
+                rsm_photons,
+                photons,
+                photon_count,
+                tile_counts,
+                counters,
+            }) => {
+                let rsm = get(rsm_photons.id)?.as_slice::<RsmPhoton>(rsm_photons.len)?;
+                reserve_temporary::<[u32; 8]>(params.count as u64, "an indirect photon batch")?;
+                let r =
+                    photon_gi::trace_indirect(&view(scene)?, params, rsm, tile_counts.len as usize);
+                let start = get(photon_count.id)?.as_slice::<u32>(1)?[0] as usize;
+                if start + r.photons.len() > photons.len as usize {
+                    return Err(BackendError::BadArgument(format!(
+                        "indirect photon buffer holds {} photons, {} stored",
+                        photons.len,
+                        start + r.photons.len()
+                    )));
+                }
+                self.get_mut(photons.id)?
+                    .as_mut_slice::<[u32; 8]>(photons.len)?[start..start + r.photons.len()]
+                    .copy_from_slice(&r.photons);
+                self.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] =
+                    (start + r.photons.len()) as u32;
+                for (t, n) in self
+                    .get_mut(tile_counts.id)?
+                    .as_mut_slice::<u32>(tile_counts.len)?
+                    .iter_mut()
+                    .zip(&r.tile_counts)
+                {
+                    *t = t.wrapping_add(*n);
+                }
+                r.counters
+                    .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+                Ok(())
+            }
+            Kernel::SplatPhotons(SplatPhotons {
+                params,
+                gbuffer,
+                photons,
+                photon_count,
+                tile_counts,
+                counters,
+                photon_map,
+            }) => {
+                let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
+                let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
+                let tc = get(tile_counts.id)?.as_slice(tile_counts.len)?;
+                let g = self.gbuffer(gbuffer)?;
+                let atomics = map_atomics(photon_map)?;
+                let c = photon_gi::splat_photons(params, g, ph, tc, atomics);
+                c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+                Ok(())
             }
             Kernel::TemporalBlend(TemporalBlend {
                 params,

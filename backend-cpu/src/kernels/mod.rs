@@ -9,6 +9,7 @@ pub mod deposit_screen;
 pub mod direct_light;
 pub mod gather;
 pub mod gbuffer;
+pub mod photon_gi;
 pub mod refine_clusters;
 pub mod temporal_blend;
 pub mod trace_photons;

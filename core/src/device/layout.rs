@@ -509,6 +509,159 @@ pub struct AtrousParams {
     pub _pad: [u32; 2],
 }
 
+/// One texel of a PhotonGi reflective shadow map (seed 003 section 24.2.1), 32 bytes: what
+/// the light's face camera sees there and the flux that leaves it. Written by
+/// `rsm_importance` (level 0) from the face's G-buffer, read by `sample_rsm`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RsmTexel {
+    /// World-space point the light sees through the texel's centre.
+    pub position: [f32; 3],
+    /// Unit shading normal there, turned towards the light, packed octahedrally
+    /// (`packing::pack_unit_vector`).
+    pub normal: u32,
+    /// Flux leaving the point (W per channel): the flux arriving through the texel
+    /// (intensity x spot falloff x the texel's solid angle) times the diffuse albedo on a
+    /// diffuse surface, unscaled on a mirror or dielectric (the trace applies those).
+    pub flux: [f32; 3],
+    /// One of [`crate::math::rsm::rsm_texel_kind`].
+    pub kind: u32,
+}
+
+/// A photon leaving a reflective-shadow-map point (32 bytes): written by `sample_rsm`, the
+/// start of a `trace_indirect` path.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RsmPhoton {
+    /// Ray origin (world space): the RSM point lifted off its surface after a diffuse
+    /// bounce, or the light's position for a photon on its way to a specular RSM point.
+    pub origin: [f32; 3],
+    /// Unit direction of travel, packed octahedrally (`packing::pack_unit_vector`).
+    pub direction: u32,
+    /// Flux (W per channel), the sampling probability divided out (zero: no photon).
+    pub flux: [f32; 3],
+    /// Diffuse bounces already made: 1 from a diffuse RSM point, 0 on the way to a
+    /// specular one.
+    pub bounces: u32,
+}
+
+/// Parameters of `rsm_importance` and `sample_rsm` (seed 003 section 24.2.1).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RsmParams {
+    /// The face camera (the light's position, the face's frame, `side x side` pixels)
+    /// whose G-buffer `rsm_importance` level 0 reads.
+    pub face_camera: GpuCamera,
+    /// Index of the light in the light buffer.
+    pub light: u32,
+    /// `rsm_importance`: the face slot level 0 writes (of the stacked texel and pyramid
+    /// arrays); `sample_rsm`: the light's first face slot.
+    pub face: u32,
+    /// Texels per face side (a power of two).
+    pub side: u32,
+    /// `rsm_importance`: the pyramid level this launch writes (0: texels and importance
+    /// from the G-buffer; `k > 0`: 2x2 sums of level `k - 1` of every face up to `face`).
+    pub level: u32,
+    /// `sample_rsm`: the light's faces (slots `face .. face + face_count`).
+    pub face_count: u32,
+    /// `sample_rsm`: the light's first sample (slot in the output buffer).
+    pub first_sample: u32,
+    /// `sample_rsm`: the light's samples this frame (the Hammersley set's size).
+    pub sample_count: u32,
+    /// The frame seed hashed with the light (the set's Cranley-Patterson rotation).
+    pub seed: u32,
+}
+
+/// PhotonGi's stored photon (seed 003 Table 24-2, derived in `docs/photon-gi.md`), 32
+/// bytes: written by `trace_indirect`, splatted by `splat_photons`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GiPhoton {
+    /// World-space hit point.
+    pub position: [f32; 3],
+    /// Power in units of the frame's power scale (W per channel / `power_scale`), rgb9e5
+    /// (`packing::pack_rgb9e5`).
+    pub power: u32,
+    /// Unit geometric normal at the hit, turned towards the arriving photon, packed
+    /// octahedrally.
+    pub normal: u32,
+    /// Unit direction of travel as it arrived, packed octahedrally.
+    pub direction: u32,
+    /// Length of the photon's last segment (scene units; Eq. 2's `l`).
+    pub ray_length: f32,
+    /// Row-major index of the screen tile the photon projects to (Eqs. 3-6's tile).
+    pub tile: u32,
+}
+
+/// Parameters of `trace_indirect` (seed 003 section 24.2.2).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct IndirectTraceParams {
+    /// The frame's camera: photons outside its frustum or on faces turned away from it
+    /// are not stored, stored ones are counted in their screen tile.
+    pub camera: GpuCamera,
+    /// First `RsmPhoton` of the launch.
+    pub first: u32,
+    /// `RsmPhoton`s in the launch (one thread each).
+    pub count: u32,
+    /// Frame seed (random dimensions of the bounces and roulette).
+    pub seed: u32,
+    /// Diffuse bounces of a path (the RSM's included): photons are stored at the hits
+    /// after bounces `1 ..= max_bounces`.
+    pub max_bounces: u32,
+    /// Most ray segments of a path (bounds specular chains).
+    pub max_segments: u32,
+    /// Screen tile edge (pixels) of the density counts.
+    pub tile_size: u32,
+    /// One of [`crate::math::gi_photon::gi_store`]: packed `GiPhoton`s, or float
+    /// `Photon`s for the reference.
+    pub store: u32,
+    /// Reflectance of dielectric interfaces, one of
+    /// [`fresnel_model`](crate::math::optics::fresnel_model).
+    pub fresnel_model: u32,
+    /// Unit of the packed power (W): stored power is `power / power_scale`.
+    pub power_scale: f32,
+    /// Flux quantum (W) of the fixed-point stored-flux counters.
+    pub flux_quantum: f32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 2],
+}
+
+/// Parameters of `splat_photons` (seed 003 section 24.3, Eqs. 2-9): the camera, the
+/// tiles and the kernel's constants
+/// ([`SplatConstants`](crate::math::photon_splat::SplatConstants)).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SplatParams {
+    /// The frame's camera.
+    pub camera: GpuCamera,
+    /// Screen tile edge (pixels) of the density counts.
+    pub tile_size: u32,
+    /// Unit of the packed power (W).
+    pub power_scale: f32,
+    /// Flux quantum (W) of the photon map the splats add to.
+    pub flux_quantum: f32,
+    /// Most pixels from a splat's centre pixel to its edge, per axis: larger splats are
+    /// clipped there and counted (`counter::SATURATED`'s word for splats).
+    pub max_splat_px: u32,
+    /// Eq. 2's `l_max` (scene units).
+    pub max_ray_length: f32,
+    /// Eq. 2's lower clamp.
+    pub min_length_scale: f32,
+    /// Eq. 6's `r_min` (scene units).
+    pub density_radius_min: f32,
+    /// Eq. 6's `r_max` (scene units).
+    pub density_radius_max: f32,
+    /// Eq. 6's `n_tile`.
+    pub photons_per_pixel: f32,
+    /// `s_n`.
+    pub normal_compression: f32,
+    /// `s_max` of Eq. 7.
+    pub max_stretch: f32,
+    /// Eqs. 3-4's `c_tile`.
+    pub tile_constant: f32,
+}
+
 /// Parameters of `caustic_map_lookup`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

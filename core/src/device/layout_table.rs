@@ -10,8 +10,9 @@
 
 use super::layout::{
     AtlasParams, AtrousParams, DepositParams, DepositTexel, DirectParams, GBufferTexel,
-    GatherParams, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex, MapLookupParams,
-    Photon, RefineParams, TemporalParams, TraceParams,
+    GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
+    IndirectTraceParams, MapLookupParams, Photon, RefineParams, RsmParams, RsmPhoton, RsmTexel,
+    SplatParams, TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -227,6 +228,21 @@ table! {
     }
     TemporalParams {
         camera, previous, alpha_max, sigma_z, sigma_n, epsilon, history_frames, _pad
+    }
+    RsmTexel { position, normal, flux, kind }
+    RsmPhoton { origin, direction, flux, bounces }
+    RsmParams {
+        face_camera, light, face, side, level, face_count, first_sample, sample_count, seed
+    }
+    GiPhoton { position, power, normal, direction, ray_length, tile }
+    IndirectTraceParams {
+        camera, first, count, seed, max_bounces, max_segments, tile_size, store,
+        fresnel_model, power_scale, flux_quantum, _pad
+    }
+    SplatParams {
+        camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,
+        min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,
+        normal_compression, max_stretch, tile_constant
     }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,

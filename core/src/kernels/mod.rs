@@ -30,8 +30,12 @@ mod prepare_scene;
 mod primary_gbuffer;
 mod refine_clusters;
 mod resolve_caustics;
+mod rsm_importance;
+mod sample_rsm;
+mod splat_photons;
 mod temporal_blend;
 mod tile_hit_distance;
+mod trace_indirect;
 mod trace_photons;
 
 pub use atrous_filter::AtrousFilter;
@@ -49,8 +53,12 @@ pub use prepare_scene::PrepareScene;
 pub use primary_gbuffer::PrimaryGbuffer;
 pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
+pub use rsm_importance::RsmImportance;
+pub use sample_rsm::SampleRsm;
+pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
+pub use trace_indirect::TraceIndirect;
 pub use trace_photons::{TracePhotons, TraceVariant};
 
 use crate::device::error::BackendError;
@@ -401,6 +409,10 @@ pub(crate) mod bytes {
     pub const IMAGE_TEXEL: u64 = 16;
     pub const PHOTON: u64 = size_of::<Photon>() as u64;
     pub const COUNTERS: u64 = 4 * counter::WORDS as u64;
+    pub const LIGHT: u64 = size_of::<crate::device::layout::GpuLight>() as u64;
+    pub const RSM_TEXEL: u64 = size_of::<crate::device::layout::RsmTexel>() as u64;
+    pub const RSM_PHOTON: u64 = size_of::<crate::device::layout::RsmPhoton>() as u64;
+    pub const GI_PHOTON: u64 = size_of::<crate::device::layout::GiPhoton>() as u64;
 }
 
 /// The one list: `Variant => module`. Generates [`Kernel`], [`KERNELS`], `From<...>` for
@@ -474,6 +486,10 @@ kernel_list! {
     GatherCausticMap => gather_caustic_map,
     CausticMapLookup => caustic_map_lookup,
     RefineClusters => refine_clusters,
+    RsmImportance => rsm_importance,
+    SampleRsm => sample_rsm,
+    TraceIndirect => trace_indirect,
+    SplatPhotons => splat_photons,
 }
 
 impl Kernel {

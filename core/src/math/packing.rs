@@ -59,7 +59,10 @@ pub fn unpack_unit_vector(p: u32) -> Vec3 {
 
 /// RGB packed as rgb9e5 (9-bit mantissas, shared 5-bit exponent, bias 15), the layout of
 /// `VK_FORMAT_E5B9G9R9_UFLOAT_PACK32`. Negative and NaN inputs become 0; values beyond
-/// the largest representable (65408) saturate.
+/// the largest representable (65408) saturate, values below `2^-24` round to 0 or the
+/// smallest step. Exact arithmetic only (the exponent from the float's bits, scaling by
+/// powers of two, rounding half up by `floor(x + 0.5)` of an exact value), so the shader
+/// ports give the same bits.
 pub fn pack_rgb9e5(rgb: Vec3) -> u32 {
     const MAX: f32 = 65408.0; // (2^9 - 1) / 2^9 * 2^16
     let c = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, MAX) };
@@ -68,20 +71,28 @@ pub fn pack_rgb9e5(rgb: Vec3) -> u32 {
     if max_c == 0.0 {
         return 0;
     }
-    // exponent such that max_c < 2^(exp - 15) * 2^0 ... with 9 mantissa bits
-    let mut exp_shared = (max_c.log2().floor() as i32).max(-16) + 1 + 15;
-    let mut denom = 2f32.powi(exp_shared - 15 - 9);
-    if (max_c / denom).round() as u32 == 512 {
+    // floor(log2(max_c)) from the biased exponent (subnormals count as 2^-127: they
+    // round to 0 below anyway), at least -16
+    let e = ((max_c.to_bits() >> 23) & 0xFF) as i32 - 127;
+    let mut exp_shared = e.max(-16) + 1 + 15;
+    let mut scale = pow2(9 + 15 - exp_shared);
+    if (max_c * scale + 0.5).floor() as u32 == 512 {
         exp_shared += 1;
-        denom *= 2.0;
+        scale *= 0.5;
     }
-    let q = |x: f32| ((x / denom).round() as u32).min(511);
+    let q = |x: f32| ((x * scale + 0.5).floor() as u32).min(511);
     q(r) | (q(g) << 9) | (q(b) << 18) | ((exp_shared as u32) << 27)
+}
+
+/// `2^k` for `k` in `-126..=127`, from its bits (exact).
+#[inline]
+pub fn pow2(k: i32) -> f32 {
+    f32::from_bits(((k + 127) as u32) << 23)
 }
 
 /// Inverse of [`pack_rgb9e5`].
 pub fn unpack_rgb9e5(p: u32) -> Vec3 {
-    let scale = 2f32.powi((p >> 27) as i32 - 15 - 9);
+    let scale = pow2((p >> 27) as i32 - 15 - 9);
     Vec3::new(
         (p & 511) as f32 * scale,
         ((p >> 9) & 511) as f32 * scale,

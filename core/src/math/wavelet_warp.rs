@@ -87,7 +87,7 @@ pub fn warp_split(u: f32, p: f32) -> (bool, f32, f32) {
 
 /// `part / whole`, 0 when the whole is 0 (a node without weight is never entered).
 #[inline]
-fn ratio(part: f32, whole: f32) -> f32 {
+pub fn warp_ratio(part: f32, whole: f32) -> f32 {
     if whole > 0.0 {
         (part / whole).clamp(0.0, 1.0)
     } else {
@@ -162,9 +162,9 @@ impl ImportancePyramid {
             let c = level[(cy + 1) * s + cx];
             let d = level[(cy + 1) * s + cx + 1];
             // horizontally by the left column's share, then vertically in that column
-            let (left, ux, px) = warp_split(u.x, ratio(a + c, (a + c) + (b + d)));
+            let (left, ux, px) = warp_split(u.x, warp_ratio(a + c, (a + c) + (b + d)));
             let (top, bottom) = if left { (a, c) } else { (b, d) };
-            let (upper, uy, py) = warp_split(u.y, ratio(top, top + bottom));
+            let (upper, uy, py) = warp_split(u.y, warp_ratio(top, top + bottom));
             u = Vec2::new(ux, uy);
             probability *= px * py;
             x = 2 * x + (!left) as u32;

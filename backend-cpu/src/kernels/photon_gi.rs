@@ -1,0 +1,479 @@
+//! PhotonGi's kernels (seed 003): `rsm_importance` and `sample_rsm` (section 24.2.1),
+//! `trace_indirect` (24.2.2) and `splat_photons` (24.3). Method, units and sources in
+//! `caustica_core::math::{rsm, gi_photon, photon_splat}` and the kernels' declarations.
+
+use super::deposit_screen::{deposit_photon_texel, MapPlanes};
+use super::Counters;
+use crate::traversal::SceneView;
+use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::device::layout::{
+    camera_ray, counter, gbuffer_flags, gbuffer_pixel_area, light_kind, material_kind,
+    project_to_pixel, GBufferView, GiPhoton, GpuLight, IndirectTraceParams, Photon, RsmParams,
+    RsmPhoton, RsmTexel, SplatParams, NO_MATERIAL,
+};
+use caustica_core::math::geometry::offset_ray_origin;
+use caustica_core::math::gi_photon::{gi_store, screen_tile};
+use caustica_core::math::optics::{
+    beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
+};
+use caustica_core::math::packing::{
+    pack_rgb9e5, pack_unit_vector, unpack_rgb9e5, unpack_unit_vector,
+};
+use caustica_core::math::photon_splat::{
+    density_scale, ray_length_scale, splat_irradiance, splat_kernel, SplatConstants,
+};
+use caustica_core::math::rng::random_f32;
+use caustica_core::math::rsm::{
+    cosine_hemisphere, hammersley, level_offset, luminance, pyramid_len, pyramid_sum,
+    rsm_texel_kind, russian_roulette, texel_arriving_flux, warp_rsm,
+};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// One RSM texel and its importance (`rsm_importance` level 0, texel `i` of the face).
+pub fn rsm_texel(
+    p: &RsmParams,
+    light: &GpuLight,
+    g: &caustica_core::device::layout::GBufferTexel,
+    i: u32,
+) -> (RsmTexel, f32) {
+    let none = (RsmTexel::default(), 0.0);
+    if g.material == NO_MATERIAL {
+        return none;
+    }
+    let (x, y) = (i % p.side, i / p.side);
+    let falloff = if light.kind == light_kind::SPOT {
+        let dir = camera_ray(&p.face_camera, x, y);
+        spot_falloff(
+            dir.dot(Vec3::from_slice(&light.direction[..3])),
+            light.cos_inner,
+            light.cos_outer,
+        )
+    } else {
+        1.0
+    };
+    let arriving = texel_arriving_flux(
+        Vec3::from_slice(&light.intensity[..3]),
+        falloff,
+        x,
+        y,
+        p.side,
+        p.face_camera.tan_half_fov_x,
+    );
+    let albedo = Vec3::from(g.albedo);
+    let importance = luminance(arriving * albedo);
+    if !(importance > 0.0) || !importance.is_finite() {
+        return none;
+    }
+    let diffuse = g.flags & gbuffer_flags::RECEIVER != 0;
+    (
+        RsmTexel {
+            position: g.position,
+            normal: pack_unit_vector(Vec3::from(g.normal)),
+            flux: if diffuse { arriving * albedo } else { arriving }.to_array(),
+            kind: if diffuse {
+                rsm_texel_kind::DIFFUSE
+            } else {
+                rsm_texel_kind::SPECULAR
+            },
+        },
+        importance,
+    )
+}
+
+/// Level `p.level > 0` of `rsm_importance`: the 2x2 sums of level `p.level - 1` for
+/// faces `0 ..= p.face`.
+pub fn rsm_level(p: &RsmParams, pyramid: &mut [f32]) {
+    let side = p.side;
+    let plen = pyramid_len(side) as usize;
+    let (below_off, off) = (
+        level_offset(side, p.level - 1) as usize,
+        level_offset(side, p.level) as usize,
+    );
+    let (s, sb) = ((side >> p.level) as usize, (side >> (p.level - 1)) as usize);
+    for f in 0..=p.face as usize {
+        let face = &mut pyramid[f * plen..(f + 1) * plen];
+        let (below, rest) = face.split_at_mut(off);
+        let below = &below[below_off..];
+        for (i, v) in rest[..s * s].iter_mut().enumerate() {
+            *v = pyramid_sum(
+                |x, y| below[y as usize * sb + x as usize],
+                (i % s) as u32,
+                (i / s) as u32,
+            );
+        }
+    }
+}
+
+/// `sample_rsm`: the light's photons (slot `i` of the returned vector is sample `i`).
+pub fn sample_rsm(
+    p: &RsmParams,
+    light: &GpuLight,
+    texels: &[RsmTexel],
+    pyramid: &[f32],
+) -> Vec<RsmPhoton> {
+    (0..p.sample_count)
+        .into_par_iter()
+        .map(|i| rsm_photon(p, light, texels, pyramid, i))
+        .collect()
+}
+
+/// Sample `i` of `sample_rsm`.
+pub fn rsm_photon(
+    p: &RsmParams,
+    light: &GpuLight,
+    texels: &[RsmTexel],
+    pyramid: &[f32],
+    i: u32,
+) -> RsmPhoton {
+    let shift = Vec2::new(
+        random_f32(p.seed, p.light, 0, 0),
+        random_f32(p.seed, p.light, 0, 1),
+    );
+    let u = hammersley(i, p.sample_count, shift);
+    let plen = pyramid_len(p.side);
+    let read = |f: u32, k: u32| pyramid[((p.face + f) * plen + k) as usize];
+    let Some(c) = warp_rsm(read, p.face_count, p.side, u) else {
+        return RsmPhoton::default();
+    };
+    let t =
+        &texels[((p.face + c.face) * p.side * p.side + c.texel.1 * p.side + c.texel.0) as usize];
+    let scale = 1.0 / (c.probability * p.sample_count as f32);
+    let flux = Vec3::from(t.flux) * scale;
+    if t.kind == rsm_texel_kind::DIFFUSE {
+        let n = unpack_unit_vector(t.normal);
+        RsmPhoton {
+            origin: offset_ray_origin(Vec3::from(t.position), n).to_array(),
+            direction: pack_unit_vector(cosine_hemisphere(c.within, n)),
+            flux: flux.to_array(),
+            bounces: 1,
+        }
+    } else if t.kind == rsm_texel_kind::SPECULAR {
+        let origin = Vec3::from_slice(&light.position[..3]);
+        RsmPhoton {
+            origin: origin.to_array(),
+            direction: pack_unit_vector((Vec3::from(t.position) - origin).normalize()),
+            flux: flux.to_array(),
+            bounces: 0,
+        }
+    } else {
+        RsmPhoton::default()
+    }
+}
+
+/// Photons `trace_indirect` stored (32-byte words, in photon order), the per-tile counts
+/// it adds, and its counters.
+pub struct IndirectResult {
+    /// Stored photons (`GiPhoton` or `Photon` bytes as `p.store` says).
+    pub photons: Vec<[u32; 8]>,
+    /// Stored photons per screen tile.
+    pub tile_counts: Vec<u32>,
+    /// The launch's counters.
+    pub counters: Counters,
+}
+
+/// `trace_indirect` over `rsm[p.first .. p.first + p.count]`.
+pub fn trace_indirect(
+    scene: &SceneView,
+    p: &IndirectTraceParams,
+    rsm: &[RsmPhoton],
+    tiles: usize,
+) -> IndirectResult {
+    let tile_counts: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(0)).collect();
+    let parts: Vec<(Vec<[u32; 8]>, Counters)> = (0..p.count.div_ceil(256))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Vec::new();
+            let mut counters = Counters::default();
+            for i in c * 256..((c + 1) * 256).min(p.count) {
+                let index = p.first + i;
+                trace_indirect_path(
+                    scene,
+                    p,
+                    &rsm[index as usize],
+                    index,
+                    &mut |ph, tile| {
+                        out.push(ph);
+                        tile_counts[tile as usize].fetch_add(1, Ordering::Relaxed);
+                    },
+                    &mut counters,
+                );
+            }
+            (out, counters)
+        })
+        .collect();
+    let mut photons = Vec::new();
+    let mut counters = Counters::default();
+    for (ph, c) in parts {
+        photons.extend(ph);
+        counters = counters.merge(c);
+    }
+    IndirectResult {
+        photons,
+        tile_counts: tile_counts.into_iter().map(|a| a.into_inner()).collect(),
+        counters,
+    }
+}
+
+/// One path of `trace_indirect` (photon `index`): calls `store(photon words, tile)` for
+/// every stored photon and counts into `c`.
+pub fn trace_indirect_path(
+    scene: &SceneView,
+    p: &IndirectTraceParams,
+    r: &RsmPhoton,
+    index: u32,
+    store: &mut impl FnMut([u32; 8], u32),
+    c: &mut Counters,
+) {
+    let mut flux = Vec3::from(r.flux);
+    if !(flux.max_element() > 0.0) {
+        c.bump(counter::NEGLIGIBLE);
+        return;
+    }
+    let mut origin = Vec3::from(r.origin);
+    let mut dir = unpack_unit_vector(r.direction);
+    let mut bounces = r.bounces;
+    let mut channel: Option<usize> = None;
+    for segment in 0..p.max_segments {
+        c.words[counter::RAYS] += 1;
+        let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
+            c.bump(counter::ESCAPED);
+            return;
+        };
+        let (s, m) = scene.surface(&hit);
+        let entering = dir.dot(s.geometric_normal) < 0.0;
+        if m.kind == material_kind::DIELECTRIC && !entering {
+            flux *= beer_lambert(Vec3::from_slice(&m.absorption[..3]), hit.t);
+        }
+        let facing = if s.shading_normal.dot(dir) > 0.0 {
+            -s.shading_normal
+        } else {
+            s.shading_normal
+        };
+        if m.kind == material_kind::DIFFUSE {
+            if bounces >= 1 {
+                store_indirect(
+                    p,
+                    &s.position,
+                    s.geometric_normal,
+                    dir,
+                    hit.t,
+                    flux,
+                    store,
+                    c,
+                );
+            }
+            if bounces >= p.max_bounces {
+                c.bump(counter::BOUNCE_LIMIT);
+                return;
+            }
+            let xi = random_f32(p.seed, index, segment, 2);
+            match russian_roulette(flux, Vec3::from_slice(&m.color[..3]), xi) {
+                Some(f) => flux = f,
+                None => {
+                    c.bump(counter::NEGLIGIBLE);
+                    return;
+                }
+            }
+            let u = Vec2::new(
+                random_f32(p.seed, index, segment, 0),
+                random_f32(p.seed, index, segment, 1),
+            );
+            dir = cosine_hemisphere(u, facing);
+            bounces += 1;
+        } else if m.kind == material_kind::MIRROR {
+            flux *= Vec3::from_slice(&m.color[..3]);
+            dir = reflect(dir, facing).normalize();
+        } else {
+            let mut ior = m.ior;
+            if m.cauchy_b != 0.0 {
+                let ch = *channel.get_or_insert_with(|| {
+                    // first dispersive surface: keep one channel, x3 (expectation kept)
+                    let ch = ((random_f32(p.seed, index, segment, 4) * 3.0) as usize).min(2);
+                    let mut one = [0.0; 3];
+                    one[ch] = flux[ch] * 3.0;
+                    flux = Vec3::from(one);
+                    ch
+                });
+                ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[ch]);
+            }
+            dir = dielectric_scatter(
+                dir,
+                s.shading_normal,
+                entering,
+                ior,
+                random_f32(p.seed, index, segment, 3),
+                p.fresnel_model,
+            )
+            .direction;
+        }
+        if !(flux.max_element() > 0.0) {
+            c.bump(counter::NEGLIGIBLE);
+            return;
+        }
+        let side = if dir.dot(s.geometric_normal) > 0.0 {
+            s.geometric_normal
+        } else {
+            -s.geometric_normal
+        };
+        origin = offset_ray_origin(s.position, side);
+    }
+    c.bump(counter::BOUNCE_LIMIT);
+}
+
+/// Stores a photon at a diffuse hit if the camera sees its side and it projects into the
+/// view (`trace_indirect`'s culling), counting it.
+#[allow(clippy::too_many_arguments)]
+fn store_indirect(
+    p: &IndirectTraceParams,
+    position: &Vec3,
+    geometric_normal: Vec3,
+    dir: Vec3,
+    ray_length: f32,
+    flux: Vec3,
+    store: &mut impl FnMut([u32; 8], u32),
+    c: &mut Counters,
+) {
+    let n = if geometric_normal.dot(dir) > 0.0 {
+        -geometric_normal
+    } else {
+        geometric_normal
+    };
+    if (Vec3::from(p.camera.position) - *position).dot(n) <= 0.0 {
+        c.bump(counter::DEPTH_MISMATCH);
+        return;
+    }
+    let Some((px, py, _)) = project_to_pixel(&p.camera, *position) else {
+        c.bump(counter::OFF_SCREEN);
+        return;
+    };
+    let tile = screen_tile(px, py, p.camera.width, p.tile_size);
+    let words: [u32; 8] = if p.store == gi_store::FLOAT {
+        bytemuck::cast(Photon {
+            position: position.to_array(),
+            hit_distance: ray_length,
+            flux: flux.to_array(),
+            direction: pack_unit_vector(dir),
+        })
+    } else {
+        let power = pack_rgb9e5(flux / p.power_scale);
+        if power & 0x07FF_FFFF == 0 {
+            c.bump(counter::UNDERFLOW);
+        }
+        bytemuck::cast(GiPhoton {
+            position: position.to_array(),
+            power,
+            normal: pack_unit_vector(n),
+            direction: pack_unit_vector(dir),
+            ray_length,
+            tile,
+        })
+    };
+    let stored = Photon {
+        flux: flux.to_array(),
+        ..Default::default()
+    };
+    super::trace_photons::count_stored(&stored, p.flux_quantum, c);
+    store(words, tile);
+}
+
+/// The chapter's kernel constants from the splat parameters.
+pub fn splat_constants(p: &SplatParams) -> SplatConstants {
+    SplatConstants {
+        max_ray_length: p.max_ray_length,
+        min_length_scale: p.min_length_scale,
+        density_radius_min: p.density_radius_min,
+        density_radius_max: p.density_radius_max,
+        photons_per_pixel: p.photons_per_pixel,
+        normal_compression: p.normal_compression,
+        max_stretch: p.max_stretch,
+    }
+}
+
+/// `splat_photons`: every photon's splat added to `map`; returns the counters.
+pub fn splat_photons(
+    p: &SplatParams,
+    g: GBufferView,
+    photons: &[GiPhoton],
+    tile_counts: &[u32],
+    map: MapPlanes,
+) -> Counters {
+    photons
+        .par_chunks(256)
+        .map(|chunk| {
+            let mut c = Counters::default();
+            for ph in chunk {
+                splat_photon(p, &g, ph, tile_counts, &map, &mut c);
+            }
+            c
+        })
+        .reduce(Counters::default, Counters::merge)
+}
+
+/// Half-width (pixels) of the square of pixels a splat with bounding radius `radius`
+/// (scene units) around a point at view depth `z` can reach: its radius over the pixel
+/// footprint at the sphere's nearest depth, plus one; `u32::MAX` when the sphere reaches
+/// the camera plane.
+pub fn splat_reach_px(p: &SplatParams, radius: f32, z: f32) -> u32 {
+    let near = z - radius;
+    if !(near > 0.0) {
+        return u32::MAX;
+    }
+    let pixel = 2.0 * p.camera.tan_half_fov_y / p.camera.height as f32;
+    let r = (radius / (near * pixel)).ceil() + 1.0;
+    if r >= 4_194_304.0 {
+        u32::MAX
+    } else {
+        r as u32
+    }
+}
+
+fn splat_photon(
+    p: &SplatParams,
+    g: &GBufferView,
+    ph: &GiPhoton,
+    tile_counts: &[u32],
+    map: &MapPlanes,
+    c: &mut Counters,
+) {
+    let power = unpack_rgb9e5(ph.power) * p.power_scale;
+    if !(power.max_element() > 0.0) {
+        return;
+    }
+    let pos = Vec3::from(ph.position);
+    let Some((px, py, z)) = project_to_pixel(&p.camera, pos) else {
+        return;
+    };
+    let k = splat_constants(p);
+    let n = unpack_unit_vector(ph.normal);
+    let to_light = -unpack_unit_vector(ph.direction);
+    let s = ray_length_scale(ph.ray_length, &k)
+        * density_scale(z, p.tile_constant, tile_counts[ph.tile as usize], &k);
+    let kernel = splat_kernel(n, to_light, s, &k);
+    let e = splat_irradiance(power, &kernel);
+    let reach = splat_reach_px(p, kernel.axes.max_element(), z);
+    if reach > p.max_splat_px {
+        c.bump(counter::SATURATED);
+    }
+    let r = reach.min(p.max_splat_px) as i64;
+    let (w, h) = (p.camera.width as i64, p.camera.height as i64);
+    for qy in (py as i64 - r).max(0)..=(py as i64 + r).min(h - 1) {
+        for qx in (px as i64 - r).max(0)..=(px as i64 + r).min(w - 1) {
+            let q = (qy * w + qx) as u32;
+            let t = g.load_gbuffer(q as usize);
+            if t.flags & gbuffer_flags::RECEIVER == 0
+                || Vec3::from(t.normal).dot(n) <= 0.0
+                || !kernel.contains(pos, Vec3::from(t.position))
+            {
+                continue;
+            }
+            let area = gbuffer_pixel_area(&p.camera, q, &t);
+            let splat = Photon {
+                flux: (e * area).to_array(),
+                ..Default::default()
+            };
+            deposit_photon_texel(map, q, &splat, p.flux_quantum, 1.0, c);
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! `trace_indirect`: PhotonGi's photon paths with Russian roulette (seed 003 section
+//! 24.2.2).
+
+use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use crate::device::error::BackendError;
+use crate::device::handle::{Buf, SceneArgs};
+use crate::device::layout::{IndirectTraceParams, RsmPhoton};
+use crate::math::gi_photon::screen_tiles;
+
+/// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s).
+/// At a diffuse hit a photon that has bounced diffusely at least once (all do: the RSM
+/// point is the first bounce, or a specular RSM point leads to a later one) is stored
+/// if the hit faces the camera and projects inside its view (`GiPhoton`s, or float
+/// `Photon`s with `params.store` = `gi_store::FLOAT`), and its screen tile's count in
+/// `tile_counts` goes up; then, below `params.max_bounces` diffuse bounces, it survives
+/// Jensen's roulette (`math::rsm::russian_roulette`) and leaves in a cosine direction.
+/// Mirrors scale the flux by their colour; dielectrics reflect or refract by Fresnel
+/// (`math::optics::dielectric_scatter`), with Beer-Lambert inside and, on a dispersive
+/// one, one colour channel kept (x3) and its Cauchy IOR, as `trace_photons` does.
+///
+/// Random dimensions (`rng::random_f32(seed, first + i, segment, d)`): d 0, 1 the
+/// bounce direction, d 2 the roulette, d 3 the Fresnel choice, d 4 the channel.
+///
+/// Counters ([`crate::device::layout::counter`], read for this kernel as): `STORED`
+/// photons stored, `ESCAPED` paths that left the scene, `NEGLIGIBLE` paths ended by the
+/// roulette or without flux, `BOUNCE_LIMIT` paths ended after `max_bounces` bounces or
+/// `max_segments` segments, `OFF_SCREEN` hits outside the view, `DEPTH_MISMATCH` hits
+/// turned away from the camera, `RAYS`, `STORED_FLUX`, `UNDERFLOW` (a stored power that
+/// packs to zero).
+#[derive(Clone, Copy, Debug)]
+pub struct TraceIndirect {
+    /// The uploaded scene.
+    pub scene: SceneArgs,
+    /// Camera, range, seed, bounce limits, tiles, store format.
+    pub params: IndirectTraceParams,
+    /// The photons leaving the RSM points.
+    pub rsm_photons: Buf<RsmPhoton>,
+    /// Output: stored photons (32 bytes each, `GiPhoton` or `Photon`), appended.
+    pub photons: Buf<[u32; 8]>,
+    /// `[0]`: next free slot in `photons` (the caller clears it).
+    pub photon_count: Buf<u32>,
+    /// Stored photons per screen tile (`math::gi_photon::screen_tile`; the caller clears
+    /// it).
+    pub tile_counts: Buf<u32>,
+    /// Photon counters the kernel adds to.
+    pub counters: Buf<u32>,
+}
+
+const BINDINGS: [Binding; 13] = with_scene([
+    bind("params", Params),
+    bind("rsm_photons", Read),
+    bind("photons", ReadWrite),
+    bind("photon_capacity", Count),
+    bind("photon_count", ReadWrite),
+    bind("tile_counts", ReadWrite),
+    bind("counters", ReadWrite),
+]);
+
+impl KernelDecl for TraceIndirect {
+    const INFO: KernelInfo = KernelInfo::traced("trace_indirect", &BINDINGS, &[], "PhotonGi");
+
+    fn scene(&self) -> Option<&SceneArgs> {
+        Some(&self.scene)
+    }
+
+    fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
+        let p = &self.params;
+        let c = &p.camera;
+        a.scene(&self.scene)?
+            .params("params", p)?
+            .buf(
+                "rsm_photons",
+                self.rsm_photons,
+                (p.first as u64 + p.count as u64) * bytes::RSM_PHOTON,
+            )?
+            .buf(
+                "photons",
+                self.photons,
+                self.photons.len as u64 * bytes::GI_PHOTON,
+            )?
+            .count("photon_capacity", self.photons.len)?
+            .buf("photon_count", self.photon_count, 4)?
+            .buf(
+                "tile_counts",
+                self.tile_counts,
+                screen_tiles(c.width, c.height, p.tile_size) as u64 * 4,
+            )?
+            .buf("counters", self.counters, bytes::COUNTERS)?;
+        Ok(Some(p.count as u64))
+    }
+}
