@@ -121,3 +121,16 @@ impl PhotonMapPlanes {
         self.planes.iter().map(|p| p.bytes()).sum()
     }
 }
+
+impl<T> Buf<T> {
+    /// The same buffer seen as elements of `U`, which must have `T`'s size (checked at
+    /// compile time): e.g. 32-byte photon slots read as `GiPhoton`s or `Photon`s.
+    pub fn reinterpret<U>(self) -> Buf<U> {
+        const { assert!(std::mem::size_of::<T>() == std::mem::size_of::<U>()) };
+        Buf {
+            id: self.id,
+            len: self.len,
+            _t: PhantomData,
+        }
+    }
+}

@@ -71,6 +71,10 @@ pub struct FrameStats {
     pub plan: Option<crate::frame::plan::FramePlan>,
     /// Photons emitted: the photon grid size times the number of emitting lights.
     pub photons_emitted: u64,
+    /// Photons emitted per light, in scene order, where a technique allocates them by
+    /// power (PhotonGi); empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub photons_per_light: Vec<u64>,
     /// Ray segments traced for photons (every bounce counts).
     pub photon_rays_traced: u64,
     /// Photons that ended on a diffuse surface after at least one specular interaction.

@@ -5,6 +5,7 @@
 
 pub mod adaptive_caustics;
 pub mod caustic_map;
+pub mod photon_gi;
 pub mod sspm;
 
 use crate::backend::Backend;
@@ -66,6 +67,17 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
                 .unwrap_or(serde_json::Value::Null)
         },
         filter_setting: Some(("gather", &["density", "box"])),
+    },
+    TechniqueEntry {
+        name: "photon-gi",
+        title: "multi-bounce indirect light by photon splatting (seed 003, Smal and \
+                Aizenshtein, Ray Tracing Gems ch. 24)",
+        create: photon_gi::create,
+        default_settings: || {
+            serde_json::to_value(photon_gi::PhotonGiSettings::default())
+                .unwrap_or(serde_json::Value::Null)
+        },
+        filter_setting: None,
     },
 ];
 

@@ -1,0 +1,884 @@
+//! PhotonGi (seed 003: Smal and Aizenshtein, "Real-Time Global Illumination with Photon
+//! Mapping", Ray Tracing Gems ch. 24): multi-bounce indirect light by photon splatting.
+//! One frame:
+//!
+//! 1. `primary_gbuffer` and `direct_light` from the camera;
+//! 2. per light with photons (allocated over the lights by power,
+//!    [`crate::math::photon_allocation`]): per RSM face `primary_gbuffer` from the light
+//!    and `rsm_importance` level 0, the pyramid's levels, then `sample_rsm` (section
+//!    24.2.1) and `trace_indirect` (24.2.2: roulette, photons stored after the first
+//!    bounce, culled to the view, counted per screen tile);
+//! 3. `splat_photons` (24.3) into the screen photon map, `resolve_caustics` (irradiance
+//!    times albedo / pi: the raw indirect light), `temporal_blend` and `atrous_filter`
+//!    (24.4, each a setting), `composite` with the direct light.
+//!
+//! Not built yet (issue 18): the shading-normal correction of Eq. 20, a directional
+//! light's orthographic RSM (PhotonGi refuses directional lights), Vulkan's
+//! `trace_indirect` (its ray-tracing stage), light, material and image-size updates
+//! without re-creating the technique.
+
+mod settings;
+
+pub use settings::PhotonGiSettings;
+
+use crate::backend::{read_buf, Backend};
+use crate::device::device_scene::{BuildBudget, DeviceScene};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
+use crate::device::layout::*;
+use crate::frame::allocation::planned_allocation;
+use crate::frame::error::Error;
+use crate::frame::image::Image;
+use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
+use crate::frame::stats::FrameStats;
+use crate::frame::technique::{OutputInfo, Progress, Technique};
+use crate::frame::temporal::PingPong;
+use crate::kernels::{
+    AtrousFilter, Composite, DirectLight, PrimaryGbuffer, ResolveCaustics, RsmImportance,
+    SampleRsm, SplatPhotons, TemporalBlend, TraceIndirect,
+};
+use crate::math::fixed_point::join_u64;
+use crate::math::gi_photon::{gi_store, screen_tiles};
+use crate::math::rsm::{level_count, luminance, pyramid_len};
+use crate::recording::{Recording, Step};
+use crate::scene::Scene;
+use glam::Vec3;
+use std::time::Instant;
+
+/// The outputs, in order: name and what it holds (linear radiance, W/(sr m^2)).
+pub const OUTPUTS: [(&str, &str); 4] = [
+    ("composite", "direct light plus the filtered indirect light"),
+    ("direct", "direct light (with specular chains)"),
+    (
+        "indirect_raw",
+        "indirect light from the splats alone (no temporal or A-Trous filter)",
+    ),
+    (
+        "indirect",
+        "indirect light after the temporal and A-Trous filters",
+    ),
+];
+
+/// A light's reflective shadow map: its face cameras and its photons this frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightRsm {
+    /// Index of the light.
+    pub light: u32,
+    /// One pinhole per face (the light's position, `rsm_size` square).
+    pub faces: Vec<GpuCamera>,
+    /// Initial photons of this light per frame.
+    pub photons: u32,
+}
+
+/// The faces of a light's RSM (see `crate::math::rsm`): six 90-degree faces around a
+/// point light, one face over a spot's outer cone below 60 degrees (six above);
+/// directional lights have none.
+pub fn rsm_faces(light: &GpuLight, side: u32) -> Vec<GpuCamera> {
+    let pos = Vec3::from_slice(&light.position[..3]);
+    let face = |forward: Vec3, up_hint: Vec3, tan: f32| {
+        let right = forward.cross(up_hint).normalize();
+        let up = right.cross(forward);
+        GpuCamera {
+            position: pos.to_array(),
+            tan_half_fov_x: tan,
+            forward: forward.to_array(),
+            tan_half_fov_y: tan,
+            right: right.to_array(),
+            width: side,
+            up: up.to_array(),
+            height: side,
+        }
+    };
+    let cube = || {
+        [
+            (Vec3::X, Vec3::Y),
+            (Vec3::NEG_X, Vec3::Y),
+            (Vec3::Y, Vec3::Z),
+            (Vec3::NEG_Y, Vec3::Z),
+            (Vec3::Z, Vec3::Y),
+            (Vec3::NEG_Z, Vec3::Y),
+        ]
+        .into_iter()
+        .map(|(f, u)| face(f, u, 1.0))
+        .collect()
+    };
+    match light.kind {
+        light_kind::POINT => cube(),
+        light_kind::SPOT => {
+            let cos = light.cos_outer.clamp(-1.0, 1.0);
+            if cos > 0.5 {
+                let axis = Vec3::from_slice(&light.direction[..3]).normalize();
+                let hint = if axis.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+                let tan = (1.0 - cos * cos).sqrt() / cos;
+                vec![face(axis, hint, tan)]
+            } else {
+                cube()
+            }
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// A light's power for the allocation (003 section 24.2): the luminance of its
+/// intensity times the solid angle it emits into (W).
+fn light_power(l: &GpuLight) -> f64 {
+    let i = luminance(Vec3::from_slice(&l.intensity[..3])).max(0.0) as f64;
+    let omega = if l.kind == light_kind::SPOT {
+        crate::math::sampling::cone_solid_angle(l.cos_outer) as f64
+    } else {
+        4.0 * std::f64::consts::PI
+    };
+    i * omega
+}
+
+/// Device buffers of the frame.
+#[derive(Clone, Copy, Debug)]
+struct Buffers {
+    gbuffer: GBufferPlanes,
+    direct: ImageBuf,
+    rsm_gbuffer: GBufferPlanes,
+    rsm_texels: Buf<RsmTexel>,
+    pyramid: Buf<f32>,
+    rsm_photons: Buf<RsmPhoton>,
+    photons: Buf<[u32; 8]>,
+    photon_count: Buf<u32>,
+    tile_counts: Buf<u32>,
+    counters: Buf<u32>,
+    photon_map: PhotonMapPlanes,
+    raw: ImageBuf,
+    indirect: ImageBuf,
+    composite: ImageBuf,
+    temporal: Option<TemporalBuffers>,
+    atrous: Option<AtrousBuffers>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TemporalBuffers {
+    image: PingPong<[f32; 4]>,
+    edge: PingPong<[f32; 4]>,
+    previous: GpuCamera,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct AtrousBuffers {
+    input: ImageBuf,
+    a: ImageBuf,
+    b: ImageBuf,
+    details: ImageBuf,
+}
+
+/// PhotonGi on one backend, for one scene.
+pub struct PhotonGi {
+    settings: PhotonGiSettings,
+    scene: SceneArgs,
+    model: Scene,
+    camera: GpuCamera,
+    lights: Vec<GpuLight>,
+    rsms: Vec<LightRsm>,
+    /// Scene bounding-box diagonal (scene units): the splat constants scale with it.
+    diagonal: f32,
+    /// Unit of the packed photon power (W) and the photon map's flux quantum (W).
+    power_scale: f32,
+    flux_quantum: f32,
+    buffers: Buffers,
+    plan: FramePlan,
+    owned: Vec<ResourceId>,
+    bytes: u64,
+    reference: Option<Image>,
+    degenerate_triangles: u64,
+}
+
+impl PhotonGi {
+    /// Validates the scene and settings, uploads the scene and creates the frame's
+    /// buffers (every one checked against the device first).
+    pub fn new(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: PhotonGiSettings,
+    ) -> Result<PhotonGi, Error> {
+        settings.validate()?;
+        scene
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let ds = DeviceScene::build(
+            scene,
+            BuildBudget {
+                max_triangles: settings.max_triangles,
+            },
+        )?;
+        if let Some(i) = ds
+            .lights
+            .iter()
+            .position(|l| l.kind == light_kind::DIRECTIONAL)
+        {
+            return Err(Error::InvalidScene(format!(
+                "lights[{i}]: photon-gi has no RSM for directional lights yet (an \
+                 orthographic face over the scene; issue 18): use a spot or point light"
+            )));
+        }
+        let camera = GpuCamera::from_camera(&scene.camera);
+        let total = settings.photons_w as u64 * settings.photons_h as u64;
+        let powers: Vec<f64> = ds.lights.iter().map(light_power).collect();
+        let counts = crate::math::photon_allocation::allocate_photons(total, &powers);
+        let rsms: Vec<LightRsm> = ds
+            .lights
+            .iter()
+            .zip(&counts)
+            .enumerate()
+            .map(|(i, (l, &n))| LightRsm {
+                light: i as u32,
+                faces: rsm_faces(l, settings.rsm_size),
+                photons: n as u32,
+            })
+            .collect();
+        let diagonal = (ds.bounds.max - ds.bounds.min)
+            .length()
+            .max(f32::MIN_POSITIVE);
+        let emitted: f64 = powers.iter().sum();
+        let power_scale = ((emitted / total as f64) as f32).max(f32::MIN_POSITIVE);
+        // a splat's share of a photon is at least 2^-20 of it in any pixel it reaches
+        let flux_quantum = power_scale * (1.0 / 1_048_576.0);
+
+        let mut rec = Recording::new();
+        let scene_args = rec.upload_scene(&ds);
+        let pixels = camera.width * camera.height;
+        let side = settings.rsm_size;
+        let max_faces = rsms.iter().map(|r| r.faces.len()).max().unwrap_or(1).max(1) as u32;
+        let max_photons = rsms.iter().map(|r| r.photons).max().unwrap_or(1).max(1);
+        let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
+        let temporal = settings.temporal.then(|| TemporalBuffers {
+            image: PingPong::create(&mut rec, pixels, "temporal indirect history"),
+            edge: PingPong::create(&mut rec, pixels, "temporal edge history"),
+            previous: camera,
+        });
+        let atrous = (settings.atrous_iterations > 0).then(|| AtrousBuffers {
+            input: rec.create(pixels, "A-Trous input image"),
+            a: rec.create(pixels, "A-Trous image a"),
+            b: rec.create(pixels, "A-Trous image b"),
+            details: rec.create(pixels, "A-Trous clipped details"),
+        });
+        let raw = rec.create(pixels, "raw indirect image");
+        let buffers = Buffers {
+            gbuffer: rec.create_gbuffer(pixels),
+            direct: rec.create(pixels, "direct image"),
+            rsm_gbuffer: rec.create_gbuffer(side * side),
+            rsm_texels: rec.create(max_faces * side * side, "RSM texels"),
+            pyramid: rec.create(max_faces * pyramid_len(side), "RSM importance pyramid"),
+            rsm_photons: rec.create(max_photons, "RSM photons"),
+            photons: rec.create(capacity.max(1), "indirect photons"),
+            photon_count: rec.create(1, "indirect photon count"),
+            tile_counts: rec.create(
+                screen_tiles(camera.width, camera.height, settings.tile_size),
+                "photons per screen tile",
+            ),
+            counters: rec.create(counter::WORDS as u32, "photon counters"),
+            photon_map: rec.create_photon_map(pixels),
+            raw,
+            indirect: if temporal.is_some() || atrous.is_some() {
+                rec.create(pixels, "indirect image")
+            } else {
+                raw
+            },
+            composite: rec.create(pixels, "composite image"),
+            temporal,
+            atrous,
+        };
+        let allocation = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
+        backend.execute(&rec)?;
+        let plan = PhotonGi::make_plan(scene, &settings, &rsms, &allocation.buffers);
+        Ok(PhotonGi {
+            settings,
+            scene: scene_args,
+            model: scene.clone(),
+            camera,
+            lights: ds.lights.clone(),
+            rsms,
+            diagonal,
+            power_scale,
+            flux_quantum,
+            buffers,
+            plan,
+            owned: allocation.owned,
+            bytes: allocation.bytes,
+            reference: None,
+            degenerate_triangles: ds.degenerate_triangles,
+        })
+    }
+
+    fn make_plan(
+        scene: &Scene,
+        s: &PhotonGiSettings,
+        rsms: &[LightRsm],
+        buffers: &[crate::frame::plan::BufferPlan],
+    ) -> FramePlan {
+        let any = rsms.iter().any(|r| r.photons > 0);
+        let pass = |name: &str, runs: bool, reason: &str| PassPlan {
+            name: name.into(),
+            runs,
+            reason: reason.into(),
+        };
+        let photons = if any {
+            "some light has power"
+        } else {
+            "no light has power"
+        };
+        FramePlan {
+            prune: true,
+            features: SceneFeatures::of(scene),
+            outputs: OUTPUTS.iter().map(|o| o.0.to_string()).collect(),
+            lights: rsms
+                .iter()
+                .map(|r| LightPlan {
+                    light: r.light,
+                    emits: r.photons > 0,
+                    reason: format!(
+                        "{} photons by power, {} RSM faces of {}^2",
+                        r.photons,
+                        r.faces.len(),
+                        s.rsm_size
+                    ),
+                })
+                .collect(),
+            trace_variant: None,
+            passes: vec![
+                pass("primary_gbuffer", true, "camera and RSM faces"),
+                pass("direct_light", true, "the composite's direct part"),
+                pass("rsm_importance", any, photons),
+                pass("sample_rsm", any, photons),
+                pass("trace_indirect", any, photons),
+                pass("splat_photons", any, photons),
+                pass("resolve_caustics", true, "irradiance to radiance"),
+                pass(
+                    "temporal_blend",
+                    s.temporal,
+                    if s.temporal {
+                        "setting temporal"
+                    } else {
+                        "temporal off"
+                    },
+                ),
+                pass(
+                    "atrous_filter",
+                    s.atrous_iterations > 0,
+                    if s.atrous_iterations > 0 {
+                        "setting atrous_iterations"
+                    } else {
+                        "atrous_iterations = 0"
+                    },
+                ),
+                pass("composite", true, "direct plus indirect"),
+            ],
+            buffers: buffers.to_vec(),
+        }
+    }
+
+    /// The splat's parameters for camera `cam`.
+    fn splat_params(&self, cam: GpuCamera) -> SplatParams {
+        let s = &self.settings;
+        SplatParams {
+            camera: cam,
+            tile_size: s.tile_size,
+            power_scale: self.power_scale,
+            flux_quantum: self.flux_quantum,
+            max_splat_px: s.max_splat_px,
+            max_ray_length: s.max_ray_length * self.diagonal,
+            min_length_scale: 0.1,
+            density_radius_min: s.density_radius_min * self.diagonal,
+            density_radius_max: s.density_radius_max * self.diagonal,
+            photons_per_pixel: s.photons_per_pixel,
+            normal_compression: s.normal_compression,
+            max_stretch: s.max_stretch,
+            tile_constant: crate::math::photon_splat::tile_area_constant(
+                cam.tan_half_fov_x,
+                cam.tan_half_fov_y,
+                (s.tile_size, s.tile_size),
+                (cam.width, cam.height),
+            ),
+        }
+    }
+
+    /// The trace's parameters for a light's photons `first .. first + count`.
+    fn trace_params(
+        &self,
+        cam: GpuCamera,
+        first: u32,
+        count: u32,
+        store: u32,
+    ) -> IndirectTraceParams {
+        IndirectTraceParams {
+            camera: cam,
+            first,
+            count,
+            seed: self.settings.seed,
+            max_bounces: self.settings.bounces,
+            max_segments: self.settings.max_segments,
+            tile_size: self.settings.tile_size,
+            store,
+            fresnel_model: self.settings.fresnel_model,
+            power_scale: self.power_scale,
+            flux_quantum: self.flux_quantum,
+            _pad: [0; 2],
+        }
+    }
+
+    /// Records the RSM and trace passes of light `r` (the photons go to `b.photons`).
+    fn record_light(&self, rec: &mut Recording, r: &LightRsm, cam: GpuCamera, store: u32) {
+        let b = &self.buffers;
+        let side = self.settings.rsm_size;
+        let seed = crate::math::rng::random_u32(self.settings.seed, r.light, 0, 7);
+        let mut params = RsmParams {
+            light: r.light,
+            side,
+            seed,
+            ..Default::default()
+        };
+        for (f, face) in r.faces.iter().enumerate() {
+            rec.kernel(PrimaryGbuffer {
+                scene: self.scene,
+                camera: *face,
+                gbuffer: b.rsm_gbuffer,
+            });
+            params.face_camera = *face;
+            params.face = f as u32;
+            params.level = 0;
+            rec.kernel(RsmImportance {
+                params,
+                lights: self.scene.lights,
+                gbuffer: b.rsm_gbuffer,
+                texels: b.rsm_texels,
+                pyramid: b.pyramid,
+            });
+        }
+        for level in 1..level_count(side) {
+            params.level = level;
+            rec.kernel(RsmImportance {
+                params,
+                lights: self.scene.lights,
+                gbuffer: b.rsm_gbuffer,
+                texels: b.rsm_texels,
+                pyramid: b.pyramid,
+            });
+        }
+        rec.kernel(SampleRsm {
+            params: RsmParams {
+                face: 0,
+                face_count: r.faces.len() as u32,
+                first_sample: 0,
+                sample_count: r.photons,
+                level: 0,
+                ..params
+            },
+            lights: self.scene.lights,
+            texels: b.rsm_texels,
+            pyramid: b.pyramid,
+            photons: b.rsm_photons,
+        });
+        rec.kernel(TraceIndirect {
+            scene: self.scene,
+            params: self.trace_params(cam, 0, r.photons, store),
+            rsm_photons: b.rsm_photons,
+            photons: b.photons,
+            photon_count: b.photon_count,
+            tile_counts: b.tile_counts,
+            counters: b.counters,
+        });
+    }
+
+    fn run(
+        backend: &mut dyn Backend,
+        rec: &Recording,
+        stats: &mut FrameStats,
+    ) -> Result<(), Error> {
+        for t in backend.execute(rec)? {
+            stats.add_pass_time(t.kernel, t.seconds);
+        }
+        Ok(())
+    }
+
+    /// Renders one frame (see the module doc).
+    pub fn frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error> {
+        let start = Instant::now();
+        let caps = backend.capabilities();
+        let cam = self.camera;
+        let b = self.buffers;
+        let mut stats = FrameStats {
+            technique: "photon-gi".into(),
+            backend: backend.name().into(),
+            device: caps.device.clone(),
+            width: cam.width,
+            height: cam.height,
+            timing: if caps.timestamps {
+                "device timestamps".into()
+            } else {
+                "host wall clock".into()
+            },
+            flux_quantum: self.flux_quantum as f64,
+            bytes_allocated: self.bytes,
+            degenerate_triangles: self.degenerate_triangles,
+            plan: Some(self.plan.clone()),
+            ..Default::default()
+        };
+        for p in self.plan.passes.iter().filter(|p| !p.runs) {
+            stats.skip(&p.name, p.reason.clone());
+        }
+        let mut rec = Recording::new();
+        rec.kernel(PrimaryGbuffer {
+            scene: self.scene,
+            camera: cam,
+            gbuffer: b.gbuffer,
+        });
+        rec.kernel(DirectLight {
+            scene: self.scene,
+            params: DirectParams {
+                camera: cam,
+                light_count: self.lights.len() as u32,
+                max_specular_depth: self.settings.max_specular_depth,
+                min_weight: 1e-4,
+                fresnel_model: self.settings.fresnel_model,
+            },
+            gbuffer: b.gbuffer,
+            out: b.direct,
+        });
+        rec.clear_photon_map(&b.photon_map);
+        rec.clear(b.counters);
+        rec.clear(b.photon_count);
+        rec.clear(b.tile_counts);
+        PhotonGi::run(backend, &rec, &mut stats)?;
+
+        let total: u64 = self.rsms.iter().map(|r| r.photons as u64).sum();
+        let mut done = 0u64;
+        for r in self.rsms.iter().filter(|r| r.photons > 0) {
+            let mut rec = Recording::new();
+            self.record_light(&mut rec, r, cam, gi_store::PACKED);
+            PhotonGi::run(backend, &rec, &mut stats)?;
+            stats.batches += 1;
+            done += r.photons as u64;
+            progress(Progress {
+                photons_done: done,
+                photons_total: total,
+            });
+        }
+        stats.photons_emitted = total;
+        stats.photons_per_light = self.rsms.iter().map(|r| r.photons as u64).collect();
+
+        let mut rec = Recording::new();
+        rec.kernel(SplatPhotons {
+            params: self.splat_params(cam),
+            gbuffer: b.gbuffer,
+            photons: b.photons.reinterpret(),
+            photon_count: b.photon_count,
+            tile_counts: b.tile_counts,
+            counters: b.counters,
+            photon_map: b.photon_map,
+        });
+        rec.kernel(ResolveCaustics {
+            params: self.deposit_params(cam),
+            gbuffer: b.gbuffer,
+            photon_map: b.photon_map,
+            out: b.raw,
+        });
+        self.record_filters(&mut rec, cam);
+        rec.kernel(Composite {
+            direct: b.direct,
+            caustics: b.indirect,
+            out: b.composite,
+        });
+        PhotonGi::run(backend, &rec, &mut stats)?;
+
+        let c = read_buf(backend, b.counters)?;
+        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
+        stats.photons_stored = c[counter::STORED] as u64;
+        stats.photons_deposited = c[counter::DEPOSITED] as u64;
+        stats.discarded.escaped = c[counter::ESCAPED] as u64;
+        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
+        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
+        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
+        stats.discarded.depth_mismatch = c[counter::DEPTH_MISMATCH] as u64;
+        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
+        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
+        stats.photon_rays_traced = c64(counter::RAYS);
+        for ch in 0..3 {
+            stats.stored_flux[ch] =
+                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
+        }
+        if let Some(t) = &mut self.buffers.temporal {
+            t.image.swap();
+            t.edge.swap();
+            t.previous = cam;
+        }
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(r) = &self.reference {
+            let img = self.read_image(backend, b.indirect)?;
+            stats.error = Some(crate::frame::metrics::compare(&img, r));
+        }
+        Ok(stats)
+    }
+
+    fn deposit_params(&self, cam: GpuCamera) -> DepositParams {
+        DepositParams {
+            camera: cam,
+            flux_quantum: self.flux_quantum,
+            hit_distance_quantum: 1.0,
+            depth_tolerance: 0.01,
+            photon_capacity: self.buffers.photons.len,
+        }
+    }
+
+    /// The temporal blend and the A-Trous iterations from `raw` to `indirect` (each
+    /// optional: the last that runs writes `indirect`; with neither, `indirect` is `raw`).
+    fn record_filters(&self, rec: &mut Recording, cam: GpuCamera) {
+        let b = &self.buffers;
+        let c = crate::math::irradiance_filter::FilterConstants::default();
+        let blended = b.atrous.map_or(b.indirect, |a| a.input);
+        let mut input = b.raw;
+        if let Some(t) = b.temporal {
+            rec.kernel(TemporalBlend {
+                params: TemporalParams {
+                    camera: cam,
+                    previous: t.previous,
+                    alpha_max: c.alpha_max,
+                    sigma_z: c.sigma_z,
+                    sigma_n: c.sigma_n,
+                    epsilon: c.epsilon,
+                    history_frames: t.image.frames.min(u32::MAX as u64) as u32,
+                    _pad: [0; 3],
+                },
+                gbuffer: b.gbuffer,
+                input: b.raw,
+                history: t.image.history(),
+                history_edge: t.edge.history(),
+                out: blended,
+                next_history: t.image.current(),
+                next_edge: t.edge.current(),
+            });
+            input = blended;
+        }
+        match b.atrous {
+            Some(a) => {
+                if b.temporal.is_none() {
+                    input = b.raw;
+                }
+                let n = self.settings.atrous_iterations;
+                for i in 0..n {
+                    let out = if i + 1 == n {
+                        b.indirect
+                    } else if i % 2 == 0 {
+                        a.a
+                    } else {
+                        a.b
+                    };
+                    rec.kernel(AtrousFilter {
+                        params: AtrousParams {
+                            camera: cam,
+                            iteration: i,
+                            last: (i + 1 == n) as u32,
+                            sigma_z: c.sigma_z,
+                            sigma_n: c.sigma_n,
+                            epsilon: c.epsilon,
+                            clip_sigmas: self.settings.atrous_clip_sigmas,
+                            _pad: [0; 2],
+                        },
+                        gbuffer: b.gbuffer,
+                        input,
+                        details: a.details,
+                        out,
+                    });
+                    input = out;
+                }
+            }
+            // neither filter: `indirect` is the raw image's buffer
+            None => {}
+        }
+    }
+
+    /// Reads a device image back.
+    fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
+        let px = read_buf(backend, image)?;
+        Ok(Image::new(self.camera.width, self.camera.height, px))
+    }
+
+    /// The indirect reference's ingredient: one frame's photons of every light as float
+    /// `Photon`s (the same paths as the splatted ones, unpacked), for a raw screen
+    /// deposit. Returns them read back.
+    pub fn float_photons(&mut self, backend: &mut dyn Backend) -> Result<Vec<Photon>, Error> {
+        let cam = self.camera;
+        let b = self.buffers;
+        let mut all = Vec::new();
+        for r in self.rsms.iter().filter(|r| r.photons > 0) {
+            let mut rec = Recording::new();
+            rec.clear(b.photon_count);
+            rec.clear(b.tile_counts);
+            rec.clear(b.counters);
+            self.record_light(&mut rec, r, cam, gi_store::FLOAT);
+            backend.execute(&rec)?;
+            let n = read_buf(backend, b.photon_count)?[0] as usize;
+            let words = read_buf(backend, b.photons)?;
+            all.extend(
+                words[..n]
+                    .iter()
+                    .map(|w| bytemuck::cast::<[u32; 8], Photon>(*w)),
+            );
+        }
+        Ok(all)
+    }
+
+    /// The settings in effect.
+    pub fn settings(&self) -> &PhotonGiSettings {
+        &self.settings
+    }
+
+    /// The lights' RSMs and photon counts.
+    pub fn light_rsms(&self) -> &[LightRsm] {
+        &self.rsms
+    }
+
+    /// Releases every device buffer.
+    pub fn free(mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let mut rec = Recording::new();
+        for id in std::mem::take(&mut self.owned) {
+            rec.steps.push(Step::Free { id });
+        }
+        backend.execute(&rec)?;
+        Ok(())
+    }
+}
+
+impl Drop for PhotonGi {
+    fn drop(&mut self) {
+        crate::frame::technique::report_leak("photon-gi", self.owned.len(), self.bytes);
+    }
+}
+
+impl Technique for PhotonGi {
+    fn name(&self) -> &'static str {
+        "photon-gi"
+    }
+
+    fn frame(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error> {
+        PhotonGi::frame(self, backend, progress)
+    }
+
+    fn outputs(&self) -> Vec<OutputInfo> {
+        OUTPUTS
+            .iter()
+            .map(|(name, description)| OutputInfo {
+                name,
+                description,
+                requested: true,
+                camera_space: true,
+            })
+            .collect()
+    }
+
+    fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
+        let b = &self.buffers;
+        let buf = match name {
+            "composite" => b.composite,
+            "direct" => b.direct,
+            "indirect_raw" => b.raw,
+            "indirect" => b.indirect,
+            _ => {
+                return Err(Error::InvalidParameter(format!(
+                    "photon-gi has no output '{name}'; outputs: {}",
+                    OUTPUTS.map(|o| o.0).join(", ")
+                )))
+            }
+        };
+        self.read_image(backend, buf)
+    }
+
+    fn estimate_outputs(&self) -> (&'static str, &'static str) {
+        ("indirect", "indirect_raw")
+    }
+
+    fn settings_json(&self) -> serde_json::Value {
+        serde_json::to_value(&self.settings).unwrap_or(serde_json::Value::Null)
+    }
+
+    fn set_seed(&mut self, seed: u32) {
+        self.settings.seed = seed;
+    }
+
+    fn set_camera(
+        &mut self,
+        _backend: &mut dyn Backend,
+        camera: &crate::scene::Camera,
+    ) -> Result<(), Error> {
+        if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
+            // TODO(issue 19): remake the per-pixel buffers at a new size
+            return Err(Error::InvalidParameter(
+                "photon-gi: the image size cannot change yet; create the technique again".into(),
+            ));
+        }
+        let mut model = self.model.clone();
+        model.camera = camera.clone();
+        model
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        self.camera = GpuCamera::from_camera(camera);
+        self.model = model;
+        Ok(())
+    }
+
+    fn set_lights(
+        &mut self,
+        _backend: &mut dyn Backend,
+        _lights: &[crate::scene::Light],
+    ) -> Result<(), Error> {
+        // TODO(issue 19): light updates (re-allocate photons and RSM faces)
+        Err(Error::InvalidParameter(
+            "photon-gi: lights cannot change yet; create the technique again".into(),
+        ))
+    }
+
+    fn set_materials(
+        &mut self,
+        _backend: &mut dyn Backend,
+        _materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error> {
+        // TODO(issue 19): material updates
+        Err(Error::InvalidParameter(
+            "photon-gi: materials cannot change yet; create the technique again".into(),
+        ))
+    }
+
+    fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
+        if let Some(r) = &reference {
+            if (r.width, r.height) != (self.camera.width, self.camera.height) {
+                return Err(Error::InvalidParameter(format!(
+                    "reference is {}x{}, the frame {}x{}",
+                    r.width, r.height, self.camera.width, self.camera.height
+                )));
+            }
+        }
+        self.reference = reference;
+        Ok(())
+    }
+
+    fn plan(&self) -> &FramePlan {
+        &self.plan
+    }
+
+    fn free(self: Box<Self>, backend: &mut dyn Backend) -> Result<(), Error> {
+        PhotonGi::free(*self, backend)
+    }
+}
+
+/// The registry's constructor: `settings` is a JSON object of [`PhotonGiSettings`]
+/// fields.
+pub fn create(
+    backend: &mut dyn Backend,
+    scene: &Scene,
+    settings: &serde_json::Value,
+) -> Result<Box<dyn Technique>, Error> {
+    let settings: PhotonGiSettings = serde_json::from_value(settings.clone())
+        .map_err(|e| Error::InvalidParameter(format!("photon-gi settings: {e}")))?;
+    Ok(Box::new(PhotonGi::new(backend, scene, settings)?))
+}

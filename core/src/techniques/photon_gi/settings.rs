@@ -1,0 +1,144 @@
+//! Every parameter of PhotonGi, with its defaults (seed 003 where it gives them) and
+//! validation.
+
+use crate::frame::error::Error;
+use crate::math::optics::fresnel_model;
+use serde::{Deserialize, Serialize};
+
+/// Every parameter of the technique.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PhotonGiSettings {
+    /// Initial photons per frame, over all lights, are `photons_w x photons_h` (003's
+    /// "high" setting: 3 million, about 1732^2; "low": 1 million, 1024^2), allocated to
+    /// the lights in proportion to their power.
+    pub photons_w: u32,
+    /// See `photons_w`.
+    pub photons_h: u32,
+    /// Diffuse bounces of a path, the RSM's included (003: 3 "high", 1 "low"): photons
+    /// are stored at the hits after bounces 1 ..= `bounces`.
+    pub bounces: u32,
+    /// Most ray segments of a path (bounds mirror and glass chains).
+    pub max_segments: u32,
+    /// Texels per side of each RSM face (a power of two, 8..=2048).
+    pub rsm_size: u32,
+    /// Screen tile edge (pixels) of the splat's photon-density counts (Eqs. 3-6's `t`).
+    pub tile_size: u32,
+    /// Eq. 6's `n_tile`: photons expected to contribute to each pixel.
+    pub photons_per_pixel: f32,
+    /// Eq. 6's `r_min`, relative to the scene's bounding-box diagonal.
+    pub density_radius_min: f32,
+    /// Eq. 6's `r_max`, relative to the scene's bounding-box diagonal.
+    pub density_radius_max: f32,
+    /// Eq. 2's `l_max`, relative to the scene's diagonal (the chapter derives it from
+    /// the bounding box).
+    pub max_ray_length: f32,
+    /// Compression of the kernel along the photon's normal (`s_n`, the listing's
+    /// `KernelCompress`).
+    pub normal_compression: f32,
+    /// Largest stretch along the light direction (Eq. 7's `s_max`).
+    pub max_stretch: f32,
+    /// Most pixels from a splat's centre to its edge (a cost bound; larger splats are
+    /// clipped and counted as saturated).
+    pub max_splat_px: u32,
+    /// The temporal accumulation (003 section 24.4.1) over reprojected history.
+    pub temporal: bool,
+    /// A-Trous iterations after it (003 section 24.4.2; default 4, 0 turns it off).
+    pub atrous_iterations: u32,
+    /// Eq. 18's variance clipping of the detail coefficients, in standard deviations.
+    pub atrous_clip_sigmas: f32,
+    /// Reflectance of dielectric interfaces ([`fresnel_model`]).
+    pub fresnel_model: u32,
+    /// Longest specular chain followed from a mirror or glass pixel in `direct_light`.
+    pub max_specular_depth: u32,
+    /// Frame seed.
+    pub seed: u32,
+    /// Most triangles the tessellated scene may have.
+    pub max_triangles: u64,
+}
+
+impl Default for PhotonGiSettings {
+    fn default() -> Self {
+        PhotonGiSettings {
+            photons_w: 1024,
+            photons_h: 1024,
+            bounces: 3,
+            max_segments: 16,
+            rsm_size: 256,
+            tile_size: 16,
+            photons_per_pixel: 2.0,
+            density_radius_min: 1e-4,
+            density_radius_max: 0.05,
+            max_ray_length: 0.5,
+            normal_compression: 0.1,
+            max_stretch: 4.0,
+            max_splat_px: 48,
+            temporal: true,
+            atrous_iterations: 4,
+            atrous_clip_sigmas: 1.0,
+            fresnel_model: fresnel_model::EXACT,
+            max_specular_depth: 4,
+            seed: 1,
+            max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
+        }
+    }
+}
+
+impl PhotonGiSettings {
+    /// Refuses values the kernels cannot run with, each by name.
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |what: &str| Err(Error::InvalidParameter(format!("photon-gi: {what}")));
+        let total = self.photons_w as u64 * self.photons_h as u64;
+        if total == 0 || total > (1 << 28) {
+            return bad("photons_w x photons_h must be in 1..=2^28");
+        }
+        if self.bounces == 0 || self.bounces > 16 {
+            return bad("bounces must be in 1..=16");
+        }
+        if self.max_segments == 0 || self.max_segments > 1024 {
+            return bad("max_segments must be in 1..=1024");
+        }
+        if !self.rsm_size.is_power_of_two() || !(8..=2048).contains(&self.rsm_size) {
+            return bad("rsm_size must be a power of two in 8..=2048");
+        }
+        if self.tile_size == 0 || self.tile_size > 256 {
+            return bad("tile_size must be in 1..=256");
+        }
+        if self.max_splat_px == 0 || self.max_splat_px > 256 {
+            return bad("max_splat_px must be in 1..=256");
+        }
+        for (name, v) in [
+            ("photons_per_pixel", self.photons_per_pixel),
+            ("density_radius_min", self.density_radius_min),
+            ("density_radius_max", self.density_radius_max),
+            ("max_ray_length", self.max_ray_length),
+            ("normal_compression", self.normal_compression),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return bad(&format!("{name} must be > 0 and finite"));
+            }
+        }
+        if self.density_radius_min > self.density_radius_max {
+            return bad("density_radius_min must not exceed density_radius_max");
+        }
+        if !(self.max_stretch >= 1.0 && self.max_stretch.is_finite()) {
+            return bad("max_stretch must be >= 1");
+        }
+        if self.atrous_iterations > 8 {
+            return bad("atrous_iterations must be in 0..=8");
+        }
+        if !(self.atrous_clip_sigmas > 0.0 && self.atrous_clip_sigmas.is_finite()) {
+            return bad("atrous_clip_sigmas must be > 0");
+        }
+        if self.fresnel_model > fresnel_model::SCHLICK {
+            return bad("fresnel_model must be 0 (exact) or 1 (Schlick)");
+        }
+        if self.max_specular_depth > crate::kernels::MAX_SPECULAR_DEPTH {
+            return bad("max_specular_depth is above the kernels' limit");
+        }
+        if self.max_triangles == 0 {
+            return bad("max_triangles must be >= 1");
+        }
+        Ok(())
+    }
+}
