@@ -57,6 +57,10 @@ pub const COMMON: &[(&str, &str)] = &[
         "irradiance_filter.cl",
         include_str!("../kernels/common/irradiance_filter.cl"),
     ),
+    (
+        "photon_gi.cl",
+        include_str!("../kernels/common/photon_gi.cl"),
+    ),
 ];
 
 /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
@@ -115,6 +119,16 @@ pub const KERNELS: &[(&str, &str)] = &[
         include_str!("../kernels/temporal_blend.cl"),
     ),
     ("atrous_filter", include_str!("../kernels/atrous_filter.cl")),
+    (
+        "rsm_importance",
+        include_str!("../kernels/rsm_importance.cl"),
+    ),
+    ("sample_rsm", include_str!("../kernels/sample_rsm.cl")),
+    (
+        "trace_indirect",
+        include_str!("../kernels/trace_indirect.cl"),
+    ),
+    ("splat_photons", include_str!("../kernels/splat_photons.cl")),
 ];
 
 /// Kernels compiled per variant, in programs of their own.

@@ -58,6 +58,7 @@ pub const COMMON: &[(&str, &str)] = &[
         "irradiance_filter",
         include_str!("../wgsl/common/irradiance_filter.wgsl"),
     ),
+    ("photon_gi", include_str!("../wgsl/common/photon_gi.wgsl")),
 ];
 
 /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
@@ -115,6 +116,16 @@ pub const KERNELS: &[(&str, &str)] = &[
         include_str!("../wgsl/temporal_blend.wgsl"),
     ),
     ("atrous_filter", include_str!("../wgsl/atrous_filter.wgsl")),
+    (
+        "rsm_importance",
+        include_str!("../wgsl/rsm_importance.wgsl"),
+    ),
+    ("sample_rsm", include_str!("../wgsl/sample_rsm.wgsl")),
+    (
+        "trace_indirect",
+        include_str!("../wgsl/trace_indirect.wgsl"),
+    ),
+    ("splat_photons", include_str!("../wgsl/splat_photons.wgsl")),
 ];
 
 /// The kernels with compiled variants: their modules declare pipeline-overridable

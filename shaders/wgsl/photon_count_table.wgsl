@@ -53,7 +53,7 @@ fn edge_texel(t: GatherTexel) -> vec4<f32> {
 
 
 // Threads of a workgroup (the launch's DEFAULT_WORKGROUP_SIZE); table_block is a power
-// of two of at least 64, so a block's row is a whole number of workgroup-wide chunks.
+// of two of at least 64, so each thread of a row block takes table_block / 64 pixels.
 const SCAN_THREADS: u32 = 64u;
 // The column pass splits a block's column into COLUMN_CHUNKS chunks of table_block /
 // COLUMN_CHUNKS rows; a workgroup takes SCAN_THREADS / COLUMN_CHUNKS neighbouring columns.
@@ -62,88 +62,95 @@ const SCAN_COLUMNS: u32 = 8u;
 
 var<workgroup> scan_scratch: array<u32, 64>;
 
-// Axis 0: workgroup g takes row g / blocks, block g % blocks; its threads read
-// neighbouring pixels (coalesced) and a Hillis-Steele scan in workgroup memory gives the
-// prefix sums, chunk by chunk with the carry of the chunks before. The same wrapping u32
-// sums as a sequential loop, in another order: exact, the same bits.
-fn photon_count_row_block(g: u32, li: u32) {
-    let p = params;
-    let w = p.camera.width;
-    let b = p.table_block;
-    let blocks = (w + b - 1u) / b;
-    if (g >= p.camera.height * blocks) {
-        return;
+// One Hillis-Steele step of the workgroup's inclusive scan (barriers at its top level).
+fn scan_step(li: u32, d: u32) {
+    var add = 0u;
+    if (li >= d) {
+        add = scan_scratch[li - d];
     }
-    let y = g / blocks;
-    let x0 = (g % blocks) * b;
-    let x_end = min(x0 + b, w);
-    var carry = 0u;
-    for (var c = x0; c < x_end; c += SCAN_THREADS) {
-        let x = c + li;
-        let i = y * w + x;
-        var v = 0u;
-        if (x < x_end) {
-            v = clamped_photon_count(photon_map_word(i, 8u), photon_map_word(i, 9u),
-                                     p.knn_photons);
-        }
-        scan_scratch[li] = v;
-        workgroupBarrier();
-        for (var d = 1u; d < SCAN_THREADS; d = d << 1u) {
-            var add = 0u;
-            if (li >= d) {
-                add = scan_scratch[li - d];
-            }
-            workgroupBarrier();
-            scan_scratch[li] += add;
-            workgroupBarrier();
-        }
-        if (x < x_end) {
-            table[i] = carry + scan_scratch[li];
-        }
-        carry += scan_scratch[SCAN_THREADS - 1u];
-        workgroupBarrier();
-    }
+    workgroupBarrier();
+    scan_scratch[li] += add;
+    workgroupBarrier();
 }
 
-// Axis 1: thread t (= g * 64 + li) writes pixel t's edge texel; workgroup g also scans
-// SCAN_COLUMNS neighbouring columns of one block (g % column groups, g / column groups),
-// each column in COLUMN_CHUNKS chunks: a chunk's sum, the chunks above it through
-// workgroup memory, then the chunk's prefix sums in place. Exact wrapping u32 sums.
-fn photon_count_column_block(g: u32, li: u32) {
+// The clamped count of pixel (x, y).
+fn count_at(x: u32, y: u32) -> u32 {
+    let i = y * params.camera.width + x;
+    return clamped_photon_count(photon_map_word(i, 8u), photon_map_word(i, 9u),
+                                params.knn_photons);
+}
+
+// Both axes in one body, so that every barrier sits at its top level and every
+// invocation reaches it (no early return). Axis 0: workgroup g takes row g / blocks,
+// block g % blocks; thread li sums its table_block / 64 neighbouring pixels, a workgroup
+// scan gives each thread the sum before its pixels, and it writes their prefix sums.
+// Axis 1: thread t = g * 64 + li writes pixel t's edge texel; workgroup g also scans
+// SCAN_COLUMNS neighbouring columns of one block, each column in COLUMN_CHUNKS chunks:
+// a chunk's sum, the chunks above it through workgroup memory, then the chunk's prefix
+// sums in place. Wrapping u32 sums in another order than the CPU's loop: exact, the
+// same bits.
+fn photon_count_table(g: u32, li: u32) {
     let p = params;
     let w = p.camera.width;
     let h = p.camera.height;
     let b = p.table_block;
+    let rows = p.axis == 0u;
+    var v = 0u;
+    // axis 0
+    let row_blocks = (w + b - 1u) / b;
+    let row_active = rows && g < h * row_blocks;
+    let y_row = g / max(row_blocks, 1u);
+    let m = b / SCAN_THREADS;
+    let xr = (g % max(row_blocks, 1u)) * b + li * m;
+    if (row_active) {
+        for (var j = 0u; j < m && xr + j < w; j++) {
+            v += count_at(xr + j, y_row);
+        }
+    }
+    // axis 1
     let t = g * SCAN_THREADS + li;
-    if (t < w * h && p.surface != GATHER_SURFACE_ATLAS) {
+    if (!rows && t < w * h && p.surface != GATHER_SURFACE_ATLAS) {
         edge[t] = edge_texel(load_gather_texel(t));
     }
     let groups_x = (w + SCAN_COLUMNS - 1u) / SCAN_COLUMNS;
-    let blocks = (h + b - 1u) / b;
-    if (g >= groups_x * blocks) {
-        return;
-    }
+    let col_blocks = (h + b - 1u) / b;
     let x = (g % groups_x) * SCAN_COLUMNS + li % SCAN_COLUMNS;
     let chunk = li / SCAN_COLUMNS;
-    let rows = b / COLUMN_CHUNKS;
-    let y0 = (g / groups_x) * b + chunk * rows;
-    let y1 = min(y0 + rows, h);
-    var chunk_sum = 0u;
-    if (x < w) {
+    let chunk_rows = b / COLUMN_CHUNKS;
+    let y0 = (g / groups_x) * b + chunk * chunk_rows;
+    let y1 = min(y0 + chunk_rows, h);
+    let col_active = !rows && g < groups_x * col_blocks && x < w;
+    if (col_active) {
         for (var y = y0; y < y1; y++) {
-            chunk_sum += table[y * w + x];
+            v += table[y * w + x];
         }
     }
-    scan_scratch[li] = chunk_sum;
+    scan_scratch[li] = v;
     workgroupBarrier();
-    var sum = 0u;
-    for (var k = 0u; k < chunk; k++) {
-        sum += scan_scratch[k * SCAN_COLUMNS + li % SCAN_COLUMNS];
+    var col_sum = 0u;
+    if (col_active) {
+        for (var k = 0u; k < chunk; k++) {
+            col_sum += scan_scratch[k * SCAN_COLUMNS + li % SCAN_COLUMNS];
+        }
     }
-    if (x < w) {
+    workgroupBarrier();
+    scan_step(li, 1u);
+    scan_step(li, 2u);
+    scan_step(li, 4u);
+    scan_step(li, 8u);
+    scan_step(li, 16u);
+    scan_step(li, 32u);
+    if (row_active) {
+        var sum = scan_scratch[li] - v;
+        for (var j = 0u; j < m && xr + j < w; j++) {
+            sum += count_at(xr + j, y_row);
+            table[y_row * w + xr + j] = sum;
+        }
+    }
+    if (col_active) {
         for (var y = y0; y < y1; y++) {
-            sum += table[y * w + x];
-            table[y * w + x] = sum;
+            col_sum += table[y * w + x];
+            table[y * w + x] = col_sum;
         }
     }
 }
@@ -151,10 +158,5 @@ fn photon_count_column_block(g: u32, li: u32) {
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) li: u32) {
-    let g = wg.y * nwg.x + wg.x;
-    if (params.axis == 0u) {
-        photon_count_row_block(g, li);
-    } else {
-        photon_count_column_block(g, li);
-    }
+    photon_count_table(wg.y * nwg.x + wg.x, li);
 }

@@ -80,6 +80,36 @@ typedef struct {
     float epsilon; float clip_sigmas; uint _pad0; uint _pad1;
 } AtrousParams;
 
+// PhotonGi (seed 003): core::device::layout::{RsmTexel, RsmPhoton, RsmParams, GiPhoton,
+// IndirectTraceParams, SplatParams}.
+typedef struct { float position[3]; uint normal; float flux[3]; uint kind; } RsmTexel;
+typedef struct { float origin[3]; uint direction; float flux[3]; uint bounces; } RsmPhoton;
+typedef struct {
+    GpuCamera face_camera;
+    uint light; uint face; uint side; uint level;
+    uint face_count; uint first_sample; uint sample_count; uint seed;
+} RsmParams;
+typedef struct {
+    float position[3]; uint power; uint normal; uint direction; float ray_length; uint tile;
+} GiPhoton;
+typedef struct {
+    GpuCamera camera;
+    uint first; uint count; uint seed; uint max_bounces;
+    uint max_segments; uint tile_size; uint store; uint fresnel_model;
+    float power_scale; float flux_quantum; uint _pad0; uint _pad1;
+} IndirectTraceParams;
+typedef struct {
+    GpuCamera camera;
+    uint tile_size; float power_scale; float flux_quantum; uint max_splat_px;
+    float max_ray_length; float min_length_scale; float density_radius_min; float density_radius_max;
+    float photons_per_pixel; float normal_compression; float max_stretch; float tile_constant;
+} SplatParams;
+#define RSM_TEXEL_NONE 0u // core::math::rsm::rsm_texel_kind
+#define RSM_TEXEL_DIFFUSE 1u
+#define RSM_TEXEL_SPECULAR 2u
+#define GI_STORE_PACKED 0u // core::math::gi_photon::gi_store
+#define GI_STORE_FLOAT 1u
+
 // core::gpu constants
 #define MATERIAL_DIFFUSE 0u
 #define MATERIAL_MIRROR 1u

@@ -57,8 +57,9 @@ pub(super) fn gbuffer_texels(p: &GatherParams, n: u64) -> u64 {
 
 /// Threads of a `photon_count_table` launch (workgroups of
 /// [`SCAN_THREADS`](crate::math::density_gather::SCAN_THREADS)). Axis 0: a workgroup per
-/// row and block, its threads on neighbouring pixels (a thread per row and block walking
-/// its pixels was latency-bound on an H200). Axis 1: a thread per pixel for the edge
+/// row and block, each thread on `table_block / 64` neighbouring pixels and a workgroup
+/// scan between them (a thread per row and block walking its pixels was latency-bound on
+/// an H200). Axis 1: a thread per pixel for the edge
 /// texels, and a workgroup per `SCAN_COLUMNS` columns of a block, each column in
 /// `COLUMN_CHUNKS` chunks.
 pub fn count_table_threads(p: &GatherParams) -> u64 {

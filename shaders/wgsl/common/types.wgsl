@@ -206,6 +206,81 @@ struct TemporalParams {
     _pad2: u32,
 }
 
+// PhotonGi (seed 003): core::device::layout::{RsmTexel, RsmPhoton, RsmParams, GiPhoton,
+// IndirectTraceParams, SplatParams}.
+struct RsmTexel {
+    position: vec3<f32>,
+    normal: u32,
+    flux: vec3<f32>,
+    kind: u32,
+}
+
+struct RsmPhoton {
+    origin: vec3<f32>,
+    direction: u32,
+    flux: vec3<f32>,
+    bounces: u32,
+}
+
+struct RsmParams {
+    face_camera: GpuCamera,
+    light: u32,
+    face: u32,
+    side: u32,
+    level: u32,
+    face_count: u32,
+    first_sample: u32,
+    sample_count: u32,
+    seed: u32,
+}
+
+struct GiPhoton {
+    position: vec3<f32>,
+    power: u32,
+    normal: u32,
+    direction: u32,
+    ray_length: f32,
+    tile: u32,
+}
+
+struct IndirectTraceParams {
+    camera: GpuCamera,
+    first: u32,
+    count: u32,
+    seed: u32,
+    max_bounces: u32,
+    max_segments: u32,
+    tile_size: u32,
+    store: u32,
+    fresnel_model: u32,
+    power_scale: f32,
+    flux_quantum: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct SplatParams {
+    camera: GpuCamera,
+    tile_size: u32,
+    power_scale: f32,
+    flux_quantum: f32,
+    max_splat_px: u32,
+    max_ray_length: f32,
+    min_length_scale: f32,
+    density_radius_min: f32,
+    density_radius_max: f32,
+    photons_per_pixel: f32,
+    normal_compression: f32,
+    max_stretch: f32,
+    tile_constant: f32,
+}
+
+const RSM_TEXEL_NONE: u32 = 0u; // core::math::rsm::rsm_texel_kind
+const RSM_TEXEL_DIFFUSE: u32 = 1u;
+const RSM_TEXEL_SPECULAR: u32 = 2u;
+const GI_STORE_PACKED: u32 = 0u; // core::math::gi_photon::gi_store
+const GI_STORE_FLOAT: u32 = 1u;
+
 struct DirectParams {
     camera: GpuCamera,
     light_count: u32,

@@ -1,0 +1,51 @@
+// splat_photons (seed 003 section 24.3, Eqs. 2-9): a thread per stored photon adds its
+// ellipsoid splat's irradiance times each covered receiver pixel's area to the photon map
+// in fixed point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_photon) and
+// shaders/wgsl/splat_photons.wgsl.
+
+inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global const),
+                         GiPhoton ph, __global const uint* tile_counts,
+                         PHOTON_MAP_PARAMS(volatile __global), __local uint* lc) {
+    float3 power = unpack_rgb9e5(ph.power) * p->power_scale;
+    if (!(max_element3(power) > 0.0f)) return;
+    float3 pos = load3(ph.position);
+    uint px, py;
+    float z;
+    if (!project_to_pixel(&p->camera, pos, &px, &py, &z)) return;
+    float3 n = unpack_unit_vector(ph.normal);
+    float3 to_light = -unpack_unit_vector(ph.direction);
+    float s = ray_length_scale(ph.ray_length, p) *
+              density_scale(z, p->tile_constant, tile_counts[ph.tile], p);
+    SplatKernel k = splat_kernel(n, to_light, s, p);
+    float3 e = splat_irradiance(power, &k);
+    uint reach = splat_reach_px(p, max_element3(k.axes), z);
+    if (reach > p->max_splat_px) atomic_inc(&lc[COUNTER_SATURATED]);
+    int r = (int)min(reach, p->max_splat_px);
+    int w = (int)p->camera.width, h = (int)p->camera.height;
+    for (int qy = max((int)py - r, 0); qy <= min((int)py + r, h - 1); qy++) {
+        for (int qx = max((int)px - r, 0); qx <= min((int)px + r, w - 1); qx++) {
+            uint q = (uint)(qy * w + qx);
+            GBufferTexel t = load_gbuffer(GBUFFER_ARGS, q);
+            if ((t.flags & GBUFFER_RECEIVER) == 0u || dot3(load3(t.normal), n) <= 0.0f ||
+                !kernel_contains(&k, pos, load3(t.position)))
+                continue;
+            float area = gbuffer_pixel_area(&p->camera, q, &t);
+            float3 f = e * area;
+            Photon splat = {{0.0f, 0.0f, 0.0f}, 0.0f, {f.x, f.y, f.z}, 0u};
+            deposit_photon_texel(PHOTON_MAP_ARGS, lc, q, &splat, p->flux_quantum, 1.0f);
+        }
+    }
+}
+
+__kernel void splat_photons(__global const SplatParams* p, GBUFFER_PARAMS(__global const),
+                            __global const GiPhoton* photons, uint photon_capacity,
+                            __global const uint* photon_count,
+                            __global const uint* tile_counts, volatile __global uint* counters,
+                            PHOTON_MAP_PARAMS(volatile __global)) {
+    __local uint lc[COUNTER_WORDS];
+    counters_clear_local(lc);
+    uint i = get_global_id(0);
+    if (i < min(photon_count[0], photon_capacity))
+        splat_photon(p, GBUFFER_ARGS, photons[i], tile_counts, PHOTON_MAP_ARGS, lc);
+    counters_flush_local(lc, counters);
+}

@@ -1,0 +1,136 @@
+// trace_indirect (seed 003 section 24.2.2): photon p->first + i of the RSM photons is
+// traced with Russian roulette at diffuse bounces and stored (culled to the camera's view
+// and facing side, counted per screen tile) at every diffuse hit after its first bounce.
+// Mirror of backend-cpu/src/kernels/photon_gi.rs (trace_indirect_path, store_indirect) and
+// shaders/wgsl/trace_indirect.wgsl: same random dimensions (per segment: 0, 1 bounce
+// direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Photons are 32-byte slots,
+// two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
+
+inline void store_indirect(__global const IndirectTraceParams* p, float3 position,
+                           float3 geometric_normal, float3 dir, float ray_length, float3 flux,
+                           __global uint4* photons, uint photon_capacity,
+                           volatile __global uint* photon_count,
+                           volatile __global uint* tile_counts, __local uint* lc) {
+    float3 n = dot3(geometric_normal, dir) > 0.0f ? -geometric_normal : geometric_normal;
+    if (dot3(load3g(p->camera.position) - position, n) <= 0.0f) {
+        atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
+        return;
+    }
+    uint px, py;
+    float z;
+    if (!project_to_pixel(&p->camera, position, &px, &py, &z)) {
+        atomic_inc(&lc[COUNTER_OFF_SCREEN]);
+        return;
+    }
+    uint tile = screen_tile(px, py, p->camera.width, p->tile_size);
+    uint4 a, b;
+    if (p->store == GI_STORE_FLOAT) {
+        a = (uint4)(as_uint(position.x), as_uint(position.y), as_uint(position.z),
+                    as_uint(ray_length));
+        b = (uint4)(as_uint(flux.x), as_uint(flux.y), as_uint(flux.z), pack_unit_vector(dir));
+    } else {
+        uint power = pack_rgb9e5(flux / p->power_scale);
+        if ((power & 0x07ffffffu) == 0u) atomic_inc(&lc[COUNTER_UNDERFLOW]);
+        a = (uint4)(as_uint(position.x), as_uint(position.y), as_uint(position.z), power);
+        b = (uint4)(pack_unit_vector(n), pack_unit_vector(dir), as_uint(ray_length), tile);
+    }
+    Photon stored = {{0.0f, 0.0f, 0.0f}, 0.0f, {flux.x, flux.y, flux.z}, 0u};
+    count_stored(&stored, p->flux_quantum, lc);
+    uint slot = atomic_inc(&photon_count[0]);
+    // the host sizes the buffer for every photon a launch can store
+    if (slot < photon_capacity) {
+        photons[2u * slot] = a;
+        photons[2u * slot + 1u] = b;
+    }
+    atomic_inc(&tile_counts[tile]);
+}
+
+inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams* p,
+                                RsmPhoton r, uint index, __global uint4* photons,
+                                uint photon_capacity, volatile __global uint* photon_count,
+                                volatile __global uint* tile_counts, __local uint* lc) {
+    float3 flux = load3(r.flux);
+    if (!(max_element3(flux) > 0.0f)) {
+        atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
+        return 0u;
+    }
+    float3 origin = load3(r.origin);
+    float3 dir = unpack_unit_vector(r.direction);
+    uint bounces = r.bounces;
+    int channel = -1;
+    for (uint segment = 0u; segment < p->max_segments; segment++) {
+        Hit hit;
+        if (!closest_hit(nodes, node_count, vertices, triangles, origin, dir, INFINITY, &hit)) {
+            atomic_inc(&lc[COUNTER_ESCAPED]);
+            return segment + 1u;
+        }
+        SurfacePoint s = hit_surface(vertices, triangles, &hit);
+        __global const GpuMaterial* m = &materials[triangles[hit.triangle].material];
+        bool entering = dot3(dir, s.geometric_normal) < 0.0f;
+        if (m->kind == MATERIAL_DIELECTRIC && !entering)
+            flux *= beer_lambert(load3g(m->absorption), hit.t);
+        float3 facing = facing_normal(s.shading_normal, dir);
+        if (m->kind == MATERIAL_DIFFUSE) {
+            if (bounces >= 1u)
+                store_indirect(p, s.position, s.geometric_normal, dir, hit.t, flux, photons,
+                               photon_capacity, photon_count, tile_counts, lc);
+            if (bounces >= p->max_bounces) {
+                atomic_inc(&lc[COUNTER_BOUNCE_LIMIT]);
+                return segment + 1u;
+            }
+            float4 rr = russian_roulette(flux, load3g(m->color),
+                                         random_f32(p->seed, index, segment, 2u));
+            if (rr.w == 0.0f) {
+                atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
+                return segment + 1u;
+            }
+            flux = rr.xyz;
+            float2 u = (float2)(random_f32(p->seed, index, segment, 0u),
+                                random_f32(p->seed, index, segment, 1u));
+            dir = cosine_hemisphere(u, facing);
+            bounces += 1u;
+        } else if (m->kind == MATERIAL_MIRROR) {
+            flux *= load3g(m->color);
+            dir = normalize3(reflect(dir, facing));
+        } else {
+            float ior = m->ior;
+            if (m->cauchy_b != 0.0f) {
+                if (channel < 0) {
+                    // first dispersive surface: keep one channel, x3
+                    channel = min((int)(random_f32(p->seed, index, segment, 4u) * 3.0f), 2);
+                    float one[3] = {0.0f, 0.0f, 0.0f};
+                    one[channel] = (channel == 0 ? flux.x : channel == 1 ? flux.y : flux.z) * 3.0f;
+                    flux = load3(one);
+                }
+                ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
+            }
+            dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
+                                     random_f32(p->seed, index, segment, 3u), p->fresnel_model);
+        }
+        if (!(max_element3(flux) > 0.0f)) {
+            atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
+            return segment + 1u;
+        }
+        float3 side = dot3(dir, s.geometric_normal) > 0.0f ? s.geometric_normal : -s.geometric_normal;
+        origin = offset_ray_origin(s.position, side);
+    }
+    atomic_inc(&lc[COUNTER_BOUNCE_LIMIT]);
+    return p->max_segments;
+}
+
+__kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p,
+                             __global const RsmPhoton* rsm_photons, __global uint4* photons,
+                             uint photon_capacity, volatile __global uint* photon_count,
+                             volatile __global uint* tile_counts,
+                             volatile __global uint* counters) {
+    __local uint lc[COUNTER_WORDS];
+    counters_clear_local(lc);
+    uint i = get_global_id(0);
+    if (i < p->count) {
+        uint index = p->first + i;
+        uint rays = trace_indirect_path(SCENE_ARGS, p, rsm_photons[index], index, photons,
+                                        photon_capacity, photon_count, tile_counts, lc);
+        atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
+    }
+    counters_flush_local(lc, counters);
+}

@@ -1,0 +1,80 @@
+// needs: types vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi
+// splat_photons (seed 003 section 24.3, Eqs. 2-9): a thread per stored photon adds its
+// ellipsoid splat's irradiance times each covered receiver pixel's area to the photon map
+// in fixed point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_photon) and
+// backend-opencl/kernels/splat_photons.cl.
+
+@group(0) @binding(0) var<uniform> params: SplatParams;
+@group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(5) var<storage, read> photons: array<GiPhoton>;
+@group(0) @binding(6) var<storage, read> photon_count: array<u32>;
+@group(0) @binding(7) var<storage, read> tile_counts: array<u32>;
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> photon_map2: array<atomic<u32>>;
+
+var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
+
+fn splat_photon(p: SplatParams, ph: GiPhoton) {
+    let power = unpack_rgb9e5(ph.power) * p.power_scale;
+    if (!(max_element3(power) > 0.0)) {
+        return;
+    }
+    var px: u32;
+    var py: u32;
+    var z: f32;
+    if (!project_to_pixel(p.camera, ph.position, &px, &py, &z)) {
+        return;
+    }
+    let n = unpack_unit_vector(ph.normal);
+    let to_light = -unpack_unit_vector(ph.direction);
+    let s = ray_length_scale(ph.ray_length, p) *
+            density_scale(z, p.tile_constant, tile_counts[ph.tile], p);
+    let kernel = splat_kernel(n, to_light, s, p);
+    let e = splat_irradiance(power, kernel);
+    let reach = splat_reach_px(p, max_element3(kernel.axes), z);
+    if (reach > p.max_splat_px) {
+        atomicAdd(&lc[COUNTER_SATURATED], 1u);
+    }
+    let r = i32(min(reach, p.max_splat_px));
+    let w = i32(p.camera.width);
+    let h = i32(p.camera.height);
+    for (var qy = max(i32(py) - r, 0); qy <= min(i32(py) + r, h - 1); qy++) {
+        for (var qx = max(i32(px) - r, 0); qx <= min(i32(px) + r, w - 1); qx++) {
+            let q = u32(qy * w + qx);
+            let t = load_gbuffer(q);
+            if ((t.flags & GBUFFER_RECEIVER) == 0u || dot3(t.normal, n) <= 0.0 ||
+                !kernel_contains(kernel, ph.position, t.position)) {
+                continue;
+            }
+            let area = gbuffer_pixel_area(p.camera, q, t);
+            var splat: Photon;
+            splat.position = vec3<f32>(0.0);
+            splat.hit_distance = 0.0;
+            splat.flux = e * area;
+            splat.direction = 0u;
+            deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
+        }
+    }
+}
+
+// `li`: local invocation index; every invocation reaches the counter helpers' barriers.
+fn splat_photons(i: u32, li: u32) {
+    counters_clear_local(li);
+    let p = params;
+    if (i < min(photon_count[0], arrayLength(&photons))) {
+        splat_photon(p, photons[i]);
+    }
+    counters_flush_local(li);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    splat_photons(i, li);
+}

@@ -1,0 +1,164 @@
+// needs: types vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
+// trace_indirect (seed 003 section 24.2.2): photon params.first + i of the RSM photons is
+// traced with Russian roulette at diffuse bounces and stored (culled to the camera's view
+// and facing side, counted per screen tile) at every diffuse hit after its first bounce.
+// Mirror of backend-cpu/src/kernels/photon_gi.rs (trace_indirect_path, store_indirect)
+// and backend-opencl/kernels/trace_indirect.cl: same random dimensions (per segment: 0, 1
+// bounce direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Stored photons are
+// appended in arrival order (an atomic slot counter): the set equals the CPU's.
+// Photons are 32-byte slots, two vec4<u32> each: GiPhoton (params.store 0) or Photon (1).
+
+@group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
+@group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
+@group(0) @binding(2) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(3) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(4) var<storage, read> nodes: array<vec4<u32>>;
+@group(0) @binding(5) var<uniform> params: IndirectTraceParams;
+@group(0) @binding(6) var<storage, read> rsm_photons: array<RsmPhoton>;
+@group(0) @binding(7) var<storage, read_write> photons: array<vec4<u32>>;
+@group(0) @binding(8) var<storage, read_write> photon_count: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> tile_counts: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
+
+// The work-group's counters (fixed_point.wgsl).
+var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
+
+// Stores a photon at a diffuse hit if the camera sees its side and it projects into the
+// view (backend-cpu photon_gi.rs::store_indirect).
+fn store_indirect(p: IndirectTraceParams, position: vec3<f32>, geometric_normal: vec3<f32>,
+                  dir: vec3<f32>, ray_length: f32, flux: vec3<f32>) {
+    let n = select(geometric_normal, -geometric_normal, dot3(geometric_normal, dir) > 0.0);
+    if (dot3(p.camera.position - position, n) <= 0.0) {
+        atomicAdd(&lc[COUNTER_DEPTH_MISMATCH], 1u);
+        return;
+    }
+    var px: u32;
+    var py: u32;
+    var z: f32;
+    if (!project_to_pixel(p.camera, position, &px, &py, &z)) {
+        atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
+        return;
+    }
+    let tile = screen_tile(px, py, p.camera.width, p.tile_size);
+    var a: vec4<u32>;
+    var b: vec4<u32>;
+    if (p.store == GI_STORE_FLOAT) {
+        a = vec4<u32>(bitcast<vec3<u32>>(position), bitcast<u32>(ray_length));
+        b = vec4<u32>(bitcast<vec3<u32>>(flux), pack_unit_vector(dir));
+    } else {
+        let power = pack_rgb9e5(flux / p.power_scale);
+        if ((power & 0x07ffffffu) == 0u) {
+            atomicAdd(&lc[COUNTER_UNDERFLOW], 1u);
+        }
+        a = vec4<u32>(bitcast<vec3<u32>>(position), power);
+        b = vec4<u32>(pack_unit_vector(n), pack_unit_vector(dir), bitcast<u32>(ray_length), tile);
+    }
+    var stored: Photon;
+    stored.position = vec3<f32>(0.0);
+    stored.hit_distance = 0.0;
+    stored.flux = flux;
+    stored.direction = 0u;
+    count_stored(stored, p.flux_quantum);
+    let slot = atomicAdd(&photon_count[0], 1u);
+    // The host sizes the buffer for every photon a launch can store.
+    if (2u * slot + 1u < arrayLength(&photons)) {
+        photons[2u * slot] = a;
+        photons[2u * slot + 1u] = b;
+    }
+    atomicAdd(&tile_counts[tile], 1u);
+}
+
+// One path (backend-cpu photon_gi.rs::trace_indirect_path); returns the segments traced.
+fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 {
+    var flux = r.flux;
+    if (!(max_element3(flux) > 0.0)) {
+        atomicAdd(&lc[COUNTER_NEGLIGIBLE], 1u);
+        return 0u;
+    }
+    var origin = r.origin;
+    var dir = unpack_unit_vector(r.direction);
+    var bounces = r.bounces;
+    var channel = -1;
+    for (var segment = 0u; segment < p.max_segments; segment++) {
+        var hit: Hit;
+        if (!closest_hit(origin, dir, NO_T_MAX, &hit)) {
+            atomicAdd(&lc[COUNTER_ESCAPED], 1u);
+            return segment + 1u;
+        }
+        let s = hit_surface(hit);
+        let m = materials[triangles[hit.triangle].material];
+        let entering = dot3(dir, s.geometric_normal) < 0.0;
+        if (m.kind == MATERIAL_DIELECTRIC && !entering) {
+            flux *= beer_lambert(m.absorption.xyz, hit.t);
+        }
+        let facing = facing_normal(s.shading_normal, dir);
+        if (m.kind == MATERIAL_DIFFUSE) {
+            if (bounces >= 1u) {
+                store_indirect(p, s.position, s.geometric_normal, dir, hit.t, flux);
+            }
+            if (bounces >= p.max_bounces) {
+                atomicAdd(&lc[COUNTER_BOUNCE_LIMIT], 1u);
+                return segment + 1u;
+            }
+            let rr = russian_roulette(flux, m.color.xyz, random_f32(p.seed, index, segment, 2u));
+            if (rr.w == 0.0) {
+                atomicAdd(&lc[COUNTER_NEGLIGIBLE], 1u);
+                return segment + 1u;
+            }
+            flux = rr.xyz;
+            let u = vec2<f32>(random_f32(p.seed, index, segment, 0u),
+                              random_f32(p.seed, index, segment, 1u));
+            dir = cosine_hemisphere(u, facing);
+            bounces += 1u;
+        } else if (m.kind == MATERIAL_MIRROR) {
+            flux *= m.color.xyz;
+            dir = normalize3(reflect(dir, facing));
+        } else {
+            var ior = m.ior;
+            if (m.cauchy_b != 0.0) {
+                if (channel < 0) {
+                    // first dispersive surface: keep one channel, x3
+                    channel = min(i32(random_f32(p.seed, index, segment, 4u) * 3.0), 2);
+                    var one = vec3<f32>(0.0, 0.0, 0.0);
+                    one[channel] = select(select(flux.z, flux.y, channel == 1), flux.x,
+                                          channel == 0) * 3.0;
+                    flux = one;
+                }
+                ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
+            }
+            dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
+                                     random_f32(p.seed, index, segment, 3u), p.fresnel_model);
+        }
+        if (!(max_element3(flux) > 0.0)) {
+            atomicAdd(&lc[COUNTER_NEGLIGIBLE], 1u);
+            return segment + 1u;
+        }
+        let side = select(-s.geometric_normal, s.geometric_normal,
+                          dot3(dir, s.geometric_normal) > 0.0);
+        origin = offset_ray_origin(s.position, side);
+    }
+    atomicAdd(&lc[COUNTER_BOUNCE_LIMIT], 1u);
+    return p.max_segments;
+}
+
+// `li`: local invocation index. Every invocation reaches the counter helpers' barriers.
+fn trace_indirect(i: u32, li: u32) {
+    counters_clear_local(li);
+    let p = params;
+    if (i < p.count) {
+        let index = p.first + i;
+        let rays = trace_indirect_path(p, rsm_photons[index], index);
+        atomic_add_u64_local(COUNTER_RAYS, rays);
+    }
+    counters_flush_local(li);
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    // `lights` is part of the scene bindings but unused here (the RSM photons carry
+    // their light); wgpu derives the bind group layout from the bindings main uses.
+    _ = arrayLength(&lights);
+    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    trace_indirect(i, li);
+}
