@@ -33,7 +33,7 @@ have spirv-dis || echo "compile-shaders: spirv-dis not found, NoContraction not 
 mkdir -p spirv
 manifest=spirv/SOURCES.sha256.tmp
 : > "$manifest"
-for stage in primary_gbuffer.rgen direct_light.rgen trace_photons.rgen caustic_map_lookup.rgen closest_hit.rchit \
+for stage in primary_gbuffer.rgen direct_light.rgen trace_photons.rgen caustic_map_lookup.rgen trace_indirect.rgen closest_hit.rchit \
              miss.rmiss shadow_miss.rmiss reduce_counters.comp; do
     glslc --target-env=vulkan1.2 -O -o "spirv/$stage.spv" "shaders/$stage"
     if have spirv-val; then spirv-val --target-env vulkan1.2 "spirv/$stage.spv"; fi

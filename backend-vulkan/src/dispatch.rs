@@ -16,7 +16,7 @@ use caustica_core::device::launch::{check_buffer, LaunchArg};
 use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{KernelInfo, ShaderBinding, KERNELS};
-use caustica_core::kernels::{PrepareScene, TracePhotons};
+use caustica_core::kernels::{PrepareScene, TraceIndirect, TracePhotons};
 use caustica_core::recording::{RecordedKernel, Recording, Step};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -50,8 +50,8 @@ const RAYGEN_WIDTH: u64 = 8192;
 /// traced kernels as ray-tracing pipelines (GLSL ray generation stage, binding the TLAS at
 /// 0 in place of the CWBVH nodes), the others as compute pipelines from the WGSL through
 /// naga; bindings from each kernel's declaration. Kernels with switches are built per
-/// variant on first use ([`ensure_variants`]). `trace_photons` adds into 64 counter banks
-/// that `reduce_counters` folds into the frame's counters.
+/// variant on first use ([`ensure_variants`]). `trace_photons` and `trace_indirect` add
+/// into 64 counter banks that `reduce_counters` folds into the frame's counters.
 pub fn create_pipelines(ctx: &Arc<Context>) -> Result<HashMap<String, Pipeline>, BackendError> {
     let mut p = HashMap::new();
     for info in KERNELS {
@@ -413,6 +413,7 @@ fn record_kernel(
     }
     let counters = match k.kernel() {
         Kernel::TracePhotons(TracePhotons { counters, .. }) => Some(counters.id),
+        Kernel::TraceIndirect(TraceIndirect { counters, .. }) => Some(counters.id),
         _ => None,
     };
     let mut descs = Vec::new();

@@ -18,6 +18,7 @@ pub mod spirv {
     pub const DIRECT_LIGHT: &[u8] = include_bytes!("../spirv/direct_light.rgen.spv");
     pub const TRACE_PHOTONS: &[u8] = include_bytes!("../spirv/trace_photons.rgen.spv");
     pub const CAUSTIC_MAP_LOOKUP: &[u8] = include_bytes!("../spirv/caustic_map_lookup.rgen.spv");
+    pub const TRACE_INDIRECT: &[u8] = include_bytes!("../spirv/trace_indirect.rgen.spv");
     pub const CLOSEST_HIT: &[u8] = include_bytes!("../spirv/closest_hit.rchit.spv");
     pub const MISS: &[u8] = include_bytes!("../spirv/miss.rmiss.spv");
     pub const SHADOW_MISS: &[u8] = include_bytes!("../spirv/shadow_miss.rmiss.spv");
@@ -30,6 +31,7 @@ pub mod spirv {
             "direct_light" => Some(DIRECT_LIGHT),
             "trace_photons" => Some(TRACE_PHOTONS),
             "caustic_map_lookup" => Some(CAUSTIC_MAP_LOOKUP),
+            "trace_indirect" => Some(TRACE_INDIRECT),
             _ => None,
         }
     }

@@ -129,12 +129,43 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
     ),
     // outputs and inputs
     ("trace_photons.rgen", 6, Holds::Elements, "Photon"),
+    ("trace_indirect.rgen", 1, Holds::Elements, "GpuVertex"),
+    ("trace_indirect.rgen", 2, Holds::Elements, "GpuTriangle"),
+    ("trace_indirect.rgen", 3, Holds::Elements, "GpuMaterial"),
+    (
+        "trace_indirect.rgen",
+        5,
+        Holds::Member,
+        "IndirectTraceParams",
+    ),
+    ("trace_indirect.rgen", 6, Holds::Elements, "RsmPhoton"),
 ];
 
 /// Structs of types.glsl that no stage binds, with the reason. They appear in no SPIR-V
 /// (glslang emits no type for an unused declaration), so nothing here can check them;
 /// the test fails if one gets bound somewhere without a [`BOUND`] row.
 const NOT_BOUND: &[(&str, &str)] = &[
+    (
+        "RsmTexel",
+        "rsm_importance and sample_rsm run on Vulkan as compute pipelines from \
+         caustica-shaders' WGSL, whose layouts that crate's tests check",
+    ),
+    (
+        "RsmParams",
+        "rsm_importance and sample_rsm run on Vulkan as compute pipelines from \
+         caustica-shaders' WGSL, whose layouts that crate's tests check",
+    ),
+    (
+        "GiPhoton",
+        "trace_indirect.rgen writes photons as uvec4 pairs (GiPhoton or Photon by the \
+         store setting); splat_photons runs on Vulkan from caustica-shaders' WGSL, whose \
+         layouts that crate's tests check",
+    ),
+    (
+        "SplatParams",
+        "splat_photons runs on Vulkan as a compute pipeline from caustica-shaders' WGSL, \
+         whose layouts that crate's tests check",
+    ),
     (
         "AtrousParams",
         "atrous_filter runs on Vulkan as a compute pipeline from caustica-shaders' WGSL, \

@@ -140,6 +140,34 @@ const uint NO_TILE = 0xffffffffu;
 const uint GBUFFER_RECEIVER = 1u;
 const uint NO_MATERIAL = 0xffffffffu;
 // core::gpu::counter word offsets
+// PhotonGi (seed 003): core::device::layout::{RsmTexel, RsmPhoton, RsmParams, GiPhoton,
+// IndirectTraceParams, SplatParams} (trace_indirect.rgen binds RsmPhoton and
+// IndirectTraceParams; the others belong to compute kernels, which Vulkan runs from WGSL).
+struct RsmTexel { vec3 position; uint normal; vec3 flux; uint kind; };
+struct RsmParams {
+    GpuCamera face_camera;
+    uint light; uint face; uint side; uint level;
+    uint face_count; uint first_sample; uint sample_count; uint seed;
+};
+struct GiPhoton {
+    vec3 position; uint power; uint normal; uint direction; float ray_length; uint tile;
+};
+struct SplatParams {
+    GpuCamera camera;
+    uint tile_size; float power_scale; float flux_quantum; uint max_splat_px;
+    float max_ray_length; float min_length_scale; float density_radius_min; float density_radius_max;
+    float photons_per_pixel; float normal_compression; float max_stretch; float tile_constant;
+};
+struct RsmPhoton { vec3 origin; uint direction; vec3 flux; uint bounces; };
+struct IndirectTraceParams {
+    GpuCamera camera;
+    uint first; uint count; uint seed; uint max_bounces;
+    uint max_segments; uint tile_size; uint store; uint fresnel_model;
+    float power_scale; float flux_quantum; uint _pad0; uint _pad1;
+};
+const uint GI_STORE_PACKED = 0u; // core::math::gi_photon::gi_store
+const uint GI_STORE_FLOAT = 1u;
+
 const uint COUNTER_STORED = 0u;
 const uint COUNTER_NO_SPECULAR = 1u;
 const uint COUNTER_ESCAPED = 2u;

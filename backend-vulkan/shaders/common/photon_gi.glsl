@@ -1,0 +1,55 @@
+// Mirror of the parts of core::math::{rsm, gi_photon} and packing's rgb9e5 that
+// trace_indirect.rgen needs (PhotonGi, seed 003), same names as the Rust, WGSL
+// (shaders/wgsl/common/photon_gi.wgsl) and OpenCL C (kernels/common/photon_gi.cl).
+
+// rsm::cosine_hemisphere (Malley).
+precise vec3 cosine_hemisphere(vec2 u, vec3 n) {
+    float r = sqrt(u.x);
+    float phi = TAU_F * u.y;
+    float z = sqrt(max(1.0 - u.x, 0.0));
+    return to_world(vec3(r * cos(phi), r * sin(phi), z), n);
+}
+
+// rsm::russian_roulette: w = 1 survives with flux xyz, 0 absorbed.
+precise vec4 russian_roulette(vec3 flux, vec3 albedo, float xi) {
+    vec3 reflected = flux * albedo;
+    float m = max_element3(flux);
+    if (!(m > 0.0)) return vec4(0.0);
+    float q = clampf(max_element3(reflected) / m, 0.0, 1.0);
+    if (xi < q) return vec4(reflected / q, 1.0);
+    return vec4(0.0);
+}
+
+// gi_photon::screen_tile.
+uint screen_tile(uint x, uint y, uint width, uint tile_size) {
+    uint t = max(tile_size, 1u);
+    uint tiles_x = (width + t - 1u) / t;
+    return (y / t) * tiles_x + x / t;
+}
+
+// packing::pow2: 2^k from its bits.
+float pow2(int k) { return uintBitsToFloat(uint(k + 127) << 23); }
+
+// packing::pack_rgb9e5 (exact arithmetic only).
+uint pack_rgb9e5(vec3 rgb) {
+    precise float r = is_nan(rgb.x) ? 0.0 : clampf(rgb.x, 0.0, 65408.0);
+    precise float g = is_nan(rgb.y) ? 0.0 : clampf(rgb.y, 0.0, 65408.0);
+    precise float b = is_nan(rgb.z) ? 0.0 : clampf(rgb.z, 0.0, 65408.0);
+    precise float max_c = max(max(r, g), b);
+    if (max_c == 0.0) return 0u;
+    int e = int((floatBitsToUint(max_c) >> 23) & 0xffu) - 127;
+    int exp_shared = max(e, -16) + 1 + 15;
+    precise float scale = pow2(9 + 15 - exp_shared);
+    precise float top = floor(max_c * scale + 0.5);
+    if (uint(top) == 512u) {
+        exp_shared += 1;
+        scale = scale * 0.5;
+    }
+    precise float fr = floor(r * scale + 0.5);
+    precise float fg = floor(g * scale + 0.5);
+    precise float fb = floor(b * scale + 0.5);
+    uint qr = min(uint(fr), 511u);
+    uint qg = min(uint(fg), 511u);
+    uint qb = min(uint(fb), 511u);
+    return qr | (qg << 9) | (qb << 18) | (uint(exp_shared) << 27);
+}
