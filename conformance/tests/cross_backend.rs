@@ -16,7 +16,8 @@ use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
     check_density_gather, check_deposit, check_direct, check_gather, check_gbuffer,
-    check_kernel_cases, check_screen_target, check_temporal_blend, check_trace, KernelCheck,
+    check_kernel_cases, check_photon_gi, check_screen_target, check_temporal_blend, check_trace,
+    KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -104,6 +105,14 @@ fn adaptive_caustics_kernels_match_cpu_on_the_same_inputs() {
 #[test]
 fn adaptive_caustics_screen_target_matches_cpu_on_the_same_inputs() {
     kernel_test("adaptive caustics screen target", &check_screen_target);
+}
+
+/// PhotonGi's kernels (`rsm_importance`, `sample_rsm`, `trace_indirect`,
+/// `splat_photons`) on the same inputs for every point and spot light (tolerances argued
+/// in `kernels::photon_gi`).
+#[test]
+fn photon_gi_kernels_match_cpu_on_the_same_inputs() {
+    kernel_test("photon gi kernels", &check_photon_gi);
 }
 
 /// The temporal blend on the same inputs, a moved previous camera: within the tolerance of

@@ -20,23 +20,26 @@ use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
     check_density_gather, check_deposit, check_direct, check_gather, check_gbuffer,
-    check_kernel_cases, check_screen_target, check_temporal_blend, check_trace, KernelCheck,
+    check_kernel_cases, check_photon_gi, check_screen_target, check_temporal_blend, check_trace,
+    KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
 use caustica_core::backend::{read_gbuffer, Backend, BackendError, Capabilities, PassTime};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::layout::{
-    cluster_count, counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GpuCamera,
-    GpuVertex, Photon, DEPOSIT_PLANE_WORDS, NO_MATERIAL,
+    cluster_count, counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GiPhoton,
+    GpuCamera, GpuVertex, Photon, RsmPhoton, RsmTexel, DEPOSIT_PLANE_WORDS, NO_MATERIAL,
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
     DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, TemporalBlend, TileHitDistance, TracePhotons,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm, SplatPhotons,
+    TemporalBlend, TileHitDistance, TraceIndirect, TracePhotons,
 };
 use caustica_core::math::fixed_point::{join_u64, quantize};
+use caustica_core::math::packing::{pack_rgb9e5, unpack_rgb9e5};
 use caustica_core::math::photon_clusters::entry_cluster;
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::{Recording, Step};
@@ -97,6 +100,16 @@ enum Mutation {
     TemporalHigh,
     /// `atrous_filter`'s output 1% too high.
     AtrousHigh,
+    /// `rsm_importance` level 0's texel fluxes 1e-4 too high.
+    RsmFluxHigh,
+    /// `sample_rsm`'s photon fluxes 1e-4 too high.
+    SampleFluxHigh,
+    /// `trace_indirect`'s stored photon powers 2% too high.
+    IndirectPowerHigh,
+    /// `splat_photons`' red flux 0.1% low in every splatted texel (an off-by-one quantum
+    /// is below the check's rounding allowance: each splat's `E x area` is a float that
+    /// backends round a few ulps apart before it becomes quanta).
+    SplatLow,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -403,6 +416,41 @@ impl Mutant {
                     v[0] -= 1;
                 }
             }),
+            (
+                Mutation::RsmFluxHigh,
+                Kernel::RsmImportance(RsmImportance { params, texels, .. }),
+            ) if params.level == 0 => self.modify::<RsmTexel>(texels.id, |v| {
+                for t in v {
+                    for c in &mut t.flux {
+                        *c *= 1.0 + 1e-4;
+                    }
+                }
+            }),
+            (Mutation::SampleFluxHigh, Kernel::SampleRsm(SampleRsm { photons, .. })) => {
+                self.modify::<RsmPhoton>(photons.id, |v| {
+                    for p in v {
+                        for c in &mut p.flux {
+                            *c *= 1.0 + 1e-4;
+                        }
+                    }
+                })
+            }
+            (Mutation::IndirectPowerHigh, Kernel::TraceIndirect(TraceIndirect { photons, .. })) => {
+                self.modify::<GiPhoton>(photons.id, |v| {
+                    for p in v {
+                        p.power = pack_rgb9e5(unpack_rgb9e5(p.power) * 1.02);
+                    }
+                })
+            }
+            (Mutation::SplatLow, Kernel::SplatPhotons(SplatPhotons { photon_map, .. })) => {
+                // word 0 (red flux, lo) of every texel, on its plane
+                let (k, _) = deposit_word(0, 0);
+                self.modify::<u32>(photon_map.planes[k].id, |m| {
+                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 1000) {
+                        t[0] -= t[0] / 1000;
+                    }
+                })
+            }
             (Mutation::AtrousHigh, Kernel::AtrousFilter(AtrousFilter { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-2))
             }
@@ -485,6 +533,7 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
             Box::new(check_density_gather),
         ),
         ("direct_light", Box::new(check_direct)),
+        ("photon gi kernels", Box::new(check_photon_gi)),
         ("composite", Box::new(|_, i, r, c| check_composite(i, r, c))),
         (
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
@@ -624,6 +673,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
         ),
         (Mutation::TemporalHigh, "temporal_blend"),
         (Mutation::AtrousHigh, "atrous_filter"),
+        (Mutation::RsmFluxHigh, "photon gi kernels"),
+        (Mutation::SampleFluxHigh, "photon gi kernels"),
+        (Mutation::IndirectPowerHigh, "photon gi kernels"),
+        (Mutation::SplatLow, "photon gi kernels"),
     ] {
         let mut report = Report::new(kernel);
         let mut cand = Mutant::candidate(mutation);
