@@ -5,8 +5,8 @@ __kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
     uint i = get_global_id(0);
     if (i >= cam->width * cam->height) return;
     uint px = i % cam->width, py = i / cam->width;
-    float3 dir = camera_ray(cam, px, py);
-    float3 origin = load3g(cam->position);
+    float3 origin;
+    float3 dir = primary_ray(cam, px, py, &origin);
     GBufferTexel g;
     for (int k = 0; k < 16; k++) ((float*)&g)[k] = 0.0f;
     Hit hit;

@@ -22,8 +22,12 @@ __kernel void rsm_importance(__global const RsmParams* p, __global const GpuLigh
                 falloff = spot_falloff(dot3(dir, load3g(light->direction)), light->cos_inner,
                                        light->cos_outer);
             }
-            float3 arriving = texel_arriving_flux(load3g(light->intensity), falloff, x, y,
-                                                  p->side, p->face_camera.tan_half_fov_x);
+            float3 arriving =
+                light->kind == LIGHT_DIRECTIONAL
+                    ? ortho_texel_flux(load3g(light->intensity), p->side,
+                                       -p->face_camera.tan_half_fov_x)
+                    : texel_arriving_flux(load3g(light->intensity), falloff, x, y, p->side,
+                                          p->face_camera.tan_half_fov_x);
             float3 albedo = load3(g.albedo);
             float imp = luminance(arriving * albedo);
             if (imp > 0.0f && isfinite(imp)) {

@@ -75,7 +75,11 @@ __kernel void sample_rsm(__global const RsmParams* p, __global const GpuLight* l
             store3(out.flux, flux);
             out.bounces = 1u;
         } else if (t.kind == RSM_TEXEL_SPECULAR) {
-            float3 origin = load3g(lights[p->light].position);
+            __global const GpuLight* light = &lights[p->light];
+            float3 origin = light->kind == LIGHT_DIRECTIONAL
+                                ? ortho_origin(load3(t.position), load3g(p->face_camera.position),
+                                               load3g(p->face_camera.forward))
+                                : load3g(light->position);
             store3(out.origin, origin);
             out.direction = pack_unit_vector(normalize3(load3(t.position) - origin));
             store3(out.flux, flux);

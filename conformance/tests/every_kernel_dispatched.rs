@@ -84,6 +84,22 @@ fn every_backend_dispatches_every_declared_kernel() {
             "{name}: the adaptive traversal deposited no photon"
         );
         passes.extend(stats.passes);
+        // PhotonGi: the RSM, the warp, the roulette trace and the splat
+        let gi = caustica_core::techniques::photon_gi::PhotonGiSettings {
+            photons_w: 64,
+            photons_h: 64,
+            rsm_size: 16,
+            ..Default::default()
+        };
+        let mut t = caustica_core::techniques::photon_gi::PhotonGi::new(b.as_mut(), &scene, gi)
+            .expect("valid scene");
+        let stats = t.frame(b.as_mut(), &mut |_| {}).expect("frame");
+        t.free(b.as_mut()).expect("free");
+        assert!(
+            stats.photons_deposited > 0,
+            "{name}: photon-gi splatted no photon"
+        );
+        passes.extend(stats.passes);
         for k in KERNELS.iter().filter(|k| k.name != "prepare_scene") {
             let pass = passes.iter().find(|p| p.name == k.name);
             assert!(

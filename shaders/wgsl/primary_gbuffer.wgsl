@@ -29,8 +29,8 @@ fn primary_gbuffer(i: u32) {
     }
     let px = i % cam.width;
     let py = i / cam.width;
-    let dir = camera_ray(cam, px, py);
-    let origin = cam.position;
+    var origin: vec3<f32>;
+    let dir = primary_ray(cam, px, py, &origin);
     var g: GBufferTexel; // zero-initialised, as the OpenCL loop clears it
     var hit: Hit;
     if (!closest_hit(origin, dir, NO_T_MAX, &hit)) {

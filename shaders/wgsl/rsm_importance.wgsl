@@ -33,8 +33,13 @@ fn rsm_texel(i: u32) {
             falloff = spot_falloff(dot3(dir, light.direction.xyz), light.cos_inner,
                                    light.cos_outer);
         }
-        let arriving = texel_arriving_flux(light.intensity.xyz, falloff, x, y, p.side,
+        var arriving: vec3<f32>;
+        if (light.kind == LIGHT_DIRECTIONAL) {
+            arriving = ortho_texel_flux(light.intensity.xyz, p.side, -p.face_camera.tan_half_fov_x);
+        } else {
+            arriving = texel_arriving_flux(light.intensity.xyz, falloff, x, y, p.side,
                                            p.face_camera.tan_half_fov_x);
+        }
         let imp = luminance(arriving * g.albedo);
         if (imp > 0.0 && is_finite_f32(imp)) {
             let diffuse = (g.flags & GBUFFER_RECEIVER) != 0u;

@@ -93,7 +93,11 @@ fn sample_rsm(i: u32) {
             out.flux = flux;
             out.bounces = 1u;
         } else if (t.kind == RSM_TEXEL_SPECULAR) {
-            let origin = lights[p.light].position.xyz;
+            let light = lights[p.light];
+            var origin = light.position.xyz;
+            if (light.kind == LIGHT_DIRECTIONAL) {
+                origin = ortho_origin(t.position, p.face_camera.position, p.face_camera.forward);
+            }
             out.origin = origin;
             out.direction = pack_unit_vector(normalize3(t.position - origin));
             out.flux = flux;

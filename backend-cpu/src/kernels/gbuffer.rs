@@ -5,7 +5,7 @@
 
 use crate::traversal::SceneView;
 use caustica_core::device::layout::{
-    camera_ray, gbuffer_flags, material_kind, GBufferTexel, GpuCamera, NO_MATERIAL,
+    gbuffer_flags, material_kind, primary_ray, GBufferTexel, GpuCamera, NO_MATERIAL,
 };
 use glam::Vec3;
 use rayon::prelude::*;
@@ -20,8 +20,7 @@ pub fn primary_gbuffer(scene: &SceneView, cam: &GpuCamera) -> Vec<GBufferTexel> 
 }
 
 fn gbuffer_texel(scene: &SceneView, cam: &GpuCamera, px: u32, py: u32) -> GBufferTexel {
-    let dir = camera_ray(cam, px, py);
-    let origin = Vec3::from(cam.position);
+    let (origin, dir) = primary_ray(cam, px, py);
     let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
         return GBufferTexel {
             material: NO_MATERIAL,

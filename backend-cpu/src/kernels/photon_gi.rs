@@ -24,8 +24,8 @@ use caustica_core::math::photon_splat::{
 };
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{
-    cosine_hemisphere, hammersley, level_offset, luminance, pyramid_len, pyramid_sum,
-    rsm_texel_kind, russian_roulette, texel_arriving_flux, warp_rsm,
+    cosine_hemisphere, hammersley, level_offset, luminance, ortho_origin, ortho_texel_flux,
+    pyramid_len, pyramid_sum, rsm_texel_kind, russian_roulette, texel_arriving_flux, warp_rsm,
 };
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -53,14 +53,22 @@ pub fn rsm_texel(
     } else {
         1.0
     };
-    let arriving = texel_arriving_flux(
-        Vec3::from_slice(&light.intensity[..3]),
-        falloff,
-        x,
-        y,
-        p.side,
-        p.face_camera.tan_half_fov_x,
-    );
+    let arriving = if light.kind == light_kind::DIRECTIONAL {
+        ortho_texel_flux(
+            Vec3::from_slice(&light.intensity[..3]),
+            p.side,
+            -p.face_camera.tan_half_fov_x,
+        )
+    } else {
+        texel_arriving_flux(
+            Vec3::from_slice(&light.intensity[..3]),
+            falloff,
+            x,
+            y,
+            p.side,
+            p.face_camera.tan_half_fov_x,
+        )
+    };
     let albedo = Vec3::from(g.albedo);
     let importance = luminance(arriving * albedo);
     if !(importance > 0.0) || !importance.is_finite() {
@@ -150,7 +158,15 @@ pub fn rsm_photon(
             bounces: 1,
         }
     } else if t.kind == rsm_texel_kind::SPECULAR {
-        let origin = Vec3::from_slice(&light.position[..3]);
+        let origin = if light.kind == light_kind::DIRECTIONAL {
+            ortho_origin(
+                Vec3::from(t.position),
+                Vec3::from(p.face_camera.position),
+                Vec3::from(p.face_camera.forward),
+            )
+        } else {
+            Vec3::from_slice(&light.position[..3])
+        };
         RsmPhoton {
             origin: origin.to_array(),
             direction: pack_unit_vector((Vec3::from(t.position) - origin).normalize()),

@@ -29,6 +29,17 @@ inline float3 texel_arriving_flux(float3 intensity, float falloff, uint ix, uint
     return intensity * (falloff * (centre * w));
 }
 
+// rsm::ortho_texel_flux: irradiance x the orthographic texel's area.
+inline float3 ortho_texel_flux(float3 irradiance, uint side, float half_extent) {
+    float edge = 2.0f * half_extent / (float)side;
+    return irradiance * (edge * edge);
+}
+
+// rsm::ortho_origin: p projected onto the orthographic face's plane.
+inline float3 ortho_origin(float3 p, float3 plane_point, float3 forward) {
+    return p - forward * dot3(p - plane_point, forward);
+}
+
 // rsm::radical_inverse2 (bit reversal by swaps).
 inline float radical_inverse2(uint i) {
     uint b = i;

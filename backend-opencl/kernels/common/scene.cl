@@ -13,6 +13,20 @@ inline float3 camera_ray(__global const GpuCamera* cam, uint px, uint py) {
     return normalize3(load3g(cam->forward) + sx * load3g(cam->right) + sy * load3g(cam->up));
 }
 
+// core::device::layout::primary_ray: the pixel's ray origin and direction; an
+// orthographic camera (tan_half_fov_x < 0) shoots along forward from the pixel's point of
+// the image plane.
+inline float3 primary_ray(__global const GpuCamera* cam, uint px, uint py, float3* origin) {
+    if (cam->tan_half_fov_x < 0.0f) {
+        float sx = (2.0f * ((float)px + 0.5f) / (float)cam->width - 1.0f) * -cam->tan_half_fov_x;
+        float sy = (1.0f - 2.0f * ((float)py + 0.5f) / (float)cam->height) * -cam->tan_half_fov_y;
+        *origin = load3g(cam->position) + sx * load3g(cam->right) + sy * load3g(cam->up);
+        return load3g(cam->forward);
+    }
+    *origin = load3g(cam->position);
+    return camera_ray(cam, px, py);
+}
+
 // Pixel containing world point `p` and its view depth; false behind the camera or off
 // screen.
 inline bool project_to_pixel(__global const GpuCamera* cam, float3 p, uint* px, uint* py,

@@ -15,6 +15,22 @@ precise vec3 camera_ray(GpuCamera cam, uint px, uint py) {
     return normalize3(d);
 }
 
+// core::device::layout::primary_ray: the pixel's ray origin and direction; an
+// orthographic camera (tan_half_fov_x < 0) shoots along forward from the pixel's point of
+// the image plane.
+precise vec3 primary_ray(GpuCamera cam, uint px, uint py, precise out vec3 origin) {
+    if (cam.tan_half_fov_x < 0.0) {
+        precise float hx = -cam.tan_half_fov_x;
+        precise float hy = -cam.tan_half_fov_y;
+        precise float sx = (2.0 * (float(px) + 0.5) / float(cam.width) - 1.0) * hx;
+        precise float sy = (1.0 - 2.0 * (float(py) + 0.5) / float(cam.height)) * hy;
+        origin = cam.position + sx * cam.right + sy * cam.up;
+        return cam.forward;
+    }
+    origin = cam.position;
+    return camera_ray(cam, px, py);
+}
+
 // Pixel containing world point `p` and its view depth; false behind the camera or off
 // screen.
 bool project_to_pixel(GpuCamera cam, vec3 p, out uint px, out uint py, precise out float depth) {

@@ -11,7 +11,7 @@ use crate::harness::tolerance::{
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
-use caustica_core::device::layout::{camera_ray, GBufferTexel, GpuCamera, NO_MATERIAL};
+use caustica_core::device::layout::{primary_ray, GBufferTexel, GpuCamera, NO_MATERIAL};
 
 /// Texel-by-texel comparison of two G-buffers of camera `cam` (reference first); also
 /// returns which pixels agree (material equal and geometry within tolerance).
@@ -60,7 +60,7 @@ pub fn compare_gbuffers(
             }
             continue;
         }
-        let ray = camera_ray(cam, x, y);
+        let ray = primary_ray(cam, x, y).1;
         let cos = ray.dot(v3(a.normal)).abs().max(GBUFFER_MIN_COS);
         let tol =
             GBUFFER_POSITION_REL * (a.view_distance / cos + v3(a.position).abs().max_element());

@@ -850,6 +850,29 @@ pub mod counter {
 }
 
 impl GpuCamera {
+    /// An orthographic camera (see [`primary_ray`]): the image plane centred on
+    /// `position`, `half_x` by `half_y` scene units each side, looking along `forward`
+    /// (unit; `right`, `up` unit and orthogonal to it).
+    pub fn orthographic(
+        position: Vec3,
+        forward: Vec3,
+        right: Vec3,
+        up: Vec3,
+        half: (f32, f32),
+        size: (u32, u32),
+    ) -> GpuCamera {
+        GpuCamera {
+            position: position.to_array(),
+            tan_half_fov_x: -half.0,
+            forward: forward.to_array(),
+            tan_half_fov_y: -half.1,
+            right: right.to_array(),
+            width: size.0,
+            up: up.to_array(),
+            height: size.1,
+        }
+    }
+
     /// Builds the camera frame from a scene camera.
     pub fn from_camera(c: &crate::scene::Camera) -> GpuCamera {
         let forward = (c.target - c.position).normalize();
@@ -875,6 +898,24 @@ pub fn camera_ray(cam: &GpuCamera, px: u32, py: u32) -> Vec3 {
     let sx = (2.0 * (px as f32 + 0.5) / cam.width as f32 - 1.0) * cam.tan_half_fov_x;
     let sy = (1.0 - 2.0 * (py as f32 + 0.5) / cam.height as f32) * cam.tan_half_fov_y;
     (Vec3::from(cam.forward) + sx * Vec3::from(cam.right) + sy * Vec3::from(cam.up)).normalize()
+}
+
+/// The primary ray of pixel (`px`, `py`) as (origin, unit direction): from the eye
+/// through the pixel, or, for an orthographic camera ([`GpuCamera::orthographic`]:
+/// `tan_half_fov_x < 0`), along `forward` from the pixel's point of the image plane
+/// (`position` at its centre, half-extents `-tan_half_fov_x`, `-tan_half_fov_y` in scene
+/// units). PhotonGi's RSM of a directional light is the only orthographic camera.
+#[inline]
+pub fn primary_ray(cam: &GpuCamera, px: u32, py: u32) -> (Vec3, Vec3) {
+    if cam.tan_half_fov_x < 0.0 {
+        let sx = (2.0 * (px as f32 + 0.5) / cam.width as f32 - 1.0) * -cam.tan_half_fov_x;
+        let sy = (1.0 - 2.0 * (py as f32 + 0.5) / cam.height as f32) * -cam.tan_half_fov_y;
+        let origin =
+            Vec3::from(cam.position) + sx * Vec3::from(cam.right) + sy * Vec3::from(cam.up);
+        (origin, Vec3::from(cam.forward))
+    } else {
+        (Vec3::from(cam.position), camera_ray(cam, px, py))
+    }
 }
 
 /// Projects world point `p` to the pixel that contains it; returns (px, py, view depth)

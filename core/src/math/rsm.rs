@@ -7,10 +7,12 @@
 //!
 //! Parameterisation (the issue leaves it open; stated here): a point light gets six
 //! 90-degree faces (a cube around it), a spot light one face whose half field of view is
-//! its outer cone angle when that is below 60 degrees, else the cube's faces. Directional
-//! lights have no pinhole; PhotonGi refuses them (see the technique). A texel's flux:
-//! `I x falloff x dw`, `dw` the texel's solid angle (`view_plane_texel_weight` times the
-//! centre texel's `(2 tan_x / side) (2 tan_y / side)`), W per channel.
+//! its outer cone angle when that is below 60 degrees, else the cube's faces; a
+//! directional light one orthographic face over the scene's bounding sphere
+//! (`GpuCamera::orthographic`). A texel's flux: `I x falloff x dw`, `dw` the texel's solid
+//! angle (`view_plane_texel_weight` times the centre texel's `(2 tan_x / side) (2 tan_y /
+//! side)`), or for the orthographic face `E x` the texel's area ([`ortho_texel_flux`]), W
+//! per channel.
 //!
 //! Flat pyramid layout of one face of side `R` (a power of two): level `k` holds
 //! `(R >> k)^2` sums, row-major, starting at [`level_offset`]`(R, k)`; a face takes
@@ -90,6 +92,23 @@ pub fn texel_arriving_flux(
         tan_half_fov,
     );
     intensity * (falloff * (centre * w))
+}
+
+/// The flux arriving through a texel of a directional light's orthographic face (W per
+/// channel): irradiance (W/m^2, on a plane facing the light) times the texel's area,
+/// `(2 half / side)^2` for a face `2 half` scene units wide.
+#[inline]
+pub fn ortho_texel_flux(irradiance: Vec3, side: u32, half: f32) -> Vec3 {
+    let edge = 2.0 * half / side as f32;
+    irradiance * (edge * edge)
+}
+
+/// Origin of a photon on its way from a directional light to world point `p`: `p`
+/// projected onto the orthographic face's plane (the plane through `plane_point`
+/// orthogonal to the unit `forward`).
+#[inline]
+pub fn ortho_origin(p: Vec3, plane_point: Vec3, forward: Vec3) -> Vec3 {
+    p - forward * (p - plane_point).dot(forward)
 }
 
 /// Radical inverse of `i` in base 2 (van der Corput), in `[0, 1)`.

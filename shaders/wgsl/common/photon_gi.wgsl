@@ -35,6 +35,17 @@ fn texel_arriving_flux(intensity: vec3<f32>, falloff: f32, ix: u32, iy: u32, sid
     return intensity * (falloff * (centre * w));
 }
 
+// rsm::ortho_texel_flux: irradiance x the orthographic texel's area.
+fn ortho_texel_flux(irradiance: vec3<f32>, side: u32, half: f32) -> vec3<f32> {
+    let edge = 2.0 * half / f32(side);
+    return irradiance * (edge * edge);
+}
+
+// rsm::ortho_origin: p projected onto the orthographic face's plane.
+fn ortho_origin(p: vec3<f32>, plane_point: vec3<f32>, forward: vec3<f32>) -> vec3<f32> {
+    return p - forward * dot3(p - plane_point, forward);
+}
+
 // rsm::radical_inverse2.
 fn radical_inverse2(i: u32) -> f32 {
     return f32(reverseBits(i) >> 8u) * (1.0 / 16777216.0);

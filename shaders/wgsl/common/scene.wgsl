@@ -10,6 +10,20 @@ fn camera_ray(cam: GpuCamera, px: u32, py: u32) -> vec3<f32> {
     return normalize3(cam.forward + sx * cam.right + sy * cam.up);
 }
 
+// core::device::layout::primary_ray: the pixel's ray origin (written to `origin`) and
+// direction; an orthographic camera (tan_half_fov_x < 0) shoots along forward from the
+// pixel's point of the image plane.
+fn primary_ray(cam: GpuCamera, px: u32, py: u32, origin: ptr<function, vec3<f32>>) -> vec3<f32> {
+    if (cam.tan_half_fov_x < 0.0) {
+        let sx = (2.0 * (f32(px) + 0.5) / f32(cam.width) - 1.0) * -cam.tan_half_fov_x;
+        let sy = (1.0 - 2.0 * (f32(py) + 0.5) / f32(cam.height)) * -cam.tan_half_fov_y;
+        *origin = cam.position + sx * cam.right + sy * cam.up;
+        return cam.forward;
+    }
+    *origin = cam.position;
+    return camera_ray(cam, px, py);
+}
+
 // Pixel containing world point `p` and its view depth; false behind the camera or off
 // screen.
 fn project_to_pixel(cam: GpuCamera, p: vec3<f32>, px: ptr<function, u32>,

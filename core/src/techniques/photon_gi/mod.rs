@@ -12,10 +12,8 @@
 //!    times albedo / pi: the raw indirect light), `temporal_blend` and `atrous_filter`
 //!    (24.4, each a setting), `composite` with the direct light.
 //!
-//! Not built yet (issue 18): the shading-normal correction of Eq. 20, a directional
-//! light's orthographic RSM (PhotonGi refuses directional lights), Vulkan's
-//! `trace_indirect` (its ray-tracing stage), light, material and image-size updates
-//! without re-creating the technique.
+//! Not built yet (issue 18): the shading-normal correction of Eq. 20; light, material and
+//! image-size updates without re-creating the technique.
 
 mod settings;
 
@@ -70,9 +68,13 @@ pub struct LightRsm {
 }
 
 /// The faces of a light's RSM (see `crate::math::rsm`): six 90-degree faces around a
-/// point light, one face over a spot's outer cone below 60 degrees (six above);
-/// directional lights have none.
-pub fn rsm_faces(light: &GpuLight, side: u32) -> Vec<GpuCamera> {
+/// point light, one face over a spot's outer cone below 60 degrees (six above), one
+/// orthographic face over the bounding sphere of `bounds` for a directional light.
+pub fn rsm_faces(
+    light: &GpuLight,
+    side: u32,
+    bounds: &crate::math::geometry::Aabb,
+) -> Vec<GpuCamera> {
     let pos = Vec3::from_slice(&light.position[..3]);
     let face = |forward: Vec3, up_hint: Vec3, tan: f32| {
         let right = forward.cross(up_hint).normalize();
@@ -114,7 +116,26 @@ pub fn rsm_faces(light: &GpuLight, side: u32) -> Vec<GpuCamera> {
                 cube()
             }
         }
-        _ => Vec::new(),
+        _ => {
+            let forward = Vec3::from_slice(&light.direction[..3]).normalize();
+            let hint = if forward.y.abs() < 0.9 {
+                Vec3::Y
+            } else {
+                Vec3::X
+            };
+            let right = forward.cross(hint).normalize();
+            let up = right.cross(forward);
+            let centre = 0.5 * (bounds.min + bounds.max);
+            let radius = (0.5 * (bounds.max - bounds.min).length()).max(f32::MIN_POSITIVE);
+            vec![GpuCamera::orthographic(
+                centre - 2.0 * radius * forward,
+                forward,
+                right,
+                up,
+                (radius, radius),
+                (side, side),
+            )]
+        }
     }
 }
 
@@ -205,16 +226,6 @@ impl PhotonGi {
                 max_triangles: settings.max_triangles,
             },
         )?;
-        if let Some(i) = ds
-            .lights
-            .iter()
-            .position(|l| l.kind == light_kind::DIRECTIONAL)
-        {
-            return Err(Error::InvalidScene(format!(
-                "lights[{i}]: photon-gi has no RSM for directional lights yet (an \
-                 orthographic face over the scene; issue 18): use a spot or point light"
-            )));
-        }
         let camera = GpuCamera::from_camera(&scene.camera);
         let total = settings.photons_w as u64 * settings.photons_h as u64;
         let powers: Vec<f64> = ds.lights.iter().map(light_power).collect();
@@ -226,7 +237,7 @@ impl PhotonGi {
             .enumerate()
             .map(|(i, (l, &n))| LightRsm {
                 light: i as u32,
-                faces: rsm_faces(l, settings.rsm_size),
+                faces: rsm_faces(l, settings.rsm_size, &ds.bounds),
                 photons: n as u32,
             })
             .collect();
@@ -460,6 +471,8 @@ impl PhotonGi {
         }
         rec.kernel(SampleRsm {
             params: RsmParams {
+                // the orthographic face's plane, for a directional light's photons
+                face_camera: r.faces[0],
                 face: 0,
                 face_count: r.faces.len() as u32,
                 first_sample: 0,
