@@ -4,6 +4,14 @@
 // backend-cpu/src/kernels/deposit_screen.rs; 64-bit sums are (lo, hi) u32 atomics with
 // carry, so the map is bitwise identical to the CPU's for the same photons.
 
+// core::device::layout::off_surface: the deposit's surface test (a depth test, or with a
+// negative tolerance a tangent-plane test).
+inline bool off_surface(float z, float3 p, float3 position, float3 normal, float depth,
+                        float tolerance) {
+    if (tolerance < 0.0f) return fabs(dot3(p - position, normal)) > -tolerance * depth;
+    return fabs(z - depth) > tolerance * depth;
+}
+
 __kernel void deposit_screen(__global const DepositParams* p,
                              GBUFFER_PARAMS(__global const),
                              __global const Photon* photons, uint photon_capacity,
@@ -25,7 +33,9 @@ __kernel void deposit_screen(__global const DepositParams* p,
             const GBufferTexel* g = &gt;
             bool arrives_in_front = dot3(unpack_unit_vector(ph.direction), load3(g->normal)) < 0.0f;
             if ((g->flags & GBUFFER_RECEIVER) == 0u ||
-                fabs(z - g->depth) > p->depth_tolerance * g->depth || !arrives_in_front) {
+                off_surface(z, load3(ph.position), load3(g->position), load3(g->normal), g->depth,
+                            p->depth_tolerance) ||
+                !arrives_in_front) {
                 atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
             } else {
                 deposit_photon_texel(PHOTON_MAP_ARGS, lc, pix, &ph, p->flux_quantum,

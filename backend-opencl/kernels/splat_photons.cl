@@ -14,8 +14,9 @@ inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global 
     if (!project_to_pixel(&p->camera, pos, &px, &py, &z)) return;
     float3 n = unpack_unit_vector(ph.normal);
     float3 to_light = -unpack_unit_vector(ph.direction);
-    float s = ray_length_scale(ph.ray_length, p) *
-              density_scale(z, p->tile_constant, tile_counts[ph.tile], p);
+    float s = max(ray_length_scale(ph.ray_length, p) *
+                      density_scale(z, p->tile_constant, tile_counts[ph.tile], p),
+                  min_splat_scale(z, p->camera.tan_half_fov_y, p->camera.height, p->min_splat_px));
     SplatKernel k = splat_kernel(n, to_light, s, p);
     float3 e = splat_irradiance(power, &k);
     uint reach = splat_reach_px(p, max_element3(k.axes), z);

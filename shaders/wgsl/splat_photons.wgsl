@@ -32,8 +32,9 @@ fn splat_photon(p: SplatParams, ph: GiPhoton) {
     }
     let n = unpack_unit_vector(ph.normal);
     let to_light = -unpack_unit_vector(ph.direction);
-    let s = ray_length_scale(ph.ray_length, p) *
-            density_scale(z, p.tile_constant, tile_counts[ph.tile], p);
+    let s = max(ray_length_scale(ph.ray_length, p) *
+                density_scale(z, p.tile_constant, tile_counts[ph.tile], p),
+                min_splat_scale(z, p.camera.tan_half_fov_y, p.camera.height, p.min_splat_px));
     let kernel = splat_kernel(n, to_light, s, p);
     let e = splat_irradiance(power, kernel);
     let reach = splat_reach_px(p, max_element3(kernel.axes), z);

@@ -71,7 +71,14 @@ fn deposit_photon(
     let g = &gbuffer.load_gbuffer(pix);
     let arrives_in_front = unpack_unit_vector(ph.direction).dot(Vec3::from(g.normal)) < 0.0;
     if g.flags & gbuffer_flags::RECEIVER == 0
-        || (z - g.depth).abs() > p.depth_tolerance * g.depth
+        || caustica_core::device::layout::off_surface(
+            z,
+            pos,
+            Vec3::from(g.position),
+            Vec3::from(g.normal),
+            g.depth,
+            p.depth_tolerance,
+        )
         || !arrives_in_front
     {
         c.bump(counter::DEPTH_MISMATCH);

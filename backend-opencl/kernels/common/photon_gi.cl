@@ -143,6 +143,11 @@ inline float density_scale(float z_view, float tile_constant, uint photons_in_ti
     return clamp(r, c->density_radius_min, c->density_radius_max) * c->photons_per_pixel;
 }
 
+// photon_splat::min_splat_scale: min_px pixel footprints at view depth z.
+inline float min_splat_scale(float z_view, float tan_half_fov_y, uint height, float min_px) {
+    return min_px * (2.0f * z_view * tan_half_fov_y / (float)height);
+}
+
 // photon_splat::light_stretch (Eq. 7).
 inline float light_stretch(float3 normal, float3 to_light, __global const SplatParams* c) {
     float cs = clamp(dot3(normal, to_light), 0.0f, 1.0f);

@@ -247,6 +247,8 @@ fn splat_params(fx: &Fixture, power_scale: f32, quantum: f32) -> SplatParams {
             (TILE, TILE),
             (cam.width, cam.height),
         ),
+        min_splat_px: 1.5,
+        _pad: [0; 3],
     }
 }
 

@@ -242,7 +242,7 @@ table! {
     SplatParams {
         camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,
         min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,
-        normal_compression, max_stretch, tile_constant
+        normal_compression, max_stretch, tile_constant, min_splat_px, _pad
     }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,

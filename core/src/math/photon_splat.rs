@@ -79,6 +79,15 @@ pub fn density_scale(
     r.clamp(c.density_radius_min, c.density_radius_max) * c.photons_per_pixel
 }
 
+/// The smallest uniform kernel scale at view depth `z_view`: `min_px` pixel footprints
+/// (`2 z tan(fov_y / 2) / r_y` scene units each). Not in the chapter, whose rasterised
+/// splats cover at least the pixels their triangles touch; a scattered kernel smaller
+/// than a pixel reaches one pixel centre or none, unbiased but all noise.
+#[inline]
+pub fn min_splat_scale(z_view: f32, tan_half_fov_y: f32, height: u32, min_px: f32) -> f32 {
+    min_px * (2.0 * z_view * tan_half_fov_y / height as f32)
+}
+
 /// Eq. 7: the stretch along `u`, `s_u = min(1 / cos(theta), s_max)`, `cos(theta)` between
 /// the photon's normal and the direction towards the light it came from (saturated, as
 /// the listing does).

@@ -160,6 +160,11 @@ fn density_scale(z_view: f32, tile_constant: f32, photons_in_tile: u32, c: Splat
     return clamp(r, c.density_radius_min, c.density_radius_max) * c.photons_per_pixel;
 }
 
+// photon_splat::min_splat_scale: min_px pixel footprints at view depth z.
+fn min_splat_scale(z_view: f32, tan_half_fov_y: f32, height: u32, min_px: f32) -> f32 {
+    return min_px * (2.0 * z_view * tan_half_fov_y / f32(height));
+}
+
 // photon_splat::light_stretch (Eq. 7).
 fn light_stretch(normal: vec3<f32>, to_light: vec3<f32>, c: SplatParams) -> f32 {
     let cs = clamp(dot3(normal, to_light), 0.0, 1.0);

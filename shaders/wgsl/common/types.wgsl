@@ -273,6 +273,10 @@ struct SplatParams {
     normal_compression: f32,
     max_stretch: f32,
     tile_constant: f32,
+    min_splat_px: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 const RSM_TEXEL_NONE: u32 = 0u; // core::math::rsm::rsm_texel_kind

@@ -17,7 +17,7 @@
 
 mod settings;
 
-pub use settings::PhotonGiSettings;
+pub use settings::{IndirectEstimator, PhotonGiSettings};
 
 use crate::backend::{read_buf, Backend};
 use crate::device::device_scene::{BuildBudget, DeviceScene};
@@ -31,8 +31,8 @@ use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    AtrousFilter, Composite, DirectLight, PrimaryGbuffer, ResolveCaustics, RsmImportance,
-    SampleRsm, SplatPhotons, TemporalBlend, TraceIndirect,
+    AtrousFilter, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
+    RsmImportance, SampleRsm, SplatPhotons, TemporalBlend, TraceIndirect,
 };
 use crate::math::fixed_point::join_u64;
 use crate::math::gi_photon::{gi_store, screen_tiles};
@@ -356,7 +356,24 @@ impl PhotonGi {
                 pass("rsm_importance", any, photons),
                 pass("sample_rsm", any, photons),
                 pass("trace_indirect", any, photons),
-                pass("splat_photons", any, photons),
+                pass(
+                    "splat_photons",
+                    any && s.estimator == IndirectEstimator::Splat,
+                    if s.estimator == IndirectEstimator::Splat {
+                        photons
+                    } else {
+                        "estimator deposit: the photons are deposited, not splatted"
+                    },
+                ),
+                pass(
+                    "deposit_screen",
+                    any && s.estimator == IndirectEstimator::Deposit,
+                    if s.estimator == IndirectEstimator::Deposit {
+                        "estimator deposit (the indirect reference's estimator)"
+                    } else {
+                        "estimator splat"
+                    },
+                ),
                 pass("resolve_caustics", true, "irradiance to radiance"),
                 pass(
                     "temporal_blend",
@@ -404,6 +421,8 @@ impl PhotonGi {
                 (s.tile_size, s.tile_size),
                 (cam.width, cam.height),
             ),
+            min_splat_px: s.min_splat_px,
+            _pad: [0; 3],
         }
     }
 
@@ -563,9 +582,24 @@ impl PhotonGi {
 
         let total: u64 = self.rsms.iter().map(|r| r.photons as u64).sum();
         let mut done = 0u64;
+        let deposit = self.settings.estimator == IndirectEstimator::Deposit;
         for r in self.rsms.iter().filter(|r| r.photons > 0) {
             let mut rec = Recording::new();
-            self.record_light(&mut rec, r, cam, gi_store::PACKED);
+            if deposit {
+                // each light's float photons deposited before the next light's are traced
+                rec.clear(b.photon_count);
+                self.record_light(&mut rec, r, cam, gi_store::FLOAT);
+                rec.kernel(DepositScreen {
+                    params: self.deposit_params(cam),
+                    gbuffer: b.gbuffer,
+                    photons: b.photons.reinterpret(),
+                    photon_count: b.photon_count,
+                    counters: b.counters,
+                    photon_map: b.photon_map,
+                });
+            } else {
+                self.record_light(&mut rec, r, cam, gi_store::PACKED);
+            }
             PhotonGi::run(backend, &rec, &mut stats)?;
             stats.batches += 1;
             done += r.photons as u64;
@@ -578,15 +612,17 @@ impl PhotonGi {
         stats.photons_per_light = self.rsms.iter().map(|r| r.photons as u64).collect();
 
         let mut rec = Recording::new();
-        rec.kernel(SplatPhotons {
-            params: self.splat_params(cam),
-            gbuffer: b.gbuffer,
-            photons: b.photons.reinterpret(),
-            photon_count: b.photon_count,
-            tile_counts: b.tile_counts,
-            counters: b.counters,
-            photon_map: b.photon_map,
-        });
+        if !deposit {
+            rec.kernel(SplatPhotons {
+                params: self.splat_params(cam),
+                gbuffer: b.gbuffer,
+                photons: b.photons.reinterpret(),
+                photon_count: b.photon_count,
+                tile_counts: b.tile_counts,
+                counters: b.counters,
+                photon_map: b.photon_map,
+            });
+        }
         rec.kernel(ResolveCaustics {
             params: self.deposit_params(cam),
             gbuffer: b.gbuffer,
@@ -635,7 +671,11 @@ impl PhotonGi {
             camera: cam,
             flux_quantum: self.flux_quantum,
             hit_distance_quantum: 1.0,
-            depth_tolerance: 0.01,
+            // the tangent-plane test (`layout::off_surface`): within 1% of the depth of
+            // the pixel's tangent plane, so a surface seen at any angle keeps its photons
+            // (a curved receiver of radius R departs from the plane by ~(pixel size)^2 /
+            // 2R within a pixel: 2e-3 of the depth for R = z / 10 at 54 rows)
+            depth_tolerance: -0.01,
             photon_capacity: self.buffers.photons.len,
         }
     }
@@ -711,31 +751,6 @@ impl PhotonGi {
     fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
         let px = read_buf(backend, image)?;
         Ok(Image::new(self.camera.width, self.camera.height, px))
-    }
-
-    /// The indirect reference's ingredient: one frame's photons of every light as float
-    /// `Photon`s (the same paths as the splatted ones, unpacked), for a raw screen
-    /// deposit. Returns them read back.
-    pub fn float_photons(&mut self, backend: &mut dyn Backend) -> Result<Vec<Photon>, Error> {
-        let cam = self.camera;
-        let b = self.buffers;
-        let mut all = Vec::new();
-        for r in self.rsms.iter().filter(|r| r.photons > 0) {
-            let mut rec = Recording::new();
-            rec.clear(b.photon_count);
-            rec.clear(b.tile_counts);
-            rec.clear(b.counters);
-            self.record_light(&mut rec, r, cam, gi_store::FLOAT);
-            backend.execute(&rec)?;
-            let n = read_buf(backend, b.photon_count)?[0] as usize;
-            let words = read_buf(backend, b.photons)?;
-            all.extend(
-                words[..n]
-                    .iter()
-                    .map(|w| bytemuck::cast::<[u32; 8], Photon>(*w)),
-            );
-        }
-        Ok(all)
     }
 
     /// The settings in effect.

@@ -5,6 +5,19 @@ use crate::frame::error::Error;
 use crate::math::optics::fresnel_model;
 use serde::{Deserialize, Serialize};
 
+/// What the raw indirect image is made of.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IndirectEstimator {
+    /// The chapter's ellipsoid splats of the packed photons (the technique).
+    #[default]
+    Splat,
+    /// Every stored photon (as a float photon, the same paths) deposited into the one
+    /// pixel it lands in (`deposit_screen`), no kernel: the quantity the splats estimate,
+    /// whose mean over frames is the indirect reference.
+    Deposit,
+}
+
 /// Every parameter of the technique.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -33,11 +46,16 @@ pub struct PhotonGiSettings {
     /// Eq. 2's `l_max`, relative to the scene's diagonal (the chapter derives it from
     /// the bounding box).
     pub max_ray_length: f32,
+    /// Smallest kernel scale in pixel footprints at the photon's depth (not in the chapter,
+    /// whose rasterised splats cover whole pixels; see `photon_splat::min_splat_scale`).
+    pub min_splat_px: f32,
     /// Compression of the kernel along the photon's normal (`s_n`, the listing's
     /// `KernelCompress`).
     pub normal_compression: f32,
     /// Largest stretch along the light direction (Eq. 7's `s_max`).
     pub max_stretch: f32,
+    /// The raw indirect image's estimator (splats; or the raw deposit, for references).
+    pub estimator: IndirectEstimator,
     /// Most pixels from a splat's centre to its edge (a cost bound; larger splats are
     /// clipped and counted as saturated).
     pub max_splat_px: u32,
@@ -70,8 +88,10 @@ impl Default for PhotonGiSettings {
             density_radius_min: 1e-4,
             density_radius_max: 0.05,
             max_ray_length: 0.5,
+            min_splat_px: 1.5,
             normal_compression: 0.1,
             max_stretch: 4.0,
+            estimator: IndirectEstimator::Splat,
             max_splat_px: 48,
             temporal: true,
             atrous_iterations: 4,
@@ -113,6 +133,7 @@ impl PhotonGiSettings {
             ("density_radius_max", self.density_radius_max),
             ("max_ray_length", self.max_ray_length),
             ("normal_compression", self.normal_compression),
+            ("min_splat_px", self.min_splat_px),
         ] {
             if !(v > 0.0 && v.is_finite()) {
                 return bad(&format!("{name} must be > 0 and finite"));
