@@ -507,7 +507,6 @@ mod tests {
     use caustica_core::device::layout::{
         camera_ray, gbuffer_to_planes, GpuCamera, DEPOSIT_PLANES, DEPOSIT_PLANE_WORDS,
     };
-    use caustica_core::math::fixed_point::join_u64;
     use std::sync::atomic::AtomicU64;
 
     /// A camera `elevation` degrees above the plane y = 0 (90: straight down), at distance
@@ -624,14 +623,17 @@ mod tests {
             .sum::<f64>()
             * p.flux_quantum as f64;
         let expected = photons.len() as f64 * unpack_rgb9e5(pack_rgb9e5(Vec3::ONE)).x as f64;
-        let _ = join_u64;
         assert_eq!(c.words[counter::SATURATED], 0, "a splat was clipped");
         eprintln!(
             "elevation {elevation}: splats sum to {:.4} of the photons' power",
             sum / expected
         );
+        // pixel sampling of the ellipses averages out over 4000 photons (within 0.2% seen
+        // from above); at 12 degrees the view spans only 0.6 of the photons' square in
+        // depth, so splats at its top and bottom rows spill past the image (3.6% measured)
+        let tol = if elevation < 20.0 { 0.05 } else { 0.01 };
         assert!(
-            (sum / expected - 1.0).abs() < 0.02,
+            (sum / expected - 1.0).abs() < tol,
             "elevation {elevation}: splats sum to {sum}, photons carry {expected}"
         );
     }
