@@ -489,11 +489,18 @@ impl CpuBackend {
                 photon_count,
                 tile_counts,
                 counters,
+                gbuffer,
             }) => {
                 let rsm = get(rsm_photons.id)?.as_slice::<RsmPhoton>(rsm_photons.len)?;
+                let g = self.gbuffer(gbuffer)?;
                 reserve_temporary::<[u32; 8]>(params.count as u64, "an indirect photon batch")?;
-                let r =
-                    photon_gi::trace_indirect(&view(scene)?, params, rsm, tile_counts.len as usize);
+                let r = photon_gi::trace_indirect(
+                    &view(scene)?,
+                    params,
+                    rsm,
+                    &g,
+                    tile_counts.len as usize,
+                );
                 let start = get(photon_count.id)?.as_slice::<u32>(1)?[0] as usize;
                 if start + r.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(

@@ -4,14 +4,6 @@
 // backend-cpu/src/kernels/deposit_screen.rs; 64-bit sums are (lo, hi) u32 atomics with
 // carry, so the map is bitwise identical to the CPU's for the same photons.
 
-// core::device::layout::off_surface: the deposit's surface test (a depth test, or with a
-// negative tolerance a tangent-plane test).
-inline bool off_surface(float z, float3 p, float3 position, float3 normal, float depth,
-                        float tolerance) {
-    if (tolerance < 0.0f) return fabs(dot3(p - position, normal)) > -tolerance * depth;
-    return fabs(z - depth) > tolerance * depth;
-}
-
 __kernel void deposit_screen(__global const DepositParams* p,
                              GBUFFER_PARAMS(__global const),
                              __global const Photon* photons, uint photon_capacity,

@@ -6,11 +6,15 @@
 // direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Photons are 32-byte slots,
 // two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
 
+// core::kernels::VISIBLE_TOLERANCE: within 1% of the depth of the pixel's tangent plane.
+#define VISIBLE_TOLERANCE (-0.01f)
+
 inline void store_indirect(__global const IndirectTraceParams* p, float3 position,
                            float3 geometric_normal, float3 dir, float ray_length, float3 flux,
                            __global uint4* photons, uint photon_capacity,
                            volatile __global uint* photon_count,
-                           volatile __global uint* tile_counts, __local uint* lc) {
+                           volatile __global uint* tile_counts,
+                           GATHER_GBUFFER_PARAMS(__global const), __local uint* lc) {
     float3 n = dot3(geometric_normal, dir) > 0.0f ? -geometric_normal : geometric_normal;
     if (dot3(load3g(p->camera.position) - position, n) <= 0.0f) {
         atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
@@ -20,6 +24,16 @@ inline void store_indirect(__global const IndirectTraceParams* p, float3 positio
     float z;
     if (!project_to_pixel(&p->camera, position, &px, &py, &z)) {
         atomic_inc(&lc[COUNTER_OFF_SCREEN]);
+        return;
+    }
+    // the camera must see the photon's surface there (core's VISIBLE_TOLERANCE)
+    uint pix = py * p->camera.width + px;
+    uint4 g0 = gbuffer0[pix], g1 = gbuffer1[pix];
+    if ((gbuffer3[pix].w & GBUFFER_RECEIVER) == 0u ||
+        off_surface(z, position, (float3)(as_float(g0.x), as_float(g0.y), as_float(g0.z)),
+                    (float3)(as_float(g1.x), as_float(g1.y), as_float(g1.z)), as_float(g0.w),
+                    VISIBLE_TOLERANCE)) {
+        atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
         return;
     }
     uint tile = screen_tile(px, py, p->camera.width, p->tile_size);
@@ -48,7 +62,8 @@ inline void store_indirect(__global const IndirectTraceParams* p, float3 positio
 inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams* p,
                                 RsmPhoton r, uint index, __global uint4* photons,
                                 uint photon_capacity, volatile __global uint* photon_count,
-                                volatile __global uint* tile_counts, __local uint* lc) {
+                                volatile __global uint* tile_counts,
+                                GATHER_GBUFFER_PARAMS(__global const), __local uint* lc) {
     float3 flux = load3(r.flux);
     if (!(max_element3(flux) > 0.0f)) {
         atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
@@ -73,7 +88,7 @@ inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams
         if (m->kind == MATERIAL_DIFFUSE) {
             if (bounces >= 1u)
                 store_indirect(p, s.position, s.geometric_normal, dir, hit.t, flux, photons,
-                               photon_capacity, photon_count, tile_counts, lc);
+                               photon_capacity, photon_count, tile_counts, GATHER_GBUFFER_ARGS, lc);
             if (bounces >= p->max_bounces) {
                 atomic_inc(&lc[COUNTER_BOUNCE_LIMIT]);
                 return segment + 1u;
@@ -122,14 +137,16 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
                              __global const RsmPhoton* rsm_photons, __global uint4* photons,
                              uint photon_capacity, volatile __global uint* photon_count,
                              volatile __global uint* tile_counts,
-                             volatile __global uint* counters) {
+                             volatile __global uint* counters,
+                             GATHER_GBUFFER_PARAMS(__global const)) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < p->count) {
         uint index = p->first + i;
         uint rays = trace_indirect_path(SCENE_ARGS, p, rsm_photons[index], index, photons,
-                                        photon_capacity, photon_count, tile_counts, lc);
+                                        photon_capacity, photon_count, tile_counts,
+                                        GATHER_GBUFFER_ARGS, lc);
         atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
     }
     counters_flush_local(lc, counters);

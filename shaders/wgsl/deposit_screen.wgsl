@@ -21,16 +21,6 @@
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
-// core::device::layout::off_surface: the deposit's surface test (a depth test, or with a
-// negative tolerance a tangent-plane test).
-fn off_surface(z: f32, p: vec3<f32>, position: vec3<f32>, normal: vec3<f32>, depth: f32,
-               tolerance: f32) -> bool {
-    if (tolerance < 0.0) {
-        return abs(dot3(p - position, normal)) > -tolerance * depth;
-    }
-    return abs(z - depth) > tolerance * depth;
-}
-
 // `li`: local invocation index. Called by every invocation of the group (the counter
 // helpers hold barriers).
 fn deposit_screen(i: u32, li: u32) {

@@ -19,6 +19,12 @@
 @group(0) @binding(8) var<storage, read_write> photon_count: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read_write> tile_counts: array<atomic<u32>>;
 @group(0) @binding(10) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(12) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(13) var<storage, read> gbuffer3: array<vec4<u32>>;
+
+// core::kernels::VISIBLE_TOLERANCE: within 1% of the depth of the pixel's tangent plane.
+const VISIBLE_TOLERANCE: f32 = -0.01;
 
 // The work-group's counters (fixed_point.wgsl).
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
@@ -37,6 +43,15 @@ fn store_indirect(p: IndirectTraceParams, position: vec3<f32>, geometric_normal:
     var z: f32;
     if (!project_to_pixel(p.camera, position, &px, &py, &z)) {
         atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
+        return;
+    }
+    // the camera must see the photon's surface there (core's VISIBLE_TOLERANCE)
+    let pix = py * p.camera.width + px;
+    let g0 = gbuffer0[pix];
+    if ((gbuffer3[pix].w & GBUFFER_RECEIVER) == 0u ||
+        off_surface(z, position, bitcast<vec3<f32>>(g0.xyz), bitcast<vec3<f32>>(gbuffer1[pix].xyz),
+                    bitcast<f32>(g0.w), VISIBLE_TOLERANCE)) {
+        atomicAdd(&lc[COUNTER_DEPTH_MISMATCH], 1u);
         return;
     }
     let tile = screen_tile(px, py, p.camera.width, p.tile_size);

@@ -7,10 +7,11 @@ use super::Counters;
 use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
-    camera_ray, counter, gbuffer_flags, gbuffer_pixel_area, light_kind, material_kind,
+    camera_ray, counter, gbuffer_flags, gbuffer_pixel_area, light_kind, material_kind, off_surface,
     project_to_pixel, GBufferView, GiPhoton, GpuLight, IndirectTraceParams, Photon, RsmParams,
     RsmPhoton, RsmTexel, SplatParams, NO_MATERIAL,
 };
+use caustica_core::kernels::VISIBLE_TOLERANCE;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::optics::{
@@ -195,6 +196,7 @@ pub fn trace_indirect(
     scene: &SceneView,
     p: &IndirectTraceParams,
     rsm: &[RsmPhoton],
+    gbuffer: &GBufferView,
     tiles: usize,
 ) -> IndirectResult {
     let tile_counts: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(0)).collect();
@@ -210,6 +212,7 @@ pub fn trace_indirect(
                     p,
                     &rsm[index as usize],
                     index,
+                    gbuffer,
                     &mut |ph, tile| {
                         out.push(ph);
                         tile_counts[tile as usize].fetch_add(1, Ordering::Relaxed);
@@ -240,6 +243,7 @@ pub fn trace_indirect_path(
     p: &IndirectTraceParams,
     r: &RsmPhoton,
     index: u32,
+    gbuffer: &GBufferView,
     store: &mut impl FnMut([u32; 8], u32),
     c: &mut Counters,
 ) {
@@ -272,6 +276,7 @@ pub fn trace_indirect_path(
             if bounces >= 1 {
                 store_indirect(
                     p,
+                    gbuffer,
                     &s.position,
                     s.geometric_normal,
                     dir,
@@ -344,6 +349,7 @@ pub fn trace_indirect_path(
 #[allow(clippy::too_many_arguments)]
 fn store_indirect(
     p: &IndirectTraceParams,
+    gbuffer: &GBufferView,
     position: &Vec3,
     geometric_normal: Vec3,
     dir: Vec3,
@@ -361,10 +367,24 @@ fn store_indirect(
         c.bump(counter::DEPTH_MISMATCH);
         return;
     }
-    let Some((px, py, _)) = project_to_pixel(&p.camera, *position) else {
+    let Some((px, py, z)) = project_to_pixel(&p.camera, *position) else {
         c.bump(counter::OFF_SCREEN);
         return;
     };
+    let g = gbuffer.load_gbuffer((py * p.camera.width + px) as usize);
+    if g.flags & gbuffer_flags::RECEIVER == 0
+        || off_surface(
+            z,
+            *position,
+            Vec3::from(g.position),
+            Vec3::from(g.normal),
+            g.depth,
+            VISIBLE_TOLERANCE,
+        )
+    {
+        c.bump(counter::DEPTH_MISMATCH);
+        return;
+    }
     let tile = screen_tile(px, py, p.camera.width, p.tile_size);
     let words: [u32; 8] = if p.store == gi_store::FLOAT {
         bytemuck::cast(Photon {

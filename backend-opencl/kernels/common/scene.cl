@@ -62,3 +62,11 @@ inline float spot_falloff(float cos_theta, float cos_inner, float cos_outer) {
 }
 
 inline float3 facing_normal(float3 n, float3 dir) { return dot3(n, dir) > 0.0f ? -n : n; }
+
+// core::device::layout::off_surface: the deposit's surface test (a depth test, or with a
+// negative tolerance a tangent-plane test).
+inline bool off_surface(float z, float3 p, float3 position, float3 normal, float depth,
+                        float tolerance) {
+    if (tolerance < 0.0f) return fabs(dot3(p - position, normal)) > -tolerance * depth;
+    return fabs(z - depth) > tolerance * depth;
+}

@@ -64,3 +64,17 @@ precise float spot_falloff(float cos_theta, float cos_inner, float cos_outer) {
 }
 
 vec3 facing_normal(vec3 n, vec3 dir) { return dot3(n, dir) > 0.0 ? -n : n; }
+
+// core::device::layout::off_surface: the deposit's surface test (a depth test, or with a
+// negative tolerance a tangent-plane test).
+bool off_surface(float z, vec3 p, vec3 position, vec3 normal, float depth, float tolerance) {
+    if (tolerance < 0.0) {
+        precise vec3 d = p - position;
+        precise float dist = abs(dot3(d, normal));
+        precise float bound = -tolerance * depth;
+        return dist > bound;
+    }
+    precise float dz = abs(z - depth);
+    precise float bound = tolerance * depth;
+    return dz > bound;
+}

@@ -179,11 +179,13 @@ fn run_trace(
     fx: &Fixture,
     b: &mut dyn Backend,
     rsm: &[RsmPhoton],
+    gbuffer: &[GBufferTexel],
     power_scale: f32,
     quantum: f32,
 ) -> Result<Traced, String> {
     let cam = fx.camera;
     let mut rec = Recording::new();
+    let g = rec.upload_gbuffer(gbuffer);
     let r = rec.upload(rsm, "RSM photons");
     let photons = rec.create::<[u32; 8]>(rsm.len() as u32 * BOUNCES, "indirect photons");
     let count = rec.create(1, "count");
@@ -213,6 +215,7 @@ fn run_trace(
         photon_count: count,
         tile_counts: tiles,
         counters,
+        gbuffer: g,
     });
     run_and_free(b, "trace_indirect", &rec, |b| {
         let n = read_buf(b, count)?[0] as usize;
@@ -396,8 +399,8 @@ pub fn check_photon_gi(
             / SAMPLES as f32;
         let power_scale = mean.max(f32::MIN_POSITIVE);
         let quantum = power_scale / 1_048_576.0;
-        let (pha, tia, ca) = run_trace(fx, r, &sa, power_scale, quantum)?;
-        let (phb, tib, cb) = run_trace(fx, c, &sa, power_scale, quantum)?;
+        let (pha, tia, ca) = run_trace(fx, r, &sa, &inputs.gbuffer, power_scale, quantum)?;
+        let (phb, tib, cb) = run_trace(fx, c, &sa, &inputs.gbuffer, power_scale, quantum)?;
         let stored = ca[counter::STORED].max(cb[counter::STORED]) as u64;
         let allow = divergence_allowance(stored) * BOUNCES as u64;
         let diff = |k: usize| (ca[k] as i64 - cb[k] as i64).unsigned_abs();

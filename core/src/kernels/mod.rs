@@ -58,7 +58,7 @@ pub use sample_rsm::SampleRsm;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
-pub use trace_indirect::TraceIndirect;
+pub use trace_indirect::{TraceIndirect, VISIBLE_TOLERANCE};
 pub use trace_photons::{TracePhotons, TraceVariant};
 
 use crate::device::error::BackendError;

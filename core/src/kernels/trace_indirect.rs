@@ -3,16 +3,24 @@
 
 use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, SceneArgs};
+use crate::device::handle::{Buf, GBufferPlanes, SceneArgs};
 use crate::device::layout::{IndirectTraceParams, RsmPhoton};
 use crate::math::gi_photon::screen_tiles;
+
+/// The visibility test's tolerance (`layout::off_surface`'s negative form: within 1% of
+/// the view depth of the pixel's tangent plane). Without it photons of a room hidden
+/// behind a wall counted in the tiles they project to and shrank the visible photons'
+/// kernels there (Eqs. 3-6: `rooms` showed 1500-6500 photons per 16 x 16 tile and
+/// one-pixel speckles).
+pub const VISIBLE_TOLERANCE: f32 = -0.01;
 
 /// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s).
 /// At a diffuse hit a photon that has bounced diffusely at least once (all do: the RSM
 /// point is the first bounce, or a specular RSM point leads to a later one) is stored
-/// if the hit faces the camera and projects inside its view (`GiPhoton`s, or float
-/// `Photon`s with `params.store` = `gi_store::FLOAT`), and its screen tile's count in
-/// `tile_counts` goes up; then, below `params.max_bounces` diffuse bounces, it survives
+/// if the hit faces the camera, projects inside its view and the camera sees it there (a
+/// receiver pixel whose tangent plane it lies on, `layout::off_surface` with
+/// [`VISIBLE_TOLERANCE`]) (`GiPhoton`s, or float `Photon`s with `params.store` =
+/// `gi_store::FLOAT`), and its screen tile's count in `tile_counts` goes up; then, below `params.max_bounces` diffuse bounces, it survives
 /// Jensen's roulette (`math::rsm::russian_roulette`) and leaves in a cosine direction.
 /// Mirrors scale the flux by their colour; dielectrics reflect or refract by Fresnel
 /// (`math::optics::dielectric_scatter`), with Beer-Lambert inside and, on a dispersive
@@ -25,8 +33,9 @@ use crate::math::gi_photon::screen_tiles;
 /// photons stored, `ESCAPED` paths that left the scene, `NEGLIGIBLE` paths ended by the
 /// roulette or without flux, `BOUNCE_LIMIT` paths ended after `max_bounces` bounces or
 /// `max_segments` segments, `OFF_SCREEN` hits outside the view, `DEPTH_MISMATCH` hits
-/// turned away from the camera, `RAYS`, `STORED_FLUX`, `UNDERFLOW` (a stored power that
-/// packs to zero).
+/// turned away from the camera or hidden from it, `RAYS`, `STORED_FLUX`, `UNDERFLOW` (a
+/// stored power that packs to zero).
+
 #[derive(Clone, Copy, Debug)]
 pub struct TraceIndirect {
     /// The uploaded scene.
@@ -44,9 +53,12 @@ pub struct TraceIndirect {
     pub tile_counts: Buf<u32>,
     /// Photon counters the kernel adds to.
     pub counters: Buf<u32>,
+    /// The camera's G-buffer (planes 0, 1 and 3: position and depth, normal, flags): a
+    /// photon is stored only where the camera sees its surface.
+    pub gbuffer: GBufferPlanes,
 }
 
-const BINDINGS: [Binding; 13] = with_scene([
+const BINDINGS: [Binding; 16] = with_scene([
     bind("params", Params),
     bind("rsm_photons", Read),
     bind("photons", ReadWrite),
@@ -54,6 +66,9 @@ const BINDINGS: [Binding; 13] = with_scene([
     bind("photon_count", ReadWrite),
     bind("tile_counts", ReadWrite),
     bind("counters", ReadWrite),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer3", Read),
 ]);
 
 impl KernelDecl for TraceIndirect {
@@ -85,7 +100,8 @@ impl KernelDecl for TraceIndirect {
                 self.tile_counts,
                 screen_tiles(c.width, c.height, p.tile_size) as u64 * 4,
             )?
-            .buf("counters", self.counters, bytes::COUNTERS)?;
+            .buf("counters", self.counters, bytes::COUNTERS)?
+            .gather_gbuffer(&self.gbuffer, c.width as u64 * c.height as u64)?;
         Ok(Some(p.count as u64))
     }
 }

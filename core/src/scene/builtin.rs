@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 use std::collections::BTreeMap;
 
 /// Names of the built-in scenes, in the order `caustica scenes` lists them.
-pub const BUILTIN_SCENES: [&str; 9] = [
+pub const BUILTIN_SCENES: [&str; 10] = [
     "sphere",
     "sphere-sun",
     "ring",
@@ -17,6 +17,7 @@ pub const BUILTIN_SCENES: [&str; 9] = [
     "jelly",
     "spot-glass",
     "plain",
+    "rooms",
 ];
 
 /// The built-in scene called `name`, or `None`.
@@ -31,6 +32,7 @@ pub fn builtin(name: &str) -> Option<Scene> {
         "jelly" => jelly(),
         "spot-glass" => spot_glass(),
         "plain" => plain(),
+        "rooms" => rooms(),
         _ => return None,
     })
 }
@@ -451,5 +453,171 @@ pub fn plain() -> Scene {
             position: Vec3::new(0.0, 3.0, 1.0),
             intensity: Vec3::splat(10.0),
         }],
+    }
+}
+
+/// `rooms` (PhotonGi, seed 003's multi-room test scenes): two rooms 3 x 2.5 x 4 side by
+/// side (x in [-3, 0] and [0, 3], z in [-2, 2], floor y = 0, ceiling y = 2.5), joined by a
+/// doorway 1 wide and 2 high in the dividing wall at x = 0. Room A (x < 0) holds both
+/// lights, of unequal power: a point light 12 W/sr at (-1.5, 2.2, 0) and a spot light
+/// 3 W/sr at (-2.4, 2.4, 1.4) aimed straight down (outer cone 35 degrees), and a glass
+/// ball (IOR 1.5, r 0.5 at (-1.2, 0.5, -0.9), 256 segments: 65k triangles) casting a
+/// caustic. Room B (x > 0) has no light: it is lit only through the doorway, by light
+/// that bounced at least once; its far wall is red, its front wall green, and a grey
+/// ball (r 0.45 at (1.6, 0.45, -0.8)) stands in it. The camera stands in room B's corner
+/// at (2.7, 1.5, 1.8) looking at (-0.8, 0.9, -0.6), through the doorway into room A.
+/// The walls are single quads (two-sided).
+pub fn rooms() -> Scene {
+    let q = |c: Vec3, u: Vec3, v: Vec3| Shape::Quad { center: c, u, v };
+    let colour = |r, g, b| Material::Diffuse {
+        albedo: Vec3::new(r, g, b),
+    };
+    Scene {
+        name: "rooms".into(),
+        description: "Two rooms joined by a doorway: two lights of unequal power and a glass \
+                      ball in one, the other lit only indirectly"
+            .into(),
+        camera: camera(Vec3::new(2.7, 1.5, 1.8), Vec3::new(-0.8, 0.9, -0.6), 60.0),
+        materials: BTreeMap::from([
+            ("white".into(), diffuse(0.75)),
+            ("red".into(), colour(0.75, 0.15, 0.12)),
+            ("green".into(), colour(0.15, 0.6, 0.2)),
+            ("blue".into(), colour(0.2, 0.3, 0.7)),
+            ("grey".into(), diffuse(0.5)),
+            ("glass".into(), glass(1.5)),
+        ]),
+        objects: vec![
+            obj(
+                "floor",
+                "white",
+                q(
+                    Vec3::new(0.0, 0.0, 0.0),
+                    Vec3::new(3.0, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, -2.0),
+                ),
+            ),
+            obj(
+                "ceiling",
+                "white",
+                q(
+                    Vec3::new(0.0, 2.5, 0.0),
+                    Vec3::new(3.0, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, 2.0),
+                ),
+            ),
+            obj(
+                "room A back",
+                "white",
+                q(
+                    Vec3::new(-1.5, 1.25, -2.0),
+                    Vec3::new(1.5, 0.0, 0.0),
+                    Vec3::new(0.0, 1.25, 0.0),
+                ),
+            ),
+            obj(
+                "room A front",
+                "white",
+                q(
+                    Vec3::new(-1.5, 1.25, 2.0),
+                    Vec3::new(1.5, 0.0, 0.0),
+                    Vec3::new(0.0, -1.25, 0.0),
+                ),
+            ),
+            obj(
+                "room A side",
+                "blue",
+                q(
+                    Vec3::new(-3.0, 1.25, 0.0),
+                    Vec3::new(0.0, 1.25, 0.0),
+                    Vec3::new(0.0, 0.0, 2.0),
+                ),
+            ),
+            obj(
+                "room B back",
+                "red",
+                q(
+                    Vec3::new(1.5, 1.25, -2.0),
+                    Vec3::new(1.5, 0.0, 0.0),
+                    Vec3::new(0.0, 1.25, 0.0),
+                ),
+            ),
+            obj(
+                "room B front",
+                "green",
+                q(
+                    Vec3::new(1.5, 1.25, 2.0),
+                    Vec3::new(1.5, 0.0, 0.0),
+                    Vec3::new(0.0, -1.25, 0.0),
+                ),
+            ),
+            obj(
+                "room B side",
+                "white",
+                q(
+                    Vec3::new(3.0, 1.25, 0.0),
+                    Vec3::new(0.0, 1.25, 0.0),
+                    Vec3::new(0.0, 0.0, -2.0),
+                ),
+            ),
+            // the dividing wall at x = 0: two panels beside the doorway and a lintel over it
+            obj(
+                "wall, back panel",
+                "white",
+                q(
+                    Vec3::new(0.0, 1.25, -1.25),
+                    Vec3::new(0.0, 1.25, 0.0),
+                    Vec3::new(0.0, 0.0, 0.75),
+                ),
+            ),
+            obj(
+                "wall, front panel",
+                "white",
+                q(
+                    Vec3::new(0.0, 1.25, 1.25),
+                    Vec3::new(0.0, 1.25, 0.0),
+                    Vec3::new(0.0, 0.0, 0.75),
+                ),
+            ),
+            obj(
+                "wall, lintel",
+                "white",
+                q(
+                    Vec3::new(0.0, 2.25, 0.0),
+                    Vec3::new(0.0, 0.25, 0.0),
+                    Vec3::new(0.0, 0.0, 0.5),
+                ),
+            ),
+            obj(
+                "glass ball",
+                "glass",
+                Shape::Sphere {
+                    center: Vec3::new(-1.2, 0.5, -0.9),
+                    radius: 0.5,
+                    segments: 256,
+                },
+            ),
+            obj(
+                "grey ball",
+                "grey",
+                Shape::Sphere {
+                    center: Vec3::new(1.6, 0.45, -0.8),
+                    radius: 0.45,
+                    segments: 96,
+                },
+            ),
+        ],
+        lights: vec![
+            Light::Point {
+                position: Vec3::new(-1.5, 2.2, 0.0),
+                intensity: Vec3::splat(12.0),
+            },
+            Light::Spot {
+                position: Vec3::new(-2.4, 2.4, 1.4),
+                direction: Vec3::new(0.0, -1.0, 0.0),
+                intensity: Vec3::splat(3.0),
+                inner_angle_deg: 25.0,
+                outer_angle_deg: 35.0,
+            },
+        ],
     }
 }

@@ -61,3 +61,13 @@ fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
 fn facing_normal(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
     return select(n, -n, dot3(n, dir) > 0.0);
 }
+
+// core::device::layout::off_surface: the deposit's surface test (a depth test, or with a
+// negative tolerance a tangent-plane test).
+fn off_surface(z: f32, p: vec3<f32>, position: vec3<f32>, normal: vec3<f32>, depth: f32,
+               tolerance: f32) -> bool {
+    if (tolerance < 0.0) {
+        return abs(dot3(p - position, normal)) > -tolerance * depth;
+    }
+    return abs(z - depth) > tolerance * depth;
+}

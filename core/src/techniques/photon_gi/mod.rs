@@ -512,6 +512,7 @@ impl PhotonGi {
             photon_count: b.photon_count,
             tile_counts: b.tile_counts,
             counters: b.counters,
+            gbuffer: b.gbuffer,
         });
     }
 
