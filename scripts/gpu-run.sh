@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -120,6 +120,13 @@ if has filter; then
     # issue 15: the density gather keeps the raw flux on every backend (per-kernel checks
     # run in the vulkan section's cross_backend)
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
+fi
+if has photongi; then
+    # issue 18: PhotonGi's kernels and frames against the CPU on every backend, and its
+    # frame times at the chapter's high and low settings
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend photon_gi --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./photon_gi_frames --test-threads=1 --nocapture
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
 fi
 if has countscan; then
     # issue 15 point 4: the count table's workgroup scans against the CPU, the flux test,

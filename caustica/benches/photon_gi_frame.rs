@@ -1,0 +1,118 @@
+//! PhotonGi frames (seed 003) per backend at the chapter's two settings on `rooms` at
+//! 1920x1080: "high", 3 million initial photons (1732^2), 3 bounces, 4 A-Trous iterations;
+//! "low", 1 million (1024^2), 1 bounce, 4 A-Trous iterations. Both with the temporal
+//! blend. After a warm-up frame, the median over frames (a new seed each) of every pass,
+//! of the technique's device time (every pass but `primary_gbuffer` of the camera and
+//! `direct_light`, which a renderer has anyway: the RSM faces' own `primary_gbuffer`
+//! dispatches are counted by subtracting one camera G-buffer, see below) and of the host
+//! wall time of the frame. Target on the H200 (issue 18): <= 6 ms at the high setting.
+//!
+//! `cargo bench -p caustica --bench photon_gi_frame`
+//! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
+//! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SETTINGS=high,low`,
+//! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080).
+
+mod common;
+use caustica::{open_backend, BACKEND_NAMES};
+use caustica_core::scene::builtin::builtin;
+use caustica_core::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
+use common::{env_or, median};
+use std::collections::BTreeMap;
+
+fn main() {
+    let frames: usize = env_or("CAUSTICA_BENCH_FRAMES", "5")
+        .parse()
+        .expect("frames");
+    let size = env_or("CAUSTICA_BENCH_SIZE", "1920x1080");
+    let (w, h) = size
+        .split_once('x')
+        .map(|(a, b)| (a.parse().expect("width"), b.parse().expect("height")))
+        .expect("WxH");
+    let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
+    let settings = env_or("CAUSTICA_BENCH_SETTINGS", "high,low");
+    let mut scene = builtin("rooms").expect("built-in scene");
+    (scene.camera.width, scene.camera.height) = (w, h);
+    println!("PhotonGi frame, rooms, {w}x{h}, median of {frames} frames after one warm-up");
+    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let mut backend = match open_backend(name) {
+            Ok(b) => b,
+            Err(e) => {
+                println!("{name}: skipped ({e})");
+                continue;
+            }
+        };
+        for setting in settings.split(',').map(str::trim) {
+            let (side, bounces) = match setting {
+                "high" => (1732, 3),
+                "low" => (1024, 1),
+                other => panic!("unknown setting {other}"),
+            };
+            let s = PhotonGiSettings {
+                photons_w: side,
+                photons_h: side,
+                bounces,
+                ..Default::default()
+            };
+            let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {
+                Ok(t) => t,
+                Err(e) => {
+                    println!("{name} / {setting}: {e}");
+                    continue;
+                }
+            };
+            let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+            let (mut wall, mut technique) = (Vec::new(), Vec::new());
+            let mut timing = String::new();
+            let mut stored = 0;
+            for i in 0..=frames {
+                use caustica_core::frame::technique::Technique;
+                t.set_seed(i as u32 + 1);
+                let st = match t.frame(backend.as_mut(), &mut |_| {}) {
+                    Ok(st) => st,
+                    Err(e) => {
+                        println!("{name} / {setting}: {e}");
+                        break;
+                    }
+                };
+                if i == 0 {
+                    continue;
+                }
+                for (p, v) in &st.pass_ms {
+                    passes.entry(p.clone()).or_default().push(*v);
+                }
+                // the camera's G-buffer is one of the primary_gbuffer dispatches: its share
+                // is the mean dispatch times the one camera dispatch (faces are smaller, so
+                // this leaves the faces slightly overcounted in the technique's time)
+                let gb = st
+                    .passes
+                    .iter()
+                    .find(|p| p.name == "primary_gbuffer")
+                    .map_or(0.0, |p| p.ms / p.dispatches as f64);
+                let own: f64 = st
+                    .pass_ms
+                    .iter()
+                    .filter(|(p, _)| p.as_str() != "direct_light")
+                    .map(|(_, v)| v)
+                    .sum::<f64>()
+                    - gb;
+                technique.push(own);
+                wall.push(st.frame_ms);
+                timing = st.timing.clone();
+                stored = st.photons_stored;
+            }
+            if wall.is_empty() {
+                continue;
+            }
+            println!(
+                "\n{name} on {} / {setting} ({side}^2 photons, {bounces} bounce(s), {stored} stored) ({timing}): frame {:.3} ms (host wall), PhotonGi passes {:.3} ms",
+                backend.capabilities().device,
+                median(&mut wall),
+                median(&mut technique)
+            );
+            for (p, mut v) in passes {
+                println!("  {p:24} {:.3} ms", median(&mut v));
+            }
+            t.free(backend.as_mut()).expect("free");
+        }
+    }
+}
