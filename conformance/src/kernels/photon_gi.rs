@@ -346,6 +346,11 @@ pub fn check_photon_gi(
         // 1. rsm_importance
         let (ta, pa) = run_rsm(fx, r, l, &faces, &gbufs)?;
         let (tb, pb) = run_rsm(fx, c, l, &faces, &gbufs)?;
+        // a spot's smoothstep falloff has an absolute error of a few ulps of 1: near the
+        // outer cone the flux is tiny and its relative error large, so fluxes agree within
+        // RSM_REL of the larger or of the face's largest texel flux (sums likewise)
+        let floor = ta.iter().flat_map(|t| t.flux).fold(0.0f32, f32::max) * RSM_REL;
+        let close = |a: f32, b: f32| rel_close(a, b, RSM_REL) || (a - b).abs() <= floor;
         let texel_bad = ta
             .iter()
             .zip(&tb)
@@ -353,7 +358,7 @@ pub fn check_photon_gi(
                 a.kind != b.kind
                     || a.position.map(f32::to_bits) != b.position.map(f32::to_bits)
                     || a.normal != b.normal
-                    || !(0..3).all(|k| rel_close(a.flux[k], b.flux[k], RSM_REL))
+                    || !(0..3).all(|k| close(a.flux[k], b.flux[k]))
             })
             .count();
         v.check(texel_bad == 0, || {
@@ -362,7 +367,11 @@ pub fn check_photon_gi(
         let pyr_bad = pa
             .iter()
             .zip(&pb)
-            .filter(|(a, b)| !rel_close(**a, **b, RSM_REL))
+            // a sum holds at most RSM_SIDE^2 texels, each within `floor`
+            .filter(|(a, b)| {
+                !rel_close(**a, **b, RSM_REL)
+                    && (**a - **b).abs() > floor * (RSM_SIDE * RSM_SIDE) as f32
+            })
             .count();
         v.check(pyr_bad == 0, || {
             format!("light {l}: {pyr_bad} pyramid sums differ beyond {RSM_REL}")
@@ -373,7 +382,11 @@ pub fn check_photon_gi(
         let mut other_texel = 0u64;
         let mut bad = 0u64;
         for (a, b) in sa.iter().zip(&sb) {
-            if a.origin.map(f32::to_bits) != b.origin.map(f32::to_bits) || a.bounces != b.bounces {
+            // the same texel gives origins a few ulps apart (the normal's unpacking and the
+            // offset divide and normalise); another texel is a texel's width away
+            let (oa, ob) = (glam::Vec3::from(a.origin), glam::Vec3::from(b.origin));
+            if (oa - ob).length() > 1e-5 * (oa.abs().max_element() + 1.0) || a.bounces != b.bounces
+            {
                 other_texel += 1;
                 continue;
             }
@@ -401,7 +414,10 @@ pub fn check_photon_gi(
         let quantum = power_scale / 1_048_576.0;
         let (pha, tia, ca) = run_trace(fx, r, &sa, &inputs.gbuffer, power_scale, quantum)?;
         let (phb, tib, cb) = run_trace(fx, c, &sa, &inputs.gbuffer, power_scale, quantum)?;
+        // diverged paths: a share of the paths, each moving one path end and at most
+        // BOUNCES stored photons
         let stored = ca[counter::STORED].max(cb[counter::STORED]) as u64;
+        let paths_allow = divergence_allowance(SAMPLES as u64);
         let allow = divergence_allowance(stored) * BOUNCES as u64;
         let diff = |k: usize| (ca[k] as i64 - cb[k] as i64).unsigned_abs();
         v.check(diff(counter::STORED) <= allow, || {
@@ -418,7 +434,7 @@ pub fn check_photon_gi(
             counter::OFF_SCREEN,
             counter::DEPTH_MISMATCH,
         ] {
-            v.check(diff(k) <= allow, || {
+            v.check(diff(k) <= paths_allow.max(allow), || {
                 format!("light {l}: counter {k}: {} vs {}", ca[k], cb[k])
             });
         }
