@@ -316,6 +316,12 @@ fn unmatched(a: &[GiPhoton], b: &[GiPhoton], diagonal: f32) -> u64 {
     a.iter().filter(|x| !b.iter().any(|y| close(x, y))).count() as u64
 }
 
+/// Two packed unit vectors whose snorm16 components differ by at most one.
+fn within_one_quantum(a: u32, b: u32) -> bool {
+    let d = |s: u32| ((a >> s) as u16 as i16 as i32 - (b >> s) as u16 as i16 as i32).abs();
+    d(0) <= 1 && d(16) <= 1
+}
+
 fn rel_close(a: f32, b: f32, rel: f32) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs()) || a == b
 }
@@ -360,8 +366,7 @@ pub fn check_photon_gi(
                     || a.position.map(f32::to_bits) != b.position.map(f32::to_bits)
                     // packing divides by the normal's L1 norm: GPUs' approximate
                     // division may move it by one snorm16 quantum (~3e-5 rad)
-                    || unpack_unit_vector(a.normal).dot(unpack_unit_vector(b.normal))
-                        < 1.0 - 1e-7
+                    || !within_one_quantum(a.normal, b.normal)
                     || !(0..3).all(|k| close(a.flux[k], b.flux[k]))
             })
             .count();
