@@ -404,7 +404,8 @@ pub fn check_photon_gi(
                 .clamp(-1.0, 1.0)
                 .acos();
             let flux_ok = (0..3).all(|k| rel_close(a.flux[k], b.flux[k], RSM_REL));
-            bad += (!flux_ok || !(angle <= DIRECTION_TOL)) as u64;
+            let angle_ok = angle <= DIRECTION_TOL; // false for NaN
+            bad += (!flux_ok || !angle_ok) as u64;
         }
         let allow = (DEPOSIT_PHOTON_CHANGES * SAMPLES as f64).ceil() as u64 + 2;
         v.check(other_texel <= allow, || {

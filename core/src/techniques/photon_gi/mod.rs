@@ -710,41 +710,35 @@ impl PhotonGi {
             });
             input = blended;
         }
-        match b.atrous {
-            Some(a) => {
-                if b.temporal.is_none() {
-                    input = b.raw;
-                }
-                let n = self.settings.atrous_iterations;
-                for i in 0..n {
-                    let out = if i + 1 == n {
-                        b.indirect
-                    } else if i % 2 == 0 {
-                        a.a
-                    } else {
-                        a.b
-                    };
-                    rec.kernel(AtrousFilter {
-                        params: AtrousParams {
-                            camera: cam,
-                            iteration: i,
-                            last: (i + 1 == n) as u32,
-                            sigma_z: c.sigma_z,
-                            sigma_n: c.sigma_n,
-                            epsilon: c.epsilon,
-                            clip_sigmas: self.settings.atrous_clip_sigmas,
-                            _pad: [0; 2],
-                        },
-                        gbuffer: b.gbuffer,
-                        input,
-                        details: a.details,
-                        out,
-                    });
-                    input = out;
-                }
+        // with neither filter `indirect` is the raw image's buffer
+        if let Some(a) = b.atrous {
+            let n = self.settings.atrous_iterations;
+            for i in 0..n {
+                let out = if i + 1 == n {
+                    b.indirect
+                } else if i % 2 == 0 {
+                    a.a
+                } else {
+                    a.b
+                };
+                rec.kernel(AtrousFilter {
+                    params: AtrousParams {
+                        camera: cam,
+                        iteration: i,
+                        last: (i + 1 == n) as u32,
+                        sigma_z: c.sigma_z,
+                        sigma_n: c.sigma_n,
+                        epsilon: c.epsilon,
+                        clip_sigmas: self.settings.atrous_clip_sigmas,
+                        _pad: [0; 2],
+                    },
+                    gbuffer: b.gbuffer,
+                    input,
+                    details: a.details,
+                    out,
+                });
+                input = out;
             }
-            // neither filter: `indirect` is the raw image's buffer
-            None => {}
         }
     }
 
