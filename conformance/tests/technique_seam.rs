@@ -28,12 +28,16 @@ fn settings() -> serde_json::Value {
 
 /// [`settings`] for technique `name` (CausticMap at a 128^2 atlas; AdaptiveCaustics with
 /// three levels, the error metric from the second, so that its coarse photons' quantum
-/// and pyramid are exercised).
+/// and pyramid are exercised; PhotonGi without its temporal blend, whose second frame
+/// blends the first by design and so never equals a fresh technique's first frame).
 fn settings_for(name: &str) -> serde_json::Value {
     match name {
         "caustic-map" => serde_json::json!({ "photons_w": 64, "photons_h": 64, "atlas_size": 128 }),
         "adaptive-caustics" => serde_json::json!({
             "photons_w": 256, "photons_h": 256, "atlas_size": 128, "error_from_grid": 128
+        }),
+        "photon-gi" => serde_json::json!({
+            "photons_w": 64, "photons_h": 64, "rsm_size": 32, "temporal": false
         }),
         _ => settings(),
     }

@@ -12,8 +12,8 @@
 //!    times albedo / pi: the raw indirect light), `temporal_blend` and `atrous_filter`
 //!    (24.4, each a setting), `composite` with the direct light.
 //!
-//! Not built yet (issue 18): the shading-normal correction of Eq. 20; light, material and
-//! image-size updates without re-creating the technique.
+//! Not built yet (issue 18): the shading-normal correction of Eq. 20; image-size updates
+//! without re-creating the technique.
 
 mod settings;
 
@@ -151,6 +151,34 @@ fn light_power(l: &GpuLight) -> f64 {
     i * omega
 }
 
+/// The lights' RSMs and photon counts for `total` initial photons (allocated by power,
+/// 003 section 24.2), the unit of the packed photon power (the mean emitted photon
+/// power, W) and the photon map's flux quantum (W).
+fn plan_lights(
+    lights: &[GpuLight],
+    total: u64,
+    side: u32,
+    bounds: &crate::math::geometry::Aabb,
+) -> (Vec<LightRsm>, f32, f32) {
+    let powers: Vec<f64> = lights.iter().map(light_power).collect();
+    let counts = crate::math::photon_allocation::allocate_photons(total, &powers);
+    let rsms = lights
+        .iter()
+        .zip(&counts)
+        .enumerate()
+        .map(|(i, (l, &n))| LightRsm {
+            light: i as u32,
+            faces: rsm_faces(l, side, bounds),
+            photons: n as u32,
+        })
+        .collect();
+    let emitted: f64 = powers.iter().sum();
+    let power_scale = ((emitted / total as f64) as f32).max(f32::MIN_POSITIVE);
+    // a splat's share of a photon is at least 2^-20 of it in any pixel it reaches
+    let flux_quantum = power_scale * (1.0 / 1_048_576.0);
+    (rsms, power_scale, flux_quantum)
+}
+
 /// Device buffers of the frame.
 #[derive(Clone, Copy, Debug)]
 struct Buffers {
@@ -194,6 +222,8 @@ pub struct PhotonGi {
     model: Scene,
     camera: GpuCamera,
     lights: Vec<GpuLight>,
+    /// Scene bounds (a directional light's orthographic face covers them).
+    bounds: crate::math::geometry::Aabb,
     rsms: Vec<LightRsm>,
     /// Scene bounding-box diagonal (scene units): the splat constants scale with it.
     diagonal: f32,
@@ -228,33 +258,19 @@ impl PhotonGi {
         )?;
         let camera = GpuCamera::from_camera(&scene.camera);
         let total = settings.photons_w as u64 * settings.photons_h as u64;
-        let powers: Vec<f64> = ds.lights.iter().map(light_power).collect();
-        let counts = crate::math::photon_allocation::allocate_photons(total, &powers);
-        let rsms: Vec<LightRsm> = ds
-            .lights
-            .iter()
-            .zip(&counts)
-            .enumerate()
-            .map(|(i, (l, &n))| LightRsm {
-                light: i as u32,
-                faces: rsm_faces(l, settings.rsm_size, &ds.bounds),
-                photons: n as u32,
-            })
-            .collect();
+        let (rsms, power_scale, flux_quantum) =
+            plan_lights(&ds.lights, total, settings.rsm_size, &ds.bounds);
         let diagonal = (ds.bounds.max - ds.bounds.min)
             .length()
             .max(f32::MIN_POSITIVE);
-        let emitted: f64 = powers.iter().sum();
-        let power_scale = ((emitted / total as f64) as f32).max(f32::MIN_POSITIVE);
-        // a splat's share of a photon is at least 2^-20 of it in any pixel it reaches
-        let flux_quantum = power_scale * (1.0 / 1_048_576.0);
-
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
         let pixels = camera.width * camera.height;
         let side = settings.rsm_size;
-        let max_faces = rsms.iter().map(|r| r.faces.len()).max().unwrap_or(1).max(1) as u32;
-        let max_photons = rsms.iter().map(|r| r.photons).max().unwrap_or(1).max(1);
+        // room for any light's RSM and photons, so that lights can change without new
+        // buffers: six faces, every initial photon
+        let max_faces = 6u32;
+        let max_photons = total.min(u32::MAX as u64) as u32;
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let temporal = settings.temporal.then(|| TemporalBuffers {
             image: PingPong::create(&mut rec, pixels, "temporal indirect history"),
@@ -302,6 +318,7 @@ impl PhotonGi {
             model: scene.clone(),
             camera,
             lights: ds.lights.clone(),
+            bounds: ds.bounds,
             rsms,
             diagonal,
             power_scale,
@@ -748,6 +765,86 @@ impl PhotonGi {
         Ok(Image::new(self.camera.width, self.camera.height, px))
     }
 
+    /// Replaces the lights for the next frames: photons re-allocated by power, RSM faces
+    /// re-planned, the light buffer updated in place (or replaced when the count changes);
+    /// no other buffer is made (they hold any light's six faces and every photon). The
+    /// temporal history is reset.
+    pub fn set_lights(
+        &mut self,
+        backend: &mut dyn Backend,
+        lights: &[crate::scene::Light],
+    ) -> Result<(), Error> {
+        let mut model = self.model.clone();
+        model.lights = lights.to_vec();
+        model
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let gpu: Vec<GpuLight> = lights
+            .iter()
+            .map(crate::device::device_scene::gpu_light)
+            .collect();
+        let mut rec = Recording::new();
+        if gpu.len() == self.lights.len() {
+            rec.update(self.scene.lights, &gpu, "lights")?;
+            backend.execute(&rec)?;
+        } else {
+            let old = self.scene.lights;
+            let new = rec.upload(&gpu, "lights");
+            let alloc = planned_allocation(backend, &rec, None)?;
+            rec.steps.push(Step::Free { id: old.id });
+            backend.execute(&rec)?;
+            self.scene.lights = new;
+            for id in &mut self.owned {
+                if *id == old.id {
+                    *id = new.id;
+                }
+            }
+            let old_bytes = old.len as u64 * std::mem::size_of::<GpuLight>() as u64;
+            self.bytes = self.bytes - old_bytes + alloc.bytes;
+            for b in &mut self.plan.buffers {
+                if b.name == "lights" {
+                    b.bytes = alloc.bytes;
+                }
+            }
+        }
+        let total = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+        (self.rsms, self.power_scale, self.flux_quantum) =
+            plan_lights(&gpu, total, self.settings.rsm_size, &self.bounds);
+        self.lights = gpu;
+        let buffers = std::mem::take(&mut self.plan.buffers);
+        self.plan = PhotonGi::make_plan(&model, &self.settings, &self.rsms, &buffers);
+        self.model = model;
+        self.reset_history();
+        Ok(())
+    }
+
+    /// Replaces the materials' parameters for the next frames (the same names, none
+    /// switching between diffuse and specular: `frame::material_update`); the temporal
+    /// history is reset.
+    pub fn set_materials(
+        &mut self,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<(), Error> {
+        let u = crate::frame::material_update::material_update(&self.model, materials)?;
+        let mut rec = Recording::new();
+        rec.update(self.scene.materials, &u.gpu, "materials")?;
+        backend.execute(&rec)?;
+        let buffers = std::mem::take(&mut self.plan.buffers);
+        self.plan = PhotonGi::make_plan(&u.model, &self.settings, &self.rsms, &buffers);
+        self.model = u.model;
+        self.reset_history();
+        Ok(())
+    }
+
+    /// Forgets the temporal history (the next frame is not blended).
+    fn reset_history(&mut self) {
+        if let Some(t) = &mut self.buffers.temporal {
+            t.image.reset();
+            t.edge.reset();
+        }
+    }
+
     /// The settings in effect.
     pub fn settings(&self) -> &PhotonGiSettings {
         &self.settings
@@ -852,24 +949,18 @@ impl Technique for PhotonGi {
 
     fn set_lights(
         &mut self,
-        _backend: &mut dyn Backend,
-        _lights: &[crate::scene::Light],
+        backend: &mut dyn Backend,
+        lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
-        // TODO(issue 19): light updates (re-allocate photons and RSM faces)
-        Err(Error::InvalidParameter(
-            "photon-gi: lights cannot change yet; create the technique again".into(),
-        ))
+        PhotonGi::set_lights(self, backend, lights)
     }
 
     fn set_materials(
         &mut self,
-        _backend: &mut dyn Backend,
-        _materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+        backend: &mut dyn Backend,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
     ) -> Result<(), Error> {
-        // TODO(issue 19): material updates
-        Err(Error::InvalidParameter(
-            "photon-gi: materials cannot change yet; create the technique again".into(),
-        ))
+        PhotonGi::set_materials(self, backend, materials)
     }
 
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
