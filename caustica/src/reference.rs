@@ -17,7 +17,9 @@ use std::path::{Path, PathBuf};
 /// How a reference is computed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ReferenceSpec {
-    /// The technique whose unfiltered estimate converges to the reference (registry name).
+    /// The technique whose unfiltered estimate converges to the reference: a registry
+    /// name, or a technique spec with settings (`report::technique_spec`; PhotonGi's
+    /// indirect reference is [`INDIRECT_REFERENCE`]).
     #[serde(default = "default_technique")]
     pub technique: String,
     /// Image size (pixels).
@@ -31,6 +33,26 @@ pub struct ReferenceSpec {
     pub target_noise: f64,
     /// Stop after this many frames whatever the noise (recorded in the sidecar).
     pub max_frames: u32,
+}
+
+/// The technique spec of the indirect-light reference (issue 18): PhotonGi's raw deposit
+/// of every photon hit after the first bounce (`estimator: deposit`: no splat, no filter),
+/// the quantity its splats estimate.
+pub const INDIRECT_REFERENCE: &str =
+    "photon-gi:estimator=deposit+temporal=false+atrous_iterations=0";
+
+/// The reference technique `technique` (a registry name) is measured against: the
+/// indirect reference for PhotonGi, `spec`'s (the caustic reference by default)
+/// otherwise.
+pub fn reference_for(technique: &str, spec: &ReferenceSpec) -> ReferenceSpec {
+    if technique == "photon-gi" {
+        ReferenceSpec {
+            technique: INDIRECT_REFERENCE.into(),
+            ..spec.clone()
+        }
+    } else {
+        spec.clone()
+    }
 }
 
 fn default_technique() -> String {
@@ -173,12 +195,14 @@ pub fn compute(
     let mut scene = scene.clone();
     scene.camera.width = spec.width;
     scene.camera.height = spec.height;
-    let settings = serde_json::json!({
-        "photons_w": spec.photons_side,
-        "photons_h": spec.photons_side,
-    });
-    let mut sspm =
-        create(&spec.technique, backend, &scene, &settings).map_err(|e| e.to_string())?;
+    // the technique may be a spec with settings (`photon-gi:estimator=deposit+...`)
+    let (name, overrides) = crate::report::technique_spec(&spec.technique)?;
+    let mut settings = serde_json::Map::new();
+    settings.insert("photons_w".into(), spec.photons_side.into());
+    settings.insert("photons_h".into(), spec.photons_side.into());
+    settings.extend(overrides);
+    let settings = serde_json::Value::Object(settings);
+    let mut sspm = create(name, backend, &scene, &settings).map_err(|e| e.to_string())?;
     let (_, raw_output) = sspm.estimate_outputs();
     let n = (spec.width * spec.height) as usize;
     let mut sum = vec![[0.0f64; 3]; n];

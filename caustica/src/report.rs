@@ -138,32 +138,43 @@ pub fn run(
     }
     let mut cpu = crate::open_backend("cpu").map_err(|e| e.to_string())?;
     let mut records = Vec::new();
-    for scene in &plan.scenes {
-        log(&format!(
-            "{}: reference ({}x{}, target noise {})",
-            scene.name, plan.reference.width, plan.reference.height, plan.reference.target_noise
-        ));
-        let r = reference::load_or_compute(
-            cache,
-            scene,
-            &plan.reference,
-            cpu.as_mut(),
-            &mut |k, max, noise| {
-                if k % 8 == 0 || k == max {
-                    log(&format!("  reference frame {k}/{max}: noise {noise:.4}"));
-                }
-            },
-        )?;
-        log(&format!(
-            "  reference: {} photons over {} frames, noise {:.4}",
-            r.info.photons, r.info.frames, r.info.noise
-        ));
-        let mut scene = scene.clone();
+    for original in &plan.scenes {
+        // one reference per estimator the techniques need (the caustics' for the caustic
+        // techniques, the indirect light's for PhotonGi), computed or loaded once
+        let mut references: Vec<reference::Reference> = Vec::new();
+        let mut scene = original.clone();
         scene.camera.width = plan.reference.width;
         scene.camera.height = plan.reference.height;
-        let mask = CausticMask::from_reference(&r.image);
         for technique in &plan.techniques {
             let (name, overrides) = technique_spec(technique)?;
+            let spec = reference::reference_for(name, &plan.reference);
+            if !references.iter().any(|r| r.info.spec == spec) {
+                log(&format!(
+                    "{}: reference {} ({}x{}, target noise {})",
+                    scene.name, spec.technique, spec.width, spec.height, spec.target_noise
+                ));
+                let r = reference::load_or_compute(
+                    cache,
+                    original,
+                    &spec,
+                    cpu.as_mut(),
+                    &mut |k, max, noise| {
+                        if k % 8 == 0 || k == max {
+                            log(&format!("  reference frame {k}/{max}: noise {noise:.4}"));
+                        }
+                    },
+                )?;
+                log(&format!(
+                    "  reference: {} photons over {} frames, noise {:.4}",
+                    r.info.photons, r.info.frames, r.info.noise
+                ));
+                references.push(r);
+            }
+            let r = references
+                .iter()
+                .find(|r| r.info.spec == spec)
+                .expect("computed above");
+            let mask = CausticMask::from_reference(&r.image);
             // each technique runs the asked filters it has (Sspm's `filter`, CausticMap's
             // `gather`), its default filter where it has none of them, and a technique
             // with one filter runs it once as "own"
