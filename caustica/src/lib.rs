@@ -38,6 +38,7 @@ pub mod reference;
 #[cfg(feature = "report")]
 pub mod report;
 pub mod scene_file;
+pub mod technique_spec;
 
 pub use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType};
 pub use caustica_core::frame::error::Error;

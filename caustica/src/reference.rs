@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ReferenceSpec {
     /// The technique whose unfiltered estimate converges to the reference: a registry
-    /// name, or a technique spec with settings (`report::technique_spec`; PhotonGi's
+    /// name, or a technique spec with settings (`technique_spec::technique_spec`; PhotonGi's
     /// indirect reference is [`INDIRECT_REFERENCE`]).
     #[serde(default = "default_technique")]
     pub technique: String,
@@ -196,7 +196,7 @@ pub fn compute(
     scene.camera.width = spec.width;
     scene.camera.height = spec.height;
     // the technique may be a spec with settings (`photon-gi:estimator=deposit+...`)
-    let (name, overrides) = crate::report::technique_spec(&spec.technique)?;
+    let (name, overrides) = crate::technique_spec::technique_spec(&spec.technique)?;
     let mut settings = serde_json::Map::new();
     settings.insert("photons_w".into(), spec.photons_side.into());
     settings.insert("photons_h".into(), spec.photons_side.into());

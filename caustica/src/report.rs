@@ -7,7 +7,7 @@
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::{bias_variance, peak_ratio, relative_mse, CausticMask};
-use caustica_core::techniques::{create, technique_names, TECHNIQUES};
+use caustica_core::techniques::{create, TECHNIQUES};
 
 /// The filter label of a technique that has no `filter` setting (its own filter runs).
 pub const OWN_FILTER: &str = "own";
@@ -95,29 +95,7 @@ pub struct ReportPlan {
     pub reference: ReferenceSpec,
 }
 
-/// A technique spec `name[:key=value[+key=value...]]` as (registry name, settings set over
-/// the plan's): a value that parses as JSON is taken as such (`64`, `true`), any other
-/// as a string (`screen`). Errors name the spec and the registry's techniques.
-pub fn technique_spec(
-    spec: &str,
-) -> Result<(&str, serde_json::Map<String, serde_json::Value>), String> {
-    let (name, rest) = spec.split_once(':').unwrap_or((spec, ""));
-    if !technique_names().contains(&name) {
-        return Err(format!(
-            "unknown technique '{name}' in '{spec}'; available: {}",
-            technique_names().join(", ")
-        ));
-    }
-    let mut settings = serde_json::Map::new();
-    for pair in rest.split('+').filter(|p| !p.is_empty()) {
-        let (k, v) = pair
-            .split_once('=')
-            .ok_or_else(|| format!("technique '{spec}': '{pair}' is not key=value"))?;
-        let value = serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::from(v));
-        settings.insert(k.to_string(), value);
-    }
-    Ok((name, settings))
-}
+pub use crate::technique_spec::technique_spec;
 
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
