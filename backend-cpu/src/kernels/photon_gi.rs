@@ -631,8 +631,9 @@ mod tests {
         for f in 0..faces as usize {
             for i in 0..n {
                 let t = &texels[f * n + i];
-                for c in 0..3 {
-                    exact[block((i % 16) as f32, (i / 16) as f32, f)][c] += t.flux[c] as f64;
+                let e = &mut exact[block((i % 16) as f32, (i / 16) as f32, f)];
+                for (acc, v) in e.iter_mut().zip(t.flux) {
+                    *acc += v as f64;
                 }
             }
         }
@@ -654,19 +655,17 @@ mod tests {
                 }
                 let f = (ph.origin[0] / 100.0) as usize;
                 let b = block(ph.origin[0] - 100.0 * f as f32, ph.origin[1], f);
-                for c in 0..3 {
-                    warped[b][c] += ph.flux[c] as f64 / seeds as f64;
+                for (acc, v) in warped[b].iter_mut().zip(ph.flux) {
+                    *acc += v as f64 / seeds as f64;
                 }
             }
             for k in 0..samples {
                 let t =
                     (caustica_core::math::rng::random_u32(seed, k, 9, 0) as usize) % texels.len();
                 let (f, i) = (t / n, t % n);
-                for c in 0..3 {
-                    uniform[block((i % 16) as f32, (i / 16) as f32, f)][c] +=
-                        texels[t].flux[c] as f64 * texels.len() as f64
-                            / samples as f64
-                            / seeds as f64;
+                let u = &mut uniform[block((i % 16) as f32, (i / 16) as f32, f)];
+                for (acc, v) in u.iter_mut().zip(texels[t].flux) {
+                    *acc += v as f64 * texels.len() as f64 / samples as f64 / seeds as f64;
                 }
             }
         }
