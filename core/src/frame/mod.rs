@@ -10,6 +10,7 @@ pub mod caustic_atlas;
 pub mod emission;
 pub mod error;
 pub mod image;
+pub mod irradiance_passes;
 pub mod light_view_plane;
 pub mod material_update;
 pub mod metrics;

@@ -26,13 +26,16 @@ use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
 use crate::frame::error::Error;
 use crate::frame::image::Image;
+use crate::frame::irradiance_passes::{
+    record_atrous, record_temporal_blend, AtrousScratch, History,
+};
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    AtrousFilter, Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics,
-    RsmImportance, SampleRsm, SplatPhotons, TemporalBlend, TraceIndirect,
+    Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, RsmImportance,
+    SampleRsm, SplatPhotons, TraceIndirect,
 };
 use crate::math::fixed_point::join_u64;
 use crate::math::gi_photon::{gi_store, screen_tiles};
@@ -702,60 +705,34 @@ impl PhotonGi {
     /// optional: the last that runs writes `indirect`; with neither, `indirect` is `raw`).
     fn record_filters(&self, rec: &mut Recording, cam: GpuCamera) {
         let b = &self.buffers;
-        let c = crate::math::irradiance_filter::FilterConstants::default();
         let blended = b.atrous.map_or(b.indirect, |a| a.input);
         let mut input = b.raw;
-        if let Some(t) = b.temporal {
-            rec.kernel(TemporalBlend {
-                params: TemporalParams {
-                    camera: cam,
-                    previous: t.previous,
-                    alpha_max: c.alpha_max,
-                    sigma_z: c.sigma_z,
-                    sigma_n: c.sigma_n,
-                    epsilon: c.epsilon,
-                    history_frames: t.image.frames.min(u32::MAX as u64) as u32,
-                    _pad: [0; 3],
-                },
-                gbuffer: b.gbuffer,
-                input: b.raw,
-                history: t.image.history(),
-                history_edge: t.edge.history(),
-                out: blended,
-                next_history: t.image.current(),
-                next_edge: t.edge.current(),
-            });
+        if let Some(t) = &b.temporal {
+            let history = History {
+                image: &t.image,
+                edge: &t.edge,
+                previous: t.previous,
+            };
+            record_temporal_blend(rec, cam, b.gbuffer, history, b.raw, blended);
             input = blended;
         }
         // with neither filter `indirect` is the raw image's buffer
         if let Some(a) = b.atrous {
-            let n = self.settings.atrous_iterations;
-            for i in 0..n {
-                let out = if i + 1 == n {
-                    b.indirect
-                } else if i % 2 == 0 {
-                    a.a
-                } else {
-                    a.b
-                };
-                rec.kernel(AtrousFilter {
-                    params: AtrousParams {
-                        camera: cam,
-                        iteration: i,
-                        last: (i + 1 == n) as u32,
-                        sigma_z: c.sigma_z,
-                        sigma_n: c.sigma_n,
-                        epsilon: c.epsilon,
-                        clip_sigmas: self.settings.atrous_clip_sigmas,
-                        _pad: [0; 2],
-                    },
-                    gbuffer: b.gbuffer,
-                    input,
-                    details: a.details,
-                    out,
-                });
-                input = out;
-            }
+            let scratch = AtrousScratch {
+                a: a.a,
+                b: a.b,
+                details: a.details,
+            };
+            record_atrous(
+                rec,
+                cam,
+                b.gbuffer,
+                scratch,
+                self.settings.atrous_iterations,
+                self.settings.atrous_clip_sigmas,
+                input,
+                b.indirect,
+            );
         }
     }
 

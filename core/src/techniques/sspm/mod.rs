@@ -36,14 +36,16 @@ use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
 use crate::frame::error::Error;
 use crate::frame::image::Image;
+use crate::frame::irradiance_passes::{
+    record_atrous, record_temporal_blend, AtrousScratch, History,
+};
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    AtrousFilter, BilateralGather, Composite, DensityGather, DepositScreen, DirectLight,
-    GatherFootprint, PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TemporalBlend,
-    TileHitDistance, TracePhotons,
+    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
 use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
@@ -851,58 +853,37 @@ impl Sspm {
                         });
                     }
                 }
-                if let Some(t) = self.temporal {
-                    let c = crate::math::irradiance_filter::FilterConstants::default();
-                    rec.kernel(TemporalBlend {
-                        params: TemporalParams {
-                            camera: cam,
-                            previous: t.previous,
-                            alpha_max: c.alpha_max,
-                            sigma_z: c.sigma_z,
-                            sigma_n: c.sigma_n,
-                            epsilon: c.epsilon,
-                            history_frames: t.image.frames.min(u32::MAX as u64) as u32,
-                            _pad: [0; 3],
-                        },
-                        gbuffer: self.gbuffer,
-                        input: t.unblended,
-                        history: t.image.history(),
-                        history_edge: t.edge.history(),
-                        out: blended,
-                        next_history: t.image.current(),
-                        next_edge: t.edge.current(),
-                    });
+                if let Some(t) = &self.temporal {
+                    let history = History {
+                        image: &t.image,
+                        edge: &t.edge,
+                        previous: t.previous,
+                    };
+                    record_temporal_blend(
+                        &mut rec,
+                        cam,
+                        self.gbuffer,
+                        history,
+                        t.unblended,
+                        blended,
+                    );
                 }
                 if let Some(a) = self.atrous {
-                    let c = crate::math::irradiance_filter::FilterConstants::default();
-                    let n = self.settings.atrous_iterations;
-                    let mut input = a.input;
-                    for i in 0..n {
-                        let out = if i + 1 == n {
-                            filtered
-                        } else if i % 2 == 0 {
-                            a.a
-                        } else {
-                            a.b
-                        };
-                        rec.kernel(AtrousFilter {
-                            params: AtrousParams {
-                                camera: cam,
-                                iteration: i,
-                                last: (i + 1 == n) as u32,
-                                sigma_z: c.sigma_z,
-                                sigma_n: c.sigma_n,
-                                epsilon: c.epsilon,
-                                clip_sigmas: self.settings.atrous_clip_sigmas,
-                                _pad: [0; 2],
-                            },
-                            gbuffer: self.gbuffer,
-                            input,
-                            details: a.details,
-                            out,
-                        });
-                        input = out;
-                    }
+                    let scratch = AtrousScratch {
+                        a: a.a,
+                        b: a.b,
+                        details: a.details,
+                    };
+                    record_atrous(
+                        &mut rec,
+                        cam,
+                        self.gbuffer,
+                        scratch,
+                        self.settings.atrous_iterations,
+                        self.settings.atrous_clip_sigmas,
+                        a.input,
+                        filtered,
+                    );
                 }
                 if let (true, Some(direct), Some(out)) = (
                     Needs::of_plan(&self.plan).composite,
