@@ -266,13 +266,21 @@ impl CpuBackend {
                 table,
                 edge,
                 out,
+                reach,
             }) => {
                 let m = self.photon_map(photon_map)?;
                 let t = get(table.id)?.as_slice(table.len)?;
                 let e = get(edge.id)?.as_slice(edge.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
                 let img = density_gather::gather_footprint(params, e, m, t);
-                self.put(out.id, &img)
+                let grid = density_gather::reach_grid(
+                    params,
+                    0,
+                    get(reach.id)?.as_slice(reach.len)?,
+                    &img,
+                );
+                self.put(out.id, &img)?;
+                self.put(reach.id, &grid)
             }
             Kernel::DensityGather(DensityGather {
                 params,
@@ -280,12 +288,19 @@ impl CpuBackend {
                 edge,
                 input,
                 out,
+                reach,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let e = get(edge.id)?.as_slice(edge.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
+                let grid = get(reach.id)?.as_slice(reach.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = density_gather::density_gather(params, g, e, i);
+                let img = density_gather::density_gather(params, g, e, i, grid);
+                if params.axis == 0 {
+                    // the row pass's sources' reaches, for the column pass
+                    let grid = density_gather::reach_grid(params, 1, grid, &img);
+                    self.put(reach.id, &grid)?;
+                }
                 self.put(out.id, &img)
             }
             Kernel::RefineClusters(RefineClusters {

@@ -4,7 +4,7 @@
 
 __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__global const),
                              __global const float4* edge, __global const float4* input,
-                             __global float4* out) {
+                             __global float4* out, __global uint* reach) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int x, y;
     if (p->axis == 0u) {
@@ -21,10 +21,11 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         out[j] = (float4)(0.0f);
         return;
     }
-    int reach = (int)p->max_radius_px;
+    // the taps that can hold a source with weight here (the rest add nothing)
+    int taps = pass_reach(reach, w, h, x, y, p->axis, (int)p->max_radius_px);
     float r = input[j].w;
     float3 sum = (float3)(0.0f);
-    for (int d = -reach; d <= reach; d++) {
+    for (int d = -taps; d <= taps; d++) {
         int qx = p->axis == 0u ? x + d : x;
         int qy = p->axis == 0u ? y : y + d;
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
@@ -46,7 +47,10 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         return;
     }
     if (p->axis == 0u) {
-        out[j] = (float4)(sum / gather_normaliser(p, edge, x, y, r, 1u), r);
+        float4 o = (float4)(sum / gather_normaliser(p, edge, x, y, r, 1u), r);
+        out[j] = o;
+        // the column pass's sources
+        put_reach(reach, w, h, 1u, x, y, o, (int)p->max_radius_px);
     } else if (p->surface == GATHER_SURFACE_ATLAS) {
         // irradiance E = Phi / A over the texel's world area (its edge texel's y)
         float3 e = saturate_radiance3(sum * saturate_radiance(1.0f / ej.y));

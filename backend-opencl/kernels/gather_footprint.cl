@@ -4,7 +4,8 @@
 
 __kernel void gather_footprint(__global const GatherParams* p,
                                PHOTON_MAP_PARAMS(__global const), __global const uint* table,
-                               __global const float4* edge, __global float4* out) {
+                               __global const float4* edge, __global float4* out,
+                               __global uint* reach) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int i = (int)get_global_id(0);
     if (i >= w * h) return;
@@ -28,5 +29,8 @@ __kernel void gather_footprint(__global const GatherParams* p,
         return;
     }
     float inv = 1.0f / gather_normaliser(p, edge, x, y, r, 0u);
-    out[i] = (float4)(f.x * inv, f.y * inv, f.z * inv, r);
+    float4 o = (float4)(f.x * inv, f.y * inv, f.z * inv, r);
+    out[i] = o;
+    // the row pass's sources: its loops reach only as far as they do
+    put_reach(reach, w, h, 0u, x, y, o, (int)p->max_radius_px);
 }

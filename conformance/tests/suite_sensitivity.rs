@@ -72,6 +72,9 @@ enum Mutation {
     FootprintHigh,
     /// `density_gather` 1e-4 too high.
     DensityGatherHigh,
+    /// `gather_footprint`'s reach-grid entries one tap short: the row pass would miss
+    /// each tile's farthest-reaching source's last taps.
+    ReachShort,
     /// `direct_light` 1e-3 too high.
     DirectHigh,
     /// `composite` one ulp off in one channel.
@@ -330,6 +333,13 @@ impl Mutant {
             }),
             (Mutation::FootprintHigh, Kernel::GatherFootprint(GatherFootprint { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
+            }
+            (Mutation::ReachShort, Kernel::GatherFootprint(GatherFootprint { reach, .. })) => {
+                self.modify::<u32>(reach.id, |v| {
+                    for e in v.iter_mut().filter(|e| **e > 0) {
+                        *e -= 1;
+                    }
+                })
             }
             (Mutation::DensityGatherHigh, Kernel::DensityGather(DensityGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
@@ -622,6 +632,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
         ),
         (
             Mutation::DensityGatherHigh,
+            "photon_count_table + gather_footprint + density_gather",
+        ),
+        (
+            Mutation::ReachShort,
             "photon_count_table + gather_footprint + density_gather",
         ),
         (Mutation::DirectHigh, "direct_light"),

@@ -1,4 +1,4 @@
-// needs: types vector optics footprint scene gbuffer density_gather
+// needs: types vector optics footprint scene gbuffer density_gather reach_grid
 // density_gather: one direction of the scatter-normalised, density-adaptive caustic
 // gather (core/src/math/density_gather.rs; the contract in core/src/kernels/
 // density_gather.rs). Mirror of backend-opencl/kernels/density_gather.cl and
@@ -12,6 +12,7 @@
 @group(0) @binding(5) var<storage, read> edge: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> reach: array<atomic<u32>>;
 
 fn density_gather(index: u32) {
     let p = params;
@@ -40,11 +41,12 @@ fn density_gather(index: u32) {
         out[j] = vec4<f32>(0.0);
         return;
     }
-    let reach = i32(p.max_radius_px);
+    // the taps that can hold a source with weight here (the rest add nothing)
+    let taps = pass_reach(w, h, x, y, p.axis, i32(p.max_radius_px));
     let r = input[j].w;
     let dark = vec4<f32>(0.0, 0.0, 0.0, select(0.0, r, p.axis == 0u));
     var sum = vec3<f32>(0.0);
-    for (var d = -reach; d <= reach; d++) {
+    for (var d = -taps; d <= taps; d++) {
         let qx = select(x, x + d, p.axis == 0u);
         let qy = select(y + d, y, p.axis == 0u);
         if (qx < 0 || qy < 0 || qx >= w || qy >= h) {
@@ -74,7 +76,10 @@ fn density_gather(index: u32) {
         return;
     }
     if (p.axis == 0u) {
-        out[j] = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
+        let o = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
+        out[j] = o;
+        // the column pass's sources
+        put_reach(w, h, 1u, x, y, o, i32(p.max_radius_px));
     } else if (p.surface == GATHER_SURFACE_ATLAS) {
         // irradiance E = Phi / A over the texel's world area (its edge texel's y)
         let e = saturate_radiance3(sum * saturate_radiance(1.0 / ej.y));

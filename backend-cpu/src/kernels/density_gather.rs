@@ -7,8 +7,8 @@ use caustica_core::device::layout::{
     PhotonMapView,
 };
 use caustica_core::math::density_gather::{
-    clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight, footprint_radius,
-    footprint_weight, join_u64_wide,
+    accumulate_reach_grid, clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight,
+    footprint_radius, footprint_weight, join_u64_wide, pass_reach,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
@@ -140,16 +140,26 @@ pub fn gather_footprint(
         .collect()
 }
 
+/// The reach grid after a pass that wrote `sources` for pass `axis` (`gather_footprint`:
+/// the row pass's, axis 0; the row pass: the column pass's, axis 1): `grid`'s entries
+/// merged by maximum with the sources' (the GPU ports' atomic maxima).
+pub fn reach_grid(p: &GatherParams, axis: u32, grid: &[u32], sources: &[[f32; 4]]) -> Vec<u32> {
+    let mut grid = grid.to_vec();
+    let (w, h) = (p.camera.width, p.camera.height);
+    accumulate_reach_grid(&mut grid, sources, w, h, axis, p.max_radius_px as i32);
+    grid
+}
+
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
-/// `caustica_core::kernels::DensityGather`).
+/// `caustica_core::kernels::DensityGather`); `grid` is the reach grid the pass reads.
 pub fn density_gather(
     p: &GatherParams,
     g: GBufferView,
     edge: &[[f32; 4]],
     input: &[[f32; 4]],
+    grid: &[u32],
 ) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
-    let reach = p.max_radius_px as i32;
     (0..w * h)
         .into_par_iter()
         .map(|j| {
@@ -158,6 +168,8 @@ pub fn density_gather(
                 return [0.0; 4];
             }
             let (x, y) = (j % w, j / w);
+            // the taps that can hold a source with weight here (the rest add nothing)
+            let reach = pass_reach(grid, w, h, x, y, p.axis, p.max_radius_px as i32);
             let r = input[j as usize][3];
             let mut sum = Vec3::ZERO;
             for d in -reach..=reach {

@@ -174,3 +174,57 @@ inline bool column_pass_pixel(uint t, uint w, uint h, int* x, int* y) {
     *y = (int)py;
     return px < w && py < h;
 }
+
+// The reach grid that bounds the density gather's loops (core's footprint_reach,
+// reach_grid_index, reach_grid_entry, pass_reach): per REACH_TILE x REACH_TILE tile and
+// pass the maximum footprint_reach + 1 of its sources, the row pass's grid first.
+#define REACH_TILE 8
+
+// The largest |offset| at which footprint_weight(offset, radius) can be nonzero, capped
+// at `cap`; -1 where none.
+inline int footprint_reach(float radius, int cap) {
+    float s = radius + 0.5f;
+    if (!(s > 0.0f)) return -1;
+    return (int)fmin(ceil(s), (float)cap + 1.0f) - 1;
+}
+
+// Index of the tile holding (x, y) in pass `axis`'s grid of a w x h image.
+inline uint reach_grid_index(int w, int h, uint axis, int x, int y) {
+    int tx = (w + REACH_TILE - 1) / REACH_TILE;
+    int ty = (h + REACH_TILE - 1) / REACH_TILE;
+    return (uint)((int)axis * tx * ty + (y / REACH_TILE) * tx + x / REACH_TILE);
+}
+
+// A source's entry: footprint_reach + 1, 0 for a pixel without flux.
+inline uint reach_grid_entry(float4 source, int cap) {
+    if (source.x == 0.0f && source.y == 0.0f && source.z == 0.0f) return 0u;
+    return (uint)(footprint_reach(source.w, cap) + 1);
+}
+
+// Puts a source pixel into its tile of pass `axis`'s grid (atomic maximum).
+inline void put_reach(__global uint* grid, int w, int h, uint axis, int x, int y,
+                      float4 source, int cap) {
+    uint e = reach_grid_entry(source, cap);
+    if (e > 0u) atomic_max(&grid[reach_grid_index(w, h, axis, x, y)], e);
+}
+
+// Half-width of the taps destination (x, y) of pass `axis` visits: the largest reach
+// among the tiles of its row (column) within `cap` whose entry covers the distance to the
+// tile's nearest pixel; -1 where no source reaches it.
+inline int pass_reach(__global const uint* grid, int w, int h, int x, int y, uint axis,
+                      int cap) {
+    int along = axis == 0u ? x : y;
+    int len = axis == 0u ? w : h;
+    int t0 = max(along - cap, 0) / REACH_TILE;
+    int t1 = min(along + cap, len - 1) / REACH_TILE;
+    int r = -1;
+    for (int k = t0; k <= t1; k++) {
+        int tx = axis == 0u ? k : x / REACH_TILE;
+        int ty = axis == 0u ? y / REACH_TILE : k;
+        int g = (int)grid[reach_grid_index(w, h, axis, tx * REACH_TILE, ty * REACH_TILE)] - 1;
+        // distance from `along` to the tile's nearest pixel
+        int dist = max(max(k * REACH_TILE - along, along - (k * REACH_TILE + REACH_TILE - 1)), 0);
+        if (g >= dist) r = max(r, g);
+    }
+    return min(r, cap);
+}

@@ -16,6 +16,7 @@ use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
     PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
+use caustica_core::math::density_gather::{accumulate_reach_grid, reach_grid_len};
 use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::Scene;
 use caustica_core::techniques::sspm::{FrameConstants, GatherFilter};
@@ -290,30 +291,51 @@ impl Fixture {
         })
     }
 
-    /// Runs `gather_footprint` on `b`: the normalised flux and radius per pixel.
+    /// The density gather's reach grid buffer (both passes' grids) holding pass `axis`'s
+    /// grid of `sources` merged into `grid` (`math::density_gather::accumulate_reach_grid`).
+    pub fn reach_grid_of(&self, mut grid: Vec<u32>, axis: u32, sources: &[[f32; 4]]) -> Vec<u32> {
+        let (w, h) = (self.camera.width, self.camera.height);
+        let cap = self.settings.max_radius_px as i32;
+        accumulate_reach_grid(&mut grid, sources, w, h, axis, cap);
+        grid
+    }
+
+    /// A zeroed reach grid buffer for this fixture's camera.
+    pub fn empty_reach_grid(&self) -> Vec<u32> {
+        vec![0; reach_grid_len(self.camera.width, self.camera.height) as usize]
+    }
+
+    /// Runs `gather_footprint` on `b`: the normalised flux and radius per pixel, and the
+    /// reach grid it wrote (into a zeroed one).
     pub fn run_footprint(
         &self,
         b: &mut dyn Backend,
         edge: &[EdgeTexel],
         map: &[DepositTexel],
         table: &[u32],
-    ) -> Result<Vec<[f32; 4]>, String> {
+    ) -> Result<(Vec<[f32; 4]>, Vec<u32>), String> {
         let mut rec = Recording::new();
         let e = rec.upload(edge, "gather edge texels");
         let m = rec.upload_photon_map(map);
         let t = rec.upload(table, "photon count table");
         let out = rec.create(self.pixels(), "footprints");
+        let reach = rec.upload(&self.empty_reach_grid(), "gather reach grid");
         rec.kernel(Kernel::GatherFootprint(GatherFootprint {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
             photon_map: m,
             table: t,
             edge: e,
             out,
+            reach,
         }));
-        run_and_free(b, "gather_footprint", &rec, |b| read_buf(b, out))
+        run_and_free(b, "gather_footprint", &rec, |b| {
+            Ok((read_buf(b, out)?, read_buf(b, reach)?))
+        })
     }
 
-    /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b`.
+    /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b` with the reach
+    /// grid of `input` (as the pass before would have written it): the output, and the
+    /// reach grid after the pass.
     pub fn run_density_gather(
         &self,
         b: &mut dyn Backend,
@@ -321,12 +343,14 @@ impl Fixture {
         gbuffer: &[GBufferTexel],
         edge: &[EdgeTexel],
         input: &[[f32; 4]],
-    ) -> Result<Vec<[f32; 4]>, String> {
+    ) -> Result<(Vec<[f32; 4]>, Vec<u32>), String> {
         let mut rec = Recording::new();
         let g = rec.upload_gbuffer(gbuffer);
         let e = rec.upload(edge, "gather edge texels");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
+        let grid = self.reach_grid_of(self.empty_reach_grid(), axis, input);
+        let reach = rec.upload(&grid, "gather reach grid");
         rec.kernel(Kernel::DensityGather(DensityGather {
             params: self
                 .constants
@@ -335,8 +359,11 @@ impl Fixture {
             edge: e,
             input: i,
             out,
+            reach,
         }));
-        run_and_free(b, "density_gather", &rec, |b| read_buf(b, out))
+        run_and_free(b, "density_gather", &rec, |b| {
+            Ok((read_buf(b, out)?, read_buf(b, reach)?))
+        })
     }
 
     /// Runs `direct_light` on `b` with the given G-buffer.
@@ -423,10 +450,13 @@ impl ReferenceInputs {
         } = fx.run_deposit(r, &gbuffer, &photons)?;
         let tiles = fx.run_tiles(r, &photon_map)?;
         let (table, edge) = fx.run_count_table(r, &gbuffer, &photon_map)?;
-        let footprints = fx.run_footprint(r, &edge, &photon_map, &table)?;
-        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &edge, &footprints)?;
+        let footprints = fx.run_footprint(r, &edge, &photon_map, &table)?.0;
+        let density_rows = fx.run_density_gather(r, 0, &gbuffer, &edge, &footprints)?.0;
         let filtered = match fx.settings.filter {
-            GatherFilter::Density => fx.run_density_gather(r, 1, &gbuffer, &edge, &density_rows)?,
+            GatherFilter::Density => {
+                fx.run_density_gather(r, 1, &gbuffer, &edge, &density_rows)?
+                    .0
+            }
             GatherFilter::Bilateral => {
                 let half = fx.run_gather(r, 0, &gbuffer, &tiles, &raw)?;
                 fx.run_gather(r, 1, &gbuffer, &tiles, &half)?

@@ -111,8 +111,15 @@ pub fn check_density_gather(
         format!("photon_count_table's edge texels differ on {differ} pixels")
     });
 
-    let fa = fx.run_footprint(r, &inputs.edge, &inputs.photon_map, &inputs.table)?;
-    let fb = fx.run_footprint(c, &inputs.edge, &inputs.photon_map, &inputs.table)?;
+    let (fa, grid_a) = fx.run_footprint(r, &inputs.edge, &inputs.photon_map, &inputs.table)?;
+    let (fb, grid_b) = fx.run_footprint(c, &inputs.edge, &inputs.photon_map, &inputs.table)?;
+    // the reach grid is an integer function of the kernel's own output: equal
+    for (who, f, grid) in [("reference", &fa, &grid_a), ("candidate", &fb, &grid_b)] {
+        let want = fx.reach_grid_of(fx.empty_reach_grid(), 0, f);
+        v.check(*grid == want, || {
+            format!("gather_footprint's reach grid on the {who} is not its output's")
+        });
+    }
     // the radius is ~7 ulp from the same integers: compared as a channel
     let radius: Vec<[f32; 4]> = fa.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
     let radius_b: Vec<[f32; 4]> = fb.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
@@ -140,8 +147,19 @@ pub fn check_density_gather(
             &inputs.density_rows
         };
         let (g, e) = (&inputs.gbuffer, &inputs.edge);
-        let a = fx.run_density_gather(r, axis, g, e, input)?;
-        let b = fx.run_density_gather(c, axis, g, e, input)?;
+        let (a, grid_a) = fx.run_density_gather(r, axis, g, e, input)?;
+        let (b, grid_b) = fx.run_density_gather(c, axis, g, e, input)?;
+        // the row pass adds its own output's grid for the column pass; the column pass
+        // writes none
+        for (who, out, grid) in [("reference", &a, &grid_a), ("candidate", &b, &grid_b)] {
+            let mut want = fx.reach_grid_of(fx.empty_reach_grid(), axis, input);
+            if axis == 0 {
+                want = fx.reach_grid_of(want, 1, out);
+            }
+            v.check(*grid == want, || {
+                format!("density_gather axis {axis}'s reach grid on the {who} is wrong")
+            });
+        }
         // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass
         let to_output = |i: usize, ch: usize| -> f32 {
             if axis == 0 {

@@ -3,9 +3,9 @@
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{GBufferPlanes, ImageBuf};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
 use crate::device::layout::GatherParams;
-use crate::math::density_gather::column_pass_threads;
+use crate::math::density_gather::{column_pass_threads, reach_grid_len};
 
 /// One pass of the separable gather. Every receiver pixel `j` sums, over the receivers
 /// `i` of its row (`params.axis` 0) or column (1) inside the image,
@@ -27,7 +27,9 @@ use crate::math::density_gather::column_pass_threads;
 ///   from its edge texel (`math::density_gather::atlas_edge_texel`), and the G-buffer is
 ///   bound but not read.
 ///
-/// Non-receiver pixels get 0.
+/// Non-receiver pixels get 0. The loop over sources runs over `-R..=R` with `R` from the
+/// reach grid (`math::density_gather::pass_reach`): the taps it leaves out have no
+/// weight, so the sum is the one over `-max_radius_px..=max_radius_px`, bit for bit.
 #[derive(Clone, Copy, Debug)]
 pub struct DensityGather {
     /// Gather parameters; `axis` picks the pass.
@@ -40,6 +42,10 @@ pub struct DensityGather {
     pub input: ImageBuf,
     /// Axis 0: normalised flux and radius; axis 1: caustic radiance and radius.
     pub out: ImageBuf,
+    /// The reach grid: axis 0 reads the row half (`gather_footprint` wrote it) and puts
+    /// the pixels it gives flux into the column half (atomic maxima, the column half
+    /// zeroed before); axis 1 reads the column half.
+    pub reach: Buf<u32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -51,6 +57,7 @@ const BINDINGS: &[Binding] = &[
     bind("edge", Read),
     bind("input", Read),
     bind("out", ReadWrite),
+    bind("reach", ReadWrite),
 ];
 
 impl KernelDecl for DensityGather {
@@ -66,7 +73,12 @@ impl KernelDecl for DensityGather {
             )?
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
-            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
+            .buf(
+                "reach",
+                self.reach,
+                reach_grid_len(c.width, c.height) as u64 * 4,
+            )?;
         Ok(Some(if self.params.axis == 1 {
             column_pass_threads(c.width, c.height)
         } else {

@@ -5,6 +5,7 @@ use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, Kern
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::GatherParams;
+use crate::math::density_gather::reach_grid_len;
 
 /// For every receiver pixel `i`: the radius `r_i` (pixels) of the smallest window holding
 /// `params.knn_photons` photons (`footprint_radius` on the summed-area table), and the
@@ -13,7 +14,8 @@ use crate::device::layout::GatherParams;
 /// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out`
 /// (other pixels get 0; a pixel without flux gets `(0, 0, 0, r_i)` without its normaliser
 /// being computed). Receivers, depths and normals come from the edge texels
-/// `photon_count_table` wrote.
+/// `photon_count_table` wrote. Every pixel it gives flux puts its reach into its tile of
+/// the row pass's reach grid, which bounds the row pass's loops.
 #[derive(Clone, Copy, Debug)]
 pub struct GatherFootprint {
     /// Gather parameters (camera, `knn_photons`, `max_radius_px`, edge weights,
@@ -27,6 +29,10 @@ pub struct GatherFootprint {
     pub out: ImageBuf,
     /// Per pixel the edge texel from `photon_count_table`.
     pub edge: ImageBuf,
+    /// The reach grid (`math::density_gather::reach_grid_len` entries, zeroed before):
+    /// the row pass's half gets, per tile, the maximum `reach_grid_entry` of the pixels
+    /// this kernel gives flux (atomic maxima).
+    pub reach: Buf<u32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -37,6 +43,7 @@ const BINDINGS: &[Binding] = &[
     bind("table", Read),
     bind("edge", Read),
     bind("out", ReadWrite),
+    bind("reach", ReadWrite),
 ];
 
 impl KernelDecl for GatherFootprint {
@@ -49,7 +56,12 @@ impl KernelDecl for GatherFootprint {
             .photon_map(&self.photon_map, n)?
             .buf("table", self.table, n * 4)?
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?
-            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
+            .buf(
+                "reach",
+                self.reach,
+                reach_grid_len(c.width, c.height) as u64 * 4,
+            )?;
         Ok(Some(n))
     }
 }

@@ -224,6 +224,100 @@ pub fn column_pass_pixel(t: u64, w: u32, h: u32) -> Option<(u32, u32)> {
     (x < w as u64 && y < h as u64).then_some((x as u32, y as u32))
 }
 
+/// Edge of the square tiles of the reach grid (pixels, or atlas texels on the caustic
+/// atlas): one `u32` per tile and pass, see [`pass_reach`].
+pub const REACH_TILE: u32 = 8;
+
+/// The largest `|offset|` at which [`footprint_weight`]`(offset, radius)` can be nonzero,
+/// capped at `cap`: the weight needs `|d| < radius + 1/2` (the very f32 sum
+/// `footprint_weight` tests), and for `s = radius + 1/2 > 0` the integers with `|d| < s`
+/// are those with `|d| <= ceil(s) - 1`. -1 where no offset has weight (a negative or NaN
+/// radius).
+#[inline]
+pub fn footprint_reach(radius: f32, cap: i32) -> i32 {
+    let s = radius + 0.5;
+    if !(s > 0.0) {
+        return -1;
+    }
+    s.ceil().min(cap as f32 + 1.0) as i32 - 1
+}
+
+/// Tiles `(across, down)` of one pass's reach grid over a `w x h` image.
+pub fn reach_grid_tiles(w: u32, h: u32) -> (u32, u32) {
+    (w.div_ceil(REACH_TILE), h.div_ceil(REACH_TILE))
+}
+
+/// Entries of the reach grid buffer: one grid per pass, the row pass's sources first
+/// (written by `gather_footprint`), then the column pass's (written by the row pass).
+pub fn reach_grid_len(w: u32, h: u32) -> u32 {
+    let (tx, ty) = reach_grid_tiles(w, h);
+    2 * tx * ty
+}
+
+/// Index into the reach grid buffer of the tile holding `(x, y)` in pass `axis`'s grid.
+#[inline]
+pub fn reach_grid_index(w: u32, h: u32, axis: u32, x: u32, y: u32) -> usize {
+    let (tx, ty) = reach_grid_tiles(w, h);
+    (axis * tx * ty + (y / REACH_TILE) * tx + x / REACH_TILE) as usize
+}
+
+/// The entry a source pixel puts into its tile (the grid keeps the maximum):
+/// [`footprint_reach`]` + 1`, so 0 means "no source in this tile". A source is a pixel
+/// whose flux is not all zero, the exact negation of the gather's "source without flux"
+/// test.
+#[inline]
+pub fn reach_grid_entry(source: &[f32; 4], cap: i32) -> u32 {
+    if source[0] == 0.0 && source[1] == 0.0 && source[2] == 0.0 {
+        return 0;
+    }
+    (footprint_reach(source[3], cap) + 1) as u32
+}
+
+/// Half-width of the taps that destination `(x, y)` of pass `axis` must visit: the largest
+/// reach among the tiles of its row (axis 0) or column (1) within `cap` whose entry covers
+/// the distance from `(x, y)` to the tile's nearest pixel; -1 where no source reaches it.
+/// Every source with a nonzero weight at `(x, y)` lies within it, so a loop over
+/// `-reach..=reach` sums exactly the terms of a loop over `-cap..=cap` in the same order:
+/// the same bits, with the dark and sparse parts of the image visiting few taps or none.
+pub fn pass_reach(grid: &[u32], w: i32, h: i32, x: i32, y: i32, axis: u32, cap: i32) -> i32 {
+    let t = REACH_TILE as i32;
+    let (along, len) = if axis == 0 { (x, w) } else { (y, h) };
+    let (t0, t1) = ((along - cap).max(0) / t, (along + cap).min(len - 1) / t);
+    let mut reach = -1;
+    for k in t0..=t1 {
+        let (tx, ty) = if axis == 0 { (k, y / t) } else { (x / t, k) };
+        let entry =
+            grid[reach_grid_index(w as u32, h as u32, axis, (tx * t) as u32, (ty * t) as u32)];
+        let g = entry as i32 - 1;
+        // distance from `along` to the tile's nearest pixel
+        let dist = (k * t - along).max(along - (k * t + t - 1)).max(0);
+        if g >= dist {
+            reach = reach.max(g);
+        }
+    }
+    reach.min(cap)
+}
+
+/// Pass `axis`'s reach grid of `sources` (a `w x h` image of `(flux, radius)`): the
+/// maximum [`reach_grid_entry`] per tile, merged into `grid` by maximum as the GPU ports'
+/// atomic maxima do.
+pub fn accumulate_reach_grid(
+    grid: &mut [u32],
+    sources: &[[f32; 4]],
+    w: u32,
+    h: u32,
+    axis: u32,
+    cap: i32,
+) {
+    for (i, s) in sources.iter().enumerate() {
+        let e = reach_grid_entry(s, cap);
+        if e > 0 {
+            let k = reach_grid_index(w, h, axis, i as u32 % w, i as u32 / w);
+            grid[k] = grid[k].max(e);
+        }
+    }
+}
+
 /// k-NN radius (pixels): half the side of the square that holds `k` photons at the
 /// density `photons / pixels` of the smallest window holding `k` (Jensen 1996; see the
 /// module doc), the support half-width of the kernel. `photons >= 1`.
@@ -325,6 +419,62 @@ pub fn join_u64_wide(lo: u32, hi: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn footprint_reach_is_the_last_offset_with_weight() {
+        for k in 0..4000 {
+            let r = k as f32 * 0.01 - 1.0;
+            for cap in [0, 1, 3, 16, 256] {
+                let last = (0..=cap).rev().find(|&d| footprint_weight(d, r) > 0.0);
+                let reach = footprint_reach(r, cap);
+                // every offset with weight lies within the reach (a weight may still
+                // round to 0 inside it)
+                assert!(last.unwrap_or(-1) <= reach, "r {r} cap {cap}");
+                assert!(reach <= cap);
+                if reach >= 0 {
+                    assert!((reach as f32) < r + 0.5, "r {r}: {reach} has no support");
+                }
+            }
+        }
+        assert_eq!(footprint_reach(f32::NAN, 16), -1);
+        assert_eq!(footprint_reach(0.5, 16), 0);
+        assert_eq!(footprint_reach(0.51, 16), 1);
+    }
+
+    #[test]
+    fn pass_reach_covers_every_source_with_weight() {
+        use crate::math::rng::random_f32;
+        let (w, h, cap) = (37i32, 29i32, 11i32);
+        for seed in 0..24u32 {
+            // sparse sources with radii from the identity to beyond the cap
+            let img: Vec<[f32; 4]> = (0..(w * h) as u32)
+                .map(|i| {
+                    let lit = random_f32(seed, i, 0, 0) < 0.04;
+                    let r = random_f32(seed, i, 0, 1) * 14.0;
+                    [if lit { 1.0 } else { 0.0 }, 0.0, 0.0, r]
+                })
+                .collect();
+            for axis in 0..2u32 {
+                let mut grid = vec![0; reach_grid_len(w as u32, h as u32) as usize];
+                accumulate_reach_grid(&mut grid, &img, w as u32, h as u32, axis, cap);
+                for y in 0..h {
+                    for x in 0..w {
+                        let reach = pass_reach(&grid, w, h, x, y, axis, cap);
+                        for d in -cap..=cap {
+                            let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };
+                            if qx < 0 || qy < 0 || qx >= w || qy >= h {
+                                continue;
+                            }
+                            let s = img[(qy * w + qx) as usize];
+                            if s[0] != 0.0 && footprint_weight(-d, s[3]) > 0.0 {
+                                assert!(d.abs() <= reach, "({x}, {y}) axis {axis}: tap {d}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn atlas_edge_texels_keep_the_gather_inside_a_tile() {

@@ -78,6 +78,8 @@ struct DensityBuffers {
     footprint: ImageBuf,
     /// The row pass's output.
     rows: ImageBuf,
+    /// The passes' reach grids (`math::density_gather::pass_reach`), zeroed each frame.
+    reach: Buf<u32>,
     /// A one-texel G-buffer: the kernels bind one, and on the atlas read none.
     gbuffer: GBufferPlanes,
 }
@@ -378,6 +380,10 @@ impl CausticMap {
                     edge: rec.upload(&edge, "atlas edge texels"),
                     footprint: rec.create(texels, "atlas gather footprints"),
                     rows: rec.create(texels, "atlas gather rows"),
+                    reach: rec.create(
+                        crate::math::density_gather::reach_grid_len(s.atlas_size, s.atlas_size),
+                        "atlas gather reach grid",
+                    ),
                     gbuffer: rec.create_gbuffer(1),
                 }
             }),
@@ -770,12 +776,14 @@ impl CausticMap {
                     edge: d.edge,
                 });
             }
+            rec.clear(d.reach);
             rec.kernel(GatherFootprint {
                 params: rows,
                 photon_map: a.sums,
                 table: d.table,
                 out: d.footprint,
                 edge: d.edge,
+                reach: d.reach,
             });
             for (params, input, out) in [(rows, d.footprint, d.rows), (columns, d.rows, a.map)] {
                 rec.kernel(DensityGather {
@@ -784,6 +792,7 @@ impl CausticMap {
                     edge: d.edge,
                     input,
                     out,
+                    reach: d.reach,
                 });
             }
         } else {

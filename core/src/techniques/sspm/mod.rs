@@ -121,6 +121,8 @@ enum GatherBuffers {
         table: Buf<u32>,
         edge: ImageBuf,
         scratch: ImageBuf,
+        /// The passes' reach grids (`math::density_gather::pass_reach`).
+        reach: Buf<u32>,
     },
     /// The bilateral gather: hit-distance tiles and the image between its two passes.
     Bilateral { tiles: Buf<f32>, scratch: ImageBuf },
@@ -411,6 +413,10 @@ impl Sspm {
                 table: rec.create(pixels, "photon count table"),
                 edge: rec.create(pixels, "gather edge texels"),
                 scratch: rec.create(pixels, "gather scratch image"),
+                reach: rec.create(
+                    crate::math::density_gather::reach_grid_len(w, h),
+                    "gather reach grid",
+                ),
             },
             GatherFilter::Bilateral => GatherBuffers::Bilateral {
                 tiles: rec.create(
@@ -799,6 +805,7 @@ impl Sspm {
                         table,
                         edge,
                         scratch,
+                        reach,
                     } => {
                         for params in [gather, columns] {
                             rec.kernel(PhotonCountTable {
@@ -809,12 +816,14 @@ impl Sspm {
                                 edge,
                             });
                         }
+                        rec.clear(reach);
                         rec.kernel(GatherFootprint {
                             params: gather,
                             photon_map: p.photon_map,
                             table,
                             out: filtered,
                             edge,
+                            reach,
                         });
                         rec.kernel(DensityGather {
                             params: gather,
@@ -822,6 +831,7 @@ impl Sspm {
                             edge,
                             input: filtered,
                             out: scratch,
+                            reach,
                         });
                         rec.kernel(DensityGather {
                             params: columns,
@@ -829,6 +839,7 @@ impl Sspm {
                             edge,
                             input: scratch,
                             out: last,
+                            reach,
                         });
                     }
                     GatherBuffers::Bilateral { tiles, scratch } => {
