@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -134,6 +134,17 @@ if has countscan; then
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend density --test-threads=1
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
+fi
+if has reach; then
+    # issue 15 point 4: the density gather's reach grid; kernels and flux against the CPU
+    # (screen and atlas), then both gathers' frame times in Sspm and CausticMap
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend density --test-threads=1
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend caustic_map --test-threads=1
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend sspm_matches_cpu_on_every --test-threads=1
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./filter_flux --test-threads=1
+    run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=density,box ./caustic_map_frame --bench
 fi
 if has causticmap; then
     # issue 16: CausticMap's kernels and frames against the CPU on every backend, its stiff
