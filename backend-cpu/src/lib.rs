@@ -266,21 +266,17 @@ impl CpuBackend {
                 table,
                 edge,
                 out,
-                reach,
+                source_index,
             }) => {
                 let m = self.photon_map(photon_map)?;
                 let t = get(table.id)?.as_slice(table.len)?;
                 let e = get(edge.id)?.as_slice(edge.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
                 let img = density_gather::gather_footprint(params, e, m, t);
-                let grid = density_gather::reach_grid(
-                    params,
-                    0,
-                    get(reach.id)?.as_slice(reach.len)?,
-                    &img,
-                );
+                let sources = get(source_index.id)?.as_slice(source_index.len)?;
+                let sources = density_gather::source_index(params, 0, sources, &img);
                 self.put(out.id, &img)?;
-                self.put(reach.id, &grid)
+                self.put(source_index.id, &sources)
             }
             Kernel::DensityGather(DensityGather {
                 params,
@@ -288,18 +284,18 @@ impl CpuBackend {
                 edge,
                 input,
                 out,
-                reach,
+                source_index,
             }) => {
                 let g = self.gbuffer(gbuffer)?;
                 let e = get(edge.id)?.as_slice(edge.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
-                let grid = get(reach.id)?.as_slice(reach.len)?;
+                let sources = get(source_index.id)?.as_slice(source_index.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = density_gather::density_gather(params, g, e, i, grid);
+                let img = density_gather::density_gather(params, g, e, i, sources);
                 if params.axis == 0 {
-                    // the row pass's sources' reaches, for the column pass
-                    let grid = density_gather::reach_grid(params, 1, grid, &img);
-                    self.put(reach.id, &grid)?;
+                    // the row pass's output: the column pass's sources
+                    let sources = density_gather::source_index(params, 1, sources, &img);
+                    self.put(source_index.id, &sources)?;
                 }
                 self.put(out.id, &img)
             }

@@ -4,7 +4,7 @@
 
 __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__global const),
                              __global const float4* edge, __global const float4* input,
-                             __global float4* out, __global uint* reach) {
+                             __global float4* out, __global uint* source_index) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int x, y;
     if (p->axis == 0u) {
@@ -21,25 +21,31 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         out[j] = (float4)(0.0f);
         return;
     }
-    // the taps that can hold a source with weight here (the rest add nothing)
-    int taps = pass_reach(reach, w, h, x, y, p->axis, (int)p->max_radius_px);
     float r = input[j].w;
     float3 sum = (float3)(0.0f);
-    for (int d = -taps; d <= taps; d++) {
-        int qx = p->axis == 0u ? x + d : x;
-        int qy = p->axis == 0u ? y : y + d;
-        if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
-        int q = qy * w + qx;
-        // source q, destination j: a source without flux adds nothing; then the source's
-        // radius at offset j - q (non-receivers hold no flux)
-        float4 s = input[q];
-        if (s.x == 0.0f && s.y == 0.0f && s.z == 0.0f) continue;
-        float ws = footprint_weight(-d, s.w);
-        if (ws == 0.0f) continue;
-        float4 eq = edge[q];
-        if (!edge_texel_is_receiver(eq)) continue;
-        float wgt = ws * edge_weight_of(p, eq, ej);
-        sum += wgt * s.xyz;
+    // the sources that can have weight here, in increasing offset (the taps left out
+    // have no flux or no weight): the mask's set bits within the reach grid's bound
+    int taps = pass_reach(source_index, w, h, x, y, p->axis, (int)p->max_radius_px);
+    int along = p->axis == 0u ? x : y;
+    int lo = max(along - taps, 0);
+    int hi = min(along + taps, (p->axis == 0u ? w : h) - 1);
+    for (int k = lo / 32; k <= hi / 32 && lo <= hi; k++) {
+        uint bits = source_bits(source_index, w, h, p->axis, x, y, k, lo, hi);
+        while (bits != 0u) {
+            int d = k * 32 + lowest_bit(bits) - along;
+            bits &= bits - 1u;
+            int q = (p->axis == 0u ? y : y + d) * w + (p->axis == 0u ? x + d : x);
+            // source q, destination j: a source without flux adds nothing; then the
+            // source's radius at offset j - q (non-receivers hold no flux)
+            float4 s = input[q];
+            if (s.x == 0.0f && s.y == 0.0f && s.z == 0.0f) continue;
+            float ws = footprint_weight(-d, s.w);
+            if (ws == 0.0f) continue;
+            float4 eq = edge[q];
+            if (!edge_texel_is_receiver(eq)) continue;
+            float wgt = ws * edge_weight_of(p, eq, ej);
+            sum += wgt * s.xyz;
+        }
     }
     // (flux and weights are >= 0: a sum without a positive channel is 0)
     if (!(sum.x > 0.0f || sum.y > 0.0f || sum.z > 0.0f)) {
@@ -50,7 +56,7 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         float4 o = (float4)(sum / gather_normaliser(p, edge, x, y, r, 1u), r);
         out[j] = o;
         // the column pass's sources
-        put_reach(reach, w, h, 1u, x, y, o, (int)p->max_radius_px);
+        put_source(source_index, w, h, 1u, x, y, o, (int)p->max_radius_px);
     } else if (p->surface == GATHER_SURFACE_ATLAS) {
         // irradiance E = Phi / A over the texel's world area (its edge texel's y)
         float3 e = saturate_radiance3(sum * saturate_radiance(1.0f / ej.y));

@@ -5,7 +5,7 @@
 __kernel void gather_footprint(__global const GatherParams* p,
                                PHOTON_MAP_PARAMS(__global const), __global const uint* table,
                                __global const float4* edge, __global float4* out,
-                               __global uint* reach) {
+                               __global uint* source_index) {
     int w = (int)p->camera.width, h = (int)p->camera.height;
     int i = (int)get_global_id(0);
     if (i >= w * h) return;
@@ -31,6 +31,6 @@ __kernel void gather_footprint(__global const GatherParams* p,
     float inv = 1.0f / gather_normaliser(p, edge, x, y, r, 0u);
     float4 o = (float4)(f.x * inv, f.y * inv, f.z * inv, r);
     out[i] = o;
-    // the row pass's sources: its loops reach only as far as they do
-    put_reach(reach, w, h, 0u, x, y, o, (int)p->max_radius_px);
+    // the row pass's sources: its loops visit only them
+    put_source(source_index, w, h, 0u, x, y, o, (int)p->max_radius_px);
 }

@@ -38,6 +38,7 @@ use caustica_core::kernels::{
     PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm, SplatPhotons,
     TemporalBlend, TileHitDistance, TraceIndirect, TracePhotons,
 };
+use caustica_core::math::density_gather::reach_grid_len;
 use caustica_core::math::fixed_point::{join_u64, quantize};
 use caustica_core::math::packing::{pack_rgb9e5, unpack_rgb9e5};
 use caustica_core::math::photon_clusters::entry_cluster;
@@ -75,6 +76,9 @@ enum Mutation {
     /// `gather_footprint`'s reach-grid entries one tap short: the row pass would miss
     /// each tile's farthest-reaching source's last taps.
     ReachShort,
+    /// `gather_footprint`'s source mask loses the first source of every word: the row
+    /// pass would skip those sources.
+    SourceBitLost,
     /// `direct_light` 1e-3 too high.
     DirectHigh,
     /// `composite` one ulp off in one channel.
@@ -334,10 +338,33 @@ impl Mutant {
             (Mutation::FootprintHigh, Kernel::GatherFootprint(GatherFootprint { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
-            (Mutation::ReachShort, Kernel::GatherFootprint(GatherFootprint { reach, .. })) => {
-                self.modify::<u32>(reach.id, |v| {
-                    for e in v.iter_mut().filter(|e| **e > 0) {
+            (
+                Mutation::ReachShort,
+                Kernel::GatherFootprint(GatherFootprint {
+                    params,
+                    source_index,
+                    ..
+                }),
+            ) => {
+                let grid = reach_grid_len(params.camera.width, params.camera.height) as usize;
+                self.modify::<u32>(source_index.id, |v| {
+                    for e in v[..grid].iter_mut().filter(|e| **e > 0) {
                         *e -= 1;
+                    }
+                })
+            }
+            (
+                Mutation::SourceBitLost,
+                Kernel::GatherFootprint(GatherFootprint {
+                    params,
+                    source_index,
+                    ..
+                }),
+            ) => {
+                let grid = reach_grid_len(params.camera.width, params.camera.height) as usize;
+                self.modify::<u32>(source_index.id, |v| {
+                    for e in &mut v[grid..] {
+                        *e &= e.wrapping_sub(1);
                     }
                 })
             }
@@ -636,6 +663,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
         ),
         (
             Mutation::ReachShort,
+            "photon_count_table + gather_footprint + density_gather",
+        ),
+        (
+            Mutation::SourceBitLost,
             "photon_count_table + gather_footprint + density_gather",
         ),
         (Mutation::DirectHigh, "direct_light"),

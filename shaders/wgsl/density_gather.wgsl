@@ -1,4 +1,4 @@
-// needs: types vector optics footprint scene gbuffer density_gather reach_grid
+// needs: types vector optics footprint scene gbuffer density_gather source_index
 // density_gather: one direction of the scatter-normalised, density-adaptive caustic
 // gather (core/src/math/density_gather.rs; the contract in core/src/kernels/
 // density_gather.rs). Mirror of backend-opencl/kernels/density_gather.cl and
@@ -12,7 +12,7 @@
 @group(0) @binding(5) var<storage, read> edge: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> input: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> reach: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> source_index: array<atomic<u32>>;
 
 fn density_gather(index: u32) {
     let p = params;
@@ -41,34 +41,38 @@ fn density_gather(index: u32) {
         out[j] = vec4<f32>(0.0);
         return;
     }
-    // the taps that can hold a source with weight here (the rest add nothing)
-    let taps = pass_reach(w, h, x, y, p.axis, i32(p.max_radius_px));
     let r = input[j].w;
     let dark = vec4<f32>(0.0, 0.0, 0.0, select(0.0, r, p.axis == 0u));
     var sum = vec3<f32>(0.0);
-    for (var d = -taps; d <= taps; d++) {
-        let qx = select(x, x + d, p.axis == 0u);
-        let qy = select(y + d, y, p.axis == 0u);
-        if (qx < 0 || qy < 0 || qx >= w || qy >= h) {
-            continue;
+    // the sources that can have weight here, in increasing offset (the taps left out
+    // have no flux or no weight): the mask's set bits within the reach grid's bound
+    let taps = pass_reach(w, h, x, y, p.axis, i32(p.max_radius_px));
+    let along = select(y, x, p.axis == 0u);
+    let lo = max(along - taps, 0);
+    let hi = min(along + taps, select(h, w, p.axis == 0u) - 1);
+    for (var k = lo / 32; k <= hi / 32 && lo <= hi; k++) {
+        var bits = source_bits(w, h, p.axis, x, y, k, lo, hi);
+        while (bits != 0u) {
+            let d = k * 32 + i32(countTrailingZeros(bits)) - along;
+            bits &= bits - 1u;
+            let q = select(y + d, y, p.axis == 0u) * w + select(x, x + d, p.axis == 0u);
+            // source q, destination j: a source without flux adds nothing; then the
+            // source's radius at offset j - q (non-receivers hold no flux)
+            let s = input[q];
+            if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) {
+                continue;
+            }
+            let ws = footprint_weight(-d, s.w);
+            if (ws == 0.0) {
+                continue;
+            }
+            let eq = edge[q];
+            if (!edge_texel_is_receiver(eq)) {
+                continue;
+            }
+            let wgt = ws * edge_weight_of(p, eq, ej);
+            sum += wgt * s.xyz;
         }
-        let q = qy * w + qx;
-        // source q, destination j: a source without flux adds nothing; then the source's
-        // radius at offset j - q (non-receivers hold no flux)
-        let s = input[q];
-        if (s.x == 0.0 && s.y == 0.0 && s.z == 0.0) {
-            continue;
-        }
-        let ws = footprint_weight(-d, s.w);
-        if (ws == 0.0) {
-            continue;
-        }
-        let eq = edge[q];
-        if (!edge_texel_is_receiver(eq)) {
-            continue;
-        }
-        let wgt = ws * edge_weight_of(p, eq, ej);
-        sum += wgt * s.xyz;
     }
     // (flux and weights are >= 0: a sum without a positive channel is 0)
     if (!(sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0)) {
@@ -79,7 +83,7 @@ fn density_gather(index: u32) {
         let o = vec4<f32>(sum / gather_normaliser(p, x, y, r, 1u), r);
         out[j] = o;
         // the column pass's sources
-        put_reach(w, h, 1u, x, y, o, i32(p.max_radius_px));
+        put_source(w, h, 1u, x, y, o, i32(p.max_radius_px));
     } else if (p.surface == GATHER_SURFACE_ATLAS) {
         // irradiance E = Phi / A over the texel's world area (its edge texel's y)
         let e = saturate_radiance3(sum * saturate_radiance(1.0 / ej.y));

@@ -1,4 +1,4 @@
-// needs: types vector photon_map photon_table density_gather reach_grid
+// needs: types vector photon_map photon_table density_gather source_index
 // gather_footprint: per receiver pixel its k-NN gather radius and its flux over its row
 // normaliser (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/gather_footprint.cl and backend-cpu/src/kernels/
@@ -11,7 +11,7 @@
 @group(0) @binding(4) var<storage, read> table: array<u32>;
 @group(0) @binding(5) var<storage, read> edge: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> reach: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> source_index: array<atomic<u32>>;
 
 // The gather radius (pixels) at (x, y): smallest window holding k photons, capped.
 fn footprint_radius(w: i32, h: i32, block: i32, x: i32, y: i32, k: u32,
@@ -65,8 +65,8 @@ fn gather_footprint(index: u32) {
     let inv = 1.0 / gather_normaliser(p, x, y, r, 0u);
     let o = vec4<f32>(f.x * inv, f.y * inv, f.z * inv, r);
     out[i] = o;
-    // the row pass's sources: its loops reach only as far as they do
-    put_reach(w, h, 0u, x, y, o, i32(p.max_radius_px));
+    // the row pass's sources: its loops visit only them
+    put_source(w, h, 0u, x, y, o, i32(p.max_radius_px));
 }
 
 @compute @workgroup_size(64)

@@ -7,8 +7,8 @@ use caustica_core::device::layout::{
     PhotonMapView,
 };
 use caustica_core::math::density_gather::{
-    accumulate_reach_grid, clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight,
-    footprint_radius, footprint_weight, join_u64_wide, pass_reach,
+    accumulate_source_index, clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight,
+    footprint_radius, footprint_weight, for_each_pass_source, join_u64_wide,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
@@ -140,24 +140,24 @@ pub fn gather_footprint(
         .collect()
 }
 
-/// The reach grid after a pass that wrote `sources` for pass `axis` (`gather_footprint`:
-/// the row pass's, axis 0; the row pass: the column pass's, axis 1): `grid`'s entries
-/// merged by maximum with the sources' (the GPU ports' atomic maxima).
-pub fn reach_grid(p: &GatherParams, axis: u32, grid: &[u32], sources: &[[f32; 4]]) -> Vec<u32> {
-    let mut grid = grid.to_vec();
+/// The source index after a pass that wrote `sources` for pass `axis`
+/// (`gather_footprint`: the row pass's part, axis 0; the row pass: the column pass's,
+/// axis 1): `index` with the sources entered (the GPU ports' atomic maxima and ors).
+pub fn source_index(p: &GatherParams, axis: u32, index: &[u32], sources: &[[f32; 4]]) -> Vec<u32> {
+    let mut index = index.to_vec();
     let (w, h) = (p.camera.width, p.camera.height);
-    accumulate_reach_grid(&mut grid, sources, w, h, axis, p.max_radius_px as i32);
-    grid
+    accumulate_source_index(&mut index, sources, w, h, axis, p.max_radius_px as i32);
+    index
 }
 
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
-/// `caustica_core::kernels::DensityGather`); `grid` is the reach grid the pass reads.
+/// `caustica_core::kernels::DensityGather`); `index` is the source index the pass reads.
 pub fn density_gather(
     p: &GatherParams,
     g: GBufferView,
     edge: &[[f32; 4]],
     input: &[[f32; 4]],
-    grid: &[u32],
+    index: &[u32],
 ) -> Vec<[f32; 4]> {
     let (w, h) = (p.camera.width as i32, p.camera.height as i32);
     (0..w * h)
@@ -168,32 +168,30 @@ pub fn density_gather(
                 return [0.0; 4];
             }
             let (x, y) = (j % w, j / w);
-            // the taps that can hold a source with weight here (the rest add nothing)
-            let reach = pass_reach(grid, w, h, x, y, p.axis, p.max_radius_px as i32);
             let r = input[j as usize][3];
             let mut sum = Vec3::ZERO;
-            for d in -reach..=reach {
+            // the sources that can have weight here, in increasing offset (the taps left
+            // out have no flux or no weight)
+            let cap = p.max_radius_px as i32;
+            for_each_pass_source(index, w, h, x, y, p.axis, cap, |d| {
                 let (qx, qy) = if p.axis == 0 { (x + d, y) } else { (x, y + d) };
-                if qx < 0 || qy < 0 || qx >= w || qy >= h {
-                    continue;
-                }
                 let q = (qy * w + qx) as usize;
                 // source q, destination j: a source without flux adds nothing; then the
                 // source's radius at offset j - q (non-receivers hold no flux)
                 let s = &input[q];
                 if s[0] == 0.0 && s[1] == 0.0 && s[2] == 0.0 {
-                    continue;
+                    return;
                 }
                 let ws = footprint_weight(-d, s[3]);
                 if ws == 0.0 {
-                    continue;
+                    return;
                 }
                 let eq = &edge[q];
                 if !edge_texel_is_receiver(eq) {
-                    continue;
+                    return;
                 }
                 sum += ws * edge_weight_of(p, eq, ej) * Vec3::from_slice(&s[..3]);
-            }
+            });
             // (flux and weights are >= 0: a sum without a positive channel is 0)
             if !(sum.x > 0.0 || sum.y > 0.0 || sum.z > 0.0) {
                 return [0.0, 0.0, 0.0, if p.axis == 0 { r } else { 0.0 }];

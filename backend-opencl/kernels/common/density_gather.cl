@@ -175,9 +175,11 @@ inline bool column_pass_pixel(uint t, uint w, uint h, int* x, int* y) {
     return px < w && py < h;
 }
 
-// The reach grid that bounds the density gather's loops (core's footprint_reach,
-// reach_grid_index, reach_grid_entry, pass_reach): per REACH_TILE x REACH_TILE tile and
-// pass the maximum footprint_reach + 1 of its sources, the row pass's grid first.
+// The density gather's source index (core's footprint_reach, reach_grid_index,
+// reach_grid_entry, pass_reach, source_mask_word, source_bits, accumulate_source_index):
+// per REACH_TILE x REACH_TILE tile and pass the maximum footprint_reach + 1 of its
+// sources (the row pass's grid, then the column pass's), then per pass a bit per pixel
+// (the row pass's mask by image rows, the column pass's by columns).
 #define REACH_TILE 8
 
 // The largest |offset| at which footprint_weight(offset, radius) can be nonzero, capped
@@ -188,6 +190,11 @@ inline int footprint_reach(float radius, int cap) {
     return (int)fmin(ceil(s), (float)cap + 1.0f) - 1;
 }
 
+// Entries of the two reach grids of a w x h image.
+inline int reach_grid_len(int w, int h) {
+    return 2 * ((w + REACH_TILE - 1) / REACH_TILE) * ((h + REACH_TILE - 1) / REACH_TILE);
+}
+
 // Index of the tile holding (x, y) in pass `axis`'s grid of a w x h image.
 inline uint reach_grid_index(int w, int h, uint axis, int x, int y) {
     int tx = (w + REACH_TILE - 1) / REACH_TILE;
@@ -195,23 +202,49 @@ inline uint reach_grid_index(int w, int h, uint axis, int x, int y) {
     return (uint)((int)axis * tx * ty + (y / REACH_TILE) * tx + x / REACH_TILE);
 }
 
+// Index of word k of pass `axis`'s mask line through (x, y) (row y for axis 0, column x
+// for axis 1).
+inline uint source_mask_word(int w, int h, uint axis, int x, int y, int k) {
+    int base = reach_grid_len(w, h);
+    if (axis == 0u) return (uint)(base + y * ((w + 31) / 32) + k);
+    return (uint)(base + h * ((w + 31) / 32) + x * ((h + 31) / 32) + k);
+}
+
+// Word k of the mask line through (x, y), its bits outside [lo, hi] cleared.
+inline uint source_bits(__global const uint* index, int w, int h, uint axis, int x, int y,
+                        int k, int lo, int hi) {
+    uint bits = index[source_mask_word(w, h, axis, x, y, k)];
+    if (k == lo / 32) bits &= 0xffffffffu << (uint)(lo % 32);
+    if (k == hi / 32) bits &= 0xffffffffu >> (uint)(31 - hi % 32);
+    return bits;
+}
+
+// Index of the lowest set bit of a nonzero word (OpenCL C 1.2 has clz, not ctz).
+inline int lowest_bit(uint bits) { return 31 - (int)clz(bits & (0u - bits)); }
+
 // A source's entry: footprint_reach + 1, 0 for a pixel without flux.
 inline uint reach_grid_entry(float4 source, int cap) {
     if (source.x == 0.0f && source.y == 0.0f && source.z == 0.0f) return 0u;
     return (uint)(footprint_reach(source.w, cap) + 1);
 }
 
-// Puts a source pixel into its tile of pass `axis`'s grid (atomic maximum).
-inline void put_reach(__global uint* grid, int w, int h, uint axis, int x, int y,
-                      float4 source, int cap) {
+// Enters a source pixel into pass `axis`'s part of the index: its reach into its tile
+// (atomic maximum), its mask bit (atomic or).
+inline void put_source(__global uint* index, int w, int h, uint axis, int x, int y,
+                       float4 source, int cap) {
     uint e = reach_grid_entry(source, cap);
-    if (e > 0u) atomic_max(&grid[reach_grid_index(w, h, axis, x, y)], e);
+    if (e > 0u) {
+        atomic_max(&index[reach_grid_index(w, h, axis, x, y)], e);
+        int along = axis == 0u ? x : y;
+        atomic_or(&index[source_mask_word(w, h, axis, x, y, along / 32)],
+                  1u << (uint)(along % 32));
+    }
 }
 
 // Half-width of the taps destination (x, y) of pass `axis` visits: the largest reach
 // among the tiles of its row (column) within `cap` whose entry covers the distance to the
 // tile's nearest pixel; -1 where no source reaches it.
-inline int pass_reach(__global const uint* grid, int w, int h, int x, int y, uint axis,
+inline int pass_reach(__global const uint* index, int w, int h, int x, int y, uint axis,
                       int cap) {
     int along = axis == 0u ? x : y;
     int len = axis == 0u ? w : h;
@@ -221,7 +254,7 @@ inline int pass_reach(__global const uint* grid, int w, int h, int x, int y, uin
     for (int k = t0; k <= t1; k++) {
         int tx = axis == 0u ? k : x / REACH_TILE;
         int ty = axis == 0u ? y / REACH_TILE : k;
-        int g = (int)grid[reach_grid_index(w, h, axis, tx * REACH_TILE, ty * REACH_TILE)] - 1;
+        int g = (int)index[reach_grid_index(w, h, axis, tx * REACH_TILE, ty * REACH_TILE)] - 1;
         // distance from `along` to the tile's nearest pixel
         int dist = max(max(k * REACH_TILE - along, along - (k * REACH_TILE + REACH_TILE - 1)), 0);
         if (g >= dist) r = max(r, g);

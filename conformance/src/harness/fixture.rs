@@ -16,7 +16,7 @@ use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
     PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
 };
-use caustica_core::math::density_gather::{accumulate_reach_grid, reach_grid_len};
+use caustica_core::math::density_gather::{accumulate_source_index, source_index_len};
 use caustica_core::recording::{Recording, Step};
 use caustica_core::scene::Scene;
 use caustica_core::techniques::sspm::{FrameConstants, GatherFilter};
@@ -291,22 +291,22 @@ impl Fixture {
         })
     }
 
-    /// The density gather's reach grid buffer (both passes' grids) holding pass `axis`'s
-    /// grid of `sources` merged into `grid` (`math::density_gather::accumulate_reach_grid`).
-    pub fn reach_grid_of(&self, mut grid: Vec<u32>, axis: u32, sources: &[[f32; 4]]) -> Vec<u32> {
+    /// The density gather's source index `grid` with pass `axis`'s `sources` entered
+    /// (`math::density_gather::accumulate_source_index`).
+    pub fn source_index_of(&self, mut grid: Vec<u32>, axis: u32, sources: &[[f32; 4]]) -> Vec<u32> {
         let (w, h) = (self.camera.width, self.camera.height);
         let cap = self.settings.max_radius_px as i32;
-        accumulate_reach_grid(&mut grid, sources, w, h, axis, cap);
+        accumulate_source_index(&mut grid, sources, w, h, axis, cap);
         grid
     }
 
-    /// A zeroed reach grid buffer for this fixture's camera.
-    pub fn empty_reach_grid(&self) -> Vec<u32> {
-        vec![0; reach_grid_len(self.camera.width, self.camera.height) as usize]
+    /// A zeroed source index for this fixture's camera.
+    pub fn empty_source_index(&self) -> Vec<u32> {
+        vec![0; source_index_len(self.camera.width, self.camera.height) as usize]
     }
 
     /// Runs `gather_footprint` on `b`: the normalised flux and radius per pixel, and the
-    /// reach grid it wrote (into a zeroed one).
+    /// source index it wrote (into a zeroed one).
     pub fn run_footprint(
         &self,
         b: &mut dyn Backend,
@@ -319,23 +319,23 @@ impl Fixture {
         let m = rec.upload_photon_map(map);
         let t = rec.upload(table, "photon count table");
         let out = rec.create(self.pixels(), "footprints");
-        let reach = rec.upload(&self.empty_reach_grid(), "gather reach grid");
+        let source_index = rec.upload(&self.empty_source_index(), "gather source index");
         rec.kernel(Kernel::GatherFootprint(GatherFootprint {
             params: self.constants.gather_params(self.camera, &self.settings, 0),
             photon_map: m,
             table: t,
             edge: e,
             out,
-            reach,
+            source_index,
         }));
         run_and_free(b, "gather_footprint", &rec, |b| {
-            Ok((read_buf(b, out)?, read_buf(b, reach)?))
+            Ok((read_buf(b, out)?, read_buf(b, source_index)?))
         })
     }
 
-    /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b` with the reach
-    /// grid of `input` (as the pass before would have written it): the output, and the
-    /// reach grid after the pass.
+    /// Runs one `density_gather` pass (`axis` 0: rows, 1: columns) on `b` with the source
+    /// index of `input` (as the pass before would have written it): the output, and the
+    /// source index after the pass.
     pub fn run_density_gather(
         &self,
         b: &mut dyn Backend,
@@ -349,8 +349,8 @@ impl Fixture {
         let e = rec.upload(edge, "gather edge texels");
         let i = rec.upload(input, "gather input");
         let out = rec.create(self.pixels(), "gather output");
-        let grid = self.reach_grid_of(self.empty_reach_grid(), axis, input);
-        let reach = rec.upload(&grid, "gather reach grid");
+        let index = self.source_index_of(self.empty_source_index(), axis, input);
+        let source_index = rec.upload(&index, "gather source index");
         rec.kernel(Kernel::DensityGather(DensityGather {
             params: self
                 .constants
@@ -359,10 +359,10 @@ impl Fixture {
             edge: e,
             input: i,
             out,
-            reach,
+            source_index,
         }));
         run_and_free(b, "density_gather", &rec, |b| {
-            Ok((read_buf(b, out)?, read_buf(b, reach)?))
+            Ok((read_buf(b, out)?, read_buf(b, source_index)?))
         })
     }
 

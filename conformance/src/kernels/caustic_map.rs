@@ -36,7 +36,7 @@ use caustica_core::kernels::{
     PhotonCountTable,
 };
 use caustica_core::math::density_gather::{
-    accumulate_reach_grid, atlas_edge_texel, reach_grid_len,
+    accumulate_source_index, atlas_edge_texel, source_index_len,
 };
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::math::rng::random_f32;
@@ -246,14 +246,14 @@ fn check_atlas_density_gather(
         let t = rec.upload(&ta, "photon count table");
         let e = rec.upload(&edge, "atlas edge texels");
         let out = rec.create(n, "footprints");
-        let reach = rec.create(reach_grid_len(cam.width, cam.height), "reach grid");
+        let source_index = rec.create(source_index_len(cam.width, cam.height), "source index");
         rec.kernel(GatherFootprint {
             params: params(0),
             photon_map: m,
             table: t,
             edge: e,
             out,
-            reach,
+            source_index,
         });
         run_and_free(b, "gather_footprint (atlas)", &rec, |b| read_buf(b, out))
     };
@@ -282,18 +282,18 @@ fn check_atlas_density_gather(
         let i = rec.upload(input, "gather input");
         let g = rec.create_gbuffer(1);
         let out = rec.create(n, "gather output");
-        // the reach grid the pass before would have written for this input
-        let mut grid = vec![0; reach_grid_len(cam.width, cam.height) as usize];
+        // the source index the pass before would have written for this input
+        let mut grid = vec![0; source_index_len(cam.width, cam.height) as usize];
         let cap = params(axis).max_radius_px as i32;
-        accumulate_reach_grid(&mut grid, input, cam.width, cam.height, axis, cap);
-        let reach = rec.upload(&grid, "reach grid");
+        accumulate_source_index(&mut grid, input, cam.width, cam.height, axis, cap);
+        let source_index = rec.upload(&grid, "source index");
         rec.kernel(DensityGather {
             params: params(axis),
             gbuffer: g,
             edge: e,
             input: i,
             out,
-            reach,
+            source_index,
         });
         run_and_free(b, "density_gather (atlas)", &rec, |b| read_buf(b, out))
     };

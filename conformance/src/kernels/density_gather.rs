@@ -136,11 +136,11 @@ pub fn check_density_gather(
 
     let (fa, grid_a) = fx.run_footprint(r, &inputs.edge, &inputs.photon_map, &inputs.table)?;
     let (fb, grid_b) = fx.run_footprint(c, &inputs.edge, &inputs.photon_map, &inputs.table)?;
-    // the reach grid is an integer function of the kernel's own output: equal
+    // the source index is an integer function of the kernel's own output: equal
     for (who, f, grid) in [("reference", &fa, &grid_a), ("candidate", &fb, &grid_b)] {
-        let want = fx.reach_grid_of(fx.empty_reach_grid(), 0, f);
+        let want = fx.source_index_of(fx.empty_source_index(), 0, f);
         v.check(*grid == want, || {
-            format!("gather_footprint's reach grid on the {who} is not its output's")
+            format!("gather_footprint's source index on the {who} is not its output's")
         });
     }
     // the radius is ~7 ulp from the same integers: compared as a channel
@@ -175,12 +175,12 @@ pub fn check_density_gather(
         // the row pass adds its own output's grid for the column pass; the column pass
         // writes none
         for (who, out, grid) in [("reference", &a, &grid_a), ("candidate", &b, &grid_b)] {
-            let mut want = fx.reach_grid_of(fx.empty_reach_grid(), axis, input);
+            let mut want = fx.source_index_of(fx.empty_source_index(), axis, input);
             if axis == 0 {
-                want = fx.reach_grid_of(want, 1, out);
+                want = fx.source_index_of(want, 1, out);
             }
             v.check(*grid == want, || {
-                format!("density_gather axis {axis}'s reach grid on the {who} is wrong")
+                format!("density_gather axis {axis}'s source index on the {who} is wrong")
             });
         }
         // flux -> output units: 1 for the row pass, albedo / (pi A) for the column pass

@@ -5,7 +5,7 @@ use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, Kern
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
 use crate::device::layout::GatherParams;
-use crate::math::density_gather::{column_pass_threads, reach_grid_len};
+use crate::math::density_gather::{column_pass_threads, source_index_len};
 
 /// One pass of the separable gather. Every receiver pixel `j` sums, over the receivers
 /// `i` of its row (`params.axis` 0) or column (1) inside the image,
@@ -27,9 +27,10 @@ use crate::math::density_gather::{column_pass_threads, reach_grid_len};
 ///   from its edge texel (`math::density_gather::atlas_edge_texel`), and the G-buffer is
 ///   bound but not read.
 ///
-/// Non-receiver pixels get 0. The loop over sources runs over `-R..=R` with `R` from the
-/// reach grid (`math::density_gather::pass_reach`): the taps it leaves out have no
-/// weight, so the sum is the one over `-max_radius_px..=max_radius_px`, bit for bit.
+/// Non-receiver pixels get 0. The loop visits only the sources the source index lists
+/// within `R` of `j` (`math::density_gather::for_each_pass_source`, `R` from the reach
+/// grid): the taps it leaves out have no flux or no weight, so the sum is the one over
+/// `-max_radius_px..=max_radius_px`, bit for bit.
 #[derive(Clone, Copy, Debug)]
 pub struct DensityGather {
     /// Gather parameters; `axis` picks the pass.
@@ -42,10 +43,10 @@ pub struct DensityGather {
     pub input: ImageBuf,
     /// Axis 0: normalised flux and radius; axis 1: caustic radiance and radius.
     pub out: ImageBuf,
-    /// The reach grid: axis 0 reads the row half (`gather_footprint` wrote it) and puts
-    /// the pixels it gives flux into the column half (atomic maxima, the column half
-    /// zeroed before); axis 1 reads the column half.
-    pub reach: Buf<u32>,
+    /// The source index: axis 0 reads the row pass's part (`gather_footprint` wrote it)
+    /// and enters the pixels it gives flux into the column pass's (atomic maxima and ors,
+    /// zeroed before); axis 1 reads the column pass's part.
+    pub source_index: Buf<u32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -57,7 +58,7 @@ const BINDINGS: &[Binding] = &[
     bind("edge", Read),
     bind("input", Read),
     bind("out", ReadWrite),
-    bind("reach", ReadWrite),
+    bind("source_index", ReadWrite),
 ];
 
 impl KernelDecl for DensityGather {
@@ -75,9 +76,9 @@ impl KernelDecl for DensityGather {
             .buf("input", self.input, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
             .buf(
-                "reach",
-                self.reach,
-                reach_grid_len(c.width, c.height) as u64 * 4,
+                "source_index",
+                self.source_index,
+                source_index_len(c.width, c.height) as u64 * 4,
             )?;
         Ok(Some(if self.params.axis == 1 {
             column_pass_threads(c.width, c.height)

@@ -5,7 +5,7 @@ use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, Kern
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::GatherParams;
-use crate::math::density_gather::reach_grid_len;
+use crate::math::density_gather::source_index_len;
 
 /// For every receiver pixel `i`: the radius `r_i` (pixels) of the smallest window holding
 /// `params.knn_photons` photons (`footprint_radius` on the summed-area table), and the
@@ -14,8 +14,9 @@ use crate::math::density_gather::reach_grid_len;
 /// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out`
 /// (other pixels get 0; a pixel without flux gets `(0, 0, 0, r_i)` without its normaliser
 /// being computed). Receivers, depths and normals come from the edge texels
-/// `photon_count_table` wrote. Every pixel it gives flux puts its reach into its tile of
-/// the row pass's reach grid, which bounds the row pass's loops.
+/// `photon_count_table` wrote. Every pixel it gives flux is entered into the row pass's
+/// part of the source index (its reach into its tile's grid entry, its mask bit), which
+/// the row pass's loops visit instead of every tap.
 #[derive(Clone, Copy, Debug)]
 pub struct GatherFootprint {
     /// Gather parameters (camera, `knn_photons`, `max_radius_px`, edge weights,
@@ -29,10 +30,11 @@ pub struct GatherFootprint {
     pub out: ImageBuf,
     /// Per pixel the edge texel from `photon_count_table`.
     pub edge: ImageBuf,
-    /// The reach grid (`math::density_gather::reach_grid_len` entries, zeroed before):
-    /// the row pass's half gets, per tile, the maximum `reach_grid_entry` of the pixels
-    /// this kernel gives flux (atomic maxima).
-    pub reach: Buf<u32>,
+    /// The source index (`math::density_gather::source_index_len` entries, zeroed
+    /// before): the row pass's reach grid gets, per tile, the maximum `reach_grid_entry`
+    /// of the pixels this kernel gives flux (atomic maxima), its source mask their bits
+    /// (atomic ors).
+    pub source_index: Buf<u32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -43,7 +45,7 @@ const BINDINGS: &[Binding] = &[
     bind("table", Read),
     bind("edge", Read),
     bind("out", ReadWrite),
-    bind("reach", ReadWrite),
+    bind("source_index", ReadWrite),
 ];
 
 impl KernelDecl for GatherFootprint {
@@ -58,9 +60,9 @@ impl KernelDecl for GatherFootprint {
             .buf("edge", self.edge, n * bytes::IMAGE_TEXEL)?
             .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
             .buf(
-                "reach",
-                self.reach,
-                reach_grid_len(c.width, c.height) as u64 * 4,
+                "source_index",
+                self.source_index,
+                source_index_len(c.width, c.height) as u64 * 4,
             )?;
         Ok(Some(n))
     }

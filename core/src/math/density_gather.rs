@@ -298,11 +298,66 @@ pub fn pass_reach(grid: &[u32], w: i32, h: i32, x: i32, y: i32, axis: u32, cap: 
     reach.min(cap)
 }
 
-/// Pass `axis`'s reach grid of `sources` (a `w x h` image of `(flux, radius)`): the
-/// maximum [`reach_grid_entry`] per tile, merged into `grid` by maximum as the GPU ports'
-/// atomic maxima do.
-pub fn accumulate_reach_grid(
-    grid: &mut [u32],
+/// Words of pass `axis`'s source mask over a `w x h` image: one bit per pixel,
+/// `ceil(w / 32)` words per image row (axis 0) or `ceil(h / 32)` per column (axis 1), so
+/// that the pixels a pass's loop visits lie in consecutive words.
+pub fn source_mask_words(w: u32, h: u32, axis: u32) -> u32 {
+    if axis == 0 {
+        h * w.div_ceil(32)
+    } else {
+        w * h.div_ceil(32)
+    }
+}
+
+/// Entries of the gather's source index, the buffer `gather_footprint` and the row pass
+/// fill and the passes read: the reach grids ([`reach_grid_len`]), then the row pass's
+/// source mask, then the column pass's ([`source_mask_words`]). Zeroed before each gather.
+pub fn source_index_len(w: u32, h: u32) -> u32 {
+    reach_grid_len(w, h) + source_mask_words(w, h, 0) + source_mask_words(w, h, 1)
+}
+
+/// Index in the source index of word `k` of the mask line (image row `y` for axis 0,
+/// column `x` for axis 1) through `(x, y)`.
+#[inline]
+pub fn source_mask_word(w: u32, h: u32, axis: u32, x: u32, y: u32, k: u32) -> usize {
+    let base = reach_grid_len(w, h);
+    (if axis == 0 {
+        base + y * w.div_ceil(32) + k
+    } else {
+        base + source_mask_words(w, h, 0) + x * h.div_ceil(32) + k
+    }) as usize
+}
+
+/// Word `k` of the mask line through `(x, y)` (pass `axis`), its bits outside
+/// `[lo, hi]` (positions along the line) cleared.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn source_bits(
+    index: &[u32],
+    w: u32,
+    h: u32,
+    axis: u32,
+    x: u32,
+    y: u32,
+    k: u32,
+    lo: u32,
+    hi: u32,
+) -> u32 {
+    let mut bits = index[source_mask_word(w, h, axis, x, y, k)];
+    if k == lo / 32 {
+        bits &= !0u32 << (lo % 32);
+    }
+    if k == hi / 32 {
+        bits &= !0u32 >> (31 - hi % 32);
+    }
+    bits
+}
+
+/// Pass `axis`'s part of the source index for `sources` (a `w x h` image of `(flux,
+/// radius)`), merged into `index` as the GPU ports' atomic maxima and ors do: per tile the
+/// maximum [`reach_grid_entry`], and a mask bit for every source.
+pub fn accumulate_source_index(
+    index: &mut [u32],
     sources: &[[f32; 4]],
     w: u32,
     h: u32,
@@ -312,8 +367,44 @@ pub fn accumulate_reach_grid(
     for (i, s) in sources.iter().enumerate() {
         let e = reach_grid_entry(s, cap);
         if e > 0 {
-            let k = reach_grid_index(w, h, axis, i as u32 % w, i as u32 / w);
-            grid[k] = grid[k].max(e);
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            let k = reach_grid_index(w, h, axis, x, y);
+            index[k] = index[k].max(e);
+            let along = if axis == 0 { x } else { y };
+            index[source_mask_word(w, h, axis, x, y, along / 32)] |= 1 << (along % 32);
+        }
+    }
+}
+
+/// The offsets `d` (increasing) of the sources destination `(x, y)` of pass `axis` visits:
+/// the mask's set bits within [`pass_reach`] of it, clipped to the image. Every tap the
+/// unbounded loop over `-cap..=cap` would have summed is among them, in the same order.
+#[allow(clippy::too_many_arguments)]
+pub fn for_each_pass_source(
+    index: &[u32],
+    w: i32,
+    h: i32,
+    x: i32,
+    y: i32,
+    axis: u32,
+    cap: i32,
+    mut f: impl FnMut(i32),
+) {
+    let taps = pass_reach(index, w, h, x, y, axis, cap);
+    let (along, len) = if axis == 0 { (x, w) } else { (y, h) };
+    let (lo, hi) = ((along - taps).max(0), (along + taps).min(len - 1));
+    if lo > hi {
+        return;
+    }
+    let (lo, hi) = (lo as u32, hi as u32);
+    for k in lo / 32..=hi / 32 {
+        let mut bits = source_bits(
+            index, w as u32, h as u32, axis, x as u32, y as u32, k, lo, hi,
+        );
+        while bits != 0 {
+            let b = bits.trailing_zeros();
+            bits &= bits - 1;
+            f((k * 32 + b) as i32 - along);
         }
     }
 }
@@ -442,7 +533,7 @@ mod tests {
     }
 
     #[test]
-    fn pass_reach_covers_every_source_with_weight() {
+    fn the_pass_visits_every_source_with_weight_and_only_sources() {
         use crate::math::rng::random_f32;
         let (w, h, cap) = (37i32, 29i32, 11i32);
         for seed in 0..24u32 {
@@ -455,11 +546,14 @@ mod tests {
                 })
                 .collect();
             for axis in 0..2u32 {
-                let mut grid = vec![0; reach_grid_len(w as u32, h as u32) as usize];
-                accumulate_reach_grid(&mut grid, &img, w as u32, h as u32, axis, cap);
+                let mut grid = vec![0; source_index_len(w as u32, h as u32) as usize];
+                accumulate_source_index(&mut grid, &img, w as u32, h as u32, axis, cap);
                 for y in 0..h {
                     for x in 0..w {
                         let reach = pass_reach(&grid, w, h, x, y, axis, cap);
+                        let mut visited = Vec::new();
+                        for_each_pass_source(&grid, w, h, x, y, axis, cap, |d| visited.push(d));
+                        assert!(visited.windows(2).all(|p| p[0] < p[1]));
                         for d in -cap..=cap {
                             let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };
                             if qx < 0 || qy < 0 || qx >= w || qy >= h {
@@ -468,6 +562,10 @@ mod tests {
                             let s = img[(qy * w + qx) as usize];
                             if s[0] != 0.0 && footprint_weight(-d, s[3]) > 0.0 {
                                 assert!(d.abs() <= reach, "({x}, {y}) axis {axis}: tap {d}");
+                                assert!(visited.contains(&d), "({x}, {y}) axis {axis}: {d}");
+                            }
+                            if visited.contains(&d) {
+                                assert!(s[0] != 0.0, "({x}, {y}) axis {axis}: dark {d}");
                             }
                         }
                     }

@@ -78,8 +78,9 @@ struct DensityBuffers {
     footprint: ImageBuf,
     /// The row pass's output.
     rows: ImageBuf,
-    /// The passes' reach grids (`math::density_gather::pass_reach`), zeroed each frame.
-    reach: Buf<u32>,
+    /// The passes' source index (`math::density_gather::source_index_len`), zeroed each
+    /// frame.
+    source_index: Buf<u32>,
     /// A one-texel G-buffer: the kernels bind one, and on the atlas read none.
     gbuffer: GBufferPlanes,
 }
@@ -380,9 +381,9 @@ impl CausticMap {
                     edge: rec.upload(&edge, "atlas edge texels"),
                     footprint: rec.create(texels, "atlas gather footprints"),
                     rows: rec.create(texels, "atlas gather rows"),
-                    reach: rec.create(
-                        crate::math::density_gather::reach_grid_len(s.atlas_size, s.atlas_size),
-                        "atlas gather reach grid",
+                    source_index: rec.create(
+                        crate::math::density_gather::source_index_len(s.atlas_size, s.atlas_size),
+                        "atlas gather source index",
                     ),
                     gbuffer: rec.create_gbuffer(1),
                 }
@@ -776,14 +777,14 @@ impl CausticMap {
                     edge: d.edge,
                 });
             }
-            rec.clear(d.reach);
+            rec.clear(d.source_index);
             rec.kernel(GatherFootprint {
                 params: rows,
                 photon_map: a.sums,
                 table: d.table,
                 out: d.footprint,
                 edge: d.edge,
-                reach: d.reach,
+                source_index: d.source_index,
             });
             for (params, input, out) in [(rows, d.footprint, d.rows), (columns, d.rows, a.map)] {
                 rec.kernel(DensityGather {
@@ -792,7 +793,7 @@ impl CausticMap {
                     edge: d.edge,
                     input,
                     out,
-                    reach: d.reach,
+                    source_index: d.source_index,
                 });
             }
         } else {

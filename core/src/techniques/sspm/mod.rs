@@ -121,8 +121,8 @@ enum GatherBuffers {
         table: Buf<u32>,
         edge: ImageBuf,
         scratch: ImageBuf,
-        /// The passes' reach grids (`math::density_gather::pass_reach`).
-        reach: Buf<u32>,
+        /// The passes' source index (`math::density_gather::source_index_len`).
+        source_index: Buf<u32>,
     },
     /// The bilateral gather: hit-distance tiles and the image between its two passes.
     Bilateral { tiles: Buf<f32>, scratch: ImageBuf },
@@ -413,9 +413,9 @@ impl Sspm {
                 table: rec.create(pixels, "photon count table"),
                 edge: rec.create(pixels, "gather edge texels"),
                 scratch: rec.create(pixels, "gather scratch image"),
-                reach: rec.create(
-                    crate::math::density_gather::reach_grid_len(w, h),
-                    "gather reach grid",
+                source_index: rec.create(
+                    crate::math::density_gather::source_index_len(w, h),
+                    "gather source index",
                 ),
             },
             GatherFilter::Bilateral => GatherBuffers::Bilateral {
@@ -805,7 +805,7 @@ impl Sspm {
                         table,
                         edge,
                         scratch,
-                        reach,
+                        source_index,
                     } => {
                         for params in [gather, columns] {
                             rec.kernel(PhotonCountTable {
@@ -816,14 +816,14 @@ impl Sspm {
                                 edge,
                             });
                         }
-                        rec.clear(reach);
+                        rec.clear(source_index);
                         rec.kernel(GatherFootprint {
                             params: gather,
                             photon_map: p.photon_map,
                             table,
                             out: filtered,
                             edge,
-                            reach,
+                            source_index,
                         });
                         rec.kernel(DensityGather {
                             params: gather,
@@ -831,7 +831,7 @@ impl Sspm {
                             edge,
                             input: filtered,
                             out: scratch,
-                            reach,
+                            source_index,
                         });
                         rec.kernel(DensityGather {
                             params: columns,
@@ -839,7 +839,7 @@ impl Sspm {
                             edge,
                             input: scratch,
                             out: last,
-                            reach,
+                            source_index,
                         });
                     }
                     GatherBuffers::Bilateral { tiles, scratch } => {
