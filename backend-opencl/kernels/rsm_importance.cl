@@ -36,7 +36,7 @@ __kernel void rsm_importance(__global const RsmParams* p, __global const GpuLigh
                 t.normal = pack_unit_vector(load3(g.normal));
                 store3(t.flux, diffuse ? arriving * albedo : arriving);
                 t.kind = diffuse ? RSM_TEXEL_DIFFUSE : RSM_TEXEL_SPECULAR;
-                importance = imp;
+                importance = pyramid_weight(p->sampling, imp);
             }
         }
         texels[p->face * n + i] = t;

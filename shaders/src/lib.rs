@@ -39,7 +39,10 @@ pub const COMMON: &[(&str, &str)] = &[
         "density_gather",
         include_str!("../wgsl/common/density_gather.wgsl"),
     ),
-    ("source_index", include_str!("../wgsl/common/source_index.wgsl")),
+    (
+        "source_index",
+        include_str!("../wgsl/common/source_index.wgsl"),
+    ),
     (
         "photon_map_add",
         include_str!("../wgsl/common/photon_map_add.wgsl"),

@@ -47,7 +47,7 @@ fn rsm_texel(i: u32) {
             t.normal = pack_unit_vector(g.normal);
             t.flux = select(arriving, arriving * g.albedo, diffuse);
             t.kind = select(RSM_TEXEL_SPECULAR, RSM_TEXEL_DIFFUSE, diffuse);
-            importance = imp;
+            importance = pyramid_weight(p.sampling, imp);
         }
     }
     texels[at] = t;

@@ -88,7 +88,7 @@ pub fn rsm_texel(
                 rsm_texel_kind::SPECULAR
             },
         },
-        importance,
+        caustica_core::math::rsm::pyramid_weight(p.sampling, importance),
     )
 }
 

@@ -3,6 +3,11 @@
 // is the WGSL twin.
 
 // rsm::luminance (Rec. 709).
+// A level-0 texel's pyramid entry: its importance, or 1 under uniform sampling
+// (core::math::rsm::pyramid_weight).
+inline float pyramid_weight(uint sampling, float imp) {
+    return sampling == RSM_SAMPLING_UNIFORM ? 1.0f : imp;
+}
 inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 // rsm::level_count: log2(side) + 1 (side a power of two; OpenCL 1.2 has clz, not ctz).

@@ -88,7 +88,9 @@ typedef struct {
     GpuCamera face_camera;
     uint light; uint face; uint side; uint level;
     uint face_count; uint first_sample; uint sample_count; uint seed;
+    uint sampling; uint _pad0; uint _pad1; uint _pad2;
 } RsmParams;
+#define RSM_SAMPLING_UNIFORM 1u // core::math::rsm::rsm_sampling
 typedef struct {
     float position[3]; uint power; uint normal; uint direction; float ray_length; uint tile;
 } GiPhoton;

@@ -148,6 +148,7 @@ struct RsmParams {
     GpuCamera face_camera;
     uint light; uint face; uint side; uint level;
     uint face_count; uint first_sample; uint sample_count; uint seed;
+    uint sampling; uint _pad0; uint _pad1; uint _pad2;
 };
 struct GiPhoton {
     vec3 position; uint power; uint normal; uint direction; float ray_length; uint tile;

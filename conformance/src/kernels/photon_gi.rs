@@ -89,6 +89,7 @@ fn rsm_params(
         first_sample: 0,
         sample_count: SAMPLES,
         seed,
+        ..Default::default()
     }
 }
 

@@ -570,6 +570,11 @@ pub struct RsmParams {
     pub sample_count: u32,
     /// The frame seed hashed with the light (the set's Cranley-Patterson rotation).
     pub seed: u32,
+    /// `rsm_importance` level 0: how texels are weighted in the pyramid
+    /// (`math::rsm::rsm_sampling`).
+    pub sampling: u32,
+    /// Padding to a multiple of 16 bytes.
+    pub _pad: [u32; 3],
 }
 
 /// PhotonGi's stored photon (seed 003 Table 24-2, derived in `docs/photon-gi.md`), 32

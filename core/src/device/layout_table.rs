@@ -232,7 +232,8 @@ table! {
     RsmTexel { position, normal, flux, kind }
     RsmPhoton { origin, direction, flux, bounces }
     RsmParams {
-        face_camera, light, face, side, level, face_count, first_sample, sample_count, seed
+        face_camera, light, face, side, level, face_count, first_sample, sample_count, seed,
+        sampling, _pad
     }
     GiPhoton { position, power, normal, direction, ray_length, tile }
     IndirectTraceParams {

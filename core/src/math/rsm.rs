@@ -32,6 +32,27 @@ pub mod rsm_texel_kind {
     pub const SPECULAR: u32 = 2;
 }
 
+/// How `sample_rsm` chooses texels (`RsmParams::sampling`).
+pub mod rsm_sampling {
+    /// By importance, `luminance(flux x albedo)` (003 section 24.2.1): the default.
+    pub const IMPORTANCE: u32 = 0;
+    /// Every texel that leaves flux equally likely: the estimate the importance warp must
+    /// agree with in the mean (issue 18's unbiasedness test), at a higher variance.
+    pub const UNIFORM: u32 = 1;
+}
+
+/// A level-0 texel's entry in the importance pyramid: its importance `imp` (> 0, finite:
+/// the texel leaves flux) under [`rsm_sampling::IMPORTANCE`], 1 under
+/// [`rsm_sampling::UNIFORM`].
+#[inline]
+pub fn pyramid_weight(sampling: u32, imp: f32) -> f32 {
+    if sampling == rsm_sampling::UNIFORM {
+        1.0
+    } else {
+        imp
+    }
+}
+
 /// Rec. 709 luminance of a linear colour (the importance of a texel is the luminance of
 /// its leaving flux, 003 section 24.2.1).
 #[inline]

@@ -3,6 +3,12 @@
 // photon_gi.cl is the OpenCL C twin.
 
 // rsm::luminance (Rec. 709).
+// A level-0 texel's pyramid entry: its importance, or 1 under uniform sampling
+// (core::math::rsm::pyramid_weight).
+fn pyramid_weight(sampling: u32, imp: f32) -> f32 {
+    return select(imp, 1.0, sampling == RSM_SAMPLING_UNIFORM);
+}
+
 fn luminance(c: vec3<f32>) -> f32 {
     return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
 }

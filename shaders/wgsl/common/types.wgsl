@@ -232,7 +232,13 @@ struct RsmParams {
     first_sample: u32,
     sample_count: u32,
     seed: u32,
+    sampling: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
+
+const RSM_SAMPLING_UNIFORM: u32 = 1u; // core::math::rsm::rsm_sampling
 
 struct GiPhoton {
     position: vec3<f32>,

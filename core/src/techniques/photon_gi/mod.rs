@@ -17,7 +17,7 @@
 
 mod settings;
 
-pub use settings::{IndirectEstimator, PhotonGiSettings};
+pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 
 use crate::backend::{read_buf, Backend};
 use crate::device::device_scene::{BuildBudget, DeviceScene};
@@ -479,6 +479,7 @@ impl PhotonGi {
             light: r.light,
             side,
             seed,
+            sampling: self.settings.rsm_sampling.code(),
             ..Default::default()
         };
         for (f, face) in r.faces.iter().enumerate() {

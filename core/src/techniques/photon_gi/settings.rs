@@ -18,6 +18,29 @@ pub enum IndirectEstimator {
     Deposit,
 }
 
+/// How the RSM's texels are chosen for the photons.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RsmSampling {
+    /// By importance `luminance(flux x albedo)`, Clarberg's hierarchical warp (003 section
+    /// 24.2.1): the technique.
+    #[default]
+    Importance,
+    /// Every texel that leaves flux equally likely, through the same warp: the same
+    /// estimate in the mean at a higher variance (the unbiasedness test's comparison).
+    Uniform,
+}
+
+impl RsmSampling {
+    /// The value of `RsmParams::sampling` (`math::rsm::rsm_sampling`).
+    pub fn code(self) -> u32 {
+        match self {
+            RsmSampling::Importance => crate::math::rsm::rsm_sampling::IMPORTANCE,
+            RsmSampling::Uniform => crate::math::rsm::rsm_sampling::UNIFORM,
+        }
+    }
+}
+
 /// Every parameter of the technique.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -56,6 +79,8 @@ pub struct PhotonGiSettings {
     pub max_stretch: f32,
     /// The raw indirect image's estimator (splats; or the raw deposit, for references).
     pub estimator: IndirectEstimator,
+    /// How the RSM's texels are chosen (by importance; uniformly, for comparisons).
+    pub rsm_sampling: RsmSampling,
     /// Most pixels from a splat's centre to its edge (a cost bound; larger splats are
     /// clipped and counted as saturated).
     pub max_splat_px: u32,
@@ -92,6 +117,7 @@ impl Default for PhotonGiSettings {
             normal_compression: 0.1,
             max_stretch: 4.0,
             estimator: IndirectEstimator::Splat,
+            rsm_sampling: RsmSampling::Importance,
             max_splat_px: 48,
             temporal: true,
             atrous_iterations: 4,
