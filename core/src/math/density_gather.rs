@@ -41,6 +41,15 @@
 //!   terms (000 section 30.3.2), made symmetric so that a source's normaliser and its
 //!   destinations' gathers use the very same number.
 //!
+//! - **Source index: only the taps with weight.** `gather_footprint` and the row pass
+//!   enter every pixel they give flux into a bit mask (one bit per pixel, by rows for the
+//!   row pass, by columns for the column pass) and into a per-tile grid of the farthest
+//!   tap any source there has weight at ([`footprint_reach`], [`pass_reach`]); a pass
+//!   visits only the set bits within that reach ([`for_each_pass_source`]). The visited
+//!   taps are a superset of those with weight, in the loop's order, so the sums are
+//!   bitwise those of the loop over every tap within `max_radius`; the GPU ports no
+//!   longer pay, per warp, the weights of every tap that one lane needs.
+//!
 //! The filter works on flux (W per pixel), not radiance: flux is what is conserved, and
 //! radiance `L = (albedo / pi) Phi / A` (000 Eq. 5) is formed after the last pass with the
 //! destination pixel's area.
