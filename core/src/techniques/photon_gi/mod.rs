@@ -12,8 +12,7 @@
 //!    times albedo / pi: the raw indirect light), `temporal_blend` and `atrous_filter`
 //!    (24.4, each a setting), `composite` with the direct light.
 //!
-//! Not built yet (issue 18): the shading-normal correction of Eq. 20; image-size updates
-//! without re-creating the technique.
+//! Not built yet (issue 18): the shading-normal correction of Eq. 20.
 
 mod settings;
 
@@ -203,6 +202,98 @@ struct Buffers {
     atrous: Option<AtrousBuffers>,
 }
 
+/// The buffers whose size follows the image's (remade at a new image size).
+#[derive(Clone, Copy, Debug)]
+struct ScreenBuffers {
+    gbuffer: GBufferPlanes,
+    direct: ImageBuf,
+    tile_counts: Buf<u32>,
+    photon_map: PhotonMapPlanes,
+    raw: ImageBuf,
+    indirect: ImageBuf,
+    composite: ImageBuf,
+    temporal: Option<TemporalBuffers>,
+    atrous: Option<AtrousBuffers>,
+}
+
+impl ScreenBuffers {
+    /// Records the creation of the per-pixel buffers for `camera`'s image.
+    fn create(rec: &mut Recording, camera: GpuCamera, settings: &PhotonGiSettings) -> Self {
+        let pixels = camera.width * camera.height;
+        let temporal = settings.temporal.then(|| TemporalBuffers {
+            image: PingPong::create(rec, pixels, "temporal indirect history"),
+            edge: PingPong::create(rec, pixels, "temporal edge history"),
+            previous: camera,
+        });
+        let atrous = (settings.atrous_iterations > 0).then(|| AtrousBuffers {
+            input: rec.create(pixels, "A-Trous input image"),
+            a: rec.create(pixels, "A-Trous image a"),
+            b: rec.create(pixels, "A-Trous image b"),
+            details: rec.create(pixels, "A-Trous clipped details"),
+        });
+        let raw = rec.create(pixels, "raw indirect image");
+        ScreenBuffers {
+            gbuffer: rec.create_gbuffer(pixels),
+            direct: rec.create(pixels, "direct image"),
+            tile_counts: rec.create(
+                screen_tiles(camera.width, camera.height, settings.tile_size),
+                "photons per screen tile",
+            ),
+            photon_map: rec.create_photon_map(pixels),
+            raw,
+            indirect: if temporal.is_some() || atrous.is_some() {
+                rec.create(pixels, "indirect image")
+            } else {
+                raw
+            },
+            composite: rec.create(pixels, "composite image"),
+            temporal,
+            atrous,
+        }
+    }
+}
+
+impl Buffers {
+    /// The ids of the per-pixel buffers (`indirect` once where it is `raw`).
+    fn screen_ids(&self) -> Vec<ResourceId> {
+        let mut ids: Vec<ResourceId> = self.gbuffer.planes.iter().map(|p| p.id).collect();
+        ids.extend(self.photon_map.planes.iter().map(|p| p.id));
+        ids.extend([
+            self.direct.id,
+            self.tile_counts.id,
+            self.raw.id,
+            self.composite.id,
+        ]);
+        if self.indirect.id != self.raw.id {
+            ids.push(self.indirect.id);
+        }
+        if let Some(t) = &self.temporal {
+            ids.extend(t.image.buffers().iter().map(|b| b.id));
+            ids.extend(t.edge.buffers().iter().map(|b| b.id));
+        }
+        if let Some(a) = &self.atrous {
+            ids.extend([a.input.id, a.a.id, a.b.id, a.details.id]);
+        }
+        ids
+    }
+
+    /// These buffers with the per-pixel ones replaced by `s`.
+    fn with_screen(self, s: ScreenBuffers) -> Buffers {
+        Buffers {
+            gbuffer: s.gbuffer,
+            direct: s.direct,
+            tile_counts: s.tile_counts,
+            photon_map: s.photon_map,
+            raw: s.raw,
+            indirect: s.indirect,
+            composite: s.composite,
+            temporal: s.temporal,
+            atrous: s.atrous,
+            ..self
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct TemporalBuffers {
     image: PingPong<[f32; 4]>,
@@ -268,49 +359,30 @@ impl PhotonGi {
             .max(f32::MIN_POSITIVE);
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
-        let pixels = camera.width * camera.height;
         let side = settings.rsm_size;
         // room for any light's RSM and photons, so that lights can change without new
         // buffers: six faces, every initial photon
         let max_faces = 6u32;
         let max_photons = total.min(u32::MAX as u64) as u32;
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
-        let temporal = settings.temporal.then(|| TemporalBuffers {
-            image: PingPong::create(&mut rec, pixels, "temporal indirect history"),
-            edge: PingPong::create(&mut rec, pixels, "temporal edge history"),
-            previous: camera,
-        });
-        let atrous = (settings.atrous_iterations > 0).then(|| AtrousBuffers {
-            input: rec.create(pixels, "A-Trous input image"),
-            a: rec.create(pixels, "A-Trous image a"),
-            b: rec.create(pixels, "A-Trous image b"),
-            details: rec.create(pixels, "A-Trous clipped details"),
-        });
-        let raw = rec.create(pixels, "raw indirect image");
+        let s = ScreenBuffers::create(&mut rec, camera, &settings);
         let buffers = Buffers {
-            gbuffer: rec.create_gbuffer(pixels),
-            direct: rec.create(pixels, "direct image"),
+            gbuffer: s.gbuffer,
+            direct: s.direct,
             rsm_gbuffer: rec.create_gbuffer(side * side),
             rsm_texels: rec.create(max_faces * side * side, "RSM texels"),
             pyramid: rec.create(max_faces * pyramid_len(side), "RSM importance pyramid"),
             rsm_photons: rec.create(max_photons, "RSM photons"),
             photons: rec.create(capacity.max(1), "indirect photons"),
             photon_count: rec.create(1, "indirect photon count"),
-            tile_counts: rec.create(
-                screen_tiles(camera.width, camera.height, settings.tile_size),
-                "photons per screen tile",
-            ),
+            tile_counts: s.tile_counts,
             counters: rec.create(counter::WORDS as u32, "photon counters"),
-            photon_map: rec.create_photon_map(pixels),
-            raw,
-            indirect: if temporal.is_some() || atrous.is_some() {
-                rec.create(pixels, "indirect image")
-            } else {
-                raw
-            },
-            composite: rec.create(pixels, "composite image"),
-            temporal,
-            atrous,
+            photon_map: s.photon_map,
+            raw: s.raw,
+            indirect: s.indirect,
+            composite: s.composite,
+            temporal: s.temporal,
+            atrous: s.atrous,
         };
         let allocation = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
         backend.execute(&rec)?;
@@ -815,6 +887,56 @@ impl PhotonGi {
         Ok(())
     }
 
+    /// Moves the camera for the next frames. At the same image size no buffer is made (the
+    /// temporal history reprojects across the move); a new size makes the per-pixel
+    /// buffers anew (G-buffer, photon map, tile counts, images, the filters' history,
+    /// which starts empty) and frees the old ones, keeping the scene, the RSMs and the
+    /// photon buffers; the reference image (of the old size) is dropped. On an error
+    /// nothing changes.
+    pub fn set_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: &crate::scene::Camera,
+    ) -> Result<(), Error> {
+        let mut model = self.model.clone();
+        model.camera = camera.clone();
+        model
+            .validate()
+            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let gpu = GpuCamera::from_camera(camera);
+        if (gpu.width, gpu.height) != (self.camera.width, self.camera.height) {
+            let mut rec = Recording::new();
+            let s = ScreenBuffers::create(&mut rec, gpu, &self.settings);
+            let alloc = planned_allocation(backend, &rec, Some((gpu.width, gpu.height)))?;
+            backend.execute(&rec)?;
+            // free the old per-pixel buffers; `owned[i]` is `plan.buffers[i]`
+            let old = self.buffers.screen_ids();
+            let mut free = Recording::new();
+            let (mut owned, mut plans) = (Vec::new(), Vec::new());
+            let buffers = std::mem::take(&mut self.plan.buffers);
+            for (id, plan) in std::mem::take(&mut self.owned).into_iter().zip(buffers) {
+                if old.contains(&id) {
+                    free.steps.push(Step::Free { id });
+                    self.bytes -= plan.bytes;
+                } else {
+                    owned.push(id);
+                    plans.push(plan);
+                }
+            }
+            owned.extend(alloc.owned);
+            plans.extend(alloc.buffers);
+            self.bytes += alloc.bytes;
+            self.owned = owned;
+            self.buffers = self.buffers.with_screen(s);
+            self.plan = PhotonGi::make_plan(&model, &self.settings, &self.rsms, &plans);
+            self.reference = None;
+            backend.execute(&free)?;
+        }
+        self.camera = gpu;
+        self.model = model;
+        Ok(())
+    }
+
     /// Forgets the temporal history (the next frame is not blended).
     fn reset_history(&mut self) {
         if let Some(t) = &mut self.buffers.temporal {
@@ -906,23 +1028,10 @@ impl Technique for PhotonGi {
 
     fn set_camera(
         &mut self,
-        _backend: &mut dyn Backend,
+        backend: &mut dyn Backend,
         camera: &crate::scene::Camera,
     ) -> Result<(), Error> {
-        if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
-            // TODO(issue 19): remake the per-pixel buffers at a new size
-            return Err(Error::InvalidParameter(
-                "photon-gi: the image size cannot change yet; create the technique again".into(),
-            ));
-        }
-        let mut model = self.model.clone();
-        model.camera = camera.clone();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-        self.camera = GpuCamera::from_camera(camera);
-        self.model = model;
-        Ok(())
+        PhotonGi::set_camera(self, backend, camera)
     }
 
     fn set_lights(
