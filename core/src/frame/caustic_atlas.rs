@@ -410,12 +410,25 @@ pub fn atlas_layout(
 
 /// Whether `c` lies in UV triangle `t` (edges included, except the top-left rule: a point
 /// on an edge shared by two triangles belongs to one of them only).
+///
+/// Watertight: each edge function is evaluated from the edge's endpoints in a canonical
+/// order (the lexicographically smaller first) and then negated as the triangle's winding
+/// needs, so the two triangles that share an edge compute exactly opposite values for
+/// every point and no point near the edge can round to "inside" in both. (Evaluated from
+/// each triangle's own start vertex, `(b - a) x (c - a)` and `(a - b) x (c - b)` are not
+/// exact negatives in f32: on `rooms`' 8k-triangle grey ball, texel centres a rounding
+/// error from a shared edge landed in both triangles and the atlas refused the ball.)
 fn inside_triangle(c: Vec2, t: &[Vec2; 3], twice_area: f32) -> bool {
     let sign = twice_area.signum();
     let mut inside = true;
     for e in 0..3 {
         let (a, b) = (t[e], t[(e + 1) % 3]);
-        let w = (b - a).perp_dot(c - a) * sign;
+        let (p, q, flip) = if (a.x, a.y) < (b.x, b.y) {
+            (a, b, 1.0)
+        } else {
+            (b, a, -1.0)
+        };
+        let w = (q - p).perp_dot(c - p) * flip * sign;
         // top-left rule on the oriented edge: on the edge counts only for edges whose
         // direction (in the triangle's winding) points down or left
         let d = (b - a) * sign;
@@ -428,6 +441,33 @@ fn inside_triangle(c: Vec2, t: &[Vec2; 3], twice_area: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn triangles_sharing_an_edge_never_both_own_a_point() {
+        use crate::math::rng::random_f32;
+        let r = |k: u32, d: u32| random_f32(7, k, 0, d);
+        for k in 0..2000u32 {
+            // a quad a b c d split along a-c into (a, b, c) and (a, c, d), same winding
+            let a = Vec2::new(r(k, 0) * 0.3, r(k, 1) * 0.3);
+            let b = Vec2::new(0.7 + r(k, 2) * 0.3, r(k, 3) * 0.3);
+            let c = Vec2::new(0.7 + r(k, 4) * 0.3, 0.7 + r(k, 5) * 0.3);
+            let d = Vec2::new(r(k, 6) * 0.3, 0.7 + r(k, 7) * 0.3);
+            let (t1, t2) = ([a, b, c], [a, c, d]);
+            let area = |t: &[Vec2; 3]| (t[1] - t[0]).perp_dot(t[2] - t[0]);
+            for j in 0..64u32 {
+                // points on the shared edge, give or take a few ulps
+                let s = random_f32(9, k, j, 0);
+                let on = a + (c - a) * s;
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (-1, 0), (0, -1), (1, -1)] {
+                    let bump = |v: f32, k: i32| f32::from_bits((v.to_bits() as i32 + k) as u32);
+                    let p = Vec2::new(bump(on.x, dx), bump(on.y, dy));
+                    let n = inside_triangle(p, &t1, area(&t1)) as u32
+                        + inside_triangle(p, &t2, area(&t2)) as u32;
+                    assert!(n <= 1, "quad {k}: {p:?} is inside both triangles");
+                }
+            }
+        }
+    }
 
     fn overlaps(a: &AtlasTile, b: &AtlasTile) -> bool {
         a.x < b.x + b.side && b.x < a.x + a.side && a.y < b.y + b.side && b.y < a.y + a.side
