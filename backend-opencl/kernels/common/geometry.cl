@@ -35,6 +35,17 @@ inline WatertightRay watertight_ray(float3 origin, float3 dir) {
     return r;
 }
 
+// Woop's edge function q.x p.y - q.y p.x with the endpoints in a canonical order, negated
+// back (core::geometry::edge_function; with FP_CONTRACT off the plain expression rounds
+// the same).
+inline float edge_function(float2 p, float2 q) {
+    bool swap = !(p.x < q.x || (p.x == q.x && p.y < q.y));
+    float2 lo = swap ? q : p;
+    float2 hi = swap ? p : q;
+    float e = hi.x * lo.y - hi.y * lo.x;
+    return swap ? 0.0f - e : e;
+}
+
 // Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
 // core::geometry::WatertightRay::intersect, operation by operation (FP_CONTRACT is off).
 inline bool intersect_watertight(const WatertightRay* r, float3 v0, float3 v1, float3 v2,
@@ -49,9 +60,9 @@ inline bool intersect_watertight(const WatertightRay* r, float3 v0, float3 v1, f
     float by = component3(b, r->ky) - r->sy * component3(b, r->kz);
     float cx = component3(c, r->kx) - r->sx * component3(c, r->kz);
     float cy = component3(c, r->ky) - r->sy * component3(c, r->kz);
-    float u = cx * by - cy * bx;
-    float v = ax * cy - ay * cx;
-    float w = bx * ay - by * ax;
+    float u = edge_function((float2)(bx, by), (float2)(cx, cy));
+    float v = edge_function((float2)(cx, cy), (float2)(ax, ay));
+    float w = edge_function((float2)(ax, ay), (float2)(bx, by));
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
     float det = u + v + w;
     if (det == 0.0f || !isfinite(det)) return false;

@@ -5,6 +5,18 @@
 
 struct TriangleHit { float t; float u; float v; };
 
+// Woop's edge function q.x p.y - q.y p.x with the endpoints in a canonical order, negated
+// back (core::geometry::edge_function; with `precise` the plain expression rounds the
+// same).
+float edge_function(vec2 p, vec2 q) {
+    bool swap = !(p.x < q.x || (p.x == q.x && p.y < q.y));
+    vec2 lo = swap ? q : p;
+    vec2 hi = swap ? p : q;
+    precise float e = hi.x * lo.y - hi.y * lo.x;
+    precise float neg = 0.0 - e;
+    return swap ? neg : e;
+}
+
 // Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
 // core::geometry::intersect_triangle (the hardware's own triangle test is watertight too).
 bool intersect_triangle(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float t_min,
@@ -32,9 +44,9 @@ bool intersect_triangle(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float 
     precise float by = b[ky] - sy * b[kz];
     precise float cx = c[kx] - sx * c[kz];
     precise float cy = c[ky] - sy * c[kz];
-    precise float u = cx * by - cy * bx;
-    precise float v = ax * cy - ay * cx;
-    precise float w = bx * ay - by * ax;
+    precise float u = edge_function(vec2(bx, by), vec2(cx, cy));
+    precise float v = edge_function(vec2(cx, cy), vec2(ax, ay));
+    precise float w = edge_function(vec2(ax, ay), vec2(bx, by));
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
     precise float det = u + v + w;
     if (det == 0.0 || !is_finite(det)) return false;

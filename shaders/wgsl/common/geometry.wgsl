@@ -39,6 +39,18 @@ fn watertight_ray(origin: vec3<f32>, dir: vec3<f32>) -> WatertightRay {
     return WatertightRay(origin, kx, ky, kz, dir[kx] / dz, dir[ky] / dz, 1.0 / dz, dz != 0.0);
 }
 
+// Woop's edge function q.x p.y - q.y p.x with the endpoints in a canonical order, negated
+// back (core::geometry::edge_function): the two triangles of a shared edge compute exactly
+// opposite values even where the driver contracts the products into an FMA (WGSL cannot
+// forbid it; NVIDIA's driver does it).
+fn edge_function(p: vec2<f32>, q: vec2<f32>) -> f32 {
+    let swap = !(p.x < q.x || (p.x == q.x && p.y < q.y));
+    let lo = select(p, q, swap);
+    let hi = select(q, p, swap);
+    let e = hi.x * lo.y - hi.y * lo.x;
+    return select(e, 0.0 - e, swap);
+}
+
 // Watertight ray-triangle test (Woop, Benthin and Wald 2013), two-sided; mirror of
 // core::geometry::WatertightRay::intersect, operation by operation.
 fn intersect_watertight(r: ptr<function, WatertightRay>, v0: vec3<f32>, v1: vec3<f32>,
@@ -62,9 +74,9 @@ fn intersect_watertight(r: ptr<function, WatertightRay>, v0: vec3<f32>, v1: vec3
     let by = b[ky] - sy * b[kz];
     let cx = c[kx] - sx * c[kz];
     let cy = c[ky] - sy * c[kz];
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
+    let u = edge_function(vec2<f32>(bx, by), vec2<f32>(cx, cy));
+    let v = edge_function(vec2<f32>(cx, cy), vec2<f32>(ax, ay));
+    let w = edge_function(vec2<f32>(ax, ay), vec2<f32>(bx, by));
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
         return false;
     }
