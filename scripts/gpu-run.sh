@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach seams photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -145,6 +145,10 @@ if has reach; then
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./sspm_frame --bench
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=density,box ./caustic_map_frame --bench
+fi
+if has cross; then
+    # every per-kernel and per-frame comparison against the CPU, one test at a time
+    run timeout 300 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
 fi
 if has seams; then
     # a new image size for every technique (issue 19 point 1), PhotonGi's importance and
