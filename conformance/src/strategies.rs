@@ -433,8 +433,7 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
         4u32..=12,
         prop_oneof![Just(0.0f32), Just(1e-4f32), Just(1e-2f32)],
         prop_oneof![Just(PointEmission::CasterCone), Just(PointEmission::Sphere)],
-        // the tangent-plane store test (the default) and the seed's view-depth test
-        prop_oneof![-0.05f32..=-0.003, 0.003f32..=0.05],
+        0.003f32..=0.05,
         any::<u32>(),
         prop_oneof![2 => Just(1u32 << 20), 1 => 256u32..=2048],
     );
@@ -469,7 +468,14 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
             max_bounces,
             min_relative_power,
             point_emission,
-            depth_tolerance,
+            // both store tests, the tangent-plane one (the default) on odd seeds; the
+            // sign comes from the seed so that the generated cases stay those of the
+            // seed's test alone
+            depth_tolerance: if seed & 1 == 1 {
+                -depth_tolerance
+            } else {
+                depth_tolerance
+            },
             filter,
             knn_photons,
             roughness,
