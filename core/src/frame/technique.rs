@@ -101,6 +101,20 @@ pub fn leaked_buffers() -> u64 {
     LEAKED_BUFFERS.load(Ordering::Relaxed)
 }
 
+/// `model` with its camera replaced by `camera`, validated: what every technique's
+/// `set_camera` checks before it changes anything.
+pub fn with_camera(
+    model: &crate::scene::Scene,
+    camera: &Camera,
+) -> Result<crate::scene::Scene, Error> {
+    let mut model = model.clone();
+    model.camera = camera.clone();
+    model
+        .validate()
+        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+    Ok(model)
+}
+
 /// What a technique's `Drop` calls when it still owns device buffers: counts them in
 /// [`leaked_buffers`] and says so on stderr, never silently.
 pub fn report_leak(technique: &str, buffers: usize, bytes: u64) {

@@ -1012,11 +1012,7 @@ impl CausticMap {
         backend: &mut dyn Backend,
         camera: &crate::scene::Camera,
     ) -> Result<(), Error> {
-        let mut model = self.model.clone();
-        model.camera = camera.clone();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let model = crate::frame::technique::with_camera(&self.model, camera)?;
         let new = GpuCamera::from_camera(camera);
         let resized = (new.width, new.height) != (self.camera.width, self.camera.height);
         self.camera = new;

@@ -898,11 +898,7 @@ impl PhotonGi {
         backend: &mut dyn Backend,
         camera: &crate::scene::Camera,
     ) -> Result<(), Error> {
-        let mut model = self.model.clone();
-        model.camera = camera.clone();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let model = crate::frame::technique::with_camera(&self.model, camera)?;
         let gpu = GpuCamera::from_camera(camera);
         if (gpu.width, gpu.height) != (self.camera.width, self.camera.height) {
             let mut rec = Recording::new();

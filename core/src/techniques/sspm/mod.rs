@@ -1097,11 +1097,7 @@ impl Sspm {
         backend: &mut dyn Backend,
         camera: &crate::scene::Camera,
     ) -> Result<(), Error> {
-        let mut model = self.model.clone();
-        model.camera = camera.clone();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let model = crate::frame::technique::with_camera(&self.model, camera)?;
         if (camera.width, camera.height) != (self.camera.width, self.camera.height) {
             let settings = self.settings.clone();
             self.rebuild_frame(backend, model, settings)?;
