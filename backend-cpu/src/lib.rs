@@ -361,6 +361,7 @@ impl CpuBackend {
                 photons,
                 photon_count,
                 counters,
+                triangle_reach,
                 atlas,
             }) => {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
@@ -369,6 +370,11 @@ impl CpuBackend {
                 let tl = get(tiles.id)?.as_slice(tiles.len)?;
                 let atomics = map_atomics(atlas)?;
                 let c = caustic_map::deposit_atlas(params, tt, tl, ph, atomics);
+                let mut reach = get(triangle_reach.id)?
+                    .as_slice::<u32>(triangle_reach.len)?
+                    .to_vec();
+                caustic_map::mark_triangle_reach(ph, &mut reach);
+                self.put(triangle_reach.id, &reach)?;
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }

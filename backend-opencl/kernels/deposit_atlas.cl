@@ -6,12 +6,15 @@ __kernel void deposit_atlas(__global const AtlasParams* p, __global const uint* 
                             __global const uint4* tiles, __global const Photon* photons,
                             uint photon_capacity, __global const uint* photon_count,
                             volatile __global uint* counters,
+                            volatile __global uint* triangle_reach,
                             PHOTON_MAP_PARAMS(volatile __global)) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < min(photon_count[0], photon_capacity)) {
         Photon ph = photons[i];
+        uint2 reach = triangle_reach_bit(ph.direction);
+        atomic_or(&triangle_reach[reach.x], reach.y);
         uint tile = triangle_tiles[ph.direction];
         if (tile == NO_TILE) {
             atomic_inc(&lc[COUNTER_OFF_SCREEN]);

@@ -319,8 +319,6 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
 /// (`cornell`'s boxes, `ring`'s wall, `pool`'s basin) exercise the tile borders.
 #[test]
 fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
-    use caustica_core::device::device_scene::DeviceScene;
-    use caustica_core::frame::caustic_atlas::atlas_layout;
     use caustica_core::frame::plan::SceneFeatures;
     use caustica_core::scene::builtin::BUILTIN_SCENES;
     use caustica_core::techniques::caustic_map::MapGather;
@@ -340,16 +338,15 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
                 continue;
             }
             (scene.camera.width, scene.camera.height) = (32, 18);
-            let ds = DeviceScene::build(&scene, Default::default()).expect("scene");
-            let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(&scene);
-            let layout = atlas_layout(&ds, &receiver, (256, 256)).expect("layout");
             let atlas_flux = |s: CausticMapSettings, b: &mut dyn caustica_core::Backend| {
                 let mut t = CausticMap::new(b, &scene, s).expect("technique");
                 t.frame(b, &mut |_| {}).expect("frame");
                 let map = t.read_output(b, "caustic_atlas").expect("atlas");
+                // the technique's own layout: its tiles are the reached receivers'
+                let texels = t.atlas_texels(b).expect("texels").expect("an atlas");
                 Box::new(t).free(b).expect("free");
                 let mut flux = [0.0f64; 3];
-                for (e, t) in map.pixels.iter().zip(&layout.texels) {
+                for (e, t) in map.pixels.iter().zip(&texels) {
                     let area = f32::from_bits(t[0]) as f64;
                     for c in 0..3 {
                         flux[c] += e[c] as f64 * area;
@@ -386,4 +383,114 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
         }
     }
     assert!(checked > 0, "no scene with caustics was checked");
+}
+
+/// The plan's words for the atlas layout (the reason of `trace_photons`).
+fn layout_words(t: &CausticMap) -> String {
+    t.plan()
+        .passes
+        .iter()
+        .find(|p| p.name == "trace_photons")
+        .map(|p| p.reason.clone())
+        .unwrap_or_default()
+}
+
+/// The bits of every texel of an image.
+fn image_bits(i: &caustica_core::frame::image::Image) -> Vec<[u32; 4]> {
+    i.pixels.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+#[test]
+fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
+    // `sphere` and `sphere` with a second receiver, a 1 x 1 "cellar" quad 0.5 below the
+    // plane's centre: every segment from the ball (above the plane) to the cellar crosses
+    // y = 0 inside the plane's 4 x 4 (both lie within its footprint, which is convex), and
+    // the plane is a receiver that ends every photon, so no photon can reach the cellar.
+    let mut scene = builtin("sphere").expect("built-in");
+    (scene.camera.width, scene.camera.height) = (96, 54);
+    let mut cellar = scene.clone();
+    cellar.objects.push(caustica_core::scene::Object {
+        name: "cellar".into(),
+        material: "white".into(),
+        shape: caustica_core::scene::Shape::Quad {
+            center: glam::Vec3::new(0.0, -0.5, 0.0),
+            u: glam::Vec3::new(0.5, 0.0, 0.0),
+            v: glam::Vec3::new(0.0, 0.0, -0.5),
+        },
+    });
+    let below = vec![caustica_core::scene::Light::Point {
+        position: glam::Vec3::new(0.0, -0.2, 0.0),
+        intensity: glam::Vec3::splat(10.0),
+    }];
+    for (name, mut b) in backends() {
+        let mut plain = CausticMap::new(b.as_mut(), &scene, settings()).expect("scene");
+        plain.frame(b.as_mut(), &mut |_| {}).expect("frame");
+        let mut t = CausticMap::new(b.as_mut(), &cellar, settings()).expect("scene");
+        let before = layout_words(&t);
+        assert!(before.contains("2 tiles"), "{name}: {before}");
+        let stats = t.frame(b.as_mut(), &mut |_| {}).expect("frame");
+        let after = layout_words(&t);
+        assert!(
+            after.contains("1 tiles") && after.contains("1 receivers no photon reaches"),
+            "{name}: the cellar kept its tile: {after}"
+        );
+        assert_eq!(
+            stats.plan.as_ref().map(|p| p.passes.clone()),
+            Some(t.plan().passes.clone()),
+            "{name}: the frame's stats carry the plan before the new layout"
+        );
+        // the plane alone shares the atlas: the same layout as without the cellar, and
+        // (the photons meet the same triangles) the same atlas, bitwise
+        let words = layout_words(&plain);
+        let density = |w: &str| w.split(" texels per").next().map(str::to_string);
+        assert_eq!(
+            density(&words),
+            density(&after),
+            "{name}: {words} / {after}"
+        );
+        for out in ["caustic_atlas", "caustics_filtered"] {
+            let a = plain.read_output(b.as_mut(), out).expect("read");
+            let c = t.read_output(b.as_mut(), out).expect("read");
+            assert!(
+                image_bits(&a) == image_bits(&c),
+                "{name}: {out} differs with an unreachable receiver beside the plane"
+            );
+        }
+        // a light under the plane: its photons meet the plane before the ball and are
+        // discarded, no receiver is reached, the atlas has no tile; then back. Each state
+        // equals a technique built fresh in it, bitwise.
+        for lights in [below.clone(), cellar.lights.clone()] {
+            t.set_lights(b.as_mut(), &lights).expect("lights");
+            t.frame(b.as_mut(), &mut |_| {}).expect("frame");
+            let mut fresh_scene = cellar.clone();
+            fresh_scene.lights = lights.clone();
+            let mut f = CausticMap::new(b.as_mut(), &fresh_scene, settings()).expect("scene");
+            f.frame(b.as_mut(), &mut |_| {}).expect("frame");
+            assert_eq!(layout_words(&t), layout_words(&f), "{name}");
+            for out in ["composite", "caustics_raw", "caustic_atlas"] {
+                let a = t.read_output(b.as_mut(), out).expect("read");
+                let c = f.read_output(b.as_mut(), out).expect("read");
+                assert!(
+                    image_bits(&a) == image_bits(&c),
+                    "{name}: {out} after a light update differs from a fresh technique"
+                );
+            }
+            Box::new(f).free(b.as_mut()).expect("free");
+        }
+        // with pruning off the cellar keeps its tile
+        let mut off = CausticMap::new(
+            b.as_mut(),
+            &cellar,
+            CausticMapSettings {
+                prune: false,
+                ..settings()
+            },
+        )
+        .expect("scene");
+        off.frame(b.as_mut(), &mut |_| {}).expect("frame");
+        assert!(layout_words(&off).contains("2 tiles"), "{name}");
+        for x in [plain, t, off] {
+            Box::new(x).free(b.as_mut()).expect("free");
+        }
+    }
 }

@@ -85,6 +85,9 @@ enum Mutation {
     CompositeUlp,
     /// `deposit_atlas` loses one fixed-point unit of red in every atlas texel it touches.
     AtlasDepositOffByOne,
+    /// `deposit_atlas` forgets the lowest reached triangle of every word of its reach mask
+    /// (CausticMap would give that receiver no tile).
+    AtlasReachLost,
     /// `gather_caustic_map` 1e-4 too high.
     MapGatherHigh,
     /// `caustic_map_lookup` 1e-3 too high.
@@ -379,6 +382,14 @@ impl Mutant {
                     }
                 })
             }
+            (
+                Mutation::AtlasReachLost,
+                Kernel::DepositAtlas(DepositAtlas { triangle_reach, .. }),
+            ) => self.modify::<u32>(triangle_reach.id, |v| {
+                for w in v {
+                    *w &= w.wrapping_sub(1);
+                }
+            }),
             (Mutation::MapGatherHigh, Kernel::GatherCausticMap(GatherCausticMap { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
@@ -673,6 +684,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
         (Mutation::CompositeUlp, "composite"),
         (
             Mutation::AtlasDepositOffByOne,
+            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::AtlasReachLost,
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
         ),
         (

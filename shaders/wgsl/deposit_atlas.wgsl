@@ -10,9 +10,10 @@
 @group(0) @binding(3) var<storage, read> photons: array<Photon>;
 @group(0) @binding(4) var<storage, read> photon_count: array<u32>;
 @group(0) @binding(5) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(6) var<storage, read_write> photon_map0: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read_write> photon_map1: array<atomic<u32>>;
-@group(0) @binding(8) var<storage, read_write> photon_map2: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> triangle_reach: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(8) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(9) var<storage, read_write> photon_map2: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
@@ -22,6 +23,10 @@ fn deposit_atlas(i: u32, li: u32) {
     let photon_capacity = arrayLength(&photons);
     if (i < min(photon_count[0], photon_capacity)) {
         let ph = photons[i];
+        let reach = triangle_reach_bit(ph.direction);
+        if (reach.x < arrayLength(&triangle_reach)) {
+            atomicOr(&triangle_reach[reach.x], reach.y);
+        }
         var tile = NO_TILE;
         if (ph.direction < arrayLength(&triangle_tiles)) {
             tile = triangle_tiles[ph.direction];

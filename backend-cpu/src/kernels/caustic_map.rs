@@ -16,7 +16,7 @@ use caustica_core::device::layout::{
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::map_gather::{
     atlas_texel_index, footprint_extent, footprint_texels, gather_caustic_texel, join_u64_f32,
-    sample_caustic_map,
+    sample_caustic_map, triangle_reach_bit,
 };
 use caustica_core::math::optics::saturate_radiance3;
 use caustica_core::math::photon_clusters::{footprint_share, footprint_window};
@@ -51,6 +51,17 @@ pub fn deposit_atlas(
             c
         })
         .reduce(Counters::default, Counters::merge)
+}
+
+/// Sets the reach bit of each texture-space photon's triangle (`deposit_atlas`; tile or
+/// not, a triangle outside the mask is skipped).
+pub fn mark_triangle_reach(photons: &[Photon], reach: &mut [u32]) {
+    for ph in photons {
+        let (word, bit) = triangle_reach_bit(ph.direction);
+        if let Some(w) = reach.get_mut(word as usize) {
+            *w |= bit;
+        }
+    }
 }
 
 /// Adds photon `ph` to atlas texel `texel` (fixed point, `(flux, hit distance)` quanta),

@@ -8,6 +8,9 @@ inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
     return (tile.y + cy) * atlas_width + tile.x + cx;
 }
 
+// math::map_gather::triangle_reach_bit: (word, bit) of scene triangle t in a reach mask
+inline uint2 triangle_reach_bit(uint t) { return (uint2)(t >> 5, 1u << (t & 31u)); }
+
 inline float join_u64_f32(uint lo, uint hi) { return (float)hi * 4294967296.0f + (float)lo; }
 
 // (first column, last column, first row, last row), inclusive.

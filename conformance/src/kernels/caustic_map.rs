@@ -7,7 +7,8 @@
 //! - `deposit_atlas`, on 4096 generated texture-space photons (uv anywhere in `[0, 1]^2`,
 //!   triangles of receivers and of casters, fluxes over 12 binary orders): the sums are
 //!   integer atomics of the same quanta, so the atlas and the counters must be **bitwise**
-//!   equal.
+//!   equal; so must the triangle reach mask (integer ors), which on the CPU must be
+//!   exactly the photons' triangles.
 //! - `gather_caustic_map` (N = 3, and N = 1: the raw map) on the CPU's sums: per texel a
 //!   sum of at most `N^2` sources, each converted exactly (a power-of-two quantum times a
 //!   u64 split in two exact f32 parts and one rounding) and divided by a count and by the
@@ -38,6 +39,7 @@ use caustica_core::kernels::{
 use caustica_core::math::density_gather::{
     accumulate_source_index, atlas_edge_texel, source_index_len,
 };
+use caustica_core::math::map_gather::{triangle_reach_bit, triangle_reach_words};
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::math::rng::random_f32;
 use caustica_core::recording::Recording;
@@ -91,12 +93,11 @@ fn params(l: &AtlasLayout, n: u32, capacity: u32) -> AtlasParams {
     }
 }
 
-/// Runs `deposit_atlas` on `b`: the atlas sums and the counters.
-fn run_deposit(
-    b: &mut dyn Backend,
-    l: &AtlasLayout,
-    ph: &[Photon],
-) -> Result<(Vec<DepositTexel>, Vec<u32>), String> {
+/// What `deposit_atlas` writes: the atlas sums, the counters, the triangle reach mask.
+type Deposit = (Vec<DepositTexel>, Vec<u32>, Vec<u32>);
+
+/// Runs `deposit_atlas` on `b`.
+fn run_deposit(b: &mut dyn Backend, l: &AtlasLayout, ph: &[Photon]) -> Result<Deposit, String> {
     let mut rec = Recording::new();
     let photons = rec.upload(ph, "photons");
     let count = rec.upload(&[ph.len() as u32], "photon count");
@@ -105,6 +106,11 @@ fn run_deposit(
     rec.clear_photon_map(&atlas);
     let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
     let tiles = rec.upload(&l.tiles, "tiles");
+    let triangle_reach = rec.create(
+        triangle_reach_words(l.triangle_tiles.len() as u32),
+        "triangle reach",
+    );
+    rec.clear(triangle_reach);
     rec.kernel(DepositAtlas {
         params: params(l, 1, ph.len() as u32),
         triangle_tiles,
@@ -112,10 +118,15 @@ fn run_deposit(
         photons,
         photon_count: count,
         counters,
+        triangle_reach,
         atlas,
     });
     run_and_free(b, "deposit_atlas", &rec, |b| {
-        Ok((read_photon_map(b, &atlas)?, read_buf(b, counters)?))
+        Ok((
+            read_photon_map(b, &atlas)?,
+            read_buf(b, counters)?,
+            read_buf(b, triangle_reach)?,
+        ))
     })
 }
 
@@ -338,8 +349,22 @@ pub fn check_caustic_map(
         return Ok(v);
     };
     let ph = photons(&l, 4096);
-    let (sa, ca) = run_deposit(r, &l, &ph)?;
-    let (sb, cb) = run_deposit(c, &l, &ph)?;
+    let (sa, ca, ra) = run_deposit(r, &l, &ph)?;
+    let (sb, cb, rb) = run_deposit(c, &l, &ph)?;
+    // the reach mask: exactly the photons' triangles, on the CPU and bitwise on the
+    // candidate (integer ors)
+    let mut expected = vec![0u32; ra.len()];
+    for p in &ph {
+        let (word, bit) = triangle_reach_bit(p.direction);
+        expected[word as usize] |= bit;
+    }
+    v.check(ra == expected, || {
+        "cpu: the triangle reach mask is not the photons' triangles".into()
+    });
+    v.check(rb == ra, || {
+        let differ = ra.iter().zip(&rb).filter(|(a, b)| a != b).count();
+        format!("{differ} words of the triangle reach mask differ (integer ors must agree)")
+    });
     let deposited = ca[counter::DEPOSITED] as u64;
     v.check(
         deposited + ca[counter::OFF_SCREEN] as u64 == ph.len() as u64,

@@ -148,6 +148,14 @@ pub fn plan_atlas(areas: &[f64], size: (u32, u32)) -> Result<AtlasPlan, AtlasErr
     if size.0 == 0 || size.1 == 0 {
         return Err(AtlasError::BadInput("the atlas has no texel".into()));
     }
+    if areas.is_empty() {
+        // no receiver (none reached): an atlas without tiles
+        return Ok(AtlasPlan {
+            size,
+            tiles: Vec::new(),
+            texels_per_unit_area: 0.0,
+        });
+    }
     if let Some(i) = areas.iter().position(|a| !(a.is_finite() && *a > 0.0)) {
         return Err(AtlasError::BadInput(format!(
             "receiver {i} has world area {}, not a finite number > 0",
@@ -333,79 +341,139 @@ pub fn atlas_receivers(scene: &crate::scene::Scene) -> Vec<bool> {
 type ReceiverTriangle = (usize, [Vec3; 3], [Vec2; 3]);
 
 /// Lays out the atlas of `size` texels for the scene objects flagged in `receiver` (one
-/// flag per scene object): tiles by world area ([`plan_atlas`]), every texel centre
-/// tested against the receiver's UV triangles ([`receiver_owners`]: overlapping, missing
-/// or out-of-range UVs are refused, naming the receiver by its object index), and each
-/// covered texel's world area from its triangle's UV-to-world Jacobian
-/// ([`texel_world_area`]).
+/// flag per scene object): [`AtlasReceivers::of`] then [`AtlasReceivers::layout`] with
+/// every receiver included.
 pub fn atlas_layout(
     ds: &DeviceScene,
     receiver: &[bool],
     size: (u32, u32),
 ) -> Result<AtlasLayout, AtlasError> {
-    let receivers: Vec<u32> = (0..receiver.len() as u32)
-        .filter(|&o| receiver[o as usize])
-        .collect();
-    let slot_of = |o: u32| receivers.iter().position(|&r| r == o);
-    let mut tris: Vec<Vec<ReceiverTriangle>> = vec![Vec::new(); receivers.len()];
-    for (t, (tri, &o)) in ds.triangles.iter().zip(&ds.triangle_objects).enumerate() {
-        if let Some(r) = slot_of(o) {
-            let v = tri.indices.map(|i| ds.vertices[i as usize]);
-            tris[r].push((
-                t,
-                v.map(|v| Vec3::from(v.position)),
-                v.map(|v| Vec2::new(v.u, v.v)),
-            ));
+    let r = AtlasReceivers::of(ds, receiver);
+    r.layout(&vec![true; r.objects.len()], size)
+}
+
+/// The diffuse receivers' triangles, gathered once from the device scene, from which the
+/// atlas is laid out for any subset of them: CausticMap lays its tiles out anew for the
+/// receivers its photons reach ([`AtlasReceivers::reached`]) whenever that set changes.
+#[derive(Clone, Debug)]
+pub struct AtlasReceivers {
+    /// Scene object index of each receiver.
+    pub objects: Vec<u32>,
+    /// Per receiver: its triangles (scene index, world corners, UV corners).
+    triangles: Vec<Vec<ReceiverTriangle>>,
+    /// Per receiver: its world area (scene units^2).
+    areas: Vec<f64>,
+    /// Triangles in the scene.
+    scene_triangles: usize,
+}
+
+impl AtlasReceivers {
+    /// The receivers among the scene objects flagged in `receiver` (one flag per scene
+    /// object), with their triangles in device order.
+    pub fn of(ds: &DeviceScene, receiver: &[bool]) -> AtlasReceivers {
+        let objects: Vec<u32> = (0..receiver.len() as u32)
+            .filter(|&o| receiver[o as usize])
+            .collect();
+        let mut slot_of = vec![None; receiver.len()];
+        for (r, &o) in objects.iter().enumerate() {
+            slot_of[o as usize] = Some(r);
         }
-    }
-    let areas: Vec<f64> = tris
-        .iter()
-        .map(|ts| {
-            ts.iter()
-                .map(|(_, p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
-                .sum()
-        })
-        .collect();
-    let plan = plan_atlas(&areas, size)?;
-    let atlas_texels = size.0 as usize * size.1 as usize;
-    let mut texels: Vec<AtlasTexel> = Vec::new();
-    texels.try_reserve_exact(atlas_texels).map_err(|_| {
-        AtlasError::BadInput(format!("no host memory for {atlas_texels} atlas texels"))
-    })?;
-    texels.resize(atlas_texels, [0, NO_TILE]);
-    let mut triangle_tiles = vec![NO_TILE; ds.triangles.len()];
-    let mut tiles = Vec::with_capacity(plan.tiles.len());
-    let mut covered_texels = 0u64;
-    for (r, tile) in plan.tiles.iter().enumerate() {
-        tiles.push([tile.x, tile.y, tile.side, receivers[r]]);
-        let local: Vec<([Vec3; 3], [Vec2; 3])> = tris[r].iter().map(|(_, p, t)| (*p, *t)).collect();
-        let owners = receiver_owners(receivers[r], &local, tile.side)?;
-        for (t, _, _) in &tris[r] {
-            triangle_tiles[*t] = r as u32;
-        }
-        for ty in 0..tile.side {
-            for tx in 0..tile.side {
-                let i = (tile.y + ty) as usize * size.0 as usize + (tile.x + tx) as usize;
-                let owner = owners[(ty * tile.side + tx) as usize];
-                let area = if owner == u32::MAX {
-                    0.0
-                } else {
-                    let (p, t) = &local[owner as usize];
-                    texel_world_area(*p, *t, tile.side).unwrap_or(0.0)
-                };
-                covered_texels += (area > 0.0) as u64;
-                texels[i] = [area.to_bits(), r as u32];
+        let mut triangles: Vec<Vec<ReceiverTriangle>> = vec![Vec::new(); objects.len()];
+        for (t, (tri, &o)) in ds.triangles.iter().zip(&ds.triangle_objects).enumerate() {
+            if let Some(r) = slot_of.get(o as usize).copied().flatten() {
+                let v = tri.indices.map(|i| ds.vertices[i as usize]);
+                triangles[r].push((
+                    t,
+                    v.map(|v| Vec3::from(v.position)),
+                    v.map(|v| Vec2::new(v.u, v.v)),
+                ));
             }
         }
+        let areas = triangles
+            .iter()
+            .map(|ts| {
+                ts.iter()
+                    .map(|(_, p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
+                    .sum()
+            })
+            .collect();
+        AtlasReceivers {
+            objects,
+            triangles,
+            areas,
+            scene_triangles: ds.triangles.len(),
+        }
     }
-    Ok(AtlasLayout {
-        plan,
-        receivers,
-        tiles,
-        triangle_tiles,
-        texels,
-        covered_texels,
-    })
+
+    /// Per receiver: whether a triangle of it has its bit set in `reach`, a triangle
+    /// reach mask ([`crate::math::map_gather::triangle_reach_bit`]).
+    pub fn reached(&self, reach: &[u32]) -> Vec<bool> {
+        self.triangles
+            .iter()
+            .map(|ts| {
+                ts.iter().any(|(t, _, _)| {
+                    let (word, bit) = crate::math::map_gather::triangle_reach_bit(*t as u32);
+                    reach.get(word as usize).is_some_and(|w| w & bit != 0)
+                })
+            })
+            .collect()
+    }
+
+    /// Lays out the atlas of `size` texels for the receivers flagged in `include` (one
+    /// flag per receiver; the others get no tile, their triangles [`NO_TILE`]): tiles by
+    /// world area ([`plan_atlas`]), every texel centre tested against the receiver's UV
+    /// triangles ([`receiver_owners`]: overlapping, missing or out-of-range UVs are
+    /// refused, naming the receiver by its object index), and each covered texel's world
+    /// area from its triangle's UV-to-world Jacobian ([`texel_world_area`]).
+    pub fn layout(&self, include: &[bool], size: (u32, u32)) -> Result<AtlasLayout, AtlasError> {
+        let slots: Vec<usize> = (0..self.objects.len())
+            .filter(|&r| include.get(r).copied().unwrap_or(false))
+            .collect();
+        let receivers: Vec<u32> = slots.iter().map(|&r| self.objects[r]).collect();
+        let areas: Vec<f64> = slots.iter().map(|&r| self.areas[r]).collect();
+        let plan = plan_atlas(&areas, size)?;
+        let atlas_texels = size.0 as usize * size.1 as usize;
+        let mut texels: Vec<AtlasTexel> = Vec::new();
+        texels.try_reserve_exact(atlas_texels).map_err(|_| {
+            AtlasError::BadInput(format!("no host memory for {atlas_texels} atlas texels"))
+        })?;
+        texels.resize(atlas_texels, [0, NO_TILE]);
+        let mut triangle_tiles = vec![NO_TILE; self.scene_triangles];
+        let mut tiles = Vec::with_capacity(plan.tiles.len());
+        let mut covered_texels = 0u64;
+        for (k, tile) in plan.tiles.iter().enumerate() {
+            let tris = &self.triangles[slots[k]];
+            tiles.push([tile.x, tile.y, tile.side, receivers[k]]);
+            let local: Vec<([Vec3; 3], [Vec2; 3])> =
+                tris.iter().map(|(_, p, t)| (*p, *t)).collect();
+            let owners = receiver_owners(receivers[k], &local, tile.side)?;
+            for (t, _, _) in tris {
+                triangle_tiles[*t] = k as u32;
+            }
+            for ty in 0..tile.side {
+                for tx in 0..tile.side {
+                    let i = (tile.y + ty) as usize * size.0 as usize + (tile.x + tx) as usize;
+                    let owner = owners[(ty * tile.side + tx) as usize];
+                    let area = if owner == u32::MAX {
+                        0.0
+                    } else {
+                        let (p, t) = &local[owner as usize];
+                        texel_world_area(*p, *t, tile.side).unwrap_or(0.0)
+                    };
+                    covered_texels += (area > 0.0) as u64;
+                    texels[i] = [area.to_bits(), k as u32];
+                }
+            }
+        }
+        Ok(AtlasLayout {
+            plan,
+            receivers,
+            tiles,
+            triangle_tiles,
+            texels,
+            covered_texels,
+        })
+    }
 }
 
 /// Whether `c` lies in UV triangle `t` (edges included, except the top-left rule: a point

@@ -164,6 +164,20 @@ impl FrameStats {
         *self.pass_ms.entry(name.into()).or_default() += ms;
     }
 
+    /// Adds the pass times (and dispatches) of `other` to this frame's: work the frame
+    /// did twice, counted once in the accounting and twice in the time.
+    pub fn absorb_pass_times(&mut self, other: &FrameStats) {
+        for p in &other.passes {
+            if let Some(q) = self.passes.iter_mut().find(|q| q.name == p.name) {
+                q.ms += p.ms;
+                q.dispatches += p.dispatches;
+            } else {
+                self.passes.push(p.clone());
+            }
+            *self.pass_ms.entry(p.name.clone()).or_default() += p.ms;
+        }
+    }
+
     /// Records pass `name` as skipped, with its reason.
     pub fn skip(&mut self, name: &str, reason: impl Into<String>) {
         self.skipped.push(SkippedPass {

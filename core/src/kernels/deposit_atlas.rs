@@ -12,7 +12,10 @@ use crate::device::layout::{AtlasParams, AtlasTileTexel, Photon};
 /// hit distance and a count in fixed point (`params.flux_quantum`,
 /// `params.hit_distance_quantum`) with the integer atomics of `deposit_screen`, so the
 /// sums are exact and order-free. A photon on a triangle without a tile (a receiver the
-/// atlas leaves out) is counted as `OFF_SCREEN`; deposited ones as `DEPOSITED`.
+/// atlas leaves out) is counted as `OFF_SCREEN`; deposited ones as `DEPOSITED`. Every
+/// photon, with a tile or not, sets its triangle's bit in `triangle_reach`
+/// ([`crate::math::map_gather::triangle_reach_bit`]): CausticMap lays out tiles only for
+/// the receivers photons reach.
 #[derive(Clone, Copy, Debug)]
 pub struct DepositAtlas {
     /// Atlas size, quanta, photon capacity.
@@ -27,6 +30,9 @@ pub struct DepositAtlas {
     pub photon_count: Buf<u32>,
     /// Photon counters ([`crate::device::layout::counter`]) the kernel adds to.
     pub counters: Buf<u32>,
+    /// One bit per scene triangle ([`crate::math::map_gather::triangle_reach_words`]
+    /// words), or-ed with the bits of the photons' triangles.
+    pub triangle_reach: Buf<u32>,
     /// The atlas's fixed-point sums, one texel per atlas texel (the planes of a screen
     /// photon map), summed over the frame's batches.
     pub atlas: PhotonMapPlanes,
@@ -40,6 +46,7 @@ const BINDINGS: &[Binding] = &[
     bind("photon_capacity", Count),
     bind("photon_count", Read),
     bind("counters", ReadWrite),
+    bind("triangle_reach", ReadWrite),
     bind("photon_map0", ReadWrite),
     bind("photon_map1", ReadWrite),
     bind("photon_map2", ReadWrite),
@@ -61,6 +68,7 @@ impl KernelDecl for DepositAtlas {
             .count("photon_capacity", self.photons.len)?
             .buf("photon_count", self.photon_count, 4)?
             .buf("counters", self.counters, bytes::COUNTERS)?
+            .buf("triangle_reach", self.triangle_reach, 4)?
             .photon_map(&self.atlas, n)?;
         Ok(Some(self.photons.len as u64))
     }

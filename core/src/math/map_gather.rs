@@ -103,6 +103,20 @@ pub fn atlas_texel_index(tile: [u32; 4], uv: Vec2, atlas_width: u32) -> u32 {
     (tile[1] + cy) * atlas_width + tile[0] + cx
 }
 
+/// The word and the bit of scene triangle `t` in a triangle reach mask (one bit per
+/// triangle, 32 to a `u32` word): `deposit_atlas` or-s the bit of every photon's triangle
+/// into it.
+#[inline]
+pub fn triangle_reach_bit(t: u32) -> (u32, u32) {
+    (t >> 5, 1u32 << (t & 31))
+}
+
+/// Words of a triangle reach mask over `triangles` scene triangles (at least one).
+#[inline]
+pub fn triangle_reach_words(triangles: u32) -> u32 {
+    triangles.div_ceil(32).max(1)
+}
+
 /// A (lo, hi) fixed-point sum as f32: `f32(hi) * 2^32 + f32(lo)` (exact in the parts
 /// where they fit 24 bits; two roundings otherwise), what every backend computes the
 /// same way (WGSL has no 64-bit integers nor f64).

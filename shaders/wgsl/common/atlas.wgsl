@@ -7,6 +7,11 @@ fn atlas_texel_index(tile: vec4<u32>, uv: vec2<f32>, atlas_width: u32) -> u32 {
     return (tile.y + cy) * atlas_width + tile.x + cx;
 }
 
+// math::map_gather::triangle_reach_bit: (word, bit) of scene triangle t in a reach mask
+fn triangle_reach_bit(t: u32) -> vec2<u32> {
+    return vec2<u32>(t >> 5u, 1u << (t & 31u));
+}
+
 fn join_u64_f32(lo: u32, hi: u32) -> f32 {
     return f32(hi) * 4294967296.0f + f32(lo);
 }

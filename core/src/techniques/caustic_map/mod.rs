@@ -14,9 +14,20 @@
 //! 2. every frame: `primary_gbuffer` and `direct_light` (as Sspm), `caustic_map_lookup`
 //!    (the camera's specular ray tree reading the map) and `composite`.
 //!
-//! Not built yet (TODO(issue 16)): pruning atlas tiles of receivers no photon can reach
-//! (the layout is fixed before any photon is traced); a footprint carried through curved
-//! glass (the lookup unfolds the pixel's square along the path, blind to focusing).
+//! **Tiles only for reached receivers.** `deposit_atlas` also marks every photon's
+//! triangle in a reach mask. After the photon pass the mask is read back: when the set of
+//! receivers the photons reached differs from the set that has tiles, the atlas is laid
+//! out anew for the reached ones (they share the whole atlas, so their texel density
+//! rises) and the same photons are deposited again. Which receivers the photons reach
+//! does not depend on the layout, so the second pass reaches the same set, and a technique
+//! updated into a state lays its atlas out exactly as a fresh one built in that state (the
+//! seam tests compare them bitwise). A receiver no photon reaches owns no tile; a light
+//! moving over a scene pays the second pass only on the frames whose reached set changes.
+//! With pruning off every receiver keeps its tile; AdaptiveCaustics (whose traversal
+//! deposits in `refine_clusters`) keeps every receiver's tile too.
+//!
+//! Not built yet (TODO(issue 16)): a footprint carried through curved glass (the lookup
+//! unfolds the pixel's square along the path, blind to focusing).
 
 mod emission;
 mod settings;
@@ -32,7 +43,7 @@ use crate::device::device_scene::{BuildBudget, DeviceScene};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
-use crate::frame::caustic_atlas::{atlas_layout, AtlasLayout};
+use crate::frame::caustic_atlas::{AtlasLayout, AtlasReceivers};
 use crate::frame::error::Error;
 use crate::frame::image::Image;
 use crate::frame::plan::{FramePlan, PassPlan, SceneFeatures};
@@ -64,6 +75,9 @@ struct AtlasBuffers {
     photons: Buf<Photon>,
     photon_count: Buf<u32>,
     counters: Buf<u32>,
+    /// One bit per scene triangle that a photon of this atlas reached
+    /// (`math::map_gather::triangle_reach_bit`), cleared with the sums.
+    triangle_reach: Buf<u32>,
     density: Option<DensityBuffers>,
 }
 
@@ -155,6 +169,24 @@ pub fn atlas_gather_params(
     }
 }
 
+/// The tiles buffer: layout `l`'s tiles, then zero tiles up to `len` (one slot per
+/// receiver, so that a new layout fits the same buffer; no triangle points at a padding
+/// tile).
+fn tile_buffer(l: &AtlasLayout, len: usize) -> Vec<AtlasTileTexel> {
+    let mut tiles = l.tiles.clone();
+    tiles.resize(len.max(tiles.len()), [0; 4]);
+    tiles
+}
+
+/// The density gather's edge texels of layout `l`
+/// ([`crate::math::density_gather::atlas_edge_texel`]).
+fn atlas_edge_texels(l: &AtlasLayout) -> Vec<[f32; 4]> {
+    l.texels
+        .iter()
+        .map(|t| crate::math::density_gather::atlas_edge_texel(t[1], f32::from_bits(t[0])))
+        .collect()
+}
+
 /// CausticMap on one backend, for one scene.
 pub struct CausticMap {
     /// Registry name: `caustic-map`, or `adaptive-caustics` with a traversal.
@@ -172,6 +204,11 @@ pub struct CausticMap {
     emission: Emission,
     variant: TraceVariant,
     layout_summary: String,
+    /// The diffuse receivers and their triangles (with an atlas): the atlas is laid out
+    /// from them whenever the set of reached receivers changes.
+    receivers: Option<AtlasReceivers>,
+    /// Per receiver (in `receivers` order): whether it owns a tile now.
+    tiled: Vec<bool>,
     plan: FramePlan,
     atlas: Option<AtlasBuffers>,
     images: Images,
@@ -251,23 +288,13 @@ impl CausticMap {
             }
             .into());
         }
-        let layout = if with_atlas {
-            Some(
-                atlas_layout(&ds, &receiver, (settings.atlas_size, settings.atlas_size)).map_err(
-                    |e| match e {
-                        crate::frame::caustic_atlas::AtlasError::BadUvs { receiver, reason } => {
-                            Error::InvalidScene(format!(
-                                "objects[{receiver}] ('{}'): its UVs cannot address a caustic \
-                                 map: {reason}",
-                                scene.objects[receiver as usize].name
-                            ))
-                        }
-                        other => Error::InvalidScene(other.to_string()),
-                    },
-                )?,
-            )
-        } else {
-            None
+        let receivers = with_atlas.then(|| AtlasReceivers::of(&ds, &receiver));
+        // at creation every receiver owns a tile (and has its UVs checked); the first
+        // photon pass keeps the reached ones
+        let tiled = vec![true; receivers.as_ref().map_or(0, |r| r.objects.len())];
+        let layout = match &receivers {
+            Some(r) => Some(Self::lay_out(scene, r, &tiled, settings.atlas_size)?),
+            None => None,
         };
         let mut variant = features.trace_variant();
         variant.surface_store = true;
@@ -301,6 +328,8 @@ impl CausticMap {
             emission,
             variant,
             layout_summary: String::new(),
+            receivers,
+            tiled,
             plan: FramePlan {
                 prune: true,
                 features,
@@ -357,9 +386,11 @@ impl CausticMap {
             cap
         };
         let mut rec = Recording::new();
+        let all_receivers = self.tiled.len().max(1);
+        let triangles = l.triangle_tiles.len() as u32;
         let a = AtlasBuffers {
             triangle_tiles: rec.upload(&l.triangle_tiles, "atlas triangle tiles"),
-            tiles: rec.upload(&l.tiles, "atlas tiles"),
+            tiles: rec.upload(&tile_buffer(l, all_receivers), "atlas tiles"),
             texels: rec.upload(&l.texels, "atlas texels"),
             sums: rec.create_photon_map(texels),
             map: rec.create(texels, "caustic map"),
@@ -368,25 +399,20 @@ impl CausticMap {
             photons: rec.create(cap, "photons"),
             photon_count: rec.create(1, "photon count"),
             counters: rec.create(counter::WORDS as u32, "photon counters"),
-            density: (s.gather == MapGather::Density).then(|| {
-                let edge: Vec<[f32; 4]> = l
-                    .texels
-                    .iter()
-                    .map(|t| {
-                        crate::math::density_gather::atlas_edge_texel(t[1], f32::from_bits(t[0]))
-                    })
-                    .collect();
-                DensityBuffers {
-                    table: rec.create(texels, "atlas photon count table"),
-                    edge: rec.upload(&edge, "atlas edge texels"),
-                    footprint: rec.create(texels, "atlas gather footprints"),
-                    rows: rec.create(texels, "atlas gather rows"),
-                    source_index: rec.create(
-                        crate::math::density_gather::source_index_len(s.atlas_size, s.atlas_size),
-                        "atlas gather source index",
-                    ),
-                    gbuffer: rec.create_gbuffer(1),
-                }
+            triangle_reach: rec.create(
+                crate::math::map_gather::triangle_reach_words(triangles),
+                "atlas triangle reach",
+            ),
+            density: (s.gather == MapGather::Density).then(|| DensityBuffers {
+                table: rec.create(texels, "atlas photon count table"),
+                edge: rec.upload(&atlas_edge_texels(l), "atlas edge texels"),
+                footprint: rec.create(texels, "atlas gather footprints"),
+                rows: rec.create(texels, "atlas gather rows"),
+                source_index: rec.create(
+                    crate::math::density_gather::source_index_len(s.atlas_size, s.atlas_size),
+                    "atlas gather source index",
+                ),
+                gbuffer: rec.create_gbuffer(1),
             }),
         };
         let finest = self
@@ -412,14 +438,78 @@ impl CausticMap {
         self.atlas_owned = alloc.owned;
         self.atlas_bytes = alloc.bytes;
         self.plan.buffers.extend(alloc.buffers);
-        self.layout_summary = format!(
-            "{} tiles in {}x{} texels at {:.4} texels per scene unit^2, {} texels covered",
+        self.layout_summary = self.describe_layout(l);
+        Ok(())
+    }
+
+    /// Lays the atlas out for the receivers flagged in `include`; a receiver whose UVs
+    /// cannot address a map is named by its scene object.
+    fn lay_out(
+        scene: &Scene,
+        receivers: &AtlasReceivers,
+        include: &[bool],
+        atlas_size: u32,
+    ) -> Result<AtlasLayout, Error> {
+        receivers
+            .layout(include, (atlas_size, atlas_size))
+            .map_err(|e| match e {
+                crate::frame::caustic_atlas::AtlasError::BadUvs { receiver, reason } => {
+                    Error::InvalidScene(format!(
+                        "objects[{receiver}] ('{}'): its UVs cannot address a caustic map: \
+                         {reason}",
+                        scene.objects[receiver as usize].name
+                    ))
+                }
+                other => Error::InvalidScene(other.to_string()),
+            })
+    }
+
+    /// The plan's words for layout `l`.
+    fn describe_layout(&self, l: &AtlasLayout) -> String {
+        let left_out = self.tiled.iter().filter(|t| !**t).count();
+        format!(
+            "{} tiles in {}x{} texels at {:.4} texels per scene unit^2, {} texels covered{}",
             l.tiles.len(),
             l.plan.size.0,
             l.plan.size.1,
             l.plan.texels_per_unit_area,
-            l.covered_texels
-        );
+            l.covered_texels,
+            if left_out == 0 {
+                String::new()
+            } else {
+                format!("; {left_out} receivers no photon reaches own no tile")
+            }
+        )
+    }
+
+    /// Lays the atlas out anew for the receivers flagged in `include` and writes the
+    /// layout's buffers in place (no buffer is reallocated); the plan states the new
+    /// layout.
+    fn relayout(
+        &mut self,
+        backend: &mut dyn Backend,
+        a: AtlasBuffers,
+        include: &[bool],
+    ) -> Result<(), Error> {
+        let Some(r) = &self.receivers else {
+            return Ok(());
+        };
+        let l = Self::lay_out(&self.model, r, include, self.settings.atlas_size)?;
+        let mut rec = Recording::new();
+        rec.update(a.triangle_tiles, &l.triangle_tiles, "atlas triangle tiles")?;
+        rec.update(
+            a.tiles,
+            &tile_buffer(&l, a.tiles.len as usize),
+            "atlas tiles",
+        )?;
+        rec.update(a.texels, &l.texels, "atlas texels")?;
+        if let Some(d) = a.density {
+            rec.update(d.edge, &atlas_edge_texels(&l), "atlas edge texels")?;
+        }
+        backend.execute(&rec)?;
+        self.tiled = include.to_vec();
+        self.layout_summary = self.describe_layout(&l);
+        self.replan(true, true);
         Ok(())
     }
 
@@ -640,8 +730,9 @@ impl CausticMap {
         }
     }
 
-    /// The photon passes: clear the atlas, trace and deposit every plane in batches,
-    /// gather. Fills the photon accounting of `stats`.
+    /// The photon passes: clear the atlas, trace and deposit every plane in batches (twice
+    /// when the reached receivers change: see the module doc), gather. Fills the photon
+    /// accounting of `stats`.
     fn photon_pass(
         &mut self,
         backend: &mut dyn Backend,
@@ -649,10 +740,115 @@ impl CausticMap {
         stats: &mut FrameStats,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<(), Error> {
+        let before = stats.clone();
+        let mut adaptive = self.trace_and_deposit(backend, a, stats, progress)?;
+        if self.settings.prune && self.adaptive.is_none() {
+            if let Some(r) = &self.receivers {
+                let reached = r.reached(&read_buf(backend, a.triangle_reach)?);
+                if reached != self.tiled {
+                    self.relayout(backend, a, &reached)?;
+                    // the same photons into the new tiles: the photon accounting is the
+                    // second pass's, the device time both passes'
+                    let first = std::mem::replace(stats, before);
+                    stats.plan = Some(self.plan.clone());
+                    adaptive = self.trace_and_deposit(backend, a, stats, progress)?;
+                    stats.absorb_pass_times(&first);
+                }
+            }
+        }
+        let s = self.settings.clone();
+        let deposit = self.atlas_params(&a, 1);
+        let traversal = self.adaptive.as_ref().and_then(|t| t.traversal.as_ref());
+        let mut rec = Recording::new();
+        if let Some(d) = a.density {
+            let rows = self.atlas_gather_params(0);
+            let columns = self.atlas_gather_params(1);
+            for params in [rows, columns] {
+                rec.kernel(PhotonCountTable {
+                    params,
+                    photon_map: a.sums,
+                    table: d.table,
+                    gbuffer: d.gbuffer,
+                    edge: d.edge,
+                });
+            }
+            rec.clear(d.source_index);
+            rec.kernel(GatherFootprint {
+                params: rows,
+                photon_map: a.sums,
+                table: d.table,
+                out: d.footprint,
+                edge: d.edge,
+                source_index: d.source_index,
+            });
+            for (params, input, out) in [(rows, d.footprint, d.rows), (columns, d.rows, a.map)] {
+                rec.kernel(DensityGather {
+                    params,
+                    gbuffer: d.gbuffer,
+                    edge: d.edge,
+                    input,
+                    out,
+                    source_index: d.source_index,
+                });
+            }
+        } else {
+            rec.kernel(GatherCausticMap {
+                params: self.atlas_params(&a, s.gather_width),
+                texels: a.texels,
+                tiles: a.tiles,
+                atlas: a.sums,
+                out: a.map,
+            });
+        }
+        if let Some(raw) = a.raw_map {
+            rec.kernel(GatherCausticMap {
+                params: deposit,
+                texels: a.texels,
+                tiles: a.tiles,
+                atlas: a.sums,
+                out: raw,
+            });
+        }
+        Self::run(backend, &rec, stats)?;
+        let c = read_buf(backend, a.counters)?;
+        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
+        stats.photons_stored = c[counter::STORED] as u64;
+        stats.photons_deposited = c[counter::DEPOSITED] as u64;
+        stats.discarded.no_specular = c[counter::NO_SPECULAR] as u64;
+        stats.discarded.escaped = c[counter::ESCAPED] as u64;
+        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
+        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
+        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
+        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
+        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
+        stats.photon_rays_traced = c64(counter::RAYS);
+        stats.photon_splits = c[counter::SPLITS] as u64;
+        for ch in 0..3 {
+            stats.stored_flux[ch] =
+                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
+        }
+        if let Some(t) = traversal {
+            t.output_stats(backend, self.emission.flux_quantum, stats, adaptive)?;
+        }
+        self.atlas_valid = true;
+        Ok(())
+    }
+
+    /// Clears the atlas sums, counters and reach mask, then traces and deposits every
+    /// plane in batches; fills the photon accounting of `stats` and returns the adaptive
+    /// traversal's statistics.
+    fn trace_and_deposit(
+        &mut self,
+        backend: &mut dyn Backend,
+        a: AtlasBuffers,
+        stats: &mut FrameStats,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<crate::frame::stats::AdaptiveStats, Error> {
         let s = self.settings.clone();
         let mut rec = Recording::new();
         rec.clear_photon_map(&a.sums);
         rec.clear(a.counters);
+        rec.clear(a.triangle_reach);
         Self::run(backend, &rec, stats)?;
         stats.variants.push(crate::kernels::variant_label(
             "trace_photons",
@@ -752,6 +948,7 @@ impl CausticMap {
                     photons: a.photons,
                     photon_count: a.photon_count,
                     counters: a.counters,
+                    triangle_reach: a.triangle_reach,
                     atlas: a.sums,
                 });
                 Self::run(backend, &rec, stats)?;
@@ -764,79 +961,7 @@ impl CausticMap {
                 });
             }
         }
-        let mut rec = Recording::new();
-        if let Some(d) = a.density {
-            let rows = self.atlas_gather_params(0);
-            let columns = self.atlas_gather_params(1);
-            for params in [rows, columns] {
-                rec.kernel(PhotonCountTable {
-                    params,
-                    photon_map: a.sums,
-                    table: d.table,
-                    gbuffer: d.gbuffer,
-                    edge: d.edge,
-                });
-            }
-            rec.clear(d.source_index);
-            rec.kernel(GatherFootprint {
-                params: rows,
-                photon_map: a.sums,
-                table: d.table,
-                out: d.footprint,
-                edge: d.edge,
-                source_index: d.source_index,
-            });
-            for (params, input, out) in [(rows, d.footprint, d.rows), (columns, d.rows, a.map)] {
-                rec.kernel(DensityGather {
-                    params,
-                    gbuffer: d.gbuffer,
-                    edge: d.edge,
-                    input,
-                    out,
-                    source_index: d.source_index,
-                });
-            }
-        } else {
-            rec.kernel(GatherCausticMap {
-                params: self.atlas_params(&a, s.gather_width),
-                texels: a.texels,
-                tiles: a.tiles,
-                atlas: a.sums,
-                out: a.map,
-            });
-        }
-        if let Some(raw) = a.raw_map {
-            rec.kernel(GatherCausticMap {
-                params: deposit,
-                texels: a.texels,
-                tiles: a.tiles,
-                atlas: a.sums,
-                out: raw,
-            });
-        }
-        Self::run(backend, &rec, stats)?;
-        let c = read_buf(backend, a.counters)?;
-        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
-        stats.photons_stored = c[counter::STORED] as u64;
-        stats.photons_deposited = c[counter::DEPOSITED] as u64;
-        stats.discarded.no_specular = c[counter::NO_SPECULAR] as u64;
-        stats.discarded.escaped = c[counter::ESCAPED] as u64;
-        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
-        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
-        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
-        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
-        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
-        stats.photon_rays_traced = c64(counter::RAYS);
-        stats.photon_splits = c[counter::SPLITS] as u64;
-        for ch in 0..3 {
-            stats.stored_flux[ch] =
-                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
-        }
-        if let Some(t) = traversal {
-            t.output_stats(backend, self.emission.flux_quantum, stats, adaptive)?;
-        }
-        self.atlas_valid = true;
-        Ok(())
+        Ok(adaptive)
     }
 
     /// Renders one frame: the photon passes only when the atlas is stale, then the
@@ -948,6 +1073,21 @@ impl CausticMap {
         Ok(stats)
     }
 
+    /// The atlas layout as the kernels read it now, per atlas texel (row-major):
+    /// `[world area bits, tile]` ([`AtlasTexel`]; `NO_TILE` and area 0 outside the tiles),
+    /// read back from the device; `None` without an atlas. With the `caustic_atlas`
+    /// output (irradiance, W/m^2) it gives each texel's flux, `E x area`. The layout
+    /// follows the receivers the last photon pass reached (see the module doc).
+    pub fn atlas_texels(
+        &self,
+        backend: &mut dyn Backend,
+    ) -> Result<Option<Vec<AtlasTexel>>, Error> {
+        match self.atlas {
+            Some(a) => Ok(Some(read_buf(backend, a.texels)?)),
+            None => Ok(None),
+        }
+    }
+
     fn requested(&self, name: &str) -> bool {
         let o = &self.settings.outputs;
         match name {
@@ -1027,8 +1167,9 @@ impl CausticMap {
     }
 
     /// Replaces the lights (same number: uploaded into the light buffer; else a new light
-    /// buffer); the geometry, its acceleration structure and the atlas layout stay, the
-    /// atlas is remade on the next frame.
+    /// buffer); the geometry, its acceleration structure and the atlas buffers stay, the
+    /// atlas is remade on the next frame (laid out anew there if the new lights' photons
+    /// reach other receivers).
     pub fn set_lights(
         &mut self,
         backend: &mut dyn Backend,
