@@ -2,8 +2,9 @@
 //! required in CI), each against the CPU's frame of the same scene and seed:
 //!
 //! - **A light whose RSM sees nothing** (a spot aimed into empty space beside the room):
-//!   its photons carry no flux, every path ends at once, the frame stays finite and the
-//!   other light's indirect light is unchanged.
+//!   its RSM, rendered once at creation, has no texel that leaves flux, so it gets no
+//!   photon (none could carry any) and the plan says so; the room's light gets the whole
+//!   budget and the frame stays finite.
 //! - **Albedo-1 walls** (a closed white box of albedo exactly 1): Jensen's roulette never
 //!   ends a path there (survival `max(flux x 1) / max(flux) = 1`), so every path must end
 //!   by the bounce limit, none by roulette, and the image stays finite.
@@ -205,10 +206,25 @@ fn photon_gi_stiff_cases_on_every_backend() {
                 st.fixed_point_saturated
             );
             match case {
-                "a light whose RSM sees nothing" => assert!(
-                    st.photons_stored > 0,
-                    "{what}: the box's light stored nothing"
-                ),
+                "a light whose RSM sees nothing" => {
+                    assert!(
+                        st.photons_stored > 0,
+                        "{what}: the box's light stored nothing"
+                    );
+                    // the blind spot's RSM is rendered and proven empty: no photon, the
+                    // box's light gets the whole budget, the plan says why
+                    assert_eq!(
+                        st.photons_per_light,
+                        vec![st.photons_emitted, 0],
+                        "{what}: the blind light got photons"
+                    );
+                    let plan = st.plan.as_ref().expect("plan");
+                    assert!(
+                        !plan.lights[1].emits && plan.lights[1].reason.contains("sees no texel"),
+                        "{what}: {:?}",
+                        plan.lights[1]
+                    );
+                }
                 "a room one pixel wide" => assert!(
                     st.photons_stored > 0,
                     "{what}: the camera sees no photon in the corridor"

@@ -4,7 +4,8 @@
 //!
 //! 1. `primary_gbuffer` and `direct_light` from the camera;
 //! 2. per light with photons (allocated over the lights by power,
-//!    [`crate::math::photon_allocation`]): per RSM face `primary_gbuffer` from the light
+//!    [`crate::math::photon_allocation`], leaving out a light whose RSM sees no texel
+//!    that leaves flux: `PhotonGi::probe_rsms`, at creation and on updates): per RSM face `primary_gbuffer` from the light
 //!    and `rsm_importance` level 0, the pyramid's levels, then `sample_rsm` (section
 //!    24.2.1) and `trace_indirect` (24.2.2: roulette, photons stored after the first
 //!    bounce, culled to the view, counted per screen tile);
@@ -38,7 +39,7 @@ use crate::kernels::{
 };
 use crate::math::fixed_point::join_u64;
 use crate::math::gi_photon::{gi_store, screen_tiles};
-use crate::math::rsm::{level_count, luminance, pyramid_len};
+use crate::math::rsm::{level_count, level_offset, luminance, pyramid_len};
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
 use glam::Vec3;
@@ -67,6 +68,10 @@ pub struct LightRsm {
     pub faces: Vec<GpuCamera>,
     /// Initial photons of this light per frame.
     pub photons: u32,
+    /// False when the light's RSM sees no texel that leaves flux (every texel's flux x
+    /// albedo is zero: it looks into empty space or onto black surfaces), so that none of
+    /// its photons could carry any: it gets no photon, the others share its budget.
+    pub sees: bool,
 }
 
 /// The faces of a light's RSM (see `crate::math::rsm`): six 90-degree faces around a
@@ -154,15 +159,22 @@ fn light_power(l: &GpuLight) -> f64 {
 }
 
 /// The lights' RSMs and photon counts for `total` initial photons (allocated by power,
-/// 003 section 24.2), the unit of the packed photon power (the mean emitted photon
-/// power, W) and the photon map's flux quantum (W).
+/// 003 section 24.2, over the lights whose RSM sees something: `sees`, one flag per
+/// light, all true when not yet known), the unit of the packed photon power (the mean
+/// emitted photon power, W) and the photon map's flux quantum (W).
 fn plan_lights(
     lights: &[GpuLight],
     total: u64,
     side: u32,
     bounds: &crate::math::geometry::Aabb,
+    sees: &[bool],
 ) -> (Vec<LightRsm>, f32, f32) {
-    let powers: Vec<f64> = lights.iter().map(light_power).collect();
+    let sees_at = |i: usize| sees.get(i).copied().unwrap_or(true);
+    let powers: Vec<f64> = lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| if sees_at(i) { light_power(l) } else { 0.0 })
+        .collect();
     let counts = crate::math::photon_allocation::allocate_photons(total, &powers);
     let rsms = lights
         .iter()
@@ -172,6 +184,7 @@ fn plan_lights(
             light: i as u32,
             faces: rsm_faces(l, side, bounds),
             photons: n as u32,
+            sees: sees_at(i),
         })
         .collect();
     let emitted: f64 = powers.iter().sum();
@@ -353,7 +366,7 @@ impl PhotonGi {
         let camera = GpuCamera::from_camera(&scene.camera);
         let total = settings.photons_w as u64 * settings.photons_h as u64;
         let (rsms, power_scale, flux_quantum) =
-            plan_lights(&ds.lights, total, settings.rsm_size, &ds.bounds);
+            plan_lights(&ds.lights, total, settings.rsm_size, &ds.bounds, &[]);
         let diagonal = (ds.bounds.max - ds.bounds.min)
             .length()
             .max(f32::MIN_POSITIVE);
@@ -387,7 +400,7 @@ impl PhotonGi {
         let allocation = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
         backend.execute(&rec)?;
         let plan = PhotonGi::make_plan(scene, &settings, &rsms, &allocation.buffers);
-        Ok(PhotonGi {
+        let mut t = PhotonGi {
             settings,
             scene: scene_args,
             model: scene.clone(),
@@ -404,7 +417,12 @@ impl PhotonGi {
             bytes: allocation.bytes,
             reference: None,
             degenerate_triangles: ds.degenerate_triangles,
-        })
+        };
+        if let Err(e) = t.plan_photons(backend) {
+            let _ = t.free(backend);
+            return Err(e);
+        }
+        Ok(t)
     }
 
     fn make_plan(
@@ -433,12 +451,22 @@ impl PhotonGi {
                 .map(|r| LightPlan {
                     light: r.light,
                     emits: r.photons > 0,
-                    reason: format!(
-                        "{} photons by power, {} RSM faces of {}^2",
-                        r.photons,
-                        r.faces.len(),
-                        s.rsm_size
-                    ),
+                    reason: if r.sees {
+                        format!(
+                            "{} photons by power, {} RSM faces of {}^2",
+                            r.photons,
+                            r.faces.len(),
+                            s.rsm_size
+                        )
+                    } else {
+                        format!(
+                            "no photons: its RSM ({} faces of {}^2) sees no texel that \
+                             leaves flux (flux x albedo is zero on every one), so none \
+                             could carry any; the other lights share the budget by power",
+                            r.faces.len(),
+                            s.rsm_size
+                        )
+                    },
                 })
                 .collect(),
             trace_variant: None,
@@ -545,6 +573,39 @@ impl PhotonGi {
     /// Records the RSM and trace passes of light `r` (the photons go to `b.photons`).
     fn record_light(&self, rec: &mut Recording, r: &LightRsm, cam: GpuCamera, store: u32) {
         let b = &self.buffers;
+        let params = self.record_rsm(rec, r);
+        rec.kernel(SampleRsm {
+            params: RsmParams {
+                // the orthographic face's plane, for a directional light's photons
+                face_camera: r.faces[0],
+                face: 0,
+                face_count: r.faces.len() as u32,
+                first_sample: 0,
+                sample_count: r.photons,
+                level: 0,
+                ..params
+            },
+            lights: self.scene.lights,
+            texels: b.rsm_texels,
+            pyramid: b.pyramid,
+            photons: b.rsm_photons,
+        });
+        rec.kernel(TraceIndirect {
+            scene: self.scene,
+            params: self.trace_params(cam, 0, r.photons, store),
+            rsm_photons: b.rsm_photons,
+            photons: b.photons,
+            photon_count: b.photon_count,
+            tile_counts: b.tile_counts,
+            counters: b.counters,
+            gbuffer: b.gbuffer,
+        });
+    }
+
+    /// Records light `r`'s RSM: per face the G-buffer from the light and the
+    /// importance pyramid's level 0, then its upper levels; returns the parameters.
+    fn record_rsm(&self, rec: &mut Recording, r: &LightRsm) -> RsmParams {
+        let b = &self.buffers;
         let side = self.settings.rsm_size;
         let seed = crate::math::rng::random_u32(self.settings.seed, r.light, 0, 7);
         let mut params = RsmParams {
@@ -581,32 +642,55 @@ impl PhotonGi {
                 pyramid: b.pyramid,
             });
         }
-        rec.kernel(SampleRsm {
-            params: RsmParams {
-                // the orthographic face's plane, for a directional light's photons
-                face_camera: r.faces[0],
-                face: 0,
-                face_count: r.faces.len() as u32,
-                first_sample: 0,
-                sample_count: r.photons,
-                level: 0,
-                ..params
-            },
-            lights: self.scene.lights,
-            texels: b.rsm_texels,
-            pyramid: b.pyramid,
-            photons: b.rsm_photons,
-        });
-        rec.kernel(TraceIndirect {
-            scene: self.scene,
-            params: self.trace_params(cam, 0, r.photons, store),
-            rsm_photons: b.rsm_photons,
-            photons: b.photons,
-            photon_count: b.photon_count,
-            tile_counts: b.tile_counts,
-            counters: b.counters,
-            gbuffer: b.gbuffer,
-        });
+        params
+    }
+
+    /// Which lights' RSMs see a texel that leaves flux: each light with power renders
+    /// its RSM and importance pyramid once, and the pyramid's top (per face: the sum of
+    /// its level-0 entries, each zero exactly where the texel's flux x albedo is zero,
+    /// under either sampling) is read back. The RSMs depend on the lights, the geometry
+    /// and the albedos only, so this runs at creation and on light and material updates,
+    /// never per frame.
+    fn probe_rsms(&self, backend: &mut dyn Backend, rsms: &[LightRsm]) -> Result<Vec<bool>, Error> {
+        let side = self.settings.rsm_size;
+        let (len, top) = (pyramid_len(side), level_offset(side, level_count(side) - 1));
+        let mut sees = vec![false; rsms.len()];
+        for (k, r) in rsms.iter().enumerate() {
+            if r.photons == 0 {
+                continue; // no power: nothing to prove, it gets no photon anyway
+            }
+            let mut rec = Recording::new();
+            self.record_rsm(&mut rec, r);
+            backend.execute(&rec)?;
+            let pyramid = read_buf(backend, self.buffers.pyramid)?;
+            sees[k] = (0..r.faces.len()).any(|f| {
+                pyramid
+                    .get(f * len as usize + top as usize)
+                    .is_some_and(|&t| t > 0.0)
+            });
+        }
+        Ok(sees)
+    }
+
+    /// Allocates the photons over the lights by power, among those whose RSM sees
+    /// something ([`PhotonGi::probe_rsms`]), and states it in the plan.
+    fn plan_photons(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let total = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+        let side = self.settings.rsm_size;
+        let (by_power, _, _) = plan_lights(&self.lights, total, side, &self.bounds, &[]);
+        let sees = self.probe_rsms(backend, &by_power)?;
+        // a light without power keeps `sees: true` in the plan: it gets no photon for
+        // that reason, not for its RSM
+        let sees: Vec<bool> = by_power
+            .iter()
+            .zip(&sees)
+            .map(|(r, &s)| s || r.photons == 0)
+            .collect();
+        (self.rsms, self.power_scale, self.flux_quantum) =
+            plan_lights(&self.lights, total, side, &self.bounds, &sees);
+        let buffers = std::mem::take(&mut self.plan.buffers);
+        self.plan = PhotonGi::make_plan(&self.model, &self.settings, &self.rsms, &buffers);
+        Ok(())
     }
 
     fn run(
@@ -857,13 +941,9 @@ impl PhotonGi {
                 }
             }
         }
-        let total = self.settings.photons_w as u64 * self.settings.photons_h as u64;
-        (self.rsms, self.power_scale, self.flux_quantum) =
-            plan_lights(&gpu, total, self.settings.rsm_size, &self.bounds);
         self.lights = gpu;
-        let buffers = std::mem::take(&mut self.plan.buffers);
-        self.plan = PhotonGi::make_plan(&model, &self.settings, &self.rsms, &buffers);
         self.model = model;
+        self.plan_photons(backend)?;
         self.reset_history();
         Ok(())
     }
@@ -880,9 +960,9 @@ impl PhotonGi {
         let mut rec = Recording::new();
         rec.update(self.scene.materials, &u.gpu, "materials")?;
         backend.execute(&rec)?;
-        let buffers = std::mem::take(&mut self.plan.buffers);
-        self.plan = PhotonGi::make_plan(&u.model, &self.settings, &self.rsms, &buffers);
         self.model = u.model;
+        // albedos decide what the RSMs see
+        self.plan_photons(backend)?;
         self.reset_history();
         Ok(())
     }
