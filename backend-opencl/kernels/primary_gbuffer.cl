@@ -23,7 +23,7 @@ __kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
     store3(g.position, s.position);
     g.depth = hit.t * dot3(dir, load3g(cam->forward));
     store3(g.normal, n);
-    g.roughness = diffuse ? 1.0f : 0.0f;
+    g.geometric_normal = pack_unit_vector(facing_normal(s.geometric_normal, dir));
     g.albedo[0] = m->color[0];
     g.albedo[1] = m->color[1];
     g.albedo[2] = m->color[2];

@@ -94,7 +94,7 @@ pub enum Step {
 /// Labels of the G-buffer's planes (errors and the frame plan name them).
 pub const GBUFFER_LABELS: [&str; 4] = [
     "gbuffer plane 0 (position, depth)",
-    "gbuffer plane 1 (normal, roughness)",
+    "gbuffer plane 1 (normal, geometric normal)",
     "gbuffer plane 2 (albedo, material)",
     "gbuffer plane 3 (uv, view distance, flags)",
 ];

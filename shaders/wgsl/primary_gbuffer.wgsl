@@ -1,4 +1,4 @@
-// needs: types vector geometry traversal scene
+// needs: types vector packing geometry traversal scene
 // primary_gbuffer: one camera ray per pixel; mirror of backend-opencl/kernels/
 // primary_gbuffer.cl and backend-cpu/src/kernels/gbuffer.rs.
 
@@ -17,7 +17,7 @@
 // GBufferTexel::to_planes; load_gbuffer in common/gbuffer.wgsl reads them back).
 fn store_gbuffer(i: u32, g: GBufferTexel) {
     gbuffer0[i] = vec4<u32>(bitcast<vec3<u32>>(g.position), bitcast<u32>(g.depth));
-    gbuffer1[i] = vec4<u32>(bitcast<vec3<u32>>(g.normal), bitcast<u32>(g.roughness));
+    gbuffer1[i] = vec4<u32>(bitcast<vec3<u32>>(g.normal), g.geometric_normal);
     gbuffer2[i] = vec4<u32>(bitcast<vec3<u32>>(g.albedo), g.material);
     gbuffer3[i] = vec4<u32>(bitcast<vec2<u32>>(g.uv), bitcast<u32>(g.view_distance), g.flags);
 }
@@ -46,7 +46,7 @@ fn primary_gbuffer(i: u32) {
     g.position = s.position;
     g.depth = hit.t * dot3(dir, cam.forward);
     g.normal = n;
-    g.roughness = select(0.0, 1.0, diffuse);
+    g.geometric_normal = pack_unit_vector(facing_normal(s.geometric_normal, dir));
     g.albedo = m.color.xyz;
     g.material = mat;
     g.uv = s.uv;

@@ -1,5 +1,5 @@
 //! `primary_gbuffer`: one camera ray per pixel; writes the first hit's position, view
-//! depth, shading normal (turned to the camera), albedo, roughness (1 diffuse, 0 specular),
+//! depth, shading normal (turned to the camera), albedo, geometric normal (packed, turned to the camera),
 //! uv, material and the RECEIVER flag for diffuse surfaces. Misses get depth 0 and
 //! material `NO_MATERIAL`.
 
@@ -7,6 +7,7 @@ use crate::traversal::SceneView;
 use caustica_core::device::layout::{
     gbuffer_flags, material_kind, primary_ray, GBufferTexel, GpuCamera, NO_MATERIAL,
 };
+use caustica_core::math::packing::pack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -33,13 +34,18 @@ fn gbuffer_texel(scene: &SceneView, cam: &GpuCamera, px: u32, py: u32) -> GBuffe
     } else {
         s.shading_normal
     };
+    let ng = if s.geometric_normal.dot(dir) > 0.0 {
+        -s.geometric_normal
+    } else {
+        s.geometric_normal
+    };
     let diffuse = m.kind == material_kind::DIFFUSE;
     let tri = &scene.triangles[hit.triangle as usize];
     GBufferTexel {
         position: s.position.to_array(),
         depth: hit.t * dir.dot(Vec3::from(cam.forward)),
         normal: n.to_array(),
-        roughness: if diffuse { 1.0 } else { 0.0 },
+        geometric_normal: pack_unit_vector(ng),
         albedo: [m.color[0], m.color[1], m.color[2]],
         material: tri.material,
         uv: s.uv.to_array(),

@@ -565,7 +565,7 @@ mod tests {
                     position: (Vec3::from(cam.position) + t * d).to_array(),
                     depth: t * d.dot(Vec3::from(cam.forward)),
                     normal: [0.0, 1.0, 0.0],
-                    roughness: 1.0,
+                    geometric_normal: caustica_core::math::packing::pack_unit_vector(Vec3::Y),
                     albedo: [1.0; 3],
                     material: 0,
                     uv: [0.0; 2],

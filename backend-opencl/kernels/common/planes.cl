@@ -20,7 +20,7 @@ inline GBufferTexel gbuffer_from_planes(uint4 p0, uint4 p1, uint4 p2, uint4 p3) 
     g.normal[0] = as_float(p1.x);
     g.normal[1] = as_float(p1.y);
     g.normal[2] = as_float(p1.z);
-    g.roughness = as_float(p1.w);
+    g.geometric_normal = p1.w;
     g.albedo[0] = as_float(p2.x);
     g.albedo[1] = as_float(p2.y);
     g.albedo[2] = as_float(p2.z);
@@ -42,7 +42,7 @@ inline void store_gbuffer(GBUFFER_PARAMS(__global), uint i, const GBufferTexel* 
     gbuffer0[i] = (uint4)(as_uint(g->position[0]), as_uint(g->position[1]),
                           as_uint(g->position[2]), as_uint(g->depth));
     gbuffer1[i] = (uint4)(as_uint(g->normal[0]), as_uint(g->normal[1]), as_uint(g->normal[2]),
-                          as_uint(g->roughness));
+                          g->geometric_normal);
     gbuffer2[i] = (uint4)(as_uint(g->albedo[0]), as_uint(g->albedo[1]), as_uint(g->albedo[2]),
                           g->material);
     gbuffer3[i] = (uint4)(as_uint(g->uv[0]), as_uint(g->uv[1]), as_uint(g->view_distance),

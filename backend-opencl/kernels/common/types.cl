@@ -25,7 +25,7 @@ typedef struct {
 } GpuCamera;
 typedef struct {
     float position[3]; float depth;
-    float normal[3]; float roughness;
+    float normal[3]; uint geometric_normal;
     float albedo[3]; uint material;
     float uv[2]; float view_distance; uint flags;
 } GBufferTexel;

@@ -7,7 +7,7 @@
 // core's GBufferTexel::from_planes.
 GBufferTexel gbuffer_from_planes(uvec4 p0, uvec4 p1, uvec4 p2, uvec4 p3) {
     return GBufferTexel(uintBitsToFloat(p0.xyz), uintBitsToFloat(p0.w),
-                        uintBitsToFloat(p1.xyz), uintBitsToFloat(p1.w),
+                        uintBitsToFloat(p1.xyz), p1.w,
                         uintBitsToFloat(p2.xyz), p2.w,
                         uintBitsToFloat(p3.xy), uintBitsToFloat(p3.z), p3.w);
 }
@@ -21,7 +21,7 @@ GBufferTexel load_gbuffer(uint i) {
 // Writes the texel of pixel `i` into the planes (core's GBufferTexel::to_planes).
 void store_gbuffer(uint i, GBufferTexel g) {
     gbuffer0[i] = uvec4(floatBitsToUint(g.position), floatBitsToUint(g.depth));
-    gbuffer1[i] = uvec4(floatBitsToUint(g.normal), floatBitsToUint(g.roughness));
+    gbuffer1[i] = uvec4(floatBitsToUint(g.normal), g.geometric_normal);
     gbuffer2[i] = uvec4(floatBitsToUint(g.albedo), g.material);
     gbuffer3[i] = uvec4(floatBitsToUint(g.uv), floatBitsToUint(g.view_distance), g.flags);
 }

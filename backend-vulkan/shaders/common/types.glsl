@@ -16,7 +16,7 @@
 //                     direction 32, intensity 48
 //   GpuCamera     64: position 0, tan_half_fov_x 12, forward 16, tan_half_fov_y 28,
 //                     right 32, width 44, up 48, height 60
-//   GBufferTexel  64: position 0, depth 12, normal 16, roughness 28, albedo 32,
+//   GBufferTexel  64: position 0, depth 12, normal 16, geometric_normal 28, albedo 32,
 //                     material 44, uv 48, view_distance 56, flags 60
 //   Photon        32: position 0, hit_distance 12, flux 16, direction 28
 //   DepositTexel  40: words 0 (10 x u32)
@@ -63,7 +63,7 @@ struct GpuCamera {
 };
 struct GBufferTexel {
     vec3 position; float depth;
-    vec3 normal; float roughness;
+    vec3 normal; uint geometric_normal;
     vec3 albedo; uint material;
     vec2 uv; float view_distance; uint flags;
 };

@@ -130,8 +130,11 @@ pub struct GBufferTexel {
     pub depth: f32,
     /// Unit shading normal (world space), turned towards the camera.
     pub normal: [f32; 3],
-    /// 1 for diffuse surfaces, 0 for mirrors and dielectrics.
-    pub roughness: f32,
+    /// Unit geometric normal of the hit triangle (world space), turned towards the camera
+    /// on its own, packed octahedrally in two snorm16
+    /// ([`crate::math::packing::pack_unit_vector`]): PhotonGi's shading-normal correction
+    /// (003 Eq. 20) compares the light direction with both normals.
+    pub geometric_normal: u32,
     /// The material's `color`: diffuse albedo, mirror reflectance, 1 for dielectrics.
     pub albedo: [f32; 3],
     /// Index into the material table; [`NO_MATERIAL`] on a miss.
@@ -148,7 +151,7 @@ pub struct GBufferTexel {
 /// per-pixel buffer is larger than an RGBA f32 image (a device's storage-binding limit
 /// then bounds the frame at 16 bytes per pixel, not 64): plane `k` of pixel `i` holds
 /// bytes `16k .. 16k + 16` of its [`GBufferTexel`] as four u32 words (0: position, depth;
-/// 1: normal, roughness; 2: albedo, material; 3: uv, view_distance, flags). The split is
+/// 1: normal, geometric normal; 2: albedo, material; 3: uv, view_distance, flags). The split is
 /// a copy of bits, so the assembled texel is bitwise the texel.
 pub const GBUFFER_PLANES: usize = 4;
 
@@ -1108,7 +1111,7 @@ mod tests {
             position: [1.0, f32::from_bits(0x7fc0_0001), -0.0],
             depth: 2.5,
             normal: [0.0, 1.0, 0.0],
-            roughness: 1.0,
+            geometric_normal: 7,
             albedo: [0.25, 0.5, 0.75],
             material: NO_MATERIAL,
             uv: [0.125, 0.875],

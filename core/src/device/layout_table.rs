@@ -205,7 +205,7 @@ table! {
     GpuMaterial { kind, ior, cauchy_b, _pad, color, absorption }
     GpuLight { kind, cos_inner, cos_outer, _pad, position, direction, intensity }
     GpuCamera { position, tan_half_fov_x, forward, tan_half_fov_y, right, width, up, height }
-    GBufferTexel { position, depth, normal, roughness, albedo, material, uv, view_distance, flags }
+    GBufferTexel { position, depth, normal, geometric_normal, albedo, material, uv, view_distance, flags }
     Photon { position, hit_distance, flux, direction }
     DepositTexel { flux, hit_distance, photons }
     TraceParams {

@@ -10,7 +10,7 @@ fn gbuffer_from_planes(p0: vec4<u32>, p1: vec4<u32>, p2: vec4<u32>, p3: vec4<u32
     g.position = bitcast<vec3<f32>>(p0.xyz);
     g.depth = bitcast<f32>(p0.w);
     g.normal = bitcast<vec3<f32>>(p1.xyz);
-    g.roughness = bitcast<f32>(p1.w);
+    g.geometric_normal = p1.w;
     g.albedo = bitcast<vec3<f32>>(p2.xyz);
     g.material = p2.w;
     g.uv = bitcast<vec2<f32>>(p3.xy);

@@ -64,7 +64,7 @@ struct GBufferTexel {
     position: vec3<f32>,
     depth: f32,
     normal: vec3<f32>,
-    roughness: f32,
+    geometric_normal: u32,
     albedo: vec3<f32>,
     material: u32,
     uv: vec2<f32>,
