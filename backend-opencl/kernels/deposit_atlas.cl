@@ -14,7 +14,9 @@ __kernel void deposit_atlas(__global const AtlasParams* p, __global const uint* 
     if (i < min(photon_count[0], photon_capacity)) {
         Photon ph = photons[i];
         uint2 reach = triangle_reach_bit(ph.direction);
-        atomic_or(&triangle_reach[reach.x], reach.y);
+        // most photons land on a few triangles: a load first, so that a bit already set
+        // costs no atomic on the hot word
+        if ((triangle_reach[reach.x] & reach.y) == 0u) atomic_or(&triangle_reach[reach.x], reach.y);
         uint tile = triangle_tiles[ph.direction];
         if (tile == NO_TILE) {
             atomic_inc(&lc[COUNTER_OFF_SCREEN]);

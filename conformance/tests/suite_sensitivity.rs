@@ -40,7 +40,7 @@ use caustica_core::kernels::{
 };
 use caustica_core::math::density_gather::reach_grid_len;
 use caustica_core::math::fixed_point::{join_u64, quantize};
-use caustica_core::math::packing::{pack_rgb9e5, unpack_rgb9e5};
+use caustica_core::math::packing::{pack_rgb9e5, pack_unit_vector, unpack_rgb9e5};
 use caustica_core::math::photon_clusters::entry_cluster;
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::{Recording, Step};
@@ -55,6 +55,8 @@ enum Mutation {
     UlpNoise,
     /// `primary_gbuffer` writes the view distance as the view depth.
     GbufferDepthIsDistance,
+    /// `primary_gbuffer` writes the (interpolated) shading normal as the geometric normal.
+    GbufferGeometricIsShading,
     /// `trace_photons` loses every 30th stored photon (counted as escaped).
     DropPhotons,
     /// `trace_photons` stores photons with 2% less flux.
@@ -250,6 +252,19 @@ impl Mutant {
                 let mut g = read_gbuffer(&mut self.inner, gbuffer)?;
                 for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
                     t.depth = t.view_distance;
+                }
+                for (b, p) in gbuffer.planes.iter().zip(gbuffer_to_planes(&g)) {
+                    self.modify::<GBufferPlaneTexel>(b.id, |v| *v = p)?;
+                }
+                Ok(())
+            }
+            (
+                Mutation::GbufferGeometricIsShading,
+                Kernel::PrimaryGbuffer(PrimaryGbuffer { gbuffer, .. }),
+            ) => {
+                let mut g = read_gbuffer(&mut self.inner, gbuffer)?;
+                for t in g.iter_mut().filter(|t| t.material != NO_MATERIAL) {
+                    t.geometric_normal = pack_unit_vector(glam::Vec3::from(t.normal));
                 }
                 for (b, p) in gbuffer.planes.iter().zip(gbuffer_to_planes(&g)) {
                     self.modify::<GBufferPlaneTexel>(b.id, |v| *v = p)?;
@@ -651,6 +666,7 @@ fn each_fault_fails_the_check_of_its_kernel() {
     let mut missed = Vec::new();
     for (mutation, kernel) in [
         (Mutation::GbufferDepthIsDistance, "primary_gbuffer"),
+        (Mutation::GbufferGeometricIsShading, "primary_gbuffer"),
         (Mutation::DropPhotons, "trace_photons"),
         (Mutation::PhotonFluxLow, "trace_photons"),
         (

@@ -24,7 +24,10 @@ fn deposit_atlas(i: u32, li: u32) {
     if (i < min(photon_count[0], photon_capacity)) {
         let ph = photons[i];
         let reach = triangle_reach_bit(ph.direction);
-        if (reach.x < arrayLength(&triangle_reach)) {
+        // most photons land on a few triangles: a load first, so that a bit already set
+        // costs no atomic on the hot word
+        if (reach.x < arrayLength(&triangle_reach) &&
+            (atomicLoad(&triangle_reach[reach.x]) & reach.y) == 0u) {
             atomicOr(&triangle_reach[reach.x], reach.y);
         }
         var tile = NO_TILE;

@@ -75,7 +75,15 @@ pub fn render_frame(
 pub fn compare_frames(scene: &Scene, a: &Frame, b: &Frame) -> Verdict {
     let mut v = Verdict::new("sspm frame");
     let cam = GpuCamera::from_camera(&scene.camera);
-    let (gv, agree) = compare_gbuffers(&cam, &a.gbuffer, &b.gbuffer);
+    // the geometric normals' edge ties are resolved against the scene's triangles
+    let ds = caustica_core::device::device_scene::DeviceScene::build(scene, Default::default());
+    let (gv, agree) = match &ds {
+        Ok(ds) => compare_gbuffers(ds, &cam, &a.gbuffer, &b.gbuffer),
+        Err(e) => {
+            v.check(false, || format!("the scene does not build: {e}"));
+            return v;
+        }
+    };
     let disagree = agree.iter().filter(|x| !**x).count() as u64;
     let q = disagree as f64 / agree.len().max(1) as f64;
     v.absorb(gv);
