@@ -23,8 +23,10 @@
 //! updated into a state lays its atlas out exactly as a fresh one built in that state (the
 //! seam tests compare them bitwise). A receiver no photon reaches owns no tile; a light
 //! moving over a scene pays the second pass only on the frames whose reached set changes.
-//! With pruning off every receiver keeps its tile; AdaptiveCaustics (whose traversal
-//! deposits in `refine_clusters`) keeps every receiver's tile too.
+//! With pruning off every receiver keeps its tile. AdaptiveCaustics keeps every
+//! receiver's tile too: its caustic-map-error metric refines clusters by the atlas
+//! texels their photons land in, so its photons (and the receivers they reach) depend on
+//! the layout, and a second pass on a new layout need not reach the same set.
 //!
 //! Not built yet (TODO(issue 16)): a footprint carried through curved glass (the lookup
 //! unfolds the pixel's square along the path, blind to focusing).

@@ -13,7 +13,9 @@
 //!    times albedo / pi: the raw indirect light), `temporal_blend` and `atrous_filter`
 //!    (24.4, each a setting), `composite` with the direct light.
 //!
-//! Not built yet (issue 18): the shading-normal correction of Eq. 20.
+//! Not built yet (TODO(issue 18)): the shading-normal correction of Eq. 20 (the G-buffer
+//! has the geometric normal; the splat's light-direction target, its filtering and the
+//! correction pass are missing).
 
 mod settings;
 
