@@ -23,8 +23,9 @@ use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
     DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm, SplatPhotons,
-    TemporalBlend, TileHitDistance, TraceIndirect, TracePhotons,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
+    ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
+    TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -409,6 +410,20 @@ impl CpuBackend {
                 let img = caustic_map::caustic_map_lookup(&view(scene)?, params, tt, tl, tx, m);
                 self.put(out.id, &img)
             }
+            Kernel::ShadingNormalCorrection(ShadingNormalCorrection {
+                params,
+                gbuffer,
+                direction_map,
+                input,
+                out,
+            }) => {
+                let g = self.gbuffer(gbuffer)?;
+                let d = self.photon_map(direction_map)?;
+                let i = get(input.id)?.as_slice(input.len)?;
+                reserve_temporary::<[f32; 4]>(out.len as u64, "the shading-normal correction")?;
+                let img = photon_gi::shading_normal_correction(params, g, d, i);
+                self.put(out.id, &img)
+            }
             Kernel::Composite(Composite {
                 direct,
                 caustics,
@@ -551,13 +566,15 @@ impl CpuBackend {
                 tile_counts,
                 counters,
                 photon_map,
+                direction_map,
             }) => {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
                 let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
                 let tc = get(tile_counts.id)?.as_slice(tile_counts.len)?;
                 let g = self.gbuffer(gbuffer)?;
                 let atomics = map_atomics(photon_map)?;
-                let c = photon_gi::splat_photons(params, g, ph, tc, atomics);
+                let directions = map_atomics(direction_map)?;
+                let c = photon_gi::splat_photons(params, g, ph, tc, atomics, directions);
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }

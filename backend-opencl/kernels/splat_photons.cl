@@ -5,7 +5,10 @@
 
 inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global const),
                          GiPhoton ph, __global const uint* tile_counts,
-                         PHOTON_MAP_PARAMS(volatile __global), __local uint* lc) {
+                         PHOTON_MAP_PARAMS(volatile __global), volatile __global uint* direction_map0,
+                         volatile __global uint* direction_map1,
+                         volatile __global uint* direction_map2, __local uint* lc,
+                         __local uint* uncounted) {
     float3 power = unpack_rgb9e5(ph.power) * p->power_scale;
     if (!(max_element3(power) > 0.0f)) return;
     float3 pos = load3(ph.position);
@@ -34,6 +37,14 @@ inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global 
             float3 f = e * area;
             Photon splat = {{0.0f, 0.0f, 0.0f}, 0.0f, {f.x, f.y, f.z}, 0u};
             deposit_photon_texel(PHOTON_MAP_ARGS, lc, q, &splat, p->flux_quantum, 1.0f);
+            if (p->light_direction != 0u) {
+                // Eq. 20's power-weighted light direction, in the flux's quanta; its
+                // rounding is not counted (the flux's own deposit counts it)
+                float4 d = light_direction_deposit(f, to_light);
+                Photon dir = {{0.0f, 0.0f, 0.0f}, d.w, {d.x, d.y, d.z}, 0u};
+                deposit_photon_texel(direction_map0, direction_map1, direction_map2, uncounted,
+                                     q, &dir, p->flux_quantum, p->flux_quantum);
+            }
         }
     }
 }
@@ -42,11 +53,16 @@ __kernel void splat_photons(__global const SplatParams* p, GBUFFER_PARAMS(__glob
                             __global const GiPhoton* photons, uint photon_capacity,
                             __global const uint* photon_count,
                             __global const uint* tile_counts, volatile __global uint* counters,
-                            PHOTON_MAP_PARAMS(volatile __global)) {
+                            PHOTON_MAP_PARAMS(volatile __global),
+                            volatile __global uint* direction_map0,
+                            volatile __global uint* direction_map1,
+                            volatile __global uint* direction_map2) {
     __local uint lc[COUNTER_WORDS];
+    __local uint uncounted[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < min(photon_count[0], photon_capacity))
-        splat_photon(p, GBUFFER_ARGS, photons[i], tile_counts, PHOTON_MAP_ARGS, lc);
+        splat_photon(p, GBUFFER_ARGS, photons[i], tile_counts, PHOTON_MAP_ARGS, direction_map0,
+                     direction_map1, direction_map2, lc, uncounted);
     counters_flush_local(lc, counters);
 }

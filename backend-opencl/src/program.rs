@@ -120,6 +120,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     ),
     ("atrous_filter", include_str!("../kernels/atrous_filter.cl")),
     (
+        "shading_normal_correction",
+        include_str!("../kernels/shading_normal_correction.cl"),
+    ),
+    (
         "rsm_importance",
         include_str!("../kernels/rsm_importance.cl"),
     ),

@@ -172,6 +172,11 @@ const NOT_BOUND: &[(&str, &str)] = &[
          whose layouts that crate's tests check",
     ),
     (
+        "CorrectionParams",
+        "shading_normal_correction runs on Vulkan as a compute pipeline from \
+         caustica-shaders' WGSL, whose layouts that crate's tests check",
+    ),
+    (
         "TemporalParams",
         "temporal_blend runs on Vulkan as a compute pipeline from caustica-shaders' WGSL, \
          whose layouts that crate's tests check",

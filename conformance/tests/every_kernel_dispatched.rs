@@ -84,14 +84,17 @@ fn every_backend_dispatches_every_declared_kernel() {
             "{name}: the adaptive traversal deposited no photon"
         );
         passes.extend(stats.passes);
-        // PhotonGi: the RSM, the warp, the roulette trace and the splat
+        // PhotonGi: the RSM, the warp, the roulette trace and the splat, on `sphere`, whose
+        // ball's smooth normals need Eq. 20's correction (the prism's flat faces do not)
         let gi = caustica_core::techniques::photon_gi::PhotonGiSettings {
             photons_w: 64,
             photons_h: 64,
             rsm_size: 16,
             ..Default::default()
         };
-        let mut t = caustica_core::techniques::photon_gi::PhotonGi::new(b.as_mut(), &scene, gi)
+        let mut ball = builtin("sphere").expect("built-in scene");
+        (ball.camera.width, ball.camera.height) = (64, 36);
+        let mut t = caustica_core::techniques::photon_gi::PhotonGi::new(b.as_mut(), &ball, gi)
             .expect("valid scene");
         let stats = t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         t.free(b.as_mut()).expect("free");

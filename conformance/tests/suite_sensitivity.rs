@@ -35,8 +35,9 @@ use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
     DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm, SplatPhotons,
-    TemporalBlend, TileHitDistance, TraceIndirect, TracePhotons,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
+    ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
+    TracePhotons,
 };
 use caustica_core::math::density_gather::reach_grid_len;
 use caustica_core::math::fixed_point::{join_u64, quantize};
@@ -122,6 +123,8 @@ enum Mutation {
     /// is below the check's rounding allowance: each splat's `E x area` is a float that
     /// backends round a few ulps apart before it becomes quanta).
     SplatLow,
+    /// `shading_normal_correction` 1e-4 too high.
+    CorrectionHigh,
 }
 
 /// The CPU backend with a [`Mutation`].
@@ -505,6 +508,10 @@ impl Mutant {
                     }
                 })
             }
+            (
+                Mutation::CorrectionHigh,
+                Kernel::ShadingNormalCorrection(ShadingNormalCorrection { out, .. }),
+            ) => self.modify(out.id, |v| scale(v, 1.0 + 1e-4)),
             (Mutation::SplatLow, Kernel::SplatPhotons(SplatPhotons { photon_map, .. })) => {
                 // word 0 (red flux, lo) of every texel, on its plane
                 let (k, _) = deposit_word(0, 0);
@@ -753,6 +760,7 @@ fn each_fault_fails_the_check_of_its_kernel() {
         (Mutation::SampleFluxHigh, "photon gi kernels"),
         (Mutation::IndirectPowerHigh, "photon gi kernels"),
         (Mutation::SplatLow, "photon gi kernels"),
+        (Mutation::CorrectionHigh, "photon gi kernels"),
     ] {
         let mut report = Report::new(kernel);
         let mut cand = Mutant::candidate(mutation);

@@ -121,6 +121,10 @@ pub const KERNELS: &[(&str, &str)] = &[
     ),
     ("atrous_filter", include_str!("../wgsl/atrous_filter.wgsl")),
     (
+        "shading_normal_correction",
+        include_str!("../wgsl/shading_normal_correction.wgsl"),
+    ),
+    (
         "rsm_importance",
         include_str!("../wgsl/rsm_importance.wgsl"),
     ),

@@ -16,8 +16,45 @@
 @group(0) @binding(9) var<storage, read_write> photon_map0: array<atomic<u32>>;
 @group(0) @binding(10) var<storage, read_write> photon_map1: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> photon_map2: array<atomic<u32>>;
+@group(0) @binding(12) var<storage, read_write> direction_map0: array<atomic<u32>>;
+@group(0) @binding(13) var<storage, read_write> direction_map1: array<atomic<u32>>;
+@group(0) @binding(14) var<storage, read_write> direction_map2: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
+
+// atomic_add_photon_map on the direction map's plane `at.x`, index `at.y`.
+fn atomic_add_direction_map(at: vec2<u32>, v: u32) -> u32 {
+    if (at.x == 0u) {
+        return atomicAdd(&direction_map0[at.y], v);
+    }
+    if (at.x == 1u) {
+        return atomicAdd(&direction_map1[at.y], v);
+    }
+    return atomicAdd(&direction_map2[at.y], v);
+}
+
+// atomic_add_u64_photon_map on the direction map.
+fn atomic_add_u64_direction_map(pixel: u32, word: u32, lo: u32, hi: u32) {
+    let at = deposit_word(pixel, word);
+    let old = atomic_add_direction_map(at, lo);
+    let carry = u64_carry(old, lo);
+    if (hi + carry != 0u) {
+        atomic_add_direction_map(vec2<u32>(at.x, at.y + 1u), hi + carry);
+    }
+}
+
+// backend-cpu photon_gi.rs splat_photon's direction deposit: deposit_photon_texel of
+// (flux d.xyz, hit distance d.w) into the direction map, in the flux's quanta, uncounted.
+fn deposit_light_direction(texel: u32, d: vec4<f32>, quantum: f32) {
+    for (var ch = 0u; ch < 3u; ch++) {
+        let units = quantize(d[ch], quantum).units;
+        if (units != 0u) {
+            atomic_add_u64_direction_map(texel, DEPOSIT_FLUX + 2u * ch, units, 0u);
+        }
+    }
+    atomic_add_u64_direction_map(texel, DEPOSIT_HIT_DISTANCE, quantize(d.w, quantum).units, 0u);
+    atomic_add_u64_direction_map(texel, DEPOSIT_PHOTONS, 1u, 0u);
+}
 
 fn splat_photon(p: SplatParams, ph: GiPhoton) {
     let power = unpack_rgb9e5(ph.power) * p.power_scale;
@@ -59,6 +96,10 @@ fn splat_photon(p: SplatParams, ph: GiPhoton) {
             splat.flux = e * area;
             splat.direction = 0u;
             deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
+            if (p.light_direction != 0u) {
+                deposit_light_direction(q, light_direction_deposit(e * area, to_light),
+                                        p.flux_quantum);
+            }
         }
     }
 }

@@ -8,12 +8,16 @@ use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
     camera_ray, counter, gbuffer_flags, gbuffer_pixel_area, light_kind, material_kind, off_surface,
-    project_to_pixel, GBufferView, GiPhoton, GpuLight, IndirectTraceParams, Photon, RsmParams,
-    RsmPhoton, RsmTexel, SplatParams, NO_MATERIAL,
+    project_to_pixel, CorrectionParams, GBufferView, GiPhoton, GpuLight, IndirectTraceParams,
+    Photon, PhotonMapView, RsmParams, RsmPhoton, RsmTexel, SplatParams, NO_MATERIAL,
 };
 use caustica_core::kernels::VISIBLE_TOLERANCE;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
+use caustica_core::math::irradiance_filter::{
+    light_direction_deposit, mean_light_direction, shading_normal_factor,
+};
+use caustica_core::math::map_gather::join_u64_f32;
 use caustica_core::math::optics::{
     beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
 };
@@ -435,13 +439,14 @@ pub fn splat_photons(
     photons: &[GiPhoton],
     tile_counts: &[u32],
     map: MapPlanes,
+    directions: MapPlanes,
 ) -> Counters {
     photons
         .par_chunks(256)
         .map(|chunk| {
             let mut c = Counters::default();
             for ph in chunk {
-                splat_photon(p, &g, ph, tile_counts, &map, &mut c);
+                splat_photon(p, &g, ph, tile_counts, (&map, &directions), &mut c);
             }
             c
         })
@@ -471,7 +476,7 @@ fn splat_photon(
     g: &GBufferView,
     ph: &GiPhoton,
     tile_counts: &[u32],
-    map: &MapPlanes,
+    (map, directions): (&MapPlanes, &MapPlanes),
     c: &mut Counters,
 ) {
     let power = unpack_rgb9e5(ph.power) * p.power_scale;
@@ -517,8 +522,67 @@ fn splat_photon(
                 ..Default::default()
             };
             deposit_photon_texel(map, q, &splat, p.flux_quantum, 1.0, c);
+            if p.light_direction != 0 {
+                // Eq. 20's power-weighted light direction, in the flux's quanta; its
+                // rounding is not counted (the flux's own deposit counts it)
+                let (d, w) = light_direction_deposit(e * area, to_light);
+                let dir = Photon {
+                    flux: d.to_array(),
+                    hit_distance: w,
+                    ..Default::default()
+                };
+                let mut uncounted = Counters::default();
+                deposit_photon_texel(
+                    directions,
+                    q,
+                    &dir,
+                    p.flux_quantum,
+                    p.flux_quantum,
+                    &mut uncounted,
+                );
+            }
         }
     }
+}
+
+/// `shading_normal_correction` (003 Eq. 20): per receiver pixel with splats, the input
+/// times `shading_normal_factor(w_i, n_s, n_g, s_max, eps)` with `w_i` the direction
+/// map's mean light direction; other pixels keep the input.
+pub fn shading_normal_correction(
+    p: &CorrectionParams,
+    g: GBufferView,
+    directions: PhotonMapView,
+    input: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
+    (0..(p.width as usize * p.height as usize))
+        .into_par_iter()
+        .map(|i| {
+            let v = input[i];
+            let t = g.load_gbuffer(i);
+            let d = directions.load(i);
+            let w = join_u64_f32(d.hit_distance[0], d.hit_distance[1]);
+            if t.flags & gbuffer_flags::RECEIVER == 0 || !(w > 0.0) {
+                return v;
+            }
+            let sums = Vec3::new(
+                join_u64_f32(d.flux[0][0], d.flux[0][1]),
+                join_u64_f32(d.flux[1][0], d.flux[1][1]),
+                join_u64_f32(d.flux[2][0], d.flux[2][1]),
+            );
+            let w_i = mean_light_direction(sums, w);
+            if w_i == Vec3::ZERO {
+                return v;
+            }
+            let f = shading_normal_factor(
+                w_i,
+                Vec3::from(t.normal),
+                unpack_unit_vector(t.geometric_normal),
+                p.max_stretch,
+                p.epsilon,
+            );
+            [v[0] * f, v[1] * f, v[2] * f, v[3]]
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -723,7 +787,8 @@ mod tests {
             max_stretch: 4.0,
             tile_constant: 1e-3,
             min_splat_px: 1.5,
-            _pad: [0; 3],
+            light_direction: 1,
+            _pad: [0; 2],
         };
         let photons: Vec<GiPhoton> = (0..4000u32)
             .map(|i| {
@@ -747,7 +812,40 @@ mod tests {
                 .collect()
         });
         let map: MapPlanes = std::array::from_fn(|k| &words[k][..]);
-        let c = splat_photons(&p, view, &photons, &tiles, map);
+        let direction_words: [Vec<AtomicU64>; DEPOSIT_PLANES] = std::array::from_fn(|k| {
+            (0..n * DEPOSIT_PLANE_WORDS[k] / 2)
+                .map(|_| AtomicU64::new(0))
+                .collect()
+        });
+        let directions: MapPlanes = std::array::from_fn(|k| &direction_words[k][..]);
+        let c = splat_photons(&p, view, &photons, &tiles, map, directions);
+        // Eq. 20's direction map: per pixel the weights (hit-distance words: plane 1, the
+        // second u64 of each pixel) are the luminance of the flux (white photons: the
+        // red flux), within a quantum per splat; the mean direction points up, to the
+        // photons' source
+        let (mut weights, mut up) = (0.0f64, 0.0f64);
+        for px in 0..n {
+            let word = |k: usize, w: usize| {
+                direction_words[k][px * DEPOSIT_PLANE_WORDS[k] / 2 + w].load(Ordering::Relaxed)
+            };
+            let w = word(1, 1) as f64;
+            weights += w;
+            // y sum: flux g (plane 0, second u64)
+            up += 2.0 * word(0, 1) as f64 - w;
+        }
+        let red: f64 = words[0]
+            .iter()
+            .step_by(2)
+            .map(|a| a.load(Ordering::Relaxed) as f64)
+            .sum();
+        assert!(
+            (weights / red - 1.0).abs() < 1e-3,
+            "direction weights {weights} vs flux {red}"
+        );
+        assert!(
+            up > 0.5 * weights,
+            "mean light direction not upwards: {up} of {weights}"
+        );
         // red flux words: plane 0, words 0..2 of each pixel
         let sum: f64 = words[0]
             .iter()

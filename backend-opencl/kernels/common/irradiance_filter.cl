@@ -52,3 +52,18 @@ inline float3 clipped_detail(float3 s_i, float3 s_next, float3 bound) {
 inline float3 atrous_final(float3 s_n, float3 clipped_details) {
     return fmax(s_n - clipped_details, (float3)(0.0f));
 }
+
+// irradiance_filter::mean_light_direction: normalize(2 d - w), zero where it has no length.
+inline float3 mean_light_direction(float3 d, float w) {
+    float3 v = 2.0f * d - (float3)(w);
+    float l = length(v);
+    if (!(l > 0.0f) || !(l < 3.4e38f)) return (float3)(0.0f);
+    return v * (1.0f / l);
+}
+
+// irradiance_filter::shading_normal_factor (003 Eq. 20).
+inline float shading_normal_factor(float3 w_i, float3 n_s, float3 n_g, float s_max, float eps) {
+    float num = fmax(dot3(w_i, n_s), 0.0f);
+    float den = fmax(dot3(w_i, n_g), 0.0f) + eps;
+    return fmin(num / den, s_max);
+}

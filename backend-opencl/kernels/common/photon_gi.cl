@@ -214,3 +214,12 @@ inline uint splat_reach_px(__global const SplatParams* p, float radius, float z)
     float r = ceil(radius / (near_z * pixel)) + 1.0f;
     return r >= 4194304.0f ? 0xffffffffu : (uint)r;
 }
+
+// irradiance_filter::light_direction_deposit: a splat contribution's flux (W) from unit
+// light direction `to_light` adds w (to_light + 1) / 2 per axis (xyz) and its weight w,
+// the flux's luminance (w).
+inline float4 light_direction_deposit(float3 flux, float3 to_light) {
+    float w = luminance(flux);
+    float3 d = (to_light + (float3)(1.0f)) * (0.5f * w);
+    return (float4)(d.x, d.y, d.z, w);
+}

@@ -105,8 +105,9 @@ typedef struct {
     uint tile_size; float power_scale; float flux_quantum; uint max_splat_px;
     float max_ray_length; float min_length_scale; float density_radius_min; float density_radius_max;
     float photons_per_pixel; float normal_compression; float max_stretch; float tile_constant;
-    float min_splat_px; uint _pad0; uint _pad1; uint _pad2;
+    float min_splat_px; uint light_direction; uint _pad0; uint _pad1;
 } SplatParams;
+typedef struct { uint width; uint height; float max_stretch; float epsilon; } CorrectionParams;
 #define RSM_TEXEL_NONE 0u // core::math::rsm::rsm_texel_kind
 #define RSM_TEXEL_DIFFUSE 1u
 #define RSM_TEXEL_SPECULAR 2u

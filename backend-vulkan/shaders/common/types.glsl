@@ -158,8 +158,9 @@ struct SplatParams {
     uint tile_size; float power_scale; float flux_quantum; uint max_splat_px;
     float max_ray_length; float min_length_scale; float density_radius_min; float density_radius_max;
     float photons_per_pixel; float normal_compression; float max_stretch; float tile_constant;
-    float min_splat_px; uint _pad0; uint _pad1; uint _pad2;
+    float min_splat_px; uint light_direction; uint _pad0; uint _pad1;
 };
+struct CorrectionParams { uint width; uint height; float max_stretch; float epsilon; };
 struct RsmPhoton { vec3 origin; uint direction; vec3 flux; uint bounces; };
 struct IndirectTraceParams {
     GpuCamera camera;

@@ -42,11 +42,11 @@ use crate::harness::tolerance::{
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_gbuffer, read_photon_map, Backend};
 use caustica_core::device::layout::{
-    counter, DepositTexel, GBufferTexel, GiPhoton, GpuCamera, RsmParams, RsmPhoton, RsmTexel,
-    SplatParams,
+    counter, CorrectionParams, DepositTexel, GBufferTexel, GiPhoton, GpuCamera, RsmParams,
+    RsmPhoton, RsmTexel, SplatParams,
 };
 use caustica_core::kernels::{
-    PrimaryGbuffer, RsmImportance, SampleRsm, SplatPhotons, TraceIndirect,
+    PrimaryGbuffer, RsmImportance, SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
 };
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::gi_photon::{gi_store, screen_tiles};
@@ -253,7 +253,8 @@ fn splat_params(fx: &Fixture, power_scale: f32, quantum: f32) -> SplatParams {
             (cam.width, cam.height),
         ),
         min_splat_px: 1.5,
-        _pad: [0; 3],
+        light_direction: 1,
+        _pad: [0; 2],
     }
 }
 
@@ -264,7 +265,7 @@ fn run_splat(
     photons: &[GiPhoton],
     tiles: &[u32],
     params: SplatParams,
-) -> Result<(Vec<DepositTexel>, Vec<u32>), String> {
+) -> Result<Splats, String> {
     let n = fx.camera.width * fx.camera.height;
     let mut rec = Recording::new();
     let g = rec.upload_gbuffer(gbuffer);
@@ -281,8 +282,10 @@ fn run_splat(
     let t = rec.upload(tiles, "tile counts");
     let counters = rec.create(counter::WORDS as u32, "counters");
     let map = rec.create_photon_map(n);
+    let directions = rec.create_photon_map(n);
     rec.clear(counters);
     rec.clear_photon_map(&map);
+    rec.clear_photon_map(&directions);
     rec.kernel(SplatPhotons {
         params,
         gbuffer: g,
@@ -291,10 +294,47 @@ fn run_splat(
         tile_counts: t,
         counters,
         photon_map: map,
+        direction_map: directions,
     });
     run_and_free(b, "splat_photons", &rec, |b| {
-        Ok((read_photon_map(b, &map)?, read_buf(b, counters)?))
+        Ok((
+            read_photon_map(b, &map)?,
+            read_buf(b, counters)?,
+            read_photon_map(b, &directions)?,
+        ))
     })
+}
+
+/// What `splat_photons` writes: the photon map, the counters, the light-direction map.
+type Splats = (Vec<DepositTexel>, Vec<u32>, Vec<DepositTexel>);
+
+/// Runs `shading_normal_correction` on `b` over the reference's G-buffer and direction
+/// map, on a fixed input image.
+fn run_correction(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    gbuffer: &[GBufferTexel],
+    directions: &[DepositTexel],
+    input: &[[f32; 4]],
+) -> Result<Vec<[f32; 4]>, String> {
+    let mut rec = Recording::new();
+    let g = rec.upload_gbuffer(gbuffer);
+    let d = rec.upload_photon_map(directions);
+    let i = rec.upload(input, "input");
+    let out = rec.create(input.len() as u32, "corrected");
+    rec.kernel(ShadingNormalCorrection {
+        params: CorrectionParams {
+            width: fx.camera.width,
+            height: fx.camera.height,
+            max_stretch: 4.0,
+            epsilon: caustica_core::techniques::photon_gi::SHADING_EPSILON,
+        },
+        gbuffer: g,
+        direction_map: d,
+        input: i,
+        out,
+    });
+    run_and_free(b, "shading_normal_correction", &rec, |b| read_buf(b, out))
 }
 
 /// Photons of `a` without a photon of `b` at the same place (within
@@ -505,23 +545,70 @@ pub fn check_photon_gi(
         );
         // 4. splat_photons on the reference's photons
         let sp = splat_params(fx, power_scale, quantum);
-        let (ma, _) = run_splat(fx, r, &inputs.gbuffer, &pha, &tia, sp)?;
-        let (mb, _) = run_splat(fx, c, &inputs.gbuffer, &pha, &tia, sp)?;
+        let (ma, _, da) = run_splat(fx, r, &inputs.gbuffer, &pha, &tia, sp)?;
+        let (mb, _, db) = run_splat(fx, c, &inputs.gbuffer, &pha, &tia, sp)?;
         let mut same = 0u64;
         let mut flux_bad = 0u64;
-        for (a, b) in ma.iter().zip(&mb) {
+        // the light-direction sums as the flux's: each contribution w (d + 1) / 2 and w
+        // is a few more roundings of the same `E x area` (a luminance, a sum and a
+        // product: ~5 ulp more, inside SPLAT_REL), plus one quantum per splat
+        for ((a, b), (x_d, y_d)) in ma.iter().zip(&mb).zip(da.iter().zip(&db)) {
             if a.photons != b.photons {
                 continue;
             }
             same += 1;
             let splats = join_u64(a.photons) as f64;
-            for ch in 0..3 {
-                let (x, y) = (join_u64(a.flux[ch]) as f64, join_u64(b.flux[ch]) as f64);
+            let words = |t: &DepositTexel| {
+                [t.flux[0], t.flux[1], t.flux[2], t.hit_distance].map(|w| join_u64(w) as f64)
+            };
+            let pairs = (0..3)
+                .map(|ch| (join_u64(a.flux[ch]) as f64, join_u64(b.flux[ch]) as f64))
+                .chain(words(x_d).into_iter().zip(words(y_d)));
+            for (x, y) in pairs {
                 if (x - y).abs() > SPLAT_REL * x.max(y) + splats {
                     flux_bad += 1;
                 }
             }
         }
+        // 5. shading_normal_correction on the reference's direction map
+        let input: Vec<[f32; 4]> = (0..ma.len())
+            .map(|i| [1.0 + (i % 5) as f32, 1.0, 0.5, 0.25])
+            .collect();
+        let ca = run_correction(fx, r, &inputs.gbuffer, &da, &input)?;
+        let cb = run_correction(fx, c, &inputs.gbuffer, &da, &input)?;
+        let mut corrected = 0u64;
+        let mut correction_bad = Vec::new();
+        for (k, ((x, y), t)) in ca.iter().zip(&cb).zip(&da).enumerate() {
+            let w = join_u64(t.hit_distance) as f32;
+            let v =
+                glam::Vec3::from_array([0, 1, 2].map(|ch| 2.0 * join_u64(t.flux[ch]) as f32 - w));
+            let g = &inputs.gbuffer[k];
+            let ng = unpack_unit_vector(g.geometric_normal);
+            let (f, den) = (
+                x[0] / input[k][0],
+                v.normalize_or_zero().dot(ng).max(0.0) + 1e-4,
+            );
+            corrected += (f != 1.0) as u64;
+            // the mean direction 2 d - w carries ~4 ulp of w (cancellation: times w / |v|),
+            // each dot product 3 ulp, the division 2.5 ulp: 16 ulp x w / |v| of the
+            // factor's numerator and denominator, relative to the denominator
+            let bound =
+                16.0 * f32::EPSILON * (w / v.length().max(f32::MIN_POSITIVE)).max(1.0) * (1.0 + f)
+                    / den
+                    + 1e-6;
+            let ok = (0..4)
+                .all(|ch| (x[ch] - y[ch]).abs() <= bound * x[ch].abs().max(input[k][ch]))
+                && y.iter().all(|c| c.is_finite());
+            if !ok && correction_bad.len() < 3 {
+                correction_bad.push(format!("pixel {k}: {y:?} vs cpu {x:?} (bound {bound:.2e})"));
+            }
+        }
+        v.check(correction_bad.is_empty(), || {
+            format!(
+                "light {l}: shading_normal_correction differs: {}",
+                correction_bad.join("; ")
+            )
+        });
         let n = ma.len() as f64;
         v.check(same as f64 >= DEPOSIT_TEXEL_AGREEMENT * n, || {
             format!("light {l}: {same} of {n} texels hold the same splats")
@@ -531,7 +618,8 @@ pub fn check_photon_gi(
         });
         let splatted = ma.iter().filter(|t| join_u64(t.photons) > 0).count();
         v.note(format!(
-            "light {l}: {nf} faces, {} / {} photons stored, {splatted} texels splatted",
+            "light {l}: {nf} faces, {} / {} photons stored, {splatted} texels splatted, \
+             {corrected} corrected by Eq. 20",
             pha.len(),
             phb.len()
         ));

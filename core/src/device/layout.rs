@@ -672,8 +672,25 @@ pub struct SplatParams {
     /// (`photon_splat::min_splat_scale`): a kernel smaller than a pixel would reach one
     /// pixel centre or none, an unbiased but fireflied estimate.
     pub min_splat_px: f32,
+    /// 1: also add each splat's light direction to the direction map (003 Eq. 20's
+    /// `w_i`, [`crate::math::irradiance_filter::light_direction_deposit`]); 0: leave it.
+    pub light_direction: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
+}
+
+/// Parameters of `shading_normal_correction` (003 Eq. 20).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CorrectionParams {
+    /// Image width (pixels).
+    pub width: u32,
+    /// Image height (pixels).
+    pub height: u32,
+    /// Largest factor, 24.3.1.2's `s_max` (the splat's light stretch).
+    pub max_stretch: f32,
+    /// Eq. 20's `epsilon` in the denominator.
+    pub epsilon: f32,
 }
 
 /// Parameters of `caustic_map_lookup`.

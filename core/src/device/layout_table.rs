@@ -9,8 +9,8 @@
 //! the struct without `..`, so a field added to a struct and not here does not compile.
 
 use super::layout::{
-    AtlasParams, AtrousParams, DepositParams, DepositTexel, DirectParams, GBufferTexel,
-    GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
+    AtlasParams, AtrousParams, CorrectionParams, DepositParams, DepositTexel, DirectParams,
+    GBufferTexel, GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
     IndirectTraceParams, MapLookupParams, Photon, RefineParams, RsmParams, RsmPhoton, RsmTexel,
     SplatParams, TemporalParams, TraceParams,
 };
@@ -243,8 +243,9 @@ table! {
     SplatParams {
         camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,
         min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,
-        normal_compression, max_stretch, tile_constant, min_splat_px, _pad
+        normal_compression, max_stretch, tile_constant, min_splat_px, light_direction, _pad
     }
+    CorrectionParams { width, height, max_stretch, epsilon }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
         error_from_level, grid_w, first, count, children_capacity, relevance,

@@ -32,6 +32,7 @@ mod refine_clusters;
 mod resolve_caustics;
 mod rsm_importance;
 mod sample_rsm;
+mod shading_normal_correction;
 mod splat_photons;
 mod temporal_blend;
 mod tile_hit_distance;
@@ -55,6 +56,7 @@ pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
 pub use rsm_importance::RsmImportance;
 pub use sample_rsm::SampleRsm;
+pub use shading_normal_correction::ShadingNormalCorrection;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
@@ -347,6 +349,10 @@ pub const GBUFFER_BINDINGS: [&str; 4] = ["gbuffer0", "gbuffer1", "gbuffer2", "gb
 /// Binding names of the screen photon map's planes, in launch order.
 pub const PHOTON_MAP_BINDINGS: [&str; 3] = ["photon_map0", "photon_map1", "photon_map2"];
 
+/// The binding names of PhotonGi's light-direction map's planes (a photon map's layout).
+pub const DIRECTION_MAP_BINDINGS: [&str; 3] =
+    ["direction_map0", "direction_map1", "direction_map2"];
+
 impl Args {
     /// The G-buffer's planes ([`GBUFFER_BINDINGS`]), each holding `pixels` texels.
     pub fn gbuffer(&mut self, g: &GBufferPlanes, pixels: u64) -> Result<&mut Self, BackendError> {
@@ -380,7 +386,17 @@ impl Args {
         m: &PhotonMapPlanes,
         pixels: u64,
     ) -> Result<&mut Self, BackendError> {
-        for (k, (name, p)) in PHOTON_MAP_BINDINGS.into_iter().zip(m.planes).enumerate() {
+        self.named_photon_map(PHOTON_MAP_BINDINGS, m, pixels)
+    }
+
+    /// [`Args::photon_map`] under the binding names `names`.
+    pub fn named_photon_map(
+        &mut self,
+        names: [&'static str; 3],
+        m: &PhotonMapPlanes,
+        pixels: u64,
+    ) -> Result<&mut Self, BackendError> {
+        for (k, (name, p)) in names.into_iter().zip(m.planes).enumerate() {
             let words = crate::device::layout::DEPOSIT_PLANE_WORDS[k] as u64;
             self.buf(name, p, pixels * words * 4)?;
         }
@@ -490,6 +506,7 @@ kernel_list! {
     SampleRsm => sample_rsm,
     TraceIndirect => trace_indirect,
     SplatPhotons => splat_photons,
+    ShadingNormalCorrection => shading_normal_correction,
 }
 
 impl Kernel {

@@ -15,7 +15,11 @@ use crate::math::gi_photon::screen_tiles;
 /// (Eq. 9) times the pixel's surface area, added in flux quanta to the photon map with
 /// exact integer atomics (so `resolve_caustics` turns the sum back into `E x albedo /
 /// pi`). A splat reaching past `max_splat_px` is clipped there and counted
-/// (`counter::SATURATED`); a photon that packs to zero power is skipped.
+/// (`counter::SATURATED`); a photon that packs to zero power is skipped. With
+/// `params.light_direction` each contribution also adds its light direction to
+/// `direction_map` (Eq. 20's power-weighted `w_i`,
+/// [`crate::math::irradiance_filter::light_direction_deposit`]), exactly as the flux;
+/// without, `direction_map` (one texel will do) is not touched.
 #[derive(Clone, Copy, Debug)]
 pub struct SplatPhotons {
     /// Camera, tiles, kernel constants, quanta.
@@ -32,6 +36,9 @@ pub struct SplatPhotons {
     pub counters: Buf<u32>,
     /// The screen photon map the splats add to.
     pub photon_map: PhotonMapPlanes,
+    /// The light-direction map (a photon map's layout) the splats add to with
+    /// `params.light_direction`.
+    pub direction_map: PhotonMapPlanes,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -48,6 +55,9 @@ const BINDINGS: &[Binding] = &[
     bind("photon_map0", ReadWrite),
     bind("photon_map1", ReadWrite),
     bind("photon_map2", ReadWrite),
+    bind("direction_map0", ReadWrite),
+    bind("direction_map1", ReadWrite),
+    bind("direction_map2", ReadWrite),
 ];
 
 impl KernelDecl for SplatPhotons {
@@ -72,7 +82,12 @@ impl KernelDecl for SplatPhotons {
                 screen_tiles(c.width, c.height, p.tile_size) as u64 * 4,
             )?
             .buf("counters", self.counters, bytes::COUNTERS)?
-            .photon_map(&self.photon_map, n)?;
+            .photon_map(&self.photon_map, n)?
+            .named_photon_map(
+                super::DIRECTION_MAP_BINDINGS,
+                &self.direction_map,
+                if p.light_direction != 0 { n } else { 1 },
+            )?;
         Ok(Some(self.photons.len as u64))
     }
 }

@@ -143,9 +143,49 @@ pub fn shading_normal_factor(w_i: Vec3, n_s: Vec3, n_g: Vec3, s_max: f32, eps: f
     (num / den).min(s_max)
 }
 
+/// What a splat contribution of flux `flux` (W per channel, `E x` the pixel's area)
+/// arriving from unit light direction `to_light` adds to the direction map: its
+/// luminance `w` as the weight (the map's hit distance) and `w (to_light + 1) / 2` per
+/// axis (the map's flux channels; non-negative, so the unsigned fixed-point sums hold
+/// them). Eq. 20's `w_i` is the power-weighted mean of the splats' directions.
+#[inline]
+pub fn light_direction_deposit(flux: Vec3, to_light: Vec3) -> (Vec3, f32) {
+    let w = crate::math::rsm::luminance(flux);
+    ((to_light + Vec3::ONE) * (0.5 * w), w)
+}
+
+/// The unit mean light direction from a pixel's direction sums: `d` holds the summed
+/// `w (d + 1) / 2` per axis and `w` the summed weights (any common unit); the result is
+/// `normalize(2 d - w)`, zero where the weights cancel or are zero.
+#[inline]
+pub fn mean_light_direction(d: Vec3, w: f32) -> Vec3 {
+    (2.0 * d - Vec3::splat(w)).normalize_or_zero()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_direction_sums_give_back_the_mean_direction() {
+        // two splats of weights 1 and 3 from directions a and b: the mean is along a + 3b
+        let (a, b) = (Vec3::new(0.6, 0.8, 0.0), Vec3::Z);
+        let (da, wa) = light_direction_deposit(Vec3::ONE, a);
+        let (db, wb) = light_direction_deposit(Vec3::splat(3.0), b);
+        let m = mean_light_direction(da + db, wa + wb);
+        assert!((m - (a + 3.0 * b).normalize()).abs().max_element() < 1e-6);
+        assert_eq!(mean_light_direction(Vec3::ZERO, 0.0), Vec3::ZERO);
+        // Eq. 20 on a flat receiver (n_s = n_g) is 1 up to eps; a shading normal tilted by
+        // 30 degrees from light along n_g gives cos 30
+        let n = Vec3::Y;
+        assert!((shading_normal_factor(n, n, n, 10.0, 1e-4) - 1.0).abs() < 2e-4);
+        let tilted = Vec3::new(0.5, 0.75f32.sqrt(), 0.0);
+        let f = shading_normal_factor(n, tilted, n, 10.0, 1e-4);
+        assert!((f - 0.75f32.sqrt() / (1.0 + 1e-4)).abs() < 1e-6);
+        // grazing light on the geometric normal: clamped at s_max
+        let grazing = Vec3::new(1.0, 1e-6, 0.0).normalize();
+        assert_eq!(shading_normal_factor(grazing, tilted, n, 4.0, 1e-4), 4.0);
+    }
 
     #[test]
     fn weights_stop_at_edges() {

@@ -63,3 +63,21 @@ fn clipped_detail(s_i: vec3<f32>, s_next: vec3<f32>, bound: vec3<f32>) -> vec3<f
 fn atrous_final(s_n: vec3<f32>, clipped_details: vec3<f32>) -> vec3<f32> {
     return max(s_n - clipped_details, vec3<f32>(0.0f));
 }
+
+// irradiance_filter::mean_light_direction: normalize(2 d - w), zero where it has no length.
+fn mean_light_direction(d: vec3<f32>, w: f32) -> vec3<f32> {
+    let v = 2.0f * d - vec3<f32>(w);
+    let l = length(v);
+    if (!(l > 0.0f) || !(l < 3.4e38f)) {
+        return vec3<f32>(0.0f);
+    }
+    return v * (1.0f / l);
+}
+
+// irradiance_filter::shading_normal_factor (003 Eq. 20).
+fn shading_normal_factor(w_i: vec3<f32>, n_s: vec3<f32>, n_g: vec3<f32>, s_max: f32,
+                         eps: f32) -> f32 {
+    let num = max(dot3(w_i, n_s), 0.0f);
+    let den = max(dot3(w_i, n_g), 0.0f) + eps;
+    return min(num / den, s_max);
+}

@@ -249,3 +249,11 @@ fn splat_reach_px(p: SplatParams, radius: f32, z: f32) -> u32 {
     }
     return u32(r);
 }
+
+// irradiance_filter::light_direction_deposit: a splat contribution's flux (W) from unit
+// light direction `to_light` adds w (to_light + 1) / 2 per axis (xyz) and its weight w,
+// the flux's luminance (w).
+fn light_direction_deposit(flux: vec3<f32>, to_light: vec3<f32>) -> vec4<f32> {
+    let w = luminance(flux);
+    return vec4<f32>((to_light + vec3<f32>(1.0)) * (0.5 * w), w);
+}

@@ -280,9 +280,16 @@ struct SplatParams {
     max_stretch: f32,
     tile_constant: f32,
     min_splat_px: f32,
+    light_direction: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
+}
+
+struct CorrectionParams {
+    width: u32,
+    height: u32,
+    max_stretch: f32,
+    epsilon: f32,
 }
 
 const RSM_TEXEL_NONE: u32 = 0u; // core::math::rsm::rsm_texel_kind

@@ -5,17 +5,18 @@
 //! 1. `primary_gbuffer` and `direct_light` from the camera;
 //! 2. per light with photons (allocated over the lights by power,
 //!    [`crate::math::photon_allocation`], leaving out a light whose RSM sees no texel
-//!    that leaves flux: `PhotonGi::probe_rsms`, at creation and on updates): per RSM face `primary_gbuffer` from the light
-//!    and `rsm_importance` level 0, the pyramid's levels, then `sample_rsm` (section
-//!    24.2.1) and `trace_indirect` (24.2.2: roulette, photons stored after the first
-//!    bounce, culled to the view, counted per screen tile);
-//! 3. `splat_photons` (24.3) into the screen photon map, `resolve_caustics` (irradiance
-//!    times albedo / pi: the raw indirect light), `temporal_blend` and `atrous_filter`
-//!    (24.4, each a setting), `composite` with the direct light.
-//!
-//! Not built yet (TODO(issue 18)): the shading-normal correction of Eq. 20 (the G-buffer
-//! has the geometric normal; the splat's light-direction target, its filtering and the
-//! correction pass are missing).
+//!    that leaves flux: `PhotonGi::probe_rsms`, at creation and on updates): per RSM face
+//!    `primary_gbuffer` from the light and `rsm_importance` level 0, the pyramid's
+//!    levels, then `sample_rsm` (section 24.2.1) and `trace_indirect` (24.2.2: roulette,
+//!    photons stored after the first bounce, culled to the view, counted per screen tile);
+//! 3. `splat_photons` (24.3) into the screen photon map (and, for Eq. 20, each splat's
+//!    light direction into the direction map), `resolve_caustics` (irradiance times albedo
+//!    / pi: the raw indirect light), `temporal_blend` and `atrous_filter` (24.4, each a
+//!    setting);
+//! 4. `shading_normal_correction` (24.4.3, Eq. 20) where the scene has vertex normals that
+//!    depart from the geometric ones: the splats' power-weighted mean light direction
+//!    against the shading normal instead of the geometric one; then `composite` with the
+//!    direct light.
 
 mod settings;
 
@@ -37,8 +38,12 @@ use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
     Composite, DepositScreen, DirectLight, PrimaryGbuffer, ResolveCaustics, RsmImportance,
-    SampleRsm, SplatPhotons, TraceIndirect,
+    SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
 };
+
+/// Eq. 20's `epsilon`: keeps the factor finite where the mean light direction grazes the
+/// geometric normal (there `s_max` bounds it anyway).
+pub const SHADING_EPSILON: f32 = 1e-4;
 use crate::math::fixed_point::join_u64;
 use crate::math::gi_photon::{gi_store, screen_tiles};
 use crate::math::rsm::{level_count, level_offset, luminance, pyramid_len};
@@ -196,6 +201,29 @@ fn plan_lights(
     (rsms, power_scale, flux_quantum)
 }
 
+/// Whether Eq. 20's shading-normal correction runs: the setting, the splat estimator
+/// (the raw deposit has no splats to carry a direction), and a scene where some
+/// triangle's vertex normals depart from its geometric normal (elsewhere the shading and
+/// geometric normals agree and the factor is 1 up to `eps`).
+fn shading_correction(s: &PhotonGiSettings, ds: &DeviceScene) -> bool {
+    s.shading_normals && s.estimator == IndirectEstimator::Splat && smooth_normals(ds)
+}
+
+/// Whether a triangle of `ds` has a vertex normal more than 1e-4 (per axis) from its
+/// geometric normal (either side).
+fn smooth_normals(ds: &DeviceScene) -> bool {
+    ds.triangles.iter().any(|t| {
+        let p = t
+            .indices
+            .map(|i| Vec3::from(ds.vertices[i as usize].position));
+        let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        t.indices.iter().any(|&i| {
+            let n = Vec3::from(ds.vertices[i as usize].normal).normalize_or_zero();
+            (n - ng).abs().max_element() > 1e-4 && (n + ng).abs().max_element() > 1e-4
+        })
+    })
+}
+
 /// Device buffers of the frame.
 #[derive(Clone, Copy, Debug)]
 struct Buffers {
@@ -210,7 +238,13 @@ struct Buffers {
     tile_counts: Buf<u32>,
     counters: Buf<u32>,
     photon_map: PhotonMapPlanes,
+    /// The splats' light directions (Eq. 20): per pixel with the correction, one texel
+    /// (bound, never written) without.
+    direction_map: PhotonMapPlanes,
     raw: ImageBuf,
+    /// The filters' output before Eq. 20's correction (with the correction; `raw` when
+    /// no filter runs).
+    uncorrected: Option<ImageBuf>,
     indirect: ImageBuf,
     composite: ImageBuf,
     temporal: Option<TemporalBuffers>,
@@ -224,7 +258,9 @@ struct ScreenBuffers {
     direct: ImageBuf,
     tile_counts: Buf<u32>,
     photon_map: PhotonMapPlanes,
+    direction_map: PhotonMapPlanes,
     raw: ImageBuf,
+    uncorrected: Option<ImageBuf>,
     indirect: ImageBuf,
     composite: ImageBuf,
     temporal: Option<TemporalBuffers>,
@@ -232,8 +268,14 @@ struct ScreenBuffers {
 }
 
 impl ScreenBuffers {
-    /// Records the creation of the per-pixel buffers for `camera`'s image.
-    fn create(rec: &mut Recording, camera: GpuCamera, settings: &PhotonGiSettings) -> Self {
+    /// Records the creation of the per-pixel buffers for `camera`'s image (with Eq. 20's
+    /// correction when `correct`).
+    fn create(
+        rec: &mut Recording,
+        camera: GpuCamera,
+        settings: &PhotonGiSettings,
+        correct: bool,
+    ) -> Self {
         let pixels = camera.width * camera.height;
         let temporal = settings.temporal.then(|| TemporalBuffers {
             image: PingPong::create(rec, pixels, "temporal indirect history"),
@@ -247,6 +289,7 @@ impl ScreenBuffers {
             details: rec.create(pixels, "A-Trous clipped details"),
         });
         let raw = rec.create(pixels, "raw indirect image");
+        let filtered = temporal.is_some() || atrous.is_some();
         ScreenBuffers {
             gbuffer: rec.create_gbuffer(pixels),
             direct: rec.create(pixels, "direct image"),
@@ -255,8 +298,12 @@ impl ScreenBuffers {
                 "photons per screen tile",
             ),
             photon_map: rec.create_photon_map(pixels),
+            direction_map: rec.create_photon_map(if correct { pixels } else { 1 }),
             raw,
-            indirect: if temporal.is_some() || atrous.is_some() {
+            uncorrected: (correct && filtered)
+                .then(|| rec.create(pixels, "uncorrected indirect image"))
+                .or(correct.then_some(raw)),
+            indirect: if filtered || correct {
                 rec.create(pixels, "indirect image")
             } else {
                 raw
@@ -273,6 +320,10 @@ impl Buffers {
     fn screen_ids(&self) -> Vec<ResourceId> {
         let mut ids: Vec<ResourceId> = self.gbuffer.planes.iter().map(|p| p.id).collect();
         ids.extend(self.photon_map.planes.iter().map(|p| p.id));
+        ids.extend(self.direction_map.planes.iter().map(|p| p.id));
+        if let Some(u) = self.uncorrected.filter(|u| u.id != self.raw.id) {
+            ids.push(u.id);
+        }
         ids.extend([
             self.direct.id,
             self.tile_counts.id,
@@ -299,7 +350,9 @@ impl Buffers {
             direct: s.direct,
             tile_counts: s.tile_counts,
             photon_map: s.photon_map,
+            direction_map: s.direction_map,
             raw: s.raw,
+            uncorrected: s.uncorrected,
             indirect: s.indirect,
             composite: s.composite,
             temporal: s.temporal,
@@ -380,7 +433,8 @@ impl PhotonGi {
         let max_faces = 6u32;
         let max_photons = total.min(u32::MAX as u64) as u32;
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
-        let s = ScreenBuffers::create(&mut rec, camera, &settings);
+        let correct = shading_correction(&settings, &ds);
+        let s = ScreenBuffers::create(&mut rec, camera, &settings, correct);
         let buffers = Buffers {
             gbuffer: s.gbuffer,
             direct: s.direct,
@@ -393,7 +447,9 @@ impl PhotonGi {
             tile_counts: s.tile_counts,
             counters: rec.create(counter::WORDS as u32, "photon counters"),
             photon_map: s.photon_map,
+            direction_map: s.direction_map,
             raw: s.raw,
+            uncorrected: s.uncorrected,
             indirect: s.indirect,
             composite: s.composite,
             temporal: s.temporal,
@@ -401,7 +457,7 @@ impl PhotonGi {
         };
         let allocation = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
         backend.execute(&rec)?;
-        let plan = PhotonGi::make_plan(scene, &settings, &rsms, &allocation.buffers);
+        let plan = PhotonGi::make_plan(scene, &settings, &rsms, &allocation.buffers, correct);
         let mut t = PhotonGi {
             settings,
             scene: scene_args,
@@ -432,6 +488,7 @@ impl PhotonGi {
         s: &PhotonGiSettings,
         rsms: &[LightRsm],
         buffers: &[crate::frame::plan::BufferPlan],
+        correct: bool,
     ) -> FramePlan {
         let any = rsms.iter().any(|r| r.photons > 0);
         let pass = |name: &str, runs: bool, reason: &str| PassPlan {
@@ -515,6 +572,19 @@ impl PhotonGi {
                         "atrous_iterations = 0"
                     },
                 ),
+                pass(
+                    "shading_normal_correction",
+                    correct,
+                    if correct {
+                        "Eq. 20: the scene has vertex normals that depart from the geometric ones"
+                    } else if !s.shading_normals {
+                        "shading_normals off"
+                    } else if s.estimator != IndirectEstimator::Splat {
+                        "estimator deposit: no splats carry a light direction"
+                    } else {
+                        "every vertex normal is its triangle's geometric normal: the factor is 1"
+                    },
+                ),
                 pass("composite", true, "direct plus indirect"),
             ],
             buffers: buffers.to_vec(),
@@ -544,7 +614,8 @@ impl PhotonGi {
                 (cam.width, cam.height),
             ),
             min_splat_px: s.min_splat_px,
-            _pad: [0; 3],
+            light_direction: self.buffers.uncorrected.is_some() as u32,
+            _pad: [0; 2],
         }
     }
 
@@ -691,7 +762,13 @@ impl PhotonGi {
         (self.rsms, self.power_scale, self.flux_quantum) =
             plan_lights(&self.lights, total, side, &self.bounds, &sees);
         let buffers = std::mem::take(&mut self.plan.buffers);
-        self.plan = PhotonGi::make_plan(&self.model, &self.settings, &self.rsms, &buffers);
+        self.plan = PhotonGi::make_plan(
+            &self.model,
+            &self.settings,
+            &self.rsms,
+            &buffers,
+            self.buffers.uncorrected.is_some(),
+        );
         Ok(())
     }
 
@@ -755,6 +832,9 @@ impl PhotonGi {
             out: b.direct,
         });
         rec.clear_photon_map(&b.photon_map);
+        if b.uncorrected.is_some() {
+            rec.clear_photon_map(&b.direction_map);
+        }
         rec.clear(b.counters);
         rec.clear(b.photon_count);
         rec.clear(b.tile_counts);
@@ -801,6 +881,7 @@ impl PhotonGi {
                 tile_counts: b.tile_counts,
                 counters: b.counters,
                 photon_map: b.photon_map,
+                direction_map: b.direction_map,
             });
         }
         rec.kernel(ResolveCaustics {
@@ -810,6 +891,20 @@ impl PhotonGi {
             out: b.raw,
         });
         self.record_filters(&mut rec, cam);
+        if let Some(uncorrected) = b.uncorrected {
+            rec.kernel(ShadingNormalCorrection {
+                params: CorrectionParams {
+                    width: cam.width,
+                    height: cam.height,
+                    max_stretch: self.settings.max_stretch,
+                    epsilon: SHADING_EPSILON,
+                },
+                gbuffer: b.gbuffer,
+                direction_map: b.direction_map,
+                input: uncorrected,
+                out: b.indirect,
+            });
+        }
         rec.kernel(Composite {
             direct: b.direct,
             caustics: b.indirect,
@@ -864,7 +959,9 @@ impl PhotonGi {
     /// optional: the last that runs writes `indirect`; with neither, `indirect` is `raw`).
     fn record_filters(&self, rec: &mut Recording, cam: GpuCamera) {
         let b = &self.buffers;
-        let blended = b.atrous.map_or(b.indirect, |a| a.input);
+        // the filters' last output: before Eq. 20's correction where it runs
+        let target = b.uncorrected.unwrap_or(b.indirect);
+        let blended = b.atrous.map_or(target, |a| a.input);
         let mut input = b.raw;
         if let Some(t) = &b.temporal {
             let history = History {
@@ -890,7 +987,7 @@ impl PhotonGi {
                 self.settings.atrous_iterations,
                 self.settings.atrous_clip_sigmas,
                 input,
-                b.indirect,
+                target,
             );
         }
     }
@@ -984,7 +1081,8 @@ impl PhotonGi {
         let gpu = GpuCamera::from_camera(camera);
         if (gpu.width, gpu.height) != (self.camera.width, self.camera.height) {
             let mut rec = Recording::new();
-            let s = ScreenBuffers::create(&mut rec, gpu, &self.settings);
+            let correct = self.buffers.uncorrected.is_some();
+            let s = ScreenBuffers::create(&mut rec, gpu, &self.settings, correct);
             let alloc = planned_allocation(backend, &rec, Some((gpu.width, gpu.height)))?;
             backend.execute(&rec)?;
             // free the old per-pixel buffers; `owned[i]` is `plan.buffers[i]`
@@ -1006,7 +1104,7 @@ impl PhotonGi {
             self.bytes += alloc.bytes;
             self.owned = owned;
             self.buffers = self.buffers.with_screen(s);
-            self.plan = PhotonGi::make_plan(&model, &self.settings, &self.rsms, &plans);
+            self.plan = PhotonGi::make_plan(&model, &self.settings, &self.rsms, &plans, correct);
             self.reference = None;
             backend.execute(&free)?;
         }

@@ -90,6 +90,11 @@ pub struct PhotonGiSettings {
     pub atrous_iterations: u32,
     /// Eq. 18's variance clipping of the detail coefficients, in standard deviations.
     pub atrous_clip_sigmas: f32,
+    /// Eq. 20's shading-normal correction (003 section 24.4.3): the splats' power-weighted
+    /// light direction against the shading normal instead of the geometric one. Runs only
+    /// where the scene has vertex normals that depart from the geometric ones and with the
+    /// splat estimator (the plan says why not).
+    pub shading_normals: bool,
     /// Reflectance of dielectric interfaces ([`fresnel_model`]).
     pub fresnel_model: u32,
     /// Longest specular chain followed from a mirror or glass pixel in `direct_light`.
@@ -122,6 +127,7 @@ impl Default for PhotonGiSettings {
             temporal: true,
             atrous_iterations: 4,
             atrous_clip_sigmas: 1.0,
+            shading_normals: true,
             fresnel_model: fresnel_model::EXACT,
             max_specular_depth: 4,
             seed: 1,
