@@ -17,7 +17,9 @@ __kernel void shading_normal_correction(__global const CorrectionParams* p,
     for (uint k = 0u; k < 10u; k++)
         t[k] = photon_map_word(direction_map0, direction_map1, direction_map2, i, k);
     float w = join_u64_f32(t[6], t[7]);
-    if ((g.flags & GBUFFER_RECEIVER) == 0u || !(w > 0.0f)) {
+    float3 n_g = unpack_unit_vector(g.geometric_normal);
+    if ((g.flags & GBUFFER_RECEIVER) == 0u || !(w > 0.0f) ||
+        !shading_normal_departs(load3(g.normal), n_g)) {
         out[i] = v;
         return;
     }
@@ -28,7 +30,6 @@ __kernel void shading_normal_correction(__global const CorrectionParams* p,
         out[i] = v;
         return;
     }
-    float f = shading_normal_factor(w_i, load3(g.normal), unpack_unit_vector(g.geometric_normal),
-                                    p->max_stretch, p->epsilon);
+    float f = shading_normal_factor(w_i, load3(g.normal), n_g, p->max_stretch, p->epsilon);
     out[i] = (float4)(v.x * f, v.y * f, v.z * f, v.w);
 }

@@ -37,7 +37,8 @@ inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global 
             float3 f = e * area;
             Photon splat = {{0.0f, 0.0f, 0.0f}, 0.0f, {f.x, f.y, f.z}, 0u};
             deposit_photon_texel(PHOTON_MAP_ARGS, lc, q, &splat, p->flux_quantum, 1.0f);
-            if (p->light_direction != 0u) {
+            if (p->light_direction != 0u &&
+                shading_normal_departs(load3(t.normal), unpack_unit_vector(t.geometric_normal))) {
                 // Eq. 20's power-weighted light direction, in the flux's quanta; its
                 // rounding is not counted (the flux's own deposit counts it)
                 float4 d = light_direction_deposit(f, to_light);

@@ -37,7 +37,9 @@ fn shading_normal_correction(i: u32) {
     let g = load_gbuffer(i);
     let w = join_u64_f32(direction_map_word(i, DEPOSIT_HIT_DISTANCE),
                          direction_map_word(i, DEPOSIT_HIT_DISTANCE + 1u));
-    if ((g.flags & GBUFFER_RECEIVER) == 0u || !(w > 0.0f)) {
+    let n_g = unpack_unit_vector(g.geometric_normal);
+    if ((g.flags & GBUFFER_RECEIVER) == 0u || !(w > 0.0f) ||
+        !shading_normal_departs(g.normal, n_g)) {
         out[i] = v;
         return;
     }
@@ -51,8 +53,7 @@ fn shading_normal_correction(i: u32) {
         out[i] = v;
         return;
     }
-    let f = shading_normal_factor(w_i, g.normal, unpack_unit_vector(g.geometric_normal),
-                                  p.max_stretch, p.epsilon);
+    let f = shading_normal_factor(w_i, g.normal, n_g, p.max_stretch, p.epsilon);
     out[i] = vec4<f32>(v.xyz * f, v.w);
 }
 

@@ -1,4 +1,4 @@
-// needs: types vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi
+// needs: types vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
 // splat_photons (seed 003 section 24.3, Eqs. 2-9): a thread per stored photon adds its
 // ellipsoid splat's irradiance times each covered receiver pixel's area to the photon map
 // in fixed point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_photon) and
@@ -96,7 +96,8 @@ fn splat_photon(p: SplatParams, ph: GiPhoton) {
             splat.flux = e * area;
             splat.direction = 0u;
             deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
-            if (p.light_direction != 0u) {
+            if (p.light_direction != 0u &&
+                shading_normal_departs(t.normal, unpack_unit_vector(t.geometric_normal))) {
                 deposit_light_direction(q, light_direction_deposit(e * area, to_light),
                                         p.flux_quantum);
             }

@@ -15,7 +15,7 @@ use caustica_core::kernels::VISIBLE_TOLERANCE;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::irradiance_filter::{
-    light_direction_deposit, mean_light_direction, shading_normal_factor,
+    light_direction_deposit, mean_light_direction, shading_normal_departs, shading_normal_factor,
 };
 use caustica_core::math::map_gather::join_u64_f32;
 use caustica_core::math::optics::{
@@ -522,7 +522,12 @@ fn splat_photon(
                 ..Default::default()
             };
             deposit_photon_texel(map, q, &splat, p.flux_quantum, 1.0, c);
-            if p.light_direction != 0 {
+            if p.light_direction != 0
+                && shading_normal_departs(
+                    Vec3::from(t.normal),
+                    unpack_unit_vector(t.geometric_normal),
+                )
+            {
                 // Eq. 20's power-weighted light direction, in the flux's quanta; its
                 // rounding is not counted (the flux's own deposit counts it)
                 let (d, w) = light_direction_deposit(e * area, to_light);
@@ -561,7 +566,11 @@ pub fn shading_normal_correction(
             let t = g.load_gbuffer(i);
             let d = directions.load(i);
             let w = join_u64_f32(d.hit_distance[0], d.hit_distance[1]);
-            if t.flags & gbuffer_flags::RECEIVER == 0 || !(w > 0.0) {
+            let (n_s, n_g) = (Vec3::from(t.normal), unpack_unit_vector(t.geometric_normal));
+            if t.flags & gbuffer_flags::RECEIVER == 0
+                || !(w > 0.0)
+                || !shading_normal_departs(n_s, n_g)
+            {
                 return v;
             }
             let sums = Vec3::new(
@@ -573,13 +582,7 @@ pub fn shading_normal_correction(
             if w_i == Vec3::ZERO {
                 return v;
             }
-            let f = shading_normal_factor(
-                w_i,
-                Vec3::from(t.normal),
-                unpack_unit_vector(t.geometric_normal),
-                p.max_stretch,
-                p.epsilon,
-            );
+            let f = shading_normal_factor(w_i, n_s, n_g, p.max_stretch, p.epsilon);
             [v[0] * f, v[1] * f, v[2] * f, v[3]]
         })
         .collect()
@@ -629,7 +632,11 @@ mod tests {
                     position: (Vec3::from(cam.position) + t * d).to_array(),
                     depth: t * d.dot(Vec3::from(cam.forward)),
                     normal: [0.0, 1.0, 0.0],
-                    geometric_normal: caustica_core::math::packing::pack_unit_vector(Vec3::Y),
+                    // a geometric normal 3 degrees off the shading one, so that Eq. 20's
+                    // direction map is written
+                    geometric_normal: caustica_core::math::packing::pack_unit_vector(
+                        Vec3::new(0.05, 1.0, 0.0).normalize(),
+                    ),
                     albedo: [1.0; 3],
                     material: 0,
                     uv: [0.0; 2],

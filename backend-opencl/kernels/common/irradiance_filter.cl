@@ -53,6 +53,12 @@ inline float3 atrous_final(float3 s_n, float3 clipped_details) {
     return fmax(s_n - clipped_details, (float3)(0.0f));
 }
 
+// irradiance_filter::shading_normal_departs (SHADING_DEPARTURE = 1e-3).
+inline bool shading_normal_departs(float3 n_s, float3 n_g) {
+    float3 d = fabs(n_s - n_g);
+    return fmax(d.x, fmax(d.y, d.z)) > 1e-3f;
+}
+
 // irradiance_filter::mean_light_direction: normalize(2 d - w), zero where it has no length.
 inline float3 mean_light_direction(float3 d, float w) {
     float3 v = 2.0f * d - (float3)(w);

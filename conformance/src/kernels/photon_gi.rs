@@ -42,14 +42,15 @@ use crate::harness::tolerance::{
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_gbuffer, read_photon_map, Backend};
 use caustica_core::device::layout::{
-    counter, CorrectionParams, DepositTexel, GBufferTexel, GiPhoton, GpuCamera, RsmParams,
-    RsmPhoton, RsmTexel, SplatParams,
+    counter, gbuffer_flags, CorrectionParams, DepositTexel, GBufferTexel, GiPhoton, GpuCamera,
+    RsmParams, RsmPhoton, RsmTexel, SplatParams,
 };
 use caustica_core::kernels::{
     PrimaryGbuffer, RsmImportance, SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
 };
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::gi_photon::{gi_store, screen_tiles};
+use caustica_core::math::irradiance_filter::shading_normal_departs;
 use caustica_core::math::packing::unpack_unit_vector;
 use caustica_core::math::rsm::{level_count, pyramid_len};
 use caustica_core::recording::Recording;
@@ -584,6 +585,19 @@ pub fn check_photon_gi(
                 glam::Vec3::from_array([0, 1, 2].map(|ch| 2.0 * join_u64(t.flux[ch]) as f32 - w));
             let g = &inputs.gbuffer[k];
             let ng = unpack_unit_vector(g.geometric_normal);
+            // where Eq. 20 does not apply (no receiver, no splat, or a shading normal that
+            // does not depart from the geometric one: exact decisions on the same
+            // G-buffer) the input passes through bitwise
+            let applies = g.flags & gbuffer_flags::RECEIVER != 0
+                && w > 0.0
+                && shading_normal_departs(glam::Vec3::from(g.normal), ng);
+            if !applies {
+                let ok = y.map(f32::to_bits) == input[k].map(f32::to_bits);
+                if !ok && correction_bad.len() < 3 {
+                    correction_bad.push(format!("pixel {k}: {y:?}, input {:?} kept", input[k]));
+                }
+                continue;
+            }
             let (f, den) = (
                 x[0] / input[k][0],
                 v.normalize_or_zero().dot(ng).max(0.0) + 1e-4,

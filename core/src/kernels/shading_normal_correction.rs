@@ -14,7 +14,9 @@ use crate::device::layout::CorrectionParams;
 /// [`crate::math::irradiance_filter::mean_light_direction`]) and Eq. 20's factor
 /// `min(max(0, w_i . n_s) / (w_i . n_g + eps), s_max)` with the G-buffer's shading and
 /// geometric normals: `out.rgb = input.rgb x factor` (radiance, W/(sr m^2)), `out.a =
-/// input.a`. A pixel that is no receiver or got no splat keeps its input.
+/// input.a`. A pixel that is no receiver, got no splat, or whose shading normal does not
+/// depart from its geometric one
+/// ([`crate::math::irradiance_filter::shading_normal_departs`]) keeps its input.
 #[derive(Clone, Copy, Debug)]
 pub struct ShadingNormalCorrection {
     /// Image size, `s_max`, `eps`.

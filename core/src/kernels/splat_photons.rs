@@ -16,8 +16,9 @@ use crate::math::gi_photon::screen_tiles;
 /// exact integer atomics (so `resolve_caustics` turns the sum back into `E x albedo /
 /// pi`). A splat reaching past `max_splat_px` is clipped there and counted
 /// (`counter::SATURATED`); a photon that packs to zero power is skipped. With
-/// `params.light_direction` each contribution also adds its light direction to
-/// `direction_map` (Eq. 20's power-weighted `w_i`,
+/// `params.light_direction` each contribution to a pixel whose shading normal departs from
+/// its geometric one ([`crate::math::irradiance_filter::shading_normal_departs`]) also adds
+/// its light direction to `direction_map` (Eq. 20's power-weighted `w_i`,
 /// [`crate::math::irradiance_filter::light_direction_deposit`]), exactly as the flux;
 /// without, `direction_map` (one texel will do) is not touched.
 #[derive(Clone, Copy, Debug)]

@@ -154,6 +154,21 @@ pub fn light_direction_deposit(flux: Vec3, to_light: Vec3) -> (Vec3, f32) {
     ((to_light + Vec3::ONE) * (0.5 * w), w)
 }
 
+/// Least per-axis difference between a pixel's shading normal and its (decoded) geometric
+/// normal for which Eq. 20 is applied: 1e-3, ten times the snorm16 octahedral code's
+/// error (~1e-4), so a flat surface (shading = geometric normal) is never corrected. Below
+/// it the factor departs from 1 by less than ~1e-3 (the light's tangent times it).
+pub const SHADING_DEPARTURE: f32 = 1e-3;
+
+/// Whether Eq. 20 applies at a pixel: its shading normal `n_s` departs from its geometric
+/// normal `n_g` by more than [`SHADING_DEPARTURE`] on some axis (exact operations, so every
+/// backend decides alike on the same G-buffer). `splat_photons` deposits light directions
+/// only there, `shading_normal_correction` corrects only there.
+#[inline]
+pub fn shading_normal_departs(n_s: Vec3, n_g: Vec3) -> bool {
+    (n_s - n_g).abs().max_element() > SHADING_DEPARTURE
+}
+
 /// The unit mean light direction from a pixel's direction sums: `d` holds the summed
 /// `w (d + 1) / 2` per axis and `w` the summed weights (any common unit); the result is
 /// `normalize(2 d - w)`, zero where the weights cancel or are zero.

@@ -64,6 +64,12 @@ fn atrous_final(s_n: vec3<f32>, clipped_details: vec3<f32>) -> vec3<f32> {
     return max(s_n - clipped_details, vec3<f32>(0.0f));
 }
 
+// irradiance_filter::shading_normal_departs (SHADING_DEPARTURE = 1e-3).
+fn shading_normal_departs(n_s: vec3<f32>, n_g: vec3<f32>) -> bool {
+    let d = abs(n_s - n_g);
+    return max(d.x, max(d.y, d.z)) > 1e-3f;
+}
+
 // irradiance_filter::mean_light_direction: normalize(2 d - w), zero where it has no length.
 fn mean_light_direction(d: vec3<f32>, w: f32) -> vec3<f32> {
     let v = 2.0f * d - vec3<f32>(w);
