@@ -107,3 +107,121 @@ pub fn record_atrous(
         input = target;
     }
 }
+
+/// The temporal blend's own buffers: blended images and edge texels (ping-pong) and the
+/// camera they were rendered with.
+#[derive(Clone, Copy, Debug)]
+pub struct TemporalHistory {
+    /// Blended images.
+    pub image: PingPong<[f32; 4]>,
+    /// Edge texels.
+    pub edge: PingPong<[f32; 4]>,
+    /// The history's camera.
+    pub previous: GpuCamera,
+}
+
+/// A technique's opt-in temporal blend and A-Trous iterations over one camera-space image
+/// (CausticMap's caustics): their buffers, the image the technique writes its unfiltered
+/// result into, the recording, and the history's bookkeeping between frames.
+#[derive(Clone, Copy, Debug)]
+pub struct FilterChain {
+    /// The temporal blend's history (blended images, edge texels) and its camera.
+    pub temporal: Option<TemporalHistory>,
+    /// The unfiltered image (the technique's result) when a filter runs.
+    pub unfiltered: Option<ImageBuf>,
+    /// The A-Trous iterations' input (the blended image with the temporal blend) and
+    /// scratch.
+    pub atrous: Option<(ImageBuf, AtrousScratch)>,
+}
+
+impl FilterChain {
+    /// Records the creation of the buffers for `pixels` pixels seen by `camera`: the
+    /// temporal blend's history when `temporal`, the A-Trous scratch when `atrous`.
+    pub fn create(
+        rec: &mut Recording,
+        pixels: u32,
+        camera: GpuCamera,
+        temporal: bool,
+        atrous: bool,
+    ) -> FilterChain {
+        FilterChain {
+            temporal: temporal.then(|| TemporalHistory {
+                image: PingPong::create(rec, pixels, "temporal history image"),
+                edge: PingPong::create(rec, pixels, "temporal edge history image"),
+                previous: camera,
+            }),
+            unfiltered: (temporal || atrous).then(|| rec.create(pixels, "unfiltered image")),
+            atrous: atrous.then(|| {
+                (
+                    rec.create(pixels, "A-Trous input image"),
+                    AtrousScratch {
+                        a: rec.create(pixels, "A-Trous image a"),
+                        b: rec.create(pixels, "A-Trous image b"),
+                        details: rec.create(pixels, "A-Trous clipped details image"),
+                    },
+                )
+            }),
+        }
+    }
+
+    /// The image the technique writes its unfiltered result into when the chain's output
+    /// is `out`: `out` itself when no filter runs.
+    pub fn input(&self, out: ImageBuf) -> ImageBuf {
+        self.unfiltered.unwrap_or(out)
+    }
+
+    /// Records the blend (from the unfiltered image) and the iterations, the last pass
+    /// writing `out`; nothing when no filter runs.
+    pub fn record(
+        &self,
+        rec: &mut Recording,
+        camera: GpuCamera,
+        gbuffer: GBufferPlanes,
+        (iterations, clip_sigmas): (u32, f32),
+        out: ImageBuf,
+    ) {
+        let Some(unfiltered) = self.unfiltered else {
+            return;
+        };
+        let blended = self.atrous.map_or(out, |(input, _)| input);
+        let mut next = unfiltered;
+        if let Some(t) = &self.temporal {
+            let history = History {
+                image: &t.image,
+                edge: &t.edge,
+                previous: t.previous,
+            };
+            record_temporal_blend(rec, camera, gbuffer, history, unfiltered, blended);
+            next = blended;
+        }
+        if let Some((_, scratch)) = self.atrous {
+            record_atrous(
+                rec,
+                camera,
+                gbuffer,
+                scratch,
+                iterations,
+                clip_sigmas,
+                next,
+                out,
+            );
+        }
+    }
+
+    /// After a frame seen by `camera`: its blend becomes the next frame's history.
+    pub fn end_frame(&mut self, camera: GpuCamera) {
+        if let Some(t) = &mut self.temporal {
+            t.image.swap();
+            t.edge.swap();
+            t.previous = camera;
+        }
+    }
+
+    /// Forgets the history (the next frame is not blended).
+    pub fn reset(&mut self) {
+        if let Some(t) = &mut self.temporal {
+            t.image.reset();
+            t.edge.reset();
+        }
+    }
+}

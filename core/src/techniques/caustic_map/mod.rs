@@ -48,6 +48,7 @@ use crate::frame::allocation::planned_allocation;
 use crate::frame::caustic_atlas::{AtlasLayout, AtlasReceivers};
 use crate::frame::error::Error;
 use crate::frame::image::Image;
+use crate::frame::irradiance_passes::FilterChain;
 use crate::frame::plan::{FramePlan, PassPlan, SceneFeatures};
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
@@ -114,6 +115,8 @@ struct Images {
     raw: Option<ImageBuf>,
     filtered: Option<ImageBuf>,
     composite: Option<ImageBuf>,
+    /// The opt-in temporal blend and A-Trous iterations on the filtered caustics.
+    filters: Option<FilterChain>,
 }
 
 /// One output image of CausticMap: the names are Sspm's, so that both write the same
@@ -523,13 +526,25 @@ impl CausticMap {
         let caustics = self.atlas.is_some();
         let mut rec = Recording::new();
         let direct_needed = keep(o.direct || o.composite);
+        let s = &self.settings;
+        let filtered_needed = caustics && keep(o.filtered_caustics || o.composite);
+        let filters = (filtered_needed && (s.temporal || s.atrous_iterations > 0)).then(|| {
+            FilterChain::create(
+                &mut rec,
+                pixels,
+                self.camera,
+                s.temporal,
+                s.atrous_iterations > 0,
+            )
+        });
         let images = Images {
-            gbuffer: direct_needed.then(|| rec.create_gbuffer(pixels)),
+            // direct light and the filters' edge stopping read the camera's G-buffer
+            gbuffer: (direct_needed || filters.is_some()).then(|| rec.create_gbuffer(pixels)),
+            filters,
             direct: direct_needed.then(|| rec.create(pixels, "direct image")),
             raw: (caustics && keep(o.raw_caustics))
                 .then(|| rec.create(pixels, "raw caustics image")),
-            filtered: (caustics && keep(o.filtered_caustics || o.composite))
-                .then(|| rec.create(pixels, "filtered caustics image")),
+            filtered: filtered_needed.then(|| rec.create(pixels, "filtered caustics image")),
             composite: (caustics && keep(o.composite))
                 .then(|| rec.create(pixels, "composite image")),
         };
@@ -595,8 +610,8 @@ impl CausticMap {
         pass(
             "primary_gbuffer",
             i.gbuffer.is_some(),
-            "direct light reads the G-buffer",
-            "neither direct light nor the composite was requested",
+            "direct light or the temporal and A-Trous filters read the G-buffer",
+            "neither direct light nor the composite nor a filter was requested",
         );
         pass(
             "direct_light",
@@ -664,6 +679,27 @@ impl CausticMap {
                 "no camera-space caustic output was requested"
             } else {
                 why_no_atlas
+            },
+        );
+        let chain = i.filters;
+        pass(
+            "temporal_blend",
+            chain.is_some_and(|f| f.temporal.is_some()),
+            "setting temporal: the filtered caustics over reprojected history",
+            if self.settings.temporal {
+                "no filtered caustics are made"
+            } else {
+                "temporal off"
+            },
+        );
+        pass(
+            "atrous_filter",
+            chain.is_some_and(|f| f.atrous.is_some()),
+            "setting atrous_iterations, on the filtered caustics as the camera sees them",
+            if self.settings.atrous_iterations > 0 {
+                "no filtered caustics are made"
+            } else {
+                "atrous_iterations = 0"
             },
         );
         pass(
@@ -1018,12 +1054,14 @@ impl CausticMap {
         let cam = self.camera;
         let i = self.images;
         let mut rec = Recording::new();
-        if let (Some(g), Some(direct)) = (i.gbuffer, i.direct) {
+        if let Some(g) = i.gbuffer {
             rec.kernel(PrimaryGbuffer {
                 scene: self.scene,
                 camera: cam,
                 gbuffer: g,
             });
+        }
+        if let (Some(g), Some(direct)) = (i.gbuffer, i.direct) {
             rec.kernel(DirectLight {
                 scene: self.scene,
                 params: DirectParams {
@@ -1045,7 +1083,13 @@ impl CausticMap {
                 min_weight: 1e-3,
                 fresnel_model: self.settings.fresnel.kernel_value(),
             };
-            for (map, out) in [(Some(a.map), i.filtered), (a.raw_map, i.raw)] {
+            // the filtered caustics through the opt-in temporal blend and A-Trous
+            // iterations: the lookup writes the chain's input
+            let into = |out: Option<ImageBuf>| match (i.filters, out) {
+                (Some(f), Some(o)) => Some(f.input(o)),
+                _ => out,
+            };
+            for (map, out) in [(Some(a.map), into(i.filtered)), (a.raw_map, i.raw)] {
                 if let (Some(map), Some(out)) = (map, out) {
                     rec.kernel(CausticMapLookup {
                         scene: self.scene,
@@ -1058,6 +1102,11 @@ impl CausticMap {
                     });
                 }
             }
+            if let (Some(f), Some(filtered), Some(g)) = (i.filters, i.filtered, i.gbuffer) {
+                let s = &self.settings;
+                let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
+                f.record(&mut rec, cam, g, iterations, filtered);
+            }
             if let (Some(direct), Some(filtered), Some(out)) = (i.direct, i.filtered, i.composite) {
                 rec.kernel(Composite {
                     direct,
@@ -1067,6 +1116,9 @@ impl CausticMap {
             }
         }
         Self::run(backend, &rec, &mut stats)?;
+        if let Some(f) = &mut self.images.filters {
+            f.end_frame(cam);
+        }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = &self.reference {
             let filtered = self.read_output(backend, "caustics_filtered")?;
@@ -1256,6 +1308,9 @@ impl CausticMap {
         self.model = model;
         self.emission = emission;
         self.atlas_valid = false;
+        if let Some(f) = &mut self.images.filters {
+            f.reset();
+        }
         let f = self.plan.features;
         self.replan(f.mirrors || f.dielectrics, true);
         Ok(())
@@ -1287,10 +1342,14 @@ impl CausticMap {
         backend.execute(&rec)?;
         self.model = u.model;
         self.atlas_valid = false;
+        if let Some(f) = &mut self.images.filters {
+            f.reset();
+        }
         Ok(())
     }
 
-    /// Sets the frame seed; the atlas is remade on the next frame.
+    /// Sets the frame seed; the atlas is remade on the next frame (the temporal history
+    /// is kept: accumulating over seeds is what it is for).
     pub fn set_seed(&mut self, seed: u32) {
         if seed != self.settings.seed {
             self.settings.seed = seed;

@@ -188,6 +188,20 @@ pub struct CausticMapSettings {
     pub outputs: CausticMapOutputs,
     /// Leave out passes and buffers the requested outputs and the scene do not need.
     pub prune: bool,
+    /// Accumulate the filtered caustics over frames (seed 003's temporal blend, the shared
+    /// `temporal_blend` pass, as Sspm's `temporal`): useful when the seed changes every
+    /// frame, each frame then a new set of photons. Off by default. The history survives
+    /// camera moves (it is reprojected) and seed changes, and is forgotten when the
+    /// lights, materials or image size change.
+    pub temporal: bool,
+    /// Iterations of the edge-avoiding A-Trous filter with variance clipping (seed 003
+    /// section 24.4.2, the shared `atrous_filter` pass) on the filtered (and, with
+    /// `temporal`, blended) caustics as the camera sees them: 0 (the default) runs none.
+    /// At most 8.
+    pub atrous_iterations: u32,
+    /// Standard deviations of the A-Trous kernel's values a detail coefficient may keep
+    /// (Eq. 18's bounds; 1 by default).
+    pub atrous_clip_sigmas: f32,
     /// Largest scene, in triangles, the technique accepts.
     pub max_triangles: u64,
     /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), the
@@ -220,6 +234,9 @@ impl Default for CausticMapSettings {
             max_photons_per_batch: 1 << 20,
             outputs: CausticMapOutputs::default(),
             prune: true,
+            temporal: false,
+            atrous_iterations: 0,
+            atrous_clip_sigmas: 1.0,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
             max_atlas_bytes: 4 << 30,
         }
@@ -292,6 +309,12 @@ impl CausticMapSettings {
         }
         if self.max_triangles == 0 {
             return bad("max_triangles must be >= 1".into());
+        }
+        if self.atrous_iterations > 8 {
+            return bad("atrous_iterations must be at most 8".into());
+        }
+        if !(self.atrous_clip_sigmas >= 0.0 && self.atrous_clip_sigmas.is_finite()) {
+            return bad("atrous_clip_sigmas must be a finite number >= 0".into());
         }
         if !self.outputs.any() {
             return bad("outputs: at least one output must be requested".into());
