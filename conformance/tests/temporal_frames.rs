@@ -277,6 +277,23 @@ fn caustic_map_opts_into_the_temporal_blend_and_atrous() {
             &cm(serde_json::json!({ "atrous_iterations": 4 })),
             1000..1008,
         );
+        // both in a chain (the blend writes the iterations' input): with every detail kept
+        // (a huge clip bound) the same as the blend alone (Eq. 17), within rounding
+        let chain = run(
+            b,
+            &cm(serde_json::json!({
+                "temporal": true, "atrous_iterations": 2, "atrous_clip_sigmas": 1e30
+            })),
+            0..4,
+        );
+        let same = chain[3]
+            .iter()
+            .zip(&blended[3])
+            .all(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() <= 1e-4 * q[c].abs() + 1e-6));
+        assert!(
+            same,
+            "{name}: the chain with every detail kept differs from the blend alone"
+        );
         let atrous_err = single_error(&atrous, &reference);
         let kept = atrous.iter().map(|i| flux(i)).sum::<f64>()
             / singles[..8].iter().map(|i| flux(i)).sum::<f64>();

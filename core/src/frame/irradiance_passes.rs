@@ -129,8 +129,8 @@ pub struct FilterChain {
     pub temporal: Option<TemporalHistory>,
     /// The unfiltered image (the technique's result) when a filter runs.
     pub unfiltered: Option<ImageBuf>,
-    /// The A-Trous iterations' input (the blended image with the temporal blend) and
-    /// scratch.
+    /// The A-Trous iterations' input (the blend's output with the temporal blend, else
+    /// the unfiltered image) and scratch.
     pub atrous: Option<(ImageBuf, AtrousScratch)>,
 }
 
@@ -144,16 +144,22 @@ impl FilterChain {
         temporal: bool,
         atrous: bool,
     ) -> FilterChain {
+        let unfiltered = (temporal || atrous).then(|| rec.create(pixels, "unfiltered image"));
         FilterChain {
             temporal: temporal.then(|| TemporalHistory {
                 image: PingPong::create(rec, pixels, "temporal history image"),
                 edge: PingPong::create(rec, pixels, "temporal edge history image"),
                 previous: camera,
             }),
-            unfiltered: (temporal || atrous).then(|| rec.create(pixels, "unfiltered image")),
+            unfiltered,
             atrous: atrous.then(|| {
                 (
-                    rec.create(pixels, "A-Trous input image"),
+                    // the blend's output; without the blend the iterations read the
+                    // unfiltered image itself
+                    match unfiltered {
+                        Some(u) if !temporal => u,
+                        _ => rec.create(pixels, "A-Trous input image"),
+                    },
                     AtrousScratch {
                         a: rec.create(pixels, "A-Trous image a"),
                         b: rec.create(pixels, "A-Trous image b"),
