@@ -121,7 +121,7 @@ pub struct TemporalHistory {
 }
 
 /// A technique's opt-in temporal blend and A-Trous iterations over one camera-space image
-/// (CausticMap's caustics): their buffers, the image the technique writes its unfiltered
+/// (Sspm's and CausticMap's caustics): their buffers, the image the technique writes its unfiltered
 /// result into, the recording, and the history's bookkeeping between frames.
 #[derive(Clone, Copy, Debug)]
 pub struct FilterChain {

@@ -36,13 +36,10 @@ use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
 use crate::frame::error::Error;
 use crate::frame::image::Image;
-use crate::frame::irradiance_passes::{
-    record_atrous, record_temporal_blend, AtrousScratch, History,
-};
+use crate::frame::irradiance_passes::FilterChain;
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
-use crate::frame::temporal::PingPong;
 use crate::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
     PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
@@ -81,36 +78,6 @@ struct PhotonBuffers {
     counters: Buf<u32>,
 }
 
-/// The temporal accumulation's buffers (`SspmSettings::temporal`): the history of the
-/// blended caustics and of the edge texels (ping-pong), the filter's unblended result and
-/// the camera the history was rendered with.
-#[derive(Clone, Copy, Debug)]
-struct TemporalBuffers {
-    image: PingPong<[f32; 4]>,
-    edge: PingPong<[f32; 4]>,
-    unblended: ImageBuf,
-    previous: GpuCamera,
-}
-
-/// The A-Trous iterations' buffers (`SspmSettings::atrous_iterations`): their input (the
-/// filtered, or blended, caustics), two images the iterations alternate between, and the
-/// running sum of clipped detail coefficients.
-#[derive(Clone, Copy, Debug)]
-struct AtrousBuffers {
-    input: ImageBuf,
-    a: ImageBuf,
-    b: ImageBuf,
-    details: ImageBuf,
-}
-
-impl TemporalBuffers {
-    /// Forgets the history (the next frame is not blended).
-    fn reset(&mut self) {
-        self.image.reset();
-        self.edge.reset();
-    }
-}
-
 /// Device buffers of the filter (exist only when filtered caustics are needed).
 #[derive(Clone, Copy, Debug)]
 enum GatherBuffers {
@@ -139,8 +106,8 @@ pub struct Sspm {
     gbuffer: GBufferPlanes,
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
-    temporal: Option<TemporalBuffers>,
-    atrous: Option<AtrousBuffers>,
+    /// The opt-in temporal blend and A-Trous iterations on the filtered caustics.
+    filters: Option<FilterChain>,
     images: FrameImages,
     /// Every image buffer the plan created, by [`Output`], requested or not.
     image_buffers: [Option<ImageBuf>; 4],
@@ -184,8 +151,8 @@ struct FrameParts {
     gbuffer: GBufferPlanes,
     photon: Option<PhotonBuffers>,
     gather: Option<GatherBuffers>,
-    temporal: Option<TemporalBuffers>,
-    atrous: Option<AtrousBuffers>,
+    /// The opt-in temporal blend and A-Trous iterations on the filtered caustics.
+    filters: Option<FilterChain>,
     images: FrameImages,
     image_buffers: [Option<ImageBuf>; 4],
     owned: Vec<ResourceId>,
@@ -280,8 +247,7 @@ impl Sspm {
             gbuffer: parts.gbuffer,
             photon: parts.photon,
             gather: parts.gather,
-            temporal: parts.temporal,
-            atrous: parts.atrous,
+            filters: parts.filters,
             images: parts.images,
             image_buffers: parts.image_buffers,
             owned: parts.owned,
@@ -429,18 +395,9 @@ impl Sspm {
         let filtered_caustics = needs
             .gather
             .then(|| rec.create(pixels, "filtered caustics image"));
-        let temporal = plan.runs("temporal_blend").then(|| TemporalBuffers {
-            image: PingPong::create(&mut rec, pixels, "temporal caustics history"),
-            edge: PingPong::create(&mut rec, pixels, "temporal edge history"),
-            unblended: rec.create(pixels, "unblended caustics image"),
-            previous: camera,
-        });
-        let atrous = plan.runs("atrous_filter").then(|| AtrousBuffers {
-            input: rec.create(pixels, "A-Trous input image"),
-            a: rec.create(pixels, "A-Trous image a"),
-            b: rec.create(pixels, "A-Trous image b"),
-            details: rec.create(pixels, "A-Trous clipped details"),
-        });
+        let (temporal, atrous) = (plan.runs("temporal_blend"), plan.runs("atrous_filter"));
+        let filters = (temporal || atrous)
+            .then(|| FilterChain::create(&mut rec, pixels, camera, temporal, atrous));
         let own_composite = needs
             .composite
             .then(|| rec.create(pixels, "composite image"));
@@ -490,8 +447,7 @@ impl Sspm {
             gbuffer,
             photon,
             gather,
-            temporal,
-            atrous,
+            filters,
             images,
             image_buffers: [own_composite, direct, raw_caustics, filtered_caustics],
             owned: allocation.owned,
@@ -508,8 +464,7 @@ impl Sspm {
         self.gbuffer = p.gbuffer;
         self.photon = p.photon;
         self.gather = p.gather;
-        self.temporal = p.temporal;
-        self.atrous = p.atrous;
+        self.filters = p.filters;
         self.images = p.images;
         self.image_buffers = p.image_buffers;
         self.owned = p.owned;
@@ -526,8 +481,7 @@ impl Sspm {
         self.bytes = self.scene_bytes;
         self.photon = None;
         self.gather = None;
-        self.temporal = None;
-        self.atrous = None;
+        self.filters = None;
         self.adaptive_frame = None;
         self.image_buffers = [None; 4];
         backend.execute(&rec)?;
@@ -796,8 +750,7 @@ impl Sspm {
             if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
                 // the filter, then the temporal blend, then the A-Trous iterations, each
                 // opt-in; the last that runs writes `filtered`
-                let blended = self.atrous.map_or(filtered, |a| a.input);
-                let last = self.temporal.map_or(blended, |t| t.unblended);
+                let last = self.filters.map_or(filtered, |f| f.input(filtered));
                 let gather = self.constants.gather_params(cam, &self.settings, 0);
                 let columns = GatherParams { axis: 1, ..gather };
                 match g {
@@ -864,37 +817,10 @@ impl Sspm {
                         });
                     }
                 }
-                if let Some(t) = &self.temporal {
-                    let history = History {
-                        image: &t.image,
-                        edge: &t.edge,
-                        previous: t.previous,
-                    };
-                    record_temporal_blend(
-                        &mut rec,
-                        cam,
-                        self.gbuffer,
-                        history,
-                        t.unblended,
-                        blended,
-                    );
-                }
-                if let Some(a) = self.atrous {
-                    let scratch = AtrousScratch {
-                        a: a.a,
-                        b: a.b,
-                        details: a.details,
-                    };
-                    record_atrous(
-                        &mut rec,
-                        cam,
-                        self.gbuffer,
-                        scratch,
-                        self.settings.atrous_iterations,
-                        self.settings.atrous_clip_sigmas,
-                        a.input,
-                        filtered,
-                    );
+                if let Some(f) = &self.filters {
+                    let s = &self.settings;
+                    let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
+                    f.record(&mut rec, cam, self.gbuffer, iterations, filtered);
                 }
                 if let (true, Some(direct), Some(out)) = (
                     Needs::of_plan(&self.plan).composite,
@@ -933,10 +859,8 @@ impl Sspm {
                 a.traversal.output_stats(backend, q, &mut stats, adaptive)?;
             }
             // this frame's blend is the next frame's history
-            if let Some(t) = &mut self.temporal {
-                t.image.swap();
-                t.edge.swap();
-                t.previous = cam;
+            if let Some(f) = &mut self.filters {
+                f.end_frame(cam);
             }
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -1142,8 +1066,8 @@ impl Sspm {
         let mut rec = Recording::new();
         rec.update(self.scene.lights, &gpu, "lights")?;
         backend.execute(&rec)?;
-        if let Some(t) = &mut self.temporal {
-            t.reset();
+        if let Some(f) = &mut self.filters {
+            f.reset();
         }
         self.model = model;
         self.constants = constants;
@@ -1172,8 +1096,8 @@ impl Sspm {
         backend.execute(&rec)?;
         if u.same_plan {
             self.model = u.model;
-            if let Some(t) = &mut self.temporal {
-                t.reset();
+            if let Some(f) = &mut self.filters {
+                f.reset();
             }
             return Ok(());
         }
