@@ -164,6 +164,32 @@ impl FrameStats {
         *self.pass_ms.entry(name.into()).or_default() += ms;
     }
 
+    /// Fills the photon accounting from the device's photon counters `c`
+    /// ([`crate::device::layout::counter`], `counter::WORDS` words as read back); a
+    /// counter a technique's kernels never bump reads 0. Stored flux in W from the
+    /// counters' fixed-point units of `flux_quantum`.
+    pub fn read_counters(&mut self, c: &[u32], flux_quantum: f32) {
+        use crate::device::layout::counter;
+        let word = |i: usize| c.get(i).copied().unwrap_or(0) as u64;
+        let c64 =
+            |i: usize| crate::math::fixed_point::join_u64([word(i) as u32, word(i + 1) as u32]);
+        self.photons_stored = word(counter::STORED);
+        self.photons_deposited = word(counter::DEPOSITED);
+        self.discarded.no_specular = word(counter::NO_SPECULAR);
+        self.discarded.escaped = word(counter::ESCAPED);
+        self.discarded.negligible_power = word(counter::NEGLIGIBLE);
+        self.discarded.bounce_limit = word(counter::BOUNCE_LIMIT);
+        self.discarded.off_screen = word(counter::OFF_SCREEN);
+        self.discarded.depth_mismatch = word(counter::DEPTH_MISMATCH);
+        self.fixed_point_underflow = word(counter::UNDERFLOW);
+        self.fixed_point_saturated = word(counter::SATURATED);
+        self.photon_rays_traced = c64(counter::RAYS);
+        self.photon_splits = word(counter::SPLITS);
+        for ch in 0..3 {
+            self.stored_flux[ch] = c64(counter::STORED_FLUX + 2 * ch) as f64 * flux_quantum as f64;
+        }
+    }
+
     /// Adds the pass times (and dispatches) of `other` to this frame's: work the frame
     /// did twice, counted once in the accounting and twice in the time.
     pub fn absorb_pass_times(&mut self, other: &FrameStats) {

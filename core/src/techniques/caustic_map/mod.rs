@@ -56,7 +56,6 @@ use crate::kernels::{
     CausticMapLookup, Composite, DensityGather, DepositAtlas, DirectLight, GatherCausticMap,
     GatherFootprint, PhotonCountTable, PrimaryGbuffer, TracePhotons, TraceVariant,
 };
-use crate::math::fixed_point::join_u64;
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
 use crate::techniques::adaptive_caustics::{
@@ -849,22 +848,7 @@ impl CausticMap {
         }
         Self::run(backend, &rec, stats)?;
         let c = read_buf(backend, a.counters)?;
-        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
-        stats.photons_stored = c[counter::STORED] as u64;
-        stats.photons_deposited = c[counter::DEPOSITED] as u64;
-        stats.discarded.no_specular = c[counter::NO_SPECULAR] as u64;
-        stats.discarded.escaped = c[counter::ESCAPED] as u64;
-        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
-        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
-        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
-        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
-        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
-        stats.photon_rays_traced = c64(counter::RAYS);
-        stats.photon_splits = c[counter::SPLITS] as u64;
-        for ch in 0..3 {
-            stats.stored_flux[ch] =
-                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.emission.flux_quantum as f64;
-        }
+        stats.read_counters(&c, self.emission.flux_quantum);
         if let Some(t) = traversal {
             t.output_stats(backend, self.emission.flux_quantum, stats, adaptive)?;
         }

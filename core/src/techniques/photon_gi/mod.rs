@@ -44,7 +44,6 @@ use crate::kernels::{
 /// Eq. 20's `epsilon`: keeps the factor finite where the mean light direction grazes the
 /// geometric normal (there `s_max` bounds it anyway).
 pub const SHADING_EPSILON: f32 = 1e-4;
-use crate::math::fixed_point::join_u64;
 use crate::math::gi_photon::{gi_store, screen_tiles};
 use crate::math::rsm::{level_count, level_offset, luminance, pyramid_len};
 use crate::recording::{Recording, Step};
@@ -913,21 +912,7 @@ impl PhotonGi {
         PhotonGi::run(backend, &rec, &mut stats)?;
 
         let c = read_buf(backend, b.counters)?;
-        let c64 = |i: usize| join_u64([c[i], c[i + 1]]);
-        stats.photons_stored = c[counter::STORED] as u64;
-        stats.photons_deposited = c[counter::DEPOSITED] as u64;
-        stats.discarded.escaped = c[counter::ESCAPED] as u64;
-        stats.discarded.negligible_power = c[counter::NEGLIGIBLE] as u64;
-        stats.discarded.bounce_limit = c[counter::BOUNCE_LIMIT] as u64;
-        stats.discarded.off_screen = c[counter::OFF_SCREEN] as u64;
-        stats.discarded.depth_mismatch = c[counter::DEPTH_MISMATCH] as u64;
-        stats.fixed_point_underflow = c[counter::UNDERFLOW] as u64;
-        stats.fixed_point_saturated = c[counter::SATURATED] as u64;
-        stats.photon_rays_traced = c64(counter::RAYS);
-        for ch in 0..3 {
-            stats.stored_flux[ch] =
-                c64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
-        }
+        stats.read_counters(&c, self.flux_quantum);
         if let Some(t) = &mut self.buffers.temporal {
             t.image.swap();
             t.edge.swap();
