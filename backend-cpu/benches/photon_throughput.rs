@@ -15,7 +15,7 @@ use caustica_core::device::device_scene::DeviceScene;
 use caustica_core::frame::emission::{emission_domain, PointEmission};
 use caustica_core::scene::builtin::builtin;
 use caustica_cpu::kernels::trace_photons::{emit_photon, trace_photon_observed, trace_photons};
-use caustica_cpu::traversal::{adopt_bvh, SceneView};
+use caustica_cpu::traversal::SceneView;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3A;
 use obvhs::ray::{Ray, RayHit};
@@ -27,13 +27,12 @@ fn bench(c: &mut Criterion) {
     for name in ["sphere", "cornell"] {
         let scene = builtin(name).unwrap();
         let ds = DeviceScene::build(&scene, Default::default()).expect("built-in scene builds");
-        let bvh = adopt_bvh(&ds.bvh_nodes).unwrap();
         let view = SceneView {
             vertices: &ds.vertices,
             triangles: &ds.triangles,
             materials: &ds.materials,
             lights: &ds.lights,
-            bvh: &bvh,
+            nodes: &ds.bvh_nodes,
         };
         let d = emission_domain(
             &scene.lights[0],
@@ -56,6 +55,18 @@ fn bench(c: &mut Criterion) {
                     v2: p(2),
                 }
             })
+            .collect();
+        // the raw obvhs baseline: its own one-level BVH over the world triangles, leaf
+        // order (its callback's ids)
+        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+            &tris,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        let tris: Vec<Triangle> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| tris[i as usize])
             .collect();
         let rays: Vec<Ray> = (0..n * n)
             .map(|i| {

@@ -37,8 +37,6 @@ use traversal::SceneView;
 /// The CPU backend.
 pub struct CpuBackend {
     buffers: HashMap<ResourceId, Storage>,
-    /// BVHs adopted by `prepare_scene`, by the id of their node buffer.
-    bvhs: HashMap<ResourceId, Arc<obvhs::cwbvh::CwBvh>>,
     pool: Arc<rayon::ThreadPool>,
     threads: usize,
     /// Labels of the kernel variants run so far (see [`Backend::variants`]).
@@ -64,7 +62,6 @@ impl CpuBackend {
         let threads = pool.current_num_threads();
         Ok(CpuBackend {
             buffers: HashMap::new(),
-            bvhs: HashMap::new(),
             pool: Arc::new(pool),
             threads,
             variants: Default::default(),
@@ -74,11 +71,11 @@ impl CpuBackend {
     fn run_kernel(&mut self, k: &Kernel) -> Result<(), BackendError> {
         use kernels::*;
         if let Kernel::PrepareScene(PrepareScene { scene }) = k {
+            // the traversal reads the node buffer in place: only its shape is checked
             let nodes = self
                 .get(scene.bvh_nodes.id)?
                 .as_slice::<[u32; 4]>(scene.bvh_nodes.len)?;
-            let bvh = traversal::adopt_bvh(nodes)?;
-            self.bvhs.insert(scene.bvh_nodes.id, Arc::new(bvh));
+            traversal::check_nodes(nodes)?;
             return Ok(());
         }
         let bufs = &self.buffers;
@@ -95,15 +92,12 @@ impl CpuBackend {
             };
         let view =
             |s: &caustica_core::device::handle::SceneArgs| -> Result<SceneView<'_>, BackendError> {
-                let bvh = self.bvhs.get(&s.bvh_nodes.id).ok_or_else(|| {
-                    BackendError::BadArgument("scene used before prepare_scene".into())
-                })?;
                 Ok(SceneView {
                     vertices: get(s.vertices.id)?.as_slice(s.vertices.len)?,
                     triangles: get(s.triangles.id)?.as_slice(s.triangles.len)?,
                     materials: get(s.materials.id)?.as_slice(s.materials.len)?,
                     lights: get(s.lights.id)?.as_slice(s.lights.len)?,
-                    bvh,
+                    nodes: get(s.bvh_nodes.id)?.as_slice(s.bvh_nodes.len)?,
                 })
             };
         match k {
@@ -674,10 +668,12 @@ impl Backend for CpuBackend {
                     s.write_all(data)?;
                     self.buffers.insert(*id, s);
                 }
+                Step::Write {
+                    id, offset, data, ..
+                } => self.get_mut(*id)?.write_at(*offset, data)?,
                 Step::Clear { id } => self.get_mut(*id)?.clear(),
                 Step::Free { id } => {
                     self.buffers.remove(id);
-                    self.bvhs.remove(id);
                 }
                 Step::Kernel(k) => {
                     if let Some(l) = k.launch()?.filter(|l| !l.constants.is_empty()) {

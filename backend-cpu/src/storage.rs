@@ -76,6 +76,20 @@ impl Storage {
         Ok(())
     }
 
+    /// Writes `data` from byte `offset` on (a `Step::Write`).
+    pub fn write_at(&mut self, offset: u64, data: &[u8]) -> Result<(), BackendError> {
+        let end = offset.checked_add(data.len() as u64);
+        if end.is_none_or(|e| e > self.bytes as u64) {
+            return Err(BackendError::BadArgument(format!(
+                "write of {} bytes at {offset} into a buffer of {}",
+                data.len(),
+                self.bytes
+            )));
+        }
+        self.bytes_mut()[offset as usize..offset as usize + data.len()].copy_from_slice(data);
+        Ok(())
+    }
+
     /// Writes `data` at the start of the buffer.
     pub fn write_prefix<T: bytemuck::Pod>(&mut self, data: &[T]) -> Result<(), BackendError> {
         let src: &[u8] = bytemuck::cast_slice(data);

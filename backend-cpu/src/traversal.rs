@@ -15,14 +15,18 @@ use caustica_core::device::layout::{surface_point, SurfacePoint};
 use caustica_core::device::layout::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
 use caustica_core::math::geometry::WatertightRay;
 // `UVec2`: named by obvhs's `traverse!` macro at its call site.
+use caustica_core::device::acceleration::{instance_flags, SLOT_VEC4S};
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::cwbvh::node::extract_byte64;
-use obvhs::cwbvh::{node::CwBvhNode, CwBvh};
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ray::Ray;
 
 /// Smallest exit distance of a child box that is entered (scene units): 0, i.e. boxes
 /// behind the ray origin are culled, and nothing else (obvhs: 1e-4).
 pub const CWBVH_T_MIN: f32 = 0.0;
+
+/// Depth of the traversal stack (the ports' `TRAVERSAL_STACK_SIZE`).
+const TRAVERSAL_STACK_SIZE: usize = 32;
 
 /// The (near, far) quantized bounds of one axis for a ray whose direction is negative
 /// (`neg`) or not along it.
@@ -74,16 +78,17 @@ pub fn node_hits(node: &CwBvhNode, ray: &Ray, oct_inv4: u32) -> u32 {
 
 /// Borrowed view of a prepared scene.
 pub struct SceneView<'a> {
-    /// Mesh vertices (world space).
+    /// Mesh vertices (world space: instances' vertices transformed).
     pub vertices: &'a [GpuVertex],
-    /// Triangles in BVH leaf order.
+    /// Triangles, level after level, each level's in its BVH's leaf order.
     pub triangles: &'a [GpuTriangle],
     /// Material table.
     pub materials: &'a [GpuMaterial],
     /// Every light of the scene.
     pub lights: &'a [GpuLight],
-    /// The CWBVH adopted by `prepare_scene` (its leaves index `triangles` directly).
-    pub bvh: &'a CwBvh,
+    /// The node buffer as uploaded ([`caustica_core::device::acceleration`]): TLAS,
+    /// instance records, BLASes and object-space positions, read in place.
+    pub nodes: &'a [[u32; 4]],
 }
 
 /// Closest hit: distance, triangle and barycentrics.
@@ -99,22 +104,15 @@ pub struct Hit {
     pub v: f32,
 }
 
-/// Builds an obvhs `CwBvh` from the uploaded node array (5 x `[u32; 4]` per node).
-pub fn adopt_bvh(nodes: &[[u32; 4]]) -> Result<CwBvh, BackendError> {
-    if !nodes.len().is_multiple_of(5) {
+/// Checks that the uploaded node array is a whole number of 80-byte nodes (the
+/// traversal reads it in place).
+pub fn check_nodes(nodes: &[[u32; 4]]) -> Result<(), BackendError> {
+    if !nodes.len().is_multiple_of(SLOT_VEC4S) {
         return Err(BackendError::BadArgument(
             "BVH node buffer is not a whole number of 80-byte nodes".into(),
         ));
     }
-    let nodes: Vec<CwBvhNode> =
-        bytemuck::pod_collect_to_vec(bytemuck::cast_slice::<[u32; 4], u8>(nodes));
-    Ok(CwBvh {
-        nodes,
-        primitive_indices: Vec::new(),
-        total_aabb: obvhs::aabb::Aabb::INVALID,
-        exact_node_aabbs: None,
-        uses_spatial_splits: false,
-    })
+    Ok(())
 }
 
 /// The obvhs ray for a traversal. obvhs's `safe_inverse` maps a zero direction component
@@ -132,10 +130,72 @@ fn traversal_ray(origin: Vec3, dir: Vec3, t_max: f32) -> Ray {
     )
 }
 
+/// `row.xyz . p + row.w` in the order the ports write it (`x*r.x + y*r.y + z*r.z + r.w`,
+/// each product rounded, never fused).
+#[inline(always)]
+fn affine_row(r: [u32; 4], p: Vec3, w: f32) -> f32 {
+    let f = r.map(f32::from_bits);
+    p.x * f[0] + p.y * f[1] + p.z * f[2] + w * f[3]
+}
+
+/// The ray as one level sees it: node-culling ray, its octant and its watertight form.
+#[derive(Clone, Copy)]
+struct LevelRay {
+    ray: Ray,
+    oct_inv4: u32,
+    watertight: WatertightRay,
+}
+
+impl LevelRay {
+    fn new(origin: Vec3, dir: Vec3, t_max: f32) -> Option<LevelRay> {
+        let ray = traversal_ray(origin, dir, t_max);
+        Some(LevelRay {
+            oct_inv4: ray_get_octant_inv4(&ray.direction),
+            watertight: WatertightRay::new(origin, dir)?,
+            ray,
+        })
+    }
+}
+
+/// The ray's inverted octant in every byte (obvhs's private `ray_get_octant_inv4`; the
+/// ports' `octant_inv4`).
+#[inline(always)]
+fn ray_get_octant_inv4(d: &Vec3A) -> u32 {
+    (if d.x < 0.0 { 0 } else { 0x0404_0404 })
+        | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
+        | (if d.z < 0.0 { 0 } else { 0x0101_0101 })
+}
+
+/// obvhs's `firstbithigh`.
+#[inline(always)]
+fn firstbithigh(x: u32) -> u32 {
+    31 - x.leading_zeros()
+}
+
 impl SceneView<'_> {
-    fn tri(&self, i: u32) -> (Vec3, Vec3, Vec3) {
+    fn node(&self, i: u32) -> &CwBvhNode {
+        let at = i as usize * SLOT_VEC4S;
+        bytemuck::from_bytes(bytemuck::cast_slice(&self.nodes[at..at + SLOT_VEC4S]))
+    }
+
+    fn world_triangle(&self, i: u32) -> (Vec3, Vec3, Vec3) {
         let t = &self.triangles[i as usize];
         let p = |k: usize| Vec3::from(self.vertices[t.indices[k] as usize].position);
+        (p(0), p(1), p(2))
+    }
+
+    /// An instance's triangle in object space: vertex index + `position_offset` is the
+    /// position's vec4 in the node buffer.
+    fn object_triangle(&self, i: u32, position_offset: u32) -> (Vec3, Vec3, Vec3) {
+        let t = &self.triangles[i as usize];
+        let p = |k: usize| {
+            let v = self.nodes[t.indices[k].wrapping_add(position_offset) as usize];
+            Vec3::new(
+                f32::from_bits(v[0]),
+                f32::from_bits(v[1]),
+                f32::from_bits(v[2]),
+            )
+        };
         (p(0), p(1), p(2))
     }
 
@@ -150,27 +210,84 @@ impl SceneView<'_> {
     }
 
     /// The closest hit in `0 < t < t_max`, or with `any_hit` the first one found (as the
-    /// ports' `traverse_cwbvh`).
+    /// ports' `traverse_cwbvh`): obvhs's `traverse!` loop over two levels
+    /// ([`caustica_core::device::acceleration`]). A TLAS leaf is an instance record: the
+    /// TLAS's remaining work is pushed, the ray moves into the instance's object space
+    /// (the static level keeps the world ray) and the instance's BLAS root becomes the
+    /// current group; when the stack falls back to where it was on entry, the world ray
+    /// returns. Popped groups with no inner-node bits are primitive groups (the TLAS's
+    /// remaining instances).
     #[inline(always)]
     fn traverse(&self, origin: Vec3, dir: Vec3, t_max: f32, any_hit: bool) -> Option<Hit> {
-        if self.bvh.nodes.is_empty() {
+        if self.nodes.len() < SLOT_VEC4S {
             return None;
         }
-        let watertight = WatertightRay::new(origin, dir)?;
-        let mut ray = traversal_ray(origin, dir, t_max);
+        let world = LevelRay::new(origin, dir, t_max)?;
+        let mut level = world;
+        let mut closest = t_max;
         let mut best: Option<Hit> = None;
-        let mut state = self.bvh.new_traversal(ray.direction);
-        let mut node;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node_hits(node, &ray, state.oct_inv4),
-            {
-                let prim = state.primitive_id;
-                let (a, b, c) = self.tri(prim);
-                if let Some(h) = watertight.intersect(a, b, c, 0.0, ray.tmax) {
-                    ray.tmax = h.t;
+        let mut stack = [UVec2::ZERO; TRAVERSAL_STACK_SIZE];
+        let mut sp = 0usize;
+        let mut current_group = UVec2::new(0, 0x8000_0000);
+        let mut primitive_group = UVec2::ZERO;
+        // in a BLAS: the stack depth on entry and the record's position offset
+        let mut in_blas = false;
+        let mut blas_sp = 0usize;
+        let mut object_space = false;
+        let mut position_offset = 0u32;
+        loop {
+            while primitive_group.y != 0 {
+                let bit = firstbithigh(primitive_group.y);
+                primitive_group.y &= !(1u32 << bit);
+                let prim = primitive_group.x + bit;
+                if !in_blas {
+                    // a TLAS leaf: enter the instance whose record is at slot 2 * prim
+                    if primitive_group.y != 0 && sp < TRAVERSAL_STACK_SIZE {
+                        stack[sp] = primitive_group;
+                        sp += 1;
+                    }
+                    if current_group.y & 0xff00_0000 != 0 && sp < TRAVERSAL_STACK_SIZE {
+                        stack[sp] = current_group;
+                        sp += 1;
+                    }
+                    let r = &self.nodes[(2 * prim) as usize * SLOT_VEC4S..][..5];
+                    let info = r[3];
+                    object_space = info[1] & instance_flags::IDENTITY == 0;
+                    if object_space {
+                        let o = Vec3::new(
+                            affine_row(r[0], origin, 1.0),
+                            affine_row(r[1], origin, 1.0),
+                            affine_row(r[2], origin, 1.0),
+                        );
+                        let d = Vec3::new(
+                            affine_row(r[0], dir, 0.0),
+                            affine_row(r[1], dir, 0.0),
+                            affine_row(r[2], dir, 0.0),
+                        );
+                        match LevelRay::new(o, d, closest) {
+                            Some(l) => level = l,
+                            None => {
+                                // a direction the transform cannot carry: skip the instance
+                                current_group = UVec2::ZERO;
+                                in_blas = true;
+                                blas_sp = sp;
+                                break;
+                            }
+                        }
+                    }
+                    position_offset = info[2];
+                    in_blas = true;
+                    blas_sp = sp;
+                    current_group = UVec2::new(info[0], 0x8000_0000);
+                    break;
+                }
+                let (a, b, c) = if object_space {
+                    self.object_triangle(prim, position_offset)
+                } else {
+                    self.world_triangle(prim)
+                };
+                if let Some(h) = level.watertight.intersect(a, b, c, 0.0, closest) {
+                    closest = h.t;
                     best = Some(Hit {
                         t: h.t,
                         triangle: prim,
@@ -178,11 +295,55 @@ impl SceneView<'_> {
                         v: h.v,
                     });
                     if any_hit {
-                        break;
+                        return best;
                     }
                 }
             }
-        );
+            primitive_group = UVec2::ZERO;
+            if current_group.y & 0xff00_0000 != 0 {
+                let hits_imask = current_group.y;
+                let child_index_offset = firstbithigh(hits_imask);
+                let child_index_base = current_group.x;
+                current_group.y &= !(1u32 << child_index_offset);
+                if current_group.y & 0xff00_0000 != 0 && sp < TRAVERSAL_STACK_SIZE {
+                    // a deeper tree than the stack (degenerate input) loses the group
+                    // rather than writing out of bounds, as the ports do
+                    stack[sp] = current_group;
+                    sp += 1;
+                }
+                let slot_index = (child_index_offset - 24) ^ (level.oct_inv4 & 0xff);
+                let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+                let node = self.node(child_index_base + relative_index);
+                // `level` is the world ray outside a BLAS
+                level.ray.tmax = closest;
+                let hitmask = node_hits(node, &level.ray, level.oct_inv4);
+                current_group = UVec2::new(
+                    node.child_base_idx,
+                    (hitmask & 0xff00_0000) | node.imask as u32,
+                );
+                primitive_group = UVec2::new(node.primitive_base_idx, hitmask & 0x00ff_ffff);
+            } else {
+                current_group = UVec2::ZERO;
+            }
+            if primitive_group.y == 0 && current_group.y & 0xff00_0000 == 0 {
+                if in_blas && sp == blas_sp {
+                    // the instance is done: back to the world ray and the TLAS
+                    in_blas = false;
+                    object_space = false;
+                    level = world;
+                }
+                if sp == 0 {
+                    break;
+                }
+                sp -= 1;
+                let g = stack[sp];
+                if g.y & 0xff00_0000 != 0 {
+                    current_group = g;
+                } else {
+                    primitive_group = g;
+                }
+            }
+        }
         best
     }
 

@@ -255,6 +255,33 @@ impl OpenClBackend {
                 Step::Upload { id, data, label } => {
                     self.create(*id, data.len() as u64, label, Some(data))?
                 }
+                Step::Write {
+                    id, offset, data, ..
+                } => {
+                    let b = self
+                        .buffers
+                        .get_mut(id)
+                        .ok_or(BackendError::MissingResource(*id))?;
+                    if offset + data.len() as u64 > b.bytes {
+                        return Err(BackendError::BadArgument(format!(
+                            "write of {} bytes at {offset} into a buffer of {}",
+                            data.len(),
+                            b.bytes
+                        )));
+                    }
+                    if !data.is_empty() {
+                        unsafe {
+                            self.queue.enqueue_write_buffer(
+                                &mut b.mem,
+                                CL_BLOCKING,
+                                *offset as usize,
+                                data,
+                                &[],
+                            )
+                        }
+                        .map_err(cl_error("writing into a buffer"))?;
+                    }
+                }
                 Step::Clear { id } => {
                     let b = self
                         .buffers

@@ -1,13 +1,21 @@
-//! Acceleration structures built by the driver (VK_KHR_acceleration_structure): one
-//! bottom-level structure over the scene's triangles (positions read in place from the
-//! vertex buffer, stride 32 bytes; indices packed from the triangle buffer) and one
-//! top-level instance of it. The BLAS primitive order is the triangle buffer's order, so
-//! `gl_PrimitiveID` is the triangle index the other backends use.
+//! Acceleration structures built by the driver (VK_KHR_acceleration_structure) from core's
+//! two-level layout (`caustica_core::device::acceleration`): one bottom-level structure
+//! per level (the static level over the world-space vertex buffer, stride 32 bytes; each
+//! instance over its object-space positions in the node buffer, stride 16 bytes; indices
+//! packed from the triangle buffer, an instance's rebased to its own positions) and a
+//! top-level structure with one instance per level, transform `world_from_object` from
+//! the level's record and custom index its first triangle. The closest-hit stage reports
+//! `gl_InstanceCustomIndexEXT + gl_PrimitiveID`: a BLAS holds its level's triangles in the
+//! triangle buffer's order, so that is the triangle index the other backends use.
+//!
+//! Moving instances rewrites the records: [`SceneAccel::rebuild_top_level`] builds a new
+//! TLAS over the BLASes it keeps.
 
 use crate::context::{vk_error, Context};
 use crate::memory::Buffer;
 use ash::vk;
 use caustica_core::backend::BackendError;
+use caustica_core::device::acceleration::{instance_flags, InstanceRecord};
 use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use std::sync::Arc;
 
@@ -31,12 +39,38 @@ impl Drop for AccelStructure {
     }
 }
 
-/// The scene's structures: the TLAS the shaders trace, the BLAS it instances, and the
-/// build inputs the BLAS keeps referring to.
+/// What a BLAS was built from: equal keys mean the BLAS can be kept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BlasKey {
+    flags: u32,
+    triangle_base: u32,
+    triangle_count: u32,
+    vertex_base: u32,
+    vertex_count: u32,
+    position_base: u32,
+}
+
+impl BlasKey {
+    fn of(r: &InstanceRecord) -> BlasKey {
+        BlasKey {
+            flags: r.flags,
+            triangle_base: r.triangle_base,
+            triangle_count: r.triangle_count,
+            vertex_base: r.vertex_base,
+            vertex_count: r.vertex_count,
+            position_base: r.position_base,
+        }
+    }
+}
+
+/// The scene's structures: the TLAS the shaders trace, the BLASes it instances (by
+/// [`BlasKey`]) and the build inputs.
 pub struct SceneAccel {
     pub tlas: AccelStructure,
-    _blas: AccelStructure,
+    blases: Vec<(BlasKey, AccelStructure)>,
     _inputs: Vec<Buffer>,
+    /// Generations of the vertex, triangle and node buffers the BLASes were built from.
+    pub sources: [u64; 3],
 }
 
 fn build(
@@ -107,19 +141,61 @@ fn build(
     Ok(structure)
 }
 
+/// The device buffers a scene's structures are built from.
+pub struct SceneSources<'a> {
+    /// World-space vertices (`GpuVertex`, 32 bytes).
+    pub vertices: &'a Buffer,
+    /// Their count.
+    pub vertex_count: u32,
+    /// The node buffer (instances' object-space positions inside).
+    pub nodes: &'a Buffer,
+    /// Generations of vertices, triangles and nodes.
+    pub generations: [u64; 3],
+}
+
+/// Largest triangle index a TLAS instance's 24-bit custom index can carry.
+const MAX_CUSTOM_INDEX: u32 = (1 << 24) - 1;
+
 impl SceneAccel {
-    /// Builds the BLAS and TLAS over the device buffers `vertices` and the host copy of
-    /// the triangles; `run` records a closure into a command buffer, submits it and waits.
+    /// Builds every level's BLAS and the TLAS; `run` records a closure into a command
+    /// buffer, submits it and waits.
     pub fn build(
         ctx: &Arc<Context>,
         run: SubmitFn<'_>,
-        vertices: &Buffer,
-        vertex_count: u32,
+        src: &SceneSources<'_>,
         triangles: &[GpuTriangle],
+        records: &[InstanceRecord],
     ) -> Result<SceneAccel, BackendError> {
-        let indices: Vec<u32> = triangles.iter().flat_map(|t| t.indices).collect();
         let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        // one index buffer, level after level (an instance's indices rebased to its
+        // positions)
+        let mut indices: Vec<u32> = Vec::with_capacity(triangles.len() * 3);
+        for r in records {
+            let range = r.triangle_base as usize..(r.triangle_base + r.triangle_count) as usize;
+            let tris = triangles.get(range).ok_or_else(|| {
+                BackendError::BadArgument(
+                    "an instance record names triangles past the buffer".into(),
+                )
+            })?;
+            let identity = r.flags & instance_flags::IDENTITY != 0;
+            for t in tris {
+                for i in t.indices {
+                    let local = if identity {
+                        i
+                    } else {
+                        i.checked_sub(r.vertex_base)
+                            .filter(|l| *l < r.vertex_count)
+                            .ok_or_else(|| {
+                                BackendError::BadArgument(
+                                    "an instance's triangle indexes outside its vertices".into(),
+                                )
+                            })?
+                    };
+                    indices.push(local);
+                }
+            }
+        }
         let index_buffer = Buffer::with_data(
             ctx,
             bytemuck::cast_slice(if indices.is_empty() {
@@ -130,67 +206,153 @@ impl SceneAccel {
             input,
             "triangle indices",
         )?;
-        let triangles_data = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
-            .vertex_format(vk::Format::R32G32B32_SFLOAT)
-            .vertex_data(vk::DeviceOrHostAddressConstKHR {
-                device_address: vertices.address(),
-            })
-            .vertex_stride(std::mem::size_of::<GpuVertex>() as u64)
-            // the highest vertex index, not the count
-            .max_vertex(vertex_count.saturating_sub(1))
-            .index_type(vk::IndexType::UINT32)
-            .index_data(vk::DeviceOrHostAddressConstKHR {
-                device_address: index_buffer.address(),
+        let mut blases = Vec::with_capacity(records.len());
+        for r in records {
+            let identity = r.flags & instance_flags::IDENTITY != 0;
+            let (address, stride, max_vertex) = if identity {
+                (
+                    src.vertices.address(),
+                    std::mem::size_of::<GpuVertex>() as u64,
+                    src.vertex_count.saturating_sub(1),
+                )
+            } else {
+                (
+                    src.nodes.address() + r.position_base as u64 * 16,
+                    16,
+                    r.vertex_count.saturating_sub(1),
+                )
+            };
+            let triangles_data = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+                .vertex_format(vk::Format::R32G32B32_SFLOAT)
+                .vertex_data(vk::DeviceOrHostAddressConstKHR {
+                    device_address: address,
+                })
+                .vertex_stride(stride)
+                // the highest vertex index, not the count
+                .max_vertex(max_vertex)
+                .index_type(vk::IndexType::UINT32)
+                .index_data(vk::DeviceOrHostAddressConstKHR {
+                    device_address: index_buffer.address() + r.triangle_base as u64 * 12,
+                });
+            let geometry = vk::AccelerationStructureGeometryKHR::default()
+                .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+                .flags(vk::GeometryFlagsKHR::OPAQUE)
+                .geometry(vk::AccelerationStructureGeometryDataKHR {
+                    triangles: triangles_data,
+                });
+            let blas = build(
+                ctx,
+                run,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                geometry,
+                r.triangle_count,
+                "bottom-level acceleration structure",
+            )?;
+            blases.push((BlasKey::of(r), blas));
+        }
+        let (tlas, instances) = Self::top_level(ctx, run, &blases, records)?;
+        Ok(SceneAccel {
+            tlas,
+            blases,
+            _inputs: vec![index_buffer, instances],
+            sources: src.generations,
+        })
+    }
+
+    /// Whether the BLASes can serve `records` built from buffers of `generations`.
+    pub fn keeps_bottom_levels(&self, records: &[InstanceRecord], generations: [u64; 3]) -> bool {
+        self.sources == generations
+            && self.blases.len() == records.len()
+            && records
+                .iter()
+                .all(|r| self.blases.iter().any(|(k, _)| *k == BlasKey::of(r)))
+    }
+
+    /// A new TLAS over the kept BLASes with the records' transforms (moved instances).
+    pub fn rebuild_top_level(
+        &mut self,
+        ctx: &Arc<Context>,
+        run: SubmitFn<'_>,
+        records: &[InstanceRecord],
+    ) -> Result<(), BackendError> {
+        let (tlas, instances) = Self::top_level(ctx, run, &self.blases, records)?;
+        self.tlas = tlas;
+        self._inputs.truncate(1);
+        self._inputs.push(instances);
+        Ok(())
+    }
+
+    fn top_level(
+        ctx: &Arc<Context>,
+        run: SubmitFn<'_>,
+        blases: &[(BlasKey, AccelStructure)],
+        records: &[InstanceRecord],
+    ) -> Result<(AccelStructure, Buffer), BackendError> {
+        let mut instances = Vec::with_capacity(records.len());
+        for r in records {
+            let blas = &blases
+                .iter()
+                .find(|(k, _)| *k == BlasKey::of(r))
+                .ok_or_else(|| BackendError::BadArgument("a level without its BLAS".into()))?
+                .1;
+            if r.triangle_base > MAX_CUSTOM_INDEX {
+                return Err(BackendError::Unsupported(format!(
+                    "an instance's first triangle is {}, past the {} a Vulkan instance index \
+                     can carry (24 bits)",
+                    r.triangle_base, MAX_CUSTOM_INDEX
+                )));
+            }
+            let address = unsafe {
+                ctx.accel.get_acceleration_structure_device_address(
+                    &vk::AccelerationStructureDeviceAddressInfoKHR::default()
+                        .acceleration_structure(blas.handle),
+                )
+            };
+            let m = r.world_from_object;
+            instances.push(vk::AccelerationStructureInstanceKHR {
+                transform: vk::TransformMatrixKHR {
+                    matrix: [
+                        m[0][0], m[0][1], m[0][2], m[0][3], m[1][0], m[1][1], m[1][2], m[1][3],
+                        m[2][0], m[2][1], m[2][2], m[2][3],
+                    ],
+                },
+                instance_custom_index_and_mask: vk::Packed24_8::new(r.triangle_base, 0xff),
+                instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
+                    0,
+                    // two-sided, as the other backends' triangle test
+                    vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
+                ),
+                acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
+                    device_handle: address,
+                },
             });
-        let geometry = vk::AccelerationStructureGeometryKHR::default()
-            .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
-            .flags(vk::GeometryFlagsKHR::OPAQUE)
-            .geometry(vk::AccelerationStructureGeometryDataKHR {
-                triangles: triangles_data,
-            });
-        let blas = build(
-            ctx,
-            run,
-            vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-            geometry,
-            triangles.len() as u32,
-            "bottom-level acceleration structure",
-        )?;
-        let blas_address = unsafe {
-            ctx.accel.get_acceleration_structure_device_address(
-                &vk::AccelerationStructureDeviceAddressInfoKHR::default()
-                    .acceleration_structure(blas.handle),
-            )
-        };
-        let instance = vk::AccelerationStructureInstanceKHR {
-            transform: vk::TransformMatrixKHR {
-                matrix: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-            },
-            instance_custom_index_and_mask: vk::Packed24_8::new(0, 0xff),
-            instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
-                0,
-                // two-sided, as the other backends' triangle test
-                vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
-            ),
-            acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
-                device_handle: blas_address,
-            },
-        };
+        }
         // SAFETY: AccelerationStructureInstanceKHR is a plain repr(C) struct of 64 bytes.
         let bytes = unsafe {
             std::slice::from_raw_parts(
-                &instance as *const _ as *const u8,
-                std::mem::size_of::<vk::AccelerationStructureInstanceKHR>(),
+                instances.as_ptr() as *const u8,
+                std::mem::size_of_val(instances.as_slice()),
             )
         };
-        let instances = Buffer::with_data(ctx, bytes, input, "TLAS instances")?;
+        let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        let buffer = Buffer::with_data(
+            ctx,
+            if bytes.is_empty() {
+                &[0u8; 64][..]
+            } else {
+                bytes
+            },
+            input,
+            "TLAS instances",
+        )?;
         let geometry = vk::AccelerationStructureGeometryKHR::default()
             .geometry_type(vk::GeometryTypeKHR::INSTANCES)
             .flags(vk::GeometryFlagsKHR::OPAQUE)
             .geometry(vk::AccelerationStructureGeometryDataKHR {
                 instances: vk::AccelerationStructureGeometryInstancesDataKHR::default().data(
                     vk::DeviceOrHostAddressConstKHR {
-                        device_address: instances.address(),
+                        device_address: buffer.address(),
                     },
                 ),
             });
@@ -199,13 +361,9 @@ impl SceneAccel {
             run,
             vk::AccelerationStructureTypeKHR::TOP_LEVEL,
             geometry,
-            u32::from(!triangles.is_empty()),
+            records.len() as u32,
             "top-level acceleration structure",
         )?;
-        Ok(SceneAccel {
-            tlas,
-            _blas: blas,
-            _inputs: vec![index_buffer, instances],
-        })
+        Ok((tlas, buffer))
     }
 }

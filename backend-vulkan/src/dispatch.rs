@@ -4,7 +4,7 @@
 //! and bracketed by timestamps. `prepare_scene` reads the triangles back and has the
 //! driver build the acceleration structures.
 
-use crate::accel::SceneAccel;
+use crate::accel::{SceneAccel, SceneSources};
 use crate::context::{vk_error, Context};
 use crate::memory::Buffer;
 use crate::pipelines::{self, spirv, Pipeline};
@@ -288,6 +288,7 @@ fn record_all(
                     DeviceBuffer {
                         buffer,
                         bytes: *bytes,
+                        generation: crate::next_generation(),
                     },
                 ) {
                     frame.retired.push(old.buffer);
@@ -318,9 +319,45 @@ fn record_all(
                     DeviceBuffer {
                         buffer,
                         bytes: data.len() as u64,
+                        generation: crate::next_generation(),
                     },
                 ) {
                     frame.retired.push(old.buffer);
+                }
+                barrier(&d, frame.cmd);
+            }
+            Step::Write {
+                id,
+                offset,
+                data,
+                label,
+            } => {
+                let dst = b.get(*id)?;
+                if offset + data.len() as u64 > dst.bytes {
+                    return Err(BackendError::BadArgument(format!(
+                        "{label}: write of {} bytes at {offset} into a buffer of {}",
+                        data.len(),
+                        dst.bytes
+                    )));
+                }
+                if !data.is_empty() {
+                    let staging = Buffer::with_data(
+                        &b.ctx,
+                        data,
+                        vk::BufferUsageFlags::TRANSFER_SRC,
+                        "write staging",
+                    )?;
+                    unsafe {
+                        d.cmd_copy_buffer(
+                            frame.cmd,
+                            staging.buffer,
+                            dst.buffer.buffer,
+                            &[vk::BufferCopy::default()
+                                .dst_offset(*offset)
+                                .size(data.len() as u64)],
+                        )
+                    };
+                    frame.retired.push(staging);
                 }
                 barrier(&d, frame.cmd);
             }
@@ -354,7 +391,53 @@ fn record_all(
     Ok(())
 }
 
+/// Builds (or, when only instance transforms changed, updates) the scene's acceleration
+/// structures from core's two-level layout: the records are read back from the node
+/// buffer; the BLASes are kept when the vertex, triangle and node buffers are the ones they
+/// were built from and the levels are the same, and only the TLAS is rebuilt.
 fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), BackendError> {
+    use caustica_core::device::acceleration::{
+        tlas_capacity, InstanceRecord, RECORD_SLOTS, SLOT_VEC4S,
+    };
+    let levels = scene.levels as usize;
+    let capacity = tlas_capacity(levels) as usize;
+    let prefix_vec4s = (capacity + RECORD_SLOTS as usize * levels) * SLOT_VEC4S;
+    if prefix_vec4s > scene.bvh_nodes.len as usize {
+        return Err(BackendError::BadArgument(format!(
+            "the node buffer ({} vectors) is shorter than the {levels} levels' records",
+            scene.bvh_nodes.len
+        )));
+    }
+    let nodes_buf = b.get(scene.bvh_nodes.id)?;
+    let prefix: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(
+        &b.read_device(nodes_buf.buffer.buffer, prefix_vec4s as u64 * 16)?,
+    );
+    let records: Vec<InstanceRecord> = (0..levels)
+        .map(|p| {
+            let at = (capacity + RECORD_SLOTS as usize * p) * SLOT_VEC4S;
+            InstanceRecord::decode(&prefix[at..at + 10])
+        })
+        .collect();
+    let generations = [
+        b.get(scene.vertices.id)?.generation,
+        b.get(scene.triangles.id)?.generation,
+        b.get(scene.bvh_nodes.id)?.generation,
+    ];
+    let shared: &VulkanBackend = b;
+    if let Some(accel) = b.scenes.get(&scene.bvh_nodes.id) {
+        if accel.keeps_bottom_levels(&records, generations) {
+            // only transforms moved: a new TLAS over the same BLASes (the device is idle:
+            // the caller waited)
+            let ctx = Arc::clone(&shared.ctx);
+            let mut accel = b.scenes.remove(&scene.bvh_nodes.id).expect("present");
+            let result = {
+                let shared: &VulkanBackend = b;
+                accel.rebuild_top_level(&ctx, &|f| shared.one_shot(f), &records)
+            };
+            b.scenes.insert(scene.bvh_nodes.id, accel);
+            return result;
+        }
+    }
     let tri_bytes = b.read_device(
         b.get(scene.triangles.id)?.buffer.buffer,
         scene.triangles.bytes(),
@@ -372,13 +455,18 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
     }
     debug_assert_eq!(std::mem::size_of::<GpuVertex>(), 32);
     let shared: &VulkanBackend = b;
-    let vertices = &shared.get(scene.vertices.id)?.buffer;
+    let sources = SceneSources {
+        vertices: &shared.get(scene.vertices.id)?.buffer,
+        vertex_count,
+        nodes: &shared.get(scene.bvh_nodes.id)?.buffer,
+        generations,
+    };
     let accel = SceneAccel::build(
         &shared.ctx,
         &|f| shared.one_shot(f),
-        vertices,
-        vertex_count,
+        &sources,
         &triangles,
+        &records,
     )?;
     if let Some(old) = b.scenes.insert(scene.bvh_nodes.id, accel) {
         drop(old); // the device is idle here: prepare_scene waited for it

@@ -40,6 +40,16 @@ const COUNTER_BANK_BYTES: u64 = 64 * 20 * 4;
 struct DeviceBuffer {
     buffer: Buffer,
     bytes: u64,
+    /// Process-unique stamp of this allocation (a `Create` or `Upload` makes a new one):
+    /// a scene's acceleration structures remember those of their sources.
+    generation: u64,
+}
+
+/// A fresh [`DeviceBuffer::generation`].
+fn next_generation() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
 }
 
 /// The Vulkan backend.

@@ -446,6 +446,46 @@ impl WgpuBackend {
                 Step::Upload { id, data, label } => {
                     self.create(*id, data.len() as u64, label, Some(data))?
                 }
+                Step::Write {
+                    id,
+                    offset,
+                    data,
+                    label,
+                } => {
+                    let dst = self.get(*id)?;
+                    if offset + data.len() as u64 > dst.bytes {
+                        return Err(BackendError::BadArgument(format!(
+                            "{label}: write of {} bytes at {offset} into a buffer of {}",
+                            data.len(),
+                            dst.bytes
+                        )));
+                    }
+                    if !data.is_empty() {
+                        // a staging copy in the encoder, ordered with the kernels around it
+                        // (queue.write_buffer would land before the whole submission)
+                        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("write staging"),
+                            size: data.len() as u64,
+                            usage: wgpu::BufferUsages::COPY_SRC,
+                            mapped_at_creation: true,
+                        });
+                        {
+                            let mut view =
+                                staging.slice(..).get_mapped_range_mut().map_err(|e| {
+                                    BackendError::Driver(format!("mapping {label}: {e}"))
+                                })?;
+                            view.copy_from_slice(data);
+                        }
+                        staging.unmap();
+                        enc.copy_buffer_to_buffer(
+                            &staging,
+                            0,
+                            &dst.buffer,
+                            *offset,
+                            data.len() as u64,
+                        );
+                    }
+                }
                 Step::Clear { id } => enc.clear_buffer(&self.get(*id)?.buffer, 0, None),
                 Step::Free { id } => {
                     self.buffers.remove(id);

@@ -47,6 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         name: name.into(),
         material: material.into(),
         shape,
+        transform: None,
     };
     let scene = Scene {
         name: "ball-and-cube".into(),

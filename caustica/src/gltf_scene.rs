@@ -435,6 +435,7 @@ impl Importer<'_> {
                     uvs: if uvs.len() == n { uvs } else { Vec::new() },
                     indices: tris,
                 },
+                transform: None,
             });
         }
         Ok(())

@@ -43,6 +43,7 @@ fn scene_with_obj(d: &std::path::Path) -> (caustica::Scene, caustica::Scene) {
         shape: Shape::ObjFile {
             path: "ball.obj".into(),
         },
+        transform: None,
     };
     // the inline twin: the same triangles as a mesh (no uvs: OBJ has none here)
     let mut inline = s.clone();

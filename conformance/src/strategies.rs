@@ -393,6 +393,7 @@ pub fn build_scene(
             u: Vec3::new(ground_half_size, 0.0, 0.0),
             v: Vec3::new(0.0, 0.0, -ground_half_size),
         },
+        transform: None,
     }];
     let mut bounds = Aabb::EMPTY;
     for (i, c) in casters.iter().enumerate() {
@@ -412,6 +413,7 @@ pub fn build_scene(
             name: name.clone(),
             material: name,
             shape: c.shape.place(center),
+            transform: None,
         });
     }
     Scene {

@@ -417,6 +417,7 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             u: glam::Vec3::new(0.5, 0.0, 0.0),
             v: glam::Vec3::new(0.0, 0.0, -0.5),
         },
+        transform: None,
     });
     let below = vec![caustica_core::scene::Light::Point {
         position: glam::Vec3::new(0.0, -0.2, 0.0),

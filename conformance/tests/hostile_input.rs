@@ -113,6 +113,7 @@ fn object(s: &mut Scene, shape: Shape) {
         name: "hostile".into(),
         material,
         shape,
+        transform: None,
     });
 }
 

@@ -36,6 +36,7 @@ fn quad(name: &str, material: &str, c: Vec3, u: Vec3, v: Vec3) -> Object {
         name: name.into(),
         material: material.into(),
         shape: Shape::Quad { center: c, u, v },
+        transform: None,
     }
 }
 

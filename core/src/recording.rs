@@ -77,6 +77,19 @@ pub enum Step {
         /// Its name, for errors, the frame plan and debuggers.
         label: &'static str,
     },
+    /// Writes `data` into an existing buffer from byte `offset` on (the rest of the buffer
+    /// unchanged; ordered with the steps around it, as every step is). Offset and length
+    /// are multiples of 4.
+    Write {
+        /// Handle of the buffer.
+        id: ResourceId,
+        /// First byte written.
+        offset: u64,
+        /// The bytes written there.
+        data: Vec<u8>,
+        /// Its name, for errors and debuggers.
+        label: &'static str,
+    },
     /// Fills an existing buffer with zeros.
     Clear {
         /// Handle of the buffer.
@@ -164,6 +177,34 @@ impl Recording {
         Ok(())
     }
 
+    /// Records a write of `data` into `buf` from element `first` on (a part of an existing
+    /// buffer: moved instances' vertices, the TLAS). Elements must be a multiple of 4
+    /// bytes long.
+    pub fn write<T: bytemuck::Pod>(
+        &mut self,
+        buf: Buf<T>,
+        first: u32,
+        data: &[T],
+        label: &'static str,
+    ) -> Result<(), BackendError> {
+        if first as u64 + data.len() as u64 > buf.len as u64
+            || !std::mem::size_of::<T>().is_multiple_of(4)
+        {
+            return Err(BackendError::BadArgument(format!(
+                "{label}: write of {} elements at {first} into a buffer of {}",
+                data.len(),
+                buf.len
+            )));
+        }
+        self.steps.push(Step::Write {
+            id: buf.id,
+            offset: first as u64 * std::mem::size_of::<T>() as u64,
+            data: bytemuck::cast_slice(data).to_vec(),
+            label,
+        });
+        Ok(())
+    }
+
     /// Records the upload of every scene buffer and the `prepare_scene` kernel.
     pub fn upload_scene(&mut self, ds: &DeviceScene) -> SceneArgs {
         let scene = SceneArgs {
@@ -172,6 +213,7 @@ impl Recording {
             materials: self.upload(&ds.materials, "materials"),
             lights: self.upload(&ds.lights, "lights"),
             bvh_nodes: self.upload(&ds.bvh_nodes, "bvh nodes"),
+            levels: ds.levels.len() as u32,
         };
         self.kernel(PrepareScene { scene });
         scene

@@ -1,5 +1,5 @@
 //! The CPU kernels, one module per registry kernel (`prepare_scene` is
-//! [`crate::traversal::adopt_bvh`]).
+//! [`crate::traversal::check_nodes`]: the traversal reads the node buffer in place).
 
 pub mod atrous_filter;
 pub mod caustic_map;

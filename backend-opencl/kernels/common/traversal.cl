@@ -95,21 +95,71 @@ inline void triangle_positions(__global const GpuVertex* vertices,
     *c = load3g(vertices[t->indices[2]].position);
 }
 
-// Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true).
+// An instance's triangle in object space: vertex index + `position_offset` is the vec4 of
+// its position in the node buffer (core::device::acceleration).
+inline float3 object_position(__global const uint4* nodes, uint index, uint position_offset) {
+    uint4 v = nodes[index + position_offset];
+    return (float3)(as_float(v.x), as_float(v.y), as_float(v.z));
+}
+
+inline void object_triangle_positions(__global const uint4* nodes,
+                                      __global const GpuTriangle* triangles, uint i,
+                                      uint position_offset, float3* a, float3* b, float3* c) {
+    __global const GpuTriangle* t = &triangles[i];
+    *a = object_position(nodes, t->indices[0], position_offset);
+    *b = object_position(nodes, t->indices[1], position_offset);
+    *c = object_position(nodes, t->indices[2], position_offset);
+}
+
+// `row.xyz . p + row.w * w`, in the CPU backend's order (affine_row; FP_CONTRACT is off).
+inline float affine_row(uint4 r, float3 p, float w) {
+    return p.x * as_float(r.x) + p.y * as_float(r.y) + p.z * as_float(r.z) + w * as_float(r.w);
+}
+
+// Instance record flag: the level is in world space (core's instance_flags::IDENTITY).
+#define INSTANCE_IDENTITY 1u
+
+// The ray as one level sees it (the CPU backend's LevelRay).
+typedef struct {
+    float3 origin;
+    float3 tdir;
+    float3 inv_dir;
+    uint oct_inv4;
+    WatertightRay wray;
+} LevelRay;
+
+inline LevelRay level_ray(float3 origin, float3 dir) {
+    LevelRay l;
+    l.origin = origin;
+    l.tdir = (float3)(traversal_component(dir.x), traversal_component(dir.y),
+                      traversal_component(dir.z));
+    l.inv_dir = (float3)(safe_inverse(l.tdir.x), safe_inverse(l.tdir.y), safe_inverse(l.tdir.z));
+    l.oct_inv4 = octant_inv4(l.tdir);
+    l.wray = watertight_ray(origin, dir);
+    return l;
+}
+
+// Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true). Two levels
+// (core::device::acceleration; the CPU backend's `traverse` says how): a TLAS leaf is an
+// instance record; entering it pushes the TLAS's remaining work, moves the ray into object
+// space (not for the static level) and starts at the BLAS root; when the stack is back at
+// its depth on entry the world ray returns. Popped groups without inner-node bits are the
+// TLAS's remaining instances.
 inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                            __global const GpuVertex* vertices,
                            __global const GpuTriangle* triangles, float3 origin, float3 dir,
                            float t_max, bool any_hit, Hit* hit) {
     if (node_count == 0u) return false;
-    float3 tdir = (float3)(traversal_component(dir.x), traversal_component(dir.y),
-                           traversal_component(dir.z));
-    float3 inv_dir = (float3)(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z));
-    uint oct_inv4 = octant_inv4(tdir);
-    WatertightRay wray = watertight_ray(origin, dir);
+    LevelRay world = level_ray(origin, dir);
+    LevelRay level = world;
     uint2 stack[TRAVERSAL_STACK_SIZE];
     uint sp = 0u;
     uint2 current_group = (uint2)(0u, 0x80000000u);
     uint2 primitive_group = (uint2)(0u, 0u);
+    bool in_blas = false;
+    uint blas_sp = 0u;
+    bool object_space = false;
+    uint position_offset = 0u;
     bool found = false;
     float closest = t_max;
     for (;;) {
@@ -117,10 +167,37 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
             uint bit = firstbithigh(primitive_group.y);
             primitive_group.y &= ~(1u << bit);
             uint prim = primitive_group.x + bit;
+            if (!in_blas) {
+                // a TLAS leaf: enter the instance whose record is at slot 2 * prim
+                if (primitive_group.y != 0u && sp < TRAVERSAL_STACK_SIZE)
+                    stack[sp++] = primitive_group;
+                if ((current_group.y & 0xff000000u) != 0u && sp < TRAVERSAL_STACK_SIZE)
+                    stack[sp++] = current_group;
+                uint r = 2u * prim * 5u;
+                uint4 info = nodes[r + 3u];
+                object_space = (info.y & INSTANCE_IDENTITY) == 0u;
+                if (object_space) {
+                    float3 o = (float3)(affine_row(nodes[r], origin, 1.0f),
+                                        affine_row(nodes[r + 1u], origin, 1.0f),
+                                        affine_row(nodes[r + 2u], origin, 1.0f));
+                    float3 d = (float3)(affine_row(nodes[r], dir, 0.0f),
+                                        affine_row(nodes[r + 1u], dir, 0.0f),
+                                        affine_row(nodes[r + 2u], dir, 0.0f));
+                    level = level_ray(o, d);
+                }
+                position_offset = info.z;
+                in_blas = true;
+                blas_sp = sp;
+                current_group = (uint2)(info.x, 0x80000000u);
+                break;
+            }
             float3 a, b, c;
-            triangle_positions(vertices, triangles, prim, &a, &b, &c);
+            if (object_space)
+                object_triangle_positions(nodes, triangles, prim, position_offset, &a, &b, &c);
+            else
+                triangle_positions(vertices, triangles, prim, &a, &b, &c);
             TriangleHit h;
-            if (intersect_watertight(&wray, a, b, c, 0.0f, closest, &h) && h.t < closest) {
+            if (intersect_watertight(&level.wray, a, b, c, 0.0f, closest, &h) && h.t < closest) {
                 found = true;
                 closest = h.t;
                 hit->t = h.t;
@@ -141,10 +218,12 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                 // (degenerate input) loses the group rather than writing out of bounds.
                 if (sp < TRAVERSAL_STACK_SIZE) stack[sp++] = current_group;
             }
-            uint slot_index = (child_index_offset - 24u) ^ (oct_inv4 & 0xffu);
+            uint slot_index = (child_index_offset - 24u) ^ (level.oct_inv4 & 0xffu);
             uint relative_index = popcount(hits_imask & ~(0xffffffffu << slot_index));
             uint child = child_index_base + relative_index;
-            uint hitmask = cwbvh_node_hits(nodes, child, origin, tdir, inv_dir, closest, oct_inv4);
+            // `level` is the world ray outside a BLAS
+            uint hitmask = cwbvh_node_hits(nodes, child, level.origin, level.tdir, level.inv_dir,
+                                           closest, level.oct_inv4);
             uint4 n0 = nodes[child * 5u + 0u];
             uint4 n1 = nodes[child * 5u + 1u];
             current_group = (uint2)(n1.x, (hitmask & 0xff000000u) | (n0.w >> 24));
@@ -153,8 +232,18 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
             current_group = (uint2)(0u, 0u);
         }
         if (primitive_group.y == 0u && (current_group.y & 0xff000000u) == 0u) {
+            if (in_blas && sp == blas_sp) {
+                // the instance is done: back to the world ray and the TLAS
+                in_blas = false;
+                object_space = false;
+                level = world;
+            }
             if (sp == 0u) break;
-            current_group = stack[--sp];
+            uint2 g = stack[--sp];
+            if ((g.y & 0xff000000u) != 0u)
+                current_group = g;
+            else
+                primitive_group = g;
         }
     }
     return found;

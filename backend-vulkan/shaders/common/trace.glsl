@@ -1,7 +1,8 @@
 // Hardware replacement of backend-opencl/kernels/traversal.cl (the software CWBVH
 // traversal): closest_hit and occluded trace against the driver-built TLAS with
-// traceRayEXT. Included by ray generation stages only (GL_EXT_ray_tracing). The BLAS holds
-// the triangles in the triangle buffer's order, so gl_PrimitiveID is the triangle index.
+// traceRayEXT. Included by ray generation stages only (GL_EXT_ray_tracing). One BLAS per
+// level of core's two-level layout, instanced in the TLAS with the level's transform; the
+// closest-hit stage reports the triangle index the other backends use (accel.rs).
 //
 // Differences from the software traversal (0 < t < t_max, Moller-Trumbore):
 // - hardware reports hits with t_min <= t <= t_max; t_min is 0.0, so a hit exactly at

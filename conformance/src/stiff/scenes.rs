@@ -38,6 +38,7 @@ pub(super) fn obj(name: &str, material: &str, shape: Shape) -> Object {
         name: name.into(),
         material: material.into(),
         shape,
+        transform: None,
     }
 }
 

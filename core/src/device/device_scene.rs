@@ -3,13 +3,16 @@
 //! uploaded as 5 x `[u32; 4]`). Triangles are reordered into BVH leaf order, so the
 //! BVH's primitive index *is* the triangle index on every backend.
 
+use crate::device::acceleration::{
+    rebase_blas, tlas_capacity, top_level, Level, RECORD_SLOTS, SLOT_VEC4S,
+};
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
 };
 use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
 };
-use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene};
+use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene, Transform};
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};
 use obvhs::triangle::Triangle;
@@ -41,6 +44,60 @@ pub struct DeviceScene {
     /// Per triangle (in `triangles`' order): the index of the scene object it came from
     /// (host only: CausticMap's atlas assigns receivers' triangles to tiles with it).
     pub triangle_objects: Vec<u32>,
+    /// The acceleration structure's levels (static level first, then the instances in
+    /// object order; [`crate::device::acceleration`]).
+    pub levels: Vec<Level>,
+    /// The instances' vertices in object space, level after level (host only: moving an
+    /// instance recomputes its world vertices from them).
+    pub object_vertices: Vec<GpuVertex>,
+}
+
+/// What [`DeviceScene::move_instances`] changed on the device side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstanceUpdate {
+    /// World-vertex index ranges rewritten (one per moved instance).
+    pub vertex_ranges: Vec<std::ops::Range<u32>>,
+    /// The node buffer's first vectors rewritten (the TLAS and the records).
+    pub top_level_vec4s: u32,
+}
+
+/// An instance's world vertices: positions through `world_from_object`, normals through
+/// its inverse transpose, renormalised (the one function a build and a move both use).
+pub fn world_vertices(t: &Transform, local: &[GpuVertex]) -> Vec<GpuVertex> {
+    let m = t.world_from_object();
+    let nm = t.normal_matrix();
+    local
+        .iter()
+        .map(|v| GpuVertex {
+            position: m.transform_point3(Vec3::from(v.position)).to_array(),
+            normal: (nm * Vec3::from(v.normal)).normalize_or(Vec3::Y).to_array(),
+            ..*v
+        })
+        .collect()
+}
+
+/// The scene's bounds and caster bounds: unions of the levels' (min and max are exact, so
+/// the union in any order equals growing a box vertex by vertex).
+fn level_bounds(levels: &[Level]) -> (Aabb, Aabb) {
+    levels.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), l| {
+        (b.union(l.world_bounds), c.union(l.caster_bounds))
+    })
+}
+
+/// An instance must stay inside the coordinate bound once transformed.
+fn check_placed(object: usize, b: &Aabb) -> Result<(), BuildError> {
+    let reach = b.min.abs().max(b.max.abs()).max_element();
+    if !(reach <= crate::scene::limits::MAX_COORDINATE) {
+        return Err(BuildError::Scene {
+            path: format!("objects[{object}].transform"),
+            reason: format!(
+                "the transformed object reaches {reach:e} from the origin, beyond the \
+                 coordinate bound {:e}",
+                crate::scene::limits::MAX_COORDINATE
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// `[u32; 4]` vectors per CWBVH node in `bvh_nodes` (80 bytes).
@@ -117,32 +174,53 @@ impl DeviceScene {
             });
         }
         let mut vertices: Vec<GpuVertex> = Vec::new();
-        let mut tris: Vec<GpuTriangle> = Vec::new();
+        let mut static_tris: Vec<GpuTriangle> = Vec::new();
         reserve(&mut vertices, vertex_total, "scene vertices")?;
-        reserve(&mut tris, triangle_total, "scene triangles")?;
-        let mut bounds = Aabb::EMPTY;
-        let mut caster_bounds = Aabb::EMPTY;
+        reserve(&mut static_tris, triangle_total, "scene triangles")?;
         let mut degenerate_triangles = 0u64;
-        let mut objects: Vec<u32> = Vec::new();
-        reserve(&mut objects, triangle_total, "triangle objects")?;
+        let mut static_objects: Vec<u32> = Vec::new();
+        reserve(&mut static_objects, triangle_total, "triangle objects")?;
+        let mut static_level = Level {
+            object: None,
+            transform: Transform::IDENTITY,
+            blas_root: 0,
+            triangle_base: 0,
+            triangle_count: 0,
+            vertex_base: 0,
+            vertex_count: 0,
+            position_base: 0,
+            world_bounds: Aabb::EMPTY,
+            caster_bounds: Aabb::EMPTY,
+        };
+        // instances: (level, triangles, object-space vertices)
+        let mut instances: Vec<(Level, Vec<GpuTriangle>)> = Vec::new();
+        let mut object_vertices: Vec<GpuVertex> = Vec::new();
         for (k, o) in scene.objects.iter().enumerate() {
             let mat = names.iter().position(|n| **n == o.material).unwrap_or(0) as u32;
             let specular = scene.materials[&o.material].is_specular();
             let m = tessellate(&o.shape);
             let base = vertices.len() as u32;
-            let kept_before = tris.len();
+            // a mirroring transform reverses the winding: swap two corners so that world
+            // winding keeps agreeing with the (transformed) normals
+            let mirrored = o
+                .transform
+                .is_some_and(|t| t.world_from_object().matrix3.determinant() < 0.0);
+            let mut tris: Vec<GpuTriangle> = Vec::new();
             for t in &m.indices {
                 if is_degenerate(&m, *t) {
                     degenerate_triangles += 1;
                 } else {
+                    let mut indices = t.map(|i| i + base);
+                    if mirrored {
+                        indices.swap(1, 2);
+                    }
                     tris.push(GpuTriangle {
-                        indices: t.map(|i| i + base),
+                        indices,
                         material: mat,
                     });
-                    objects.push(k as u32);
                 }
             }
-            if tris.len() == kept_before {
+            if tris.is_empty() {
                 return Err(BuildError::Scene {
                     path: format!("objects[{k}].shape"),
                     reason: format!(
@@ -152,28 +230,124 @@ impl DeviceScene {
                     ),
                 });
             }
-            for i in 0..m.positions.len() {
-                let p = m.positions[i];
-                bounds.grow(p);
-                if specular {
-                    caster_bounds.grow(p);
-                }
-                vertices.push(GpuVertex {
-                    position: p.to_array(),
+            let local: Vec<GpuVertex> = (0..m.positions.len())
+                .map(|i| GpuVertex {
+                    position: m.positions[i].to_array(),
                     u: m.uvs[i].x,
                     normal: m.normals[i].normalize_or(Vec3::Y).to_array(),
                     v: m.uvs[i].y,
-                });
+                })
+                .collect();
+            let mut world_bounds = Aabb::EMPTY;
+            match o.transform {
+                None => {
+                    for v in &local {
+                        world_bounds.grow(Vec3::from(v.position));
+                    }
+                    vertices.extend_from_slice(&local);
+                    static_objects.extend(std::iter::repeat_n(k as u32, tris.len()));
+                    static_tris.extend(tris);
+                    static_level.world_bounds = static_level.world_bounds.union(world_bounds);
+                    if specular {
+                        static_level.caster_bounds = static_level.caster_bounds.union(world_bounds);
+                    }
+                    static_level.vertex_count = vertices.len() as u32;
+                }
+                Some(transform) => {
+                    let world = world_vertices(&transform, &local);
+                    for v in &world {
+                        world_bounds.grow(Vec3::from(v.position));
+                    }
+                    check_placed(k, &world_bounds)?;
+                    vertices.extend_from_slice(&world);
+                    let level = Level {
+                        object: Some(k),
+                        transform,
+                        blas_root: 0,
+                        triangle_base: 0,
+                        triangle_count: tris.len() as u32,
+                        vertex_base: base,
+                        vertex_count: local.len() as u32,
+                        position_base: object_vertices.len() as u32,
+                        world_bounds,
+                        caster_bounds: if specular { world_bounds } else { Aabb::EMPTY },
+                    };
+                    object_vertices.extend_from_slice(&local);
+                    instances.push((level, tris));
+                }
             }
         }
-        check_coincident(scene, &vertices, &tris)?;
+        let all: Vec<GpuTriangle> = static_tris
+            .iter()
+            .chain(instances.iter().flat_map(|(_, t)| t.iter()))
+            .copied()
+            .collect();
+        check_coincident(scene, &vertices, &all)?;
+        drop(all);
         let has_dispersion = scene
             .materials
             .values()
             .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
         let lights = scene.lights.iter().map(gpu_light).collect();
-        let (triangles, bvh_nodes, order) = build_bvh(&vertices, tris)?;
-        let triangle_objects = order.iter().map(|&i| objects[i as usize]).collect();
+
+        // the levels' BLASes, static level first, then the instances in object order
+        let world_positions = |i: u32| Vec3A::from(vertices[i as usize].position);
+        let mut blases: Vec<(Level, BvhBuild, Vec<u32>)> = Vec::new();
+        if !static_tris.is_empty() {
+            static_level.triangle_count = static_tris.len() as u32;
+            let build = build_bvh(&world_positions, static_tris)?;
+            blases.push((static_level, build, static_objects));
+        }
+        for (level, tris) in instances {
+            let (base, first) = (level.vertex_base, level.position_base);
+            let object_position =
+                |i: u32| Vec3A::from(object_vertices[(i - base + first) as usize].position);
+            let build = build_bvh(&object_position, tris)?;
+            let k = level.object.unwrap_or(0) as u32;
+            let objects = vec![k; build.0.len()];
+            blases.push((level, build, objects));
+        }
+        let capacity = tlas_capacity(blases.len());
+        let mut slot = capacity + RECORD_SLOTS * blases.len() as u32;
+        let mut triangle_base = 0u32;
+        let mut triangles: Vec<GpuTriangle> = Vec::new();
+        reserve(&mut triangles, triangle_total, "BVH-ordered triangles")?;
+        let mut triangle_objects: Vec<u32> = Vec::new();
+        reserve(&mut triangle_objects, triangle_total, "triangle objects")?;
+        let mut blas_nodes: Vec<[u32; 4]> = Vec::new();
+        let mut levels: Vec<Level> = Vec::new();
+        for (mut level, (ordered, mut nodes, order), objects) in blases {
+            rebase_blas(&mut nodes, slot, triangle_base);
+            level.blas_root = slot;
+            level.triangle_base = triangle_base;
+            // object-space positions follow the BLASes (their vec4 index set below)
+            slot += (nodes.len() / SLOT_VEC4S) as u32;
+            triangle_base += ordered.len() as u32;
+            triangle_objects.extend(order.iter().map(|&i| objects[i as usize]));
+            triangles.extend(ordered);
+            blas_nodes.extend(nodes);
+            levels.push(level);
+        }
+        let positions_vec4 = slot as usize * SLOT_VEC4S;
+        for l in levels.iter_mut().filter(|l| l.object.is_some()) {
+            l.position_base += positions_vec4 as u32;
+        }
+        let top = top_level(&levels).map_err(|reason| BuildError::Scene {
+            path: "objects".into(),
+            reason,
+        })?;
+        let mut bvh_nodes: Vec<[u32; 4]> = Vec::new();
+        let total_vec4 = (positions_vec4 + object_vertices.len()).next_multiple_of(SLOT_VEC4S);
+        reserve(&mut bvh_nodes, total_vec4 as u64, "BVH nodes")?;
+        bvh_nodes.extend(top);
+        bvh_nodes.extend(blas_nodes);
+        debug_assert_eq!(bvh_nodes.len(), positions_vec4);
+        bvh_nodes.extend(object_vertices.iter().map(|v| {
+            let [x, y, z] = v.position;
+            [x.to_bits(), y.to_bits(), z.to_bits(), 1f32.to_bits()]
+        }));
+        bvh_nodes.resize(total_vec4, [0; 4]);
+        let (bounds, caster_bounds) = level_bounds(&levels);
         Ok(DeviceScene {
             vertices,
             triangles,
@@ -185,7 +359,98 @@ impl DeviceScene {
             has_dispersion,
             degenerate_triangles,
             triangle_objects,
+            levels,
+            object_vertices,
         })
+    }
+
+    /// Moves instances (`(object index, transform)` pairs; the objects must have been
+    /// built with a transform): their world vertices and boxes, the scene's bounds, the
+    /// TLAS and the records are recomputed with the functions the build uses, so the
+    /// result equals a fresh build of the moved scene bitwise. No BLAS changes. Says which
+    /// vertex ranges changed and how many leading node-buffer vectors (TLAS and records)
+    /// to rewrite. On an error nothing changes.
+    pub fn move_instances(
+        &mut self,
+        moves: &[(usize, Transform)],
+    ) -> Result<InstanceUpdate, BuildError> {
+        let mut levels = self.levels.clone();
+        let mut changed = Vec::new();
+        for (object, transform) in moves {
+            let path = format!("objects[{object}].transform");
+            if let Some(reason) = transform.problem() {
+                return Err(BuildError::Scene { path, reason });
+            }
+            let Some(l) = levels.iter_mut().find(|l| l.object == Some(*object)) else {
+                return Err(BuildError::Scene {
+                    path,
+                    reason: "the object has no transform in the scene it was built from, so it \
+                             is part of the static level; give it one (identity will do) to \
+                             move it"
+                        .into(),
+                });
+            };
+            let old_mirrored = l.transform.world_from_object().matrix3.determinant() < 0.0;
+            let new_mirrored = transform.world_from_object().matrix3.determinant() < 0.0;
+            if old_mirrored != new_mirrored {
+                return Err(BuildError::Scene {
+                    path,
+                    reason: "the new transform mirrors the object where the old one did not \
+                             (or the reverse): its triangles' winding would have to change; \
+                             rebuild the scene"
+                        .into(),
+                });
+            }
+            l.transform = *transform;
+            changed.push(l.clone());
+        }
+        let mut writes = Vec::new();
+        let mut new_vertices = Vec::new();
+        for l in &mut levels {
+            if !changed.iter().any(|c| c.object == l.object) {
+                continue;
+            }
+            let first = l.position_base - self.positions_vec4() as u32;
+            let local = &self.object_vertices[first as usize..(first + l.vertex_count) as usize];
+            let world = world_vertices(&l.transform, local);
+            let mut b = Aabb::EMPTY;
+            for v in &world {
+                b.grow(Vec3::from(v.position));
+            }
+            check_placed(l.object.unwrap_or(0), &b)?;
+            l.caster_bounds = if l.caster_bounds.is_empty() {
+                Aabb::EMPTY
+            } else {
+                b
+            };
+            l.world_bounds = b;
+            writes.push(l.vertex_base..l.vertex_base + l.vertex_count);
+            new_vertices.push(world);
+        }
+        let top = top_level(&levels).map_err(|reason| BuildError::Scene {
+            path: "objects".into(),
+            reason,
+        })?;
+        for (range, world) in writes.iter().zip(new_vertices) {
+            self.vertices[range.start as usize..range.end as usize].copy_from_slice(&world);
+        }
+        self.bvh_nodes[..top.len()].copy_from_slice(&top);
+        (self.bounds, self.caster_bounds) = level_bounds(&levels);
+        self.levels = levels;
+        Ok(InstanceUpdate {
+            vertex_ranges: writes,
+            top_level_vec4s: top.len() as u32,
+        })
+    }
+
+    /// vec4 index in the node buffer where the object-space positions start.
+    fn positions_vec4(&self) -> usize {
+        self.levels
+            .iter()
+            .filter(|l| l.object.is_some())
+            .map(|l| l.position_base as usize)
+            .min()
+            .unwrap_or(self.bvh_nodes.len())
     }
 
     /// Number of CWBVH nodes.
@@ -259,8 +524,7 @@ fn check_coincident(
 /// in the input.
 type BvhBuild = (Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>);
 
-fn build_bvh(vertices: &[GpuVertex], tris: Vec<GpuTriangle>) -> Result<BvhBuild, BuildError> {
-    let p = |i: u32| Vec3A::from(vertices[i as usize].position);
+fn build_bvh(p: &dyn Fn(u32) -> Vec3A, tris: Vec<GpuTriangle>) -> Result<BvhBuild, BuildError> {
     let mut obvhs_tris: Vec<Triangle> = Vec::new();
     reserve(&mut obvhs_tris, tris.len() as u64, "BVH build triangles")?;
     obvhs_tris.extend(tris.iter().map(|t| Triangle {

@@ -67,8 +67,13 @@ pub struct SceneArgs {
     pub materials: Buf<GpuMaterial>,
     /// Lights ([`GpuLight`]).
     pub lights: Buf<GpuLight>,
-    /// CWBVH nodes, 5 x `[u32; 4]` (80 bytes) each.
+    /// The two-level acceleration structure: 80-byte slots of 5 x `[u32; 4]`
+    /// ([`crate::device::acceleration`]: TLAS, instance records, BLASes, object-space
+    /// positions).
     pub bvh_nodes: Buf<[u32; 4]>,
+    /// How many levels (static level and instances) `bvh_nodes` holds: the TLAS capacity
+    /// and the records' place follow from it (read by Vulkan's `prepare_scene`).
+    pub levels: u32,
 }
 
 /// The frame's G-buffer as [`GBUFFER_PLANES`] device buffers of 16 bytes per pixel (see

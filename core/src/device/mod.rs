@@ -2,10 +2,11 @@
 //! layouts shared with every shader (and the functions over them that shaders mirror);
 //! [`layout_table`]: a description of those layouts (fields, offsets, 4-byte leaves) that
 //! the shader crates' layout tests compare with; [`device_scene`]: a scene flattened to
-//! those layouts with its CWBVH; [`handle`]: typed opaque buffer handles; [`launch`]: a
+//! those layouts with its two-level CWBVH ([`acceleration`]: how the node buffer holds it); [`handle`]: typed opaque buffer handles; [`launch`]: a
 //! lowered kernel launch; [`error`]: typed failures. Imports only [`crate::math`] and
 //! [`crate::scene`].
 
+pub mod acceleration;
 pub mod device_scene;
 pub mod error;
 pub mod handle;

@@ -58,6 +58,7 @@ fn obj(name: &str, material: &str, shape: Shape) -> Object {
         name: name.into(),
         material: material.into(),
         shape,
+        transform: None,
     }
 }
 

@@ -10,6 +10,7 @@ pub mod builtin;
 pub mod format;
 pub mod limits;
 pub mod shapes;
+pub mod transform;
 mod validate;
 
 use glam::{Vec2, Vec3};
@@ -17,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 pub use crate::math::geometry::Aabb;
+pub use transform::Transform;
 pub use validate::Problem;
 
 /// A complete scene: what the file format holds and what built-in scenes produce.
@@ -177,8 +179,13 @@ pub struct Object {
     pub name: String,
     /// Name of its material, a key of [`Scene::materials`].
     pub material: String,
-    /// Its geometry.
+    /// Its geometry: in world space, or in object space when `transform` is given.
     pub shape: Shape,
+    /// With a transform the object is an instance ([`Transform`]): its shape is in object
+    /// space, it has a bottom-level BVH of its own, and `set_object_transforms` moves it
+    /// without a rebuild. Without one (the default) it belongs to the static level.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transform: Option<Transform>,
 }
 
 /// Geometry. Procedural shapes are tessellated into triangles by [`shapes::tessellate`];

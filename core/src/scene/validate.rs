@@ -217,6 +217,11 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
     }
     for (i, o) in s.objects.iter().enumerate() {
         let p = format!("objects[{i}]");
+        if let Some(reason) = o.transform.as_ref().and_then(|t| t.problem()) {
+            c.fail(format!("{p}.transform"), reason);
+        } else if let Some(t) = &o.transform {
+            c.coord3(&format!("{p}.transform.translation"), t.translation);
+        }
         if !s.materials.contains_key(&o.material) {
             c.fail(
                 format!("{p}.material"),

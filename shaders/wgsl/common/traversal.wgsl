@@ -126,23 +126,71 @@ fn triangle_positions(i: u32, a: ptr<function, vec3<f32>>, b: ptr<function, vec3
     *c = vertices[t.indices[2]].position;
 }
 
+// An instance's triangle in object space: vertex index + `position_offset` is the vec4 of
+// its position in the node buffer (core::device::acceleration).
+fn object_position(index: u32, position_offset: u32) -> vec3<f32> {
+    let v = nodes[index + position_offset];
+    return vec3<f32>(bitcast<f32>(v.x), bitcast<f32>(v.y), bitcast<f32>(v.z));
+}
+
+fn object_triangle_positions(i: u32, position_offset: u32, a: ptr<function, vec3<f32>>,
+                             b: ptr<function, vec3<f32>>, c: ptr<function, vec3<f32>>) {
+    let t = triangles[i];
+    *a = object_position(t.indices[0], position_offset);
+    *b = object_position(t.indices[1], position_offset);
+    *c = object_position(t.indices[2], position_offset);
+}
+
+// `row.xyz . p + row.w * w`, in the CPU backend's order (affine_row).
+fn affine_row(r: vec4<u32>, p: vec3<f32>, w: f32) -> f32 {
+    return p.x * bitcast<f32>(r.x) + p.y * bitcast<f32>(r.y) + p.z * bitcast<f32>(r.z) +
+           w * bitcast<f32>(r.w);
+}
+
+// Instance record flag: the level is in world space (core's instance_flags::IDENTITY).
+const INSTANCE_IDENTITY: u32 = 1u;
+
+// The ray as one level's nodes see it (the CPU backend's LevelRay; its watertight form is
+// a separate variable: naga's SPIR-V output cannot pass a pointer into a struct member).
+struct LevelRay {
+    origin: vec3<f32>,
+    tdir: vec3<f32>,
+    inv_dir: vec3<f32>,
+    oct_inv4: u32,
+}
+
+fn level_ray(origin: vec3<f32>, dir: vec3<f32>) -> LevelRay {
+    let tdir = vec3<f32>(traversal_component(dir.x), traversal_component(dir.y),
+                         traversal_component(dir.z));
+    return LevelRay(origin, tdir,
+                    vec3<f32>(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z)),
+                    octant_inv4(tdir));
+}
+
 // Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true). `t_max`
-// NO_T_MAX stands for OpenCL's INFINITY.
+// NO_T_MAX stands for OpenCL's INFINITY. Two levels (core::device::acceleration; the CPU
+// backend's `traverse` says how): a TLAS leaf is an instance record; entering it pushes
+// the TLAS's remaining work, moves the ray into object space (not for the static level)
+// and starts at the BLAS root; when the stack is back at its depth on entry the world ray
+// returns. Popped groups without inner-node bits are the TLAS's remaining instances.
 fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
                   hit: ptr<function, Hit>) -> bool {
     let node_count = arrayLength(&nodes) / 5u;
     if (node_count == 0u) {
         return false;
     }
-    let tdir = vec3<f32>(traversal_component(dir.x), traversal_component(dir.y),
-                         traversal_component(dir.z));
-    let inv_dir = vec3<f32>(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z));
-    let oct_inv4 = octant_inv4(tdir);
-    var wray = watertight_ray(origin, dir);
+    let world = level_ray(origin, dir);
+    var level = world;
+    let world_wray = watertight_ray(origin, dir);
+    var wray = world_wray;
     var stack: array<vec2<u32>, TRAVERSAL_STACK_SIZE>;
     var sp = 0u;
     var current_group = vec2<u32>(0u, 0x80000000u);
     var primitive_group = vec2<u32>(0u, 0u);
+    var in_blas = false;
+    var blas_sp = 0u;
+    var object_space = false;
+    var position_offset = 0u;
     var found = false;
     var closest = t_max;
     loop {
@@ -150,10 +198,43 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
             let bit = firstbithigh(primitive_group.y);
             primitive_group.y &= ~(1u << bit);
             let prim = primitive_group.x + bit;
+            if (!in_blas) {
+                // a TLAS leaf: enter the instance whose record is at slot 2 * prim
+                if (primitive_group.y != 0u && sp < TRAVERSAL_STACK_SIZE) {
+                    stack[sp] = primitive_group;
+                    sp += 1u;
+                }
+                if ((current_group.y & 0xff000000u) != 0u && sp < TRAVERSAL_STACK_SIZE) {
+                    stack[sp] = current_group;
+                    sp += 1u;
+                }
+                let r = 2u * prim * 5u;
+                let info = nodes[r + 3u];
+                object_space = (info.y & INSTANCE_IDENTITY) == 0u;
+                if (object_space) {
+                    let o = vec3<f32>(affine_row(nodes[r], origin, 1.0),
+                                      affine_row(nodes[r + 1u], origin, 1.0),
+                                      affine_row(nodes[r + 2u], origin, 1.0));
+                    let d = vec3<f32>(affine_row(nodes[r], dir, 0.0),
+                                      affine_row(nodes[r + 1u], dir, 0.0),
+                                      affine_row(nodes[r + 2u], dir, 0.0));
+                    level = level_ray(o, d);
+                    wray = watertight_ray(o, d);
+                }
+                position_offset = info.z;
+                in_blas = true;
+                blas_sp = sp;
+                current_group = vec2<u32>(info.x, 0x80000000u);
+                break;
+            }
             var a: vec3<f32>;
             var b: vec3<f32>;
             var c: vec3<f32>;
-            triangle_positions(prim, &a, &b, &c);
+            if (object_space) {
+                object_triangle_positions(prim, position_offset, &a, &b, &c);
+            } else {
+                triangle_positions(prim, &a, &b, &c);
+            }
             var h: TriangleHit;
             if (intersect_watertight(&wray, a, b, c, 0.0, closest, &h) && h.t < closest) {
                 found = true;
@@ -181,10 +262,12 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
                     sp += 1u;
                 }
             }
-            let slot_index = (child_index_offset - 24u) ^ (oct_inv4 & 0xffu);
+            let slot_index = (child_index_offset - 24u) ^ (level.oct_inv4 & 0xffu);
             let relative_index = countOneBits(hits_imask & ~(0xffffffffu << slot_index));
             let child = child_index_base + relative_index;
-            let hitmask = cwbvh_node_hits(child, origin, tdir, inv_dir, closest, oct_inv4);
+            // `level` is the world ray outside a BLAS
+            let hitmask = cwbvh_node_hits(child, level.origin, level.tdir, level.inv_dir, closest,
+                                          level.oct_inv4);
             let n0 = nodes[child * 5u + 0u];
             let n1 = nodes[child * 5u + 1u];
             current_group = vec2<u32>(n1.x, (hitmask & 0xff000000u) | (n0.w >> 24u));
@@ -193,11 +276,23 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
             current_group = vec2<u32>(0u, 0u);
         }
         if (primitive_group.y == 0u && (current_group.y & 0xff000000u) == 0u) {
+            if (in_blas && sp == blas_sp) {
+                // the instance is done: back to the world ray and the TLAS
+                in_blas = false;
+                object_space = false;
+                level = world;
+                wray = world_wray;
+            }
             if (sp == 0u) {
                 break;
             }
             sp -= 1u;
-            current_group = stack[sp];
+            let g = stack[sp];
+            if ((g.y & 0xff000000u) != 0u) {
+                current_group = g;
+            } else {
+                primitive_group = g;
+            }
         }
     }
     return found;

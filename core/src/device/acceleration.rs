@@ -1,0 +1,241 @@
+//! The two-level acceleration structure every software traversal reads, laid out in the
+//! scene's node buffer (`SceneArgs::bvh_nodes`, 80-byte slots of 5 x `[u32; 4]`):
+//!
+//! | slots                          | what                                                   |
+//! |--------------------------------|--------------------------------------------------------|
+//! | `0 .. C`                       | the top level (TLAS): a CWBVH over the levels' world boxes, root at slot 0, unused slots zero |
+//! | `C .. C + 2N`                  | one [`InstanceRecord`] (2 slots) per level, in TLAS leaf order |
+//! | then                           | each level's bottom-level CWBVH (BLAS), static level first |
+//! | then                           | the instances' object-space vertex positions, one `[f32; 4]` each (w = 1), padded to whole slots |
+//!
+//! A *level* is the scene's static level (every object without a transform, in world
+//! space: the single BVH that scenes had before instances) or one instance (an object with
+//! a [`Transform`], its BLAS built once in object space). `C` (the TLAS capacity) is the
+//! level count rounded up to even, enough for any CWBVH over that many boxes (its nodes
+//! are the collapsed inner nodes of a binary tree: at most `max(1, N - 1)`), so moving
+//! instances rewrites slots `0 .. C + 2N` in place and nothing else of the buffer.
+//!
+//! Node indices are absolute: each BLAS's child indices are rebased to where it lies and
+//! its primitive indices to its first triangle; the TLAS's primitive indices are rebased
+//! by `C / 2`, so that TLAS primitive `p` names the record at slot `2p`.
+//!
+//! Traversal (CPU `traversal.rs`, `traversal.wgsl`, `traversal.cl`): world ray through the
+//! TLAS; at a TLAS leaf the ray moves into the level's object space (not at all for the
+//! static level, flag [`instance_flags::IDENTITY`], so scenes without instances trace as
+//! before, bitwise) and its BLAS is traversed, triangles tested in object space (the
+//! instance's positions above; direction not normalised, so `t` is the world ray's). The
+//! kernels then shade with the world-space vertices (`vertices`), which hold every
+//! instance's vertices transformed: surfaces are interpolated from them with the hit's
+//! barycentrics, which the affine map preserves. Vulkan builds its own BLAS per level from
+//! the same records (static level from `vertices`, instances from their positions here)
+//! and a TLAS of instances with the records' `world_from_object`.
+
+use crate::math::geometry::Aabb;
+use crate::scene::Transform;
+use glam::{Affine3A, Vec3};
+
+/// `[u32; 4]` vectors per 80-byte slot of the node buffer.
+pub const SLOT_VEC4S: usize = 5;
+
+/// Slots per [`InstanceRecord`].
+pub const RECORD_SLOTS: u32 = 2;
+
+/// Bits of [`InstanceRecord::flags`].
+pub mod instance_flags {
+    /// The level is in world space (the static level): rays enter its BLAS unchanged and
+    /// its triangles are tested against `vertices`.
+    pub const IDENTITY: u32 = 1;
+}
+
+/// One level as the traversal reads it: 10 x `[u32; 4]` (two node slots).
+///
+/// `[0..3]` rows of `object_from_world` (f32 bits; `x' = dot(row.xyz, p) + row.w`);
+/// `[3]` = (`blas_root`, `flags`, `position_offset`, `triangle_base`);
+/// `[4]` = (`triangle_count`, `vertex_base`, `vertex_count`, `position_base`);
+/// `[5..8]` rows of `world_from_object` (Vulkan's instance transform); `[8..10]` zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InstanceRecord {
+    /// World space to object space (3 rows of an affine 3x4 matrix).
+    pub object_from_world: [[f32; 4]; 3],
+    /// Object space to world space (3 rows).
+    pub world_from_object: [[f32; 4]; 3],
+    /// Slot of the level's BLAS root.
+    pub blas_root: u32,
+    /// [`instance_flags`].
+    pub flags: u32,
+    /// `position_base - vertex_base` (wrapping): a triangle's vertex index plus this is the
+    /// vec4 index of its object-space position in the node buffer.
+    pub position_offset: u32,
+    /// First triangle of the level (triangles are contiguous per level).
+    pub triangle_base: u32,
+    /// Its triangle count.
+    pub triangle_count: u32,
+    /// First world vertex of the level's object (the static level: 0, unused).
+    pub vertex_base: u32,
+    /// Its vertex count (the static level: every vertex).
+    pub vertex_count: u32,
+    /// vec4 index of the first object-space position (the static level: 0, unused).
+    pub position_base: u32,
+}
+
+fn rows(m: &Affine3A) -> [[f32; 4]; 3] {
+    let c = m.to_cols_array_2d(); // 4 columns of 3
+    std::array::from_fn(|r| [c[0][r], c[1][r], c[2][r], c[3][r]])
+}
+
+impl InstanceRecord {
+    /// The record's ten vectors.
+    pub fn encode(&self) -> [[u32; 4]; 10] {
+        let f = |r: [f32; 4]| r.map(f32::to_bits);
+        let z = [0u32; 4];
+        [
+            f(self.object_from_world[0]),
+            f(self.object_from_world[1]),
+            f(self.object_from_world[2]),
+            [
+                self.blas_root,
+                self.flags,
+                self.position_offset,
+                self.triangle_base,
+            ],
+            [
+                self.triangle_count,
+                self.vertex_base,
+                self.vertex_count,
+                self.position_base,
+            ],
+            f(self.world_from_object[0]),
+            f(self.world_from_object[1]),
+            f(self.world_from_object[2]),
+            z,
+            z,
+        ]
+    }
+
+    /// Reads a record back from its ten vectors.
+    pub fn decode(v: &[[u32; 4]]) -> InstanceRecord {
+        let f = |r: [u32; 4]| r.map(f32::from_bits);
+        InstanceRecord {
+            object_from_world: [f(v[0]), f(v[1]), f(v[2])],
+            world_from_object: [f(v[5]), f(v[6]), f(v[7])],
+            blas_root: v[3][0],
+            flags: v[3][1],
+            position_offset: v[3][2],
+            triangle_base: v[3][3],
+            triangle_count: v[4][0],
+            vertex_base: v[4][1],
+            vertex_count: v[4][2],
+            position_base: v[4][3],
+        }
+    }
+}
+
+/// One level on the host.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Level {
+    /// The scene object it is (an instance), or `None` for the static level.
+    pub object: Option<usize>,
+    /// Its placement (identity for the static level).
+    pub transform: Transform,
+    /// Slot of its BLAS root.
+    pub blas_root: u32,
+    /// Its triangles: `triangle_base .. triangle_base + triangle_count`.
+    pub triangle_base: u32,
+    /// Its triangle count.
+    pub triangle_count: u32,
+    /// Its object's world vertices: `vertex_base .. vertex_base + vertex_count`.
+    pub vertex_base: u32,
+    /// Its vertex count.
+    pub vertex_count: u32,
+    /// vec4 index of its object-space positions in the node buffer (instances).
+    pub position_base: u32,
+    /// Box of its world vertices.
+    pub world_bounds: Aabb,
+    /// Box of its world vertices if its material is specular, else empty.
+    pub caster_bounds: Aabb,
+}
+
+impl Level {
+    /// The record the traversal reads.
+    pub fn record(&self) -> InstanceRecord {
+        let identity = self.object.is_none();
+        InstanceRecord {
+            object_from_world: rows(&self.transform.object_from_world()),
+            world_from_object: rows(&self.transform.world_from_object()),
+            blas_root: self.blas_root,
+            flags: if identity {
+                instance_flags::IDENTITY
+            } else {
+                0
+            },
+            position_offset: self.position_base.wrapping_sub(self.vertex_base),
+            triangle_base: self.triangle_base,
+            triangle_count: self.triangle_count,
+            vertex_base: self.vertex_base,
+            vertex_count: self.vertex_count,
+            position_base: self.position_base,
+        }
+    }
+}
+
+/// TLAS capacity in slots for `levels` levels: the count rounded up to even, at least 2.
+pub fn tlas_capacity(levels: usize) -> u32 {
+    (levels.max(1) as u32).next_multiple_of(2)
+}
+
+/// The world box the TLAS culls a level with: its world vertices' box grown by
+/// `2^-16 (extent + largest |coordinate|)` on every side. The margin covers the rounding
+/// between the world vertices (`f32(M p)`) and the object-space triangles the ray meets
+/// after its own transform into object space (a few ulps of those magnitudes each); it
+/// only lets more rays into a BLAS, never changes which triangle is hit.
+pub fn culling_box(b: &Aabb) -> obvhs::aabb::Aabb {
+    let magnitude = b.min.abs().max(b.max.abs()).max_element();
+    let pad = Vec3::splat(((b.max - b.min).max_element() + magnitude) * (1.0 / 65_536.0));
+    obvhs::aabb::Aabb::new((b.min - pad).into(), (b.max + pad).into())
+}
+
+/// Slots `0 .. C + 2N` of the node buffer for `levels`: the TLAS built over their culling
+/// boxes (obvhs, deterministic) and the records in its leaf order. Errors (never panics)
+/// if the build made more nodes than the capacity.
+pub fn top_level(levels: &[Level]) -> Result<Vec<[u32; 4]>, String> {
+    let capacity = tlas_capacity(levels.len());
+    let boxes: Vec<obvhs::aabb::Aabb> = levels
+        .iter()
+        .map(|l| culling_box(&l.world_bounds))
+        .collect();
+    let mut time = std::time::Duration::ZERO;
+    let bvh = obvhs::cwbvh::builder::build_cwbvh(
+        &boxes,
+        obvhs::BvhBuildParams::medium_build(),
+        &mut time,
+    );
+    if bvh.nodes.len() > capacity as usize {
+        return Err(format!(
+            "the top-level BVH over {} levels has {} nodes, over its capacity {capacity}",
+            levels.len(),
+            bvh.nodes.len()
+        ));
+    }
+    let mut out =
+        vec![[0u32; 4]; (capacity + RECORD_SLOTS * levels.len() as u32) as usize * SLOT_VEC4S];
+    let nodes: &[[u32; 4]] = bytemuck::cast_slice(&bvh.nodes);
+    out[..nodes.len()].copy_from_slice(nodes);
+    for n in 0..bvh.nodes.len() {
+        // TLAS primitive p (leaf order) -> record slot C + 2p = 2 (C/2 + p)
+        out[n * SLOT_VEC4S + 1][1] += capacity / 2;
+    }
+    for (p, &l) in bvh.primitive_indices.iter().enumerate() {
+        let at = (capacity as usize + 2 * p) * SLOT_VEC4S;
+        out[at..at + 10].copy_from_slice(&levels[l as usize].record().encode());
+    }
+    Ok(out)
+}
+
+/// Rebases a BLAS's nodes to lie at slot `first_slot` with its triangles from
+/// `first_triangle`.
+pub fn rebase_blas(nodes: &mut [[u32; 4]], first_slot: u32, first_triangle: u32) {
+    for n in nodes.chunks_exact_mut(SLOT_VEC4S) {
+        n[1][0] += first_slot;
+        n[1][1] += first_triangle;
+    }
+}
