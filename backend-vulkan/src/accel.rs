@@ -168,9 +168,9 @@ impl SceneAccel {
     ) -> Result<SceneAccel, BackendError> {
         let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
-        // one index buffer, level after level (an instance's indices rebased to its
-        // positions)
-        let mut indices: Vec<u32> = Vec::with_capacity(triangles.len() * 3);
+        // one index buffer in the triangle buffer's order (records come in TLAS leaf
+        // order; each fills its own range, an instance's indices rebased to its positions)
+        let mut indices: Vec<u32> = vec![0; triangles.len() * 3];
         for r in records {
             let range = r.triangle_base as usize..(r.triangle_base + r.triangle_count) as usize;
             let tris = triangles.get(range).ok_or_else(|| {
@@ -179,6 +179,7 @@ impl SceneAccel {
                 )
             })?;
             let identity = r.flags & instance_flags::IDENTITY != 0;
+            let mut at = r.triangle_base as usize * 3;
             for t in tris {
                 for i in t.indices {
                     let local = if identity {
@@ -192,7 +193,8 @@ impl SceneAccel {
                                 )
                             })?
                     };
-                    indices.push(local);
+                    indices[at] = local;
+                    at += 1;
                 }
             }
         }

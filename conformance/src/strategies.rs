@@ -170,20 +170,34 @@ pub struct CasterSpec {
     pub material: Material,
     pub jitter: (f32, f32),
     pub gap: f32,
+    /// Half the casters are instances (issue 19): built at the origin in object space and
+    /// placed by a transform (rotation about a random axis, uniform scale 0.7..1, which
+    /// only shrinks the bounding radius the slots are spaced for); `None` puts the shape
+    /// in world space, in the static level.
+    pub instance: Option<(glam::Quat, f32)>,
 }
 
 pub fn caster() -> impl Strategy<Value = CasterSpec> {
+    let instance = prop_oneof![
+        Just(None),
+        (rgb(-1.0, 1.0), 0.0f32..TAU, 0.7f32..=1.0).prop_map(|(axis, angle, scale)| {
+            let axis = axis.try_normalize().unwrap_or(Vec3::Y);
+            Some((glam::Quat::from_axis_angle(axis, angle), scale))
+        }),
+    ];
     (
         caster_shape(),
         caster_material(),
         (-JITTER..=JITTER, -JITTER..=JITTER),
         0.02f32..=0.8,
+        instance,
     )
-        .prop_map(|(shape, material, jitter, gap)| CasterSpec {
+        .prop_map(|(shape, material, jitter, gap, instance)| CasterSpec {
             shape,
             material,
             jitter,
             gap,
+            instance,
         })
 }
 
@@ -409,11 +423,23 @@ pub fn build_scene(
         bounds.grow(center + r);
         let name = format!("caster{i}");
         materials.insert(name.clone(), c.material.clone());
-        objects.push(Object {
-            name: name.clone(),
-            material: name,
-            shape: c.shape.place(center),
-            transform: None,
+        objects.push(match c.instance {
+            None => Object {
+                name: name.clone(),
+                material: name,
+                shape: c.shape.place(center),
+                transform: None,
+            },
+            Some((rotation, scale)) => Object {
+                name: name.clone(),
+                material: name,
+                shape: c.shape.place(Vec3::ZERO),
+                transform: Some(caustica_core::scene::Transform {
+                    translation: center,
+                    rotation,
+                    scale: Vec3::splat(scale),
+                }),
+            },
         });
     }
     Scene {

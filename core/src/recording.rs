@@ -213,7 +213,7 @@ impl Recording {
             materials: self.upload(&ds.materials, "materials"),
             lights: self.upload(&ds.lights, "lights"),
             bvh_nodes: self.upload(&ds.bvh_nodes, "bvh nodes"),
-            levels: ds.levels.len() as u32,
+            levels: ds.instances.levels.len() as u32,
         };
         self.kernel(PrepareScene { scene });
         scene

@@ -153,6 +153,12 @@ pub struct Level {
     pub world_bounds: Aabb,
     /// Box of its world vertices if its material is specular, else empty.
     pub caster_bounds: Aabb,
+    /// Whether a triangle of the level has a vertex normal that departs from its
+    /// geometric normal in world space ([`crate::device::device_scene::smooth_normals`]).
+    pub smooth_normals: bool,
+    /// An instance's triangles (world-vertex indices; empty for the static level): what
+    /// `smooth_normals` is recomputed over when it moves.
+    pub triangle_indices: Vec<[u32; 3]>,
 }
 
 impl Level {

@@ -44,21 +44,139 @@ pub struct DeviceScene {
     /// Per triangle (in `triangles`' order): the index of the scene object it came from
     /// (host only: CausticMap's atlas assigns receivers' triangles to tiles with it).
     pub triangle_objects: Vec<u32>,
-    /// The acceleration structure's levels (static level first, then the instances in
-    /// object order; [`crate::device::acceleration`]).
-    pub levels: Vec<Level>,
-    /// The instances' vertices in object space, level after level (host only: moving an
-    /// instance recomputes its world vertices from them).
-    pub object_vertices: Vec<GpuVertex>,
+    /// The acceleration structure's levels and what moving an instance needs (host
+    /// only).
+    pub instances: SceneInstances,
 }
 
-/// What [`DeviceScene::move_instances`] changed on the device side.
+/// The levels of a built scene ([`crate::device::acceleration`]) and the instances'
+/// object-space vertices: what a technique keeps to move instances without the rest of
+/// the [`DeviceScene`].
 #[derive(Clone, Debug, PartialEq)]
-pub struct InstanceUpdate {
-    /// World-vertex index ranges rewritten (one per moved instance).
-    pub vertex_ranges: Vec<std::ops::Range<u32>>,
-    /// The node buffer's first vectors rewritten (the TLAS and the records).
-    pub top_level_vec4s: u32,
+pub struct SceneInstances {
+    /// Static level first (if any object has no transform), then the instances in object
+    /// order.
+    pub levels: Vec<Level>,
+    /// The instances' vertices in object space, level after level.
+    pub object_vertices: Vec<GpuVertex>,
+    /// vec4 index in the node buffer where the object-space positions start.
+    positions_vec4: u32,
+}
+
+/// What moving instances changes ([`SceneInstances::move_instances`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstanceMove {
+    /// New world vertices, each run from its first index.
+    pub vertices: Vec<(u32, Vec<GpuVertex>)>,
+    /// The node buffer's new first vectors (TLAS and records).
+    pub top_level: Vec<[u32; 4]>,
+    /// The scene's new bounds and caster bounds (world space).
+    pub bounds: Aabb,
+    /// Its new caster bounds.
+    pub caster_bounds: Aabb,
+}
+
+impl InstanceMove {
+    /// Records the writes into the uploaded scene and the `prepare_scene` that refits
+    /// the acceleration structure (Vulkan: a new TLAS over the same BLASes).
+    pub fn record(
+        &self,
+        rec: &mut crate::recording::Recording,
+        scene: &crate::device::handle::SceneArgs,
+    ) -> Result<(), crate::device::error::BackendError> {
+        for (first, v) in &self.vertices {
+            rec.write(scene.vertices, *first, v, "moved instance vertices")?;
+        }
+        rec.write(
+            scene.bvh_nodes,
+            0,
+            &self.top_level,
+            "top-level BVH and instance records",
+        )?;
+        rec.kernel(crate::kernels::PrepareScene { scene: *scene });
+        Ok(())
+    }
+}
+
+impl SceneInstances {
+    /// Whether some level's triangles have smooth normals ([`smooth_normals`]).
+    pub fn smooth_normals(&self) -> bool {
+        self.levels.iter().any(|l| l.smooth_normals)
+    }
+
+    /// Moves instances (`(object index, transform)` pairs; the objects must have been
+    /// built with a transform): their world vertices and boxes, the scene's bounds, the
+    /// TLAS and the records are recomputed with the functions the build uses, so the
+    /// result equals a fresh build of the moved scene bitwise. No BLAS changes. On an error
+    /// nothing changes.
+    pub fn move_instances(
+        &mut self,
+        moves: &[(usize, Transform)],
+    ) -> Result<InstanceMove, BuildError> {
+        let mut levels = self.levels.clone();
+        let mut moved = vec![false; levels.len()];
+        for (object, transform) in moves {
+            let path = format!("objects[{object}].transform");
+            if let Some(reason) = transform.problem() {
+                return Err(BuildError::Scene { path, reason });
+            }
+            let Some(k) = levels.iter().position(|l| l.object == Some(*object)) else {
+                return Err(BuildError::Scene {
+                    path,
+                    reason: "the object has no transform in the scene it was built from, so it \
+                             is part of the static level; give it one (identity will do) to \
+                             move it"
+                        .into(),
+                });
+            };
+            let l = &mut levels[k];
+            let mirrors = |t: &Transform| t.world_from_object().matrix3.determinant() < 0.0;
+            if mirrors(&l.transform) != mirrors(transform) {
+                return Err(BuildError::Scene {
+                    path,
+                    reason: "the new transform mirrors the object where the old one did not \
+                             (or the reverse): its triangles' winding would change; build \
+                             the scene anew"
+                        .into(),
+                });
+            }
+            l.transform = *transform;
+            moved[k] = true;
+        }
+        let mut vertices = Vec::new();
+        for (l, _) in levels.iter_mut().zip(&moved).filter(|(_, m)| **m) {
+            let first = (l.position_base - self.positions_vec4) as usize;
+            let local = &self.object_vertices[first..first + l.vertex_count as usize];
+            let world = world_vertices(&l.transform, local);
+            let mut b = Aabb::EMPTY;
+            for v in &world {
+                b.grow(Vec3::from(v.position));
+            }
+            check_placed(l.object.unwrap_or(0), &b)?;
+            l.caster_bounds = if l.caster_bounds.is_empty() {
+                Aabb::EMPTY
+            } else {
+                b
+            };
+            l.world_bounds = b;
+            l.smooth_normals = smooth_normals(l.triangle_indices.iter().copied(), &|i: u32| {
+                world[(i - l.vertex_base) as usize]
+            });
+            vertices.push((l.vertex_base, world));
+        }
+        let top_level = top_level(&levels).map_err(|reason| BuildError::Scene {
+            path: "objects".into(),
+            reason,
+        })?;
+        let (bounds, caster_bounds) = level_bounds(&levels);
+        self.levels = levels;
+        Ok(InstanceMove {
+            vertices,
+            top_level,
+            bounds,
+            caster_bounds,
+        })
+    }
 }
 
 /// An instance's world vertices: positions through `world_from_object`, normals through
@@ -74,6 +192,43 @@ pub fn world_vertices(t: &Transform, local: &[GpuVertex]) -> Vec<GpuVertex> {
             ..*v
         })
         .collect()
+}
+
+/// Whether a triangle has a vertex normal more than 1e-4 (per axis) from its geometric
+/// normal (either side): where none does, shading and geometric normals agree (PhotonGi's
+/// Eq. 20 correction is then 1 up to its epsilon).
+pub fn smooth_normals(
+    triangles: impl Iterator<Item = [u32; 3]>,
+    vertex: &dyn VertexLookup,
+) -> bool {
+    let mut triangles = triangles;
+    triangles.any(|t| {
+        let v = t.map(|i| vertex.vertex(i));
+        let p = v.map(|v| Vec3::from(v.position));
+        let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+        v.iter().any(|v| {
+            let n = Vec3::from(v.normal).normalize_or_zero();
+            (n - ng).abs().max_element() > 1e-4 && (n + ng).abs().max_element() > 1e-4
+        })
+    })
+}
+
+/// A world vertex by index (a slice of all, or one instance's run).
+pub trait VertexLookup {
+    /// Vertex `i`.
+    fn vertex(&self, i: u32) -> GpuVertex;
+}
+
+impl VertexLookup for Vec<GpuVertex> {
+    fn vertex(&self, i: u32) -> GpuVertex {
+        self[i as usize]
+    }
+}
+
+impl<F: Fn(u32) -> GpuVertex> VertexLookup for F {
+    fn vertex(&self, i: u32) -> GpuVertex {
+        self(i)
+    }
 }
 
 /// The scene's bounds and caster bounds: unions of the levels' (min and max are exact, so
@@ -191,6 +346,8 @@ impl DeviceScene {
             position_base: 0,
             world_bounds: Aabb::EMPTY,
             caster_bounds: Aabb::EMPTY,
+            smooth_normals: false,
+            triangle_indices: Vec::new(),
         };
         // instances: (level, triangles, object-space vertices)
         let mut instances: Vec<(Level, Vec<GpuTriangle>)> = Vec::new();
@@ -271,6 +428,8 @@ impl DeviceScene {
                         position_base: object_vertices.len() as u32,
                         world_bounds,
                         caster_bounds: if specular { world_bounds } else { Aabb::EMPTY },
+                        smooth_normals: false,
+                        triangle_indices: tris.iter().map(|t| t.indices).collect(),
                     };
                     object_vertices.extend_from_slice(&local);
                     instances.push((level, tris));
@@ -328,6 +487,11 @@ impl DeviceScene {
             blas_nodes.extend(nodes);
             levels.push(level);
         }
+        for l in &mut levels {
+            let range = l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize;
+            l.smooth_normals =
+                smooth_normals(triangles[range].iter().map(|t| t.indices), &vertices);
+        }
         let positions_vec4 = slot as usize * SLOT_VEC4S;
         for l in levels.iter_mut().filter(|l| l.object.is_some()) {
             l.position_base += positions_vec4 as u32;
@@ -359,98 +523,25 @@ impl DeviceScene {
             has_dispersion,
             degenerate_triangles,
             triangle_objects,
-            levels,
-            object_vertices,
+            instances: SceneInstances {
+                levels,
+                object_vertices,
+                positions_vec4: positions_vec4 as u32,
+            },
         })
     }
 
-    /// Moves instances (`(object index, transform)` pairs; the objects must have been
-    /// built with a transform): their world vertices and boxes, the scene's bounds, the
-    /// TLAS and the records are recomputed with the functions the build uses, so the
-    /// result equals a fresh build of the moved scene bitwise. No BLAS changes. Says which
-    /// vertex ranges changed and how many leading node-buffer vectors (TLAS and records)
-    /// to rewrite. On an error nothing changes.
-    pub fn move_instances(
-        &mut self,
-        moves: &[(usize, Transform)],
-    ) -> Result<InstanceUpdate, BuildError> {
-        let mut levels = self.levels.clone();
-        let mut changed = Vec::new();
-        for (object, transform) in moves {
-            let path = format!("objects[{object}].transform");
-            if let Some(reason) = transform.problem() {
-                return Err(BuildError::Scene { path, reason });
-            }
-            let Some(l) = levels.iter_mut().find(|l| l.object == Some(*object)) else {
-                return Err(BuildError::Scene {
-                    path,
-                    reason: "the object has no transform in the scene it was built from, so it \
-                             is part of the static level; give it one (identity will do) to \
-                             move it"
-                        .into(),
-                });
-            };
-            let old_mirrored = l.transform.world_from_object().matrix3.determinant() < 0.0;
-            let new_mirrored = transform.world_from_object().matrix3.determinant() < 0.0;
-            if old_mirrored != new_mirrored {
-                return Err(BuildError::Scene {
-                    path,
-                    reason: "the new transform mirrors the object where the old one did not \
-                             (or the reverse): its triangles' winding would have to change; \
-                             rebuild the scene"
-                        .into(),
-                });
-            }
-            l.transform = *transform;
-            changed.push(l.clone());
+    /// Moves instances ([`SceneInstances::move_instances`]) and applies the move to these
+    /// arrays: the result equals a fresh build of the moved scene.
+    pub fn move_instances(&mut self, moves: &[(usize, Transform)]) -> Result<(), BuildError> {
+        let m = self.instances.move_instances(moves)?;
+        for (first, v) in &m.vertices {
+            self.vertices[*first as usize..*first as usize + v.len()].copy_from_slice(v);
         }
-        let mut writes = Vec::new();
-        let mut new_vertices = Vec::new();
-        for l in &mut levels {
-            if !changed.iter().any(|c| c.object == l.object) {
-                continue;
-            }
-            let first = l.position_base - self.positions_vec4() as u32;
-            let local = &self.object_vertices[first as usize..(first + l.vertex_count) as usize];
-            let world = world_vertices(&l.transform, local);
-            let mut b = Aabb::EMPTY;
-            for v in &world {
-                b.grow(Vec3::from(v.position));
-            }
-            check_placed(l.object.unwrap_or(0), &b)?;
-            l.caster_bounds = if l.caster_bounds.is_empty() {
-                Aabb::EMPTY
-            } else {
-                b
-            };
-            l.world_bounds = b;
-            writes.push(l.vertex_base..l.vertex_base + l.vertex_count);
-            new_vertices.push(world);
-        }
-        let top = top_level(&levels).map_err(|reason| BuildError::Scene {
-            path: "objects".into(),
-            reason,
-        })?;
-        for (range, world) in writes.iter().zip(new_vertices) {
-            self.vertices[range.start as usize..range.end as usize].copy_from_slice(&world);
-        }
-        self.bvh_nodes[..top.len()].copy_from_slice(&top);
-        (self.bounds, self.caster_bounds) = level_bounds(&levels);
-        self.levels = levels;
-        Ok(InstanceUpdate {
-            vertex_ranges: writes,
-            top_level_vec4s: top.len() as u32,
-        })
-    }
-
-    /// vec4 index in the node buffer where the object-space positions start.
-    fn positions_vec4(&self) -> usize {
-        self.levels
-            .iter()
-            .filter(|l| l.object.is_some())
-            .map(|l| l.position_base as usize)
-            .min()
-            .unwrap_or(self.bvh_nodes.len())
+        self.bvh_nodes[..m.top_level.len()].copy_from_slice(&m.top_level);
+        self.bounds = m.bounds;
+        self.caster_bounds = m.caster_bounds;
+        Ok(())
     }
 
     /// Number of CWBVH nodes.

@@ -26,7 +26,7 @@
 //! automatic per-triangle atlas for such meshes is left for later: TODO(issue 16).)
 
 use crate::device::device_scene::DeviceScene;
-use crate::device::layout::{AtlasTexel, AtlasTileTexel, NO_TILE};
+use crate::device::layout::{AtlasTexel, AtlasTileTexel, GpuVertex, NO_TILE};
 use glam::{Vec2, Vec3};
 
 /// Default atlas size (texels a side), the source's caustic map size.
@@ -363,8 +363,17 @@ pub struct AtlasReceivers {
     triangles: Vec<Vec<ReceiverTriangle>>,
     /// Per receiver: its world area (scene units^2).
     areas: Vec<f64>,
+    /// Per receiver: its triangles' world-vertex indices (to follow moved instances).
+    indices: Vec<Vec<[u32; 3]>>,
     /// Triangles in the scene.
     scene_triangles: usize,
+}
+
+/// A receiver's world area: the sum of its triangles' areas (scene units^2).
+fn world_area(ts: &[ReceiverTriangle]) -> f64 {
+    ts.iter()
+        .map(|(_, p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
+        .sum()
 }
 
 impl AtlasReceivers {
@@ -379,6 +388,7 @@ impl AtlasReceivers {
             slot_of[o as usize] = Some(r);
         }
         let mut triangles: Vec<Vec<ReceiverTriangle>> = vec![Vec::new(); objects.len()];
+        let mut indices: Vec<Vec<[u32; 3]>> = vec![Vec::new(); objects.len()];
         for (t, (tri, &o)) in ds.triangles.iter().zip(&ds.triangle_objects).enumerate() {
             if let Some(r) = slot_of.get(o as usize).copied().flatten() {
                 let v = tri.indices.map(|i| ds.vertices[i as usize]);
@@ -387,22 +397,49 @@ impl AtlasReceivers {
                     v.map(|v| Vec3::from(v.position)),
                     v.map(|v| Vec2::new(v.u, v.v)),
                 ));
+                indices[r].push(tri.indices);
             }
         }
-        let areas = triangles
-            .iter()
-            .map(|ts| {
-                ts.iter()
-                    .map(|(_, p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
-                    .sum()
-            })
-            .collect();
+        let areas = triangles.iter().map(|ts| world_area(ts)).collect();
         AtlasReceivers {
             objects,
             triangles,
             areas,
+            indices,
             scene_triangles: ds.triangles.len(),
         }
+    }
+
+    /// Follows moved instances: `vertices` are runs of new world vertices from their first
+    /// index ([`crate::device::device_scene::InstanceMove::vertices`]). The receivers whose
+    /// triangles use them get their new corners and areas, computed as
+    /// [`AtlasReceivers::of`] does, so the layout equals that of a fresh build of the moved
+    /// scene. Returns whether any receiver moved.
+    pub fn move_vertices(&mut self, vertices: &[(u32, Vec<GpuVertex>)]) -> bool {
+        let lookup = |i: u32| {
+            vertices.iter().find_map(|(first, v)| {
+                i.checked_sub(*first)
+                    .and_then(|k| v.get(k as usize))
+                    .map(|v| Vec3::from(v.position))
+            })
+        };
+        let mut any = false;
+        for r in 0..self.objects.len() {
+            let mut moved = false;
+            for (tri, idx) in self.triangles[r].iter_mut().zip(&self.indices[r]) {
+                for (corner, &i) in tri.1.iter_mut().zip(idx) {
+                    if let Some(p) = lookup(i) {
+                        *corner = p;
+                        moved = true;
+                    }
+                }
+            }
+            if moved {
+                self.areas[r] = world_area(&self.triangles[r]);
+                any = true;
+            }
+        }
+        any
     }
 
     /// Per receiver: whether a triangle of it has its bit set in `reach`, a triangle

@@ -73,6 +73,17 @@ pub trait Technique {
     /// removed), without rebuilding geometry.
     fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error>;
 
+    /// Moves instances for the next frames (`(object index, transform)` pairs; each object
+    /// must have had a transform in the scene the technique was built from, see
+    /// [`crate::scene::Object::transform`]): their world vertices and the top level of the
+    /// acceleration structure are rewritten, no BVH is rebuilt, and the next frame equals
+    /// that of a technique created for the moved scene, bitwise. An error leaves the
+    /// technique as it was.
+    fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error>;
     /// Replaces the materials' parameters for the next frames without rebuilding geometry
     /// (the same names, none switching between diffuse and specular:
     /// [`crate::frame::material_update`]); an error leaves the technique as it was.
@@ -109,6 +120,28 @@ pub fn with_camera(
 ) -> Result<crate::scene::Scene, Error> {
     let mut model = model.clone();
     model.camera = camera.clone();
+    model
+        .validate()
+        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+    Ok(model)
+}
+
+/// `model` with the objects in `moves` given their new transforms, validated: what every
+/// technique's `set_object_transforms` checks before it changes anything.
+pub fn with_transforms(
+    model: &crate::scene::Scene,
+    moves: &[(usize, crate::scene::Transform)],
+) -> Result<crate::scene::Scene, Error> {
+    let mut model = model.clone();
+    for (k, t) in moves {
+        let count = model.objects.len();
+        let o = model.objects.get_mut(*k).ok_or_else(|| {
+            Error::InvalidParameter(format!(
+                "set_object_transforms: object {k} does not exist (the scene has {count})"
+            ))
+        })?;
+        o.transform = Some(*t);
+    }
     model
         .validate()
         .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;

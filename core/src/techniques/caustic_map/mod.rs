@@ -41,7 +41,7 @@ pub use settings::{
 };
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::{BuildBudget, DeviceScene};
+use crate::device::device_scene::{BuildBudget, DeviceScene, SceneInstances};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -226,6 +226,8 @@ pub struct CausticMap {
     atlas_bytes: u64,
     image_bytes: u64,
     reference: Option<Image>,
+    /// The acceleration structure's levels, to move instances without a rebuild.
+    instances: SceneInstances,
 }
 
 impl CausticMap {
@@ -353,6 +355,7 @@ impl CausticMap {
             atlas_bytes: 0,
             image_bytes: 0,
             reference: None,
+            instances: ds.instances,
         };
         let made = (|| {
             if let Some(l) = &layout {
@@ -1218,55 +1221,9 @@ impl CausticMap {
         model
             .validate()
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-        let mut emission = Emission::new(
-            &model,
-            self.bounds,
-            self.caster_bounds,
-            self.has_dispersion,
-            &self.settings,
-        );
-        if let Some(a) = &self.adaptive {
-            // the traversal's pyramid and its coarse photons' quantum, as at creation
-            adaptive_caustics::fit_planes(&mut emission, &a.settings, self.has_dispersion);
-        }
-        emission.check_light_flux()?;
-        // the traversal's buffers hold planes down to its finest level
-        let deeper = self.adaptive.as_ref().is_some_and(|a| {
-            let start = a.settings.start_grid;
-            let finest = |e: &Emission| {
-                e.planes
-                    .iter()
-                    .map(|(_, _, p)| (p.resolution.0 / start).max(1).ilog2())
-                    .max()
-                    .unwrap_or(0)
-            };
-            finest(&emission) > finest(&self.emission)
-        });
-        let per_plane = emission
-            .planes
-            .iter()
-            .map(|(_, _, p)| p.texels())
-            .max()
-            .unwrap_or(0);
-        let had_photons = self.plan.trace_variant.is_some();
-        if (emission.planes.is_empty() == had_photons && self.settings.prune)
-            || deeper
-            || (self.adaptive.is_none()
-                && self.atlas.is_some_and(|a| {
-                    per_plane.min(self.settings.max_photons_per_batch as u64) > a.photons.len as u64
-                }))
-        {
-            // the passes or buffer sizes change: build anew on the same backend (with the
-            // same traversal, for AdaptiveCaustics)
-            let settings = self.settings.clone();
-            let adaptive = self.adaptive.as_ref().map(|a| a.settings.clone());
-            let fresh = CausticMap::build(backend, &model, settings, adaptive)?;
-            let old = std::mem::replace(self, fresh);
-            let reference = old.reference.clone();
-            old.free(backend)?;
-            self.reference = reference;
-            return Ok(());
-        }
+        let Some(emission) = self.plan_emission(&model, self.bounds, self.caster_bounds)? else {
+            return self.rebuild_as(backend, &model);
+        };
         let gpu: Vec<GpuLight> = lights
             .iter()
             .map(crate::device::device_scene::gpu_light)
@@ -1294,6 +1251,118 @@ impl CausticMap {
         self.atlas_valid = false;
         if let Some(f) = &mut self.images.filters {
             f.reset();
+        }
+        let f = self.plan.features;
+        self.replan(f.mirrors || f.dielectrics, true);
+        Ok(())
+    }
+
+    /// The emission of `model` with the scene bounds given, or `None` when the passes or
+    /// buffer sizes it needs differ from this technique's (then it must be built anew).
+    fn plan_emission(
+        &self,
+        model: &Scene,
+        bounds: crate::math::geometry::Aabb,
+        caster_bounds: crate::math::geometry::Aabb,
+    ) -> Result<Option<Emission>, Error> {
+        let mut emission = Emission::new(
+            model,
+            bounds,
+            caster_bounds,
+            self.has_dispersion,
+            &self.settings,
+        );
+        if let Some(a) = &self.adaptive {
+            // the traversal's pyramid and its coarse photons' quantum, as at creation
+            adaptive_caustics::fit_planes(&mut emission, &a.settings, self.has_dispersion);
+        }
+        emission.check_light_flux()?;
+        // the traversal's buffers hold planes down to its finest level
+        let deeper = self.adaptive.as_ref().is_some_and(|a| {
+            let start = a.settings.start_grid;
+            let finest = |e: &Emission| {
+                e.planes
+                    .iter()
+                    .map(|(_, _, p)| (p.resolution.0 / start).max(1).ilog2())
+                    .max()
+                    .unwrap_or(0)
+            };
+            finest(&emission) > finest(&self.emission)
+        });
+        let per_plane = emission
+            .planes
+            .iter()
+            .map(|(_, _, p)| p.texels())
+            .max()
+            .unwrap_or(0);
+        let had_photons = self.plan.trace_variant.is_some();
+        let rebuild = (emission.planes.is_empty() == had_photons && self.settings.prune)
+            || deeper
+            || (self.adaptive.is_none()
+                && self.atlas.is_some_and(|a| {
+                    per_plane.min(self.settings.max_photons_per_batch as u64) > a.photons.len as u64
+                }));
+        Ok((!rebuild).then_some(emission))
+    }
+
+    /// Builds this technique anew for `model` on the same backend (with the same
+    /// traversal, for AdaptiveCaustics), keeping the reference image.
+    fn rebuild_as(&mut self, backend: &mut dyn Backend, model: &Scene) -> Result<(), Error> {
+        let settings = self.settings.clone();
+        let adaptive = self.adaptive.as_ref().map(|a| a.settings.clone());
+        let fresh = CausticMap::build(backend, model, settings, adaptive)?;
+        let old = std::mem::replace(self, fresh);
+        let reference = old.reference.clone();
+        old.free(backend)?;
+        self.reference = reference;
+        Ok(())
+    }
+
+    /// Moves instances for the next frames ([`crate::frame::technique::Technique::set_object_transforms`]):
+    /// the moved objects' world vertices and the top level are rewritten in place, the
+    /// light view planes re-aimed at the new caster bounds, and a moved receiver's tile
+    /// sizes follow its new area (the atlas is laid out again for every receiver, as at
+    /// creation, and the next photon pass keeps the reached ones). The technique is built
+    /// anew only where [`CausticMap::set_lights`] would be. On an error nothing changes.
+    pub fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error> {
+        if self.adaptive.is_some() {
+            // TODO(issue 19): the traversal's per-caster boxes follow moved casters
+            return Err(Error::InvalidParameter(
+                "set_object_transforms: AdaptiveCaustics does not move instances yet (its \
+                 traversal's caster boxes are fixed at creation); create it anew"
+                    .into(),
+            ));
+        }
+        let model = crate::frame::technique::with_transforms(&self.model, moves)?;
+        let mut instances = self.instances.clone();
+        let m = instances.move_instances(moves)?;
+        let Some(emission) = self.plan_emission(&model, m.bounds, m.caster_bounds)? else {
+            return self.rebuild_as(backend, &model);
+        };
+        let mut receivers = self.receivers.clone();
+        let receivers_moved = receivers
+            .as_mut()
+            .is_some_and(|r| r.move_vertices(&m.vertices));
+        let mut rec = Recording::new();
+        m.record(&mut rec, &self.scene)?;
+        backend.execute(&rec)?;
+        self.instances = instances;
+        self.receivers = receivers;
+        self.bounds = m.bounds;
+        self.caster_bounds = m.caster_bounds;
+        self.model = model;
+        self.emission = emission;
+        self.atlas_valid = false;
+        if let Some(f) = &mut self.images.filters {
+            f.reset();
+        }
+        if let (true, Some(a)) = (receivers_moved, self.atlas) {
+            let all = vec![true; self.tiled.len()];
+            self.relayout(backend, a, &all)?;
         }
         let f = self.plan.features;
         self.replan(f.mirrors || f.dielectrics, true);
@@ -1419,6 +1488,14 @@ impl Technique for CausticMap {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         CausticMap::set_lights(self, backend, lights)
+    }
+
+    fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error> {
+        CausticMap::set_object_transforms(self, backend, moves)
     }
 
     fn set_materials(

@@ -23,7 +23,7 @@ mod settings;
 pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::{BuildBudget, DeviceScene};
+use crate::device::device_scene::{BuildBudget, DeviceScene, SceneInstances};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -203,24 +203,16 @@ fn plan_lights(
 /// Whether Eq. 20's shading-normal correction runs: the setting, the splat estimator
 /// (the raw deposit has no splats to carry a direction), and a scene where some
 /// triangle's vertex normals depart from its geometric normal (elsewhere the shading and
-/// geometric normals agree and the factor is 1 up to `eps`).
-fn shading_correction(s: &PhotonGiSettings, ds: &DeviceScene) -> bool {
-    s.shading_normals && s.estimator == IndirectEstimator::Splat && smooth_normals(ds)
+/// geometric normals agree and the factor is 1 up to `eps`:
+/// [`crate::device::device_scene::smooth_normals`]).
+fn shading_correction(s: &PhotonGiSettings, instances: &SceneInstances) -> bool {
+    s.shading_normals && s.estimator == IndirectEstimator::Splat && instances.smooth_normals()
 }
 
-/// Whether a triangle of `ds` has a vertex normal more than 1e-4 (per axis) from its
-/// geometric normal (either side).
-fn smooth_normals(ds: &DeviceScene) -> bool {
-    ds.triangles.iter().any(|t| {
-        let p = t
-            .indices
-            .map(|i| Vec3::from(ds.vertices[i as usize].position));
-        let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        t.indices.iter().any(|&i| {
-            let n = Vec3::from(ds.vertices[i as usize].normal).normalize_or_zero();
-            (n - ng).abs().max_element() > 1e-4 && (n + ng).abs().max_element() > 1e-4
-        })
-    })
+/// The length of the scene box's diagonal (scene units; at least the smallest positive
+/// f32).
+fn scene_diagonal(b: &crate::math::geometry::Aabb) -> f32 {
+    (b.max - b.min).length().max(f32::MIN_POSITIVE)
 }
 
 /// Device buffers of the frame.
@@ -397,6 +389,8 @@ pub struct PhotonGi {
     bytes: u64,
     reference: Option<Image>,
     degenerate_triangles: u64,
+    /// The acceleration structure's levels, to move instances without a rebuild.
+    instances: SceneInstances,
 }
 
 impl PhotonGi {
@@ -421,9 +415,7 @@ impl PhotonGi {
         let total = settings.photons_w as u64 * settings.photons_h as u64;
         let (rsms, power_scale, flux_quantum) =
             plan_lights(&ds.lights, total, settings.rsm_size, &ds.bounds, &[]);
-        let diagonal = (ds.bounds.max - ds.bounds.min)
-            .length()
-            .max(f32::MIN_POSITIVE);
+        let diagonal = scene_diagonal(&ds.bounds);
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
         let side = settings.rsm_size;
@@ -432,7 +424,7 @@ impl PhotonGi {
         let max_faces = 6u32;
         let max_photons = total.min(u32::MAX as u64) as u32;
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
-        let correct = shading_correction(&settings, &ds);
+        let correct = shading_correction(&settings, &ds.instances);
         let s = ScreenBuffers::create(&mut rec, camera, &settings, correct);
         let buffers = Buffers {
             gbuffer: s.gbuffer,
@@ -474,6 +466,7 @@ impl PhotonGi {
             bytes: allocation.bytes,
             reference: None,
             degenerate_triangles: ds.degenerate_triangles,
+            instances: ds.instances,
         };
         if let Err(e) = t.plan_photons(backend) {
             let _ = t.free(backend);
@@ -1032,6 +1025,38 @@ impl PhotonGi {
         Ok(())
     }
 
+    /// Moves instances for the next frames
+    /// ([`crate::frame::technique::Technique::set_object_transforms`]): the moved objects'
+    /// world vertices and the top level are rewritten in place, the RSMs re-planned over
+    /// the new scene bounds, photons re-allocated, and the temporal history reset. Built
+    /// anew (on the same backend) only when the move switches Eq. 20's correction pass on
+    /// or off. On an error nothing changes.
+    pub fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error> {
+        let model = crate::frame::technique::with_transforms(&self.model, moves)?;
+        let mut instances = self.instances.clone();
+        let m = instances.move_instances(moves)?;
+        if shading_correction(&self.settings, &instances) != self.buffers.uncorrected.is_some() {
+            let fresh = PhotonGi::new(backend, &model, self.settings.clone())?;
+            let old = std::mem::replace(self, fresh);
+            self.reference = old.reference.clone();
+            return old.free(backend);
+        }
+        let mut rec = Recording::new();
+        m.record(&mut rec, &self.scene)?;
+        backend.execute(&rec)?;
+        self.instances = instances;
+        self.bounds = m.bounds;
+        self.diagonal = scene_diagonal(&m.bounds);
+        self.model = model;
+        self.plan_photons(backend)?;
+        self.reset_history();
+        Ok(())
+    }
+
     /// Replaces the materials' parameters for the next frames (the same names, none
     /// switching between diffuse and specular: `frame::material_update`); the temporal
     /// history is reset.
@@ -1201,6 +1226,14 @@ impl Technique for PhotonGi {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         PhotonGi::set_lights(self, backend, lights)
+    }
+
+    fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error> {
+        PhotonGi::set_object_transforms(self, backend, moves)
     }
 
     fn set_materials(

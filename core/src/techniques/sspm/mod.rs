@@ -30,7 +30,7 @@ pub use plan::{plan_frame, volume_light_plans, Needs};
 pub use settings::{GatherFilter, SspmSettings};
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::{BuildBudget, DeviceScene};
+use crate::device::device_scene::{BuildBudget, DeviceScene, SceneInstances};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -126,6 +126,8 @@ pub struct Sspm {
     /// AdaptiveCaustics' screen target: the traversal's settings, and its frame.
     adaptive: Option<AdaptiveEmission>,
     adaptive_frame: Option<AdaptiveFrame>,
+    /// The acceleration structure's levels, to move instances without a rebuild.
+    instances: SceneInstances,
 }
 
 /// What the frame constants need of the device scene, kept so that lights can change
@@ -259,6 +261,7 @@ impl Sspm {
             bounds,
             adaptive,
             adaptive_frame: parts.adaptive,
+            instances: ds.instances,
         })
     }
 
@@ -1059,6 +1062,69 @@ impl Sspm {
         Ok(())
     }
 
+    /// Moves instances for the next frames (`(object index, transform)` pairs; each object
+    /// must have had a transform in the scene this technique was built from: see
+    /// [`crate::scene::Object::transform`]). No BVH is rebuilt: the moved objects' world
+    /// vertices and the top level are rewritten in place (Vulkan rebuilds only its TLAS),
+    /// the emission is re-planned for the new caster bounds, and the frame's buffers are
+    /// remade only if the plan's needs change. The next frame equals, bitwise, a frame of a
+    /// technique built fresh from the moved scene. On an error nothing changes.
+    pub fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error> {
+        if self.adaptive.is_some() {
+            // TODO(issue 19): the traversal's per-caster boxes follow moved casters
+            return Err(Error::InvalidParameter(
+                "set_object_transforms: AdaptiveCaustics' screen target does not move \
+                 instances yet (its caster boxes are fixed at creation); build it anew"
+                    .into(),
+            ));
+        }
+        let model = crate::frame::technique::with_transforms(&self.model, moves)?;
+        let mut instances = self.instances.clone();
+        let m = instances.move_instances(moves)?;
+        let bounds = SceneBounds {
+            bounds: m.bounds,
+            caster_bounds: m.caster_bounds,
+            ..self.bounds
+        };
+        let (constants, mut plan, _) =
+            Sspm::frame_setup(&model, bounds, &self.settings, self.adaptive.as_ref())?;
+        let mut rec = Recording::new();
+        m.record(&mut rec, &self.scene)?;
+        backend.execute(&rec)?;
+        self.instances = instances;
+        let old_bounds = self.bounds;
+        self.bounds = bounds;
+        if let Some(f) = &mut self.filters {
+            f.reset();
+        }
+        if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) {
+            let settings = self.settings.clone();
+            if let Err(e) = self.rebuild_frame(backend, model, settings) {
+                // the old placement back, then the error
+                let back: Vec<(usize, crate::scene::Transform)> = moves
+                    .iter()
+                    .map(|(k, _)| (*k, self.model.objects[*k].transform.unwrap_or_default()))
+                    .collect();
+                let m = self.instances.move_instances(&back)?;
+                let mut rec = Recording::new();
+                m.record(&mut rec, &self.scene)?;
+                backend.execute(&rec)?;
+                self.bounds = old_bounds;
+                return Err(e);
+            }
+            return Ok(());
+        }
+        plan.buffers = std::mem::take(&mut self.plan.buffers);
+        self.model = model;
+        self.constants = constants;
+        self.plan = plan;
+        Ok(())
+    }
+
     /// Replaces the materials' parameters for the next frames
     /// ([`crate::frame::material_update`]): the table is uploaded in place; when the
     /// scene's features or dispersion change, the frame is also re-planned and its
@@ -1236,6 +1302,14 @@ impl Technique for Sspm {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         Sspm::set_lights(self, backend, lights)
+    }
+
+    fn set_object_transforms(
+        &mut self,
+        backend: &mut dyn Backend,
+        moves: &[(usize, crate::scene::Transform)],
+    ) -> Result<(), Error> {
+        Sspm::set_object_transforms(self, backend, moves)
     }
 
     fn set_materials(
