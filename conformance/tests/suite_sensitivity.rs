@@ -54,6 +54,12 @@ use proptest::test_runner::TestRunner;
 enum Mutation {
     /// Correct, with different rounding: float inputs nudged by up to 2 ulps.
     UlpNoise,
+    /// `prepare_scene` leaves every instance at the origin: its record's `object_from_world`
+    /// becomes the identity (a traversal that ignores the instance transform).
+    InstanceTransformLost,
+    /// Writes into existing buffers are dropped (a backend without `Step::Write`: moved
+    /// instances never reach the device).
+    WritesDropped,
     /// `primary_gbuffer` writes the view distance as the view depth.
     GbufferDepthIsDistance,
     /// `primary_gbuffer` writes the (interpolated) shading normal as the geometric normal.
@@ -247,6 +253,24 @@ impl Mutant {
             }
         };
         match (self.mutation, k) {
+            (
+                Mutation::InstanceTransformLost,
+                Kernel::PrepareScene(caustica_core::kernels::PrepareScene { scene }),
+            ) => {
+                use caustica_core::device::acceleration::{tlas_capacity, SLOT_VEC4S};
+                let first = tlas_capacity(scene.levels as usize) as usize * SLOT_VEC4S;
+                let levels = scene.levels as usize;
+                self.modify::<[u32; 4]>(scene.bvh_nodes.id, |v| {
+                    for l in 0..levels {
+                        let r = first + 10 * l;
+                        for (row, axis) in v[r..r + 3].iter_mut().enumerate() {
+                            let mut id = [0.0f32; 4];
+                            id[row] = 1.0;
+                            *axis = id.map(f32::to_bits);
+                        }
+                    }
+                })
+            }
             (
                 Mutation::GbufferDepthIsDistance,
                 Kernel::PrimaryGbuffer(PrimaryGbuffer { gbuffer, .. }),
@@ -555,6 +579,9 @@ impl Backend for Mutant {
             if self.mutation == Mutation::UlpNoise {
                 Self::perturb(&mut step);
             }
+            if self.mutation == Mutation::WritesDropped && matches!(step, Step::Write { .. }) {
+                continue;
+            }
             if let (Mutation::VariantWithoutFeatures, Step::Kernel(k)) = (self.mutation, &mut step)
             {
                 k.modify(|k| {
@@ -656,6 +683,65 @@ fn rounding_differences_pass_every_comparison() {
         }
     }
     report.finish();
+}
+
+/// The instance faults fail the checks that cover instances: a traversal that ignores the
+/// instance transform fails the frame comparison on `sphere` with its ball an instance
+/// (turned and moved: object and world space differ), and a backend that drops buffer
+/// writes fails the moved-equals-fresh comparison of instance_updates.rs.
+#[test]
+fn instance_faults_fail_the_instance_checks() {
+    use caustica_core::scene::Transform;
+    use caustica_core::techniques::create;
+    use glam::{Quat, Vec3};
+    let mut scene = builtin_small("sphere");
+    let ball = scene.objects.iter().position(|o| o.name == "ball").unwrap();
+    if let caustica_core::scene::Shape::Sphere { center, .. } = &mut scene.objects[ball].shape {
+        let c = std::mem::replace(center, Vec3::ZERO);
+        scene.objects[ball].transform = Some(Transform {
+            translation: c,
+            rotation: Quat::from_rotation_z(0.4),
+            scale: Vec3::splat(0.9),
+        });
+    }
+    let mut reference = harness::reference();
+    let mut cand = Mutant::candidate(Mutation::InstanceTransformLost);
+    let v = check_frame(
+        &mut reference,
+        cand.backend.as_mut(),
+        &scene,
+        &small_settings(64),
+    )
+    .expect("frames render");
+    assert!(
+        !v.failures.is_empty(),
+        "a traversal ignoring instance transforms passed the frame check"
+    );
+
+    let mut cand = Mutant::candidate(Mutation::WritesDropped);
+    let b = cand.backend.as_mut();
+    let mut moved = scene.clone();
+    let to = Transform {
+        translation: Vec3::new(0.3, 0.6, 0.1),
+        ..scene.objects[ball].transform.unwrap()
+    };
+    moved.objects[ball].transform = Some(to);
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
+    let frame = |t: &mut Box<dyn caustica_core::Technique>, b: &mut dyn Backend| {
+        t.frame(b, &mut |_| {}).expect("frame");
+        t.read_output(b, "composite").expect("read").pixels
+    };
+    let mut fresh = create("sspm", b, &moved, &settings).expect("create");
+    let want = frame(&mut fresh, b);
+    fresh.free(b).expect("free");
+    let mut t = create("sspm", b, &scene, &settings).expect("create");
+    t.set_object_transforms(b, &[(ball, to)]).expect("move");
+    let got = frame(&mut t, b);
+    t.free(b).expect("free");
+    assert!(
+        got != want,
+        "a backend dropping buffer writes passed the moved-equals-fresh comparison"
+    );
 }
 
 /// Each fault makes the check that covers its kernel fail on every scene where that kernel

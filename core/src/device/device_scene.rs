@@ -720,3 +720,111 @@ pub fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     let t = ((cos_theta - cos_outer) / (cos_inner - cos_outer)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::acceleration::{tlas_capacity, InstanceRecord};
+    use crate::scene::builtin::builtin;
+    use glam::Quat;
+
+    /// `cornell` with both balls instances (re-centred, placed by translation).
+    fn instanced_cornell() -> Scene {
+        let mut s = builtin("cornell").unwrap();
+        for o in s.objects.iter_mut().filter(|o| o.name.ends_with("ball")) {
+            if let crate::scene::Shape::Sphere { center, .. } = &mut o.shape {
+                o.transform = Some(Transform::from_translation(std::mem::replace(
+                    center,
+                    Vec3::ZERO,
+                )));
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn a_scene_without_transforms_has_one_static_level() {
+        let ds = DeviceScene::build(&builtin("sphere").unwrap(), Default::default()).unwrap();
+        assert_eq!(ds.instances.levels.len(), 1);
+        let l = &ds.instances.levels[0];
+        assert_eq!(l.object, None);
+        assert_eq!(l.triangle_count as usize, ds.triangles.len());
+        let r = InstanceRecord::decode(&ds.bvh_nodes[tlas_capacity(1) as usize * SLOT_VEC4S..]);
+        assert_eq!(r, l.record());
+        assert_eq!(
+            r.flags,
+            crate::device::acceleration::instance_flags::IDENTITY
+        );
+    }
+
+    #[test]
+    fn moved_instances_equal_a_fresh_build_bitwise() {
+        let scene = instanced_cornell();
+        let mut ds = DeviceScene::build(&scene, Default::default()).unwrap();
+        assert_eq!(ds.instances.levels.len(), 3, "static level and two balls");
+        let moves = [
+            (
+                5,
+                Transform {
+                    translation: Vec3::new(-0.2, 0.6, 0.1),
+                    rotation: Quat::from_rotation_y(0.7),
+                    scale: Vec3::new(0.8, 1.1, 0.9),
+                },
+            ),
+            (6, Transform::from_translation(Vec3::new(0.3, 0.4, -0.3))),
+        ];
+        ds.move_instances(&moves).unwrap();
+        let mut moved = scene.clone();
+        for (k, t) in moves {
+            moved.objects[k].transform = Some(t);
+        }
+        let fresh = DeviceScene::build(&moved, Default::default()).unwrap();
+        assert!(ds.vertices == fresh.vertices, "world vertices");
+        assert!(ds.bvh_nodes == fresh.bvh_nodes, "node buffer");
+        assert_eq!(ds.triangles, fresh.triangles);
+        assert_eq!(ds.bounds, fresh.bounds);
+        assert_eq!(ds.caster_bounds, fresh.caster_bounds);
+        assert_eq!(ds.instances, fresh.instances);
+    }
+
+    #[test]
+    fn static_objects_and_mirroring_moves_are_refused() {
+        let scene = instanced_cornell();
+        let mut ds = DeviceScene::build(&scene, Default::default()).unwrap();
+        let before = ds.bvh_nodes.clone();
+        let e = ds.move_instances(&[(0, Transform::IDENTITY)]).unwrap_err();
+        assert!(e.to_string().contains("static level"), "{e}");
+        let mirror = Transform {
+            scale: Vec3::new(-1.0, 1.0, 1.0),
+            ..Transform::IDENTITY
+        };
+        let e = ds.move_instances(&[(5, mirror)]).unwrap_err();
+        assert!(e.to_string().contains("mirrors"), "{e}");
+        assert!(ds.bvh_nodes == before, "a refused move changed the nodes");
+    }
+
+    #[test]
+    fn a_mirrored_instance_keeps_its_winding_with_its_normals() {
+        let mut scene = instanced_cornell();
+        scene.objects[5].transform = Some(Transform {
+            scale: Vec3::new(-1.0, 1.0, 1.0),
+            ..scene.objects[5].transform.unwrap()
+        });
+        let ds = DeviceScene::build(&scene, Default::default()).unwrap();
+        let l = ds
+            .instances
+            .levels
+            .iter()
+            .find(|l| l.object == Some(5))
+            .unwrap();
+        let tris = &ds.triangles[l.triangle_base as usize..][..l.triangle_count as usize];
+        // the winding's normal agrees with the vertex normals (outward) on every triangle
+        for t in tris {
+            let v = t.indices.map(|i| ds.vertices[i as usize]);
+            let p = v.map(|v| Vec3::from(v.position));
+            let ng = (p[1] - p[0]).cross(p[2] - p[0]);
+            let n = Vec3::from(v[0].normal) + Vec3::from(v[1].normal) + Vec3::from(v[2].normal);
+            assert!(ng.dot(n) > 0.0, "a mirrored triangle faces inward");
+        }
+    }
+}
