@@ -138,21 +138,54 @@ fn affine_row(r: [u32; 4], p: Vec3, w: f32) -> f32 {
     p.x * f[0] + p.y * f[1] + p.z * f[2] + w * f[3]
 }
 
-/// The ray as one level sees it: node-culling ray, its octant and its watertight form.
+/// The ray as one level sees it: node-culling ray, its octant, its watertight form, and
+/// `t_scale`, the factor from the ray's `t` to the culling ray's (1 in world space).
 #[derive(Clone, Copy)]
 struct LevelRay {
     ray: Ray,
     oct_inv4: u32,
     watertight: WatertightRay,
+    t_scale: f32,
+}
+
+/// The power of two that brings `d`'s largest component into [1, 2) (1 where it is zero or
+/// not finite): an object-space direction is `object_from_world` applied to a unit one, so
+/// its length is about 1 / scale, and obvhs's `safe_inverse` would clamp every component
+/// below 2^-23 of *unit* size, i.e. whole directions of instances scaled by 1e5 (seen: a
+/// glass ball at scale 1e5 missed 4% of its photons). Multiplying by a power of two is
+/// exact, so culling with `d * c` and `t / c` decides as culling with `d` and `t` would
+/// with an unclamped inverse.
+#[inline(always)]
+fn culling_scale(d: Vec3) -> f32 {
+    let e = (d.abs().max_element().to_bits() >> 23) & 0xff;
+    if e == 0 || e >= 254 {
+        return 1.0;
+    }
+    f32::from_bits((254 - e) << 23)
 }
 
 impl LevelRay {
-    fn new(origin: Vec3, dir: Vec3, t_max: f32) -> Option<LevelRay> {
+    /// The world ray (unit direction; culled as before instances existed).
+    fn world(origin: Vec3, dir: Vec3, t_max: f32) -> Option<LevelRay> {
         let ray = traversal_ray(origin, dir, t_max);
         Some(LevelRay {
             oct_inv4: ray_get_octant_inv4(&ray.direction),
             watertight: WatertightRay::new(origin, dir)?,
             ray,
+            t_scale: 1.0,
+        })
+    }
+
+    /// An instance's object-space ray (direction not normalised: `t` stays the world
+    /// ray's), culled with its direction scaled by [`culling_scale`].
+    fn object(origin: Vec3, dir: Vec3, t_max: f32) -> Option<LevelRay> {
+        let c = culling_scale(dir);
+        let ray = traversal_ray(origin, dir * c, t_max);
+        Some(LevelRay {
+            oct_inv4: ray_get_octant_inv4(&ray.direction),
+            watertight: WatertightRay::new(origin, dir)?,
+            ray,
+            t_scale: 1.0 / c,
         })
     }
 }
@@ -222,7 +255,7 @@ impl SceneView<'_> {
         if self.nodes.len() < SLOT_VEC4S {
             return None;
         }
-        let world = LevelRay::new(origin, dir, t_max)?;
+        let world = LevelRay::world(origin, dir, t_max)?;
         let mut level = world;
         let mut closest = t_max;
         let mut best: Option<Hit> = None;
@@ -264,7 +297,7 @@ impl SceneView<'_> {
                             affine_row(r[1], dir, 0.0),
                             affine_row(r[2], dir, 0.0),
                         );
-                        match LevelRay::new(o, d, closest) {
+                        match LevelRay::object(o, d, closest) {
                             Some(l) => level = l,
                             None => {
                                 // a direction the transform cannot carry: skip the instance
@@ -314,8 +347,8 @@ impl SceneView<'_> {
                 let slot_index = (child_index_offset - 24) ^ (level.oct_inv4 & 0xff);
                 let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
                 let node = self.node(child_index_base + relative_index);
-                // `level` is the world ray outside a BLAS
-                level.ray.tmax = closest;
+                // `level` is the world ray outside a BLAS (t_scale 1: `closest` exactly)
+                level.ray.tmax = closest * level.t_scale;
                 let hitmask = node_hits(node, &level.ray, level.oct_inv4);
                 current_group = UVec2::new(
                     node.child_base_idx,

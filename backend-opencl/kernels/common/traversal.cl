@@ -119,24 +119,34 @@ inline float affine_row(uint4 r, float3 p, float w) {
 // Instance record flag: the level is in world space (core's instance_flags::IDENTITY).
 #define INSTANCE_IDENTITY 1u
 
-// The ray as one level sees it (the CPU backend's LevelRay).
+// The ray as one level sees it (the CPU backend's LevelRay); `t_scale` takes the ray's t
+// to the culling ray's (1 in world space).
 typedef struct {
     float3 origin;
     float3 tdir;
     float3 inv_dir;
     uint oct_inv4;
-    WatertightRay wray;
+    float t_scale;
 } LevelRay;
 
-inline LevelRay level_ray(float3 origin, float3 dir) {
+inline LevelRay level_ray(float3 origin, float3 dir, float t_scale) {
     LevelRay l;
     l.origin = origin;
     l.tdir = (float3)(traversal_component(dir.x), traversal_component(dir.y),
                       traversal_component(dir.z));
     l.inv_dir = (float3)(safe_inverse(l.tdir.x), safe_inverse(l.tdir.y), safe_inverse(l.tdir.z));
     l.oct_inv4 = octant_inv4(l.tdir);
-    l.wray = watertight_ray(origin, dir);
+    l.t_scale = t_scale;
     return l;
+}
+
+// The power of two that brings d's largest component into [1, 2) (the CPU backend's
+// culling_scale: object-space directions are ~1/scale long, and safe_inverse clamps
+// components below 2^-23).
+inline float culling_scale(float3 d) {
+    uint e = (as_uint(fmax(fmax(fabs(d.x), fabs(d.y)), fabs(d.z))) >> 23) & 0xffu;
+    if (e == 0u || e >= 254u) return 1.0f;
+    return as_float((254u - e) << 23);
 }
 
 // Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true). Two levels
@@ -150,8 +160,10 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                            __global const GpuTriangle* triangles, float3 origin, float3 dir,
                            float t_max, bool any_hit, Hit* hit) {
     if (node_count == 0u) return false;
-    LevelRay world = level_ray(origin, dir);
+    LevelRay world = level_ray(origin, dir, 1.0f);
     LevelRay level = world;
+    WatertightRay world_wray = watertight_ray(origin, dir);
+    WatertightRay wray = world_wray;
     uint2 stack[TRAVERSAL_STACK_SIZE];
     uint sp = 0u;
     uint2 current_group = (uint2)(0u, 0x80000000u);
@@ -183,7 +195,9 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                     float3 d = (float3)(affine_row(nodes[r], dir, 0.0f),
                                         affine_row(nodes[r + 1u], dir, 0.0f),
                                         affine_row(nodes[r + 2u], dir, 0.0f));
-                    level = level_ray(o, d);
+                    float c = culling_scale(d);
+                    level = level_ray(o, d * c, 1.0f / c);
+                    wray = watertight_ray(o, d);
                 }
                 position_offset = info.z;
                 in_blas = true;
@@ -197,7 +211,7 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
             else
                 triangle_positions(vertices, triangles, prim, &a, &b, &c);
             TriangleHit h;
-            if (intersect_watertight(&level.wray, a, b, c, 0.0f, closest, &h) && h.t < closest) {
+            if (intersect_watertight(&wray, a, b, c, 0.0f, closest, &h) && h.t < closest) {
                 found = true;
                 closest = h.t;
                 hit->t = h.t;
@@ -221,9 +235,9 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
             uint slot_index = (child_index_offset - 24u) ^ (level.oct_inv4 & 0xffu);
             uint relative_index = popcount(hits_imask & ~(0xffffffffu << slot_index));
             uint child = child_index_base + relative_index;
-            // `level` is the world ray outside a BLAS
+            // `level` is the world ray outside a BLAS (t_scale 1: `closest` exactly)
             uint hitmask = cwbvh_node_hits(nodes, child, level.origin, level.tdir, level.inv_dir,
-                                           closest, level.oct_inv4);
+                                           closest * level.t_scale, level.oct_inv4);
             uint4 n0 = nodes[child * 5u + 0u];
             uint4 n1 = nodes[child * 5u + 1u];
             current_group = (uint2)(n1.x, (hitmask & 0xff000000u) | (n0.w >> 24));
@@ -237,6 +251,7 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                 in_blas = false;
                 object_space = false;
                 level = world;
+                wray = world_wray;
             }
             if (sp == 0u) break;
             uint2 g = stack[--sp];

@@ -22,11 +22,27 @@ use glam::Vec3;
 /// allowance is argued for perturbations of ~1e-6 (divergence well below 0.1%, 10x
 /// margin), and the divergence bands grow linearly with the perturbation, so `k` grows by
 /// `extra_rel / 1e-6` (capped at n).
-fn scale_case(b: &mut dyn Backend, s: f32, o: Vec3, extra_rel: f64) -> Result<Outcome, String> {
+///
+/// With `instanced`, the scaled scene's ball is an instance (object space: the unscaled
+/// ball at the origin; its transform carries the scale and the offset), so rays enter its
+/// BLAS scaled by `1 / s`: the same single rounding per coordinate, in object space.
+fn scale_case(
+    b: &mut dyn Backend,
+    s: f32,
+    o: Vec3,
+    extra_rel: f64,
+    instanced: bool,
+) -> Result<Outcome, String> {
     let base = sphere_scene();
-    let scene = transform_scene(&base, s, o);
+    let scaled = if instanced {
+        super::scenes::instanced_spheres(&base)
+    } else {
+        base.clone()
+    };
+    let scene = transform_scene(&scaled, s, o);
     let st = settings(GRID);
-    let mut v = Verdict::new(format!("scale {s:e} offset {o}"));
+    let what = if instanced { "instance " } else { "" };
+    let mut v = Verdict::new(format!("{what}scale {s:e} offset {o}"));
     let f = run_checked(b, &scene, &st, &mut v)?;
     let r = sspm::render_frame(b, &base, &st)?;
     let agree: Vec<bool> = f
@@ -81,11 +97,19 @@ fn scale_case(b: &mut dyn Backend, s: f32, o: Vec3, extra_rel: f64) -> Result<Ou
 }
 
 pub(super) fn scale_small(b: &mut dyn Backend) -> Result<Outcome, String> {
-    scale_case(b, 1e-4, Vec3::ZERO, 0.0)
+    scale_case(b, 1e-4, Vec3::ZERO, 0.0, false)
 }
 
 pub(super) fn scale_large(b: &mut dyn Backend) -> Result<Outcome, String> {
-    scale_case(b, 1e5, Vec3::ZERO, 0.0)
+    scale_case(b, 1e5, Vec3::ZERO, 0.0, false)
+}
+
+pub(super) fn instance_scale_small(b: &mut dyn Backend) -> Result<Outcome, String> {
+    scale_case(b, 1e-4, Vec3::ZERO, 0.0, true)
+}
+
+pub(super) fn instance_scale_large(b: &mut dyn Backend) -> Result<Outcome, String> {
+    scale_case(b, 1e5, Vec3::ZERO, 0.0, true)
 }
 
 pub(super) fn offset_far(b: &mut dyn Backend) -> Result<Outcome, String> {
@@ -95,5 +119,5 @@ pub(super) fn offset_far(b: &mut dyn Backend) -> Result<Outcome, String> {
     // radius): world-space f32 needs features >> |p| 2^-23.
     let s = 1e3;
     let extra = 0.0625 / (4.0 * s as f64);
-    scale_case(b, s, Vec3::splat(1e6), extra)
+    scale_case(b, s, Vec3::splat(1e6), extra, false)
 }

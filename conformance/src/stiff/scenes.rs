@@ -50,7 +50,22 @@ pub(super) fn ball(center: Vec3, radius: f32) -> Shape {
     }
 }
 
-/// Scales every length of a scene about the origin by `s`, then offsets it by `o`; light
+/// `scene` with its sphere objects as instances: each re-centred at the object-space
+/// origin and placed by a translation to its centre.
+pub fn instanced_spheres(scene: &Scene) -> Scene {
+    let mut t = scene.clone();
+    for ob in &mut t.objects {
+        if let Shape::Sphere { center, .. } = &mut ob.shape {
+            ob.transform = Some(caustica_core::scene::Transform::from_translation(
+                std::mem::replace(center, Vec3::ZERO),
+            ));
+        }
+    }
+    t
+}
+
+/// Scales every length of a scene about the origin by `s`, then offsets it by `o` (an
+/// instance's transform scales and moves, its object-space shape stays); light
 /// intensities scale by `s^2` (so radiances are unchanged), irradiances are kept.
 pub fn transform_scene(scene: &Scene, s: f32, o: Vec3) -> Scene {
     let mut t = scene.clone();
@@ -58,6 +73,12 @@ pub fn transform_scene(scene: &Scene, s: f32, o: Vec3) -> Scene {
     t.camera.position = p(t.camera.position);
     t.camera.target = p(t.camera.target);
     for ob in &mut t.objects {
+        if let Some(tr) = &mut ob.transform {
+            // an instance: its placement scales, its object-space shape stays
+            tr.translation = p(tr.translation);
+            tr.scale *= s;
+            continue;
+        }
         match &mut ob.shape {
             Shape::Sphere { center, radius, .. } => {
                 *center = p(*center);

@@ -152,19 +152,32 @@ const INSTANCE_IDENTITY: u32 = 1u;
 
 // The ray as one level's nodes see it (the CPU backend's LevelRay; its watertight form is
 // a separate variable: naga's SPIR-V output cannot pass a pointer into a struct member).
+// `t_scale` takes the ray's t to the culling ray's (1 in world space).
 struct LevelRay {
     origin: vec3<f32>,
     tdir: vec3<f32>,
     inv_dir: vec3<f32>,
     oct_inv4: u32,
+    t_scale: f32,
 }
 
-fn level_ray(origin: vec3<f32>, dir: vec3<f32>) -> LevelRay {
+fn level_ray(origin: vec3<f32>, dir: vec3<f32>, t_scale: f32) -> LevelRay {
     let tdir = vec3<f32>(traversal_component(dir.x), traversal_component(dir.y),
                          traversal_component(dir.z));
     return LevelRay(origin, tdir,
                     vec3<f32>(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z)),
-                    octant_inv4(tdir));
+                    octant_inv4(tdir), t_scale);
+}
+
+// The power of two that brings d's largest component into [1, 2) (the CPU backend's
+// culling_scale: object-space directions are ~1/scale long, and safe_inverse clamps
+// components below 2^-23).
+fn culling_scale(d: vec3<f32>) -> f32 {
+    let e = (bitcast<u32>(max(max(abs(d.x), abs(d.y)), abs(d.z))) >> 23u) & 0xffu;
+    if (e == 0u || e >= 254u) {
+        return 1.0;
+    }
+    return bitcast<f32>((254u - e) << 23u);
 }
 
 // Closest hit with 0 < t < t_max (any_hit = false), or any hit (any_hit = true). `t_max`
@@ -179,7 +192,7 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
     if (node_count == 0u) {
         return false;
     }
-    let world = level_ray(origin, dir);
+    let world = level_ray(origin, dir, 1.0);
     var level = world;
     let world_wray = watertight_ray(origin, dir);
     var wray = world_wray;
@@ -218,7 +231,8 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
                     let d = vec3<f32>(affine_row(nodes[r], dir, 0.0),
                                       affine_row(nodes[r + 1u], dir, 0.0),
                                       affine_row(nodes[r + 2u], dir, 0.0));
-                    level = level_ray(o, d);
+                    let c = culling_scale(d);
+                    level = level_ray(o, d * c, 1.0 / c);
                     wray = watertight_ray(o, d);
                 }
                 position_offset = info.z;
@@ -265,9 +279,9 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
             let slot_index = (child_index_offset - 24u) ^ (level.oct_inv4 & 0xffu);
             let relative_index = countOneBits(hits_imask & ~(0xffffffffu << slot_index));
             let child = child_index_base + relative_index;
-            // `level` is the world ray outside a BLAS
-            let hitmask = cwbvh_node_hits(child, level.origin, level.tdir, level.inv_dir, closest,
-                                          level.oct_inv4);
+            // `level` is the world ray outside a BLAS (t_scale 1: `closest` exactly)
+            let hitmask = cwbvh_node_hits(child, level.origin, level.tdir, level.inv_dir,
+                                          closest * level.t_scale, level.oct_inv4);
             let n0 = nodes[child * 5u + 0u];
             let n1 = nodes[child * 5u + 1u];
             current_group = vec2<u32>(n1.x, (hitmask & 0xff000000u) | (n0.w >> 24u));
