@@ -8,8 +8,9 @@
 //! `gl_InstanceCustomIndexEXT + gl_PrimitiveID`: a BLAS holds its level's triangles in the
 //! triangle buffer's order, so that is the triangle index the other backends use.
 //!
-//! Moving instances rewrites the records: [`SceneAccel::rebuild_top_level`] builds a new
-//! TLAS over the BLASes it keeps.
+//! Moving instances rewrites the records: [`SceneAccel::record_top_level_rebuild`]
+//! rebuilds the TLAS in place over the BLASes it keeps, recorded into the frame's command
+//! buffer (no wait, no allocation).
 
 use crate::context::{vk_error, Context};
 use crate::memory::Buffer;
@@ -68,7 +69,12 @@ impl BlasKey {
 pub struct SceneAccel {
     pub tlas: AccelStructure,
     blases: Vec<(BlasKey, AccelStructure)>,
-    _inputs: Vec<Buffer>,
+    _index_buffer: Buffer,
+    /// The TLAS's instances (host-visible, mapped) and build scratch, kept for rebuilds
+    /// in place ([`SceneAccel::record_top_level_rebuild`]).
+    instances: Buffer,
+    _scratch: Buffer,
+    scratch_address: u64,
     /// Generations of the vertex, triangle and node buffers the BLASes were built from.
     pub sources: [u64; 3],
 }
@@ -252,13 +258,162 @@ impl SceneAccel {
             )?;
             blases.push((BlasKey::of(r), blas));
         }
-        let (tlas, instances) = Self::top_level(ctx, run, &blases, records)?;
-        Ok(SceneAccel {
+        let instances = Buffer::new(
+            ctx,
+            (records.len().max(1) * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>())
+                as u64,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            true,
+            "TLAS instances",
+        )?;
+        Self::write_instances(ctx, &instances, &blases, records)?;
+        let (geometry, count) = Self::top_level_geometry(&instances, records);
+        let geometries = [geometry];
+        let info = Self::top_level_info(&geometries);
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        unsafe {
+            ctx.accel.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &info,
+                &[count],
+                &mut sizes,
+            )
+        };
+        let storage = Buffer::new(
+            ctx,
+            sizes.acceleration_structure_size,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR,
+            false,
+            "top-level acceleration structure",
+        )?;
+        let handle = unsafe {
+            ctx.accel.create_acceleration_structure(
+                &vk::AccelerationStructureCreateInfoKHR::default()
+                    .buffer(storage.buffer)
+                    .size(sizes.acceleration_structure_size)
+                    .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL),
+                None,
+            )
+        }
+        .map_err(vk_error("creating an acceleration structure"))?;
+        let tlas = AccelStructure {
+            ctx: Arc::clone(ctx),
+            handle,
+            _storage: storage,
+        };
+        let align = ctx.rt_props.scratch_alignment.max(1) as u64;
+        let scratch = Buffer::new(
+            ctx,
+            sizes.build_scratch_size + align,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            false,
+            "TLAS scratch",
+        )?;
+        let scratch_address = scratch.address().next_multiple_of(align);
+        let accel = SceneAccel {
             tlas,
             blases,
-            _inputs: vec![index_buffer, instances],
+            _index_buffer: index_buffer,
+            instances,
+            _scratch: scratch,
+            scratch_address,
             sources: src.generations,
-        })
+        };
+        run(&|cmd| accel.record_build(cmd, records.len() as u32))?;
+        Ok(accel)
+    }
+
+    fn top_level_geometry<'a>(
+        instances: &Buffer,
+        records: &[InstanceRecord],
+    ) -> (vk::AccelerationStructureGeometryKHR<'a>, u32) {
+        let geometry = vk::AccelerationStructureGeometryKHR::default()
+            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+            .flags(vk::GeometryFlagsKHR::OPAQUE)
+            .geometry(vk::AccelerationStructureGeometryDataKHR {
+                instances: vk::AccelerationStructureGeometryInstancesDataKHR::default().data(
+                    vk::DeviceOrHostAddressConstKHR {
+                        device_address: instances.address(),
+                    },
+                ),
+            });
+        (geometry, records.len() as u32)
+    }
+
+    fn top_level_info<'a>(
+        geometries: &'a [vk::AccelerationStructureGeometryKHR<'a>],
+    ) -> vk::AccelerationStructureBuildGeometryInfoKHR<'a> {
+        vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(geometries)
+    }
+
+    /// Records the TLAS build over the instance buffer into `cmd`, between barriers: the
+    /// traces recorded before it read the old TLAS, those after it the new one.
+    pub fn record_build(&self, cmd: vk::CommandBuffer, count: u32) {
+        let ctx = &self.tlas.ctx;
+        let (geometry, _) = Self::top_level_geometry(&self.instances, &[]);
+        let geometries = [geometry];
+        let info = Self::top_level_info(&geometries)
+            .dst_acceleration_structure(self.tlas.handle)
+            .scratch_data(vk::DeviceOrHostAddressKHR {
+                device_address: self.scratch_address,
+            });
+        let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
+        let all = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+            .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE);
+        unsafe {
+            let d = &ctx.device;
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &[all],
+                &[],
+                &[],
+            );
+            ctx.accel.cmd_build_acceleration_structures(
+                cmd,
+                std::slice::from_ref(&info),
+                &[&range],
+            );
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &[all],
+                &[],
+                &[],
+            );
+        }
+    }
+
+    /// The TLAS rebuilt in place for moved instances, recorded into `cmd` (no submit, no
+    /// wait): `records` (the same levels, new transforms) written into the mapped instance
+    /// buffer, then a build into the same storage with the kept scratch. The device must
+    /// not be running an earlier build of this TLAS (every `execute` waits for its work,
+    /// and core records one `prepare_scene` per recording).
+    pub fn record_top_level_rebuild(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        records: &[InstanceRecord],
+    ) -> Result<(), BackendError> {
+        self.restage(records)?;
+        self.record_build(cmd, records.len() as u32);
+        Ok(())
+    }
+
+    /// Writes `records`' instances into the mapped instance buffer (same levels, new
+    /// transforms) for the next [`SceneAccel::record_build`].
+    pub fn restage(&mut self, records: &[InstanceRecord]) -> Result<(), BackendError> {
+        let ctx = Arc::clone(&self.tlas.ctx);
+        Self::write_instances(&ctx, &self.instances, &self.blases, records)
     }
 
     /// Whether the BLASes can serve `records` built from buffers of `generations`.
@@ -270,26 +425,14 @@ impl SceneAccel {
                 .all(|r| self.blases.iter().any(|(k, _)| *k == BlasKey::of(r)))
     }
 
-    /// A new TLAS over the kept BLASes with the records' transforms (moved instances).
-    pub fn rebuild_top_level(
-        &mut self,
+    /// Writes one TLAS instance per record into the mapped `buffer`: the level's BLAS,
+    /// its `world_from_object`, and its first triangle as the custom index.
+    fn write_instances(
         ctx: &Arc<Context>,
-        run: SubmitFn<'_>,
-        records: &[InstanceRecord],
-    ) -> Result<(), BackendError> {
-        let (tlas, instances) = Self::top_level(ctx, run, &self.blases, records)?;
-        self.tlas = tlas;
-        self._inputs.truncate(1);
-        self._inputs.push(instances);
-        Ok(())
-    }
-
-    fn top_level(
-        ctx: &Arc<Context>,
-        run: SubmitFn<'_>,
+        buffer: &Buffer,
         blases: &[(BlasKey, AccelStructure)],
         records: &[InstanceRecord],
-    ) -> Result<(AccelStructure, Buffer), BackendError> {
+    ) -> Result<(), BackendError> {
         let mut instances = Vec::with_capacity(records.len());
         for r in records {
             let blas = &blases
@@ -336,36 +479,7 @@ impl SceneAccel {
                 std::mem::size_of_val(instances.as_slice()),
             )
         };
-        let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
-            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
-        let buffer = Buffer::with_data(
-            ctx,
-            if bytes.is_empty() {
-                &[0u8; 64][..]
-            } else {
-                bytes
-            },
-            input,
-            "TLAS instances",
-        )?;
-        let geometry = vk::AccelerationStructureGeometryKHR::default()
-            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
-            .flags(vk::GeometryFlagsKHR::OPAQUE)
-            .geometry(vk::AccelerationStructureGeometryDataKHR {
-                instances: vk::AccelerationStructureGeometryInstancesDataKHR::default().data(
-                    vk::DeviceOrHostAddressConstKHR {
-                        device_address: buffer.address(),
-                    },
-                ),
-            });
-        let tlas = build(
-            ctx,
-            run,
-            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
-            geometry,
-            records.len() as u32,
-            "top-level acceleration structure",
-        )?;
-        Ok((tlas, buffer))
+        buffer.write(0, bytes);
+        Ok(())
     }
 }

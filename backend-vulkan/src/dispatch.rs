@@ -332,6 +332,12 @@ fn record_all(
                 data,
                 label,
             } => {
+                if *offset == 0 && b.scenes.contains_key(id) {
+                    // a prepared scene's TLAS and records rewritten (moved instances): kept
+                    // on the host for the refit that follows, so it reads nothing back
+                    b.written_top_levels
+                        .insert(*id, bytemuck::pod_collect_to_vec(data));
+                }
                 let dst = b.get(*id)?;
                 if offset + data.len() as u64 > dst.bytes {
                     return Err(BackendError::BadArgument(format!(
@@ -373,11 +379,15 @@ fn record_all(
                 if let Some(s) = b.scenes.remove(id) {
                     frame.retired_scenes.push(s);
                 }
+                b.written_top_levels.remove(id);
             }
             Step::Kernel(k) => {
                 if let Kernel::PrepareScene(PrepareScene { scene }) = k.kernel() {
                     k.launch()?; // the node buffer's shape is checked
-                                 // The build reads the uploads: finish what is recorded, then build.
+                    if refit_in_frame(b, frame, scene)? {
+                        continue;
+                    }
+                    // The build reads the uploads: finish what is recorded, then build.
                     let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
                     b.submit_and_wait(cmd)?;
                     prepare_scene(b, scene)?;
@@ -389,6 +399,58 @@ fn record_all(
         }
     }
     Ok(())
+}
+
+/// The records of `scene`'s levels from the top level written into its node buffer in
+/// this recording (`Step::Write` at offset 0), if there was one of the right length.
+fn written_records(
+    b: &mut VulkanBackend,
+    scene: &SceneArgs,
+) -> Option<Vec<caustica_core::device::acceleration::InstanceRecord>> {
+    use caustica_core::device::acceleration::{
+        tlas_capacity, InstanceRecord, RECORD_SLOTS, SLOT_VEC4S,
+    };
+    let prefix = b.written_top_levels.remove(&scene.bvh_nodes.id)?;
+    let levels = scene.levels as usize;
+    let capacity = tlas_capacity(levels) as usize;
+    if prefix.len() != (capacity + RECORD_SLOTS as usize * levels) * SLOT_VEC4S {
+        return None;
+    }
+    Some(
+        (0..levels)
+            .map(|p| {
+                let at = (capacity + RECORD_SLOTS as usize * p) * SLOT_VEC4S;
+                InstanceRecord::decode(&prefix[at..at + 10])
+            })
+            .collect(),
+    )
+}
+
+/// Moved instances, the common case of a frame loop: when this recording wrote the scene's
+/// top level and its BLASes still serve it, the TLAS is rebuilt in place into the frame's
+/// command buffer (no readback, no submit, no wait, no allocation). Returns whether it
+/// did; otherwise `prepare_scene` builds what is needed.
+fn refit_in_frame(
+    b: &mut VulkanBackend,
+    frame: &mut Frame,
+    scene: &SceneArgs,
+) -> Result<bool, BackendError> {
+    let Some(records) = written_records(b, scene) else {
+        return Ok(false);
+    };
+    let generations = [
+        b.get(scene.vertices.id)?.generation,
+        b.get(scene.triangles.id)?.generation,
+        b.get(scene.bvh_nodes.id)?.generation,
+    ];
+    let Some(accel) = b.scenes.get_mut(&scene.bvh_nodes.id) else {
+        return Ok(false);
+    };
+    if !accel.keeps_bottom_levels(&records, generations) {
+        return Ok(false);
+    }
+    accel.record_top_level_rebuild(frame.cmd, &records)?;
+    Ok(true)
 }
 
 /// Builds (or, when only instance transforms changed, updates) the scene's acceleration
@@ -423,20 +485,18 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
         b.get(scene.triangles.id)?.generation,
         b.get(scene.bvh_nodes.id)?.generation,
     ];
-    let shared: &VulkanBackend = b;
-    if let Some(accel) = b.scenes.get(&scene.bvh_nodes.id) {
+    if let Some(mut accel) = b.scenes.remove(&scene.bvh_nodes.id) {
         if accel.keeps_bottom_levels(&records, generations) {
-            // only transforms moved: a new TLAS over the same BLASes (the device is idle:
-            // the caller waited)
-            let ctx = Arc::clone(&shared.ctx);
-            let mut accel = b.scenes.remove(&scene.bvh_nodes.id).expect("present");
-            let result = {
-                let shared: &VulkanBackend = b;
-                accel.rebuild_top_level(&ctx, &|f| shared.one_shot(f), &records)
-            };
+            // only transforms moved: the TLAS rebuilt in place over the same BLASes (the
+            // device is idle: the caller waited)
+            let shared: &VulkanBackend = b;
+            let result = accel.restage(&records).and_then(|_| {
+                shared.one_shot(&|cmd| accel.record_build(cmd, records.len() as u32))
+            });
             b.scenes.insert(scene.bvh_nodes.id, accel);
             return result;
         }
+        b.scenes.insert(scene.bvh_nodes.id, accel);
     }
     let tri_bytes = b.read_device(
         b.get(scene.triangles.id)?.buffer.buffer,

@@ -57,6 +57,9 @@ pub struct VulkanBackend {
     // field order is drop order: everything before `ctx`, which destroys the device
     buffers: HashMap<ResourceId, DeviceBuffer>,
     scenes: HashMap<ResourceId, accel::SceneAccel>,
+    /// Top levels (TLAS nodes and instance records) written into prepared scenes' node
+    /// buffers by the recording being executed, by buffer: the refit's input.
+    written_top_levels: HashMap<ResourceId, Vec<[u32; 4]>>,
     /// Pipelines by variant label (`kernel` or `kernel[SWITCH=0/1,...]`).
     pipelines: HashMap<String, pipelines::Pipeline>,
     counter_banks: Buffer,
@@ -151,6 +154,7 @@ impl VulkanBackend {
         let mut backend = VulkanBackend {
             buffers: HashMap::new(),
             scenes: HashMap::new(),
+            written_top_levels: HashMap::new(),
             pipelines: HashMap::new(),
             counter_banks,
             pool,

@@ -128,6 +128,10 @@ pub struct Sspm {
     adaptive_frame: Option<AdaptiveFrame>,
     /// The acceleration structure's levels, to move instances without a rebuild.
     instances: SceneInstances,
+    /// Scene writes of the updates since the last frame (moved lights and instances): run
+    /// with the next frame's first submission, so that an update costs the host its own
+    /// arithmetic and no submission or wait of its own.
+    pending: Recording,
 }
 
 /// What the frame constants need of the device scene, kept so that lights can change
@@ -262,6 +266,7 @@ impl Sspm {
             adaptive,
             adaptive_frame: parts.adaptive,
             instances: ds.instances,
+            pending: Recording::new(),
         })
     }
 
@@ -640,8 +645,8 @@ impl Sspm {
         }
         let cam = self.camera;
 
-        // 1. visibility and direct light
-        let mut rec = Recording::new();
+        // 1. visibility and direct light, after the updates' scene writes
+        let mut rec = std::mem::take(&mut self.pending);
         rec.kernel(PrimaryGbuffer {
             scene: self.scene,
             camera: cam,
@@ -1021,8 +1026,9 @@ impl Sspm {
     }
 
     /// Replaces the lights for the next frames without rebuilding geometry. With as many
-    /// lights as before and the same passes, the lights are uploaded into the existing
-    /// buffer and emission is re-planned (no buffer is made); lights added or removed, or
+    /// lights as before and the same passes, the lights are written into the existing
+    /// buffer with the next frame's first submission and emission is re-planned (no buffer
+    /// is made, nothing is submitted here); lights added or removed, or
     /// lights that start or stop photon passes (the first to reach a caster, the last to
     /// stop), replace the light buffer and remake the frame's resources (see
     /// [`Sspm::set_settings`]). The geometry and its acceleration structure stay.
@@ -1050,9 +1056,8 @@ impl Sspm {
             return self.replace_lights(backend, model, &gpu);
         }
         plan.buffers = std::mem::take(&mut self.plan.buffers);
-        let mut rec = Recording::new();
-        rec.update(self.scene.lights, &gpu, "lights")?;
-        backend.execute(&rec)?;
+        // written with the next frame (`pending`)
+        self.pending.write(self.scene.lights, 0, &gpu, "lights")?;
         if let Some(f) = &mut self.filters {
             f.reset();
         }
@@ -1067,8 +1072,9 @@ impl Sspm {
     /// [`crate::scene::Object::transform`]). No BVH is rebuilt: the moved objects' world
     /// vertices and the top level are rewritten in place (Vulkan rebuilds only its TLAS),
     /// the emission is re-planned for the new caster bounds, and the frame's buffers are
-    /// remade only if the plan's needs change. The next frame equals, bitwise, a frame of a
-    /// technique built fresh from the moved scene. On an error nothing changes.
+    /// remade only if the plan's needs change. The writes run with the next frame's first
+    /// submission (no submission or wait here). The next frame equals, bitwise, a frame of
+    /// a technique built fresh from the moved scene. On an error nothing changes.
     pub fn set_object_transforms(
         &mut self,
         backend: &mut dyn Backend,
@@ -1092,9 +1098,8 @@ impl Sspm {
         };
         let (constants, mut plan, _) =
             Sspm::frame_setup(&model, bounds, &self.settings, self.adaptive.as_ref())?;
-        let mut rec = Recording::new();
-        m.record(&mut rec, &self.scene)?;
-        backend.execute(&rec)?;
+        // written with the next frame (`pending`)
+        m.record(&mut self.pending, &self.scene)?;
         self.instances = instances;
         let old_bounds = self.bounds;
         self.bounds = bounds;
@@ -1110,9 +1115,7 @@ impl Sspm {
                     .map(|(k, _)| (*k, self.model.objects[*k].transform.unwrap_or_default()))
                     .collect();
                 let m = self.instances.move_instances(&back)?;
-                let mut rec = Recording::new();
-                m.record(&mut rec, &self.scene)?;
-                backend.execute(&rec)?;
+                m.record(&mut self.pending, &self.scene)?;
                 self.bounds = old_bounds;
                 return Err(e);
             }
@@ -1197,6 +1200,11 @@ impl Sspm {
         backend: &mut dyn Backend,
         gpu: &[GpuLight],
     ) -> Result<(), Error> {
+        // earlier updates' writes into the old buffer first
+        let pending = std::mem::take(&mut self.pending);
+        if !pending.steps.is_empty() {
+            backend.execute(&pending)?;
+        }
         let old = self.scene.lights;
         let mut rec = Recording::new();
         let new = rec.upload(gpu, "lights");
