@@ -55,7 +55,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -251,6 +251,16 @@ if has vulkanab; then
     run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend photon_gi --test-threads=1
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./instance_updates --test-threads=1
+fi
+if has instcheck; then
+    # issue 19 after the in-frame TLAS refit and the deferred update writes: the whole
+    # cross-backend suite, moved instances against fresh techniques, the update seams, the
+    # dynamic benchmark, then the stiff catalogue (instance scales 1e-4 and 1e5 among it)
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
+    run timeout 100 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./instance_updates --test-threads=1 --nocapture
+    run timeout 100 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./technique_seam --test-threads=1
+    run timeout 150 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
