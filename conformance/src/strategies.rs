@@ -576,13 +576,19 @@ mod tests {
                     .iter()
                     .zip(&casters)
                     .map(|(o, c)| {
-                        let r = c.shape.bounding_radius();
+                        let mut r = c.shape.bounding_radius();
                         prop_assert!(r <= MAX_CASTER_RADIUS);
-                        let center = match &o.shape {
+                        let mut center = match &o.shape {
                             Shape::Sphere { center, .. } | Shape::Prism { center, .. } => *center,
                             Shape::Cuboid { min, max } => 0.5 * (*min + *max),
                             _ => unreachable!(),
                         };
+                        if let Some(t) = &o.transform {
+                            // an instance: its shape about the object origin, placed and
+                            // uniformly scaled by the transform
+                            center = t.transform_point(center);
+                            r *= t.scale.abs().max_element();
+                        }
                         prop_assert!(center.y - r > 0.0, "caster touches the ground");
                         Ok((center, r))
                     })

@@ -1,6 +1,7 @@
 //! Instances moved between frames (issue 19 point 1), on every backend: an object with a
 //! transform is an instance over the two-level acceleration structure, and
-//! `set_object_transforms` moves it without rebuilding a BVH. For every technique the
+//! `set_object_transforms` moves it without rebuilding a BVH. For every technique (and
+//! AdaptiveCaustics' two targets) the
 //! frame after a move (of casters, and for CausticMap of a receiver whose area changes)
 //! equals, bitwise, the frame of a technique created for the moved scene; moving a static
 //! object, an unknown one or with a bad transform is a clear error that changes nothing;
@@ -45,6 +46,28 @@ fn moved(t: Transform, shift: Vec3, scale: f32) -> Transform {
         ) * t.rotation,
         scale: t.scale * scale,
     }
+}
+
+/// Every technique with small settings, AdaptiveCaustics with both targets.
+fn variants() -> Vec<(&'static str, serde_json::Value)> {
+    let mut v: Vec<(&'static str, serde_json::Value)> = ["sspm", "caustic-map", "photon-gi"]
+        .into_iter()
+        .map(|n| (n, settings_for(n)))
+        .collect();
+    // as technique_seam.rs: three levels, the error metric from the second
+    v.push((
+        "adaptive-caustics",
+        serde_json::json!({
+            "photons_w": 256, "photons_h": 256, "atlas_size": 128, "error_from_grid": 128
+        }),
+    ));
+    v.push((
+        "adaptive-caustics",
+        serde_json::json!({
+            "photons_w": 256, "photons_h": 256, "error_from_grid": 128, "deposit": "screen"
+        }),
+    ));
+    v
 }
 
 /// Small settings per technique (as technique_seam.rs: PhotonGi without its temporal
@@ -133,8 +156,7 @@ fn moved_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
     for (bname, mut b) in backends() {
         for (sname, scene, moves, lights) in cases() {
             let target = apply(&scene, &moves, &lights);
-            for name in ["sspm", "caustic-map", "photon-gi"] {
-                let settings = settings_for(name);
+            for (name, settings) in variants() {
                 let mut fresh = create(name, b.as_mut(), &target, &settings).expect("create");
                 let want = frame_outputs(fresh.as_mut(), b.as_mut());
                 fresh.free(b.as_mut()).expect("free");
@@ -165,9 +187,10 @@ fn moved_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
                     .expect("move back");
                 t.set_lights(b.as_mut(), &scene.lights)
                     .expect("lights back");
+                let again = frame_outputs(t.as_mut(), b.as_mut());
                 assert!(
-                    frame_outputs(t.as_mut(), b.as_mut()) == before,
-                    "{bname}/{name}/{sname}: moved back, the frame differs from the first"
+                    again == before,
+                    "{bname}/{name}/{sname} ({settings}): moved back, the frame differs from the first"
                 );
                 t.free(b.as_mut()).expect("free");
             }
@@ -180,8 +203,7 @@ fn moved_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
 fn static_objects_unknown_objects_and_bad_transforms_are_refused() {
     for (bname, mut b) in backends() {
         let scene = instanced(small("sphere"), 1);
-        for name in ["sspm", "caustic-map", "photon-gi"] {
-            let settings = settings_for(name);
+        for (name, settings) in variants() {
             let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
             let before = frame_outputs(t.as_mut(), b.as_mut());
             let bad: [(Vec<(usize, Transform)>, &str); 4] = [

@@ -157,8 +157,11 @@ pub struct Level {
     /// geometric normal in world space ([`crate::device::device_scene::smooth_normals`]).
     pub smooth_normals: bool,
     /// An instance's triangles (world-vertex indices; empty for the static level): what
-    /// `smooth_normals` is recomputed over when it moves.
+    /// `smooth_normals` and `triangle_bounds` are recomputed over when it moves.
     pub triangle_indices: Vec<[u32; 3]>,
+    /// An instance's box of the world vertices its triangles use (AdaptiveCaustics' caster
+    /// box of the object: `adaptive_caustics::caster_boxes`); empty for the static level.
+    pub triangle_bounds: Aabb,
 }
 
 impl Level {

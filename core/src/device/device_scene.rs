@@ -159,9 +159,9 @@ impl SceneInstances {
                 b
             };
             l.world_bounds = b;
-            l.smooth_normals = smooth_normals(l.triangle_indices.iter().copied(), &|i: u32| {
-                world[(i - l.vertex_base) as usize]
-            });
+            let run = |i: u32| world[(i - l.vertex_base) as usize];
+            l.smooth_normals = smooth_normals(l.triangle_indices.iter().copied(), &run);
+            l.triangle_bounds = triangle_bounds(&l.triangle_indices, &run);
             vertices.push((l.vertex_base, world));
         }
         let top_level = top_level(&levels).map_err(|reason| BuildError::Scene {
@@ -211,6 +211,17 @@ pub fn smooth_normals(
             (n - ng).abs().max_element() > 1e-4 && (n + ng).abs().max_element() > 1e-4
         })
     })
+}
+
+/// The box of the vertices `triangles` use.
+fn triangle_bounds(triangles: &[[u32; 3]], vertex: &dyn VertexLookup) -> Aabb {
+    let mut b = Aabb::EMPTY;
+    for t in triangles {
+        for &i in t {
+            b.grow(Vec3::from(vertex.vertex(i).position));
+        }
+    }
+    b
 }
 
 /// A world vertex by index (a slice of all, or one instance's run).
@@ -348,6 +359,7 @@ impl DeviceScene {
             caster_bounds: Aabb::EMPTY,
             smooth_normals: false,
             triangle_indices: Vec::new(),
+            triangle_bounds: Aabb::EMPTY,
         };
         // instances: (level, triangles, object-space vertices)
         let mut instances: Vec<(Level, Vec<GpuTriangle>)> = Vec::new();
@@ -430,6 +442,7 @@ impl DeviceScene {
                         caster_bounds: if specular { world_bounds } else { Aabb::EMPTY },
                         smooth_normals: false,
                         triangle_indices: tris.iter().map(|t| t.indices).collect(),
+                        triangle_bounds: Aabb::EMPTY,
                     };
                     object_vertices.extend_from_slice(&local);
                     instances.push((level, tris));
@@ -491,6 +504,7 @@ impl DeviceScene {
             let range = l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize;
             l.smooth_normals =
                 smooth_normals(triangles[range].iter().map(|t| t.indices), &vertices);
+            l.triangle_bounds = triangle_bounds(&l.triangle_indices, &vertices);
         }
         let positions_vec4 = slot as usize * SLOT_VEC4S;
         for l in levels.iter_mut().filter(|l| l.object.is_some()) {
@@ -785,6 +799,16 @@ mod tests {
         assert_eq!(ds.bounds, fresh.bounds);
         assert_eq!(ds.caster_bounds, fresh.caster_bounds);
         assert_eq!(ds.instances, fresh.instances);
+        // AdaptiveCaustics' caster boxes follow the levels' triangle bounds
+        let boxes = crate::techniques::adaptive_caustics::caster_boxes_by_object(&fresh);
+        for (object, b) in boxes {
+            let l = ds
+                .instances
+                .levels
+                .iter()
+                .find(|l| l.object == Some(object as usize));
+            assert_eq!(l.map(|l| l.triangle_bounds), Some(b), "object {object}");
+        }
     }
 
     #[test]

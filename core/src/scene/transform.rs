@@ -60,6 +60,11 @@ impl Transform {
         }
     }
 
+    /// A point of object space in world space.
+    pub fn transform_point(&self, p: Vec3) -> Vec3 {
+        self.world_from_object().transform_point3(p)
+    }
+
     /// `T * R * S`: object space to world space.
     pub fn world_from_object(&self) -> Affine3A {
         Affine3A::from_scale_rotation_translation(

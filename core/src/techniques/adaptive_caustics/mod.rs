@@ -54,13 +54,25 @@ pub(crate) struct AdaptiveSetup {
     pub traversal: Option<Traversal>,
     /// Bounding box of each caster object (world space).
     pub caster_boxes: Vec<crate::math::geometry::Aabb>,
+    /// The scene object of each box (they follow moved instances).
+    pub caster_objects: Vec<u32>,
 }
 
 /// The bounding box of every caster object (mirror or dielectric) of `ds`, from its
-/// triangles.
+/// triangles, in object order.
 pub fn caster_boxes(
     ds: &crate::device::device_scene::DeviceScene,
 ) -> Vec<crate::math::geometry::Aabb> {
+    caster_boxes_by_object(ds)
+        .into_iter()
+        .map(|(_, b)| b)
+        .collect()
+}
+
+/// [`caster_boxes`] with the scene object each box belongs to.
+pub fn caster_boxes_by_object(
+    ds: &crate::device::device_scene::DeviceScene,
+) -> Vec<(u32, crate::math::geometry::Aabb)> {
     use crate::device::layout::material_kind;
     use crate::math::geometry::Aabb;
     let mut boxes: std::collections::BTreeMap<u32, Aabb> = Default::default();
@@ -73,7 +85,22 @@ pub fn caster_boxes(
             b.grow(glam::Vec3::from(ds.vertices[i as usize].position));
         }
     }
-    boxes.into_values().collect()
+    boxes.into_iter().collect()
+}
+
+/// The caster boxes after instances moved: an instance caster's box is its level's
+/// `triangle_bounds` (the same vertices [`caster_boxes`] grows over, so the same box as a
+/// fresh build's); the static level's casters keep theirs.
+pub fn follow_moved_casters(
+    boxes: &mut [crate::math::geometry::Aabb],
+    objects: &[u32],
+    levels: &[crate::device::acceleration::Level],
+) {
+    for (b, object) in boxes.iter_mut().zip(objects) {
+        if let Some(l) = levels.iter().find(|l| l.object == Some(*object as usize)) {
+            *b = l.triangle_bounds;
+        }
+    }
 }
 
 /// AdaptiveCaustics' constructor. The technique *is* a [`CausticMap`] (the same atlas,

@@ -139,6 +139,15 @@ pub struct Traversal {
 }
 
 impl Traversal {
+    /// Replaces the caster boxes (as many as before: moved instances,
+    /// [`super::follow_moved_casters`]); the next frame's planes get their rectangles from
+    /// them.
+    pub fn set_caster_boxes(&mut self, boxes: &[Aabb]) {
+        if boxes.len() == self.caster_boxes.len() {
+            self.caster_boxes = boxes.to_vec();
+        }
+    }
+
     /// Records the creation of the traversal's buffers for planes down to level
     /// `finest`, for the atlas target or (`screen`) the screen target.
     pub fn record(

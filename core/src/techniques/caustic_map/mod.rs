@@ -322,6 +322,10 @@ impl CausticMap {
                 settings,
                 traversal: None,
                 caster_boxes: adaptive_caustics::caster_boxes(&ds),
+                caster_objects: adaptive_caustics::caster_boxes_by_object(&ds)
+                    .into_iter()
+                    .map(|(o, _)| o)
+                    .collect(),
             }),
             settings,
             model: scene.clone(),
@@ -1322,21 +1326,14 @@ impl CausticMap {
     /// the moved objects' world vertices and the top level are rewritten in place, the
     /// light view planes re-aimed at the new caster bounds, and a moved receiver's tile
     /// sizes follow its new area (the atlas is laid out again for every receiver, as at
-    /// creation, and the next photon pass keeps the reached ones). The technique is built
-    /// anew only where [`CausticMap::set_lights`] would be. On an error nothing changes.
+    /// creation, and the next photon pass keeps the reached ones); AdaptiveCaustics'
+    /// traversal gets the moved casters' boxes. The technique is built anew only where
+    /// [`CausticMap::set_lights`] would be. On an error nothing changes.
     pub fn set_object_transforms(
         &mut self,
         backend: &mut dyn Backend,
         moves: &[(usize, crate::scene::Transform)],
     ) -> Result<(), Error> {
-        if self.adaptive.is_some() {
-            // TODO(issue 19): the traversal's per-caster boxes follow moved casters
-            return Err(Error::InvalidParameter(
-                "set_object_transforms: AdaptiveCaustics does not move instances yet (its \
-                 traversal's caster boxes are fixed at creation); create it anew"
-                    .into(),
-            ));
-        }
         let model = crate::frame::technique::with_transforms(&self.model, moves)?;
         let mut instances = self.instances.clone();
         let m = instances.move_instances(moves)?;
@@ -1350,6 +1347,17 @@ impl CausticMap {
         let mut rec = Recording::new();
         m.record(&mut rec, &self.scene)?;
         backend.execute(&rec)?;
+        if let Some(ad) = &mut self.adaptive {
+            // the traversal's caster boxes follow the moved casters
+            adaptive_caustics::follow_moved_casters(
+                &mut ad.caster_boxes,
+                &ad.caster_objects,
+                &instances.levels,
+            );
+            if let Some(t) = &mut ad.traversal {
+                t.set_caster_boxes(&ad.caster_boxes);
+            }
+        }
         self.instances = instances;
         self.receivers = receivers;
         self.bounds = m.bounds;

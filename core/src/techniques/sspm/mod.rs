@@ -58,6 +58,8 @@ use std::time::Instant;
 struct AdaptiveEmission {
     settings: AdaptiveCausticsSettings,
     caster_boxes: Vec<crate::math::geometry::Aabb>,
+    /// The scene object of each box (they follow moved instances).
+    caster_objects: Vec<u32>,
 }
 
 /// The adaptive emission of one frame setup: the light view planes (fitted to the
@@ -216,6 +218,10 @@ impl Sspm {
         let adaptive = adaptive.map(|settings| AdaptiveEmission {
             settings,
             caster_boxes: adaptive_caustics::caster_boxes(&ds),
+            caster_objects: adaptive_caustics::caster_boxes_by_object(&ds)
+                .into_iter()
+                .map(|(o, _)| o)
+                .collect(),
         });
         // the frame's constants first: a light whose flux is out of range is refused
         // before anything is uploaded
@@ -1080,14 +1086,6 @@ impl Sspm {
         backend: &mut dyn Backend,
         moves: &[(usize, crate::scene::Transform)],
     ) -> Result<(), Error> {
-        if self.adaptive.is_some() {
-            // TODO(issue 19): the traversal's per-caster boxes follow moved casters
-            return Err(Error::InvalidParameter(
-                "set_object_transforms: AdaptiveCaustics' screen target does not move \
-                 instances yet (its caster boxes are fixed at creation); build it anew"
-                    .into(),
-            ));
-        }
         let model = crate::frame::technique::with_transforms(&self.model, moves)?;
         let mut instances = self.instances.clone();
         let m = instances.move_instances(moves)?;
@@ -1096,8 +1094,16 @@ impl Sspm {
             caster_bounds: m.caster_bounds,
             ..self.bounds
         };
+        let mut adaptive = self.adaptive.clone();
+        if let Some(a) = &mut adaptive {
+            adaptive_caustics::follow_moved_casters(
+                &mut a.caster_boxes,
+                &a.caster_objects,
+                &instances.levels,
+            );
+        }
         let (constants, mut plan, _) =
-            Sspm::frame_setup(&model, bounds, &self.settings, self.adaptive.as_ref())?;
+            Sspm::frame_setup(&model, bounds, &self.settings, adaptive.as_ref())?;
         // written with the next frame (`pending`)
         m.record(&mut self.pending, &self.scene)?;
         self.instances = instances;
@@ -1106,7 +1112,10 @@ impl Sspm {
         if let Some(f) = &mut self.filters {
             f.reset();
         }
-        if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) {
+        let old_adaptive = std::mem::replace(&mut self.adaptive, adaptive);
+        // the adaptive traversal's planes follow the casters: its frame is remade (as for
+        // moved lights)
+        if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) || self.adaptive.is_some() {
             let settings = self.settings.clone();
             if let Err(e) = self.rebuild_frame(backend, model, settings) {
                 // the old placement back, then the error
@@ -1117,6 +1126,7 @@ impl Sspm {
                 let m = self.instances.move_instances(&back)?;
                 m.record(&mut self.pending, &self.scene)?;
                 self.bounds = old_bounds;
+                self.adaptive = old_adaptive;
                 return Err(e);
             }
             return Ok(());
