@@ -127,7 +127,8 @@ fn barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
 enum Desc {
     Tlas(vk::AccelerationStructureKHR),
     Storage(vk::Buffer, u64),
-    Uniform(vk::Buffer, u64),
+    /// A uniform buffer, its offset and range.
+    Uniform(vk::Buffer, u64, u64),
 }
 
 /// Per-execute state: the command buffer being recorded and what must outlive it.
@@ -138,6 +139,8 @@ struct Frame {
     descriptor_pool: vk::DescriptorPool,
     queries: Option<vk::QueryPool>,
     passes: Vec<&'static str>,
+    /// The backend's arena while this execute runs ([`crate::arena`]).
+    arena: crate::arena::Arena,
 }
 
 pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, BackendError> {
@@ -174,33 +177,64 @@ pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, 
             .ty(AS)
             .descriptor_count(sets),
     ];
-    let descriptor_pool = unsafe {
-        d.create_descriptor_pool(
-            &vk::DescriptorPoolCreateInfo::default()
-                .max_sets(sets)
-                .pool_sizes(&sizes),
-            None,
-        )
-    }
-    .map_err(vk_error("creating a descriptor pool"))?;
+    // the pools are kept across executes: reset, or made anew when this recording needs
+    // more than they hold (issue 19 point 3: no pool made and destroyed per recording)
+    let descriptor_pool = match b.descriptor_pool {
+        Some((p, cap)) if cap >= sets => {
+            unsafe { d.reset_descriptor_pool(p, vk::DescriptorPoolResetFlags::empty()) }
+                .map_err(vk_error("resetting the descriptor pool"))?;
+            p
+        }
+        old => {
+            if let Some((p, _)) = old {
+                unsafe { d.destroy_descriptor_pool(p, None) };
+                b.descriptor_pool = None;
+            }
+            let cap = sets.max(64).next_power_of_two();
+            let sizes = sizes.map(|s| {
+                let per = s.descriptor_count / sets;
+                s.descriptor_count(per * cap)
+            });
+            let p = unsafe {
+                d.create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(cap)
+                        .pool_sizes(&sizes),
+                    None,
+                )
+            }
+            .map_err(vk_error("creating a descriptor pool"))?;
+            b.descriptor_pool = Some((p, cap));
+            p
+        }
+    };
     let queries = if b.ctx.timestamps && kernels > 0 {
-        match unsafe {
-            d.create_query_pool(
-                &vk::QueryPoolCreateInfo::default()
-                    .query_type(vk::QueryType::TIMESTAMP)
-                    .query_count(2 * kernels),
-                None,
-            )
-        } {
-            Ok(q) => Some(q),
-            Err(e) => {
-                unsafe { d.destroy_descriptor_pool(descriptor_pool, None) };
-                return Err(vk_error("creating a query pool")(e));
+        match b.query_pool {
+            Some((q, cap)) if cap >= 2 * kernels => Some(q),
+            old => {
+                if let Some((q, _)) = old {
+                    unsafe { d.destroy_query_pool(q, None) };
+                    b.query_pool = None;
+                }
+                let cap = (2 * kernels).max(128).next_power_of_two();
+                let q = unsafe {
+                    d.create_query_pool(
+                        &vk::QueryPoolCreateInfo::default()
+                            .query_type(vk::QueryType::TIMESTAMP)
+                            .query_count(cap),
+                        None,
+                    )
+                }
+                .map_err(vk_error("creating a query pool"))?;
+                b.query_pool = Some((q, cap));
+                Some(q)
             }
         }
     } else {
         None
     };
+    let mut arena = std::mem::take(&mut b.arena);
+    arena.reset(&b.ctx)?;
     let mut frame = Frame {
         cmd: vk::CommandBuffer::null(),
         retired: Vec::new(),
@@ -208,6 +242,7 @@ pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, 
         descriptor_pool,
         queries,
         passes: Vec::new(),
+        arena,
     };
     let result = record_all(b, rec, &mut frame, kernels);
     // whatever happened, wait for the device before the frame's objects go
@@ -221,14 +256,28 @@ pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, 
     let times = result.and_then(|_| read_times(&b.ctx, &frame));
     unsafe {
         let _ = d.queue_wait_idle(b.ctx.queue);
-        if let Some(q) = frame.queries {
-            d.destroy_query_pool(q, None);
-        }
-        d.destroy_descriptor_pool(frame.descriptor_pool, None);
     }
+    b.arena = std::mem::take(&mut frame.arena);
     drop(frame.retired);
     drop(frame.retired_scenes);
     times
+}
+
+/// `data` in host-visible memory the device can copy from: in the frame's arena, or (too
+/// large, or the arena full) in a staging buffer of its own, retired with the frame.
+fn staged(
+    ctx: &Arc<Context>,
+    frame: &mut Frame,
+    data: &[u8],
+    what: &str,
+) -> Result<(vk::Buffer, u64), BackendError> {
+    if let Some(at) = frame.arena.put(data, 16) {
+        return Ok(at);
+    }
+    let staging = Buffer::with_data(ctx, data, vk::BufferUsageFlags::TRANSFER_SRC, what)?;
+    let buffer = staging.buffer;
+    frame.retired.push(staging);
+    Ok((buffer, 0))
 }
 
 fn read_times(ctx: &Context, frame: &Frame) -> Result<Vec<PassTime>, BackendError> {
@@ -298,21 +347,17 @@ fn record_all(
             Step::Upload { id, data, label } => {
                 let buffer = b.new_storage(data.len() as u64, label)?;
                 if !data.is_empty() {
-                    let staging = Buffer::with_data(
-                        &b.ctx,
-                        data,
-                        vk::BufferUsageFlags::TRANSFER_SRC,
-                        "upload staging",
-                    )?;
+                    let (src, at) = staged(&b.ctx, frame, data, "upload staging")?;
                     unsafe {
                         d.cmd_copy_buffer(
                             frame.cmd,
-                            staging.buffer,
+                            src,
                             buffer.buffer,
-                            &[vk::BufferCopy::default().size(data.len() as u64)],
+                            &[vk::BufferCopy::default()
+                                .src_offset(at)
+                                .size(data.len() as u64)],
                         )
                     };
-                    frame.retired.push(staging);
                 }
                 if let Some(old) = b.buffers.insert(
                     *id,
@@ -347,23 +392,19 @@ fn record_all(
                     )));
                 }
                 if !data.is_empty() {
-                    let staging = Buffer::with_data(
-                        &b.ctx,
-                        data,
-                        vk::BufferUsageFlags::TRANSFER_SRC,
-                        "write staging",
-                    )?;
+                    let dst = dst.buffer.buffer;
+                    let (src, at) = staged(&b.ctx, frame, data, "write staging")?;
                     unsafe {
                         d.cmd_copy_buffer(
                             frame.cmd,
-                            staging.buffer,
-                            dst.buffer.buffer,
+                            src,
+                            dst,
                             &[vk::BufferCopy::default()
+                                .src_offset(at)
                                 .dst_offset(*offset)
                                 .size(data.len() as u64)],
                         )
                     };
-                    frame.retired.push(staging);
                 }
                 barrier(&d, frame.cmd);
             }
@@ -591,14 +632,20 @@ fn record_kernel(
                 ));
             }
             LaunchArg::Params(p) => {
-                let u = Buffer::with_data(
-                    &b.ctx,
-                    p,
-                    vk::BufferUsageFlags::UNIFORM_BUFFER,
-                    "kernel parameters",
-                )?;
-                descs.push(Desc::Uniform(u.buffer, p.len() as u64));
-                frame.retired.push(u);
+                let align = b.ctx.limits.min_uniform_buffer_offset_alignment;
+                match frame.arena.put(p, align) {
+                    Some((buf, at)) => descs.push(Desc::Uniform(buf, at, p.len() as u64)),
+                    None => {
+                        let u = Buffer::with_data(
+                            &b.ctx,
+                            p,
+                            vk::BufferUsageFlags::UNIFORM_BUFFER,
+                            "kernel parameters",
+                        )?;
+                        descs.push(Desc::Uniform(u.buffer, 0, p.len() as u64));
+                        frame.retired.push(u);
+                    }
+                }
             }
         }
     }
@@ -708,10 +755,14 @@ fn bind_set(
     let mut tlas = Vec::new();
     for desc in descs {
         match desc {
-            Desc::Storage(buf, range) | Desc::Uniform(buf, range) => {
+            Desc::Storage(buf, range) => buffer_infos.push([vk::DescriptorBufferInfo::default()
+                .buffer(*buf)
+                .offset(0)
+                .range(*range)]),
+            Desc::Uniform(buf, offset, range) => {
                 buffer_infos.push([vk::DescriptorBufferInfo::default()
                     .buffer(*buf)
-                    .offset(0)
+                    .offset(*offset)
                     .range(*range)])
             }
             Desc::Tlas(h) => tlas.push([*h]),

@@ -13,6 +13,7 @@
 //! on drop. Embedding: [`VulkanBackend::from_raw`] takes a caller's instance and device.
 
 mod accel;
+mod arena;
 mod context;
 mod dispatch;
 mod memory;
@@ -62,6 +63,13 @@ pub struct VulkanBackend {
     written_top_levels: HashMap<ResourceId, Vec<[u32; 4]>>,
     /// Pipelines by variant label (`kernel` or `kernel[SWITCH=0/1,...]`).
     pipelines: HashMap<String, pipelines::Pipeline>,
+    /// Parameters and staging for every execute ([`arena`]), moved into the execute's
+    /// frame while it runs.
+    arena: arena::Arena,
+    /// The descriptor pool and the timestamp query pool, kept across executes with their
+    /// capacities (sets, queries): reset, or made anew larger, when an execute starts.
+    descriptor_pool: Option<(vk::DescriptorPool, u32)>,
+    query_pool: Option<(vk::QueryPool, u32)>,
     counter_banks: Buffer,
     pool: vk::CommandPool,
     fence: vk::Fence,
@@ -155,6 +163,9 @@ impl VulkanBackend {
             buffers: HashMap::new(),
             scenes: HashMap::new(),
             written_top_levels: HashMap::new(),
+            arena: arena::Arena::default(),
+            descriptor_pool: None,
+            query_pool: None,
             pipelines: HashMap::new(),
             counter_banks,
             pool,
@@ -281,6 +292,12 @@ impl Drop for VulkanBackend {
     fn drop(&mut self) {
         caustica_core::backend::driver_entry(|| unsafe {
             let _ = self.ctx.device.queue_wait_idle(self.ctx.queue);
+            if let Some((p, _)) = self.descriptor_pool.take() {
+                self.ctx.device.destroy_descriptor_pool(p, None);
+            }
+            if let Some((q, _)) = self.query_pool.take() {
+                self.ctx.device.destroy_query_pool(q, None);
+            }
             self.ctx.device.destroy_fence(self.fence, None);
             self.ctx.device.destroy_command_pool(self.pool, None);
         })
