@@ -219,6 +219,28 @@ impl Recording {
         scene
     }
 
+    /// Records the writes of moved instances into the uploaded scene
+    /// ([`crate::device::device_scene::InstanceMove`]: world vertices, the top level) and
+    /// the `prepare_scene` that refits the acceleration structure (Vulkan: its TLAS
+    /// rebuilt in place).
+    pub fn move_instances(
+        &mut self,
+        m: &crate::device::device_scene::InstanceMove,
+        scene: &SceneArgs,
+    ) -> Result<(), BackendError> {
+        for (first, v) in &m.vertices {
+            self.write(scene.vertices, *first, v, "moved instance vertices")?;
+        }
+        self.write(
+            scene.bvh_nodes,
+            0,
+            &m.top_level,
+            "top-level BVH and instance records",
+        )?;
+        self.kernel(PrepareScene { scene: *scene });
+        Ok(())
+    }
+
     /// Records creation of a zeroed G-buffer of `pixels` texels, as its planes.
     pub fn create_gbuffer(&mut self, pixels: u32) -> GBufferPlanes {
         GBufferPlanes {

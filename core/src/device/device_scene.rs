@@ -76,28 +76,6 @@ pub struct InstanceMove {
     pub caster_bounds: Aabb,
 }
 
-impl InstanceMove {
-    /// Records the writes into the uploaded scene and the `prepare_scene` that refits
-    /// the acceleration structure (Vulkan: a new TLAS over the same BLASes).
-    pub fn record(
-        &self,
-        rec: &mut crate::recording::Recording,
-        scene: &crate::device::handle::SceneArgs,
-    ) -> Result<(), crate::device::error::BackendError> {
-        for (first, v) in &self.vertices {
-            rec.write(scene.vertices, *first, v, "moved instance vertices")?;
-        }
-        rec.write(
-            scene.bvh_nodes,
-            0,
-            &self.top_level,
-            "top-level BVH and instance records",
-        )?;
-        rec.kernel(crate::kernels::PrepareScene { scene: *scene });
-        Ok(())
-    }
-}
-
 impl SceneInstances {
     /// Whether some level's triangles have smooth normals ([`smooth_normals`]).
     pub fn smooth_normals(&self) -> bool {
@@ -799,16 +777,6 @@ mod tests {
         assert_eq!(ds.bounds, fresh.bounds);
         assert_eq!(ds.caster_bounds, fresh.caster_bounds);
         assert_eq!(ds.instances, fresh.instances);
-        // AdaptiveCaustics' caster boxes follow the levels' triangle bounds
-        let boxes = crate::techniques::adaptive_caustics::caster_boxes_by_object(&fresh);
-        for (object, b) in boxes {
-            let l = ds
-                .instances
-                .levels
-                .iter()
-                .find(|l| l.object == Some(object as usize));
-            assert_eq!(l.map(|l| l.triangle_bounds), Some(b), "object {object}");
-        }
     }
 
     #[test]

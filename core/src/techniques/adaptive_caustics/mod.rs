@@ -181,3 +181,38 @@ pub fn create(
         }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::device::device_scene::DeviceScene;
+    use crate::scene::builtin::builtin;
+    use crate::scene::{Shape, Transform};
+    use glam::{Quat, Vec3};
+
+    /// A moved instance caster's box is its level's triangle bounds, the box a fresh
+    /// build of the moved scene gives it ([`super::follow_moved_casters`]).
+    #[test]
+    fn caster_boxes_follow_moved_instances() {
+        let mut s = builtin("cornell").unwrap();
+        for o in s.objects.iter_mut().filter(|o| o.name.ends_with("ball")) {
+            if let Shape::Sphere { center, .. } = &mut o.shape {
+                let c = std::mem::replace(center, Vec3::ZERO);
+                o.transform = Some(Transform::from_translation(c));
+            }
+        }
+        let ds = DeviceScene::build(&s, Default::default()).unwrap();
+        let (objects, mut boxes): (Vec<u32>, Vec<_>) =
+            super::caster_boxes_by_object(&ds).into_iter().unzip();
+        let mut instances = ds.instances.clone();
+        let to = Transform {
+            translation: Vec3::new(0.1, 0.5, 0.2),
+            rotation: Quat::from_rotation_x(0.3),
+            scale: Vec3::splat(0.7),
+        };
+        instances.move_instances(&[(5, to)]).unwrap();
+        super::follow_moved_casters(&mut boxes, &objects, &instances.levels);
+        s.objects[5].transform = Some(to);
+        let fresh = DeviceScene::build(&s, Default::default()).unwrap();
+        assert_eq!(boxes, super::caster_boxes(&fresh));
+    }
+}

@@ -1345,7 +1345,7 @@ impl CausticMap {
             .as_mut()
             .is_some_and(|r| r.move_vertices(&m.vertices));
         let mut rec = Recording::new();
-        m.record(&mut rec, &self.scene)?;
+        rec.move_instances(&m, &self.scene)?;
         backend.execute(&rec)?;
         if let Some(ad) = &mut self.adaptive {
             // the traversal's caster boxes follow the moved casters

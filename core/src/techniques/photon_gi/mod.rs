@@ -1046,7 +1046,7 @@ impl PhotonGi {
             return old.free(backend);
         }
         let mut rec = Recording::new();
-        m.record(&mut rec, &self.scene)?;
+        rec.move_instances(&m, &self.scene)?;
         backend.execute(&rec)?;
         self.instances = instances;
         self.bounds = m.bounds;

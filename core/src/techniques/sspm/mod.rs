@@ -1105,7 +1105,7 @@ impl Sspm {
         let (constants, mut plan, _) =
             Sspm::frame_setup(&model, bounds, &self.settings, adaptive.as_ref())?;
         // written with the next frame (`pending`)
-        m.record(&mut self.pending, &self.scene)?;
+        self.pending.move_instances(&m, &self.scene)?;
         self.instances = instances;
         let old_bounds = self.bounds;
         self.bounds = bounds;
@@ -1124,7 +1124,7 @@ impl Sspm {
                     .map(|(k, _)| (*k, self.model.objects[*k].transform.unwrap_or_default()))
                     .collect();
                 let m = self.instances.move_instances(&back)?;
-                m.record(&mut self.pending, &self.scene)?;
+                self.pending.move_instances(&m, &self.scene)?;
                 self.bounds = old_bounds;
                 self.adaptive = old_adaptive;
                 return Err(e);
