@@ -228,6 +228,27 @@ impl Recording {
         m: &crate::device::device_scene::InstanceMove,
         scene: &SceneArgs,
     ) -> Result<(), BackendError> {
+        // a recording that holds earlier moves not yet run (Sspm's pending updates) keeps
+        // only the latest: the same ranges are written again, and one prepare_scene follows
+        let superseded = |s: &Step| match s {
+            Step::Write {
+                id, offset, data, ..
+            } => {
+                (*id == scene.bvh_nodes.id && *offset == 0 && data.len() == m.top_level.len() * 16)
+                    || (*id == scene.vertices.id
+                        && m.vertices.iter().any(|(first, v)| {
+                            *offset
+                                == *first as u64
+                                    * std::mem::size_of::<crate::device::layout::GpuVertex>() as u64
+                                && data.len() == std::mem::size_of_val(v.as_slice())
+                        }))
+            }
+            Step::Kernel(k) => {
+                matches!(k.kernel(), Kernel::PrepareScene(p) if p.scene.bvh_nodes.id == scene.bvh_nodes.id)
+            }
+            _ => false,
+        };
+        self.steps.retain(|s| !superseded(s));
         for (first, v) in &m.vertices {
             self.write(scene.vertices, *first, v, "moved instance vertices")?;
         }

@@ -58,7 +58,8 @@ pub struct SceneInstances {
     /// order.
     pub levels: Vec<Level>,
     /// The instances' vertices in object space, level after level.
-    pub object_vertices: Vec<GpuVertex>,
+    /// (Shared: a technique clones its `SceneInstances` on every move; they never change.)
+    pub object_vertices: std::sync::Arc<[GpuVertex]>,
     /// vec4 index in the node buffer where the object-space positions start.
     positions_vec4: u32,
 }
@@ -77,9 +78,24 @@ pub struct InstanceMove {
 }
 
 impl SceneInstances {
-    /// Whether some level's triangles have smooth normals ([`smooth_normals`]).
-    pub fn smooth_normals(&self) -> bool {
-        self.levels.iter().any(|l| l.smooth_normals)
+    /// Whether some level's triangles have smooth normals ([`smooth_normals`]); `None`
+    /// while a moved level's flag awaits [`SceneInstances::refresh_smooth_normals`].
+    pub fn smooth_normals(&self) -> Option<bool> {
+        self.levels
+            .iter()
+            .try_fold(false, |any, l| l.smooth_normals.map(|s| any || s))
+    }
+
+    /// Recomputes the smooth-normal flags of the levels `m` moved, from their new world
+    /// vertices (as the build computes them).
+    pub fn refresh_smooth_normals(&mut self, m: &InstanceMove) {
+        for (first, world) in &m.vertices {
+            if let Some(l) = self.levels.iter_mut().find(|l| l.vertex_base == *first) {
+                let base = l.vertex_base;
+                let run = |i: u32| world[(i - base) as usize];
+                l.smooth_normals = Some(smooth_normals(l.triangle_indices.iter().copied(), &run));
+            }
+        }
     }
 
     /// Moves instances (`(object index, transform)` pairs; the objects must have been
@@ -137,9 +153,8 @@ impl SceneInstances {
                 b
             };
             l.world_bounds = b;
-            let run = |i: u32| world[(i - l.vertex_base) as usize];
-            l.smooth_normals = smooth_normals(l.triangle_indices.iter().copied(), &run);
-            l.triangle_bounds = triangle_bounds(&l.triangle_indices, &run);
+            l.smooth_normals = None; // refresh_smooth_normals, where it is needed
+            l.triangle_bounds = triangle_bounds(&l.used_vertices, &world, l.vertex_base);
             vertices.push((l.vertex_base, world));
         }
         let top_level = top_level(&levels).map_err(|reason| BuildError::Scene {
@@ -191,15 +206,22 @@ pub fn smooth_normals(
     })
 }
 
-/// The box of the vertices `triangles` use.
-fn triangle_bounds(triangles: &[[u32; 3]], vertex: &dyn VertexLookup) -> Aabb {
+/// The box of the vertices `used` (world-vertex indices); `vertices[i - base]` is vertex
+/// `i` (all world vertices with `base` 0, or one instance's run from its first index).
+fn triangle_bounds(used: &[u32], vertices: &[GpuVertex], base: u32) -> Aabb {
     let mut b = Aabb::EMPTY;
-    for t in triangles {
-        for &i in t {
-            b.grow(Vec3::from(vertex.vertex(i).position));
-        }
+    for &i in used {
+        b.grow(Vec3::from(vertices[(i - base) as usize].position));
     }
     b
+}
+
+/// The vertices `triangles` use, each once, ascending.
+fn used_vertices(triangles: &[[u32; 3]]) -> Vec<u32> {
+    let mut v: Vec<u32> = triangles.iter().flatten().copied().collect();
+    v.sort_unstable();
+    v.dedup();
+    v
 }
 
 /// A world vertex by index (a slice of all, or one instance's run).
@@ -335,8 +357,9 @@ impl DeviceScene {
             position_base: 0,
             world_bounds: Aabb::EMPTY,
             caster_bounds: Aabb::EMPTY,
-            smooth_normals: false,
-            triangle_indices: Vec::new(),
+            smooth_normals: None,
+            triangle_indices: std::sync::Arc::from(Vec::new()),
+            used_vertices: std::sync::Arc::from(Vec::new()),
             triangle_bounds: Aabb::EMPTY,
         };
         // instances: (level, triangles, object-space vertices)
@@ -418,8 +441,12 @@ impl DeviceScene {
                         position_base: object_vertices.len() as u32,
                         world_bounds,
                         caster_bounds: if specular { world_bounds } else { Aabb::EMPTY },
-                        smooth_normals: false,
+                        smooth_normals: None,
                         triangle_indices: tris.iter().map(|t| t.indices).collect(),
+                        used_vertices: used_vertices(
+                            &tris.iter().map(|t| t.indices).collect::<Vec<_>>(),
+                        )
+                        .into(),
                         triangle_bounds: Aabb::EMPTY,
                     };
                     object_vertices.extend_from_slice(&local);
@@ -480,9 +507,11 @@ impl DeviceScene {
         }
         for l in &mut levels {
             let range = l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize;
-            l.smooth_normals =
-                smooth_normals(triangles[range].iter().map(|t| t.indices), &vertices);
-            l.triangle_bounds = triangle_bounds(&l.triangle_indices, &vertices);
+            l.smooth_normals = Some(smooth_normals(
+                triangles[range].iter().map(|t| t.indices),
+                &vertices,
+            ));
+            l.triangle_bounds = triangle_bounds(&l.used_vertices, &vertices, 0);
         }
         let positions_vec4 = slot as usize * SLOT_VEC4S;
         for l in levels.iter_mut().filter(|l| l.object.is_some()) {
@@ -517,7 +546,7 @@ impl DeviceScene {
             triangle_objects,
             instances: SceneInstances {
                 levels,
-                object_vertices,
+                object_vertices: object_vertices.into(),
                 positions_vec4: positions_vec4 as u32,
             },
         })
@@ -527,6 +556,7 @@ impl DeviceScene {
     /// arrays: the result equals a fresh build of the moved scene.
     pub fn move_instances(&mut self, moves: &[(usize, Transform)]) -> Result<(), BuildError> {
         let m = self.instances.move_instances(moves)?;
+        self.instances.refresh_smooth_normals(&m);
         for (first, v) in &m.vertices {
             self.vertices[*first as usize..*first as usize + v.len()].copy_from_slice(v);
         }

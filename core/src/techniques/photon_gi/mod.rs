@@ -206,7 +206,9 @@ fn plan_lights(
 /// geometric normals agree and the factor is 1 up to `eps`:
 /// [`crate::device::device_scene::smooth_normals`]).
 fn shading_correction(s: &PhotonGiSettings, instances: &SceneInstances) -> bool {
-    s.shading_normals && s.estimator == IndirectEstimator::Splat && instances.smooth_normals()
+    s.shading_normals
+        && s.estimator == IndirectEstimator::Splat
+        && instances.smooth_normals().unwrap_or(true)
 }
 
 /// The length of the scene box's diagonal (scene units; at least the smallest positive
@@ -1039,6 +1041,7 @@ impl PhotonGi {
         let model = crate::frame::technique::with_transforms(&self.model, moves)?;
         let mut instances = self.instances.clone();
         let m = instances.move_instances(moves)?;
+        instances.refresh_smooth_normals(&m);
         if shading_correction(&self.settings, &instances) != self.buffers.uncorrected.is_some() {
             let fresh = PhotonGi::new(backend, &model, self.settings.clone())?;
             let old = std::mem::replace(self, fresh);
