@@ -79,25 +79,21 @@ pub struct SceneAccel {
     pub sources: [u64; 3],
 }
 
-fn build(
+/// Creates an acceleration structure of type `ty` sized for `info` over `primitives`,
+/// with its storage and a build scratch buffer (the scratch and its aligned address are
+/// returned: a one-off build drops them, the TLAS keeps them for rebuilds in place).
+fn allocate(
     ctx: &Arc<Context>,
-    run: SubmitFn<'_>,
     ty: vk::AccelerationStructureTypeKHR,
-    geometry: vk::AccelerationStructureGeometryKHR<'_>,
+    info: &vk::AccelerationStructureBuildGeometryInfoKHR<'_>,
     primitives: u32,
     what: &str,
-) -> Result<AccelStructure, BackendError> {
-    let geometries = [geometry];
-    let mut info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-        .ty(ty)
-        .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
-        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-        .geometries(&geometries);
+) -> Result<(AccelStructure, Buffer, u64), BackendError> {
     let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
     unsafe {
         ctx.accel.get_acceleration_structure_build_sizes(
             vk::AccelerationStructureBuildTypeKHR::DEVICE,
-            &info,
+            info,
             &[primitives],
             &mut sizes,
         )
@@ -133,8 +129,28 @@ fn build(
         "acceleration structure scratch",
     )?;
     let scratch_address = scratch.address().next_multiple_of(align);
-    info = info
-        .dst_acceleration_structure(handle)
+    Ok((structure, scratch, scratch_address))
+}
+
+/// Builds an acceleration structure of type `ty` over `geometry` once (`run` records,
+/// submits and waits); its scratch is dropped.
+fn build(
+    ctx: &Arc<Context>,
+    run: SubmitFn<'_>,
+    ty: vk::AccelerationStructureTypeKHR,
+    geometry: vk::AccelerationStructureGeometryKHR<'_>,
+    primitives: u32,
+    what: &str,
+) -> Result<AccelStructure, BackendError> {
+    let geometries = [geometry];
+    let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .ty(ty)
+        .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(&geometries);
+    let (structure, scratch, scratch_address) = allocate(ctx, ty, &info, primitives, what)?;
+    let info = info
+        .dst_acceleration_structure(structure.handle)
         .scratch_data(vk::DeviceOrHostAddressKHR {
             device_address: scratch_address,
         });
@@ -271,46 +287,13 @@ impl SceneAccel {
         let (geometry, count) = Self::top_level_geometry(&instances, records);
         let geometries = [geometry];
         let info = Self::top_level_info(&geometries);
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        unsafe {
-            ctx.accel.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &info,
-                &[count],
-                &mut sizes,
-            )
-        };
-        let storage = Buffer::new(
+        let (tlas, scratch, scratch_address) = allocate(
             ctx,
-            sizes.acceleration_structure_size,
-            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR,
-            false,
+            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+            &info,
+            count,
             "top-level acceleration structure",
         )?;
-        let handle = unsafe {
-            ctx.accel.create_acceleration_structure(
-                &vk::AccelerationStructureCreateInfoKHR::default()
-                    .buffer(storage.buffer)
-                    .size(sizes.acceleration_structure_size)
-                    .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL),
-                None,
-            )
-        }
-        .map_err(vk_error("creating an acceleration structure"))?;
-        let tlas = AccelStructure {
-            ctx: Arc::clone(ctx),
-            handle,
-            _storage: storage,
-        };
-        let align = ctx.rt_props.scratch_alignment.max(1) as u64;
-        let scratch = Buffer::new(
-            ctx,
-            sizes.build_scratch_size + align,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            false,
-            "TLAS scratch",
-        )?;
-        let scratch_address = scratch.address().next_multiple_of(align);
         let accel = SceneAccel {
             tlas,
             blases,
