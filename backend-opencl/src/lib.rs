@@ -12,14 +12,16 @@
 //! device), with what to install. No development package is needed to build it.
 //!
 //! Buffers stay on the device between passes and recordings; data comes back only
-//! through [`Backend::read`]. Kernel times are device timestamps (profiling events).
+//! through [`Backend::read`] and a submission's readbacks. Kernel times are device
+//! timestamps (profiling events). [`Backend::submit`] only enqueues (writes and readbacks
+//! non-blocking, a marker event last, a flush): the host's frame loop does not wait.
 
 mod device;
 mod dispatch;
 mod error;
 pub mod program;
 
-use caustica_core::backend::{Backend, BackendError, Capabilities, PassTime};
+use caustica_core::backend::{Backend, BackendError, Capabilities, Finished, PassTime, Submission};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::recording::{Recording, Step};
 use device::DeviceState;
@@ -27,9 +29,10 @@ pub use device::{list_devices, DeviceSummary};
 use error::cl_error;
 use opencl3::command_queue::{CommandQueue, CL_QUEUE_PROFILING_ENABLE};
 use opencl3::event::Event;
+use opencl3::event::CL_COMPLETE;
 use opencl3::kernel::Kernel;
 use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_WRITE};
-use opencl3::types::CL_BLOCKING;
+use opencl3::types::{CL_BLOCKING, CL_NON_BLOCKING};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -50,6 +53,9 @@ pub struct OpenClBackend {
     /// Labels of the kernel variants this backend has run (their programs are built once
     /// per device and shared, see [`device::DeviceState::program_for`]).
     variants: std::sync::Mutex<std::collections::BTreeSet<String>>,
+    /// Submissions not yet collected ([`Backend::submit`]), by number.
+    in_flight: HashMap<u64, InFlight>,
+    next_submission: u64,
 }
 
 impl OpenClBackend {
@@ -80,6 +86,8 @@ impl OpenClBackend {
             queue,
             buffers: HashMap::new(),
             variants: Default::default(),
+            in_flight: HashMap::new(),
+            next_submission: 0,
         })
     }
 
@@ -238,16 +246,80 @@ impl Backend for OpenClBackend {
         caustica_core::backend::driver_entry(|| self.read_back(id))
     }
 
+    fn submit(
+        &mut self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<Submission, BackendError> {
+        caustica_core::backend::driver_entry(|| self.submit_recording(recording, readbacks))
+    }
+
+    fn poll(
+        &mut self,
+        submission: &mut Submission,
+        wait: bool,
+    ) -> Result<Option<Finished>, BackendError> {
+        caustica_core::backend::driver_entry(|| self.poll_submission(submission, wait))
+    }
+
     fn variants(&self) -> Vec<String> {
         let v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
         v.iter().cloned().collect()
     }
 }
 
+/// A submission on the queue ([`Backend::submit`]): what it must keep alive until it has
+/// run, and what it gives back.
+struct InFlight {
+    /// Kernel names and their profiling events.
+    kernels: Vec<(&'static str, Event)>,
+    /// Data of non-blocking writes (read by the device until the submission is done).
+    _writes: Vec<Vec<u8>>,
+    /// Host memory the readbacks land in.
+    readbacks: Vec<Vec<u8>>,
+    /// A marker after everything else: complete when the submission is.
+    done: Event,
+}
+
+/// Kernel times from profiling events (the commands have completed).
+fn pass_times(kernels: &[(&'static str, Event)]) -> Result<Vec<PassTime>, BackendError> {
+    kernels
+        .iter()
+        .map(|(kernel, e)| {
+            let start = e
+                .profiling_command_start()
+                .map_err(cl_error("reading a kernel timestamp"))?;
+            let end = e
+                .profiling_command_end()
+                .map_err(cl_error("reading a kernel timestamp"))?;
+            Ok(PassTime {
+                kernel,
+                seconds: end.saturating_sub(start) as f64 * 1e-9,
+            })
+        })
+        .collect()
+}
+
 impl OpenClBackend {
     /// [`Backend::execute`]'s body (the trait method runs it under
     /// [`caustica_core::backend::driver_entry`]).
     fn execute_recording(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
+        let mut writes = Vec::new();
+        let kernels = self.enqueue(recording, &mut writes)?;
+        self.queue
+            .finish()
+            .map_err(cl_error("waiting for the device"))?;
+        pass_times(&kernels)
+    }
+
+    /// Enqueues every step of `recording` on the in-order queue. Writes do not block: their
+    /// data is copied into `writes`, which must outlive the commands. Creations upload
+    /// blocking (they are set-up work, not a frame's).
+    fn enqueue(
+        &mut self,
+        recording: &Recording,
+        writes: &mut Vec<Vec<u8>>,
+    ) -> Result<Vec<(&'static str, Event)>, BackendError> {
         let mut pending: Vec<(&'static str, Event)> = Vec::new();
         for step in &recording.steps {
             match step {
@@ -270,10 +342,14 @@ impl OpenClBackend {
                         )));
                     }
                     if !data.is_empty() {
+                        writes.push(data.clone());
+                        let data = writes.last().expect("just pushed");
+                        // SAFETY: `data` lives in `writes` (its heap block does not move)
+                        // until the queue has finished this command.
                         unsafe {
                             self.queue.enqueue_write_buffer(
                                 &mut b.mem,
-                                CL_BLOCKING,
+                                CL_NON_BLOCKING,
                                 *offset as usize,
                                 data,
                                 &[],
@@ -290,6 +366,7 @@ impl OpenClBackend {
                     fill_zero(&self.queue, &mut b.mem, b.bytes.max(4) as usize)?;
                 }
                 Step::Free { id } => {
+                    // OpenCL keeps the memory until the commands using it have finished
                     self.buffers.remove(id);
                 }
                 Step::Kernel(k) => {
@@ -299,24 +376,100 @@ impl OpenClBackend {
                 }
             }
         }
-        self.queue
-            .finish()
-            .map_err(cl_error("waiting for the device"))?;
-        pending
-            .into_iter()
-            .map(|(kernel, e)| {
-                let start = e
-                    .profiling_command_start()
-                    .map_err(cl_error("reading a kernel timestamp"))?;
-                let end = e
-                    .profiling_command_end()
-                    .map_err(cl_error("reading a kernel timestamp"))?;
-                Ok(PassTime {
-                    kernel,
-                    seconds: end.saturating_sub(start) as f64 * 1e-9,
-                })
-            })
-            .collect()
+        Ok(pending)
+    }
+
+    /// [`Backend::submit`]'s body: enqueue, non-blocking reads of `readbacks`, a marker,
+    /// a flush; no wait.
+    fn submit_recording(
+        &mut self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<Submission, BackendError> {
+        if self.in_flight.len() >= caustica_core::backend::MAX_UNCOLLECTED {
+            let oldest = *self.in_flight.keys().min().expect("not empty");
+            if let Some(f) = self.in_flight.remove(&oldest) {
+                f.done
+                    .wait()
+                    .map_err(cl_error("waiting for an uncollected submission"))?;
+            }
+        }
+        let mut writes = Vec::new();
+        let kernels = self.enqueue(recording, &mut writes)?;
+        let mut landing = Vec::with_capacity(readbacks.len());
+        for id in readbacks {
+            let b = self.buffer(*id)?;
+            let mut out = caustica_core::device::host_bytes(b.bytes, "a submission's readback")?;
+            if !out.is_empty() {
+                // SAFETY: `out`'s heap block is kept in the submission, unmoved and
+                // untouched, until its marker has completed.
+                unsafe {
+                    self.queue
+                        .enqueue_read_buffer(&b.mem, CL_NON_BLOCKING, 0, &mut out, &[])
+                }
+                .map_err(cl_error("reading a buffer back"))?;
+            }
+            landing.push(out);
+        }
+        let done = unsafe { self.queue.enqueue_marker_with_wait_list(&[]) }
+            .map_err(cl_error("enqueueing a submission's marker"))?;
+        self.queue.flush().map_err(cl_error("flushing the queue"))?;
+        self.next_submission += 1;
+        let id = self.next_submission;
+        self.in_flight.insert(
+            id,
+            InFlight {
+                kernels,
+                _writes: writes,
+                readbacks: landing,
+                done,
+            },
+        );
+        Ok(Submission::pending(id))
+    }
+
+    /// [`Backend::poll`]'s body.
+    fn poll_submission(
+        &mut self,
+        s: &mut Submission,
+        wait: bool,
+    ) -> Result<Option<Finished>, BackendError> {
+        if !s.is_pending() {
+            return s.take_finished().map(Some);
+        }
+        let Some(f) = self.in_flight.get(&s.id) else {
+            return Err(BackendError::BadArgument(format!(
+                "submission {} is not one of this backend's, or its result was discarded \
+                 ({} newer submissions were left uncollected)",
+                s.id,
+                caustica_core::backend::MAX_UNCOLLECTED
+            )));
+        };
+        if wait {
+            f.done
+                .wait()
+                .map_err(cl_error("waiting for a submission"))?;
+        } else {
+            let status = f
+                .done
+                .command_execution_status()
+                .map_err(cl_error("querying a submission"))?;
+            if status.0 < 0 {
+                return Err(BackendError::Driver(format!(
+                    "a submission failed on the device (status {})",
+                    status.0
+                )));
+            }
+            if status.0 != CL_COMPLETE {
+                return Ok(None);
+            }
+        }
+        let f = self.in_flight.remove(&s.id).expect("looked up above");
+        s.mark_collected();
+        Ok(Some(Finished {
+            times: pass_times(&f.kernels)?,
+            readbacks: f.readbacks,
+        }))
     }
 
     /// [`Backend::read`]'s body.

@@ -311,6 +311,8 @@ impl Context {
             .queue_priorities(&priorities)];
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(true)
+            // a Vulkan 1.2 core feature every 1.2 device has: the submissions' timeline
+            .timeline_semaphore(true)
             .scalar_block_layout(true);
         let mut fas = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
             .acceleration_structure(true);

@@ -107,7 +107,7 @@ fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), Backend
     Ok(())
 }
 
-fn barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
+pub(crate) fn barrier(d: &ash::Device, cmd: vk::CommandBuffer) {
     let m = [vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
         .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)];
@@ -131,25 +131,22 @@ enum Desc {
     Uniform(vk::Buffer, u64, u64),
 }
 
-/// Per-execute state: the command buffer being recorded and what must outlive it.
-struct Frame {
-    cmd: vk::CommandBuffer,
-    retired: Vec<Buffer>,
-    retired_scenes: Vec<SceneAccel>,
-    descriptor_pool: vk::DescriptorPool,
-    queries: Option<vk::QueryPool>,
-    passes: Vec<&'static str>,
-    /// The backend's arena while this execute runs ([`crate::arena`]).
-    arena: crate::arena::Arena,
+/// Per-submission state: the command buffer being recorded and what must outlive it.
+pub struct Frame {
+    pub cmd: vk::CommandBuffer,
+    pub retired: Vec<Buffer>,
+    pub retired_scenes: Vec<SceneAccel>,
+    pub queries: Option<vk::QueryPool>,
+    pub passes: Vec<&'static str>,
+    /// The slot's descriptor pool, arena and readback buffer while it runs.
+    pub slot: crate::submission::FrameSlot,
 }
 
-pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, BackendError> {
-    ensure_variants(b, rec)?;
-    let kernels = rec.steps.iter().filter(|s| is_kernel(s)).count() as u32;
-    let d = b.ctx.device.clone();
+/// Descriptor sets and descriptors of each type that `kernels` kernel steps need: two
+/// sets per kernel; storage descriptors per set the most any kernel binds (the G-buffer
+/// and photon map count one per plane).
+fn descriptor_needs(kernels: u32) -> (u32, [vk::DescriptorPoolSize; 3]) {
     let sets = 2 * kernels.max(1);
-    // storage descriptors per set: the most any kernel of the list binds (the G-buffer
-    // and photon map count one per plane)
     let storage_per_set = KERNELS
         .iter()
         .map(|k| {
@@ -166,101 +163,132 @@ pub fn execute(b: &mut VulkanBackend, rec: &Recording) -> Result<Vec<PassTime>, 
         .max()
         .unwrap_or(0)
         .max(1);
-    let sizes = [
-        vk::DescriptorPoolSize::default()
-            .ty(S)
-            .descriptor_count(storage_per_set * sets),
-        vk::DescriptorPoolSize::default()
-            .ty(U)
-            .descriptor_count(sets),
-        vk::DescriptorPoolSize::default()
-            .ty(AS)
-            .descriptor_count(sets),
-    ];
-    // the pools are kept across executes: reset, or made anew when this recording needs
-    // more than they hold (issue 19 point 3: no pool made and destroyed per recording)
-    let descriptor_pool = match b.descriptor_pool {
-        Some((p, cap)) if cap >= sets => {
-            unsafe { d.reset_descriptor_pool(p, vk::DescriptorPoolResetFlags::empty()) }
-                .map_err(vk_error("resetting the descriptor pool"))?;
-            p
-        }
-        old => {
-            if let Some((p, _)) = old {
-                unsafe { d.destroy_descriptor_pool(p, None) };
-                b.descriptor_pool = None;
-            }
-            let cap = sets.max(64).next_power_of_two();
-            let sizes = sizes.map(|s| {
-                let per = s.descriptor_count / sets;
-                s.descriptor_count(per * cap)
-            });
-            let p = unsafe {
-                d.create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default()
-                        .max_sets(cap)
-                        .pool_sizes(&sizes),
-                    None,
-                )
-            }
-            .map_err(vk_error("creating a descriptor pool"))?;
-            b.descriptor_pool = Some((p, cap));
-            p
-        }
-    };
-    let queries = if b.ctx.timestamps && kernels > 0 {
-        match b.query_pool {
-            Some((q, cap)) if cap >= 2 * kernels => Some(q),
-            old => {
-                if let Some((q, _)) = old {
-                    unsafe { d.destroy_query_pool(q, None) };
-                    b.query_pool = None;
-                }
-                let cap = (2 * kernels).max(128).next_power_of_two();
-                let q = unsafe {
-                    d.create_query_pool(
-                        &vk::QueryPoolCreateInfo::default()
-                            .query_type(vk::QueryType::TIMESTAMP)
-                            .query_count(cap),
-                        None,
-                    )
-                }
-                .map_err(vk_error("creating a query pool"))?;
-                b.query_pool = Some((q, cap));
-                Some(q)
-            }
-        }
-    } else {
-        None
-    };
-    let mut arena = std::mem::take(&mut b.arena);
-    arena.reset(&b.ctx)?;
+    (
+        sets,
+        [
+            vk::DescriptorPoolSize::default()
+                .ty(S)
+                .descriptor_count(storage_per_set),
+            vk::DescriptorPoolSize::default().ty(U).descriptor_count(1),
+            vk::DescriptorPoolSize::default().ty(AS).descriptor_count(1),
+        ],
+    )
+}
+
+/// Records `rec` into a command buffer of a free frame slot and submits it with the
+/// slot's fence (and the backend's timeline value `id`), copying `readbacks` into the
+/// slot's host-visible buffer at the end. Does not wait, except for a `prepare_scene` that
+/// builds acceleration structures (a set-up step: it reads the uploads back).
+pub fn submit(
+    b: &mut VulkanBackend,
+    rec: &Recording,
+    readbacks: &[caustica_core::device::handle::ResourceId],
+    id: u64,
+) -> Result<crate::submission::InFlight, BackendError> {
+    ensure_variants(b, rec)?;
+    let kernels = rec.steps.iter().filter(|s| is_kernel(s)).count() as u32;
+    let d = b.ctx.device.clone();
+    let mut slot = b.take_slot()?;
+    // the slot's pools are kept: reset, or made anew when this recording needs more than
+    // they hold (issue 19 point 3: no pool made and destroyed per recording)
+    let (sets, per_set) = descriptor_needs(kernels);
+    if let Err(e) = slot.prepare(
+        &b.ctx,
+        sets,
+        &per_set,
+        if b.ctx.timestamps { 2 * kernels } else { 0 },
+    ) {
+        b.return_slot(slot);
+        return Err(e);
+    }
+    let queries = slot.query_pool().filter(|_| kernels > 0);
     let mut frame = Frame {
         cmd: vk::CommandBuffer::null(),
         retired: Vec::new(),
         retired_scenes: Vec::new(),
-        descriptor_pool,
         queries,
         passes: Vec::new(),
-        arena,
+        slot,
     };
-    let result = record_all(b, rec, &mut frame, kernels);
-    // whatever happened, wait for the device before the frame's objects go
-    if frame.cmd != vk::CommandBuffer::null() {
-        let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
-        let submitted = b.submit_and_wait(cmd);
-        if result.is_ok() {
-            submitted?;
+    let recorded = record_all(b, rec, &mut frame, kernels)
+        .and_then(|_| record_readbacks(b, &mut frame, readbacks));
+    let sizes = match recorded {
+        Ok(sizes) => sizes,
+        Err(e) => {
+            // wait for what was recorded before the frame's objects go
+            if frame.cmd != vk::CommandBuffer::null() {
+                let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+                let _ = b.submit_and_wait(cmd);
+            }
+            b.return_slot(frame.slot);
+            return Err(e);
+        }
+    };
+    let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+    if let Err(e) = b.submit_signalled(cmd, frame.slot.fence, id) {
+        unsafe {
+            let _ = d.queue_wait_idle(b.ctx.queue);
+        }
+        b.return_slot(frame.slot);
+        return Err(e);
+    }
+    Ok(crate::submission::InFlight {
+        id,
+        cmd,
+        frame,
+        readbacks: sizes,
+    })
+}
+
+/// Copies of `readbacks` into the slot's host-visible readback buffer, after a barrier;
+/// returns each one's offset and size.
+fn record_readbacks(
+    b: &mut VulkanBackend,
+    frame: &mut Frame,
+    readbacks: &[caustica_core::device::handle::ResourceId],
+) -> Result<Vec<(u64, u64)>, BackendError> {
+    if readbacks.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut at = 0u64;
+    let mut sizes = Vec::with_capacity(readbacks.len());
+    for id in readbacks {
+        let bytes = b.get(*id)?.bytes;
+        sizes.push((at, bytes));
+        at = (at + bytes).next_multiple_of(16);
+    }
+    let dst = frame.slot.readback_buffer(&b.ctx, at)?;
+    let d = &b.ctx.device;
+    barrier(d, frame.cmd);
+    for (id, (offset, bytes)) in readbacks.iter().zip(&sizes) {
+        if *bytes > 0 {
+            let src = b.get(*id)?.buffer.buffer;
+            unsafe {
+                d.cmd_copy_buffer(
+                    frame.cmd,
+                    src,
+                    dst,
+                    &[vk::BufferCopy::default().dst_offset(*offset).size(*bytes)],
+                )
+            };
         }
     }
-    let times = result.and_then(|_| read_times(&b.ctx, &frame));
+    // host reads after the fence: make the transfer writes visible to the host
+    let m = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)];
     unsafe {
-        let _ = d.queue_wait_idle(b.ctx.queue);
-    }
-    b.arena = std::mem::take(&mut frame.arena);
-    drop(frame.retired);
-    drop(frame.retired_scenes);
-    times
+        d.cmd_pipeline_barrier(
+            frame.cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &m,
+            &[],
+            &[],
+        )
+    };
+    Ok(sizes)
 }
 
 /// `data` in host-visible memory the device can copy from: in the frame's arena, or (too
@@ -271,7 +299,7 @@ fn staged(
     data: &[u8],
     what: &str,
 ) -> Result<(vk::Buffer, u64), BackendError> {
-    if let Some(at) = frame.arena.put(data, 16) {
+    if let Some(at) = frame.slot.arena.put(data, 16) {
         return Ok(at);
     }
     let staging = Buffer::with_data(ctx, data, vk::BufferUsageFlags::TRANSFER_SRC, what)?;
@@ -280,7 +308,8 @@ fn staged(
     Ok((buffer, 0))
 }
 
-fn read_times(ctx: &Context, frame: &Frame) -> Result<Vec<PassTime>, BackendError> {
+/// The frame's kernel times (its fence has signalled).
+pub fn read_times(ctx: &Context, frame: &Frame) -> Result<Vec<PassTime>, BackendError> {
     let Some(q) = frame.queries else {
         return Ok(frame
             .passes
@@ -633,7 +662,7 @@ fn record_kernel(
             }
             LaunchArg::Params(p) => {
                 let align = b.ctx.limits.min_uniform_buffer_offset_alignment;
-                match frame.arena.put(p, align) {
+                match frame.slot.arena.put(p, align) {
                     Some((buf, at)) => descs.push(Desc::Uniform(buf, at, p.len() as u64)),
                     None => {
                         let u = Buffer::with_data(
@@ -746,7 +775,7 @@ fn bind_set(
     let set = unsafe {
         d.allocate_descriptor_sets(
             &vk::DescriptorSetAllocateInfo::default()
-                .descriptor_pool(frame.descriptor_pool)
+                .descriptor_pool(frame.slot.descriptor_pool())
                 .set_layouts(&layouts),
         )
     }

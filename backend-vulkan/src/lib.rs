@@ -6,7 +6,10 @@
 //! backend's source) through naga's SPIR-V writer.
 //!
 //! Buffers stay on the device between passes and recordings; reads come back only through
-//! [`Backend::read`]. Pass times are device timestamps. With
+//! [`Backend::read`] and a submission's readbacks. Pass times are device timestamps.
+//! [`Backend::submit`] records into a kept frame slot and submits once, without waiting
+//! ([`submission`]); [`VulkanBackend::completion_semaphore`] is the timeline semaphore a
+//! host waits on. With
 //! `CAUSTICA_VULKAN_VALIDATION=1` (the conformance suite sets it) the Khronos validation
 //! layer is enabled where installed, and any validation error fails the `execute` during
 //! which it was reported. Every Vulkan failure is a typed error; every object is destroyed
@@ -18,9 +21,12 @@ mod context;
 mod dispatch;
 mod memory;
 mod pipelines;
+mod submission;
 
 use ash::vk;
-use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
+use caustica_core::backend::{
+    Backend, BackendError, Capabilities, DeviceType, Finished, PassTime, Submission,
+};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::recording::{Recording, Step};
 use context::{vk_error, Context};
@@ -63,13 +69,15 @@ pub struct VulkanBackend {
     written_top_levels: HashMap<ResourceId, Vec<[u32; 4]>>,
     /// Pipelines by variant label (`kernel` or `kernel[SWITCH=0/1,...]`).
     pipelines: HashMap<String, pipelines::Pipeline>,
-    /// Parameters and staging for every execute ([`arena`]), moved into the execute's
-    /// frame while it runs.
-    arena: arena::Arena,
-    /// The descriptor pool and the timestamp query pool, kept across executes with their
-    /// capacities (sets, queries): reset, or made anew larger, when an execute starts.
-    descriptor_pool: Option<(vk::DescriptorPool, u32)>,
-    query_pool: Option<(vk::QueryPool, u32)>,
+    /// Submissions on the device, oldest first ([`submission`]).
+    in_flight: Vec<submission::InFlight>,
+    /// Frame slots free for the next submission (pools, arena, fence: kept, reset).
+    free_slots: Vec<submission::FrameSlot>,
+    /// Results of submissions retired before they were polled.
+    finished: HashMap<u64, Result<caustica_core::backend::Finished, BackendError>>,
+    next_submission: u64,
+    /// Signalled with each submission's number, once a host asked for it.
+    timeline: Option<vk::Semaphore>,
     counter_banks: Buffer,
     pool: vk::CommandPool,
     fence: vk::Fence,
@@ -163,9 +171,11 @@ impl VulkanBackend {
             buffers: HashMap::new(),
             scenes: HashMap::new(),
             written_top_levels: HashMap::new(),
-            arena: arena::Arena::default(),
-            descriptor_pool: None,
-            query_pool: None,
+            in_flight: Vec::new(),
+            free_slots: Vec::new(),
+            finished: HashMap::new(),
+            next_submission: 0,
+            timeline: None,
             pipelines: HashMap::new(),
             counter_banks,
             pool,
@@ -210,6 +220,10 @@ impl VulkanBackend {
             )
         }
         .map_err(vk_error("beginning a command buffer"))?;
+        // ordered after every earlier submission's work on the queue (submissions do not
+        // wait for each other on the host; a barrier's first scope reaches back through
+        // submission order)
+        dispatch::barrier(d, cmd);
         Ok(cmd)
     }
 
@@ -292,11 +306,11 @@ impl Drop for VulkanBackend {
     fn drop(&mut self) {
         caustica_core::backend::driver_entry(|| unsafe {
             let _ = self.ctx.device.queue_wait_idle(self.ctx.queue);
-            if let Some((p, _)) = self.descriptor_pool.take() {
-                self.ctx.device.destroy_descriptor_pool(p, None);
-            }
-            if let Some((q, _)) = self.query_pool.take() {
-                self.ctx.device.destroy_query_pool(q, None);
+            // the device is idle: every submission's objects and slot can go
+            self.in_flight.clear();
+            self.free_slots.clear();
+            if let Some(t) = self.timeline.take() {
+                self.ctx.device.destroy_semaphore(t, None);
             }
             self.ctx.device.destroy_fence(self.fence, None);
             self.ctx.device.destroy_command_pool(self.pool, None);
@@ -338,7 +352,27 @@ impl Backend for VulkanBackend {
     }
 
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        caustica_core::backend::driver_entry(|| dispatch::execute(self, recording))
+        caustica_core::backend::driver_entry(|| {
+            let mut s = self.submit_recording(recording, &[])?;
+            let f = self.poll_submission(&mut s, true)?;
+            Ok(f.map(|f| f.times).unwrap_or_default())
+        })
+    }
+
+    fn submit(
+        &mut self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<Submission, BackendError> {
+        caustica_core::backend::driver_entry(|| self.submit_recording(recording, readbacks))
+    }
+
+    fn poll(
+        &mut self,
+        submission: &mut Submission,
+        wait: bool,
+    ) -> Result<Option<Finished>, BackendError> {
+        caustica_core::backend::driver_entry(|| self.poll_submission(submission, wait))
     }
 
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {

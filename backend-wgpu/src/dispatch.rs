@@ -65,22 +65,45 @@ impl Timer {
         }
     }
 
-    pub fn finish(self, b: &WgpuBackend) -> Result<Vec<PassTime>, BackendError> {
+    /// The resolved timestamps' buffer and its length in bytes (after [`Timer::resolve`]),
+    /// if the passes were timed on the device.
+    pub fn resolved(&self) -> Option<(&wgpu::Buffer, u64)> {
         match &self.queries {
-            Some((_, buf)) if !self.passes.is_empty() => {
-                let raw = b.read_buffer(buf, 16 * self.passes.len() as u64)?;
-                let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&raw);
-                Ok(self
-                    .passes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, k)| PassTime {
-                        kernel: k,
-                        seconds: ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64
-                            * self.period_ns as f64
-                            * 1e-9,
-                    })
-                    .collect())
+            Some((_, buf)) if !self.passes.is_empty() => Some((buf, 16 * self.passes.len() as u64)),
+            _ => None,
+        }
+    }
+
+    /// The kernels recorded, in order.
+    pub fn passes(&self) -> &[&'static str] {
+        &self.passes
+    }
+
+    /// Pass times from resolved timestamp pairs (`raw`: the bytes of [`Timer::resolved`]).
+    pub fn times_from_ticks(passes: &[&'static str], raw: &[u8], period_ns: f32) -> Vec<PassTime> {
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(raw);
+        passes
+            .iter()
+            .enumerate()
+            .map(|(i, k)| PassTime {
+                kernel: k,
+                seconds: ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64
+                    * period_ns as f64
+                    * 1e-9,
+            })
+            .collect()
+    }
+
+    /// The timestamp period (ns per tick).
+    pub fn period_ns(&self) -> f32 {
+        self.period_ns
+    }
+
+    pub fn finish(self, b: &WgpuBackend) -> Result<Vec<PassTime>, BackendError> {
+        match self.resolved() {
+            Some((buf, bytes)) => {
+                let raw = b.read_buffer(buf, bytes)?;
+                Ok(Self::times_from_ticks(&self.passes, &raw, self.period_ns))
             }
             _ => Ok(self
                 .passes

@@ -8,13 +8,18 @@
 //! data comes back only through [`Backend::read`]. Per-pass GPU timestamps are used where
 //! the adapter has `TIMESTAMP_QUERY`; otherwise each kernel is submitted alone and timed
 //! by the host. Embedding: [`WgpuBackend::from_device`] takes the caller's device and
-//! queue, and [`WgpuBackend::write_image_to_texture`] writes a result image (the
-//! caustics, say) into the caller's texture.
+//! queue, [`WgpuBackend::encode`] records a recording (a whole frame) into the caller's
+//! command encoder without submitting or waiting, and
+//! [`WgpuBackend::encode_image_to_texture`] writes a result image (the caustics, say) into
+//! the caller's texture in the same encoder.
 
 mod dispatch;
+mod submission;
 mod texture;
 
-use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
+use caustica_core::backend::{
+    Backend, BackendError, Capabilities, DeviceType, Finished, PassTime, Submission,
+};
 use caustica_core::device::handle::ResourceId;
 use caustica_core::device::launch::Launch;
 use caustica_core::recording::{Recording, Step};
@@ -51,6 +56,9 @@ pub struct WgpuBackend {
     buffers: HashMap<ResourceId, DeviceBuffer>,
     /// Errors wgpu reports outside an error scope (validation, device loss).
     uncaptured: Arc<Mutex<Vec<String>>>,
+    /// Submissions not yet collected ([`Backend::submit`], [`WgpuBackend::encode`]).
+    in_flight: HashMap<u64, submission::InFlight>,
+    next_submission: u64,
 }
 
 /// Compiles kernel `name` with its override constants set to `constants`; a WGSL or
@@ -220,6 +228,8 @@ impl WgpuBackend {
             texture_pipelines: HashMap::new(),
             buffers: HashMap::new(),
             uncaptured,
+            in_flight: HashMap::new(),
+            next_submission: 0,
         })
     }
 
@@ -373,6 +383,7 @@ impl WgpuBackend {
 impl Drop for WgpuBackend {
     fn drop(&mut self) {
         caustica_core::backend::driver_entry(|| {
+            self.in_flight.clear();
             self.buffers.clear();
             self.pipelines.clear();
             self.texture_pipelines.clear();
@@ -423,6 +434,28 @@ impl Backend for WgpuBackend {
         })
     }
 
+    fn submit(
+        &mut self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<Submission, BackendError> {
+        caustica_core::backend::driver_entry(|| {
+            let mut enc = self.device.create_command_encoder(&Default::default());
+            let s = self.encode(recording, readbacks, &mut enc)?;
+            let index = self.queue.submit([enc.finish()]);
+            self.submitted(&s, Some(index))?;
+            Ok(s)
+        })
+    }
+
+    fn poll(
+        &mut self,
+        submission: &mut Submission,
+        wait: bool,
+    ) -> Result<Option<Finished>, BackendError> {
+        caustica_core::backend::driver_entry(|| self.poll_submission(submission, wait))
+    }
+
     fn variants(&self) -> Vec<String> {
         caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
@@ -433,13 +466,26 @@ impl WgpuBackend {
     /// [`caustica_core::backend::driver_entry`]).
     fn execute_recording(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
         self.check_uncaptured()?;
-        let kernels = recording
-            .steps
-            .iter()
-            .filter(|s| matches!(s, Step::Kernel(_)))
-            .count() as u32;
-        let mut timer = dispatch::Timer::new(self, kernels);
+        let mut timer = dispatch::Timer::new(self, kernel_count(recording));
         let mut enc = self.device.create_command_encoder(&Default::default());
+        self.encode_steps(recording, &mut enc, &mut timer, true)?;
+        timer.resolve(&mut enc);
+        self.queue.submit([enc.finish()]);
+        self.wait()?;
+        timer.finish(self)
+    }
+
+    /// Records every step of `recording` into `enc`, in order. Creations happen at once
+    /// (zeroed or mapped at creation); writes go through staging copies in `enc`.
+    /// `alone`: without timestamp queries, each kernel is submitted and waited for on its
+    /// own so the host can time it (never in a non-blocking submission).
+    fn encode_steps(
+        &mut self,
+        recording: &Recording,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut dispatch::Timer,
+        alone: bool,
+    ) -> Result<(), BackendError> {
         for step in &recording.steps {
             match step {
                 Step::Create { id, bytes, label } => self.create(*id, *bytes, label, None)?,
@@ -488,17 +534,18 @@ impl WgpuBackend {
                 }
                 Step::Clear { id } => enc.clear_buffer(&self.get(*id)?.buffer, 0, None),
                 Step::Free { id } => {
+                    // wgpu keeps the memory until the commands using it have finished
                     self.buffers.remove(id);
                 }
                 Step::Kernel(k) => {
                     if let Some(l) = k.launch()? {
                         self.ensure_pipeline(l)?;
                     }
-                    dispatch::record(self, &mut enc, &mut timer, k)?;
-                    if !self.timestamps {
+                    dispatch::record(self, enc, timer, k)?;
+                    if !self.timestamps && alone {
                         // No GPU timestamps: each kernel runs alone, timed by the host.
                         let done = std::mem::replace(
-                            &mut enc,
+                            enc,
                             self.device.create_command_encoder(&Default::default()),
                         );
                         let t0 = std::time::Instant::now();
@@ -509,9 +556,15 @@ impl WgpuBackend {
                 }
             }
         }
-        timer.resolve(&mut enc);
-        self.queue.submit([enc.finish()]);
-        self.wait()?;
-        timer.finish(self)
+        Ok(())
     }
+}
+
+/// Kernel steps of a recording (timestamp pairs to reserve).
+fn kernel_count(recording: &Recording) -> u32 {
+    recording
+        .steps
+        .iter()
+        .filter(|s| matches!(s, Step::Kernel(_)))
+        .count() as u32
 }

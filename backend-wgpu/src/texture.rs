@@ -30,6 +30,21 @@ impl WgpuBackend {
         image: ImageBuf,
         target: &wgpu::Texture,
     ) -> Result<(), BackendError> {
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        self.encode_image_to_texture(image, target, &mut enc)?;
+        self.queue.submit([enc.finish()]);
+        self.check_uncaptured()
+    }
+
+    /// As [`WgpuBackend::write_image_to_texture`], recorded into the caller's `enc` (after
+    /// the frame it encoded with [`WgpuBackend::encode`]) instead of submitted: the host's
+    /// frame loop submits once.
+    pub fn encode_image_to_texture(
+        &mut self,
+        image: ImageBuf,
+        target: &wgpu::Texture,
+        enc: &mut wgpu::CommandEncoder,
+    ) -> Result<(), BackendError> {
         let format = target.format();
         let name = match format {
             wgpu::TextureFormat::Rgba16Float => "rgba16float",
@@ -97,15 +112,13 @@ impl WgpuBackend {
                 },
             ],
         });
-        let mut enc = self.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
-        self.queue.submit([enc.finish()]);
-        self.check_uncaptured()
+        Ok(())
     }
 }
 

@@ -134,15 +134,130 @@ pub trait Backend {
     fn name(&self) -> &'static str;
     /// What the device can do, queried from the driver.
     fn capabilities(&self) -> Capabilities;
-    /// Executes every step in order; returns the time of each kernel step.
+    /// Executes every step in order and waits for them; returns the time of each kernel
+    /// step.
     fn execute(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError>;
-    /// Reads a buffer's bytes back to the host.
+    /// Reads a buffer's bytes back to the host (waits for the work queued before it).
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError>;
+
+    /// Enqueues every step of `recording` and returns without waiting for the device
+    /// (issue 19 point 2: the non-blocking frame). After the last step the buffers in
+    /// `readbacks` are copied into host memory, so that their values at that point can be
+    /// collected later with [`Backend::poll`] while later submissions change them.
+    /// Submissions run in the order they were made; [`Backend::read`] and
+    /// [`Backend::execute`] wait for them.
+    ///
+    /// The default runs the recording at once ([`Backend::execute`], then reads): right
+    /// for the CPU backend, whose work is the host's, and for wrappers.
+    fn submit(
+        &mut self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<Submission, BackendError> {
+        let times = self.execute(recording)?;
+        let readbacks = readbacks
+            .iter()
+            .map(|id| self.read(*id))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Submission::finished(Finished { times, readbacks }))
+    }
+
+    /// A submission's result once the device has finished it: `Ok(None)` while it still
+    /// runs and `wait` is false (never blocks then); with `wait`, blocks until it is done.
+    /// The result is handed out once; polling again is an error.
+    fn poll(
+        &mut self,
+        submission: &mut Submission,
+        wait: bool,
+    ) -> Result<Option<Finished>, BackendError> {
+        let _ = wait;
+        submission.take_finished().map(Some)
+    }
     /// Labels of the kernel variants this backend has compiled so far (GPU backends:
     /// pipelines/programs built on demand; CPU: the monomorphised variants it has run),
     /// as [`crate::kernels::variant_label`] writes them. Conformance checks that a scene
     /// compiles no variant it does not need.
     fn variants(&self) -> Vec<String>;
+}
+
+/// A recording submitted with [`Backend::submit`], not yet collected.
+#[derive(Debug)]
+pub struct Submission {
+    /// The backend's number for it (increasing in submission order).
+    pub id: u64,
+    state: SubmissionState,
+}
+
+#[derive(Debug)]
+enum SubmissionState {
+    /// On the device; the backend holds what it will give back.
+    Pending,
+    /// Done when submitted (the default [`Backend::submit`]).
+    Finished(Finished),
+    /// Its result was handed out.
+    Collected,
+}
+
+impl Submission {
+    /// A submission still on the device, numbered `id` by its backend.
+    pub fn pending(id: u64) -> Submission {
+        Submission {
+            id,
+            state: SubmissionState::Pending,
+        }
+    }
+
+    /// A submission that finished when it was made.
+    pub fn finished(result: Finished) -> Submission {
+        Submission {
+            id: 0,
+            state: SubmissionState::Finished(result),
+        }
+    }
+
+    /// Whether the backend still owes its result.
+    pub fn is_pending(&self) -> bool {
+        matches!(self.state, SubmissionState::Pending)
+    }
+
+    /// Marks the result handed out (a backend's `poll` calls this when it gives it).
+    pub fn mark_collected(&mut self) {
+        self.state = SubmissionState::Collected;
+    }
+
+    /// The result of a submission that finished when it was made; an error if it was
+    /// collected already or is still pending (a backend's own `poll` handles those).
+    pub fn take_finished(&mut self) -> Result<Finished, BackendError> {
+        match std::mem::replace(&mut self.state, SubmissionState::Collected) {
+            SubmissionState::Finished(f) => Ok(f),
+            SubmissionState::Collected => Err(BackendError::BadArgument(format!(
+                "submission {} was collected already",
+                self.id
+            ))),
+            SubmissionState::Pending => {
+                self.state = SubmissionState::Pending;
+                Err(BackendError::BadArgument(format!(
+                    "submission {} belongs to another backend",
+                    self.id
+                )))
+            }
+        }
+    }
+}
+
+/// Most submissions a backend keeps uncollected: beyond it, the oldest is waited for and
+/// its result discarded (polling it later is an error), so a host that never asks for
+/// its frames' statistics does not grow the backend's memory.
+pub const MAX_UNCOLLECTED: usize = 64;
+
+/// What a finished submission gives back.
+#[derive(Clone, Debug, Default)]
+pub struct Finished {
+    /// Time of each kernel step, in order (see [`Capabilities::timestamps`]).
+    pub times: Vec<PassTime>,
+    /// The bytes of each buffer asked for in [`Backend::submit`]'s `readbacks`, in that
+    /// order, as they were after the submission's last step.
+    pub readbacks: Vec<Vec<u8>>,
 }
 
 /// Reads a typed buffer back.

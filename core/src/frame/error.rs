@@ -13,6 +13,10 @@ pub enum Error {
     #[error("invalid parameter: {0}")]
     /// A setting or argument is out of range (the message names it).
     InvalidParameter(String),
+    #[error("unsupported: {0}")]
+    /// The technique cannot do what was asked in its current configuration (the message
+    /// says why), e.g. a non-blocking frame of a technique that reads back mid-frame.
+    Unsupported(String),
     #[error(transparent)]
     /// The backend failed (driver, memory, device lost, ...).
     Backend(#[from] BackendError),

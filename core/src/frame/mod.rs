@@ -3,7 +3,7 @@
 //! allocation with the device-limit check ([`allocation`]), temporal (ping-pong)
 //! resources ([`temporal`]), photon emission domains ([`emission`]), light view planes
 //! ([`light_view_plane`]), the caustic atlas ([`caustic_atlas`]), host images ([`image`]) and error metrics against a reference
-//! ([`metrics`]). Knows no technique.
+//! ([`metrics`]), and the non-blocking frame ([`submitted`]). Knows no technique.
 
 pub mod allocation;
 pub mod caustic_atlas;
@@ -16,5 +16,6 @@ pub mod material_update;
 pub mod metrics;
 pub mod plan;
 pub mod stats;
+pub mod submitted;
 pub mod technique;
 pub mod temporal;

@@ -39,6 +39,7 @@ use crate::frame::image::Image;
 use crate::frame::irradiance_passes::FilterChain;
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
+use crate::frame::submitted::RecordedFrame;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
@@ -621,13 +622,122 @@ impl Sspm {
     }
 
     /// Renders one frame: the planned passes, nothing else. `progress` is called after
-    /// every photon batch.
+    /// every photon batch. Waits for the device; [`Sspm::record_frame`] is the
+    /// non-blocking frame.
     pub fn frame(
         &mut self,
         backend: &mut dyn Backend,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
+        let mut stats = self.frame_stats(&*backend);
+        let cam = self.camera;
+
+        // 1. visibility and direct light, after the updates' scene writes
+        let rec = self.visibility_recording();
+        self.run(backend, &rec, &mut stats)?;
+
+        // 2. photons, per emitting light, in batches
+        if let (Some(p), Some(variant)) = (self.photon, self.plan.trace_variant) {
+            let mut adaptive = crate::frame::stats::AdaptiveStats::default();
+            if let Some(a) = &self.adaptive_frame {
+                let target = DepositTarget::Screen(ScreenTarget {
+                    deposit: self
+                        .constants
+                        .deposit_params(cam, &self.settings, p.photons.len),
+                    gbuffer: self.gbuffer,
+                    photon_map: p.photon_map,
+                    trace_counters: p.counters,
+                });
+                self.traverse(
+                    backend,
+                    a,
+                    variant,
+                    &target,
+                    &mut stats,
+                    &mut adaptive,
+                    progress,
+                )?;
+            }
+            let total = self.projection_volume_photons();
+            let mut done = 0u64;
+            for rec in self.batch_recordings(&mut stats) {
+                self.run(backend, &rec.0, &mut stats)?;
+                done += rec.1;
+                progress(Progress {
+                    photons_done: done,
+                    photons_total: total,
+                });
+            }
+
+            // 3. resolve, gather, composite
+            let rec = self.resolve_recording();
+            self.run(backend, &rec, &mut stats)?;
+
+            // 4. counters
+            let c = read_buf(backend, p.counters)?;
+            stats.read_counters(&c, self.constants.flux_quantum);
+            if let Some(a) = &self.adaptive_frame {
+                let q = self.constants.flux_quantum;
+                a.traversal.output_stats(backend, q, &mut stats, adaptive)?;
+            }
+            // this frame's blend is the next frame's history
+            if let Some(f) = &mut self.filters {
+                f.end_frame(cam);
+            }
+        }
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(r) = &self.reference {
+            let filtered = self.read_output(backend, Output::FilteredCaustics)?;
+            stats.error = Some(crate::frame::metrics::compare(&filtered, r));
+        }
+        Ok(stats)
+    }
+
+    /// Records one whole frame without running it (issue 19 point 2): the same passes as
+    /// [`Sspm::frame`], in one [`Recording`] that [`RecordedFrame::submit`] submits
+    /// without waiting (one submission a frame), or that an embedding host encodes into
+    /// its own command stream. The photon counters are copied to the host at the frame's
+    /// end and come back with [`crate::frame::submitted::FrameTicket::stats`], a frame or
+    /// more later. No progress callback (nothing runs here) and no error against the
+    /// reference (that reads the image back: use [`Sspm::frame`]). AdaptiveCaustics'
+    /// traversal reads its queues back between levels, so its frame cannot be recorded
+    /// ahead: an [`Error::Unsupported`].
+    pub fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+        if self.adaptive_frame.is_some() {
+            return Err(Error::Unsupported(
+                "adaptive-caustics' screen target reads its traversal queues back between \
+                 levels, so its frame cannot be recorded ahead; use frame()"
+                    .into(),
+            ));
+        }
+        let start = Instant::now();
+        let mut stats = self.frame_stats(backend);
+        let mut recording = self.visibility_recording();
+        let mut counters = None;
+        let mut readbacks = Vec::new();
+        if let Some(p) = self.photon.filter(|_| self.plan.trace_variant.is_some()) {
+            for (rec, _) in self.batch_recordings(&mut stats) {
+                recording.steps.extend(rec.steps);
+            }
+            recording.steps.extend(self.resolve_recording().steps);
+            readbacks.push(p.counters.id);
+            counters = Some((0, self.constants.flux_quantum));
+            if let Some(f) = &mut self.filters {
+                f.end_frame(self.camera);
+            }
+        }
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(RecordedFrame {
+            recording,
+            readbacks,
+            stats,
+            counters,
+        })
+    }
+
+    /// A frame's statistics before anything runs: names, sizes, plan, skipped passes.
+    fn frame_stats(&self, backend: &dyn Backend) -> FrameStats {
         let caps = backend.capabilities();
         let mut stats = FrameStats {
             technique: self.technique_name().into(),
@@ -649,9 +759,19 @@ impl Sspm {
         for p in self.plan.passes.iter().filter(|p| !p.runs) {
             stats.skip(&p.name, p.reason.clone());
         }
-        let cam = self.camera;
+        if let Some(variant) = self.plan.trace_variant.filter(|_| self.photon.is_some()) {
+            stats.variants.push(crate::kernels::variant_label(
+                "trace_photons",
+                &variant.constants(),
+            ));
+        }
+        stats
+    }
 
-        // 1. visibility and direct light, after the updates' scene writes
+    /// Step 1: the updates' pending scene writes, the G-buffer and direct light, and the
+    /// photon map and counters cleared.
+    fn visibility_recording(&mut self) -> Recording {
+        let cam = self.camera;
         let mut rec = std::mem::take(&mut self.pending);
         rec.kernel(PrimaryGbuffer {
             scene: self.scene,
@@ -670,203 +790,181 @@ impl Sspm {
             rec.clear_photon_map(&p.photon_map);
             rec.clear(p.counters);
         }
-        self.run(backend, &rec, &mut stats)?;
+        rec
+    }
 
-        // 2. photons, per emitting light, in batches
-        if let (Some(p), Some(variant)) = (self.photon, self.plan.trace_variant) {
-            stats.variants.push(crate::kernels::variant_label(
-                "trace_photons",
-                &variant.constants(),
-            ));
-            let deposit_params = self
-                .constants
-                .deposit_params(cam, &self.settings, p.photons.len);
-            let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
-            let total = per_light * self.constants.domains.len() as u64;
-            let mut done = 0u64;
-            let mut adaptive = crate::frame::stats::AdaptiveStats::default();
-            if let Some(a) = &self.adaptive_frame {
-                let target = DepositTarget::Screen(ScreenTarget {
-                    deposit: deposit_params,
-                    gbuffer: self.gbuffer,
-                    photon_map: p.photon_map,
-                    trace_counters: p.counters,
-                });
-                self.traverse(
-                    backend,
-                    a,
+    /// Photons the projection volumes emit in one frame (every emitting light's grid);
+    /// none with adaptive emission.
+    fn projection_volume_photons(&self) -> u64 {
+        if self.adaptive_frame.is_some() {
+            return 0;
+        }
+        let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+        per_light * self.constants.domains.len() as u64
+    }
+
+    /// Step 2 with projection volumes: per emitting light, per batch, the trace and the
+    /// deposit, each with the photons it covers; counts the emitted photons and flux and
+    /// the batches into `stats`. Empty with adaptive emission or without photon passes.
+    fn batch_recordings(&self, stats: &mut FrameStats) -> Vec<(Recording, u64)> {
+        let (Some(p), Some(variant)) = (self.photon, self.plan.trace_variant) else {
+            return Vec::new();
+        };
+        if self.adaptive_frame.is_some() {
+            return Vec::new();
+        }
+        let cam = self.camera;
+        let deposit_params = self
+            .constants
+            .deposit_params(cam, &self.settings, p.photons.len);
+        let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+        let mut out = Vec::new();
+        for (light, d) in &self.constants.domains {
+            stats.photons_emitted += per_light;
+            for c in 0..3 {
+                stats.emitted_flux[c] += d.flux[c] as f64;
+            }
+            let mut first = 0u64;
+            while first < per_light {
+                let count = (per_light - first).min(p.photons.len as u64) as u32;
+                let mut rec = Recording::new();
+                rec.clear(p.photon_count);
+                rec.kernel(TracePhotons {
+                    scene: self.scene,
                     variant,
-                    &target,
-                    &mut stats,
-                    &mut adaptive,
-                    progress,
-                )?;
+                    params: self.constants.trace_params(
+                        &self.settings,
+                        *light,
+                        d,
+                        first as u32,
+                        count,
+                    ),
+                    photons: p.photons,
+                    photon_count: p.photon_count,
+                    counters: p.counters,
+                    clusters: None,
+                });
+                rec.kernel(DepositScreen {
+                    params: deposit_params,
+                    gbuffer: self.gbuffer,
+                    photons: p.photons,
+                    photon_count: p.photon_count,
+                    counters: p.counters,
+                    photon_map: p.photon_map,
+                });
+                stats.batches += 1;
+                first += count as u64;
+                out.push((rec, count as u64));
             }
-            let volumes = if self.adaptive_frame.is_some() {
-                &[][..]
-            } else {
-                &self.constants.domains[..]
-            };
-            for (light, d) in volumes {
-                stats.photons_emitted += per_light;
-                for c in 0..3 {
-                    stats.emitted_flux[c] += d.flux[c] as f64;
-                }
-                let mut first = 0u64;
-                while first < per_light {
-                    let count = (per_light - first).min(p.photons.len as u64) as u32;
-                    let mut rec = Recording::new();
-                    rec.clear(p.photon_count);
-                    rec.kernel(TracePhotons {
-                        scene: self.scene,
-                        variant,
-                        params: self.constants.trace_params(
-                            &self.settings,
-                            *light,
-                            d,
-                            first as u32,
-                            count,
-                        ),
-                        photons: p.photons,
-                        photon_count: p.photon_count,
-                        counters: p.counters,
-                        clusters: None,
-                    });
-                    rec.kernel(DepositScreen {
-                        params: deposit_params,
-                        gbuffer: self.gbuffer,
-                        photons: p.photons,
-                        photon_count: p.photon_count,
-                        counters: p.counters,
-                        photon_map: p.photon_map,
-                    });
-                    self.run(backend, &rec, &mut stats)?;
-                    stats.batches += 1;
-                    first += count as u64;
-                    done += count as u64;
-                    progress(Progress {
-                        photons_done: done,
-                        photons_total: total,
-                    });
-                }
-            }
+        }
+        out
+    }
 
-            // 3. resolve, gather, composite
-            let mut rec = Recording::new();
-            let raw = self.raw_image().expect("planned with the photon passes");
-            rec.kernel(ResolveCaustics {
-                params: deposit_params,
-                gbuffer: self.gbuffer,
-                photon_map: p.photon_map,
-                out: raw,
-            });
-            if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
-                // the filter, then the temporal blend, then the A-Trous iterations, each
-                // opt-in; the last that runs writes `filtered`
-                let last = self.filters.map_or(filtered, |f| f.input(filtered));
-                let gather = self.constants.gather_params(cam, &self.settings, 0);
-                let columns = GatherParams { axis: 1, ..gather };
-                match g {
-                    GatherBuffers::Density {
-                        table,
-                        edge,
-                        scratch,
-                        source_index,
-                    } => {
-                        for params in [gather, columns] {
-                            rec.kernel(PhotonCountTable {
-                                params,
-                                photon_map: p.photon_map,
-                                table,
-                                gbuffer: self.gbuffer,
-                                edge,
-                            });
-                        }
-                        rec.clear(source_index);
-                        rec.kernel(GatherFootprint {
-                            params: gather,
+    /// Step 3: resolve, the filter chain, the composite.
+    fn resolve_recording(&self) -> Recording {
+        let mut rec = Recording::new();
+        let Some(p) = self.photon else {
+            return rec;
+        };
+        let cam = self.camera;
+        let deposit_params = self
+            .constants
+            .deposit_params(cam, &self.settings, p.photons.len);
+        let raw = self.raw_image().expect("planned with the photon passes");
+        rec.kernel(ResolveCaustics {
+            params: deposit_params,
+            gbuffer: self.gbuffer,
+            photon_map: p.photon_map,
+            out: raw,
+        });
+        if let (Some(g), Some(filtered)) = (self.gather, self.filtered_image()) {
+            // the filter, then the temporal blend, then the A-Trous iterations, each
+            // opt-in; the last that runs writes `filtered`
+            let last = self.filters.map_or(filtered, |f| f.input(filtered));
+            let gather = self.constants.gather_params(cam, &self.settings, 0);
+            let columns = GatherParams { axis: 1, ..gather };
+            match g {
+                GatherBuffers::Density {
+                    table,
+                    edge,
+                    scratch,
+                    source_index,
+                } => {
+                    for params in [gather, columns] {
+                        rec.kernel(PhotonCountTable {
+                            params,
                             photon_map: p.photon_map,
                             table,
-                            out: filtered,
-                            edge,
-                            source_index,
-                        });
-                        rec.kernel(DensityGather {
-                            params: gather,
                             gbuffer: self.gbuffer,
                             edge,
-                            input: filtered,
-                            out: scratch,
-                            source_index,
-                        });
-                        rec.kernel(DensityGather {
-                            params: columns,
-                            gbuffer: self.gbuffer,
-                            edge,
-                            input: scratch,
-                            out: last,
-                            source_index,
                         });
                     }
-                    GatherBuffers::Bilateral { tiles, scratch } => {
-                        rec.kernel(TileHitDistance {
-                            params: gather,
-                            photon_map: p.photon_map,
-                            tiles,
-                        });
-                        rec.kernel(BilateralGather {
-                            params: gather,
-                            gbuffer: self.gbuffer,
-                            tiles,
-                            input: raw,
-                            out: scratch,
-                        });
-                        rec.kernel(BilateralGather {
-                            params: columns,
-                            gbuffer: self.gbuffer,
-                            tiles,
-                            input: scratch,
-                            out: last,
-                        });
-                    }
+                    rec.clear(source_index);
+                    rec.kernel(GatherFootprint {
+                        params: gather,
+                        photon_map: p.photon_map,
+                        table,
+                        out: filtered,
+                        edge,
+                        source_index,
+                    });
+                    rec.kernel(DensityGather {
+                        params: gather,
+                        gbuffer: self.gbuffer,
+                        edge,
+                        input: filtered,
+                        out: scratch,
+                        source_index,
+                    });
+                    rec.kernel(DensityGather {
+                        params: columns,
+                        gbuffer: self.gbuffer,
+                        edge,
+                        input: scratch,
+                        out: last,
+                        source_index,
+                    });
                 }
-                if let Some(f) = &self.filters {
-                    let s = &self.settings;
-                    let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
-                    f.record(&mut rec, cam, self.gbuffer, iterations, filtered);
-                }
-                if let (true, Some(direct), Some(out)) = (
-                    Needs::of_plan(&self.plan).composite,
-                    self.direct_image(),
-                    self.images.composite,
-                ) {
-                    rec.kernel(Composite {
-                        direct,
-                        caustics: filtered,
-                        out,
+                GatherBuffers::Bilateral { tiles, scratch } => {
+                    rec.kernel(TileHitDistance {
+                        params: gather,
+                        photon_map: p.photon_map,
+                        tiles,
+                    });
+                    rec.kernel(BilateralGather {
+                        params: gather,
+                        gbuffer: self.gbuffer,
+                        tiles,
+                        input: raw,
+                        out: scratch,
+                    });
+                    rec.kernel(BilateralGather {
+                        params: columns,
+                        gbuffer: self.gbuffer,
+                        tiles,
+                        input: scratch,
+                        out: last,
                     });
                 }
             }
-            self.run(backend, &rec, &mut stats)?;
-
-            // 4. counters
-            let c = read_buf(backend, p.counters)?;
-            stats.read_counters(&c, self.constants.flux_quantum);
-            if let Some(a) = &self.adaptive_frame {
-                let q = self.constants.flux_quantum;
-                a.traversal.output_stats(backend, q, &mut stats, adaptive)?;
+            if let Some(f) = &self.filters {
+                let s = &self.settings;
+                let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
+                f.record(&mut rec, cam, self.gbuffer, iterations, filtered);
             }
-            // this frame's blend is the next frame's history
-            if let Some(f) = &mut self.filters {
-                f.end_frame(cam);
+            if let (true, Some(direct), Some(out)) = (
+                Needs::of_plan(&self.plan).composite,
+                self.direct_image(),
+                self.images.composite,
+            ) {
+                rec.kernel(Composite {
+                    direct,
+                    caustics: filtered,
+                    out,
+                });
             }
         }
-        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        if let Some(r) = &self.reference {
-            let filtered = self.read_output(backend, Output::FilteredCaustics)?;
-            stats.error = Some(crate::frame::metrics::compare(&filtered, r));
-        }
-        Ok(stats)
+        rec
     }
 
     /// The registry and stats name: `sspm`, or `adaptive-caustics` with adaptive emission.
@@ -1266,6 +1364,10 @@ impl Technique for Sspm {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         Sspm::frame(self, backend, progress)
+    }
+
+    fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+        Sspm::record_frame(self, backend)
     }
 
     fn outputs(&self) -> Vec<OutputInfo> {

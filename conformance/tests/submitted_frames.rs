@@ -1,0 +1,244 @@
+//! The non-blocking frame (issue 19 point 2), on every backend: a frame recorded whole and
+//! submitted without waiting ([`Technique::submit_frame`]) renders the images of the
+//! blocking [`Technique::frame`], bitwise; several frames can be in flight with updates
+//! between them (moved instances, moved lights, new seeds), and each frame's statistics,
+//! collected later, are that frame's own (its photon counters were copied at its end, not
+//! read after the next one ran); a submission is polled without blocking until it is
+//! done, handed out once, and a foreign one is an error, not a panic. Techniques that must
+//! read the device back midway say so with `Error::Unsupported`.
+
+use caustica_conformance::backends;
+use caustica_core::backend::Submission;
+use caustica_core::frame::stats::FrameStats;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::{Light, Scene, Transform};
+use caustica_core::techniques::create;
+use caustica_core::{Backend, Error, Technique};
+use glam::{Quat, Vec3};
+
+fn small(name: &str) -> Scene {
+    let mut s = builtin(name).expect("built-in scene");
+    s.camera.width = 80;
+    s.camera.height = 45;
+    s
+}
+
+/// `sphere` with its glass ball an instance, so that frames can move it.
+fn sphere_with_instance() -> Scene {
+    let mut s = small("sphere");
+    let o = &mut s.objects[1];
+    if let caustica_core::scene::Shape::Sphere { center, .. } = &mut o.shape {
+        let c = std::mem::replace(center, Vec3::ZERO);
+        o.transform = Some(Transform::from_translation(c));
+    } else {
+        panic!("sphere's object 1 is its glass ball");
+    }
+    s
+}
+
+/// Sspm with four batches per light (so one recording holds several trace/deposit
+/// pairs) and every output.
+fn settings() -> serde_json::Value {
+    serde_json::json!({
+        "photons_w": 64, "photons_h": 64, "max_photons_per_batch": 1024,
+        "outputs": {
+            "composite": true, "direct": true, "raw_caustics": true, "filtered_caustics": true
+        }
+    })
+}
+
+/// What a frame's statistics must agree on between the two modes: the photon accounting
+/// from the device counters and the recorded work.
+fn accounting(s: &FrameStats) -> String {
+    format!(
+        "emitted {} stored {} deposited {} rays {} splits {} discarded {:?} flux {:?} \
+         batches {} skipped {:?}",
+        s.photons_emitted,
+        s.photons_stored,
+        s.photons_deposited,
+        s.photon_rays_traced,
+        s.photon_splits,
+        s.discarded,
+        s.stored_flux,
+        s.batches,
+        s.skipped.iter().map(|p| &p.name).collect::<Vec<_>>()
+    )
+}
+
+fn outputs(t: &dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
+    t.outputs()
+        .into_iter()
+        .filter(|o| o.requested)
+        .map(|o| {
+            let img = t.read_output(b, o.name).expect("read");
+            assert!(img.all_finite(), "{}: not finite", o.name);
+            (o.name.to_string(), img.pixels)
+        })
+        .collect()
+}
+
+/// The updates made before frames 1, 2 and 3 (frame 0 has none): a new seed, a moved
+/// instance, a moved light.
+fn update(t: &mut dyn Technique, b: &mut dyn Backend, scene: &Scene, frame: usize) {
+    match frame {
+        1 => t.set_seed(7),
+        2 => {
+            let tr = scene.objects[1].transform.expect("an instance");
+            let to = Transform {
+                translation: tr.translation + Vec3::new(0.25, 0.05, -0.1),
+                rotation: Quat::from_rotation_y(0.4),
+                scale: tr.scale * 0.9,
+            };
+            t.set_object_transforms(b, &[(1, to)]).expect("move");
+        }
+        3 => {
+            let mut lights = scene.lights.clone();
+            if let Light::Point { position, .. } = &mut lights[0] {
+                *position += Vec3::new(-0.3, 0.1, 0.2);
+            }
+            t.set_lights(b, &lights).expect("lights");
+        }
+        _ => {}
+    }
+}
+
+#[test]
+fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
+    const FRAMES: usize = 4;
+    for (bname, mut b) in backends() {
+        for (sname, scene) in [
+            ("sphere", sphere_with_instance()),
+            ("cornell", small("cornell")),
+        ] {
+            let b = b.as_mut();
+            // the blocking frames: images after each, and stats
+            let mut blocking = create("sspm", b, &scene, &settings()).expect("create");
+            let mut want_images = Vec::new();
+            let mut want_stats = Vec::new();
+            for f in 0..FRAMES {
+                if sname == "sphere" || f != 2 {
+                    update(blocking.as_mut(), b, &scene, f);
+                }
+                let s = blocking.frame(b, &mut |_| {}).expect("frame");
+                want_stats.push(s);
+                want_images.push(outputs(blocking.as_ref(), b));
+            }
+            blocking.free(b).expect("free");
+
+            // (a) one submitted frame at a time, its images read back after it
+            let mut t = create("sspm", b, &scene, &settings()).expect("create");
+            for f in 0..FRAMES {
+                if sname == "sphere" || f != 2 {
+                    update(t.as_mut(), b, &scene, f);
+                }
+                let mut ticket = t.submit_frame(b).expect("submit_frame");
+                let got = outputs(t.as_ref(), b);
+                assert!(
+                    got == want_images[f],
+                    "{bname}/{sname}: submitted frame {f} differs from the blocking one"
+                );
+                let stats = ticket.stats(b, true).expect("stats").expect("waited");
+                assert_eq!(
+                    accounting(&stats),
+                    accounting(&want_stats[f]),
+                    "{bname}/{sname}: frame {f}'s statistics"
+                );
+                if !stats.passes.is_empty() {
+                    let passes = |s: &FrameStats| {
+                        s.passes
+                            .iter()
+                            .map(|p| (p.name.clone(), p.dispatches))
+                            .collect::<Vec<_>>()
+                    };
+                    assert_eq!(
+                        passes(&stats),
+                        passes(&want_stats[f]),
+                        "{bname}/{sname}: frame {f}'s timed passes"
+                    );
+                }
+            }
+            t.free(b).expect("free");
+
+            // (b) every frame in flight at once, the statistics collected afterwards: each
+            // frame's counters are its own
+            let mut t = create("sspm", b, &scene, &settings()).expect("create");
+            let mut tickets = Vec::new();
+            for f in 0..FRAMES {
+                if sname == "sphere" || f != 2 {
+                    update(t.as_mut(), b, &scene, f);
+                }
+                tickets.push(t.submit_frame(b).expect("submit_frame"));
+            }
+            for (f, ticket) in tickets.iter_mut().enumerate() {
+                let stats = ticket.stats(b, true).expect("stats").expect("waited");
+                assert_eq!(
+                    accounting(&stats),
+                    accounting(&want_stats[f]),
+                    "{bname}/{sname}: frame {f} of {FRAMES} in flight: its statistics"
+                );
+                // handed out once
+                assert!(
+                    ticket.stats(b, true).is_err(),
+                    "{bname}: a ticket's statistics collected twice"
+                );
+            }
+            let got = outputs(t.as_ref(), b);
+            assert!(
+                got == want_images[FRAMES - 1],
+                "{bname}/{sname}: the last of {FRAMES} frames in flight differs"
+            );
+            t.free(b).expect("free");
+            eprintln!(
+                "{bname}: {sname}'s submitted frames equal the blocking ones, bitwise, \
+                 {FRAMES} in flight each with its own statistics"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_submission_is_polled_without_blocking_until_done() {
+    for (bname, mut b) in backends() {
+        let b = b.as_mut();
+        let scene = small("sphere");
+        let mut t = create("sspm", b, &scene, &settings()).expect("create");
+        let mut ticket = t.submit_frame(b).expect("submit_frame");
+        let start = std::time::Instant::now();
+        let mut polls = 0u32;
+        let stats = loop {
+            polls += 1;
+            if let Some(s) = ticket.stats(b, false).expect("poll") {
+                break s;
+            }
+            assert!(
+                start.elapsed().as_secs() < 120,
+                "{bname}: a submitted frame did not finish in 120 s of polling"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        };
+        assert!(stats.photons_deposited > 0, "{bname}: nothing deposited");
+        // a submission of no one's is an error, not a panic
+        let mut foreign = Submission::pending(u64::MAX);
+        assert!(
+            b.poll(&mut foreign, false).is_err(),
+            "{bname}: polling a foreign submission"
+        );
+        t.free(b).expect("free");
+        eprintln!("{bname}: a submitted frame finished after {polls} non-blocking polls");
+    }
+}
+
+#[test]
+fn techniques_that_read_back_midway_say_so() {
+    let mut b = caustica_cpu::CpuBackend::new().expect("cpu");
+    let scene = small("sphere");
+    let adaptive = serde_json::json!({
+        "photons_w": 64, "photons_h": 64, "error_from_grid": 32, "deposit": "screen"
+    });
+    let mut t = create("adaptive-caustics", &mut b, &scene, &adaptive).expect("create");
+    match t.submit_frame(&mut b) {
+        Err(Error::Unsupported(why)) => assert!(why.contains("traversal"), "{why}"),
+        other => panic!("adaptive-caustics' screen target: {:?}", other.map(|_| ())),
+    }
+    t.free(&mut b).expect("free");
+}

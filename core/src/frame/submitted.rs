@@ -1,0 +1,91 @@
+//! The non-blocking frame (issue 19 point 2): a technique records a whole frame as one
+//! [`Recording`] ([`RecordedFrame`]), the host submits it ([`RecordedFrame::submit`], or
+//! its own command encoder for an embedding backend) and goes on; the frame's statistics
+//! (pass times, photon counters) come back later through [`FrameTicket::stats`], without
+//! stalling, from copies the device made at the end of that frame.
+
+use crate::backend::{Backend, Finished, Submission};
+use crate::device::handle::ResourceId;
+use crate::frame::error::Error;
+use crate::frame::stats::FrameStats;
+use crate::recording::Recording;
+
+/// A frame recorded but not yet submitted.
+#[derive(Debug)]
+pub struct RecordedFrame {
+    /// Every step of the frame, in order (the technique's pending updates first).
+    pub recording: Recording,
+    /// Buffers to copy to the host after the last step ([`Backend::submit`]'s
+    /// `readbacks`): the frame's photon counters, when it has photon passes.
+    pub readbacks: Vec<ResourceId>,
+    /// The statistics known when recording (plan, skipped passes, emitted photons and
+    /// flux, batches); `frame_ms` is the host time spent recording.
+    pub stats: FrameStats,
+    /// Where the photon counters are in `readbacks`, and their fixed-point quantum.
+    pub counters: Option<(usize, f32)>,
+}
+
+impl RecordedFrame {
+    /// Submits the frame on `backend` without waiting for it.
+    pub fn submit(self, backend: &mut dyn Backend) -> Result<FrameTicket, Error> {
+        let t0 = std::time::Instant::now();
+        let submission = backend.submit(&self.recording, &self.readbacks)?;
+        let mut ticket = self.submitted(submission);
+        ticket.stats.frame_ms += t0.elapsed().as_secs_f64() * 1e3;
+        Ok(ticket)
+    }
+
+    /// The ticket of a frame the host submitted itself (an embedding backend's own
+    /// encoding of [`RecordedFrame::recording`], which returned `submission`).
+    pub fn submitted(self, submission: Submission) -> FrameTicket {
+        FrameTicket {
+            submission,
+            stats: self.stats,
+            counters: self.counters,
+        }
+    }
+}
+
+/// A submitted frame whose statistics are still to be collected.
+#[derive(Debug)]
+pub struct FrameTicket {
+    submission: Submission,
+    stats: FrameStats,
+    counters: Option<(usize, f32)>,
+}
+
+impl FrameTicket {
+    /// The backend's number of the frame's submission.
+    pub fn submission_id(&self) -> u64 {
+        self.submission.id
+    }
+
+    /// The frame's statistics once the device has finished it: `Ok(None)` while it runs
+    /// and `wait` is false (never blocks then). `frame_ms` is the host time the frame cost
+    /// to record and submit. Collected once; asking again is an error.
+    pub fn stats(
+        &mut self,
+        backend: &mut dyn Backend,
+        wait: bool,
+    ) -> Result<Option<FrameStats>, Error> {
+        let Some(finished) = backend.poll(&mut self.submission, wait)? else {
+            return Ok(None);
+        };
+        Ok(Some(self.complete(finished)))
+    }
+
+    /// The recorded statistics completed with what the device gave back.
+    fn complete(&self, finished: Finished) -> FrameStats {
+        let mut stats = self.stats.clone();
+        for t in &finished.times {
+            stats.add_pass_time(t.kernel, t.seconds);
+        }
+        if let Some((k, quantum)) = self.counters {
+            if let Some(bytes) = finished.readbacks.get(k) {
+                let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
+                stats.read_counters(&words, quantum);
+            }
+        }
+        stats
+    }
+}
