@@ -21,7 +21,8 @@ if [ "${1:-}" = "--build" ]; then
                 "caustica-conformance:stiff_cases" "caustica-conformance:every_kernel_dispatched" \
                 "caustica-conformance:technique_seam" "caustica-conformance:hostile_input" \
                 "caustica-conformance:large_frames" "caustica-conformance:filter_flux" \
-                "caustica-conformance:caustic_map_frames" "caustica-conformance:adaptive_caustics_frames"; do
+                "caustica-conformance:caustic_map_frames" "caustica-conformance:adaptive_caustics_frames" \
+                "caustica-conformance:submitted_frames"; do
         pkg=${spec%%:*}; t=${spec##*:}
         exe=$(cargo test --release -p "$pkg" --test "$t" --no-run --message-format=json 2>/dev/null |
               grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
@@ -36,7 +37,7 @@ if [ "${1:-}" = "--build" ]; then
         cp "$exe" ".devbin/$name"
     done
     cargo build --release -p caustica --examples
-    for ex in embed_wgpu embed_ash render_png; do cp "target/release/examples/$ex" .devbin/; done
+    for ex in embed_wgpu embed_ash render_png frame_loop; do cp "target/release/examples/$ex" .devbin/; done
     cargo build --release -p caustica-conformance --example stiff_table --example adaptive_table
     cp target/release/examples/stiff_table target/release/examples/adaptive_table .devbin/
     strip .devbin/caustica .devbin/backend_diff .devbin/device_layout .devbin/cross_backend \
@@ -45,7 +46,7 @@ if [ "${1:-}" = "--build" ]; then
           .devbin/stiff_cases .devbin/stiff_table .devbin/every_kernel_dispatched \
           .devbin/technique_seam .devbin/hostile_input .devbin/large_frames .devbin/filter_flux \
           .devbin/caustic_map_frames .devbin/caustic_map_frame .devbin/adaptive_caustics_frames \
-          .devbin/adaptive_frame .devbin/adaptive_table
+          .devbin/adaptive_frame .devbin/adaptive_table .devbin/submitted_frames .devbin/frame_loop
     # what the device tool carries must stay under 64 MiB: the binaries travel gzipped
     (cd .devbin && for f in *; do case $f in *.deb|*.gz) ;; *) gzip -9 -f "$f" ;; esac; done)
     (cd .devbin && ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1)
@@ -55,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -277,6 +278,16 @@ if has dyn; then
     # issue 19 point 6 again after cheaper moves: warm Vulkan up, then the dynamic scene
     run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
+fi
+if has nonblock; then
+    # issue 19 points 2 and 3: warm Vulkan up; the non-blocking frames against the
+    # blocking ones on every backend (bitwise, several in flight); sspm_frame with its
+    # pipelined line (submit, wall per frame, device passes); the wgpu host's frame loop
+    run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./submitted_frames --test-threads=1 --nocapture
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
+    run timeout 60 ./frame_loop 1920x1080 2048 100
+    run timeout 60 ./frame_loop 1920x1080 1024 100
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

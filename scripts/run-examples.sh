@@ -19,6 +19,7 @@ mkdir -p out/examples
 "$target/release/caustica" scenes --export jelly --format gltf > out/examples/jelly.gltf
 run load_gltf out/examples/jelly.gltf 96x54 128
 run embed_wgpu 96x54 128
+run frame_loop 96x54 128 20
 run embed_ash 96x54 64
 run compare_techniques cpu sphere 256
 echo "examples: ok"

@@ -6,6 +6,10 @@
 //! fastest backend), once per caustic filter. Device timestamps where the backend has
 //! them.
 //!
+//! Then the same frame as a host's frame loop runs it (issue 19 points 2 and 3):
+//! `submit_frame` without waiting, at most two frames in flight, statistics collected
+//! later: the host's submit time, the wall time per frame, and the device passes' sum.
+//!
 //! Then `plain` (no caster, issue 8): the host wall time of a whole Sspm frame, whose plan
 //! runs only the G-buffer and direct light, against a recording of those two kernels
 //! alone on the same backend, medians with their min..max spread: the frame plan's
@@ -133,6 +137,19 @@ fn main() {
             for (k, mut v) in passes {
                 println!("  {k:<20} {:>9.3} ms", median(&mut v));
             }
+            match pipelined(backend.as_mut(), sspm.as_mut(), 4 * frames) {
+                Ok(p) => println!(
+                    "  non-blocking ({} frames, at most {IN_FLIGHT} in flight): submit {:.3} ms \
+                     host, {:.3} ms per frame on the wall, device passes {:.3} ms (medians); \
+                     wall - device {:+.3} ms",
+                    4 * frames,
+                    p.submit_ms,
+                    p.wall_ms,
+                    p.device_ms,
+                    p.wall_ms - p.device_ms
+                ),
+                Err(e) => println!("  non-blocking: {e}"),
+            }
             let _ = sspm.free(backend.as_mut());
         }
         let mut plain = builtin("plain").expect("built-in scene");
@@ -152,6 +169,56 @@ fn main() {
             Err(e) => println!("{name} / plain: {e}"),
         }
     }
+}
+
+/// Frames a pipelined host keeps on the device before it waits for the oldest.
+const IN_FLIGHT: usize = 2;
+
+/// The non-blocking frame loop's costs (issue 19 points 2 and 3), medians.
+struct Pipelined {
+    /// Host time of `submit_frame` (record + submit).
+    submit_ms: f64,
+    /// Wall time per frame over the whole run (frames overlap with the host's work).
+    wall_ms: f64,
+    /// Sum of a frame's device passes.
+    device_ms: f64,
+}
+
+/// `n` frames submitted as a host's frame loop does: submit, keep at most [`IN_FLIGHT`] on
+/// the device, collect each frame's statistics when it is the oldest.
+fn pipelined(
+    backend: &mut dyn Backend,
+    sspm: &mut dyn caustica_core::Technique,
+    n: usize,
+) -> Result<Pipelined, caustica_core::Error> {
+    let mut tickets = std::collections::VecDeque::new();
+    let (mut submit, mut device) = (Vec::new(), Vec::new());
+    let mut collect = |t: &mut caustica_core::FrameTicket, b: &mut dyn Backend| {
+        t.stats(b, true).map(|s| {
+            if let Some(s) = s {
+                device.push(s.passes.iter().map(|p| p.ms).sum::<f64>());
+            }
+        })
+    };
+    let start = Instant::now();
+    for _ in 0..n {
+        let t0 = Instant::now();
+        tickets.push_back(sspm.submit_frame(backend)?);
+        submit.push(t0.elapsed().as_secs_f64() * 1e3);
+        while tickets.len() > IN_FLIGHT {
+            let mut t = tickets.pop_front().expect("not empty");
+            collect(&mut t, backend)?;
+        }
+    }
+    for mut t in tickets {
+        collect(&mut t, backend)?;
+    }
+    let wall_ms = start.elapsed().as_secs_f64() * 1e3 / n.max(1) as f64;
+    Ok(Pipelined {
+        submit_ms: median(&mut submit),
+        wall_ms,
+        device_ms: median(&mut device),
+    })
 }
 
 type Times = (Vec<f64>, (f64, f64));

@@ -40,12 +40,15 @@ pub mod report;
 pub mod scene_file;
 pub mod technique_spec;
 
-pub use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType};
+pub use caustica_core::backend::{
+    Backend, BackendError, Capabilities, DeviceType, Finished, Submission,
+};
 pub use caustica_core::frame::error::Error;
 pub use caustica_core::frame::image::Image;
 pub use caustica_core::frame::metrics;
 pub use caustica_core::frame::plan::FramePlan;
 pub use caustica_core::frame::stats::FrameStats;
+pub use caustica_core::frame::submitted::{FrameTicket, RecordedFrame};
 pub use caustica_core::frame::technique::{OutputInfo, Progress, Technique};
 pub use caustica_core::scene;
 pub use caustica_core::scene::Scene;

@@ -36,6 +36,18 @@ fn sphere_with_instance() -> Scene {
     s
 }
 
+/// The techniques with a non-blocking frame: Sspm, and PhotonGi with its temporal blend
+/// (history carried from frame to frame, in flight too) and A-Trous.
+fn techniques() -> Vec<(&'static str, serde_json::Value)> {
+    vec![
+        ("sspm", settings()),
+        (
+            "photon-gi",
+            serde_json::json!({ "photons_w": 64, "photons_h": 64, "rsm_size": 32 }),
+        ),
+    ]
+}
+
 /// Sspm with four batches per light (so one recording holds several trace/deposit
 /// pairs) and every output.
 fn settings() -> serde_json::Value {
@@ -106,13 +118,17 @@ fn update(t: &mut dyn Technique, b: &mut dyn Backend, scene: &Scene, frame: usiz
 fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
     const FRAMES: usize = 4;
     for (bname, mut b) in backends() {
-        for (sname, scene) in [
+        let cases = [
             ("sphere", sphere_with_instance()),
             ("cornell", small("cornell")),
-        ] {
+        ];
+        for ((sname, scene), (tname, settings)) in cases
+            .into_iter()
+            .flat_map(|c| techniques().into_iter().map(move |t| (c.clone(), t)))
+        {
             let b = b.as_mut();
             // the blocking frames: images after each, and stats
-            let mut blocking = create("sspm", b, &scene, &settings()).expect("create");
+            let mut blocking = create(tname, b, &scene, &settings).expect("create");
             let mut want_images = Vec::new();
             let mut want_stats = Vec::new();
             for f in 0..FRAMES {
@@ -126,7 +142,7 @@ fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
             blocking.free(b).expect("free");
 
             // (a) one submitted frame at a time, its images read back after it
-            let mut t = create("sspm", b, &scene, &settings()).expect("create");
+            let mut t = create(tname, b, &scene, &settings).expect("create");
             for f in 0..FRAMES {
                 if sname == "sphere" || f != 2 {
                     update(t.as_mut(), b, &scene, f);
@@ -135,13 +151,13 @@ fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
                 let got = outputs(t.as_ref(), b);
                 assert!(
                     got == want_images[f],
-                    "{bname}/{sname}: submitted frame {f} differs from the blocking one"
+                    "{bname}/{tname}/{sname}: submitted frame {f} differs from the blocking one"
                 );
                 let stats = ticket.stats(b, true).expect("stats").expect("waited");
                 assert_eq!(
                     accounting(&stats),
                     accounting(&want_stats[f]),
-                    "{bname}/{sname}: frame {f}'s statistics"
+                    "{bname}/{tname}/{sname}: frame {f}'s statistics"
                 );
                 if !stats.passes.is_empty() {
                     let passes = |s: &FrameStats| {
@@ -153,7 +169,7 @@ fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
                     assert_eq!(
                         passes(&stats),
                         passes(&want_stats[f]),
-                        "{bname}/{sname}: frame {f}'s timed passes"
+                        "{bname}/{tname}/{sname}: frame {f}'s timed passes"
                     );
                 }
             }
@@ -161,7 +177,7 @@ fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
 
             // (b) every frame in flight at once, the statistics collected afterwards: each
             // frame's counters are its own
-            let mut t = create("sspm", b, &scene, &settings()).expect("create");
+            let mut t = create(tname, b, &scene, &settings).expect("create");
             let mut tickets = Vec::new();
             for f in 0..FRAMES {
                 if sname == "sphere" || f != 2 {
@@ -174,7 +190,7 @@ fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
                 assert_eq!(
                     accounting(&stats),
                     accounting(&want_stats[f]),
-                    "{bname}/{sname}: frame {f} of {FRAMES} in flight: its statistics"
+                    "{bname}/{tname}/{sname}: frame {f} of {FRAMES} in flight: its statistics"
                 );
                 // handed out once
                 assert!(
@@ -185,11 +201,11 @@ fn submitted_frames_render_the_blocking_frames_bitwise_with_their_own_stats() {
             let got = outputs(t.as_ref(), b);
             assert!(
                 got == want_images[FRAMES - 1],
-                "{bname}/{sname}: the last of {FRAMES} frames in flight differs"
+                "{bname}/{tname}/{sname}: the last of {FRAMES} frames in flight differs"
             );
             t.free(b).expect("free");
             eprintln!(
-                "{bname}: {sname}'s submitted frames equal the blocking ones, bitwise, \
+                "{bname}: {tname} on {sname}: submitted frames equal the blocking ones, bitwise, \
                  {FRAMES} in flight each with its own statistics"
             );
         }

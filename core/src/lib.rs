@@ -26,10 +26,11 @@ pub mod recording;
 pub mod scene;
 pub mod techniques;
 
-pub use backend::{Backend, BackendError, Capabilities, DeviceType};
+pub use backend::{Backend, BackendError, Capabilities, DeviceType, Finished, Submission};
 pub use frame::error::Error;
 pub use frame::plan::FramePlan;
 pub use frame::stats::FrameStats;
+pub use frame::submitted::{FrameTicket, RecordedFrame};
 pub use frame::technique::{OutputInfo, Progress, Technique};
 pub use scene::Scene;
 pub use techniques::sspm::{GatherFilter, Output, Outputs, Sspm, SspmSettings};

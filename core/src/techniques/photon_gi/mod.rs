@@ -34,6 +34,7 @@ use crate::frame::irradiance_passes::{
 };
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::stats::FrameStats;
+use crate::frame::submitted::RecordedFrame;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
@@ -777,16 +778,64 @@ impl PhotonGi {
         Ok(())
     }
 
-    /// Renders one frame (see the module doc).
+    /// Renders one frame (see the module doc). Waits for the device;
+    /// [`PhotonGi::record_frame`] is the non-blocking frame.
     pub fn frame(
         &mut self,
         backend: &mut dyn Backend,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
+        let mut stats = self.frame_stats(&*backend);
+        let total = stats.photons_emitted;
+        let mut done = 0u64;
+        for (rec, photons) in self.frame_recordings(&mut stats) {
+            PhotonGi::run(backend, &rec, &mut stats)?;
+            if photons > 0 {
+                done += photons;
+                progress(Progress {
+                    photons_done: done,
+                    photons_total: total,
+                });
+            }
+        }
+        let c = read_buf(backend, self.buffers.counters)?;
+        stats.read_counters(&c, self.flux_quantum);
+        self.end_frame();
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(r) = &self.reference {
+            let img = self.read_image(backend, self.buffers.indirect)?;
+            stats.error = Some(crate::frame::metrics::compare(&img, r));
+        }
+        Ok(stats)
+    }
+
+    /// Records one whole frame without running it (issue 19 point 2): the passes of
+    /// [`PhotonGi::frame`] in one [`Recording`], the photon counters copied to the host at
+    /// its end ([`crate::frame::submitted`]). The temporal history advances as if the
+    /// frame had run. No progress callback and no error against the reference.
+    pub fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+        let start = Instant::now();
+        let mut stats = self.frame_stats(backend);
+        let mut recording = Recording::new();
+        for (rec, _) in self.frame_recordings(&mut stats) {
+            recording.steps.extend(rec.steps);
+        }
+        self.end_frame();
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(RecordedFrame {
+            recording,
+            readbacks: vec![self.buffers.counters.id],
+            stats,
+            counters: Some((0, self.flux_quantum)),
+        })
+    }
+
+    /// A frame's statistics before anything runs: names, plan, skipped passes, photons
+    /// per light.
+    fn frame_stats(&self, backend: &dyn Backend) -> FrameStats {
         let caps = backend.capabilities();
         let cam = self.camera;
-        let b = self.buffers;
         let mut stats = FrameStats {
             technique: "photon-gi".into(),
             backend: backend.name().into(),
@@ -807,6 +856,18 @@ impl PhotonGi {
         for p in self.plan.passes.iter().filter(|p| !p.runs) {
             stats.skip(&p.name, p.reason.clone());
         }
+        stats.photons_emitted = self.rsms.iter().map(|r| r.photons as u64).sum();
+        stats.photons_per_light = self.rsms.iter().map(|r| r.photons as u64).collect();
+        stats
+    }
+
+    /// The frame's recordings in order, each with the photons it traces: visibility and
+    /// clears; per lit light, its photons (deposited at once with the deposit estimator);
+    /// the splat, resolve, filters, Eq. 20's correction and the composite.
+    fn frame_recordings(&self, stats: &mut FrameStats) -> Vec<(Recording, u64)> {
+        let cam = self.camera;
+        let b = self.buffers;
+        let mut out = Vec::new();
         let mut rec = Recording::new();
         rec.kernel(PrimaryGbuffer {
             scene: self.scene,
@@ -832,10 +893,8 @@ impl PhotonGi {
         rec.clear(b.counters);
         rec.clear(b.photon_count);
         rec.clear(b.tile_counts);
-        PhotonGi::run(backend, &rec, &mut stats)?;
+        out.push((rec, 0));
 
-        let total: u64 = self.rsms.iter().map(|r| r.photons as u64).sum();
-        let mut done = 0u64;
         let deposit = self.settings.estimator == IndirectEstimator::Deposit;
         for r in self.rsms.iter().filter(|r| r.photons > 0) {
             let mut rec = Recording::new();
@@ -854,16 +913,9 @@ impl PhotonGi {
             } else {
                 self.record_light(&mut rec, r, cam, gi_store::PACKED);
             }
-            PhotonGi::run(backend, &rec, &mut stats)?;
             stats.batches += 1;
-            done += r.photons as u64;
-            progress(Progress {
-                photons_done: done,
-                photons_total: total,
-            });
+            out.push((rec, r.photons as u64));
         }
-        stats.photons_emitted = total;
-        stats.photons_per_light = self.rsms.iter().map(|r| r.photons as u64).collect();
 
         let mut rec = Recording::new();
         if !deposit {
@@ -904,21 +956,18 @@ impl PhotonGi {
             caustics: b.indirect,
             out: b.composite,
         });
-        PhotonGi::run(backend, &rec, &mut stats)?;
+        out.push((rec, 0));
+        out
+    }
 
-        let c = read_buf(backend, b.counters)?;
-        stats.read_counters(&c, self.flux_quantum);
+    /// After a frame: this frame's blend is the next frame's history.
+    fn end_frame(&mut self) {
+        let cam = self.camera;
         if let Some(t) = &mut self.buffers.temporal {
             t.image.swap();
             t.edge.swap();
             t.previous = cam;
         }
-        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        if let Some(r) = &self.reference {
-            let img = self.read_image(backend, b.indirect)?;
-            stats.error = Some(crate::frame::metrics::compare(&img, r));
-        }
-        Ok(stats)
     }
 
     fn deposit_params(&self, cam: GpuCamera) -> DepositParams {
@@ -1172,6 +1221,10 @@ impl Technique for PhotonGi {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         PhotonGi::frame(self, backend, progress)
+    }
+
+    fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+        PhotonGi::record_frame(self, backend)
     }
 
     fn outputs(&self) -> Vec<OutputInfo> {
