@@ -31,7 +31,7 @@ use opencl3::command_queue::{CommandQueue, CL_QUEUE_PROFILING_ENABLE};
 use opencl3::event::Event;
 use opencl3::event::CL_COMPLETE;
 use opencl3::kernel::Kernel;
-use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_WRITE};
+use opencl3::memory::{Buffer, ClMem, CL_MAP_READ, CL_MEM_ALLOC_HOST_PTR, CL_MEM_READ_WRITE};
 use opencl3::types::{CL_BLOCKING, CL_NON_BLOCKING};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -275,10 +275,21 @@ struct InFlight {
     kernels: Vec<(&'static str, Event)>,
     /// Data of non-blocking writes (read by the device until the submission is done).
     _writes: Vec<Vec<u8>>,
-    /// Host memory the readbacks land in.
-    readbacks: Vec<Vec<u8>>,
+    /// Pinned buffers the readbacks are copied into, mapped once copied.
+    readbacks: Vec<PinnedReadback>,
     /// A marker after everything else: complete when the submission is.
     done: Event,
+}
+
+/// A readback's landing place: a host-allocated (pinned) buffer, copied into on the
+/// device and mapped without blocking. NVIDIA's driver performs a "non-blocking" read into
+/// pageable host memory synchronously (measured: `submit` took the whole frame), so the
+/// copy goes device to pinned buffer and the host reads the mapping once the submission's
+/// marker has completed.
+struct PinnedReadback {
+    pinned: Buffer<u8>,
+    mapped: *mut std::ffi::c_void,
+    bytes: u64,
 }
 
 /// Kernel times from profiling events (the commands have completed).
@@ -399,17 +410,42 @@ impl OpenClBackend {
         let mut landing = Vec::with_capacity(readbacks.len());
         for id in readbacks {
             let b = self.buffer(*id)?;
-            let mut out = caustica_core::device::host_bytes(b.bytes, "a submission's readback")?;
-            if !out.is_empty() {
-                // SAFETY: `out`'s heap block is kept in the submission, unmoved and
-                // untouched, until its marker has completed.
-                unsafe {
-                    self.queue
-                        .enqueue_read_buffer(&b.mem, CL_NON_BLOCKING, 0, &mut out, &[])
-                }
-                .map_err(cl_error("reading a buffer back"))?;
+            let size = b.bytes.max(4) as usize;
+            let mut pinned = unsafe {
+                Buffer::<u8>::create(
+                    &self.state.context,
+                    CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR,
+                    size,
+                    std::ptr::null_mut(),
+                )
             }
-            landing.push(out);
+            .map_err(cl_error("creating a readback buffer"))?;
+            let mut mapped = std::ptr::null_mut();
+            // SAFETY: both buffers are this backend's and at least `bytes` long; the
+            // mapping is read only after the submission's marker has completed.
+            unsafe {
+                if b.bytes > 0 {
+                    self.queue
+                        .enqueue_copy_buffer(&b.mem, &mut pinned, 0, 0, b.bytes as usize, &[])
+                        .map_err(cl_error("copying a buffer for readback"))?;
+                }
+                self.queue
+                    .enqueue_map_buffer(
+                        &pinned,
+                        CL_NON_BLOCKING,
+                        CL_MAP_READ,
+                        0,
+                        size,
+                        &mut mapped,
+                        &[],
+                    )
+                    .map_err(cl_error("mapping a readback buffer"))?;
+            }
+            landing.push(PinnedReadback {
+                pinned,
+                mapped,
+                bytes: b.bytes,
+            });
         }
         let done = unsafe { self.queue.enqueue_marker_with_wait_list(&[]) }
             .map_err(cl_error("enqueueing a submission's marker"))?;
@@ -466,9 +502,21 @@ impl OpenClBackend {
         }
         let f = self.in_flight.remove(&s.id).expect("looked up above");
         s.mark_collected();
+        let mut readbacks = Vec::with_capacity(f.readbacks.len());
+        for r in &f.readbacks {
+            let mut out = caustica_core::device::host_bytes(r.bytes, "a submission's readback")?;
+            // SAFETY: the map completed before the marker; it covers `bytes` bytes.
+            unsafe {
+                std::ptr::copy_nonoverlapping(r.mapped as *const u8, out.as_mut_ptr(), out.len());
+                self.queue
+                    .enqueue_unmap_mem_object(r.pinned.get(), r.mapped, &[])
+                    .map_err(cl_error("unmapping a readback buffer"))?;
+            }
+            readbacks.push(out);
+        }
         Ok(Some(Finished {
             times: pass_times(&f.kernels)?,
-            readbacks: f.readbacks,
+            readbacks,
         }))
     }
 

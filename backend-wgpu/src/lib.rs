@@ -58,6 +58,8 @@ pub struct WgpuBackend {
     uncaptured: Arc<Mutex<Vec<String>>>,
     /// Submissions not yet collected ([`Backend::submit`], [`WgpuBackend::encode`]).
     in_flight: HashMap<u64, submission::InFlight>,
+    /// Results of submissions waited for before they were polled (a host too far ahead).
+    finished: HashMap<u64, Result<Finished, BackendError>>,
     next_submission: u64,
 }
 
@@ -229,6 +231,7 @@ impl WgpuBackend {
             buffers: HashMap::new(),
             uncaptured,
             in_flight: HashMap::new(),
+            finished: HashMap::new(),
             next_submission: 0,
         })
     }

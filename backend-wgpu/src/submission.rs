@@ -66,9 +66,18 @@ impl WgpuBackend {
     ) -> Result<Submission, BackendError> {
         self.check_uncaptured()?;
         if self.in_flight.len() >= caustica_core::backend::MAX_UNCOLLECTED {
-            // the oldest uncollected result is discarded (its buffers go with it)
+            // a host this far ahead is paced by the device: wait for the oldest and keep
+            // its result for its poll
             if let Some(oldest) = self.in_flight.keys().min().copied() {
-                self.in_flight.remove(&oldest);
+                let mut s = Submission::pending(oldest);
+                let result = self.poll_submission(&mut s, true);
+                if self.finished.len() >= caustica_core::backend::MAX_UNCOLLECTED {
+                    if let Some(k) = self.finished.keys().min().copied() {
+                        self.finished.remove(&k);
+                    }
+                }
+                self.finished
+                    .insert(oldest, result.map(|r| r.unwrap_or_default()));
             }
         }
         let mut timer = dispatch::Timer::new(self, kernel_count(recording));
@@ -147,6 +156,10 @@ impl WgpuBackend {
     ) -> Result<Option<Finished>, BackendError> {
         if !s.is_pending() {
             return s.take_finished().map(Some);
+        }
+        if let Some(r) = self.finished.remove(&s.id) {
+            s.mark_collected();
+            return r.map(Some);
         }
         let Some(f) = self.in_flight.get(&s.id) else {
             return Err(BackendError::BadArgument(format!(
