@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -278,6 +278,11 @@ if has dyn; then
     # issue 19 point 6 again after cheaper moves: warm Vulkan up, then the dynamic scene
     run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
+fi
+if has nonblock-opencl; then
+    # OpenCL's non-blocking line alone, and its submitted frames
+    run timeout 150 env CAUSTICA_BENCH_BACKENDS=opencl CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
+    run timeout 100 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl ./submitted_frames --test-threads=1
 fi
 if has nonblock; then
     # issue 19 points 2 and 3: warm Vulkan up; the non-blocking frames against the

@@ -11,8 +11,20 @@ use opencl3::event::Event;
 use opencl3::kernel::Kernel as ClKernel;
 use opencl3::memory::{Buffer, ClMem, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_ONLY};
 
-/// Enqueues one registry kernel; returns its profiling event (`None` if it did no work).
-pub fn run(b: &OpenClBackend, k: &RecordedKernel) -> Result<Option<Event>, BackendError> {
+/// What an enqueued launch must keep alive until it has run: its kernel object and
+/// parameter buffers. Releasing them while the launch is queued made NVIDIA's driver wait
+/// for it (measured: a non-blocking submission took the whole frame on the host).
+pub struct Launched {
+    _kernel: ClKernel,
+    _params: Vec<Buffer<u8>>,
+}
+
+/// Enqueues one registry kernel; returns its profiling event and what must outlive it
+/// (`None` if it did no work).
+pub fn run(
+    b: &OpenClBackend,
+    k: &RecordedKernel,
+) -> Result<Option<(Event, Launched)>, BackendError> {
     let Some(launch) = k.launch()? else {
         return Ok(None);
     };
@@ -91,5 +103,11 @@ pub fn run(b: &OpenClBackend, k: &RecordedKernel) -> Result<Option<Event>, Backe
         )
     }
     .map_err(cl_error(name))?;
-    Ok(Some(event))
+    Ok(Some((
+        event,
+        Launched {
+            _kernel: kernel,
+            _params: params,
+        },
+    )))
 }

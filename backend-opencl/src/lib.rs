@@ -275,6 +275,8 @@ struct InFlight {
     kernels: Vec<(&'static str, Event)>,
     /// Data of non-blocking writes (read by the device until the submission is done).
     _writes: Vec<Vec<u8>>,
+    /// Kernel objects and parameter buffers of the launches (released once done).
+    _launches: Vec<dispatch::Launched>,
     /// Pinned buffers the readbacks are copied into, mapped once copied.
     readbacks: Vec<PinnedReadback>,
     /// A marker after everything else: complete when the submission is.
@@ -315,8 +317,8 @@ impl OpenClBackend {
     /// [`Backend::execute`]'s body (the trait method runs it under
     /// [`caustica_core::backend::driver_entry`]).
     fn execute_recording(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        let mut writes = Vec::new();
-        let kernels = self.enqueue(recording, &mut writes)?;
+        let (mut writes, mut launches) = (Vec::new(), Vec::new());
+        let kernels = self.enqueue(recording, &mut writes, &mut launches)?;
         self.queue
             .finish()
             .map_err(cl_error("waiting for the device"))?;
@@ -330,6 +332,7 @@ impl OpenClBackend {
         &mut self,
         recording: &Recording,
         writes: &mut Vec<Vec<u8>>,
+        launches: &mut Vec<dispatch::Launched>,
     ) -> Result<Vec<(&'static str, Event)>, BackendError> {
         let mut pending: Vec<(&'static str, Event)> = Vec::new();
         for step in &recording.steps {
@@ -381,8 +384,9 @@ impl OpenClBackend {
                     self.buffers.remove(id);
                 }
                 Step::Kernel(k) => {
-                    if let Some(event) = dispatch::run(self, k)? {
+                    if let Some((event, launched)) = dispatch::run(self, k)? {
                         pending.push((k.name(), event));
+                        launches.push(launched);
                     }
                 }
             }
@@ -405,8 +409,8 @@ impl OpenClBackend {
                     .map_err(cl_error("waiting for an uncollected submission"))?;
             }
         }
-        let mut writes = Vec::new();
-        let kernels = self.enqueue(recording, &mut writes)?;
+        let (mut writes, mut launches) = (Vec::new(), Vec::new());
+        let kernels = self.enqueue(recording, &mut writes, &mut launches)?;
         let mut landing = Vec::with_capacity(readbacks.len());
         for id in readbacks {
             let b = self.buffer(*id)?;
@@ -456,6 +460,7 @@ impl OpenClBackend {
             id,
             InFlight {
                 kernels,
+                _launches: launches,
                 _writes: writes,
                 readbacks: landing,
                 done,
