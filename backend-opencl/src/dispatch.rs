@@ -9,21 +9,23 @@ use caustica_core::device::launch::{check_buffer, Launch, LaunchArg};
 use caustica_core::recording::RecordedKernel;
 use opencl3::event::Event;
 use opencl3::kernel::Kernel as ClKernel;
-use opencl3::memory::{Buffer, ClMem, CL_MEM_COPY_HOST_PTR, CL_MEM_READ_ONLY};
+use opencl3::memory::{Buffer, ClMem};
 
 /// What an enqueued launch must keep alive until it has run: its kernel object and
 /// parameter buffers. Releasing them while the launch is queued made NVIDIA's driver wait
 /// for it (measured: a non-blocking submission took the whole frame on the host).
 pub struct Launched {
     _kernel: ClKernel,
-    _params: Vec<Buffer<u8>>,
 }
 
 /// Enqueues one registry kernel; returns its profiling event and what must outlive it
 /// (`None` if it did no work).
+/// `params` are the launch's parameter blocks, in argument order, already on the device
+/// (sub-buffers of the submission's staging: [`crate::staging`]).
 pub fn run(
     b: &OpenClBackend,
     k: &RecordedKernel,
+    params: &[Buffer<u8>],
 ) -> Result<Option<(Event, Launched)>, BackendError> {
     let Some(launch) = k.launch()? else {
         return Ok(None);
@@ -39,26 +41,9 @@ pub fn run(
         args,
     } = launch;
     let (name, threads, group) = (*name, *threads, *workgroup_size as usize);
-    // Parameter blocks live until the launch is enqueued; OpenCL keeps a memory object
-    // alive until the commands that use it have finished.
-    let mut params: Vec<Buffer<u8>> = Vec::new();
     for a in args {
-        match a {
-            LaunchArg::Buffer { id, .. } => check_buffer(a, b.buffer(*id)?.bytes)?,
-            LaunchArg::Params(bytes) => params.push(
-                // COPY_HOST_PTR: the driver copies `bytes` during the call and never
-                // writes through the pointer.
-                unsafe {
-                    Buffer::<u8>::create(
-                        &b.state.context,
-                        CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                        bytes.len(),
-                        bytes.as_ptr() as *mut std::ffi::c_void,
-                    )
-                }
-                .map_err(cl_error("uploading kernel parameters"))?,
-            ),
-            LaunchArg::Count(_) => {}
+        if let LaunchArg::Buffer { id, .. } = a {
+            check_buffer(a, b.buffer(*id)?.bytes)?;
         }
     }
     if threads == 0 {
@@ -103,11 +88,5 @@ pub fn run(
         )
     }
     .map_err(cl_error(name))?;
-    Ok(Some((
-        event,
-        Launched {
-            _kernel: kernel,
-            _params: params,
-        },
-    )))
+    Ok(Some((event, Launched { _kernel: kernel })))
 }

@@ -20,6 +20,7 @@ mod device;
 mod dispatch;
 mod error;
 pub mod program;
+mod staging;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, Finished, PassTime, Submission};
 use caustica_core::device::handle::ResourceId;
@@ -31,7 +32,7 @@ use opencl3::command_queue::{CommandQueue, CL_QUEUE_PROFILING_ENABLE};
 use opencl3::event::Event;
 use opencl3::event::CL_COMPLETE;
 use opencl3::kernel::Kernel;
-use opencl3::memory::{Buffer, ClMem, CL_MAP_READ, CL_MEM_ALLOC_HOST_PTR, CL_MEM_READ_WRITE};
+use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_ONLY, CL_MEM_READ_WRITE};
 use opencl3::types::{CL_BLOCKING, CL_NON_BLOCKING};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -55,6 +56,12 @@ pub struct OpenClBackend {
     variants: std::sync::Mutex<std::collections::BTreeSet<String>>,
     /// Submissions not yet collected ([`Backend::submit`]), by number.
     in_flight: HashMap<u64, InFlight>,
+    /// Results of submissions retired before they were polled.
+    finished: HashMap<u64, Result<Finished, BackendError>>,
+    /// Staging slots free for the next submission ([`staging`]).
+    free_slots: Vec<staging::StagingSlot>,
+    /// Alignment of parameter sub-buffers (`CL_DEVICE_MEM_BASE_ADDR_ALIGN`, bytes).
+    param_align: usize,
     next_submission: u64,
 }
 
@@ -81,12 +88,23 @@ impl OpenClBackend {
             CommandQueue::create(&state.context, state.device.id(), CL_QUEUE_PROFILING_ENABLE)
         }
         .map_err(cl_error("creating the command queue"))?;
+        // sub-buffer origins must be multiples of the base address alignment (bits)
+        let param_align = (state
+            .device
+            .mem_base_addr_align()
+            .map_err(cl_error("querying CL_DEVICE_MEM_BASE_ADDR_ALIGN"))?
+            as usize
+            / 8)
+        .max(16);
         Ok(OpenClBackend {
             state,
             queue,
             buffers: HashMap::new(),
             variants: Default::default(),
             in_flight: HashMap::new(),
+            finished: HashMap::new(),
+            free_slots: Vec::new(),
+            param_align,
             next_submission: 0,
         })
     }
@@ -219,6 +237,20 @@ fn fill_zero(queue: &CommandQueue, mem: &mut Buffer<u8>, size: usize) -> Result<
     Ok(())
 }
 
+/// Waits for the queue, then releases the submissions and staging slots (their pinned
+/// memory is unmapped on the queue, which must still exist) before the queue goes.
+impl Drop for OpenClBackend {
+    fn drop(&mut self) {
+        caustica_core::backend::driver_entry(|| {
+            let _ = self.queue.finish();
+            self.in_flight.clear();
+            self.finished.clear();
+            self.free_slots.clear();
+            let _ = self.queue.finish();
+        })
+    }
+}
+
 impl Backend for OpenClBackend {
     fn name(&self) -> &'static str {
         "opencl"
@@ -273,26 +305,20 @@ impl Backend for OpenClBackend {
 struct InFlight {
     /// Kernel names and their profiling events.
     kernels: Vec<(&'static str, Event)>,
-    /// Data of non-blocking writes (read by the device until the submission is done).
-    _writes: Vec<Vec<u8>>,
-    /// Kernel objects and parameter buffers of the launches (released once done).
+    /// Kernel objects of the launches and the parameters' sub-buffers (released once
+    /// done).
     _launches: Vec<dispatch::Launched>,
-    /// Pinned buffers the readbacks are copied into, mapped once copied.
-    readbacks: Vec<PinnedReadback>,
+    _params: Vec<Buffer<u8>>,
+    /// The staging slot (parameters, write data, readback landing).
+    slot: staging::StagingSlot,
+    /// Offset and size of each readback in the slot's pinned readback memory.
+    readbacks: Vec<(usize, usize)>,
     /// A marker after everything else: complete when the submission is.
     done: Event,
 }
 
-/// A readback's landing place: a host-allocated (pinned) buffer, copied into on the
-/// device and mapped without blocking. NVIDIA's driver performs a "non-blocking" read into
-/// pageable host memory synchronously (measured: `submit` took the whole frame), so the
-/// copy goes device to pinned buffer and the host reads the mapping once the submission's
-/// marker has completed.
-struct PinnedReadback {
-    pinned: Buffer<u8>,
-    mapped: *mut std::ffi::c_void,
-    bytes: u64,
-}
+/// Submissions on the device at once; the next waits for the oldest.
+const MAX_FRAMES_IN_FLIGHT: usize = 3;
 
 /// Kernel times from profiling events (the commands have completed).
 fn pass_times(kernels: &[(&'static str, Event)]) -> Result<Vec<PassTime>, BackendError> {
@@ -313,28 +339,241 @@ fn pass_times(kernels: &[(&'static str, Event)]) -> Result<Vec<PassTime>, Backen
         .collect()
 }
 
+/// Where a recording's staged bytes go in a slot: each parameter block's offset in the
+/// parameter buffer (aligned for sub-buffers), each write's offset in the pinned upload
+/// memory (after the parameters), each readback's in the pinned readback memory.
+struct StagingLayout {
+    params: Vec<(usize, usize)>,
+    params_bytes: usize,
+    writes: Vec<usize>,
+    upload_bytes: usize,
+    readbacks: Vec<(usize, usize)>,
+    readback_bytes: usize,
+}
+
 impl OpenClBackend {
     /// [`Backend::execute`]'s body (the trait method runs it under
     /// [`caustica_core::backend::driver_entry`]).
     fn execute_recording(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        let (mut writes, mut launches) = (Vec::new(), Vec::new());
-        let kernels = self.enqueue(recording, &mut writes, &mut launches)?;
-        self.queue
-            .finish()
-            .map_err(cl_error("waiting for the device"))?;
-        pass_times(&kernels)
+        let mut s = self.submit_recording(recording, &[])?;
+        let f = self.poll_submission(&mut s, true)?;
+        Ok(f.map(|f| f.times).unwrap_or_default())
     }
 
-    /// Enqueues every step of `recording` on the in-order queue. Writes do not block: their
-    /// data is copied into `writes`, which must outlive the commands. Creations upload
-    /// blocking (they are set-up work, not a frame's).
+    /// The staging layout of `recording` with `readbacks`.
+    fn layout(
+        &self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<StagingLayout, BackendError> {
+        let align = self.param_align;
+        let mut params = Vec::new();
+        let mut at = 0usize;
+        for step in &recording.steps {
+            if let Step::Kernel(k) = step {
+                if let Some(l) = k.launch()? {
+                    for a in &l.args {
+                        if let caustica_core::device::launch::LaunchArg::Params(p) = a {
+                            params.push((at, p.len()));
+                            at = (at + p.len().max(4)).next_multiple_of(align);
+                        }
+                    }
+                }
+            }
+        }
+        let params_bytes = at.max(4);
+        let mut writes = Vec::new();
+        let mut up = params_bytes.next_multiple_of(16);
+        for step in &recording.steps {
+            if let Step::Write { data, .. } = step {
+                writes.push(up);
+                up = (up + data.len()).next_multiple_of(16);
+            }
+        }
+        let mut rb = Vec::new();
+        let mut r = 0usize;
+        for id in readbacks {
+            let bytes = self.buffer(*id)?.bytes as usize;
+            rb.push((r, bytes));
+            r = (r + bytes).next_multiple_of(16);
+        }
+        Ok(StagingLayout {
+            params,
+            params_bytes,
+            writes,
+            upload_bytes: up,
+            readbacks: rb,
+            readback_bytes: r,
+        })
+    }
+
+    /// A staging slot: a free one, a new one, or (with [`MAX_FRAMES_IN_FLIGHT`] on the
+    /// queue) the oldest submission's once it has finished, its result kept for its poll.
+    fn take_slot(&mut self) -> Result<staging::StagingSlot, BackendError> {
+        if let Some(s) = self.free_slots.pop() {
+            return Ok(s);
+        }
+        if self.in_flight.len() >= MAX_FRAMES_IN_FLIGHT {
+            let oldest = *self.in_flight.keys().min().expect("not empty");
+            let f = self.in_flight.remove(&oldest).expect("a key");
+            let result = self.retire(f, true);
+            if self.finished.len() >= caustica_core::backend::MAX_UNCOLLECTED {
+                if let Some(k) = self.finished.keys().min().copied() {
+                    self.finished.remove(&k);
+                }
+            }
+            self.finished.insert(oldest, result);
+            if let Some(s) = self.free_slots.pop() {
+                return Ok(s);
+            }
+        }
+        Ok(staging::StagingSlot::default())
+    }
+
+    /// A finished (or, with `wait`, waited-for) submission's result; its slot back in the
+    /// free list.
+    fn retire(&mut self, f: InFlight, wait: bool) -> Result<Finished, BackendError> {
+        let waited = if wait {
+            f.done.wait().map_err(cl_error("waiting for a submission"))
+        } else {
+            Ok(())
+        };
+        let result = waited.and_then(|_| {
+            let times = pass_times(&f.kernels)?;
+            let mut readbacks = Vec::with_capacity(f.readbacks.len());
+            for (at, bytes) in &f.readbacks {
+                let mut out =
+                    caustica_core::device::host_bytes(*bytes as u64, "a submission's readback")?;
+                if let Some(p) = &f.slot.readback {
+                    out.copy_from_slice(p.bytes(*at, *bytes));
+                }
+                readbacks.push(out);
+            }
+            Ok(Finished { times, readbacks })
+        });
+        self.free_slots.push(f.slot);
+        result
+    }
+
+    /// [`Backend::submit`]'s body: the recording's parameters and write data staged in a
+    /// slot's pinned memory and uploaded by non-blocking copies, every step enqueued, the
+    /// readbacks copied into pinned memory, a marker, a flush; no wait (see
+    /// [`staging`]). Creations upload blocking (set-up work, not a frame's).
+    fn submit_recording(
+        &mut self,
+        recording: &Recording,
+        readbacks: &[ResourceId],
+    ) -> Result<Submission, BackendError> {
+        let layout = self.layout(recording, readbacks)?;
+        let mut slot = self.take_slot()?;
+        let staged = self.enqueue(recording, readbacks, &layout, &mut slot);
+        let (kernels, launches, params) = match staged {
+            Ok(x) => x,
+            Err(e) => {
+                // what was enqueued may still read the slot: let it finish first
+                let _ = self.queue.finish();
+                self.free_slots.push(slot);
+                return Err(e);
+            }
+        };
+        let done = match unsafe { self.queue.enqueue_marker_with_wait_list(&[]) }
+            .map_err(cl_error("enqueueing a submission's marker"))
+            .and_then(|d| {
+                self.queue
+                    .flush()
+                    .map_err(cl_error("flushing the queue"))
+                    .map(|_| d)
+            }) {
+            Ok(d) => d,
+            Err(e) => {
+                let _ = self.queue.finish();
+                self.free_slots.push(slot);
+                return Err(e);
+            }
+        };
+        self.next_submission += 1;
+        let id = self.next_submission;
+        self.in_flight.insert(
+            id,
+            InFlight {
+                kernels,
+                _launches: launches,
+                _params: params,
+                slot,
+                readbacks: layout.readbacks,
+                done,
+            },
+        );
+        Ok(Submission::pending(id))
+    }
+
+    /// Enqueues `recording` with its staging in `slot` (laid out by `layout`), then the
+    /// readbacks into the slot's pinned memory.
+    #[allow(clippy::type_complexity)]
     fn enqueue(
         &mut self,
         recording: &Recording,
-        writes: &mut Vec<Vec<u8>>,
-        launches: &mut Vec<dispatch::Launched>,
-    ) -> Result<Vec<(&'static str, Event)>, BackendError> {
+        readbacks: &[ResourceId],
+        layout: &StagingLayout,
+        slot: &mut staging::StagingSlot,
+    ) -> Result<
+        (
+            Vec<(&'static str, Event)>,
+            Vec<dispatch::Launched>,
+            Vec<Buffer<u8>>,
+        ),
+        BackendError,
+    > {
+        slot.prepare(
+            &self.queue,
+            &self.state.context,
+            layout.params_bytes,
+            layout.upload_bytes,
+            layout.readback_bytes,
+        )?;
+        // the parameters: into pinned memory, one non-blocking copy to the device, one
+        // sub-buffer per block
+        let mut params = Vec::with_capacity(layout.params.len());
+        {
+            let upload = slot.upload.as_mut().expect("prepared");
+            let mut k = 0;
+            for step in &recording.steps {
+                if let Step::Kernel(rk) = step {
+                    if let Some(l) = rk.launch()? {
+                        for a in &l.args {
+                            if let caustica_core::device::launch::LaunchArg::Params(p) = a {
+                                let (at, len) = layout.params[k];
+                                upload.bytes_mut(at, len).copy_from_slice(p);
+                                k += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if !layout.params.is_empty() {
+            let upload = slot.upload.as_ref().expect("prepared");
+            let src = upload.bytes(0, layout.params_bytes);
+            let dst = slot.params.as_mut().expect("prepared");
+            // SAFETY: `src` is pinned memory the slot keeps until the submission is done
+            unsafe {
+                self.queue
+                    .enqueue_write_buffer(dst, CL_NON_BLOCKING, 0, src, &[])
+            }
+            .map_err(cl_error("uploading kernel parameters"))?;
+            for (at, len) in &layout.params {
+                params.push(
+                    unsafe {
+                        slot.params()
+                            .create_sub_buffer(CL_MEM_READ_ONLY, *at, (*len).max(4))
+                    }
+                    .map_err(cl_error("making a parameter sub-buffer"))?,
+                );
+            }
+        }
         let mut pending: Vec<(&'static str, Event)> = Vec::new();
+        let mut launches = Vec::new();
+        let (mut next_write, mut next_param) = (0usize, 0usize);
         for step in &recording.steps {
             match step {
                 Step::Create { id, bytes, label } => self.create(*id, *bytes, label, None)?,
@@ -344,6 +583,8 @@ impl OpenClBackend {
                 Step::Write {
                     id, offset, data, ..
                 } => {
+                    let at = layout.writes[next_write];
+                    next_write += 1;
                     let b = self
                         .buffers
                         .get_mut(id)
@@ -356,16 +597,16 @@ impl OpenClBackend {
                         )));
                     }
                     if !data.is_empty() {
-                        writes.push(data.clone());
-                        let data = writes.last().expect("just pushed");
-                        // SAFETY: `data` lives in `writes` (its heap block does not move)
-                        // until the queue has finished this command.
+                        let upload = slot.upload.as_mut().expect("prepared");
+                        upload.bytes_mut(at, data.len()).copy_from_slice(data);
+                        let src = upload.bytes(at, data.len());
+                        // SAFETY: pinned memory the slot keeps until the submission is done
                         unsafe {
                             self.queue.enqueue_write_buffer(
                                 &mut b.mem,
                                 CL_NON_BLOCKING,
                                 *offset as usize,
-                                data,
+                                src,
                                 &[],
                             )
                         }
@@ -384,89 +625,41 @@ impl OpenClBackend {
                     self.buffers.remove(id);
                 }
                 Step::Kernel(k) => {
-                    if let Some((event, launched)) = dispatch::run(self, k)? {
+                    let blocks = match k.launch()? {
+                        Some(l) => l
+                            .args
+                            .iter()
+                            .filter(|a| {
+                                matches!(a, caustica_core::device::launch::LaunchArg::Params(_))
+                            })
+                            .count(),
+                        None => 0,
+                    };
+                    let mine = &params[next_param..next_param + blocks];
+                    next_param += blocks;
+                    if let Some((event, launched)) = dispatch::run(self, k, mine)? {
                         pending.push((k.name(), event));
                         launches.push(launched);
                     }
                 }
             }
         }
-        Ok(pending)
-    }
-
-    /// [`Backend::submit`]'s body: enqueue, non-blocking reads of `readbacks`, a marker,
-    /// a flush; no wait.
-    fn submit_recording(
-        &mut self,
-        recording: &Recording,
-        readbacks: &[ResourceId],
-    ) -> Result<Submission, BackendError> {
-        if self.in_flight.len() >= caustica_core::backend::MAX_UNCOLLECTED {
-            let oldest = *self.in_flight.keys().min().expect("not empty");
-            if let Some(f) = self.in_flight.remove(&oldest) {
-                f.done
-                    .wait()
-                    .map_err(cl_error("waiting for an uncollected submission"))?;
-            }
-        }
-        let (mut writes, mut launches) = (Vec::new(), Vec::new());
-        let kernels = self.enqueue(recording, &mut writes, &mut launches)?;
-        let mut landing = Vec::with_capacity(readbacks.len());
-        for id in readbacks {
-            let b = self.buffer(*id)?;
-            let size = b.bytes.max(4) as usize;
-            let mut pinned = unsafe {
-                Buffer::<u8>::create(
-                    &self.state.context,
-                    CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR,
-                    size,
-                    std::ptr::null_mut(),
-                )
-            }
-            .map_err(cl_error("creating a readback buffer"))?;
-            let mut mapped = std::ptr::null_mut();
-            // SAFETY: both buffers are this backend's and at least `bytes` long; the
-            // mapping is read only after the submission's marker has completed.
-            unsafe {
-                if b.bytes > 0 {
-                    self.queue
-                        .enqueue_copy_buffer(&b.mem, &mut pinned, 0, 0, b.bytes as usize, &[])
-                        .map_err(cl_error("copying a buffer for readback"))?;
+        if let Some(landing) = slot.readback.as_mut() {
+            for (id, (at, bytes)) in readbacks.iter().zip(&layout.readbacks) {
+                if *bytes == 0 {
+                    continue;
                 }
-                self.queue
-                    .enqueue_map_buffer(
-                        &pinned,
-                        CL_NON_BLOCKING,
-                        CL_MAP_READ,
-                        0,
-                        size,
-                        &mut mapped,
-                        &[],
-                    )
-                    .map_err(cl_error("mapping a readback buffer"))?;
+                let b = self.buffer(*id)?;
+                let dst = landing.bytes_mut(*at, *bytes);
+                // SAFETY: pinned memory the slot keeps, unread, until the marker completes
+                unsafe {
+                    self.queue
+                        .enqueue_read_buffer(&b.mem, CL_NON_BLOCKING, 0, dst, &[])
+                }
+                .map_err(cl_error("reading a buffer back"))?;
             }
-            landing.push(PinnedReadback {
-                pinned,
-                mapped,
-                bytes: b.bytes,
-            });
         }
-        let done = unsafe { self.queue.enqueue_marker_with_wait_list(&[]) }
-            .map_err(cl_error("enqueueing a submission's marker"))?;
-        self.queue.flush().map_err(cl_error("flushing the queue"))?;
-        self.next_submission += 1;
-        let id = self.next_submission;
-        self.in_flight.insert(
-            id,
-            InFlight {
-                kernels,
-                _launches: launches,
-                _writes: writes,
-                readbacks: landing,
-                done,
-            },
-        );
-        Ok(Submission::pending(id))
+        Ok((pending, launches, params))
     }
 
     /// [`Backend::poll`]'s body.
@@ -478,6 +671,10 @@ impl OpenClBackend {
         if !s.is_pending() {
             return s.take_finished().map(Some);
         }
+        if let Some(r) = self.finished.remove(&s.id) {
+            s.mark_collected();
+            return r.map(Some);
+        }
         let Some(f) = self.in_flight.get(&s.id) else {
             return Err(BackendError::BadArgument(format!(
                 "submission {} is not one of this backend's, or its result was discarded \
@@ -486,11 +683,7 @@ impl OpenClBackend {
                 caustica_core::backend::MAX_UNCOLLECTED
             )));
         };
-        if wait {
-            f.done
-                .wait()
-                .map_err(cl_error("waiting for a submission"))?;
-        } else {
+        if !wait {
             let status = f
                 .done
                 .command_execution_status()
@@ -507,22 +700,7 @@ impl OpenClBackend {
         }
         let f = self.in_flight.remove(&s.id).expect("looked up above");
         s.mark_collected();
-        let mut readbacks = Vec::with_capacity(f.readbacks.len());
-        for r in &f.readbacks {
-            let mut out = caustica_core::device::host_bytes(r.bytes, "a submission's readback")?;
-            // SAFETY: the map completed before the marker; it covers `bytes` bytes.
-            unsafe {
-                std::ptr::copy_nonoverlapping(r.mapped as *const u8, out.as_mut_ptr(), out.len());
-                self.queue
-                    .enqueue_unmap_mem_object(r.pinned.get(), r.mapped, &[])
-                    .map_err(cl_error("unmapping a readback buffer"))?;
-            }
-            readbacks.push(out);
-        }
-        Ok(Some(Finished {
-            times: pass_times(&f.kernels)?,
-            readbacks,
-        }))
+        self.retire(f, wait).map(Some)
     }
 
     /// [`Backend::read`]'s body.

@@ -8,6 +8,7 @@ use crate::backend::{Backend, Finished, Submission};
 use crate::device::handle::ResourceId;
 use crate::frame::error::Error;
 use crate::frame::stats::FrameStats;
+use crate::frame::technique::Progress;
 use crate::recording::Recording;
 
 /// A frame recorded but not yet submitted.
@@ -87,5 +88,64 @@ impl FrameTicket {
             }
         }
         stats
+    }
+}
+
+/// A blocking frame's recordings, each with the photons it traces, run as one pipeline:
+/// all submitted without waiting (the device never idles between them, and the host pays
+/// one wait, not one per recording), then waited for in order, `progress` called as each
+/// photon batch completes. The pass times go into `stats`; returns the bytes of
+/// `readbacks` as they were after the last recording. On an error every submitted
+/// recording is still waited for before it is returned.
+pub fn run_pipelined(
+    backend: &mut dyn Backend,
+    recordings: Vec<(Recording, u64)>,
+    readbacks: &[ResourceId],
+    stats: &mut FrameStats,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Vec<Vec<u8>>, Error> {
+    let total: u64 = recordings.iter().map(|r| r.1).sum();
+    let last = recordings.len().saturating_sub(1);
+    let mut submitted: Vec<(Submission, u64)> = Vec::with_capacity(recordings.len());
+    let mut failure = None;
+    for (k, (rec, photons)) in recordings.iter().enumerate() {
+        let wanted = if k == last { readbacks } else { &[] };
+        match backend.submit(rec, wanted) {
+            Ok(s) => submitted.push((s, *photons)),
+            Err(e) => {
+                failure = Some(Error::from(e));
+                break;
+            }
+        }
+    }
+    let mut done = 0u64;
+    let mut out = Vec::new();
+    let count = submitted.len();
+    for (k, (mut s, photons)) in submitted.into_iter().enumerate() {
+        match backend.poll(&mut s, true) {
+            Ok(Some(f)) if failure.is_none() => {
+                for t in &f.times {
+                    stats.add_pass_time(t.kernel, t.seconds);
+                }
+                if photons > 0 {
+                    done += photons;
+                    progress(Progress {
+                        photons_done: done,
+                        photons_total: total,
+                    });
+                }
+                if k + 1 == count {
+                    out = f.readbacks;
+                }
+            }
+            Ok(_) => {}
+            Err(e) => {
+                failure.get_or_insert(Error::from(e));
+            }
+        }
+    }
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(out),
     }
 }

@@ -767,19 +767,9 @@ impl PhotonGi {
         Ok(())
     }
 
-    fn run(
-        backend: &mut dyn Backend,
-        rec: &Recording,
-        stats: &mut FrameStats,
-    ) -> Result<(), Error> {
-        for t in backend.execute(rec)? {
-            stats.add_pass_time(t.kernel, t.seconds);
-        }
-        Ok(())
-    }
-
-    /// Renders one frame (see the module doc). Waits for the device;
-    /// [`PhotonGi::record_frame`] is the non-blocking frame.
+    /// Renders one frame (see the module doc): the recordings of
+    /// [`PhotonGi::record_frame`] submitted without a wait between them, waited for at the
+    /// end; `progress` is called as each light's photons complete.
     pub fn frame(
         &mut self,
         backend: &mut dyn Backend,
@@ -787,19 +777,19 @@ impl PhotonGi {
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
         let mut stats = self.frame_stats(&*backend);
-        let total = stats.photons_emitted;
-        let mut done = 0u64;
-        for (rec, photons) in self.frame_recordings(&mut stats) {
-            PhotonGi::run(backend, &rec, &mut stats)?;
-            if photons > 0 {
-                done += photons;
-                progress(Progress {
-                    photons_done: done,
-                    photons_total: total,
-                });
-            }
-        }
-        let c = read_buf(backend, self.buffers.counters)?;
+        // submitted without a wait between them, waited for at the end
+        let recordings = self.frame_recordings(&mut stats);
+        let back = crate::frame::submitted::run_pipelined(
+            backend,
+            recordings,
+            &[self.buffers.counters.id],
+            &mut stats,
+            progress,
+        )?;
+        let c: Vec<u32> = back
+            .first()
+            .map(|c| bytemuck::pod_collect_to_vec(c))
+            .unwrap_or_default();
         stats.read_counters(&c, self.flux_quantum);
         self.end_frame();
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -622,8 +622,9 @@ impl Sspm {
     }
 
     /// Renders one frame: the planned passes, nothing else. `progress` is called after
-    /// every photon batch. Waits for the device; [`Sspm::record_frame`] is the
-    /// non-blocking frame.
+    /// every photon batch has run. The recordings of [`Sspm::record_frame`] are submitted
+    /// without a wait between them and waited for at the end (one wait a frame);
+    /// AdaptiveCaustics' screen target waits between its traversal's levels.
     pub fn frame(
         &mut self,
         backend: &mut dyn Backend,
@@ -631,60 +632,9 @@ impl Sspm {
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
         let mut stats = self.frame_stats(&*backend);
-        let cam = self.camera;
-
-        // 1. visibility and direct light, after the updates' scene writes
-        let rec = self.visibility_recording();
-        self.run(backend, &rec, &mut stats)?;
-
-        // 2. photons, per emitting light, in batches
-        if let (Some(p), Some(variant)) = (self.photon, self.plan.trace_variant) {
-            let mut adaptive = crate::frame::stats::AdaptiveStats::default();
-            if let Some(a) = &self.adaptive_frame {
-                let target = DepositTarget::Screen(ScreenTarget {
-                    deposit: self
-                        .constants
-                        .deposit_params(cam, &self.settings, p.photons.len),
-                    gbuffer: self.gbuffer,
-                    photon_map: p.photon_map,
-                    trace_counters: p.counters,
-                });
-                self.traverse(
-                    backend,
-                    a,
-                    variant,
-                    &target,
-                    &mut stats,
-                    &mut adaptive,
-                    progress,
-                )?;
-            }
-            let total = self.projection_volume_photons();
-            let mut done = 0u64;
-            for rec in self.batch_recordings(&mut stats) {
-                self.run(backend, &rec.0, &mut stats)?;
-                done += rec.1;
-                progress(Progress {
-                    photons_done: done,
-                    photons_total: total,
-                });
-            }
-
-            // 3. resolve, gather, composite
-            let rec = self.resolve_recording();
-            self.run(backend, &rec, &mut stats)?;
-
-            // 4. counters
-            let c = read_buf(backend, p.counters)?;
-            stats.read_counters(&c, self.constants.flux_quantum);
-            if let Some(a) = &self.adaptive_frame {
-                let q = self.constants.flux_quantum;
-                a.traversal.output_stats(backend, q, &mut stats, adaptive)?;
-            }
-            // this frame's blend is the next frame's history
-            if let Some(f) = &mut self.filters {
-                f.end_frame(cam);
-            }
+        match &self.adaptive_frame {
+            None => self.pipelined_passes(backend, &mut stats, progress)?,
+            Some(_) => self.adaptive_passes(backend, &mut stats, progress)?,
         }
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = &self.reference {
@@ -692,6 +642,76 @@ impl Sspm {
             stats.error = Some(crate::frame::metrics::compare(&filtered, r));
         }
         Ok(stats)
+    }
+
+    /// The frame with projection volumes: visibility, the batches, the resolve, submitted
+    /// as one pipeline ([`crate::frame::submitted::run_pipelined`]), the counters read back
+    /// at its end.
+    fn pipelined_passes(
+        &mut self,
+        backend: &mut dyn Backend,
+        stats: &mut FrameStats,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<(), Error> {
+        let mut recordings = vec![(self.visibility_recording(), 0)];
+        let mut readbacks = Vec::new();
+        if let Some(p) = self.photon.filter(|_| self.plan.trace_variant.is_some()) {
+            recordings.extend(self.batch_recordings(stats));
+            recordings.push((self.resolve_recording(), 0));
+            readbacks.push(p.counters.id);
+        }
+        let back = crate::frame::submitted::run_pipelined(
+            backend, recordings, &readbacks, stats, progress,
+        )?;
+        if let Some(c) = back.first() {
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(c);
+            stats.read_counters(&words, self.constants.flux_quantum);
+            // this frame's blend is the next frame's history
+            if let Some(f) = &mut self.filters {
+                f.end_frame(self.camera);
+            }
+        }
+        Ok(())
+    }
+
+    /// The frame with adaptive emission (AdaptiveCaustics' screen target): visibility,
+    /// seed 004's traversal of the light view planes (it reads its queues back between
+    /// levels), the resolve, the counters.
+    fn adaptive_passes(
+        &mut self,
+        backend: &mut dyn Backend,
+        stats: &mut FrameStats,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<(), Error> {
+        let cam = self.camera;
+        let rec = self.visibility_recording();
+        self.run(backend, &rec, stats)?;
+        let (Some(p), Some(variant), Some(a)) =
+            (self.photon, self.plan.trace_variant, &self.adaptive_frame)
+        else {
+            return Ok(());
+        };
+        let mut adaptive = crate::frame::stats::AdaptiveStats::default();
+        let target = DepositTarget::Screen(ScreenTarget {
+            deposit: self
+                .constants
+                .deposit_params(cam, &self.settings, p.photons.len),
+            gbuffer: self.gbuffer,
+            photon_map: p.photon_map,
+            trace_counters: p.counters,
+        });
+        self.traverse(backend, a, variant, &target, stats, &mut adaptive, progress)?;
+        let rec = self.resolve_recording();
+        self.run(backend, &rec, stats)?;
+        let c = read_buf(backend, p.counters)?;
+        stats.read_counters(&c, self.constants.flux_quantum);
+        let q = self.constants.flux_quantum;
+        a.traversal.output_stats(backend, q, stats, adaptive)?;
+        // this frame's blend is the next frame's history
+        if let Some(f) = &mut self.filters {
+            f.end_frame(cam);
+        }
+        Ok(())
     }
 
     /// Records one whole frame without running it (issue 19 point 2): the same passes as
@@ -791,16 +811,6 @@ impl Sspm {
             rec.clear(p.counters);
         }
         rec
-    }
-
-    /// Photons the projection volumes emit in one frame (every emitting light's grid);
-    /// none with adaptive emission.
-    fn projection_volume_photons(&self) -> u64 {
-        if self.adaptive_frame.is_some() {
-            return 0;
-        }
-        let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
-        per_light * self.constants.domains.len() as u64
     }
 
     /// Step 2 with projection volumes: per emitting light, per batch, the trace and the
