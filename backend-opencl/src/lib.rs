@@ -109,6 +109,14 @@ impl OpenClBackend {
         })
     }
 
+    /// The OpenCL event that completes with `submission` (its marker), while it is on
+    /// the queue: a host with its own OpenCL work on this context waits on it (retain it
+    /// with `clRetainEvent` to keep it past the submission's collection). `None` once the
+    /// submission was collected.
+    pub fn submission_event(&self, submission: &Submission) -> Option<opencl3::types::cl_event> {
+        self.in_flight.get(&submission.id).map(|f| f.done.get())
+    }
+
     /// The device in use.
     pub fn device(&self) -> &DeviceSummary {
         &self.state.info

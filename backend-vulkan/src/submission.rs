@@ -308,6 +308,12 @@ impl VulkanBackend {
         self.retire(f, wait).map(Some)
     }
 
+    /// The device and queue the backend submits to (a host's own submissions that wait
+    /// on [`VulkanBackend::completion_semaphore`] go to its queues of this device).
+    pub fn device(&self) -> (&ash::Device, vk::Queue) {
+        (&self.ctx.device, self.ctx.queue)
+    }
+
     /// The timeline semaphore every later submission signals with its number
     /// ([`Submission::id`]): a host that submits its own work on another queue, or that
     /// presents, waits on it for value `id` instead of the CPU waiting (made on first call;

@@ -58,3 +58,54 @@ fn impossible_allocation_is_a_typed_error() {
         other => panic!("expected OutOfMemory, got {other:?}"),
     }
 }
+
+/// Issue 19 point 2: a host's own work waits on the backend's timeline semaphore for a
+/// submitted frame's number instead of the CPU waiting; here the host waits on it with
+/// `vkWaitSemaphores` (under the validation layer), then collects the frame's statistics
+/// without blocking.
+#[test]
+fn a_submitted_frame_signals_the_timeline_semaphore_with_its_number() {
+    use ash::vk;
+    use caustica_core::Technique;
+    let mut b = backend();
+    let timeline = b.completion_semaphore().expect("timeline semaphore");
+    let mut scene = builtin("sphere").unwrap();
+    scene.camera.width = 64;
+    scene.camera.height = 36;
+    let settings = SspmSettings {
+        photons_w: 32,
+        photons_h: 32,
+        ..SspmSettings::default()
+    };
+    let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
+    let mut tickets = Vec::new();
+    for _ in 0..3 {
+        tickets.push(s.submit_frame(&mut b).expect("submit_frame"));
+    }
+    let last = tickets.last().unwrap().submission_id();
+    {
+        let (device, _) = b.device();
+        let semaphores = [timeline];
+        let values = [last];
+        unsafe {
+            device.wait_semaphores(
+                &vk::SemaphoreWaitInfo::default()
+                    .semaphores(&semaphores)
+                    .values(&values),
+                60_000_000_000,
+            )
+        }
+        .expect("the timeline reaches the last frame's number");
+        let value = unsafe { device.get_semaphore_counter_value(timeline) }.unwrap();
+        assert!(value >= last, "timeline at {value}, last frame {last}");
+    }
+    // done on the device: every frame's statistics are there without a wait
+    for t in &mut tickets {
+        let stats = t
+            .stats(&mut b, false)
+            .expect("stats")
+            .expect("finished once the timeline passed it");
+        assert!(stats.photons_stored > 0);
+    }
+    s.free(&mut b).unwrap();
+}
