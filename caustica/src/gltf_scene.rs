@@ -6,8 +6,13 @@
 //! **What is read.** The default scene's node hierarchy, with each node's world transform
 //! applied to its meshes (positions by the matrix, normals by its inverse transpose, the
 //! winding reversed where the determinant is negative so that normals stay outward).
-//! Instances are flattened into one object per node and primitive: caustica has no
-//! instancing yet (issue 19's update API will keep them as instances). Triangle
+//! A mesh node whose world transform is a translation, rotation and scale (any glTF
+//! node's own, and any chain of them without shear) becomes an *instance* per primitive:
+//! its vertices stay in object space under that placement (`Object::transform`), so a
+//! host moves it with `set_object_transforms` without a rebuild; a node under an
+//! identity parent keeps the file's exact values. Identity nodes join the static level,
+//! and a world transform with shear (a non-uniform scale above a rotation) is applied to
+//! the vertices instead (a static object). Triangle
 //! primitives (lists, strips and fans); points and lines are skipped with a warning.
 //! Missing normals are generated as the area-weighted average of the faces around each
 //! vertex (`scene::shapes`); missing UVs stay missing (Sspm needs none; CausticMap's atlas
@@ -41,7 +46,7 @@
 use caustica_core::math::optics::REFERENCE_WAVELENGTH_UM;
 use caustica_core::scene::format::SceneFileError;
 use caustica_core::scene::shapes::tessellate;
-use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape};
+use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape, Transform};
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -335,6 +340,47 @@ struct Importer<'b> {
     bounds: Aabb,
 }
 
+/// A node's world transform as an instance placement: the node's own translation,
+/// rotation and scale, exactly as the file has them, under an identity parent; otherwise
+/// `world` decomposed, if that decomposition gives `world` back (no shear, which a
+/// non-uniform scale under a rotated child makes) and its scale is one an instance may
+/// have. `None` for the identity (the object stays in the static level) and where no
+/// placement reproduces `world` (its vertices are transformed instead).
+fn instance_placement(node: &gltf::Node, parent: Mat4, world: Mat4) -> Option<Transform> {
+    let t = if parent == Mat4::IDENTITY {
+        let (translation, rotation, scale) = node.transform().decomposed();
+        Transform {
+            translation: Vec3::from(translation),
+            rotation: Quat::from_array(rotation),
+            scale: Vec3::from(scale),
+        }
+    } else {
+        let (scale, rotation, translation) = world.to_scale_rotation_translation();
+        let back = Mat4::from_scale_rotation_translation(scale, rotation, translation);
+        let size = world
+            .to_cols_array()
+            .iter()
+            .fold(1.0f32, |m, x| m.max(x.abs()));
+        let off = (back - world)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f32, |m, x| m.max(x.abs()));
+        // f32 decomposition round-trips to a few ulps of the largest element
+        if off > 1e-5 * size {
+            return None;
+        }
+        Transform {
+            translation,
+            rotation,
+            scale,
+        }
+    };
+    if t.translation == Vec3::ZERO && t.rotation == Quat::IDENTITY && t.scale == Vec3::ONE {
+        return None;
+    }
+    t.problem().is_none().then_some(t)
+}
+
 impl Importer<'_> {
     fn visit(&mut self, node: &gltf::Node, parent: Mat4) -> Result<(), String> {
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
@@ -344,7 +390,8 @@ impl Importer<'_> {
             None => format!("nodes[{}]", node.index()),
         };
         if let Some(mesh) = node.mesh() {
-            self.mesh(&mesh, world, &label)?;
+            let placement = instance_placement(node, parent, world);
+            self.mesh(&mesh, world, placement, &label)?;
         }
         if let Some(light) = node.light() {
             self.light(&light, world, &label);
@@ -358,9 +405,24 @@ impl Importer<'_> {
         Ok(())
     }
 
-    fn mesh(&mut self, mesh: &gltf::Mesh, world: Mat4, label: &str) -> Result<(), String> {
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-        let flip = Mat3::from_mat4(world).determinant() < 0.0;
+    /// The primitives of `mesh` as objects: instances placed by `placement` (object-space
+    /// vertices; a mirroring placement's winding is core's to reverse), or with `world`
+    /// applied to their vertices.
+    fn mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        placement: Option<Transform>,
+        label: &str,
+    ) -> Result<(), String> {
+        // an instance keeps its vertices in object space
+        let vertex_matrix = if placement.is_some() {
+            Mat4::IDENTITY
+        } else {
+            world
+        };
+        let normal_matrix = Mat3::from_mat4(vertex_matrix).inverse().transpose();
+        let flip = Mat3::from_mat4(vertex_matrix).determinant() < 0.0;
         for prim in mesh.primitives() {
             let at = format!("{label} mesh {} primitive {}", mesh.index(), prim.index());
             let reader = prim.reader(|b| self.buffers.get(b.index()).map(|v| v.as_slice()));
@@ -369,7 +431,7 @@ impl Importer<'_> {
                 continue;
             };
             let positions: Vec<Vec3> = positions
-                .map(|p| world.transform_point3(Vec3::from(p)))
+                .map(|p| vertex_matrix.transform_point3(Vec3::from(p)))
                 .collect();
             let n = positions.len();
             let normals: Vec<Vec3> = match reader.read_normals() {
@@ -419,7 +481,8 @@ impl Importer<'_> {
                 continue;
             }
             for p in &positions {
-                self.bounds.grow(*p);
+                self.bounds
+                    .grow(placement.map_or(*p, |t| t.transform_point(*p)));
             }
             let material = self.material(prim.material());
             self.objects.push(Object {
@@ -435,7 +498,7 @@ impl Importer<'_> {
                     uvs: if uvs.len() == n { uvs } else { Vec::new() },
                     indices: tris,
                 },
-                transform: None,
+                transform: placement,
             });
         }
         Ok(())
@@ -748,7 +811,8 @@ fn default_camera(bounds: Aabb) -> Camera {
 // ---- export ----
 
 /// The scene as a self-contained glTF 2.0 document (`.gltf` JSON with one embedded
-/// buffer): every object tessellated into a mesh in world space (one node each), the
+/// buffer): every object tessellated into a mesh (one node each; an instance's mesh in
+/// object space under a node with its translation, rotation and scale), the
 /// materials by the inverse of the import mapping (absorption as attenuation colour
 /// `exp(-sigma / max sigma)` at distance `1 / max sigma`; dispersion as
 /// `KHR_materials_dispersion`), the lights with `KHR_lights_punctual` (times 683), the
@@ -819,7 +883,14 @@ pub fn scene_to_gltf(scene: &Scene) -> String {
         let mat = names.iter().position(|k| **k == o.material).unwrap_or(0);
         meshes.push(json!({"name": o.name, "primitives": [{"attributes": attributes, "indices": a_idx, "material": mat, "mode": 4}]}));
         root.push(nodes.len());
-        nodes.push(json!({"name": o.name, "mesh": meshes.len() - 1}));
+        let mut node = json!({"name": o.name, "mesh": meshes.len() - 1});
+        if let Some(t) = &o.transform {
+            // an instance: its object-space mesh under its placement
+            node["translation"] = json!(t.translation.to_array());
+            node["rotation"] = json!(t.rotation.to_array());
+            node["scale"] = json!(t.scale.to_array());
+        }
+        nodes.push(node);
     }
     let mut ext_used = std::collections::BTreeSet::new();
     let materials: Vec<Value> = scene
