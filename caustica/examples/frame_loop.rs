@@ -116,7 +116,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t1 = Instant::now();
 
         // the frame, into the host's encoder, with the host's own work after it
-        let recorded = sspm.record_frame(&backend)?;
+        let recorded = sspm.record_frame(&mut backend)?;
         let mut encoder = device.create_command_encoder(&Default::default());
         let submission = backend.encode(&recorded.recording, &recorded.readbacks, &mut encoder)?;
         backend.encode_image_to_texture(caustics, &texture, &mut encoder)?;

@@ -48,24 +48,20 @@ pub trait Technique {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error>;
 
-    /// Records one whole frame without running it, for a host's frame loop (issue 19
-    /// point 2): submit it with [`RecordedFrame::submit`] (one submission, no wait) or
-    /// encode it into the host's own command stream, and collect its statistics a frame
-    /// or more later with [`crate::frame::submitted::FrameTicket::stats`]. The images are
-    /// those [`Technique::frame`] would make, bitwise. Techniques whose frame must read
-    /// the device back midway return [`Error::Unsupported`] with the reason.
-    fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
-        let _ = backend;
-        Err(Error::Unsupported(format!(
-            "{} has no non-blocking frame yet (issue 19 point 2): use frame()",
-            self.name()
-        )))
-    }
+    /// Records a frame for a host's frame loop (issue 19 point 2): submit it with
+    /// [`RecordedFrame::submit`] (one submission, no wait) or encode it into the host's
+    /// own command stream, and collect its statistics a frame or more later with
+    /// [`crate::frame::submitted::FrameTicket::stats`]. The images are those
+    /// [`Technique::frame`] would make, bitwise. Work whose next step depends on data read
+    /// back from the device runs here, waited for, before the rest is recorded; each
+    /// technique says which (Sspm and PhotonGi: none; CausticMap: a stale atlas's photon
+    /// pass; AdaptiveCaustics: its traversal).
+    fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error>;
 
     /// Records one frame and submits it without waiting ([`Technique::record_frame`],
     /// then [`RecordedFrame::submit`]).
     fn submit_frame(&mut self, backend: &mut dyn Backend) -> Result<FrameTicket, Error> {
-        self.record_frame(&*backend)?.submit(backend)
+        self.record_frame(backend)?.submit(backend)
     }
 
     /// Every output of the technique, requested or not, in a fixed order.

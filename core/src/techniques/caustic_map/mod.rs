@@ -51,6 +51,7 @@ use crate::frame::image::Image;
 use crate::frame::irradiance_passes::FilterChain;
 use crate::frame::plan::{FramePlan, PassPlan, SceneFeatures};
 use crate::frame::stats::FrameStats;
+use crate::frame::submitted::RecordedFrame;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
     CausticMapLookup, Composite, DensityGather, DepositAtlas, DirectLight, GatherCausticMap,
@@ -1001,6 +1002,48 @@ impl CausticMap {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
+        let mut stats = self.photon_passes(backend, progress)?;
+        let rec = self.camera_recording();
+        Self::run(backend, &rec, &mut stats)?;
+        if let Some(f) = &mut self.images.filters {
+            f.end_frame(self.camera);
+        }
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if let Some(r) = &self.reference {
+            let filtered = self.read_output(backend, "caustics_filtered")?;
+            stats.error = Some(crate::frame::metrics::compare(&filtered, r));
+        }
+        Ok(stats)
+    }
+
+    /// Records a frame for a host's frame loop (issue 19 point 2;
+    /// [`crate::frame::technique::Technique::record_frame`]): a stale atlas's photon pass
+    /// runs here, waited for (it reads the reach mask back to lay the tiles out, and its
+    /// statistics are complete when this returns); the camera's passes are recorded. When
+    /// only the camera moved, nothing waits.
+    pub fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
+        let start = Instant::now();
+        let mut stats = self.photon_passes(backend, &mut |_| {})?;
+        let recording = self.camera_recording();
+        if let Some(f) = &mut self.images.filters {
+            f.end_frame(self.camera);
+        }
+        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(RecordedFrame {
+            recording,
+            readbacks: Vec::new(),
+            stats,
+            counters: None,
+        })
+    }
+
+    /// The frame's statistics, after the photon passes if the atlas is stale (run and
+    /// waited for), or with those passes listed as skipped when only the camera changed.
+    fn photon_passes(
+        &mut self,
+        backend: &mut dyn Backend,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<FrameStats, Error> {
         let caps = backend.capabilities();
         let mut stats = FrameStats {
             technique: self.name.into(),
@@ -1042,6 +1085,12 @@ impl CausticMap {
             }
             _ => {}
         }
+        Ok(stats)
+    }
+
+    /// The camera's passes: G-buffer, direct light, the caustic-map lookups through
+    /// mirrors and glass, the opt-in temporal blend and A-Trous, the composite.
+    fn camera_recording(&self) -> Recording {
         let cam = self.camera;
         let i = self.images;
         let mut rec = Recording::new();
@@ -1106,16 +1155,7 @@ impl CausticMap {
                 });
             }
         }
-        Self::run(backend, &rec, &mut stats)?;
-        if let Some(f) = &mut self.images.filters {
-            f.end_frame(cam);
-        }
-        stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        if let Some(r) = &self.reference {
-            let filtered = self.read_output(backend, "caustics_filtered")?;
-            stats.error = Some(crate::frame::metrics::compare(&filtered, r));
-        }
-        Ok(stats)
+        rec
     }
 
     /// The atlas layout as the kernels read it now, per atlas texel (row-major):
@@ -1445,6 +1485,10 @@ impl Technique for CausticMap {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         CausticMap::frame(self, backend, progress)
+    }
+
+    fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
+        CausticMap::record_frame(self, backend)
     }
 
     fn outputs(&self) -> Vec<OutputInfo> {

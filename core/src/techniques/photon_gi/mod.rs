@@ -804,7 +804,7 @@ impl PhotonGi {
     /// [`PhotonGi::frame`] in one [`Recording`], the photon counters copied to the host at
     /// its end ([`crate::frame::submitted`]). The temporal history advances as if the
     /// frame had run. No progress callback and no error against the reference.
-    pub fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+    pub fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
         let start = Instant::now();
         let mut stats = self.frame_stats(backend);
         let mut recording = Recording::new();
@@ -1213,7 +1213,7 @@ impl Technique for PhotonGi {
         PhotonGi::frame(self, backend, progress)
     }
 
-    fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+    fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
         PhotonGi::record_frame(self, backend)
     }
 

@@ -674,22 +674,42 @@ impl Sspm {
         Ok(())
     }
 
-    /// The frame with adaptive emission (AdaptiveCaustics' screen target): visibility,
-    /// seed 004's traversal of the light view planes (it reads its queues back between
-    /// levels), the resolve, the counters.
+    /// The frame with adaptive emission (AdaptiveCaustics' screen target): its photon
+    /// passes ([`Sspm::adaptive_photon_passes`]), then the resolve.
     fn adaptive_passes(
         &mut self,
         backend: &mut dyn Backend,
         stats: &mut FrameStats,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<(), Error> {
+        if self.adaptive_photon_passes(backend, stats, progress)? {
+            let rec = self.resolve_recording();
+            self.run(backend, &rec, stats)?;
+            // this frame's blend is the next frame's history
+            if let Some(f) = &mut self.filters {
+                f.end_frame(self.camera);
+            }
+        }
+        Ok(())
+    }
+
+    /// AdaptiveCaustics' screen target up to the resolve, waited for: visibility, seed
+    /// 004's traversal of the light view planes (it reads its queues back between
+    /// levels), and the photon accounting (trace counters, then the traversal's). Returns
+    /// whether there are photon passes (then the resolve follows).
+    fn adaptive_photon_passes(
+        &mut self,
+        backend: &mut dyn Backend,
+        stats: &mut FrameStats,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<bool, Error> {
         let cam = self.camera;
         let rec = self.visibility_recording();
         self.run(backend, &rec, stats)?;
         let (Some(p), Some(variant), Some(a)) =
             (self.photon, self.plan.trace_variant, &self.adaptive_frame)
         else {
-            return Ok(());
+            return Ok(false);
         };
         let mut adaptive = crate::frame::stats::AdaptiveStats::default();
         let target = DepositTarget::Screen(ScreenTarget {
@@ -701,17 +721,12 @@ impl Sspm {
             trace_counters: p.counters,
         });
         self.traverse(backend, a, variant, &target, stats, &mut adaptive, progress)?;
-        let rec = self.resolve_recording();
-        self.run(backend, &rec, stats)?;
+        // the resolve reads the photon map only: the counters are final here
         let c = read_buf(backend, p.counters)?;
         stats.read_counters(&c, self.constants.flux_quantum);
         let q = self.constants.flux_quantum;
         a.traversal.output_stats(backend, q, stats, adaptive)?;
-        // this frame's blend is the next frame's history
-        if let Some(f) = &mut self.filters {
-            f.end_frame(cam);
-        }
-        Ok(())
+        Ok(true)
     }
 
     /// Records one whole frame without running it (issue 19 point 2): the same passes as
@@ -721,18 +736,29 @@ impl Sspm {
     /// end and come back with [`crate::frame::submitted::FrameTicket::stats`], a frame or
     /// more later. No progress callback (nothing runs here) and no error against the
     /// reference (that reads the image back: use [`Sspm::frame`]). AdaptiveCaustics'
-    /// traversal reads its queues back between levels, so its frame cannot be recorded
-    /// ahead: an [`Error::Unsupported`].
-    pub fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
-        if self.adaptive_frame.is_some() {
-            return Err(Error::Unsupported(
-                "adaptive-caustics' screen target reads its traversal queues back between \
-                 levels, so its frame cannot be recorded ahead; use frame()"
-                    .into(),
-            ));
-        }
+    /// screen target runs its visibility pass and traversal here, waited for (the
+    /// traversal reads its queues back between levels; its statistics are complete when
+    /// this returns), and records the resolve and filters.
+    pub fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
         let start = Instant::now();
-        let mut stats = self.frame_stats(backend);
+        let mut stats = self.frame_stats(&*backend);
+        if self.adaptive_frame.is_some() {
+            // the traversal waits; the resolve is recorded
+            let mut recording = Recording::new();
+            if self.adaptive_photon_passes(backend, &mut stats, &mut |_| {})? {
+                recording = self.resolve_recording();
+                if let Some(f) = &mut self.filters {
+                    f.end_frame(self.camera);
+                }
+            }
+            stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+            return Ok(RecordedFrame {
+                recording,
+                readbacks: Vec::new(),
+                stats,
+                counters: None,
+            });
+        }
         let mut recording = self.visibility_recording();
         let mut counters = None;
         let mut readbacks = Vec::new();
@@ -1376,7 +1402,7 @@ impl Technique for Sspm {
         Sspm::frame(self, backend, progress)
     }
 
-    fn record_frame(&mut self, backend: &dyn Backend) -> Result<RecordedFrame, Error> {
+    fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
         Sspm::record_frame(self, backend)
     }
 
