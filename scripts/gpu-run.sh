@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -334,6 +334,33 @@ if has hangdiag; then
         fi
         wait "$pid"
         echo "hangdiag: run $k finished" | tee -a "$OUT/log.txt"
+    done
+fi
+if has hangstack; then
+    # issue 19 point 5: user-space stacks of every thread of a hung parallel run (eu-stack
+    # from elfutils, unpacked from .devbin: the device image has no gdb). The driver lock
+    # is off (CAUSTICA_SERIALIZE_DRIVERS=0) so that a hang is likely; at most HANG_RUNS
+    # runs, stopping at the first hang.
+    for f in "$B"/elfutils_*.deb "$B"/libdw1_*.deb "$B"/libelf1_*.deb "$B"/libasm1_*.deb; do
+        [ -f "$f" ] && dpkg -x "$f" /tmp/eu
+    done
+    EU="env LD_LIBRARY_PATH=/tmp/eu/usr/lib/x86_64-linux-gnu /tmp/eu/usr/bin/eu-stack"
+    for k in $(seq 1 "${HANG_RUNS:-8}"); do
+        env CAUSTICA_SERIALIZE_DRIVERS=0 ./cross_backend > /tmp/hangstack.log 2>&1 &
+        pid=$!
+        for s in $(seq 1 25); do kill -0 "$pid" 2>/dev/null || break; sleep 1; done
+        if kill -0 "$pid" 2>/dev/null; then
+            echo "hangstack: run $k hung; last line: $(grep -E '^test |\*\*\*' /tmp/hangstack.log | tail -n 1)" | tee -a "$OUT/log.txt"
+            nvidia-smi --query-gpu=utilization.gpu,memory.used --format=csv | tee -a "$OUT/log.txt"
+            for t in /proc/$pid/task/*; do
+                echo "thread $(basename "$t") $(cat "$t/comm") state=$(awk '{print $3}' "$t/stat") wchan=$(cat "$t/wchan" 2>/dev/null)"
+            done | tee -a "$OUT/log.txt"
+            timeout 60 $EU -p "$pid" -m -s 2>&1 | head -n 600 | tee -a "$OUT/log.txt"
+            kill -9 "$pid"
+            break
+        fi
+        wait "$pid"
+        echo "hangstack: run $k finished ($(grep -E '^test result' /tmp/hangstack.log | tail -n 1))" | tee -a "$OUT/log.txt"
     done
 fi
 if has hostile; then

@@ -116,8 +116,10 @@ pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
     thread_local! {
         static HELD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     }
+    // on unless `CAUSTICA_SERIALIZE_DRIVERS=0` (the documented default; it was read as
+    // off unless set to 1 until 2026-12-02, so the mitigation did not run by default)
     let on =
-        *ON.get_or_init(|| std::env::var("CAUSTICA_SERIALIZE_DRIVERS").is_ok_and(|v| v == "1"));
+        *ON.get_or_init(|| !std::env::var("CAUSTICA_SERIALIZE_DRIVERS").is_ok_and(|v| v == "0"));
     if !on || HELD.with(|h| h.get()) {
         return f();
     }
