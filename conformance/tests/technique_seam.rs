@@ -258,6 +258,87 @@ fn new_settings_and_image_size_equal_a_fresh_technique_bitwise() {
     }
 }
 
+/// `settings` with its JSON fields overridden by `changes`.
+fn with(settings: &serde_json::Value, changes: serde_json::Value) -> serde_json::Value {
+    let mut s = settings.clone();
+    for (k, v) in changes.as_object().expect("an object") {
+        s[k] = v.clone();
+    }
+    s
+}
+
+/// New settings through the seam (issue 19 point 1), for every technique: the frame after
+/// `set_settings` equals a fresh technique created with them, bitwise; settings that do
+/// not parse, fail validation or do not fit the scene are refused and change nothing.
+#[test]
+fn new_settings_through_the_seam_equal_a_fresh_technique_for_every_technique() {
+    for (bname, mut b) in backends() {
+        let scene = small("cornell");
+        for (name, before) in variants() {
+            // more photons, another seed; AdaptiveCaustics fewer bounces, and its screen
+            // target may change only its screen settings (the seed's bilateral filter)
+            let screen = before.get("deposit").is_some();
+            let after = if screen {
+                with(
+                    &before,
+                    serde_json::json!({ "screen": { "filter": "bilateral" } }),
+                )
+            } else if name == "adaptive-caustics" {
+                // (the traversal is deterministic, no seed: one specular bounce at most)
+                with(&before, serde_json::json!({ "max_bounces": 1 }))
+            } else if name == "photon-gi" {
+                with(
+                    &before,
+                    serde_json::json!({ "photons_w": 96, "seed": 9, "rsm_size": 64 }),
+                )
+            } else {
+                with(
+                    &before,
+                    serde_json::json!({ "photons_w": 128, "photons_h": 128, "seed": 9 }),
+                )
+            };
+            let mut fresh = create(name, b.as_mut(), &scene, &after).expect("create");
+            let want = frame_outputs(fresh.as_mut(), b.as_mut());
+            fresh.free(b.as_mut()).expect("free");
+
+            let mut t = create(name, b.as_mut(), &scene, &before).expect("create");
+            let first = frame_outputs(t.as_mut(), b.as_mut());
+            t.set_settings(b.as_mut(), &after).expect("set_settings");
+            let got = frame_outputs(t.as_mut(), b.as_mut());
+            assert!(
+                got == want,
+                "{bname}/{name} ({after}): new settings differ from a fresh technique"
+            );
+            assert!(
+                got != first,
+                "{bname}/{name}: the new settings changed nothing (fresh with them: {})",
+                if want == first {
+                    "the same"
+                } else {
+                    "different"
+                }
+            );
+            // refused: an unknown field, a bad value, a budget the scene exceeds
+            for bad in [
+                with(&after, serde_json::json!({ "no_such_setting": 1 })),
+                with(&after, serde_json::json!({ "photons_w": 0 })),
+                with(&after, serde_json::json!({ "max_triangles": 1 })),
+            ] {
+                assert!(
+                    t.set_settings(b.as_mut(), &bad).is_err(),
+                    "{bname}/{name}: {bad} was accepted"
+                );
+            }
+            assert!(
+                frame_outputs(t.as_mut(), b.as_mut()) == want,
+                "{bname}/{name}: a refused update changed the frame"
+            );
+            t.free(b.as_mut()).expect("free");
+        }
+        eprintln!("{bname}: new settings through the seam equal fresh techniques, bitwise");
+    }
+}
+
 #[test]
 fn lights_added_and_removed_equal_a_fresh_technique_bitwise() {
     for (bname, mut b) in backends() {

@@ -110,6 +110,20 @@ pub trait Technique {
         materials: &std::collections::BTreeMap<String, crate::scene::Material>,
     ) -> Result<(), Error>;
 
+    /// Replaces the technique's settings for the next frames (`settings`: a JSON object
+    /// as [`crate::techniques::create`] takes it; missing fields take their defaults);
+    /// the next frame equals, bitwise, that of a technique created with them. Sspm and
+    /// PhotonGi remake only their frame buffers (the uploaded scene stays);
+    /// AdaptiveCaustics' screen target may change its screen settings only; CausticMap
+    /// and AdaptiveCaustics' atlas target are built anew, scene included
+    /// (TODO(issue 19): keep their uploaded scene). An error leaves the technique as it
+    /// was.
+    fn set_settings(
+        &mut self,
+        backend: &mut dyn Backend,
+        settings: &serde_json::Value,
+    ) -> Result<(), Error>;
+
     /// Sets (or clears) the reference image of the filtered estimate: every later frame
     /// puts its error against it in [`FrameStats::error`].
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error>;

@@ -1558,6 +1558,30 @@ impl Technique for CausticMap {
         CausticMap::set_materials(self, backend, materials)
     }
 
+    fn set_settings(
+        &mut self,
+        backend: &mut dyn Backend,
+        settings: &serde_json::Value,
+    ) -> Result<(), Error> {
+        // built anew, scene included (TODO(issue 19): keep the uploaded scene); the old
+        // technique stays until the new one exists
+        let (map, adaptive) = match &self.adaptive {
+            None => (
+                serde_json::from_value::<CausticMapSettings>(settings.clone())
+                    .map_err(|e| Error::InvalidParameter(format!("caustic-map settings: {e}")))?,
+                None,
+            ),
+            Some(_) => {
+                let a = AdaptiveCausticsSettings::from_json(settings)?;
+                (a.map.clone(), Some(a))
+            }
+        };
+        let fresh = CausticMap::build(backend, &self.model, map, adaptive)?;
+        let old = std::mem::replace(self, fresh);
+        self.reference = old.reference.clone();
+        old.free(backend)
+    }
+
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
         if let Some(r) = &reference {
             if (r.width, r.height) != (self.camera.width, self.camera.height) {

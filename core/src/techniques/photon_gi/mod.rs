@@ -311,6 +311,42 @@ impl ScreenBuffers {
 
 impl Buffers {
     /// The ids of the per-pixel buffers (`indirect` once where it is `raw`).
+    /// Every frame buffer for `settings` (with room for any light's RSM and photons, so
+    /// that lights can change without new buffers: six faces, every initial photon).
+    fn create_all(
+        rec: &mut Recording,
+        camera: GpuCamera,
+        settings: &PhotonGiSettings,
+        correct: bool,
+    ) -> Buffers {
+        let side = settings.rsm_size;
+        let total = settings.photons_w as u64 * settings.photons_h as u64;
+        let max_faces = 6u32;
+        let max_photons = total.min(u32::MAX as u64) as u32;
+        let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
+        let s = ScreenBuffers::create(rec, camera, settings, correct);
+        Buffers {
+            gbuffer: s.gbuffer,
+            direct: s.direct,
+            rsm_gbuffer: rec.create_gbuffer(side * side),
+            rsm_texels: rec.create(max_faces * side * side, "RSM texels"),
+            pyramid: rec.create(max_faces * pyramid_len(side), "RSM importance pyramid"),
+            rsm_photons: rec.create(max_photons, "RSM photons"),
+            photons: rec.create(capacity.max(1), "indirect photons"),
+            photon_count: rec.create(1, "indirect photon count"),
+            tile_counts: s.tile_counts,
+            counters: rec.create(counter::WORDS as u32, "photon counters"),
+            photon_map: s.photon_map,
+            direction_map: s.direction_map,
+            raw: s.raw,
+            uncorrected: s.uncorrected,
+            indirect: s.indirect,
+            composite: s.composite,
+            temporal: s.temporal,
+            atrous: s.atrous,
+        }
+    }
+
     fn screen_ids(&self) -> Vec<ResourceId> {
         let mut ids: Vec<ResourceId> = self.gbuffer.planes.iter().map(|p| p.id).collect();
         ids.extend(self.photon_map.planes.iter().map(|p| p.id));
@@ -392,6 +428,8 @@ pub struct PhotonGi {
     bytes: u64,
     reference: Option<Image>,
     degenerate_triangles: u64,
+    /// Triangles of the uploaded scene (checked against a new `max_triangles`).
+    triangles: u64,
     /// The acceleration structure's levels, to move instances without a rebuild.
     instances: SceneInstances,
 }
@@ -421,34 +459,8 @@ impl PhotonGi {
         let diagonal = scene_diagonal(&ds.bounds);
         let mut rec = Recording::new();
         let scene_args = rec.upload_scene(&ds);
-        let side = settings.rsm_size;
-        // room for any light's RSM and photons, so that lights can change without new
-        // buffers: six faces, every initial photon
-        let max_faces = 6u32;
-        let max_photons = total.min(u32::MAX as u64) as u32;
-        let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let correct = shading_correction(&settings, &ds.instances);
-        let s = ScreenBuffers::create(&mut rec, camera, &settings, correct);
-        let buffers = Buffers {
-            gbuffer: s.gbuffer,
-            direct: s.direct,
-            rsm_gbuffer: rec.create_gbuffer(side * side),
-            rsm_texels: rec.create(max_faces * side * side, "RSM texels"),
-            pyramid: rec.create(max_faces * pyramid_len(side), "RSM importance pyramid"),
-            rsm_photons: rec.create(max_photons, "RSM photons"),
-            photons: rec.create(capacity.max(1), "indirect photons"),
-            photon_count: rec.create(1, "indirect photon count"),
-            tile_counts: s.tile_counts,
-            counters: rec.create(counter::WORDS as u32, "photon counters"),
-            photon_map: s.photon_map,
-            direction_map: s.direction_map,
-            raw: s.raw,
-            uncorrected: s.uncorrected,
-            indirect: s.indirect,
-            composite: s.composite,
-            temporal: s.temporal,
-            atrous: s.atrous,
-        };
+        let buffers = Buffers::create_all(&mut rec, camera, &settings, correct);
         let allocation = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
         backend.execute(&rec)?;
         let plan = PhotonGi::make_plan(scene, &settings, &rsms, &allocation.buffers, correct);
@@ -469,6 +481,7 @@ impl PhotonGi {
             bytes: allocation.bytes,
             reference: None,
             degenerate_triangles: ds.degenerate_triangles,
+            triangles: ds.triangles.len() as u64,
             instances: ds.instances,
         };
         if let Err(e) = t.plan_photons(backend) {
@@ -476,6 +489,93 @@ impl PhotonGi {
             return Err(e);
         }
         Ok(t)
+    }
+
+    /// Replaces the settings for the next frames without touching the uploaded scene
+    /// (issue 19 point 1): every frame buffer is made anew for them (photon and RSM
+    /// capacities, screen buffers, filters), the lights re-planned and their RSMs probed;
+    /// the next frame equals, bitwise, that of a technique created with these settings.
+    /// A budget the scene exceeds (`max_triangles`), a bad setting or a failed allocation
+    /// is an error that leaves the technique as it was.
+    pub fn set_settings(
+        &mut self,
+        backend: &mut dyn Backend,
+        settings: PhotonGiSettings,
+    ) -> Result<(), Error> {
+        settings.validate()?;
+        if self.triangles > settings.max_triangles as u64 {
+            return Err(Error::InvalidParameter(format!(
+                "photon-gi: the scene has {} triangles, over max_triangles = {}",
+                self.triangles, settings.max_triangles
+            )));
+        }
+        let correct = shading_correction(&settings, &self.instances);
+        let mut rec = Recording::new();
+        let buffers = Buffers::create_all(&mut rec, self.camera, &settings, correct);
+        let size = Some((self.camera.width, self.camera.height));
+        let allocation = planned_allocation(backend, &rec, size)?;
+        backend.execute(&rec)?;
+        // the scene's buffers stay; the frame's are swapped (`owned[i]` is
+        // `plan.buffers[i]`)
+        let scene_ids = self.scene_ids();
+        let (mut owned, mut plans, mut bytes) = (Vec::new(), Vec::new(), 0);
+        let mut old_ids = Vec::new();
+        for (id, plan) in self.owned.iter().zip(&self.plan.buffers) {
+            if scene_ids.contains(id) {
+                owned.push(*id);
+                plans.push(plan.clone());
+                bytes += plan.bytes;
+            } else {
+                old_ids.push(*id);
+            }
+        }
+        owned.extend(allocation.owned);
+        plans.extend(allocation.buffers);
+        bytes += allocation.bytes;
+        let plan = PhotonGi::make_plan(&self.model, &settings, &self.rsms, &plans, correct);
+        let old = (
+            std::mem::replace(&mut self.settings, settings),
+            std::mem::replace(&mut self.buffers, buffers),
+            std::mem::replace(&mut self.owned, owned),
+            std::mem::replace(&mut self.plan, plan),
+            std::mem::replace(&mut self.bytes, bytes),
+            (self.rsms.clone(), self.power_scale, self.flux_quantum),
+        );
+        if let Err(e) = self.plan_photons(backend) {
+            // the new buffers go, the old state comes back
+            let mut free = Recording::new();
+            for id in self.owned.iter().filter(|id| !scene_ids.contains(id)) {
+                free.steps.push(Step::Free { id: *id });
+            }
+            let _ = backend.execute(&free);
+            (
+                self.settings,
+                self.buffers,
+                self.owned,
+                self.plan,
+                self.bytes,
+                (self.rsms, self.power_scale, self.flux_quantum),
+            ) = old;
+            return Err(e);
+        }
+        let mut free = Recording::new();
+        for id in old_ids {
+            free.steps.push(Step::Free { id });
+        }
+        backend.execute(&free)?;
+        Ok(())
+    }
+
+    /// The uploaded scene's buffers.
+    fn scene_ids(&self) -> [ResourceId; 5] {
+        let s = &self.scene;
+        [
+            s.vertices.id,
+            s.triangles.id,
+            s.materials.id,
+            s.lights.id,
+            s.bvh_nodes.id,
+        ]
     }
 
     fn make_plan(
@@ -1288,6 +1388,16 @@ impl Technique for PhotonGi {
         materials: &std::collections::BTreeMap<String, crate::scene::Material>,
     ) -> Result<(), Error> {
         PhotonGi::set_materials(self, backend, materials)
+    }
+
+    fn set_settings(
+        &mut self,
+        backend: &mut dyn Backend,
+        settings: &serde_json::Value,
+    ) -> Result<(), Error> {
+        let next: PhotonGiSettings = serde_json::from_value(settings.clone())
+            .map_err(|e| Error::InvalidParameter(format!("photon-gi settings: {e}")))?;
+        PhotonGi::set_settings(self, backend, next)
     }
 
     fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {

@@ -1480,6 +1480,33 @@ impl Technique for Sspm {
         Sspm::set_reference(self, reference)
     }
 
+    fn set_settings(
+        &mut self,
+        backend: &mut dyn Backend,
+        settings: &serde_json::Value,
+    ) -> Result<(), Error> {
+        let next = match &self.adaptive {
+            None => serde_json::from_value::<SspmSettings>(settings.clone())
+                .map_err(|e| Error::InvalidParameter(format!("sspm settings: {e}")))?,
+            Some(a) => {
+                let parsed = AdaptiveCausticsSettings::from_json(settings)?;
+                let same_traversal = AdaptiveCausticsSettings {
+                    screen: a.settings.screen.clone(),
+                    ..parsed.clone()
+                } == a.settings;
+                if !same_traversal {
+                    return Err(Error::InvalidParameter(
+                        "adaptive-caustics (screen): only the `screen` settings can change \
+                         through set_settings; the traversal's need a new technique"
+                            .into(),
+                    ));
+                }
+                parsed.screen_settings()
+            }
+        };
+        Sspm::set_settings(self, backend, next)
+    }
+
     fn plan(&self) -> &FramePlan {
         &self.plan
     }
