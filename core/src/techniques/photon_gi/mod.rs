@@ -503,7 +503,7 @@ impl PhotonGi {
         settings: PhotonGiSettings,
     ) -> Result<(), Error> {
         settings.validate()?;
-        if self.triangles > settings.max_triangles as u64 {
+        if self.triangles > settings.max_triangles {
             return Err(Error::InvalidParameter(format!(
                 "photon-gi: the scene has {} triangles, over max_triangles = {}",
                 self.triangles, settings.max_triangles
