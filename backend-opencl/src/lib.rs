@@ -75,7 +75,9 @@ impl OpenClBackend {
     /// Opens the chosen device (`CAUSTICA_OPENCL_DEVICE=N`, else the first GPU, else the
     /// first device). No loader, platform or device, or a failed kernel build, is an error.
     pub fn new() -> Result<OpenClBackend, BackendError> {
-        caustica_core::backend::driver_entry(OpenClBackend::open)
+        caustica_core::backend::driver_entry(|| {
+            caustica_core::backend::driver_lifecycle(OpenClBackend::open)
+        })
     }
 
     /// [`OpenClBackend::new`]'s body.

@@ -32,11 +32,12 @@ pub struct AccelStructure {
 
 impl Drop for AccelStructure {
     fn drop(&mut self) {
-        unsafe {
+        // with the other creations and destructions below the API (crate::context::serialised)
+        crate::context::serialised(|| unsafe {
             self.ctx
                 .accel
                 .destroy_acceleration_structure(self.handle, None)
-        };
+        });
     }
 }
 

@@ -17,27 +17,13 @@ pub const DEVICE_EXTENSIONS: [&CStr; 3] = [
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
-/// Serialises backend creation (instance, device, pipelines) and destruction in the process: two threads
-/// creating Vulkan backends at once hung in NVIDIA's driver (seen on the H100 with the
-/// test harness's parallel tests).
-pub(crate) static LIFECYCLE: Mutex<()> = Mutex::new(());
-
-thread_local! {
-    /// Whether this thread holds `LIFECYCLE` (a context dropped while its backend is
-    /// being created must not lock it again).
-    pub(crate) static IN_LIFECYCLE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-/// Runs `f` holding `LIFECYCLE`.
+/// Runs `f` under [`caustica_core::backend::driver_lifecycle`]: creation and destruction
+/// of instances, devices, pipelines and acceleration structures, one at a time in the
+/// process and across every GPU backend (NVIDIA's driver deadlocks when a device is
+/// destroyed while another thread destroys a ray-tracing pipeline; two threads creating
+/// Vulkan backends at once also hung it on the H100).
 pub(crate) fn serialised<T>(f: impl FnOnce() -> T) -> T {
-    if IN_LIFECYCLE.with(|c| c.get()) {
-        return f();
-    }
-    let _guard = LIFECYCLE.lock().unwrap_or_else(|e| e.into_inner());
-    IN_LIFECYCLE.with(|c| c.set(true));
-    let out = f();
-    IN_LIFECYCLE.with(|c| c.set(false));
-    out
+    caustica_core::backend::driver_lifecycle(f)
 }
 
 /// Vulkan result to a typed error.

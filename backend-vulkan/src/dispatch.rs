@@ -80,7 +80,7 @@ pub fn create_pipelines(ctx: &Arc<Context>) -> Result<HashMap<String, Pipeline>,
 
 /// Creates the pipeline of every kernel variant `rec` launches that does not exist yet
 /// (`trace_photons`: one ray-tracing pipeline per `TraceVariant`, specialization
-/// constants in switch order), one backend at a time (see `context::LIFECYCLE`).
+/// constants in switch order), one creation or destruction at a time (see `context::serialised`).
 fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), BackendError> {
     for step in &rec.steps {
         let Step::Kernel(k) = step else { continue };

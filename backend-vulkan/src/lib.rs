@@ -96,7 +96,7 @@ impl VulkanBackend {
     /// where installed, and any validation error fails the `execute` that caused it).
     pub fn with_validation(validation: bool) -> Result<VulkanBackend, BackendError> {
         // instance, device and pipelines are created one backend at a time (see
-        // `context::LIFECYCLE`)
+        // `context::serialised`)
         context::serialised(|| VulkanBackend::with_context(Context::new(validation)?))
     }
 

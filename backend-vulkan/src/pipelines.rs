@@ -59,12 +59,14 @@ pub struct Pipeline {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
-        unsafe {
+        // a ray-tracing pipeline's destruction enters the driver's CUDA layer: never at
+        // once with a device's destruction (crate::context::serialised)
+        crate::context::serialised(|| unsafe {
             let d = &self.ctx.device;
             d.destroy_pipeline(self.pipeline, None);
             d.destroy_pipeline_layout(self.layout, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);
-        }
+        })
     }
 }
 

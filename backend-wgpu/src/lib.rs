@@ -136,7 +136,9 @@ impl WgpuBackend {
     /// otherwise a GPU before a CPU adapter such as lavapipe) with the adapter's own
     /// limits and, where offered, timestamp queries.
     pub fn new() -> Result<WgpuBackend, BackendError> {
-        caustica_core::backend::driver_entry(WgpuBackend::open)
+        caustica_core::backend::driver_entry(|| {
+            caustica_core::backend::driver_lifecycle(WgpuBackend::open)
+        })
     }
 
     /// [`WgpuBackend::new`]'s body.
@@ -197,7 +199,9 @@ impl WgpuBackend {
         queue: wgpu::Queue,
         description: &str,
     ) -> Result<WgpuBackend, BackendError> {
-        caustica_core::backend::driver_entry(|| Self::adopt(device, queue, description))
+        caustica_core::backend::driver_entry(|| {
+            caustica_core::backend::driver_lifecycle(|| Self::adopt(device, queue, description))
+        })
     }
 
     /// [`WgpuBackend::from_device`]'s body.
@@ -385,16 +389,20 @@ impl WgpuBackend {
 /// the backend's destruction too (issue 19 point 5).
 impl Drop for WgpuBackend {
     fn drop(&mut self) {
+        // the device's destruction with the other creations and destructions below the
+        // API (caustica_core::backend::driver_lifecycle)
         caustica_core::backend::driver_entry(|| {
-            self.in_flight.clear();
-            self.buffers.clear();
-            self.pipelines.clear();
-            self.texture_pipelines.clear();
-            // SAFETY: dropped once, here; no field is used after `drop`.
-            unsafe {
-                std::mem::ManuallyDrop::drop(&mut self.queue);
-                std::mem::ManuallyDrop::drop(&mut self.device);
-            }
+            caustica_core::backend::driver_lifecycle(|| {
+                self.in_flight.clear();
+                self.buffers.clear();
+                self.pipelines.clear();
+                self.texture_pipelines.clear();
+                // SAFETY: dropped once, here; no field is used after `drop`.
+                unsafe {
+                    std::mem::ManuallyDrop::drop(&mut self.queue);
+                    std::mem::ManuallyDrop::drop(&mut self.device);
+                }
+            })
         })
     }
 }

@@ -130,6 +130,35 @@ pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
     out
 }
 
+/// Runs `f`, a creation or destruction of a GPU driver object that reaches below the API
+/// (devices, contexts, ray-tracing pipelines, acceleration structures), one at a time in
+/// the process, always; nested calls on one thread do not lock again.
+///
+/// Why (issue 19 point 5, `docs/gpu/issue19-hang.md`): user-space stacks of a hung
+/// parallel run on the H200 showed a lock-order inversion inside NVIDIA's driver, between
+/// two threads on two different Vulkan devices: `vkDestroyDevice` holds the driver's
+/// global lock (`libnvidia-glsi`) and waits for a `libcuda` mutex, while destroying a
+/// ray-tracing pipeline enters `libnvidia-rtcore`, takes that `libcuda` mutex and waits
+/// for the global lock. Every other thread in the driver then waits on the global lock.
+/// Holding one lock around every such creation and destruction, in every GPU backend,
+/// keeps the two paths from interleaving. Unlike [`driver_entry`], it cannot be turned
+/// off.
+pub fn driver_lifecycle<T>(f: impl FnOnce() -> T) -> T {
+    use std::sync::Mutex;
+    static LOCK: Mutex<()> = Mutex::new(());
+    thread_local! {
+        static HELD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    if HELD.with(|h| h.get()) {
+        return f();
+    }
+    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    HELD.with(|h| h.set(true));
+    let out = f();
+    HELD.with(|h| h.set(false));
+    out
+}
+
 /// A compute backend.
 pub trait Backend {
     /// Short name used on the command line (`cpu`, `opencl`, ...).
