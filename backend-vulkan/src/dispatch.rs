@@ -352,7 +352,8 @@ fn record_all(
     kernels: u32,
 ) -> Result<(), BackendError> {
     let d = b.ctx.device.clone();
-    frame.cmd = b.begin()?;
+    // the slot's command buffer from its last submission, reset, else a new one
+    frame.cmd = b.begin_reusing(frame.slot.cmd.take())?;
     if let Some(q) = frame.queries {
         unsafe { d.cmd_reset_query_pool(frame.cmd, q, 0, 2 * kernels) };
     }

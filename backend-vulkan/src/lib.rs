@@ -202,16 +202,32 @@ impl VulkanBackend {
     }
 
     fn begin(&self) -> Result<vk::CommandBuffer, BackendError> {
+        self.begin_reusing(None)
+    }
+
+    /// Begins `reuse` (a finished submission's command buffer, reset here) or a newly
+    /// allocated command buffer.
+    fn begin_reusing(
+        &self,
+        reuse: Option<vk::CommandBuffer>,
+    ) -> Result<vk::CommandBuffer, BackendError> {
         let d = &self.ctx.device;
-        let cmd = unsafe {
-            d.allocate_command_buffers(
-                &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(self.pool)
-                    .level(vk::CommandBufferLevel::PRIMARY)
-                    .command_buffer_count(1),
-            )
-        }
-        .map_err(vk_error("allocating a command buffer"))?[0];
+        let cmd = match reuse {
+            Some(cmd) => {
+                unsafe { d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()) }
+                    .map_err(vk_error("resetting a command buffer"))?;
+                cmd
+            }
+            None => unsafe {
+                d.allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(self.pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+            }
+            .map_err(vk_error("allocating a command buffer"))?[0],
+        };
         unsafe {
             d.begin_command_buffer(
                 cmd,

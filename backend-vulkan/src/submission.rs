@@ -30,6 +30,9 @@ pub struct FrameSlot {
     pub arena: Arena,
     readback: Option<Buffer>,
     pub fence: vk::Fence,
+    /// The command buffer of the slot's last submission (its pool's flag lets it be
+    /// reset and recorded again).
+    pub cmd: Option<vk::CommandBuffer>,
 }
 
 impl FrameSlot {
@@ -46,6 +49,7 @@ impl FrameSlot {
             arena: Arena::default(),
             readback: None,
             fence,
+            cmd: None,
         })
     }
 
@@ -249,8 +253,12 @@ impl VulkanBackend {
         drop(retired);
         drop(retired_scenes);
         unsafe {
-            d.free_command_buffers(self.pool, &[f.cmd]);
             let _ = d.reset_fences(&[slot.fence]);
+        }
+        // the command buffer stays with its slot, reset when the slot records again
+        let mut slot = slot;
+        if let Some(old) = slot.cmd.replace(f.cmd) {
+            unsafe { d.free_command_buffers(self.pool, &[old]) };
         }
         self.free_slots.push(slot);
         let result = result?;
