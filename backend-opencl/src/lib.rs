@@ -57,7 +57,7 @@ pub struct OpenClBackend {
     /// Submissions not yet collected ([`Backend::submit`]), by number.
     in_flight: HashMap<u64, InFlight>,
     /// Results of submissions retired before they were polled.
-    finished: HashMap<u64, Result<Finished, BackendError>>,
+    finished: caustica_core::backend::UncollectedResults,
     /// Staging slots free for the next submission ([`staging`]).
     free_slots: Vec<staging::StagingSlot>,
     /// Alignment of parameter sub-buffers (`CL_DEVICE_MEM_BASE_ADDR_ALIGN`, bytes).
@@ -104,7 +104,7 @@ impl OpenClBackend {
             buffers: HashMap::new(),
             variants: Default::default(),
             in_flight: HashMap::new(),
-            finished: HashMap::new(),
+            finished: Default::default(),
             free_slots: Vec::new(),
             param_align,
             next_submission: 0,
@@ -427,12 +427,7 @@ impl OpenClBackend {
             let oldest = *self.in_flight.keys().min().expect("not empty");
             let f = self.in_flight.remove(&oldest).expect("a key");
             let result = self.retire(f, true);
-            if self.finished.len() >= caustica_core::backend::MAX_UNCOLLECTED {
-                if let Some(k) = self.finished.keys().min().copied() {
-                    self.finished.remove(&k);
-                }
-            }
-            self.finished.insert(oldest, result);
+            self.finished.keep(oldest, result);
             if let Some(s) = self.free_slots.pop() {
                 return Ok(s);
             }
@@ -678,20 +673,11 @@ impl OpenClBackend {
         s: &mut Submission,
         wait: bool,
     ) -> Result<Option<Finished>, BackendError> {
-        if !s.is_pending() {
-            return s.take_finished().map(Some);
-        }
-        if let Some(r) = self.finished.remove(&s.id) {
-            s.mark_collected();
-            return r.map(Some);
+        if let Some(answer) = self.finished.settle(s) {
+            return answer;
         }
         let Some(f) = self.in_flight.get(&s.id) else {
-            return Err(BackendError::BadArgument(format!(
-                "submission {} is not one of this backend's, or its result was discarded \
-                 ({} newer submissions were left uncollected)",
-                s.id,
-                caustica_core::backend::MAX_UNCOLLECTED
-            )));
+            return Err(caustica_core::backend::unknown_submission(s.id));
         };
         if !wait {
             let status = f

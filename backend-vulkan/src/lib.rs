@@ -74,7 +74,7 @@ pub struct VulkanBackend {
     /// Frame slots free for the next submission (pools, arena, fence: kept, reset).
     free_slots: Vec<submission::FrameSlot>,
     /// Results of submissions retired before they were polled.
-    finished: HashMap<u64, Result<caustica_core::backend::Finished, BackendError>>,
+    finished: caustica_core::backend::UncollectedResults,
     next_submission: u64,
     /// Signalled with each submission's number, once a host asked for it.
     timeline: Option<vk::Semaphore>,
@@ -173,7 +173,7 @@ impl VulkanBackend {
             written_top_levels: HashMap::new(),
             in_flight: Vec::new(),
             free_slots: Vec::new(),
-            finished: HashMap::new(),
+            finished: Default::default(),
             next_submission: 0,
             timeline: None,
             pipelines: HashMap::new(),

@@ -179,7 +179,7 @@ impl VulkanBackend {
             let oldest = self.in_flight.remove(0);
             let id = oldest.id;
             let result = self.retire(oldest, true);
-            self.keep_finished(id, result);
+            self.finished.keep(id, result);
             if let Some(s) = self.free_slots.pop() {
                 return Ok(s);
             }
@@ -190,17 +190,6 @@ impl VulkanBackend {
     /// Gives a slot back unused (a submission that failed before it was submitted).
     pub(crate) fn return_slot(&mut self, slot: FrameSlot) {
         self.free_slots.push(slot);
-    }
-
-    /// Keeps a finished submission's result until it is polled (at most
-    /// [`caustica_core::backend::MAX_UNCOLLECTED`]; the oldest goes first).
-    fn keep_finished(&mut self, id: u64, result: Result<Finished, BackendError>) {
-        if self.finished.len() >= caustica_core::backend::MAX_UNCOLLECTED {
-            if let Some(oldest) = self.finished.keys().min().copied() {
-                self.finished.remove(&oldest);
-            }
-        }
-        self.finished.insert(id, result);
     }
 
     /// Ends `cmd` and submits it with `fence`, signalling the timeline semaphore with `id`
@@ -285,20 +274,11 @@ impl VulkanBackend {
         s: &mut Submission,
         wait: bool,
     ) -> Result<Option<Finished>, BackendError> {
-        if !s.is_pending() {
-            return s.take_finished().map(Some);
-        }
-        if let Some(r) = self.finished.remove(&s.id) {
-            s.mark_collected();
-            return r.map(Some);
+        if let Some(answer) = self.finished.settle(s) {
+            return answer;
         }
         let Some(k) = self.in_flight.iter().position(|f| f.id == s.id) else {
-            return Err(BackendError::BadArgument(format!(
-                "submission {} is not one of this backend's, or its result was discarded \
-                 ({} newer submissions were left uncollected)",
-                s.id,
-                caustica_core::backend::MAX_UNCOLLECTED
-            )));
+            return Err(caustica_core::backend::unknown_submission(s.id));
         };
         if !wait {
             let done = unsafe {

@@ -59,7 +59,7 @@ pub struct WgpuBackend {
     /// Submissions not yet collected ([`Backend::submit`], [`WgpuBackend::encode`]).
     in_flight: HashMap<u64, submission::InFlight>,
     /// Results of submissions waited for before they were polled (a host too far ahead).
-    finished: HashMap<u64, Result<Finished, BackendError>>,
+    finished: caustica_core::backend::UncollectedResults,
     next_submission: u64,
 }
 
@@ -235,7 +235,7 @@ impl WgpuBackend {
             buffers: HashMap::new(),
             uncaptured,
             in_flight: HashMap::new(),
-            finished: HashMap::new(),
+            finished: Default::default(),
             next_submission: 0,
         })
     }

@@ -71,13 +71,8 @@ impl WgpuBackend {
             if let Some(oldest) = self.in_flight.keys().min().copied() {
                 let mut s = Submission::pending(oldest);
                 let result = self.poll_submission(&mut s, true);
-                if self.finished.len() >= caustica_core::backend::MAX_UNCOLLECTED {
-                    if let Some(k) = self.finished.keys().min().copied() {
-                        self.finished.remove(&k);
-                    }
-                }
                 self.finished
-                    .insert(oldest, result.map(|r| r.unwrap_or_default()));
+                    .keep(oldest, result.map(|r| r.unwrap_or_default()));
             }
         }
         let mut timer = dispatch::Timer::new(self, kernel_count(recording));
@@ -154,20 +149,11 @@ impl WgpuBackend {
         s: &mut Submission,
         wait: bool,
     ) -> Result<Option<Finished>, BackendError> {
-        if !s.is_pending() {
-            return s.take_finished().map(Some);
-        }
-        if let Some(r) = self.finished.remove(&s.id) {
-            s.mark_collected();
-            return r.map(Some);
+        if let Some(answer) = self.finished.settle(s) {
+            return answer;
         }
         let Some(f) = self.in_flight.get(&s.id) else {
-            return Err(BackendError::BadArgument(format!(
-                "submission {} is not one of this backend's, or its result was discarded \
-                 ({} newer submissions were left uncollected)",
-                s.id,
-                caustica_core::backend::MAX_UNCOLLECTED
-            )));
+            return Err(caustica_core::backend::unknown_submission(s.id));
         };
         let index = f.index.clone();
         if !f.requested {

@@ -99,6 +99,20 @@ pub struct PassTime {
     pub seconds: f64,
 }
 
+/// Runs `f` holding `lock`, with `held` marking this thread as the holder (the caller
+/// checks it first, so nested calls do not lock again).
+fn held_once<T>(
+    lock: &std::sync::Mutex<()>,
+    held: &'static std::thread::LocalKey<std::cell::Cell<bool>>,
+    f: impl FnOnce() -> T,
+) -> T {
+    let _guard = lock.lock().unwrap_or_else(|e| e.into_inner());
+    held.with(|h| h.set(true));
+    let out = f();
+    held.with(|h| h.set(false));
+    out
+}
+
 /// Runs `f`, a call into a GPU driver (a backend's creation, `execute`, `read`, drop), one
 /// at a time in the process; `CAUSTICA_SERIALIZE_DRIVERS=0` lets them run at once.
 ///
@@ -123,11 +137,7 @@ pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
     if !on || HELD.with(|h| h.get()) {
         return f();
     }
-    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    HELD.with(|h| h.set(true));
-    let out = f();
-    HELD.with(|h| h.set(false));
-    out
+    held_once(&LOCK, &HELD, f)
 }
 
 /// Runs `f`, a creation or destruction of a GPU driver object that reaches below the API
@@ -152,11 +162,7 @@ pub fn driver_lifecycle<T>(f: impl FnOnce() -> T) -> T {
     if HELD.with(|h| h.get()) {
         return f();
     }
-    let _guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    HELD.with(|h| h.set(true));
-    let out = f();
-    HELD.with(|h| h.set(false));
-    out
+    held_once(&LOCK, &HELD, f)
 }
 
 /// A compute backend.
@@ -280,6 +286,52 @@ impl Submission {
 /// its result discarded (polling it later is an error), so a host that never asks for
 /// its frames' statistics does not grow the backend's memory.
 pub const MAX_UNCOLLECTED: usize = 64;
+
+/// What an asynchronous backend keeps of the submissions it finished before they were
+/// polled (waited for to free a slot, or to bound its uncollected work), oldest dropped
+/// first beyond [`MAX_UNCOLLECTED`]; and the start of every such backend's `poll`.
+#[derive(Debug, Default)]
+pub struct UncollectedResults {
+    results: std::collections::BTreeMap<u64, Result<Finished, BackendError>>,
+}
+
+impl UncollectedResults {
+    /// Keeps the result of submission `id` until it is polled.
+    pub fn keep(&mut self, id: u64, result: Result<Finished, BackendError>) {
+        if self.results.len() >= MAX_UNCOLLECTED {
+            self.results.pop_first();
+        }
+        self.results.insert(id, result);
+    }
+
+    /// A poll's answer that needs no device: a submission that finished when it was made,
+    /// one collected already (an error), or one kept here. `None`: the backend looks at
+    /// its work in flight.
+    pub fn settle(
+        &mut self,
+        submission: &mut Submission,
+    ) -> Option<Result<Option<Finished>, BackendError>> {
+        if !submission.is_pending() {
+            return Some(submission.take_finished().map(Some));
+        }
+        let r = self.results.remove(&submission.id)?;
+        submission.mark_collected();
+        Some(r.map(Some))
+    }
+
+    /// Forgets every kept result.
+    pub fn clear(&mut self) {
+        self.results.clear();
+    }
+}
+
+/// The error of polling a submission a backend neither has in flight nor kept.
+pub fn unknown_submission(id: u64) -> BackendError {
+    BackendError::BadArgument(format!(
+        "submission {id} is not one of this backend's, or its result was discarded \
+         ({MAX_UNCOLLECTED} newer submissions were left uncollected)"
+    ))
+}
 
 /// What a finished submission gives back.
 #[derive(Clone, Debug, Default)]
