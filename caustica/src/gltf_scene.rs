@@ -15,8 +15,9 @@
 //! the vertices instead (a static object). Triangle
 //! primitives (lists, strips and fans); points and lines are skipped with a warning.
 //! Missing normals are generated as the area-weighted average of the faces around each
-//! vertex (`scene::shapes`); missing UVs stay missing (Sspm needs none; CausticMap's atlas
-//! refuses such a receiver by name). The first perspective camera met in the hierarchy
+//! vertex (`scene::shapes`); missing UVs are generated as box-projected charts
+//! (`scene::uv_charts`: charts grown over shared edges, split where they would overlap,
+//! packed at one texel density), with a warning naming the mesh. The first perspective camera met in the hierarchy
 //! (its image size from `extras.caustica`, else 960 pixels wide at its aspect ratio), or
 //! a default camera framing the scene, with a warning; a scene without lights (assets lit
 //! by an environment map) gets a default directional light, with a warning.
@@ -205,7 +206,7 @@ pub fn parse_gltf(
             default_camera(im.bounds)
         }
     };
-    let scene = Scene {
+    let mut scene = Scene {
         name: name.into(),
         description: format!("imported from {file}"),
         camera,
@@ -225,6 +226,11 @@ pub fn parse_gltf(
             }
         )));
     }
+    // after validation: every index is in range
+    im.warnings
+        .extend(caustica_core::scene::uv_charts::generate_missing_uvs(
+            &mut scene,
+        ));
     Ok(GltfImport {
         scene,
         warnings: im

@@ -6,8 +6,9 @@
 //!
 //! An OBJ file is a bare mesh: its vertex positions are taken as world space, its faces
 //! triangulated (fans), its normals and UVs kept where every vertex has them (else
-//! normals are generated as the area-weighted face average and UVs left out, as for any
-//! mesh), all its objects and groups merged into the one shape, its `.mtl` materials not
+//! normals are generated as the area-weighted face average, and UVs as box-projected
+//! charts, `caustica_core::scene::uv_charts`, as for any mesh of a scene file without
+//! them, with a warning naming the object), all its objects and groups merged into the one shape, its `.mtl` materials not
 //! read: the scene's object names the caustica material. Bad OBJ files are errors at the
 //! shape's `path` in the scene file.
 
@@ -20,7 +21,8 @@ use std::path::Path;
 pub struct LoadedScene {
     /// The validated scene.
     pub scene: Scene,
-    /// One line per dropped or approximated element (empty for caustica's own format).
+    /// One line per dropped, approximated or generated element (for caustica's own format:
+    /// the meshes given generated UV charts).
     pub warnings: Vec<String>,
 }
 
@@ -57,10 +59,13 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene, SceneFileError> {
     };
     #[cfg(not(feature = "obj"))]
     let scene = caustica_core::scene::format::parse_scene(&text, &file)?;
-    Ok(LoadedScene {
-        scene,
-        warnings: Vec::new(),
-    })
+    let mut scene = scene;
+    // after validation: every index is in range
+    let warnings = caustica_core::scene::uv_charts::generate_missing_uvs(&mut scene)
+        .into_iter()
+        .map(|w| format!("{file}: {w}"))
+        .collect();
+    Ok(LoadedScene { scene, warnings })
 }
 
 /// The mesh of an OBJ file as a [`caustica_core::scene::Shape::Mesh`] (see the module

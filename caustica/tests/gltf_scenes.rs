@@ -540,3 +540,28 @@ fn khronos_sample_assets_load_and_render_when_present() {
         );
     }
 }
+
+#[test]
+fn meshes_without_uvs_get_charts_a_caustic_map_can_address() {
+    // the instanced document's quad has positions and normals only
+    let im = import(&instanced_document());
+    let charted: Vec<&String> = im
+        .warnings
+        .iter()
+        .filter(|w| w.contains("no UVs; generated 1 UV chart"))
+        .collect();
+    assert_eq!(charted.len(), 3, "{:?}", im.warnings);
+    for o in &im.scene.objects {
+        let Shape::Mesh { uvs, positions, .. } = &o.shape else {
+            unreachable!()
+        };
+        assert_eq!(uvs.len(), positions.len(), "{}", o.name);
+    }
+    let ds = caustica_core::device::device_scene::DeviceScene::build(&im.scene, Default::default())
+        .unwrap();
+    let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(&im.scene);
+    let layout =
+        caustica_core::frame::caustic_atlas::atlas_layout(&ds, &receiver, (256, 256)).unwrap();
+    assert_eq!(layout.tiles.len(), 3);
+    assert!(layout.covered_texels > 0);
+}

@@ -8,6 +8,9 @@
 //! image, 2^26 photons) on every backend but cpu (lavapipe and PoCL take minutes and ~10 GiB
 //! of host memory for them), to be run on the GPU machine:
 //! `cargo test --release -p caustica-conformance --test stiff_cases -- --ignored`.
+//!
+//! `CAUSTICA_STIFF_CASES=a,b` runs only the cases whose id (`group/name`) contains one of
+//! the comma-separated parts (while working on one case; CI runs them all).
 
 use caustica_conformance::harness::{loud, quirk, Quirk, Report};
 use caustica_conformance::stiff::catalogue;
@@ -16,7 +19,22 @@ use caustica_conformance::stiff::catalogue;
 /// backend's device, if any.
 fn run(test: &str, pick: impl Fn(Option<&Quirk>) -> bool) {
     let mut report = Report::new(test);
-    let cases = catalogue();
+    let only: Option<Vec<String>> = std::env::var("CAUSTICA_STIFF_CASES")
+        .ok()
+        .map(|v| v.split(',').map(str::to_owned).collect());
+    let cases: Vec<_> = catalogue()
+        .into_iter()
+        .filter(|c| {
+            only.as_ref()
+                .is_none_or(|o| o.iter().any(|part| c.id().contains(part.as_str())))
+        })
+        .collect();
+    if let Some(o) = &only {
+        loud(&format!(
+            "{test}: only the cases matching {o:?} ({} cases)",
+            cases.len()
+        ));
+    }
     let mut ran = 0;
     for (name, mut backend) in caustica_conformance::backends() {
         let device = backend.capabilities().device;

@@ -237,22 +237,42 @@ pub(super) fn tiny_receiver(b: &mut dyn Backend) -> Result<Outcome, String> {
 pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
     // A white box as the only receiver under the ball: its six faces are a 3x2 grid of UV
     // islands filling its tile, with seams between faces of different sizes (so texels of
-    // different world areas meet there). The gather stays within the tile and keeps the
-    // flux: sum E x texel area over the atlas equals the stored flux, for the 3x3 gather
-    // and the raw map alike. Every texel centre is covered and every stored photon lands
-    // on the box, so the only differences are f32 roundings: the u64 sum to f32 (2^-24),
-    // the division by the area and the product with it again (2 x 2^-24), summed in f64:
-    // relative 1e-5 is > 40 times that. The density gather (`gather: density`) too, within
-    // 1e-4: each of its two passes adds the rounding of a <= 33-term sum and a division per
-    // source (~35 ulp, 2e-6; the argument of `filter_flux.rs`).
+    // different world areas meet there). Every texel centre is covered and every stored
+    // photon lands on the box, so the raw map keeps the flux too.
     let mut scene = sphere_scene();
     scene.objects[0].shape = Shape::Cuboid {
         min: Vec3::new(-2.0, -0.5, -2.0),
         max: Vec3::new(2.0, 0.0, 2.0),
     };
-    let ds = caustica_core::device::device_scene::DeviceScene::build(&scene, Default::default())
+    flux_kept(b, &scene, "uv seams", false)
+}
+
+/// The gather stays within the tile and keeps the flux: sum E x texel area over the atlas
+/// equals the stored flux, for the 3x3 box gather, the density gather and the raw map.
+/// The only differences are f32 roundings: the u64 sum to f32 (2^-24), the division by
+/// the area and the product with it again (2 x 2^-24), summed in f64: relative 1e-5 is
+/// over 40 times that. The density gather within 1e-4: each of its two passes adds the
+/// rounding of a <= 33-term sum and a division per source (~35 ulp, 2e-6; the argument of
+/// `filter_flux.rs`).
+///
+/// With `islands` (UV islands that leave texels uncovered: a photon within half a texel
+/// of an island's border can land in a texel whose centre lies outside every triangle),
+/// only the box gather keeps that photon (it spreads it over the covered texels of its
+/// window); the raw map has no area to show it in and the density gather drops it
+/// (`gather_footprint` takes no source outside a receiver: TODO(issue 16), it should
+/// move it to the nearest covered texel). So there the raw map shows the flux of the
+/// covered texels, the density gather keeps exactly that (within 1e-4), and the flux
+/// left in uncovered texels is reported and bounded by 1% (the islands' half-texel border
+/// bands over their area: 3e-4 here).
+fn flux_kept(
+    b: &mut dyn Backend,
+    scene: &Scene,
+    what: &str,
+    islands: bool,
+) -> Result<Outcome, String> {
+    let ds = caustica_core::device::device_scene::DeviceScene::build(scene, Default::default())
         .map_err(|e| e.to_string())?;
-    let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(&scene);
+    let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(scene);
     let layout = caustica_core::frame::caustic_atlas::atlas_layout(&ds, &receiver, (256, 256))
         .map_err(|e| e.to_string())?;
     let flux = |img: &Image| -> f64 {
@@ -262,55 +282,100 @@ pub(super) fn uv_seams(b: &mut dyn Backend) -> Result<Outcome, String> {
             .map(|(p, t)| p[0] as f64 * f32::from_bits(t[0]) as f64)
             .sum()
     };
-    let mut v = Verdict::new("uv seams");
-    let f = checked(
-        b,
-        &scene,
-        &CausticMapSettings {
-            gather: caustica_core::techniques::caustic_map::MapGather::Box,
-            ..settings(256)
-        },
-        &mut v,
-    )?;
-    let raw = checked(
-        b,
-        &scene,
-        &CausticMapSettings {
-            gather: caustica_core::techniques::caustic_map::MapGather::Box,
-            gather_width: 1,
-            ..settings(256)
-        },
-        &mut v,
-    )?;
-    let density = checked(
-        b,
-        &scene,
-        &CausticMapSettings {
-            gather: caustica_core::techniques::caustic_map::MapGather::Density,
-            ..settings(256)
-        },
-        &mut v,
-    )?;
+    let mut v = Verdict::new(what);
+    let with = |gather, gather_width| CausticMapSettings {
+        gather,
+        gather_width,
+        ..settings(256)
+    };
+    use caustica_core::techniques::caustic_map::MapGather;
+    let f = checked(b, scene, &with(MapGather::Box, 3), &mut v)?;
+    let density = checked(b, scene, &with(MapGather::Density, 3), &mut v)?;
+    let raw = checked(b, scene, &with(MapGather::Box, 1), &mut v)?;
     let stored = f.stats.stored_flux[0];
-    let (g, r, d) = (flux(&f.atlas), flux(&raw.atlas), flux(&density.atlas));
     v.check(stored > 0.0, || "nothing stored".into());
-    for (what, x, tol) in [
-        ("gathered", g, 1e-5),
-        ("raw", r, 1e-5),
-        ("density", d, 1e-4),
+    let (g, d, r) = (flux(&f.atlas), flux(&density.atlas), flux(&raw.atlas));
+    // what the density gather and the raw map are to keep
+    let covered = if islands { r } else { stored };
+    for (what, x, of, tol) in [
+        ("gathered", g, stored, 1e-5),
+        ("density", d, covered, 1e-4),
+        ("raw", r, stored, if islands { 1e-2 } else { 1e-5 }),
     ] {
-        v.check(((x - stored) / stored).abs() < tol, || {
-            format!("{what} map flux {x:.7e} vs stored {stored:.7e}")
+        v.check(((x - of) / of).abs() < tol, || {
+            format!("{what} map flux {x:.7e} vs {of:.7e}")
         });
     }
-    outcome(
-        format!(
-            "gathered / stored {:.7}, density {:.7}",
-            g / stored,
-            d / stored
-        ),
-        v,
-    )
+    let mut key = format!(
+        "gathered / stored {:.7}, density / stored {:.7}",
+        g / stored,
+        d / stored
+    );
+    if islands {
+        key += &format!(
+            ", in uncovered texels {:.1e} of stored",
+            (stored - r) / stored
+        );
+    }
+    outcome(key, v)
+}
+
+pub(super) fn generated_uv_charts(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // The floor as a mesh without UVs: a box of 8 shared corners (12 triangles), as an
+    // OBJ or glTF file without texture coordinates has it. CausticMap refuses it by name
+    // until `generate_missing_uvs` gives it charts (six, one per face, packed with
+    // gutters), after which its caustic keeps the stored flux as any UV islands' does
+    // ([`flux_kept`]).
+    let mut scene = sphere_scene();
+    let corners: Vec<Vec3> = (0..8)
+        .map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { -2.0 } else { 2.0 },
+                if k & 2 == 0 { -0.5 } else { 0.0 },
+                if k & 4 == 0 { -2.0 } else { 2.0 },
+            )
+        })
+        .collect();
+    // outward-facing quads (counter-clockwise seen from outside), two triangles each
+    let quads = [
+        [0, 4, 6, 2], // -x
+        [1, 3, 7, 5], // +x
+        [0, 1, 5, 4], // -y
+        [2, 6, 7, 3], // +y
+        [0, 2, 3, 1], // -z
+        [4, 5, 7, 6], // +z
+    ];
+    let indices = quads
+        .iter()
+        .flat_map(|q: &[u32; 4]| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    scene.objects[0].shape = Shape::Mesh {
+        positions: corners,
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        indices,
+    };
+    let mut v = Verdict::new("generated uv charts");
+    match CausticMap::new(b, &scene, settings(256)) {
+        Err(Error::InvalidScene(why)) => {
+            v.check(
+                why.contains(&scene.objects[0].name) && why.contains("uv_charts"),
+                || format!("unclear: {why}"),
+            );
+        }
+        Err(e) => return Err(format!("expected InvalidScene, got {e}")),
+        Ok(t) => {
+            let _ = t.free(b);
+            return Err("a receiver without UVs was accepted".into());
+        }
+    }
+    let notes = caustica_core::scene::uv_charts::generate_missing_uvs(&mut scene);
+    v.check(notes.len() == 1 && notes[0].contains("6 UV charts"), || {
+        format!("{notes:?}")
+    });
+    let kept = flux_kept(b, &scene, "generated uv charts", true)?;
+    v.absorb(kept.verdict);
+    outcome(kept.key, v)
 }
 
 pub(super) fn overlapping_uvs(b: &mut dyn Backend) -> Result<Outcome, String> {

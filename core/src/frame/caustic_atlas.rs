@@ -22,8 +22,10 @@
 //! the caustic would be counted twice where either is seen. [`receiver_coverage`] tests
 //! every texel centre of a tile against the receiver's UV triangles and refuses a receiver
 //! whose UVs overlap, leave `[0, 1]^2`, or are missing (a triangle of zero UV area but
-//! non-zero world area), naming it: a clear error, never a silently doubled caustic. (An
-//! automatic per-triangle atlas for such meshes is left for later: TODO(issue 16).)
+//! non-zero world area), naming it: a clear error, never a silently doubled caustic.
+//! Meshes without UVs get generated ones where scenes are loaded (glTF, OBJ, scene files:
+//! [`crate::scene::uv_charts`]); a scene built in code calls
+//! [`crate::scene::uv_charts::generate_missing_uvs`] itself, as the error says.
 
 use crate::device::device_scene::DeviceScene;
 use crate::device::layout::{AtlasTexel, AtlasTileTexel, GpuVertex, NO_TILE};
@@ -264,7 +266,9 @@ pub fn receiver_owners(
         if twice_uv == 0.0 {
             if a_world > 0.0 {
                 return Err(bad(format!(
-                    "triangle {k} has no UV area (missing or degenerate UVs)"
+                    "triangle {k} has no UV area (missing or degenerate UVs; \
+                     scene::uv_charts::generate_missing_uvs makes UV charts for a mesh \
+                     without them)"
                 )));
             }
             continue; // degenerate in the world too: covers nothing

@@ -11,6 +11,7 @@ pub mod format;
 pub mod limits;
 pub mod shapes;
 pub mod transform;
+pub mod uv_charts;
 mod validate;
 
 use glam::{Vec2, Vec3};
@@ -196,7 +197,8 @@ pub struct Object {
 pub enum Shape {
     /// Explicit triangle mesh; `normals` and `uvs` are per vertex and optional (when
     /// absent: each vertex gets the area-weighted average of its faces' normals, uvs are
-    /// zero).
+    /// zero, which a caustic map refuses; the scene loaders give a mesh without uvs
+    /// generated charts, [`uv_charts::generate_missing_uvs`]).
     Mesh {
         /// Vertex positions (world space, scene units).
         positions: Vec<Vec3>,

@@ -67,7 +67,7 @@ pub fn tessellate(shape: &Shape) -> TriangleMesh {
 }
 
 /// Per-vertex normal = normalised sum of the (area-weighted) face normals around it.
-fn flat_vertex_normals(positions: &[Vec3], indices: &[[u32; 3]]) -> Vec<Vec3> {
+pub(crate) fn flat_vertex_normals(positions: &[Vec3], indices: &[[u32; 3]]) -> Vec<Vec3> {
     let mut n = vec![Vec3::ZERO; positions.len()];
     for t in indices {
         let [a, b, c] = t.map(|i| i as usize);
