@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -293,6 +293,12 @@ if has nonblock; then
     run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
     run timeout 60 ./frame_loop 1920x1080 2048 100
     run timeout 60 ./frame_loop 1920x1080 1024 100
+fi
+if has batches; then
+    # issue 19 point 4, the "fewer, larger batches" lever: Sspm's 2048^2 photons in one
+    # batch instead of four of 2^20 (run after `nonblock`, whose sspm_frame is the default)
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density \
+        CAUSTICA_BENCH_SETTINGS='{"max_photons_per_batch": 4194304}' ./sspm_frame --bench
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

@@ -12,28 +12,17 @@ use wgpu::util::DeviceExt;
 /// Per-pass timing: a timestamp pair per kernel where the device has timestamp queries,
 /// else host times of kernels submitted alone.
 pub struct Timer {
-    queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    queries: Option<crate::pool::TimestampQueries>,
     passes: Vec<&'static str>,
     host: Vec<f64>,
     period_ns: f32,
 }
 
 impl Timer {
-    pub fn new(b: &WgpuBackend, kernels: u32) -> Timer {
-        let queries = (b.timestamps && kernels > 0).then(|| {
-            let set = b.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2 * kernels,
-            });
-            let resolve = b.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamp resolve"),
-                size: 16 * kernels as u64,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (set, resolve)
-        });
+    /// A timer for `kernels` kernels, its query set from the backend's pool (give it back
+    /// with [`Timer::give_back`] once its ticks are read).
+    pub fn new(b: &mut WgpuBackend, kernels: u32) -> Timer {
+        let queries = (b.timestamps && kernels > 0).then(|| b.pool.queries(&b.device, kernels));
         Timer {
             queries,
             passes: Vec::new(),
@@ -42,12 +31,24 @@ impl Timer {
         }
     }
 
+    /// The query set, taken out (to be kept until the GPU has resolved it).
+    pub fn take_queries(&mut self) -> Option<crate::pool::TimestampQueries> {
+        self.queries.take()
+    }
+
+    /// Returns the query set to the backend's pool.
+    pub fn give_back(&mut self, b: &mut WgpuBackend) {
+        if let Some(q) = self.queries.take() {
+            b.pool.give_queries(q);
+        }
+    }
+
     fn writes(&self) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         let i = self.passes.len() as u32;
         self.queries
             .as_ref()
-            .map(|(set, _)| wgpu::ComputePassTimestampWrites {
-                query_set: set,
+            .map(|q| wgpu::ComputePassTimestampWrites {
+                query_set: &q.set,
                 beginning_of_pass_write_index: Some(2 * i),
                 end_of_pass_write_index: Some(2 * i + 1),
             })
@@ -58,9 +59,9 @@ impl Timer {
     }
 
     pub fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
-        if let Some((set, buf)) = &self.queries {
+        if let Some(q) = &self.queries {
             if !self.passes.is_empty() {
-                enc.resolve_query_set(set, 0..2 * self.passes.len() as u32, buf, 0);
+                enc.resolve_query_set(&q.set, 0..2 * self.passes.len() as u32, &q.resolve, 0);
             }
         }
     }
@@ -69,7 +70,7 @@ impl Timer {
     /// if the passes were timed on the device.
     pub fn resolved(&self) -> Option<(&wgpu::Buffer, u64)> {
         match &self.queries {
-            Some((_, buf)) if !self.passes.is_empty() => Some((buf, 16 * self.passes.len() as u64)),
+            Some(q) if !self.passes.is_empty() => Some((&q.resolve, 16 * self.passes.len() as u64)),
             _ => None,
         }
     }
@@ -99,11 +100,12 @@ impl Timer {
         self.period_ns
     }
 
-    pub fn finish(self, b: &WgpuBackend) -> Result<Vec<PassTime>, BackendError> {
+    pub fn finish(mut self, b: &mut WgpuBackend) -> Result<Vec<PassTime>, BackendError> {
         match self.resolved() {
             Some((buf, bytes)) => {
-                let raw = b.read_buffer(buf, bytes)?;
-                Ok(Self::times_from_ticks(&self.passes, &raw, self.period_ns))
+                let raw = b.read_buffer(buf, bytes);
+                self.give_back(b);
+                Ok(Self::times_from_ticks(&self.passes, &raw?, self.period_ns))
             }
             _ => Ok(self
                 .passes

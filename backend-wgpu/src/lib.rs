@@ -14,6 +14,7 @@
 //! the caller's texture in the same encoder.
 
 mod dispatch;
+mod pool;
 mod submission;
 mod texture;
 
@@ -61,6 +62,8 @@ pub struct WgpuBackend {
     /// Results of submissions waited for before they were polled (a host too far ahead).
     finished: caustica_core::backend::UncollectedResults,
     next_submission: u64,
+    /// Query sets and staging reused across submissions.
+    pool: pool::SubmissionPool,
 }
 
 /// Compiles kernel `name` with its override constants set to `constants`; a WGSL or
@@ -236,6 +239,7 @@ impl WgpuBackend {
             uncaptured,
             in_flight: HashMap::new(),
             finished: Default::default(),
+            pool: Default::default(),
             next_submission: 0,
         })
     }

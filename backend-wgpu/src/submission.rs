@@ -16,8 +16,11 @@ pub struct InFlight {
     /// The queue's index, once submitted (`None` until the host has submitted its
     /// encoder: [`WgpuBackend::submitted`]).
     index: Option<wgpu::SubmissionIndex>,
-    /// Mappable copies: the timestamps (if timed on the device) then the readbacks.
+    /// Mappable copies: the timestamps (if timed on the device) then the readbacks
+    /// (from the pool, given back when collected).
     staging: Vec<(wgpu::Buffer, u64)>,
+    /// The timestamp queries (from the pool, given back when collected).
+    queries: Option<crate::pool::TimestampQueries>,
     /// Kernels timed, their timestamp period, and whether `staging[0]` holds the ticks.
     passes: Vec<&'static str>,
     period_ns: f32,
@@ -30,20 +33,17 @@ pub struct InFlight {
     failed: Arc<Mutex<Option<String>>>,
 }
 
-/// A mappable copy of `bytes` of `src`, recorded into `enc`.
+/// A mappable copy of `bytes` of `src` in a staging buffer from `pool`, recorded into
+/// `enc`.
 fn staged_copy(
+    pool: &mut crate::pool::SubmissionPool,
     device: &wgpu::Device,
     enc: &mut wgpu::CommandEncoder,
     src: &wgpu::Buffer,
     bytes: u64,
 ) -> (wgpu::Buffer, u64) {
     let size = bytes.max(4).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("submission readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    let staging = pool.staging(device, size);
     if bytes > 0 {
         enc.copy_buffer_to_buffer(src, 0, &staging, 0, size.min(src.size()));
     }
@@ -80,15 +80,25 @@ impl WgpuBackend {
         timer.resolve(enc);
         let mut staging = Vec::new();
         let timed = if let Some((buf, bytes)) = timer.resolved() {
-            staging.push(staged_copy(&self.device, enc, buf, bytes));
+            staging.push(staged_copy(&mut self.pool, &self.device, enc, buf, bytes));
             true
         } else {
             false
         };
         for id in readbacks {
-            let b = self.get(*id)?;
-            staging.push(staged_copy(&self.device, enc, &b.buffer, b.bytes));
+            let b = self
+                .buffers
+                .get(id)
+                .ok_or(BackendError::MissingResource(*id))?;
+            staging.push(staged_copy(
+                &mut self.pool,
+                &self.device,
+                enc,
+                &b.buffer,
+                b.bytes,
+            ));
         }
+        let queries = timer.take_queries();
         self.next_submission += 1;
         let id = self.next_submission;
         self.in_flight.insert(
@@ -96,6 +106,7 @@ impl WgpuBackend {
             InFlight {
                 index: None,
                 staging,
+                queries,
                 passes: timer.passes().to_vec(),
                 period_ns: timer.period_ns(),
                 timed,
@@ -105,6 +116,12 @@ impl WgpuBackend {
             },
         );
         Ok(Submission::pending(id))
+    }
+
+    /// Timestamp query sets and staging buffers created so far: they are kept and reused,
+    /// so in a frame loop's steady state this stops growing.
+    pub fn pooled_resources_created(&self) -> u64 {
+        self.pool.created
     }
 
     /// Tells the backend that the encoder holding `submission` was submitted (its queue
@@ -197,17 +214,43 @@ impl WgpuBackend {
             )));
         }
         let mut data = Vec::with_capacity(f.staging.len());
+        let mut read = Ok(());
         for (buf, bytes) in &f.staging {
-            let view = buf
-                .slice(..)
-                .get_mapped_range()
-                .map_err(|e| BackendError::Driver(format!("reading back: {e}")))?;
-            let mut out = caustica_core::device::host_bytes(*bytes, "a submission's readback")?;
-            out.copy_from_slice(&view[..*bytes as usize]);
-            data.push(out);
+            if read.is_ok() {
+                read = buf
+                    .slice(..)
+                    .get_mapped_range()
+                    .map_err(|e| BackendError::Driver(format!("reading back: {e}")))
+                    .and_then(|view| {
+                        let mut out = caustica_core::device::host_bytes(
+                            *bytes,
+                            "a submission's readback",
+                        )?;
+                        out.copy_from_slice(&view[..*bytes as usize]);
+                        data.push(out);
+                        Ok(())
+                    });
+            }
         }
-        let times = if f.timed {
-            dispatch::Timer::times_from_ticks(&f.passes, &data.remove(0), f.period_ns)
+        // the staging and the queries back to the pool (unmapped: the views are gone)
+        let InFlight {
+            staging,
+            queries,
+            passes,
+            period_ns,
+            timed,
+            ..
+        } = f;
+        for (buf, _) in staging {
+            buf.unmap();
+            self.pool.give_staging(buf);
+        }
+        if let Some(q) = queries {
+            self.pool.give_queries(q);
+        }
+        read?;
+        let times = if timed {
+            dispatch::Timer::times_from_ticks(&passes, &data.remove(0), period_ns)
         } else {
             // without timestamp queries a submitted frame's kernels are not timed (timing
             // them on the host would mean waiting for each)

@@ -20,7 +20,8 @@
 //! Environment: `CAUSTICA_BENCH_BACKENDS=wgpu,vulkan` (default: every backend that opens
 //! here), `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZE=WxH`,
 //! `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048), `CAUSTICA_BENCH_FILTERS=density`
-//! (default: density,bilateral).
+//! (default: density,bilateral), `CAUSTICA_BENCH_SETTINGS='{"max_photons_per_batch":
+//! 4194304}'` (more Sspm settings as JSON, merged over those: to measure a lever).
 
 mod common;
 use caustica::{open_backend, BACKEND_NAMES};
@@ -70,9 +71,15 @@ fn main() {
         .map(|f| f.trim().to_string())
         .filter(|f| !f.is_empty())
         .collect();
+    let extra: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_str(&env_or("CAUSTICA_BENCH_SETTINGS", "{}"))
+            .expect("CAUSTICA_BENCH_SETTINGS: a JSON object of Sspm settings");
     println!(
         "Sspm frame, {w}x{h}, {side}x{side} photons, median of {frames} frames after one warm-up"
     );
+    if !extra.is_empty() {
+        println!("settings: {}", serde_json::Value::Object(extra.clone()));
+    }
     for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let mut backend = match open_backend(name) {
             Ok(b) => b,
@@ -89,8 +96,11 @@ fn main() {
             let mut scene = builtin(scene_name).expect("built-in scene");
             scene.camera.width = w;
             scene.camera.height = h;
-            let settings =
+            let mut settings =
                 serde_json::json!({ "photons_w": side, "photons_h": side, "filter": filter });
+            for (k, v) in &extra {
+                settings[k] = v.clone();
+            }
             let mut sspm = match create("sspm", backend.as_mut(), &scene, &settings) {
                 Ok(s) => s,
                 Err(e) => {
