@@ -222,10 +222,8 @@ impl WgpuBackend {
                     .get_mapped_range()
                     .map_err(|e| BackendError::Driver(format!("reading back: {e}")))
                     .and_then(|view| {
-                        let mut out = caustica_core::device::host_bytes(
-                            *bytes,
-                            "a submission's readback",
-                        )?;
+                        let mut out =
+                            caustica_core::device::host_bytes(*bytes, "a submission's readback")?;
                         out.copy_from_slice(&view[..*bytes as usize]);
                         data.push(out);
                         Ok(())

@@ -37,7 +37,10 @@ fn a_steady_frame_loop_creates_no_queries_or_staging() {
         t.stats(&mut b, true).expect("stats");
     }
     let warm = created_after_warm_up.unwrap();
-    assert!(warm > 0, "the first frames create their queries and staging");
+    assert!(
+        warm > 0,
+        "the first frames create their queries and staging"
+    );
     assert_eq!(
         b.pooled_resources_created(),
         warm,

@@ -157,9 +157,10 @@ naming the case and the backend.
   pixel's surface footprint (`core::footprint`): a pixel's contribution `L A pi / albedo`
   is the flux deposited in it, never more than the stored flux, at any depth (checked at
   footprints of ~1.5e-23 and ~5e8 units^2).
-- **Memory.** Photons are traced in batches of `max_photons_per_batch` (default 2^20:
-  a 32 MiB photon buffer), each deposited before the next: 2^26 photons run in 64
-  batches with nothing lost and the same integer sums as 4 batches.
+- **Memory.** Photons are traced in batches of `max_photons_per_batch` (default 2^22:
+  a 128 MiB photon buffer, at most the device's largest buffer), each deposited before
+  the next: 2^26 photons run in 64 batches of 2^20 with nothing lost and the same
+  integer sums as 4 batches.
 
 ## Scale and precision
 

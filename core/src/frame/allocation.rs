@@ -98,3 +98,24 @@ mod tests {
         assert_eq!(fitting_frame(10, 10, 101, 50), None);
     }
 }
+
+/// Default photons per batch (Sspm, CausticMap, AdaptiveCaustics): 2^22, a 2048^2 grid in
+/// one batch (a 128 MiB photon buffer). Fewer, larger batches keep a large GPU busy: on
+/// an H200, Sspm's trace of 2048^2 photons took 4.33 ms in four batches of 2^20 and 3.31
+/// ms in one on Vulkan (`sphere`; 2.85 and 2.20 on `cornell`; `scripts/gpu-run.sh nonblock
+/// batches`, `docs/gpu/h200-session11-batches.log`).
+pub const DEFAULT_PHOTONS_PER_BATCH: u32 = 1 << 22;
+
+/// Bytes of one stored photon ([`crate::device::layout::Photon`]).
+const PHOTON_BYTES: u64 = 32;
+
+/// Photons a batch holds: the `wanted` photons (a light's or a plane's), at most the
+/// `setting` (`max_photons_per_batch`) and at most what the device's largest buffer holds
+/// (`max_buffer_bytes`: lavapipe binds 128 MiB), at least 1. Batches only split the work:
+/// the deposited sums are exact and order-free, so the image does not depend on it.
+pub fn photons_per_batch(wanted: u64, setting: u32, max_buffer_bytes: u64) -> u32 {
+    wanted
+        .min(setting as u64)
+        .min(max_buffer_bytes / PHOTON_BYTES)
+        .max(1) as u32
+}

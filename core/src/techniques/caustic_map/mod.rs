@@ -229,6 +229,8 @@ pub struct CausticMap {
     reference: Option<Image>,
     /// The acceleration structure's levels, to move instances without a rebuild.
     instances: SceneInstances,
+    /// The device's largest buffer (bytes): batches hold at most that many photons.
+    max_buffer_bytes: u64,
 }
 
 impl CausticMap {
@@ -361,6 +363,7 @@ impl CausticMap {
             image_bytes: 0,
             reference: None,
             instances: ds.instances,
+            max_buffer_bytes: backend.capabilities().max_buffer_bytes,
         };
         let made = (|| {
             if let Some(l) = &layout {
@@ -387,7 +390,11 @@ impl CausticMap {
             .map(|(_, _, p)| p.texels())
             .max()
             .unwrap_or(1);
-        let cap = per_plane.min(s.max_photons_per_batch as u64).max(1) as u32;
+        let cap = crate::frame::allocation::photons_per_batch(
+            per_plane,
+            s.max_photons_per_batch,
+            self.max_buffer_bytes,
+        );
         // photons a batch traces: the split stores up to split_budget per photon
         let cap = if self.variant.fresnel_split {
             cap.max(s.split_budget)
@@ -1344,7 +1351,11 @@ impl CausticMap {
             || deeper
             || (self.adaptive.is_none()
                 && self.atlas.is_some_and(|a| {
-                    per_plane.min(self.settings.max_photons_per_batch as u64) > a.photons.len as u64
+                    crate::frame::allocation::photons_per_batch(
+                        per_plane,
+                        self.settings.max_photons_per_batch,
+                        self.max_buffer_bytes,
+                    ) > a.photons.len
                 }));
         Ok((!rebuild).then_some(emission))
     }

@@ -182,7 +182,8 @@ pub struct CausticMapSettings {
     /// Frame seed (photon jitter and Fresnel choices).
     pub seed: u32,
     /// Photons traced and deposited per batch (bounds the photon buffer at 32 bytes
-    /// each).
+    /// each; default [`crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH`], at most what
+    /// the device's largest buffer holds).
     pub max_photons_per_batch: u32,
     /// The images to produce.
     pub outputs: CausticMapOutputs,
@@ -231,7 +232,7 @@ impl Default for CausticMapSettings {
             min_relative_power: 1e-4,
             max_specular_depth: 6,
             seed: 0x434d_4150,
-            max_photons_per_batch: 1 << 20,
+            max_photons_per_batch: crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH,
             outputs: CausticMapOutputs::default(),
             prune: true,
             temporal: false,

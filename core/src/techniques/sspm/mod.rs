@@ -376,7 +376,11 @@ impl Sspm {
             let cap = if adaptive.is_some() {
                 1
             } else {
-                per_light.min(settings.max_photons_per_batch as u64) as u32
+                crate::frame::allocation::photons_per_batch(
+                    per_light,
+                    settings.max_photons_per_batch,
+                    backend.capabilities().max_buffer_bytes,
+                )
             };
             PhotonBuffers {
                 photons: rec.create(cap, "photons"),

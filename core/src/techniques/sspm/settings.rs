@@ -77,7 +77,9 @@ pub struct SspmSettings {
     pub max_specular_depth: u32,
     /// Frame seed of the counter-based RNG.
     pub seed: u32,
-    /// Memory limit: photons traced per batch (photon buffer = 32 bytes each).
+    /// Memory limit: photons traced per batch (photon buffer = 32 bytes each; default
+    /// [`crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH`], at most what the device's
+    /// largest buffer holds).
     pub max_photons_per_batch: u32,
     /// The images the caller wants; passes and buffers that no requested image needs are
     /// left out (see [`crate::frame::plan`]).
@@ -125,7 +127,7 @@ impl Default for SspmSettings {
             tile_size: 8,
             max_specular_depth: 6,
             seed: 0x5350_4d31,
-            max_photons_per_batch: 1 << 20,
+            max_photons_per_batch: crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH,
             outputs: Outputs::default(),
             prune: true,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
