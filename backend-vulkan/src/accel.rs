@@ -50,6 +50,9 @@ pub struct BlasKey {
     vertex_base: u32,
     vertex_count: u32,
     position_base: u32,
+    /// The level's deformations (core's `InstanceRecord::geometry_version`): a deformed
+    /// level's BLAS is rebuilt, the others kept.
+    geometry_version: u32,
 }
 
 impl BlasKey {
@@ -61,6 +64,7 @@ impl BlasKey {
             vertex_base: r.vertex_base,
             vertex_count: r.vertex_count,
             position_base: r.position_base,
+            geometry_version: r.geometry_version,
         }
     }
 }
@@ -78,6 +82,8 @@ pub struct SceneAccel {
     scratch_address: u64,
     /// Generations of the vertex, triangle and node buffers the BLASes were built from.
     pub sources: [u64; 3],
+    /// BLASes this build made (the others were kept from the previous structures).
+    pub built_blases: u32,
 }
 
 /// Creates an acceleration structure of type `ty` sized for `info` over `primitives`,
@@ -181,14 +187,21 @@ const MAX_CUSTOM_INDEX: u32 = (1 << 24) - 1;
 
 impl SceneAccel {
     /// Builds every level's BLAS and the TLAS; `run` records a closure into a command
-    /// buffer, submits it and waits.
+    /// buffer, submits it and waits. The BLASes of `previous` (the scene's structures
+    /// until now, built from the same buffers) whose levels are unchanged are kept: after
+    /// a deformation only the deformed level's BLAS is built.
     pub fn build(
         ctx: &Arc<Context>,
         run: SubmitFn<'_>,
         src: &SceneSources<'_>,
         triangles: &[GpuTriangle],
         records: &[InstanceRecord],
+        previous: Option<SceneAccel>,
     ) -> Result<SceneAccel, BackendError> {
+        let mut kept: Vec<(BlasKey, AccelStructure)> = match previous {
+            Some(p) if p.sources == src.generations => p.blases,
+            _ => Vec::new(),
+        };
         let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         // one index buffer in the triangle buffer's order (records come in TLAS leaf
@@ -232,7 +245,12 @@ impl SceneAccel {
             "triangle indices",
         )?;
         let mut blases = Vec::with_capacity(records.len());
+        let mut built_blases = 0;
         for r in records {
+            if let Some(at) = kept.iter().position(|(k, _)| *k == BlasKey::of(r)) {
+                blases.push(kept.swap_remove(at));
+                continue;
+            }
             let identity = r.flags & instance_flags::IDENTITY != 0;
             let (address, stride, max_vertex) = if identity {
                 (
@@ -274,6 +292,7 @@ impl SceneAccel {
                 "bottom-level acceleration structure",
             )?;
             blases.push((BlasKey::of(r), blas));
+            built_blases += 1;
         }
         let instances = Buffer::new(
             ctx,
@@ -303,6 +322,7 @@ impl SceneAccel {
             _scratch: scratch,
             scratch_address,
             sources: src.generations,
+            built_blases,
         };
         run(&|cmd| accel.record_build(cmd, records.len() as u32))?;
         Ok(accel)

@@ -556,6 +556,7 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
         b.get(scene.triangles.id)?.generation,
         b.get(scene.bvh_nodes.id)?.generation,
     ];
+    let mut previous = None;
     if let Some(mut accel) = b.scenes.remove(&scene.bvh_nodes.id) {
         if accel.keeps_bottom_levels(&records, generations) {
             // only transforms moved: the TLAS rebuilt in place over the same BLASes (the
@@ -567,7 +568,8 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
             b.scenes.insert(scene.bvh_nodes.id, accel);
             return result;
         }
-        b.scenes.insert(scene.bvh_nodes.id, accel);
+        // a level changed (deformed): its BLAS is built, the others are kept
+        previous = Some(accel);
     }
     let tri_bytes = b.read_device(
         b.get(scene.triangles.id)?.buffer.buffer,
@@ -598,7 +600,9 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
         &sources,
         &triangles,
         &records,
+        previous,
     )?;
+    b.bottom_level_builds += accel.built_blases as u64;
     if let Some(old) = b.scenes.insert(scene.bvh_nodes.id, accel) {
         drop(old); // the device is idle here: prepare_scene waited for it
     }

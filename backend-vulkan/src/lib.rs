@@ -64,6 +64,8 @@ pub struct VulkanBackend {
     // field order is drop order: everything before `ctx`, which destroys the device
     buffers: HashMap<ResourceId, DeviceBuffer>,
     scenes: HashMap<ResourceId, accel::SceneAccel>,
+    /// Bottom-level acceleration structures built so far ([`VulkanBackend::bottom_level_builds`]).
+    bottom_level_builds: u64,
     /// Top levels (TLAS nodes and instance records) written into prepared scenes' node
     /// buffers by the recording being executed, by buffer: the refit's input.
     written_top_levels: HashMap<ResourceId, Vec<[u32; 4]>>,
@@ -85,6 +87,12 @@ pub struct VulkanBackend {
 }
 
 impl VulkanBackend {
+    /// Bottom-level acceleration structures built so far: one per level when a scene is
+    /// prepared, then one per deformed instance (the others are kept); moves build none.
+    pub fn bottom_level_builds(&self) -> u64 {
+        self.bottom_level_builds
+    }
+
     /// Opens the first device with ray-tracing pipelines (`CAUSTICA_VULKAN_DEVICE=N`
     /// picks one); `CAUSTICA_VULKAN_VALIDATION=1` enables the validation layer.
     pub fn new() -> Result<VulkanBackend, BackendError> {
@@ -170,6 +178,7 @@ impl VulkanBackend {
         let mut backend = VulkanBackend {
             buffers: HashMap::new(),
             scenes: HashMap::new(),
+            bottom_level_builds: 0,
             written_top_levels: HashMap::new(),
             in_flight: Vec::new(),
             free_slots: Vec::new(),

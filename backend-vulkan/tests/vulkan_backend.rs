@@ -6,7 +6,7 @@
 use caustica_core::backend::{Backend, BackendError};
 use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
-use caustica_core::{Sspm, SspmSettings};
+use caustica_core::{Sspm, SspmSettings, Technique};
 use caustica_vulkan::VulkanBackend;
 
 fn backend() -> VulkanBackend {
@@ -66,7 +66,6 @@ fn impossible_allocation_is_a_typed_error() {
 #[test]
 fn a_submitted_frame_signals_the_timeline_semaphore_with_its_number() {
     use ash::vk;
-    use caustica_core::Technique;
     let mut b = backend();
     let timeline = b.completion_semaphore().expect("timeline semaphore");
     let mut scene = builtin("sphere").unwrap();
@@ -107,5 +106,69 @@ fn a_submitted_frame_signals_the_timeline_semaphore_with_its_number() {
             .expect("finished once the timeline passed it");
         assert!(stats.photons_stored > 0);
     }
+    s.free(&mut b).unwrap();
+}
+
+/// Issue 19 point 1 on Vulkan: deforming one instance builds that instance's BLAS only
+/// (the driver's build), moving one builds none.
+#[test]
+fn a_deformed_instance_rebuilds_its_own_bottom_level_only() {
+    use caustica_core::scene::{Shape, Transform};
+    let mut b = backend();
+    let mut scene = builtin("cornell").unwrap();
+    scene.camera.width = 32;
+    scene.camera.height = 18;
+    // both balls instances: three levels with the static one
+    for o in scene
+        .objects
+        .iter_mut()
+        .filter(|o| o.name.ends_with("ball"))
+    {
+        if let Shape::Sphere { center, .. } = &mut o.shape {
+            o.transform = Some(Transform::from_translation(std::mem::replace(
+                center,
+                glam::Vec3::ZERO,
+            )));
+        }
+    }
+    let ball = scene
+        .objects
+        .iter()
+        .position(|o| o.transform.is_some())
+        .unwrap();
+    let settings = SspmSettings {
+        photons_w: 16,
+        photons_h: 16,
+        ..SspmSettings::default()
+    };
+    let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
+    s.frame(&mut b, &mut |_| {}).expect("frame");
+    let built = b.bottom_level_builds();
+    assert_eq!(built, 3, "one BLAS per level");
+    let m = caustica_core::scene::shapes::tessellate(&scene.objects[ball].shape);
+    let squashed: Vec<glam::Vec3> = m
+        .positions
+        .iter()
+        .map(|p| glam::Vec3::new(p.x, 0.7 * p.y, p.z))
+        .collect();
+    s.set_object_vertices(&mut b, ball, &squashed, &[])
+        .expect("deform");
+    s.frame(&mut b, &mut |_| {}).expect("frame");
+    assert_eq!(
+        b.bottom_level_builds(),
+        built + 1,
+        "the deformed ball's BLAS only"
+    );
+    let t = scene.objects[ball].transform.unwrap();
+    s.set_object_transforms(
+        &mut b,
+        &[(
+            ball,
+            Transform::from_translation(t.translation + glam::Vec3::X * 0.1),
+        )],
+    )
+    .expect("move");
+    s.frame(&mut b, &mut |_| {}).expect("frame");
+    assert_eq!(b.bottom_level_builds(), built + 1, "a move builds no BLAS");
     s.free(&mut b).unwrap();
 }

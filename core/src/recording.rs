@@ -262,6 +262,30 @@ impl Recording {
         Ok(())
     }
 
+    /// Records the writes of an instance update into the uploaded scene: a move
+    /// ([`Recording::move_instances`]) or a deformation (its triangles, BLAS region and
+    /// object-space positions, then the move's writes and the `prepare_scene` after them;
+    /// Vulkan rebuilds the deformed level's BLAS, keeping the others).
+    pub fn update_instances(
+        &mut self,
+        u: &crate::device::device_scene::InstanceUpdate,
+        scene: &SceneArgs,
+    ) -> Result<(), BackendError> {
+        if let crate::device::device_scene::InstanceUpdate::Deformed(d) = u {
+            let (first, t) = &d.triangles;
+            self.write(scene.triangles, *first, t, "deformed instance triangles")?;
+            for (first, n) in &d.nodes {
+                self.write(
+                    scene.bvh_nodes,
+                    *first,
+                    n,
+                    "deformed instance BLAS and positions",
+                )?;
+            }
+        }
+        self.move_instances(u.moved(), scene)
+    }
+
     /// Records creation of a zeroed G-buffer of `pixels` texels, as its planes.
     pub fn create_gbuffer(&mut self, pixels: u32) -> GBufferPlanes {
         GBufferPlanes {

@@ -5,7 +5,7 @@
 //! |--------------------------------|--------------------------------------------------------|
 //! | `0 .. C`                       | the top level (TLAS): a CWBVH over the levels' world boxes, root at slot 0, unused slots zero |
 //! | `C .. C + 2N`                  | one [`InstanceRecord`] (2 slots) per level, in TLAS leaf order |
-//! | then                           | each level's bottom-level CWBVH (BLAS), static level first |
+//! | then                           | each level's bottom-level CWBVH (BLAS), static level first, each in a region of [`Level::blas_capacity`] slots (an instance's: room for any BVH over its triangles, so that a deformed instance's BLAS is rebuilt in place) |
 //! | then                           | the instances' object-space vertex positions, one `[f32; 4]` each (w = 1), padded to whole slots |
 //!
 //! A *level* is the scene's static level (every object without a transform, in world
@@ -52,7 +52,8 @@ pub mod instance_flags {
 /// `[0..3]` rows of `object_from_world` (f32 bits; `x' = dot(row.xyz, p) + row.w`);
 /// `[3]` = (`blas_root`, `flags`, `position_offset`, `triangle_base`);
 /// `[4]` = (`triangle_count`, `vertex_base`, `vertex_count`, `position_base`);
-/// `[5..8]` rows of `world_from_object` (Vulkan's instance transform); `[8..10]` zero.
+/// `[5..8]` rows of `world_from_object` (Vulkan's instance transform); `[8]` =
+/// (`geometry_version`, 0, 0, 0); `[9]` zero.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InstanceRecord {
     /// World space to object space (3 rows of an affine 3x4 matrix).
@@ -76,6 +77,9 @@ pub struct InstanceRecord {
     pub vertex_count: u32,
     /// vec4 index of the first object-space position (the static level: 0, unused).
     pub position_base: u32,
+    /// How many times the level's geometry was deformed since the build (Vulkan rebuilds
+    /// a level's BLAS when it changes).
+    pub geometry_version: u32,
 }
 
 fn rows(m: &Affine3A) -> [[f32; 4]; 3] {
@@ -107,7 +111,7 @@ impl InstanceRecord {
             f(self.world_from_object[0]),
             f(self.world_from_object[1]),
             f(self.world_from_object[2]),
-            z,
+            [self.geometry_version, 0, 0, 0],
             z,
         ]
     }
@@ -126,6 +130,7 @@ impl InstanceRecord {
             vertex_base: v[4][1],
             vertex_count: v[4][2],
             position_base: v[4][3],
+            geometry_version: v[8][0],
         }
     }
 }
@@ -139,6 +144,13 @@ pub struct Level {
     pub transform: Transform,
     /// Slot of its BLAS root.
     pub blas_root: u32,
+    /// Slots its BLAS region holds (the static level: its BLAS's nodes; an instance:
+    /// [`instance_blas_capacity`]).
+    pub blas_capacity: u32,
+    /// The material index of its triangles (an instance is one object).
+    pub material: u32,
+    /// Deformations since the build ([`InstanceRecord::geometry_version`]).
+    pub geometry_version: u32,
     /// Its triangles: `triangle_base .. triangle_base + triangle_count`.
     pub triangle_base: u32,
     /// Its triangle count.
@@ -190,8 +202,19 @@ impl Level {
             vertex_base: self.vertex_base,
             vertex_count: self.vertex_count,
             position_base: self.position_base,
+            geometry_version: self.geometry_version,
         }
     }
+}
+
+/// Slots reserved for an instance's BLAS over `triangles` triangles: room for any CWBVH
+/// over them. Every node but the root has at least two children and every leaf child at
+/// least one triangle, so a CWBVH over `n` triangles has at most `max(1, n - 1)` nodes
+/// (the TLAS's argument, [`tlas_capacity`]); `max(2, n)` leaves a margin. A deformed
+/// instance's BLAS is rebuilt into this region in place (80 bytes a triangle of device
+/// memory for instances; the static level is not reserved for, it never deforms).
+pub fn instance_blas_capacity(triangles: u32) -> u32 {
+    triangles.max(2)
 }
 
 /// TLAS capacity in slots for `levels` levels: the count rounded up to even, at least 2.

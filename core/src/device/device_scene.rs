@@ -4,7 +4,7 @@
 //! BVH's primitive index *is* the triangle index on every backend.
 
 use crate::device::acceleration::{
-    rebase_blas, tlas_capacity, top_level, Level, RECORD_SLOTS, SLOT_VEC4S,
+    instance_blas_capacity, rebase_blas, tlas_capacity, top_level, Level, RECORD_SLOTS, SLOT_VEC4S,
 };
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
@@ -75,6 +75,52 @@ pub struct InstanceMove {
     pub bounds: Aabb,
     /// Its new caster bounds.
     pub caster_bounds: Aabb,
+}
+
+/// What deforming an instance changes ([`SceneInstances::deform_instance`]): what a move
+/// changes (its world vertices, the top level, the bounds), and its triangles in the new
+/// BLAS's leaf order, its BLAS and its object-space positions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstanceDeform {
+    /// The world vertices, top level and bounds.
+    pub moved: InstanceMove,
+    /// The level's first triangle and its triangles in their new order.
+    pub triangles: (u32, Vec<GpuTriangle>),
+    /// Runs of the node buffer from their first vec4: the BLAS region (zero-padded to
+    /// its capacity) and the object-space positions.
+    pub nodes: Vec<(u32, Vec<[u32; 4]>)>,
+}
+
+/// An update of the instances: moved, or one deformed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum InstanceUpdate {
+    /// Instances moved ([`SceneInstances::move_instances`]).
+    Moved(InstanceMove),
+    /// An instance deformed ([`SceneInstances::deform_instance`]).
+    Deformed(InstanceDeform),
+}
+
+impl InstanceUpdate {
+    /// What it changes that a move changes too.
+    pub fn moved(&self) -> &InstanceMove {
+        match self {
+            InstanceUpdate::Moved(m) => m,
+            InstanceUpdate::Deformed(d) => &d.moved,
+        }
+    }
+}
+
+/// A tessellated mesh's vertices as the device holds them (object space for an
+/// instance): normals normalised (`Y` for a zero normal).
+pub fn mesh_vertices(m: &crate::scene::TriangleMesh) -> Vec<GpuVertex> {
+    (0..m.positions.len())
+        .map(|i| GpuVertex {
+            position: m.positions[i].to_array(),
+            u: m.uvs[i].x,
+            normal: m.normals[i].normalize_or(Vec3::Y).to_array(),
+            v: m.uvs[i].y,
+        })
+        .collect()
 }
 
 impl SceneInstances {
@@ -168,6 +214,113 @@ impl SceneInstances {
             top_level,
             bounds,
             caster_bounds,
+        })
+    }
+}
+
+impl SceneInstances {
+    /// Deforms instance `object` (an object built with a transform): `local` are its new
+    /// object-space vertices ([`mesh_vertices`] of its new shape: the same count, the same
+    /// triangles). Its BLAS is rebuilt (the one BVH build: no other level's) into its
+    /// reserved region, its triangles reordered as the new BLAS has them, its world
+    /// vertices and boxes, the scene's bounds and the top level recomputed with the
+    /// functions the build uses, so the result equals a fresh build of the deformed scene
+    /// (the records' `geometry_version` aside). On an error nothing changes.
+    pub fn deform_instance(
+        &mut self,
+        object: usize,
+        local: Vec<GpuVertex>,
+    ) -> Result<InstanceDeform, BuildError> {
+        let path = format!("objects[{object}].shape");
+        let bad = |reason: String| BuildError::Scene {
+            path: path.clone(),
+            reason,
+        };
+        let Some(k) = self.levels.iter().position(|l| l.object == Some(object)) else {
+            return Err(bad(
+                "the object has no transform in the scene it was built from, so it is part of \
+                 the static level, whose BVH a deformation would rebuild; give it one \
+                 (identity will do) to deform it"
+                    .into(),
+            ));
+        };
+        let mut levels = self.levels.clone();
+        let l = &mut levels[k];
+        if local.len() != l.vertex_count as usize {
+            return Err(bad(format!(
+                "{} vertices for an object of {}: a deformation keeps the mesh's vertices \
+                 and triangles",
+                local.len(),
+                l.vertex_count
+            )));
+        }
+        let world = world_vertices(&l.transform, &local);
+        let mut b = Aabb::EMPTY;
+        for v in &world {
+            b.grow(Vec3::from(v.position));
+        }
+        check_placed(object, &b)?;
+        let base = l.vertex_base;
+        let tris: Vec<GpuTriangle> = l
+            .triangle_indices
+            .iter()
+            .map(|&indices| GpuTriangle {
+                indices,
+                material: l.material,
+            })
+            .collect();
+        let object_position = |i: u32| Vec3A::from(local[(i - base) as usize].position);
+        let (ordered, mut nodes, _) = build_bvh(&object_position, tris)?;
+        let used = (nodes.len() / SLOT_VEC4S) as u32;
+        if used > l.blas_capacity {
+            return Err(bad(format!(
+                "the deformed BLAS has {used} nodes, over the {} its region holds",
+                l.blas_capacity
+            )));
+        }
+        rebase_blas(&mut nodes, l.blas_root, l.triangle_base);
+        nodes.resize(l.blas_capacity as usize * SLOT_VEC4S, [0; 4]);
+        let positions: Vec<[u32; 4]> = local
+            .iter()
+            .map(|v| {
+                let [x, y, z] = v.position;
+                [x.to_bits(), y.to_bits(), z.to_bits(), 1f32.to_bits()]
+            })
+            .collect();
+        l.caster_bounds = if l.caster_bounds.is_empty() {
+            Aabb::EMPTY
+        } else {
+            b
+        };
+        l.world_bounds = b;
+        l.triangle_bounds = triangle_bounds(&l.used_vertices, &world, base);
+        let run = |i: u32| world[(i - base) as usize];
+        l.smooth_normals = Some(smooth_normals(l.triangle_indices.iter().copied(), &run));
+        l.geometry_version = l.geometry_version.wrapping_add(1);
+        let (blas_root, triangle_base, position_base) =
+            (l.blas_root, l.triangle_base, l.position_base);
+        let top_level = top_level(&levels).map_err(|reason| BuildError::Scene {
+            path: "objects".into(),
+            reason,
+        })?;
+        let (bounds, caster_bounds) = level_bounds(&levels);
+        let first = (position_base - self.positions_vec4) as usize;
+        let mut object_vertices = self.object_vertices.to_vec();
+        object_vertices[first..first + local.len()].copy_from_slice(&local);
+        self.levels = levels;
+        self.object_vertices = object_vertices.into();
+        Ok(InstanceDeform {
+            moved: InstanceMove {
+                vertices: vec![(base, world)],
+                top_level,
+                bounds,
+                caster_bounds,
+            },
+            triangles: (triangle_base, ordered),
+            nodes: vec![
+                (blas_root * SLOT_VEC4S as u32, nodes),
+                (position_base, positions),
+            ],
         })
     }
 }
@@ -350,6 +503,9 @@ impl DeviceScene {
             object: None,
             transform: Transform::IDENTITY,
             blas_root: 0,
+            blas_capacity: 0,
+            material: 0,
+            geometry_version: 0,
             triangle_base: 0,
             triangle_count: 0,
             vertex_base: 0,
@@ -400,14 +556,7 @@ impl DeviceScene {
                     ),
                 });
             }
-            let local: Vec<GpuVertex> = (0..m.positions.len())
-                .map(|i| GpuVertex {
-                    position: m.positions[i].to_array(),
-                    u: m.uvs[i].x,
-                    normal: m.normals[i].normalize_or(Vec3::Y).to_array(),
-                    v: m.uvs[i].y,
-                })
-                .collect();
+            let local = mesh_vertices(&m);
             let mut world_bounds = Aabb::EMPTY;
             match o.transform {
                 None => {
@@ -434,6 +583,9 @@ impl DeviceScene {
                         object: Some(k),
                         transform,
                         blas_root: 0,
+                        blas_capacity: 0,
+                        material: mat,
+                        geometry_version: 0,
                         triangle_base: 0,
                         triangle_count: tris.len() as u32,
                         vertex_base: base,
@@ -486,6 +638,7 @@ impl DeviceScene {
         }
         let capacity = tlas_capacity(blases.len());
         let mut slot = capacity + RECORD_SLOTS * blases.len() as u32;
+        let top_vec4s = slot as usize * SLOT_VEC4S;
         let mut triangle_base = 0u32;
         let mut triangles: Vec<GpuTriangle> = Vec::new();
         reserve(&mut triangles, triangle_total, "BVH-ordered triangles")?;
@@ -497,12 +650,19 @@ impl DeviceScene {
             rebase_blas(&mut nodes, slot, triangle_base);
             level.blas_root = slot;
             level.triangle_base = triangle_base;
+            let used = (nodes.len() / SLOT_VEC4S) as u32;
+            level.blas_capacity = if level.object.is_some() {
+                instance_blas_capacity(level.triangle_count).max(used)
+            } else {
+                used
+            };
             // object-space positions follow the BLASes (their vec4 index set below)
-            slot += (nodes.len() / SLOT_VEC4S) as u32;
+            slot += level.blas_capacity;
             triangle_base += ordered.len() as u32;
             triangle_objects.extend(order.iter().map(|&i| objects[i as usize]));
             triangles.extend(ordered);
             blas_nodes.extend(nodes);
+            blas_nodes.resize(slot as usize * SLOT_VEC4S - top_vec4s, [0; 4]);
             levels.push(level);
         }
         for l in &mut levels {
@@ -563,6 +723,30 @@ impl DeviceScene {
         self.bvh_nodes[..m.top_level.len()].copy_from_slice(&m.top_level);
         self.bounds = m.bounds;
         self.caster_bounds = m.caster_bounds;
+        Ok(())
+    }
+
+    /// Deforms an instance ([`SceneInstances::deform_instance`]) and applies it to these
+    /// arrays: the result equals a fresh build of the deformed scene (the records'
+    /// `geometry_version` aside).
+    pub fn deform_instance(
+        &mut self,
+        object: usize,
+        local: Vec<GpuVertex>,
+    ) -> Result<(), BuildError> {
+        let d = self.instances.deform_instance(object, local)?;
+        for (first, v) in &d.moved.vertices {
+            self.vertices[*first as usize..*first as usize + v.len()].copy_from_slice(v);
+        }
+        let (first, t) = &d.triangles;
+        self.triangles[*first as usize..*first as usize + t.len()].copy_from_slice(t);
+        for (first, n) in &d.nodes {
+            self.bvh_nodes[*first as usize..*first as usize + n.len()].copy_from_slice(n);
+        }
+        let top = &d.moved.top_level;
+        self.bvh_nodes[..top.len()].copy_from_slice(top);
+        self.bounds = d.moved.bounds;
+        self.caster_bounds = d.moved.caster_bounds;
         Ok(())
     }
 
@@ -807,6 +991,93 @@ mod tests {
         assert_eq!(ds.bounds, fresh.bounds);
         assert_eq!(ds.caster_bounds, fresh.caster_bounds);
         assert_eq!(ds.instances, fresh.instances);
+    }
+
+    #[test]
+    fn a_deformed_instance_equals_a_fresh_build_but_for_its_version() {
+        let scene = instanced_cornell();
+        let mut ds = DeviceScene::build(&scene, Default::default()).unwrap();
+        let before_nodes = ds.bvh_nodes.len();
+        // ball 5 squashed and rippled (object space): a BVH of another shape
+        let m = tessellate(&scene.objects[5].shape);
+        let positions: Vec<Vec3> = m
+            .positions
+            .iter()
+            .map(|p| Vec3::new(1.3 * p.x, 0.6 * p.y + 0.05 * (9.0 * p.x).sin(), p.z))
+            .collect();
+        let mut deformed = scene.clone();
+        deformed.objects[5].shape = crate::scene::Shape::Mesh {
+            positions,
+            normals: Vec::new(),
+            uvs: m.uvs.clone(),
+            indices: m.indices.clone(),
+        };
+        let local = mesh_vertices(&tessellate(&deformed.objects[5].shape));
+        ds.deform_instance(5, local).unwrap();
+        let fresh = DeviceScene::build(&deformed, Default::default()).unwrap();
+        assert_eq!(ds.bvh_nodes.len(), before_nodes, "deformed in place");
+        assert!(ds.vertices == fresh.vertices, "world vertices");
+        assert_eq!(ds.triangles, fresh.triangles);
+        assert_eq!(ds.bounds, fresh.bounds);
+        assert_eq!(ds.caster_bounds, fresh.caster_bounds);
+        // the node buffer bitwise, but for the deformed level's record's version word
+        let k = ds
+            .instances
+            .levels
+            .iter()
+            .position(|l| l.object == Some(5))
+            .unwrap();
+        assert_eq!(ds.instances.levels[k].geometry_version, 1);
+        let mut nodes = ds.bvh_nodes.clone();
+        let capacity = tlas_capacity(ds.instances.levels.len()) as usize;
+        for p in 0..ds.instances.levels.len() {
+            nodes[(capacity + 2 * p) * SLOT_VEC4S + 8][0] = 0;
+        }
+        assert!(nodes == fresh.bvh_nodes, "node buffer");
+        let mut levels = ds.instances.levels.clone();
+        levels[k].geometry_version = 0;
+        assert_eq!(levels, fresh.instances.levels);
+        assert_eq!(
+            ds.instances.object_vertices,
+            fresh.instances.object_vertices
+        );
+        // another vertex count, or a static object: refused, nothing changed
+        let kept = ds.instances.clone();
+        assert!(ds.instances.deform_instance(5, Vec::new()).is_err());
+        assert!(ds.instances.deform_instance(0, Vec::new()).is_err());
+        assert_eq!(ds.instances, kept);
+    }
+
+    #[test]
+    fn an_instance_blas_fits_its_region_for_any_shape() {
+        // the bound of instance_blas_capacity on triangle soups of many sizes and shapes
+        let mut seed = 7u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1 << 24) as f32
+        };
+        for n in [1u32, 2, 3, 5, 8, 17, 64, 300, 2000] {
+            for spread in [1e-3f32, 1.0, 100.0] {
+                let mut p = Vec::new();
+                let mut tris = Vec::new();
+                for t in 0..n {
+                    let c = Vec3::new(rnd(), rnd(), rnd()) * spread;
+                    for _ in 0..3 {
+                        p.push(c + Vec3::new(rnd(), rnd(), rnd()) * 0.01);
+                    }
+                    tris.push(GpuTriangle {
+                        indices: [3 * t, 3 * t + 1, 3 * t + 2],
+                        material: 0,
+                    });
+                }
+                let (_, nodes, _) = build_bvh(&|i| Vec3A::from(p[i as usize]), tris).unwrap();
+                let used = (nodes.len() / SLOT_VEC4S) as u32;
+                assert!(
+                    used <= instance_blas_capacity(n) && used <= n.max(2) - 1 + (n == 1) as u32,
+                    "{n} triangles: {used} nodes"
+                );
+            }
+        }
     }
 
     #[test]

@@ -84,21 +84,6 @@ pub fn fitting_frame(w: u32, h: u32, bytes: u64, limit: u64) -> Option<(u32, u32
     (fw > 0 && fh > 0).then_some((fw as u32, fh as u32))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::fitting_frame;
-
-    #[test]
-    fn fitting_frame_fits_and_keeps_the_aspect() {
-        // lavapipe: 128 MiB per binding, 64-byte G-buffer texels at 2560x1440
-        let (w, h) = fitting_frame(2560, 1440, 2560 * 1440 * 64, 128 << 20).unwrap();
-        assert!(w as u64 * h as u64 * 64 <= 128 << 20);
-        assert!((w as f64 / h as f64 - 16.0 / 9.0).abs() < 0.01);
-        assert!(w >= 1900, "{w}x{h}");
-        assert_eq!(fitting_frame(10, 10, 101, 50), None);
-    }
-}
-
 /// Default photons per batch (Sspm, CausticMap, AdaptiveCaustics): 2^22, a 2048^2 grid in
 /// one batch (a 128 MiB photon buffer). Fewer, larger batches keep a large GPU busy: on
 /// an H200, Sspm's trace of 2048^2 photons took 4.33 ms in four batches of 2^20 and 3.31
@@ -118,4 +103,19 @@ pub fn photons_per_batch(wanted: u64, setting: u32, max_buffer_bytes: u64) -> u3
         .min(setting as u64)
         .min(max_buffer_bytes / PHOTON_BYTES)
         .max(1) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fitting_frame;
+
+    #[test]
+    fn fitting_frame_fits_and_keeps_the_aspect() {
+        // lavapipe: 128 MiB per binding, 64-byte G-buffer texels at 2560x1440
+        let (w, h) = fitting_frame(2560, 1440, 2560 * 1440 * 64, 128 << 20).unwrap();
+        assert!(w as u64 * h as u64 * 64 <= 128 << 20);
+        assert!((w as f64 / h as f64 - 16.0 / 9.0).abs() < 0.01);
+        assert!(w >= 1900, "{w}x{h}");
+        assert_eq!(fitting_frame(10, 10, 101, 50), None);
+    }
 }

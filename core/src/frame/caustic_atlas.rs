@@ -446,6 +446,42 @@ impl AtlasReceivers {
         any
     }
 
+    /// Follows a deformed instance whose triangles from scene index `first` are now
+    /// `ordered` (its new BLAS's leaf order, [`crate::device::device_scene::InstanceDeform`]):
+    /// each receiver triangle in that range takes the vertex indices and UVs of the
+    /// triangle now at its index (its corners follow with
+    /// [`AtlasReceivers::move_vertices`]), so the layout equals that of a fresh build.
+    pub fn reorder_triangles(
+        &mut self,
+        first: u32,
+        ordered: &[crate::device::layout::GpuTriangle],
+    ) {
+        let range = first as usize..first as usize + ordered.len();
+        // a deformation keeps every vertex's UV: read them off the triangles as they were
+        let mut uv: std::collections::HashMap<u32, Vec2> = std::collections::HashMap::new();
+        for (ts, is) in self.triangles.iter().zip(&self.indices) {
+            for (tri, idx) in ts.iter().zip(is) {
+                if range.contains(&tri.0) {
+                    for (i, t) in idx.iter().zip(tri.2) {
+                        uv.insert(*i, t);
+                    }
+                }
+            }
+        }
+        if uv.is_empty() {
+            return;
+        }
+        for (ts, is) in self.triangles.iter_mut().zip(self.indices.iter_mut()) {
+            for (tri, idx) in ts.iter_mut().zip(is.iter_mut()) {
+                if range.contains(&tri.0) {
+                    let new = ordered[tri.0 - range.start].indices;
+                    *idx = new;
+                    tri.2 = new.map(|i| uv.get(&i).copied().unwrap_or(Vec2::ZERO));
+                }
+            }
+        }
+    }
+
     /// Per receiver: whether a triangle of it has its bit set in `reach`, a triangle
     /// reach mask ([`crate::math::map_gather::triangle_reach_bit`]).
     pub fn reached(&self, reach: &[u32]) -> Vec<bool> {
@@ -717,6 +753,42 @@ mod tests {
             if !areas.is_empty() {
                 let plan = plan_atlas(&areas, (DEFAULT_ATLAS_SIDE, DEFAULT_ATLAS_SIDE)).unwrap();
                 assert_eq!(plan.tiles.len(), areas.len(), "{name}");
+            }
+        }
+    }
+
+    #[test]
+    fn generated_uv_charts_never_overlap_and_cover_every_triangle() {
+        use crate::scene::uv_charts::{chart_mesh, test_meshes};
+        let meshes = [
+            ("box", test_meshes::cuboid(), 64),
+            ("sphere", test_meshes::sphere(48), 1024),
+            ("spiral ramp", test_meshes::spiral_ramp(), 2048),
+            ("degenerate", test_meshes::degenerate(), 64),
+        ];
+        for (what, (positions, indices), side) in meshes {
+            let m = chart_mesh(&positions, &[], &indices).unwrap();
+            let tris: Vec<([Vec3; 3], [Vec2; 3])> = m
+                .indices
+                .iter()
+                .map(|t| {
+                    (
+                        t.map(|i| m.positions[i as usize]),
+                        t.map(|i| m.uvs[i as usize]),
+                    )
+                })
+                .collect();
+            for s in [16, side] {
+                receiver_owners(0, &tris, s).unwrap_or_else(|e| panic!("{what} at {s}: {e}"));
+            }
+            if what == "box" {
+                let owners = receiver_owners(0, &tris, side).unwrap();
+                for k in 0..tris.len() as u32 {
+                    assert!(
+                        owners.contains(&k),
+                        "box: triangle {k} owns no texel at {side}"
+                    );
+                }
             }
         }
     }

@@ -101,6 +101,20 @@ pub trait Technique {
         backend: &mut dyn Backend,
         moves: &[(usize, crate::scene::Transform)],
     ) -> Result<(), Error>;
+    /// Deforms an instance for the next frames: `positions` (object space) and `normals`
+    /// (empty: generated as the area-weighted face average) are the new vertices of object
+    /// `object`'s tessellated mesh, the same count, the same triangles (its shape becomes
+    /// that mesh). Only that object's bottom-level BVH is rebuilt, in place; the next
+    /// frame equals that of a technique created for the deformed scene, bitwise. The
+    /// object must have had a transform in the scene the technique was built from (an
+    /// instance; identity will do). An error leaves the technique as it was.
+    fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error>;
     /// Replaces the materials' parameters for the next frames without rebuilding geometry
     /// (the same names, none switching between diffuse and specular:
     /// [`crate::frame::material_update`]); an error leaves the technique as it was.
@@ -177,6 +191,80 @@ pub fn with_transforms(
         .validate()
         .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
     Ok(model)
+}
+
+/// `model` with object `object` deformed to `positions` and `normals` (see
+/// [`Technique::set_object_vertices`]), validated, and the object's new object-space
+/// vertices as the device holds them: what every technique checks before it changes
+/// anything. Refused: an unknown object, one without a transform, another vertex count,
+/// and a deformation that makes a triangle degenerate in f32 or a degenerate one proper
+/// (a fresh build would keep another set of triangles).
+pub fn with_deformed_object(
+    model: &crate::scene::Scene,
+    object: usize,
+    positions: &[glam::Vec3],
+    normals: &[glam::Vec3],
+) -> Result<(crate::scene::Scene, Vec<crate::device::layout::GpuVertex>), Error> {
+    use crate::scene::limits::is_degenerate;
+    use crate::scene::shapes::tessellate;
+    let bad = |why: String| Error::InvalidParameter(format!("set_object_vertices: {why}"));
+    let count = model.objects.len();
+    let o = model.objects.get(object).ok_or_else(|| {
+        bad(format!(
+            "object {object} does not exist (the scene has {count})"
+        ))
+    })?;
+    if o.transform.is_none() {
+        return Err(bad(format!(
+            "objects[{object}] ('{}') has no transform: it is part of the static level, \
+             whose BVH a deformation would rebuild; give it one (identity will do) when \
+             creating the technique",
+            o.name
+        )));
+    }
+    let old = tessellate(&o.shape);
+    if positions.len() != old.positions.len() {
+        return Err(bad(format!(
+            "{} positions for objects[{object}], whose mesh has {} vertices",
+            positions.len(),
+            old.positions.len()
+        )));
+    }
+    if !normals.is_empty() && normals.len() != positions.len() {
+        return Err(bad(format!(
+            "{} normals for {} positions (give none to generate them)",
+            normals.len(),
+            positions.len()
+        )));
+    }
+    let mut model = model.clone();
+    model.objects[object].shape = crate::scene::Shape::Mesh {
+        positions: positions.to_vec(),
+        normals: normals.to_vec(),
+        uvs: old.uvs.clone(),
+        indices: old.indices.clone(),
+    };
+    model
+        .validate()
+        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+    let new = tessellate(&model.objects[object].shape);
+    if let Some(t) = old
+        .indices
+        .iter()
+        .position(|t| is_degenerate(&old, *t) != is_degenerate(&new, *t))
+    {
+        return Err(bad(format!(
+            "triangle {t} of objects[{object}] would {} zero area in f32: the scene keeps \
+             another set of triangles then; build it anew",
+            if is_degenerate(&new, old.indices[t]) {
+                "get"
+            } else {
+                "lose its"
+            }
+        )));
+    }
+    let local = crate::device::device_scene::mesh_vertices(&new);
+    Ok((model, local))
 }
 
 /// What a technique's `Drop` calls when it still owns device buffers: counts them in

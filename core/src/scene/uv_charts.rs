@@ -449,48 +449,18 @@ pub fn generate_missing_uvs(scene: &mut Scene) -> Vec<String> {
     notes
 }
 
+/// Meshes without UVs for the tests here and in `frame::caustic_atlas` (welded, as a file
+/// without texture coordinates has them).
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::frame::caustic_atlas::receiver_owners;
+pub(crate) mod test_meshes {
     use crate::scene::shapes::tessellate;
+    use crate::scene::Shape;
+    use glam::Vec3;
+    use std::collections::HashMap;
 
-    /// The charted mesh's triangles (world corners, UV corners), and a check that each
-    /// keeps the input triangle's corners and normals.
-    fn checked(positions: &[Vec3], indices: &[[u32; 3]]) -> Vec<([Vec3; 3], [Vec2; 3])> {
-        let m = chart_mesh(positions, &[], indices).expect("charts");
-        let normals = crate::scene::shapes::flat_vertex_normals(positions, indices);
-        assert_eq!(m.indices.len(), indices.len());
-        for (a, b) in indices.iter().zip(&m.indices) {
-            for k in 0..3 {
-                assert_eq!(positions[a[k] as usize], m.positions[b[k] as usize]);
-                assert_eq!(normals[a[k] as usize], m.normals[b[k] as usize]);
-            }
-        }
-        for uv in &m.uvs {
-            assert!(
-                uv.cmpge(Vec2::ZERO).all() && uv.cmple(Vec2::ONE).all(),
-                "{uv}"
-            );
-        }
-        m.indices
-            .iter()
-            .map(|t| {
-                (
-                    t.map(|i| m.positions[i as usize]),
-                    t.map(|i| m.uvs[i as usize]),
-                )
-            })
-            .collect()
-    }
-
-    fn welded_sphere(segments: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-        let m = tessellate(&Shape::Sphere {
-            center: Vec3::new(0.3, 1.0, -0.2),
-            radius: 0.7,
-            segments,
-        });
-        // weld the seam's and the poles' copies, as a mesh without UVs would have them
+    /// A tessellated shape with the copies of each position welded into one vertex.
+    fn welded(shape: &Shape) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let m = tessellate(shape);
         let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
         let mut positions = Vec::new();
         let map: Vec<u32> = m
@@ -513,64 +483,27 @@ mod tests {
         (positions, indices)
     }
 
-    #[test]
-    fn a_welded_box_gets_six_charts_that_address_a_caustic_map() {
-        let m = tessellate(&Shape::Cuboid {
+    /// A UV sphere of `segments`, welded (its seam and poles do not weld exactly:
+    /// sin(2 pi) != 0).
+    pub fn sphere(segments: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        welded(&Shape::Sphere {
+            center: Vec3::new(0.3, 1.0, -0.2),
+            radius: 0.7,
+            segments,
+        })
+    }
+
+    /// A box of 8 shared corners (12 triangles).
+    pub fn cuboid() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        welded(&Shape::Cuboid {
             min: Vec3::new(-2.0, -0.5, -1.0),
             max: Vec3::new(2.0, 0.0, 1.0),
-        });
-        // 8 shared corners instead of the cuboid's 24 face vertices
-        let corner =
-            |p: Vec3| (p.x > 0.0) as u32 | ((p.y > -0.25) as u32) << 1 | ((p.z > 0.0) as u32) << 2;
-        let mut positions = vec![Vec3::ZERO; 8];
-        for p in &m.positions {
-            positions[corner(*p) as usize] = *p;
-        }
-        let indices: Vec<[u32; 3]> = m
-            .indices
-            .iter()
-            .map(|t| t.map(|i| corner(m.positions[i as usize])))
-            .collect();
-        let charted = chart_mesh(&positions, &[], &indices).unwrap();
-        assert_eq!(charted.charts, 6);
-        assert_eq!(charted.positions.len(), 24);
-        let tris = checked(&positions, &indices);
-        for side in [16, 64, 256] {
-            let owners = receiver_owners(0, &tris, side).unwrap();
-            // every triangle owns texels once the tile has a few texels per face
-            if side >= 64 {
-                for k in 0..tris.len() as u32 {
-                    assert!(owners.contains(&k), "triangle {k} owns no texel at {side}");
-                }
-            }
-        }
+        })
     }
 
-    #[test]
-    fn a_sphere_gets_six_caps_without_overlap() {
-        // (the tessellated sphere's seam and poles do not weld exactly: sin(2 pi) != 0, so
-        // the seam splits two caps and the pole's copies cross each other by ~1e-8 and
-        // become charts of a few triangles)
-        let (positions, indices) = welded_sphere(48);
-        let (chart_of, charts) = grow_charts(&positions, &indices);
-        let mut count = vec![0usize; charts.len()];
-        chart_of.iter().for_each(|&c| count[c as usize] += 1);
-        let mut largest: Vec<usize> = (0..charts.len()).collect();
-        largest.sort_by_key(|&c| std::cmp::Reverse(count[c]));
-        let in_caps: usize = largest[..7].iter().map(|&c| count[c]).sum();
-        assert!(in_caps * 100 > 95 * indices.len(), "{count:?}");
-        let mut axes: Vec<u8> = largest[..7].iter().map(|&c| charts[c].axis).collect();
-        axes.sort();
-        axes.dedup();
-        assert_eq!(axes, [0, 1, 2, 3, 4, 5], "one cap per axis");
-        let tris = checked(&positions, &indices);
-        receiver_owners(0, &tris, 1024).unwrap();
-    }
-
-    #[test]
-    fn a_spiral_ramp_is_split_where_it_would_overlap_itself() {
-        // two and a half turns of a ramp, every normal close to +y: one axis, one
-        // connected strip, overlapping itself in projection after each turn
+    /// Two and a half turns of a ramp, every normal close to +y: one axis, one connected
+    /// strip, overlapping itself in projection after each turn.
+    pub fn spiral_ramp() -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let (turns, steps) = (2.5f32, 120u32);
         let mut positions = Vec::new();
         for i in 0..=steps {
@@ -586,24 +519,92 @@ mod tests {
             indices.push([a, b, d]);
             indices.push([a, d, c]);
         }
-        let m = chart_mesh(&positions, &[], &indices).unwrap();
+        (positions, indices)
+    }
+
+    /// A repeated index, three collinear points and a proper triangle.
+    pub fn degenerate() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        (
+            vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(2.0, 0.0, 0.0),
+            ],
+            vec![[0, 0, 1], [0, 1, 3], [0, 2, 1]],
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_meshes;
+    use super::*;
+
+    /// Charts for a mesh, checked: every input triangle keeps its corners and normals, and
+    /// every UV lies in `[0, 1]^2`.
+    fn checked(positions: &[Vec3], indices: &[[u32; 3]]) -> ChartedMesh {
+        let m = chart_mesh(positions, &[], indices).expect("charts");
+        let normals = crate::scene::shapes::flat_vertex_normals(positions, indices);
+        assert_eq!(m.indices.len(), indices.len());
+        for (a, b) in indices.iter().zip(&m.indices) {
+            for k in 0..3 {
+                assert_eq!(positions[a[k] as usize], m.positions[b[k] as usize]);
+                assert_eq!(normals[a[k] as usize], m.normals[b[k] as usize]);
+            }
+        }
+        for uv in &m.uvs {
+            assert!(
+                uv.cmpge(Vec2::ZERO).all() && uv.cmple(Vec2::ONE).all(),
+                "{uv}"
+            );
+        }
+        m
+    }
+
+    #[test]
+    fn a_welded_box_gets_six_charts() {
+        let (positions, indices) = test_meshes::cuboid();
+        assert_eq!(positions.len(), 8);
+        let m = checked(&positions, &indices);
+        assert_eq!(m.charts, 6);
+        assert_eq!(
+            m.positions.len(),
+            24,
+            "each corner split between its three faces"
+        );
+    }
+
+    #[test]
+    fn a_sphere_gets_six_caps() {
+        // (the seam splits two caps and the pole's copies cross each other by ~1e-8 and
+        // become charts of a few triangles)
+        let (positions, indices) = test_meshes::sphere(48);
+        checked(&positions, &indices);
+        let (chart_of, charts) = grow_charts(&positions, &indices);
+        let mut count = vec![0usize; charts.len()];
+        chart_of.iter().for_each(|&c| count[c as usize] += 1);
+        let mut largest: Vec<usize> = (0..charts.len()).collect();
+        largest.sort_by_key(|&c| std::cmp::Reverse(count[c]));
+        let in_caps: usize = largest[..7].iter().map(|&c| count[c]).sum();
+        assert!(in_caps * 100 > 95 * indices.len(), "{count:?}");
+        let mut axes: Vec<u8> = largest[..7].iter().map(|&c| charts[c].axis).collect();
+        axes.sort();
+        axes.dedup();
+        assert_eq!(axes, [0, 1, 2, 3, 4, 5], "one cap per axis");
+    }
+
+    #[test]
+    fn a_spiral_ramp_is_split_where_it_would_overlap_itself() {
+        let (positions, indices) = test_meshes::spiral_ramp();
+        let m = checked(&positions, &indices);
         assert!(m.charts >= 3, "{} charts", m.charts);
-        let tris = checked(&positions, &indices);
-        receiver_owners(0, &tris, 2048).unwrap();
     }
 
     #[test]
     fn degenerate_triangles_and_bad_indices_do_not_panic() {
-        let positions = vec![
-            Vec3::ZERO,
-            Vec3::X,
-            Vec3::new(1.0, 0.0, 1.0),
-            Vec3::new(2.0, 0.0, 0.0),
-        ];
-        // a repeated index, three collinear points, a proper triangle
-        let indices = vec![[0, 0, 1], [0, 1, 3], [0, 2, 1]];
-        let tris = checked(&positions, &indices);
-        receiver_owners(0, &tris, 64).unwrap();
+        let (positions, indices) = test_meshes::degenerate();
+        checked(&positions, &indices);
         assert!(chart_mesh(&positions, &[], &[[0, 1, 9]]).is_none());
         assert!(chart_mesh(&positions, &[], &[]).is_none());
     }
@@ -611,7 +612,7 @@ mod tests {
     #[test]
     fn meshes_with_uvs_are_left_alone_and_the_others_say_so() {
         let mut scene = crate::scene::builtin::builtin("sphere").unwrap();
-        let (positions, indices) = welded_sphere(16);
+        let (positions, indices) = test_meshes::sphere(16);
         scene.objects[0].shape = Shape::Mesh {
             positions,
             normals: Vec::new(),

@@ -41,7 +41,7 @@ pub use settings::{
 };
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::{BuildBudget, DeviceScene, SceneInstances};
+use crate::device::device_scene::{BuildBudget, DeviceScene, InstanceUpdate, SceneInstances};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -231,6 +231,76 @@ pub struct CausticMap {
     instances: SceneInstances,
     /// The device's largest buffer (bytes): batches hold at most that many photons.
     max_buffer_bytes: u64,
+    /// The triangle budget the scene was built under.
+    max_triangles: u64,
+    /// The uploaded scene's buffers, as the plan lists them.
+    scene_buffers: Vec<crate::frame::plan::BufferPlan>,
+}
+
+/// The uploaded scene and what the technique derives from it, kept when only the
+/// settings change ([`Technique::set_settings`]).
+struct UploadedScene {
+    scene: SceneArgs,
+    owned: Vec<ResourceId>,
+    bytes: u64,
+    buffers: Vec<crate::frame::plan::BufferPlan>,
+    bounds: crate::math::geometry::Aabb,
+    caster_bounds: crate::math::geometry::Aabb,
+    has_dispersion: bool,
+    degenerate_triangles: u64,
+    instances: SceneInstances,
+    /// Every diffuse receiver, where the scene has casters and receivers.
+    receivers: Option<AtlasReceivers>,
+    /// AdaptiveCaustics' caster boxes and their objects (empty for CausticMap).
+    caster_boxes: Vec<crate::math::geometry::Aabb>,
+    caster_objects: Vec<u32>,
+    max_triangles: u64,
+}
+
+impl UploadedScene {
+    /// Builds and uploads `scene` (validated) under the triangle budget.
+    fn upload(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        max_triangles: u64,
+        adaptive: bool,
+    ) -> Result<UploadedScene, Error> {
+        let ds = DeviceScene::build(scene, BuildBudget { max_triangles })?;
+        let receiver = crate::frame::caustic_atlas::atlas_receivers(scene);
+        let features = SceneFeatures::of(scene);
+        let receivers = ((features.mirrors || features.dielectrics) && receiver.iter().any(|r| *r))
+            .then(|| AtlasReceivers::of(&ds, &receiver));
+        let (caster_boxes, caster_objects) = if adaptive {
+            (
+                adaptive_caustics::caster_boxes(&ds),
+                adaptive_caustics::caster_boxes_by_object(&ds)
+                    .into_iter()
+                    .map(|(o, _)| o)
+                    .collect(),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let mut rec = Recording::new();
+        let scene_args = rec.upload_scene(&ds);
+        let alloc = planned_allocation(backend, &rec, None)?;
+        backend.execute(&rec)?;
+        Ok(UploadedScene {
+            scene: scene_args,
+            owned: alloc.owned,
+            bytes: alloc.bytes,
+            buffers: alloc.buffers,
+            bounds: ds.bounds,
+            caster_bounds: ds.caster_bounds,
+            has_dispersion: ds.has_dispersion,
+            degenerate_triangles: ds.degenerate_triangles,
+            instances: ds.instances,
+            receivers,
+            caster_boxes,
+            caster_objects,
+            max_triangles,
+        })
+    }
 }
 
 impl CausticMap {
@@ -256,24 +326,39 @@ impl CausticMap {
         scene
             .validate()
             .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-        let ds = DeviceScene::build(
-            scene,
-            BuildBudget {
-                max_triangles: settings.max_triangles,
-            },
-        )?;
+        let uploaded =
+            UploadedScene::upload(backend, scene, settings.max_triangles, adaptive.is_some())?;
+        let scene_owned = uploaded.owned.clone();
+        match Self::assemble(backend, scene, settings, adaptive, uploaded) {
+            Ok(t) => Ok(t),
+            Err(e) => {
+                let _ = Self::free_ids(backend, scene_owned);
+                Err(e)
+            }
+        }
+    }
+
+    /// The technique over an uploaded scene: plans the emission, lays out the atlas and
+    /// creates the atlas's and the images' buffers. On an error, what it created is freed
+    /// (the uploaded scene is the caller's).
+    fn assemble(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        settings: CausticMapSettings,
+        adaptive: Option<AdaptiveCausticsSettings>,
+        uploaded: UploadedScene,
+    ) -> Result<CausticMap, Error> {
         let mut emission = Emission::new(
             scene,
-            ds.bounds,
-            ds.caster_bounds,
-            ds.has_dispersion,
+            uploaded.bounds,
+            uploaded.caster_bounds,
+            uploaded.has_dispersion,
             &settings,
         );
         if let Some(a) = &adaptive {
-            adaptive_caustics::fit_planes(&mut emission, a, ds.has_dispersion);
+            adaptive_caustics::fit_planes(&mut emission, a, uploaded.has_dispersion);
         }
         emission.check_light_flux()?;
-        let receiver = crate::frame::caustic_atlas::atlas_receivers(scene);
         let features = SceneFeatures::of(scene);
         let casters = features.mirrors || features.dielectrics;
         let emits = !emission.planes.is_empty();
@@ -281,7 +366,9 @@ impl CausticMap {
             let o = &settings.outputs;
             o.composite || o.raw_caustics || o.filtered_caustics || o.atlas
         };
-        let has_receivers = receiver.iter().any(|r| *r);
+        let has_receivers = crate::frame::caustic_atlas::atlas_receivers(scene)
+            .iter()
+            .any(|r| *r);
         let with_atlas = casters
             && has_receivers
             && (emits || !settings.prune)
@@ -297,13 +384,12 @@ impl CausticMap {
             }
             .into());
         }
-        let receivers = with_atlas.then(|| AtlasReceivers::of(&ds, &receiver));
         // at creation every receiver owns a tile (and has its UVs checked); the first
         // photon pass keeps the reached ones
-        let tiled = vec![true; receivers.as_ref().map_or(0, |r| r.objects.len())];
-        let layout = match &receivers {
-            Some(r) => Some(Self::lay_out(scene, r, &tiled, settings.atlas_size)?),
-            None => None,
+        let tiled = vec![true; uploaded.receivers.as_ref().map_or(0, |r| r.objects.len())];
+        let layout = match (&uploaded.receivers, with_atlas) {
+            (Some(r), true) => Some(Self::lay_out(scene, r, &tiled, settings.atlas_size)?),
+            _ => None,
         };
         let mut variant = features.trace_variant();
         variant.surface_store = true;
@@ -311,10 +397,6 @@ impl CausticMap {
         variant.fresnel_split =
             settings.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
         variant.adaptive = adaptive.is_some();
-        let mut rec = Recording::new();
-        let scene_args = rec.upload_scene(&ds);
-        let scene_alloc = planned_allocation(backend, &rec, None)?;
-        backend.execute(&rec)?;
         let mut t = CausticMap {
             name: if adaptive.is_some() {
                 "adaptive-caustics"
@@ -324,24 +406,21 @@ impl CausticMap {
             adaptive: adaptive.map(|settings| AdaptiveSetup {
                 settings,
                 traversal: None,
-                caster_boxes: adaptive_caustics::caster_boxes(&ds),
-                caster_objects: adaptive_caustics::caster_boxes_by_object(&ds)
-                    .into_iter()
-                    .map(|(o, _)| o)
-                    .collect(),
+                caster_boxes: uploaded.caster_boxes,
+                caster_objects: uploaded.caster_objects,
             }),
             settings,
             model: scene.clone(),
-            scene: scene_args,
-            bounds: ds.bounds,
-            caster_bounds: ds.caster_bounds,
-            has_dispersion: ds.has_dispersion,
-            degenerate_triangles: ds.degenerate_triangles,
+            scene: uploaded.scene,
+            bounds: uploaded.bounds,
+            caster_bounds: uploaded.caster_bounds,
+            has_dispersion: uploaded.has_dispersion,
+            degenerate_triangles: uploaded.degenerate_triangles,
             camera: GpuCamera::from_camera(&scene.camera),
             emission,
             variant,
             layout_summary: String::new(),
-            receivers,
+            receivers: uploaded.receivers,
             tiled,
             plan: FramePlan {
                 prune: true,
@@ -350,20 +429,22 @@ impl CausticMap {
                 lights: Vec::new(),
                 trace_variant: None,
                 passes: Vec::new(),
-                buffers: scene_alloc.buffers,
+                buffers: uploaded.buffers.clone(),
             },
             atlas: None,
             images: Images::default(),
             atlas_valid: false,
-            scene_owned: scene_alloc.owned,
+            scene_owned: uploaded.owned,
             atlas_owned: Vec::new(),
             image_owned: Vec::new(),
-            scene_bytes: scene_alloc.bytes,
+            scene_bytes: uploaded.bytes,
             atlas_bytes: 0,
             image_bytes: 0,
             reference: None,
-            instances: ds.instances,
+            instances: uploaded.instances,
             max_buffer_bytes: backend.capabilities().max_buffer_bytes,
+            max_triangles: uploaded.max_triangles,
+            scene_buffers: uploaded.buffers,
         };
         let made = (|| {
             if let Some(l) = &layout {
@@ -372,11 +453,41 @@ impl CausticMap {
             t.make_images(backend)
         })();
         if let Err(e) = made {
+            // the scene is the caller's
+            t.scene_owned.clear();
+            t.scene_bytes = 0;
             let _ = t.free_all(backend);
             return Err(e);
         }
         t.replan(casters, has_receivers);
         Ok(t)
+    }
+
+    /// The uploaded scene as it is now (moved instances, receivers and caster boxes
+    /// followed), for [`CausticMap::assemble`] with other settings. The buffers stay this
+    /// technique's until it hands them over.
+    fn uploaded_scene(&self) -> UploadedScene {
+        UploadedScene {
+            scene: self.scene,
+            owned: self.scene_owned.clone(),
+            bytes: self.scene_bytes,
+            buffers: self.scene_buffers.clone(),
+            bounds: self.bounds,
+            caster_bounds: self.caster_bounds,
+            has_dispersion: self.has_dispersion,
+            degenerate_triangles: self.degenerate_triangles,
+            instances: self.instances.clone(),
+            receivers: self.receivers.clone(),
+            caster_boxes: self
+                .adaptive
+                .as_ref()
+                .map_or_else(Vec::new, |a| a.caster_boxes.clone()),
+            caster_objects: self
+                .adaptive
+                .as_ref()
+                .map_or_else(Vec::new, |a| a.caster_objects.clone()),
+            max_triangles: self.max_triangles,
+        }
     }
 
     /// Uploads the atlas layout and creates the atlas's sums, maps and photon buffers.
@@ -1388,15 +1499,50 @@ impl CausticMap {
         let model = crate::frame::technique::with_transforms(&self.model, moves)?;
         let mut instances = self.instances.clone();
         let m = instances.move_instances(moves)?;
+        self.update_instances(backend, model, instances, InstanceUpdate::Moved(m))
+    }
+
+    /// Deforms an instance for the next frames
+    /// ([`crate::frame::technique::Technique::set_object_vertices`]): its BLAS rebuilt in
+    /// place, then as a move (a deformed receiver's triangles follow into the atlas, which
+    /// is laid out anew). On an error nothing changes.
+    pub fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error> {
+        let (model, local) =
+            crate::frame::technique::with_deformed_object(&self.model, object, positions, normals)?;
+        let mut instances = self.instances.clone();
+        let d = instances.deform_instance(object, local)?;
+        self.update_instances(backend, model, instances, InstanceUpdate::Deformed(d))
+    }
+
+    /// Applies an instance update already made to `instances` (a copy of the technique's)
+    /// for `model`, the scene after it.
+    fn update_instances(
+        &mut self,
+        backend: &mut dyn Backend,
+        model: Scene,
+        instances: SceneInstances,
+        u: InstanceUpdate,
+    ) -> Result<(), Error> {
+        let m = u.moved();
         let Some(emission) = self.plan_emission(&model, m.bounds, m.caster_bounds)? else {
             return self.rebuild_as(backend, &model);
         };
         let mut receivers = self.receivers.clone();
+        if let (Some(r), InstanceUpdate::Deformed(d)) = (receivers.as_mut(), &u) {
+            // the deformed level's triangles in their new order
+            r.reorder_triangles(d.triangles.0, &d.triangles.1);
+        }
         let receivers_moved = receivers
             .as_mut()
             .is_some_and(|r| r.move_vertices(&m.vertices));
         let mut rec = Recording::new();
-        rec.move_instances(&m, &self.scene)?;
+        rec.update_instances(&u, &self.scene)?;
         backend.execute(&rec)?;
         if let Some(ad) = &mut self.adaptive {
             // the traversal's caster boxes follow the moved casters
@@ -1561,6 +1707,16 @@ impl Technique for CausticMap {
         CausticMap::set_object_transforms(self, backend, moves)
     }
 
+    fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error> {
+        CausticMap::set_object_vertices(self, backend, object, positions, normals)
+    }
+
     fn set_materials(
         &mut self,
         backend: &mut dyn Backend,
@@ -1574,8 +1730,8 @@ impl Technique for CausticMap {
         backend: &mut dyn Backend,
         settings: &serde_json::Value,
     ) -> Result<(), Error> {
-        // built anew, scene included (TODO(issue 19): keep the uploaded scene); the old
-        // technique stays until the new one exists
+        // the technique is assembled anew over the uploaded scene (rebuilt only for a new
+        // triangle budget); the old one stays until the new one exists
         let (map, adaptive) = match &self.adaptive {
             None => (
                 serde_json::from_value::<CausticMapSettings>(settings.clone())
@@ -1587,9 +1743,20 @@ impl Technique for CausticMap {
                 (a.map.clone(), Some(a))
             }
         };
-        let fresh = CausticMap::build(backend, &self.model, map, adaptive)?;
-        let old = std::mem::replace(self, fresh);
+        map.validate()?;
+        if map.max_triangles != self.max_triangles {
+            let fresh = CausticMap::build(backend, &self.model, map, adaptive)?;
+            let old = std::mem::replace(self, fresh);
+            self.reference = old.reference.clone();
+            return old.free(backend);
+        }
+        let fresh =
+            CausticMap::assemble(backend, &self.model, map, adaptive, self.uploaded_scene())?;
+        let mut old = std::mem::replace(self, fresh);
         self.reference = old.reference.clone();
+        // the scene is the new technique's now
+        old.scene_owned.clear();
+        old.scene_bytes = 0;
         old.free(backend)
     }
 

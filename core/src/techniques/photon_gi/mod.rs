@@ -23,7 +23,7 @@ mod settings;
 pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::{BuildBudget, DeviceScene, SceneInstances};
+use crate::device::device_scene::{BuildBudget, DeviceScene, InstanceUpdate, SceneInstances};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -1180,7 +1180,38 @@ impl PhotonGi {
         let model = crate::frame::technique::with_transforms(&self.model, moves)?;
         let mut instances = self.instances.clone();
         let m = instances.move_instances(moves)?;
-        instances.refresh_smooth_normals(&m);
+        self.update_instances(backend, model, instances, InstanceUpdate::Moved(m))
+    }
+
+    /// Deforms an instance for the next frames
+    /// ([`crate::frame::technique::Technique::set_object_vertices`]): its BLAS rebuilt in
+    /// place, then as a move (RSMs re-planned, photons re-allocated, history reset). On
+    /// an error nothing changes.
+    pub fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error> {
+        let (model, local) =
+            crate::frame::technique::with_deformed_object(&self.model, object, positions, normals)?;
+        let mut instances = self.instances.clone();
+        let d = instances.deform_instance(object, local)?;
+        self.update_instances(backend, model, instances, InstanceUpdate::Deformed(d))
+    }
+
+    /// Applies an instance update already made to `instances` (a copy of the technique's)
+    /// for `model`, the scene after it.
+    fn update_instances(
+        &mut self,
+        backend: &mut dyn Backend,
+        model: Scene,
+        mut instances: SceneInstances,
+        u: InstanceUpdate,
+    ) -> Result<(), Error> {
+        let m = u.moved();
+        instances.refresh_smooth_normals(m);
         if shading_correction(&self.settings, &instances) != self.buffers.uncorrected.is_some() {
             let fresh = PhotonGi::new(backend, &model, self.settings.clone())?;
             let old = std::mem::replace(self, fresh);
@@ -1188,7 +1219,7 @@ impl PhotonGi {
             return old.free(backend);
         }
         let mut rec = Recording::new();
-        rec.move_instances(&m, &self.scene)?;
+        rec.update_instances(&u, &self.scene)?;
         backend.execute(&rec)?;
         self.instances = instances;
         self.bounds = m.bounds;
@@ -1380,6 +1411,16 @@ impl Technique for PhotonGi {
         moves: &[(usize, crate::scene::Transform)],
     ) -> Result<(), Error> {
         PhotonGi::set_object_transforms(self, backend, moves)
+    }
+
+    fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error> {
+        PhotonGi::set_object_vertices(self, backend, object, positions, normals)
     }
 
     fn set_materials(

@@ -30,7 +30,9 @@ pub use plan::{plan_frame, volume_light_plans, Needs};
 pub use settings::{GatherFilter, SspmSettings};
 
 use crate::backend::{read_buf, Backend};
-use crate::device::device_scene::{BuildBudget, DeviceScene, SceneInstances};
+use crate::device::device_scene::{
+    BuildBudget, BuildError, DeviceScene, InstanceUpdate, SceneInstances,
+};
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
@@ -1225,8 +1227,62 @@ impl Sspm {
         moves: &[(usize, crate::scene::Transform)],
     ) -> Result<(), Error> {
         let model = crate::frame::technique::with_transforms(&self.model, moves)?;
+        // the old placement, to go back to if the frame cannot be remade
+        let back: Vec<(usize, crate::scene::Transform)> = moves
+            .iter()
+            .map(|(k, _)| (*k, self.model.objects[*k].transform.unwrap_or_default()))
+            .collect();
+        self.update_instances(
+            backend,
+            model,
+            &|i| i.move_instances(moves).map(InstanceUpdate::Moved),
+            &|i| i.move_instances(&back).map(InstanceUpdate::Moved),
+        )
+    }
+
+    /// Deforms an instance for the next frames
+    /// ([`crate::frame::technique::Technique::set_object_vertices`]): its BLAS is rebuilt
+    /// in place (no other BVH; Vulkan rebuilds that BLAS only), its triangles, world
+    /// vertices and the top level rewritten, and the frame re-planned as for a move. The
+    /// writes run with the next frame's first submission. On an error nothing changes.
+    pub fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error> {
+        let (model, local) =
+            crate::frame::technique::with_deformed_object(&self.model, object, positions, normals)?;
+        let old = crate::device::device_scene::mesh_vertices(&crate::scene::shapes::tessellate(
+            &self.model.objects[object].shape,
+        ));
+        self.update_instances(
+            backend,
+            model,
+            &|i| {
+                i.deform_instance(object, local.clone())
+                    .map(InstanceUpdate::Deformed)
+            },
+            &|i| {
+                i.deform_instance(object, old.clone())
+                    .map(InstanceUpdate::Deformed)
+            },
+        )
+    }
+
+    /// Applies an instance update (`update`; `undo` goes back) and re-plans the frame for
+    /// `model`, the scene after it.
+    fn update_instances(
+        &mut self,
+        backend: &mut dyn Backend,
+        model: Scene,
+        update: &dyn Fn(&mut SceneInstances) -> Result<InstanceUpdate, BuildError>,
+        undo: &dyn Fn(&mut SceneInstances) -> Result<InstanceUpdate, BuildError>,
+    ) -> Result<(), Error> {
         let mut instances = self.instances.clone();
-        let m = instances.move_instances(moves)?;
+        let u = update(&mut instances)?;
+        let m = u.moved();
         let bounds = SceneBounds {
             bounds: m.bounds,
             caster_bounds: m.caster_bounds,
@@ -1243,7 +1299,7 @@ impl Sspm {
         let (constants, mut plan, _) =
             Sspm::frame_setup(&model, bounds, &self.settings, adaptive.as_ref())?;
         // written with the next frame (`pending`)
-        self.pending.move_instances(&m, &self.scene)?;
+        self.pending.update_instances(&u, &self.scene)?;
         self.instances = instances;
         let old_bounds = self.bounds;
         self.bounds = bounds;
@@ -1256,13 +1312,9 @@ impl Sspm {
         if Needs::of_plan(&plan) != Needs::of_plan(&self.plan) || self.adaptive.is_some() {
             let settings = self.settings.clone();
             if let Err(e) = self.rebuild_frame(backend, model, settings) {
-                // the old placement back, then the error
-                let back: Vec<(usize, crate::scene::Transform)> = moves
-                    .iter()
-                    .map(|(k, _)| (*k, self.model.objects[*k].transform.unwrap_or_default()))
-                    .collect();
-                let m = self.instances.move_instances(&back)?;
-                self.pending.move_instances(&m, &self.scene)?;
+                // the old geometry back, then the error
+                let u = undo(&mut self.instances)?;
+                self.pending.update_instances(&u, &self.scene)?;
                 self.bounds = old_bounds;
                 self.adaptive = old_adaptive;
                 return Err(e);
@@ -1470,6 +1522,16 @@ impl Technique for Sspm {
         moves: &[(usize, crate::scene::Transform)],
     ) -> Result<(), Error> {
         Sspm::set_object_transforms(self, backend, moves)
+    }
+
+    fn set_object_vertices(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        positions: &[glam::Vec3],
+        normals: &[glam::Vec3],
+    ) -> Result<(), Error> {
+        Sspm::set_object_vertices(self, backend, object, positions, normals)
     }
 
     fn set_materials(
