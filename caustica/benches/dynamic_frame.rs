@@ -5,7 +5,9 @@
 //! the updates (both calls, including the writes they submit and, on Vulkan, the TLAS
 //! build they wait for), the frame's host wall time and the sum of its device passes,
 //! and the same frame with nothing moving (still and moving frames interleaved). Target (H200): updates < 0.5 ms on the host,
-//! the moving frame within 10% of the static one.
+//! the moving frame within 10% of the static one. Every moving frame also deforms the
+//! first caster (`set_object_vertices`: a wobble of its vertices, its BLAS rebuilt in
+//! place, timed apart from the other updates).
 //!
 //! `cargo bench -p caustica --bench dynamic_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS=wgpu,vulkan` (default: every backend that opens
@@ -54,6 +56,16 @@ fn dynamic_scene(name: &str, w: u32, h: u32, big: u32) -> Scene {
         transform: None,
     });
     s
+}
+
+/// Frame `i`'s vertices of object `k` (object space): its tessellated mesh wobbling.
+fn wobble(scene: &Scene, k: usize, i: usize) -> Vec<Vec3> {
+    let phase = i as f32 * 0.7;
+    caustica_core::scene::shapes::tessellate(&scene.objects[k].shape)
+        .positions
+        .iter()
+        .map(|p| *p * (1.0 + 0.05 * (phase + 9.0 * p.y).sin()))
+        .collect()
 }
 
 /// Frame `i`'s lights and instance placements: the light circles, the casters sway.
@@ -128,6 +140,11 @@ fn main() {
             // frame), so that a GPU still ramping its clocks up slows both alike
             let (mut still, mut still_dev) = (Vec::new(), Vec::new());
             let (mut update, mut moving, mut moving_dev) = (Vec::new(), Vec::new(), Vec::new());
+            let mut deform = Vec::new();
+            let caster = scene.objects.iter().position(|o| o.transform.is_some());
+            let caster_triangles = caster.map_or(0, |k| {
+                caustica_core::scene::limits::tessellated_size(&scene.objects[k].shape).1
+            });
             let mut failed = None;
             for i in 0..=frames {
                 match t.frame(backend.as_mut(), &mut |_| {}) {
@@ -144,9 +161,18 @@ fn main() {
                     .set_lights(backend.as_mut(), &lights)
                     .and_then(|_| t.set_object_transforms(backend.as_mut(), &moves));
                 let ms = t0.elapsed().as_secs_f64() * 1e3;
+                let t1 = Instant::now();
+                let r = r.and_then(|_| match caster {
+                    Some(k) => {
+                        t.set_object_vertices(backend.as_mut(), k, &wobble(&scene, k, i), &[])
+                    }
+                    None => Ok(()),
+                });
+                let deform_ms = t1.elapsed().as_secs_f64() * 1e3;
                 match r.and_then(|_| t.frame(backend.as_mut(), &mut |_| {})) {
                     Ok(s) if i > 0 => {
                         update.push(ms);
+                        deform.push(deform_ms);
                         moving.push(s.frame_ms);
                         moving_dev.push(s.pass_ms.values().sum::<f64>());
                     }
@@ -162,9 +188,11 @@ fn main() {
             let (s, m) = (median(&mut still), median(&mut moving));
             println!(
                 "\n{name} on {device} / {scene_name} + static sphere: build {build_ms:.1} ms; \
-                 update (lights + instances) {:.3} ms host; frame {m:.3} ms host / {:.3} ms \
-                 passes moving, {s:.3} ms host / {:.3} ms passes still ({:+.1}%)",
+                 update (lights + instances) {:.3} ms host; deform one caster \
+                 ({caster_triangles} triangles) {:.3} ms host; frame {m:.3} ms host / {:.3} ms \
+                 passes moving and deformed, {s:.3} ms host / {:.3} ms passes still ({:+.1}%)",
                 median(&mut update),
+                median(&mut deform),
                 median(&mut moving_dev),
                 median(&mut still_dev),
                 100.0 * (m / s - 1.0)
