@@ -383,42 +383,6 @@ fn assert_same_frame(backend: &str, scene: &str, a: &Run, b: &Run) {
     }
 }
 
-/// A backend whose device binds at most `max` bytes per buffer (the CPU otherwise), and
-/// that counts the recordings it executes.
-struct Limited {
-    inner: caustica_cpu::CpuBackend,
-    max: u64,
-    executed: usize,
-}
-
-impl Backend for Limited {
-    fn name(&self) -> &'static str {
-        "limited"
-    }
-    fn capabilities(&self) -> caustica_core::Capabilities {
-        caustica_core::Capabilities {
-            max_buffer_bytes: self.max,
-            ..self.inner.capabilities()
-        }
-    }
-    fn execute(
-        &mut self,
-        r: &caustica_core::recording::Recording,
-    ) -> Result<Vec<caustica_core::backend::PassTime>, caustica_core::BackendError> {
-        self.executed += 1;
-        self.inner.execute(r)
-    }
-    fn read(
-        &mut self,
-        id: caustica_core::device::handle::ResourceId,
-    ) -> Result<Vec<u8>, caustica_core::BackendError> {
-        self.inner.read(id)
-    }
-    fn variants(&self) -> Vec<String> {
-        self.inner.variants()
-    }
-}
-
 /// A planned buffer larger than the device's largest buffer (or storage binding) is a
 /// typed OutOfMemory error from `Sspm::new` naming that buffer, before anything is
 /// uploaded: the G-buffer's first plane (16 bytes a pixel, the largest per-pixel buffer
@@ -432,11 +396,7 @@ fn oversized_buffer_is_a_typed_error_before_any_work() {
     scene.camera.width = 640;
     scene.camera.height = 360;
     let gbuffer = 640 * 360 * 16;
-    let mut b = Limited {
-        inner: caustica_cpu::CpuBackend::new().unwrap(),
-        max: gbuffer - 1,
-        executed: 0,
-    };
+    let mut b = caustica_conformance::harness::WatchedCpu::new(Some(gbuffer - 1));
     match Sspm::new(&mut b, &scene, settings(true)) {
         Err(caustica_core::Error::Backend(caustica_core::BackendError::OutOfMemory {
             bytes,
@@ -455,6 +415,6 @@ fn oversized_buffer_is_a_typed_error_before_any_work() {
         ),
     }
     assert_eq!(b.executed, 0, "work was recorded before the error");
-    b.max = gbuffer;
+    b.max_buffer_bytes = Some(gbuffer);
     assert!(Sspm::new(&mut b, &scene, settings(true)).is_ok());
 }

@@ -96,6 +96,32 @@ fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec
         .collect()
 }
 
+/// The outputs of the first frame of technique `name` created for `scene`.
+fn fresh_outputs(
+    b: &mut dyn Backend,
+    name: &str,
+    scene: &Scene,
+    settings: &serde_json::Value,
+) -> Vec<(String, Vec<[f32; 4]>)> {
+    let mut fresh = create(name, b, scene, settings).expect("create");
+    let want = frame_outputs(fresh.as_mut(), b);
+    fresh.free(b).expect("free");
+    want
+}
+
+/// `got` (the frame after an update) equals `want` (a fresh technique's) and differs from
+/// `before` (the frame before the update). (No `assert_eq!`: it would print every pixel.)
+fn same_as_fresh<T: PartialEq>(got: &T, want: &T, before: &T, what: &str) {
+    assert!(
+        got == want,
+        "{what}: the technique differs from a fresh one"
+    );
+    assert!(
+        got != before,
+        "{what}: the update changed nothing in the image"
+    );
+}
+
 /// A scene, the instances moved in it and, optionally, its lights moved too.
 type Case = (
     &'static str,
@@ -157,9 +183,7 @@ fn moved_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
         for (sname, scene, moves, lights) in cases() {
             let target = apply(&scene, &moves, &lights);
             for (name, settings) in variants() {
-                let mut fresh = create(name, b.as_mut(), &target, &settings).expect("create");
-                let want = frame_outputs(fresh.as_mut(), b.as_mut());
-                fresh.free(b.as_mut()).expect("free");
+                let want = fresh_outputs(b.as_mut(), name, &target, &settings);
 
                 let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
                 let before = frame_outputs(t.as_mut(), b.as_mut());
@@ -169,14 +193,11 @@ fn moved_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
                     t.set_lights(b.as_mut(), l).expect("set_lights");
                 }
                 let got = frame_outputs(t.as_mut(), b.as_mut());
-                // (no `assert_eq!`: it would print every pixel)
-                assert!(
-                    got == want,
-                    "{bname}/{name}/{sname}: the moved technique differs from a fresh one"
-                );
-                assert!(
-                    got != before,
-                    "{bname}/{name}/{sname}: the move changed nothing in the image"
+                same_as_fresh(
+                    &got,
+                    &want,
+                    &before,
+                    &format!("{bname}/{name}/{sname}: moved"),
                 );
                 // and back: the first placement again equals the first frame
                 let back: Vec<(usize, Transform)> = moves
@@ -370,9 +391,7 @@ fn deformed_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
                 target = with_mesh(&target, k, &deformed_positions(&scene, k, 1.0));
             }
             for (name, settings) in variants() {
-                let mut fresh = create(name, b.as_mut(), &target, &settings).expect("create");
-                let want = frame_outputs(fresh.as_mut(), b.as_mut());
-                fresh.free(b.as_mut()).expect("free");
+                let want = fresh_outputs(b.as_mut(), name, &target, &settings);
 
                 let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
                 let before = frame_outputs(t.as_mut(), b.as_mut());
@@ -381,13 +400,11 @@ fn deformed_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
                         .expect("set_object_vertices");
                 }
                 let got = frame_outputs(t.as_mut(), b.as_mut());
-                assert!(
-                    got == want,
-                    "{bname}/{name}/{sname}: the deformed technique differs from a fresh one"
-                );
-                assert!(
-                    got != before,
-                    "{bname}/{name}/{sname}: the deformation changed nothing in the image"
+                same_as_fresh(
+                    &got,
+                    &want,
+                    &before,
+                    &format!("{bname}/{name}/{sname}: deformed"),
                 );
                 // refused, and nothing changes: a static object (the floor), another
                 // vertex count, an unknown object

@@ -498,56 +498,20 @@ fn a_technique_dropped_without_free_is_reported() {
     );
 }
 
-/// The CPU backend, counting the scene uploads (the node buffer) it executes.
-struct SceneUploads {
-    inner: caustica_cpu::CpuBackend,
-    uploads: usize,
-}
-
-impl Backend for SceneUploads {
-    fn name(&self) -> &'static str {
-        "scene-uploads"
-    }
-    fn capabilities(&self) -> caustica_core::Capabilities {
-        self.inner.capabilities()
-    }
-    fn execute(
-        &mut self,
-        r: &caustica_core::recording::Recording,
-    ) -> Result<Vec<caustica_core::backend::PassTime>, caustica_core::BackendError> {
-        self.uploads += r
-            .steps
-            .iter()
-            .filter(|s| {
-                matches!(s, caustica_core::recording::Step::Upload { label, .. } if *label == "bvh nodes")
-            })
-            .count();
-        self.inner.execute(r)
-    }
-    fn read(
-        &mut self,
-        id: caustica_core::device::handle::ResourceId,
-    ) -> Result<Vec<u8>, caustica_core::BackendError> {
-        self.inner.read(id)
-    }
-    fn variants(&self) -> Vec<String> {
-        self.inner.variants()
-    }
-}
-
 /// New settings keep the uploaded scene for every technique (issue 19 point 1): no node
 /// buffer is uploaded again (CausticMap and AdaptiveCaustics assemble their atlas and
 /// images over the scene they have); a new triangle budget builds anew.
 #[test]
 fn new_settings_keep_the_uploaded_scene() {
-    let mut b = SceneUploads {
-        inner: caustica_cpu::CpuBackend::new().unwrap(),
-        uploads: 0,
-    };
+    let mut b = caustica_conformance::harness::WatchedCpu::new(None);
     let scene = small("cornell");
     for (name, before) in variants() {
         let mut t = create(name, &mut b, &scene, &before).expect("create");
-        assert_eq!(b.uploads, 1, "{name}: created with one scene upload");
+        assert_eq!(
+            b.uploads_of("bvh nodes"),
+            1,
+            "{name}: created with one scene upload"
+        );
         t.frame(&mut b, &mut |_| {}).expect("frame");
         let after = if before.get("deposit").is_some() {
             with(
@@ -562,10 +526,11 @@ fn new_settings_keep_the_uploaded_scene() {
         t.set_settings(&mut b, &after).expect("set_settings");
         t.frame(&mut b, &mut |_| {}).expect("frame");
         assert_eq!(
-            b.uploads, 1,
+            b.uploads_of("bvh nodes"),
+            1,
             "{name}: new settings uploaded the scene again"
         );
         t.free(&mut b).expect("free");
-        b.uploads = 0;
+        b.uploads.clear();
     }
 }

@@ -25,9 +25,11 @@ pub mod measure;
 pub mod quirks;
 pub mod tolerance;
 pub mod verdict;
+pub mod watched;
 
 pub use candidates::{candidates, loud, reference, Candidate, REFERENCE_BACKEND};
 pub use cases::{builtin_small, kernel_cases, BUILTIN_SIZE};
 pub use fixture::{Fixture, ReferenceInputs};
 pub use quirks::{quirk, Quirk, QUIRKS};
 pub use verdict::{Report, Verdict};
+pub use watched::WatchedCpu;

@@ -267,6 +267,44 @@ pub fn with_deformed_object(
     Ok((model, local))
 }
 
+/// A deformation as every technique's `set_object_vertices` applies it: the deformed
+/// scene, the technique's instances with the deformation made
+/// ([`crate::device::device_scene::SceneInstances::deform_instance`]), the update to
+/// write, and the object's vertices before it (to go back on a later error).
+pub struct Deformation {
+    /// The scene with the object's shape the deformed mesh.
+    pub model: crate::scene::Scene,
+    /// The instances with the deformation made.
+    pub instances: crate::device::device_scene::SceneInstances,
+    /// What to write into the uploaded scene.
+    pub update: crate::device::device_scene::InstanceUpdate,
+    /// The object's object-space vertices before the deformation.
+    pub before: Vec<crate::device::layout::GpuVertex>,
+}
+
+/// Checks and makes a deformation of object `object` of `model` on a copy of `instances`
+/// ([`with_deformed_object`]); nothing is changed on an error.
+pub fn deformation(
+    model: &crate::scene::Scene,
+    instances: &crate::device::device_scene::SceneInstances,
+    object: usize,
+    positions: &[glam::Vec3],
+    normals: &[glam::Vec3],
+) -> Result<Deformation, Error> {
+    let (deformed, local) = with_deformed_object(model, object, positions, normals)?;
+    let before = crate::device::device_scene::mesh_vertices(&crate::scene::shapes::tessellate(
+        &model.objects[object].shape,
+    ));
+    let mut instances = instances.clone();
+    let d = instances.deform_instance(object, local)?;
+    Ok(Deformation {
+        model: deformed,
+        instances,
+        update: crate::device::device_scene::InstanceUpdate::Deformed(d),
+        before,
+    })
+}
+
 /// What a technique's `Drop` calls when it still owns device buffers: counts them in
 /// [`leaked_buffers`] and says so on stderr, never silently.
 pub fn report_leak(technique: &str, buffers: usize, bytes: u64) {

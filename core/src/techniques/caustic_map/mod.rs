@@ -1513,11 +1513,14 @@ impl CausticMap {
         positions: &[glam::Vec3],
         normals: &[glam::Vec3],
     ) -> Result<(), Error> {
-        let (model, local) =
-            crate::frame::technique::with_deformed_object(&self.model, object, positions, normals)?;
-        let mut instances = self.instances.clone();
-        let d = instances.deform_instance(object, local)?;
-        self.update_instances(backend, model, instances, InstanceUpdate::Deformed(d))
+        let d = crate::frame::technique::deformation(
+            &self.model,
+            &self.instances,
+            object,
+            positions,
+            normals,
+        )?;
+        self.update_instances(backend, d.model, d.instances, d.update)
     }
 
     /// Applies an instance update already made to `instances` (a copy of the technique's)

@@ -1232,12 +1232,11 @@ impl Sspm {
             .iter()
             .map(|(k, _)| (*k, self.model.objects[*k].transform.unwrap_or_default()))
             .collect();
-        self.update_instances(
-            backend,
-            model,
-            &|i| i.move_instances(moves).map(InstanceUpdate::Moved),
-            &|i| i.move_instances(&back).map(InstanceUpdate::Moved),
-        )
+        let mut instances = self.instances.clone();
+        let m = instances.move_instances(moves)?;
+        self.update_instances(backend, model, instances, InstanceUpdate::Moved(m), &|i| {
+            i.move_instances(&back).map(InstanceUpdate::Moved)
+        })
     }
 
     /// Deforms an instance for the next frames
@@ -1252,36 +1251,31 @@ impl Sspm {
         positions: &[glam::Vec3],
         normals: &[glam::Vec3],
     ) -> Result<(), Error> {
-        let (model, local) =
-            crate::frame::technique::with_deformed_object(&self.model, object, positions, normals)?;
-        let old = crate::device::device_scene::mesh_vertices(&crate::scene::shapes::tessellate(
-            &self.model.objects[object].shape,
-        ));
-        self.update_instances(
-            backend,
-            model,
-            &|i| {
-                i.deform_instance(object, local.clone())
-                    .map(InstanceUpdate::Deformed)
-            },
-            &|i| {
-                i.deform_instance(object, old.clone())
-                    .map(InstanceUpdate::Deformed)
-            },
-        )
+        let d = crate::frame::technique::deformation(
+            &self.model,
+            &self.instances,
+            object,
+            positions,
+            normals,
+        )?;
+        let before = d.before;
+        self.update_instances(backend, d.model, d.instances, d.update, &|i| {
+            i.deform_instance(object, before.clone())
+                .map(InstanceUpdate::Deformed)
+        })
     }
 
-    /// Applies an instance update (`update`; `undo` goes back) and re-plans the frame for
-    /// `model`, the scene after it.
+    /// Applies an instance update already made to `instances` (a copy of the technique's)
+    /// and re-plans the frame for `model`, the scene after it; `undo` goes back if the
+    /// frame cannot be remade.
     fn update_instances(
         &mut self,
         backend: &mut dyn Backend,
         model: Scene,
-        update: &dyn Fn(&mut SceneInstances) -> Result<InstanceUpdate, BuildError>,
+        instances: SceneInstances,
+        u: InstanceUpdate,
         undo: &dyn Fn(&mut SceneInstances) -> Result<InstanceUpdate, BuildError>,
     ) -> Result<(), Error> {
-        let mut instances = self.instances.clone();
-        let u = update(&mut instances)?;
         let m = u.moved();
         let bounds = SceneBounds {
             bounds: m.bounds,
