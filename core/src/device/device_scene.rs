@@ -86,8 +86,8 @@ pub struct InstanceDeform {
     pub moved: InstanceMove,
     /// The level's first triangle and its triangles in their new order.
     pub triangles: (u32, Vec<GpuTriangle>),
-    /// Runs of the node buffer from their first vec4: the BLAS region (zero-padded to
-    /// its capacity) and the object-space positions.
+    /// Runs of the node buffer from their first vec4: the new BLAS (at the start of its
+    /// region; the rest of the region is not read) and the object-space positions.
     pub nodes: Vec<(u32, Vec<[u32; 4]>)>,
 }
 
@@ -279,7 +279,6 @@ impl SceneInstances {
             )));
         }
         rebase_blas(&mut nodes, l.blas_root, l.triangle_base);
-        nodes.resize(l.blas_capacity as usize * SLOT_VEC4S, [0; 4]);
         let positions: Vec<[u32; 4]> = local
             .iter()
             .map(|v| {
@@ -734,7 +733,18 @@ impl DeviceScene {
         object: usize,
         local: Vec<GpuVertex>,
     ) -> Result<(), BuildError> {
+        let k = self
+            .instances
+            .levels
+            .iter()
+            .position(|l| l.object == Some(object));
         let d = self.instances.deform_instance(object, local)?;
+        if let Some(l) = k.map(|k| &self.instances.levels[k]) {
+            // the region as a fresh build leaves it: zero past the BLAS
+            let region = l.blas_root as usize * SLOT_VEC4S
+                ..(l.blas_root + l.blas_capacity) as usize * SLOT_VEC4S;
+            self.bvh_nodes[region].fill([0; 4]);
+        }
         for (first, v) in &d.moved.vertices {
             self.vertices[*first as usize..*first as usize + v.len()].copy_from_slice(v);
         }

@@ -65,7 +65,7 @@ impl Check {
         }
     }
     /// A point (or a vector of point size): finite, every coordinate within
-    /// `MAX_COORDINATE` (2^40, see `limits`).
+    /// `MAX_COORDINATE` (2^40, see `limits`); [`is_coord3`] without the report.
     fn coord3(&mut self, path: &str, v: Vec3) -> bool {
         if !self.finite3(path, v) {
             return false;
@@ -246,8 +246,12 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 if positions.is_empty() || indices.is_empty() {
                     c.fail(&sp, "empty mesh (no positions or no triangles)");
                 }
+                // (paths are formatted only for a bad value: a mesh of a million vertices
+                // is validated on every update of a technique's scene)
                 for (k, v) in positions.iter().enumerate() {
-                    c.coord3(&format!("{sp}.positions[{k}]"), *v);
+                    if !is_coord3(*v) {
+                        c.coord3(&format!("{sp}.positions[{k}]"), *v);
+                    }
                 }
                 if !normals.is_empty() && normals.len() != positions.len() {
                     c.fail(
@@ -260,7 +264,9 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                     );
                 }
                 for (k, n) in normals.iter().enumerate() {
-                    c.direction(&format!("{sp}.normals[{k}]"), *n);
+                    if !(is_coord3(*n) && n.length_squared() >= 1e-20) {
+                        c.direction(&format!("{sp}.normals[{k}]"), *n);
+                    }
                 }
                 if !uvs.is_empty() && uvs.len() != positions.len() {
                     c.fail(
@@ -510,4 +516,10 @@ fn unit(v: Vec3) -> Vec3 {
     } else {
         Vec3::ZERO
     }
+}
+
+/// Whether `v` passes [`Check::coord3`]: finite, every coordinate within
+/// `MAX_COORDINATE`.
+fn is_coord3(v: Vec3) -> bool {
+    v.is_finite() && v.abs().max_element() <= MAX_COORDINATE
 }
