@@ -84,6 +84,8 @@ pub struct SceneAccel {
     pub sources: [u64; 3],
     /// BLASes this build made (the others were kept from the previous structures).
     pub built_blases: u32,
+    /// Triangles the index buffer holds.
+    triangle_count: u32,
 }
 
 /// Creates an acceleration structure of type `ty` sized for `info` over `primitives`,
@@ -194,28 +196,58 @@ impl SceneAccel {
         ctx: &Arc<Context>,
         run: SubmitFn<'_>,
         src: &SceneSources<'_>,
-        triangles: &[GpuTriangle],
+        triangle_count: u32,
+        fetch: &dyn Fn(u32, u32) -> Result<Vec<GpuTriangle>, BackendError>,
         records: &[InstanceRecord],
         previous: Option<SceneAccel>,
     ) -> Result<SceneAccel, BackendError> {
-        let mut kept: Vec<(BlasKey, AccelStructure)> = match previous {
-            Some(p) if p.sources == src.generations => p.blases,
-            _ => Vec::new(),
-        };
         let input = vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         // one index buffer in the triangle buffer's order (records come in TLAS leaf
-        // order; each fills its own range, an instance's indices rebased to its positions)
-        let mut indices: Vec<u32> = vec![0; triangles.len() * 3];
-        for r in records {
-            let range = r.triangle_base as usize..(r.triangle_base + r.triangle_count) as usize;
-            let tris = triangles.get(range).ok_or_else(|| {
-                BackendError::BadArgument(
-                    "an instance record names triangles past the buffer".into(),
-                )
-            })?;
+        // order; each fills its own range, an instance's indices rebased to its positions);
+        // kept from `previous` (host-visible) with the kept levels' ranges as they are
+        let (index_buffer, mut kept) = match previous {
+            Some(p) if p.sources == src.generations && p.triangle_count == triangle_count => {
+                (p._index_buffer, p.blases)
+            }
+            _ => (
+                Buffer::new(
+                    ctx,
+                    (triangle_count.max(1) as u64) * 12,
+                    input,
+                    true,
+                    "triangle indices",
+                )?,
+                Vec::new(),
+            ),
+        };
+        let building: Vec<&InstanceRecord> = records
+            .iter()
+            .filter(|r| !kept.iter().any(|(k, _)| *k == BlasKey::of(r)))
+            .collect();
+        // a first build reads every triangle back at once, a deformation its level's only
+        let all = if kept.is_empty() {
+            Some(fetch(0, triangle_count)?)
+        } else {
+            None
+        };
+        for r in &building {
+            let fetched;
+            let tris = match &all {
+                Some(t) => t
+                    .get(r.triangle_base as usize..(r.triangle_base + r.triangle_count) as usize)
+                    .ok_or_else(|| {
+                        BackendError::BadArgument(
+                            "an instance record names triangles past the buffer".into(),
+                        )
+                    })?,
+                None => {
+                    fetched = fetch(r.triangle_base, r.triangle_count)?;
+                    &fetched[..]
+                }
+            };
             let identity = r.flags & instance_flags::IDENTITY != 0;
-            let mut at = r.triangle_base as usize * 3;
+            let mut indices: Vec<u32> = Vec::with_capacity(tris.len() * 3);
             for t in tris {
                 for i in t.indices {
                     let local = if identity {
@@ -229,21 +261,14 @@ impl SceneAccel {
                                 )
                             })?
                     };
-                    indices[at] = local;
-                    at += 1;
+                    indices.push(local);
                 }
             }
+            index_buffer.write(
+                r.triangle_base as usize * 12,
+                bytemuck::cast_slice(&indices),
+            );
         }
-        let index_buffer = Buffer::with_data(
-            ctx,
-            bytemuck::cast_slice(if indices.is_empty() {
-                &[0u32; 3][..]
-            } else {
-                &indices
-            }),
-            input,
-            "triangle indices",
-        )?;
         let mut blases = Vec::with_capacity(records.len());
         let mut built_blases = 0;
         for r in records {
@@ -323,6 +348,7 @@ impl SceneAccel {
             scratch_address,
             sources: src.generations,
             built_blases,
+            triangle_count,
         };
         run(&|cmd| accel.record_build(cmd, records.len() as u32))?;
         Ok(accel)

@@ -571,23 +571,34 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
         // a level changed (deformed): its BLAS is built, the others are kept
         previous = Some(accel);
     }
-    let tri_bytes = b.read_device(
-        b.get(scene.triangles.id)?.buffer.buffer,
-        scene.triangles.bytes(),
-    )?;
-    let triangles: Vec<GpuTriangle> = bytemuck::pod_collect_to_vec(&tri_bytes);
     let vertex_count = scene.vertices.len;
-    if triangles
-        .iter()
-        .flat_map(|t| t.indices)
-        .any(|i| i >= vertex_count)
-    {
-        return Err(BackendError::BadArgument(
-            "a triangle indexes past the vertex buffer".into(),
-        ));
-    }
+    let triangle_buffer = b.get(scene.triangles.id)?.buffer.buffer;
+    let triangle_count = scene.triangles.len;
     debug_assert_eq!(std::mem::size_of::<GpuVertex>(), 32);
     let shared: &VulkanBackend = b;
+    // triangles `first .. first + count` read back (only the levels whose BLAS is built:
+    // all at a first build, a deformed level's after a deformation)
+    let fetch = |first: u32, count: u32| -> Result<Vec<GpuTriangle>, BackendError> {
+        if first as u64 + count as u64 > triangle_count as u64 {
+            return Err(BackendError::BadArgument(
+                "an instance record names triangles past the buffer".into(),
+            ));
+        }
+        let size = std::mem::size_of::<GpuTriangle>() as u64;
+        let bytes =
+            shared.read_device_range(triangle_buffer, first as u64 * size, count as u64 * size)?;
+        let triangles: Vec<GpuTriangle> = bytemuck::pod_collect_to_vec(&bytes);
+        if triangles
+            .iter()
+            .flat_map(|t| t.indices)
+            .any(|i| i >= vertex_count)
+        {
+            return Err(BackendError::BadArgument(
+                "a triangle indexes past the vertex buffer".into(),
+            ));
+        }
+        Ok(triangles)
+    };
     let sources = SceneSources {
         vertices: &shared.get(scene.vertices.id)?.buffer,
         vertex_count,
@@ -598,7 +609,8 @@ fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), Backend
         &shared.ctx,
         &|f| shared.one_shot(f),
         &sources,
-        &triangles,
+        triangle_count,
+        &fetch,
         &records,
         previous,
     )?;

@@ -304,6 +304,16 @@ impl VulkanBackend {
 
     /// Copies `bytes` of a device buffer to the host.
     fn read_device(&self, buffer: vk::Buffer, bytes: u64) -> Result<Vec<u8>, BackendError> {
+        self.read_device_range(buffer, 0, bytes)
+    }
+
+    /// Copies `bytes` of a device buffer from byte `offset` to the host.
+    fn read_device_range(
+        &self,
+        buffer: vk::Buffer,
+        offset: u64,
+        bytes: u64,
+    ) -> Result<Vec<u8>, BackendError> {
         if bytes == 0 {
             return Ok(Vec::new());
         }
@@ -320,7 +330,7 @@ impl VulkanBackend {
                 cmd,
                 buffer,
                 dst,
-                &[vk::BufferCopy::default().size(bytes)],
+                &[vk::BufferCopy::default().src_offset(offset).size(bytes)],
             )
         })?;
         staging.read(bytes as usize)
