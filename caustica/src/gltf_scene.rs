@@ -495,14 +495,15 @@ impl Importer<'_> {
                 name: at,
                 material,
                 shape: Shape::Mesh {
-                    positions,
-                    normals: if normals.len() == n {
+                    positions: positions.into(),
+                    normals: (if normals.len() == n {
                         normals
                     } else {
                         Vec::new()
-                    },
-                    uvs: if uvs.len() == n { uvs } else { Vec::new() },
-                    indices: tris,
+                    })
+                    .into(),
+                    uvs: (if uvs.len() == n { uvs } else { Vec::new() }).into(),
+                    indices: tris.into(),
                 },
                 transform: placement,
             });

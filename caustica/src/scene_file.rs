@@ -125,9 +125,9 @@ pub fn load_obj(path: &Path) -> Result<caustica_core::scene::Shape, String> {
         return Err(format!("{} has no face", path.display()));
     }
     Ok(caustica_core::scene::Shape::Mesh {
-        positions,
-        normals: if all_normals { normals } else { Vec::new() },
-        uvs: if all_uvs { uvs } else { Vec::new() },
-        indices,
+        positions: positions.into(),
+        normals: (if all_normals { normals } else { Vec::new() }).into(),
+        uvs: (if all_uvs { uvs } else { Vec::new() }).into(),
+        indices: indices.into(),
     })
 }

@@ -281,15 +281,15 @@ fn flattened(scene: &caustica::Scene) -> caustica::Scene {
             ..
         } = &mut o.shape
         {
-            for p in positions.iter_mut() {
+            for p in std::sync::Arc::make_mut(positions).iter_mut() {
                 *p = t.transform_point(*p);
             }
             let nm = glam::Mat3::from(t.normal_matrix());
-            for n in normals.iter_mut() {
+            for n in std::sync::Arc::make_mut(normals).iter_mut() {
                 *n = nm * *n;
             }
             if t.scale.x * t.scale.y * t.scale.z < 0.0 {
-                for tri in indices.iter_mut() {
+                for tri in std::sync::Arc::make_mut(indices).iter_mut() {
                     tri.swap(1, 2);
                 }
             }

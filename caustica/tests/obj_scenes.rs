@@ -48,10 +48,10 @@ fn scene_with_obj(d: &std::path::Path) -> (caustica::Scene, caustica::Scene) {
     // the inline twin: the same triangles as a mesh (no uvs: OBJ has none here)
     let mut inline = s.clone();
     inline.objects[k].shape = Shape::Mesh {
-        positions: m.positions.clone(),
-        normals: m.normals.clone(),
-        uvs: Vec::new(),
-        indices: m.indices.clone(),
+        positions: m.positions.clone().into(),
+        normals: m.normals.clone().into(),
+        uvs: Vec::new().into(),
+        indices: m.indices.clone().into(),
     };
     (with_obj, inline)
 }
@@ -86,7 +86,7 @@ fn an_obj_ball_renders_as_its_inline_mesh() {
             // order faces first use them); OBJ's decimal text of an f32 reads back to the
             // same f32
             assert_eq!(ia.len(), ib.len());
-            for (ta, tb) in ia.iter().zip(ib) {
+            for (ta, tb) in ia.iter().zip(ib.iter()) {
                 for c in 0..3 {
                     assert_eq!(a[ta[c] as usize], b[tb[c] as usize]);
                 }

@@ -128,10 +128,10 @@ fn sphere(center: Vec3, radius: f32, segments: u32) -> Shape {
 /// A mesh of `n` copies of one triangle (`tri`), or of one point when `tri` collapses.
 fn repeated_triangle(n: u32, tri: [Vec3; 3]) -> Shape {
     Shape::Mesh {
-        positions: tri.to_vec(),
-        normals: vec![],
-        uvs: vec![],
-        indices: vec![[0, 1, 2]; n as usize],
+        positions: tri.to_vec().into(),
+        normals: vec![].into(),
+        uvs: vec![].into(),
+        indices: vec![[0, 1, 2]; n as usize].into(),
     }
 }
 
@@ -334,11 +334,12 @@ fn catalogue() -> Vec<Case> {
                             Vec3::new(2.5, 0.0, 0.0),
                             Vec3::new(2.0, 0.5, 0.0),
                             Vec3::new(3.0, 0.0, 0.0),
-                        ],
-                        normals: vec![],
-                        uvs: vec![],
+                        ]
+                        .into(),
+                        normals: vec![].into(),
+                        uvs: vec![].into(),
                         // the second triangle's vertices are collinear
-                        indices: vec![[0, 1, 2], [0, 1, 3]],
+                        indices: vec![[0, 1, 2], [0, 1, 3]].into(),
                     },
                 );
                 s

@@ -359,10 +359,10 @@ fn with_mesh(scene: &Scene, k: usize, positions: &[Vec3]) -> Scene {
     let m = caustica_core::scene::shapes::tessellate(&scene.objects[k].shape);
     let mut s = scene.clone();
     s.objects[k].shape = Shape::Mesh {
-        positions: positions.to_vec(),
-        normals: Vec::new(),
-        uvs: m.uvs,
-        indices: m.indices,
+        positions: positions.to_vec().into(),
+        normals: Vec::new().into(),
+        uvs: m.uvs.into(),
+        indices: m.indices.into(),
     };
     s
 }

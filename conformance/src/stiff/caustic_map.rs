@@ -345,15 +345,15 @@ pub(super) fn generated_uv_charts(b: &mut dyn Backend) -> Result<Outcome, String
         [0, 2, 3, 1], // -z
         [4, 5, 7, 6], // +z
     ];
-    let indices = quads
+    let indices: Vec<[u32; 3]> = quads
         .iter()
         .flat_map(|q: &[u32; 4]| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
         .collect();
     scene.objects[0].shape = Shape::Mesh {
-        positions: corners,
-        normals: Vec::new(),
-        uvs: Vec::new(),
-        indices,
+        positions: corners.into(),
+        normals: Vec::new().into(),
+        uvs: Vec::new().into(),
+        indices: indices.into(),
     };
     let mut v = Verdict::new("generated uv charts");
     match CausticMap::new(b, &scene, settings(256)) {
@@ -391,15 +391,17 @@ pub(super) fn overlapping_uvs(b: &mut dyn Backend) -> Result<Outcome, String> {
                 Vec3::new(2.0, 0.0, 2.0),
                 Vec3::new(2.0, 0.0, -2.0),
                 Vec3::new(-2.0, 0.0, -2.0),
-            ],
-            normals: Vec::new(),
+            ]
+            .into(),
+            normals: Vec::new().into(),
             uvs: vec![
                 Vec2::new(0.0, 0.0),
                 Vec2::new(1.0, 0.0),
                 Vec2::new(1.0, 1.0),
                 Vec2::new(1.0, 0.0),
-            ],
-            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ]
+            .into(),
+            indices: vec![[0, 1, 2], [0, 2, 3]].into(),
         },
     );
     let mut v = Verdict::new("overlapping uvs");

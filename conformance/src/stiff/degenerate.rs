@@ -30,10 +30,10 @@ fn plane_mesh(degenerate: bool) -> Shape {
         indices.extend([[0, 0, 1], [1, 4, 2], [0, 5, 2], [3, 3, 3], [4, 1, 4]]);
     }
     Shape::Mesh {
-        positions,
-        normals: Vec::new(),
-        uvs: Vec::new(),
-        indices,
+        positions: positions.into(),
+        normals: Vec::new().into(),
+        uvs: Vec::new().into(),
+        indices: indices.into(),
     }
 }
 
@@ -71,16 +71,16 @@ pub(super) fn nan_normals(b: &mut dyn Backend) -> Result<Outcome, String> {
             unreachable!()
         };
         let mut normals = vec![Vec3::Y; positions.len()];
-        let mut positions = positions;
+        let mut positions = positions.to_vec();
         if is_normal {
             normals[2] = bad;
         } else {
             positions[2] = bad;
         }
         scene.objects[0].shape = Shape::Mesh {
-            positions,
-            normals,
-            uvs: Vec::new(),
+            positions: positions.into(),
+            normals: normals.into(),
+            uvs: Vec::new().into(),
             indices,
         };
         let field = if is_normal {

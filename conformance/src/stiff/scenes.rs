@@ -93,7 +93,9 @@ pub fn transform_scene(scene: &Scene, s: f32, o: Vec3) -> Scene {
                 *min = p(*min);
                 *max = p(*max);
             }
-            Shape::Mesh { positions, .. } => positions.iter_mut().for_each(|x| *x = p(*x)),
+            Shape::Mesh { positions, .. } => std::sync::Arc::make_mut(positions)
+                .iter_mut()
+                .for_each(|x| *x = p(*x)),
             _ => panic!("transform_scene: shape not supported"),
         }
     }

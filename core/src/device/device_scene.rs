@@ -1017,10 +1017,10 @@ mod tests {
             .collect();
         let mut deformed = scene.clone();
         deformed.objects[5].shape = crate::scene::Shape::Mesh {
-            positions,
-            normals: Vec::new(),
-            uvs: m.uvs.clone(),
-            indices: m.indices.clone(),
+            positions: positions.into(),
+            normals: Vec::new().into(),
+            uvs: m.uvs.clone().into(),
+            indices: m.indices.clone().into(),
         };
         let local = mesh_vertices(&tessellate(&deformed.objects[5].shape));
         ds.deform_instance(5, local).unwrap();

@@ -239,10 +239,10 @@ pub fn with_deformed_object(
     }
     let mut model = model.clone();
     model.objects[object].shape = crate::scene::Shape::Mesh {
-        positions: positions.to_vec(),
-        normals: normals.to_vec(),
-        uvs: old.uvs.clone(),
-        indices: old.indices.clone(),
+        positions: positions.to_vec().into(),
+        normals: normals.to_vec().into(),
+        uvs: old.uvs.clone().into(),
+        indices: old.indices.clone().into(),
     };
     model
         .validate()

@@ -353,10 +353,10 @@ mod tests {
         );
         let mut s = builtin("sphere").unwrap();
         s.objects[0].shape = crate::scene::Shape::Mesh {
-            positions: vec![],
-            normals: vec![],
-            uvs: vec![],
-            indices: vec![],
+            positions: vec![].into(),
+            normals: vec![].into(),
+            uvs: vec![].into(),
+            indices: vec![].into(),
         };
         let e = parse_scene(&to_json(&s), "f").unwrap_err();
         assert!(e.reason.contains("empty mesh"), "{e}");

@@ -189,6 +189,15 @@ pub struct Object {
     pub transform: Option<Transform>,
 }
 
+/// A mesh's per-vertex or per-triangle data, shared: cloning a scene (every update of a
+/// technique's scene does) copies no mesh. `vec.into()` makes one; `Arc::make_mut`
+/// changes one in place.
+pub type MeshData<T> = std::sync::Arc<Vec<T>>;
+
+fn no_data<T>(v: &MeshData<T>) -> bool {
+    v.is_empty()
+}
+
 /// Geometry. Procedural shapes are tessellated into triangles by [`shapes::tessellate`];
 /// closed shapes have outward normals (required for dielectrics: the side a ray arrives
 /// from tells inside from outside).
@@ -201,15 +210,15 @@ pub enum Shape {
     /// generated charts, [`uv_charts::generate_missing_uvs`]).
     Mesh {
         /// Vertex positions (world space, scene units).
-        positions: Vec<Vec3>,
+        positions: MeshData<Vec3>,
         /// Per-vertex shading normals (world space; normalised on upload), or empty.
-        #[serde(default, skip_serializing_if = "Vec::is_empty")]
-        normals: Vec<Vec3>,
+        #[serde(default, skip_serializing_if = "no_data")]
+        normals: MeshData<Vec3>,
         /// Per-vertex texture coordinates, or empty.
-        #[serde(default, skip_serializing_if = "Vec::is_empty")]
-        uvs: Vec<Vec2>,
+        #[serde(default, skip_serializing_if = "no_data")]
+        uvs: MeshData<Vec2>,
         /// Triangles as triples of indices into `positions`.
-        indices: Vec<[u32; 3]>,
+        indices: MeshData<[u32; 3]>,
     },
     /// A triangle mesh in a Wavefront OBJ file (path relative to the scene file), loaded
     /// by the facade's scene loader (`caustica::scene_file`, the `obj` feature), which

@@ -15,15 +15,15 @@ pub fn tessellate(shape: &Shape) -> TriangleMesh {
             uvs,
             indices,
         } => {
-            m.positions = positions.clone();
-            m.indices = indices.clone();
+            m.positions = positions.to_vec();
+            m.indices = indices.to_vec();
             m.uvs = if uvs.len() == positions.len() {
-                uvs.clone()
+                uvs.to_vec()
             } else {
                 vec![Vec2::ZERO; positions.len()]
             };
             m.normals = if normals.len() == positions.len() {
-                normals.clone()
+                normals.to_vec()
             } else {
                 flat_vertex_normals(positions, indices)
             };

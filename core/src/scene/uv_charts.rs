@@ -441,10 +441,10 @@ pub fn generate_missing_uvs(scene: &mut Scene) -> Vec<String> {
             m.positions.len(),
             positions.len()
         ));
-        *positions = m.positions;
-        *normals = m.normals;
-        *uvs = m.uvs;
-        *indices = m.indices;
+        *positions = m.positions.into();
+        *normals = m.normals.into();
+        *uvs = m.uvs.into();
+        *indices = m.indices.into();
     }
     notes
 }
@@ -614,10 +614,10 @@ mod tests {
         let mut scene = crate::scene::builtin::builtin("sphere").unwrap();
         let (positions, indices) = test_meshes::sphere(16);
         scene.objects[0].shape = Shape::Mesh {
-            positions,
-            normals: Vec::new(),
-            uvs: Vec::new(),
-            indices,
+            positions: positions.into(),
+            normals: Vec::new().into(),
+            uvs: Vec::new().into(),
+            indices: indices.into(),
         };
         let before = scene.clone();
         let notes = generate_missing_uvs(&mut scene);
