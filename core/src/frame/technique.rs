@@ -126,12 +126,11 @@ pub trait Technique {
 
     /// Replaces the technique's settings for the next frames (`settings`: a JSON object
     /// as [`crate::techniques::create`] takes it; missing fields take their defaults);
-    /// the next frame equals, bitwise, that of a technique created with them. Sspm and
-    /// PhotonGi remake only their frame buffers (the uploaded scene stays);
-    /// AdaptiveCaustics' screen target may change its screen settings only; CausticMap
-    /// and AdaptiveCaustics' atlas target are built anew, scene included
-    /// (TODO(issue 19): keep their uploaded scene). An error leaves the technique as it
-    /// was.
+    /// the next frame equals, bitwise, that of a technique created with them. The
+    /// uploaded scene stays (a new `max_triangles` budget builds it anew): Sspm and
+    /// PhotonGi remake their frame buffers, CausticMap and AdaptiveCaustics' atlas target
+    /// their atlas and images; AdaptiveCaustics' screen target may change its screen
+    /// settings only. An error leaves the technique as it was.
     fn set_settings(
         &mut self,
         backend: &mut dyn Backend,
