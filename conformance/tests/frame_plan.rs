@@ -404,7 +404,7 @@ fn oversized_buffer_is_a_typed_error_before_any_work() {
         })) => {
             assert_eq!(bytes, gbuffer);
             assert!(
-                what.contains("gbuffer") && what.contains("limited"),
+                what.contains("gbuffer") && what.contains("watched-cpu"),
                 "{what}"
             );
         }
