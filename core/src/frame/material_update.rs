@@ -55,8 +55,9 @@ pub fn material_update(
     }
     let mut model = scene.clone();
     model.materials = materials.clone();
+    // (materials change no shape: the scene's meshes are not checked again)
     model
-        .validate()
+        .validate_except_shapes()
         .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
     let dispersive = |s: &Scene| {
         s.materials

@@ -156,6 +156,16 @@ pub fn leaked_buffers() -> u64 {
     LEAKED_BUFFERS.load(Ordering::Relaxed)
 }
 
+/// `model` checked after a change that leaves every shape as it was (validated when the
+/// technique was made): [`crate::scene::Scene::validate_except_shapes`], whose time does
+/// not grow with the meshes.
+fn validated_update(model: crate::scene::Scene) -> Result<crate::scene::Scene, Error> {
+    model
+        .validate_except_shapes()
+        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+    Ok(model)
+}
+
 /// `model` with its camera replaced by `camera`, validated: what every technique's
 /// `set_camera` checks before it changes anything.
 pub fn with_camera(
@@ -164,10 +174,18 @@ pub fn with_camera(
 ) -> Result<crate::scene::Scene, Error> {
     let mut model = model.clone();
     model.camera = camera.clone();
-    model
-        .validate()
-        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-    Ok(model)
+    validated_update(model)
+}
+
+/// `model` with its lights replaced by `lights`, validated: what every technique's
+/// `set_lights` checks before it changes anything.
+pub fn with_lights(
+    model: &crate::scene::Scene,
+    lights: &[Light],
+) -> Result<crate::scene::Scene, Error> {
+    let mut model = model.clone();
+    model.lights = lights.to_vec();
+    validated_update(model)
 }
 
 /// `model` with the objects in `moves` given their new transforms, validated: what every
@@ -186,10 +204,7 @@ pub fn with_transforms(
         })?;
         o.transform = Some(*t);
     }
-    model
-        .validate()
-        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-    Ok(model)
+    validated_update(model)
 }
 
 /// `model` with object `object` deformed to `positions` and `normals` (see

@@ -375,6 +375,13 @@ impl Scene {
     pub fn validate(&self) -> Result<(), Vec<Problem>> {
         validate::validate(self)
     }
+
+    /// [`Scene::validate`] but for the shapes' own fields (a mesh's every vertex): what a
+    /// change that leaves every shape as it was needs to check (lights, camera, materials,
+    /// transforms), in time independent of the meshes' size.
+    pub fn validate_except_shapes(&self) -> Result<(), Vec<Problem>> {
+        validate::validate_parts(self, false)
+    }
 }
 
 /// Deserialises a map, refusing a key that appears twice (serde's maps keep the last).

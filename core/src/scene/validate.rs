@@ -137,6 +137,13 @@ impl Check {
 }
 
 pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
+    validate_parts(s, true)
+}
+
+/// [`validate`], with the shapes' own checks (every vertex of a mesh) left out when
+/// `shapes` is false: what an update that changes no shape needs (a technique's scene
+/// was validated whole when it was made).
+pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>> {
     let mut c = Check {
         problems: Vec::new(),
     };
@@ -227,6 +234,9 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
                 format!("{p}.material"),
                 format!("unknown material '{}'", o.material),
             );
+        }
+        if !shapes {
+            continue;
         }
         let sp = format!("{p}.shape");
         match &o.shape {

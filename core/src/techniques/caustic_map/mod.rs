@@ -1378,11 +1378,7 @@ impl CausticMap {
         backend: &mut dyn Backend,
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
-        let mut model = self.model.clone();
-        model.lights = lights.to_vec();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let model = crate::frame::technique::with_lights(&self.model, lights)?;
         let Some(emission) = self.plan_emission(&model, self.bounds, self.caster_bounds)? else {
             return self.rebuild_as(backend, &model);
         };

@@ -1126,11 +1126,7 @@ impl PhotonGi {
         backend: &mut dyn Backend,
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
-        let mut model = self.model.clone();
-        model.lights = lights.to_vec();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let model = crate::frame::technique::with_lights(&self.model, lights)?;
         let gpu: Vec<GpuLight> = lights
             .iter()
             .map(crate::device::device_scene::gpu_light)

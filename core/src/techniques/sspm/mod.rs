@@ -1183,11 +1183,7 @@ impl Sspm {
         backend: &mut dyn Backend,
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
-        let mut model = self.model.clone();
-        model.lights = lights.to_vec();
-        model
-            .validate()
-            .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+        let model = crate::frame::technique::with_lights(&self.model, lights)?;
         let (constants, mut plan, _) =
             Sspm::frame_setup(&model, self.bounds, &self.settings, self.adaptive.as_ref())?;
         let gpu: Vec<GpuLight> = lights
