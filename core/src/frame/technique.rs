@@ -208,9 +208,9 @@ pub fn with_transforms(
 }
 
 /// `model` with object `object` deformed to `positions` and `normals` (see
-/// [`Technique::set_object_vertices`]), validated, and the object's new object-space
-/// vertices as the device holds them: what every technique checks before it changes
-/// anything. Refused: an unknown object, one without a transform, another vertex count,
+/// [`Technique::set_object_vertices`]), validated, and the object's new and old
+/// object-space vertices as the device holds them: what every technique checks before
+/// it changes anything. Refused: an unknown object, one without a transform, another vertex count,
 /// and a deformation that makes a triangle degenerate in f32 or a degenerate one proper
 /// (a fresh build would keep another set of triangles).
 pub fn with_deformed_object(
@@ -218,7 +218,14 @@ pub fn with_deformed_object(
     object: usize,
     positions: &[glam::Vec3],
     normals: &[glam::Vec3],
-) -> Result<(crate::scene::Scene, Vec<crate::device::layout::GpuVertex>), Error> {
+) -> Result<
+    (
+        crate::scene::Scene,
+        Vec<crate::device::layout::GpuVertex>,
+        Vec<crate::device::layout::GpuVertex>,
+    ),
+    Error,
+> {
     use crate::scene::limits::is_degenerate;
     use crate::scene::shapes::tessellate;
     let bad = |why: String| Error::InvalidParameter(format!("set_object_vertices: {why}"));
@@ -278,7 +285,8 @@ pub fn with_deformed_object(
         )));
     }
     let local = crate::device::device_scene::mesh_vertices(&new);
-    Ok((model, local))
+    let before = crate::device::device_scene::mesh_vertices(&old);
+    Ok((model, local, before))
 }
 
 /// A deformation as every technique's `set_object_vertices` applies it: the deformed
@@ -305,10 +313,7 @@ pub fn deformation(
     positions: &[glam::Vec3],
     normals: &[glam::Vec3],
 ) -> Result<Deformation, Error> {
-    let (deformed, local) = with_deformed_object(model, object, positions, normals)?;
-    let before = crate::device::device_scene::mesh_vertices(&crate::scene::shapes::tessellate(
-        &model.objects[object].shape,
-    ));
+    let (deformed, local, before) = with_deformed_object(model, object, positions, normals)?;
     let mut instances = instances.clone();
     let d = instances.deform_instance(object, local)?;
     Ok(Deformation {
