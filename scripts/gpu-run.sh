@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -309,6 +309,16 @@ if has deform; then
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./instance_updates --test-threads=1 --nocapture
     run timeout 60 ./vulkan_backend --test-threads=1
     run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
+fi
+if has castercull; then
+    # The first-segment caster-ball test (core's device::caster_spheres): trace_photons on
+    # every backend against the CPU and against itself without the test (its notes say how
+    # many photons the test ended), then Sspm's and CausticMap's frames.
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend trace_photons --test-threads=1 --nocapture
+    run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

@@ -39,6 +39,16 @@
 #define PATH_NEGLIGIBLE 3
 #define PATH_BOUNCE_LIMIT 4
 
+// core::math::geometry::ray_meets_caster_spheres over the batch's caster balls (core's
+// device::caster_spheres): a first segment that meets none cannot meet a caster first.
+inline bool ray_meets_caster_spheres(__global const TraceParams* p, float3 origin, float3 dir) {
+    uint count = p->caster_sphere_count;
+    if (count == 0u) return true;
+    for (uint k = 0u; k < min(count, (uint)MAX_CASTER_SPHERES); k++)
+        if (ray_meets_sphere(origin, dir, p->caster_spheres[k])) return true;
+    return false;
+}
+
 // The emitted ray and flux of photon `index` (global index in the light's grid).
 inline void emit_photon(__global const GpuLight* lights, __global const TraceParams* p,
                         uint index, float3* origin, float3* dir, float3* flux) {
@@ -79,6 +89,8 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
     float min_power = p->photon_flux[3] * emitted_max;
     *rays = 0u;
     if (max_element3(flux) <= 0.0f || max_element3(flux) < min_power) return PATH_NEGLIGIBLE;
+    // no caster ball on the first segment, so no caster first: no ray traced
+    if (!ray_meets_caster_spheres(p, origin, dir)) return PATH_NO_SPECULAR;
     int channel = -1;
     for (uint bounce = 0u; bounce < p->max_bounces; bounce++) {
         *rays = bounce + 1u;
@@ -223,6 +235,10 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
     *splits = 0u;
     if (max_element3(flux) <= 0.0f || max_element3(flux) < min_power) {
         RECORD(PATH_NEGLIGIBLE, &none);
+        return 0u;
+    }
+    if (!ray_meets_caster_spheres(p, origin, dir)) {
+        RECORD(PATH_NO_SPECULAR, &none);
         return 0u;
     }
     uint budget = clamp(p->split_budget, 1u, (uint)MAX_SPLIT_BRANCHES);

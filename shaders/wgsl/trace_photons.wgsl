@@ -45,6 +45,21 @@ const PATH_ESCAPED: i32 = 2;
 const PATH_NEGLIGIBLE: i32 = 3;
 const PATH_BOUNCE_LIMIT: i32 = 4;
 
+// core::math::geometry::ray_meets_caster_spheres over the batch's caster balls (core's
+// device::caster_spheres): a first segment that meets none cannot meet a caster first.
+fn ray_meets_caster_spheres(origin: vec3<f32>, dir: vec3<f32>) -> bool {
+    let count = params.caster_sphere_count;
+    if (count == 0u) {
+        return true;
+    }
+    for (var k = 0u; k < min(count, MAX_CASTER_SPHERES); k++) {
+        if (ray_meets_sphere(origin, dir, params.caster_spheres[k])) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // The emitted ray and flux of photon `index` (global index in the light's grid).
 fn emit_photon(p: TraceParams, index: u32, origin: ptr<function, vec3<f32>>,
                dir: ptr<function, vec3<f32>>, flux: ptr<function, vec3<f32>>) {
@@ -87,6 +102,10 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
     *rays = 0u;
     if (max_element3(flux) <= 0.0 || max_element3(flux) < min_power) {
         return PATH_NEGLIGIBLE;
+    }
+    if (!ray_meets_caster_spheres(origin, dir)) {
+        // no caster ball on the first segment, so no caster first: no ray traced
+        return PATH_NO_SPECULAR;
     }
     var channel = -1;
     for (var bounce = 0u; bounce < p.max_bounces; bounce++) {
@@ -231,6 +250,10 @@ fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) ->
     *splits = 0u;
     if (max_element3(flux) <= 0.0 || max_element3(flux) < min_power) {
         record_end(PATH_NEGLIGIBLE, none, p.flux_quantum);
+        return 0u;
+    }
+    if (!ray_meets_caster_spheres(origin, dir)) {
+        record_end(PATH_NO_SPECULAR, none, p.flux_quantum);
         return 0u;
     }
     let budget = clamp(p.split_budget, 1u, MAX_SPLIT_BRANCHES);

@@ -33,7 +33,7 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::TraceVariant;
 use caustica_core::math::fixed_point::quantize;
-use caustica_core::math::geometry::offset_ray_origin;
+use caustica_core::math::geometry::{offset_ray_origin, ray_meets_caster_spheres};
 use caustica_core::math::optics::{
     beer_lambert, cauchy_ior, dielectric_scatter, fresnel_reflectance, reflect, refract,
     CHANNEL_WAVELENGTH_UM,
@@ -226,6 +226,12 @@ pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
     let min_power = p.photon_flux[3] * emitted_max;
     if flux.max_element() <= 0.0 || flux.max_element() < min_power {
         on_end(PathEnd::Negligible);
+        return (0, 0);
+    }
+    if !ray_meets_caster_spheres(origin, dir, &p.caster_spheres, p.caster_sphere_count) {
+        // its first segment meets no caster ball, so no caster first (core's
+        // device::caster_spheres): no ray traced
+        on_end(PathEnd::NoSpecular);
         return (0, 0);
     }
     let budget = p.split_budget.clamp(1, MAX_SPLIT_BRANCHES);
@@ -545,6 +551,11 @@ pub fn trace_photon_variant<
     let min_power = p.photon_flux[3] * emitted_max;
     if flux.max_element() <= 0.0 || flux.max_element() < min_power {
         return (PathEnd::Negligible, 0);
+    }
+    if !ray_meets_caster_spheres(origin, dir, &p.caster_spheres, p.caster_sphere_count) {
+        // its first segment meets no caster ball, so no caster first (core's
+        // device::caster_spheres): no ray traced
+        return (PathEnd::NoSpecular, 0);
     }
     let mut channel: Option<usize> = None;
     for bounce in 0..p.max_bounces {

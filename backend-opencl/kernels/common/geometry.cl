@@ -91,6 +91,19 @@ inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, 
 #define OFFSET_REL (1.0f / 32768.0f)
 #define OFFSET_MIN_SCALE 7.888609e-31f
 
+// core::math::geometry::SPHERE_TEST_SLACK (2^-16)
+#define SPHERE_TEST_SLACK (1.0f / 65536.0f)
+
+// core::math::geometry::ray_meets_sphere: whether the ray origin + t dir (t >= 0) may meet
+// the ball (centre xyz, radius w); false only outside the test's rounding slack.
+inline bool ray_meets_sphere(float3 origin, float3 dir, __global const float* sphere) {
+    float3 oc = (float3)(sphere[0], sphere[1], sphere[2]) - origin;
+    float tca = fmax(dot3(oc, dir), 0.0f);
+    float oc2 = dot3(oc, oc);
+    float r = sphere[3];
+    return !(oc2 - tca * tca > r * r + SPHERE_TEST_SLACK * oc2);
+}
+
 inline float3 offset_ray_origin(float3 p, float3 n) {
     float m = fmax(fmax(fabs(p.x), fabs(p.y)), fmax(fabs(p.z), OFFSET_MIN_SCALE));
     float d = m * OFFSET_REL;

@@ -32,11 +32,13 @@ typedef struct {
 typedef struct { float position[3]; float hit_distance; float flux[3]; uint direction; } Photon;
 // u64 sums as (lo, hi) u32 words: flux r, g, b, hit distance, photon count.
 typedef struct { uint words[10]; } DepositTexel;
+#define MAX_CASTER_SPHERES 8 // core::device::layout::MAX_CASTER_SPHERES
 typedef struct {
     uint light; uint emission; uint grid_w; uint grid_h;
     uint first; uint count; uint seed; uint max_bounces;
     float origin[4]; float axis[4]; float rect_u[4]; float rect_v[4]; float photon_flux[4];
-    float flux_quantum; uint split_budget; uint fresnel_model; uint _pad;
+    float flux_quantum; uint split_budget; uint fresnel_model; uint caster_sphere_count;
+    float caster_spheres[MAX_CASTER_SPHERES][4];
 } TraceParams;
 typedef struct {
     GpuCamera camera;

@@ -68,6 +68,21 @@ bool intersect_triangle(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float 
 const float OFFSET_REL = 1.0 / 32768.0;
 const float OFFSET_MIN_SCALE = 7.888609e-31;
 
+// core::math::geometry::SPHERE_TEST_SLACK (2^-16)
+const float SPHERE_TEST_SLACK = 1.52587890625e-5;
+
+// core::math::geometry::ray_meets_sphere: whether the ray origin + t dir (t >= 0) may meet
+// the ball (centre xyz, radius w); false only outside the test's rounding slack.
+bool ray_meets_sphere(vec3 origin, vec3 dir, vec4 sphere) {
+    precise vec3 oc = sphere.xyz - origin;
+    precise float tca = max(dot3(oc, dir), 0.0);
+    precise float oc2 = dot3(oc, oc);
+    precise float r2 = sphere.w * sphere.w;
+    precise float d2 = oc2 - tca * tca;
+    precise float bound = r2 + SPHERE_TEST_SLACK * oc2;
+    return !(d2 > bound);
+}
+
 vec3 offset_ray_origin(vec3 p, vec3 n) {
     float m = max(max(abs(p.x), abs(p.y)), max(abs(p.z), OFFSET_MIN_SCALE));
     precise float d = m * OFFSET_REL;

@@ -20,10 +20,10 @@
 //                     material 44, uv 48, view_distance 56, flags 60
 //   Photon        32: position 0, hit_distance 12, flux 16, direction 28
 //   DepositTexel  40: words 0 (10 x u32)
-//   TraceParams  128: light 0, emission 4, grid_w 8, grid_h 12, first 16, count 20,
+//   TraceParams  256: light 0, emission 4, grid_w 8, grid_h 12, first 16, count 20,
 //                     seed 24, max_bounces 28, origin 32, axis 48, rect_u 64, rect_v 80,
 //                     photon_flux 96, flux_quantum 112, split_budget 116,
-//                     fresnel_model 120, _pad 124
+//                     fresnel_model 120, caster_sphere_count 124, caster_spheres 128
 //   DepositParams 80: camera 0, flux_quantum 64, hit_distance_quantum 68,
 //                     depth_tolerance 72, photon_capacity 76
 //   GatherParams 128: camera 0, roughness 64, hit_distance_min 68, hit_distance_max 72,
@@ -70,11 +70,13 @@ struct GBufferTexel {
 struct Photon { vec3 position; float hit_distance; vec3 flux; uint direction; };
 // u64 sums as (lo, hi) u32 words: flux r, g, b, hit distance, photon count.
 struct DepositTexel { uint words[10]; };
+const uint MAX_CASTER_SPHERES = 8u; // core::device::layout::MAX_CASTER_SPHERES
 struct TraceParams {
     uint light; uint emission; uint grid_w; uint grid_h;
     uint first; uint count; uint seed; uint max_bounces;
     vec4 origin; vec4 axis; vec4 rect_u; vec4 rect_v; vec4 photon_flux;
-    float flux_quantum; uint split_budget; uint fresnel_model; uint _pad;
+    float flux_quantum; uint split_budget; uint fresnel_model; uint caster_sphere_count;
+    vec4 caster_spheres[MAX_CASTER_SPHERES];
 };
 struct DepositParams {
     GpuCamera camera;

@@ -117,6 +117,73 @@ fn trace_accounting(v: &mut Verdict, who: &str, counters: &[u32], stored: usize,
     }
 }
 
+/// Checks that the first-segment caster-ball test changed no stored photon on one
+/// backend: `with` and `without` it, the stored photons are the same multiset bitwise
+/// (each photon's path depends on its index alone, and a photon the test ends could
+/// meet no caster first, so it could not be stored), the path ends differ only by
+/// first-segment escapes counted as `no_specular`, and no more rays are traced.
+fn caster_test_keeps_every_photon(
+    v: &mut Verdict,
+    who: &str,
+    with: (&[Photon], &[u32]),
+    without: (&[Photon], &[u32]),
+) {
+    let key = |p: &Photon| bytemuck::bytes_of(p).to_vec();
+    let mut a: Vec<Vec<u8>> = with.0.iter().map(key).collect();
+    let mut b: Vec<Vec<u8>> = without.0.iter().map(key).collect();
+    a.sort_unstable();
+    b.sort_unstable();
+    v.check(a == b, || {
+        format!(
+            "{who}: the caster-ball test changed the stored photons ({} with it, {} without)",
+            a.len(),
+            b.len()
+        )
+    });
+    let (cw, co) = (with.1, without.1);
+    for w in [
+        counter::STORED,
+        counter::NEGLIGIBLE,
+        counter::BOUNCE_LIMIT,
+        counter::STORED_FLUX,
+        counter::STORED_FLUX + 1,
+        counter::STORED_FLUX + 2,
+        counter::STORED_FLUX + 3,
+        counter::STORED_FLUX + 4,
+        counter::STORED_FLUX + 5,
+    ] {
+        v.check(cw[w] == co[w], || {
+            format!("{who}: caster-ball test changed counter word {w}: {} vs {}", cw[w], co[w])
+        });
+    }
+    let ends = |c: &[u32]| c[counter::NO_SPECULAR] as u64 + c[counter::ESCAPED] as u64;
+    v.check(ends(cw) == ends(co) && cw[counter::ESCAPED] <= co[counter::ESCAPED], || {
+        format!(
+            "{who}: with the caster-ball test no_specular {} escaped {}, without {} and {}",
+            cw[counter::NO_SPECULAR],
+            cw[counter::ESCAPED],
+            co[counter::NO_SPECULAR],
+            co[counter::ESCAPED]
+        )
+    });
+    let rays = |c: &[u32]| join_u64([c[counter::RAYS], c[counter::RAYS + 1]]);
+    // every photon the test ends would have ended after its first ray
+    v.note(format!(
+        "{who}: the caster-ball test ended {} photons before their first ray ({} of {} rays \
+         left)",
+        rays(co).saturating_sub(rays(cw)),
+        rays(cw),
+        rays(co)
+    ));
+    v.check(rays(cw) <= rays(co), || {
+        format!(
+            "{who}: {} rays with the caster-ball test, {} without",
+            rays(cw),
+            rays(co)
+        )
+    });
+}
+
 /// `trace_photons` for every emitting light of the fixture, compared as multisets.
 pub fn check_trace(
     fx: &Fixture,
@@ -217,6 +284,14 @@ pub fn check_trace(
                     "{u} of {len} {who} photons have no counterpart within {tol:.2e} (allowed {allowed})"
                 )
             });
+        }
+        // The first-segment caster-ball test (core's device::caster_spheres) on each
+        // backend against the same backend without it.
+        let runs: [(&str, &mut dyn Backend, (&[Photon], &[u32])); 2] =
+            [("cpu", &mut *r, (&pa, &ca)), ("candidate", &mut *c, (&pb, &cb))];
+        for (who, b, with) in runs {
+            let without = fx.run_trace_with(b, k, |p| p.caster_sphere_count = 0)?;
+            caster_test_keeps_every_photon(&mut v, who, with, (&without.0, &without.1));
         }
         v.note(format!(
             "stored {} vs cpu {}; unmatched {ua} / {ub} within {tol:.2e}; flux {:.4e} vs {:.4e}",

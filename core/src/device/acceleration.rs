@@ -181,6 +181,13 @@ pub struct Level {
     /// An instance's box of the world vertices its triangles use (AdaptiveCaustics' caster
     /// box of the object: `adaptive_caustics::caster_boxes`); empty for the static level.
     pub triangle_bounds: Aabb,
+    /// Balls around its caster objects (world space, centre xyz and radius w;
+    /// [`crate::device::caster_spheres`]): one per specular object of the static level,
+    /// one for a specular instance, none otherwise.
+    pub caster_balls: Vec<[f32; 4]>,
+    /// A specular instance's ball of its object-space vertices, which its world ball is
+    /// placed from ([`crate::device::caster_spheres::placed_ball`]); `None` otherwise.
+    pub object_ball: Option<[f32; 4]>,
 }
 
 impl Level {

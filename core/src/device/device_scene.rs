@@ -13,6 +13,8 @@ use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
 };
 use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene, Transform};
+use crate::device::caster_spheres::{placed_ball, CasterSpheres};
+use crate::math::geometry::bounding_sphere;
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};
 use obvhs::triangle::Triangle;
@@ -37,6 +39,9 @@ pub struct DeviceScene {
     /// Bounds of the caustic casters, the mirror and dielectric objects (world space; empty
     /// when there are none).
     pub caster_bounds: Aabb,
+    /// Balls around the caustic casters that photons' first segments are tested against
+    /// ([`crate::device::caster_spheres`]).
+    pub caster_spheres: CasterSpheres,
     /// True when some dielectric has a non-zero Cauchy B.
     pub has_dispersion: bool,
     /// Triangles dropped because their area is zero in f32.
@@ -75,6 +80,8 @@ pub struct InstanceMove {
     pub bounds: Aabb,
     /// Its new caster bounds.
     pub caster_bounds: Aabb,
+    /// Its new caster balls.
+    pub caster_spheres: CasterSpheres,
 }
 
 /// What deforming an instance changes ([`SceneInstances::deform_instance`]): what a move
@@ -199,6 +206,7 @@ impl SceneInstances {
                 b
             };
             l.world_bounds = b;
+            l.caster_balls = placed_balls(l);
             l.smooth_normals = None; // refresh_smooth_normals, where it is needed
             l.triangle_bounds = triangle_bounds(&l.used_vertices, &world, l.vertex_base);
             vertices.push((l.vertex_base, world));
@@ -208,12 +216,14 @@ impl SceneInstances {
             reason,
         })?;
         let (bounds, caster_bounds) = level_bounds(&levels);
+        let caster_spheres = level_caster_spheres(&levels);
         self.levels = levels;
         Ok(InstanceMove {
             vertices,
             top_level,
             bounds,
             caster_bounds,
+            caster_spheres,
         })
     }
 }
@@ -292,6 +302,10 @@ impl SceneInstances {
             b
         };
         l.world_bounds = b;
+        if l.object_ball.is_some() {
+            l.object_ball = bounding_sphere(&vertex_positions(&local));
+        }
+        l.caster_balls = placed_balls(l);
         l.triangle_bounds = triangle_bounds(&l.used_vertices, &world, base);
         let run = |i: u32| world[(i - base) as usize];
         l.smooth_normals = Some(smooth_normals(l.triangle_indices.iter().copied(), &run));
@@ -303,6 +317,7 @@ impl SceneInstances {
             reason,
         })?;
         let (bounds, caster_bounds) = level_bounds(&levels);
+        let caster_spheres = level_caster_spheres(&levels);
         let first = (position_base - self.positions_vec4) as usize;
         let mut object_vertices = self.object_vertices.to_vec();
         object_vertices[first..first + local.len()].copy_from_slice(&local);
@@ -314,6 +329,7 @@ impl SceneInstances {
                 top_level,
                 bounds,
                 caster_bounds,
+                caster_spheres,
             },
             triangles: (triangle_base, ordered),
             nodes: vec![
@@ -400,6 +416,29 @@ fn level_bounds(levels: &[Level]) -> (Aabb, Aabb) {
     levels.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), l| {
         (b.union(l.world_bounds), c.union(l.caster_bounds))
     })
+}
+
+/// The levels' caster balls, merged to what `trace_photons` reads.
+fn level_caster_spheres(levels: &[Level]) -> CasterSpheres {
+    CasterSpheres::from_balls(
+        levels
+            .iter()
+            .flat_map(|l| l.caster_balls.iter().copied())
+            .collect(),
+    )
+}
+
+/// An instance's world caster ball at its current transform (none when it is no caster).
+fn placed_balls(l: &Level) -> Vec<[f32; 4]> {
+    l.object_ball
+        .map(|b| placed_ball(&l.transform, b))
+        .into_iter()
+        .collect()
+}
+
+/// The positions of `vertices`.
+fn vertex_positions(vertices: &[GpuVertex]) -> Vec<Vec3> {
+    vertices.iter().map(|v| Vec3::from(v.position)).collect()
 }
 
 /// An instance must stay inside the coordinate bound once transformed.
@@ -516,6 +555,8 @@ impl DeviceScene {
             triangle_indices: std::sync::Arc::from(Vec::new()),
             used_vertices: std::sync::Arc::from(Vec::new()),
             triangle_bounds: Aabb::EMPTY,
+            caster_balls: Vec::new(),
+            object_ball: None,
         };
         // instances: (level, triangles, object-space vertices)
         let mut instances: Vec<(Level, Vec<GpuTriangle>)> = Vec::new();
@@ -568,6 +609,7 @@ impl DeviceScene {
                     static_level.world_bounds = static_level.world_bounds.union(world_bounds);
                     if specular {
                         static_level.caster_bounds = static_level.caster_bounds.union(world_bounds);
+                        static_level.caster_balls.extend(bounding_sphere(&vertex_positions(&local)));
                     }
                     static_level.vertex_count = vertices.len() as u32;
                 }
@@ -578,6 +620,11 @@ impl DeviceScene {
                     }
                     check_placed(k, &world_bounds)?;
                     vertices.extend_from_slice(&world);
+                    let object_ball = if specular {
+                        bounding_sphere(&vertex_positions(&local))
+                    } else {
+                        None
+                    };
                     let level = Level {
                         object: Some(k),
                         transform,
@@ -599,6 +646,11 @@ impl DeviceScene {
                         )
                         .into(),
                         triangle_bounds: Aabb::EMPTY,
+                        caster_balls: object_ball
+                            .map(|b| placed_ball(&transform, b))
+                            .into_iter()
+                            .collect(),
+                        object_ball,
                     };
                     object_vertices.extend_from_slice(&local);
                     instances.push((level, tris));
@@ -700,6 +752,7 @@ impl DeviceScene {
             bvh_nodes,
             bounds,
             caster_bounds,
+            caster_spheres: level_caster_spheres(&levels),
             has_dispersion,
             degenerate_triangles,
             triangle_objects,
@@ -722,6 +775,7 @@ impl DeviceScene {
         self.bvh_nodes[..m.top_level.len()].copy_from_slice(&m.top_level);
         self.bounds = m.bounds;
         self.caster_bounds = m.caster_bounds;
+        self.caster_spheres = m.caster_spheres;
         Ok(())
     }
 
@@ -757,6 +811,7 @@ impl DeviceScene {
         self.bvh_nodes[..top.len()].copy_from_slice(top);
         self.bounds = d.moved.bounds;
         self.caster_bounds = d.moved.caster_bounds;
+        self.caster_spheres = d.moved.caster_spheres;
         Ok(())
     }
 
@@ -1000,6 +1055,7 @@ mod tests {
         assert_eq!(ds.triangles, fresh.triangles);
         assert_eq!(ds.bounds, fresh.bounds);
         assert_eq!(ds.caster_bounds, fresh.caster_bounds);
+        assert_eq!(ds.caster_spheres, fresh.caster_spheres);
         assert_eq!(ds.instances, fresh.instances);
     }
 
@@ -1030,6 +1086,7 @@ mod tests {
         assert_eq!(ds.triangles, fresh.triangles);
         assert_eq!(ds.bounds, fresh.bounds);
         assert_eq!(ds.caster_bounds, fresh.caster_bounds);
+        assert_eq!(ds.caster_spheres, fresh.caster_spheres);
         // the node buffer bitwise, but for the deformed level's record's version word
         let k = ds
             .instances

@@ -750,12 +750,21 @@ pub struct TraceParams {
     /// Reflectance of dielectric interfaces, one of
     /// [`fresnel_model`](crate::math::optics::fresnel_model).
     pub fresnel_model: u32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// How many of `caster_spheres` a photon's first segment is tested against (0: no
+    /// test, every photon is traversed).
+    pub caster_sphere_count: u32,
+    /// Balls around the caustic casters (centre xyz, radius w; world space,
+    /// [`crate::device::caster_spheres`]): a photon whose first segment meets none of them
+    /// cannot meet a caster first, so it ends as `NO_SPECULAR` with no ray traced
+    /// ([`crate::math::geometry::ray_meets_caster_spheres`]).
+    pub caster_spheres: [[f32; 4]; MAX_CASTER_SPHERES],
 }
 
 /// Largest [`TraceParams::split_budget`]: the depth of the kernels' branch stacks.
 pub const MAX_SPLIT_BRANCHES: u32 = 32;
+
+/// Length of [`TraceParams::caster_spheres`].
+pub const MAX_CASTER_SPHERES: usize = 8;
 
 /// Parameters of `deposit_screen` and `resolve_caustics`.
 #[repr(C)]

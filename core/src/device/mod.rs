@@ -7,6 +7,7 @@
 //! [`crate::scene`].
 
 pub mod acceleration;
+pub mod caster_spheres;
 pub mod device_scene;
 pub mod error;
 pub mod handle;

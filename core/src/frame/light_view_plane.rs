@@ -221,7 +221,10 @@ impl LightViewPlane {
             flux_quantum,
             split_budget: 1,
             fresnel_model: crate::math::optics::fresnel_model::EXACT,
-            _pad: 0,
+            // no first-segment test until the technique adds its casters' balls
+            // (`CasterSpheres::apply`)
+            caster_sphere_count: 0,
+            caster_spheres: [[0.0; 4]; crate::device::layout::MAX_CASTER_SPHERES],
         }
     }
 }

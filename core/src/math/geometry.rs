@@ -201,6 +201,110 @@ pub fn normalize_scaled(v: Vec3, fallback: Vec3) -> Vec3 {
     (v * scale).normalize_or(fallback)
 }
 
+/// Relative slack of [`ray_meets_sphere`]: a ray is refused only when its closest
+/// approach to the centre exceeds the radius by more than `SPHERE_TEST_SLACK |oc|^2` in
+/// the squared distance (`oc` = centre - origin). The f32 expression
+/// `|oc|^2 - max(oc . d, 0)^2` errs by less than `16 eps |oc|^2 = 2^-20 |oc|^2`
+/// (`eps = 2^-24`: the subtraction `c - o` per component, two 3-term dot products, one
+/// square, one difference, and a direction whose length is 1 within 2 eps), so the slack
+/// `2^-16` holds that bound 16 times over; contracted (fused) operations err less.
+pub const SPHERE_TEST_SLACK: f32 = 1.0 / 65_536.0;
+
+/// Whether the ray `origin + t dir`, `t >= 0` (`dir` unit, world space), may meet the ball
+/// `sphere` (centre xyz, radius w; world space): false only when its closest point to the
+/// centre lies outside the ball by more than the rounding of this test
+/// ([`SPHERE_TEST_SLACK`]). The squared distance of the closest point is
+/// `|oc|^2 - max(oc . dir, 0)^2` (the foot of the perpendicular, or the origin when the
+/// centre is behind it). Mirrored by name in the shaders (`ray_meets_sphere`).
+#[inline]
+pub fn ray_meets_sphere(origin: Vec3, dir: Vec3, sphere: [f32; 4]) -> bool {
+    let oc = Vec3::new(
+        sphere[0] - origin.x,
+        sphere[1] - origin.y,
+        sphere[2] - origin.z,
+    );
+    let tca = (oc.x * dir.x + oc.y * dir.y + oc.z * dir.z).max(0.0);
+    let oc2 = oc.x * oc.x + oc.y * oc.y + oc.z * oc.z;
+    let r = sphere[3];
+    !(oc2 - tca * tca > r * r + SPHERE_TEST_SLACK * oc2)
+}
+
+/// Whether the ray may meet one of the first `count` balls of `spheres`
+/// ([`ray_meets_sphere`]); true when `count` is 0 (no test). Mirrored by name in the
+/// shaders (`ray_meets_caster_spheres`).
+#[inline]
+pub fn ray_meets_caster_spheres(origin: Vec3, dir: Vec3, spheres: &[[f32; 4]], count: u32) -> bool {
+    if count == 0 {
+        return true;
+    }
+    spheres
+        .iter()
+        .take(count as usize)
+        .any(|&s| ray_meets_sphere(origin, dir, s))
+}
+
+/// A ball (centre xyz, radius w) that holds every point of `points` with a margin: the
+/// centre of their box, the largest distance to it (in f64) grown by 2^-12 of itself and
+/// by 2^-16 of the largest coordinate magnitude, rounded up to f32. The margin covers the
+/// rounding of any f32 point computed on a triangle of these vertices (a ray's hit
+/// point) many times over. `None` for no points or a non-finite one.
+pub fn bounding_sphere(points: &[Vec3]) -> Option<[f32; 4]> {
+    let mut b = Aabb::EMPTY;
+    for &p in points {
+        b.grow(p);
+    }
+    if points.is_empty() || !(b.min.is_finite() && b.max.is_finite()) {
+        return None;
+    }
+    let c = b.center();
+    let r = points
+        .iter()
+        .map(|&p| (p - c).as_dvec3().length())
+        .fold(0.0f64, f64::max);
+    let reach = b.min.abs().max(b.max.abs()).max_element() as f64;
+    Some(padded_ball(c, r, reach))
+}
+
+/// The ball `(c, r)` with the margin of [`bounding_sphere`] (`reach`: the largest coordinate
+/// magnitude its points were computed from), radius rounded up to f32.
+pub fn padded_ball(c: Vec3, r: f64, reach: f64) -> [f32; 4] {
+    let padded = r * (1.0 + 1.0 / 4096.0) + reach / 65_536.0;
+    [c.x, c.y, c.z, round_up_f32(padded)]
+}
+
+/// The smallest f32 not below `x` (x finite, non-negative).
+fn round_up_f32(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        // the next f32 up (f is finite and non-negative here)
+        f32::from_bits(f.to_bits() + 1)
+    } else {
+        f
+    }
+}
+
+/// A ball that holds every ball of `balls` (centre xyz, radius w): centred on the box of
+/// their boxes, radius the largest `|c_i - c| + r_i` (in f64), grown by 2^-20 of the
+/// reach and rounded up. `None` for none.
+pub fn enclosing_ball(balls: &[[f32; 4]]) -> Option<[f32; 4]> {
+    let mut b = Aabb::EMPTY;
+    for s in balls {
+        let c = Vec3::new(s[0], s[1], s[2]);
+        b.grow(c - Vec3::splat(s[3]));
+        b.grow(c + Vec3::splat(s[3]));
+    }
+    if balls.is_empty() || !(b.min.is_finite() && b.max.is_finite()) {
+        return None;
+    }
+    let c = b.center();
+    let r = balls
+        .iter()
+        .map(|s| (Vec3::new(s[0], s[1], s[2]) - c).as_dvec3().length() + s[3] as f64)
+        .fold(0.0f64, f64::max);
+    let reach = b.min.abs().max(b.max.abs()).max_element() as f64;
+    Some([c.x, c.y, c.z, round_up_f32(r + reach / 1_048_576.0)])
+}
+
 /// Axis-aligned box in world space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -110,6 +110,19 @@ fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3
 const OFFSET_REL: f32 = 1.0f / 32768.0f;
 const OFFSET_MIN_SCALE: f32 = 7.888609e-31f;
 
+// core::math::geometry::SPHERE_TEST_SLACK (2^-16)
+const SPHERE_TEST_SLACK: f32 = 1.52587890625e-5;
+
+// core::math::geometry::ray_meets_sphere: whether the ray origin + t dir (t >= 0) may meet
+// the ball (centre xyz, radius w); false only outside the test's rounding slack.
+fn ray_meets_sphere(origin: vec3<f32>, dir: vec3<f32>, sphere: vec4<f32>) -> bool {
+    let oc = sphere.xyz - origin;
+    let tca = max(dot3(oc, dir), 0.0);
+    let oc2 = dot3(oc, oc);
+    let r = sphere.w;
+    return !(oc2 - tca * tca > r * r + SPHERE_TEST_SLACK * oc2);
+}
+
 fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let m = max(max(abs(p.x), abs(p.y)), max(abs(p.z), OFFSET_MIN_SCALE));
     let d = m * OFFSET_REL;

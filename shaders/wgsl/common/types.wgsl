@@ -111,7 +111,8 @@ struct TraceParams {
     flux_quantum: f32,
     split_budget: u32,
     fresnel_model: u32,
-    _pad: u32,
+    caster_sphere_count: u32,
+    caster_spheres: array<vec4<f32>, MAX_CASTER_SPHERES>,
 }
 
 struct DepositParams {
@@ -335,6 +336,7 @@ const COUNTER_RAYS: u32 = 10u;
 const COUNTER_STORED_FLUX: u32 = 12u;
 const COUNTER_SPLITS: u32 = 18u;
 const MAX_SPLIT_BRANCHES: u32 = 32u; // core::device::layout::MAX_SPLIT_BRANCHES
+const MAX_CASTER_SPHERES: u32 = 8u; // core::device::layout::MAX_CASTER_SPHERES
 const COUNTER_WORDS: u32 = 20u;
 
 const MAX_SPECULAR_DEPTH: u32 = 30u; // core::sspm::MAX_SPECULAR_DEPTH

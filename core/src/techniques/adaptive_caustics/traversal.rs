@@ -106,6 +106,9 @@ pub struct PhotonOptics {
     pub min_relative_power: f32,
     /// `fresnel_model` of the kernels.
     pub fresnel_model: u32,
+    /// The casters' balls its first segment is tested against
+    /// ([`crate::device::caster_spheres`]).
+    pub caster_spheres: crate::device::caster_spheres::CasterSpheres,
 }
 
 /// The traversal's device buffers and sizes.
@@ -429,6 +432,8 @@ impl Traversal {
             variant,
             params: TraceParams {
                 fresnel_model: optics.fresnel_model,
+                caster_sphere_count: optics.caster_spheres.count,
+                caster_spheres: optics.caster_spheres.spheres,
                 ..at_level.trace_params(
                     light,
                     (first, 4 * m),

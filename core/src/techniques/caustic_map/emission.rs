@@ -2,6 +2,7 @@
 //! caustic casters, and the fixed-point quantum of the frame's flux.
 
 use super::settings::CausticMapSettings;
+use crate::device::caster_spheres::CasterSpheres;
 use crate::frame::emission::NoEmission;
 use crate::frame::light_view_plane::{light_view_planes, LightViewPlane};
 use crate::math::fixed_point::power_of_two_quantum;
@@ -23,6 +24,9 @@ pub struct Emission {
     /// Hit distance per fixed-point unit (scene units): the scene diagonal is 2^24 to
     /// 2^25 units.
     pub hit_distance_quantum: f32,
+    /// Balls around the casters that photons' first segments are tested against
+    /// ([`crate::device::caster_spheres`]).
+    pub caster_spheres: CasterSpheres,
 }
 
 impl Emission {
@@ -33,6 +37,7 @@ impl Emission {
         scene: &Scene,
         bounds: Aabb,
         casters: Aabb,
+        caster_spheres: CasterSpheres,
         has_dispersion: bool,
         s: &CausticMapSettings,
     ) -> Emission {
@@ -61,7 +66,32 @@ impl Emission {
             skipped_lights,
             flux_quantum,
             hit_distance_quantum: power_of_two_quantum(bounds.diagonal().max(f32::MIN_POSITIVE)),
+            caster_spheres,
         }
+    }
+
+    /// `trace_photons` parameters for photons `first .. first + count` of `plane` (of
+    /// light `light`): the plane's emission ([`LightViewPlane::trace_params`]) at the
+    /// frame's flux quantum, with the casters' balls.
+    pub fn trace_params(
+        &self,
+        plane: &LightViewPlane,
+        light: u32,
+        range: (u32, u32),
+        seed: u32,
+        max_bounces: u32,
+        min_relative_power: f32,
+    ) -> crate::device::layout::TraceParams {
+        let mut p = plane.trace_params(
+            light,
+            range,
+            seed,
+            max_bounces,
+            min_relative_power,
+            self.flux_quantum,
+        );
+        self.caster_spheres.apply(&mut p);
+        p
     }
 
     /// The flux quantum for photons of `planes` shot on grids of `resolution(plane)`

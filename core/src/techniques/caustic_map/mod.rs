@@ -203,6 +203,7 @@ pub struct CausticMap {
     scene: SceneArgs,
     bounds: crate::math::geometry::Aabb,
     caster_bounds: crate::math::geometry::Aabb,
+    caster_spheres: crate::device::caster_spheres::CasterSpheres,
     has_dispersion: bool,
     degenerate_triangles: u64,
     camera: GpuCamera,
@@ -246,6 +247,7 @@ struct UploadedScene {
     buffers: Vec<crate::frame::plan::BufferPlan>,
     bounds: crate::math::geometry::Aabb,
     caster_bounds: crate::math::geometry::Aabb,
+    caster_spheres: crate::device::caster_spheres::CasterSpheres,
     has_dispersion: bool,
     degenerate_triangles: u64,
     instances: SceneInstances,
@@ -292,6 +294,7 @@ impl UploadedScene {
             buffers: alloc.buffers,
             bounds: ds.bounds,
             caster_bounds: ds.caster_bounds,
+            caster_spheres: ds.caster_spheres,
             has_dispersion: ds.has_dispersion,
             degenerate_triangles: ds.degenerate_triangles,
             instances: ds.instances,
@@ -352,6 +355,7 @@ impl CausticMap {
             scene,
             uploaded.bounds,
             uploaded.caster_bounds,
+            uploaded.caster_spheres,
             uploaded.has_dispersion,
             &settings,
         );
@@ -414,6 +418,7 @@ impl CausticMap {
             scene: uploaded.scene,
             bounds: uploaded.bounds,
             caster_bounds: uploaded.caster_bounds,
+            caster_spheres: uploaded.caster_spheres,
             has_dispersion: uploaded.has_dispersion,
             degenerate_triangles: uploaded.degenerate_triangles,
             camera: GpuCamera::from_camera(&scene.camera),
@@ -474,6 +479,7 @@ impl CausticMap {
             buffers: self.scene_buffers.clone(),
             bounds: self.bounds,
             caster_bounds: self.caster_bounds,
+            caster_spheres: self.caster_spheres,
             has_dispersion: self.has_dispersion,
             degenerate_triangles: self.degenerate_triangles,
             instances: self.instances.clone(),
@@ -1037,6 +1043,7 @@ impl CausticMap {
                     max_bounces: s.max_bounces,
                     min_relative_power: s.min_relative_power,
                     fresnel_model: s.fresnel.kernel_value(),
+                    caster_spheres: self.emission.caster_spheres,
                 };
                 let before = adaptive.photons_processed;
                 t.run_plane(
@@ -1075,13 +1082,13 @@ impl CausticMap {
                     params: TraceParams {
                         split_budget: s.split_budget,
                         fresnel_model: s.fresnel.kernel_value(),
-                        ..plane.trace_params(
+                        ..self.emission.trace_params(
+                            plane,
                             *light,
                             (first as u32, count),
                             Emission::plane_seed(s.seed, *light, *k),
                             s.max_bounces,
                             s.min_relative_power,
-                            self.emission.flux_quantum,
                         )
                     },
                     photons: a.photons,
@@ -1379,7 +1386,7 @@ impl CausticMap {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         let model = crate::frame::technique::with_lights(&self.model, lights)?;
-        let Some(emission) = self.plan_emission(&model, self.bounds, self.caster_bounds)? else {
+        let Some(emission) = self.plan_emission(&model, self.bounds, self.caster_bounds, self.caster_spheres)? else {
             return self.rebuild_as(backend, &model);
         };
         let gpu: Vec<GpuLight> = lights
@@ -1422,11 +1429,13 @@ impl CausticMap {
         model: &Scene,
         bounds: crate::math::geometry::Aabb,
         caster_bounds: crate::math::geometry::Aabb,
+        caster_spheres: crate::device::caster_spheres::CasterSpheres,
     ) -> Result<Option<Emission>, Error> {
         let mut emission = Emission::new(
             model,
             bounds,
             caster_bounds,
+            caster_spheres,
             self.has_dispersion,
             &self.settings,
         );
@@ -1529,7 +1538,7 @@ impl CausticMap {
         u: InstanceUpdate,
     ) -> Result<(), Error> {
         let m = u.moved();
-        let Some(emission) = self.plan_emission(&model, m.bounds, m.caster_bounds)? else {
+        let Some(emission) = self.plan_emission(&model, m.bounds, m.caster_bounds, m.caster_spheres)? else {
             return self.rebuild_as(backend, &model);
         };
         let mut receivers = self.receivers.clone();
@@ -1558,6 +1567,7 @@ impl CausticMap {
         self.receivers = receivers;
         self.bounds = m.bounds;
         self.caster_bounds = m.caster_bounds;
+        self.caster_spheres = m.caster_spheres;
         self.model = model;
         self.emission = emission;
         self.atlas_valid = false;

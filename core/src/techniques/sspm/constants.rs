@@ -1,6 +1,7 @@
 //! What Sspm's kernels are parameterised with, derived before any work.
 
 use super::settings::SspmSettings;
+use crate::device::caster_spheres::CasterSpheres;
 use crate::device::device_scene::DeviceScene;
 use crate::device::layout::*;
 use crate::frame::emission::{emission_domain, unpruned_domain, EmissionDomain, NoEmission};
@@ -38,6 +39,9 @@ pub struct FrameConstants {
     /// Upper clamp of the gather's hit distance (scene units; default 50% of the scene
     /// diagonal, never below `hit_distance_min`).
     pub hit_distance_max: f32,
+    /// Balls around the casters that photons' first segments are tested against
+    /// ([`crate::device::caster_spheres`]).
+    pub caster_spheres: CasterSpheres,
 }
 
 impl FrameConstants {
@@ -46,7 +50,7 @@ impl FrameConstants {
         Self::for_bounds(
             scene,
             ds.bounds,
-            ds.caster_bounds,
+            (ds.caster_bounds, ds.caster_spheres),
             ds.has_dispersion,
             settings,
         )
@@ -69,12 +73,12 @@ impl FrameConstants {
         Ok(())
     }
 
-    /// [`FrameConstants::new`] from the device scene's bounds (scene, casters) and whether
-    /// a material disperses: what a light update re-plans with.
+    /// [`FrameConstants::new`] from the device scene's bounds (scene; casters' box and
+    /// balls) and whether a material disperses: what a light update re-plans with.
     pub fn for_bounds(
         scene: &Scene,
         bounds: Aabb,
-        caster_bounds: Aabb,
+        (caster_bounds, caster_spheres): (Aabb, CasterSpheres),
         has_dispersion: bool,
         settings: &SspmSettings,
     ) -> FrameConstants {
@@ -120,6 +124,7 @@ impl FrameConstants {
                 .hit_distance_max
                 .unwrap_or(0.5 * diag)
                 .max(hit_distance_min),
+            caster_spheres,
         }
     }
 
@@ -133,7 +138,7 @@ impl FrameConstants {
         first: u32,
         count: u32,
     ) -> TraceParams {
-        d.trace_params(
+        let mut p = d.trace_params(
             light,
             (settings.photons_w, settings.photons_h),
             (first, count),
@@ -141,7 +146,9 @@ impl FrameConstants {
             settings.max_bounces,
             settings.min_relative_power,
             self.flux_quantum,
-        )
+        );
+        self.caster_spheres.apply(&mut p);
+        p
     }
 
     /// `deposit_screen` / `resolve_caustics` parameters.

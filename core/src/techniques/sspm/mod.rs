@@ -145,6 +145,7 @@ pub struct Sspm {
 struct SceneBounds {
     bounds: crate::math::geometry::Aabb,
     caster_bounds: crate::math::geometry::Aabb,
+    caster_spheres: crate::device::caster_spheres::CasterSpheres,
     has_dispersion: bool,
     /// Triangles the build dropped for zero area in f32.
     degenerate_triangles: u64,
@@ -214,6 +215,7 @@ impl Sspm {
         let bounds = SceneBounds {
             bounds: ds.bounds,
             caster_bounds: ds.caster_bounds,
+            caster_spheres: ds.caster_spheres,
             has_dispersion: ds.has_dispersion,
             degenerate_triangles: ds.degenerate_triangles,
             triangles: ds.triangles.len() as u64,
@@ -291,7 +293,7 @@ impl Sspm {
         let mut constants = FrameConstants::for_bounds(
             scene,
             b.bounds,
-            b.caster_bounds,
+            (b.caster_bounds, b.caster_spheres),
             b.has_dispersion,
             settings,
         );
@@ -315,6 +317,7 @@ impl Sspm {
             scene,
             b.bounds,
             b.caster_bounds,
+            b.caster_spheres,
             b.has_dispersion,
             &a.settings.map,
         );
@@ -1040,6 +1043,7 @@ impl Sspm {
             max_bounces: s.max_bounces,
             min_relative_power: s.min_relative_power,
             fresnel_model: s.fresnel.kernel_value(),
+            caster_spheres: a.emission.caster_spheres,
         };
         for (light, k, plane) in &a.emission.planes {
             let flux = plane.power.as_dvec3() * plane.plane_measure();
@@ -1276,6 +1280,7 @@ impl Sspm {
         let bounds = SceneBounds {
             bounds: m.bounds,
             caster_bounds: m.caster_bounds,
+            caster_spheres: m.caster_spheres,
             ..self.bounds
         };
         let mut adaptive = self.adaptive.clone();
