@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -316,6 +316,23 @@ if has castercull; then
     # many photons the test ended), then Sspm's and CausticMap's frames.
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend trace_photons --test-threads=1 --nocapture
     run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+fi
+if has corners; then
+    # Triangle corners read from the node buffer's corner region (core's
+    # acceleration::TRIANGLE_CORNER_VEC4S) and wgpu's kernels without naga's loop
+    # bounding: the whole cross-backend suite and the instance updates, then the frames.
+    run timeout 300 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./instance_updates --test-threads=1
+    run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+fi
+if has framebench; then
+    # Sspm's and CausticMap's frames alone (a rerun on a warm machine)
     run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench

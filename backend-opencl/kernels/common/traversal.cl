@@ -86,29 +86,12 @@ inline uint cwbvh_node_hits(__global const uint4* nodes, uint index, float3 orig
     return hit_mask;
 }
 
-inline void triangle_positions(__global const GpuVertex* vertices,
-                               __global const GpuTriangle* triangles, uint i, float3* a,
-                               float3* b, float3* c) {
-    __global const GpuTriangle* t = &triangles[i];
-    *a = load3g(vertices[t->indices[0]].position);
-    *b = load3g(vertices[t->indices[1]].position);
-    *c = load3g(vertices[t->indices[2]].position);
-}
-
-// An instance's triangle in object space: vertex index + `position_offset` is the vec4 of
-// its position in the node buffer (core::device::acceleration).
-inline float3 object_position(__global const uint4* nodes, uint index, uint position_offset) {
-    uint4 v = nodes[index + position_offset];
+// Corner `k` of triangle `i` in its level's space, from the node buffer's corner region at
+// vec4 `corners` (core::device::acceleration::TRIANGLE_CORNER_VEC4S; the CPU backend reads
+// the same values through the vertex indices).
+inline float3 triangle_corner(__global const uint4* nodes, uint i, uint k, uint corners) {
+    uint4 v = nodes[corners + 3u * i + k];
     return (float3)(as_float(v.x), as_float(v.y), as_float(v.z));
-}
-
-inline void object_triangle_positions(__global const uint4* nodes,
-                                      __global const GpuTriangle* triangles, uint i,
-                                      uint position_offset, float3* a, float3* b, float3* c) {
-    __global const GpuTriangle* t = &triangles[i];
-    *a = object_position(nodes, t->indices[0], position_offset);
-    *b = object_position(nodes, t->indices[1], position_offset);
-    *c = object_position(nodes, t->indices[2], position_offset);
 }
 
 // `row.xyz . p + row.w * w`, in the CPU backend's order (affine_row; FP_CONTRACT is off).
@@ -170,8 +153,7 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
     uint2 primitive_group = (uint2)(0u, 0u);
     bool in_blas = false;
     uint blas_sp = 0u;
-    bool object_space = false;
-    uint position_offset = 0u;
+    uint corners = 0u;
     bool found = false;
     float closest = t_max;
     for (;;) {
@@ -187,8 +169,7 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                     stack[sp++] = current_group;
                 uint r = 2u * prim * 5u;
                 uint4 info = nodes[r + 3u];
-                object_space = (info.y & INSTANCE_IDENTITY) == 0u;
-                if (object_space) {
+                if ((info.y & INSTANCE_IDENTITY) == 0u) {
                     float3 o = (float3)(affine_row(nodes[r], origin, 1.0f),
                                         affine_row(nodes[r + 1u], origin, 1.0f),
                                         affine_row(nodes[r + 2u], origin, 1.0f));
@@ -199,17 +180,15 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
                     level = level_ray(o, d * c, 1.0f / c);
                     wray = watertight_ray(o, d);
                 }
-                position_offset = info.z;
+                corners = nodes[r + 8u].y;
                 in_blas = true;
                 blas_sp = sp;
                 current_group = (uint2)(info.x, 0x80000000u);
                 break;
             }
-            float3 a, b, c;
-            if (object_space)
-                object_triangle_positions(nodes, triangles, prim, position_offset, &a, &b, &c);
-            else
-                triangle_positions(vertices, triangles, prim, &a, &b, &c);
+            float3 a = triangle_corner(nodes, prim, 0u, corners);
+            float3 b = triangle_corner(nodes, prim, 1u, corners);
+            float3 c = triangle_corner(nodes, prim, 2u, corners);
             TriangleHit h;
             if (intersect_watertight(&wray, a, b, c, 0.0f, closest, &h) && h.t < closest) {
                 found = true;
@@ -249,7 +228,6 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
             if (in_blas && sp == blas_sp) {
                 // the instance is done: back to the world ray and the TLAS
                 in_blas = false;
-                object_space = false;
                 level = world;
                 wray = world_wray;
             }

@@ -6,7 +6,8 @@
 //! | `0 .. C`                       | the top level (TLAS): a CWBVH over the levels' world boxes, root at slot 0, unused slots zero |
 //! | `C .. C + 2N`                  | one [`InstanceRecord`] (2 slots) per level, in TLAS leaf order |
 //! | then                           | each level's bottom-level CWBVH (BLAS), static level first, each in a region of [`Level::blas_capacity`] slots (an instance's: room for any BVH over its triangles, so that a deformed instance's BLAS is rebuilt in place) |
-//! | then                           | the instances' object-space vertex positions, one `[f32; 4]` each (w = 1), padded to whole slots |
+//! | then                           | the instances' object-space vertex positions, one `[f32; 4]` each (w = 1) |
+//! | then                           | every triangle's corners in its level's space, [`TRIANGLE_CORNER_VEC4S`] `[f32; 4]` per triangle in triangle order (the records' `triangle_corners`), padded to whole slots |
 //!
 //! A *level* is the scene's static level (every object without a transform, in world
 //! space: the single BVH that scenes had before instances) or one instance (an object with
@@ -24,6 +25,8 @@
 //! static level, flag [`instance_flags::IDENTITY`], so scenes without instances trace as
 //! before, bitwise) and its BLAS is traversed, triangles tested in object space (the
 //! instance's positions above; direction not normalised, so `t` is the world ray's). The
+//! GPU ports read a tested triangle's corners from the corner region, the CPU through its
+//! vertex indices: the same values (`device_scene`'s tests check the region). The
 //! kernels then shade with the world-space vertices (`vertices`), which hold every
 //! instance's vertices transformed: surfaces are interpolated from them with the hit's
 //! barycentrics, which the affine map preserves. Vulkan builds its own BLAS per level from
@@ -53,7 +56,7 @@ pub mod instance_flags {
 /// `[3]` = (`blas_root`, `flags`, `position_offset`, `triangle_base`);
 /// `[4]` = (`triangle_count`, `vertex_base`, `vertex_count`, `position_base`);
 /// `[5..8]` rows of `world_from_object` (Vulkan's instance transform); `[8]` =
-/// (`geometry_version`, 0, 0, 0); `[9]` zero.
+/// (`geometry_version`, `triangle_corners`, 0, 0); `[9]` zero.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InstanceRecord {
     /// World space to object space (3 rows of an affine 3x4 matrix).
@@ -80,7 +83,17 @@ pub struct InstanceRecord {
     /// How many times the level's geometry was deformed since the build (Vulkan rebuilds
     /// a level's BLAS when it changes).
     pub geometry_version: u32,
+    /// vec4 index in the node buffer of the triangle corners ([`TRIANGLE_CORNER_VEC4S`]
+    /// per triangle, triangle `i` at `triangle_corners + 3 i`; the same for every level).
+    pub triangle_corners: u32,
 }
+
+/// vec4s per triangle in the node buffer's corner region: its three corners, each
+/// `(x, y, z, 1)` as f32 bits, in its level's space (world for the static level, object
+/// space for an instance), in triangle (leaf) order. The GPU traversals read a triangle
+/// here in one contiguous 48-byte run instead of through its three vertex indices (two
+/// dependent loads); the values are the vertices' own, so hits are bitwise the same.
+pub const TRIANGLE_CORNER_VEC4S: usize = 3;
 
 fn rows(m: &Affine3A) -> [[f32; 4]; 3] {
     let c = m.to_cols_array_2d(); // 4 columns of 3
@@ -111,7 +124,7 @@ impl InstanceRecord {
             f(self.world_from_object[0]),
             f(self.world_from_object[1]),
             f(self.world_from_object[2]),
-            [self.geometry_version, 0, 0, 0],
+            [self.geometry_version, self.triangle_corners, 0, 0],
             z,
         ]
     }
@@ -131,6 +144,7 @@ impl InstanceRecord {
             vertex_count: v[4][2],
             position_base: v[4][3],
             geometry_version: v[8][0],
+            triangle_corners: v[8][1],
         }
     }
 }
@@ -151,6 +165,8 @@ pub struct Level {
     pub material: u32,
     /// Deformations since the build ([`InstanceRecord::geometry_version`]).
     pub geometry_version: u32,
+    /// [`InstanceRecord::triangle_corners`] (the node buffer's corner region).
+    pub triangle_corners: u32,
     /// Its triangles: `triangle_base .. triangle_base + triangle_count`.
     pub triangle_base: u32,
     /// Its triangle count.
@@ -210,6 +226,7 @@ impl Level {
             vertex_count: self.vertex_count,
             position_base: self.position_base,
             geometry_version: self.geometry_version,
+            triangle_corners: self.triangle_corners,
         }
     }
 }

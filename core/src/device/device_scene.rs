@@ -5,6 +5,7 @@
 
 use crate::device::acceleration::{
     instance_blas_capacity, rebase_blas, tlas_capacity, top_level, Level, RECORD_SLOTS, SLOT_VEC4S,
+    TRIANGLE_CORNER_VEC4S,
 };
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
@@ -289,13 +290,8 @@ impl SceneInstances {
             )));
         }
         rebase_blas(&mut nodes, l.blas_root, l.triangle_base);
-        let positions: Vec<[u32; 4]> = local
-            .iter()
-            .map(|v| {
-                let [x, y, z] = v.position;
-                [x.to_bits(), y.to_bits(), z.to_bits(), 1f32.to_bits()]
-            })
-            .collect();
+        let positions: Vec<[u32; 4]> = local.iter().map(|v| position_vec4(v.position)).collect();
+        let corners = triangle_corners(&ordered, |i| local[(i - base) as usize].position);
         l.caster_bounds = if l.caster_bounds.is_empty() {
             Aabb::EMPTY
         } else {
@@ -310,8 +306,12 @@ impl SceneInstances {
         let run = |i: u32| world[(i - base) as usize];
         l.smooth_normals = Some(smooth_normals(l.triangle_indices.iter().copied(), &run));
         l.geometry_version = l.geometry_version.wrapping_add(1);
-        let (blas_root, triangle_base, position_base) =
-            (l.blas_root, l.triangle_base, l.position_base);
+        let (blas_root, triangle_base, position_base, corners_at) = (
+            l.blas_root,
+            l.triangle_base,
+            l.position_base,
+            l.triangle_corners + TRIANGLE_CORNER_VEC4S as u32 * l.triangle_base,
+        );
         let top_level = top_level(&levels).map_err(|reason| BuildError::Scene {
             path: "objects".into(),
             reason,
@@ -335,6 +335,7 @@ impl SceneInstances {
             nodes: vec![
                 (blas_root * SLOT_VEC4S as u32, nodes),
                 (position_base, positions),
+                (corners_at, corners),
             ],
         })
     }
@@ -416,6 +417,19 @@ fn level_bounds(levels: &[Level]) -> (Aabb, Aabb) {
     levels.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), l| {
         (b.union(l.world_bounds), c.union(l.caster_bounds))
     })
+}
+
+/// A position as a node-buffer vec4: `(x, y, z, 1)` as f32 bits.
+fn position_vec4([x, y, z]: [f32; 3]) -> [u32; 4] {
+    [x.to_bits(), y.to_bits(), z.to_bits(), 1f32.to_bits()]
+}
+
+/// The corner vec4s of `tris` ([`TRIANGLE_CORNER_VEC4S`] each), `position(i)` the
+/// position of vertex index `i` in the level's space.
+fn triangle_corners(tris: &[GpuTriangle], position: impl Fn(u32) -> [f32; 3]) -> Vec<[u32; 4]> {
+    tris.iter()
+        .flat_map(|t| t.indices.map(|i| position_vec4(position(i))))
+        .collect()
 }
 
 /// The levels' caster balls, merged to what `trace_photons` reads.
@@ -544,6 +558,7 @@ impl DeviceScene {
             blas_capacity: 0,
             material: 0,
             geometry_version: 0,
+            triangle_corners: 0,
             triangle_base: 0,
             triangle_count: 0,
             vertex_base: 0,
@@ -632,6 +647,7 @@ impl DeviceScene {
                         blas_capacity: 0,
                         material: mat,
                         geometry_version: 0,
+                        triangle_corners: 0,
                         triangle_base: 0,
                         triangle_count: tris.len() as u32,
                         vertex_base: base,
@@ -725,23 +741,47 @@ impl DeviceScene {
             l.triangle_bounds = triangle_bounds(&l.used_vertices, &vertices, 0);
         }
         let positions_vec4 = slot as usize * SLOT_VEC4S;
-        for l in levels.iter_mut().filter(|l| l.object.is_some()) {
-            l.position_base += positions_vec4 as u32;
+        let corners_vec4 = positions_vec4 + object_vertices.len();
+        let total_vec4 = (corners_vec4 + TRIANGLE_CORNER_VEC4S * triangles.len())
+            .next_multiple_of(SLOT_VEC4S);
+        if total_vec4 > u32::MAX as usize {
+            return Err(BuildError::Scene {
+                path: "objects".into(),
+                reason: format!(
+                    "the node buffer would hold {total_vec4} vectors, over the 2^32 its u32 \
+                     indices address: fewer triangles"
+                ),
+            });
+        }
+        for l in levels.iter_mut() {
+            if l.object.is_some() {
+                l.position_base += positions_vec4 as u32;
+            }
+            l.triangle_corners = corners_vec4 as u32;
         }
         let top = top_level(&levels).map_err(|reason| BuildError::Scene {
             path: "objects".into(),
             reason,
         })?;
         let mut bvh_nodes: Vec<[u32; 4]> = Vec::new();
-        let total_vec4 = (positions_vec4 + object_vertices.len()).next_multiple_of(SLOT_VEC4S);
         reserve(&mut bvh_nodes, total_vec4 as u64, "BVH nodes")?;
         bvh_nodes.extend(top);
         bvh_nodes.extend(blas_nodes);
         debug_assert_eq!(bvh_nodes.len(), positions_vec4);
-        bvh_nodes.extend(object_vertices.iter().map(|v| {
-            let [x, y, z] = v.position;
-            [x.to_bits(), y.to_bits(), z.to_bits(), 1f32.to_bits()]
-        }));
+        bvh_nodes.extend(object_vertices.iter().map(|v| position_vec4(v.position)));
+        for l in &levels {
+            let tris = &triangles[l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize];
+            match l.object {
+                None => bvh_nodes.extend(triangle_corners(tris, |i| vertices[i as usize].position)),
+                Some(_) => {
+                    let first = l.position_base as usize - positions_vec4;
+                    let base = l.vertex_base;
+                    bvh_nodes.extend(triangle_corners(tris, |i| {
+                        object_vertices[first + (i - base) as usize].position
+                    }))
+                }
+            }
+        }
         bvh_nodes.resize(total_vec4, [0; 4]);
         let (bounds, caster_bounds) = level_bounds(&levels);
         Ok(DeviceScene {
@@ -1113,6 +1153,33 @@ mod tests {
         assert!(ds.instances.deform_instance(5, Vec::new()).is_err());
         assert!(ds.instances.deform_instance(0, Vec::new()).is_err());
         assert_eq!(ds.instances, kept);
+    }
+
+    #[test]
+    fn triangle_corners_are_each_triangles_vertices_in_its_levels_space() {
+        let mut ds = DeviceScene::build(&instanced_cornell(), Default::default()).unwrap();
+        let check = |ds: &DeviceScene| {
+            for l in &ds.instances.levels {
+                let r = l.record();
+                for i in r.triangle_base..r.triangle_base + r.triangle_count {
+                    let t = ds.triangles[i as usize];
+                    for (k, &v) in t.indices.iter().enumerate() {
+                        let want = match l.object {
+                            // world space
+                            None => position_vec4(ds.vertices[v as usize].position),
+                            // object space, where the CPU traversal reads it
+                            Some(_) => ds.bvh_nodes[v.wrapping_add(r.position_offset) as usize],
+                        };
+                        let at = r.triangle_corners as usize + TRIANGLE_CORNER_VEC4S * i as usize + k;
+                        assert_eq!(ds.bvh_nodes[at], want, "triangle {i} corner {k}");
+                    }
+                }
+            }
+        };
+        check(&ds);
+        ds.move_instances(&[(5, Transform::from_translation(Vec3::new(0.1, 0.5, 0.0)))])
+            .unwrap();
+        check(&ds);
     }
 
     #[test]

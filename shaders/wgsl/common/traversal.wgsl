@@ -118,27 +118,12 @@ fn cwbvh_node_hits(index: u32, origin: vec3<f32>, dir: vec3<f32>, inv_dir: vec3<
     return hit_mask;
 }
 
-fn triangle_positions(i: u32, a: ptr<function, vec3<f32>>, b: ptr<function, vec3<f32>>,
-                      c: ptr<function, vec3<f32>>) {
-    let t = triangles[i];
-    *a = vertices[t.indices[0]].position;
-    *b = vertices[t.indices[1]].position;
-    *c = vertices[t.indices[2]].position;
-}
-
-// An instance's triangle in object space: vertex index + `position_offset` is the vec4 of
-// its position in the node buffer (core::device::acceleration).
-fn object_position(index: u32, position_offset: u32) -> vec3<f32> {
-    let v = nodes[index + position_offset];
+// Corner `k` of triangle `i` in its level's space, from the node buffer's corner region at
+// vec4 `corners` (core::device::acceleration::TRIANGLE_CORNER_VEC4S; the CPU backend reads
+// the same values through the vertex indices).
+fn triangle_corner(i: u32, k: u32, corners: u32) -> vec3<f32> {
+    let v = nodes[corners + 3u * i + k];
     return vec3<f32>(bitcast<f32>(v.x), bitcast<f32>(v.y), bitcast<f32>(v.z));
-}
-
-fn object_triangle_positions(i: u32, position_offset: u32, a: ptr<function, vec3<f32>>,
-                             b: ptr<function, vec3<f32>>, c: ptr<function, vec3<f32>>) {
-    let t = triangles[i];
-    *a = object_position(t.indices[0], position_offset);
-    *b = object_position(t.indices[1], position_offset);
-    *c = object_position(t.indices[2], position_offset);
 }
 
 // `row.xyz . p + row.w * w`, in the CPU backend's order (affine_row).
@@ -202,8 +187,7 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
     var primitive_group = vec2<u32>(0u, 0u);
     var in_blas = false;
     var blas_sp = 0u;
-    var object_space = false;
-    var position_offset = 0u;
+    var corners = 0u;
     var found = false;
     var closest = t_max;
     loop {
@@ -223,8 +207,7 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
                 }
                 let r = 2u * prim * 5u;
                 let info = nodes[r + 3u];
-                object_space = (info.y & INSTANCE_IDENTITY) == 0u;
-                if (object_space) {
+                if ((info.y & INSTANCE_IDENTITY) == 0u) {
                     let o = vec3<f32>(affine_row(nodes[r], origin, 1.0),
                                       affine_row(nodes[r + 1u], origin, 1.0),
                                       affine_row(nodes[r + 2u], origin, 1.0));
@@ -235,20 +218,15 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
                     level = level_ray(o, d * c, 1.0 / c);
                     wray = watertight_ray(o, d);
                 }
-                position_offset = info.z;
+                corners = nodes[r + 8u].y;
                 in_blas = true;
                 blas_sp = sp;
                 current_group = vec2<u32>(info.x, 0x80000000u);
                 break;
             }
-            var a: vec3<f32>;
-            var b: vec3<f32>;
-            var c: vec3<f32>;
-            if (object_space) {
-                object_triangle_positions(prim, position_offset, &a, &b, &c);
-            } else {
-                triangle_positions(prim, &a, &b, &c);
-            }
+            let a = triangle_corner(prim, 0u, corners);
+            let b = triangle_corner(prim, 1u, corners);
+            let c = triangle_corner(prim, 2u, corners);
             var h: TriangleHit;
             if (intersect_watertight(&wray, a, b, c, 0.0, closest, &h) && h.t < closest) {
                 found = true;
@@ -293,7 +271,6 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
             if (in_blas && sp == blas_sp) {
                 // the instance is done: back to the world ray and the TLAS
                 in_blas = false;
-                object_space = false;
                 level = world;
                 wray = world_wray;
             }
