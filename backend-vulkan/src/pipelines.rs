@@ -191,6 +191,9 @@ pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
     .map_err(|e| BackendError::Driver(format!("{name}.wgsl does not validate: {e:?}")))?;
     let options = naga::back::spv::Options {
         lang_version: (1, 3),
+        // no iteration counter in every loop: every loop of these kernels ends (the
+        // argument is at the wgpu backend's `create_pipeline`, which does the same)
+        force_loop_bounding: false,
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {
