@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -337,6 +337,17 @@ if has framebench; then
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
     [ -x ./photon_gi_frame ] && run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
+fi
+if has session12; then
+    # The closing run of session 12: every kernel against the CPU, the instance updates,
+    # Sspm's and CausticMap's frames, and the dynamic scene's update cost.
+    run timeout 300 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./instance_updates --test-threads=1
+    run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
