@@ -13,7 +13,8 @@
 //! Environment: `CAUSTICA_BENCH_BACKENDS=wgpu,vulkan` (default: every backend that opens
 //! here), `CAUSTICA_BENCH_FRAMES=N` (default 10), `CAUSTICA_BENCH_SIZE=WxH` (default
 //! 1920x1080), `CAUSTICA_BENCH_PHOTONS=N` (grid side, default 2048),
-//! `CAUSTICA_BENCH_BIG=N` (segments of the static sphere, default 1024: N^2 triangles).
+//! `CAUSTICA_BENCH_BIG=N` (segments of the static sphere, default 1024: N^2 triangles),
+//! `CAUSTICA_BENCH_DEFORM=0` (moves only: no caster deformed per frame).
 
 mod common;
 use caustica::{open_backend, BACKEND_NAMES};
@@ -105,6 +106,7 @@ fn main() {
         .parse()
         .unwrap_or(2048);
     let big: u32 = env_or("CAUSTICA_BENCH_BIG", "1024").parse().unwrap_or(1024);
+    let deform_each_frame = env_or("CAUSTICA_BENCH_DEFORM", "1") != "0";
     let size = env_or("CAUSTICA_BENCH_SIZE", "1920x1080");
     let (w, h) = size
         .split_once('x')
@@ -141,7 +143,11 @@ fn main() {
             let (mut still, mut still_dev) = (Vec::new(), Vec::new());
             let (mut update, mut moving, mut moving_dev) = (Vec::new(), Vec::new(), Vec::new());
             let mut deform = Vec::new();
-            let caster = scene.objects.iter().position(|o| o.transform.is_some());
+            let caster = scene
+                .objects
+                .iter()
+                .position(|o| o.transform.is_some())
+                .filter(|_| deform_each_frame);
             let caster_triangles = caster.map_or(0, |k| {
                 caustica_core::scene::limits::tessellated_size(&scene.objects[k].shape).1
             });
@@ -186,14 +192,20 @@ fn main() {
                 continue;
             }
             let (s, m) = (median(&mut still), median(&mut moving));
+            let deformed = match caster {
+                Some(_) => format!(
+                    "deform one caster ({caster_triangles} triangles) {:.3} ms host",
+                    median(&mut deform)
+                ),
+                None => "no deformation".into(),
+            };
             println!(
                 "\n{name} on {device} / {scene_name} + static sphere: build {build_ms:.1} ms; \
-                 update (lights + instances) {:.3} ms host; deform one caster \
-                 ({caster_triangles} triangles) {:.3} ms host; frame {m:.3} ms host / {:.3} ms \
-                 passes moving and deformed, {s:.3} ms host / {:.3} ms passes still ({:+.1}%)",
+                 update (lights + instances) {:.3} ms host; {deformed}; frame {m:.3} ms host / \
+                 {:.3} ms passes moving{}, {s:.3} ms host / {:.3} ms passes still ({:+.1}%)",
                 median(&mut update),
-                median(&mut deform),
                 median(&mut moving_dev),
+                if caster.is_some() { " and deformed" } else { "" },
                 median(&mut still_dev),
                 100.0 * (m / s - 1.0)
             );
