@@ -7,9 +7,12 @@ use std::collections::BTreeMap;
 /// lists four conditions; escaped and bounce-limit photons are counted apart).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Discards {
-    /// Reached a diffuse surface without any specular interaction (direct light).
+    /// Reached a diffuse surface without any specular interaction (direct light), or
+    /// ended before its first ray because that ray meets no caster ball
+    /// ([`crate::device::caster_spheres`]): it could meet a diffuse surface or nothing.
     pub no_specular: u64,
-    /// Left the scene without hitting anything.
+    /// Left the scene without hitting anything after at least one specular interaction
+    /// (or on a first segment that the caster-ball test did not end).
     pub escaped: u64,
     /// Power fell below the negligible threshold (absorption, reflectance).
     pub negligible_power: u64,
