@@ -205,7 +205,11 @@ fn main() {
                  {:.3} ms passes moving{}, {s:.3} ms host / {:.3} ms passes still ({:+.1}%)",
                 median(&mut update),
                 median(&mut moving_dev),
-                if caster.is_some() { " and deformed" } else { "" },
+                if caster.is_some() {
+                    " and deformed"
+                } else {
+                    ""
+                },
                 median(&mut still_dev),
                 100.0 * (m / s - 1.0)
             );

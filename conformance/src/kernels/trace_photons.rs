@@ -153,19 +153,25 @@ fn caster_test_keeps_every_photon(
         counter::STORED_FLUX + 5,
     ] {
         v.check(cw[w] == co[w], || {
-            format!("{who}: caster-ball test changed counter word {w}: {} vs {}", cw[w], co[w])
+            format!(
+                "{who}: caster-ball test changed counter word {w}: {} vs {}",
+                cw[w], co[w]
+            )
         });
     }
     let ends = |c: &[u32]| c[counter::NO_SPECULAR] as u64 + c[counter::ESCAPED] as u64;
-    v.check(ends(cw) == ends(co) && cw[counter::ESCAPED] <= co[counter::ESCAPED], || {
-        format!(
-            "{who}: with the caster-ball test no_specular {} escaped {}, without {} and {}",
-            cw[counter::NO_SPECULAR],
-            cw[counter::ESCAPED],
-            co[counter::NO_SPECULAR],
-            co[counter::ESCAPED]
-        )
-    });
+    v.check(
+        ends(cw) == ends(co) && cw[counter::ESCAPED] <= co[counter::ESCAPED],
+        || {
+            format!(
+                "{who}: with the caster-ball test no_specular {} escaped {}, without {} and {}",
+                cw[counter::NO_SPECULAR],
+                cw[counter::ESCAPED],
+                co[counter::NO_SPECULAR],
+                co[counter::ESCAPED]
+            )
+        },
+    );
     let rays = |c: &[u32]| join_u64([c[counter::RAYS], c[counter::RAYS + 1]]);
     // every photon the test ends would have ended after its first ray
     v.note(format!(
@@ -287,8 +293,10 @@ pub fn check_trace(
         }
         // The first-segment caster-ball test (core's device::caster_spheres) on each
         // backend against the same backend without it.
-        let runs: [(&str, &mut dyn Backend, (&[Photon], &[u32])); 2] =
-            [("cpu", &mut *r, (&pa, &ca)), ("candidate", &mut *c, (&pb, &cb))];
+        let runs: [(&str, &mut dyn Backend, (&[Photon], &[u32])); 2] = [
+            ("cpu", &mut *r, (&pa, &ca)),
+            ("candidate", &mut *c, (&pb, &cb)),
+        ];
         for (who, b, with) in runs {
             let without = fx.run_trace_with(b, k, |p| p.caster_sphere_count = 0)?;
             caster_test_keeps_every_photon(&mut v, who, with, (&without.0, &without.1));

@@ -140,7 +140,8 @@ mod tests {
             let r = |d| random_f32(91, k, 0, d);
             let pts = points(k, 64, 0.5 + 3.0 * r(0), Vec3::new(r(1), r(2), r(3)) * 4.0);
             let t = Transform {
-                translation: Vec3::new(r(4) - 0.5, r(5) - 0.5, r(6) - 0.5) * 10f32.powi((k % 7) as i32),
+                translation: Vec3::new(r(4) - 0.5, r(5) - 0.5, r(6) - 0.5)
+                    * 10f32.powi((k % 7) as i32),
                 rotation: Quat::from_axis_angle(
                     Vec3::new(r(7) - 0.5, r(8) - 0.5, r(9) + 0.1).normalize(),
                     6.0 * r(10),
@@ -152,7 +153,10 @@ mod tests {
             let m = t.world_from_object();
             for p in &pts {
                 let w = m.transform_point3(*p).as_dvec3();
-                assert!((w - c).length() <= ball[3] as f64, "case {k}: {w} outside {ball:?}");
+                assert!(
+                    (w - c).length() <= ball[3] as f64,
+                    "case {k}: {w} outside {ball:?}"
+                );
             }
         }
     }
@@ -183,8 +187,8 @@ mod tests {
         for (i, b) in balls.iter().enumerate() {
             for d in 0..64u32 {
                 let r = |k| random_f32(17, i as u32 * 64 + d, 0, k) - 0.5;
-                let on = Vec3::new(b[0], b[1], b[2])
-                    + Vec3::new(r(0), r(1), r(2)).normalize() * b[3];
+                let on =
+                    Vec3::new(b[0], b[1], b[2]) + Vec3::new(r(0), r(1), r(2)).normalize() * b[3];
                 let dir = (on - origin).normalize();
                 assert!(ray_meets_caster_spheres(origin, dir, used, merged.count));
             }
@@ -205,14 +209,22 @@ mod tests {
             let towards = |p: Vec3| (p * scale - o).normalize();
             // straight at it, tangent to its surface, and clear past it
             assert!(ray_meets_sphere(o, towards(Vec3::Y), s));
-            let tangent = Vec3::new(0.5 * (1.0 - 0.25f32 / 4.0).sqrt(), 1.0 + 0.5 * 0.5 / 2.0, 0.0);
+            let tangent = Vec3::new(
+                0.5 * (1.0 - 0.25f32 / 4.0).sqrt(),
+                1.0 + 0.5 * 0.5 / 2.0,
+                0.0,
+            );
             let d_t = towards(tangent);
             assert!(ray_meets_sphere(o, d_t, s));
             assert!(!ray_meets_sphere(o, towards(Vec3::new(0.8, 1.0, 0.0)), s));
             // away from it
             assert!(!ray_meets_sphere(o, Vec3::Y, s));
             // from inside, any direction
-            assert!(ray_meets_sphere(Vec3::new(0.1, 1.2, 0.0) * scale, Vec3::Y, s));
+            assert!(ray_meets_sphere(
+                Vec3::new(0.1, 1.2, 0.0) * scale,
+                Vec3::Y,
+                s
+            ));
         }
     }
 }

@@ -7,15 +7,15 @@ use crate::device::acceleration::{
     instance_blas_capacity, rebase_blas, tlas_capacity, top_level, Level, RECORD_SLOTS, SLOT_VEC4S,
     TRIANGLE_CORNER_VEC4S,
 };
+use crate::device::caster_spheres::{placed_ball, CasterSpheres};
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
 };
+use crate::math::geometry::bounding_sphere;
 use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
 };
 use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene, Transform};
-use crate::device::caster_spheres::{placed_ball, CasterSpheres};
-use crate::math::geometry::bounding_sphere;
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};
 use obvhs::triangle::Triangle;
@@ -639,7 +639,9 @@ impl DeviceScene {
                     static_level.world_bounds = static_level.world_bounds.union(world_bounds);
                     if specular {
                         static_level.caster_bounds = static_level.caster_bounds.union(world_bounds);
-                        static_level.caster_balls.extend(bounding_sphere(&vertex_positions(&local)));
+                        static_level
+                            .caster_balls
+                            .extend(bounding_sphere(&vertex_positions(&local)));
                     }
                     static_level.vertex_count = vertices.len() as u32;
                 }
@@ -755,8 +757,8 @@ impl DeviceScene {
         }
         let positions_vec4 = slot as usize * SLOT_VEC4S;
         let corners_vec4 = positions_vec4 + object_vertices.len();
-        let total_vec4 = (corners_vec4 + TRIANGLE_CORNER_VEC4S * triangles.len())
-            .next_multiple_of(SLOT_VEC4S);
+        let total_vec4 =
+            (corners_vec4 + TRIANGLE_CORNER_VEC4S * triangles.len()).next_multiple_of(SLOT_VEC4S);
         if total_vec4 > u32::MAX as usize {
             return Err(BuildError::Scene {
                 path: "objects".into(),
@@ -783,7 +785,8 @@ impl DeviceScene {
         debug_assert_eq!(bvh_nodes.len(), positions_vec4);
         bvh_nodes.extend(object_vertices.iter().map(|v| position_vec4(v.position)));
         for l in &levels {
-            let tris = &triangles[l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize];
+            let tris =
+                &triangles[l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize];
             match l.object {
                 None => bvh_nodes.extend(triangle_corners(tris, |i| vertices[i as usize].position)),
                 Some(_) => {
@@ -1183,7 +1186,8 @@ mod tests {
                             // object space, where the CPU traversal reads it
                             Some(_) => ds.bvh_nodes[v.wrapping_add(r.position_offset) as usize],
                         };
-                        let at = r.triangle_corners as usize + TRIANGLE_CORNER_VEC4S * i as usize + k;
+                        let at =
+                            r.triangle_corners as usize + TRIANGLE_CORNER_VEC4S * i as usize + k;
                         assert_eq!(ds.bvh_nodes[at], want, "triangle {i} corner {k}");
                     }
                 }

@@ -1386,7 +1386,9 @@ impl CausticMap {
         lights: &[crate::scene::Light],
     ) -> Result<(), Error> {
         let model = crate::frame::technique::with_lights(&self.model, lights)?;
-        let Some(emission) = self.plan_emission(&model, self.bounds, self.caster_bounds, self.caster_spheres)? else {
+        let Some(emission) =
+            self.plan_emission(&model, self.bounds, self.caster_bounds, self.caster_spheres)?
+        else {
             return self.rebuild_as(backend, &model);
         };
         let gpu: Vec<GpuLight> = lights
@@ -1538,7 +1540,9 @@ impl CausticMap {
         u: InstanceUpdate,
     ) -> Result<(), Error> {
         let m = u.moved();
-        let Some(emission) = self.plan_emission(&model, m.bounds, m.caster_bounds, m.caster_spheres)? else {
+        let Some(emission) =
+            self.plan_emission(&model, m.bounds, m.caster_bounds, m.caster_spheres)?
+        else {
             return self.rebuild_as(backend, &model);
         };
         let mut receivers = self.receivers.clone();
