@@ -320,7 +320,7 @@ if has castercull; then
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
 fi
-if has corners; then
+if has corners || has session12; then
     # Triangle corners read from the node buffer's corner region (core's
     # acceleration::TRIANGLE_CORNER_VEC4S) and wgpu's kernels without naga's loop
     # bounding: the whole cross-backend suite and the instance updates, then the frames.
@@ -339,14 +339,8 @@ if has framebench; then
     [ -x ./photon_gi_frame ] && run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
 fi
 if has session12; then
-    # The closing run of session 12: every kernel against the CPU, the instance updates,
-    # Sspm's and CausticMap's frames, and the dynamic scene's update cost.
-    run timeout 300 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
-    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./instance_updates --test-threads=1
-    run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
-    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
-    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
-        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+    # The closing run of session 12: the `corners` section above, then the dynamic scene's
+    # update cost.
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./dynamic_frame --bench
 fi
 if has dynmoves; then
