@@ -117,17 +117,15 @@ fn trace_accounting(v: &mut Verdict, who: &str, counters: &[u32], stored: usize,
     }
 }
 
+/// One backend's `trace_photons` result: the stored photons and the counters.
+type TraceRun<'a> = (&'a [Photon], &'a [u32]);
+
 /// Checks that the first-segment caster-ball test changed no stored photon on one
 /// backend: `with` and `without` it, the stored photons are the same multiset bitwise
 /// (each photon's path depends on its index alone, and a photon the test ends could
 /// meet no caster first, so it could not be stored), the path ends differ only by
 /// first-segment escapes counted as `no_specular`, and no more rays are traced.
-fn caster_test_keeps_every_photon(
-    v: &mut Verdict,
-    who: &str,
-    with: (&[Photon], &[u32]),
-    without: (&[Photon], &[u32]),
-) {
+fn caster_test_keeps_every_photon(v: &mut Verdict, who: &str, with: TraceRun, without: TraceRun) {
     let key = |p: &Photon| bytemuck::bytes_of(p).to_vec();
     let mut a: Vec<Vec<u8>> = with.0.iter().map(key).collect();
     let mut b: Vec<Vec<u8>> = without.0.iter().map(key).collect();
@@ -293,7 +291,7 @@ pub fn check_trace(
         }
         // The first-segment caster-ball test (core's device::caster_spheres) on each
         // backend against the same backend without it.
-        let runs: [(&str, &mut dyn Backend, (&[Photon], &[u32])); 2] = [
+        let runs: [(&str, &mut dyn Backend, TraceRun); 2] = [
             ("cpu", &mut *r, (&pa, &ca)),
             ("candidate", &mut *c, (&pb, &cb)),
         ];
