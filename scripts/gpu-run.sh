@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -347,6 +347,22 @@ if has dynmoves; then
     # issue 19 point 6 as stated: light and glass objects moving, no deformation
     run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=20 ./sspm_frame --bench
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_DEFORM=0 ./dynamic_frame --bench
+fi
+if has clexp; then
+    # OpenCL kernel experiments without a rebuild: every folder .devbin/exp/<name>/ holds
+    # changed kernel files (backend-opencl's CAUSTICA_OPENCL_KERNEL_DIR); the built-in
+    # kernels run first as `base`, with their programs dumped (on NVIDIA: PTX) for ptxas.
+    PTXAS=$(command -v ptxas || ls /usr/local/cuda*/bin/ptxas 2>/dev/null | head -n 1)
+    for dir in base "$B"/exp/*; do
+        name=$(basename "$dir")
+        mkdir -p "$OUT/ptx-$name"
+        if [ "$name" = base ]; then kd=/nonexistent; else kd=$dir; fi
+        run timeout 120 env CAUSTICA_OPENCL_KERNEL_DIR=$kd CAUSTICA_OPENCL_DUMP_DIR="$OUT/ptx-$name" \
+            CAUSTICA_BENCH_BACKENDS=opencl CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} ./sspm_frame --bench
+        for f in "$OUT/ptx-$name"/trace_photons*.bin; do
+            [ -f "$f" ] && [ -n "$PTXAS" ] && echo "ptxas $name $(basename "$f"): $(timeout 60 "$PTXAS" -arch=sm_90 -v "$f" -o /dev/null 2>&1 | grep -E 'registers|spill|stack' | tr '\n' ' ')" | tee -a "$OUT/log.txt"
+        done
+    done
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

@@ -138,6 +138,34 @@ pub const KERNELS: &[(&str, &str)] = &[
 /// Kernels compiled per variant, in programs of their own.
 pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 
+/// Developer override: `CAUSTICA_OPENCL_KERNEL_DIR=dir` reads every kernel file from
+/// `dir/<kernel>.cl` and `dir/common/<file>.cl` instead of the texts built into the
+/// library (a missing file falls back to the built-in text), so that a kernel can be
+/// changed and timed on a device without rebuilding. Not for production: the
+/// conformance suite checks the built-in texts.
+pub const KERNEL_DIR_VAR: &str = "CAUSTICA_OPENCL_KERNEL_DIR";
+
+/// Developer aid: `CAUSTICA_OPENCL_DUMP_DIR=dir` writes every program the backend builds
+/// to `dir/<label>.bin` (on NVIDIA the driver's PTX, which `ptxas -v` reads for
+/// registers and spills). A write that fails is reported on stderr.
+pub const DUMP_DIR_VAR: &str = "CAUSTICA_OPENCL_DUMP_DIR";
+
+/// Developer aid: `CAUSTICA_OPENCL_OPTIONS="..."` appends build options to every program
+/// (for example NVIDIA's `-cl-nv-verbose` or `-cl-nv-maxrregcount=N`); with
+/// [`DUMP_DIR_VAR`] the build log is written beside the binary.
+pub const OPTIONS_VAR: &str = "CAUSTICA_OPENCL_OPTIONS";
+
+/// The text of kernel file `file` (`common/<name>.cl` or `<kernel>.cl`): the override of
+/// [`KERNEL_DIR_VAR`] where one is set and holds the file, else `built_in`.
+fn file_text(file: &str, built_in: &str) -> String {
+    if let Some(dir) = std::env::var_os(KERNEL_DIR_VAR) {
+        if let Ok(text) = std::fs::read_to_string(std::path::Path::new(&dir).join(file)) {
+            return text;
+        }
+    }
+    built_in.to_string()
+}
+
 /// Appends one file to a program text, introduced by a `#line` naming it so that build
 /// logs point at the file and line.
 fn append(s: &mut String, file: &str, text: &str) {
@@ -149,7 +177,7 @@ fn append(s: &mut String, file: &str, text: &str) {
 /// Appends every common file, in [`COMMON`] order.
 fn append_common(s: &mut String) {
     for (file, text) in COMMON {
-        append(s, file, text);
+        append(s, file, &file_text(&format!("common/{file}"), text));
     }
 }
 
@@ -161,7 +189,8 @@ pub fn source() -> String {
     append_common(&mut s);
     for (kernel, text) in KERNELS {
         if !VARIANT_KERNELS.contains(kernel) {
-            append(&mut s, &format!("{kernel}.cl"), text);
+            let file = format!("{kernel}.cl");
+            append(&mut s, &file, &file_text(&file, text));
         }
     }
     s
@@ -173,7 +202,8 @@ pub fn variant_source(kernel: &str) -> Option<String> {
     let (name, text) = KERNELS.iter().find(|(n, _)| *n == kernel)?;
     let mut s = String::new();
     append_common(&mut s);
-    append(&mut s, &format!("{name}.cl"), text);
+    let file = format!("{name}.cl");
+    append(&mut s, &file, &file_text(&file, text));
     Some(s)
 }
 
@@ -199,7 +229,9 @@ pub fn options(device: cl_device_id) -> String {
 
 /// Compiles [`source`] for `device`.
 pub fn build(context: &Context, device: cl_device_id) -> Result<Program, BackendError> {
-    build_source(context, device, &source())
+    let program = build_source(context, device, &source())?;
+    dump_binary(&program, device, "kernels");
+    Ok(program)
 }
 
 /// Compiles the program of variant `constants` of `kernel` for `device`.
@@ -207,11 +239,47 @@ pub fn build_variant(
     context: &Context,
     device: cl_device_id,
     kernel: &str,
-    constants: &[(&str, u32)],
+    constants: &[(&'static str, u32)],
 ) -> Result<Program, BackendError> {
     let src = variant_source(kernel)
         .ok_or_else(|| BackendError::Unsupported(format!("{kernel} has no variants")))?;
-    build_with(context, device, &src, &defines(constants))
+    let program = build_with(context, device, &src, &defines(constants))?;
+    dump_binary(
+        &program,
+        device,
+        &caustica_core::kernels::variant_label(kernel, constants),
+    );
+    Ok(program)
+}
+
+/// Writes `program`'s binary to [`DUMP_DIR_VAR`]'s folder when that is set; a failure
+/// to write is only logged (a developer aid must not fail a frame).
+fn dump_binary(program: &Program, device: cl_device_id, label: &str) {
+    let Some(dir) = std::env::var_os(DUMP_DIR_VAR) else {
+        return;
+    };
+    let name: String = label
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    let path = std::path::Path::new(&dir).join(format!("{name}.bin"));
+    let written = program
+        .get_binaries()
+        .map_err(|e| e.to_string())
+        .and_then(|b| {
+            let bytes = b.into_iter().next().unwrap_or_default();
+            std::fs::write(&path, bytes).map_err(|e| e.to_string())
+        });
+    let log = program.get_build_log(device).unwrap_or_default();
+    let written = written
+        .and_then(|()| std::fs::write(path.with_extension("log"), log).map_err(|e| e.to_string()));
+    if let Err(e) = written {
+        // opted into by the developer's own environment variable: say it where they look
+        eprintln!(
+            "could not dump the OpenCL program to {}: {e}",
+            path.display()
+        );
+    }
 }
 
 /// Compiles `src` for `device`; a failure returns the driver's build log.
@@ -233,7 +301,11 @@ fn build_with(
     if src.contains('\0') {
         return Err(BackendError::Driver("NUL in OpenCL source".into()));
     }
-    let opts = options(device) + extra_options;
+    let mut opts = options(device) + extra_options;
+    if let Ok(more) = std::env::var(OPTIONS_VAR) {
+        opts.push(' ');
+        opts.push_str(&more);
+    }
     // opencl3's `Program::build` panics on a NUL in the options: refuse it here.
     if opts.contains('\0') {
         return Err(BackendError::Driver("NUL in OpenCL build options".into()));
