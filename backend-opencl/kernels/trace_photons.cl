@@ -1,7 +1,8 @@
-// trace_photons (seed 000 sections 30.3.1.1-2): photon `first + i` of the light's
-// stratified grid is emitted, traced through mirrors and dielectrics and stored where it
-// first meets a diffuse surface after at least one specular interaction. Mirror of
-// backend-cpu/src/kernels/trace_photons.rs (same random dimensions, same decisions).
+// trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
+// the light's stratified grid (tile order, sampling.cl) is emitted, traced through
+// mirrors and dielectrics and stored where it first meets a diffuse surface after at
+// least one specular interaction. Mirror of backend-cpu/src/kernels/trace_photons.rs
+// (same random dimensions, same decisions).
 // Stored photons are appended in arrival order (an atomic slot counter): the set of
 // photons equals the CPU's, their order does not, and every later sum is order-free.
 
@@ -371,14 +372,14 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
             count_end(end, &ph, p->flux_quantum, lc);
         } else if (FRESNEL_SPLIT) {
             uint splits;
-            uint rays = trace_photon_split(SCENE_ARGS, p, p->first + i, photons, photon_capacity,
+            uint rays = trace_photon_split(SCENE_ARGS, p, tiled_photon_index(p->first + i, p->grid_w, p->grid_h), photons, photon_capacity,
                                            photon_count, lc, &splits);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             atomic_add(&lc[COUNTER_SPLITS], splits);
         } else {
             Photon ph;
             uint rays;
-            int end = trace_photon(SCENE_ARGS, p, p->first + i, &ph, &rays);
+            int end = trace_photon(SCENE_ARGS, p, tiled_photon_index(p->first + i, p->grid_w, p->grid_h), &ph, &rays);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             RECORD(end, &ph);
         }

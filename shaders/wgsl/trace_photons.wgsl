@@ -1,7 +1,8 @@
 // needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters
-// trace_photons (seed 000 sections 30.3.1.1-2): photon `first + i` of the light's
-// stratified grid is emitted, traced through mirrors and dielectrics and stored where it
-// first meets a diffuse surface after at least one specular interaction. Mirror of
+// trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
+// the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
+// mirrors and dielectrics and stored where it first meets a diffuse surface after at least
+// one specular interaction. Mirror of
 // backend-opencl/kernels/trace_photons.cl and backend-cpu/src/kernels/trace_photons.rs
 // (same random dimensions, same decisions). Stored photons are appended in arrival order
 // (an atomic slot counter): the set of photons equals the CPU's, their order does not,
@@ -392,13 +393,13 @@ fn trace_photons(i: u32, li: u32) {
             count_end(end, ph, p.flux_quantum);
         } else if (FRESNEL_SPLIT) {
             var splits: u32;
-            let rays = trace_photon_split(p, p.first + i, &splits);
+            let rays = trace_photon_split(p, tiled_photon_index(p.first + i, p.grid_w, p.grid_h), &splits);
             atomic_add_u64_local(COUNTER_RAYS, rays);
             atomicAdd(&lc[COUNTER_SPLITS], splits);
         } else {
             var ph: Photon;
             var rays: u32;
-            let end = trace_photon(p, p.first + i, &ph, &rays);
+            let end = trace_photon(p, tiled_photon_index(p.first + i, p.grid_w, p.grid_h), &ph, &rays);
             atomic_add_u64_local(COUNTER_RAYS, rays);
             record_end(end, ph, p.flux_quantum);
         }

@@ -1,5 +1,6 @@
-//! `trace_photons` (seed 000 sections 30.3.1.1-2): emits photon `first + i` of the light's
-//! stratified grid, traces it through mirrors and dielectrics and stores it where it first
+//! `trace_photons` (seed 000 sections 30.3.1.1-2): emits photon
+//! `tiled_photon_index(first + i)` of the light's stratified grid (tile order: core's
+//! `math::sampling`), traces it through mirrors and dielectrics and stores it where it first
 //! meets a diffuse surface, provided it met at least one specular surface on the way.
 //!
 //! Per interaction: mirrors scale power by their reflectance; dielectrics reflect with
@@ -44,7 +45,8 @@ use caustica_core::math::photon_clusters::{
 };
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::sampling::{
-    stratified_cell, to_world, uniform_cone, view_plane_direction, view_plane_texel_weight,
+    stratified_cell, tiled_photon_index, to_world, uniform_cone, view_plane_direction,
+    view_plane_texel_weight,
 };
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -122,7 +124,8 @@ fn count_end(end: PathEnd, p: &TraceParams, photons: &mut Vec<Photon>, counters:
     }
 }
 
-/// Traces photons `first .. first + count` of the batch in parallel chunks of `chunk`:
+/// Traces photons `first .. first + count` of the batch, in tile order
+/// ([`tiled_photon_index`]), in parallel chunks of `chunk`:
 /// `photon(index, on_end, counters)` traces one emitted photon, calling `on_end` for each
 /// path end (one, or one per branch of a split) and adding its rays (and splits) to the
 /// counters; stored photons come back in photon order.
@@ -140,7 +143,7 @@ fn batch(
             for i in c * chunk..((c + 1) * chunk).min(p.count) {
                 let mut ends = Counters::default();
                 photon(
-                    p.first + i,
+                    tiled_photon_index(p.first + i, p.grid_w, p.grid_h),
                     &mut |end| count_end(end, p, &mut photons, &mut ends),
                     &mut counters,
                 );

@@ -289,6 +289,32 @@ pub fn check_trace(
                 )
             });
         }
+        // A batch that is part of the grid, starting inside a band of tiles: the photons
+        // it covers (core's math::sampling::tiled_photon_index) are the CPU's; a backend
+        // that handed its threads photons in row order would store another set.
+        let count = fx.settings.photons_w * fx.settings.photons_h;
+        if count >= 3 {
+            let (first, part) = (count / 3 + 1, count / 3);
+            let partial = |p: &mut caustica_core::device::layout::TraceParams| {
+                p.first = first;
+                p.count = part;
+            };
+            let (qa, _) = fx.run_trace_with(r, k, partial)?;
+            let (qb, _) = fx.run_trace_with(c, k, partial)?;
+            for (u, len, who) in [
+                (unmatched(&qb, &qa, tol, flux_rel), qb.len(), "candidate"),
+                (unmatched(&qa, &qb, tol, flux_rel), qa.len(), "cpu"),
+            ] {
+                let allowed = ((1.0 - PHOTON_MATCH) * len as f64).ceil() as u64 + 2;
+                v.check(u <= allowed, || {
+                    format!(
+                        "batch {first} .. {}: {u} of {len} {who} photons have no counterpart \
+                         within {tol:.2e} (allowed {allowed})",
+                        first + part
+                    )
+                });
+            }
+        }
         // The first-segment caster-ball test (core's device::caster_spheres) on each
         // backend against the same backend without it.
         let runs: [(&str, &mut dyn Backend, TraceRun); 2] = [

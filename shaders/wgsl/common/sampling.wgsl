@@ -1,6 +1,22 @@
 // Mirror of core/src/sampling.rs and backend-opencl/kernels/sampling.cl: equal-area warps
 // of the unit square.
 
+// core::math::sampling::tiled_photon_index: the row-major grid index of the g-th photon
+// in tile order (8 x 8 tiles, bands of tiles left to right; a warp's photons in one block).
+const PHOTON_TILE: u32 = 8u;
+fn tiled_photon_index(g: u32, grid_w: u32, grid_h: u32) -> u32 {
+    if (grid_w == 0u || grid_h == 0u) {
+        return g;
+    }
+    let band_y = g / grid_w / PHOTON_TILE * PHOTON_TILE;
+    let band_h = min(PHOTON_TILE, grid_h - band_y);
+    let r = g - band_y * grid_w;
+    let tile_x = r / (PHOTON_TILE * band_h) * PHOTON_TILE;
+    let tile_w = min(PHOTON_TILE, grid_w - tile_x);
+    let q = r - tile_x * band_h;
+    return (band_y + q / tile_w) * grid_w + tile_x + q % tile_w;
+}
+
 fn stratified_cell(ix: u32, iy: u32, grid_w: u32, grid_h: u32, jitter: vec2<f32>) -> vec2<f32> {
     return vec2<f32>((f32(ix) + jitter.x) / f32(grid_w), (f32(iy) + jitter.y) / f32(grid_h));
 }
