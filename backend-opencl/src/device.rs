@@ -21,7 +21,8 @@ pub struct DeviceState {
     pub context: Context,
     /// Every kernel without variants.
     pub program: Arc<Program>,
-    /// Programs of kernel variants by label, built on first use.
+    /// Programs of kernel variants by label and the relaxed-division program, built on
+    /// first use.
     variants: Mutex<HashMap<String, Arc<Program>>>,
     /// What the backend reports about the device.
     pub info: DeviceSummary,
@@ -29,26 +30,31 @@ pub struct DeviceState {
 
 impl DeviceState {
     /// The program holding variant `constants` of `kernel` (the base program for a
-    /// kernel without switches), building it on first use.
+    /// kernel without switches, the relaxed-division program for
+    /// [`program::RELAXED_DIVISION_KERNELS`]), building it on first use.
     pub fn program_for(
         &self,
         kernel: &str,
         constants: &[(&'static str, u32)],
     ) -> Result<Arc<Program>, BackendError> {
-        if constants.is_empty() {
+        let relaxed = program::RELAXED_DIVISION_KERNELS.contains(&kernel);
+        if constants.is_empty() && !relaxed {
             return Ok(Arc::clone(&self.program));
         }
-        let label = caustica_core::kernels::variant_label(kernel, constants);
+        let label = if relaxed {
+            program::RELAXED_DIVISION_PROGRAM.to_string()
+        } else {
+            caustica_core::kernels::variant_label(kernel, constants)
+        };
         let mut map = self.variants.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(p) = map.get(&label) {
             return Ok(Arc::clone(p));
         }
-        let p = Arc::new(program::build_variant(
-            &self.context,
-            self.device.id(),
-            kernel,
-            constants,
-        )?);
+        let p = Arc::new(if relaxed {
+            program::build_relaxed_division(&self.context, self.device.id())?
+        } else {
+            program::build_variant(&self.context, self.device.id(), kernel, constants)?
+        });
         map.insert(label, Arc::clone(&p));
         Ok(p)
     }

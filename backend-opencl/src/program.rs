@@ -138,6 +138,19 @@ pub const KERNELS: &[(&str, &str)] = &[
 /// Kernels compiled per variant, in programs of their own.
 pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 
+/// Kernels compiled in a program of their own with OpenCL's default single-precision
+/// bounds, 2.5 ulp for `/` and 3 ulp for `sqrt` (OpenCL C 1.2 section 7.4), instead of the
+/// correctly rounded ones of [`options`]: the bounds of WGSL and SPIR-V, which the
+/// conformance tolerance of these kernels already argues for (`DENSITY_GATHER_REL` in
+/// conformance/src/harness/tolerance.rs). The density gather divides five times per tap;
+/// measured on the H200 (`cornell`), the correctly rounded divisions made `density_gather`
+/// 0.37 ms against 0.23 ms without them, and `gather_footprint` 0.17 against 0.12
+/// (docs/gpu/h200-session13-order.log, `dgdiv`).
+pub const RELAXED_DIVISION_KERNELS: &[&str] = &["gather_footprint", "density_gather"];
+
+/// The label [`crate::device::DeviceState::program_for`] keeps the relaxed program under.
+pub const RELAXED_DIVISION_PROGRAM: &str = "relaxed division";
+
 /// Developer override: `CAUSTICA_OPENCL_KERNEL_DIR=dir` reads every kernel file from
 /// `dir/<kernel>.cl` and `dir/common/<file>.cl` instead of the texts built into the
 /// library (a missing file falls back to the built-in text), so that a kernel can be
@@ -188,7 +201,7 @@ pub fn source() -> String {
     let mut s = String::new();
     append_common(&mut s);
     for (kernel, text) in KERNELS {
-        if !VARIANT_KERNELS.contains(kernel) {
+        if !VARIANT_KERNELS.contains(kernel) && !RELAXED_DIVISION_KERNELS.contains(kernel) {
             let file = format!("{kernel}.cl");
             append(&mut s, &file, &file_text(&file, text));
         }
@@ -215,10 +228,44 @@ pub fn defines(constants: &[(&str, u32)]) -> String {
         .collect()
 }
 
-/// Build options: OpenCL C 1.2, IEEE-exact division and square root where the device
-/// offers them (the Rust reference rounds both correctly), never fast math.
+/// The text of the program of [`RELAXED_DIVISION_KERNELS`]: the common files and theirs.
+pub fn relaxed_division_source() -> String {
+    let mut s = String::new();
+    append_common(&mut s);
+    for (kernel, text) in KERNELS {
+        if RELAXED_DIVISION_KERNELS.contains(kernel) {
+            let file = format!("{kernel}.cl");
+            append(&mut s, &file, &file_text(&file, text));
+        }
+    }
+    s
+}
+
+/// Compiles [`relaxed_division_source`] for `device` with [`base_options`].
+pub fn build_relaxed_division(
+    context: &Context,
+    device: cl_device_id,
+) -> Result<Program, BackendError> {
+    let program = build_with(
+        context,
+        device,
+        &relaxed_division_source(),
+        base_options(),
+        "",
+    )?;
+    dump_binary(&program, device, RELAXED_DIVISION_PROGRAM);
+    Ok(program)
+}
+
+/// OpenCL C 1.2, never fast math.
+fn base_options() -> String {
+    String::from("-cl-std=CL1.2")
+}
+
+/// Build options: [`base_options`] with IEEE-exact division and square root where the
+/// device offers them (the Rust reference rounds both correctly).
 pub fn options(device: cl_device_id) -> String {
-    let mut o = String::from("-cl-std=CL1.2");
+    let mut o = base_options();
     if let Ok(c) = Device::new(device).single_fp_config() {
         if c & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT != 0 {
             o.push_str(" -cl-fp32-correctly-rounded-divide-sqrt");
@@ -243,7 +290,7 @@ pub fn build_variant(
 ) -> Result<Program, BackendError> {
     let src = variant_source(kernel)
         .ok_or_else(|| BackendError::Unsupported(format!("{kernel} has no variants")))?;
-    let program = build_with(context, device, &src, &defines(constants))?;
+    let program = build_with(context, device, &src, options(device), &defines(constants))?;
     dump_binary(
         &program,
         device,
@@ -288,7 +335,7 @@ pub fn build_source(
     device: cl_device_id,
     src: &str,
 ) -> Result<Program, BackendError> {
-    build_with(context, device, src, "")
+    build_with(context, device, src, options(device), "")
 }
 
 /// Compiles `src` for `device` with [`options`] followed by `extra_options`.
@@ -296,12 +343,13 @@ fn build_with(
     context: &Context,
     device: cl_device_id,
     src: &str,
+    options: String,
     extra_options: &str,
 ) -> Result<Program, BackendError> {
     if src.contains('\0') {
         return Err(BackendError::Driver("NUL in OpenCL source".into()));
     }
-    let mut opts = options(device) + extra_options;
+    let mut opts = options + extra_options;
     if let Ok(more) = std::env::var(OPTIONS_VAR) {
         opts.push(' ');
         opts.push_str(&more);
@@ -347,6 +395,27 @@ mod tests {
 
     /// The common files and kernel files are the files of `kernels/common/` and
     /// `kernels/`, so a new file cannot be forgotten in the tables.
+    /// Every kernel is in exactly one of the base, variant and relaxed-division programs
+    /// (a relaxed kernel's switches would be ignored: none may have any).
+    #[test]
+    fn each_kernel_is_in_one_program() {
+        let base = source();
+        let relaxed = relaxed_division_source();
+        for (kernel, _) in KERNELS {
+            let marker = format!("void {kernel}(");
+            let places = [
+                base.contains(&marker),
+                VARIANT_KERNELS.contains(kernel),
+                relaxed.contains(&marker),
+            ];
+            assert_eq!(
+                places.iter().filter(|&&p| p).count(),
+                1,
+                "{kernel}: {places:?}"
+            );
+        }
+    }
+
     #[test]
     fn tables_list_every_file() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("kernels");
