@@ -46,6 +46,27 @@ fn descriptor_types(info: &KernelInfo) -> Vec<vk::DescriptorType> {
 /// Width of a ray-generation launch grid (`i = y * width + x` in the shaders).
 const RAYGEN_WIDTH: u64 = 8192;
 
+/// Width of `trace_photons`' launch grid. Its threads are photons in tile order (core's
+/// `math::sampling::tiled_photon_index`: 64 consecutive threads, an 8 x 8 block of the
+/// photon grid); NVIDIA's driver packs a 2D block of launch ids into a warp, which on an
+/// 8192-wide grid took four rows 8192 threads apart (photons of four distant tiles). Eight
+/// columns make any such block a run of consecutive threads. Measured on the H200
+/// (`sphere` / `cornell`, 2048^2 photons): trace 4.95 / 2.50 ms at width 8192, 2.89 / 1.60
+/// at width 8 (3.13 / 1.78 in row order; docs/gpu/h200-session13-vulkan-width.log).
+const PHOTON_LAUNCH_WIDTH: u64 = 8;
+
+/// The launch grid's width for `n` threads of `kernel`: [`PHOTON_LAUNCH_WIDTH`] for
+/// `trace_photons` where the device takes a grid that tall, else [`RAYGEN_WIDTH`].
+fn raygen_width(limits: &vk::PhysicalDeviceLimits, kernel: &str, n: u64) -> u64 {
+    let max_height = limits.max_compute_work_group_count[1] as u64
+        * limits.max_compute_work_group_size[1] as u64;
+    if kernel == "trace_photons" && n.div_ceil(PHOTON_LAUNCH_WIDTH) <= max_height {
+        PHOTON_LAUNCH_WIDTH
+    } else {
+        RAYGEN_WIDTH
+    }
+}
+
 /// Every pipeline without compiled switches, created once, from core's kernel list:
 /// traced kernels as ray-tracing pipelines (GLSL ray generation stage, binding the TLAS at
 /// 0 in place of the CWBVH nodes), the others as compute pipelines from the WGSL through
@@ -724,7 +745,7 @@ fn record_kernel(
     }
     if n > 0 {
         if let Some(sbt) = &pipeline.sbt {
-            let w = n.min(RAYGEN_WIDTH);
+            let w = n.min(raygen_width(&b.ctx.limits, launch.kernel, n));
             let h = n.div_ceil(w);
             unsafe {
                 b.ctx.rt.cmd_trace_rays(
