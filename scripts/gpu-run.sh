@@ -352,6 +352,8 @@ if has session13; then
     # Tile order of the photon grid (core's math::sampling::tiled_photon_index): the
     # cross-backend suite, then Sspm's and CausticMap's frames on every GPU backend.
     run timeout 300 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
+    # a warm-up: a process's first frames on a fresh machine run 3-4x slow
+    run timeout 100 env CAUSTICA_BENCH_BACKENDS=vulkan,wgpu CAUSTICA_BENCH_FRAMES=5 ./sspm_frame --bench > /dev/null 2>&1
     run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density ./sspm_frame --bench
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
