@@ -57,8 +57,9 @@ pub struct EmissionDomain {
 }
 
 impl EmissionDomain {
-    /// Parameters of a `trace_photons` dispatch over photons `first .. first + count` of
-    /// the `grid.0 x grid.1` grid of light `light`: flux per photon is the domain's flux
+    /// Parameters of a `trace_photons` dispatch over photons `first .. first + count` (in
+    /// tile order, [`crate::math::sampling::tiled_photon_index`]) of the `grid.0 x grid.1`
+    /// grid of light `light`: flux per photon is the domain's flux
     /// over the grid (000 Eqs. 1 and 3).
     #[allow(clippy::too_many_arguments)]
     pub fn trace_params(

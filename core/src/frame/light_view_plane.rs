@@ -169,8 +169,9 @@ impl LightViewPlane {
         self.resolution.0 as u64 * self.resolution.1 as u64
     }
 
-    /// Parameters of a `trace_photons` dispatch over texels `first .. first + count`
-    /// (row-major) of this plane, one photon each, jittered inside its texel by the
+    /// Parameters of a `trace_photons` dispatch over texels `first .. first + count` of
+    /// this plane in tile order ([`crate::math::sampling::tiled_photon_index`] gives each
+    /// its row-major texel), one photon each, jittered inside its texel by the
     /// `seed`'s random numbers: a perspective plane as
     /// [`emission_kind::VIEW_PLANE`](crate::device::layout::emission_kind::VIEW_PLANE)
     /// (photon flux `I * Omega_texel`, the kernel weighting the centre texel's flux by
