@@ -2,6 +2,18 @@
 // normaliser (core/src/math/density_gather.rs). Mirror of
 // backend-cpu/src/kernels/density_gather.rs.
 
+// A pixel's deposited flux (W per channel) from the photon map's fixed-point sums.
+inline float3 pixel_flux(PHOTON_MAP_PARAMS(__global const), uint i, float quantum) {
+    float3 f;
+    f.x = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, i, 0u),
+                            photon_map_word(PHOTON_MAP_ARGS, i, 1u)) * quantum;
+    f.y = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, i, 2u),
+                            photon_map_word(PHOTON_MAP_ARGS, i, 3u)) * quantum;
+    f.z = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, i, 4u),
+                            photon_map_word(PHOTON_MAP_ARGS, i, 5u)) * quantum;
+    return f;
+}
+
 __kernel void gather_footprint(__global const GatherParams* p,
                                PHOTON_MAP_PARAMS(__global const), __global const uint* table,
                                __global const float4* edge, __global float4* out,
@@ -16,13 +28,19 @@ __kernel void gather_footprint(__global const GatherParams* p,
     int x = i % w, y = i / w;
     float r = footprint_radius(table, w, h, (int)p->table_block, x, y, p->knn_photons,
                                p->max_radius_px);
-    float3 f;
-    f.x = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 0u),
-                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 1u)) * p->flux_quantum;
-    f.y = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 2u),
-                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 3u)) * p->flux_quantum;
-    f.z = join_u64_wide_f32(photon_map_word(PHOTON_MAP_ARGS, (uint)i, 4u),
-                            photon_map_word(PHOTON_MAP_ARGS, (uint)i, 5u)) * p->flux_quantum;
+    float3 f = pixel_flux(PHOTON_MAP_ARGS, (uint)i, p->flux_quantum);
+    if (p->surface == GATHER_SURFACE_ATLAS) {
+        // core's inherited_flux: the flux of uncovered neighbours whose heir this texel is
+        for (int k = 0; k < 8; k++) {
+            int2 d = HEIR_OFFSETS[k];
+            int nx = x + d.x, ny = y + d.y;
+            if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+            int n = ny * w + nx;
+            uint heir = edge_texel_heir(edge[n]);
+            if (heir != 0u && HEIR_OFFSETS[heir - 1u].x == -d.x && HEIR_OFFSETS[heir - 1u].y == -d.y)
+                f += pixel_flux(PHOTON_MAP_ARGS, (uint)n, p->flux_quantum);
+        }
+    }
     if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) {
         // no flux to spread: no normaliser to compute
         out[i] = (float4)(0.0f, 0.0f, 0.0f, r);

@@ -37,6 +37,13 @@ fn footprint_radius(w: i32, h: i32, block: i32, x: i32, y: i32, k: u32,
     return min(knn_radius(k, at_hi.y, at_hi.x), f32(max_radius));
 }
 
+// A pixel's deposited flux (W per channel) from the photon map's fixed-point sums.
+fn pixel_flux(u: u32, quantum: f32) -> vec3<f32> {
+    return vec3<f32>(join_u64_wide(photon_map_word(u, 0u), photon_map_word(u, 1u)),
+                     join_u64_wide(photon_map_word(u, 2u), photon_map_word(u, 3u)),
+                     join_u64_wide(photon_map_word(u, 4u), photon_map_word(u, 5u))) * quantum;
+}
+
 fn gather_footprint(index: u32) {
     let p = params;
     let w = i32(p.camera.width);
@@ -52,11 +59,23 @@ fn gather_footprint(index: u32) {
     let x = i % w;
     let y = i / w;
     let r = footprint_radius(w, h, i32(p.table_block), x, y, p.knn_photons, p.max_radius_px);
-    let u = u32(i);
-    let f = vec3<f32>(join_u64_wide(photon_map_word(u, 0u), photon_map_word(u, 1u)),
-                      join_u64_wide(photon_map_word(u, 2u), photon_map_word(u, 3u)),
-                      join_u64_wide(photon_map_word(u, 4u), photon_map_word(u, 5u))) *
-            p.flux_quantum;
+    var f = pixel_flux(u32(i), p.flux_quantum);
+    if (p.surface == GATHER_SURFACE_ATLAS) {
+        // core's inherited_flux: the flux of uncovered neighbours whose heir this texel is
+        for (var k = 0u; k < 8u; k++) {
+            let d = heir_offset(k);
+            let nx = x + d.x;
+            let ny = y + d.y;
+            if (nx < 0 || ny < 0 || nx >= w || ny >= h) {
+                continue;
+            }
+            let n = ny * w + nx;
+            let heir = edge_texel_heir(edge[n]);
+            if (heir != 0u && all(heir_offset(heir - 1u) == -d)) {
+                f += pixel_flux(u32(n), p.flux_quantum);
+            }
+        }
+    }
     if (f.x == 0.0 && f.y == 0.0 && f.z == 0.0) {
         // no flux to spread: no normaliser to compute
         out[i] = vec4<f32>(0.0, 0.0, 0.0, r);

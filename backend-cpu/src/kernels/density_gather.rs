@@ -8,7 +8,7 @@ use caustica_core::device::layout::{
 };
 use caustica_core::math::density_gather::{
     accumulate_source_index, clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight,
-    footprint_radius, footprint_weight, for_each_pass_source, join_u64_wide,
+    footprint_radius, footprint_weight, for_each_pass_source, inherited_flux, join_u64_wide,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
@@ -127,9 +127,17 @@ pub fn gather_footprint(
                 p.knn_photons,
                 p.max_radius_px,
             );
-            let word = |k: u32| map.photon_map_word(i as u32, k);
-            let flux = |c: u32| join_u64_wide(word(2 * c), word(2 * c + 1)) * p.flux_quantum;
-            let f = [flux(0), flux(1), flux(2)];
+            let flux = |j: i32| {
+                let word = |k: u32| map.photon_map_word(j as u32, k);
+                let channel = |c: u32| join_u64_wide(word(2 * c), word(2 * c + 1)) * p.flux_quantum;
+                [channel(0), channel(1), channel(2)]
+            };
+            // on the atlas, the flux of uncovered neighbours whose heir this texel is
+            let f = if p.surface == gather_surface::ATLAS {
+                inherited_flux(edge, w, h, i % w, i / w, flux)
+            } else {
+                flux(i)
+            };
             if f == [0.0; 3] {
                 // no flux to spread: no normaliser to compute
                 return [0.0, 0.0, 0.0, r];

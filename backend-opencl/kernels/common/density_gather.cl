@@ -136,6 +136,18 @@ inline float4 edge_texel(GatherTexel t) {
 
 inline bool edge_texel_is_receiver(float4 t) { return t.x >= 0.0f; }
 
+// core::math::density_gather::HEIR_OFFSETS: an uncovered atlas texel's neighbours in the
+// order its heir was chosen.
+__constant int2 HEIR_OFFSETS[8] = {(int2)(-1, 0),  (int2)(1, 0),  (int2)(0, -1), (int2)(0, 1),
+                                   (int2)(-1, -1), (int2)(1, -1), (int2)(-1, 1), (int2)(1, 1)};
+
+// core's edge_texel_heir: 1..8 for an uncovered texel whose flux goes to its neighbour at
+// HEIR_OFFSETS[heir - 1], 0 for none.
+inline uint edge_texel_heir(float4 t) {
+    if (edge_texel_is_receiver(t) || !(t.y >= 1.0f && t.y <= 8.0f)) return 0u;
+    return (uint)t.y;
+}
+
 // Edge weight between two edge texels.
 inline float edge_weight_of(__global const GatherParams* p, float4 a, float4 b) {
     return edge_weight(a.x, a.yzw, b.x, b.yzw, p->sigma_depth, p->normal_power);

@@ -180,7 +180,7 @@ pub fn catalogue() -> Vec<StiffCase> {
         case!("caustic-map", "uv-seams", caustic_map::uv_seams,
             "A box receiver (six UV islands, seams between them): the 3x3 box gather, the raw map and the density gather keep the stored flux (sum of irradiance x texel area) within 1e-5, 1e-5 and 1e-4; agrees with cpu"),
         case!("caustic-map", "generated-uv-charts", caustic_map::generated_uv_charts,
-            "A receiver mesh without UVs (a box of 8 shared corners): refused by name, pointing at scene::uv_charts; with generated charts (six, with gutters) the 3x3 box gather keeps the stored flux within 1e-5; the density gather keeps the raw map's within 1e-4, the flux in uncovered border texels (which it drops: TODO(issue 16)) below 1%; agrees with cpu"),
+            "A receiver mesh without UVs (a box of 8 shared corners): refused by name, pointing at scene::uv_charts; with generated charts (six, with gutters) the 3x3 box gather keeps the stored flux within 1e-5 and the density gather within 1e-4 (flux in uncovered border texels goes to a covered neighbour of the chart); the raw map shows all but the uncovered texels' flux (below 1%); agrees with cpu"),
         case!("caustic-map", "overlapping-uvs", caustic_map::overlapping_uvs,
             "A receiver mesh whose triangles share UVs: a typed InvalidScene naming the object and the overlap"),
         case!("caustic-map", "dispersion-split", caustic_map::dispersion_split,

@@ -203,6 +203,99 @@ pub fn atlas_edge_texel(tile: u32, area: f32) -> [f32; 4] {
     }
 }
 
+/// The eight neighbours of an atlas texel in the order [`atlas_edge_texels`] looks for an
+/// heir: the four sharing an edge first, then the four sharing a corner (texel offsets).
+pub const HEIR_OFFSETS: [(i32, i32); 8] = [
+    (-1, 0),
+    (1, 0),
+    (0, -1),
+    (0, 1),
+    (-1, -1),
+    (1, -1),
+    (-1, 1),
+    (1, 1),
+];
+
+/// The edge texel of an uncovered atlas texel (inside a tile, its centre outside every
+/// UV triangle) whose flux goes to its neighbour at `HEIR_OFFSETS[heir - 1]`, a covered
+/// texel of the same tile; `heir` 0 for none. A photon within half a texel of a UV
+/// island's border can land in such a texel: the raw map has no area to show it in, and
+/// `gather_footprint` adds its flux to the heir's so that the density gather keeps it
+/// (001's box gather keeps it by spreading its window over covered texels).
+#[inline]
+pub fn uncovered_edge_texel(heir: u32) -> [f32; 4] {
+    [EDGE_TEXEL_NOT_RECEIVER, heir.min(8) as f32, 0.0, 0.0]
+}
+
+/// The heir of a texel that is not a receiver's (`1..=8`, an index into [`HEIR_OFFSETS`]
+/// plus one), 0 for none (every non-receiver pixel of Sspm's screen).
+#[inline]
+pub fn edge_texel_heir(t: &[f32; 4]) -> u32 {
+    if edge_texel_is_receiver(t) || !(t[1] >= 1.0 && t[1] <= 8.0) {
+        0
+    } else {
+        t[1] as u32
+    }
+}
+
+/// Every atlas texel's edge texel ([`atlas_edge_texel`]; for `(world area, tile)` texels
+/// of a `size.0`-wide atlas, row-major): an uncovered texel inside a tile names as its
+/// heir ([`uncovered_edge_texel`]) its first neighbour in [`HEIR_OFFSETS`] order that is
+/// a covered texel of the same tile, if any.
+pub fn atlas_edge_texels(texels: &[[u32; 2]], width: u32) -> Vec<[f32; 4]> {
+    let w = width as i64;
+    let h = if w > 0 { texels.len() as i64 / w } else { 0 };
+    let at = |x: i64, y: i64| -> Option<[u32; 2]> {
+        (x >= 0 && y >= 0 && x < w && y < h).then(|| texels[(y * w + x) as usize])
+    };
+    texels
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let edge = atlas_edge_texel(t[1], f32::from_bits(t[0]));
+            if edge_texel_is_receiver(&edge) || t[1] >= ATLAS_MAX_TILES || w == 0 {
+                return edge;
+            }
+            let (x, y) = (i as i64 % w, i as i64 / w);
+            let heir = HEIR_OFFSETS.iter().position(|&(dx, dy)| {
+                at(x + dx as i64, y + dy as i64).is_some_and(|n| {
+                    n[1] == t[1]
+                        && edge_texel_is_receiver(&atlas_edge_texel(n[1], f32::from_bits(n[0])))
+                })
+            });
+            uncovered_edge_texel(heir.map_or(0, |k| k as u32 + 1))
+        })
+        .collect()
+}
+
+/// The flux `gather_footprint` gives receiver pixel `(x, y)` of a `w x h` image: its own,
+/// then that of each neighbour in [`HEIR_OFFSETS`] order whose heir it is, added in f32
+/// in that order. `flux(i)` is pixel `i`'s deposited flux (W per channel).
+pub fn inherited_flux(
+    edge: &[[f32; 4]],
+    w: i32,
+    h: i32,
+    x: i32,
+    y: i32,
+    flux: impl Fn(i32) -> [f32; 3],
+) -> [f32; 3] {
+    let mut f = flux(y * w + x);
+    for &(dx, dy) in HEIR_OFFSETS.iter() {
+        let (nx, ny) = (x + dx, y + dy);
+        if nx < 0 || ny < 0 || nx >= w || ny >= h {
+            continue;
+        }
+        let n = ny * w + nx;
+        let heir = edge_texel_heir(&edge[n as usize]);
+        // the neighbour's heir is this pixel: its offset is the opposite of offset k
+        if heir != 0 && HEIR_OFFSETS[heir as usize - 1] == (-dx, -dy) {
+            let g = flux(n);
+            f = [f[0] + g[0], f[1] + g[1], f[2] + g[2]];
+        }
+    }
+    f
+}
+
 /// Whether an edge texel is a receiver's ([`edge_texel`]).
 #[inline]
 pub fn edge_texel_is_receiver(t: &[f32; 4]) -> bool {
@@ -581,6 +674,53 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn uncovered_texels_name_a_covered_heir_of_their_own_tile() {
+        // a 4 x 3 atlas: tile 0 in columns 0-1, tile 1 in columns 2-3; covered (area 1)
+        // texels marked C, uncovered ones u (tile 0) and v (tile 1), '-' outside tiles
+        //   row 0:  C u v C
+        //   row 1:  u u v v
+        //   row 2:  - C v -
+        let one = 1.0f32.to_bits();
+        let none = [0, crate::device::layout::NO_TILE];
+        let texels = [
+            [one, 0],
+            [0, 0],
+            [0, 1],
+            [one, 1],
+            [0, 0],
+            [0, 0],
+            [0, 1],
+            [0, 1],
+            none,
+            [one, 0],
+            [0, 1],
+            none,
+        ];
+        let edge = atlas_edge_texels(&texels, 4);
+        let heirs: Vec<u32> = edge.iter().map(edge_texel_heir).collect();
+        // (1,0): left neighbour (0,0) is covered -> offset 0 -> heir 1. (0,1): up (0,0)
+        // -> offset 2 -> heir 3. (1,1): left (0,1) uncovered, right (2,1) other tile, up
+        // (1,0) uncovered, down (1,2) covered -> offset 3 -> heir 4. (2,0): right (3,0)
+        // covered, same tile -> heir 2. (2,1): corner (3,0) -> offset 5 -> heir 6. (2,2)
+        // and (3,1): only tile 0's or no covered texels of tile 1 at an edge or corner
+        // but (3,0) for (3,1): up -> heir 3; (2,2): corner (3,1) uncovered, none -> 0.
+        assert_eq!(heirs, vec![0, 1, 2, 0, 3, 4, 6, 3, 0, 0, 0, 0]);
+        for (i, t) in edge.iter().enumerate() {
+            assert_eq!(edge_texel_is_receiver(t), texels[i][0] == one, "texel {i}");
+        }
+        // the covered texel (0,0) inherits (1,0) and (0,1); (1,2) inherits (1,1)
+        let flux = |i: i32| [i as f32 + 1.0, 0.0, 0.0];
+        assert_eq!(inherited_flux(&edge, 4, 3, 0, 0, flux)[0], 1.0 + 2.0 + 5.0);
+        assert_eq!(inherited_flux(&edge, 4, 3, 1, 2, flux)[0], 10.0 + 6.0);
+        assert_eq!(
+            inherited_flux(&edge, 4, 3, 3, 0, flux)[0],
+            4.0 + 3.0 + 7.0 + 8.0
+        );
+        // Sspm's screen: no non-receiver pixel has an heir
+        assert_eq!(edge_texel_heir(&edge_texel(false, 1.0, [0.0, 0.0, 1.0])), 0);
     }
 
     #[test]

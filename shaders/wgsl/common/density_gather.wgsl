@@ -52,6 +52,24 @@ fn edge_texel_is_receiver(t: vec4<f32>) -> bool {
     return t.x >= 0.0;
 }
 
+// core::math::density_gather::HEIR_OFFSETS[k]: an uncovered atlas texel's neighbours in
+// the order its heir was chosen (edge neighbours, then corner neighbours).
+fn heir_offset(k: u32) -> vec2<i32> {
+    var offsets = array<vec2<i32>, 8>(vec2<i32>(-1, 0), vec2<i32>(1, 0), vec2<i32>(0, -1),
+                                      vec2<i32>(0, 1), vec2<i32>(-1, -1), vec2<i32>(1, -1),
+                                      vec2<i32>(-1, 1), vec2<i32>(1, 1));
+    return offsets[min(k, 7u)];
+}
+
+// core's edge_texel_heir: 1..8 for an uncovered texel whose flux goes to its neighbour at
+// heir_offset(heir - 1), 0 for none.
+fn edge_texel_heir(t: vec4<f32>) -> u32 {
+    if (edge_texel_is_receiver(t) || !(t.y >= 1.0 && t.y <= 8.0)) {
+        return 0u;
+    }
+    return u32(t.y);
+}
+
 // Edge weight between two edge texels.
 fn edge_weight_of(p: GatherParams, a: vec4<f32>, b: vec4<f32>) -> f32 {
     return edge_weight(a.x, a.yzw, b.x, b.yzw, p.sigma_depth, p.normal_power);

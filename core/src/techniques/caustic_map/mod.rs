@@ -184,12 +184,10 @@ fn tile_buffer(l: &AtlasLayout, len: usize) -> Vec<AtlasTileTexel> {
 }
 
 /// The density gather's edge texels of layout `l`
-/// ([`crate::math::density_gather::atlas_edge_texel`]).
+/// ([`crate::math::density_gather::atlas_edge_texels`]: uncovered texels name the
+/// covered neighbour that inherits their flux).
 fn atlas_edge_texels(l: &AtlasLayout) -> Vec<[f32; 4]> {
-    l.texels
-        .iter()
-        .map(|t| crate::math::density_gather::atlas_edge_texel(t[1], f32::from_bits(t[0])))
-        .collect()
+    crate::math::density_gather::atlas_edge_texels(&l.texels, l.plan.size.0)
 }
 
 /// CausticMap on one backend, for one scene.
