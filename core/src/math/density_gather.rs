@@ -684,7 +684,8 @@ mod tests {
         //   row 1:  u u v v
         //   row 2:  - C v -
         let one = 1.0f32.to_bits();
-        let none = [0, crate::device::layout::NO_TILE];
+        // outside every tile (the layout's NO_TILE, u32::MAX)
+        let none = [0, u32::MAX];
         let texels = [
             [one, 0],
             [0, 0],
