@@ -48,11 +48,13 @@ const RAYGEN_WIDTH: u64 = 8192;
 
 /// Width of `trace_photons`' launch grid. Its threads are photons in tile order (core's
 /// `math::sampling::tiled_photon_index`: 64 consecutive threads, an 8 x 8 block of the
-/// photon grid); NVIDIA's driver packs a 2D block of launch ids into a warp, which on an
-/// 8192-wide grid took four rows 8192 threads apart (photons of four distant tiles). Eight
-/// columns make any such block a run of consecutive threads. Measured on the H200
-/// (`sphere` / `cornell`, 2048^2 photons): trace 4.95 / 2.50 ms at width 8192, 2.89 / 1.60
-/// at width 8 (3.13 / 1.78 in row order; docs/gpu/h200-session13-vulkan-width.log).
+/// photon grid). NVIDIA's driver appears to pack a 2D block of launch ids into a warp
+/// (the times below fit that; it is not documented): on an 8192-wide grid such a block
+/// takes rows 8192 threads apart, photons of distant tiles. Eight columns make any such
+/// block a run of consecutive threads. Measured on the H200 (`sphere` / `cornell`, 2048^2
+/// photons): trace 4.95 / 2.50 ms at width 8192, 3.31 / 1.73 at width 32, 2.89 / 1.60 at
+/// width 8, 2.90 / 1.59 in one row (3.13 / 1.78 in row order before tile order;
+/// docs/gpu/h200-session13-vulkan-width.log).
 const PHOTON_LAUNCH_WIDTH: u64 = 8;
 
 /// The launch grid's width for `n` threads of `kernel`: [`PHOTON_LAUNCH_WIDTH`] for
