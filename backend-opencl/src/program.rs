@@ -143,9 +143,10 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 /// correctly rounded ones of [`options`]: the bounds of WGSL and SPIR-V, which the
 /// conformance tolerance of these kernels already argues for (`DENSITY_GATHER_REL` in
 /// conformance/src/harness/tolerance.rs). The density gather divides five times per tap;
-/// measured on the H200 (`cornell`), the correctly rounded divisions made `density_gather`
-/// 0.37 ms against 0.23 ms without them, and `gather_footprint` 0.17 against 0.12
-/// (docs/gpu/h200-session13-order.log, `dgdiv`).
+/// measured on the H200 (`cornell`), this program made `density_gather` 0.26 ms against
+/// 0.37 with correctly rounded division, and `gather_footprint` 0.13 against 0.17
+/// (docs/gpu/h200-session13-relaxed.log; `dgdiv` in -order.log, with native division,
+/// was the experiment that found the cost).
 pub const RELAXED_DIVISION_KERNELS: &[&str] = &["gather_footprint", "density_gather"];
 
 /// The label [`crate::device::DeviceState::program_for`] keeps the relaxed program under.
