@@ -37,7 +37,8 @@ __kernel void gather_footprint(__global const GatherParams* p,
             if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
             int n = ny * w + nx;
             uint heir = edge_texel_heir(edge[n]);
-            if (heir != 0u && HEIR_OFFSETS[heir - 1u].x == -d.x && HEIR_OFFSETS[heir - 1u].y == -d.y)
+            // the neighbour's heir is this texel: its offset is the opposite of d
+            if (heir != 0u && all(HEIR_OFFSETS[heir - 1u] == -d))
                 f += pixel_flux(PHOTON_MAP_ARGS, (uint)n, p->flux_quantum);
         }
     }

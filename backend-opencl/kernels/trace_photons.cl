@@ -372,14 +372,17 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
             count_end(end, &ph, p->flux_quantum, lc);
         } else if (FRESNEL_SPLIT) {
             uint splits;
-            uint rays = trace_photon_split(SCENE_ARGS, p, tiled_photon_index(p->first + i, p->grid_w, p->grid_h), photons, photon_capacity,
+            // grid photon in tile order (sampling.cl)
+            uint index = tiled_photon_index(p->first + i, p->grid_w, p->grid_h);
+            uint rays = trace_photon_split(SCENE_ARGS, p, index, photons, photon_capacity,
                                            photon_count, lc, &splits);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             atomic_add(&lc[COUNTER_SPLITS], splits);
         } else {
             Photon ph;
             uint rays;
-            int end = trace_photon(SCENE_ARGS, p, tiled_photon_index(p->first + i, p->grid_w, p->grid_h), &ph, &rays);
+            uint index = tiled_photon_index(p->first + i, p->grid_w, p->grid_h);
+            int end = trace_photon(SCENE_ARGS, p, index, &ph, &rays);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             RECORD(end, &ph);
         }

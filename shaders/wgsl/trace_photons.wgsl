@@ -393,13 +393,16 @@ fn trace_photons(i: u32, li: u32) {
             count_end(end, ph, p.flux_quantum);
         } else if (FRESNEL_SPLIT) {
             var splits: u32;
-            let rays = trace_photon_split(p, tiled_photon_index(p.first + i, p.grid_w, p.grid_h), &splits);
+            // grid photon in tile order (sampling.wgsl)
+            let index = tiled_photon_index(p.first + i, p.grid_w, p.grid_h);
+            let rays = trace_photon_split(p, index, &splits);
             atomic_add_u64_local(COUNTER_RAYS, rays);
             atomicAdd(&lc[COUNTER_SPLITS], splits);
         } else {
             var ph: Photon;
             var rays: u32;
-            let end = trace_photon(p, tiled_photon_index(p.first + i, p.grid_w, p.grid_h), &ph, &rays);
+            let index = tiled_photon_index(p.first + i, p.grid_w, p.grid_h);
+            let end = trace_photon(p, index, &ph, &rays);
             atomic_add_u64_local(COUNTER_RAYS, rays);
             record_end(end, ph, p.flux_quantum);
         }

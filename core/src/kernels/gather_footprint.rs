@@ -11,7 +11,8 @@ use crate::math::density_gather::source_index_len;
 /// `params.knn_photons` photons (`footprint_radius` on the summed-area table), and the
 /// pixel's deposited flux `F_i` (W per channel, from the photon map's fixed-point sums; on
 /// the caustic atlas with the flux of the uncovered neighbours whose heir it is,
-/// `math::density_gather::inherited_flux`) divided by its row normaliser `W_i = sum_d footprint_weight(d, r_i) edge_weight(i, i+d)`
+/// `math::density_gather::inherited_flux`) divided by its row normaliser
+/// `W_i = sum_d footprint_weight(d, r_i) edge_weight(i, i+d)`
 /// over the receivers of its row inside the image. Writes `(F_i / W_i, r_i)` to `out`
 /// (other pixels get 0; a pixel without flux gets `(0, 0, 0, r_i)` without its normaliser
 /// being computed). Receivers, depths and normals come from the edge texels

@@ -8,7 +8,8 @@ use crate::device::layout::{Photon, TraceParams};
 /// Emits and traces photons `params.first .. first + count` of light `params.light`, in
 /// the tile order of its photon grid (thread `i` traces grid photon
 /// [`crate::math::sampling::tiled_photon_index`]`(first + i)`; the adaptive variant takes
-/// its photons from clusters instead), from its emission domain (cone, rectangle or light view plane) through specular chains
+/// its photons from clusters instead), from its emission domain (cone, rectangle or light
+/// view plane) through specular chains
 /// (mirror, Fresnel reflect/refract, total internal reflection, Beer-Lambert, Cauchy
 /// dispersion as the variant allows); appends each photon that ends on a diffuse surface
 /// after at least one specular interaction to `photons` at `photon_count[0]` (world-space
