@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp session13 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp session13 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -381,6 +381,19 @@ if has clexp; then
         for f in "$OUT/ptx-$name"/trace_photons*.bin; do
             [ -f "$f" ] && [ -n "$PTXAS" ] && echo "ptxas $name $(basename "$f"): $(timeout 60 "$PTXAS" -arch=sm_90 -v "$f" -o /dev/null 2>&1 | grep -E 'registers|spill|stack' | tr '\n' ' ')" | tee -a "$OUT/log.txt"
         done
+    done
+fi
+if has cmexp; then
+    # clexp for CausticMap: the built-in kernels (`base`, programs dumped) and every folder
+    # under .devbin/exp/, each timed on seed 001's settings 0 and 1 (box gather) on OpenCL.
+    for dir in base "$B"/exp/*; do
+        name=$(basename "$dir")
+        mkdir -p "$OUT/ptx-$name"
+        if [ "$name" = base ]; then kd=/nonexistent; else kd=$dir; fi
+        run timeout 150 env CAUSTICA_OPENCL_KERNEL_DIR=$kd CAUSTICA_OPENCL_DUMP_DIR="$OUT/ptx-$name" \
+            CAUSTICA_BENCH_BACKENDS=opencl CAUSTICA_BENCH_SETTINGS=${EXP_SETTINGS:-0,1} CAUSTICA_BENCH_SPLITS=stochastic \
+            CAUSTICA_BENCH_GATHERS=box CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} CAUSTICA_BENCH_WARMUP_MS=1500 ./caustic_map_frame --bench
+        [ "$name" = base ] || rm -rf "$OUT/ptx-$name"
     done
 fi
 if has cmbench; then

@@ -4,7 +4,7 @@
 //! and `sphere` with CausticMap's caster-fitted plane.
 //!
 //! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
-//! after a warm-up frame, the median over frames that remake the atlas (a new seed each)
+//! after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames that remake the atlas (a new seed each)
 //! of: the photon work (every `trace_photons`, `deposit_atlas` / `refine_clusters` and
 //! gather pass, device time where the backend has timestamps), the whole frame (host wall
 //! time), the photons traced and the traversal's steps; and per level the photons traced
@@ -25,7 +25,7 @@ use caustica_core::techniques::adaptive_caustics::{
 use caustica_core::techniques::caustic_map::{
     CausticMap, CausticMapOutputs, CausticMapSettings, EmissionPlane,
 };
-use common::{env_or, median};
+use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
     "trace_photons",
@@ -47,7 +47,10 @@ fn main() {
         .filter_map(|s| s.trim().parse().ok())
         .collect();
     let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
-    println!("AdaptiveCaustics vs the dense plane, median of {frames} frames after one warm-up");
+    println!(
+        "AdaptiveCaustics vs the dense plane, median of {frames} frames after {} ms of warm-up frames",
+        warmup_ms()
+    );
     for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let mut backend = match open_backend(name) {
             Ok(b) => b,
@@ -103,6 +106,10 @@ fn main() {
                             continue;
                         }
                     };
+                    if let Err(e) = warm_up(|| t.frame(backend.as_mut(), &mut |_| {}).map(|_| ())) {
+                        println!("{name} / {scene_name} / {n}^2 / {label}: {e}");
+                        continue;
+                    }
                     let (mut work, mut frame) = (vec![], vec![]);
                     let (mut traced, mut steps, mut levels, mut timing) =
                         (0u64, 0u32, Vec::new(), String::new());

@@ -6,7 +6,8 @@
 //! `max_specular_depth = n` for the camera's tree.
 //!
 //! Per setting, Fresnel split (deterministic; stochastic, the default), map gather
-//! (density, the default; 001's box) and backend, after a warm-up frame: the median over frames
+//! (density, the default; 001's box) and backend, after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`,
+//! default 3000, then one more): the median over frames
 //! that remake the atlas (a new seed each) of every pass and of the budget line emission +
 //! trace + splat + gather (`trace_photons`, `deposit_atlas`, and `gather_caustic_map` or
 //! the density gather's `photon_count_table`, `gather_footprint`, `density_gather`; target
@@ -18,7 +19,7 @@
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_PHOTONS=N` (default 2048),
 //! `CAUSTICA_BENCH_SETTINGS=0,1,2` (which of the three settings),
 //! `CAUSTICA_BENCH_SPLITS=deterministic,stochastic` (default both),
-//! `CAUSTICA_BENCH_GATHERS=density,box` (default density).
+//! `CAUSTICA_BENCH_GATHERS=density,box` (default density), `CAUSTICA_BENCH_WARMUP_MS=N`.
 
 mod common;
 use caustica::{open_backend, BACKEND_NAMES};
@@ -28,7 +29,7 @@ use caustica_core::scene::{Scene, Shape};
 use caustica_core::techniques::caustic_map::{
     CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit, MapGather,
 };
-use common::{env_or, median};
+use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
 const BUDGET_PASSES: &[&str] = &[
@@ -91,7 +92,8 @@ fn main() {
         .filter(|&i: &usize| i < SETTINGS.len())
         .collect();
     println!(
-        "CausticMap frame, {side}x{side} photons, median of {frames} frames after one warm-up"
+        "CausticMap frame, {side}x{side} photons, median of {frames} frames after {} ms of warm-up frames",
+        warmup_ms()
     );
     for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let mut backend = match open_backend(name) {
@@ -145,6 +147,10 @@ fn main() {
                     continue;
                 }
             };
+            if let Err(e) = warm_up(|| t.frame(backend.as_mut(), &mut |_| {}).map(|_| ())) {
+                println!("{name} / setting {k}: {e}");
+                continue;
+            }
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             let (mut frame_ms, mut budget, mut camera_ms) = (vec![], vec![], vec![]);
             let mut timing = String::new();

@@ -1,7 +1,7 @@
 //! PhotonGi frames (seed 003) per backend at the chapter's two settings on `rooms` at
 //! 1920x1080: "high", 3 million initial photons (1732^2), 3 bounces, 4 A-Trous iterations;
 //! "low", 1 million (1024^2), 1 bounce, 4 A-Trous iterations. Both with the temporal
-//! blend. After a warm-up frame, the median over frames (a new seed each) of every pass,
+//! blend. After warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames (a new seed each) of every pass,
 //! of the technique's device time (every pass but `primary_gbuffer` of the camera and
 //! `direct_light`, which a renderer has anyway: the RSM faces' own `primary_gbuffer`
 //! dispatches are counted by subtracting one camera G-buffer, see below) and of the host
@@ -16,7 +16,7 @@ mod common;
 use caustica::{open_backend, BACKEND_NAMES};
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
-use common::{env_or, median};
+use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
 fn main() {
@@ -32,7 +32,10 @@ fn main() {
     let settings = env_or("CAUSTICA_BENCH_SETTINGS", "high,low");
     let mut scene = builtin("rooms").expect("built-in scene");
     (scene.camera.width, scene.camera.height) = (w, h);
-    println!("PhotonGi frame, rooms, {w}x{h}, median of {frames} frames after one warm-up");
+    println!(
+        "PhotonGi frame, rooms, {w}x{h}, median of {frames} frames after {} ms of warm-up frames",
+        warmup_ms()
+    );
     for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let mut backend = match open_backend(name) {
             Ok(b) => b,
@@ -60,6 +63,13 @@ fn main() {
                     continue;
                 }
             };
+            if let Err(e) = warm_up(|| {
+                use caustica_core::frame::technique::Technique;
+                t.frame(backend.as_mut(), &mut |_| {}).map(|_| ())
+            }) {
+                println!("{name} / {setting}: {e}");
+                continue;
+            }
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             let (mut wall, mut technique) = (Vec::new(), Vec::new());
             let mut timing = String::new();

@@ -31,11 +31,27 @@ inline float3 atlas_flux(PHOTON_MAP_PARAMS(__global const), uint i, float q) {
                                  photon_map_word(PHOTON_MAP_ARGS, i, 5u)) * q);
 }
 
+// core::math::map_gather::TILE_FULLY_COVERED (a tile's fourth word)
+#define TILE_FULLY_COVERED 0x80000000u
+
+// core::math::map_gather::window_coverage: the covered texels of source (qx, qy)'s window.
+inline uint window_coverage(__global const uint2* texels, uint4 tile, uint qx, uint qy, uint n,
+                            uint atlas_width) {
+    uint4 cw = tile_window(tile, qx, qy, n);
+    if ((tile.w & TILE_FULLY_COVERED) != 0u) return (cw.y - cw.x + 1u) * (cw.w - cw.z + 1u);
+    uint c = 0u;
+    for (uint sy = cw.z; sy <= cw.w; sy++)
+        for (uint sx = cw.x; sx <= cw.y; sx++)
+            c += atlas_area(texels, sy * atlas_width + sx) > 0.0f ? 1u : 0u;
+    return c;
+}
+
 inline float3 gather_caustic_texel(__global const uint2* texels, PHOTON_MAP_PARAMS(__global const),
                                    float quantum, uint4 tile, uint x, uint y, uint n,
                                    uint atlas_width) {
     uint t = y * atlas_width + x;
     float area_t = atlas_area(texels, t);
+    if (!(area_t > 0.0f)) return (float3)(0.0f);
     uint4 win = tile_window(tile, x, y, n);
     float3 sum = (float3)(0.0f);
     for (uint qy = win.z; qy <= win.w; qy++) {
@@ -43,19 +59,15 @@ inline float3 gather_caustic_texel(__global const uint2* texels, PHOTON_MAP_PARA
             uint q = qy * atlas_width + qx;
             float3 f = atlas_flux(PHOTON_MAP_ARGS, q, quantum);
             if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) continue;
-            uint4 cw = tile_window(tile, qx, qy, n);
-            uint c = 0u;
-            for (uint sy = cw.z; sy <= cw.w; sy++)
-                for (uint sx = cw.x; sx <= cw.y; sx++)
-                    c += atlas_area(texels, sy * atlas_width + sx) > 0.0f ? 1u : 0u;
+            uint c = window_coverage(texels, tile, qx, qy, n, atlas_width);
             if (c == 0u) {
                 if (q == t) sum += f;
-            } else if (area_t > 0.0f) {
+            } else {
                 sum += f / (float)c;
             }
         }
     }
-    return area_t > 0.0f ? sum / area_t : (float3)(0.0f);
+    return sum / area_t;
 }
 
 #define MAX_FOOTPRINT_TEXELS 32.0f

@@ -9,7 +9,10 @@
 //!   integer atomics of the same quanta, so the atlas and the counters must be **bitwise**
 //!   equal; so must the triangle reach mask (integer ors), which on the CPU must be
 //!   exactly the photons' triangles.
-//! - `gather_caustic_map` (N = 3, and N = 1: the raw map) on the CPU's sums: per texel a
+//! - `gather_caustic_map` (N = 3, and N = 1: the raw map; N = 3 once more with every
+//!   tile's `TILE_FULLY_COVERED` flag cleared on the backend under test, so that its
+//!   counting of each source's covered texels is checked against the flag's shortcut on
+//!   the CPU) on the CPU's sums: per texel a
 //!   sum of at most `N^2` sources, each converted exactly (a power-of-two quantum times a
 //!   u64 split in two exact f32 parts and one rounding) and divided by a count and by the
 //!   area, i.e. at most `N^2 + 3` roundings of `2^-24` each, plus WGSL/SPIR-V's division
@@ -39,7 +42,7 @@ use caustica_core::kernels::{
 use caustica_core::math::density_gather::{
     accumulate_source_index, atlas_edge_texel, source_index_len,
 };
-use caustica_core::math::map_gather::{triangle_reach_bit, triangle_reach_words};
+use caustica_core::math::map_gather::{tile_receiver, triangle_reach_bit, triangle_reach_words};
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::math::rng::random_f32;
 use caustica_core::recording::Recording;
@@ -130,17 +133,31 @@ fn run_deposit(b: &mut dyn Backend, l: &AtlasLayout, ph: &[Photon]) -> Result<De
     })
 }
 
-/// Runs `gather_caustic_map` of width `n` on `b` over `sums`.
+/// Runs `gather_caustic_map` of width `n` on `b` over `sums`; `counted`: with every
+/// tile's `TILE_FULLY_COVERED` flag cleared, so that the kernel counts each source's
+/// covered texels where the flag would give it their number.
 fn run_gather(
     b: &mut dyn Backend,
     l: &AtlasLayout,
     sums: &[DepositTexel],
     n: u32,
+    counted: bool,
 ) -> Result<Vec<[f32; 4]>, String> {
     let mut rec = Recording::new();
     let out = rec.create(l.texels.len() as u32, "caustic map");
     let texels = rec.upload(&l.texels, "texels");
-    let tiles = rec.upload(&l.tiles, "tiles");
+    let tile_words: Vec<AtlasTileTexel> = l
+        .tiles
+        .iter()
+        .map(|t| {
+            if counted {
+                [t[0], t[1], t[2], tile_receiver(t[3])]
+            } else {
+                *t
+            }
+        })
+        .collect();
+    let tiles = rec.upload(&tile_words, "tiles");
     let atlas = rec.upload_photon_map(sums);
     rec.kernel(GatherCausticMap {
         params: params(l, n, 1),
@@ -392,9 +409,15 @@ pub fn check_caustic_map(
         )
     });
     let mut gathered = Vec::new();
-    for n in [3u32, 1] {
-        let ga = run_gather(r, &l, &sa, n)?;
-        let gb = run_gather(c, &l, &sa, n)?;
+    // N = 3 twice: flagged tiles as laid out, then counted on the backend under test
+    for (n, counted) in [(3u32, false), (3, true), (1, false)] {
+        let ga = run_gather(r, &l, &sa, n, false)?;
+        let gb = run_gather(c, &l, &sa, n, counted)?;
+        let n_label = if counted {
+            "3 (counted)".to_string()
+        } else {
+            n.to_string()
+        };
         let bad = ga
             .iter()
             .zip(&gb)
@@ -405,14 +428,18 @@ pub fn check_caustic_map(
             })
             .count();
         let lit = ga.iter().filter(|t| t[0] > 0.0).count();
-        v.check(lit > 0, || format!("N = {n}: the gathered map is dark"));
+        v.check(lit > 0, || {
+            format!("N = {n_label}: the gathered map is dark")
+        });
         v.check(bad == 0, || {
             format!(
-                "N = {n}: {bad} of {} texels differ by more than {GATHER_REL} relative",
+                "N = {n_label}: {bad} of {} texels differ by more than {GATHER_REL} relative",
                 ga.len()
             )
         });
-        gathered.push(ga);
+        if !counted {
+            gathered.push(ga);
+        }
     }
     check_atlas_density_gather(&mut v, &l, &sa, r, c)?;
     // both reflectance models of the specular chain (the exact default, seed 001's Schlick)

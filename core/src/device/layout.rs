@@ -369,7 +369,9 @@ pub mod photon_store {
 pub const NO_TILE: u32 = u32::MAX;
 
 /// One receiver's square tile of the caustic atlas as the kernels read it (texels):
-/// `[x, y, side, receiver object index]`.
+/// `[x, y, side, receiver object index | flags]`, the flag
+/// [`crate::math::map_gather::TILE_FULLY_COVERED`] set where every texel of the tile is
+/// covered (`math::map_gather::tile_receiver` strips it).
 pub type AtlasTileTexel = [u32; 4];
 
 /// One atlas texel as the kernels read it: `[world area (f32 bits, scene units^2; 0 where

@@ -29,6 +29,7 @@
 
 use crate::device::device_scene::DeviceScene;
 use crate::device::layout::{AtlasTexel, AtlasTileTexel, GpuVertex, NO_TILE};
+use crate::math::map_gather::TILE_FULLY_COVERED;
 use glam::{Vec2, Vec3};
 
 /// Default atlas size (texels a side), the source's caustic map size.
@@ -316,7 +317,8 @@ pub struct AtlasLayout {
     pub plan: AtlasPlan,
     /// Scene object index of each receiver (receiver `i` owns tile `i`).
     pub receivers: Vec<u32>,
-    /// Per tile: `[x, y, side, receiver object]`.
+    /// Per tile: `[x, y, side, receiver object | TILE_FULLY_COVERED where every texel of
+    /// the tile is covered]` ([`crate::math::map_gather::TILE_FULLY_COVERED`]).
     pub tiles: Vec<AtlasTileTexel>,
     /// Per scene triangle (device order): its tile, or [`NO_TILE`].
     pub triangle_tiles: Vec<u32>,
@@ -507,6 +509,12 @@ impl AtlasReceivers {
             .filter(|&r| include.get(r).copied().unwrap_or(false))
             .collect();
         let receivers: Vec<u32> = slots.iter().map(|&r| self.objects[r]).collect();
+        if let Some(r) = receivers.iter().find(|&&r| r & TILE_FULLY_COVERED != 0) {
+            // the tile's fourth word keeps the flag in its top bit
+            return Err(AtlasError::BadInput(format!(
+                "receiver object index {r} is past the atlas's 2^31 objects"
+            )));
+        }
         let areas: Vec<f64> = slots.iter().map(|&r| self.areas[r]).collect();
         let plan = plan_atlas(&areas, size)?;
         let atlas_texels = size.0 as usize * size.1 as usize;
@@ -520,7 +528,7 @@ impl AtlasReceivers {
         let mut covered_texels = 0u64;
         for (k, tile) in plan.tiles.iter().enumerate() {
             let tris = &self.triangles[slots[k]];
-            tiles.push([tile.x, tile.y, tile.side, receivers[k]]);
+            let tile_covered_before = covered_texels;
             let local: Vec<([Vec3; 3], [Vec2; 3])> =
                 tris.iter().map(|(_, p, t)| (*p, *t)).collect();
             let owners = receiver_owners(receivers[k], &local, tile.side)?;
@@ -541,6 +549,13 @@ impl AtlasReceivers {
                     texels[i] = [area.to_bits(), k as u32];
                 }
             }
+            let full = covered_texels - tile_covered_before == tile.side as u64 * tile.side as u64;
+            tiles.push([
+                tile.x,
+                tile.y,
+                tile.side,
+                receivers[k] | if full { TILE_FULLY_COVERED } else { 0 },
+            ]);
         }
         Ok(AtlasLayout {
             plan,
@@ -791,6 +806,33 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_tile_is_flagged_fully_covered_exactly_when_every_texel_is() {
+        use crate::device::device_scene::DeviceScene;
+        use crate::math::map_gather::tile_receiver;
+        use crate::scene::builtin::{builtin, BUILTIN_SCENES};
+        let mut flagged = 0;
+        for name in BUILTIN_SCENES {
+            let scene = builtin(name).unwrap();
+            let ds = DeviceScene::build(&scene, Default::default()).unwrap();
+            let receiver = atlas_receivers(&scene);
+            let Ok(l) = atlas_layout(&ds, &receiver, (256, 256)) else {
+                continue;
+            };
+            for (k, t) in l.tiles.iter().enumerate() {
+                let all = (0..t[2] * t[2]).all(|i| {
+                    let at = (t[1] + i / t[2]) as usize * 256 + (t[0] + i % t[2]) as usize;
+                    f32::from_bits(l.texels[at][0]) > 0.0
+                });
+                assert_eq!(t[3] & TILE_FULLY_COVERED != 0, all, "{name} tile {k}");
+                assert_eq!(tile_receiver(t[3]), l.receivers[k], "{name} tile {k}");
+                flagged += all as u32;
+            }
+        }
+        // the quads of the built-in scenes fill their tiles
+        assert!(flagged > 0);
     }
 
     #[test]

@@ -139,6 +139,45 @@ pub fn tile_window(tile: [u32; 4], x: u32, y: u32, n: u32) -> (u32, u32, u32, u3
     )
 }
 
+/// Flag in a tile's fourth word (`[x, y, side, receiver | flag]`,
+/// `device::layout::AtlasTileTexel`): every texel of the tile is covered (a UV triangle of
+/// the receiver holds its centre, so its world area is > 0), as for receivers whose UVs
+/// fill their square (the built-in quads and spheres). The gather then knows each
+/// source's covered count from the window's size alone ([`window_coverage`]).
+pub const TILE_FULLY_COVERED: u32 = 1 << 31;
+
+/// The receiver object index of a tile's fourth word (without [`TILE_FULLY_COVERED`]).
+pub fn tile_receiver(word: u32) -> u32 {
+    word & !TILE_FULLY_COVERED
+}
+
+/// `c_s` of the gather: the covered texels of source `(qx, qy)`'s window of width `n`
+/// inside `tile`. In a tile flagged [`TILE_FULLY_COVERED`] that is the clipped window's
+/// size, which equals the count of texels with `area(i) > 0` over it; otherwise they are
+/// counted. The kernels' `window_coverage` mirror it (the count a texel of the
+/// `gather_caustic_map` kernel's hottest loop made 9 reads for: 0.26 against 0.15 ms for
+/// the 2048^2 atlas of seed 001's setting 0 on an H200).
+pub fn window_coverage(
+    tile: [u32; 4],
+    qx: u32,
+    qy: u32,
+    n: u32,
+    atlas_width: u32,
+    area: impl Fn(u32) -> f32,
+) -> u32 {
+    let (cx0, cx1, cy0, cy1) = tile_window(tile, qx, qy, n);
+    if tile[3] & TILE_FULLY_COVERED != 0 {
+        return (cx1 - cx0 + 1) * (cy1 - cy0 + 1);
+    }
+    let mut c = 0u32;
+    for sy in cy0..=cy1 {
+        for sx in cx0..=cx1 {
+            c += (area(sy * atlas_width + sx) > 0.0) as u32;
+        }
+    }
+    c
+}
+
 /// One texel of the flux-keeping `n x n` gather in the form a kernel runs it (one thread
 /// per destination texel `t = (x, y)` of tile `tile`): `sum_s Phi_s / c_s` over the
 /// sources `s` of `t`'s window inside the tile, `c_s` the covered texels of `s`'s window
@@ -156,6 +195,10 @@ pub fn gather_caustic_texel(
 ) -> Vec3 {
     let t = y * atlas_width + x;
     let area_t = area(t);
+    // an uncovered destination receives nothing (its sum would be dropped below)
+    if !(area_t > 0.0) {
+        return Vec3::ZERO;
+    }
     let (ax, bx, ay, by) = tile_window(tile, x, y, n);
     let mut sum = Vec3::ZERO;
     for qy in ay..=by {
@@ -165,27 +208,17 @@ pub fn gather_caustic_texel(
             if f == Vec3::ZERO {
                 continue;
             }
-            let (cx0, cx1, cy0, cy1) = tile_window(tile, qx, qy, n);
-            let mut c = 0u32;
-            for sy in cy0..=cy1 {
-                for sx in cx0..=cx1 {
-                    c += (area(sy * atlas_width + sx) > 0.0) as u32;
-                }
-            }
+            let c = window_coverage(tile, qx, qy, n, atlas_width, &area);
             if c == 0 {
                 if q == t {
                     sum += f;
                 }
-            } else if area_t > 0.0 {
+            } else {
                 sum += f / c as f32;
             }
         }
     }
-    if area_t > 0.0 {
-        sum / area_t
-    } else {
-        Vec3::ZERO
-    }
+    sum / area_t
 }
 
 /// Widest footprint (texels a side) the lookup averages; wider footprints are averaged
@@ -449,6 +482,49 @@ mod tests {
                 (e - f).length() <= 1e-5 * f.length().max(1.0),
                 "texel {i}: {e} vs {f}"
             );
+        }
+    }
+
+    #[test]
+    fn a_fully_covered_tiles_flag_changes_no_bit_of_the_gather() {
+        // a 7x7 tile at (2, 3) of a 13-wide atlas, every texel covered, sparse flux
+        let (w, plain) = (13u32, [2u32, 3, 7, 5]);
+        let flagged = [2u32, 3, 7, 5 | TILE_FULLY_COVERED];
+        assert_eq!(tile_receiver(flagged[3]), 5);
+        let mut k = 0u32;
+        let mut rnd = || {
+            k += 1;
+            random_f32(13, k, 0, 0)
+        };
+        let len = (w * 12) as usize;
+        let area: Vec<f32> = (0..len).map(|_| 0.25 + rnd()).collect();
+        let flux: Vec<Vec3> = (0..len)
+            .map(|_| {
+                if rnd() < 0.4 {
+                    Vec3::new(rnd(), rnd(), 0.0)
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect();
+        for n in [1, 3, 5, 9] {
+            for i in 0..49u32 {
+                let (x, y) = (plain[0] + i % 7, plain[1] + i / 7);
+                assert_eq!(
+                    window_coverage(flagged, x, y, n, w, |q| area[q as usize]),
+                    window_coverage(plain, x, y, n, w, |q| area[q as usize]),
+                    "n {n} texel {i}"
+                );
+                let g = |t| {
+                    gather_caustic_texel(t, x, y, n, w, |q| flux[q as usize], |q| area[q as usize])
+                };
+                let (a, b) = (g(plain), g(flagged));
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits),
+                    "n {n} texel {i}"
+                );
+            }
         }
     }
 
