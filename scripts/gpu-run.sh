@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp session13 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp session13 session14 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -394,6 +394,20 @@ if has cmexp; then
             CAUSTICA_BENCH_BACKENDS=opencl CAUSTICA_BENCH_SETTINGS=${EXP_SETTINGS:-0,1} CAUSTICA_BENCH_SPLITS=stochastic \
             CAUSTICA_BENCH_GATHERS=box CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} CAUSTICA_BENCH_WARMUP_MS=1500 ./caustic_map_frame --bench
         [ "$name" = base ] || rm -rf "$OUT/ptx-$name"
+    done
+fi
+if has session14; then
+    # The covered-tile gather (core::math::map_gather::TILE_FULLY_COVERED): CausticMap's
+    # kernel and frame checks on every backend, its frames at seed 001's settings, then
+    # OpenCL's trace under register caps (CAUSTICA_OPENCL_OPTIONS).
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend caustic_map --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./caustic_map_frames --test-threads=1
+    run timeout 300 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box,density ./caustic_map_frame --bench
+    for r in ${REG_CAPS:-64 80 96}; do
+        run timeout 100 env CAUSTICA_OPENCL_OPTIONS="-cl-nv-maxrregcount=$r" CAUSTICA_BENCH_BACKENDS=opencl \
+            CAUSTICA_BENCH_SETTINGS=0 CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box \
+            CAUSTICA_BENCH_FRAMES=10 CAUSTICA_BENCH_WARMUP_MS=1500 ./caustic_map_frame --bench
     done
 fi
 if has cmbench; then
