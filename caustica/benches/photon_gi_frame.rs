@@ -63,10 +63,7 @@ fn main() {
                     continue;
                 }
             };
-            if let Err(e) = warm_up(|| {
-                use caustica_core::frame::technique::Technique;
-                t.frame(backend.as_mut(), &mut |_| {}).map(|_| ())
-            }) {
+            if let Err(e) = warm_up(|| t.frame(backend.as_mut(), &mut |_| {}).map(|_| ())) {
                 println!("{name} / {setting}: {e}");
                 continue;
             }
