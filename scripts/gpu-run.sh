@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp session13 session14 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp session13 session14 session14gi session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -409,6 +409,24 @@ if has session14; then
             CAUSTICA_BENCH_SETTINGS=0 CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box \
             CAUSTICA_BENCH_FRAMES=10 CAUSTICA_BENCH_WARMUP_MS=1500 ./caustic_map_frame --bench
     done
+fi
+if has giexp; then
+    # clexp for PhotonGi: the built-in kernels and every folder under .devbin/exp/, each
+    # timed on the chapter's settings (photon_gi_frame) on OpenCL.
+    for dir in base "$B"/exp/*; do
+        name=$(basename "$dir")
+        if [ "$name" = base ]; then kd=/nonexistent; else kd=$dir; fi
+        run timeout 150 env CAUSTICA_OPENCL_KERNEL_DIR=$kd CAUSTICA_BENCH_BACKENDS=opencl \
+            CAUSTICA_BENCH_SETTINGS=${EXP_SETTINGS:-high,low} CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-5} \
+            CAUSTICA_BENCH_WARMUP_MS=1500 ./photon_gi_frame --bench
+    done
+fi
+if has session14gi; then
+    # PhotonGi's splat with staged G-buffer loads in the relaxed-division program
+    # (backend-opencl's RELAXED_DIVISION_KERNELS): its checks and frames on every backend.
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend photon_gi --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./photon_gi_frames --test-threads=1
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

@@ -29,10 +29,17 @@ inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global 
     for (int qy = max((int)py - r, 0); qy <= min((int)py + r, h - 1); qy++) {
         for (int qx = max((int)px - r, 0); qx <= min((int)px + r, w - 1); qx++) {
             uint q = (uint)(qy * w + qx);
-            GBufferTexel t = load_gbuffer(GBUFFER_ARGS, q);
-            if ((t.flags & GBUFFER_RECEIVER) == 0u || dot3(load3(t.normal), n) <= 0.0f ||
-                !kernel_contains(&k, pos, load3(t.position)))
+            // each test loads the G-buffer plane it reads, in the tests' order (flags,
+            // position, normal): most pixels of the square fail the first two (1-2 ms of
+            // 16 at the chapter's high setting on the H200)
+            uint4 p3 = gbuffer3[q];
+            if ((p3.w & GBUFFER_RECEIVER) == 0u) continue;
+            uint4 p0 = gbuffer0[q];
+            if (!kernel_contains(&k, pos, (float3)(as_float(p0.x), as_float(p0.y), as_float(p0.z))))
                 continue;
+            uint4 p1 = gbuffer1[q];
+            if (dot3((float3)(as_float(p1.x), as_float(p1.y), as_float(p1.z)), n) <= 0.0f) continue;
+            GBufferTexel t = gbuffer_from_planes(p0, p1, gbuffer2[q], p3);
             float area = gbuffer_pixel_area(&p->camera, q, &t);
             float3 f = e * area;
             Photon splat = {{0.0f, 0.0f, 0.0f}, 0.0f, {f.x, f.y, f.z}, 0u};

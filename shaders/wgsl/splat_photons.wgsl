@@ -84,11 +84,21 @@ fn splat_photon(p: SplatParams, ph: GiPhoton) {
     for (var qy = max(i32(py) - r, 0); qy <= min(i32(py) + r, h - 1); qy++) {
         for (var qx = max(i32(px) - r, 0); qx <= min(i32(px) + r, w - 1); qx++) {
             let q = u32(qy * w + qx);
-            let t = load_gbuffer(q);
-            if ((t.flags & GBUFFER_RECEIVER) == 0u || dot3(t.normal, n) <= 0.0 ||
-                !kernel_contains(kernel, ph.position, t.position)) {
+            // each test loads the G-buffer plane it reads, in the tests' order (flags,
+            // position, normal): most pixels of the square fail the first two
+            let p3 = gbuffer3[q];
+            if ((p3.w & GBUFFER_RECEIVER) == 0u) {
                 continue;
             }
+            let p0 = gbuffer0[q];
+            if (!kernel_contains(kernel, ph.position, bitcast<vec3<f32>>(p0.xyz))) {
+                continue;
+            }
+            let p1 = gbuffer1[q];
+            if (dot3(bitcast<vec3<f32>>(p1.xyz), n) <= 0.0) {
+                continue;
+            }
+            let t = gbuffer_from_planes(p0, p1, gbuffer2[q], p3);
             let area = gbuffer_pixel_area(p.camera, q, t);
             var splat: Photon;
             splat.position = vec3<f32>(0.0);

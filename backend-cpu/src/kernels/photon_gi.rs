@@ -510,9 +510,10 @@ fn splat_photon(
         for qx in (px as i64 - r).max(0)..=(px as i64 + r).min(w - 1) {
             let q = (qy * w + qx) as u32;
             let t = g.load_gbuffer(q as usize);
+            // the GPU kernels' order: flags, containment, normal (each loads its plane)
             if t.flags & gbuffer_flags::RECEIVER == 0
-                || Vec3::from(t.normal).dot(n) <= 0.0
                 || !kernel.contains(pos, Vec3::from(t.position))
+                || Vec3::from(t.normal).dot(n) <= 0.0
             {
                 continue;
             }
