@@ -24,10 +24,11 @@ inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global 
     float3 e = splat_irradiance(power, &k);
     uint reach = splat_reach_px(p, max_element3(k.axes), z);
     if (reach > p->max_splat_px) atomic_inc(&lc[COUNTER_SATURATED]);
-    int r = (int)min(reach, p->max_splat_px);
-    int w = (int)p->camera.width, h = (int)p->camera.height;
-    for (int qy = max((int)py - r, 0); qy <= min((int)py + r, h - 1); qy++) {
-        for (int qx = max((int)px - r, 0); qx <= min((int)px + r, w - 1); qx++) {
+    int4 rect = splat_screen_rect(&p->camera, pos, k.n, k.u, k.t, k.axes, px, py,
+                                  min(reach, p->max_splat_px));
+    int w = (int)p->camera.width;
+    for (int qy = rect.z; qy <= rect.w; qy++) {
+        for (int qx = rect.x; qx <= rect.y; qx++) {
             uint q = (uint)(qy * w + qx);
             // each test loads the G-buffer plane it reads, in the tests' order (flags,
             // position, normal): most pixels of the square fail the first two (1-2 ms of

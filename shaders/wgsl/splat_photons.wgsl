@@ -78,11 +78,11 @@ fn splat_photon(p: SplatParams, ph: GiPhoton) {
     if (reach > p.max_splat_px) {
         atomicAdd(&lc[COUNTER_SATURATED], 1u);
     }
-    let r = i32(min(reach, p.max_splat_px));
+    let rect = splat_screen_rect(p.camera, ph.position, kernel.n, kernel.u, kernel.t,
+                                 kernel.axes, px, py, min(reach, p.max_splat_px));
     let w = i32(p.camera.width);
-    let h = i32(p.camera.height);
-    for (var qy = max(i32(py) - r, 0); qy <= min(i32(py) + r, h - 1); qy++) {
-        for (var qx = max(i32(px) - r, 0); qx <= min(i32(px) + r, w - 1); qx++) {
+    for (var qy = rect.z; qy <= rect.w; qy++) {
+        for (var qx = rect.x; qx <= rect.y; qx++) {
             let q = u32(qy * w + qx);
             // each test loads the G-buffer plane it reads, in the tests' order (flags,
             // position, normal): most pixels of the square fail the first two

@@ -8,8 +8,9 @@ use crate::traversal::SceneView;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
     camera_ray, counter, gbuffer_flags, gbuffer_pixel_area, light_kind, material_kind, off_surface,
-    project_to_pixel, CorrectionParams, GBufferView, GiPhoton, GpuLight, IndirectTraceParams,
-    Photon, PhotonMapView, RsmParams, RsmPhoton, RsmTexel, SplatParams, NO_MATERIAL,
+    project_to_pixel, splat_screen_rect, CorrectionParams, GBufferView, GiPhoton, GpuLight,
+    IndirectTraceParams, Photon, PhotonMapView, RsmParams, RsmPhoton, RsmTexel, SplatParams,
+    NO_MATERIAL,
 };
 use caustica_core::kernels::VISIBLE_TOLERANCE;
 use caustica_core::math::geometry::offset_ray_origin;
@@ -504,10 +505,20 @@ fn splat_photon(
     if reach > p.max_splat_px {
         c.bump(counter::SATURATED);
     }
-    let r = reach.min(p.max_splat_px) as i64;
-    let (w, h) = (p.camera.width as i64, p.camera.height as i64);
-    for qy in (py as i64 - r).max(0)..=(py as i64 + r).min(h - 1) {
-        for qx in (px as i64 - r).max(0)..=(px as i64 + r).min(w - 1) {
+    let [x0, x1, y0, y1] = splat_screen_rect(
+        &p.camera,
+        pos,
+        kernel.n,
+        kernel.u,
+        kernel.t,
+        kernel.axes,
+        px,
+        py,
+        reach.min(p.max_splat_px),
+    );
+    let w = p.camera.width as i64;
+    for qy in y0 as i64..=y1 as i64 {
+        for qx in x0 as i64..=x1 as i64 {
             let q = (qy * w + qx) as u32;
             let t = g.load_gbuffer(q as usize);
             // the GPU kernels' order: flags, containment, normal (each loads its plane)

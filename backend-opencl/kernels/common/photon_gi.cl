@@ -197,6 +197,43 @@ inline float3 splat_irradiance(float3 power, const SplatKernel* k) {
     return a > 0.0f ? power / a : (float3)(0.0f);
 }
 
+// core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
+// splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
+// the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
+inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, float3 n, float3 u,
+                              float3 t, float3 axes, uint px, uint py, uint r) {
+    int w = (int)cam->width, h = (int)cam->height;
+    int ri = (int)min(r, 1u << 24);
+    int4 square = (int4)(max((int)px - ri, 0), min((int)px + ri, w - 1), max((int)py - ri, 0),
+                         min((int)py + ri, h - 1));
+    float3 origin = load3g(cam->position);
+    float eps = 1e-5f * (max_element3(fabs(centre)) + max_element3(fabs(origin)) + max_element3(axes));
+    float3 a = axes + (float3)(eps);
+    float lo_x = FLT_MAX, hi_x = -FLT_MAX, lo_y = FLT_MAX, hi_y = -FLT_MAX;
+    for (uint corner = 0u; corner < 8u; corner++) {
+        float sn = (corner & 1u) != 0u ? 1.0f : -1.0f;
+        float su = (corner & 2u) != 0u ? 1.0f : -1.0f;
+        float st = (corner & 4u) != 0u ? 1.0f : -1.0f;
+        float3 c = centre + n * (sn * a.x) + u * (su * a.y) + t * (st * a.z);
+        float3 v = c - origin;
+        float z = dot3(v, load3g(cam->forward));
+        if (!(z > 0.0f)) return square;
+        float sx = dot3(v, load3g(cam->right)) / (z * cam->tan_half_fov_x);
+        float sy = dot3(v, load3g(cam->up)) / (z * cam->tan_half_fov_y);
+        float fx = (sx + 1.0f) * 0.5f * (float)cam->width;
+        float fy = (1.0f - sy) * 0.5f * (float)cam->height;
+        if (!(isfinite(fx) && isfinite(fy))) return square;
+        lo_x = fmin(lo_x, fx);
+        hi_x = fmax(hi_x, fx);
+        lo_y = fmin(lo_y, fy);
+        hi_y = fmax(hi_y, fy);
+    }
+    return (int4)((int)clamp(floor(lo_x) - 1.0f, (float)square.x, (float)square.y),
+                  (int)clamp(floor(hi_x) + 1.0f, (float)square.x, (float)square.y),
+                  (int)clamp(floor(lo_y) - 1.0f, (float)square.z, (float)square.w),
+                  (int)clamp(floor(hi_y) + 1.0f, (float)square.z, (float)square.w));
+}
+
 // layout::gbuffer_pixel_area.
 inline float gbuffer_pixel_area(__global const GpuCamera* cam, uint index, const GBufferTexel* g) {
     float3 ray = camera_ray(cam, index % cam->width, index / cam->width);

@@ -1003,6 +1003,73 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
     Some((fx as u32, fy as u32, z))
 }
 
+/// The pixels `splat_photons` tests for a splat: inclusive `[x0, x1, y0, y1]`, the square
+/// of `r` pixels around the splat centre's pixel `(px, py)` inside the image, narrowed to
+/// the screen bounds of the kernel's box (half-axes `axes` along `n`, `u`, `t` about
+/// `centre`, world space), so that a flat or stretched kernel seen at an angle no longer
+/// scans its largest axis's square (seed 003's ellipsoid splat; 2x fewer pixel tests on
+/// `rooms`, see `docs/gpu/h200-session14-photon-gi.log`).
+///
+/// Nothing the square held that the kernel contains is lost: a pixel passes the kernel
+/// test only if its G-buffer point (on its centre ray) lies in the ellipsoid, so in the
+/// box; with every corner in front of the camera the box's projection is the convex hull
+/// of its corners' projections, and the point's pixel is within one of the hull's
+/// bounds. The box is widened by `1e-5` of the scene's coordinate magnitude (the G-buffer
+/// point's and the projection's rounding) and the bounds by a pixel on each side. A
+/// corner at or behind the camera, or a non-finite bound, keeps the square.
+pub fn splat_screen_rect(
+    cam: &GpuCamera,
+    centre: Vec3,
+    n: Vec3,
+    u: Vec3,
+    t: Vec3,
+    axes: Vec3,
+    px: u32,
+    py: u32,
+    r: u32,
+) -> [i32; 4] {
+    let (w, h) = (cam.width as i32, cam.height as i32);
+    let (px, py, r) = (px as i32, py as i32, r.min(1 << 24) as i32);
+    let square = [
+        (px - r).max(0),
+        (px + r).min(w - 1),
+        (py - r).max(0),
+        (py + r).min(h - 1),
+    ];
+    let origin = Vec3::from(cam.position);
+    let eps = 1e-5 * (centre.abs().max_element() + origin.abs().max_element() + axes.max_element());
+    let a = axes + Vec3::splat(eps);
+    let (mut lo_x, mut hi_x, mut lo_y, mut hi_y) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
+    for corner in 0..8u32 {
+        let sign = |bit: u32| if corner & bit != 0 { 1.0 } else { -1.0 };
+        let c = centre + n * (sign(1) * a.x) + u * (sign(2) * a.y) + t * (sign(4) * a.z);
+        let v = c - origin;
+        let z = v.dot(Vec3::from(cam.forward));
+        if !(z > 0.0) {
+            return square;
+        }
+        let sx = v.dot(Vec3::from(cam.right)) / (z * cam.tan_half_fov_x);
+        let sy = v.dot(Vec3::from(cam.up)) / (z * cam.tan_half_fov_y);
+        let fx = (sx + 1.0) * 0.5 * cam.width as f32;
+        let fy = (1.0 - sy) * 0.5 * cam.height as f32;
+        if !(fx.is_finite() && fy.is_finite()) {
+            return square;
+        }
+        lo_x = lo_x.min(fx);
+        hi_x = hi_x.max(fx);
+        lo_y = lo_y.min(fy);
+        hi_y = hi_y.max(fy);
+    }
+    // clamped to the square in float first, so the conversions stay in range
+    let bound = |v: f32, lo: i32, hi: i32| v.clamp(lo as f32, hi as f32) as i32;
+    [
+        bound(lo_x.floor() - 1.0, square[0], square[1]),
+        bound(hi_x.floor() + 1.0, square[0], square[1]),
+        bound(lo_y.floor() - 1.0, square[2], square[3]),
+        bound(hi_y.floor() + 1.0, square[2], square[3]),
+    ]
+}
+
 // ---- functions over the layouts (shader ports mirror them by name)
 
 /// A point on a triangle, interpolated from its vertices (world space).
@@ -1111,6 +1178,78 @@ mod tests {
             assert!((got.tan_half_fov_y / want.tan_half_fov_y - 1.0).abs() < 1e-6);
             assert!((got.tan_half_fov_x / want.tan_half_fov_x - 1.0).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn a_splats_screen_rect_holds_every_pixel_its_kernel_contains() {
+        use crate::math::rng::random_f32;
+        let mut k = 0u32;
+        let mut rnd = || {
+            k += 1;
+            random_f32(0x5b1a7, k, 0, 0)
+        };
+        let mut narrowed = 0;
+        for case in 0..400 {
+            let scale = [1e-3f32, 1.0, 1e3][case % 3];
+            let eye = Vec3::new(rnd() - 0.5, rnd() + 0.5, rnd() + 2.0) * scale;
+            let target = Vec3::new(rnd() - 0.5, rnd() * 0.5, rnd() - 0.5) * scale;
+            let cam = GpuCamera::from_camera(&crate::scene::Camera {
+                position: eye,
+                target,
+                up: Vec3::Y,
+                fov_y_deg: 20.0 + 70.0 * rnd(),
+                width: 64 + (rnd() * 400.0) as u32,
+                height: 48 + (rnd() * 300.0) as u32,
+            });
+            let centre = target + (Vec3::new(rnd(), rnd(), rnd()) - 0.5) * scale;
+            let Some((px, py, _)) = project_to_pixel(&cam, centre) else {
+                continue;
+            };
+            // an orthonormal frame and half-axes from flat (normal compression) to long
+            let n = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize_or(Vec3::Y);
+            let (u, t) = n.any_orthonormal_pair();
+            let axes = Vec3::new(0.02 + 0.2 * rnd(), 0.1 + rnd(), 0.1 + 0.5 * rnd()) * 0.3 * scale;
+            let r = if case % 4 == 0 { 3 } else { 1 << 20 };
+            let rect = splat_screen_rect(&cam, centre, n, u, t, axes, px, py, r);
+            let (w, h) = (cam.width as i32, cam.height as i32);
+            let square = [
+                (px as i32 - r as i32).max(0),
+                (px as i32 + r as i32).min(w - 1),
+                (py as i32 - r as i32).max(0),
+                (py as i32 + r as i32).min(h - 1),
+            ];
+            assert!(
+                rect[0] >= square[0] && rect[1] <= square[1],
+                "{case}: {rect:?} {square:?}"
+            );
+            assert!(
+                rect[2] >= square[2] && rect[3] <= square[3],
+                "{case}: {rect:?} {square:?}"
+            );
+            narrowed += ((rect[1] - rect[0] + 1) * (rect[3] - rect[2] + 1)
+                < (square[1] - square[0] + 1) * (square[3] - square[2] + 1))
+                as u32;
+            for _ in 0..300 {
+                // a point of the closed ellipsoid, its boundary included
+                let d = Vec3::new(rnd(), rnd(), rnd()) * 2.0 - 1.0;
+                let d = if d.length() > 1.0 { d / d.length() } else { d };
+                let q = centre + n * (d.x * axes.x) + u * (d.y * axes.y) + t * (d.z * axes.z);
+                if let Some((x, y, _)) = project_to_pixel(&cam, q) {
+                    let (x, y) = (x as i32, y as i32);
+                    if x < square[0] || x > square[1] || y < square[2] || y > square[3] {
+                        continue;
+                    }
+                    assert!(
+                        x >= rect[0] && x <= rect[1] && y >= rect[2] && y <= rect[3],
+                        "{case}: pixel ({x}, {y}) of a kernel point outside {rect:?}"
+                    );
+                }
+            }
+        }
+        assert!(
+            narrowed > 100,
+            "the rectangle narrowed only {narrowed} squares"
+        );
     }
 
     use std::mem::size_of;

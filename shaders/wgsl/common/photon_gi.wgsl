@@ -257,3 +257,48 @@ fn light_direction_deposit(flux: vec3<f32>, to_light: vec3<f32>) -> vec4<f32> {
     let w = luminance(flux);
     return vec4<f32>((to_light + vec3<f32>(1.0)) * (0.5 * w), w);
 }
+
+// core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
+// splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
+// the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
+fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, n: vec3<f32>, u: vec3<f32>,
+                     t: vec3<f32>, axes: vec3<f32>, px: u32, py: u32, r: u32) -> vec4<i32> {
+    let w = i32(cam.width);
+    let h = i32(cam.height);
+    let ri = i32(min(r, 1u << 24u));
+    let square = vec4<i32>(max(i32(px) - ri, 0), min(i32(px) + ri, w - 1),
+                           max(i32(py) - ri, 0), min(i32(py) + ri, h - 1));
+    let eps = 1e-5 * (max_element3(abs(centre)) + max_element3(abs(cam.position)) +
+                      max_element3(axes));
+    let a = axes + vec3<f32>(eps);
+    var lo_x = 3.4028235e38;
+    var hi_x = -3.4028235e38;
+    var lo_y = 3.4028235e38;
+    var hi_y = -3.4028235e38;
+    for (var corner = 0u; corner < 8u; corner++) {
+        let sn = select(-1.0, 1.0, (corner & 1u) != 0u);
+        let su = select(-1.0, 1.0, (corner & 2u) != 0u);
+        let st = select(-1.0, 1.0, (corner & 4u) != 0u);
+        let c = centre + n * (sn * a.x) + u * (su * a.y) + t * (st * a.z);
+        let v = c - cam.position;
+        let z = dot3(v, cam.forward);
+        if (!(z > 0.0)) {
+            return square;
+        }
+        let sx = dot3(v, cam.right) / (z * cam.tan_half_fov_x);
+        let sy = dot3(v, cam.up) / (z * cam.tan_half_fov_y);
+        let fx = (sx + 1.0) * 0.5 * f32(cam.width);
+        let fy = (1.0 - sy) * 0.5 * f32(cam.height);
+        if (!(is_finite_f32(fx) && is_finite_f32(fy))) {
+            return square;
+        }
+        lo_x = min(lo_x, fx);
+        hi_x = max(hi_x, fx);
+        lo_y = min(lo_y, fy);
+        hi_y = max(hi_y, fy);
+    }
+    return vec4<i32>(i32(clamp(floor(lo_x) - 1.0, f32(square.x), f32(square.y))),
+                     i32(clamp(floor(hi_x) + 1.0, f32(square.x), f32(square.y))),
+                     i32(clamp(floor(lo_y) - 1.0, f32(square.z), f32(square.w))),
+                     i32(clamp(floor(hi_y) + 1.0, f32(square.z), f32(square.w))));
+}
