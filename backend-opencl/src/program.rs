@@ -149,9 +149,9 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 /// was the experiment that found the cost). `splat_photons` divides three times per
 /// pixel of a splat's square (`kernel_contains`); its tolerance (`SPLAT_REL`, 40 ulp a
 /// contribution, and the containment flips near 1 that `DEPOSIT_TEXEL_AGREEMENT` allows
-/// for: conformance/src/kernels/photon_gi.rs) is argued for WGSL's bounds too. With
-/// native division it took 12.1 ms against 14.8 at the chapter's high setting on the H200
-/// (`docs/gpu/h200-session14-photon-gi.log`).
+/// for: conformance/src/kernels/photon_gi.rs) is argued for WGSL's bounds too. At the
+/// chapter's high setting on the H200 it took 9.7 ms here against 14.8 in the main
+/// program (both with staged G-buffer loads; `docs/gpu/h200-session14-photon-gi.log`).
 pub const RELAXED_DIVISION_KERNELS: &[&str] =
     &["gather_footprint", "density_gather", "splat_photons"];
 
