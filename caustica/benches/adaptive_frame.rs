@@ -4,8 +4,8 @@
 //! and `sphere` with CausticMap's caster-fitted plane.
 //!
 //! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
-//! after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames that remake the atlas (a new seed each)
-//! of: the photon work (every `trace_photons`, `deposit_atlas` / `refine_clusters` and
+//! after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames
+//! that remake the atlas (a new seed each) of: the photon work (every `trace_photons`, `deposit_atlas` / `refine_clusters` and
 //! gather pass, device time where the backend has timestamps), the whole frame (host wall
 //! time), the photons traced and the traversal's steps; and per level the photons traced
 //! and the time of its steps (`trace_photons` + `refine_clusters`, `AdaptiveStats::

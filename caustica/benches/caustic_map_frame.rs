@@ -6,9 +6,9 @@
 //! `max_specular_depth = n` for the camera's tree.
 //!
 //! Per setting, Fresnel split (deterministic; stochastic, the default), map gather
-//! (density, the default; 001's box) and backend, after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`,
-//! default 3000, then one more): the median over frames
-//! that remake the atlas (a new seed each) of every pass and of the budget line emission +
+//! (density, the default; 001's box) and backend, after warm-up frames
+//! (`CAUSTICA_BENCH_WARMUP_MS`, default 3000, then one more): the median over frames that
+//! remake the atlas (a new seed each) of every pass and of the budget line emission +
 //! trace + splat + gather (`trace_photons`, `deposit_atlas`, and `gather_caustic_map` or
 //! the density gather's `photon_count_table`, `gather_footprint`, `density_gather`; target
 //! on the H200: <= 2 ms at 2048^2 photons and a 2048^2 map), and the median host wall time

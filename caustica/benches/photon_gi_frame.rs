@@ -1,8 +1,8 @@
 //! PhotonGi frames (seed 003) per backend at the chapter's two settings on `rooms` at
 //! 1920x1080: "high", 3 million initial photons (1732^2), 3 bounces, 4 A-Trous iterations;
 //! "low", 1 million (1024^2), 1 bounce, 4 A-Trous iterations. Both with the temporal
-//! blend. After warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames (a new seed each) of every pass,
-//! of the technique's device time (every pass but `primary_gbuffer` of the camera and
+//! blend. After warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over
+//! frames (a new seed each) of every pass, of the technique's device time (every pass but `primary_gbuffer` of the camera and
 //! `direct_light`, which a renderer has anyway: the RSM faces' own `primary_gbuffer`
 //! dispatches are counted by subtracting one camera G-buffer, see below) and of the host
 //! wall time of the frame. Target on the H200 (issue 18): <= 6 ms at the high setting.

@@ -1,7 +1,7 @@
 //! One Sspm frame per backend, side by side: `sphere` and `cornell` at 1920x1080 with
 //! 2048x2048 photons (the setting of the performance targets), median per-pass times over
-//! repeated frames after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), and the budget line trace + deposit + gather
-//! (resolve and the filter's passes: the density gather's table, footprint and two
+//! repeated frames after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), and the
+//! budget line trace + deposit + gather (resolve and the filter's passes: the density gather's table, footprint and two
 //! passes, or the bilateral's tiles and two passes; target on a GPU: <= 2 ms on the
 //! fastest backend), once per caustic filter. Device timestamps where the backend has
 //! them.
