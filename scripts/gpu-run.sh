@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp session13 session14 session14gi session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp session13 session14 session14gi session14tr session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -427,6 +427,15 @@ if has session14gi; then
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend photon_gi --test-threads=1
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./photon_gi_frames --test-threads=1
     run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
+fi
+if has session14tr; then
+    # trace_photons' variant programs with OpenCL's default division bounds
+    # (backend-opencl's RELAXED_DIVISION_VARIANTS): its checks, then OpenCL's frames.
+    run timeout 120 env CAUSTICA_BENCH_BACKENDS=opencl CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=10 ./sspm_frame --bench
+    run timeout 120 env CAUSTICA_BENCH_BACKENDS=opencl CAUSTICA_BENCH_SETTINGS=0,1 CAUSTICA_BENCH_SPLITS=stochastic \
+        CAUSTICA_BENCH_GATHERS=box CAUSTICA_BENCH_FRAMES=10 ./caustic_map_frame --bench
+    run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl CAUSTICA_SKIP_BACKENDS=wgpu,vulkan ./cross_backend trace_photons sspm caustic --test-threads=1
+    [ -x ./stiff_cases ] && run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl CAUSTICA_SKIP_BACKENDS=wgpu,vulkan ./stiff_cases --test-threads=1
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
