@@ -24,8 +24,7 @@ inline void splat_photon(__global const SplatParams* p, GBUFFER_PARAMS(__global 
     float3 e = splat_irradiance(power, &k);
     uint reach = splat_reach_px(p, max_element3(k.axes), z);
     if (reach > p->max_splat_px) atomic_inc(&lc[COUNTER_SATURATED]);
-    int4 rect = splat_screen_rect(&p->camera, pos, k.n, k.u, k.t, k.axes, px, py,
-                                  min(reach, p->max_splat_px));
+    int4 rect = splat_screen_rect(&p->camera, pos, &k, px, py, min(reach, p->max_splat_px));
     int w = (int)p->camera.width;
     for (int qy = rect.z; qy <= rect.w; qy++) {
         for (int qx = rect.x; qx <= rect.y; qx++) {

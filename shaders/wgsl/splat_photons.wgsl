@@ -78,8 +78,8 @@ fn splat_photon(p: SplatParams, ph: GiPhoton) {
     if (reach > p.max_splat_px) {
         atomicAdd(&lc[COUNTER_SATURATED], 1u);
     }
-    let rect = splat_screen_rect(p.camera, ph.position, kernel.n, kernel.u, kernel.t,
-                                 kernel.axes, px, py, min(reach, p.max_splat_px));
+    let rect = splat_screen_rect(p.camera, ph.position, kernel, px, py,
+                                 min(reach, p.max_splat_px));
     let w = i32(p.camera.width);
     for (var qy = rect.z; qy <= rect.w; qy++) {
         for (var qx = rect.x; qx <= rect.y; qx++) {

@@ -505,17 +505,8 @@ fn splat_photon(
     if reach > p.max_splat_px {
         c.bump(counter::SATURATED);
     }
-    let [x0, x1, y0, y1] = splat_screen_rect(
-        &p.camera,
-        pos,
-        kernel.n,
-        kernel.u,
-        kernel.t,
-        kernel.axes,
-        px,
-        py,
-        reach.min(p.max_splat_px),
-    );
+    let [x0, x1, y0, y1] =
+        splat_screen_rect(&p.camera, pos, &kernel, (px, py), reach.min(p.max_splat_px));
     let w = p.camera.width as i64;
     for qy in y0 as i64..=y1 as i64 {
         for qx in x0 as i64..=x1 as i64 {

@@ -200,8 +200,9 @@ inline float3 splat_irradiance(float3 power, const SplatKernel* k) {
 // core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
 // splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
 // the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
-inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, float3 n, float3 u,
-                              float3 t, float3 axes, uint px, uint py, uint r) {
+inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, const SplatKernel* k,
+                              uint px, uint py, uint r) {
+    float3 n = k->n, u = k->u, t = k->t, axes = k->axes;
     int w = (int)cam->width, h = (int)cam->height;
     int ri = (int)min(r, 1u << 24);
     int4 square = (int4)(max((int)px - ri, 0), min((int)px + ri, w - 1), max((int)py - ri, 0),

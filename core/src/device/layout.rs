@@ -1005,8 +1005,8 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
 
 /// The pixels `splat_photons` tests for a splat: inclusive `[x0, x1, y0, y1]`, the square
 /// of `r` pixels around the splat centre's pixel `(px, py)` inside the image, narrowed to
-/// the screen bounds of the kernel's box (half-axes `axes` along `n`, `u`, `t` about
-/// `centre`, world space), so that a flat or stretched kernel seen at an angle no longer
+/// the screen bounds of kernel `k`'s box (half-axes `k.axes` along `k.n`, `k.u`, `k.t`
+/// about `centre`, world space), so that a flat or stretched kernel seen at an angle no longer
 /// scans its largest axis's square (seed 003's ellipsoid splat; 2x fewer pixel tests on
 /// `rooms`, see `docs/gpu/h200-session14-photon-gi.log`).
 ///
@@ -1020,14 +1020,11 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
 pub fn splat_screen_rect(
     cam: &GpuCamera,
     centre: Vec3,
-    n: Vec3,
-    u: Vec3,
-    t: Vec3,
-    axes: Vec3,
-    px: u32,
-    py: u32,
+    k: &crate::math::photon_splat::SplatKernel,
+    (px, py): (u32, u32),
     r: u32,
 ) -> [i32; 4] {
+    let (n, u, t, axes) = (k.n, k.u, k.t, k.axes);
     let (w, h) = (cam.width as i32, cam.height as i32);
     let (px, py, r) = (px as i32, py as i32, r.min(1 << 24) as i32);
     let square = [
@@ -1210,7 +1207,8 @@ mod tests {
             let (u, t) = n.any_orthonormal_pair();
             let axes = Vec3::new(0.02 + 0.2 * rnd(), 0.1 + rnd(), 0.1 + 0.5 * rnd()) * 0.3 * scale;
             let r = if case % 4 == 0 { 3 } else { 1 << 20 };
-            let rect = splat_screen_rect(&cam, centre, n, u, t, axes, px, py, r);
+            let kernel = crate::math::photon_splat::SplatKernel { n, u, t, axes };
+            let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), r);
             let (w, h) = (cam.width as i32, cam.height as i32);
             let square = [
                 (px as i32 - r as i32).max(0),

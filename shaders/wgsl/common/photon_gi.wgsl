@@ -261,8 +261,12 @@ fn light_direction_deposit(flux: vec3<f32>, to_light: vec3<f32>) -> vec4<f32> {
 // core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
 // splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
 // the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
-fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, n: vec3<f32>, u: vec3<f32>,
-                     t: vec3<f32>, axes: vec3<f32>, px: u32, py: u32, r: u32) -> vec4<i32> {
+fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, px: u32, py: u32,
+                     r: u32) -> vec4<i32> {
+    let n = k.n;
+    let u = k.u;
+    let t = k.t;
+    let axes = k.axes;
     let w = i32(cam.width);
     let h = i32(cam.height);
     let ri = i32(min(r, 1u << 24u));
