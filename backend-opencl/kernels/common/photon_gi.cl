@@ -216,13 +216,8 @@ inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, cons
         float su = (corner & 2u) != 0u ? 1.0f : -1.0f;
         float st = (corner & 4u) != 0u ? 1.0f : -1.0f;
         float3 c = centre + n * (sn * a.x) + u * (su * a.y) + t * (st * a.z);
-        float3 v = c - origin;
-        float z = dot3(v, load3g(cam->forward));
-        if (!(z > 0.0f)) return square;
-        float sx = dot3(v, load3g(cam->right)) / (z * cam->tan_half_fov_x);
-        float sy = dot3(v, load3g(cam->up)) / (z * cam->tan_half_fov_y);
-        float fx = (sx + 1.0f) * 0.5f * (float)cam->width;
-        float fy = (1.0f - sy) * 0.5f * (float)cam->height;
+        float fx, fy, z;
+        if (!project_to_screen(cam, c, &fx, &fy, &z)) return square;
         if (!(isfinite(fx) && isfinite(fy))) return square;
         lo_x = fmin(lo_x, fx);
         hi_x = fmax(hi_x, fx);

@@ -27,17 +27,27 @@ inline float3 primary_ray(__global const GpuCamera* cam, uint px, uint py, float
     return camera_ray(cam, px, py);
 }
 
-// Pixel containing world point `p` and its view depth; false behind the camera or off
-// screen.
-inline bool project_to_pixel(__global const GpuCamera* cam, float3 p, uint* px, uint* py,
-                             float* depth) {
+// core's project_to_screen: continuous pixel coordinates and view depth, on screen or not;
+// false when p is not in front of the camera.
+inline bool project_to_screen(__global const GpuCamera* cam, float3 p, float* fx, float* fy,
+                              float* depth) {
     float3 v = p - load3g(cam->position);
     float z = dot3(v, load3g(cam->forward));
     if (isnan(z) || z <= 0.0f) return false;
     float sx = dot3(v, load3g(cam->right)) / (z * cam->tan_half_fov_x);
     float sy = dot3(v, load3g(cam->up)) / (z * cam->tan_half_fov_y);
-    float fx = (sx + 1.0f) * 0.5f * (float)cam->width;
-    float fy = (1.0f - sy) * 0.5f * (float)cam->height;
+    *fx = (sx + 1.0f) * 0.5f * (float)cam->width;
+    *fy = (1.0f - sy) * 0.5f * (float)cam->height;
+    *depth = z;
+    return true;
+}
+
+// Pixel containing world point `p` and its view depth; false behind the camera or off
+// screen.
+inline bool project_to_pixel(__global const GpuCamera* cam, float3 p, uint* px, uint* py,
+                             float* depth) {
+    float fx, fy, z;
+    if (!project_to_screen(cam, p, &fx, &fy, &z)) return false;
     if (!(fx >= 0.0f && fy >= 0.0f && fx < (float)cam->width && fy < (float)cam->height))
         return false;
     *px = (uint)fx;

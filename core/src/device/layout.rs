@@ -984,10 +984,11 @@ pub fn off_surface(
     }
 }
 
-/// Projects world point `p` to the pixel that contains it; returns (px, py, view depth)
-/// or `None` when it is behind the camera or off screen.
+/// Projects world point `p` to continuous pixel coordinates (x right, y down; pixel `i`
+/// spans `[i, i + 1)`) and view depth, on screen or not; `None` when it is not in front
+/// of the camera.
 #[inline]
-pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
+pub fn project_to_screen(cam: &GpuCamera, p: Vec3) -> Option<(f32, f32, f32)> {
     let v = p - Vec3::from(cam.position);
     let z = v.dot(Vec3::from(cam.forward));
     if z.is_nan() || z <= 0.0 {
@@ -997,6 +998,14 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
     let sy = v.dot(Vec3::from(cam.up)) / (z * cam.tan_half_fov_y);
     let fx = (sx + 1.0) * 0.5 * cam.width as f32;
     let fy = (1.0 - sy) * 0.5 * cam.height as f32;
+    Some((fx, fy, z))
+}
+
+/// Projects world point `p` to the pixel that contains it; returns (px, py, view depth)
+/// or `None` when it is behind the camera or off screen.
+#[inline]
+pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
+    let (fx, fy, z) = project_to_screen(cam, p)?;
     if !(fx >= 0.0 && fy >= 0.0 && fx < cam.width as f32 && fy < cam.height as f32) {
         return None;
     }
@@ -1040,15 +1049,9 @@ pub fn splat_screen_rect(
     for corner in 0..8u32 {
         let sign = |bit: u32| if corner & bit != 0 { 1.0 } else { -1.0 };
         let c = centre + n * (sign(1) * a.x) + u * (sign(2) * a.y) + t * (sign(4) * a.z);
-        let v = c - origin;
-        let z = v.dot(Vec3::from(cam.forward));
-        if !(z > 0.0) {
+        let Some((fx, fy, _)) = project_to_screen(cam, c) else {
             return square;
-        }
-        let sx = v.dot(Vec3::from(cam.right)) / (z * cam.tan_half_fov_x);
-        let sy = v.dot(Vec3::from(cam.up)) / (z * cam.tan_half_fov_y);
-        let fx = (sx + 1.0) * 0.5 * cam.width as f32;
-        let fy = (1.0 - sy) * 0.5 * cam.height as f32;
+        };
         if !(fx.is_finite() && fy.is_finite()) {
             return square;
         }

@@ -284,15 +284,12 @@ fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, px: u32,
         let su = select(-1.0, 1.0, (corner & 2u) != 0u);
         let st = select(-1.0, 1.0, (corner & 4u) != 0u);
         let c = centre + n * (sn * a.x) + u * (su * a.y) + t * (st * a.z);
-        let v = c - cam.position;
-        let z = dot3(v, cam.forward);
-        if (!(z > 0.0)) {
+        var fx: f32;
+        var fy: f32;
+        var z: f32;
+        if (!project_to_screen(cam, c, &fx, &fy, &z)) {
             return square;
         }
-        let sx = dot3(v, cam.right) / (z * cam.tan_half_fov_x);
-        let sy = dot3(v, cam.up) / (z * cam.tan_half_fov_y);
-        let fx = (sx + 1.0) * 0.5 * f32(cam.width);
-        let fy = (1.0 - sy) * 0.5 * f32(cam.height);
         if (!(is_finite_f32(fx) && is_finite_f32(fy))) {
             return square;
         }

@@ -24,10 +24,10 @@ fn primary_ray(cam: GpuCamera, px: u32, py: u32, origin: ptr<function, vec3<f32>
     return camera_ray(cam, px, py);
 }
 
-// Pixel containing world point `p` and its view depth; false behind the camera or off
-// screen.
-fn project_to_pixel(cam: GpuCamera, p: vec3<f32>, px: ptr<function, u32>,
-                    py: ptr<function, u32>, depth: ptr<function, f32>) -> bool {
+// core's project_to_screen: continuous pixel coordinates and view depth, on screen or not;
+// false when p is not in front of the camera.
+fn project_to_screen(cam: GpuCamera, p: vec3<f32>, fx: ptr<function, f32>,
+                     fy: ptr<function, f32>, depth: ptr<function, f32>) -> bool {
     let v = p - cam.position;
     let z = dot3(v, cam.forward);
     if (is_nan_f32(z) || z <= 0.0) {
@@ -35,8 +35,22 @@ fn project_to_pixel(cam: GpuCamera, p: vec3<f32>, px: ptr<function, u32>,
     }
     let sx = dot3(v, cam.right) / (z * cam.tan_half_fov_x);
     let sy = dot3(v, cam.up) / (z * cam.tan_half_fov_y);
-    let fx = (sx + 1.0) * 0.5 * f32(cam.width);
-    let fy = (1.0 - sy) * 0.5 * f32(cam.height);
+    *fx = (sx + 1.0) * 0.5 * f32(cam.width);
+    *fy = (1.0 - sy) * 0.5 * f32(cam.height);
+    *depth = z;
+    return true;
+}
+
+// Pixel containing world point `p` and its view depth; false behind the camera or off
+// screen.
+fn project_to_pixel(cam: GpuCamera, p: vec3<f32>, px: ptr<function, u32>,
+                    py: ptr<function, u32>, depth: ptr<function, f32>) -> bool {
+    var fx: f32;
+    var fy: f32;
+    var z: f32;
+    if (!project_to_screen(cam, p, &fx, &fy, &z)) {
+        return false;
+    }
     if (!(fx >= 0.0 && fy >= 0.0 && fx < f32(cam.width) && fy < f32(cam.height))) {
         return false;
     }
