@@ -27,10 +27,10 @@ pub fn warmup_ms() -> u64 {
 /// and returns it.
 #[allow(dead_code)]
 pub fn warm_up<E>(mut frame: impl FnMut() -> Result<(), E>) -> Result<(), E> {
-    let start = std::time::Instant::now();
+    let (start, ms) = (std::time::Instant::now(), warmup_ms());
     loop {
         frame()?;
-        if start.elapsed().as_millis() as u64 >= warmup_ms() {
+        if start.elapsed().as_millis() as u64 >= ms {
             return Ok(());
         }
     }
