@@ -25,7 +25,7 @@ use caustica_core::kernels::{
     DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
     PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
-    TracePhotons,
+    AtlasDeposit, TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -145,6 +145,7 @@ impl CpuBackend {
                 photon_count,
                 counters,
                 clusters,
+                atlas,
             }) => {
                 reserve_temporary::<Photon>(params.count as u64, "a photon batch")?;
                 let result = match clusters.filter(|_| variant.adaptive) {
@@ -154,6 +155,13 @@ impl CpuBackend {
                     }
                     None => trace_photons::trace_photons(&view(scene)?, params, *variant),
                 };
+                result
+                    .counters
+                    .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+                if let Some(d) = atlas.filter(|_| variant.atlas_deposit) {
+                    // the fused pass: the stored photons into the atlas, as deposit_atlas
+                    return self.deposit_atlas_photons(&d, &result.photons, *counters);
+                }
                 if result.photons.len() > photons.len as usize {
                     return Err(BackendError::BadArgument(format!(
                         "photon buffer holds {} photons, batch stored {}",
@@ -166,9 +174,6 @@ impl CpuBackend {
                     self.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] =
                         result.photons.len() as u32;
                 }
-                result
-                    .counters
-                    .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }
             Kernel::DepositScreen(DepositScreen {
@@ -360,18 +365,15 @@ impl CpuBackend {
                 atlas,
             }) => {
                 let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
-                let ph = &get(photons.id)?.as_slice(photons.len)?[..n as usize];
-                let tt = get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
-                let tl = get(tiles.id)?.as_slice(tiles.len)?;
-                let atomics = map_atomics(atlas)?;
-                let c = caustic_map::deposit_atlas(params, tt, tl, ph, atomics);
-                let mut reach = get(triangle_reach.id)?
-                    .as_slice::<u32>(triangle_reach.len)?
-                    .to_vec();
-                caustic_map::mark_triangle_reach(ph, &mut reach);
-                self.put(triangle_reach.id, &reach)?;
-                c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
-                Ok(())
+                let ph = get(photons.id)?.as_slice::<Photon>(photons.len)?[..n as usize].to_vec();
+                let d = AtlasDeposit {
+                    params: *params,
+                    triangle_tiles: *triangle_tiles,
+                    tiles: *tiles,
+                    triangle_reach: *triangle_reach,
+                    sums: *atlas,
+                };
+                self.deposit_atlas_photons(&d, &ph, *counters)
             }
             Kernel::GatherCausticMap(GatherCausticMap {
                 params,
@@ -619,6 +621,35 @@ impl CpuBackend {
                 self.get(c.id)?.as_slice(c.len)?,
             ],
         })
+    }
+
+    /// `deposit_atlas` of texture-space photons `ph` into atlas `d`: the fixed-point sums,
+    /// the reach bits of their triangles and the deposit's counters (added to
+    /// `counters`). Serves `deposit_atlas` and the fused `atlas_deposit` trace alike.
+    fn deposit_atlas_photons(
+        &mut self,
+        d: &AtlasDeposit,
+        ph: &[Photon],
+        counters: caustica_core::device::handle::Buf<u32>,
+    ) -> Result<(), BackendError> {
+        use kernels::caustic_map;
+        let c = {
+            let tt = self.get(d.triangle_tiles.id)?.as_slice(d.triangle_tiles.len)?;
+            let tl = self.get(d.tiles.id)?.as_slice(d.tiles.len)?;
+            let [a, b, c] = d.sums.planes;
+            let atomics = [
+                self.get(a.id)?.as_atomic_u64(a.bytes())?,
+                self.get(b.id)?.as_atomic_u64(b.bytes())?,
+                self.get(c.id)?.as_atomic_u64(c.bytes())?,
+            ];
+            caustic_map::deposit_atlas(&d.params, tt, tl, ph, atomics)
+        };
+        let reach = self
+            .get_mut(d.triangle_reach.id)?
+            .as_mut_slice::<u32>(d.triangle_reach.len)?;
+        caustic_map::mark_triangle_reach(ph, reach);
+        c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+        Ok(())
     }
 
     fn get(&self, id: ResourceId) -> Result<&Storage, BackendError> {

@@ -33,6 +33,12 @@
 #ifndef ADAPTIVE
 #define ADAPTIVE 0
 #endif
+// CausticMap's fused pass (core's TraceVariant::atlas_deposit, with SURFACE_STORE): a
+// stored photon goes straight into the caustic atlas (map_gather.cl's
+// deposit_atlas_photon, as deposit_atlas adds it) instead of into the photon buffer.
+#ifndef ATLAS_DEPOSIT
+#define ATLAS_DEPOSIT 0
+#endif
 
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
@@ -147,14 +153,18 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
 
 inline void count_end(int end, const Photon* ph, float flux_quantum, __local uint* lc);
 
-// Adds one path end to the photon buffer and the work-group's counters.
+// Adds one path end to the photon buffer (or the atlas) and the work-group's counters.
 inline void record_end(int end, const Photon* ph, float flux_quantum, __global Photon* photons,
                        uint photon_capacity, volatile __global uint* photon_count,
-                       __local uint* lc) {
+                       ATLAS_DEPOSIT_PARAMS, __local uint* lc) {
     if (end == PATH_STORED) {
-        uint slot = atomic_inc(photon_count);
-        // The host never dispatches more photons than the buffer holds.
-        if (slot < photon_capacity) photons[slot] = *ph;
+        if (ATLAS_DEPOSIT) {
+            deposit_atlas_photon(ATLAS_DEPOSIT_ARGS, lc, ph);
+        } else {
+            uint slot = atomic_inc(photon_count);
+            // The host never dispatches more photons than the buffer holds.
+            if (slot < photon_capacity) photons[slot] = *ph;
+        }
     }
     count_end(end, ph, flux_quantum, lc);
 }
@@ -219,15 +229,17 @@ inline Branch branch(float3 origin, float3 dir, float3 flux, uint bounce, int ch
     return b;
 }
 
-#define RECORD(end, ph) record_end(end, ph, p->flux_quantum, photons, photon_capacity, photon_count, lc)
+#define RECORD(end, ph)                                                                    \
+    record_end(end, ph, p->flux_quantum, photons, photon_capacity, photon_count,            \
+               ATLAS_DEPOSIT_ARGS, lc)
 
 // One emitted photon with seed 001's deterministic splits (backend-cpu
 // trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
 // end; returns the ray segments traced, writes the branches added.
 inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint index,
                                __global Photon* photons, uint photon_capacity,
-                               volatile __global uint* photon_count, __local uint* lc,
-                               uint* splits) {
+                               volatile __global uint* photon_count, ATLAS_DEPOSIT_PARAMS,
+                               __local uint* lc, uint* splits) {
     float3 origin, dir, flux;
     emit_photon(lights, p, index, &origin, &dir, &flux);
     float emitted_max = max_element3(load3g(p->photon_flux));
@@ -356,7 +368,8 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
 __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
                             __global Photon* photons, uint photon_capacity,
                             volatile __global uint* photon_count,
-                            volatile __global uint* counters, __global const uint* clusters) {
+                            volatile __global uint* counters, __global const uint* clusters,
+                            ATLAS_DEPOSIT_PARAMS) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
@@ -375,7 +388,7 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
             // grid photon in tile order (sampling.cl)
             uint index = tiled_photon_index(p->first + i, p->grid_w, p->grid_h);
             uint rays = trace_photon_split(SCENE_ARGS, p, index, photons, photon_capacity,
-                                           photon_count, lc, &splits);
+                                           photon_count, ATLAS_DEPOSIT_ARGS, lc, &splits);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             atomic_add(&lc[COUNTER_SPLITS], splits);
         } else {

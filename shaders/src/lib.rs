@@ -52,6 +52,10 @@ pub const COMMON: &[(&str, &str)] = &[
         include_str!("../wgsl/common/specular_tree.wgsl"),
     ),
     ("atlas", include_str!("../wgsl/common/atlas.wgsl")),
+    (
+        "atlas_deposit",
+        include_str!("../wgsl/common/atlas_deposit.wgsl"),
+    ),
     ("map_gather", include_str!("../wgsl/common/map_gather.wgsl")),
     ("map_lookup", include_str!("../wgsl/common/map_lookup.wgsl")),
     (

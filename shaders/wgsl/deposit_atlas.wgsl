@@ -1,4 +1,4 @@
-// needs: types vector fixed_point atlas photon_map_add
+// needs: types vector fixed_point atlas photon_map_add atlas_deposit
 // deposit_atlas (seed 001 section 3.2): each texture-space photon (uv, triangle) is added
 // in fixed point to the atlas texel under its uv on its triangle's receiver tile. Mirror
 // of backend-opencl/kernels/deposit_atlas.cl and backend-cpu/src/kernels/caustic_map.rs;
@@ -22,24 +22,7 @@ fn deposit_atlas(i: u32, li: u32) {
     let p = params;
     let photon_capacity = arrayLength(&photons);
     if (i < min(photon_count[0], photon_capacity)) {
-        let ph = photons[i];
-        let reach = triangle_reach_bit(ph.direction);
-        // most photons land on a few triangles: a load first, so that a bit already set
-        // costs no atomic on the hot word
-        if (reach.x < arrayLength(&triangle_reach) &&
-            (atomicLoad(&triangle_reach[reach.x]) & reach.y) == 0u) {
-            atomicOr(&triangle_reach[reach.x], reach.y);
-        }
-        var tile = NO_TILE;
-        if (ph.direction < arrayLength(&triangle_tiles)) {
-            tile = triangle_tiles[ph.direction];
-        }
-        if (tile == NO_TILE || tile >= arrayLength(&tiles)) {
-            atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
-        } else {
-            let texel = atlas_texel_index(tiles[tile], ph.position.xy, p.width);
-            deposit_photon_texel(texel, ph, p.flux_quantum, p.hit_distance_quantum);
-        }
+        deposit_atlas_photon(photons[i], p.width, p.flux_quantum, p.hit_distance_quantum);
     }
     counters_flush_local(li);
 }

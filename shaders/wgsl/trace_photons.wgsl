@@ -1,4 +1,4 @@
-// needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters
+// needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas photon_map_add atlas_deposit
 // trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least
@@ -25,6 +25,10 @@ override FRESNEL_SPLIT: bool = false;
 // of cluster clusters[params.first + i / 4] of the params.grid_w grid and is written to
 // slot i, stored or not (core's photon_store says how); photon_count is left untouched.
 override ADAPTIVE: bool = false;
+// CausticMap's fused pass (core's TraceVariant::atlas_deposit, with SURFACE_STORE): a
+// stored photon goes straight into the caustic atlas (atlas_deposit.wgsl, as deposit_atlas
+// adds it) instead of into the photon buffer.
+override ATLAS_DEPOSIT: bool = false;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -36,6 +40,14 @@ override ADAPTIVE: bool = false;
 @group(0) @binding(7) var<storage, read_write> photon_count: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read> clusters: array<u32>;
+// the atlas of ATLAS_DEPOSIT (otherwise aliases that nobody touches)
+@group(0) @binding(10) var<uniform> atlas_params: AtlasParams;
+@group(0) @binding(11) var<storage, read> triangle_tiles: array<u32>;
+@group(0) @binding(12) var<storage, read> tiles: array<vec4<u32>>;
+@group(0) @binding(13) var<storage, read_write> triangle_reach: array<atomic<u32>>;
+@group(0) @binding(14) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(15) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(16) var<storage, read_write> photon_map2: array<atomic<u32>>;
 
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
@@ -183,13 +195,18 @@ fn stored_photon(s: SurfacePoint, hit: Hit, flux: vec3<f32>, dir: vec3<f32>) -> 
     return ph;
 }
 
-// Adds one path end to the photon buffer and the work-group's counters.
+// Adds one path end to the photon buffer (or the atlas) and the work-group's counters.
 fn record_end(end: i32, ph: Photon, flux_quantum: f32) {
     if (end == PATH_STORED) {
-        let slot = atomicAdd(&photon_count[0], 1u);
-        // The host never dispatches more photons than the buffer holds.
-        if (slot < arrayLength(&photons)) {
-            photons[slot] = ph;
+        if (ATLAS_DEPOSIT) {
+            let a = atlas_params;
+            deposit_atlas_photon(ph, a.width, a.flux_quantum, a.hit_distance_quantum);
+        } else {
+            let slot = atomicAdd(&photon_count[0], 1u);
+            // The host never dispatches more photons than the buffer holds.
+            if (slot < arrayLength(&photons)) {
+                photons[slot] = ph;
+            }
         }
     }
     count_end(end, ph, flux_quantum);

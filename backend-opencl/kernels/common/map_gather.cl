@@ -11,6 +11,34 @@ inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
 // math::map_gather::triangle_reach_bit: (word, bit) of scene triangle t in a reach mask
 inline uint2 triangle_reach_bit(uint t) { return (uint2)(t >> 5, 1u << (t & 31u)); }
 
+// The caustic atlas a texture-space photon is deposited into (deposit_atlas, and the
+// ATLAS_DEPOSIT variant of trace_photons).
+#define ATLAS_DEPOSIT_PARAMS                                                                  \
+    __global const AtlasParams *ap, __global const uint *triangle_tiles,                    \
+        __global const uint4 *tiles, volatile __global uint *triangle_reach,                \
+        PHOTON_MAP_PARAMS(volatile __global)
+#define ATLAS_DEPOSIT_ARGS ap, triangle_tiles, tiles, triangle_reach, PHOTON_MAP_ARGS
+
+// One texture-space photon (uv, triangle) into the atlas (backend-cpu caustic_map.rs
+// deposit_atlas and mark_triangle_reach): its triangle's reach bit, then its flux, hit
+// distance and a count in fixed point on the texel under its uv on its triangle's tile,
+// or OFF_SCREEN counted in the work-group's `lc` when the triangle has no tile.
+inline void deposit_atlas_photon(ATLAS_DEPOSIT_PARAMS, __local uint* lc, const Photon* ph) {
+    uint2 reach = triangle_reach_bit(ph->direction);
+    // most photons land on a few triangles: a load first, so that a bit already set costs
+    // no atomic on the hot word
+    if ((triangle_reach[reach.x] & reach.y) == 0u) atomic_or(&triangle_reach[reach.x], reach.y);
+    uint tile = triangle_tiles[ph->direction];
+    if (tile == NO_TILE) {
+        atomic_inc(&lc[COUNTER_OFF_SCREEN]);
+    } else {
+        uint texel = atlas_texel_index(tiles[tile], (float2)(ph->position[0], ph->position[1]),
+                                       ap->width);
+        deposit_photon_texel(PHOTON_MAP_ARGS, lc, texel, ph, ap->flux_quantum,
+                             ap->hit_distance_quantum);
+    }
+}
+
 inline float join_u64_f32(uint lo, uint hi) { return (float)hi * 4294967296.0f + (float)lo; }
 
 // (first column, last column, first row, last row), inclusive.

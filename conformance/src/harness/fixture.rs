@@ -169,6 +169,7 @@ impl Fixture {
             photon_count,
             counters,
             clusters: None,
+            atlas: None,
         }));
         run_and_free(b, "trace_photons", &rec, |b| {
             let n = read_buf(b, photon_count)?[0] as usize;

@@ -58,6 +58,7 @@ impl SceneFeatures {
             surface_store: false,
             fresnel_split: false,
             adaptive: false,
+            atlas_deposit: false,
         }
     }
 }

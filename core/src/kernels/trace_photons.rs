@@ -2,8 +2,8 @@
 
 use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, SceneArgs};
-use crate::device::layout::{Photon, TraceParams};
+use crate::device::handle::{Buf, PhotonMapPlanes, SceneArgs};
+use crate::device::layout::{AtlasParams, AtlasTileTexel, Photon, TraceParams};
 
 /// Emits and traces photons `params.first .. first + count` of light `params.light`, in
 /// the tile order of its photon grid (thread `i` traces grid photon
@@ -15,7 +15,8 @@ use crate::device::layout::{Photon, TraceParams};
 /// after at least one specular interaction to `photons` at `photon_count[0]` (world-space
 /// position, or uv and triangle with the variant's `surface_store`; flux in W per
 /// channel; last segment length) and adds the photon accounting to `counters`
-/// ([`crate::device::layout::counter`]).
+/// ([`crate::device::layout::counter`]). With the variant's `atlas_deposit` the stored
+/// photons go into the caustic atlas instead ([`TracePhotons::atlas`]).
 #[derive(Clone, Copy, Debug)]
 pub struct TracePhotons {
     /// The uploaded scene.
@@ -38,15 +39,44 @@ pub struct TracePhotons {
     /// written to slot `i` of `photons` (`photon_store` says how). Otherwise `None` (the
     /// binding then aliases the scene's triangles, read by nobody).
     pub clusters: Option<Buf<u32>>,
+    /// With the `atlas_deposit` variant: the caustic atlas each stored (texture-space)
+    /// photon is added to, as [`crate::kernels::DepositAtlas`] adds it (same texel, same
+    /// fixed-point sums, counters and reach bit); `photons` and `photon_count` are then
+    /// neither read nor written. Otherwise `None` (the bindings then alias buffers of the
+    /// kernel's other arguments, touched by nobody).
+    pub atlas: Option<AtlasDeposit>,
 }
 
-const BINDINGS: [Binding; 12] = with_scene([
+/// The caustic atlas that the `atlas_deposit` variant of [`TracePhotons`] deposits into:
+/// the arguments of [`crate::kernels::DepositAtlas`] but its photons.
+#[derive(Clone, Copy, Debug)]
+pub struct AtlasDeposit {
+    /// Atlas size and quanta (`photon_capacity` unused).
+    pub params: AtlasParams,
+    /// Per scene triangle: its receiver's tile, or [`crate::device::layout::NO_TILE`].
+    pub triangle_tiles: Buf<u32>,
+    /// The atlas tiles.
+    pub tiles: Buf<AtlasTileTexel>,
+    /// One bit per scene triangle, or-ed with the bits of the stored photons' triangles.
+    pub triangle_reach: Buf<u32>,
+    /// The atlas's fixed-point sums.
+    pub sums: PhotonMapPlanes,
+}
+
+const BINDINGS: [Binding; 19] = with_scene([
     bind("params", Params),
     bind("photons", ReadWrite),
     bind("photon_capacity", Count),
     bind("photon_count", ReadWrite),
     bind("counters", ReadWrite),
     bind("clusters", Read),
+    bind("atlas_params", Params),
+    bind("triangle_tiles", Read),
+    bind("tiles", Read),
+    bind("triangle_reach", ReadWrite),
+    bind("photon_map0", ReadWrite),
+    bind("photon_map1", ReadWrite),
+    bind("photon_map2", ReadWrite),
 ]);
 
 impl KernelDecl for TracePhotons {
@@ -77,7 +107,17 @@ impl KernelDecl for TracePhotons {
         } else {
             1
         };
-        if p.count as u64 * per_photon > self.photons.len as u64 {
+        if self.variant.atlas_deposit != self.atlas.is_some()
+            || (self.variant.atlas_deposit
+                && (!self.variant.surface_store || self.variant.adaptive))
+        {
+            return Err(BackendError::BadArgument(
+                "trace_photons: the atlas_deposit variant (texture space, not adaptive) and \
+                 an atlas go together"
+                    .into(),
+            ));
+        }
+        if !self.variant.atlas_deposit && p.count as u64 * per_photon > self.photons.len as u64 {
             return Err(BackendError::BadArgument(format!(
                 "photon buffer holds {} photons, the batch traces {} (x {per_photon} branches \
                  at most)",
@@ -123,6 +163,28 @@ impl KernelDecl for TracePhotons {
             Some(c) => a.buf("clusters", c, 0)?,
             None => a.buf("clusters", self.scene.triangles, 0)?,
         };
+        match &self.atlas {
+            Some(d) => {
+                let texels = super::texels(d.params.width, d.params.height);
+                a.params("atlas_params", &d.params)?
+                    .buf("triangle_tiles", d.triangle_tiles, 0)?
+                    .buf("tiles", d.tiles, 0)?
+                    .buf("triangle_reach", d.triangle_reach, 4)?
+                    .photon_map(&d.sums, texels)?;
+            }
+            None => {
+                // read by nobody: the scene's triangles for the read-only bindings, the
+                // counters for the read-write ones (a buffer bound twice read-write is
+                // one usage on every backend)
+                a.params("atlas_params", &AtlasParams::default())?
+                    .buf("triangle_tiles", self.scene.triangles, 0)?
+                    .buf("tiles", self.scene.triangles, 0)?
+                    .buf("triangle_reach", self.counters, 0)?;
+                for name in super::PHOTON_MAP_BINDINGS {
+                    a.buf(name, self.counters, 0)?;
+                }
+            }
+        }
         Ok(Some(p.count as u64))
     }
 
@@ -158,17 +220,23 @@ pub struct TraceVariant {
     /// Seed 004's adaptive emission: photons come four by four from a cluster list, and
     /// each is written to its own slot (stored or not) for `refine_clusters` to judge.
     pub adaptive: bool,
+    /// CausticMap's fused pass (with `surface_store`, without `adaptive`): each stored
+    /// photon goes straight into the caustic atlas ([`AtlasDeposit`], the sums, counters
+    /// and reach mask of [`crate::kernels::DepositAtlas`]) instead of into the photon
+    /// buffer: no photon buffer and no second pass.
+    pub atlas_deposit: bool,
 }
 
 impl TraceVariant {
     /// Switch names, in specialization-constant id order.
-    pub const SWITCHES: [&'static str; 6] = [
+    pub const SWITCHES: [&'static str; 7] = [
         "DIELECTRIC",
         "DISPERSION",
         "ABSORPTION",
         "SURFACE_STORE",
         "FRESNEL_SPLIT",
         "ADAPTIVE",
+        "ATLAS_DEPOSIT",
     ];
 
     /// Every feature compiled in (what a frame uses with pruning off).
@@ -179,10 +247,11 @@ impl TraceVariant {
         surface_store: false,
         fresnel_split: false,
         adaptive: false,
+        atlas_deposit: false,
     };
 
     /// Switch values in [`TraceVariant::SWITCHES`] order.
-    pub fn values(&self) -> [u32; 6] {
+    pub fn values(&self) -> [u32; 7] {
         [
             self.dielectric as u32,
             self.dispersion as u32,
@@ -190,6 +259,7 @@ impl TraceVariant {
             self.surface_store as u32,
             self.fresnel_split as u32,
             self.adaptive as u32,
+            self.atlas_deposit as u32,
         ]
     }
 

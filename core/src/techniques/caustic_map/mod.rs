@@ -6,19 +6,22 @@
 //!
 //! 1. photon work, only when the atlas is stale (new lights, settings or seed; never for
 //!    a camera move): per light view plane and per batch `trace_photons` (the
-//!    `SURFACE_STORE` variant: uv and triangle) then `deposit_atlas` (fixed-point sums per
-//!    atlas texel), then `gather_caustic_map` (001's N x N gather, fixed to keep flux, as
+//!    `SURFACE_STORE` and `ATLAS_DEPOSIT` variant: each stored photon's uv and triangle
+//!    go straight into the atlas's fixed-point sums, as `deposit_atlas` would add them;
+//!    no photon buffer, no second pass; AdaptiveCaustics' traversal keeps its slots and
+//!    `refine_clusters` deposits), then `gather_caustic_map` (001's N x N gather, fixed to keep flux, as
 //!    irradiance; and N = 1 for the raw map when asked), or with `gather: density` Sspm's
 //!    density-adaptive gather on the atlas (`photon_count_table`, `gather_footprint`,
 //!    `density_gather` twice, `GatherParams::surface` ATLAS);
 //! 2. every frame: `primary_gbuffer` and `direct_light` (as Sspm), `caustic_map_lookup`
 //!    (the camera's specular ray tree reading the map) and `composite`.
 //!
-//! **Tiles only for reached receivers.** `deposit_atlas` also marks every photon's
-//! triangle in a reach mask. After the photon pass the mask is read back: when the set of
+//! **Tiles only for reached receivers.** The deposit also marks every photon's triangle
+//! in a reach mask. After the photon pass the mask is read back: when the set of
 //! receivers the photons reached differs from the set that has tiles, the atlas is laid
 //! out anew for the reached ones (they share the whole atlas, so their texel density
-//! rises) and the same photons are deposited again. Which receivers the photons reach
+//! rises) and the same photons are traced (counter-based random numbers: the same paths)
+//! and deposited again. Which receivers the photons reach
 //! does not depend on the layout, so the second pass reaches the same set, and a technique
 //! updated into a state lays its atlas out exactly as a fresh one built in that state (the
 //! seam tests compare them bitwise). A receiver no photon reaches owns no tile; a light
@@ -54,7 +57,7 @@ use crate::frame::stats::FrameStats;
 use crate::frame::submitted::RecordedFrame;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
-    CausticMapLookup, Composite, DensityGather, DepositAtlas, DirectLight, GatherCausticMap,
+    AtlasDeposit, CausticMapLookup, Composite, DensityGather, DirectLight, GatherCausticMap,
     GatherFootprint, PhotonCountTable, PrimaryGbuffer, TracePhotons, TraceVariant,
 };
 use crate::recording::{Recording, Step};
@@ -399,6 +402,9 @@ impl CausticMap {
         variant.fresnel_split =
             settings.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
         variant.adaptive = adaptive.is_some();
+        // CausticMap's photons go straight into the atlas; the adaptive traversal keeps
+        // its slots for refine_clusters to judge
+        variant.atlas_deposit = adaptive.is_none();
         let mut t = CausticMap {
             name: if adaptive.is_some() {
                 "adaptive-caustics"
@@ -510,12 +516,13 @@ impl CausticMap {
             s.max_photons_per_batch,
             self.max_buffer_bytes,
         );
-        // photons a batch traces: the split stores up to split_budget per photon
-        let cap = if self.variant.fresnel_split {
-            cap.max(s.split_budget)
-        } else if self.adaptive.is_some() {
-            // the traversal traces into its own slots
+        // photons a batch stores: none with the fused deposit (each goes into the atlas)
+        // nor with the adaptive traversal (it traces into its own slots)
+        let cap = if self.variant.atlas_deposit || self.adaptive.is_some() {
             1
+        } else if self.variant.fresnel_split {
+            // the split stores up to split_budget per photon
+            cap.max(s.split_budget)
         } else {
             cap
         };
@@ -768,9 +775,18 @@ impl CausticMap {
                 "adaptive emission: refine_clusters deposits the output clusters",
             );
         } else {
-            for name in ["trace_photons", "deposit_atlas"] {
-                pass(name, photons, &stale, why_no_atlas);
-            }
+            pass(
+                "trace_photons",
+                photons,
+                &format!("each stored photon straight into the atlas, {stale}"),
+                why_no_atlas,
+            );
+            pass(
+                "deposit_atlas",
+                false,
+                "",
+                "trace_photons deposits each stored photon into the atlas (the fused pass)",
+            );
         }
         let density = self.atlas.is_some_and(|a| a.density.is_some());
         let raw_map = self.atlas.is_some_and(|a| a.raw_map.is_some());
@@ -1065,15 +1081,16 @@ impl CausticMap {
             }
             stats.photons_emitted += n;
             let mut first = 0u64;
-            let per_batch = if self.variant.fresnel_split {
-                (a.photons.len / s.split_budget).max(1) as u64
-            } else {
-                a.photons.len as u64
-            };
+            // the fused deposit stores nothing: a batch is bounded by the settings and the
+            // largest launch only
+            let per_batch = crate::frame::allocation::photons_per_batch(
+                n,
+                s.max_photons_per_batch,
+                self.max_buffer_bytes,
+            ) as u64;
             while first < n {
                 let count = (n - first).min(per_batch) as u32;
                 let mut rec = Recording::new();
-                rec.clear(a.photon_count);
                 rec.kernel(TracePhotons {
                     scene: self.scene,
                     variant: self.variant,
@@ -1093,16 +1110,13 @@ impl CausticMap {
                     photon_count: a.photon_count,
                     counters: a.counters,
                     clusters: None,
-                });
-                rec.kernel(DepositAtlas {
-                    params: deposit,
-                    triangle_tiles: a.triangle_tiles,
-                    tiles: a.tiles,
-                    photons: a.photons,
-                    photon_count: a.photon_count,
-                    counters: a.counters,
-                    triangle_reach: a.triangle_reach,
-                    atlas: a.sums,
+                    atlas: Some(AtlasDeposit {
+                        params: deposit,
+                        triangle_tiles: a.triangle_tiles,
+                        tiles: a.tiles,
+                        triangle_reach: a.triangle_reach,
+                        sums: a.sums,
+                    }),
                 });
                 Self::run(backend, &rec, stats)?;
                 stats.batches += 1;

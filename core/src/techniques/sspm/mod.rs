@@ -888,6 +888,7 @@ impl Sspm {
                     photon_count: p.photon_count,
                     counters: p.counters,
                     clusters: None,
+                    atlas: None,
                 });
                 rec.kernel(DepositScreen {
                     params: deposit_params,
