@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp session13 session14 session14gi session14tr session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp session13 session14 session14gi session14tr session15 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -436,6 +436,16 @@ if has session14tr; then
         CAUSTICA_BENCH_GATHERS=box CAUSTICA_BENCH_FRAMES=10 ./caustic_map_frame --bench
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl CAUSTICA_SKIP_BACKENDS=wgpu,vulkan ./cross_backend trace_photons sspm caustic --test-threads=1
     [ -x ./stiff_cases ] && run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl CAUSTICA_SKIP_BACKENDS=wgpu,vulkan ./stiff_cases --test-threads=1
+fi
+if has session15; then
+    # CausticMap's fused trace (trace_photons' ATLAS_DEPOSIT variant: each stored photon
+    # straight into the atlas, no deposit_atlas pass): its frames at seed 001's settings,
+    # then its kernel, frame and stiff checks on every backend.
+    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+    run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend caustic trace_photons --test-threads=1
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./caustic_map_frames --test-threads=1
+    [ -x ./stiff_cases ] && run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
