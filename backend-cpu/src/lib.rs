@@ -21,11 +21,11 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
-    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
+    AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
+    DepositAtlas, DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
+    PrepareScene, PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
-    AtlasDeposit, TracePhotons,
+    TracePhotons,
 };
 use caustica_core::recording::{Recording, Step};
 use std::collections::HashMap;
@@ -634,7 +634,9 @@ impl CpuBackend {
     ) -> Result<(), BackendError> {
         use kernels::caustic_map;
         let c = {
-            let tt = self.get(d.triangle_tiles.id)?.as_slice(d.triangle_tiles.len)?;
+            let tt = self
+                .get(d.triangle_tiles.id)?
+                .as_slice(d.triangle_tiles.len)?;
             let tl = self.get(d.tiles.id)?.as_slice(d.tiles.len)?;
             let [a, b, c] = d.sums.planes;
             let atomics = [

@@ -19,9 +19,9 @@
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
-    check_density_gather, check_deposit, check_direct, check_gather, check_gbuffer,
-    check_kernel_cases, check_photon_gi, check_screen_target, check_temporal_blend, check_trace,
-    KernelCheck,
+    check_density_gather, check_deposit, check_direct, check_fused_trace, check_gather,
+    check_gbuffer, check_kernel_cases, check_photon_gi, check_screen_target, check_temporal_blend,
+    check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -33,8 +33,8 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
-    AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather, DepositAtlas,
-    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
+    AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
+    DepositAtlas, DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
     PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
     TracePhotons,
@@ -97,6 +97,12 @@ enum Mutation {
     /// `deposit_atlas` forgets the lowest reached triangle of every word of its reach mask
     /// (CausticMap would give that receiver no tile).
     AtlasReachLost,
+    /// `trace_photons`' fused pass (`atlas_deposit`) loses one fixed-point unit of red in
+    /// every atlas texel it touches.
+    FusedDepositOffByOne,
+    /// `trace_photons`' fused pass forgets the lowest reached triangle of every word of
+    /// its reach mask.
+    FusedReachLost,
     /// `gather_caustic_map` 1e-4 too high.
     MapGatherHigh,
     /// `caustic_map_lookup` 1e-3 too high.
@@ -432,6 +438,31 @@ impl Mutant {
                     *w &= w.wrapping_sub(1);
                 }
             }),
+            (
+                Mutation::FusedDepositOffByOne,
+                Kernel::TracePhotons(TracePhotons {
+                    atlas: Some(AtlasDeposit { sums, .. }),
+                    ..
+                }),
+            ) => {
+                let (k, _) = deposit_word(0, 0);
+                self.modify::<u32>(sums.planes[k].id, |m| {
+                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
+                        t[0] -= 1;
+                    }
+                })
+            }
+            (
+                Mutation::FusedReachLost,
+                Kernel::TracePhotons(TracePhotons {
+                    atlas: Some(AtlasDeposit { triangle_reach, .. }),
+                    ..
+                }),
+            ) => self.modify::<u32>(triangle_reach.id, |v| {
+                for w in v {
+                    *w &= w.wrapping_sub(1);
+                }
+            }),
             (Mutation::MapGatherHigh, Kernel::GatherCausticMap(GatherCausticMap { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
@@ -636,6 +667,7 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
             Box::new(check_caustic_map),
         ),
+        ("trace_photons (atlas deposit)", Box::new(check_fused_trace)),
         (
             "trace_photons (adaptive) + refine_clusters",
             Box::new(check_adaptive_caustics),
@@ -799,6 +831,11 @@ fn each_fault_fails_the_check_of_its_kernel() {
             Mutation::AtlasReachLost,
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",
         ),
+        (
+            Mutation::FusedDepositOffByOne,
+            "trace_photons (atlas deposit)",
+        ),
+        (Mutation::FusedReachLost, "trace_photons (atlas deposit)"),
         (
             Mutation::MapGatherHigh,
             "deposit_atlas + gather_caustic_map + caustic_map_lookup",

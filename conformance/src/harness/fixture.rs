@@ -14,7 +14,7 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons, TraceVariant,
 };
 use caustica_core::math::density_gather::{accumulate_source_index, source_index_len};
 use caustica_core::recording::{Recording, Step};
@@ -150,20 +150,47 @@ impl Fixture {
         k: usize,
         edit: impl Fn(&mut TraceParams),
     ) -> Result<(Vec<Photon>, Vec<u32>), String> {
+        self.run_trace_as(b, k, self.trace_variant(), edit)
+    }
+
+    /// The `trace_photons` variant a frame of this scene runs (the plan's).
+    pub fn trace_variant(&self) -> TraceVariant {
+        caustica_core::frame::plan::SceneFeatures::of(&self.scene).trace_variant()
+    }
+
+    /// The one batch of every photon of light `domains[k]`.
+    pub fn trace_batch(&self, k: usize) -> TraceParams {
         let (light, d) = &self.constants.domains[k];
         let count = self.settings.photons_w * self.settings.photons_h;
-        let mut params = self
-            .constants
-            .trace_params(&self.settings, *light, d, 0, count);
+        self.constants
+            .trace_params(&self.settings, *light, d, 0, count)
+    }
+
+    /// [`Fixture::run_trace_with`] with compiled variant `variant` (without
+    /// `atlas_deposit`: the photons are read back; a split stores up to
+    /// `split_budget` photons per emitted one).
+    pub fn run_trace_as(
+        &self,
+        b: &mut dyn Backend,
+        k: usize,
+        variant: TraceVariant,
+        edit: impl Fn(&mut TraceParams),
+    ) -> Result<(Vec<Photon>, Vec<u32>), String> {
+        let mut params = self.trace_batch(k);
         edit(&mut params);
+        let count = params.count;
+        let capacity = if variant.fresnel_split {
+            count * params.split_budget.max(1)
+        } else {
+            count
+        };
         let mut rec = Recording::new();
-        let photons = rec.create(count, "photons");
+        let photons = rec.create(capacity, "photons");
         let photon_count = rec.create(1, "photon count");
         let counters = rec.create(counter::WORDS as u32, "counters");
         rec.kernel(Kernel::TracePhotons(TracePhotons {
             scene: self.args,
-            // the variant a frame of this scene runs (the plan's)
-            variant: caustica_core::frame::plan::SceneFeatures::of(&self.scene).trace_variant(),
+            variant,
             params,
             photons,
             photon_count,
@@ -174,7 +201,7 @@ impl Fixture {
         run_and_free(b, "trace_photons", &rec, |b| {
             let n = read_buf(b, photon_count)?[0] as usize;
             let mut ph = read_buf(b, photons)?;
-            ph.truncate(n.min(count as usize));
+            ph.truncate(n.min(capacity as usize));
             Ok((ph, read_buf(b, counters)?))
         })
     }

@@ -26,6 +26,15 @@
 //!   `DIRECT_AGREEMENT` of the pixels, where a ray that grazes an edge may take the other
 //!   triangle) ending in a bilinear lookup of four texels (7 roundings); under both
 //!   reflectance models (exact and Schlick).
+//!
+//! [`check_fused_trace`] checks CausticMap's fused pass, `trace_photons`' `atlas_deposit`
+//! variant, on the backend under test against the CPU's `deposit_atlas` of the photons
+//! that the same backend's texture-space trace stores (the variant without
+//! `atlas_deposit`: the same code up to where a stored photon goes, and that trace is
+//! `check_trace`'s). The deposit is integer atomics of quanta that are powers of two
+//! (`x / 2^k` is exact under any division bound), so the atlas sums, the reach mask and
+//! the counters (the trace's plus the deposit's) must be **bitwise** equal; under the
+//! stochastic and, on scenes with dielectrics, the deterministic Fresnel split.
 
 use super::density_gather::{compare, flush_allowance, tap_sum};
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
@@ -36,8 +45,8 @@ use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
 use caustica_core::frame::caustic_atlas::{atlas_layout, atlas_receivers, AtlasLayout};
 use caustica_core::kernels::{
-    CausticMapLookup, DensityGather, DepositAtlas, GatherCausticMap, GatherFootprint,
-    PhotonCountTable,
+    AtlasDeposit, CausticMapLookup, DensityGather, DepositAtlas, GatherCausticMap, GatherFootprint,
+    PhotonCountTable, TracePhotons, TraceVariant,
 };
 use caustica_core::math::density_gather::{
     accumulate_source_index, atlas_edge_texel, source_index_len,
@@ -102,7 +111,9 @@ type Deposit = (Vec<DepositTexel>, Vec<u32>, Vec<u32>);
 /// Runs `deposit_atlas` on `b`.
 fn run_deposit(b: &mut dyn Backend, l: &AtlasLayout, ph: &[Photon]) -> Result<Deposit, String> {
     let mut rec = Recording::new();
-    let photons = rec.upload(ph, "photons");
+    // a zero-length buffer is not a valid device buffer everywhere: keep one slot
+    let one = [Photon::default()];
+    let photons = rec.upload(if ph.is_empty() { &one } else { ph }, "photons");
     let count = rec.upload(&[ph.len() as u32], "photon count");
     let counters = rec.upload(&[0u32; counter::WORDS], "counters");
     let atlas = rec.create_photon_map(l.texels.len() as u32);
@@ -131,6 +142,126 @@ fn run_deposit(b: &mut dyn Backend, l: &AtlasLayout, ph: &[Photon]) -> Result<De
             read_buf(b, triangle_reach)?,
         ))
     })
+}
+
+/// Runs the fused trace (`variant` with `atlas_deposit`) of light `domains[k]` on `b`
+/// into a cleared atlas of layout `l`.
+fn run_fused_trace(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    k: usize,
+    variant: TraceVariant,
+    split_budget: u32,
+) -> Result<Deposit, String> {
+    let mut rec = Recording::new();
+    // the fused pass stores no photon: one slot, as CausticMap has
+    let photons = rec.create(1, "photons");
+    let photon_count = rec.create(1, "photon count");
+    let counters = rec.create(counter::WORDS as u32, "counters");
+    let sums = rec.create_photon_map(l.texels.len() as u32);
+    rec.clear_photon_map(&sums);
+    let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
+    let tiles = rec.upload(&l.tiles, "tiles");
+    let triangle_reach = rec.create(
+        triangle_reach_words(l.triangle_tiles.len() as u32),
+        "triangle reach",
+    );
+    rec.clear(triangle_reach);
+    rec.kernel(TracePhotons {
+        scene: fx.args,
+        variant,
+        params: TraceParams {
+            split_budget,
+            ..fx.trace_batch(k)
+        },
+        photons,
+        photon_count,
+        counters,
+        clusters: None,
+        atlas: Some(AtlasDeposit {
+            params: params(l, 1, 1),
+            triangle_tiles,
+            tiles,
+            triangle_reach,
+            sums,
+        }),
+    });
+    run_and_free(b, "trace_photons (atlas deposit)", &rec, |b| {
+        Ok((
+            read_photon_map(b, &sums)?,
+            read_buf(b, counters)?,
+            read_buf(b, triangle_reach)?,
+        ))
+    })
+}
+
+/// Branches per emitted photon of the checked deterministic split.
+const CHECK_SPLIT_BUDGET: u32 = 4;
+
+/// The fused trace on every light of the fixture's scene (see the module doc).
+pub fn check_fused_trace(
+    fx: &Fixture,
+    _inputs: &ReferenceInputs,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("trace_photons (atlas deposit)");
+    let Some(l) = layout(fx) else {
+        return Ok(v);
+    };
+    let stochastic = TraceVariant {
+        surface_store: true,
+        ..fx.trace_variant()
+    };
+    let mut variants = vec![(stochastic, 1)];
+    if stochastic.dielectric {
+        let split = TraceVariant {
+            fresnel_split: true,
+            ..stochastic
+        };
+        variants.push((split, CHECK_SPLIT_BUDGET));
+    }
+    for (variant, budget) in variants {
+        for k in 0..fx.constants.domains.len() {
+            let label = format!(
+                "light domain {k}{}",
+                if variant.fresnel_split { ", split" } else { "" }
+            );
+            let (photons, trace_counters) =
+                fx.run_trace_as(c, k, variant, |p| p.split_budget = budget)?;
+            let fused = TraceVariant {
+                atlas_deposit: true,
+                ..variant
+            };
+            let (sums, counters, reach) = run_fused_trace(fx, c, &l, k, fused, budget)?;
+            let (es, deposit_counters, er) = run_deposit(r, &l, &photons)?;
+            // the trace and the deposit count disjoint words (their sum is the fused one's)
+            let ec: Vec<u32> = trace_counters
+                .iter()
+                .zip(&deposit_counters)
+                .map(|(t, d)| t.wrapping_add(*d))
+                .collect();
+            v.check(reach == er, || {
+                let differ = er.iter().zip(&reach).filter(|(a, b)| a != b).count();
+                format!("{label}: {differ} words of the triangle reach mask differ")
+            });
+            v.check(counters == ec, || {
+                format!("{label}: counters differ: expected {ec:?}, fused {counters:?}")
+            });
+            let equal = es.iter().zip(&sums).filter(|(a, b)| a == b).count();
+            v.check(equal == es.len(), || {
+                format!(
+                    "{label}: {} of {} atlas texels differ from the deposit of the trace's \
+                     {} photons (integer atomics must agree bitwise)",
+                    es.len() - equal,
+                    es.len(),
+                    photons.len()
+                )
+            });
+        }
+    }
+    Ok(v)
 }
 
 /// Runs `gather_caustic_map` of width `n` on `b` over `sums`; `counted`: with every

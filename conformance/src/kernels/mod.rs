@@ -33,7 +33,7 @@ pub mod trace_photons;
 pub use adaptive_caustics::{check_adaptive_caustics, check_screen_target};
 pub use atrous_filter::check_atrous_filter;
 pub use bilateral_gather::check_gather;
-pub use caustic_map::check_caustic_map;
+pub use caustic_map::{check_caustic_map, check_fused_trace};
 pub use composite::check_composite;
 pub use density_gather::check_density_gather;
 pub use deposit_screen::check_deposit;
