@@ -439,7 +439,7 @@ if has session14tr; then
 fi
 if has session15; then
     # CausticMap's fused trace (trace_photons' ATLAS_DEPOSIT variant: each stored photon
-    # straight into the atlas, no deposit_atlas pass): its frames at seed 001's settings,
+    # straight into the atlas, no separate deposit pass): its frames at seed 001's settings,
     # then its kernel, frame and stiff checks on every backend.
     run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench

@@ -22,8 +22,8 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
-    DepositAtlas, DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
-    PrepareScene, PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
+    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
     TracePhotons,
 };
@@ -159,7 +159,7 @@ impl CpuBackend {
                     .counters
                     .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 if let Some(d) = atlas.filter(|_| variant.atlas_deposit) {
-                    // the fused pass: the stored photons into the atlas, as deposit_atlas
+                    // the fused pass: the stored photons into the atlas, as caustic_map::deposit_atlas adds them
                     return self.deposit_atlas_photons(&d, &result.photons, *counters);
                 }
                 if result.photons.len() > photons.len as usize {
@@ -353,27 +353,6 @@ impl CpuBackend {
                     self.get_mut(output_count.id)?.as_mut_slice::<u32>(1)?[0] = n;
                 }
                 Ok(())
-            }
-            Kernel::DepositAtlas(DepositAtlas {
-                params,
-                triangle_tiles,
-                tiles,
-                photons,
-                photon_count,
-                counters,
-                triangle_reach,
-                atlas,
-            }) => {
-                let n = get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
-                let ph = get(photons.id)?.as_slice::<Photon>(photons.len)?[..n as usize].to_vec();
-                let d = AtlasDeposit {
-                    params: *params,
-                    triangle_tiles: *triangle_tiles,
-                    tiles: *tiles,
-                    triangle_reach: *triangle_reach,
-                    sums: *atlas,
-                };
-                self.deposit_atlas_photons(&d, &ph, *counters)
             }
             Kernel::GatherCausticMap(GatherCausticMap {
                 params,
@@ -623,9 +602,9 @@ impl CpuBackend {
         })
     }
 
-    /// `deposit_atlas` of texture-space photons `ph` into atlas `d`: the fixed-point sums,
+    /// The atlas deposit of texture-space photons `ph` into atlas `d`: the fixed-point sums,
     /// the reach bits of their triangles and the deposit's counters (added to
-    /// `counters`). Serves `deposit_atlas` and the fused `atlas_deposit` trace alike.
+    /// `counters`). The fused `atlas_deposit` trace's second half.
     fn deposit_atlas_photons(
         &mut self,
         d: &AtlasDeposit,

@@ -1,6 +1,6 @@
 // refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one work-item per traced
 // cluster of the batch decides its fate from its four photon slots (discarded, output
-// into the atlas as deposit_atlas deposits, or refined into four children appended to
+// into the atlas as the fused trace deposits, or refined into four children appended to
 // the next level's list). With the screen target (world-space slots) a photon's texel is
 // its pixel and an output cluster's stored photons are appended to output_photons for
 // deposit_screen. Mirror of backend-cpu/src/kernels/refine_clusters.rs; the atlas

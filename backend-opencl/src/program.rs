@@ -101,7 +101,6 @@ pub const KERNELS: &[(&str, &str)] = &[
         include_str!("../kernels/density_gather.cl"),
     ),
     ("composite", include_str!("../kernels/composite.cl")),
-    ("deposit_atlas", include_str!("../kernels/deposit_atlas.cl")),
     (
         "gather_caustic_map",
         include_str!("../kernels/gather_caustic_map.cl"),

@@ -5,7 +5,7 @@
 //!
 //! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
 //! after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames
-//! that remake the atlas (a new seed each) of: the photon work (every `trace_photons`, `deposit_atlas` / `refine_clusters` and
+//! that remake the atlas (a new seed each) of: the photon work (every `trace_photons`, `refine_clusters` and
 //! gather pass, device time where the backend has timestamps), the whole frame (host wall
 //! time), the photons traced and the traversal's steps; and per level the photons traced
 //! and the time of its steps (`trace_photons` + `refine_clusters`, `AdaptiveStats::
@@ -29,7 +29,6 @@ use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
     "trace_photons",
-    "deposit_atlas",
     "refine_clusters",
     "gather_caustic_map",
     "photon_count_table",

@@ -9,7 +9,7 @@
 //! (density, the default; 001's box) and backend, after warm-up frames
 //! (`CAUSTICA_BENCH_WARMUP_MS`, default 3000, then one more): the median over frames that
 //! remake the atlas (a new seed each) of every pass and of the budget line emission +
-//! trace + splat + gather (`trace_photons`, `deposit_atlas`, and `gather_caustic_map` or
+//! trace + splat + gather (`trace_photons`, which deposits into the atlas, and `gather_caustic_map` or
 //! the density gather's `photon_count_table`, `gather_footprint`, `density_gather`; target
 //! on the H200: <= 2 ms at 2048^2 photons and a 2048^2 map), and the median host wall time
 //! of a camera-only frame (the atlas reused: G-buffer, direct light, lookup, composite).
@@ -34,7 +34,6 @@ use std::collections::BTreeMap;
 
 const BUDGET_PASSES: &[&str] = &[
     "trace_photons",
-    "deposit_atlas",
     "gather_caustic_map",
     "photon_count_table",
     "gather_footprint",

@@ -91,7 +91,7 @@ fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
 }
 
 /// CausticMap's fused pass (`trace_photons`' `atlas_deposit` variant) on each backend:
-/// bitwise the CPU's `deposit_atlas` of the photons that backend's own texture-space trace
+/// bitwise the CPU's atlas deposit of the photons that backend's own texture-space trace
 /// stores (`kernels::caustic_map::check_fused_trace` argues it).
 #[test]
 fn caustic_map_fused_trace_deposits_what_its_trace_stores() {

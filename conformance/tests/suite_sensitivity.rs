@@ -34,7 +34,7 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
-    DepositAtlas, DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
+    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
     PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
     TracePhotons,
@@ -92,16 +92,11 @@ enum Mutation {
     DirectHigh,
     /// `composite` one ulp off in one channel.
     CompositeUlp,
-    /// `deposit_atlas` loses one fixed-point unit of red in every atlas texel it touches.
-    AtlasDepositOffByOne,
-    /// `deposit_atlas` forgets the lowest reached triangle of every word of its reach mask
-    /// (CausticMap would give that receiver no tile).
-    AtlasReachLost,
     /// `trace_photons`' fused pass (`atlas_deposit`) loses one fixed-point unit of red in
     /// every atlas texel it touches.
     FusedDepositOffByOne,
     /// `trace_photons`' fused pass forgets the lowest reached triangle of every word of
-    /// its reach mask.
+    /// its reach mask (CausticMap would give that receiver no tile).
     FusedReachLost,
     /// `gather_caustic_map` 1e-4 too high.
     MapGatherHigh,
@@ -422,22 +417,6 @@ impl Mutant {
             (Mutation::DensityGatherHigh, Kernel::DensityGather(DensityGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
-            (Mutation::AtlasDepositOffByOne, Kernel::DepositAtlas(DepositAtlas { atlas, .. })) => {
-                let (k, _) = deposit_word(0, 0);
-                self.modify::<u32>(atlas.planes[k].id, |m| {
-                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
-                        t[0] -= 1;
-                    }
-                })
-            }
-            (
-                Mutation::AtlasReachLost,
-                Kernel::DepositAtlas(DepositAtlas { triangle_reach, .. }),
-            ) => self.modify::<u32>(triangle_reach.id, |v| {
-                for w in v {
-                    *w &= w.wrapping_sub(1);
-                }
-            }),
             (
                 Mutation::FusedDepositOffByOne,
                 Kernel::TracePhotons(TracePhotons {
@@ -664,7 +643,7 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
         ("photon gi kernels", Box::new(check_photon_gi)),
         ("composite", Box::new(|_, i, r, c| check_composite(i, r, c))),
         (
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            "gather_caustic_map + caustic_map_lookup",
             Box::new(check_caustic_map),
         ),
         ("trace_photons (atlas deposit)", Box::new(check_fused_trace)),
@@ -824,38 +803,30 @@ fn each_fault_fails_the_check_of_its_kernel() {
         (Mutation::DirectHigh, "direct_light"),
         (Mutation::CompositeUlp, "composite"),
         (
-            Mutation::AtlasDepositOffByOne,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
-        ),
-        (
-            Mutation::AtlasReachLost,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
-        ),
-        (
             Mutation::FusedDepositOffByOne,
             "trace_photons (atlas deposit)",
         ),
         (Mutation::FusedReachLost, "trace_photons (atlas deposit)"),
         (
             Mutation::MapGatherHigh,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            "gather_caustic_map + caustic_map_lookup",
         ),
         (
             Mutation::MapLookupHigh,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            "gather_caustic_map + caustic_map_lookup",
         ),
         // the density gather run on the atlas (CausticMap's default gather)
         (
             Mutation::CountTableOffByOne,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            "gather_caustic_map + caustic_map_lookup",
         ),
         (
             Mutation::FootprintHigh,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            "gather_caustic_map + caustic_map_lookup",
         ),
         (
             Mutation::DensityGatherHigh,
-            "deposit_atlas + gather_caustic_map + caustic_map_lookup",
+            "gather_caustic_map + caustic_map_lookup",
         ),
         (
             Mutation::AdaptiveSlotsRotated,

@@ -106,7 +106,6 @@ pub const KERNELS: &[(&str, &str)] = &[
         include_str!("../wgsl/density_gather.wgsl"),
     ),
     ("composite", include_str!("../wgsl/composite.wgsl")),
-    ("deposit_atlas", include_str!("../wgsl/deposit_atlas.wgsl")),
     (
         "gather_caustic_map",
         include_str!("../wgsl/gather_caustic_map.wgsl"),

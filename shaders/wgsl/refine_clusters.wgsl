@@ -2,7 +2,7 @@
 // refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one thread per traced
 // cluster of the batch. Its four photon slots (trace_photons' ADAPTIVE variant) decide
 // its fate (core::math::photon_clusters::cluster_fate): discarded, output (its stored
-// photons deposited into the atlas exactly as deposit_atlas does) or refined (four
+// photons deposited into the atlas exactly as the fused trace does) or refined (four
 // children appended to the next level's list). With the screen target (world-space
 // slots) a photon's texel is its pixel and an output cluster's stored photons are
 // appended to output_photons for deposit_screen. Mirror of

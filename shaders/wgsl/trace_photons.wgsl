@@ -26,8 +26,8 @@ override FRESNEL_SPLIT: bool = false;
 // slot i, stored or not (core's photon_store says how); photon_count is left untouched.
 override ADAPTIVE: bool = false;
 // CausticMap's fused pass (core's TraceVariant::atlas_deposit, with SURFACE_STORE): a
-// stored photon goes straight into the caustic atlas (atlas_deposit.wgsl, as deposit_atlas
-// adds it) instead of into the photon buffer.
+// stored photon goes straight into the caustic atlas (atlas_deposit.wgsl, as the CPU's
+// caustic_map::deposit_atlas adds it) instead of into the photon buffer.
 override ATLAS_DEPOSIT: bool = false;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;

@@ -1,5 +1,5 @@
-//! CausticMap's kernels (seed 001): `deposit_atlas` (texture-space photons into the
-//! atlas's fixed-point sums), `gather_caustic_map` (the flux-keeping N x N gather as
+//! CausticMap's kernels (seed 001): the atlas deposit (texture-space photons into the
+//! atlas's fixed-point sums: `trace_photons`' `atlas_deposit` variant), `gather_caustic_map` (the flux-keeping N x N gather as
 //! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
 //! `math::map_gather`; these are loops over it.
 
@@ -10,8 +10,8 @@ use super::direct_light::specular_tree;
 use super::Counters;
 use crate::traversal::SceneView;
 use caustica_core::device::layout::{
-    camera_ray, counter, AtlasParams, AtlasTexel, AtlasTileTexel, MapLookupParams, Photon,
-    PhotonMapView, NO_TILE,
+    camera_ray, counter, deposit_from_planes, AtlasParams, AtlasTexel, AtlasTileTexel,
+    DepositTexel, MapLookupParams, Photon, PhotonMapView, DEPOSIT_PLANE_WORDS, NO_TILE,
 };
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::map_gather::{
@@ -23,6 +23,7 @@ use caustica_core::math::photon_clusters::{footprint_share, footprint_window};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
+use std::sync::atomic::AtomicU64;
 
 /// Deposits every texture-space photon into the atlas sums (flux r, g, b in flux quanta,
 /// hit distance in its quanta, a count), and returns the counters it adds to (off
@@ -53,7 +54,54 @@ pub fn deposit_atlas(
         .reduce(Counters::default, Counters::merge)
 }
 
-/// Sets the reach bit of each texture-space photon's triangle (`deposit_atlas`; tile or
+/// What [`deposit_atlas_fresh`] returns: the atlas sums, the counters in the device's
+/// word layout ([`counter`]), the triangle reach mask.
+pub type AtlasDepositResult = (Vec<DepositTexel>, Vec<u32>, Vec<u32>);
+
+/// [`deposit_atlas`] and [`mark_triangle_reach`] of `photons` into a fresh atlas of
+/// `texels` texels and a fresh reach mask of `reach_words` words: the CPU's deposit of
+/// photons another backend traced (conformance's check of the fused trace).
+pub fn deposit_atlas_fresh(
+    p: &AtlasParams,
+    (triangle_tiles, tiles): (&[u32], &[AtlasTileTexel]),
+    photons: &[Photon],
+    texels: usize,
+    reach_words: usize,
+) -> AtlasDepositResult {
+    let planes: [Vec<AtomicU64>; 3] = std::array::from_fn(|k| {
+        (0..texels * DEPOSIT_PLANE_WORDS[k] / 2)
+            .map(|_| AtomicU64::new(0))
+            .collect()
+    });
+    let c = deposit_atlas(
+        p,
+        triangle_tiles,
+        tiles,
+        photons,
+        [&planes[0], &planes[1], &planes[2]],
+    );
+    // a u64 of the planes is the (lo, hi) pair of u32 words the devices hold
+    let words = planes.map(|plane| {
+        plane
+            .into_iter()
+            .flat_map(|a| {
+                let v = a.into_inner();
+                [v as u32, (v >> 32) as u32]
+            })
+            .collect::<Vec<u32>>()
+    });
+    let mut counters = vec![0u32; counter::WORDS];
+    c.add_to(&mut counters);
+    let mut reach = vec![0u32; reach_words];
+    mark_triangle_reach(photons, &mut reach);
+    (
+        deposit_from_planes([&words[0], &words[1], &words[2]]),
+        counters,
+        reach,
+    )
+}
+
+/// Sets the reach bit of each texture-space photon's triangle (the atlas deposit; tile or
 /// not, a triangle outside the mask is skipped).
 pub fn mark_triangle_reach(photons: &[Photon], reach: &mut [u32]) {
     for ph in photons {
@@ -66,7 +114,7 @@ pub fn mark_triangle_reach(photons: &[Photon], reach: &mut [u32]) {
 
 /// Adds photon `ph` to atlas texel `texel` (fixed point, `(flux, hit distance)` quanta),
 /// or counts it as off the atlas when `texel` is `NO_TILE` (its triangle has no tile):
-/// `deposit_atlas`'s and `refine_clusters`' deposit.
+/// the atlas deposit's and `refine_clusters`' deposit.
 pub fn deposit_atlas_texel(
     map: &MapPlanes,
     texel: u32,

@@ -1,6 +1,6 @@
 //! `refine_clusters` (seed 004 section 3.2, AdaptiveCaustics): one step of the adaptive
 //! traversal over a batch of traced clusters. The decisions are core's
-//! `math::photon_clusters`; the atlas deposit is `deposit_atlas`'s, the screen target's
+//! `math::photon_clusters`; the atlas deposit is the fused trace's (`caustic_map::deposit_atlas_texel`), the screen target's
 //! photons are `deposit_screen`'s input.
 
 use super::caustic_map::{

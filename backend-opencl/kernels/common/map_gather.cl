@@ -11,8 +11,8 @@ inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
 // math::map_gather::triangle_reach_bit: (word, bit) of scene triangle t in a reach mask
 inline uint2 triangle_reach_bit(uint t) { return (uint2)(t >> 5, 1u << (t & 31u)); }
 
-// The caustic atlas a texture-space photon is deposited into (deposit_atlas, and the
-// ATLAS_DEPOSIT variant of trace_photons).
+// The caustic atlas a texture-space photon is deposited into (the ATLAS_DEPOSIT variant
+// of trace_photons).
 #define ATLAS_DEPOSIT_PARAMS                                                                  \
     __global const AtlasParams *ap, __global const uint *triangle_tiles,                    \
         __global const uint4 *tiles, volatile __global uint *triangle_reach,                \

@@ -308,7 +308,7 @@ pub fn receiver_owners(
     Ok(owner)
 }
 
-/// The atlas as the kernels read it (`deposit_atlas`, `gather_caustic_map`,
+/// The atlas as the kernels read it (`trace_photons`' atlas deposit, `gather_caustic_map`,
 /// `caustic_map_lookup`): the plan, each tile, each scene triangle's tile and each atlas
 /// texel's world area and tile.
 #[derive(Clone, Debug)]

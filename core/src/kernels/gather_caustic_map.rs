@@ -19,7 +19,7 @@ pub struct GatherCausticMap {
     pub texels: Buf<AtlasTexel>,
     /// The atlas tiles.
     pub tiles: Buf<AtlasTileTexel>,
-    /// The atlas's fixed-point sums (`deposit_atlas`).
+    /// The atlas's fixed-point sums (`trace_photons`' atlas deposit).
     pub atlas: PhotonMapPlanes,
     /// The caustic map: irradiance per atlas texel.
     pub out: ImageBuf,

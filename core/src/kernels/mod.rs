@@ -20,7 +20,6 @@ mod bilateral_gather;
 mod caustic_map_lookup;
 mod composite;
 mod density_gather;
-mod deposit_atlas;
 mod deposit_screen;
 mod direct_light;
 mod gather_caustic_map;
@@ -44,7 +43,6 @@ pub use bilateral_gather::BilateralGather;
 pub use caustic_map_lookup::CausticMapLookup;
 pub use composite::Composite;
 pub use density_gather::DensityGather;
-pub use deposit_atlas::DepositAtlas;
 pub use deposit_screen::DepositScreen;
 pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
 pub use gather_caustic_map::GatherCausticMap;
@@ -498,7 +496,6 @@ kernel_list! {
     Composite => composite,
     TemporalBlend => temporal_blend,
     AtrousFilter => atrous_filter,
-    DepositAtlas => deposit_atlas,
     GatherCausticMap => gather_caustic_map,
     CausticMapLookup => caustic_map_lookup,
     RefineClusters => refine_clusters,

@@ -11,7 +11,7 @@ use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams}
 /// when none of its photons met a caster and (with `params.relevance` BOUNDS) its
 /// footprint overlaps none of `caster_rects`; a cluster output at the finest level
 /// (`params.level >= params.finest`) deposits its stored photons into the atlas exactly
-/// as `deposit_atlas` does (fixed point, order-free); one that converged earlier (the
+/// as the fused trace does (fixed point, order-free); one that converged earlier (the
 /// error metric) is appended to `converged` at `cluster_counts[CONVERGED]`, to be output
 /// from fresh photons (see `adaptive_caustics::traversal`); a refined one appends its four
 /// children (the ids of its photons in the level grid) to `children` at

@@ -40,15 +40,15 @@ pub struct TracePhotons {
     /// binding then aliases the scene's triangles, read by nobody).
     pub clusters: Option<Buf<u32>>,
     /// With the `atlas_deposit` variant: the caustic atlas each stored (texture-space)
-    /// photon is added to, as [`crate::kernels::DepositAtlas`] adds it (same texel, same
-    /// fixed-point sums, counters and reach bit); `photons` and `photon_count` are then
+    /// photon is added to, in its fixed-point sums (the texel under its uv on its triangle's
+    /// tile; flux, hit distance, a count; counters and reach bit); `photons` and `photon_count` are then
     /// neither read nor written. Otherwise `None` (the bindings then alias buffers of the
     /// kernel's other arguments, touched by nobody).
     pub atlas: Option<AtlasDeposit>,
 }
 
 /// The caustic atlas that the `atlas_deposit` variant of [`TracePhotons`] deposits into:
-/// the arguments of [`crate::kernels::DepositAtlas`] but its photons.
+/// the atlas's sums and the buffers that address them.
 #[derive(Clone, Copy, Debug)]
 pub struct AtlasDeposit {
     /// Atlas size and quanta (`photon_capacity` unused).
@@ -222,7 +222,7 @@ pub struct TraceVariant {
     pub adaptive: bool,
     /// CausticMap's fused pass (with `surface_store`, without `adaptive`): each stored
     /// photon goes straight into the caustic atlas ([`AtlasDeposit`], the sums, counters
-    /// and reach mask of [`crate::kernels::DepositAtlas`]) instead of into the photon
+    /// and reach mask the atlas keeps) instead of into the photon
     /// buffer: no photon buffer and no second pass.
     pub atlas_deposit: bool,
 }

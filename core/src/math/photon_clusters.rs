@@ -48,7 +48,7 @@ pub mod cluster_relevance {
 /// 3.2's "splat into the caustic map", for either technique's map).
 pub mod cluster_target {
     /// CausticMap's atlas: a photon's texel is the atlas texel under its uv (texture-space
-    /// slots); output photons are deposited at once, as `deposit_atlas` does.
+    /// slots); output photons are deposited at once, as the fused trace does.
     pub const ATLAS: u32 = 0;
     /// Sspm's screen: a photon's texel is the pixel it projects to (world-space slots);
     /// output photons are appended to a list that `deposit_screen` then deposits.

@@ -1,5 +1,5 @@
-// One texture-space photon into the caustic atlas, for the kernels that deposit into it
-// (deposit_atlas, and the ATLAS_DEPOSIT variant of trace_photons): the kernel declares
+// One texture-space photon into the caustic atlas, for the ATLAS_DEPOSIT variant of
+// trace_photons: the kernel declares
 // `triangle_tiles: array<u32>`, `tiles: array<vec4<u32>>`,
 // `triangle_reach: array<atomic<u32>>`, the photon map's planes (photon_map_add.wgsl) and
 // the work-group counters `lc`. Mirror of backend-opencl map_gather.cl's

@@ -1,5 +1,5 @@
 // Fixed-point adds into the photon map's planes (core::device::layout::DEPOSIT_PLANES), for
-// the kernels that deposit (deposit_screen, deposit_atlas): the kernel declares
+// the kernels that deposit (deposit_screen, trace_photons' atlas deposit): the kernel declares
 // `photon_map0`, `photon_map1`, `photon_map2` as `array<atomic<u32>>` and the work-group
 // counters `lc`.
 

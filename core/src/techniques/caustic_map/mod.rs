@@ -7,7 +7,7 @@
 //! 1. photon work, only when the atlas is stale (new lights, settings or seed; never for
 //!    a camera move): per light view plane and per batch `trace_photons` (the
 //!    `SURFACE_STORE` and `ATLAS_DEPOSIT` variant: each stored photon's uv and triangle
-//!    go straight into the atlas's fixed-point sums, as `deposit_atlas` would add them;
+//!    go straight into the atlas's fixed-point sums, as the CPU's `caustic_map::deposit_atlas` adds them;
 //!    no photon buffer, no second pass; AdaptiveCaustics' traversal keeps its slots and
 //!    `refine_clusters` deposits), then `gather_caustic_map` (001's N x N gather, fixed to keep flux, as
 //!    irradiance; and N = 1 for the raw map when asked), or with `gather: density` Sspm's
@@ -768,24 +768,12 @@ impl CausticMap {
             for name in ["trace_photons", "refine_clusters"] {
                 pass(name, photons, &traversal, why_no_atlas);
             }
-            pass(
-                "deposit_atlas",
-                false,
-                "",
-                "adaptive emission: refine_clusters deposits the output clusters",
-            );
         } else {
             pass(
                 "trace_photons",
                 photons,
                 &format!("each stored photon straight into the atlas, {stale}"),
                 why_no_atlas,
-            );
-            pass(
-                "deposit_atlas",
-                false,
-                "",
-                "trace_photons deposits each stored photon into the atlas (the fused pass)",
             );
         }
         let density = self.atlas.is_some_and(|a| a.density.is_some());
@@ -1208,7 +1196,7 @@ impl CausticMap {
                 self.photon_pass(backend, a, &mut stats, progress)?
             }
             Some(_) if photons => {
-                for name in ["trace_photons", "deposit_atlas", "refine_clusters"]
+                for name in ["trace_photons", "refine_clusters"]
                     .into_iter()
                     .chain(BOX_GATHER_PASSES)
                     .chain(DENSITY_GATHER_PASSES)
