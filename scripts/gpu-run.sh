@@ -441,8 +441,9 @@ if has session15; then
     # CausticMap's fused trace (trace_photons' ATLAS_DEPOSIT variant: each stored photon
     # straight into the atlas, no separate deposit pass): its frames at seed 001's settings,
     # then its kernel, frame and stiff checks on every backend.
-    run timeout 200 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
-        CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+    run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \
+        CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-20} CAUSTICA_BENCH_SPLITS=stochastic \
+        CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend caustic trace_photons --test-threads=1
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./caustic_map_frames --test-threads=1
     [ -x ./stiff_cases ] && run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./stiff_cases --test-threads=1
