@@ -438,7 +438,7 @@ if has session14tr; then
     [ -x ./stiff_cases ] && run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl CAUSTICA_SKIP_BACKENDS=wgpu,vulkan ./stiff_cases --test-threads=1
 fi
 if has session15; then
-    # CausticMap's fused trace (trace_photons' ATLAS_DEPOSIT variant: each stored photon
+    # CausticMap's fused trace (trace_photons' FUSED_DEPOSIT variant: each stored photon
     # straight into the atlas, no separate deposit pass): its frames at seed 001's settings,
     # then its kernel, frame and stiff checks on every backend.
     run timeout 240 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} \

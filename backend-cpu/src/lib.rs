@@ -22,8 +22,8 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
-    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable, PrepareScene,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
+    DepositScreen, DirectLight, FusedDeposit, GatherCausticMap, GatherFootprint, PhotonCountTable,
+    PrepareScene, PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
     TracePhotons,
 };
@@ -145,7 +145,7 @@ impl CpuBackend {
                 photon_count,
                 counters,
                 clusters,
-                atlas,
+                deposit,
             }) => {
                 reserve_temporary::<Photon>(params.count as u64, "a photon batch")?;
                 let result = match clusters.filter(|_| variant.adaptive) {
@@ -155,11 +155,30 @@ impl CpuBackend {
                     }
                     None => trace_photons::trace_photons(&view(scene)?, params, *variant),
                 };
-                result
-                    .counters
-                    .add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
-                if let Some(d) = atlas.filter(|_| variant.atlas_deposit) {
-                    // the fused pass: the stored photons into the atlas, as caustic_map::deposit_atlas adds them
+                let fused = deposit.filter(|_| variant.fused_deposit);
+                // the fused pass into the screen: the stored photons as deposit_screen
+                // adds them
+                let screen = match &fused {
+                    Some(FusedDeposit::Screen(d)) => {
+                        let g = self.gbuffer(&d.gbuffer)?;
+                        let atomics = map_atomics(&d.photon_map)?;
+                        Some(deposit_screen::deposit_screen(
+                            &d.params,
+                            g,
+                            &result.photons,
+                            atomics,
+                        ))
+                    }
+                    _ => None,
+                };
+                let words = self.get_mut(counters.id)?.as_mut_slice(counters.len)?;
+                result.counters.add_to(words);
+                if let Some(c) = screen {
+                    c.add_to(words);
+                    return Ok(());
+                }
+                if let Some(FusedDeposit::Atlas(d)) = fused {
+                    // the fused pass into the atlas, as caustic_map::deposit_atlas adds them
                     return self.deposit_atlas_photons(&d, &result.photons, *counters);
                 }
                 if result.photons.len() > photons.len as usize {
@@ -604,7 +623,7 @@ impl CpuBackend {
 
     /// The atlas deposit of texture-space photons `ph` into atlas `d`: the fixed-point sums,
     /// the reach bits of their triangles and the deposit's counters (added to
-    /// `counters`). The fused `atlas_deposit` trace's second half.
+    /// `counters`). The fused `fused_deposit` trace's second half.
     fn deposit_atlas_photons(
         &mut self,
         d: &AtlasDeposit,

@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
             photon_count,
             counters,
             clusters: None,
-            atlas: None,
+            deposit: None,
         }));
         // warm-up (first launch compiles on some drivers), then the device timestamp
         backend.execute(&trace).unwrap();

@@ -33,12 +33,19 @@
 #ifndef ADAPTIVE
 #define ADAPTIVE 0
 #endif
-// CausticMap's fused pass (core's TraceVariant::atlas_deposit, with SURFACE_STORE): a
-// stored photon goes straight into the caustic atlas (map_gather.cl's
-// deposit_atlas_photon, as deposit_atlas adds it) instead of into the photon buffer.
-#ifndef ATLAS_DEPOSIT
-#define ATLAS_DEPOSIT 0
+// The fused pass (core's TraceVariant::fused_deposit): a stored photon is deposited where
+// its path ends instead of into the photon buffer: with SURFACE_STORE into the caustic
+// atlas (CausticMap; map_gather.cl's deposit_atlas_photon), without into the screen photon
+// map (Sspm; planes.cl's deposit_screen_photon, as deposit_screen adds it).
+#ifndef FUSED_DEPOSIT
+#define FUSED_DEPOSIT 0
 #endif
+
+// The fused deposit's arguments, after `clusters`: the atlas with the photon map's planes
+// (map_gather.cl), then the screen's parameters and G-buffer (planes.cl).
+#define FUSED_DEPOSIT_PARAMS                                                                  \
+    ATLAS_DEPOSIT_PARAMS, __global const DepositParams *dp, GBUFFER_PARAMS(__global const)
+#define FUSED_DEPOSIT_ARGS ATLAS_DEPOSIT_ARGS, dp, GBUFFER_ARGS
 
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
@@ -156,10 +163,12 @@ inline void count_end(int end, const Photon* ph, float flux_quantum, __local uin
 // Adds one path end to the photon buffer (or the atlas) and the work-group's counters.
 inline void record_end(int end, const Photon* ph, float flux_quantum, __global Photon* photons,
                        uint photon_capacity, volatile __global uint* photon_count,
-                       ATLAS_DEPOSIT_PARAMS, __local uint* lc) {
+                       FUSED_DEPOSIT_PARAMS, __local uint* lc) {
     if (end == PATH_STORED) {
-        if (ATLAS_DEPOSIT) {
+        if (FUSED_DEPOSIT && SURFACE_STORE) {
             deposit_atlas_photon(ATLAS_DEPOSIT_ARGS, lc, ph);
+        } else if (FUSED_DEPOSIT) {
+            deposit_screen_photon(SCREEN_DEPOSIT_ARGS, lc, ph);
         } else {
             uint slot = atomic_inc(photon_count);
             // The host never dispatches more photons than the buffer holds.
@@ -231,14 +240,14 @@ inline Branch branch(float3 origin, float3 dir, float3 flux, uint bounce, int ch
 
 #define RECORD(end, ph)                                                                    \
     record_end(end, ph, p->flux_quantum, photons, photon_capacity, photon_count,            \
-               ATLAS_DEPOSIT_ARGS, lc)
+               FUSED_DEPOSIT_ARGS, lc)
 
 // One emitted photon with seed 001's deterministic splits (backend-cpu
 // trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
 // end; returns the ray segments traced, writes the branches added.
 inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint index,
                                __global Photon* photons, uint photon_capacity,
-                               volatile __global uint* photon_count, ATLAS_DEPOSIT_PARAMS,
+                               volatile __global uint* photon_count, FUSED_DEPOSIT_PARAMS,
                                __local uint* lc, uint* splits) {
     float3 origin, dir, flux;
     emit_photon(lights, p, index, &origin, &dir, &flux);
@@ -369,7 +378,7 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
                             __global Photon* photons, uint photon_capacity,
                             volatile __global uint* photon_count,
                             volatile __global uint* counters, __global const uint* clusters,
-                            ATLAS_DEPOSIT_PARAMS) {
+                            FUSED_DEPOSIT_PARAMS) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
@@ -388,7 +397,8 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
             // grid photon in tile order (sampling.cl)
             uint index = tiled_photon_index(p->first + i, p->grid_w, p->grid_h);
             uint rays = trace_photon_split(SCENE_ARGS, p, index, photons, photon_capacity,
-                                           photon_count, ATLAS_DEPOSIT_ARGS, lc, &splits);
+                                           photon_count, FUSED_DEPOSIT_ARGS, lc,
+                                           &splits);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             atomic_add(&lc[COUNTER_SPLITS], splits);
         } else {

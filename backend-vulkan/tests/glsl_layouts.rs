@@ -122,6 +122,7 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
     ("direct_light.rgen", 5, Holds::Member, "DirectParams"),
     ("trace_photons.rgen", 5, Holds::Member, "TraceParams"),
     ("trace_photons.rgen", 10, Holds::Member, "AtlasParams"),
+    ("trace_photons.rgen", 17, Holds::Member, "DepositParams"),
     (
         "caustic_map_lookup.rgen",
         5,

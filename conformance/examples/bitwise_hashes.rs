@@ -31,6 +31,9 @@ fn main() {
             let settings = caustica_core::SspmSettings {
                 // several batches per light: batching must not change a bit either
                 max_photons_per_batch: 20_000,
+                // the photons stored, so that their multiset is hashed too (the fused
+                // deposit, the default, stores none and gives the same images)
+                fused_deposit: false,
                 ..small_settings(256)
             };
             let mut s = Sspm::new(backend.as_mut(), &scene, settings).expect("valid scene");

@@ -15,9 +15,9 @@
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
-    check_density_gather, check_deposit, check_direct, check_fused_trace, check_gather,
-    check_gbuffer, check_kernel_cases, check_photon_gi, check_screen_target, check_temporal_blend,
-    check_trace, KernelCheck,
+    check_density_gather, check_deposit, check_direct, check_fused_screen_trace, check_fused_trace,
+    check_gather, check_gbuffer, check_kernel_cases, check_photon_gi, check_screen_target,
+    check_temporal_blend, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -90,12 +90,21 @@ fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
     kernel_test("caustic map kernels", &check_caustic_map);
 }
 
-/// CausticMap's fused pass (`trace_photons`' `atlas_deposit` variant) on each backend:
+/// CausticMap's fused pass (`trace_photons`' `fused_deposit` variant) on each backend:
 /// bitwise the CPU's atlas deposit of the photons that backend's own texture-space trace
 /// stores (`kernels::caustic_map::check_fused_trace` argues it).
 #[test]
 fn caustic_map_fused_trace_deposits_what_its_trace_stores() {
     kernel_test("caustic map fused trace", &check_fused_trace);
+}
+
+/// Sspm's fused pass (`trace_photons`' `fused_deposit` variant in world space) on each
+/// backend: that backend's own `deposit_screen` of the photons its world-space trace
+/// stores, within `deposit_screen`'s agreement
+/// (`kernels::deposit_screen::check_fused_screen_trace` argues it).
+#[test]
+fn sspm_fused_trace_deposits_what_its_trace_stores() {
+    kernel_test("sspm fused trace", &check_fused_screen_trace);
 }
 
 /// AdaptiveCaustics' kernels on the same inputs: the adaptive trace slot by slot within

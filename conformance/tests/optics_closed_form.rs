@@ -32,6 +32,8 @@ fn ball_lens_focus_matches_paraxial_optics() {
     let settings = SspmSettings {
         photons_w: 64,
         photons_h: 64,
+        // the stored photons are what this test reads
+        fused_deposit: false,
         ..SspmSettings::default()
     };
     let mut s = Sspm::new(&mut b, &scene, settings).unwrap();

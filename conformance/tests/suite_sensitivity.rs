@@ -19,9 +19,9 @@
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
     check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
-    check_density_gather, check_deposit, check_direct, check_fused_trace, check_gather,
-    check_gbuffer, check_kernel_cases, check_photon_gi, check_screen_target, check_temporal_blend,
-    check_trace, KernelCheck,
+    check_density_gather, check_deposit, check_direct, check_fused_screen_trace, check_fused_trace,
+    check_gather, check_gbuffer, check_kernel_cases, check_photon_gi, check_screen_target,
+    check_temporal_blend, check_trace, KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
@@ -34,8 +34,8 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
-    DepositScreen, DirectLight, GatherCausticMap, GatherFootprint, PhotonCountTable,
-    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm,
+    DepositScreen, DirectLight, FusedDeposit, GatherCausticMap, GatherFootprint, PhotonCountTable,
+    PrimaryGbuffer, RefineClusters, ResolveCaustics, RsmImportance, SampleRsm, ScreenDeposit,
     ShadingNormalCorrection, SplatPhotons, TemporalBlend, TileHitDistance, TraceIndirect,
     TracePhotons,
 };
@@ -92,12 +92,15 @@ enum Mutation {
     DirectHigh,
     /// `composite` one ulp off in one channel.
     CompositeUlp,
-    /// `trace_photons`' fused pass (`atlas_deposit`) loses one fixed-point unit of red in
+    /// `trace_photons`' fused pass (`fused_deposit`) loses one fixed-point unit of red in
     /// every atlas texel it touches.
     FusedDepositOffByOne,
     /// `trace_photons`' fused pass forgets the lowest reached triangle of every word of
     /// its reach mask (CausticMap would give that receiver no tile).
     FusedReachLost,
+    /// `trace_photons`' fused pass into the screen loses one fixed-point unit of red in
+    /// every pixel it touches.
+    FusedScreenOffByOne,
     /// `gather_caustic_map` 1e-4 too high.
     MapGatherHigh,
     /// `caustic_map_lookup` 1e-3 too high.
@@ -420,7 +423,7 @@ impl Mutant {
             (
                 Mutation::FusedDepositOffByOne,
                 Kernel::TracePhotons(TracePhotons {
-                    atlas: Some(AtlasDeposit { sums, .. }),
+                    deposit: Some(FusedDeposit::Atlas(AtlasDeposit { sums, .. })),
                     ..
                 }),
             ) => {
@@ -434,7 +437,7 @@ impl Mutant {
             (
                 Mutation::FusedReachLost,
                 Kernel::TracePhotons(TracePhotons {
-                    atlas: Some(AtlasDeposit { triangle_reach, .. }),
+                    deposit: Some(FusedDeposit::Atlas(AtlasDeposit { triangle_reach, .. })),
                     ..
                 }),
             ) => self.modify::<u32>(triangle_reach.id, |v| {
@@ -442,6 +445,20 @@ impl Mutant {
                     *w &= w.wrapping_sub(1);
                 }
             }),
+            (
+                Mutation::FusedScreenOffByOne,
+                Kernel::TracePhotons(TracePhotons {
+                    deposit: Some(FusedDeposit::Screen(ScreenDeposit { photon_map, .. })),
+                    ..
+                }),
+            ) => {
+                let (k, _) = deposit_word(0, 0);
+                self.modify::<u32>(photon_map.planes[k].id, |m| {
+                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
+                        t[0] -= 1;
+                    }
+                })
+            }
             (Mutation::MapGatherHigh, Kernel::GatherCausticMap(GatherCausticMap { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
@@ -648,6 +665,10 @@ fn kernel_checks() -> Vec<(&'static str, Box<KernelCheck>)> {
         ),
         ("trace_photons (atlas deposit)", Box::new(check_fused_trace)),
         (
+            "trace_photons (screen deposit)",
+            Box::new(check_fused_screen_trace),
+        ),
+        (
             "trace_photons (adaptive) + refine_clusters",
             Box::new(check_adaptive_caustics),
         ),
@@ -807,6 +828,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
             "trace_photons (atlas deposit)",
         ),
         (Mutation::FusedReachLost, "trace_photons (atlas deposit)"),
+        (
+            Mutation::FusedScreenOffByOne,
+            "trace_photons (screen deposit)",
+        ),
         (
             Mutation::MapGatherHigh,
             "gather_caustic_map + caustic_map_lookup",

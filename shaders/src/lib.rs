@@ -56,6 +56,10 @@ pub const COMMON: &[(&str, &str)] = &[
         "atlas_deposit",
         include_str!("../wgsl/common/atlas_deposit.wgsl"),
     ),
+    (
+        "screen_deposit",
+        include_str!("../wgsl/common/screen_deposit.wgsl"),
+    ),
     ("map_gather", include_str!("../wgsl/common/map_gather.wgsl")),
     ("map_lookup", include_str!("../wgsl/common/map_lookup.wgsl")),
     (

@@ -1,4 +1,4 @@
-// needs: types vector packing fixed_point scene gbuffer photon_map_add
+// needs: types vector packing fixed_point scene gbuffer photon_map_add screen_deposit
 // deposit_screen (seed 000 section 30.3.1.3): each stored photon is projected to its pixel
 // and added in fixed point if the pixel sees a diffuse surface at a consistent depth and
 // the photon arrives on the side the camera sees. Mirror of
@@ -29,24 +29,7 @@ fn deposit_screen(i: u32, li: u32) {
     // The OpenCL kernel's `photon_capacity` argument is the photon buffer's length.
     let photon_capacity = arrayLength(&photons);
     if (i < min(photon_count[0], photon_capacity)) {
-        let ph = photons[i];
-        var px: u32;
-        var py: u32;
-        var z: f32;
-        if (!project_to_pixel(p.camera, ph.position, &px, &py, &z)) {
-            atomicAdd(&lc[COUNTER_OFF_SCREEN], 1u);
-        } else {
-            let pix = py * p.camera.width + px;
-            let g = load_gbuffer(pix);
-            let arrives_in_front = dot3(unpack_unit_vector(ph.direction), g.normal) < 0.0;
-            if ((g.flags & GBUFFER_RECEIVER) == 0u ||
-                off_surface(z, ph.position, g.position, g.normal, g.depth, p.depth_tolerance) ||
-                !arrives_in_front) {
-                atomicAdd(&lc[COUNTER_DEPTH_MISMATCH], 1u);
-            } else {
-                deposit_photon_texel(pix, ph, p.flux_quantum, p.hit_distance_quantum);
-            }
-        }
+        deposit_screen_photon(photons[i], p);
     }
     counters_flush_local(li);
 }

@@ -1,4 +1,4 @@
-// needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas photon_map_add atlas_deposit
+// needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
 // trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least
@@ -25,10 +25,11 @@ override FRESNEL_SPLIT: bool = false;
 // of cluster clusters[params.first + i / 4] of the params.grid_w grid and is written to
 // slot i, stored or not (core's photon_store says how); photon_count is left untouched.
 override ADAPTIVE: bool = false;
-// CausticMap's fused pass (core's TraceVariant::atlas_deposit, with SURFACE_STORE): a
-// stored photon goes straight into the caustic atlas (atlas_deposit.wgsl, as the CPU's
-// caustic_map::deposit_atlas adds it) instead of into the photon buffer.
-override ATLAS_DEPOSIT: bool = false;
+// The fused pass (core's TraceVariant::fused_deposit): a stored photon is deposited where
+// its path ends instead of into the photon buffer: with SURFACE_STORE into the caustic
+// atlas (CausticMap; atlas_deposit.wgsl), without into the screen photon map (Sspm;
+// screen_deposit.wgsl, as deposit_screen adds it).
+override FUSED_DEPOSIT: bool = false;
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -40,7 +41,7 @@ override ATLAS_DEPOSIT: bool = false;
 @group(0) @binding(7) var<storage, read_write> photon_count: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read> clusters: array<u32>;
-// the atlas of ATLAS_DEPOSIT (otherwise aliases that nobody touches)
+// the atlas of FUSED_DEPOSIT (otherwise aliases that nobody touches)
 @group(0) @binding(10) var<uniform> atlas_params: AtlasParams;
 @group(0) @binding(11) var<storage, read> triangle_tiles: array<u32>;
 @group(0) @binding(12) var<storage, read> tiles: array<vec4<u32>>;
@@ -48,6 +49,12 @@ override ATLAS_DEPOSIT: bool = false;
 @group(0) @binding(14) var<storage, read_write> photon_map0: array<atomic<u32>>;
 @group(0) @binding(15) var<storage, read_write> photon_map1: array<atomic<u32>>;
 @group(0) @binding(16) var<storage, read_write> photon_map2: array<atomic<u32>>;
+// the screen of FUSED_DEPOSIT in world space (otherwise aliases that nobody touches)
+@group(0) @binding(17) var<uniform> deposit_params: DepositParams;
+@group(0) @binding(18) var<storage, read> gbuffer0: array<vec4<u32>>;
+@group(0) @binding(19) var<storage, read> gbuffer1: array<vec4<u32>>;
+@group(0) @binding(20) var<storage, read> gbuffer2: array<vec4<u32>>;
+@group(0) @binding(21) var<storage, read> gbuffer3: array<vec4<u32>>;
 
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
@@ -198,9 +205,11 @@ fn stored_photon(s: SurfacePoint, hit: Hit, flux: vec3<f32>, dir: vec3<f32>) -> 
 // Adds one path end to the photon buffer (or the atlas) and the work-group's counters.
 fn record_end(end: i32, ph: Photon, flux_quantum: f32) {
     if (end == PATH_STORED) {
-        if (ATLAS_DEPOSIT) {
+        if (FUSED_DEPOSIT && SURFACE_STORE) {
             let a = atlas_params;
             deposit_atlas_photon(ph, a.width, a.flux_quantum, a.hit_distance_quantum);
+        } else if (FUSED_DEPOSIT) {
+            deposit_screen_photon(ph, deposit_params);
         } else {
             let slot = atomicAdd(&photon_count[0], 1u);
             // The host never dispatches more photons than the buffer holds.

@@ -1,5 +1,5 @@
 //! CausticMap's kernels (seed 001): the atlas deposit (texture-space photons into the
-//! atlas's fixed-point sums: `trace_photons`' `atlas_deposit` variant), `gather_caustic_map` (the flux-keeping N x N gather as
+//! atlas's fixed-point sums: `trace_photons`' `fused_deposit` variant), `gather_caustic_map` (the flux-keeping N x N gather as
 //! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
 //! `math::map_gather`; these are loops over it.
 

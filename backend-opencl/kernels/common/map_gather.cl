@@ -11,7 +11,7 @@ inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
 // math::map_gather::triangle_reach_bit: (word, bit) of scene triangle t in a reach mask
 inline uint2 triangle_reach_bit(uint t) { return (uint2)(t >> 5, 1u << (t & 31u)); }
 
-// The caustic atlas a texture-space photon is deposited into (the ATLAS_DEPOSIT variant
+// The caustic atlas a texture-space photon is deposited into (the FUSED_DEPOSIT variant
 // of trace_photons).
 #define ATLAS_DEPOSIT_PARAMS                                                                  \
     __global const AtlasParams *ap, __global const uint *triangle_tiles,                    \

@@ -98,3 +98,36 @@ inline void deposit_photon_texel(PHOTON_MAP_PARAMS(volatile __global), __local u
     atomic_add_u64_photon_map(PHOTON_MAP_ARGS, texel, 8u, 1u, 0u);
     atomic_inc(&lc[COUNTER_DEPOSITED]);
 }
+
+// The screen photon map and G-buffer a world-space photon is deposited into
+// (deposit_screen, and the FUSED_DEPOSIT variant of trace_photons in world space).
+#define SCREEN_DEPOSIT_PARAMS                                                                 \
+    __global const DepositParams *dp, GBUFFER_PARAMS(__global const),                        \
+        PHOTON_MAP_PARAMS(volatile __global)
+#define SCREEN_DEPOSIT_ARGS dp, GBUFFER_ARGS, PHOTON_MAP_ARGS
+
+// One world-space photon into the screen photon map (backend-cpu deposit_screen.rs): projected
+// to its pixel and added in fixed point if the pixel sees a diffuse surface at a consistent
+// depth and the photon arrives on the side the camera sees; OFF_SCREEN or DEPTH_MISMATCH
+// counted in the work-group's `lc` otherwise.
+inline void deposit_screen_photon(SCREEN_DEPOSIT_PARAMS, __local uint* lc, const Photon* ph) {
+    uint px, py;
+    float z;
+    if (!project_to_pixel(&dp->camera, load3(ph->position), &px, &py, &z)) {
+        atomic_inc(&lc[COUNTER_OFF_SCREEN]);
+        return;
+    }
+    uint pix = py * dp->camera.width + px;
+    GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, pix);
+    const GBufferTexel* g = &gt;
+    bool arrives_in_front = dot3(unpack_unit_vector(ph->direction), load3(g->normal)) < 0.0f;
+    if ((g->flags & GBUFFER_RECEIVER) == 0u ||
+        off_surface(z, load3(ph->position), load3(g->position), load3(g->normal), g->depth,
+                    dp->depth_tolerance) ||
+        !arrives_in_front) {
+        atomic_inc(&lc[COUNTER_DEPTH_MISMATCH]);
+    } else {
+        deposit_photon_texel(PHOTON_MAP_ARGS, lc, pix, ph, dp->flux_quantum,
+                             dp->hit_distance_quantum);
+    }
+}

@@ -167,7 +167,7 @@ impl Fixture {
     }
 
     /// [`Fixture::run_trace_with`] with compiled variant `variant` (without
-    /// `atlas_deposit`: the photons are read back; a split stores up to
+    /// `fused_deposit`: the photons are read back; a split stores up to
     /// `split_budget` photons per emitted one).
     pub fn run_trace_as(
         &self,
@@ -196,7 +196,7 @@ impl Fixture {
             photon_count,
             counters,
             clusters: None,
-            atlas: None,
+            deposit: None,
         }));
         run_and_free(b, "trace_photons", &rec, |b| {
             let n = read_buf(b, photon_count)?[0] as usize;

@@ -108,7 +108,7 @@ fn run_trace(
         photon_count,
         counters,
         clusters: Some(clusters),
-        atlas: None,
+        deposit: None,
     });
     run_and_free(b, "trace_photons (adaptive)", &rec, |b| {
         let n = read_buf(b, photon_count)?;

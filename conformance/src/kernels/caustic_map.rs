@@ -24,10 +24,10 @@
 //!   triangle) ending in a bilinear lookup of four texels (7 roundings); under both
 //!   reflectance models (exact and Schlick).
 //!
-//! [`check_fused_trace`] checks CausticMap's fused pass, `trace_photons`' `atlas_deposit`
+//! [`check_fused_trace`] checks CausticMap's fused pass, `trace_photons`' `fused_deposit`
 //! variant, on the backend under test against the CPU's atlas deposit of the photons
 //! that the same backend's texture-space trace stores (the variant without
-//! `atlas_deposit`: the same code up to where a stored photon goes, and that trace is
+//! `fused_deposit`: the same code up to where a stored photon goes, and that trace is
 //! `check_trace`'s). The deposit is integer atomics of quanta that are powers of two
 //! (`x / 2^k` is exact under any division bound), so the atlas sums, the reach mask and
 //! the counters (the trace's plus the deposit's) must be **bitwise** equal; under the
@@ -42,7 +42,7 @@ use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
 use caustica_core::frame::caustic_atlas::{atlas_layout, atlas_receivers, AtlasLayout};
 use caustica_core::kernels::{
-    AtlasDeposit, CausticMapLookup, DensityGather, GatherCausticMap, GatherFootprint,
+    AtlasDeposit, CausticMapLookup, DensityGather, FusedDeposit, GatherCausticMap, GatherFootprint,
     PhotonCountTable, TracePhotons, TraceVariant,
 };
 use caustica_core::math::density_gather::{
@@ -118,7 +118,7 @@ fn cpu_deposit(l: &AtlasLayout, ph: &[Photon]) -> Deposit {
     )
 }
 
-/// Runs the fused trace (`variant` with `atlas_deposit`) of light `domains[k]` on `b`
+/// Runs the fused trace (`variant` with `fused_deposit`) of light `domains[k]` on `b`
 /// into a cleared atlas of layout `l`.
 fn run_fused_trace(
     fx: &Fixture,
@@ -153,13 +153,13 @@ fn run_fused_trace(
         photon_count,
         counters,
         clusters: None,
-        atlas: Some(AtlasDeposit {
+        deposit: Some(FusedDeposit::Atlas(AtlasDeposit {
             params: params(l, 1, 1),
             triangle_tiles,
             tiles,
             triangle_reach,
             sums,
-        }),
+        })),
     });
     run_and_free(b, "trace_photons (atlas deposit)", &rec, |b| {
         Ok((
@@ -218,7 +218,7 @@ pub fn check_fused_trace(
             let (photons, trace_counters) =
                 fx.run_trace_as(c, k, variant, |p| p.split_budget = budget)?;
             let fused = TraceVariant {
-                atlas_deposit: true,
+                fused_deposit: true,
                 ..variant
             };
             let (sums, counters, reach) = run_fused_trace(fx, c, &l, k, fused, budget)?;

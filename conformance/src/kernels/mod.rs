@@ -36,7 +36,7 @@ pub use bilateral_gather::check_gather;
 pub use caustic_map::{check_caustic_map, check_fused_trace};
 pub use composite::check_composite;
 pub use density_gather::check_density_gather;
-pub use deposit_screen::check_deposit;
+pub use deposit_screen::{check_deposit, check_fused_screen_trace};
 pub use direct_light::check_direct;
 pub use photon_gi::check_photon_gi;
 pub use primary_gbuffer::{check_gbuffer, compare_gbuffers};

@@ -379,7 +379,7 @@ pub type AtlasTileTexel = [u32; 4];
 /// outside every tile)]`.
 pub type AtlasTexel = [u32; 2];
 
-/// Parameters of the atlas deposit (`trace_photons`' `atlas_deposit`) and `gather_caustic_map` (the caustic atlas, seed 001).
+/// Parameters of the atlas deposit (`trace_photons`' `fused_deposit`) and `gather_caustic_map` (the caustic atlas, seed 001).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct AtlasParams {

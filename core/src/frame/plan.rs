@@ -58,7 +58,7 @@ impl SceneFeatures {
             surface_store: false,
             fresnel_split: false,
             adaptive: false,
-            atlas_deposit: false,
+            fused_deposit: false,
         }
     }
 }

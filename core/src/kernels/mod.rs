@@ -59,7 +59,7 @@ pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
 pub use trace_indirect::{TraceIndirect, VISIBLE_TOLERANCE};
-pub use trace_photons::{AtlasDeposit, TracePhotons, TraceVariant};
+pub use trace_photons::{AtlasDeposit, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant};
 
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};

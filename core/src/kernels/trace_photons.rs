@@ -2,8 +2,8 @@
 
 use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
-use crate::device::handle::{Buf, PhotonMapPlanes, SceneArgs};
-use crate::device::layout::{AtlasParams, AtlasTileTexel, Photon, TraceParams};
+use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
+use crate::device::layout::{AtlasParams, AtlasTileTexel, DepositParams, Photon, TraceParams};
 
 /// Emits and traces photons `params.first .. first + count` of light `params.light`, in
 /// the tile order of its photon grid (thread `i` traces grid photon
@@ -15,8 +15,9 @@ use crate::device::layout::{AtlasParams, AtlasTileTexel, Photon, TraceParams};
 /// after at least one specular interaction to `photons` at `photon_count[0]` (world-space
 /// position, or uv and triangle with the variant's `surface_store`; flux in W per
 /// channel; last segment length) and adds the photon accounting to `counters`
-/// ([`crate::device::layout::counter`]). With the variant's `atlas_deposit` the stored
-/// photons go into the caustic atlas instead ([`TracePhotons::atlas`]).
+/// ([`crate::device::layout::counter`]). With the variant's `fused_deposit` the stored
+/// photons are deposited where their paths end instead ([`TracePhotons::deposit`]: the
+/// caustic atlas, or the camera's screen photon map).
 #[derive(Clone, Copy, Debug)]
 pub struct TracePhotons {
     /// The uploaded scene.
@@ -39,15 +40,37 @@ pub struct TracePhotons {
     /// written to slot `i` of `photons` (`photon_store` says how). Otherwise `None` (the
     /// binding then aliases the scene's triangles, read by nobody).
     pub clusters: Option<Buf<u32>>,
-    /// With the `atlas_deposit` variant: the caustic atlas each stored (texture-space)
-    /// photon is added to, in its fixed-point sums (the texel under its uv on its triangle's
-    /// tile; flux, hit distance, a count; counters and reach bit); `photons` and `photon_count` are then
-    /// neither read nor written. Otherwise `None` (the bindings then alias buffers of the
-    /// kernel's other arguments, touched by nobody).
-    pub atlas: Option<AtlasDeposit>,
+    /// With the `fused_deposit` variant: where each stored photon is deposited
+    /// ([`FusedDeposit`]); `photons` and `photon_count` are then neither read nor
+    /// written. Otherwise `None` (the bindings then alias buffers of the kernel's other
+    /// arguments, touched by nobody).
+    pub deposit: Option<FusedDeposit>,
 }
 
-/// The caustic atlas that the `atlas_deposit` variant of [`TracePhotons`] deposits into:
+/// Where the `fused_deposit` variant of [`TracePhotons`] deposits each stored photon.
+#[derive(Clone, Copy, Debug)]
+pub enum FusedDeposit {
+    /// A texture-space photon (`surface_store`) into the caustic atlas (CausticMap).
+    Atlas(AtlasDeposit),
+    /// A world-space photon into the camera's screen photon map (Sspm).
+    Screen(ScreenDeposit),
+}
+
+/// The screen photon map that the `fused_deposit` variant of [`TracePhotons`] (world
+/// space) deposits into, as `deposit_screen` adds a photon: projected to its pixel, kept
+/// where the pixel's G-buffer sees a receiver at a consistent depth from the side the
+/// photon arrives on, added in fixed point.
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenDeposit {
+    /// Camera, quanta, depth tolerance (`photon_capacity` unused).
+    pub params: DepositParams,
+    /// The frame's G-buffer.
+    pub gbuffer: GBufferPlanes,
+    /// The screen photon map's fixed-point sums.
+    pub photon_map: PhotonMapPlanes,
+}
+
+/// The caustic atlas that the `fused_deposit` variant of [`TracePhotons`] deposits into:
 /// the atlas's sums and the buffers that address them.
 #[derive(Clone, Copy, Debug)]
 pub struct AtlasDeposit {
@@ -63,7 +86,7 @@ pub struct AtlasDeposit {
     pub sums: PhotonMapPlanes,
 }
 
-const BINDINGS: [Binding; 19] = with_scene([
+const BINDINGS: [Binding; 24] = with_scene([
     bind("params", Params),
     bind("photons", ReadWrite),
     bind("photon_capacity", Count),
@@ -77,6 +100,11 @@ const BINDINGS: [Binding; 19] = with_scene([
     bind("photon_map0", ReadWrite),
     bind("photon_map1", ReadWrite),
     bind("photon_map2", ReadWrite),
+    bind("deposit_params", Params),
+    bind("gbuffer0", Read),
+    bind("gbuffer1", Read),
+    bind("gbuffer2", Read),
+    bind("gbuffer3", Read),
 ]);
 
 impl KernelDecl for TracePhotons {
@@ -107,17 +135,23 @@ impl KernelDecl for TracePhotons {
         } else {
             1
         };
-        if self.variant.atlas_deposit != self.atlas.is_some()
-            || (self.variant.atlas_deposit
-                && (!self.variant.surface_store || self.variant.adaptive))
-        {
+        let fits = match &self.deposit {
+            None => !self.variant.fused_deposit,
+            Some(FusedDeposit::Atlas(_)) => {
+                self.variant.fused_deposit && self.variant.surface_store
+            }
+            Some(FusedDeposit::Screen(_)) => {
+                self.variant.fused_deposit && !self.variant.surface_store
+            }
+        };
+        if !fits || (self.variant.fused_deposit && self.variant.adaptive) {
             return Err(BackendError::BadArgument(
-                "trace_photons: the atlas_deposit variant (texture space, not adaptive) and \
-                 an atlas go together"
+                "trace_photons: the fused_deposit variant (not adaptive) goes with a deposit \
+                 target, the atlas in texture space, the screen in world space"
                     .into(),
             ));
         }
-        if !self.variant.atlas_deposit && p.count as u64 * per_photon > self.photons.len as u64 {
+        if !self.variant.fused_deposit && p.count as u64 * per_photon > self.photons.len as u64 {
             return Err(BackendError::BadArgument(format!(
                 "photon buffer holds {} photons, the batch traces {} (x {per_photon} branches \
                  at most)",
@@ -163,25 +197,50 @@ impl KernelDecl for TracePhotons {
             Some(c) => a.buf("clusters", c, 0)?,
             None => a.buf("clusters", self.scene.triangles, 0)?,
         };
-        match &self.atlas {
+        let (atlas, screen) = match &self.deposit {
+            Some(FusedDeposit::Atlas(d)) => (Some(d), None),
+            Some(FusedDeposit::Screen(d)) => (None, Some(d)),
+            None => (None, None),
+        };
+        // bindings of the target not deposited into are read by nobody: the scene's
+        // triangles for the read-only ones, the counters for the read-write ones (a
+        // buffer bound twice read-write is one usage on every backend)
+        match atlas {
             Some(d) => {
-                let texels = super::texels(d.params.width, d.params.height);
                 a.params("atlas_params", &d.params)?
                     .buf("triangle_tiles", d.triangle_tiles, 0)?
                     .buf("tiles", d.tiles, 0)?
-                    .buf("triangle_reach", d.triangle_reach, 4)?
-                    .photon_map(&d.sums, texels)?;
+                    .buf("triangle_reach", d.triangle_reach, 4)?;
             }
             None => {
-                // read by nobody: the scene's triangles for the read-only bindings, the
-                // counters for the read-write ones (a buffer bound twice read-write is
-                // one usage on every backend)
                 a.params("atlas_params", &AtlasParams::default())?
                     .buf("triangle_tiles", self.scene.triangles, 0)?
                     .buf("tiles", self.scene.triangles, 0)?
                     .buf("triangle_reach", self.counters, 0)?;
+            }
+        }
+        match (atlas, screen) {
+            (Some(d), _) => {
+                a.photon_map(&d.sums, super::texels(d.params.width, d.params.height))?;
+            }
+            (None, Some(d)) => {
+                a.photon_map(&d.photon_map, pixels(&d.params))?;
+            }
+            (None, None) => {
                 for name in super::PHOTON_MAP_BINDINGS {
                     a.buf(name, self.counters, 0)?;
+                }
+            }
+        }
+        match screen {
+            Some(d) => {
+                a.params("deposit_params", &d.params)?
+                    .gbuffer(&d.gbuffer, pixels(&d.params))?;
+            }
+            None => {
+                a.params("deposit_params", &DepositParams::default())?;
+                for name in super::GBUFFER_BINDINGS {
+                    a.buf(name, self.scene.triangles, 0)?;
                 }
             }
         }
@@ -191,6 +250,11 @@ impl KernelDecl for TracePhotons {
     fn switch_values(&self) -> Vec<u32> {
         self.variant.values().to_vec()
     }
+}
+
+/// The camera's pixels of a screen deposit.
+fn pixels(p: &DepositParams) -> u64 {
+    super::texels(p.camera.width, p.camera.height)
 }
 
 /// A compiled variant of `trace_photons` (feature variants are compiled, not
@@ -220,11 +284,12 @@ pub struct TraceVariant {
     /// Seed 004's adaptive emission: photons come four by four from a cluster list, and
     /// each is written to its own slot (stored or not) for `refine_clusters` to judge.
     pub adaptive: bool,
-    /// CausticMap's fused pass (with `surface_store`, without `adaptive`): each stored
-    /// photon goes straight into the caustic atlas ([`AtlasDeposit`], the sums, counters
-    /// and reach mask the atlas keeps) instead of into the photon
-    /// buffer: no photon buffer and no second pass.
-    pub atlas_deposit: bool,
+    /// The fused pass (without `adaptive`): each stored photon is deposited where its
+    /// path ends instead of into the photon buffer, into the caustic atlas with
+    /// `surface_store` (CausticMap; [`AtlasDeposit`]: sums, counters and reach mask), into
+    /// the camera's screen photon map without (Sspm; [`ScreenDeposit`]): no photon
+    /// buffer and no second pass.
+    pub fused_deposit: bool,
 }
 
 impl TraceVariant {
@@ -236,7 +301,7 @@ impl TraceVariant {
         "SURFACE_STORE",
         "FRESNEL_SPLIT",
         "ADAPTIVE",
-        "ATLAS_DEPOSIT",
+        "FUSED_DEPOSIT",
     ];
 
     /// Every feature compiled in (what a frame uses with pruning off).
@@ -247,7 +312,7 @@ impl TraceVariant {
         surface_store: false,
         fresnel_split: false,
         adaptive: false,
-        atlas_deposit: false,
+        fused_deposit: false,
     };
 
     /// Switch values in [`TraceVariant::SWITCHES`] order.
@@ -259,7 +324,7 @@ impl TraceVariant {
             self.surface_store as u32,
             self.fresnel_split as u32,
             self.adaptive as u32,
-            self.atlas_deposit as u32,
+            self.fused_deposit as u32,
         ]
     }
 

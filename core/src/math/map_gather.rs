@@ -104,7 +104,7 @@ pub fn atlas_texel_index(tile: [u32; 4], uv: Vec2, atlas_width: u32) -> u32 {
 }
 
 /// The word and the bit of scene triangle `t` in a triangle reach mask (one bit per
-/// triangle, 32 to a `u32` word): the atlas deposit (`trace_photons`' `atlas_deposit`) or-s the bit of every photon's triangle
+/// triangle, 32 to a `u32` word): the atlas deposit (`trace_photons`' `fused_deposit`) or-s the bit of every photon's triangle
 /// into it.
 #[inline]
 pub fn triangle_reach_bit(t: u32) -> (u32, u32) {

@@ -1,4 +1,4 @@
-// One texture-space photon into the caustic atlas, for the ATLAS_DEPOSIT variant of
+// One texture-space photon into the caustic atlas, for the FUSED_DEPOSIT variant of
 // trace_photons: the kernel declares
 // `triangle_tiles: array<u32>`, `tiles: array<vec4<u32>>`,
 // `triangle_reach: array<atomic<u32>>`, the photon map's planes (photon_map_add.wgsl) and

@@ -447,7 +447,7 @@ impl Traversal {
             photon_count: self.counts,
             counters: target.trace_counters(),
             clusters: Some(list),
-            atlas: None,
+            deposit: None,
         });
         let (atlas_width, triangle_tiles, tiles, atlas, camera, kind) =
             match (target, self.no_atlas) {

@@ -6,7 +6,7 @@
 //!
 //! 1. photon work, only when the atlas is stale (new lights, settings or seed; never for
 //!    a camera move): per light view plane and per batch `trace_photons` (the
-//!    `SURFACE_STORE` and `ATLAS_DEPOSIT` variant: each stored photon's uv and triangle
+//!    `SURFACE_STORE` and `FUSED_DEPOSIT` variant: each stored photon's uv and triangle
 //!    go straight into the atlas's fixed-point sums, as the CPU's `caustic_map::deposit_atlas` adds them;
 //!    no photon buffer, no second pass; AdaptiveCaustics' traversal keeps its slots and
 //!    `refine_clusters` deposits), then `gather_caustic_map` (001's N x N gather, fixed to keep flux, as
@@ -57,8 +57,9 @@ use crate::frame::stats::FrameStats;
 use crate::frame::submitted::RecordedFrame;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
-    AtlasDeposit, CausticMapLookup, Composite, DensityGather, DirectLight, GatherCausticMap,
-    GatherFootprint, PhotonCountTable, PrimaryGbuffer, TracePhotons, TraceVariant,
+    AtlasDeposit, CausticMapLookup, Composite, DensityGather, DirectLight, FusedDeposit,
+    GatherCausticMap, GatherFootprint, PhotonCountTable, PrimaryGbuffer, TracePhotons,
+    TraceVariant,
 };
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
@@ -404,7 +405,7 @@ impl CausticMap {
         variant.adaptive = adaptive.is_some();
         // CausticMap's photons go straight into the atlas; the adaptive traversal keeps
         // its slots for refine_clusters to judge
-        variant.atlas_deposit = adaptive.is_none();
+        variant.fused_deposit = adaptive.is_none();
         let mut t = CausticMap {
             name: if adaptive.is_some() {
                 "adaptive-caustics"
@@ -518,7 +519,7 @@ impl CausticMap {
         );
         // photons a batch stores: none with the fused deposit (each goes into the atlas)
         // nor with the adaptive traversal (it traces into its own slots)
-        let cap = if self.variant.atlas_deposit || self.adaptive.is_some() {
+        let cap = if self.variant.fused_deposit || self.adaptive.is_some() {
             1
         } else if self.variant.fresnel_split {
             // the split stores up to split_budget per photon
@@ -1098,13 +1099,13 @@ impl CausticMap {
                     photon_count: a.photon_count,
                     counters: a.counters,
                     clusters: None,
-                    atlas: Some(AtlasDeposit {
+                    deposit: Some(FusedDeposit::Atlas(AtlasDeposit {
                         params: deposit,
                         triangle_tiles: a.triangle_tiles,
                         tiles: a.tiles,
                         triangle_reach: a.triangle_reach,
                         sums: a.sums,
-                    }),
+                    })),
                 });
                 Self::run(backend, &rec, stats)?;
                 stats.batches += 1;

@@ -44,8 +44,9 @@ use crate::frame::stats::FrameStats;
 use crate::frame::submitted::RecordedFrame;
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::kernels::{
-    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, GatherFootprint,
-    PhotonCountTable, PrimaryGbuffer, ResolveCaustics, TileHitDistance, TracePhotons,
+    BilateralGather, Composite, DensityGather, DepositScreen, DirectLight, FusedDeposit,
+    GatherFootprint, PhotonCountTable, PrimaryGbuffer, ResolveCaustics, ScreenDeposit,
+    TileHitDistance, TracePhotons,
 };
 use crate::recording::{Recording, Step};
 use crate::scene::Scene;
@@ -76,7 +77,10 @@ struct AdaptiveFrame {
 /// Device buffers of the photon passes (exist only when some light emits photons).
 #[derive(Clone, Copy, Debug)]
 struct PhotonBuffers {
+    /// Stored photons (one slot with the fused deposit, which stores none).
     photons: Buf<Photon>,
+    /// Photons a batch traces.
+    batch: u32,
     photon_count: Buf<u32>,
     photon_map: PhotonMapPlanes,
     counters: Buf<u32>,
@@ -301,17 +305,29 @@ impl Sspm {
         let Some(a) = adaptive else {
             constants.check_light_flux()?;
             let lights = volume_light_plans(&constants);
-            return Ok((
-                constants,
-                plan_frame(
-                    scene,
-                    lights,
-                    out,
-                    prune,
-                    (filter, settings.temporal, settings.atrous_iterations > 0),
-                ),
-                None,
-            ));
+            let mut plan = plan_frame(
+                scene,
+                lights,
+                out,
+                prune,
+                (filter, settings.temporal, settings.atrous_iterations > 0),
+            );
+            if settings.fused_deposit {
+                if let Some(v) = &mut plan.trace_variant {
+                    v.fused_deposit = true;
+                }
+                if let Some(p) = plan
+                    .passes
+                    .iter_mut()
+                    .find(|p| p.name == "deposit_screen" && p.runs)
+                {
+                    p.runs = false;
+                    p.reason = "trace_photons deposits each stored photon into the screen \
+                                photon map (fused_deposit)"
+                        .into();
+                }
+            }
+            return Ok((constants, plan, None));
         };
         let mut emission = Emission::new(
             scene,
@@ -377,18 +393,21 @@ impl Sspm {
             .then(|| rec.create(pixels, "direct image"));
         let photon = needs.photons.then(|| {
             let per_light = settings.photons_w as u64 * settings.photons_h as u64;
-            // with adaptive emission the traversal holds the photons (its output list)
-            let cap = if adaptive.is_some() {
+            let batch = crate::frame::allocation::photons_per_batch(
+                per_light,
+                settings.max_photons_per_batch,
+                backend.capabilities().max_buffer_bytes,
+            );
+            // with adaptive emission the traversal holds the photons (its output list),
+            // with the fused deposit the screen photon map
+            let cap = if adaptive.is_some() || settings.fused_deposit {
                 1
             } else {
-                crate::frame::allocation::photons_per_batch(
-                    per_light,
-                    settings.max_photons_per_batch,
-                    backend.capabilities().max_buffer_bytes,
-                )
+                batch
             };
             PhotonBuffers {
                 photons: rec.create(cap, "photons"),
+                batch,
                 photon_count: rec.create(1, "photon count"),
                 photon_map: rec.create_photon_map(pixels),
                 counters: rec.create(counter::WORDS as u32, "photon counters"),
@@ -624,10 +643,13 @@ impl Sspm {
         self.gbuffer
     }
 
-    /// The stored-photon buffer and its count (absent when no light emits photons). After
-    /// a frame they hold the last batch.
+    /// The stored-photon buffer and its count (absent when no light emits photons and with
+    /// the fused deposit, which stores none: [`SspmSettings::fused_deposit`]). After a
+    /// frame they hold the last batch.
     pub fn photon_buffers(&self) -> Option<(Buf<Photon>, Buf<u32>)> {
-        self.photon.map(|p| (p.photons, p.photon_count))
+        self.photon
+            .filter(|_| !self.plan.trace_variant.is_some_and(|v| v.fused_deposit))
+            .map(|p| (p.photons, p.photon_count))
     }
 
     /// Renders one frame: the planned passes, nothing else. `progress` is called after
@@ -871,7 +893,7 @@ impl Sspm {
             }
             let mut first = 0u64;
             while first < per_light {
-                let count = (per_light - first).min(p.photons.len as u64) as u32;
+                let count = (per_light - first).min(p.batch as u64) as u32;
                 let mut rec = Recording::new();
                 rec.clear(p.photon_count);
                 rec.kernel(TracePhotons {
@@ -888,16 +910,24 @@ impl Sspm {
                     photon_count: p.photon_count,
                     counters: p.counters,
                     clusters: None,
-                    atlas: None,
+                    deposit: variant
+                        .fused_deposit
+                        .then_some(FusedDeposit::Screen(ScreenDeposit {
+                            params: deposit_params,
+                            gbuffer: self.gbuffer,
+                            photon_map: p.photon_map,
+                        })),
                 });
-                rec.kernel(DepositScreen {
-                    params: deposit_params,
-                    gbuffer: self.gbuffer,
-                    photons: p.photons,
-                    photon_count: p.photon_count,
-                    counters: p.counters,
-                    photon_map: p.photon_map,
-                });
+                if !variant.fused_deposit {
+                    rec.kernel(DepositScreen {
+                        params: deposit_params,
+                        gbuffer: self.gbuffer,
+                        photons: p.photons,
+                        photon_count: p.photon_count,
+                        counters: p.counters,
+                        photon_map: p.photon_map,
+                    });
+                }
                 stats.batches += 1;
                 first += count as u64;
                 out.push((rec, count as u64));
