@@ -199,10 +199,6 @@ const NOT_BOUND: &[(&str, &str)] = &[
          pipelines from caustica-shaders' WGSL, whose layouts that crate's tests check",
     ),
     (
-        "DepositParams",
-        "deposit_screen runs from WGSL (see DepositTexel)",
-    ),
-    (
         "GatherParams",
         "tile_hit_distance and bilateral_gather run from WGSL (see DepositTexel)",
     ),
