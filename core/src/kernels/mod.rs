@@ -434,6 +434,9 @@ pub(crate) mod bytes {
 macro_rules! kernel_list {
     ($($variant:ident => $module:ident),* $(,)?) => {
         /// One kernel dispatch with its typed arguments (see each struct for its contract).
+        // A recording holds a few dispatches a frame: the size of the largest (the trace
+        // with its fused deposit's parameters) costs nothing worth a box.
+        #[allow(clippy::large_enum_variant)]
         #[derive(Clone, Debug)]
         pub enum Kernel {
             $(
