@@ -26,7 +26,7 @@ use caustica_conformance::kernels::{
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};
 use caustica_core::backend::{read_gbuffer, Backend, BackendError, Capabilities, PassTime};
-use caustica_core::device::handle::ResourceId;
+use caustica_core::device::handle::{PhotonMapPlanes, ResourceId};
 use caustica_core::device::layout::{
     cluster_count, counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GiPhoton,
     GpuCamera, GpuVertex, Photon, RsmPhoton, RsmTexel, DEPOSIT_PLANE_WORDS, NO_MATERIAL,
@@ -229,6 +229,16 @@ impl Mutant {
         }
     }
 
+    /// One fixed-point unit of red less in every texel of photon map `m` that has red.
+    fn lose_a_red_unit(&mut self, m: &PhotonMapPlanes) -> Result<(), BackendError> {
+        let (k, _) = deposit_word(0, 0);
+        self.modify::<u32>(m.planes[k].id, |m| {
+            for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
+                t[0] -= 1;
+            }
+        })
+    }
+
     /// Reads buffer `id` as `T`s, lets `f` change them, writes them back.
     fn modify<T: bytemuck::Pod>(
         &mut self,
@@ -426,14 +436,7 @@ impl Mutant {
                     deposit: Some(FusedDeposit::Atlas(AtlasDeposit { sums, .. })),
                     ..
                 }),
-            ) => {
-                let (k, _) = deposit_word(0, 0);
-                self.modify::<u32>(sums.planes[k].id, |m| {
-                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
-                        t[0] -= 1;
-                    }
-                })
-            }
+            ) => self.lose_a_red_unit(sums),
             (
                 Mutation::FusedReachLost,
                 Kernel::TracePhotons(TracePhotons {
@@ -451,14 +454,7 @@ impl Mutant {
                     deposit: Some(FusedDeposit::Screen(ScreenDeposit { photon_map, .. })),
                     ..
                 }),
-            ) => {
-                let (k, _) = deposit_word(0, 0);
-                self.modify::<u32>(photon_map.planes[k].id, |m| {
-                    for t in m.chunks_mut(DEPOSIT_PLANE_WORDS[k]).filter(|t| t[0] > 0) {
-                        t[0] -= 1;
-                    }
-                })
-            }
+            ) => self.lose_a_red_unit(photon_map),
             (Mutation::MapGatherHigh, Kernel::GatherCausticMap(GatherCausticMap { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }

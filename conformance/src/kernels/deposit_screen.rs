@@ -58,12 +58,7 @@ pub fn check_deposit(
         }
     }
     let texels = ma.len() as u64;
-    let equal = ma.iter().zip(&mb).filter(|(a, b)| a == b).count() as u64;
-    let moved: u64 = ma
-        .iter()
-        .zip(&mb)
-        .map(|(a, b)| (join_u64(a.photons) as i64 - join_u64(b.photons) as i64).unsigned_abs())
-        .sum();
+    let (equal, moved) = map_agreement(&ma, &mb);
     v.check(
         equal as f64 >= DEPOSIT_TEXEL_AGREEMENT * texels as f64,
         || {
@@ -99,6 +94,18 @@ pub fn check_deposit(
         ca[counter::DEPOSITED]
     ));
     Ok(v)
+}
+
+/// Two photon maps' agreement: the texels bitwise equal, and the photons moved (the sum
+/// over texels of their counts' differences).
+fn map_agreement(a: &[DepositTexel], b: &[DepositTexel]) -> (u64, u64) {
+    let equal = a.iter().zip(b).filter(|(a, b)| a == b).count() as u64;
+    let moved = a
+        .iter()
+        .zip(b)
+        .map(|(a, b)| (join_u64(a.photons) as i64 - join_u64(b.photons) as i64).unsigned_abs())
+        .sum();
+    (equal, moved)
 }
 
 /// Runs the fused trace (the scene's world-space variant with `fused_deposit`) of light
@@ -185,16 +192,7 @@ pub fn check_fused_screen_trace(
             format!("light domain {k}: fused outcomes {outcomes}, {n} stored photons")
         });
         let texels = map.len() as u64;
-        let equal = map
-            .iter()
-            .zip(&two.photon_map)
-            .filter(|(a, b)| a == b)
-            .count() as u64;
-        let moved: u64 = map
-            .iter()
-            .zip(&two.photon_map)
-            .map(|(a, b)| (join_u64(a.photons) as i64 - join_u64(b.photons) as i64).unsigned_abs())
-            .sum();
+        let (equal, moved) = map_agreement(&map, &two.photon_map);
         v.check(
             equal as f64 >= DEPOSIT_TEXEL_AGREEMENT * texels as f64,
             || {
