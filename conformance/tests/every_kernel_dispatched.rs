@@ -24,6 +24,9 @@ fn every_backend_dispatches_every_declared_kernel() {
             let settings = SspmSettings {
                 prune: false,
                 filter,
+                // the density run deposits inside the trace, the bilateral one through
+                // deposit_screen
+                fused_deposit: filter == GatherFilter::Density,
                 // the opt-in temporal blend and A-Trous iterations, with the bilateral
                 // filter
                 temporal: filter == GatherFilter::Bilateral,
