@@ -1,7 +1,7 @@
 // needs: types vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
-// splat_photons (seed 003 section 24.3, Eqs. 2-9): a thread per stored photon adds its
-// ellipsoid splat's irradiance times each covered receiver pixel's area to the photon map
-// in fixed point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_photon) and
+// splat_photons (seed 003 section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat
+// adds its irradiance times each covered receiver pixel's area to the photon map in fixed
+// point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_setup, splat_pixel) and
 // backend-opencl/kernels/splat_photons.cl.
 
 @group(0) @binding(0) var<uniform> params: SplatParams;
@@ -56,71 +56,140 @@ fn deposit_light_direction(texel: u32, d: vec4<f32>, quantum: f32) {
     atomic_add_u64_direction_map(texel, DEPOSIT_PHOTONS, 1u, 0u);
 }
 
-fn splat_photon(p: SplatParams, ph: GiPhoton) {
+// backend-cpu photon_gi::SplatSetup: what every pixel test of one splat reads.
+struct SplatSetup {
+    ellipsoid: SplatKernel,
+    centre: vec3<f32>,
+    normal: vec3<f32>,
+    to_light: vec3<f32>,
+    irradiance: vec3<f32>,
+    // x0, x1, y0, y1 inclusive; empty when x1 < x0
+    rect: vec4<i32>,
+}
+
+var<workgroup> setups: array<SplatSetup, WORKGROUP_SIZE>;
+// first pixel of each splat in the group's run of pixels; [WORKGROUP_SIZE]: their total
+var<workgroup> starts: array<u32, 65>; // WORKGROUP_SIZE + 1
+
+fn no_splat() -> SplatSetup {
+    var s: SplatSetup;
+    s.rect = vec4<i32>(0, -1, 0, -1);
+    return s;
+}
+
+// backend-cpu photon_gi::splat_setup: the photon's kernel, irradiance and screen rectangle
+// (empty when it packs to zero power or projects off screen).
+fn splat_setup(p: SplatParams, ph: GiPhoton) -> SplatSetup {
+    var s = no_splat();
     let power = unpack_rgb9e5(ph.power) * p.power_scale;
     if (!(max_element3(power) > 0.0)) {
-        return;
+        return s;
     }
     var px: u32;
     var py: u32;
     var z: f32;
     if (!project_to_pixel(p.camera, ph.position, &px, &py, &z)) {
-        return;
+        return s;
     }
     let n = unpack_unit_vector(ph.normal);
     let to_light = -unpack_unit_vector(ph.direction);
-    let s = max(ray_length_scale(ph.ray_length, p) *
-                density_scale(z, p.tile_constant, tile_counts[ph.tile], p),
-                min_splat_scale(z, p.camera.tan_half_fov_y, p.camera.height, p.min_splat_px));
-    let kernel = splat_kernel(n, to_light, s, p);
-    let e = splat_irradiance(power, kernel);
+    let sc = max(ray_length_scale(ph.ray_length, p) *
+                 density_scale(z, p.tile_constant, tile_counts[ph.tile], p),
+                 min_splat_scale(z, p.camera.tan_half_fov_y, p.camera.height, p.min_splat_px));
+    let kernel = splat_kernel(n, to_light, sc, p);
     let reach = splat_reach_px(p, max_element3(kernel.axes), z);
     if (reach > p.max_splat_px) {
         atomicAdd(&lc[COUNTER_SATURATED], 1u);
     }
-    let rect = splat_screen_rect(p.camera, ph.position, kernel, px, py,
-                                 min(reach, p.max_splat_px));
-    let w = i32(p.camera.width);
-    for (var qy = rect.z; qy <= rect.w; qy++) {
-        for (var qx = rect.x; qx <= rect.y; qx++) {
-            let q = u32(qy * w + qx);
-            // each test loads the G-buffer plane it reads, in the tests' order (flags,
-            // position, normal): most pixels of the square fail the first two
-            let p3 = gbuffer3[q];
-            if ((p3.w & GBUFFER_RECEIVER) == 0u) {
-                continue;
-            }
-            let p0 = gbuffer0[q];
-            if (!kernel_contains(kernel, ph.position, bitcast<vec3<f32>>(p0.xyz))) {
-                continue;
-            }
-            let p1 = gbuffer1[q];
-            if (dot3(bitcast<vec3<f32>>(p1.xyz), n) <= 0.0) {
-                continue;
-            }
-            let t = gbuffer_from_planes(p0, p1, gbuffer2[q], p3);
-            let area = gbuffer_pixel_area(p.camera, q, t);
-            var splat: Photon;
-            splat.position = vec3<f32>(0.0);
-            splat.hit_distance = 0.0;
-            splat.flux = e * area;
-            splat.direction = 0u;
-            deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
-            if (p.light_direction != 0u &&
-                shading_normal_departs(t.normal, unpack_unit_vector(t.geometric_normal))) {
-                deposit_light_direction(q, light_direction_deposit(e * area, to_light),
-                                        p.flux_quantum);
-            }
-        }
+    s.ellipsoid = kernel;
+    s.centre = ph.position;
+    s.normal = n;
+    s.to_light = to_light;
+    s.irradiance = splat_irradiance(power, kernel);
+    s.rect = splat_screen_rect(p.camera, ph.position, kernel, px, py, min(reach, p.max_splat_px));
+    return s;
+}
+
+// backend-cpu photon_gi::splat_rect_pixels: pixels in a splat's screen rectangle.
+fn splat_rect_pixels(rect: vec4<i32>) -> u32 {
+    if (rect.y < rect.x || rect.w < rect.z) {
+        return 0u;
+    }
+    return u32(rect.y - rect.x + 1) * u32(rect.w - rect.z + 1);
+}
+
+// backend-cpu photon_gi::splat_pixel: one pixel's test and deposit.
+fn splat_pixel(p: SplatParams, s: SplatSetup, q: u32) {
+    // each test loads the G-buffer plane it reads, in the tests' order (flags, position,
+    // normal): most pixels of the rectangle fail the first two
+    let p3 = gbuffer3[q];
+    if ((p3.w & GBUFFER_RECEIVER) == 0u) {
+        return;
+    }
+    let p0 = gbuffer0[q];
+    if (!kernel_contains(s.ellipsoid, s.centre, bitcast<vec3<f32>>(p0.xyz))) {
+        return;
+    }
+    let p1 = gbuffer1[q];
+    if (dot3(bitcast<vec3<f32>>(p1.xyz), s.normal) <= 0.0) {
+        return;
+    }
+    let t = gbuffer_from_planes(p0, p1, gbuffer2[q], p3);
+    let area = gbuffer_pixel_area(p.camera, q, t);
+    var splat: Photon;
+    splat.position = vec3<f32>(0.0);
+    splat.hit_distance = 0.0;
+    splat.flux = s.irradiance * area;
+    splat.direction = 0u;
+    deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
+    if (p.light_direction != 0u &&
+        shading_normal_departs(t.normal, unpack_unit_vector(t.geometric_normal))) {
+        deposit_light_direction(q, light_direction_deposit(s.irradiance * area, s.to_light),
+                                p.flux_quantum);
     }
 }
 
-// `li`: local invocation index; every invocation reaches the counter helpers' barriers.
+// A workgroup splats its photons together: each invocation sets up its own photon's splat,
+// then the group walks the run of all its splats' pixels, a pixel per invocation, so that
+// neighbouring invocations test neighbouring pixels of one splat and every invocation
+// gets the same share (a large splat does not hold up the rest of its group). The sums
+// are exact integers, so the order is free. `li`: local invocation index; every
+// invocation reaches the barriers.
 fn splat_photons(i: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
+    var mine = no_splat();
     if (i < min(photon_count[0], arrayLength(&photons))) {
-        splat_photon(p, photons[i]);
+        mine = splat_setup(p, photons[i]);
+    }
+    setups[li] = mine;
+    starts[li + 1u] = splat_rect_pixels(mine.rect);
+    workgroupBarrier();
+    if (li == 0u) {
+        starts[0] = 0u;
+        for (var j = 1u; j <= WORKGROUP_SIZE; j++) {
+            starts[j] += starts[j - 1u];
+        }
+    }
+    workgroupBarrier();
+    let w = i32(p.camera.width);
+    let total = starts[WORKGROUP_SIZE];
+    var j = 0u;
+    var loaded = WORKGROUP_SIZE;
+    var s = mine;
+    for (var k = li; k < total; k += WORKGROUP_SIZE) {
+        while (starts[j + 1u] <= k) {
+            j++;
+        }
+        if (j != loaded) {
+            s = setups[j];
+            loaded = j;
+        }
+        let at = k - starts[j];
+        let rw = u32(s.rect.y - s.rect.x + 1);
+        let qx = s.rect.x + i32(at % rw);
+        let qy = s.rect.z + i32(at / rw);
+        splat_pixel(p, s, u32(qy * w + qx));
     }
     counters_flush_local(li);
 }

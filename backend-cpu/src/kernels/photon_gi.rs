@@ -27,7 +27,7 @@ use caustica_core::math::packing::{
 };
 use caustica_core::math::photon_splat::{
     density_scale, min_splat_scale, ray_length_scale, splat_irradiance, splat_kernel,
-    SplatConstants,
+    SplatConstants, SplatKernel,
 };
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{
@@ -472,22 +472,32 @@ pub fn splat_reach_px(p: &SplatParams, radius: f32, z: f32) -> u32 {
     }
 }
 
-fn splat_photon(
+/// What every pixel test of one splat reads (the GPU ports keep a workgroup's in shared
+/// memory and walk their pixels together).
+struct SplatSetup {
+    ellipsoid: SplatKernel,
+    centre: Vec3,
+    normal: Vec3,
+    to_light: Vec3,
+    irradiance: Vec3,
+    /// `[x0, x1, y0, y1]`, inclusive.
+    rect: [i32; 4],
+}
+
+/// A photon's kernel (Eqs. 2-8), irradiance (Eq. 9) and screen rectangle; `None` when it
+/// packs to zero power or projects off screen. Counts a saturated splat.
+fn splat_setup(
     p: &SplatParams,
-    g: &GBufferView,
     ph: &GiPhoton,
     tile_counts: &[u32],
-    (map, directions): (&MapPlanes, &MapPlanes),
     c: &mut Counters,
-) {
+) -> Option<SplatSetup> {
     let power = unpack_rgb9e5(ph.power) * p.power_scale;
     if !(power.max_element() > 0.0) {
-        return;
+        return None;
     }
     let pos = Vec3::from(ph.position);
-    let Some((px, py, z)) = project_to_pixel(&p.camera, pos) else {
-        return;
-    };
+    let (px, py, z) = project_to_pixel(&p.camera, pos)?;
     let k = splat_constants(p);
     let n = unpack_unit_vector(ph.normal);
     let to_light = -unpack_unit_vector(ph.direction);
@@ -500,55 +510,85 @@ fn splat_photon(
         p.min_splat_px,
     ));
     let kernel = splat_kernel(n, to_light, s, &k);
-    let e = splat_irradiance(power, &kernel);
     let reach = splat_reach_px(p, kernel.axes.max_element(), z);
     if reach > p.max_splat_px {
         c.bump(counter::SATURATED);
     }
-    let [x0, x1, y0, y1] =
-        splat_screen_rect(&p.camera, pos, &kernel, (px, py), reach.min(p.max_splat_px));
+    let rect = splat_screen_rect(&p.camera, pos, &kernel, (px, py), reach.min(p.max_splat_px));
+    Some(SplatSetup {
+        irradiance: splat_irradiance(power, &kernel),
+        ellipsoid: kernel,
+        centre: pos,
+        normal: n,
+        to_light,
+        rect,
+    })
+}
+
+/// One pixel `q` of a splat's rectangle: if it is a receiver inside the kernel facing the
+/// photon's side, `E` times its area goes to `map` (and Eq. 20's light direction to
+/// `directions` with `p.light_direction`).
+fn splat_pixel(
+    p: &SplatParams,
+    g: &GBufferView,
+    s: &SplatSetup,
+    q: u32,
+    (map, directions): (&MapPlanes, &MapPlanes),
+    c: &mut Counters,
+) {
+    let t = g.load_gbuffer(q as usize);
+    // the GPU kernels' order: flags, containment, normal (each loads its plane)
+    if t.flags & gbuffer_flags::RECEIVER == 0
+        || !s.ellipsoid.contains(s.centre, Vec3::from(t.position))
+        || Vec3::from(t.normal).dot(s.normal) <= 0.0
+    {
+        return;
+    }
+    let area = gbuffer_pixel_area(&p.camera, q, &t);
+    let splat = Photon {
+        flux: (s.irradiance * area).to_array(),
+        ..Default::default()
+    };
+    deposit_photon_texel(map, q, &splat, p.flux_quantum, 1.0, c);
+    if p.light_direction != 0
+        && shading_normal_departs(Vec3::from(t.normal), unpack_unit_vector(t.geometric_normal))
+    {
+        // Eq. 20's power-weighted light direction, in the flux's quanta; its rounding is
+        // not counted (the flux's own deposit counts it)
+        let (d, w) = light_direction_deposit(s.irradiance * area, s.to_light);
+        let dir = Photon {
+            flux: d.to_array(),
+            hit_distance: w,
+            ..Default::default()
+        };
+        let mut uncounted = Counters::default();
+        deposit_photon_texel(
+            directions,
+            q,
+            &dir,
+            p.flux_quantum,
+            p.flux_quantum,
+            &mut uncounted,
+        );
+    }
+}
+
+fn splat_photon(
+    p: &SplatParams,
+    g: &GBufferView,
+    ph: &GiPhoton,
+    tile_counts: &[u32],
+    maps: (&MapPlanes, &MapPlanes),
+    c: &mut Counters,
+) {
+    let Some(s) = splat_setup(p, ph, tile_counts, c) else {
+        return;
+    };
+    let [x0, x1, y0, y1] = s.rect;
     let w = p.camera.width as i64;
     for qy in y0 as i64..=y1 as i64 {
         for qx in x0 as i64..=x1 as i64 {
-            let q = (qy * w + qx) as u32;
-            let t = g.load_gbuffer(q as usize);
-            // the GPU kernels' order: flags, containment, normal (each loads its plane)
-            if t.flags & gbuffer_flags::RECEIVER == 0
-                || !kernel.contains(pos, Vec3::from(t.position))
-                || Vec3::from(t.normal).dot(n) <= 0.0
-            {
-                continue;
-            }
-            let area = gbuffer_pixel_area(&p.camera, q, &t);
-            let splat = Photon {
-                flux: (e * area).to_array(),
-                ..Default::default()
-            };
-            deposit_photon_texel(map, q, &splat, p.flux_quantum, 1.0, c);
-            if p.light_direction != 0
-                && shading_normal_departs(
-                    Vec3::from(t.normal),
-                    unpack_unit_vector(t.geometric_normal),
-                )
-            {
-                // Eq. 20's power-weighted light direction, in the flux's quanta; its
-                // rounding is not counted (the flux's own deposit counts it)
-                let (d, w) = light_direction_deposit(e * area, to_light);
-                let dir = Photon {
-                    flux: d.to_array(),
-                    hit_distance: w,
-                    ..Default::default()
-                };
-                let mut uncounted = Counters::default();
-                deposit_photon_texel(
-                    directions,
-                    q,
-                    &dir,
-                    p.flux_quantum,
-                    p.flux_quantum,
-                    &mut uncounted,
-                );
-            }
+            splat_pixel(p, g, &s, (qy * w + qx) as u32, maps, c);
         }
     }
 }
