@@ -99,11 +99,15 @@ __kernel void splat_photons(__global const SplatParams* p, GBUFFER_PARAMS(__glob
     __local SplatSetup setups[SPLAT_GROUP];
     // first pixel of each splat in the group's run of pixels; [SPLAT_GROUP]: their total
     __local uint starts[SPLAT_GROUP + 1];
+    // the launch covers the photon buffer's capacity; a group past the stored photons
+    // (most of them at 3 bounces) leaves at once, all its threads alike, before any barrier
+    uint stored = min(photon_count[0], photon_capacity);
+    if (get_group_id(0) * SPLAT_GROUP >= stored) return;
     counters_clear_local(lc);
     uint i = get_global_id(0), l = get_local_id(0);
     SplatSetup mine;
     mine.rect = (int4)(0, -1, 0, -1);
-    if (i < min(photon_count[0], photon_capacity))
+    if (i < stored)
         mine = splat_setup(p, photons[i], tile_counts, lc);
     setups[l] = mine;
     starts[l + 1u] = splat_rect_pixels(mine.rect);

@@ -1,6 +1,7 @@
-// trace_indirect (seed 003 section 24.2.2): photon p->first + i of the RSM photons is
-// traced with Russian roulette at diffuse bounces and stored (culled to the camera's view
-// and facing side, counted per screen tile) at every diffuse hit after its first bounce.
+// trace_indirect (seed 003 section 24.2.2): photon p->first + coherent_sample_order(i) of
+// the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled to
+// the camera's view and facing side, counted per screen tile) at every diffuse hit after
+// its first bounce.
 // Mirror of backend-cpu/src/kernels/photon_gi.rs (trace_indirect_path, store_indirect) and
 // shaders/wgsl/trace_indirect.wgsl: same random dimensions (per segment: 0, 1 bounce
 // direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Photons are 32-byte slots,
@@ -143,7 +144,9 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < p->count) {
-        uint index = p->first + i;
+        // a warp's samples in one small box of the Hammersley square (its RSM photons
+        // near each other), not a column across it
+        uint index = p->first + coherent_sample_order(i, p->count);
         uint rays = trace_indirect_path(SCENE_ARGS, p, rsm_photons[index], index, photons,
                                         photon_capacity, photon_count, tile_counts,
                                         GATHER_GBUFFER_ARGS, lc);

@@ -58,11 +58,15 @@ const RAYGEN_WIDTH: u64 = 8192;
 const PHOTON_LAUNCH_WIDTH: u64 = 8;
 
 /// The launch grid's width for `n` threads of `kernel`: [`PHOTON_LAUNCH_WIDTH`] for
-/// `trace_photons` where the device takes a grid that tall, else [`RAYGEN_WIDTH`].
+/// `trace_photons` and `trace_indirect` (whose warps trace neighbouring samples,
+/// `core::math::rsm::coherent_sample_order`) where the device takes a grid that tall,
+/// else [`RAYGEN_WIDTH`].
 fn raygen_width(limits: &vk::PhysicalDeviceLimits, kernel: &str, n: u64) -> u64 {
     let max_height = limits.max_compute_work_group_count[1] as u64
         * limits.max_compute_work_group_size[1] as u64;
-    if kernel == "trace_photons" && n.div_ceil(PHOTON_LAUNCH_WIDTH) <= max_height {
+    if matches!(kernel, "trace_photons" | "trace_indirect")
+        && n.div_ceil(PHOTON_LAUNCH_WIDTH) <= max_height
+    {
         PHOTON_LAUNCH_WIDTH
     } else {
         RAYGEN_WIDTH

@@ -194,6 +194,13 @@ pub fn wgsl_to_spirv(name: &str) -> Result<Vec<u32>, BackendError> {
         // no iteration counter in every loop: every loop of these kernels ends (the
         // argument is at the wgpu backend's `create_pipeline`, which does the same)
         force_loop_bounding: false,
+        // kernels that write their workgroup memory before reading it skip the polyfill
+        // (invocation 0 storing zeros over all of it before a barrier)
+        zero_initialize_workgroup_memory: if wgsl::WORKGROUP_MEMORY_WRITTEN_FIRST.contains(&name) {
+            naga::back::spv::ZeroInitializeWorkgroupMemoryMode::None
+        } else {
+            naga::back::spv::ZeroInitializeWorkgroupMemoryMode::Polyfill
+        },
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {

@@ -108,7 +108,8 @@ fn create_pipeline(
         entry_point: Some("main"),
         compilation_options: wgpu::PipelineCompilationOptions {
             constants: &overrides,
-            ..Default::default()
+            zero_initialize_workgroup_memory: !shaders::WORKGROUP_MEMORY_WRITTEN_FIRST
+                .contains(&name),
         },
         cache: None,
     });

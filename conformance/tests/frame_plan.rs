@@ -163,7 +163,10 @@ fn each_scene_compiles_only_the_variant_it_needs() {
             let scene = small(scene_name);
             let f = caustica_core::frame::plan::SceneFeatures::of(&scene);
             let r = run(b.as_mut(), &scene, settings(true));
-            let want = variant_label("trace_photons", &f.trace_variant().constants());
+            // the scene's features, and Sspm's fused deposit (a setting, on by default)
+            let mut variant = f.trace_variant();
+            variant.fused_deposit = settings(true).fused_deposit;
+            let want = variant_label("trace_photons", &variant.constants());
             if r.stats.photons_emitted == 0 {
                 continue; // plain: checked above
             }
@@ -228,13 +231,15 @@ fn pruning_on_and_off_give_the_same_frame() {
             let scene = small(scene_name);
             let on = run(b.as_mut(), &scene, settings(true));
             let off = run(b.as_mut(), &scene, settings(false));
-            // pruning off runs every pass but those of the filter not chosen and the
-            // opt-in temporal blend (a setting, not pruning)
+            // pruning off runs every pass but those of the filter not chosen, the opt-in
+            // temporal blend and A-Trous, and the deposit the fused trace does (settings,
+            // not pruning)
             assert!(
                 off.stats.skipped.iter().all(|p| {
                     p.reason.starts_with("filter is density")
                         || p.name == "temporal_blend"
                         || p.name == "atrous_filter"
+                        || (p.name == "deposit_screen" && p.reason.contains("fused_deposit"))
                 }),
                 "{name}: pruning off skipped {:?}",
                 off.stats.skipped

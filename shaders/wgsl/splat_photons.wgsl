@@ -118,8 +118,9 @@ fn splat_rect_pixels(rect: vec4<i32>) -> u32 {
     return u32(rect.y - rect.x + 1) * u32(rect.w - rect.z + 1);
 }
 
-// backend-cpu photon_gi::splat_pixel: one pixel's test and deposit.
-fn splat_pixel(p: SplatParams, s: SplatSetup, q: u32) {
+// backend-cpu photon_gi::splat_pixel: one pixel's test and deposit for the group's splat
+// `j` (read from workgroup memory where used: most pixels fail the first test).
+fn splat_pixel(p: SplatParams, j: u32, q: u32) {
     // each test loads the G-buffer plane it reads, in the tests' order (flags, position,
     // normal): most pixels of the rectangle fail the first two
     let p3 = gbuffer3[q];
@@ -127,24 +128,25 @@ fn splat_pixel(p: SplatParams, s: SplatSetup, q: u32) {
         return;
     }
     let p0 = gbuffer0[q];
-    if (!kernel_contains(s.ellipsoid, s.centre, bitcast<vec3<f32>>(p0.xyz))) {
+    if (!kernel_contains(setups[j].ellipsoid, setups[j].centre, bitcast<vec3<f32>>(p0.xyz))) {
         return;
     }
     let p1 = gbuffer1[q];
-    if (dot3(bitcast<vec3<f32>>(p1.xyz), s.normal) <= 0.0) {
+    if (dot3(bitcast<vec3<f32>>(p1.xyz), setups[j].normal) <= 0.0) {
         return;
     }
     let t = gbuffer_from_planes(p0, p1, gbuffer2[q], p3);
     let area = gbuffer_pixel_area(p.camera, q, t);
+    let irradiance = setups[j].irradiance;
     var splat: Photon;
     splat.position = vec3<f32>(0.0);
     splat.hit_distance = 0.0;
-    splat.flux = s.irradiance * area;
+    splat.flux = irradiance * area;
     splat.direction = 0u;
     deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
     if (p.light_direction != 0u &&
         shading_normal_departs(t.normal, unpack_unit_vector(t.geometric_normal))) {
-        deposit_light_direction(q, light_direction_deposit(s.irradiance * area, s.to_light),
+        deposit_light_direction(q, light_direction_deposit(irradiance * area, setups[j].to_light),
                                 p.flux_quantum);
     }
 }
@@ -153,13 +155,15 @@ fn splat_pixel(p: SplatParams, s: SplatSetup, q: u32) {
 // then the group walks the run of all its splats' pixels, a pixel per invocation, so that
 // neighbouring invocations test neighbouring pixels of one splat and every invocation
 // gets the same share (a large splat does not hold up the rest of its group). The sums
-// are exact integers, so the order is free. `li`: local invocation index; every
-// invocation reaches the barriers.
-fn splat_photons(i: u32, li: u32) {
+// are exact integers, so the order is free. `first`: the group's first photon; `li`: local
+// invocation index. Every invocation reaches the barriers.
+fn splat_photons(first: u32, li: u32) {
+    let stored = min(photon_count[0], arrayLength(&photons));
     counters_clear_local(li);
     let p = params;
+    let i = first + li;
     var mine = no_splat();
-    if (i < min(photon_count[0], arrayLength(&photons))) {
+    if (i < stored) {
         mine = splat_setup(p, photons[i]);
     }
     setups[li] = mine;
@@ -175,21 +179,16 @@ fn splat_photons(i: u32, li: u32) {
     let w = i32(p.camera.width);
     let total = starts[WORKGROUP_SIZE];
     var j = 0u;
-    var loaded = WORKGROUP_SIZE;
-    var s = mine;
     for (var k = li; k < total; k += WORKGROUP_SIZE) {
         while (starts[j + 1u] <= k) {
             j++;
         }
-        if (j != loaded) {
-            s = setups[j];
-            loaded = j;
-        }
         let at = k - starts[j];
-        let rw = u32(s.rect.y - s.rect.x + 1);
-        let qx = s.rect.x + i32(at % rw);
-        let qy = s.rect.z + i32(at / rw);
-        splat_pixel(p, s, u32(qy * w + qx));
+        let rect = setups[j].rect;
+        let rw = u32(rect.y - rect.x + 1);
+        let qx = rect.x + i32(at % rw);
+        let qy = rect.z + i32(at / rw);
+        splat_pixel(p, j, u32(qy * w + qx));
     }
     counters_flush_local(li);
 }
@@ -197,6 +196,14 @@ fn splat_photons(i: u32, li: u32) {
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) li: u32) {
-    let i = (wg.y * nwg.x + wg.x) * 64u + li;
-    splat_photons(i, li);
+    let first = (wg.y * nwg.x + wg.x) * 64u;
+    // the launch covers the photon buffer's capacity; a group past the stored photons
+    // (most of them at 3 bounces) leaves at once, all its invocations alike, before any
+    // barrier: the condition reads only workgroup builtins and read-only storage, which
+    // WGSL's uniformity analysis holds uniform (wgsl_validate's
+    // barriers_in_uniform_control_flow checks that form)
+    if (first >= min(photon_count[0], arrayLength(&photons))) {
+        return;
+    }
+    splat_photons(first, li);
 }

@@ -1,7 +1,8 @@
 // needs: types vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
-// trace_indirect (seed 003 section 24.2.2): photon params.first + i of the RSM photons is
-// traced with Russian roulette at diffuse bounces and stored (culled to the camera's view
-// and facing side, counted per screen tile) at every diffuse hit after its first bounce.
+// trace_indirect (seed 003 section 24.2.2): photon params.first + coherent_sample_order(i)
+// of the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled
+// to the camera's view and facing side, counted per screen tile) at every diffuse hit
+// after its first bounce.
 // Mirror of backend-cpu/src/kernels/photon_gi.rs (trace_indirect_path, store_indirect)
 // and backend-opencl/kernels/trace_indirect.cl: same random dimensions (per segment: 0, 1
 // bounce direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Stored photons are
@@ -161,7 +162,9 @@ fn trace_indirect(i: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
     if (i < p.count) {
-        let index = p.first + i;
+        // a warp's samples in one small box of the Hammersley square (its RSM photons
+        // near each other), not a column across it
+        let index = p.first + coherent_sample_order(i, p.count);
         let rays = trace_indirect_path(p, rsm_photons[index], index);
         atomic_add_u64_local(COUNTER_RAYS, rays);
     }

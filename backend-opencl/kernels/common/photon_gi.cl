@@ -66,6 +66,16 @@ inline float2 hammersley(uint i, uint n, float2 shift) {
     return (float2)(wrap_unit(u.x), wrap_unit(u.y));
 }
 
+// rsm::coherent_sample_order: the sample thread t of a launch over n samples traces.
+inline uint coherent_sample_order(uint t, uint n) {
+    if (n < 64u) return t;
+    uint m = 31u - clz(n);
+    if (t >= (1u << m)) return t;
+    uint k = (m - 5u) / 2u;
+    uint hi = m - k;
+    return ((t & ((1u << hi) - 1u)) << k) | (t >> hi);
+}
+
 // wavelet_warp::warp_ratio.
 inline float warp_ratio(float part, float whole) {
     return whole > 0.0f ? clamp(part / whole, 0.0f, 1.0f) : 0.0f;

@@ -20,6 +20,16 @@ precise vec4 russian_roulette(vec3 flux, vec3 albedo, float xi) {
     return vec4(0.0);
 }
 
+// rsm::coherent_sample_order: the sample thread t of a launch over n samples traces.
+uint coherent_sample_order(uint t, uint n) {
+    if (n < 64u) return t;
+    uint m = uint(findMSB(n));
+    if (t >= (1u << m)) return t;
+    uint k = (m - 5u) / 2u;
+    uint hi = m - k;
+    return ((t & ((1u << hi) - 1u)) << k) | (t >> hi);
+}
+
 // gi_photon::screen_tile.
 uint screen_tile(uint x, uint y, uint width, uint tile_size) {
     uint t = max(tile_size, 1u);

@@ -7,7 +7,7 @@ use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes};
 use crate::device::layout::{GiPhoton, SplatParams};
 use crate::math::gi_photon::screen_tiles;
 
-/// A thread per stored photon (of `photon_count[0]`) scatters its splat: the kernel of
+/// Every stored photon (of `photon_count[0]`) scatters its splat: the kernel of
 /// Eqs. 2-8 (ray-length scale, the density scale from its tile's count in
 /// `tile_counts`, normal compression, light stretch) around the photon, and every
 /// receiver pixel within `params.max_splat_px` of the photon's pixel whose G-buffer

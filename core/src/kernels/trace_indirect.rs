@@ -26,8 +26,12 @@ pub const VISIBLE_TOLERANCE: f32 = -0.01;
 /// (`math::optics::dielectric_scatter`), with Beer-Lambert inside and, on a dispersive
 /// one, one colour channel kept (x3) and its Cauchy IOR, as `trace_photons` does.
 ///
-/// Random dimensions (`rng::random_f32(seed, first + i, segment, d)`): d 0, 1 the
-/// bounce direction, d 2 the roulette, d 3 the Fresnel choice, d 4 the channel.
+/// Random dimensions (`rng::random_f32(seed, first + i, segment, d)` for photon
+/// `first + i`): d 0, 1 the bounce direction, d 2 the roulette, d 3 the Fresnel choice, d 4
+/// the channel. GPU thread `t` traces photon `first +
+/// math::rsm::coherent_sample_order(t, count)` (a warp's samples near each other); the
+/// CPU traces them in order. A path depends on its photon alone, so only the order of the
+/// appended photons differs.
 ///
 /// Counters ([`crate::device::layout::counter`], read for this kernel as): `STORED`
 /// photons stored, `ESCAPED` paths that left the scene, `NEGLIGIBLE` paths ended by the

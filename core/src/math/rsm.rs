@@ -147,6 +147,33 @@ pub fn hammersley(i: u32, n: u32, shift: Vec2) -> Vec2 {
     Vec2::new(wrap_unit(u.x), wrap_unit(u.y))
 }
 
+/// The Hammersley sample that thread `t` of a launch over `n` samples traces (and so
+/// the RSM photon it reads): a bijection of `0 .. n` onto itself that puts a warp's 32
+/// samples in one small box of `[0, 1)^2` instead of a column across it. Point `i` is
+/// `(i / n, radical_inverse2(i))`: neighbouring `i` share `u.x` but scatter over `u.y`,
+/// whose top bits are `i`'s reversed low bits. Over the largest power of two `2^m <= n`
+/// the order moves `t`'s low `m - k` bits to the top (`k = (m - 5) / 2`), so that a run
+/// of `2^(m - k)` threads shares `i`'s low `k` bits (one `2^-k` stripe of `u.y`) and
+/// steps through neighbouring high bits (`u.x` within `32 * 2^k / n` for a warp): the box
+/// of 32 points' share of the square. Threads past `2^m` (and launches under 64) keep
+/// their own index. A path depends on its sample index alone, so the order changes which
+/// thread traces a sample, never what it does. Measured on the H200: `trace_indirect`
+/// 8.92 -> 8.56 ms at seed 003's high setting, 1.66 -> 1.56 at its low (OpenCL,
+/// docs/gpu/h200-session16-trace-order.log).
+#[inline]
+pub fn coherent_sample_order(t: u32, n: u32) -> u32 {
+    if n < 64 {
+        return t;
+    }
+    let m = 31 - n.leading_zeros();
+    if t >= 1 << m {
+        return t;
+    }
+    let k = (m - 5) / 2;
+    let hi = m - k;
+    ((t & ((1 << hi) - 1)) << k) | (t >> hi)
+}
+
 /// `x` (in `[0, 2)`) wrapped into `[0, 1)`.
 #[inline]
 fn wrap_unit(x: f32) -> f32 {
@@ -257,6 +284,28 @@ pub fn russian_roulette(flux: Vec3, albedo: Vec3, xi: f32) -> Option<Vec3> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn coherent_sample_order_is_a_bijection_that_keeps_a_warp_together() {
+        for n in [1u32, 63, 64, 65, 100, 1000, 1024, 4097, 1 << 16, 1_000_003] {
+            let mut seen = vec![false; n as usize];
+            for t in 0..n {
+                let i = coherent_sample_order(t, n);
+                assert!(i < n && !seen[i as usize], "n {n}: t {t} -> {i}");
+                seen[i as usize] = true;
+            }
+        }
+        // a warp of the 2^20-sample order: one 2^-7 stripe of u.y, 32 neighbouring u.x steps
+        let n = 1u32 << 20;
+        let pts: Vec<Vec2> = (0..32)
+            .map(|t| hammersley(coherent_sample_order(t, n), n, Vec2::ZERO))
+            .collect();
+        let (lo, hi) = pts
+            .iter()
+            .fold((Vec2::ONE, Vec2::ZERO), |(a, b), p| (a.min(*p), b.max(*p)));
+        assert!(hi.y - lo.y < 1.0 / 128.0, "{lo} {hi}");
+        assert!(hi.x - lo.x < 32.0 * 128.0 / n as f32, "{lo} {hi}");
+    }
+
     use super::*;
     use crate::math::wavelet_warp::ImportancePyramid;
 

@@ -70,6 +70,20 @@ fn hammersley(i: u32, n: u32, shift: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(wrap_unit(u.x), wrap_unit(u.y));
 }
 
+// rsm::coherent_sample_order: the sample thread t of a launch over n samples traces.
+fn coherent_sample_order(t: u32, n: u32) -> u32 {
+    if (n < 64u) {
+        return t;
+    }
+    let m = 31u - countLeadingZeros(n);
+    if (t >= (1u << m)) {
+        return t;
+    }
+    let k = (m - 5u) / 2u;
+    let hi = m - k;
+    return ((t & ((1u << hi) - 1u)) << k) | (t >> hi);
+}
+
 // wavelet_warp::warp_ratio: part / whole clamped to [0, 1], 0 when whole is 0.
 fn warp_ratio(part: f32, whole: f32) -> f32 {
     if (whole > 0.0) {
