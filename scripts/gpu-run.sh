@@ -461,6 +461,8 @@ if has session16; then
             CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} CAUSTICA_BENCH_SETTINGS="{\"fused_deposit\": $fused}" ./sspm_frame --bench
     done
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend sspm_fused --test-threads=1
+    [ -x ./photon_gi_stiff ] && run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./photon_gi_stiff --test-threads=1
+    [ -x ./every_kernel_dispatched ] && run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./every_kernel_dispatched --test-threads=1
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
