@@ -110,7 +110,8 @@ fn splat_setup(p: SplatParams, ph: GiPhoton) -> SplatSetup {
     return s;
 }
 
-// backend-cpu photon_gi::splat_rect_pixels: pixels in a splat's screen rectangle.
+// Pixels in a splat's screen rectangle (splat_photons.cl's splat_rect_pixels; the CPU
+// walks its rectangles directly).
 fn splat_rect_pixels(rect: vec4<i32>) -> u32 {
     if (rect.y < rect.x || rect.w < rect.z) {
         return 0u;
