@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp session13 session14 session14gi session14tr session15 session16 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -418,6 +418,19 @@ if has giexp; then
         if [ "$name" = base ]; then kd=/nonexistent; else kd=$dir; fi
         run timeout 150 env CAUSTICA_OPENCL_KERNEL_DIR=$kd CAUSTICA_BENCH_BACKENDS=opencl \
             CAUSTICA_BENCH_SETTINGS=${EXP_SETTINGS:-high,low} CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-5} \
+            CAUSTICA_BENCH_WARMUP_MS=1500 ./photon_gi_frame --bench
+    done
+fi
+if has wgslexp; then
+    # giexp for the WGSL kernels (wgpu, and Vulkan's compute kernels): the built-in texts
+    # and every folder under .devbin/wexp/ (CAUSTICA_WGSL_KERNEL_DIR), each timed on the
+    # chapter's settings (photon_gi_frame).
+    for dir in base "$B"/wexp/*; do
+        name=$(basename "$dir")
+        if [ "$name" = base ]; then kd=/nonexistent; else kd=$dir; fi
+        echo "wgslexp: $name" | tee -a "$OUT/log.txt"
+        run timeout 150 env CAUSTICA_WGSL_KERNEL_DIR=$kd CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu} \
+            CAUSTICA_BENCH_SETTINGS=${EXP_SETTINGS:-high} CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-5} \
             CAUSTICA_BENCH_WARMUP_MS=1500 ./photon_gi_frame --bench
     done
 fi

@@ -169,7 +169,28 @@ pub fn module_source(name: &str) -> Result<String, String> {
         .iter()
         .find(|(n, _)| *n == name)
         .ok_or_else(|| format!("no WGSL kernel named {name}"))?;
-    assemble(name, kernel)
+    match std::env::var_os(KERNEL_DIR_VAR) {
+        Some(dir) => {
+            let dir = std::path::Path::new(&dir);
+            let kernel = file_text(dir, &format!("{name}.wgsl"), kernel);
+            assemble_with(name, &kernel, |n, built_in| {
+                file_text(dir, &format!("common/{n}.wgsl"), built_in)
+            })
+        }
+        None => assemble(name, kernel),
+    }
+}
+
+/// Developer aid, as the OpenCL backend's `CAUSTICA_OPENCL_KERNEL_DIR`: a folder whose
+/// `<kernel>.wgsl` and `common/<name>.wgsl` files replace the built-in ones of the same
+/// name in [`module_source`] (on wgpu and on Vulkan's compute kernels alike), so that a
+/// kernel variant can be timed on the GPU machine without a rebuild. Files it lacks stay
+/// built in; an unreadable file is the built-in one too.
+pub const KERNEL_DIR_VAR: &str = "CAUSTICA_WGSL_KERNEL_DIR";
+
+/// `dir/file`'s text where it can be read, else `built_in`.
+fn file_text(dir: &std::path::Path, file: &str, built_in: &str) -> String {
+    std::fs::read_to_string(dir.join(file)).unwrap_or_else(|_| built_in.to_string())
 }
 
 /// The module text of kernel file `text` (named `name` in messages and in the module's
@@ -178,6 +199,15 @@ pub fn module_source(name: &str) -> Result<String, String> {
 /// newline, then `// ---- <name>.wgsl` and `text`. Fails when `text` has no `// needs:`
 /// line or names a file that is not in [`COMMON`].
 pub fn assemble(name: &str, text: &str) -> Result<String, String> {
+    assemble_with(name, text, |_, built_in| built_in.to_string())
+}
+
+/// [`assemble`] with each shared file's text passed through `common(name, built_in)`.
+fn assemble_with(
+    name: &str,
+    text: &str,
+    common: impl Fn(&str, &str) -> String,
+) -> Result<String, String> {
     let needs = text
         .lines()
         .find_map(|l| l.trim().strip_prefix("// needs:"))
@@ -189,7 +219,7 @@ pub fn assemble(name: &str, text: &str) -> Result<String, String> {
             .find(|(c, _)| *c == n)
             .ok_or_else(|| format!("{name}.wgsl needs unknown shared file '{n}'"))?;
         out.push_str(&format!("// ---- common/{n}.wgsl\n"));
-        out.push_str(src);
+        out.push_str(&common(n, src));
         out.push('\n');
     }
     out.push_str(&format!("// ---- {name}.wgsl\n"));

@@ -44,16 +44,37 @@ fn photon_flux_units(ph: Photon, flux_quantum: f32) -> vec3<u32> {
 
 // backend-cpu deposit_screen.rs::deposit_photon_texel: photon `ph` added to texel `texel`
 // (a screen pixel or an atlas texel): flux per channel, hit distance and a count in fixed
-// point; underflow, saturation and the deposit counted in `lc`.
+// point; underflow, saturation and the deposit counted in `lc`. Every low word's add goes
+// out before any carry is looked at, so that their round trips overlap (planes.cl's
+// deposit_photon_texel says what it bought); adding zero changes nothing, a zero hit
+// distance (a splat's) is left out.
 fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_quantum: f32) {
     let units = photon_flux_units(ph, flux_quantum);
-    for (var ch = 0u; ch < 3u; ch++) {
-        if (units[ch] != 0u) {
-            atomic_add_u64_photon_map(texel, DEPOSIT_FLUX + 2u * ch, units[ch], 0u);
-        }
+    let hit = quantize(ph.hit_distance, hit_distance_quantum).units;
+    let r = deposit_word(texel, DEPOSIT_FLUX);
+    let g = deposit_word(texel, DEPOSIT_FLUX + 2u);
+    let b = deposit_word(texel, DEPOSIT_FLUX + 4u);
+    let h = deposit_word(texel, DEPOSIT_HIT_DISTANCE);
+    let n = deposit_word(texel, DEPOSIT_PHOTONS);
+    let old_r = atomic_add_photon_map(r, units.x);
+    let old_g = atomic_add_photon_map(g, units.y);
+    let old_b = atomic_add_photon_map(b, units.z);
+    var old_h = 0u;
+    if (hit != 0u) {
+        old_h = atomic_add_photon_map(h, hit);
     }
-    atomic_add_u64_photon_map(texel, DEPOSIT_HIT_DISTANCE,
-                              quantize(ph.hit_distance, hit_distance_quantum).units, 0u);
-    atomic_add_u64_photon_map(texel, DEPOSIT_PHOTONS, 1u, 0u);
+    let old_n = atomic_add_photon_map(n, 1u);
+    add_carry_photon_map(r, u64_carry(old_r, units.x));
+    add_carry_photon_map(g, u64_carry(old_g, units.y));
+    add_carry_photon_map(b, u64_carry(old_b, units.z));
+    add_carry_photon_map(h, u64_carry(old_h, hit));
+    add_carry_photon_map(n, u64_carry(old_n, 1u));
     atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
+}
+
+// The high word after low word `at` += `carry` (0 or 1).
+fn add_carry_photon_map(at: vec2<u32>, carry: u32) {
+    if (carry != 0u) {
+        atomic_add_photon_map(vec2<u32>(at.x, at.y + 1u), 1u);
+    }
 }
