@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session17 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -368,11 +368,12 @@ if has session13b; then
         CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
 fi
 if has clexp; then
-    # OpenCL kernel experiments without a rebuild: every folder .devbin/exp/<name>/ holds
-    # changed kernel files (backend-opencl's CAUSTICA_OPENCL_KERNEL_DIR); the built-in
-    # kernels run first as `base`, with their programs dumped (on NVIDIA: PTX) for ptxas.
+    # OpenCL kernel experiments without a rebuild: every folder .devbin/exp/<name>/ (or
+    # $CLEXP_DIR/<name>/, an absolute path) holds changed kernel files (backend-opencl's
+    # CAUSTICA_OPENCL_KERNEL_DIR); the built-in kernels run first as `base`, with their
+    # programs dumped (on NVIDIA: PTX) for ptxas.
     PTXAS=$(command -v ptxas || ls /usr/local/cuda*/bin/ptxas 2>/dev/null | head -n 1)
-    for dir in base "$B"/exp/*; do
+    for dir in base "${CLEXP_DIR:-$B/exp}"/*; do
         name=$(basename "$dir")
         mkdir -p "$OUT/ptx-$name"
         if [ "$name" = base ]; then kd=/nonexistent; else kd=$dir; fi
@@ -476,6 +477,20 @@ if has session16; then
     run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend sspm_fused --test-threads=1
     [ -x ./photon_gi_stiff ] && run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./photon_gi_stiff --test-threads=1
     [ -x ./every_kernel_dispatched ] && run timeout 120 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./every_kernel_dispatched --test-threads=1
+fi
+if has session17; then
+    # Deposits with every low word's add before any carry, OpenCL's filter weights with
+    # native functions: PhotonGi, Sspm and CausticMap frames on every backend, then the
+    # checks of every kernel, frame and stiff case they touch on every backend.
+    run timeout 150 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
+    run timeout 150 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density \
+        CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} ./sspm_frame --bench
+    run timeout 150 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} \
+        CAUSTICA_BENCH_SETTINGS=0,1 CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
+    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
+    for t in photon_gi_frames caustic_map_frames photon_gi_stiff stiff_cases; do
+        [ -x ./$t ] && run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./$t --test-threads=1
+    done
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)
