@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session17 session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session17 sass session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -491,6 +491,28 @@ if has session17; then
     for t in photon_gi_frames caustic_map_frames photon_gi_stiff stiff_cases; do
         [ -x ./$t ] && run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./$t --test-threads=1
     done
+fi
+if has sass; then
+    # The OpenCL programs NVIDIA's driver builds, as PTX (CAUSTICA_OPENCL_DUMP_DIR), then
+    # ptxas's register and spill counts and the SASS of the trace kernels, packed into
+    # $OUT/sass.tgz, to count the instructions a traversal step issues.
+    PTXAS=$(command -v ptxas || ls /usr/local/cuda*/bin/ptxas 2>/dev/null | head -n 1)
+    CUOBJ=$(command -v cuobjdump || ls /usr/local/cuda*/bin/cuobjdump 2>/dev/null | head -n 1)
+    echo "ptxas: $PTXAS cuobjdump: $CUOBJ" | tee -a "$OUT/log.txt"
+    rm -rf /tmp/sass && mkdir -p /tmp/sass/ptx
+    run timeout 120 env CAUSTICA_OPENCL_DUMP_DIR=/tmp/sass/ptx CAUSTICA_BENCH_BACKENDS=opencl \
+        CAUSTICA_BENCH_SETTINGS=high CAUSTICA_BENCH_FRAMES=3 CAUSTICA_BENCH_WARMUP_MS=300 ./photon_gi_frame --bench
+    run timeout 120 env CAUSTICA_OPENCL_DUMP_DIR=/tmp/sass/ptx CAUSTICA_BENCH_BACKENDS=opencl \
+        CAUSTICA_BENCH_FILTERS=density CAUSTICA_BENCH_FRAMES=3 CAUSTICA_BENCH_WARMUP_MS=300 ./sspm_frame --bench
+    for f in /tmp/sass/ptx/*.bin; do
+        n=$(basename "$f" .bin)
+        # the driver's program binary is PTX text with a trailing NUL
+        tr -d '\000' < "$f" > "/tmp/sass/$n.ptx"
+        timeout 120 "$PTXAS" -arch=sm_90 -v "/tmp/sass/$n.ptx" -o "/tmp/sass/$n.cubin" > "/tmp/sass/$n.ptxas.txt" 2>&1
+        grep -E -A3 "entry function '(trace_|splat_)" "/tmp/sass/$n.ptxas.txt" | grep -E "entry|Used|spill|stack|rror" | tee -a "$OUT/log.txt"
+        [ -f "/tmp/sass/$n.cubin" ] && timeout 120 "$CUOBJ" -sass "/tmp/sass/$n.cubin" > "/tmp/sass/$n.sass" 2>&1
+    done
+    (cd /tmp && tar czf "$OUT/sass.tgz" sass)
 fi
 if has cmbench; then
     # CausticMap's frame times alone (CAUSTICA_BENCH_SPLITS / _GATHERS pick the variants)

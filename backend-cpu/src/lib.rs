@@ -13,6 +13,7 @@
 pub mod kernels;
 mod storage;
 pub mod traversal;
+pub mod traversal_stats;
 
 use caustica_core::backend::{Backend, BackendError, Capabilities, DeviceType, PassTime};
 use caustica_core::device::handle::{GBufferPlanes, PhotonMapPlanes, ResourceId};

@@ -255,6 +255,7 @@ impl SceneView<'_> {
         if self.nodes.len() < SLOT_VEC4S {
             return None;
         }
+        crate::traversal_stats::ray_begins();
         let world = LevelRay::world(origin, dir, t_max)?;
         let mut level = world;
         let mut closest = t_max;
@@ -319,6 +320,7 @@ impl SceneView<'_> {
                 } else {
                     self.world_triangle(prim)
                 };
+                crate::traversal_stats::triangle_tested();
                 if let Some(h) = level.watertight.intersect(a, b, c, 0.0, closest) {
                     closest = h.t;
                     best = Some(Hit {
@@ -349,6 +351,7 @@ impl SceneView<'_> {
                 let node = self.node(child_index_base + relative_index);
                 // `level` is the world ray outside a BLAS (t_scale 1: `closest` exactly)
                 level.ray.tmax = closest * level.t_scale;
+                crate::traversal_stats::node_visited();
                 let hitmask = node_hits(node, &level.ray, level.oct_inv4);
                 current_group = UVec2::new(
                     node.child_base_idx,

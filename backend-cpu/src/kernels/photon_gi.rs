@@ -31,8 +31,9 @@ use caustica_core::math::photon_splat::{
 };
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{
-    cosine_hemisphere, hammersley, level_offset, luminance, ortho_origin, ortho_texel_flux,
-    pyramid_len, pyramid_sum, rsm_texel_kind, russian_roulette, texel_arriving_flux, warp_rsm,
+    coherent_sample_order, cosine_hemisphere, hammersley, level_offset, luminance, ortho_origin,
+    ortho_texel_flux, pyramid_len, pyramid_sum, rsm_texel_kind, russian_roulette,
+    texel_arriving_flux, warp_rsm,
 };
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -212,6 +213,7 @@ pub fn trace_indirect(
             let mut counters = Counters::default();
             for i in c * 256..((c + 1) * 256).min(p.count) {
                 let index = p.first + i;
+                crate::traversal_stats::photon_begins(i);
                 trace_indirect_path(
                     scene,
                     p,
@@ -224,10 +226,15 @@ pub fn trace_indirect(
                     },
                     &mut counters,
                 );
+                crate::traversal_stats::photon_ends();
             }
             (out, counters)
         })
         .collect();
+    // the GPU ports' thread t traces photon first + coherent_sample_order(t)
+    crate::traversal_stats::report("trace_indirect", p.count, |t| {
+        coherent_sample_order(t, p.count)
+    });
     let mut photons = Vec::new();
     let mut counters = Counters::default();
     for (ph, c) in parts {

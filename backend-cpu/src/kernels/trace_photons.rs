@@ -142,16 +142,20 @@ fn batch(
             let mut counters = Counters::default();
             for i in c * chunk..((c + 1) * chunk).min(p.count) {
                 let mut ends = Counters::default();
+                crate::traversal_stats::photon_begins(i);
                 photon(
                     tiled_photon_index(p.first + i, p.grid_w, p.grid_h),
                     &mut |end| count_end(end, p, &mut photons, &mut ends),
                     &mut counters,
                 );
+                crate::traversal_stats::photon_ends();
                 counters = counters.merge(ends);
             }
             (photons, counters)
         })
         .collect();
+    // thread i traces the i-th photon of the batch here as in the GPU ports
+    crate::traversal_stats::report("trace_photons", p.count, |i| i);
     let mut photons = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
     let mut counters = Counters::default();
     for (ph, c) in parts {
