@@ -56,7 +56,7 @@ if [ "${1:-}" = "--build" ]; then
 fi
 
 # Sections to run (default: all but hang): opencl wgpu vulkan plan stiff frames hostile filter
-# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session17 session18 sass session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
+# countscan reach reachmask eq20 instances vulkanab instcheck hostcost dyn nonblock nonblock-opencl batches deform castercull corners framebench session12 dynmoves clexp cmexp giexp wgslexp session13 session14 session14gi session14tr session15 session16 session17 sass session13b hangstack seams cross photongi causticmap cmbench adaptive adaptivescreen adaptivefootprint shared adaptivebench hang
 SECTIONS=${*:-opencl wgpu vulkan plan stiff frames hostile filter causticmap}
 OUT=${OUT:-/tmp/out}
 mkdir -p "$OUT"
@@ -489,18 +489,6 @@ if has session17; then
         CAUSTICA_BENCH_SETTINGS=0,1 CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame --bench
     run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
     for t in photon_gi_frames caustic_map_frames photon_gi_stiff stiff_cases; do
-        [ -x ./$t ] && run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./$t --test-threads=1
-    done
-fi
-if has session18; then
-    # A build's PhotonGi and Sspm frames on every backend, then the checks of every kernel,
-    # PhotonGi frame and stiff case on every backend (run 5 of
-    # docs/gpu/h200-session18-traversal.log: trace_indirect in two rounds per workgroup).
-    run timeout 150 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} ./photon_gi_frame --bench
-    run timeout 150 env CAUSTICA_BENCH_BACKENDS=${BENCH_BACKENDS:-vulkan,wgpu,opencl} CAUSTICA_BENCH_FILTERS=density \
-        CAUSTICA_BENCH_FRAMES=${EXP_FRAMES:-10} ./sspm_frame --bench
-    run timeout 200 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./cross_backend --test-threads=1
-    for t in photon_gi_frames photon_gi_stiff; do
         [ -x ./$t ] && run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=cpu,opencl,wgpu,vulkan ./$t --test-threads=1
     done
 fi

@@ -90,7 +90,8 @@ mod enabled {
                 .get(((steps.len() as f64 - 1.0) * q) as usize)
                 .map_or(0, |&s| s)
         };
-        let (mut taken, mut warp_slots) = (0u64, 0u64);
+        let taken: u64 = steps.iter().map(|&x| x as u64).sum();
+        let mut warp_slots = 0u64;
         let empty = Vec::new();
         for first in (0..threads).step_by(32) {
             let lanes: Vec<&Vec<u32>> = (first..(first + 32).min(threads))
@@ -101,11 +102,6 @@ mod enabled {
                 let longest = lanes.iter().filter_map(|l| l.get(s)).max().unwrap_or(&0);
                 warp_slots += 32 * *longest as u64;
             }
-            taken += lanes
-                .iter()
-                .flat_map(|l| l.iter())
-                .map(|&x| x as u64)
-                .sum::<u64>();
         }
         eprintln!(
             "traversal stats, {pass}: {} rays; per ray {:.2} node visits, {:.2} triangle \
