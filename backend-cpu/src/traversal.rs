@@ -7,8 +7,9 @@
 //! The node test is [`node_hits`], obvhs's `intersect_ray_basic` with one change: a child
 //! box is entered when its exit distance is >= 0 (`CWBVH_T_MIN`), where obvhs clamps the
 //! entry distance to its `EPSILON = 1e-4` and so culls every box closer than 1e-4 scene
-//! units. That lost whole hits in scenes at 1e-4 scale (issue 7, `scale-1e-4`). The
-//! OpenCL and WGSL traversals (`cwbvh_node_hits`) make the same test.
+//! units. That lost whole hits in scenes at 1e-4 scale (stiff case `scale-1e-4`,
+//! docs/stability.md). The OpenCL and WGSL traversals (`cwbvh_node_hits`) make the same
+//! test.
 
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{surface_point, SurfacePoint};

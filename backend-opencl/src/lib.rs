@@ -235,7 +235,7 @@ impl OpenClBackend {
 
 /// Zeroes `size` bytes of `mem`, in fills of at most [`FILL_CHUNK`] bytes: NVIDIA's
 /// OpenCL faults (CL_NV_INVALID_MEM_ACCESS) filling a 4 GiB buffer in one command
-/// (seen with the 8192x8192 G-buffer, issue 7).
+/// (seen with the 8192x8192 G-buffer of the stiff catalogue).
 fn fill_zero(queue: &CommandQueue, mem: &mut Buffer<u8>, size: usize) -> Result<(), BackendError> {
     let mut offset = 0;
     while offset < size {

@@ -143,14 +143,13 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 /// conformance tolerance of these kernels already argues for (`DENSITY_GATHER_REL` in
 /// conformance/src/harness/tolerance.rs). The density gather divides five times per tap;
 /// measured on the H200 (`cornell`), this program made `density_gather` 0.26 ms against
-/// 0.37 with correctly rounded division, and `gather_footprint` 0.13 against 0.17
-/// (docs/gpu/h200-session13-relaxed.log; `dgdiv` in -order.log, with native division,
-/// was the experiment that found the cost). `splat_photons` divides three times per
-/// pixel of a splat's square (`kernel_contains`); its tolerance (`SPLAT_REL`, 40 ulp a
-/// contribution, and the containment flips near 1 that `DEPOSIT_TEXEL_AGREEMENT` allows
-/// for: conformance/src/kernels/photon_gi.rs) is argued for WGSL's bounds too. At the
-/// chapter's high setting on the H200 it took 9.7 ms here against 14.8 in the main
-/// program (both with staged G-buffer loads; `docs/gpu/h200-session14-photon-gi.log`).
+/// 0.37 with correctly rounded division, and `gather_footprint` 0.13 against 0.17 (an
+/// experiment with native division found the cost; docs/performance.md). `splat_photons`
+/// divides three times per pixel of a splat's square (`kernel_contains`); its tolerance
+/// (`SPLAT_REL`, 40 ulp a contribution, and the containment flips near 1 that
+/// `DEPOSIT_TEXEL_AGREEMENT` allows for: conformance/src/kernels/photon_gi.rs) is argued
+/// for WGSL's bounds too. At the chapter's high setting on the H200 it took 9.7 ms here
+/// against 14.8 in the main program (both with staged G-buffer loads).
 pub const RELAXED_DIVISION_KERNELS: &[&str] =
     &["gather_footprint", "density_gather", "splat_photons"];
 
@@ -160,8 +159,7 @@ pub const RELAXED_DIVISION_KERNELS: &[&str] =
 /// rounding sends them the other way) is argued for WGSL's and SPIR-V's bounds too. On the
 /// H200 its trace took 2.71 ms against 2.75 on `sphere`, 1.15 against 1.18 on `cornell`
 /// and 1.76 against 1.82 at CausticMap's seed 001 setting 0, with `cross_backend`'s trace,
-/// Sspm and CausticMap checks and the stiff catalogue passing against the CPU
-/// (`docs/gpu/h200-session14-trace.log`).
+/// Sspm and CausticMap checks and the stiff catalogue passing against the CPU.
 pub const RELAXED_DIVISION_VARIANTS: &[&str] = &["trace_photons"];
 
 /// The label [`crate::device::DeviceState::program_for`] keeps the relaxed program under.

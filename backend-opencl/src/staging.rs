@@ -1,4 +1,4 @@
-//! Host staging in pinned memory, reused per submission (issue 19 point 3). On NVIDIA's
+//! Host staging in pinned memory, reused per submission (no allocation per frame). On NVIDIA's
 //! driver every host-to-device copy from pageable memory, and every buffer created with
 //! `CL_MEM_COPY_HOST_PTR`, waits for the work queued before it, and releasing device
 //! memory synchronises the device: a "non-blocking" submission that made a parameter

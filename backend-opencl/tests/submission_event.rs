@@ -1,4 +1,4 @@
-//! Issue 19 point 2 on OpenCL: a submission only enqueues, and its marker event is the
+//! The non-blocking frame on OpenCL: a submission only enqueues, and its marker event is the
 //! host's to wait on (here with `clWaitForEvents`); once it has completed, the frame's
 //! statistics come back without blocking. Fails loudly when no OpenCL platform exists (CI
 //! installs PoCL with scripts/install-drivers.sh).

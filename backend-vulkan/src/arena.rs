@@ -1,10 +1,10 @@
-//! Host-visible scratch memory reused by every `execute` (issue 19 point 3: no allocation
-//! per kernel): kernel parameters (uniforms) and the staging copies of uploads and writes
-//! are bump-allocated from one mapped buffer, which is reset when an execute starts (each
-//! execute waits for its work before it returns, so nothing of the last one is still read).
-//! A request that does not fit gets its own buffer for this execute, as before, and the
-//! arena grows to fit the whole execute's requests at the next reset (up to
-//! [`MAX_ARENA_BYTES`]: larger uploads, such as whole scenes, keep their own staging).
+//! Host-visible scratch memory reused by every `execute` (no allocation per kernel): kernel
+//! parameters (uniforms) and the staging copies of uploads and writes are bump-allocated
+//! from one mapped buffer, which is reset when an execute starts (each execute waits for
+//! its work before it returns, so nothing of the last one is still read). A request that
+//! does not fit gets its own buffer for this execute, as before, and the arena grows to fit
+//! the whole execute's requests at the next reset (up to [`MAX_ARENA_BYTES`]: larger
+//! uploads, such as whole scenes, keep their own staging).
 
 use crate::context::Context;
 use crate::memory::Buffer;

@@ -53,8 +53,7 @@ const RAYGEN_WIDTH: u64 = 8192;
 /// takes rows 8192 threads apart, photons of distant tiles. Eight columns make any such
 /// block a run of consecutive threads. Measured on the H200 (`sphere` / `cornell`, 2048^2
 /// photons): trace 4.95 / 2.50 ms at width 8192, 3.31 / 1.73 at width 32, 2.89 / 1.60 at
-/// width 8, 2.90 / 1.59 in one row (3.13 / 1.78 in row order before tile order;
-/// docs/gpu/h200-session13-vulkan-width.log).
+/// width 8, 2.90 / 1.59 in one row (3.13 / 1.78 in row order without tile order).
 const PHOTON_LAUNCH_WIDTH: u64 = 8;
 
 /// The launch grid's width for `n` threads of `kernel`: [`PHOTON_LAUNCH_WIDTH`] for
@@ -217,7 +216,7 @@ pub fn submit(
     let d = b.ctx.device.clone();
     let mut slot = b.take_slot()?;
     // the slot's pools are kept: reset, or made anew when this recording needs more than
-    // they hold (issue 19 point 3: no pool made and destroyed per recording)
+    // they hold (no pool made and destroyed per recording)
     let (sets, per_set) = descriptor_needs(kernels);
     if let Err(e) = slot.prepare(
         &b.ctx,

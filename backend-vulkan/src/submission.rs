@@ -1,12 +1,12 @@
-//! The non-blocking submission (issue 19 points 2 and 3): each submission records into
-//! the command buffer of a *frame slot* (its own descriptor pool, timestamp query pool,
-//! parameter and staging arena, readback buffer and fence, all kept and reset, never made
-//! per frame) and is submitted once with the slot's fence, signalling the backend's
-//! timeline semaphore with its number when the host asked for one
+//! The non-blocking submission (docs/embedding.md, "A host's frame loop"): each submission
+//! records into the command buffer of a *frame slot* (its own descriptor pool, timestamp
+//! query pool, parameter and staging arena, readback buffer and fence, all kept and reset,
+//! never made per frame) and is submitted once with the slot's fence, signalling the
+//! backend's timeline semaphore with its number when the host asked for one
 //! ([`VulkanBackend::completion_semaphore`]). Nothing waits: a slot is reused once its
-//! fence has signalled, and only when [`MAX_FRAMES_IN_FLIGHT`] are on the device does a
-//! new submission wait for the oldest. [`caustica_core::backend::Backend::poll`] checks a
-//! fence without blocking and hands out the times and readbacks.
+//! fence has signalled, and only when [`MAX_FRAMES_IN_FLIGHT`] are on the device does a new
+//! submission wait for the oldest. [`caustica_core::backend::Backend::poll`] checks a fence
+//! without blocking and hands out the times and readbacks.
 
 use crate::arena::Arena;
 use crate::context::{vk_error, Context};

@@ -59,7 +59,7 @@ fn impossible_allocation_is_a_typed_error() {
     }
 }
 
-/// Issue 19 point 2: a host's own work waits on the backend's timeline semaphore for a
+/// The non-blocking frame: a host's own work waits on the backend's timeline semaphore for a
 /// submitted frame's number instead of the CPU waiting; here the host waits on it with
 /// `vkWaitSemaphores` (under the validation layer), then collects the frame's statistics
 /// without blocking.
@@ -109,7 +109,7 @@ fn a_submitted_frame_signals_the_timeline_semaphore_with_its_number() {
     s.free(&mut b).unwrap();
 }
 
-/// Issue 19 point 1 on Vulkan: deforming one instance builds that instance's BLAS only
+/// Deformed instances on Vulkan: deforming one instance builds that instance's BLAS only
 /// (the driver's build), moving one builds none.
 #[test]
 fn a_deformed_instance_rebuilds_its_own_bottom_level_only() {

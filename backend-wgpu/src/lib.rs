@@ -412,7 +412,7 @@ impl WgpuBackend {
 
 /// Releases the buffers, pipelines, queue and device inside
 /// [`caustica_core::backend::driver_entry`], so that `CAUSTICA_SERIALIZE_DRIVERS=1` covers
-/// the backend's destruction too (issue 19 point 5).
+/// the backend's destruction too (docs/embedding.md, "Threads").
 impl Drop for WgpuBackend {
     fn drop(&mut self) {
         // the device's destruction with the other creations and destructions below the

@@ -1,4 +1,4 @@
-//! Per-submission resources kept and reused (issue 19 point 3): timestamp query sets with
+//! Per-submission resources kept and reused: timestamp query sets with
 //! their resolve buffers, and mappable staging buffers by size. A submission takes what it
 //! needs when it is encoded and gives it back when it is collected (the staging unmapped),
 //! so a frame loop in its steady state creates neither.

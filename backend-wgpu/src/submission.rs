@@ -1,8 +1,9 @@
-//! The non-blocking submission (issue 19 point 2): a recording encoded into a command
-//! encoder (the backend's own, submitted at once, or the embedding host's, submitted by
-//! the host), with copies of its timestamps and of the asked-for buffers into mappable
-//! staging at its end. Nothing waits: the staging is mapped asynchronously once the work
-//! is on the queue, and [`Backend::poll`] hands the result out when every mapping is done.
+//! The non-blocking submission (docs/embedding.md, "A host's frame loop"): a recording
+//! encoded into a command encoder (the backend's own, submitted at once, or the embedding
+//! host's, submitted by the host), with copies of its timestamps and of the asked-for
+//! buffers into mappable staging at its end. Nothing waits: the staging is mapped
+//! asynchronously once the work is on the queue, and [`Backend::poll`] hands the result out
+//! when every mapping is done.
 
 use crate::{dispatch, kernel_count, WgpuBackend};
 use caustica_core::backend::{BackendError, Finished, Submission};

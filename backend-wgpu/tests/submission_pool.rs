@@ -1,4 +1,4 @@
-//! Issue 19 point 3 on wgpu: a frame loop in its steady state creates no timestamp query
+//! Pooled submission resources on wgpu: a frame loop in its steady state creates no timestamp query
 //! set and no staging buffer; each submission takes them from the backend's pool and
 //! gives them back when it is collected. Fails loudly when no wgpu adapter exists (CI
 //! installs lavapipe with scripts/install-drivers.sh).

@@ -1,7 +1,7 @@
 //! AdaptiveCaustics against the dense light view plane (CausticMap) per backend, at 1024^2,
-//! 2048^2 and 4096^2 equivalent photons (issue 17 point 6; seed 004 found adaptive faster
-//! from 1024^2 on): `spot-glass` with the plane over the spot's whole cone (004's setting)
-//! and `sphere` with CausticMap's caster-fitted plane.
+//! 2048^2 and 4096^2 equivalent photons (seed 004 found adaptive faster from 1024^2 on):
+//! `spot-glass` with the plane over the spot's whole cone (004's setting) and `sphere` with
+//! CausticMap's caster-fitted plane.
 //!
 //! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
 //! after warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over frames

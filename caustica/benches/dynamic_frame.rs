@@ -1,4 +1,4 @@
-//! A dynamic scene, per backend (issue 19 point 6): every frame the light and the caustic
+//! A dynamic scene, per backend: every frame the light and the caustic
 //! casters move (`set_lights` and `set_object_transforms`: the casters are instances over
 //! the two-level acceleration structure), beside a static object of about a million
 //! triangles that is never rebuilt. Prints, medians over the frames: the host time of

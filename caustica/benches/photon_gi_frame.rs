@@ -5,7 +5,7 @@
 //! frames (a new seed each) of every pass, of the technique's device time (every pass but `primary_gbuffer` of the camera and
 //! `direct_light`, which a renderer has anyway: the RSM faces' own `primary_gbuffer`
 //! dispatches are counted by subtracting one camera G-buffer, see below) and of the host
-//! wall time of the frame. Target on the H200 (issue 18): <= 6 ms at the high setting.
+//! wall time of the frame. Target: <= 6 ms at the high setting (docs/performance.md).
 //!
 //! `cargo bench -p caustica --bench photon_gi_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),

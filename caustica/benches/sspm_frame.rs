@@ -6,12 +6,12 @@
 //! fastest backend), once per caustic filter. Device timestamps where the backend has
 //! them.
 //!
-//! Then the same frame as a host's frame loop runs it (issue 19 points 2 and 3):
+//! Then the same frame as a host's frame loop runs it (docs/embedding.md):
 //! `submit_frame` without waiting, at most two frames in flight, statistics collected
 //! later: the host's submit time, the wall time per frame in the steady state (first to
 //! last collected frame), and the device passes' sum.
 //!
-//! Then `plain` (no caster, issue 8): the host wall time of a whole Sspm frame, whose plan
+//! Then `plain` (no caster): the host wall time of a whole Sspm frame, whose plan
 //! runs only the G-buffer and direct light, against a recording of those two kernels
 //! alone on the same backend, medians with their min..max spread: the frame plan's
 //! overhead must be within that noise.
@@ -190,7 +190,7 @@ fn main() {
 /// Frames a pipelined host keeps on the device before it waits for the oldest.
 const IN_FLIGHT: usize = 2;
 
-/// The non-blocking frame loop's costs (issue 19 points 2 and 3), medians.
+/// The non-blocking frame loop's costs, medians.
 struct Pipelined {
     /// Host time of `submit_frame` (record + submit).
     submit_ms: f64,

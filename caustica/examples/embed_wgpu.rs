@@ -3,7 +3,7 @@
 //! caustics on that device and writes them into the renderer's texture, which the
 //! renderer then reads back here to show that the texels arrived. `frame` still submits
 //! and waits on the renderer's queue (recording into the host's own encoder without a
-//! CPU wait is issue 19's frame loop).
+//! CPU wait is the `frame_loop` example).
 //! Run: `cargo run --release -p caustica --example embed_wgpu -- [WxH] [PHOTONS]`.
 
 use caustica::backends::wgpu::WgpuBackend;

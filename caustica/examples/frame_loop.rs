@@ -1,4 +1,4 @@
-//! A real-time host's frame loop (issue 19 point 2), headless: the "renderer" owns the
+//! A real-time host's frame loop, headless: the "renderer" owns the
 //! wgpu device, its queue and an `Rgba16Float` texture. Every frame it moves the light and
 //! the glass ball (an instance) through caustica's update API, records caustica's whole
 //! frame into *its own* command encoder, has the caustics written into its texture in the

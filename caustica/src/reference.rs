@@ -35,7 +35,7 @@ pub struct ReferenceSpec {
     pub max_frames: u32,
 }
 
-/// The technique spec of the indirect-light reference (issue 18): PhotonGi's raw deposit
+/// The technique spec of the indirect-light reference: PhotonGi's raw deposit
 /// of every photon hit after the first bounce (`estimator: deposit`: no splat, no filter),
 /// the quantity its splats estimate.
 pub const INDIRECT_REFERENCE: &str =

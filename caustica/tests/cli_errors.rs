@@ -107,7 +107,7 @@ fn exported_scene_loads_back() {
 }
 
 /// `stats.json` of the `plain` scene (no caster) lists the passes that ran and those the
-/// frame plan skipped, each with its reason (issue 8).
+/// frame plan skipped, each with its reason.
 #[test]
 fn stats_json_lists_passes_run_and_skipped_with_reasons() {
     let out_dir = std::env::temp_dir().join(format!("caustica-plain-{}", std::process::id()));

@@ -1,4 +1,4 @@
-//! glTF 2.0 in and out (issue 20): every built-in scene survives `scene_to_gltf` ->
+//! glTF 2.0 in and out: every built-in scene survives `scene_to_gltf` ->
 //! `parse_gltf`; the glTF twins render as their JSON scenes on the CPU backend; node
 //! transforms (rotation, scale, a mirroring instance) land where the matrices say, with
 //! outward normals; GLB containers read as the same document; bad files get one-line,

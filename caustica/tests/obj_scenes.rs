@@ -1,4 +1,4 @@
-//! OBJ meshes in scene files (issue 20, point 3): a JSON scene whose glass object is an
+//! OBJ meshes in scene files: a JSON scene whose glass object is an
 //! `obj_file` shape loads the OBJ's triangles (faces triangulated, normals kept or
 //! generated) and renders as the same scene with the mesh written inline; bad OBJ files
 //! are errors located at the shape's `path`.

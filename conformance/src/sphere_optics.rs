@@ -1,7 +1,8 @@
-//! The `sphere` scene's exact optics in f64, the anchor for every technique (issue 15,
-//! point 6; `tests/sphere_closed_form.rs`) and the traced reference of CausticMap's view
-//! through the ball (issue 16, point 5; `tests/caustic_map_frames.rs`): a point light of I = 10 W/sr per channel at (0, 3, 0), a glass ball
-//! (n = 1.5, R = 0.5) centred at (0, 1, 0), a 4 x 4 diffuse plane at y = 0.
+//! The `sphere` scene's exact optics in f64, the anchor for every technique
+//! (`tests/sphere_closed_form.rs`) and the traced reference of CausticMap's view through
+//! the ball (`tests/caustic_map_frames.rs`): a point light of I = 10 W/sr per channel at
+//! (0, 3, 0), a glass ball (n = 1.5, R = 0.5) centred at (0, 1, 0), a 4 x 4 diffuse plane
+//! at y = 0.
 //!
 //! Derivation. The scene is rotationally symmetric about the y axis, so every ray from
 //! the light stays in its meridional plane: a ray leaving at angle theta from -y meets

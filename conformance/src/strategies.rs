@@ -170,7 +170,7 @@ pub struct CasterSpec {
     pub material: Material,
     pub jitter: (f32, f32),
     pub gap: f32,
-    /// Half the casters are instances (issue 19): built at the origin in object space and
+    /// Half the casters are instances: built at the origin in object space and
     /// placed by a transform (rotation about a random axis, uniform scale 0.7..1, which
     /// only shrinks the bounding radius the slots are spaced for); `None` puts the shape
     /// in world space, in the static level.

@@ -223,7 +223,7 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
 ///   photons (0.87 at 1024^2, 0.95 at 2048^2) and is at least 0.9 at 2048^2. The misses lie
 ///   next to the images of the focus, where the lookup's footprint (the pixel's square
 ///   unfolded along the path, blind to the ball's focusing) is too wide: the residual
-///   left for a footprint carried through curved glass (TODO(issue 16)).
+///   left for a footprint carried through curved glass (not built; docs/caustic-map.md).
 ///
 /// CPU only: the reference checks the physics; every other backend is tied to the CPU's
 /// atlas (stiff group `caustic-map`) and lookup (`cross_backend.rs`).

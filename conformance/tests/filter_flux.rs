@@ -1,4 +1,4 @@
-//! Issue 15, point 2: the density gather keeps the raw deposit's flux, on every backend
+//! The density gather keeps the raw deposit's flux, on every backend
 //! found, on every built-in scene with caustics, framed twice: as built, and zoomed in
 //! 2x about the view axis so that caustics run off the image and the gather's windows
 //! are clipped by the border. The flux of an image is `sum L pi A / albedo` over the
@@ -11,7 +11,7 @@
 //! f32 each source's shares `F w_ij / W` sum to `F` within the rounding of a <= 33-term sum
 //! and a division, ~35 ulp ~ 2e-6 per pass; the raw resolve and the last pass convert
 //! flux to radiance with the pixel's area (~1e-5 relative each, `RESOLVE_REL`), which the
-//! test inverts with the CPU's area. ~3e-5 in all, hence 1e-4 (the issue asks for 0.5%).
+//! test inverts with the CPU's area. ~3e-5 in all, hence 1e-4 (the filter's target is 0.5%).
 //!
 //! The test also measures, and requires to be non-zero over the cases, the share of the
 //! raw flux that lies within the gather's reach of the image border and of a depth or

@@ -1,7 +1,7 @@
-//! The frame plan on every backend (issue 8, "leave out what a scene does not
-//! need"): a scene without casters runs no photon pass and allocates no photon buffer; a
-//! scene compiles only the `trace_photons` variant its materials need; a light whose
-//! frustum misses every caster emits nothing; and pruning changes no result.
+//! The frame plan on every backend ("leave out what a scene does not need"): a scene
+//! without casters runs no photon pass and allocates no photon buffer; a scene compiles
+//! only the `trace_photons` variant its materials need; a light whose frustum misses every
+//! caster emits nothing; and pruning changes no result.
 //!
 //! "No result changes" is checked bitwise: pruning removes only work whose outcome is
 //! known exactly. A variant without a feature skips code that would multiply by exactly 1

@@ -1,4 +1,4 @@
-//! Hostile scenes (issue 14): what a careless or malicious scene file does must end in a
+//! Hostile scenes: what a careless or malicious scene file does must end in a
 //! clean error naming the field, or in a frame whose every output texel is finite; never
 //! a panic, an abort, a hang or Inf/NaN.
 //!

@@ -1,4 +1,4 @@
-//! Instances moved between frames (issue 19 point 1), on every backend: an object with a
+//! Instances moved between frames, on every backend: an object with a
 //! transform is an instance over the two-level acceleration structure, and
 //! `set_object_transforms` moves it without rebuilding a BVH. For every technique (and
 //! AdaptiveCaustics' two targets) the
@@ -367,7 +367,7 @@ fn with_mesh(scene: &Scene, k: usize, positions: &[Vec3]) -> Scene {
     s
 }
 
-/// Deformed instances (issue 19 point 1, the bottom level of deformed meshes only): for
+/// Deformed instances (the bottom level of deformed meshes only): for
 /// every technique the frame after `set_object_vertices` equals, bitwise, the frame of a
 /// technique created for the deformed scene: `sphere`'s glass ball (a caster), and
 /// `cornell`'s back wall (a CausticMap receiver, bent out of its plane, so its atlas tile

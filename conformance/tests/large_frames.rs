@@ -1,5 +1,5 @@
 //! Frames larger than lavapipe's storage binding (128 MiB) before the G-buffer and the
-//! screen photon map were split into planes (issue 14, point 5): sspm at 2560x1440 and
+//! screen photon map were split into planes: sspm at 2560x1440 and
 //! 3840x2160 on every backend found. With planes the largest per-pixel buffer is 16 bytes
 //! a pixel (3840x2160: 132.7 MB < 128 MiB = 134.2 MB), so every backend renders both.
 //!

@@ -145,7 +145,7 @@ fn splats_estimate_the_deposit_and_filters_converge() {
     }
 }
 
-/// Issue 18 point 2 on whole frames: the first bounce's light, estimated from the RSM
+/// Unbiased RSM sampling on whole frames: the first bounce's light, estimated from the RSM
 /// texels chosen by importance (Clarberg's warp by `luminance(flux x albedo)`, the pdf
 /// carried into each photon's flux), has the same mean over seeds as when the texels are
 /// chosen uniformly (`rsm_sampling: uniform`, the same warp over a flat pyramid).

@@ -1,4 +1,4 @@
-//! PhotonGi's stiff cases (issue 18 point 8) on every backend (`backends()`: all four,
+//! PhotonGi's stiff cases on every backend (`backends()`: all four,
 //! required in CI), each against the CPU's frame of the same scene and seed:
 //!
 //! - **A light whose RSM sees nothing** (a spot aimed into empty space beside the room):

@@ -1,5 +1,5 @@
-//! The `sphere` scene's caustic in closed form, as an anchor for every technique (issue
-//! 15, point 6). The derivation and the exact optics are in
+//! The `sphere` scene's caustic in closed form, as an anchor for every technique. The
+//! derivation and the exact optics are in
 //! `caustica_conformance::sphere_optics`.
 //!
 //! Numbers (per channel): total caustic flux on the plane ~1.749 W (all internal orders),

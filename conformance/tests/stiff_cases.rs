@@ -1,4 +1,4 @@
-//! Issue 7: the catalogue of stiff and extreme cases (`caustica_conformance::stiff`) on
+//! The catalogue of stiff and extreme cases (`caustica_conformance::stiff`) on
 //! every backend of `caustica_conformance::backends()` (`CAUSTICA_REQUIRE_BACKENDS` makes a
 //! missing backend fail). A failure names the case and the backend.
 //!

@@ -1,4 +1,4 @@
-//! The non-blocking frame (issue 19 point 2), on every backend and for every technique:
+//! The non-blocking frame, on every backend and for every technique:
 //! a frame recorded whole and submitted without waiting ([`Technique::submit_frame`])
 //! renders the images of the blocking [`Technique::frame`], bitwise; several frames can be
 //! in flight with updates between them (a new seed, moved instances, moved lights, a moved

@@ -267,7 +267,7 @@ fn with(settings: &serde_json::Value, changes: serde_json::Value) -> serde_json:
     s
 }
 
-/// New settings through the seam (issue 19 point 1), for every technique: the frame after
+/// New settings through the seam, for every technique: the frame after
 /// `set_settings` equals a fresh technique created with them, bitwise; settings that do
 /// not parse, fail validation or do not fit the scene are refused and change nothing.
 #[test]
@@ -498,7 +498,7 @@ fn a_technique_dropped_without_free_is_reported() {
     );
 }
 
-/// New settings keep the uploaded scene for every technique (issue 19 point 1): no node
+/// New settings keep the uploaded scene for every technique: no node
 /// buffer is uploaded again (CausticMap and AdaptiveCaustics assemble their atlas and
 /// images over the scene they have); a new triangle budget builds anew.
 #[test]

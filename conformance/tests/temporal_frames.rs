@@ -188,7 +188,7 @@ fn atrous_iterations_on_single_frames() {
     }
 }
 
-/// CausticMap's opt-in temporal blend and A-Trous iterations (issue 18 point 5; the shared
+/// CausticMap's opt-in temporal blend and A-Trous iterations (the shared
 /// passes on the caustics the camera sees through the map): with the seed changing every
 /// frame (each frame a new atlas), a static camera's blend converges (after 48 frames,
 /// on the pixels it blends, below 0.5 of a single frame's error: see the comment at the
@@ -308,7 +308,7 @@ fn caustic_map_opts_into_the_temporal_blend_and_atrous() {
         // it (0.20, the test above). CausticMap measured 0.34 on every backend although
         // its frames of different seeds are independent (the diagnostic above: 0.38
         // against 0.41); its error falls more slowly than the arithmetic from the first
-        // frames on (0.93 after 8 frames against 0.71). Why is open (TODO(issue 18)), so
+        // frames on (0.93 after 8 frames against 0.71). Why is open (TODO), so
         // the bound here is only that the blend converges well below a single frame.
         assert!(
             blend < 0.5 * single_blended,

@@ -116,7 +116,7 @@ fn held_once<T>(
 /// Runs `f`, a call into a GPU driver (a backend's creation, `execute`, `read`, drop), one
 /// at a time in the process; `CAUSTICA_SERIALIZE_DRIVERS=0` lets them run at once.
 ///
-/// Why (issue 19 point 5, `docs/gpu/issue19-hang.md`): on NVIDIA's driver, the GPU
+/// Why (docs/embedding.md, "Threads"): on NVIDIA's driver, the GPU
 /// backends used from parallel threads of one process deadlock in the user-mode driver
 /// (threads asleep on its priority-inheritance locks, the GPU idle). With every driver
 /// entry of the three GPU backends serialised, 6 of 52 parallel conformance runs on the
@@ -130,8 +130,7 @@ pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
     thread_local! {
         static HELD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     }
-    // on unless `CAUSTICA_SERIALIZE_DRIVERS=0` (the documented default; it was read as
-    // off unless set to 1 until 2026-12-02, so the mitigation did not run by default)
+    // on unless `CAUSTICA_SERIALIZE_DRIVERS=0` (the documented default)
     let on =
         *ON.get_or_init(|| !std::env::var("CAUSTICA_SERIALIZE_DRIVERS").is_ok_and(|v| v == "0"));
     if !on || HELD.with(|h| h.get()) {
@@ -144,7 +143,7 @@ pub fn driver_entry<T>(f: impl FnOnce() -> T) -> T {
 /// (devices, contexts, ray-tracing pipelines, acceleration structures), one at a time in
 /// the process, always; nested calls on one thread do not lock again.
 ///
-/// Why (issue 19 point 5, `docs/gpu/issue19-hang.md`): user-space stacks of a hung
+/// Why (docs/embedding.md, "Threads"): user-space stacks of a hung
 /// parallel run on the H200 showed a lock-order inversion inside NVIDIA's driver, between
 /// two threads on two different Vulkan devices: `vkDestroyDevice` holds the driver's
 /// global lock (`libnvidia-glsi`) and waits for a `libcuda` mutex, while destroying a
@@ -178,7 +177,7 @@ pub trait Backend {
     fn read(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError>;
 
     /// Enqueues every step of `recording` and returns without waiting for the device
-    /// (issue 19 point 2: the non-blocking frame). After the last step the buffers in
+    /// (the non-blocking frame). After the last step the buffers in
     /// `readbacks` are copied into host memory, so that their values at that point can be
     /// collected later with [`Backend::poll`] while later submissions change them.
     /// Submissions run in the order they were made; [`Backend::read`] and

@@ -698,7 +698,7 @@ mod tests {
         (cam, g)
     }
 
-    /// Issue 18 point 2: the warped RSM photons are unbiased. Over 64 frame seeds, the
+    /// The warped RSM photons are unbiased. Over 64 frame seeds, the
     /// mean flux the photons of each 4x4 block of two 16x16 faces carry equals that of
     /// uniform RSM sampling (texel uniformly at random, flux times the texel count), and
     /// both equal the block's leaving flux. Coloured, uneven texel fluxes (importance is

@@ -3,8 +3,8 @@
 
 // The weights use the native (hardware) exp2, log2 and division, as WGSL's exp and pow
 // do on the GPUs: an A-Trous iteration at seed 003's high setting on the H200 took 0.90 ms
-// against 1.54 with OpenCL's full-precision exp, pow and division
-// (docs/gpu/h200-session17-deposit.log). Their error (NVIDIA: ex2.approx and lg2.approx,
+// against 1.54 with OpenCL's full-precision exp, pow and division (docs/performance.md,
+// "PhotonGi"). Their error (NVIDIA: ex2.approx and lg2.approx,
 // ~2^-22 relative and absolute; exp's argument rounded before it: ~1e-7 x |argument|)
 // keeps a weight within ~1e-5 relative of the CPU's where it matters (an argument under
 // ~50, a normal weight's log2 x sigma_n of 32), the bound the conformance tolerances of

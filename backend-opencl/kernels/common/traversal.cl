@@ -10,7 +10,7 @@
 
 // Child boxes are entered where their exit t >= CWBVH_T_MIN = 0. obvhs clamps the entry t
 // to 1e-4 (its EPSILON), which culls every box closer than 1e-4 units: whole scenes at
-// 1e-4 scale lost their hits (issue 7). Mirrors backend-cpu/src/traversal.rs.
+// 1e-4 scale lost their hits (stiff case `scale-1e-4`). Mirrors backend-cpu/src/traversal.rs.
 #define CWBVH_T_MIN 0.0f
 #define TRAVERSAL_STACK_SIZE 32
 

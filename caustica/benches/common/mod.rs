@@ -14,8 +14,8 @@ pub fn median(v: &mut [f64]) -> f64 {
 /// Milliseconds of frames each measured configuration runs before its timed frames
 /// (`CAUSTICA_BENCH_WARMUP_MS`, default 3000). A fresh process on an idle H200 ran its
 /// first seconds of frames 3-5x slow (CausticMap setting 0 on Vulkan: 12.6 ms budget
-/// first in its process, 2.5-2.7 ms after other work; `docs/gpu/h200-session13-closing.log`),
-/// so one warm-up frame is not enough.
+/// first in its process, 2.5-2.7 ms after other work; docs/performance.md, "Method"), so
+/// one warm-up frame is not enough.
 #[allow(dead_code)] // dynamic_frame times its updates from the first frame on
 pub fn warmup_ms() -> u64 {
     env_or("CAUSTICA_BENCH_WARMUP_MS", "3000")

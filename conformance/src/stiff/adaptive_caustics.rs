@@ -1,4 +1,4 @@
-//! The adaptive-caustics group: AdaptiveCaustics' own extremes (issue 17), on every
+//! The adaptive-caustics group: AdaptiveCaustics' own extremes, on every
 //! backend. Each case runs the traversal through the caustic-map group's checks
 //! ([`checked_with`]: finite outputs, accounting over every photon traced, stored flux
 //! at most emitted, no saturation, agreement with the CPU's frame) and compares the

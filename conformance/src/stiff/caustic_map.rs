@@ -1,4 +1,4 @@
-//! The caustic-map group: CausticMap's own extremes (issue 16), on every backend. Each case
+//! The caustic-map group: CausticMap's own extremes, on every backend. Each case
 //! runs a CausticMap frame and checks ([`checked`]): every output finite (camera images and
 //! the atlas); photon accounting (path ends add up to the emitted photons plus the
 //! branches the deterministic split added, atlas outcomes to the stored ones); stored flux at most the emitted flux plus the fixed-point rounding; no

@@ -1,5 +1,5 @@
-//! Catalogue of stiff and extreme cases (issue 7): each entry is a scene or input with its
-//! expected behaviour stated, run on any backend by [`StiffCase::run`].
+//! Catalogue of stiff and extreme cases (docs/stability.md): each entry is a scene or input
+//! with its expected behaviour stated, run on any backend by [`StiffCase::run`].
 //!
 //! Every case, on every backend, additionally checks ([`universal`]):
 //! - no NaN or Inf in any output image (composite, raw and filtered caustics, direct);
@@ -66,7 +66,7 @@ use caustica_core::backend::Backend;
 
 /// One stiff case: what it is, what must hold, and how to run it on a backend.
 pub struct StiffCase {
-    /// Issue 7's heading: optics, screen, scale, range, degenerate, termination.
+    /// The catalogue's heading: optics, screen, scale, range, degenerate, termination.
     pub group: &'static str,
     pub name: &'static str,
     /// The expected behaviour, as the table prints it.

@@ -10,7 +10,7 @@
 //! the void (`ESCAPED`). With it, it ends as `NO_SPECULAR` with no ray traced. Stored
 //! photons, hence images, are unchanged bitwise (each photon's random numbers depend on
 //! its index alone); the counters move first-segment escapes to `no_specular` and count
-//! fewer rays. This is caustica's own lever (issue 19), not a seed's.
+//! fewer rays. This is caustica's own lever, not a seed's.
 //!
 //! One ball per caster object: the static level's specular objects each get the ball of
 //! their world vertices, an instance the ball of its object-space vertices placed by its

@@ -1017,7 +1017,7 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
 /// the screen bounds of kernel `k`'s box (half-axes `k.axes` along `k.n`, `k.u`, `k.t`
 /// about `centre`, world space), so that a flat or stretched kernel seen at an angle no longer
 /// scans its largest axis's square (seed 003's ellipsoid splat; 2x fewer pixel tests on
-/// `rooms`, see `docs/gpu/h200-session14-photon-gi.log`).
+/// `rooms`).
 ///
 /// Nothing the square held that the kernel contains is lost: a pixel passes the kernel
 /// test only if its G-buffer point (on its centre ray) lies in the ellipsoid, so in the

@@ -169,13 +169,13 @@ pub const OFFSET_MIN_SCALE: f32 = 7.888_609e-31;
 /// along the edges). Waechter and Binder (Ray Tracing Gems ch. 6) offset each component by
 /// 256 ulps of itself, but below a fixed `1/32` they switch to a fixed absolute `1/65536`:
 /// that assumes unit-size scenes, and at 1e-4 units it moved origins by 30% of a 5e-5 ball
-/// (issue 7's `scale-1e-4` case). Here the whole offset scales with the point: rounding
-/// the sum `p + n d` errs by at most `ulp(m) / 2` per component, `< 2^-8 d` along `n`, so
-/// the origin always leaves the surface by nearly `d`, at every scale from 2^-100 to 2^127.
-/// The cost: on a surface far from the origin whose own coordinate is small (a floor at
-/// y = 0.5 seen at x = 1e6) the offset is 256 ulps of the *large* coordinate, more than
-/// that surface's own error needs; features smaller than `2^-15 |p|` cannot be resolved
-/// there (f32 itself only resolves `2^-23 |p|`).
+/// (stiff case `scale-1e-4`, docs/stability.md). Here the whole offset scales with the
+/// point: rounding the sum `p + n d` errs by at most `ulp(m) / 2` per component, `< 2^-8 d`
+/// along `n`, so the origin always leaves the surface by nearly `d`, at every scale from
+/// 2^-100 to 2^127. The cost: on a surface far from the origin whose own coordinate is
+/// small (a floor at y = 0.5 seen at x = 1e6) the offset is 256 ulps of the *large*
+/// coordinate, more than that surface's own error needs; features smaller than `2^-15 |p|`
+/// cannot be resolved there (f32 itself only resolves `2^-23 |p|`).
 #[inline]
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     let m =
@@ -191,7 +191,7 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
 /// `v`. The edge cross product of a triangle 1e-11 across is ~1e-22 per component and its
 /// squared length ~1e-44, a subnormal that devices flushing subnormals to zero (NVIDIA's
 /// Vulkan) turn into 0: the plain normalisation then fell back to +y on such devices only
-/// (issue 7's `near-plane` case).
+/// (stiff case `near-plane`, docs/stability.md).
 #[inline]
 pub fn normalize_scaled(v: Vec3, fallback: Vec3) -> Vec3 {
     let scale = 1.0 / v.abs().max_element();

@@ -5,7 +5,7 @@
 //! and the warp of a low-discrepancy set through it to photons whose flux carries the
 //! sampling probability.
 //!
-//! Parameterisation (the issue leaves it open; stated here): a point light gets six
+//! Parameterisation (seed 003 leaves it open; stated here): a point light gets six
 //! 90-degree faces (a cube around it), a spot light one face whose half field of view is
 //! its outer cone angle when that is below 60 degrees, else the cube's faces; a
 //! directional light one orthographic face over the scene's bounding sphere
@@ -37,7 +37,8 @@ pub mod rsm_sampling {
     /// By importance, `luminance(flux x albedo)` (003 section 24.2.1): the default.
     pub const IMPORTANCE: u32 = 0;
     /// Every texel that leaves flux equally likely: the estimate the importance warp must
-    /// agree with in the mean (issue 18's unbiasedness test), at a higher variance.
+    /// agree with in the mean (`photon_gi_frames.rs`' unbiasedness test), at a higher
+    /// variance.
     pub const UNIFORM: u32 = 1;
 }
 
@@ -158,8 +159,7 @@ pub fn hammersley(i: u32, n: u32, shift: Vec2) -> Vec2 {
 /// of 32 points' share of the square. Threads past `2^m` (and launches under 64) keep
 /// their own index. A path depends on its sample index alone, so the order changes which
 /// thread traces a sample, never what it does. Measured on the H200: `trace_indirect`
-/// 8.92 -> 8.56 ms at seed 003's high setting, 1.66 -> 1.56 at its low (OpenCL,
-/// docs/gpu/h200-session16-trace-order.log).
+/// 8.92 -> 8.56 ms at seed 003's high setting, 1.66 -> 1.56 at its low (OpenCL).
 #[inline]
 pub fn coherent_sample_order(t: u32, n: u32) -> u32 {
     if n < 64 {

@@ -17,7 +17,7 @@ pub const PHOTON_TILE: u32 = 8;
 /// what it does: a warp's 32 photons lie in an 8 x 4 block of the grid (rays through the
 /// same nodes and triangles) where row order put them on one line of 32 cells.
 /// Measured on the H200: `trace_photons` 3.71 -> 2.74 ms on `sphere`, 1.41 -> 1.17 ms on
-/// `cornell` (OpenCL, 2048^2 photons; docs/gpu/h200-session13-order.log).
+/// `cornell` (OpenCL, 2048^2 photons).
 #[inline]
 pub fn tiled_photon_index(g: u32, grid_w: u32, grid_h: u32) -> u32 {
     if grid_w == 0 || grid_h == 0 {

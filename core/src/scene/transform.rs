@@ -1,7 +1,7 @@
 //! An object's placement in the world: translation, rotation and scale (glTF's TRS order,
 //! `world_from_object = T * R * S`). An object with a transform is an *instance*: its
 //! shape is in object space, it gets its own bottom-level BVH, and the update API moves it
-//! every frame without rebuilding that BVH (issue 19); an object without one is part of the
+//! every frame without rebuilding that BVH; an object without one is part of the
 //! scene's static level, in world space.
 
 use glam::{Affine3A, Mat3A, Quat, Vec3};
