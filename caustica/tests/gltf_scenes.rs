@@ -559,9 +559,9 @@ fn meshes_without_uvs_get_charts_a_caustic_map_can_address() {
     }
     let ds = caustica_core::device::device_scene::DeviceScene::build(&im.scene, Default::default())
         .unwrap();
-    let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(&im.scene);
+    let receiver = caustica_core::frame::receivers::atlas::layout::atlas_receivers(&im.scene);
     let layout =
-        caustica_core::frame::caustic_atlas::atlas_layout(&ds, &receiver, (256, 256)).unwrap();
+        caustica_core::frame::receivers::atlas::layout::atlas_layout(&ds, &receiver, (256, 256)).unwrap();
     assert_eq!(layout.tiles.len(), 3);
     assert!(layout.covered_texels > 0);
 }

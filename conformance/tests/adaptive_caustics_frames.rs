@@ -281,11 +281,11 @@ fn the_screen_target_deposits_the_traversals_photons() {
                     .expect("atlas target");
             let (a, _) = render(b.as_mut(), atlas);
             let mut screen =
-                AdaptiveCaustics::build_screen(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
+                caustica_core::techniques::adaptive_caustics::AdaptiveScreen::new(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
                     .expect("screen target");
             let s = screen.frame(b.as_mut(), &mut |_| {}).expect("frame");
             let raw = screen
-                .read_output(b.as_mut(), Output::RawCaustics)
+                .read_output_named(b.as_mut(), Output::RawCaustics.stem())
                 .expect("raw");
             screen.free(b.as_mut()).expect("free");
             assert_eq!(s.technique, "adaptive-caustics", "{what}");
@@ -335,7 +335,7 @@ fn the_screen_target_deposits_the_traversals_photons() {
             }
             // the error metric through the screen: the level metric's flux within the bound
             let mut e =
-                AdaptiveCaustics::build_screen(b.as_mut(), &scene, settings(AdaptiveMetric::Error))
+                caustica_core::techniques::adaptive_caustics::AdaptiveScreen::new(b.as_mut(), &scene, settings(AdaptiveMetric::Error))
                     .expect("screen target, error metric");
             let es = e.frame(b.as_mut(), &mut |_| {}).expect("frame");
             e.free(b.as_mut()).expect("free");

@@ -37,8 +37,8 @@ use crate::harness::tolerance::{
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
-use caustica_core::frame::caustic_atlas::AtlasLayout;
-use caustica_core::frame::light_view_plane::{light_view_planes, LightViewPlane};
+use caustica_core::frame::receivers::atlas::layout::AtlasLayout;
+use caustica_core::frame::emission::light_view_plane::{light_view_planes, LightViewPlane};
 use caustica_core::kernels::{RefineClusters, TracePhotons};
 use caustica_core::math::map_gather::atlas_texel_index;
 use caustica_core::math::photon_clusters::{

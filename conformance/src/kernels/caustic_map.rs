@@ -40,7 +40,7 @@ use crate::harness::tolerance::{DIRECT_AGREEMENT, DIRECT_FLOOR, DIRECT_REL, GATH
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
-use caustica_core::frame::caustic_atlas::{atlas_layout, atlas_receivers, AtlasLayout};
+use caustica_core::frame::receivers::atlas::layout::{atlas_layout, atlas_receivers, AtlasLayout};
 use caustica_core::kernels::{
     AtlasDeposit, CausticMapLookup, DensityGather, FusedDeposit, GatherCausticMap, GatherFootprint,
     PhotonCountTable, TracePhotons, TraceVariant,

@@ -67,14 +67,15 @@ fn screen_target(
     v: &mut Verdict,
 ) -> Result<(), String> {
     use caustica_core::techniques::sspm::Output;
-    let mut t = AdaptiveCaustics::build_screen(b, scene, s.clone()).map_err(|e| e.to_string())?;
+    let mut t = caustica_core::techniques::adaptive_caustics::AdaptiveScreen::new(b, scene, s.clone())
+        .map_err(|e| e.to_string())?;
     let st = t.frame(b, &mut |_| {}).map_err(|e| e.to_string())?;
     let images = [
         Output::RawCaustics,
         Output::FilteredCaustics,
         Output::Composite,
     ]
-    .map(|o| t.read_output(b, o).map_err(|e| e.to_string()));
+    .map(|o| t.read_output_named(b, o.stem()).map_err(|e| e.to_string()));
     t.free(b).map_err(|e| e.to_string())?;
     for img in images {
         v.check(img?.all_finite(), || {

@@ -272,8 +272,8 @@ fn flux_kept(
 ) -> Result<Outcome, String> {
     let ds = caustica_core::device::device_scene::DeviceScene::build(scene, Default::default())
         .map_err(|e| e.to_string())?;
-    let receiver = caustica_core::frame::caustic_atlas::atlas_receivers(scene);
-    let layout = caustica_core::frame::caustic_atlas::atlas_layout(&ds, &receiver, (256, 256))
+    let receiver = caustica_core::frame::receivers::atlas::layout::atlas_receivers(scene);
+    let layout = caustica_core::frame::receivers::atlas::layout::atlas_layout(&ds, &receiver, (256, 256))
         .map_err(|e| e.to_string())?;
     let flux = |img: &Image| -> f64 {
         img.pixels

@@ -106,6 +106,10 @@ pub struct FrameStats {
     pub bytes_allocated: u64,
     /// Trace-and-deposit batches run.
     pub batches: u32,
+    /// Times the host waited for the device while it recorded the frame (a blocking
+    /// readback or a run-and-wait whose result the rest of the frame depends on); 0 for a
+    /// frame recorded whole.
+    pub host_waits: u32,
     /// Per-pass timing by kernel name (ms), for quick lookup.
     pub pass_ms: BTreeMap<String, f64>,
     /// Error of the filtered caustics against the reference set with

@@ -20,7 +20,7 @@
 //! average with the corrected `1 / N^2`. The gather never crosses a tile's border: a
 //! tile is one receiver, and its neighbours in the atlas are other receivers.
 //!
-//! The map holds irradiance (W/m^2, `frame::caustic_atlas`); the gather works on flux
+//! The map holds irradiance (W/m^2, `frame::receivers::atlas::layout`); the gather works on flux
 //! (irradiance times the texel's world area) and converts back with the destination's
 //! area.
 
@@ -94,7 +94,7 @@ pub fn source_gather_texel(map: &[Vec3], side: u32, x: u32, y: u32, n: u32) -> V
 
 /// The atlas texel (row-major index in an atlas `atlas_width` texels wide) under `uv`
 /// on tile `tile = [x, y, side, _]`: `corner + floor(uv * side)`, clamped to the tile
-/// (`frame::caustic_atlas::uv_texel`).
+/// (`frame::receivers::atlas::layout::uv_texel`).
 #[inline]
 pub fn atlas_texel_index(tile: [u32; 4], uv: Vec2, atlas_width: u32) -> u32 {
     let s = tile[2] as f32;

@@ -66,7 +66,7 @@ pub fn uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
 }
 
 /// Unit direction through point `u` in [0,1)^2 of a perspective light view plane (seed
-/// 001 section 3.1, its garbled ray formula corrected as `frame::light_view_plane` says):
+/// 001 section 3.1, its garbled ray formula corrected as `frame::emission::light_view_plane` says):
 /// `normalize(axis + ndc.x * right + ndc.y * up)` with `ndc = (2 u.x - 1, 1 - 2 u.y)` (row
 /// 0 at the top); `right` and `up` are the plane's unit vectors scaled by the tangents of
 /// the half fields of view (world space).
@@ -80,7 +80,7 @@ pub fn view_plane_direction(axis: Vec3, right: Vec3, up: Vec3, u: Vec2) -> Vec3 
 /// tangents `tan_x`, `tan_y`, over that of a texel at the plane's centre: `1 / q^(3/2)`
 /// with `q = 1 + a^2 + b^2` at the texel's centre `(a, b)` in tangent units (the
 /// integrand of `dx dy / (1 + x^2 + y^2)^(3/2)`, midpoint rule; error bound in
-/// `frame::light_view_plane`).
+/// `frame::emission::light_view_plane`).
 #[inline]
 pub fn view_plane_texel_weight(ix: u32, iy: u32, w: u32, h: u32, tan_x: f32, tan_y: f32) -> f32 {
     let a = (2.0 * (ix as f32 + 0.5) / w as f32 - 1.0) * tan_x;

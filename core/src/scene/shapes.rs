@@ -137,7 +137,7 @@ fn sphere(m: &mut TriangleMesh, c: Vec3, r: f32, segments: u32) {
 }
 
 /// A box's six faces. Their uvs do not overlap (a caustic map addresses a receiver by
-/// its uvs, `frame::caustic_atlas`): face `k` fills cell `(k mod 3, k div 3)` of a 3 x 2
+/// its uvs, `frame::receivers::atlas::layout`): face `k` fills cell `(k mod 3, k div 3)` of a 3 x 2
 /// grid over `[0, 1]^2`.
 fn cuboid(m: &mut TriangleMesh, lo: Vec3, hi: Vec3) {
     let d = hi - lo;

@@ -1,6 +1,6 @@
 //! Automatic UV charts for meshes that have none (glTF and OBJ files without texture
 //! coordinates, meshes built in code). A caustic map addresses a receiver by its UVs
-//! (`frame::caustic_atlas`), which must not overlap; Sspm and PhotonGi need none.
+//! (`frame::receivers::atlas::layout`), which must not overlap; Sspm and PhotonGi need none.
 //!
 //! **How.** Each triangle is given the axis (+-x, +-y, +-z) its geometric normal leans
 //! on most (box projection). A *chart* grows from a triangle over shared edges (vertices
@@ -449,7 +449,7 @@ pub fn generate_missing_uvs(scene: &mut Scene) -> Vec<String> {
     notes
 }
 
-/// Meshes without UVs for the tests here and in `frame::caustic_atlas` (welded, as a file
+/// Meshes without UVs for the tests here and in `frame::receivers::atlas::layout` (welded, as a file
 /// without texture coordinates has them).
 #[cfg(test)]
 pub(crate) mod test_meshes {

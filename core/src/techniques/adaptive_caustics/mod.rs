@@ -26,23 +26,24 @@
 //! traversal's, listed in world space by `refine_clusters` and deposited by
 //! `deposit_screen`; a photon's "texel" for the error metric is then its pixel).
 
+mod screen;
 mod settings;
-mod traversal;
 
+pub use crate::frame::emission::adaptive::{
+    caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
+    TraversalSettings, EMPTY_RECT,
+};
+pub use screen::AdaptiveScreen;
 pub use settings::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
     LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
-};
-pub use traversal::{
-    caster_rects, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal, EMPTY_RECT,
 };
 
 use crate::backend::Backend;
 use crate::frame::error::Error;
 use crate::frame::technique::Technique;
 use crate::scene::Scene;
-use crate::techniques::caustic_map::{CausticMap, Emission};
-use crate::techniques::sspm::Sspm;
+use crate::techniques::caustic_map::CausticMap;
 
 /// The traversal a [`CausticMap`] runs instead of its dense planes.
 #[derive(Clone, Debug)]
@@ -128,41 +129,6 @@ impl AdaptiveCaustics {
         let map = settings.map.clone();
         CausticMap::build(backend, scene, map, Some(settings))
     }
-
-    /// The screen target (`deposit: screen`): Sspm's frame (G-buffer, screen deposit,
-    /// resolve, filter, composite, with `settings.screen`) whose photons are the
-    /// traversal's, deposited step by step by `deposit_screen`.
-    pub fn build_screen(
-        backend: &mut dyn Backend,
-        scene: &Scene,
-        mut settings: AdaptiveCausticsSettings,
-    ) -> Result<Sspm, Error> {
-        settings.deposit = AdaptiveDeposit::Screen;
-        Sspm::with_adaptive_emission(backend, scene, settings)
-    }
-}
-
-/// Fits the planes of `emission` to the pyramid: each plane's side becomes
-/// `start_grid * 2^k` (the nearest such size to the dense plane's; a single plane's is
-/// `photons_w` exactly, a cube face's `photons_w / sqrt 6` rounded to the pyramid), and
-/// the flux quantum follows the coarsest photons that can be output (the error metric's
-/// first level, else the finest), so that they cannot saturate the fixed point.
-pub(crate) fn fit_planes(emission: &mut Emission, s: &AdaptiveCausticsSettings, dispersion: bool) {
-    let start = s.start_grid;
-    for (_, _, p) in &mut emission.planes {
-        let ratio = (p.resolution.0.max(1) as f64 / start as f64).max(1.0);
-        let k = ratio.log2().round() as u32;
-        p.resolution = (start << k, start << k);
-    }
-    let coarsest_output = |p: &crate::frame::light_view_plane::LightViewPlane| {
-        let finest = (p.resolution.0 / start).max(1).ilog2();
-        let level = match s.metric {
-            AdaptiveMetric::Level => finest,
-            AdaptiveMetric::Error => s.error_from_level().min(finest),
-        };
-        (start << level, start << level)
-    };
-    emission.flux_quantum = Emission::quantum_for(&emission.planes, dispersion, coarsest_output);
 }
 
 /// The registry's constructor: `settings` is a JSON object of
@@ -176,9 +142,7 @@ pub fn create(
     let settings = AdaptiveCausticsSettings::from_json(settings)?;
     Ok(match settings.deposit {
         AdaptiveDeposit::Atlas => Box::new(AdaptiveCaustics::build(backend, scene, settings)?),
-        AdaptiveDeposit::Screen => {
-            Box::new(AdaptiveCaustics::build_screen(backend, scene, settings)?)
-        }
+        AdaptiveDeposit::Screen => Box::new(AdaptiveScreen::new(backend, scene, settings)?),
     })
 }
 

@@ -1,59 +1,15 @@
 //! Every parameter of AdaptiveCaustics, with its defaults and validation.
 
 use crate::frame::error::Error;
-use crate::techniques::caustic_map::{CausticMapSettings, FresnelSplit};
-use crate::techniques::sspm::SspmSettings;
+use crate::frame::emission::adaptive::TraversalSettings;
+use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
+use crate::frame::receivers::screen::ScreenSettings;
+pub use crate::frame::emission::adaptive::{
+    AdaptiveMetric, ClusterRelevance, LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
+};
 use serde::{Deserialize, Serialize};
 
-/// When a relevant cluster stops being refined (seed 004 sections 3.2.1-2).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum AdaptiveMetric {
-    /// Maximal traversal level: every cluster that met a caster is refined down to the
-    /// finest level, where all its photons are output. The photons output are exactly the
-    /// dense grid's over the clusters kept (the same seed and jitter), so the map differs
-    /// from CausticMap's only where a coarse cluster missed a caster its finer photons
-    /// would have met.
-    Level,
-    /// Maximal caustic map error: from `error_from_grid` on, a cluster whose four photons
-    /// all stored in one caustic-map texel is output at once (its photons carry their
-    /// coarse texels' flux, the cluster's solid angle or area); the rest is refined, and
-    /// output at the finest level (004's third condition). The default: it traces the
-    /// fewest photons (004 Figure 7), and here both metrics cost one kernel per step.
-    #[default]
-    Error,
-}
-
-/// What keeps a traced cluster from being discarded (seed 004 section 3.2's first
-/// condition, and a conservative one).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ClusterRelevance {
-    /// A cluster is kept when one of its photons met a caster, or when its footprint on
-    /// the view plane overlaps the projection of a caster's bounding box. No photon that
-    /// can meet a caster is lost: the level metric outputs exactly the dense grid's
-    /// photons (bitwise the same atlas), and a caster smaller than a start-grid cell is
-    /// found. The default: 004's own test lost 0.2 to 1.9% of the stored flux on the
-    /// built-in scenes at 256^2 (`cornell` the most), at the casters' silhouettes.
-    #[default]
-    Bounds,
-    /// 004's test: kept when at least one of its four photons met a caster. Traces fewer
-    /// photons; loses what the coarse photons straddle.
-    Photons,
-}
-
-impl ClusterRelevance {
-    /// The kernels' `relevance` value
-    /// ([`cluster_relevance`](crate::math::photon_clusters::cluster_relevance)).
-    pub fn kernel_value(self) -> u32 {
-        match self {
-            ClusterRelevance::Bounds => crate::math::photon_clusters::cluster_relevance::BOUNDS,
-            ClusterRelevance::Photons => crate::math::photon_clusters::cluster_relevance::PHOTONS,
-        }
-    }
-}
-
-/// The map the traversal's photons are deposited into (issue 17: so that a comparison
+/// The map the traversal's photons are deposited into (so that a comparison
 /// can isolate what adaptive emission buys in each).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -105,12 +61,10 @@ pub struct AdaptiveCausticsSettings {
     pub max_traversal_bytes: u64,
     /// Where output photons are deposited: `atlas` (the default) or `screen`.
     pub deposit: AdaptiveDeposit,
-    /// Sspm's settings for the screen target: depth tolerance, filter, outputs and the
-    /// rest of what follows the deposit. The photons are the traversal's: the photon
-    /// fields (`photons_w`, `photons_h`, `max_bounces`, `min_relative_power`, `seed`,
-    /// `point_emission`, `max_photons_per_batch`, `max_triangles`) are set at the top
-    /// level and must be left at their defaults here. Unused with the atlas target.
-    pub screen: SspmSettings,
+    /// The screen receiver's settings for the screen target: depth tolerance, filter,
+    /// outputs and the rest of what follows the deposit (the photons are the traversal's,
+    /// set at the top level). Unused with the atlas target.
+    pub screen: ScreenSettings,
 }
 
 impl Default for AdaptiveCausticsSettings {
@@ -124,16 +78,10 @@ impl Default for AdaptiveCausticsSettings {
             error_texels: 1,
             max_traversal_bytes: 64 << 20,
             deposit: AdaptiveDeposit::Atlas,
-            screen: SspmSettings::default(),
+            screen: ScreenSettings::default(),
         }
     }
 }
-
-/// Device bytes per cluster of a batch: four 32-byte photon slots.
-pub const SLOT_BYTES_PER_CLUSTER: u64 = 128;
-/// Device bytes per cluster of a batch per level below the start grid: room for four
-/// 4-byte children.
-pub const LIST_BYTES_PER_CLUSTER: u64 = 16;
 
 impl AdaptiveCausticsSettings {
     /// The settings from a JSON object of their fields (CausticMap's at the top level);
@@ -162,19 +110,15 @@ impl AdaptiveCausticsSettings {
         serde_json::from_value(value.clone()).map_err(|e| bad(e.to_string()))
     }
 
-    /// The Sspm settings of the screen target: `screen`, with the photon fields of the top
-    /// level (the optics of the trace; `photons_w` and `photons_h` the dense-equivalent
-    /// grid).
-    pub fn screen_settings(&self) -> SspmSettings {
-        let m = &self.map;
-        SspmSettings {
-            photons_w: m.photons_w,
-            photons_h: m.photons_h,
-            max_bounces: m.max_bounces,
-            min_relative_power: m.min_relative_power,
-            seed: m.seed,
-            max_triangles: m.max_triangles,
-            ..self.screen.clone()
+    /// The traversal's settings.
+    pub fn traversal(&self) -> TraversalSettings {
+        TraversalSettings {
+            metric: self.metric,
+            relevance: self.relevance,
+            start_grid: self.start_grid,
+            error_from_grid: self.error_from_grid,
+            error_texels: self.error_texels,
+            max_traversal_bytes: self.max_traversal_bytes,
         }
     }
 
@@ -185,11 +129,7 @@ impl AdaptiveCausticsSettings {
 
     /// The first level at which the error metric is checked.
     pub fn error_from_level(&self) -> u32 {
-        let mut l = 0;
-        while (self.start_grid as u64) << l < self.error_from_grid as u64 && l < 31 {
-            l += 1;
-        }
-        l
+        self.traversal().error_from_level()
     }
 
     /// Checks every field's range.
@@ -218,33 +158,8 @@ impl AdaptiveCausticsSettings {
         if w > 65536 {
             return bad("photons_w must be <= 65536 (the cluster ids of a level fit a u32)".into());
         }
-        let d = SspmSettings::default();
-        let s = &self.screen;
-        for (field, default) in [
-            ("photons_w", s.photons_w == d.photons_w),
-            ("photons_h", s.photons_h == d.photons_h),
-            ("max_bounces", s.max_bounces == d.max_bounces),
-            (
-                "min_relative_power",
-                s.min_relative_power == d.min_relative_power,
-            ),
-            ("seed", s.seed == d.seed),
-            ("point_emission", s.point_emission == d.point_emission),
-            (
-                "max_photons_per_batch",
-                s.max_photons_per_batch == d.max_photons_per_batch,
-            ),
-            ("max_triangles", s.max_triangles == d.max_triangles),
-        ] {
-            if !default {
-                return bad(format!(
-                    "screen.{field}: the photons are the traversal's; set `{field}` at the top \
-                     level (where it exists) instead"
-                ));
-            }
-        }
         if self.deposit == AdaptiveDeposit::Screen {
-            self.screen_settings().validate()?;
+            self.screen.validate()?;
         }
         let max = crate::math::photon_clusters::MAX_ERROR_TEXELS;
         if self.error_texels == 0 || self.error_texels > max {
@@ -269,30 +184,19 @@ impl AdaptiveCausticsSettings {
 
     /// Clusters of the start grid.
     pub fn start_clusters(&self) -> u64 {
-        (self.start_grid as u64 / 2).pow(2)
+        self.traversal().start_clusters()
     }
 
     /// Fixed bytes plus one cluster's.
     fn min_traversal_bytes(&self) -> u64 {
-        let outputs = match self.deposit {
-            AdaptiveDeposit::Screen => SLOT_BYTES_PER_CLUSTER,
-            AdaptiveDeposit::Atlas => 0,
-        };
-        4 * self.start_clusters()
-            + SLOT_BYTES_PER_CLUSTER
-            + outputs
-            + LIST_BYTES_PER_CLUSTER * self.finest_level() as u64
+        let screen = self.deposit == AdaptiveDeposit::Screen;
+        self.traversal().min_bytes(self.finest_level(), screen)
     }
 
-    /// Clusters per batch under `max_traversal_bytes`, at most what the finest level can
-    /// need in one step (`dense_clusters`); the screen target (`screen`) also holds an
-    /// output list of four photons per cluster.
+    /// Clusters per batch under `max_traversal_bytes` ([`TraversalSettings::batch_clusters`]).
     pub fn batch_clusters(&self, finest: u32, dense_clusters: u64, screen: bool) -> u32 {
-        let fixed = 4 * self.start_clusters();
-        let outputs = if screen { SLOT_BYTES_PER_CLUSTER } else { 0 };
-        let per = SLOT_BYTES_PER_CLUSTER + outputs + LIST_BYTES_PER_CLUSTER * finest as u64;
-        let c = self.max_traversal_bytes.saturating_sub(fixed) / per;
-        c.clamp(1, dense_clusters.clamp(1, u32::MAX as u64 / 4)) as u32
+        self.traversal()
+            .batch_clusters(finest, dense_clusters, screen)
     }
 }
 

@@ -1,6 +1,6 @@
 //! CausticMap (seed 001, "Real-time caustics via texture-space photon mapping"): photons
-//! shot from each light's view plane ([`crate::frame::light_view_plane`]) deposit into a
-//! caustic atlas in the receivers' texture space ([`crate::frame::caustic_atlas`]), which
+//! shot from each light's view plane ([`crate::frame::emission::light_view_plane`]) deposit into a
+//! caustic atlas in the receivers' texture space ([`crate::frame::receivers::atlas::layout`]), which
 //! the final pass samples wherever a camera path ends on a receiver (directly, in a
 //! mirror or through glass). Passes:
 //!
@@ -34,11 +34,8 @@
 //! Not built yet (TODO(issue 16)): a footprint carried through curved glass (the lookup
 //! unfolds the pixel's square along the path, blind to focusing).
 
-mod emission;
-mod settings;
-
-pub use emission::Emission;
-pub use settings::{
+pub use crate::frame::emission::view_planes::ViewPlanes;
+pub use crate::frame::receivers::atlas::settings::{
     CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
     ATLAS_BYTES_PER_TEXEL, DENSITY_GATHER_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
 };
@@ -48,7 +45,7 @@ use crate::device::device_scene::{BuildBudget, DeviceScene, InstanceUpdate, Scen
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId, SceneArgs};
 use crate::device::layout::*;
 use crate::frame::allocation::planned_allocation;
-use crate::frame::caustic_atlas::{AtlasLayout, AtlasReceivers};
+use crate::frame::receivers::atlas::layout::{AtlasLayout, AtlasReceivers};
 use crate::frame::error::Error;
 use crate::frame::image::Image;
 use crate::frame::irradiance_passes::FilterChain;
@@ -209,7 +206,7 @@ pub struct CausticMap {
     has_dispersion: bool,
     degenerate_triangles: u64,
     camera: GpuCamera,
-    emission: Emission,
+    emission: ViewPlanes,
     variant: TraceVariant,
     layout_summary: String,
     /// The diffuse receivers and their triangles (with an atlas): the atlas is laid out
@@ -270,7 +267,7 @@ impl UploadedScene {
         adaptive: bool,
     ) -> Result<UploadedScene, Error> {
         let ds = DeviceScene::build(scene, BuildBudget { max_triangles })?;
-        let receiver = crate::frame::caustic_atlas::atlas_receivers(scene);
+        let receiver = crate::frame::receivers::atlas::layout::atlas_receivers(scene);
         let features = SceneFeatures::of(scene);
         let receivers = ((features.mirrors || features.dielectrics) && receiver.iter().any(|r| *r))
             .then(|| AtlasReceivers::of(&ds, &receiver));
@@ -353,7 +350,7 @@ impl CausticMap {
         adaptive: Option<AdaptiveCausticsSettings>,
         uploaded: UploadedScene,
     ) -> Result<CausticMap, Error> {
-        let mut emission = Emission::new(
+        let mut emission = ViewPlanes::new(
             scene,
             uploaded.bounds,
             uploaded.caster_bounds,
@@ -362,7 +359,7 @@ impl CausticMap {
             &settings,
         );
         if let Some(a) = &adaptive {
-            adaptive_caustics::fit_planes(&mut emission, a, uploaded.has_dispersion);
+            adaptive_caustics::fit_planes(&mut emission, &a.traversal(), uploaded.has_dispersion);
         }
         emission.check_light_flux()?;
         let features = SceneFeatures::of(scene);
@@ -372,7 +369,7 @@ impl CausticMap {
             let o = &settings.outputs;
             o.composite || o.raw_caustics || o.filtered_caustics || o.atlas
         };
-        let has_receivers = crate::frame::caustic_atlas::atlas_receivers(scene)
+        let has_receivers = crate::frame::receivers::atlas::layout::atlas_receivers(scene)
             .iter()
             .any(|r| *r);
         let with_atlas = casters
@@ -568,7 +565,7 @@ impl CausticMap {
             let levels = (finest / ad.settings.start_grid).max(1).ilog2();
             ad.traversal = Some(Traversal::record(
                 &mut rec,
-                &ad.settings,
+                &ad.settings.traversal(),
                 levels,
                 &ad.caster_boxes,
                 false,
@@ -595,7 +592,7 @@ impl CausticMap {
         receivers
             .layout(include, (atlas_size, atlas_size))
             .map_err(|e| match e {
-                crate::frame::caustic_atlas::AtlasError::BadUvs { receiver, reason } => {
+                crate::frame::receivers::atlas::layout::AtlasError::BadUvs { receiver, reason } => {
                     Error::InvalidScene(format!(
                         "objects[{receiver}] ('{}'): its UVs cannot address a caustic map: \
                          {reason}",
@@ -1054,7 +1051,7 @@ impl CausticMap {
                     self.scene,
                     self.variant,
                     &target,
-                    (*light, plane, Emission::plane_seed(s.seed, *light, *k)),
+                    (*light, plane, ViewPlanes::plane_seed(s.seed, *light, *k)),
                     optics,
                     stats,
                     &mut adaptive,
@@ -1090,7 +1087,7 @@ impl CausticMap {
                             plane,
                             *light,
                             (first as u32, count),
-                            Emission::plane_seed(s.seed, *light, *k),
+                            ViewPlanes::plane_seed(s.seed, *light, *k),
                             s.max_bounces,
                             s.min_relative_power,
                         )
@@ -1433,8 +1430,8 @@ impl CausticMap {
         bounds: crate::math::geometry::Aabb,
         caster_bounds: crate::math::geometry::Aabb,
         caster_spheres: crate::device::caster_spheres::CasterSpheres,
-    ) -> Result<Option<Emission>, Error> {
-        let mut emission = Emission::new(
+    ) -> Result<Option<ViewPlanes>, Error> {
+        let mut emission = ViewPlanes::new(
             model,
             bounds,
             caster_bounds,
@@ -1444,13 +1441,13 @@ impl CausticMap {
         );
         if let Some(a) = &self.adaptive {
             // the traversal's pyramid and its coarse photons' quantum, as at creation
-            adaptive_caustics::fit_planes(&mut emission, &a.settings, self.has_dispersion);
+            adaptive_caustics::fit_planes(&mut emission, &a.settings.traversal(), self.has_dispersion);
         }
         emission.check_light_flux()?;
         // the traversal's buffers hold planes down to its finest level
         let deeper = self.adaptive.as_ref().is_some_and(|a| {
             let start = a.settings.start_grid;
-            let finest = |e: &Emission| {
+            let finest = |e: &ViewPlanes| {
                 e.planes
                     .iter()
                     .map(|(_, _, p)| (p.resolution.0 / start).max(1).ilog2())

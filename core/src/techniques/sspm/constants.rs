@@ -2,6 +2,8 @@
 
 use super::settings::SspmSettings;
 use crate::device::caster_spheres::CasterSpheres;
+use crate::frame::plan::LightPlan;
+use crate::frame::receivers::screen::ScreenQuanta;
 use crate::device::device_scene::DeviceScene;
 use crate::device::layout::*;
 use crate::frame::emission::{emission_domain, unpruned_domain, EmissionDomain, NoEmission};
@@ -109,22 +111,31 @@ impl FrameConstants {
             .map(|(_, d)| d.flux.max_element() / photons_per_light)
             .fold(0.0f32, f32::max)
             * dispersion_gain;
-        let flux_quantum = power_of_two_quantum(max_photon_flux);
-        let diag = bounds.diagonal().max(f32::MIN_POSITIVE);
-        let hit_distance_min = settings.hit_distance_min.unwrap_or(0.05 * diag);
+        let quanta = ScreenQuanta::new(
+            bounds,
+            power_of_two_quantum(max_photon_flux),
+            &settings.screen(),
+        );
         FrameConstants {
             domains,
             skipped_lights,
             unpruned,
             max_photon_flux,
-            flux_quantum,
-            hit_distance_quantum: power_of_two_quantum(diag),
-            hit_distance_min,
-            hit_distance_max: settings
-                .hit_distance_max
-                .unwrap_or(0.5 * diag)
-                .max(hit_distance_min),
+            flux_quantum: quanta.flux_quantum,
+            hit_distance_quantum: quanta.hit_distance_quantum,
+            hit_distance_min: quanta.hit_distance_min,
+            hit_distance_max: quanta.hit_distance_max,
             caster_spheres,
+        }
+    }
+
+    /// The screen receiver's quanta and hit-distance clamp.
+    pub fn quanta(&self) -> ScreenQuanta {
+        ScreenQuanta {
+            flux_quantum: self.flux_quantum,
+            hit_distance_quantum: self.hit_distance_quantum,
+            hit_distance_min: self.hit_distance_min,
+            hit_distance_max: self.hit_distance_max,
         }
     }
 
@@ -158,39 +169,18 @@ impl FrameConstants {
         settings: &SspmSettings,
         photon_capacity: u32,
     ) -> DepositParams {
-        DepositParams {
-            camera,
-            flux_quantum: self.flux_quantum,
-            hit_distance_quantum: self.hit_distance_quantum,
-            depth_tolerance: settings.depth_tolerance,
-            photon_capacity,
-        }
+        self.quanta()
+            .deposit_params(camera, &settings.screen(), photon_capacity)
     }
 
-    /// `tile_hit_distance` / `bilateral_gather` parameters (`axis` 0: horizontal pass).
+    /// The gathers' parameters (`axis` 0: horizontal pass).
     pub fn gather_params(
         &self,
         camera: GpuCamera,
         settings: &SspmSettings,
         axis: u32,
     ) -> GatherParams {
-        GatherParams {
-            camera,
-            roughness: settings.roughness,
-            hit_distance_min: self.hit_distance_min,
-            hit_distance_max: self.hit_distance_max,
-            max_radius_px: settings.max_radius_px,
-            sigma_depth: settings.sigma_depth,
-            normal_power: settings.normal_power,
-            axis,
-            tile_size: settings.tile_size,
-            hit_distance_quantum: self.hit_distance_quantum,
-            knn_photons: settings.knn_photons,
-            flux_quantum: self.flux_quantum,
-            table_block: crate::math::density_gather::table_block(settings.max_radius_px),
-            surface: crate::device::layout::gather_surface::SCREEN,
-            _pad: [0; 3],
-        }
+        self.quanta().gather_params(camera, &settings.screen(), axis)
     }
 
     /// `direct_light` parameters.
@@ -199,12 +189,35 @@ impl FrameConstants {
         light_count: u32,
         settings: &SspmSettings,
     ) -> DirectParams {
-        DirectParams {
-            camera,
-            light_count,
-            max_specular_depth: settings.max_specular_depth,
-            min_weight: 1e-3,
-            fresnel_model: crate::math::optics::fresnel_model::EXACT,
-        }
+        settings
+            .screen()
+            .direct_lighting()
+            .params(camera, light_count)
     }
 }
+
+/// The plan of every light of `constants`' emission (seed 000's projection volumes):
+/// whether it emits and why.
+pub fn volume_light_plans(constants: &FrameConstants) -> Vec<LightPlan> {
+    let mut lights: Vec<LightPlan> = constants
+        .domains
+        .iter()
+        .map(|(i, _)| LightPlan {
+            light: *i,
+            emits: true,
+            reason: if constants.unpruned.contains(i) {
+                "pruning off: emits its whole domain".into()
+            } else {
+                "its emission domain reaches a caustic caster".into()
+            },
+        })
+        .collect();
+    lights.extend(constants.skipped_lights.iter().map(|(i, why)| LightPlan {
+        light: *i,
+        emits: false,
+        reason: why.reason().into(),
+    }));
+    lights.sort_by_key(|l| l.light);
+    lights
+}
+

@@ -1,25 +1,9 @@
 //! Every parameter of Sspm, with its defaults and validation.
 
-use super::outputs::Outputs;
 use crate::frame::emission::PointEmission;
 use crate::frame::error::Error;
-use crate::kernels::MAX_SPECULAR_DEPTH;
+use crate::frame::receivers::screen::{GatherFilter, Outputs, ScreenSettings};
 use serde::{Deserialize, Serialize};
-
-/// The filter that turns the raw screen-space deposit into the technique's caustics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum GatherFilter {
-    /// Density-adaptive, scatter-normalised gather (the default): the radius follows the
-    /// local photon density (k nearest photons), the flux of the raw deposit is kept by
-    /// construction, and the filter fades to the identity as photons accumulate
-    /// (`crate::math::density_gather`).
-    #[default]
-    Density,
-    /// The seed's edge-aware bilateral gather: radius `roughness` x the tile's mean hit
-    /// distance (000 section 30.3.2), normalised per destination.
-    Bilateral,
-}
 
 /// Every parameter of the technique; defaults from seed 000 where it gives them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -37,43 +21,27 @@ pub struct SspmSettings {
     pub min_relative_power: f32,
     /// Point-light emission domain.
     pub point_emission: PointEmission,
-    /// The store test (condition 3): a photon is kept in the pixel it projects to when it
-    /// lies on the surface that pixel's centre sees. `< 0` (default -0.01): within
-    /// `|depth_tolerance| x depth` of the pixel's tangent plane (`layout::off_surface`);
-    /// `> 0`: the seed's test, its view depth within `depth_tolerance x depth` of the
-    /// pixel's. The default departs from the seed because the seed's test drops photons of
-    /// surfaces seen at a grazing angle in coarse images, whose view depth varies across
-    /// one pixel by more than 1%: on `rooms` at 160x90 the seed's 0.01 keeps 106953 of the
-    /// 214497 photons the tangent-plane test keeps (at 480x270: 194472 of 194543), and
-    /// Sspm's caustics were 20% (`cornell`) and 51% (`rooms`) too dark at 160x90. The
-    /// caustic reference uses the same test (`caustica::reference::CAUSTIC_REFERENCE`).
+    /// The screen receiver's [`ScreenSettings::depth_tolerance`].
     pub depth_tolerance: f32,
-    /// The caustic filter between the raw deposit and the output.
+    /// The screen receiver's [`ScreenSettings::filter`].
     pub filter: GatherFilter,
-    /// Density gather: photons `k` of a pixel's nearest-neighbour window; its kernel's
-    /// support half-width is half the side of the square that holds `k` photons at the
-    /// window's density, so pixels whose 3x3 window holds `k` photons per pixel are not
-    /// filtered at all. 1..=1024; 32 (chosen on the built-in scenes: `k = 16` filters
-    /// too little at 256^2 photons, 64 blurs the sparse tails more than it helps at
-    /// 4096^2; see the README's report).
+    /// The screen receiver's [`ScreenSettings::knn_photons`].
     pub knn_photons: u32,
-    /// Bilateral gather: blur per unit hit distance (the source's denoiser "roughness",
-    /// 0.07).
+    /// The screen receiver's [`ScreenSettings::roughness`].
     pub roughness: f32,
-    /// Lower hit-distance clamp (scene units); `None`: 5% of the scene's diagonal (the
-    /// source clamps to [300, 2000] in its scene units and asks for a per-scene choice).
+    /// The screen receiver's [`ScreenSettings::hit_distance_min`].
     pub hit_distance_min: Option<f32>,
-    /// Upper hit-distance clamp (scene units); `None`: 50% of the scene's diagonal.
+    /// The screen receiver's [`ScreenSettings::hit_distance_max`].
     pub hit_distance_max: Option<f32>,
-    /// Largest gather radius in pixels (both filters).
+    /// The screen receiver's [`ScreenSettings::max_radius_px`].
     pub max_radius_px: u32,
-    /// Bilateral depth weight `exp(-|dz| / (sigma_depth z))`.
+    /// The screen receiver's [`ScreenSettings::sigma_depth`].
     pub sigma_depth: f32,
-    /// Bilateral normal weight exponent (0 disables it).
+    /// The screen receiver's [`ScreenSettings::normal_power`].
     pub normal_power: f32,
-    /// Tile size (pixels) of the hit-distance tiles that set the gather radius.
+    /// The screen receiver's [`ScreenSettings::tile_size`].
     pub tile_size: u32,
-    /// Longest specular chain followed from a mirror/glass pixel in `direct_light`.
+    /// The screen receiver's [`ScreenSettings::max_specular_depth`].
     pub max_specular_depth: u32,
     /// Frame seed of the counter-based RNG.
     pub seed: u32,
@@ -89,29 +57,18 @@ pub struct SspmSettings {
     /// same either way; a GPU's within `deposit_screen`'s own agreement
     /// (`conformance`'s `sspm_fused_trace_deposits_what_its_trace_stores`).
     pub fused_deposit: bool,
-    /// The images the caller wants; passes and buffers that no requested image needs are
-    /// left out (see [`crate::frame::plan`]).
+    /// The screen receiver's [`ScreenSettings::outputs`].
     pub outputs: Outputs,
-    /// Leave out passes, kernel features, buffers and lights the scene and outputs do
-    /// not need (default). Off: everything runs, the baseline pruning is checked against.
+    /// The screen receiver's [`ScreenSettings::prune`].
     pub prune: bool,
     /// Most triangles the tessellated scene may have; checked before anything is
     /// allocated (default [`crate::scene::limits::DEFAULT_MAX_TRIANGLES`], 2^24).
     pub max_triangles: u64,
-    /// Blends each frame's filtered caustics with the reprojected history of the earlier
-    /// frames (seed 003 section 24.4.1's temporal accumulation, the shared
-    /// `temporal_blend` pass with the chapter's constants: alpha 0.95 x depth and normal
-    /// weights). Off by default: a frame is then a function of its seed alone. The history
-    /// is forgotten when the lights, materials, settings or image size change.
+    /// The screen receiver's [`ScreenSettings::temporal`].
     pub temporal: bool,
-    /// Iterations of the edge-avoiding A-Trous filter with variance clipping of its
-    /// detail coefficients (seed 003 section 24.4.2, the shared `atrous_filter` pass) run
-    /// on the filtered (and, with `temporal`, blended) caustics: 0 (the default) runs
-    /// none; the chapter runs 4. At most 8.
+    /// The screen receiver's [`ScreenSettings::atrous_iterations`].
     pub atrous_iterations: u32,
-    /// Standard deviations of the A-Trous kernel's values that a detail coefficient may
-    /// keep (Eq. 18's bounds; the chapter gives no value: 1 by default). 0 keeps none (the
-    /// smooth `s_n`); a large value keeps all (the unfiltered input).
+    /// The screen receiver's [`ScreenSettings::atrous_clip_sigmas`].
     pub atrous_clip_sigmas: f32,
 }
 
@@ -164,61 +121,41 @@ impl SspmSettings {
         if !(self.min_relative_power >= 0.0 && self.min_relative_power < 1.0) {
             return bad("min_relative_power must be in [0, 1)");
         }
-        if !(self.depth_tolerance != 0.0 && self.depth_tolerance.is_finite()) {
-            return bad(
-                "depth_tolerance must be nonzero and finite (> 0: view-depth test; < 0: \
-                 tangent-plane test)",
-            );
-        }
-        if !(self.roughness >= 0.0 && self.roughness.is_finite()) {
-            return bad("roughness must be >= 0");
-        }
-        for (name, v) in [
-            ("hit_distance_min", self.hit_distance_min),
-            ("hit_distance_max", self.hit_distance_max),
-        ] {
-            if let Some(v) = v {
-                if !(v > 0.0 && v.is_finite()) {
-                    return bad(&format!("{name} must be > 0"));
-                }
-            }
-        }
-        if let (Some(a), Some(b)) = (self.hit_distance_min, self.hit_distance_max) {
-            if a > b {
-                return bad("hit_distance_min exceeds hit_distance_max");
-            }
-        }
-        if self.knn_photons == 0 || self.knn_photons > 1024 {
-            return bad("knn_photons must be in 1..=1024");
-        }
-        if self.max_radius_px > 256 {
-            return bad("max_radius_px must be <= 256");
-        }
-        if !(self.sigma_depth > 0.0 && self.sigma_depth.is_finite())
-            || !(self.normal_power >= 0.0 && self.normal_power.is_finite())
-        {
-            return bad("sigma_depth must be > 0 and normal_power >= 0");
-        }
-        if self.tile_size == 0 || self.tile_size > 256 {
-            return bad("tile_size must be in 1..=256");
-        }
-        if !self.outputs.any() {
-            return bad("outputs: at least one output must be requested");
-        }
-        if self.atrous_iterations > 8 {
-            return bad("atrous_iterations must be <= 8 (taps 128 pixels apart)");
-        }
-        if !(self.atrous_clip_sigmas >= 0.0 && self.atrous_clip_sigmas.is_finite()) {
-            return bad("atrous_clip_sigmas must be >= 0");
-        }
         if self.max_photons_per_batch == 0 {
             return bad("max_photons_per_batch must be >= 1");
         }
-        if self.max_specular_depth > MAX_SPECULAR_DEPTH {
-            return bad(&format!(
-                "max_specular_depth must be <= {MAX_SPECULAR_DEPTH}"
-            ));
+        self.screen().validate()
+    }
+
+    /// The screen receiver's fields.
+    pub fn screen(&self) -> ScreenSettings {
+        ScreenSettings {
+            depth_tolerance: self.depth_tolerance,
+            filter: self.filter,
+            knn_photons: self.knn_photons,
+            roughness: self.roughness,
+            hit_distance_min: self.hit_distance_min,
+            hit_distance_max: self.hit_distance_max,
+            max_radius_px: self.max_radius_px,
+            sigma_depth: self.sigma_depth,
+            normal_power: self.normal_power,
+            tile_size: self.tile_size,
+            max_specular_depth: self.max_specular_depth,
+            outputs: self.outputs,
+            prune: self.prune,
+            temporal: self.temporal,
+            atrous_iterations: self.atrous_iterations,
+            atrous_clip_sigmas: self.atrous_clip_sigmas,
         }
-        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_screen_fields_default_to_the_screen_receivers_defaults() {
+        assert_eq!(SspmSettings::default().screen(), ScreenSettings::default());
     }
 }

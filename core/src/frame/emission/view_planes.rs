@@ -1,10 +1,10 @@
 //! CausticMap's emission (seed 001 section 3.1): each light's view planes aimed at the
 //! caustic casters, and the fixed-point quantum of the frame's flux.
 
-use super::settings::CausticMapSettings;
+use crate::frame::receivers::atlas::settings::CausticMapSettings;
 use crate::device::caster_spheres::CasterSpheres;
 use crate::frame::emission::NoEmission;
-use crate::frame::light_view_plane::{light_view_planes, LightViewPlane};
+use crate::frame::emission::light_view_plane::{light_view_planes, LightViewPlane};
 use crate::math::fixed_point::power_of_two_quantum;
 use crate::math::geometry::Aabb;
 use crate::math::rng::pcg_hash;
@@ -12,7 +12,7 @@ use crate::scene::Scene;
 
 /// The light view planes of a frame and what its fixed-point sums are scaled by.
 #[derive(Clone, Debug)]
-pub struct Emission {
+pub struct ViewPlanes {
     /// (light index, plane index of that light, plane) of every plane that emits.
     pub planes: Vec<(u32, u32, LightViewPlane)>,
     /// Lights that emit nothing, and why.
@@ -29,7 +29,7 @@ pub struct Emission {
     pub caster_spheres: CasterSpheres,
 }
 
-impl Emission {
+impl ViewPlanes {
     /// The planes of every light of `scene` (bounded by `bounds`, casters in `casters`)
     /// at the settings' resolution: one plane of `photons_w x photons_h` texels, or six
     /// cube faces of `photons_w / sqrt 6 x photons_h / sqrt 6`.
@@ -40,7 +40,7 @@ impl Emission {
         caster_spheres: CasterSpheres,
         has_dispersion: bool,
         s: &CausticMapSettings,
-    ) -> Emission {
+    ) -> ViewPlanes {
         let mut planes = Vec::new();
         let mut skipped_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
@@ -61,7 +61,7 @@ impl Emission {
             }
         }
         let flux_quantum = Self::quantum_for(&planes, has_dispersion, |p| p.resolution);
-        Emission {
+        ViewPlanes {
             planes,
             skipped_lights,
             flux_quantum,

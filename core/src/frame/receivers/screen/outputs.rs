@@ -114,9 +114,9 @@ impl Output {
     }
 }
 
-/// Device images of a frame (handles; read them with [`super::Sspm::read_output`]). An image
+/// Device images of a frame (handles; read them with `read_output`). An image
 /// is `None` when it was not requested, or when the plan knows it is zero (no light emits
-/// photons): [`super::Sspm::read_output`] then returns zeros without a device buffer.
+/// photons): `read_output` then returns zeros without a device buffer.
 #[derive(Clone, Copy, Debug)]
 pub struct FrameImages {
     /// Image width (pixels).

@@ -1,6 +1,6 @@
 //! Every parameter of CausticMap, with its defaults and validation.
 
-use crate::frame::caustic_atlas::DEFAULT_ATLAS_SIDE;
+use crate::frame::receivers::atlas::layout::DEFAULT_ATLAS_SIDE;
 use crate::frame::error::Error;
 use crate::kernels::MAX_SPECULAR_DEPTH;
 use crate::math::map_gather::DEFAULT_GATHER_WIDTH;

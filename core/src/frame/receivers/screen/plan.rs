@@ -1,7 +1,7 @@
-//! Sspm's frame plan: which of its passes run for the scene, its lights and the requested
-//! outputs, and why ([`crate::frame::plan`] holds the shared vocabulary).
+//! The screen receiver's frame plan: which of its passes run for the scene, the lights'
+//! emission and the requested outputs, and why ([`crate::frame::plan`] holds the shared
+//! vocabulary).
 
-use super::constants::FrameConstants;
 use super::outputs::Outputs;
 use super::settings::GatherFilter;
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
@@ -23,34 +23,8 @@ pub struct Needs {
     pub composite: bool,
 }
 
-/// The plan of every light of `constants`' emission (seed 000's projection volumes):
-/// whether it emits and why.
-pub fn volume_light_plans(constants: &FrameConstants) -> Vec<LightPlan> {
-    let mut lights: Vec<LightPlan> = constants
-        .domains
-        .iter()
-        .map(|(i, _)| LightPlan {
-            light: *i,
-            emits: true,
-            reason: if constants.unpruned.contains(i) {
-                "pruning off: emits its whole domain".into()
-            } else {
-                "its emission domain reaches a caustic caster".into()
-            },
-        })
-        .collect();
-    lights.extend(constants.skipped_lights.iter().map(|(i, why)| LightPlan {
-        light: *i,
-        emits: false,
-        reason: why.reason().into(),
-    }));
-    lights.sort_by_key(|l| l.light);
-    lights
-}
-
-/// Plans a frame of Sspm for `scene` whose lights' emission is already decided
-/// (`lights`; [`volume_light_plans`] for seed 000's, or AdaptiveCaustics' light view
-/// planes).
+/// Plans a screen-receiver frame for `scene` whose lights' emission is already decided
+/// (`lights`: Sspm's projection volumes or AdaptiveCaustics' light view planes).
 pub fn plan_frame(
     scene: &Scene,
     lights: Vec<LightPlan>,

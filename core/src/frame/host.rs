@@ -1,0 +1,532 @@
+//! The frame host: the world every technique renders, owned once (kajiya's world
+//! renderer is the model). It holds the uploaded scene with its two-level acceleration
+//! structure, the scene model it came from, the camera, the camera's own images
+//! ([`crate::frame::screen`]: G-buffer, direct light, composite) and the scene writes of
+//! the updates since the last frame; it applies every update (camera, lights, instance
+//! moves and deformations, materials) the same way for every technique, and a technique
+//! ([`crate::frame::pipeline`]) only re-plans its own passes over the result.
+//!
+//! Scene writes of an update go into [`FrameHost::take_pending`]'s recording, which the
+//! next frame runs first: an update costs the host its own arithmetic, never a
+//! submission or a wait of its own (a light buffer of a new length is the exception: it
+//! is allocated at once).
+
+use crate::backend::{read_buf, Backend};
+use crate::device::caster_spheres::CasterSpheres;
+use crate::device::device_scene::{
+    gpu_light, BuildBudget, DeviceScene, InstanceUpdate, SceneInstances,
+};
+use crate::device::handle::{ImageBuf, ResourceId, SceneArgs};
+use crate::device::layout::{material_kind, GpuCamera, GpuLight, GpuMaterial};
+use crate::frame::allocation::planned_allocation;
+use crate::frame::receivers::atlas::layout::AtlasReceivers;
+use crate::frame::error::Error;
+use crate::frame::image::Image;
+use crate::frame::plan::{BufferPlan, FramePlan, SceneFeatures};
+use crate::frame::screen::{ScreenNeeds, ScreenTargets};
+use crate::frame::stats::FrameStats;
+use crate::math::geometry::Aabb;
+use crate::recording::{Recording, Step};
+use crate::scene::{Camera, Light, Scene};
+
+/// What the host derives from the uploaded geometry, kept so that lights, cameras and
+/// instance moves never need the flattened scene again. World space, scene units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneGeometry {
+    /// Bounds of every triangle.
+    pub bounds: Aabb,
+    /// Bounds of the caustic casters (mirrors and dielectrics).
+    pub caster_bounds: Aabb,
+    /// Balls around the casters that photons' first segments are tested against.
+    pub caster_spheres: CasterSpheres,
+    /// Some material disperses (a non-zero Cauchy B).
+    pub has_dispersion: bool,
+    /// Triangles the build dropped for zero area in f32.
+    pub degenerate_triangles: u64,
+    /// Triangles uploaded (what a `max_triangles` budget is checked against).
+    pub triangles: u64,
+    /// Bounding box of every caster object, with its scene object index, in object
+    /// order (they follow moved instances).
+    pub caster_boxes: Vec<(u32, Aabb)>,
+}
+
+/// What a technique asks the host to derive when it uploads the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HostOptions {
+    /// The triangle budget the scene is built under.
+    pub max_triangles: u64,
+    /// Keep the diffuse receivers' triangles for a caustic atlas
+    /// ([`AtlasReceivers`]; only where the scene has casters and receivers).
+    pub atlas_receivers: bool,
+}
+
+/// The state an update changed, kept to go back when the technique cannot follow it.
+#[derive(Clone, Debug)]
+pub struct HostState {
+    model: Scene,
+    geometry: SceneGeometry,
+    instances: SceneInstances,
+    receivers: Option<AtlasReceivers>,
+    camera: GpuCamera,
+}
+
+/// The frame host of one technique on one backend.
+#[derive(Debug)]
+pub struct FrameHost {
+    model: Scene,
+    scene: SceneArgs,
+    instances: SceneInstances,
+    geometry: SceneGeometry,
+    receivers: Option<AtlasReceivers>,
+    camera: GpuCamera,
+    options: HostOptions,
+    /// The uploaded scene's buffers, their bytes and plan entries.
+    uploaded: Vec<ResourceId>,
+    uploaded_bytes: u64,
+    uploaded_buffers: Vec<BufferPlan>,
+    screen: ScreenTargets,
+    pending: Recording,
+    reference: Option<Image>,
+}
+
+/// The bounding box of every caster object (mirror or dielectric) of `ds`, from its
+/// triangles, with its object index, in object order.
+pub fn caster_boxes(ds: &DeviceScene) -> Vec<(u32, Aabb)> {
+    let mut boxes: std::collections::BTreeMap<u32, Aabb> = Default::default();
+    for (t, obj) in ds.triangles.iter().zip(&ds.triangle_objects) {
+        if ds.materials[t.material as usize].kind == material_kind::DIFFUSE {
+            continue;
+        }
+        let b = boxes.entry(*obj).or_insert(Aabb::EMPTY);
+        for i in t.indices {
+            b.grow(glam::Vec3::from(ds.vertices[i as usize].position));
+        }
+    }
+    boxes.into_iter().collect()
+}
+
+/// `scene`'s validation, as an error that names the first offending path.
+pub fn validated(scene: &Scene) -> Result<(), Error> {
+    scene
+        .validate()
+        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))
+}
+
+impl FrameHost {
+    /// Validates `scene`, builds its device scene under the budget and uploads it (every
+    /// buffer checked against the device first). No camera image exists yet: the
+    /// technique asks for them ([`FrameHost::make_screen`]).
+    pub fn upload(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        options: HostOptions,
+    ) -> Result<FrameHost, Error> {
+        validated(scene)?;
+        let ds = DeviceScene::build(
+            scene,
+            BuildBudget {
+                max_triangles: options.max_triangles,
+            },
+        )?;
+        let features = SceneFeatures::of(scene);
+        let receiver = crate::frame::receivers::atlas::layout::atlas_receivers(scene);
+        let receivers = (options.atlas_receivers
+            && (features.mirrors || features.dielectrics)
+            && receiver.iter().any(|r| *r))
+        .then(|| AtlasReceivers::of(&ds, &receiver));
+        let geometry = SceneGeometry {
+            bounds: ds.bounds,
+            caster_bounds: ds.caster_bounds,
+            caster_spheres: ds.caster_spheres,
+            has_dispersion: ds.has_dispersion,
+            degenerate_triangles: ds.degenerate_triangles,
+            triangles: ds.triangles.len() as u64,
+            caster_boxes: caster_boxes(&ds),
+        };
+        let mut rec = Recording::new();
+        let args = rec.upload_scene(&ds);
+        let alloc = planned_allocation(backend, &rec, None)?;
+        backend.execute(&rec)?;
+        Ok(FrameHost {
+            model: scene.clone(),
+            scene: args,
+            instances: ds.instances,
+            geometry,
+            receivers,
+            camera: GpuCamera::from_camera(&scene.camera),
+            options,
+            uploaded: alloc.owned,
+            uploaded_bytes: alloc.bytes,
+            uploaded_buffers: alloc.buffers,
+            screen: ScreenTargets::none(),
+            pending: Recording::new(),
+            reference: None,
+        })
+    }
+
+    /// The scene model as it is now (after every update).
+    pub fn model(&self) -> &Scene {
+        &self.model
+    }
+
+    /// The uploaded scene's buffers, as kernels bind them.
+    pub fn scene(&self) -> SceneArgs {
+        self.scene
+    }
+
+    /// What the host derived from the geometry (bounds, casters).
+    pub fn geometry(&self) -> &SceneGeometry {
+        &self.geometry
+    }
+
+    /// The diffuse receivers' triangles, when the technique asked for them and the scene
+    /// has casters and receivers.
+    pub fn receivers(&self) -> Option<&AtlasReceivers> {
+        self.receivers.as_ref()
+    }
+
+    /// The acceleration structure's levels.
+    pub fn instances(&self) -> &SceneInstances {
+        &self.instances
+    }
+
+    /// The camera as the kernels read it.
+    pub fn camera(&self) -> GpuCamera {
+        self.camera
+    }
+
+    /// The number of lights.
+    pub fn light_count(&self) -> u32 {
+        self.model.lights.len() as u32
+    }
+
+    /// The options the scene was uploaded with.
+    pub fn options(&self) -> HostOptions {
+        self.options
+    }
+
+    /// The camera's images.
+    pub fn screen(&self) -> &ScreenTargets {
+        &self.screen
+    }
+
+    /// Bytes of the uploaded scene and the camera's images.
+    pub fn bytes(&self) -> u64 {
+        self.uploaded_bytes + self.screen.bytes
+    }
+
+    /// Device buffers the host owns.
+    pub fn buffer_count(&self) -> usize {
+        self.uploaded.len() + self.screen.owned.len()
+    }
+
+    /// The plan entries of the uploaded scene and the camera's images.
+    pub fn buffer_plans(&self) -> Vec<BufferPlan> {
+        self.uploaded_buffers
+            .iter()
+            .chain(&self.screen.buffers)
+            .cloned()
+            .collect()
+    }
+
+    /// The scene writes of the updates since the last frame (the frame runs them first).
+    pub fn take_pending(&mut self) -> Recording {
+        std::mem::take(&mut self.pending)
+    }
+
+    /// Runs the pending scene writes now (a technique whose update reads the device,
+    /// such as PhotonGi's RSM probe, needs the scene as it is after the update).
+    pub fn flush(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let pending = self.take_pending();
+        if !pending.steps.is_empty() {
+            backend.execute(&pending)?;
+        }
+        Ok(())
+    }
+
+    /// Makes the camera's images `needs` asks for at the camera's size (the old ones are
+    /// freed; nothing changes on an error). Images already made for `needs` at this size
+    /// stay.
+    pub fn make_screen(&mut self, backend: &mut dyn Backend, needs: ScreenNeeds) -> Result<(), Error> {
+        let size = (self.camera.width, self.camera.height);
+        if self.screen.needs == needs && self.screen.size == size && needs != ScreenNeeds::NONE {
+            return Ok(());
+        }
+        let mut rec = Recording::new();
+        let targets = ScreenTargets::create(backend, &mut rec, self.camera, needs)?;
+        for id in &self.screen.owned {
+            rec.steps.push(Step::Free { id: *id });
+        }
+        backend.execute(&rec)?;
+        self.screen = targets;
+        Ok(())
+    }
+
+    /// Records the G-buffer and the direct light, as the camera's images were made.
+    pub fn record_visibility(&self, rec: &mut Recording) {
+        self.screen
+            .record_visibility(rec, self.scene, self.camera, self.light_count());
+    }
+
+    /// Records the composite of the direct light and `light`.
+    pub fn record_composite(&self, rec: &mut Recording, light: ImageBuf) {
+        self.screen.record_composite(rec, light);
+    }
+
+    /// Reads a camera-space image back (the camera's size).
+    pub fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
+        let px = read_buf(backend, image)?;
+        Ok(Image::new(self.camera.width, self.camera.height, px))
+    }
+
+    /// A black image of the camera's size (an output the plan knows to be zero).
+    pub fn black_image(&self) -> Image {
+        let (w, h) = (self.camera.width, self.camera.height);
+        Image::new(w, h, vec![[0.0; 4]; w as usize * h as usize])
+    }
+
+    /// A frame's statistics before anything runs: the technique, backend and device,
+    /// the frame size and timing source, the plan with every skipped pass, the bytes of
+    /// every buffer (`own_bytes`: the technique's) and the scene's degenerate triangles.
+    pub fn frame_stats(
+        &self,
+        backend: &dyn Backend,
+        technique: &str,
+        plan: &FramePlan,
+        own_bytes: u64,
+    ) -> FrameStats {
+        let caps = backend.capabilities();
+        let mut stats = FrameStats {
+            technique: technique.into(),
+            backend: backend.name().into(),
+            device: caps.device.clone(),
+            width: self.camera.width,
+            height: self.camera.height,
+            timing: if caps.timestamps {
+                "device timestamps".into()
+            } else {
+                "host wall clock".into()
+            },
+            bytes_allocated: self.bytes() + own_bytes,
+            degenerate_triangles: self.geometry.degenerate_triangles,
+            plan: Some(plan.clone()),
+            ..Default::default()
+        };
+        for p in plan.passes.iter().filter(|p| !p.runs) {
+            stats.skip(&p.name, p.reason.clone());
+        }
+        stats
+    }
+
+    /// The reference image of the technique's filtered estimate, if set.
+    pub fn reference(&self) -> Option<&Image> {
+        self.reference.as_ref()
+    }
+
+    /// Sets (or clears) the reference image (linear radiance, the camera's size).
+    pub fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
+        if let Some(r) = &reference {
+            if (r.width, r.height) != (self.camera.width, self.camera.height) {
+                return Err(Error::InvalidParameter(format!(
+                    "reference is {}x{}, the frame {}x{}",
+                    r.width, r.height, self.camera.width, self.camera.height
+                )));
+            }
+        }
+        self.reference = reference;
+        Ok(())
+    }
+
+    /// What an update may change, to go back to.
+    pub fn state(&self) -> HostState {
+        HostState {
+            model: self.model.clone(),
+            geometry: self.geometry.clone(),
+            instances: self.instances.clone(),
+            receivers: self.receivers.clone(),
+            camera: self.camera,
+        }
+    }
+
+    /// Moves the camera (validated). Returns whether the image size changed; then the
+    /// camera's images are made anew (on an error nothing changes) and the reference is
+    /// dropped.
+    pub fn set_camera(&mut self, backend: &mut dyn Backend, camera: &Camera) -> Result<bool, Error> {
+        let model = crate::frame::technique::with_camera(&self.model, camera)?;
+        let new = GpuCamera::from_camera(camera);
+        let resized = (new.width, new.height) != (self.camera.width, self.camera.height);
+        let old = self.camera;
+        self.camera = new;
+        if resized {
+            if let Err(e) = self.make_screen(backend, self.screen.needs) {
+                self.camera = old;
+                return Err(e);
+            }
+            self.reference = None;
+        }
+        self.model = model;
+        Ok(resized)
+    }
+
+    /// The camera of `state` back, with images of its size.
+    fn restore_camera(&mut self, backend: &mut dyn Backend, state: &HostState) -> Result<(), Error> {
+        if (state.camera.width, state.camera.height) != (self.camera.width, self.camera.height) {
+            self.camera = state.camera;
+            self.make_screen(backend, self.screen.needs)?;
+        }
+        self.camera = state.camera;
+        Ok(())
+    }
+
+    /// Replaces the lights (validated): written in place with the next frame when their
+    /// number stays, else a light buffer of the new length replaces the old one at once.
+    pub fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error> {
+        let model = crate::frame::technique::with_lights(&self.model, lights)?;
+        self.write_lights(backend, lights)?;
+        self.model = model;
+        Ok(())
+    }
+
+    /// Writes `lights` into the light buffer (a new one when the length changes).
+    fn write_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error> {
+        let gpu: Vec<GpuLight> = lights.iter().map(gpu_light).collect();
+        if gpu.len() as u32 == self.scene.lights.len {
+            self.pending.write(self.scene.lights, 0, &gpu, "lights")?;
+            return Ok(());
+        }
+        // earlier updates' writes into the old buffer first
+        self.flush(backend)?;
+        let old = self.scene.lights;
+        let mut rec = Recording::new();
+        let new = rec.upload(&gpu, "lights");
+        let alloc = planned_allocation(backend, &rec, None)?;
+        rec.steps.push(Step::Free { id: old.id });
+        backend.execute(&rec)?;
+        self.scene.lights = new;
+        for id in &mut self.uploaded {
+            if *id == old.id {
+                *id = new.id;
+            }
+        }
+        let old_bytes = old.len as u64 * std::mem::size_of::<GpuLight>() as u64;
+        self.uploaded_bytes = self.uploaded_bytes - old_bytes + alloc.bytes;
+        for b in &mut self.uploaded_buffers {
+            if b.name == "lights" {
+                b.bytes = alloc.bytes;
+            }
+        }
+        Ok(())
+    }
+
+    /// Applies an instance update already made to `instances` (a copy of the host's) for
+    /// `model`, the scene after it: its writes go with the next frame, and the geometry
+    /// (bounds, caster balls and boxes, receivers' triangles) follows. Returns whether a
+    /// receiver of the atlas moved.
+    pub fn apply_instances(
+        &mut self,
+        model: Scene,
+        mut instances: SceneInstances,
+        u: &InstanceUpdate,
+    ) -> Result<bool, Error> {
+        let m = u.moved();
+        self.pending.update_instances(u, &self.scene)?;
+        instances.refresh_smooth_normals(m);
+        let mut receivers_moved = false;
+        if let Some(r) = self.receivers.as_mut() {
+            if let InstanceUpdate::Deformed(d) = u {
+                // the deformed level's triangles in their new order
+                r.reorder_triangles(d.triangles.0, &d.triangles.1);
+            }
+            receivers_moved = r.move_vertices(&m.vertices);
+        }
+        // an instance caster's box is its level's triangle bounds (the vertices a fresh
+        // build's box grows over); the static level's casters keep theirs
+        for (object, b) in &mut self.geometry.caster_boxes {
+            if let Some(l) = instances
+                .levels
+                .iter()
+                .find(|l| l.object == Some(*object as usize))
+            {
+                *b = l.triangle_bounds;
+            }
+        }
+        self.geometry.bounds = m.bounds;
+        self.geometry.caster_bounds = m.caster_bounds;
+        self.geometry.caster_spheres = m.caster_spheres;
+        self.instances = instances;
+        self.model = model;
+        Ok(receivers_moved)
+    }
+
+    /// Writes new material parameters (checked: [`crate::frame::material_update`]) with
+    /// the next frame. Returns whether the scene's features and dispersion stayed.
+    pub fn set_materials(
+        &mut self,
+        materials: &std::collections::BTreeMap<String, crate::scene::Material>,
+    ) -> Result<bool, Error> {
+        let u = crate::frame::material_update::material_update(&self.model, materials)?;
+        self.pending.update(self.scene.materials, &u.gpu, "materials")?;
+        self.geometry.has_dispersion = u.has_dispersion;
+        self.model = u.model;
+        Ok(u.same_plan)
+    }
+
+    /// Goes back to `state` after an update the technique could not follow: the model,
+    /// the geometry and the instances, with the device's lights, materials and instances
+    /// written back (`undo`: the instance update back to `state`'s, where instances moved).
+    pub fn restore(
+        &mut self,
+        backend: &mut dyn Backend,
+        state: HostState,
+        undo: Option<InstanceUpdate>,
+    ) -> Result<(), Error> {
+        if let Some(u) = &undo {
+            self.pending.update_instances(u, &self.scene)?;
+        }
+        if state.model.lights != self.model.lights {
+            self.write_lights(backend, &state.model.lights)?;
+        }
+        if state.model.materials != self.model.materials {
+            let gpu: Vec<GpuMaterial> = state
+                .model
+                .materials
+                .values()
+                .map(crate::device::device_scene::gpu_material)
+                .collect();
+            self.pending.update(self.scene.materials, &gpu, "materials")?;
+        }
+        self.restore_camera(backend, &state)?;
+        self.model = state.model;
+        self.geometry = state.geometry;
+        self.instances = state.instances;
+        self.receivers = state.receivers;
+        Ok(())
+    }
+
+    /// Checks a new triangle budget against the uploaded scene.
+    pub fn check_budget(&self, max_triangles: u64) -> Result<(), Error> {
+        if self.geometry.triangles > max_triangles {
+            return Err(Error::InvalidParameter(format!(
+                "max_triangles {max_triangles} is below the scene's {} triangles: create the \
+                 technique again",
+                self.geometry.triangles
+            )));
+        }
+        Ok(())
+    }
+
+    /// Releases every device buffer of the host.
+    pub fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        let mut rec = Recording::new();
+        for id in std::mem::take(&mut self.uploaded)
+            .into_iter()
+            .chain(std::mem::take(&mut self.screen.owned))
+        {
+            rec.steps.push(Step::Free { id });
+        }
+        self.uploaded_bytes = 0;
+        self.screen = ScreenTargets::none();
+        backend.execute(&rec)?;
+        Ok(())
+    }
+}
