@@ -193,8 +193,9 @@ naming the case and the backend.
   and storage binding in `Sspm::new`; a frame that does not fit is a typed `OutOfMemory`
   naming the buffer, the limit and the frame size that would fit. Per-pixel buffers are
   stored in planes of at most 16 B/px (the 64-byte G-buffer in 4, the photon map in 3),
-  so 8192x8192 (1 GiB planes) renders on NVIDIA's Vulkan, wgpu and OpenCL (H200:
-  `docs/gpu/h200-issue14-stiff.log`) and 3840x2160 fits lavapipe's 128 MiB bindings.
+  so 8192x8192 (1 GiB planes) renders on NVIDIA's Vulkan, wgpu and OpenCL (H200,
+  2026-12-01, case `image-8192x8192`: `SUITE_PARTS=stiff scripts/gpu-run.sh suite`) and
+  3840x2160 fits lavapipe's 128 MiB bindings.
   OpenCL fills large buffers in 1 GiB commands (NVIDIA faulted on one 4 GiB fill).
 - Degenerate-size checks (`Scene::validate` for quads, quad tessellation) use unit
   vectors, so they no longer underflow for scenes below ~1e-10 units.
