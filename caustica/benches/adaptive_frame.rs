@@ -86,8 +86,9 @@ fn main() {
                     ("error", Some(AdaptiveMetric::Error)),
                 ] {
                     let made = match metric {
-                        None => CausticMap::new(backend.as_mut(), &scene, map.clone()),
-                        Some(metric) => AdaptiveCaustics::build(
+                        None => CausticMap::new(backend.as_mut(), &scene, map.clone())
+                            .map(|t| Box::new(t) as Box<dyn Technique>),
+                        Some(metric) => AdaptiveCaustics::new(
                             backend.as_mut(),
                             &scene,
                             AdaptiveCausticsSettings {
@@ -96,7 +97,8 @@ fn main() {
                                 max_traversal_bytes: 256 << 20,
                                 ..Default::default()
                             },
-                        ),
+                        )
+                        .map(|t| Box::new(t) as Box<dyn Technique>),
                     };
                     let mut t = match made {
                         Ok(t) => t,

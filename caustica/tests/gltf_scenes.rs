@@ -561,7 +561,8 @@ fn meshes_without_uvs_get_charts_a_caustic_map_can_address() {
         .unwrap();
     let receiver = caustica_core::frame::receivers::atlas::layout::atlas_receivers(&im.scene);
     let layout =
-        caustica_core::frame::receivers::atlas::layout::atlas_layout(&ds, &receiver, (256, 256)).unwrap();
+        caustica_core::frame::receivers::atlas::layout::atlas_layout(&ds, &receiver, (256, 256))
+            .unwrap();
     assert_eq!(layout.tiles.len(), 3);
     assert!(layout.covered_texels > 0);
 }

@@ -34,7 +34,7 @@ fn main() {
         )];
         let mut counts = Vec::new();
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-            let mut a = AdaptiveCaustics::build(
+            let mut a = AdaptiveCaustics::new(
                 &mut b,
                 &scene,
                 AdaptiveCausticsSettings {

@@ -30,11 +30,14 @@ fn map(n: u32, plane: EmissionPlane) -> CausticMapSettings {
 }
 
 /// Stats, the gathered atlas and the host time of one frame.
-fn run(b: &mut dyn Backend, mut t: CausticMap) -> (FrameStats, Image, f64) {
+fn run<P: caustica_core::frame::pipeline::Pipeline>(
+    b: &mut dyn Backend,
+    mut t: caustica_core::frame::pipeline::Hosted<P>,
+) -> (FrameStats, Image, f64) {
     let start = Instant::now();
     let s = t.frame(b, &mut |_| {}).expect("frame");
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    let atlas = t.read_output(b, "caustic_atlas").expect("atlas");
+    let atlas = t.read_output_named(b, "caustic_atlas").expect("atlas");
     t.free(b).expect("free");
     (s, atlas, ms)
 }
@@ -82,8 +85,7 @@ fn main() {
         let (ds, da, dms) = run(b, t);
         let mut row = Vec::new();
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-            let t =
-                AdaptiveCaustics::build(b, &scene, adaptive(n, plane, metric)).expect("adaptive");
+            let t = AdaptiveCaustics::new(b, &scene, adaptive(n, plane, metric)).expect("adaptive");
             let (s, a, ms) = run(b, t);
             let st = s.adaptive.clone().unwrap_or_default();
             per_level.push((n, metric, st.photons_per_level.clone()));
@@ -122,7 +124,7 @@ fn main() {
                     error_texels: t,
                     ..adaptive(n, plane, AdaptiveMetric::Error)
                 };
-                let tech = AdaptiveCaustics::build(b, &scene, settings).expect("adaptive");
+                let tech = AdaptiveCaustics::new(b, &scene, settings).expect("adaptive");
                 let (s, a, ms) = run(b, tech);
                 let p = s.adaptive.map_or(0, |a| a.photons_processed) as f64;
                 println!(
@@ -153,8 +155,7 @@ fn main() {
         }
         let mut ratios = Vec::new();
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-            let t =
-                AdaptiveCaustics::build(b, &s, adaptive(top, casters, metric)).expect("adaptive");
+            let t = AdaptiveCaustics::new(b, &s, adaptive(top, casters, metric)).expect("adaptive");
             let (st, _, _) = run(b, t);
             let p = st.adaptive.map_or(0, |a| a.photons_processed);
             ratios.push(p as f64 / ds.photons_emitted as f64);

@@ -33,6 +33,14 @@ use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::techniques::sspm::Output;
 use caustica_core::{Backend, FrameStats};
 
+/// `s` with the screen target.
+fn on_screen(s: AdaptiveCausticsSettings) -> AdaptiveCausticsSettings {
+    AdaptiveCausticsSettings {
+        deposit: caustica_core::techniques::adaptive_caustics::AdaptiveDeposit::Screen,
+        ..s
+    }
+}
+
 const OUTPUTS: [&str; 5] = [
     "caustic_atlas",
     "caustics_raw",
@@ -57,14 +65,14 @@ fn map(photons: u32) -> CausticMapSettings {
 }
 
 /// A frame's stats and outputs, the technique freed.
-fn render(
+fn render<P: caustica_core::frame::pipeline::Pipeline>(
     b: &mut dyn Backend,
-    mut t: CausticMap,
+    mut t: caustica_core::frame::pipeline::Hosted<P>,
 ) -> (FrameStats, Vec<caustica_core::frame::image::Image>) {
     let stats = t.frame(b, &mut |_| {}).expect("frame");
     let images = OUTPUTS
         .iter()
-        .map(|o| t.read_output(b, o).expect("read"))
+        .map(|o| t.read_output_named(b, o).expect("read"))
         .collect();
     t.free(b).expect("free");
     (stats, images)
@@ -101,7 +109,7 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
             };
             let dense = CausticMap::new(b.as_mut(), &scene, every_tile).expect("dense");
             let (ds, di) = render(b.as_mut(), dense);
-            let adaptive = AdaptiveCaustics::build(
+            let adaptive = AdaptiveCaustics::new(
                 b.as_mut(),
                 &scene,
                 AdaptiveCausticsSettings {
@@ -152,8 +160,7 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
     for (name, mut b) in backends() {
         for scene_name in ["sphere", "cornell"] {
             let scene = small(scene_name);
-            let one =
-                AdaptiveCaustics::build(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
+            let one = AdaptiveCaustics::new(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
             let (s1, i1) = render(b.as_mut(), one);
             let a1 = s1.adaptive.clone().expect("adaptive stats");
             assert!(
@@ -165,7 +172,7 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
             let mut steps = vec![a1.steps];
             for parts in [2u64, 16] {
                 let c = busiest.div_ceil(parts);
-                let t = AdaptiveCaustics::build(b.as_mut(), &scene, settings(limit_for(c, 32, 3)))
+                let t = AdaptiveCaustics::new(b.as_mut(), &scene, settings(limit_for(c, 32, 3)))
                     .expect("scene");
                 let (s, i) = render(b.as_mut(), t);
                 let what = format!("{name} / {scene_name}, batches of {c} clusters");
@@ -220,7 +227,7 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
             let (ds, _) = render(b.as_mut(), dense);
             // 004's one-texel metric, and its tolerance variant with footprint splats
             for error_texels in [1, 4] {
-                let adaptive = AdaptiveCaustics::build(
+                let adaptive = AdaptiveCaustics::new(
                     b.as_mut(),
                     &scene,
                     AdaptiveCausticsSettings {
@@ -276,13 +283,15 @@ fn the_screen_target_deposits_the_traversals_photons() {
         for scene_name in BUILTIN_SCENES {
             let scene = small(scene_name);
             let what = format!("{name} / {scene_name}");
-            let atlas =
-                AdaptiveCaustics::build(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
-                    .expect("atlas target");
+            let atlas = AdaptiveCaustics::new(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
+                .expect("atlas target");
             let (a, _) = render(b.as_mut(), atlas);
-            let mut screen =
-                caustica_core::techniques::adaptive_caustics::AdaptiveScreen::new(b.as_mut(), &scene, settings(AdaptiveMetric::Level))
-                    .expect("screen target");
+            let mut screen = AdaptiveCaustics::new(
+                b.as_mut(),
+                &scene,
+                on_screen(settings(AdaptiveMetric::Level)),
+            )
+            .expect("screen target");
             let s = screen.frame(b.as_mut(), &mut |_| {}).expect("frame");
             let raw = screen
                 .read_output_named(b.as_mut(), Output::RawCaustics.stem())
@@ -334,9 +343,12 @@ fn the_screen_target_deposits_the_traversals_photons() {
                 }
             }
             // the error metric through the screen: the level metric's flux within the bound
-            let mut e =
-                caustica_core::techniques::adaptive_caustics::AdaptiveScreen::new(b.as_mut(), &scene, settings(AdaptiveMetric::Error))
-                    .expect("screen target, error metric");
+            let mut e = AdaptiveCaustics::new(
+                b.as_mut(),
+                &scene,
+                on_screen(settings(AdaptiveMetric::Error)),
+            )
+            .expect("screen target, error metric");
             let es = e.frame(b.as_mut(), &mut |_| {}).expect("frame");
             e.free(b.as_mut()).expect("free");
             let dispersive = scene.materials.values().any(|m| {

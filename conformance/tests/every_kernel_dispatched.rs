@@ -74,7 +74,7 @@ fn every_backend_dispatches_every_declared_kernel() {
             start_grid: 16,
             ..Default::default()
         };
-        let mut t = caustica_core::techniques::adaptive_caustics::AdaptiveCaustics::build(
+        let mut t = caustica_core::techniques::adaptive_caustics::AdaptiveCaustics::new(
             b.as_mut(),
             &scene,
             adaptive,

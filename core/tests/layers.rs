@@ -73,3 +73,44 @@ fn no_layer_imports_a_higher_one() {
     assert!(files.len() > 20, "found only {} files", files.len());
     assert!(violations.is_empty(), "{}", violations.join("\n"));
 }
+
+/// No technique imports another: each is its photon pipeline, filter and temporal state
+/// over the frame host, and what two share lives in `frame/` (emission, receivers). This
+/// fails on any `techniques::<other>` path in code (comments aside) of a technique's
+/// folder; the registry (`techniques/mod.rs`) names them all.
+#[test]
+fn no_technique_imports_another() {
+    let techniques = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/techniques");
+    let names: Vec<String> = std::fs::read_dir(&techniques)
+        .expect("techniques folder")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_dir())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.len() >= 4, "found only {names:?}");
+    let mut violations = Vec::new();
+    for own in &names {
+        let mut files = Vec::new();
+        rust_files(&techniques.join(own), &mut files);
+        for f in &files {
+            let text = std::fs::read_to_string(f).expect("readable file");
+            for (n, line) in text.lines().enumerate() {
+                let code = line.split("//").next().unwrap_or("");
+                for other in names.iter().filter(|o| *o != own) {
+                    let imports = [
+                        format!("techniques::{other}"),
+                        format!("super::super::{other}"),
+                    ];
+                    if imports.iter().any(|p| code.contains(p.as_str())) {
+                        violations.push(format!(
+                            "{}:{}: {own} imports {other}",
+                            f.strip_prefix(&techniques).unwrap_or(f).display(),
+                            n + 1
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    assert!(violations.is_empty(), "{}", violations.join("\n"));
+}

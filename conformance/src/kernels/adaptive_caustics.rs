@@ -37,8 +37,9 @@ use crate::harness::tolerance::{
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
 use caustica_core::device::layout::*;
-use caustica_core::frame::receivers::atlas::layout::AtlasLayout;
 use caustica_core::frame::emission::light_view_plane::{light_view_planes, LightViewPlane};
+use caustica_core::frame::host::caster_boxes;
+use caustica_core::frame::receivers::atlas::layout::AtlasLayout;
 use caustica_core::kernels::{RefineClusters, TracePhotons};
 use caustica_core::math::map_gather::atlas_texel_index;
 use caustica_core::math::photon_clusters::{
@@ -47,7 +48,7 @@ use caustica_core::math::photon_clusters::{
 };
 use caustica_core::math::rng::pcg_hash;
 use caustica_core::recording::Recording;
-use caustica_core::techniques::adaptive_caustics::{caster_boxes, caster_rects};
+use caustica_core::techniques::adaptive_caustics::caster_rects;
 
 /// Side of the checked plane's grid.
 const GRID: u32 = 32;
@@ -315,7 +316,7 @@ pub fn check_adaptive_caustics(
         )
     });
     v.note(format!("{stored} of {n} slots stored"));
-    let rects = caster_rects(&p, &caster_boxes(&fx.ds));
+    let rects = caster_rects(&p, &boxes_of(&fx.ds));
     // converged entries as the resample step reads them: footprints of 1 to 4 texels
     let spread_list: Vec<u32> = list
         .iter()
@@ -435,7 +436,7 @@ pub fn check_screen_target(
     });
     let kept = sa.iter().filter(|s| stored(s)).count();
     v.note(format!("{kept} of {n} world-space slots stored"));
-    let rects = caster_rects(&p, &caster_boxes(&fx.ds));
+    let rects = caster_rects(&p, &boxes_of(&fx.ds));
     let screen = Target::Screen(fx.camera);
     let clusters = list.len() as u64 - FIRST as u64;
     for (what, step, exact) in [
@@ -487,4 +488,11 @@ pub fn check_screen_target(
         }
     }
     Ok(v)
+}
+
+/// The casters' bounding boxes of `ds`, in object order.
+fn boxes_of(
+    ds: &caustica_core::device::device_scene::DeviceScene,
+) -> Vec<caustica_core::math::geometry::Aabb> {
+    caster_boxes(ds).into_iter().map(|(_, b)| b).collect()
 }

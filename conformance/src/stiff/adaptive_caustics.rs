@@ -51,7 +51,7 @@ fn adaptive(
     checked_with(
         b,
         scene,
-        &|b, sc| AdaptiveCaustics::build(b, sc, s.clone()),
+        &|b, sc| Ok(Box::new(AdaptiveCaustics::new(b, sc, s.clone())?)),
         v,
     )
 }
@@ -67,8 +67,15 @@ fn screen_target(
     v: &mut Verdict,
 ) -> Result<(), String> {
     use caustica_core::techniques::sspm::Output;
-    let mut t = caustica_core::techniques::adaptive_caustics::AdaptiveScreen::new(b, scene, s.clone())
-        .map_err(|e| e.to_string())?;
+    let mut t = AdaptiveCaustics::new(
+        b,
+        scene,
+        AdaptiveCausticsSettings {
+            deposit: caustica_core::techniques::adaptive_caustics::AdaptiveDeposit::Screen,
+            ..s.clone()
+        },
+    )
+    .map_err(|e| e.to_string())?;
     let st = t.frame(b, &mut |_| {}).map_err(|e| e.to_string())?;
     let images = [
         Output::RawCaustics,

@@ -39,9 +39,10 @@ fn settings(atlas: u32) -> CausticMapSettings {
     }
 }
 
-/// Builds the technique a case checks: CausticMap, or AdaptiveCaustics (a CausticMap
-/// with seed 004's traversal).
-pub type MakeMap<'a> = &'a dyn Fn(&mut dyn Backend, &Scene) -> Result<CausticMap, Error>;
+/// Builds the technique a case checks: CausticMap, or AdaptiveCaustics (the same atlas
+/// receiver with seed 004's traversal).
+pub type MakeMap<'a> =
+    &'a dyn Fn(&mut dyn Backend, &Scene) -> Result<Box<dyn caustica_core::Technique>, Error>;
 
 /// Renders one CausticMap frame on `b`.
 pub fn render(
@@ -49,7 +50,9 @@ pub fn render(
     scene: &Scene,
     s: &CausticMapSettings,
 ) -> Result<MapFrame, Error> {
-    render_with(b, scene, &|b, scene| CausticMap::new(b, scene, s.clone()))
+    render_with(b, scene, &|b, scene| {
+        Ok(Box::new(CausticMap::new(b, scene, s.clone())?))
+    })
 }
 
 /// Renders one frame of the technique `make` builds on `b`.
@@ -76,7 +79,7 @@ fn checked(
     checked_with(
         b,
         scene,
-        &|b, scene| CausticMap::new(b, scene, s.clone()),
+        &|b, scene| Ok(Box::new(CausticMap::new(b, scene, s.clone())?)),
         v,
     )
 }
@@ -273,8 +276,9 @@ fn flux_kept(
     let ds = caustica_core::device::device_scene::DeviceScene::build(scene, Default::default())
         .map_err(|e| e.to_string())?;
     let receiver = caustica_core::frame::receivers::atlas::layout::atlas_receivers(scene);
-    let layout = caustica_core::frame::receivers::atlas::layout::atlas_layout(&ds, &receiver, (256, 256))
-        .map_err(|e| e.to_string())?;
+    let layout =
+        caustica_core::frame::receivers::atlas::layout::atlas_layout(&ds, &receiver, (256, 256))
+            .map_err(|e| e.to_string())?;
     let flux = |img: &Image| -> f64 {
         img.pixels
             .iter()

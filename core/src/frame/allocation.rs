@@ -19,6 +19,17 @@ pub struct Allocation {
     pub buffers: Vec<BufferPlan>,
 }
 
+impl Allocation {
+    /// Records every buffer freed and forgets them.
+    pub fn free_into(&mut self, rec: &mut Recording) {
+        for id in std::mem::take(&mut self.owned) {
+            rec.steps.push(Step::Free { id });
+        }
+        self.bytes = 0;
+        self.buffers.clear();
+    }
+}
+
 /// Checks every buffer that `rec` creates or uploads against the device's largest buffer
 /// (its allocation limit or, on wgpu and Vulkan, its storage-binding size, whichever is
 /// smaller) and returns them, before `rec` is executed. `frame` is the image size: when
@@ -87,8 +98,8 @@ pub fn fitting_frame(w: u32, h: u32, bytes: u64, limit: u64) -> Option<(u32, u32
 /// Default photons per batch (Sspm, CausticMap, AdaptiveCaustics): 2^22, a 2048^2 grid in
 /// one batch (a 128 MiB photon buffer). Fewer, larger batches keep a large GPU busy: on
 /// an H200, Sspm's trace of 2048^2 photons took 4.33 ms in four batches of 2^20 and 3.31
-/// ms in one on Vulkan (`sphere`; 2.85 and 2.20 on `cornell`; `scripts/gpu-run.sh nonblock
-/// batches`, `docs/gpu/h200-session11-batches.log`).
+/// ms in one on Vulkan (`sphere`; 2.85 and 2.20 on `cornell`; H200, 2026-12-02,
+/// `docs/performance.md`, "What the kernels do for speed").
 pub const DEFAULT_PHOTONS_PER_BATCH: u32 = 1 << 22;
 
 /// Bytes of one stored photon ([`crate::device::layout::Photon`]).

@@ -6,10 +6,11 @@
 //! moves and deformations, materials) the same way for every technique, and a technique
 //! ([`crate::frame::pipeline`]) only re-plans its own passes over the result.
 //!
-//! Scene writes of an update go into [`FrameHost::take_pending`]'s recording, which the
-//! next frame runs first: an update costs the host its own arithmetic, never a
-//! submission or a wait of its own (a light buffer of a new length is the exception: it
-//! is allocated at once).
+//! The scene's upload, the camera images' creation and the scene writes of an update go
+//! into [`FrameHost::take_pending`]'s recording, which the next frame runs first: nothing
+//! runs before every buffer of the host and its technique has been checked against the
+//! device, and an update costs the host its own arithmetic, never a submission or a wait
+//! of its own (a light buffer of a new length is the exception: it is allocated at once).
 
 use crate::backend::{read_buf, Backend};
 use crate::device::caster_spheres::CasterSpheres;
@@ -19,10 +20,10 @@ use crate::device::device_scene::{
 use crate::device::handle::{ImageBuf, ResourceId, SceneArgs};
 use crate::device::layout::{material_kind, GpuCamera, GpuLight, GpuMaterial};
 use crate::frame::allocation::planned_allocation;
-use crate::frame::receivers::atlas::layout::AtlasReceivers;
 use crate::frame::error::Error;
 use crate::frame::image::Image;
 use crate::frame::plan::{BufferPlan, FramePlan, SceneFeatures};
+use crate::frame::receivers::atlas::layout::AtlasReceivers;
 use crate::frame::screen::{ScreenNeeds, ScreenTargets};
 use crate::frame::stats::FrameStats;
 use crate::math::geometry::Aabb;
@@ -86,6 +87,8 @@ pub struct FrameHost {
     uploaded_buffers: Vec<BufferPlan>,
     screen: ScreenTargets,
     pending: Recording,
+    /// Some recording of this host has run (else freeing it runs nothing).
+    on_device: bool,
     reference: Option<Image>,
 }
 
@@ -105,6 +108,20 @@ pub fn caster_boxes(ds: &DeviceScene) -> Vec<(u32, Aabb)> {
     boxes.into_iter().collect()
 }
 
+/// The caster boxes after instances moved: an instance caster's box is its level's
+/// `triangle_bounds` (the same vertices [`caster_boxes`] grows over, so the same box as a
+/// fresh build's); the static level's casters keep theirs.
+pub fn follow_moved_casters(
+    boxes: &mut [(u32, Aabb)],
+    levels: &[crate::device::acceleration::Level],
+) {
+    for (object, b) in boxes {
+        if let Some(l) = levels.iter().find(|l| l.object == Some(*object as usize)) {
+            *b = l.triangle_bounds;
+        }
+    }
+}
+
 /// `scene`'s validation, as an error that names the first offending path.
 pub fn validated(scene: &Scene) -> Result<(), Error> {
     scene
@@ -113,9 +130,10 @@ pub fn validated(scene: &Scene) -> Result<(), Error> {
 }
 
 impl FrameHost {
-    /// Validates `scene`, builds its device scene under the budget and uploads it (every
-    /// buffer checked against the device first). No camera image exists yet: the
-    /// technique asks for them ([`FrameHost::make_screen`]).
+    /// Validates `scene`, builds its device scene under the budget and records its upload
+    /// (every buffer checked against the device first; it runs with the first frame, or
+    /// at [`FrameHost::flush`]). No camera image exists yet: the technique asks for them
+    /// ([`FrameHost::make_screen`]).
     pub fn upload(
         backend: &mut dyn Backend,
         scene: &Scene,
@@ -146,7 +164,6 @@ impl FrameHost {
         let mut rec = Recording::new();
         let args = rec.upload_scene(&ds);
         let alloc = planned_allocation(backend, &rec, None)?;
-        backend.execute(&rec)?;
         Ok(FrameHost {
             model: scene.clone(),
             scene: args,
@@ -159,7 +176,8 @@ impl FrameHost {
             uploaded_bytes: alloc.bytes,
             uploaded_buffers: alloc.buffers,
             screen: ScreenTargets::none(),
-            pending: Recording::new(),
+            pending: rec,
+            on_device: false,
             reference: None,
         })
     }
@@ -229,8 +247,15 @@ impl FrameHost {
             .collect()
     }
 
+    /// Appends a technique's own writes of an update (an atlas laid out anew) to the
+    /// scene writes the next frame runs first.
+    pub fn defer(&mut self, rec: Recording) {
+        self.pending.steps.extend(rec.steps);
+    }
+
     /// The scene writes of the updates since the last frame (the frame runs them first).
     pub fn take_pending(&mut self) -> Recording {
+        self.on_device = true;
         std::mem::take(&mut self.pending)
     }
 
@@ -244,10 +269,15 @@ impl FrameHost {
         Ok(())
     }
 
-    /// Makes the camera's images `needs` asks for at the camera's size (the old ones are
-    /// freed; nothing changes on an error). Images already made for `needs` at this size
+    /// Makes the camera's images `needs` asks for at the camera's size (checked against
+    /// the device now, created with the pending writes; the old ones are freed after
+    /// them; nothing changes on an error). Images already made for `needs` at this size
     /// stay.
-    pub fn make_screen(&mut self, backend: &mut dyn Backend, needs: ScreenNeeds) -> Result<(), Error> {
+    pub fn make_screen(
+        &mut self,
+        backend: &mut dyn Backend,
+        needs: ScreenNeeds,
+    ) -> Result<(), Error> {
         let size = (self.camera.width, self.camera.height);
         if self.screen.needs == needs && self.screen.size == size && needs != ScreenNeeds::NONE {
             return Ok(());
@@ -257,7 +287,7 @@ impl FrameHost {
         for id in &self.screen.owned {
             rec.steps.push(Step::Free { id: *id });
         }
-        backend.execute(&rec)?;
+        self.pending.steps.extend(rec.steps);
         self.screen = targets;
         Ok(())
     }
@@ -351,7 +381,11 @@ impl FrameHost {
     /// Moves the camera (validated). Returns whether the image size changed; then the
     /// camera's images are made anew (on an error nothing changes) and the reference is
     /// dropped.
-    pub fn set_camera(&mut self, backend: &mut dyn Backend, camera: &Camera) -> Result<bool, Error> {
+    pub fn set_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: &Camera,
+    ) -> Result<bool, Error> {
         let model = crate::frame::technique::with_camera(&self.model, camera)?;
         let new = GpuCamera::from_camera(camera);
         let resized = (new.width, new.height) != (self.camera.width, self.camera.height);
@@ -369,7 +403,11 @@ impl FrameHost {
     }
 
     /// The camera of `state` back, with images of its size.
-    fn restore_camera(&mut self, backend: &mut dyn Backend, state: &HostState) -> Result<(), Error> {
+    fn restore_camera(
+        &mut self,
+        backend: &mut dyn Backend,
+        state: &HostState,
+    ) -> Result<(), Error> {
         if (state.camera.width, state.camera.height) != (self.camera.width, self.camera.height) {
             self.camera = state.camera;
             self.make_screen(backend, self.screen.needs)?;
@@ -439,17 +477,7 @@ impl FrameHost {
             }
             receivers_moved = r.move_vertices(&m.vertices);
         }
-        // an instance caster's box is its level's triangle bounds (the vertices a fresh
-        // build's box grows over); the static level's casters keep theirs
-        for (object, b) in &mut self.geometry.caster_boxes {
-            if let Some(l) = instances
-                .levels
-                .iter()
-                .find(|l| l.object == Some(*object as usize))
-            {
-                *b = l.triangle_bounds;
-            }
-        }
+        follow_moved_casters(&mut self.geometry.caster_boxes, &instances.levels);
         self.geometry.bounds = m.bounds;
         self.geometry.caster_bounds = m.caster_bounds;
         self.geometry.caster_spheres = m.caster_spheres;
@@ -465,7 +493,8 @@ impl FrameHost {
         materials: &std::collections::BTreeMap<String, crate::scene::Material>,
     ) -> Result<bool, Error> {
         let u = crate::frame::material_update::material_update(&self.model, materials)?;
-        self.pending.update(self.scene.materials, &u.gpu, "materials")?;
+        self.pending
+            .update(self.scene.materials, &u.gpu, "materials")?;
         self.geometry.has_dispersion = u.has_dispersion;
         self.model = u.model;
         Ok(u.same_plan)
@@ -493,7 +522,8 @@ impl FrameHost {
                 .values()
                 .map(crate::device::device_scene::gpu_material)
                 .collect();
-            self.pending.update(self.scene.materials, &gpu, "materials")?;
+            self.pending
+                .update(self.scene.materials, &gpu, "materials")?;
         }
         self.restore_camera(backend, &state)?;
         self.model = state.model;
@@ -515,9 +545,10 @@ impl FrameHost {
         Ok(())
     }
 
-    /// Releases every device buffer of the host.
+    /// Releases every device buffer of the host (after the pending writes, which may
+    /// create some; nothing runs when nothing of the host ever ran).
     pub fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
-        let mut rec = Recording::new();
+        let mut rec = std::mem::take(&mut self.pending);
         for id in std::mem::take(&mut self.uploaded)
             .into_iter()
             .chain(std::mem::take(&mut self.screen.owned))
@@ -526,7 +557,43 @@ impl FrameHost {
         }
         self.uploaded_bytes = 0;
         self.screen = ScreenTargets::none();
-        backend.execute(&rec)?;
+        if self.on_device {
+            backend.execute(&rec)?;
+        }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::device::device_scene::DeviceScene;
+    use crate::scene::builtin::builtin;
+    use crate::scene::{Shape, Transform};
+    use glam::{Quat, Vec3};
+
+    /// A moved instance caster's box is its level's triangle bounds, the box a fresh
+    /// build of the moved scene gives it ([`super::follow_moved_casters`]).
+    #[test]
+    fn caster_boxes_follow_moved_instances() {
+        let mut s = builtin("cornell").unwrap();
+        for o in s.objects.iter_mut().filter(|o| o.name.ends_with("ball")) {
+            if let Shape::Sphere { center, .. } = &mut o.shape {
+                let c = std::mem::replace(center, Vec3::ZERO);
+                o.transform = Some(Transform::from_translation(c));
+            }
+        }
+        let ds = DeviceScene::build(&s, Default::default()).unwrap();
+        let mut boxes = super::caster_boxes(&ds);
+        let mut instances = ds.instances.clone();
+        let to = Transform {
+            translation: Vec3::new(0.1, 0.5, 0.2),
+            rotation: Quat::from_rotation_x(0.3),
+            scale: Vec3::splat(0.7),
+        };
+        instances.move_instances(&[(5, to)]).unwrap();
+        super::follow_moved_casters(&mut boxes, &instances.levels);
+        s.objects[5].transform = Some(to);
+        let fresh = DeviceScene::build(&s, Default::default()).unwrap();
+        assert_eq!(boxes, super::caster_boxes(&fresh));
     }
 }

@@ -1,5 +1,5 @@
-//! Material parameters changed between frames without rebuilding geometry (issue 19's
-//! update API): what every technique checks and uploads alike.
+//! Material parameters changed between frames without rebuilding geometry (the update
+//! API): what the frame host checks and uploads for every technique.
 //!
 //! The acceleration structure, the triangles' material indices (by name, in the scene's
 //! sorted order) and everything that depends on which objects are casters or receivers

@@ -6,8 +6,8 @@
 //! only re-plans its own passes when the host tells it what changed ([`Change`]).
 
 use crate::backend::Backend;
-use crate::device::handle::{Buf, ResourceId};
 use crate::device::device_scene::InstanceUpdate;
+use crate::device::handle::{Buf, ResourceId};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions, HostState};
 use crate::frame::image::Image;
@@ -94,7 +94,11 @@ impl<'p> FrameBuilder<'p> {
 
     /// The recording being filled (the last one).
     pub fn rec(&mut self) -> &mut Recording {
-        &mut self.recordings.last_mut().expect("a frame has a recording").0
+        &mut self
+            .recordings
+            .last_mut()
+            .expect("a frame has a recording")
+            .0
     }
 
     /// Starts a new recording after the current one; `photons` is what it completes (a
@@ -307,10 +311,15 @@ impl<P: Pipeline> Hosted<P> {
         P::validate(&settings)?;
         let mut host = FrameHost::upload(backend, scene, P::host_options(&settings))?;
         match P::create(backend, &mut host, settings) {
-            Ok(p) => Ok(Hosted {
-                host,
-                pipeline: Some(p),
-            }),
+            Ok(p) => {
+                let mut t = Hosted {
+                    host,
+                    pipeline: Some(p),
+                };
+                // every buffer is checked: the scene goes up now
+                t.host.flush(backend)?;
+                Ok(t)
+            }
             Err(e) => {
                 let _ = host.free(backend);
                 Err(e)

@@ -106,8 +106,8 @@ impl ScreenTargets {
         let mut own = Recording::new();
         let gbuffer = needs.gbuffer.then(|| own.create_gbuffer(pixels));
         let direct = needs.direct.map(|_| own.create(pixels, "direct image"));
-        let composite = (needs.composite && direct.is_some())
-            .then(|| own.create(pixels, "composite image"));
+        let composite =
+            (needs.composite && direct.is_some()).then(|| own.create(pixels, "composite image"));
         let alloc = planned_allocation(backend, &own, Some((camera.width, camera.height)))?;
         rec.steps.extend(own.steps);
         Ok(ScreenTargets {

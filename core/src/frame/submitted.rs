@@ -1,4 +1,4 @@
-//! The non-blocking frame (issue 19 point 2): a technique records a whole frame as one
+//! The non-blocking frame: a technique records a whole frame as one
 //! [`Recording`] ([`RecordedFrame`]), the host submits it ([`RecordedFrame::submit`], or
 //! its own command encoder for an embedding backend) and goes on; the frame's statistics
 //! (pass times, photon counters) come back later through [`FrameTicket::stats`], without

@@ -48,7 +48,7 @@ pub trait Technique {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error>;
 
-    /// Records a frame for a host's frame loop (issue 19 point 2): submit it with
+    /// Records a frame for a host's frame loop: submit it with
     /// [`RecordedFrame::submit`] (one submission, no wait) or encode it into the host's
     /// own command stream, and collect its statistics a frame or more later with
     /// [`crate::frame::submitted::FrameTicket::stats`]. The images are those

@@ -20,16 +20,15 @@
 //! level, and the atlas sums are exact fixed-point, so any memory limit gives bitwise
 //! the same atlas.
 
-use serde::{Deserialize, Serialize};
 use crate::backend::{read_buf, Backend};
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::layout::{
     cluster_count, counter, AtlasTileTexel, DepositParams, GpuCamera, Photon, RefineParams,
     TraceParams,
 };
-use crate::frame::error::Error;
 use crate::frame::emission::light_view_plane::{LightViewPlane, ViewPlaneProjection};
 use crate::frame::emission::view_planes::ViewPlanes;
+use crate::frame::error::Error;
 use crate::frame::stats::{AdaptiveStats, FrameStats};
 use crate::kernels::{DepositScreen, RefineClusters, TracePhotons, TraceVariant};
 use crate::math::geometry::Aabb;
@@ -37,6 +36,7 @@ use crate::math::photon_clusters::{
     cluster_level_seed, cluster_metric, cluster_resample_seed, cluster_target,
 };
 use crate::recording::Recording;
+use serde::{Deserialize, Serialize};
 
 /// When a relevant cluster stops being refined (seed 004 sections 3.2.1-2).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

@@ -1,5 +1,5 @@
 //! Light view planes (seed 001 section 3.1): the virtual image plane in front of a light
-//! from whose texels CausticMap (and AdaptiveCaustics, issue 17) shoot one photon each.
+//! from whose texels CausticMap and AdaptiveCaustics shoot one photon each.
 //!
 //! **The frame.** 001 builds a pinhole camera at the light: `W` along the light's
 //! direction scaled by a focal distance, `U = normalize(W x up) * ulen`,

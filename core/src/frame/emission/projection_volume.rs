@@ -35,7 +35,7 @@ pub enum PointEmission {
     CasterCone,
 }
 
-/// ViewPlanes domain of one light, in the form of `TraceParams` fields.
+/// Emission domain of one light, in the form of `TraceParams` fields.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionDomain {
     /// One of [`emission_kind`]: cone or rectangle.

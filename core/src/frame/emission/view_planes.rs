@@ -1,10 +1,10 @@
 //! CausticMap's emission (seed 001 section 3.1): each light's view planes aimed at the
 //! caustic casters, and the fixed-point quantum of the frame's flux.
 
-use crate::frame::receivers::atlas::settings::CausticMapSettings;
 use crate::device::caster_spheres::CasterSpheres;
-use crate::frame::emission::NoEmission;
 use crate::frame::emission::light_view_plane::{light_view_planes, LightViewPlane};
+use crate::frame::emission::NoEmission;
+use crate::frame::receivers::atlas::settings::CausticMapSettings;
 use crate::math::fixed_point::power_of_two_quantum;
 use crate::math::geometry::Aabb;
 use crate::math::rng::pcg_hash;

@@ -1,31 +1,28 @@
 //! AdaptiveCaustics (seed 004, Wyman and Nichols, "Adaptive Caustic Maps Using Deferred
-//! Shading"): CausticMap's light view planes sampled coarse to fine, so that photons are
-//! traced only where the casters are and, with the error metric, only where the caustic
-//! map still needs them. Everything after the photons is CausticMap's: the same atlas,
-//! gather, final pass and outputs (`caustic_map`), so the two differ only in which
-//! photons reach the map.
+//! Shading"): light view planes ([`crate::frame::emission::view_planes`]) sampled coarse
+//! to fine by seed 004's traversal ([`crate::frame::emission::adaptive`]), so that photons
+//! are traced only where the casters are and, with the error metric, only where the map
+//! still needs them; its output photons land in a receiver: the caustic atlas
+//! ([`crate::frame::receivers::atlas`], the default, [`atlas`]) or the screen photon map
+//! ([`crate::frame::receivers::screen`], [`screen`]).
 //!
 //! The source emits photons by point-sampling rasterised G-buffers of the refractor from
 //! the light and refracts them in image space; here the traversal drives the exact
 //! tracer of the other techniques (`trace_photons`, its `ADAPTIVE` variant), which makes
 //! the source's G-buffer resolution question moot.
 //!
-//! Per frame with photon work, per light view plane (`traversal`): the 64^2 start grid's
-//! 2x2 clusters are traced and judged (`refine_clusters`): discarded when every photon
-//! missed the casters, output (deposited into the atlas) at the finest level or when the
-//! error metric holds, else refined into four clusters of the next level; batches of
-//! clusters under `max_traversal_bytes`. Photons output early carry their coarse texels'
-//! flux (the cluster's solid angle or area), so the map's expectation is the dense
-//! grid's. With 004's one-texel metric (`error_texels: 1`) they all landed in one atlas
-//! texel, so that texel *is* the cluster's footprint; with a wider tolerance (004's
-//! alternative) each output photon is splatted over its cluster's footprint, the flux
-//! split exactly (`math::photon_clusters::footprint_window`).
-//!
-//! The deposit target is a setting (`deposit`): CausticMap's atlas (the default) or Sspm's
-//! screen ([`AdaptiveCaustics::build_screen`]: Sspm's frame whose photons are the
-//! traversal's, listed in world space by `refine_clusters` and deposited by
-//! `deposit_screen`; a photon's "texel" for the error metric is then its pixel).
+//! Per frame with photon work, per light view plane: the 64^2 start grid's 2x2 clusters
+//! are traced and judged (`refine_clusters`): discarded when every photon missed the
+//! casters, output at the finest level or when the error metric holds, else refined into
+//! four clusters of the next level; batches of clusters under `max_traversal_bytes`.
+//! Photons output early carry their coarse texels' flux (the cluster's solid angle or
+//! area), so the map's expectation is the dense grid's. With 004's one-texel metric
+//! (`error_texels: 1`) they all landed in one atlas texel, so that texel *is* the
+//! cluster's footprint; with a wider tolerance (004's alternative) each output photon is
+//! splatted over its cluster's footprint, the flux split exactly
+//! (`math::photon_clusters::footprint_window`).
 
+mod atlas;
 mod screen;
 mod settings;
 
@@ -33,101 +30,285 @@ pub use crate::frame::emission::adaptive::{
     caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
     TraversalSettings, EMPTY_RECT,
 };
-pub use screen::AdaptiveScreen;
 pub use settings::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
     LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
 };
 
 use crate::backend::Backend;
+use crate::frame::allocation::Allocation;
+use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
-use crate::frame::technique::Technique;
-use crate::scene::Scene;
-use crate::techniques::caustic_map::CausticMap;
+use crate::frame::host::{FrameHost, HostOptions};
+use crate::frame::image::Image;
+use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
+use crate::frame::plan::FramePlan;
+use crate::frame::receivers::atlas::AtlasReceiver;
+use crate::frame::receivers::screen::ScreenReceiver;
+use crate::frame::stats::AdaptiveStats;
+use crate::frame::technique::OutputInfo;
+use crate::kernels::TraceVariant;
+use crate::recording::Recording;
 
-/// The traversal a [`CausticMap`] runs instead of its dense planes.
-#[derive(Clone, Debug)]
-pub(crate) struct AdaptiveSetup {
-    /// The traversal's settings (its `map` field unused: the technique's own settings
-    /// hold the map's).
-    pub settings: AdaptiveCausticsSettings,
-    /// Its device buffers, made with the atlas.
-    pub traversal: Option<Traversal>,
-    /// Bounding box of each caster object (world space).
-    pub caster_boxes: Vec<crate::math::geometry::Aabb>,
-    /// The scene object of each box (they follow moved instances).
-    pub caster_objects: Vec<u32>,
+/// AdaptiveCaustics on one backend, for one scene: the frame host and
+/// [`AdaptiveCausticsPipeline`].
+pub type AdaptiveCaustics = Hosted<AdaptiveCausticsPipeline>;
+
+/// Where the traversal's output photons land.
+enum Target {
+    /// The caustic atlas (texture-space photons, deposited by `refine_clusters`).
+    Atlas {
+        receiver: AtlasReceiver,
+        /// The atlas holds the photons of the current lights, settings and seed.
+        valid: bool,
+    },
+    /// The screen photon map (world-space photons, deposited by `deposit_screen`).
+    Screen {
+        receiver: ScreenReceiver,
+        /// The receiver's and the traversal's buffers.
+        owned: Allocation,
+    },
 }
 
-/// The bounding box of every caster object (mirror or dielectric) of `ds`, from its
-/// triangles, in object order.
-pub fn caster_boxes(
-    ds: &crate::device::device_scene::DeviceScene,
-) -> Vec<crate::math::geometry::Aabb> {
-    caster_boxes_by_object(ds)
-        .into_iter()
-        .map(|(_, b)| b)
-        .collect()
+/// AdaptiveCaustics' own state over the frame host.
+pub struct AdaptiveCausticsPipeline {
+    settings: AdaptiveCausticsSettings,
+    planes: ViewPlanes,
+    variant: TraceVariant,
+    plan: FramePlan,
+    traversal: Option<Traversal>,
+    target: Target,
 }
 
-/// [`caster_boxes`] with the scene object each box belongs to.
-pub fn caster_boxes_by_object(
-    ds: &crate::device::device_scene::DeviceScene,
-) -> Vec<(u32, crate::math::geometry::Aabb)> {
-    use crate::device::layout::material_kind;
-    use crate::math::geometry::Aabb;
-    let mut boxes: std::collections::BTreeMap<u32, Aabb> = Default::default();
-    for (t, obj) in ds.triangles.iter().zip(&ds.triangle_objects) {
-        if ds.materials[t.material as usize].kind == material_kind::DIFFUSE {
-            continue;
-        }
-        let b = boxes.entry(*obj).or_insert(Aabb::EMPTY);
-        for i in t.indices {
-            b.grow(glam::Vec3::from(ds.vertices[i as usize].position));
-        }
-    }
-    boxes.into_iter().collect()
+/// The light view planes of the host's scene fitted to the pyramid; refuses a light
+/// whose flux is out of range.
+fn view_planes(host: &FrameHost, s: &AdaptiveCausticsSettings) -> Result<ViewPlanes, Error> {
+    let g = host.geometry();
+    let mut planes = ViewPlanes::new(
+        host.model(),
+        g.bounds,
+        g.caster_bounds,
+        g.caster_spheres,
+        g.has_dispersion,
+        &s.map,
+    );
+    fit_planes(&mut planes, &s.traversal(), g.has_dispersion);
+    planes.check_light_flux()?;
+    Ok(planes)
 }
 
-/// The caster boxes after instances moved: an instance caster's box is its level's
-/// `triangle_bounds` (the same vertices [`caster_boxes`] grows over, so the same box as a
-/// fresh build's); the static level's casters keep theirs.
-pub fn follow_moved_casters(
-    boxes: &mut [crate::math::geometry::Aabb],
-    objects: &[u32],
-    levels: &[crate::device::acceleration::Level],
-) {
-    for (b, object) in boxes.iter_mut().zip(objects) {
-        if let Some(l) = levels.iter().find(|l| l.object == Some(*object as usize)) {
-            *b = l.triangle_bounds;
-        }
-    }
+/// The deepest level of any of `planes`' pyramids.
+fn finest_level(planes: &ViewPlanes, start_grid: u32) -> u32 {
+    let finest = planes
+        .planes
+        .iter()
+        .map(|(_, _, p)| p.resolution.0)
+        .max()
+        .unwrap_or(1);
+    (finest / start_grid).max(1).ilog2()
 }
 
-/// AdaptiveCaustics' constructor. The technique *is* a [`CausticMap`] (the same atlas,
-/// gather, final pass, outputs and update methods) whose photons come from seed 004's
-/// traversal, and whose registry and stats name is `adaptive-caustics`.
-pub struct AdaptiveCaustics;
-
-impl AdaptiveCaustics {
-    /// Validates `settings`, uploads the scene, lays out the atlas and makes the
-    /// traversal's buffers: the [`CausticMap`] that runs the traversal (the atlas target;
-    /// [`AdaptiveCaustics::build_screen`] for the screen).
-    pub fn build(
+impl AdaptiveCausticsPipeline {
+    /// Traverses every plane into `target` (run at once: the traversal reads its queues
+    /// back between levels), then reads the trace counters and the traversal's own into
+    /// the statistics.
+    fn traverse(
+        &self,
         backend: &mut dyn Backend,
-        scene: &Scene,
-        settings: AdaptiveCausticsSettings,
-    ) -> Result<CausticMap, Error> {
-        settings.validate()?;
-        if settings.deposit != AdaptiveDeposit::Atlas {
-            return Err(Error::InvalidParameter(
-                "adaptive-caustics: deposit \"screen\" makes an Sspm frame \
-                 (AdaptiveCaustics::build_screen)"
-                    .into(),
-            ));
+        host: &FrameHost,
+        frame: &mut FrameBuilder,
+        target: &DepositTarget,
+        counters: crate::device::handle::Buf<u32>,
+    ) -> Result<(), Error> {
+        let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
+            return Ok(());
+        };
+        // TODO(issue 46): the traversal is to be recorded once per frame, its queues on
+        // the device
+        let mut rec = Recording::new();
+        rec.clear(t.output_counters);
+        frame.run_now(backend, rec)?;
+        let s = &self.settings.map;
+        let optics = PhotonOptics {
+            max_bounces: s.max_bounces,
+            min_relative_power: s.min_relative_power,
+            fresnel_model: s.fresnel.kernel_value(),
+            caster_spheres: self.planes.caster_spheres,
+        };
+        let total: u64 = self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum();
+        let mut adaptive = AdaptiveStats::default();
+        for (light, k, plane) in &self.planes.planes {
+            let flux = plane.power.as_dvec3() * plane.plane_measure();
+            for c in 0..3 {
+                frame.stats.emitted_flux[c] += flux[c];
+            }
+            let mut done = 0;
+            t.run_plane(
+                backend,
+                host.scene(),
+                variant,
+                target,
+                (*light, plane, ViewPlanes::plane_seed(s.seed, *light, *k)),
+                optics,
+                &mut frame.stats,
+                &mut adaptive,
+                &mut |traced| done = traced.min(total),
+            )?;
+            frame.progress(done, total);
         }
-        let map = settings.map.clone();
-        CausticMap::build(backend, scene, map, Some(settings))
+        let q = self.planes.flux_quantum;
+        let c = frame.read_now(backend, counters)?;
+        frame.stats.read_counters(&c, q);
+        t.output_stats(backend, q, &mut frame.stats, adaptive)
+    }
+}
+
+impl Pipeline for AdaptiveCausticsPipeline {
+    type Settings = AdaptiveCausticsSettings;
+
+    fn name(&self) -> &'static str {
+        "adaptive-caustics"
+    }
+
+    fn parse_settings(json: &serde_json::Value) -> Result<AdaptiveCausticsSettings, Error> {
+        AdaptiveCausticsSettings::from_json(json)
+    }
+
+    fn validate(settings: &AdaptiveCausticsSettings) -> Result<(), Error> {
+        settings.validate()
+    }
+
+    fn host_options(settings: &AdaptiveCausticsSettings) -> HostOptions {
+        HostOptions {
+            max_triangles: settings.map.max_triangles,
+            atlas_receivers: settings.deposit == AdaptiveDeposit::Atlas,
+        }
+    }
+
+    fn create(
+        backend: &mut dyn Backend,
+        host: &mut FrameHost,
+        settings: AdaptiveCausticsSettings,
+    ) -> Result<AdaptiveCausticsPipeline, Error> {
+        let planes = view_planes(host, &settings)?;
+        match settings.deposit {
+            AdaptiveDeposit::Atlas => atlas::create(backend, host, settings, planes),
+            AdaptiveDeposit::Screen => screen::create(backend, host, settings, planes),
+        }
+    }
+
+    fn settings(&self) -> &AdaptiveCausticsSettings {
+        &self.settings
+    }
+
+    fn set_seed(&mut self, seed: u32) {
+        if seed != self.settings.map.seed {
+            self.settings.map.seed = seed;
+            if let Target::Atlas { receiver, valid } = &mut self.target {
+                receiver.set_seed(seed);
+                *valid = false;
+            }
+        }
+    }
+
+    fn record(
+        &mut self,
+        backend: &mut dyn Backend,
+        host: &mut FrameHost,
+        frame: &mut FrameBuilder,
+    ) -> Result<(), Error> {
+        frame.stats.flux_quantum = self.planes.flux_quantum as f64;
+        match self.target {
+            Target::Atlas { .. } => self.record_atlas(backend, host, frame),
+            Target::Screen { .. } => self.record_screen(backend, host, frame),
+        }
+    }
+
+    fn react(
+        &mut self,
+        backend: &mut dyn Backend,
+        host: &mut FrameHost,
+        change: Change,
+    ) -> Result<Reaction, Error> {
+        match change {
+            Change::Camera => Ok(Reaction::Kept),
+            Change::Materials { same_plan: true } => {
+                match &mut self.target {
+                    Target::Atlas { receiver, valid } => {
+                        *valid = false;
+                        receiver.reset_history();
+                    }
+                    Target::Screen { receiver, .. } => receiver.reset_history(),
+                }
+                Ok(Reaction::Kept)
+            }
+            Change::Materials { same_plan: false } => Ok(Reaction::Rebuild),
+            _ => match self.target {
+                Target::Atlas { .. } => self.react_atlas(backend, host, change),
+                // the traversal's planes follow the lights and casters
+                Target::Screen { .. } => Ok(Reaction::Rebuild),
+            },
+        }
+    }
+
+    fn plan(&self) -> &FramePlan {
+        &self.plan
+    }
+
+    fn outputs(&self) -> Vec<OutputInfo> {
+        match &self.target {
+            Target::Atlas { receiver, .. } => receiver.outputs(),
+            Target::Screen { receiver, .. } => receiver.outputs(),
+        }
+    }
+
+    fn read_output(
+        &self,
+        backend: &mut dyn Backend,
+        host: &FrameHost,
+        name: &str,
+    ) -> Result<Image, Error> {
+        match &self.target {
+            Target::Atlas { receiver, .. } => {
+                receiver.read_output(backend, host, "adaptive-caustics", name)
+            }
+            Target::Screen { receiver, .. } => {
+                receiver.read_output(backend, host, "adaptive-caustics", name)
+            }
+        }
+    }
+
+    fn estimate_outputs(&self) -> (&'static str, &'static str) {
+        ("caustics_filtered", "caustics_raw")
+    }
+
+    fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        self.traversal = None;
+        match &mut self.target {
+            Target::Atlas { receiver, .. } => receiver.free(backend),
+            Target::Screen { owned, .. } => {
+                let mut rec = Recording::new();
+                owned.free_into(&mut rec);
+                backend.execute(&rec)?;
+                Ok(())
+            }
+        }
+    }
+
+    fn owned(&self) -> (usize, u64) {
+        match &self.target {
+            Target::Atlas { receiver, .. } => receiver.owned(),
+            Target::Screen { owned, .. } => (owned.owned.len(), owned.bytes),
+        }
+    }
+}
+
+impl Hosted<AdaptiveCausticsPipeline> {
+    /// Reads output `name` back: the atlas target's outputs are CausticMap's
+    /// ([`crate::frame::receivers::atlas::OUTPUTS`]), the screen target's Sspm's
+    /// ([`crate::frame::receivers::screen::Output`]).
+    pub fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
+        self.read_output_named(backend, name)
     }
 }
 
@@ -136,47 +317,8 @@ impl AdaptiveCaustics {
 /// take their defaults, unknown ones are an error).
 pub fn create(
     backend: &mut dyn Backend,
-    scene: &Scene,
+    scene: &crate::scene::Scene,
     settings: &serde_json::Value,
-) -> Result<Box<dyn Technique>, Error> {
-    let settings = AdaptiveCausticsSettings::from_json(settings)?;
-    Ok(match settings.deposit {
-        AdaptiveDeposit::Atlas => Box::new(AdaptiveCaustics::build(backend, scene, settings)?),
-        AdaptiveDeposit::Screen => Box::new(AdaptiveScreen::new(backend, scene, settings)?),
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use crate::device::device_scene::DeviceScene;
-    use crate::scene::builtin::builtin;
-    use crate::scene::{Shape, Transform};
-    use glam::{Quat, Vec3};
-
-    /// A moved instance caster's box is its level's triangle bounds, the box a fresh
-    /// build of the moved scene gives it ([`super::follow_moved_casters`]).
-    #[test]
-    fn caster_boxes_follow_moved_instances() {
-        let mut s = builtin("cornell").unwrap();
-        for o in s.objects.iter_mut().filter(|o| o.name.ends_with("ball")) {
-            if let Shape::Sphere { center, .. } = &mut o.shape {
-                let c = std::mem::replace(center, Vec3::ZERO);
-                o.transform = Some(Transform::from_translation(c));
-            }
-        }
-        let ds = DeviceScene::build(&s, Default::default()).unwrap();
-        let (objects, mut boxes): (Vec<u32>, Vec<_>) =
-            super::caster_boxes_by_object(&ds).into_iter().unzip();
-        let mut instances = ds.instances.clone();
-        let to = Transform {
-            translation: Vec3::new(0.1, 0.5, 0.2),
-            rotation: Quat::from_rotation_x(0.3),
-            scale: Vec3::splat(0.7),
-        };
-        instances.move_instances(&[(5, to)]).unwrap();
-        super::follow_moved_casters(&mut boxes, &objects, &instances.levels);
-        s.objects[5].transform = Some(to);
-        let fresh = DeviceScene::build(&s, Default::default()).unwrap();
-        assert_eq!(boxes, super::caster_boxes(&fresh));
-    }
+) -> Result<Box<dyn crate::frame::technique::Technique>, Error> {
+    crate::frame::pipeline::create::<AdaptiveCausticsPipeline>(backend, scene, settings)
 }

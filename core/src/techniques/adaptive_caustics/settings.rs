@@ -1,12 +1,12 @@
 //! Every parameter of AdaptiveCaustics, with its defaults and validation.
 
-use crate::frame::error::Error;
 use crate::frame::emission::adaptive::TraversalSettings;
-use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
-use crate::frame::receivers::screen::ScreenSettings;
 pub use crate::frame::emission::adaptive::{
     AdaptiveMetric, ClusterRelevance, LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
 };
+use crate::frame::error::Error;
+use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
+use crate::frame::receivers::screen::ScreenSettings;
 use serde::{Deserialize, Serialize};
 
 /// The map the traversal's photons are deposited into (so that a comparison

@@ -2,11 +2,11 @@
 
 use super::settings::SspmSettings;
 use crate::device::caster_spheres::CasterSpheres;
-use crate::frame::plan::LightPlan;
-use crate::frame::receivers::screen::ScreenQuanta;
 use crate::device::device_scene::DeviceScene;
 use crate::device::layout::*;
 use crate::frame::emission::{emission_domain, unpruned_domain, EmissionDomain, NoEmission};
+use crate::frame::plan::LightPlan;
+use crate::frame::receivers::screen::ScreenQuanta;
 use crate::math::fixed_point::power_of_two_quantum;
 use crate::math::geometry::Aabb;
 use crate::math::rng::pcg_hash;
@@ -180,7 +180,8 @@ impl FrameConstants {
         settings: &SspmSettings,
         axis: u32,
     ) -> GatherParams {
-        self.quanta().gather_params(camera, &settings.screen(), axis)
+        self.quanta()
+            .gather_params(camera, &settings.screen(), axis)
     }
 
     /// `direct_light` parameters.
@@ -220,4 +221,3 @@ pub fn volume_light_plans(constants: &FrameConstants) -> Vec<LightPlan> {
     lights.sort_by_key(|l| l.light);
     lights
 }
-

@@ -144,9 +144,7 @@ impl SspmPipeline {
         ) else {
             return;
         };
-        let deposit_params = self
-            .receiver
-            .deposit_params(host.camera(), p.photons.len);
+        let deposit_params = self.receiver.deposit_params(host.camera(), p.photons.len);
         let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
         for (light, d) in &self.constants.domains {
             frame.stats.photons_emitted += per_light;
@@ -336,15 +334,7 @@ impl Pipeline for SspmPipeline {
     }
 
     fn outputs(&self) -> Vec<OutputInfo> {
-        Output::ALL
-            .iter()
-            .map(|o| OutputInfo {
-                name: o.stem(),
-                description: o.description(),
-                requested: o.requested(&self.settings.outputs),
-                camera_space: true,
-            })
-            .collect()
+        self.receiver.outputs()
     }
 
     fn read_output(
@@ -353,13 +343,7 @@ impl Pipeline for SspmPipeline {
         host: &FrameHost,
         name: &str,
     ) -> Result<Image, Error> {
-        let o = Output::from_stem(name).ok_or_else(|| {
-            Error::InvalidParameter(format!(
-                "sspm has no output '{name}'; outputs: {}",
-                Output::ALL.map(|o| o.stem()).join(", ")
-            ))
-        })?;
-        self.read(backend, host, o)
+        self.receiver.read_output(backend, host, "sspm", name)
     }
 
     fn estimate_outputs(&self) -> (&'static str, &'static str) {
@@ -381,34 +365,22 @@ impl Pipeline for SspmPipeline {
     }
 }
 
-impl SspmPipeline {
-    /// Reads `output` back: zeros where the plan knows it is zero, an error where it was
-    /// not requested.
-    fn read(&self, backend: &mut dyn Backend, host: &FrameHost, output: Output) -> Result<Image, Error> {
-        if !output.requested(&self.settings.outputs) {
-            return Err(Error::InvalidParameter(format!(
-                "output '{}' was not requested (SspmSettings::outputs)",
-                output.stem()
-            )));
-        }
-        match self.receiver.images(host.camera(), host.screen()).get(output) {
-            Some(h) => host.read_image(backend, h),
-            None => Ok(host.black_image()),
-        }
-    }
-}
-
 impl Hosted<SspmPipeline> {
     /// The frame's device images.
     pub fn images(&self) -> FrameImages {
         let host = self.host();
-        self.pipeline().receiver.images(host.camera(), host.screen())
+        self.pipeline()
+            .receiver
+            .images(host.camera(), host.screen())
     }
 
     /// The G-buffer's planes (for conformance and embedding; read them back assembled
     /// with [`crate::backend::read_gbuffer`]).
     pub fn gbuffer(&self) -> GBufferPlanes {
-        self.host().screen().gbuffer.expect("Sspm always makes the G-buffer")
+        self.host()
+            .screen()
+            .gbuffer
+            .expect("Sspm always makes the G-buffer")
     }
 
     /// The stored-photon buffer and its count (absent when no light emits photons and
@@ -425,7 +397,7 @@ impl Hosted<SspmPipeline> {
     /// light emits photons) has no device buffer and reads as zeros; one that was not
     /// requested in [`SspmSettings::outputs`] is an error.
     pub fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
-        self.pipeline().read(backend, self.host(), output)
+        self.pipeline().receiver.read(backend, self.host(), output)
     }
 
     /// Reads a device image of the camera's size back to the host.

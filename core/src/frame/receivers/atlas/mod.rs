@@ -18,24 +18,24 @@ pub mod layout;
 pub mod settings;
 
 use crate::backend::{read_buf, Backend};
-use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::{
     counter, gather_surface, AtlasParams, AtlasTexel, AtlasTileTexel, GatherParams, GpuCamera,
     MapLookupParams, Photon,
 };
-use crate::frame::allocation::planned_allocation;
+use crate::frame::allocation::{planned_allocation, Allocation};
 use crate::frame::emission::adaptive::AtlasTarget;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::image::Image;
 use crate::frame::irradiance_passes::FilterChain;
-use crate::frame::plan::{BufferPlan, FramePlan, LightPlan, PassPlan, SceneFeatures};
+use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::screen::{DirectLighting, ScreenNeeds};
 use crate::kernels::{
     AtlasDeposit, CausticMapLookup, DensityGather, GatherCausticMap, GatherFootprint,
     PhotonCountTable, TraceVariant,
 };
-use crate::recording::{Recording, Step};
+use crate::recording::Recording;
 use layout::{AtlasLayout, AtlasReceivers};
 use settings::{CausticMapSettings, MapGather};
 
@@ -179,24 +179,6 @@ struct CameraImages {
     filters: Option<FilterChain>,
 }
 
-/// Device buffers of one lifetime, their bytes and plan entries.
-#[derive(Clone, Debug, Default)]
-struct Owned {
-    ids: Vec<ResourceId>,
-    bytes: u64,
-    buffers: Vec<BufferPlan>,
-}
-
-impl Owned {
-    fn take(&mut self, rec: &mut Recording) {
-        for id in std::mem::take(&mut self.ids) {
-            rec.steps.push(Step::Free { id });
-        }
-        self.bytes = 0;
-        self.buffers.clear();
-    }
-}
-
 /// The caustic-map receiver of one technique.
 #[derive(Debug)]
 pub struct AtlasReceiver {
@@ -207,8 +189,8 @@ pub struct AtlasReceiver {
     layout_summary: String,
     atlas: Option<AtlasBuffers>,
     images: CameraImages,
-    atlas_owned: Owned,
-    image_owned: Owned,
+    atlas_owned: Allocation,
+    image_owned: Allocation,
 }
 
 /// Whether a frame of `host`'s scene with `settings` has an atlas: casters, receivers, a
@@ -285,8 +267,8 @@ impl AtlasReceiver {
             layout_summary: String::new(),
             atlas: None,
             images: CameraImages::default(),
-            atlas_owned: Owned::default(),
-            image_owned: Owned::default(),
+            atlas_owned: Allocation::default(),
+            image_owned: Allocation::default(),
         };
         let made = (|| {
             if let (Some(receivers), true) = (host.receivers(), atlas) {
@@ -357,18 +339,18 @@ impl AtlasReceiver {
         let alloc = planned_allocation(backend, &rec, None)?;
         backend.execute(&rec)?;
         self.atlas = Some(a);
-        self.atlas_owned = Owned {
-            ids: alloc.owned,
-            bytes: alloc.bytes,
-            buffers: alloc.buffers,
-        };
+        self.atlas_owned = alloc;
         self.layout_summary = self.describe_layout(l);
         Ok(())
     }
 
     /// Makes the camera-sized caustic images for `camera` anew (the old ones freed):
     /// after a resize, the atlas stays.
-    pub fn make_images(&mut self, backend: &mut dyn Backend, camera: GpuCamera) -> Result<(), Error> {
+    pub fn make_images(
+        &mut self,
+        backend: &mut dyn Backend,
+        camera: GpuCamera,
+    ) -> Result<(), Error> {
         let o = self.settings.outputs;
         let s = &self.settings;
         let keep = |x: bool| x || !s.prune;
@@ -392,14 +374,10 @@ impl AtlasReceiver {
             filtered: filtered_needed.then(|| rec.create(pixels, "filtered caustics image")),
         };
         let alloc = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
-        self.image_owned.take(&mut rec);
+        self.image_owned.free_into(&mut rec);
         backend.execute(&rec)?;
         self.images = images;
-        self.image_owned = Owned {
-            ids: alloc.owned,
-            bytes: alloc.bytes,
-            buffers: alloc.buffers,
-        };
+        self.image_owned = alloc;
         Ok(())
     }
 
@@ -537,7 +515,8 @@ impl AtlasReceiver {
         };
         let q = self.quanta;
         if let Some(d) = a.density {
-            let rows = atlas_gather_params(&self.settings, q.flux_quantum, q.hit_distance_quantum, 0);
+            let rows =
+                atlas_gather_params(&self.settings, q.flux_quantum, q.hit_distance_quantum, 0);
             let columns = GatherParams { axis: 1, ..rows };
             for params in [rows, columns] {
                 rec.kernel(PhotonCountTable {
@@ -875,7 +854,10 @@ impl AtlasReceiver {
     /// The atlas layout as the kernels read it now, per atlas texel (row-major):
     /// `[world area bits, tile]` ([`AtlasTexel`]; `NO_TILE` and area 0 outside the tiles),
     /// read back from the device; `None` without an atlas.
-    pub fn atlas_texels(&self, backend: &mut dyn Backend) -> Result<Option<Vec<AtlasTexel>>, Error> {
+    pub fn atlas_texels(
+        &self,
+        backend: &mut dyn Backend,
+    ) -> Result<Option<Vec<AtlasTexel>>, Error> {
         match self.atlas {
             Some(a) => Ok(Some(read_buf(backend, a.texels)?)),
             None => Ok(None),
@@ -885,7 +867,7 @@ impl AtlasReceiver {
     /// Device buffers and bytes of the receiver.
     pub fn owned(&self) -> (usize, u64) {
         (
-            self.atlas_owned.ids.len() + self.image_owned.ids.len(),
+            self.atlas_owned.owned.len() + self.image_owned.owned.len(),
             self.atlas_owned.bytes + self.image_owned.bytes,
         )
     }
@@ -893,8 +875,8 @@ impl AtlasReceiver {
     /// Releases every device buffer of the receiver.
     pub fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
         let mut rec = Recording::new();
-        self.atlas_owned.take(&mut rec);
-        self.image_owned.take(&mut rec);
+        self.atlas_owned.free_into(&mut rec);
+        self.image_owned.free_into(&mut rec);
         self.atlas = None;
         self.images = CameraImages::default();
         backend.execute(&rec)?;

@@ -1,7 +1,7 @@
 //! Every parameter of CausticMap, with its defaults and validation.
 
-use crate::frame::receivers::atlas::layout::DEFAULT_ATLAS_SIDE;
 use crate::frame::error::Error;
+use crate::frame::receivers::atlas::layout::DEFAULT_ATLAS_SIDE;
 use crate::kernels::MAX_SPECULAR_DEPTH;
 use crate::math::map_gather::DEFAULT_GATHER_WIDTH;
 use serde::{Deserialize, Serialize};
@@ -51,7 +51,7 @@ pub enum FresnelSplit {
     /// It takes the noise of the Fresnel and channel choices out of the map (on the CPU,
     /// `docs/report-caustic-map`: about 8x less variance at the same photon count, for
     /// about 3x the time), but on the H200 it costs 3 to 6x the trace time (10 to 44 ms
-    /// against 3 to 8 ms for 2048^2 photons, `docs/gpu/h200-issue16-caustic-map-split.log`):
+    /// against 3 to 8 ms for 2048^2 photons, H200, 2026-12-01, `docs/caustic-map.md`):
     /// for offline quality, not the real-time default.
     Deterministic,
     /// Sspm's: reflect with probability R, else refract, flux kept; one channel (x3) per
@@ -123,7 +123,7 @@ pub enum MapGather {
     /// inside each tile (`gather_caustic_map`). Not the default: it blurs a focused
     /// caustic at every photon budget, so that with the lookup's footprint rectangle the
     /// filtered image is worse than the raw map on `sphere` (relMSE 1.3e-3 against
-    /// 8e-5 at 2048^2 photons, `docs/report-caustic-map-gather`) and on `cornell` from
+    /// 8e-5 at 2048^2 photons, `docs/report-caustic-map`) and on `cornell` from
     /// 1024^2 photons on.
     Box,
     /// The density-adaptive, scatter-normalised gather Sspm filters its screen with
@@ -135,7 +135,7 @@ pub enum MapGather {
     /// UV island's edge) is dropped, as the raw map drops it; the box gather spreads it
     /// into covered neighbours. The default: below the raw map's error at every budget
     /// on `sphere`, `cornell` and `sphere-sun`, and converging to it
-    /// (`docs/report-caustic-map-gather`); it costs about 1.1 to 1.9 ms on the H200 at a
+    /// (`docs/report-caustic-map`); it costs about 1.1 to 1.9 ms on the H200 at a
     /// 2048^2 atlas against the box's 0.25 ms, and 52 more bytes a texel.
     #[default]
     Density,

@@ -26,8 +26,8 @@ use crate::kernels::{
     BilateralGather, DensityGather, GatherFootprint, PhotonCountTable, ResolveCaustics,
     TileHitDistance,
 };
-use crate::math::geometry::Aabb;
 use crate::math::fixed_point::power_of_two_quantum;
+use crate::math::geometry::Aabb;
 use crate::recording::Recording;
 
 /// The fixed-point quanta and the gather's hit-distance clamp of a screen frame.
@@ -397,6 +397,57 @@ impl ScreenReceiver {
         if let Some(f) = &mut self.filters {
             f.end_frame(camera);
         }
+    }
+
+    /// Every output, requested or not.
+    pub fn outputs(&self) -> Vec<crate::frame::technique::OutputInfo> {
+        Output::ALL
+            .iter()
+            .map(|o| crate::frame::technique::OutputInfo {
+                name: o.stem(),
+                description: o.description(),
+                requested: o.requested(&self.settings.outputs),
+                camera_space: true,
+            })
+            .collect()
+    }
+
+    /// Reads `output` back over the host's images: zeros where the plan knows it is zero,
+    /// an error where it was not requested.
+    pub fn read(
+        &self,
+        backend: &mut dyn crate::backend::Backend,
+        host: &crate::frame::host::FrameHost,
+        output: Output,
+    ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
+        if !output.requested(&self.settings.outputs) {
+            return Err(crate::frame::error::Error::InvalidParameter(format!(
+                "output '{}' was not requested (outputs)",
+                output.stem()
+            )));
+        }
+        match self.images(host.camera(), host.screen()).get(output) {
+            Some(h) => host.read_image(backend, h),
+            None => Ok(host.black_image()),
+        }
+    }
+
+    /// Reads output `name` back ([`Output::stem`]); `technique` names the technique in
+    /// errors.
+    pub fn read_output(
+        &self,
+        backend: &mut dyn crate::backend::Backend,
+        host: &crate::frame::host::FrameHost,
+        technique: &str,
+        name: &str,
+    ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
+        let o = Output::from_stem(name).ok_or_else(|| {
+            crate::frame::error::Error::InvalidParameter(format!(
+                "{technique} has no output '{name}'; outputs: {}",
+                Output::ALL.map(|o| o.stem()).join(", ")
+            ))
+        })?;
+        self.read(backend, host, o)
     }
 
     /// Forgets the temporal history (the next frame is not blended).
