@@ -16,15 +16,15 @@
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZES=1024,2048,4096`.
 
 mod common;
-use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::frame::technique::Technique;
-use caustica_core::scene::builtin::builtin;
-use caustica_core::techniques::adaptive_caustics::{
+use caustica::scene::builtin::builtin;
+use caustica::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
-use caustica_core::techniques::caustic_map::{
+use caustica::techniques::caustic_map::{
     CausticMap, CausticMapOutputs, CausticMapSettings, EmissionPlane,
 };
+use caustica::Technique;
+use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[

@@ -22,13 +22,13 @@
 //! `CAUSTICA_BENCH_GATHERS=density,box` (default density), `CAUSTICA_BENCH_WARMUP_MS=N`.
 
 mod common;
-use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::scene::builtin::builtin;
-use caustica_core::scene::limits::tessellated_size;
-use caustica_core::scene::{Scene, Shape};
-use caustica_core::techniques::caustic_map::{
+use caustica::scene::builtin::builtin;
+use caustica::scene::limits::tessellated_size;
+use caustica::scene::{Scene, Shape};
+use caustica::techniques::caustic_map::{
     CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit, MapGather,
 };
+use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 

@@ -17,10 +17,10 @@
 //! `CAUSTICA_BENCH_DEFORM=0` (moves only: no caster deformed per frame).
 
 mod common;
+use caustica::scene::builtin::builtin;
+use caustica::scene::{Light, Object, Scene, Shape, Transform};
+use caustica::techniques::create;
 use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::scene::builtin::builtin;
-use caustica_core::scene::{Light, Object, Scene, Shape, Transform};
-use caustica_core::techniques::create;
 use common::{env_or, median};
 use glam::{Quat, Vec3};
 use std::time::Instant;
@@ -62,7 +62,7 @@ fn dynamic_scene(name: &str, w: u32, h: u32, big: u32) -> Scene {
 /// Frame `i`'s vertices of object `k` (object space): its tessellated mesh wobbling.
 fn wobble(scene: &Scene, k: usize, i: usize) -> Vec<Vec3> {
     let phase = i as f32 * 0.7;
-    caustica_core::scene::shapes::tessellate(&scene.objects[k].shape)
+    caustica::scene::shapes::tessellate(&scene.objects[k].shape)
         .positions
         .iter()
         .map(|p| *p * (1.0 + 0.05 * (phase + 9.0 * p.y).sin()))
@@ -149,7 +149,7 @@ fn main() {
                 .position(|o| o.transform.is_some())
                 .filter(|_| deform_each_frame);
             let caster_triangles = caster.map_or(0, |k| {
-                caustica_core::scene::limits::tessellated_size(&scene.objects[k].shape).1
+                caustica::scene::limits::tessellated_size(&scene.objects[k].shape).1
             });
             let mut failed = None;
             for i in 0..=frames {

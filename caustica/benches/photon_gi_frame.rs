@@ -13,9 +13,9 @@
 //! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080).
 
 mod common;
+use caustica::scene::builtin::builtin;
+use caustica::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
 use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::scene::builtin::builtin;
-use caustica_core::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
@@ -72,7 +72,6 @@ fn main() {
             let mut timing = String::new();
             let mut stored = 0;
             for i in 0..=frames {
-                use caustica_core::frame::technique::Technique;
                 t.set_seed(i as u32 + 1);
                 let st = match t.frame(backend.as_mut(), &mut |_| {}) {
                     Ok(st) => st,

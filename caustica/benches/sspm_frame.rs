@@ -24,18 +24,18 @@
 //! 4194304}'` (more Sspm settings as JSON, merged over those: to measure a lever).
 
 mod common;
+use caustica::internals::device::device_scene::DeviceScene;
+use caustica::internals::device::layout::GpuCamera;
 use caustica::{open_backend, BACKEND_NAMES};
-use caustica_core::device::device_scene::DeviceScene;
-use caustica_core::device::layout::GpuCamera;
 use common::{env_or, median, warm_up, warmup_ms};
 
-use caustica_core::kernels::{DirectLight, PrimaryGbuffer};
-use caustica_core::recording::Recording;
-use caustica_core::scene::builtin::builtin;
-use caustica_core::scene::Scene;
-use caustica_core::techniques::create;
-use caustica_core::techniques::sspm::FrameConstants;
-use caustica_core::{Backend, SspmSettings};
+use caustica::internals::kernels::{DirectLight, PrimaryGbuffer};
+use caustica::internals::recording::Recording;
+use caustica::scene::builtin::builtin;
+use caustica::scene::Scene;
+use caustica::techniques::create;
+use caustica::techniques::sspm::FrameConstants;
+use caustica::{Backend, SspmSettings};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -205,12 +205,12 @@ struct Pipelined {
 /// the device, collect each frame's statistics when it is the oldest.
 fn pipelined(
     backend: &mut dyn Backend,
-    sspm: &mut dyn caustica_core::Technique,
+    sspm: &mut dyn caustica::Technique,
     n: usize,
-) -> Result<Pipelined, caustica_core::Error> {
+) -> Result<Pipelined, caustica::Error> {
     let mut tickets = std::collections::VecDeque::new();
     let (mut submit, mut device, mut done) = (Vec::new(), Vec::new(), Vec::new());
-    let mut collect = |t: &mut caustica_core::FrameTicket, b: &mut dyn Backend| {
+    let mut collect = |t: &mut caustica::FrameTicket, b: &mut dyn Backend| {
         t.stats(b, true).map(|s| {
             if let Some(s) = s {
                 device.push(s.passes.iter().map(|p| p.ms).sum::<f64>());
@@ -257,7 +257,7 @@ fn plain_against_direct(
     backend: &mut dyn Backend,
     scene: &Scene,
     frames: usize,
-) -> Result<(Times, Times), caustica_core::Error> {
+) -> Result<(Times, Times), caustica::Error> {
     let settings = SspmSettings::default();
     let mut sspm = create("sspm", backend, scene, &serde_json::json!({}))?;
     let mut frame = Vec::new();
@@ -269,7 +269,7 @@ fn plain_against_direct(
     }
     sspm.free(backend)?;
 
-    let ds = DeviceScene::build(scene, Default::default()).map_err(caustica_core::Error::from)?;
+    let ds = DeviceScene::build(scene, Default::default()).map_err(caustica::Error::from)?;
     let mut setup = Recording::new();
     let args = setup.upload_scene(&ds);
     let camera = GpuCamera::from_camera(&scene.camera);
@@ -304,7 +304,8 @@ fn plain_against_direct(
         args.materials.id,
         args.lights.id,
     ] {
-        free.steps.push(caustica_core::recording::Step::Free { id });
+        free.steps
+            .push(caustica::internals::recording::Step::Free { id });
     }
     free.free(args.bvh_nodes);
     for p in gbuffer.planes {

@@ -1,17 +1,19 @@
-//! A real-time host's frame loop, headless: the "renderer" owns the
-//! wgpu device, its queue and an `Rgba16Float` texture. Every frame it moves the light and
-//! the glass ball (an instance) through caustica's update API, records caustica's whole
-//! frame into *its own* command encoder, has the caustics written into its texture in the
-//! same encoder, and submits once. Nothing waits on the CPU inside the loop: each frame's
-//! statistics (pass times, photon counts) are collected a few frames later, when the
-//! device has finished that frame. At the end it prints the update and frame times.
+//! A real-time host's frame loop, headless: the "renderer" owns the wgpu device, its
+//! queue and an `Rgba16Float` texture. It drives each of the four techniques in turn:
+//! every frame it moves the light and the glass ball (an instance) through caustica's
+//! update API, records the technique's whole frame into *its own* command encoder (with
+//! Sspm, it also has the caustics written into its texture in the same encoder), and
+//! submits once. Each frame's statistics (pass times, photon counts) are collected a few
+//! frames later, when the device has finished that frame. It prints the update and
+//! record times and the host waits inside `record_frame` per frame (device waits and
+//! blocking readbacks a technique still needs while recording).
 //! Run: `cargo run --release -p caustica --example frame_loop -- [WxH] [PHOTONS] [FRAMES]`.
 
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::builtin::builtin;
 use caustica::scene::{Light, Shape, Transform};
 use caustica::wgpu;
-use caustica::{FrameTicket, Outputs, Sspm, SspmSettings};
+use caustica::{FrameTicket, Outputs, Sspm, SspmSettings, Technique};
 use std::collections::VecDeque;
 use std::time::Instant;
 
@@ -69,121 +71,149 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let home = std::mem::replace(center, glam::Vec3::ZERO);
     scene.objects[ball].transform = Some(Transform::from_translation(home));
-    let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        // the renderer does its own direct light: caustics only
-        outputs: Outputs::CAUSTICS_ONLY,
-        ..SspmSettings::default()
-    };
-    let mut sspm = Sspm::new(&mut backend, &scene, settings)?;
-    let caustics = sspm
-        .images()
-        .filtered_caustics
-        .ok_or("no light reaches a caustic caster")?;
+    println!("{name}: {frames} frames a technique at {w}x{h}, {side}x{side} photons, moving light and ball");
 
-    // --- the loop ------------------------------------------------------------------------
-    let mut update_ms = Vec::with_capacity(frames);
-    let mut host_ms = Vec::with_capacity(frames);
-    let mut device_ms = Vec::with_capacity(frames);
-    let mut in_flight: VecDeque<FrameTicket> = VecDeque::new();
-    let mut deposited = 0u64;
-    let mut paced_ms = 0.0;
-    let mut collect = |t: &mut FrameTicket, b: &mut WgpuBackend, wait: bool| {
-        t.stats(b, wait).map(|s| {
-            s.map(|s| {
-                deposited += s.photons_deposited;
-                device_ms.push(s.passes.iter().map(|p| p.ms).sum::<f64>());
-            })
-        })
-    };
-    let start = Instant::now();
-    for f in 0..frames {
-        let phase = f as f32 / frames as f32 * std::f32::consts::TAU;
-        // updates: the light circles, the ball bobs and turns (no rebuild, nothing waits)
-        let t0 = Instant::now();
-        let mut lights = scene.lights.clone();
-        if let Light::Point { position, .. } = &mut lights[0] {
-            *position += glam::Vec3::new(0.4 * phase.cos(), 0.0, 0.4 * phase.sin());
-        }
-        sspm.set_lights(&mut backend, &lights)?;
-        let placement = Transform {
-            translation: home + glam::Vec3::new(0.0, 0.15 * phase.sin(), 0.0),
-            rotation: glam::Quat::from_rotation_y(phase),
-            scale: glam::Vec3::ONE,
+    for technique in ["sspm", "caustic-map", "adaptive-caustics", "photon-gi"] {
+        let grid = serde_json::json!({ "photons_w": side, "photons_h": side });
+        let (mut t, caustics): (Box<dyn Technique>, _) = if technique == "sspm" {
+            let settings = SspmSettings {
+                photons_w: side,
+                photons_h: side,
+                // the renderer does its own direct light: caustics only
+                outputs: Outputs::CAUSTICS_ONLY,
+                ..SspmSettings::default()
+            };
+            let sspm = Sspm::new(&mut backend, &scene, settings)?;
+            let caustics = sspm.images().filtered_caustics;
+            (Box::new(sspm), caustics)
+        } else {
+            let t = caustica::techniques::create(technique, &mut backend, &scene, &grid)?;
+            (t, None)
         };
-        sspm.set_object_transforms(&mut backend, &[(ball, placement)])?;
-        let t1 = Instant::now();
-
-        // the frame, into the host's encoder, with the host's own work after it
-        let recorded = sspm.record_frame(&mut backend)?;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let submission = backend.encode(&recorded.recording, &recorded.readbacks, &mut encoder)?;
-        backend.encode_image_to_texture(caustics, &texture, &mut encoder)?;
-        let index = queue.submit([encoder.finish()]);
-        backend.submitted(&submission, Some(index))?;
-        in_flight.push_back(recorded.submitted(submission));
-        let t2 = Instant::now();
-        update_ms.push((t1 - t0).as_secs_f64() * 1e3);
-        host_ms.push((t2 - t1).as_secs_f64() * 1e3);
-
-        // statistics of earlier frames, if the device has finished them (never waits)
-        while let Some(t) = in_flight.front_mut() {
-            if collect(t, &mut backend, false)?.is_none() {
-                break;
+        let mut l = Loop::default();
+        let mut in_flight: VecDeque<FrameTicket> = VecDeque::new();
+        let start = Instant::now();
+        for f in 0..frames {
+            let phase = f as f32 / frames as f32 * std::f32::consts::TAU;
+            // updates: the light circles, the ball bobs and turns (no rebuild)
+            let t0 = Instant::now();
+            let mut lights = scene.lights.clone();
+            if let Light::Point { position, .. } = &mut lights[0] {
+                *position += glam::Vec3::new(0.4 * phase.cos(), 0.0, 0.4 * phase.sin());
             }
-            in_flight.pop_front();
-        }
-        // frame pacing, as a presenting host gets from its swap chain: at most
-        // MAX_IN_FLIGHT frames on the device, else the host waits for the oldest
-        if in_flight.len() > MAX_IN_FLIGHT {
-            let t3 = Instant::now();
-            let mut t = in_flight.pop_front().expect("not empty");
-            collect(&mut t, &mut backend, true)?;
-            paced_ms += t3.elapsed().as_secs_f64() * 1e3;
-        }
-    }
-    let loop_s = start.elapsed().as_secs_f64();
-    let still_running = in_flight.len();
-    for t in in_flight.iter_mut() {
-        collect(t, &mut backend, true)?;
-    }
-    let wall_s = start.elapsed().as_secs_f64();
-    sspm.free(&mut backend)?;
+            t.set_lights(&mut backend, &lights)?;
+            let placement = Transform {
+                translation: home + glam::Vec3::new(0.0, 0.15 * phase.sin(), 0.0),
+                rotation: glam::Quat::from_rotation_y(phase),
+                scale: glam::Vec3::ONE,
+            };
+            t.set_object_transforms(&mut backend, &[(ball, placement)])?;
+            let t1 = Instant::now();
 
-    let stat = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let n = v.len().max(1);
-        (
-            v.get(n / 2).copied().unwrap_or(0.0),
-            v.last().copied().unwrap_or(0.0),
-        )
-    };
-    let (u_med, u_max) = stat(&mut update_ms);
-    let (h_med, h_max) = stat(&mut host_ms);
-    let (d_med, d_max) = stat(&mut device_ms);
-    println!("{name}: {frames} frames at {w}x{h}, {side}x{side} photons, moving light and ball");
-    println!("  update (set_lights + set_object_transforms), host: median {u_med:.3} ms, max {u_max:.3} ms");
-    println!("  frame record + encode + submit, host:             median {h_med:.3} ms, max {h_max:.3} ms");
-    if device_ms.iter().any(|&d| d > 0.0) {
-        println!("  frame passes on the device (timestamps):          median {d_med:.3} ms, max {d_max:.3} ms");
-    } else {
-        println!("  frame passes on the device: not timed (the adapter has no timestamp queries)");
-    }
-    println!(
-        "  loop {:.1} ms/frame on the host; all frames done after {:.1} ms/frame; {} frames \
-         still on the device when the loop ended; {deposited} photons deposited in all",
-        loop_s * 1e3 / frames as f64,
-        wall_s * 1e3 / frames as f64,
-        still_running
-    );
-    println!(
-        "  frame pacing (at most {MAX_IN_FLIGHT} frames in flight): the host waited {:.1} ms/frame \
-         for the device",
-        paced_ms / frames as f64
-    );
-    if deposited == 0 {
-        return Err("no photon was deposited".into());
+            // the frame, into the host's encoder, with the host's own work after it
+            let recorded = t.record_frame(&mut backend)?;
+            l.host_waits.push(recorded.stats.host_waits as f64);
+            let mut encoder = device.create_command_encoder(&Default::default());
+            let submission =
+                backend.encode(&recorded.recording, &recorded.readbacks, &mut encoder)?;
+            if let Some(c) = caustics {
+                backend.encode_image_to_texture(c, &texture, &mut encoder)?;
+            }
+            let index = queue.submit([encoder.finish()]);
+            backend.submitted(&submission, Some(index))?;
+            in_flight.push_back(recorded.submitted(submission));
+            let t2 = Instant::now();
+            l.update_ms.push((t1 - t0).as_secs_f64() * 1e3);
+            l.record_ms.push((t2 - t1).as_secs_f64() * 1e3);
+
+            // statistics of earlier frames, if the device has finished them (never waits)
+            while let Some(ticket) = in_flight.front_mut() {
+                if !l.collect(ticket, &mut backend, false)? {
+                    break;
+                }
+                in_flight.pop_front();
+            }
+            // frame pacing, as a presenting host gets from its swap chain: at most
+            // MAX_IN_FLIGHT frames on the device, else the host waits for the oldest
+            if in_flight.len() > MAX_IN_FLIGHT {
+                let t3 = Instant::now();
+                let mut ticket = in_flight.pop_front().expect("not empty");
+                l.collect(&mut ticket, &mut backend, true)?;
+                l.paced_ms += t3.elapsed().as_secs_f64() * 1e3;
+            }
+        }
+        let loop_ms = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
+        for ticket in in_flight.iter_mut() {
+            l.collect(ticket, &mut backend, true)?;
+        }
+        t.free(&mut backend)?;
+        l.print(technique, loop_ms, frames);
+        if l.stored == 0 {
+            return Err(format!("{technique}: no photon was stored").into());
+        }
     }
     Ok(())
+}
+
+/// One technique's loop: per-frame figures and photon totals.
+#[derive(Default)]
+struct Loop {
+    update_ms: Vec<f64>,
+    record_ms: Vec<f64>,
+    device_ms: Vec<f64>,
+    host_waits: Vec<f64>,
+    paced_ms: f64,
+    stored: u64,
+}
+
+impl Loop {
+    /// Collects a finished frame's statistics (`wait`: wait for it); whether it had
+    /// finished.
+    fn collect(
+        &mut self,
+        t: &mut FrameTicket,
+        b: &mut WgpuBackend,
+        wait: bool,
+    ) -> Result<bool, caustica::Error> {
+        Ok(t.stats(b, wait)?.is_some_and(|s| {
+            self.stored += s.photons_stored;
+            self.device_ms
+                .push(s.passes.iter().map(|p| p.ms).sum::<f64>());
+            true
+        }))
+    }
+
+    fn print(&mut self, technique: &str, loop_ms: f64, frames: usize) {
+        let stat = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            let n = v.len().max(1);
+            (
+                v.get(n / 2).copied().unwrap_or(0.0),
+                v.last().copied().unwrap_or(0.0),
+            )
+        };
+        let (u_med, u_max) = stat(&mut self.update_ms);
+        let (r_med, r_max) = stat(&mut self.record_ms);
+        let (d_med, d_max) = stat(&mut self.device_ms);
+        let (w_med, w_max) = stat(&mut self.host_waits);
+        println!("{technique}:");
+        println!("  update (set_lights + set_object_transforms), host: median {u_med:.3} ms, max {u_max:.3} ms");
+        println!("  frame record + encode + submit, host:             median {r_med:.3} ms, max {r_max:.3} ms");
+        println!(
+            "  host waits inside record_frame, per frame:        median {w_med:.0}, max {w_max:.0}"
+        );
+        if self.device_ms.iter().any(|&d| d > 0.0) {
+            println!("  frame passes on the device (timestamps):          median {d_med:.3} ms, max {d_max:.3} ms");
+        } else {
+            println!(
+                "  frame passes on the device: not timed (the adapter has no timestamp queries)"
+            );
+        }
+        println!(
+            "  loop {loop_ms:.1} ms/frame on the host; frame pacing (at most {MAX_IN_FLIGHT} in \
+             flight): the host waited {:.1} ms/frame; {} photons stored in all",
+            self.paced_ms / frames as f64,
+            self.stored
+        );
+    }
 }

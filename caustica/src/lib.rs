@@ -1,6 +1,6 @@
-//! caustica: real-time photon-mapping techniques for caustics, written once against a
-//! small backend trait and run on the backend chosen at run time (CPU, OpenCL, wgpu or
-//! Vulkan).
+//! caustica: real-time photon-mapping techniques for caustics and indirect light,
+//! written once against a small backend trait and run on the backend chosen at run time
+//! (CPU, OpenCL, wgpu or Vulkan).
 //!
 //! ```no_run
 //! use caustica::{open_backend, scene::builtin, Sspm, SspmSettings, Output};
@@ -17,8 +17,11 @@
 //! # }
 //! ```
 //!
-//! Any technique by name, without naming its type: [`techniques::create`] returns a
-//! `Box<dyn` [`Technique`]`>`; [`techniques::TECHNIQUES`] lists them.
+//! Every technique is a type of its own with its settings, created over a scene and
+//! driven the same way (frame, updates, outputs by name, free); see [`CausticMap`],
+//! [`AdaptiveCaustics`] and [`PhotonGi`] for one example each. Any technique by name,
+//! without naming its type: [`techniques::create`] returns a `Box<dyn` [`Technique`]`>`;
+//! [`techniques::TECHNIQUES`] lists them.
 //!
 //! What is here: scenes ([`scene`]: the model, built-ins, the JSON format), opening a
 //! backend ([`open_backend`], [`backend_statuses`]), the techniques with their settings
@@ -26,8 +29,8 @@
 //! metrics ([`metrics`]) and references ([`reference`](mod@reference)); each backend's own API behind its
 //! cargo feature in [`backends`] (embedding into a host's wgpu or Vulkan device);
 //! `glam`, `wgpu` and `ash` as caustica uses them. Backend authors find the kernel list,
-//! recordings, device layouts and shared math under [`internals`]. With the `report`
-//! feature, [`report`] measures error against run time.
+//! recordings and device layouts under [`internals`]. With the `report` feature,
+//! [`report`] measures error against run time.
 
 #![warn(missing_docs)]
 
@@ -52,21 +55,115 @@ pub use caustica_core::frame::submitted::{FrameTicket, RecordedFrame};
 pub use caustica_core::frame::technique::{OutputInfo, Progress, Technique};
 pub use caustica_core::scene;
 pub use caustica_core::scene::Scene;
-pub use caustica_core::techniques::sspm::{Output, Outputs, Sspm, SspmSettings};
+pub use caustica_core::techniques::sspm::{
+    FrameImages, GatherFilter, Output, Outputs, Sspm, SspmSettings,
+};
+
+/// CausticMap (seed 001): photons from each light's view planes into a caustic atlas in
+/// the receivers' texture space, looked up by the camera through mirrors and glass. The
+/// atlas is remade only when lights, settings or the seed change: a frame after a camera
+/// move reuses it.
+///
+/// ```no_run
+/// use caustica::{open_backend, scene::builtin, CausticMap, CausticMapSettings};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut backend = open_backend("auto")?;
+/// let scene = builtin::builtin("sphere").expect("built-in scene");
+/// let settings = CausticMapSettings {
+///     photons_w: 1024,
+///     photons_h: 1024,
+///     ..Default::default()
+/// };
+/// let mut map = CausticMap::new(backend.as_mut(), &scene, settings)?;
+/// map.frame(backend.as_mut(), &mut |_| {})?;
+/// let caustics = map.read_output(backend.as_mut(), "caustics_filtered")?; // radiance
+/// let atlas = map.read_output(backend.as_mut(), "caustic_atlas")?; // irradiance, W/m^2
+/// map.free(backend.as_mut())?;
+/// # let _ = (caustics, atlas);
+/// # Ok(())
+/// # }
+/// ```
+pub use caustica_core::techniques::caustic_map::CausticMap;
+pub use caustica_core::techniques::caustic_map::{
+    CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
+};
+
+/// AdaptiveCaustics (seed 004): the light view planes sampled coarse to fine, so that
+/// photons are traced only where the casters are; its photons land in the caustic atlas
+/// (the default) or the screen photon map (`deposit: screen`).
+///
+/// ```no_run
+/// use caustica::{open_backend, scene::builtin, AdaptiveCaustics, AdaptiveCausticsSettings};
+/// use caustica::{AdaptiveDeposit, AdaptiveMetric, CausticMapSettings};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut backend = open_backend("auto")?;
+/// let scene = builtin::builtin("spot-glass").expect("built-in scene");
+/// let settings = AdaptiveCausticsSettings {
+///     // the dense-equivalent grid: the pyramid's finest level
+///     map: CausticMapSettings { photons_w: 2048, photons_h: 2048, ..Default::default() },
+///     metric: AdaptiveMetric::Error,
+///     deposit: AdaptiveDeposit::Atlas,
+///     ..Default::default()
+/// };
+/// let mut t = AdaptiveCaustics::new(backend.as_mut(), &scene, settings)?;
+/// let stats = t.frame(backend.as_mut(), &mut |_| {})?;
+/// if let Some(a) = &stats.adaptive {
+///     println!("{} of {} photons traced", a.photons_processed, a.dense_equivalent_photons);
+/// }
+/// let composite = t.read_output(backend.as_mut(), "composite")?;
+/// t.free(backend.as_mut())?;
+/// # let _ = composite;
+/// # Ok(())
+/// # }
+/// ```
+pub use caustica_core::techniques::adaptive_caustics::AdaptiveCaustics;
+pub use caustica_core::techniques::adaptive_caustics::{
+    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
+};
+
+/// PhotonGi (seed 003): multi-bounce indirect light by photon splatting from each light's
+/// reflective shadow map, with the chapter's temporal and A-Trous filters.
+///
+/// ```no_run
+/// use caustica::{open_backend, scene::builtin, PhotonGi, PhotonGiSettings};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut backend = open_backend("auto")?;
+/// let scene = builtin::builtin("cornell").expect("built-in scene");
+/// let mut gi = PhotonGi::new(backend.as_mut(), &scene, PhotonGiSettings::default())?;
+/// for seed in 0..4 {
+///     gi.set_seed(seed); // the temporal filter accumulates over frames
+///     gi.frame(backend.as_mut(), &mut |_| {})?;
+/// }
+/// let composite = gi.read_output(backend.as_mut(), "composite")?;
+/// gi.free(backend.as_mut())?;
+/// # let _ = composite;
+/// # Ok(())
+/// # }
+/// ```
+pub use caustica_core::techniques::photon_gi::PhotonGi;
+pub use caustica_core::techniques::photon_gi::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 
 /// The techniques: the registry ([`techniques::TECHNIQUES`], [`techniques::create`]) and
-/// one module per technique.
+/// one module per technique, with everything each exports.
 pub mod techniques {
     pub use caustica_core::techniques::{
-        create, sspm, technique_names, TechniqueEntry, TECHNIQUES,
+        adaptive_caustics, caustic_map, create, photon_gi, sspm, technique_names, TechniqueEntry,
+        TECHNIQUES,
     };
 }
 
-/// For backend authors and tools: the kernel list and its declarations, recordings,
-/// device layouts and handles, the frame machinery and the scalar math every shader
-/// mirrors. Not needed to use a technique.
+/// For backend authors: the backend trait's vocabulary (recordings and their steps, the
+/// kernel list and declarations, device layouts and handles) and the scalar math every
+/// shader mirrors. Not needed to use a technique.
 pub mod internals {
-    pub use caustica_core::{backend, device, frame, kernels, math, recording};
+    pub use caustica_core::{backend, device, kernels, math, recording};
+}
+
+/// The frame machinery a host or tool may need beyond the techniques: images, metrics,
+/// the frame plan and statistics, the non-blocking frame, the frame host and the seam a
+/// technique implements over it ([`frame::pipeline::Pipeline`]).
+pub mod frame {
+    pub use caustica_core::frame::{host, image, metrics, pipeline, plan, stats, submitted};
 }
 
 /// Each backend's own API (embedding into a host's device, device choice), behind its

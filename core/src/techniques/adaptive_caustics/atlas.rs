@@ -99,7 +99,7 @@ pub(super) fn create(
         plan,
         traversal,
         target: Target::Atlas {
-            receiver,
+            receiver: Box::new(receiver),
             valid: false,
         },
     })

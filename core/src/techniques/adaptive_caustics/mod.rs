@@ -58,13 +58,13 @@ pub type AdaptiveCaustics = Hosted<AdaptiveCausticsPipeline>;
 enum Target {
     /// The caustic atlas (texture-space photons, deposited by `refine_clusters`).
     Atlas {
-        receiver: AtlasReceiver,
+        receiver: Box<AtlasReceiver>,
         /// The atlas holds the photons of the current lights, settings and seed.
         valid: bool,
     },
     /// The screen photon map (world-space photons, deposited by `deposit_screen`).
     Screen {
-        receiver: ScreenReceiver,
+        receiver: Box<ScreenReceiver>,
         /// The receiver's and the traversal's buffers.
         owned: Allocation,
     },

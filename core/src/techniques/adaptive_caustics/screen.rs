@@ -95,7 +95,10 @@ pub(super) fn create(
         variant,
         plan,
         traversal,
-        target: Target::Screen { receiver, owned },
+        target: Target::Screen {
+            receiver: Box::new(receiver),
+            owned,
+        },
     })
 }
 
