@@ -216,14 +216,26 @@ impl<'p> FrameBuilder<'p> {
 /// [`Hosted`] gives every implementation the public [`Technique`] seam.
 pub trait Pipeline: Sized {
     /// Its settings (their JSON form is what [`crate::techniques::create`] takes).
-    type Settings: Clone + PartialEq + std::fmt::Debug + serde::Serialize;
+    type Settings: Clone
+        + PartialEq
+        + std::fmt::Debug
+        + serde::Serialize
+        + serde::de::DeserializeOwned;
 
     /// The registry and statistics name.
-    fn name(&self) -> &'static str;
+    const NAME: &'static str;
+
+    /// The registry and statistics name ([`Pipeline::NAME`]).
+    fn name(&self) -> &'static str {
+        Self::NAME
+    }
 
     /// Parses a JSON object of settings fields (missing ones take their defaults,
-    /// unknown ones are an error) and checks every range.
-    fn parse_settings(json: &serde_json::Value) -> Result<Self::Settings, Error>;
+    /// unknown ones are an error).
+    fn parse_settings(json: &serde_json::Value) -> Result<Self::Settings, Error> {
+        serde_json::from_value(json.clone())
+            .map_err(|e| Error::InvalidParameter(format!("{} settings: {e}", Self::NAME)))
+    }
 
     /// Checks every field's range.
     fn validate(settings: &Self::Settings) -> Result<(), Error>;

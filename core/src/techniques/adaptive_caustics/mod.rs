@@ -166,9 +166,7 @@ impl AdaptiveCausticsPipeline {
 impl Pipeline for AdaptiveCausticsPipeline {
     type Settings = AdaptiveCausticsSettings;
 
-    fn name(&self) -> &'static str {
-        "adaptive-caustics"
-    }
+    const NAME: &'static str = "adaptive-caustics";
 
     fn parse_settings(json: &serde_json::Value) -> Result<AdaptiveCausticsSettings, Error> {
         AdaptiveCausticsSettings::from_json(json)

@@ -214,14 +214,7 @@ impl CausticMapPipeline {
 impl Pipeline for CausticMapPipeline {
     type Settings = CausticMapSettings;
 
-    fn name(&self) -> &'static str {
-        "caustic-map"
-    }
-
-    fn parse_settings(json: &serde_json::Value) -> Result<CausticMapSettings, Error> {
-        serde_json::from_value(json.clone())
-            .map_err(|e| Error::InvalidParameter(format!("caustic-map settings: {e}")))
-    }
+    const NAME: &'static str = "caustic-map";
 
     fn validate(settings: &CausticMapSettings) -> Result<(), Error> {
         settings.validate()

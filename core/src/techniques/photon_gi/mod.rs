@@ -548,14 +548,7 @@ impl PhotonGiPipeline {
 impl Pipeline for PhotonGiPipeline {
     type Settings = PhotonGiSettings;
 
-    fn name(&self) -> &'static str {
-        "photon-gi"
-    }
-
-    fn parse_settings(json: &serde_json::Value) -> Result<PhotonGiSettings, Error> {
-        serde_json::from_value(json.clone())
-            .map_err(|e| Error::InvalidParameter(format!("photon-gi settings: {e}")))
-    }
+    const NAME: &'static str = "photon-gi";
 
     fn validate(settings: &PhotonGiSettings) -> Result<(), Error> {
         settings.validate()

@@ -199,14 +199,7 @@ impl SspmPipeline {
 impl Pipeline for SspmPipeline {
     type Settings = SspmSettings;
 
-    fn name(&self) -> &'static str {
-        "sspm"
-    }
-
-    fn parse_settings(json: &serde_json::Value) -> Result<SspmSettings, Error> {
-        serde_json::from_value(json.clone())
-            .map_err(|e| Error::InvalidParameter(format!("sspm settings: {e}")))
-    }
+    const NAME: &'static str = "sspm";
 
     fn validate(settings: &SspmSettings) -> Result<(), Error> {
         settings.validate()
