@@ -110,6 +110,10 @@ pub struct FrameStats {
     /// readback or a run-and-wait whose result the rest of the frame depends on); 0 for a
     /// frame recorded whole.
     pub host_waits: u32,
+    /// Frames whose photons the receiver holds, this one included, with progressive
+    /// accumulation (`accumulate`; 0 without it): N frames of M photons estimate as one
+    /// frame of N x M photons.
+    pub accumulated_frames: u32,
     /// Per-pass timing by kernel name (ms), for quick lookup.
     pub pass_ms: BTreeMap<String, f64>,
     /// Error of the filtered caustics against the reference set with

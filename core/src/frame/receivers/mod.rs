@@ -9,3 +9,13 @@
 
 pub mod atlas;
 pub mod screen;
+
+/// The frame seed of the `k`-th frame a receiver accumulates (`k = 0`: `seed` itself, so
+/// that the first frame is a frame without accumulation, bitwise).
+pub fn accumulation_seed(seed: u32, k: u32) -> u32 {
+    if k == 0 {
+        seed
+    } else {
+        seed ^ crate::math::rng::pcg_hash(k.wrapping_add(0x4143_4355))
+    }
+}

@@ -13,6 +13,7 @@ use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::pipeline::{Change, FrameBuilder, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
+use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::atlas::{
     with_atlas, AtlasQuanta, AtlasReceiver, BOX_GATHER_PASSES, DENSITY_GATHER_PASSES,
 };
@@ -154,16 +155,21 @@ impl AdaptiveCausticsPipeline {
                 ));
                 let mut gather = Recording::new();
                 receiver.record_gather(&mut gather);
+                // a new seed for every pass an accumulating atlas adds
+                let seed = accumulation_seed(self.settings.map.seed, receiver.pass_index());
                 self.traverse(
                     backend,
                     host,
                     frame,
                     &DepositTarget::Atlas(target),
                     a.counters,
+                    seed,
                 )
                 .and_then(|_| frame.run_now(backend, gather))?;
-                if let Target::Atlas { valid, .. } = &mut self.target {
-                    *valid = true;
+                if let Target::Atlas { receiver, valid } = &mut self.target {
+                    frame.stats.accumulated_frames = receiver.end_photon_pass();
+                    // an accumulating atlas takes new photons every frame
+                    *valid = !self.settings.map.accumulate;
                 }
             }
         }

@@ -119,6 +119,7 @@ impl AdaptiveCausticsPipeline {
         frame: &mut FrameBuilder,
         target: &DepositTarget,
         counters: crate::device::handle::Buf<u32>,
+        seed: u32,
     ) -> Result<(), Error> {
         let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
             return Ok(());
@@ -148,7 +149,7 @@ impl AdaptiveCausticsPipeline {
                 host.scene(),
                 variant,
                 target,
-                (*light, plane, ViewPlanes::plane_seed(s.seed, *light, *k)),
+                (*light, plane, ViewPlanes::plane_seed(seed, *light, *k)),
                 optics,
                 &mut frame.stats,
                 &mut adaptive,

@@ -12,6 +12,7 @@ use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::pipeline::FrameBuilder;
 use crate::frame::plan::SceneFeatures;
+use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::{plan_frame, Needs, ScreenQuanta, ScreenReceiver};
 use crate::recording::{Recording, Step};
 
@@ -136,7 +137,9 @@ impl AdaptiveCausticsPipeline {
             photon_map: map.planes,
             trace_counters: map.counters,
         });
-        self.traverse(backend, host, frame, &target, map.counters)?;
+        // a new seed for every frame an accumulating photon map adds
+        let seed = accumulation_seed(self.settings.map.seed, receiver.frame_index());
+        self.traverse(backend, host, frame, &target, map.counters, seed)?;
         let Target::Screen { receiver, .. } = &mut self.target else {
             return Ok(());
         };
@@ -144,7 +147,7 @@ impl AdaptiveCausticsPipeline {
         receiver.record_resolve(&mut rec, camera, host.screen(), NO_PHOTON_LIST);
         frame.push(rec, 0);
         // this frame's blend is the next frame's history
-        receiver.end_frame(camera);
+        frame.stats.accumulated_frames = receiver.end_frame(camera);
         Ok(())
     }
 }

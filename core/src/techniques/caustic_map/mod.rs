@@ -40,6 +40,7 @@ use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
+use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::atlas::{
     with_atlas, AtlasQuanta, AtlasReceiver, BOX_GATHER_PASSES, DENSITY_GATHER_PASSES,
 };
@@ -119,6 +120,8 @@ impl CausticMapPipeline {
         };
         let a = self.receiver.atlas().expect("an atlas with its deposit");
         let s = &self.settings;
+        // a new seed for every pass an accumulating atlas adds
+        let seed = accumulation_seed(s.seed, self.receiver.pass_index());
         self.receiver.record_clear(frame.rec());
         frame.stats.variants.push(crate::kernels::variant_label(
             "trace_photons",
@@ -152,7 +155,7 @@ impl CausticMapPipeline {
                             plane,
                             *light,
                             (first as u32, count),
-                            ViewPlanes::plane_seed(s.seed, *light, *k),
+                            ViewPlanes::plane_seed(seed, *light, *k),
                             s.max_bounces,
                             s.min_relative_power,
                         )
@@ -206,7 +209,9 @@ impl CausticMapPipeline {
         }
         self.receiver.record_gather(frame.rec());
         frame.counters_at_end(a.counters, self.planes.flux_quantum);
-        self.atlas_valid = true;
+        frame.stats.accumulated_frames = self.receiver.end_photon_pass();
+        // an accumulating atlas takes new photons every frame
+        self.atlas_valid = !self.settings.accumulate;
         Ok(())
     }
 }

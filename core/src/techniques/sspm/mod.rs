@@ -33,6 +33,7 @@ use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{BufferPlan, FramePlan};
+use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::ScreenReceiver;
 use crate::frame::technique::OutputInfo;
 use crate::kernels::{DepositScreen, FusedDeposit, ScreenDeposit, TracePhotons};
@@ -146,6 +147,11 @@ impl SspmPipeline {
         };
         let deposit_params = self.receiver.deposit_params(host.camera(), p.photons.len);
         let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+        // a new seed for every frame an accumulating photon map adds
+        let settings = SspmSettings {
+            seed: accumulation_seed(self.settings.seed, self.receiver.frame_index()),
+            ..self.settings.clone()
+        };
         for (light, d) in &self.constants.domains {
             frame.stats.photons_emitted += per_light;
             for c in 0..3 {
@@ -159,13 +165,9 @@ impl SspmPipeline {
                 rec.kernel(TracePhotons {
                     scene: host.scene(),
                     variant,
-                    params: self.constants.trace_params(
-                        &self.settings,
-                        *light,
-                        d,
-                        first as u32,
-                        count,
-                    ),
+                    params: self
+                        .constants
+                        .trace_params(&settings, *light, d, first as u32, count),
                     photons: p.photons,
                     photon_count: p.photon_count,
                     counters: map.counters,
@@ -300,7 +302,7 @@ impl Pipeline for SspmPipeline {
         frame.push(rec, 0);
         frame.counters_at_end(map.counters, self.constants.flux_quantum);
         // this frame's blend is the next frame's history
-        self.receiver.end_frame(camera);
+        frame.stats.accumulated_frames = self.receiver.end_frame(camera);
         Ok(())
     }
 
@@ -311,7 +313,11 @@ impl Pipeline for SspmPipeline {
         change: Change,
     ) -> Result<Reaction, Error> {
         match change {
-            Change::Camera => Ok(Reaction::Kept),
+            Change::Camera => {
+                // the photon map is the old camera's pixels
+                self.receiver.restart_accumulation();
+                Ok(Reaction::Kept)
+            }
             Change::Resized => Ok(Reaction::Rebuild),
             Change::Lights | Change::Instances { .. } => self.replan(host),
             Change::Materials { same_plan: true } => {

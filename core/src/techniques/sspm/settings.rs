@@ -70,6 +70,8 @@ pub struct SspmSettings {
     pub atrous_iterations: u32,
     /// The screen receiver's [`ScreenSettings::atrous_clip_sigmas`].
     pub atrous_clip_sigmas: f32,
+    /// The screen receiver's [`ScreenSettings::accumulate`].
+    pub accumulate: bool,
 }
 
 impl Default for SspmSettings {
@@ -100,6 +102,7 @@ impl Default for SspmSettings {
             temporal: false,
             atrous_iterations: 0,
             atrous_clip_sigmas: 1.0,
+            accumulate: false,
         }
     }
 }
@@ -146,6 +149,7 @@ impl SspmSettings {
             temporal: self.temporal,
             atrous_iterations: self.atrous_iterations,
             atrous_clip_sigmas: self.atrous_clip_sigmas,
+            accumulate: self.accumulate,
         }
     }
 }

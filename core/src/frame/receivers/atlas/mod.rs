@@ -191,6 +191,8 @@ pub struct AtlasReceiver {
     images: CameraImages,
     atlas_owned: Allocation,
     image_owned: Allocation,
+    /// Photon passes whose photons the sums hold (progressive accumulation).
+    accumulated: u32,
 }
 
 /// Whether a frame of `host`'s scene with `settings` has an atlas: casters, receivers, a
@@ -269,6 +271,7 @@ impl AtlasReceiver {
             images: CameraImages::default(),
             atlas_owned: Allocation::default(),
             image_owned: Allocation::default(),
+            accumulated: 0,
         };
         let made = (|| {
             if let (Some(receivers), true) = (host.receivers(), atlas) {
@@ -396,15 +399,53 @@ impl AtlasReceiver {
         self.quanta
     }
 
-    /// New quanta (moved lights or casters): the history is forgotten.
+    /// New quanta (moved lights or casters): the history and the accumulated photons
+    /// are forgotten.
     pub fn set_quanta(&mut self, quanta: AtlasQuanta) {
         self.quanta = quanta;
         self.reset_history();
     }
 
-    /// Sets the frame seed the settings carry.
+    /// Sets the frame seed the settings carry (an accumulation starts again).
     pub fn set_seed(&mut self, seed: u32) {
         self.settings.seed = seed;
+        self.restart_accumulation();
+    }
+
+    /// With progressive accumulation, the index of this photon pass among those the sums
+    /// accumulate (its photons' seed: [`crate::frame::receivers::accumulation_seed`]); 0
+    /// without.
+    pub fn pass_index(&self) -> u32 {
+        if self.settings.accumulate {
+            self.accumulated
+        } else {
+            0
+        }
+    }
+
+    /// Starts the accumulation again from the next photon pass.
+    pub fn restart_accumulation(&mut self) {
+        self.accumulated = 0;
+    }
+
+    /// After a photon pass: with accumulation its photons stay in the sums; returns the
+    /// passes they hold (0 without accumulation).
+    pub fn end_photon_pass(&mut self) -> u32 {
+        if self.settings.accumulate {
+            self.accumulated += 1;
+            self.accumulated
+        } else {
+            0
+        }
+    }
+
+    /// The quanta the gather reads the sums with: the deposit's flux quantum over the
+    /// passes they hold (their mean).
+    fn read_quanta(&self) -> AtlasQuanta {
+        AtlasQuanta {
+            flux_quantum: self.quanta.flux_quantum / (self.pass_index() + 1) as f32,
+            ..self.quanta
+        }
     }
 
     /// The plan's words for layout `l`.
@@ -459,16 +500,23 @@ impl AtlasReceiver {
         }
         self.tiled = include.to_vec();
         self.layout_summary = self.describe_layout(&l);
+        // the sums belong to the old layout
+        self.restart_accumulation();
         Ok(())
     }
 
-    /// `AtlasParams` of the deposit (`gather_width` 1) or the box gather.
+    /// `AtlasParams` of the deposit (`gather_width` 1).
     pub fn atlas_params(&self, gather_width: u32) -> AtlasParams {
+        self.params_with(self.quanta, gather_width)
+    }
+
+    /// `AtlasParams` with `quanta` (the deposit's, or the gathers' reading them).
+    fn params_with(&self, quanta: AtlasQuanta, gather_width: u32) -> AtlasParams {
         AtlasParams {
             width: self.settings.atlas_size,
             height: self.settings.atlas_size,
-            flux_quantum: self.quanta.flux_quantum,
-            hit_distance_quantum: self.quanta.hit_distance_quantum,
+            flux_quantum: quanta.flux_quantum,
+            hit_distance_quantum: quanta.hit_distance_quantum,
             photon_capacity: self.atlas.map_or(1, |a| a.photons.len),
             gather_width,
             _pad: [0; 2],
@@ -499,10 +547,13 @@ impl AtlasReceiver {
         })
     }
 
-    /// Records the sums, counters and reach mask cleared (a photon pass's start).
+    /// Records the sums, counters and reach mask cleared (a photon pass's start); with
+    /// progressive accumulation the sums keep the passes before.
     pub fn record_clear(&self, rec: &mut Recording) {
         if let Some(a) = self.atlas {
-            rec.clear_photon_map(&a.sums);
+            if self.pass_index() == 0 {
+                rec.clear_photon_map(&a.sums);
+            }
             rec.clear(a.counters);
             rec.clear(a.triangle_reach);
         }
@@ -513,7 +564,7 @@ impl AtlasReceiver {
         let Some(a) = self.atlas else {
             return;
         };
-        let q = self.quanta;
+        let q = self.read_quanta();
         if let Some(d) = a.density {
             let rows =
                 atlas_gather_params(&self.settings, q.flux_quantum, q.hit_distance_quantum, 0);
@@ -548,7 +599,7 @@ impl AtlasReceiver {
             }
         } else {
             rec.kernel(GatherCausticMap {
-                params: self.atlas_params(self.settings.gather_width),
+                params: self.params_with(q, self.settings.gather_width),
                 texels: a.texels,
                 tiles: a.tiles,
                 atlas: a.sums,
@@ -557,7 +608,7 @@ impl AtlasReceiver {
         }
         if let Some(raw) = a.raw_map {
             rec.kernel(GatherCausticMap {
-                params: self.atlas_params(1),
+                params: self.params_with(q, 1),
                 texels: a.texels,
                 tiles: a.tiles,
                 atlas: a.sums,
@@ -618,11 +669,12 @@ impl AtlasReceiver {
         }
     }
 
-    /// Forgets the temporal history.
+    /// Forgets the temporal history and the accumulated photons.
     pub fn reset_history(&mut self) {
         if let Some(f) = &mut self.images.filters {
             f.reset();
         }
+        self.restart_accumulation();
     }
 
     /// The frame plan from the emission (`lights`; `photon_passes`: the emission's passes

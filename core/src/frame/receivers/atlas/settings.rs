@@ -203,6 +203,13 @@ pub struct CausticMapSettings {
     /// Standard deviations of the A-Trous kernel's values a detail coefficient may keep
     /// (Eq. 18's bounds; 1 by default).
     pub atrous_clip_sigmas: f32,
+    /// Progressive accumulation: while the lights, scene and settings stay, every frame
+    /// traces new photons (a new seed) into the atlas sums of the frames before, and the
+    /// gather reads the sum as one frame of all their photons (N frames of M photons: the
+    /// map of one frame of N x M). A camera move keeps the atlas (it is in texture
+    /// space); any other change starts again. Off by default (the atlas is then reused
+    /// while only the camera moves).
+    pub accumulate: bool,
     /// Largest scene, in triangles, the technique accepts.
     pub max_triangles: u64,
     /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), the
@@ -238,6 +245,7 @@ impl Default for CausticMapSettings {
             temporal: false,
             atrous_iterations: 0,
             atrous_clip_sigmas: 1.0,
+            accumulate: false,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
             max_atlas_bytes: 4 << 30,
         }

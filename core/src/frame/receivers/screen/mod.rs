@@ -144,6 +144,8 @@ pub struct ScreenReceiver {
     filtered: Option<ImageBuf>,
     /// The opt-in temporal blend and A-Trous iterations on the filtered caustics.
     filters: Option<FilterChain>,
+    /// Frames whose photons the photon map holds (progressive accumulation).
+    accumulated: u32,
 }
 
 impl ScreenReceiver {
@@ -209,6 +211,7 @@ impl ScreenReceiver {
             gather,
             filtered,
             filters,
+            accumulated: 0,
         }
     }
 
@@ -227,6 +230,36 @@ impl ScreenReceiver {
     pub fn set_quanta(&mut self, quanta: ScreenQuanta) {
         self.quanta = quanta;
         self.reset_history();
+    }
+
+    /// With progressive accumulation, the index of this frame among those the photon map
+    /// accumulates (its photons' seed: [`crate::frame::receivers::accumulation_seed`]);
+    /// 0 without.
+    pub fn frame_index(&self) -> u32 {
+        if self.settings.accumulate {
+            self.accumulated
+        } else {
+            0
+        }
+    }
+
+    /// Frames the resolve reads as one, this one included (1 without accumulation).
+    fn frames_read(&self) -> u32 {
+        self.frame_index() + 1
+    }
+
+    /// Starts the accumulation again from the next frame (a moved camera).
+    pub fn restart_accumulation(&mut self) {
+        self.accumulated = 0;
+    }
+
+    /// The quanta the resolve and filter read the photon map with: the deposit's flux
+    /// quantum over the frames it holds (their mean).
+    fn read_quanta(&self) -> ScreenQuanta {
+        ScreenQuanta {
+            flux_quantum: self.quanta.flux_quantum / self.frames_read() as f32,
+            ..self.quanta
+        }
     }
 
     /// The pass groups it was made for.
@@ -268,10 +301,13 @@ impl ScreenReceiver {
         }
     }
 
-    /// Records the photon map and counters cleared (the frame's start).
+    /// Records the photon map and counters cleared (the frame's start); with progressive
+    /// accumulation the photon map keeps the frames before.
     pub fn record_clear(&self, rec: &mut Recording) {
         if let Some(m) = self.map {
-            rec.clear_photon_map(&m.planes);
+            if self.frame_index() == 0 {
+                rec.clear_photon_map(&m.planes);
+            }
             rec.clear(m.counters);
         }
     }
@@ -289,7 +325,9 @@ impl ScreenReceiver {
             return;
         };
         rec.kernel(ResolveCaustics {
-            params: self.deposit_params(camera, photon_capacity),
+            params: self
+                .read_quanta()
+                .deposit_params(camera, &self.settings, photon_capacity),
             gbuffer,
             photon_map: m.planes,
             out: raw,
@@ -323,7 +361,7 @@ impl ScreenReceiver {
         g: GatherBuffers,
         (raw, filtered, last): (ImageBuf, ImageBuf, ImageBuf),
     ) {
-        let gather = self.quanta.gather_params(camera, &self.settings, 0);
+        let gather = self.read_quanta().gather_params(camera, &self.settings, 0);
         let columns = GatherParams { axis: 1, ..gather };
         match g {
             GatherBuffers::Density {
@@ -392,10 +430,17 @@ impl ScreenReceiver {
     }
 
     /// After a frame with photon passes seen by `camera`: its blend is the next frame's
-    /// history.
-    pub fn end_frame(&mut self, camera: GpuCamera) {
+    /// history, and its photons stay in an accumulating photon map. Returns the frames
+    /// the frame's estimate holds with accumulation (0 without).
+    pub fn end_frame(&mut self, camera: GpuCamera) -> u32 {
         if let Some(f) = &mut self.filters {
             f.end_frame(camera);
+        }
+        if self.settings.accumulate {
+            self.accumulated += 1;
+            self.accumulated
+        } else {
+            0
         }
     }
 
@@ -450,10 +495,12 @@ impl ScreenReceiver {
         self.read(backend, host, o)
     }
 
-    /// Forgets the temporal history (the next frame is not blended).
+    /// Forgets the temporal history and the accumulated photons (the next frame is not
+    /// blended and starts a new accumulation).
     pub fn reset_history(&mut self) {
         if let Some(f) = &mut self.filters {
             f.reset();
         }
+        self.restart_accumulation();
     }
 }

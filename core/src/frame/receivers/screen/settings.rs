@@ -86,6 +86,12 @@ pub struct ScreenSettings {
     /// keep (Eq. 18's bounds; the chapter gives no value: 1 by default). 0 keeps none (the
     /// smooth `s_n`); a large value keeps all (the unfiltered input).
     pub atrous_clip_sigmas: f32,
+    /// Progressive accumulation: while the camera, lights, scene and settings stay, every
+    /// frame adds its photons (traced with a new seed) to the photon map of the frames
+    /// before, and the resolve and filter read the sum as one frame of all their photons
+    /// (N frames of M photons: the estimate of one frame of N x M). Any change starts
+    /// again from the next frame's photons. Off by default.
+    pub accumulate: bool,
 }
 
 impl Default for ScreenSettings {
@@ -107,6 +113,7 @@ impl Default for ScreenSettings {
             temporal: false,
             atrous_iterations: 0,
             atrous_clip_sigmas: 1.0,
+            accumulate: false,
         }
     }
 }

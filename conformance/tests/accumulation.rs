@@ -1,0 +1,159 @@
+//! Progressive accumulation (`accumulate`): N frames of M photons estimate as one frame of
+//! N x M photons. Measured on the CPU backend against a reference of 16 times the
+//! largest photon count: the relative L2 error of the accumulated estimate is that of one
+//! frame of all its photons, and the raw estimate's error falls as 1/sqrt(frames) over 1
+//! to 64 frames; a moved camera starts the accumulation again.
+//!
+//! Tolerances. The relative L2 error is a mean over the caustic mask's pixels (a few
+//! hundred at 96x54), each an independent photon count, so two estimates of one error
+//! differ by about 1/sqrt(2 pixels) ~ 5%; 0.8..1.25 is four such deviations. The
+//! reference's own noise (a quarter of the largest test count's, its photons 16 times
+//! theirs) is removed in quadrature before the slope is taken; the slope of four points
+//! over a factor 64 in photons carries the same 5% per point, 0.06 in the exponent: -0.5
+//! within 0.1.
+
+use caustica_core::frame::image::Image;
+use caustica_core::frame::metrics::compare;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::Scene;
+use caustica_core::techniques::create;
+use caustica_core::Backend;
+
+fn scene() -> Scene {
+    let mut s = builtin("sphere").expect("built-in");
+    (s.camera.width, s.camera.height) = (96, 54);
+    s
+}
+
+/// `output` after `frames` frames of `technique` with `side`^2 photons, accumulating.
+fn estimate(
+    b: &mut dyn Backend,
+    technique: &str,
+    side: u32,
+    frames: u32,
+    output: &str,
+    extra: serde_json::Value,
+) -> Image {
+    let mut settings = serde_json::json!({
+        "photons_w": side, "photons_h": side, "accumulate": frames > 1,
+    });
+    if let (Some(s), Some(e)) = (settings.as_object_mut(), extra.as_object()) {
+        s.extend(e.clone());
+    }
+    let mut t = create(technique, b, &scene(), &settings).expect("create");
+    let mut last = None;
+    for _ in 0..frames {
+        last = Some(t.frame(b, &mut |_| {}).expect("frame"));
+    }
+    let stats = last.expect("a frame");
+    assert_eq!(
+        stats.accumulated_frames,
+        if frames > 1 { frames } else { 0 },
+        "{technique}: the frames the estimate holds"
+    );
+    let img = t.read_output(b, output).expect("read");
+    t.free(b).expect("free");
+    img
+}
+
+fn rel_l2(x: &Image, r: &Image) -> f64 {
+    compare(x, r).relative_mse.sqrt()
+}
+
+/// N frames of M photons against one frame of N x M photons, and the raw error's slope.
+fn check(technique: &str, output: &str, extra: serde_json::Value, slope: bool) {
+    let (_, mut b) = caustica_conformance::backends()
+        .into_iter()
+        .next()
+        .expect("the cpu backend");
+    let b = b.as_mut();
+    let base = 64;
+    // 16 times the photons of the largest test, with photons of their own (another seed)
+    let mut own = extra.clone();
+    if let Some(o) = own.as_object_mut() {
+        o.insert("seed".into(), serde_json::json!(0x7e57_5eed_u32));
+    }
+    let reference = estimate(b, technique, 8 * base, 64, output, own);
+    let reference_noise = |e_largest: f64| e_largest / 4.0;
+    let mut errors = Vec::new();
+    for n in [1u32, 4, 16, 64] {
+        let side = base * (n as f64).sqrt() as u32;
+        let accumulated = rel_l2(
+            &estimate(b, technique, base, n, output, extra.clone()),
+            &reference,
+        );
+        let single = rel_l2(
+            &estimate(b, technique, side, 1, output, extra.clone()),
+            &reference,
+        );
+        eprintln!("{technique} {output}: {n} frames of {base}^2: {accumulated:.5}; one frame of {side}^2: {single:.5}");
+        // one frame of all the photons is stratified over a finer grid: it can be better,
+        // never worse beyond the noise
+        assert!(
+            accumulated >= 0.8 * single,
+            "{technique} {output}: {n} frames of {base}^2 photons have error {accumulated}, \
+             below one frame of {side}^2 ({single})"
+        );
+        errors.push(accumulated);
+    }
+    if slope {
+        let r = reference_noise(errors[3]);
+        let true_error = |e: f64| (e * e - r * r).max(0.0).sqrt();
+        let s = (true_error(errors[3]) / true_error(errors[0])).ln() / 64f64.ln();
+        assert!(
+            (s + 0.5).abs() <= 0.1,
+            "{technique} {output}: error against frames has slope {s}, not -1/2 ({errors:?})"
+        );
+    }
+}
+
+#[test]
+fn sspm_accumulates_frames_as_one_frame_of_all_their_photons() {
+    let all = serde_json::json!({ "outputs": { "raw_caustics": true, "filtered_caustics": true } });
+    check("sspm", "caustics_raw", all.clone(), true);
+    check("sspm", "caustics_filtered", all, false);
+}
+
+#[test]
+fn caustic_map_accumulates_frames_as_one_frame_of_all_their_photons() {
+    let all = serde_json::json!({
+        "atlas_size": 256,
+        "outputs": { "raw_caustics": true, "filtered_caustics": true }
+    });
+    check("caustic-map", "caustics_filtered", all, false);
+}
+
+#[test]
+fn a_moved_camera_starts_the_screen_accumulation_again() {
+    let (_, mut b) = caustica_conformance::backends()
+        .into_iter()
+        .next()
+        .expect("the cpu backend");
+    let b = b.as_mut();
+    let s = scene();
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64, "accumulate": true });
+    let mut t = create("sspm", b, &s, &settings).expect("create");
+    for k in 1..=3 {
+        let st = t.frame(b, &mut |_| {}).expect("frame");
+        assert_eq!(st.accumulated_frames, k);
+    }
+    let mut camera = s.camera.clone();
+    camera.position += glam::Vec3::new(0.1, 0.0, 0.0);
+    t.set_camera(b, &camera).expect("camera");
+    let st = t.frame(b, &mut |_| {}).expect("frame");
+    assert_eq!(st.accumulated_frames, 1, "the moved camera's first frame");
+    // the first frame of an accumulation is a frame without it, bitwise
+    let moved = t.read_output(b, "composite").expect("read");
+    t.free(b).expect("free");
+    let mut fresh_scene = s.clone();
+    fresh_scene.camera = camera;
+    let plain = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
+    let mut f = create("sspm", b, &fresh_scene, &plain).expect("create");
+    f.frame(b, &mut |_| {}).expect("frame");
+    let want = f.read_output(b, "composite").expect("read");
+    f.free(b).expect("free");
+    assert!(
+        moved.pixels == want.pixels,
+        "a restarted accumulation's first frame differs"
+    );
+}
