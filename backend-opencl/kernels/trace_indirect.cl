@@ -7,9 +7,6 @@
 // direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Photons are 32-byte slots,
 // two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
 
-// core::kernels::VISIBLE_TOLERANCE: within 1% of the depth of the pixel's tangent plane.
-#define VISIBLE_TOLERANCE (-0.01f)
-
 inline void store_indirect(__global const IndirectTraceParams* p, float3 position,
                            float3 geometric_normal, float3 dir, float ray_length, float3 flux,
                            __global uint4* photons, uint photon_capacity,

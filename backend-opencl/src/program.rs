@@ -1,5 +1,6 @@
-//! The OpenCL C programs: the shared files under `kernels/common/` (mirrors of core's
-//! scalar functions and Pod structs, [`COMMON`]) and one file per registry kernel directly
+//! The OpenCL C programs: the shared files under `kernels/common/` ([`COMMON`]: the
+//! generated `layout.cl` with core's Pod structs and shared constants, then `prelude.cl`
+//! and the mirrors of core's scalar functions) and one file per registry kernel directly
 //! under `kernels/` ([`KERNELS`]). Kernels without variants are compiled together as one
 //! program; a kernel with compiled variants ([`VARIANT_KERNELS`]) gets one
 //! program per variant, the common files and its own file built with `-D NAME=0/1` for
@@ -16,7 +17,8 @@ use opencl3::types::cl_device_id;
 /// The shared files of `kernels/common/`, in dependency order (a file uses only the ones
 /// before it): `(file name, text)`.
 pub const COMMON: &[(&str, &str)] = &[
-    ("types.cl", include_str!("../kernels/common/types.cl")),
+    ("layout.cl", include_str!("../kernels/common/layout.cl")),
+    ("prelude.cl", include_str!("../kernels/common/prelude.cl")),
     ("vector.cl", include_str!("../kernels/common/vector.cl")),
     ("rng.cl", include_str!("../kernels/common/rng.cl")),
     ("sampling.cl", include_str!("../kernels/common/sampling.cl")),

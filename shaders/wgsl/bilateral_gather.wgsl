@@ -1,4 +1,4 @@
-// needs: types vector optics footprint gbuffer
+// needs: layout prelude vector optics footprint gbuffer
 // bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
 // photon gather. Mirror of backend-opencl/kernels/bilateral_gather.cl and
 // backend-cpu/src/kernels/gather.rs.

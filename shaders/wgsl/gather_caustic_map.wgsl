@@ -1,4 +1,4 @@
-// needs: types vector atlas photon_map map_gather
+// needs: layout prelude vector atlas photon_map map_gather
 // gather_caustic_map (seed 001 section 3.1, "Denoising"): per atlas texel, the
 // flux-keeping N x N gather inside its tile, as irradiance. Mirror of
 // backend-opencl/kernels/gather_caustic_map.cl and backend-cpu/src/kernels/caustic_map.rs.

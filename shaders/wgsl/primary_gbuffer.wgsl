@@ -1,4 +1,4 @@
-// needs: types vector packing geometry traversal scene
+// needs: layout prelude vector packing geometry traversal scene
 // primary_gbuffer: one camera ray per pixel; mirror of backend-opencl/kernels/
 // primary_gbuffer.cl and backend-cpu/src/kernels/gbuffer.rs.
 

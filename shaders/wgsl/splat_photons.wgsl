@@ -1,4 +1,4 @@
-// needs: types vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
+// needs: layout prelude vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
 // splat_photons (seed 003 section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat
 // adds its irradiance times each covered receiver pixel's area to the photon map in fixed
 // point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_setup, splat_pixel) and
@@ -69,7 +69,7 @@ struct SplatSetup {
 
 var<workgroup> setups: array<SplatSetup, WORKGROUP_SIZE>;
 // first pixel of each splat in the group's run of pixels; [WORKGROUP_SIZE]: their total
-var<workgroup> starts: array<u32, 65>; // WORKGROUP_SIZE + 1
+var<workgroup> starts: array<u32, WORKGROUP_SIZE + 1u>;
 
 fn no_splat() -> SplatSetup {
     var s: SplatSetup;

@@ -1,4 +1,4 @@
-// needs: types photon_map
+// needs: layout prelude photon_map
 // tile_hit_distance (seed 000 section 30.3.2): photon-weighted mean hit distance per
 // tile_size^2 tile, 0 for empty tiles. Mirror of backend-opencl/kernels/
 // tile_hit_distance.cl and backend-cpu/src/kernels/gather.rs. The u64 sums are (lo, hi)

@@ -1,4 +1,4 @@
-// needs: types vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
+// needs: layout prelude vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
 // trace_indirect (seed 003 section 24.2.2): photon params.first + coherent_sample_order(i)
 // of the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled
 // to the camera's view and facing side, counted per screen tile) at every diffuse hit
@@ -23,9 +23,6 @@
 @group(0) @binding(11) var<storage, read> gbuffer0: array<vec4<u32>>;
 @group(0) @binding(12) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(13) var<storage, read> gbuffer3: array<vec4<u32>>;
-
-// core::kernels::VISIBLE_TOLERANCE: within 1% of the depth of the pixel's tangent plane.
-const VISIBLE_TOLERANCE: f32 = -0.01;
 
 // The work-group's counters (fixed_point.wgsl).
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;

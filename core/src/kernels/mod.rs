@@ -44,7 +44,7 @@ pub use caustic_map_lookup::CausticMapLookup;
 pub use composite::Composite;
 pub use density_gather::DensityGather;
 pub use deposit_screen::DepositScreen;
-pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
+pub use direct_light::DirectLight;
 pub use gather_caustic_map::GatherCausticMap;
 pub use gather_footprint::GatherFootprint;
 pub use photon_count_table::PhotonCountTable;
@@ -58,13 +58,14 @@ pub use shading_normal_correction::ShadingNormalCorrection;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
-pub use trace_indirect::{TraceIndirect, VISIBLE_TOLERANCE};
+pub use trace_indirect::TraceIndirect;
 pub use trace_photons::{AtlasDeposit, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant};
 
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
-pub use crate::device::launch::{variant_label, variant_labels};
+pub use crate::device::launch::{variant_label, variant_labels, DEFAULT_WORKGROUP_SIZE};
 use crate::device::launch::{Launch, LaunchArg};
+pub use crate::device::layout::{MAX_SPECULAR_DEPTH, VISIBLE_TOLERANCE};
 
 /// How a kernel binds one of its launch arguments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -143,9 +144,6 @@ pub struct KernelInfo {
     /// Techniques that use it.
     pub used_by: &'static str,
 }
-
-/// Threads per workgroup of the kernels that do not say otherwise.
-pub const DEFAULT_WORKGROUP_SIZE: u32 = 64;
 
 impl KernelInfo {
     /// A compute kernel (no ray tracing, no switches) of [`DEFAULT_WORKGROUP_SIZE`].
