@@ -1,6 +1,6 @@
 // photon_count_table: one direction of the blocked summed-area table of the photon
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
-// backend-cpu/src/kernels/density_gather.rs and shaders/wgsl/photon_count_table.wgsl.
+// backend-cpu/src/kernels/photon_count_table.rs and shaders/wgsl/photon_count_table.wgsl.
 // Axis 0: a work-group per row and block; 1: a work-group per eight columns of a block, in
 // place. Wrapping uint sums: exact, the same bits on every backend. Axis 1 also writes
 // every pixel's edge texel (on the screen; the atlas's come with its layout).

@@ -65,76 +65,18 @@ pub const COMMON: &[(&str, &str)] = &[
     ),
 ];
 
-/// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
-/// the order they are appended to the program text.
-pub const KERNELS: &[(&str, &str)] = &[
-    (
-        "primary_gbuffer",
-        include_str!("../kernels/primary_gbuffer.cl"),
-    ),
-    ("direct_light", include_str!("../kernels/direct_light.cl")),
-    ("trace_photons", include_str!("../kernels/trace_photons.cl")),
-    (
-        "deposit_screen",
-        include_str!("../kernels/deposit_screen.cl"),
-    ),
-    (
-        "resolve_caustics",
-        include_str!("../kernels/resolve_caustics.cl"),
-    ),
-    (
-        "tile_hit_distance",
-        include_str!("../kernels/tile_hit_distance.cl"),
-    ),
-    (
-        "bilateral_gather",
-        include_str!("../kernels/bilateral_gather.cl"),
-    ),
-    (
-        "photon_count_table",
-        include_str!("../kernels/photon_count_table.cl"),
-    ),
-    (
-        "gather_footprint",
-        include_str!("../kernels/gather_footprint.cl"),
-    ),
-    (
-        "density_gather",
-        include_str!("../kernels/density_gather.cl"),
-    ),
-    ("composite", include_str!("../kernels/composite.cl")),
-    (
-        "gather_caustic_map",
-        include_str!("../kernels/gather_caustic_map.cl"),
-    ),
-    (
-        "caustic_map_lookup",
-        include_str!("../kernels/caustic_map_lookup.cl"),
-    ),
-    (
-        "refine_clusters",
-        include_str!("../kernels/refine_clusters.cl"),
-    ),
-    (
-        "temporal_blend",
-        include_str!("../kernels/temporal_blend.cl"),
-    ),
-    ("atrous_filter", include_str!("../kernels/atrous_filter.cl")),
-    (
-        "shading_normal_correction",
-        include_str!("../kernels/shading_normal_correction.cl"),
-    ),
-    (
-        "rsm_importance",
-        include_str!("../kernels/rsm_importance.cl"),
-    ),
-    ("sample_rsm", include_str!("../kernels/sample_rsm.cl")),
-    (
-        "trace_indirect",
-        include_str!("../kernels/trace_indirect.cl"),
-    ),
-    ("splat_photons", include_str!("../kernels/splat_photons.cl")),
-];
+macro_rules! kernel_table {
+    ($($name:ident),* $(,)?) => {
+        /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
+        /// the order they are appended to the program text, which is core's
+        /// (`caustica_core::with_shader_kernels!`), so a new kernel needs no row here.
+        pub const KERNELS: &[(&str, &str)] = &[$((
+            stringify!($name),
+            include_str!(concat!("../kernels/", stringify!($name), ".cl")),
+        ),)*];
+    };
+}
+caustica_core::with_shader_kernels!(kernel_table);
 
 /// Kernels compiled per variant, in programs of their own.
 pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
@@ -150,7 +92,7 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 /// was the experiment that found the cost). `splat_photons` divides three times per
 /// pixel of a splat's square (`kernel_contains`); its tolerance (`SPLAT_REL`, 40 ulp a
 /// contribution, and the containment flips near 1 that `DEPOSIT_TEXEL_AGREEMENT` allows
-/// for: conformance/src/kernels/photon_gi.rs) is argued for WGSL's bounds too. At the
+/// for: conformance/src/kernels/splat_photons.rs) is argued for WGSL's bounds too. At the
 /// chapter's high setting on the H200 it took 9.7 ms here against 14.8 in the main
 /// program (both with staged G-buffer loads; `docs/gpu/h200-session14-photon-gi.log`).
 pub const RELAXED_DIVISION_KERNELS: &[&str] =

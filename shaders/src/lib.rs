@@ -76,75 +76,18 @@ pub const COMMON: &[(&str, &str)] = &[
     ("photon_gi", include_str!("../wgsl/common/photon_gi.wgsl")),
 ];
 
-/// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`).
-pub const KERNELS: &[(&str, &str)] = &[
-    (
-        "primary_gbuffer",
-        include_str!("../wgsl/primary_gbuffer.wgsl"),
-    ),
-    ("direct_light", include_str!("../wgsl/direct_light.wgsl")),
-    ("trace_photons", include_str!("../wgsl/trace_photons.wgsl")),
-    (
-        "deposit_screen",
-        include_str!("../wgsl/deposit_screen.wgsl"),
-    ),
-    (
-        "resolve_caustics",
-        include_str!("../wgsl/resolve_caustics.wgsl"),
-    ),
-    (
-        "tile_hit_distance",
-        include_str!("../wgsl/tile_hit_distance.wgsl"),
-    ),
-    (
-        "bilateral_gather",
-        include_str!("../wgsl/bilateral_gather.wgsl"),
-    ),
-    (
-        "photon_count_table",
-        include_str!("../wgsl/photon_count_table.wgsl"),
-    ),
-    (
-        "gather_footprint",
-        include_str!("../wgsl/gather_footprint.wgsl"),
-    ),
-    (
-        "density_gather",
-        include_str!("../wgsl/density_gather.wgsl"),
-    ),
-    ("composite", include_str!("../wgsl/composite.wgsl")),
-    (
-        "gather_caustic_map",
-        include_str!("../wgsl/gather_caustic_map.wgsl"),
-    ),
-    (
-        "caustic_map_lookup",
-        include_str!("../wgsl/caustic_map_lookup.wgsl"),
-    ),
-    (
-        "refine_clusters",
-        include_str!("../wgsl/refine_clusters.wgsl"),
-    ),
-    (
-        "temporal_blend",
-        include_str!("../wgsl/temporal_blend.wgsl"),
-    ),
-    ("atrous_filter", include_str!("../wgsl/atrous_filter.wgsl")),
-    (
-        "shading_normal_correction",
-        include_str!("../wgsl/shading_normal_correction.wgsl"),
-    ),
-    (
-        "rsm_importance",
-        include_str!("../wgsl/rsm_importance.wgsl"),
-    ),
-    ("sample_rsm", include_str!("../wgsl/sample_rsm.wgsl")),
-    (
-        "trace_indirect",
-        include_str!("../wgsl/trace_indirect.wgsl"),
-    ),
-    ("splat_photons", include_str!("../wgsl/splat_photons.wgsl")),
-];
+macro_rules! kernel_table {
+    ($($name:ident),* $(,)?) => {
+        /// The kernel files, as (registry kernel name, text of `wgsl/<name>.wgsl`): one per
+        /// kernel of core's list that has shader code, in its order
+        /// (`caustica_core::with_shader_kernels!`), so a new kernel needs no row here.
+        pub const KERNELS: &[(&str, &str)] = &[$((
+            stringify!($name),
+            include_str!(concat!("../wgsl/", stringify!($name), ".wgsl")),
+        ),)*];
+    };
+}
+caustica_core::with_shader_kernels!(kernel_table);
 
 /// The kernels with compiled variants: their modules declare pipeline-overridable
 /// constants named as core's `TraceVariant` switches, so the wgpu backend builds one

@@ -1,19 +1,17 @@
 //! `gather_caustic_map` and the density gather on a caustic atlas, the first part of
 //! CausticMap's check ([`super::caustic_map_lookup::check_caustic_map`], which has the
 //! setup):
-//! `gather_caustic_map` (N = 3, and N = 1: the raw map; N = 3 once more with every
-//! tile's `TILE_FULLY_COVERED` flag cleared on the backend under test, so that its
-//! counting of each source's covered texels is checked against the flag's shortcut on
-//! the CPU) on the CPU's sums: per texel a
-//! sum of at most `N^2` sources, each converted exactly (a power-of-two quantum times a
-//! u64 split in two exact f32 parts and one rounding) and divided by a count and by the
-//! area, i.e. at most `N^2 + 3` roundings of `2^-24` each, plus WGSL/SPIR-V's division
-//! (2.5 ulp): relative `GATHER_REL` (1e-5 >> 14 ulp) of the texel's value, absolute
-//! `1e-30` for zero texels.
+//! - `gather_caustic_map` (N = 3, and N = 1: the raw map; N = 3 once more with every
+//!   tile's `TILE_FULLY_COVERED` flag cleared on the backend under test, so that its
+//!   counting of each source's covered texels is checked against the flag's shortcut on
+//!   the CPU) on the CPU's sums: per texel a sum of at most `N^2` sources, each converted
+//!   exactly (a power-of-two quantum times a u64 split in two exact f32 parts and one
+//!   rounding) and divided by a count and by the area, i.e. at most `N^2 + 3` roundings
+//!   of `2^-24` each, plus WGSL/SPIR-V's division (2.5 ulp): relative `GATHER_REL` (1e-5
+//!   >> 14 ulp) of the texel's value, absolute `1e-30` for zero texels.
 //! - the density gather on the atlas (`gather: density`): `photon_count_table` bitwise,
-//! `gather_footprint` and both `density_gather` passes as on the screen
-//! ([`check_atlas_density_gather`]).
-
+//!   `gather_footprint` and both `density_gather` passes as on the screen
+//!   (`check_atlas_density_gather`).
 use super::density_gather::{compare, flush_allowance, tap_sum};
 use crate::harness::fixture::{run_and_free, Fixture};
 use crate::harness::tolerance::DENSITY_GATHER_REL;
@@ -131,6 +129,9 @@ pub(crate) fn run_gather(
     run_and_free(b, "gather_caustic_map", &rec, |b| read_buf(b, out))
 }
 
+/// An image of RGBA texels.
+pub(crate) type Image = Vec<[f32; 4]>;
+
 /// The gather's part of the check: the CPU's deposit of generated photons into atlas
 /// `l` (its reach mask exactly the photons' triangles) gathered on both backends at
 /// N = 3 (as laid out, then counted on the candidate) and N = 1. Returns the CPU's sums
@@ -140,7 +141,7 @@ pub(crate) fn compare_gather(
     l: &AtlasLayout,
     r: &mut dyn Backend,
     c: &mut dyn Backend,
-) -> Result<(Vec<DepositTexel>, Vec<Vec<[f32; 4]>>), String> {
+) -> Result<(Vec<DepositTexel>, Vec<Image>), String> {
     let ph = photons(l, 4096);
     // the gather's input: the CPU's deposit of the generated photons (the deposit itself
     // is check_fused_trace's), its reach mask exactly the photons' triangles

@@ -10,7 +10,7 @@
 //!    `splat_photons` ([`super::splat_photons`]), each on the reference's output of the
 //!    one before, each module saying what it compares and why;
 //! 5. `shading_normal_correction` on the reference's splat direction sums
-//!    ([`compare_correction`]): where Eq. 20 does not apply (no receiver, no splat, or a
+//!    (`compare_correction`): where Eq. 20 does not apply (no receiver, no splat, or a
 //!    shading normal that does not depart from the geometric one) the input passes
 //!    through bitwise; elsewhere the factor is within 16 ulp of the mean direction's
 //!    cancellation.

@@ -1,8 +1,9 @@
 //! `splat_photons` on the reference's stored photons, tile counts and camera G-buffer:
 //! a pixel's sum changes only where a splat's containment test (a sum of three squared
 //! ratios against 1) or its reach (a `ceil`) lands within a few ulps of the threshold,
-//! ~1e-5 of the splat-pixel pairs: at least [`DEPOSIT_TEXEL_AGREEMENT`] of the texels
-//! must hold the same number of splats, and those within [`SPLAT_REL`] of the flux
+//! ~1e-5 of the splat-pixel pairs: at least
+//! [`DEPOSIT_TEXEL_AGREEMENT`](crate::harness::tolerance::DEPOSIT_TEXEL_AGREEMENT) of the
+//! texels must hold the same number of splats, and those within [`SPLAT_REL`] of the flux
 //! plus one quantum per splat (each contribution `E x area` carries ~40 ulp: the
 //! kernel's normalisations, square roots and divisions, the pixel area's footprint;
 //! rounding to quanta moves each by at most one unit).

@@ -127,11 +127,11 @@ pub(crate) fn compare_indirect(
         || format!("light {l}: tile counts do not add up to the stored photons"),
     );
     let ends = |c: &[u32]| c[counter::ESCAPED] + c[counter::NEGLIGIBLE] + c[counter::BOUNCE_LIMIT];
-    v.check(ends(&ca) == SAMPLES && ends(&cb) == SAMPLES, || {
+    v.check(ends(ca) == SAMPLES && ends(cb) == SAMPLES, || {
         format!(
             "light {l}: path ends {} / {} of {SAMPLES}",
-            ends(&ca),
-            ends(&cb)
+            ends(ca),
+            ends(cb)
         )
     });
     for ch in 0..3 {
@@ -158,8 +158,8 @@ pub(crate) fn compare_indirect(
         });
     }
     let diagonal = (fx.ds.bounds.max - fx.ds.bounds.min).length();
-    let unmatched_ab = unmatched(&pha, &phb, diagonal);
-    let unmatched_ba = unmatched(&phb, &pha, diagonal);
+    let unmatched_ab = unmatched(pha, phb, diagonal);
+    let unmatched_ba = unmatched(phb, pha, diagonal);
     let allow_match = ((1.0 - PHOTON_MATCH) * stored as f64).ceil() as u64 + 2;
     v.check(
         unmatched_ab <= allow_match && unmatched_ba <= allow_match,
