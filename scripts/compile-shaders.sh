@@ -11,8 +11,8 @@
 #   2. validates spirv/<stage>.spv with spirv-val --target-env vulkan1.2;
 #   3. checks with spirv-dis that every float add, sub, mul, div (and vector-times-scalar,
 #      dot, mod, rem, matrix product) carries NoContraction, i.e. that `precise` reached
-#      every float operation (types.glsl says why): the kernels must round as the Rust
-#      reference, which never fuses a * b + c;
+#      every float operation (common/prelude.glsl says why): the kernels must round as
+#      the Rust reference, which never fuses a * b + c;
 #   4. records one line in spirv/SOURCES.sha256.
 # The struct layouts in the result are then checked against core's by
 # backend-vulkan/tests/glsl_layouts.rs (cargo test -p caustica-vulkan).

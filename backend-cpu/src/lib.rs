@@ -10,6 +10,7 @@
 //! order, and the screen photon map is summed with integer atomics, so every result is
 //! bitwise identical across runs and thread counts.
 
+pub mod atlas_deposit;
 pub mod kernels;
 mod storage;
 pub mod traversal;
@@ -110,7 +111,7 @@ impl CpuBackend {
             }) => {
                 let pixels = camera.width as u64 * camera.height as u64;
                 reserve_temporary::<GBufferTexel>(pixels, "the G-buffer")?;
-                let out = gbuffer::primary_gbuffer(&view(scene)?, camera);
+                let out = primary_gbuffer::primary_gbuffer(&view(scene)?, camera);
                 // plane by plane, with no second copy of the G-buffer (8192^2: 4 GiB)
                 for (k, b) in gbuffer.planes.iter().enumerate() {
                     use rayon::prelude::*;
@@ -179,7 +180,7 @@ impl CpuBackend {
                     return Ok(());
                 }
                 if let Some(FusedDeposit::Atlas(d)) = fused {
-                    // the fused pass into the atlas, as caustic_map::deposit_atlas adds them
+                    // the fused pass into the atlas, as atlas_deposit::deposit_atlas adds them
                     return self.deposit_atlas_photons(&d, &result.photons, *counters);
                 }
                 if result.photons.len() > photons.len as usize {
@@ -221,7 +222,7 @@ impl CpuBackend {
                 let g = self.gbuffer(gbuffer)?;
                 let m = self.photon_map(photon_map)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the raw caustics image")?;
-                let img = deposit_screen::resolve_caustics(params, g, m);
+                let img = resolve_caustics::resolve_caustics(params, g, m);
                 self.put(out.id, &img)
             }
             Kernel::TileHitDistance(TileHitDistance {
@@ -231,7 +232,7 @@ impl CpuBackend {
             }) => {
                 let m = self.photon_map(photon_map)?;
                 reserve_temporary::<f32>(tiles.len as u64, "the hit-distance tiles")?;
-                let t = gather::tile_hit_distance(params, m);
+                let t = tile_hit_distance::tile_hit_distance(params, m);
                 self.put(tiles.id, &t)
             }
             Kernel::BilateralGather(BilateralGather {
@@ -245,7 +246,7 @@ impl CpuBackend {
                 let t = get(tiles.id)?.as_slice(tiles.len)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
-                let img = gather::bilateral_gather(params, g, t, i);
+                let img = bilateral_gather::bilateral_gather(params, g, t, i);
                 self.put(out.id, &img)
             }
             Kernel::PhotonCountTable(PhotonCountTable {
@@ -260,23 +261,23 @@ impl CpuBackend {
                         let m = self.photon_map(photon_map)?;
                         reserve_temporary::<u32>(table.len as u64, "the photon count table")?;
                         let mut rows = vec![0u32; table.len as usize];
-                        density_gather::photon_count_rows(params, m, &mut rows);
+                        photon_count_table::photon_count_rows(params, m, &mut rows);
                         rows
                     };
                     self.put(table.id, &rows)
                 } else if params.surface == gather_surface::ATLAS {
                     // the atlas's edge texels come with its layout
                     let t = self.get_mut(table.id)?.as_mut_slice(table.len)?;
-                    density_gather::photon_count_columns(params, t);
+                    photon_count_table::photon_count_columns(params, t);
                     Ok(())
                 } else {
                     let edges = {
                         let g = self.gbuffer(gbuffer)?;
                         reserve_temporary::<[f32; 4]>(edge.len as u64, "the edge texels")?;
-                        density_gather::edge_texels(g, edge.len as usize)
+                        photon_count_table::edge_texels(g, edge.len as usize)
                     };
                     let t = self.get_mut(table.id)?.as_mut_slice(table.len)?;
-                    density_gather::photon_count_columns(params, t);
+                    photon_count_table::photon_count_columns(params, t);
                     self.put(edge.id, &edges)
                 }
             }
@@ -292,9 +293,9 @@ impl CpuBackend {
                 let t = get(table.id)?.as_slice(table.len)?;
                 let e = get(edge.id)?.as_slice(edge.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
-                let img = density_gather::gather_footprint(params, e, m, t);
+                let img = gather_footprint::gather_footprint(params, e, m, t);
                 let sources = get(source_index.id)?.as_slice(source_index.len)?;
-                let sources = density_gather::source_index(params, 0, sources, &img);
+                let sources = gather_footprint::source_index(params, 0, sources, &img);
                 self.put(out.id, &img)?;
                 self.put(source_index.id, &sources)
             }
@@ -314,7 +315,7 @@ impl CpuBackend {
                 let img = density_gather::density_gather(params, g, e, i, sources);
                 if params.axis == 0 {
                     // the row pass's output: the column pass's sources
-                    let sources = density_gather::source_index(params, 1, sources, &img);
+                    let sources = gather_footprint::source_index(params, 1, sources, &img);
                     self.put(source_index.id, &sources)?;
                 }
                 self.put(out.id, &img)
@@ -385,7 +386,7 @@ impl CpuBackend {
                 let tl = get(tiles.id)?.as_slice(tiles.len)?;
                 let m = self.photon_map(atlas)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the caustic map")?;
-                let img = caustic_map::gather_caustic_map(params, tx, tl, m);
+                let img = gather_caustic_map::gather_caustic_map(params, tx, tl, m);
                 self.put(out.id, &img)
             }
             Kernel::CausticMapLookup(CausticMapLookup {
@@ -402,7 +403,8 @@ impl CpuBackend {
                 let tx = get(texels.id)?.as_slice(texels.len)?;
                 let m = get(map.id)?.as_slice(map.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the caustics image")?;
-                let img = caustic_map::caustic_map_lookup(&view(scene)?, params, tt, tl, tx, m);
+                let img =
+                    caustic_map_lookup::caustic_map_lookup(&view(scene)?, params, tt, tl, tx, m);
                 self.put(out.id, &img)
             }
             Kernel::ShadingNormalCorrection(ShadingNormalCorrection {
@@ -416,7 +418,7 @@ impl CpuBackend {
                 let d = self.photon_map(direction_map)?;
                 let i = get(input.id)?.as_slice(input.len)?;
                 reserve_temporary::<[f32; 4]>(out.len as u64, "the shading-normal correction")?;
-                let img = photon_gi::shading_normal_correction(params, g, d, i);
+                let img = shading_normal_correction::shading_normal_correction(params, g, d, i);
                 self.put(out.id, &img)
             }
             Kernel::Composite(Composite {
@@ -469,7 +471,12 @@ impl CpuBackend {
                         (0..n)
                             .into_par_iter()
                             .map(|i| {
-                                photon_gi::rsm_texel(params, &light, &g.load_gbuffer(i), i as u32)
+                                rsm_importance::rsm_texel(
+                                    params,
+                                    &light,
+                                    &g.load_gbuffer(i),
+                                    i as u32,
+                                )
                             })
                             .unzip()
                     };
@@ -480,7 +487,7 @@ impl CpuBackend {
                         [f * plen..f * plen + n]
                         .copy_from_slice(&imp);
                 } else {
-                    photon_gi::rsm_level(
+                    rsm_importance::rsm_level(
                         params,
                         self.get_mut(pyramid.id)?.as_mut_slice(pyramid.len)?,
                     );
@@ -501,7 +508,7 @@ impl CpuBackend {
                 let t = get(texels.id)?.as_slice(texels.len)?;
                 let pyr = get(pyramid.id)?.as_slice(pyramid.len)?;
                 reserve_temporary::<RsmPhoton>(params.sample_count as u64, "the RSM photons")?;
-                let out = photon_gi::sample_rsm(params, &light, t, pyr);
+                let out = sample_rsm::sample_rsm(params, &light, t, pyr);
                 let first = params.first_sample as usize;
                 self.get_mut(photons.id)?
                     .as_mut_slice::<RsmPhoton>(photons.len)?[first..first + out.len()]
@@ -521,7 +528,7 @@ impl CpuBackend {
                 let rsm = get(rsm_photons.id)?.as_slice::<RsmPhoton>(rsm_photons.len)?;
                 let g = self.gbuffer(gbuffer)?;
                 reserve_temporary::<[u32; 8]>(params.count as u64, "an indirect photon batch")?;
-                let r = photon_gi::trace_indirect(
+                let r = trace_indirect::trace_indirect(
                     &view(scene)?,
                     params,
                     rsm,
@@ -569,7 +576,7 @@ impl CpuBackend {
                 let g = self.gbuffer(gbuffer)?;
                 let atomics = map_atomics(photon_map)?;
                 let directions = map_atomics(direction_map)?;
-                let c = photon_gi::splat_photons(params, g, ph, tc, atomics, directions);
+                let c = splat_photons::splat_photons(params, g, ph, tc, atomics, directions);
                 c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
                 Ok(())
             }
@@ -631,7 +638,6 @@ impl CpuBackend {
         ph: &[Photon],
         counters: caustica_core::device::handle::Buf<u32>,
     ) -> Result<(), BackendError> {
-        use kernels::caustic_map;
         let c = {
             let tt = self
                 .get(d.triangle_tiles.id)?
@@ -643,12 +649,12 @@ impl CpuBackend {
                 self.get(b.id)?.as_atomic_u64(b.bytes())?,
                 self.get(c.id)?.as_atomic_u64(c.bytes())?,
             ];
-            caustic_map::deposit_atlas(&d.params, tt, tl, ph, atomics)
+            atlas_deposit::deposit_atlas(&d.params, tt, tl, ph, atomics)
         };
         let reach = self
             .get_mut(d.triangle_reach.id)?
             .as_mut_slice::<u32>(d.triangle_reach.len)?;
-        caustic_map::mark_triangle_reach(ph, reach);
+        atlas_deposit::mark_triangle_reach(ph, reach);
         c.add_to(self.get_mut(counters.id)?.as_mut_slice(counters.len)?);
         Ok(())
     }

@@ -1,5 +1,5 @@
 // bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
-// photon gather. Mirror of backend-cpu/src/kernels/gather.rs.
+// photon gather. Mirror of backend-cpu/src/kernels/bilateral_gather.rs.
 
 // Gather radius in pixels at a receiver pixel.
 inline float gather_radius_px(__global const GatherParams* p, const GBufferTexel* g,

@@ -1,6 +1,6 @@
 // caustic_map_lookup (seed 001 section 3.3): the camera ray's specular tree
 // (common/specular_tree.cl) reads the caustic map of each diffuse surface it ends on.
-// Mirror of backend-cpu/src/kernels/caustic_map.rs.
+// Mirror of backend-cpu/src/kernels/caustic_map_lookup.rs.
 
 __kernel void caustic_map_lookup(SCENE_PARAMS, __global const MapLookupParams* p,
                                  __global const uint* triangle_tiles, __global const uint4* tiles,

@@ -1,6 +1,6 @@
 // gather_caustic_map (seed 001 section 3.1, "Denoising"): per atlas texel, the
 // flux-keeping N x N gather inside its tile, as irradiance. Mirror of
-// backend-cpu/src/kernels/caustic_map.rs.
+// backend-cpu/src/kernels/gather_caustic_map.rs.
 
 __kernel void gather_caustic_map(__global const AtlasParams* p, __global const uint2* texels,
                                  __global const uint4* tiles,

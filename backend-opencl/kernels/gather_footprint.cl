@@ -1,6 +1,6 @@
 // gather_footprint: per receiver pixel its k-NN gather radius and its flux over its row
 // normaliser (core/src/math/density_gather.rs). Mirror of
-// backend-cpu/src/kernels/density_gather.rs.
+// backend-cpu/src/kernels/gather_footprint.rs.
 
 // A pixel's deposited flux (W per channel) from the photon map's fixed-point sums.
 inline float3 pixel_flux(PHOTON_MAP_PARAMS(__global const), uint i, float quantum) {

@@ -1,17 +1,14 @@
 // photon_count_table: one direction of the blocked summed-area table of the photon
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
-// backend-cpu/src/kernels/density_gather.rs and shaders/wgsl/photon_count_table.wgsl.
+// backend-cpu/src/kernels/photon_count_table.rs and shaders/wgsl/photon_count_table.wgsl.
 // Axis 0: a work-group per row and block; 1: a work-group per eight columns of a block, in
 // place. Wrapping uint sums: exact, the same bits on every backend. Axis 1 also writes
 // every pixel's edge texel (on the screen; the atlas's come with its layout).
 
-// Threads of a work-group (the launch's 64); table_block is a power of two of at least
-// 64, so each work-item of a row block takes table_block / 64 pixels. The column pass
-// cuts a block's column into COLUMN_CHUNKS chunks; a work-group takes SCAN_COLUMNS
-// neighbouring columns (core/src/math/density_gather.rs).
-#define SCAN_THREADS 64u
-#define COLUMN_CHUNKS 8u
-#define SCAN_COLUMNS 8u
+// SCAN_THREADS (layout.cl): the threads of a work-group (the launch's 64); table_block
+// is a power of two of at least 64, so each work-item of a row block takes table_block /
+// 64 pixels. The column pass cuts a block's column into COLUMN_CHUNKS chunks; a
+// work-group takes SCAN_COLUMNS neighbouring columns (core/src/math/density_gather.rs).
 
 // One Hillis-Steele step of the work-group's inclusive scan.
 void scan_step(__local uint* scratch, uint li, uint d) {

@@ -1,4 +1,4 @@
-// primary_gbuffer: one camera ray per pixel; mirror of backend-cpu/src/kernels/gbuffer.rs.
+// primary_gbuffer: one camera ray per pixel; mirror of backend-cpu/src/kernels/primary_gbuffer.rs.
 
 __kernel void primary_gbuffer(SCENE_PARAMS, __global const GpuCamera* cam,
                               GBUFFER_PARAMS(__global)) {

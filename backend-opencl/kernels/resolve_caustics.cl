@@ -1,6 +1,6 @@
 // resolve_caustics (seed 000 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
 // fixed-point flux sum; alpha = mean hit distance. Mirror of
-// backend-cpu/src/kernels/deposit_screen.rs::resolve_caustics, which scales in f64. Where
+// backend-cpu/src/kernels/resolve_caustics.rs::resolve_caustics, which scales in f64. Where
 // the device has doubles (cl_khr_fp64: PoCL, NVIDIA) this does the same f64 operations and
 // matches bitwise; otherwise the 64-bit sums are split exactly into hi * 2^32 and lo and
 // scaled in f32, a few f32 roundings (<= ~4 ulp) away from the CPU.

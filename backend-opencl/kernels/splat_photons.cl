@@ -5,13 +5,13 @@
 // thread (splat_pixel), so that neighbouring threads test neighbouring pixels of one splat
 // (their G-buffer loads coalesce) and every thread gets the same share (a large splat does
 // not hold up the rest of its warp). The sums are exact integers, so the order is free.
-// Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_setup, splat_pixel) and
+// Mirror of backend-cpu/src/kernels/splat_photons.rs (splat_setup, splat_pixel) and
 // shaders/wgsl/splat_photons.wgsl.
 
 // threads per workgroup (core::kernels::DEFAULT_WORKGROUP_SIZE, the launch's local size)
 #define SPLAT_GROUP 64
 
-// backend-cpu photon_gi::SplatSetup: what every pixel test of one splat reads.
+// backend-cpu splat_photons::SplatSetup: what every pixel test of one splat reads.
 typedef struct {
     SplatKernel ellipsoid;
     float3 centre;

@@ -2,13 +2,10 @@
 // the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled to
 // the camera's view and facing side, counted per screen tile) at every diffuse hit after
 // its first bounce.
-// Mirror of backend-cpu/src/kernels/photon_gi.rs (trace_indirect_path, store_indirect) and
+// Mirror of backend-cpu/src/kernels/trace_indirect.rs (trace_indirect_path, store_indirect) and
 // shaders/wgsl/trace_indirect.wgsl: same random dimensions (per segment: 0, 1 bounce
 // direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Photons are 32-byte slots,
 // two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
-
-// core::kernels::VISIBLE_TOLERANCE: within 1% of the depth of the pixel's tangent plane.
-#define VISIBLE_TOLERANCE (-0.01f)
 
 inline void store_indirect(__global const IndirectTraceParams* p, float3 position,
                            float3 geometric_normal, float3 dir, float ray_length, float3 flux,

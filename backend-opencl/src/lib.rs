@@ -125,14 +125,16 @@ impl OpenClBackend {
     }
 
     /// `sizeof` of every shared struct as the device compiler lays it out, in the order
-    /// of `kernels/common/types.cl`'s `struct_sizes` (checked against Rust's `size_of` in
-    /// tests).
+    /// of the generated `kernels/common/layout.cl`'s `struct_sizes`, which is core's
+    /// layout table's (`caustica_core::device::layout_table::structs`; checked against
+    /// Rust's `size_of` in tests).
     pub fn device_struct_sizes(&mut self) -> Result<Vec<u32>, BackendError> {
+        let n = caustica_core::device::layout_table::structs().len();
         let mem = unsafe {
             Buffer::<u32>::create(
                 &self.state.context,
                 CL_MEM_READ_WRITE,
-                16,
+                n,
                 std::ptr::null_mut(),
             )
         }
@@ -140,7 +142,7 @@ impl OpenClBackend {
         let kernel = Kernel::create(&self.state.program, "struct_sizes")
             .map_err(cl_error("creating a kernel"))?;
         unsafe { kernel.set_arg(0, &mem.get()) }.map_err(cl_error("setting a kernel argument"))?;
-        let mut out = vec![0u32; 16];
+        let mut out = vec![0u32; n];
         let global: [usize; 3] = [1, 1, 1];
         unsafe {
             self.queue
@@ -157,7 +159,6 @@ impl OpenClBackend {
                 .enqueue_read_buffer(&mem, CL_BLOCKING, 0, &mut out, &[])
                 .map_err(cl_error("reading a buffer"))?;
         }
-        out.truncate(12);
         Ok(out)
     }
 

@@ -1,5 +1,6 @@
-//! The OpenCL C programs: the shared files under `kernels/common/` (mirrors of core's
-//! scalar functions and Pod structs, [`COMMON`]) and one file per registry kernel directly
+//! The OpenCL C programs: the shared files under `kernels/common/` ([`COMMON`]: the
+//! generated `layout.cl` with core's Pod structs and shared constants, then `prelude.cl`
+//! and the mirrors of core's scalar functions) and one file per registry kernel directly
 //! under `kernels/` ([`KERNELS`]). Kernels without variants are compiled together as one
 //! program; a kernel with compiled variants ([`VARIANT_KERNELS`]) gets one
 //! program per variant, the common files and its own file built with `-D NAME=0/1` for
@@ -16,7 +17,8 @@ use opencl3::types::cl_device_id;
 /// The shared files of `kernels/common/`, in dependency order (a file uses only the ones
 /// before it): `(file name, text)`.
 pub const COMMON: &[(&str, &str)] = &[
-    ("types.cl", include_str!("../kernels/common/types.cl")),
+    ("layout.cl", include_str!("../kernels/common/layout.cl")),
+    ("prelude.cl", include_str!("../kernels/common/prelude.cl")),
     ("vector.cl", include_str!("../kernels/common/vector.cl")),
     ("rng.cl", include_str!("../kernels/common/rng.cl")),
     ("sampling.cl", include_str!("../kernels/common/sampling.cl")),
@@ -63,76 +65,18 @@ pub const COMMON: &[(&str, &str)] = &[
     ),
 ];
 
-/// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
-/// the order they are appended to the program text.
-pub const KERNELS: &[(&str, &str)] = &[
-    (
-        "primary_gbuffer",
-        include_str!("../kernels/primary_gbuffer.cl"),
-    ),
-    ("direct_light", include_str!("../kernels/direct_light.cl")),
-    ("trace_photons", include_str!("../kernels/trace_photons.cl")),
-    (
-        "deposit_screen",
-        include_str!("../kernels/deposit_screen.cl"),
-    ),
-    (
-        "resolve_caustics",
-        include_str!("../kernels/resolve_caustics.cl"),
-    ),
-    (
-        "tile_hit_distance",
-        include_str!("../kernels/tile_hit_distance.cl"),
-    ),
-    (
-        "bilateral_gather",
-        include_str!("../kernels/bilateral_gather.cl"),
-    ),
-    (
-        "photon_count_table",
-        include_str!("../kernels/photon_count_table.cl"),
-    ),
-    (
-        "gather_footprint",
-        include_str!("../kernels/gather_footprint.cl"),
-    ),
-    (
-        "density_gather",
-        include_str!("../kernels/density_gather.cl"),
-    ),
-    ("composite", include_str!("../kernels/composite.cl")),
-    (
-        "gather_caustic_map",
-        include_str!("../kernels/gather_caustic_map.cl"),
-    ),
-    (
-        "caustic_map_lookup",
-        include_str!("../kernels/caustic_map_lookup.cl"),
-    ),
-    (
-        "refine_clusters",
-        include_str!("../kernels/refine_clusters.cl"),
-    ),
-    (
-        "temporal_blend",
-        include_str!("../kernels/temporal_blend.cl"),
-    ),
-    ("atrous_filter", include_str!("../kernels/atrous_filter.cl")),
-    (
-        "shading_normal_correction",
-        include_str!("../kernels/shading_normal_correction.cl"),
-    ),
-    (
-        "rsm_importance",
-        include_str!("../kernels/rsm_importance.cl"),
-    ),
-    ("sample_rsm", include_str!("../kernels/sample_rsm.cl")),
-    (
-        "trace_indirect",
-        include_str!("../kernels/trace_indirect.cl"),
-    ),
-    ("splat_photons", include_str!("../kernels/splat_photons.cl")),
-];
+macro_rules! kernel_table {
+    ($($name:ident),* $(,)?) => {
+        /// The kernel files of `kernels/`, one per registry kernel: `(registry name, text)`, in
+        /// the order they are appended to the program text, which is core's
+        /// (`caustica_core::with_shader_kernels!`), so a new kernel needs no row here.
+        pub const KERNELS: &[(&str, &str)] = &[$((
+            stringify!($name),
+            include_str!(concat!("../kernels/", stringify!($name), ".cl")),
+        ),)*];
+    };
+}
+caustica_core::with_shader_kernels!(kernel_table);
 
 /// Kernels compiled per variant, in programs of their own.
 pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
@@ -147,7 +91,7 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 /// experiment with native division found the cost; docs/performance.md). `splat_photons`
 /// divides three times per pixel of a splat's square (`kernel_contains`); its tolerance
 /// (`SPLAT_REL`, 40 ulp a contribution, and the containment flips near 1 that
-/// `DEPOSIT_TEXEL_AGREEMENT` allows for: conformance/src/kernels/photon_gi.rs) is argued
+/// `DEPOSIT_TEXEL_AGREEMENT` allows for: conformance/src/kernels/splat_photons.rs) is argued
 /// for WGSL's bounds too. At the chapter's high setting on the H200 it took 9.7 ms here
 /// against 14.8 in the main program (both with staged G-buffer loads).
 pub const RELAXED_DIVISION_KERNELS: &[&str] =

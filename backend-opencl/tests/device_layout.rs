@@ -1,32 +1,23 @@
 //! The OpenCL program builds on this machine's platform, and the device compiler lays out
-//! every shared struct with Rust's sizes. Fails loudly when no OpenCL platform exists
+//! every shared struct (the generated kernels/common/layout.cl) with Rust's sizes. Fails loudly when no OpenCL platform exists
 //! (CI installs PoCL with scripts/install-drivers.sh).
 
-use caustica_core::device::layout::*;
+use caustica_core::device::layout_table;
 use caustica_opencl::OpenClBackend;
-use std::mem::size_of;
 
 #[test]
 fn struct_sizes_match_core() {
     let mut b = OpenClBackend::new().unwrap_or_else(|e| panic!("OpenCL backend unavailable: {e}"));
     eprintln!("OpenCL device: {:?}", b.device());
     let sizes = b.device_struct_sizes().unwrap();
-    let expect = [
-        ("GpuVertex", size_of::<GpuVertex>()),
-        ("GpuTriangle", size_of::<GpuTriangle>()),
-        ("GpuMaterial", size_of::<GpuMaterial>()),
-        ("GpuLight", size_of::<GpuLight>()),
-        ("GpuCamera", size_of::<GpuCamera>()),
-        ("GBufferTexel", size_of::<GBufferTexel>()),
-        ("Photon", size_of::<Photon>()),
-        ("DepositTexel", size_of::<DepositTexel>()),
-        ("TraceParams", size_of::<TraceParams>()),
-        ("DepositParams", size_of::<DepositParams>()),
-        ("GatherParams", size_of::<GatherParams>()),
-        ("DirectParams", size_of::<DirectParams>()),
-    ];
-    for ((name, rust), cl) in expect.iter().zip(&sizes) {
-        assert_eq!(*rust as u32, *cl, "{name}: Rust {rust} bytes, OpenCL {cl}");
+    let structs = layout_table::structs();
+    assert_eq!(sizes.len(), structs.len());
+    for (s, cl) in structs.iter().zip(&sizes) {
+        assert_eq!(
+            s.size as u32, *cl,
+            "{}: Rust {} bytes, OpenCL {cl}",
+            s.name, s.size
+        );
     }
 }
 

@@ -6,7 +6,8 @@
 // BLAS holds its triangles in the triangle buffer's order: accel.rs) and the barycentrics (u, v), weights 1 - u - v, u, v of vertices 0, 1, 2, core's
 // convention (geometry.rs, Moller-Trumbore's u and v).
 
-#include "common/types.glsl"
+#include "common/layout.glsl"
+#include "common/prelude.glsl"
 
 layout(location = 0) rayPayloadInEXT HitPayload hit_payload;
 hitAttributeEXT vec2 bary;

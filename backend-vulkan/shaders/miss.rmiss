@@ -3,7 +3,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Miss stage 0, closest-hit rays (trace.glsl's closest_hit): no triangle.
 
-#include "common/types.glsl"
+#include "common/layout.glsl"
+#include "common/prelude.glsl"
 
 layout(location = 0) rayPayloadInEXT HitPayload hit_payload;
 

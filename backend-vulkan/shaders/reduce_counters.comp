@@ -10,7 +10,8 @@
 // Bindings (set 0): 0 the counter banks (64 x COUNTER_WORDS words), 1 the counters
 // (COUNTER_WORDS words).
 
-#include "common/types.glsl"
+#include "common/layout.glsl"
+#include "common/prelude.glsl"
 #include "common/fixed_point.glsl"
 
 layout(local_size_x = 64) in;

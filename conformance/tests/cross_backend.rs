@@ -84,7 +84,8 @@ fn direct_light_matches_cpu_on_the_same_gbuffer() {
 
 /// Composite of the CPU's direct and filtered images: bitwise equal.
 /// CausticMap's kernels on the same inputs: the atlas sums bitwise, the gather per texel,
-/// the lookup per pixel (`kernels::caustic_map` argues each bound).
+/// the lookup per pixel (`kernels::gather_caustic_map` and `kernels::caustic_map_lookup`
+/// argue each bound).
 #[test]
 fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
     kernel_test("caustic map kernels", &check_caustic_map);
@@ -92,7 +93,7 @@ fn caustic_map_kernels_match_cpu_on_the_same_inputs() {
 
 /// CausticMap's fused pass (`trace_photons`' `fused_deposit` variant) on each backend:
 /// bitwise the CPU's atlas deposit of the photons that backend's own texture-space trace
-/// stores (`kernels::caustic_map::check_fused_trace` argues it).
+/// stores (`kernels::trace_photons::check_fused_trace` argues it).
 #[test]
 fn caustic_map_fused_trace_deposits_what_its_trace_stores() {
     kernel_test("caustic map fused trace", &check_fused_trace);
@@ -108,7 +109,7 @@ fn sspm_fused_trace_deposits_what_its_trace_stores() {
 }
 
 /// AdaptiveCaustics' kernels on the same inputs: the adaptive trace slot by slot within
-/// the path-divergence allowance, `refine_clusters` bitwise (`kernels::adaptive_caustics`
+/// the path-divergence allowance, `refine_clusters` bitwise (`kernels::refine_clusters`
 /// argues both).
 #[test]
 fn adaptive_caustics_kernels_match_cpu_on_the_same_inputs() {
@@ -118,7 +119,7 @@ fn adaptive_caustics_kernels_match_cpu_on_the_same_inputs() {
 /// AdaptiveCaustics' screen target on the same inputs: the world-space adaptive trace
 /// slot by slot, `refine_clusters` with the camera bitwise where nothing is projected and
 /// within the pixel-edge allowance of `deposit_screen` where the error metric projects
-/// (`kernels::adaptive_caustics::check_screen_target` argues both).
+/// (`kernels::refine_clusters::check_screen_target` argues both).
 #[test]
 fn adaptive_caustics_screen_target_matches_cpu_on_the_same_inputs() {
     kernel_test("adaptive caustics screen target", &check_screen_target);
@@ -126,7 +127,7 @@ fn adaptive_caustics_screen_target_matches_cpu_on_the_same_inputs() {
 
 /// PhotonGi's kernels (`rsm_importance`, `sample_rsm`, `trace_indirect`,
 /// `splat_photons`) on the same inputs for every point and spot light (tolerances argued
-/// in `kernels::photon_gi`).
+/// in `kernels::shading_normal_correction` and the files of its kernels).
 #[test]
 fn photon_gi_kernels_match_cpu_on_the_same_inputs() {
     kernel_test("photon gi kernels", &check_photon_gi);

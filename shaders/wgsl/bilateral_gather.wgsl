@@ -1,7 +1,7 @@
-// needs: types vector optics footprint gbuffer
+// needs: layout prelude vector optics footprint gbuffer
 // bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
 // photon gather. Mirror of backend-opencl/kernels/bilateral_gather.cl and
-// backend-cpu/src/kernels/gather.rs.
+// backend-cpu/src/kernels/bilateral_gather.rs.
 
 @group(0) @binding(0) var<uniform> params: GatherParams;
 @group(0) @binding(1) var<storage, read> gbuffer0: array<vec4<u32>>;

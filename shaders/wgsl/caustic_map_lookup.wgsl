@@ -1,8 +1,8 @@
-// needs: types vector optics geometry traversal scene atlas specular_tree map_lookup
+// needs: layout prelude vector optics geometry traversal scene atlas specular_tree map_lookup
 // caustic_map_lookup (seed 001 section 3.3): the camera ray's specular tree reads the
 // caustic map of each diffuse surface it ends on. Mirror of
 // backend-opencl/kernels/caustic_map_lookup.cl, backend-vulkan/shaders/caustic_map_lookup.rgen
-// and backend-cpu/src/kernels/caustic_map.rs.
+// and backend-cpu/src/kernels/caustic_map_lookup.rs.
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;

@@ -1,4 +1,4 @@
-// needs: types vector optics footprint scene gbuffer density_gather source_index
+// needs: layout prelude vector optics footprint scene gbuffer density_gather source_index
 // density_gather: one direction of the scatter-normalised, density-adaptive caustic
 // gather (core/src/math/density_gather.rs; the contract in core/src/kernels/
 // density_gather.rs). Mirror of backend-opencl/kernels/density_gather.cl and

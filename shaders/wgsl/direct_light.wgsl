@@ -1,4 +1,4 @@
-// needs: types vector optics geometry traversal scene gbuffer specular_tree
+// needs: layout prelude vector optics geometry traversal scene gbuffer specular_tree
 // direct_light: radiance from the lights with shadow rays; mirror and glass pixels follow
 // their specular ray tree. Mirror of backend-opencl/kernels/direct_light.cl and
 // backend-cpu/src/kernels/direct_light.rs.

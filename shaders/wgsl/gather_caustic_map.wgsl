@@ -1,7 +1,7 @@
-// needs: types vector atlas photon_map map_gather
+// needs: layout prelude vector atlas photon_map map_gather
 // gather_caustic_map (seed 001 section 3.1, "Denoising"): per atlas texel, the
 // flux-keeping N x N gather inside its tile, as irradiance. Mirror of
-// backend-opencl/kernels/gather_caustic_map.cl and backend-cpu/src/kernels/caustic_map.rs.
+// backend-opencl/kernels/gather_caustic_map.cl and backend-cpu/src/kernels/gather_caustic_map.rs.
 
 @group(0) @binding(0) var<uniform> params: AtlasParams;
 @group(0) @binding(1) var<storage, read> texels: array<vec2<u32>>;

@@ -1,4 +1,4 @@
-// needs: types vector photon_map photon_table density_gather source_index
+// needs: layout prelude vector photon_map photon_table density_gather source_index
 // gather_footprint: per receiver pixel its k-NN gather radius and its flux over its row
 // normaliser (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/gather_footprint.cl and backend-cpu/src/kernels/

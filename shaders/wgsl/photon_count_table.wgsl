@@ -1,4 +1,4 @@
-// needs: types photon_map
+// needs: layout prelude photon_map
 // photon_count_table: one direction of the blocked summed-area table of the photon
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/photon_count_table.cl and backend-cpu/src/kernels/
@@ -15,8 +15,6 @@
 @group(0) @binding(6) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(7) var<storage, read> gbuffer3: array<vec4<u32>>;
 @group(0) @binding(8) var<storage, read_write> edge: array<vec4<f32>>;
-
-const COUNT_CLAMP_PER_K: u32 = 9u;
 
 // Per-pixel photon count as the summed-area table holds it: min(count, 9 k).
 fn clamped_photon_count(lo: u32, hi: u32, k: u32) -> u32 {
@@ -39,9 +37,6 @@ fn load_gather_texel(i: u32) -> GatherTexel {
     return t;
 }
 
-// Depth of a non-receiver's edge texel (receivers' view depths are positive).
-const EDGE_TEXEL_NOT_RECEIVER: f32 = -1.0;
-
 // A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
 // EDGE_TEXEL_NOT_RECEIVER elsewhere.
 fn edge_texel(t: GatherTexel) -> vec4<f32> {
@@ -51,14 +46,11 @@ fn edge_texel(t: GatherTexel) -> vec4<f32> {
     return vec4<f32>(EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0);
 }
 
-
-// Threads of a workgroup (the launch's DEFAULT_WORKGROUP_SIZE); table_block is a power
-// of two of at least 64, so each thread of a row block takes table_block / 64 pixels.
-const SCAN_THREADS: u32 = 64u;
-// The column pass splits a block's column into COLUMN_CHUNKS chunks of table_block /
-// COLUMN_CHUNKS rows; a workgroup takes SCAN_THREADS / COLUMN_CHUNKS neighbouring columns.
-const COLUMN_CHUNKS: u32 = 8u;
-const SCAN_COLUMNS: u32 = 8u;
+// SCAN_THREADS: the threads of a workgroup (the launch's DEFAULT_WORKGROUP_SIZE);
+// table_block is a power of two of at least 64, so each thread of a row block takes
+// table_block / 64 pixels. The column pass splits a block's column into COLUMN_CHUNKS
+// chunks of table_block / COLUMN_CHUNKS rows; a workgroup takes SCAN_COLUMNS =
+// SCAN_THREADS / COLUMN_CHUNKS neighbouring columns.
 
 var<workgroup> scan_scratch: array<u32, 64>;
 

@@ -1,6 +1,6 @@
-// needs: types vector packing geometry traversal scene
+// needs: layout prelude vector packing geometry traversal scene
 // primary_gbuffer: one camera ray per pixel; mirror of backend-opencl/kernels/
-// primary_gbuffer.cl and backend-cpu/src/kernels/gbuffer.rs.
+// primary_gbuffer.cl and backend-cpu/src/kernels/primary_gbuffer.rs.
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;

@@ -1,4 +1,4 @@
-// needs: types vector fixed_point atlas photon_map_add photon_clusters scene
+// needs: layout prelude vector fixed_point atlas photon_map_add photon_clusters scene
 // refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one thread per traced
 // cluster of the batch. Its four photon slots (trace_photons' ADAPTIVE variant) decide
 // its fate (core::math::photon_clusters::cluster_fate): discarded, output (its stored

@@ -1,9 +1,9 @@
-// needs: types vector optics footprint scene gbuffer photon_map
+// needs: layout prelude vector optics footprint scene gbuffer photon_map
 // resolve_caustics (seed 000 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
 // fixed-point flux sum; alpha = mean hit distance. Mirror of
 // backend-opencl/kernels/resolve_caustics.cl without cl_khr_fp64 (WGSL has no f64): the
 // 64-bit sums are split exactly into hi * 2^32 and lo and scaled in f32. The CPU
-// (backend-cpu/src/kernels/deposit_screen.rs::resolve_caustics) scales in f64; this is a
+// (backend-cpu/src/kernels/resolve_caustics.rs::resolve_caustics) scales in f64; this is a
 // few f32 roundings (<= ~4 ulp, plus WGSL's division accuracy) away from it.
 
 @group(0) @binding(0) var<uniform> params: DepositParams;

@@ -1,8 +1,8 @@
-// needs: types vector packing gbuffer atlas irradiance_filter
+// needs: layout prelude vector packing gbuffer atlas irradiance_filter
 // shading_normal_correction (seed 003 section 24.4.3, Eq. 20): per receiver pixel with
 // splats, the filtered indirect radiance times min(max(0, w_i . n_s) / (w_i . n_g + eps),
 // s_max), w_i the splats' power-weighted mean light direction. Mirror of
-// backend-cpu/src/kernels/photon_gi.rs (shading_normal_correction) and
+// backend-cpu/src/kernels/shading_normal_correction.rs (shading_normal_correction) and
 // backend-opencl/kernels/shading_normal_correction.cl.
 
 @group(0) @binding(0) var<uniform> params: CorrectionParams;

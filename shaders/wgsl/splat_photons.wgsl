@@ -1,7 +1,7 @@
-// needs: types vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
+// needs: layout prelude vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
 // splat_photons (seed 003 section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat
 // adds its irradiance times each covered receiver pixel's area to the photon map in fixed
-// point. Mirror of backend-cpu/src/kernels/photon_gi.rs (splat_setup, splat_pixel) and
+// point. Mirror of backend-cpu/src/kernels/splat_photons.rs (splat_setup, splat_pixel) and
 // backend-opencl/kernels/splat_photons.cl.
 
 @group(0) @binding(0) var<uniform> params: SplatParams;
@@ -43,7 +43,7 @@ fn atomic_add_u64_direction_map(pixel: u32, word: u32, lo: u32, hi: u32) {
     }
 }
 
-// backend-cpu photon_gi.rs splat_photon's direction deposit: deposit_photon_texel of
+// backend-cpu splat_photons.rs splat_photon's direction deposit: deposit_photon_texel of
 // (flux d.xyz, hit distance d.w) into the direction map, in the flux's quanta, uncounted.
 fn deposit_light_direction(texel: u32, d: vec4<f32>, quantum: f32) {
     for (var ch = 0u; ch < 3u; ch++) {
@@ -56,7 +56,7 @@ fn deposit_light_direction(texel: u32, d: vec4<f32>, quantum: f32) {
     atomic_add_u64_direction_map(texel, DEPOSIT_PHOTONS, 1u, 0u);
 }
 
-// backend-cpu photon_gi::SplatSetup: what every pixel test of one splat reads.
+// backend-cpu splat_photons::SplatSetup: what every pixel test of one splat reads.
 struct SplatSetup {
     ellipsoid: SplatKernel,
     centre: vec3<f32>,
@@ -69,7 +69,7 @@ struct SplatSetup {
 
 var<workgroup> setups: array<SplatSetup, WORKGROUP_SIZE>;
 // first pixel of each splat in the group's run of pixels; [WORKGROUP_SIZE]: their total
-var<workgroup> starts: array<u32, 65>; // WORKGROUP_SIZE + 1
+var<workgroup> starts: array<u32, WORKGROUP_SIZE + 1u>;
 
 fn no_splat() -> SplatSetup {
     var s: SplatSetup;
@@ -77,7 +77,7 @@ fn no_splat() -> SplatSetup {
     return s;
 }
 
-// backend-cpu photon_gi::splat_setup: the photon's kernel, irradiance and screen rectangle
+// backend-cpu splat_photons::splat_setup: the photon's kernel, irradiance and screen rectangle
 // (empty when it packs to zero power or projects off screen).
 fn splat_setup(p: SplatParams, ph: GiPhoton) -> SplatSetup {
     var s = no_splat();
@@ -119,7 +119,7 @@ fn splat_rect_pixels(rect: vec4<i32>) -> u32 {
     return u32(rect.y - rect.x + 1) * u32(rect.w - rect.z + 1);
 }
 
-// backend-cpu photon_gi::splat_pixel: one pixel's test and deposit for the group's splat
+// backend-cpu splat_photons::splat_pixel: one pixel's test and deposit for the group's splat
 // `j` (read from workgroup memory where used: most pixels fail the first test).
 fn splat_pixel(p: SplatParams, j: u32, q: u32) {
     // each test loads the G-buffer plane it reads, in the tests' order (flags, position,

@@ -1,9 +1,9 @@
-// needs: types vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
+// needs: layout prelude vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
 // trace_indirect (seed 003 section 24.2.2): photon params.first + coherent_sample_order(i)
 // of the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled
 // to the camera's view and facing side, counted per screen tile) at every diffuse hit
 // after its first bounce.
-// Mirror of backend-cpu/src/kernels/photon_gi.rs (trace_indirect_path, store_indirect)
+// Mirror of backend-cpu/src/kernels/trace_indirect.rs (trace_indirect_path, store_indirect)
 // and backend-opencl/kernels/trace_indirect.cl: same random dimensions (per segment: 0, 1
 // bounce direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Stored photons are
 // appended in arrival order (an atomic slot counter): the set equals the CPU's.
@@ -24,14 +24,11 @@
 @group(0) @binding(12) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(13) var<storage, read> gbuffer3: array<vec4<u32>>;
 
-// core::kernels::VISIBLE_TOLERANCE: within 1% of the depth of the pixel's tangent plane.
-const VISIBLE_TOLERANCE: f32 = -0.01;
-
 // The work-group's counters (fixed_point.wgsl).
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
 // Stores a photon at a diffuse hit if the camera sees its side and it projects into the
-// view (backend-cpu photon_gi.rs::store_indirect).
+// view (backend-cpu trace_indirect.rs::store_indirect).
 fn store_indirect(p: IndirectTraceParams, position: vec3<f32>, geometric_normal: vec3<f32>,
                   dir: vec3<f32>, ray_length: f32, flux: vec3<f32>) {
     let n = select(geometric_normal, -geometric_normal, dot3(geometric_normal, dir) > 0.0);
@@ -84,7 +81,7 @@ fn store_indirect(p: IndirectTraceParams, position: vec3<f32>, geometric_normal:
     atomicAdd(&tile_counts[tile], 1u);
 }
 
-// One path (backend-cpu photon_gi.rs::trace_indirect_path); returns the segments traced.
+// One path (backend-cpu trace_indirect.rs::trace_indirect_path); returns the segments traced.
 fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 {
     var flux = r.flux;
     if (!(max_element3(flux) > 0.0)) {

@@ -1,4 +1,4 @@
-// needs: types vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
+// needs: layout prelude vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
 // trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least

@@ -1,162 +1,19 @@
-//! The density-adaptive, scatter-normalised caustic gather: `photon_count_table`,
-//! `gather_footprint` and `density_gather` (method and sources in
+//! `density_gather`: the density-adaptive, scatter-normalised caustic gather's separable
+//! passes over the footprints of `gather_footprint` (method and sources in
 //! `caustica_core::math::density_gather`).
 
+use super::gather_footprint::{edge_weight_of, normaliser};
+
 use caustica_core::device::layout::{
-    gather_surface, gbuffer_flags, gbuffer_pixel_area, GBufferTexel, GBufferView, GatherParams,
-    PhotonMapView,
+    gather_surface, gbuffer_pixel_area, GBufferView, GatherParams,
 };
 use caustica_core::math::density_gather::{
-    accumulate_source_index, clamped_photon_count, edge_texel, edge_texel_is_receiver, edge_weight,
-    footprint_radius, footprint_weight, for_each_pass_source, inherited_flux, join_u64_wide,
+    edge_texel_is_receiver, footprint_weight, for_each_pass_source,
 };
 use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
-
-/// Axis 0 of `photon_count_table`: per row and block, the inclusive prefix sums of the
-/// clamped photon counts from the block's left edge (wrapping `u32`), row-major.
-pub fn photon_count_rows(p: &GatherParams, map: PhotonMapView, table: &mut [u32]) {
-    let (w, b) = (p.camera.width as usize, p.table_block as usize);
-    table.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let mut sum = 0u32;
-        for (x, t) in row.iter_mut().enumerate() {
-            if x % b == 0 {
-                sum = 0;
-            }
-            let i = (y * w + x) as u32;
-            let n = clamped_photon_count(
-                map.photon_map_word(i, 8),
-                map.photon_map_word(i, 9),
-                p.knn_photons,
-            );
-            sum = sum.wrapping_add(n);
-            *t = sum;
-        }
-    });
-}
-
-/// Axis 1 of `photon_count_table`: the row sums become the blocked summed-area table in
-/// place (column prefix sums from each block's top edge, wrapping `u32`).
-pub fn photon_count_columns(p: &GatherParams, table: &mut [u32]) {
-    let (w, b) = (p.camera.width as usize, p.table_block as usize);
-    for y in 1..p.camera.height as usize {
-        if y % b == 0 {
-            continue;
-        }
-        let (above, row) = table[(y - 1) * w..(y + 1) * w].split_at_mut(w);
-        for (t, a) in row.iter_mut().zip(above.iter()) {
-            *t = t.wrapping_add(*a);
-        }
-    }
-}
-
-/// The rest of axis 1 of `photon_count_table`: every pixel's edge texel.
-pub fn edge_texels(g: GBufferView, pixels: usize) -> Vec<[f32; 4]> {
-    (0..pixels)
-        .into_par_iter()
-        .map(|i| {
-            let gi = g.load_gbuffer(i);
-            edge_texel(is_receiver(&gi), gi.depth, gi.normal)
-        })
-        .collect()
-}
-
-fn is_receiver(g: &GBufferTexel) -> bool {
-    g.flags & gbuffer_flags::RECEIVER != 0
-}
-
-/// Normaliser of a source at `i` with radius `r`: the sum of its weights over the
-/// receivers of its row (`axis` 0) or column (1) inside the image (itself included).
-fn normaliser(p: &GatherParams, edge: &[[f32; 4]], i: i32, r: f32, axis: u32) -> f32 {
-    let (w, h) = (p.camera.width as i32, p.camera.height as i32);
-    let (x, y) = (i % w, i / w);
-    let ei = &edge[i as usize];
-    // taps beyond the radius weigh 0: the loop stops there
-    let reach = ((r + 0.5).ceil() as i32).min(p.max_radius_px as i32);
-    let mut sum = 0.0f32;
-    for d in -reach..=reach {
-        let (qx, qy) = if axis == 0 { (x + d, y) } else { (x, y + d) };
-        if qx < 0 || qy < 0 || qx >= w || qy >= h {
-            continue;
-        }
-        let eq = &edge[(qy * w + qx) as usize];
-        if !edge_texel_is_receiver(eq) {
-            continue;
-        }
-        sum += footprint_weight(d, r) * edge_weight_of(p, ei, eq);
-    }
-    sum
-}
-
-/// [`edge_weight`] between two edge texels.
-fn edge_weight_of(p: &GatherParams, a: &[f32; 4], b: &[f32; 4]) -> f32 {
-    edge_weight(
-        a[0],
-        [a[1], a[2], a[3]],
-        b[0],
-        [b[1], b[2], b[3]],
-        p.sigma_depth,
-        p.normal_power,
-    )
-}
-
-/// `gather_footprint`: per receiver pixel `(F / W_row, r)` (W per channel, pixels), 0
-/// elsewhere.
-pub fn gather_footprint(
-    p: &GatherParams,
-    edge: &[[f32; 4]],
-    map: PhotonMapView,
-    table: &[u32],
-) -> Vec<[f32; 4]> {
-    let (w, h) = (p.camera.width as i32, p.camera.height as i32);
-    (0..w * h)
-        .into_par_iter()
-        .map(|i| {
-            if !edge_texel_is_receiver(&edge[i as usize]) {
-                return [0.0; 4];
-            }
-            let r = footprint_radius(
-                table,
-                w,
-                h,
-                p.table_block as i32,
-                i % w,
-                i / w,
-                p.knn_photons,
-                p.max_radius_px,
-            );
-            let flux = |j: i32| {
-                let word = |k: u32| map.photon_map_word(j as u32, k);
-                let channel = |c: u32| join_u64_wide(word(2 * c), word(2 * c + 1)) * p.flux_quantum;
-                [channel(0), channel(1), channel(2)]
-            };
-            // on the atlas, the flux of uncovered neighbours whose heir this texel is
-            let f = if p.surface == gather_surface::ATLAS {
-                inherited_flux(edge, w, h, i % w, i / w, flux)
-            } else {
-                flux(i)
-            };
-            if f == [0.0; 3] {
-                // no flux to spread: no normaliser to compute
-                return [0.0, 0.0, 0.0, r];
-            }
-            let inv = 1.0 / normaliser(p, edge, i, r, 0);
-            [f[0] * inv, f[1] * inv, f[2] * inv, r]
-        })
-        .collect()
-}
-
-/// The source index after a pass that wrote `sources` for pass `axis`
-/// (`gather_footprint`: the row pass's part, axis 0; the row pass: the column pass's,
-/// axis 1): `index` with the sources entered (the GPU ports' atomic maxima and ors).
-pub fn source_index(p: &GatherParams, axis: u32, index: &[u32], sources: &[[f32; 4]]) -> Vec<u32> {
-    let mut index = index.to_vec();
-    let (w, h) = (p.camera.width, p.camera.height);
-    accumulate_source_index(&mut index, sources, w, h, axis, p.max_radius_px as i32);
-    index
-}
 
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
 /// `caustica_core::kernels::DensityGather`); `index` is the source index the pass reads.

@@ -1,23 +1,15 @@
-//! `deposit_screen` (seed 000 section 30.3.1.3) and `resolve_caustics` (Eq. 5).
-//!
-//! Deposit: each stored photon is projected to the pixel that contains it; it is added
+//! `deposit_screen` (seed 000 section 30.3.1.3): each stored photon is projected to the pixel that contains it; it is added
 //! only if the pixel sees a diffuse surface (RECEIVER) at a view depth within
 //! `depth_tolerance * depth` of the photon's, and the photon arrives on the side the camera
 //! sees. Flux is added in fixed point (units of `flux_quantum`) with 64-bit integer
 //! atomics, with the hit distance and a photon count, so the sum is exact and
 //! order-independent: no photon is lost to a race (the source admits it loses some).
-//!
-//! Resolve: radiance `L = (albedo / pi) * Phi / A`, where `Phi` is the pixel's summed flux
-//! and `A` the surface area the pixel covers (Eq. 4 footprint corrected for obliquity,
-//! see `caustica_core::math::footprint`). Alpha: mean hit distance of the pixel's photons.
 
 use super::Counters;
-use caustica_core::device::layout::gbuffer_pixel_area;
 use caustica_core::device::layout::{
-    counter, deposit_word, gbuffer_flags, DepositParams, GBufferView, Photon, PhotonMapView,
-    DEPOSIT_PLANES,
+    counter, deposit_word, gbuffer_flags, DepositParams, GBufferView, Photon, DEPOSIT_PLANES,
 };
-use caustica_core::math::fixed_point::{join_u64, quantize};
+use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::packing::unpack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -133,39 +125,4 @@ pub fn photon_flux_units(ph: &Photon, flux_quantum: f32, c: &mut Counters) -> [u
         }
         q.units
     })
-}
-
-/// Caustic radiance per pixel from the photon map (W/(sr m^2) per channel); alpha: the
-/// mean hit distance of the pixel's photons (scene units). Zero where the pixel has no
-/// photons or sees no diffuse surface.
-pub fn resolve_caustics(
-    p: &DepositParams,
-    gbuffer: GBufferView,
-    map: PhotonMapView,
-) -> Vec<[f32; 4]> {
-    let cam = &p.camera;
-    (0..gbuffer.len().min(map.len()))
-        .into_par_iter()
-        .map(|i| {
-            let (g, t) = (&gbuffer.load_gbuffer(i), &map.load(i));
-            let n = join_u64(t.photons);
-            if n == 0 || g.flags & gbuffer_flags::RECEIVER == 0 {
-                return [0.0; 4];
-            }
-            let area = gbuffer_pixel_area(cam, i as u32, g);
-            let scale = saturate_wide(p.flux_quantum as f64 / (std::f64::consts::PI * area as f64));
-            let l = |ch: usize| {
-                (saturate_wide(join_u64(t.flux[ch]) as f64 * scale) * g.albedo[ch] as f64) as f32
-            };
-            let hit =
-                (join_u64(t.hit_distance) as f64 * p.hit_distance_quantum as f64 / n as f64) as f32;
-            [l(0), l(1), l(2), hit]
-        })
-        .collect()
-}
-
-/// `saturate_radiance` in the resolve's wide (f64) arithmetic: at most f32::MAX, so the
-/// product with an albedo in [0, 1] and the cast to f32 stay finite.
-fn saturate_wide(x: f64) -> f64 {
-    x.min(caustica_core::math::optics::RADIANCE_MAX as f64)
 }

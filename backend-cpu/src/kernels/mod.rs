@@ -1,17 +1,30 @@
-//! The CPU kernels, one module per registry kernel (`prepare_scene` is
-//! [`crate::traversal::check_nodes`]: the traversal reads the node buffer in place).
+//! The CPU kernels, one module per registry kernel, named as the kernel's declaration in
+//! `caustica_core::kernels` (`prepare_scene` is [`crate::traversal::check_nodes`]: the
+//! traversal reads the node buffer in place). What several kernels share lives in the
+//! module of the kernel that defines it (`deposit_screen`'s photon-map deposit) or, for
+//! the atlas deposit of `trace_photons` and `refine_clusters`, in
+//! [`crate::atlas_deposit`].
 
 pub mod atrous_filter;
-pub mod caustic_map;
+pub mod bilateral_gather;
+pub mod caustic_map_lookup;
 pub mod composite;
 pub mod density_gather;
 pub mod deposit_screen;
 pub mod direct_light;
-pub mod gather;
-pub mod gbuffer;
-pub mod photon_gi;
+pub mod gather_caustic_map;
+pub mod gather_footprint;
+pub mod photon_count_table;
+pub mod primary_gbuffer;
 pub mod refine_clusters;
+pub mod resolve_caustics;
+pub mod rsm_importance;
+pub mod sample_rsm;
+pub mod shading_normal_correction;
+pub mod splat_photons;
 pub mod temporal_blend;
+pub mod tile_hit_distance;
+pub mod trace_indirect;
 pub mod trace_photons;
 
 use caustica_core::device::layout::counter;

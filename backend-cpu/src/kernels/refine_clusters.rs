@@ -1,14 +1,14 @@
 //! `refine_clusters` (seed 004 section 3.2, AdaptiveCaustics): one step of the adaptive
 //! traversal over a batch of traced clusters. The decisions are core's
-//! `math::photon_clusters`; the atlas deposit is the fused trace's (`caustic_map::deposit_atlas_texel`), the screen target's
+//! `math::photon_clusters`; the atlas deposit is the fused trace's (`atlas_deposit::deposit_atlas_texel`), the screen target's
 //! photons are `deposit_screen`'s input.
 
-use super::caustic_map::{
-    atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint, deposit_atlas_texel,
-};
 use super::deposit_screen::MapPlanes;
 use super::trace_photons::count_stored;
 use super::Counters;
+use crate::atlas_deposit::{
+    atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint, deposit_atlas_texel,
+};
 use caustica_core::device::layout::{
     cluster_count, counter, project_to_pixel, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };

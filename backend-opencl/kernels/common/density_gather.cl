@@ -1,9 +1,6 @@
 // Mirror of core/src/math/density_gather.rs (method and sources there): the scalar
 // functions of the density-adaptive, scatter-normalised caustic gather.
 
-#define MIN_WINDOW_HALF_WIDTH 1
-#define COUNT_CLAMP_PER_K 9u
-
 // Per-pixel photon count as the summed-area table holds it: min(count, 9 k).
 inline uint clamped_photon_count(uint lo, uint hi, uint k) {
     uint clamp = COUNT_CLAMP_PER_K * k;
@@ -124,9 +121,6 @@ inline GatherTexel load_gather_texel(GATHER_GBUFFER_PARAMS(__global const), uint
     return t;
 }
 
-// Depth of a non-receiver's edge texel (receivers' view depths are positive).
-#define EDGE_TEXEL_NOT_RECEIVER (-1.0f)
-
 // A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
 // EDGE_TEXEL_NOT_RECEIVER elsewhere.
 inline float4 edge_texel(GatherTexel t) {
@@ -175,7 +169,6 @@ inline float gather_normaliser(__global const GatherParams* p, __global const fl
 
 // The pixel thread t of density_gather's column pass takes: 8 x 8 tiles, 64 threads
 // each (core's column_pass_pixel); false for the padding of edge tiles.
-#define COLUMN_PASS_TILE 8u
 inline bool column_pass_pixel(uint t, uint w, uint h, int* x, int* y) {
     uint tile = t / (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
     uint l = t % (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
@@ -192,7 +185,6 @@ inline bool column_pass_pixel(uint t, uint w, uint h, int* x, int* y) {
 // per REACH_TILE x REACH_TILE tile and pass the maximum footprint_reach + 1 of its
 // sources (the row pass's grid, then the column pass's), then per pass a bit per pixel
 // (the row pass's mask by image rows, the column pass's by columns).
-#define REACH_TILE 8
 
 // The largest |offset| at which footprint_weight(offset, radius) can be nonzero, capped
 // at `cap`; -1 where none.

@@ -1,7 +1,5 @@
 // Mirror of core/src/footprint.rs: 000 Eq. 4 pixel footprint and its obliquity correction.
 
-#define MIN_COSINE 1e-4f
-
 // 000 Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
 inline float pixel_footprint(float depth, uint width, uint height, float tan_half_fov_x,
                              float tan_half_fov_y) {

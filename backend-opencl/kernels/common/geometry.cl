@@ -88,11 +88,6 @@ inline bool intersect_triangle(float3 origin, float3 dir, float3 v0, float3 v1, 
 }
 
 // Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.
-#define OFFSET_REL (1.0f / 32768.0f)
-#define OFFSET_MIN_SCALE 7.888609e-31f
-
-// core::math::geometry::SPHERE_TEST_SLACK (2^-16)
-#define SPHERE_TEST_SLACK (1.0f / 65536.0f)
 
 // core::math::geometry::ray_meets_sphere: whether the ray origin + t dir (t >= 0) may meet
 // the ball (centre xyz, radius w); false only outside the test's rounding slack.

@@ -61,9 +61,6 @@ inline float3 atlas_flux(PHOTON_MAP_PARAMS(__global const), uint i, float q) {
                     join_u64_f32(b.x, b.y) * q);
 }
 
-// core::math::map_gather::TILE_FULLY_COVERED (a tile's fourth word)
-#define TILE_FULLY_COVERED 0x80000000u
-
 // core::math::map_gather::window_coverage: the covered texels of source (qx, qy)'s window.
 inline uint window_coverage(__global const uint2* texels, uint4 tile, uint qx, uint qy, uint n,
                             uint atlas_width) {
@@ -99,8 +96,6 @@ inline float3 gather_caustic_texel(__global const uint2* texels, PHOTON_MAP_PARA
     }
     return sum / area_t;
 }
-
-#define MAX_FOOTPRINT_TEXELS 32.0f
 
 inline float footprint_texels(float pixel_angle, float distance, float cos_in, float texel_area) {
     float w = pixel_angle * distance;

@@ -40,9 +40,6 @@ inline float fresnel_schlick(float cos_i, float eta) {
     return r0 + (1.0f - r0) * x * x * x * x * x;
 }
 
-// core: optics::fresnel_model values
-#define FRESNEL_SCHLICK 1u
-
 // The reflectance under `model` (core: optics::fresnel_reflectance).
 inline float fresnel_reflectance(float cos_i, float eta, uint model) {
     return model == FRESNEL_SCHLICK ? fresnel_schlick(cos_i, eta) : fresnel_dielectric(cos_i, eta);
@@ -55,7 +52,6 @@ inline float3 beer_lambert(float3 sigma_a, float distance) {
 
 // Wavelengths (micrometres) of the red, green and blue photon channels.
 __constant float CHANNEL_WAVELENGTH_UM[3] = {0.65f, 0.55f, 0.45f};
-#define REFERENCE_WAVELENGTH_UM 0.55f
 
 inline float cauchy_ior(float ior, float cauchy_b, float wavelength_um) {
     float a = ior - cauchy_b / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM);
@@ -78,8 +74,6 @@ inline float3 dielectric_scatter(float3 incident, float3 shading_normal, bool en
 
 // Largest radiance, irradiance or scale factor a kernel carries: f32::MAX (core:
 // optics::RADIANCE_MAX). Overflow saturates instead of becoming Inf (and Inf * 0 = NaN).
-#define RADIANCE_MAX FLT_MAX
-
 inline float saturate_radiance(float x) { return fmin(x, RADIANCE_MAX); }
 
 inline float3 saturate_radiance3(float3 v) { return fmin(v, (float3)(RADIANCE_MAX)); }

@@ -1,19 +1,5 @@
 // Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics).
-
-#define NO_TRIANGLE 0xffffffffu
-#define CLUSTER_METRIC_ERROR 1u
-#define CLUSTER_DISCARDED 0u
-#define CLUSTER_OUTPUT 1u
-#define CLUSTER_REFINED 2u
-// core::device::layout::cluster_count words
-#define CLUSTER_COUNT_CHILDREN 0
-#define CLUSTER_COUNT_OUTPUT 1
-#define CLUSTER_COUNT_DISCARDED 2
-#define CLUSTER_COUNT_OUTPUT_PHOTONS 3
-#define CLUSTER_COUNT_CONVERGED 4
-
-#define CLUSTER_ID_MASK 0x3fffffffu
-#define MAX_ERROR_TEXELS 4u
+// Its constants (NO_TRIANGLE, CLUSTER_*, MAX_ERROR_TEXELS) are in layout.cl.
 
 inline uint cluster_entry(uint cluster, uint spread) {
     return (cluster & CLUSTER_ID_MASK) | ((clamp(spread, 1u, MAX_ERROR_TEXELS) - 1u) << 30u);
@@ -61,9 +47,6 @@ inline uint cluster_fate(bool any_met_caster, bool converged, uint level, uint f
         return CLUSTER_OUTPUT;
     return CLUSTER_REFINED;
 }
-
-#define CLUSTER_RELEVANCE_BOUNDS 1u
-#define CLUSTER_TARGET_SCREEN 1u
 
 inline bool slot_stored(const float* flux) {
     return flux[0] > 0.0f || flux[1] > 0.0f || flux[2] > 0.0f;

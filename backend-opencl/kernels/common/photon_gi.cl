@@ -249,7 +249,7 @@ inline float gbuffer_pixel_area(__global const GpuCamera* cam, uint index, const
                               dot3(ray, load3(g->normal)));
 }
 
-// backend-cpu photon_gi::splat_reach_px.
+// backend-cpu splat_photons::splat_reach_px.
 inline uint splat_reach_px(__global const SplatParams* p, float radius, float z) {
     float near_z = z - radius;
     if (!(near_z > 0.0f)) return 0xffffffffu;

@@ -2,7 +2,6 @@
 
 // core::math::sampling::tiled_photon_index: the row-major grid index of the g-th photon
 // in tile order (8 x 8 tiles, bands of tiles left to right; a warp's photons in one block).
-#define PHOTON_TILE 8u
 inline uint tiled_photon_index(uint g, uint grid_w, uint grid_h) {
     if (grid_w == 0u || grid_h == 0u) return g;
     uint band_y = g / grid_w / PHOTON_TILE * PHOTON_TILE;

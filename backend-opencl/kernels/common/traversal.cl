@@ -99,9 +99,6 @@ inline float affine_row(uint4 r, float3 p, float w) {
     return p.x * as_float(r.x) + p.y * as_float(r.y) + p.z * as_float(r.z) + w * as_float(r.w);
 }
 
-// Instance record flag: the level is in world space (core's instance_flags::IDENTITY).
-#define INSTANCE_IDENTITY 1u
-
 // The ray as one level sees it (the CPU backend's LevelRay); `t_scale` takes the ray's t
 // to the culling ray's (1 in world space).
 typedef struct {

@@ -1,12 +1,7 @@
 // Mirror of core::math::map_gather's texel addressing (the caustic atlas, seed 001) and of
 // the photon map's word layout (core::device::layout::deposit_word), as
-// shaders/wgsl/common/atlas.wgsl and types.wgsl and backend-opencl map_gather.cl and
+// shaders/wgsl/common/atlas.wgsl and prelude.wgsl and backend-opencl map_gather.cl and
 // planes.cl have them.
-
-// DepositTexel's words: flux r, g, b at 0, 2, 4 (u64 each), hit distance at 6, count at 8
-const uint DEPOSIT_FLUX = 0u;
-const uint DEPOSIT_HIT_DISTANCE = 6u;
-const uint DEPOSIT_PHOTONS = 8u;
 
 uint atlas_texel_index(uvec4 tile, vec2 uv, uint atlas_width) {
     float s = float(tile.z);

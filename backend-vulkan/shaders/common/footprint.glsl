@@ -1,8 +1,6 @@
 // Mirror of core/src/footprint.rs and backend-opencl/kernels/footprint.cl: 000 Eq. 4 pixel
 // footprint and its obliquity correction.
 
-const float MIN_COSINE = 1e-4;
-
 // 000 Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
 precise float pixel_footprint(float depth, uint width, uint height, float tan_half_fov_x,
                               float tan_half_fov_y) {

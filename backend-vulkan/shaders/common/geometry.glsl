@@ -65,11 +65,6 @@ bool intersect_triangle(vec3 origin, vec3 dir, vec3 v0, vec3 v1, vec3 v2, float 
 }
 
 // Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.
-const float OFFSET_REL = 1.0 / 32768.0;
-const float OFFSET_MIN_SCALE = 7.888609e-31;
-
-// core::math::geometry::SPHERE_TEST_SLACK (2^-16)
-const float SPHERE_TEST_SLACK = 1.52587890625e-5;
 
 // core::math::geometry::ray_meets_sphere: whether the ray origin + t dir (t >= 0) may meet
 // the ball (centre xyz, radius w); false only outside the test's rounding slack.

@@ -43,9 +43,6 @@ precise float fresnel_schlick(float cos_i, float eta) {
     return r0 + (1.0 - r0) * x * x * x * x * x;
 }
 
-// core: optics::fresnel_model values
-const uint FRESNEL_SCHLICK = 1u;
-
 // The reflectance under `model` (core: optics::fresnel_reflectance).
 precise float fresnel_reflectance(float cos_i, float eta, uint model) {
     if (model == FRESNEL_SCHLICK) return fresnel_schlick(cos_i, eta);
@@ -59,7 +56,6 @@ precise vec3 beer_lambert(vec3 sigma_a, float distance) {
 
 // Wavelengths (micrometres) of the red, green and blue photon channels.
 const float CHANNEL_WAVELENGTH_UM[3] = float[3](0.65, 0.55, 0.45);
-const float REFERENCE_WAVELENGTH_UM = 0.55;
 
 precise float cauchy_ior(float ior, float cauchy_b, float wavelength_um) {
     // Through a variable: glslang would fold the constant square in double precision
@@ -87,8 +83,6 @@ precise vec3 dielectric_scatter(vec3 incident, vec3 shading_normal, bool enterin
 
 // Largest radiance, irradiance or scale factor a kernel carries: f32::MAX (core:
 // optics::RADIANCE_MAX). Overflow saturates instead of becoming Inf (and Inf * 0 = NaN).
-const float RADIANCE_MAX = 3.402823466e+38;
-
 float saturate_radiance(float x) { return min(x, RADIANCE_MAX); }
 
 vec3 saturate_radiance3(vec3 v) { return min(v, vec3(RADIANCE_MAX)); }

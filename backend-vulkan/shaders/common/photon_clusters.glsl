@@ -1,10 +1,6 @@
 // Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics):
 // what trace_photons' ADAPTIVE variant needs (refine_clusters runs from WGSL).
 
-const uint NO_TRIANGLE = 0xffffffffu;
-
-const uint CLUSTER_ID_MASK = 0x3fffffffu;
-
 uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }
 
 uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {

@@ -1,7 +1,7 @@
 // Vector helpers with glam's exact operation order (Vec3 is scalar in glam): products
 // and sums are evaluated left to right, so results round as in the Rust reference.
 // Mirror of backend-opencl/kernels/vector.cl (its load3/store3 helpers have no GLSL
-// counterpart: the structs hold vec3 fields). `precise` returns: see types.glsl.
+// counterpart: the structs hold vec3 fields). `precise` returns: see prelude.glsl.
 
 precise float dot3(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 precise vec3 cross3(vec3 a, vec3 b) {

@@ -35,7 +35,8 @@ pub fn check_gather(
             let g = &inputs.gbuffer[i];
             if g.flags & gbuffer_flags::RECEIVER != 0 {
                 let tile = inputs.tiles[((y / ts) * tw + x / ts) as usize];
-                let rad = caustica_cpu::kernels::gather::gather_radius_px(&params, g, tile);
+                let rad =
+                    caustica_cpu::kernels::bilateral_gather::gather_radius_px(&params, g, tile);
                 if rad < params.max_radius_px as f32
                     && (rad - rad.round()).abs() <= GATHER_REL * rad.max(1.0)
                 {

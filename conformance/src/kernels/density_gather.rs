@@ -1,9 +1,13 @@
-//! The density gather's three kernels on the reference's inputs, in one verdict:
-//! `photon_count_table` (the summed-area table, integer sums, and the edge texels, copies: bitwise equal),
-//! `gather_footprint` (radius and normalised flux) and both `density_gather` passes,
-//! each within [`DENSITY_GATHER_REL`] of the magnitudes it gathers (the argument is
-//! there), the radius it passes through bitwise equal.
+//! The density gather's three kernels on the reference's inputs, in one verdict
+//! ([`check_density_gather`], here with the last of them):
+//! `photon_count_table` ([`super::photon_count_table`]: the summed-area table, integer
+//! sums, and the edge texels, copies: bitwise equal), `gather_footprint`
+//! ([`super::gather_footprint`]: radius and normalised flux) and both `density_gather`
+//! passes, each within [`DENSITY_GATHER_REL`] of the magnitudes it gathers (the argument
+//! is there), the radius it passes through bitwise equal.
 
+use super::gather_footprint::check_footprint;
+use super::photon_count_table::check_count_table;
 use crate::harness::fixture::{Fixture, ReferenceInputs};
 use crate::harness::tolerance::{
     flushed_sum_allowance, DENSITY_GATHER_REL, RESOLVE_COS_REL, RESOLVE_REL,
@@ -114,54 +118,9 @@ pub fn check_density_gather(
     let cam = fx.camera;
     let reach = fx.settings.max_radius_px as i32;
 
-    // integer sums of the same counts: bitwise; the edge texels are copies of the
-    // G-buffer's bits (or the not-a-receiver mark): bitwise
-    let (ta, ea) = fx.run_count_table(r, &inputs.gbuffer, &inputs.photon_map)?;
-    let (tb, eb) = fx.run_count_table(c, &inputs.gbuffer, &inputs.photon_map)?;
-    let differ = ta.iter().zip(&tb).filter(|(a, b)| a != b).count();
-    v.check(differ == 0, || {
-        format!(
-            "photon_count_table differs on {differ} of {} entries",
-            ta.len()
-        )
-    });
-    let differ = ea
-        .iter()
-        .zip(&eb)
-        .filter(|(a, b)| a.map(f32::to_bits) != b.map(f32::to_bits))
-        .count();
-    v.check(differ == 0, || {
-        format!("photon_count_table's edge texels differ on {differ} pixels")
-    });
+    check_count_table(&mut v, fx, inputs, r, c)?;
 
-    let (fa, grid_a) = fx.run_footprint(r, &inputs.edge, &inputs.photon_map, &inputs.table)?;
-    let (fb, grid_b) = fx.run_footprint(c, &inputs.edge, &inputs.photon_map, &inputs.table)?;
-    // the source index is an integer function of the kernel's own output: equal
-    for (who, f, grid) in [("reference", &fa, &grid_a), ("candidate", &fb, &grid_b)] {
-        let want = fx.source_index_of(fx.empty_source_index(), 0, f);
-        v.check(*grid == want, || {
-            format!("gather_footprint's source index on the {who} is not its output's")
-        });
-    }
-    // the radius is ~7 ulp from the same integers: compared as a channel
-    let radius: Vec<[f32; 4]> = fa.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
-    let radius_b: Vec<[f32; 4]> = fb.iter().map(|p| [p[3], 0.0, 0.0, 0.0]).collect();
-    compare(
-        &mut v,
-        "gather_footprint radius",
-        &cam,
-        (&radius, &radius_b),
-        &|_, _| (DENSITY_GATHER_REL, 0.0, 0.0),
-        false,
-    );
-    compare(
-        &mut v,
-        "gather_footprint flux",
-        &cam,
-        (&fa, &fb),
-        &|_, _| (DENSITY_GATHER_REL, 0.0, 0.0),
-        false,
-    );
+    check_footprint(&mut v, fx, inputs, r, c)?;
 
     for axis in 0..2u32 {
         let input = if axis == 0 {

@@ -3,16 +3,33 @@
 //! fixed-point stored-flux counter within the diverged photons' flux, and
 //! [`PHOTON_MATCH`] of each backend's photons matched by one of the other's within
 //! [`PHOTON_POSITION_REL`] of the scene diagonal, in both directions.
+//!
+//! [`check_fused_trace`] checks CausticMap's fused pass, `trace_photons`' `fused_deposit`
+//! variant, on the backend under test against the CPU's atlas deposit of the photons
+//! that the same backend's texture-space trace stores (the variant without
+//! `fused_deposit`: the same code up to where a stored photon goes, and that trace is
+//! `check_trace`'s). The deposit is integer atomics of quanta that are powers of two
+//! (`x / 2^k` is exact under any division bound), so the atlas sums, the reach mask and
+//! the counters (the trace's plus the deposit's) must be **bitwise** equal; under the
+//! stochastic and, on scenes with dielectrics, the deterministic Fresnel split.
 
+use super::gather_caustic_map::{cpu_deposit, params, Deposit, CHECK_ATLAS};
 use crate::harness::fixture::Fixture;
+use crate::harness::fixture::{run_and_free, ReferenceInputs};
 use crate::harness::measure::v3;
 use crate::harness::tolerance::{
     divergence_allowance, photon_flux_match_rel, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL,
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
+use caustica_core::backend::{read_buf, read_photon_map};
+use caustica_core::device::layout::*;
 use caustica_core::device::layout::{counter, Photon};
+use caustica_core::frame::receivers::atlas::layout::{atlas_layout, atlas_receivers, AtlasLayout};
+use caustica_core::kernels::{AtlasDeposit, FusedDeposit, TracePhotons, TraceVariant};
 use caustica_core::math::fixed_point::join_u64;
+use caustica_core::math::map_gather::triangle_reach_words;
+use caustica_core::recording::Recording;
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -335,4 +352,137 @@ pub fn check_trace(
         all.absorb(v);
     }
     Ok(all)
+}
+
+/// Runs the fused trace (`variant` with `fused_deposit`) of light `domains[k]` on `b`
+/// into a cleared atlas of layout `l`.
+fn run_fused_trace(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    k: usize,
+    variant: TraceVariant,
+    split_budget: u32,
+) -> Result<Deposit, String> {
+    let mut rec = Recording::new();
+    // the fused pass stores no photon: one slot, as CausticMap has
+    let photons = rec.create(1, "photons");
+    let photon_count = rec.create(1, "photon count");
+    let counters = rec.create(counter::WORDS as u32, "counters");
+    let sums = rec.create_photon_map(l.texels.len() as u32);
+    rec.clear_photon_map(&sums);
+    let triangle_tiles = rec.upload(&l.triangle_tiles, "triangle tiles");
+    let tiles = rec.upload(&l.tiles, "tiles");
+    let triangle_reach = rec.create(
+        triangle_reach_words(l.triangle_tiles.len() as u32),
+        "triangle reach",
+    );
+    rec.clear(triangle_reach);
+    rec.kernel(TracePhotons {
+        scene: fx.args,
+        variant,
+        params: TraceParams {
+            split_budget,
+            ..fx.trace_batch(k)
+        },
+        photons,
+        photon_count,
+        counters,
+        clusters: None,
+        deposit: Some(FusedDeposit::Atlas(AtlasDeposit {
+            params: params(l, 1, 1),
+            triangle_tiles,
+            tiles,
+            triangle_reach,
+            sums,
+        })),
+    });
+    run_and_free(b, "trace_photons (atlas deposit)", &rec, |b| {
+        Ok((
+            read_photon_map(b, &sums)?,
+            read_buf(b, counters)?,
+            read_buf(b, triangle_reach)?,
+        ))
+    })
+}
+
+/// Branches per emitted photon of the checked deterministic split.
+const CHECK_SPLIT_BUDGET: u32 = 4;
+
+/// The fused trace on every light of the fixture's scene (see the module doc).
+pub fn check_fused_trace(
+    fx: &Fixture,
+    _inputs: &ReferenceInputs,
+    _r: &mut dyn Backend,
+    c: &mut dyn Backend,
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("trace_photons (atlas deposit)");
+    // every other receiver left out, so that photons also land where no tile is
+    let mut receivers = atlas_receivers(&fx.scene);
+    let tiled: Vec<usize> = (0..receivers.len()).filter(|&i| receivers[i]).collect();
+    if tiled.len() > 1 {
+        for i in tiled.into_iter().skip(1).step_by(2) {
+            receivers[i] = false;
+        }
+    }
+    let Some(l) = receivers
+        .iter()
+        .any(|r| *r)
+        .then(|| atlas_layout(&fx.ds, &receivers, (CHECK_ATLAS, CHECK_ATLAS)).ok())
+        .flatten()
+    else {
+        return Ok(v);
+    };
+    let stochastic = TraceVariant {
+        surface_store: true,
+        ..fx.trace_variant()
+    };
+    let mut variants = vec![(stochastic, 1)];
+    if stochastic.dielectric {
+        let split = TraceVariant {
+            fresnel_split: true,
+            ..stochastic
+        };
+        variants.push((split, CHECK_SPLIT_BUDGET));
+    }
+    for (variant, budget) in variants {
+        for k in 0..fx.constants.domains.len() {
+            let label = format!(
+                "light domain {k}{}",
+                if variant.fresnel_split { ", split" } else { "" }
+            );
+            let (photons, trace_counters) =
+                fx.run_trace_as(c, k, variant, |p| p.split_budget = budget)?;
+            let fused = TraceVariant {
+                fused_deposit: true,
+                ..variant
+            };
+            let (sums, counters, reach) = run_fused_trace(fx, c, &l, k, fused, budget)?;
+            let (es, deposit_counters, er) = cpu_deposit(&l, &photons);
+            // the trace and the deposit count disjoint words (their sum is the fused one's)
+            let ec: Vec<u32> = trace_counters
+                .iter()
+                .zip(&deposit_counters)
+                .map(|(t, d)| t.wrapping_add(*d))
+                .collect();
+            v.check(reach == er, || {
+                let differ = er.iter().zip(&reach).filter(|(a, b)| a != b).count();
+                format!("{label}: {differ} words of the triangle reach mask differ")
+            });
+            v.check(counters == ec, || {
+                format!("{label}: counters differ: expected {ec:?}, fused {counters:?}")
+            });
+            let equal = es.iter().zip(&sums).filter(|(a, b)| a == b).count();
+            v.check(equal == es.len(), || {
+                format!(
+                    "{label}: {} of {} atlas texels differ from the deposit of the trace's \
+                     {} photons (integer atomics must agree bitwise)",
+                    es.len() - equal,
+                    es.len(),
+                    photons.len()
+                )
+            });
+        }
+    }
+    Ok(v)
 }

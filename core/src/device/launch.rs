@@ -30,6 +30,10 @@ pub enum LaunchArg {
     Count(u32),
 }
 
+/// Threads per workgroup of the kernels that do not say otherwise (every kernel today; the
+/// shaders' `WORKGROUP_SIZE`).
+pub const DEFAULT_WORKGROUP_SIZE: u32 = 64;
+
 /// A kernel launch: `threads` work-items in groups of `workgroup_size` (kernels skip the
 /// excess of the last group).
 #[derive(Clone, Debug, PartialEq)]

@@ -768,6 +768,11 @@ pub const MAX_SPLIT_BRANCHES: u32 = 32;
 /// Length of [`TraceParams::caster_spheres`].
 pub const MAX_CASTER_SPHERES: usize = 8;
 
+/// Largest `max_specular_depth` ([`DirectParams`], [`MapLookupParams`]): GPU kernels walk
+/// the specular ray tree with a fixed stack of `MAX_SPECULAR_DEPTH + 1` entries (a
+/// depth-first walk of a binary tree of depth `d` holds at most `d + 1` pending rays).
+pub const MAX_SPECULAR_DEPTH: u32 = 30;
+
 /// Parameters of `deposit_screen` and `resolve_caustics`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -983,6 +988,13 @@ pub fn off_surface(
         (z - depth).abs() > tolerance * depth
     }
 }
+
+/// `trace_indirect`'s visibility test's tolerance ([`off_surface`]'s negative form: within
+/// 1% of the view depth of the pixel's tangent plane). Without it photons of a room hidden
+/// behind a wall counted in the tiles they project to and shrank the visible photons'
+/// kernels there (Eqs. 3-6: `rooms` showed 1500-6500 photons per 16 x 16 tile and
+/// one-pixel speckles).
+pub const VISIBLE_TOLERANCE: f32 = -0.01;
 
 /// Projects world point `p` to continuous pixel coordinates (x right, y down; pixel `i`
 /// spans `[i, i + 1)`) and view depth, on screen or not; `None` when it is not in front

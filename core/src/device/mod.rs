@@ -1,7 +1,9 @@
 //! The device layer: what crosses to a backend. [`layout`]: the `#[repr(C)]` Pod element
 //! layouts shared with every shader (and the functions over them that shaders mirror);
 //! [`layout_table`]: a description of those layouts (fields, offsets, 4-byte leaves) that
-//! the shader crates' layout tests compare with; [`device_scene`]: a scene flattened to
+//! the shader crates' layout tests compare with; [`shader_constants`]: the constants the
+//! shaders share with core, listed once; [`shader_layouts`]: the generator of the shaders'
+//! declarations of both; [`device_scene`]: a scene flattened to
 //! those layouts with its two-level CWBVH ([`acceleration`]: how the node buffer holds it); [`handle`]: typed opaque buffer handles; [`launch`]: a
 //! lowered kernel launch; [`error`]: typed failures. Imports only [`crate::math`] and
 //! [`crate::scene`].
@@ -14,6 +16,8 @@ pub mod handle;
 pub mod launch;
 pub mod layout;
 pub mod layout_table;
+pub mod shader_constants;
+pub mod shader_layouts;
 
 pub use device_scene::DeviceScene;
 pub use error::{host_bytes, BackendError};

@@ -5,12 +5,7 @@ use super::{
 };
 use crate::device::error::BackendError;
 use crate::device::handle::{GBufferPlanes, ImageBuf, SceneArgs};
-use crate::device::layout::DirectParams;
-
-/// Largest `max_specular_depth`: GPU kernels walk the specular ray tree with a fixed
-/// stack of `MAX_SPECULAR_DEPTH + 1` entries (a depth-first walk of a binary tree of depth
-/// `d` holds at most `d + 1` pending rays).
-pub const MAX_SPECULAR_DEPTH: u32 = 30;
+use crate::device::layout::{DirectParams, MAX_SPECULAR_DEPTH};
 
 /// Direct lighting with shadow rays at every diffuse G-buffer texel, and specular chains
 /// (mirror reflection, Fresnel-weighted reflection and refraction) from mirror and glass

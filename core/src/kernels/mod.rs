@@ -12,8 +12,10 @@
 //! CPU backend matches [`Kernel`] exhaustively, so a new kernel without a CPU arm does
 //! not compile.
 //!
-//! Adding a kernel: a file here, one line in `kernel_list!`, then its CPU function, WGSL,
-//! OpenCL C (and GLSL stage if traced) and conformance check; see CONTRIBUTING.md.
+//! Adding a kernel: a file here, one line in `kernel_list!` and its name in
+//! [`with_shader_kernels!`](crate::with_shader_kernels) (the WGSL and OpenCL kernel tables),
+//! then its CPU function, WGSL, OpenCL C (and GLSL stage if traced) and conformance check,
+//! each in a file named as the kernel; see CONTRIBUTING.md.
 
 mod atrous_filter;
 mod bilateral_gather;
@@ -44,7 +46,7 @@ pub use caustic_map_lookup::CausticMapLookup;
 pub use composite::Composite;
 pub use density_gather::DensityGather;
 pub use deposit_screen::DepositScreen;
-pub use direct_light::{DirectLight, MAX_SPECULAR_DEPTH};
+pub use direct_light::DirectLight;
 pub use gather_caustic_map::GatherCausticMap;
 pub use gather_footprint::GatherFootprint;
 pub use photon_count_table::PhotonCountTable;
@@ -58,13 +60,14 @@ pub use shading_normal_correction::ShadingNormalCorrection;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
-pub use trace_indirect::{TraceIndirect, VISIBLE_TOLERANCE};
+pub use trace_indirect::TraceIndirect;
 pub use trace_photons::{AtlasDeposit, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant};
 
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
-pub use crate::device::launch::{variant_label, variant_labels};
+pub use crate::device::launch::{variant_label, variant_labels, DEFAULT_WORKGROUP_SIZE};
 use crate::device::launch::{Launch, LaunchArg};
+pub use crate::device::layout::{MAX_SPECULAR_DEPTH, VISIBLE_TOLERANCE};
 
 /// How a kernel binds one of its launch arguments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -143,9 +146,6 @@ pub struct KernelInfo {
     /// Techniques that use it.
     pub used_by: &'static str,
 }
-
-/// Threads per workgroup of the kernels that do not say otherwise.
-pub const DEFAULT_WORKGROUP_SIZE: u32 = 64;
 
 impl KernelInfo {
     /// A compute kernel (no ray tracing, no switches) of [`DEFAULT_WORKGROUP_SIZE`].
@@ -509,6 +509,41 @@ kernel_list! {
     ShadingNormalCorrection => shading_normal_correction,
 }
 
+/// Calls macro `$m` with the registry names of the kernels that have shader code, every
+/// kernel of `kernel_list!` but `prepare_scene` (which launches nothing on a device), in
+/// the order the OpenCL program appends their files. caustica-shaders and caustica-opencl
+/// build their kernel tables from it (`wgsl/<name>.wgsl`, `kernels/<name>.cl`, read with
+/// `include_str!`, so a missing file fails their build); a unit test below checks it
+/// against [`KERNELS`].
+#[macro_export]
+macro_rules! with_shader_kernels {
+    ($m:ident) => {
+        $m! {
+            primary_gbuffer,
+            direct_light,
+            trace_photons,
+            deposit_screen,
+            resolve_caustics,
+            tile_hit_distance,
+            bilateral_gather,
+            photon_count_table,
+            gather_footprint,
+            density_gather,
+            composite,
+            gather_caustic_map,
+            caustic_map_lookup,
+            refine_clusters,
+            temporal_blend,
+            atrous_filter,
+            shading_normal_correction,
+            rsm_importance,
+            sample_rsm,
+            trace_indirect,
+            splat_photons,
+        }
+    };
+}
+
 impl Kernel {
     /// The registry name of this kernel.
     pub fn name(&self) -> &'static str {
@@ -569,6 +604,25 @@ pub fn all_kernel_names() -> Vec<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `with_shader_kernels!` names every kernel of the list but `prepare_scene`, once.
+    #[test]
+    fn shader_kernels_are_the_list_but_prepare_scene() {
+        macro_rules! names {
+            ($($n:ident),* $(,)?) => {
+                [$(stringify!($n)),*]
+            };
+        }
+        let mut shader: Vec<&str> = crate::with_shader_kernels!(names).to_vec();
+        let mut list: Vec<&str> = KERNELS
+            .iter()
+            .map(|k| k.name)
+            .filter(|n| *n != "prepare_scene")
+            .collect();
+        shader.sort_unstable();
+        list.sort_unstable();
+        assert_eq!(shader, list);
+    }
 
     #[test]
     fn names_are_unique_and_snake_case() {

@@ -7,19 +7,12 @@ use crate::device::handle::{Buf, GBufferPlanes, SceneArgs};
 use crate::device::layout::{IndirectTraceParams, RsmPhoton};
 use crate::math::gi_photon::screen_tiles;
 
-/// The visibility test's tolerance (`layout::off_surface`'s negative form: within 1% of
-/// the view depth of the pixel's tangent plane). Without it photons of a room hidden
-/// behind a wall counted in the tiles they project to and shrank the visible photons'
-/// kernels there (Eqs. 3-6: `rooms` showed 1500-6500 photons per 16 x 16 tile and
-/// one-pixel speckles).
-pub const VISIBLE_TOLERANCE: f32 = -0.01;
-
 /// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s).
 /// At a diffuse hit a photon that has bounced diffusely at least once (all do: the RSM
 /// point is the first bounce, or a specular RSM point leads to a later one) is stored
 /// if the hit faces the camera, projects inside its view and the camera sees it there (a
 /// receiver pixel whose tangent plane it lies on, `layout::off_surface` with
-/// [`VISIBLE_TOLERANCE`]) (`GiPhoton`s, or float `Photon`s with `params.store` =
+/// [`VISIBLE_TOLERANCE`](crate::device::layout::VISIBLE_TOLERANCE)) (`GiPhoton`s, or float `Photon`s with `params.store` =
 /// `gi_store::FLOAT`), and its screen tile's count in `tile_counts` goes up; then, below `params.max_bounces` diffuse bounces, it survives
 /// Jensen's roulette (`math::rsm::russian_roulette`) and leaves in a cosine direction.
 /// Mirrors scale the flux by their colour; dielectrics reflect or refract by Fresnel

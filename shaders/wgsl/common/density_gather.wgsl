@@ -6,8 +6,6 @@
 // edge_texel in photon_count_table.wgsl, the one kernel that reads the photon counts and
 // writes the edge texels.
 
-const MIN_WINDOW_HALF_WIDTH: i32 = 1;
-
 // k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
 fn knn_radius(k: u32, pixels: u32, photons: u32) -> f32 {
     return 0.5 * sqrt(f32(k) * f32(pixels) / f32(photons));
@@ -101,7 +99,6 @@ fn gather_normaliser(p: GatherParams, x: i32, y: i32, r: f32, axis: u32) -> f32 
 
 // The pixel thread t of density_gather's column pass takes: 8 x 8 tiles, 64 threads each
 // (core's column_pass_pixel); x >= w or y >= h for the padding of edge tiles.
-const COLUMN_PASS_TILE: u32 = 8u;
 fn column_pass_pixel(t: u32, w: u32) -> vec2<u32> {
     let tile = t / (COLUMN_PASS_TILE * COLUMN_PASS_TILE);
     let l = t % (COLUMN_PASS_TILE * COLUMN_PASS_TILE);

@@ -1,8 +1,6 @@
 // Mirror of core/src/footprint.rs and backend-opencl/kernels/footprint.cl: 000 Eq. 4 pixel
 // footprint and its obliquity correction.
 
-const MIN_COSINE: f32 = 1e-4f;
-
 // 000 Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
 fn pixel_footprint(depth: f32, width: u32, height: u32, tan_half_fov_x: f32,
                    tan_half_fov_y: f32) -> f32 {

@@ -106,12 +106,8 @@ fn intersect_triangle(origin: vec3<f32>, dir: vec3<f32>, v0: vec3<f32>, v1: vec3
     return intersect_watertight(&r, v0, v1, v2, t_min, t_max, hit);
 }
 
-// Scale-aware offset: p + n * (2^-15 * largest |coordinate|), see core/src/geometry.rs.
-const OFFSET_REL: f32 = 1.0f / 32768.0f;
-const OFFSET_MIN_SCALE: f32 = 7.888609e-31f;
-
-// core::math::geometry::SPHERE_TEST_SLACK (2^-16)
-const SPHERE_TEST_SLACK: f32 = 1.52587890625e-5;
+// Scale-aware offset: p + n * (OFFSET_REL = 2^-15 * largest |coordinate|), see
+// core/src/geometry.rs.
 
 // core::math::geometry::ray_meets_sphere: whether the ray origin + t dir (t >= 0) may meet
 // the ball (centre xyz, radius w); false only outside the test's rounding slack.

@@ -3,9 +3,6 @@
 // `atlas_area(i)` (texel i's world area, 0 where uncovered) and `atlas_flux(i)` (its
 // flux, W).
 
-// core::math::map_gather::TILE_FULLY_COVERED (a tile's fourth word)
-const TILE_FULLY_COVERED: u32 = 0x80000000u;
-
 // core::math::map_gather::window_coverage: the covered texels of source (qx, qy)'s window.
 fn window_coverage(tile: vec4<u32>, qx: u32, qy: u32, n: u32, atlas_width: u32) -> u32 {
     let cw = tile_window(tile, qx, qy, n);

@@ -3,8 +3,6 @@
 // than a texel. Reads the atlas through functions the kernel module defines: `atlas_area(i)`
 // and `map_irradiance(i)` (W/m^2).
 
-const MAX_FOOTPRINT_TEXELS: f32 = 32.0;
-
 fn footprint_texels(pixel_angle: f32, distance: f32, cos_in: f32, texel_area: f32) -> f32 {
     let w = pixel_angle * distance;
     let area = w * w / max(abs(cos_in), 1e-3);

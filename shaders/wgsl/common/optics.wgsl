@@ -48,9 +48,6 @@ fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
     return r0 + (1.0 - r0) * x * x * x * x * x;
 }
 
-// core: optics::fresnel_model values
-const FRESNEL_SCHLICK: u32 = 1u;
-
 // The reflectance under `model` (core: optics::fresnel_reflectance).
 fn fresnel_reflectance(cos_i: f32, eta: f32, model: u32) -> f32 {
     if (model == FRESNEL_SCHLICK) {
@@ -66,7 +63,6 @@ fn beer_lambert(sigma_a: vec3<f32>, distance: f32) -> vec3<f32> {
 
 // Wavelengths (micrometres) of the red, green and blue photon channels.
 const CHANNEL_WAVELENGTH_UM = array<f32, 3>(0.65f, 0.55f, 0.45f);
-const REFERENCE_WAVELENGTH_UM: f32 = 0.55f;
 
 fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
     let a = ior - cauchy_b / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM);
@@ -91,9 +87,8 @@ fn dielectric_scatter(incident: vec3<f32>, shading_normal: vec3<f32>, entering: 
     return reflect(incident, facing);
 }
 
-// Largest radiance, irradiance or scale factor a kernel carries: f32::MAX (core:
-// optics::RADIANCE_MAX). Overflow saturates instead of becoming Inf (and Inf * 0 = NaN).
-const RADIANCE_MAX: f32 = 0x1.fffffep+127f;
+// Radiance, irradiance and scale factors saturate at RADIANCE_MAX (f32::MAX, core:
+// optics::RADIANCE_MAX) instead of becoming Inf (and Inf * 0 = NaN).
 
 fn saturate_radiance(x: f32) -> f32 {
     return min(x, RADIANCE_MAX);

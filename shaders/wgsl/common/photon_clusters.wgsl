@@ -1,19 +1,6 @@
 // Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics).
 
-const NO_TRIANGLE: u32 = 0xffffffffu;
-const CLUSTER_METRIC_ERROR: u32 = 1u;
-const CLUSTER_DISCARDED: u32 = 0u;
-const CLUSTER_OUTPUT: u32 = 1u;
-const CLUSTER_REFINED: u32 = 2u;
-// core::device::layout::cluster_count words
-const CLUSTER_COUNT_CHILDREN: u32 = 0u;
-const CLUSTER_COUNT_OUTPUT: u32 = 1u;
-const CLUSTER_COUNT_DISCARDED: u32 = 2u;
-const CLUSTER_COUNT_OUTPUT_PHOTONS: u32 = 3u;
-const CLUSTER_COUNT_CONVERGED: u32 = 4u;
-
-const CLUSTER_ID_MASK: u32 = 0x3fffffffu;
-const MAX_ERROR_TEXELS: u32 = 4u;
+// Its constants (NO_TRIANGLE, CLUSTER_*, MAX_ERROR_TEXELS) are in layout.wgsl.
 
 fn cluster_entry(cluster: u32, spread: u32) -> u32 {
     return (cluster & CLUSTER_ID_MASK) | ((clamp(spread, 1u, MAX_ERROR_TEXELS) - 1u) << 30u);
@@ -70,9 +57,6 @@ fn cluster_fate(any_met_caster: bool, converged: bool, level: u32, finest: u32, 
     }
     return CLUSTER_REFINED;
 }
-
-const CLUSTER_RELEVANCE_BOUNDS: u32 = 1u;
-const CLUSTER_TARGET_SCREEN: u32 = 1u;
 
 fn slot_stored(flux: vec3<f32>) -> bool {
     return flux.x > 0.0f || flux.y > 0.0f || flux.z > 0.0f;

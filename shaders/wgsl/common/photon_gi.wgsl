@@ -249,7 +249,7 @@ fn gbuffer_pixel_area(cam: GpuCamera, index: u32, g: GBufferTexel) -> f32 {
     return pixel_surface_area(footprint, dot3(ray, cam.forward), dot3(ray, g.normal));
 }
 
-// backend-cpu photon_gi::splat_reach_px: half-width in pixels a splat of bounding radius
+// backend-cpu splat_photons::splat_reach_px: half-width in pixels a splat of bounding radius
 // `radius` around view depth z can reach; 0xffffffff when it reaches the camera plane.
 fn splat_reach_px(p: SplatParams, radius: f32, z: f32) -> u32 {
     let near = z - radius;

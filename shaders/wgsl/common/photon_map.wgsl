@@ -1,6 +1,6 @@
 // The screen photon map's planes (core::device::layout::DEPOSIT_PLANES): a kernel that
 // needs this file declares `photon_map0`, `photon_map1` (4 words a pixel) and
-// `photon_map2` (2 words a pixel) as `array<u32>`; `deposit_word` (types.wgsl) finds a
+// `photon_map2` (2 words a pixel) as `array<u32>`; `deposit_word` (prelude.wgsl) finds a
 // texel word in them.
 
 // Word `word` of pixel `pixel`'s DepositTexel.

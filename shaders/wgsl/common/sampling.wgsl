@@ -3,7 +3,6 @@
 
 // core::math::sampling::tiled_photon_index: the row-major grid index of the g-th photon
 // in tile order (8 x 8 tiles, bands of tiles left to right; a warp's photons in one block).
-const PHOTON_TILE: u32 = 8u;
 fn tiled_photon_index(g: u32, grid_w: u32, grid_h: u32) -> u32 {
     if (grid_w == 0u || grid_h == 0u) {
         return g;
@@ -22,7 +21,7 @@ fn stratified_cell(ix: u32, iy: u32, grid_w: u32, grid_h: u32, jitter: vec2<f32>
 }
 
 // sin and cos: WGSL bounds their error only absolutely (2^-11 on [-pi, pi]); drivers do
-// much better, but not Rust's libm (see types.wgsl).
+// much better, but not Rust's libm (see prelude.wgsl).
 fn uniform_cone(u: vec2<f32>, cos_max: f32) -> vec3<f32> {
     let cos_t = 1.0 - u.x * (1.0 - cos_max);
     let sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));

@@ -6,8 +6,6 @@
 // row pass's reach grid, the column pass's, the row pass's source mask, the column
 // pass's).
 
-const REACH_TILE: i32 = 8;
-
 // The largest |offset| at which footprint_weight(offset, radius) can be nonzero, capped
 // at `cap`; -1 where none.
 fn footprint_reach(radius: f32, cap: i32) -> i32 {

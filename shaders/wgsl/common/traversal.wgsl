@@ -132,9 +132,6 @@ fn affine_row(r: vec4<u32>, p: vec3<f32>, w: f32) -> f32 {
            w * bitcast<f32>(r.w);
 }
 
-// Instance record flag: the level is in world space (core's instance_flags::IDENTITY).
-const INSTANCE_IDENTITY: u32 = 1u;
-
 // The ray as one level's nodes see it (the CPU backend's LevelRay; its watertight form is
 // a separate variable: naga's SPIR-V output cannot pass a pointer into a struct member).
 // `t_scale` takes the ray's t to the culling ray's (1 in world space).

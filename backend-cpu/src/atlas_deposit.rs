@@ -1,28 +1,21 @@
-//! CausticMap's kernels (seed 001): the atlas deposit (texture-space photons into the
-//! atlas's fixed-point sums: `trace_photons`' `fused_deposit` variant), `gather_caustic_map` (the flux-keeping N x N gather as
-//! irradiance) and `caustic_map_lookup` (camera paths read the map). The math is core's
+//! The atlas deposit of CausticMap (seed 001): texture-space photons into the atlas's
+//! fixed-point sums, as `trace_photons`' fused atlas deposit and `refine_clusters` add
+//! them (the WGSL ports' `common/atlas_deposit.wgsl`). The math is core's
 //! `math::map_gather`; these are loops over it.
 
-use super::deposit_screen::{
+use crate::kernels::deposit_screen::{
     add_photon_map_u64, deposit_photon_texel, photon_flux_units, MapPlanes,
 };
-use super::direct_light::specular_tree;
-use super::Counters;
-use crate::traversal::SceneView;
+use crate::kernels::Counters;
 use caustica_core::device::layout::{
-    camera_ray, counter, deposit_from_planes, AtlasParams, AtlasTexel, AtlasTileTexel,
-    DepositTexel, MapLookupParams, Photon, PhotonMapView, DEPOSIT_PLANE_WORDS, NO_TILE,
+    counter, deposit_from_planes, AtlasParams, AtlasTileTexel, DepositTexel, Photon,
+    DEPOSIT_PLANE_WORDS, NO_TILE,
 };
 use caustica_core::math::fixed_point::quantize;
-use caustica_core::math::map_gather::{
-    atlas_texel_index, footprint_extent, footprint_texels, gather_caustic_texel, join_u64_f32,
-    sample_caustic_map, triangle_reach_bit,
-};
-use caustica_core::math::optics::saturate_radiance3;
+use caustica_core::math::map_gather::{atlas_texel_index, triangle_reach_bit};
 use caustica_core::math::photon_clusters::{footprint_share, footprint_window};
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use rayon::prelude::*;
-use std::f32::consts::PI;
 use std::sync::atomic::AtomicU64;
 
 /// Deposits every texture-space photon into the atlas sums (flux r, g, b in flux quanta,
@@ -196,113 +189,4 @@ pub fn atlas_photon_texel(
     }
     let uv = Vec2::new(ph.position[0], ph.position[1]);
     atlas_texel_index(tiles[tile as usize], uv, width)
-}
-
-/// The flux (W per channel) of atlas texel `i`'s fixed-point sums.
-pub fn atlas_flux(map: &PhotonMapView, i: u32, quantum: f32) -> Vec3 {
-    let ch = |c: u32| {
-        join_u64_f32(
-            map.photon_map_word(i, 2 * c),
-            map.photon_map_word(i, 2 * c + 1),
-        ) * quantum
-    };
-    Vec3::new(ch(0), ch(1), ch(2))
-}
-
-/// The caustic map: irradiance (W/m^2 per channel, alpha 1) per atlas texel.
-pub fn gather_caustic_map(
-    p: &AtlasParams,
-    texels: &[AtlasTexel],
-    tiles: &[AtlasTileTexel],
-    map: PhotonMapView,
-) -> Vec<[f32; 4]> {
-    let n = p.width as usize * p.height as usize;
-    (0..n as u32)
-        .into_par_iter()
-        .map(|t| {
-            let tile = texels[t as usize][1];
-            if tile == NO_TILE || tile as usize >= tiles.len() {
-                return [0.0, 0.0, 0.0, 1.0];
-            }
-            let e = gather_caustic_texel(
-                tiles[tile as usize],
-                t % p.width,
-                t / p.width,
-                p.gather_width,
-                p.width,
-                |q| atlas_flux(&map, q, p.flux_quantum),
-                |q| f32::from_bits(texels[q as usize][0]),
-            );
-            [e.x, e.y, e.z, 1.0]
-        })
-        .collect()
-}
-
-/// Caustic radiance per pixel (W/(sr m^2), alpha 1): the camera ray's specular tree
-/// reading the caustic map at every diffuse end.
-#[allow(clippy::too_many_arguments)]
-pub fn caustic_map_lookup(
-    scene: &SceneView,
-    p: &MapLookupParams,
-    triangle_tiles: &[u32],
-    tiles: &[AtlasTileTexel],
-    texels: &[AtlasTexel],
-    map: &[[f32; 4]],
-) -> Vec<[f32; 4]> {
-    let cam = &p.camera;
-    let (w, h) = (cam.width, cam.height);
-    let pixel_angle = 2.0 * cam.tan_half_fov_y / h as f32;
-    (0..w * h)
-        .into_par_iter()
-        .map(|i| {
-            let l = specular_tree(
-                scene,
-                p.max_specular_depth,
-                p.min_weight,
-                p.fresnel_model,
-                Vec3::from(cam.position),
-                camera_ray(cam, i % w, i / w),
-                |hit, s, m, _, _, distance, cos, dir| {
-                    let tile = triangle_tiles[hit.triangle as usize];
-                    if tile == NO_TILE {
-                        return Vec3::ZERO;
-                    }
-                    let t = tiles[tile as usize];
-                    let tri = &scene.triangles[hit.triangle as usize];
-                    let v = tri.indices.map(|k| &scene.vertices[k as usize]);
-                    let mut extent = footprint_extent(
-                        dir,
-                        Vec3::from(cam.right),
-                        pixel_angle * distance,
-                        v.map(|v| Vec3::from(v.position)),
-                        v.map(|v| Vec2::new(v.u, v.v)),
-                        t[2],
-                    );
-                    if extent.x < 0.0 {
-                        // no UV Jacobian: the isotropic footprint
-                        let texel = atlas_texel_index(t, s.uv, p.atlas_width);
-                        extent = Vec2::splat(
-                            0.5 * footprint_texels(
-                                pixel_angle,
-                                distance,
-                                cos,
-                                f32::from_bits(texels[texel as usize][0]),
-                            ),
-                        );
-                    }
-                    let e = sample_caustic_map(
-                        t,
-                        s.uv,
-                        extent,
-                        p.atlas_width,
-                        |q| Vec3::from_slice(&map[q as usize][..3]),
-                        |q| f32::from_bits(texels[q as usize][0]),
-                    );
-                    Vec3::from_slice(&m.color[..3]) / PI * e
-                },
-            );
-            let l = saturate_radiance3(l);
-            [l.x, l.y, l.z, 1.0]
-        })
-        .collect()
 }

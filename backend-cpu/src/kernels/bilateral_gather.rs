@@ -1,5 +1,5 @@
-//! Photon gathering (seed 000 section 30.3.2): `tile_hit_distance` and the separable,
-//! edge-aware `bilateral_gather`.
+//! Photon gathering (seed 000 section 30.3.2): the separable, edge-aware
+//! `bilateral_gather` (the tile hit distances come from [`super::tile_hit_distance`]).
 //!
 //! The source denoises with a reflection denoiser fed with a constant roughness (0.07) and
 //! the photons' last hit distance clamped to [min, max]. Here the blur radius of a pixel
@@ -10,39 +10,10 @@
 //! `max(0, n . n')^normal_power`; only RECEIVER pixels take part. Two 1-D passes
 //! (horizontal then vertical) approximate the 2-D filter.
 
-use caustica_core::device::layout::{
-    gbuffer_flags, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
-};
-use caustica_core::math::fixed_point::join_u64;
+use caustica_core::device::layout::{gbuffer_flags, GBufferTexel, GBufferView, GatherParams};
 use caustica_core::math::footprint::pixel_footprint;
 use glam::Vec3;
 use rayon::prelude::*;
-
-/// Photon-weighted mean hit distance (scene units) per `tile_size^2` tile, row-major; 0 for
-/// tiles without photons.
-pub fn tile_hit_distance(p: &GatherParams, map: PhotonMapView) -> Vec<f32> {
-    let (w, h, ts) = (p.camera.width, p.camera.height, p.tile_size);
-    let (tw, th) = (w.div_ceil(ts), h.div_ceil(ts));
-    (0..tw * th)
-        .into_par_iter()
-        .map(|t| {
-            let (tx, ty) = (t % tw, t / tw);
-            let (mut sum, mut n) = (0u64, 0u64);
-            for y in ty * ts..((ty + 1) * ts).min(h) {
-                for x in tx * ts..((tx + 1) * ts).min(w) {
-                    let m = &map.load((y * w + x) as usize);
-                    sum += join_u64(m.hit_distance);
-                    n += join_u64(m.photons);
-                }
-            }
-            if n == 0 {
-                0.0
-            } else {
-                (sum as f64 * p.hit_distance_quantum as f64 / n as f64) as f32
-            }
-        })
-        .collect()
-}
 
 /// Gather radius in pixels at a receiver pixel.
 pub fn gather_radius_px(p: &GatherParams, g: &GBufferTexel, tile_hit_distance: f32) -> f32 {

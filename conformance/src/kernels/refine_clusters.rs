@@ -1,6 +1,6 @@
 //! AdaptiveCaustics' kernels (`trace_photons`' `ADAPTIVE` variant and `refine_clusters`),
 //! checked on the fixture's scene with a caustic atlas laid out as for CausticMap's check
-//! ([`super::caustic_map`]): nothing to check where the scene has no receiver tile or no
+//! ([`super::gather_caustic_map`]): nothing to check where the scene has no receiver tile or no
 //! light sees a caster.
 //!
 //! - The adaptive trace: the first light view plane of the first light that has one, on a
@@ -29,7 +29,7 @@
 //!   a photon within a few ulps of a pixel edge may flip a cluster between converged and
 //!   refined: at most [`DEPOSIT_PHOTON_CHANGES`] of the slots (plus 2) may change a fate.
 
-use super::caustic_map::layout;
+use super::gather_caustic_map::layout;
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
 use crate::harness::tolerance::{
     divergence_allowance, photon_flux_match_rel, DEPOSIT_PHOTON_CHANGES, PHOTON_POSITION_REL,

@@ -1,0 +1,84 @@
+//! `caustic_map_lookup` (seed 001): camera paths read the caustic map. The math is
+//! core's `math::map_gather`; this is a loop over it.
+
+use super::direct_light::specular_tree;
+use crate::traversal::SceneView;
+use caustica_core::device::layout::{
+    camera_ray, AtlasTexel, AtlasTileTexel, MapLookupParams, NO_TILE,
+};
+use caustica_core::math::map_gather::{
+    atlas_texel_index, footprint_extent, footprint_texels, sample_caustic_map,
+};
+use caustica_core::math::optics::saturate_radiance3;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::f32::consts::PI;
+
+/// Caustic radiance per pixel (W/(sr m^2), alpha 1): the camera ray's specular tree
+/// reading the caustic map at every diffuse end.
+#[allow(clippy::too_many_arguments)]
+pub fn caustic_map_lookup(
+    scene: &SceneView,
+    p: &MapLookupParams,
+    triangle_tiles: &[u32],
+    tiles: &[AtlasTileTexel],
+    texels: &[AtlasTexel],
+    map: &[[f32; 4]],
+) -> Vec<[f32; 4]> {
+    let cam = &p.camera;
+    let (w, h) = (cam.width, cam.height);
+    let pixel_angle = 2.0 * cam.tan_half_fov_y / h as f32;
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let l = specular_tree(
+                scene,
+                p.max_specular_depth,
+                p.min_weight,
+                p.fresnel_model,
+                Vec3::from(cam.position),
+                camera_ray(cam, i % w, i / w),
+                |hit, s, m, _, _, distance, cos, dir| {
+                    let tile = triangle_tiles[hit.triangle as usize];
+                    if tile == NO_TILE {
+                        return Vec3::ZERO;
+                    }
+                    let t = tiles[tile as usize];
+                    let tri = &scene.triangles[hit.triangle as usize];
+                    let v = tri.indices.map(|k| &scene.vertices[k as usize]);
+                    let mut extent = footprint_extent(
+                        dir,
+                        Vec3::from(cam.right),
+                        pixel_angle * distance,
+                        v.map(|v| Vec3::from(v.position)),
+                        v.map(|v| Vec2::new(v.u, v.v)),
+                        t[2],
+                    );
+                    if extent.x < 0.0 {
+                        // no UV Jacobian: the isotropic footprint
+                        let texel = atlas_texel_index(t, s.uv, p.atlas_width);
+                        extent = Vec2::splat(
+                            0.5 * footprint_texels(
+                                pixel_angle,
+                                distance,
+                                cos,
+                                f32::from_bits(texels[texel as usize][0]),
+                            ),
+                        );
+                    }
+                    let e = sample_caustic_map(
+                        t,
+                        s.uv,
+                        extent,
+                        p.atlas_width,
+                        |q| Vec3::from_slice(&map[q as usize][..3]),
+                        |q| f32::from_bits(texels[q as usize][0]),
+                    );
+                    Vec3::from_slice(&m.color[..3]) / PI * e
+                },
+            );
+            let l = saturate_radiance3(l);
+            [l.x, l.y, l.z, 1.0]
+        })
+        .collect()
+}

@@ -1,0 +1,134 @@
+//! `splat_photons` on the reference's stored photons, tile counts and camera G-buffer:
+//! a pixel's sum changes only where a splat's containment test (a sum of three squared
+//! ratios against 1) or its reach (a `ceil`) lands within a few ulps of the threshold,
+//! ~1e-5 of the splat-pixel pairs: at least
+//! [`DEPOSIT_TEXEL_AGREEMENT`](crate::harness::tolerance::DEPOSIT_TEXEL_AGREEMENT) of the
+//! texels must hold the same number of splats, and those within [`SPLAT_REL`] of the flux
+//! plus one quantum per splat (each contribution `E x area` carries ~40 ulp: the
+//! kernel's normalisations, square roots and divisions, the pixel area's footprint;
+//! rounding to quanta moves each by at most one unit).
+//!
+//! One link of PhotonGi's chain, [`super::shading_normal_correction::check_photon_gi`].
+
+use super::trace_indirect::*;
+use crate::harness::fixture::{run_and_free, Fixture};
+use caustica_core::backend::{read_buf, read_photon_map, Backend};
+use caustica_core::device::layout::{counter, DepositTexel, GBufferTexel, GiPhoton, SplatParams};
+use caustica_core::kernels::SplatPhotons;
+use caustica_core::math::fixed_point::join_u64;
+use caustica_core::recording::Recording;
+
+/// Relative tolerance of a splatted texel's flux (module doc, point 4): 40 ulp ~ 2.4e-6,
+/// 1e-5 with margin.
+pub const SPLAT_REL: f64 = 1e-5;
+
+pub(crate) fn splat_params(fx: &Fixture, power_scale: f32, quantum: f32) -> SplatParams {
+    let d = (fx.ds.bounds.max - fx.ds.bounds.min).length();
+    let cam = fx.camera;
+    SplatParams {
+        camera: cam,
+        tile_size: TILE,
+        power_scale,
+        flux_quantum: quantum,
+        max_splat_px: 12,
+        max_ray_length: 0.5 * d,
+        min_length_scale: 0.1,
+        density_radius_min: 1e-4 * d,
+        density_radius_max: 0.05 * d,
+        photons_per_pixel: 2.0,
+        normal_compression: 0.1,
+        max_stretch: 4.0,
+        tile_constant: caustica_core::math::photon_splat::tile_area_constant(
+            cam.tan_half_fov_x,
+            cam.tan_half_fov_y,
+            (TILE, TILE),
+            (cam.width, cam.height),
+        ),
+        min_splat_px: 1.5,
+        light_direction: 1,
+        _pad: [0; 2],
+    }
+}
+
+pub(crate) fn run_splat(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    gbuffer: &[GBufferTexel],
+    photons: &[GiPhoton],
+    tiles: &[u32],
+    params: SplatParams,
+) -> Result<Splats, String> {
+    let n = fx.camera.width * fx.camera.height;
+    let mut rec = Recording::new();
+    let g = rec.upload_gbuffer(gbuffer);
+    let one = [GiPhoton::default()];
+    let ph = rec.upload(
+        if photons.is_empty() {
+            &one[..]
+        } else {
+            photons
+        },
+        "photons",
+    );
+    let count = rec.upload(&[photons.len() as u32], "count");
+    let t = rec.upload(tiles, "tile counts");
+    let counters = rec.create(counter::WORDS as u32, "counters");
+    let map = rec.create_photon_map(n);
+    let directions = rec.create_photon_map(n);
+    rec.clear(counters);
+    rec.clear_photon_map(&map);
+    rec.clear_photon_map(&directions);
+    rec.kernel(SplatPhotons {
+        params,
+        gbuffer: g,
+        photons: ph,
+        photon_count: count,
+        tile_counts: t,
+        counters,
+        photon_map: map,
+        direction_map: directions,
+    });
+    run_and_free(b, "splat_photons", &rec, |b| {
+        Ok((
+            read_photon_map(b, &map)?,
+            read_buf(b, counters)?,
+            read_photon_map(b, &directions)?,
+        ))
+    })
+}
+
+/// What `splat_photons` writes: the photon map, the counters, the light-direction map.
+pub(crate) type Splats = (Vec<DepositTexel>, Vec<u32>, Vec<DepositTexel>);
+
+/// Point 4 of the module doc: of the splatted texels `ma` / `mb` and their light-direction
+/// sums `da` / `db` (reference, candidate), how many hold the same number of splats and
+/// how many of their channels differ in flux.
+pub(crate) fn splat_agreement(
+    (ma, da): (&[DepositTexel], &[DepositTexel]),
+    (mb, db): (&[DepositTexel], &[DepositTexel]),
+) -> (u64, u64) {
+    let mut same = 0u64;
+    let mut flux_bad = 0u64;
+    // the light-direction sums as the flux's: each contribution w (d + 1) / 2 and w
+    // is a few more roundings of the same `E x area` (a luminance, a sum and a
+    // product: ~5 ulp more, inside SPLAT_REL), plus one quantum per splat
+    for ((a, b), (x_d, y_d)) in ma.iter().zip(mb).zip(da.iter().zip(db)) {
+        if a.photons != b.photons {
+            continue;
+        }
+        same += 1;
+        let splats = join_u64(a.photons) as f64;
+        let words = |t: &DepositTexel| {
+            [t.flux[0], t.flux[1], t.flux[2], t.hit_distance].map(|w| join_u64(w) as f64)
+        };
+        let pairs = (0..3)
+            .map(|ch| (join_u64(a.flux[ch]) as f64, join_u64(b.flux[ch]) as f64))
+            .chain(words(x_d).into_iter().zip(words(y_d)));
+        for (x, y) in pairs {
+            if (x - y).abs() > SPLAT_REL * x.max(y) + splats {
+                flux_bad += 1;
+            }
+        }
+    }
+    (same, flux_bad)
+}

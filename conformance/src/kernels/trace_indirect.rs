@@ -1,0 +1,193 @@
+//! `trace_indirect` on the reference's RSM photons: the stored photons as counts and
+//! flux sums within the path-divergence allowance ([`divergence_allowance`] of the
+//! stored photons, each diverged path changing at most `bounces` of them), as
+//! multisets (each photon matched by one of the other backend's within
+//! `trace_photons`' position tolerance, with the same tile and power within one rgb9e5
+//! step, but for [`PHOTON_MATCH`]'s share), every path end accounted for, and tile
+//! counts that add up to the stored photons.
+//!
+//! One link of PhotonGi's chain, [`super::shading_normal_correction::check_photon_gi`].
+
+use super::sample_rsm::*;
+use crate::harness::fixture::{run_and_free, Fixture};
+use crate::harness::tolerance::{
+    divergence_allowance, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL,
+};
+use crate::harness::verdict::Verdict;
+use caustica_core::backend::{read_buf, Backend};
+use caustica_core::device::layout::{counter, GBufferTexel, GiPhoton, RsmPhoton};
+use caustica_core::kernels::TraceIndirect;
+use caustica_core::math::fixed_point::join_u64;
+use caustica_core::math::gi_photon::{gi_store, screen_tiles};
+use caustica_core::math::packing::unpack_unit_vector;
+use caustica_core::recording::Recording;
+
+/// Diffuse bounces of the checked paths.
+pub(crate) const BOUNCES: u32 = 3;
+pub(crate) const TILE: u32 = 8;
+
+/// (stored photons, tile counts, counters) of `trace_indirect`.
+pub(crate) type Traced = (Vec<GiPhoton>, Vec<u32>, Vec<u32>);
+
+pub(crate) fn run_trace(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    rsm: &[RsmPhoton],
+    gbuffer: &[GBufferTexel],
+    power_scale: f32,
+    quantum: f32,
+) -> Result<Traced, String> {
+    let cam = fx.camera;
+    let mut rec = Recording::new();
+    let g = rec.upload_gbuffer(gbuffer);
+    let r = rec.upload(rsm, "RSM photons");
+    let photons = rec.create::<[u32; 8]>(rsm.len() as u32 * BOUNCES, "indirect photons");
+    let count = rec.create(1, "count");
+    let tiles = rec.create(screen_tiles(cam.width, cam.height, TILE), "tile counts");
+    let counters = rec.create(counter::WORDS as u32, "counters");
+    rec.clear(count);
+    rec.clear(tiles);
+    rec.clear(counters);
+    rec.kernel(TraceIndirect {
+        scene: fx.args,
+        params: caustica_core::device::layout::IndirectTraceParams {
+            camera: cam,
+            first: 0,
+            count: rsm.len() as u32,
+            seed: 77,
+            max_bounces: BOUNCES,
+            max_segments: 12,
+            tile_size: TILE,
+            store: gi_store::PACKED,
+            fresnel_model: 0,
+            power_scale,
+            flux_quantum: quantum,
+            _pad: [0; 2],
+        },
+        rsm_photons: r,
+        photons,
+        photon_count: count,
+        tile_counts: tiles,
+        counters,
+        gbuffer: g,
+    });
+    run_and_free(b, "trace_indirect", &rec, |b| {
+        let n = read_buf(b, count)?[0] as usize;
+        let words = read_buf(b, photons)?;
+        let ph = words[..n.min(words.len())]
+            .iter()
+            .map(|w| bytemuck::cast::<[u32; 8], GiPhoton>(*w))
+            .collect();
+        Ok((ph, read_buf(b, tiles)?, read_buf(b, counters)?))
+    })
+}
+
+/// Point 3 of the module doc: light `l`'s stored photons, tile counts and counters
+/// (reference, candidate), traced with `power_scale` and `quantum`.
+pub(crate) fn compare_indirect(
+    v: &mut Verdict,
+    fx: &Fixture,
+    l: u32,
+    (pha, tia, ca): (&[GiPhoton], &[u32], &[u32]),
+    (phb, tib, cb): (&[GiPhoton], &[u32], &[u32]),
+    power_scale: f32,
+    quantum: f32,
+) {
+    // diverged paths: a share of the paths, each moving one path end and at most
+    // BOUNCES stored photons
+    let stored = ca[counter::STORED].max(cb[counter::STORED]) as u64;
+    let paths_allow = divergence_allowance(SAMPLES as u64);
+    let allow = divergence_allowance(stored) * BOUNCES as u64;
+    let diff = |k: usize| (ca[k] as i64 - cb[k] as i64).unsigned_abs();
+    v.check(diff(counter::STORED) <= allow, || {
+        format!(
+            "light {l}: stored {} vs {} (allowance {allow})",
+            ca[counter::STORED],
+            cb[counter::STORED]
+        )
+    });
+    for k in [
+        counter::ESCAPED,
+        counter::NEGLIGIBLE,
+        counter::BOUNCE_LIMIT,
+        counter::OFF_SCREEN,
+        counter::DEPTH_MISMATCH,
+    ] {
+        v.check(diff(k) <= paths_allow.max(allow), || {
+            format!("light {l}: counter {k}: {} vs {}", ca[k], cb[k])
+        });
+    }
+    v.check(
+        pha.len() as u32 == ca[counter::STORED] && phb.len() as u32 == cb[counter::STORED],
+        || "stored photons and STORED disagree".into(),
+    );
+    v.check(
+        tia.iter().sum::<u32>() as usize == pha.len()
+            && tib.iter().sum::<u32>() as usize == phb.len(),
+        || format!("light {l}: tile counts do not add up to the stored photons"),
+    );
+    let ends = |c: &[u32]| c[counter::ESCAPED] + c[counter::NEGLIGIBLE] + c[counter::BOUNCE_LIMIT];
+    v.check(ends(ca) == SAMPLES && ends(cb) == SAMPLES, || {
+        format!(
+            "light {l}: path ends {} / {} of {SAMPLES}",
+            ends(ca),
+            ends(cb)
+        )
+    });
+    for ch in 0..3 {
+        let fa = join_u64([
+            ca[counter::STORED_FLUX + 2 * ch],
+            ca[counter::STORED_FLUX + 2 * ch + 1],
+        ]) as f64;
+        let fb = join_u64([
+            cb[counter::STORED_FLUX + 2 * ch],
+            cb[counter::STORED_FLUX + 2 * ch + 1],
+        ]) as f64;
+        // each diverged path moves at most BOUNCES photons of up to the largest
+        // photon's flux; the rest agree within PHOTON_FLUX_REL
+        let biggest = pha
+            .iter()
+            .chain(phb)
+            .map(|p| caustica_core::math::packing::unpack_rgb9e5(p.power).max_element())
+            .fold(0.0f32, f32::max) as f64
+            * power_scale as f64
+            / quantum as f64;
+        let tol = PHOTON_FLUX_REL * fa.max(fb) + allow as f64 * biggest + 3.0;
+        v.check((fa - fb).abs() <= tol, || {
+            format!("light {l}: stored flux channel {ch}: {fa} vs {fb} units")
+        });
+    }
+    let diagonal = (fx.ds.bounds.max - fx.ds.bounds.min).length();
+    let unmatched_ab = unmatched(pha, phb, diagonal);
+    let unmatched_ba = unmatched(phb, pha, diagonal);
+    let allow_match = ((1.0 - PHOTON_MATCH) * stored as f64).ceil() as u64 + 2;
+    v.check(
+        unmatched_ab <= allow_match && unmatched_ba <= allow_match,
+        || {
+            format!(
+                "light {l}: {unmatched_ab} / {unmatched_ba} stored photons without a match \
+             (allowance {allow_match})"
+            )
+        },
+    );
+}
+
+/// Photons of `a` without a photon of `b` at the same place (within
+/// `PHOTON_POSITION_REL` of the scene diagonal: `trace_photons`' argument) with the same
+/// tile, normal and direction within a packing quantum or two, and power within one rgb9e5
+/// step (2^-9 of the largest channel: the same float flux may round to neighbouring
+/// mantissas when it differs by an ulp).
+pub(crate) fn unmatched(a: &[GiPhoton], b: &[GiPhoton], diagonal: f32) -> u64 {
+    use caustica_core::math::packing::unpack_rgb9e5;
+    let tol = PHOTON_POSITION_REL * diagonal;
+    let close = |x: &GiPhoton, y: &GiPhoton| {
+        let d = glam::Vec3::from(x.position) - glam::Vec3::from(y.position);
+        let (px, py) = (unpack_rgb9e5(x.power), unpack_rgb9e5(y.power));
+        let step = px.max_element().max(py.max_element()) * (2.0 / 512.0);
+        d.length() <= tol
+            && x.tile == y.tile
+            && (px - py).abs().max_element() <= step
+            && unpack_unit_vector(x.normal).dot(unpack_unit_vector(y.normal)) >= 1.0 - 1e-4
+    };
+    a.iter().filter(|x| !b.iter().any(|y| close(x, y))).count() as u64
+}

@@ -1,0 +1,321 @@
+//! The constants that core shares with every shader port, listed once: enum values
+//! (material, light and emission kinds, cluster fates, ...), counter and word indices,
+//! bit flags, fixed sizes and the few `f32` constants the ports use by name. The shaders'
+//! generated layout files ([`super::shader_layouts`]) declare exactly these, with values
+//! read from the Rust constants below, so no port keeps a copy of a number by hand.
+//!
+//! Each [`ConstGroup`] is one Rust module or item and the shader names of its constants:
+//! a module's constants take the module's shader prefix (`counter::STORED` is
+//! `COUNTER_STORED`), a lone constant keeps its name.
+
+use super::acceleration::instance_flags;
+use super::launch::DEFAULT_WORKGROUP_SIZE;
+use super::layout::{
+    cluster_count, counter, emission_kind, gather_surface, gbuffer_flags, light_kind,
+    material_kind, DepositTexel, DEPOSIT_TEXEL_WORDS, MAX_CASTER_SPHERES, MAX_SPECULAR_DEPTH,
+    MAX_SPLIT_BRANCHES, NO_MATERIAL, NO_TILE, VISIBLE_TOLERANCE,
+};
+use crate::math::gi_photon::gi_store;
+use crate::math::photon_clusters::{
+    cluster_fate, cluster_metric, cluster_relevance, cluster_target, CLUSTER_ID_MASK,
+    MAX_ERROR_TEXELS, NO_TRIANGLE,
+};
+use crate::math::rsm::{rsm_sampling, rsm_texel_kind};
+use crate::math::{density_gather, footprint, geometry, map_gather, optics, sampling};
+use std::mem::offset_of;
+
+/// A constant's value and how the shading languages spell its type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShaderValue {
+    /// An unsigned value: WGSL `u32`, GLSL `uint`, OpenCL C a `u`-suffixed literal.
+    U32(u32),
+    /// A word index, count or array length: WGSL `u32`, GLSL `uint`, OpenCL C a plain
+    /// (`int`) literal, so that array bounds and index arithmetic there stay as signed
+    /// as with a written-out number.
+    Index(u32),
+    /// A signed value: WGSL `i32`, GLSL `int`, OpenCL C a plain literal.
+    I32(i32),
+    /// A single-precision value: WGSL `f32`, GLSL `float`, OpenCL C an `f`-suffixed
+    /// literal; written with the shortest decimal that reads back as the same `f32`.
+    F32(f32),
+}
+
+/// One shared constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShaderConst {
+    /// The name every shader port uses.
+    pub name: &'static str,
+    /// Its value, from the Rust constant.
+    pub value: ShaderValue,
+}
+
+/// The constants of one Rust module or item.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstGroup {
+    /// The Rust path they come from (written above them in the generated files).
+    pub source: &'static str,
+    /// The constants, in the module's order.
+    pub consts: Vec<ShaderConst>,
+}
+
+/// `ShaderConst`s named `$prefix` + the Rust name, of kind `$kind`, from `$module`.
+macro_rules! prefixed {
+    ($prefix:literal, $kind:ident, $module:ident { $($c:ident),* $(,)? }) => {
+        vec![$(ShaderConst {
+            name: concat!($prefix, stringify!($c)),
+            value: ShaderValue::$kind($module::$c as _),
+        }),*]
+    };
+}
+
+/// A `ShaderConst` named `$name` of kind `$kind` with value `$value`.
+macro_rules! named {
+    ($name:literal, $kind:ident, $value:expr) => {
+        ShaderConst {
+            name: $name,
+            value: ShaderValue::$kind($value as _),
+        }
+    };
+}
+
+/// A group from `source`.
+fn group(source: &'static str, consts: Vec<ShaderConst>) -> ConstGroup {
+    ConstGroup { source, consts }
+}
+
+/// Every shared constant, grouped by where it is defined, in the order the generated
+/// files declare them.
+pub fn groups() -> Vec<ConstGroup> {
+    let word = |offset: usize| (offset / 4) as u32;
+    vec![
+        group(
+            "core::device::layout::material_kind",
+            prefixed!("MATERIAL_", U32, material_kind { DIFFUSE, MIRROR, DIELECTRIC }),
+        ),
+        group(
+            "core::device::layout::light_kind",
+            prefixed!("LIGHT_", U32, light_kind { POINT, SPOT, DIRECTIONAL }),
+        ),
+        group(
+            "core::device::layout::emission_kind",
+            prefixed!("EMISSION_", U32, emission_kind { CONE, RECTANGLE, VIEW_PLANE }),
+        ),
+        group(
+            "core::device::layout::gbuffer_flags",
+            prefixed!("GBUFFER_", U32, gbuffer_flags { RECEIVER }),
+        ),
+        group(
+            "core::device::layout::gather_surface",
+            prefixed!("GATHER_SURFACE_", U32, gather_surface { SCREEN, ATLAS }),
+        ),
+        group(
+            "core::device::layout::counter (word offsets into the counter buffer)",
+            prefixed!(
+                "COUNTER_",
+                Index,
+                counter {
+                    STORED,
+                    NO_SPECULAR,
+                    ESCAPED,
+                    NEGLIGIBLE,
+                    BOUNCE_LIMIT,
+                    OFF_SCREEN,
+                    DEPTH_MISMATCH,
+                    DEPOSITED,
+                    UNDERFLOW,
+                    SATURATED,
+                    RAYS,
+                    STORED_FLUX,
+                    SPLITS,
+                    WORDS,
+                }
+            ),
+        ),
+        group(
+            "core::device::layout::cluster_count (words of refine_clusters' counts)",
+            prefixed!(
+                "CLUSTER_COUNT_",
+                Index,
+                cluster_count {
+                    CHILDREN,
+                    OUTPUT,
+                    DISCARDED,
+                    OUTPUT_PHOTONS,
+                    CONVERGED,
+                    WORDS,
+                }
+            ),
+        ),
+        group(
+            "core::device::layout::DepositTexel (its u32 words: flux r, g, b at 0, 2, 4)",
+            vec![
+                named!("DEPOSIT_TEXEL_WORDS", Index, DEPOSIT_TEXEL_WORDS),
+                named!("DEPOSIT_FLUX", Index, word(offset_of!(DepositTexel, flux))),
+                named!(
+                    "DEPOSIT_HIT_DISTANCE",
+                    Index,
+                    word(offset_of!(DepositTexel, hit_distance))
+                ),
+                named!("DEPOSIT_PHOTONS", Index, word(offset_of!(DepositTexel, photons))),
+            ],
+        ),
+        group(
+            "core::device::layout",
+            vec![
+                named!("NO_MATERIAL", U32, NO_MATERIAL),
+                named!("NO_TILE", U32, NO_TILE),
+                named!("MAX_SPLIT_BRANCHES", Index, MAX_SPLIT_BRANCHES),
+                named!("MAX_CASTER_SPHERES", Index, MAX_CASTER_SPHERES),
+                named!("MAX_SPECULAR_DEPTH", Index, MAX_SPECULAR_DEPTH),
+                named!("VISIBLE_TOLERANCE", F32, VISIBLE_TOLERANCE),
+            ],
+        ),
+        group(
+            "core::device::launch::DEFAULT_WORKGROUP_SIZE (every kernel's invocations per workgroup)",
+            vec![named!("WORKGROUP_SIZE", Index, DEFAULT_WORKGROUP_SIZE)],
+        ),
+        group(
+            "core::device::acceleration::instance_flags",
+            prefixed!("INSTANCE_", U32, instance_flags { IDENTITY }),
+        ),
+        group(
+            "core::math::optics",
+            vec![
+                named!("FRESNEL_EXACT", U32, optics::fresnel_model::EXACT),
+                named!("FRESNEL_SCHLICK", U32, optics::fresnel_model::SCHLICK),
+                named!(
+                    "REFERENCE_WAVELENGTH_UM",
+                    F32,
+                    optics::REFERENCE_WAVELENGTH_UM
+                ),
+                named!("RADIANCE_MAX", F32, optics::RADIANCE_MAX),
+            ],
+        ),
+        group(
+            "core::math::geometry",
+            vec![
+                named!("OFFSET_REL", F32, geometry::OFFSET_REL),
+                named!("OFFSET_MIN_SCALE", F32, geometry::OFFSET_MIN_SCALE),
+                named!("SPHERE_TEST_SLACK", F32, geometry::SPHERE_TEST_SLACK),
+            ],
+        ),
+        group(
+            "core::math::footprint",
+            vec![named!("MIN_COSINE", F32, footprint::MIN_COSINE)],
+        ),
+        group(
+            "core::math::sampling",
+            vec![named!("PHOTON_TILE", U32, sampling::PHOTON_TILE)],
+        ),
+        group(
+            "core::math::density_gather",
+            vec![
+                named!(
+                    "MIN_WINDOW_HALF_WIDTH",
+                    I32,
+                    density_gather::MIN_WINDOW_HALF_WIDTH
+                ),
+                named!("COUNT_CLAMP_PER_K", U32, density_gather::COUNT_CLAMP_PER_K),
+                named!("SCAN_THREADS", U32, density_gather::SCAN_THREADS),
+                named!("COLUMN_CHUNKS", U32, density_gather::COLUMN_CHUNKS),
+                named!("SCAN_COLUMNS", U32, density_gather::SCAN_COLUMNS),
+                named!(
+                    "EDGE_TEXEL_NOT_RECEIVER",
+                    F32,
+                    density_gather::EDGE_TEXEL_NOT_RECEIVER
+                ),
+                named!("COLUMN_PASS_TILE", U32, density_gather::COLUMN_PASS_TILE),
+                named!("REACH_TILE", I32, density_gather::REACH_TILE),
+            ],
+        ),
+        group(
+            "core::math::map_gather",
+            vec![
+                named!("TILE_FULLY_COVERED", U32, map_gather::TILE_FULLY_COVERED),
+                named!("MAX_FOOTPRINT_TEXELS", F32, map_gather::MAX_FOOTPRINT_TEXELS),
+            ],
+        ),
+        group(
+            "core::math::photon_clusters",
+            [
+                vec![named!("NO_TRIANGLE", U32, NO_TRIANGLE)],
+                prefixed!("CLUSTER_METRIC_", U32, cluster_metric { LEVEL, ERROR }),
+                prefixed!("CLUSTER_", U32, cluster_fate { DISCARDED, OUTPUT, REFINED }),
+                prefixed!("CLUSTER_RELEVANCE_", U32, cluster_relevance { PHOTONS, BOUNDS }),
+                prefixed!("CLUSTER_TARGET_", U32, cluster_target { ATLAS, SCREEN }),
+                vec![
+                    named!("MAX_ERROR_TEXELS", U32, MAX_ERROR_TEXELS),
+                    named!("CLUSTER_ID_MASK", U32, CLUSTER_ID_MASK),
+                ],
+            ]
+            .concat(),
+        ),
+        group(
+            "core::math::rsm",
+            [
+                prefixed!("RSM_TEXEL_", U32, rsm_texel_kind { NONE, DIFFUSE, SPECULAR }),
+                prefixed!("RSM_SAMPLING_", U32, rsm_sampling { IMPORTANCE, UNIFORM }),
+            ]
+            .concat(),
+        ),
+        group(
+            "core::math::gi_photon::gi_store",
+            prefixed!("GI_STORE_", U32, gi_store { PACKED, FLOAT }),
+        ),
+    ]
+}
+
+/// Struct fields whose array length the shaders spell with a shared constant rather than
+/// a number: (struct, field, constant). The generator checks that the constant's value
+/// is the field's outermost length.
+pub const ARRAY_LENGTHS: &[(&str, &str, &str)] =
+    &[("TraceParams", "caster_spheres", "MAX_CASTER_SPHERES")];
+
+/// The constant called `name`.
+pub fn find(name: &str) -> Option<ShaderConst> {
+    groups()
+        .into_iter()
+        .flat_map(|g| g.consts)
+        .find(|c| c.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeSet;
+
+    #[test]
+    fn names_are_unique_and_shader_style() {
+        let mut seen = BTreeSet::new();
+        for c in groups().iter().flat_map(|g| g.consts.iter()) {
+            assert!(seen.insert(c.name), "{} listed twice", c.name);
+            assert!(
+                c.name
+                    .chars()
+                    .all(|ch| ch.is_ascii_uppercase() || ch.is_ascii_digit() || ch == '_'),
+                "{}: not an upper-case name",
+                c.name
+            );
+        }
+    }
+
+    #[test]
+    fn values_are_the_rust_constants() {
+        assert_eq!(
+            find("COUNTER_STORED_FLUX").map(|c| c.value),
+            Some(ShaderValue::Index(counter::STORED_FLUX as u32))
+        );
+        assert_eq!(
+            find("DEPOSIT_PHOTONS").map(|c| c.value),
+            Some(ShaderValue::Index(8))
+        );
+        assert_eq!(
+            find("CLUSTER_TARGET_SCREEN").map(|c| c.value),
+            Some(ShaderValue::U32(cluster_target::SCREEN))
+        );
+        assert_eq!(
+            find("REACH_TILE").map(|c| c.value),
+            Some(ShaderValue::I32(8))
+        );
+    }
+}
