@@ -54,6 +54,11 @@ enum Command {
         /// density (default) or box (seed 001's 3x3).
         #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
+        /// Frames to render; the last is written. Above 1, a technique with progressive
+        /// accumulation (`accumulate`) sums the frames' photons as one frame of all of
+        /// them; PhotonGi gets a new seed per frame for its temporal filter.
+        #[arg(long, default_value_t = 1)]
+        frames: u32,
         /// Output directory.
         #[arg(long, default_value = "out")]
         out: PathBuf,
@@ -360,6 +365,7 @@ fn run(cli: Cli) -> Result<(), String> {
             exposure,
             settings,
             filter,
+            frames,
             out,
         } => {
             if !technique_names().contains(&technique.as_str()) {
@@ -406,6 +412,24 @@ fn run(cli: Cli) -> Result<(), String> {
             if let Some(seed) = seed {
                 s.insert("seed".into(), seed.into());
             }
+            if frames == 0 {
+                return Err("--frames must be at least 1".into());
+            }
+            let defaults = TECHNIQUES
+                .iter()
+                .find(|t| t.name == technique)
+                .map(|t| (t.default_settings)());
+            let accumulates = defaults
+                .as_ref()
+                .is_some_and(|d| d.get("accumulate").is_some());
+            if frames > 1 && accumulates && !s.contains_key("accumulate") {
+                s.insert("accumulate".into(), true.into());
+            }
+            let base_seed = s
+                .get("seed")
+                .or_else(|| defaults.as_ref().and_then(|d| d.get("seed")))
+                .and_then(|v| v.as_u64())
+                .unwrap_or(0) as u32;
             caustica::output::prepare_output_dir(&out)?;
             let stem = caustica::output::file_stem(&scene.name);
             let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
@@ -424,12 +448,20 @@ fn run(cli: Cli) -> Result<(), String> {
                 .expect("valid template")
                 .progress_chars("=> "),
             );
-            let stats = t
-                .frame(be.as_mut(), &mut |p| {
-                    bar.set_length(p.photons_total);
-                    bar.set_position(p.photons_done);
-                })
-                .map_err(|e| e.to_string())?;
+            let mut stats = None;
+            for f in 0..frames {
+                if f > 0 && !accumulates {
+                    t.set_seed(base_seed.wrapping_add(f));
+                }
+                stats = Some(
+                    t.frame(be.as_mut(), &mut |p| {
+                        bar.set_length(p.photons_total);
+                        bar.set_position(p.photons_done);
+                    })
+                    .map_err(|e| e.to_string())?,
+                );
+            }
+            let stats = stats.expect("at least one frame");
             bar.finish_and_clear();
             for output in t.outputs().into_iter().filter(|o| o.requested) {
                 let name = output.name;
