@@ -74,7 +74,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{name}: {frames} frames a technique at {w}x{h}, {side}x{side} photons, moving light and ball");
 
     for technique in ["sspm", "caustic-map", "adaptive-caustics", "photon-gi"] {
-        let grid = serde_json::json!({ "photons_w": side, "photons_h": side });
+        let mut grid = serde_json::json!({ "photons_w": side, "photons_h": side });
+        if technique.contains("caustic") {
+            // an atlas of 512^2 texels over the two receivers
+            grid["atlas_size"] = 512.into();
+        }
         let (mut t, caustics): (Box<dyn Technique>, _) = if technique == "sspm" {
             let settings = SspmSettings {
                 photons_w: side,
