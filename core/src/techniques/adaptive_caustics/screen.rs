@@ -13,7 +13,9 @@ use crate::frame::host::FrameHost;
 use crate::frame::pipeline::FrameBuilder;
 use crate::frame::plan::SceneFeatures;
 use crate::frame::receivers::accumulation_seed;
-use crate::frame::receivers::screen::{plan_frame, Needs, ScreenQuanta, ScreenReceiver};
+use crate::frame::receivers::screen::{
+    plan_frame, Needs, ScreenQuanta, ScreenReceiver, ScreenSettings,
+};
 use crate::recording::{Recording, Step};
 
 /// The photon capacity `deposit_screen` and `resolve_caustics` are parameterised with
@@ -28,7 +30,11 @@ pub(super) fn create(
     planes: ViewPlanes,
 ) -> Result<AdaptiveCausticsPipeline, Error> {
     let g = host.geometry();
-    let sc = settings.screen.clone();
+    // the top level's `accumulate` (the map's) holds for either target
+    let sc = ScreenSettings {
+        accumulate: settings.screen.accumulate || settings.map.accumulate,
+        ..settings.screen.clone()
+    };
     let quanta = ScreenQuanta {
         flux_quantum: planes.flux_quantum,
         hit_distance_quantum: planes.hit_distance_quantum,
