@@ -329,8 +329,13 @@ impl<P: Pipeline> Hosted<P> {
                     pipeline: Some(p),
                 };
                 // every buffer is checked: the scene goes up now
-                t.host.flush(backend)?;
-                Ok(t)
+                match t.host.flush(backend) {
+                    Ok(()) => Ok(t),
+                    Err(e) => {
+                        let _ = t.free(backend);
+                        Err(e)
+                    }
+                }
             }
             Err(e) => {
                 let _ = host.free(backend);
