@@ -95,6 +95,10 @@ enum Command {
         /// Spheres as the exact sphere (analytic) or the scene's tessellated mesh (mesh).
         #[arg(long, default_value = "analytic")]
         spheres: String,
+        /// Count every photon on the surface a pixel's centre sees, hidden from the eye
+        /// or not (Sspm's store test), instead of only those the eye sees.
+        #[arg(long)]
+        count_hidden: bool,
         /// Cache directory.
         #[arg(long, default_value = "out/references")]
         cache: PathBuf,
@@ -294,6 +298,7 @@ fn run(cli: Cli) -> Result<(), String> {
             batches,
             seed,
             spheres,
+            count_hidden,
             cache,
         } => {
             use caustica::reference::light_tracer::{
@@ -315,6 +320,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 batches,
                 seed,
                 spheres,
+                count_hidden,
                 ..LightTracerSpec::default()
             };
             let (_, info) = load_or_compute(&cache, &scene, &spec, &mut |k, n, noise| {

@@ -71,6 +71,11 @@ pub struct LightTracerSpec {
     pub spheres: SphereModel,
     /// Specular interactions after which a path is dropped (counted in the info).
     pub max_specular: u32,
+    /// Leave out test (b), the eye's view of the photon: count every photon on the
+    /// surface the pixel's centre sees, hidden or not, as Sspm's tangent-plane store test
+    /// does. The two definitions differ only in pixels that straddle a silhouette.
+    #[serde(default)]
+    pub count_hidden: bool,
 }
 
 impl Default for LightTracerSpec {
@@ -83,6 +88,7 @@ impl Default for LightTracerSpec {
             seed: 1,
             spheres: SphereModel::Analytic,
             max_specular: 64,
+            count_hidden: false,
         }
     }
 }
@@ -896,6 +902,14 @@ fn trace(
 
 // ---------------------------------------------------------------- the reference
 
+/// Per pixel of `scene` seen at `spec`'s size: whether its corner rays see another object
+/// than its centre ray (or nothing), as [`LightTracerReference::silhouette`].
+pub fn silhouette_pixels(scene: &Scene, spec: &LightTracerSpec) -> Result<Vec<bool>, String> {
+    let g = Geometry::build(scene, spec.spheres)?;
+    let cam = Cam::new(&scene.camera, spec.width, spec.height);
+    Ok(pixel_table(&g, &cam).1)
+}
+
 /// FNV-1a (64 bit) of the scene file text and the light tracer's settings.
 pub fn light_tracer_hash(scene: &Scene, spec: &LightTracerSpec) -> String {
     let text = format!(
@@ -975,7 +989,16 @@ pub fn compute(
                                 PathEnd::Truncated => trunc += 1,
                                 PathEnd::Lost => {}
                                 PathEnd::Stored { hit, dir, flux } => {
-                                    if let Some(c) = connect(&g, &cam, &table, &hit, dir, flux) {
+                                    let c = connect(
+                                        &g,
+                                        &cam,
+                                        &table,
+                                        &hit,
+                                        dir,
+                                        flux,
+                                        spec.count_hidden,
+                                    );
+                                    if let Some(c) = c {
                                         out.push(c);
                                     }
                                 }
@@ -1046,6 +1069,7 @@ fn connect(
     hit: &Hit,
     dir: DVec3,
     flux: [f64; 3],
+    count_hidden: bool,
 ) -> Option<(u32, [f64; 3])> {
     let p = cam.pixel(hit.p)?;
     let see = table[p]?;
@@ -1060,7 +1084,7 @@ fn connect(
     let dist = to_eye.length();
     let w = to_eye / dist;
     let o = g.offset(hit, w);
-    if g.intersect(o, w, (cam.pos - o).length()).is_some() {
+    if !count_hidden && g.intersect(o, w, (cam.pos - o).length()).is_some() {
         return None;
     }
     Some((p as u32, std::array::from_fn(|c| flux[c] * see.scale[c])))
