@@ -1,4 +1,4 @@
-//! The `caustica` command line: `render`, `scenes`, `backends`, `report`.
+//! The `caustica` command line: `render`, `scenes`, `backends`, `techniques`, `reference`, `report`.
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
