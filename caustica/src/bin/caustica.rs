@@ -1,4 +1,4 @@
-//! The `caustica` command line: `render`, `scenes`, `backends`, `report`.
+//! The `caustica` command line: `render`, `scenes`, `backends`, `techniques`, `reference`, `report`.
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
@@ -78,6 +78,36 @@ enum Command {
     Backends,
     /// List the techniques.
     Techniques,
+    /// The independent caustic reference of a scene: a brute-force f64 light tracer's
+    /// camera-space caustic radiance and its error bar (docs/performance.md), cached as
+    /// EXR (mean, standard error) with a JSON sidecar; prints the sidecar.
+    Reference {
+        /// Built-in scene name or a scene file (JSON).
+        #[arg(long, default_value = "sphere")]
+        scene: String,
+        /// Image size WxH.
+        #[arg(long, default_value = "480x270", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Photons per light and batch.
+        #[arg(long, default_value_t = 1 << 22)]
+        photons: u64,
+        /// Independent batches (the error bar is their spread; at least 2).
+        #[arg(long, default_value_t = 16)]
+        batches: u32,
+        /// Seed of the batches' random streams.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Spheres as the exact sphere (analytic) or the scene's tessellated mesh (mesh).
+        #[arg(long, default_value = "analytic")]
+        spheres: String,
+        /// Count every photon on the surface a pixel's centre sees, hidden from the eye
+        /// or not (Sspm's store test), instead of only those the eye sees.
+        #[arg(long)]
+        count_hidden: bool,
+        /// Cache directory.
+        #[arg(long, default_value = "out/references")]
+        cache: PathBuf,
+    },
     /// Error against run time for every scene x technique x backend x photon budget:
     /// prints a table, writes report.json and a log-log plot per scene.
     Report {
@@ -264,6 +294,47 @@ fn run(cli: Cli) -> Result<(), String> {
             for t in TECHNIQUES {
                 println!("{:<width$} {}", t.name, t.title);
             }
+            Ok(())
+        }
+        Command::Reference {
+            scene,
+            size,
+            photons,
+            batches,
+            seed,
+            spheres,
+            count_hidden,
+            cache,
+        } => {
+            use caustica::reference::light_tracer::{
+                load_or_compute, LightTracerSpec, SphereModel,
+            };
+            let spheres = match spheres.as_str() {
+                "analytic" => SphereModel::Analytic,
+                "mesh" => SphereModel::Mesh,
+                other => return Err(format!("unknown --spheres '{other}': analytic or mesh")),
+            };
+            if batches < 2 || photons == 0 {
+                return Err("--batches must be at least 2 and --photons positive".into());
+            }
+            let scene = load_scene(&scene)?;
+            let spec = LightTracerSpec {
+                width: size.0,
+                height: size.1,
+                photons,
+                batches,
+                seed,
+                spheres,
+                count_hidden,
+                ..LightTracerSpec::default()
+            };
+            let (_, info) = load_or_compute(&cache, &scene, &spec, &mut |k, n, noise| {
+                eprintln!("batch {k}/{n}: relative standard error {noise:.5}")
+            })?;
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&info).map_err(|e| e.to_string())?
+            );
             Ok(())
         }
         Command::Report {

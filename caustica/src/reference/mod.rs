@@ -7,6 +7,8 @@
 //! a JSON sidecar (photon count, frames, reached noise, scene hash) and recomputed when the
 //! scene, the image size or the reference settings change.
 
+pub mod light_tracer;
+
 use caustica_core::frame::image::{luminance, Image};
 use caustica_core::frame::metrics::MASK_FRACTION;
 use caustica_core::techniques::create;
