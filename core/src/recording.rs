@@ -143,6 +143,14 @@ impl Recording {
         buf
     }
 
+    /// How many kernel steps the recording holds (the timestamp pairs a backend reserves).
+    pub fn kernel_count(&self) -> u32 {
+        self.steps
+            .iter()
+            .filter(|s| matches!(s, Step::Kernel(_)))
+            .count() as u32
+    }
+
     /// Records an upload of `data` into a new buffer.
     pub fn upload<T: bytemuck::Pod>(&mut self, data: &[T], label: &'static str) -> Buf<T> {
         let buf = Buf::fresh(data.len() as u32);
