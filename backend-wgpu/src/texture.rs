@@ -90,7 +90,7 @@ impl WgpuBackend {
             self.texture_pipelines.insert(format, pipeline);
         }
         let pipeline = &self.texture_pipelines[&format];
-        let buffer = &self.get(image.id)?.buffer;
+        let buffer = &self.buffers.get(image.id)?.buffer;
         let view = target.create_view(&Default::default());
         let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("write_image_to_texture"),
@@ -102,7 +102,7 @@ impl WgpuBackend {
                         buffer,
                         offset: 0,
                         size: std::num::NonZeroU64::new(
-                            image.bytes().max(crate::MIN_BINDING_BYTES),
+                            image.bytes().max(crate::memory::MIN_BINDING_BYTES),
                         ),
                     }),
                 },
