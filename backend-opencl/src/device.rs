@@ -1,15 +1,26 @@
 //! OpenCL platforms and devices: discovery without panics (no loader, no platform and no
 //! device are typed errors), the choice of device, and one shared context + built
-//! program per device, so that a program is compiled once per device and source.
+//! program per device, so that a program is compiled once per device and source; the
+//! backend's command queue and what it reports of the device; OpenCL errors as typed
+//! backend errors (allocation failures become `OutOfMemory`, the rest `Driver` with the
+//! call that failed and the status name).
 
-use crate::error::{cl_error, status_text};
-use crate::program;
-use caustica_core::backend::{BackendError, DeviceType};
+use crate::pipelines;
+use crate::OpenClBackend;
+use caustica_core::backend::{BackendError, Capabilities, DeviceType};
+use opencl3::command_queue::{CommandQueue, CL_QUEUE_PROFILING_ENABLE};
 use opencl3::context::Context;
 use opencl3::device::{Device, CL_DEVICE_TYPE_ALL, CL_DEVICE_TYPE_CPU, CL_DEVICE_TYPE_GPU};
+use opencl3::error_codes::{
+    error_text, ClError, CL_MEM_OBJECT_ALLOCATION_FAILURE, CL_OUT_OF_HOST_MEMORY,
+    CL_OUT_OF_RESOURCES,
+};
+use opencl3::kernel::Kernel;
+use opencl3::memory::{Buffer, ClMem, CL_MEM_READ_WRITE};
 use opencl3::platform::{get_platforms, Platform};
 use opencl3::program::Program;
 use opencl3::types::cl_context_properties;
+use opencl3::types::{cl_int, CL_BLOCKING};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -22,42 +33,10 @@ pub struct DeviceState {
     /// Every kernel without variants.
     pub program: Arc<Program>,
     /// Programs of kernel variants by label and the relaxed-division program, built on
-    /// first use.
-    variants: Mutex<HashMap<String, Arc<Program>>>,
+    /// first use ([`DeviceState::program_for`]).
+    pub(crate) variants: Mutex<HashMap<String, Arc<Program>>>,
     /// What the backend reports about the device.
     pub info: DeviceSummary,
-}
-
-impl DeviceState {
-    /// The program holding variant `constants` of `kernel` (the base program for a
-    /// kernel without switches, the relaxed-division program for
-    /// [`program::RELAXED_DIVISION_KERNELS`]), building it on first use.
-    pub fn program_for(
-        &self,
-        kernel: &str,
-        constants: &[(&'static str, u32)],
-    ) -> Result<Arc<Program>, BackendError> {
-        let relaxed = program::RELAXED_DIVISION_KERNELS.contains(&kernel);
-        if constants.is_empty() && !relaxed {
-            return Ok(Arc::clone(&self.program));
-        }
-        let label = if relaxed {
-            program::RELAXED_DIVISION_PROGRAM.to_string()
-        } else {
-            caustica_core::kernels::variant_label(kernel, constants)
-        };
-        let mut map = self.variants.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = map.get(&label) {
-            return Ok(Arc::clone(p));
-        }
-        let p = Arc::new(if relaxed {
-            program::build_relaxed_division(&self.context, self.device.id())?
-        } else {
-            program::build_variant(&self.context, self.device.id(), kernel, constants)?
-        });
-        map.insert(label, Arc::clone(&p));
-        Ok(p)
-    }
 }
 
 /// What the backend reports about its device.
@@ -241,7 +220,7 @@ pub fn device_state(platform: Platform, device: Device) -> Result<Arc<DeviceStat
     ];
     let context = Context::from_devices(&[device.id()], &props, None, std::ptr::null_mut())
         .map_err(cl_error("creating the context"))?;
-    let program = Arc::new(program::build(&context, device.id())?);
+    let program = Arc::new(pipelines::build(&context, device.id())?);
     let state = Arc::new(DeviceState {
         device,
         context,
@@ -251,6 +230,108 @@ pub fn device_state(platform: Platform, device: Device) -> Result<Arc<DeviceStat
     });
     map.insert(key, Arc::clone(&state));
     Ok(state)
+}
+
+/// An OpenCL status code as its name and number, e.g. `CL_INVALID_VALUE (-30)`.
+pub fn status_text(status: cl_int) -> String {
+    format!("{} ({status})", error_text(status))
+}
+
+/// Maps the OpenCL error of a call made while doing `what` to a backend error.
+pub fn cl_error(what: &'static str) -> impl Fn(ClError) -> BackendError {
+    move |e| match e.0 {
+        CL_MEM_OBJECT_ALLOCATION_FAILURE | CL_OUT_OF_RESOURCES | CL_OUT_OF_HOST_MEMORY => {
+            BackendError::OutOfMemory {
+                bytes: 0,
+                what: format!("{what} ({})", status_text(e.0)),
+            }
+        }
+        _ => BackendError::Driver(format!("{what}: {}", status_text(e.0))),
+    }
+}
+
+impl OpenClBackend {
+    /// [`OpenClBackend::new`]'s body.
+    pub(crate) fn open() -> Result<OpenClBackend, BackendError> {
+        let (platform, device) = choose_device()?;
+        let state = device_state(platform, device)?;
+        // clCreateCommandQueue (OpenCL 1.2): PoCL's and NVIDIA's platforms both have it.
+        #[allow(deprecated)]
+        let queue = unsafe {
+            CommandQueue::create(&state.context, state.device.id(), CL_QUEUE_PROFILING_ENABLE)
+        }
+        .map_err(cl_error("creating the command queue"))?;
+        // sub-buffer origins must be multiples of the base address alignment (bits)
+        let param_align = (state
+            .device
+            .mem_base_addr_align()
+            .map_err(cl_error("querying CL_DEVICE_MEM_BASE_ADDR_ALIGN"))?
+            as usize
+            / 8)
+        .max(16);
+        Ok(OpenClBackend {
+            state,
+            queue,
+            buffers: Default::default(),
+            variants: Default::default(),
+            submissions: Default::default(),
+            free_slots: Vec::new(),
+            param_align,
+        })
+    }
+
+    /// `sizeof` of every shared struct as the device compiler lays it out, in the order
+    /// of the generated `kernels/common/layout.cl`'s `struct_sizes`, which is core's
+    /// layout table's (`caustica_core::device::layout_table::structs`; checked against
+    /// Rust's `size_of` in tests).
+    pub fn device_struct_sizes(&mut self) -> Result<Vec<u32>, BackendError> {
+        let n = caustica_core::device::layout_table::structs().len();
+        let mem = unsafe {
+            Buffer::<u32>::create(
+                &self.state.context,
+                CL_MEM_READ_WRITE,
+                n,
+                std::ptr::null_mut(),
+            )
+        }
+        .map_err(cl_error("creating a buffer"))?;
+        let kernel = Kernel::create(&self.state.program, "struct_sizes")
+            .map_err(cl_error("creating a kernel"))?;
+        unsafe { kernel.set_arg(0, &mem.get()) }.map_err(cl_error("setting a kernel argument"))?;
+        let mut out = vec![0u32; n];
+        let global: [usize; 3] = [1, 1, 1];
+        unsafe {
+            self.queue
+                .enqueue_nd_range_kernel(
+                    kernel.get(),
+                    1,
+                    std::ptr::null(),
+                    global.as_ptr(),
+                    std::ptr::null(),
+                    &[],
+                )
+                .map_err(cl_error("struct_sizes"))?;
+            self.queue
+                .enqueue_read_buffer(&mem, CL_BLOCKING, 0, &mut out, &[])
+                .map_err(cl_error("reading a buffer"))?;
+        }
+        Ok(out)
+    }
+
+    /// What the device can do ([`caustica_core::backend::Backend::capabilities`]).
+    pub(crate) fn describe(&self) -> Capabilities {
+        let i = &self.state.info;
+        Capabilities {
+            device: format!("{} ({}, {})", i.name, i.platform, i.version),
+            device_type: i.device_type,
+            hardware_ray_tracing: false,
+            float_atomics: false,
+            int64_atomics: i.int64_atomics,
+            timestamps: true,
+            max_buffer_bytes: i.max_alloc_bytes,
+            max_buffer_limit: "device allocation size (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
+        }
+    }
 }
 
 #[cfg(test)]

@@ -7,12 +7,14 @@
 //! each switch, only when a launch first asks for it.
 //! A failed build is a typed error carrying the driver's build log.
 
-use crate::error::{cl_error, status_text};
+use crate::device::{cl_error, status_text, DeviceState};
+use crate::OpenClBackend;
 use caustica_core::backend::BackendError;
 use opencl3::context::Context;
 use opencl3::device::{Device, CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT};
 use opencl3::program::Program;
 use opencl3::types::cl_device_id;
+use std::sync::Arc;
 
 /// The shared files of `kernels/common/`, in dependency order (a file uses only the ones
 /// before it): `(file name, text)`.
@@ -332,6 +334,52 @@ fn build_with(
         )));
     }
     Ok(program)
+}
+
+impl DeviceState {
+    /// The program holding variant `constants` of `kernel` (the base program for a
+    /// kernel without switches, the relaxed-division program for
+    /// [`RELAXED_DIVISION_KERNELS`]), building it on first use.
+    pub(crate) fn program_for(
+        &self,
+        kernel: &str,
+        constants: &[(&'static str, u32)],
+    ) -> Result<Arc<Program>, BackendError> {
+        let relaxed = RELAXED_DIVISION_KERNELS.contains(&kernel);
+        if constants.is_empty() && !relaxed {
+            return Ok(Arc::clone(&self.program));
+        }
+        let label = if relaxed {
+            RELAXED_DIVISION_PROGRAM.to_string()
+        } else {
+            caustica_core::kernels::variant_label(kernel, constants)
+        };
+        let mut map = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = map.get(&label) {
+            return Ok(Arc::clone(p));
+        }
+        let p = Arc::new(if relaxed {
+            build_relaxed_division(&self.context, self.device.id())?
+        } else {
+            build_variant(&self.context, self.device.id(), kernel, constants)?
+        });
+        map.insert(label, Arc::clone(&p));
+        Ok(p)
+    }
+}
+
+impl OpenClBackend {
+    /// Records that a launch ran variant `label`.
+    pub(crate) fn note_variant(&self, label: String) {
+        let mut v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
+        v.insert(label);
+    }
+
+    /// Compiles `src` on this backend's device (diagnostics and tests: the error of a
+    /// failed build carries the driver's build log).
+    pub fn build_test_program(&self, src: &str) -> Result<(), BackendError> {
+        build_source(&self.state.context, self.state.device.id(), src).map(|_| ())
+    }
 }
 
 #[cfg(test)]
