@@ -10,13 +10,17 @@
 //!
 //! Moving instances rewrites the records: [`SceneAccel::record_top_level_rebuild`]
 //! rebuilds the TLAS in place over the BLASes it keeps, recorded into the frame's command
-//! buffer (no wait, no allocation).
+//! buffer (no wait, no allocation). A recording's `prepare_scene` step comes here
+//! ([`prepare_scene`], [`refit_in_frame`]).
 
-use crate::context::{vk_error, Context};
+use crate::device::{vk_error, Context};
 use crate::memory::Buffer;
+use crate::submission::Frame;
+use crate::VulkanBackend;
 use ash::vk;
-use caustica_core::backend::BackendError;
+use caustica_core::backend::{driver_lifecycle, BackendError};
 use caustica_core::device::acceleration::{instance_flags, InstanceRecord};
+use caustica_core::device::handle::SceneArgs;
 use caustica_core::device::layout::{GpuTriangle, GpuVertex};
 use std::sync::Arc;
 
@@ -32,8 +36,9 @@ pub struct AccelStructure {
 
 impl Drop for AccelStructure {
     fn drop(&mut self) {
-        // with the other creations and destructions below the API (crate::context::serialised)
-        crate::context::serialised(|| unsafe {
+        // with the other creations and destructions below the API
+        // (caustica_core::backend::driver_lifecycle)
+        driver_lifecycle(|| unsafe {
             self.ctx
                 .accel
                 .destroy_acceleration_structure(self.handle, None)
@@ -512,4 +517,153 @@ impl SceneAccel {
         buffer.write(0, bytes);
         Ok(())
     }
+}
+
+/// The records of `scene`'s levels from the top level written into its node buffer in
+/// this recording (`Step::Write` at offset 0), if there was one of the right length.
+fn written_records(
+    b: &mut VulkanBackend,
+    scene: &SceneArgs,
+) -> Option<Vec<caustica_core::device::acceleration::InstanceRecord>> {
+    use caustica_core::device::acceleration::{
+        tlas_capacity, InstanceRecord, RECORD_SLOTS, SLOT_VEC4S,
+    };
+    let prefix = b.written_top_levels.remove(&scene.bvh_nodes.id)?;
+    let levels = scene.levels as usize;
+    let capacity = tlas_capacity(levels) as usize;
+    if prefix.len() != (capacity + RECORD_SLOTS as usize * levels) * SLOT_VEC4S {
+        return None;
+    }
+    Some(
+        (0..levels)
+            .map(|p| {
+                let at = (capacity + RECORD_SLOTS as usize * p) * SLOT_VEC4S;
+                InstanceRecord::decode(&prefix[at..at + 10])
+            })
+            .collect(),
+    )
+}
+
+/// Moved instances, the common case of a frame loop: when this recording wrote the scene's
+/// top level and its BLASes still serve it, the TLAS is rebuilt in place into the frame's
+/// command buffer (no readback, no submit, no wait, no allocation). Returns whether it
+/// did; otherwise `prepare_scene` builds what is needed.
+pub(crate) fn refit_in_frame(
+    b: &mut VulkanBackend,
+    frame: &mut Frame,
+    scene: &SceneArgs,
+) -> Result<bool, BackendError> {
+    let Some(records) = written_records(b, scene) else {
+        return Ok(false);
+    };
+    let generations = [
+        b.buffers.get(scene.vertices.id)?.generation,
+        b.buffers.get(scene.triangles.id)?.generation,
+        b.buffers.get(scene.bvh_nodes.id)?.generation,
+    ];
+    let Some(accel) = b.scenes.get_mut(&scene.bvh_nodes.id) else {
+        return Ok(false);
+    };
+    if !accel.keeps_bottom_levels(&records, generations) {
+        return Ok(false);
+    }
+    accel.record_top_level_rebuild(frame.cmd, &records)?;
+    Ok(true)
+}
+
+/// Builds (or, when only instance transforms changed, updates) the scene's acceleration
+/// structures from core's two-level layout: the records are read back from the node
+/// buffer; the BLASes are kept when the vertex, triangle and node buffers are the ones they
+/// were built from and the levels are the same, and only the TLAS is rebuilt.
+pub(crate) fn prepare_scene(b: &mut VulkanBackend, scene: &SceneArgs) -> Result<(), BackendError> {
+    use caustica_core::device::acceleration::{
+        tlas_capacity, InstanceRecord, RECORD_SLOTS, SLOT_VEC4S,
+    };
+    let levels = scene.levels as usize;
+    let capacity = tlas_capacity(levels) as usize;
+    let prefix_vec4s = (capacity + RECORD_SLOTS as usize * levels) * SLOT_VEC4S;
+    if prefix_vec4s > scene.bvh_nodes.len as usize {
+        return Err(BackendError::BadArgument(format!(
+            "the node buffer ({} vectors) is shorter than the {levels} levels' records",
+            scene.bvh_nodes.len
+        )));
+    }
+    let nodes_buf = b.buffers.get(scene.bvh_nodes.id)?;
+    let prefix: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(
+        &b.read_device(nodes_buf.buffer.buffer, prefix_vec4s as u64 * 16)?,
+    );
+    let records: Vec<InstanceRecord> = (0..levels)
+        .map(|p| {
+            let at = (capacity + RECORD_SLOTS as usize * p) * SLOT_VEC4S;
+            InstanceRecord::decode(&prefix[at..at + 10])
+        })
+        .collect();
+    let generations = [
+        b.buffers.get(scene.vertices.id)?.generation,
+        b.buffers.get(scene.triangles.id)?.generation,
+        b.buffers.get(scene.bvh_nodes.id)?.generation,
+    ];
+    let mut previous = None;
+    if let Some(mut accel) = b.scenes.remove(&scene.bvh_nodes.id) {
+        if accel.keeps_bottom_levels(&records, generations) {
+            // only transforms moved: the TLAS rebuilt in place over the same BLASes (the
+            // device is idle: the caller waited)
+            let shared: &VulkanBackend = b;
+            let result = accel.restage(&records).and_then(|_| {
+                shared.one_shot(&|cmd| accel.record_build(cmd, records.len() as u32))
+            });
+            b.scenes.insert(scene.bvh_nodes.id, accel);
+            return result;
+        }
+        // a level changed (deformed): its BLAS is built, the others are kept
+        previous = Some(accel);
+    }
+    let vertex_count = scene.vertices.len;
+    let triangle_buffer = b.buffers.get(scene.triangles.id)?.buffer.buffer;
+    let triangle_count = scene.triangles.len;
+    debug_assert_eq!(std::mem::size_of::<GpuVertex>(), 32);
+    let shared: &VulkanBackend = b;
+    // triangles `first .. first + count` read back (only the levels whose BLAS is built:
+    // all at a first build, a deformed level's after a deformation)
+    let fetch = |first: u32, count: u32| -> Result<Vec<GpuTriangle>, BackendError> {
+        if first as u64 + count as u64 > triangle_count as u64 {
+            return Err(BackendError::BadArgument(
+                "an instance record names triangles past the buffer".into(),
+            ));
+        }
+        let size = std::mem::size_of::<GpuTriangle>() as u64;
+        let bytes =
+            shared.read_device_range(triangle_buffer, first as u64 * size, count as u64 * size)?;
+        let triangles: Vec<GpuTriangle> = bytemuck::pod_collect_to_vec(&bytes);
+        if triangles
+            .iter()
+            .flat_map(|t| t.indices)
+            .any(|i| i >= vertex_count)
+        {
+            return Err(BackendError::BadArgument(
+                "a triangle indexes past the vertex buffer".into(),
+            ));
+        }
+        Ok(triangles)
+    };
+    let sources = SceneSources {
+        vertices: &shared.buffers.get(scene.vertices.id)?.buffer,
+        vertex_count,
+        nodes: &shared.buffers.get(scene.bvh_nodes.id)?.buffer,
+        generations,
+    };
+    let accel = SceneAccel::build(
+        &shared.ctx,
+        &|f| shared.one_shot(f),
+        &sources,
+        triangle_count,
+        &fetch,
+        &records,
+        previous,
+    )?;
+    b.bottom_level_builds += accel.built_blases as u64;
+    if let Some(old) = b.scenes.insert(scene.bvh_nodes.id, accel) {
+        drop(old); // the device is idle here: prepare_scene waited for it
+    }
+    Ok(())
 }

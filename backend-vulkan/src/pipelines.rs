@@ -2,15 +2,43 @@
 //! GLSL sources under `shaders/`, compiled to SPIR-V kept in `spirv/`) with their shader
 //! binding tables, and compute pipelines for the other kernels, from the WGSL of the
 //! `caustica-shaders` crate through naga's SPIR-V writer (one source for this backend and
-//! the wgpu backend).
+//! the wgpu backend). Every pipeline without compiled switches is made with the backend,
+//! a variant on first use, kept by variant label; descriptor types come from core's
+//! kernel declarations.
 
-use crate::context::{vk_error, Context};
+use crate::device::{vk_error, Context};
 use crate::memory::Buffer;
+use crate::VulkanBackend;
 use ash::vk;
-use caustica_core::backend::BackendError;
+use caustica_core::backend::{driver_lifecycle, BackendError};
+use caustica_core::kernels::{KernelInfo, ShaderBinding, KERNELS};
+use caustica_core::recording::{Recording, Step};
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use caustica_shaders as wgsl;
+
+pub(crate) const S: vk::DescriptorType = vk::DescriptorType::STORAGE_BUFFER;
+pub(crate) const U: vk::DescriptorType = vk::DescriptorType::UNIFORM_BUFFER;
+pub(crate) const AS: vk::DescriptorType = vk::DescriptorType::ACCELERATION_STRUCTURE_KHR;
+
+/// The Vulkan descriptor type of a binding as core's kernel declaration states it.
+fn descriptor_type(b: ShaderBinding) -> vk::DescriptorType {
+    match b {
+        ShaderBinding::AccelerationStructure => AS,
+        ShaderBinding::Uniform => U,
+        ShaderBinding::StorageRead | ShaderBinding::StorageReadWrite => S,
+    }
+}
+
+/// The descriptor types of kernel `info`'s pipeline, derived from its declaration
+/// ([`KernelInfo::descriptor_bindings`]).
+pub(crate) fn descriptor_types(info: &KernelInfo) -> Vec<vk::DescriptorType> {
+    info.descriptor_bindings()
+        .into_iter()
+        .map(descriptor_type)
+        .collect()
+}
 
 /// SPIR-V of the GLSL stages (see `scripts/compile-shaders.sh`).
 pub mod spirv {
@@ -60,8 +88,8 @@ pub struct Pipeline {
 impl Drop for Pipeline {
     fn drop(&mut self) {
         // a ray-tracing pipeline's destruction enters the driver's CUDA layer: never at
-        // once with a device's destruction (crate::context::serialised)
-        crate::context::serialised(|| unsafe {
+        // once with a device's destruction (caustica_core::backend::driver_lifecycle)
+        driver_lifecycle(|| unsafe {
             let d = &self.ctx.device;
             d.destroy_pipeline(self.pipeline, None);
             d.destroy_pipeline_layout(self.layout, None);
@@ -389,4 +417,62 @@ fn binding_table(
         callable: vk::StridedDeviceAddressRegionKHR::default(),
         _buffer: buffer,
     })
+}
+
+/// Every pipeline without compiled switches, created once, from core's kernel list:
+/// traced kernels as ray-tracing pipelines (GLSL ray generation stage, binding the TLAS at
+/// 0 in place of the CWBVH nodes), the others as compute pipelines from the WGSL through
+/// naga; bindings from each kernel's declaration. Kernels with switches are built per
+/// variant on first use ([`ensure_variants`]). `trace_photons` and `trace_indirect` add
+/// into 64 counter banks that `reduce_counters` folds into the frame's counters.
+pub fn create_pipelines(ctx: &Arc<Context>) -> Result<HashMap<String, Pipeline>, BackendError> {
+    let mut p = HashMap::new();
+    for info in KERNELS {
+        if info.name == "prepare_scene" || !info.switches.is_empty() {
+            continue;
+        }
+        let bindings = descriptor_types(info);
+        let pipeline = if info.traced {
+            let raygen = spirv::raygen(info.name).ok_or_else(|| {
+                BackendError::Unsupported(format!("{}: no ray generation stage", info.name))
+            })?;
+            ray_tracing(ctx, raygen, bindings, &[])?
+        } else {
+            compute(ctx, &wgsl_to_spirv(info.name)?, bindings)?
+        };
+        p.insert(info.name.to_string(), pipeline);
+    }
+    let reduce = ash::util::read_spv(&mut std::io::Cursor::new(spirv::REDUCE_COUNTERS))
+        .map_err(|e| BackendError::Driver(format!("bad SPIR-V: {e}")))?;
+    p.insert("reduce_counters".into(), compute(ctx, &reduce, vec![S, S])?);
+    Ok(p)
+}
+
+/// Creates the pipeline of every kernel variant `rec` launches that does not exist yet
+/// (`trace_photons`: one ray-tracing pipeline per `TraceVariant`, specialization
+/// constants in switch order), one creation or destruction at a time (see `caustica_core::backend::driver_lifecycle`).
+pub(crate) fn ensure_variants(b: &mut VulkanBackend, rec: &Recording) -> Result<(), BackendError> {
+    for step in &rec.steps {
+        let Step::Kernel(k) = step else { continue };
+        let Some(launch) = k.launch()? else { continue };
+        let label = launch.variant_label();
+        if launch.constants.is_empty() || b.pipelines.contains_key(&label) {
+            continue;
+        }
+        let info = k.kernel().info();
+        let raygen = spirv::raygen(info.name)
+            .filter(|_| info.traced)
+            .ok_or_else(|| {
+                BackendError::Unsupported(format!(
+                    "{}: variants exist only for ray-traced kernels",
+                    info.name
+                ))
+            })?;
+        let ctx = Arc::clone(&b.ctx);
+        let p = driver_lifecycle(|| {
+            ray_tracing(&ctx, raygen, descriptor_types(info), &launch.constants)
+        })?;
+        b.pipelines.insert(label, p);
+    }
+    Ok(())
 }

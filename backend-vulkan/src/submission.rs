@@ -8,25 +8,24 @@
 //! submission wait for the oldest. [`caustica_core::backend::Backend::poll`] checks a fence
 //! without blocking and hands out the times and readbacks.
 
-use crate::arena::Arena;
-use crate::context::{vk_error, Context};
-use crate::dispatch::Frame;
-use crate::memory::Buffer;
+use crate::accel::SceneAccel;
+use crate::device::{vk_error, Context};
+use crate::memory::{Arena, Buffer};
+use crate::pipelines::{ensure_variants, AS, S, U};
+use crate::recording::{barrier, record_all};
 use crate::VulkanBackend;
 use ash::vk;
-use caustica_core::backend::{BackendError, Finished, Submission};
+use caustica_core::backend::{BackendError, Finished, PassTime, Submission, MAX_FRAMES_IN_FLIGHT};
+use caustica_core::kernels::{ShaderBinding, KERNELS};
+use caustica_core::recording::Recording;
 use std::sync::Arc;
-
-/// Submissions on the device at once; the next waits for the oldest (a host running more
-/// frames ahead than this is paced by the device).
-pub const MAX_FRAMES_IN_FLIGHT: usize = 3;
 
 /// What one submission records with, reused once its fence has signalled.
 pub struct FrameSlot {
     ctx: Arc<Context>,
     descriptor_pool: Option<(vk::DescriptorPool, u32)>,
     query_pool: Option<(vk::QueryPool, u32)>,
-    /// Kernel parameters and staging ([`crate::arena`]).
+    /// Kernel parameters and staging ([`crate::memory::Arena`]).
     pub arena: Arena,
     readback: Option<Buffer>,
     pub fence: vk::Fence,
@@ -160,7 +159,6 @@ impl Drop for FrameSlot {
 
 /// A submission on the device.
 pub struct InFlight {
-    pub id: u64,
     pub cmd: vk::CommandBuffer,
     pub frame: Frame,
     /// Offset and size of each readback in the slot's readback buffer.
@@ -175,11 +173,10 @@ impl VulkanBackend {
         if let Some(s) = self.free_slots.pop() {
             return Ok(s);
         }
-        if self.in_flight.len() >= MAX_FRAMES_IN_FLIGHT {
-            let oldest = self.in_flight.remove(0);
-            let id = oldest.id;
+        if self.submissions.len() >= MAX_FRAMES_IN_FLIGHT {
+            let (id, oldest) = self.submissions.take_oldest().expect("not empty");
             let result = self.retire(oldest, true);
-            self.finished.keep(id, result);
+            self.submissions.keep(id, result);
             if let Some(s) = self.free_slots.pop() {
                 return Ok(s);
             }
@@ -225,7 +222,7 @@ impl VulkanBackend {
             Ok(())
         };
         let result = waited.and_then(|_| {
-            let times = crate::dispatch::read_times(&self.ctx, &f.frame)?;
+            let times = read_times(&self.ctx, &f.frame)?;
             let readbacks = f
                 .readbacks
                 .iter()
@@ -233,7 +230,7 @@ impl VulkanBackend {
                 .collect::<Result<Vec<_>, _>>()?;
             Ok(Finished { times, readbacks })
         });
-        let crate::dispatch::Frame {
+        let Frame {
             retired,
             retired_scenes,
             slot,
@@ -255,17 +252,26 @@ impl VulkanBackend {
         Ok(result)
     }
 
+    /// [`caustica_core::backend::Backend::execute`]'s body (core runs it inside
+    /// [`caustica_core::backend::driver_entry`]): a submission, waited for.
+    pub(crate) fn execute_recording(
+        &mut self,
+        recording: &Recording,
+    ) -> Result<Vec<PassTime>, BackendError> {
+        let mut s = self.submit_recording(recording, &[])?;
+        let f = self.poll_submission(&mut s, true)?;
+        Ok(f.map(|f| f.times).unwrap_or_default())
+    }
+
     /// [`caustica_core::backend::Backend::submit`]'s body.
     pub(crate) fn submit_recording(
         &mut self,
-        recording: &caustica_core::recording::Recording,
+        recording: &Recording,
         readbacks: &[caustica_core::device::handle::ResourceId],
     ) -> Result<Submission, BackendError> {
-        let id = self.next_submission + 1;
-        let f = crate::dispatch::submit(self, recording, readbacks, id)?;
-        self.next_submission = id;
-        self.in_flight.push(f);
-        Ok(Submission::pending(id))
+        let id = self.submissions.next_id();
+        let f = record_submission(self, recording, readbacks, id)?;
+        Ok(self.submissions.push(f))
     }
 
     /// [`caustica_core::backend::Backend::poll`]'s body.
@@ -274,25 +280,18 @@ impl VulkanBackend {
         s: &mut Submission,
         wait: bool,
     ) -> Result<Option<Finished>, BackendError> {
-        if let Some(answer) = self.finished.settle(s) {
+        if let Some(answer) = self.submissions.settle(s) {
             return answer;
         }
-        let Some(k) = self.in_flight.iter().position(|f| f.id == s.id) else {
-            return Err(caustica_core::backend::unknown_submission(s.id));
-        };
         if !wait {
-            let done = unsafe {
-                self.ctx
-                    .device
-                    .get_fence_status(self.in_flight[k].frame.slot.fence)
-            }
-            .map_err(vk_error("querying a fence"))?;
+            let f = self.submissions.get(s.id).expect("settle: on the device");
+            let done = unsafe { self.ctx.device.get_fence_status(f.frame.slot.fence) }
+                .map_err(vk_error("querying a fence"))?;
             if !done {
                 return Ok(None);
             }
         }
-        let f = self.in_flight.remove(k);
-        s.mark_collected();
+        let f = self.submissions.collect(s).expect("looked up above");
         self.retire(f, wait).map(Some)
     }
 
@@ -312,7 +311,7 @@ impl VulkanBackend {
         }
         let mut ty = vk::SemaphoreTypeCreateInfo::default()
             .semaphore_type(vk::SemaphoreType::TIMELINE)
-            .initial_value(self.next_submission);
+            .initial_value(self.submissions.last_id());
         let t = unsafe {
             self.ctx
                 .device
@@ -322,4 +321,269 @@ impl VulkanBackend {
         self.timeline = Some(t);
         Ok(t)
     }
+}
+
+impl VulkanBackend {
+    /// Records `f` into a fresh command buffer, submits it and waits.
+    pub(crate) fn one_shot(&self, f: &dyn Fn(vk::CommandBuffer)) -> Result<(), BackendError> {
+        let cmd = self.begin()?;
+        f(cmd);
+        self.submit_and_wait(cmd)
+    }
+
+    pub(crate) fn begin(&self) -> Result<vk::CommandBuffer, BackendError> {
+        self.begin_reusing(None)
+    }
+
+    /// Begins `reuse` (a finished submission's command buffer, reset here) or a newly
+    /// allocated command buffer.
+    pub(crate) fn begin_reusing(
+        &self,
+        reuse: Option<vk::CommandBuffer>,
+    ) -> Result<vk::CommandBuffer, BackendError> {
+        let d = &self.ctx.device;
+        let cmd = match reuse {
+            Some(cmd) => {
+                unsafe { d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()) }
+                    .map_err(vk_error("resetting a command buffer"))?;
+                cmd
+            }
+            None => unsafe {
+                d.allocate_command_buffers(
+                    &vk::CommandBufferAllocateInfo::default()
+                        .command_pool(self.pool)
+                        .level(vk::CommandBufferLevel::PRIMARY)
+                        .command_buffer_count(1),
+                )
+            }
+            .map_err(vk_error("allocating a command buffer"))?[0],
+        };
+        unsafe {
+            d.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+        }
+        .map_err(vk_error("beginning a command buffer"))?;
+        // ordered after every earlier submission's work on the queue (submissions do not
+        // wait for each other on the host; a barrier's first scope reaches back through
+        // submission order)
+        barrier(d, cmd);
+        Ok(cmd)
+    }
+
+    pub(crate) fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<(), BackendError> {
+        let d = &self.ctx.device;
+        let result = (|| unsafe {
+            d.end_command_buffer(cmd)
+                .map_err(vk_error("ending a command buffer"))?;
+            let cmds = [cmd];
+            d.queue_submit(
+                self.ctx.queue,
+                &[vk::SubmitInfo::default().command_buffers(&cmds)],
+                self.fence,
+            )
+            .map_err(vk_error("vkQueueSubmit"))?;
+            d.wait_for_fences(&[self.fence], true, u64::MAX)
+                .map_err(vk_error("waiting for the device"))?;
+            d.reset_fences(&[self.fence])
+                .map_err(vk_error("resetting a fence"))
+        })();
+        unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        result?;
+        self.check_validation()
+    }
+}
+
+/// Per-submission state: the command buffer being recorded and what must outlive it.
+pub struct Frame {
+    pub cmd: vk::CommandBuffer,
+    pub retired: Vec<Buffer>,
+    pub retired_scenes: Vec<SceneAccel>,
+    pub queries: Option<vk::QueryPool>,
+    pub passes: Vec<&'static str>,
+    /// The slot's descriptor pool, arena and readback buffer while it runs.
+    pub slot: FrameSlot,
+}
+
+/// Descriptor sets and descriptors of each type that `kernels` kernel steps need: two
+/// sets per kernel; storage descriptors per set the most any kernel binds (the G-buffer
+/// and photon map count one per plane).
+fn descriptor_needs(kernels: u32) -> (u32, [vk::DescriptorPoolSize; 3]) {
+    let sets = 2 * kernels.max(1);
+    let storage_per_set = KERNELS
+        .iter()
+        .map(|k| {
+            k.descriptor_bindings()
+                .iter()
+                .filter(|b| {
+                    matches!(
+                        b,
+                        ShaderBinding::StorageRead | ShaderBinding::StorageReadWrite
+                    )
+                })
+                .count() as u32
+        })
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    (
+        sets,
+        [
+            vk::DescriptorPoolSize::default()
+                .ty(S)
+                .descriptor_count(storage_per_set),
+            vk::DescriptorPoolSize::default().ty(U).descriptor_count(1),
+            vk::DescriptorPoolSize::default().ty(AS).descriptor_count(1),
+        ],
+    )
+}
+
+/// Records `rec` into a command buffer of a free frame slot and submits it with the
+/// slot's fence (and the backend's timeline value `id`), copying `readbacks` into the
+/// slot's host-visible buffer at the end. Does not wait, except for a `prepare_scene` that
+/// builds acceleration structures (a set-up step: it reads the uploads back).
+fn record_submission(
+    b: &mut VulkanBackend,
+    rec: &Recording,
+    readbacks: &[caustica_core::device::handle::ResourceId],
+    id: u64,
+) -> Result<InFlight, BackendError> {
+    ensure_variants(b, rec)?;
+    let kernels = rec.kernel_count();
+    let d = b.ctx.device.clone();
+    let mut slot = b.take_slot()?;
+    // the slot's pools are kept: reset, or made anew when this recording needs more than
+    // they hold (no pool made and destroyed per recording)
+    let (sets, per_set) = descriptor_needs(kernels);
+    if let Err(e) = slot.prepare(
+        &b.ctx,
+        sets,
+        &per_set,
+        if b.ctx.timestamps { 2 * kernels } else { 0 },
+    ) {
+        b.return_slot(slot);
+        return Err(e);
+    }
+    let queries = slot.query_pool().filter(|_| kernels > 0);
+    let mut frame = Frame {
+        cmd: vk::CommandBuffer::null(),
+        retired: Vec::new(),
+        retired_scenes: Vec::new(),
+        queries,
+        passes: Vec::new(),
+        slot,
+    };
+    let recorded = record_all(b, rec, &mut frame, kernels)
+        .and_then(|_| record_readbacks(b, &mut frame, readbacks));
+    let sizes = match recorded {
+        Ok(sizes) => sizes,
+        Err(e) => {
+            // wait for what was recorded before the frame's objects go
+            if frame.cmd != vk::CommandBuffer::null() {
+                let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+                let _ = b.submit_and_wait(cmd);
+            }
+            b.return_slot(frame.slot);
+            return Err(e);
+        }
+    };
+    let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
+    if let Err(e) = b.submit_signalled(cmd, frame.slot.fence, id) {
+        unsafe {
+            let _ = d.queue_wait_idle(b.ctx.queue);
+        }
+        b.return_slot(frame.slot);
+        return Err(e);
+    }
+    Ok(InFlight {
+        cmd,
+        frame,
+        readbacks: sizes,
+    })
+}
+
+/// Copies of `readbacks` into the slot's host-visible readback buffer, after a barrier;
+/// returns each one's offset and size.
+fn record_readbacks(
+    b: &mut VulkanBackend,
+    frame: &mut Frame,
+    readbacks: &[caustica_core::device::handle::ResourceId],
+) -> Result<Vec<(u64, u64)>, BackendError> {
+    if readbacks.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut at = 0u64;
+    let mut sizes = Vec::with_capacity(readbacks.len());
+    for id in readbacks {
+        let bytes = b.buffers.get(*id)?.bytes;
+        sizes.push((at, bytes));
+        at = (at + bytes).next_multiple_of(16);
+    }
+    let dst = frame.slot.readback_buffer(&b.ctx, at)?;
+    let d = &b.ctx.device;
+    barrier(d, frame.cmd);
+    for (id, (offset, bytes)) in readbacks.iter().zip(&sizes) {
+        if *bytes > 0 {
+            let src = b.buffers.get(*id)?.buffer.buffer;
+            unsafe {
+                d.cmd_copy_buffer(
+                    frame.cmd,
+                    src,
+                    dst,
+                    &[vk::BufferCopy::default().dst_offset(*offset).size(*bytes)],
+                )
+            };
+        }
+    }
+    // host reads after the fence: make the transfer writes visible to the host
+    let m = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)];
+    unsafe {
+        d.cmd_pipeline_barrier(
+            frame.cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &m,
+            &[],
+            &[],
+        )
+    };
+    Ok(sizes)
+}
+
+/// The frame's kernel times (its fence has signalled).
+fn read_times(ctx: &Context, frame: &Frame) -> Result<Vec<PassTime>, BackendError> {
+    let Some(q) = frame.queries else {
+        return Ok(frame
+            .passes
+            .iter()
+            .map(|k| PassTime {
+                kernel: k,
+                seconds: 0.0,
+            })
+            .collect());
+    };
+    if frame.passes.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut ticks = vec![0u64; 2 * frame.passes.len()];
+    unsafe {
+        ctx.device.get_query_pool_results(
+            q,
+            0,
+            &mut ticks,
+            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+        )
+    }
+    .map_err(vk_error("reading timestamps"))?;
+    let period = ctx.limits.timestamp_period as f64;
+    Ok(caustica_core::backend::pass_times_from_ticks(
+        &frame.passes,
+        &ticks,
+        period,
+    ))
 }

@@ -1,10 +1,14 @@
 //! The Vulkan instance, device and queue: created here (with the ray-tracing extensions
 //! and features, and the Khronos validation layer when asked for and installed) or taken
-//! from a caller's renderer. Every failure is a typed error; what is created here is
+//! from a caller's renderer; the backend's command pool, fence and counter banks on it;
+//! what the device can do. Every failure is a typed error; what is created here is
 //! destroyed on drop, what a caller lent is left alone.
 
+use crate::memory::{self, Buffer, COUNTER_BANK_BYTES};
+use crate::VulkanBackend;
 use ash::vk;
-use caustica_core::backend::BackendError;
+use caustica_core::backend::{driver_lifecycle, BackendError, Capabilities, DeviceType};
+use std::collections::HashMap;
 use std::ffi::{c_void, CStr};
 use std::sync::{Arc, Mutex};
 
@@ -16,15 +20,6 @@ pub const DEVICE_EXTENSIONS: [&CStr; 3] = [
 ];
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
-
-/// Runs `f` under [`caustica_core::backend::driver_lifecycle`]: creation and destruction
-/// of instances, devices, pipelines and acceleration structures, one at a time in the
-/// process and across every GPU backend (NVIDIA's driver deadlocks when a device is
-/// destroyed while another thread destroys a ray-tracing pipeline; two threads creating
-/// Vulkan backends at once also hung it on the H100).
-pub(crate) fn serialised<T>(f: impl FnOnce() -> T) -> T {
-    caustica_core::backend::driver_lifecycle(f)
-}
 
 /// Vulkan result to a typed error.
 pub fn vk_error(what: &'static str) -> impl Fn(vk::Result) -> BackendError {
@@ -415,7 +410,7 @@ impl Drop for Context {
         if !self.owned {
             return;
         }
-        serialised(|| unsafe {
+        driver_lifecycle(|| unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_device(None);
             if let Some((l, m)) = &self.debug {
@@ -423,5 +418,112 @@ impl Drop for Context {
             }
             self.instance.destroy_instance(None);
         })
+    }
+}
+
+impl VulkanBackend {
+    /// The backend on `ctx`: its command pool, fence, counter banks and pipelines.
+    pub(crate) fn with_context(ctx: Context) -> Result<VulkanBackend, BackendError> {
+        let ctx = Arc::new(ctx);
+        let d = &ctx.device;
+        let pool = unsafe {
+            d.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(ctx.queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+        }
+        .map_err(vk_error("creating a command pool"))?;
+        let fence = match unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) } {
+            Ok(f) => f,
+            Err(e) => {
+                unsafe { d.destroy_command_pool(pool, None) };
+                return Err(vk_error("creating a fence")(e));
+            }
+        };
+        let counter_banks = Buffer::new(
+            &ctx,
+            COUNTER_BANK_BYTES,
+            memory::storage_usage(),
+            false,
+            "counter banks",
+        );
+        let counter_banks = match counter_banks {
+            Ok(b) => b,
+            Err(e) => {
+                unsafe {
+                    d.destroy_fence(fence, None);
+                    d.destroy_command_pool(pool, None);
+                }
+                return Err(e);
+            }
+        };
+        let mut backend = VulkanBackend {
+            buffers: Default::default(),
+            scenes: HashMap::new(),
+            bottom_level_builds: 0,
+            written_top_levels: HashMap::new(),
+            submissions: Default::default(),
+            free_slots: Vec::new(),
+            timeline: None,
+            pipelines: HashMap::new(),
+            counter_banks,
+            pool,
+            fence,
+            ctx,
+        };
+        backend.pipelines = crate::pipelines::create_pipelines(&backend.ctx)?;
+        // the banks start at zero; the reduce pass leaves them zeroed after every use
+        let banks = backend.counter_banks.buffer;
+        backend.one_shot(&|cmd| unsafe {
+            backend
+                .ctx
+                .device
+                .cmd_fill_buffer(cmd, banks, 0, vk::WHOLE_SIZE, 0)
+        })?;
+        Ok(backend)
+    }
+
+    /// The validation errors reported since the last check, as an error.
+    pub(crate) fn check_validation(&self) -> Result<(), BackendError> {
+        let errors = self.ctx.take_validation_errors();
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            Err(BackendError::Driver(format!(
+                "Vulkan validation: {}",
+                errors.join(" | ")
+            )))
+        }
+    }
+
+    /// What the device can do ([`caustica_core::backend::Backend::capabilities`]).
+    pub(crate) fn describe(&self) -> Capabilities {
+        Capabilities {
+            device: self.ctx.name.clone(),
+            device_type: match self.ctx.device_type {
+                vk::PhysicalDeviceType::DISCRETE_GPU => DeviceType::DiscreteGpu,
+                vk::PhysicalDeviceType::INTEGRATED_GPU => DeviceType::IntegratedGpu,
+                vk::PhysicalDeviceType::VIRTUAL_GPU => DeviceType::VirtualGpu,
+                vk::PhysicalDeviceType::CPU => DeviceType::SoftwareGpu,
+                _ => DeviceType::Other,
+            },
+            hardware_ray_tracing: true,
+            float_atomics: false,
+            int64_atomics: false,
+            timestamps: self.ctx.timestamps,
+            max_buffer_bytes: self
+                .ctx
+                .max_allocation
+                .min(self.ctx.limits.max_storage_buffer_range as u64),
+            max_buffer_limit: if self.ctx.max_allocation
+                < self.ctx.limits.max_storage_buffer_range as u64
+            {
+                "device allocation size (maxMemoryAllocationSize)"
+            } else {
+                "storage-binding size (maxStorageBufferRange)"
+            },
+        }
     }
 }
