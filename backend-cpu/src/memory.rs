@@ -1,6 +1,9 @@
-//! Host buffers: 8-byte aligned byte storage, viewed as typed slices or as `AtomicU64`s.
+//! Host buffers: 8-byte aligned byte storage, viewed as typed slices or as `AtomicU64`s;
+//! the backend's buffers by resource, read back by copy.
 
-use caustica_core::backend::BackendError;
+use crate::CpuBackend;
+use caustica_core::backend::{check_write, BackendError};
+use caustica_core::device::handle::ResourceId;
 use std::sync::atomic::AtomicU64;
 
 pub(crate) struct Storage {
@@ -76,16 +79,9 @@ impl Storage {
         Ok(())
     }
 
-    /// Writes `data` from byte `offset` on (a `Step::Write`).
-    pub fn write_at(&mut self, offset: u64, data: &[u8]) -> Result<(), BackendError> {
-        let end = offset.checked_add(data.len() as u64);
-        if end.is_none_or(|e| e > self.bytes as u64) {
-            return Err(BackendError::BadArgument(format!(
-                "write of {} bytes at {offset} into a buffer of {}",
-                data.len(),
-                self.bytes
-            )));
-        }
+    /// Writes `data` from byte `offset` on (`label`'s `Step::Write`).
+    pub fn write_at(&mut self, label: &str, offset: u64, data: &[u8]) -> Result<(), BackendError> {
+        check_write(label, self.bytes as u64, offset, data.len())?;
         self.bytes_mut()[offset as usize..offset as usize + data.len()].copy_from_slice(data);
         Ok(())
     }
@@ -114,5 +110,34 @@ impl Storage {
         // only accessed through atomics while this shared borrow lives, and u64 has no
         // invalid bit patterns.
         Ok(unsafe { &*(words as *const [u64] as *const [AtomicU64]) })
+    }
+}
+
+impl CpuBackend {
+    /// Buffer `id`.
+    pub(crate) fn get(&self, id: ResourceId) -> Result<&Storage, BackendError> {
+        self.buffers.get(id)
+    }
+
+    /// Buffer `id`, to write.
+    pub(crate) fn get_mut(&mut self, id: ResourceId) -> Result<&mut Storage, BackendError> {
+        self.buffers.get_mut(id)
+    }
+
+    /// Replaces the whole of buffer `id` with `data` (a kernel's result).
+    pub(crate) fn put<T: bytemuck::Pod>(
+        &mut self,
+        id: ResourceId,
+        data: &[T],
+    ) -> Result<(), BackendError> {
+        self.get_mut(id)?.write_all(data)
+    }
+
+    /// [`caustica_core::backend::Backend::read`]'s body.
+    pub(crate) fn read_resource(&self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+        let src = self.get(id)?.bytes();
+        let mut out = caustica_core::device::host_bytes(src.len() as u64, "reading a buffer back")?;
+        out.copy_from_slice(src);
+        Ok(out)
     }
 }
