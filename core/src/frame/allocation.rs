@@ -20,6 +20,21 @@ pub struct Allocation {
 }
 
 impl Allocation {
+    /// Frees every buffer now and forgets them.
+    pub fn free(&mut self, backend: &mut dyn Backend) -> Result<(), BackendError> {
+        let mut rec = Recording::new();
+        self.free_into(&mut rec);
+        if !rec.steps.is_empty() {
+            backend.execute(&rec)?;
+        }
+        Ok(())
+    }
+
+    /// The buffers and their bytes (leak reports, statistics).
+    pub fn count(&self) -> (usize, u64) {
+        (self.owned.len(), self.bytes)
+    }
+
     /// Records every buffer freed and forgets them.
     pub fn free_into(&mut self, rec: &mut Recording) {
         for id in std::mem::take(&mut self.owned) {
@@ -28,6 +43,21 @@ impl Allocation {
         self.bytes = 0;
         self.buffers.clear();
     }
+}
+
+/// Checks every buffer `rec` creates against the device ([`planned_allocation`]), then
+/// runs it; if it fails, what it made is freed before the error.
+pub fn allocate(
+    backend: &mut dyn Backend,
+    rec: &Recording,
+    frame: Option<(u32, u32)>,
+) -> Result<Allocation, BackendError> {
+    let mut alloc = planned_allocation(backend, rec, frame)?;
+    if let Err(e) = backend.execute(rec) {
+        let _ = alloc.free(backend);
+        return Err(e);
+    }
+    Ok(alloc)
 }
 
 /// Checks every buffer that `rec` creates or uploads against the device's largest buffer

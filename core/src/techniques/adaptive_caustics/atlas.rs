@@ -20,13 +20,6 @@ use crate::frame::receivers::atlas::{
 use crate::kernels::TraceVariant;
 use crate::recording::Recording;
 
-fn quanta(planes: &ViewPlanes) -> AtlasQuanta {
-    AtlasQuanta {
-        flux_quantum: planes.flux_quantum,
-        hit_distance_quantum: planes.hit_distance_quantum,
-    }
-}
-
 /// The plan from the planes, the traversal, the atlas and the camera images.
 fn plan(
     host: &FrameHost,
@@ -81,7 +74,7 @@ pub(super) fn create(
         backend,
         host,
         map.clone(),
-        quanta(&planes),
+        AtlasQuanta::of(&planes),
         atlas,
         &mut |rec| traversal = Some(Traversal::record(rec, &ts, levels, &boxes, false)),
     )?;
@@ -217,7 +210,7 @@ impl AdaptiveCausticsPipeline {
         let Target::Atlas { receiver, valid } = &mut self.target else {
             return Ok(Reaction::Rebuild);
         };
-        receiver.set_quanta(quanta(&planes));
+        receiver.set_quanta(AtlasQuanta::of(&planes));
         *valid = false;
         if let Change::Instances {
             receivers_moved: true,

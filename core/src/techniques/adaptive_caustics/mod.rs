@@ -285,19 +285,14 @@ impl Pipeline for AdaptiveCausticsPipeline {
         self.traversal = None;
         match &mut self.target {
             Target::Atlas { receiver, .. } => receiver.free(backend),
-            Target::Screen { owned, .. } => {
-                let mut rec = Recording::new();
-                owned.free_into(&mut rec);
-                backend.execute(&rec)?;
-                Ok(())
-            }
+            Target::Screen { owned, .. } => Ok(owned.free(backend)?),
         }
     }
 
     fn owned(&self) -> (usize, u64) {
         match &self.target {
             Target::Atlas { receiver, .. } => receiver.owned(),
-            Target::Screen { owned, .. } => (owned.owned.len(), owned.bytes),
+            Target::Screen { owned, .. } => owned.count(),
         }
     }
 }

@@ -5,7 +5,7 @@
 
 use super::{AdaptiveCausticsPipeline, AdaptiveCausticsSettings, Target};
 use crate::backend::Backend;
-use crate::frame::allocation::planned_allocation;
+use crate::frame::allocation::allocate;
 use crate::frame::emission::adaptive::{DepositTarget, ScreenTarget, Traversal};
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
@@ -16,7 +16,7 @@ use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::{
     plan_frame, Needs, ScreenQuanta, ScreenReceiver, ScreenSettings,
 };
-use crate::recording::{Recording, Step};
+use crate::recording::Recording;
 
 /// The photon capacity `deposit_screen` and `resolve_caustics` are parameterised with
 /// outside the traversal's steps (the traversal's own list sets it in each step).
@@ -82,15 +82,7 @@ pub(super) fn create(
             .collect();
         Traversal::record(&mut rec, &settings.traversal(), levels, &boxes, true)
     });
-    let owned = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
-    if let Err(e) = backend.execute(&rec) {
-        let mut free = Recording::new();
-        for id in &owned.owned {
-            free.steps.push(Step::Free { id: *id });
-        }
-        let _ = backend.execute(&free);
-        return Err(e.into());
-    }
+    let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;
     plan.buffers = host
         .buffer_plans()
         .into_iter()

@@ -81,13 +81,6 @@ fn view_planes(host: &FrameHost, settings: &CausticMapSettings) -> Result<ViewPl
     Ok(planes)
 }
 
-fn quanta(planes: &ViewPlanes) -> AtlasQuanta {
-    AtlasQuanta {
-        flux_quantum: planes.flux_quantum,
-        hit_distance_quantum: planes.hit_distance_quantum,
-    }
-}
-
 /// The plan from the planes, the atlas and the camera images.
 fn plan(
     host: &FrameHost,
@@ -253,7 +246,7 @@ impl Pipeline for CausticMapPipeline {
             backend,
             host,
             settings.clone(),
-            quanta(&planes),
+            AtlasQuanta::of(&planes),
             atlas,
             &mut |_| {},
         )?;
@@ -343,7 +336,7 @@ impl Pipeline for CausticMapPipeline {
             // photon passes start or stop: other buffers
             return Ok(Reaction::Rebuild);
         }
-        self.receiver.set_quanta(quanta(&planes));
+        self.receiver.set_quanta(AtlasQuanta::of(&planes));
         self.planes = planes;
         self.atlas_valid = false;
         if receivers_moved {

@@ -26,12 +26,12 @@ pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 
 use crate::backend::Backend;
 use crate::device::device_scene::SceneInstances;
-use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes, ResourceId};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::{
     counter, CorrectionParams, DepositParams, GpuCamera, IndirectTraceParams, RsmParams,
     SplatParams,
 };
-use crate::frame::allocation::planned_allocation;
+use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
@@ -47,7 +47,7 @@ use crate::kernels::{
     DepositScreen, ResolveCaustics, SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
 };
 use crate::math::gi_photon::{gi_store, screen_tiles};
-use crate::recording::{Recording, Step};
+use crate::recording::Recording;
 use rsm::{PhotonPlan, RsmBuffers};
 
 /// Eq. 20's `epsilon`: keeps the factor finite where the mean light direction grazes the
@@ -208,10 +208,8 @@ pub struct PhotonGiPipeline {
     diagonal: f32,
     buffers: Buffers,
     plan: FramePlan,
-    owned: Vec<ResourceId>,
-    bytes: u64,
-    /// The plan entries of `owned`.
-    own_buffers: Vec<BufferPlan>,
+    /// Its own buffers.
+    owned: Allocation,
 }
 
 /// The frame plan of `host`'s scene with `s`: the lights' photons and RSMs, every pass
@@ -356,7 +354,7 @@ impl PhotonGiPipeline {
     fn plan_buffers(&self, host: &FrameHost) -> Vec<BufferPlan> {
         host.buffer_plans()
             .into_iter()
-            .chain(self.own_buffers.iter().cloned())
+            .chain(self.owned.buffers.iter().cloned())
             .collect()
     }
 
@@ -573,22 +571,11 @@ impl Pipeline for PhotonGiPipeline {
         let correct = shading_correction(&settings, host.instances());
         let mut rec = Recording::new();
         let buffers = Buffers::create(&mut rec, camera, &settings, correct);
-        let alloc = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
-        let free = |backend: &mut dyn Backend| {
-            let mut free = Recording::new();
-            for id in &alloc.owned {
-                free.steps.push(Step::Free { id: *id });
-            }
-            let _ = backend.execute(&free);
-        };
-        if let Err(e) = backend.execute(&rec) {
-            free(backend);
-            return Err(e.into());
-        }
+        let mut alloc = allocate(backend, &rec, Some((camera.width, camera.height)))?;
         let photons = match rsm::plan_photons(backend, host, &buffers.rsm, &settings) {
             Ok(p) => p,
             Err(e) => {
-                free(backend);
+                let _ = alloc.free(backend);
                 return Err(e);
             }
         };
@@ -604,9 +591,7 @@ impl Pipeline for PhotonGiPipeline {
             diagonal: scene_diagonal(&host.geometry().bounds),
             buffers,
             plan,
-            owned: alloc.owned,
-            bytes: alloc.bytes,
-            own_buffers: alloc.buffers,
+            owned: alloc,
         })
     }
 
@@ -751,17 +736,11 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
-        let mut rec = Recording::new();
-        for id in std::mem::take(&mut self.owned) {
-            rec.steps.push(Step::Free { id });
-        }
-        self.bytes = 0;
-        backend.execute(&rec)?;
-        Ok(())
+        Ok(self.owned.free(backend)?)
     }
 
     fn owned(&self) -> (usize, u64) {
-        (self.owned.len(), self.bytes)
+        self.owned.count()
     }
 }
 

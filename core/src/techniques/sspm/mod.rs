@@ -25,19 +25,19 @@ pub use constants::{volume_light_plans, FrameConstants};
 pub use settings::SspmSettings;
 
 use crate::backend::Backend;
-use crate::device::handle::{Buf, GBufferPlanes, ResourceId};
+use crate::device::handle::{Buf, GBufferPlanes};
 use crate::device::layout::Photon;
-use crate::frame::allocation::planned_allocation;
+use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
-use crate::frame::plan::{BufferPlan, FramePlan};
+use crate::frame::plan::FramePlan;
 use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::ScreenReceiver;
 use crate::frame::technique::OutputInfo;
 use crate::kernels::{DepositScreen, FusedDeposit, ScreenDeposit, TracePhotons};
-use crate::recording::{Recording, Step};
+use crate::recording::Recording;
 
 /// Screen-space photon mapping on one backend, for one scene: the frame host and
 /// [`SspmPipeline`].
@@ -61,9 +61,8 @@ pub struct SspmPipeline {
     plan: FramePlan,
     photons: Option<PhotonBuffers>,
     receiver: ScreenReceiver,
-    owned: Vec<ResourceId>,
-    bytes: u64,
-    buffers: Vec<BufferPlan>,
+    /// Its own buffers.
+    owned: Allocation,
 }
 
 /// The frame constants and plan of the host's scene with `settings`; refuses a light
@@ -117,7 +116,7 @@ impl SspmPipeline {
         self.plan.buffers = host
             .buffer_plans()
             .into_iter()
-            .chain(self.buffers.iter().cloned())
+            .chain(self.owned.buffers.iter().cloned())
             .collect();
     }
 
@@ -241,24 +240,14 @@ impl Pipeline for SspmPipeline {
             }
         });
         let receiver = ScreenReceiver::create(&mut rec, camera, &plan, screen, constants.quanta());
-        let alloc = planned_allocation(backend, &rec, Some((camera.width, camera.height)))?;
-        if let Err(e) = backend.execute(&rec) {
-            let mut free = Recording::new();
-            for id in &alloc.owned {
-                free.steps.push(Step::Free { id: *id });
-            }
-            let _ = backend.execute(&free);
-            return Err(e.into());
-        }
+        let alloc = allocate(backend, &rec, Some((camera.width, camera.height)))?;
         let mut p = SspmPipeline {
             settings,
             constants,
             plan,
             photons,
             receiver,
-            owned: alloc.owned,
-            bytes: alloc.bytes,
-            buffers: alloc.buffers,
+            owned: alloc,
         };
         p.plan_buffers(host);
         Ok(p)
@@ -350,17 +339,11 @@ impl Pipeline for SspmPipeline {
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
-        let mut rec = Recording::new();
-        for id in std::mem::take(&mut self.owned) {
-            rec.steps.push(Step::Free { id });
-        }
-        self.bytes = 0;
-        backend.execute(&rec)?;
-        Ok(())
+        Ok(self.owned.free(backend)?)
     }
 
     fn owned(&self) -> (usize, u64) {
-        (self.owned.len(), self.bytes)
+        self.owned.count()
     }
 }
 

@@ -79,6 +79,16 @@ pub struct AtlasQuanta {
     pub hit_distance_quantum: f32,
 }
 
+impl AtlasQuanta {
+    /// The quanta of the view planes' photons.
+    pub fn of(planes: &crate::frame::emission::view_planes::ViewPlanes) -> AtlasQuanta {
+        AtlasQuanta {
+            flux_quantum: planes.flux_quantum,
+            hit_distance_quantum: planes.hit_distance_quantum,
+        }
+    }
+}
+
 /// The density gather's parameters on an atlas of `settings.atlas_size` texels a side
 /// (`gather: density`; `axis` 0: the row pass, 1: the column pass): the atlas is the
 /// grid, edge weights only keep the gather inside a tile
