@@ -68,11 +68,13 @@ inline uint target_texel(__global const RefineParams* p, __global const uint* tr
 }
 
 __kernel void refine_clusters(__global const RefineParams* p, __global const uint* clusters,
+                              __global const uint* list_length,
                               __global const float4* caster_rects,
                               __global const Photon* photons,
                               __global const uint* triangle_tiles, __global const uint4* tiles,
                               __global uint* children, __global uint* converged,
-                              uint converged_capacity, volatile __global uint* cluster_counts,
+                              uint converged_capacity, volatile __global uint* converged_count,
+                              volatile __global uint* cluster_counts,
                               volatile __global uint* counters,
                               PHOTON_MAP_PARAMS(volatile __global),
                               __global Photon* output_photons, uint output_capacity,
@@ -80,7 +82,8 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint t = get_global_id(0);
-    if (t < p->count) {
+    // the pass's live clusters: list_length[0] is its list's length
+    if (t < live_clusters(list_length[0], p->first, p->count)) {
         uint entry = clusters[p->first + t];
         uint cluster = entry_cluster(entry);
         Photon slots[4];
@@ -119,7 +122,8 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                                  p->metric, p->error_from_level);
         if (fate == CLUSTER_OUTPUT && p->level < p->finest) {
             // converged early: output later from fresh photons
-            uint slot = atomic_inc(&cluster_counts[CLUSTER_COUNT_CONVERGED]);
+            atomic_inc(&cluster_counts[CLUSTER_COUNT_CONVERGED]);
+            uint slot = atomic_inc(converged_count);
             if (slot < converged_capacity) converged[slot] = cluster_entry(cluster, spread);
         } else if (fate == CLUSTER_OUTPUT) {
             for (uint k = 0u; k < 4u; k++) {
@@ -150,10 +154,14 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
             atomic_inc(&cluster_counts[CLUSTER_COUNT_DISCARDED]);
         } else {
             uint base = atomic_add(&cluster_counts[CLUSTER_COUNT_CHILDREN], 4u);
-            for (uint k = 0u; k < 4u; k++) {
-                // the host sizes every step so that this never drops a child
-                if (base + k < p->children_capacity)
+            if (base + 4u <= p->children_capacity) {
+                for (uint k = 0u; k < 4u; k++)
                     children[base + k] = cluster_photon_index(cluster, k, p->grid_w);
+            } else {
+                // the next level's list is full: output at this level from fresh photons
+                atomic_inc(&cluster_counts[CLUSTER_COUNT_OVERFLOW]);
+                uint slot = atomic_inc(converged_count);
+                if (slot < converged_capacity) converged[slot] = cluster_entry(cluster, 1u);
             }
         }
     }

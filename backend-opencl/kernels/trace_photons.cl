@@ -383,7 +383,8 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
     counters_clear_local(lc);
     uint i = get_global_id(0);
     if (i < p->count) {
-        if (ADAPTIVE) {
+        // the adaptive batch's live clusters: photon_count[0] is its list's length
+        if (ADAPTIVE && i < 4u * live_clusters(photon_count[0], p->first, p->count / 4u)) {
             uint index = cluster_photon_index(entry_cluster(clusters[p->first + i / 4u]), i % 4u,
                                               p->grid_w);
             Photon ph;
@@ -392,6 +393,8 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
             if (i < photon_capacity) photons[i] = cluster_slot(end, rays, &ph);
             count_end(end, &ph, p->flux_quantum, lc);
+        } else if (ADAPTIVE) {
+            // past the list's live clusters: nothing to trace
         } else if (FRESNEL_SPLIT) {
             uint splits;
             // grid photon in tile order (sampling.cl)

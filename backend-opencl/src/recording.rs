@@ -184,6 +184,9 @@ fn run(
         threads,
         workgroup_size,
         args,
+        // OpenCL 1.2 has no indirect launch: an indirect kernel runs its recorded bound,
+        // and its threads past the device count leave at once
+        indirect: _,
     } = launch;
     let (name, threads, group) = (*name, *threads, *workgroup_size as usize);
     for a in args {

@@ -86,6 +86,10 @@ pub struct Context {
     /// Largest single allocation: `maxMemoryAllocationSize`, at most the largest heap.
     pub max_allocation: u64,
     pub timestamps: bool,
+    /// `rayTracingPipelineTraceRaysIndirect` enabled (on a device this backend created
+    /// where supported; never assumed of a lent one): traced kernels with their size on
+    /// the device launch it with `vkCmdTraceRaysIndirectKHR`, else their bound.
+    pub trace_rays_indirect: bool,
     pub name: String,
     /// The physical device's type.
     pub device_type: vk::PhysicalDeviceType,
@@ -93,6 +97,14 @@ pub struct Context {
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     /// Whether instance and device are ours to destroy.
     owned: bool,
+}
+
+/// Whether `physical` can launch ray-tracing pipelines with their size in a buffer.
+fn trace_rays_indirect_supported(instance: &ash::Instance, physical: vk::PhysicalDevice) -> bool {
+    let mut rt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
+    let mut f = vk::PhysicalDeviceFeatures2::default().push_next(&mut rt);
+    unsafe { instance.get_physical_device_features2(physical, &mut f) };
+    rt.ray_tracing_pipeline_trace_rays_indirect == vk::TRUE
 }
 
 /// The ray-tracing properties the shader binding table needs.
@@ -226,6 +238,7 @@ impl Context {
                 return Err(e);
             }
         };
+        let indirect = trace_rays_indirect_supported(&instance, physical);
         let mut ctx = Self::assemble(
             entry,
             instance,
@@ -234,6 +247,7 @@ impl Context {
             (queue_family, None),
             true,
         );
+        ctx.trace_rays_indirect = indirect;
         ctx.debug = debug;
         ctx.validation = validation_log;
         Ok(ctx)
@@ -297,8 +311,11 @@ impl Context {
             .scalar_block_layout(true);
         let mut fas = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
             .acceleration_structure(true);
-        let mut frt =
-            vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
+        let mut frt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default()
+            .ray_tracing_pipeline(true)
+            .ray_tracing_pipeline_trace_rays_indirect(trace_rays_indirect_supported(
+                instance, physical,
+            ));
         let ext: Vec<_> = DEVICE_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
@@ -350,6 +367,7 @@ impl Context {
             limits,
             max_allocation,
             timestamps,
+            trace_rays_indirect: false,
             name,
             device_type,
             validation: Arc::new(Mutex::new(Vec::new())),

@@ -54,9 +54,11 @@ pub struct Buffer {
     mapped: Option<*mut u8>,
 }
 
-/// Storage buffers: read and written by kernels, copied, read by AS builds.
+/// Storage buffers: read and written by kernels, copied, read by AS builds and as the
+/// sizes of indirect launches.
 pub fn storage_usage() -> vk::BufferUsageFlags {
     vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::INDIRECT_BUFFER
         | vk::BufferUsageFlags::TRANSFER_SRC
         | vk::BufferUsageFlags::TRANSFER_DST
         | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS

@@ -309,22 +309,47 @@ fn record_kernel(
             &[],
         );
     }
+    // an indirect launch: its record's buffer (handle and device address)
+    let indirect = match launch.indirect {
+        Some(i) => {
+            let args = &b.buffers.get(i.args)?.buffer;
+            Some(((args.buffer, args.address()), i))
+        }
+        None => None,
+    };
     if n > 0 {
         if let Some(sbt) = &pipeline.sbt {
-            let w = n.min(raygen_width(&b.ctx.limits, launch.kernel, n));
-            let h = n.div_ceil(w);
-            unsafe {
-                b.ctx.rt.cmd_trace_rays(
-                    frame.cmd,
-                    &sbt.raygen,
-                    &sbt.miss,
-                    &sbt.hit,
-                    &sbt.callable,
-                    w as u32,
-                    h as u32,
-                    1,
-                )
-            };
+            match indirect {
+                Some((args, i)) if b.ctx.trace_rays_indirect => unsafe {
+                    b.ctx.rt.cmd_trace_rays_indirect(
+                        frame.cmd,
+                        &sbt.raygen,
+                        &sbt.miss,
+                        &sbt.hit,
+                        &sbt.callable,
+                        args.1 + i.grid_offset(),
+                    )
+                },
+                _ => {
+                    // the bound (the kernel leaves past its device count)
+                    let w = n.min(raygen_width(&b.ctx.limits, launch.kernel, n));
+                    let h = n.div_ceil(w);
+                    unsafe {
+                        b.ctx.rt.cmd_trace_rays(
+                            frame.cmd,
+                            &sbt.raygen,
+                            &sbt.miss,
+                            &sbt.hit,
+                            &sbt.callable,
+                            w as u32,
+                            h as u32,
+                            1,
+                        )
+                    };
+                }
+            }
+        } else if let Some((args, i)) = indirect {
+            unsafe { d.cmd_dispatch_indirect(frame.cmd, args.0, i.groups_offset()) };
         } else {
             let groups = n.div_ceil(launch.workgroup_size as u64);
             let max = b.ctx.limits.max_compute_work_group_count[0] as u64;

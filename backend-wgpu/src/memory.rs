@@ -46,6 +46,7 @@ impl WgpuBackend {
             label: Some(label),
             size,
             usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: data.is_some(),

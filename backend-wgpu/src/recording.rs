@@ -201,7 +201,11 @@ fn record(
         });
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x as u32, y as u32, 1);
+        match launch.indirect {
+            // the record an earlier kernel wrote (the kernel bounds itself by its count)
+            Some(i) => pass.dispatch_workgroups_indirect(&b.buffers.get(i.args)?.buffer, i.groups_offset()),
+            None => pass.dispatch_workgroups(x as u32, y as u32, 1),
+        }
     }
     timer.passes.push(name);
     Ok(())

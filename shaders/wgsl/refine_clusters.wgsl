@@ -12,19 +12,21 @@
 
 @group(0) @binding(0) var<uniform> params: RefineParams;
 @group(0) @binding(1) var<storage, read> clusters: array<u32>;
-@group(0) @binding(2) var<storage, read> caster_rects: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> photons: array<Photon>;
-@group(0) @binding(4) var<storage, read> triangle_tiles: array<u32>;
-@group(0) @binding(5) var<storage, read> tiles: array<vec4<u32>>;
-@group(0) @binding(6) var<storage, read_write> children: array<u32>;
-@group(0) @binding(7) var<storage, read_write> converged: array<u32>;
-@group(0) @binding(8) var<storage, read_write> cluster_counts: array<atomic<u32>>;
-@group(0) @binding(9) var<storage, read_write> counters: array<atomic<u32>>;
-@group(0) @binding(10) var<storage, read_write> photon_map0: array<atomic<u32>>;
-@group(0) @binding(11) var<storage, read_write> photon_map1: array<atomic<u32>>;
-@group(0) @binding(12) var<storage, read_write> photon_map2: array<atomic<u32>>;
-@group(0) @binding(13) var<storage, read_write> output_photons: array<Photon>;
-@group(0) @binding(14) var<storage, read_write> output_count: array<atomic<u32>>;
+@group(0) @binding(2) var<storage, read> list_length: array<u32>;
+@group(0) @binding(3) var<storage, read> caster_rects: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> photons: array<Photon>;
+@group(0) @binding(5) var<storage, read> triangle_tiles: array<u32>;
+@group(0) @binding(6) var<storage, read> tiles: array<vec4<u32>>;
+@group(0) @binding(7) var<storage, read_write> children: array<u32>;
+@group(0) @binding(8) var<storage, read_write> converged: array<u32>;
+@group(0) @binding(9) var<storage, read_write> converged_count: array<atomic<u32>>;
+@group(0) @binding(10) var<storage, read_write> cluster_counts: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> counters: array<atomic<u32>>;
+@group(0) @binding(12) var<storage, read_write> photon_map0: array<atomic<u32>>;
+@group(0) @binding(13) var<storage, read_write> photon_map1: array<atomic<u32>>;
+@group(0) @binding(14) var<storage, read_write> photon_map2: array<atomic<u32>>;
+@group(0) @binding(15) var<storage, read_write> output_photons: array<Photon>;
+@group(0) @binding(16) var<storage, read_write> output_count: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
@@ -105,7 +107,8 @@ fn atlas_photon_tile(ph: Photon, tile: ptr<function, vec4<u32>>) -> bool {
 fn refine_clusters(t: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
-    if (t < p.count) {
+    // the pass's live clusters: list_length[0] is its list's length
+    if (t < live_clusters(list_length[0], p.first, p.count)) {
         let entry = clusters[p.first + t];
         let cluster = entry_cluster(entry);
         var slots: array<Photon, 4>;
@@ -150,7 +153,8 @@ fn refine_clusters(t: u32, li: u32) {
                                 p.error_from_level);
         if (fate == CLUSTER_OUTPUT && p.level < p.finest) {
             // converged early: output later from fresh photons
-            let slot = atomicAdd(&cluster_counts[CLUSTER_COUNT_CONVERGED], 1u);
+            atomicAdd(&cluster_counts[CLUSTER_COUNT_CONVERGED], 1u);
+            let slot = atomicAdd(&converged_count[0], 1u);
             if (slot < arrayLength(&converged)) {
                 converged[slot] = cluster_entry(cluster, spread);
             }
@@ -186,10 +190,16 @@ fn refine_clusters(t: u32, li: u32) {
             atomicAdd(&cluster_counts[CLUSTER_COUNT_DISCARDED], 1u);
         } else {
             let base = atomicAdd(&cluster_counts[CLUSTER_COUNT_CHILDREN], 4u);
-            for (var k = 0u; k < 4u; k++) {
-                // the host sizes every step so that this never drops a child
-                if (base + k < min(p.children_capacity, arrayLength(&children))) {
+            if (base + 4u <= min(p.children_capacity, arrayLength(&children))) {
+                for (var k = 0u; k < 4u; k++) {
                     children[base + k] = cluster_photon_index(cluster, k, p.grid_w);
+                }
+            } else {
+                // the next level's list is full: output at this level from fresh photons
+                atomicAdd(&cluster_counts[CLUSTER_COUNT_OVERFLOW], 1u);
+                let slot = atomicAdd(&converged_count[0], 1u);
+                if (slot < arrayLength(&converged)) {
+                    converged[slot] = cluster_entry(cluster, 1u);
                 }
             }
         }

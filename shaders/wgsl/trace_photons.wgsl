@@ -407,7 +407,8 @@ fn trace_photons(i: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
     if (i < p.count) {
-        if (ADAPTIVE) {
+        // the adaptive batch's live clusters: photon_count[0] is its list's length
+        if (ADAPTIVE && i < 4u * live_clusters(atomicLoad(&photon_count[0]), p.first, p.count / 4u)) {
             let index = cluster_photon_index(entry_cluster(clusters[p.first + i / 4u]), i % 4u, p.grid_w);
             var ph: Photon;
             var rays: u32;
@@ -417,6 +418,8 @@ fn trace_photons(i: u32, li: u32) {
                 photons[i] = cluster_slot(end, rays, ph);
             }
             count_end(end, ph, p.flux_quantum);
+        } else if (ADAPTIVE) {
+            // past the list's live clusters: nothing to trace
         } else if (FRESNEL_SPLIT) {
             var splits: u32;
             // grid photon in tile order (sampling.wgsl)

@@ -49,6 +49,7 @@
 #define CLUSTER_COUNT_DISCARDED 2
 #define CLUSTER_COUNT_OUTPUT_PHOTONS 3
 #define CLUSTER_COUNT_CONVERGED 4
+#define CLUSTER_COUNT_OVERFLOW 5
 #define CLUSTER_COUNT_WORDS 8
 
 // core::device::layout::DepositTexel (its u32 words: flux r, g, b at 0, 2, 4)
@@ -67,6 +68,21 @@
 
 // core::device::launch::DEFAULT_WORKGROUP_SIZE (every kernel's invocations per workgroup)
 #define WORKGROUP_SIZE 64
+
+// core::device::launch (dispatch records of indirect launches)
+#define DISPATCH_RECORD_WORDS 8
+#define DISPATCH_MAX_GROUPS_X 65535u
+#define DISPATCH_TRACE_WIDTH 8u
+
+// core::device::launch::dispatch_word (words of a dispatch record)
+#define DISPATCH_GROUPS_X 0
+#define DISPATCH_GROUPS_Y 1
+#define DISPATCH_GROUPS_Z 2
+#define DISPATCH_WIDTH 3
+#define DISPATCH_HEIGHT 4
+#define DISPATCH_DEPTH 5
+#define DISPATCH_THREADS 6
+#define DISPATCH_ITEMS 7
 
 // core::device::acceleration::instance_flags
 #define INSTANCE_IDENTITY 1u

@@ -7,6 +7,12 @@ inline uint cluster_entry(uint cluster, uint spread) {
 
 inline uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }
 
+// core::math::photon_clusters::live_clusters: entries `first ..` of a list of
+// `list_length`, at most `bound`.
+inline uint live_clusters(uint list_length, uint first, uint bound) {
+    return list_length <= first ? 0u : min(list_length - first, bound);
+}
+
 inline uint entry_spread(uint entry) { return (entry >> 30u) + 1u; }
 
 inline uint cluster_spread(const uint* xs, const uint* ys) {

@@ -49,6 +49,7 @@ const uint CLUSTER_COUNT_OUTPUT = 1u;
 const uint CLUSTER_COUNT_DISCARDED = 2u;
 const uint CLUSTER_COUNT_OUTPUT_PHOTONS = 3u;
 const uint CLUSTER_COUNT_CONVERGED = 4u;
+const uint CLUSTER_COUNT_OVERFLOW = 5u;
 const uint CLUSTER_COUNT_WORDS = 8u;
 
 // core::device::layout::DepositTexel (its u32 words: flux r, g, b at 0, 2, 4)
@@ -67,6 +68,21 @@ const float VISIBLE_TOLERANCE = -0.01;
 
 // core::device::launch::DEFAULT_WORKGROUP_SIZE (every kernel's invocations per workgroup)
 const uint WORKGROUP_SIZE = 64u;
+
+// core::device::launch (dispatch records of indirect launches)
+const uint DISPATCH_RECORD_WORDS = 8u;
+const uint DISPATCH_MAX_GROUPS_X = 65535u;
+const uint DISPATCH_TRACE_WIDTH = 8u;
+
+// core::device::launch::dispatch_word (words of a dispatch record)
+const uint DISPATCH_GROUPS_X = 0u;
+const uint DISPATCH_GROUPS_Y = 1u;
+const uint DISPATCH_GROUPS_Z = 2u;
+const uint DISPATCH_WIDTH = 3u;
+const uint DISPATCH_HEIGHT = 4u;
+const uint DISPATCH_DEPTH = 5u;
+const uint DISPATCH_THREADS = 6u;
+const uint DISPATCH_ITEMS = 7u;
 
 // core::device::acceleration::instance_flags
 const uint INSTANCE_IDENTITY = 1u;

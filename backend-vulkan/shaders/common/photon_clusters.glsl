@@ -3,6 +3,12 @@
 
 uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }
 
+// core::math::photon_clusters::live_clusters: entries `first ..` of a list of
+// `list_length`, at most `bound`.
+uint live_clusters(uint list_length, uint first, uint bound) {
+    return list_length <= first ? 0u : min(list_length - first, bound);
+}
+
 uint cluster_photon_index(uint cluster, uint sub, uint grid_w) {
     uint clusters_w = grid_w / 2u;
     uint cx = cluster % clusters_w;

@@ -40,7 +40,9 @@ use caustica_core::device::layout::*;
 use caustica_core::frame::emission::light_view_plane::{light_view_planes, LightViewPlane};
 use caustica_core::frame::host::caster_boxes;
 use caustica_core::frame::receivers::atlas::layout::AtlasLayout;
-use caustica_core::kernels::{RefineClusters, TracePhotons};
+use caustica_core::kernels::{
+    ClusterBatch, DispatchArgs, DispatchRecord, RefineClusters, TracePhotons,
+};
 use caustica_core::math::map_gather::atlas_texel_index;
 use caustica_core::math::photon_clusters::{
     cluster_entry, cluster_metric, cluster_relevance, cluster_target, slot_stored,
@@ -85,12 +87,65 @@ fn quanta() -> (f32, f32) {
     (2f32.powi(-24), 2f32.powi(-20))
 }
 
+/// How a check launches a kernel over a list: the list length the device holds (the
+/// kernel takes entries `FIRST .. length`, at most the recorded bound) and whether the
+/// launch's shape comes from `dispatch_args` (an indirect launch) or is the bound.
+#[derive(Clone, Copy, Debug)]
+pub struct ListLaunch {
+    /// The list's length word.
+    pub length: u32,
+    /// Launched from a `dispatch_args` record.
+    pub indirect: bool,
+}
+
+impl ListLaunch {
+    /// Every entry of `list`, the bound launched.
+    pub fn whole(list: &[u32]) -> ListLaunch {
+        ListLaunch {
+            length: list.len() as u32,
+            indirect: false,
+        }
+    }
+}
+
+/// Records `dispatch_args` over one row `[FIRST, bound, per_item, 0]` reading `length`,
+/// when `l` is indirect: the record the launch reads.
+fn dispatch(
+    rec: &mut Recording,
+    l: ListLaunch,
+    length: caustica_core::device::handle::Buf<u32>,
+    (bound, per_item): (u32, u32),
+) -> Option<DispatchRecord> {
+    l.indirect.then(|| {
+        let table = rec.upload(&[[FIRST, bound, per_item, 0]], "dispatch rows");
+        let args = rec.create(8, "dispatch records");
+        rec.kernel(DispatchArgs {
+            table,
+            counts: length,
+            args,
+        });
+        DispatchRecord { args, record: 0 }
+    })
+}
+
 /// Runs the adaptive trace of every listed cluster on `b`: the slots and the counters.
 fn run_trace(
     fx: &Fixture,
     b: &mut dyn Backend,
     (light, p, surface): (u32, &LightViewPlane, bool),
     list: &[u32],
+) -> Result<(Vec<Photon>, Vec<u32>), String> {
+    run_trace_as(fx, b, (light, p, surface), list, ListLaunch::whole(list))
+}
+
+/// [`run_trace`] with the list's length and launch of `l` (slots past the live clusters
+/// stay zero).
+fn run_trace_as(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    (light, p, surface): (u32, &LightViewPlane, bool),
+    list: &[u32],
+    l: ListLaunch,
 ) -> Result<(Vec<Photon>, Vec<u32>), String> {
     let count = 4 * (list.len() as u32 - FIRST);
     let mut variant = caustica_core::frame::plan::SceneFeatures::of(&fx.scene).trace_variant();
@@ -99,8 +154,9 @@ fn run_trace(
     let mut rec = Recording::new();
     let clusters = rec.upload(list, "clusters");
     let photons = rec.create(count, "photon slots");
-    let photon_count = rec.upload(&[0u32], "photon count");
+    let photon_count = rec.upload(&[l.length], "cluster list length");
     let counters = rec.upload(&[0u32; counter::WORDS], "counters");
+    let shape = dispatch(&mut rec, l, photon_count, (count / 4, 4));
     rec.kernel(TracePhotons {
         scene: fx.args,
         variant,
@@ -108,14 +164,17 @@ fn run_trace(
         photons,
         photon_count,
         counters,
-        clusters: Some(clusters),
+        clusters: Some(ClusterBatch {
+            list: clusters,
+            dispatch: shape,
+        }),
         deposit: None,
     });
     run_and_free(b, "trace_photons (adaptive)", &rec, |b| {
         let n = read_buf(b, photon_count)?;
-        if n[0] != 0 {
+        if n[0] != l.length {
             return Err(caustica_core::backend::BackendError::BadArgument(
-                "the adaptive trace touched photon_count".into(),
+                "the adaptive trace wrote its list length".into(),
             ));
         }
         Ok((read_buf(b, photons)?, read_buf(b, counters)?))
@@ -148,10 +207,24 @@ fn run_refine(
     target: &Target,
     (list, rects): (&[u32], &[[f32; 4]]),
     slots: &[Photon],
-    (level, finest, metric, relevance, error_texels): (u32, u32, u32, u32, u32),
+    step: (u32, u32, u32, u32, u32),
 ) -> Result<Refined, String> {
     let count = list.len() as u32 - FIRST;
-    let capacity = BEFORE + 4 * count;
+    let launch = ListLaunch::whole(list);
+    run_refine_as(b, target, (list, rects), slots, step, (launch, BEFORE + 4 * count))
+}
+
+/// [`run_refine`] with the list's length and launch of `l` and a child list of
+/// `capacity` entries (refined clusters past it overflow into the converged list).
+fn run_refine_as(
+    b: &mut dyn Backend,
+    target: &Target,
+    (list, rects): (&[u32], &[[f32; 4]]),
+    slots: &[Photon],
+    (level, finest, metric, relevance, error_texels): (u32, u32, u32, u32, u32),
+    (l, capacity): (ListLaunch, u32),
+) -> Result<Refined, String> {
+    let count = list.len() as u32 - FIRST;
     let (fq, hq) = quanta();
     let mut rec = Recording::new();
     let clusters = rec.upload(list, "clusters");
@@ -180,6 +253,9 @@ fn run_refine(
     let tiles = rec.upload(tl, "tiles");
     let children = rec.upload(&vec![u32::MAX; capacity as usize], "children");
     let converged = rec.upload(&vec![u32::MAX; count as usize], "converged");
+    let converged_count = rec.upload(&[0u32], "converged count");
+    let list_length = rec.upload(&[l.length], "cluster list length");
+    let shape = dispatch(&mut rec, l, list_length, (count, 1));
     let mut start = [0u32; cluster_count::WORDS];
     start[cluster_count::CHILDREN] = BEFORE;
     let counts = rec.upload(&start, "cluster counts");
@@ -209,17 +285,20 @@ fn run_refine(
             camera,
         },
         clusters,
+        list_length,
         caster_rects,
         photons,
         triangle_tiles,
         tiles,
         children,
         converged,
+        converged_count,
         cluster_counts: counts,
         counters,
         atlas,
         output_photons,
         output_count,
+        dispatch: shape,
     });
     run_and_free(b, "refine_clusters", &rec, |b| {
         let counts = read_buf(b, counts)?;
@@ -227,7 +306,14 @@ fn run_refine(
         kids.truncate(counts[cluster_count::CHILDREN].min(capacity) as usize);
         kids[BEFORE as usize..].sort_unstable();
         let mut conv = read_buf(b, converged)?;
-        conv.truncate(counts[cluster_count::CONVERGED].min(count) as usize);
+        let listed = read_buf(b, converged_count)?[0];
+        if listed != counts[cluster_count::CONVERGED] + counts[cluster_count::OVERFLOW] {
+            return Err(caustica_core::backend::BackendError::BadArgument(format!(
+                "refine_clusters listed {listed} converged entries, counted {:?}",
+                counts
+            )));
+        }
+        conv.truncate(listed.min(count) as usize);
         conv.sort_unstable();
         let n = read_buf(b, output_count)?[0].min(4 * count) as usize;
         let mut outputs = read_buf(b, output_photons)?;
@@ -397,6 +483,80 @@ pub fn check_adaptive_caustics(
             )
         });
     }
+    // the device-driven shapes: a list shorter than the bound launched from its
+    // dispatch record, and a child list too small for every refined cluster (they
+    // overflow into the converged list, counted)
+    let count = list.len() as u32 - FIRST;
+    let step = (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS, 1);
+    for (what, launch, capacity) in [
+        (
+            "indirect launch of half the list",
+            ListLaunch {
+                length: FIRST + count / 2,
+                indirect: true,
+            },
+            BEFORE + 4 * count,
+        ),
+        (
+            "a child list of a quarter of the refinements",
+            ListLaunch::whole(&list),
+            BEFORE + count,
+        ),
+        (
+            "an empty list launched indirectly",
+            ListLaunch {
+                length: FIRST / 2,
+                indirect: true,
+            },
+            BEFORE + 4 * count,
+        ),
+    ] {
+        let a = run_refine_as(r, &Target::Atlas(&l), (&list, &rects), &sa, step, (launch, capacity))?;
+        let b = run_refine_as(c, &Target::Atlas(&l), (&list, &rects), &sa, step, (launch, capacity))?;
+        let live = launch.length.saturating_sub(FIRST).min(count);
+        let w = |i: usize| a.counts[i];
+        let refined = (w(cluster_count::CHILDREN) - BEFORE) / 4 - w(cluster_count::OVERFLOW);
+        v.check(
+            refined
+                + w(cluster_count::OUTPUT)
+                + w(cluster_count::DISCARDED)
+                + w(cluster_count::CONVERGED)
+                + w(cluster_count::OVERFLOW)
+                == live,
+            || format!("{what}: cpu fates {:?} do not add up to {live}", a.counts),
+        );
+        v.check(a == b, || {
+            format!(
+                "{what}: cpu and candidate differ (counts {:?} vs {:?})",
+                a.counts, b.counts
+            )
+        });
+        v.note(format!("{what}: counts {:?}", a.counts));
+    }
+    // the trace launched from its record over half the list: those slots as the whole
+    // list's, the rest untouched
+    let half = ListLaunch {
+        length: FIRST + count / 2,
+        indirect: true,
+    };
+    let (ha, _) = run_trace_as(fx, r, (light, &p, true), &list, half)?;
+    let (hb, _) = run_trace_as(fx, c, (light, &p, true), &list, half)?;
+    let live = 4 * (count / 2) as usize;
+    let untouched = |s: &[Photon]| s[live..].iter().all(|ph| *ph == Photon::default());
+    v.check(untouched(&ha) && untouched(&hb), || {
+        "an indirect adaptive trace wrote slots past its live clusters".into()
+    });
+    v.check(ha[..live] == sa[..live], || {
+        "the cpu's indirect trace of half the list differs from its whole trace".into()
+    });
+    let differ = ha[..live]
+        .iter()
+        .zip(&hb[..live])
+        .filter(|(a, b)| !same(a, b))
+        .count() as u64;
+    v.check(differ <= k, || {
+        format!("indirect trace: {differ} of {live} slots differ (allowance {k})")
+    });
     Ok(v)
 }
 
@@ -495,4 +655,50 @@ fn boxes_of(
     ds: &caustica_core::device::device_scene::DeviceScene,
 ) -> Vec<caustica_core::math::geometry::Aabb> {
     caster_boxes(ds).into_iter().map(|(_, b)| b).collect()
+}
+
+/// `refine_clusters` launched from its dispatch record over lists of each of `lengths`
+/// (the device's list length: 0 to past the bound), on the CPU's slots of the fixture's
+/// plane: bitwise the CPU's, and the fates add up to the live clusters.
+pub fn check_indirect_refinement(
+    fx: &Fixture,
+    r: &mut dyn Backend,
+    c: &mut dyn Backend,
+    lengths: &[u32],
+) -> Result<Verdict, String> {
+    let mut v = Verdict::new("refine_clusters (indirect, any list length)");
+    let (Some(l), Some((light, p))) = (layout(fx), plane(fx)) else {
+        return Ok(v);
+    };
+    let list = cluster_list();
+    let (slots, _) = run_trace(fx, r, (light, &p, true), &list)?;
+    let rects = caster_rects(&p, &boxes_of(&fx.ds));
+    let count = list.len() as u32 - FIRST;
+    let step = (1, 3, cluster_metric::ERROR, cluster_relevance::BOUNDS, 1);
+    for &length in lengths {
+        let launch = ListLaunch {
+            length,
+            indirect: true,
+        };
+        let capacity = BEFORE + 4 * count;
+        let a = run_refine_as(r, &Target::Atlas(&l), (&list, &rects), &slots, step, (launch, capacity))?;
+        let b = run_refine_as(c, &Target::Atlas(&l), (&list, &rects), &slots, step, (launch, capacity))?;
+        let live = length.saturating_sub(FIRST).min(count);
+        let w = |i: usize| a.counts[i];
+        let fates = (w(cluster_count::CHILDREN) - BEFORE) / 4
+            + w(cluster_count::OUTPUT)
+            + w(cluster_count::DISCARDED)
+            + w(cluster_count::CONVERGED);
+        v.check(fates == live, || {
+            format!("length {length}: cpu fates {:?} for {live} live clusters", a.counts)
+        });
+        v.check(a == b, || {
+            format!(
+                "length {length}: counts cpu {:?} vs {:?}",
+                a.counts, b.counts
+            )
+        });
+    }
+    v.note(format!("{} list lengths, bound {count}", lengths.len()));
+    Ok(v)
 }

@@ -49,7 +49,72 @@ pub struct Launch {
     pub workgroup_size: u32,
     /// Arguments in declaration order.
     pub args: Vec<LaunchArg>,
+    /// Where the launch's shape is on the device, when an earlier kernel of the same
+    /// recording computes it (`dispatch_args`); `threads` is then its upper bound.
+    pub indirect: Option<Indirect>,
 }
+
+/// A launch whose size an earlier kernel wrote to the device: record `record` of the
+/// `dispatch_args` buffer `args` ([`DISPATCH_RECORD_WORDS`] `u32` words each:
+/// [`dispatch_word`]). A backend with indirect dispatch launches that shape (wgpu
+/// `dispatch_workgroups_indirect`, Vulkan `vkCmdDispatchIndirect` and
+/// `vkCmdTraceRaysIndirectKHR`); one without (OpenCL 1.2) launches the bound, and the
+/// kernel's threads past the device count leave at once (every indirect kernel reads its
+/// own count, so both give the same results).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Indirect {
+    /// The buffer of dispatch records.
+    pub args: ResourceId,
+    /// The record's index.
+    pub record: u32,
+}
+
+impl Indirect {
+    /// Byte offset of the record's workgroup counts (x, y, z: wgpu's and Vulkan's
+    /// dispatch-indirect layout).
+    pub fn groups_offset(&self) -> u64 {
+        (self.record as u64 * DISPATCH_RECORD_WORDS as u64 + dispatch_word::GROUPS_X as u64) * 4
+    }
+
+    /// Byte offset of the record's launch grid (width, height, depth:
+    /// `VkTraceRaysIndirectCommandKHR`).
+    pub fn grid_offset(&self) -> u64 {
+        (self.record as u64 * DISPATCH_RECORD_WORDS as u64 + dispatch_word::WIDTH as u64) * 4
+    }
+}
+
+/// Words of one dispatch record (`dispatch_args`' output).
+pub const DISPATCH_RECORD_WORDS: usize = 8;
+
+/// Word indices within a dispatch record.
+pub mod dispatch_word {
+    /// Workgroups along x (at most [`super::DISPATCH_MAX_GROUPS_X`]).
+    pub const GROUPS_X: usize = 0;
+    /// Workgroups along y.
+    pub const GROUPS_Y: usize = 1;
+    /// Workgroups along z (1).
+    pub const GROUPS_Z: usize = 2;
+    /// A traced kernel's launch width ([`super::DISPATCH_TRACE_WIDTH`] or fewer).
+    pub const WIDTH: usize = 3;
+    /// Its launch height.
+    pub const HEIGHT: usize = 4;
+    /// Its launch depth (1).
+    pub const DEPTH: usize = 5;
+    /// The launch's threads (items times threads per item).
+    pub const THREADS: usize = 6;
+    /// The items (clusters, photons) the launch covers.
+    pub const ITEMS: usize = 7;
+}
+
+/// Most workgroups along x of an indirect launch: the smallest
+/// `maxComputeWorkGroupCount[0]` Vulkan allows and wgpu's default limit; more groups go
+/// along y (kernels index threads as `(y * groups_x + x) * size + local`).
+pub const DISPATCH_MAX_GROUPS_X: u32 = 65535;
+
+/// Width of a traced kernel's indirect launch grid: eight columns (see the Vulkan
+/// backend's launch width of `trace_photons`: a warp then traces a run of consecutive
+/// threads).
+pub const DISPATCH_TRACE_WIDTH: u32 = 8;
 
 impl Launch {
     /// The variant's label (`kernel[NAME=0,...]`), the key of a backend's pipeline cache.

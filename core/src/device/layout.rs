@@ -464,6 +464,10 @@ pub mod cluster_count {
     /// Clusters that converged before the finest level, appended to the converged list
     /// (to be output from fresh photons).
     pub const CONVERGED: usize = 4;
+    /// Clusters to be refined whose children did not fit the next level's list: appended
+    /// to the converged list instead (output at their level from fresh photons, so no
+    /// photon is lost), and counted here.
+    pub const OVERFLOW: usize = 5;
     /// Number of u32 words.
     pub const WORDS: usize = 8;
 }

@@ -9,7 +9,10 @@
 //! `COUNTER_STORED`), a lone constant keeps its name.
 
 use super::acceleration::instance_flags;
-use super::launch::DEFAULT_WORKGROUP_SIZE;
+use super::launch::{
+    dispatch_word, DEFAULT_WORKGROUP_SIZE, DISPATCH_MAX_GROUPS_X, DISPATCH_RECORD_WORDS,
+    DISPATCH_TRACE_WIDTH,
+};
 use super::layout::{
     cluster_count, counter, emission_kind, gather_surface, gbuffer_flags, light_kind,
     material_kind, DepositTexel, DEPOSIT_TEXEL_WORDS, MAX_CASTER_SPHERES, MAX_SPECULAR_DEPTH,
@@ -142,6 +145,7 @@ pub fn groups() -> Vec<ConstGroup> {
                     DISCARDED,
                     OUTPUT_PHOTONS,
                     CONVERGED,
+                    OVERFLOW,
                     WORDS,
                 }
             ),
@@ -173,6 +177,31 @@ pub fn groups() -> Vec<ConstGroup> {
         group(
             "core::device::launch::DEFAULT_WORKGROUP_SIZE (every kernel's invocations per workgroup)",
             vec![named!("WORKGROUP_SIZE", Index, DEFAULT_WORKGROUP_SIZE)],
+        ),
+        group(
+            "core::device::launch (dispatch records of indirect launches)",
+            vec![
+                named!("DISPATCH_RECORD_WORDS", Index, DISPATCH_RECORD_WORDS),
+                named!("DISPATCH_MAX_GROUPS_X", U32, DISPATCH_MAX_GROUPS_X),
+                named!("DISPATCH_TRACE_WIDTH", U32, DISPATCH_TRACE_WIDTH),
+            ],
+        ),
+        group(
+            "core::device::launch::dispatch_word (words of a dispatch record)",
+            prefixed!(
+                "DISPATCH_",
+                Index,
+                dispatch_word {
+                    GROUPS_X,
+                    GROUPS_Y,
+                    GROUPS_Z,
+                    WIDTH,
+                    HEIGHT,
+                    DEPTH,
+                    THREADS,
+                    ITEMS,
+                }
+            ),
         ),
         group(
             "core::device::acceleration::instance_flags",

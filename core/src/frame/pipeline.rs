@@ -13,7 +13,7 @@ use crate::frame::host::{FrameHost, HostOptions, HostState};
 use crate::frame::image::Image;
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
-use crate::frame::submitted::RecordedFrame;
+use crate::frame::submitted::{EndRead, RecordedFrame};
 use crate::frame::technique::{OutputInfo, Progress, Technique};
 use crate::recording::Recording;
 use crate::scene::{Camera, Light, Scene, Transform};
@@ -63,7 +63,7 @@ pub enum Reaction {
 pub struct FrameBuilder<'p> {
     recordings: Vec<(Recording, u64)>,
     readbacks: Vec<ResourceId>,
-    counters: Option<(usize, f32)>,
+    ends: Vec<EndRead>,
     /// The frame's statistics so far.
     pub stats: FrameStats,
     progress: &'p mut dyn FnMut(Progress),
@@ -78,7 +78,7 @@ impl<'p> FrameBuilder<'p> {
         FrameBuilder {
             recordings: vec![(first, 0)],
             readbacks: Vec::new(),
-            counters: None,
+            ends: Vec::new(),
             stats,
             progress,
             done: 0,
@@ -110,8 +110,30 @@ impl<'p> FrameBuilder<'p> {
     /// Copies the photon counters `counters` (fixed point with `quantum`) to the host at
     /// the frame's end; their values go into the statistics when the frame completes.
     pub fn counters_at_end(&mut self, counters: Buf<u32>, quantum: f32) {
-        self.counters = Some((self.readbacks.len(), quantum));
-        self.readbacks.push(counters.id);
+        let at = self.read_at_end(counters);
+        self.ends.push(EndRead::Counters { at, quantum });
+    }
+
+    /// Copies `buf` to the host at the frame's end; returns its index among the frame's
+    /// readbacks (for an [`EndRead`]).
+    pub fn read_at_end<T>(&mut self, buf: Buf<T>) -> usize {
+        self.readbacks.push(buf.id);
+        self.readbacks.len() - 1
+    }
+
+    /// Puts `end` into the statistics when the frame completes (after those pushed
+    /// before it).
+    pub fn end_read(&mut self, end: EndRead) {
+        self.ends.push(end);
+    }
+
+    /// The index, among the kernel steps whose times the frame's completion sees, of the
+    /// next kernel recorded.
+    pub fn kernel_index(&self) -> usize {
+        self.recordings
+            .iter()
+            .map(|(r, _)| r.kernel_count() as usize)
+            .sum()
     }
 
     /// Runs everything recorded so far and then `rec`, and waits (a host wait: counted).
@@ -163,7 +185,7 @@ impl<'p> FrameBuilder<'p> {
         let FrameBuilder {
             recordings,
             readbacks,
-            counters,
+            ends,
             mut stats,
             progress,
             done,
@@ -181,18 +203,15 @@ impl<'p> FrameBuilder<'p> {
                 photons_total: expected.max(done + p.photons_total),
             })
         };
-        let back = crate::frame::submitted::run_pipelined(
+        let (back, times) = crate::frame::submitted::run_pipelined(
             backend,
             recordings,
             &readbacks,
             &mut stats,
             &mut report,
         )?;
-        if let Some((k, quantum)) = counters {
-            if let Some(c) = back.get(k) {
-                let words: Vec<u32> = bytemuck::pod_collect_to_vec(c);
-                stats.read_counters(&words, quantum);
-            }
+        for end in &ends {
+            end.apply(&back, &times, &mut stats);
         }
         Ok(stats)
     }
@@ -207,7 +226,7 @@ impl<'p> FrameBuilder<'p> {
             recording,
             readbacks: self.readbacks,
             stats: self.stats,
-            counters: self.counters,
+            ends: self.ends,
         }
     }
 }

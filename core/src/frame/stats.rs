@@ -154,7 +154,12 @@ pub struct AdaptiveStats {
     /// Clusters that converged before the finest level (the error metric), output from
     /// four fresh photons each (counted in `clusters_output` too).
     pub clusters_converged: u64,
-    /// Traversal steps (a trace and a refinement of one batch of one level).
+    /// Clusters to be refined whose children did not fit the next level's list (the
+    /// byte limit caps the lists): output at their level from four fresh photons each
+    /// (counted in `clusters_output` too), so that no photon is lost.
+    pub clusters_overflowed: u64,
+    /// Traversal passes that had clusters (a trace and a refinement of one pass of one
+    /// level, or of its converged clusters).
     pub steps: u32,
 }
 

@@ -4,7 +4,7 @@
 //! (pass times, photon counters) come back later through [`FrameTicket::stats`], without
 //! stalling, from copies the device made at the end of that frame.
 
-use crate::backend::{Backend, Finished, Submission};
+use crate::backend::{Backend, Finished, PassTime, Submission};
 use crate::device::handle::ResourceId;
 use crate::frame::error::Error;
 use crate::frame::stats::FrameStats;
@@ -22,8 +22,39 @@ pub struct RecordedFrame {
     /// The statistics known when recording (plan, skipped passes, emitted photons and
     /// flux, batches); `frame_ms` is the host time spent recording.
     pub stats: FrameStats,
-    /// Where the photon counters are in `readbacks`, and their fixed-point quantum.
-    pub counters: Option<(usize, f32)>,
+    /// What goes into the statistics from `readbacks` when the frame completes, in order.
+    pub ends: Vec<EndRead>,
+}
+
+/// Device data a frame reads back at its end, and how it goes into the statistics.
+#[derive(Clone, Debug)]
+pub enum EndRead {
+    /// Photon counters (fixed point with `quantum`) at `readbacks[at]`
+    /// ([`FrameStats::read_counters`]).
+    Counters {
+        /// Index into the frame's readbacks.
+        at: usize,
+        /// Flux per fixed-point unit (W).
+        quantum: f32,
+    },
+    /// The adaptive traversal's counts.
+    Traversal(Box<crate::frame::emission::adaptive::TraversalReadback>),
+}
+
+impl EndRead {
+    /// Puts what the device gave back (`readbacks` of the frame, `times` of its kernel
+    /// steps in order) into `stats`.
+    pub fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats) {
+        match self {
+            EndRead::Counters { at, quantum } => {
+                if let Some(c) = readbacks.get(*at) {
+                    let words: Vec<u32> = bytemuck::pod_collect_to_vec(c);
+                    stats.read_counters(&words, *quantum);
+                }
+            }
+            EndRead::Traversal(t) => t.apply(readbacks, times, stats),
+        }
+    }
 }
 
 impl RecordedFrame {
@@ -42,7 +73,7 @@ impl RecordedFrame {
         FrameTicket {
             submission,
             stats: self.stats,
-            counters: self.counters,
+            ends: self.ends,
         }
     }
 }
@@ -52,7 +83,7 @@ impl RecordedFrame {
 pub struct FrameTicket {
     submission: Submission,
     stats: FrameStats,
-    counters: Option<(usize, f32)>,
+    ends: Vec<EndRead>,
 }
 
 impl FrameTicket {
@@ -81,11 +112,8 @@ impl FrameTicket {
         for t in &finished.times {
             stats.add_pass_time(t.kernel, t.seconds);
         }
-        if let Some((k, quantum)) = self.counters {
-            if let Some(bytes) = finished.readbacks.get(k) {
-                let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
-                stats.read_counters(&words, quantum);
-            }
+        for end in &self.ends {
+            end.apply(&finished.readbacks, &finished.times, &mut stats);
         }
         stats
     }
@@ -95,15 +123,16 @@ impl FrameTicket {
 /// all submitted without waiting (the device never idles between them, and the host pays
 /// one wait, not one per recording), then waited for in order, `progress` called as each
 /// photon batch completes. The pass times go into `stats`; returns the bytes of
-/// `readbacks` as they were after the last recording. On an error every submitted
-/// recording is still waited for before it is returned.
+/// `readbacks` as they were after the last recording and every kernel step's time in
+/// order. On an error every submitted recording is still waited for before it is
+/// returned.
 pub fn run_pipelined(
     backend: &mut dyn Backend,
     recordings: Vec<(Recording, u64)>,
     readbacks: &[ResourceId],
     stats: &mut FrameStats,
     progress: &mut dyn FnMut(Progress),
-) -> Result<Vec<Vec<u8>>, Error> {
+) -> Result<(Vec<Vec<u8>>, Vec<PassTime>), Error> {
     let total: u64 = recordings.iter().map(|r| r.1).sum();
     let last = recordings.len().saturating_sub(1);
     let mut submitted: Vec<(Submission, u64)> = Vec::with_capacity(recordings.len());
@@ -120,6 +149,7 @@ pub fn run_pipelined(
     }
     let mut done = 0u64;
     let mut out = Vec::new();
+    let mut times = Vec::new();
     let count = submitted.len();
     for (k, (mut s, photons)) in submitted.into_iter().enumerate() {
         match backend.poll(&mut s, true) {
@@ -127,6 +157,7 @@ pub fn run_pipelined(
                 for t in &f.times {
                     stats.add_pass_time(t.kernel, t.seconds);
                 }
+                times.extend(f.times);
                 if photons > 0 {
                     done += photons;
                     progress(Progress {
@@ -146,6 +177,6 @@ pub fn run_pipelined(
     }
     match failure {
         Some(e) => Err(e),
-        None => Ok(out),
+        None => Ok((out, times)),
     }
 }

@@ -24,6 +24,7 @@ mod composite;
 mod density_gather;
 mod deposit_screen;
 mod direct_light;
+mod dispatch_args;
 mod gather_caustic_map;
 mod gather_footprint;
 mod photon_count_table;
@@ -47,6 +48,7 @@ pub use composite::Composite;
 pub use density_gather::DensityGather;
 pub use deposit_screen::DepositScreen;
 pub use direct_light::DirectLight;
+pub use dispatch_args::{dispatch_record, DispatchArgs, DispatchRecord};
 pub use gather_caustic_map::GatherCausticMap;
 pub use gather_footprint::GatherFootprint;
 pub use photon_count_table::PhotonCountTable;
@@ -61,7 +63,9 @@ pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
 pub use trace_indirect::TraceIndirect;
-pub use trace_photons::{AtlasDeposit, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant};
+pub use trace_photons::{
+    AtlasDeposit, ClusterBatch, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant,
+};
 
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
@@ -263,6 +267,7 @@ pub trait KernelDecl {
 pub struct Args {
     info: &'static KernelInfo,
     args: Vec<LaunchArg>,
+    indirect: Option<crate::device::launch::Indirect>,
 }
 
 fn bad(why: String) -> BackendError {
@@ -501,6 +506,7 @@ kernel_list! {
     AtrousFilter => atrous_filter,
     GatherCausticMap => gather_caustic_map,
     CausticMapLookup => caustic_map_lookup,
+    DispatchArgs => dispatch_args,
     RefineClusters => refine_clusters,
     RsmImportance => rsm_importance,
     SampleRsm => sample_rsm,
@@ -532,6 +538,7 @@ macro_rules! with_shader_kernels {
             composite,
             gather_caustic_map,
             caustic_map_lookup,
+            dispatch_args,
             refine_clusters,
             temporal_blend,
             atrous_filter,
@@ -560,6 +567,7 @@ impl Kernel {
         let mut a = Args {
             info,
             args: Vec::new(),
+            indirect: None,
         };
         let Some(threads) = self.lower_into(&mut a)? else {
             return Ok(None);
@@ -587,6 +595,7 @@ impl Kernel {
             threads,
             workgroup_size: info.workgroup_size,
             args: a.args,
+            indirect: a.indirect,
         }))
     }
 }

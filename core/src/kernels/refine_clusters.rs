@@ -1,22 +1,26 @@
 //! `refine_clusters`: seed 004's traversal step, one thread per traced cluster.
 
-use super::{bind, bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{bind, bytes, Args, Binding, BindingKind::*, DispatchRecord, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, PhotonMapPlanes};
 use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams};
 
-/// Judges each of the `params.count` clusters `clusters[params.first ..]` whose four
+/// Judges each of the live clusters `clusters[params.first ..]` (at most `params.count`,
+/// and no more than `list_length[0] - params.first`:
+/// [`crate::math::photon_clusters::live_clusters`]) whose four
 /// photons `trace_photons`' `ADAPTIVE` variant wrote to slots `4 t .. 4 t + 4` of
 /// `photons` ([`crate::math::photon_clusters::cluster_fate`]): a cluster is discarded
 /// when none of its photons met a caster and (with `params.relevance` BOUNDS) its
 /// footprint overlaps none of `caster_rects`; a cluster output at the finest level
 /// (`params.level >= params.finest`) deposits its stored photons into the atlas exactly
 /// as the fused trace does (fixed point, order-free); one that converged earlier (the
-/// error metric) is appended to `converged` at `cluster_counts[CONVERGED]`, to be output
-/// from fresh photons (see `adaptive_caustics::traversal`); a refined one appends its four
-/// children (the ids of its photons in the level grid) to `children` at
-/// `cluster_counts[CHILDREN]`. Counts clusters output and discarded in
-/// `cluster_counts`, and the deposit's photon accounting (stored, stored flux,
+/// error metric) is appended to `converged` at `converged_count[0]`, to be output
+/// from fresh photons (see [`crate::frame::emission::adaptive`]); a refined one appends
+/// its four children (the ids of its photons in the level grid) to `children` at
+/// `cluster_counts[CHILDREN]`, or, when they do not fit under `params.children_capacity`,
+/// is appended to `converged` like a converged one (output at its level, never lost) and
+/// counted in `cluster_counts[OVERFLOW]`. Counts clusters output, discarded and converged
+/// in `cluster_counts`, and the deposit's photon accounting (stored, stored flux,
 /// deposited, off-atlas) in `counters`.
 ///
 /// With `params.target` = [`cluster_target::SCREEN`](crate::math::photon_clusters::cluster_target)
@@ -31,6 +35,8 @@ pub struct RefineClusters {
     pub params: RefineParams,
     /// The level's cluster list.
     pub clusters: Buf<u32>,
+    /// `[0]`: the list's length (written by the step that appended to it).
+    pub list_length: Buf<u32>,
     /// The casters' bounding boxes projected on the plane: `(x0, y0, x1, y1)` in its
     /// normalised device coordinates (`math::photon_clusters::cluster_overlaps_rect`).
     pub caster_rects: Buf<[f32; 4]>,
@@ -42,9 +48,11 @@ pub struct RefineClusters {
     pub tiles: Buf<AtlasTileTexel>,
     /// The next level's cluster list, appended to.
     pub children: Buf<u32>,
-    /// The clusters that converged before the finest level, appended to (at most
-    /// `params.count`: the host sizes it to a batch).
+    /// The clusters that converged before the finest level or did not fit the child
+    /// list, appended to (at most one per cluster: sized to `params.count`).
     pub converged: Buf<u32>,
+    /// `[0]`: entries appended to `converged` (the caller clears it).
+    pub converged_count: Buf<u32>,
     /// [`cluster_count`] words, added to.
     pub cluster_counts: Buf<u32>,
     /// Photon counters ([`crate::device::layout::counter`]) of the output photons.
@@ -56,11 +64,14 @@ pub struct RefineClusters {
     /// `[0]`: photons in `output_photons` (entries past its length are counted, not
     /// written; the host sizes it to four per cluster of a batch).
     pub output_count: Buf<u32>,
+    /// The launch's shape on the device (its `params.count` the bound), or `None`.
+    pub dispatch: Option<DispatchRecord>,
 }
 
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
     bind("clusters", Read),
+    bind("list_length", Read),
     bind("caster_rects", Read),
     bind("photons", Read),
     bind("triangle_tiles", Read),
@@ -68,6 +79,7 @@ const BINDINGS: &[Binding] = &[
     bind("children", ReadWrite),
     bind("converged", ReadWrite),
     bind("converged_capacity", Count),
+    bind("converged_count", ReadWrite),
     bind("cluster_counts", ReadWrite),
     bind("counters", ReadWrite),
     bind("photon_map0", ReadWrite),
@@ -98,14 +110,22 @@ impl KernelDecl for RefineClusters {
                 "refine_clusters: rect_count over the rectangle buffer".into(),
             ));
         }
-        if p.children_capacity > self.children.len {
+        if p.children_capacity > self.children.len || !p.children_capacity.is_multiple_of(4) {
             return Err(BackendError::BadArgument(
-                "refine_clusters: children_capacity over the child list".into(),
+                "refine_clusters: children_capacity over the child list or not a multiple of 4"
+                    .into(),
             ));
+        }
+        if p.level < p.finest && self.converged.len < p.count {
+            return Err(BackendError::BadArgument(format!(
+                "refine_clusters: a converged list of {} for {} clusters",
+                self.converged.len, p.count
+            )));
         }
         let n = super::texels(p.atlas_width, p.atlas_width);
         a.params("params", p)?
             .buf("clusters", self.clusters, 0)?
+            .buf("list_length", self.list_length, 4)?
             .buf("caster_rects", self.caster_rects, 0)?
             .buf("photons", self.photons, 0)?
             .buf("triangle_tiles", self.triangle_tiles, 0)?
@@ -113,6 +133,7 @@ impl KernelDecl for RefineClusters {
             .buf("children", self.children, 0)?
             .buf("converged", self.converged, 0)?
             .count("converged_capacity", self.converged.len)?
+            .buf("converged_count", self.converged_count, 4)?
             .buf(
                 "cluster_counts",
                 self.cluster_counts,
@@ -122,7 +143,8 @@ impl KernelDecl for RefineClusters {
             .photon_map(&self.atlas, n)?
             .buf("output_photons", self.output_photons, 0)?
             .count("output_capacity", self.output_photons.len)?
-            .buf("output_count", self.output_count, 4)?;
+            .buf("output_count", self.output_count, 4)?
+            .indirect(self.dispatch)?;
         Ok(Some(p.count as u64))
     }
 }

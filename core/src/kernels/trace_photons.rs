@@ -1,6 +1,8 @@
 //! `trace_photons`: emit, trace through specular chains, store.
 
-use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
+use super::{
+    bind, bytes, with_scene, Args, Binding, BindingKind::*, DispatchRecord, KernelDecl, KernelInfo,
+};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::layout::{AtlasParams, AtlasTileTexel, DepositParams, Photon, TraceParams};
@@ -30,7 +32,9 @@ pub struct TracePhotons {
     /// Output: stored photons, appended.
     pub photons: Buf<Photon>,
     /// `[0]`: next free slot in `photons`, incremented atomically (the caller clears it);
-    /// the `adaptive` variant leaves it untouched.
+    /// with the `adaptive` variant, read only: the length of the cluster list (the batch
+    /// traces its live clusters, [`crate::math::photon_clusters::live_clusters`] of
+    /// `params.first` and `params.count / 4`).
     pub photon_count: Buf<u32>,
     /// Photon counters ([`crate::device::layout::counter`]) the kernel adds to.
     pub counters: Buf<u32>,
@@ -39,12 +43,22 @@ pub struct TracePhotons {
     /// cluster `clusters[params.first + i / 4]` of the `params.grid_w` grid, and is
     /// written to slot `i` of `photons` (`photon_store` says how). Otherwise `None` (the
     /// binding then aliases the scene's triangles, read by nobody).
-    pub clusters: Option<Buf<u32>>,
+    pub clusters: Option<ClusterBatch>,
     /// With the `fused_deposit` variant: where each stored photon is deposited
     /// ([`FusedDeposit`]); `photons` and `photon_count` are then neither read nor
     /// written. Otherwise `None` (the bindings then alias buffers of the kernel's other
     /// arguments, touched by nobody).
     pub deposit: Option<FusedDeposit>,
+}
+
+/// The adaptive variant's cluster list and, when its size is on the device, the launch's
+/// shape (`params.count` is then the bound).
+#[derive(Clone, Copy, Debug)]
+pub struct ClusterBatch {
+    /// The level's cluster list.
+    pub list: Buf<u32>,
+    /// The launch's record (`dispatch_args`), or `None` for a launch of `params.count`.
+    pub dispatch: Option<DispatchRecord>,
 }
 
 /// Where the `fused_deposit` variant of [`TracePhotons`] deposits each stored photon.
@@ -159,7 +173,7 @@ impl KernelDecl for TracePhotons {
             )));
         }
         if self.variant.adaptive {
-            let Some(c) = self.clusters else {
+            let Some(ClusterBatch { list: c, .. }) = self.clusters else {
                 return Err(BackendError::BadArgument(
                     "trace_photons: the adaptive variant needs a cluster list".into(),
                 ));
@@ -194,7 +208,7 @@ impl KernelDecl for TracePhotons {
             .buf("photon_count", self.photon_count, 4)?
             .buf("counters", self.counters, bytes::COUNTERS)?;
         match self.clusters {
-            Some(c) => a.buf("clusters", c, 0)?,
+            Some(c) => a.buf("clusters", c.list, 0)?.indirect(c.dispatch)?,
             None => a.buf("clusters", self.scene.triangles, 0)?,
         };
         let (atlas, screen) = match &self.deposit {

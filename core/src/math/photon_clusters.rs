@@ -156,6 +156,16 @@ pub fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: [f32; 4]) -> bool 
     x0 <= rect[2] && rect[0] <= x1 && y0 <= rect[3] && rect[1] <= y1
 }
 
+/// Clusters a traversal pass takes from a list whose length (on the device) is
+/// `list_length`: entries `first ..` of it, at most `bound` (the pass's recorded size).
+/// A list's length may run past its capacity (appends that did not fit are counted, not
+/// written); the passes recorded over a list never reach past its capacity, so the
+/// entries taken are always written ones.
+#[inline]
+pub fn live_clusters(list_length: u32, first: u32, bound: u32) -> u32 {
+    list_length.saturating_sub(first).min(bound)
+}
+
 /// Index, in the row-major level grid of `grid_w` texels a side, of photon `sub` (0..4:
 /// x = `sub & 1`, y = `sub >> 1`) of cluster `cluster`. It is also the id of the child
 /// cluster that photon becomes at the next level.

@@ -49,6 +49,7 @@ const CLUSTER_COUNT_OUTPUT: u32 = 1u;
 const CLUSTER_COUNT_DISCARDED: u32 = 2u;
 const CLUSTER_COUNT_OUTPUT_PHOTONS: u32 = 3u;
 const CLUSTER_COUNT_CONVERGED: u32 = 4u;
+const CLUSTER_COUNT_OVERFLOW: u32 = 5u;
 const CLUSTER_COUNT_WORDS: u32 = 8u;
 
 // core::device::layout::DepositTexel (its u32 words: flux r, g, b at 0, 2, 4)
@@ -67,6 +68,21 @@ const VISIBLE_TOLERANCE: f32 = -0.01f;
 
 // core::device::launch::DEFAULT_WORKGROUP_SIZE (every kernel's invocations per workgroup)
 const WORKGROUP_SIZE: u32 = 64u;
+
+// core::device::launch (dispatch records of indirect launches)
+const DISPATCH_RECORD_WORDS: u32 = 8u;
+const DISPATCH_MAX_GROUPS_X: u32 = 65535u;
+const DISPATCH_TRACE_WIDTH: u32 = 8u;
+
+// core::device::launch::dispatch_word (words of a dispatch record)
+const DISPATCH_GROUPS_X: u32 = 0u;
+const DISPATCH_GROUPS_Y: u32 = 1u;
+const DISPATCH_GROUPS_Z: u32 = 2u;
+const DISPATCH_WIDTH: u32 = 3u;
+const DISPATCH_HEIGHT: u32 = 4u;
+const DISPATCH_DEPTH: u32 = 5u;
+const DISPATCH_THREADS: u32 = 6u;
+const DISPATCH_ITEMS: u32 = 7u;
 
 // core::device::acceleration::instance_flags
 const INSTANCE_IDENTITY: u32 = 1u;

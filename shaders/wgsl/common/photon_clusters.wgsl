@@ -10,6 +10,15 @@ fn entry_cluster(entry: u32) -> u32 {
     return entry & CLUSTER_ID_MASK;
 }
 
+// core::math::photon_clusters::live_clusters: entries `first ..` of a list of
+// `list_length`, at most `bound`.
+fn live_clusters(list_length: u32, first: u32, bound: u32) -> u32 {
+    if (list_length <= first) {
+        return 0u;
+    }
+    return min(list_length - first, bound);
+}
+
 fn entry_spread(entry: u32) -> u32 {
     return (entry >> 30u) + 1u;
 }

@@ -1,27 +1,33 @@
 //! Seed 004's hierarchical emission on the device: the photon pyramid of one light view
-//! plane traversed in batches under a memory limit (sections 3.2 and 4.3).
+//! plane traversed level by level under a memory limit (sections 3.2 and 4.3), recorded
+//! once per frame with no wait on the device.
 //!
 //! **Levels.** Level `l` samples the plane on a `start_grid * 2^l` grid; level 0 holds
 //! every cluster of the start grid, each deeper level a list of the clusters refined
-//! into it ([`crate::math::photon_clusters`]). One *step* takes a batch of at most
-//! `batch_clusters` clusters of one level: `trace_photons` (`ADAPTIVE` variant) traces
-//! their four photons each into slots, `refine_clusters` discards, outputs or refines
-//! each, appending children to the next level's list, and the host reads the cluster
-//! counts back (the stall of a step: the next step's size). Output photons go to a
-//! [`DepositTarget`]: deposited into CausticMap's atlas by `refine_clusters` itself, or
-//! listed (world space) and deposited into Sspm's screen photon map by `deposit_screen`
-//! in the same step.
+//! into it ([`crate::math::photon_clusters`]). A level is taken in *passes* of at most
+//! `batch_clusters` clusters: `dispatch_args` reads the list's length on the device and
+//! writes the pass's launch shapes, `trace_photons` (`ADAPTIVE` variant) traces four
+//! photons per live cluster into slots and `refine_clusters` discards, outputs or
+//! refines each, appending children to the next level's list (both launched indirectly;
+//! each bounds itself by the same length, so a backend without indirect dispatch
+//! launches the recorded bound). Clusters that converged early (the error metric) are
+//! output from fresh photons by a second trace and refinement of the pass. Output
+//! photons go to a [`DepositTarget`]: deposited into CausticMap's atlas by
+//! `refine_clusters` itself, or listed (world space) and deposited into Sspm's screen
+//! photon map by `deposit_screen` in the same pass. The counts come back at the frame's
+//! end ([`TraversalReadback`]).
 //!
-//! **Batches** (004 section 4.3). The traversal always steps the deepest level with
-//! clusters left, taking them from the end of its list; the level below is then empty,
-//! so a step's children (at most four per cluster) always fit a list of
-//! `4 * batch_clusters` entries, and no buffer grows with the photon count. The order
-//! changes nothing: a photon's jitter and Fresnel choices are keyed by its texel and
-//! level, and the atlas sums are exact fixed-point, so any memory limit gives bitwise
-//! the same atlas.
+//! **Memory** (004 section 4.3, [`TraversalSettings::sizes`]). A level's list holds all
+//! of its clusters when the byte limit allows; the passes take the rest of the limit. A
+//! tighter limit caps the lists: a cluster whose children do not fit is output at its
+//! level from fresh photons and counted (`clusters_overflowed`), never lost. The pass
+//! size changes nothing: a photon's jitter and Fresnel choices are keyed by its texel and
+//! level, and the atlas sums are exact fixed-point, so any limit whose lists are whole
+//! gives bitwise the same atlas.
 
-use crate::backend::{read_buf, Backend};
+use crate::backend::PassTime;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
+use crate::device::launch::DISPATCH_RECORD_WORDS;
 use crate::device::layout::{
     cluster_count, counter, AtlasTileTexel, DepositParams, GpuCamera, Photon, RefineParams,
     TraceParams,
@@ -29,8 +35,13 @@ use crate::device::layout::{
 use crate::frame::emission::light_view_plane::{LightViewPlane, ViewPlaneProjection};
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
+use crate::frame::pipeline::FrameBuilder;
 use crate::frame::stats::{AdaptiveStats, FrameStats};
-use crate::kernels::{DepositScreen, RefineClusters, TracePhotons, TraceVariant};
+use crate::frame::submitted::EndRead;
+use crate::kernels::{
+    ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, RefineClusters, TracePhotons,
+    TraceVariant,
+};
 use crate::math::geometry::Aabb;
 use crate::math::photon_clusters::{
     cluster_level_seed, cluster_metric, cluster_resample_seed, cluster_target,
@@ -86,11 +97,13 @@ impl ClusterRelevance {
     }
 }
 
-/// Device bytes per cluster of a batch: four 32-byte photon slots.
+/// Device bytes per cluster of a pass: four 32-byte photon slots.
 pub const SLOT_BYTES_PER_CLUSTER: u64 = 128;
-/// Device bytes per cluster of a batch per level below the start grid: room for four
-/// 4-byte children.
-pub const LIST_BYTES_PER_CLUSTER: u64 = 16;
+/// Device bytes per entry of a level's cluster list, and of a pass's converged list.
+pub const LIST_BYTES_PER_ENTRY: u64 = 4;
+/// Most passes a level's list is taken in: a pass holds at least 1/64 of the largest
+/// level's clusters, so that a frame records a bounded number of dispatches.
+pub const MAX_PASSES_PER_LEVEL: u64 = 64;
 
 /// The traversal's parameters (AdaptiveCaustics' fields of the same names).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,6 +122,19 @@ pub struct TraversalSettings {
     pub max_traversal_bytes: u64,
 }
 
+/// How the traversal's device memory is split (from [`TraversalSettings::sizes`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TraversalSizes {
+    /// Clusters one pass traces and judges (its photon slots).
+    pub pass_clusters: u32,
+    /// Entries of the cluster list of each level `1 ..= finest` (index `level - 1`): the
+    /// level's every cluster when the lists fit the byte limit beside the passes, else
+    /// fewer (a multiple of 4), and what does not fit is output one level up.
+    pub list_capacity: Vec<u32>,
+    /// Whether some list holds fewer entries than its level has clusters.
+    pub lists_capped: bool,
+}
+
 impl TraversalSettings {
     /// The first level at which the error metric is checked.
     pub fn error_from_level(&self) -> u32 {
@@ -124,25 +150,80 @@ impl TraversalSettings {
         (self.start_grid as u64 / 2).pow(2)
     }
 
-    /// The fixed bytes plus one cluster's of a traversal down to level `finest` (`screen`:
-    /// with the screen target's output list).
-    pub fn min_bytes(&self, finest: u32, screen: bool) -> u64 {
-        let outputs = if screen { SLOT_BYTES_PER_CLUSTER } else { 0 };
-        4 * self.start_clusters()
-            + SLOT_BYTES_PER_CLUSTER
-            + outputs
-            + LIST_BYTES_PER_CLUSTER * finest as u64
+    /// Clusters of level `level`'s whole grid.
+    pub fn dense_clusters(&self, level: u32) -> u64 {
+        ((self.start_grid as u64) << level).pow(2) / 4
     }
 
-    /// Clusters per batch under `max_traversal_bytes`, at most what the finest level can
-    /// need in one step (`dense_clusters`); the screen target (`screen`) also holds an
-    /// output list of four photons per cluster.
-    pub fn batch_clusters(&self, finest: u32, dense_clusters: u64, screen: bool) -> u32 {
-        let fixed = 4 * self.start_clusters();
+    /// Bytes of one cluster of a pass: its slots, its converged-list entry and (`screen`)
+    /// its four output photons.
+    fn pass_bytes_per_cluster(screen: bool) -> u64 {
         let outputs = if screen { SLOT_BYTES_PER_CLUSTER } else { 0 };
-        let per = SLOT_BYTES_PER_CLUSTER + outputs + LIST_BYTES_PER_CLUSTER * finest as u64;
-        let c = self.max_traversal_bytes.saturating_sub(fixed) / per;
-        c.clamp(1, dense_clusters.clamp(1, u32::MAX as u64 / 4)) as u32
+        SLOT_BYTES_PER_CLUSTER + LIST_BYTES_PER_ENTRY + outputs
+    }
+
+    /// Bytes of the lists of levels `1 ..= finest` holding every cluster of their level.
+    pub fn full_list_bytes(&self, finest: u32) -> u64 {
+        (1..=finest)
+            .map(|l| LIST_BYTES_PER_ENTRY * self.dense_clusters(l))
+            .sum()
+    }
+
+    /// The byte limit at which passes hold `clusters` clusters and every list is whole
+    /// ([`TraversalSettings::sizes`] inverted).
+    pub fn bytes_for_pass(&self, finest: u32, screen: bool, clusters: u64) -> u64 {
+        4 * self.start_clusters()
+            + self.full_list_bytes(finest)
+            + clusters * Self::pass_bytes_per_cluster(screen)
+    }
+
+    /// The smallest limit the traversal runs under: one cluster a pass, four entries a
+    /// list.
+    pub fn min_bytes(&self, finest: u32, screen: bool) -> u64 {
+        4 * self.start_clusters()
+            + Self::pass_bytes_per_cluster(screen)
+            + 4 * LIST_BYTES_PER_ENTRY * finest as u64
+    }
+
+    /// The split of `max_traversal_bytes` for pyramids down to level `finest`: whole
+    /// lists when they fit beside passes of at least `1 / MAX_PASSES_PER_LEVEL` of the
+    /// largest level, the passes then as large as the rest allows; else half of the limit
+    /// for the passes and the other half shared by the lists.
+    pub fn sizes(&self, finest: u32, screen: bool) -> TraversalSizes {
+        let largest = self.dense_clusters(finest).max(self.start_clusters());
+        let min_pass = largest.div_ceil(MAX_PASSES_PER_LEVEL);
+        let fixed = 4 * self.start_clusters();
+        let per = Self::pass_bytes_per_cluster(screen);
+        let lists = self.full_list_bytes(finest);
+        let budget = self.max_traversal_bytes;
+        let cap = |c: u64| c.min(u32::MAX as u64 / 4) as u32;
+        if budget >= fixed + lists + min_pass * per {
+            let c = ((budget - fixed - lists) / per).clamp(min_pass, largest);
+            return TraversalSizes {
+                pass_clusters: cap(c),
+                list_capacity: (1..=finest).map(|l| cap(self.dense_clusters(l))).collect(),
+                lists_capped: false,
+            };
+        }
+        let rest = budget.saturating_sub(fixed);
+        let c = (rest / 2 / per).clamp(min_pass.min(largest), largest).max(1);
+        let share = rest.saturating_sub(c * per) / (LIST_BYTES_PER_ENTRY * finest.max(1) as u64);
+        let list_capacity: Vec<u32> = (1..=finest)
+            .map(|l| {
+                let n = self
+                    .dense_clusters(l)
+                    .min(share)
+                    .min(MAX_PASSES_PER_LEVEL * c);
+                cap((n / 4 * 4).max(4))
+            })
+            .collect();
+        let lists_capped = (1..=finest)
+            .any(|l| (list_capacity[l as usize - 1] as u64) < self.dense_clusters(l));
+        TraversalSizes {
+            pass_clusters: cap(c),
+            list_capacity,
+            lists_capped,
+        }
     }
 }
 
@@ -227,27 +308,153 @@ pub struct Traversal {
     pub settings: TraversalSettings,
     /// Deepest level any plane reaches.
     pub finest: u32,
-    /// Clusters per step.
+    /// Clusters per pass.
     pub batch_clusters: u32,
+    /// The lists' capacities and whether they are capped.
+    pub sizes: TraversalSizes,
     level0: Buf<u32>,
+    /// `[0]`: the start grid's clusters (level 0's list length).
+    level0_length: Buf<u32>,
     /// The casters' bounding boxes (world space), one per caster object.
     caster_boxes: Vec<Aabb>,
     /// Their projections on the current plane ([`caster_rects`]).
     rects: Buf<[f32; 4]>,
+    /// The cluster lists of levels `1 ..= finest`.
     lists: Vec<Buf<u32>>,
+    /// Per plane of a frame, per level: [`cluster_count`] words (word 0: the next level's
+    /// list length), read back at the frame's end.
+    counts: Vec<Vec<Buf<u32>>>,
     no_children: Buf<u32>,
     converged: Buf<u32>,
+    converged_count: Buf<u32>,
     no_converged: Buf<u32>,
+    no_converged_count: Buf<u32>,
     slots: Buf<Photon>,
-    counts: Buf<u32>,
+    /// Per level, per pass: the pass's clusters at most and its `dispatch_args` rows (its
+    /// trace, its refinement).
+    tables: Vec<Vec<(u32, Buf<[u32; 4]>)>>,
+    /// The rows of a pass over the converged clusters (from entry 0).
+    converged_rows: Buf<[u32; 4]>,
+    /// The records the passes' launches read (trace, refinement; then the converged
+    /// clusters' trace and refinement).
+    args: Buf<u32>,
+    resample_args: Buf<u32>,
     /// Counters of the output (deposited) photons.
     pub output_counters: Buf<u32>,
-    /// The screen target's output list (four slots per cluster of a batch; one unused
+    /// The screen target's output list (four slots per cluster of a pass; one unused
     /// entry with the atlas target) and its count.
     outputs: Buf<Photon>,
     output_count: Buf<u32>,
     /// Stand-ins for `refine_clusters`' atlas bindings with the screen target.
     no_atlas: Option<(Buf<u32>, Buf<AtlasTileTexel>, PhotonMapPlanes)>,
+}
+
+/// The `dispatch_args` rows of a pass from list entry `first` of `bound` clusters: its
+/// trace (four photons a cluster) and its refinement (one thread a cluster), both
+/// reading the list length at word 0.
+fn pass_rows(first: u32, bound: u32) -> [[u32; 4]; 2] {
+    [[first, bound, 4, 0], [first, bound, 1, 0]]
+}
+
+/// One level of one plane's traversal as recorded: where its counts come back and what
+/// bounds them.
+#[derive(Clone, Debug)]
+struct LevelRead {
+    /// Index of the level's counts among the frame's readbacks.
+    counts: usize,
+    /// Clusters of the level's list: the start grid's at level 0, else the list's
+    /// capacity (its length word may count appends past it).
+    capacity: u64,
+    /// Capacity of the next level's list (0 at the plane's finest).
+    children_capacity: u64,
+}
+
+/// What a frame's traversal reads back at the frame's end and how it becomes
+/// [`AdaptiveStats`] (an [`crate::frame::submitted::EndRead`]).
+#[derive(Clone, Debug)]
+pub struct TraversalReadback {
+    planes: Vec<Vec<LevelRead>>,
+    output_counters: usize,
+    flux_quantum: f32,
+    pass_clusters: u64,
+    dense_equivalent: u64,
+    /// The traversal's kernels: (index among the frame's kernel steps, level, name).
+    kernels: Vec<(usize, u32, &'static str)>,
+}
+
+impl TraversalReadback {
+    /// Puts the traversal's counts and the output photons' accounting into `stats`:
+    /// stored, deposited and their flux are the output photons (the traced ones that
+    /// were refined instead are not part of the map), emitted the photons traced. Call
+    /// after the trace counters went in (`photons_traced_stored` takes their stored
+    /// photons). A level's time is its kernels' when `times` holds them in order.
+    pub fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats) {
+        let words = |k: usize| -> Vec<u32> {
+            readbacks
+                .get(k)
+                .map(|b| bytemuck::pod_collect_to_vec(b))
+                .unwrap_or_default()
+        };
+        let mut a = AdaptiveStats {
+            dense_equivalent_photons: self.dense_equivalent,
+            ..Default::default()
+        };
+        let levels = self.planes.iter().map(Vec::len).max().unwrap_or(0);
+        a.photons_per_level.resize(levels, 0);
+        a.photons_output_per_level.resize(levels, 0);
+        a.ms_per_level.resize(levels, 0.0);
+        for plane in &self.planes {
+            let mut length = plane.first().map_or(0, |l| l.capacity);
+            for l in plane.iter().enumerate() {
+                let (level, read) = l;
+                let c = words(read.counts);
+                let w = |i: usize| c.get(i).copied().unwrap_or(0) as u64;
+                let taken = length.min(read.capacity);
+                let resampled = w(cluster_count::CONVERGED) + w(cluster_count::OVERFLOW);
+                let children = w(cluster_count::CHILDREN).min(read.children_capacity);
+                a.clusters_refined += children / 4;
+                a.clusters_output += w(cluster_count::OUTPUT);
+                a.clusters_discarded += w(cluster_count::DISCARDED);
+                a.clusters_converged += w(cluster_count::CONVERGED);
+                a.clusters_overflowed += w(cluster_count::OVERFLOW);
+                let traced = 4 * (taken + resampled);
+                a.photons_processed += traced;
+                a.photons_per_level[level] += traced;
+                a.photons_output_per_level[level] += w(cluster_count::OUTPUT_PHOTONS);
+                let passes = taken.div_ceil(self.pass_clusters.max(1))
+                    + resampled.div_ceil(self.pass_clusters.max(1));
+                a.steps += passes as u32;
+                stats.batches += passes as u32;
+                length = w(cluster_count::CHILDREN);
+            }
+        }
+        let in_order = self
+            .kernels
+            .iter()
+            .all(|&(i, _, name)| times.get(i).is_some_and(|t| t.kernel == name));
+        if in_order {
+            for &(i, level, _) in &self.kernels {
+                a.ms_per_level[level as usize] += times[i].seconds * 1e3;
+            }
+        }
+        let o = words(self.output_counters);
+        if o.len() >= counter::WORDS {
+            let o64 = |i: usize| crate::math::fixed_point::join_u64([o[i], o[i + 1]]);
+            a.photons_traced_stored = stats.photons_stored;
+            stats.photons_stored = o[counter::STORED] as u64;
+            stats.photons_deposited = o[counter::DEPOSITED] as u64;
+            stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;
+            stats.discarded.depth_mismatch = o[counter::DEPTH_MISMATCH] as u64;
+            stats.fixed_point_underflow = o[counter::UNDERFLOW] as u64;
+            stats.fixed_point_saturated = o[counter::SATURATED] as u64;
+            for ch in 0..3 {
+                stats.stored_flux[ch] =
+                    o64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
+            }
+        }
+        stats.photons_emitted = a.photons_processed;
+        stats.adaptive = Some(a);
+    }
 }
 
 impl Traversal {
@@ -269,27 +476,53 @@ impl Traversal {
         caster_boxes: &[Aabb],
         screen: bool,
     ) -> Traversal {
-        let dense_clusters = ((settings.start_grid as u64) << finest).pow(2) / 4;
-        let c = settings.batch_clusters(finest, dense_clusters, screen);
-        let ids: Vec<u32> = (0..settings.start_clusters() as u32).collect();
+        let sizes = settings.sizes(finest, screen);
+        let c = sizes.pass_clusters;
+        let start = settings.start_clusters() as u32;
+        let ids: Vec<u32> = (0..start).collect();
+        // per level, per pass: its rows (the last pass of a level takes what is left of
+        // the list's capacity, so that no pass reads past it)
+        let tables: Vec<Vec<(u32, Buf<[u32; 4]>)>> = std::iter::once(start)
+            .chain(sizes.list_capacity.iter().copied())
+            .map(|n| {
+                (0..n.div_ceil(c))
+                    .map(|k| {
+                        let bound = c.min(n - k * c);
+                        let rows = pass_rows(k * c, bound);
+                        (bound, rec.upload(&rows, "adaptive pass dispatch rows"))
+                    })
+                    .collect()
+            })
+            .collect();
+        let converged_rows = rec.upload(&pass_rows(0, c), "adaptive converged dispatch rows");
+        let records = 2 * DISPATCH_RECORD_WORDS as u32;
         Traversal {
             settings: *settings,
             finest,
             batch_clusters: c,
             level0: rec.upload(&ids, "adaptive start-grid clusters"),
+            level0_length: rec.upload(&[start], "adaptive start-grid length"),
             caster_boxes: caster_boxes.to_vec(),
             rects: rec.create(
                 caster_boxes.len().max(1) as u32,
                 "adaptive caster rectangles",
             ),
-            lists: (1..=finest)
-                .map(|_| rec.create(4 * c, "adaptive cluster list"))
+            lists: sizes
+                .list_capacity
+                .iter()
+                .map(|&n| rec.create(n, "adaptive cluster list"))
                 .collect(),
+            counts: Vec::new(),
             no_children: rec.create(1, "adaptive finest-level child list"),
             converged: rec.create(c, "adaptive converged clusters"),
+            converged_count: rec.create(1, "adaptive converged count"),
             no_converged: rec.create(1, "adaptive resampled converged list"),
+            no_converged_count: rec.create(1, "adaptive resampled converged count"),
             slots: rec.create(4 * c, "adaptive photon slots"),
-            counts: rec.create(cluster_count::WORDS as u32, "adaptive cluster counts"),
+            tables,
+            converged_rows,
+            args: rec.create(records, "adaptive dispatch records"),
+            resample_args: rec.create(records, "adaptive converged dispatch records"),
             output_counters: rec.create(counter::WORDS as u32, "adaptive output counters"),
             outputs: rec.create(if screen { 4 * c } else { 1 }, "adaptive output photons"),
             output_count: rec.create(1, "adaptive output photon count"),
@@ -305,264 +538,180 @@ impl Traversal {
                     planes,
                 )
             }),
+            sizes,
         }
     }
 
-    /// Traverses the pyramid of `plane` (its resolution the finest level's,
-    /// `start_grid * 2^finest`) of light `light` with seed `plane_seed`: every step
-    /// traced, judged and deposited into `target` (the target this traversal was
-    /// recorded for). Adds to `adaptive` and the pass times
-    /// of `stats`; calls `progress` with the photons traced so far after each step.
-    #[allow(clippy::too_many_arguments)]
-    pub fn run_plane(
-        &self,
-        backend: &mut dyn Backend,
+    /// Records the traversal of every plane of a frame (`planes`: light, plane, seed)
+    /// into `frame`, with no wait: each level's passes read their cluster counts on the
+    /// device (`dispatch_args` and indirect launches), and the counts come back at the
+    /// frame's end into [`AdaptiveStats`]. Each plane's `start_grid * 2^finest` side must
+    /// lie in the traversal's pyramid. Output photons go into `target` (the target this
+    /// traversal was recorded for).
+    pub fn record_frame(
+        &mut self,
+        frame: &mut FrameBuilder,
         scene: SceneArgs,
         variant: TraceVariant,
         target: &DepositTarget,
-        (light, plane, plane_seed): (u32, &LightViewPlane, u32),
+        planes: &[(u32, LightViewPlane, u32)],
         optics: PhotonOptics,
-        stats: &mut FrameStats,
-        adaptive: &mut AdaptiveStats,
-        progress: &mut dyn FnMut(u64),
     ) -> Result<(), Error> {
-        let s = &self.settings;
-        let finest = (plane.resolution.0 / s.start_grid).max(1).ilog2();
-        if finest > self.finest || (s.start_grid << finest) != plane.resolution.0 {
-            return Err(Error::InvalidParameter(format!(
-                "adaptive plane of {}x{} texels outside the traversal's pyramid",
-                plane.resolution.0, plane.resolution.1
-            )));
-        }
-        let levels = finest as usize + 1;
-        if adaptive.photons_per_level.len() < levels {
-            adaptive.photons_per_level.resize(levels, 0);
-            adaptive.ms_per_level.resize(levels, 0.0);
-            adaptive.photons_output_per_level.resize(levels, 0);
-        }
-        adaptive.dense_equivalent_photons += plane.texels();
-        let start = s.start_clusters() as u32;
-        // clusters left per level (level 0: from `cursor` to `start`)
-        let mut left = vec![0u32; levels];
-        let mut cursor = 0u32;
-        let c = self.batch_clusters;
-        let mut rects = caster_rects(plane, &self.caster_boxes);
-        rects.resize(self.rects.len as usize, EMPTY_RECT);
-        let mut rec = Recording::new();
-        rec.update(self.rects, &rects, "adaptive caster rectangles")?;
-        backend.execute(&rec)?;
-        stats.host_waits += 1;
-        loop {
-            let level = match (1..levels).rev().find(|&l| left[l] > 0) {
-                Some(l) => l,
-                None if cursor < start => 0,
-                None => break,
-            };
-            let (list, first, m) = if level == 0 {
-                let m = c.min(start - cursor);
-                (self.level0, cursor, m)
-            } else {
-                let m = c.min(left[level]);
-                (self.lists[level - 1], left[level] - m, m)
-            };
-            let (children, capacity, before) = if level < finest as usize {
-                let l = self.lists[level];
-                (l, l.len, left[level + 1])
-            } else {
-                (self.no_children, 0, 0)
-            };
-            let grid = s.start_grid << level;
-            let step = StepArgs {
-                level: level as u32,
-                grid,
-                seed: cluster_level_seed(plane_seed, level as u32, finest),
-                finest,
-                metric: s.metric as u32,
-                list: (list, first, m),
-                children: (children, capacity, before),
-                converged: self.converged,
-            };
-            adaptive.ms_per_level[level] += self.step(
-                backend,
-                scene,
-                variant,
-                target,
-                (light, plane),
-                optics,
-                &step,
-                stats,
-            )?;
-            let counts = read_buf(backend, self.counts)?;
-            // the step ran and its counts came back: two waits
-            stats.host_waits += 2;
-            let kids = counts[cluster_count::CHILDREN];
-            if kids > capacity || kids < before {
+        let s = self.settings;
+        frame.rec().clear(self.output_counters);
+        let mut read = TraversalReadback {
+            planes: Vec::new(),
+            output_counters: 0,
+            flux_quantum: target.quanta().0,
+            pass_clusters: self.batch_clusters as u64,
+            dense_equivalent: 0,
+            kernels: Vec::new(),
+        };
+        for (k, (light, plane, plane_seed)) in planes.iter().enumerate() {
+            let finest = (plane.resolution.0 / s.start_grid).max(1).ilog2();
+            if finest > self.finest || (s.start_grid << finest) != plane.resolution.0 {
                 return Err(Error::InvalidParameter(format!(
-                    "adaptive traversal: level {} list overflowed ({kids} of {capacity})",
-                    level + 1
+                    "adaptive plane of {}x{} texels outside the traversal's pyramid",
+                    plane.resolution.0, plane.resolution.1
                 )));
             }
-            if level < finest as usize {
-                left[level + 1] = kids;
+            while self.counts.len() <= k {
+                let rec = frame.rec();
+                let level_counts = (0..=self.finest)
+                    .map(|_| rec.create(cluster_count::WORDS as u32, "adaptive cluster counts"))
+                    .collect();
+                self.counts.push(level_counts);
             }
-            if level == 0 {
-                cursor += m;
-            } else {
-                left[level] -= m;
-            }
-            let refined = (kids - before) as u64 / 4;
-            adaptive.clusters_refined += refined;
-            adaptive.clusters_output += counts[cluster_count::OUTPUT] as u64;
-            adaptive.clusters_discarded += counts[cluster_count::DISCARDED] as u64;
-            adaptive.photons_processed += 4 * m as u64;
-            adaptive.photons_per_level[level] += 4 * m as u64;
-            adaptive.photons_output_per_level[level] +=
-                counts[cluster_count::OUTPUT_PHOTONS] as u64;
-            adaptive.steps += 1;
-            stats.batches += 1;
-            let converged = counts[cluster_count::CONVERGED];
-            if converged > 0 {
-                // the converged clusters, output from fresh photons of their texels: the
-                // decision to stop was made on the first four, so depositing those would
-                // keep only the outcomes (Fresnel choices) that converge, a bias of
-                // several percent (+3.6% on `sphere` at 1024^2)
-                let resample = StepArgs {
-                    level: level as u32,
-                    grid,
-                    seed: cluster_resample_seed(plane_seed, level as u32),
-                    finest: level as u32,
-                    metric: cluster_metric::LEVEL,
-                    list: (self.converged, 0, converged),
-                    children: (self.no_children, 0, 0),
-                    converged: self.no_converged,
+            read.dense_equivalent += plane.texels();
+            let mut rects = caster_rects(plane, &self.caster_boxes);
+            rects.resize(self.rects.len as usize, EMPTY_RECT);
+            frame
+                .rec()
+                .update(self.rects, &rects, "adaptive caster rectangles")?;
+            let mut levels = Vec::new();
+            for level in 0..=finest {
+                let counts = self.counts[k][level as usize];
+                frame.rec().clear(counts);
+                let (list, length, capacity) = match level {
+                    0 => (self.level0, self.level0_length, s.start_clusters()),
+                    l => (
+                        self.lists[l as usize - 1],
+                        self.counts[k][l as usize - 1],
+                        self.sizes.list_capacity[l as usize - 1] as u64,
+                    ),
                 };
-                adaptive.ms_per_level[level] += self.step(
-                    backend,
-                    scene,
-                    variant,
-                    target,
-                    (light, plane),
-                    optics,
-                    &resample,
-                    stats,
-                )?;
-                let c = read_buf(backend, self.counts)?;
-                stats.host_waits += 2;
-                adaptive.clusters_converged += converged as u64;
-                adaptive.clusters_output += c[cluster_count::OUTPUT] as u64;
-                adaptive.clusters_discarded += c[cluster_count::DISCARDED] as u64;
-                adaptive.photons_processed += 4 * converged as u64;
-                adaptive.photons_per_level[level] += 4 * converged as u64;
-                adaptive.photons_output_per_level[level] += c[cluster_count::OUTPUT_PHOTONS] as u64;
-                adaptive.steps += 1;
-                stats.batches += 1;
+                let (children, children_capacity) = if level < finest {
+                    let n = self.sizes.list_capacity[level as usize];
+                    (self.lists[level as usize], n)
+                } else {
+                    (self.no_children, 0)
+                };
+                levels.push(LevelRead {
+                    counts: frame.read_at_end(counts),
+                    capacity,
+                    children_capacity: children_capacity as u64,
+                });
+                let c = self.batch_clusters;
+                // converged clusters (from the error metric's level) and overflowed ones
+                // (capped lists) are output at their level from fresh photons
+                let resample = level < finest
+                    && (level >= s.error_from_level() || self.sizes.lists_capped);
+                for (pass, &(bound, rows)) in self.tables[level as usize].iter().enumerate() {
+                    let step = PassArgs {
+                        level,
+                        grid: s.start_grid << level,
+                        seed: cluster_level_seed(*plane_seed, level, finest),
+                        finest,
+                        metric: s.metric as u32,
+                        list: (list, length, pass as u32 * c),
+                        bound,
+                        rows,
+                        args: self.args,
+                        children: (children, children_capacity),
+                        converged: (self.converged, self.converged_count),
+                        counts,
+                    };
+                    if resample {
+                        frame.rec().clear(self.converged_count);
+                    }
+                    self.record_pass(frame, scene, variant, target, (*light, plane), optics, &step, &mut read)?;
+                    if resample {
+                        let again = PassArgs {
+                            seed: cluster_resample_seed(*plane_seed, level),
+                            finest: level,
+                            metric: cluster_metric::LEVEL,
+                            list: (self.converged, self.converged_count, 0),
+                            bound: c,
+                            rows: self.converged_rows,
+                            args: self.resample_args,
+                            children: (self.no_children, 0),
+                            converged: (self.no_converged, self.no_converged_count),
+                            ..step
+                        };
+                        self.record_pass(frame, scene, variant, target, (*light, plane), optics, &again, &mut read)?;
+                    }
+                }
             }
-            progress(adaptive.photons_processed);
+            read.planes.push(levels);
+            frame.push(Recording::new(), plane.texels());
         }
+        read.output_counters = frame.read_at_end(self.output_counters);
+        frame.end_read(EndRead::Traversal(Box::new(read)));
         Ok(())
     }
 }
 
-impl Traversal {
-    /// Puts the output photons' accounting (read from `output_counters`) into `stats`
-    /// after a frame's traversal: stored, deposited and their flux are the output photons
-    /// (the traced ones that were refined instead are not part of the map), emitted the
-    /// photons traced; `adaptive` (with the photons the trace stored) goes into
-    /// `stats.adaptive`.
-    pub fn output_stats(
-        &self,
-        backend: &mut dyn Backend,
-        flux_quantum: f32,
-        stats: &mut FrameStats,
-        mut adaptive: AdaptiveStats,
-    ) -> Result<(), Error> {
-        let o = read_buf(backend, self.output_counters)?;
-        stats.host_waits += 1;
-        let o64 = |i: usize| crate::math::fixed_point::join_u64([o[i], o[i + 1]]);
-        stats.photons_emitted = adaptive.photons_processed;
-        adaptive.photons_traced_stored = stats.photons_stored;
-        stats.photons_stored = o[counter::STORED] as u64;
-        stats.photons_deposited = o[counter::DEPOSITED] as u64;
-        stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;
-        stats.discarded.depth_mismatch = o[counter::DEPTH_MISMATCH] as u64;
-        stats.fixed_point_underflow = o[counter::UNDERFLOW] as u64;
-        stats.fixed_point_saturated = o[counter::SATURATED] as u64;
-        for ch in 0..3 {
-            stats.stored_flux[ch] = o64(counter::STORED_FLUX + 2 * ch) as f64 * flux_quantum as f64;
-        }
-        stats.adaptive = Some(adaptive);
-        Ok(())
-    }
-}
-
-/// One traversal step's dispatch arguments.
-struct StepArgs {
+/// One pass's dispatch arguments.
+#[derive(Clone, Copy)]
+struct PassArgs {
     level: u32,
     grid: u32,
     seed: u32,
-    /// The level at which clusters are output (the plane's finest; the step's own level
+    /// The level at which clusters are output (the plane's finest; the pass's own level
     /// when outputting converged clusters from fresh photons).
     finest: u32,
     metric: u32,
-    /// The cluster list, its first entry and the clusters to take.
-    list: (Buf<u32>, u32, u32),
-    /// The child list, its capacity and its entries before the step.
-    children: (Buf<u32>, u32, u32),
-    converged: Buf<u32>,
+    /// The cluster list, the buffer whose word 0 is its length, and the pass's first
+    /// entry.
+    list: (Buf<u32>, Buf<u32>, u32),
+    /// Most clusters the pass takes.
+    bound: u32,
+    /// The `dispatch_args` rows of the pass and the records they write.
+    rows: Buf<[u32; 4]>,
+    args: Buf<u32>,
+    /// The child list and its capacity.
+    children: (Buf<u32>, u32),
+    /// The converged list and its count.
+    converged: (Buf<u32>, Buf<u32>),
+    /// The level's cluster counts.
+    counts: Buf<u32>,
 }
 
 impl Traversal {
-    /// Traces and judges one batch (`trace_photons`, `refine_clusters`), the cluster
-    /// counts reset first (the child count to the entries already listed).
+    /// Records one pass: `dispatch_args` (the pass's live clusters on the device), then
+    /// `trace_photons` and `refine_clusters` launched from its records (and, for the
+    /// screen target, `deposit_screen` of the listed output photons).
     #[allow(clippy::too_many_arguments)]
-    fn step(
+    fn record_pass(
         &self,
-        backend: &mut dyn Backend,
+        frame: &mut FrameBuilder,
         scene: SceneArgs,
         variant: TraceVariant,
         target: &DepositTarget,
         (light, plane): (u32, &LightViewPlane),
         optics: PhotonOptics,
-        a: &StepArgs,
-        stats: &mut FrameStats,
-    ) -> Result<f64, Error> {
+        a: &PassArgs,
+        read: &mut TraversalReadback,
+    ) -> Result<(), Error> {
         let s = &self.settings;
         let at_level = LightViewPlane {
             resolution: (a.grid, a.grid),
             ..*plane
         };
-        let (list, first, m) = a.list;
-        let (children, capacity, before) = a.children;
-        let mut counts = [0u32; cluster_count::WORDS];
-        counts[cluster_count::CHILDREN] = before;
+        let (list, length, first) = a.list;
+        let (children, capacity) = a.children;
+        let c = a.bound;
         let (flux_quantum, hit_distance_quantum) = target.quanta();
-        let mut rec = Recording::new();
-        rec.update(self.counts, &counts, "adaptive cluster counts")?;
-        if let DepositTarget::Screen(_) = target {
-            rec.clear(self.output_count);
-        }
-        rec.kernel(TracePhotons {
-            scene,
-            variant,
-            params: TraceParams {
-                fresnel_model: optics.fresnel_model,
-                caster_sphere_count: optics.caster_spheres.count,
-                caster_spheres: optics.caster_spheres.spheres,
-                ..at_level.trace_params(
-                    light,
-                    (first, 4 * m),
-                    a.seed,
-                    optics.max_bounces,
-                    optics.min_relative_power,
-                    flux_quantum,
-                )
-            },
-            photons: self.slots,
-            photon_count: self.counts,
-            counters: target.trace_counters(),
-            clusters: Some(list),
-            deposit: None,
-        });
         let (atlas_width, triangle_tiles, tiles, atlas, camera, kind) =
             match (target, self.no_atlas) {
                 (DepositTarget::Atlas(a), _) => (
@@ -582,58 +731,111 @@ impl Traversal {
                     ))
                 }
             };
-        rec.kernel(RefineClusters {
-            params: RefineParams {
-                atlas_width,
-                flux_quantum,
-                hit_distance_quantum,
-                level: a.level,
-                finest: a.finest,
-                metric: a.metric,
-                error_from_level: s.error_from_level(),
-                grid_w: a.grid,
-                first,
-                count: m,
-                children_capacity: capacity,
-                relevance: s.relevance.kernel_value(),
-                rect_count: self.caster_boxes.len() as u32,
-                deposit_target: kind,
-                error_texels: s.error_texels,
-                _pad: 0,
-                camera,
-            },
-            clusters: list,
-            caster_rects: self.rects,
-            photons: self.slots,
-            triangle_tiles,
-            tiles,
-            children,
-            converged: a.converged,
-            cluster_counts: self.counts,
-            counters: self.output_counters,
-            atlas,
-            output_photons: self.outputs,
-            output_count: self.output_count,
-        });
-        if let DepositTarget::Screen(sc) = target {
-            rec.kernel(DepositScreen {
-                params: DepositParams {
-                    photon_capacity: self.outputs.len,
-                    ..sc.deposit
+        let mut kernel = |frame: &mut FrameBuilder, k: crate::kernels::Kernel| {
+            read.kernels
+                .push((frame.kernel_index(), a.level, k.name()));
+            frame.rec().kernel(k);
+        };
+        kernel(
+            frame,
+            DispatchArgs {
+                table: a.rows,
+                counts: length,
+                args: a.args,
+            }
+            .into(),
+        );
+        if let DepositTarget::Screen(_) = target {
+            frame.rec().clear(self.output_count);
+        }
+        let record = |record| Some(DispatchRecord { args: a.args, record });
+        kernel(
+            frame,
+            TracePhotons {
+                scene,
+                variant,
+                params: TraceParams {
+                    fresnel_model: optics.fresnel_model,
+                    caster_sphere_count: optics.caster_spheres.count,
+                    caster_spheres: optics.caster_spheres.spheres,
+                    ..at_level.trace_params(
+                        light,
+                        (first, 4 * c),
+                        a.seed,
+                        optics.max_bounces,
+                        optics.min_relative_power,
+                        flux_quantum,
+                    )
                 },
-                gbuffer: sc.gbuffer,
-                photons: self.outputs,
-                photon_count: self.output_count,
+                photons: self.slots,
+                photon_count: length,
+                counters: target.trace_counters(),
+                clusters: Some(ClusterBatch {
+                    list,
+                    dispatch: record(0),
+                }),
+                deposit: None,
+            }
+            .into(),
+        );
+        kernel(
+            frame,
+            RefineClusters {
+                params: RefineParams {
+                    atlas_width,
+                    flux_quantum,
+                    hit_distance_quantum,
+                    level: a.level,
+                    finest: a.finest,
+                    metric: a.metric,
+                    error_from_level: s.error_from_level(),
+                    grid_w: a.grid,
+                    first,
+                    count: c,
+                    children_capacity: capacity,
+                    relevance: s.relevance.kernel_value(),
+                    rect_count: self.caster_boxes.len() as u32,
+                    deposit_target: kind,
+                    error_texels: s.error_texels,
+                    _pad: 0,
+                    camera,
+                },
+                clusters: list,
+                list_length: length,
+                caster_rects: self.rects,
+                photons: self.slots,
+                triangle_tiles,
+                tiles,
+                children,
+                converged: a.converged.0,
+                converged_count: a.converged.1,
+                cluster_counts: a.counts,
                 counters: self.output_counters,
-                photon_map: sc.photon_map,
-            });
+                atlas,
+                output_photons: self.outputs,
+                output_count: self.output_count,
+                dispatch: record(1),
+            }
+            .into(),
+        );
+        if let DepositTarget::Screen(sc) = target {
+            kernel(
+                frame,
+                DepositScreen {
+                    params: DepositParams {
+                        photon_capacity: self.outputs.len,
+                        ..sc.deposit
+                    },
+                    gbuffer: sc.gbuffer,
+                    photons: self.outputs,
+                    photon_count: self.output_count,
+                    counters: self.output_counters,
+                    photon_map: sc.photon_map,
+                }
+                .into(),
+            );
         }
-        let mut ms = 0.0;
-        for t in backend.execute(&rec)? {
-            stats.add_pass_time(t.kernel, t.seconds);
-            ms += t.seconds * 1e3;
-        }
-        Ok(ms)
+        Ok(())
     }
 }
 

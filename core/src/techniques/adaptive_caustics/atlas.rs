@@ -114,10 +114,9 @@ impl AdaptiveCausticsPipeline {
     }
 
     /// The atlas target's frame: the traversal into the atlas and its gather when the
-    /// atlas is stale (run at once), then the camera's passes recorded.
+    /// atlas is stale, then the camera's passes, all recorded.
     pub(super) fn record_atlas(
         &mut self,
-        backend: &mut dyn Backend,
         host: &mut FrameHost,
         frame: &mut FrameBuilder,
     ) -> Result<(), Error> {
@@ -150,15 +149,9 @@ impl AdaptiveCausticsPipeline {
                 receiver.record_gather(&mut gather);
                 // a new seed for every pass an accumulating atlas adds
                 let seed = accumulation_seed(self.settings.map.seed, receiver.pass_index());
-                self.traverse(
-                    backend,
-                    host,
-                    frame,
-                    &DepositTarget::Atlas(target),
-                    a.counters,
-                    seed,
-                )
-                .and_then(|_| frame.run_now(backend, gather))?;
+                let counters = a.counters;
+                self.traverse(host, frame, &DepositTarget::Atlas(target), counters, seed)?;
+                frame.rec().steps.extend(gather.steps);
                 if let Target::Atlas { receiver, valid } = &mut self.target {
                     frame.stats.accumulated_frames = receiver.end_photon_pass();
                     // an accumulating atlas takes new photons every frame

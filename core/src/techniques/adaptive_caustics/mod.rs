@@ -32,7 +32,7 @@ pub use crate::frame::emission::adaptive::{
 };
 pub use settings::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
-    LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
+    TraversalSizes, LIST_BYTES_PER_ENTRY, SLOT_BYTES_PER_CLUSTER,
 };
 
 use crate::backend::Backend;
@@ -45,10 +45,8 @@ use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::FramePlan;
 use crate::frame::receivers::atlas::AtlasReceiver;
 use crate::frame::receivers::screen::ScreenReceiver;
-use crate::frame::stats::AdaptiveStats;
 use crate::frame::technique::OutputInfo;
 use crate::kernels::TraceVariant;
-use crate::recording::Recording;
 
 /// AdaptiveCaustics on one backend, for one scene: the frame host and
 /// [`AdaptiveCausticsPipeline`].
@@ -109,26 +107,20 @@ fn finest_level(planes: &ViewPlanes, start_grid: u32) -> u32 {
 }
 
 impl AdaptiveCausticsPipeline {
-    /// Traverses every plane into `target` (run at once: the traversal reads its queues
-    /// back between levels), then reads the trace counters and the traversal's own into
-    /// the statistics.
+    /// Records the traversal of every plane into `target` (no wait: each level's passes
+    /// read their counts on the device), the trace counters (`counters`) and the
+    /// traversal's own read into the statistics at the frame's end.
     fn traverse(
-        &self,
-        backend: &mut dyn Backend,
+        &mut self,
         host: &FrameHost,
         frame: &mut FrameBuilder,
         target: &DepositTarget,
         counters: crate::device::handle::Buf<u32>,
         seed: u32,
     ) -> Result<(), Error> {
-        let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
+        let (Some(t), Some(variant)) = (&mut self.traversal, self.plan.trace_variant) else {
             return Ok(());
         };
-        // TODO(issue 46): the traversal is to be recorded once per frame, its queues on
-        // the device
-        let mut rec = Recording::new();
-        rec.clear(t.output_counters);
-        frame.run_now(backend, rec)?;
         let s = &self.settings.map;
         let optics = PhotonOptics {
             max_bounces: s.max_bounces,
@@ -137,30 +129,19 @@ impl AdaptiveCausticsPipeline {
             caster_spheres: self.planes.caster_spheres,
         };
         let total: u64 = self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum();
-        let mut adaptive = AdaptiveStats::default();
+        frame.expect_photons(total);
+        let mut planes = Vec::with_capacity(self.planes.planes.len());
         for (light, k, plane) in &self.planes.planes {
             let flux = plane.power.as_dvec3() * plane.plane_measure();
             for c in 0..3 {
                 frame.stats.emitted_flux[c] += flux[c];
             }
-            let mut done = 0;
-            t.run_plane(
-                backend,
-                host.scene(),
-                variant,
-                target,
-                (*light, plane, ViewPlanes::plane_seed(seed, *light, *k)),
-                optics,
-                &mut frame.stats,
-                &mut adaptive,
-                &mut |traced| done = traced.min(total),
-            )?;
-            frame.progress(done, total);
+            planes.push((*light, *plane, ViewPlanes::plane_seed(seed, *light, *k)));
         }
-        let q = self.planes.flux_quantum;
-        let c = frame.read_now(backend, counters)?;
-        frame.stats.read_counters(&c, q);
-        t.output_stats(backend, q, &mut frame.stats, adaptive)
+        // the trace counters go into the statistics first (read at the frame's end like
+        // the traversal's counts): the traversal's accounting takes their stored photons
+        frame.counters_at_end(counters, self.planes.flux_quantum);
+        t.record_frame(frame, host.scene(), variant, target, &planes, optics)
     }
 }
 
@@ -212,14 +193,14 @@ impl Pipeline for AdaptiveCausticsPipeline {
 
     fn record(
         &mut self,
-        backend: &mut dyn Backend,
+        _backend: &mut dyn Backend,
         host: &mut FrameHost,
         frame: &mut FrameBuilder,
     ) -> Result<(), Error> {
         frame.stats.flux_quantum = self.planes.flux_quantum as f64;
         match self.target {
-            Target::Atlas { .. } => self.record_atlas(backend, host, frame),
-            Target::Screen { .. } => self.record_screen(backend, host, frame),
+            Target::Atlas { .. } => self.record_atlas(host, frame),
+            Target::Screen { .. } => self.record_screen(host, frame),
         }
     }
 

@@ -102,11 +102,10 @@ pub(super) fn create(
 }
 
 impl AdaptiveCausticsPipeline {
-    /// The screen target's frame: visibility, the traversal into the screen photon map
-    /// (run at once), then the resolve, filters and composite recorded.
+    /// The screen target's frame: visibility, the traversal into the screen photon map,
+    /// the resolve, filters and composite, all recorded.
     pub(super) fn record_screen(
         &mut self,
-        backend: &mut dyn Backend,
         host: &mut FrameHost,
         frame: &mut FrameBuilder,
     ) -> Result<(), Error> {
@@ -137,7 +136,7 @@ impl AdaptiveCausticsPipeline {
         });
         // a new seed for every frame an accumulating photon map adds
         let seed = accumulation_seed(self.settings.map.seed, receiver.frame_index());
-        self.traverse(backend, host, frame, &target, map.counters, seed)?;
+        self.traverse(host, frame, &target, map.counters, seed)?;
         let Target::Screen { receiver, .. } = &mut self.target else {
             return Ok(());
         };

@@ -2,7 +2,8 @@
 
 use crate::frame::emission::adaptive::TraversalSettings;
 pub use crate::frame::emission::adaptive::{
-    AdaptiveMetric, ClusterRelevance, LIST_BYTES_PER_CLUSTER, SLOT_BYTES_PER_CLUSTER,
+    AdaptiveMetric, ClusterRelevance, TraversalSizes, LIST_BYTES_PER_ENTRY,
+    SLOT_BYTES_PER_CLUSTER,
 };
 use crate::frame::error::Error;
 use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
@@ -193,10 +194,11 @@ impl AdaptiveCausticsSettings {
         self.traversal().min_bytes(self.finest_level(), screen)
     }
 
-    /// Clusters per batch under `max_traversal_bytes` ([`TraversalSettings::batch_clusters`]).
-    pub fn batch_clusters(&self, finest: u32, dense_clusters: u64, screen: bool) -> u32 {
-        self.traversal()
-            .batch_clusters(finest, dense_clusters, screen)
+    /// The split of `max_traversal_bytes` into passes and lists
+    /// ([`TraversalSettings::sizes`]) for this photon grid's pyramid.
+    pub fn traversal_sizes(&self) -> TraversalSizes {
+        let screen = self.deposit == AdaptiveDeposit::Screen;
+        self.traversal().sizes(self.finest_level(), screen)
     }
 }
 
@@ -242,13 +244,34 @@ mod tests {
     }
 
     #[test]
-    fn the_batch_follows_the_byte_limit() {
-        let s = AdaptiveCausticsSettings {
-            max_traversal_bytes: 4 * 1024 + 10 * (128 + 16 * 4),
-            ..Default::default()
+    fn the_passes_and_lists_follow_the_byte_limit() {
+        let t = AdaptiveCausticsSettings::default().traversal();
+        // whole lists beside passes of 1000 clusters
+        let whole = TraversalSettings {
+            max_traversal_bytes: t.bytes_for_pass(4, false, 1000),
+            ..t
         };
-        assert_eq!(s.batch_clusters(4, 1 << 20, false), 10);
-        assert_eq!(s.batch_clusters(4, 3, false), 3);
-        assert_eq!(s.batch_clusters(4, 1 << 20, true), 6);
+        let z = whole.sizes(4, false);
+        assert_eq!(z.pass_clusters, 1000);
+        assert!(!z.lists_capped);
+        assert_eq!(z.list_capacity[3] as u64, t.dense_clusters(4));
+        // the screen target's passes also hold four output photons a cluster
+        assert!(whole.sizes(4, true).pass_clusters < 1000);
+        // a limit below whole lists caps them, in multiples of 4, and the passes take at
+        // most half
+        let tight = TraversalSettings {
+            max_traversal_bytes: t.full_list_bytes(4) / 2,
+            ..t
+        };
+        let z = tight.sizes(4, false);
+        assert!(z.lists_capped);
+        assert!(z.list_capacity.iter().all(|&n| n % 4 == 0 && n >= 4));
+        assert!(z.pass_clusters as u64 * 132 <= tight.max_traversal_bytes / 2 + 132);
+        // a huge limit: one pass per level
+        let huge = TraversalSettings {
+            max_traversal_bytes: 1 << 40,
+            ..t
+        };
+        assert_eq!(huge.sizes(4, false).pass_clusters as u64, t.dense_clusters(4));
     }
 }
