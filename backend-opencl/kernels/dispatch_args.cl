@@ -27,10 +27,10 @@ inline void dispatch_record(__global uint* args, uint r, uint count, uint first,
     o[DISPATCH_ITEMS] = items;
 }
 
-__kernel void dispatch_args(uint rows, __global const uint4* table, __global const uint* counts,
-                            __global uint* args) {
+__kernel void dispatch_args(uint rows, __global const uint4* table, uint count_words,
+                            __global const uint* counts, __global uint* args) {
     uint r = get_global_id(0);
     if (r >= rows) return;
     uint4 row = table[r];
-    dispatch_record(args, r, counts[row.w], row.x, row.y, row.z);
+    dispatch_record(args, r, row.w < count_words ? counts[row.w] : 0u, row.x, row.y, row.z);
 }

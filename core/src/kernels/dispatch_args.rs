@@ -9,7 +9,7 @@ use crate::device::launch::{
 };
 
 /// Writes one dispatch record per row of `table`: row `k` = `[first, bound, per_item,
-/// word]` takes `items = min(counts[word] - first, bound)` items (0 when the count is at
+/// word]` (a word past `counts` reads 0) takes `items = min(counts[word] - first, bound)` items (0 when the count is at
 /// most `first`: [`crate::math::photon_clusters::live_clusters`]) of `per_item` threads
 /// each, and record `k` of `args` ([`DISPATCH_RECORD_WORDS`] words,
 /// [`dispatch_word`]) gets that launch's workgroups (x, y, z), traced-launch grid (width,
@@ -64,6 +64,7 @@ pub fn dispatch_record(count: u32, first: u32, bound: u32, per_item: u32) -> [u3
 const BINDINGS: &[Binding] = &[
     bind("rows", Count),
     bind("table", Read),
+    bind("count_words", Count),
     bind("counts", Read),
     bind("args", ReadWrite),
 ];
@@ -81,6 +82,7 @@ impl KernelDecl for DispatchArgs {
         }
         a.count("rows", self.table.len)?
             .buf("table", self.table, rows * 16)?
+            .count("count_words", self.counts.len)?
             .buf("counts", self.counts, 0)?
             .buf("args", self.args, rows * 4 * DISPATCH_RECORD_WORDS as u64)?;
         Ok(Some(rows))
