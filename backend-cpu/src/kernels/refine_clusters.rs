@@ -9,14 +9,71 @@ use super::Counters;
 use crate::atlas_deposit::{
     atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint, deposit_atlas_texel,
 };
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     cluster_count, counter, project_to_pixel, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };
+use caustica_core::kernels::RefineClusters;
 use caustica_core::math::photon_clusters::{
     cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
     cluster_spread, cluster_target, entry_cluster, entry_spread, slot_met_caster, slot_stored,
 };
 use rayon::prelude::*;
+
+/// Runs `refine_clusters` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &RefineClusters) -> Result<(), BackendError> {
+    let RefineClusters {
+        params,
+        clusters,
+        caster_rects,
+        photons,
+        triangle_tiles,
+        tiles,
+        children,
+        converged,
+        cluster_counts,
+        counters,
+        atlas,
+        output_photons,
+        output_count,
+    } = k;
+    let list = cpu.get(clusters.id)?.as_slice(clusters.len)?;
+    let rects = cpu.get(caster_rects.id)?.as_slice(caster_rects.len)?;
+    let ph = cpu.get(photons.id)?.as_slice(photons.len)?;
+    let tt = cpu.get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
+    let tl = cpu.get(tiles.id)?.as_slice(tiles.len)?;
+    let atomics = cpu.map_atomics(atlas)?;
+    let r = refine_clusters(params, list, rects, ph, tt, tl, atomics);
+    r.counters
+        .add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    let mut counts = cpu
+        .get(cluster_counts.id)?
+        .as_slice::<u32>(cluster_counts.len)?
+        .to_vec();
+    let mut conv = cpu
+        .get(converged.id)?
+        .as_slice::<u32>(converged.len)?
+        .to_vec();
+    let kids = cpu.get_mut(children.id)?.as_mut_slice(children.len)?;
+    append_refined(&r, (kids, params.children_capacity), &mut conv, &mut counts);
+    cpu.get_mut(converged.id)?
+        .as_mut_slice::<u32>(converged.len)?
+        .copy_from_slice(&conv);
+    cpu.get_mut(cluster_counts.id)?
+        .as_mut_slice::<u32>(cluster_counts.len)?
+        .copy_from_slice(&counts);
+    if !r.outputs.is_empty() {
+        let mut n = cpu.get(output_count.id)?.as_slice::<u32>(1)?[0];
+        let out = cpu
+            .get_mut(output_photons.id)?
+            .as_mut_slice(output_photons.len)?;
+        append_outputs(&r, out, &mut n);
+        cpu.get_mut(output_count.id)?.as_mut_slice::<u32>(1)?[0] = n;
+    }
+    Ok(())
+}
 
 /// What becomes of one cluster.
 enum Step {
