@@ -26,8 +26,7 @@ use caustica_conformance::backends;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
 use caustica_core::techniques::adaptive_caustics::{
-    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, LIST_BYTES_PER_CLUSTER,
-    SLOT_BYTES_PER_CLUSTER,
+    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, MAX_PASSES_PER_LEVEL,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::techniques::sspm::Output;
@@ -141,11 +140,6 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
     }
 }
 
-/// Bytes that make batches of `clusters` clusters at `finest` levels below a start grid
-/// of `start` (`AdaptiveCausticsSettings::batch_clusters` inverted).
-fn limit_for(clusters: u64, start: u64, finest: u64) -> u64 {
-    4 * (start / 2).pow(2) + clusters * (SLOT_BYTES_PER_CLUSTER + LIST_BYTES_PER_CLUSTER * finest)
-}
 
 #[test]
 fn any_memory_limit_gives_the_same_frame_bitwise() {
@@ -167,15 +161,21 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
                 a1.clusters_converged > 0,
                 "{name} / {scene_name}: nothing converged"
             );
-            // the busiest level's clusters: one batch at the large limit
+            // the busiest level's clusters: one pass at the large limit; the smallest pass
+            // the lists allow whole
             let busiest = a1.photons_per_level.iter().max().copied().unwrap_or(0) / 4;
+            let t = settings(0).traversal();
+            let smallest = t.dense_clusters(3).div_ceil(MAX_PASSES_PER_LEVEL);
             let mut steps = vec![a1.steps];
             for parts in [2u64, 16] {
-                let c = busiest.div_ceil(parts);
-                let t = AdaptiveCaustics::new(b.as_mut(), &scene, settings(limit_for(c, 32, 3)))
-                    .expect("scene");
+                let c = busiest.div_ceil(parts).max(smallest);
+                let bytes = t.bytes_for_pass(3, false, c);
+                let t = AdaptiveCaustics::new(b.as_mut(), &scene, settings(bytes)).expect("scene");
                 let (s, i) = render(b.as_mut(), t);
-                let what = format!("{name} / {scene_name}, batches of {c} clusters");
+                let what = format!("{name} / {scene_name}, passes of {c} clusters");
+                let sizes = settings(bytes).traversal_sizes();
+                assert!(!sizes.lists_capped, "{what}: {sizes:?}");
+                assert_eq!(s.adaptive.as_ref().map(|a| a.clusters_overflowed), Some(0));
                 let a = s.adaptive.clone().expect("adaptive stats");
                 assert_eq!(a.photons_processed, a1.photons_processed, "{what}");
                 assert_eq!(s.stored_flux, s1.stored_flux, "{what}: stored flux");
@@ -185,11 +185,50 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
                 steps.push(a.steps);
             }
             assert!(
-                steps[0] < steps[1] && steps[1] < steps[2],
+                steps[0] < steps[1] && steps[1] <= steps[2],
                 "{name} / {scene_name}: the limits did not split the traversal: steps {steps:?}"
             );
-            eprintln!("{name} / {scene_name}: steps at 1, 2 and 16 batches {steps:?}");
+            eprintln!("{name} / {scene_name}: passes at 1, 2 and 16 parts {steps:?}");
         }
+    }
+}
+
+/// A limit below whole lists caps them: the clusters whose children do not fit are
+/// output at their level from fresh photons and counted, so no photon is lost: the stored
+/// flux stays within the error metric's tolerance of the whole lists' (the overflowed
+/// clusters are output early, as converged ones are), and the image stays finite.
+#[test]
+fn capped_lists_overflow_counted_and_keep_the_flux() {
+    let settings = |bytes: u64| AdaptiveCausticsSettings {
+        map: map(256),
+        metric: AdaptiveMetric::Level,
+        start_grid: 32,
+        max_traversal_bytes: bytes,
+        ..Default::default()
+    };
+    for (name, mut b) in backends() {
+        let scene = small("sphere");
+        let whole = AdaptiveCaustics::new(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
+        let (sw, _) = render(b.as_mut(), whole);
+        let bytes = settings(0).traversal().full_list_bytes(3) / 8;
+        let capped = AdaptiveCaustics::new(b.as_mut(), &scene, settings(bytes)).expect("scene");
+        let (sc, img) = render(b.as_mut(), capped);
+        let a = sc.adaptive.clone().expect("adaptive stats");
+        assert!(settings(bytes).traversal_sizes().lists_capped);
+        assert!(a.clusters_overflowed > 0, "{name}: nothing overflowed at {bytes} bytes");
+        assert!(
+            img.iter().flat_map(|i| &i.pixels).flatten().all(|v| v.is_finite()),
+            "{name}: NaN or Inf"
+        );
+        let (x, y): (f64, f64) = (sc.stored_flux.iter().sum(), sw.stored_flux.iter().sum());
+        let tol = flux_tolerance(&sc, &sw, false);
+        eprintln!(
+            "{name}: capped / whole stored flux {:.5} (tolerance {:.5}), {} clusters overflowed",
+            x / y,
+            tol / y,
+            a.clusters_overflowed
+        );
+        assert!((x - y).abs() <= tol, "{name}: capped lists lost flux: {x} vs {y}");
     }
 }
 

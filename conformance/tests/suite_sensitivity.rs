@@ -18,10 +18,20 @@
 
 use caustica_conformance::harness::{self, builtin_small, kernel_cases, Candidate, Report};
 use caustica_conformance::kernels::{
-    check_adaptive_caustics, check_atrous_filter, check_caustic_map, check_composite,
-    check_density_gather, check_deposit, check_direct, check_fused_screen_trace, check_fused_trace,
-    check_gather, check_gbuffer, check_kernel_cases, check_photon_gi, check_screen_target,
-    check_temporal_blend, check_trace, KernelCheck,
+    atrous_filter::check_atrous_filter,
+    bilateral_gather::check_gather,
+    caustic_map_lookup::check_caustic_map,
+    check_kernel_cases,
+    composite::check_composite,
+    density_gather::check_density_gather,
+    deposit_screen::{check_deposit, check_fused_screen_trace},
+    direct_light::check_direct,
+    primary_gbuffer::check_gbuffer,
+    refine_clusters::{check_adaptive_caustics, check_screen_target},
+    shading_normal_correction::check_photon_gi,
+    temporal_blend::check_temporal_blend,
+    trace_photons::{check_fused_trace, check_trace},
+    KernelCheck,
 };
 use caustica_conformance::techniques::sspm::check_frame;
 use caustica_conformance::{small_settings, strategies};

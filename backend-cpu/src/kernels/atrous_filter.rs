@@ -2,13 +2,37 @@
 //! variance clipping of its detail coefficient. The weights are core's
 //! `math::irradiance_filter`; see core's `AtrousFilter` for the contract.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gbuffer_flags, AtrousParams, GBufferView};
+use caustica_core::kernels::AtrousFilter;
 use caustica_core::math::irradiance_filter::{
     atrous_final, atrous_offset, clipped_detail, depth_gradient, depth_weight, detail_bound,
     normal_weight, FilterConstants, ATROUS_TAPS,
 };
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// Runs `atrous_filter` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &AtrousFilter) -> Result<(), BackendError> {
+    let AtrousFilter {
+        params,
+        gbuffer,
+        input,
+        details,
+        out,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    let i = cpu.get(input.id)?.as_slice(input.len)?;
+    let d = cpu.get(details.id)?.as_slice(details.len)?;
+    reserve_temporary::<[[f32; 4]; 2]>(out.len as u64, "an A-Trous iteration")?;
+    let r = atrous_filter_image(params, g, i, d);
+    let (img, det): (Vec<[f32; 4]>, Vec<[f32; 4]>) = r.into_iter().unzip();
+    cpu.put(details.id, &det)?;
+    cpu.put(out.id, &img)
+}
 
 /// (out, details) per pixel.
 pub fn atrous_filter_image(

@@ -10,10 +10,32 @@
 //! `max(0, n . n')^normal_power`; only RECEIVER pixels take part. Two 1-D passes
 //! (horizontal then vertical) approximate the 2-D filter.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gbuffer_flags, GBufferTexel, GBufferView, GatherParams};
+use caustica_core::kernels::BilateralGather;
 use caustica_core::math::footprint::pixel_footprint;
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// Runs `bilateral_gather` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &BilateralGather) -> Result<(), BackendError> {
+    let BilateralGather {
+        params,
+        gbuffer,
+        tiles,
+        input,
+        out,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    let t = cpu.get(tiles.id)?.as_slice(tiles.len)?;
+    let i = cpu.get(input.id)?.as_slice(input.len)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
+    let img = bilateral_gather(params, g, t, i);
+    cpu.put(out.id, &img)
+}
 
 /// Gather radius in pixels at a receiver pixel.
 pub fn gather_radius_px(p: &GatherParams, g: &GBufferTexel, tile_hit_distance: f32) -> f32 {

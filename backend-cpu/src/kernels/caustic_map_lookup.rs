@@ -2,10 +2,14 @@
 //! core's `math::map_gather`; this is a loop over it.
 
 use super::direct_light::specular_tree;
+use crate::recording::reserve_temporary;
 use crate::traversal::SceneView;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     camera_ray, AtlasTexel, AtlasTileTexel, MapLookupParams, NO_TILE,
 };
+use caustica_core::kernels::CausticMapLookup;
 use caustica_core::math::map_gather::{
     atlas_texel_index, footprint_extent, footprint_texels, sample_caustic_map,
 };
@@ -13,6 +17,27 @@ use caustica_core::math::optics::saturate_radiance3;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
+
+/// Runs `caustic_map_lookup` on the host ([`super::run`]'s arm): its buffers read from
+/// `cpu`, its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &CausticMapLookup) -> Result<(), BackendError> {
+    let CausticMapLookup {
+        scene,
+        params,
+        triangle_tiles,
+        tiles,
+        texels,
+        map,
+        out,
+    } = k;
+    let tt = cpu.get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
+    let tl = cpu.get(tiles.id)?.as_slice(tiles.len)?;
+    let tx = cpu.get(texels.id)?.as_slice(texels.len)?;
+    let m = cpu.get(map.id)?.as_slice(map.len)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "the caustics image")?;
+    let img = caustic_map_lookup(&cpu.view(scene)?, params, tt, tl, tx, m);
+    cpu.put(out.id, &img)
+}
 
 /// Caustic radiance per pixel (W/(sr m^2), alpha 1): the camera ray's specular tree
 /// reading the caustic map at every diffuse end.

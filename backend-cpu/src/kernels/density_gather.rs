@@ -4,9 +4,14 @@
 
 use super::gather_footprint::{edge_weight_of, normaliser};
 
+use super::gather_footprint;
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     gather_surface, gbuffer_pixel_area, GBufferView, GatherParams,
 };
+use caustica_core::kernels::DensityGather;
 use caustica_core::math::density_gather::{
     edge_texel_is_receiver, footprint_weight, for_each_pass_source,
 };
@@ -14,6 +19,31 @@ use caustica_core::math::optics::{saturate_radiance, saturate_radiance3};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
+
+/// Runs `density_gather` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &DensityGather) -> Result<(), BackendError> {
+    let DensityGather {
+        params,
+        gbuffer,
+        edge,
+        input,
+        out,
+        source_index,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    let e = cpu.get(edge.id)?.as_slice(edge.len)?;
+    let i = cpu.get(input.id)?.as_slice(input.len)?;
+    let sources = cpu.get(source_index.id)?.as_slice(source_index.len)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "a gathered image")?;
+    let img = density_gather(params, g, e, i, sources);
+    if params.axis == 0 {
+        // the row pass's output: the column pass's sources
+        let sources = gather_footprint::source_index(params, 1, sources, &img);
+        cpu.put(source_index.id, &sources)?;
+    }
+    cpu.put(out.id, &img)
+}
 
 /// One pass (`p.axis`) of `density_gather` (see the kernel's contract in
 /// `caustica_core::kernels::DensityGather`); `index` is the source index the pass reads.

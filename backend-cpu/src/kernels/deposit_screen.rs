@@ -6,14 +6,37 @@
 //! order-independent: no photon is lost to a race (the source admits it loses some).
 
 use super::Counters;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     counter, deposit_word, gbuffer_flags, DepositParams, GBufferView, Photon, DEPOSIT_PLANES,
 };
+use caustica_core::kernels::DepositScreen;
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::packing::unpack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Runs `deposit_screen` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &DepositScreen) -> Result<(), BackendError> {
+    let DepositScreen {
+        params,
+        gbuffer,
+        photons,
+        photon_count,
+        counters,
+        photon_map,
+    } = k;
+    let n = cpu.get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
+    let ph = &cpu.get(photons.id)?.as_slice(photons.len)?[..n as usize];
+    let g = cpu.gbuffer(gbuffer)?;
+    let atomics = cpu.map_atomics(photon_map)?;
+    let c = deposit_screen(params, g, ph, atomics);
+    c.add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    Ok(())
+}
 
 /// The photon map's planes as `u64` atomics (see [`deposit_word`]).
 pub type MapPlanes<'a> = [&'a [AtomicU64]; DEPOSIT_PLANES];

@@ -5,11 +5,15 @@
 //! absorption inside dielectrics) to the diffuse surfaces they show. Background: black.
 //! Output: radiance W/(sr m^2), alpha 1.
 
+use crate::recording::reserve_temporary;
 use crate::traversal::{Hit, SceneView};
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
     camera_ray, light_kind, material_kind, DirectParams, GBufferView, GpuMaterial, SurfacePoint,
 };
+use caustica_core::kernels::DirectLight;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::optics::{
     beer_lambert, fresnel_reflectance, reflect, refract, saturate_radiance, saturate_radiance3,
@@ -17,6 +21,21 @@ use caustica_core::math::optics::{
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
+
+/// Runs `direct_light` on the host ([`super::run`]'s arm): its buffers read from `cpu`, its
+/// results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &DirectLight) -> Result<(), BackendError> {
+    let DirectLight {
+        scene,
+        params,
+        gbuffer,
+        out,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "the direct image")?;
+    let img = direct_light(&cpu.view(scene)?, params, g);
+    cpu.put(out.id, &img)
+}
 
 /// Direct radiance per pixel (W/(sr m^2) per channel), alpha 1: diffuse pixels shaded with
 /// shadow rays, mirror and glass pixels through their specular chain, black where the

@@ -1,12 +1,34 @@
 //! `gather_caustic_map` (seed 001): the flux-keeping N x N gather of the caustic atlas
 //! as irradiance. The math is core's `math::map_gather`; this is a loop over it.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     AtlasParams, AtlasTexel, AtlasTileTexel, PhotonMapView, NO_TILE,
 };
+use caustica_core::kernels::GatherCausticMap;
 use caustica_core::math::map_gather::{gather_caustic_texel, join_u64_f32};
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// Runs `gather_caustic_map` on the host ([`super::run`]'s arm): its buffers read from
+/// `cpu`, its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &GatherCausticMap) -> Result<(), BackendError> {
+    let GatherCausticMap {
+        params,
+        texels,
+        tiles,
+        atlas,
+        out,
+    } = k;
+    let tx = cpu.get(texels.id)?.as_slice(texels.len)?;
+    let tl = cpu.get(tiles.id)?.as_slice(tiles.len)?;
+    let m = cpu.photon_map(atlas)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "the caustic map")?;
+    let img = gather_caustic_map(params, tx, tl, m);
+    cpu.put(out.id, &img)
+}
 
 /// The flux (W per channel) of atlas texel `i`'s fixed-point sums.
 pub fn atlas_flux(map: &PhotonMapView, i: u32, quantum: f32) -> Vec3 {

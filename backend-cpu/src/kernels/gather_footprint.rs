@@ -2,12 +2,38 @@
 //! scatter-normalised caustic gather's k-NN radius and normaliser) and the row pass's
 //! source index (method and sources in `caustica_core::math::density_gather`).
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gather_surface, GatherParams, PhotonMapView};
+use caustica_core::kernels::GatherFootprint;
 use caustica_core::math::density_gather::{
     accumulate_source_index, edge_texel_is_receiver, edge_weight, footprint_radius,
     footprint_weight, inherited_flux, join_u64_wide,
 };
 use rayon::prelude::*;
+
+/// Runs `gather_footprint` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &GatherFootprint) -> Result<(), BackendError> {
+    let GatherFootprint {
+        params,
+        photon_map,
+        table,
+        edge,
+        out,
+        source_index,
+    } = k;
+    let m = cpu.photon_map(photon_map)?;
+    let t = cpu.get(table.id)?.as_slice(table.len)?;
+    let e = cpu.get(edge.id)?.as_slice(edge.len)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "the gather footprints")?;
+    let img = gather_footprint(params, e, m, t);
+    let sources = cpu.get(source_index.id)?.as_slice(source_index.len)?;
+    let sources = self::source_index(params, 0, sources, &img);
+    cpu.put(out.id, &img)?;
+    cpu.put(source_index.id, &sources)
+}
 
 /// Normaliser of a source at `i` with radius `r`: the sum of its weights over the
 /// receivers of its row (`axis` 0) or column (1) inside the image (itself included).

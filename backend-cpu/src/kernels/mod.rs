@@ -1,33 +1,35 @@
 //! The CPU kernels, one module per registry kernel, named as the kernel's declaration in
-//! `caustica_core::kernels` (`prepare_scene` is [`crate::traversal::check_nodes`]: the
-//! traversal reads the node buffer in place). What several kernels share lives in the
-//! module of the kernel that defines it (`deposit_screen`'s photon-map deposit) or, for
+//! `caustica_core::kernels` (`prepare_scene` only checks the node buffer with
+//! [`crate::traversal::check_nodes`]: the traversal reads it in place). The modules and
+//! the dispatch (`run`) are generated from core's list ([`caustica_core::with_kernels`]):
+//! each module has a `run(cpu, k)` that takes the kernel's buffers from the backend, calls
+//! the kernel's function and writes its results back. What several kernels share lives in
+//! the module of the kernel that defines it (`deposit_screen`'s photon-map deposit) or, for
 //! the atlas deposit of `trace_photons` and `refine_clusters`, in
 //! [`crate::atlas_deposit`].
 
-pub mod atrous_filter;
-pub mod bilateral_gather;
-pub mod caustic_map_lookup;
-pub mod composite;
-pub mod density_gather;
-pub mod deposit_screen;
-pub mod direct_light;
-pub mod gather_caustic_map;
-pub mod gather_footprint;
-pub mod photon_count_table;
-pub mod primary_gbuffer;
-pub mod refine_clusters;
-pub mod resolve_caustics;
-pub mod rsm_importance;
-pub mod sample_rsm;
-pub mod shading_normal_correction;
-pub mod splat_photons;
-pub mod temporal_blend;
-pub mod tile_hit_distance;
-pub mod trace_indirect;
-pub mod trace_photons;
+/// Called with core's list ([`caustica_core::with_kernels`]): one module per kernel and
+/// [`run`], the dispatch to each module's `run`.
+macro_rules! cpu_kernels {
+    ($($variant:ident => $module:ident),* $(,)?) => {
+        $(pub mod $module;)*
 
+        /// Runs kernel `k` on the host: its module's `run` takes the kernel's buffers from
+        /// `cpu`, calls the kernel's function and writes its results back.
+        pub(crate) fn run(cpu: &mut CpuBackend, k: &Kernel) -> Result<(), BackendError> {
+            match k {
+                $(Kernel::$variant(a) => $module::run(cpu, a),)*
+            }
+        }
+    };
+}
+
+caustica_core::with_kernels!(cpu_kernels);
+
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::counter;
+use caustica_core::kernels::Kernel;
 use caustica_core::math::fixed_point::join_u64;
 
 /// Photon counters accumulated per worker and merged (sums are order-independent).

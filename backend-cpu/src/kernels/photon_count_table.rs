@@ -2,11 +2,51 @@
 //! caustic gather (rows, then columns) and, with the column pass, the screen's edge
 //! texels (method and sources in `caustica_core::math::density_gather`).
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
-    gbuffer_flags, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
+    gather_surface, gbuffer_flags, GBufferTexel, GBufferView, GatherParams, PhotonMapView,
 };
+use caustica_core::kernels::PhotonCountTable;
 use caustica_core::math::density_gather::{clamped_photon_count, edge_texel};
 use rayon::prelude::*;
+
+/// Runs `photon_count_table` on the host ([`super::run`]'s arm): its buffers read from
+/// `cpu`, its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &PhotonCountTable) -> Result<(), BackendError> {
+    let PhotonCountTable {
+        params,
+        photon_map,
+        table,
+        gbuffer,
+        edge,
+    } = k;
+    if params.axis == 0 {
+        let rows = {
+            let m = cpu.photon_map(photon_map)?;
+            reserve_temporary::<u32>(table.len as u64, "the photon count table")?;
+            let mut rows = vec![0u32; table.len as usize];
+            photon_count_rows(params, m, &mut rows);
+            rows
+        };
+        cpu.put(table.id, &rows)
+    } else if params.surface == gather_surface::ATLAS {
+        // the atlas's edge texels come with its layout
+        let t = cpu.get_mut(table.id)?.as_mut_slice(table.len)?;
+        photon_count_columns(params, t);
+        Ok(())
+    } else {
+        let edges = {
+            let g = cpu.gbuffer(gbuffer)?;
+            reserve_temporary::<[f32; 4]>(edge.len as u64, "the edge texels")?;
+            edge_texels(g, edge.len as usize)
+        };
+        let t = cpu.get_mut(table.id)?.as_mut_slice(table.len)?;
+        photon_count_columns(params, t);
+        cpu.put(edge.id, &edges)
+    }
+}
 
 /// Axis 0 of `photon_count_table`: per row and block, the inclusive prefix sums of the
 /// clamped photon counts from the block's left edge (wrapping `u32`), row-major.

@@ -3,13 +3,45 @@
 //! uv, material and the RECEIVER flag for diffuse surfaces. Misses get depth 0 and
 //! material `NO_MATERIAL`.
 
+use crate::recording::reserve_temporary;
 use crate::traversal::SceneView;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     gbuffer_flags, material_kind, primary_ray, GBufferTexel, GpuCamera, NO_MATERIAL,
 };
+use caustica_core::kernels::PrimaryGbuffer;
 use caustica_core::math::packing::pack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// Runs `primary_gbuffer` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &PrimaryGbuffer) -> Result<(), BackendError> {
+    let PrimaryGbuffer {
+        scene,
+        camera,
+        gbuffer,
+    } = k;
+    let pixels = camera.width as u64 * camera.height as u64;
+    reserve_temporary::<GBufferTexel>(pixels, "the G-buffer")?;
+    let out = primary_gbuffer(&cpu.view(scene)?, camera);
+    // plane by plane, with no second copy of the G-buffer (8192^2: 4 GiB)
+    for (k, b) in gbuffer.planes.iter().enumerate() {
+        use rayon::prelude::*;
+        let plane = cpu.get_mut(b.id)?.as_mut_slice(b.len)?;
+        if plane.len() != out.len() {
+            return Err(BackendError::BadArgument(
+                "G-buffer plane and camera differ in size".into(),
+            ));
+        }
+        plane
+            .par_iter_mut()
+            .zip(out.par_iter())
+            .for_each(|(p, t): (&mut [u32; 4], _)| *p = t.to_planes()[k]);
+    }
+    Ok(())
+}
 
 /// The G-buffer of `cam`: one texel per pixel, row-major from the top-left.
 pub fn primary_gbuffer(scene: &SceneView, cam: &GpuCamera) -> Vec<GBufferTexel> {

@@ -9,14 +9,85 @@ use super::Counters;
 use crate::atlas_deposit::{
     atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint, deposit_atlas_texel,
 };
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     cluster_count, counter, project_to_pixel, AtlasTileTexel, Photon, RefineParams, NO_TILE,
 };
+use caustica_core::kernels::RefineClusters;
 use caustica_core::math::photon_clusters::{
+    live_clusters,
     cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
     cluster_spread, cluster_target, entry_cluster, entry_spread, slot_met_caster, slot_stored,
 };
 use rayon::prelude::*;
+
+/// Runs `refine_clusters` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &RefineClusters) -> Result<(), BackendError> {
+    let RefineClusters {
+        params,
+        clusters,
+        list_length,
+        caster_rects,
+        photons,
+        triangle_tiles,
+        tiles,
+        children,
+        converged,
+        converged_count,
+        cluster_counts,
+        counters,
+        atlas,
+        output_photons,
+        output_count,
+        dispatch: _,
+    } = k;
+    // the pass's live clusters: list_length[0] is its list's length
+    let length = cpu.get(list_length.id)?.as_slice::<u32>(1)?[0];
+    let live = live_clusters(length, params.first, params.count);
+    let list = cpu.get(clusters.id)?.as_slice(clusters.len)?;
+    let rects = cpu.get(caster_rects.id)?.as_slice(caster_rects.len)?;
+    let ph = cpu.get(photons.id)?.as_slice(photons.len)?;
+    let tt = cpu.get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
+    let tl = cpu.get(tiles.id)?.as_slice(tiles.len)?;
+    let atomics = cpu.map_atomics(atlas)?;
+    let r = refine_clusters(params, live, list, rects, ph, tt, tl, atomics);
+    r.counters
+        .add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    let mut counts = cpu
+        .get(cluster_counts.id)?
+        .as_slice::<u32>(cluster_counts.len)?
+        .to_vec();
+    let mut conv = cpu
+        .get(converged.id)?
+        .as_slice::<u32>(converged.len)?
+        .to_vec();
+    let mut listed = cpu.get(converged_count.id)?.as_slice::<u32>(1)?[0];
+    let kids = cpu.get_mut(children.id)?.as_mut_slice(children.len)?;
+    append_refined(
+        &r,
+        (kids, params.children_capacity),
+        (&mut conv, &mut listed),
+        &mut counts,
+    );
+    cpu.get_mut(converged_count.id)?.as_mut_slice::<u32>(1)?[0] = listed;
+    cpu.get_mut(converged.id)?
+        .as_mut_slice::<u32>(converged.len)?
+        .copy_from_slice(&conv);
+    cpu.get_mut(cluster_counts.id)?
+        .as_mut_slice::<u32>(cluster_counts.len)?
+        .copy_from_slice(&counts);
+    if !r.outputs.is_empty() {
+        let mut n = cpu.get(output_count.id)?.as_slice::<u32>(1)?[0];
+        let out = cpu
+            .get_mut(output_photons.id)?
+            .as_mut_slice(output_photons.len)?;
+        append_outputs(&r, out, &mut n);
+        cpu.get_mut(output_count.id)?.as_mut_slice::<u32>(1)?[0] = n;
+    }
+    Ok(())
+}
 
 /// What becomes of one cluster.
 enum Step {
@@ -26,8 +97,8 @@ enum Step {
     Output(Counters, Vec<Photon>),
     /// Converged before the finest level: to be output from fresh photons.
     Converged(u32),
-    /// Refined into four children.
-    Refined([u32; 4]),
+    /// Refined into four children (the cluster, its children).
+    Refined(u32, [u32; 4]),
 }
 
 /// What a batch step produced: the lists appended (in cluster order: the GPU ports
@@ -35,8 +106,8 @@ enum Step {
 /// counts and the photon counters of the output photons.
 #[derive(Default)]
 pub struct Refined {
-    /// Child cluster ids, four per refined cluster.
-    pub children: Vec<u32>,
+    /// The refined clusters and their child cluster ids.
+    pub children: Vec<(u32, [u32; 4])>,
     /// Clusters that converged before the finest level.
     pub converged: Vec<u32>,
     /// Clusters output.
@@ -51,10 +122,12 @@ pub struct Refined {
     pub outputs: Vec<Photon>,
 }
 
-/// Judges the batch's clusters and deposits the output ones (see core's
+/// Judges the pass's `live` clusters and deposits the output ones (see core's
 /// `RefineClusters`).
+#[allow(clippy::too_many_arguments)]
 pub fn refine_clusters(
     p: &RefineParams,
+    live: u32,
     clusters: &[u32],
     caster_rects: &[[f32; 4]],
     photons: &[Photon],
@@ -62,7 +135,7 @@ pub fn refine_clusters(
     tiles: &[AtlasTileTexel],
     map: MapPlanes,
 ) -> Refined {
-    let steps: Vec<Step> = (0..p.count)
+    let steps: Vec<Step> = (0..live)
         .into_par_iter()
         .map(|t| {
             let entry = clusters[(p.first + t) as usize];
@@ -145,9 +218,10 @@ pub fn refine_clusters(
                     }
                     Step::Output(c, listed)
                 }
-                _ => {
-                    Step::Refined([0, 1, 2, 3].map(|s| cluster_photon_index(cluster, s, p.grid_w)))
-                }
+                _ => Step::Refined(
+                    cluster,
+                    [0, 1, 2, 3].map(|s| cluster_photon_index(cluster, s, p.grid_w)),
+                ),
             }
         })
         .collect();
@@ -162,25 +236,12 @@ pub fn refine_clusters(
                 r.outputs.extend(listed);
             }
             Step::Converged(c) => r.converged.push(c),
-            Step::Refined(ch) => r.children.extend(ch),
+            Step::Refined(cluster, ch) => r.children.push((cluster, ch)),
         }
     }
     r
 }
 
-/// Appends `items` to `list` at `counts[word]` as a GPU port's atomic appends do: entries
-/// past `capacity` (or the list) are counted but not written.
-fn append(list: &mut [u32], counts: &mut [u32], word: usize, items: &[u32], capacity: u32) {
-    let base = counts[word];
-    let cap = capacity.min(list.len() as u32) as u64;
-    for (k, &c) in items.iter().enumerate() {
-        let slot = base as u64 + k as u64;
-        if slot < cap {
-            list[slot as usize] = c;
-        }
-    }
-    counts[word] = base.wrapping_add(items.len() as u32);
-}
 
 /// Appends the screen target's output photons to `list` at `count[0]` (entries past the
 /// list are counted, not written), as the GPU ports do.
@@ -193,22 +254,38 @@ pub fn append_outputs(r: &Refined, list: &mut [Photon], count: &mut u32) {
     *count = count.wrapping_add(r.outputs.len() as u32);
 }
 
-/// Adds a step's results to the child and converged lists and the cluster counts.
+/// Adds a pass's results to the child and converged lists (`converged` and its count)
+/// and the cluster counts, as the GPU ports' atomic appends do: a refined cluster's four
+/// children go to the child list at `counts[CHILDREN]` (advanced by four either way)
+/// when they all fit under `capacity`, else the cluster goes to the converged list
+/// (output at its level) and counts as overflowed; converged entries past the list are
+/// counted, not written.
 pub fn append_refined(
     r: &Refined,
     (children, capacity): (&mut [u32], u32),
-    converged: &mut [u32],
+    (converged, listed): (&mut [u32], &mut u32),
     counts: &mut [u32],
 ) {
-    append(
-        children,
-        counts,
-        cluster_count::CHILDREN,
-        &r.children,
-        capacity,
-    );
-    let n = converged.len() as u32;
-    append(converged, counts, cluster_count::CONVERGED, &r.converged, n);
+    let cap = capacity.min(children.len() as u32) as u64;
+    let mut to_converged = r.converged.clone();
+    for &(cluster, ch) in &r.children {
+        let base = counts[cluster_count::CHILDREN];
+        if base as u64 + 4 <= cap {
+            children[base as usize..base as usize + 4].copy_from_slice(&ch);
+        } else {
+            to_converged.push(cluster_entry(cluster, 1));
+            counts[cluster_count::OVERFLOW] = counts[cluster_count::OVERFLOW].wrapping_add(1);
+        }
+        counts[cluster_count::CHILDREN] = base.wrapping_add(4);
+    }
+    counts[cluster_count::CONVERGED] =
+        counts[cluster_count::CONVERGED].wrapping_add(r.converged.len() as u32);
+    for &e in &to_converged {
+        if let Some(slot) = converged.get_mut(*listed as usize) {
+            *slot = e;
+        }
+        *listed = listed.wrapping_add(1);
+    }
     counts[cluster_count::OUTPUT] = counts[cluster_count::OUTPUT].wrapping_add(r.output);
     counts[cluster_count::DISCARDED] = counts[cluster_count::DISCARDED].wrapping_add(r.discarded);
     counts[cluster_count::OUTPUT_PHOTONS] =

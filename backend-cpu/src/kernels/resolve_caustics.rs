@@ -2,10 +2,30 @@
 //! and `A` the surface area the pixel covers (Eq. 4 footprint corrected for obliquity,
 //! see `caustica_core::math::footprint`). Alpha: mean hit distance of the pixel's photons.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::gbuffer_pixel_area;
 use caustica_core::device::layout::{gbuffer_flags, DepositParams, GBufferView, PhotonMapView};
+use caustica_core::kernels::ResolveCaustics;
 use caustica_core::math::fixed_point::join_u64;
 use rayon::prelude::*;
+
+/// Runs `resolve_caustics` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &ResolveCaustics) -> Result<(), BackendError> {
+    let ResolveCaustics {
+        params,
+        gbuffer,
+        photon_map,
+        out,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    let m = cpu.photon_map(photon_map)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "the raw caustics image")?;
+    let img = resolve_caustics(params, g, m);
+    cpu.put(out.id, &img)
+}
 
 /// Caustic radiance per pixel from the photon map (W/(sr m^2) per channel); alpha: the
 /// mean hit distance of the pixel's photons (scene units). Zero where the pixel has no

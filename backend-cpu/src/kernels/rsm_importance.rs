@@ -2,16 +2,57 @@
 //! texels and the importance pyramid over them. Method, units and sources in
 //! `caustica_core::math::rsm` and the kernel's declaration.
 
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
     camera_ray, gbuffer_flags, light_kind, GpuLight, RsmParams, RsmTexel, NO_MATERIAL,
 };
+use caustica_core::kernels::RsmImportance;
 use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::rsm::{
     level_offset, luminance, ortho_texel_flux, pyramid_len, pyramid_sum, rsm_texel_kind,
     texel_arriving_flux,
 };
 use glam::Vec3;
+
+/// Runs `rsm_importance` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &RsmImportance) -> Result<(), BackendError> {
+    let RsmImportance {
+        params,
+        lights,
+        gbuffer,
+        texels,
+        pyramid,
+    } = k;
+    let plen = caustica_core::math::rsm::pyramid_len(params.side) as usize;
+    let f = params.face as usize;
+    if params.level == 0 {
+        let light = *cpu
+            .get(lights.id)?
+            .as_slice::<GpuLight>(lights.len)?
+            .get(params.light as usize)
+            .ok_or_else(|| BackendError::BadArgument("rsm_importance: no such light".into()))?;
+        let g = cpu.gbuffer(gbuffer)?;
+        let n = params.side as usize * params.side as usize;
+        let (t, imp): (Vec<RsmTexel>, Vec<f32>) = {
+            use rayon::prelude::*;
+            (0..n)
+                .into_par_iter()
+                .map(|i| rsm_texel(params, &light, &g.load_gbuffer(i), i as u32))
+                .unzip()
+        };
+        cpu.get_mut(texels.id)?
+            .as_mut_slice::<RsmTexel>(texels.len)?[f * n..(f + 1) * n]
+            .copy_from_slice(&t);
+        cpu.get_mut(pyramid.id)?.as_mut_slice::<f32>(pyramid.len)?[f * plen..f * plen + n]
+            .copy_from_slice(&imp);
+    } else {
+        rsm_level(params, cpu.get_mut(pyramid.id)?.as_mut_slice(pyramid.len)?);
+    }
+    Ok(())
+}
 
 /// One RSM texel and its importance (`rsm_importance` level 0, texel `i` of the face).
 pub fn rsm_texel(

@@ -2,7 +2,11 @@
 //! shadow map's importance pyramid. Method, units and sources in `caustica_core::math::rsm`
 //! and the kernel's declaration.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{light_kind, GpuLight, RsmParams, RsmPhoton, RsmTexel};
+use caustica_core::kernels::SampleRsm;
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::packing::{pack_unit_vector, unpack_unit_vector};
 use caustica_core::math::rng::random_f32;
@@ -11,6 +15,32 @@ use caustica_core::math::rsm::{
 };
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+
+/// Runs `sample_rsm` on the host ([`super::run`]'s arm): its buffers read from `cpu`, its
+/// results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &SampleRsm) -> Result<(), BackendError> {
+    let SampleRsm {
+        params,
+        lights,
+        texels,
+        pyramid,
+        photons,
+    } = k;
+    let light = *cpu
+        .get(lights.id)?
+        .as_slice::<GpuLight>(lights.len)?
+        .get(params.light as usize)
+        .ok_or_else(|| BackendError::BadArgument("sample_rsm: no such light".into()))?;
+    let t = cpu.get(texels.id)?.as_slice(texels.len)?;
+    let pyr = cpu.get(pyramid.id)?.as_slice(pyramid.len)?;
+    reserve_temporary::<RsmPhoton>(params.sample_count as u64, "the RSM photons")?;
+    let out = sample_rsm(params, &light, t, pyr);
+    let first = params.first_sample as usize;
+    cpu.get_mut(photons.id)?
+        .as_mut_slice::<RsmPhoton>(photons.len)?[first..first + out.len()]
+        .copy_from_slice(&out);
+    Ok(())
+}
 
 /// `sample_rsm`: the light's photons (slot `i` of the returned vector is sample `i`).
 pub fn sample_rsm(

@@ -2,7 +2,11 @@
 //! corrected for smooth shading normals. Method and sources in
 //! `caustica_core::math::irradiance_filter` and the kernel's declaration.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gbuffer_flags, CorrectionParams, GBufferView, PhotonMapView};
+use caustica_core::kernels::ShadingNormalCorrection;
 use caustica_core::math::irradiance_filter::{
     mean_light_direction, shading_normal_departs, shading_normal_factor,
 };
@@ -10,6 +14,24 @@ use caustica_core::math::map_gather::join_u64_f32;
 use caustica_core::math::packing::unpack_unit_vector;
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// Runs `shading_normal_correction` on the host ([`super::run`]'s arm): its buffers read
+/// from `cpu`, its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &ShadingNormalCorrection) -> Result<(), BackendError> {
+    let ShadingNormalCorrection {
+        params,
+        gbuffer,
+        direction_map,
+        input,
+        out,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    let d = cpu.photon_map(direction_map)?;
+    let i = cpu.get(input.id)?.as_slice(input.len)?;
+    reserve_temporary::<[f32; 4]>(out.len as u64, "the shading-normal correction")?;
+    let img = shading_normal_correction(params, g, d, i);
+    cpu.put(out.id, &img)
+}
 
 /// `shading_normal_correction` (003 Eq. 20): per receiver pixel with splats, the input
 /// times `shading_normal_factor(w_i, n_s, n_g, s_max, eps)` with `w_i` the direction

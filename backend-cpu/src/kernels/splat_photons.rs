@@ -4,10 +4,13 @@
 
 use super::deposit_screen::{deposit_photon_texel, MapPlanes};
 use super::Counters;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     counter, gbuffer_flags, gbuffer_pixel_area, project_to_pixel, splat_screen_rect, GBufferView,
     GiPhoton, Photon, SplatParams,
 };
+use caustica_core::kernels::SplatPhotons;
 use caustica_core::math::irradiance_filter::{light_direction_deposit, shading_normal_departs};
 use caustica_core::math::packing::{unpack_rgb9e5, unpack_unit_vector};
 use caustica_core::math::photon_splat::{
@@ -16,6 +19,30 @@ use caustica_core::math::photon_splat::{
 };
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// Runs `splat_photons` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &SplatPhotons) -> Result<(), BackendError> {
+    let SplatPhotons {
+        params,
+        gbuffer,
+        photons,
+        photon_count,
+        tile_counts,
+        counters,
+        photon_map,
+        direction_map,
+    } = k;
+    let n = cpu.get(photon_count.id)?.as_slice::<u32>(1)?[0].min(photons.len);
+    let ph = &cpu.get(photons.id)?.as_slice(photons.len)?[..n as usize];
+    let tc = cpu.get(tile_counts.id)?.as_slice(tile_counts.len)?;
+    let g = cpu.gbuffer(gbuffer)?;
+    let atomics = cpu.map_atomics(photon_map)?;
+    let directions = cpu.map_atomics(direction_map)?;
+    let c = splat_photons(params, g, ph, tc, atomics, directions);
+    c.add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    Ok(())
+}
 
 /// The chapter's kernel constants from the splat parameters.
 pub fn splat_constants(p: &SplatParams) -> SplatConstants {

@@ -2,13 +2,42 @@
 //! estimate over its reprojected history. The weights are core's
 //! `math::irradiance_filter`; see core's `TemporalBlend` for the contract.
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gbuffer_flags, project_to_pixel, GBufferView, TemporalParams};
+use caustica_core::kernels::TemporalBlend;
 use caustica_core::math::irradiance_filter::{
     blend_with_history, depth_weight, normal_weight, reprojection_depth_step, temporal_alpha,
     FilterConstants,
 };
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
+
+/// Runs `temporal_blend` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &TemporalBlend) -> Result<(), BackendError> {
+    let TemporalBlend {
+        params,
+        gbuffer,
+        input,
+        history,
+        history_edge,
+        out,
+        next_history,
+        next_edge,
+    } = k;
+    let g = cpu.gbuffer(gbuffer)?;
+    let i = cpu.get(input.id)?.as_slice(input.len)?;
+    let hi = cpu.get(history.id)?.as_slice(history.len)?;
+    let he = cpu.get(history_edge.id)?.as_slice(history_edge.len)?;
+    reserve_temporary::<[[f32; 4]; 2]>(out.len as u64, "the temporal blend")?;
+    let r = temporal_blend_image(params, g, i, hi, he);
+    let (img, edge): (Vec<[f32; 4]>, Vec<[f32; 4]>) = r.into_iter().unzip();
+    cpu.put(out.id, &img)?;
+    cpu.put(next_history.id, &img)?;
+    cpu.put(next_edge.id, &edge)
+}
 
 /// Depth of an edge texel that is no receiver.
 const NOT_RECEIVER: f32 = -1.0;

@@ -2,9 +2,27 @@
 //! each screen tile, from which `bilateral_gather` takes its blur radius
 //! ([`super::bilateral_gather`] has the method).
 
+use crate::recording::reserve_temporary;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{GatherParams, PhotonMapView};
+use caustica_core::kernels::TileHitDistance;
 use caustica_core::math::fixed_point::join_u64;
 use rayon::prelude::*;
+
+/// Runs `tile_hit_distance` on the host ([`super::run`]'s arm): its buffers read from
+/// `cpu`, its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &TileHitDistance) -> Result<(), BackendError> {
+    let TileHitDistance {
+        params,
+        photon_map,
+        tiles,
+    } = k;
+    let m = cpu.photon_map(photon_map)?;
+    reserve_temporary::<f32>(tiles.len as u64, "the hit-distance tiles")?;
+    let t = tile_hit_distance(params, m);
+    cpu.put(tiles.id, &t)
+}
 
 /// Photon-weighted mean hit distance (scene units) per `tile_size^2` tile, row-major; 0 for
 /// tiles without photons.

@@ -3,12 +3,15 @@
 //! `caustica_core::math::gi_photon` and the kernel's declaration.
 
 use super::Counters;
+use crate::recording::reserve_temporary;
 use crate::traversal::SceneView;
+use crate::CpuBackend;
+use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     counter, gbuffer_flags, material_kind, off_surface, project_to_pixel, GBufferView, GiPhoton,
     IndirectTraceParams, Photon, RsmPhoton,
 };
-use caustica_core::kernels::VISIBLE_TOLERANCE;
+use caustica_core::kernels::{TraceIndirect, VISIBLE_TOLERANCE};
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::optics::{
@@ -20,6 +23,50 @@ use caustica_core::math::rsm::{coherent_sample_order, cosine_hemisphere, russian
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Runs `trace_indirect` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), BackendError> {
+    let TraceIndirect {
+        scene,
+        params,
+        rsm_photons,
+        photons,
+        photon_count,
+        tile_counts,
+        counters,
+        gbuffer,
+    } = k;
+    let rsm = cpu
+        .get(rsm_photons.id)?
+        .as_slice::<RsmPhoton>(rsm_photons.len)?;
+    let g = cpu.gbuffer(gbuffer)?;
+    reserve_temporary::<[u32; 8]>(params.count as u64, "an indirect photon batch")?;
+    let r = trace_indirect(&cpu.view(scene)?, params, rsm, &g, tile_counts.len as usize);
+    let start = cpu.get(photon_count.id)?.as_slice::<u32>(1)?[0] as usize;
+    if start + r.photons.len() > photons.len as usize {
+        return Err(BackendError::BadArgument(format!(
+            "indirect photon buffer holds {} photons, {} stored",
+            photons.len,
+            start + r.photons.len()
+        )));
+    }
+    cpu.get_mut(photons.id)?
+        .as_mut_slice::<[u32; 8]>(photons.len)?[start..start + r.photons.len()]
+        .copy_from_slice(&r.photons);
+    cpu.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] = (start + r.photons.len()) as u32;
+    for (t, n) in cpu
+        .get_mut(tile_counts.id)?
+        .as_mut_slice::<u32>(tile_counts.len)?
+        .iter_mut()
+        .zip(&r.tile_counts)
+    {
+        *t = t.wrapping_add(*n);
+    }
+    r.counters
+        .add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    Ok(())
+}
 
 /// Photons `trace_indirect` stored (32-byte words, in photon order), the per-tile counts
 /// it adds, and its counters.

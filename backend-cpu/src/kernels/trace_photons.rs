@@ -25,14 +25,17 @@
 //! [`trace_photons`] picks the monomorphisation of core's [`TraceVariant`]. A variant
 //! without a feature is only run on scenes without it (the frame plan's guarantee).
 
-use super::Counters;
+use super::{deposit_screen, Counters};
+use crate::recording::reserve_temporary;
 use crate::traversal::{Hit, SceneView};
+use crate::{atlas_deposit, CpuBackend};
+use caustica_core::backend::BackendError;
 use caustica_core::device::device_scene::spot_falloff;
 use caustica_core::device::layout::{
     counter, emission_kind, light_kind, material_kind, photon_store, Photon, SurfacePoint,
     TraceParams, MAX_SPLIT_BRANCHES,
 };
-use caustica_core::kernels::TraceVariant;
+use caustica_core::kernels::{AtlasDeposit, FusedDeposit, TracePhotons, TraceVariant};
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::geometry::{offset_ray_origin, ray_meets_caster_spheres};
 use caustica_core::math::optics::{
@@ -41,6 +44,7 @@ use caustica_core::math::optics::{
 };
 use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::photon_clusters::{
+    live_clusters,
     cluster_photon_index, entry_cluster, photon_met_caster, NO_TRIANGLE,
 };
 use caustica_core::math::rng::random_f32;
@@ -50,6 +54,104 @@ use caustica_core::math::sampling::{
 };
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+
+/// Runs `trace_photons` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
+/// its results written back.
+pub(crate) fn run(cpu: &mut CpuBackend, k: &TracePhotons) -> Result<(), BackendError> {
+    let TracePhotons {
+        scene,
+        variant,
+        params,
+        photons,
+        photon_count,
+        counters,
+        clusters,
+        deposit,
+    } = k;
+    reserve_temporary::<Photon>(params.count as u64, "a photon batch")?;
+    let result = match clusters.filter(|_| variant.adaptive) {
+        Some(c) => {
+            let list = cpu.get(c.list.id)?.as_slice::<u32>(c.list.len)?.to_vec();
+            // the batch's live clusters: photon_count[0] is the list's length
+            let length = cpu.get(photon_count.id)?.as_slice::<u32>(1)?[0];
+            let live = live_clusters(length, params.first, params.count / 4);
+            let p = TraceParams {
+                count: 4 * live,
+                ..*params
+            };
+            trace_cluster_slots(&cpu.view(scene)?, &p, *variant, &list)
+        }
+        None => trace_photons(&cpu.view(scene)?, params, *variant),
+    };
+    let fused = deposit.filter(|_| variant.fused_deposit);
+    // the fused pass into the screen: the stored photons as deposit_screen
+    // adds them
+    let screen = match &fused {
+        Some(FusedDeposit::Screen(d)) => {
+            let g = cpu.gbuffer(&d.gbuffer)?;
+            let atomics = cpu.map_atomics(&d.photon_map)?;
+            Some(deposit_screen::deposit_screen(
+                &d.params,
+                g,
+                &result.photons,
+                atomics,
+            ))
+        }
+        _ => None,
+    };
+    let words = cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?;
+    result.counters.add_to(words);
+    if let Some(c) = screen {
+        c.add_to(words);
+        return Ok(());
+    }
+    if let Some(FusedDeposit::Atlas(d)) = fused {
+        // the fused pass into the atlas, as atlas_deposit::deposit_atlas adds them
+        return deposit_atlas_photons(cpu, &d, &result.photons, *counters);
+    }
+    if result.photons.len() > photons.len as usize {
+        return Err(BackendError::BadArgument(format!(
+            "photon buffer holds {} photons, batch stored {}",
+            photons.len,
+            result.photons.len()
+        )));
+    }
+    cpu.get_mut(photons.id)?.write_prefix(&result.photons)?;
+    if !variant.adaptive {
+        cpu.get_mut(photon_count.id)?.as_mut_slice::<u32>(1)?[0] = result.photons.len() as u32;
+    }
+    Ok(())
+}
+
+/// The atlas deposit of texture-space photons `ph` into atlas `d`: the fixed-point sums,
+/// the reach bits of their triangles and the deposit's counters (added to
+/// `counters`). The fused `fused_deposit` trace's second half.
+fn deposit_atlas_photons(
+    cpu: &mut CpuBackend,
+    d: &AtlasDeposit,
+    ph: &[Photon],
+    counters: caustica_core::device::handle::Buf<u32>,
+) -> Result<(), BackendError> {
+    let c = {
+        let tt = cpu
+            .get(d.triangle_tiles.id)?
+            .as_slice(d.triangle_tiles.len)?;
+        let tl = cpu.get(d.tiles.id)?.as_slice(d.tiles.len)?;
+        let [a, b, c] = d.sums.planes;
+        let atomics = [
+            cpu.get(a.id)?.as_atomic_u64(a.bytes())?,
+            cpu.get(b.id)?.as_atomic_u64(b.bytes())?,
+            cpu.get(c.id)?.as_atomic_u64(c.bytes())?,
+        ];
+        atlas_deposit::deposit_atlas(&d.params, tt, tl, ph, atomics)
+    };
+    let reach = cpu
+        .get_mut(d.triangle_reach.id)?
+        .as_mut_slice::<u32>(d.triangle_reach.len)?;
+    atlas_deposit::mark_triangle_reach(ph, reach);
+    c.add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    Ok(())
+}
 
 /// Stored photons in photon order, plus the batch's counters.
 pub struct TraceResult {

@@ -4,61 +4,41 @@
 //! traced kernels' checks run on the prepared scene), each comparing the kernel's outputs
 //! on a candidate with the reference's, on the same input buffers
 //! ([`crate::harness::fixture`]), with the tolerances of [`crate::harness::tolerance`].
+//! The modules are declared from core's list of the kernels with shader code; a check is
+//! named by its module's path (`kernels::deposit_screen::check_deposit`).
 //!
 //! Kernels are checked together where one check covers a chain of them; the chain's
 //! check lives in the file of the last kernel it runs, and each kernel's comparison in
 //! its own file: `tile_hit_distance` and `bilateral_gather` share one verdict
-//! ([`check_gather`]), though each compares on the reference's inputs
+//! ([`bilateral_gather::check_gather`]), though each compares on the reference's inputs
 //! ([`tile_hit_distance`], [`bilateral_gather`]); so do the density gather's
 //! `photon_count_table`, `gather_footprint` and `density_gather`
-//! ([`check_density_gather`]), CausticMap's `gather_caustic_map` and
-//! `caustic_map_lookup` ([`check_caustic_map`]), AdaptiveCaustics' adaptive
-//! `trace_photons` and `refine_clusters` ([`check_adaptive_caustics`],
-//! [`check_screen_target`]) and PhotonGi's five kernels ([`check_photon_gi`]). One chain
-//! starts its file instead: `deposit_screen` and `resolve_caustics` run in one recording
-//! and the resolved radiance is compared on each backend's *own* photon map, on the
-//! texels whose sums agree ([`check_deposit`]; the two comparisons are in
-//! [`deposit_screen`] and [`resolve_caustics`]). `trace_photons`' fused variants are
-//! checked against the deposit they fuse: [`check_fused_trace`] (atlas) in
-//! [`trace_photons`], [`check_fused_screen_trace`] in [`deposit_screen`].
+//! ([`density_gather::check_density_gather`]), CausticMap's `gather_caustic_map` and
+//! `caustic_map_lookup` ([`caustic_map_lookup::check_caustic_map`]), AdaptiveCaustics'
+//! adaptive `trace_photons` and `refine_clusters`
+//! ([`refine_clusters::check_adaptive_caustics`],
+//! [`refine_clusters::check_screen_target`]) and PhotonGi's five kernels
+//! ([`shading_normal_correction::check_photon_gi`]). One chain starts its file instead:
+//! `deposit_screen` and `resolve_caustics` run in one recording and the resolved radiance
+//! is compared on each backend's *own* photon map, on the texels whose sums agree
+//! ([`deposit_screen::check_deposit`]; the two comparisons are in [`deposit_screen`] and
+//! [`resolve_caustics`]). `trace_photons`' fused variants are checked against the deposit
+//! they fuse: [`trace_photons::check_fused_trace`] (atlas) in [`trace_photons`],
+//! [`deposit_screen::check_fused_screen_trace`] in [`deposit_screen`].
 //!
 //! [`check_kernel_cases`] runs one check for a candidate over the fixed cases
 //! ([`crate::harness::kernel_cases`]).
 
-pub mod atrous_filter;
-pub mod bilateral_gather;
-pub mod caustic_map_lookup;
-pub mod composite;
-pub mod density_gather;
-pub mod deposit_screen;
-pub mod direct_light;
-pub mod gather_caustic_map;
-pub mod gather_footprint;
-pub mod photon_count_table;
-pub mod primary_gbuffer;
-pub mod refine_clusters;
-pub mod resolve_caustics;
-pub mod rsm_importance;
-pub mod sample_rsm;
-pub mod shading_normal_correction;
-pub mod splat_photons;
-pub mod temporal_blend;
-pub mod tile_hit_distance;
-pub mod trace_indirect;
-pub mod trace_photons;
+/// Called with core's list of the kernels with shader code
+/// ([`caustica_core::with_shader_kernels`], every kernel but `prepare_scene`): one module
+/// per kernel.
+macro_rules! kernel_modules {
+    ($($name:ident),* $(,)?) => {
+        $(pub mod $name;)*
+    };
+}
 
-pub use atrous_filter::check_atrous_filter;
-pub use bilateral_gather::check_gather;
-pub use caustic_map_lookup::check_caustic_map;
-pub use composite::check_composite;
-pub use density_gather::check_density_gather;
-pub use deposit_screen::{check_deposit, check_fused_screen_trace};
-pub use direct_light::check_direct;
-pub use primary_gbuffer::{check_gbuffer, compare_gbuffers};
-pub use refine_clusters::{check_adaptive_caustics, check_screen_target};
-pub use shading_normal_correction::check_photon_gi;
-pub use temporal_blend::check_temporal_blend;
-pub use trace_photons::{check_fused_trace, check_trace};
+caustica_core::with_shader_kernels!(kernel_modules);
 
 use crate::harness::{Candidate, Fixture, ReferenceInputs, Report, Verdict};
 use caustica_core::backend::Backend;

@@ -1,6 +1,6 @@
 //! `resolve_caustics`, on texels whose photon-map sums two backends produced bitwise equal:
 //! radiance within [`RESOLVE_REL`] + [`RESOLVE_COS_REL`] / cos. It runs with
-//! `deposit_screen`, whose check ([`super::check_deposit`]) calls [`compare_resolve`].
+//! `deposit_screen`, whose check ([`super::deposit_screen::check_deposit`]) calls [`compare_resolve`].
 
 use crate::harness::measure::v3;
 use crate::harness::tolerance::{RESOLVE_COS_REL, RESOLVE_REL};

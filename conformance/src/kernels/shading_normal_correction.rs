@@ -140,7 +140,12 @@ pub fn check_photon_gi(
         // 1024 texels of a `cornell` face on lavapipe's Vulkan)
         if faces[0].tan_half_fov_x < 0.0 {
             let gc = face_gbuffers(fx, c, &faces)?;
-            v.absorb(crate::kernels::compare_gbuffers(&fx.ds, &faces[0], &gbufs[0], &gc[0]).0);
+            v.absorb(
+                crate::kernels::primary_gbuffer::compare_gbuffers(
+                    &fx.ds, &faces[0], &gbufs[0], &gc[0],
+                )
+                .0,
+            );
         }
         // 1. rsm_importance
         let (ta, pa) = run_rsm(fx, r, l, &faces, &gbufs)?;

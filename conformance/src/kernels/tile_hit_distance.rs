@@ -1,5 +1,5 @@
 //! `tile_hit_distance` on the reference's photon map: every tile within [`TILE_REL`]
-//! relative. Checked in the verdict of [`super::check_gather`].
+//! relative. Checked in the verdict of [`super::bilateral_gather::check_gather`].
 
 use crate::harness::fixture::{Fixture, ReferenceInputs};
 use crate::harness::tolerance::{within_rel, TILE_REL};

@@ -4,15 +4,16 @@
 //! its name, its bindings in launch order with their access, its workgroup size, its
 //! compiled switches and its lowering (argument checks, buffer sizes, thread count).
 //!
-//! From the list in `kernel_list!` below everything else is derived: the [`Kernel`] enum
-//! a [`crate::recording::Recording`] carries, the registry [`KERNELS`], the lowering of a
-//! recorded kernel to a [`Launch`] (checked binding by binding against the declaration),
-//! the Vulkan descriptor types ([`KernelInfo::descriptor_bindings`]) and the WGSL binding
-//! table the shader crate's validation test expects ([`KernelInfo::wgsl_bindings`]). The
-//! CPU backend matches [`Kernel`] exhaustively, so a new kernel without a CPU arm does
-//! not compile.
+//! From the list in [`with_kernels!`](crate::with_kernels) everything else is derived:
+//! the [`Kernel`] enum a [`crate::recording::Recording`] carries, the registry
+//! [`KERNELS`], the lowering of a recorded kernel to a [`Launch`] (checked binding by
+//! binding against the declaration), the Vulkan descriptor types
+//! ([`KernelInfo::descriptor_bindings`]) and the WGSL binding table the shader crate's
+//! validation test expects ([`KernelInfo::wgsl_bindings`]). The CPU backend generates its
+//! kernel modules and their dispatch from the same list, so a new kernel without its CPU
+//! file (a `run` function) does not compile.
 //!
-//! Adding a kernel: a file here, one line in `kernel_list!` and its name in
+//! Adding a kernel: a file here, one line in `with_kernels!` and its name in
 //! [`with_shader_kernels!`](crate::with_shader_kernels) (the WGSL and OpenCL kernel tables),
 //! then its CPU function, WGSL, OpenCL C (and GLSL stage if traced) and conformance check,
 //! each in a file named as the kernel; see CONTRIBUTING.md.
@@ -434,8 +435,9 @@ pub(crate) mod bytes {
     pub const GI_PHOTON: u64 = size_of::<crate::device::layout::GiPhoton>() as u64;
 }
 
-/// The one list: `Variant => module`. Generates [`Kernel`], [`KERNELS`], `From<...>` for
-/// each argument struct, and the lowering dispatch.
+/// Called with the one list ([`with_kernels!`](crate::with_kernels)): generates
+/// [`Kernel`], [`KERNELS`], `From<...>` for each argument struct, and the lowering
+/// dispatch.
 macro_rules! kernel_list {
     ($($variant:ident => $module:ident),* $(,)?) => {
         /// One kernel dispatch with its typed arguments (see each struct for its contract).
@@ -489,38 +491,50 @@ macro_rules! kernel_list {
     };
 }
 
-kernel_list! {
-    PrepareScene => prepare_scene,
-    PrimaryGbuffer => primary_gbuffer,
-    DirectLight => direct_light,
-    TracePhotons => trace_photons,
-    DepositScreen => deposit_screen,
-    ResolveCaustics => resolve_caustics,
-    TileHitDistance => tile_hit_distance,
-    BilateralGather => bilateral_gather,
-    PhotonCountTable => photon_count_table,
-    GatherFootprint => gather_footprint,
-    DensityGather => density_gather,
-    Composite => composite,
-    TemporalBlend => temporal_blend,
-    AtrousFilter => atrous_filter,
-    GatherCausticMap => gather_caustic_map,
-    CausticMapLookup => caustic_map_lookup,
-    DispatchArgs => dispatch_args,
-    RefineClusters => refine_clusters,
-    RsmImportance => rsm_importance,
-    SampleRsm => sample_rsm,
-    TraceIndirect => trace_indirect,
-    SplatPhotons => splat_photons,
-    ShadingNormalCorrection => shading_normal_correction,
+/// Calls macro `$m` with the one list of kernels, `Variant => module` (the argument
+/// struct in [`crate::kernels`] and the stem of the kernel's files), in registry order.
+/// [`Kernel`](crate::kernels::Kernel) and [`KERNELS`](crate::kernels::KERNELS) are built
+/// from it, and so are the CPU backend's kernel modules and their dispatch.
+#[macro_export]
+macro_rules! with_kernels {
+    ($m:ident) => {
+        $m! {
+            PrepareScene => prepare_scene,
+            PrimaryGbuffer => primary_gbuffer,
+            DirectLight => direct_light,
+            TracePhotons => trace_photons,
+            DepositScreen => deposit_screen,
+            ResolveCaustics => resolve_caustics,
+            TileHitDistance => tile_hit_distance,
+            BilateralGather => bilateral_gather,
+            PhotonCountTable => photon_count_table,
+            GatherFootprint => gather_footprint,
+            DensityGather => density_gather,
+            Composite => composite,
+            TemporalBlend => temporal_blend,
+            AtrousFilter => atrous_filter,
+            GatherCausticMap => gather_caustic_map,
+            CausticMapLookup => caustic_map_lookup,
+            DispatchArgs => dispatch_args,
+            RefineClusters => refine_clusters,
+            RsmImportance => rsm_importance,
+            SampleRsm => sample_rsm,
+            TraceIndirect => trace_indirect,
+            SplatPhotons => splat_photons,
+            ShadingNormalCorrection => shading_normal_correction,
+        }
+    };
 }
 
+crate::with_kernels!(kernel_list);
+
 /// Calls macro `$m` with the registry names of the kernels that have shader code, every
-/// kernel of `kernel_list!` but `prepare_scene` (which launches nothing on a device), in
-/// the order the OpenCL program appends their files. caustica-shaders and caustica-opencl
-/// build their kernel tables from it (`wgsl/<name>.wgsl`, `kernels/<name>.cl`, read with
-/// `include_str!`, so a missing file fails their build); a unit test below checks it
-/// against [`KERNELS`].
+/// kernel of [`with_kernels!`](crate::with_kernels) but `prepare_scene` (which launches
+/// nothing on a device), in the order the OpenCL program appends their files.
+/// caustica-shaders and caustica-opencl build their kernel tables from it
+/// (`wgsl/<name>.wgsl`, `kernels/<name>.cl`, read with `include_str!`, so a missing file
+/// fails their build) and caustica-conformance its check modules; a unit test below
+/// checks it against [`KERNELS`](crate::kernels::KERNELS).
 #[macro_export]
 macro_rules! with_shader_kernels {
     ($m:ident) => {

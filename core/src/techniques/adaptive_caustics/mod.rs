@@ -32,7 +32,7 @@ pub use crate::frame::emission::adaptive::{
 };
 pub use settings::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
-    TraversalSizes, LIST_BYTES_PER_ENTRY, SLOT_BYTES_PER_CLUSTER,
+    TraversalSizes, LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
 };
 
 use crate::backend::Backend;

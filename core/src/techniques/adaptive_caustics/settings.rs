@@ -3,7 +3,7 @@
 use crate::frame::emission::adaptive::TraversalSettings;
 pub use crate::frame::emission::adaptive::{
     AdaptiveMetric, ClusterRelevance, TraversalSizes, LIST_BYTES_PER_ENTRY,
-    SLOT_BYTES_PER_CLUSTER,
+    MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
 };
 use crate::frame::error::Error;
 use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
