@@ -203,7 +203,9 @@ fn record(
         pass.set_bind_group(0, &group, &[]);
         match launch.indirect {
             // the record an earlier kernel wrote (the kernel bounds itself by its count)
-            Some(i) => pass.dispatch_workgroups_indirect(&b.buffers.get(i.args)?.buffer, i.groups_offset()),
+            Some(i) => {
+                pass.dispatch_workgroups_indirect(&b.buffers.get(i.args)?.buffer, i.groups_offset())
+            }
             None => pass.dispatch_workgroups(x as u32, y as u32, 1),
         }
     }

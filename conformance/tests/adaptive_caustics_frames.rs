@@ -140,7 +140,6 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
     }
 }
 
-
 #[test]
 fn any_memory_limit_gives_the_same_frame_bitwise() {
     let settings = |bytes: u64| AdaptiveCausticsSettings {
@@ -215,9 +214,15 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
         let (sc, img) = render(b.as_mut(), capped);
         let a = sc.adaptive.clone().expect("adaptive stats");
         assert!(settings(bytes).traversal_sizes().lists_capped);
-        assert!(a.clusters_overflowed > 0, "{name}: nothing overflowed at {bytes} bytes");
         assert!(
-            img.iter().flat_map(|i| &i.pixels).flatten().all(|v| v.is_finite()),
+            a.clusters_overflowed > 0,
+            "{name}: nothing overflowed at {bytes} bytes"
+        );
+        assert!(
+            img.iter()
+                .flat_map(|i| &i.pixels)
+                .flatten()
+                .all(|v| v.is_finite()),
             "{name}: NaN or Inf"
         );
         let (x, y): (f64, f64) = (sc.stored_flux.iter().sum(), sw.stored_flux.iter().sum());
@@ -228,7 +233,10 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
             tol / y,
             a.clusters_overflowed
         );
-        assert!((x - y).abs() <= tol, "{name}: capped lists lost flux: {x} vs {y}");
+        assert!(
+            (x - y).abs() <= tol,
+            "{name}: capped lists lost flux: {x} vs {y}"
+        );
     }
 }
 

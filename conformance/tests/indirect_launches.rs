@@ -17,12 +17,7 @@ fn rows_and_counts() -> impl Strategy<Value = (Vec<[u32; 4]>, Vec<u32>)> {
     (1usize..4).prop_flat_map(|words| {
         let row = (0u32..1 << 20, 0u32..1 << 22, 1u32..9, 0..words as u32)
             .prop_map(|(first, bound, per, word)| [first, bound, per, word]);
-        let count = prop_oneof![
-            Just(0u32),
-            0u32..64,
-            0u32..(1 << 23),
-            Just(u32::MAX),
-        ];
+        let count = prop_oneof![Just(0u32), 0u32..64, 0u32..(1 << 23), Just(u32::MAX),];
         (
             proptest::collection::vec(row, 1..6),
             proptest::collection::vec(count, words),
@@ -46,7 +41,9 @@ fn dispatch_records_match_core_for_any_count() {
             if v.passed() {
                 Ok(())
             } else {
-                Err(TestCaseError::fail(format!("{v}rows {rows:?}, counts {counts:?}")))
+                Err(TestCaseError::fail(format!(
+                    "{v}rows {rows:?}, counts {counts:?}"
+                )))
             }
         });
         if let Err(e) = result {

@@ -16,9 +16,9 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::RefineClusters;
 use caustica_core::math::photon_clusters::{
-    live_clusters,
     cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
-    cluster_spread, cluster_target, entry_cluster, entry_spread, slot_met_caster, slot_stored,
+    cluster_spread, cluster_target, entry_cluster, entry_spread, live_clusters, slot_met_caster,
+    slot_stored,
 };
 use rayon::prelude::*;
 
@@ -241,7 +241,6 @@ pub fn refine_clusters(
     }
     r
 }
-
 
 /// Appends the screen target's output photons to `list` at `count[0]` (entries past the
 /// list are counted, not written), as the GPU ports do.

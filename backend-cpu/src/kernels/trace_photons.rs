@@ -44,8 +44,7 @@ use caustica_core::math::optics::{
 };
 use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::photon_clusters::{
-    live_clusters,
-    cluster_photon_index, entry_cluster, photon_met_caster, NO_TRIANGLE,
+    cluster_photon_index, entry_cluster, live_clusters, photon_met_caster, NO_TRIANGLE,
 };
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::sampling::{

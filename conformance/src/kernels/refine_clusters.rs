@@ -211,7 +211,14 @@ fn run_refine(
 ) -> Result<Refined, String> {
     let count = list.len() as u32 - FIRST;
     let launch = ListLaunch::whole(list);
-    run_refine_as(b, target, (list, rects), slots, step, (launch, BEFORE + 4 * count))
+    run_refine_as(
+        b,
+        target,
+        (list, rects),
+        slots,
+        step,
+        (launch, BEFORE + 4 * count),
+    )
 }
 
 /// [`run_refine`] with the list's length and launch of `l` and a child list of
@@ -511,8 +518,22 @@ pub fn check_adaptive_caustics(
             BEFORE + 4 * count,
         ),
     ] {
-        let a = run_refine_as(r, &Target::Atlas(&l), (&list, &rects), &sa, step, (launch, capacity))?;
-        let b = run_refine_as(c, &Target::Atlas(&l), (&list, &rects), &sa, step, (launch, capacity))?;
+        let a = run_refine_as(
+            r,
+            &Target::Atlas(&l),
+            (&list, &rects),
+            &sa,
+            step,
+            (launch, capacity),
+        )?;
+        let b = run_refine_as(
+            c,
+            &Target::Atlas(&l),
+            (&list, &rects),
+            &sa,
+            step,
+            (launch, capacity),
+        )?;
         let live = launch.length.saturating_sub(FIRST).min(count);
         let w = |i: usize| a.counts[i];
         let refined = (w(cluster_count::CHILDREN) - BEFORE) / 4 - w(cluster_count::OVERFLOW);
@@ -681,8 +702,22 @@ pub fn check_indirect_refinement(
             indirect: true,
         };
         let capacity = BEFORE + 4 * count;
-        let a = run_refine_as(r, &Target::Atlas(&l), (&list, &rects), &slots, step, (launch, capacity))?;
-        let b = run_refine_as(c, &Target::Atlas(&l), (&list, &rects), &slots, step, (launch, capacity))?;
+        let a = run_refine_as(
+            r,
+            &Target::Atlas(&l),
+            (&list, &rects),
+            &slots,
+            step,
+            (launch, capacity),
+        )?;
+        let b = run_refine_as(
+            c,
+            &Target::Atlas(&l),
+            (&list, &rects),
+            &slots,
+            step,
+            (launch, capacity),
+        )?;
         let live = length.saturating_sub(FIRST).min(count);
         let w = |i: usize| a.counts[i];
         let fates = (w(cluster_count::CHILDREN) - BEFORE) / 4
@@ -690,7 +725,10 @@ pub fn check_indirect_refinement(
             + w(cluster_count::DISCARDED)
             + w(cluster_count::CONVERGED);
         v.check(fates == live, || {
-            format!("length {length}: cpu fates {:?} for {live} live clusters", a.counts)
+            format!(
+                "length {length}: cpu fates {:?} for {live} live clusters",
+                a.counts
+            )
         });
         v.check(a == b, || {
             format!(

@@ -92,7 +92,10 @@ impl KernelDecl for DispatchArgs {
 impl Args {
     /// Makes the launch indirect: its shape is `dispatch`'s record (written by an earlier
     /// `dispatch_args`), its recorded thread count the bound. `None`: a direct launch.
-    pub fn indirect(&mut self, dispatch: Option<DispatchRecord>) -> Result<&mut Self, BackendError> {
+    pub fn indirect(
+        &mut self,
+        dispatch: Option<DispatchRecord>,
+    ) -> Result<&mut Self, BackendError> {
         if let Some(d) = dispatch {
             if (d.record as u64 + 1) * DISPATCH_RECORD_WORDS as u64 > d.args.len as u64 {
                 return Err(BackendError::BadArgument(format!(
@@ -118,7 +121,10 @@ mod tests {
         assert_eq!(dispatch_record(0, 0, 100, 4), [0, 1, 1, 0, 1, 1, 0, 0]);
         assert_eq!(dispatch_record(10, 20, 100, 4), [0, 1, 1, 0, 1, 1, 0, 0]);
         assert_eq!(dispatch_record(30, 20, 100, 4), [1, 1, 1, 8, 5, 1, 40, 10]);
-        assert_eq!(dispatch_record(1000, 0, 100, 1), [2, 1, 1, 8, 13, 1, 100, 100]);
+        assert_eq!(
+            dispatch_record(1000, 0, 100, 1),
+            [2, 1, 1, 8, 13, 1, 100, 100]
+        );
         // more groups than fit along x go along y
         let r = dispatch_record(u32::MAX, 0, 65536 * 64, 1);
         assert_eq!((r[0], r[1]), (65535, 2));

@@ -206,7 +206,9 @@ impl TraversalSettings {
             };
         }
         let rest = budget.saturating_sub(fixed);
-        let c = (rest / 2 / per).clamp(min_pass.min(largest), largest).max(1);
+        let c = (rest / 2 / per)
+            .clamp(min_pass.min(largest), largest)
+            .max(1);
         let share = rest.saturating_sub(c * per) / (LIST_BYTES_PER_ENTRY * finest.max(1) as u64);
         let list_capacity: Vec<u32> = (1..=finest)
             .map(|l| {
@@ -217,8 +219,8 @@ impl TraversalSettings {
                 cap((n / 4 * 4).max(4))
             })
             .collect();
-        let lists_capped = (1..=finest)
-            .any(|l| (list_capacity[l as usize - 1] as u64) < self.dense_clusters(l));
+        let lists_capped =
+            (1..=finest).any(|l| (list_capacity[l as usize - 1] as u64) < self.dense_clusters(l));
         TraversalSizes {
             pass_clusters: cap(c),
             list_capacity,
@@ -322,7 +324,8 @@ pub struct Traversal {
     /// The cluster lists of levels `1 ..= finest`.
     lists: Vec<Buf<u32>>,
     /// Per plane of a frame, per level: [`cluster_count`] words (word 0: the next level's
-    /// list length), read back at the frame's end.
+    /// list length), read back at the frame's end (made with the traversal: a buffer
+    /// is read back only after the recording that made it).
     counts: Vec<Vec<Buf<u32>>>,
     no_children: Buf<u32>,
     converged: Buf<u32>,
@@ -467,12 +470,12 @@ impl Traversal {
         }
     }
 
-    /// Records the creation of the traversal's buffers for planes down to level
-    /// `finest`, for the atlas target or (`screen`) the screen target.
+    /// Records the creation of the traversal's buffers for `planes` planes a frame down
+    /// to level `finest`, for the atlas target or (`screen`) the screen target.
     pub fn record(
         rec: &mut Recording,
         settings: &TraversalSettings,
-        finest: u32,
+        (planes, finest): (usize, u32),
         caster_boxes: &[Aabb],
         screen: bool,
     ) -> Traversal {
@@ -512,7 +515,13 @@ impl Traversal {
                 .iter()
                 .map(|&n| rec.create(n, "adaptive cluster list"))
                 .collect(),
-            counts: Vec::new(),
+            counts: (0..planes.max(1))
+                .map(|_| {
+                    (0..=finest)
+                        .map(|_| rec.create(cluster_count::WORDS as u32, "adaptive cluster counts"))
+                        .collect()
+                })
+                .collect(),
             no_children: rec.create(1, "adaptive finest-level child list"),
             converged: rec.create(c, "adaptive converged clusters"),
             converged_count: rec.create(1, "adaptive converged count"),
@@ -549,7 +558,7 @@ impl Traversal {
     /// lie in the traversal's pyramid. Output photons go into `target` (the target this
     /// traversal was recorded for).
     pub fn record_frame(
-        &mut self,
+        &self,
         frame: &mut FrameBuilder,
         scene: SceneArgs,
         variant: TraceVariant,
@@ -575,12 +584,12 @@ impl Traversal {
                     plane.resolution.0, plane.resolution.1
                 )));
             }
-            while self.counts.len() <= k {
-                let rec = frame.rec();
-                let level_counts = (0..=self.finest)
-                    .map(|_| rec.create(cluster_count::WORDS as u32, "adaptive cluster counts"))
-                    .collect();
-                self.counts.push(level_counts);
+            if k >= self.counts.len() {
+                return Err(Error::InvalidParameter(format!(
+                    "adaptive traversal made for {} planes, run for {}",
+                    self.counts.len(),
+                    planes.len()
+                )));
             }
             read.dense_equivalent += plane.texels();
             let mut rects = caster_rects(plane, &self.caster_boxes);
@@ -614,8 +623,8 @@ impl Traversal {
                 let c = self.batch_clusters;
                 // converged clusters (from the error metric's level) and overflowed ones
                 // (capped lists) are output at their level from fresh photons
-                let resample = level < finest
-                    && (level >= s.error_from_level() || self.sizes.lists_capped);
+                let resample =
+                    level < finest && (level >= s.error_from_level() || self.sizes.lists_capped);
                 for (pass, &(bound, rows)) in self.tables[level as usize].iter().enumerate() {
                     let step = PassArgs {
                         level,
@@ -634,7 +643,16 @@ impl Traversal {
                     if resample {
                         frame.rec().clear(self.converged_count);
                     }
-                    self.record_pass(frame, scene, variant, target, (*light, plane), optics, &step, &mut read)?;
+                    self.record_pass(
+                        frame,
+                        scene,
+                        variant,
+                        target,
+                        (*light, plane),
+                        optics,
+                        &step,
+                        &mut read,
+                    )?;
                     if resample {
                         let again = PassArgs {
                             seed: cluster_resample_seed(*plane_seed, level),
@@ -648,7 +666,16 @@ impl Traversal {
                             converged: (self.no_converged, self.no_converged_count),
                             ..step
                         };
-                        self.record_pass(frame, scene, variant, target, (*light, plane), optics, &again, &mut read)?;
+                        self.record_pass(
+                            frame,
+                            scene,
+                            variant,
+                            target,
+                            (*light, plane),
+                            optics,
+                            &again,
+                            &mut read,
+                        )?;
                     }
                 }
             }
@@ -732,8 +759,7 @@ impl Traversal {
                 }
             };
         let mut kernel = |frame: &mut FrameBuilder, k: crate::kernels::Kernel| {
-            read.kernels
-                .push((frame.kernel_index(), a.level, k.name()));
+            read.kernels.push((frame.kernel_index(), a.level, k.name()));
             frame.rec().kernel(k);
         };
         kernel(
@@ -748,7 +774,12 @@ impl Traversal {
         if let DepositTarget::Screen(_) = target {
             frame.rec().clear(self.output_count);
         }
-        let record = |record| Some(DispatchRecord { args: a.args, record });
+        let record = |record| {
+            Some(DispatchRecord {
+                args: a.args,
+                record,
+            })
+        };
         kernel(
             frame,
             TracePhotons {

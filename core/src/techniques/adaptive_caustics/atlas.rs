@@ -76,7 +76,15 @@ pub(super) fn create(
         map.clone(),
         AtlasQuanta::of(&planes),
         atlas,
-        &mut |rec| traversal = Some(Traversal::record(rec, &ts, levels, &boxes, false)),
+        &mut |rec| {
+            traversal = Some(Traversal::record(
+                rec,
+                &ts,
+                (planes.planes.len(), levels),
+                &boxes,
+                false,
+            ))
+        },
     )?;
     let plan = plan(
         host,
@@ -186,7 +194,9 @@ impl AdaptiveCausticsPipeline {
         }
         let planes = super::view_planes(host, &self.settings)?;
         let start = self.settings.start_grid;
-        let deeper = super::finest_level(&planes, start) > super::finest_level(&self.planes, start);
+        // more planes than the traversal has counts for (a light added) also rebuilds
+        let deeper = super::finest_level(&planes, start) > super::finest_level(&self.planes, start)
+            || planes.planes.len() > self.planes.planes.len();
         let had_photons = self.plan.trace_variant.is_some();
         if (planes.planes.is_empty() == had_photons && self.settings.map.prune) || deeper {
             return Ok(Reaction::Rebuild);

@@ -31,8 +31,8 @@ pub use crate::frame::emission::adaptive::{
     TraversalSettings, EMPTY_RECT,
 };
 pub use settings::{
-    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
-    TraversalSizes, LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
+    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance, TraversalSizes,
+    LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
 };
 
 use crate::backend::Backend;
@@ -118,7 +118,7 @@ impl AdaptiveCausticsPipeline {
         counters: crate::device::handle::Buf<u32>,
         seed: u32,
     ) -> Result<(), Error> {
-        let (Some(t), Some(variant)) = (&mut self.traversal, self.plan.trace_variant) else {
+        let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
             return Ok(());
         };
         let s = &self.settings.map;

@@ -80,7 +80,13 @@ pub(super) fn create(
             .iter()
             .map(|(_, b)| *b)
             .collect();
-        Traversal::record(&mut rec, &settings.traversal(), levels, &boxes, true)
+        Traversal::record(
+            &mut rec,
+            &settings.traversal(),
+            (planes.planes.len(), levels),
+            &boxes,
+            true,
+        )
     });
     let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;
     plan.buffers = host

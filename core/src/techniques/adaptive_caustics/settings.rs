@@ -2,8 +2,8 @@
 
 use crate::frame::emission::adaptive::TraversalSettings;
 pub use crate::frame::emission::adaptive::{
-    AdaptiveMetric, ClusterRelevance, TraversalSizes, LIST_BYTES_PER_ENTRY,
-    MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
+    AdaptiveMetric, ClusterRelevance, TraversalSizes, LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL,
+    SLOT_BYTES_PER_CLUSTER,
 };
 use crate::frame::error::Error;
 use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
@@ -246,19 +246,20 @@ mod tests {
     #[test]
     fn the_passes_and_lists_follow_the_byte_limit() {
         let t = AdaptiveCausticsSettings::default().traversal();
-        // whole lists beside passes of 1000 clusters
+        // whole lists beside passes of 5000 clusters (at least 1/64 of the finest level)
+        assert!(5000 >= t.dense_clusters(4).div_ceil(MAX_PASSES_PER_LEVEL));
         let whole = TraversalSettings {
-            max_traversal_bytes: t.bytes_for_pass(4, false, 1000),
+            max_traversal_bytes: t.bytes_for_pass(4, false, 5000),
             ..t
         };
         let z = whole.sizes(4, false);
-        assert_eq!(z.pass_clusters, 1000);
+        assert_eq!(z.pass_clusters, 5000);
         assert!(!z.lists_capped);
         assert_eq!(z.list_capacity[3] as u64, t.dense_clusters(4));
         // the screen target's passes also hold four output photons a cluster
-        assert!(whole.sizes(4, true).pass_clusters < 1000);
+        assert!(whole.sizes(4, true).pass_clusters < 5000);
         // a limit below whole lists caps them, in multiples of 4, and the passes take at
-        // most half
+        // most half (or the fewest clusters that keep a level to 64 passes)
         let tight = TraversalSettings {
             max_traversal_bytes: t.full_list_bytes(4) / 2,
             ..t
@@ -266,12 +267,16 @@ mod tests {
         let z = tight.sizes(4, false);
         assert!(z.lists_capped);
         assert!(z.list_capacity.iter().all(|&n| n % 4 == 0 && n >= 4));
-        assert!(z.pass_clusters as u64 * 132 <= tight.max_traversal_bytes / 2 + 132);
+        let min_pass = t.dense_clusters(4).div_ceil(MAX_PASSES_PER_LEVEL);
+        assert!(z.pass_clusters as u64 <= (tight.max_traversal_bytes / 2 / 132).max(min_pass));
         // a huge limit: one pass per level
         let huge = TraversalSettings {
             max_traversal_bytes: 1 << 40,
             ..t
         };
-        assert_eq!(huge.sizes(4, false).pass_clusters as u64, t.dense_clusters(4));
+        assert_eq!(
+            huge.sizes(4, false).pass_clusters as u64,
+            t.dense_clusters(4)
+        );
     }
 }

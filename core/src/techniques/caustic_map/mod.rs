@@ -14,14 +14,19 @@
 //!    `caustic_map_lookup` (the camera's specular ray tree reading the map), the opt-in
 //!    filters and `composite`.
 //!
-//! **Tiles only for reached receivers.** After the photon pass the reach mask is read
-//! back: when the set of receivers the photons reached differs from the set that has
-//! tiles, the atlas is laid out anew for the reached ones (they share the whole atlas,
-//! so their texel density rises) and the same photons are traced (counter-based random
-//! numbers: the same paths) and deposited again. Which receivers the photons reach does
-//! not depend on the layout, so the second pass reaches the same set, and a technique
-//! updated into a state lays its atlas out exactly as a fresh one built in that state
-//! (the seam tests compare them bitwise). With pruning off every receiver keeps its tile.
+//! **Tiles only for reached receivers.** A photon pass runs on a layout that gives every
+//! receiver the photons can reach a tile: at creation and after a change of the lights or
+//! instances every receiver has one, so no photon's flux is lost. Its reach mask comes
+//! back without a wait (a readback submitted at the next frame's recording, collected
+//! at a later one: two frames later in a blocking loop, whenever the device is done in
+//! a host's loop): when the set of receivers the photons reached differs from the set
+//! that has tiles, the atlas is laid out anew for the reached ones (they share the whole
+//! atlas, so their texel density rises) and the same photons are traced (counter-based
+//! random numbers: the same paths) and deposited again. Which receivers the photons
+//! reach does not depend on the layout, so that pass reaches the same set, and a
+//! technique updated into a state lays its atlas out exactly as a fresh one built in
+//! that state, frame for frame (the seam tests compare them bitwise). With pruning off
+//! every receiver keeps its tile.
 //!
 //! Not built yet: a footprint carried through curved glass (the lookup unfolds the
 //! pixel's square along the path, blind to focusing).
@@ -63,6 +68,22 @@ pub struct CausticMapPipeline {
     atlas_valid: bool,
     /// The device's largest buffer (bytes): batches hold at most that many photons.
     max_buffer_bytes: u64,
+    /// Photon passes recorded (the reach mask's generation).
+    photon_passes: u64,
+    /// The last photon pass's reach mask on its way back.
+    reach: Reach,
+}
+
+/// A photon pass's reach mask on its way to the host, never waited for inside a frame.
+#[derive(Debug)]
+enum Reach {
+    /// Nothing to read.
+    Idle,
+    /// Pass `n`'s mask is to be read (submitted at the next recording, after pass `n`'s
+    /// frame on the device's queue).
+    Wanted(u64),
+    /// Pass `n`'s mask is being copied back.
+    Pending(crate::backend::Submission, u64),
 }
 
 /// The light view planes of the host's scene; refuses a light whose flux is out of
@@ -103,6 +124,79 @@ fn plan(
 impl CausticMapPipeline {
     fn replan(&mut self, host: &FrameHost) {
         self.plan = plan(host, &self.receiver, &self.planes, self.variant);
+    }
+
+    /// Moves the last photon pass's reach mask along without waiting: submits its
+    /// readback (the pass's frame is ahead of it on the device's queue), or collects it
+    /// if the device is done; a mask of the current pass whose reached receivers differ
+    /// from the tiled ones lays the atlas out for them (recorded into `frame`) and makes
+    /// the atlas stale, so this frame traces the same photons into the new tiles.
+    fn follow_reach(
+        &mut self,
+        backend: &mut dyn Backend,
+        host: &FrameHost,
+        frame: &mut FrameBuilder,
+    ) -> Result<(), Error> {
+        let Some(a) = self.receiver.atlas() else {
+            return Ok(());
+        };
+        match std::mem::replace(&mut self.reach, Reach::Idle) {
+            Reach::Idle => {}
+            Reach::Wanted(n) => {
+                let s = backend.submit(&Recording::new(), &[a.triangle_reach.id])?;
+                self.reach = Reach::Pending(s, n);
+            }
+            Reach::Pending(mut s, n) => match backend.poll(&mut s, false)? {
+                None => self.reach = Reach::Pending(s, n),
+                Some(f) if n == self.photon_passes => {
+                    let mask: Vec<u32> = f
+                        .readbacks
+                        .first()
+                        .map(|b| bytemuck::pod_collect_to_vec(b))
+                        .unwrap_or_default();
+                    if let Some(reached) = self.receiver.reached(host, &mask) {
+                        if reached != self.receiver.tiled() {
+                            self.receiver.relayout(host, frame.rec(), &reached)?;
+                            self.replan(host);
+                            frame.stats.plan = Some(self.plan.clone());
+                            self.atlas_valid = false;
+                        }
+                    }
+                }
+                // an older pass's mask
+                Some(_) => {}
+            },
+        }
+        Ok(())
+    }
+
+    /// Gives every receiver a tile again, as at creation, when some has none (moved
+    /// lights, casters or new optics may reach it, and the next pass would lose its
+    /// flux); a later frame keeps the reached ones. A mask on its way back is of the old
+    /// state.
+    fn unprune(&mut self, host: &mut FrameHost) -> Result<(), Error> {
+        if self.receiver.tiled().iter().any(|t| !t) {
+            self.relayout_all(host)?;
+        }
+        self.photon_passes += 1;
+        Ok(())
+    }
+
+    /// Records every receiver laid out anew (deferred to the next frame's recording).
+    fn relayout_all(&mut self, host: &mut FrameHost) -> Result<(), Error> {
+        let all = vec![true; self.receiver.tiled().len()];
+        let mut rec = Recording::new();
+        self.receiver.relayout(host, &mut rec, &all)?;
+        host.defer(rec);
+        Ok(())
+    }
+
+    /// Collects a reach mask still on its way back (before the technique is freed).
+    fn drain_reach(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        if let Reach::Pending(mut s, _) = std::mem::replace(&mut self.reach, Reach::Idle) {
+            backend.poll(&mut s, true)?;
+        }
+        Ok(())
     }
 
     /// Records the photon pass's start and every plane's batches (the fused trace
@@ -169,36 +263,15 @@ impl CausticMapPipeline {
     /// The photon pass: trace and deposit every plane (twice when the reached receivers
     /// change: see the module doc), then the gather; the counters come back at the
     /// frame's end.
-    fn photon_pass(
-        &mut self,
-        backend: &mut dyn Backend,
-        host: &mut FrameHost,
-        frame: &mut FrameBuilder,
-    ) -> Result<(), Error> {
+    fn photon_pass(&mut self, host: &mut FrameHost, frame: &mut FrameBuilder) -> Result<(), Error> {
         let Some(a) = self.receiver.atlas() else {
             return Ok(());
         };
         frame.expect_photons(self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum());
-        let before = frame.stats.clone();
         self.trace(host, frame);
+        self.photon_passes += 1;
         if self.settings.prune && host.receivers().is_some() {
-            // TODO(issue 46): the reach mask is read back inside the frame
-            let mask = frame.read_now(backend, a.triangle_reach)?;
-            if let Some(reached) = self.receiver.reached(host, &mask) {
-                if reached != self.receiver.tiled() {
-                    let mut rec = Recording::new();
-                    self.receiver.relayout(host, &mut rec, &reached)?;
-                    frame.push(rec, 0);
-                    self.replan(host);
-                    // the same photons into the new tiles: the photon accounting is the
-                    // second pass's, the device time both passes'
-                    let first = std::mem::replace(&mut frame.stats, before);
-                    frame.stats.plan = Some(self.plan.clone());
-                    frame.stats.absorb_pass_times(&first);
-                    frame.stats.host_waits = first.host_waits;
-                    self.trace(host, frame);
-                }
-            }
+            self.reach = Reach::Wanted(self.photon_passes);
         }
         self.receiver.record_gather(frame.rec());
         frame.counters_at_end(a.counters, self.planes.flux_quantum);
@@ -259,6 +332,8 @@ impl Pipeline for CausticMapPipeline {
             plan,
             atlas_valid: false,
             max_buffer_bytes: backend.capabilities().max_buffer_bytes,
+            photon_passes: 0,
+            reach: Reach::Idle,
         })
     }
 
@@ -281,6 +356,7 @@ impl Pipeline for CausticMapPipeline {
         frame: &mut FrameBuilder,
     ) -> Result<(), Error> {
         frame.stats.flux_quantum = self.planes.flux_quantum as f64;
+        self.follow_reach(backend, host, frame)?;
         let photons = self.plan.trace_variant.is_some();
         if photons && self.receiver.atlas().is_some() {
             if self.atlas_valid {
@@ -296,7 +372,7 @@ impl Pipeline for CausticMapPipeline {
                     );
                 }
             } else {
-                self.photon_pass(backend, host, frame)?;
+                self.photon_pass(host, frame)?;
             }
         }
         host.record_visibility(frame.rec());
@@ -320,6 +396,8 @@ impl Pipeline for CausticMapPipeline {
                 return Ok(Reaction::Kept);
             }
             Change::Materials { same_plan: true } => {
+                // new optics may reach receivers without a tile
+                self.unprune(host)?;
                 self.atlas_valid = false;
                 self.receiver.reset_history();
                 return Ok(Reaction::Kept);
@@ -340,13 +418,10 @@ impl Pipeline for CausticMapPipeline {
         self.planes = planes;
         self.atlas_valid = false;
         if receivers_moved {
-            // a moved receiver's tile follows its new area: every receiver laid out, as at
-            // creation, and the next photon pass keeps the reached ones
-            let all = vec![true; self.receiver.tiled().len()];
-            let mut rec = Recording::new();
-            self.receiver.relayout(host, &mut rec, &all)?;
-            host.defer(rec);
+            // a moved receiver's tile follows its new area
+            self.relayout_all(host)?;
         }
+        self.unprune(host)?;
         self.replan(host);
         Ok(Reaction::Kept)
     }
@@ -374,6 +449,7 @@ impl Pipeline for CausticMapPipeline {
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        self.drain_reach(backend)?;
         self.receiver.free(backend)
     }
 
