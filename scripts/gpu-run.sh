@@ -20,6 +20,7 @@ Sections:
   adaptive     AdaptiveCaustics (ADAPTIVE_PARTS=checks,frames by default; table,footprint,screen)
   photon-gi    PhotonGi's checks and stiff cases, its frames at the chapter's two settings
   dynamic      moving lights and instances, deformations, the non-blocking loop (frame_loop)
+  traversal    indirect launches checked, AdaptiveCaustics' device traversal timed, host waits
   hang         loops the parallel conformance suite; a hung run's threads are recorded
   experiment   kernel variants timed without a rebuild (EXP_* below, CONTRIBUTING.md)
 
@@ -32,7 +33,7 @@ CAUSTICA_SKIP_BACKENDS and CAUSTICA_SERIALIZE_DRIVERS pass through to the suite.
 EOF
 }
 case "${1:-}" in ""|-h|--help) usage; exit 0 ;; esac
-SECTIONS="suite frames sspm caustic-map adaptive photon-gi dynamic hang experiment"
+SECTIONS="suite frames sspm caustic-map adaptive photon-gi dynamic traversal hang experiment"
 for s in "$@"; do case " --build $SECTIONS " in *" $s "*) ;; *) echo "unknown section '$s'" >&2; exit 2 ;; esac; done
 
 # The functions a section runs: its parts' (SUITE_PARTS, ADAPTIVE_PARTS) or its own.
@@ -123,6 +124,11 @@ dynamic() {
     bench 240 CAUSTICA_BENCH_DEFORM=0 ./dynamic_frame --bench; bench 300 ./dynamic_frame --bench
     check 200 ./instance_updates --nocapture; check 200 ./submitted_frames --nocapture
     run timeout 60 ./frame_loop 1920x1080 2048 100; run timeout 60 ./frame_loop 1920x1080 1024 100
+}
+traversal() {
+    check 120 ./indirect_launches; check 240 ./submitted_frames; check 300 ./adaptive_caustics_frames
+    warm_up; bench 400 CAUSTICA_BENCH_SIZES="${CAUSTICA_BENCH_SIZES:-2048,4096}" ./adaptive_frame
+    run timeout 90 ./frame_loop 1920x1080 2048 60
 }
 hang() {
     # elfutils' eu-stack from .devbin (the device image has no gdb) names a hung thread's calls

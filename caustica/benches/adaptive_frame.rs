@@ -8,7 +8,7 @@
 //! that remake the atlas (a new seed each) of: the photon work (every `trace_photons`, `refine_clusters` and
 //! gather pass, device time where the backend has timestamps), the whole frame (host wall
 //! time), the photons traced and the traversal's steps; and per level the photons traced
-//! and the time of its steps (`trace_photons` + `refine_clusters`, `AdaptiveStats::
+//! and the time of its passes (`dispatch_args`, `trace_photons`, `refine_clusters`, `AdaptiveStats::
 //! ms_per_level`).
 //!
 //! `cargo bench -p caustica --bench adaptive_frame`
@@ -28,6 +28,7 @@ use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
+    "dispatch_args",
     "trace_photons",
     "refine_clusters",
     "gather_caustic_map",
@@ -155,7 +156,7 @@ fn main() {
                         .map(|v| format!("{:.3}", median(v)))
                         .collect();
                     println!(
-                        "{name} on {device} / {scene_name} / {n}^2 / {label}: photon work {:.3} ms ({timing}), frame {:.3} ms (host wall), {traced} photons traced, {steps} steps, per level {levels:?}, ms per level (trace + refine) [{}]",
+                        "{name} on {device} / {scene_name} / {n}^2 / {label}: photon work {:.3} ms ({timing}), frame {:.3} ms (host wall), {traced} photons traced, {steps} steps, per level {levels:?}, ms per level (dispatch_args + trace + refine) [{}]",
                         median(&mut work),
                         median(&mut frame),
                         per_level.join(", ")
