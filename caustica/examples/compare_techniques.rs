@@ -24,6 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         techniques: vec!["sspm".into()],
         backends: vec![backend],
         budgets,
+        frames: vec![1],
         filters: vec!["density".into(), "bilateral".into()],
         settings: serde_json::Map::new(),
         repeats: 2,

@@ -1,8 +1,11 @@
-//! Error against run time: for every scene x technique x backend x photon
-//! budget (any registered technique, created by name), the median frame time and per-pass times over repeated frames (device
-//! timestamps where the backend has them) and the error of the filtered caustics against
-//! the scene's reference, with bias and variance over the repeats' seeds. Writes one JSON
-//! record per combination and a log-log plot of relative MSE against frame time per scene.
+//! Error against run time: for every scene x technique x backend x photon budget x
+//! frames accumulated (any registered technique, created by name), the median time and
+//! per-pass times over repeated runs (device timestamps where the backend has them) and
+//! the error of the filtered caustics against the scene's reference, with bias and
+//! variance over the repeats' seeds. A run of `frames` > 1 accumulates that many frames
+//! of the budget (`accumulate: true`, a fresh technique per repeat) and is timed to its
+//! last frame. Writes one JSON record per combination and a log-log plot of relative MSE
+//! against time per scene.
 
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
@@ -34,6 +37,9 @@ pub struct Record {
     pub budget: String,
     /// Photons emitted per frame.
     pub photons: u64,
+    /// Frames accumulated (1: a single frame); `frame_ms` and the pass times are the
+    /// sums over them, the errors the last frame's.
+    pub frames: usize,
     /// Image size (pixels).
     pub width: u32,
     /// Image size (pixels).
@@ -82,6 +88,9 @@ pub struct ReportPlan {
     pub backends: Vec<String>,
     /// Photon grids per light.
     pub budgets: Vec<(u32, u32)>,
+    /// Frames accumulated per run (1: single frames; more needs a technique with
+    /// `accumulate`, the others are skipped with a log line).
+    pub frames: Vec<usize>,
     /// Caustic filters to compare (Sspm's `filter`: density, bilateral; CausticMap's
     /// `gather`: box, density), each measured on its own; a technique runs those it has,
     /// or its default where it has none of them.
@@ -178,10 +187,18 @@ pub fn run(
             };
             for backend_name in &plan.backends {
                 let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
-                for (filter, &(pw, ph)) in filters
-                    .iter()
-                    .flat_map(|f| plan.budgets.iter().map(move |b| (f, b)))
-                {
+                let frames_axis: Vec<usize> = if plan.frames.is_empty() {
+                    vec![1]
+                } else {
+                    plan.frames.clone()
+                };
+                for (filter, &(pw, ph), &frames) in filters.iter().flat_map(|f| {
+                    plan.budgets
+                        .iter()
+                        .flat_map(|b| frames_axis.iter().map(move |n| (b, n)))
+                        .map(move |(b, n)| (f, b, n))
+                }) {
+                    let frames = frames.max(1);
                     let mut settings = plan.settings.clone();
                     settings.extend(overrides.clone());
                     settings.insert("photons_w".into(), pw.into());
@@ -189,9 +206,21 @@ pub fn run(
                     if let Some((key, _)) = filter_setting {
                         settings.insert(key.into(), filter.as_str().into());
                     }
+                    if frames > 1 {
+                        settings.insert("accumulate".into(), true.into());
+                    }
                     let settings = serde_json::Value::Object(settings);
-                    let mut sspm = create(name, backend.as_mut(), &scene, &settings)
-                        .map_err(|e| e.to_string())?;
+                    let made = create(name, backend.as_mut(), &scene, &settings);
+                    let mut sspm = match made {
+                        Ok(t) => t,
+                        Err(e) if frames > 1 => {
+                            log(&format!(
+                                "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: skipped ({e})"
+                            ));
+                            continue;
+                        }
+                        Err(e) => return Err(e.to_string()),
+                    };
                     let (filtered_output, raw_output) = sspm.estimate_outputs();
                     sspm.set_reference(Some(r.image.clone()))
                         .map_err(|e| e.to_string())?;
@@ -205,13 +234,31 @@ pub fn run(
                     let mut images: Vec<Image> = Vec::new();
                     let (mut timing, mut photons, mut device) = (String::new(), 0, String::new());
                     for k in 0..plan.repeats.max(1) {
+                        if frames > 1 {
+                            // an accumulation of its own from the first frame
+                            sspm.free(backend.as_mut()).map_err(|e| e.to_string())?;
+                            sspm = create(name, backend.as_mut(), &scene, &settings)
+                                .map_err(|e| e.to_string())?;
+                            sspm.set_reference(Some(r.image.clone()))
+                                .map_err(|e| e.to_string())?;
+                        }
                         sspm.set_seed(k as u32 + 1);
-                        let st = sspm
-                            .frame(backend.as_mut(), &mut |_| {})
-                            .map_err(|e| e.to_string())?;
-                        frame_ms.push(st.frame_ms);
-                        for (p, ms) in &st.pass_ms {
-                            passes.entry(p.clone()).or_default().push(*ms);
+                        let (mut ms, mut pass_sums) = (0.0, BTreeMap::<String, f64>::new());
+                        let mut last = None;
+                        for _ in 0..frames {
+                            let st = sspm
+                                .frame(backend.as_mut(), &mut |_| {})
+                                .map_err(|e| e.to_string())?;
+                            ms += st.frame_ms;
+                            for (p, t) in &st.pass_ms {
+                                *pass_sums.entry(p.clone()).or_default() += *t;
+                            }
+                            last = Some(st);
+                        }
+                        let st = last.expect("at least one frame");
+                        frame_ms.push(ms);
+                        for (p, t) in pass_sums {
+                            passes.entry(p).or_default().push(t);
                         }
                         if let Some(e) = &st.error {
                             rel.push(e.relative_mse);
@@ -243,6 +290,7 @@ pub fn run(
                         device,
                         budget: format!("{pw}x{ph}"),
                         photons,
+                        frames,
                         width: scene.camera.width,
                         height: scene.camera.height,
                         repeats: plan.repeats.max(1),
@@ -264,7 +312,7 @@ pub fn run(
                         reference_noise: r.info.noise,
                     };
                     log(&format!(
-                        "  {technique}/{filter}/{backend_name} {pw}x{ph}: {:.2} ms, relMSE {:.5} (raw {:.5})",
+                        "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: {:.2} ms, relMSE {:.5} (raw {:.5})",
                         rec.frame_ms, rec.relative_mse, rec.raw_relative_mse
                     ));
                     records.push(rec);
@@ -279,18 +327,19 @@ pub fn run(
 /// caustics and of the raw deposit, their ratio, and the peak ratios.
 pub fn table(records: &[Record]) -> String {
     let mut s = String::from(
-        "| scene | technique (filter) | backend | photons | frame ms | relMSE filtered | relMSE raw | \
+        "| scene | technique (filter) | backend | photons | frames | ms | relMSE filtered | relMSE raw | \
          filtered / raw | peak filtered | peak raw | FLIP | bias | variance |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     for r in records {
         s.push_str(&format!(
-            "| {} | {} ({}) | {} | {} | {:.1} | {:.3e} | {:.3e} | {:.3} | {:.3} | {:.3} | {} | {:+.4} | {:.2e} |\n",
+            "| {} | {} ({}) | {} | {} | {} | {:.1} | {:.3e} | {:.3e} | {:.3} | {:.3} | {:.3} | {} | {:+.4} | {:.2e} |\n",
             r.scene,
             r.technique,
             r.filter,
             r.backend,
             r.budget,
+            r.frames,
             r.frame_ms,
             r.relative_mse,
             r.raw_relative_mse,
@@ -382,7 +431,15 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
     let mut curves: BTreeMap<String, Vec<(f64, f64, f64)>> = BTreeMap::new();
     for r in rs {
         curves
-            .entry(format!("{} {} / {}", r.technique, r.filter, r.backend))
+            .entry(if r.frames > 1 {
+                // an accumulation's points (one per budget) are a series of their own
+                format!(
+                    "{} {} / {}, {} frames",
+                    r.technique, r.filter, r.backend, r.frames
+                )
+            } else {
+                format!("{} {} / {}", r.technique, r.filter, r.backend)
+            })
             .or_default()
             .push((r.frame_ms, r.relative_mse, r.raw_relative_mse));
     }

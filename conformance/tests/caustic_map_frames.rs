@@ -16,9 +16,9 @@
 
 use caustica_conformance::backends;
 use caustica_core::frame::technique::Technique;
-use caustica_core::{Backend, FrameStats};
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{Backend, FrameStats};
 
 fn settings() -> CausticMapSettings {
     CausticMapSettings {
@@ -444,7 +444,10 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
         // the first frame traces into every receiver's tile; its reach mask comes back
         // without a wait, and a later frame lays the atlas out for the reached ones
         t.frame(b.as_mut(), &mut |_| {}).expect("frame");
-        assert!(layout_words(&t).contains("2 tiles"), "{name}: pruned before the mask came back");
+        assert!(
+            layout_words(&t).contains("2 tiles"),
+            "{name}: pruned before the mask came back"
+        );
         let stats = settle(&mut t, b.as_mut());
         let after = layout_words(&t);
         assert!(

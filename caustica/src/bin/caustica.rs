@@ -55,8 +55,9 @@ enum Command {
         #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
         /// Frames to render; the last is written. Above 1, a technique with progressive
-        /// accumulation (`accumulate`) sums the frames' photons as one frame of all of
-        /// them; PhotonGi gets a new seed per frame for its temporal filter.
+        /// accumulation (`accumulate`, every technique) sums the frames' photons as one
+        /// frame of all of them; with `accumulate: false` in the settings each frame gets a
+        /// new seed.
         #[arg(long, default_value_t = 1)]
         frames: u32,
         /// Output directory.
@@ -127,6 +128,10 @@ enum Command {
         /// Frames measured per combination (after one warm-up frame), seeds 1..=N.
         #[arg(long, default_value_t = 5)]
         repeats: usize,
+        /// Comma-separated frames accumulated per run (`accumulate: true`, timed to the
+        /// last frame; techniques without accumulation are skipped beyond 1).
+        #[arg(long, default_value = "1")]
+        frames: String,
         /// Image size WxH of the measurements and the references.
         #[arg(long, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
@@ -343,6 +348,7 @@ fn run(cli: Cli) -> Result<(), String> {
             backends,
             budgets,
             repeats,
+            frames,
             size,
             reference_noise,
             reference_frames,
@@ -368,6 +374,13 @@ fn run(cli: Cli) -> Result<(), String> {
                     .iter()
                     .map(|b| parse_grid(b))
                     .collect::<Result<_, _>>()?,
+                frames: list(&frames)
+                    .iter()
+                    .map(|f| match f.parse::<usize>() {
+                        Ok(n) if n >= 1 => Ok(n),
+                        _ => Err(format!("--frames: '{f}' is not a count of at least 1")),
+                    })
+                    .collect::<Result<_, _>>()?,
                 filters: list(&filters),
                 settings: read_settings(settings.as_deref())?,
                 repeats,
@@ -388,6 +401,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 ("--techniques", plan.techniques.is_empty()),
                 ("--backends", plan.backends.is_empty()),
                 ("--budgets", plan.budgets.is_empty()),
+                ("--frames", plan.frames.is_empty()),
                 ("--filters", plan.filters.is_empty()),
             ] {
                 if empty {
@@ -496,6 +510,11 @@ fn run(cli: Cli) -> Result<(), String> {
             if frames > 1 && accumulates && !s.contains_key("accumulate") {
                 s.insert("accumulate".into(), true.into());
             }
+            // the frames sum only where the settings accumulate
+            let accumulates = s
+                .get("accumulate")
+                .and_then(|v| v.as_bool())
+                .unwrap_or(false);
             let base_seed = s
                 .get("seed")
                 .or_else(|| defaults.as_ref().and_then(|d| d.get("seed")))

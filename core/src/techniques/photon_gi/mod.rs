@@ -151,7 +151,7 @@ impl Buffers {
         correct: bool,
     ) -> Buffers {
         let pixels = camera.width * camera.height;
-        let temporal = settings.temporal.then(|| TemporalBuffers {
+        let temporal = (settings.temporal && !settings.accumulate).then(|| TemporalBuffers {
             image: PingPong::create(rec, pixels, "temporal indirect history"),
             edge: PingPong::create(rec, pixels, "temporal edge history"),
             previous: camera,
@@ -210,6 +210,8 @@ pub struct PhotonGiPipeline {
     plan: FramePlan,
     /// Its own buffers.
     owned: Allocation,
+    /// Frames whose photons the photon map holds (progressive accumulation).
+    accumulated: u32,
 }
 
 /// The frame plan of `host`'s scene with `s`: the lights' photons and RSMs, every pass
@@ -290,8 +292,10 @@ fn make_plan(
             pass("resolve_caustics", true, "irradiance to radiance"),
             pass(
                 "temporal_blend",
-                s.temporal,
-                if s.temporal {
+                s.temporal && !s.accumulate,
+                if s.accumulate {
+                    "accumulate: the photon map holds the frames' photons"
+                } else if s.temporal {
                     "setting temporal"
                 } else {
                     "temporal off"
@@ -364,6 +368,22 @@ impl PhotonGiPipeline {
             t.image.reset();
             t.edge.reset();
         }
+        self.accumulated = 0;
+    }
+
+    /// With progressive accumulation, this frame's index among those the photon map holds
+    /// (0 without, and at an accumulation's first frame).
+    fn frame_index(&self) -> u32 {
+        if self.settings.accumulate {
+            self.accumulated
+        } else {
+            0
+        }
+    }
+
+    /// This frame's photon seed (a new one for every frame an accumulation adds).
+    fn frame_seed(&self) -> u32 {
+        crate::frame::receivers::accumulation_seed(self.settings.seed, self.frame_index())
     }
 
     /// The splat's parameters for camera `cam`.
@@ -406,7 +426,7 @@ impl PhotonGiPipeline {
             camera: cam,
             first,
             count,
-            seed: self.settings.seed,
+            seed: self.frame_seed(),
             max_bounces: self.settings.bounces,
             max_segments: self.settings.max_segments,
             tile_size: self.settings.tile_size,
@@ -436,7 +456,11 @@ impl PhotonGiPipeline {
     fn record_light(&self, rec: &mut Recording, host: &FrameHost, r: &LightRsm, store: u32) {
         let b = &self.buffers;
         let scene = host.scene();
-        let params = rsm::record_rsm(rec, scene, &b.rsm, &self.settings, r);
+        let seeded = PhotonGiSettings {
+            seed: self.frame_seed(),
+            ..self.settings.clone()
+        };
+        let params = rsm::record_rsm(rec, scene, &b.rsm, &seeded, r);
         rec.kernel(SampleRsm {
             params: RsmParams {
                 // the orthographic face's plane, for a directional light's photons
@@ -518,8 +542,13 @@ impl PhotonGiPipeline {
                 direction_map: b.direction_map,
             });
         }
+        // an accumulation's sums read as one frame of all their photons
+        let frames = self.frame_index() + 1;
         rec.kernel(ResolveCaustics {
-            params: self.deposit_params(cam),
+            params: DepositParams {
+                flux_quantum: self.photons.flux_quantum / frames as f32,
+                ..self.deposit_params(cam)
+            },
             gbuffer: g,
             photon_map: b.photon_map,
             out: b.raw,
@@ -592,6 +621,7 @@ impl Pipeline for PhotonGiPipeline {
             buffers,
             plan,
             owned: alloc,
+            accumulated: 0,
         })
     }
 
@@ -600,6 +630,9 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
+        if seed != self.settings.seed {
+            self.accumulated = 0;
+        }
         self.settings.seed = seed;
     }
 
@@ -618,10 +651,14 @@ impl Pipeline for PhotonGiPipeline {
         frame.stats.photons_per_light = rsms.iter().map(|r| r.photons as u64).collect();
         let (cam, b) = (host.camera(), self.buffers);
         host.record_visibility(frame.rec());
+        let first = self.frame_index() == 0;
         let rec = frame.rec();
-        rec.clear_photon_map(&b.photon_map);
-        if b.uncorrected.is_some() {
-            rec.clear_photon_map(&b.direction_map);
+        // an accumulating photon map keeps the frames before
+        if first {
+            rec.clear_photon_map(&b.photon_map);
+            if b.uncorrected.is_some() {
+                rec.clear_photon_map(&b.direction_map);
+            }
         }
         rec.clear(b.counters);
         rec.clear(b.photon_count);
@@ -659,6 +696,10 @@ impl Pipeline for PhotonGiPipeline {
             t.edge.swap();
             t.previous = cam;
         }
+        if self.settings.accumulate {
+            self.accumulated += 1;
+            frame.stats.accumulated_frames = self.accumulated;
+        }
         Ok(())
     }
 
@@ -674,7 +715,11 @@ impl Pipeline for PhotonGiPipeline {
         change: Change,
     ) -> Result<Reaction, Error> {
         match change {
-            Change::Camera => return Ok(Reaction::Kept),
+            Change::Camera => {
+                // the photon map is the camera's: an accumulation starts again
+                self.accumulated = 0;
+                return Ok(Reaction::Kept);
+            }
             // every per-pixel buffer and the filters' history anew, at the new size
             Change::Resized => return Ok(Reaction::Rebuild),
             Change::Instances { .. }

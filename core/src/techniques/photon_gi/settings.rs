@@ -84,8 +84,14 @@ pub struct PhotonGiSettings {
     /// Most pixels from a splat's centre to its edge (a cost bound; larger splats are
     /// clipped and counted as saturated).
     pub max_splat_px: u32,
-    /// The temporal accumulation (003 section 24.4.1) over reprojected history.
+    /// The temporal accumulation (003 section 24.4.1) over reprojected history (left out
+    /// with `accumulate`, whose photon map holds the history).
     pub temporal: bool,
+    /// Progressive accumulation for a still camera, lights and scene: the photon map keeps
+    /// every frame's photons (each frame's seeded anew), so N frames of M photons resolve
+    /// as one frame of N x M; a moved camera, light, object or material, new settings or
+    /// a new seed start again.
+    pub accumulate: bool,
     /// A-Trous iterations after it (003 section 24.4.2; default 4, 0 turns it off).
     pub atrous_iterations: u32,
     /// Eq. 18's variance clipping of the detail coefficients, in standard deviations.
@@ -125,6 +131,7 @@ impl Default for PhotonGiSettings {
             rsm_sampling: RsmSampling::Importance,
             max_splat_px: 48,
             temporal: true,
+            accumulate: false,
             atrous_iterations: 4,
             atrous_clip_sigmas: 1.0,
             shading_normals: true,
