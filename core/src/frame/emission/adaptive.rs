@@ -20,7 +20,8 @@
 //! **Memory** (004 section 4.3, [`TraversalSettings::sizes`]). A level's list holds all
 //! of its clusters when the byte limit allows; the passes take the rest of the limit. A
 //! tighter limit caps the lists: a cluster whose children do not fit is output at its
-//! level from fresh photons and counted (`clusters_overflowed`), never lost. The pass
+//! level from fresh photons and counted (`clusters_overflowed`), never lost (which ones
+//! overflow is the device atomics' order: such a frame is not bitwise reproducible). The pass
 //! size changes nothing: a photon's jitter and Fresnel choices are keyed by its texel and
 //! level, and the atlas sums are exact fixed-point, so any limit whose lists are whole
 //! gives bitwise the same atlas.
