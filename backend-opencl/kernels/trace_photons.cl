@@ -68,7 +68,8 @@ inline void emit_photon(__global const GpuLight* lights, __global const TracePar
                         uint index, float3* origin, float3* dir, float3* flux) {
     uint ix = index % p->grid_w;
     uint iy = index / p->grid_w;
-    float2 jitter = (float2)(random_f32(p->seed, index, 0u, 0u), random_f32(p->seed, index, 0u, 1u));
+    float2 jitter = (float2)(stratum_jitter(p->jitter_seed, index, 0u, p->stratum),
+                             stratum_jitter(p->jitter_seed, index, 1u, p->stratum));
     float2 u = stratified_cell(ix, iy, p->grid_w, p->grid_h, jitter);
     *flux = load3g(p->photon_flux);
     float3 axis = load3g(p->axis);

@@ -85,7 +85,8 @@ fn emit_photon(p: TraceParams, index: u32, origin: ptr<function, vec3<f32>>,
                dir: ptr<function, vec3<f32>>, flux: ptr<function, vec3<f32>>) {
     let ix = index % p.grid_w;
     let iy = index / p.grid_w;
-    let jitter = vec2<f32>(random_f32(p.seed, index, 0u, 0u), random_f32(p.seed, index, 0u, 1u));
+    let jitter = vec2<f32>(stratum_jitter(p.jitter_seed, index, 0u, p.stratum),
+                           stratum_jitter(p.jitter_seed, index, 1u, p.stratum));
     let u = stratified_cell(ix, iy, p.grid_w, p.grid_h, jitter);
     *flux = p.photon_flux.xyz;
     let axis = p.axis.xyz;

@@ -46,7 +46,7 @@ use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::photon_clusters::{
     cluster_photon_index, entry_cluster, live_clusters, photon_met_caster, NO_TRIANGLE,
 };
-use caustica_core::math::rng::random_f32;
+use caustica_core::math::rng::{random_f32, stratum_jitter};
 use caustica_core::math::sampling::{
     stratified_cell, tiled_photon_index, to_world, uniform_cone, view_plane_direction,
     view_plane_texel_weight,
@@ -586,8 +586,8 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
     let ix = index % p.grid_w;
     let iy = index / p.grid_w;
     let jitter = Vec2::new(
-        random_f32(p.seed, index, 0, 0),
-        random_f32(p.seed, index, 0, 1),
+        stratum_jitter(p.jitter_seed, index, 0, p.stratum),
+        stratum_jitter(p.jitter_seed, index, 1, p.stratum),
     );
     let u = stratified_cell(ix, iy, p.grid_w, p.grid_h, jitter);
     let flux = Vec3::from_slice(&p.photon_flux[..3]);

@@ -104,6 +104,10 @@
 // core::math::sampling
 #define PHOTON_TILE 8u
 
+// core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)
+#define R2_STEP_X 0xc13fa9a9u
+#define R2_STEP_Y 0x91e10da5u
+
 // core::math::density_gather
 #define MIN_WINDOW_HALF_WIDTH 1
 #define COUNT_CLAMP_PER_K 9u
@@ -218,7 +222,7 @@ typedef struct {
     uint photons[2]; // 32
 } DepositTexel;
 
-// core::device::layout::TraceParams, 256 bytes
+// core::device::layout::TraceParams, 272 bytes
 typedef struct {
     uint light; // 0
     uint emission; // 4
@@ -237,7 +241,11 @@ typedef struct {
     uint split_budget; // 116
     uint fresnel_model; // 120
     uint caster_sphere_count; // 124
-    float caster_spheres[MAX_CASTER_SPHERES][4]; // 128
+    uint jitter_seed; // 128
+    uint stratum; // 132
+    uint _pad0; // 136
+    uint _pad1; // 140
+    float caster_spheres[MAX_CASTER_SPHERES][4]; // 144
 } TraceParams;
 
 // core::device::layout::DepositParams, 80 bytes

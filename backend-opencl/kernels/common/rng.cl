@@ -14,6 +14,13 @@ inline uint random_u32(uint seed, uint index, uint bounce, uint dimension) {
 
 inline float u32_to_unit_f32(uint x) { return (float)(x >> 8) * (1.0f / 16777216.0f); }
 
+// core::math::rng::stratum_jitter: the cell's rotation plus the k-th R2 point, mod 1 in
+// 0.32 fixed point.
+inline float stratum_jitter(uint jitter_seed, uint index, uint dim, uint k) {
+    uint step = (dim & 1u) ? R2_STEP_Y : R2_STEP_X;
+    return u32_to_unit_f32(random_u32(jitter_seed, index, 0u, dim) + k * step);
+}
+
 inline float random_f32(uint seed, uint index, uint bounce, uint dimension) {
     return u32_to_unit_f32(random_u32(seed, index, bounce, dimension));
 }

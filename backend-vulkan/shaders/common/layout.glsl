@@ -104,6 +104,10 @@ const float MIN_COSINE = 0.0001;
 // core::math::sampling
 const uint PHOTON_TILE = 8u;
 
+// core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)
+const uint R2_STEP_X = 0xc13fa9a9u;
+const uint R2_STEP_Y = 0x91e10da5u;
+
 // core::math::density_gather
 const int MIN_WINDOW_HALF_WIDTH = 1;
 const uint COUNT_CLAMP_PER_K = 9u;
@@ -218,7 +222,7 @@ struct DepositTexel {
     uvec2 photons; // 32
 };
 
-// core::device::layout::TraceParams, 256 bytes
+// core::device::layout::TraceParams, 272 bytes
 struct TraceParams {
     uint light; // 0
     uint emission; // 4
@@ -237,7 +241,11 @@ struct TraceParams {
     uint split_budget; // 116
     uint fresnel_model; // 120
     uint caster_sphere_count; // 124
-    vec4 caster_spheres[MAX_CASTER_SPHERES]; // 128
+    uint jitter_seed; // 128
+    uint stratum; // 132
+    uint _pad0; // 136
+    uint _pad1; // 140
+    vec4 caster_spheres[MAX_CASTER_SPHERES]; // 144
 };
 
 // core::device::layout::DepositParams, 80 bytes

@@ -158,12 +158,20 @@ impl Fixture {
         caustica_core::frame::plan::SceneFeatures::of(&self.scene).trace_variant()
     }
 
-    /// The one batch of every photon of light `domains[k]`.
+    /// The one batch of every photon of light `domains[k]`, as the fifth frame of an
+    /// accumulation (a jitter seed of its own and stratum 4: every port's strata
+    /// arithmetic is compared, not only the plain jitter).
     pub fn trace_batch(&self, k: usize) -> TraceParams {
         let (light, d) = &self.constants.domains[k];
         let count = self.settings.photons_w * self.settings.photons_h;
-        self.constants
-            .trace_params(&self.settings, *light, d, 0, count)
+        let p = self
+            .constants
+            .trace_params(&self.settings, *light, d, 0, count);
+        TraceParams {
+            jitter_seed: p.seed ^ 0x5eed_0004,
+            stratum: 4,
+            ..p
+        }
     }
 
     /// [`Fixture::run_trace_with`] with compiled variant `variant` (without

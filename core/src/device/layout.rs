@@ -759,6 +759,16 @@ pub struct TraceParams {
     /// How many of `caster_spheres` a photon's first segment is tested against (0: no
     /// test, every photon is traversed).
     pub caster_sphere_count: u32,
+    /// The seed of the photons' jitter inside their grid cells: `seed` for a frame on its
+    /// own; with progressive accumulation the accumulation's first seed, so that every
+    /// frame's photon in a cell is rotated alike ([`crate::math::rng::stratum_jitter`]).
+    pub jitter_seed: u32,
+    /// The frame's index in an accumulation (0 without): frame `k`'s jitter is the `k`-th
+    /// point of a low-discrepancy sequence rotated per cell, so the frames' photons
+    /// stratify each cell together.
+    pub stratum: u32,
+    /// Padding (the spheres start on 16 bytes).
+    pub _pad: [u32; 2],
     /// Balls around the caustic casters (centre xyz, radius w; world space,
     /// [`crate::device::caster_spheres`]): a photon whose first segment meets none of them
     /// cannot meet a caster first, so it ends as `NO_SPECULAR` with no ray traced

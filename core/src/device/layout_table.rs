@@ -211,7 +211,7 @@ table! {
     TraceParams {
         light, emission, grid_w, grid_h, first, count, seed, max_bounces,
         origin, axis, rect_u, rect_v, photon_flux, flux_quantum, split_budget, fresnel_model,
-        caster_sphere_count, caster_spheres
+        caster_sphere_count, jitter_seed, stratum, _pad, caster_spheres
     }
     DepositParams { camera, flux_quantum, hit_distance_quantum, depth_tolerance, photon_capacity }
     GatherParams {

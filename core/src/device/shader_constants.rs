@@ -237,6 +237,13 @@ pub fn groups() -> Vec<ConstGroup> {
             vec![named!("PHOTON_TILE", U32, sampling::PHOTON_TILE)],
         ),
         group(
+            "core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)",
+            vec![
+                named!("R2_STEP_X", U32, crate::math::rng::R2_STEP[0]),
+                named!("R2_STEP_Y", U32, crate::math::rng::R2_STEP[1]),
+            ],
+        ),
+        group(
             "core::math::density_gather",
             vec![
                 named!(

@@ -481,18 +481,18 @@ mod tests {
     fn members_follow_the_rules() {
         let wgsl = generate(Language::Wgsl).unwrap();
         assert!(wgsl.contains("    position: vec3<f32>, // 0\n    u: f32, // 12\n"));
-        assert!(wgsl.contains("caster_spheres: array<vec4<f32>, MAX_CASTER_SPHERES>, // 128"));
+        assert!(wgsl.contains("caster_spheres: array<vec4<f32>, MAX_CASTER_SPHERES>, // 144"));
         assert!(wgsl.contains("    _pad0: u32, // 116\n    _pad1: u32, // 120\n"));
         assert!(wgsl.contains("const NO_TILE: u32 = 0xffffffffu;"));
         assert!(wgsl.contains("const OFFSET_REL: f32 = 3.0517578e-5f;"));
         let cl = generate(Language::OpenCl).unwrap();
-        assert!(cl.contains("    float caster_spheres[MAX_CASTER_SPHERES][4]; // 128\n"));
+        assert!(cl.contains("    float caster_spheres[MAX_CASTER_SPHERES][4]; // 144\n"));
         assert!(cl.contains("    uint flux[3][2]; // 0\n"));
         assert!(cl.contains("#define COUNTER_STORED_FLUX 12\n"));
         assert!(cl.contains("#define EDGE_TEXEL_NOT_RECEIVER (-1.0f)\n"));
         assert!(cl.contains("    uint _pad0; // 24\n    uint _pad1; // 28\n} AtlasParams;"));
         let glsl = generate(Language::Glsl).unwrap();
-        assert!(glsl.contains("    vec4 caster_spheres[MAX_CASTER_SPHERES]; // 128\n"));
+        assert!(glsl.contains("    vec4 caster_spheres[MAX_CASTER_SPHERES]; // 144\n"));
         assert!(glsl.contains("    uvec3 indices; // 0\n"));
         assert!(glsl.contains("const int REACH_TILE = 8;"));
     }

@@ -32,9 +32,44 @@ pub fn random_f32(seed: u32, index: u32, bounce: u32, dimension: u32) -> f32 {
     u32_to_unit_f32(random_u32(seed, index, bounce, dimension))
 }
 
+/// Steps of the R2 sequence (Roberts' generalised golden ratio: `1/phi2`, `1/phi2^2`,
+/// `phi2` the plastic number) in 0.32 fixed point: point `k` is `k * step mod 1` in each
+/// dimension, low-discrepancy for every prefix.
+pub const R2_STEP: [u32; 2] = [3_242_174_889, 2_447_445_413];
+
+/// Dimension `dim` (0: x, 1: y) of the jitter of photon `index` in its grid cell for
+/// stratum `k` ([`crate::device::layout::TraceParams::stratum`]): the cell's random
+/// rotation (`jitter_seed`) plus the `k`-th R2 point, mod 1, added in 0.32 fixed point (so
+/// every port gets the same bits). Stratum 0 is the plain `random_f32(jitter_seed, index,
+/// 0, dim)`; strata 0 .. N of one cell spread over it as a stratified sample does.
+#[inline]
+pub fn stratum_jitter(jitter_seed: u32, index: u32, dim: u32, k: u32) -> f32 {
+    let r = random_u32(jitter_seed, index, 0, dim);
+    u32_to_unit_f32(r.wrapping_add(k.wrapping_mul(R2_STEP[dim as usize & 1])))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn strata_spread_over_a_cell() {
+        for index in [0u32, 7, 1 << 20] {
+            // stratum 0 is the plain jitter
+            assert_eq!(stratum_jitter(9, index, 0, 0), random_f32(9, index, 0, 0));
+            // 64 strata over a 4 x 4 split of the cell: 4 each, give or take 2 (64
+            // independent points would leave some sub-cell with 0 or 9 often)
+            let mut n = [0u32; 16];
+            for k in 0..64 {
+                let (x, y) = (
+                    stratum_jitter(9, index, 0, k),
+                    stratum_jitter(9, index, 1, k),
+                );
+                n[(y * 4.0) as usize * 4 + (x * 4.0) as usize] += 1;
+            }
+            assert!(n.iter().all(|&c| (2..=6).contains(&c)), "{index}: {n:?}");
+        }
+    }
 
     #[test]
     fn unit_range_and_mean() {

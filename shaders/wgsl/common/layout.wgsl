@@ -104,6 +104,10 @@ const MIN_COSINE: f32 = 0.0001f;
 // core::math::sampling
 const PHOTON_TILE: u32 = 8u;
 
+// core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)
+const R2_STEP_X: u32 = 0xc13fa9a9u;
+const R2_STEP_Y: u32 = 0x91e10da5u;
+
 // core::math::density_gather
 const MIN_WINDOW_HALF_WIDTH: i32 = 1;
 const COUNT_CLAMP_PER_K: u32 = 9u;
@@ -218,7 +222,7 @@ struct DepositTexel {
     photons: vec2<u32>, // 32
 }
 
-// core::device::layout::TraceParams, 256 bytes
+// core::device::layout::TraceParams, 272 bytes
 struct TraceParams {
     light: u32, // 0
     emission: u32, // 4
@@ -237,7 +241,11 @@ struct TraceParams {
     split_budget: u32, // 116
     fresnel_model: u32, // 120
     caster_sphere_count: u32, // 124
-    caster_spheres: array<vec4<f32>, MAX_CASTER_SPHERES>, // 128
+    jitter_seed: u32, // 128
+    stratum: u32, // 132
+    _pad0: u32, // 136
+    _pad1: u32, // 140
+    caster_spheres: array<vec4<f32>, MAX_CASTER_SPHERES>, // 144
 }
 
 // core::device::layout::DepositParams, 80 bytes

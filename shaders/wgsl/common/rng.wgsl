@@ -19,6 +19,13 @@ fn u32_to_unit_f32(x: u32) -> f32 {
     return f32(x >> 8u) * (1.0f / 16777216.0f);
 }
 
+// core::math::rng::stratum_jitter: the cell's rotation plus the k-th R2 point, mod 1 in
+// 0.32 fixed point.
+fn stratum_jitter(jitter_seed: u32, index: u32, dim: u32, k: u32) -> f32 {
+    let step = select(R2_STEP_X, R2_STEP_Y, (dim & 1u) == 1u);
+    return u32_to_unit_f32(random_u32(jitter_seed, index, 0u, dim) + k * step);
+}
+
 fn random_f32(seed: u32, index: u32, bounce: u32, dimension: u32) -> f32 {
     return u32_to_unit_f32(random_u32(seed, index, bounce, dimension));
 }

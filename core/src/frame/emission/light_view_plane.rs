@@ -225,6 +225,10 @@ impl LightViewPlane {
             // no first-segment test until the technique adds its casters' balls
             // (`CasterSpheres::apply`)
             caster_sphere_count: 0,
+            // a frame on its own: jitter from its seed (an accumulation sets its stratum)
+            jitter_seed: seed,
+            stratum: 0,
+            _pad: [0; 2],
             caster_spheres: [[0.0; 4]; crate::device::layout::MAX_CASTER_SPHERES],
         }
     }

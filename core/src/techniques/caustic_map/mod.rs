@@ -238,6 +238,9 @@ impl CausticMapPipeline {
                     params: TraceParams {
                         split_budget: s.split_budget,
                         fresnel_model: s.fresnel.kernel_value(),
+                        // the passes of an accumulation stratify each grid cell together
+                        jitter_seed: ViewPlanes::plane_seed(s.seed, *light, *k),
+                        stratum: self.receiver.pass_index(),
                         ..self.planes.trace_params(
                             plane,
                             *light,

@@ -26,7 +26,7 @@ pub use settings::SspmSettings;
 
 use crate::backend::Backend;
 use crate::device::handle::{Buf, GBufferPlanes};
-use crate::device::layout::Photon;
+use crate::device::layout::{Photon, TraceParams};
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
@@ -161,12 +161,22 @@ impl SspmPipeline {
                 let count = (per_light - first).min(p.batch as u64) as u32;
                 let mut rec = Recording::new();
                 rec.clear(p.photon_count);
+                // the frames of an accumulation stratify each grid cell together: the
+                // first frame's jitter seed, this frame's stratum
+                let first_frame =
+                    self.constants
+                        .trace_params(&self.settings, *light, d, first as u32, count);
+                let params = TraceParams {
+                    jitter_seed: first_frame.seed,
+                    stratum: self.receiver.frame_index(),
+                    ..self
+                        .constants
+                        .trace_params(&settings, *light, d, first as u32, count)
+                };
                 rec.kernel(TracePhotons {
                     scene: host.scene(),
                     variant,
-                    params: self
-                        .constants
-                        .trace_params(&settings, *light, d, first as u32, count),
+                    params,
                     photons: p.photons,
                     photon_count: p.photon_count,
                     counters: map.counters,
