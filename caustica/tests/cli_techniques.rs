@@ -44,6 +44,8 @@ fn a_small_report_measures_the_technique_by_name() {
         "cpu",
         "--budgets",
         "64x64",
+        "--frames",
+        "1,3",
         "--repeats",
         "2",
         "--size",
@@ -66,6 +68,17 @@ fn a_small_report_measures_the_technique_by_name() {
     let rel = r["relative_mse"].as_f64().expect("a number");
     let raw = r["raw_relative_mse"].as_f64().expect("a number");
     assert!(rel.is_finite() && raw.is_finite() && rel >= 0.0, "{r}");
+    // the frames axis: a single frame and three accumulated, timed to the last
+    assert_eq!(r["frames"], 1);
+    let three = &records[1];
+    assert_eq!(three["frames"], 3);
+    let t3 = three["frame_ms"].as_f64().expect("a number");
+    assert!(
+        t3 > 0.0
+            && three["raw_relative_mse"]
+                .as_f64()
+                .is_some_and(f64::is_finite)
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -78,6 +91,10 @@ fn report_arguments_are_checked_before_any_reference_is_rendered() {
         (vec!["--backends", " , "], "--backends lists nothing"),
         (vec!["--budgets", ""], "--budgets lists nothing"),
         (vec!["--repeats", "0"], "--repeats must be at least 1"),
+        (
+            vec!["--frames", "0"],
+            "--frames: '0' is not a count of at least 1",
+        ),
         (vec!["--backends", "bogus"], "unknown backend"),
     ] {
         let mut cmd = vec!["report", "--out", d];

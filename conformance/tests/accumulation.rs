@@ -189,3 +189,50 @@ fn a_moved_camera_starts_the_screen_accumulation_again() {
         "a restarted accumulation's first frame differs"
     );
 }
+
+/// No ghosting: a moved light restarts every technique's accumulation, so the frames after
+/// the move are a fresh accumulation's, bitwise (the error of frame k after a move is that
+/// of k frames in the new state, with nothing of the old light in it).
+#[test]
+fn a_moved_light_restarts_every_accumulation_without_ghosting() {
+    let (_, mut b) = caustica_conformance::backends()
+        .into_iter()
+        .next()
+        .expect("the cpu backend");
+    let b = b.as_mut();
+    let s = scene();
+    let mut moved = s.clone();
+    for l in &mut moved.lights {
+        if let caustica_core::scene::Light::Point { position, .. } = l {
+            *position += glam::Vec3::new(0.3, 0.0, -0.2);
+        }
+    }
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64, "accumulate": true });
+    for technique in ["sspm", "caustic-map", "adaptive-caustics", "photon-gi"] {
+        let mut t = create(technique, b, &s, &settings).expect("create");
+        for _ in 0..4 {
+            t.frame(b, &mut |_| {}).expect("frame");
+        }
+        t.set_lights(b, &moved.lights).expect("lights");
+        let mut f = create(technique, b, &moved, &settings).expect("create");
+        for k in 1..=2 {
+            let got = t.frame(b, &mut |_| {}).expect("frame");
+            let want = f.frame(b, &mut |_| {}).expect("frame");
+            assert_eq!(
+                got.accumulated_frames, k,
+                "{technique}: frame {k} after the move"
+            );
+            assert_eq!(want.accumulated_frames, k, "{technique}: a fresh frame {k}");
+            let (a, c) = (
+                t.read_output(b, "composite").expect("read"),
+                f.read_output(b, "composite").expect("read"),
+            );
+            assert!(
+                a.pixels == c.pixels,
+                "{technique}: frame {k} after the move holds more than the new light's photons"
+            );
+        }
+        t.free(b).expect("free");
+        f.free(b).expect("free");
+    }
+}
