@@ -357,6 +357,52 @@ fn texel(l: &AtlasLayout, ph: &Photon) -> u32 {
     }
 }
 
+/// `refine_clusters` of `list` on the reference `r` and the candidate `c` with launch and
+/// child-list capacity `shape`: the reference's fates add up to the live clusters, and the
+/// candidate's results are the reference's, bitwise (with a child list too short for
+/// every refinement, which clusters find room is the atomics' arrival order: the lists
+/// are then compared as the clusters they hold). Returns the reference's counts.
+fn check_refinement(
+    v: &mut Verdict,
+    what: &str,
+    (r, c): (&mut dyn Backend, &mut dyn Backend),
+    (target, list, rects, slots): (&Target, &[u32], &[[f32; 4]], &[Photon]),
+    step: (u32, u32, u32, u32, u32),
+    shape: (ListLaunch, u32),
+) -> Result<Vec<u32>, String> {
+    let a = run_refine_as(r, target, (list, rects), slots, step, shape)?;
+    let b = run_refine_as(c, target, (list, rects), slots, step, shape)?;
+    let (launch, capacity) = shape;
+    let count = list.len() as u32 - FIRST;
+    let live = launch.length.saturating_sub(FIRST).min(count);
+    let w = |i: usize| a.counts[i];
+    let refined = (w(cluster_count::CHILDREN) - BEFORE) / 4 - w(cluster_count::OVERFLOW);
+    let fates = refined
+        + w(cluster_count::OUTPUT)
+        + w(cluster_count::DISCARDED)
+        + w(cluster_count::CONVERGED)
+        + w(cluster_count::OVERFLOW);
+    v.check(fates == live, || {
+        format!("{what}: cpu fates {:?} do not add up to {live}", a.counts)
+    });
+    let same = if capacity < BEFORE + 4 * count {
+        a.counts == b.counts
+            && a.counters == b.counters
+            && a.atlas == b.atlas
+            && a.outputs == b.outputs
+            && held_clusters(&a) == held_clusters(&b)
+    } else {
+        a == b
+    };
+    v.check(same, || {
+        format!(
+            "{what}: cpu and candidate differ (counts {:?} vs {:?})",
+            a.counts, b.counts
+        )
+    });
+    Ok(a.counts)
+}
+
 /// The clusters a refinement's lists hold, sorted: each child's parent (once per four
 /// children) and each converged or overflowed entry's cluster.
 fn held_clusters(r: &Refined) -> Vec<u32> {
@@ -533,53 +579,15 @@ pub fn check_adaptive_caustics(
             BEFORE + 4 * count,
         ),
     ] {
-        let a = run_refine_as(
-            r,
-            &Target::Atlas(&l),
-            (&list, &rects),
-            &sa,
+        let counts = check_refinement(
+            &mut v,
+            what,
+            (r, c),
+            (&Target::Atlas(&l), &list, &rects, &sa),
             step,
             (launch, capacity),
         )?;
-        let b = run_refine_as(
-            c,
-            &Target::Atlas(&l),
-            (&list, &rects),
-            &sa,
-            step,
-            (launch, capacity),
-        )?;
-        let live = launch.length.saturating_sub(FIRST).min(count);
-        let w = |i: usize| a.counts[i];
-        let refined = (w(cluster_count::CHILDREN) - BEFORE) / 4 - w(cluster_count::OVERFLOW);
-        v.check(
-            refined
-                + w(cluster_count::OUTPUT)
-                + w(cluster_count::DISCARDED)
-                + w(cluster_count::CONVERGED)
-                + w(cluster_count::OVERFLOW)
-                == live,
-            || format!("{what}: cpu fates {:?} do not add up to {live}", a.counts),
-        );
-        // which refined clusters find room in a full child list is the atomics' arrival
-        // order: the lists are compared as the clusters they hold (a child's parent, or
-        // the converged or overflowed entry), everything else bitwise
-        let same = if capacity < BEFORE + 4 * count {
-            a.counts == b.counts
-                && a.counters == b.counters
-                && a.atlas == b.atlas
-                && a.outputs == b.outputs
-                && held_clusters(&a) == held_clusters(&b)
-        } else {
-            a == b
-        };
-        v.check(same, || {
-            format!(
-                "{what}: cpu and candidate differ (counts {:?} vs {:?})",
-                a.counts, b.counts
-            )
-        });
-        v.note(format!("{what}: counts {:?}", a.counts));
+        v.note(format!("{what}: counts {counts:?}"));
     }
     // the trace launched from its record over half the list: those slots as the whole
     // list's, the rest untouched
@@ -728,41 +736,14 @@ pub fn check_indirect_refinement(
             length,
             indirect: true,
         };
-        let capacity = BEFORE + 4 * count;
-        let a = run_refine_as(
-            r,
-            &Target::Atlas(&l),
-            (&list, &rects),
-            &slots,
+        check_refinement(
+            &mut v,
+            &format!("length {length}"),
+            (r, c),
+            (&Target::Atlas(&l), &list, &rects, &slots),
             step,
-            (launch, capacity),
+            (launch, BEFORE + 4 * count),
         )?;
-        let b = run_refine_as(
-            c,
-            &Target::Atlas(&l),
-            (&list, &rects),
-            &slots,
-            step,
-            (launch, capacity),
-        )?;
-        let live = length.saturating_sub(FIRST).min(count);
-        let w = |i: usize| a.counts[i];
-        let fates = (w(cluster_count::CHILDREN) - BEFORE) / 4
-            + w(cluster_count::OUTPUT)
-            + w(cluster_count::DISCARDED)
-            + w(cluster_count::CONVERGED);
-        v.check(fates == live, || {
-            format!(
-                "length {length}: cpu fates {:?} for {live} live clusters",
-                a.counts
-            )
-        });
-        v.check(a == b, || {
-            format!(
-                "length {length}: counts cpu {:?} vs {:?}",
-                a.counts, b.counts
-            )
-        });
     }
     v.note(format!("{} list lengths, bound {count}", lengths.len()));
     Ok(v)

@@ -5,7 +5,7 @@
 //! **Levels.** Level `l` samples the plane on a `start_grid * 2^l` grid; level 0 holds
 //! every cluster of the start grid, each deeper level a list of the clusters refined
 //! into it ([`crate::math::photon_clusters`]). A level is taken in *passes* of at most
-//! `batch_clusters` clusters: `dispatch_args` reads the list's length on the device and
+//! `pass_clusters` clusters ([`TraversalSizes`]): `dispatch_args` reads the list's length on the device and
 //! writes the pass's launch shapes, `trace_photons` (`ADAPTIVE` variant) traces four
 //! photons per live cluster into slots and `refine_clusters` discards, outputs or
 //! refines each, appending children to the next level's list (both launched indirectly;
@@ -311,8 +311,6 @@ pub struct Traversal {
     pub settings: TraversalSettings,
     /// Deepest level any plane reaches.
     pub finest: u32,
-    /// Clusters per pass.
-    pub batch_clusters: u32,
     /// The lists' capacities and whether they are capped.
     pub sizes: TraversalSizes,
     level0: Buf<u32>,
@@ -503,7 +501,6 @@ impl Traversal {
         Traversal {
             settings: *settings,
             finest,
-            batch_clusters: c,
             level0: rec.upload(&ids, "adaptive start-grid clusters"),
             level0_length: rec.upload(&[start], "adaptive start-grid length"),
             caster_boxes: caster_boxes.to_vec(),
@@ -573,7 +570,7 @@ impl Traversal {
             planes: Vec::new(),
             output_counters: 0,
             flux_quantum: target.quanta().0,
-            pass_clusters: self.batch_clusters as u64,
+            pass_clusters: self.sizes.pass_clusters as u64,
             dense_equivalent: 0,
             kernels: Vec::new(),
         };
@@ -621,7 +618,7 @@ impl Traversal {
                     capacity,
                     children_capacity: children_capacity as u64,
                 });
-                let c = self.batch_clusters;
+                let c = self.sizes.pass_clusters;
                 // converged clusters (from the error metric's level) and overflowed ones
                 // (capped lists) are output at their level from fresh photons
                 let resample =

@@ -33,7 +33,7 @@ fn plan(
         "seed 004's traversal ({:?} metric, {}^2 start grid, batches of {} clusters), {}",
         s.metric,
         s.start_grid,
-        traversal.map_or(0, |t| t.batch_clusters),
+        traversal.map_or(0, |t| t.sizes.pass_clusters),
         receiver.stale_words()
     );
     receiver.plan(
