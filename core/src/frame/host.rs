@@ -315,6 +315,19 @@ impl FrameHost {
         Image::new(w, h, vec![[0.0; 4]; w as usize * h as usize])
     }
 
+    /// Reads a camera-space output back: its device image, or black where it has none
+    /// (the plan knows it is zero).
+    pub fn read_output_image(
+        &self,
+        backend: &mut dyn Backend,
+        image: Option<ImageBuf>,
+    ) -> Result<Image, Error> {
+        match image {
+            Some(i) => self.read_image(backend, i),
+            None => Ok(self.black_image()),
+        }
+    }
+
     /// A frame's statistics before anything runs: the technique, backend and device,
     /// the frame size and timing source, the plan with every skipped pass, the bytes of
     /// every buffer (`own_bytes`: the technique's) and the scene's degenerate triangles.

@@ -309,6 +309,13 @@ pub trait Pipeline: Sized {
         name: &str,
     ) -> Result<Image, Error>;
 
+    /// The device image of camera-space output `name` ([`Technique::output_image`]).
+    fn output_image(
+        &self,
+        host: &FrameHost,
+        name: &str,
+    ) -> Result<Option<crate::device::handle::ImageBuf>, Error>;
+
     /// The filtered estimate and the raw one (output names).
     fn estimate_outputs(&self) -> (&'static str, &'static str);
 
@@ -671,6 +678,10 @@ impl<P: Pipeline> Technique for Hosted<P> {
 
     fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
         self.read_output_named(backend, name)
+    }
+
+    fn output_image(&self, name: &str) -> Result<Option<crate::device::handle::ImageBuf>, Error> {
+        self.pipeline().output_image(&self.host, name)
     }
 
     fn estimate_outputs(&self) -> (&'static str, &'static str) {

@@ -52,10 +52,10 @@ pub trait Technique {
     /// [`RecordedFrame::submit`] (one submission, no wait) or encode it into the host's
     /// own command stream, and collect its statistics a frame or more later with
     /// [`crate::frame::submitted::FrameTicket::stats`]. The images are those
-    /// [`Technique::frame`] would make, bitwise. Work whose next step depends on data read
-    /// back from the device runs here, waited for, before the rest is recorded; each
-    /// technique says which (Sspm and PhotonGi: none; CausticMap: a stale atlas's photon
-    /// pass; AdaptiveCaustics: its traversal).
+    /// [`Technique::frame`] would make, bitwise. Nothing here waits on the device: what
+    /// depends on data the device computes stays on the device (AdaptiveCaustics'
+    /// traversal) or is read back a frame later (CausticMap's reach mask);
+    /// [`FrameStats::host_waits`] counts any wait, and is 0 for every technique.
     fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error>;
 
     /// Records one frame and submits it without waiting ([`Technique::record_frame`],
@@ -71,6 +71,15 @@ pub trait Technique {
     /// outputs ([`OutputInfo::camera_space`]), the technique's own data otherwise. An
     /// output that was not requested is an error.
     fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error>;
+
+    /// The device image of camera-space output `name`, for a host that uses it on the
+    /// device (a composite, a copy into its own texture): `width x height` texels of
+    /// linear radiance (`[r, g, b, 1]`, W/(sr m^2)), row-major from the camera's top-left
+    /// pixel. It holds the last recorded frame once that frame has run, and stays valid
+    /// until the next update that resizes the frame (`set_camera` with a new size,
+    /// `set_settings`). `None`: the plan knows the output is zero (it has no image); an
+    /// output that is not camera-space or was not requested is an error.
+    fn output_image(&self, name: &str) -> Result<Option<crate::device::handle::ImageBuf>, Error>;
 
     /// The technique's estimate after its filter and its unfiltered estimate (output
     /// names): what error-against-time measurements compare with a reference.

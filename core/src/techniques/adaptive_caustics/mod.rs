@@ -36,6 +36,7 @@ pub use settings::{
 };
 
 use crate::backend::Backend;
+use crate::device::handle::ImageBuf;
 use crate::frame::allocation::Allocation;
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
@@ -254,6 +255,17 @@ impl Pipeline for AdaptiveCausticsPipeline {
             }
             Target::Screen { receiver, .. } => {
                 receiver.read_output(backend, host, "adaptive-caustics", name)
+            }
+        }
+    }
+
+    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+        match &self.target {
+            Target::Atlas { receiver, .. } => {
+                receiver.output_image(host, "adaptive-caustics", name)
+            }
+            Target::Screen { receiver, .. } => {
+                receiver.output_image(host, "adaptive-caustics", name)
             }
         }
     }

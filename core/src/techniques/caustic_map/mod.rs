@@ -39,6 +39,7 @@ pub use crate::frame::receivers::atlas::settings::{
 pub use crate::frame::receivers::atlas::{atlas_gather_params, OUTPUTS};
 
 use crate::backend::Backend;
+use crate::device::handle::ImageBuf;
 use crate::device::layout::{AtlasTexel, TraceParams};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
@@ -445,6 +446,10 @@ impl Pipeline for CausticMapPipeline {
     ) -> Result<Image, Error> {
         self.receiver
             .read_output(backend, host, "caustic-map", name)
+    }
+
+    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+        self.receiver.output_image(host, "caustic-map", name)
     }
 
     fn estimate_outputs(&self) -> (&'static str, &'static str) {

@@ -757,8 +757,12 @@ impl Pipeline for PhotonGiPipeline {
         host: &FrameHost,
         name: &str,
     ) -> Result<Image, Error> {
+        host.read_output_image(backend, self.output_image(host, name)?)
+    }
+
+    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
         let b = &self.buffers;
-        let image = match name {
+        Ok(match name {
             "composite" => host.screen().composite,
             "direct" => host.screen().direct,
             "indirect_raw" => Some(b.raw),
@@ -769,11 +773,7 @@ impl Pipeline for PhotonGiPipeline {
                     OUTPUTS.map(|o| o.0).join(", ")
                 )))
             }
-        };
-        match image {
-            Some(i) => host.read_image(backend, i),
-            None => Ok(host.black_image()),
-        }
+        })
     }
 
     fn estimate_outputs(&self) -> (&'static str, &'static str) {

@@ -25,7 +25,7 @@ pub use constants::{volume_light_plans, FrameConstants};
 pub use settings::SspmSettings;
 
 use crate::backend::Backend;
-use crate::device::handle::{Buf, GBufferPlanes};
+use crate::device::handle::{Buf, GBufferPlanes, ImageBuf};
 use crate::device::layout::{Photon, TraceParams};
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
@@ -344,6 +344,10 @@ impl Pipeline for SspmPipeline {
         self.receiver.read_output(backend, host, "sspm", name)
     }
 
+    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+        self.receiver.output_image(host, "sspm", name)
+    }
+
     fn estimate_outputs(&self) -> (&'static str, &'static str) {
         (Output::FilteredCaustics.stem(), Output::RawCaustics.stem())
     }
@@ -396,7 +400,7 @@ impl Hosted<SspmPipeline> {
     pub fn read_image(
         &self,
         backend: &mut dyn Backend,
-        image: crate::device::handle::ImageBuf,
+        image: ImageBuf,
     ) -> Result<Image, Error> {
         self.host().read_image(backend, image)
     }

@@ -855,16 +855,9 @@ impl AtlasReceiver {
         }
     }
 
-    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
-    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
-    /// zeros; `technique` names the technique in errors.
-    pub fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Image, Error> {
+    /// Checks that `name` is an output and was requested; `technique` names the
+    /// technique in errors.
+    fn check_output(&self, technique: &str, name: &str) -> Result<(), Error> {
         if !OUTPUTS.iter().any(|(n, _)| *n == name) {
             return Err(Error::InvalidParameter(format!(
                 "{technique} has no output '{name}'; outputs: {}",
@@ -876,28 +869,56 @@ impl AtlasReceiver {
                 "output '{name}' was not requested (CausticMapSettings::outputs)"
             )));
         }
+        Ok(())
+    }
+
+    /// The device image of camera-space output `name` (camera-sized, linear radiance,
+    /// row-major from the top-left pixel): `None` where the plan knows it is zero; the
+    /// atlas, which is not camera-space, is an error here.
+    pub fn output_image(
+        &self,
+        host: &FrameHost,
+        technique: &str,
+        name: &str,
+    ) -> Result<Option<ImageBuf>, Error> {
+        self.check_output(technique, name)?;
         let (screen, i) = (host.screen(), self.images);
-        let buf = match name {
+        Ok(match name {
             "composite" => screen.composite.or(screen.direct),
             "direct" => screen.direct,
             "caustics_raw" => i.raw,
             "caustics_filtered" => i.filtered,
             _ => {
-                let side = self.settings.atlas_size;
-                return match self.atlas {
-                    Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
-                    None => Ok(Image::new(
-                        side,
-                        side,
-                        vec![[0.0; 4]; side as usize * side as usize],
-                    )),
-                };
+                return Err(Error::InvalidParameter(format!(
+                    "{technique}'s output '{name}' is not camera-space: read it back"
+                )))
             }
-        };
-        match buf {
-            Some(b) => host.read_image(backend, b),
-            None => Ok(host.black_image()),
+        })
+    }
+
+    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
+    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
+    /// zeros; `technique` names the technique in errors.
+    pub fn read_output(
+        &self,
+        backend: &mut dyn Backend,
+        host: &FrameHost,
+        technique: &str,
+        name: &str,
+    ) -> Result<Image, Error> {
+        self.check_output(technique, name)?;
+        if name == "caustic_atlas" {
+            let side = self.settings.atlas_size;
+            return match self.atlas {
+                Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
+                None => Ok(Image::new(
+                    side,
+                    side,
+                    vec![[0.0; 4]; side as usize * side as usize],
+                )),
+            };
         }
+        host.read_output_image(backend, self.output_image(host, technique, name)?)
     }
 
     /// Every output, requested or not.

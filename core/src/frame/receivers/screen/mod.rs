@@ -457,6 +457,23 @@ impl ScreenReceiver {
             .collect()
     }
 
+    /// The device image of `output` (camera-sized, linear radiance, row-major from the
+    /// top-left pixel): `None` where the plan knows it is zero, an error where it was not
+    /// requested.
+    pub fn image(
+        &self,
+        host: &crate::frame::host::FrameHost,
+        output: Output,
+    ) -> Result<Option<crate::device::handle::ImageBuf>, crate::frame::error::Error> {
+        if !output.requested(&self.settings.outputs) {
+            return Err(crate::frame::error::Error::InvalidParameter(format!(
+                "output '{}' was not requested (outputs)",
+                output.stem()
+            )));
+        }
+        Ok(self.images(host.camera(), host.screen()).get(output))
+    }
+
     /// Reads `output` back over the host's images: zeros where the plan knows it is zero,
     /// an error where it was not requested.
     pub fn read(
@@ -465,16 +482,18 @@ impl ScreenReceiver {
         host: &crate::frame::host::FrameHost,
         output: Output,
     ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
-        if !output.requested(&self.settings.outputs) {
-            return Err(crate::frame::error::Error::InvalidParameter(format!(
-                "output '{}' was not requested (outputs)",
-                output.stem()
-            )));
-        }
-        match self.images(host.camera(), host.screen()).get(output) {
-            Some(h) => host.read_image(backend, h),
-            None => Ok(host.black_image()),
-        }
+        host.read_output_image(backend, self.image(host, output)?)
+    }
+
+    /// Output `name` by its stem ([`Output::stem`]); `technique` names the technique in
+    /// errors.
+    pub fn output(technique: &str, name: &str) -> Result<Output, crate::frame::error::Error> {
+        Output::from_stem(name).ok_or_else(|| {
+            crate::frame::error::Error::InvalidParameter(format!(
+                "{technique} has no output '{name}'; outputs: {}",
+                Output::ALL.map(|o| o.stem()).join(", ")
+            ))
+        })
     }
 
     /// Reads output `name` back ([`Output::stem`]); `technique` names the technique in
@@ -486,13 +505,17 @@ impl ScreenReceiver {
         technique: &str,
         name: &str,
     ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
-        let o = Output::from_stem(name).ok_or_else(|| {
-            crate::frame::error::Error::InvalidParameter(format!(
-                "{technique} has no output '{name}'; outputs: {}",
-                Output::ALL.map(|o| o.stem()).join(", ")
-            ))
-        })?;
-        self.read(backend, host, o)
+        self.read(backend, host, Self::output(technique, name)?)
+    }
+
+    /// The device image of output `name` ([`ScreenReceiver::image`]).
+    pub fn output_image(
+        &self,
+        host: &crate::frame::host::FrameHost,
+        technique: &str,
+        name: &str,
+    ) -> Result<Option<crate::device::handle::ImageBuf>, crate::frame::error::Error> {
+        self.image(host, Self::output(technique, name)?)
     }
 
     /// Forgets the temporal history and the accumulated photons (the next frame is not
