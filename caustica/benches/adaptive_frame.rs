@@ -1,5 +1,5 @@
 //! AdaptiveCaustics against the dense light view plane (CausticMap) per backend, at 1024^2,
-//! 2048^2 and 4096^2 equivalent photons (seed 004 found adaptive faster from 1024^2 on):
+//! 2048^2 and 4096^2 equivalent photons (Wyman 2009 found adaptive faster from 1024^2 on):
 //! `spot-glass` with the plane over the spot's whole cone (004's setting) and `sphere` with
 //! CausticMap's caster-fitted plane.
 //!

@@ -1,4 +1,4 @@
-//! CausticMap frames per backend at seed 001's three test settings (its section 4), each
+//! CausticMap frames per backend at Vanderstichelen 2021's three test settings (its section 4), each
 //! with `sphere`'s glass ball tessellated to the setting's triangle count: 20k triangles,
 //! 4 bounces, 3x3 gather, 2048^2 map, 1280x720; 70k, 6 bounces, 2048^2, 1920x1080; 100k,
 //! 4 bounces, 4096^2, 1920x1080; 2048x2048 photons (light view plane texels) each. "n
@@ -40,7 +40,7 @@ const BUDGET_PASSES: &[&str] = &[
     "density_gather",
 ];
 
-/// (glass triangles, bounces, atlas side, image size): seed 001 section 4.
+/// (glass triangles, bounces, atlas side, image size): Vanderstichelen 2021, section 4.
 const SETTINGS: [(u64, u32, u32, (u32, u32)); 3] = [
     (20_000, 4, 2048, (1280, 720)),
     (70_000, 6, 2048, (1920, 1080)),

@@ -1,4 +1,4 @@
-//! PhotonGi frames (seed 003) per backend at the chapter's two settings on `rooms` at
+//! PhotonGi frames (Smal 2019) per backend at the chapter's two settings on `rooms` at
 //! 1920x1080: "high", 3 million initial photons (1732^2), 3 bounces, 4 A-Trous iterations;
 //! "low", 1 million (1024^2), 1 bounce, 4 A-Trous iterations. Both with the temporal
 //! blend. After warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over

@@ -59,7 +59,7 @@ pub use caustica_core::techniques::sspm::{
     FrameImages, GatherFilter, Output, Outputs, Sspm, SspmSettings,
 };
 
-/// CausticMap (seed 001): photons from each light's view planes into a caustic atlas in
+/// CausticMap (Vanderstichelen 2021): photons from each light's view planes into a caustic atlas in
 /// the receivers' texture space, looked up by the camera through mirrors and glass. The
 /// atlas is remade only when lights, settings or the seed change: a frame after a camera
 /// move reuses it.
@@ -88,7 +88,7 @@ pub use caustica_core::techniques::caustic_map::{
     CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
 };
 
-/// AdaptiveCaustics (seed 004): the light view planes sampled coarse to fine, so that
+/// AdaptiveCaustics (Wyman 2009): the light view planes sampled coarse to fine, so that
 /// photons are traced only where the casters are; its photons land in the caustic atlas
 /// (the default) or the screen photon map (`deposit: screen`).
 ///
@@ -121,7 +121,7 @@ pub use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
 };
 
-/// PhotonGi (seed 003): multi-bounce indirect light by photon splatting from each light's
+/// PhotonGi (Smal 2019): multi-bounce indirect light by photon splatting from each light's
 /// reflective shadow map, with the chapter's temporal and A-Trous filters.
 ///
 /// ```no_run

@@ -63,7 +63,7 @@ fn every_backend_dispatches_every_declared_kernel() {
             "{name}: caustic map saw no photon"
         );
         passes.extend(stats.passes);
-        // seed 004's traversal: the adaptive trace and refine_clusters
+        // Wyman 2009's traversal: the adaptive trace and refine_clusters
         let adaptive = caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
             map: caustica_core::techniques::caustic_map::CausticMapSettings {
                 photons_w: 64,

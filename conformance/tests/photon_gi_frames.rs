@@ -1,4 +1,4 @@
-//! PhotonGi's frames (seed 003) on every backend (`backends()`: all four, required in CI),
+//! PhotonGi's frames (Smal 2019) on every backend (`backends()`: all four, required in CI),
 //! measured against the quantity they estimate: the raw screen deposit of the same
 //! photons (`estimator: deposit`, every stored photon in the one pixel it lands in),
 //! averaged over frames of independent seeds.

@@ -66,7 +66,7 @@ fn stored_photons_carry_the_closed_form_flux() {
     check_stored_photons(Fresnel::Exact);
 }
 
-/// The same with seed 001's Schlick reflectance (the trace's `fresnel_model` set to
+/// The same with Vanderstichelen 2021's Schlick reflectance (the trace's `fresnel_model` set to
 /// Schlick) against the closed form under Schlick. Schlick's total differs from the exact
 /// one by more than the tolerance (checked below), so the test tells the models apart.
 #[test]

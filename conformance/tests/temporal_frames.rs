@@ -1,4 +1,4 @@
-//! The temporal blend (seed 003 section 24.4.1) as Sspm's opt-in pass
+//! The temporal blend (Smal 2019, section 24.4.1) as Sspm's opt-in pass
 //! (`SspmSettings::temporal`), on every backend (`backends()`: all four, required in CI).
 //!
 //! The blend's expectation is a single frame's (an exponential moving average of frames

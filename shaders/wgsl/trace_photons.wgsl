@@ -1,5 +1,5 @@
 // needs: layout prelude vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
-// trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
+// trace_photons (Kim 2019, sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least
 // one specular interaction. Mirror of
@@ -264,7 +264,7 @@ struct Branch {
     channel: i32,
 }
 
-// One emitted photon with seed 001's deterministic splits (backend-cpu
+// One emitted photon with Vanderstichelen 2021's deterministic splits (backend-cpu
 // trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
 // end; returns the ray segments traced, writes the branches added.
 fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) -> u32 {

@@ -1,4 +1,4 @@
-//! `shading_normal_correction` (PhotonGi, seed 003 Eq. 20): the splatted irradiance
+//! `shading_normal_correction` (PhotonGi, Smal 2019 Eq. 20): the splatted irradiance
 //! corrected for smooth shading normals. Method and sources in
 //! `caustica_core::math::irradiance_filter` and the kernel's declaration.
 

@@ -1,8 +1,8 @@
-// Mirror of core::math::irradiance_filter (seed 003 section 24.4: edge-stopping weights,
+// Mirror of core::math::irradiance_filter (Smal 2019, section 24.4: edge-stopping weights,
 // the temporal blend).
 
 // The weights use the native (hardware) exp2, log2 and division, as WGSL's exp and pow
-// do on the GPUs: an A-Trous iteration at seed 003's high setting on the H200 took 0.90 ms
+// do on the GPUs: an A-Trous iteration at Smal 2019's high setting on the H200 took 0.90 ms
 // against 1.54 with OpenCL's full-precision exp, pow and division (docs/performance.md,
 // "PhotonGi"). Their error (NVIDIA: ex2.approx and lg2.approx,
 // ~2^-22 relative and absolute; exp's argument rounded before it: ~1e-7 x |argument|)

@@ -51,7 +51,7 @@ enum Command {
         settings: Option<PathBuf>,
         /// The technique's caustic filter: Sspm's `filter`, density (default: adapts to the
         /// photons, keeps the flux) or bilateral (the seed's); CausticMap's `gather`,
-        /// density (default) or box (seed 001's 3x3).
+        /// density (default) or box (Vanderstichelen 2021's 3x3).
         #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
         /// Frames to render; the last is written. Above 1, a technique with progressive

@@ -13,7 +13,7 @@
 //! colour channel at that channel's wavelength). Spheres are analytic or, selectably, the
 //! tessellated mesh with interpolated normals the kernels trace.
 //!
-//! Estimator (the quantity Sspm's raw deposit, seed 000 Eq. 5, converges to): a photon
+//! Estimator (the quantity Sspm's raw deposit, Kim 2019 Eq. 5, converges to): a photon
 //! whose path met at least one specular surface and first meets a diffuse surface at `x`
 //! is connected to the pinhole camera. It counts for the pixel `P` that `x` projects into
 //! when (a) the surface `P`'s centre ray sees is diffuse and is the object `x` lies on,

@@ -40,7 +40,7 @@ fn settings(atlas: u32) -> CausticMapSettings {
 }
 
 /// Builds the technique a case checks: CausticMap, or AdaptiveCaustics (the same atlas
-/// receiver with seed 004's traversal).
+/// receiver with Wyman 2009's traversal).
 pub type MakeMap<'a> =
     &'a dyn Fn(&mut dyn Backend, &Scene) -> Result<Box<dyn caustica_core::Technique>, Error>;
 
@@ -84,7 +84,7 @@ fn checked(
     )
 }
 
-/// [`checked`] for the technique `make` builds. With seed 004's traversal the path ends
+/// [`checked`] for the technique `make` builds. With Wyman 2009's traversal the path ends
 /// add up to the photons traced (every level) and the stored photons of that count, and
 /// the photons traced on two backends may differ by the refinements of diverged photons
 /// (within the allowance, as the stored ones).
@@ -486,7 +486,7 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
 }
 
 pub(super) fn schlick(b: &mut dyn Backend) -> Result<Outcome, String> {
-    // seed 001's Schlick reflectance on `sphere`, with the deterministic split and the
+    // Vanderstichelen 2021's Schlick reflectance on `sphere`, with the deterministic split and the
     // stochastic choice: finite, accounted, both agree with cpu. With the split the photons
     // of the two models follow the same rays, and only the branch weights differ, so the
     // ratio of their stored flux is the closed forms' (`sphere_closed_form.rs`: Schlick

@@ -3,7 +3,7 @@
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Why photons were not stored in the screen-space photon map (seed 000 section 30.3.1.2
+/// Why photons were not stored in the screen-space photon map (Kim 2019, section 30.3.1.2
 /// lists four conditions; escaped and bounce-limit photons are counted apart).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Discards {
@@ -119,13 +119,13 @@ pub struct FrameStats {
     /// Error of the filtered caustics against the reference set with
     /// `Sspm::set_reference` (computed after the frame; not part of `frame_ms`).
     pub error: Option<crate::frame::metrics::ErrorStats>,
-    /// AdaptiveCaustics' traversal (seed 004); absent for the dense techniques and on
+    /// AdaptiveCaustics' traversal (Wyman 2009); absent for the dense techniques and on
     /// frames without photon work.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adaptive: Option<AdaptiveStats>,
 }
 
-/// The photon work of one adaptive traversal (seed 004 section 3.2, its Table 1's
+/// The photon work of one adaptive traversal (Wyman 2009, section 3.2, its Table 1's
 /// "photons processed"), summed over the light view planes.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct AdaptiveStats {

@@ -1,4 +1,4 @@
-//! `deposit_screen`: one photon -> one pixel (seed 000 section 30.3.1.3).
+//! `deposit_screen`: one photon -> one pixel (Kim 2019, section 30.3.1.3).
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;

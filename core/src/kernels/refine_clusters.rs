@@ -1,4 +1,4 @@
-//! `refine_clusters`: seed 004's traversal step, one thread per traced cluster.
+//! `refine_clusters`: Wyman 2009's traversal step, one thread per traced cluster.
 
 use super::{bind, bytes, Args, Binding, BindingKind::*, DispatchRecord, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;

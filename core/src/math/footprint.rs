@@ -1,4 +1,4 @@
-//! Pixel footprint (seed 000 section 30.3.1.3, Eq. 4) and the surface area a pixel covers.
+//! Pixel footprint (Kim 2019, section 30.3.1.3, Eq. 4) and the surface area a pixel covers.
 //!
 //! Eq. 4 (lost in the extraction; rederived): a pixel of a `w` x `h` image with field of
 //! view angles `theta_x`, `theta_y` covers, on a plane parallel to the image plane at view

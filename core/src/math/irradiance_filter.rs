@@ -1,4 +1,4 @@
-//! Edge-aware filtering of screen-space irradiance (seed 003 section 24.4, PhotonGi; meant
+//! Edge-aware filtering of screen-space irradiance (Smal 2019, section 24.4, PhotonGi; meant
 //! to be shared with the caustic techniques): the edge-stopping weights (Eqs. 10-11), the
 //! temporal exponential moving average (Eqs. 12-13), the A-Trous wavelet iterations with
 //! variance clipping of their detail coefficients (Eqs. 14-18) and the shading-normal

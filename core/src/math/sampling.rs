@@ -1,6 +1,6 @@
 //! Sampling warps shared by every backend. All map the unit square [0,1)^2 to a domain
 //! with constant Jacobian (equal-area), so that a stratified pw x ph grid of photons
-//! carries equal flux per photon (seed 000 Eq. 1).
+//! carries equal flux per photon (Kim 2019 Eq. 1).
 
 use glam::{Vec2, Vec3};
 

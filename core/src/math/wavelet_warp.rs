@@ -1,6 +1,6 @@
 //! Hierarchical sample warping by an importance pyramid: the wavelet importance sampling of
 //! Clarberg, Jarosz, Akenine-Möller and Jensen ("Wavelet Importance Sampling", SIGGRAPH
-//! 2005), as seed 003 section 24.2.1 (PhotonGi) uses it to pick reflective-shadow-map
+//! 2005), as Smal 2019, section 24.2.1 (PhotonGi) uses it to pick reflective-shadow-map
 //! texels in proportion to the power their photons carry, without normalising the map.
 //!
 //! The pyramid holds the Haar *scaling* coefficients of the importance map: level 0 is the

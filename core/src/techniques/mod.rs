@@ -41,7 +41,7 @@ pub struct TechniqueEntry {
 pub const TECHNIQUES: &[TechniqueEntry] = &[
     TechniqueEntry {
         name: "sspm",
-        title: "screen-space photon mapping (seed 000, Kim, Ray Tracing Gems ch. 30)",
+        title: "screen-space photon mapping (Kim 2019, Kim, Ray Tracing Gems ch. 30)",
         create: sspm::create,
         default_settings: || {
             serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
@@ -50,7 +50,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
     },
     TechniqueEntry {
         name: "caustic-map",
-        title: "texture-space caustic maps from light view planes (seed 001)",
+        title: "texture-space caustic maps from light view planes (Vanderstichelen 2021)",
         create: caustic_map::create,
         default_settings: || {
             serde_json::to_value(caustic_map::CausticMapSettings::default())
@@ -60,7 +60,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
     },
     TechniqueEntry {
         name: "adaptive-caustics",
-        title: "coarse-to-fine photon emission into caustic maps (seed 004)",
+        title: "coarse-to-fine photon emission into caustic maps (Wyman 2009)",
         create: adaptive_caustics::create,
         default_settings: || {
             serde_json::to_value(adaptive_caustics::AdaptiveCausticsSettings::default())
@@ -70,7 +70,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
     },
     TechniqueEntry {
         name: "photon-gi",
-        title: "multi-bounce indirect light by photon splatting (seed 003, Smal and \
+        title: "multi-bounce indirect light by photon splatting (Smal 2019, Smal and \
                 Aizenshtein, Ray Tracing Gems ch. 24)",
         create: photon_gi::create,
         default_settings: || {

@@ -1,4 +1,4 @@
-// Mirror of core::math::irradiance_filter (seed 003 section 24.4: edge-stopping weights,
+// Mirror of core::math::irradiance_filter (Smal 2019, section 24.4: edge-stopping weights,
 // the temporal blend).
 
 fn depth_weight(z_p: f32, z_q: f32, depth_step: f32, sigma_z: f32, epsilon: f32) -> f32 {

@@ -50,7 +50,7 @@ use crate::math::photon_clusters::{
 use crate::recording::Recording;
 use serde::{Deserialize, Serialize};
 
-/// When a relevant cluster stops being refined (seed 004 sections 3.2.1-2).
+/// When a relevant cluster stops being refined (Wyman 2009, sections 3.2.1-2).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AdaptiveMetric {
@@ -69,7 +69,7 @@ pub enum AdaptiveMetric {
     Error,
 }
 
-/// What keeps a traced cluster from being discarded (seed 004 section 3.2's first
+/// What keeps a traced cluster from being discarded (Wyman 2009, section 3.2's first
 /// condition, and a conservative one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -263,7 +263,7 @@ pub struct ScreenTarget {
     pub trace_counters: Buf<u32>,
 }
 
-/// Where the traversal's output photons go (seed 004's "splat into the caustic map", for
+/// Where the traversal's output photons go (Wyman 2009's "splat into the caustic map", for
 /// either technique's map).
 #[derive(Clone, Copy, Debug)]
 pub enum DepositTarget {

@@ -1,4 +1,4 @@
-//! Light view planes (seed 001 section 3.1): the virtual image plane in front of a light
+//! Light view planes (Vanderstichelen 2021, section 3.1): the virtual image plane in front of a light
 //! from whose texels CausticMap and AdaptiveCaustics shoot one photon each.
 //!
 //! **The frame.** 001 builds a pinhole camera at the light: `W` along the light's
@@ -285,7 +285,7 @@ fn cube_planes(position: Vec3, power: Vec3, res: u32) -> Vec<LightViewPlane> {
 /// share the budget: `resolution / sqrt(6)` texels a side, at least 1), or why the light
 /// sends no photon towards a caster. `aim`: `CasterCone` fits the plane to the casters
 /// (CausticMap's default), `Sphere` covers the light's whole cone (a spot's outer cone,
-/// a point light's six cube faces: the dense baseline of seed 004's comparison).
+/// a point light's six cube faces: the dense baseline of Wyman 2009's comparison).
 pub fn light_view_planes(
     light: &Light,
     casters: Aabb,

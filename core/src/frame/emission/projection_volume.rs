@@ -1,4 +1,4 @@
-//! Photon emission domains (seed 000 section 30.3.1.1). Each light gets a domain whose
+//! Photon emission domains (Kim 2019, section 30.3.1.1). Each light gets a domain whose
 //! photons all carry the same flux (stratified equal-area grid):
 //!
 //! - point light: the cone from the light that bounds the caustic casters' bounding

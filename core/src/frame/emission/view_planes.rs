@@ -1,4 +1,4 @@
-//! CausticMap's emission (seed 001 section 3.1): each light's view planes aimed at the
+//! CausticMap's emission (Vanderstichelen 2021, section 3.1): each light's view planes aimed at the
 //! caustic casters, and the fixed-point quantum of the frame's flux.
 
 use crate::device::caster_spheres::CasterSpheres;

@@ -30,7 +30,7 @@ fn plan(
     variant: TraceVariant,
 ) -> FramePlan {
     let why = format!(
-        "seed 004's traversal ({:?} metric, {}^2 start grid, batches of {} clusters), {}",
+        "Wyman 2009's traversal ({:?} metric, {}^2 start grid, batches of {} clusters), {}",
         s.metric,
         s.start_grid,
         traversal.map_or(0, |t| t.sizes.pass_clusters),

@@ -1,6 +1,6 @@
-//! AdaptiveCaustics (seed 004, Wyman and Nichols, "Adaptive Caustic Maps Using Deferred
+//! AdaptiveCaustics (Wyman 2009: Wyman and Nichols, "Adaptive Caustic Maps Using Deferred
 //! Shading"): light view planes ([`crate::frame::emission::view_planes`]) sampled coarse
-//! to fine by seed 004's traversal ([`crate::frame::emission::adaptive`]), so that photons
+//! to fine by Wyman 2009's traversal ([`crate::frame::emission::adaptive`]), so that photons
 //! are traced only where the casters are and, with the error metric, only where the map
 //! still needs them; its output photons land in a receiver: the caustic atlas
 //! ([`crate::frame::receivers::atlas`], the default, [`atlas`]) or the screen photon map

@@ -50,7 +50,7 @@ pub(super) fn create(
     let mut variant = plan
         .trace_variant
         .unwrap_or_else(|| SceneFeatures::of(host.model()).trace_variant());
-    // seed 004's slots, in world space for the screen deposit
+    // Wyman 2009's slots, in world space for the screen deposit
     variant.adaptive = true;
     variant.surface_store = false;
     variant.fresnel_split = false;
@@ -61,7 +61,7 @@ pub(super) fn create(
         let mut refine = plan.passes[i].clone();
         refine.name = "refine_clusters".into();
         if refine.runs {
-            refine.reason = "seed 004's traversal: judges the clusters and lists the output \
+            refine.reason = "Wyman 2009's traversal: judges the clusters and lists the output \
                              photons for deposit_screen"
                 .into();
         }

@@ -16,11 +16,11 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 pub enum AdaptiveDeposit {
     /// CausticMap's texture-space caustic atlas, its gather and final pass (the default:
-    /// seed 004 splats into a caustic map, and the atlas is the map kind here).
+    /// Wyman 2009 splats into a caustic map, and the atlas is the map kind here).
     #[default]
     Atlas,
     /// Sspm's screen-space photon map, its resolve, filter and composite (the `screen`
-    /// settings): the photons of seed 000 replaced by the traversal's.
+    /// settings): the photons of Kim 2019 replaced by the traversal's.
     Screen,
 }
 
@@ -48,7 +48,7 @@ pub struct AdaptiveCausticsSettings {
     pub error_from_grid: u32,
     /// The error metric's tolerance (texels): a cluster converges when its four photons
     /// land in a square of at most this many caustic-map texels a side on one receiver,
-    /// and its photons are then splatted over a window that size (seed 004 section 3.2.2's
+    /// and its photons are then splatted over a window that size (Wyman 2009, section 3.2.2's
     /// alternative: "photon divergence greater than a single texel but less than a
     /// user-defined tolerance", with its multi-resolution map). 1 (the default) is 004's
     /// metric: one texel, and a one-texel splat. At most 4; above 1 only with the atlas

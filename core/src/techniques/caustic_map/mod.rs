@@ -1,4 +1,4 @@
-//! CausticMap (seed 001, "Real-time caustics via texture-space photon mapping"): photons
+//! CausticMap (Vanderstichelen 2021, "Real-time caustics via texture-space photon mapping"): photons
 //! shot from each light's view planes ([`crate::frame::emission::view_planes`]) deposit
 //! into the caustic atlas in the receivers' texture space
 //! ([`crate::frame::receivers::atlas`]), which the camera's lookup samples wherever a

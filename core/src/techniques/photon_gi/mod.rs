@@ -1,4 +1,4 @@
-//! PhotonGi (seed 003: Smal and Aizenshtein, "Real-Time Global Illumination with Photon
+//! PhotonGi (Smal 2019: Smal and Aizenshtein, "Real-Time Global Illumination with Photon
 //! Mapping", Ray Tracing Gems ch. 24): multi-bounce indirect light by photon splatting.
 //! One frame:
 //!

@@ -1,4 +1,4 @@
-//! PhotonGi's reflective shadow maps and photon planning (seed 003 section 24.2): each
+//! PhotonGi's reflective shadow maps and photon planning (Smal 2019, section 24.2): each
 //! light's RSM faces ([`rsm_faces`]), the photons allocated over the lights by power
 //! ([`crate::math::photon_allocation`]), and the probe that leaves out a light whose RSM
 //! sees no texel that leaves flux ([`plan_photons`], at creation and on updates, never per

@@ -1,4 +1,4 @@
-//! Every parameter of PhotonGi, with its defaults (seed 003 where it gives them) and
+//! Every parameter of PhotonGi, with its defaults (Smal 2019 where it gives them) and
 //! validation.
 
 use crate::frame::error::Error;

@@ -197,7 +197,7 @@ impl FrameConstants {
     }
 }
 
-/// The plan of every light of `constants`' emission (seed 000's projection volumes):
+/// The plan of every light of `constants`' emission (Kim 2019's projection volumes):
 /// whether it emits and why.
 pub fn volume_light_plans(constants: &FrameConstants) -> Vec<LightPlan> {
     let mut lights: Vec<LightPlan> = constants

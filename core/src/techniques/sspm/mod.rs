@@ -1,4 +1,4 @@
-//! Screen-space photon mapping (`Sspm`, seed 000): seed 000's projection volumes
+//! Screen-space photon mapping (`Sspm`, Kim 2019): Kim 2019's projection volumes
 //! ([`crate::frame::emission::projection_volume`]) emit photons that the screen receiver
 //! ([`crate::frame::receivers::screen`]) deposits, resolves, filters and composites over
 //! the frame host's direct light. Per frame:

@@ -5,19 +5,19 @@ use crate::frame::error::Error;
 use crate::frame::receivers::screen::{GatherFilter, Outputs, ScreenSettings};
 use serde::{Deserialize, Serialize};
 
-/// Every parameter of the technique; defaults from seed 000 where it gives them.
+/// Every parameter of the technique; defaults from Kim 2019 where it gives them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SspmSettings {
     /// Photon grid width per light (photons); each light emits `photons_w x photons_h`
-    /// photons (seed 000: 2k x 2k in its figures).
+    /// photons (Kim 2019: 2k x 2k in its figures).
     pub photons_w: u32,
     /// Photon grid height per light (photons).
     pub photons_h: u32,
     /// Maximum ray segments per photon path.
     pub max_bounces: u32,
     /// A photon whose largest channel falls below this fraction of its emitted flux is
-    /// dropped as negligible (seed 000 condition 1).
+    /// dropped as negligible (Kim 2019, condition 1).
     pub min_relative_power: f32,
     /// Point-light emission domain.
     pub point_emission: PointEmission,

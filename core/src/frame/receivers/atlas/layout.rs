@@ -1,4 +1,4 @@
-//! The caustic atlas (seed 001 section 3.2, "render caustic map"): one texture in which
+//! The caustic atlas (Vanderstichelen 2021, section 3.2, "render caustic map"): one texture in which
 //! every diffuse receiver owns a square tile, addressed by the receiver's UVs, so that a
 //! photon landing on a receiver deposits into the texel under its hit's UV and any camera
 //! path ending on that receiver reads it back (CausticMap's final pass, AdaptiveCaustics'

@@ -91,7 +91,7 @@ impl FresnelModel {
     }
 }
 
-/// What each light's view plane covers (seed 001 section 3.1 aims it at the casters).
+/// What each light's view plane covers (Vanderstichelen 2021, section 3.1 aims it at the casters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EmissionPlane {
@@ -141,7 +141,7 @@ pub enum MapGather {
     Density,
 }
 
-/// CausticMap's settings (seed 001; defaults from its section 4 where it gives them).
+/// CausticMap's settings (Vanderstichelen 2021; defaults from its section 4 where it gives them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CausticMapSettings {
@@ -165,7 +165,7 @@ pub struct CausticMapSettings {
     pub max_radius_texels: u32,
     /// Deterministic (001's) or stochastic Fresnel and dispersion splits.
     pub fresnel_split: FresnelSplit,
-    /// Exact Fresnel (the default) or seed 001's Schlick approximation, for the photons and
+    /// Exact Fresnel (the default) or Vanderstichelen 2021's Schlick approximation, for the photons and
     /// for the final pass's camera chains alike.
     pub fresnel: FresnelModel,
     /// With the deterministic split: the most branches (stored photons) one emitted photon
@@ -189,13 +189,13 @@ pub struct CausticMapSettings {
     pub outputs: CausticMapOutputs,
     /// Leave out passes and buffers the requested outputs and the scene do not need.
     pub prune: bool,
-    /// Accumulate the filtered caustics over frames (seed 003's temporal blend, the shared
+    /// Accumulate the filtered caustics over frames (Smal 2019's temporal blend, the shared
     /// `temporal_blend` pass, as Sspm's `temporal`): useful when the seed changes every
     /// frame, each frame then a new set of photons. Off by default. The history survives
     /// camera moves (it is reprojected) and seed changes, and is forgotten when the
     /// lights, materials or image size change.
     pub temporal: bool,
-    /// Iterations of the edge-avoiding A-Trous filter with variance clipping (seed 003
+    /// Iterations of the edge-avoiding A-Trous filter with variance clipping (Smal 2019
     /// section 24.4.2, the shared `atrous_filter` pass) on the filtered (and, with
     /// `temporal`, blended) caustics as the camera sees them: 0 (the default) runs none.
     /// At most 8.

@@ -23,7 +23,7 @@ pub enum GatherFilter {
     Bilateral,
 }
 
-/// Every parameter of the screen receiver; defaults from seed 000 where it gives them.
+/// Every parameter of the screen receiver; defaults from Kim 2019 where it gives them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ScreenSettings {
@@ -72,13 +72,13 @@ pub struct ScreenSettings {
     /// not need (default). Off: everything runs, the baseline pruning is checked against.
     pub prune: bool,
     /// Blends each frame's filtered caustics with the reprojected history of the earlier
-    /// frames (seed 003 section 24.4.1's temporal accumulation, the shared
+    /// frames (Smal 2019, section 24.4.1's temporal accumulation, the shared
     /// `temporal_blend` pass with the chapter's constants: alpha 0.95 x depth and normal
     /// weights). Off by default: a frame is then a function of its seed alone. The history
     /// is forgotten when the lights, materials, settings or image size change.
     pub temporal: bool,
     /// Iterations of the edge-avoiding A-Trous filter with variance clipping of its
-    /// detail coefficients (seed 003 section 24.4.2, the shared `atrous_filter` pass) run
+    /// detail coefficients (Smal 2019, section 24.4.2, the shared `atrous_filter` pass) run
     /// on the filtered (and, with `temporal`, blended) caustics: 0 (the default) runs
     /// none; the chapter runs 4. At most 8.
     pub atrous_iterations: u32,
