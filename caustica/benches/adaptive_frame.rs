@@ -20,11 +20,10 @@ use caustica::scene::builtin::builtin;
 use caustica::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
-use caustica::techniques::caustic_map::{
-    CausticMap, CausticMapOutputs, CausticMapSettings, EmissionPlane,
-};
+use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica::Technique;
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
@@ -72,13 +71,7 @@ fn main() {
                     photons_h: n,
                     emission_plane: plane,
                     max_photons_per_batch: 1 << 22,
-                    outputs: CausticMapOutputs {
-                        composite: true,
-                        direct: false,
-                        raw_caustics: false,
-                        filtered_caustics: false,
-                        atlas: false,
-                    },
+                    outputs: Outputs::of(&[Output::Composite]),
                     ..Default::default()
                 };
                 for (label, metric) in [

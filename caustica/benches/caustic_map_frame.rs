@@ -25,10 +25,9 @@ mod common;
 use caustica::scene::builtin::builtin;
 use caustica::scene::limits::tessellated_size;
 use caustica::scene::{Scene, Shape};
-use caustica::techniques::caustic_map::{
-    CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit, MapGather,
-};
+use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, FresnelSplit, MapGather};
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
@@ -130,13 +129,7 @@ fn main() {
                 max_specular_depth: bounces,
                 fresnel_split: split,
                 gather,
-                outputs: CausticMapOutputs {
-                    composite: true,
-                    direct: false,
-                    raw_caustics: false,
-                    filtered_caustics: false,
-                    atlas: false,
-                },
+                outputs: Outputs::of(&[Output::Composite]),
                 ..Default::default()
             };
             let mut t = match CausticMap::new(backend.as_mut(), &scene, settings) {

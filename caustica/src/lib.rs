@@ -18,10 +18,46 @@
 //! ```
 //!
 //! Every technique is a type of its own with its settings, created over a scene and
-//! driven the same way (frame, updates, outputs by name, free); see [`CausticMap`],
+//! driven the same way (frame, updates, outputs, free); see [`CausticMap`],
 //! [`AdaptiveCaustics`] and [`PhotonGi`] for one example each. Any technique by name,
 //! without naming its type: [`techniques::create`] returns a `Box<dyn` [`Technique`]`>`;
 //! [`techniques::TECHNIQUES`] lists them.
+//!
+//! Every technique speaks one output vocabulary ([`Output`]) and lists the outputs it has
+//! ([`Technique::outputs`]), so a host writes one function for all four. This one renders
+//! a frame of any technique and reads its caustics (an output the technique lacks, such as
+//! PhotonGi's, is [`Error::NoSuchOutput`]):
+//!
+//! ```
+//! use caustica::{open_backend, scene::builtin, techniques, Error, Output, Technique};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! fn caustics(t: &mut dyn Technique, backend: &mut dyn caustica::Backend)
+//!     -> Result<Option<caustica::Image>, Error> {
+//!     t.frame(backend, &mut |_| {})?;
+//!     let has = t.outputs().iter().any(|o| o.output == Output::FilteredCaustics);
+//!     if !has {
+//!         return Ok(None);
+//!     }
+//!     t.read_output(backend, Output::FilteredCaustics).map(Some)
+//! }
+//!
+//! let mut backend = open_backend("cpu")?;
+//! let mut scene = builtin::builtin("sphere").expect("built-in scene");
+//! (scene.camera.width, scene.camera.height) = (64, 36);
+//! for name in techniques::technique_names() {
+//!     let small = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
+//!     let mut t = techniques::create(name, backend.as_mut(), &scene, &small)?;
+//!     match caustics(t.as_mut(), backend.as_mut())? {
+//!         Some(img) => println!("{name}: {} caustic pixels", img.pixels.len()),
+//!         None => println!("{name} has no caustics"),
+//!     }
+//!     let e = t.read_output(backend.as_mut(), Output::CausticAtlas);
+//!     assert!(e.is_ok() || matches!(e, Err(Error::NoSuchOutput { .. })));
+//!     t.free(backend.as_mut())?;
+//! }
+//! # Ok(())
+//! # }
+//! ```
 //!
 //! What is here: scenes ([`scene`]: the model, built-ins, the JSON format), opening a
 //! backend ([`open_backend`], [`backend_statuses`]), the techniques with their settings
@@ -49,15 +85,14 @@ pub use caustica_core::backend::{
 pub use caustica_core::frame::error::Error;
 pub use caustica_core::frame::image::Image;
 pub use caustica_core::frame::metrics;
+pub use caustica_core::frame::output::{Output, OutputInfo, Outputs};
 pub use caustica_core::frame::plan::FramePlan;
 pub use caustica_core::frame::stats::FrameStats;
 pub use caustica_core::frame::submitted::{FrameTicket, RecordedFrame};
-pub use caustica_core::frame::technique::{OutputInfo, Progress, Technique};
+pub use caustica_core::frame::technique::{Progress, Technique};
 pub use caustica_core::scene;
 pub use caustica_core::scene::Scene;
-pub use caustica_core::techniques::sspm::{
-    FrameImages, GatherFilter, Output, Outputs, Sspm, SspmSettings,
-};
+pub use caustica_core::techniques::sspm::{FrameImages, GatherFilter, Sspm, SspmSettings};
 
 /// CausticMap (Vanderstichelen 2021): photons from each light's view planes into a caustic atlas in
 /// the receivers' texture space, looked up by the camera through mirrors and glass. The
@@ -65,7 +100,7 @@ pub use caustica_core::techniques::sspm::{
 /// move reuses it.
 ///
 /// ```no_run
-/// use caustica::{open_backend, scene::builtin, CausticMap, CausticMapSettings};
+/// use caustica::{open_backend, scene::builtin, CausticMap, CausticMapSettings, Output};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("sphere").expect("built-in scene");
@@ -76,8 +111,8 @@ pub use caustica_core::techniques::sspm::{
 /// };
 /// let mut map = CausticMap::new(backend.as_mut(), &scene, settings)?;
 /// map.frame(backend.as_mut(), &mut |_| {})?;
-/// let caustics = map.read_output(backend.as_mut(), "caustics_filtered")?; // radiance
-/// let atlas = map.read_output(backend.as_mut(), "caustic_atlas")?; // irradiance, W/m^2
+/// let caustics = map.read_output(backend.as_mut(), Output::FilteredCaustics)?; // radiance
+/// let atlas = map.read_output(backend.as_mut(), Output::CausticAtlas)?; // irradiance, W/m^2
 /// map.free(backend.as_mut())?;
 /// # let _ = (caustics, atlas);
 /// # Ok(())
@@ -85,7 +120,7 @@ pub use caustica_core::techniques::sspm::{
 /// ```
 pub use caustica_core::techniques::caustic_map::CausticMap;
 pub use caustica_core::techniques::caustic_map::{
-    CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
+    CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
 };
 
 /// AdaptiveCaustics (Wyman 2009): the light view planes sampled coarse to fine, so that
@@ -94,7 +129,7 @@ pub use caustica_core::techniques::caustic_map::{
 ///
 /// ```no_run
 /// use caustica::{open_backend, scene::builtin, AdaptiveCaustics, AdaptiveCausticsSettings};
-/// use caustica::{AdaptiveDeposit, AdaptiveMetric, CausticMapSettings};
+/// use caustica::{AdaptiveDeposit, AdaptiveMetric, CausticMapSettings, Output};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("spot-glass").expect("built-in scene");
@@ -110,7 +145,7 @@ pub use caustica_core::techniques::caustic_map::{
 /// if let Some(a) = &stats.adaptive {
 ///     println!("{} of {} photons traced", a.photons_processed, a.dense_equivalent_photons);
 /// }
-/// let composite = t.read_output(backend.as_mut(), "composite")?;
+/// let composite = t.read_output(backend.as_mut(), Output::Composite)?;
 /// t.free(backend.as_mut())?;
 /// # let _ = composite;
 /// # Ok(())
@@ -125,7 +160,7 @@ pub use caustica_core::techniques::adaptive_caustics::{
 /// reflective shadow map, with the chapter's temporal and A-Trous filters.
 ///
 /// ```no_run
-/// use caustica::{open_backend, scene::builtin, PhotonGi, PhotonGiSettings};
+/// use caustica::{open_backend, scene::builtin, Output, PhotonGi, PhotonGiSettings};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("cornell").expect("built-in scene");
@@ -134,7 +169,7 @@ pub use caustica_core::techniques::adaptive_caustics::{
 ///     gi.set_seed(seed); // the temporal filter accumulates over frames
 ///     gi.frame(backend.as_mut(), &mut |_| {})?;
 /// }
-/// let composite = gi.read_output(backend.as_mut(), "composite")?;
+/// let composite = gi.read_output(backend.as_mut(), Output::Composite)?;
 /// gi.free(backend.as_mut())?;
 /// # let _ = composite;
 /// # Ok(())

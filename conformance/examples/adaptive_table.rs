@@ -10,6 +10,7 @@
 //! each tolerance (`error_texels`: footprint splats above 1).
 
 use caustica_core::frame::image::Image;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
 use caustica_core::techniques::adaptive_caustics::{
@@ -37,7 +38,7 @@ fn run<P: caustica_core::frame::pipeline::Pipeline>(
     let start = Instant::now();
     let s = t.frame(b, &mut |_| {}).expect("frame");
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    let atlas = t.read_output_named(b, "caustic_atlas").expect("atlas");
+    let atlas = t.read_output(b, Output::CausticAtlas).expect("atlas");
     t.free(b).expect("free");
     (s, atlas, ms)
 }

@@ -152,7 +152,7 @@ fn others(all: &mut [(&'static str, Box<dyn caustica_core::backend::Backend>)]) 
                         );
                     };
                     for o in t.outputs().into_iter().filter(|o| o.requested) {
-                        let img = t.read_output(backend.as_mut(), o.name).expect("read");
+                        let img = t.read_output(backend.as_mut(), o.output).expect("read");
                         line(o.name, bytemuck::cast_slice(&img.pixels));
                     }
                     let counters = format!(

@@ -40,12 +40,12 @@ fn on_screen(s: AdaptiveCausticsSettings) -> AdaptiveCausticsSettings {
     }
 }
 
-const OUTPUTS: [&str; 5] = [
-    "caustic_atlas",
-    "caustics_raw",
-    "caustics_filtered",
-    "composite",
-    "direct",
+const OUTPUTS: [Output; 5] = [
+    Output::CausticAtlas,
+    Output::RawCaustics,
+    Output::FilteredCaustics,
+    Output::Composite,
+    Output::Direct,
 ];
 
 fn small(name: &str) -> Scene {
@@ -71,7 +71,7 @@ fn render<P: caustica_core::frame::pipeline::Pipeline>(
     let stats = t.frame(b, &mut |_| {}).expect("frame");
     let images = OUTPUTS
         .iter()
-        .map(|o| t.read_output_named(b, o).expect("read"))
+        .map(|o| t.read_output(b, *o).expect("read"))
         .collect();
     t.free(b).expect("free");
     (stats, images)
@@ -80,7 +80,7 @@ fn render<P: caustica_core::frame::pipeline::Pipeline>(
 fn same_bits(
     a: &[caustica_core::frame::image::Image],
     b: &[caustica_core::frame::image::Image],
-) -> Option<&'static str> {
+) -> Option<Output> {
     OUTPUTS
         .iter()
         .zip(a.iter().zip(b))
@@ -341,7 +341,7 @@ fn the_screen_target_deposits_the_traversals_photons() {
             .expect("screen target");
             let s = screen.frame(b.as_mut(), &mut |_| {}).expect("frame");
             let raw = screen
-                .read_output_named(b.as_mut(), Output::RawCaustics.stem())
+                .read_output(b.as_mut(), Output::RawCaustics)
                 .expect("raw");
             screen.free(b.as_mut()).expect("free");
             assert_eq!(s.technique, "adaptive-caustics", "{what}");

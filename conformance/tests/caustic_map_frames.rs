@@ -15,6 +15,7 @@
 //!   `the_caustic_seen_through_the_ball_agrees_with_a_traced_reference`).
 
 use caustica_conformance::backends;
+use caustica_core::frame::output::Output;
 use caustica_core::frame::technique::Technique;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
@@ -57,10 +58,10 @@ fn a_camera_move_reuses_the_atlas_and_equals_a_fresh_frame() {
         let mut f = CausticMap::new(b.as_mut(), &fresh_scene, settings()).expect("scene");
         f.frame(b.as_mut(), &mut |_| {}).expect("frame");
         for out in [
-            "composite",
-            "caustics_filtered",
-            "caustics_raw",
-            "caustic_atlas",
+            Output::Composite,
+            Output::FilteredCaustics,
+            Output::RawCaustics,
+            Output::CausticAtlas,
         ] {
             let a = t.read_output(b.as_mut(), out).expect("read");
             let c = f.read_output(b.as_mut(), out).expect("read");
@@ -95,7 +96,9 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
         t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         // the atlas output is the gathered map; the raw map is what caustics_raw samples:
         // compare their flux through a frame with gather width 1
-        let map = t.read_output(b.as_mut(), "caustic_atlas").expect("atlas");
+        let map = t
+            .read_output(b.as_mut(), Output::CausticAtlas)
+            .expect("atlas");
         let gathered: f64 = map.pixels.iter().map(|p| p[0] as f64).sum();
         let mut raw_t = CausticMap::new(
             b.as_mut(),
@@ -111,7 +114,7 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
         .expect("scene");
         raw_t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         let raw_map = raw_t
-            .read_output(b.as_mut(), "caustic_atlas")
+            .read_output(b.as_mut(), Output::CausticAtlas)
             .expect("atlas");
         let raw: f64 = raw_map.pixels.iter().map(|p| p[0] as f64).sum();
         assert!(raw > 0.0, "{name}: the raw map is dark");
@@ -122,9 +125,9 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
         // through the ball: the pixels where the composite shows the glass (no direct
         // diffuse shading on their first hit) still carry caustic radiance
         let caustics = t
-            .read_output(b.as_mut(), "caustics_filtered")
+            .read_output(b.as_mut(), Output::FilteredCaustics)
             .expect("caustics");
-        let direct = t.read_output(b.as_mut(), "direct").expect("direct");
+        let direct = t.read_output(b.as_mut(), Output::Direct).expect("direct");
         let (cx, cy) = (48u32, 22u32); // the ball's centre in sphere's camera, 96x54
         let mut lit = 0;
         for y in cy - 3..=cy + 3 {
@@ -180,7 +183,7 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
         .expect("scene");
         t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         let caustics = t
-            .read_output(b.as_mut(), "caustics_filtered")
+            .read_output(b.as_mut(), Output::FilteredCaustics)
             .expect("caustics");
         Box::new(t).free(b.as_mut()).expect("free");
         let mut s = create(
@@ -192,7 +195,7 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
         .expect("sspm");
         s.frame(b.as_mut(), &mut |_| {}).expect("frame");
         let screen = s
-            .read_output(b.as_mut(), "caustics_filtered")
+            .read_output(b.as_mut(), Output::FilteredCaustics)
             .expect("caustics");
         s.free(b.as_mut()).expect("free");
         assert!(
@@ -279,7 +282,7 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
         .expect("scene");
         t.frame(&mut b, &mut |_| {}).expect("frame");
         let img = t
-            .read_output(&mut b, "caustics_filtered")
+            .read_output(&mut b, Output::FilteredCaustics)
             .expect("caustics");
         Box::new(t).free(&mut b).expect("free");
         let got = |&((x, y), _): &((u32, u32), f64)| img.at(x, y)[0] as f64;
@@ -342,7 +345,7 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
             let atlas_flux = |s: CausticMapSettings, b: &mut dyn caustica_core::Backend| {
                 let mut t = CausticMap::new(b, &scene, s).expect("technique");
                 t.frame(b, &mut |_| {}).expect("frame");
-                let map = t.read_output(b, "caustic_atlas").expect("atlas");
+                let map = t.read_output(b, Output::CausticAtlas).expect("atlas");
                 // the technique's own layout: its tiles are the reached receivers'
                 let texels = t.atlas_texels(b).expect("texels").expect("an atlas");
                 Box::new(t).free(b).expect("free");
@@ -475,7 +478,7 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             density(&after),
             "{name}: {words} / {after}"
         );
-        for out in ["caustic_atlas", "caustics_filtered"] {
+        for out in [Output::CausticAtlas, Output::FilteredCaustics] {
             let a = plain.read_output(b.as_mut(), out).expect("read");
             let c = t.read_output(b.as_mut(), out).expect("read");
             assert!(
@@ -494,7 +497,7 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             let mut f = CausticMap::new(b.as_mut(), &fresh_scene, settings()).expect("scene");
             settle(&mut f, b.as_mut());
             assert_eq!(layout_words(&t), layout_words(&f), "{name}");
-            for out in ["composite", "caustics_raw", "caustic_atlas"] {
+            for out in [Output::Composite, Output::RawCaustics, Output::CausticAtlas] {
                 let a = t.read_output(b.as_mut(), out).expect("read");
                 let c = f.read_output(b.as_mut(), out).expect("read");
                 assert!(

@@ -55,10 +55,16 @@ fn run(b: &mut dyn Backend, scene: &Scene, settings: SspmSettings) -> Run {
     let stats = s
         .frame(b, &mut |_| {})
         .unwrap_or_else(|e| panic!("{}: frame of {}: {e}", b.name(), scene.name));
-    let images = Output::ALL
+    let images = s
+        .outputs()
         .into_iter()
-        .filter(|o| o.requested(&settings.outputs))
-        .map(|o| (o, s.read_output(b, o).expect("read output").pixels))
+        .filter(|o| o.requested)
+        .map(|o| {
+            (
+                o.output,
+                s.read_output(b, o.output).expect("read output").pixels,
+            )
+        })
         .collect();
     let buffers = s.plan().buffers.iter().map(|b| b.name.clone()).collect();
     let had_photon_buffers = s.photon_buffers().is_some();

@@ -556,10 +556,10 @@ fn run(cli: Cli) -> Result<(), String> {
             for output in t.outputs().into_iter().filter(|o| o.requested) {
                 let name = output.name;
                 let img = t
-                    .read_output(be.as_mut(), name)
+                    .read_output(be.as_mut(), output.output)
                     .map_err(|e| e.to_string())?;
                 write_exr(&out.join(format!("{stem}_{name}.exr")), &img)?;
-                if name == "composite" {
+                if output.output == caustica::Output::Composite {
                     write_png(&out.join(format!("{stem}_composite.png")), &img, exposure)?;
                 }
             }

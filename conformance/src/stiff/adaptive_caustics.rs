@@ -82,7 +82,7 @@ fn screen_target(
         Output::FilteredCaustics,
         Output::Composite,
     ]
-    .map(|o| t.read_output_named(b, o.stem()).map_err(|e| e.to_string()));
+    .map(|o| t.read_output(b, o).map_err(|e| e.to_string()));
     t.free(b).map_err(|e| e.to_string())?;
     for img in images {
         v.check(img?.all_finite(), || {

@@ -17,6 +17,7 @@ use crate::harness::tolerance::divergence_allowance;
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{Backend, BackendError};
 use caustica_core::frame::image::Image;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::{Light, Material, Scene, Shape};
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::{Error, FrameStats};
@@ -61,9 +62,9 @@ pub fn render_with(b: &mut dyn Backend, scene: &Scene, make: MakeMap) -> Result<
     let stats = t.frame(b, &mut |_| {})?;
     let f = MapFrame {
         stats,
-        atlas: t.read_output(b, "caustic_atlas")?,
-        caustics: t.read_output(b, "caustics_filtered")?,
-        composite: t.read_output(b, "composite")?,
+        atlas: t.read_output(b, Output::CausticAtlas)?,
+        caustics: t.read_output(b, Output::FilteredCaustics)?,
+        composite: t.read_output(b, Output::Composite)?,
     };
     t.free(b)?;
     Ok(f)

@@ -1,7 +1,8 @@
 //! What every technique shares, and knows no technique: the frame host that owns the
 //! scene, camera and camera images and applies every update ([`host`], [`screen`]), the
 //! seam a technique implements over it ([`pipeline`]) and the public
-//! [`technique::Technique`] seam it gets from there; photon emission ([`emission`]:
+//! [`technique::Technique`] seam it gets from there, with the one output vocabulary of
+//! every technique ([`output`]); photon emission ([`emission`]:
 //! projection volumes, light view planes, the adaptive traversal) and the receivers
 //! photons land in ([`receivers`]: the screen photon map, the caustic atlas); the frame
 //! plan of passes and buffers with reasons ([`plan`]), frame statistics ([`stats`]),
@@ -18,6 +19,7 @@ pub mod image;
 pub mod irradiance_passes;
 pub mod material_update;
 pub mod metrics;
+pub mod output;
 pub mod pipeline;
 pub mod plan;
 pub mod receivers;

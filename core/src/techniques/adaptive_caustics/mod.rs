@@ -42,11 +42,11 @@ use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
+use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::FramePlan;
 use crate::frame::receivers::atlas::AtlasReceiver;
 use crate::frame::receivers::screen::ScreenReceiver;
-use crate::frame::technique::OutputInfo;
 use crate::kernels::TraceVariant;
 
 /// AdaptiveCaustics on one backend, for one scene: the frame host and
@@ -236,42 +236,40 @@ impl Pipeline for AdaptiveCausticsPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
+    fn own_outputs(&self) -> &'static [Output] {
         match &self.target {
-            Target::Atlas { receiver, .. } => receiver.outputs(),
-            Target::Screen { receiver, .. } => receiver.outputs(),
+            Target::Atlas { .. } => &crate::frame::receivers::atlas::OUTPUTS,
+            Target::Screen { .. } => &ScreenReceiver::OUTPUTS,
         }
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
+    fn requested_outputs(&self) -> Outputs {
         match &self.target {
-            Target::Atlas { receiver, .. } => {
-                receiver.read_output(backend, host, "adaptive-caustics", name)
-            }
-            Target::Screen { receiver, .. } => {
-                receiver.read_output(backend, host, "adaptive-caustics", name)
-            }
+            Target::Atlas { .. } => self.settings.map.outputs,
+            Target::Screen { .. } => self.settings.screen.outputs,
         }
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
         match &self.target {
-            Target::Atlas { receiver, .. } => {
-                receiver.output_image(host, "adaptive-caustics", name)
-            }
-            Target::Screen { receiver, .. } => {
-                receiver.output_image(host, "adaptive-caustics", name)
-            }
+            Target::Atlas { receiver, .. } => receiver.output_image(host, output),
+            Target::Screen { receiver, .. } => receiver.image(host, output),
         }
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        ("caustics_filtered", "caustics_raw")
+    fn read_data_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        match &self.target {
+            Target::Atlas { receiver, .. } if output == Output::CausticAtlas => {
+                receiver.read_atlas(backend)
+            }
+            _ => Err(Error::Unsupported(format!(
+                "adaptive-caustics has no data output '{output}'"
+            ))),
+        }
+    }
+
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredCaustics, Output::RawCaustics)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -287,15 +285,6 @@ impl Pipeline for AdaptiveCausticsPipeline {
             Target::Atlas { receiver, .. } => receiver.owned(),
             Target::Screen { owned, .. } => owned.count(),
         }
-    }
-}
-
-impl Hosted<AdaptiveCausticsPipeline> {
-    /// Reads output `name` back: the atlas target's outputs are CausticMap's
-    /// ([`crate::frame::receivers::atlas::OUTPUTS`]), the screen target's Sspm's
-    /// ([`crate::frame::receivers::screen::Output`]).
-    pub fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
-        self.read_output_named(backend, name)
     }
 }
 

@@ -33,7 +33,7 @@
 
 pub use crate::frame::emission::view_planes::ViewPlanes;
 pub use crate::frame::receivers::atlas::settings::{
-    CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
+    CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
     ATLAS_BYTES_PER_TEXEL, DENSITY_GATHER_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
 };
 pub use crate::frame::receivers::atlas::{atlas_gather_params, OUTPUTS};
@@ -44,13 +44,13 @@ use crate::device::layout::{AtlasTexel, TraceParams};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
+use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
 use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::atlas::{
     with_atlas, AtlasQuanta, AtlasReceiver, BOX_GATHER_PASSES, DENSITY_GATHER_PASSES,
 };
-use crate::frame::technique::OutputInfo;
 use crate::kernels::{FusedDeposit, TracePhotons, TraceVariant};
 use crate::recording::Recording;
 
@@ -434,26 +434,25 @@ impl Pipeline for CausticMapPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
-        self.receiver.outputs()
+    fn own_outputs(&self) -> &'static [Output] {
+        &OUTPUTS
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
-        self.receiver
-            .read_output(backend, host, "caustic-map", name)
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.outputs
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
-        self.receiver.output_image(host, "caustic-map", name)
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
+        self.receiver.output_image(host, output)
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        ("caustics_filtered", "caustics_raw")
+    fn read_data_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        debug_assert_eq!(output, Output::CausticAtlas);
+        self.receiver.read_atlas(backend)
+    }
+
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredCaustics, Output::RawCaustics)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -467,13 +466,6 @@ impl Pipeline for CausticMapPipeline {
 }
 
 impl Hosted<CausticMapPipeline> {
-    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
-    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
-    /// zeros.
-    pub fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
-        self.read_output_named(backend, name)
-    }
-
     /// The atlas layout as the kernels read it now, per atlas texel (row-major):
     /// `[world area bits, tile]` ([`AtlasTexel`]; `NO_TILE` and area 0 outside the tiles),
     /// read back from the device; `None` without an atlas. With the `caustic_atlas`

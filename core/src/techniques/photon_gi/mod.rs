@@ -34,14 +34,13 @@ use crate::device::layout::{
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
-use crate::frame::image::Image;
 use crate::frame::irradiance_passes::{
     record_atrous, record_temporal_blend, AtrousScratch, History,
 };
+use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{BufferPlan, FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::screen::{DirectLighting, ScreenNeeds};
-use crate::frame::technique::OutputInfo;
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
     DepositScreen, ResolveCaustics, SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
@@ -54,18 +53,12 @@ use rsm::{PhotonPlan, RsmBuffers};
 /// geometric normal (there `s_max` bounds it anyway).
 pub const SHADING_EPSILON: f32 = 1e-4;
 
-/// The outputs, in order: name and what it holds (linear radiance, W/(sr m^2)).
-pub const OUTPUTS: [(&str, &str); 4] = [
-    ("composite", "direct light plus the filtered indirect light"),
-    ("direct", "direct light (with specular chains)"),
-    (
-        "indirect_raw",
-        "indirect light from the splats alone (no temporal or A-Trous filter)",
-    ),
-    (
-        "indirect",
-        "indirect light after the temporal and A-Trous filters",
-    ),
+/// PhotonGi's outputs (linear radiance, W/(sr m^2), the camera's size).
+pub const OUTPUTS: [Output; 4] = [
+    Output::Composite,
+    Output::Direct,
+    Output::RawIndirect,
+    Output::FilteredIndirect,
 ];
 
 /// PhotonGi on one backend, for one scene: the frame host and [`PhotonGiPipeline`].
@@ -88,17 +81,20 @@ fn scene_diagonal(b: &crate::math::geometry::Aabb) -> f32 {
     (b.max - b.min).length().max(f32::MIN_POSITIVE)
 }
 
-/// The camera images PhotonGi asks the host for: the G-buffer, the direct light with its
-/// specular chains, and the composite.
+/// The camera images PhotonGi asks the host for: the G-buffer, and as the requested
+/// outputs need them the direct light with its specular chains and the composite.
 fn screen_needs(s: &PhotonGiSettings) -> ScreenNeeds {
     ScreenNeeds {
         gbuffer: true,
-        direct: Some(DirectLighting {
-            max_specular_depth: s.max_specular_depth,
-            min_weight: 1e-4,
-            fresnel_model: s.fresnel_model,
-        }),
-        composite: true,
+        direct: s
+            .outputs
+            .any_of(&[Output::Direct, Output::Composite])
+            .then_some(DirectLighting {
+                max_specular_depth: s.max_specular_depth,
+                min_weight: 1e-4,
+                fresnel_model: s.fresnel_model,
+            }),
+        composite: s.outputs.has(Output::Composite),
     }
 }
 
@@ -240,7 +236,7 @@ fn make_plan(
     FramePlan {
         prune: true,
         features: SceneFeatures::of(host.model()),
-        outputs: OUTPUTS.iter().map(|o| o.0.to_string()).collect(),
+        outputs: s.outputs.names(&OUTPUTS),
         lights: rsms
             .iter()
             .map(|r| LightPlan {
@@ -267,7 +263,15 @@ fn make_plan(
         trace_variant: None,
         passes: vec![
             pass("primary_gbuffer", true, "camera and RSM faces"),
-            pass("direct_light", true, "the composite's direct part"),
+            if s.outputs.any_of(&[Output::Direct, Output::Composite]) {
+                pass("direct_light", true, "direct or composite requested")
+            } else {
+                pass(
+                    "direct_light",
+                    false,
+                    "neither direct nor composite requested",
+                )
+            },
             pass("rsm_importance", any, photons),
             pass("sample_rsm", any, photons),
             pass("trace_indirect", any, photons),
@@ -323,7 +327,11 @@ fn make_plan(
                     "every vertex normal is its triangle's geometric normal: the factor is 1"
                 },
             ),
-            pass("composite", true, "direct plus indirect"),
+            if s.outputs.has(Output::Composite) {
+                pass("composite", true, "direct plus indirect")
+            } else {
+                pass("composite", false, "composite not requested")
+            },
         ],
         buffers,
     }
@@ -739,45 +747,27 @@ impl Pipeline for PhotonGiPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
-        OUTPUTS
-            .iter()
-            .map(|(name, description)| OutputInfo {
-                name,
-                description,
-                requested: true,
-                camera_space: true,
-            })
-            .collect()
+    fn own_outputs(&self) -> &'static [Output] {
+        &OUTPUTS
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
-        host.read_output_image(backend, self.output_image(host, name)?)
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.outputs
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
         let b = &self.buffers;
-        Ok(match name {
-            "composite" => host.screen().composite,
-            "direct" => host.screen().direct,
-            "indirect_raw" => Some(b.raw),
-            "indirect" => Some(b.indirect),
-            _ => {
-                return Err(Error::InvalidParameter(format!(
-                    "photon-gi has no output '{name}'; outputs: {}",
-                    OUTPUTS.map(|o| o.0).join(", ")
-                )))
-            }
-        })
+        match output {
+            Output::Composite => host.screen().composite,
+            Output::Direct => host.screen().direct,
+            Output::RawIndirect => Some(b.raw),
+            Output::FilteredIndirect => Some(b.indirect),
+            _ => None,
+        }
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        ("indirect", "indirect_raw")
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredIndirect, Output::RawIndirect)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -790,15 +780,6 @@ impl Pipeline for PhotonGiPipeline {
 }
 
 impl Hosted<PhotonGiPipeline> {
-    /// Reads output `name` back (see [`OUTPUTS`]: linear radiance, the camera's size).
-    pub fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        name: &str,
-    ) -> Result<crate::frame::image::Image, Error> {
-        self.read_output_named(backend, name)
-    }
-
     /// The lights' RSMs and photon counts.
     pub fn light_rsms(&self) -> &[LightRsm] {
         &self.pipeline().photons.rsms

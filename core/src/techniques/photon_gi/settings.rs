@@ -2,6 +2,7 @@
 //! validation.
 
 use crate::frame::error::Error;
+use crate::frame::output::Outputs;
 use crate::math::optics::fresnel_model;
 use serde::{Deserialize, Serialize};
 
@@ -109,6 +110,9 @@ pub struct PhotonGiSettings {
     pub seed: u32,
     /// Most triangles the tessellated scene may have.
     pub max_triangles: u64,
+    /// The images the caller wants (every one of PhotonGi's by default): direct light and
+    /// the composite are left out when neither is asked for.
+    pub outputs: Outputs,
 }
 
 impl Default for PhotonGiSettings {
@@ -139,6 +143,7 @@ impl Default for PhotonGiSettings {
             max_specular_depth: 4,
             seed: 1,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
+            outputs: Outputs::ALL,
         }
     }
 }
@@ -147,6 +152,7 @@ impl PhotonGiSettings {
     /// Refuses values the kernels cannot run with, each by name.
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: &str| Err(Error::InvalidParameter(format!("photon-gi: {what}")));
+        self.outputs.check("photon-gi", &super::OUTPUTS)?;
         let total = self.photons_w as u64 * self.photons_h as u64;
         if total == 0 || total > (1 << 28) {
             return bad("photons_w x photons_h must be in 1..=2^28");

@@ -18,9 +18,8 @@
 mod constants;
 mod settings;
 
-pub use crate::frame::receivers::screen::{
-    plan_frame, FrameImages, GatherFilter, Needs, Output, Outputs,
-};
+pub use crate::frame::output::{Output, Outputs};
+pub use crate::frame::receivers::screen::{plan_frame, FrameImages, GatherFilter, Needs};
 pub use constants::{volume_light_plans, FrameConstants};
 pub use settings::SspmSettings;
 
@@ -35,7 +34,6 @@ use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::FramePlan;
 use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::ScreenReceiver;
-use crate::frame::technique::OutputInfo;
 use crate::kernels::{DepositScreen, FusedDeposit, ScreenDeposit, TracePhotons};
 use crate::recording::Recording;
 
@@ -331,25 +329,20 @@ impl Pipeline for SspmPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
-        self.receiver.outputs()
+    fn own_outputs(&self) -> &'static [Output] {
+        &ScreenReceiver::OUTPUTS
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
-        self.receiver.read_output(backend, host, "sspm", name)
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.outputs
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
-        self.receiver.output_image(host, "sspm", name)
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
+        self.receiver.image(host, output)
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        (Output::FilteredCaustics.stem(), Output::RawCaustics.stem())
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredCaustics, Output::RawCaustics)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -389,19 +382,8 @@ impl Hosted<SspmPipeline> {
             .map(|b| (b.photons, b.photon_count))
     }
 
-    /// Reads one of the frame's outputs back. An output the plan knows to be zero (no
-    /// light emits photons) has no device buffer and reads as zeros; one that was not
-    /// requested in [`SspmSettings::outputs`] is an error.
-    pub fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
-        self.pipeline().receiver.read(backend, self.host(), output)
-    }
-
     /// Reads a device image of the camera's size back to the host.
-    pub fn read_image(
-        &self,
-        backend: &mut dyn Backend,
-        image: ImageBuf,
-    ) -> Result<Image, Error> {
+    pub fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
         self.host().read_image(backend, image)
     }
 }

@@ -2,7 +2,8 @@
 
 use crate::frame::emission::PointEmission;
 use crate::frame::error::Error;
-use crate::frame::receivers::screen::{GatherFilter, Outputs, ScreenSettings};
+use crate::frame::output::Outputs;
+use crate::frame::receivers::screen::{GatherFilter, ScreenSettings};
 use serde::{Deserialize, Serialize};
 
 /// Every parameter of the technique; defaults from Kim 2019 where it gives them.

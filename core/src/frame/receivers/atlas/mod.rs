@@ -29,6 +29,7 @@ use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::image::Image;
 use crate::frame::irradiance_passes::FilterChain;
+use crate::frame::output::Output;
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::screen::{DirectLighting, ScreenNeeds};
 use crate::kernels::{
@@ -45,29 +46,14 @@ pub const BOX_GATHER_PASSES: [&str; 1] = ["gather_caustic_map"];
 pub const DENSITY_GATHER_PASSES: [&str; 3] =
     ["photon_count_table", "gather_footprint", "density_gather"];
 
-/// One output image of the caustic map: the names are the screen receiver's, so that
-/// every technique writes the same files, plus the atlas.
-pub const OUTPUTS: [(&str, &str); 5] = [
-    (
-        "composite",
-        "direct light + caustics from the gathered caustic map",
-    ),
-    (
-        "direct",
-        "direct light alone (shadow rays, specular chains)",
-    ),
-    (
-        "caustics_raw",
-        "caustic radiance from the raw caustic map, as the camera sees it",
-    ),
-    (
-        "caustics_filtered",
-        "caustic radiance from the gathered caustic map, as the camera sees it",
-    ),
-    (
-        "caustic_atlas",
-        "the gathered caustic map: irradiance (W/m^2) per atlas texel",
-    ),
+/// The outputs of the caustic map: the screen receiver's, so that every technique writes
+/// the same files, plus the atlas.
+pub const OUTPUTS: [Output; 5] = [
+    Output::Composite,
+    Output::Direct,
+    Output::RawCaustics,
+    Output::FilteredCaustics,
+    Output::CausticAtlas,
 ];
 
 /// The fixed-point quanta of the atlas's sums (the emission's).
@@ -211,7 +197,12 @@ pub fn with_atlas(host: &FrameHost, settings: &CausticMapSettings, emits: bool) 
     let features = SceneFeatures::of(host.model());
     let casters = features.mirrors || features.dielectrics;
     let o = &settings.outputs;
-    let wants = o.composite || o.raw_caustics || o.filtered_caustics || o.atlas;
+    let wants = o.any_of(&[
+        Output::Composite,
+        Output::RawCaustics,
+        Output::FilteredCaustics,
+        Output::CausticAtlas,
+    ]);
     casters
         && host.receivers().is_some()
         && (emits || !settings.prune)
@@ -244,9 +235,9 @@ impl AtlasReceiver {
     pub fn screen_needs(settings: &CausticMapSettings, caustics: bool) -> ScreenNeeds {
         let o = settings.outputs;
         let keep = |x: bool| x || !settings.prune;
-        let direct = keep(o.direct || o.composite);
+        let direct = keep(o.any_of(&[Output::Direct, Output::Composite]));
         let filters = caustics
-            && keep(o.filtered_caustics || o.composite)
+            && keep(o.any_of(&[Output::FilteredCaustics, Output::Composite]))
             && (settings.temporal || settings.atrous_iterations > 0);
         ScreenNeeds {
             gbuffer: direct || filters,
@@ -255,7 +246,7 @@ impl AtlasReceiver {
                 min_weight: 1e-3,
                 fresnel_model: settings.fresnel.kernel_value(),
             }),
-            composite: caustics && keep(o.composite),
+            composite: caustics && keep(o.has(Output::Composite)),
         }
     }
 
@@ -327,7 +318,7 @@ impl AtlasReceiver {
             texels: rec.upload(&l.texels, "atlas texels"),
             sums: rec.create_photon_map(texels),
             map: rec.create(texels, "caustic map"),
-            raw_map: (s.outputs.raw_caustics || !s.prune)
+            raw_map: (s.outputs.has(Output::RawCaustics) || !s.prune)
                 .then(|| rec.create(texels, "raw caustic map")),
             photons: rec.create(1, "photons"),
             photon_count: rec.create(1, "photon count"),
@@ -370,7 +361,8 @@ impl AtlasReceiver {
         let pixels = camera.width * camera.height;
         let caustics = self.atlas.is_some();
         let mut rec = Recording::new();
-        let filtered_needed = caustics && keep(o.filtered_caustics || o.composite);
+        let filtered_needed =
+            caustics && keep(o.any_of(&[Output::FilteredCaustics, Output::Composite]));
         let filters = (filtered_needed && (s.temporal || s.atrous_iterations > 0)).then(|| {
             FilterChain::create(
                 &mut rec,
@@ -382,7 +374,7 @@ impl AtlasReceiver {
         });
         let images = CameraImages {
             filters,
-            raw: (caustics && keep(o.raw_caustics))
+            raw: (caustics && keep(o.has(Output::RawCaustics)))
                 .then(|| rec.create(pixels, "raw caustics image")),
             filtered: filtered_needed.then(|| rec.create(pixels, "filtered caustics image")),
         };
@@ -806,22 +798,10 @@ impl AtlasReceiver {
                 why_no_atlas
             },
         );
-        let o = self.settings.outputs;
         FramePlan {
             prune: self.settings.prune,
             features,
-            outputs: OUTPUTS
-                .iter()
-                .zip([
-                    o.composite,
-                    o.direct,
-                    o.raw_caustics,
-                    o.filtered_caustics,
-                    o.atlas,
-                ])
-                .filter(|(_, r)| *r)
-                .map(|((n, _), _)| n.to_string())
-                .collect(),
+            outputs: self.settings.outputs.names(&OUTPUTS),
             lights,
             trace_variant: photons.then_some(variant),
             passes,
@@ -842,96 +822,32 @@ impl AtlasReceiver {
         )
     }
 
-    /// Whether output `name` was requested.
-    pub fn requested(&self, name: &str) -> bool {
-        let o = &self.settings.outputs;
-        match name {
-            "composite" => o.composite,
-            "direct" => o.direct,
-            "caustics_raw" => o.raw_caustics,
-            "caustics_filtered" => o.filtered_caustics,
-            "caustic_atlas" => o.atlas,
-            _ => false,
-        }
-    }
-
-    /// Checks that `name` is an output and was requested; `technique` names the
-    /// technique in errors.
-    fn check_output(&self, technique: &str, name: &str) -> Result<(), Error> {
-        if !OUTPUTS.iter().any(|(n, _)| *n == name) {
-            return Err(Error::InvalidParameter(format!(
-                "{technique} has no output '{name}'; outputs: {}",
-                OUTPUTS.map(|(n, _)| n).join(", ")
-            )));
-        }
-        if !self.requested(name) {
-            return Err(Error::InvalidParameter(format!(
-                "output '{name}' was not requested (CausticMapSettings::outputs)"
-            )));
-        }
-        Ok(())
-    }
-
-    /// The device image of camera-space output `name` (camera-sized, linear radiance,
-    /// row-major from the top-left pixel): `None` where the plan knows it is zero; the
-    /// atlas, which is not camera-space, is an error here.
-    pub fn output_image(
-        &self,
-        host: &FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Option<ImageBuf>, Error> {
-        self.check_output(technique, name)?;
+    /// The device image of camera-space `output` (camera-sized, linear radiance, row-major
+    /// from the top-left pixel): `None` where the plan knows it is zero, and for the
+    /// atlas, which is not camera-space.
+    pub fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
         let (screen, i) = (host.screen(), self.images);
-        Ok(match name {
-            "composite" => screen.composite.or(screen.direct),
-            "direct" => screen.direct,
-            "caustics_raw" => i.raw,
-            "caustics_filtered" => i.filtered,
-            _ => {
-                return Err(Error::InvalidParameter(format!(
-                    "{technique}'s output '{name}' is not camera-space: read it back"
-                )))
-            }
-        })
-    }
-
-    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
-    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
-    /// zeros; `technique` names the technique in errors.
-    pub fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Image, Error> {
-        self.check_output(technique, name)?;
-        if name == "caustic_atlas" {
-            let side = self.settings.atlas_size;
-            return match self.atlas {
-                Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
-                None => Ok(Image::new(
-                    side,
-                    side,
-                    vec![[0.0; 4]; side as usize * side as usize],
-                )),
-            };
+        match output {
+            Output::Composite => screen.composite.or(screen.direct),
+            Output::Direct => screen.direct,
+            Output::RawCaustics => i.raw,
+            Output::FilteredCaustics => i.filtered,
+            _ => None,
         }
-        host.read_output_image(backend, self.output_image(host, technique, name)?)
     }
 
-    /// Every output, requested or not.
-    pub fn outputs(&self) -> Vec<crate::frame::technique::OutputInfo> {
-        OUTPUTS
-            .iter()
-            .map(|(name, description)| crate::frame::technique::OutputInfo {
-                name,
-                description,
-                requested: self.requested(name),
-                camera_space: *name != "caustic_atlas",
-            })
-            .collect()
+    /// Reads the gathered caustic atlas back: irradiance (W/m^2) per texel, `atlas_size`
+    /// square; zeros without an atlas.
+    pub fn read_atlas(&self, backend: &mut dyn Backend) -> Result<Image, Error> {
+        let side = self.settings.atlas_size;
+        match self.atlas {
+            Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
+            None => Ok(Image::new(
+                side,
+                side,
+                vec![[0.0; 4]; side as usize * side as usize],
+            )),
+        }
     }
 
     /// The atlas layout as the kernels read it now, per atlas texel (row-major):

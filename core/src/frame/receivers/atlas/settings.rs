@@ -1,45 +1,11 @@
 //! Every parameter of CausticMap, with its defaults and validation.
 
 use crate::frame::error::Error;
+use crate::frame::output::Outputs;
 use crate::frame::receivers::atlas::layout::DEFAULT_ATLAS_SIDE;
 use crate::kernels::MAX_SPECULAR_DEPTH;
 use crate::math::map_gather::DEFAULT_GATHER_WIDTH;
 use serde::{Deserialize, Serialize};
-
-/// The images a caller asks a frame for (all by default).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct CausticMapOutputs {
-    /// Direct light + filtered caustics.
-    pub composite: bool,
-    /// Direct light alone.
-    pub direct: bool,
-    /// Caustic radiance from the raw caustic map (no gather), as the camera sees it.
-    pub raw_caustics: bool,
-    /// Caustic radiance from the gathered caustic map, as the camera sees it.
-    pub filtered_caustics: bool,
-    /// The gathered caustic map itself (irradiance per atlas texel).
-    pub atlas: bool,
-}
-
-impl Default for CausticMapOutputs {
-    fn default() -> Self {
-        CausticMapOutputs {
-            composite: true,
-            direct: true,
-            raw_caustics: true,
-            filtered_caustics: true,
-            atlas: true,
-        }
-    }
-}
-
-impl CausticMapOutputs {
-    /// Whether at least one output is requested.
-    pub fn any(&self) -> bool {
-        self.composite || self.direct || self.raw_caustics || self.filtered_caustics || self.atlas
-    }
-}
 
 /// How photons cross a dielectric (and a dispersive one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -186,7 +152,7 @@ pub struct CausticMapSettings {
     /// the device's largest buffer holds).
     pub max_photons_per_batch: u32,
     /// The images to produce.
-    pub outputs: CausticMapOutputs,
+    pub outputs: Outputs,
     /// Leave out passes and buffers the requested outputs and the scene do not need.
     pub prune: bool,
     /// Accumulate the filtered caustics over frames (Smal 2019's temporal blend, the shared
@@ -240,7 +206,7 @@ impl Default for CausticMapSettings {
             max_specular_depth: 6,
             seed: 0x434d_4150,
             max_photons_per_batch: crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH,
-            outputs: CausticMapOutputs::default(),
+            outputs: Outputs::ALL,
             prune: true,
             temporal: false,
             atrous_iterations: 0,
@@ -325,9 +291,7 @@ impl CausticMapSettings {
         if !(self.atrous_clip_sigmas >= 0.0 && self.atrous_clip_sigmas.is_finite()) {
             return bad("atrous_clip_sigmas must be a finite number >= 0".into());
         }
-        if !self.outputs.any() {
-            return bad("outputs: at least one output must be requested".into());
-        }
+        self.outputs.check("the caustic map", &super::OUTPUTS)?;
         Ok(())
     }
 }

@@ -13,7 +13,9 @@ pub mod outputs;
 pub mod plan;
 pub mod settings;
 
-pub use outputs::{FrameImages, Output, Outputs};
+pub use outputs::FrameImages;
+
+use crate::frame::output::Output;
 pub use plan::{plan_frame, Needs};
 pub use settings::{GatherFilter, ScreenSettings};
 
@@ -286,7 +288,7 @@ impl ScreenReceiver {
         let keep = |requested: bool| requested || !self.settings.prune;
         let composite = if screen.composite.is_some() {
             screen.composite
-        } else if out.composite {
+        } else if out.has(Output::Composite) {
             screen.direct // no caustics: the composite is the direct image
         } else {
             None
@@ -295,9 +297,11 @@ impl ScreenReceiver {
             width: camera.width,
             height: camera.height,
             composite,
-            direct: screen.direct.filter(|_| keep(out.direct)),
-            raw_caustics: self.raw.filter(|_| keep(out.raw_caustics)),
-            filtered_caustics: self.filtered.filter(|_| keep(out.filtered_caustics)),
+            direct: screen.direct.filter(|_| keep(out.has(Output::Direct))),
+            raw_caustics: self.raw.filter(|_| keep(out.has(Output::RawCaustics))),
+            filtered_caustics: self
+                .filtered
+                .filter(|_| keep(out.has(Output::FilteredCaustics))),
         }
     }
 
@@ -444,78 +448,19 @@ impl ScreenReceiver {
         }
     }
 
-    /// Every output, requested or not.
-    pub fn outputs(&self) -> Vec<crate::frame::technique::OutputInfo> {
-        Output::ALL
-            .iter()
-            .map(|o| crate::frame::technique::OutputInfo {
-                name: o.stem(),
-                description: o.description(),
-                requested: o.requested(&self.settings.outputs),
-                camera_space: true,
-            })
-            .collect()
-    }
+    /// The outputs the screen receiver gives a technique.
+    pub const OUTPUTS: [Output; 4] = [
+        Output::Composite,
+        Output::Direct,
+        Output::RawCaustics,
+        Output::FilteredCaustics,
+    ];
 
     /// The device image of `output` (camera-sized, linear radiance, row-major from the
-    /// top-left pixel): `None` where the plan knows it is zero, an error where it was not
-    /// requested.
-    pub fn image(
-        &self,
-        host: &crate::frame::host::FrameHost,
-        output: Output,
-    ) -> Result<Option<crate::device::handle::ImageBuf>, crate::frame::error::Error> {
-        if !output.requested(&self.settings.outputs) {
-            return Err(crate::frame::error::Error::InvalidParameter(format!(
-                "output '{}' was not requested (outputs)",
-                output.stem()
-            )));
-        }
-        Ok(self.images(host.camera(), host.screen()).get(output))
-    }
-
-    /// Reads `output` back over the host's images: zeros where the plan knows it is zero,
-    /// an error where it was not requested.
-    pub fn read(
-        &self,
-        backend: &mut dyn crate::backend::Backend,
-        host: &crate::frame::host::FrameHost,
-        output: Output,
-    ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
-        host.read_output_image(backend, self.image(host, output)?)
-    }
-
-    /// Output `name` by its stem ([`Output::stem`]); `technique` names the technique in
-    /// errors.
-    pub fn output(technique: &str, name: &str) -> Result<Output, crate::frame::error::Error> {
-        Output::from_stem(name).ok_or_else(|| {
-            crate::frame::error::Error::InvalidParameter(format!(
-                "{technique} has no output '{name}'; outputs: {}",
-                Output::ALL.map(|o| o.stem()).join(", ")
-            ))
-        })
-    }
-
-    /// Reads output `name` back ([`Output::stem`]); `technique` names the technique in
-    /// errors.
-    pub fn read_output(
-        &self,
-        backend: &mut dyn crate::backend::Backend,
-        host: &crate::frame::host::FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
-        self.read(backend, host, Self::output(technique, name)?)
-    }
-
-    /// The device image of output `name` ([`ScreenReceiver::image`]).
-    pub fn output_image(
-        &self,
-        host: &crate::frame::host::FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Option<crate::device::handle::ImageBuf>, crate::frame::error::Error> {
-        self.image(host, Self::output(technique, name)?)
+    /// top-left pixel): `None` where the plan knows it is zero, or for an output the
+    /// screen receiver does not make.
+    pub fn image(&self, host: &crate::frame::host::FrameHost, output: Output) -> Option<ImageBuf> {
+        self.images(host.camera(), host.screen()).get(output)
     }
 
     /// Forgets the temporal history and the accumulated photons (the next frame is not

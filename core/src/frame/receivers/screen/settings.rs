@@ -2,8 +2,8 @@
 //! passes, outputs), with their defaults and validation. Sspm's settings hold the same
 //! fields at their top level; AdaptiveCaustics' screen target holds them as `screen`.
 
-use super::outputs::Outputs;
 use crate::frame::error::Error;
+use crate::frame::output::Outputs;
 use crate::frame::screen::DirectLighting;
 use crate::kernels::MAX_SPECULAR_DEPTH;
 use serde::{Deserialize, Serialize};
@@ -170,9 +170,8 @@ impl ScreenSettings {
         if self.tile_size == 0 || self.tile_size > 256 {
             return bad("tile_size must be in 1..=256");
         }
-        if !self.outputs.any() {
-            return bad("outputs: at least one output must be requested");
-        }
+        self.outputs
+            .check("the screen receiver", &super::ScreenReceiver::OUTPUTS)?;
         if self.atrous_iterations > 8 {
             return bad("atrous_iterations must be <= 8 (taps 128 pixels apart)");
         }
