@@ -12,7 +12,7 @@
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::builtin::builtin;
 use caustica::scene::{Light, Shape, Transform};
-use caustica::wgpu;
+use caustica::{glam, wgpu};
 use caustica::{FrameTicket, Outputs, Sspm, SspmSettings, Technique};
 use std::collections::VecDeque;
 use std::time::Instant;

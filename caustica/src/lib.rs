@@ -65,7 +65,8 @@
 //! metrics ([`metrics`]) and references ([`reference`](mod@reference)); each backend's own API behind its
 //! cargo feature in [`backends`] (embedding into a host's wgpu or Vulkan device);
 //! `glam`, `wgpu` and `ash` as caustica uses them. Backend authors find the kernel list,
-//! recordings and device layouts under [`internals`]. With the `report` feature,
+//! recordings, device layouts and the frame host under [`internals`], the one module of
+//! what lies below the techniques. With the `report` feature,
 //! [`report`] measures error against run time.
 
 #![warn(missing_docs)]
@@ -187,18 +188,20 @@ pub mod techniques {
     };
 }
 
-/// For backend authors: the backend trait's vocabulary (recordings and their steps, the
-/// kernel list and declarations, device layouts and handles) and the scalar math every
-/// shader mirrors. Not needed to use a technique.
+/// For backend authors and tools that work below the techniques; not needed to use a
+/// technique. The backend trait's vocabulary: [`backend`](internals::backend),
+/// [`recording`](internals::recording) (recordings and their steps),
+/// [`kernels`](internals::kernels) (the kernel list and declarations),
+/// [`device`](internals::device) (device layouts and handles) and
+/// [`math`](internals::math) (the scalar math every shader mirrors). The frame machinery:
+/// the frame [`host`](internals::host) and the seam a technique implements over it
+/// ([`pipeline::Pipeline`](internals::pipeline::Pipeline)), the non-blocking frame
+/// ([`submitted`](internals::submitted)), and the modules behind the top level's
+/// [`Image`], [`FramePlan`] and [`FrameStats`] with their helpers
+/// ([`image`](internals::image), [`plan`](internals::plan), [`stats`](internals::stats)).
 pub mod internals {
+    pub use caustica_core::frame::{host, image, pipeline, plan, stats, submitted};
     pub use caustica_core::{backend, device, kernels, math, recording};
-}
-
-/// The frame machinery a host or tool may need beyond the techniques: images, metrics,
-/// the frame plan and statistics, the non-blocking frame, the frame host and the seam a
-/// technique implements over it ([`frame::pipeline::Pipeline`]).
-pub mod frame {
-    pub use caustica_core::frame::{host, image, metrics, pipeline, plan, stats, submitted};
 }
 
 /// Each backend's own API (embedding into a host's device, device choice), behind its

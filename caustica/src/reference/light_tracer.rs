@@ -1118,8 +1118,9 @@ pub fn load_or_compute(
             }
         }
     }
+    // the cache must take the result before the work begins
+    crate::output::prepare_folder(dir).map_err(|e| format!("reference cache {e}"))?;
     let r = compute(scene, spec, progress)?;
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     crate::output::write_exr(&exr_path, &r.image)?;
     crate::output::write_exr(&err_path, &r.std_error)?;
     let text = serde_json::to_string_pretty(&r.info).map_err(|e| e.to_string())?;
