@@ -23,11 +23,11 @@
 #ifndef SURFACE_STORE
 #define SURFACE_STORE 0
 #endif
-// Seed 001's deterministic splits (core's TraceVariant::fresnel_split).
+// Vanderstichelen 2021's deterministic splits (core's TraceVariant::fresnel_split).
 #ifndef FRESNEL_SPLIT
 #define FRESNEL_SPLIT 0
 #endif
-// Seed 004's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
+// Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
 // of cluster clusters[p->first + i / 4] of the p->grid_w grid and is written to slot i,
 // stored or not (core's photon_store says how); photon_count is left untouched.
 #ifndef ADAPTIVE

@@ -1,6 +1,6 @@
 //! AdaptiveCaustics against the dense light view plane (CausticMap) per backend, at 1024^2,
 //! 2048^2 and 4096^2 equivalent photons (Wyman 2009 found adaptive faster from 1024^2 on):
-//! `spot-glass` with the plane over the spot's whole cone (004's setting) and `sphere` with
+//! `spot-glass` with the plane over the spot's whole cone (Wyman 2009's setting) and `sphere` with
 //! CausticMap's caster-fitted plane.
 //!
 //! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
@@ -23,6 +23,7 @@ use caustica::techniques::adaptive_caustics::{
 use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica::Technique;
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica::{FrameSettings, PlaneSettings, TraceSettings, TraversalSettings};
 use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 
@@ -67,12 +68,21 @@ fn main() {
             (scene.camera.width, scene.camera.height) = (1920, 1080);
             for &n in &sizes {
                 let map = CausticMapSettings {
-                    photons_w: n,
-                    photons_h: n,
-                    emission_plane: plane,
-                    max_photons_per_batch: 1 << 22,
-                    outputs: Outputs::of(&[Output::Composite]),
-                    ..Default::default()
+                    frame: FrameSettings {
+                        photons_w: n,
+                        photons_h: n,
+                        outputs: Outputs::of(&[Output::Composite]),
+                        ..CausticMapSettings::default().frame
+                    },
+                    planes: PlaneSettings {
+                        emission_plane: plane,
+                        ..CausticMapSettings::default().planes
+                    },
+                    trace: TraceSettings {
+                        max_photons_per_batch: 1 << 22,
+                        ..CausticMapSettings::default().trace
+                    },
+                    ..CausticMapSettings::default()
                 };
                 for (label, metric) in [
                     ("dense", None),
@@ -86,10 +96,12 @@ fn main() {
                             backend.as_mut(),
                             &scene,
                             AdaptiveCausticsSettings {
-                                map: map.clone(),
-                                metric,
-                                max_traversal_bytes: 256 << 20,
-                                ..Default::default()
+                                traversal: TraversalSettings {
+                                    metric,
+                                    max_traversal_bytes: 256 << 20,
+                                    ..AdaptiveCausticsSettings::default().traversal
+                                },
+                                ..AdaptiveCausticsSettings::from_map(map.clone())
                             },
                         )
                         .map(|t| Box::new(t) as Box<dyn Technique>),

@@ -6,7 +6,7 @@
 //! `max_specular_depth = n` for the camera's tree.
 //!
 //! Per setting, Fresnel split (deterministic; stochastic, the default), map gather
-//! (density, the default; 001's box) and backend, after warm-up frames
+//! (density, the default; Vanderstichelen 2021's box) and backend, after warm-up frames
 //! (`CAUSTICA_BENCH_WARMUP_MS`, default 3000, then one more): the median over frames that
 //! remake the atlas (a new seed each) of every pass and of the budget line emission +
 //! trace + splat + gather (`trace_photons`, which deposits into the atlas, and `gather_caustic_map` or
@@ -27,6 +27,7 @@ use caustica::scene::limits::tessellated_size;
 use caustica::scene::{Scene, Shape};
 use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, FresnelSplit, MapGather};
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica::{AtlasSettings, FrameSettings, PlaneSettings, TraceSettings};
 use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
@@ -122,15 +123,27 @@ fn main() {
             let (tris, bounces, atlas, size) = SETTINGS[k];
             let (scene, total) = scene_with(tris, size);
             let settings = CausticMapSettings {
-                photons_w: side,
-                photons_h: side,
-                atlas_size: atlas,
-                max_bounces: bounces + 1,
-                max_specular_depth: bounces,
-                fresnel_split: split,
-                gather,
-                outputs: Outputs::of(&[Output::Composite]),
-                ..Default::default()
+                frame: FrameSettings {
+                    photons_w: side,
+                    photons_h: side,
+                    max_specular_depth: bounces,
+                    outputs: Outputs::of(&[Output::Composite]),
+                    ..CausticMapSettings::default().frame
+                },
+                atlas: AtlasSettings {
+                    atlas_size: atlas,
+                    gather,
+                    ..CausticMapSettings::default().atlas
+                },
+                trace: TraceSettings {
+                    max_bounces: bounces + 1,
+                    ..CausticMapSettings::default().trace
+                },
+                planes: PlaneSettings {
+                    fresnel_split: split,
+                    ..CausticMapSettings::default().planes
+                },
+                ..CausticMapSettings::default()
             };
             let mut t = match CausticMap::new(backend.as_mut(), &scene, settings) {
                 Ok(t) => t,

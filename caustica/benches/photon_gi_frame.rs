@@ -15,6 +15,7 @@
 mod common;
 use caustica::scene::builtin::builtin;
 use caustica::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
+use caustica::FrameSettings;
 use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
@@ -51,10 +52,13 @@ fn main() {
                 other => panic!("unknown setting {other}"),
             };
             let s = PhotonGiSettings {
-                photons_w: side,
-                photons_h: side,
+                frame: FrameSettings {
+                    photons_w: side,
+                    photons_h: side,
+                    ..PhotonGiSettings::default().frame
+                },
                 bounces,
-                ..Default::default()
+                ..PhotonGiSettings::default()
             };
             let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {
                 Ok(t) => t,

@@ -9,6 +9,7 @@
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::builtin::builtin;
 use caustica::wgpu;
+use caustica::FrameSettings;
 use caustica::{Outputs, Sspm, SspmSettings};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -57,10 +58,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scene.camera.width = w;
     scene.camera.height = h;
     let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        // the renderer does its own direct light: no direct_light or composite pass
-        outputs: Outputs::CAUSTICS_ONLY,
+        frame: FrameSettings {
+            photons_w: side,
+            photons_h: side,
+            // the renderer does its own direct light: no direct_light or composite pass
+            outputs: Outputs::CAUSTICS_ONLY,
+            ..SspmSettings::default().frame
+        },
         ..SspmSettings::default()
     };
     let mut sspm = Sspm::new(&mut backend, &scene, settings)?;

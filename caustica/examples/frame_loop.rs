@@ -12,6 +12,7 @@
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::builtin::builtin;
 use caustica::scene::{Light, Shape, Transform};
+use caustica::FrameSettings;
 use caustica::{glam, wgpu};
 use caustica::{FrameTicket, Outputs, Sspm, SspmSettings, Technique};
 use std::collections::VecDeque;
@@ -81,10 +82,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let (mut t, caustics): (Box<dyn Technique>, _) = if technique == "sspm" {
             let settings = SspmSettings {
-                photons_w: side,
-                photons_h: side,
-                // the renderer does its own direct light: caustics only
-                outputs: Outputs::CAUSTICS_ONLY,
+                frame: FrameSettings {
+                    photons_w: side,
+                    photons_h: side,
+                    // the renderer does its own direct light: caustics only
+                    outputs: Outputs::CAUSTICS_ONLY,
+                    ..SspmSettings::default().frame
+                },
                 ..SspmSettings::default()
             };
             let sspm = Sspm::new(&mut backend, &scene, settings)?;

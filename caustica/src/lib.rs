@@ -45,7 +45,7 @@
 //! let mut scene = builtin::builtin("sphere").expect("built-in scene");
 //! (scene.camera.width, scene.camera.height) = (64, 36);
 //! for name in techniques::technique_names() {
-//!     let small = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
+//!     let small = serde_json::json!({ "frame": { "photons_w": 64, "photons_h": 64 } });
 //!     let mut t = techniques::create(name, backend.as_mut(), &scene, &small)?;
 //!     match caustics(t.as_mut(), backend.as_mut())? {
 //!         Some(img) => println!("{name}: {} caustic pixels", img.pixels.len()),
@@ -71,6 +71,12 @@
 
 #![warn(missing_docs)]
 
+/// The README's examples, compiled by `cargo test --doc` (the embedding fragments, marked
+/// `ignore`, are the runnable examples `frame_loop` and `embed_ash`).
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeExamples;
+
 #[cfg(feature = "gltf")]
 pub mod gltf_scene;
 pub mod output;
@@ -88,12 +94,14 @@ pub use caustica_core::frame::image::Image;
 pub use caustica_core::frame::metrics;
 pub use caustica_core::frame::output::{Output, OutputInfo, Outputs};
 pub use caustica_core::frame::plan::FramePlan;
+pub use caustica_core::frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
 pub use caustica_core::frame::stats::FrameStats;
 pub use caustica_core::frame::submitted::{FrameTicket, RecordedFrame};
 pub use caustica_core::frame::technique::{Progress, Technique};
 pub use caustica_core::scene;
 pub use caustica_core::scene::Scene;
 pub use caustica_core::techniques::sspm::{FrameImages, GatherFilter, Sspm, SspmSettings};
+pub use caustica_core::{AtlasSettings, PlaneSettings, ScreenSettings, TraversalSettings};
 
 /// CausticMap (Vanderstichelen 2021): photons from each light's view planes into a caustic atlas in
 /// the receivers' texture space, looked up by the camera through mirrors and glass. The
@@ -102,14 +110,13 @@ pub use caustica_core::techniques::sspm::{FrameImages, GatherFilter, Sspm, SspmS
 ///
 /// ```no_run
 /// use caustica::{open_backend, scene::builtin, CausticMap, CausticMapSettings, Output};
+/// use caustica::TechniqueSettings; // with_photons
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("sphere").expect("built-in scene");
-/// let settings = CausticMapSettings {
-///     photons_w: 1024,
-///     photons_h: 1024,
-///     ..Default::default()
-/// };
+/// // the knobs every technique shares sit in `frame`, the atlas's in `atlas`
+/// let mut settings = CausticMapSettings::default().with_photons(1024, 1024);
+/// settings.atlas.atlas_size = 1024;
 /// let mut map = CausticMap::new(backend.as_mut(), &scene, settings)?;
 /// map.frame(backend.as_mut(), &mut |_| {})?;
 /// let caustics = map.read_output(backend.as_mut(), Output::FilteredCaustics)?; // radiance
@@ -130,17 +137,16 @@ pub use caustica_core::techniques::caustic_map::{
 ///
 /// ```no_run
 /// use caustica::{open_backend, scene::builtin, AdaptiveCaustics, AdaptiveCausticsSettings};
-/// use caustica::{AdaptiveDeposit, AdaptiveMetric, CausticMapSettings, Output};
+/// use caustica::{AdaptiveDeposit, AdaptiveMetric, Output, TechniqueSettings, TraversalSettings};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("spot-glass").expect("built-in scene");
 /// let settings = AdaptiveCausticsSettings {
-///     // the dense-equivalent grid: the pyramid's finest level
-///     map: CausticMapSettings { photons_w: 2048, photons_h: 2048, ..Default::default() },
-///     metric: AdaptiveMetric::Error,
+///     traversal: TraversalSettings { metric: AdaptiveMetric::Error, ..Default::default() },
 ///     deposit: AdaptiveDeposit::Atlas,
 ///     ..Default::default()
-/// };
+/// }
+/// .with_photons(2048, 2048); // the dense-equivalent grid: the pyramid's finest level
 /// let mut t = AdaptiveCaustics::new(backend.as_mut(), &scene, settings)?;
 /// let stats = t.frame(backend.as_mut(), &mut |_| {})?;
 /// if let Some(a) = &stats.adaptive {

@@ -22,7 +22,24 @@ pub fn technique_spec(
             .split_once('=')
             .ok_or_else(|| format!("technique '{spec}': '{pair}' is not key=value"))?;
         let value = serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::from(v));
-        settings.insert(k.to_string(), value);
+        // `block.field` sets a field of a block (`frame.seed=3`); a bare field name is
+        // found in its block by the technique (`seed=3`)
+        match k.split_once('.') {
+            Some((block, field)) => {
+                let b = settings
+                    .entry(block.to_string())
+                    .or_insert_with(|| serde_json::Value::Object(Default::default()));
+                match b.as_object_mut() {
+                    Some(b) => {
+                        b.insert(field.to_string(), value);
+                    }
+                    None => return Err(format!("technique '{spec}': '{block}' is not a block")),
+                }
+            }
+            None => {
+                settings.insert(k.to_string(), value);
+            }
+        }
     }
     Ok((name, settings))
 }

@@ -8,6 +8,7 @@ use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{AtlasSettings, FrameSettings, TraversalSettings};
 
 fn main() {
     let n: u32 = std::env::args()
@@ -16,10 +17,16 @@ fn main() {
         .unwrap_or(256);
     let mut b = caustica_cpu::CpuBackend::new().expect("cpu backend");
     let map = CausticMapSettings {
-        photons_w: n,
-        photons_h: n,
-        atlas_size: 256,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: n,
+            photons_h: n,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 256,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     };
     println!("scene | dense stored W | level / dense | error / dense | photons level | photons error | dense");
     for name in BUILTIN_SCENES {
@@ -38,9 +45,11 @@ fn main() {
                 &mut b,
                 &scene,
                 AdaptiveCausticsSettings {
-                    map: map.clone(),
-                    metric,
-                    ..Default::default()
+                    traversal: TraversalSettings {
+                        metric,
+                        ..AdaptiveCausticsSettings::default().traversal
+                    },
+                    ..AdaptiveCausticsSettings::from_map(map.clone())
                 },
             )
             .unwrap();

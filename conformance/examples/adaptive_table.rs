@@ -1,4 +1,4 @@
-//! Seed 004's Table 1 in its own setting: photons traced per level and in total by the
+//! Wyman 2009's Table 1 in its own setting: photons traced per level and in total by the
 //! dense light view plane and by AdaptiveCaustics' two metrics on `spot-glass` (the plane
 //! over the spot's whole cone), with each caustic map's error against a denser reference,
 //! and the ratio against CausticMap's default caster-fitted plane on every built-in scene.
@@ -18,15 +18,25 @@ use caustica_core::techniques::adaptive_caustics::{
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica_core::{Backend, FrameStats};
+use caustica_core::{FrameSettings, PlaneSettings, TraceSettings, TraversalSettings};
 use std::time::Instant;
 
 fn map(n: u32, plane: EmissionPlane) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: n,
-        photons_h: n,
-        emission_plane: plane,
-        max_photons_per_batch: 1 << 22,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: n,
+            photons_h: n,
+            ..CausticMapSettings::default().frame
+        },
+        planes: PlaneSettings {
+            emission_plane: plane,
+            ..CausticMapSettings::default().planes
+        },
+        trace: TraceSettings {
+            max_photons_per_batch: 1 << 22,
+            ..CausticMapSettings::default().trace
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -45,10 +55,12 @@ fn run<P: caustica_core::frame::pipeline::Pipeline>(
 
 fn adaptive(n: u32, plane: EmissionPlane, metric: AdaptiveMetric) -> AdaptiveCausticsSettings {
     AdaptiveCausticsSettings {
-        map: map(n, plane),
-        metric,
-        max_traversal_bytes: 256 << 20,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric,
+            max_traversal_bytes: 256 << 20,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..AdaptiveCausticsSettings::from_map(map(n, plane))
     }
 }
 
@@ -122,7 +134,10 @@ fn main() {
             let dense = (n as f64).powi(2);
             for &t in &tolerances {
                 let settings = AdaptiveCausticsSettings {
-                    error_texels: t,
+                    traversal: TraversalSettings {
+                        error_texels: t,
+                        ..adaptive(n, plane, AdaptiveMetric::Error).traversal
+                    },
                     ..adaptive(n, plane, AdaptiveMetric::Error)
                 };
                 let tech = AdaptiveCaustics::new(b, &scene, settings).expect("adaptive");

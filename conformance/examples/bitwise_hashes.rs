@@ -11,6 +11,7 @@
 use caustica_conformance::{backends, small_settings};
 use caustica_core::backend::{read_buf, read_gbuffer};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
+use caustica_core::TraceSettings;
 use caustica_core::{Output, Sspm};
 
 /// FNV-1a, 64-bit: stable across Rust versions (std's hasher is not promised to be).
@@ -32,8 +33,11 @@ fn main() {
         for (bname, backend) in all.iter_mut() {
             let device = backend.capabilities().device;
             let settings = caustica_core::SspmSettings {
-                // several batches per light: batching must not change a bit either
-                max_photons_per_batch: 20_000,
+                trace: TraceSettings {
+                    // several batches per light: batching must not change a bit either
+                    max_photons_per_batch: 20_000,
+                    ..small_settings(256).trace
+                },
                 // the photons stored, so that their multiset is hashed too (the fused
                 // deposit, the default, stores none and gives the same images)
                 fused_deposit: false,

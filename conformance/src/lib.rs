@@ -23,15 +23,12 @@ pub mod techniques;
 
 pub use harness::candidates::backends;
 
+use caustica_core::TechniqueSettings;
 use caustica_core::{Backend, Output, Scene, Sspm, SspmSettings};
 
 /// Small test settings: a `n x n` photon grid.
 pub fn small_settings(n: u32) -> SspmSettings {
-    SspmSettings {
-        photons_w: n,
-        photons_h: n,
-        ..SspmSettings::default()
-    }
+    SspmSettings::default().with_photons(n, n)
 }
 
 /// Renders one frame at `w x h` and returns (stats, composite, raw, filtered, direct).

@@ -11,7 +11,7 @@
 //!   the sums are exact integers.
 //! - **The error metric keeps the flux.** Its stored flux equals the dense grid's within
 //!   four standard deviations of their difference, bounded from the stats (see
-//!   [`flux_tolerance`]), with 004's one-texel metric and with a 4-texel tolerance whose
+//!   [`flux_tolerance`]), with Wyman 2009's one-texel metric and with a 4-texel tolerance whose
 //!   converged photons splat over their footprints.
 //! - **The screen target deposits the traversal's photons.** With the level metric, Sspm's
 //!   screen (`deposit: screen`) receives exactly the photons the atlas target outputs:
@@ -30,6 +30,7 @@ use caustica_core::techniques::adaptive_caustics::{
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::techniques::sspm::Output;
+use caustica_core::{AtlasSettings, FrameSettings, TraversalSettings};
 use caustica_core::{Backend, FrameStats};
 
 /// `s` with the screen target.
@@ -56,10 +57,16 @@ fn small(name: &str) -> Scene {
 
 fn map(photons: u32) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: photons,
-        photons_h: photons,
-        atlas_size: 128,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: photons,
+            photons_h: photons,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 128,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -103,7 +110,10 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
             // atlas out for the receivers its photons reach, AdaptiveCaustics never does
             // (its error metric reads the layout); pruning off changes nothing else
             let every_tile = CausticMapSettings {
-                prune: false,
+                frame: FrameSettings {
+                    prune: false,
+                    ..map(256).frame
+                },
                 ..map(256)
             };
             let dense = CausticMap::new(b.as_mut(), &scene, every_tile).expect("dense");
@@ -112,10 +122,12 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
                 b.as_mut(),
                 &scene,
                 AdaptiveCausticsSettings {
-                    map: map(256),
-                    metric: AdaptiveMetric::Level,
-                    start_grid: 32,
-                    ..Default::default()
+                    traversal: TraversalSettings {
+                        metric: AdaptiveMetric::Level,
+                        start_grid: 32,
+                        ..AdaptiveCausticsSettings::default().traversal
+                    },
+                    ..AdaptiveCausticsSettings::from_map(map(256))
                 },
             )
             .expect("adaptive");
@@ -143,12 +155,14 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
 #[test]
 fn any_memory_limit_gives_the_same_frame_bitwise() {
     let settings = |bytes: u64| AdaptiveCausticsSettings {
-        map: map(256),
-        metric: AdaptiveMetric::Error,
-        start_grid: 32,
-        error_from_grid: 64,
-        max_traversal_bytes: bytes,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric: AdaptiveMetric::Error,
+            start_grid: 32,
+            error_from_grid: 64,
+            max_traversal_bytes: bytes,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..AdaptiveCausticsSettings::from_map(map(256))
     };
     for (name, mut b) in backends() {
         for scene_name in ["sphere", "cornell"] {
@@ -199,11 +213,13 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
 #[test]
 fn capped_lists_overflow_counted_and_keep_the_flux() {
     let settings = |bytes: u64| AdaptiveCausticsSettings {
-        map: map(256),
-        metric: AdaptiveMetric::Level,
-        start_grid: 32,
-        max_traversal_bytes: bytes,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric: AdaptiveMetric::Level,
+            start_grid: 32,
+            max_traversal_bytes: bytes,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..AdaptiveCausticsSettings::from_map(map(256))
     };
     for (name, mut b) in backends() {
         let scene = small("sphere");
@@ -272,17 +288,19 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
             let scene = small(scene_name);
             let dense = CausticMap::new(b.as_mut(), &scene, map(512)).expect("dense");
             let (ds, _) = render(b.as_mut(), dense);
-            // 004's one-texel metric, and its tolerance variant with footprint splats
+            // Wyman 2009's one-texel metric, and its tolerance variant with footprint splats
             for error_texels in [1, 4] {
                 let adaptive = AdaptiveCaustics::new(
                     b.as_mut(),
                     &scene,
                     AdaptiveCausticsSettings {
-                        map: map(512),
-                        metric: AdaptiveMetric::Error,
-                        error_from_grid: 128,
-                        error_texels,
-                        ..Default::default()
+                        traversal: TraversalSettings {
+                            metric: AdaptiveMetric::Error,
+                            error_from_grid: 128,
+                            error_texels,
+                            ..AdaptiveCausticsSettings::default().traversal
+                        },
+                        ..AdaptiveCausticsSettings::from_map(map(512))
                     },
                 )
                 .expect("adaptive");
@@ -319,11 +337,13 @@ fn the_screen_target_deposits_the_traversals_photons() {
         divergence_allowance, DEPOSIT_PHOTON_CHANGES, GBUFFER_MATERIAL_AGREEMENT,
     };
     let settings = |metric| AdaptiveCausticsSettings {
-        map: map(256),
-        metric,
-        start_grid: 32,
-        error_from_grid: 64,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric,
+            start_grid: 32,
+            error_from_grid: 64,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..AdaptiveCausticsSettings::from_map(map(256))
     };
     let mut cpu_deposits: std::collections::HashMap<&str, u64> = Default::default();
     for (name, mut b) in backends() {

@@ -19,14 +19,21 @@ use caustica_core::frame::output::Output;
 use caustica_core::frame::technique::Technique;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{AtlasSettings, FrameSettings, TechniqueSettings};
 use caustica_core::{Backend, FrameStats};
 
 fn settings() -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: 128,
-        photons_h: 128,
-        atlas_size: 128,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 128,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -87,8 +94,11 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
             b.as_mut(),
             &scene,
             CausticMapSettings {
-                photons_w: 256,
-                photons_h: 256,
+                frame: FrameSettings {
+                    photons_w: 256,
+                    photons_h: 256,
+                    ..settings().frame
+                },
                 ..settings()
             },
         )
@@ -104,10 +114,16 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
             b.as_mut(),
             &scene,
             CausticMapSettings {
-                photons_w: 256,
-                photons_h: 256,
-                gather: caustica_core::techniques::caustic_map::MapGather::Box,
-                gather_width: 1,
+                frame: FrameSettings {
+                    photons_w: 256,
+                    photons_h: 256,
+                    ..settings().frame
+                },
+                atlas: AtlasSettings {
+                    gather: caustica_core::techniques::caustic_map::MapGather::Box,
+                    gather_width: 1,
+                    ..settings().atlas
+                },
                 ..settings()
             },
         )
@@ -175,8 +191,11 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
             b.as_mut(),
             &scene,
             CausticMapSettings {
-                photons_w: 256,
-                photons_h: 256,
+                frame: FrameSettings {
+                    photons_w: 256,
+                    photons_h: 256,
+                    ..settings().frame
+                },
                 ..settings()
             },
         )
@@ -244,7 +263,7 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
     let reference = CameraReference {
         profile: &profile,
         albedo: 0.8,
-        max_depth: CausticMapSettings::default().max_specular_depth,
+        max_depth: CausticMapSettings::default().frame.max_specular_depth,
         min_weight: 1e-3,
         model: Fresnel::Exact,
     };
@@ -273,11 +292,7 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
         let mut t = CausticMap::new(
             &mut b,
             &scene,
-            CausticMapSettings {
-                photons_w: n,
-                photons_h: n,
-                ..Default::default()
-            },
+            CausticMapSettings::default().with_photons(n, n),
         )
         .expect("scene");
         t.frame(&mut b, &mut |_| {}).expect("frame");
@@ -328,10 +343,16 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
     use caustica_core::techniques::caustic_map::MapGather;
     const FLUX_REL: f64 = 1e-4;
     let base = CausticMapSettings {
-        photons_w: 128,
-        photons_h: 128,
-        atlas_size: 256,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 256,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     };
     let mut checked = 0;
     for (name, mut b) in backends() {
@@ -360,15 +381,21 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
             };
             let raw = atlas_flux(
                 CausticMapSettings {
-                    gather: MapGather::Box,
-                    gather_width: 1,
+                    atlas: AtlasSettings {
+                        gather: MapGather::Box,
+                        gather_width: 1,
+                        ..base.clone().atlas
+                    },
                     ..base.clone()
                 },
                 b.as_mut(),
             );
             let density = atlas_flux(
                 CausticMapSettings {
-                    gather: MapGather::Density,
+                    atlas: AtlasSettings {
+                        gather: MapGather::Density,
+                        ..base.clone().atlas
+                    },
                     ..base.clone()
                 },
                 b.as_mut(),
@@ -512,7 +539,10 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             b.as_mut(),
             &cellar,
             CausticMapSettings {
-                prune: false,
+                frame: FrameSettings {
+                    prune: false,
+                    ..settings().frame
+                },
                 ..settings()
             },
         )

@@ -17,6 +17,7 @@ use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Light;
 use caustica_core::techniques::sspm::{Output, Outputs};
 use caustica_core::{Backend, FrameStats, GatherFilter, Scene, Sspm, SspmSettings};
+use caustica_core::{FrameSettings, ScreenSettings};
 use glam::Vec3;
 
 const W: u32 = 64;
@@ -31,9 +32,12 @@ fn small(scene: &str) -> Scene {
 
 fn settings(prune: bool) -> SspmSettings {
     SspmSettings {
-        photons_w: 64,
-        photons_h: 64,
-        prune,
+        frame: FrameSettings {
+            photons_w: 64,
+            photons_h: 64,
+            prune,
+            ..SspmSettings::default().frame
+        },
         ..SspmSettings::default()
     }
 }
@@ -285,7 +289,10 @@ fn the_filter_setting_picks_its_passes_and_buffers() {
                 b.as_mut(),
                 &scene,
                 SspmSettings {
-                    filter,
+                    screen: ScreenSettings {
+                        filter,
+                        ..settings(true).screen
+                    },
                     ..settings(true)
                 },
             );
@@ -326,7 +333,10 @@ fn caustics_only_output_skips_direct_light_and_composite() {
             b.as_mut(),
             &scene,
             SspmSettings {
-                outputs: Outputs::CAUSTICS_ONLY,
+                frame: FrameSettings {
+                    outputs: Outputs::CAUSTICS_ONLY,
+                    ..settings(true).frame
+                },
                 ..settings(true)
             },
         );

@@ -15,6 +15,7 @@ use caustica_core::scene::{Light, Scene};
 use caustica_core::techniques::sspm::GatherFilter;
 use caustica_core::techniques::{create, technique_names};
 use caustica_core::{Backend, Technique};
+use caustica_core::{FrameSettings, ScreenSettings};
 use caustica_core::{Sspm, SspmSettings};
 use glam::Vec3;
 
@@ -270,17 +271,29 @@ fn new_settings_and_image_size_equal_a_fresh_technique_bitwise() {
     for (bname, mut b) in backends() {
         let scene = small("cornell");
         let before = SspmSettings {
-            photons_w: 48,
-            photons_h: 40,
-            filter: GatherFilter::Bilateral,
+            frame: FrameSettings {
+                photons_w: 48,
+                photons_h: 40,
+                ..SspmSettings::default().frame
+            },
+            screen: ScreenSettings {
+                filter: GatherFilter::Bilateral,
+                ..SspmSettings::default().screen
+            },
             ..SspmSettings::default()
         };
         let after = SspmSettings {
-            photons_w: 96,
-            photons_h: 64,
-            filter: GatherFilter::Density,
-            knn_photons: 16,
-            max_radius_px: 8,
+            frame: FrameSettings {
+                photons_w: 96,
+                photons_h: 64,
+                ..SspmSettings::default().frame
+            },
+            screen: ScreenSettings {
+                filter: GatherFilter::Density,
+                knn_photons: 16,
+                max_radius_px: 8,
+                ..SspmSettings::default().screen
+            },
             ..SspmSettings::default()
         };
         let mut bigger = scene.clone();
@@ -309,7 +322,10 @@ fn new_settings_and_image_size_equal_a_fresh_technique_bitwise() {
         );
         // a budget the built scene does not fit is refused, and nothing changes
         let tight = SspmSettings {
-            max_triangles: 1,
+            frame: FrameSettings {
+                max_triangles: 1,
+                ..after.clone().frame
+            },
             ..after.clone()
         };
         assert!(t.set_settings(b.as_mut(), tight).is_err(), "{bname}");

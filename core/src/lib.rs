@@ -27,8 +27,12 @@ pub mod scene;
 pub mod techniques;
 
 pub use backend::{Backend, BackendError, Capabilities, DeviceType, Finished, Submission};
+pub use frame::emission::adaptive::TraversalSettings;
 pub use frame::error::Error;
 pub use frame::plan::FramePlan;
+pub use frame::receivers::atlas::settings::{AtlasSettings, PlaneSettings};
+pub use frame::receivers::screen::ScreenSettings;
+pub use frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
 pub use frame::stats::FrameStats;
 pub use frame::submitted::{FrameTicket, RecordedFrame};
 pub use frame::technique::{OutputInfo, Progress, Technique};

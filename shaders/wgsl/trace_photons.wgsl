@@ -17,11 +17,11 @@ override ABSORPTION: bool = true;
 // Store policy (core's photon_store): false stores world space (Sspm), true the hit's uv
 // and triangle (CausticMap's atlas).
 override SURFACE_STORE: bool = false;
-// Seed 001's deterministic splits (core's TraceVariant::fresnel_split): both Fresnel
+// Vanderstichelen 2021's deterministic splits (core's TraceVariant::fresnel_split): both Fresnel
 // branches and three one-channel branches at the first dispersive surface, up to
 // params.split_budget branches per photon.
 override FRESNEL_SPLIT: bool = false;
-// Seed 004's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
+// Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
 // of cluster clusters[params.first + i / 4] of the params.grid_w grid and is written to
 // slot i, stored or not (core's photon_store says how); photon_count is left untouched.
 override ADAPTIVE: bool = false;

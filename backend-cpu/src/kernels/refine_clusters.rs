@@ -152,7 +152,7 @@ pub fn refine_clusters(
                 }
             };
             let texels = slots.map(|ph| slot_stored(ph.flux).then(|| texel_of(&ph)));
-            // 004's test (a photon met a caster), or the conservative one
+            // Wyman 2009's test (a photon met a caster), or the conservative one
             let relevant = slots
                 .iter()
                 .any(|ph| slot_met_caster(ph.flux, ph.position[2]))

@@ -79,7 +79,7 @@ inline float3 mean_light_direction(float3 d, float w) {
     return v * (1.0f / l);
 }
 
-// irradiance_filter::shading_normal_factor (003 Eq. 20).
+// irradiance_filter::shading_normal_factor (Smal 2019, Eq. 20).
 inline float shading_normal_factor(float3 w_i, float3 n_s, float3 n_g, float s_max, float eps) {
     float num = fmax(dot3(w_i, n_s), 0.0f);
     float den = fmax(dot3(w_i, n_g), 0.0f) + eps;

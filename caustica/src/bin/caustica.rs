@@ -607,7 +607,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     .and_then(|t| t.filter_setting);
                 match setting {
                     Some((key, values)) if values.contains(&f.as_str()) => {
-                        s.insert(key.into(), f.into());
+                        put_setting(&mut s, key, f.into());
                     }
                     Some((_, values)) => {
                         return Err(format!(
@@ -621,14 +621,16 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             }
             // the flag overrides the settings file; neither: 1024x1024
             let (pw, ph) = photons.unwrap_or((1024, 1024));
-            if photons.is_some() || !s.contains_key("photons_w") {
-                s.insert("photons_w".into(), pw.into());
-            }
-            if photons.is_some() || !s.contains_key("photons_h") {
-                s.insert("photons_h".into(), ph.into());
+            let in_frame = |s: &serde_json::Map<String, serde_json::Value>, key: &str| {
+                s.contains_key(key) || s.get("frame").is_some_and(|f| f.get(key).is_some())
+            };
+            for (key, v) in [("photons_w", pw), ("photons_h", ph)] {
+                if photons.is_some() || !in_frame(&s, key) {
+                    put_setting(&mut s, key, v.into());
+                }
             }
             if let Some(seed) = seed {
-                s.insert("seed".into(), seed.into());
+                put_setting(&mut s, "seed", seed.into());
             }
             if frames == 0 {
                 return Err("--frames must be at least 1".into());
@@ -637,20 +639,27 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 .iter()
                 .find(|t| t.name == technique)
                 .map(|t| (t.default_settings)());
-            let accumulates = defaults
-                .as_ref()
-                .is_some_and(|d| d.get("accumulate").is_some());
-            if frames > 1 && accumulates && !s.contains_key("accumulate") {
+            // a shared field as given: flat (the earlier form) or in the `frame` block
+            let shared = |s: &serde_json::Map<String, serde_json::Value>, key: &str| {
+                s.get(key)
+                    .or_else(|| s.get("frame").and_then(|f| f.get(key)))
+                    .cloned()
+            };
+            // several frames accumulate unless the settings say otherwise
+            if frames > 1 && shared(&s, "accumulate").is_none() {
                 s.insert("accumulate".into(), true.into());
             }
-            // the frames sum only where the settings accumulate
-            let accumulates = s
-                .get("accumulate")
+            let accumulates = shared(&s, "accumulate")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(false);
-            let base_seed = s
-                .get("seed")
-                .or_else(|| defaults.as_ref().and_then(|d| d.get("seed")))
+            let base_seed = shared(&s, "seed")
+                .or_else(|| {
+                    defaults
+                        .as_ref()
+                        .and_then(|d| d.get("frame"))
+                        .and_then(|f| f.get("seed"))
+                        .cloned()
+                })
                 .and_then(|v| v.as_u64())
                 .unwrap_or(0) as u32;
             caustica::output::prepare_output_dir(&out)?;
@@ -724,4 +733,18 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             )
         }
     }
+}
+
+/// Sets settings field `key` (a flag's value over the settings file): the file may give
+/// it flat (`"seed"`, the earlier form) or in its block (`"frame": {"seed": ..}`); the
+/// flag's value replaces either.
+fn put_setting(
+    s: &mut serde_json::Map<String, serde_json::Value>,
+    key: &str,
+    value: serde_json::Value,
+) {
+    for block in s.values_mut().filter_map(|b| b.as_object_mut()) {
+        block.remove(key);
+    }
+    s.insert(key.into(), value);
 }

@@ -44,7 +44,7 @@ pub(crate) fn run_lookup(
         params: MapLookupParams {
             camera: fx.camera,
             atlas_width: l.plan.size.0,
-            max_specular_depth: fx.settings.max_specular_depth,
+            max_specular_depth: fx.settings.frame.max_specular_depth,
             min_weight: 1e-3,
             fresnel_model,
         },

@@ -20,6 +20,7 @@ use caustica_core::frame::image::Image;
 use caustica_core::frame::output::Output;
 use caustica_core::scene::{Light, Material, Scene, Shape};
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{AtlasSettings, FrameSettings, PlaneSettings};
 use caustica_core::{Error, FrameStats};
 use glam::{Vec2, Vec3};
 
@@ -33,10 +34,16 @@ pub struct MapFrame {
 
 fn settings(atlas: u32) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: 128,
-        photons_h: 128,
-        atlas_size: atlas,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: atlas,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -289,8 +296,11 @@ fn flux_kept(
     };
     let mut v = Verdict::new(what);
     let with = |gather, gather_width| CausticMapSettings {
-        gather,
-        gather_width,
+        atlas: AtlasSettings {
+            gather,
+            gather_width,
+            ..settings(256).atlas
+        },
         ..settings(256)
     };
     use caustica_core::techniques::caustic_map::MapGather;
@@ -440,7 +450,7 @@ pub(super) fn ball_glass(b: &mut dyn Backend) -> Result<Outcome, String> {
 }
 
 pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
-    // the dispersive prism with 001's deterministic splits (three one-channel branches at
+    // the dispersive prism with Vanderstichelen 2021's deterministic splits (three one-channel branches at
     // the first dispersive surface, both Fresnel branches at every glass surface) and with
     // the stochastic choice: finite, accounted (path ends = emitted + splits), both agree
     // with cpu, and the two store the same flux per channel in expectation (within 3% at
@@ -454,7 +464,10 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
         b,
         &scene,
         &CausticMapSettings {
-            fresnel_split: FresnelSplit::Deterministic,
+            planes: PlaneSettings {
+                fresnel_split: FresnelSplit::Deterministic,
+                ..settings(128).planes
+            },
             ..settings(128)
         },
         &mut v,
@@ -463,7 +476,10 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
         b,
         &scene,
         &CausticMapSettings {
-            fresnel_split: FresnelSplit::Stochastic,
+            planes: PlaneSettings {
+                fresnel_split: FresnelSplit::Stochastic,
+                ..settings(128).planes
+            },
             ..settings(128)
         },
         &mut v,
@@ -502,8 +518,11 @@ pub(super) fn schlick(b: &mut dyn Backend) -> Result<Outcome, String> {
             b,
             &scene,
             &CausticMapSettings {
-                fresnel,
-                fresnel_split: split,
+                planes: PlaneSettings {
+                    fresnel,
+                    fresnel_split: split,
+                    ..settings(128).planes
+                },
                 ..settings(128)
             },
             v,

@@ -133,7 +133,7 @@ pub struct GBufferTexel {
     /// Unit geometric normal of the hit triangle (world space), turned towards the camera
     /// on its own, packed octahedrally in two snorm16
     /// ([`crate::math::packing::pack_unit_vector`]): PhotonGi's shading-normal correction
-    /// (003 Eq. 20) compares the light direction with both normals.
+    /// (Smal 2019, Eq. 20) compares the light direction with both normals.
     pub geometric_normal: u32,
     /// The material's `color`: diffuse albedo, mirror reflectance, 1 for dielectrics.
     pub albedo: [f32; 3],
@@ -218,7 +218,7 @@ pub mod gbuffer_flags {
 
 /// A stored photon (32 bytes): where it stopped on a diffuse surface, its flux (W per
 /// channel), the length of its last traced segment (scene units, the "hit distance" of seed
-/// 000 section 30.3.2) and its incoming direction packed octahedrally
+/// Kim 2019, section 30.3.2) and its incoming direction packed octahedrally
 /// (`packing::pack_unit_vector`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -418,7 +418,7 @@ pub struct RefineParams {
     /// [`cluster_metric`](crate::math::photon_clusters::cluster_metric).
     pub metric: u32,
     /// First level at which the error metric is checked (coarser levels use the
-    /// traversal-level metric, 004 section 4.2).
+    /// traversal-level metric, Wyman 2009, section 4.2).
     pub error_from_level: u32,
     /// Texels a side of the level's grid.
     pub grid_w: u32,
@@ -678,14 +678,14 @@ pub struct SplatParams {
     /// (`photon_splat::min_splat_scale`): a kernel smaller than a pixel would reach one
     /// pixel centre or none, an unbiased but fireflied estimate.
     pub min_splat_px: f32,
-    /// 1: also add each splat's light direction to the direction map (003 Eq. 20's
+    /// 1: also add each splat's light direction to the direction map (Smal 2019, Eq. 20's
     /// `w_i`, [`crate::math::irradiance_filter::light_direction_deposit`]); 0: leave it.
     pub light_direction: u32,
     /// Padding to the 16-byte boundary.
     pub _pad: [u32; 2],
 }
 
-/// Parameters of `shading_normal_correction` (003 Eq. 20).
+/// Parameters of `shading_normal_correction` (Smal 2019, Eq. 20).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CorrectionParams {

@@ -238,10 +238,12 @@ impl<'p> FrameBuilder<'p> {
 pub trait Pipeline: Sized {
     /// Its settings (their JSON form is what [`crate::techniques::create`] takes).
     type Settings: Clone
+        + Default
         + PartialEq
         + std::fmt::Debug
         + serde::Serialize
-        + serde::de::DeserializeOwned;
+        + serde::de::DeserializeOwned
+        + crate::frame::settings::TechniqueSettings;
 
     /// The registry and statistics name.
     const NAME: &'static str;
@@ -251,11 +253,11 @@ pub trait Pipeline: Sized {
         Self::NAME
     }
 
-    /// Parses a JSON object of settings fields (missing ones take their defaults,
-    /// unknown ones are an error).
+    /// Parses a JSON object of settings laid over the technique's defaults (missing
+    /// fields keep them, unknown ones are an error naming where a moved field is now:
+    /// [`crate::frame::settings::from_json`]).
     fn parse_settings(json: &serde_json::Value) -> Result<Self::Settings, Error> {
-        serde_json::from_value(json.clone())
-            .map_err(|e| Error::InvalidParameter(format!("{} settings: {e}", Self::NAME)))
+        crate::frame::settings::from_json(Self::NAME, &Self::Settings::default(), json)
     }
 
     /// Checks every field's range.

@@ -13,7 +13,7 @@
 //! meets the surface obliquely. Radiance stored from flux (Eq. 5) divides by this surface
 //! area: `L = f_r * Phi / A_surface`.
 
-/// 000 Eq. 4: world-space area (scene units^2) of one pixel at view depth `depth` on a
+/// Kim 2019, Eq. 4: world-space area (scene units^2) of one pixel at view depth `depth` on a
 /// plane parallel to the image plane.
 #[inline]
 pub fn pixel_footprint(

@@ -101,7 +101,7 @@ pub fn blend_with_history(current: Vec3, history: Vec3, alpha: f32) -> Vec3 {
 pub const ATROUS_TAPS: [f32; 5] = [1.0 / 8.0, 1.0 / 4.0, 1.0 / 2.0, 1.0 / 4.0, 1.0 / 8.0];
 
 /// Pixel offset of tap `k` (0..5) in A-Trous iteration `i`: `(k - 2) 2^i` (the taps spread
-/// by doubling, the samples between them skipped; 003 Figure 24-5).
+/// by doubling, the samples between them skipped; Smal 2019, Figure 24-5).
 #[inline]
 pub fn atrous_offset(k: u32, iteration: u32) -> i32 {
     (k as i32 - 2) << iteration

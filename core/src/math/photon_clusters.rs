@@ -33,7 +33,7 @@ pub mod cluster_fate {
 
 /// What keeps a traced cluster from being discarded.
 pub mod cluster_relevance {
-    /// Seed 004's test: at least one of its four photons met a caustic caster. Photons
+    /// Wyman 2009's test: at least one of its four photons met a caustic caster. Photons
     /// are samples: a cluster whose coarse photons all miss can still cover a caster's
     /// silhouette (or a caster smaller than its footprint), whose caustic is then lost.
     pub const PHOTONS: u32 = 0;
@@ -208,11 +208,11 @@ pub fn photon_met_caster(end: u32, rays: u32) -> bool {
 }
 
 /// The fate of a cluster at `level` (0 = the start grid, `finest` = the last): discarded
-/// when no photon met a caster (004 condition 1); output at the finest level (the
-/// maximal traversal level, 004 3.2.1, and the error metric's third condition, 004
-/// 3.2.2); output when the error metric applies at this level (`level >=
-/// error_from_level`) and every photon landed in one caustic-map texel (`converged`,
-/// 004 3.2.2 condition 2); else refined.
+/// when no photon met a caster (Wyman 2009, condition 1); output at the finest level (the
+/// maximal traversal level, Wyman 2009, section 3.2.1, and the error metric's third
+/// condition, section 3.2.2); output when the error metric applies at this level (`level
+/// >= error_from_level`) and every photon landed in one caustic-map texel (`converged`,
+/// section 3.2.2, condition 2); else refined.
 #[inline]
 pub fn cluster_fate(
     any_met_caster: bool,

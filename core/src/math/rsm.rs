@@ -34,7 +34,7 @@ pub mod rsm_texel_kind {
 
 /// How `sample_rsm` chooses texels (`RsmParams::sampling`).
 pub mod rsm_sampling {
-    /// By importance, `luminance(flux x albedo)` (003 section 24.2.1): the default.
+    /// By importance, `luminance(flux x albedo)` (Smal 2019, section 24.2.1): the default.
     pub const IMPORTANCE: u32 = 0;
     /// Every texel that leaves flux equally likely: the estimate the importance warp must
     /// agree with in the mean (`photon_gi_frames.rs`' unbiasedness test), at a higher
@@ -55,7 +55,7 @@ pub fn pyramid_weight(sampling: u32, imp: f32) -> f32 {
 }
 
 /// Rec. 709 luminance of a linear colour (the importance of a texel is the luminance of
-/// its leaving flux, 003 section 24.2.1).
+/// its leaving flux, Smal 2019, section 24.2.1).
 #[inline]
 pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
@@ -263,7 +263,7 @@ pub fn cosine_hemisphere(u: Vec2, n: Vec3) -> Vec3 {
     crate::math::sampling::to_world(Vec3::new(r * phi.cos(), r * phi.sin(), z), n)
 }
 
-/// Jensen's Russian roulette at a diffuse bounce (Jensen 2001, as 003 section 24.2.2):
+/// Jensen's Russian roulette at a diffuse bounce (Jensen 2001, as Smal 2019, section 24.2.2):
 /// the path survives with probability `q = max(flux x albedo) / max(flux)` (clamped to
 /// `[0, 1]`) and carries `flux x albedo / q`, which keeps its expectation. `xi` uniform in
 /// `[0, 1)`. `None`: absorbed.

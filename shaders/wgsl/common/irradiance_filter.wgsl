@@ -80,7 +80,7 @@ fn mean_light_direction(d: vec3<f32>, w: f32) -> vec3<f32> {
     return v * (1.0f / l);
 }
 
-// irradiance_filter::shading_normal_factor (003 Eq. 20).
+// irradiance_filter::shading_normal_factor (Smal 2019, Eq. 20).
 fn shading_normal_factor(w_i: vec3<f32>, n_s: vec3<f32>, n_g: vec3<f32>, s_max: f32,
                          eps: f32) -> f32 {
     let num = max(dot3(w_i, n_s), 0.0f);

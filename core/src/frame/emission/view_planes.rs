@@ -44,15 +44,21 @@ impl ViewPlanes {
         let mut planes = Vec::new();
         let mut skipped_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
-            match light_view_planes(l, casters, bounds, s.photons_w, s.emission_plane.aim()) {
+            match light_view_planes(
+                l,
+                casters,
+                bounds,
+                s.frame.photons_w,
+                s.planes.emission_plane.aim(),
+            ) {
                 Ok(ps) => {
                     let cube = ps.len() > 1;
                     for (k, mut p) in ps.into_iter().enumerate() {
                         p.resolution = if cube {
                             let side = |n: u32| ((n as f64 / 6f64.sqrt()).round() as u32).max(1);
-                            (side(s.photons_w), side(s.photons_h))
+                            (side(s.frame.photons_w), side(s.frame.photons_h))
                         } else {
-                            (s.photons_w, s.photons_h)
+                            (s.frame.photons_w, s.frame.photons_h)
                         };
                         planes.push((i as u32, k as u32, p));
                     }

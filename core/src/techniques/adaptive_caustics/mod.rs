@@ -1,4 +1,4 @@
-//! AdaptiveCaustics (Wyman 2009: Wyman and Nichols, "Adaptive Caustic Maps Using Deferred
+//! AdaptiveCaustics (Wyman 2009, "Adaptive Caustic Maps Using Deferred
 //! Shading"): light view planes ([`crate::frame::emission::view_planes`]) sampled coarse
 //! to fine by Wyman 2009's traversal ([`crate::frame::emission::adaptive`]), so that photons
 //! are traced only where the casters are and, with the error metric, only where the map
@@ -16,9 +16,9 @@
 //! casters, output at the finest level or when the error metric holds, else refined into
 //! four clusters of the next level; batches of clusters under `max_traversal_bytes`.
 //! Photons output early carry their coarse texels' flux (the cluster's solid angle or
-//! area), so the map's expectation is the dense grid's. With 004's one-texel metric
+//! area), so the map's expectation is the dense grid's. With Wyman 2009's one-texel metric
 //! (`error_texels: 1`) they all landed in one atlas texel, so that texel *is* the
-//! cluster's footprint; with a wider tolerance (004's alternative) each output photon is
+//! cluster's footprint; with a wider tolerance (Wyman 2009's alternative) each output photon is
 //! splatted over its cluster's footprint, the flux split exactly
 //! (`math::photon_clusters::footprint_window`).
 
@@ -89,7 +89,7 @@ fn view_planes(host: &FrameHost, s: &AdaptiveCausticsSettings) -> Result<ViewPla
         g.caster_bounds,
         g.caster_spheres,
         g.has_dispersion,
-        &s.map,
+        &s.caustic_map(),
     );
     fit_planes(&mut planes, &s.traversal(), g.has_dispersion);
     planes.check_light_flux()?;
@@ -122,11 +122,11 @@ impl AdaptiveCausticsPipeline {
         let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
             return Ok(());
         };
-        let s = &self.settings.map;
+        let s = &self.settings;
         let optics = PhotonOptics {
-            max_bounces: s.max_bounces,
-            min_relative_power: s.min_relative_power,
-            fresnel_model: s.fresnel.kernel_value(),
+            max_bounces: s.trace.max_bounces,
+            min_relative_power: s.trace.min_relative_power,
+            fresnel_model: s.planes.fresnel.kernel_value(),
             caster_spheres: self.planes.caster_spheres,
         };
         let total: u64 = self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum();
@@ -151,17 +151,13 @@ impl Pipeline for AdaptiveCausticsPipeline {
 
     const NAME: &'static str = "adaptive-caustics";
 
-    fn parse_settings(json: &serde_json::Value) -> Result<AdaptiveCausticsSettings, Error> {
-        AdaptiveCausticsSettings::from_json(json)
-    }
-
     fn validate(settings: &AdaptiveCausticsSettings) -> Result<(), Error> {
         settings.validate()
     }
 
     fn host_options(settings: &AdaptiveCausticsSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.map.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: settings.deposit == AdaptiveDeposit::Atlas,
         }
     }
@@ -183,8 +179,8 @@ impl Pipeline for AdaptiveCausticsPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        if seed != self.settings.map.seed {
-            self.settings.map.seed = seed;
+        if seed != self.settings.frame.seed {
+            self.settings.frame.seed = seed;
             if let Target::Atlas { receiver, valid } = &mut self.target {
                 receiver.set_seed(seed);
                 *valid = false;
@@ -245,8 +241,7 @@ impl Pipeline for AdaptiveCausticsPipeline {
 
     fn requested_outputs(&self) -> Outputs {
         match &self.target {
-            Target::Atlas { .. } => self.settings.map.outputs,
-            Target::Screen { .. } => self.settings.screen.outputs,
+            Target::Atlas { .. } | Target::Screen { .. } => self.settings.frame.outputs,
         }
     }
 

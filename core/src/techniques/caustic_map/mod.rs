@@ -8,7 +8,7 @@
 //!    a camera move): per light view plane and per batch `trace_photons` (the
 //!    `SURFACE_STORE` and `FUSED_DEPOSIT` variant: each stored photon's uv and triangle
 //!    go straight into the atlas's fixed-point sums; no photon buffer, no second pass),
-//!    then the atlas's gather (001's N x N gather fixed to keep flux, or the density
+//!    then the atlas's gather (Vanderstichelen 2021's N x N gather fixed to keep flux, or the density
 //!    gather on the atlas);
 //! 2. every frame: the frame host's `primary_gbuffer` and `direct_light`, then
 //!    `caustic_map_lookup` (the camera's specular ray tree reading the map), the opt-in
@@ -48,9 +48,7 @@ use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
 use crate::frame::receivers::accumulation_seed;
-use crate::frame::receivers::atlas::{
-    with_atlas, AtlasQuanta, AtlasReceiver, BOX_GATHER_PASSES, DENSITY_GATHER_PASSES,
-};
+use crate::frame::receivers::atlas::{with_atlas, AtlasQuanta, AtlasReceiver};
 use crate::kernels::{FusedDeposit, TracePhotons, TraceVariant};
 use crate::recording::Recording;
 
@@ -209,7 +207,7 @@ impl CausticMapPipeline {
         let a = self.receiver.atlas().expect("an atlas with its deposit");
         let s = &self.settings;
         // a new seed for every pass an accumulating atlas adds
-        let seed = accumulation_seed(s.seed, self.receiver.pass_index());
+        let seed = accumulation_seed(s.frame.seed, self.receiver.pass_index());
         self.receiver.record_clear(frame.rec());
         frame.stats.variants.push(crate::kernels::variant_label(
             "trace_photons",
@@ -226,7 +224,7 @@ impl CausticMapPipeline {
             // largest launch only
             let per_batch = crate::frame::allocation::photons_per_batch(
                 n,
-                s.max_photons_per_batch,
+                s.trace.max_photons_per_batch,
                 self.max_buffer_bytes,
             ) as u64;
             let mut first = 0u64;
@@ -237,18 +235,18 @@ impl CausticMapPipeline {
                     scene: host.scene(),
                     variant: self.variant,
                     params: TraceParams {
-                        split_budget: s.split_budget,
-                        fresnel_model: s.fresnel.kernel_value(),
+                        split_budget: s.planes.split_budget,
+                        fresnel_model: s.planes.fresnel.kernel_value(),
                         // the passes of an accumulation stratify each grid cell together
-                        jitter_seed: ViewPlanes::plane_seed(s.seed, *light, *k),
+                        jitter_seed: ViewPlanes::plane_seed(s.frame.seed, *light, *k),
                         stratum: self.receiver.pass_index(),
                         ..self.planes.trace_params(
                             plane,
                             *light,
                             (first as u32, count),
                             ViewPlanes::plane_seed(seed, *light, *k),
-                            s.max_bounces,
-                            s.min_relative_power,
+                            s.trace.max_bounces,
+                            s.trace.min_relative_power,
                         )
                     },
                     photons: a.photons,
@@ -274,14 +272,14 @@ impl CausticMapPipeline {
         frame.expect_photons(self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum());
         self.trace(host, frame);
         self.photon_passes += 1;
-        if self.settings.prune && host.receivers().is_some() {
+        if self.settings.frame.prune && host.receivers().is_some() {
             self.reach = Reach::Wanted(self.photon_passes);
         }
         self.receiver.record_gather(frame.rec());
         frame.counters_at_end(a.counters, self.planes.flux_quantum);
         frame.stats.accumulated_frames = self.receiver.end_photon_pass();
         // an accumulating atlas takes new photons every frame
-        self.atlas_valid = !self.settings.accumulate;
+        self.atlas_valid = !self.settings.frame.accumulate;
         Ok(())
     }
 }
@@ -297,7 +295,7 @@ impl Pipeline for CausticMapPipeline {
 
     fn host_options(settings: &CausticMapSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: true,
         }
     }
@@ -315,7 +313,7 @@ impl Pipeline for CausticMapPipeline {
         variant.surface_store = true;
         // the split only changes dielectrics: a scene without one runs the plain variant
         variant.fresnel_split =
-            settings.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
+            settings.planes.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
         variant.adaptive = false;
         // CausticMap's photons go straight into the atlas
         variant.fused_deposit = true;
@@ -346,8 +344,8 @@ impl Pipeline for CausticMapPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        if seed != self.settings.seed {
-            self.settings.seed = seed;
+        if seed != self.settings.frame.seed {
+            self.settings.frame.seed = seed;
             self.receiver.set_seed(seed);
             self.atlas_valid = false;
         }
@@ -364,17 +362,7 @@ impl Pipeline for CausticMapPipeline {
         let photons = self.plan.trace_variant.is_some();
         if photons && self.receiver.atlas().is_some() {
             if self.atlas_valid {
-                for name in ["trace_photons", "refine_clusters"]
-                    .into_iter()
-                    .chain(BOX_GATHER_PASSES)
-                    .chain(DENSITY_GATHER_PASSES)
-                    .filter(|n| self.plan.runs(n))
-                {
-                    frame.stats.skip(
-                        name,
-                        "only the camera changed since the caustic atlas was made: it is reused",
-                    );
-                }
+                AtlasReceiver::skip_photon_passes(&self.plan, &mut frame.stats);
             } else {
                 self.photon_pass(host, frame)?;
             }
@@ -414,7 +402,7 @@ impl Pipeline for CausticMapPipeline {
         };
         let planes = view_planes(host, &self.settings)?;
         let had_photons = self.plan.trace_variant.is_some();
-        if planes.planes.is_empty() == had_photons && self.settings.prune {
+        if planes.planes.is_empty() == had_photons && self.settings.frame.prune {
             // photon passes start or stop: other buffers
             return Ok(Reaction::Rebuild);
         }
@@ -439,7 +427,7 @@ impl Pipeline for CausticMapPipeline {
     }
 
     fn requested_outputs(&self) -> Outputs {
-        self.settings.outputs
+        self.settings.frame.outputs
     }
 
     fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {

@@ -84,17 +84,17 @@ fn scene_diagonal(b: &crate::math::geometry::Aabb) -> f32 {
 /// The camera images PhotonGi asks the host for: the G-buffer, and as the requested
 /// outputs need them the direct light with its specular chains and the composite.
 fn screen_needs(s: &PhotonGiSettings) -> ScreenNeeds {
+    let keep = |requested: bool| requested || !s.frame.prune;
     ScreenNeeds {
         gbuffer: true,
-        direct: s
-            .outputs
-            .any_of(&[Output::Direct, Output::Composite])
-            .then_some(DirectLighting {
-                max_specular_depth: s.max_specular_depth,
+        direct: keep(s.frame.outputs.any_of(&[Output::Direct, Output::Composite])).then_some(
+            DirectLighting {
+                max_specular_depth: s.frame.max_specular_depth,
                 min_weight: 1e-4,
                 fresnel_model: s.fresnel_model,
-            }),
-        composite: s.outputs.has(Output::Composite),
+            },
+        ),
+        composite: keep(s.frame.outputs.has(Output::Composite)),
     }
 }
 
@@ -147,12 +147,13 @@ impl Buffers {
         correct: bool,
     ) -> Buffers {
         let pixels = camera.width * camera.height;
-        let temporal = (settings.temporal && !settings.accumulate).then(|| TemporalBuffers {
-            image: PingPong::create(rec, pixels, "temporal indirect history"),
-            edge: PingPong::create(rec, pixels, "temporal edge history"),
-            previous: camera,
-        });
-        let atrous = (settings.atrous_iterations > 0).then(|| AtrousBuffers {
+        let temporal =
+            (settings.frame.temporal && !settings.frame.accumulate).then(|| TemporalBuffers {
+                image: PingPong::create(rec, pixels, "temporal indirect history"),
+                edge: PingPong::create(rec, pixels, "temporal edge history"),
+                previous: camera,
+            });
+        let atrous = (settings.frame.atrous_iterations > 0).then(|| AtrousBuffers {
             input: rec.create(pixels, "A-Trous input image"),
             a: rec.create(pixels, "A-Trous image a"),
             b: rec.create(pixels, "A-Trous image b"),
@@ -174,7 +175,7 @@ impl Buffers {
         } else {
             raw
         };
-        let total = settings.photons_w as u64 * settings.photons_h as u64;
+        let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
         Buffers {
@@ -232,11 +233,11 @@ fn make_plan(
     };
     let splat = s.estimator == IndirectEstimator::Splat;
     let deposit = s.estimator == IndirectEstimator::Deposit;
-    let atrous = s.atrous_iterations > 0;
+    let atrous = s.frame.atrous_iterations > 0;
     FramePlan {
-        prune: true,
+        prune: s.frame.prune,
         features: SceneFeatures::of(host.model()),
-        outputs: s.outputs.names(&OUTPUTS),
+        outputs: s.frame.outputs.names(&OUTPUTS),
         lights: rsms
             .iter()
             .map(|r| LightPlan {
@@ -263,7 +264,9 @@ fn make_plan(
         trace_variant: None,
         passes: vec![
             pass("primary_gbuffer", true, "camera and RSM faces"),
-            if s.outputs.any_of(&[Output::Direct, Output::Composite]) {
+            if !s.frame.prune {
+                pass("direct_light", true, "pruning off: every pass runs")
+            } else if s.frame.outputs.any_of(&[Output::Direct, Output::Composite]) {
                 pass("direct_light", true, "direct or composite requested")
             } else {
                 pass(
@@ -296,10 +299,10 @@ fn make_plan(
             pass("resolve_caustics", true, "irradiance to radiance"),
             pass(
                 "temporal_blend",
-                s.temporal && !s.accumulate,
-                if s.accumulate {
+                s.frame.temporal && !s.frame.accumulate,
+                if s.frame.accumulate {
                     "accumulate: the photon map holds the frames' photons"
-                } else if s.temporal {
+                } else if s.frame.temporal {
                     "setting temporal"
                 } else {
                     "temporal off"
@@ -327,7 +330,9 @@ fn make_plan(
                     "every vertex normal is its triangle's geometric normal: the factor is 1"
                 },
             ),
-            if s.outputs.has(Output::Composite) {
+            if !s.frame.prune {
+                pass("composite", true, "pruning off: every pass runs")
+            } else if s.frame.outputs.has(Output::Composite) {
                 pass("composite", true, "direct plus indirect")
             } else {
                 pass("composite", false, "composite not requested")
@@ -382,7 +387,7 @@ impl PhotonGiPipeline {
     /// With progressive accumulation, this frame's index among those the photon map holds
     /// (0 without, and at an accumulation's first frame).
     fn frame_index(&self) -> u32 {
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated
         } else {
             0
@@ -391,7 +396,7 @@ impl PhotonGiPipeline {
 
     /// This frame's photon seed (a new one for every frame an accumulation adds).
     fn frame_seed(&self) -> u32 {
-        crate::frame::receivers::accumulation_seed(self.settings.seed, self.frame_index())
+        crate::frame::receivers::accumulation_seed(self.settings.frame.seed, self.frame_index())
     }
 
     /// The splat's parameters for camera `cam`.
@@ -464,10 +469,8 @@ impl PhotonGiPipeline {
     fn record_light(&self, rec: &mut Recording, host: &FrameHost, r: &LightRsm, store: u32) {
         let b = &self.buffers;
         let scene = host.scene();
-        let seeded = PhotonGiSettings {
-            seed: self.frame_seed(),
-            ..self.settings.clone()
-        };
+        let mut seeded = self.settings.clone();
+        seeded.frame.seed = self.frame_seed();
         let params = rsm::record_rsm(rec, scene, &b.rsm, &seeded, r);
         rec.kernel(SampleRsm {
             params: RsmParams {
@@ -526,8 +529,8 @@ impl PhotonGiPipeline {
                 cam,
                 gbuffer,
                 scratch,
-                self.settings.atrous_iterations,
-                self.settings.atrous_clip_sigmas,
+                self.settings.frame.atrous_iterations,
+                self.settings.frame.atrous_clip_sigmas,
                 input,
                 target,
             );
@@ -591,7 +594,7 @@ impl Pipeline for PhotonGiPipeline {
 
     fn host_options(settings: &PhotonGiSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: false,
         }
     }
@@ -638,10 +641,10 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        if seed != self.settings.seed {
+        if seed != self.settings.frame.seed {
             self.accumulated = 0;
         }
-        self.settings.seed = seed;
+        self.settings.frame.seed = seed;
     }
 
     /// The frame's recordings in order, each with the photons it traces: visibility and
@@ -704,7 +707,7 @@ impl Pipeline for PhotonGiPipeline {
             t.edge.swap();
             t.previous = cam;
         }
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated += 1;
             frame.stats.accumulated_frames = self.accumulated;
         }
@@ -752,7 +755,7 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     fn requested_outputs(&self) -> Outputs {
-        self.settings.outputs
+        self.settings.frame.outputs
     }
 
     fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {

@@ -1,6 +1,6 @@
-//! Seed 001's caustic map as a receiver: photons deposited into the diffuse receivers'
+//! Vanderstichelen 2021's caustic map as a receiver: photons deposited into the diffuse receivers'
 //! texture space (one atlas of tiles, fixed-point sums per texel), gathered into
-//! irradiance (001's N x N gather fixed to keep flux, or the density-adaptive gather on
+//! irradiance (Vanderstichelen 2021's N x N gather fixed to keep flux, or the density-adaptive gather on
 //! the atlas), and looked up by the camera's specular ray tree (`caustic_map_lookup`),
 //! directly, in mirrors and through glass; then the opt-in temporal blend and A-Trous
 //! iterations and the composite over the frame host's direct light.
@@ -75,7 +75,7 @@ impl AtlasQuanta {
     }
 }
 
-/// The density gather's parameters on an atlas of `settings.atlas_size` texels a side
+/// The density gather's parameters on an atlas of `settings.atlas.atlas_size` texels a side
 /// (`gather: density`; `axis` 0: the row pass, 1: the column pass): the atlas is the
 /// grid, edge weights only keep the gather inside a tile
 /// ([`ATLAS_SIGMA_DEPTH`](crate::math::density_gather::ATLAS_SIGMA_DEPTH), no normal term),
@@ -88,18 +88,18 @@ pub fn atlas_gather_params(
 ) -> GatherParams {
     GatherParams {
         camera: GpuCamera {
-            width: settings.atlas_size,
-            height: settings.atlas_size,
+            width: settings.atlas.atlas_size,
+            height: settings.atlas.atlas_size,
             ..Default::default()
         },
-        max_radius_px: settings.max_radius_texels,
+        max_radius_px: settings.atlas.max_radius_texels,
         sigma_depth: crate::math::density_gather::ATLAS_SIGMA_DEPTH,
         normal_power: 0.0,
         axis,
         hit_distance_quantum,
-        knn_photons: settings.knn_photons,
+        knn_photons: settings.atlas.knn_photons,
         flux_quantum,
-        table_block: crate::math::density_gather::table_block(settings.max_radius_texels),
+        table_block: crate::math::density_gather::table_block(settings.atlas.max_radius_texels),
         surface: gather_surface::ATLAS,
         ..Default::default()
     }
@@ -196,7 +196,7 @@ pub struct AtlasReceiver {
 pub fn with_atlas(host: &FrameHost, settings: &CausticMapSettings, emits: bool) -> bool {
     let features = SceneFeatures::of(host.model());
     let casters = features.mirrors || features.dielectrics;
-    let o = &settings.outputs;
+    let o = &settings.frame.outputs;
     let wants = o.any_of(&[
         Output::Composite,
         Output::RawCaustics,
@@ -205,8 +205,8 @@ pub fn with_atlas(host: &FrameHost, settings: &CausticMapSettings, emits: bool) 
     ]);
     casters
         && host.receivers().is_some()
-        && (emits || !settings.prune)
-        && (wants || !settings.prune)
+        && (emits || !settings.frame.prune)
+        && (wants || !settings.frame.prune)
 }
 
 /// Lays the atlas out for the receivers flagged in `include`; a receiver whose UVs cannot
@@ -229,22 +229,38 @@ fn lay_out(
 }
 
 impl AtlasReceiver {
+    /// A frame that reuses the atlas (only the camera changed since it was made): each
+    /// photon pass `plan` runs is skipped, with the reason, in `stats`.
+    pub fn skip_photon_passes(plan: &FramePlan, stats: &mut crate::frame::stats::FrameStats) {
+        for name in ["trace_photons", "refine_clusters"]
+            .into_iter()
+            .chain(BOX_GATHER_PASSES)
+            .chain(DENSITY_GATHER_PASSES)
+            .filter(|n| plan.runs(n))
+        {
+            stats.skip(
+                name,
+                "only the camera changed since the caustic atlas was made: it is reused",
+            );
+        }
+    }
+
     /// The camera images the host makes for `settings` (with an atlas: `caustics`): the
     /// G-buffer where direct light or a filter reads it, the direct image where direct or
     /// composite is asked for, the composite with caustics.
     pub fn screen_needs(settings: &CausticMapSettings, caustics: bool) -> ScreenNeeds {
-        let o = settings.outputs;
-        let keep = |x: bool| x || !settings.prune;
+        let o = settings.frame.outputs;
+        let keep = |x: bool| x || !settings.frame.prune;
         let direct = keep(o.any_of(&[Output::Direct, Output::Composite]));
         let filters = caustics
             && keep(o.any_of(&[Output::FilteredCaustics, Output::Composite]))
-            && (settings.temporal || settings.atrous_iterations > 0);
+            && (settings.frame.temporal || settings.frame.atrous_iterations > 0);
         ScreenNeeds {
             gbuffer: direct || filters,
             direct: direct.then_some(DirectLighting {
-                max_specular_depth: settings.max_specular_depth,
+                max_specular_depth: settings.frame.max_specular_depth,
                 min_weight: 1e-3,
-                fresnel_model: settings.fresnel.kernel_value(),
+                fresnel_model: settings.planes.fresnel.kernel_value(),
             }),
             composite: caustics && keep(o.has(Output::Composite)),
         }
@@ -277,19 +293,19 @@ impl AtlasReceiver {
         let made = (|| {
             if let (Some(receivers), true) = (host.receivers(), atlas) {
                 let s = &r.settings;
-                if s.atlas_bytes() > s.max_atlas_bytes {
+                if s.atlas.atlas_bytes() > s.atlas.max_atlas_bytes {
                     return Err(crate::device::error::BackendError::OutOfMemory {
-                        bytes: s.atlas_bytes(),
+                        bytes: s.atlas.atlas_bytes(),
                         what: format!(
                             "caustic atlas of {0}x{0} texels: over max_atlas_bytes ({1} bytes); \
                              a smaller atlas_size, or a larger max_atlas_bytes where the \
                              device holds it",
-                            s.atlas_size, s.max_atlas_bytes
+                            s.atlas.atlas_size, s.atlas.max_atlas_bytes
                         ),
                     }
                     .into());
                 }
-                let l = lay_out(host, receivers, &r.tiled, s.atlas_size)?;
+                let l = lay_out(host, receivers, &r.tiled, s.atlas.atlas_size)?;
                 r.make_atlas(backend, &l, extra)?;
             }
             r.make_images(backend, host.camera())
@@ -318,7 +334,7 @@ impl AtlasReceiver {
             texels: rec.upload(&l.texels, "atlas texels"),
             sums: rec.create_photon_map(texels),
             map: rec.create(texels, "caustic map"),
-            raw_map: (s.outputs.has(Output::RawCaustics) || !s.prune)
+            raw_map: (s.frame.outputs.has(Output::RawCaustics) || !s.frame.prune)
                 .then(|| rec.create(texels, "raw caustic map")),
             photons: rec.create(1, "photons"),
             photon_count: rec.create(1, "photon count"),
@@ -327,13 +343,16 @@ impl AtlasReceiver {
                 crate::math::map_gather::triangle_reach_words(triangles),
                 "atlas triangle reach",
             ),
-            density: (s.gather == MapGather::Density).then(|| DensityBuffers {
+            density: (s.atlas.gather == MapGather::Density).then(|| DensityBuffers {
                 table: rec.create(texels, "atlas photon count table"),
                 edge: rec.upload(&atlas_edge_texels(l), "atlas edge texels"),
                 footprint: rec.create(texels, "atlas gather footprints"),
                 rows: rec.create(texels, "atlas gather rows"),
                 source_index: rec.create(
-                    crate::math::density_gather::source_index_len(s.atlas_size, s.atlas_size),
+                    crate::math::density_gather::source_index_len(
+                        s.atlas.atlas_size,
+                        s.atlas.atlas_size,
+                    ),
                     "atlas gather source index",
                 ),
                 gbuffer: rec.create_gbuffer(1),
@@ -355,23 +374,24 @@ impl AtlasReceiver {
         backend: &mut dyn Backend,
         camera: GpuCamera,
     ) -> Result<(), Error> {
-        let o = self.settings.outputs;
+        let o = self.settings.frame.outputs;
         let s = &self.settings;
-        let keep = |x: bool| x || !s.prune;
+        let keep = |x: bool| x || !s.frame.prune;
         let pixels = camera.width * camera.height;
         let caustics = self.atlas.is_some();
         let mut rec = Recording::new();
         let filtered_needed =
             caustics && keep(o.any_of(&[Output::FilteredCaustics, Output::Composite]));
-        let filters = (filtered_needed && (s.temporal || s.atrous_iterations > 0)).then(|| {
-            FilterChain::create(
-                &mut rec,
-                pixels,
-                camera,
-                s.temporal,
-                s.atrous_iterations > 0,
-            )
-        });
+        let filters = (filtered_needed && (s.frame.temporal || s.frame.atrous_iterations > 0))
+            .then(|| {
+                FilterChain::create(
+                    &mut rec,
+                    pixels,
+                    camera,
+                    s.frame.temporal,
+                    s.frame.atrous_iterations > 0,
+                )
+            });
         let images = CameraImages {
             filters,
             raw: (caustics && keep(o.has(Output::RawCaustics)))
@@ -410,7 +430,7 @@ impl AtlasReceiver {
 
     /// Sets the frame seed the settings carry (an accumulation starts again).
     pub fn set_seed(&mut self, seed: u32) {
-        self.settings.seed = seed;
+        self.settings.frame.seed = seed;
         self.restart_accumulation();
     }
 
@@ -418,7 +438,7 @@ impl AtlasReceiver {
     /// accumulate (its photons' seed: [`crate::frame::receivers::accumulation_seed`]); 0
     /// without.
     pub fn pass_index(&self) -> u32 {
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated
         } else {
             0
@@ -433,7 +453,7 @@ impl AtlasReceiver {
     /// After a photon pass: with accumulation its photons stay in the sums; returns the
     /// passes they hold (0 without accumulation).
     pub fn end_photon_pass(&mut self) -> u32 {
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated += 1;
             self.accumulated
         } else {
@@ -489,7 +509,7 @@ impl AtlasReceiver {
         let (Some(r), Some(a)) = (host.receivers(), self.atlas) else {
             return Ok(());
         };
-        let l = lay_out(host, r, include, self.settings.atlas_size)?;
+        let l = lay_out(host, r, include, self.settings.atlas.atlas_size)?;
         rec.update(a.triangle_tiles, &l.triangle_tiles, "atlas triangle tiles")?;
         rec.update(
             a.tiles,
@@ -515,8 +535,8 @@ impl AtlasReceiver {
     /// `AtlasParams` with `quanta` (the deposit's, or the gathers' reading them).
     fn params_with(&self, quanta: AtlasQuanta, gather_width: u32) -> AtlasParams {
         AtlasParams {
-            width: self.settings.atlas_size,
-            height: self.settings.atlas_size,
+            width: self.settings.atlas.atlas_size,
+            height: self.settings.atlas.atlas_size,
             flux_quantum: quanta.flux_quantum,
             hit_distance_quantum: quanta.hit_distance_quantum,
             photon_capacity: self.atlas.map_or(1, |a| a.photons.len),
@@ -542,7 +562,7 @@ impl AtlasReceiver {
             triangle_tiles: a.triangle_tiles,
             tiles: a.tiles,
             sums: a.sums,
-            atlas_width: self.settings.atlas_size,
+            atlas_width: self.settings.atlas.atlas_size,
             flux_quantum: self.quanta.flux_quantum,
             hit_distance_quantum: self.quanta.hit_distance_quantum,
             trace_counters: a.counters,
@@ -601,7 +621,7 @@ impl AtlasReceiver {
             }
         } else {
             rec.kernel(GatherCausticMap {
-                params: self.params_with(q, self.settings.gather_width),
+                params: self.params_with(q, self.settings.atlas.gather_width),
                 texels: a.texels,
                 tiles: a.tiles,
                 atlas: a.sums,
@@ -631,10 +651,10 @@ impl AtlasReceiver {
         let i = self.images;
         let params = MapLookupParams {
             camera: cam,
-            atlas_width: s.atlas_size,
-            max_specular_depth: s.max_specular_depth,
+            atlas_width: s.atlas.atlas_size,
+            max_specular_depth: s.frame.max_specular_depth,
             min_weight: 1e-3,
-            fresnel_model: s.fresnel.kernel_value(),
+            fresnel_model: s.planes.fresnel.kernel_value(),
         };
         // the filtered caustics through the opt-in temporal blend and A-Trous
         // iterations: the lookup writes the chain's input
@@ -656,7 +676,7 @@ impl AtlasReceiver {
             }
         }
         if let (Some(f), Some(filtered), Some(g)) = (i.filters, i.filtered, host.screen().gbuffer) {
-            let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
+            let iterations = (s.frame.atrous_iterations, s.frame.atrous_clip_sigmas);
             f.record(rec, cam, g, iterations, filtered);
         }
         if let Some(filtered) = i.filtered {
@@ -737,7 +757,7 @@ impl AtlasReceiver {
             &if density {
                 format!("the raw map (N = 1), {stale}")
             } else {
-                format!("001's N x N gather, {stale}")
+                format!("Vanderstichelen 2021's N x N gather, {stale}")
             },
             if !photons {
                 why_no_atlas
@@ -753,7 +773,7 @@ impl AtlasReceiver {
                 if !photons {
                     why_no_atlas
                 } else {
-                    "the map's gather is 001's N x N box (gather: box)"
+                    "the map's gather is Vanderstichelen 2021's N x N box (gather: box)"
                 },
             );
         }
@@ -772,7 +792,7 @@ impl AtlasReceiver {
             "temporal_blend",
             chain.is_some_and(|f| f.temporal.is_some()),
             "setting temporal: the filtered caustics over reprojected history",
-            if self.settings.temporal {
+            if self.settings.frame.temporal {
                 "no filtered caustics are made"
             } else {
                 "temporal off"
@@ -782,7 +802,7 @@ impl AtlasReceiver {
             "atrous_filter",
             chain.is_some_and(|f| f.atrous.is_some()),
             "setting atrous_iterations, on the filtered caustics as the camera sees them",
-            if self.settings.atrous_iterations > 0 {
+            if self.settings.frame.atrous_iterations > 0 {
                 "no filtered caustics are made"
             } else {
                 "atrous_iterations = 0"
@@ -799,9 +819,9 @@ impl AtlasReceiver {
             },
         );
         FramePlan {
-            prune: self.settings.prune,
+            prune: self.settings.frame.prune,
             features,
-            outputs: self.settings.outputs.names(&OUTPUTS),
+            outputs: self.settings.frame.outputs.names(&OUTPUTS),
             lights,
             trace_variant: photons.then_some(variant),
             passes,
@@ -839,7 +859,7 @@ impl AtlasReceiver {
     /// Reads the gathered caustic atlas back: irradiance (W/m^2) per texel, `atlas_size`
     /// square; zeros without an atlas.
     pub fn read_atlas(&self, backend: &mut dyn Backend) -> Result<Image, Error> {
-        let side = self.settings.atlas_size;
+        let side = self.settings.atlas.atlas_size;
         match self.atlas {
             Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
             None => Ok(Image::new(

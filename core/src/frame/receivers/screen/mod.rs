@@ -1,9 +1,9 @@
-//! Seed 000's screen receiver: photons deposited into a screen-space photon map (one
-//! photon, one pixel, fixed-point integer sums; 000 section 30.3.1.3), resolved to
-//! radiance (`resolve_caustics`, 000 Eq. 5: the raw caustics), filtered ([`GatherFilter`]:
-//! the density-adaptive, flux-keeping gather or the seed's bilateral gather, 000 section
+//! Kim 2019's screen receiver: photons deposited into a screen-space photon map (one
+//! photon, one pixel, fixed-point integer sums; Kim 2019, section 30.3.1.3), resolved to
+//! radiance (`resolve_caustics`, Kim 2019, Eq. 5: the raw caustics), filtered ([`GatherFilter`]:
+//! the density-adaptive, flux-keeping gather or the seed's bilateral gather, Kim 2019, section
 //! 30.3.2), optionally blended with the reprojected history and A-Trous filtered, and
-//! composited over the frame host's direct light (000 section 30.3.3).
+//! composited over the frame host's direct light (Kim 2019, section 30.3.3).
 //!
 //! The receiver does not know where its photons come from: Sspm deposits the photons of
 //! its projection volumes, AdaptiveCaustics those its traversal outputs. The G-buffer,
@@ -16,6 +16,7 @@ pub mod settings;
 pub use outputs::FrameImages;
 
 use crate::frame::output::Output;
+use crate::frame::settings::FrameSettings;
 pub use plan::{plan_frame, Needs};
 pub use settings::{GatherFilter, ScreenSettings};
 
@@ -134,9 +135,22 @@ pub struct PhotonMap {
     pub counters: Buf<u32>,
 }
 
+/// How the direct image of a screen-receiver frame is lit: specular chains up to the
+/// frame's `max_specular_depth`, exact Fresnel, chains below 1e-3 of the pixel's weight
+/// stopped.
+pub fn direct_lighting(frame: &FrameSettings) -> crate::frame::screen::DirectLighting {
+    crate::frame::screen::DirectLighting {
+        max_specular_depth: frame.max_specular_depth,
+        min_weight: 1e-3,
+        fresnel_model: crate::math::optics::fresnel_model::EXACT,
+    }
+}
+
 /// The screen receiver of one frame size.
 #[derive(Clone, Debug)]
 pub struct ScreenReceiver {
+    /// The technique's shared settings (outputs, pruning, filter chain, accumulation).
+    frame: FrameSettings,
     settings: ScreenSettings,
     quanta: ScreenQuanta,
     needs: Needs,
@@ -153,10 +167,10 @@ pub struct ScreenReceiver {
 impl ScreenReceiver {
     /// The camera images the frame host must make for `needs` (the G-buffer always: every
     /// output is shaded from it).
-    pub fn screen_needs(needs: Needs, settings: &ScreenSettings) -> ScreenNeeds {
+    pub fn screen_needs(needs: Needs, frame: &FrameSettings) -> ScreenNeeds {
         ScreenNeeds {
             gbuffer: true,
-            direct: needs.direct_light.then(|| settings.direct_lighting()),
+            direct: needs.direct_light.then(|| direct_lighting(frame)),
             composite: needs.composite,
         }
     }
@@ -167,6 +181,7 @@ impl ScreenReceiver {
         rec: &mut Recording,
         camera: GpuCamera,
         plan: &FramePlan,
+        frame: &FrameSettings,
         settings: ScreenSettings,
         quanta: ScreenQuanta,
     ) -> ScreenReceiver {
@@ -205,6 +220,7 @@ impl ScreenReceiver {
         let filters = (temporal || atrous)
             .then(|| FilterChain::create(rec, pixels, camera, temporal, atrous));
         ScreenReceiver {
+            frame: frame.clone(),
             settings,
             quanta,
             needs,
@@ -238,7 +254,7 @@ impl ScreenReceiver {
     /// accumulates (its photons' seed: [`crate::frame::receivers::accumulation_seed`]);
     /// 0 without.
     pub fn frame_index(&self) -> u32 {
-        if self.settings.accumulate {
+        if self.frame.accumulate {
             self.accumulated
         } else {
             0
@@ -284,8 +300,8 @@ impl ScreenReceiver {
     /// The frame's device images over the host's `screen` images, by what `settings`
     /// asked for (an image not requested has a handle only with pruning off).
     pub fn images(&self, camera: GpuCamera, screen: &ScreenTargets) -> FrameImages {
-        let out = self.settings.outputs;
-        let keep = |requested: bool| requested || !self.settings.prune;
+        let out = self.frame.outputs;
+        let keep = |requested: bool| requested || !self.frame.prune;
         let composite = if screen.composite.is_some() {
             screen.composite
         } else if out.has(Output::Composite) {
@@ -344,7 +360,7 @@ impl ScreenReceiver {
         let last = self.filters.map_or(filtered, |f| f.input(filtered));
         self.record_gather(rec, camera, gbuffer, m.planes, g, (raw, filtered, last));
         if let Some(f) = &self.filters {
-            let s = &self.settings;
+            let s = &self.frame;
             let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
             f.record(rec, camera, gbuffer, iterations, filtered);
         }
@@ -440,7 +456,7 @@ impl ScreenReceiver {
         if let Some(f) = &mut self.filters {
             f.end_frame(camera);
         }
-        if self.settings.accumulate {
+        if self.frame.accumulate {
             self.accumulated += 1;
             self.accumulated
         } else {
