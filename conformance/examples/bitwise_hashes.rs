@@ -48,7 +48,7 @@ fn main() {
             let line = |item: &str, bytes: &[u8]| {
                 println!("{bname}\t{device}\t{name}\t{item}\t{:016x}", fnv1a(bytes));
             };
-            for o in Output::ALL {
+            for o in s.outputs().into_iter().map(|o| o.output) {
                 let img = s.read_output(backend.as_mut(), o).expect("read");
                 line(o.stem(), bytemuck::cast_slice(&img.pixels));
             }
