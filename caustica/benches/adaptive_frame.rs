@@ -17,6 +17,7 @@
 
 mod common;
 use caustica::scene::builtin::builtin;
+use caustica::techniques::adaptive_caustics::AdaptiveStats;
 use caustica::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
@@ -101,7 +102,7 @@ fn main() {
                                     max_traversal_bytes: 256 << 20,
                                     ..AdaptiveCausticsSettings::default().traversal
                                 },
-                                ..AdaptiveCausticsSettings::from_map(map.clone())
+                                ..adaptive_over(&map)
                             },
                         )
                         .map(|t| Box::new(t) as Box<dyn Technique>),
@@ -135,7 +136,7 @@ fn main() {
                                         .sum(),
                                 );
                                 traced = st.photons_emitted;
-                                if let Some(a) = &st.adaptive {
+                                if let Some(a) = &AdaptiveStats::of(&st) {
                                     steps = a.steps;
                                     levels = a.photons_per_level.clone();
                                     level_ms.resize(a.ms_per_level.len(), Vec::new());
@@ -169,5 +170,17 @@ fn main() {
                 }
             }
         }
+    }
+}
+
+/// AdaptiveCaustics with the default traversal over CausticMap's `map` (the same photon
+/// grid, trace, view planes and atlas).
+fn adaptive_over(map: &CausticMapSettings) -> AdaptiveCausticsSettings {
+    AdaptiveCausticsSettings {
+        frame: map.frame.clone(),
+        trace: map.trace,
+        planes: map.planes,
+        atlas: map.atlas,
+        ..Default::default()
     }
 }

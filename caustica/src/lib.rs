@@ -137,7 +137,8 @@ pub use caustica_core::techniques::caustic_map::{
 ///
 /// ```no_run
 /// use caustica::{open_backend, scene::builtin, AdaptiveCaustics, AdaptiveCausticsSettings};
-/// use caustica::{AdaptiveDeposit, AdaptiveMetric, Output, TechniqueSettings, TraversalSettings};
+/// use caustica::{AdaptiveDeposit, AdaptiveMetric, AdaptiveStats, Output};
+/// use caustica::{TechniqueSettings, TraversalSettings};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("spot-glass").expect("built-in scene");
@@ -149,7 +150,7 @@ pub use caustica_core::techniques::caustic_map::{
 /// .with_photons(2048, 2048); // the dense-equivalent grid: the pyramid's finest level
 /// let mut t = AdaptiveCaustics::new(backend.as_mut(), &scene, settings)?;
 /// let stats = t.frame(backend.as_mut(), &mut |_| {})?;
-/// if let Some(a) = &stats.adaptive {
+/// if let Some(a) = AdaptiveStats::of(&stats) {
 ///     println!("{} of {} photons traced", a.photons_processed, a.dense_equivalent_photons);
 /// }
 /// let composite = t.read_output(backend.as_mut(), Output::Composite)?;
@@ -160,7 +161,7 @@ pub use caustica_core::techniques::caustic_map::{
 /// ```
 pub use caustica_core::techniques::adaptive_caustics::AdaptiveCaustics;
 pub use caustica_core::techniques::adaptive_caustics::{
-    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
+    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, AdaptiveStats, ClusterRelevance,
 };
 
 /// PhotonGi (Smal 2019): multi-bounce indirect light by photon splatting from each light's

@@ -4,6 +4,7 @@
 
 use caustica_core::frame::technique::Technique;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
@@ -49,7 +50,7 @@ fn main() {
                         metric,
                         ..AdaptiveCausticsSettings::default().traversal
                     },
-                    ..AdaptiveCausticsSettings::from_map(map.clone())
+                    ..caustica_conformance::adaptive_over(&map)
                 },
             )
             .unwrap();
@@ -58,7 +59,7 @@ fn main() {
             let total: f64 = ds.stored_flux.iter().sum();
             let ad: f64 = s.stored_flux.iter().sum();
             row.push(format!("{:.5}", if total > 0.0 { ad / total } else { 0.0 }));
-            let st = s.adaptive.unwrap_or_default();
+            let st = AdaptiveStats::of(&s).unwrap_or_default();
             counts.push(format!(
                 "{} ({} out)",
                 st.photons_processed, s.photons_stored

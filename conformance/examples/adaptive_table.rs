@@ -13,6 +13,7 @@ use caustica_core::frame::image::Image;
 use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
@@ -60,7 +61,7 @@ fn adaptive(n: u32, plane: EmissionPlane, metric: AdaptiveMetric) -> AdaptiveCau
             max_traversal_bytes: 256 << 20,
             ..AdaptiveCausticsSettings::default().traversal
         },
-        ..AdaptiveCausticsSettings::from_map(map(n, plane))
+        ..caustica_conformance::adaptive_over(&map(n, plane))
     }
 }
 
@@ -100,7 +101,7 @@ fn main() {
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
             let t = AdaptiveCaustics::new(b, &scene, adaptive(n, plane, metric)).expect("adaptive");
             let (s, a, ms) = run(b, t);
-            let st = s.adaptive.clone().unwrap_or_default();
+            let st = AdaptiveStats::of(&s).unwrap_or_default();
             per_level.push((n, metric, st.photons_per_level.clone()));
             row.push((st.photons_processed, rel_mse(&a, &r), ms));
         }
@@ -142,7 +143,7 @@ fn main() {
                 };
                 let tech = AdaptiveCaustics::new(b, &scene, settings).expect("adaptive");
                 let (s, a, ms) = run(b, tech);
-                let p = s.adaptive.map_or(0, |a| a.photons_processed) as f64;
+                let p = AdaptiveStats::of(&s).map_or(0, |a| a.photons_processed) as f64;
                 println!(
                     "| {n}^2 | {t} | {:.4} | {:.3e} | {ms:.0} |",
                     p / dense,
@@ -173,7 +174,7 @@ fn main() {
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
             let t = AdaptiveCaustics::new(b, &s, adaptive(top, casters, metric)).expect("adaptive");
             let (st, _, _) = run(b, t);
-            let p = st.adaptive.map_or(0, |a| a.photons_processed);
+            let p = AdaptiveStats::of(&st).map_or(0, |a| a.photons_processed);
             ratios.push(p as f64 / ds.photons_emitted as f64);
         }
         println!(

@@ -11,8 +11,8 @@
 use caustica_conformance::{backends, small_settings};
 use caustica_core::backend::{read_buf, read_gbuffer};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
+use caustica_core::Sspm;
 use caustica_core::TraceSettings;
-use caustica_core::{Output, Sspm};
 
 /// FNV-1a, 64-bit: stable across Rust versions (std's hasher is not promised to be).
 fn fnv1a(bytes: &[u8]) -> u64 {

@@ -58,3 +58,18 @@ pub fn render(
     .collect();
     (stats, imgs)
 }
+
+/// AdaptiveCaustics with the default traversal over `map`'s blocks (its photon grid, trace,
+/// view planes and atlas), depositing into the atlas: the two techniques compared on the
+/// same settings.
+pub fn adaptive_over(
+    map: &caustica_core::techniques::caustic_map::CausticMapSettings,
+) -> caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
+    caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
+        frame: map.frame.clone(),
+        trace: map.trace,
+        planes: map.planes,
+        atlas: map.atlas,
+        ..Default::default()
+    }
+}

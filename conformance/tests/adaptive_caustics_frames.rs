@@ -25,6 +25,7 @@
 use caustica_conformance::backends;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, MAX_PASSES_PER_LEVEL,
 };
@@ -127,7 +128,7 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
                         start_grid: 32,
                         ..AdaptiveCausticsSettings::default().traversal
                     },
-                    ..AdaptiveCausticsSettings::from_map(map(256))
+                    ..caustica_conformance::adaptive_over(&map(256))
                 },
             )
             .expect("adaptive");
@@ -141,7 +142,7 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
             if let Some(out) = same_bits(&di, &ai) {
                 panic!("{what}: {out} differs from the dense grid's");
             }
-            if let Some(a) = &s.adaptive {
+            if let Some(a) = &AdaptiveStats::of(&s) {
                 assert_eq!(a.dense_equivalent_photons, ds.photons_emitted, "{what}");
                 eprintln!(
                     "{what}: {} photons traced against {} dense, {} stored",
@@ -162,14 +163,14 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
             max_traversal_bytes: bytes,
             ..AdaptiveCausticsSettings::default().traversal
         },
-        ..AdaptiveCausticsSettings::from_map(map(256))
+        ..caustica_conformance::adaptive_over(&map(256))
     };
     for (name, mut b) in backends() {
         for scene_name in ["sphere", "cornell"] {
             let scene = small(scene_name);
             let one = AdaptiveCaustics::new(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
             let (s1, i1) = render(b.as_mut(), one);
-            let a1 = s1.adaptive.clone().expect("adaptive stats");
+            let a1 = AdaptiveStats::of(&s1).expect("adaptive stats");
             assert!(
                 a1.clusters_converged > 0,
                 "{name} / {scene_name}: nothing converged"
@@ -188,8 +189,13 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
                 let what = format!("{name} / {scene_name}, passes of {c} clusters");
                 let sizes = settings(bytes).traversal_sizes();
                 assert!(!sizes.lists_capped, "{what}: {sizes:?}");
-                assert_eq!(s.adaptive.as_ref().map(|a| a.clusters_overflowed), Some(0));
-                let a = s.adaptive.clone().expect("adaptive stats");
+                assert_eq!(
+                    AdaptiveStats::of(&s)
+                        .as_ref()
+                        .map(|a| a.clusters_overflowed),
+                    Some(0)
+                );
+                let a = AdaptiveStats::of(&s).expect("adaptive stats");
                 assert_eq!(a.photons_processed, a1.photons_processed, "{what}");
                 assert_eq!(s.stored_flux, s1.stored_flux, "{what}: stored flux");
                 if let Some(out) = same_bits(&i1, &i) {
@@ -219,7 +225,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
             max_traversal_bytes: bytes,
             ..AdaptiveCausticsSettings::default().traversal
         },
-        ..AdaptiveCausticsSettings::from_map(map(256))
+        ..caustica_conformance::adaptive_over(&map(256))
     };
     for (name, mut b) in backends() {
         let scene = small("sphere");
@@ -228,7 +234,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
         let bytes = settings(0).traversal().full_list_bytes(3) / 8;
         let capped = AdaptiveCaustics::new(b.as_mut(), &scene, settings(bytes)).expect("scene");
         let (sc, img) = render(b.as_mut(), capped);
-        let a = sc.adaptive.clone().expect("adaptive stats");
+        let a = AdaptiveStats::of(&sc).expect("adaptive stats");
         assert!(settings(bytes).traversal_sizes().lists_capped);
         assert!(
             a.clusters_overflowed > 0,
@@ -268,7 +274,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
 /// up to 60 degrees sees at most 1.5 times the mean solid angle near the axis... and less
 /// off it; 2 is a margin).
 fn flux_tolerance(s: &FrameStats, dense: &FrameStats, dispersive: bool) -> f64 {
-    let a = s.adaptive.as_ref().expect("adaptive stats");
+    let a = &AdaptiveStats::of(&s).expect("adaptive stats");
     let finest = a.photons_per_level.len() - 1;
     let emitted: f64 = dense.emitted_flux.iter().sum();
     let gain = if dispersive { 3.0 } else { 1.0 };
@@ -300,7 +306,7 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
                             error_texels,
                             ..AdaptiveCausticsSettings::default().traversal
                         },
-                        ..AdaptiveCausticsSettings::from_map(map(512))
+                        ..caustica_conformance::adaptive_over(&map(512))
                     },
                 )
                 .expect("adaptive");
@@ -343,7 +349,7 @@ fn the_screen_target_deposits_the_traversals_photons() {
             error_from_grid: 64,
             ..AdaptiveCausticsSettings::default().traversal
         },
-        ..AdaptiveCausticsSettings::from_map(map(256))
+        ..caustica_conformance::adaptive_over(&map(256))
     };
     let mut cpu_deposits: std::collections::HashMap<&str, u64> = Default::default();
     for (name, mut b) in backends() {
@@ -367,10 +373,12 @@ fn the_screen_target_deposits_the_traversals_photons() {
             assert_eq!(s.technique, "adaptive-caustics", "{what}");
             assert_eq!(a.stored_flux, s.stored_flux, "{what}: stored flux");
             assert_eq!(a.photons_stored, s.photons_stored, "{what}: stored photons");
-            let (ta, ts) = (a.adaptive.as_ref(), s.adaptive.as_ref());
+            let (ta, ts) = (AdaptiveStats::of(&a), AdaptiveStats::of(&s));
             assert_eq!(
-                ta.map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
-                ts.map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
+                ta.as_ref()
+                    .map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
+                ts.as_ref()
+                    .map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
                 "{what}: the two targets' traversals differ"
             );
             let d = &s.discarded;
@@ -422,14 +430,14 @@ fn the_screen_target_deposits_the_traversals_photons() {
                 matches!(m, caustica_core::scene::Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0)
             });
             let (x, y): (f64, f64) = (es.stored_flux.iter().sum(), s.stored_flux.iter().sum());
-            if es.adaptive.is_none() {
+            if AdaptiveStats::of(&es).is_none() {
                 // no light reaches a caster: no photon pass runs on either
                 assert_eq!((x, y), (0.0, 0.0), "{what}: flux without a traversal");
                 continue;
             }
             // the bound takes the finest photon's flux from the dense-equivalent count
             let mut dense = a.clone();
-            dense.photons_emitted = ta.map_or(0, |t| t.dense_equivalent_photons);
+            dense.photons_emitted = ta.as_ref().map_or(0, |t| t.dense_equivalent_photons);
             let tol = flux_tolerance(&es, &dense, dispersive);
             assert!(
                 (x - y).abs() <= tol + 1e-9 * y,

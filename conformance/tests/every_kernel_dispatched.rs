@@ -85,7 +85,7 @@ fn every_backend_dispatches_every_declared_kernel() {
                 start_grid: 16,
                 ..AdaptiveCausticsSettings::default().traversal
             },
-            ..AdaptiveCausticsSettings::from_map(CausticMapSettings {
+            ..caustica_conformance::adaptive_over(&CausticMapSettings {
                 frame: FrameSettings {
                     photons_w: 64,
                     photons_h: 64,

@@ -27,7 +27,6 @@ pub mod scene;
 pub mod techniques;
 
 pub use backend::{Backend, BackendError, Capabilities, DeviceType, Finished, Submission};
-pub use frame::emission::adaptive::TraversalSettings;
 pub use frame::error::Error;
 pub use frame::plan::FramePlan;
 pub use frame::receivers::atlas::settings::{AtlasSettings, PlaneSettings};
@@ -37,4 +36,5 @@ pub use frame::stats::FrameStats;
 pub use frame::submitted::{FrameTicket, RecordedFrame};
 pub use frame::technique::{OutputInfo, Progress, Technique};
 pub use scene::Scene;
+pub use techniques::adaptive_caustics::TraversalSettings;
 pub use techniques::sspm::{GatherFilter, Output, Outputs, Sspm, SspmSettings};

@@ -234,7 +234,7 @@ pub(crate) fn check_atlas_density_gather(
     c: &mut dyn Backend,
 ) -> Result<(), String> {
     let s = density_settings(l);
-    let params = |axis| atlas_gather_params(&s, 2f32.powi(-24), 2f32.powi(-20), axis);
+    let params = |axis| atlas_gather_params(&s.atlas_config(), 2f32.powi(-24), 2f32.powi(-20), axis);
     let edge: Vec<[f32; 4]> = l
         .texels
         .iter()

@@ -16,6 +16,7 @@ use super::{Outcome, SIZE};
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
 use caustica_core::scene::{builtin, Light, Scene, Shape};
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, ClusterRelevance,
 };
@@ -49,7 +50,7 @@ fn level(n: u32, plane: EmissionPlane, relevance: ClusterRelevance) -> AdaptiveC
             relevance,
             ..AdaptiveCausticsSettings::default().traversal
         },
-        ..AdaptiveCausticsSettings::from_map(map(n, plane))
+        ..crate::adaptive_over(&map(n, plane))
     }
 }
 
@@ -255,9 +256,7 @@ pub(super) fn light_inside_casters(b: &mut dyn Backend) -> Result<Outcome, Strin
         &level(512, EmissionPlane::Casters, ClusterRelevance::Bounds),
         &mut v,
     )?;
-    let planes = a
-        .stats
-        .adaptive
+    let planes = AdaptiveStats::of(&a.stats)
         .as_ref()
         .map_or(0, |s| s.dense_equivalent_photons);
     v.check(planes == 6 * 256 * 256, || {

@@ -19,6 +19,7 @@ use caustica_core::backend::{Backend, BackendError};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::output::Output;
 use caustica_core::scene::{Light, Material, Scene, Shape};
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::{AtlasSettings, FrameSettings, PlaneSettings};
 use caustica_core::{Error, FrameStats};
@@ -112,8 +113,7 @@ pub(super) fn checked_with(
     }
     let st = &f.stats;
     let d = &st.discarded;
-    let traced_stored = st
-        .adaptive
+    let traced_stored = AdaptiveStats::of(st)
         .as_ref()
         .map_or(st.photons_stored, |a| a.photons_traced_stored);
     let ends = traced_stored + d.no_specular + d.escaped + d.negligible_power + d.bounce_limit;
@@ -153,7 +153,11 @@ pub(super) fn checked_with(
         let r = render_with(&mut cpu, scene, make).map_err(|e| format!("cpu: {e}"))?;
         let rs = &r.stats;
         let k = divergence_allowance(rs.photons_emitted);
-        let traced = if st.adaptive.is_some() { k } else { 0 };
+        let traced = if AdaptiveStats::of(&st).is_some() {
+            k
+        } else {
+            0
+        };
         v.check(
             rs.photons_emitted.abs_diff(st.photons_emitted) <= traced,
             || {

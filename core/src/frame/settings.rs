@@ -15,7 +15,7 @@
 //! `knn_photons`: `atlas.knn_photons` and `screen.knn_photons`) is an error naming both.
 
 use crate::frame::error::Error;
-use crate::frame::output::Outputs;
+use crate::frame::output::{Output, Outputs};
 use crate::kernels::MAX_SPECULAR_DEPTH;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -87,6 +87,19 @@ impl Default for FrameSettings {
 }
 
 impl FrameSettings {
+    /// Checks that `outputs` asks for at least one of `own` (the technique's outputs);
+    /// `technique` names it in the error.
+    pub fn check_outputs(&self, technique: &str, own: &[Output]) -> Result<(), Error> {
+        if self.outputs.any_of(own) {
+            Ok(())
+        } else {
+            Err(Error::InvalidParameter(format!(
+                "frame.outputs: at least one of {technique}'s outputs must be requested ({})",
+                crate::frame::output::stems(own)
+            )))
+        }
+    }
+
     /// The shared defaults with frame seed `seed`.
     pub fn with_seed(seed: u32) -> FrameSettings {
         FrameSettings {

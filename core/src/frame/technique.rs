@@ -8,18 +8,10 @@ use crate::frame::image::Image;
 pub use crate::frame::output::{Output, OutputInfo, Outputs};
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
+pub use crate::frame::stats::Progress;
 use crate::frame::submitted::{FrameTicket, RecordedFrame};
 use crate::scene::{Camera, Light};
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// Progress of a frame's photon work (called after every batch).
-#[derive(Clone, Copy, Debug)]
-pub struct Progress {
-    /// Photons traced and deposited so far this frame.
-    pub photons_done: u64,
-    /// Photons the frame emits in all.
-    pub photons_total: u64,
-}
 
 /// A technique on one backend, for one scene: created by [`crate::techniques::create`]
 /// (or its own typed `new`), it owns its device buffers until [`Technique::free`].

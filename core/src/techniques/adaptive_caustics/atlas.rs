@@ -5,9 +5,9 @@
 //! receiver keeps its tile: the error metric refines clusters by the atlas texels their
 //! photons land in, so the photons (and the receivers they reach) depend on the layout.
 
+use super::traversal::{AtlasTarget, DepositTarget, Traversal};
 use super::{AdaptiveCausticsPipeline, AdaptiveCausticsSettings, Target};
 use crate::backend::Backend;
-use crate::frame::emission::adaptive::{DepositTarget, Traversal};
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
@@ -49,7 +49,7 @@ pub(super) fn create(
     settings: AdaptiveCausticsSettings,
     planes: ViewPlanes,
 ) -> Result<AdaptiveCausticsPipeline, Error> {
-    let map = &settings.caustic_map();
+    let map = &settings.atlas_config();
     let atlas = with_atlas(host, map, !planes.planes.is_empty());
     host.make_screen(backend, AtlasReceiver::screen_needs(map, atlas))?;
     let mut variant = SceneFeatures::of(host.model()).trace_variant();
@@ -130,9 +130,7 @@ impl AdaptiveCausticsPipeline {
             return Ok(());
         };
         let photons = self.plan.trace_variant.is_some();
-        if let (true, Some(a), Some(target)) =
-            (photons, receiver.atlas(), receiver.traversal_target())
-        {
+        if let (true, Some(a), Some(target)) = (photons, receiver.atlas(), atlas_target(receiver)) {
             if *valid {
                 AtlasReceiver::skip_photon_passes(&self.plan, &mut frame.stats);
             } else {
@@ -217,4 +215,18 @@ impl AdaptiveCausticsPipeline {
         self.replan_atlas(host);
         Ok(Reaction::Kept)
     }
+}
+
+/// The traversal's target in the atlas of `receiver` (`None` without an atlas).
+fn atlas_target(receiver: &AtlasReceiver) -> Option<AtlasTarget> {
+    let quanta = receiver.quanta();
+    receiver.atlas().map(|a| AtlasTarget {
+        triangle_tiles: a.triangle_tiles,
+        tiles: a.tiles,
+        sums: a.sums,
+        atlas_width: receiver.settings().atlas.atlas_size,
+        flux_quantum: quanta.flux_quantum,
+        hit_distance_quantum: quanta.hit_distance_quantum,
+        trace_counters: a.counters,
+    })
 }

@@ -1,6 +1,6 @@
 //! AdaptiveCaustics (Wyman 2009, "Adaptive Caustic Maps Using Deferred
 //! Shading"): light view planes ([`crate::frame::emission::view_planes`]) sampled coarse
-//! to fine by Wyman 2009's traversal ([`crate::frame::emission::adaptive`]), so that photons
+//! to fine by Wyman 2009's traversal ([`traversal`]), so that photons
 //! are traced only where the casters are and, with the error metric, only where the map
 //! still needs them; its output photons land in a receiver: the caustic atlas
 //! ([`crate::frame::receivers::atlas`], the default, [`atlas`]) or the screen photon map
@@ -25,14 +25,17 @@
 mod atlas;
 mod screen;
 mod settings;
+mod stats;
+pub mod traversal;
 
-pub use crate::frame::emission::adaptive::{
-    caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
-    TraversalSettings, EMPTY_RECT,
-};
 pub use settings::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance, TraversalSizes,
     LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
+};
+pub use stats::AdaptiveStats;
+pub use traversal::{
+    caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
+    TraversalSettings, EMPTY_RECT,
 };
 
 use crate::backend::Backend;
@@ -89,7 +92,8 @@ fn view_planes(host: &FrameHost, s: &AdaptiveCausticsSettings) -> Result<ViewPla
         g.caster_bounds,
         g.caster_spheres,
         g.has_dispersion,
-        &s.caustic_map(),
+        &s.frame,
+        &s.planes,
     );
     fit_planes(&mut planes, &s.traversal(), g.has_dispersion);
     planes.check_light_flux()?;

@@ -3,10 +3,10 @@
 //! screen receiver ([`crate::frame::receivers::screen`]), which resolves, filters and
 //! composites them as for Sspm; a photon's "texel" for the error metric is its pixel.
 
+use super::traversal::{DepositTarget, ScreenTarget, Traversal};
 use super::{AdaptiveCausticsPipeline, AdaptiveCausticsSettings, Target};
 use crate::backend::Backend;
 use crate::frame::allocation::allocate;
-use crate::frame::emission::adaptive::{DepositTarget, ScreenTarget, Traversal};
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;

@@ -1,13 +1,13 @@
 //! Every parameter of AdaptiveCaustics, with its defaults and validation.
 
-use crate::frame::emission::adaptive::TraversalSettings;
-pub use crate::frame::emission::adaptive::{
+use super::traversal::TraversalSettings;
+pub use super::traversal::{
     AdaptiveMetric, ClusterRelevance, TraversalSizes, LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL,
     SLOT_BYTES_PER_CLUSTER,
 };
 use crate::frame::error::Error;
 use crate::frame::receivers::atlas::settings::{
-    AtlasSettings, CausticMapSettings, FresnelSplit, PlaneSettings,
+    AtlasConfig, AtlasSettings, FresnelSplit, PlaneSettings,
 };
 use crate::frame::receivers::screen::ScreenSettings;
 use crate::frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
@@ -56,13 +56,14 @@ pub struct AdaptiveCausticsSettings {
 
 impl Default for AdaptiveCausticsSettings {
     fn default() -> Self {
-        let map = CausticMapSettings::default();
         AdaptiveCausticsSettings {
-            frame: map.frame,
-            trace: map.trace,
-            planes: map.planes,
+            // CausticMap's seed: the same photons where the traversal reaches the finest
+            // level
+            frame: FrameSettings::with_seed(0x434d_4150),
+            trace: TraceSettings::default(),
+            planes: PlaneSettings::default(),
             deposit: AdaptiveDeposit::Atlas,
-            atlas: map.atlas,
+            atlas: AtlasSettings::default(),
             screen: ScreenSettings::default(),
             traversal: TraversalSettings::default(),
         }
@@ -80,25 +81,12 @@ impl TechniqueSettings for AdaptiveCausticsSettings {
 }
 
 impl AdaptiveCausticsSettings {
-    /// CausticMap's settings over the same blocks: what the atlas receiver is made with.
-    pub fn caustic_map(&self) -> CausticMapSettings {
-        CausticMapSettings {
+    /// What the atlas receiver is made with.
+    pub fn atlas_config(&self) -> AtlasConfig {
+        AtlasConfig {
             frame: self.frame.clone(),
-            trace: self.trace,
             planes: self.planes,
             atlas: self.atlas,
-        }
-    }
-
-    /// The default traversal over CausticMap's blocks (`map`'s frame, trace, planes and
-    /// atlas), depositing into the atlas.
-    pub fn from_map(map: CausticMapSettings) -> AdaptiveCausticsSettings {
-        AdaptiveCausticsSettings {
-            frame: map.frame,
-            trace: map.trace,
-            planes: map.planes,
-            atlas: map.atlas,
-            ..AdaptiveCausticsSettings::default()
         }
     }
 
@@ -127,13 +115,13 @@ impl AdaptiveCausticsSettings {
         self.planes.validate()?;
         let screen = self.deposit == AdaptiveDeposit::Screen;
         if screen {
-            self.frame.outputs.check(
+            self.frame.check_outputs(
                 "adaptive-caustics (deposit screen)",
                 &crate::frame::receivers::screen::ScreenReceiver::OUTPUTS,
             )?;
             self.screen.validate()?;
         } else {
-            self.frame.outputs.check(
+            self.frame.check_outputs(
                 "adaptive-caustics",
                 &crate::frame::receivers::atlas::OUTPUTS,
             )?;
@@ -225,7 +213,7 @@ mod tests {
         }))
         .unwrap();
         assert_eq!(s.frame.photons_w, 512);
-        assert_eq!(s.frame.seed, CausticMapSettings::default().frame.seed);
+        assert_eq!(s.frame.seed, AdaptiveCausticsSettings::default().frame.seed);
         assert_eq!(s.atlas.atlas_size, 256);
         assert_eq!(s.traversal.metric, AdaptiveMetric::Level);
         assert_eq!(s.finest_level(), 3);

@@ -31,12 +31,15 @@
 //! Not built yet: a footprint carried through curved glass (the lookup unfolds the
 //! pixel's square along the path, blind to focusing).
 
+mod settings;
+
 pub use crate::frame::emission::view_planes::ViewPlanes;
 pub use crate::frame::receivers::atlas::settings::{
-    CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
+    AtlasSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather, PlaneSettings,
     ATLAS_BYTES_PER_TEXEL, DENSITY_GATHER_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
 };
 pub use crate::frame::receivers::atlas::{atlas_gather_params, OUTPUTS};
+pub use settings::CausticMapSettings;
 
 use crate::backend::Backend;
 use crate::device::handle::ImageBuf;
@@ -95,7 +98,8 @@ fn view_planes(host: &FrameHost, settings: &CausticMapSettings) -> Result<ViewPl
         g.caster_bounds,
         g.caster_spheres,
         g.has_dispersion,
-        settings,
+        &settings.frame,
+        &settings.planes,
     );
     planes.check_light_flux()?;
     Ok(planes)
@@ -306,8 +310,9 @@ impl Pipeline for CausticMapPipeline {
         settings: CausticMapSettings,
     ) -> Result<CausticMapPipeline, Error> {
         let planes = view_planes(host, &settings)?;
-        let atlas = with_atlas(host, &settings, !planes.planes.is_empty());
-        host.make_screen(backend, AtlasReceiver::screen_needs(&settings, atlas))?;
+        let config = settings.atlas_config();
+        let atlas = with_atlas(host, &config, !planes.planes.is_empty());
+        host.make_screen(backend, AtlasReceiver::screen_needs(&config, atlas))?;
         let features = SceneFeatures::of(host.model());
         let mut variant = features.trace_variant();
         variant.surface_store = true;
@@ -320,7 +325,7 @@ impl Pipeline for CausticMapPipeline {
         let receiver = AtlasReceiver::create(
             backend,
             host,
-            settings.clone(),
+            config,
             AtlasQuanta::of(&planes),
             atlas,
             &mut |_| {},

@@ -136,7 +136,7 @@ impl PhotonGiSettings {
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: &str| Err(Error::InvalidParameter(format!("photon-gi: {what}")));
         self.frame.validate()?;
-        self.frame.outputs.check("photon-gi", &super::OUTPUTS)?;
+        self.frame.check_outputs("photon-gi", &super::OUTPUTS)?;
         let total = self.frame.photons();
         if total == 0 || total > (1 << 28) {
             return bad("photons_w x photons_h must be in 1..=2^28");

@@ -57,7 +57,7 @@ impl SspmSettings {
     /// Rejects parameters that cannot give a meaningful frame.
     pub fn validate(&self) -> Result<(), Error> {
         self.frame.validate()?;
-        self.frame.outputs.check(
+        self.frame.check_outputs(
             "sspm",
             &crate::frame::receivers::screen::ScreenReceiver::OUTPUTS,
         )?;

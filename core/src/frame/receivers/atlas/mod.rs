@@ -24,7 +24,6 @@ use crate::device::layout::{
     MapLookupParams, Photon,
 };
 use crate::frame::allocation::{planned_allocation, Allocation};
-use crate::frame::emission::adaptive::AtlasTarget;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::image::Image;
@@ -38,7 +37,7 @@ use crate::kernels::{
 };
 use crate::recording::Recording;
 use layout::{AtlasLayout, AtlasReceivers};
-use settings::{CausticMapSettings, MapGather};
+use settings::{AtlasConfig, MapGather};
 
 /// The photon passes of each gather, in order (a frame that reuses the atlas skips them).
 pub const BOX_GATHER_PASSES: [&str; 1] = ["gather_caustic_map"];
@@ -81,7 +80,7 @@ impl AtlasQuanta {
 /// ([`ATLAS_SIGMA_DEPTH`](crate::math::density_gather::ATLAS_SIGMA_DEPTH), no normal term),
 /// the quanta are the atlas sums'.
 pub fn atlas_gather_params(
-    settings: &CausticMapSettings,
+    settings: &AtlasConfig,
     flux_quantum: f32,
     hit_distance_quantum: f32,
     axis: u32,
@@ -178,7 +177,7 @@ struct CameraImages {
 /// The caustic-map receiver of one technique.
 #[derive(Debug)]
 pub struct AtlasReceiver {
-    settings: CausticMapSettings,
+    settings: AtlasConfig,
     quanta: AtlasQuanta,
     /// Per receiver (in the host's receivers order): whether it owns a tile now.
     tiled: Vec<bool>,
@@ -193,7 +192,7 @@ pub struct AtlasReceiver {
 
 /// Whether a frame of `host`'s scene with `settings` has an atlas: casters, receivers, a
 /// light that emits (`emits`) and a caustic output, or pruning off.
-pub fn with_atlas(host: &FrameHost, settings: &CausticMapSettings, emits: bool) -> bool {
+pub fn with_atlas(host: &FrameHost, settings: &AtlasConfig, emits: bool) -> bool {
     let features = SceneFeatures::of(host.model());
     let casters = features.mirrors || features.dielectrics;
     let o = &settings.frame.outputs;
@@ -248,7 +247,7 @@ impl AtlasReceiver {
     /// The camera images the host makes for `settings` (with an atlas: `caustics`): the
     /// G-buffer where direct light or a filter reads it, the direct image where direct or
     /// composite is asked for, the composite with caustics.
-    pub fn screen_needs(settings: &CausticMapSettings, caustics: bool) -> ScreenNeeds {
+    pub fn screen_needs(settings: &AtlasConfig, caustics: bool) -> ScreenNeeds {
         let o = settings.frame.outputs;
         let keep = |x: bool| x || !settings.frame.prune;
         let direct = keep(o.any_of(&[Output::Direct, Output::Composite]));
@@ -273,7 +272,7 @@ impl AtlasReceiver {
     pub fn create(
         backend: &mut dyn Backend,
         host: &FrameHost,
-        settings: CausticMapSettings,
+        settings: AtlasConfig,
         quanta: AtlasQuanta,
         atlas: bool,
         extra: &mut dyn FnMut(&mut Recording),
@@ -407,7 +406,7 @@ impl AtlasReceiver {
     }
 
     /// The settings it was made with.
-    pub fn settings(&self) -> &CausticMapSettings {
+    pub fn settings(&self) -> &AtlasConfig {
         &self.settings
     }
 
@@ -553,19 +552,6 @@ impl AtlasReceiver {
             tiles: a.tiles,
             triangle_reach: a.triangle_reach,
             sums: a.sums,
-        })
-    }
-
-    /// The adaptive traversal's target.
-    pub fn traversal_target(&self) -> Option<AtlasTarget> {
-        self.atlas.map(|a| AtlasTarget {
-            triangle_tiles: a.triangle_tiles,
-            tiles: a.tiles,
-            sums: a.sums,
-            atlas_width: self.settings.atlas.atlas_size,
-            flux_quantum: self.quanta.flux_quantum,
-            hit_distance_quantum: self.quanta.hit_distance_quantum,
-            trace_counters: a.counters,
         })
     }
 

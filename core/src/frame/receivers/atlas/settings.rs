@@ -2,7 +2,7 @@
 
 use crate::frame::error::Error;
 use crate::frame::receivers::atlas::layout::DEFAULT_ATLAS_SIDE;
-use crate::frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
+use crate::frame::settings::FrameSettings;
 use crate::math::map_gather::DEFAULT_GATHER_WIDTH;
 use serde::{Deserialize, Serialize};
 
@@ -106,48 +106,18 @@ pub enum MapGather {
     Density,
 }
 
-/// CausticMap's settings (Vanderstichelen 2021; defaults from its section 4 where it
-/// gives them): the shared `frame` and `trace` blocks (a light's view plane has
-/// `frame.photons_w x frame.photons_h` texels, one photon each; a light among the casters
-/// gets six cube faces of `photons_w / sqrt 6` texels a side; `trace.min_relative_power`
-/// is relative to the flux of the plane's centre texel), the view planes' `planes` and the
-/// caustic atlas's `atlas`. `frame.temporal` blends the filtered caustics as the camera
-/// sees them (useful when the seed changes every frame; the history survives camera
-/// moves, it is reprojected); `frame.accumulate` traces new photons into the atlas sums
-/// of the frames before, and a camera move keeps them (they are in texture space).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct CausticMapSettings {
-    /// What every technique shares: photon grid, seed, accumulation, filter chain,
-    /// outputs, pruning, the camera's specular chains.
+/// What the caustic atlas receiver is made with: the technique's shared block (outputs,
+/// pruning, filter chain, accumulation, the camera's specular chains), its light view
+/// planes' optics (the final pass's Fresnel) and the atlas block. CausticMap's and
+/// AdaptiveCaustics' settings hold all three.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AtlasConfig {
+    /// The technique's shared block.
     pub frame: FrameSettings,
-    /// How photons are followed.
-    pub trace: TraceSettings,
     /// The light view planes and the photons' optics.
     pub planes: PlaneSettings,
-    /// The caustic atlas: its size, filter and memory.
+    /// The caustic atlas.
     pub atlas: AtlasSettings,
-}
-
-impl Default for CausticMapSettings {
-    fn default() -> Self {
-        CausticMapSettings {
-            frame: FrameSettings::with_seed(0x434d_4150),
-            trace: TraceSettings::default(),
-            planes: PlaneSettings::default(),
-            atlas: AtlasSettings::default(),
-        }
-    }
-}
-
-impl TechniqueSettings for CausticMapSettings {
-    fn frame(&self) -> &FrameSettings {
-        &self.frame
-    }
-
-    fn frame_mut(&mut self) -> &mut FrameSettings {
-        &mut self.frame
-    }
 }
 
 /// The light view planes photons start from, and the optics they follow (`planes` in
@@ -270,16 +240,5 @@ impl PlaneSettings {
             )));
         }
         Ok(())
-    }
-}
-
-impl CausticMapSettings {
-    /// Checks every field's range.
-    pub fn validate(&self) -> Result<(), Error> {
-        self.frame.validate()?;
-        self.frame.outputs.check("caustic-map", &super::OUTPUTS)?;
-        self.trace.validate()?;
-        self.planes.validate()?;
-        self.atlas.validate()
     }
 }

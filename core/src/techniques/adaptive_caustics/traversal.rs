@@ -26,6 +26,7 @@
 //! level, and the atlas sums are exact fixed-point, so any limit whose lists are whole
 //! gives bitwise the same atlas.
 
+use super::stats::AdaptiveStats;
 use crate::backend::PassTime;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::launch::DISPATCH_RECORD_WORDS;
@@ -37,8 +38,8 @@ use crate::frame::emission::light_view_plane::{LightViewPlane, ViewPlaneProjecti
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::pipeline::FrameBuilder;
-use crate::frame::stats::{AdaptiveStats, FrameStats};
-use crate::frame::submitted::EndRead;
+use crate::frame::stats::FrameStats;
+use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::kernels::{
     ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, RefineClusters, TracePhotons,
     TraceVariant,
@@ -400,7 +401,7 @@ struct LevelRead {
 }
 
 /// What a frame's traversal reads back at the frame's end and how it becomes
-/// [`AdaptiveStats`] (an [`crate::frame::submitted::EndRead`]).
+/// [`AdaptiveStats`] (a [`FrameEnd`]).
 #[derive(Clone, Debug)]
 pub struct TraversalReadback {
     planes: Vec<Vec<LevelRead>>,
@@ -412,13 +413,13 @@ pub struct TraversalReadback {
     kernels: Vec<(usize, u32, &'static str)>,
 }
 
-impl TraversalReadback {
+impl FrameEnd for TraversalReadback {
     /// Puts the traversal's counts and the output photons' accounting into `stats`:
     /// stored, deposited and their flux are the output photons (the traced ones that
     /// were refined instead are not part of the map), emitted the photons traced. Call
     /// after the trace counters went in (`photons_traced_stored` takes their stored
     /// photons). A level's time is its kernels' when `times` holds them in order.
-    pub fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats) {
+    fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats) {
         let words = |k: usize| -> Vec<u32> {
             readbacks
                 .get(k)
@@ -483,7 +484,7 @@ impl TraversalReadback {
             }
         }
         stats.photons_emitted = a.photons_processed;
-        stats.adaptive = Some(a);
+        a.put(stats);
     }
 }
 
@@ -709,7 +710,7 @@ impl Traversal {
             frame.push(Recording::new(), plane.texels());
         }
         read.output_counters = frame.read_at_end(self.output_counters);
-        frame.end_read(EndRead::Traversal(Box::new(read)));
+        frame.end_read(EndRead::Own(std::sync::Arc::new(read)));
         Ok(())
     }
 }
