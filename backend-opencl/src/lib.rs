@@ -87,7 +87,7 @@ caustica_core::driver_backend!(OpenClBackend, "opencl");
 
 impl OpenClBackend {
     /// The compiled kernel variants, labelled ([`caustica_core::kernels::variant_label`]).
-    pub(crate) fn compiled_variants(&self) -> Vec<String> {
+    pub(crate) fn variant_labels(&self) -> Vec<String> {
         let v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
         v.iter().cloned().collect()
     }

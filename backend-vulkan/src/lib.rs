@@ -144,7 +144,7 @@ caustica_core::driver_backend!(VulkanBackend, "vulkan");
 
 impl VulkanBackend {
     /// The compiled kernel variants, labelled ([`caustica_core::kernels::variant_label`]).
-    pub(crate) fn compiled_variants(&self) -> Vec<String> {
+    pub(crate) fn variant_labels(&self) -> Vec<String> {
         caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
 }

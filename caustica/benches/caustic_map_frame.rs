@@ -143,7 +143,6 @@ fn main() {
                     fresnel_split: split,
                     ..CausticMapSettings::default().planes
                 },
-                ..CausticMapSettings::default()
             };
             let mut t = match CausticMap::new(backend.as_mut(), &scene, settings) {
                 Ok(t) => t,

@@ -508,7 +508,7 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
                 screen: ScreenSettings {
                     // both store tests, the tangent-plane one (the default) on odd seeds;
                     // the sign comes from the seed so that the generated cases stay those
-                    // of the seed's test alone
+                    // of Kim 2019's test alone
                     depth_tolerance: if seed & 1 == 1 {
                         -depth_tolerance
                     } else {

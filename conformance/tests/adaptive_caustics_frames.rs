@@ -274,7 +274,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
 /// up to 60 degrees sees at most 1.5 times the mean solid angle near the axis... and less
 /// off it; 2 is a margin).
 fn flux_tolerance(s: &FrameStats, dense: &FrameStats, dispersive: bool) -> f64 {
-    let a = &AdaptiveStats::of(&s).expect("adaptive stats");
+    let a = &AdaptiveStats::of(s).expect("adaptive stats");
     let finest = a.photons_per_level.len() - 1;
     let emitted: f64 = dense.emitted_flux.iter().sum();
     let gain = if dispersive { 3.0 } else { 1.0 };

@@ -261,7 +261,7 @@ fn pruning_on_and_off_give_the_same_frame() {
 }
 
 /// The filter setting picks the passes: the density gather's three kernels by default,
-/// the seed's tile and bilateral passes with `filter: bilateral`; the others are skipped
+/// Kim 2019's tile and bilateral passes with `filter: bilateral`; the others are skipped
 /// with the filter as the reason, and no buffer of theirs exists.
 #[test]
 fn the_filter_setting_picks_its_passes_and_buffers() {

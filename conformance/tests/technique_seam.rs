@@ -355,7 +355,7 @@ fn new_settings_through_the_seam_equal_a_fresh_technique_for_every_technique() {
         let scene = small("cornell");
         for (name, before) in variants() {
             // more photons, another seed; AdaptiveCaustics fewer bounces, and its screen
-            // target may change only its screen settings (the seed's bilateral filter)
+            // target may change only its screen settings (Kim 2019's bilateral filter)
             let screen = before.get("deposit").is_some();
             let after = if screen {
                 with(

@@ -131,11 +131,12 @@ fn module_of(src: &Path, file: &Path) -> String {
     parts.join("::")
 }
 
-/// frame/ knows no technique and has no import cycle: every `crate::frame::...` path in a
+/// frame/ knows no technique and has no import cycle: every path to a frame module in a
 /// frame file's code (comments aside) is an edge from its module to the longest module
-/// the path names, and the graph of frame's modules has no cycle (so each module can be
-/// read from the ones it imports). The layer test above already keeps `crate::techniques`
-/// out of frame/.
+/// the path names (`crate::frame::...`, `super::...` from the file's parent, and in a
+/// `mod.rs` a child's name, `plan::...`), and the graph of frame's modules has no cycle
+/// (so each module can be read from the ones it imports). The layer test above already
+/// keeps `crate::techniques` out of frame/.
 #[test]
 fn frame_modules_import_each_other_without_cycles() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -145,13 +146,53 @@ fn frame_modules_import_each_other_without_cycles() {
     let mut edges: Vec<Vec<usize>> = vec![Vec::new(); modules.len()];
     for (i, f) in files.iter().enumerate() {
         let text = std::fs::read_to_string(f).expect("readable file");
-        for line in text.lines() {
+        let own = &modules[i];
+        let parent = own.rsplit_once("::").map_or("", |(p, _)| p).to_string();
+        let is_mod_rs = f.file_name().is_some_and(|n| n == "mod.rs");
+        // the children a mod.rs declares (`pub mod plan;`)
+        let children: Vec<String> = text
+            .lines()
+            .filter_map(|l| {
+                let l = l.trim().trim_start_matches("pub ");
+                l.strip_prefix("mod ")?
+                    .strip_suffix(';')
+                    .map(str::to_string)
+            })
+            .filter(|_| is_mod_rs)
+            .collect();
+        // a file's own tests (`#[cfg(test)] mod tests`, at its end) import nothing of it
+        for line in text.lines().take_while(|l| l.trim() != "#[cfg(test)]") {
             let code = line.split("//").next().unwrap_or("");
-            for (at, _) in code.match_indices("crate::frame::") {
-                let path: String = code[at + 7..]
+            let word = |at: usize, len: usize| -> String {
+                code[at + len..]
                     .chars()
                     .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':')
-                    .collect();
+                    .collect()
+            };
+            let starts_a_path = |at: usize| {
+                at == 0 || {
+                    let before = code.as_bytes()[at - 1];
+                    !(before.is_ascii_alphanumeric() || before == b'_' || before == b':')
+                }
+            };
+            let mut paths: Vec<String> = code
+                .match_indices("crate::frame::")
+                .map(|(at, _)| format!("frame::{}", word(at, 14)))
+                .collect();
+            paths.extend(
+                code.match_indices("super::")
+                    .filter(|(at, _)| starts_a_path(*at))
+                    .map(|(at, _)| format!("{parent}::{}", word(at, 7))),
+            );
+            for child in &children {
+                let needle = format!("{child}::");
+                paths.extend(
+                    code.match_indices(needle.as_str())
+                        .filter(|(at, _)| starts_a_path(*at))
+                        .map(|(at, _)| format!("{own}::{}", word(at, 0))),
+                );
+            }
+            for path in paths {
                 // the longest module the path names
                 let target = modules
                     .iter()

@@ -6,6 +6,7 @@
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
+use caustica::technique_spec::{get_setting, put_setting};
 use caustica::techniques::{create, technique_names, TECHNIQUES};
 use caustica::{open_backend, FrameStats, Scene};
 use clap::{Parser, Subcommand};
@@ -135,17 +136,19 @@ enum Command {
         /// Exposure multiplier for the PNG (EXR files are linear and unscaled).
         #[arg(long, default_value_t = 1.0)]
         exposure: f32,
-        /// Settings file (JSON object of the technique's settings fields, e.g. SspmSettings)
-        /// applied before the flags above.
+        /// Settings file (a JSON object of the technique's settings, e.g. `{"frame":
+        /// {"seed": 7}, "screen": {"filter": "bilateral"}}`; the flat objects of earlier
+        /// versions still load) applied before the flags above.
         #[arg(long)]
         settings: Option<PathBuf>,
-        /// The technique's caustic filter: Sspm's `filter`, density (default: adapts to the
-        /// photons, keeps the flux) or bilateral (the seed's); CausticMap's `gather`,
-        /// density (default) or box (Vanderstichelen 2021's 3x3).
+        /// The technique's caustic filter: Sspm's `screen.filter`, density (default: adapts
+        /// to the photons, keeps the flux) or bilateral (Kim 2019's); CausticMap's and
+        /// AdaptiveCaustics' `atlas.gather`, density (default) or box (Vanderstichelen
+        /// 2021's 3x3).
         #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
         /// Frames to render; the last is written. Above 1, a technique with progressive
-        /// accumulation (`accumulate`, every technique) sums the frames' photons as one
+        /// accumulation (`frame.accumulate`, every technique) sums the frames' photons as one
         /// frame of all of them; with `accumulate: false` in the settings each frame gets a
         /// new seed.
         #[arg(long, default_value_t = 1)]
@@ -621,16 +624,13 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             }
             // the flag overrides the settings file; neither: 1024x1024
             let (pw, ph) = photons.unwrap_or((1024, 1024));
-            let in_frame = |s: &serde_json::Map<String, serde_json::Value>, key: &str| {
-                s.contains_key(key) || s.get("frame").is_some_and(|f| f.get(key).is_some())
-            };
-            for (key, v) in [("photons_w", pw), ("photons_h", ph)] {
-                if photons.is_some() || !in_frame(&s, key) {
-                    put_setting(&mut s, key, v.into());
+            for (path, v) in [("frame.photons_w", pw), ("frame.photons_h", ph)] {
+                if photons.is_some() || get_setting(&s, path).is_none() {
+                    put_setting(&mut s, path, v.into());
                 }
             }
             if let Some(seed) = seed {
-                put_setting(&mut s, "seed", seed.into());
+                put_setting(&mut s, "frame.seed", seed.into());
             }
             if frames == 0 {
                 return Err("--frames must be at least 1".into());
@@ -639,27 +639,15 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 .iter()
                 .find(|t| t.name == technique)
                 .map(|t| (t.default_settings)());
-            // a shared field as given: flat (the earlier form) or in the `frame` block
-            let shared = |s: &serde_json::Map<String, serde_json::Value>, key: &str| {
-                s.get(key)
-                    .or_else(|| s.get("frame").and_then(|f| f.get(key)))
-                    .cloned()
-            };
             // several frames accumulate unless the settings say otherwise
-            if frames > 1 && shared(&s, "accumulate").is_none() {
-                s.insert("accumulate".into(), true.into());
+            if frames > 1 && get_setting(&s, "frame.accumulate").is_none() {
+                put_setting(&mut s, "frame.accumulate", true.into());
             }
-            let accumulates = shared(&s, "accumulate")
+            let accumulates = get_setting(&s, "frame.accumulate")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(false);
-            let base_seed = shared(&s, "seed")
-                .or_else(|| {
-                    defaults
-                        .as_ref()
-                        .and_then(|d| d.get("frame"))
-                        .and_then(|f| f.get("seed"))
-                        .cloned()
-                })
+            let base_seed = get_setting(&s, "frame.seed")
+                .or_else(|| defaults.as_ref().and_then(|d| d["frame"].get("seed")))
                 .and_then(|v| v.as_u64())
                 .unwrap_or(0) as u32;
             caustica::output::prepare_output_dir(&out)?;
@@ -733,18 +721,4 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             )
         }
     }
-}
-
-/// Sets settings field `key` (a flag's value over the settings file): the file may give
-/// it flat (`"seed"`, the earlier form) or in its block (`"frame": {"seed": ..}`); the
-/// flag's value replaces either.
-fn put_setting(
-    s: &mut serde_json::Map<String, serde_json::Value>,
-    key: &str,
-    value: serde_json::Value,
-) {
-    for block in s.values_mut().filter_map(|b| b.as_object_mut()) {
-        block.remove(key);
-    }
-    s.insert(key.into(), value);
 }

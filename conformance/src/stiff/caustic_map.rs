@@ -153,7 +153,7 @@ pub(super) fn checked_with(
         let r = render_with(&mut cpu, scene, make).map_err(|e| format!("cpu: {e}"))?;
         let rs = &r.stats;
         let k = divergence_allowance(rs.photons_emitted);
-        let traced = if AdaptiveStats::of(&st).is_some() {
+        let traced = if AdaptiveStats::of(st).is_some() {
             k
         } else {
             0

@@ -148,10 +148,10 @@ impl<B: DriverBackend> Backend for B {
 }
 
 /// Implements [`DriverBackend`] for a GPU backend, written once for every backend: the
-/// type must have the inherent methods the trait's bodies call, each in the backend file
-/// of its concern (`device.rs`: `describe`; `recording.rs`: `execute_recording`;
-/// `memory.rs`: `read_resource`; `submission.rs`: `submit_recording`, `poll_submission`;
-/// `pipelines.rs`: `compiled_variants`). `driver_backend!(WgpuBackend, "wgpu");`
+/// type must have the inherent methods the trait's bodies call (`describe`,
+/// `execute_recording`, `read_resource`, `submit_recording`, `poll_submission`,
+/// `variant_labels`), each in the backend's file of its concern.
+/// `driver_backend!(WgpuBackend, "wgpu");`
 #[macro_export]
 macro_rules! driver_backend {
     ($backend:ty, $name:literal) => {
@@ -195,7 +195,7 @@ macro_rules! driver_backend {
             }
 
             fn compiled_variants(&self) -> Vec<String> {
-                self.compiled_variants()
+                self.variant_labels()
             }
         }
     };

@@ -217,7 +217,7 @@ pub mod gbuffer_flags {
 }
 
 /// A stored photon (32 bytes): where it stopped on a diffuse surface, its flux (W per
-/// channel), the length of its last traced segment (scene units, the "hit distance" of seed
+/// channel), the length of its last traced segment (scene units, the "hit distance" of
 /// Kim 2019, section 30.3.2) and its incoming direction packed octahedrally
 /// (`packing::pack_unit_vector`).
 #[repr(C)]

@@ -28,7 +28,7 @@ pub enum Error {
         /// The technique's outputs.
         has: Vec<Output>,
     },
-    #[error("output '{output}' was not requested (the settings' `outputs`)")]
+    #[error("output '{output}' was not requested (the settings' `frame.outputs`)")]
     /// The output exists but the settings did not ask for it, so the frame did not make it.
     OutputNotRequested {
         /// The output asked for.

@@ -2,8 +2,8 @@
 //! scene, camera and camera images and applies every update ([`host`], [`screen`]), the
 //! seam a technique implements over it ([`pipeline`]) and the public
 //! [`technique::Technique`] seam it gets from there, with the one output vocabulary of
-//! every technique ([`output`]) and the settings every technique shares ([`settings`]); photon emission ([`emission`]:
-//! projection volumes, light view planes, the adaptive traversal) and the receivers
+//! every technique ([`output`]) and the settings every technique shares ([`settings`]);
+//! photon emission ([`emission`]: projection volumes, light view planes) and the receivers
 //! photons land in ([`receivers`]: the screen photon map, the caustic atlas); the frame
 //! plan of passes and buffers with reasons ([`plan`]), frame statistics ([`stats`]),
 //! planned allocation with the device-limit check ([`allocation`]), temporal (ping-pong)

@@ -93,11 +93,6 @@ impl Output {
         !matches!(self, Output::CausticAtlas)
     }
 
-    /// Whether the output is caustic light alone (raw or filtered, camera-space).
-    pub const fn is_caustics(self) -> bool {
-        matches!(self, Output::RawCaustics | Output::FilteredCaustics)
-    }
-
     const fn bit(self) -> u8 {
         1 << self as u8
     }
@@ -150,9 +145,9 @@ pub fn stems(outputs: &[Output]) -> String {
 /// of its own. Composite needs direct light and the filtered estimate internally even
 /// when they are not asked for themselves.
 ///
-/// JSON: a list of stems (`["composite", "caustics_filtered"]`). The object of flags of
-/// earlier versions (`{"composite": true, "direct": false, ...}`, a missing flag counting
-/// as requested; CausticMap's `atlas` flag is the caustic atlas) still loads.
+/// JSON: `"all"` or a list of stems (`["composite", "caustics_filtered"]`). The object of
+/// flags of earlier versions (`{"composite": true, "direct": false, ...}`, a missing flag
+/// counting as requested; CausticMap's `atlas` flag is the caustic atlas) still loads.
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Outputs(u8);
 
@@ -224,8 +219,14 @@ impl std::fmt::Debug for Outputs {
 }
 
 impl Serialize for Outputs {
+    /// `"all"` for [`Outputs::ALL`] (every output of whichever technique), else the list
+    /// of stems.
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        self.list().serialize(s)
+        if *self == Outputs::ALL {
+            "all".serialize(s)
+        } else {
+            self.list().serialize(s)
+        }
     }
 }
 
@@ -233,6 +234,7 @@ impl<'de> Deserialize<'de> for Outputs {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error as _;
         match serde_json::Value::deserialize(d)? {
+            serde_json::Value::String(all) if all == "all" => Ok(Outputs::ALL),
             serde_json::Value::Array(items) => {
                 let mut set = Outputs::NONE;
                 for item in items {
@@ -340,6 +342,12 @@ mod tests {
         let j = serde_json::to_value(s).unwrap();
         assert_eq!(j, serde_json::json!(["composite", "caustics_filtered"]));
         assert_eq!(serde_json::from_value::<Outputs>(j).unwrap(), s);
+        let all = serde_json::to_value(Outputs::ALL).unwrap();
+        assert_eq!(all, "all");
+        assert_eq!(
+            serde_json::from_value::<Outputs>(all).unwrap(),
+            Outputs::ALL
+        );
         let old: Outputs =
             serde_json::from_value(serde_json::json!({"direct": false, "atlas": false})).unwrap();
         assert_eq!(

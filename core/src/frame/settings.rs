@@ -101,7 +101,7 @@ impl FrameSettings {
     }
 
     /// The shared defaults with frame seed `seed`.
-    pub fn with_seed(seed: u32) -> FrameSettings {
+    pub fn seeded(seed: u32) -> FrameSettings {
         FrameSettings {
             seed,
             ..FrameSettings::default()
@@ -153,7 +153,8 @@ pub struct TraceSettings {
     pub min_relative_power: f32,
     /// Memory limit: photons traced per batch (default
     /// [`crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH`], at most what the device's
-    /// largest buffer holds).
+    /// largest buffer holds). AdaptiveCaustics sizes its batches by
+    /// `traversal.max_traversal_bytes` instead and does not read it.
     pub max_photons_per_batch: u32,
 }
 
@@ -373,7 +374,7 @@ mod tests {
             Example {
                 frame: FrameSettings {
                     temporal: true,
-                    ..FrameSettings::with_seed(7)
+                    ..FrameSettings::seeded(7)
                 },
                 trace: TraceSettings::default(),
                 own: 3,
@@ -426,5 +427,25 @@ mod tests {
         );
         assert!(e.unwrap_err().to_string().contains("`photon_w`"));
         assert!(from_json("example", &Example::default(), &serde_json::json!([1])).is_err());
+    }
+
+    #[test]
+    fn a_flat_field_of_two_blocks_names_both() {
+        #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+        #[serde(default, deny_unknown_fields)]
+        struct Two {
+            a: TraceSettings,
+            b: TraceSettings,
+        }
+        let e = from_json(
+            "two",
+            &Two::default(),
+            &serde_json::json!({ "max_bounces": 3 }),
+        );
+        let msg = e.unwrap_err().to_string();
+        assert!(
+            msg.contains("`a.max_bounces`") && msg.contains("`b.max_bounces`"),
+            "{msg}"
+        );
     }
 }

@@ -325,7 +325,10 @@ pub fn report_leak(technique: &str, buffers: usize, bytes: u64) {
         return;
     }
     LEAKED_BUFFERS.fetch_add(buffers as u64, Ordering::Relaxed);
-    eprintln!(
+    // counted above; the message is best effort (a closed stderr must not panic)
+    use std::io::Write;
+    let _ = writeln!(
+        std::io::stderr(),
         "caustica: {technique} dropped without free(): {buffers} device buffers ({bytes} bytes) \
          stay allocated until the backend is dropped"
     );

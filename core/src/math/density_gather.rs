@@ -30,14 +30,14 @@
 //!   gives destination `j` the share `F_i w_ij / W_i`, where `W_i = sum_j w_ij` runs over
 //!   the destinations that exist: receivers inside the image and on the same surface (the
 //!   edge weight). So `sum_j out_j = sum_i F_i` exactly in real arithmetic, also at the
-//!   image border and at depth edges, where a gather-normalised filter (the seed's
+//!   image border and at depth edges, where a gather-normalised filter (Kim 2019's
 //!   bilateral one) gains or loses flux.
 //! - **Separable.** Two 1-D passes (rows, then columns), each scatter-normalised on its
 //!   own, so each keeps the flux; the column pass uses the radius of the pixel the row
 //!   pass wrote into.
 //! - **Weights.** Spatial: the 1-D Epanechnikov kernel integrated over each pixel
 //!   ([`footprint_weight`]), compactly supported (zero for pixels outside `r + 1/2`, so
-//!   `r <= 1/2` is the identity). Edges: [`edge_weight`], the seed's depth and normal
+//!   `r <= 1/2` is the identity). Edges: [`edge_weight`], Kim 2019's depth and normal
 //!   terms (Kim 2019, section 30.3.2), made symmetric so that a source's normaliser and its
 //!   destinations' gathers use the very same number.
 //!
@@ -583,7 +583,7 @@ pub fn footprint_weight(offset: i32, radius: f32) -> f32 {
 
 /// Edge weight between two receiver pixels (view depths in scene units, unit normals):
 /// `exp(-|z_a - z_b| / (sigma_depth * min(z_a, z_b))) * max(0, n_a . n_b)^normal_power`
-/// (the seed's bilateral terms, Kim 2019, section 30.3.2, symmetric in `a` and `b`).
+/// (Kim 2019's bilateral terms, Kim 2019, section 30.3.2, symmetric in `a` and `b`).
 #[inline]
 pub fn edge_weight(
     depth_a: f32,

@@ -210,9 +210,9 @@ pub fn photon_met_caster(end: u32, rays: u32) -> bool {
 /// The fate of a cluster at `level` (0 = the start grid, `finest` = the last): discarded
 /// when no photon met a caster (Wyman 2009, condition 1); output at the finest level (the
 /// maximal traversal level, Wyman 2009, section 3.2.1, and the error metric's third
-/// condition, section 3.2.2); output when the error metric applies at this level (`level
-/// >= error_from_level`) and every photon landed in one caustic-map texel (`converged`,
-/// section 3.2.2, condition 2); else refined.
+/// condition, section 3.2.2); output when the error metric applies at this level
+/// (`level >= error_from_level`) and every photon landed in one caustic-map texel
+/// (`converged`, section 3.2.2, condition 2); else refined.
 #[inline]
 pub fn cluster_fate(
     any_met_caster: bool,

@@ -7,7 +7,7 @@
 //! tile photon density, Eqs. 3-6), then shaped: along the photon's geometric normal `n` it
 //! is compressed by `s_n`, along `u` (the arriving light direction projected onto the
 //! kernel plane) stretched by `s_u = min(1 / cos, s_max)` (Eq. 7), and along `t = n x u`
-//! left as is. The chapter's equations are partly garbled in the seed; the forms here
+//! left as is. The chapter's equations are partly illegible in its text; the forms here
 //! follow its HLSL listings, which are intact (the derivation is in `docs/photon-gi.md`).
 //!
 //! Units: lengths in scene units (world and view space share them), areas in scene

@@ -31,9 +31,9 @@ pub struct TechniqueEntry {
     pub create: CreateFn,
     /// The default settings (serialised).
     pub default_settings: fn() -> serde_json::Value,
-    /// The setting that picks the caustic filter, and its values (the first is the
-    /// default), so that `report` can compare filters; `None` where the technique has one
-    /// filter.
+    /// The setting that picks the caustic filter (its path: `screen.filter`), and its
+    /// values (the first is the default), so that `report` can compare filters; `None`
+    /// where the technique has one filter.
     pub filter_setting: Option<(&'static str, &'static [&'static str])>,
 }
 
@@ -46,7 +46,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
         default_settings: || {
             serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("filter", &["density", "bilateral"])),
+        filter_setting: Some(("screen.filter", &["density", "bilateral"])),
     },
     TechniqueEntry {
         name: "caustic-map",
@@ -56,7 +56,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(caustic_map::CausticMapSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("gather", &["density", "box"])),
+        filter_setting: Some(("atlas.gather", &["density", "box"])),
     },
     TechniqueEntry {
         name: "adaptive-caustics",
@@ -66,7 +66,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(adaptive_caustics::AdaptiveCausticsSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("gather", &["density", "box"])),
+        filter_setting: Some(("atlas.gather", &["density", "box"])),
     },
     TechniqueEntry {
         name: "photon-gi",

@@ -155,6 +155,11 @@ impl Pipeline for AdaptiveCausticsPipeline {
 
     const NAME: &'static str = "adaptive-caustics";
 
+    fn parse_settings(json: &serde_json::Value) -> Result<AdaptiveCausticsSettings, Error> {
+        let json = settings::earlier_form(json);
+        crate::frame::settings::from_json(Self::NAME, &AdaptiveCausticsSettings::default(), &json)
+    }
+
     fn validate(settings: &AdaptiveCausticsSettings) -> Result<(), Error> {
         settings.validate()
     }
@@ -244,9 +249,7 @@ impl Pipeline for AdaptiveCausticsPipeline {
     }
 
     fn requested_outputs(&self) -> Outputs {
-        match &self.target {
-            Target::Atlas { .. } | Target::Screen { .. } => self.settings.frame.outputs,
-        }
+        self.settings.frame.outputs
     }
 
     fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {

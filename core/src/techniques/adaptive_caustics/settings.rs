@@ -59,7 +59,7 @@ impl Default for AdaptiveCausticsSettings {
         AdaptiveCausticsSettings {
             // CausticMap's seed: the same photons where the traversal reaches the finest
             // level
-            frame: FrameSettings::with_seed(0x434d_4150),
+            frame: FrameSettings::seeded(0x434d_4150),
             trace: TraceSettings::default(),
             planes: PlaneSettings::default(),
             deposit: AdaptiveDeposit::Atlas,
@@ -193,17 +193,74 @@ impl AdaptiveCausticsSettings {
     }
 }
 
+/// The fields the screen block held in earlier versions and `frame` holds now.
+const SCREEN_FIELDS_NOW_SHARED: [&str; 7] = [
+    "outputs",
+    "prune",
+    "temporal",
+    "atrous_iterations",
+    "atrous_clip_sigmas",
+    "accumulate",
+    "max_specular_depth",
+];
+
+/// The settings JSON of earlier versions in today's places, where the generic reading of
+/// the flat form cannot tell: a top-level `knn_photons` was the atlas's (CausticMap's
+/// fields sat at the top, the screen's in `screen`), and the screen block's shared fields
+/// (outputs, filters, accumulation) now sit in `frame`: with `deposit: screen` they move
+/// there (unless `frame` or the top level gives them), otherwise they were not read and
+/// are dropped.
+pub(super) fn earlier_form(json: &serde_json::Value) -> serde_json::Value {
+    let Some(given) = json.as_object() else {
+        return json.clone();
+    };
+    let mut out = given.clone();
+    if let Some(k) = out.remove("knn_photons") {
+        let atlas = out
+            .entry("atlas")
+            .or_insert_with(|| serde_json::Value::Object(Default::default()));
+        if let Some(a) = atlas.as_object_mut() {
+            a.entry("knn_photons").or_insert(k);
+        }
+    }
+    let screen_deposit = out.get("deposit").and_then(|d| d.as_str()) == Some("screen");
+    let mut moved = serde_json::Map::new();
+    if let Some(screen) = out.get_mut("screen").and_then(|s| s.as_object_mut()) {
+        for field in SCREEN_FIELDS_NOW_SHARED {
+            if let Some(v) = screen.remove(field) {
+                moved.insert(field.to_string(), v);
+            }
+        }
+    }
+    if screen_deposit && !moved.is_empty() {
+        let given_elsewhere = |f: &str, out: &serde_json::Map<String, serde_json::Value>| {
+            out.contains_key(f) || out.get("frame").and_then(|b| b.get(f)).is_some()
+        };
+        let keep: Vec<(String, serde_json::Value)> = moved
+            .into_iter()
+            .filter(|(f, _)| !given_elsewhere(f, &out))
+            .collect();
+        let frame = out
+            .entry("frame")
+            .or_insert_with(|| serde_json::Value::Object(Default::default()));
+        if let Some(b) = frame.as_object_mut() {
+            b.extend(keep);
+        }
+    }
+    serde_json::Value::Object(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn json_lays_blocks_over_the_defaults_and_names_moved_fields() {
-        let parse = |v| {
+        let parse = |v: serde_json::Value| {
             crate::frame::settings::from_json(
                 "adaptive-caustics",
                 &AdaptiveCausticsSettings::default(),
-                &v,
+                &earlier_form(&v),
             )
         };
         let s: AdaptiveCausticsSettings = parse(serde_json::json!({
@@ -218,18 +275,25 @@ mod tests {
         assert_eq!(s.traversal.metric, AdaptiveMetric::Level);
         assert_eq!(s.finest_level(), 3);
         s.validate().unwrap();
-        // the flat form of earlier versions: a field of one block is read there, one of
-        // two blocks is refused with both names
-        let flat = parse(serde_json::json!({ "photons_w": 512, "metric": "level" })).unwrap();
+        // the form of earlier versions: CausticMap's fields at the top (`knn_photons` the
+        // atlas's), the screen's shared fields in `screen`
+        let flat = parse(serde_json::json!({
+            "photons_w": 512, "metric": "level", "knn_photons": 8
+        }))
+        .unwrap();
         assert_eq!(
             (flat.frame.photons_w, flat.traversal.metric),
             (512, AdaptiveMetric::Level)
         );
-        let e = parse(serde_json::json!({ "knn_photons": 8 }));
-        assert!(
-            matches!(&e, Err(Error::InvalidParameter(w))
-                if w.contains("atlas.knn_photons") && w.contains("screen.knn_photons")),
-            "an ambiguous flat field must name both places: {e:?}"
+        assert_eq!((flat.atlas.knn_photons, flat.screen.knn_photons), (8, 32));
+        let screen = parse(serde_json::json!({
+            "deposit": "screen", "screen": { "temporal": true, "filter": "bilateral" }
+        }))
+        .unwrap();
+        assert!(screen.frame.temporal);
+        assert_eq!(
+            screen.screen.filter,
+            crate::frame::receivers::screen::GatherFilter::Bilateral
         );
         let e = parse(serde_json::json!({ "photon_w": 512 }));
         assert!(matches!(&e, Err(Error::InvalidParameter(w)) if w.contains("photon_w")));

@@ -32,7 +32,7 @@ pub struct CausticMapSettings {
 impl Default for CausticMapSettings {
     fn default() -> Self {
         CausticMapSettings {
-            frame: FrameSettings::with_seed(0x434d_4150),
+            frame: FrameSettings::seeded(0x434d_4150),
             trace: TraceSettings::default(),
             planes: PlaneSettings::default(),
             atlas: AtlasSettings::default(),

@@ -99,7 +99,7 @@ impl Default for PhotonGiSettings {
                 temporal: true,
                 atrous_iterations: 4,
                 max_specular_depth: 4,
-                ..FrameSettings::with_seed(1)
+                ..FrameSettings::seeded(1)
             },
             bounces: 3,
             max_segments: 16,

@@ -34,7 +34,7 @@ pub struct SspmSettings {
 impl Default for SspmSettings {
     fn default() -> Self {
         SspmSettings {
-            frame: FrameSettings::with_seed(0x5350_4d31),
+            frame: FrameSettings::seeded(0x5350_4d31),
             trace: TraceSettings::default(),
             screen: ScreenSettings::default(),
             point_emission: PointEmission::CasterCone,

@@ -65,8 +65,8 @@ pub enum EmissionPlane {
     #[default]
     Casters,
     /// The light's whole cone: a spot light's outer cone, a point light's six cube faces
-    /// (a directional light keeps its projection volume). The dense baseline of seed
-    /// Wyman 2009's comparison, where adaptive emission can discard what misses the casters.
+    /// (a directional light keeps its projection volume). The dense baseline of Wyman
+    /// 2009's comparison, where adaptive emission can discard what misses the casters.
     LightCone,
 }
 

@@ -1,7 +1,7 @@
 //! Kim 2019's screen receiver: photons deposited into a screen-space photon map (one
 //! photon, one pixel, fixed-point integer sums; Kim 2019, section 30.3.1.3), resolved to
 //! radiance (`resolve_caustics`, Kim 2019, Eq. 5: the raw caustics), filtered ([`GatherFilter`]:
-//! the density-adaptive, flux-keeping gather or the seed's bilateral gather, Kim 2019, section
+//! the density-adaptive, flux-keeping gather or Kim 2019's bilateral gather, Kim 2019, section
 //! 30.3.2), optionally blended with the reprojected history and A-Trous filtered, and
 //! composited over the frame host's direct light (Kim 2019, section 30.3.3).
 //!
@@ -464,13 +464,8 @@ impl ScreenReceiver {
         }
     }
 
-    /// The outputs the screen receiver gives a technique.
-    pub const OUTPUTS: [Output; 4] = [
-        Output::Composite,
-        Output::Direct,
-        Output::RawCaustics,
-        Output::FilteredCaustics,
-    ];
+    /// The outputs the screen receiver gives a technique ([`outputs::OUTPUTS`]).
+    pub const OUTPUTS: [Output; 4] = outputs::OUTPUTS;
 
     /// The device image of `output` (camera-sized, linear radiance, row-major from the
     /// top-left pixel): `None` where the plan knows it is zero, or for an output the

@@ -3,6 +3,14 @@
 use crate::device::handle::ImageBuf;
 use crate::frame::output::Output;
 
+/// The outputs the screen receiver gives a technique.
+pub const OUTPUTS: [Output; 4] = [
+    Output::Composite,
+    Output::Direct,
+    Output::RawCaustics,
+    Output::FilteredCaustics,
+];
+
 /// Device images of a frame (handles; read them with `read_output`). An image
 /// is `None` when it was not requested, or when the plan knows it is zero (no light emits
 /// photons): `read_output` then returns zeros without a device buffer.

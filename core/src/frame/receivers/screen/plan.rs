@@ -109,7 +109,7 @@ pub fn plan_frame(
         } else if temporal {
             "temporal on: the filtered caustics blended with their reprojected history"
         } else {
-            "temporal off (SspmSettings::temporal)"
+            "temporal off (frame.temporal)"
         },
     );
     pass(
@@ -120,7 +120,7 @@ pub fn plan_frame(
         } else if atrous {
             "atrous_iterations > 0: the caustics filtered again by A-Trous iterations"
         } else {
-            "atrous_iterations is 0 (SspmSettings::atrous_iterations)"
+            "atrous_iterations is 0 (frame.atrous_iterations)"
         },
     );
     pass(
@@ -139,7 +139,7 @@ pub fn plan_frame(
     FramePlan {
         prune,
         features,
-        outputs: outputs.names(&super::ScreenReceiver::OUTPUTS),
+        outputs: outputs.names(&super::outputs::OUTPUTS),
         lights,
         trace_variant: n.photons.then(|| {
             if prune {

@@ -16,7 +16,7 @@ pub enum GatherFilter {
     /// (`crate::math::density_gather`).
     #[default]
     Density,
-    /// The seed's edge-aware bilateral gather: radius `roughness` x the tile's mean hit
+    /// Kim 2019's edge-aware bilateral gather: radius `roughness` x the tile's mean hit
     /// distance (Kim 2019, section 30.3.2), normalised per destination.
     Bilateral,
 }
@@ -28,10 +28,10 @@ pub struct ScreenSettings {
     /// The store test (condition 3): a photon is kept in the pixel it projects to when it
     /// lies on the surface that pixel's centre sees. `< 0` (default -0.01): within
     /// `|depth_tolerance| x depth` of the pixel's tangent plane (`layout::off_surface`);
-    /// `> 0`: the seed's test, its view depth within `depth_tolerance x depth` of the
-    /// pixel's. The default departs from the seed because the seed's test drops photons of
+    /// `> 0`: Kim 2019's test, its view depth within `depth_tolerance x depth` of the
+    /// pixel's. The default departs from Kim 2019 because Kim 2019's test drops photons of
     /// surfaces seen at a grazing angle in coarse images, whose view depth varies across
-    /// one pixel by more than 1%: on `rooms` at 160x90 the seed's 0.01 keeps 106953 of the
+    /// one pixel by more than 1%: on `rooms` at 160x90 Kim 2019's 0.01 keeps 106953 of the
     /// 214497 photons the tangent-plane test keeps (at 480x270: 194472 of 194543), and
     /// Sspm's caustics were 20% (`cornell`) and 51% (`rooms`) too dark at 160x90. The
     /// caustic reference uses the same test (`caustica::reference::CAUSTIC_REFERENCE`).
