@@ -481,10 +481,11 @@ mod tests {
 
     #[test]
     fn a_bevy_perspective_camera_becomes_a_pinhole() {
+        use cg::camera::rh::{proj::directx, view::look_at_mat4};
         let eye = cg::Vec3::new(0.0, 2.0, 5.0);
-        let world_from_view = cg::Mat4::look_at_rh(eye, cg::Vec3::ZERO, cg::Vec3::Y).inverse();
+        let world_from_view = look_at_mat4(eye, cg::Vec3::ZERO, cg::Vec3::Y).inverse();
         // Bevy's projection: infinite reverse z
-        let proj = cg::Mat4::perspective_infinite_reverse_rh(0.8, 16.0 / 9.0, 0.1);
+        let proj = directx::perspective_infinite_reverse(0.8, 16.0 / 9.0, 0.1);
         let c = camera(
             world_from_view.to_cols_array(),
             proj.to_cols_array(),

@@ -8,11 +8,11 @@
 
 use crate::world::WorldSnapshot;
 use crate::{CameraCaustics, Caustics, CausticaStats, CausticsStatus, CausticsTechnique};
-use bevy::core_pipeline::schedule::{camera_driver, Core3d, Core3dSystems};
+use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::renderer::{
-    RenderContext, RenderDevice, RenderGraph, RenderQueue, ViewQuery,
+    RenderContext, RenderDevice, RenderGraph, RenderGraphSystems, RenderQueue, ViewQuery,
 };
 use bevy::render::sync_world::MainEntity;
 use bevy::render::view::{ExtractedView, ViewTarget};
@@ -22,6 +22,7 @@ use caustica::scene::{Camera as CCamera, Material, Object, Scene, Shape};
 use caustica::wgpu;
 use caustica::{FrameTicket, Submission, Technique};
 use std::collections::{BTreeMap, HashMap, HashSet};
+use std::future::Future;
 use std::sync::Arc;
 
 /// The camera-space output of `technique` that the plugin adds to Bevy's image: the
@@ -97,6 +98,19 @@ impl CausticaRender {
     }
 }
 
+impl Drop for CausticaRender {
+    fn drop(&mut self) {
+        let Some(backend) = self.backend.as_mut() else {
+            return;
+        };
+        for (_, mut v) in self.views.drain() {
+            if let Some(t) = v.technique.take() {
+                let _ = t.free(backend);
+            }
+        }
+    }
+}
+
 pub(crate) fn build(app: &mut App, stats: CausticaStats) {
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         warn!("bevy_caustica: no RenderApp (RenderPlugin missing): the plugin does nothing");
@@ -126,7 +140,10 @@ pub(crate) fn build(app: &mut App, stats: CausticaStats) {
                 .after(Core3dSystems::MainPass)
                 .before(Core3dSystems::EarlyPostProcess),
         )
-        .add_systems(RenderGraph, collect_frames.after(camera_driver));
+        .add_systems(
+            RenderGraph,
+            collect_frames.in_set(RenderGraphSystems::Finish),
+        );
 }
 
 pub(crate) fn finish(_app: &mut App) {
@@ -444,6 +461,25 @@ impl Composite {
     }
 }
 
+/// `f`'s result, with the validation errors that wgpu reports for what `f` did on this
+/// thread (an error scope) made part of it.
+fn scoped<T>(device: &wgpu::Device, f: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    let guard = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let result = f();
+    let mut pop = std::pin::pin!(guard.pop());
+    let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+    // native wgpu resolves a popped scope at once
+    let error = match pop.as_mut().poll(&mut cx) {
+        std::task::Poll::Ready(e) => e,
+        std::task::Poll::Pending => None,
+    };
+    match (result, error) {
+        (Err(e), _) => Err(e),
+        (Ok(_), Some(e)) => Err(format!("wgpu: {e}")),
+        (Ok(v), None) => Ok(v),
+    }
+}
+
 fn open_backend(device: &RenderDevice, queue: &RenderQueue) -> Result<WgpuBackend, String> {
     let d: wgpu::Device = device.wgpu_device().clone();
     let q: wgpu::Queue = (**queue).clone();
@@ -469,6 +505,21 @@ fn prepare_caustica(
         state.tried_backend = true;
         match open_backend(&device, &queue) {
             Ok(b) => {
+                // `WgpuBackend::from_device` installs caustica's own uncaptured-error
+                // handler on the device, in place of Bevy's: Bevy's validation errors
+                // would then fail caustica's next frame, and Bevy would no longer see any.
+                // Both are logged here instead; caustica's own errors are caught by the
+                // error scopes around every caustica call (`scoped`).
+                device
+                    .wgpu_device()
+                    .on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
+                        let line = match &e {
+                            wgpu::Error::Validation { description, .. }
+                            | wgpu::Error::Internal { description, .. } => description.clone(),
+                            other => other.to_string(),
+                        };
+                        error!("Caught rendering error: {line}");
+                    }));
                 state.backend = Some(b);
                 state.composite = Some(make_composite(device.wgpu_device()));
             }
@@ -579,7 +630,10 @@ fn prepare_caustica(
             }
         }
         let mut cam_stats = state.stats.get(main).unwrap_or_default();
-        match bring_up_to_date(backend, view, &snapshot, &camera, &caustics, &mut cam_stats) {
+        let updated = scoped(device.wgpu_device(), || {
+            bring_up_to_date(backend, view, &snapshot, &camera, &caustics, &mut cam_stats)
+        });
+        match updated {
             Ok(()) => view.blocked = None,
             Err(why) => {
                 error!(
@@ -702,7 +756,7 @@ fn caustica_view(
         return;
     };
     let name = output_name(caustics.technique);
-    let result = (|| -> Result<bool, String> {
+    let result = scoped(device.wgpu_device(), || -> Result<bool, String> {
         let recorded = technique.record_frame(backend).map_err(|e| e.to_string())?;
         let image = technique.output_image(name).map_err(|e| e.to_string())?;
         let encoder = ctx.command_encoder();
@@ -721,7 +775,7 @@ fn caustica_view(
         };
         v.unsubmitted.push(recorded.submitted(submission));
         Ok(drawn)
-    })();
+    });
     match result {
         Ok(true) => {
             let format = target.main_texture_format();

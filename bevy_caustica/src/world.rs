@@ -49,7 +49,9 @@ pub(crate) fn build(app: &mut App) {
         .init_resource::<MeshCache>()
         .add_systems(
             PostUpdate,
-            gather_world.after(TransformSystems::Propagate),
+            gather_world
+                .after(TransformSystems::Propagate)
+                .after(bevy::camera::visibility::VisibilitySystems::VisibilityPropagate),
         );
 }
 
