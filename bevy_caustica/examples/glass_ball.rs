@@ -11,7 +11,6 @@
 use bevy::camera::{Hdr, RenderTarget};
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::window::{ExitCondition, WindowPlugin};
@@ -88,8 +87,7 @@ fn main() -> Result<(), String> {
                 primary_window: None,
                 exit_condition: ExitCondition::DontExit,
                 ..default()
-            })
-            .disable::<PipelinedRenderingPlugin>(),
+            }),
         CausticaPlugin,
     ))
     .insert_resource(Setup {
@@ -222,16 +220,25 @@ fn main() -> Result<(), String> {
             }
         }
     }
-    // two more frames so that the last readbacks land
-    app.update();
-    app.update();
+    // a few more frames so that the last readbacks land (the render world runs a frame
+    // behind with Bevy's pipelined rendering)
+    for _ in 0..4 {
+        app.update();
+    }
     println!(
         "{} frames at {}x{} in {:.1} s",
-        a.frames + 2,
+        a.frames + 4,
         a.w,
         a.h,
         start.elapsed().as_secs_f32()
     );
+    let stats = app.world().resource::<CausticaStats>().all();
+    if !stats
+        .values()
+        .any(|s| s.status == bevy_caustica::CausticsStatus::Active)
+    {
+        return Err(format!("caustica added no light: {stats:?}"));
+    }
     std::fs::create_dir_all(&a.out).map_err(|e| e.to_string())?;
     let shots = app.world().resource::<Shots>().0.lock().unwrap().clone();
     for (k, name) in [(0, "glass_ball.png"), (1, "glass_ball_bevy_only.png")] {

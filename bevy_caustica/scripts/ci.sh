@@ -34,5 +34,9 @@ start=$(date +%s)
 "${cargo[@]}" test "${flags[@]}" --locked --no-run
 built=$(date +%s)
 "${cargo[@]}" test "${flags[@]}" --locked -- --test-threads 1
+tested=$(date +%s)
+# the example, headless and small (its debug build came with the tests)
+"${cargo[@]}" run "${flags[@]}" --locked --example glass_ball -- \
+    --frames 20 --size 320x192 --out target/ci-glass-ball
 done_at=$(date +%s)
-echo "bevy_caustica: build $((built - start)) s, tests $((done_at - built)) s"
+echo "bevy_caustica: build $((built - start)) s, tests $((tested - built)) s, example $((done_at - tested)) s"

@@ -503,23 +503,24 @@ fn prepare_caustica(
     }
     if !state.tried_backend {
         state.tried_backend = true;
-        match open_backend(&device, &queue) {
+        let opened = open_backend(&device, &queue);
+        // `WgpuBackend::from_device` installs caustica's own uncaptured-error handler on
+        // the device, in place of Bevy's (even when it then fails): Bevy's validation
+        // errors would fail caustica's next frame, and Bevy would no longer see any.
+        // Every uncaptured error is logged here instead, as Bevy logs them; caustica's
+        // own errors are caught by the error scopes around each caustica call (`scoped`).
+        device
+            .wgpu_device()
+            .on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
+                let line = match &e {
+                    wgpu::Error::Validation { description, .. }
+                    | wgpu::Error::Internal { description, .. } => description.clone(),
+                    other => other.to_string(),
+                };
+                error!("Caught rendering error: {line}");
+            }));
+        match opened {
             Ok(b) => {
-                // `WgpuBackend::from_device` installs caustica's own uncaptured-error
-                // handler on the device, in place of Bevy's: Bevy's validation errors
-                // would then fail caustica's next frame, and Bevy would no longer see any.
-                // Both are logged here instead; caustica's own errors are caught by the
-                // error scopes around every caustica call (`scoped`).
-                device
-                    .wgpu_device()
-                    .on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
-                        let line = match &e {
-                            wgpu::Error::Validation { description, .. }
-                            | wgpu::Error::Internal { description, .. } => description.clone(),
-                            other => other.to_string(),
-                        };
-                        error!("Caught rendering error: {line}");
-                    }));
                 state.backend = Some(b);
                 state.composite = Some(make_composite(device.wgpu_device()));
             }
@@ -779,6 +780,17 @@ fn caustica_view(
     match result {
         Ok(true) => {
             let format = target.main_texture_format();
+            let blendable = format
+                .guaranteed_format_features(device.features())
+                .flags
+                .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE);
+            if !blendable {
+                let key = format!("format {main} {format:?}");
+                if state.warned.insert(key) {
+                    warn!("bevy_caustica: camera {main}: its target format {format:?} cannot be blended into; its image is left alone");
+                }
+                return;
+            }
             let samples = 1;
             let pipeline = composite.pipeline(device.wgpu_device(), format, samples).clone();
             let attachment = target.get_unsampled_color_attachment();

@@ -377,3 +377,40 @@ fn every_technique_per_camera_and_scene_changes_through_updates() {
     }
     eprintln!("techniques and updates: {:.1} s", t0.elapsed().as_secs_f32());
 }
+
+#[test]
+fn a_device_caustica_cannot_run_on_leaves_bevys_image_alone() {
+    let _g = serial();
+    // Bevy's device with WebGPU's 8 storage buffers per shader stage: enough for Bevy,
+    // fewer than caustica's kernels bind (trace_photons binds 19): caustica cannot open
+    use caustica::wgpu;
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+    let adapter = bevy::tasks::futures_lite::future::block_on(
+        instance.request_adapter(&wgpu::RequestAdapterOptions::default()),
+    )
+    .expect("an adapter");
+    let limits = wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 8,
+        ..adapter.limits()
+    };
+    drop((adapter, instance));
+    let mut images = Vec::new();
+    for plugin in [false, true] {
+        let mut a = app_on(plugin, Some(limits.clone()));
+        floor_and_light(&mut a);
+        glass_ball(&mut a);
+        let cam = camera(&mut a, true, Some(caustics(CausticsTechnique::Sspm)), 0);
+        let (img, _) = run_until_lit(&mut a, 0, 3);
+        if plugin {
+            let s = stats(&a, cam);
+            eprintln!("{:?}", s.status);
+            assert!(
+                matches!(&s.status, CausticsStatus::Inactive(w) if w.contains("no backend")),
+                "{:?}",
+                s.status
+            );
+        }
+        images.push(img);
+    }
+    assert_eq!(images[0], images[1], "Bevy's image as without the plugin");
+}

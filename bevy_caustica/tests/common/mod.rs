@@ -39,7 +39,16 @@ pub struct TheBall;
 
 /// An app with Bevy's default plugins (no window) and, if `plugin`, caustica's.
 pub fn app(plugin: bool) -> App {
+    app_on(plugin, None)
+}
+
+/// [`app`] on a device with `limits` (the adapter's limits at most).
+pub fn app_on(plugin: bool, limits: Option<bevy::render::settings::WgpuLimits>) -> App {
     let mut app = App::new();
+    let settings = bevy::render::settings::WgpuSettings {
+        constrained_limits: limits,
+        ..default()
+    };
     app.add_plugins(
         DefaultPlugins
             .set(WindowPlugin {
@@ -48,6 +57,9 @@ pub fn app(plugin: bool) -> App {
                 ..default()
             })
             .set(bevy::render::RenderPlugin {
+                render_creation: bevy::render::settings::RenderCreation::Automatic(Box::new(
+                    settings,
+                )),
                 synchronous_pipeline_compilation: true,
                 ..default()
             })
