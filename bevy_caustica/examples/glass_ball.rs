@@ -14,7 +14,7 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::window::{ExitCondition, WindowPlugin};
-use bevy_caustica::{Caustics, CausticaPlugin, CausticaStats, CausticsTechnique};
+use bevy_caustica::{CausticaPlugin, CausticaStats, Caustics, CausticsTechnique};
 use std::sync::{Arc, Mutex};
 
 struct Args {
@@ -54,7 +54,10 @@ fn args() -> Result<Args, String> {
                 a.technique = CausticsTechnique::ALL
                     .into_iter()
                     .find(|t| t.registry_name() == val)
-                    .ok_or(format!("--technique: one of sspm, caustic-map, adaptive-caustics, photon-gi"))?
+                    .ok_or_else(|| {
+                        "--technique: one of sspm, caustic-map, adaptive-caustics, photon-gi"
+                            .to_string()
+                    })?
             }
             other => return Err(format!("unknown argument {other}")),
         }
@@ -82,12 +85,11 @@ fn main() -> Result<(), String> {
     let a = args()?;
     let mut app = App::new();
     app.add_plugins((
-        DefaultPlugins
-            .set(WindowPlugin {
-                primary_window: None,
-                exit_condition: ExitCondition::DontExit,
-                ..default()
-            }),
+        DefaultPlugins.set(WindowPlugin {
+            primary_window: None,
+            exit_condition: ExitCondition::DontExit,
+            ..default()
+        }),
         CausticaPlugin,
     ))
     .insert_resource(Setup {
@@ -243,7 +245,10 @@ fn main() -> Result<(), String> {
     let shots = app.world().resource::<Shots>().0.lock().unwrap().clone();
     for (k, name) in [(0, "glass_ball.png"), (1, "glass_ball_bevy_only.png")] {
         let px = shots[k].clone().ok_or("no image came back")?;
-        let pixels = px.chunks_exact(4).map(|p| [p[0], p[1], p[2], 1.0]).collect();
+        let pixels = px
+            .chunks_exact(4)
+            .map(|p| [p[0], p[1], p[2], 1.0])
+            .collect();
         let img = caustica::Image::new(a.w, a.h, pixels);
         let path = a.out.join(name);
         caustica::output::write_png(&path, &img, 1.0)?;
@@ -269,8 +274,7 @@ fn animate(
     }
     let b = std::f32::consts::TAU * t * 0.5;
     for mut l in &mut light {
-        *l = Transform::from_xyz(1.8 * b.cos(), 3.5, 1.8 * b.sin())
-            .looking_at(Vec3::ZERO, Vec3::Y);
+        *l = Transform::from_xyz(1.8 * b.cos(), 3.5, 1.8 * b.sin()).looking_at(Vec3::ZERO, Vec3::Y);
     }
 }
 

@@ -87,7 +87,11 @@ pub fn material(m: &MaterialInput) -> (Material, Option<String>) {
                 "a tinted base_color on glass does not tint its caustics; use attenuation_color and attenuation_distance".into(),
             );
         }
-        let ior = if m.ior.is_finite() && m.ior > 0.0 { m.ior } else { 1.5 };
+        let ior = if m.ior.is_finite() && m.ior > 0.0 {
+            m.ior
+        } else {
+            1.5
+        };
         let note = (!notes.is_empty()).then(|| notes.join("; "));
         return (
             Material::Dielectric {
@@ -165,7 +169,9 @@ pub enum LightInput {
 
 /// caustica's light for one of Bevy's (see the module's units).
 pub fn light(l: &LightInput) -> Light {
-    let per_sr = |c: V3, lumens: f32| v3(c).max(cg::Vec3::ZERO) * lumens.max(0.0) / (4.0 * std::f32::consts::PI);
+    let per_sr = |c: V3, lumens: f32| {
+        v3(c).max(cg::Vec3::ZERO) * lumens.max(0.0) / (4.0 * std::f32::consts::PI)
+    };
     match *l {
         LightInput::Point {
             color,
@@ -243,7 +249,8 @@ pub fn mesh_geometry(mesh: &bevy::mesh::Mesh) -> Result<MeshGeometry, MeshRefusa
     }
     let extracted = |e: MeshAccessError| match e {
         MeshAccessError::ExtractedToRenderWorld => {
-            "its data lives in the render world only (RenderAssetUsages without MAIN_WORLD)".to_string()
+            "its data lives in the render world only (RenderAssetUsages without MAIN_WORLD)"
+                .to_string()
         }
         MeshAccessError::NotFound => "data not found".to_string(),
     };
@@ -355,13 +362,22 @@ mod tests {
             ior: 1.33,
             ..glass()
         };
-        let (Material::Dielectric { ior, absorption, .. }, _) = material(&m) else {
+        let (
+            Material::Dielectric {
+                ior, absorption, ..
+            },
+            _,
+        ) = material(&m)
+        else {
             panic!("not a dielectric")
         };
         assert_eq!(ior, 1.33);
         // after attenuation_distance inside, exp(-sigma d) is attenuation_color
         let kept = (-absorption * 2.0).exp();
-        assert!((kept - cg::Vec3::new(0.5, 1.0, 0.25)).abs().max_element() < 1e-5, "{kept}");
+        assert!(
+            (kept - cg::Vec3::new(0.5, 1.0, 0.25)).abs().max_element() < 1e-5,
+            "{kept}"
+        );
     }
 
     #[test]
@@ -397,7 +413,12 @@ mod tests {
             ..metal
         };
         let (m, note) = material(&rough);
-        assert_eq!(m, Material::Diffuse { albedo: cg::Vec3::ZERO });
+        assert_eq!(
+            m,
+            Material::Diffuse {
+                albedo: cg::Vec3::ZERO
+            }
+        );
         assert!(note.is_some());
         let paint = MaterialInput {
             base_color: [0.8, 0.5, 0.2],
@@ -415,21 +436,38 @@ mod tests {
                 None
             )
         );
-        let unlit = MaterialInput { unlit: true, ..paint };
-        assert_eq!(material(&unlit).0, Material::Diffuse { albedo: cg::Vec3::ZERO });
+        let unlit = MaterialInput {
+            unlit: true,
+            ..paint
+        };
+        assert_eq!(
+            material(&unlit).0,
+            Material::Diffuse {
+                albedo: cg::Vec3::ZERO
+            }
+        );
     }
 
     #[test]
     fn lumens_become_intensity_per_steradian_and_lux_irradiance() {
         let four_pi = 4.0 * std::f32::consts::PI;
-        let Light::Point { intensity, position } = light(&LightInput::Point {
+        let Light::Point {
+            intensity,
+            position,
+        } = light(&LightInput::Point {
             color: [1.0, 0.5, 0.0],
             intensity: 1000.0 * four_pi,
             position: [1.0, 2.0, 3.0],
-        }) else {
+        })
+        else {
             panic!()
         };
-        assert!((intensity - cg::Vec3::new(1000.0, 500.0, 0.0)).abs().max_element() < 1e-2);
+        assert!(
+            (intensity - cg::Vec3::new(1000.0, 500.0, 0.0))
+                .abs()
+                .max_element()
+                < 1e-2
+        );
         assert_eq!(position, cg::Vec3::new(1.0, 2.0, 3.0));
         let Light::Spot {
             intensity,
@@ -468,13 +506,19 @@ mod tests {
         let lines = Mesh::new(PrimitiveTopology::LineList, RenderAssetUsages::default())
             .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, vec![[0.0f32; 3]; 2]);
         assert!(mesh_geometry(&lines).unwrap_err().contains("topology"));
-        let empty = Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default());
+        let empty = Mesh::new(
+            PrimitiveTopology::TriangleList,
+            RenderAssetUsages::default(),
+        );
         assert!(mesh_geometry(&empty).unwrap_err().contains("positions"));
-        let tri = Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default())
-            .with_inserted_attribute(
-                Mesh::ATTRIBUTE_POSITION,
-                vec![[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            );
+        let tri = Mesh::new(
+            PrimitiveTopology::TriangleList,
+            RenderAssetUsages::default(),
+        )
+        .with_inserted_attribute(
+            Mesh::ATTRIBUTE_POSITION,
+            vec![[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        );
         let g = mesh_geometry(&tri).expect("a triangle");
         assert_eq!(*g.indices, vec![[0, 1, 2]]);
     }

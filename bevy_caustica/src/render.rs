@@ -7,7 +7,7 @@
 //! Bevy's submission, and handed to the main world's [`CausticaStats`].
 
 use crate::world::WorldSnapshot;
-use crate::{CameraCaustics, Caustics, CausticaStats, CausticsStatus, CausticsTechnique};
+use crate::{CameraCaustics, CausticaStats, Caustics, CausticsStatus, CausticsTechnique};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
@@ -51,7 +51,12 @@ struct ViewState {
     technique: Option<BoxedTechnique>,
     applied: Option<Applied>,
     /// The caustics in the view's size, written by caustica, read by the composite pass.
-    texture: Option<(wgpu::Texture, wgpu::TextureView, wgpu::BindGroup, (u32, u32))>,
+    texture: Option<(
+        wgpu::Texture,
+        wgpu::TextureView,
+        wgpu::BindGroup,
+        (u32, u32),
+    )>,
     params: wgpu::Buffer,
     /// A reason the view renders nothing until its inputs change (logged once).
     blocked: Option<(String, u64)>,
@@ -226,8 +231,7 @@ fn create_technique(
             Box::new(CausticMap::new(backend, scene, s).map_err(err)?)
         }
         CausticsTechnique::AdaptiveCaustics => {
-            let s: AdaptiveCausticsSettings =
-                serde_json::from_value(json.clone()).map_err(bad)?;
+            let s: AdaptiveCausticsSettings = serde_json::from_value(json.clone()).map_err(bad)?;
             Box::new(AdaptiveCaustics::new(backend, scene, s).map_err(err)?)
         }
         CausticsTechnique::PhotonGi => {
@@ -306,7 +310,8 @@ fn bring_up_to_date(
         let a = view.applied.as_ref().expect("checked");
         let e = |e: caustica::Error| e.to_string();
         if a.caustics != *caustics {
-            t.set_settings(backend, &settings_json(caustics)).map_err(e)?;
+            t.set_settings(backend, &settings_json(caustics))
+                .map_err(e)?;
             stats.updates += 1;
         }
         if a.camera != *camera {
@@ -336,7 +341,11 @@ fn bring_up_to_date(
             t.set_object_transforms(backend, &moves).map_err(e)?;
             stats.updates += 1;
         }
-        if a.objects.iter().zip(&objects).any(|(x, y)| x.material != y.material) {
+        if a.objects
+            .iter()
+            .zip(&objects)
+            .any(|(x, y)| x.material != y.material)
+        {
             let materials: BTreeMap<_, _> = objects
                 .iter()
                 .enumerate()
@@ -599,23 +608,26 @@ fn prepare_caustica(
         }
         let version = state.snapshot_version;
         let backend = state.backend.as_mut().expect("checked");
-        let view = state.views.entry(render_entity).or_insert_with(|| ViewState {
-            technique: None,
-            applied: None,
-            texture: None,
-            params: device.wgpu_device().create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bevy_caustica composite params"),
-                size: 16,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
-            blocked: None,
-            unsubmitted: Vec::new(),
-            in_flight: Vec::new(),
-            ready: false,
-            main,
-            viewport_origin: (0, 0),
-        });
+        let view = state
+            .views
+            .entry(render_entity)
+            .or_insert_with(|| ViewState {
+                technique: None,
+                applied: None,
+                texture: None,
+                params: device.wgpu_device().create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("bevy_caustica composite params"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                blocked: None,
+                unsubmitted: Vec::new(),
+                in_flight: Vec::new(),
+                ready: false,
+                main,
+                viewport_origin: (0, 0),
+            });
         // a failure blocks the view until its inputs change
         let key = {
             use std::hash::{Hash, Hasher};
@@ -674,8 +686,7 @@ fn prepare_caustica(
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
                 view_formats: &[],
             });
             let tv = texture.create_view(&Default::default());
@@ -792,7 +803,9 @@ fn caustica_view(
                 return;
             }
             let samples = 1;
-            let pipeline = composite.pipeline(device.wgpu_device(), format, samples).clone();
+            let pipeline = composite
+                .pipeline(device.wgpu_device(), format, samples)
+                .clone();
             let attachment = target.get_unsampled_color_attachment();
             let encoder = ctx.command_encoder();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -842,7 +855,7 @@ fn collect_frames(mut state: ResMut<CausticaRender>) {
     let Some(backend) = state.backend.as_mut() else {
         return;
     };
-    for (_, v) in state.views.iter_mut() {
+    for v in state.views.values_mut() {
         for t in v.unsubmitted.drain(..) {
             let _ = backend.submitted(&Submission::pending(t.submission_id()), None);
             v.in_flight.push(t);

@@ -102,11 +102,17 @@ fn gather_world(
     objects: ObjectQuery,
     points: Query<(&PointLight, &GlobalTransform, Option<&InheritedVisibility>)>,
     spots: Query<(&SpotLight, &GlobalTransform, Option<&InheritedVisibility>)>,
-    suns: Query<(&DirectionalLight, &GlobalTransform, Option<&InheritedVisibility>)>,
+    suns: Query<(
+        &DirectionalLight,
+        &GlobalTransform,
+        Option<&InheritedVisibility>,
+    )>,
 ) {
     for e in mesh_events.read() {
         match e {
-            AssetEvent::Modified { id } | AssetEvent::Removed { id } | AssetEvent::Unused { id } => {
+            AssetEvent::Modified { id }
+            | AssetEvent::Removed { id }
+            | AssetEvent::Unused { id } => {
                 cache.meshes.remove(id);
             }
             _ => {}

@@ -4,7 +4,7 @@
 mod common;
 
 use bevy::prelude::*;
-use bevy_caustica::{Caustics, CausticaStats, CausticsStatus, CausticsTechnique};
+use bevy_caustica::{CausticaStats, Caustics, CausticsStatus, CausticsTechnique};
 use common::*;
 
 fn caustics(t: CausticsTechnique) -> Caustics {
@@ -48,7 +48,11 @@ fn caustica_reference(app: &mut App, cam: Entity, seed: u32) -> Vec<f32> {
             ("floor".to_string(), Material::Diffuse { albedo: V::ONE }),
             (
                 "glass".to_string(),
-                Material::Dielectric { ior: 1.5, cauchy_b: 0.0, absorption: V::ZERO },
+                Material::Dielectric {
+                    ior: 1.5,
+                    cauchy_b: 0.0,
+                    absorption: V::ZERO,
+                },
             ),
         ]
         .into(),
@@ -66,7 +70,11 @@ fn caustica_reference(app: &mut App, cam: Entity, seed: u32) -> Vec<f32> {
             Object {
                 name: "ball".into(),
                 material: "glass".into(),
-                shape: Shape::Sphere { center: V::new(0.0, 1.0, 0.0), radius: 0.5, segments: 96 },
+                shape: Shape::Sphere {
+                    center: V::new(0.0, 1.0, 0.0),
+                    radius: 0.5,
+                    segments: 96,
+                },
                 transform: None,
             },
         ],
@@ -90,7 +98,10 @@ fn caustica_reference(app: &mut App, cam: Entity, seed: u32) -> Vec<f32> {
         .read_output(&mut backend, caustica::Output::FilteredCaustics)
         .expect("the caustics");
     caustica::Technique::free(Box::new(t), &mut backend).expect("free");
-    img.pixels.iter().flat_map(|p| [p[0], p[1], p[2], 0.0]).collect()
+    img.pixels
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2], 0.0])
+        .collect()
 }
 
 fn rel_l2(a: &[f32], reference: &[f32]) -> f64 {
@@ -121,7 +132,10 @@ fn the_caustic_adds_light_under_the_glass_ball_and_moves_with_the_light() {
     move_light(&mut off);
     let bevy_only_moved = run(&mut off, 0, 4);
     drop(off);
-    eprintln!("plugin off: {n} frames, {:.1} s", t0.elapsed().as_secs_f32());
+    eprintln!(
+        "plugin off: {n} frames, {:.1} s",
+        t0.elapsed().as_secs_f32()
+    );
 
     let t1 = std::time::Instant::now();
     let mut on = app(true);
@@ -190,10 +204,16 @@ fn the_caustic_adds_light_under_the_glass_ball_and_moves_with_the_light() {
     let d2 = difference(&moved, &bevy_only_moved);
     let c2 = centroid(&d2);
     let s = stats(&on, cam);
-    eprintln!("after the move: centroid {c2} (was {c}), builds {}, updates {}", s.builds, s.updates);
+    eprintln!(
+        "after the move: centroid {c2} (was {c}), builds {}, updates {}",
+        s.builds, s.updates
+    );
     assert_eq!(s.builds, 1, "a moved light rebuilds nothing");
     assert!(s.updates > updates, "the move went through set_lights");
-    assert!(c2.x < c.x - 1.0, "the caustic moved away from the light: {c2} vs {c}");
+    assert!(
+        c2.x < c.x - 1.0,
+        "the caustic moved away from the light: {c2} vs {c}"
+    );
 }
 
 #[test]
@@ -217,15 +237,27 @@ fn without_hdr_or_specular_objects_or_with_unusable_meshes_nothing_breaks() {
             PrimitiveTopology::TriangleList,
             RenderAssetUsages::default(),
         ));
-        let glass = w.resource_mut::<Assets<StandardMaterial>>().add(StandardMaterial {
-            specular_transmission: 1.0,
-            ..default()
-        });
-        w.spawn((Mesh3d(lines), MeshMaterial3d(glass.clone()), Transform::default()));
+        let glass = w
+            .resource_mut::<Assets<StandardMaterial>>()
+            .add(StandardMaterial {
+                specular_transmission: 1.0,
+                ..default()
+            });
+        w.spawn((
+            Mesh3d(lines),
+            MeshMaterial3d(glass.clone()),
+            Transform::default(),
+        ));
         w.spawn((Mesh3d(empty), MeshMaterial3d(glass), Transform::default()));
     }
     let hdr = camera(&mut a, true, Some(caustics(CausticsTechnique::Sspm)), 0);
     let ldr = camera(&mut a, false, Some(caustics(CausticsTechnique::Sspm)), 1);
+    let ortho = camera(&mut a, true, Some(caustics(CausticsTechnique::Sspm)), 2);
+    a.world_mut()
+        .entity_mut(ortho)
+        .insert(Projection::Orthographic(
+            OrthographicProjection::default_3d(),
+        ));
     run_until_lit(&mut a, 0, 2);
     run_until_lit(&mut a, 1, 2);
     let s = stats(&a, hdr);
@@ -240,11 +272,18 @@ fn without_hdr_or_specular_objects_or_with_unusable_meshes_nothing_breaks() {
         "{:?}",
         s.status
     );
-    // a glass ball arrives: the HDR camera starts adding light
+    // a glass ball arrives: the HDR camera starts adding light; the orthographic one
+    // cannot (caustica's camera is a pinhole)
     glass_ball(&mut a);
     run(&mut a, 0, 4);
     let s = stats(&a, hdr);
     assert_eq!(s.status, CausticsStatus::Active);
+    let s = stats(&a, ortho);
+    assert!(
+        matches!(&s.status, CausticsStatus::Inactive(w) if w.contains("perspective")),
+        "{:?}",
+        s.status
+    );
     eprintln!("degrade cases: {:.1} s", t0.elapsed().as_secs_f32());
 }
 
@@ -264,9 +303,35 @@ fn every_technique_per_camera_and_scene_changes_through_updates() {
     floor_and_light(&mut a);
     let ball = glass_ball(&mut a);
     let cam_a = camera(&mut a, true, Some(caustics(CausticsTechnique::Sspm)), 0);
-    let cam_b = camera(&mut a, true, Some(caustics(CausticsTechnique::CausticMap)), 1);
+    let cam_b = camera(
+        &mut a,
+        true,
+        Some(caustics(CausticsTechnique::CausticMap)),
+        1,
+    );
     camera(&mut a, true, None, 2);
+    // Bevy's default MSAA (4 samples): the light goes into the resolved target
+    let cam_msaa = camera(&mut a, true, Some(caustics(CausticsTechnique::Sspm)), 3);
+    let plain_msaa = camera(&mut a, true, None, 4);
+    for c in [cam_msaa, plain_msaa] {
+        a.world_mut()
+            .entity_mut(c)
+            .insert(bevy::render::view::Msaa::Sample4);
+    }
     run_until_lit(&mut a, 0, 4);
+    {
+        let d = difference(
+            &latest(&a, 3).expect("msaa"),
+            &latest(&a, 4).expect("msaa plain"),
+        );
+        let add: f64 = d.iter().map(|&x| x as f64).sum();
+        eprintln!(
+            "with MSAA x4: adds {add:.2}, {:?}",
+            stats(&a, cam_msaa).status
+        );
+        assert!(add > 100.0, "MSAA: the light is added");
+        assert!(d.iter().all(|&x| x > -1e-3), "MSAA: only added");
+    }
     // the light a camera's technique adds: its image minus the plain camera's
     let added = |a: &App, tag: u32| {
         let plain = latest(a, 2).expect("the plain camera's image");
@@ -300,13 +365,22 @@ fn every_technique_per_camera_and_scene_changes_through_updates() {
         let s = stats(&a, cam_a);
         eprintln!("{}", status_line(&a, cam_a));
         assert_eq!(s.technique, t.registry_name());
-        assert_eq!(s.status, CausticsStatus::Active, "{}", status_line(&a, cam_a));
+        assert_eq!(
+            s.status,
+            CausticsStatus::Active,
+            "{}",
+            status_line(&a, cam_a)
+        );
         assert_eq!(s.builds, 2 + k as u64, "a new technique for a new kind");
         assert!(s.frames_completed > 0);
         let (add, plain) = added(&a, 0);
         eprintln!("{}: adds {add:.2} to {plain:.2}", t.registry_name());
         // PhotonGi adds the floor's light reflected back onto it: little, in this scene
-        let least = if t == CausticsTechnique::PhotonGi { 1e-3 } else { 1e-2 };
+        let least = if t == CausticsTechnique::PhotonGi {
+            1e-3
+        } else {
+            1e-2
+        };
         assert!(add > least * plain, "{} adds light", t.registry_name());
         assert_eq!(stats(&a, cam_b).builds, 1, "camera B is untouched");
     }
@@ -344,22 +418,62 @@ fn every_technique_per_camera_and_scene_changes_through_updates() {
     run(&mut a, 0, 3);
     for (cam, b) in [(cam_a, builds.0), (cam_b, builds.1)] {
         let s = stats(&a, cam);
-        eprintln!("after the move and the deformation: {}", status_line(&a, cam));
+        eprintln!(
+            "after the move and the deformation: {}",
+            status_line(&a, cam)
+        );
         assert_eq!(s.builds, b, "moves and deformations rebuild nothing");
         assert_eq!(s.status, CausticsStatus::Active);
+    }
+
+    // the floor turns grey: new material parameters, no build
+    let floor_material = {
+        let w = a.world_mut();
+        let mut q = w.query::<(&MeshMaterial3d<StandardMaterial>, &Mesh3d)>();
+        let meshes = w.resource::<Assets<Mesh>>();
+        q.iter(w)
+            .find(|(_, m)| meshes.get(&m.0).is_some_and(|m| m.count_vertices() == 4))
+            .map(|(mat, _)| mat.0.clone())
+            .expect("the floor")
+    };
+    let before = (stats(&a, cam_a), stats(&a, cam_b));
+    a.world_mut()
+        .resource_mut::<Assets<StandardMaterial>>()
+        .get_mut(&floor_material)
+        .expect("the floor's material")
+        .base_color = Color::srgb(0.5, 0.5, 0.5);
+    run(&mut a, 0, 3);
+    for (cam, b) in [(cam_a, &before.0), (cam_b, &before.1)] {
+        let s = stats(&a, cam);
+        eprintln!("after the floor's new colour: {}", status_line(&a, cam));
+        assert_eq!(
+            s.builds, b.builds,
+            "a material's new parameters rebuild nothing"
+        );
+        assert!(s.updates > b.updates);
     }
 
     // a second ball arrives, then leaves: each a new scene for both cameras' techniques
     let b0 = (stats(&a, cam_a).builds, stats(&a, cam_b).builds);
     let second = glass_ball(&mut a);
-    a.world_mut().get_mut::<Transform>(second).expect("a ball").translation = Vec3::new(-1.2, 0.8, -0.5);
+    a.world_mut()
+        .get_mut::<Transform>(second)
+        .expect("a ball")
+        .translation = Vec3::new(-1.2, 0.8, -0.5);
     run(&mut a, 0, 3);
     a.world_mut().entity_mut(second).despawn();
     run(&mut a, 0, 3);
     for (cam, b) in [(cam_a, b0.0), (cam_b, b0.1)] {
         let s = stats(&a, cam);
-        eprintln!("after a second ball came and went: {}", status_line(&a, cam));
-        assert_eq!(s.builds, b + 2, "an added and a removed object: a build each");
+        eprintln!(
+            "after a second ball came and went: {}",
+            status_line(&a, cam)
+        );
+        assert_eq!(
+            s.builds,
+            b + 2,
+            "an added and a removed object: a build each"
+        );
         assert_eq!(s.status, CausticsStatus::Active);
     }
 
@@ -375,7 +489,10 @@ fn every_technique_per_camera_and_scene_changes_through_updates() {
             status_line(&a, cam)
         );
     }
-    eprintln!("techniques and updates: {:.1} s", t0.elapsed().as_secs_f32());
+    eprintln!(
+        "techniques and updates: {:.1} s",
+        t0.elapsed().as_secs_f32()
+    );
 }
 
 #[test]

@@ -11,7 +11,7 @@ use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::TextureFormat;
 use bevy::render::view::{DebandDither, Msaa, Tonemapping};
 use bevy::window::{ExitCondition, WindowPlugin};
-use bevy_caustica::{Caustics, CausticaPlugin};
+use bevy_caustica::{CausticaPlugin, Caustics};
 use std::sync::{Arc, Mutex};
 
 /// Image size (a width of a multiple of 32 keeps Rgba16Float rows unpadded).
@@ -26,7 +26,10 @@ pub fn serial() -> std::sync::MutexGuard<'static, ()> {
 }
 
 #[derive(Resource, Clone, Default)]
-pub struct Frames(pub Arc<Mutex<Vec<(u32, Vec<f32>)>>>);
+pub struct Frames(pub Arc<Mutex<Vec<Shot>>>);
+
+/// A camera's tag and its image (linear RGBA).
+pub type Shot = (u32, Vec<f32>);
 
 #[derive(Component)]
 pub struct Captured(pub u32);
@@ -224,7 +227,10 @@ pub fn ready(app: &mut App) {
 pub fn latest(app: &App, tag: u32) -> Option<Vec<f32>> {
     let f = app.world().resource::<Frames>();
     let v = f.0.lock().unwrap();
-    v.iter().rev().find(|(t, _)| *t == tag).map(|(_, p)| p.clone())
+    v.iter()
+        .rev()
+        .find(|(t, _)| *t == tag)
+        .map(|(_, p)| p.clone())
 }
 
 /// Luminance per pixel (Rec. 709 weights) of an RGBA image.
@@ -264,9 +270,7 @@ pub fn centroid(d: &[f32]) -> Vec2 {
 
 /// Where a world point lands in the camera's image (pixels).
 pub fn project(app: &mut App, cam: Entity, p: Vec3) -> Vec2 {
-    let mut q = app
-        .world_mut()
-        .query::<(&Camera, &GlobalTransform)>();
+    let mut q = app.world_mut().query::<(&Camera, &GlobalTransform)>();
     let (c, gt) = q.get(app.world(), cam).expect("the camera");
     c.world_to_viewport(gt, p).expect("in view")
 }
