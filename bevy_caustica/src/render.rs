@@ -309,7 +309,8 @@ fn bring_up_to_date(
         let t = view.technique.as_mut().expect("checked");
         let a = view.applied.as_ref().expect("checked");
         let e = |e: caustica::Error| e.to_string();
-        if a.caustics != *caustics {
+        // `strength` is the composite's alone
+        if (a.caustics.photons, &a.caustics.settings) != (caustics.photons, &caustics.settings) {
             t.set_settings(backend, &settings_json(caustics))
                 .map_err(e)?;
             stats.updates += 1;

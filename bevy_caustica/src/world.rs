@@ -174,8 +174,21 @@ fn gather_world(
     }
 
     let mut lights = Vec::new();
+    let specular = objs.values().any(|o: &ObjectSnap| o.material.is_specular());
+    let unshadowed = |cache: &mut MeshCache, kind: &str| {
+        if specular {
+            cache.warn_once(format!("unshadowed {kind}"), || {
+                format!(
+                    "a {kind} without shadow maps lights what is behind glass and mirrors directly, and caustica adds the light through them: that light is counted twice"
+                )
+            });
+        }
+    };
     for (l, gt, vis) in &points {
         if visible(vis) && l.intensity > 0.0 {
+            if !l.shadow_maps_enabled {
+                unshadowed(&mut cache, "PointLight");
+            }
             if l.radius > 0.0 {
                 cache.warn_once("point radius".into(), || {
                     "a PointLight's radius is taken as 0 (caustica's lights are points)".into()
@@ -190,6 +203,9 @@ fn gather_world(
     }
     for (l, gt, vis) in &spots {
         if visible(vis) && l.intensity > 0.0 {
+            if !l.shadow_maps_enabled {
+                unshadowed(&mut cache, "SpotLight");
+            }
             if l.radius > 0.0 {
                 cache.warn_once("spot radius".into(), || {
                     "a SpotLight's radius is taken as 0 (caustica's lights are points)".into()
@@ -207,6 +223,9 @@ fn gather_world(
     }
     for (l, gt, vis) in &suns {
         if visible(vis) && l.illuminance > 0.0 {
+            if !l.shadow_maps_enabled {
+                unshadowed(&mut cache, "DirectionalLight");
+            }
             lights.push(convert::light(&LightInput::Directional {
                 color: lin(l.color),
                 illuminance: l.illuminance,
