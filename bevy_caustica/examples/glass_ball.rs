@@ -6,7 +6,9 @@
 //!
 //! Run: `cargo +nightly run --release --ignore-rust-version --example glass_ball --
 //! [--frames N] [--size WxH] [--technique sspm|caustic-map|adaptive-caustics|photon-gi]
-//! [--photons N] [--out DIR]`
+//! [--photons N] [--out DIR]`. In a window instead (the `window` feature: winit, X11 and
+//! Wayland): `cargo +nightly run --release --ignore-rust-version --features window
+//! --example glass_ball -- --window` (Space: caustica's light off and on).
 
 use bevy::camera::{Hdr, RenderTarget};
 use bevy::prelude::*;
@@ -24,6 +26,7 @@ struct Args {
     technique: CausticsTechnique,
     photons: u32,
     out: std::path::PathBuf,
+    window: bool,
 }
 
 fn args() -> Result<Args, String> {
@@ -34,10 +37,16 @@ fn args() -> Result<Args, String> {
         technique: CausticsTechnique::Sspm,
         photons: 512,
         out: "out".into(),
+        window: false,
     };
     let v: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < v.len() {
+        if v[i] == "--window" {
+            a.window = true;
+            i += 1;
+            continue;
+        }
         let val = v.get(i + 1).ok_or(format!("{} needs a value", v[i]))?;
         match v[i].as_str() {
             "--frames" => a.frames = val.parse().map_err(|e| format!("--frames: {e}"))?,
@@ -83,6 +92,9 @@ struct Shots(Arc<Mutex<[Option<Vec<f32>>; 2]>>);
 
 fn main() -> Result<(), String> {
     let a = args()?;
+    if a.window {
+        return windowed(a);
+    }
     let mut app = App::new();
     app.add_plugins((
         DefaultPlugins.set(WindowPlugin {
@@ -99,67 +111,8 @@ fn main() -> Result<(), String> {
     .init_resource::<Shots>()
     .add_systems(Update, animate);
 
-    // the scene
     let world = app.world_mut();
-    let (floor, ball, block) = {
-        let mut meshes = world.resource_mut::<Assets<Mesh>>();
-        (
-            meshes.add(Plane3d::default().mesh().size(6.0, 6.0)),
-            meshes.add(Sphere::new(0.5).mesh().uv(96, 48)),
-            meshes.add(Cuboid::new(0.6, 0.6, 0.6)),
-        )
-    };
-    let (stone, glass, amber) = {
-        let mut m = world.resource_mut::<Assets<StandardMaterial>>();
-        (
-            m.add(StandardMaterial {
-                base_color: Color::srgb(0.8, 0.8, 0.78),
-                perceptual_roughness: 0.9,
-                ..default()
-            }),
-            m.add(StandardMaterial {
-                base_color: Color::WHITE,
-                specular_transmission: 1.0,
-                ior: 1.5,
-                thickness: 1.0,
-                perceptual_roughness: 0.02,
-                ..default()
-            }),
-            m.add(StandardMaterial {
-                base_color: Color::WHITE,
-                specular_transmission: 1.0,
-                ior: 1.5,
-                thickness: 0.6,
-                perceptual_roughness: 0.02,
-                attenuation_color: Color::srgb(1.0, 0.55, 0.1),
-                attenuation_distance: 0.4,
-                ..default()
-            }),
-        )
-    };
-    world.spawn((Mesh3d(floor), MeshMaterial3d(stone), Transform::default()));
-    world.spawn((
-        Mesh3d(ball),
-        MeshMaterial3d(glass),
-        Transform::from_xyz(-0.6, 0.75, 0.0),
-    ));
-    world.spawn((
-        Mesh3d(block),
-        MeshMaterial3d(amber),
-        Transform::from_xyz(0.7, 0.45, 0.3).with_rotation(Quat::from_rotation_y(0.5)),
-    ));
-    world.spawn((
-        SpotLight {
-            intensity: 600_000.0,
-            range: 30.0,
-            outer_angle: 0.7,
-            inner_angle: 0.5,
-            shadow_maps_enabled: true,
-            ..default()
-        },
-        Transform::from_xyz(1.5, 3.5, 1.0).looking_at(Vec3::ZERO, Vec3::Y),
-        Sweep,
-    ));
+    spawn_scene(world);
 
     // two cameras on one orbit: with caustica's light and without
     let shots = world.resource::<Shots>().clone();
@@ -257,6 +210,128 @@ fn main() -> Result<(), String> {
     Ok(())
 }
 
+/// In a window (the `window` feature): one camera on the orbit, the light sweeping, for
+/// ever; Space switches caustica's light off and on.
+#[cfg(feature = "window")]
+fn windowed(a: Args) -> Result<(), String> {
+    let caustics = Caustics {
+        technique: a.technique,
+        photons: a.photons,
+        ..default()
+    };
+    let mut app = App::new();
+    app.add_plugins((DefaultPlugins, CausticaPlugin))
+        .insert_resource(Setup {
+            frames: 1200,
+            size: (a.w, a.h),
+        })
+        .insert_resource(Toggle(caustics.clone()))
+        .add_systems(Update, (animate, toggle));
+    let world = app.world_mut();
+    spawn_scene(world);
+    world.spawn((
+        Camera3d::default(),
+        Hdr,
+        // no tonemapping LUTs in this build: a curve without one
+        Tonemapping::AcesFitted,
+        Transform::default(),
+        Orbit,
+        caustics,
+    ));
+    app.run();
+    Ok(())
+}
+
+#[cfg(not(feature = "window"))]
+fn windowed(_: Args) -> Result<(), String> {
+    Err("--window needs the `window` feature: cargo +nightly run --release --ignore-rust-version --features window --example glass_ball -- --window".into())
+}
+
+#[cfg(feature = "window")]
+#[derive(Resource)]
+struct Toggle(Caustics);
+
+#[cfg(feature = "window")]
+fn toggle(
+    keys: Res<ButtonInput<KeyCode>>,
+    on: Res<Toggle>,
+    cams: Query<(Entity, Has<Caustics>), With<Orbit>>,
+    mut commands: Commands,
+) {
+    if keys.just_pressed(KeyCode::Space) {
+        for (e, has) in &cams {
+            if has {
+                commands.entity(e).remove::<Caustics>();
+            } else {
+                commands.entity(e).insert(on.0.clone());
+            }
+        }
+    }
+}
+
+/// The floor, a glass ball, an amber glass block and the spot light.
+fn spawn_scene(world: &mut World) {
+    let (floor, ball, block) = {
+        let mut meshes = world.resource_mut::<Assets<Mesh>>();
+        (
+            meshes.add(Plane3d::default().mesh().size(6.0, 6.0)),
+            meshes.add(Sphere::new(0.5).mesh().uv(96, 48)),
+            meshes.add(Cuboid::new(0.6, 0.6, 0.6)),
+        )
+    };
+    let (stone, glass, amber) = {
+        let mut m = world.resource_mut::<Assets<StandardMaterial>>();
+        (
+            m.add(StandardMaterial {
+                base_color: Color::srgb(0.8, 0.8, 0.78),
+                perceptual_roughness: 0.9,
+                ..default()
+            }),
+            m.add(StandardMaterial {
+                base_color: Color::WHITE,
+                specular_transmission: 1.0,
+                ior: 1.5,
+                thickness: 1.0,
+                perceptual_roughness: 0.02,
+                ..default()
+            }),
+            m.add(StandardMaterial {
+                base_color: Color::WHITE,
+                specular_transmission: 1.0,
+                ior: 1.5,
+                thickness: 0.6,
+                perceptual_roughness: 0.02,
+                attenuation_color: Color::srgb(1.0, 0.55, 0.1),
+                attenuation_distance: 0.4,
+                ..default()
+            }),
+        )
+    };
+    world.spawn((Mesh3d(floor), MeshMaterial3d(stone), Transform::default()));
+    world.spawn((
+        Mesh3d(ball),
+        MeshMaterial3d(glass),
+        Transform::from_xyz(-0.6, 0.75, 0.0),
+    ));
+    world.spawn((
+        Mesh3d(block),
+        MeshMaterial3d(amber),
+        Transform::from_xyz(0.7, 0.45, 0.3).with_rotation(Quat::from_rotation_y(0.5)),
+    ));
+    world.spawn((
+        SpotLight {
+            intensity: 600_000.0,
+            range: 30.0,
+            outer_angle: 0.7,
+            inner_angle: 0.5,
+            shadow_maps_enabled: true,
+            ..default()
+        },
+        Transform::from_xyz(1.5, 3.5, 1.0).looking_at(Vec3::ZERO, Vec3::Y),
+        Sweep,
+    ));
+}
+
 /// The camera orbits the scene and the spot light sweeps around it.
 fn animate(
     setup: Res<Setup>,
@@ -264,7 +339,7 @@ fn animate(
     mut cams: Query<&mut Transform, (With<Orbit>, Without<Sweep>)>,
     mut light: Query<&mut Transform, (With<Sweep>, Without<Orbit>)>,
 ) {
-    let t = *frame as f32 / setup.frames.max(1) as f32;
+    let t = (*frame % setup.frames.max(1)) as f32 / setup.frames.max(1) as f32;
     *frame += 1;
     let _ = setup.size;
     let a = 0.6 + 0.8 * t;
