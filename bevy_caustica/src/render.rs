@@ -26,12 +26,63 @@ use std::future::Future;
 use std::sync::Arc;
 
 /// The camera-space output of `technique` that the plugin adds to Bevy's image: the
-/// filtered caustics, PhotonGi's filtered indirect light. The one place that names
-/// outputs.
+/// filtered caustics, PhotonGi's filtered indirect light. With [`only_the_added_output`]
+/// and [`encode_added_light`], the one place that names outputs.
 pub fn output_name(technique: CausticsTechnique) -> &'static str {
     match technique {
         CausticsTechnique::PhotonGi => "indirect",
         _ => "caustics_filtered",
+    }
+}
+
+/// `settings` asking for the output the plugin adds alone (no direct light, no composite:
+/// Bevy does those): every `outputs` in it, a list of output names or the earlier flags.
+fn only_the_added_output(settings: &mut serde_json::Value, technique: CausticsTechnique) {
+    let name = output_name(technique);
+    // the earlier flag of an output (the screen and atlas receivers' `outputs`)
+    let flag = match name {
+        "caustics_filtered" => "filtered_caustics",
+        other => other,
+    };
+    if let Some(o) = settings.as_object_mut() {
+        for (k, x) in o.iter_mut() {
+            match (k.as_str(), x) {
+                ("outputs", serde_json::Value::Array(list)) => {
+                    *list = vec![name.into()];
+                }
+                ("outputs", serde_json::Value::Object(flags)) => {
+                    for (f, on) in flags.iter_mut() {
+                        if on.is_boolean() {
+                            *on = serde_json::Value::Bool(f == flag);
+                        }
+                    }
+                }
+                (_, x) => only_the_added_output(x, technique),
+            }
+        }
+    }
+}
+
+/// Writes the output the plugin adds into `texture`, in `encoder`; false when the
+/// technique's plan knows it is zero (it has no image).
+fn encode_added_light(
+    technique: &dyn Technique,
+    kind: CausticsTechnique,
+    backend: &mut WgpuBackend,
+    texture: &wgpu::Texture,
+    encoder: &mut wgpu::CommandEncoder,
+) -> Result<bool, String> {
+    match technique
+        .output_image(output_name(kind))
+        .map_err(|e| e.to_string())?
+    {
+        Some(image) => {
+            backend
+                .encode_image_to_texture(image, texture, encoder)
+                .map_err(|e| e.to_string())?;
+            Ok(true)
+        }
+        None => Ok(false),
     }
 }
 
@@ -178,25 +229,7 @@ fn settings_json(c: &Caustics) -> serde_json::Value {
         .find(|t| t.name == name)
         .map(|t| (t.default_settings)())
         .unwrap_or_else(|| serde_json::json!({}));
-    fn only_wanted_outputs(v: &mut serde_json::Value, wanted: &str) {
-        if let Some(o) = v.as_object_mut() {
-            for (k, x) in o.iter_mut() {
-                if k == "outputs" {
-                    if let Some(outs) = x.as_object_mut() {
-                        for (name, on) in outs.iter_mut() {
-                            if on.is_boolean() {
-                                *on = serde_json::Value::Bool(name == wanted);
-                            }
-                        }
-                    }
-                } else {
-                    only_wanted_outputs(x, wanted);
-                }
-            }
-        }
-    }
-    // the screen and atlas receivers' `outputs` flags are named after the image
-    only_wanted_outputs(&mut v, "filtered_caustics");
+    only_the_added_output(&mut v, c.technique);
     if let Some(o) = v.as_object_mut() {
         o.insert("photons_w".into(), c.photons.max(1).into());
         o.insert("photons_h".into(), c.photons.max(1).into());
@@ -768,24 +801,14 @@ fn caustica_view(
     let Some(caustics) = state.cameras.get(&main) else {
         return;
     };
-    let name = output_name(caustics.technique);
+    let kind = caustics.technique;
     let result = scoped(device.wgpu_device(), || -> Result<bool, String> {
         let recorded = technique.record_frame(backend).map_err(|e| e.to_string())?;
-        let image = technique.output_image(name).map_err(|e| e.to_string())?;
         let encoder = ctx.command_encoder();
         let submission = backend
             .encode(&recorded.recording, &recorded.readbacks, encoder)
             .map_err(|e| e.to_string())?;
-        let drawn = match image {
-            Some(image) => {
-                backend
-                    .encode_image_to_texture(image, texture, encoder)
-                    .map_err(|e| e.to_string())?;
-                true
-            }
-            // the plan knows the output is zero: nothing to add
-            None => false,
-        };
+        let drawn = encode_added_light(&**technique, kind, backend, texture, encoder)?;
         v.unsubmitted.push(recorded.submitted(submission));
         Ok(drawn)
     });
