@@ -163,13 +163,15 @@ fn main() -> Result<(), String> {
             for (cam, s) in app.world().resource::<CausticaStats>().all() {
                 if let Some(last) = &s.last {
                     println!(
-                        "frame {}: camera {cam}: {} {:?}, {} photons stored, passes {:.2} ms, host waits {}",
+                        "frame {}: camera {cam}: {} {:?}, {} photons stored, passes {:.2} ms on the device, host waits {}; host: updates {:.2} ms, record and encode {:.2} ms",
                         f + 1,
                         s.technique,
                         s.status,
                         last.photons_stored,
                         last.passes.iter().map(|p| p.ms).sum::<f64>(),
-                        last.host_waits
+                        last.host_waits,
+                        s.host_update_ms,
+                        s.host_record_ms
                     );
                 }
             }

@@ -125,6 +125,10 @@ pub struct CameraCaustics {
     /// Updates through caustica's update API without a rebuild (lights, instances,
     /// vertices, materials, camera, settings), each call counted.
     pub updates: u64,
+    /// Host time of the last frame's updates (or build) in Bevy's render schedule (ms).
+    pub host_update_ms: f64,
+    /// Host time of the last frame's recording and encoding into Bevy's encoder (ms).
+    pub host_record_ms: f64,
 }
 
 /// caustica's figures per camera (by the camera's entity in the main world), written by

@@ -138,6 +138,8 @@ pub(crate) struct CausticaRender {
     tried_backend: bool,
     composite: Option<Composite>,
     views: HashMap<Entity, ViewState>,
+    /// Frames of views that went away, collected without a wait like the others.
+    orphans: Vec<FrameTicket>,
     snapshot: Arc<WorldSnapshot>,
     /// Bumped whenever the snapshot changes.
     snapshot_version: u64,
@@ -179,6 +181,7 @@ pub(crate) fn build(app: &mut App, stats: CausticaStats) {
             tried_backend: false,
             composite: None,
             views: HashMap::new(),
+            orphans: Vec::new(),
             snapshot: Arc::new(WorldSnapshot::default()),
             snapshot_version: 0,
             cameras: HashMap::new(),
@@ -677,6 +680,7 @@ fn prepare_caustica(
             }
         }
         let mut cam_stats = state.stats.get(main).unwrap_or_default();
+        let t0 = std::time::Instant::now();
         let updated = scoped(device.wgpu_device(), || {
             bring_up_to_date(backend, view, &snapshot, &camera, &caustics, &mut cam_stats)
         });
@@ -700,10 +704,12 @@ fn prepare_caustica(
                 continue;
             }
         }
+        let update_ms = t0.elapsed().as_secs_f64() * 1e3;
         state.stats.with(main, |c| {
             c.builds = cam_stats.builds;
             c.updates = cam_stats.updates;
             c.technique = caustics.technique.registry_name();
+            c.host_update_ms = update_ms;
         });
         // the view's texture and bind group, in its size
         let (w, h) = (size.x, size.y);
@@ -768,6 +774,8 @@ fn free_unused(state: &mut CausticaRender, live: &HashSet<Entity>) {
             if let (Some(t), Some(b)) = (v.technique.take(), state.backend.as_mut()) {
                 let _ = t.free(b);
             }
+            // still collected, so that the backend forgets them (never waited for)
+            state.orphans.append(&mut v.in_flight);
         }
     }
 }
@@ -802,6 +810,7 @@ fn caustica_view(
         return;
     };
     let kind = caustics.technique;
+    let t0 = std::time::Instant::now();
     let result = scoped(device.wgpu_device(), || -> Result<bool, String> {
         let recorded = technique.record_frame(backend).map_err(|e| e.to_string())?;
         let encoder = ctx.command_encoder();
@@ -812,6 +821,8 @@ fn caustica_view(
         v.unsubmitted.push(recorded.submitted(submission));
         Ok(drawn)
     });
+    let record_ms = t0.elapsed().as_secs_f64() * 1e3;
+    state.stats.with(main, |c| c.host_record_ms = record_ms);
     match result {
         Ok(true) => {
             let format = target.main_texture_format();
@@ -904,4 +915,7 @@ fn collect_frames(mut state: ResMut<CausticaRender>) {
         }
         v.in_flight = keep;
     }
+    state
+        .orphans
+        .retain_mut(|t| matches!(t.stats(backend, false), Ok(None)));
 }
