@@ -665,12 +665,14 @@ fn prepare_caustica(
                 main,
                 viewport_origin: (0, 0),
             });
-        // a failure blocks the view until its inputs change
+        // a failure blocks the view until the scene, its Caustics or its size change (not
+        // on every camera move)
         let key = {
             use std::hash::{Hash, Hasher};
             let mut h = std::collections::hash_map::DefaultHasher::new();
             version.hash(&mut h);
-            format!("{camera:?}{caustics:?}").hash(&mut h);
+            (size.x, size.y).hash(&mut h);
+            format!("{caustics:?}").hash(&mut h);
             h.finish()
         };
         if let Some((why, k)) = &view.blocked {
@@ -687,10 +689,12 @@ fn prepare_caustica(
         match updated {
             Ok(()) => view.blocked = None,
             Err(why) => {
-                error!(
-                    "bevy_caustica: camera {main}: {} failed: {why}; its image is left alone until the scene or its Caustics change",
-                    caustics.technique.registry_name()
-                );
+                if state.warned.insert(format!("failed {main} {why}")) {
+                    error!(
+                        "bevy_caustica: camera {main}: {} failed: {why}; its image is left alone until the scene or its Caustics change",
+                        caustics.technique.registry_name()
+                    );
+                }
                 if let Some(t) = view.technique.take() {
                     let _ = t.free(backend);
                 }
