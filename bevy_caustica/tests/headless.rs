@@ -531,3 +531,50 @@ fn a_device_caustica_cannot_run_on_leaves_bevys_image_alone() {
     }
     assert_eq!(images[0], images[1], "Bevy's image as without the plugin");
 }
+
+#[test]
+fn a_viewport_gets_the_light_inside_it_and_nothing_outside() {
+    let _g = serial();
+    let mut a = app(true);
+    floor_and_light(&mut a);
+    glass_ball(&mut a);
+    let cam = camera(&mut a, true, Some(caustics(CausticsTechnique::Sspm)), 0);
+    let plain = camera(&mut a, true, None, 1);
+    let (x0, y0, w, h) = (24u32, 8u32, 60u32, 48u32);
+    for c in [cam, plain] {
+        a.world_mut()
+            .get_mut::<Camera>(c)
+            .expect("a camera")
+            .viewport = Some(bevy::camera::Viewport {
+            physical_position: UVec2::new(x0, y0),
+            physical_size: UVec2::new(w, h),
+            ..default()
+        });
+    }
+    run_until_lit(&mut a, 0, 4);
+    let d = difference(
+        &latest(&a, 0).expect("image"),
+        &latest(&a, 1).expect("plain"),
+    );
+    let (mut inside, mut outside) = (0.0f64, 0.0f64);
+    for (i, &v) in d.iter().enumerate() {
+        let (x, y) = (i as u32 % W, i as u32 / W);
+        if (x0..x0 + w).contains(&x) && (y0..y0 + h).contains(&y) {
+            inside += v as f64;
+        } else {
+            outside += v.abs() as f64;
+        }
+    }
+    let c = centroid(&d);
+    let below = project(&mut a, cam, Vec3::ZERO);
+    eprintln!(
+        "viewport: inside {inside:.2}, outside {outside}, centroid {c}, below the ball {below}"
+    );
+    assert_eq!(stats(&a, cam).status, CausticsStatus::Active);
+    assert!(inside > 10.0, "the viewport gets the caustic");
+    assert_eq!(outside, 0.0, "nothing outside the viewport");
+    assert!(
+        c.distance(below) < 6.0,
+        "where the viewport's camera sees it: {c} vs {below}"
+    );
+}
