@@ -164,10 +164,9 @@ impl Plugin for CausticaPlugin {
         let stats = CausticaStats::default();
         app.insert_resource(stats.clone());
         world::build(app);
+        // caustica's backend opens on Bevy's device on the first render frame with a
+        // `Caustics` camera, not here: an app that never asks for caustics keeps Bevy's
+        // device as it was.
         render::build(app, stats);
-    }
-
-    fn finish(&self, app: &mut App) {
-        render::finish(app);
     }
 }

@@ -205,11 +205,6 @@ pub(crate) fn build(app: &mut App, stats: CausticaStats) {
         );
 }
 
-pub(crate) fn finish(_app: &mut App) {
-    // The backend opens on the first render frame (prepare_caustica), where a failure is
-    // logged once and the plugin stands aside.
-}
-
 fn extract_caustica(
     mut state: ResMut<CausticaRender>,
     snapshot: Extract<Res<WorldSnapshot>>,
@@ -532,7 +527,9 @@ fn open_backend(device: &RenderDevice, queue: &RenderQueue) -> Result<WgpuBacken
     WgpuBackend::from_device(d, q, "Bevy's RenderDevice").map_err(|e| e.to_string())
 }
 
-#[allow(clippy::too_many_arguments)]
+/// Per frame, for every camera with `Caustics`: opens the backend on the first frame that
+/// needs it (a failure is logged once and the plugin stands aside), checks what the
+/// camera can take, brings its technique up to date and prepares its composite.
 fn prepare_caustica(
     mut state: ResMut<CausticaRender>,
     device: Res<RenderDevice>,
