@@ -1,4 +1,4 @@
-//! The atlas deposit of CausticMap (seed 001): texture-space photons into the atlas's
+//! The atlas deposit of CausticMap (Vanderstichelen 2021): texture-space photons into the atlas's
 //! fixed-point sums, as `trace_photons`' fused atlas deposit and `refine_clusters` add
 //! them (the WGSL ports' `common/atlas_deposit.wgsl`). The math is core's
 //! `math::map_gather`; these are loops over it.

@@ -1,4 +1,4 @@
-// atrous_filter (seed 003 section 24.4.2, Eqs. 14-18): one edge-avoiding A-Trous
+// atrous_filter (Smal 2019, section 24.4.2, Eqs. 14-18): one edge-avoiding A-Trous
 // iteration with variance clipping of its detail coefficient (the contract in
 // core/src/kernels/atrous_filter.rs). Mirror of backend-cpu/src/kernels/atrous_filter.rs.
 

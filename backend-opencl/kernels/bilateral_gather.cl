@@ -1,4 +1,4 @@
-// bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
+// bilateral_gather (Kim 2019, section 30.3.2): one direction of the separable edge-aware
 // photon gather. Mirror of backend-cpu/src/kernels/bilateral_gather.rs.
 
 // Gather radius in pixels at a receiver pixel.

@@ -1,4 +1,4 @@
-// caustic_map_lookup (seed 001 section 3.3): the camera ray's specular tree
+// caustic_map_lookup (Vanderstichelen 2021, section 3.3): the camera ray's specular tree
 // (common/specular_tree.cl) reads the caustic map of each diffuse surface it ends on.
 // Mirror of backend-cpu/src/kernels/caustic_map_lookup.rs.
 

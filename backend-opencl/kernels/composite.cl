@@ -1,4 +1,4 @@
-// composite (seed 000 section 30.3.3): direct light + gathered caustics, alpha 1. Mirror
+// composite (Kim 2019, section 30.3.3): direct light + gathered caustics, alpha 1. Mirror
 // of backend-cpu/src/kernels/composite.rs.
 
 __kernel void composite(uint texels, __global const float4* direct,

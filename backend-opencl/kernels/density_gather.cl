@@ -62,7 +62,7 @@ __kernel void density_gather(__global const GatherParams* p, GBUFFER_PARAMS(__gl
         float3 e = saturate_radiance3(sum * saturate_radiance(1.0f / ej.y));
         out[j] = (float4)(e, r);
     } else {
-        // 000 Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
+        // Kim 2019, Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
         GBufferTexel gt = load_gbuffer(GBUFFER_ARGS, (uint)j);
         __global const GpuCamera* cam = &p->camera;
         float3 ray = camera_ray(cam, (uint)x, (uint)y);

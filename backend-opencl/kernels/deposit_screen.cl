@@ -1,4 +1,4 @@
-// deposit_screen (seed 000 section 30.3.1.3): each stored photon is projected to its pixel
+// deposit_screen (Kim 2019, section 30.3.1.3): each stored photon is projected to its pixel
 // and added in fixed point if the pixel sees a diffuse surface at a consistent depth and
 // the photon arrives on the side the camera sees. Mirror of
 // backend-cpu/src/kernels/deposit_screen.rs; 64-bit sums are (lo, hi) u32 atomics with

@@ -1,4 +1,4 @@
-// gather_caustic_map (seed 001 section 3.1, "Denoising"): per atlas texel, the
+// gather_caustic_map (Vanderstichelen 2021, section 3.1, "Denoising"): per atlas texel, the
 // flux-keeping N x N gather inside its tile, as irradiance. Mirror of
 // backend-cpu/src/kernels/gather_caustic_map.rs.
 

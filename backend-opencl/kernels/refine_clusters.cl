@@ -1,4 +1,4 @@
-// refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one work-item per traced
+// refine_clusters (Wyman 2009, section 3.2, AdaptiveCaustics): one work-item per traced
 // cluster of the batch decides its fate from its four photon slots (discarded, output
 // into the atlas as the fused trace deposits, or refined into four children appended to
 // the next level's list). With the screen target (world-space slots) a photon's texel is

@@ -1,4 +1,4 @@
-// resolve_caustics (seed 000 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
+// resolve_caustics (Kim 2019 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
 // fixed-point flux sum; alpha = mean hit distance. Mirror of
 // backend-cpu/src/kernels/resolve_caustics.rs::resolve_caustics, which scales in f64. Where
 // the device has doubles (cl_khr_fp64: PoCL, NVIDIA) this does the same f64 operations and

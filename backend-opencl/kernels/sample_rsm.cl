@@ -1,4 +1,4 @@
-// sample_rsm (seed 003 section 24.2.1, Figure 24-3): sample i of the light's rotated
+// sample_rsm (Smal 2019, section 24.2.1, Figure 24-3): sample i of the light's rotated
 // Hammersley set warped through its faces' importance pyramids (rsm::warp_rsm) to an RSM
 // texel, and the photon leaving it. Mirror of backend-cpu/src/kernels/sample_rsm.rs
 // (rsm_photon) and shaders/wgsl/sample_rsm.wgsl.

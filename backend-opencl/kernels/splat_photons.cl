@@ -1,4 +1,4 @@
-// splat_photons (seed 003 section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat adds
+// splat_photons (Smal 2019, section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat adds
 // its irradiance times each covered receiver pixel's area to the photon map in fixed point.
 // A workgroup splats its photons together: each thread sets up its own photon's splat
 // (splat_setup), then the group walks the run of all its splats' pixels, a pixel per

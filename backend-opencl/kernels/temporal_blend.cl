@@ -1,4 +1,4 @@
-// temporal_blend (seed 003 section 24.4.1, Eqs. 10-13): a pixel's estimate blended with
+// temporal_blend (Smal 2019, section 24.4.1, Eqs. 10-13): a pixel's estimate blended with
 // its reprojected history (the contract in core/src/kernels/temporal_blend.rs). Mirror of
 // backend-cpu/src/kernels/temporal_blend.rs.
 

@@ -1,4 +1,4 @@
-// tile_hit_distance (seed 000 section 30.3.2): photon-weighted mean hit distance per
+// tile_hit_distance (Kim 2019, section 30.3.2): photon-weighted mean hit distance per
 // tile_size^2 tile, 0 for empty tiles. Mirror of backend-cpu/src/kernels/tile_hit_distance.rs.
 
 __kernel void tile_hit_distance(__global const GatherParams* p,

@@ -1,4 +1,4 @@
-// trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
+// trace_photons (Kim 2019, sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.cl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at
 // least one specular interaction. Mirror of backend-cpu/src/kernels/trace_photons.rs
@@ -23,11 +23,11 @@
 #ifndef SURFACE_STORE
 #define SURFACE_STORE 0
 #endif
-// Seed 001's deterministic splits (core's TraceVariant::fresnel_split).
+// Vanderstichelen 2021's deterministic splits (core's TraceVariant::fresnel_split).
 #ifndef FRESNEL_SPLIT
 #define FRESNEL_SPLIT 0
 #endif
-// Seed 004's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
+// Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
 // of cluster clusters[p->first + i / 4] of the p->grid_w grid and is written to slot i,
 // stored or not (core's photon_store says how); photon_count is left untouched.
 #ifndef ADAPTIVE
@@ -243,7 +243,7 @@ inline Branch branch(float3 origin, float3 dir, float3 flux, uint bounce, int ch
     record_end(end, ph, p->flux_quantum, photons, photon_capacity, photon_count,            \
                FUSED_DEPOSIT_ARGS, lc)
 
-// One emitted photon with seed 001's deterministic splits (backend-cpu
+// One emitted photon with Vanderstichelen 2021's deterministic splits (backend-cpu
 // trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
 // end; returns the ray segments traced, writes the branches added.
 inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint index,

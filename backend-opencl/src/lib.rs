@@ -33,11 +33,8 @@ mod recording;
 mod submission;
 
 use caustica_core::backend::{
-    backend_lifecycle, driver_entry, BackendError, Capabilities, DriverBackend, Finished, PassTime,
-    ResourceTable, Submission, Submissions,
+    backend_lifecycle, driver_entry, BackendError, ResourceTable, Submissions,
 };
-use caustica_core::device::handle::ResourceId;
-use caustica_core::recording::Recording;
 use device::DeviceState;
 pub use device::{list_devices, DeviceSummary};
 use opencl3::command_queue::CommandQueue;
@@ -86,40 +83,11 @@ impl Drop for OpenClBackend {
     }
 }
 
-/// `Backend` for it is core's (`caustica_core::backend::DriverBackend`): every body below
-/// runs inside the driver lock.
-impl DriverBackend for OpenClBackend {
-    const NAME: &'static str = "opencl";
+caustica_core::driver_backend!(OpenClBackend, "opencl");
 
-    fn device_capabilities(&self) -> Capabilities {
-        self.describe()
-    }
-
-    fn execute_in_driver(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        self.execute_recording(recording)
-    }
-
-    fn read_in_driver(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
-        self.read_back(id)
-    }
-
-    fn submit_in_driver(
-        &mut self,
-        recording: &Recording,
-        readbacks: &[ResourceId],
-    ) -> Result<Submission, BackendError> {
-        self.submit_recording(recording, readbacks)
-    }
-
-    fn poll_in_driver(
-        &mut self,
-        submission: &mut Submission,
-        wait: bool,
-    ) -> Result<Option<Finished>, BackendError> {
-        self.poll_submission(submission, wait)
-    }
-
-    fn compiled_variants(&self) -> Vec<String> {
+impl OpenClBackend {
+    /// The compiled kernel variants, labelled ([`caustica_core::kernels::variant_label`]).
+    pub(crate) fn variant_labels(&self) -> Vec<String> {
         let v = self.variants.lock().unwrap_or_else(|e| e.into_inner());
         v.iter().cloned().collect()
     }

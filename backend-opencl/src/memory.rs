@@ -138,7 +138,7 @@ impl OpenClBackend {
     }
 
     /// [`caustica_core::backend::Backend::read`]'s body.
-    pub(crate) fn read_back(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
+    pub(crate) fn read_resource(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
         let b = self.buffers.get(id)?;
         let mut out = caustica_core::device::host_bytes(b.bytes, "reading a buffer back")?;
         if !out.is_empty() {

@@ -104,7 +104,7 @@ pub const RELAXED_DIVISION_KERNELS: &[&str] =
 /// (photons matched within a position tolerance, paths allowed to diverge where a
 /// rounding sends them the other way) is argued for WGSL's and SPIR-V's bounds too. On the
 /// H200 its trace took 2.71 ms against 2.75 on `sphere`, 1.15 against 1.18 on `cornell`
-/// and 1.76 against 1.82 at CausticMap's seed 001 setting 0, with `cross_backend`'s trace,
+/// and 1.76 against 1.82 at CausticMap's Vanderstichelen 2021 setting 0, with `cross_backend`'s trace,
 /// Sspm and CausticMap checks and the stiff catalogue passing against the CPU.
 pub const RELAXED_DIVISION_VARIANTS: &[&str] = &["trace_photons"];
 

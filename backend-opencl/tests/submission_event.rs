@@ -4,6 +4,7 @@
 //! installs PoCL with scripts/install-drivers.sh).
 
 use caustica_core::scene::builtin::builtin;
+use caustica_core::TechniqueSettings;
 use caustica_core::{Sspm, SspmSettings, Technique};
 use caustica_opencl::OpenClBackend;
 
@@ -13,11 +14,7 @@ fn a_submitted_frame_hands_the_host_its_event() {
     let mut scene = builtin("sphere").unwrap();
     scene.camera.width = 64;
     scene.camera.height = 36;
-    let settings = SspmSettings {
-        photons_w: 32,
-        photons_h: 32,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(32, 32);
     let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
     let mut ticket = s.submit_frame(&mut b).expect("submit_frame");
     let event = b

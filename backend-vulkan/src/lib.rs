@@ -35,11 +35,9 @@ mod submission;
 
 use ash::vk;
 use caustica_core::backend::{
-    backend_lifecycle, driver_entry, BackendError, Capabilities, DriverBackend, Finished, PassTime,
-    ResourceTable, Submission, Submissions,
+    backend_lifecycle, driver_entry, BackendError, ResourceTable, Submissions,
 };
 use caustica_core::device::handle::ResourceId;
-use caustica_core::recording::Recording;
 use device::Context;
 use memory::{Buffer, DeviceBuffer};
 use std::collections::HashMap;
@@ -142,40 +140,11 @@ impl Drop for VulkanBackend {
     }
 }
 
-/// `Backend` for it is core's (`caustica_core::backend::DriverBackend`): every body below
-/// runs inside the driver lock.
-impl DriverBackend for VulkanBackend {
-    const NAME: &'static str = "vulkan";
+caustica_core::driver_backend!(VulkanBackend, "vulkan");
 
-    fn device_capabilities(&self) -> Capabilities {
-        self.describe()
-    }
-
-    fn execute_in_driver(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        self.execute_recording(recording)
-    }
-
-    fn read_in_driver(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
-        self.read_resource(id)
-    }
-
-    fn submit_in_driver(
-        &mut self,
-        recording: &Recording,
-        readbacks: &[ResourceId],
-    ) -> Result<Submission, BackendError> {
-        self.submit_recording(recording, readbacks)
-    }
-
-    fn poll_in_driver(
-        &mut self,
-        submission: &mut Submission,
-        wait: bool,
-    ) -> Result<Option<Finished>, BackendError> {
-        self.poll_submission(submission, wait)
-    }
-
-    fn compiled_variants(&self) -> Vec<String> {
+impl VulkanBackend {
+    /// The compiled kernel variants, labelled ([`caustica_core::kernels::variant_label`]).
+    pub(crate) fn variant_labels(&self) -> Vec<String> {
         caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
 }

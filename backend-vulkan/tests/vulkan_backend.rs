@@ -6,6 +6,7 @@
 use caustica_core::backend::{Backend, BackendError};
 use caustica_core::recording::Recording;
 use caustica_core::scene::builtin::builtin;
+use caustica_core::TechniqueSettings;
 use caustica_core::{Sspm, SspmSettings, Technique};
 use caustica_vulkan::VulkanBackend;
 
@@ -33,11 +34,7 @@ fn renders_a_frame_under_the_validation_layer() {
     let mut scene = builtin("sphere").unwrap();
     scene.camera.width = 64;
     scene.camera.height = 36;
-    let settings = SspmSettings {
-        photons_w: 32,
-        photons_h: 32,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(32, 32);
     // every execute fails on a validation error, so Ok here means zero errors
     let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
     let stats = s
@@ -71,11 +68,7 @@ fn a_submitted_frame_signals_the_timeline_semaphore_with_its_number() {
     let mut scene = builtin("sphere").unwrap();
     scene.camera.width = 64;
     scene.camera.height = 36;
-    let settings = SspmSettings {
-        photons_w: 32,
-        photons_h: 32,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(32, 32);
     let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
     let mut tickets = Vec::new();
     for _ in 0..3 {
@@ -136,11 +129,7 @@ fn a_deformed_instance_rebuilds_its_own_bottom_level_only() {
         .iter()
         .position(|o| o.transform.is_some())
         .unwrap();
-    let settings = SspmSettings {
-        photons_w: 16,
-        photons_h: 16,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(16, 16);
     let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
     s.frame(&mut b, &mut |_| {}).expect("frame");
     let built = b.bottom_level_builds();

@@ -32,11 +32,9 @@ mod texture;
 pub use device::list_adapters;
 
 use caustica_core::backend::{
-    backend_lifecycle, BackendError, Capabilities, DeviceType, DriverBackend, Finished, PassTime,
-    ResourceTable, Submission, Submissions,
+    backend_lifecycle, BackendError, DeviceType, ResourceTable, Submissions,
 };
 use caustica_core::device::handle::ResourceId;
-use caustica_core::recording::Recording;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
@@ -113,40 +111,11 @@ impl Drop for WgpuBackend {
     }
 }
 
-/// `Backend` for it is core's (`caustica_core::backend::DriverBackend`): every body below
-/// runs inside the driver lock.
-impl DriverBackend for WgpuBackend {
-    const NAME: &'static str = "wgpu";
+caustica_core::driver_backend!(WgpuBackend, "wgpu");
 
-    fn device_capabilities(&self) -> Capabilities {
-        self.describe()
-    }
-
-    fn execute_in_driver(&mut self, recording: &Recording) -> Result<Vec<PassTime>, BackendError> {
-        self.execute_recording(recording)
-    }
-
-    fn read_in_driver(&mut self, id: ResourceId) -> Result<Vec<u8>, BackendError> {
-        self.read_resource(id)
-    }
-
-    fn submit_in_driver(
-        &mut self,
-        recording: &Recording,
-        readbacks: &[ResourceId],
-    ) -> Result<Submission, BackendError> {
-        self.submit_recording(recording, readbacks)
-    }
-
-    fn poll_in_driver(
-        &mut self,
-        submission: &mut Submission,
-        wait: bool,
-    ) -> Result<Option<Finished>, BackendError> {
-        self.poll_submission(submission, wait)
-    }
-
-    fn compiled_variants(&self) -> Vec<String> {
+impl WgpuBackend {
+    /// The compiled kernel variants, labelled ([`caustica_core::kernels::variant_label`]).
+    pub(crate) fn variant_labels(&self) -> Vec<String> {
         caustica_core::kernels::variant_labels(self.pipelines.keys())
     }
 }

@@ -4,6 +4,7 @@
 //! installs lavapipe with scripts/install-drivers.sh).
 
 use caustica_core::scene::builtin::builtin;
+use caustica_core::TechniqueSettings;
 use caustica_core::{Sspm, SspmSettings, Technique};
 use caustica_wgpu::WgpuBackend;
 
@@ -13,11 +14,7 @@ fn a_steady_frame_loop_creates_no_queries_or_staging() {
     let mut scene = builtin("sphere").unwrap();
     scene.camera.width = 64;
     scene.camera.height = 36;
-    let settings = SspmSettings {
-        photons_w: 32,
-        photons_h: 32,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(32, 32);
     let mut s = Sspm::new(&mut b, &scene, settings).expect("scene uploads");
     // two frames in flight, each collected two frames later (a host's loop)
     let mut in_flight = std::collections::VecDeque::new();

@@ -1,6 +1,6 @@
 //! AdaptiveCaustics against the dense light view plane (CausticMap) per backend, at 1024^2,
-//! 2048^2 and 4096^2 equivalent photons (seed 004 found adaptive faster from 1024^2 on):
-//! `spot-glass` with the plane over the spot's whole cone (004's setting) and `sphere` with
+//! 2048^2 and 4096^2 equivalent photons (Wyman 2009 found adaptive faster from 1024^2 on):
+//! `spot-glass` with the plane over the spot's whole cone (Wyman 2009's setting) and `sphere` with
 //! CausticMap's caster-fitted plane.
 //!
 //! Per scene, size and technique (dense; adaptive, level metric; adaptive, error metric),
@@ -17,14 +17,15 @@
 
 mod common;
 use caustica::scene::builtin::builtin;
+use caustica::techniques::adaptive_caustics::AdaptiveStats;
 use caustica::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
-use caustica::techniques::caustic_map::{
-    CausticMap, CausticMapOutputs, CausticMapSettings, EmissionPlane,
-};
+use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica::Technique;
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica::{FrameSettings, PlaneSettings, TraceSettings, TraversalSettings};
+use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
@@ -68,18 +69,21 @@ fn main() {
             (scene.camera.width, scene.camera.height) = (1920, 1080);
             for &n in &sizes {
                 let map = CausticMapSettings {
-                    photons_w: n,
-                    photons_h: n,
-                    emission_plane: plane,
-                    max_photons_per_batch: 1 << 22,
-                    outputs: CausticMapOutputs {
-                        composite: true,
-                        direct: false,
-                        raw_caustics: false,
-                        filtered_caustics: false,
-                        atlas: false,
+                    frame: FrameSettings {
+                        photons_w: n,
+                        photons_h: n,
+                        outputs: Outputs::of(&[Output::Composite]),
+                        ..CausticMapSettings::default().frame
                     },
-                    ..Default::default()
+                    planes: PlaneSettings {
+                        emission_plane: plane,
+                        ..CausticMapSettings::default().planes
+                    },
+                    trace: TraceSettings {
+                        max_photons_per_batch: 1 << 22,
+                        ..CausticMapSettings::default().trace
+                    },
+                    ..CausticMapSettings::default()
                 };
                 for (label, metric) in [
                     ("dense", None),
@@ -93,10 +97,12 @@ fn main() {
                             backend.as_mut(),
                             &scene,
                             AdaptiveCausticsSettings {
-                                map: map.clone(),
-                                metric,
-                                max_traversal_bytes: 256 << 20,
-                                ..Default::default()
+                                traversal: TraversalSettings {
+                                    metric,
+                                    max_traversal_bytes: 256 << 20,
+                                    ..AdaptiveCausticsSettings::default().traversal
+                                },
+                                ..adaptive_over(&map)
                             },
                         )
                         .map(|t| Box::new(t) as Box<dyn Technique>),
@@ -130,7 +136,7 @@ fn main() {
                                         .sum(),
                                 );
                                 traced = st.photons_emitted;
-                                if let Some(a) = &st.adaptive {
+                                if let Some(a) = &AdaptiveStats::of(&st) {
                                     steps = a.steps;
                                     levels = a.photons_per_level.clone();
                                     level_ms.resize(a.ms_per_level.len(), Vec::new());
@@ -164,5 +170,17 @@ fn main() {
                 }
             }
         }
+    }
+}
+
+/// AdaptiveCaustics with the default traversal over CausticMap's `map` (the same photon
+/// grid, trace, view planes and atlas).
+fn adaptive_over(map: &CausticMapSettings) -> AdaptiveCausticsSettings {
+    AdaptiveCausticsSettings {
+        frame: map.frame.clone(),
+        trace: map.trace,
+        planes: map.planes,
+        atlas: map.atlas,
+        ..Default::default()
     }
 }

@@ -1,4 +1,4 @@
-//! CausticMap frames per backend at seed 001's three test settings (its section 4), each
+//! CausticMap frames per backend at Vanderstichelen 2021's three test settings (its section 4), each
 //! with `sphere`'s glass ball tessellated to the setting's triangle count: 20k triangles,
 //! 4 bounces, 3x3 gather, 2048^2 map, 1280x720; 70k, 6 bounces, 2048^2, 1920x1080; 100k,
 //! 4 bounces, 4096^2, 1920x1080; 2048x2048 photons (light view plane texels) each. "n
@@ -6,7 +6,7 @@
 //! `max_specular_depth = n` for the camera's tree.
 //!
 //! Per setting, Fresnel split (deterministic; stochastic, the default), map gather
-//! (density, the default; 001's box) and backend, after warm-up frames
+//! (density, the default; Vanderstichelen 2021's box) and backend, after warm-up frames
 //! (`CAUSTICA_BENCH_WARMUP_MS`, default 3000, then one more): the median over frames that
 //! remake the atlas (a new seed each) of every pass and of the budget line emission +
 //! trace + splat + gather (`trace_photons`, which deposits into the atlas, and `gather_caustic_map` or
@@ -25,10 +25,10 @@ mod common;
 use caustica::scene::builtin::builtin;
 use caustica::scene::limits::tessellated_size;
 use caustica::scene::{Scene, Shape};
-use caustica::techniques::caustic_map::{
-    CausticMap, CausticMapOutputs, CausticMapSettings, FresnelSplit, MapGather,
-};
+use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, FresnelSplit, MapGather};
 use caustica::{open_backend, BACKEND_NAMES};
+use caustica::{AtlasSettings, FrameSettings, PlaneSettings, TraceSettings};
+use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
@@ -40,7 +40,7 @@ const BUDGET_PASSES: &[&str] = &[
     "density_gather",
 ];
 
-/// (glass triangles, bounces, atlas side, image size): seed 001 section 4.
+/// (glass triangles, bounces, atlas side, image size): Vanderstichelen 2021, section 4.
 const SETTINGS: [(u64, u32, u32, (u32, u32)); 3] = [
     (20_000, 4, 2048, (1280, 720)),
     (70_000, 6, 2048, (1920, 1080)),
@@ -123,21 +123,26 @@ fn main() {
             let (tris, bounces, atlas, size) = SETTINGS[k];
             let (scene, total) = scene_with(tris, size);
             let settings = CausticMapSettings {
-                photons_w: side,
-                photons_h: side,
-                atlas_size: atlas,
-                max_bounces: bounces + 1,
-                max_specular_depth: bounces,
-                fresnel_split: split,
-                gather,
-                outputs: CausticMapOutputs {
-                    composite: true,
-                    direct: false,
-                    raw_caustics: false,
-                    filtered_caustics: false,
-                    atlas: false,
+                frame: FrameSettings {
+                    photons_w: side,
+                    photons_h: side,
+                    max_specular_depth: bounces,
+                    outputs: Outputs::of(&[Output::Composite]),
+                    ..CausticMapSettings::default().frame
                 },
-                ..Default::default()
+                atlas: AtlasSettings {
+                    atlas_size: atlas,
+                    gather,
+                    ..CausticMapSettings::default().atlas
+                },
+                trace: TraceSettings {
+                    max_bounces: bounces + 1,
+                    ..CausticMapSettings::default().trace
+                },
+                planes: PlaneSettings {
+                    fresnel_split: split,
+                    ..CausticMapSettings::default().planes
+                },
             };
             let mut t = match CausticMap::new(backend.as_mut(), &scene, settings) {
                 Ok(t) => t,

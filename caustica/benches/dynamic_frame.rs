@@ -17,12 +17,12 @@
 //! `CAUSTICA_BENCH_DEFORM=0` (moves only: no caster deformed per frame).
 
 mod common;
+use caustica::glam::{Quat, Vec3};
 use caustica::scene::builtin::builtin;
 use caustica::scene::{Light, Object, Scene, Shape, Transform};
 use caustica::techniques::create;
 use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median};
-use glam::{Quat, Vec3};
 use std::time::Instant;
 
 /// `name` with its specular spheres as instances and a static diffuse sphere of

@@ -1,4 +1,4 @@
-//! PhotonGi frames (seed 003) per backend at the chapter's two settings on `rooms` at
+//! PhotonGi frames (Smal 2019) per backend at the chapter's two settings on `rooms` at
 //! 1920x1080: "high", 3 million initial photons (1732^2), 3 bounces, 4 A-Trous iterations;
 //! "low", 1 million (1024^2), 1 bounce, 4 A-Trous iterations. Both with the temporal
 //! blend. After warm-up frames (`CAUSTICA_BENCH_WARMUP_MS`, default 3000), the median over
@@ -15,6 +15,7 @@
 mod common;
 use caustica::scene::builtin::builtin;
 use caustica::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
+use caustica::FrameSettings;
 use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
 use std::collections::BTreeMap;
@@ -51,10 +52,13 @@ fn main() {
                 other => panic!("unknown setting {other}"),
             };
             let s = PhotonGiSettings {
-                photons_w: side,
-                photons_h: side,
+                frame: FrameSettings {
+                    photons_w: side,
+                    photons_h: side,
+                    ..PhotonGiSettings::default().frame
+                },
                 bounces,
-                ..Default::default()
+                ..PhotonGiSettings::default()
             };
             let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {
                 Ok(t) => t,

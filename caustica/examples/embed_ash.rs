@@ -8,6 +8,7 @@
 use caustica::ash::{self, vk};
 use caustica::backends::vulkan::{VulkanBackend, DEVICE_EXTENSIONS};
 use caustica::scene::builtin::builtin;
+use caustica::TechniqueSettings;
 use caustica::{Sspm, SspmSettings};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -80,11 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut scene = builtin("sphere").ok_or("no sphere scene")?;
         scene.camera.width = w;
         scene.camera.height = h;
-        let settings = SspmSettings {
-            photons_w: side,
-            photons_h: side,
-            ..SspmSettings::default()
-        };
+        let settings = SspmSettings::default().with_photons(side, side);
         let mut s = Sspm::new(&mut b, &scene, settings)?;
         let stats = s.frame(&mut b, &mut |_| {})?;
         println!(

@@ -9,7 +9,7 @@
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::builtin::builtin;
 use caustica::wgpu;
-use caustica::{Outputs, Sspm, SspmSettings};
+use caustica::{Output, Outputs, Sspm, SspmSettings, TechniqueSettings};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // --- the host renderer's own device and texture -------------------------------
@@ -56,19 +56,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut scene = builtin("sphere").ok_or("no sphere scene")?;
     scene.camera.width = w;
     scene.camera.height = h;
-    let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        // the renderer does its own direct light: no direct_light or composite pass
-        outputs: Outputs::CAUSTICS_ONLY,
-        ..SspmSettings::default()
-    };
+    // the renderer does its own direct light: no direct_light or composite pass
+    let settings = SspmSettings::default()
+        .with_photons(side, side)
+        .with_outputs(Outputs::CAUSTICS_ONLY);
     let mut sspm = Sspm::new(&mut backend, &scene, settings)?;
     let stats = sspm.frame(&mut backend, &mut |_| {})?;
     // `None` when no light reaches a caustic caster (the caustics are zero)
     let caustics = sspm
-        .images()
-        .filtered_caustics
+        .output_image(Output::FilteredCaustics)?
         .ok_or("no light reaches a caustic caster")?;
     backend.write_image_to_texture(caustics, &texture)?;
     sspm.free(&mut backend)?;

@@ -1,9 +1,10 @@
 //! A real-time host's frame loop, headless: the "renderer" owns the wgpu device, its
 //! queue and an `Rgba16Float` texture. It drives each of the four techniques in turn:
 //! every frame it moves the light and the glass ball (an instance) through caustica's
-//! update API, records the technique's whole frame into *its own* command encoder (with
-//! Sspm, it also has the caustics written into its texture in the same encoder), and
-//! submits once. Each frame's statistics (pass times, photon counts) are collected a few
+//! update API, records the technique's whole frame into *its own* command encoder, has
+//! the technique's filtered light (caustics, or PhotonGi's indirect light:
+//! `Technique::output_image`) written into its texture in the same encoder, and submits
+//! once. Each frame's statistics (pass times, photon counts) are collected a few
 //! frames later, when the device has finished that frame. It prints the update and
 //! record times and the host waits inside `record_frame` per frame (device waits and
 //! blocking readbacks a technique still needs while recording).
@@ -12,8 +13,8 @@
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::builtin::builtin;
 use caustica::scene::{Light, Shape, Transform};
-use caustica::wgpu;
-use caustica::{FrameTicket, Outputs, Sspm, SspmSettings, Technique};
+use caustica::{glam, wgpu};
+use caustica::{FrameTicket, Output};
 use std::collections::VecDeque;
 use std::time::Instant;
 
@@ -74,26 +75,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{name}: {frames} frames a technique at {w}x{h}, {side}x{side} photons, moving light and ball");
 
     for technique in ["sspm", "caustic-map", "adaptive-caustics", "photon-gi"] {
-        let mut grid = serde_json::json!({ "photons_w": side, "photons_h": side });
+        // the renderer does its own direct light: only the technique's filtered light
+        let light = if technique == "photon-gi" {
+            Output::FilteredIndirect
+        } else {
+            Output::FilteredCaustics
+        };
+        let mut settings = serde_json::json!({
+            "frame": { "photons_w": side, "photons_h": side, "outputs": [light] }
+        });
         if technique.contains("caustic") {
             // an atlas of 512^2 texels over the two receivers
-            grid["atlas_size"] = 512.into();
+            settings["atlas"] = serde_json::json!({ "atlas_size": 512 });
         }
-        let (mut t, caustics): (Box<dyn Technique>, _) = if technique == "sspm" {
-            let settings = SspmSettings {
-                photons_w: side,
-                photons_h: side,
-                // the renderer does its own direct light: caustics only
-                outputs: Outputs::CAUSTICS_ONLY,
-                ..SspmSettings::default()
-            };
-            let sspm = Sspm::new(&mut backend, &scene, settings)?;
-            let caustics = sspm.images().filtered_caustics;
-            (Box::new(sspm), caustics)
-        } else {
-            let t = caustica::techniques::create(technique, &mut backend, &scene, &grid)?;
-            (t, None)
-        };
+        let mut t = caustica::techniques::create(technique, &mut backend, &scene, &settings)?;
+        // the device image the host copies into its texture each frame (`None`: no light
+        // reaches a caster, the image is black)
+        let added = t.output_image(light)?;
         let mut l = Loop::default();
         let mut in_flight: VecDeque<FrameTicket> = VecDeque::new();
         let start = Instant::now();
@@ -120,7 +118,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut encoder = device.create_command_encoder(&Default::default());
             let submission =
                 backend.encode(&recorded.recording, &recorded.readbacks, &mut encoder)?;
-            if let Some(c) = caustics {
+            if let Some(c) = added {
                 backend.encode_image_to_texture(c, &texture, &mut encoder)?;
             }
             let index = queue.submit([encoder.finish()]);

@@ -6,6 +6,7 @@
 use caustica::gltf_scene::{load_gltf, scene_to_gltf};
 use caustica::output::write_png;
 use caustica::scene::builtin::builtin;
+use caustica::TechniqueSettings;
 use caustica::{open_backend, Output, Sspm, SspmSettings};
 use std::path::PathBuf;
 
@@ -44,11 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scene.camera.width = w;
     scene.camera.height = h;
     let mut backend = open_backend("cpu")?;
-    let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(side, side);
     let mut sspm = Sspm::new(backend.as_mut(), &scene, settings)?;
     sspm.frame(backend.as_mut(), &mut |_| {})?;
     let image = sspm.read_output(backend.as_mut(), Output::Composite)?;

@@ -7,6 +7,7 @@
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::builtin::builtin;
+use caustica::TechniqueSettings;
 use caustica::{open_backend, Output, Sspm, SspmSettings};
 use std::path::Path;
 
@@ -37,11 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     scene.camera.width = w;
     scene.camera.height = h;
-    let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(side, side);
     let mut sspm = Sspm::new(backend.as_mut(), &scene, settings)?;
     let stats = sspm.frame(backend.as_mut(), &mut |_| {})?;
     let image = sspm.read_output(backend.as_mut(), Output::Composite)?;

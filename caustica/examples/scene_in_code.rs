@@ -5,6 +5,7 @@
 
 use caustica::output::write_png;
 use caustica::scene::{Camera, Light, Material, Object, Scene, Shape};
+use caustica::TechniqueSettings;
 use caustica::{open_backend, Output, Sspm, SspmSettings};
 use glam::Vec3;
 use std::collections::BTreeMap;
@@ -83,11 +84,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let mut backend = open_backend("cpu")?;
-    let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(side, side);
     let mut sspm = Sspm::new(backend.as_mut(), &scene, settings)?;
     let stats = sspm.frame(backend.as_mut(), &mut |_| {})?;
     let image = sspm.read_output(backend.as_mut(), Output::Composite)?;

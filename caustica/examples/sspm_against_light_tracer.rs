@@ -7,20 +7,20 @@
 //! prints, per photon grid, the relative L2 error (sqrt of the relative MSE over the
 //! reference's caustic mask) of each seed's frame, and the reference's own noise.
 
+use caustica::backends::cpu::CpuBackend;
+use caustica::metrics::{relative_mse, CausticMask};
 use caustica::reference::light_tracer::{
     load_or_compute, silhouette_pixels, LightTracerSpec, SphereModel,
 };
 use caustica::reference::CAUSTIC_REFERENCE;
-use caustica_core::frame::metrics::{relative_mse, CausticMask};
-use caustica_core::techniques::create;
-use caustica_cpu::CpuBackend;
+use caustica::techniques::create;
 use std::path::Path;
 
 fn main() -> Result<(), String> {
     let a: Vec<String> = std::env::args().skip(1).collect();
     let arg = |i: usize, d: &str| a.get(i).cloned().unwrap_or_else(|| d.to_string());
-    let mut scene = caustica_core::scene::builtin::builtin(&arg(0, "sphere"))
-        .ok_or("unknown built-in scene")?;
+    let mut scene =
+        caustica::scene::builtin::builtin(&arg(0, "sphere")).ok_or("unknown built-in scene")?;
     let size = arg(1, "160x90");
     let (w, h) = size
         .split_once('x')
@@ -92,7 +92,7 @@ fn main() -> Result<(), String> {
             }
         }
         t.free(&mut b).map_err(|e| e.to_string())?;
-        let mean = caustica_core::frame::image::Image::new(
+        let mean = caustica::Image::new(
             w,
             h,
             sum.iter()

@@ -18,10 +18,46 @@
 //! ```
 //!
 //! Every technique is a type of its own with its settings, created over a scene and
-//! driven the same way (frame, updates, outputs by name, free); see [`CausticMap`],
+//! driven the same way (frame, updates, outputs, free); see [`CausticMap`],
 //! [`AdaptiveCaustics`] and [`PhotonGi`] for one example each. Any technique by name,
 //! without naming its type: [`techniques::create`] returns a `Box<dyn` [`Technique`]`>`;
 //! [`techniques::TECHNIQUES`] lists them.
+//!
+//! Every technique speaks one output vocabulary ([`Output`]) and lists the outputs it has
+//! ([`Technique::outputs`]), so a host writes one function for all four. This one renders
+//! a frame of any technique and reads its caustics (an output the technique lacks, such as
+//! PhotonGi's, is [`Error::NoSuchOutput`]):
+//!
+//! ```
+//! use caustica::{open_backend, scene::builtin, techniques, Error, Output, Technique};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! fn caustics(t: &mut dyn Technique, backend: &mut dyn caustica::Backend)
+//!     -> Result<Option<caustica::Image>, Error> {
+//!     t.frame(backend, &mut |_| {})?;
+//!     let has = t.outputs().iter().any(|o| o.output == Output::FilteredCaustics);
+//!     if !has {
+//!         return Ok(None);
+//!     }
+//!     t.read_output(backend, Output::FilteredCaustics).map(Some)
+//! }
+//!
+//! let mut backend = open_backend("cpu")?;
+//! let mut scene = builtin::builtin("sphere").expect("built-in scene");
+//! (scene.camera.width, scene.camera.height) = (64, 36);
+//! for name in techniques::technique_names() {
+//!     let small = serde_json::json!({ "frame": { "photons_w": 64, "photons_h": 64 } });
+//!     let mut t = techniques::create(name, backend.as_mut(), &scene, &small)?;
+//!     match caustics(t.as_mut(), backend.as_mut())? {
+//!         Some(img) => println!("{name}: {} caustic pixels", img.pixels.len()),
+//!         None => println!("{name} has no caustics"),
+//!     }
+//!     let e = t.read_output(backend.as_mut(), Output::CausticAtlas);
+//!     assert!(e.is_ok() || matches!(e, Err(Error::NoSuchOutput { .. })));
+//!     t.free(backend.as_mut())?;
+//! }
+//! # Ok(())
+//! # }
+//! ```
 //!
 //! What is here: scenes ([`scene`]: the model, built-ins, the JSON format), opening a
 //! backend ([`open_backend`], [`backend_statuses`]), the techniques with their settings
@@ -29,10 +65,17 @@
 //! metrics ([`metrics`]) and references ([`reference`](mod@reference)); each backend's own API behind its
 //! cargo feature in [`backends`] (embedding into a host's wgpu or Vulkan device);
 //! `glam`, `wgpu` and `ash` as caustica uses them. Backend authors find the kernel list,
-//! recordings and device layouts under [`internals`]. With the `report` feature,
+//! recordings, device layouts and the frame host under [`internals`], the one module of
+//! what lies below the techniques. With the `report` feature,
 //! [`report`] measures error against run time.
 
 #![warn(missing_docs)]
+
+/// The README's examples, compiled by `cargo test --doc` (the embedding fragments, marked
+/// `ignore`, are the runnable examples `frame_loop` and `embed_ash`).
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeExamples;
 
 #[cfg(feature = "gltf")]
 pub mod gltf_scene;
@@ -49,35 +92,35 @@ pub use caustica_core::backend::{
 pub use caustica_core::frame::error::Error;
 pub use caustica_core::frame::image::Image;
 pub use caustica_core::frame::metrics;
+pub use caustica_core::frame::output::{Output, OutputInfo, Outputs};
 pub use caustica_core::frame::plan::FramePlan;
+pub use caustica_core::frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
 pub use caustica_core::frame::stats::FrameStats;
 pub use caustica_core::frame::submitted::{FrameTicket, RecordedFrame};
-pub use caustica_core::frame::technique::{OutputInfo, Progress, Technique};
+pub use caustica_core::frame::technique::{Progress, Technique};
 pub use caustica_core::scene;
 pub use caustica_core::scene::Scene;
-pub use caustica_core::techniques::sspm::{
-    FrameImages, GatherFilter, Output, Outputs, Sspm, SspmSettings,
-};
+pub use caustica_core::techniques::sspm::{FrameImages, GatherFilter, Sspm, SspmSettings};
+pub use caustica_core::{AtlasSettings, PlaneSettings, ScreenSettings, TraversalSettings};
 
-/// CausticMap (seed 001): photons from each light's view planes into a caustic atlas in
+/// CausticMap (Vanderstichelen 2021): photons from each light's view planes into a caustic atlas in
 /// the receivers' texture space, looked up by the camera through mirrors and glass. The
 /// atlas is remade only when lights, settings or the seed change: a frame after a camera
 /// move reuses it.
 ///
 /// ```no_run
-/// use caustica::{open_backend, scene::builtin, CausticMap, CausticMapSettings};
+/// use caustica::{open_backend, scene::builtin, CausticMap, CausticMapSettings, Output};
+/// use caustica::TechniqueSettings; // with_photons
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("sphere").expect("built-in scene");
-/// let settings = CausticMapSettings {
-///     photons_w: 1024,
-///     photons_h: 1024,
-///     ..Default::default()
-/// };
+/// // the knobs every technique shares sit in `frame`, the atlas's in `atlas`
+/// let mut settings = CausticMapSettings::default().with_photons(1024, 1024);
+/// settings.atlas.atlas_size = 1024;
 /// let mut map = CausticMap::new(backend.as_mut(), &scene, settings)?;
 /// map.frame(backend.as_mut(), &mut |_| {})?;
-/// let caustics = map.read_output(backend.as_mut(), "caustics_filtered")?; // radiance
-/// let atlas = map.read_output(backend.as_mut(), "caustic_atlas")?; // irradiance, W/m^2
+/// let caustics = map.read_output(backend.as_mut(), Output::FilteredCaustics)?; // radiance
+/// let atlas = map.read_output(backend.as_mut(), Output::CausticAtlas)?; // irradiance, W/m^2
 /// map.free(backend.as_mut())?;
 /// # let _ = (caustics, atlas);
 /// # Ok(())
@@ -85,32 +128,32 @@ pub use caustica_core::techniques::sspm::{
 /// ```
 pub use caustica_core::techniques::caustic_map::CausticMap;
 pub use caustica_core::techniques::caustic_map::{
-    CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
+    CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
 };
 
-/// AdaptiveCaustics (seed 004): the light view planes sampled coarse to fine, so that
+/// AdaptiveCaustics (Wyman 2009): the light view planes sampled coarse to fine, so that
 /// photons are traced only where the casters are; its photons land in the caustic atlas
 /// (the default) or the screen photon map (`deposit: screen`).
 ///
 /// ```no_run
 /// use caustica::{open_backend, scene::builtin, AdaptiveCaustics, AdaptiveCausticsSettings};
-/// use caustica::{AdaptiveDeposit, AdaptiveMetric, CausticMapSettings};
+/// use caustica::{AdaptiveDeposit, AdaptiveMetric, AdaptiveStats, Output};
+/// use caustica::{TechniqueSettings, TraversalSettings};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("spot-glass").expect("built-in scene");
 /// let settings = AdaptiveCausticsSettings {
-///     // the dense-equivalent grid: the pyramid's finest level
-///     map: CausticMapSettings { photons_w: 2048, photons_h: 2048, ..Default::default() },
-///     metric: AdaptiveMetric::Error,
+///     traversal: TraversalSettings { metric: AdaptiveMetric::Error, ..Default::default() },
 ///     deposit: AdaptiveDeposit::Atlas,
 ///     ..Default::default()
-/// };
+/// }
+/// .with_photons(2048, 2048); // the dense-equivalent grid: the pyramid's finest level
 /// let mut t = AdaptiveCaustics::new(backend.as_mut(), &scene, settings)?;
 /// let stats = t.frame(backend.as_mut(), &mut |_| {})?;
-/// if let Some(a) = &stats.adaptive {
+/// if let Some(a) = AdaptiveStats::of(&stats) {
 ///     println!("{} of {} photons traced", a.photons_processed, a.dense_equivalent_photons);
 /// }
-/// let composite = t.read_output(backend.as_mut(), "composite")?;
+/// let composite = t.read_output(backend.as_mut(), Output::Composite)?;
 /// t.free(backend.as_mut())?;
 /// # let _ = composite;
 /// # Ok(())
@@ -118,14 +161,14 @@ pub use caustica_core::techniques::caustic_map::{
 /// ```
 pub use caustica_core::techniques::adaptive_caustics::AdaptiveCaustics;
 pub use caustica_core::techniques::adaptive_caustics::{
-    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance,
+    AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, AdaptiveStats, ClusterRelevance,
 };
 
-/// PhotonGi (seed 003): multi-bounce indirect light by photon splatting from each light's
+/// PhotonGi (Smal 2019): multi-bounce indirect light by photon splatting from each light's
 /// reflective shadow map, with the chapter's temporal and A-Trous filters.
 ///
 /// ```no_run
-/// use caustica::{open_backend, scene::builtin, PhotonGi, PhotonGiSettings};
+/// use caustica::{open_backend, scene::builtin, Output, PhotonGi, PhotonGiSettings};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let mut backend = open_backend("auto")?;
 /// let scene = builtin::builtin("cornell").expect("built-in scene");
@@ -134,7 +177,7 @@ pub use caustica_core::techniques::adaptive_caustics::{
 ///     gi.set_seed(seed); // the temporal filter accumulates over frames
 ///     gi.frame(backend.as_mut(), &mut |_| {})?;
 /// }
-/// let composite = gi.read_output(backend.as_mut(), "composite")?;
+/// let composite = gi.read_output(backend.as_mut(), Output::Composite)?;
 /// gi.free(backend.as_mut())?;
 /// # let _ = composite;
 /// # Ok(())
@@ -152,18 +195,20 @@ pub mod techniques {
     };
 }
 
-/// For backend authors: the backend trait's vocabulary (recordings and their steps, the
-/// kernel list and declarations, device layouts and handles) and the scalar math every
-/// shader mirrors. Not needed to use a technique.
+/// For backend authors and tools that work below the techniques; not needed to use a
+/// technique. The backend trait's vocabulary: [`backend`](internals::backend),
+/// [`recording`](internals::recording) (recordings and their steps),
+/// [`kernels`](internals::kernels) (the kernel list and declarations),
+/// [`device`](internals::device) (device layouts and handles) and
+/// [`math`](internals::math) (the scalar math every shader mirrors). The frame machinery:
+/// the frame [`host`](internals::host) and the seam a technique implements over it
+/// ([`pipeline::Pipeline`](internals::pipeline::Pipeline)), the non-blocking frame
+/// ([`submitted`](internals::submitted)), and the modules behind the top level's
+/// [`Image`], [`FramePlan`] and [`FrameStats`] with their helpers
+/// ([`image`](internals::image), [`plan`](internals::plan), [`stats`](internals::stats)).
 pub mod internals {
+    pub use caustica_core::frame::{host, image, pipeline, plan, stats, submitted};
     pub use caustica_core::{backend, device, kernels, math, recording};
-}
-
-/// The frame machinery a host or tool may need beyond the techniques: images, metrics,
-/// the frame plan and statistics, the non-blocking frame, the frame host and the seam a
-/// technique implements over it ([`frame::pipeline::Pipeline`]).
-pub mod frame {
-    pub use caustica_core::frame::{host, image, metrics, pipeline, plan, stats, submitted};
 }
 
 /// Each backend's own API (embedding into a host's device, device choice), behind its

@@ -52,12 +52,35 @@ pub fn file_stem(name: &str) -> String {
 }
 
 /// Creates the output folder `dir` and checks that a file can be written there, before
-/// any work whose results would be written there.
+/// any work whose results would be written there; the error starts with `--out` and
+/// names the path (see [`prepare_folder`]).
 pub fn prepare_output_dir(dir: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("--out {}: {e}", dir.display()))?;
+    prepare_folder(dir).map_err(|e| format!("--out {e}"))
+}
+
+/// Creates the folder `dir` (and its parents) and checks that a file can be written
+/// there. The error starts with the path and says what is wrong: a file where the folder
+/// or one of its parents must be, the operating system's error creating it, or that it
+/// is not writable (permissions, a read-only file system).
+pub fn prepare_folder(dir: &Path) -> Result<(), String> {
+    let shown = dir.display();
+    // the nearest part of the path that exists must be a folder
+    if let Some(existing) = dir
+        .ancestors()
+        .filter(|a| !a.as_os_str().is_empty())
+        .find(|a| a.exists())
+    {
+        if !existing.is_dir() {
+            return Err(if existing == dir {
+                format!("{shown}: a file is there, not a folder")
+            } else {
+                format!("{shown}: {} is a file, not a folder", existing.display())
+            });
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(|e| format!("{shown}: {e}"))?;
     let probe = dir.join(format!(".caustica-write-test-{}", std::process::id()));
-    std::fs::write(&probe, b"")
-        .map_err(|e| format!("--out {}: not writable: {e}", dir.display()))?;
+    std::fs::write(&probe, b"").map_err(|e| format!("{shown}: not writable: {e}"))?;
     let _ = std::fs::remove_file(&probe);
     Ok(())
 }

@@ -105,6 +105,7 @@ pub struct ReportPlan {
 }
 
 pub use crate::technique_spec::technique_spec;
+use crate::technique_spec::{merge_settings, put_setting};
 
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
@@ -200,14 +201,14 @@ pub fn run(
                 }) {
                     let frames = frames.max(1);
                     let mut settings = plan.settings.clone();
-                    settings.extend(overrides.clone());
-                    settings.insert("photons_w".into(), pw.into());
-                    settings.insert("photons_h".into(), ph.into());
-                    if let Some((key, _)) = filter_setting {
-                        settings.insert(key.into(), filter.as_str().into());
+                    merge_settings(&mut settings, overrides.clone());
+                    put_setting(&mut settings, "frame.photons_w", pw.into());
+                    put_setting(&mut settings, "frame.photons_h", ph.into());
+                    if let Some((path, _)) = filter_setting {
+                        put_setting(&mut settings, path, filter.as_str().into());
                     }
                     if frames > 1 {
-                        settings.insert("accumulate".into(), true.into());
+                        put_setting(&mut settings, "frame.accumulate", true.into());
                     }
                     let settings = serde_json::Value::Object(settings);
                     let made = create(name, backend.as_mut(), &scene, &settings);

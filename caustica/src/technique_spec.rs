@@ -22,7 +22,89 @@ pub fn technique_spec(
             .split_once('=')
             .ok_or_else(|| format!("technique '{spec}': '{pair}' is not key=value"))?;
         let value = serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::from(v));
-        settings.insert(k.to_string(), value);
+        // `block.field` sets a field of a block (`frame.seed=3`); a bare field name is
+        // found in its block by the technique (`seed=3`)
+        if k.contains('.') {
+            put_setting(&mut settings, k, value);
+        } else {
+            settings.insert(k.to_string(), value);
+        }
     }
     Ok((name, settings))
+}
+
+/// A JSON object of technique settings, as the techniques read it.
+pub type SettingsMap = serde_json::Map<String, serde_json::Value>;
+
+/// Sets the settings field at `path` (`"frame.photons_w"`: a block's field; `"seed"`: a
+/// top-level one) to `value`, over what `settings` held: the same field given in the
+/// flat form of earlier versions (`"photons_w"` at the top level) is replaced too, so
+/// that a settings file of either form takes a flag's value.
+pub fn put_setting(settings: &mut SettingsMap, path: &str, value: serde_json::Value) {
+    match path.split_once('.') {
+        Some((block, field)) => {
+            settings.remove(field);
+            let b = settings
+                .entry(block.to_string())
+                .or_insert_with(|| serde_json::Value::Object(Default::default()));
+            if !b.is_object() {
+                *b = serde_json::Value::Object(Default::default());
+            }
+            if let Some(b) = b.as_object_mut() {
+                b.insert(field.to_string(), value);
+            }
+        }
+        None => {
+            settings.insert(path.to_string(), value);
+        }
+    }
+}
+
+/// The settings field at `path` (`"frame.seed"`), given in its block or, in the flat form
+/// of earlier versions, at the top level.
+pub fn get_setting<'a>(settings: &'a SettingsMap, path: &str) -> Option<&'a serde_json::Value> {
+    match path.split_once('.') {
+        Some((block, field)) => settings
+            .get(block)
+            .and_then(|b| b.get(field))
+            .or_else(|| settings.get(field)),
+        None => settings.get(path),
+    }
+}
+
+/// Lays `overrides` over `settings`: a block given in both merges field by field (a
+/// spec's `frame.seed=3` keeps the settings file's other `frame` fields).
+pub fn merge_settings(settings: &mut SettingsMap, overrides: SettingsMap) {
+    for (k, v) in overrides {
+        match (settings.get_mut(&k), v) {
+            (Some(serde_json::Value::Object(b)), serde_json::Value::Object(o)) => {
+                for (field, x) in o {
+                    b.insert(field, x);
+                }
+            }
+            (_, v) => {
+                settings.insert(k, v);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_flag_replaces_a_field_given_in_either_form() {
+        let mut s: SettingsMap =
+            serde_json::from_str(r#"{"photons_w": 8, "frame": {"seed": 1}}"#).unwrap();
+        put_setting(&mut s, "frame.photons_w", 64.into());
+        assert_eq!(s.get("photons_w"), None);
+        assert_eq!(get_setting(&s, "frame.photons_w"), Some(&64.into()));
+        assert_eq!(get_setting(&s, "frame.seed"), Some(&1.into()));
+        let (_, o) = technique_spec("sspm:frame.accumulate=true+point_emission=sphere").unwrap();
+        merge_settings(&mut s, o);
+        assert_eq!(get_setting(&s, "frame.seed"), Some(&1.into()));
+        assert_eq!(get_setting(&s, "frame.accumulate"), Some(&true.into()));
+        assert_eq!(s.get("point_emission"), Some(&"sphere".into()));
+    }
 }

@@ -143,16 +143,16 @@ fn the_settings_files_photon_grid_is_kept_unless_the_flag_is_given() {
     let s = stats(&[]);
     assert_eq!(
         (
-            s["settings"]["photons_w"].as_u64(),
-            s["settings"]["photons_h"].as_u64()
+            s["settings"]["frame"]["photons_w"].as_u64(),
+            s["settings"]["frame"]["photons_h"].as_u64()
         ),
         (Some(32), Some(16))
     );
     let s = stats(&["--photons", "8x8"]);
     assert_eq!(
         (
-            s["settings"]["photons_w"].as_u64(),
-            s["settings"]["photons_h"].as_u64()
+            s["settings"]["frame"]["photons_w"].as_u64(),
+            s["settings"]["frame"]["photons_h"].as_u64()
         ),
         (Some(8), Some(8))
     );

@@ -4,10 +4,12 @@
 
 use caustica_core::frame::technique::Technique;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{AtlasSettings, FrameSettings, TraversalSettings};
 
 fn main() {
     let n: u32 = std::env::args()
@@ -16,10 +18,16 @@ fn main() {
         .unwrap_or(256);
     let mut b = caustica_cpu::CpuBackend::new().expect("cpu backend");
     let map = CausticMapSettings {
-        photons_w: n,
-        photons_h: n,
-        atlas_size: 256,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: n,
+            photons_h: n,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 256,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     };
     println!("scene | dense stored W | level / dense | error / dense | photons level | photons error | dense");
     for name in BUILTIN_SCENES {
@@ -38,9 +46,11 @@ fn main() {
                 &mut b,
                 &scene,
                 AdaptiveCausticsSettings {
-                    map: map.clone(),
-                    metric,
-                    ..Default::default()
+                    traversal: TraversalSettings {
+                        metric,
+                        ..AdaptiveCausticsSettings::default().traversal
+                    },
+                    ..caustica_conformance::adaptive_over(&map)
                 },
             )
             .unwrap();
@@ -49,7 +59,7 @@ fn main() {
             let total: f64 = ds.stored_flux.iter().sum();
             let ad: f64 = s.stored_flux.iter().sum();
             row.push(format!("{:.5}", if total > 0.0 { ad / total } else { 0.0 }));
-            let st = s.adaptive.unwrap_or_default();
+            let st = AdaptiveStats::of(&s).unwrap_or_default();
             counts.push(format!(
                 "{} ({} out)",
                 st.photons_processed, s.photons_stored

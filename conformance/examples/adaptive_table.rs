@@ -1,4 +1,4 @@
-//! Seed 004's Table 1 in its own setting: photons traced per level and in total by the
+//! Wyman 2009's Table 1 in its own setting: photons traced per level and in total by the
 //! dense light view plane and by AdaptiveCaustics' two metrics on `spot-glass` (the plane
 //! over the spot's whole cone), with each caustic map's error against a denser reference,
 //! and the ratio against CausticMap's default caster-fitted plane on every built-in scene.
@@ -10,22 +10,34 @@
 //! each tolerance (`error_texels`: footprint splats above 1).
 
 use caustica_core::frame::image::Image;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica_core::{Backend, FrameStats};
+use caustica_core::{FrameSettings, PlaneSettings, TraceSettings, TraversalSettings};
 use std::time::Instant;
 
 fn map(n: u32, plane: EmissionPlane) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: n,
-        photons_h: n,
-        emission_plane: plane,
-        max_photons_per_batch: 1 << 22,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: n,
+            photons_h: n,
+            ..CausticMapSettings::default().frame
+        },
+        planes: PlaneSettings {
+            emission_plane: plane,
+            ..CausticMapSettings::default().planes
+        },
+        trace: TraceSettings {
+            max_photons_per_batch: 1 << 22,
+            ..CausticMapSettings::default().trace
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -37,17 +49,19 @@ fn run<P: caustica_core::frame::pipeline::Pipeline>(
     let start = Instant::now();
     let s = t.frame(b, &mut |_| {}).expect("frame");
     let ms = start.elapsed().as_secs_f64() * 1e3;
-    let atlas = t.read_output_named(b, "caustic_atlas").expect("atlas");
+    let atlas = t.read_output(b, Output::CausticAtlas).expect("atlas");
     t.free(b).expect("free");
     (s, atlas, ms)
 }
 
 fn adaptive(n: u32, plane: EmissionPlane, metric: AdaptiveMetric) -> AdaptiveCausticsSettings {
     AdaptiveCausticsSettings {
-        map: map(n, plane),
-        metric,
-        max_traversal_bytes: 256 << 20,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric,
+            max_traversal_bytes: 256 << 20,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..caustica_conformance::adaptive_over(&map(n, plane))
     }
 }
 
@@ -87,7 +101,7 @@ fn main() {
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
             let t = AdaptiveCaustics::new(b, &scene, adaptive(n, plane, metric)).expect("adaptive");
             let (s, a, ms) = run(b, t);
-            let st = s.adaptive.clone().unwrap_or_default();
+            let st = AdaptiveStats::of(&s).unwrap_or_default();
             per_level.push((n, metric, st.photons_per_level.clone()));
             row.push((st.photons_processed, rel_mse(&a, &r), ms));
         }
@@ -121,12 +135,15 @@ fn main() {
             let dense = (n as f64).powi(2);
             for &t in &tolerances {
                 let settings = AdaptiveCausticsSettings {
-                    error_texels: t,
+                    traversal: TraversalSettings {
+                        error_texels: t,
+                        ..adaptive(n, plane, AdaptiveMetric::Error).traversal
+                    },
                     ..adaptive(n, plane, AdaptiveMetric::Error)
                 };
                 let tech = AdaptiveCaustics::new(b, &scene, settings).expect("adaptive");
                 let (s, a, ms) = run(b, tech);
-                let p = s.adaptive.map_or(0, |a| a.photons_processed) as f64;
+                let p = AdaptiveStats::of(&s).map_or(0, |a| a.photons_processed) as f64;
                 println!(
                     "| {n}^2 | {t} | {:.4} | {:.3e} | {ms:.0} |",
                     p / dense,
@@ -157,7 +174,7 @@ fn main() {
         for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
             let t = AdaptiveCaustics::new(b, &s, adaptive(top, casters, metric)).expect("adaptive");
             let (st, _, _) = run(b, t);
-            let p = st.adaptive.map_or(0, |a| a.photons_processed);
+            let p = AdaptiveStats::of(&st).map_or(0, |a| a.photons_processed);
             ratios.push(p as f64 / ds.photons_emitted as f64);
         }
         println!(

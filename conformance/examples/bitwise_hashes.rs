@@ -11,7 +11,8 @@
 use caustica_conformance::{backends, small_settings};
 use caustica_core::backend::{read_buf, read_gbuffer};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
-use caustica_core::{Output, Sspm};
+use caustica_core::Sspm;
+use caustica_core::TraceSettings;
 
 /// FNV-1a, 64-bit: stable across Rust versions (std's hasher is not promised to be).
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -32,8 +33,11 @@ fn main() {
         for (bname, backend) in all.iter_mut() {
             let device = backend.capabilities().device;
             let settings = caustica_core::SspmSettings {
-                // several batches per light: batching must not change a bit either
-                max_photons_per_batch: 20_000,
+                trace: TraceSettings {
+                    // several batches per light: batching must not change a bit either
+                    max_photons_per_batch: 20_000,
+                    ..small_settings(256).trace
+                },
                 // the photons stored, so that their multiset is hashed too (the fused
                 // deposit, the default, stores none and gives the same images)
                 fused_deposit: false,
@@ -44,7 +48,7 @@ fn main() {
             let line = |item: &str, bytes: &[u8]| {
                 println!("{bname}\t{device}\t{name}\t{item}\t{:016x}", fnv1a(bytes));
             };
-            for o in Output::ALL {
+            for o in s.outputs().into_iter().map(|o| o.output) {
                 let img = s.read_output(backend.as_mut(), o).expect("read");
                 line(o.stem(), bytemuck::cast_slice(&img.pixels));
             }
@@ -152,7 +156,7 @@ fn others(all: &mut [(&'static str, Box<dyn caustica_core::backend::Backend>)]) 
                         );
                     };
                     for o in t.outputs().into_iter().filter(|o| o.requested) {
-                        let img = t.read_output(backend.as_mut(), o.name).expect("read");
+                        let img = t.read_output(backend.as_mut(), o.output).expect("read");
                         line(o.name, bytemuck::cast_slice(&img.pixels));
                     }
                     let counters = format!(

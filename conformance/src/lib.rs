@@ -23,15 +23,12 @@ pub mod techniques;
 
 pub use harness::candidates::backends;
 
+use caustica_core::TechniqueSettings;
 use caustica_core::{Backend, Output, Scene, Sspm, SspmSettings};
 
 /// Small test settings: a `n x n` photon grid.
 pub fn small_settings(n: u32) -> SspmSettings {
-    SspmSettings {
-        photons_w: n,
-        photons_h: n,
-        ..SspmSettings::default()
-    }
+    SspmSettings::default().with_photons(n, n)
 }
 
 /// Renders one frame at `w x h` and returns (stats, composite, raw, filtered, direct).
@@ -60,4 +57,19 @@ pub fn render(
     .map(|o| s.read_output(backend, o).expect("read"))
     .collect();
     (stats, imgs)
+}
+
+/// AdaptiveCaustics with the default traversal over `map`'s blocks (its photon grid, trace,
+/// view planes and atlas), depositing into the atlas: the two techniques compared on the
+/// same settings.
+pub fn adaptive_over(
+    map: &caustica_core::techniques::caustic_map::CausticMapSettings,
+) -> caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
+    caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
+        frame: map.frame.clone(),
+        trace: map.trace,
+        planes: map.planes,
+        atlas: map.atlas,
+        ..Default::default()
+    }
 }

@@ -49,7 +49,7 @@ pub const PLANE_HALF: f64 = 2.0;
 pub enum Fresnel {
     /// The exact unpolarised reflectance (caustica's default, the published figures).
     Exact,
-    /// Schlick's approximation as seed 001 uses it (CausticMap's `fresnel: schlick`).
+    /// Schlick's approximation as Vanderstichelen 2021 uses it (CausticMap's `fresnel: schlick`).
     Schlick,
 }
 

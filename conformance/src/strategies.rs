@@ -19,7 +19,7 @@
 
 use caustica_core::frame::emission::PointEmission;
 use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape};
-use caustica_core::{GatherFilter, SspmSettings};
+use caustica_core::{FrameSettings, GatherFilter, ScreenSettings, SspmSettings, TraceSettings};
 use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -490,33 +490,43 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
                 filter,
                 knn_photons,
             ),
-        )| SspmSettings {
-            photons_w: w,
-            photons_h: h,
-            max_bounces,
-            min_relative_power,
-            point_emission,
-            // both store tests, the tangent-plane one (the default) on odd seeds; the
-            // sign comes from the seed so that the generated cases stay those of the
-            // seed's test alone
-            depth_tolerance: if seed & 1 == 1 {
-                -depth_tolerance
-            } else {
-                depth_tolerance
-            },
-            filter,
-            knn_photons,
-            roughness,
-            hit_distance_min: None,
-            hit_distance_max: None,
-            max_radius_px,
-            sigma_depth,
-            normal_power,
-            tile_size,
-            max_specular_depth,
-            seed,
-            max_photons_per_batch: batch,
-            ..SspmSettings::default()
+        )| {
+            let d = SspmSettings::default();
+            SspmSettings {
+                frame: FrameSettings {
+                    photons_w: w,
+                    photons_h: h,
+                    max_specular_depth,
+                    seed,
+                    ..d.frame
+                },
+                trace: TraceSettings {
+                    max_bounces,
+                    min_relative_power,
+                    max_photons_per_batch: batch,
+                },
+                screen: ScreenSettings {
+                    // both store tests, the tangent-plane one (the default) on odd seeds;
+                    // the sign comes from the seed so that the generated cases stay those
+                    // of Kim 2019's test alone
+                    depth_tolerance: if seed & 1 == 1 {
+                        -depth_tolerance
+                    } else {
+                        depth_tolerance
+                    },
+                    filter,
+                    knn_photons,
+                    roughness,
+                    hit_distance_min: None,
+                    hit_distance_max: None,
+                    max_radius_px,
+                    sigma_depth,
+                    normal_power,
+                    tile_size,
+                },
+                point_emission,
+                ..d
+            }
         },
     )
 }

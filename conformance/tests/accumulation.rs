@@ -15,6 +15,7 @@
 
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::compare;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
 use caustica_core::techniques::create;
@@ -32,7 +33,7 @@ fn estimate(
     technique: &str,
     side: u32,
     frames: u32,
-    output: &str,
+    output: Output,
     extra: serde_json::Value,
 ) -> Image {
     let mut settings = serde_json::json!({
@@ -62,7 +63,7 @@ fn rel_l2(x: &Image, r: &Image) -> f64 {
 }
 
 /// N frames of M photons against one frame of N x M photons, and the raw error's slope.
-fn check(technique: &str, output: &str, extra: serde_json::Value, slope: bool) {
+fn check(technique: &str, output: Output, extra: serde_json::Value, slope: bool) {
     check_from(64, technique, output, extra, (slope, false))
 }
 
@@ -71,7 +72,7 @@ fn check(technique: &str, output: &str, extra: serde_json::Value, slope: bool) {
 fn check_from(
     base: u32,
     technique: &str,
-    output: &str,
+    output: Output,
     extra: serde_json::Value,
     (slope, stratified): (bool, bool),
 ) {
@@ -131,8 +132,8 @@ fn check_from(
 #[test]
 fn sspm_accumulates_frames_as_one_frame_of_all_their_photons() {
     let all = serde_json::json!({ "outputs": { "raw_caustics": true, "filtered_caustics": true } });
-    check_from(64, "sspm", "caustics_raw", all.clone(), (true, true));
-    check("sspm", "caustics_filtered", all, false);
+    check_from(64, "sspm", Output::RawCaustics, all.clone(), (true, true));
+    check("sspm", Output::FilteredCaustics, all, false);
 }
 
 #[test]
@@ -141,7 +142,7 @@ fn caustic_map_accumulates_frames_as_one_frame_of_all_their_photons() {
         "atlas_size": 256,
         "outputs": { "raw_caustics": true, "filtered_caustics": true }
     });
-    check("caustic-map", "caustics_filtered", all, false);
+    check("caustic-map", Output::FilteredCaustics, all, false);
 }
 
 /// PhotonGi's indirect light with the raw deposit (an unbiased per-pixel estimate, as
@@ -152,7 +153,7 @@ fn caustic_map_accumulates_frames_as_one_frame_of_all_their_photons() {
 #[test]
 fn photon_gi_accumulates_frames_as_one_frame_of_all_their_photons() {
     let deposit = serde_json::json!({ "estimator": "deposit", "rsm_size": 64 });
-    check_from(32, "photon-gi", "indirect_raw", deposit, (true, false));
+    check_from(32, "photon-gi", Output::RawIndirect, deposit, (true, false));
 }
 
 #[test]
@@ -175,14 +176,14 @@ fn a_moved_camera_starts_the_screen_accumulation_again() {
     let st = t.frame(b, &mut |_| {}).expect("frame");
     assert_eq!(st.accumulated_frames, 1, "the moved camera's first frame");
     // the first frame of an accumulation is a frame without it, bitwise
-    let moved = t.read_output(b, "composite").expect("read");
+    let moved = t.read_output(b, Output::Composite).expect("read");
     t.free(b).expect("free");
     let mut fresh_scene = s.clone();
     fresh_scene.camera = camera;
     let plain = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
     let mut f = create("sspm", b, &fresh_scene, &plain).expect("create");
     f.frame(b, &mut |_| {}).expect("frame");
-    let want = f.read_output(b, "composite").expect("read");
+    let want = f.read_output(b, Output::Composite).expect("read");
     f.free(b).expect("free");
     assert!(
         moved.pixels == want.pixels,
@@ -224,8 +225,8 @@ fn a_moved_light_restarts_every_accumulation_without_ghosting() {
             );
             assert_eq!(want.accumulated_frames, k, "{technique}: a fresh frame {k}");
             let (a, c) = (
-                t.read_output(b, "composite").expect("read"),
-                f.read_output(b, "composite").expect("read"),
+                t.read_output(b, Output::Composite).expect("read"),
+                f.read_output(b, Output::Composite).expect("read"),
             );
             assert!(
                 a.pixels == c.pixels,

@@ -11,7 +11,7 @@
 //!   the sums are exact integers.
 //! - **The error metric keeps the flux.** Its stored flux equals the dense grid's within
 //!   four standard deviations of their difference, bounded from the stats (see
-//!   [`flux_tolerance`]), with 004's one-texel metric and with a 4-texel tolerance whose
+//!   [`flux_tolerance`]), with Wyman 2009's one-texel metric and with a 4-texel tolerance whose
 //!   converged photons splat over their footprints.
 //! - **The screen target deposits the traversal's photons.** With the level metric, Sspm's
 //!   screen (`deposit: screen`) receives exactly the photons the atlas target outputs:
@@ -25,11 +25,13 @@
 use caustica_conformance::backends;
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, MAX_PASSES_PER_LEVEL,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::techniques::sspm::Output;
+use caustica_core::{AtlasSettings, FrameSettings, TraversalSettings};
 use caustica_core::{Backend, FrameStats};
 
 /// `s` with the screen target.
@@ -40,12 +42,12 @@ fn on_screen(s: AdaptiveCausticsSettings) -> AdaptiveCausticsSettings {
     }
 }
 
-const OUTPUTS: [&str; 5] = [
-    "caustic_atlas",
-    "caustics_raw",
-    "caustics_filtered",
-    "composite",
-    "direct",
+const OUTPUTS: [Output; 5] = [
+    Output::CausticAtlas,
+    Output::RawCaustics,
+    Output::FilteredCaustics,
+    Output::Composite,
+    Output::Direct,
 ];
 
 fn small(name: &str) -> Scene {
@@ -56,10 +58,16 @@ fn small(name: &str) -> Scene {
 
 fn map(photons: u32) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: photons,
-        photons_h: photons,
-        atlas_size: 128,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: photons,
+            photons_h: photons,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 128,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -71,7 +79,7 @@ fn render<P: caustica_core::frame::pipeline::Pipeline>(
     let stats = t.frame(b, &mut |_| {}).expect("frame");
     let images = OUTPUTS
         .iter()
-        .map(|o| t.read_output_named(b, o).expect("read"))
+        .map(|o| t.read_output(b, *o).expect("read"))
         .collect();
     t.free(b).expect("free");
     (stats, images)
@@ -80,7 +88,7 @@ fn render<P: caustica_core::frame::pipeline::Pipeline>(
 fn same_bits(
     a: &[caustica_core::frame::image::Image],
     b: &[caustica_core::frame::image::Image],
-) -> Option<&'static str> {
+) -> Option<Output> {
     OUTPUTS
         .iter()
         .zip(a.iter().zip(b))
@@ -103,7 +111,10 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
             // atlas out for the receivers its photons reach, AdaptiveCaustics never does
             // (its error metric reads the layout); pruning off changes nothing else
             let every_tile = CausticMapSettings {
-                prune: false,
+                frame: FrameSettings {
+                    prune: false,
+                    ..map(256).frame
+                },
                 ..map(256)
             };
             let dense = CausticMap::new(b.as_mut(), &scene, every_tile).expect("dense");
@@ -112,10 +123,12 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
                 b.as_mut(),
                 &scene,
                 AdaptiveCausticsSettings {
-                    map: map(256),
-                    metric: AdaptiveMetric::Level,
-                    start_grid: 32,
-                    ..Default::default()
+                    traversal: TraversalSettings {
+                        metric: AdaptiveMetric::Level,
+                        start_grid: 32,
+                        ..AdaptiveCausticsSettings::default().traversal
+                    },
+                    ..caustica_conformance::adaptive_over(&map(256))
                 },
             )
             .expect("adaptive");
@@ -129,7 +142,7 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
             if let Some(out) = same_bits(&di, &ai) {
                 panic!("{what}: {out} differs from the dense grid's");
             }
-            if let Some(a) = &s.adaptive {
+            if let Some(a) = &AdaptiveStats::of(&s) {
                 assert_eq!(a.dense_equivalent_photons, ds.photons_emitted, "{what}");
                 eprintln!(
                     "{what}: {} photons traced against {} dense, {} stored",
@@ -143,19 +156,21 @@ fn the_level_metric_outputs_exactly_the_dense_grid() {
 #[test]
 fn any_memory_limit_gives_the_same_frame_bitwise() {
     let settings = |bytes: u64| AdaptiveCausticsSettings {
-        map: map(256),
-        metric: AdaptiveMetric::Error,
-        start_grid: 32,
-        error_from_grid: 64,
-        max_traversal_bytes: bytes,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric: AdaptiveMetric::Error,
+            start_grid: 32,
+            error_from_grid: 64,
+            max_traversal_bytes: bytes,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..caustica_conformance::adaptive_over(&map(256))
     };
     for (name, mut b) in backends() {
         for scene_name in ["sphere", "cornell"] {
             let scene = small(scene_name);
             let one = AdaptiveCaustics::new(b.as_mut(), &scene, settings(1 << 30)).expect("scene");
             let (s1, i1) = render(b.as_mut(), one);
-            let a1 = s1.adaptive.clone().expect("adaptive stats");
+            let a1 = AdaptiveStats::of(&s1).expect("adaptive stats");
             assert!(
                 a1.clusters_converged > 0,
                 "{name} / {scene_name}: nothing converged"
@@ -174,8 +189,13 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
                 let what = format!("{name} / {scene_name}, passes of {c} clusters");
                 let sizes = settings(bytes).traversal_sizes();
                 assert!(!sizes.lists_capped, "{what}: {sizes:?}");
-                assert_eq!(s.adaptive.as_ref().map(|a| a.clusters_overflowed), Some(0));
-                let a = s.adaptive.clone().expect("adaptive stats");
+                assert_eq!(
+                    AdaptiveStats::of(&s)
+                        .as_ref()
+                        .map(|a| a.clusters_overflowed),
+                    Some(0)
+                );
+                let a = AdaptiveStats::of(&s).expect("adaptive stats");
                 assert_eq!(a.photons_processed, a1.photons_processed, "{what}");
                 assert_eq!(s.stored_flux, s1.stored_flux, "{what}: stored flux");
                 if let Some(out) = same_bits(&i1, &i) {
@@ -199,11 +219,13 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
 #[test]
 fn capped_lists_overflow_counted_and_keep_the_flux() {
     let settings = |bytes: u64| AdaptiveCausticsSettings {
-        map: map(256),
-        metric: AdaptiveMetric::Level,
-        start_grid: 32,
-        max_traversal_bytes: bytes,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric: AdaptiveMetric::Level,
+            start_grid: 32,
+            max_traversal_bytes: bytes,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..caustica_conformance::adaptive_over(&map(256))
     };
     for (name, mut b) in backends() {
         let scene = small("sphere");
@@ -212,7 +234,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
         let bytes = settings(0).traversal().full_list_bytes(3) / 8;
         let capped = AdaptiveCaustics::new(b.as_mut(), &scene, settings(bytes)).expect("scene");
         let (sc, img) = render(b.as_mut(), capped);
-        let a = sc.adaptive.clone().expect("adaptive stats");
+        let a = AdaptiveStats::of(&sc).expect("adaptive stats");
         assert!(settings(bytes).traversal_sizes().lists_capped);
         assert!(
             a.clusters_overflowed > 0,
@@ -252,7 +274,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
 /// up to 60 degrees sees at most 1.5 times the mean solid angle near the axis... and less
 /// off it; 2 is a margin).
 fn flux_tolerance(s: &FrameStats, dense: &FrameStats, dispersive: bool) -> f64 {
-    let a = s.adaptive.as_ref().expect("adaptive stats");
+    let a = &AdaptiveStats::of(s).expect("adaptive stats");
     let finest = a.photons_per_level.len() - 1;
     let emitted: f64 = dense.emitted_flux.iter().sum();
     let gain = if dispersive { 3.0 } else { 1.0 };
@@ -272,17 +294,19 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
             let scene = small(scene_name);
             let dense = CausticMap::new(b.as_mut(), &scene, map(512)).expect("dense");
             let (ds, _) = render(b.as_mut(), dense);
-            // 004's one-texel metric, and its tolerance variant with footprint splats
+            // Wyman 2009's one-texel metric, and its tolerance variant with footprint splats
             for error_texels in [1, 4] {
                 let adaptive = AdaptiveCaustics::new(
                     b.as_mut(),
                     &scene,
                     AdaptiveCausticsSettings {
-                        map: map(512),
-                        metric: AdaptiveMetric::Error,
-                        error_from_grid: 128,
-                        error_texels,
-                        ..Default::default()
+                        traversal: TraversalSettings {
+                            metric: AdaptiveMetric::Error,
+                            error_from_grid: 128,
+                            error_texels,
+                            ..AdaptiveCausticsSettings::default().traversal
+                        },
+                        ..caustica_conformance::adaptive_over(&map(512))
                     },
                 )
                 .expect("adaptive");
@@ -319,11 +343,13 @@ fn the_screen_target_deposits_the_traversals_photons() {
         divergence_allowance, DEPOSIT_PHOTON_CHANGES, GBUFFER_MATERIAL_AGREEMENT,
     };
     let settings = |metric| AdaptiveCausticsSettings {
-        map: map(256),
-        metric,
-        start_grid: 32,
-        error_from_grid: 64,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric,
+            start_grid: 32,
+            error_from_grid: 64,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..caustica_conformance::adaptive_over(&map(256))
     };
     let mut cpu_deposits: std::collections::HashMap<&str, u64> = Default::default();
     for (name, mut b) in backends() {
@@ -341,16 +367,18 @@ fn the_screen_target_deposits_the_traversals_photons() {
             .expect("screen target");
             let s = screen.frame(b.as_mut(), &mut |_| {}).expect("frame");
             let raw = screen
-                .read_output_named(b.as_mut(), Output::RawCaustics.stem())
+                .read_output(b.as_mut(), Output::RawCaustics)
                 .expect("raw");
             screen.free(b.as_mut()).expect("free");
             assert_eq!(s.technique, "adaptive-caustics", "{what}");
             assert_eq!(a.stored_flux, s.stored_flux, "{what}: stored flux");
             assert_eq!(a.photons_stored, s.photons_stored, "{what}: stored photons");
-            let (ta, ts) = (a.adaptive.as_ref(), s.adaptive.as_ref());
+            let (ta, ts) = (AdaptiveStats::of(&a), AdaptiveStats::of(&s));
             assert_eq!(
-                ta.map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
-                ts.map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
+                ta.as_ref()
+                    .map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
+                ts.as_ref()
+                    .map(|t| (&t.photons_per_level, t.clusters_output, t.clusters_refined)),
                 "{what}: the two targets' traversals differ"
             );
             let d = &s.discarded;
@@ -402,14 +430,14 @@ fn the_screen_target_deposits_the_traversals_photons() {
                 matches!(m, caustica_core::scene::Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0)
             });
             let (x, y): (f64, f64) = (es.stored_flux.iter().sum(), s.stored_flux.iter().sum());
-            if es.adaptive.is_none() {
+            if AdaptiveStats::of(&es).is_none() {
                 // no light reaches a caster: no photon pass runs on either
                 assert_eq!((x, y), (0.0, 0.0), "{what}: flux without a traversal");
                 continue;
             }
             // the bound takes the finest photon's flux from the dense-equivalent count
             let mut dense = a.clone();
-            dense.photons_emitted = ta.map_or(0, |t| t.dense_equivalent_photons);
+            dense.photons_emitted = ta.as_ref().map_or(0, |t| t.dense_equivalent_photons);
             let tol = flux_tolerance(&es, &dense, dispersive);
             assert!(
                 (x - y).abs() <= tol + 1e-9 * y,

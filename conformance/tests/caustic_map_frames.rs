@@ -15,17 +15,25 @@
 //!   `the_caustic_seen_through_the_ball_agrees_with_a_traced_reference`).
 
 use caustica_conformance::backends;
+use caustica_core::frame::output::Output;
 use caustica_core::frame::technique::Technique;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{AtlasSettings, FrameSettings, TechniqueSettings};
 use caustica_core::{Backend, FrameStats};
 
 fn settings() -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: 128,
-        photons_h: 128,
-        atlas_size: 128,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 128,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -57,10 +65,10 @@ fn a_camera_move_reuses_the_atlas_and_equals_a_fresh_frame() {
         let mut f = CausticMap::new(b.as_mut(), &fresh_scene, settings()).expect("scene");
         f.frame(b.as_mut(), &mut |_| {}).expect("frame");
         for out in [
-            "composite",
-            "caustics_filtered",
-            "caustics_raw",
-            "caustic_atlas",
+            Output::Composite,
+            Output::FilteredCaustics,
+            Output::RawCaustics,
+            Output::CausticAtlas,
         ] {
             let a = t.read_output(b.as_mut(), out).expect("read");
             let c = f.read_output(b.as_mut(), out).expect("read");
@@ -86,8 +94,11 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
             b.as_mut(),
             &scene,
             CausticMapSettings {
-                photons_w: 256,
-                photons_h: 256,
+                frame: FrameSettings {
+                    photons_w: 256,
+                    photons_h: 256,
+                    ..settings().frame
+                },
                 ..settings()
             },
         )
@@ -95,23 +106,31 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
         t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         // the atlas output is the gathered map; the raw map is what caustics_raw samples:
         // compare their flux through a frame with gather width 1
-        let map = t.read_output(b.as_mut(), "caustic_atlas").expect("atlas");
+        let map = t
+            .read_output(b.as_mut(), Output::CausticAtlas)
+            .expect("atlas");
         let gathered: f64 = map.pixels.iter().map(|p| p[0] as f64).sum();
         let mut raw_t = CausticMap::new(
             b.as_mut(),
             &scene,
             CausticMapSettings {
-                photons_w: 256,
-                photons_h: 256,
-                gather: caustica_core::techniques::caustic_map::MapGather::Box,
-                gather_width: 1,
+                frame: FrameSettings {
+                    photons_w: 256,
+                    photons_h: 256,
+                    ..settings().frame
+                },
+                atlas: AtlasSettings {
+                    gather: caustica_core::techniques::caustic_map::MapGather::Box,
+                    gather_width: 1,
+                    ..settings().atlas
+                },
                 ..settings()
             },
         )
         .expect("scene");
         raw_t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         let raw_map = raw_t
-            .read_output(b.as_mut(), "caustic_atlas")
+            .read_output(b.as_mut(), Output::CausticAtlas)
             .expect("atlas");
         let raw: f64 = raw_map.pixels.iter().map(|p| p[0] as f64).sum();
         assert!(raw > 0.0, "{name}: the raw map is dark");
@@ -122,9 +141,9 @@ fn the_gather_keeps_the_flux_and_the_ball_shows_the_caustic_behind_it() {
         // through the ball: the pixels where the composite shows the glass (no direct
         // diffuse shading on their first hit) still carry caustic radiance
         let caustics = t
-            .read_output(b.as_mut(), "caustics_filtered")
+            .read_output(b.as_mut(), Output::FilteredCaustics)
             .expect("caustics");
-        let direct = t.read_output(b.as_mut(), "direct").expect("direct");
+        let direct = t.read_output(b.as_mut(), Output::Direct).expect("direct");
         let (cx, cy) = (48u32, 22u32); // the ball's centre in sphere's camera, 96x54
         let mut lit = 0;
         for y in cy - 3..=cy + 3 {
@@ -172,15 +191,18 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
             b.as_mut(),
             &scene,
             CausticMapSettings {
-                photons_w: 256,
-                photons_h: 256,
+                frame: FrameSettings {
+                    photons_w: 256,
+                    photons_h: 256,
+                    ..settings().frame
+                },
                 ..settings()
             },
         )
         .expect("scene");
         t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         let caustics = t
-            .read_output(b.as_mut(), "caustics_filtered")
+            .read_output(b.as_mut(), Output::FilteredCaustics)
             .expect("caustics");
         Box::new(t).free(b.as_mut()).expect("free");
         let mut s = create(
@@ -192,7 +214,7 @@ fn the_mirror_ball_shows_caustics_sspm_cannot() {
         .expect("sspm");
         s.frame(b.as_mut(), &mut |_| {}).expect("frame");
         let screen = s
-            .read_output(b.as_mut(), "caustics_filtered")
+            .read_output(b.as_mut(), Output::FilteredCaustics)
             .expect("caustics");
         s.free(b.as_mut()).expect("free");
         assert!(
@@ -241,7 +263,7 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
     let reference = CameraReference {
         profile: &profile,
         albedo: 0.8,
-        max_depth: CausticMapSettings::default().max_specular_depth,
+        max_depth: CausticMapSettings::default().frame.max_specular_depth,
         min_weight: 1e-3,
         model: Fresnel::Exact,
     };
@@ -270,16 +292,12 @@ fn the_caustic_seen_through_the_ball_agrees_with_a_traced_reference() {
         let mut t = CausticMap::new(
             &mut b,
             &scene,
-            CausticMapSettings {
-                photons_w: n,
-                photons_h: n,
-                ..Default::default()
-            },
+            CausticMapSettings::default().with_photons(n, n),
         )
         .expect("scene");
         t.frame(&mut b, &mut |_| {}).expect("frame");
         let img = t
-            .read_output(&mut b, "caustics_filtered")
+            .read_output(&mut b, Output::FilteredCaustics)
             .expect("caustics");
         Box::new(t).free(&mut b).expect("free");
         let got = |&((x, y), _): &((u32, u32), f64)| img.at(x, y)[0] as f64;
@@ -325,10 +343,16 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
     use caustica_core::techniques::caustic_map::MapGather;
     const FLUX_REL: f64 = 1e-4;
     let base = CausticMapSettings {
-        photons_w: 128,
-        photons_h: 128,
-        atlas_size: 256,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 256,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     };
     let mut checked = 0;
     for (name, mut b) in backends() {
@@ -342,7 +366,7 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
             let atlas_flux = |s: CausticMapSettings, b: &mut dyn caustica_core::Backend| {
                 let mut t = CausticMap::new(b, &scene, s).expect("technique");
                 t.frame(b, &mut |_| {}).expect("frame");
-                let map = t.read_output(b, "caustic_atlas").expect("atlas");
+                let map = t.read_output(b, Output::CausticAtlas).expect("atlas");
                 // the technique's own layout: its tiles are the reached receivers'
                 let texels = t.atlas_texels(b).expect("texels").expect("an atlas");
                 Box::new(t).free(b).expect("free");
@@ -357,15 +381,21 @@ fn the_density_gather_keeps_the_raw_maps_flux_on_every_scene() {
             };
             let raw = atlas_flux(
                 CausticMapSettings {
-                    gather: MapGather::Box,
-                    gather_width: 1,
+                    atlas: AtlasSettings {
+                        gather: MapGather::Box,
+                        gather_width: 1,
+                        ..base.clone().atlas
+                    },
                     ..base.clone()
                 },
                 b.as_mut(),
             );
             let density = atlas_flux(
                 CausticMapSettings {
-                    gather: MapGather::Density,
+                    atlas: AtlasSettings {
+                        gather: MapGather::Density,
+                        ..base.clone().atlas
+                    },
                     ..base.clone()
                 },
                 b.as_mut(),
@@ -475,7 +505,7 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             density(&after),
             "{name}: {words} / {after}"
         );
-        for out in ["caustic_atlas", "caustics_filtered"] {
+        for out in [Output::CausticAtlas, Output::FilteredCaustics] {
             let a = plain.read_output(b.as_mut(), out).expect("read");
             let c = t.read_output(b.as_mut(), out).expect("read");
             assert!(
@@ -494,7 +524,7 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             let mut f = CausticMap::new(b.as_mut(), &fresh_scene, settings()).expect("scene");
             settle(&mut f, b.as_mut());
             assert_eq!(layout_words(&t), layout_words(&f), "{name}");
-            for out in ["composite", "caustics_raw", "caustic_atlas"] {
+            for out in [Output::Composite, Output::RawCaustics, Output::CausticAtlas] {
                 let a = t.read_output(b.as_mut(), out).expect("read");
                 let c = f.read_output(b.as_mut(), out).expect("read");
                 assert!(
@@ -509,7 +539,10 @@ fn a_receiver_no_photon_reaches_owns_no_tile_on_every_backend() {
             b.as_mut(),
             &cellar,
             CausticMapSettings {
-                prune: false,
+                frame: FrameSettings {
+                    prune: false,
+                    ..settings().frame
+                },
                 ..settings()
             },
         )

@@ -11,6 +11,10 @@
 use caustica_conformance::{backends, small_settings};
 use caustica_core::kernels::KERNELS;
 use caustica_core::scene::builtin::builtin;
+use caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings;
+use caustica_core::techniques::caustic_map::CausticMapSettings;
+use caustica_core::techniques::photon_gi::PhotonGiSettings;
+use caustica_core::{AtlasSettings, FrameSettings, ScreenSettings, TraversalSettings};
 use caustica_core::{GatherFilter, Sspm, SspmSettings};
 
 #[test]
@@ -22,19 +26,25 @@ fn every_backend_dispatches_every_declared_kernel() {
         let mut passes = Vec::new();
         for filter in [GatherFilter::Density, GatherFilter::Bilateral] {
             let settings = SspmSettings {
-                prune: false,
-                filter,
+                frame: FrameSettings {
+                    prune: false,
+                    // the opt-in temporal blend and A-Trous iterations, with the bilateral
+                    // filter
+                    temporal: filter == GatherFilter::Bilateral,
+                    atrous_iterations: if filter == GatherFilter::Bilateral {
+                        2
+                    } else {
+                        0
+                    },
+                    ..small_settings(64).frame
+                },
+                screen: ScreenSettings {
+                    filter,
+                    ..small_settings(64).screen
+                },
                 // the density run deposits inside the trace, the bilateral one through
                 // deposit_screen
                 fused_deposit: filter == GatherFilter::Density,
-                // the opt-in temporal blend and A-Trous iterations, with the bilateral
-                // filter
-                temporal: filter == GatherFilter::Bilateral,
-                atrous_iterations: if filter == GatherFilter::Bilateral {
-                    2
-                } else {
-                    0
-                },
                 ..small_settings(64)
             };
             let mut s = Sspm::new(b.as_mut(), &scene, settings).expect("valid scene");
@@ -46,12 +56,18 @@ fn every_backend_dispatches_every_declared_kernel() {
             );
             passes.extend(stats.passes);
         }
-        let settings = caustica_core::techniques::caustic_map::CausticMapSettings {
-            photons_w: 64,
-            photons_h: 64,
-            atlas_size: 64,
-            prune: false,
-            ..Default::default()
+        let settings = CausticMapSettings {
+            frame: FrameSettings {
+                photons_w: 64,
+                photons_h: 64,
+                prune: false,
+                ..CausticMapSettings::default().frame
+            },
+            atlas: AtlasSettings {
+                atlas_size: 64,
+                ..CausticMapSettings::default().atlas
+            },
+            ..CausticMapSettings::default()
         };
         let mut t =
             caustica_core::techniques::caustic_map::CausticMap::new(b.as_mut(), &scene, settings)
@@ -63,16 +79,24 @@ fn every_backend_dispatches_every_declared_kernel() {
             "{name}: caustic map saw no photon"
         );
         passes.extend(stats.passes);
-        // seed 004's traversal: the adaptive trace and refine_clusters
-        let adaptive = caustica_core::techniques::adaptive_caustics::AdaptiveCausticsSettings {
-            map: caustica_core::techniques::caustic_map::CausticMapSettings {
-                photons_w: 64,
-                photons_h: 64,
-                atlas_size: 64,
-                ..Default::default()
+        // Wyman 2009's traversal: the adaptive trace and refine_clusters
+        let adaptive = AdaptiveCausticsSettings {
+            traversal: TraversalSettings {
+                start_grid: 16,
+                ..AdaptiveCausticsSettings::default().traversal
             },
-            start_grid: 16,
-            ..Default::default()
+            ..caustica_conformance::adaptive_over(&CausticMapSettings {
+                frame: FrameSettings {
+                    photons_w: 64,
+                    photons_h: 64,
+                    ..CausticMapSettings::default().frame
+                },
+                atlas: AtlasSettings {
+                    atlas_size: 64,
+                    ..CausticMapSettings::default().atlas
+                },
+                ..CausticMapSettings::default()
+            })
         };
         let mut t = caustica_core::techniques::adaptive_caustics::AdaptiveCaustics::new(
             b.as_mut(),
@@ -89,11 +113,14 @@ fn every_backend_dispatches_every_declared_kernel() {
         passes.extend(stats.passes);
         // PhotonGi: the RSM, the warp, the roulette trace and the splat, on `sphere`, whose
         // ball's smooth normals need Eq. 20's correction (the prism's flat faces do not)
-        let gi = caustica_core::techniques::photon_gi::PhotonGiSettings {
-            photons_w: 64,
-            photons_h: 64,
+        let gi = PhotonGiSettings {
+            frame: FrameSettings {
+                photons_w: 64,
+                photons_h: 64,
+                ..PhotonGiSettings::default().frame
+            },
             rsm_size: 16,
-            ..Default::default()
+            ..PhotonGiSettings::default()
         };
         let mut ball = builtin("sphere").expect("built-in scene");
         (ball.camera.width, ball.camera.height) = (64, 36);

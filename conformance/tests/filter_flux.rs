@@ -24,6 +24,7 @@ use caustica_conformance::techniques::sspm::{render_frame, Frame};
 use caustica_core::device::layout::{gbuffer_flags, gbuffer_pixel_area, GpuCamera};
 use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
+use caustica_core::{FrameSettings, ScreenSettings};
 use caustica_core::{GatherFilter, SspmSettings};
 
 const FLUX_REL: f64 = 1e-4;
@@ -99,12 +100,18 @@ fn edge_shares(scene: &Scene, f: &Frame, reach: i32) -> (f64, f64) {
 fn density_gather_keeps_the_raw_flux_on_every_backend() {
     let mut report = Report::new("filtered flux = raw flux");
     let settings = SspmSettings {
-        photons_w: 128,
-        photons_h: 128,
-        filter: GatherFilter::Density,
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..SspmSettings::default().frame
+        },
+        screen: ScreenSettings {
+            filter: GatherFilter::Density,
+            ..SspmSettings::default().screen
+        },
         ..SspmSettings::default()
     };
-    let reach = settings.max_radius_px as i32;
+    let reach = settings.screen.max_radius_px as i32;
     let (mut border_seen, mut edge_seen) = (0.0f64, 0.0f64);
     let mut all = backends();
     for name in BUILTIN_SCENES.iter().filter(|n| **n != "plain") {

@@ -17,6 +17,7 @@ use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Light;
 use caustica_core::techniques::sspm::{Output, Outputs};
 use caustica_core::{Backend, FrameStats, GatherFilter, Scene, Sspm, SspmSettings};
+use caustica_core::{FrameSettings, ScreenSettings};
 use glam::Vec3;
 
 const W: u32 = 64;
@@ -31,9 +32,12 @@ fn small(scene: &str) -> Scene {
 
 fn settings(prune: bool) -> SspmSettings {
     SspmSettings {
-        photons_w: 64,
-        photons_h: 64,
-        prune,
+        frame: FrameSettings {
+            photons_w: 64,
+            photons_h: 64,
+            prune,
+            ..SspmSettings::default().frame
+        },
         ..SspmSettings::default()
     }
 }
@@ -55,10 +59,16 @@ fn run(b: &mut dyn Backend, scene: &Scene, settings: SspmSettings) -> Run {
     let stats = s
         .frame(b, &mut |_| {})
         .unwrap_or_else(|e| panic!("{}: frame of {}: {e}", b.name(), scene.name));
-    let images = Output::ALL
+    let images = s
+        .outputs()
         .into_iter()
-        .filter(|o| o.requested(&settings.outputs))
-        .map(|o| (o, s.read_output(b, o).expect("read output").pixels))
+        .filter(|o| o.requested)
+        .map(|o| {
+            (
+                o.output,
+                s.read_output(b, o.output).expect("read output").pixels,
+            )
+        })
         .collect();
     let buffers = s.plan().buffers.iter().map(|b| b.name.clone()).collect();
     let had_photon_buffers = s.photon_buffers().is_some();
@@ -251,7 +261,7 @@ fn pruning_on_and_off_give_the_same_frame() {
 }
 
 /// The filter setting picks the passes: the density gather's three kernels by default,
-/// the seed's tile and bilateral passes with `filter: bilateral`; the others are skipped
+/// Kim 2019's tile and bilateral passes with `filter: bilateral`; the others are skipped
 /// with the filter as the reason, and no buffer of theirs exists.
 #[test]
 fn the_filter_setting_picks_its_passes_and_buffers() {
@@ -279,7 +289,10 @@ fn the_filter_setting_picks_its_passes_and_buffers() {
                 b.as_mut(),
                 &scene,
                 SspmSettings {
-                    filter,
+                    screen: ScreenSettings {
+                        filter,
+                        ..settings(true).screen
+                    },
                     ..settings(true)
                 },
             );
@@ -320,7 +333,10 @@ fn caustics_only_output_skips_direct_light_and_composite() {
             b.as_mut(),
             &scene,
             SspmSettings {
-                outputs: Outputs::CAUSTICS_ONLY,
+                frame: FrameSettings {
+                    outputs: Outputs::CAUSTICS_ONLY,
+                    ..settings(true).frame
+                },
                 ..settings(true)
             },
         );

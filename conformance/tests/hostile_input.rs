@@ -66,7 +66,7 @@ fn render(b: &mut dyn Backend, scene: &Scene, max_triangles: u64, what: &str) ->
         }
     };
     for o in t.outputs().into_iter().filter(|o| o.requested) {
-        let img = t.read_output(b, o.name).expect("read output");
+        let img = t.read_output(b, o.output).expect("read output");
         if let Some((i, px)) = img
             .pixels
             .iter()

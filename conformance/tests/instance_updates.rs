@@ -89,7 +89,7 @@ fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec
         .into_iter()
         .filter(|o| o.requested && o.camera_space)
         .map(|o| {
-            let img = t.read_output(b, o.name).expect("read");
+            let img = t.read_output(b, o.output).expect("read");
             assert!(img.all_finite(), "{}: not finite", o.name);
             (o.name.to_string(), img.pixels)
         })

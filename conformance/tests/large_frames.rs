@@ -17,6 +17,7 @@ use caustica_conformance::harness::Verdict;
 use caustica_conformance::small_settings;
 use caustica_conformance::stiff::cheap_scene;
 use caustica_conformance::techniques::sspm::{compare_frames, render_frame, Frame};
+use caustica_core::ScreenSettings;
 use caustica_core::SspmSettings;
 use std::time::Instant;
 
@@ -62,7 +63,10 @@ fn sspm_renders_2560x1440_and_3840x2160_on_every_backend() {
     // its pixels (the gather, 2 r + 1 taps a pixel and pass, dominates: 33 taps at the
     // default 16 take PoCL ~19 s at 3840x2160 on two cores)
     let settings = SspmSettings {
-        max_radius_px: 4,
+        screen: ScreenSettings {
+            max_radius_px: 4,
+            ..small_settings(64).screen
+        },
         ..small_settings(64)
     };
     let start = Instant::now();

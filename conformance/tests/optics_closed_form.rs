@@ -4,6 +4,7 @@ use caustica_conformance::render;
 use caustica_core::backend::read_buf;
 use caustica_core::math::packing::unpack_unit_vector;
 use caustica_core::scene::{builtin, Aabb, Light};
+use caustica_core::{FrameSettings, TechniqueSettings};
 use caustica_core::{Sspm, SspmSettings};
 use caustica_cpu::CpuBackend;
 use glam::Vec3;
@@ -30,8 +31,11 @@ fn ball_lens_focus_matches_paraxial_optics() {
     }
     let mut b = CpuBackend::new().unwrap();
     let settings = SspmSettings {
-        photons_w: 64,
-        photons_h: 64,
+        frame: FrameSettings {
+            photons_w: 64,
+            photons_h: 64,
+            ..SspmSettings::default().frame
+        },
         // the stored photons are what this test reads
         fused_deposit: false,
         ..SspmSettings::default()
@@ -76,11 +80,7 @@ fn ball_lens_focus_matches_paraxial_optics() {
 fn sphere_caustic_flux_matches_numerical_integration() {
     let scene = builtin::sphere();
     let mut b = CpuBackend::new().unwrap();
-    let settings = SspmSettings {
-        photons_w: 512,
-        photons_h: 512,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(512, 512);
     let (stats, _) = render(&mut b, &scene, settings, 64, 36);
     let measured = stats.stored_flux[0];
 

@@ -1,4 +1,4 @@
-//! PhotonGi's frames (seed 003) on every backend (`backends()`: all four, required in CI),
+//! PhotonGi's frames (Smal 2019) on every backend (`backends()`: all four, required in CI),
 //! measured against the quantity they estimate: the raw screen deposit of the same
 //! photons (`estimator: deposit`, every stored photon in the one pixel it lands in),
 //! averaged over frames of independent seeds.
@@ -7,6 +7,7 @@
 //! over pixels) against the reference's.
 
 use caustica_conformance::backends;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
 use caustica_core::techniques::create;
@@ -30,7 +31,7 @@ fn frames(
     b: &mut dyn Backend,
     scene: &Scene,
     settings: &serde_json::Value,
-    output: &str,
+    output: Output,
     seeds: std::ops::Range<u32>,
 ) -> Vec<Vec<[f32; 4]>> {
     let mut t = create("photon-gi", b, scene, settings).expect("create");
@@ -103,7 +104,7 @@ fn splats_estimate_the_deposit_and_filters_converge() {
                 b,
                 &s,
                 &settings("deposit", false, 0),
-                "indirect_raw",
+                Output::RawIndirect,
                 100..124,
             );
             let reference = mean(&deposits);
@@ -111,7 +112,7 @@ fn splats_estimate_the_deposit_and_filters_converge() {
                 b,
                 &s,
                 &settings("splat", false, 0),
-                "indirect_raw",
+                Output::RawIndirect,
                 100..104,
             );
             let single_deposit = deposits[..4]
@@ -120,7 +121,13 @@ fn splats_estimate_the_deposit_and_filters_converge() {
                 .sum::<f64>()
                 / 4.0;
             let single_splat = splats.iter().map(|d| rel_l2(d, &reference)).sum::<f64>() / 4.0;
-            let temporal = frames(b, &s, &settings("splat", true, 4), "indirect", 200..232);
+            let temporal = frames(
+                b,
+                &s,
+                &settings("splat", true, 4),
+                Output::FilteredIndirect,
+                200..232,
+            );
             let blended = rel_l2(temporal.last().expect("frames"), &reference);
             let ratio = total(&mean(&splats)) / total(&reference);
             eprintln!(
@@ -175,7 +182,7 @@ fn importance_and_uniform_rsm_sampling_agree_in_the_mean() {
                 "temporal": false, "atrous_iterations": 0, "bounces": 1,
                 "rsm_sampling": sampling
             });
-            frames(b, &s, &settings, "indirect_raw", 300..300 + SEEDS)
+            frames(b, &s, &settings, Output::RawIndirect, 300..300 + SEEDS)
                 .iter()
                 .map(|img| {
                     let mut v = vec![0.0f64; bw * bh + 1];
@@ -240,8 +247,8 @@ fn eq20_corrects_the_indirect_light_where_shading_normals_depart() {
     };
     let s_max = 4.0f32; // PhotonGiSettings::default().max_stretch
     for (name, mut b) in backends() {
-        let on = frames(b.as_mut(), &s, &with(true), "indirect", 1..2).remove(0);
-        let off = frames(b.as_mut(), &s, &with(false), "indirect", 1..2).remove(0);
+        let on = frames(b.as_mut(), &s, &with(true), Output::FilteredIndirect, 1..2).remove(0);
+        let off = frames(b.as_mut(), &s, &with(false), Output::FilteredIndirect, 1..2).remove(0);
         let peak = off.iter().map(|p| p[0]).fold(0.0f32, f32::max);
         let (mut changed, mut lit, mut deviation) = (0u32, 0u32, 0.0f64);
         for (x, y) in on.iter().zip(&off) {

@@ -22,6 +22,7 @@
 
 use caustica_conformance::backends;
 use caustica_conformance::harness::tolerance::divergence_allowance;
+use caustica_core::frame::output::Output;
 use caustica_core::frame::stats::FrameStats;
 use caustica_core::scene::{Camera, Light, Material, Object, Scene, Shape};
 use caustica_core::techniques::create;
@@ -180,7 +181,7 @@ fn run(b: &mut dyn Backend, scene: &Scene) -> (FrameStats, Vec<[f32; 4]>) {
     });
     let mut t = create("photon-gi", b, scene, &settings).expect("create");
     let st = t.frame(b, &mut |_| {}).expect("frame");
-    let img = t.read_output(b, "indirect_raw").expect("read").pixels;
+    let img = t.read_output(b, Output::RawIndirect).expect("read").pixels;
     t.free(b).expect("free");
     (st, img)
 }

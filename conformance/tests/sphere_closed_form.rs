@@ -16,6 +16,7 @@ use caustica_conformance::sphere_optics::{
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::techniques::sspm::SspmSettings;
+use caustica_core::{FrameSettings, TraceSettings};
 use caustica_cpu::CpuBackend;
 use std::f64::consts::PI;
 
@@ -66,7 +67,7 @@ fn stored_photons_carry_the_closed_form_flux() {
     check_stored_photons(Fresnel::Exact);
 }
 
-/// The same with seed 001's Schlick reflectance (the trace's `fresnel_model` set to
+/// The same with Vanderstichelen 2021's Schlick reflectance (the trace's `fresnel_model` set to
 /// Schlick) against the closed form under Schlick. Schlick's total differs from the exact
 /// one by more than the tolerance (checked below), so the test tells the models apart.
 #[test]
@@ -93,9 +94,15 @@ fn check_stored_photons(model: Fresnel) {
     scene.camera.height = 36;
     let side = 1024;
     let settings = SspmSettings {
-        photons_w: side,
-        photons_h: side,
-        max_photons_per_batch: side * side,
+        frame: FrameSettings {
+            photons_w: side,
+            photons_h: side,
+            ..SspmSettings::default().frame
+        },
+        trace: TraceSettings {
+            max_photons_per_batch: side * side,
+            ..SspmSettings::default().trace
+        },
         ..SspmSettings::default()
     };
     let mut cpu = CpuBackend::new().unwrap();

@@ -103,7 +103,7 @@ fn outputs(t: &dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>
         .into_iter()
         .filter(|o| o.requested)
         .map(|o| {
-            let img = t.read_output(b, o.name).expect("read");
+            let img = t.read_output(b, o.output).expect("read");
             assert!(img.all_finite(), "{}: not finite", o.name);
             (o.name.to_string(), img.pixels)
         })

@@ -41,6 +41,7 @@ use caustica_core::device::layout::{
     cluster_count, counter, deposit_word, gbuffer_to_planes, GBufferPlaneTexel, GiPhoton,
     GpuCamera, GpuVertex, Photon, RsmPhoton, RsmTexel, DEPOSIT_PLANE_WORDS, NO_MATERIAL,
 };
+use caustica_core::frame::output::Output;
 use caustica_core::kernels::Kernel;
 use caustica_core::kernels::{
     AtlasDeposit, AtrousFilter, BilateralGather, CausticMapLookup, Composite, DensityGather,
@@ -767,7 +768,7 @@ fn instance_faults_fail_the_instance_checks() {
     let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
     let frame = |t: &mut Box<dyn caustica_core::Technique>, b: &mut dyn Backend| {
         t.frame(b, &mut |_| {}).expect("frame");
-        t.read_output(b, "composite").expect("read").pixels
+        t.read_output(b, Output::Composite).expect("read").pixels
     };
     let mut fresh = create("sspm", b, &moved, &settings).expect("create");
     let want = frame(&mut fresh, b);

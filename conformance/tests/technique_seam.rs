@@ -6,12 +6,16 @@
 //! technique dropped without `free` is reported, never silently leaked.
 
 use caustica_conformance::backends;
+use caustica_core::frame::error::Error;
+use caustica_core::frame::image::Image;
+use caustica_core::frame::output::Output;
 use caustica_core::frame::technique::leaked_buffers;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::{Light, Scene};
 use caustica_core::techniques::sspm::GatherFilter;
 use caustica_core::techniques::{create, technique_names};
 use caustica_core::{Backend, Technique};
+use caustica_core::{FrameSettings, ScreenSettings};
 use caustica_core::{Sspm, SspmSettings};
 use glam::Vec3;
 
@@ -66,7 +70,7 @@ fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec
         .into_iter()
         .filter(|o| o.requested)
         .filter_map(|o| {
-            let img = t.read_output(b, o.name).expect("read");
+            let img = t.read_output(b, o.output).expect("read");
             if o.camera_space {
                 Some((o.name.to_string(), img.pixels))
             } else {
@@ -75,6 +79,46 @@ fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec
             }
         })
         .collect()
+}
+
+/// What a host writes once for all four techniques: a frame, then the caustics if the
+/// technique has them.
+fn caustics(t: &mut dyn Technique, b: &mut dyn Backend) -> Result<Option<Image>, Error> {
+    t.frame(b, &mut |_| {})?;
+    if !t
+        .outputs()
+        .iter()
+        .any(|o| o.output == Output::FilteredCaustics)
+    {
+        return Ok(None);
+    }
+    t.read_output(b, Output::FilteredCaustics).map(Some)
+}
+
+#[test]
+fn one_function_reads_the_caustics_of_every_technique() {
+    for (bname, mut b) in backends() {
+        for name in technique_names() {
+            let mut t = create(name, b.as_mut(), &small("sphere"), &settings()).expect("create");
+            let got = caustics(t.as_mut(), b.as_mut()).expect("caustics");
+            let flux = |img: &Image| img.pixels.iter().map(|p| p[0] as f64).sum::<f64>();
+            match (name, got) {
+                ("photon-gi", None) => assert!(matches!(
+                    t.read_output(b.as_mut(), Output::FilteredCaustics),
+                    Err(Error::NoSuchOutput { .. })
+                )),
+                ("photon-gi", Some(_)) => panic!("{bname}: photon-gi has no caustics"),
+                (_, Some(img)) => {
+                    assert_eq!((img.width, img.height), (64, 36), "{bname}/{name}");
+                    assert!(img.all_finite(), "{bname}/{name}");
+                    // the glass ball focuses light on the plane: caustics are not black
+                    assert!(flux(&img) > 0.0, "{bname}/{name}: black caustics");
+                }
+                (_, None) => panic!("{bname}/{name}: no caustics"),
+            }
+            t.free(b.as_mut()).expect("free");
+        }
+    }
 }
 
 #[test]
@@ -93,8 +137,28 @@ fn every_technique_by_name_renders_and_lists_its_outputs() {
                 );
             }
             let (filtered, raw) = t.estimate_outputs();
-            assert!(outs.iter().any(|(o, _)| o == filtered) && outs.iter().any(|(o, _)| o == raw));
-            assert!(t.read_output(b.as_mut(), "no_such_output").is_err());
+            assert!(
+                outs.iter().any(|(o, _)| o == filtered.stem())
+                    && outs.iter().any(|(o, _)| o == raw.stem())
+            );
+            let own: Vec<Output> = t.outputs().iter().map(|o| o.output).collect();
+            for lacking in Output::ALL.into_iter().filter(|o| !own.contains(o)) {
+                match t.read_output(b.as_mut(), lacking) {
+                    Err(Error::NoSuchOutput {
+                        technique,
+                        output,
+                        has,
+                    }) => {
+                        assert_eq!((technique, output), (name, lacking));
+                        assert_eq!(has, own, "{bname}/{name}: the outputs it has");
+                    }
+                    other => panic!("{bname}/{name}/{lacking}: {other:?}"),
+                }
+                assert!(matches!(
+                    t.output_image(lacking),
+                    Err(Error::NoSuchOutput { .. })
+                ));
+            }
             t.free(b.as_mut()).expect("free");
         }
         assert!(create(
@@ -207,17 +271,29 @@ fn new_settings_and_image_size_equal_a_fresh_technique_bitwise() {
     for (bname, mut b) in backends() {
         let scene = small("cornell");
         let before = SspmSettings {
-            photons_w: 48,
-            photons_h: 40,
-            filter: GatherFilter::Bilateral,
+            frame: FrameSettings {
+                photons_w: 48,
+                photons_h: 40,
+                ..SspmSettings::default().frame
+            },
+            screen: ScreenSettings {
+                filter: GatherFilter::Bilateral,
+                ..SspmSettings::default().screen
+            },
             ..SspmSettings::default()
         };
         let after = SspmSettings {
-            photons_w: 96,
-            photons_h: 64,
-            filter: GatherFilter::Density,
-            knn_photons: 16,
-            max_radius_px: 8,
+            frame: FrameSettings {
+                photons_w: 96,
+                photons_h: 64,
+                ..SspmSettings::default().frame
+            },
+            screen: ScreenSettings {
+                filter: GatherFilter::Density,
+                knn_photons: 16,
+                max_radius_px: 8,
+                ..SspmSettings::default().screen
+            },
             ..SspmSettings::default()
         };
         let mut bigger = scene.clone();
@@ -246,7 +322,10 @@ fn new_settings_and_image_size_equal_a_fresh_technique_bitwise() {
         );
         // a budget the built scene does not fit is refused, and nothing changes
         let tight = SspmSettings {
-            max_triangles: 1,
+            frame: FrameSettings {
+                max_triangles: 1,
+                ..after.clone().frame
+            },
             ..after.clone()
         };
         assert!(t.set_settings(b.as_mut(), tight).is_err(), "{bname}");
@@ -276,7 +355,7 @@ fn new_settings_through_the_seam_equal_a_fresh_technique_for_every_technique() {
         let scene = small("cornell");
         for (name, before) in variants() {
             // more photons, another seed; AdaptiveCaustics fewer bounces, and its screen
-            // target may change only its screen settings (the seed's bilateral filter)
+            // target may change only its screen settings (Kim 2019's bilateral filter)
             let screen = before.get("deposit").is_some();
             let after = if screen {
                 with(

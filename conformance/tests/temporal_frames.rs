@@ -1,4 +1,4 @@
-//! The temporal blend (seed 003 section 24.4.1) as Sspm's opt-in pass
+//! The temporal blend (Smal 2019, section 24.4.1) as Sspm's opt-in pass
 //! (`SspmSettings::temporal`), on every backend (`backends()`: all four, required in CI).
 //!
 //! The blend's expectation is a single frame's (an exponential moving average of frames
@@ -17,6 +17,7 @@
 //!   there: a history blended in at the wrong place would exceed it.
 
 use caustica_conformance::backends;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
 use caustica_core::techniques::create;
@@ -51,7 +52,9 @@ fn frames(
         .map(|k| {
             t.set_seed(k);
             t.frame(b, &mut |_| {}).expect("frame");
-            t.read_output(b, "caustics_filtered").expect("read").pixels
+            t.read_output(b, Output::FilteredCaustics)
+                .expect("read")
+                .pixels
         })
         .collect();
     t.free(b).expect("free");
@@ -106,7 +109,10 @@ fn a_static_camera_converges_and_a_moved_one_does_not_ghost() {
         for k in 0..48 {
             t.set_seed(k);
             t.frame(b, &mut |_| {}).expect("frame");
-            last = t.read_output(b, "caustics_filtered").expect("read").pixels;
+            last = t
+                .read_output(b, Output::FilteredCaustics)
+                .expect("read")
+                .pixels;
         }
         let blended = rel_l2(&last, &reference);
         eprintln!("{name}: static, 48 frames: blend {blended:.4}, single {single:.4}");
@@ -125,7 +131,10 @@ fn a_static_camera_converges_and_a_moved_one_does_not_ghost() {
         t.set_camera(b, &moved.camera).expect("move");
         t.set_seed(99);
         t.frame(b, &mut |_| {}).expect("frame");
-        let after = t.read_output(b, "caustics_filtered").expect("read").pixels;
+        let after = t
+            .read_output(b, Output::FilteredCaustics)
+            .expect("read")
+            .pixels;
         t.free(b).expect("free");
         let err = rel_l2(&after, &reference_moved);
         eprintln!("{name}: first frame after the move: blend {err:.4}, single {single_moved:.4}");
@@ -157,7 +166,10 @@ fn atrous_iterations_on_single_frames() {
             for (k, single) in singles[..8].iter().enumerate() {
                 t.set_seed(1000 + k as u32);
                 t.frame(b, &mut |_| {}).expect("frame");
-                let img = t.read_output(b, "caustics_filtered").expect("read").pixels;
+                let img = t
+                    .read_output(b, Output::FilteredCaustics)
+                    .expect("read")
+                    .pixels;
                 assert!(
                     img.iter().flatten().all(|x| x.is_finite()),
                     "{name}: not finite"
@@ -214,7 +226,10 @@ fn caustic_map_opts_into_the_temporal_blend_and_atrous() {
             .map(|k| {
                 t.set_seed(k);
                 t.frame(b, &mut |_| {}).expect("frame");
-                let img = t.read_output(b, "caustics_filtered").expect("read").pixels;
+                let img = t
+                    .read_output(b, Output::FilteredCaustics)
+                    .expect("read")
+                    .pixels;
                 assert!(img.iter().flatten().all(|x| x.is_finite()), "not finite");
                 img
             })

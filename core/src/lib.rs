@@ -28,9 +28,14 @@ pub mod techniques;
 
 pub use backend::{Backend, BackendError, Capabilities, DeviceType, Finished, Submission};
 pub use frame::error::Error;
+pub use frame::output::{Output, Outputs};
 pub use frame::plan::FramePlan;
+pub use frame::receivers::atlas::settings::{AtlasSettings, PlaneSettings};
+pub use frame::receivers::screen::ScreenSettings;
+pub use frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
 pub use frame::stats::FrameStats;
 pub use frame::submitted::{FrameTicket, RecordedFrame};
 pub use frame::technique::{OutputInfo, Progress, Technique};
 pub use scene::Scene;
-pub use techniques::sspm::{GatherFilter, Output, Outputs, Sspm, SspmSettings};
+pub use techniques::adaptive_caustics::TraversalSettings;
+pub use techniques::sspm::{GatherFilter, Sspm, SspmSettings};

@@ -114,3 +114,136 @@ fn no_technique_imports_another() {
     }
     assert!(violations.is_empty(), "{}", violations.join("\n"));
 }
+
+/// The module path (`frame::receivers::atlas`) of a source file under `src`.
+fn module_of(src: &Path, file: &Path) -> String {
+    let rel = file
+        .strip_prefix(src)
+        .expect("under src")
+        .with_extension("");
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if parts.last().is_some_and(|p| p == "mod") {
+        parts.pop();
+    }
+    parts.join("::")
+}
+
+/// frame/ knows no technique and has no import cycle: every path to a frame module in a
+/// frame file's code (comments aside) is an edge from its module to the longest module
+/// the path names (`crate::frame::...`, `super::...` from the file's parent, and in a
+/// `mod.rs` a child's name, `plan::...`), and the graph of frame's modules has no cycle
+/// (so each module can be read from the ones it imports). The layer test above already
+/// keeps `crate::techniques` out of frame/.
+#[test]
+fn frame_modules_import_each_other_without_cycles() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src.join("frame"), &mut files);
+    let modules: Vec<String> = files.iter().map(|f| module_of(&src, f)).collect();
+    let mut edges: Vec<Vec<usize>> = vec![Vec::new(); modules.len()];
+    for (i, f) in files.iter().enumerate() {
+        let text = std::fs::read_to_string(f).expect("readable file");
+        let own = &modules[i];
+        let parent = own.rsplit_once("::").map_or("", |(p, _)| p).to_string();
+        let is_mod_rs = f.file_name().is_some_and(|n| n == "mod.rs");
+        // the children a mod.rs declares (`pub mod plan;`)
+        let children: Vec<String> = text
+            .lines()
+            .filter_map(|l| {
+                let l = l.trim().trim_start_matches("pub ");
+                l.strip_prefix("mod ")?
+                    .strip_suffix(';')
+                    .map(str::to_string)
+            })
+            .filter(|_| is_mod_rs)
+            .collect();
+        // a file's own tests (`#[cfg(test)] mod tests`, at its end) import nothing of it
+        for line in text.lines().take_while(|l| l.trim() != "#[cfg(test)]") {
+            let code = line.split("//").next().unwrap_or("");
+            let word = |at: usize, len: usize| -> String {
+                code[at + len..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':')
+                    .collect()
+            };
+            let starts_a_path = |at: usize| {
+                at == 0 || {
+                    let before = code.as_bytes()[at - 1];
+                    !(before.is_ascii_alphanumeric() || before == b'_' || before == b':')
+                }
+            };
+            let mut paths: Vec<String> = code
+                .match_indices("crate::frame::")
+                .map(|(at, _)| format!("frame::{}", word(at, 14)))
+                .collect();
+            paths.extend(
+                code.match_indices("super::")
+                    .filter(|(at, _)| starts_a_path(*at))
+                    .map(|(at, _)| format!("{parent}::{}", word(at, 7))),
+            );
+            for child in &children {
+                let needle = format!("{child}::");
+                paths.extend(
+                    code.match_indices(needle.as_str())
+                        .filter(|(at, _)| starts_a_path(*at))
+                        .map(|(at, _)| format!("{own}::{}", word(at, 0))),
+                );
+            }
+            for path in paths {
+                // the longest module the path names
+                let target = modules
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, m)| path == **m || path.starts_with(&format!("{m}::")))
+                    .max_by_key(|(_, m)| m.len())
+                    .map(|(j, _)| j);
+                if let Some(j) = target.filter(|&j| j != i && !edges[i].contains(&j)) {
+                    edges[i].push(j);
+                }
+            }
+        }
+    }
+    assert!(
+        modules.len() > 15,
+        "found only {} frame modules",
+        modules.len()
+    );
+    // depth-first search with colours: a grey module met again closes a cycle
+    fn visit(
+        i: usize,
+        edges: &[Vec<usize>],
+        colour: &mut [u8],
+        stack: &mut Vec<usize>,
+    ) -> Option<Vec<usize>> {
+        colour[i] = 1;
+        stack.push(i);
+        for &j in &edges[i] {
+            if colour[j] == 1 {
+                let from = stack.iter().position(|&k| k == j).expect("on the stack");
+                let mut cycle = stack[from..].to_vec();
+                cycle.push(j);
+                return Some(cycle);
+            }
+            if colour[j] == 0 {
+                if let Some(c) = visit(j, edges, colour, stack) {
+                    return Some(c);
+                }
+            }
+        }
+        stack.pop();
+        colour[i] = 2;
+        None
+    }
+    let mut colour = vec![0u8; modules.len()];
+    for i in 0..modules.len() {
+        if colour[i] == 0 {
+            if let Some(cycle) = visit(i, &edges, &mut colour, &mut Vec::new()) {
+                let names: Vec<&str> = cycle.iter().map(|&k| modules[k].as_str()).collect();
+                panic!("an import cycle inside frame/: {}", names.join(" -> "));
+            }
+        }
+    }
+}

@@ -99,7 +99,7 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 /// The kernels whose every workgroup variable is written before it is read, by their own
 /// code: the backends build them without the zero-initialisation of workgroup memory that
 /// WGSL otherwise requires (on Vulkan naga's polyfill, invocation 0 storing zeros over all
-/// of it before a barrier: 6.06 to 5.40 ms of `splat_photons` at seed 003's high setting
+/// of it before a barrier: 6.06 to 5.40 ms of `splat_photons` at Smal 2019's high setting
 /// on the H200; wgpu's driver-side initialisation cost nothing measurable).
 /// `splat_photons`: every invocation writes `setups[li]` and `starts[li + 1]`,
 /// invocation 0 writes `starts[0]`, all before the barrier after which they are read;

@@ -1,5 +1,5 @@
 // needs: layout prelude vector irradiance_filter
-// atrous_filter (seed 003 section 24.4.2, Eqs. 14-18): one edge-avoiding A-Trous
+// atrous_filter (Smal 2019, section 24.4.2, Eqs. 14-18): one edge-avoiding A-Trous
 // iteration with variance clipping of its detail coefficient (the contract in
 // core/src/kernels/atrous_filter.rs). Mirror of backend-opencl/kernels/atrous_filter.cl
 // and backend-cpu/src/kernels/atrous_filter.rs.

@@ -1,5 +1,5 @@
 // needs: layout prelude vector optics footprint gbuffer
-// bilateral_gather (seed 000 section 30.3.2): one direction of the separable edge-aware
+// bilateral_gather (Kim 2019, section 30.3.2): one direction of the separable edge-aware
 // photon gather. Mirror of backend-opencl/kernels/bilateral_gather.cl and
 // backend-cpu/src/kernels/bilateral_gather.rs.
 

@@ -1,5 +1,5 @@
 // needs: layout prelude vector optics geometry traversal scene atlas specular_tree map_lookup
-// caustic_map_lookup (seed 001 section 3.3): the camera ray's specular tree reads the
+// caustic_map_lookup (Vanderstichelen 2021, section 3.3): the camera ray's specular tree reads the
 // caustic map of each diffuse surface it ends on. Mirror of
 // backend-opencl/kernels/caustic_map_lookup.cl, backend-vulkan/shaders/caustic_map_lookup.rgen
 // and backend-cpu/src/kernels/caustic_map_lookup.rs.

@@ -1,5 +1,5 @@
 // needs: layout prelude vector optics
-// composite (seed 000 section 30.3.3): direct light + gathered caustics, alpha 1. Mirror
+// composite (Kim 2019, section 30.3.3): direct light + gathered caustics, alpha 1. Mirror
 // of backend-opencl/kernels/composite.cl and backend-cpu/src/kernels/composite.rs. The
 // texel count (the OpenCL `texels` argument) is the output's length.
 

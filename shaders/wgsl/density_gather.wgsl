@@ -89,7 +89,7 @@ fn density_gather(index: u32) {
         let e = saturate_radiance3(sum * saturate_radiance(1.0 / ej.y));
         out[j] = vec4<f32>(e, r);
     } else {
-        // 000 Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
+        // Kim 2019, Eq. 5: L = (albedo / pi) Phi / A (the scale saturates first: no 0 / 0)
         let g = load_gbuffer(u32(j));
         let cam = p.camera;
         let ray = camera_ray(cam, u32(x), u32(y));

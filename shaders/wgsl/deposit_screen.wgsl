@@ -1,5 +1,5 @@
 // needs: layout prelude vector packing fixed_point scene gbuffer photon_map_add screen_deposit
-// deposit_screen (seed 000 section 30.3.1.3): each stored photon is projected to its pixel
+// deposit_screen (Kim 2019, section 30.3.1.3): each stored photon is projected to its pixel
 // and added in fixed point if the pixel sees a diffuse surface at a consistent depth and
 // the photon arrives on the side the camera sees. Mirror of
 // backend-opencl/kernels/deposit_screen.cl and backend-cpu/src/kernels/deposit_screen.rs;

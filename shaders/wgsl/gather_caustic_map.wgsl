@@ -1,5 +1,5 @@
 // needs: layout prelude vector atlas photon_map map_gather
-// gather_caustic_map (seed 001 section 3.1, "Denoising"): per atlas texel, the
+// gather_caustic_map (Vanderstichelen 2021, section 3.1, "Denoising"): per atlas texel, the
 // flux-keeping N x N gather inside its tile, as irradiance. Mirror of
 // backend-opencl/kernels/gather_caustic_map.cl and backend-cpu/src/kernels/gather_caustic_map.rs.
 

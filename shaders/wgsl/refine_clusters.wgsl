@@ -1,5 +1,5 @@
 // needs: layout prelude vector fixed_point atlas photon_map_add photon_clusters scene
-// refine_clusters (seed 004 section 3.2, AdaptiveCaustics): one thread per traced
+// refine_clusters (Wyman 2009, section 3.2, AdaptiveCaustics): one thread per traced
 // cluster of the batch. Its four photon slots (trace_photons' ADAPTIVE variant) decide
 // its fate (core::math::photon_clusters::cluster_fate): discarded, output (its stored
 // photons deposited into the atlas exactly as the fused trace does) or refined (four

@@ -1,5 +1,5 @@
 // needs: layout prelude vector optics footprint scene gbuffer photon_map
-// resolve_caustics (seed 000 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
+// resolve_caustics (Kim 2019 Eq. 5): radiance L = (albedo / pi) * Phi / A from the pixel's
 // fixed-point flux sum; alpha = mean hit distance. Mirror of
 // backend-opencl/kernels/resolve_caustics.cl without cl_khr_fp64 (WGSL has no f64): the
 // 64-bit sums are split exactly into hi * 2^32 and lo and scaled in f32. The CPU

@@ -1,5 +1,5 @@
 // needs: layout prelude vector sampling footprint scene gbuffer packing photon_gi
-// rsm_importance (seed 003 section 24.2.1): level 0 writes a face's RSM texels and
+// rsm_importance (Smal 2019, section 24.2.1): level 0 writes a face's RSM texels and
 // importance from the G-buffer its face camera rendered; level k > 0 the 2x2 sums of level
 // k - 1 of faces 0 ..= params.face. Mirror of backend-cpu/src/kernels/rsm_importance.rs
 // (rsm_texel, rsm_level) and backend-opencl/kernels/rsm_importance.cl.

@@ -1,5 +1,5 @@
 // needs: layout prelude vector packing gbuffer atlas irradiance_filter
-// shading_normal_correction (seed 003 section 24.4.3, Eq. 20): per receiver pixel with
+// shading_normal_correction (Smal 2019, section 24.4.3, Eq. 20): per receiver pixel with
 // splats, the filtered indirect radiance times min(max(0, w_i . n_s) / (w_i . n_g + eps),
 // s_max), w_i the splats' power-weighted mean light direction. Mirror of
 // backend-cpu/src/kernels/shading_normal_correction.rs (shading_normal_correction) and

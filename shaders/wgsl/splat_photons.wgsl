@@ -1,5 +1,5 @@
 // needs: layout prelude vector packing fixed_point footprint scene gbuffer photon_map_add sampling photon_gi irradiance_filter
-// splat_photons (seed 003 section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat
+// splat_photons (Smal 2019, section 24.3, Eqs. 2-9): each stored photon's ellipsoid splat
 // adds its irradiance times each covered receiver pixel's area to the photon map in fixed
 // point. Mirror of backend-cpu/src/kernels/splat_photons.rs (splat_setup, splat_pixel) and
 // backend-opencl/kernels/splat_photons.cl.

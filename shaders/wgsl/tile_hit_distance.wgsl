@@ -1,5 +1,5 @@
 // needs: layout prelude photon_map
-// tile_hit_distance (seed 000 section 30.3.2): photon-weighted mean hit distance per
+// tile_hit_distance (Kim 2019, section 30.3.2): photon-weighted mean hit distance per
 // tile_size^2 tile, 0 for empty tiles. Mirror of backend-opencl/kernels/
 // tile_hit_distance.cl and backend-cpu/src/kernels/tile_hit_distance.rs. The u64 sums are (lo, hi)
 // u32 pairs with carry (exact, as the OpenCL ulong sums); the mean is taken in f32 from

@@ -1,5 +1,5 @@
 // needs: layout prelude vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
-// trace_indirect (seed 003 section 24.2.2): photon params.first + coherent_sample_order(i)
+// trace_indirect (Smal 2019, section 24.2.2): photon params.first + coherent_sample_order(i)
 // of the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled
 // to the camera's view and facing side, counted per screen tile) at every diffuse hit
 // after its first bounce.

@@ -1,5 +1,5 @@
 // needs: layout prelude vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
-// trace_photons (seed 000 sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
+// trace_photons (Kim 2019, sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least
 // one specular interaction. Mirror of
@@ -17,11 +17,11 @@ override ABSORPTION: bool = true;
 // Store policy (core's photon_store): false stores world space (Sspm), true the hit's uv
 // and triangle (CausticMap's atlas).
 override SURFACE_STORE: bool = false;
-// Seed 001's deterministic splits (core's TraceVariant::fresnel_split): both Fresnel
+// Vanderstichelen 2021's deterministic splits (core's TraceVariant::fresnel_split): both Fresnel
 // branches and three one-channel branches at the first dispersive surface, up to
 // params.split_budget branches per photon.
 override FRESNEL_SPLIT: bool = false;
-// Seed 004's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
+// Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
 // of cluster clusters[params.first + i / 4] of the params.grid_w grid and is written to
 // slot i, stored or not (core's photon_store says how); photon_count is left untouched.
 override ADAPTIVE: bool = false;
@@ -264,7 +264,7 @@ struct Branch {
     channel: i32,
 }
 
-// One emitted photon with seed 001's deterministic splits (backend-cpu
+// One emitted photon with Vanderstichelen 2021's deterministic splits (backend-cpu
 // trace_photons.rs::trace_photon_split, same order and decisions): records every branch's
 // end; returns the ray segments traced, writes the branches added.
 fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) -> u32 {

@@ -1,4 +1,4 @@
-//! `atrous_filter` (seed 003 section 24.4.2): one edge-avoiding A-Trous iteration with
+//! `atrous_filter` (Smal 2019, section 24.4.2): one edge-avoiding A-Trous iteration with
 //! variance clipping of its detail coefficient. The weights are core's
 //! `math::irradiance_filter`; see core's `AtrousFilter` for the contract.
 

@@ -1,4 +1,4 @@
-//! Photon gathering (seed 000 section 30.3.2): the separable, edge-aware
+//! Photon gathering (Kim 2019, section 30.3.2): the separable, edge-aware
 //! `bilateral_gather` (the tile hit distances come from [`super::tile_hit_distance`]).
 //!
 //! The source denoises with a reflection denoiser fed with a constant roughness (0.07) and

@@ -1,4 +1,4 @@
-//! `caustic_map_lookup` (seed 001): camera paths read the caustic map. The math is
+//! `caustic_map_lookup` (Vanderstichelen 2021): camera paths read the caustic map. The math is
 //! core's `math::map_gather`; this is a loop over it.
 
 use super::direct_light::specular_tree;

@@ -1,4 +1,4 @@
-//! `composite` (seed 000 section 30.3.3): the gathered caustic radiance is added to the
+//! `composite` (Kim 2019, section 30.3.3): the gathered caustic radiance is added to the
 //! direct light, like one more light in a deferred renderer. Alpha 1.
 
 use crate::recording::reserve_temporary;

@@ -100,7 +100,7 @@ pub fn density_gather(
                 let e = saturate_radiance3(sum * saturate_radiance(1.0 / ej[1]));
                 [e.x, e.y, e.z, r]
             } else {
-                // 000 Eq. 5: L = (albedo / pi) Phi / A
+                // Kim 2019, Eq. 5: L = (albedo / pi) Phi / A
                 // (the scale saturates first, so that no pixel of area 0 gives 0 / 0)
                 let gj = g.load_gbuffer(j as usize);
                 let area = gbuffer_pixel_area(&p.camera, j as u32, &gj);

@@ -1,4 +1,4 @@
-//! `deposit_screen` (seed 000 section 30.3.1.3): each stored photon is projected to the pixel that contains it; it is added
+//! `deposit_screen` (Kim 2019, section 30.3.1.3): each stored photon is projected to the pixel that contains it; it is added
 //! only if the pixel sees a diffuse surface (RECEIVER) at a view depth within
 //! `depth_tolerance * depth` of the photon's, and the photon arrives on the side the camera
 //! sees. Flux is added in fixed point (units of `flux_quantum`) with 64-bit integer

@@ -1,4 +1,4 @@
-//! `gather_caustic_map` (seed 001): the flux-keeping N x N gather of the caustic atlas
+//! `gather_caustic_map` (Vanderstichelen 2021): the flux-keeping N x N gather of the caustic atlas
 //! as irradiance. The math is core's `math::map_gather`; this is a loop over it.
 
 use crate::recording::reserve_temporary;

@@ -1,4 +1,4 @@
-//! `refine_clusters` (seed 004 section 3.2, AdaptiveCaustics): one step of the adaptive
+//! `refine_clusters` (Wyman 2009, section 3.2, AdaptiveCaustics): one step of the adaptive
 //! traversal over a batch of traced clusters. The decisions are core's
 //! `math::photon_clusters`; the atlas deposit is the fused trace's (`atlas_deposit::deposit_atlas_texel`), the screen target's
 //! photons are `deposit_screen`'s input.
@@ -152,7 +152,7 @@ pub fn refine_clusters(
                 }
             };
             let texels = slots.map(|ph| slot_stored(ph.flux).then(|| texel_of(&ph)));
-            // 004's test (a photon met a caster), or the conservative one
+            // Wyman 2009's test (a photon met a caster), or the conservative one
             let relevant = slots
                 .iter()
                 .any(|ph| slot_met_caster(ph.flux, ph.position[2]))

@@ -1,4 +1,4 @@
-//! `resolve_caustics` (seed 000 Eq. 5): radiance `L = (albedo / pi) * Phi / A`, where `Phi` is the pixel's summed flux
+//! `resolve_caustics` (Kim 2019 Eq. 5): radiance `L = (albedo / pi) * Phi / A`, where `Phi` is the pixel's summed flux
 //! and `A` the surface area the pixel covers (Eq. 4 footprint corrected for obliquity,
 //! see `caustica_core::math::footprint`). Alpha: mean hit distance of the pixel's photons.
 

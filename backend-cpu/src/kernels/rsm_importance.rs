@@ -1,4 +1,4 @@
-//! `rsm_importance` (PhotonGi, seed 003 section 24.2.1): the reflective shadow map's
+//! `rsm_importance` (PhotonGi, Smal 2019, section 24.2.1): the reflective shadow map's
 //! texels and the importance pyramid over them. Method, units and sources in
 //! `caustica_core::math::rsm` and the kernel's declaration.
 

@@ -1,4 +1,4 @@
-//! `sample_rsm` (PhotonGi, seed 003 section 24.2.1): photons warped from the reflective
+//! `sample_rsm` (PhotonGi, Smal 2019, section 24.2.1): photons warped from the reflective
 //! shadow map's importance pyramid. Method, units and sources in `caustica_core::math::rsm`
 //! and the kernel's declaration.
 

@@ -1,4 +1,4 @@
-//! `shading_normal_correction` (PhotonGi, seed 003 Eq. 20): the splatted irradiance
+//! `shading_normal_correction` (PhotonGi, Smal 2019 Eq. 20): the splatted irradiance
 //! corrected for smooth shading normals. Method and sources in
 //! `caustica_core::math::irradiance_filter` and the kernel's declaration.
 
@@ -33,7 +33,7 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &ShadingNormalCorrection) -> Result<(
     cpu.put(out.id, &img)
 }
 
-/// `shading_normal_correction` (003 Eq. 20): per receiver pixel with splats, the input
+/// `shading_normal_correction` (Smal 2019, Eq. 20): per receiver pixel with splats, the input
 /// times `shading_normal_factor(w_i, n_s, n_g, s_max, eps)` with `w_i` the direction
 /// map's mean light direction; other pixels keep the input.
 pub fn shading_normal_correction(

@@ -1,4 +1,4 @@
-//! `splat_photons` (PhotonGi, seed 003 section 24.3): the stored photons splatted into
+//! `splat_photons` (PhotonGi, Smal 2019, section 24.3): the stored photons splatted into
 //! the screen's irradiance. Method, units and sources in `caustica_core::math::photon_splat`
 //! and the kernel's declaration.
 

@@ -1,4 +1,4 @@
-//! `temporal_blend` (seed 003 section 24.4.1): the temporal accumulation of a screen-space
+//! `temporal_blend` (Smal 2019, section 24.4.1): the temporal accumulation of a screen-space
 //! estimate over its reprojected history. The weights are core's
 //! `math::irradiance_filter`; see core's `TemporalBlend` for the contract.
 

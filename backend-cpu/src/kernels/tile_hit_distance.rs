@@ -1,4 +1,4 @@
-//! `tile_hit_distance` (seed 000 section 30.3.2): the mean hit distance of the photons in
+//! `tile_hit_distance` (Kim 2019, section 30.3.2): the mean hit distance of the photons in
 //! each screen tile, from which `bilateral_gather` takes its blur radius
 //! ([`super::bilateral_gather`] has the method).
 

@@ -1,4 +1,4 @@
-//! `trace_indirect` (PhotonGi, seed 003 section 24.2.2): the RSM photons' diffuse bounces,
+//! `trace_indirect` (PhotonGi, Smal 2019, section 24.2.2): the RSM photons' diffuse bounces,
 //! stored where the camera sees them. Method, units and sources in
 //! `caustica_core::math::gi_photon` and the kernel's declaration.
 

@@ -1,4 +1,4 @@
-//! `trace_photons` (seed 000 sections 30.3.1.1-2): emits photon
+//! `trace_photons` (Kim 2019, sections 30.3.1.1-2): emits photon
 //! `tiled_photon_index(first + i)` of the light's stratified grid (tile order: core's
 //! `math::sampling`), traces it through mirrors and dielectrics and stores it where it first
 //! meets a diffuse surface, provided it met at least one specular surface on the way.
@@ -12,7 +12,7 @@
 //! largest channel drops below `min_relative_power` of the emitted flux.
 //!
 //! Emission: a cone (equal-area warp), a rectangle of parallel rays, or a light view plane
-//! (seed 001: the pinhole ray through a jittered point of the photon's texel, flux `I x`
+//! (Vanderstichelen 2021: the pinhole ray through a jittered point of the photon's texel, flux `I x`
 //! the texel's solid angle). Store: world space (Sspm) or, with the variant's
 //! `surface_store`, the hit's uv and triangle (CausticMap's atlas).
 //!
@@ -312,7 +312,7 @@ fn stored_photon(store: u32, s: &SurfacePoint, hit: &Hit, flux: Vec3, dir: Vec3)
     }
 }
 
-/// One emitted photon with seed 001's deterministic splits (the variant's `FRESNEL_SPLIT`):
+/// One emitted photon with Vanderstichelen 2021's deterministic splits (the variant's `FRESNEL_SPLIT`):
 /// at a dielectric both the reflected branch (flux x R, exact Fresnel) and the refracted
 /// one (x (1 - R)) go on (total internal reflection: the reflected one with all the flux);
 /// at the first dispersive surface three branches go on, one per colour channel with that
@@ -492,7 +492,7 @@ fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION:
     })
 }
 
-/// The `ADAPTIVE` variant (seed 004): photon `i` of the batch is photon `i % 4` of cluster
+/// The `ADAPTIVE` variant (Wyman 2009): photon `i` of the batch is photon `i % 4` of cluster
 /// `clusters[p.first + i / 4]` of the `p.grid_w` grid
 /// ([`cluster_photon_index`]), and goes to slot `i` whether it stored or not
 /// (`photon_store`'s adaptive slot: an empty slot has zero flux, `direction` =

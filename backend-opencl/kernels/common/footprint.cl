@@ -1,6 +1,6 @@
-// Mirror of core/src/footprint.rs: 000 Eq. 4 pixel footprint and its obliquity correction.
+// Mirror of core/src/footprint.rs: Kim 2019, Eq. 4 pixel footprint and its obliquity correction.
 
-// 000 Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
+// Kim 2019, Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
 inline float pixel_footprint(float depth, uint width, uint height, float tan_half_fov_x,
                              float tan_half_fov_y) {
     float sx = 2.0f * depth * tan_half_fov_x / (float)width;

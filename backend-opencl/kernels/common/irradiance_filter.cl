@@ -1,8 +1,8 @@
-// Mirror of core::math::irradiance_filter (seed 003 section 24.4: edge-stopping weights,
+// Mirror of core::math::irradiance_filter (Smal 2019, section 24.4: edge-stopping weights,
 // the temporal blend).
 
 // The weights use the native (hardware) exp2, log2 and division, as WGSL's exp and pow
-// do on the GPUs: an A-Trous iteration at seed 003's high setting on the H200 took 0.90 ms
+// do on the GPUs: an A-Trous iteration at Smal 2019's high setting on the H200 took 0.90 ms
 // against 1.54 with OpenCL's full-precision exp, pow and division (docs/performance.md,
 // "PhotonGi"). Their error (NVIDIA: ex2.approx and lg2.approx,
 // ~2^-22 relative and absolute; exp's argument rounded before it: ~1e-7 x |argument|)
@@ -79,7 +79,7 @@ inline float3 mean_light_direction(float3 d, float w) {
     return v * (1.0f / l);
 }
 
-// irradiance_filter::shading_normal_factor (003 Eq. 20).
+// irradiance_filter::shading_normal_factor (Smal 2019, Eq. 20).
 inline float shading_normal_factor(float3 w_i, float3 n_s, float3 n_g, float s_max, float eps) {
     float num = fmax(dot3(w_i, n_s), 0.0f);
     float den = fmax(dot3(w_i, n_g), 0.0f) + eps;

@@ -1,4 +1,4 @@
-// Mirror of core::math::map_gather (the caustic atlas, seed 001): texel addressing, the
+// Mirror of core::math::map_gather (the caustic atlas, Vanderstichelen 2021): texel addressing, the
 // flux-keeping N x N gather and the lookup over a pixel's footprint.
 
 inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
@@ -53,7 +53,7 @@ inline float atlas_area(__global const uint2* texels, uint i) { return as_float(
 // Texel i's flux (words 0-5 of its DepositTexel: planes.cl's deposit_word puts words 0-3
 // at plane 0's uint4 i and words 4-5 at plane 1's uint2 2i), read as one 16- and one
 // 8-byte load: the gather's nine taps a texel made six 4-byte loads each (0.158 against
-// 0.134 ms at seed 001's setting 0 on the H200).
+// 0.134 ms at Vanderstichelen 2021's setting 0 on the H200).
 inline float3 atlas_flux(PHOTON_MAP_PARAMS(__global const), uint i, float q) {
     uint4 rg = ((__global const uint4*)photon_map0)[i];
     uint2 b = ((__global const uint2*)photon_map1)[2u * i];

@@ -25,7 +25,7 @@ inline float fresnel_dielectric(float cos_i, float eta) {
     return clampf(0.5f * (r_s * r_s + r_p * r_p), 0.0f, 1.0f);
 }
 
-// Seed 001's Schlick approximation (core: optics::fresnel_schlick): the transmitted
+// Vanderstichelen 2021's Schlick approximation (core: optics::fresnel_schlick): the transmitted
 // cosine when light goes into the lower index, 1 under total internal reflection.
 inline float fresnel_schlick(float cos_i, float eta) {
     float q = (eta - 1.0f) / (eta + 1.0f);

@@ -1,4 +1,4 @@
-// Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics).
+// Mirror of core::math::photon_clusters (Wyman 2009's photon clusters, AdaptiveCaustics).
 // Its constants (NO_TRIANGLE, CLUSTER_*, MAX_ERROR_TEXELS) are in layout.cl.
 
 inline uint cluster_entry(uint cluster, uint spread) {

@@ -1,5 +1,5 @@
 // Mirror of core::math::{rsm, gi_photon, photon_splat} and packing's rgb9e5 (PhotonGi,
-// seed 003), function by function with the same names; shaders/wgsl/common/photon_gi.wgsl
+// Smal 2019), function by function with the same names; shaders/wgsl/common/photon_gi.wgsl
 // is the WGSL twin.
 
 // rsm::luminance (Rec. 709).

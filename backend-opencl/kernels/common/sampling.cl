@@ -39,7 +39,7 @@ inline float3 to_world(float3 v, float3 n) {
     return t * v.x + b * v.y + n * v.z;
 }
 
-// core::math::sampling::view_plane_direction (seed 001 section 3.1): the pinhole ray
+// core::math::sampling::view_plane_direction (Vanderstichelen 2021, section 3.1): the pinhole ray
 // through point `u` of a perspective light view plane.
 inline float3 view_plane_direction(float3 axis, float3 right, float3 up, float2 u) {
     float2 ndc = (float2)(2.0f * u.x - 1.0f, 1.0f - 2.0f * u.y);

@@ -1,4 +1,4 @@
-// Mirror of core::math::map_gather's texel addressing (the caustic atlas, seed 001) and of
+// Mirror of core::math::map_gather's texel addressing (the caustic atlas, Vanderstichelen 2021) and of
 // the photon map's word layout (core::device::layout::deposit_word), as
 // shaders/wgsl/common/atlas.wgsl and prelude.wgsl and backend-opencl map_gather.cl and
 // planes.cl have them.

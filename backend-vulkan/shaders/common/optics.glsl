@@ -28,7 +28,7 @@ precise float fresnel_dielectric(float cos_i, float eta) {
     return clampf(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
 }
 
-// Seed 001's Schlick approximation (core: optics::fresnel_schlick): the transmitted
+// Vanderstichelen 2021's Schlick approximation (core: optics::fresnel_schlick): the transmitted
 // cosine when light goes into the lower index, 1 under total internal reflection.
 precise float fresnel_schlick(float cos_i, float eta) {
     float q = (eta - 1.0) / (eta + 1.0);

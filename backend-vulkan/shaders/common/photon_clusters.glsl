@@ -1,4 +1,4 @@
-// Mirror of core::math::photon_clusters (seed 004's photon clusters, AdaptiveCaustics):
+// Mirror of core::math::photon_clusters (Wyman 2009's photon clusters, AdaptiveCaustics):
 // what trace_photons' ADAPTIVE variant needs (refine_clusters runs from WGSL).
 
 uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }

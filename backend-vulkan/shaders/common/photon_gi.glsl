@@ -1,5 +1,5 @@
 // Mirror of the parts of core::math::{rsm, gi_photon} and packing's rgb9e5 that
-// trace_indirect.rgen needs (PhotonGi, seed 003), same names as the Rust, WGSL
+// trace_indirect.rgen needs (PhotonGi, Smal 2019), same names as the Rust, WGSL
 // (shaders/wgsl/common/photon_gi.wgsl) and OpenCL C (kernels/common/photon_gi.cl).
 
 // rsm::cosine_hemisphere (Malley).

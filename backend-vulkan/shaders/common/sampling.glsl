@@ -40,7 +40,7 @@ precise vec3 to_world(vec3 v, vec3 n) {
     return t * v.x + b * v.y + n * v.z;
 }
 
-// core::math::sampling::view_plane_direction (seed 001 section 3.1): the pinhole ray
+// core::math::sampling::view_plane_direction (Vanderstichelen 2021, section 3.1): the pinhole ray
 // through point `u` of a perspective light view plane.
 precise vec3 view_plane_direction(vec3 axis, vec3 right, vec3 up, vec2 u) {
     vec2 ndc = vec2(2.0 * u.x - 1.0, 1.0 - 2.0 * u.y);

@@ -1,13 +1,104 @@
 //! The `caustica` command line: `render`, `scenes`, `backends`, `techniques`, `reference`, `report`.
+//!
+//! Nothing is printed with `print!` or `eprint!` (they panic when the stream fails): stdout
+//! goes through [`Console`], whose write errors end the command (a closed pipe quietly, any
+//! other error with a message), and stderr through [`note!`], which cannot fail.
 
 use caustica::output::{write_exr, write_png};
 use caustica::scene::{builtin, format};
+use caustica::technique_spec::{get_setting, put_setting};
 use caustica::techniques::{create, technique_names, TECHNIQUES};
-use caustica::{open_backend, Scene};
+use caustica::{open_backend, FrameStats, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+/// Why a command stopped before it finished.
+enum Stop {
+    /// The command failed: `error: MESSAGE` on stderr, exit status 1.
+    Failed(String),
+    /// Stdout is a pipe whose reader has gone (`caustica scenes --export prism | head`).
+    /// The program ends at once, without a message and with status 0: the reader stopped
+    /// because it had what it wanted, which is no failure of this command, and a script
+    /// under `set -o pipefail` must not fail because `head` read one line. (The other
+    /// convention, dying of SIGPIPE with status 141, makes exactly those scripts fail.)
+    /// Every command writes its files before its stdout lines, so a closed stdout loses
+    /// nothing but those lines.
+    StdoutClosed,
+}
+
+impl From<String> for Stop {
+    fn from(message: String) -> Stop {
+        Stop::Failed(message)
+    }
+}
+
+impl From<&str> for Stop {
+    fn from(message: &str) -> Stop {
+        Stop::Failed(message.into())
+    }
+}
+
+/// Stdout, with its write errors returned: a closed pipe is [`Stop::StdoutClosed`], any
+/// other error (a full disk behind `> file`, an I/O error) a failure that names stdout.
+struct Console {
+    out: std::io::StdoutLock<'static>,
+}
+
+impl Console {
+    fn new() -> Console {
+        Console {
+            out: std::io::stdout().lock(),
+        }
+    }
+
+    /// Writes `text` as it is (no newline added).
+    fn write(&mut self, text: fmt::Arguments) -> Result<(), Stop> {
+        self.out.write_fmt(text).map_err(stdout_error)
+    }
+
+    /// Writes `text` and a newline.
+    fn line(&mut self, text: fmt::Arguments) -> Result<(), Stop> {
+        self.write(format_args!("{text}\n"))
+    }
+
+    /// Writes out what is buffered, so that its error is seen here, not lost at exit.
+    fn flush(&mut self) -> Result<(), Stop> {
+        self.out.flush().map_err(stdout_error)
+    }
+}
+
+fn stdout_error(e: std::io::Error) -> Stop {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        Stop::StdoutClosed
+    } else {
+        Stop::Failed(format!("writing to stdout: {e}"))
+    }
+}
+
+/// One line on stderr (progress, warnings, the final error). A stderr that cannot be
+/// written is ignored: there is no other place to report that to, and the exit status
+/// still tells how the command went, so the command carries on with its work.
+fn note_line(text: fmt::Arguments) {
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
+}
+
+/// `outln!(console, "format", args...)`: a line on stdout, `Result<(), Stop>`.
+macro_rules! outln {
+    ($console:expr, $($arg:tt)*) => {
+        $console.line(format_args!($($arg)*))
+    };
+}
+
+/// `note!("format", args...)`: a line on stderr that never fails (see [`note_line`]).
+macro_rules! note {
+    ($($arg:tt)*) => {
+        note_line(format_args!($($arg)*))
+    };
+}
 
 #[derive(Parser)]
 #[command(
@@ -45,17 +136,19 @@ enum Command {
         /// Exposure multiplier for the PNG (EXR files are linear and unscaled).
         #[arg(long, default_value_t = 1.0)]
         exposure: f32,
-        /// Settings file (JSON object of the technique's settings fields, e.g. SspmSettings)
-        /// applied before the flags above.
+        /// Settings file (a JSON object of the technique's settings, e.g. `{"frame":
+        /// {"seed": 7}, "screen": {"filter": "bilateral"}}`; the flat objects of earlier
+        /// versions still load) applied before the flags above.
         #[arg(long)]
         settings: Option<PathBuf>,
-        /// The technique's caustic filter: Sspm's `filter`, density (default: adapts to the
-        /// photons, keeps the flux) or bilateral (the seed's); CausticMap's `gather`,
-        /// density (default) or box (seed 001's 3x3).
+        /// The technique's caustic filter: Sspm's `screen.filter`, density (default: adapts
+        /// to the photons, keeps the flux) or bilateral (Kim 2019's); CausticMap's and
+        /// AdaptiveCaustics' `atlas.gather`, density (default) or box (Vanderstichelen
+        /// 2021's 3x3).
         #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
         /// Frames to render; the last is written. Above 1, a technique with progressive
-        /// accumulation (`accumulate`, every technique) sums the frames' photons as one
+        /// accumulation (`frame.accumulate`, every technique) sums the frames' photons as one
         /// frame of all of them; with `accumulate: false` in the settings each frame gets a
         /// new seed.
         #[arg(long, default_value_t = 1)]
@@ -197,35 +290,70 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
-        Ok(c) => c,
-        Err(e) => {
-            use clap::error::ErrorKind;
-            if matches!(
-                e.kind(),
-                ErrorKind::DisplayHelp
-                    | ErrorKind::DisplayVersion
-                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-            ) {
-                e.exit();
-            }
-            let text = e.to_string();
-            let first = text
-                .lines()
-                .next()
-                .unwrap_or("bad arguments")
-                .trim_start_matches("error: ");
-            eprintln!("error: {first} (see caustica --help)");
-            return ExitCode::from(2);
-        }
+    let mut console = Console::new();
+    let ran = match Cli::try_parse() {
+        Ok(cli) => run(cli, &mut console),
+        Err(e) => return usage(&e, &mut console),
     };
-    match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", e.replace('\n', " "));
+    finish(ran, &mut console)
+}
+
+/// The exit status of a command that ran: 0 when it succeeded or stdout's reader left
+/// (see [`Stop::StdoutClosed`]), 1 with one line on stderr when it failed.
+fn finish(ran: Result<(), Stop>, console: &mut Console) -> ExitCode {
+    match ran.and_then(|()| console.flush()) {
+        Ok(()) | Err(Stop::StdoutClosed) => ExitCode::SUCCESS,
+        Err(Stop::Failed(e)) => {
+            let _ = console.flush(); // what was printed before the error comes first
+            note!("error: {}", e.replace('\n', " "));
             ExitCode::FAILURE
         }
     }
+}
+
+/// Arguments clap did not run: `--help`, `--version` and the help of a command without
+/// its subcommand (clap's text, coloured on a terminal, with clap's status: 0, or 2 for
+/// the missing subcommand), or a usage error (one line, status 2).
+fn usage(e: &clap::Error, console: &mut Console) -> ExitCode {
+    use clap::error::ErrorKind;
+    let status = ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let styled = e.render();
+        if e.use_stderr() {
+            let text = if std::io::stderr().is_terminal() {
+                styled.ansi().to_string()
+            } else {
+                styled.to_string()
+            };
+            let _ = std::io::stderr().lock().write_all(text.as_bytes()); // as note_line
+            return status;
+        }
+        let text = if std::io::stdout().is_terminal() {
+            styled.ansi().to_string()
+        } else {
+            styled.to_string()
+        };
+        return match console
+            .write(format_args!("{text}"))
+            .and_then(|()| console.flush())
+        {
+            Ok(()) | Err(Stop::StdoutClosed) => status,
+            Err(stop) => finish(Err(stop), console),
+        };
+    }
+    let text = e.to_string();
+    let first = text
+        .lines()
+        .next()
+        .unwrap_or("bad arguments")
+        .trim_start_matches("error: ");
+    note!("error: {first} (see caustica --help)");
+    ExitCode::from(2)
 }
 
 fn load_scene(arg: &str) -> Result<Scene, String> {
@@ -236,7 +364,7 @@ fn load_scene(arg: &str) -> Result<Scene, String> {
     if path.exists() {
         let loaded = caustica::scene_file::load_scene_file(path).map_err(|e| e.to_string())?;
         for w in &loaded.warnings {
-            eprintln!("warning: {w}");
+            note!("warning: {w}");
         }
         return Ok(loaded.scene);
     }
@@ -246,7 +374,7 @@ fn load_scene(arg: &str) -> Result<Scene, String> {
     ))
 }
 
-fn run(cli: Cli) -> Result<(), String> {
+fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
     match cli.command {
         Command::Scenes {
             export: Some(name),
@@ -259,31 +387,36 @@ fn run(cli: Cli) -> Result<(), String> {
                 )
             })?;
             match fmt.as_str() {
-                "json" => println!("{}", format::to_json(&s)),
-                "gltf" => println!("{}", caustica::gltf_scene::scene_to_gltf(&s)),
-                other => return Err(format!("unknown --format '{other}': json or gltf")),
+                "json" => outln!(console, "{}", format::to_json(&s)),
+                "gltf" => outln!(console, "{}", caustica::gltf_scene::scene_to_gltf(&s)),
+                other => Err(format!("unknown --format '{other}': json or gltf").into()),
             }
-            Ok(())
         }
         Command::Scenes { export: None, .. } => {
             for name in builtin::BUILTIN_SCENES {
                 let s = builtin::builtin(name).expect("listed scene exists");
-                println!("{name:<12} {}", s.description);
+                outln!(console, "{name:<12} {}", s.description)?;
             }
             Ok(())
         }
         Command::Backends => {
             for b in caustica::backend_statuses() {
                 match b.available {
-                    Ok((dev, t)) => println!("{:<8} available    {:<24} {dev}", b.name, t.label()),
-                    Err(why) => println!("{:<8} unavailable  {why}", b.name),
+                    Ok((dev, t)) => outln!(
+                        console,
+                        "{:<8} available    {:<24} {dev}",
+                        b.name,
+                        t.label()
+                    )?,
+                    Err(why) => outln!(console, "{:<8} unavailable  {why}", b.name)?,
                 }
             }
             let order: Vec<String> = caustica::auto_order()
                 .iter()
                 .map(|(n, t)| format!("{n} ({})", t.label()))
                 .collect();
-            println!(
+            outln!(
+                console,
                 "auto prefers: {} (hardware GPU, then the native CPU backend, then GPU APIs \
                  emulated on the CPU)",
                 if order.is_empty() {
@@ -291,13 +424,12 @@ fn run(cli: Cli) -> Result<(), String> {
                 } else {
                     order.join(" > ")
                 }
-            );
-            Ok(())
+            )
         }
         Command::Techniques => {
             let width = TECHNIQUES.iter().map(|t| t.name.len()).max().unwrap_or(0);
             for t in TECHNIQUES {
-                println!("{:<width$} {}", t.name, t.title);
+                outln!(console, "{:<width$} {}", t.name, t.title)?;
             }
             Ok(())
         }
@@ -317,7 +449,9 @@ fn run(cli: Cli) -> Result<(), String> {
             let spheres = match spheres.as_str() {
                 "analytic" => SphereModel::Analytic,
                 "mesh" => SphereModel::Mesh,
-                other => return Err(format!("unknown --spheres '{other}': analytic or mesh")),
+                other => {
+                    return Err(format!("unknown --spheres '{other}': analytic or mesh").into())
+                }
             };
             if batches < 2 || photons == 0 {
                 return Err("--batches must be at least 2 and --photons positive".into());
@@ -334,13 +468,13 @@ fn run(cli: Cli) -> Result<(), String> {
                 ..LightTracerSpec::default()
             };
             let (_, info) = load_or_compute(&cache, &scene, &spec, &mut |k, n, noise| {
-                eprintln!("batch {k}/{n}: relative standard error {noise:.5}")
+                note!("batch {k}/{n}: relative standard error {noise:.5}")
             })?;
-            println!(
+            outln!(
+                console,
                 "{}",
                 serde_json::to_string_pretty(&info).map_err(|e| e.to_string())?
-            );
-            Ok(())
+            )
         }
         Command::Report {
             scenes,
@@ -405,7 +539,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 ("--filters", plan.filters.is_empty()),
             ] {
                 if empty {
-                    return Err(format!("{flag} lists nothing"));
+                    return Err(format!("{flag} lists nothing").into());
                 }
             }
             if repeats == 0 {
@@ -419,8 +553,8 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             caustica::output::prepare_output_dir(&out)?;
             let cache = cache.unwrap_or_else(|| out.join("references"));
-            let records = caustica::report::run(&plan, &cache, &mut |line| eprintln!("{line}"))?;
-            print!("{}", caustica::report::table(&records));
+            let records = caustica::report::run(&plan, &cache, &mut |line| note!("{line}"))?;
+            // the files first, the table last: a closed stdout loses only the table
             let path = out.join("report.json");
             std::fs::write(
                 &path,
@@ -433,12 +567,12 @@ fn run(cli: Cli) -> Result<(), String> {
                     caustica::output::file_stem(&scene.name)
                 ));
                 match caustica::report::plot(&records, &scene.name, &png) {
-                    Ok(()) => eprintln!("wrote {}", png.display()),
-                    Err(e) => eprintln!("no plot for {}: {e}", scene.name),
+                    Ok(()) => note!("wrote {}", png.display()),
+                    Err(e) => note!("no plot for {}: {e}", scene.name),
                 }
             }
-            eprintln!("wrote {}", path.display());
-            Ok(())
+            note!("wrote {}", path.display());
+            console.write(format_args!("{}", caustica::report::table(&records)))
         }
         Command::Render {
             scene,
@@ -457,7 +591,8 @@ fn run(cli: Cli) -> Result<(), String> {
                 return Err(format!(
                     "unknown technique '{technique}'; available: {}",
                     technique_names().join(", ")
-                ));
+                )
+                .into());
             }
             if !(exposure > 0.0 && exposure.is_finite()) {
                 return Err("--exposure must be a positive number".into());
@@ -475,27 +610,27 @@ fn run(cli: Cli) -> Result<(), String> {
                     .and_then(|t| t.filter_setting);
                 match setting {
                     Some((key, values)) if values.contains(&f.as_str()) => {
-                        s.insert(key.into(), f.into());
+                        put_setting(&mut s, key, f.into());
                     }
                     Some((_, values)) => {
                         return Err(format!(
                             "--filter {f}: {technique}'s filters are {}",
                             values.join(", ")
-                        ))
+                        )
+                        .into())
                     }
-                    None => return Err(format!("--filter: {technique} has one filter")),
+                    None => return Err(format!("--filter: {technique} has one filter").into()),
                 }
             }
             // the flag overrides the settings file; neither: 1024x1024
             let (pw, ph) = photons.unwrap_or((1024, 1024));
-            if photons.is_some() || !s.contains_key("photons_w") {
-                s.insert("photons_w".into(), pw.into());
-            }
-            if photons.is_some() || !s.contains_key("photons_h") {
-                s.insert("photons_h".into(), ph.into());
+            for (path, v) in [("frame.photons_w", pw), ("frame.photons_h", ph)] {
+                if photons.is_some() || get_setting(&s, path).is_none() {
+                    put_setting(&mut s, path, v.into());
+                }
             }
             if let Some(seed) = seed {
-                s.insert("seed".into(), seed.into());
+                put_setting(&mut s, "frame.seed", seed.into());
             }
             if frames == 0 {
                 return Err("--frames must be at least 1".into());
@@ -504,20 +639,15 @@ fn run(cli: Cli) -> Result<(), String> {
                 .iter()
                 .find(|t| t.name == technique)
                 .map(|t| (t.default_settings)());
-            let accumulates = defaults
-                .as_ref()
-                .is_some_and(|d| d.get("accumulate").is_some());
-            if frames > 1 && accumulates && !s.contains_key("accumulate") {
-                s.insert("accumulate".into(), true.into());
+            // several frames accumulate unless the settings say otherwise
+            if frames > 1 && get_setting(&s, "frame.accumulate").is_none() {
+                put_setting(&mut s, "frame.accumulate", true.into());
             }
-            // the frames sum only where the settings accumulate
-            let accumulates = s
-                .get("accumulate")
+            let accumulates = get_setting(&s, "frame.accumulate")
                 .and_then(|v| v.as_bool())
                 .unwrap_or(false);
-            let base_seed = s
-                .get("seed")
-                .or_else(|| defaults.as_ref().and_then(|d| d.get("seed")))
+            let base_seed = get_setting(&s, "frame.seed")
+                .or_else(|| defaults.as_ref().and_then(|d| d["frame"].get("seed")))
                 .and_then(|v| v.as_u64())
                 .unwrap_or(0) as u32;
             caustica::output::prepare_output_dir(&out)?;
@@ -530,6 +660,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 &serde_json::Value::Object(s),
             )
             .map_err(|e| e.to_string())?;
+            // the technique is freed whether its frames and images worked or not
             let bar = ProgressBar::new(0);
             bar.set_style(
                 ProgressStyle::with_template(
@@ -538,33 +669,39 @@ fn run(cli: Cli) -> Result<(), String> {
                 .expect("valid template")
                 .progress_chars("=> "),
             );
-            let mut stats = None;
-            for f in 0..frames {
-                if f > 0 && !accumulates {
-                    t.set_seed(base_seed.wrapping_add(f));
+            let mut frames_and_images = || -> Result<FrameStats, String> {
+                let mut stats = None;
+                for f in 0..frames {
+                    if f > 0 && !accumulates {
+                        t.set_seed(base_seed.wrapping_add(f));
+                    }
+                    stats = Some(
+                        t.frame(be.as_mut(), &mut |p| {
+                            bar.set_length(p.photons_total);
+                            bar.set_position(p.photons_done);
+                        })
+                        .map_err(|e| e.to_string())?,
+                    );
                 }
-                stats = Some(
-                    t.frame(be.as_mut(), &mut |p| {
-                        bar.set_length(p.photons_total);
-                        bar.set_position(p.photons_done);
-                    })
-                    .map_err(|e| e.to_string())?,
-                );
-            }
-            let stats = stats.expect("at least one frame");
+                let stats = stats.expect("at least one frame");
+                for output in t.outputs().into_iter().filter(|o| o.requested) {
+                    let name = output.name;
+                    let img = t
+                        .read_output(be.as_mut(), output.output)
+                        .map_err(|e| e.to_string())?;
+                    write_exr(&out.join(format!("{stem}_{name}.exr")), &img)?;
+                    if output.output == caustica::Output::Composite {
+                        write_png(&out.join(format!("{stem}_composite.png")), &img, exposure)?;
+                    }
+                }
+                Ok(stats)
+            };
+            let rendered = frames_and_images();
             bar.finish_and_clear();
-            for output in t.outputs().into_iter().filter(|o| o.requested) {
-                let name = output.name;
-                let img = t
-                    .read_output(be.as_mut(), name)
-                    .map_err(|e| e.to_string())?;
-                write_exr(&out.join(format!("{stem}_{name}.exr")), &img)?;
-                if name == "composite" {
-                    write_png(&out.join(format!("{stem}_composite.png")), &img, exposure)?;
-                }
-            }
             let s = t.settings_json();
-            t.free(be.as_mut()).map_err(|e| e.to_string())?;
+            let freed = t.free(be.as_mut()).map_err(|e| e.to_string());
+            let stats = rendered?;
+            freed?;
             let doc = serde_json::json!({ "scene": scene.name, "technique": technique, "settings": s, "stats": stats });
             let path = out.join("stats.json");
             std::fs::write(
@@ -572,7 +709,8 @@ fn run(cli: Cli) -> Result<(), String> {
                 serde_json::to_string_pretty(&doc).expect("stats serialise"),
             )
             .map_err(|e| format!("{}: {e}", path.display()))?;
-            println!(
+            outln!(
+                console,
                 "{}: {} photons emitted, {} stored, {} deposited; {:.1} ms; wrote {}",
                 scene.name,
                 stats.photons_emitted,
@@ -580,8 +718,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 stats.photons_deposited,
                 stats.frame_ms,
                 out.display()
-            );
-            Ok(())
+            )
         }
     }
 }

@@ -13,7 +13,7 @@
 //! colour channel at that channel's wavelength). Spheres are analytic or, selectably, the
 //! tessellated mesh with interpolated normals the kernels trace.
 //!
-//! Estimator (the quantity Sspm's raw deposit, seed 000 Eq. 5, converges to): a photon
+//! Estimator (the quantity Sspm's raw deposit, Kim 2019 Eq. 5, converges to): a photon
 //! whose path met at least one specular surface and first meets a diffuse surface at `x`
 //! is connected to the pinhole camera. It counts for the pixel `P` that `x` projects into
 //! when (a) the surface `P`'s centre ray sees is diffuse and is the object `x` lies on,
@@ -1118,8 +1118,9 @@ pub fn load_or_compute(
             }
         }
     }
+    // the cache must take the result before the work begins
+    crate::output::prepare_folder(dir).map_err(|e| format!("reference cache {e}"))?;
     let r = compute(scene, spec, progress)?;
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     crate::output::write_exr(&exr_path, &r.image)?;
     crate::output::write_exr(&err_path, &r.std_error)?;
     let text = serde_json::to_string_pretty(&r.info).map_err(|e| e.to_string())?;

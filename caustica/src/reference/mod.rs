@@ -59,7 +59,7 @@ pub fn reference_for(technique: &str, spec: &ReferenceSpec) -> ReferenceSpec {
 
 /// The technique spec of the caustic reference: Sspm's raw deposit with the tangent-plane
 /// store test (`depth_tolerance < 0`), which keeps every photon on the surface a pixel's
-/// centre sees; the seed's view-depth test drops photons of surfaces seen at a grazing
+/// centre sees; Kim 2019's view-depth test drops photons of surfaces seen at a grazing
 /// angle in coarse images (half of `rooms`' at 160x90), so a reference made with it
 /// converged to less than the pixel-averaged irradiance there.
 pub const CAUSTIC_REFERENCE: &str = "sspm:depth_tolerance=-0.01";
@@ -184,8 +184,9 @@ pub fn load_or_compute(
             }
         }
     }
+    // the cache must take the result before the work begins
+    crate::output::prepare_folder(dir).map_err(|e| format!("reference cache {e}"))?;
     let r = compute(scene, spec, backend, progress, hash)?;
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     crate::output::write_exr(&exr_path, &r.image)?;
     let text = serde_json::to_string_pretty(&r.info).map_err(|e| e.to_string())?;
     std::fs::write(&json_path, text).map_err(|e| format!("{}: {e}", json_path.display()))?;
@@ -207,9 +208,9 @@ pub fn compute(
     // the technique may be a spec with settings (`photon-gi:estimator=deposit+...`)
     let (name, overrides) = crate::technique_spec::technique_spec(&spec.technique)?;
     let mut settings = serde_json::Map::new();
-    settings.insert("photons_w".into(), spec.photons_side.into());
-    settings.insert("photons_h".into(), spec.photons_side.into());
-    settings.extend(overrides);
+    crate::technique_spec::put_setting(&mut settings, "frame.photons_w", spec.photons_side.into());
+    crate::technique_spec::put_setting(&mut settings, "frame.photons_h", spec.photons_side.into());
+    crate::technique_spec::merge_settings(&mut settings, overrides);
     let settings = serde_json::Value::Object(settings);
     let mut sspm = create(name, backend, &scene, &settings).map_err(|e| e.to_string())?;
     let (_, raw_output) = sspm.estimate_outputs();

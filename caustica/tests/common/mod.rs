@@ -1,5 +1,6 @@
 //! Helpers shared by the facade's integration tests.
 
+use caustica::TechniqueSettings;
 use caustica::{Output, Scene, Sspm, SspmSettings};
 use caustica_cpu::CpuBackend;
 
@@ -10,11 +11,7 @@ pub fn render_small(scene: &Scene) -> Vec<[f32; 4]> {
     scene.camera.width = 96;
     scene.camera.height = 64;
     let mut b = CpuBackend::new().unwrap();
-    let settings = SspmSettings {
-        photons_w: 128,
-        photons_h: 128,
-        ..SspmSettings::default()
-    };
+    let settings = SspmSettings::default().with_photons(128, 128);
     let mut t = Sspm::new(&mut b, &scene, settings).unwrap();
     t.frame(&mut b, &mut |_| {}).unwrap();
     let img = t.read_output(&mut b, Output::Composite).unwrap();

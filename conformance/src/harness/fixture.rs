@@ -116,7 +116,7 @@ impl Fixture {
     }
 
     pub fn tiles_len(&self) -> u32 {
-        let ts = self.settings.tile_size;
+        let ts = self.settings.screen.tile_size;
         self.camera.width.div_ceil(ts) * self.camera.height.div_ceil(ts)
     }
 
@@ -163,7 +163,7 @@ impl Fixture {
     /// arithmetic is compared, not only the plain jitter).
     pub fn trace_batch(&self, k: usize) -> TraceParams {
         let (light, d) = &self.constants.domains[k];
-        let count = self.settings.photons_w * self.settings.photons_h;
+        let count = self.settings.frame.photons_w * self.settings.frame.photons_h;
         let p = self
             .constants
             .trace_params(&self.settings, *light, d, 0, count);
@@ -331,7 +331,7 @@ impl Fixture {
     /// (`math::density_gather::accumulate_source_index`).
     pub fn source_index_of(&self, mut grid: Vec<u32>, axis: u32, sources: &[[f32; 4]]) -> Vec<u32> {
         let (w, h) = (self.camera.width, self.camera.height);
-        let cap = self.settings.max_radius_px as i32;
+        let cap = self.settings.screen.max_radius_px as i32;
         accumulate_source_index(&mut grid, sources, w, h, axis, cap);
         grid
     }
@@ -488,7 +488,7 @@ impl ReferenceInputs {
         let (table, edge) = fx.run_count_table(r, &gbuffer, &photon_map)?;
         let footprints = fx.run_footprint(r, &edge, &photon_map, &table)?.0;
         let density_rows = fx.run_density_gather(r, 0, &gbuffer, &edge, &footprints)?.0;
-        let filtered = match fx.settings.filter {
+        let filtered = match fx.settings.screen.filter {
             GatherFilter::Density => {
                 fx.run_density_gather(r, 1, &gbuffer, &edge, &density_rows)?
                     .0

@@ -23,7 +23,7 @@ pub fn check_gather(
     let mut v = Verdict::new("tile_hit_distance + bilateral_gather");
     compare_tiles(fx, inputs, r, c, &mut v)?;
     let cam = &fx.camera;
-    let ts = fx.settings.tile_size;
+    let ts = fx.settings.screen.tile_size;
     let tw = cam.width.div_ceil(ts);
     for axis in 0..2u32 {
         let params = fx.constants.gather_params(*cam, &fx.settings, axis);

@@ -44,7 +44,7 @@ pub(crate) fn run_lookup(
         params: MapLookupParams {
             camera: fx.camera,
             atlas_width: l.plan.size.0,
-            max_specular_depth: fx.settings.max_specular_depth,
+            max_specular_depth: fx.settings.frame.max_specular_depth,
             min_weight: 1e-3,
             fresnel_model,
         },
@@ -70,7 +70,7 @@ pub fn check_caustic_map(
     };
     let (sa, gathered) = compare_gather(&mut v, &l, r, c)?;
     check_atlas_density_gather(&mut v, &l, &sa, r, c)?;
-    // both reflectance models of the specular chain (the exact default, seed 001's Schlick)
+    // both reflectance models of the specular chain (the exact default, Vanderstichelen 2021's Schlick)
     for model in [fresnel_model::EXACT, fresnel_model::SCHLICK] {
         let la = run_lookup(fx, r, &l, &gathered[0], model)?;
         let lb = run_lookup(fx, c, &l, &gathered[0], model)?;

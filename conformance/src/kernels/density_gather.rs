@@ -116,7 +116,7 @@ pub fn check_density_gather(
 ) -> Result<Verdict, String> {
     let mut v = Verdict::new("photon_count_table + gather_footprint + density_gather");
     let cam = fx.camera;
-    let reach = fx.settings.max_radius_px as i32;
+    let reach = fx.settings.screen.max_radius_px as i32;
 
     check_count_table(&mut v, fx, inputs, r, c)?;
 

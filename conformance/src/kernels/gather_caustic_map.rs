@@ -12,6 +12,7 @@
 //! - the density gather on the atlas (`gather: density`): `photon_count_table` bitwise,
 //!   `gather_footprint` and both `density_gather` passes as on the screen
 //!   (`check_atlas_density_gather`).
+use caustica_core::AtlasSettings;
 use super::density_gather::{compare, flush_allowance, tap_sum};
 use crate::harness::fixture::{run_and_free, Fixture};
 use crate::harness::tolerance::DENSITY_GATHER_REL;
@@ -209,10 +210,13 @@ pub(crate) fn compare_gather(
 /// share a 3x3 window) to the cap of 8 texels (the sparse texels).
 pub(crate) fn density_settings(l: &AtlasLayout) -> CausticMapSettings {
     CausticMapSettings {
-        atlas_size: l.plan.size.0,
-        knn_photons: 8,
-        max_radius_texels: 8,
-        ..Default::default()
+        atlas: AtlasSettings {
+            atlas_size: l.plan.size.0,
+            knn_photons: 8,
+            max_radius_texels: 8,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
@@ -230,7 +234,7 @@ pub(crate) fn check_atlas_density_gather(
     c: &mut dyn Backend,
 ) -> Result<(), String> {
     let s = density_settings(l);
-    let params = |axis| atlas_gather_params(&s, 2f32.powi(-24), 2f32.powi(-20), axis);
+    let params = |axis| atlas_gather_params(&s.atlas_config(), 2f32.powi(-24), 2f32.powi(-20), axis);
     let edge: Vec<[f32; 4]> = l
         .texels
         .iter()
@@ -336,7 +340,7 @@ pub(crate) fn check_atlas_density_gather(
         if axis == 1 {
             lit = a.iter().filter(|t| t[0] > 0.0).count();
         }
-        let reach = s.max_radius_texels as i32;
+        let reach = s.atlas.max_radius_texels as i32;
         // flux -> output: 1 for the rows, 1 / area for the columns' irradiance
         let to_output = |i: usize| if axis == 0 { 1.0 } else { 1.0 / edge[i][1] };
         compare(

@@ -14,7 +14,7 @@
 //!   counters (stored, path ends) are the same photons' and get the same allowance.
 //! - `refine_clusters` on the CPU's slots (so only the kernel under test differs), at an
 //!   inner level under the error metric (discards, converged outputs and refinements all
-//!   occur on a lit scene; with 004's photon test and with the casters' projected bounds)
+//!   occur on a lit scene; with Wyman 2009's photon test and with the casters' projected bounds)
 //!   with a tolerance of 4 texels, at the finest level under the level metric (everything
 //!   relevant is output), and outputting converged entries whose footprints (1 to 4
 //!   texels) splat over several texels: integer decisions and integer atomics, so the cluster counts,

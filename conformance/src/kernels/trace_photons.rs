@@ -216,7 +216,7 @@ pub fn check_trace(
         all.note("no light emits photons (no caster): nothing to trace");
         return Ok(all);
     }
-    let emitted = fx.settings.photons_w as u64 * fx.settings.photons_h as u64;
+    let emitted = fx.settings.frame.photons_w as u64 * fx.settings.frame.photons_h as u64;
     let tol = PHOTON_POSITION_REL * fx.ds.bounds.diagonal();
     let flux_rel = photon_flux_match_rel(&fx.scene, tol);
     for k in 0..fx.constants.domains.len() {
@@ -255,7 +255,7 @@ pub fn check_trace(
         // Ray segments: a diverged path may trace up to max_bounces more or fewer.
         let rays = |c: &[u32]| join_u64([c[counter::RAYS], c[counter::RAYS + 1]]);
         let d = (rays(&ca) as i64 - rays(&cb) as i64).unsigned_abs();
-        let allow_rays = allow_paths * fx.settings.max_bounces as u64;
+        let allow_rays = allow_paths * fx.settings.trace.max_bounces as u64;
         v.check(d <= allow_rays, || {
             format!(
                 "rays traced {} vs cpu {} (allowed {allow_rays})",
@@ -309,7 +309,7 @@ pub fn check_trace(
         // A batch that is part of the grid, starting inside a band of tiles: the photons
         // it covers (core's math::sampling::tiled_photon_index) are the CPU's; a backend
         // that handed its threads photons in row order would store another set.
-        let count = fx.settings.photons_w * fx.settings.photons_h;
+        let count = fx.settings.frame.photons_w * fx.settings.frame.photons_h;
         if count >= 3 {
             let (first, part) = (count / 3 + 1, count / 3);
             let partial = |p: &mut caustica_core::device::layout::TraceParams| {

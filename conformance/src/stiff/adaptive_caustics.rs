@@ -16,28 +16,41 @@ use super::{Outcome, SIZE};
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
 use caustica_core::scene::{builtin, Light, Scene, Shape};
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
     AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, ClusterRelevance,
 };
 use caustica_core::techniques::caustic_map::{CausticMapSettings, EmissionPlane};
+use caustica_core::{AtlasSettings, FrameSettings, PlaneSettings, TraversalSettings};
 use glam::Vec3;
 
 fn map(n: u32, plane: EmissionPlane) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: n,
-        photons_h: n,
-        atlas_size: 256,
-        emission_plane: plane,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: n,
+            photons_h: n,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: 256,
+            ..CausticMapSettings::default().atlas
+        },
+        planes: PlaneSettings {
+            emission_plane: plane,
+            ..CausticMapSettings::default().planes
+        },
+        ..CausticMapSettings::default()
     }
 }
 
 fn level(n: u32, plane: EmissionPlane, relevance: ClusterRelevance) -> AdaptiveCausticsSettings {
     AdaptiveCausticsSettings {
-        map: map(n, plane),
-        metric: AdaptiveMetric::Level,
-        relevance,
-        ..Default::default()
+        traversal: TraversalSettings {
+            metric: AdaptiveMetric::Level,
+            relevance,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..crate::adaptive_over(&map(n, plane))
     }
 }
 
@@ -82,7 +95,7 @@ fn screen_target(
         Output::FilteredCaustics,
         Output::Composite,
     ]
-    .map(|o| t.read_output_named(b, o.stem()).map_err(|e| e.to_string()));
+    .map(|o| t.read_output(b, o).map_err(|e| e.to_string()));
     t.free(b).map_err(|e| e.to_string())?;
     for img in images {
         v.check(img?.all_finite(), || {
@@ -131,7 +144,7 @@ fn equals_dense(what: &str, a: &MapFrame, dense: &MapFrame, v: &mut Verdict) {
 pub(super) fn small_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
     // spot-glass's light over its floor, the only caster a glass bead of radius 0.012 at
     // 3.2 from the light: 0.0075 rad across, a tenth of a start-grid cluster (2 texels of
-    // 2 tan(50 deg) / 64 = 0.037); the plane covers the whole cone, so 004's photon test
+    // 2 tan(50 deg) / 64 = 0.037); the plane covers the whole cone, so Wyman 2009's photon test
     // almost surely discards it at the start grid
     let mut scene = sized(builtin::spot_glass(), SIZE);
     scene.objects[1].shape = Shape::Sphere {
@@ -167,7 +180,7 @@ pub(super) fn small_caster(b: &mut dyn Backend) -> Result<Outcome, String> {
     )?;
     let (kept, all) = (photons.stats.stored_flux[0], dense.stats.stored_flux[0]);
     v.check(kept < all, || {
-        format!("004's photon test kept the bead's caustic ({kept:e} of {all:e}): the case does not test a miss")
+        format!("Wyman 2009's photon test kept the bead's caustic ({kept:e} of {all:e}): the case does not test a miss")
     });
     outcome(
         format!(
@@ -243,9 +256,7 @@ pub(super) fn light_inside_casters(b: &mut dyn Backend) -> Result<Outcome, Strin
         &level(512, EmissionPlane::Casters, ClusterRelevance::Bounds),
         &mut v,
     )?;
-    let planes = a
-        .stats
-        .adaptive
+    let planes = AdaptiveStats::of(&a.stats)
         .as_ref()
         .map_or(0, |s| s.dense_equivalent_photons);
     v.check(planes == 6 * 256 * 256, || {

@@ -17,8 +17,11 @@ use crate::harness::tolerance::divergence_allowance;
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{Backend, BackendError};
 use caustica_core::frame::image::Image;
+use caustica_core::frame::output::Output;
 use caustica_core::scene::{Light, Material, Scene, Shape};
+use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
+use caustica_core::{AtlasSettings, FrameSettings, PlaneSettings};
 use caustica_core::{Error, FrameStats};
 use glam::{Vec2, Vec3};
 
@@ -32,15 +35,21 @@ pub struct MapFrame {
 
 fn settings(atlas: u32) -> CausticMapSettings {
     CausticMapSettings {
-        photons_w: 128,
-        photons_h: 128,
-        atlas_size: atlas,
-        ..Default::default()
+        frame: FrameSettings {
+            photons_w: 128,
+            photons_h: 128,
+            ..CausticMapSettings::default().frame
+        },
+        atlas: AtlasSettings {
+            atlas_size: atlas,
+            ..CausticMapSettings::default().atlas
+        },
+        ..CausticMapSettings::default()
     }
 }
 
 /// Builds the technique a case checks: CausticMap, or AdaptiveCaustics (the same atlas
-/// receiver with seed 004's traversal).
+/// receiver with Wyman 2009's traversal).
 pub type MakeMap<'a> =
     &'a dyn Fn(&mut dyn Backend, &Scene) -> Result<Box<dyn caustica_core::Technique>, Error>;
 
@@ -61,9 +70,9 @@ pub fn render_with(b: &mut dyn Backend, scene: &Scene, make: MakeMap) -> Result<
     let stats = t.frame(b, &mut |_| {})?;
     let f = MapFrame {
         stats,
-        atlas: t.read_output(b, "caustic_atlas")?,
-        caustics: t.read_output(b, "caustics_filtered")?,
-        composite: t.read_output(b, "composite")?,
+        atlas: t.read_output(b, Output::CausticAtlas)?,
+        caustics: t.read_output(b, Output::FilteredCaustics)?,
+        composite: t.read_output(b, Output::Composite)?,
     };
     t.free(b)?;
     Ok(f)
@@ -84,7 +93,7 @@ fn checked(
     )
 }
 
-/// [`checked`] for the technique `make` builds. With seed 004's traversal the path ends
+/// [`checked`] for the technique `make` builds. With Wyman 2009's traversal the path ends
 /// add up to the photons traced (every level) and the stored photons of that count, and
 /// the photons traced on two backends may differ by the refinements of diverged photons
 /// (within the allowance, as the stored ones).
@@ -104,8 +113,7 @@ pub(super) fn checked_with(
     }
     let st = &f.stats;
     let d = &st.discarded;
-    let traced_stored = st
-        .adaptive
+    let traced_stored = AdaptiveStats::of(st)
         .as_ref()
         .map_or(st.photons_stored, |a| a.photons_traced_stored);
     let ends = traced_stored + d.no_specular + d.escaped + d.negligible_power + d.bounce_limit;
@@ -145,7 +153,11 @@ pub(super) fn checked_with(
         let r = render_with(&mut cpu, scene, make).map_err(|e| format!("cpu: {e}"))?;
         let rs = &r.stats;
         let k = divergence_allowance(rs.photons_emitted);
-        let traced = if st.adaptive.is_some() { k } else { 0 };
+        let traced = if AdaptiveStats::of(st).is_some() {
+            k
+        } else {
+            0
+        };
         v.check(
             rs.photons_emitted.abs_diff(st.photons_emitted) <= traced,
             || {
@@ -288,8 +300,11 @@ fn flux_kept(
     };
     let mut v = Verdict::new(what);
     let with = |gather, gather_width| CausticMapSettings {
-        gather,
-        gather_width,
+        atlas: AtlasSettings {
+            gather,
+            gather_width,
+            ..settings(256).atlas
+        },
         ..settings(256)
     };
     use caustica_core::techniques::caustic_map::MapGather;
@@ -439,7 +454,7 @@ pub(super) fn ball_glass(b: &mut dyn Backend) -> Result<Outcome, String> {
 }
 
 pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
-    // the dispersive prism with 001's deterministic splits (three one-channel branches at
+    // the dispersive prism with Vanderstichelen 2021's deterministic splits (three one-channel branches at
     // the first dispersive surface, both Fresnel branches at every glass surface) and with
     // the stochastic choice: finite, accounted (path ends = emitted + splits), both agree
     // with cpu, and the two store the same flux per channel in expectation (within 3% at
@@ -453,7 +468,10 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
         b,
         &scene,
         &CausticMapSettings {
-            fresnel_split: FresnelSplit::Deterministic,
+            planes: PlaneSettings {
+                fresnel_split: FresnelSplit::Deterministic,
+                ..settings(128).planes
+            },
             ..settings(128)
         },
         &mut v,
@@ -462,7 +480,10 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
         b,
         &scene,
         &CausticMapSettings {
-            fresnel_split: FresnelSplit::Stochastic,
+            planes: PlaneSettings {
+                fresnel_split: FresnelSplit::Stochastic,
+                ..settings(128).planes
+            },
             ..settings(128)
         },
         &mut v,
@@ -486,7 +507,7 @@ pub(super) fn dispersion_split(b: &mut dyn Backend) -> Result<Outcome, String> {
 }
 
 pub(super) fn schlick(b: &mut dyn Backend) -> Result<Outcome, String> {
-    // seed 001's Schlick reflectance on `sphere`, with the deterministic split and the
+    // Vanderstichelen 2021's Schlick reflectance on `sphere`, with the deterministic split and the
     // stochastic choice: finite, accounted, both agree with cpu. With the split the photons
     // of the two models follow the same rays, and only the branch weights differ, so the
     // ratio of their stored flux is the closed forms' (`sphere_closed_form.rs`: Schlick
@@ -501,8 +522,11 @@ pub(super) fn schlick(b: &mut dyn Backend) -> Result<Outcome, String> {
             b,
             &scene,
             &CausticMapSettings {
-                fresnel,
-                fresnel_split: split,
+                planes: PlaneSettings {
+                    fresnel,
+                    fresnel_split: split,
+                    ..settings(128).planes
+                },
                 ..settings(128)
             },
             v,

@@ -11,6 +11,7 @@ use caustica_core::backend::{Backend, BackendError};
 use caustica_core::device::layout::GBufferPlaneTexel;
 use caustica_core::scene::builtin;
 use caustica_core::scene::{Aabb, Light, Material, Scene, Shape};
+use caustica_core::TraceSettings;
 use caustica_core::{Sspm, SspmSettings};
 use glam::Vec3;
 
@@ -251,7 +252,10 @@ pub(super) fn photons_2_26(b: &mut dyn Backend) -> Result<Outcome, String> {
     let batch = 1u32 << 20;
     let run = |b: &mut dyn Backend, per_batch: u32| {
         let st = SspmSettings {
-            max_photons_per_batch: per_batch,
+            trace: TraceSettings {
+                max_photons_per_batch: per_batch,
+                ..settings(8192).trace
+            },
             ..settings(8192)
         };
         sspm::render_frame(b, &scene, &st)

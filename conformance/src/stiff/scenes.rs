@@ -5,14 +5,11 @@ use super::SIZE;
 use caustica_core::scene::builtin;
 use caustica_core::scene::{Light, Material, Object, Scene, Shape};
 use caustica_core::SspmSettings;
+use caustica_core::TechniqueSettings;
 use glam::Vec3;
 
 pub(super) fn settings(n: u32) -> SspmSettings {
-    SspmSettings {
-        photons_w: n,
-        photons_h: n,
-        ..SspmSettings::default()
-    }
+    SspmSettings::default().with_photons(n, n)
 }
 
 pub(super) fn sized(mut s: Scene, (w, h): (u32, u32)) -> Scene {

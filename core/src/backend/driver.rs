@@ -146,3 +146,57 @@ impl<B: DriverBackend> Backend for B {
         self.compiled_variants()
     }
 }
+
+/// Implements [`DriverBackend`] for a GPU backend, written once for every backend: the
+/// type must have the inherent methods the trait's bodies call (`describe`,
+/// `execute_recording`, `read_resource`, `submit_recording`, `poll_submission`,
+/// `variant_labels`), each in the backend's file of its concern.
+/// `driver_backend!(WgpuBackend, "wgpu");`
+#[macro_export]
+macro_rules! driver_backend {
+    ($backend:ty, $name:literal) => {
+        /// `Backend` for it is core's ([`caustica_core::backend::DriverBackend`]): every
+        /// body runs inside the driver lock.
+        impl $crate::backend::DriverBackend for $backend {
+            const NAME: &'static str = $name;
+
+            fn device_capabilities(&self) -> $crate::backend::Capabilities {
+                self.describe()
+            }
+
+            fn execute_in_driver(
+                &mut self,
+                recording: &$crate::recording::Recording,
+            ) -> Result<Vec<$crate::backend::PassTime>, $crate::backend::BackendError> {
+                self.execute_recording(recording)
+            }
+
+            fn read_in_driver(
+                &mut self,
+                id: $crate::device::handle::ResourceId,
+            ) -> Result<Vec<u8>, $crate::backend::BackendError> {
+                self.read_resource(id)
+            }
+
+            fn submit_in_driver(
+                &mut self,
+                recording: &$crate::recording::Recording,
+                readbacks: &[$crate::device::handle::ResourceId],
+            ) -> Result<$crate::backend::Submission, $crate::backend::BackendError> {
+                self.submit_recording(recording, readbacks)
+            }
+
+            fn poll_in_driver(
+                &mut self,
+                submission: &mut $crate::backend::Submission,
+                wait: bool,
+            ) -> Result<Option<$crate::backend::Finished>, $crate::backend::BackendError> {
+                self.poll_submission(submission, wait)
+            }
+
+            fn compiled_variants(&self) -> Vec<String> {
+                self.variant_labels()
+            }
+        }
+    };
+}

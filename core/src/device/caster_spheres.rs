@@ -2,7 +2,7 @@
 //! objects) that `trace_photons` tests a photon's first segment against before it
 //! traverses the scene ([`crate::math::geometry::ray_meets_caster_spheres`]).
 //!
-//! Seed 000's emission cone (30.3.1.1) bounds the casters' *box*; around a round caster
+//! Kim 2019's emission cone (30.3.1.1) bounds the casters' *box*; around a round caster
 //! most of that cone misses it (on `sphere`, 68% of the photons: the cone holds the box's
 //! circumscribed ball, radius `sqrt(3) r`, about three times the ball's solid angle). A
 //! photon whose first segment meets no caster ball cannot meet a caster first: without

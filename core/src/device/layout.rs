@@ -95,7 +95,7 @@ pub struct GpuLight {
 }
 
 /// Pinhole camera in world space; `tan_half_fov_x/y` are the tangents of the half field of
-/// view angles (seed 000 Eq. 4's `theta_x / 2`, `theta_y / 2`).
+/// view angles (Kim 2019 Eq. 4's `theta_x / 2`, `theta_y / 2`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCamera {
@@ -133,7 +133,7 @@ pub struct GBufferTexel {
     /// Unit geometric normal of the hit triangle (world space), turned towards the camera
     /// on its own, packed octahedrally in two snorm16
     /// ([`crate::math::packing::pack_unit_vector`]): PhotonGi's shading-normal correction
-    /// (003 Eq. 20) compares the light direction with both normals.
+    /// (Smal 2019, Eq. 20) compares the light direction with both normals.
     pub geometric_normal: u32,
     /// The material's `color`: diffuse albedo, mirror reflectance, 1 for dielectrics.
     pub albedo: [f32; 3],
@@ -217,8 +217,8 @@ pub mod gbuffer_flags {
 }
 
 /// A stored photon (32 bytes): where it stopped on a diffuse surface, its flux (W per
-/// channel), the length of its last traced segment (scene units, the "hit distance" of seed
-/// 000 section 30.3.2) and its incoming direction packed octahedrally
+/// channel), the length of its last traced segment (scene units, the "hit distance" of
+/// Kim 2019, section 30.3.2) and its incoming direction packed octahedrally
 /// (`packing::pack_unit_vector`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -337,7 +337,7 @@ pub mod emission_kind {
     pub const CONE: u32 = 0;
     /// Parallel rays from the rectangle `origin + s*rect_u + t*rect_v`, s, t in [0, 1).
     pub const RECTANGLE: u32 = 1;
-    /// A perspective light view plane (seed 001 section 3.1): rays from the pinhole
+    /// A perspective light view plane (Vanderstichelen 2021, section 3.1): rays from the pinhole
     /// `origin` through `axis + ndc.x * rect_u + ndc.y * rect_v` with `ndc = (2 s - 1,
     /// 1 - 2 t)`, s, t in [0, 1) (row 0 at the top); `rect_u.w`, `rect_v.w` hold the
     /// tangents of the half fields of view (`rect_u`, `rect_v` are the plane's unit right
@@ -379,7 +379,7 @@ pub type AtlasTileTexel = [u32; 4];
 /// outside every tile)]`.
 pub type AtlasTexel = [u32; 2];
 
-/// Parameters of the atlas deposit (`trace_photons`' `fused_deposit`) and `gather_caustic_map` (the caustic atlas, seed 001).
+/// Parameters of the atlas deposit (`trace_photons`' `fused_deposit`) and `gather_caustic_map` (the caustic atlas, Vanderstichelen 2021).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct AtlasParams {
@@ -399,7 +399,7 @@ pub struct AtlasParams {
     pub _pad: [u32; 2],
 }
 
-/// Parameters of `refine_clusters` (AdaptiveCaustics, seed 004 section 3.2): one batch of
+/// Parameters of `refine_clusters` (AdaptiveCaustics, Wyman 2009, section 3.2): one batch of
 /// clusters of one level of one light view plane, traced by `trace_photons`' `ADAPTIVE`
 /// variant into one slot per photon.
 #[repr(C)]
@@ -418,7 +418,7 @@ pub struct RefineParams {
     /// [`cluster_metric`](crate::math::photon_clusters::cluster_metric).
     pub metric: u32,
     /// First level at which the error metric is checked (coarser levels use the
-    /// traversal-level metric, 004 section 4.2).
+    /// traversal-level metric, Wyman 2009, section 4.2).
     pub error_from_level: u32,
     /// Texels a side of the level's grid.
     pub grid_w: u32,
@@ -439,7 +439,7 @@ pub struct RefineParams {
     /// the atlas, or appended (world space) for Sspm's screen deposit.
     pub deposit_target: u32,
     /// The error metric's tolerance: a cluster converges when its four photons land in a
-    /// square of at most this many texels a side (1: seed 004's one texel), and its
+    /// square of at most this many texels a side (1: Wyman 2009's one texel), and its
     /// photons are then splatted over that footprint
     /// ([`footprint_window`](crate::math::photon_clusters::footprint_window)); at most
     /// [`MAX_ERROR_TEXELS`](crate::math::photon_clusters::MAX_ERROR_TEXELS).
@@ -472,7 +472,7 @@ pub mod cluster_count {
     pub const WORDS: usize = 8;
 }
 
-/// Parameters of `temporal_blend` (seed 003 section 24.4.1, Eqs. 10-13): the frame's
+/// Parameters of `temporal_blend` (Smal 2019, section 24.4.1, Eqs. 10-13): the frame's
 /// camera and the history's, the blend's constants and whether a history exists.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -495,7 +495,7 @@ pub struct TemporalParams {
     pub _pad: [u32; 3],
 }
 
-/// Parameters of one `atrous_filter` iteration (seed 003 section 24.4.2, Eqs. 14-18).
+/// Parameters of one `atrous_filter` iteration (Smal 2019, section 24.4.2, Eqs. 14-18).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct AtrousParams {
@@ -518,7 +518,7 @@ pub struct AtrousParams {
     pub _pad: [u32; 2],
 }
 
-/// One texel of a PhotonGi reflective shadow map (seed 003 section 24.2.1), 32 bytes: what
+/// One texel of a PhotonGi reflective shadow map (Smal 2019, section 24.2.1), 32 bytes: what
 /// the light's face camera sees there and the flux that leaves it. Written by
 /// `rsm_importance` (level 0) from the face's G-buffer, read by `sample_rsm`.
 #[repr(C)]
@@ -554,7 +554,7 @@ pub struct RsmPhoton {
     pub bounces: u32,
 }
 
-/// Parameters of `rsm_importance` and `sample_rsm` (seed 003 section 24.2.1).
+/// Parameters of `rsm_importance` and `sample_rsm` (Smal 2019, section 24.2.1).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct RsmParams {
@@ -586,7 +586,7 @@ pub struct RsmParams {
     pub _pad: [u32; 3],
 }
 
-/// PhotonGi's stored photon (seed 003 Table 24-2, derived in `docs/photon-gi.md`), 32
+/// PhotonGi's stored photon (Smal 2019, Table 24-2, derived in `docs/photon-gi.md`), 32
 /// bytes: written by `trace_indirect`, splatted by `splat_photons`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -607,7 +607,7 @@ pub struct GiPhoton {
     pub tile: u32,
 }
 
-/// Parameters of `trace_indirect` (seed 003 section 24.2.2).
+/// Parameters of `trace_indirect` (Smal 2019, section 24.2.2).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct IndirectTraceParams {
@@ -641,7 +641,7 @@ pub struct IndirectTraceParams {
     pub _pad: [u32; 2],
 }
 
-/// Parameters of `splat_photons` (seed 003 section 24.3, Eqs. 2-9): the camera, the
+/// Parameters of `splat_photons` (Smal 2019, section 24.3, Eqs. 2-9): the camera, the
 /// tiles and the kernel's constants
 /// ([`SplatConstants`](crate::math::photon_splat::SplatConstants)).
 #[repr(C)]
@@ -678,14 +678,14 @@ pub struct SplatParams {
     /// (`photon_splat::min_splat_scale`): a kernel smaller than a pixel would reach one
     /// pixel centre or none, an unbiased but fireflied estimate.
     pub min_splat_px: f32,
-    /// 1: also add each splat's light direction to the direction map (003 Eq. 20's
+    /// 1: also add each splat's light direction to the direction map (Smal 2019, Eq. 20's
     /// `w_i`, [`crate::math::irradiance_filter::light_direction_deposit`]); 0: leave it.
     pub light_direction: u32,
     /// Padding to the 16-byte boundary.
     pub _pad: [u32; 2],
 }
 
-/// Parameters of `shading_normal_correction` (003 Eq. 20).
+/// Parameters of `shading_normal_correction` (Smal 2019, Eq. 20).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct CorrectionParams {
@@ -745,7 +745,7 @@ pub struct TraceParams {
     pub rect_u: [f32; 4],
     /// Rectangle edge `v` (world, scene units; whole edge, not half); `w` unused; zero for cones.
     pub rect_v: [f32; 4],
-    /// Flux of each photon at emission (W per channel; seed 000 Eqs. 1 and 3); `w`: the
+    /// Flux of each photon at emission (W per channel; Kim 2019 Eqs. 1 and 3); `w`: the
     /// relative power below which a photon is dropped as negligible.
     pub photon_flux: [f32; 4],
     /// Flux quantum (W) of the fixed-point stored-flux counters.
@@ -805,7 +805,7 @@ pub struct DepositParams {
     pub photon_capacity: u32,
 }
 
-/// Parameters of the photon gather (`tile_hit_distance`, `bilateral_gather`), seed 000
+/// Parameters of the photon gather (`tile_hit_distance`, `bilateral_gather`), Kim 2019
 /// section 30.3.2.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -982,7 +982,7 @@ pub fn primary_ray(cam: &GpuCamera, px: u32, py: u32) -> (Vec3, Vec3) {
 
 /// Whether a photon at world point `p` and view depth `z` lies off the surface of
 /// G-buffer texel (`position`, `normal`, `depth`), `deposit_screen`'s test: with
-/// `tolerance >= 0` (seed 000's condition 3) when `|z - depth| > tolerance x depth`; with
+/// `tolerance >= 0` (Kim 2019's condition 3) when `|z - depth| > tolerance x depth`; with
 /// `tolerance < 0` (PhotonGi's indirect reference) when `p` is farther than `|tolerance| x
 /// depth` from the texel's tangent plane, which keeps the photons of a surface seen at a
 /// grazing angle, whose view depth varies across one pixel by more than any fixed
@@ -1042,7 +1042,7 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
 /// of `r` pixels around the splat centre's pixel `(px, py)` inside the image, narrowed to
 /// the screen bounds of kernel `k`'s box (half-axes `k.axes` along `k.n`, `k.u`, `k.t`
 /// about `centre`, world space), so that a flat or stretched kernel seen at an angle no longer
-/// scans its largest axis's square (seed 003's ellipsoid splat; 2x fewer pixel tests on
+/// scans its largest axis's square (Smal 2019's ellipsoid splat; 2x fewer pixel tests on
 /// `rooms`).
 ///
 /// Nothing the square held that the kernel contains is lost: a pixel passes the kernel

@@ -3,6 +3,7 @@
 
 use crate::device::device_scene::BuildError;
 use crate::device::error::BackendError;
+use crate::frame::output::{stems, Output};
 
 /// Errors of the library's front door.
 #[derive(Debug, thiserror::Error)]
@@ -17,6 +18,22 @@ pub enum Error {
     /// The technique cannot do what was asked in its current configuration (the message
     /// says why), e.g. a non-blocking frame of a technique that reads back mid-frame.
     Unsupported(String),
+    #[error("{technique} has no output '{output}'; its outputs: {}", stems(has))]
+    /// The technique has no such output (`has`: the outputs it has).
+    NoSuchOutput {
+        /// The technique's registry name.
+        technique: &'static str,
+        /// The output asked for.
+        output: Output,
+        /// The technique's outputs.
+        has: Vec<Output>,
+    },
+    #[error("output '{output}' was not requested (the settings' `frame.outputs`)")]
+    /// The output exists but the settings did not ask for it, so the frame did not make it.
+    OutputNotRequested {
+        /// The output asked for.
+        output: Output,
+    },
     #[error(transparent)]
     /// The backend failed (driver, memory, device lost, ...).
     Backend(#[from] BackendError),

@@ -1,4 +1,4 @@
-//! The shared temporal and spatial filter passes (seed 003 section 24.4) as recorders,
+//! The shared temporal and spatial filter passes (Smal 2019, section 24.4) as recorders,
 //! the same for every technique that opts in (Sspm, PhotonGi): the temporal blend over a
 //! reprojected ping-pong history and the A-Trous iterations.
 

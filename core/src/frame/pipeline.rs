@@ -7,14 +7,16 @@
 
 use crate::backend::Backend;
 use crate::device::device_scene::InstanceUpdate;
+use crate::device::handle::ImageBuf;
 use crate::device::handle::{Buf, ResourceId};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions, HostState};
 use crate::frame::image::Image;
+use crate::frame::output::{Output, OutputInfo, Outputs};
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
 use crate::frame::submitted::{EndRead, RecordedFrame};
-use crate::frame::technique::{OutputInfo, Progress, Technique};
+use crate::frame::technique::{Progress, Technique};
 use crate::recording::Recording;
 use crate::scene::{Camera, Light, Scene, Transform};
 use std::time::Instant;
@@ -236,10 +238,12 @@ impl<'p> FrameBuilder<'p> {
 pub trait Pipeline: Sized {
     /// Its settings (their JSON form is what [`crate::techniques::create`] takes).
     type Settings: Clone
+        + Default
         + PartialEq
         + std::fmt::Debug
         + serde::Serialize
-        + serde::de::DeserializeOwned;
+        + serde::de::DeserializeOwned
+        + crate::frame::settings::TechniqueSettings;
 
     /// The registry and statistics name.
     const NAME: &'static str;
@@ -249,11 +253,11 @@ pub trait Pipeline: Sized {
         Self::NAME
     }
 
-    /// Parses a JSON object of settings fields (missing ones take their defaults,
-    /// unknown ones are an error).
+    /// Parses a JSON object of settings laid over the technique's defaults (missing
+    /// fields keep them, unknown ones are an error naming where a moved field is now:
+    /// [`crate::frame::settings::from_json`]).
     fn parse_settings(json: &serde_json::Value) -> Result<Self::Settings, Error> {
-        serde_json::from_value(json.clone())
-            .map_err(|e| Error::InvalidParameter(format!("{} settings: {e}", Self::NAME)))
+        crate::frame::settings::from_json(Self::NAME, &Self::Settings::default(), json)
     }
 
     /// Checks every field's range.
@@ -298,26 +302,31 @@ pub trait Pipeline: Sized {
     /// (the host's included).
     fn plan(&self) -> &FramePlan;
 
-    /// Every output, requested or not, in a fixed order.
-    fn outputs(&self) -> Vec<OutputInfo>;
+    /// The outputs the technique has, in [`Output::ALL`]'s order.
+    fn own_outputs(&self) -> &'static [Output];
 
-    /// Reads output `name` back.
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error>;
+    /// The outputs the settings ask for.
+    fn requested_outputs(&self) -> Outputs;
 
-    /// The device image of camera-space output `name` ([`Technique::output_image`]).
-    fn output_image(
-        &self,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Option<crate::device::handle::ImageBuf>, Error>;
+    /// The device image of camera-space output `output`, one of
+    /// [`Pipeline::own_outputs`] that was requested ([`Hosted`] checks both): `None` where
+    /// the plan knows it is zero.
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf>;
 
-    /// The filtered estimate and the raw one (output names).
-    fn estimate_outputs(&self) -> (&'static str, &'static str);
+    /// Reads back an output that is not camera-space ([`Output::camera_space`]), one of
+    /// [`Pipeline::own_outputs`] that was requested. Only techniques with such an output
+    /// (the caustic atlas) override it.
+    fn read_data_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        let _ = backend;
+        Err(Error::Unsupported(format!(
+            "{} has no data output '{output}'",
+            self.name()
+        )))
+    }
+
+    /// The filtered estimate and the raw one: what error-against-time measurements
+    /// compare with a reference.
+    fn estimate_outputs(&self) -> (Output, Output);
 
     /// The settings' JSON form (as [`Pipeline::parse_settings`] reads it).
     fn settings_json(&self) -> serde_json::Value {
@@ -426,7 +435,7 @@ impl<P: Pipeline> Hosted<P> {
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = self.host.reference() {
             let (filtered, _) = self.pipeline().estimate_outputs();
-            let img = self.pipeline().read_output(backend, &self.host, filtered)?;
+            let img = Hosted::read_output(self, backend, filtered)?;
             stats.error = Some(crate::frame::metrics::compare(&img, r));
         }
         Ok(stats)
@@ -627,9 +636,48 @@ impl<P: Pipeline> Hosted<P> {
         self.host.set_reference(reference)
     }
 
-    /// Reads output `name` back.
-    pub fn read_output_named(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
-        self.pipeline().read_output(backend, &self.host, name)
+    /// Checks that `output` is one of the technique's and was requested.
+    fn check_output(&self, output: Output) -> Result<(), Error> {
+        let p = self.pipeline();
+        if !p.own_outputs().contains(&output) {
+            return Err(Error::NoSuchOutput {
+                technique: p.name(),
+                output,
+                has: p.own_outputs().to_vec(),
+            });
+        }
+        if !p.requested_outputs().has(output) {
+            return Err(Error::OutputNotRequested { output });
+        }
+        Ok(())
+    }
+
+    /// Every output of the technique, requested or not, in [`Output::ALL`]'s order.
+    pub fn outputs(&self) -> Vec<OutputInfo> {
+        let p = self.pipeline();
+        OutputInfo::list(p.own_outputs(), p.requested_outputs())
+    }
+
+    /// Reads `output` back ([`Technique::read_output`]).
+    pub fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        self.check_output(output)?;
+        if output.camera_space() {
+            let image = self.pipeline().output_image(&self.host, output);
+            self.host.read_output_image(backend, image)
+        } else {
+            self.pipeline().read_data_output(backend, output)
+        }
+    }
+
+    /// The device image of camera-space `output` ([`Technique::output_image`]).
+    pub fn output_image(&self, output: Output) -> Result<Option<ImageBuf>, Error> {
+        self.check_output(output)?;
+        if !output.camera_space() {
+            return Err(Error::InvalidParameter(format!(
+                "output '{output}' is not camera-space: read it back with read_output"
+            )));
+        }
+        Ok(self.pipeline().output_image(&self.host, output))
     }
 
     /// Releases every device buffer (the technique's and the host's).
@@ -673,18 +721,18 @@ impl<P: Pipeline> Technique for Hosted<P> {
     }
 
     fn outputs(&self) -> Vec<OutputInfo> {
-        self.pipeline().outputs()
+        Hosted::outputs(self)
     }
 
-    fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
-        self.read_output_named(backend, name)
+    fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        Hosted::read_output(self, backend, output)
     }
 
-    fn output_image(&self, name: &str) -> Result<Option<crate::device::handle::ImageBuf>, Error> {
-        self.pipeline().output_image(&self.host, name)
+    fn output_image(&self, output: Output) -> Result<Option<ImageBuf>, Error> {
+        Hosted::output_image(self, output)
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
+    fn estimate_outputs(&self) -> (Output, Output) {
         self.pipeline().estimate_outputs()
     }
 

@@ -3,7 +3,7 @@
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Why photons were not stored in the screen-space photon map (seed 000 section 30.3.1.2
+/// Why photons were not stored in the screen-space photon map (Kim 2019, section 30.3.1.2
 /// lists four conditions; escaped and bounce-limit photons are counted apart).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Discards {
@@ -119,48 +119,11 @@ pub struct FrameStats {
     /// Error of the filtered caustics against the reference set with
     /// `Sspm::set_reference` (computed after the frame; not part of `frame_ms`).
     pub error: Option<crate::frame::metrics::ErrorStats>,
-    /// AdaptiveCaustics' traversal (seed 004); absent for the dense techniques and on
-    /// frames without photon work.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub adaptive: Option<AdaptiveStats>,
-}
-
-/// The photon work of one adaptive traversal (seed 004 section 3.2, its Table 1's
-/// "photons processed"), summed over the light view planes.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct AdaptiveStats {
-    /// Every photon traced, at every level.
-    pub photons_processed: u64,
-    /// Photons the tracer stored, at every level (the output ones are `photons_stored`
-    /// of the frame): with the frame's `discarded` path ends they add up to
-    /// `photons_processed`.
-    pub photons_traced_stored: u64,
-    /// Photons the dense grid at the finest level would trace (its texels).
-    pub dense_equivalent_photons: u64,
-    /// Photons traced per level (index 0: the start grid).
-    pub photons_per_level: Vec<u64>,
-    /// Photons deposited (of output clusters), per level.
-    pub photons_output_per_level: Vec<u64>,
-    /// Time of each level's steps (`trace_photons` and `refine_clusters` of its batches
-    /// and of its converged clusters' fresh photons), in ms of the frame's `timing`
-    /// (device timestamps or host wall clock).
-    pub ms_per_level: Vec<f64>,
-    /// Clusters whose photons were deposited.
-    pub clusters_output: u64,
-    /// Clusters none of whose photons met a caster.
-    pub clusters_discarded: u64,
-    /// Clusters refined into four children.
-    pub clusters_refined: u64,
-    /// Clusters that converged before the finest level (the error metric), output from
-    /// four fresh photons each (counted in `clusters_output` too).
-    pub clusters_converged: u64,
-    /// Clusters to be refined whose children did not fit the next level's list (the
-    /// byte limit caps the lists): output at their level from four fresh photons each
-    /// (counted in `clusters_output` too), so that no photon is lost.
-    pub clusters_overflowed: u64,
-    /// Traversal passes that had clusters (a trace and a refinement of one pass of one
-    /// level, or of its converged clusters).
-    pub steps: u32,
+    /// A technique's own statistics, by name, in their serialised form (AdaptiveCaustics'
+    /// traversal: `adaptive`, read typed with its `AdaptiveStats::of`); written at the
+    /// top level of the JSON form.
+    #[serde(flatten)]
+    pub own: std::collections::BTreeMap<String, serde_json::Value>,
 }
 
 impl FrameStats {
@@ -227,4 +190,13 @@ impl FrameStats {
             reason: reason.into(),
         });
     }
+}
+
+/// Progress of a frame's photon work (called after every batch).
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Photons traced and deposited so far this frame.
+    pub photons_done: u64,
+    /// Photons the frame emits in all.
+    pub photons_total: u64,
 }

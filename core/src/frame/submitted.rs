@@ -8,7 +8,7 @@ use crate::backend::{Backend, Finished, PassTime, Submission};
 use crate::device::handle::ResourceId;
 use crate::frame::error::Error;
 use crate::frame::stats::FrameStats;
-use crate::frame::technique::Progress;
+use crate::frame::stats::Progress;
 use crate::recording::Recording;
 
 /// A frame recorded but not yet submitted.
@@ -37,8 +37,16 @@ pub enum EndRead {
         /// Flux per fixed-point unit (W).
         quantum: f32,
     },
-    /// The adaptive traversal's counts.
-    Traversal(Box<crate::frame::emission::adaptive::TraversalReadback>),
+    /// A technique's own read (AdaptiveCaustics' traversal counts).
+    Own(std::sync::Arc<dyn FrameEnd>),
+}
+
+/// A technique's own end-of-frame read: what it makes of the frame's readbacks and kernel
+/// times, put into the frame's statistics (usually [`FrameStats::own`]).
+pub trait FrameEnd: std::fmt::Debug + Send + Sync {
+    /// Puts what the device gave back (`readbacks` of the frame, `times` of its kernel
+    /// steps in order) into `stats`.
+    fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats);
 }
 
 impl EndRead {
@@ -52,7 +60,7 @@ impl EndRead {
                     stats.read_counters(&words, *quantum);
                 }
             }
-            EndRead::Traversal(t) => t.apply(readbacks, times, stats),
+            EndRead::Own(end) => end.apply(readbacks, times, stats),
         }
     }
 }

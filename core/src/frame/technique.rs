@@ -5,34 +5,13 @@
 use crate::backend::Backend;
 use crate::frame::error::Error;
 use crate::frame::image::Image;
+pub use crate::frame::output::{Output, OutputInfo, Outputs};
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
+pub use crate::frame::stats::Progress;
 use crate::frame::submitted::{FrameTicket, RecordedFrame};
 use crate::scene::{Camera, Light};
 use std::sync::atomic::{AtomicU64, Ordering};
-
-/// Progress of a frame's photon work (called after every batch).
-#[derive(Clone, Copy, Debug)]
-pub struct Progress {
-    /// Photons traced and deposited so far this frame.
-    pub photons_done: u64,
-    /// Photons the frame emits in all.
-    pub photons_total: u64,
-}
-
-/// One output image of a technique.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct OutputInfo {
-    /// Name (also the file-name stem): `composite`, `direct`, `caustics_raw`, ...
-    pub name: &'static str,
-    /// What it holds (all outputs are linear radiance, W/(sr m^2) per channel).
-    pub description: &'static str,
-    /// Whether the caller asked for it (only requested outputs can be read).
-    pub requested: bool,
-    /// Whether it is a camera-space image of the frame's size (radiance per pixel); false
-    /// for data in another space (CausticMap's atlas: irradiance per atlas texel).
-    pub camera_space: bool,
-}
 
 /// A technique on one backend, for one scene: created by [`crate::techniques::create`]
 /// (or its own typed `new`), it owns its device buffers until [`Technique::free`].
@@ -64,26 +43,32 @@ pub trait Technique {
         self.record_frame(backend)?.submit(backend)
     }
 
-    /// Every output of the technique, requested or not, in a fixed order.
+    /// Every output of the technique, requested or not, in [`Output::ALL`]'s order.
     fn outputs(&self) -> Vec<OutputInfo>;
 
-    /// Reads output `name` back: linear radiance of the camera's size for camera-space
-    /// outputs ([`OutputInfo::camera_space`]), the technique's own data otherwise. An
-    /// output that was not requested is an error.
-    fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error>;
+    /// Reads `output` back: linear radiance of the camera's size for camera-space
+    /// outputs ([`Output::camera_space`]), the caustic atlas's irradiance per texel
+    /// otherwise; zeros where the plan knows the output is zero. An output the technique
+    /// does not have is [`Error::NoSuchOutput`], one that was not requested
+    /// [`Error::OutputNotRequested`].
+    fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error>;
 
-    /// The device image of camera-space output `name`, for a host that uses it on the
-    /// device (a composite, a copy into its own texture): `width x height` texels of
-    /// linear radiance (`[r, g, b, 1]`, W/(sr m^2)), row-major from the camera's top-left
-    /// pixel. It holds the last recorded frame once that frame has run, and stays valid
-    /// until the next update that resizes the frame (`set_camera` with a new size,
-    /// `set_settings`). `None`: the plan knows the output is zero (it has no image); an
-    /// output that is not camera-space or was not requested is an error.
-    fn output_image(&self, name: &str) -> Result<Option<crate::device::handle::ImageBuf>, Error>;
+    /// The device image of camera-space `output`, for a host that uses it on the device
+    /// (a composite, a copy into its own texture): `width x height` texels of linear
+    /// radiance (`[r, g, b, 1]`, W/(sr m^2)), row-major from the camera's top-left pixel.
+    /// It holds the last recorded frame once that frame has run, and stays valid until
+    /// the next update that resizes the frame (`set_camera` with a new size,
+    /// `set_settings`). `None`: the plan knows the output is zero (it has no image). An
+    /// output the technique lacks, one not requested, or one that is not camera-space is
+    /// an error.
+    fn output_image(
+        &self,
+        output: Output,
+    ) -> Result<Option<crate::device::handle::ImageBuf>, Error>;
 
-    /// The technique's estimate after its filter and its unfiltered estimate (output
-    /// names): what error-against-time measurements compare with a reference.
-    fn estimate_outputs(&self) -> (&'static str, &'static str);
+    /// The technique's estimate after its filter and its unfiltered estimate: what
+    /// error-against-time measurements compare with a reference.
+    fn estimate_outputs(&self) -> (Output, Output);
 
     /// The settings in effect (serialised form, as `create` accepts them).
     fn settings_json(&self) -> serde_json::Value;
@@ -340,7 +325,10 @@ pub fn report_leak(technique: &str, buffers: usize, bytes: u64) {
         return;
     }
     LEAKED_BUFFERS.fetch_add(buffers as u64, Ordering::Relaxed);
-    eprintln!(
+    // counted above; the message is best effort (a closed stderr must not panic)
+    use std::io::Write;
+    let _ = writeln!(
+        std::io::stderr(),
         "caustica: {technique} dropped without free(): {buffers} device buffers ({bytes} bytes) \
          stay allocated until the backend is dropped"
     );

@@ -1,5 +1,5 @@
 //! `atrous_filter`: one iteration of the edge-avoiding A-Trous wavelet filter with
-//! variance clipping of its detail coefficients (seed 003 section 24.4.2, Eqs. 14-18), a
+//! variance clipping of its detail coefficients (Smal 2019, section 24.4.2, Eqs. 14-18), a
 //! pass any technique with a per-pixel estimate can opt into.
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

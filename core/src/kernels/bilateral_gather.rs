@@ -1,4 +1,4 @@
-//! `bilateral_gather`: one direction of the separable edge-aware photon gather (seed 000
+//! `bilateral_gather`: one direction of the separable edge-aware photon gather (Kim 2019
 //! section 30.3.2).
 
 use super::{bind, bytes, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

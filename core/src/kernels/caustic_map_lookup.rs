@@ -1,4 +1,4 @@
-//! `caustic_map_lookup`: CausticMap's final pass (seed 001 section 3.3): camera paths
+//! `caustic_map_lookup`: CausticMap's final pass (Vanderstichelen 2021, section 3.3): camera paths
 //! through mirrors and glass read the caustic map of the receiver they end on.
 
 use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

@@ -1,4 +1,4 @@
-//! `composite`: direct light plus caustics (seed 000 section 30.3.3).
+//! `composite`: direct light plus caustics (Kim 2019, section 30.3.3).
 
 use super::{bind, bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;

@@ -19,7 +19,7 @@ use crate::math::density_gather::{column_pass_threads, source_index_len};
 ///   where `W_col(j)` is pixel `j`'s normaliser over its column with its own radius: the
 ///   column pass's sources, already normalised.
 /// - Axis 1 reads that and writes caustic radiance `L = (albedo / pi) S_j / A_j`
-///   (W/(sr m^2) per channel, 000 Eq. 5 with the pixel's surface area `A_j`); alpha: the
+///   (W/(sr m^2) per channel, Kim 2019, Eq. 5 with the pixel's surface area `A_j`); alpha: the
 ///   pixel's gather radius (pixels) where it received flux, 0 elsewhere. On the caustic
 ///   atlas (`params.surface`
 ///   [`gather_surface::ATLAS`](crate::device::layout::gather_surface::ATLAS)) it writes

@@ -1,4 +1,4 @@
-//! `deposit_screen`: one photon -> one pixel (seed 000 section 30.3.1.3).
+//! `deposit_screen`: one photon -> one pixel (Kim 2019, section 30.3.1.3).
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
@@ -8,7 +8,7 @@ use crate::device::layout::{DepositParams, Photon};
 /// Projects each of the `photon_count[0]` stored photons to the screen and, when it lands
 /// on a receiver pixel whose surface it lies on (`layout::off_surface`: within
 /// `|params.depth_tolerance| x depth` of the pixel's tangent plane when the tolerance is
-/// negative, Sspm's default; the seed's relative view-depth match when positive),
+/// negative, Sspm's default; Kim 2019's relative view-depth match when positive),
 /// adds its flux and hit distance in fixed point (`params.flux_quantum`,
 /// `params.hit_distance_quantum`) to the screen-space photon map with integer atomics;
 /// off-screen and depth-mismatched photons are counted in `counters`.

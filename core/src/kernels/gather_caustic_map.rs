@@ -1,4 +1,4 @@
-//! `gather_caustic_map`: the caustic map's flux-keeping N x N gather (seed 001 section
+//! `gather_caustic_map`: the caustic map's flux-keeping N x N gather (Vanderstichelen 2021, section
 //! 3.1, "Denoising"), or with N = 1 the raw map, as irradiance.
 
 use super::{bind, bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

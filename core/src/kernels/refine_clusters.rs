@@ -1,4 +1,4 @@
-//! `refine_clusters`: seed 004's traversal step, one thread per traced cluster.
+//! `refine_clusters`: Wyman 2009's traversal step, one thread per traced cluster.
 
 use super::{bind, bytes, Args, Binding, BindingKind::*, DispatchRecord, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
@@ -15,7 +15,7 @@ use crate::device::layout::{cluster_count, AtlasTileTexel, Photon, RefineParams}
 /// (`params.level >= params.finest`) deposits its stored photons into the atlas exactly
 /// as the fused trace does (fixed point, order-free); one that converged earlier (the
 /// error metric) is appended to `converged` at `converged_count[0]`, to be output
-/// from fresh photons (see [`crate::frame::emission::adaptive`]); a refined one appends
+/// from fresh photons (see [`crate::techniques::adaptive_caustics::traversal`]); a refined one appends
 /// its four children (the ids of its photons in the level grid) to `children` at
 /// `cluster_counts[CHILDREN]`, or, when they do not fit under `params.children_capacity`,
 /// is appended to `converged` like a converged one (output at its level, never lost) and

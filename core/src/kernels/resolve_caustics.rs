@@ -1,4 +1,4 @@
-//! `resolve_caustics`: fixed-point photon map -> caustic radiance (seed 000 Eq. 5).
+//! `resolve_caustics`: fixed-point photon map -> caustic radiance (Kim 2019 Eq. 5).
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
@@ -6,7 +6,7 @@ use crate::device::handle::{GBufferPlanes, ImageBuf, PhotonMapPlanes};
 use crate::device::layout::DepositParams;
 
 /// Converts the fixed-point screen-space photon map to caustic radiance: flux over the
-/// pixel's surface area (seed 000 Eq. 4-5) times the diffuse BRDF, W/(sr m^2) per
+/// pixel's surface area (Kim 2019 Eq. 4-5) times the diffuse BRDF, W/(sr m^2) per
 /// channel; `out.a` holds the mean hit distance of the pixel's photons (scene units, 0
 /// without photons).
 #[derive(Clone, Copy, Debug)]

@@ -1,4 +1,4 @@
-//! `rsm_importance`: a reflective shadow map's texels and importance pyramid (seed 003
+//! `rsm_importance`: a reflective shadow map's texels and importance pyramid (Smal 2019
 //! section 24.2.1; `crate::math::rsm`).
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

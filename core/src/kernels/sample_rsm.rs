@@ -1,5 +1,5 @@
 //! `sample_rsm`: photons from a light's reflective shadow maps by hierarchical warping
-//! (seed 003 section 24.2.1, Figure 24-3; `crate::math::rsm::warp_rsm`).
+//! (Smal 2019, section 24.2.1, Figure 24-3; `crate::math::rsm::warp_rsm`).
 
 use super::{bind, bytes, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;

@@ -1,4 +1,4 @@
-//! `shading_normal_correction`: PhotonGi's shading-normal correction (seed 003 section
+//! `shading_normal_correction`: PhotonGi's shading-normal correction (Smal 2019, section
 //! 24.4.3, Eq. 20; `crate::math::irradiance_filter::shading_normal_factor`).
 
 use super::{

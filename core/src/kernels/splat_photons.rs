@@ -1,4 +1,4 @@
-//! `splat_photons`: PhotonGi's ellipsoid splats into the screen (seed 003 section 24.3,
+//! `splat_photons`: PhotonGi's ellipsoid splats into the screen (Smal 2019, section 24.3,
 //! Eqs. 2-9; `crate::math::photon_splat`).
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

@@ -1,4 +1,4 @@
-//! `temporal_blend`: the temporal accumulation of screen-space estimates (seed 003 section
+//! `temporal_blend`: the temporal accumulation of screen-space estimates (Smal 2019, section
 //! 24.4.1, Eqs. 10-13), a pass any technique with a per-pixel estimate can opt into.
 
 use super::{bind, bytes, texels, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

@@ -1,4 +1,4 @@
-//! `tile_hit_distance`: mean photon hit distance per tile (seed 000 section 30.3.2).
+//! `tile_hit_distance`: mean photon hit distance per tile (Kim 2019, section 30.3.2).
 
 use super::{bind, texels, tiles, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;

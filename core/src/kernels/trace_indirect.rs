@@ -1,4 +1,4 @@
-//! `trace_indirect`: PhotonGi's photon paths with Russian roulette (seed 003 section
+//! `trace_indirect`: PhotonGi's photon paths with Russian roulette (Smal 2019, section
 //! 24.2.2).
 
 use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};

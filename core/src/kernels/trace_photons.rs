@@ -290,12 +290,12 @@ pub struct TraceVariant {
     /// [`photon_store::SURFACE`](crate::device::layout::photon_store::SURFACE)) for the
     /// caustic atlas, instead of world space (Sspm's screen deposit).
     pub surface_store: bool,
-    /// Seed 001's deterministic splits: a dielectric sends both a reflected (flux x R) and
+    /// Vanderstichelen 2021's deterministic splits: a dielectric sends both a reflected (flux x R) and
     /// a refracted (x (1 - R)) branch, and the first dispersive surface three one-channel
     /// branches, up to `TraceParams::split_budget` branches per emitted photon (beyond it,
     /// the stochastic choice); otherwise Sspm's stochastic Fresnel and channel choices.
     pub fresnel_split: bool,
-    /// Seed 004's adaptive emission: photons come four by four from a cluster list, and
+    /// Wyman 2009's adaptive emission: photons come four by four from a cluster list, and
     /// each is written to its own slot (stored or not) for `refine_clusters` to judge.
     pub adaptive: bool,
     /// The fused pass (without `adaptive`): each stored photon is deposited where its

@@ -30,15 +30,15 @@
 //!   gives destination `j` the share `F_i w_ij / W_i`, where `W_i = sum_j w_ij` runs over
 //!   the destinations that exist: receivers inside the image and on the same surface (the
 //!   edge weight). So `sum_j out_j = sum_i F_i` exactly in real arithmetic, also at the
-//!   image border and at depth edges, where a gather-normalised filter (the seed's
+//!   image border and at depth edges, where a gather-normalised filter (Kim 2019's
 //!   bilateral one) gains or loses flux.
 //! - **Separable.** Two 1-D passes (rows, then columns), each scatter-normalised on its
 //!   own, so each keeps the flux; the column pass uses the radius of the pixel the row
 //!   pass wrote into.
 //! - **Weights.** Spatial: the 1-D Epanechnikov kernel integrated over each pixel
 //!   ([`footprint_weight`]), compactly supported (zero for pixels outside `r + 1/2`, so
-//!   `r <= 1/2` is the identity). Edges: [`edge_weight`], the seed's depth and normal
-//!   terms (000 section 30.3.2), made symmetric so that a source's normaliser and its
+//!   `r <= 1/2` is the identity). Edges: [`edge_weight`], Kim 2019's depth and normal
+//!   terms (Kim 2019, section 30.3.2), made symmetric so that a source's normaliser and its
 //!   destinations' gathers use the very same number.
 //!
 //! - **Source index: only the taps with weight.** `gather_footprint` and the row pass
@@ -51,7 +51,7 @@
 //!   longer pay, per warp, the weights of every tap that one lane needs.
 //!
 //! The filter works on flux (W per pixel), not radiance: flux is what is conserved, and
-//! radiance `L = (albedo / pi) Phi / A` (000 Eq. 5) is formed after the last pass with the
+//! radiance `L = (albedo / pi) Phi / A` (Kim 2019, Eq. 5) is formed after the last pass with the
 //! destination pixel's area.
 
 /// Smallest window half-width: a pixel's density is never judged from the pixel alone.
@@ -182,7 +182,7 @@ pub fn edge_texel(receiver: bool, depth: f32, normal: [f32; 3]) -> [f32; 4] {
 /// [`atlas_edge_texel`]'s "depths" (tile + 1 >= 1) the depth term of [`edge_weight`] is
 /// `exp(-0 / (1e-30 z)) = 1` between texels of one tile and `exp(-|dt| / (1e-30 z)) <=
 /// exp(-1e30 / 2^24) = 0` (it underflows to +0 in f32, exactly, on every backend) between
-/// texels of two tiles: the gather never crosses a tile border, as 001's N x N gather
+/// texels of two tiles: the gather never crosses a tile border, as Vanderstichelen 2021's N x N gather
 /// does not. (1e-30 is a normal f32; with `normal_power` 0 the normal term is skipped.)
 pub const ATLAS_SIGMA_DEPTH: f32 = 1e-30;
 
@@ -221,7 +221,7 @@ pub const HEIR_OFFSETS: [(i32, i32); 8] = [
 /// texel of the same tile; `heir` 0 for none. A photon within half a texel of a UV
 /// island's border can land in such a texel: the raw map has no area to show it in, and
 /// `gather_footprint` adds its flux to the heir's so that the density gather keeps it
-/// (001's box gather keeps it by spreading its window over covered texels).
+/// (Vanderstichelen 2021's box gather keeps it by spreading its window over covered texels).
 #[inline]
 pub fn uncovered_edge_texel(heir: u32) -> [f32; 4] {
     [EDGE_TEXEL_NOT_RECEIVER, heir.min(8) as f32, 0.0, 0.0]
@@ -583,7 +583,7 @@ pub fn footprint_weight(offset: i32, radius: f32) -> f32 {
 
 /// Edge weight between two receiver pixels (view depths in scene units, unit normals):
 /// `exp(-|z_a - z_b| / (sigma_depth * min(z_a, z_b))) * max(0, n_a . n_b)^normal_power`
-/// (the seed's bilateral terms, 000 section 30.3.2, symmetric in `a` and `b`).
+/// (Kim 2019's bilateral terms, Kim 2019, section 30.3.2, symmetric in `a` and `b`).
 #[inline]
 pub fn edge_weight(
     depth_a: f32,

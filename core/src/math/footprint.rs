@@ -1,4 +1,4 @@
-//! Pixel footprint (seed 000 section 30.3.1.3, Eq. 4) and the surface area a pixel covers.
+//! Pixel footprint (Kim 2019, section 30.3.1.3, Eq. 4) and the surface area a pixel covers.
 //!
 //! Eq. 4 (lost in the extraction; rederived): a pixel of a `w` x `h` image with field of
 //! view angles `theta_x`, `theta_y` covers, on a plane parallel to the image plane at view
@@ -13,7 +13,7 @@
 //! meets the surface obliquely. Radiance stored from flux (Eq. 5) divides by this surface
 //! area: `L = f_r * Phi / A_surface`.
 
-/// 000 Eq. 4: world-space area (scene units^2) of one pixel at view depth `depth` on a
+/// Kim 2019, Eq. 4: world-space area (scene units^2) of one pixel at view depth `depth` on a
 /// plane parallel to the image plane.
 #[inline]
 pub fn pixel_footprint(

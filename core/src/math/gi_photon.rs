@@ -1,4 +1,4 @@
-//! PhotonGi's stored photon (seed 003 Table 24-2, derived in `docs/photon-gi.md`): what
+//! PhotonGi's stored photon (Smal 2019, Table 24-2, derived in `docs/photon-gi.md`): what
 //! `trace_indirect` writes and `splat_photons` reads, and where its precision goes.
 //!
 //! - power: rgb9e5 of `power / power_scale` ([`crate::math::packing::pack_rgb9e5`]): 9

@@ -1,4 +1,4 @@
-//! Edge-aware filtering of screen-space irradiance (seed 003 section 24.4, PhotonGi; meant
+//! Edge-aware filtering of screen-space irradiance (Smal 2019, section 24.4, PhotonGi; meant
 //! to be shared with the caustic techniques): the edge-stopping weights (Eqs. 10-11), the
 //! temporal exponential moving average (Eqs. 12-13), the A-Trous wavelet iterations with
 //! variance clipping of their detail coefficients (Eqs. 14-18) and the shading-normal
@@ -101,7 +101,7 @@ pub fn blend_with_history(current: Vec3, history: Vec3, alpha: f32) -> Vec3 {
 pub const ATROUS_TAPS: [f32; 5] = [1.0 / 8.0, 1.0 / 4.0, 1.0 / 2.0, 1.0 / 4.0, 1.0 / 8.0];
 
 /// Pixel offset of tap `k` (0..5) in A-Trous iteration `i`: `(k - 2) 2^i` (the taps spread
-/// by doubling, the samples between them skipped; 003 Figure 24-5).
+/// by doubling, the samples between them skipped; Smal 2019, Figure 24-5).
 #[inline]
 pub fn atrous_offset(k: u32, iteration: u32) -> i32 {
     (k as i32 - 2) << iteration

@@ -1,7 +1,7 @@
-//! The caustic map's N x N neighbour gather (seed 001 section "3.1 Denoising", second
+//! The caustic map's N x N neighbour gather (Vanderstichelen 2021, section "3.1 Denoising", second
 //! render pass), fixed so that it keeps the map's flux, within one atlas tile.
 //!
-//! **The source's normalisation.** 001 sums the `N x N` texels around a texel
+//! **The source's normalisation.** Vanderstichelen 2021 sums the `N x N` texels around a texel
 //! (`gatherLength = (N - 1) / 2` on each side) and divides by
 //! `gatherSqDistance * gatherSqDistance + gatherLength`, i.e. `N^2 + (N - 1) / 2`: 10 for
 //! the default `N = 3`, where the window holds 9 texels. A uniform map comes out at 9/10
@@ -16,7 +16,7 @@
 //! the `c_s` covered texels of its window inside the tile, and destination `t` receives
 //! `sum_s Phi_s / c_s` over the sources whose windows hold it. Every source's flux lands
 //! somewhere (a source whose window holds no covered texel keeps its flux), so the tile's
-//! flux is kept exactly in real arithmetic, and where all windows are whole it is 001's
+//! flux is kept exactly in real arithmetic, and where all windows are whole it is Vanderstichelen 2021's
 //! average with the corrected `1 / N^2`. The gather never crosses a tile's border: a
 //! tile is one receiver, and its neighbours in the atlas are other receivers.
 //!
@@ -26,7 +26,7 @@
 
 use glam::{Vec2, Vec3};
 
-/// 001's default window: 3 x 3 on a 2048^2 map.
+/// Vanderstichelen 2021's default window: 3 x 3 on a 2048^2 map.
 pub const DEFAULT_GATHER_WIDTH: u32 = 3;
 
 /// Covered texels of the window of width `n` around `(x, y)` inside a `side x side` tile
@@ -78,7 +78,7 @@ pub fn gather_tile_flux(flux: &[Vec3], covered: &[bool], side: u32, n: u32) -> V
     out
 }
 
-/// 001's gather as printed: the window's sum over `N^2 + (N - 1) / 2` (kept to measure
+/// Vanderstichelen 2021's gather as printed: the window's sum over `N^2 + (N - 1) / 2` (kept to measure
 /// what the fix changes).
 pub fn source_gather_texel(map: &[Vec3], side: u32, x: u32, y: u32, n: u32) -> Vec3 {
     let h = (n / 2) as i64;
@@ -156,7 +156,7 @@ pub fn tile_receiver(word: u32) -> u32 {
 /// size, which equals the count of texels with `area(i) > 0` over it; otherwise they are
 /// counted. The kernels' `window_coverage` mirror it (the count a texel of the
 /// `gather_caustic_map` kernel's hottest loop made 9 reads for: 0.26 against 0.15 ms for
-/// the 2048^2 atlas of seed 001's setting 0 on an H200).
+/// the 2048^2 atlas of Vanderstichelen 2021's setting 0 on an H200).
 pub fn window_coverage(
     tile: [u32; 4],
     qx: u32,

@@ -1,5 +1,5 @@
 //! Optics shared by every backend: reflection, refraction, Fresnel, Beer-Lambert
-//! absorption and Cauchy dispersion (seed 001, "the material model shared by all
+//! absorption and Cauchy dispersion (Vanderstichelen 2021, "the material model shared by all
 //! techniques"). Shader ports mirror these functions by name.
 //!
 //! Conventions: directions are unit vectors in world space; `incident` points *towards*
@@ -48,7 +48,7 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     (0.5 * (r_s * r_s + r_p * r_p)).clamp(0.0, 1.0)
 }
 
-/// Schlick's approximation as written in seed 001 (`SchlickReflectAmount`): when light
+/// Schlick's approximation as written in Vanderstichelen 2021 (`SchlickReflectAmount`): when light
 /// goes into a lower index (`eta > 1`) the transmitted cosine is used, and total internal
 /// reflection returns 1.
 #[inline]
@@ -68,12 +68,12 @@ pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
 }
 
 /// Values of the kernels' `fresnel_model` parameter: which reflectance a dielectric
-/// interface uses (seed 001 uses Schlick's approximation; the exact unpolarised Fresnel
+/// interface uses (Vanderstichelen 2021 uses Schlick's approximation; the exact unpolarised Fresnel
 /// equations are caustica's default).
 pub mod fresnel_model {
     /// [`fresnel_dielectric`](super::fresnel_dielectric): the exact unpolarised reflectance.
     pub const EXACT: u32 = 0;
-    /// [`fresnel_schlick`](super::fresnel_schlick): seed 001's approximation.
+    /// [`fresnel_schlick`](super::fresnel_schlick): Vanderstichelen 2021's approximation.
     pub const SCHLICK: u32 = 1;
 }
 
@@ -106,7 +106,7 @@ pub const CHANNEL_WAVELENGTH_UM: [f32; 3] = [0.65, 0.55, 0.45];
 /// Reference wavelength (micrometres) at which a material's nominal `ior` is given.
 pub const REFERENCE_WAVELENGTH_UM: f32 = 0.55;
 
-/// Cauchy's equation `n(lambda) = A + B / lambda^2` (seed 001 section 3.3), `lambda` in
+/// Cauchy's equation `n(lambda) = A + B / lambda^2` (Vanderstichelen 2021, section 3.3), `lambda` in
 /// micrometres, `B` in um^2. The material's nominal `ior` is `n` at
 /// [`REFERENCE_WAVELENGTH_UM`], so `A = ior - B / 0.55^2` and `B = 0` gives `ior` at every
 /// wavelength.

@@ -1,4 +1,4 @@
-//! Photons allocated to lights by power (seed 003 section 24.2.1, PhotonGi): "a total
+//! Photons allocated to lights by power (Smal 2019, section 24.2.1, PhotonGi): "a total
 //! number of photons to emit from all light sources ... allocated to lights proportional
 //! to each light's intensity. Hence, all photons initially carry roughly the same power."
 

@@ -1,4 +1,4 @@
-//! Photon clusters of adaptive emission (seed 004 section 3.2, AdaptiveCaustics): a
+//! Photon clusters of adaptive emission (Wyman 2009, section 3.2, AdaptiveCaustics): a
 //! light view plane is sampled on a pyramid of grids, level `l` having `start * 2^l`
 //! texels a side; a *cluster* at level `l` is a 2x2 block of that grid's texels (one
 //! photon each), identified by its row-major index in the grid of `grid_w / 2` clusters a
@@ -12,7 +12,7 @@
 /// The traced photon's slot says nothing landed: `Photon::direction` of an empty slot.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
-/// How a cluster is judged after its photons are traced (seed 004 sections 3.2.1-2).
+/// How a cluster is judged after its photons are traced (Wyman 2009, sections 3.2.1-2).
 pub mod cluster_metric {
     /// Maximal traversal level: a relevant cluster is refined until the finest level.
     pub const LEVEL: u32 = 0;
@@ -33,7 +33,7 @@ pub mod cluster_fate {
 
 /// What keeps a traced cluster from being discarded.
 pub mod cluster_relevance {
-    /// Seed 004's test: at least one of its four photons met a caustic caster. Photons
+    /// Wyman 2009's test: at least one of its four photons met a caustic caster. Photons
     /// are samples: a cluster whose coarse photons all miss can still cover a caster's
     /// silhouette (or a caster smaller than its footprint), whose caustic is then lost.
     pub const PHOTONS: u32 = 0;
@@ -44,7 +44,7 @@ pub mod cluster_relevance {
     pub const BOUNDS: u32 = 1;
 }
 
-/// Where `refine_clusters` sends the photons of the clusters it outputs (seed 004 section
+/// Where `refine_clusters` sends the photons of the clusters it outputs (Wyman 2009, section
 /// 3.2's "splat into the caustic map", for either technique's map).
 pub mod cluster_target {
     /// CausticMap's atlas: a photon's texel is the atlas texel under its uv (texture-space
@@ -84,7 +84,7 @@ pub fn entry_spread(entry: u32) -> u32 {
 
 /// The side (texels) of the smallest square of map texels that holds the texels
 /// `(xs[k], ys[k])` of a cluster's four photons: 1 when all four landed in one texel
-/// (seed 004's convergence), more when they spread.
+/// (Wyman 2009's convergence), more when they spread.
 #[inline]
 pub fn cluster_spread(xs: [u32; 4], ys: [u32; 4]) -> u32 {
     let span = |v: [u32; 4]| {
@@ -99,7 +99,7 @@ pub fn cluster_spread(xs: [u32; 4], ys: [u32; 4]) -> u32 {
 }
 
 /// The splat window of a photon of a cluster converged with footprint side `spread`
-/// (seed 004 section 3.2.2's multi-resolution map: a coarse photon covers its cluster's
+/// (Wyman 2009, section 3.2.2's multi-resolution map: a coarse photon covers its cluster's
 /// footprint, not one texel): the odd square of side `2 * (spread / 2) + 1` centred on
 /// its texel `(x, y)`, clipped to its receiver's tile `[x, y, side, _]`, as inclusive
 /// `(x0, x1, y0, y1)`.
@@ -208,11 +208,11 @@ pub fn photon_met_caster(end: u32, rays: u32) -> bool {
 }
 
 /// The fate of a cluster at `level` (0 = the start grid, `finest` = the last): discarded
-/// when no photon met a caster (004 condition 1); output at the finest level (the
-/// maximal traversal level, 004 3.2.1, and the error metric's third condition, 004
-/// 3.2.2); output when the error metric applies at this level (`level >=
-/// error_from_level`) and every photon landed in one caustic-map texel (`converged`,
-/// 004 3.2.2 condition 2); else refined.
+/// when no photon met a caster (Wyman 2009, condition 1); output at the finest level (the
+/// maximal traversal level, Wyman 2009, section 3.2.1, and the error metric's third
+/// condition, section 3.2.2); output when the error metric applies at this level
+/// (`level >= error_from_level`) and every photon landed in one caustic-map texel
+/// (`converged`, section 3.2.2, condition 2); else refined.
 #[inline]
 pub fn cluster_fate(
     any_met_caster: bool,

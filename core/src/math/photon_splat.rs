@@ -1,4 +1,4 @@
-//! PhotonGi's splatting kernel (seed 003 section 24.3.1, Eqs. 2-9): each stored photon
+//! PhotonGi's splatting kernel (Smal 2019, section 24.3.1, Eqs. 2-9): each stored photon
 //! spreads its power over a tri-axial ellipsoid around its hit point, and a surface point
 //! inside the ellipsoid receives irradiance `E = Phi / a` (W/m^2), `a` the area of the
 //! ellipse the ellipsoid cuts in the kernel plane.
@@ -7,7 +7,7 @@
 //! tile photon density, Eqs. 3-6), then shaped: along the photon's geometric normal `n` it
 //! is compressed by `s_n`, along `u` (the arriving light direction projected onto the
 //! kernel plane) stretched by `s_u = min(1 / cos, s_max)` (Eq. 7), and along `t = n x u`
-//! left as is. The chapter's equations are partly garbled in the seed; the forms here
+//! left as is. The chapter's equations are partly illegible in its text; the forms here
 //! follow its HLSL listings, which are intact (the derivation is in `docs/photon-gi.md`).
 //!
 //! Units: lengths in scene units (world and view space share them), areas in scene
@@ -46,7 +46,7 @@ pub fn ray_length_scale(ray_length: f32, c: &SplatConstants) -> f32 {
 /// Eqs. 3-4: the view-space area of one screen tile at view depth `z_view`: `a_view =
 /// z^2 c_tile`, `c_tile = (2 tan(fov_x / 2) t_x / r_x) (2 tan(fov_y / 2) t_y / r_y)` for
 /// tiles of `t_x x t_y` pixels in an `r_x x r_y` image. This is the pixel footprint of
-/// seed 000's Eq. 4 times the tile's pixels (`tan_half_fov_*` are the camera's).
+/// Kim 2019's Eq. 4 times the tile's pixels (`tan_half_fov_*` are the camera's).
 #[inline]
 pub fn tile_area_constant(
     tan_half_fov_x: f32,

@@ -1,11 +1,11 @@
-//! PhotonGi's reflective shadow maps (seed 003 section 24.2.1): per light a set of faces
+//! PhotonGi's reflective shadow maps (Smal 2019, section 24.2.1): per light a set of faces
 //! (square pinhole views from the light, rendered by the ray-traced G-buffer kernel),
 //! each texel the first surface the light meets through it and the flux that leaves it;
 //! an importance pyramid per face ([`crate::math::wavelet_warp`]'s 2x2 sums, stored flat);
 //! and the warp of a low-discrepancy set through it to photons whose flux carries the
 //! sampling probability.
 //!
-//! Parameterisation (seed 003 leaves it open; stated here): a point light gets six
+//! Parameterisation (Smal 2019 leaves it open; stated here): a point light gets six
 //! 90-degree faces (a cube around it), a spot light one face whose half field of view is
 //! its outer cone angle when that is below 60 degrees, else the cube's faces; a
 //! directional light one orthographic face over the scene's bounding sphere
@@ -34,7 +34,7 @@ pub mod rsm_texel_kind {
 
 /// How `sample_rsm` chooses texels (`RsmParams::sampling`).
 pub mod rsm_sampling {
-    /// By importance, `luminance(flux x albedo)` (003 section 24.2.1): the default.
+    /// By importance, `luminance(flux x albedo)` (Smal 2019, section 24.2.1): the default.
     pub const IMPORTANCE: u32 = 0;
     /// Every texel that leaves flux equally likely: the estimate the importance warp must
     /// agree with in the mean (`photon_gi_frames.rs`' unbiasedness test), at a higher
@@ -55,7 +55,7 @@ pub fn pyramid_weight(sampling: u32, imp: f32) -> f32 {
 }
 
 /// Rec. 709 luminance of a linear colour (the importance of a texel is the luminance of
-/// its leaving flux, 003 section 24.2.1).
+/// its leaving flux, Smal 2019, section 24.2.1).
 #[inline]
 pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
@@ -159,7 +159,7 @@ pub fn hammersley(i: u32, n: u32, shift: Vec2) -> Vec2 {
 /// of 32 points' share of the square. Threads past `2^m` (and launches under 64) keep
 /// their own index. A path depends on its sample index alone, so the order changes which
 /// thread traces a sample, never what it does. Measured on the H200: `trace_indirect`
-/// 8.92 -> 8.56 ms at seed 003's high setting, 1.66 -> 1.56 at its low (OpenCL).
+/// 8.92 -> 8.56 ms at Smal 2019's high setting, 1.66 -> 1.56 at its low (OpenCL).
 #[inline]
 pub fn coherent_sample_order(t: u32, n: u32) -> u32 {
     if n < 64 {
@@ -263,7 +263,7 @@ pub fn cosine_hemisphere(u: Vec2, n: Vec3) -> Vec3 {
     crate::math::sampling::to_world(Vec3::new(r * phi.cos(), r * phi.sin(), z), n)
 }
 
-/// Jensen's Russian roulette at a diffuse bounce (Jensen 2001, as 003 section 24.2.2):
+/// Jensen's Russian roulette at a diffuse bounce (Jensen 2001, as Smal 2019, section 24.2.2):
 /// the path survives with probability `q = max(flux x albedo) / max(flux)` (clamped to
 /// `[0, 1]`) and carries `flux x albedo / q`, which keeps its expectation. `xi` uniform in
 /// `[0, 1)`. `None`: absorbed.

@@ -1,6 +1,6 @@
 //! Sampling warps shared by every backend. All map the unit square [0,1)^2 to a domain
 //! with constant Jacobian (equal-area), so that a stratified pw x ph grid of photons
-//! carries equal flux per photon (seed 000 Eq. 1).
+//! carries equal flux per photon (Kim 2019 Eq. 1).
 
 use glam::{Vec2, Vec3};
 
@@ -65,8 +65,9 @@ pub fn uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
 }
 
-/// Unit direction through point `u` in [0,1)^2 of a perspective light view plane (seed
-/// 001 section 3.1, its garbled ray formula corrected as `frame::emission::light_view_plane` says):
+/// Unit direction through point `u` in [0,1)^2 of a perspective light view plane
+/// (Vanderstichelen 2021, its ray formula corrected as `frame::emission::light_view_plane`
+/// says):
 /// `normalize(axis + ndc.x * right + ndc.y * up)` with `ndc = (2 u.x - 1, 1 - 2 u.y)` (row
 /// 0 at the top); `right` and `up` are the plane's unit vectors scaled by the tangents of
 /// the half fields of view (world space).

@@ -1,6 +1,6 @@
 //! Hierarchical sample warping by an importance pyramid: the wavelet importance sampling of
 //! Clarberg, Jarosz, Akenine-Möller and Jensen ("Wavelet Importance Sampling", SIGGRAPH
-//! 2005), as seed 003 section 24.2.1 (PhotonGi) uses it to pick reflective-shadow-map
+//! 2005), as Smal 2019, section 24.2.1 (PhotonGi) uses it to pick reflective-shadow-map
 //! texels in proportion to the power their photons carry, without normalising the map.
 //!
 //! The pyramid holds the Haar *scaling* coefficients of the importance map: level 0 is the
@@ -8,7 +8,7 @@
 //! the one below, the last a single total (the coefficients up to the Haar transform's
 //! constant factors, which cancel in every ratio used here). A sample `u` in `[0, 1)^2`
 //! descends from the total to a texel: at each node it is first warped horizontally by
-//! the ratio of the left column's coefficient to the node's (003 Figure 24-3 c-d), then
+//! the ratio of the left column's coefficient to the node's (Smal 2019, Figure 24-3 c-d), then
 //! vertically within the chosen column (e-f), and rescaled to `[0, 1)^2` inside the chosen
 //! quarter, so a low-discrepancy sequence stays well distributed over the texels and the
 //! leftover `u` places the sample inside its texel.
@@ -182,7 +182,7 @@ impl ImportancePyramid {
 mod tests {
     use super::*;
 
-    /// The 2D Hammersley point `i` of `n` (a low-discrepancy set, as 003 warps).
+    /// The 2D Hammersley point `i` of `n` (a low-discrepancy set, as Smal 2019 warps).
     fn hammersley(i: u32, n: u32) -> Vec2 {
         Vec2::new(
             (i as f32 + 0.5) / n as f32,

@@ -342,7 +342,7 @@ pub fn prism() -> Scene {
     }
 }
 
-/// `spot-glass` (seed 004's setting: a wide light and a small, finely tessellated
+/// `spot-glass` (Wyman 2009's setting: a wide light and a small, finely tessellated
 /// refractor): a spot light 30 W/sr at (0, 4, 0) shining down with a 50-degree outer
 /// (40-degree inner) half-angle over an 8 x 8 white floor (albedo 0.8) at y = 0, and a
 /// glass ball (IOR 1.5) of radius 0.4 at (0.9, 1.1, 0.3) tessellated into 50,176
@@ -457,7 +457,7 @@ pub fn plain() -> Scene {
     }
 }
 
-/// `rooms` (PhotonGi, seed 003's multi-room test scenes): two rooms 3 x 2.5 x 4 side by
+/// `rooms` (PhotonGi, Smal 2019's multi-room test scenes): two rooms 3 x 2.5 x 4 side by
 /// side (x in [-3, 0] and [0, 3], z in [-2, 2], floor y = 0, ceiling y = 2.5), joined by a
 /// doorway 1 wide and 2 high in the dividing wall at x = 0. Room A (x < 0) holds both
 /// lights, of unequal power: a point light 12 W/sr at (-1.5, 2.2, 0) and a spot light

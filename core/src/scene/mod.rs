@@ -315,7 +315,7 @@ pub struct Wave {
     pub phase: f32,
 }
 
-/// Light sources (all delta lights, as in seed 000).
+/// Light sources (all delta lights, as in Kim 2019).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Light {
@@ -342,7 +342,7 @@ pub enum Light {
     },
     /// Parallel light travelling along `direction` with `irradiance` W/m^2 on a surface
     /// facing it. Photons are emitted over the rectangle onto which `projection_volume`
-    /// (a box around the caustic casters, seed 000 Fig. 30-2) projects; when absent, the
+    /// (a box around the caustic casters, Kim 2019, Fig. 30-2) projects; when absent, the
     /// box around every specular object is used.
     Directional {
         /// Direction the light travels (world space; need not be unit length).

@@ -26,14 +26,14 @@ pub struct TechniqueEntry {
     /// One line: what it is and where it comes from.
     pub title: &'static str,
     /// Creates it on `backend` for `scene` with `settings`, a JSON object of the
-    /// technique's settings fields (missing fields take their defaults; every technique
-    /// accepts `photons_w`, `photons_h` and `seed`).
+    /// technique's settings (missing fields take their defaults; every technique has the
+    /// shared `frame` block: `frame.photons_w`, `frame.seed`, ...).
     pub create: CreateFn,
     /// The default settings (serialised).
     pub default_settings: fn() -> serde_json::Value,
-    /// The setting that picks the caustic filter, and its values (the first is the
-    /// default), so that `report` can compare filters; `None` where the technique has one
-    /// filter.
+    /// The setting that picks the caustic filter (its path: `screen.filter`), and its
+    /// values (the first is the default), so that `report` can compare filters; `None`
+    /// where the technique has one filter.
     pub filter_setting: Option<(&'static str, &'static [&'static str])>,
 }
 
@@ -41,37 +41,37 @@ pub struct TechniqueEntry {
 pub const TECHNIQUES: &[TechniqueEntry] = &[
     TechniqueEntry {
         name: "sspm",
-        title: "screen-space photon mapping (seed 000, Kim, Ray Tracing Gems ch. 30)",
+        title: "screen-space photon mapping (Kim 2019, Ray Tracing Gems ch. 30)",
         create: sspm::create,
         default_settings: || {
             serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("filter", &["density", "bilateral"])),
+        filter_setting: Some(("screen.filter", &["density", "bilateral"])),
     },
     TechniqueEntry {
         name: "caustic-map",
-        title: "texture-space caustic maps from light view planes (seed 001)",
+        title: "texture-space caustic maps from light view planes (Vanderstichelen 2021)",
         create: caustic_map::create,
         default_settings: || {
             serde_json::to_value(caustic_map::CausticMapSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("gather", &["density", "box"])),
+        filter_setting: Some(("atlas.gather", &["density", "box"])),
     },
     TechniqueEntry {
         name: "adaptive-caustics",
-        title: "coarse-to-fine photon emission into caustic maps (seed 004)",
+        title: "coarse-to-fine photon emission into caustic maps (Wyman 2009)",
         create: adaptive_caustics::create,
         default_settings: || {
             serde_json::to_value(adaptive_caustics::AdaptiveCausticsSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("gather", &["density", "box"])),
+        filter_setting: Some(("atlas.gather", &["density", "box"])),
     },
     TechniqueEntry {
         name: "photon-gi",
-        title: "multi-bounce indirect light by photon splatting (seed 003, Smal and \
-                Aizenshtein, Ray Tracing Gems ch. 24)",
+        title: "multi-bounce indirect light by photon splatting (Smal 2019, Ray Tracing Gems \
+                ch. 24)",
         create: photon_gi::create,
         default_settings: || {
             serde_json::to_value(photon_gi::PhotonGiSettings::default())
@@ -108,10 +108,17 @@ mod tests {
 
     #[test]
     fn every_technique_takes_the_common_settings() {
+        let shared = serde_json::to_value(crate::frame::settings::FrameSettings::default())
+            .expect("serialisable");
         for t in TECHNIQUES {
             let d = (t.default_settings)();
-            for key in ["photons_w", "photons_h", "seed"] {
-                assert!(d.get(key).is_some(), "{} lacks {key}", t.name);
+            // the shared block, with every field, in every technique
+            for key in shared.as_object().expect("an object").keys() {
+                assert!(
+                    d["frame"].get(key).is_some(),
+                    "{} lacks frame.{key}",
+                    t.name
+                );
             }
         }
     }

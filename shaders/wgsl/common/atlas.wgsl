@@ -1,4 +1,4 @@
-// Mirror of core::math::map_gather's texel addressing (the caustic atlas, seed 001).
+// Mirror of core::math::map_gather's texel addressing (the caustic atlas, Vanderstichelen 2021).
 
 fn atlas_texel_index(tile: vec4<u32>, uv: vec2<f32>, atlas_width: u32) -> u32 {
     let s = f32(tile.z);

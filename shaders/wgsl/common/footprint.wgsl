@@ -1,7 +1,7 @@
-// Mirror of core/src/footprint.rs and backend-opencl/kernels/footprint.cl: 000 Eq. 4 pixel
+// Mirror of core/src/footprint.rs and backend-opencl/kernels/footprint.cl: Kim 2019, Eq. 4 pixel
 // footprint and its obliquity correction.
 
-// 000 Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
+// Kim 2019, Eq. 4: world-space area of one pixel at view depth `depth` (scene units^2).
 fn pixel_footprint(depth: f32, width: u32, height: u32, tan_half_fov_x: f32,
                    tan_half_fov_y: f32) -> f32 {
     let sx = 2.0 * depth * tan_half_fov_x / f32(width);

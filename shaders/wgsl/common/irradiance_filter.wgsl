@@ -1,4 +1,4 @@
-// Mirror of core::math::irradiance_filter (seed 003 section 24.4: edge-stopping weights,
+// Mirror of core::math::irradiance_filter (Smal 2019, section 24.4: edge-stopping weights,
 // the temporal blend).
 
 fn depth_weight(z_p: f32, z_q: f32, depth_step: f32, sigma_z: f32, epsilon: f32) -> f32 {
@@ -80,7 +80,7 @@ fn mean_light_direction(d: vec3<f32>, w: f32) -> vec3<f32> {
     return v * (1.0f / l);
 }
 
-// irradiance_filter::shading_normal_factor (003 Eq. 20).
+// irradiance_filter::shading_normal_factor (Smal 2019, Eq. 20).
 fn shading_normal_factor(w_i: vec3<f32>, n_s: vec3<f32>, n_g: vec3<f32>, s_max: f32,
                          eps: f32) -> f32 {
     let num = max(dot3(w_i, n_s), 0.0f);

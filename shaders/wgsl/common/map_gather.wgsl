@@ -1,4 +1,4 @@
-// Mirror of core::math::map_gather::gather_caustic_texel (seed 001's N x N gather, fixed to
+// Mirror of core::math::map_gather::gather_caustic_texel (Vanderstichelen 2021's N x N gather, fixed to
 // keep flux). Reads the atlas through functions the kernel module defines:
 // `atlas_area(i)` (texel i's world area, 0 where uncovered) and `atlas_flux(i)` (its
 // flux, W).

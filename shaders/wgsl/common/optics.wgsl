@@ -31,7 +31,7 @@ fn fresnel_dielectric(cos_i_in: f32, eta: f32) -> f32 {
     return clampf(0.5 * (r_s * r_s + r_p * r_p), 0.0, 1.0);
 }
 
-// Seed 001's Schlick approximation (core: optics::fresnel_schlick): the transmitted
+// Vanderstichelen 2021's Schlick approximation (core: optics::fresnel_schlick): the transmitted
 // cosine when light goes into the lower index, 1 under total internal reflection.
 fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
     let q = (eta - 1.0) / (eta + 1.0);

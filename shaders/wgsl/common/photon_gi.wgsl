@@ -1,5 +1,5 @@
 // Mirror of core::math::{rsm, gi_photon, photon_splat} and packing's rgb9e5 (PhotonGi,
-// seed 003), function by function with the same names; backend-opencl/kernels/common/
+// Smal 2019), function by function with the same names; backend-opencl/kernels/common/
 // photon_gi.cl is the OpenCL C twin.
 
 // rsm::luminance (Rec. 709).

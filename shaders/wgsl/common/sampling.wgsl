@@ -44,7 +44,7 @@ fn to_world(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return t * v.x + b * v.y + n * v.z;
 }
 
-// core::math::sampling::view_plane_direction (seed 001 section 3.1): the pinhole ray
+// core::math::sampling::view_plane_direction (Vanderstichelen 2021, section 3.1): the pinhole ray
 // through point `u` of a perspective light view plane.
 fn view_plane_direction(axis: vec3<f32>, right: vec3<f32>, up: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
     let ndc = vec2<f32>(2.0 * u.x - 1.0, 1.0 - 2.0 * u.y);

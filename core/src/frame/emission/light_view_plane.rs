@@ -1,7 +1,7 @@
-//! Light view planes (seed 001 section 3.1): the virtual image plane in front of a light
+//! Light view planes (Vanderstichelen 2021, section 3.1): the virtual image plane in front of a light
 //! from whose texels CausticMap and AdaptiveCaustics shoot one photon each.
 //!
-//! **The frame.** 001 builds a pinhole camera at the light: `W` along the light's
+//! **The frame.** Vanderstichelen 2021 builds a pinhole camera at the light: `W` along the light's
 //! direction scaled by a focal distance, `U = normalize(W x up) * ulen`,
 //! `V = normalize(U x W) * vlen` with `ulen = f tan(fov / 2) aspect`, `vlen = f tan(fov /
 //! 2)`. Its texel `(i, j)` of a `w x h` plane has `p = ((i, j) + 0.5) / (w, h)` and
@@ -70,7 +70,7 @@ pub struct LightViewPlane {
     pub w: Vec3,
     /// Unit right vector: texel column `i` grows along it (world space).
     pub u: Vec3,
-    /// Unit up vector: texel row `j` grows *against* it, as 001's `ndc.y = 1 - 2 p.y`
+    /// Unit up vector: texel row `j` grows *against* it, as Vanderstichelen 2021's `ndc.y = 1 - 2 p.y`
     /// (world space; `u x v = w`).
     pub v: Vec3,
     /// Half-extent of the plane along `u` and `v`: tangents of the half field of view
@@ -84,7 +84,7 @@ pub struct LightViewPlane {
 }
 
 impl LightViewPlane {
-    /// 001's normalised device coordinates of texel `(i, j)`'s centre: `x = 2 p.x - 1`,
+    /// Vanderstichelen 2021's normalised device coordinates of texel `(i, j)`'s centre: `x = 2 p.x - 1`,
     /// `y = 1 - 2 p.y` with `p = ((i, j) + 0.5) / resolution`, each in (-1, 1).
     pub fn texel_ndc(&self, i: u32, j: u32) -> (f32, f32) {
         let px = (i as f32 + 0.5) / self.resolution.0 as f32;
@@ -112,7 +112,7 @@ impl LightViewPlane {
     }
 
     /// Unit direction of texel `(i, j)`'s photon (world space): `normalize(w + x u + y v)`
-    /// through the texel's centre (001 section 3.1, corrected as the module doc says), or
+    /// through the texel's centre (Vanderstichelen 2021, section 3.1, corrected as the module doc says), or
     /// `w` on an orthographic plane.
     pub fn texel_direction(&self, i: u32, j: u32) -> Vec3 {
         match self.projection {
@@ -285,7 +285,7 @@ fn cube_planes(position: Vec3, power: Vec3, res: u32) -> Vec<LightViewPlane> {
 /// share the budget: `resolution / sqrt(6)` texels a side, at least 1), or why the light
 /// sends no photon towards a caster. `aim`: `CasterCone` fits the plane to the casters
 /// (CausticMap's default), `Sphere` covers the light's whole cone (a spot's outer cone,
-/// a point light's six cube faces: the dense baseline of seed 004's comparison).
+/// a point light's six cube faces: the dense baseline of Wyman 2009's comparison).
 pub fn light_view_planes(
     light: &Light,
     casters: Aabb,

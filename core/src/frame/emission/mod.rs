@@ -1,14 +1,15 @@
 //! Photon emission: the seams from which techniques draw their photons.
 //!
-//! - [`projection_volume`]: seed 000's emission domains (a cone or sphere of directions
+//! - [`projection_volume`]: Kim 2019's emission domains (a cone or sphere of directions
 //!   around a point or spot light, the rectangle a directional light's projection volume
 //!   casts), each photon of a light carrying the same flux;
-//! - [`light_view_plane`] and [`view_planes`]: seed 001's light view planes (one texel,
-//!   one photon) and a frame's set of them with its fixed-point quanta;
-//! - [`adaptive`]: seed 004's coarse-to-fine traversal of light view planes, which traces
-//!   clusters of photons and refines only those that still matter.
+//! - [`light_view_plane`] and [`view_planes`]: Vanderstichelen 2021's light view planes
+//!   (one texel, one photon) and a frame's set of them with its fixed-point quanta
+//!   (CausticMap's and AdaptiveCaustics').
+//!
+//! AdaptiveCaustics' coarse-to-fine traversal of the light view planes is its own
+//! (`techniques/adaptive_caustics/traversal.rs`).
 
-pub mod adaptive;
 pub mod light_view_plane;
 pub mod projection_volume;
 pub mod view_planes;

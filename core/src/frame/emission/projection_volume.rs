@@ -1,4 +1,4 @@
-//! Photon emission domains (seed 000 section 30.3.1.1). Each light gets a domain whose
+//! Photon emission domains (Kim 2019, section 30.3.1.1). Each light gets a domain whose
 //! photons all carry the same flux (stratified equal-area grid):
 //!
 //! - point light: the cone from the light that bounds the caustic casters' bounding
@@ -60,7 +60,7 @@ impl EmissionDomain {
     /// Parameters of a `trace_photons` dispatch over photons `first .. first + count` (in
     /// tile order, [`crate::math::sampling::tiled_photon_index`]) of the `grid.0 x grid.1`
     /// grid of light `light`: flux per photon is the domain's flux
-    /// over the grid (000 Eqs. 1 and 3).
+    /// over the grid (Kim 2019, Eqs. 1 and 3).
     #[allow(clippy::too_many_arguments)]
     pub fn trace_params(
         &self,
@@ -151,7 +151,7 @@ fn cone_domain(position: Vec3, intensity: Vec3, axis: Vec3, cos_max: f32) -> Emi
     }
 }
 
-/// The rectangle domain of a directional light covering `volume` (000 Eq. 3): the
+/// The rectangle domain of a directional light covering `volume` (Kim 2019, Eq. 3): the
 /// projection of `volume` along `direction`, starting up-light of `scene` and `volume`.
 fn rectangle_domain(
     direction: Vec3,

@@ -1,10 +1,11 @@
-//! CausticMap's emission (seed 001 section 3.1): each light's view planes aimed at the
+//! CausticMap's emission (Vanderstichelen 2021, section 3.1): each light's view planes aimed at the
 //! caustic casters, and the fixed-point quantum of the frame's flux.
 
 use crate::device::caster_spheres::CasterSpheres;
 use crate::frame::emission::light_view_plane::{light_view_planes, LightViewPlane};
 use crate::frame::emission::NoEmission;
-use crate::frame::receivers::atlas::settings::CausticMapSettings;
+use crate::frame::receivers::atlas::settings::PlaneSettings;
+use crate::frame::settings::FrameSettings;
 use crate::math::fixed_point::power_of_two_quantum;
 use crate::math::geometry::Aabb;
 use crate::math::rng::pcg_hash;
@@ -39,20 +40,27 @@ impl ViewPlanes {
         casters: Aabb,
         caster_spheres: CasterSpheres,
         has_dispersion: bool,
-        s: &CausticMapSettings,
+        frame: &FrameSettings,
+        view: &PlaneSettings,
     ) -> ViewPlanes {
         let mut planes = Vec::new();
         let mut skipped_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
-            match light_view_planes(l, casters, bounds, s.photons_w, s.emission_plane.aim()) {
+            match light_view_planes(
+                l,
+                casters,
+                bounds,
+                frame.photons_w,
+                view.emission_plane.aim(),
+            ) {
                 Ok(ps) => {
                     let cube = ps.len() > 1;
                     for (k, mut p) in ps.into_iter().enumerate() {
                         p.resolution = if cube {
                             let side = |n: u32| ((n as f64 / 6f64.sqrt()).round() as u32).max(1);
-                            (side(s.photons_w), side(s.photons_h))
+                            (side(frame.photons_w), side(frame.photons_h))
                         } else {
-                            (s.photons_w, s.photons_h)
+                            (frame.photons_w, frame.photons_h)
                         };
                         planes.push((i as u32, k as u32, p));
                     }

@@ -5,18 +5,16 @@
 //! receiver keeps its tile: the error metric refines clusters by the atlas texels their
 //! photons land in, so the photons (and the receivers they reach) depend on the layout.
 
+use super::traversal::{AtlasTarget, DepositTarget, Traversal};
 use super::{AdaptiveCausticsPipeline, AdaptiveCausticsSettings, Target};
 use crate::backend::Backend;
-use crate::frame::emission::adaptive::{DepositTarget, Traversal};
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::pipeline::{Change, FrameBuilder, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
 use crate::frame::receivers::accumulation_seed;
-use crate::frame::receivers::atlas::{
-    with_atlas, AtlasQuanta, AtlasReceiver, BOX_GATHER_PASSES, DENSITY_GATHER_PASSES,
-};
+use crate::frame::receivers::atlas::{with_atlas, AtlasQuanta, AtlasReceiver};
 use crate::kernels::TraceVariant;
 use crate::recording::Recording;
 
@@ -30,9 +28,9 @@ fn plan(
     variant: TraceVariant,
 ) -> FramePlan {
     let why = format!(
-        "seed 004's traversal ({:?} metric, {}^2 start grid, batches of {} clusters), {}",
-        s.metric,
-        s.start_grid,
+        "Wyman 2009's traversal ({:?} metric, {}^2 start grid, batches of {} clusters), {}",
+        s.traversal.metric,
+        s.traversal.start_grid,
         traversal.map_or(0, |t| t.sizes.pass_clusters),
         receiver.stale_words()
     );
@@ -51,7 +49,7 @@ pub(super) fn create(
     settings: AdaptiveCausticsSettings,
     planes: ViewPlanes,
 ) -> Result<AdaptiveCausticsPipeline, Error> {
-    let map = &settings.map;
+    let map = &settings.atlas_config();
     let atlas = with_atlas(host, map, !planes.planes.is_empty());
     host.make_screen(backend, AtlasReceiver::screen_needs(map, atlas))?;
     let mut variant = SceneFeatures::of(host.model()).trace_variant();
@@ -62,7 +60,7 @@ pub(super) fn create(
     variant.adaptive = true;
     variant.fused_deposit = false;
     let mut traversal = None;
-    let levels = super::finest_level(&planes, settings.start_grid);
+    let levels = super::finest_level(&planes, settings.traversal.start_grid);
     let boxes: Vec<_> = host
         .geometry()
         .caster_boxes
@@ -132,21 +130,9 @@ impl AdaptiveCausticsPipeline {
             return Ok(());
         };
         let photons = self.plan.trace_variant.is_some();
-        if let (true, Some(a), Some(target)) =
-            (photons, receiver.atlas(), receiver.traversal_target())
-        {
+        if let (true, Some(a), Some(target)) = (photons, receiver.atlas(), atlas_target(receiver)) {
             if *valid {
-                for name in ["trace_photons", "refine_clusters"]
-                    .into_iter()
-                    .chain(BOX_GATHER_PASSES)
-                    .chain(DENSITY_GATHER_PASSES)
-                    .filter(|n| self.plan.runs(n))
-                {
-                    frame.stats.skip(
-                        name,
-                        "only the camera changed since the caustic atlas was made: it is reused",
-                    );
-                }
+                AtlasReceiver::skip_photon_passes(&self.plan, &mut frame.stats);
             } else {
                 receiver.record_clear(frame.rec());
                 frame.stats.variants.push(crate::kernels::variant_label(
@@ -156,14 +142,14 @@ impl AdaptiveCausticsPipeline {
                 let mut gather = Recording::new();
                 receiver.record_gather(&mut gather);
                 // a new seed for every pass an accumulating atlas adds
-                let seed = accumulation_seed(self.settings.map.seed, receiver.pass_index());
+                let seed = accumulation_seed(self.settings.frame.seed, receiver.pass_index());
                 let counters = a.counters;
                 self.traverse(host, frame, &DepositTarget::Atlas(target), counters, seed)?;
                 frame.rec().steps.extend(gather.steps);
                 if let Target::Atlas { receiver, valid } = &mut self.target {
                     frame.stats.accumulated_frames = receiver.end_photon_pass();
                     // an accumulating atlas takes new photons every frame
-                    *valid = !self.settings.map.accumulate;
+                    *valid = !self.settings.frame.accumulate;
                 }
             }
         }
@@ -193,12 +179,12 @@ impl AdaptiveCausticsPipeline {
             return Ok(Reaction::Kept);
         }
         let planes = super::view_planes(host, &self.settings)?;
-        let start = self.settings.start_grid;
+        let start = self.settings.traversal.start_grid;
         // more planes than the traversal has counts for (a light added) also rebuilds
         let deeper = super::finest_level(&planes, start) > super::finest_level(&self.planes, start)
             || planes.planes.len() > self.planes.planes.len();
         let had_photons = self.plan.trace_variant.is_some();
-        if (planes.planes.is_empty() == had_photons && self.settings.map.prune) || deeper {
+        if (planes.planes.is_empty() == had_photons && self.settings.frame.prune) || deeper {
             return Ok(Reaction::Rebuild);
         }
         if let Some(t) = &mut self.traversal {
@@ -229,4 +215,18 @@ impl AdaptiveCausticsPipeline {
         self.replan_atlas(host);
         Ok(Reaction::Kept)
     }
+}
+
+/// The traversal's target in the atlas of `receiver` (`None` without an atlas).
+fn atlas_target(receiver: &AtlasReceiver) -> Option<AtlasTarget> {
+    let quanta = receiver.quanta();
+    receiver.atlas().map(|a| AtlasTarget {
+        triangle_tiles: a.triangle_tiles,
+        tiles: a.tiles,
+        sums: a.sums,
+        atlas_width: receiver.settings().atlas.atlas_size,
+        flux_quantum: quanta.flux_quantum,
+        hit_distance_quantum: quanta.hit_distance_quantum,
+        trace_counters: a.counters,
+    })
 }

@@ -1,6 +1,6 @@
-//! AdaptiveCaustics (seed 004, Wyman and Nichols, "Adaptive Caustic Maps Using Deferred
+//! AdaptiveCaustics (Wyman 2009, "Adaptive Caustic Maps Using Deferred
 //! Shading"): light view planes ([`crate::frame::emission::view_planes`]) sampled coarse
-//! to fine by seed 004's traversal ([`crate::frame::emission::adaptive`]), so that photons
+//! to fine by Wyman 2009's traversal ([`traversal`]), so that photons
 //! are traced only where the casters are and, with the error metric, only where the map
 //! still needs them; its output photons land in a receiver: the caustic atlas
 //! ([`crate::frame::receivers::atlas`], the default, [`atlas`]) or the screen photon map
@@ -16,23 +16,26 @@
 //! casters, output at the finest level or when the error metric holds, else refined into
 //! four clusters of the next level; batches of clusters under `max_traversal_bytes`.
 //! Photons output early carry their coarse texels' flux (the cluster's solid angle or
-//! area), so the map's expectation is the dense grid's. With 004's one-texel metric
+//! area), so the map's expectation is the dense grid's. With Wyman 2009's one-texel metric
 //! (`error_texels: 1`) they all landed in one atlas texel, so that texel *is* the
-//! cluster's footprint; with a wider tolerance (004's alternative) each output photon is
+//! cluster's footprint; with a wider tolerance (Wyman 2009's alternative) each output photon is
 //! splatted over its cluster's footprint, the flux split exactly
 //! (`math::photon_clusters::footprint_window`).
 
 mod atlas;
 mod screen;
 mod settings;
+mod stats;
+pub mod traversal;
 
-pub use crate::frame::emission::adaptive::{
-    caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
-    TraversalSettings, EMPTY_RECT,
-};
 pub use settings::{
     AdaptiveCausticsSettings, AdaptiveDeposit, AdaptiveMetric, ClusterRelevance, TraversalSizes,
     LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL, SLOT_BYTES_PER_CLUSTER,
+};
+pub use stats::AdaptiveStats;
+pub use traversal::{
+    caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
+    TraversalSettings, EMPTY_RECT,
 };
 
 use crate::backend::Backend;
@@ -42,11 +45,11 @@ use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
+use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::FramePlan;
 use crate::frame::receivers::atlas::AtlasReceiver;
 use crate::frame::receivers::screen::ScreenReceiver;
-use crate::frame::technique::OutputInfo;
 use crate::kernels::TraceVariant;
 
 /// AdaptiveCaustics on one backend, for one scene: the frame host and
@@ -89,7 +92,8 @@ fn view_planes(host: &FrameHost, s: &AdaptiveCausticsSettings) -> Result<ViewPla
         g.caster_bounds,
         g.caster_spheres,
         g.has_dispersion,
-        &s.map,
+        &s.frame,
+        &s.planes,
     );
     fit_planes(&mut planes, &s.traversal(), g.has_dispersion);
     planes.check_light_flux()?;
@@ -122,11 +126,11 @@ impl AdaptiveCausticsPipeline {
         let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
             return Ok(());
         };
-        let s = &self.settings.map;
+        let s = &self.settings;
         let optics = PhotonOptics {
-            max_bounces: s.max_bounces,
-            min_relative_power: s.min_relative_power,
-            fresnel_model: s.fresnel.kernel_value(),
+            max_bounces: s.trace.max_bounces,
+            min_relative_power: s.trace.min_relative_power,
+            fresnel_model: s.planes.fresnel.kernel_value(),
             caster_spheres: self.planes.caster_spheres,
         };
         let total: u64 = self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum();
@@ -152,7 +156,8 @@ impl Pipeline for AdaptiveCausticsPipeline {
     const NAME: &'static str = "adaptive-caustics";
 
     fn parse_settings(json: &serde_json::Value) -> Result<AdaptiveCausticsSettings, Error> {
-        AdaptiveCausticsSettings::from_json(json)
+        let json = settings::earlier_form(json);
+        crate::frame::settings::from_json(Self::NAME, &AdaptiveCausticsSettings::default(), &json)
     }
 
     fn validate(settings: &AdaptiveCausticsSettings) -> Result<(), Error> {
@@ -161,7 +166,7 @@ impl Pipeline for AdaptiveCausticsPipeline {
 
     fn host_options(settings: &AdaptiveCausticsSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.map.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: settings.deposit == AdaptiveDeposit::Atlas,
         }
     }
@@ -183,8 +188,8 @@ impl Pipeline for AdaptiveCausticsPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        if seed != self.settings.map.seed {
-            self.settings.map.seed = seed;
+        if seed != self.settings.frame.seed {
+            self.settings.frame.seed = seed;
             if let Target::Atlas { receiver, valid } = &mut self.target {
                 receiver.set_seed(seed);
                 *valid = false;
@@ -236,42 +241,37 @@ impl Pipeline for AdaptiveCausticsPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
+    fn own_outputs(&self) -> &'static [Output] {
         match &self.target {
-            Target::Atlas { receiver, .. } => receiver.outputs(),
-            Target::Screen { receiver, .. } => receiver.outputs(),
+            Target::Atlas { .. } => &crate::frame::receivers::atlas::OUTPUTS,
+            Target::Screen { .. } => &ScreenReceiver::OUTPUTS,
         }
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.frame.outputs
+    }
+
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
         match &self.target {
-            Target::Atlas { receiver, .. } => {
-                receiver.read_output(backend, host, "adaptive-caustics", name)
-            }
-            Target::Screen { receiver, .. } => {
-                receiver.read_output(backend, host, "adaptive-caustics", name)
-            }
+            Target::Atlas { receiver, .. } => receiver.output_image(host, output),
+            Target::Screen { receiver, .. } => receiver.image(host, output),
         }
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+    fn read_data_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
         match &self.target {
-            Target::Atlas { receiver, .. } => {
-                receiver.output_image(host, "adaptive-caustics", name)
+            Target::Atlas { receiver, .. } if output == Output::CausticAtlas => {
+                receiver.read_atlas(backend)
             }
-            Target::Screen { receiver, .. } => {
-                receiver.output_image(host, "adaptive-caustics", name)
-            }
+            _ => Err(Error::Unsupported(format!(
+                "adaptive-caustics has no data output '{output}'"
+            ))),
         }
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        ("caustics_filtered", "caustics_raw")
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredCaustics, Output::RawCaustics)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -287,15 +287,6 @@ impl Pipeline for AdaptiveCausticsPipeline {
             Target::Atlas { receiver, .. } => receiver.owned(),
             Target::Screen { owned, .. } => owned.count(),
         }
-    }
-}
-
-impl Hosted<AdaptiveCausticsPipeline> {
-    /// Reads output `name` back: the atlas target's outputs are CausticMap's
-    /// ([`crate::frame::receivers::atlas::OUTPUTS`]), the screen target's Sspm's
-    /// ([`crate::frame::receivers::screen::Output`]).
-    pub fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
-        self.read_output_named(backend, name)
     }
 }
 

@@ -3,19 +3,17 @@
 //! screen receiver ([`crate::frame::receivers::screen`]), which resolves, filters and
 //! composites them as for Sspm; a photon's "texel" for the error metric is its pixel.
 
+use super::traversal::{DepositTarget, ScreenTarget, Traversal};
 use super::{AdaptiveCausticsPipeline, AdaptiveCausticsSettings, Target};
 use crate::backend::Backend;
 use crate::frame::allocation::allocate;
-use crate::frame::emission::adaptive::{DepositTarget, ScreenTarget, Traversal};
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::pipeline::FrameBuilder;
 use crate::frame::plan::SceneFeatures;
 use crate::frame::receivers::accumulation_seed;
-use crate::frame::receivers::screen::{
-    plan_frame, Needs, ScreenQuanta, ScreenReceiver, ScreenSettings,
-};
+use crate::frame::receivers::screen::{plan_frame, Needs, ScreenQuanta, ScreenReceiver};
 use crate::recording::Recording;
 
 /// The photon capacity `deposit_screen` and `resolve_caustics` are parameterised with
@@ -30,11 +28,7 @@ pub(super) fn create(
     planes: ViewPlanes,
 ) -> Result<AdaptiveCausticsPipeline, Error> {
     let g = host.geometry();
-    // the top level's `accumulate` (the map's) holds for either target
-    let sc = ScreenSettings {
-        accumulate: settings.screen.accumulate || settings.map.accumulate,
-        ..settings.screen.clone()
-    };
+    let (frame, sc) = (&settings.frame, settings.screen.clone());
     let quanta = ScreenQuanta {
         flux_quantum: planes.flux_quantum,
         hit_distance_quantum: planes.hit_distance_quantum,
@@ -43,14 +37,14 @@ pub(super) fn create(
     let mut plan = plan_frame(
         host.model(),
         planes.light_plans(),
-        sc.outputs,
-        sc.prune,
-        (sc.filter, sc.temporal, sc.atrous_iterations > 0),
+        frame.outputs,
+        frame.prune,
+        (sc.filter, frame.temporal, frame.atrous_iterations > 0),
     );
     let mut variant = plan
         .trace_variant
         .unwrap_or_else(|| SceneFeatures::of(host.model()).trace_variant());
-    // seed 004's slots, in world space for the screen deposit
+    // Wyman 2009's slots, in world space for the screen deposit
     variant.adaptive = true;
     variant.surface_store = false;
     variant.fresnel_split = false;
@@ -61,19 +55,19 @@ pub(super) fn create(
         let mut refine = plan.passes[i].clone();
         refine.name = "refine_clusters".into();
         if refine.runs {
-            refine.reason = "seed 004's traversal: judges the clusters and lists the output \
+            refine.reason = "Wyman 2009's traversal: judges the clusters and lists the output \
                              photons for deposit_screen"
                 .into();
         }
         plan.passes.insert(i + 1, refine);
     }
     let needs = Needs::of_plan(&plan);
-    host.make_screen(backend, ScreenReceiver::screen_needs(needs, &sc))?;
+    host.make_screen(backend, ScreenReceiver::screen_needs(needs, frame))?;
     let camera = host.camera();
     let mut rec = Recording::new();
-    let receiver = ScreenReceiver::create(&mut rec, camera, &plan, sc, quanta);
+    let receiver = ScreenReceiver::create(&mut rec, camera, &plan, frame, sc, quanta);
     let traversal = needs.photons.then(|| {
-        let levels = super::finest_level(&planes, settings.start_grid);
+        let levels = super::finest_level(&planes, settings.traversal.start_grid);
         let boxes: Vec<_> = host
             .geometry()
             .caster_boxes
@@ -141,7 +135,7 @@ impl AdaptiveCausticsPipeline {
             trace_counters: map.counters,
         });
         // a new seed for every frame an accumulating photon map adds
-        let seed = accumulation_seed(self.settings.map.seed, receiver.frame_index());
+        let seed = accumulation_seed(self.settings.frame.seed, receiver.frame_index());
         self.traverse(host, frame, &target, map.counters, seed)?;
         let Target::Screen { receiver, .. } = &mut self.target else {
             return Ok(());

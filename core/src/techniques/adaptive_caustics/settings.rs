@@ -1,13 +1,16 @@
 //! Every parameter of AdaptiveCaustics, with its defaults and validation.
 
-use crate::frame::emission::adaptive::TraversalSettings;
-pub use crate::frame::emission::adaptive::{
+use super::traversal::TraversalSettings;
+pub use super::traversal::{
     AdaptiveMetric, ClusterRelevance, TraversalSizes, LIST_BYTES_PER_ENTRY, MAX_PASSES_PER_LEVEL,
     SLOT_BYTES_PER_CLUSTER,
 };
 use crate::frame::error::Error;
-use crate::frame::receivers::atlas::settings::{CausticMapSettings, FresnelSplit};
+use crate::frame::receivers::atlas::settings::{
+    AtlasConfig, AtlasSettings, FresnelSplit, PlaneSettings,
+};
 use crate::frame::receivers::screen::ScreenSettings;
+use crate::frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
 use serde::{Deserialize, Serialize};
 
 /// The map the traversal's photons are deposited into (so that a comparison
@@ -16,116 +19,87 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 pub enum AdaptiveDeposit {
     /// CausticMap's texture-space caustic atlas, its gather and final pass (the default:
-    /// seed 004 splats into a caustic map, and the atlas is the map kind here).
+    /// Wyman 2009 splats into a caustic map, and the atlas is the map kind here).
     #[default]
     Atlas,
     /// Sspm's screen-space photon map, its resolve, filter and composite (the `screen`
-    /// settings): the photons of seed 000 replaced by the traversal's.
+    /// settings): the photons of Kim 2019 replaced by the traversal's.
     Screen,
 }
 
-/// AdaptiveCaustics' settings: CausticMap's (the same atlas, gather and final pass), with
-/// `photons_w` = `photons_h` the side of the dense-equivalent grid (the finest level, a
-/// power-of-two multiple of `start_grid`), plus the traversal's.
+/// AdaptiveCaustics' settings: the shared `frame` and `trace` blocks, with
+/// `frame.photons_w` = `frame.photons_h` the side of the dense-equivalent grid (the
+/// finest level, a power-of-two multiple of `start_grid`); CausticMap's light view
+/// planes (`planes`; `fresnel_split` must be `stochastic`); the receiver its `deposit`
+/// names, with its block (`atlas`: CausticMap's atlas, gather and final pass; `screen`:
+/// Sspm's screen photon map; the block of the receiver not named is not read, so that a
+/// comparison can switch `deposit` alone); and the traversal's own `traversal` block.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct AdaptiveCausticsSettings {
-    /// The caustic map, its gather, the optics and the outputs (CausticMap's fields, at
-    /// the top level of the JSON object; `fresnel_split` must be `stochastic`).
-    #[serde(flatten)]
-    pub map: CausticMapSettings,
-    /// The stop metric.
-    pub metric: AdaptiveMetric,
-    /// What keeps a cluster from being discarded: `bounds` (the default) or 004's
-    /// `photons`.
-    pub relevance: ClusterRelevance,
-    /// Texels a side of the start grid (004 section 4.2: 64, enough photons to keep a
-    /// GPU busy from the first step; a power of two).
-    pub start_grid: u32,
-    /// Grid side from which the error metric is checked; coarser levels use the
-    /// traversal-level metric (004 section 4.2: from 512^2 on, since coarse photons
-    /// rarely converge).
-    pub error_from_grid: u32,
-    /// The error metric's tolerance (texels): a cluster converges when its four photons
-    /// land in a square of at most this many caustic-map texels a side on one receiver,
-    /// and its photons are then splatted over a window that size (seed 004 section 3.2.2's
-    /// alternative: "photon divergence greater than a single texel but less than a
-    /// user-defined tolerance", with its multi-resolution map). 1 (the default) is 004's
-    /// metric: one texel, and a one-texel splat. At most 4; above 1 only with the atlas
-    /// target.
-    pub error_texels: u32,
-    /// Device bytes the traversal may hold (004 section 4.3): the photon slots of a batch
-    /// (128 bytes per cluster) and one cluster list per level (16 bytes per cluster of a
-    /// batch each), plus the start grid's list. The batch size follows from it; the
-    /// result is bitwise the same for any value. The screen target also holds a list of
-    /// the batch's output photons (another 128 bytes per cluster).
-    pub max_traversal_bytes: u64,
-    /// Where output photons are deposited: `atlas` (the default) or `screen`.
+    /// What every technique shares: photon grid (the finest level), seed, accumulation,
+    /// filter chain, outputs, pruning, the camera's specular chains.
+    pub frame: FrameSettings,
+    /// How photons are followed.
+    pub trace: TraceSettings,
+    /// The light view planes and the photons' optics.
+    pub planes: PlaneSettings,
+    /// The receiver the traversal's photons land in.
     pub deposit: AdaptiveDeposit,
-    /// The screen receiver's settings for the screen target: depth tolerance, filter,
-    /// outputs and the rest of what follows the deposit (the photons are the traversal's,
-    /// set at the top level). Unused with the atlas target.
+    /// The caustic atlas (with `deposit: atlas`).
+    pub atlas: AtlasSettings,
+    /// The screen photon map (with `deposit: screen`).
     pub screen: ScreenSettings,
+    /// The traversal: its stop metric, start grid and memory.
+    pub traversal: TraversalSettings,
 }
 
 impl Default for AdaptiveCausticsSettings {
     fn default() -> Self {
         AdaptiveCausticsSettings {
-            map: CausticMapSettings::default(),
-            metric: AdaptiveMetric::Error,
-            relevance: ClusterRelevance::Bounds,
-            start_grid: 64,
-            error_from_grid: 512,
-            error_texels: 1,
-            max_traversal_bytes: 64 << 20,
+            // CausticMap's seed: the same photons where the traversal reaches the finest
+            // level
+            frame: FrameSettings::seeded(0x434d_4150),
+            trace: TraceSettings::default(),
+            planes: PlaneSettings::default(),
             deposit: AdaptiveDeposit::Atlas,
+            atlas: AtlasSettings::default(),
             screen: ScreenSettings::default(),
+            traversal: TraversalSettings::default(),
         }
     }
 }
 
+impl TechniqueSettings for AdaptiveCausticsSettings {
+    fn frame(&self) -> &FrameSettings {
+        &self.frame
+    }
+
+    fn frame_mut(&mut self) -> &mut FrameSettings {
+        &mut self.frame
+    }
+}
+
 impl AdaptiveCausticsSettings {
-    /// The settings from a JSON object of their fields (CausticMap's at the top level);
-    /// missing fields take their defaults, and an unknown field is an error (serde's
-    /// `deny_unknown_fields` does not reach through `flatten`, so the names are checked
-    /// here against the defaults' serialisation).
-    pub fn from_json(value: &serde_json::Value) -> Result<Self, Error> {
-        let bad =
-            |why: String| Error::InvalidParameter(format!("adaptive-caustics settings: {why}"));
-        let known = serde_json::to_value(AdaptiveCausticsSettings::default())
-            .map_err(|e| bad(e.to_string()))?;
-        if let (Some(given), Some(known)) = (value.as_object(), known.as_object()) {
-            if let Some(k) = given.keys().find(|k| !known.contains_key(*k)) {
-                let mut names: Vec<&String> = known.keys().collect();
-                names.sort();
-                return Err(bad(format!(
-                    "unknown field `{k}`, expected one of {}",
-                    names
-                        .iter()
-                        .map(|n| format!("`{n}`"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )));
-            }
+    /// What the atlas receiver is made with.
+    pub fn atlas_config(&self) -> AtlasConfig {
+        AtlasConfig {
+            frame: self.frame.clone(),
+            planes: self.planes,
+            atlas: self.atlas,
         }
-        serde_json::from_value(value.clone()).map_err(|e| bad(e.to_string()))
     }
 
     /// The traversal's settings.
     pub fn traversal(&self) -> TraversalSettings {
-        TraversalSettings {
-            metric: self.metric,
-            relevance: self.relevance,
-            start_grid: self.start_grid,
-            error_from_grid: self.error_from_grid,
-            error_texels: self.error_texels,
-            max_traversal_bytes: self.max_traversal_bytes,
-        }
+        self.traversal
     }
 
     /// The finest level (the start grid is level 0): `photons_w = start_grid * 2^finest`.
     pub fn finest_level(&self) -> u32 {
-        (self.map.photons_w / self.start_grid.max(1)).max(1).ilog2()
+        (self.frame.photons_w / self.traversal.start_grid.max(1))
+            .max(1)
+            .ilog2()
     }
 
     /// The first level at which the error metric is checked.
@@ -135,48 +109,65 @@ impl AdaptiveCausticsSettings {
 
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), Error> {
-        self.map.validate()?;
         let bad = |what: String| Err(Error::InvalidParameter(what));
-        if self.map.fresnel_split != FresnelSplit::Stochastic {
+        self.frame.validate()?;
+        self.trace.validate()?;
+        self.planes.validate()?;
+        let screen = self.deposit == AdaptiveDeposit::Screen;
+        if screen {
+            self.frame.check_outputs(
+                "adaptive-caustics (deposit screen)",
+                &crate::frame::receivers::screen::ScreenReceiver::OUTPUTS,
+            )?;
+            self.screen.validate()?;
+        } else {
+            self.frame.check_outputs(
+                "adaptive-caustics",
+                &crate::frame::receivers::atlas::OUTPUTS,
+            )?;
+            self.atlas.validate()?;
+        }
+        if self.planes.fresnel_split != FresnelSplit::Stochastic {
             return bad(
-                "adaptive-caustics traces one stored photon per emitted photon: fresnel_split \
-                 must be \"stochastic\""
+                "adaptive-caustics traces one stored photon per emitted photon: \
+                 planes.fresnel_split must be \"stochastic\""
                     .into(),
             );
         }
-        if self.start_grid < 2 || !self.start_grid.is_power_of_two() || self.start_grid > 4096 {
-            return bad("start_grid must be a power of two in 2..=4096".into());
+        let t = &self.traversal;
+        if t.start_grid < 2 || !t.start_grid.is_power_of_two() || t.start_grid > 4096 {
+            return bad("traversal.start_grid must be a power of two in 2..=4096".into());
         }
-        let (w, h) = (self.map.photons_w, self.map.photons_h);
+        let (w, h) = (self.frame.photons_w, self.frame.photons_h);
         let k = self.finest_level();
-        if w != h || w < self.start_grid || (self.start_grid as u64) << k != w as u64 {
+        if w != h || w < t.start_grid || (t.start_grid as u64) << k != w as u64 {
             return bad(format!(
-                "photons_w and photons_h ({w}x{h}) must be equal and start_grid ({}) times a \
-                 power of two: the dense-equivalent grid is the finest level of the pyramid",
-                self.start_grid
+                "frame.photons_w and frame.photons_h ({w}x{h}) must be equal and \
+                 traversal.start_grid ({}) times a power of two: the dense-equivalent grid is \
+                 the finest level of the pyramid",
+                t.start_grid
             ));
         }
         if w > 65536 {
-            return bad("photons_w must be <= 65536 (the cluster ids of a level fit a u32)".into());
-        }
-        if self.deposit == AdaptiveDeposit::Screen {
-            self.screen.validate()?;
+            return bad(
+                "frame.photons_w must be <= 65536 (the cluster ids of a level fit a u32)".into(),
+            );
         }
         let max = crate::math::photon_clusters::MAX_ERROR_TEXELS;
-        if self.error_texels == 0 || self.error_texels > max {
-            return bad(format!("error_texels must be in 1..={max}"));
+        if t.error_texels == 0 || t.error_texels > max {
+            return bad(format!("traversal.error_texels must be in 1..={max}"));
         }
-        if self.error_texels > 1 && self.deposit == AdaptiveDeposit::Screen {
+        if t.error_texels > 1 && screen {
             return bad(
-                "error_texels above 1 splats converged photons over atlas texels: it needs \
-                 deposit \"atlas\""
+                "traversal.error_texels above 1 splats converged photons over atlas texels: it \
+                 needs deposit \"atlas\""
                     .into(),
             );
         }
-        if self.max_traversal_bytes < self.min_traversal_bytes() {
+        if t.max_traversal_bytes < self.min_traversal_bytes() {
             return bad(format!(
-                "max_traversal_bytes must hold the start grid's list and a batch of one \
-                 cluster: at least {} bytes",
+                "traversal.max_traversal_bytes must hold the start grid's list and a batch of \
+                 one cluster: at least {} bytes",
                 self.min_traversal_bytes()
             ));
         }
@@ -202,28 +193,110 @@ impl AdaptiveCausticsSettings {
     }
 }
 
+/// The fields the screen block held in earlier versions and `frame` holds now.
+const SCREEN_FIELDS_NOW_SHARED: [&str; 7] = [
+    "outputs",
+    "prune",
+    "temporal",
+    "atrous_iterations",
+    "atrous_clip_sigmas",
+    "accumulate",
+    "max_specular_depth",
+];
+
+/// The settings JSON of earlier versions in today's places, where the generic reading of
+/// the flat form cannot tell: a top-level `knn_photons` was the atlas's (CausticMap's
+/// fields sat at the top, the screen's in `screen`), and the screen block's shared fields
+/// (outputs, filters, accumulation) now sit in `frame`: with `deposit: screen` they move
+/// there (unless `frame` or the top level gives them), otherwise they were not read and
+/// are dropped.
+pub(super) fn earlier_form(json: &serde_json::Value) -> serde_json::Value {
+    let Some(given) = json.as_object() else {
+        return json.clone();
+    };
+    let mut out = given.clone();
+    if let Some(k) = out.remove("knn_photons") {
+        let atlas = out
+            .entry("atlas")
+            .or_insert_with(|| serde_json::Value::Object(Default::default()));
+        if let Some(a) = atlas.as_object_mut() {
+            a.entry("knn_photons").or_insert(k);
+        }
+    }
+    let screen_deposit = out.get("deposit").and_then(|d| d.as_str()) == Some("screen");
+    let mut moved = serde_json::Map::new();
+    if let Some(screen) = out.get_mut("screen").and_then(|s| s.as_object_mut()) {
+        for field in SCREEN_FIELDS_NOW_SHARED {
+            if let Some(v) = screen.remove(field) {
+                moved.insert(field.to_string(), v);
+            }
+        }
+    }
+    if screen_deposit && !moved.is_empty() {
+        let given_elsewhere = |f: &str, out: &serde_json::Map<String, serde_json::Value>| {
+            out.contains_key(f) || out.get("frame").and_then(|b| b.get(f)).is_some()
+        };
+        let keep: Vec<(String, serde_json::Value)> = moved
+            .into_iter()
+            .filter(|(f, _)| !given_elsewhere(f, &out))
+            .collect();
+        let frame = out
+            .entry("frame")
+            .or_insert_with(|| serde_json::Value::Object(Default::default()));
+        if let Some(b) = frame.as_object_mut() {
+            b.extend(keep);
+        }
+    }
+    serde_json::Value::Object(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn json_takes_caustic_map_fields_at_the_top_and_refuses_unknown_ones() {
-        let s = AdaptiveCausticsSettings::from_json(&serde_json::json!({
-            "photons_w": 512, "photons_h": 512, "metric": "level", "atlas_size": 256
+    fn json_lays_blocks_over_the_defaults_and_names_moved_fields() {
+        let parse = |v: serde_json::Value| {
+            crate::frame::settings::from_json(
+                "adaptive-caustics",
+                &AdaptiveCausticsSettings::default(),
+                &earlier_form(&v),
+            )
+        };
+        let s: AdaptiveCausticsSettings = parse(serde_json::json!({
+            "frame": { "photons_w": 512, "photons_h": 512 },
+            "traversal": { "metric": "level" },
+            "atlas": { "atlas_size": 256 }
         }))
         .unwrap();
-        assert_eq!(s.map.photons_w, 512);
-        assert_eq!(s.map.atlas_size, 256);
-        assert_eq!(s.metric, AdaptiveMetric::Level);
+        assert_eq!(s.frame.photons_w, 512);
+        assert_eq!(s.frame.seed, AdaptiveCausticsSettings::default().frame.seed);
+        assert_eq!(s.atlas.atlas_size, 256);
+        assert_eq!(s.traversal.metric, AdaptiveMetric::Level);
         assert_eq!(s.finest_level(), 3);
         s.validate().unwrap();
-        let e = AdaptiveCausticsSettings::from_json(&serde_json::json!({ "photon_w": 512 }));
-        assert!(
-            matches!(&e, Err(Error::InvalidParameter(w)) if w.contains("photon_w")),
-            "an unknown field must be refused by name: {e:?}"
+        // the form of earlier versions: CausticMap's fields at the top (`knn_photons` the
+        // atlas's), the screen's shared fields in `screen`
+        let flat = parse(serde_json::json!({
+            "photons_w": 512, "metric": "level", "knn_photons": 8
+        }))
+        .unwrap();
+        assert_eq!(
+            (flat.frame.photons_w, flat.traversal.metric),
+            (512, AdaptiveMetric::Level)
         );
-        let ok = AdaptiveCausticsSettings::from_json(&serde_json::json!({ "photons_w": 512 }));
-        assert_eq!(ok.map(|s| s.map.photons_w).ok(), Some(512));
+        assert_eq!((flat.atlas.knn_photons, flat.screen.knn_photons), (8, 32));
+        let screen = parse(serde_json::json!({
+            "deposit": "screen", "screen": { "temporal": true, "filter": "bilateral" }
+        }))
+        .unwrap();
+        assert!(screen.frame.temporal);
+        assert_eq!(
+            screen.screen.filter,
+            crate::frame::receivers::screen::GatherFilter::Bilateral
+        );
+        let e = parse(serde_json::json!({ "photon_w": 512 }));
+        assert!(matches!(&e, Err(Error::InvalidParameter(w)) if w.contains("photon_w")));
     }
 
     #[test]
@@ -232,14 +305,12 @@ mod tests {
         s.validate().unwrap();
         assert_eq!(s.finest_level(), 4);
         assert_eq!(s.error_from_level(), 3);
-        s.map.photons_w = 1000;
-        s.map.photons_h = 1000;
+        (s.frame.photons_w, s.frame.photons_h) = (1000, 1000);
         assert!(s.validate().is_err());
-        s.map.photons_w = 1024;
-        s.map.photons_h = 512;
+        (s.frame.photons_w, s.frame.photons_h) = (1024, 512);
         assert!(s.validate().is_err());
-        s.map.photons_h = 1024;
-        s.map.fresnel_split = FresnelSplit::Deterministic;
+        s.frame.photons_h = 1024;
+        s.planes.fresnel_split = FresnelSplit::Deterministic;
         assert!(s.validate().is_err());
     }
 

@@ -1,4 +1,4 @@
-//! CausticMap (seed 001, "Real-time caustics via texture-space photon mapping"): photons
+//! CausticMap (Vanderstichelen 2021, "Real-time caustics via texture-space photon mapping"): photons
 //! shot from each light's view planes ([`crate::frame::emission::view_planes`]) deposit
 //! into the caustic atlas in the receivers' texture space
 //! ([`crate::frame::receivers::atlas`]), which the camera's lookup samples wherever a
@@ -8,7 +8,7 @@
 //!    a camera move): per light view plane and per batch `trace_photons` (the
 //!    `SURFACE_STORE` and `FUSED_DEPOSIT` variant: each stored photon's uv and triangle
 //!    go straight into the atlas's fixed-point sums; no photon buffer, no second pass),
-//!    then the atlas's gather (001's N x N gather fixed to keep flux, or the density
+//!    then the atlas's gather (Vanderstichelen 2021's N x N gather fixed to keep flux, or the density
 //!    gather on the atlas);
 //! 2. every frame: the frame host's `primary_gbuffer` and `direct_light`, then
 //!    `caustic_map_lookup` (the camera's specular ray tree reading the map), the opt-in
@@ -31,12 +31,15 @@
 //! Not built yet: a footprint carried through curved glass (the lookup unfolds the
 //! pixel's square along the path, blind to focusing).
 
+mod settings;
+
 pub use crate::frame::emission::view_planes::ViewPlanes;
 pub use crate::frame::receivers::atlas::settings::{
-    CausticMapOutputs, CausticMapSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather,
+    AtlasSettings, EmissionPlane, FresnelModel, FresnelSplit, MapGather, PlaneSettings,
     ATLAS_BYTES_PER_TEXEL, DENSITY_GATHER_BYTES_PER_TEXEL, MAX_ATLAS_SIZE,
 };
 pub use crate::frame::receivers::atlas::{atlas_gather_params, OUTPUTS};
+pub use settings::CausticMapSettings;
 
 use crate::backend::Backend;
 use crate::device::handle::ImageBuf;
@@ -44,13 +47,11 @@ use crate::device::layout::{AtlasTexel, TraceParams};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
 use crate::frame::image::Image;
+use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
 use crate::frame::receivers::accumulation_seed;
-use crate::frame::receivers::atlas::{
-    with_atlas, AtlasQuanta, AtlasReceiver, BOX_GATHER_PASSES, DENSITY_GATHER_PASSES,
-};
-use crate::frame::technique::OutputInfo;
+use crate::frame::receivers::atlas::{with_atlas, AtlasQuanta, AtlasReceiver};
 use crate::kernels::{FusedDeposit, TracePhotons, TraceVariant};
 use crate::recording::Recording;
 
@@ -97,7 +98,8 @@ fn view_planes(host: &FrameHost, settings: &CausticMapSettings) -> Result<ViewPl
         g.caster_bounds,
         g.caster_spheres,
         g.has_dispersion,
-        settings,
+        &settings.frame,
+        &settings.planes,
     );
     planes.check_light_flux()?;
     Ok(planes)
@@ -209,7 +211,7 @@ impl CausticMapPipeline {
         let a = self.receiver.atlas().expect("an atlas with its deposit");
         let s = &self.settings;
         // a new seed for every pass an accumulating atlas adds
-        let seed = accumulation_seed(s.seed, self.receiver.pass_index());
+        let seed = accumulation_seed(s.frame.seed, self.receiver.pass_index());
         self.receiver.record_clear(frame.rec());
         frame.stats.variants.push(crate::kernels::variant_label(
             "trace_photons",
@@ -226,7 +228,7 @@ impl CausticMapPipeline {
             // largest launch only
             let per_batch = crate::frame::allocation::photons_per_batch(
                 n,
-                s.max_photons_per_batch,
+                s.trace.max_photons_per_batch,
                 self.max_buffer_bytes,
             ) as u64;
             let mut first = 0u64;
@@ -237,18 +239,18 @@ impl CausticMapPipeline {
                     scene: host.scene(),
                     variant: self.variant,
                     params: TraceParams {
-                        split_budget: s.split_budget,
-                        fresnel_model: s.fresnel.kernel_value(),
+                        split_budget: s.planes.split_budget,
+                        fresnel_model: s.planes.fresnel.kernel_value(),
                         // the passes of an accumulation stratify each grid cell together
-                        jitter_seed: ViewPlanes::plane_seed(s.seed, *light, *k),
+                        jitter_seed: ViewPlanes::plane_seed(s.frame.seed, *light, *k),
                         stratum: self.receiver.pass_index(),
                         ..self.planes.trace_params(
                             plane,
                             *light,
                             (first as u32, count),
                             ViewPlanes::plane_seed(seed, *light, *k),
-                            s.max_bounces,
-                            s.min_relative_power,
+                            s.trace.max_bounces,
+                            s.trace.min_relative_power,
                         )
                     },
                     photons: a.photons,
@@ -274,14 +276,14 @@ impl CausticMapPipeline {
         frame.expect_photons(self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum());
         self.trace(host, frame);
         self.photon_passes += 1;
-        if self.settings.prune && host.receivers().is_some() {
+        if self.settings.frame.prune && host.receivers().is_some() {
             self.reach = Reach::Wanted(self.photon_passes);
         }
         self.receiver.record_gather(frame.rec());
         frame.counters_at_end(a.counters, self.planes.flux_quantum);
         frame.stats.accumulated_frames = self.receiver.end_photon_pass();
         // an accumulating atlas takes new photons every frame
-        self.atlas_valid = !self.settings.accumulate;
+        self.atlas_valid = !self.settings.frame.accumulate;
         Ok(())
     }
 }
@@ -297,7 +299,7 @@ impl Pipeline for CausticMapPipeline {
 
     fn host_options(settings: &CausticMapSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: true,
         }
     }
@@ -308,21 +310,22 @@ impl Pipeline for CausticMapPipeline {
         settings: CausticMapSettings,
     ) -> Result<CausticMapPipeline, Error> {
         let planes = view_planes(host, &settings)?;
-        let atlas = with_atlas(host, &settings, !planes.planes.is_empty());
-        host.make_screen(backend, AtlasReceiver::screen_needs(&settings, atlas))?;
+        let config = settings.atlas_config();
+        let atlas = with_atlas(host, &config, !planes.planes.is_empty());
+        host.make_screen(backend, AtlasReceiver::screen_needs(&config, atlas))?;
         let features = SceneFeatures::of(host.model());
         let mut variant = features.trace_variant();
         variant.surface_store = true;
         // the split only changes dielectrics: a scene without one runs the plain variant
         variant.fresnel_split =
-            settings.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
+            settings.planes.fresnel_split == FresnelSplit::Deterministic && features.dielectrics;
         variant.adaptive = false;
         // CausticMap's photons go straight into the atlas
         variant.fused_deposit = true;
         let receiver = AtlasReceiver::create(
             backend,
             host,
-            settings.clone(),
+            config,
             AtlasQuanta::of(&planes),
             atlas,
             &mut |_| {},
@@ -346,8 +349,8 @@ impl Pipeline for CausticMapPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        if seed != self.settings.seed {
-            self.settings.seed = seed;
+        if seed != self.settings.frame.seed {
+            self.settings.frame.seed = seed;
             self.receiver.set_seed(seed);
             self.atlas_valid = false;
         }
@@ -364,17 +367,7 @@ impl Pipeline for CausticMapPipeline {
         let photons = self.plan.trace_variant.is_some();
         if photons && self.receiver.atlas().is_some() {
             if self.atlas_valid {
-                for name in ["trace_photons", "refine_clusters"]
-                    .into_iter()
-                    .chain(BOX_GATHER_PASSES)
-                    .chain(DENSITY_GATHER_PASSES)
-                    .filter(|n| self.plan.runs(n))
-                {
-                    frame.stats.skip(
-                        name,
-                        "only the camera changed since the caustic atlas was made: it is reused",
-                    );
-                }
+                AtlasReceiver::skip_photon_passes(&self.plan, &mut frame.stats);
             } else {
                 self.photon_pass(host, frame)?;
             }
@@ -414,7 +407,7 @@ impl Pipeline for CausticMapPipeline {
         };
         let planes = view_planes(host, &self.settings)?;
         let had_photons = self.plan.trace_variant.is_some();
-        if planes.planes.is_empty() == had_photons && self.settings.prune {
+        if planes.planes.is_empty() == had_photons && self.settings.frame.prune {
             // photon passes start or stop: other buffers
             return Ok(Reaction::Rebuild);
         }
@@ -434,26 +427,25 @@ impl Pipeline for CausticMapPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
-        self.receiver.outputs()
+    fn own_outputs(&self) -> &'static [Output] {
+        &OUTPUTS
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
-        self.receiver
-            .read_output(backend, host, "caustic-map", name)
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.frame.outputs
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
-        self.receiver.output_image(host, "caustic-map", name)
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
+        self.receiver.output_image(host, output)
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        ("caustics_filtered", "caustics_raw")
+    fn read_data_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
+        debug_assert_eq!(output, Output::CausticAtlas);
+        self.receiver.read_atlas(backend)
+    }
+
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredCaustics, Output::RawCaustics)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -467,13 +459,6 @@ impl Pipeline for CausticMapPipeline {
 }
 
 impl Hosted<CausticMapPipeline> {
-    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
-    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
-    /// zeros.
-    pub fn read_output(&self, backend: &mut dyn Backend, name: &str) -> Result<Image, Error> {
-        self.read_output_named(backend, name)
-    }
-
     /// The atlas layout as the kernels read it now, per atlas texel (row-major):
     /// `[world area bits, tile]` ([`AtlasTexel`]; `NO_TILE` and area 0 outside the tiles),
     /// read back from the device; `None` without an atlas. With the `caustic_atlas`

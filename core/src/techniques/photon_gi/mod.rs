@@ -1,4 +1,4 @@
-//! PhotonGi (seed 003: Smal and Aizenshtein, "Real-Time Global Illumination with Photon
+//! PhotonGi (Smal 2019: Smal and Aizenshtein, "Real-Time Global Illumination with Photon
 //! Mapping", Ray Tracing Gems ch. 24): multi-bounce indirect light by photon splatting.
 //! One frame:
 //!
@@ -34,14 +34,13 @@ use crate::device::layout::{
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
 use crate::frame::host::{FrameHost, HostOptions};
-use crate::frame::image::Image;
 use crate::frame::irradiance_passes::{
     record_atrous, record_temporal_blend, AtrousScratch, History,
 };
+use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{BufferPlan, FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::screen::{DirectLighting, ScreenNeeds};
-use crate::frame::technique::OutputInfo;
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
     DepositScreen, ResolveCaustics, SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
@@ -54,18 +53,12 @@ use rsm::{PhotonPlan, RsmBuffers};
 /// geometric normal (there `s_max` bounds it anyway).
 pub const SHADING_EPSILON: f32 = 1e-4;
 
-/// The outputs, in order: name and what it holds (linear radiance, W/(sr m^2)).
-pub const OUTPUTS: [(&str, &str); 4] = [
-    ("composite", "direct light plus the filtered indirect light"),
-    ("direct", "direct light (with specular chains)"),
-    (
-        "indirect_raw",
-        "indirect light from the splats alone (no temporal or A-Trous filter)",
-    ),
-    (
-        "indirect",
-        "indirect light after the temporal and A-Trous filters",
-    ),
+/// PhotonGi's outputs (linear radiance, W/(sr m^2), the camera's size).
+pub const OUTPUTS: [Output; 4] = [
+    Output::Composite,
+    Output::Direct,
+    Output::RawIndirect,
+    Output::FilteredIndirect,
 ];
 
 /// PhotonGi on one backend, for one scene: the frame host and [`PhotonGiPipeline`].
@@ -88,17 +81,20 @@ fn scene_diagonal(b: &crate::math::geometry::Aabb) -> f32 {
     (b.max - b.min).length().max(f32::MIN_POSITIVE)
 }
 
-/// The camera images PhotonGi asks the host for: the G-buffer, the direct light with its
-/// specular chains, and the composite.
+/// The camera images PhotonGi asks the host for: the G-buffer, and as the requested
+/// outputs need them the direct light with its specular chains and the composite.
 fn screen_needs(s: &PhotonGiSettings) -> ScreenNeeds {
+    let keep = |requested: bool| requested || !s.frame.prune;
     ScreenNeeds {
         gbuffer: true,
-        direct: Some(DirectLighting {
-            max_specular_depth: s.max_specular_depth,
-            min_weight: 1e-4,
-            fresnel_model: s.fresnel_model,
-        }),
-        composite: true,
+        direct: keep(s.frame.outputs.any_of(&[Output::Direct, Output::Composite])).then_some(
+            DirectLighting {
+                max_specular_depth: s.frame.max_specular_depth,
+                min_weight: 1e-4,
+                fresnel_model: s.fresnel_model,
+            },
+        ),
+        composite: keep(s.frame.outputs.has(Output::Composite)),
     }
 }
 
@@ -151,12 +147,13 @@ impl Buffers {
         correct: bool,
     ) -> Buffers {
         let pixels = camera.width * camera.height;
-        let temporal = (settings.temporal && !settings.accumulate).then(|| TemporalBuffers {
-            image: PingPong::create(rec, pixels, "temporal indirect history"),
-            edge: PingPong::create(rec, pixels, "temporal edge history"),
-            previous: camera,
-        });
-        let atrous = (settings.atrous_iterations > 0).then(|| AtrousBuffers {
+        let temporal =
+            (settings.frame.temporal && !settings.frame.accumulate).then(|| TemporalBuffers {
+                image: PingPong::create(rec, pixels, "temporal indirect history"),
+                edge: PingPong::create(rec, pixels, "temporal edge history"),
+                previous: camera,
+            });
+        let atrous = (settings.frame.atrous_iterations > 0).then(|| AtrousBuffers {
             input: rec.create(pixels, "A-Trous input image"),
             a: rec.create(pixels, "A-Trous image a"),
             b: rec.create(pixels, "A-Trous image b"),
@@ -178,7 +175,7 @@ impl Buffers {
         } else {
             raw
         };
-        let total = settings.photons_w as u64 * settings.photons_h as u64;
+        let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
         Buffers {
@@ -236,11 +233,11 @@ fn make_plan(
     };
     let splat = s.estimator == IndirectEstimator::Splat;
     let deposit = s.estimator == IndirectEstimator::Deposit;
-    let atrous = s.atrous_iterations > 0;
+    let atrous = s.frame.atrous_iterations > 0;
     FramePlan {
-        prune: true,
+        prune: s.frame.prune,
         features: SceneFeatures::of(host.model()),
-        outputs: OUTPUTS.iter().map(|o| o.0.to_string()).collect(),
+        outputs: s.frame.outputs.names(&OUTPUTS),
         lights: rsms
             .iter()
             .map(|r| LightPlan {
@@ -267,7 +264,17 @@ fn make_plan(
         trace_variant: None,
         passes: vec![
             pass("primary_gbuffer", true, "camera and RSM faces"),
-            pass("direct_light", true, "the composite's direct part"),
+            if !s.frame.prune {
+                pass("direct_light", true, "pruning off: every pass runs")
+            } else if s.frame.outputs.any_of(&[Output::Direct, Output::Composite]) {
+                pass("direct_light", true, "direct or composite requested")
+            } else {
+                pass(
+                    "direct_light",
+                    false,
+                    "neither direct nor composite requested",
+                )
+            },
             pass("rsm_importance", any, photons),
             pass("sample_rsm", any, photons),
             pass("trace_indirect", any, photons),
@@ -292,10 +299,10 @@ fn make_plan(
             pass("resolve_caustics", true, "irradiance to radiance"),
             pass(
                 "temporal_blend",
-                s.temporal && !s.accumulate,
-                if s.accumulate {
+                s.frame.temporal && !s.frame.accumulate,
+                if s.frame.accumulate {
                     "accumulate: the photon map holds the frames' photons"
-                } else if s.temporal {
+                } else if s.frame.temporal {
                     "setting temporal"
                 } else {
                     "temporal off"
@@ -323,7 +330,13 @@ fn make_plan(
                     "every vertex normal is its triangle's geometric normal: the factor is 1"
                 },
             ),
-            pass("composite", true, "direct plus indirect"),
+            if !s.frame.prune {
+                pass("composite", true, "pruning off: every pass runs")
+            } else if s.frame.outputs.has(Output::Composite) {
+                pass("composite", true, "direct plus indirect")
+            } else {
+                pass("composite", false, "composite not requested")
+            },
         ],
         buffers,
     }
@@ -374,7 +387,7 @@ impl PhotonGiPipeline {
     /// With progressive accumulation, this frame's index among those the photon map holds
     /// (0 without, and at an accumulation's first frame).
     fn frame_index(&self) -> u32 {
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated
         } else {
             0
@@ -383,7 +396,7 @@ impl PhotonGiPipeline {
 
     /// This frame's photon seed (a new one for every frame an accumulation adds).
     fn frame_seed(&self) -> u32 {
-        crate::frame::receivers::accumulation_seed(self.settings.seed, self.frame_index())
+        crate::frame::receivers::accumulation_seed(self.settings.frame.seed, self.frame_index())
     }
 
     /// The splat's parameters for camera `cam`.
@@ -456,10 +469,8 @@ impl PhotonGiPipeline {
     fn record_light(&self, rec: &mut Recording, host: &FrameHost, r: &LightRsm, store: u32) {
         let b = &self.buffers;
         let scene = host.scene();
-        let seeded = PhotonGiSettings {
-            seed: self.frame_seed(),
-            ..self.settings.clone()
-        };
+        let mut seeded = self.settings.clone();
+        seeded.frame.seed = self.frame_seed();
         let params = rsm::record_rsm(rec, scene, &b.rsm, &seeded, r);
         rec.kernel(SampleRsm {
             params: RsmParams {
@@ -518,8 +529,8 @@ impl PhotonGiPipeline {
                 cam,
                 gbuffer,
                 scratch,
-                self.settings.atrous_iterations,
-                self.settings.atrous_clip_sigmas,
+                self.settings.frame.atrous_iterations,
+                self.settings.frame.atrous_clip_sigmas,
                 input,
                 target,
             );
@@ -583,7 +594,7 @@ impl Pipeline for PhotonGiPipeline {
 
     fn host_options(settings: &PhotonGiSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: false,
         }
     }
@@ -630,10 +641,10 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        if seed != self.settings.seed {
+        if seed != self.settings.frame.seed {
             self.accumulated = 0;
         }
-        self.settings.seed = seed;
+        self.settings.frame.seed = seed;
     }
 
     /// The frame's recordings in order, each with the photons it traces: visibility and
@@ -696,7 +707,7 @@ impl Pipeline for PhotonGiPipeline {
             t.edge.swap();
             t.previous = cam;
         }
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated += 1;
             frame.stats.accumulated_frames = self.accumulated;
         }
@@ -739,45 +750,27 @@ impl Pipeline for PhotonGiPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
-        OUTPUTS
-            .iter()
-            .map(|(name, description)| OutputInfo {
-                name,
-                description,
-                requested: true,
-                camera_space: true,
-            })
-            .collect()
+    fn own_outputs(&self) -> &'static [Output] {
+        &OUTPUTS
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
-        host.read_output_image(backend, self.output_image(host, name)?)
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.frame.outputs
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
         let b = &self.buffers;
-        Ok(match name {
-            "composite" => host.screen().composite,
-            "direct" => host.screen().direct,
-            "indirect_raw" => Some(b.raw),
-            "indirect" => Some(b.indirect),
-            _ => {
-                return Err(Error::InvalidParameter(format!(
-                    "photon-gi has no output '{name}'; outputs: {}",
-                    OUTPUTS.map(|o| o.0).join(", ")
-                )))
-            }
-        })
+        match output {
+            Output::Composite => host.screen().composite,
+            Output::Direct => host.screen().direct,
+            Output::RawIndirect => Some(b.raw),
+            Output::FilteredIndirect => Some(b.indirect),
+            _ => None,
+        }
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        ("indirect", "indirect_raw")
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredIndirect, Output::RawIndirect)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -790,15 +783,6 @@ impl Pipeline for PhotonGiPipeline {
 }
 
 impl Hosted<PhotonGiPipeline> {
-    /// Reads output `name` back (see [`OUTPUTS`]: linear radiance, the camera's size).
-    pub fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        name: &str,
-    ) -> Result<crate::frame::image::Image, Error> {
-        self.read_output_named(backend, name)
-    }
-
     /// The lights' RSMs and photon counts.
     pub fn light_rsms(&self) -> &[LightRsm] {
         &self.pipeline().photons.rsms

@@ -1,4 +1,4 @@
-//! PhotonGi's reflective shadow maps and photon planning (seed 003 section 24.2): each
+//! PhotonGi's reflective shadow maps and photon planning (Smal 2019, section 24.2): each
 //! light's RSM faces ([`rsm_faces`]), the photons allocated over the lights by power
 //! ([`crate::math::photon_allocation`]), and the probe that leaves out a light whose RSM
 //! sees no texel that leaves flux ([`plan_photons`], at creation and on updates, never per
@@ -102,7 +102,7 @@ pub fn rsm_faces(
     }
 }
 
-/// A light's power for the allocation (003 section 24.2): the luminance of its
+/// A light's power for the allocation (Smal 2019, section 24.2): the luminance of its
 /// intensity times the solid angle it emits into (W).
 fn light_power(l: &GpuLight) -> f64 {
     let i = luminance(Vec3::from_slice(&l.intensity[..3])).max(0.0) as f64;
@@ -126,7 +126,7 @@ pub(super) struct PhotonPlan {
 }
 
 /// The lights' RSMs and photon counts for `total` initial photons (allocated by power,
-/// 003 section 24.2, over the lights whose RSM sees something: `sees`, one flag per
+/// Smal 2019, section 24.2, over the lights whose RSM sees something: `sees`, one flag per
 /// light, all true when not yet known), the unit of the packed photon power and the
 /// photon map's flux quantum.
 fn plan_lights(
@@ -181,7 +181,7 @@ impl RsmBuffers {
     /// Records the creation of the RSM buffers for `settings`.
     pub fn create(rec: &mut Recording, settings: &PhotonGiSettings) -> RsmBuffers {
         let side = settings.rsm_size;
-        let total = settings.photons_w as u64 * settings.photons_h as u64;
+        let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
         let max_faces = 6u32;
         let max_photons = total.min(u32::MAX as u64) as u32;
         RsmBuffers {
@@ -203,7 +203,7 @@ pub(super) fn record_rsm(
     r: &LightRsm,
 ) -> RsmParams {
     let side = settings.rsm_size;
-    let seed = crate::math::rng::random_u32(settings.seed, r.light, 0, 7);
+    let seed = crate::math::rng::random_u32(settings.frame.seed, r.light, 0, 7);
     let mut params = RsmParams {
         light: r.light,
         side,
@@ -290,7 +290,7 @@ pub(super) fn plan_photons(
         .map(crate::device::device_scene::gpu_light)
         .collect();
     let bounds = host.geometry().bounds;
-    let total = settings.photons_w as u64 * settings.photons_h as u64;
+    let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
     let side = settings.rsm_size;
     let by_power = plan_lights(&lights, total, side, &bounds, &[]);
     let sees = probe_rsms(backend, host.scene(), b, settings, &by_power.rsms)?;

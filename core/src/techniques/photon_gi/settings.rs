@@ -1,7 +1,8 @@
-//! Every parameter of PhotonGi, with its defaults (seed 003 where it gives them) and
+//! Every parameter of PhotonGi, with its defaults (Smal 2019 where it gives them) and
 //! validation.
 
 use crate::frame::error::Error;
+use crate::frame::settings::{FrameSettings, TechniqueSettings};
 use crate::math::optics::fresnel_model;
 use serde::{Deserialize, Serialize};
 
@@ -22,7 +23,7 @@ pub enum IndirectEstimator {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RsmSampling {
-    /// By importance `luminance(flux x albedo)`, Clarberg's hierarchical warp (003 section
+    /// By importance `luminance(flux x albedo)`, Clarberg's hierarchical warp (Smal 2019, section
     /// 24.2.1): the technique.
     #[default]
     Importance,
@@ -45,13 +46,11 @@ impl RsmSampling {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PhotonGiSettings {
-    /// Initial photons per frame, over all lights, are `photons_w x photons_h` (003's
-    /// "high" setting: 3 million, about 1732^2; "low": 1 million, 1024^2), allocated to
-    /// the lights in proportion to their power.
-    pub photons_w: u32,
-    /// See `photons_w`.
-    pub photons_h: u32,
-    /// Diffuse bounces of a path, the RSM's included (003: 3 "high", 1 "low"): photons
+    /// What every technique shares: photon grid (the photons of all lights, split by
+    /// power), seed, accumulation, the temporal blend and A-Trous iterations (on by
+    /// default: the chapter's), outputs, pruning, the camera's specular chains.
+    pub frame: FrameSettings,
+    /// Diffuse bounces of a path, the RSM's included (Smal 2019: 3 "high", 1 "low"): photons
     /// are stored at the hits after bounces 1 ..= `bounces`.
     pub bounces: u32,
     /// Most ray segments of a path (bounds mirror and glass chains).
@@ -84,38 +83,24 @@ pub struct PhotonGiSettings {
     /// Most pixels from a splat's centre to its edge (a cost bound; larger splats are
     /// clipped and counted as saturated).
     pub max_splat_px: u32,
-    /// The temporal accumulation (003 section 24.4.1) over reprojected history (left out
-    /// with `accumulate`, whose photon map holds the history).
-    pub temporal: bool,
-    /// Progressive accumulation for a still camera, lights and scene: the photon map keeps
-    /// every frame's photons (each frame's seeded anew), so N frames of M photons resolve
-    /// as one frame of N x M; a moved camera, light, object or material, new settings or
-    /// a new seed start again.
-    pub accumulate: bool,
-    /// A-Trous iterations after it (003 section 24.4.2; default 4, 0 turns it off).
-    pub atrous_iterations: u32,
-    /// Eq. 18's variance clipping of the detail coefficients, in standard deviations.
-    pub atrous_clip_sigmas: f32,
-    /// Eq. 20's shading-normal correction (003 section 24.4.3): the splats' power-weighted
+    /// Eq. 20's shading-normal correction (Smal 2019, section 24.4.3): the splats' power-weighted
     /// light direction against the shading normal instead of the geometric one. Runs only
     /// where the scene has vertex normals that depart from the geometric ones and with the
     /// splat estimator (the plan says why not).
     pub shading_normals: bool,
     /// Reflectance of dielectric interfaces ([`fresnel_model`]).
     pub fresnel_model: u32,
-    /// Longest specular chain followed from a mirror or glass pixel in `direct_light`.
-    pub max_specular_depth: u32,
-    /// Frame seed.
-    pub seed: u32,
-    /// Most triangles the tessellated scene may have.
-    pub max_triangles: u64,
 }
 
 impl Default for PhotonGiSettings {
     fn default() -> Self {
         PhotonGiSettings {
-            photons_w: 1024,
-            photons_h: 1024,
+            frame: FrameSettings {
+                temporal: true,
+                atrous_iterations: 4,
+                max_specular_depth: 4,
+                ..FrameSettings::seeded(1)
+            },
             bounces: 3,
             max_segments: 16,
             rsm_size: 256,
@@ -130,16 +115,19 @@ impl Default for PhotonGiSettings {
             estimator: IndirectEstimator::Splat,
             rsm_sampling: RsmSampling::Importance,
             max_splat_px: 48,
-            temporal: true,
-            accumulate: false,
-            atrous_iterations: 4,
-            atrous_clip_sigmas: 1.0,
             shading_normals: true,
             fresnel_model: fresnel_model::EXACT,
-            max_specular_depth: 4,
-            seed: 1,
-            max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
         }
+    }
+}
+
+impl TechniqueSettings for PhotonGiSettings {
+    fn frame(&self) -> &FrameSettings {
+        &self.frame
+    }
+
+    fn frame_mut(&mut self) -> &mut FrameSettings {
+        &mut self.frame
     }
 }
 
@@ -147,7 +135,9 @@ impl PhotonGiSettings {
     /// Refuses values the kernels cannot run with, each by name.
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: &str| Err(Error::InvalidParameter(format!("photon-gi: {what}")));
-        let total = self.photons_w as u64 * self.photons_h as u64;
+        self.frame.validate()?;
+        self.frame.check_outputs("photon-gi", &super::OUTPUTS)?;
+        let total = self.frame.photons();
         if total == 0 || total > (1 << 28) {
             return bad("photons_w x photons_h must be in 1..=2^28");
         }
@@ -184,20 +174,11 @@ impl PhotonGiSettings {
         if !(self.max_stretch >= 1.0 && self.max_stretch.is_finite()) {
             return bad("max_stretch must be >= 1");
         }
-        if self.atrous_iterations > 8 {
-            return bad("atrous_iterations must be in 0..=8");
-        }
-        if !(self.atrous_clip_sigmas > 0.0 && self.atrous_clip_sigmas.is_finite()) {
-            return bad("atrous_clip_sigmas must be > 0");
+        if !(self.frame.atrous_clip_sigmas > 0.0) {
+            return bad("frame.atrous_clip_sigmas must be > 0");
         }
         if self.fresnel_model > fresnel_model::SCHLICK {
             return bad("fresnel_model must be 0 (exact) or 1 (Schlick)");
-        }
-        if self.max_specular_depth > crate::kernels::MAX_SPECULAR_DEPTH {
-            return bad("max_specular_depth is above the kernels' limit");
-        }
-        if self.max_triangles == 0 {
-            return bad("max_triangles must be >= 1");
         }
         Ok(())
     }

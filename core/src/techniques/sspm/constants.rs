@@ -91,7 +91,7 @@ impl FrameConstants {
             let i = i as u32;
             match emission_domain(l, caster_bounds, bounds, settings.point_emission) {
                 Ok(domain) => domains.push((i, domain)),
-                Err(why) => match unpruned_domain(l, bounds).filter(|_| !settings.prune) {
+                Err(why) => match unpruned_domain(l, bounds).filter(|_| !settings.frame.prune) {
                     Some(domain) => {
                         domains.push((i, domain));
                         unpruned.push(i);
@@ -100,7 +100,7 @@ impl FrameConstants {
                 },
             }
         }
-        let photons_per_light = settings.photons_w as f32 * settings.photons_h as f32;
+        let photons_per_light = settings.frame.photons_w as f32 * settings.frame.photons_h as f32;
         let dispersion_gain = if has_dispersion { 3.0 } else { 1.0 };
         // Lights that emit only because pruning is off store no photon (that is why the
         // plan prunes them), so the quantum ignores them and stays the pruned frame's:
@@ -114,7 +114,7 @@ impl FrameConstants {
         let quanta = ScreenQuanta::new(
             bounds,
             power_of_two_quantum(max_photon_flux),
-            &settings.screen(),
+            &settings.screen,
         );
         FrameConstants {
             domains,
@@ -151,11 +151,11 @@ impl FrameConstants {
     ) -> TraceParams {
         let mut p = d.trace_params(
             light,
-            (settings.photons_w, settings.photons_h),
+            (settings.frame.photons_w, settings.frame.photons_h),
             (first, count),
-            settings.seed ^ pcg_hash(light.wrapping_add(0x6c62_272e)),
-            settings.max_bounces,
-            settings.min_relative_power,
+            settings.frame.seed ^ pcg_hash(light.wrapping_add(0x6c62_272e)),
+            settings.trace.max_bounces,
+            settings.trace.min_relative_power,
             self.flux_quantum,
         );
         self.caster_spheres.apply(&mut p);
@@ -170,7 +170,7 @@ impl FrameConstants {
         photon_capacity: u32,
     ) -> DepositParams {
         self.quanta()
-            .deposit_params(camera, &settings.screen(), photon_capacity)
+            .deposit_params(camera, &settings.screen, photon_capacity)
     }
 
     /// The gathers' parameters (`axis` 0: horizontal pass).
@@ -180,8 +180,7 @@ impl FrameConstants {
         settings: &SspmSettings,
         axis: u32,
     ) -> GatherParams {
-        self.quanta()
-            .gather_params(camera, &settings.screen(), axis)
+        self.quanta().gather_params(camera, &settings.screen, axis)
     }
 
     /// `direct_light` parameters.
@@ -190,14 +189,12 @@ impl FrameConstants {
         light_count: u32,
         settings: &SspmSettings,
     ) -> DirectParams {
-        settings
-            .screen()
-            .direct_lighting()
+        crate::frame::receivers::screen::direct_lighting(&settings.frame)
             .params(camera, light_count)
     }
 }
 
-/// The plan of every light of `constants`' emission (seed 000's projection volumes):
+/// The plan of every light of `constants`' emission (Kim 2019's projection volumes):
 /// whether it emits and why.
 pub fn volume_light_plans(constants: &FrameConstants) -> Vec<LightPlan> {
     let mut lights: Vec<LightPlan> = constants

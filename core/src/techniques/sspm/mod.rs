@@ -1,4 +1,4 @@
-//! Screen-space photon mapping (`Sspm`, seed 000): seed 000's projection volumes
+//! Screen-space photon mapping (`Sspm`, Kim 2019): Kim 2019's projection volumes
 //! ([`crate::frame::emission::projection_volume`]) emit photons that the screen receiver
 //! ([`crate::frame::receivers::screen`]) deposits, resolves, filters and composites over
 //! the frame host's direct light. Per frame:
@@ -6,10 +6,10 @@
 //! 1. `primary_gbuffer`, `direct_light` (the frame host's);
 //! 2. per light and per batch: `trace_photons` (emit, trace through specular chains, store
 //!    photons on diffuse surfaces after >= 1 specular interaction) then `deposit_screen`
-//!    (one photon -> one pixel, fixed-point integer sums; 000 section 30.3.1.3), or the
+//!    (one photon -> one pixel, fixed-point integer sums; Kim 2019, section 30.3.1.3), or the
 //!    fused trace that deposits where each path ends;
-//! 3. `resolve_caustics` (flux -> radiance, 000 Eq. 5: the raw caustics), the filter, the
-//!    opt-in temporal blend and A-Trous iterations, then `composite` (000 section 30.3.3).
+//! 3. `resolve_caustics` (flux -> radiance, Kim 2019, Eq. 5: the raw caustics), the filter, the
+//!    opt-in temporal blend and A-Trous iterations, then `composite` (Kim 2019, section 30.3.3).
 //!
 //! Photons are processed in batches of at most `max_photons_per_batch`, so the photon
 //! buffer never exceeds `32 * max_photons_per_batch` bytes; every batch is deposited before
@@ -18,9 +18,8 @@
 mod constants;
 mod settings;
 
-pub use crate::frame::receivers::screen::{
-    plan_frame, FrameImages, GatherFilter, Needs, Output, Outputs,
-};
+pub use crate::frame::output::{Output, Outputs};
+pub use crate::frame::receivers::screen::{plan_frame, FrameImages, GatherFilter, Needs};
 pub use constants::{volume_light_plans, FrameConstants};
 pub use settings::SspmSettings;
 
@@ -35,7 +34,6 @@ use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::FramePlan;
 use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::ScreenReceiver;
-use crate::frame::technique::OutputInfo;
 use crate::kernels::{DepositScreen, FusedDeposit, ScreenDeposit, TracePhotons};
 use crate::recording::Recording;
 
@@ -84,12 +82,12 @@ fn frame_setup(
     let mut plan = plan_frame(
         host.model(),
         lights,
-        settings.outputs,
-        settings.prune,
+        settings.frame.outputs,
+        settings.frame.prune,
         (
-            settings.filter,
-            settings.temporal,
-            settings.atrous_iterations > 0,
+            settings.screen.filter,
+            settings.frame.temporal,
+            settings.frame.atrous_iterations > 0,
         ),
     );
     if settings.fused_deposit {
@@ -145,12 +143,11 @@ impl SspmPipeline {
             return;
         };
         let deposit_params = self.receiver.deposit_params(host.camera(), p.photons.len);
-        let per_light = self.settings.photons_w as u64 * self.settings.photons_h as u64;
+        let per_light = self.settings.frame.photons();
         // a new seed for every frame an accumulating photon map adds
-        let settings = SspmSettings {
-            seed: accumulation_seed(self.settings.seed, self.receiver.frame_index()),
-            ..self.settings.clone()
-        };
+        let mut settings = self.settings.clone();
+        settings.frame.seed =
+            accumulation_seed(self.settings.frame.seed, self.receiver.frame_index());
         for (light, d) in &self.constants.domains {
             frame.stats.photons_emitted += per_light;
             for c in 0..3 {
@@ -218,7 +215,7 @@ impl Pipeline for SspmPipeline {
 
     fn host_options(settings: &SspmSettings) -> HostOptions {
         HostOptions {
-            max_triangles: settings.max_triangles,
+            max_triangles: settings.frame.max_triangles,
             atlas_receivers: false,
         }
     }
@@ -230,15 +227,17 @@ impl Pipeline for SspmPipeline {
     ) -> Result<SspmPipeline, Error> {
         let (constants, plan) = frame_setup(host, &settings)?;
         let needs = Needs::of_plan(&plan);
-        let screen = settings.screen();
-        host.make_screen(backend, ScreenReceiver::screen_needs(needs, &screen))?;
+        host.make_screen(
+            backend,
+            ScreenReceiver::screen_needs(needs, &settings.frame),
+        )?;
         let camera = host.camera();
         let mut rec = Recording::new();
         let photons = needs.photons.then(|| {
-            let per_light = settings.photons_w as u64 * settings.photons_h as u64;
+            let per_light = settings.frame.photons();
             let batch = crate::frame::allocation::photons_per_batch(
                 per_light,
-                settings.max_photons_per_batch,
+                settings.trace.max_photons_per_batch,
                 backend.capabilities().max_buffer_bytes,
             );
             // the fused deposit stores no photon
@@ -249,7 +248,14 @@ impl Pipeline for SspmPipeline {
                 photon_count: rec.create(1, "photon count"),
             }
         });
-        let receiver = ScreenReceiver::create(&mut rec, camera, &plan, screen, constants.quanta());
+        let receiver = ScreenReceiver::create(
+            &mut rec,
+            camera,
+            &plan,
+            &settings.frame,
+            settings.screen.clone(),
+            constants.quanta(),
+        );
         let alloc = allocate(backend, &rec, Some((camera.width, camera.height)))?;
         let mut p = SspmPipeline {
             settings,
@@ -268,7 +274,7 @@ impl Pipeline for SspmPipeline {
     }
 
     fn set_seed(&mut self, seed: u32) {
-        self.settings.seed = seed;
+        self.settings.frame.seed = seed;
     }
 
     fn record(
@@ -331,25 +337,20 @@ impl Pipeline for SspmPipeline {
         &self.plan
     }
 
-    fn outputs(&self) -> Vec<OutputInfo> {
-        self.receiver.outputs()
+    fn own_outputs(&self) -> &'static [Output] {
+        &ScreenReceiver::OUTPUTS
     }
 
-    fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        name: &str,
-    ) -> Result<Image, Error> {
-        self.receiver.read_output(backend, host, "sspm", name)
+    fn requested_outputs(&self) -> Outputs {
+        self.settings.frame.outputs
     }
 
-    fn output_image(&self, host: &FrameHost, name: &str) -> Result<Option<ImageBuf>, Error> {
-        self.receiver.output_image(host, "sspm", name)
+    fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
+        self.receiver.image(host, output)
     }
 
-    fn estimate_outputs(&self) -> (&'static str, &'static str) {
-        (Output::FilteredCaustics.stem(), Output::RawCaustics.stem())
+    fn estimate_outputs(&self) -> (Output, Output) {
+        (Output::FilteredCaustics, Output::RawCaustics)
     }
 
     fn free(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
@@ -389,19 +390,8 @@ impl Hosted<SspmPipeline> {
             .map(|b| (b.photons, b.photon_count))
     }
 
-    /// Reads one of the frame's outputs back. An output the plan knows to be zero (no
-    /// light emits photons) has no device buffer and reads as zeros; one that was not
-    /// requested in [`SspmSettings::outputs`] is an error.
-    pub fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
-        self.pipeline().receiver.read(backend, self.host(), output)
-    }
-
     /// Reads a device image of the camera's size back to the host.
-    pub fn read_image(
-        &self,
-        backend: &mut dyn Backend,
-        image: ImageBuf,
-    ) -> Result<Image, Error> {
+    pub fn read_image(&self, backend: &mut dyn Backend, image: ImageBuf) -> Result<Image, Error> {
         self.host().read_image(backend, image)
     }
 }

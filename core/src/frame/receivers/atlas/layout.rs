@@ -1,10 +1,10 @@
-//! The caustic atlas (seed 001 section 3.2, "render caustic map"): one texture in which
+//! The caustic atlas (Vanderstichelen 2021, section 3.2, "render caustic map"): one texture in which
 //! every diffuse receiver owns a square tile, addressed by the receiver's UVs, so that a
 //! photon landing on a receiver deposits into the texel under its hit's UV and any camera
 //! path ending on that receiver reads it back (CausticMap's final pass, AdaptiveCaustics'
 //! default deposit target).
 //!
-//! **Tile sizes.** 001 gives every receiver its own map; one atlas (default 2048 x 2048,
+//! **Tile sizes.** Vanderstichelen 2021 gives every receiver its own map; one atlas (default 2048 x 2048,
 //! the source's map size) holds them all here, each receiver's tile side proportional to
 //! the square root of its world area, so that every receiver gets (about) the same *texel
 //! density* `rho` (texels per scene unit^2). [`plan_atlas`] finds the largest `rho` whose

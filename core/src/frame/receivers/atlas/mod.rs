@@ -1,6 +1,6 @@
-//! Seed 001's caustic map as a receiver: photons deposited into the diffuse receivers'
+//! Vanderstichelen 2021's caustic map as a receiver: photons deposited into the diffuse receivers'
 //! texture space (one atlas of tiles, fixed-point sums per texel), gathered into
-//! irradiance (001's N x N gather fixed to keep flux, or the density-adaptive gather on
+//! irradiance (Vanderstichelen 2021's N x N gather fixed to keep flux, or the density-adaptive gather on
 //! the atlas), and looked up by the camera's specular ray tree (`caustic_map_lookup`),
 //! directly, in mirrors and through glass; then the opt-in temporal blend and A-Trous
 //! iterations and the composite over the frame host's direct light.
@@ -24,11 +24,11 @@ use crate::device::layout::{
     MapLookupParams, Photon,
 };
 use crate::frame::allocation::{planned_allocation, Allocation};
-use crate::frame::emission::adaptive::AtlasTarget;
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::image::Image;
 use crate::frame::irradiance_passes::FilterChain;
+use crate::frame::output::Output;
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::screen::{DirectLighting, ScreenNeeds};
 use crate::kernels::{
@@ -37,7 +37,7 @@ use crate::kernels::{
 };
 use crate::recording::Recording;
 use layout::{AtlasLayout, AtlasReceivers};
-use settings::{CausticMapSettings, MapGather};
+use settings::{AtlasConfig, MapGather};
 
 /// The photon passes of each gather, in order (a frame that reuses the atlas skips them).
 pub const BOX_GATHER_PASSES: [&str; 1] = ["gather_caustic_map"];
@@ -45,29 +45,14 @@ pub const BOX_GATHER_PASSES: [&str; 1] = ["gather_caustic_map"];
 pub const DENSITY_GATHER_PASSES: [&str; 3] =
     ["photon_count_table", "gather_footprint", "density_gather"];
 
-/// One output image of the caustic map: the names are the screen receiver's, so that
-/// every technique writes the same files, plus the atlas.
-pub const OUTPUTS: [(&str, &str); 5] = [
-    (
-        "composite",
-        "direct light + caustics from the gathered caustic map",
-    ),
-    (
-        "direct",
-        "direct light alone (shadow rays, specular chains)",
-    ),
-    (
-        "caustics_raw",
-        "caustic radiance from the raw caustic map, as the camera sees it",
-    ),
-    (
-        "caustics_filtered",
-        "caustic radiance from the gathered caustic map, as the camera sees it",
-    ),
-    (
-        "caustic_atlas",
-        "the gathered caustic map: irradiance (W/m^2) per atlas texel",
-    ),
+/// The outputs of the caustic map: the screen receiver's, so that every technique writes
+/// the same files, plus the atlas.
+pub const OUTPUTS: [Output; 5] = [
+    Output::Composite,
+    Output::Direct,
+    Output::RawCaustics,
+    Output::FilteredCaustics,
+    Output::CausticAtlas,
 ];
 
 /// The fixed-point quanta of the atlas's sums (the emission's).
@@ -89,31 +74,31 @@ impl AtlasQuanta {
     }
 }
 
-/// The density gather's parameters on an atlas of `settings.atlas_size` texels a side
+/// The density gather's parameters on an atlas of `settings.atlas.atlas_size` texels a side
 /// (`gather: density`; `axis` 0: the row pass, 1: the column pass): the atlas is the
 /// grid, edge weights only keep the gather inside a tile
 /// ([`ATLAS_SIGMA_DEPTH`](crate::math::density_gather::ATLAS_SIGMA_DEPTH), no normal term),
 /// the quanta are the atlas sums'.
 pub fn atlas_gather_params(
-    settings: &CausticMapSettings,
+    settings: &AtlasConfig,
     flux_quantum: f32,
     hit_distance_quantum: f32,
     axis: u32,
 ) -> GatherParams {
     GatherParams {
         camera: GpuCamera {
-            width: settings.atlas_size,
-            height: settings.atlas_size,
+            width: settings.atlas.atlas_size,
+            height: settings.atlas.atlas_size,
             ..Default::default()
         },
-        max_radius_px: settings.max_radius_texels,
+        max_radius_px: settings.atlas.max_radius_texels,
         sigma_depth: crate::math::density_gather::ATLAS_SIGMA_DEPTH,
         normal_power: 0.0,
         axis,
         hit_distance_quantum,
-        knn_photons: settings.knn_photons,
+        knn_photons: settings.atlas.knn_photons,
         flux_quantum,
-        table_block: crate::math::density_gather::table_block(settings.max_radius_texels),
+        table_block: crate::math::density_gather::table_block(settings.atlas.max_radius_texels),
         surface: gather_surface::ATLAS,
         ..Default::default()
     }
@@ -192,7 +177,7 @@ struct CameraImages {
 /// The caustic-map receiver of one technique.
 #[derive(Debug)]
 pub struct AtlasReceiver {
-    settings: CausticMapSettings,
+    settings: AtlasConfig,
     quanta: AtlasQuanta,
     /// Per receiver (in the host's receivers order): whether it owns a tile now.
     tiled: Vec<bool>,
@@ -207,15 +192,20 @@ pub struct AtlasReceiver {
 
 /// Whether a frame of `host`'s scene with `settings` has an atlas: casters, receivers, a
 /// light that emits (`emits`) and a caustic output, or pruning off.
-pub fn with_atlas(host: &FrameHost, settings: &CausticMapSettings, emits: bool) -> bool {
+pub fn with_atlas(host: &FrameHost, settings: &AtlasConfig, emits: bool) -> bool {
     let features = SceneFeatures::of(host.model());
     let casters = features.mirrors || features.dielectrics;
-    let o = &settings.outputs;
-    let wants = o.composite || o.raw_caustics || o.filtered_caustics || o.atlas;
+    let o = &settings.frame.outputs;
+    let wants = o.any_of(&[
+        Output::Composite,
+        Output::RawCaustics,
+        Output::FilteredCaustics,
+        Output::CausticAtlas,
+    ]);
     casters
         && host.receivers().is_some()
-        && (emits || !settings.prune)
-        && (wants || !settings.prune)
+        && (emits || !settings.frame.prune)
+        && (wants || !settings.frame.prune)
 }
 
 /// Lays the atlas out for the receivers flagged in `include`; a receiver whose UVs cannot
@@ -238,24 +228,40 @@ fn lay_out(
 }
 
 impl AtlasReceiver {
+    /// A frame that reuses the atlas (only the camera changed since it was made): each
+    /// photon pass `plan` runs is skipped, with the reason, in `stats`.
+    pub fn skip_photon_passes(plan: &FramePlan, stats: &mut crate::frame::stats::FrameStats) {
+        for name in ["trace_photons", "refine_clusters"]
+            .into_iter()
+            .chain(BOX_GATHER_PASSES)
+            .chain(DENSITY_GATHER_PASSES)
+            .filter(|n| plan.runs(n))
+        {
+            stats.skip(
+                name,
+                "only the camera changed since the caustic atlas was made: it is reused",
+            );
+        }
+    }
+
     /// The camera images the host makes for `settings` (with an atlas: `caustics`): the
     /// G-buffer where direct light or a filter reads it, the direct image where direct or
     /// composite is asked for, the composite with caustics.
-    pub fn screen_needs(settings: &CausticMapSettings, caustics: bool) -> ScreenNeeds {
-        let o = settings.outputs;
-        let keep = |x: bool| x || !settings.prune;
-        let direct = keep(o.direct || o.composite);
+    pub fn screen_needs(settings: &AtlasConfig, caustics: bool) -> ScreenNeeds {
+        let o = settings.frame.outputs;
+        let keep = |x: bool| x || !settings.frame.prune;
+        let direct = keep(o.any_of(&[Output::Direct, Output::Composite]));
         let filters = caustics
-            && keep(o.filtered_caustics || o.composite)
-            && (settings.temporal || settings.atrous_iterations > 0);
+            && keep(o.any_of(&[Output::FilteredCaustics, Output::Composite]))
+            && (settings.frame.temporal || settings.frame.atrous_iterations > 0);
         ScreenNeeds {
             gbuffer: direct || filters,
             direct: direct.then_some(DirectLighting {
-                max_specular_depth: settings.max_specular_depth,
+                max_specular_depth: settings.frame.max_specular_depth,
                 min_weight: 1e-3,
-                fresnel_model: settings.fresnel.kernel_value(),
+                fresnel_model: settings.planes.fresnel.kernel_value(),
             }),
-            composite: caustics && keep(o.composite),
+            composite: caustics && keep(o.has(Output::Composite)),
         }
     }
 
@@ -266,7 +272,7 @@ impl AtlasReceiver {
     pub fn create(
         backend: &mut dyn Backend,
         host: &FrameHost,
-        settings: CausticMapSettings,
+        settings: AtlasConfig,
         quanta: AtlasQuanta,
         atlas: bool,
         extra: &mut dyn FnMut(&mut Recording),
@@ -286,19 +292,19 @@ impl AtlasReceiver {
         let made = (|| {
             if let (Some(receivers), true) = (host.receivers(), atlas) {
                 let s = &r.settings;
-                if s.atlas_bytes() > s.max_atlas_bytes {
+                if s.atlas.atlas_bytes() > s.atlas.max_atlas_bytes {
                     return Err(crate::device::error::BackendError::OutOfMemory {
-                        bytes: s.atlas_bytes(),
+                        bytes: s.atlas.atlas_bytes(),
                         what: format!(
                             "caustic atlas of {0}x{0} texels: over max_atlas_bytes ({1} bytes); \
                              a smaller atlas_size, or a larger max_atlas_bytes where the \
                              device holds it",
-                            s.atlas_size, s.max_atlas_bytes
+                            s.atlas.atlas_size, s.atlas.max_atlas_bytes
                         ),
                     }
                     .into());
                 }
-                let l = lay_out(host, receivers, &r.tiled, s.atlas_size)?;
+                let l = lay_out(host, receivers, &r.tiled, s.atlas.atlas_size)?;
                 r.make_atlas(backend, &l, extra)?;
             }
             r.make_images(backend, host.camera())
@@ -327,7 +333,7 @@ impl AtlasReceiver {
             texels: rec.upload(&l.texels, "atlas texels"),
             sums: rec.create_photon_map(texels),
             map: rec.create(texels, "caustic map"),
-            raw_map: (s.outputs.raw_caustics || !s.prune)
+            raw_map: (s.frame.outputs.has(Output::RawCaustics) || !s.frame.prune)
                 .then(|| rec.create(texels, "raw caustic map")),
             photons: rec.create(1, "photons"),
             photon_count: rec.create(1, "photon count"),
@@ -336,13 +342,16 @@ impl AtlasReceiver {
                 crate::math::map_gather::triangle_reach_words(triangles),
                 "atlas triangle reach",
             ),
-            density: (s.gather == MapGather::Density).then(|| DensityBuffers {
+            density: (s.atlas.gather == MapGather::Density).then(|| DensityBuffers {
                 table: rec.create(texels, "atlas photon count table"),
                 edge: rec.upload(&atlas_edge_texels(l), "atlas edge texels"),
                 footprint: rec.create(texels, "atlas gather footprints"),
                 rows: rec.create(texels, "atlas gather rows"),
                 source_index: rec.create(
-                    crate::math::density_gather::source_index_len(s.atlas_size, s.atlas_size),
+                    crate::math::density_gather::source_index_len(
+                        s.atlas.atlas_size,
+                        s.atlas.atlas_size,
+                    ),
                     "atlas gather source index",
                 ),
                 gbuffer: rec.create_gbuffer(1),
@@ -364,25 +373,27 @@ impl AtlasReceiver {
         backend: &mut dyn Backend,
         camera: GpuCamera,
     ) -> Result<(), Error> {
-        let o = self.settings.outputs;
+        let o = self.settings.frame.outputs;
         let s = &self.settings;
-        let keep = |x: bool| x || !s.prune;
+        let keep = |x: bool| x || !s.frame.prune;
         let pixels = camera.width * camera.height;
         let caustics = self.atlas.is_some();
         let mut rec = Recording::new();
-        let filtered_needed = caustics && keep(o.filtered_caustics || o.composite);
-        let filters = (filtered_needed && (s.temporal || s.atrous_iterations > 0)).then(|| {
-            FilterChain::create(
-                &mut rec,
-                pixels,
-                camera,
-                s.temporal,
-                s.atrous_iterations > 0,
-            )
-        });
+        let filtered_needed =
+            caustics && keep(o.any_of(&[Output::FilteredCaustics, Output::Composite]));
+        let filters = (filtered_needed && (s.frame.temporal || s.frame.atrous_iterations > 0))
+            .then(|| {
+                FilterChain::create(
+                    &mut rec,
+                    pixels,
+                    camera,
+                    s.frame.temporal,
+                    s.frame.atrous_iterations > 0,
+                )
+            });
         let images = CameraImages {
             filters,
-            raw: (caustics && keep(o.raw_caustics))
+            raw: (caustics && keep(o.has(Output::RawCaustics)))
                 .then(|| rec.create(pixels, "raw caustics image")),
             filtered: filtered_needed.then(|| rec.create(pixels, "filtered caustics image")),
         };
@@ -395,7 +406,7 @@ impl AtlasReceiver {
     }
 
     /// The settings it was made with.
-    pub fn settings(&self) -> &CausticMapSettings {
+    pub fn settings(&self) -> &AtlasConfig {
         &self.settings
     }
 
@@ -418,7 +429,7 @@ impl AtlasReceiver {
 
     /// Sets the frame seed the settings carry (an accumulation starts again).
     pub fn set_seed(&mut self, seed: u32) {
-        self.settings.seed = seed;
+        self.settings.frame.seed = seed;
         self.restart_accumulation();
     }
 
@@ -426,7 +437,7 @@ impl AtlasReceiver {
     /// accumulate (its photons' seed: [`crate::frame::receivers::accumulation_seed`]); 0
     /// without.
     pub fn pass_index(&self) -> u32 {
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated
         } else {
             0
@@ -441,7 +452,7 @@ impl AtlasReceiver {
     /// After a photon pass: with accumulation its photons stay in the sums; returns the
     /// passes they hold (0 without accumulation).
     pub fn end_photon_pass(&mut self) -> u32 {
-        if self.settings.accumulate {
+        if self.settings.frame.accumulate {
             self.accumulated += 1;
             self.accumulated
         } else {
@@ -497,7 +508,7 @@ impl AtlasReceiver {
         let (Some(r), Some(a)) = (host.receivers(), self.atlas) else {
             return Ok(());
         };
-        let l = lay_out(host, r, include, self.settings.atlas_size)?;
+        let l = lay_out(host, r, include, self.settings.atlas.atlas_size)?;
         rec.update(a.triangle_tiles, &l.triangle_tiles, "atlas triangle tiles")?;
         rec.update(
             a.tiles,
@@ -523,8 +534,8 @@ impl AtlasReceiver {
     /// `AtlasParams` with `quanta` (the deposit's, or the gathers' reading them).
     fn params_with(&self, quanta: AtlasQuanta, gather_width: u32) -> AtlasParams {
         AtlasParams {
-            width: self.settings.atlas_size,
-            height: self.settings.atlas_size,
+            width: self.settings.atlas.atlas_size,
+            height: self.settings.atlas.atlas_size,
             flux_quantum: quanta.flux_quantum,
             hit_distance_quantum: quanta.hit_distance_quantum,
             photon_capacity: self.atlas.map_or(1, |a| a.photons.len),
@@ -541,19 +552,6 @@ impl AtlasReceiver {
             tiles: a.tiles,
             triangle_reach: a.triangle_reach,
             sums: a.sums,
-        })
-    }
-
-    /// The adaptive traversal's target.
-    pub fn traversal_target(&self) -> Option<AtlasTarget> {
-        self.atlas.map(|a| AtlasTarget {
-            triangle_tiles: a.triangle_tiles,
-            tiles: a.tiles,
-            sums: a.sums,
-            atlas_width: self.settings.atlas_size,
-            flux_quantum: self.quanta.flux_quantum,
-            hit_distance_quantum: self.quanta.hit_distance_quantum,
-            trace_counters: a.counters,
         })
     }
 
@@ -609,7 +607,7 @@ impl AtlasReceiver {
             }
         } else {
             rec.kernel(GatherCausticMap {
-                params: self.params_with(q, self.settings.gather_width),
+                params: self.params_with(q, self.settings.atlas.gather_width),
                 texels: a.texels,
                 tiles: a.tiles,
                 atlas: a.sums,
@@ -639,10 +637,10 @@ impl AtlasReceiver {
         let i = self.images;
         let params = MapLookupParams {
             camera: cam,
-            atlas_width: s.atlas_size,
-            max_specular_depth: s.max_specular_depth,
+            atlas_width: s.atlas.atlas_size,
+            max_specular_depth: s.frame.max_specular_depth,
             min_weight: 1e-3,
-            fresnel_model: s.fresnel.kernel_value(),
+            fresnel_model: s.planes.fresnel.kernel_value(),
         };
         // the filtered caustics through the opt-in temporal blend and A-Trous
         // iterations: the lookup writes the chain's input
@@ -664,7 +662,7 @@ impl AtlasReceiver {
             }
         }
         if let (Some(f), Some(filtered), Some(g)) = (i.filters, i.filtered, host.screen().gbuffer) {
-            let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
+            let iterations = (s.frame.atrous_iterations, s.frame.atrous_clip_sigmas);
             f.record(rec, cam, g, iterations, filtered);
         }
         if let Some(filtered) = i.filtered {
@@ -745,7 +743,7 @@ impl AtlasReceiver {
             &if density {
                 format!("the raw map (N = 1), {stale}")
             } else {
-                format!("001's N x N gather, {stale}")
+                format!("Vanderstichelen 2021's N x N gather, {stale}")
             },
             if !photons {
                 why_no_atlas
@@ -761,7 +759,7 @@ impl AtlasReceiver {
                 if !photons {
                     why_no_atlas
                 } else {
-                    "the map's gather is 001's N x N box (gather: box)"
+                    "the map's gather is Vanderstichelen 2021's N x N box (gather: box)"
                 },
             );
         }
@@ -780,7 +778,7 @@ impl AtlasReceiver {
             "temporal_blend",
             chain.is_some_and(|f| f.temporal.is_some()),
             "setting temporal: the filtered caustics over reprojected history",
-            if self.settings.temporal {
+            if self.settings.frame.temporal {
                 "no filtered caustics are made"
             } else {
                 "temporal off"
@@ -790,7 +788,7 @@ impl AtlasReceiver {
             "atrous_filter",
             chain.is_some_and(|f| f.atrous.is_some()),
             "setting atrous_iterations, on the filtered caustics as the camera sees them",
-            if self.settings.atrous_iterations > 0 {
+            if self.settings.frame.atrous_iterations > 0 {
                 "no filtered caustics are made"
             } else {
                 "atrous_iterations = 0"
@@ -806,22 +804,10 @@ impl AtlasReceiver {
                 why_no_atlas
             },
         );
-        let o = self.settings.outputs;
         FramePlan {
-            prune: self.settings.prune,
+            prune: self.settings.frame.prune,
             features,
-            outputs: OUTPUTS
-                .iter()
-                .zip([
-                    o.composite,
-                    o.direct,
-                    o.raw_caustics,
-                    o.filtered_caustics,
-                    o.atlas,
-                ])
-                .filter(|(_, r)| *r)
-                .map(|((n, _), _)| n.to_string())
-                .collect(),
+            outputs: self.settings.frame.outputs.names(&OUTPUTS),
             lights,
             trace_variant: photons.then_some(variant),
             passes,
@@ -842,96 +828,32 @@ impl AtlasReceiver {
         )
     }
 
-    /// Whether output `name` was requested.
-    pub fn requested(&self, name: &str) -> bool {
-        let o = &self.settings.outputs;
-        match name {
-            "composite" => o.composite,
-            "direct" => o.direct,
-            "caustics_raw" => o.raw_caustics,
-            "caustics_filtered" => o.filtered_caustics,
-            "caustic_atlas" => o.atlas,
-            _ => false,
-        }
-    }
-
-    /// Checks that `name` is an output and was requested; `technique` names the
-    /// technique in errors.
-    fn check_output(&self, technique: &str, name: &str) -> Result<(), Error> {
-        if !OUTPUTS.iter().any(|(n, _)| *n == name) {
-            return Err(Error::InvalidParameter(format!(
-                "{technique} has no output '{name}'; outputs: {}",
-                OUTPUTS.map(|(n, _)| n).join(", ")
-            )));
-        }
-        if !self.requested(name) {
-            return Err(Error::InvalidParameter(format!(
-                "output '{name}' was not requested (CausticMapSettings::outputs)"
-            )));
-        }
-        Ok(())
-    }
-
-    /// The device image of camera-space output `name` (camera-sized, linear radiance,
-    /// row-major from the top-left pixel): `None` where the plan knows it is zero; the
-    /// atlas, which is not camera-space, is an error here.
-    pub fn output_image(
-        &self,
-        host: &FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Option<ImageBuf>, Error> {
-        self.check_output(technique, name)?;
+    /// The device image of camera-space `output` (camera-sized, linear radiance, row-major
+    /// from the top-left pixel): `None` where the plan knows it is zero, and for the
+    /// atlas, which is not camera-space.
+    pub fn output_image(&self, host: &FrameHost, output: Output) -> Option<ImageBuf> {
         let (screen, i) = (host.screen(), self.images);
-        Ok(match name {
-            "composite" => screen.composite.or(screen.direct),
-            "direct" => screen.direct,
-            "caustics_raw" => i.raw,
-            "caustics_filtered" => i.filtered,
-            _ => {
-                return Err(Error::InvalidParameter(format!(
-                    "{technique}'s output '{name}' is not camera-space: read it back"
-                )))
-            }
-        })
-    }
-
-    /// Reads output `name` back (see [`OUTPUTS`]): camera-sized radiance, or the atlas
-    /// (irradiance, `atlas_size` square). An output the plan knows to be zero reads as
-    /// zeros; `technique` names the technique in errors.
-    pub fn read_output(
-        &self,
-        backend: &mut dyn Backend,
-        host: &FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Image, Error> {
-        self.check_output(technique, name)?;
-        if name == "caustic_atlas" {
-            let side = self.settings.atlas_size;
-            return match self.atlas {
-                Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
-                None => Ok(Image::new(
-                    side,
-                    side,
-                    vec![[0.0; 4]; side as usize * side as usize],
-                )),
-            };
+        match output {
+            Output::Composite => screen.composite.or(screen.direct),
+            Output::Direct => screen.direct,
+            Output::RawCaustics => i.raw,
+            Output::FilteredCaustics => i.filtered,
+            _ => None,
         }
-        host.read_output_image(backend, self.output_image(host, technique, name)?)
     }
 
-    /// Every output, requested or not.
-    pub fn outputs(&self) -> Vec<crate::frame::technique::OutputInfo> {
-        OUTPUTS
-            .iter()
-            .map(|(name, description)| crate::frame::technique::OutputInfo {
-                name,
-                description,
-                requested: self.requested(name),
-                camera_space: *name != "caustic_atlas",
-            })
-            .collect()
+    /// Reads the gathered caustic atlas back: irradiance (W/m^2) per texel, `atlas_size`
+    /// square; zeros without an atlas.
+    pub fn read_atlas(&self, backend: &mut dyn Backend) -> Result<Image, Error> {
+        let side = self.settings.atlas.atlas_size;
+        match self.atlas {
+            Some(a) => Ok(Image::new(side, side, read_buf(backend, a.map)?)),
+            None => Ok(Image::new(
+                side,
+                side,
+                vec![[0.0; 4]; side as usize * side as usize],
+            )),
+        }
     }
 
     /// The atlas layout as the kernels read it now, per atlas texel (row-major):

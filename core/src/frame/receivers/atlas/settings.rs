@@ -2,50 +2,15 @@
 
 use crate::frame::error::Error;
 use crate::frame::receivers::atlas::layout::DEFAULT_ATLAS_SIDE;
-use crate::kernels::MAX_SPECULAR_DEPTH;
+use crate::frame::settings::FrameSettings;
 use crate::math::map_gather::DEFAULT_GATHER_WIDTH;
 use serde::{Deserialize, Serialize};
-
-/// The images a caller asks a frame for (all by default).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct CausticMapOutputs {
-    /// Direct light + filtered caustics.
-    pub composite: bool,
-    /// Direct light alone.
-    pub direct: bool,
-    /// Caustic radiance from the raw caustic map (no gather), as the camera sees it.
-    pub raw_caustics: bool,
-    /// Caustic radiance from the gathered caustic map, as the camera sees it.
-    pub filtered_caustics: bool,
-    /// The gathered caustic map itself (irradiance per atlas texel).
-    pub atlas: bool,
-}
-
-impl Default for CausticMapOutputs {
-    fn default() -> Self {
-        CausticMapOutputs {
-            composite: true,
-            direct: true,
-            raw_caustics: true,
-            filtered_caustics: true,
-            atlas: true,
-        }
-    }
-}
-
-impl CausticMapOutputs {
-    /// Whether at least one output is requested.
-    pub fn any(&self) -> bool {
-        self.composite || self.direct || self.raw_caustics || self.filtered_caustics || self.atlas
-    }
-}
 
 /// How photons cross a dielectric (and a dispersive one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FresnelSplit {
-    /// Seed 001's intensity split: both the reflected (flux x R) and the refracted (x 1 - R)
+    /// Vanderstichelen 2021's intensity split: both the reflected (flux x R) and the refracted (x 1 - R)
     /// branch are traced, and the first dispersive surface sends three one-channel
     /// branches, up to `split_budget` branches per photon (the stochastic choice beyond).
     /// It takes the noise of the Fresnel and channel choices out of the map (on the CPU,
@@ -75,7 +40,7 @@ pub enum FresnelModel {
     /// (`fresnel_schlick_error_for_glass` in `math::optics` pins the bound).
     #[default]
     Exact,
-    /// Seed 001's Schlick approximation, `R0 + (1 - R0)(1 - cos)^5` with the transmitted
+    /// Vanderstichelen 2021's Schlick approximation, `R0 + (1 - R0)(1 - cos)^5` with the transmitted
     /// cosine when light goes into the lower index, total internal reflection included.
     Schlick,
 }
@@ -91,7 +56,7 @@ impl FresnelModel {
     }
 }
 
-/// What each light's view plane covers (seed 001 section 3.1 aims it at the casters).
+/// What each light's view plane covers (Vanderstichelen 2021, section 3.1 aims it at the casters).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EmissionPlane {
@@ -100,8 +65,8 @@ pub enum EmissionPlane {
     #[default]
     Casters,
     /// The light's whole cone: a spot light's outer cone, a point light's six cube faces
-    /// (a directional light keeps its projection volume). The dense baseline of seed
-    /// 004's comparison, where adaptive emission can discard what misses the casters.
+    /// (a directional light keeps its projection volume). The dense baseline of Wyman
+    /// 2009's comparison, where adaptive emission can discard what misses the casters.
     LightCone,
 }
 
@@ -119,7 +84,7 @@ impl EmissionPlane {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MapGather {
-    /// Seed 001's N x N neighbour average (`gather_width`), normalised to keep the flux,
+    /// Vanderstichelen 2021's N x N neighbour average (`gather_width`), normalised to keep the flux,
     /// inside each tile (`gather_caustic_map`). Not the default: it blurs a focused
     /// caustic at every photon budget, so that with the lookup's footprint rectangle the
     /// filtered image is worse than the raw map on `sphere` (relMSE 1.3e-3 against
@@ -141,77 +106,66 @@ pub enum MapGather {
     Density,
 }
 
-/// CausticMap's settings (seed 001; defaults from its section 4 where it gives them).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// What the caustic atlas receiver is made with: the technique's shared block (outputs,
+/// pruning, filter chain, accumulation, the camera's specular chains), its light view
+/// planes' optics (the final pass's Fresnel) and the atlas block. CausticMap's and
+/// AdaptiveCaustics' settings hold all three.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AtlasConfig {
+    /// The technique's shared block.
+    pub frame: FrameSettings,
+    /// The light view planes and the photons' optics.
+    pub planes: PlaneSettings,
+    /// The caustic atlas.
+    pub atlas: AtlasSettings,
+}
+
+/// The light view planes photons start from, and the optics they follow (`planes` in
+/// CausticMap's and AdaptiveCaustics' settings).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct CausticMapSettings {
-    /// Light view plane texels along u, per light (one photon each; a light among the
-    /// casters gets six cube faces of `photons_w / sqrt 6` texels a side).
-    pub photons_w: u32,
-    /// Light view plane texels along v, per light.
-    pub photons_h: u32,
+pub struct PlaneSettings {
     /// What the view plane covers: the casters (default) or the light's whole cone.
     pub emission_plane: EmissionPlane,
-    /// Side of the caustic atlas (texels; 001's map size, 2048).
-    pub atlas_size: u32,
-    /// The caustic map's filter: the density-adaptive gather (default) or 001's N x N
-    /// box.
-    pub gather: MapGather,
-    /// Width N of the flux-keeping N x N box gather (odd; 001's default 3; 1: no gather).
-    pub gather_width: u32,
-    /// Density gather: photons `k` whose nearest-neighbour window sets a texel's radius.
-    pub knn_photons: u32,
-    /// Density gather: largest radius (texels).
-    pub max_radius_texels: u32,
-    /// Deterministic (001's) or stochastic Fresnel and dispersion splits.
+    /// Deterministic (Vanderstichelen 2021's) or stochastic Fresnel and dispersion splits.
     pub fresnel_split: FresnelSplit,
-    /// Exact Fresnel (the default) or seed 001's Schlick approximation, for the photons and
-    /// for the final pass's camera chains alike.
+    /// Exact Fresnel (the default) or Vanderstichelen 2021's Schlick approximation, for
+    /// the photons and for the final pass's camera chains alike.
     pub fresnel: FresnelModel,
     /// With the deterministic split: the most branches (stored photons) one emitted photon
     /// may split into (1..=32); a batch then traces `max_photons_per_batch / split_budget`
     /// photons so that its photon buffer cannot overflow.
     pub split_budget: u32,
-    /// Longest photon path, in ray segments.
-    pub max_bounces: u32,
-    /// A photon is dropped once its largest channel falls below this fraction of the
-    /// flux of the plane's centre texel.
-    pub min_relative_power: f32,
-    /// Longest specular chain the final pass follows from the camera.
-    pub max_specular_depth: u32,
-    /// Frame seed (photon jitter and Fresnel choices).
-    pub seed: u32,
-    /// Photons traced and deposited per batch (bounds the photon buffer at 32 bytes
-    /// each; default [`crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH`], at most what
-    /// the device's largest buffer holds).
-    pub max_photons_per_batch: u32,
-    /// The images to produce.
-    pub outputs: CausticMapOutputs,
-    /// Leave out passes and buffers the requested outputs and the scene do not need.
-    pub prune: bool,
-    /// Accumulate the filtered caustics over frames (seed 003's temporal blend, the shared
-    /// `temporal_blend` pass, as Sspm's `temporal`): useful when the seed changes every
-    /// frame, each frame then a new set of photons. Off by default. The history survives
-    /// camera moves (it is reprojected) and seed changes, and is forgotten when the
-    /// lights, materials or image size change.
-    pub temporal: bool,
-    /// Iterations of the edge-avoiding A-Trous filter with variance clipping (seed 003
-    /// section 24.4.2, the shared `atrous_filter` pass) on the filtered (and, with
-    /// `temporal`, blended) caustics as the camera sees them: 0 (the default) runs none.
-    /// At most 8.
-    pub atrous_iterations: u32,
-    /// Standard deviations of the A-Trous kernel's values a detail coefficient may keep
-    /// (Eq. 18's bounds; 1 by default).
-    pub atrous_clip_sigmas: f32,
-    /// Progressive accumulation: while the lights, scene and settings stay, every frame
-    /// traces new photons (a new seed) into the atlas sums of the frames before, and the
-    /// gather reads the sum as one frame of all their photons (N frames of M photons: the
-    /// map of one frame of N x M). A camera move keeps the atlas (it is in texture
-    /// space); any other change starts again. Off by default (the atlas is then reused
-    /// while only the camera moves).
-    pub accumulate: bool,
-    /// Largest scene, in triangles, the technique accepts.
-    pub max_triangles: u64,
+}
+
+impl Default for PlaneSettings {
+    fn default() -> Self {
+        PlaneSettings {
+            emission_plane: EmissionPlane::Casters,
+            fresnel_split: FresnelSplit::Stochastic,
+            fresnel: FresnelModel::Exact,
+            split_budget: 8,
+        }
+    }
+}
+
+/// The caustic atlas in the receivers' texture space (`atlas` in CausticMap's and
+/// AdaptiveCaustics' settings).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AtlasSettings {
+    /// Side of the caustic atlas (texels; Vanderstichelen 2021's map size, 2048).
+    pub atlas_size: u32,
+    /// The caustic map's filter: the density-adaptive gather (default) or the
+    /// publication's N x N box.
+    pub gather: MapGather,
+    /// Width N of the flux-keeping N x N box gather (odd; the publication's 3; 1: no
+    /// gather).
+    pub gather_width: u32,
+    /// Density gather: photons `k` whose nearest-neighbour window sets a texel's radius.
+    pub knn_photons: u32,
+    /// Density gather: largest radius (texels).
+    pub max_radius_texels: u32,
     /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), the
     /// gathered and raw maps (16 B each) and the texel table (8 B); with the density
     /// gather also its count table (4 B), edge texels and two passes' images (16 B each).
@@ -221,32 +175,14 @@ pub struct CausticMapSettings {
     pub max_atlas_bytes: u64,
 }
 
-impl Default for CausticMapSettings {
+impl Default for AtlasSettings {
     fn default() -> Self {
-        CausticMapSettings {
-            photons_w: 1024,
-            photons_h: 1024,
-            emission_plane: EmissionPlane::Casters,
+        AtlasSettings {
             atlas_size: DEFAULT_ATLAS_SIDE,
             gather: MapGather::Density,
             gather_width: DEFAULT_GATHER_WIDTH,
             knn_photons: 32,
             max_radius_texels: 16,
-            fresnel_split: FresnelSplit::Stochastic,
-            fresnel: FresnelModel::Exact,
-            split_budget: 8,
-            max_bounces: 12,
-            min_relative_power: 1e-4,
-            max_specular_depth: 6,
-            seed: 0x434d_4150,
-            max_photons_per_batch: crate::frame::allocation::DEFAULT_PHOTONS_PER_BATCH,
-            outputs: CausticMapOutputs::default(),
-            prune: true,
-            temporal: false,
-            atrous_iterations: 0,
-            atrous_clip_sigmas: 1.0,
-            accumulate: false,
-            max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
             max_atlas_bytes: 4 << 30,
         }
     }
@@ -264,7 +200,7 @@ pub const ATLAS_BYTES_PER_TEXEL: u64 = 80;
 /// (16), the footprint and row-pass images (16 each).
 pub const DENSITY_GATHER_BYTES_PER_TEXEL: u64 = 52;
 
-impl CausticMapSettings {
+impl AtlasSettings {
     /// Device bytes of the atlas at these settings (see [`ATLAS_BYTES_PER_TEXEL`] and
     /// [`DENSITY_GATHER_BYTES_PER_TEXEL`]).
     pub fn atlas_bytes(&self) -> u64 {
@@ -274,16 +210,10 @@ impl CausticMapSettings {
         };
         (self.atlas_size as u64).pow(2) * per_texel
     }
-}
 
-impl CausticMapSettings {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), Error> {
-        let bad = |what: String| Err(Error::InvalidParameter(what));
-        let total = self.photons_w as u64 * self.photons_h as u64;
-        if self.photons_w == 0 || self.photons_h == 0 || total > u32::MAX as u64 {
-            return bad("light view plane must be at least 1x1 and at most 2^32 - 1 texels".into());
-        }
+        let bad = |what: String| Err(Error::InvalidParameter(format!("atlas.{what}")));
         if self.atlas_size == 0 || self.atlas_size > MAX_ATLAS_SIZE {
             return bad(format!("atlas_size must be in 1..={MAX_ATLAS_SIZE}"));
         }
@@ -296,37 +226,18 @@ impl CausticMapSettings {
         if self.max_radius_texels > 256 {
             return bad("max_radius_texels must be <= 256".into());
         }
-        if !(1..=crate::device::layout::MAX_SPLIT_BRANCHES).contains(&self.split_budget) {
-            return bad(format!(
-                "split_budget must be in 1..={}",
-                crate::device::layout::MAX_SPLIT_BRANCHES
-            ));
-        }
-        if self.max_bounces == 0 || self.max_bounces > 1024 {
-            return bad("max_bounces must be in 1..=1024".into());
-        }
-        if !(self.min_relative_power >= 0.0 && self.min_relative_power < 1.0) {
-            return bad("min_relative_power must be in [0, 1)".into());
-        }
-        if self.max_specular_depth > MAX_SPECULAR_DEPTH {
-            return bad(format!(
-                "max_specular_depth must be <= {MAX_SPECULAR_DEPTH}"
-            ));
-        }
-        if self.max_photons_per_batch == 0 {
-            return bad("max_photons_per_batch must be >= 1".into());
-        }
-        if self.max_triangles == 0 {
-            return bad("max_triangles must be >= 1".into());
-        }
-        if self.atrous_iterations > 8 {
-            return bad("atrous_iterations must be at most 8".into());
-        }
-        if !(self.atrous_clip_sigmas >= 0.0 && self.atrous_clip_sigmas.is_finite()) {
-            return bad("atrous_clip_sigmas must be a finite number >= 0".into());
-        }
-        if !self.outputs.any() {
-            return bad("outputs: at least one output must be requested".into());
+        Ok(())
+    }
+}
+
+impl PlaneSettings {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), Error> {
+        let max = crate::device::layout::MAX_SPLIT_BRANCHES;
+        if !(1..=max).contains(&self.split_budget) {
+            return Err(Error::InvalidParameter(format!(
+                "planes.split_budget must be in 1..={max}"
+            )));
         }
         Ok(())
     }

@@ -1,9 +1,9 @@
-//! Seed 000's screen receiver: photons deposited into a screen-space photon map (one
-//! photon, one pixel, fixed-point integer sums; 000 section 30.3.1.3), resolved to
-//! radiance (`resolve_caustics`, 000 Eq. 5: the raw caustics), filtered ([`GatherFilter`]:
-//! the density-adaptive, flux-keeping gather or the seed's bilateral gather, 000 section
+//! Kim 2019's screen receiver: photons deposited into a screen-space photon map (one
+//! photon, one pixel, fixed-point integer sums; Kim 2019, section 30.3.1.3), resolved to
+//! radiance (`resolve_caustics`, Kim 2019, Eq. 5: the raw caustics), filtered ([`GatherFilter`]:
+//! the density-adaptive, flux-keeping gather or Kim 2019's bilateral gather, Kim 2019, section
 //! 30.3.2), optionally blended with the reprojected history and A-Trous filtered, and
-//! composited over the frame host's direct light (000 section 30.3.3).
+//! composited over the frame host's direct light (Kim 2019, section 30.3.3).
 //!
 //! The receiver does not know where its photons come from: Sspm deposits the photons of
 //! its projection volumes, AdaptiveCaustics those its traversal outputs. The G-buffer,
@@ -13,7 +13,10 @@ pub mod outputs;
 pub mod plan;
 pub mod settings;
 
-pub use outputs::{FrameImages, Output, Outputs};
+pub use outputs::FrameImages;
+
+use crate::frame::output::Output;
+use crate::frame::settings::FrameSettings;
 pub use plan::{plan_frame, Needs};
 pub use settings::{GatherFilter, ScreenSettings};
 
@@ -132,9 +135,22 @@ pub struct PhotonMap {
     pub counters: Buf<u32>,
 }
 
+/// How the direct image of a screen-receiver frame is lit: specular chains up to the
+/// frame's `max_specular_depth`, exact Fresnel, chains below 1e-3 of the pixel's weight
+/// stopped.
+pub fn direct_lighting(frame: &FrameSettings) -> crate::frame::screen::DirectLighting {
+    crate::frame::screen::DirectLighting {
+        max_specular_depth: frame.max_specular_depth,
+        min_weight: 1e-3,
+        fresnel_model: crate::math::optics::fresnel_model::EXACT,
+    }
+}
+
 /// The screen receiver of one frame size.
 #[derive(Clone, Debug)]
 pub struct ScreenReceiver {
+    /// The technique's shared settings (outputs, pruning, filter chain, accumulation).
+    frame: FrameSettings,
     settings: ScreenSettings,
     quanta: ScreenQuanta,
     needs: Needs,
@@ -151,10 +167,10 @@ pub struct ScreenReceiver {
 impl ScreenReceiver {
     /// The camera images the frame host must make for `needs` (the G-buffer always: every
     /// output is shaded from it).
-    pub fn screen_needs(needs: Needs, settings: &ScreenSettings) -> ScreenNeeds {
+    pub fn screen_needs(needs: Needs, frame: &FrameSettings) -> ScreenNeeds {
         ScreenNeeds {
             gbuffer: true,
-            direct: needs.direct_light.then(|| settings.direct_lighting()),
+            direct: needs.direct_light.then(|| direct_lighting(frame)),
             composite: needs.composite,
         }
     }
@@ -165,6 +181,7 @@ impl ScreenReceiver {
         rec: &mut Recording,
         camera: GpuCamera,
         plan: &FramePlan,
+        frame: &FrameSettings,
         settings: ScreenSettings,
         quanta: ScreenQuanta,
     ) -> ScreenReceiver {
@@ -203,6 +220,7 @@ impl ScreenReceiver {
         let filters = (temporal || atrous)
             .then(|| FilterChain::create(rec, pixels, camera, temporal, atrous));
         ScreenReceiver {
+            frame: frame.clone(),
             settings,
             quanta,
             needs,
@@ -236,7 +254,7 @@ impl ScreenReceiver {
     /// accumulates (its photons' seed: [`crate::frame::receivers::accumulation_seed`]);
     /// 0 without.
     pub fn frame_index(&self) -> u32 {
-        if self.settings.accumulate {
+        if self.frame.accumulate {
             self.accumulated
         } else {
             0
@@ -282,11 +300,11 @@ impl ScreenReceiver {
     /// The frame's device images over the host's `screen` images, by what `settings`
     /// asked for (an image not requested has a handle only with pruning off).
     pub fn images(&self, camera: GpuCamera, screen: &ScreenTargets) -> FrameImages {
-        let out = self.settings.outputs;
-        let keep = |requested: bool| requested || !self.settings.prune;
+        let out = self.frame.outputs;
+        let keep = |requested: bool| requested || !self.frame.prune;
         let composite = if screen.composite.is_some() {
             screen.composite
-        } else if out.composite {
+        } else if out.has(Output::Composite) {
             screen.direct // no caustics: the composite is the direct image
         } else {
             None
@@ -295,9 +313,11 @@ impl ScreenReceiver {
             width: camera.width,
             height: camera.height,
             composite,
-            direct: screen.direct.filter(|_| keep(out.direct)),
-            raw_caustics: self.raw.filter(|_| keep(out.raw_caustics)),
-            filtered_caustics: self.filtered.filter(|_| keep(out.filtered_caustics)),
+            direct: screen.direct.filter(|_| keep(out.has(Output::Direct))),
+            raw_caustics: self.raw.filter(|_| keep(out.has(Output::RawCaustics))),
+            filtered_caustics: self
+                .filtered
+                .filter(|_| keep(out.has(Output::FilteredCaustics))),
         }
     }
 
@@ -340,7 +360,7 @@ impl ScreenReceiver {
         let last = self.filters.map_or(filtered, |f| f.input(filtered));
         self.record_gather(rec, camera, gbuffer, m.planes, g, (raw, filtered, last));
         if let Some(f) = &self.filters {
-            let s = &self.settings;
+            let s = &self.frame;
             let iterations = (s.atrous_iterations, s.atrous_clip_sigmas);
             f.record(rec, camera, gbuffer, iterations, filtered);
         }
@@ -436,7 +456,7 @@ impl ScreenReceiver {
         if let Some(f) = &mut self.filters {
             f.end_frame(camera);
         }
-        if self.settings.accumulate {
+        if self.frame.accumulate {
             self.accumulated += 1;
             self.accumulated
         } else {
@@ -444,78 +464,14 @@ impl ScreenReceiver {
         }
     }
 
-    /// Every output, requested or not.
-    pub fn outputs(&self) -> Vec<crate::frame::technique::OutputInfo> {
-        Output::ALL
-            .iter()
-            .map(|o| crate::frame::technique::OutputInfo {
-                name: o.stem(),
-                description: o.description(),
-                requested: o.requested(&self.settings.outputs),
-                camera_space: true,
-            })
-            .collect()
-    }
+    /// The outputs the screen receiver gives a technique ([`outputs::OUTPUTS`]).
+    pub const OUTPUTS: [Output; 4] = outputs::OUTPUTS;
 
     /// The device image of `output` (camera-sized, linear radiance, row-major from the
-    /// top-left pixel): `None` where the plan knows it is zero, an error where it was not
-    /// requested.
-    pub fn image(
-        &self,
-        host: &crate::frame::host::FrameHost,
-        output: Output,
-    ) -> Result<Option<crate::device::handle::ImageBuf>, crate::frame::error::Error> {
-        if !output.requested(&self.settings.outputs) {
-            return Err(crate::frame::error::Error::InvalidParameter(format!(
-                "output '{}' was not requested (outputs)",
-                output.stem()
-            )));
-        }
-        Ok(self.images(host.camera(), host.screen()).get(output))
-    }
-
-    /// Reads `output` back over the host's images: zeros where the plan knows it is zero,
-    /// an error where it was not requested.
-    pub fn read(
-        &self,
-        backend: &mut dyn crate::backend::Backend,
-        host: &crate::frame::host::FrameHost,
-        output: Output,
-    ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
-        host.read_output_image(backend, self.image(host, output)?)
-    }
-
-    /// Output `name` by its stem ([`Output::stem`]); `technique` names the technique in
-    /// errors.
-    pub fn output(technique: &str, name: &str) -> Result<Output, crate::frame::error::Error> {
-        Output::from_stem(name).ok_or_else(|| {
-            crate::frame::error::Error::InvalidParameter(format!(
-                "{technique} has no output '{name}'; outputs: {}",
-                Output::ALL.map(|o| o.stem()).join(", ")
-            ))
-        })
-    }
-
-    /// Reads output `name` back ([`Output::stem`]); `technique` names the technique in
-    /// errors.
-    pub fn read_output(
-        &self,
-        backend: &mut dyn crate::backend::Backend,
-        host: &crate::frame::host::FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<crate::frame::image::Image, crate::frame::error::Error> {
-        self.read(backend, host, Self::output(technique, name)?)
-    }
-
-    /// The device image of output `name` ([`ScreenReceiver::image`]).
-    pub fn output_image(
-        &self,
-        host: &crate::frame::host::FrameHost,
-        technique: &str,
-        name: &str,
-    ) -> Result<Option<crate::device::handle::ImageBuf>, crate::frame::error::Error> {
-        self.image(host, Self::output(technique, name)?)
+    /// top-left pixel): `None` where the plan knows it is zero, or for an output the
+    /// screen receiver does not make.
+    pub fn image(&self, host: &crate::frame::host::FrameHost, output: Output) -> Option<ImageBuf> {
+        self.images(host.camera(), host.screen()).get(output)
     }
 
     /// Forgets the temporal history and the accumulated photons (the next frame is not

@@ -2,8 +2,8 @@
 //! emission and the requested outputs, and why ([`crate::frame::plan`] holds the shared
 //! vocabulary).
 
-use super::outputs::Outputs;
 use super::settings::GatherFilter;
+use crate::frame::output::{Output, Outputs};
 use crate::frame::plan::{FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::kernels::TraceVariant;
 use crate::scene::Scene;
@@ -48,7 +48,11 @@ pub fn plan_frame(
         off
     } else if !emits {
         "no light emits photons"
-    } else if !(outputs.composite || outputs.raw_caustics || outputs.filtered_caustics) {
+    } else if !(outputs.any_of(&[
+        Output::Composite,
+        Output::RawCaustics,
+        Output::FilteredCaustics,
+    ])) {
         "no caustic output requested"
     } else {
         "a light reaches a caustic caster and a caustic output is requested"
@@ -105,7 +109,7 @@ pub fn plan_frame(
         } else if temporal {
             "temporal on: the filtered caustics blended with their reprojected history"
         } else {
-            "temporal off (SspmSettings::temporal)"
+            "temporal off (frame.temporal)"
         },
     );
     pass(
@@ -116,7 +120,7 @@ pub fn plan_frame(
         } else if atrous {
             "atrous_iterations > 0: the caustics filtered again by A-Trous iterations"
         } else {
-            "atrous_iterations is 0 (SspmSettings::atrous_iterations)"
+            "atrous_iterations is 0 (frame.atrous_iterations)"
         },
     );
     pass(
@@ -124,7 +128,7 @@ pub fn plan_frame(
         n.composite,
         if !prune {
             off
-        } else if !outputs.composite {
+        } else if !outputs.has(Output::Composite) {
             "composite not requested"
         } else if n.composite {
             "composite requested"
@@ -135,7 +139,7 @@ pub fn plan_frame(
     FramePlan {
         prune,
         features,
-        outputs: outputs.names(),
+        outputs: outputs.names(&super::outputs::OUTPUTS),
         lights,
         trace_variant: n.photons.then(|| {
             if prune {
@@ -172,13 +176,17 @@ impl Needs {
                 composite: true,
             };
         }
-        let photons =
-            emits && (outputs.composite || outputs.raw_caustics || outputs.filtered_caustics);
+        let photons = emits
+            && (outputs.any_of(&[
+                Output::Composite,
+                Output::RawCaustics,
+                Output::FilteredCaustics,
+            ]));
         Needs {
-            direct_light: outputs.direct || outputs.composite,
+            direct_light: outputs.any_of(&[Output::Direct, Output::Composite]),
             photons,
-            gather: photons && (outputs.filtered_caustics || outputs.composite),
-            composite: photons && outputs.composite,
+            gather: photons && (outputs.any_of(&[Output::FilteredCaustics, Output::Composite])),
+            composite: photons && outputs.has(Output::Composite),
         }
     }
 }

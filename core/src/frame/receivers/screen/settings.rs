@@ -1,11 +1,9 @@
-//! The screen receiver's parameters (deposit test, filter, temporal and A-Trous
-//! passes, outputs), with their defaults and validation. Sspm's settings hold the same
-//! fields at their top level; AdaptiveCaustics' screen target holds them as `screen`.
+//! The screen receiver's own parameters (the store test and the gather filter), with
+//! their defaults and validation: `screen` in Sspm's settings and in AdaptiveCaustics'
+//! screen deposit. What every technique shares (outputs, the temporal and A-Trous
+//! passes, accumulation) is in [`crate::frame::settings::FrameSettings`].
 
-use super::outputs::Outputs;
 use crate::frame::error::Error;
-use crate::frame::screen::DirectLighting;
-use crate::kernels::MAX_SPECULAR_DEPTH;
 use serde::{Deserialize, Serialize};
 
 /// The filter that turns the raw screen-space deposit into the technique's caustics.
@@ -18,22 +16,22 @@ pub enum GatherFilter {
     /// (`crate::math::density_gather`).
     #[default]
     Density,
-    /// The seed's edge-aware bilateral gather: radius `roughness` x the tile's mean hit
-    /// distance (000 section 30.3.2), normalised per destination.
+    /// Kim 2019's edge-aware bilateral gather: radius `roughness` x the tile's mean hit
+    /// distance (Kim 2019, section 30.3.2), normalised per destination.
     Bilateral,
 }
 
-/// Every parameter of the screen receiver; defaults from seed 000 where it gives them.
+/// Every parameter of the screen receiver; defaults from Kim 2019 where it gives them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ScreenSettings {
     /// The store test (condition 3): a photon is kept in the pixel it projects to when it
     /// lies on the surface that pixel's centre sees. `< 0` (default -0.01): within
     /// `|depth_tolerance| x depth` of the pixel's tangent plane (`layout::off_surface`);
-    /// `> 0`: the seed's test, its view depth within `depth_tolerance x depth` of the
-    /// pixel's. The default departs from the seed because the seed's test drops photons of
+    /// `> 0`: Kim 2019's test, its view depth within `depth_tolerance x depth` of the
+    /// pixel's. The default departs from Kim 2019 because Kim 2019's test drops photons of
     /// surfaces seen at a grazing angle in coarse images, whose view depth varies across
-    /// one pixel by more than 1%: on `rooms` at 160x90 the seed's 0.01 keeps 106953 of the
+    /// one pixel by more than 1%: on `rooms` at 160x90 Kim 2019's 0.01 keeps 106953 of the
     /// 214497 photons the tangent-plane test keeps (at 480x270: 194472 of 194543), and
     /// Sspm's caustics were 20% (`cornell`) and 51% (`rooms`) too dark at 160x90. The
     /// caustic reference uses the same test (`caustica::reference::CAUSTIC_REFERENCE`).
@@ -63,35 +61,6 @@ pub struct ScreenSettings {
     pub normal_power: f32,
     /// Tile size (pixels) of the hit-distance tiles that set the gather radius.
     pub tile_size: u32,
-    /// Longest specular chain followed from a mirror/glass pixel in `direct_light`.
-    pub max_specular_depth: u32,
-    /// The images the caller wants; passes and buffers that no requested image needs are
-    /// left out (see [`crate::frame::plan`]).
-    pub outputs: Outputs,
-    /// Leave out passes, kernel features, buffers and lights the scene and outputs do
-    /// not need (default). Off: everything runs, the baseline pruning is checked against.
-    pub prune: bool,
-    /// Blends each frame's filtered caustics with the reprojected history of the earlier
-    /// frames (seed 003 section 24.4.1's temporal accumulation, the shared
-    /// `temporal_blend` pass with the chapter's constants: alpha 0.95 x depth and normal
-    /// weights). Off by default: a frame is then a function of its seed alone. The history
-    /// is forgotten when the lights, materials, settings or image size change.
-    pub temporal: bool,
-    /// Iterations of the edge-avoiding A-Trous filter with variance clipping of its
-    /// detail coefficients (seed 003 section 24.4.2, the shared `atrous_filter` pass) run
-    /// on the filtered (and, with `temporal`, blended) caustics: 0 (the default) runs
-    /// none; the chapter runs 4. At most 8.
-    pub atrous_iterations: u32,
-    /// Standard deviations of the A-Trous kernel's values that a detail coefficient may
-    /// keep (Eq. 18's bounds; the chapter gives no value: 1 by default). 0 keeps none (the
-    /// smooth `s_n`); a large value keeps all (the unfiltered input).
-    pub atrous_clip_sigmas: f32,
-    /// Progressive accumulation: while the camera, lights, scene and settings stay, every
-    /// frame adds its photons (traced with a new seed) to the photon map of the frames
-    /// before, and the resolve and filter read the sum as one frame of all their photons
-    /// (N frames of M photons: the estimate of one frame of N x M). Any change starts
-    /// again from the next frame's photons. Off by default.
-    pub accumulate: bool,
 }
 
 impl Default for ScreenSettings {
@@ -107,31 +76,14 @@ impl Default for ScreenSettings {
             sigma_depth: 0.02,
             normal_power: 8.0,
             tile_size: 8,
-            max_specular_depth: 6,
-            outputs: Outputs::default(),
-            prune: true,
-            temporal: false,
-            atrous_iterations: 0,
-            atrous_clip_sigmas: 1.0,
-            accumulate: false,
         }
     }
 }
 
 impl ScreenSettings {
-    /// How the direct image is lit: specular chains up to `max_specular_depth`, exact
-    /// Fresnel, chains below 1e-3 of the pixel's weight stopped.
-    pub fn direct_lighting(&self) -> DirectLighting {
-        DirectLighting {
-            max_specular_depth: self.max_specular_depth,
-            min_weight: 1e-3,
-            fresnel_model: crate::math::optics::fresnel_model::EXACT,
-        }
-    }
-
     /// Rejects parameters that cannot give a meaningful frame.
     pub fn validate(&self) -> Result<(), Error> {
-        let bad = |what: &str| Err(Error::InvalidParameter(what.to_string()));
+        let bad = |what: &str| Err(Error::InvalidParameter(format!("screen.{what}")));
         if !(self.depth_tolerance != 0.0 && self.depth_tolerance.is_finite()) {
             return bad(
                 "depth_tolerance must be nonzero and finite (> 0: view-depth test; < 0: \
@@ -169,20 +121,6 @@ impl ScreenSettings {
         }
         if self.tile_size == 0 || self.tile_size > 256 {
             return bad("tile_size must be in 1..=256");
-        }
-        if !self.outputs.any() {
-            return bad("outputs: at least one output must be requested");
-        }
-        if self.atrous_iterations > 8 {
-            return bad("atrous_iterations must be <= 8 (taps 128 pixels apart)");
-        }
-        if !(self.atrous_clip_sigmas >= 0.0 && self.atrous_clip_sigmas.is_finite()) {
-            return bad("atrous_clip_sigmas must be >= 0");
-        }
-        if self.max_specular_depth > MAX_SPECULAR_DEPTH {
-            return bad(&format!(
-                "max_specular_depth must be <= {MAX_SPECULAR_DEPTH}"
-            ));
         }
         Ok(())
     }

@@ -1,4 +1,4 @@
-//! Seed 004's hierarchical emission on the device: the photon pyramid of one light view
+//! Wyman 2009's hierarchical emission on the device: the photon pyramid of one light view
 //! plane traversed level by level under a memory limit (sections 3.2 and 4.3), recorded
 //! once per frame with no wait on the device.
 //!
@@ -17,7 +17,7 @@
 //! photon map by `deposit_screen` in the same pass. The counts come back at the frame's
 //! end ([`TraversalReadback`]).
 //!
-//! **Memory** (004 section 4.3, [`TraversalSettings::sizes`]). A level's list holds all
+//! **Memory** (Wyman 2009, section 4.3, [`TraversalSettings::sizes`]). A level's list holds all
 //! of its clusters when the byte limit allows; the passes take the rest of the limit. A
 //! tighter limit caps the lists: a cluster whose children do not fit is output at its
 //! level from fresh photons and counted (`clusters_overflowed`), never lost (which ones
@@ -26,6 +26,7 @@
 //! level, and the atlas sums are exact fixed-point, so any limit whose lists are whole
 //! gives bitwise the same atlas.
 
+use super::stats::AdaptiveStats;
 use crate::backend::PassTime;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::launch::DISPATCH_RECORD_WORDS;
@@ -37,8 +38,8 @@ use crate::frame::emission::light_view_plane::{LightViewPlane, ViewPlaneProjecti
 use crate::frame::emission::view_planes::ViewPlanes;
 use crate::frame::error::Error;
 use crate::frame::pipeline::FrameBuilder;
-use crate::frame::stats::{AdaptiveStats, FrameStats};
-use crate::frame::submitted::EndRead;
+use crate::frame::stats::FrameStats;
+use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::kernels::{
     ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, RefineClusters, TracePhotons,
     TraceVariant,
@@ -50,7 +51,7 @@ use crate::math::photon_clusters::{
 use crate::recording::Recording;
 use serde::{Deserialize, Serialize};
 
-/// When a relevant cluster stops being refined (seed 004 sections 3.2.1-2).
+/// When a relevant cluster stops being refined (Wyman 2009, sections 3.2.1-2).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AdaptiveMetric {
@@ -63,13 +64,13 @@ pub enum AdaptiveMetric {
     /// Maximal caustic map error: from `error_from_grid` on, a cluster whose four photons
     /// all stored in one caustic-map texel is output at once (its photons carry their
     /// coarse texels' flux, the cluster's solid angle or area); the rest is refined, and
-    /// output at the finest level (004's third condition). The default: it traces the
-    /// fewest photons (004 Figure 7), and here both metrics cost one kernel per step.
+    /// output at the finest level (Wyman 2009's third condition). The default: it traces the
+    /// fewest photons (Wyman 2009, Figure 7), and here both metrics cost one kernel per step.
     #[default]
     Error,
 }
 
-/// What keeps a traced cluster from being discarded (seed 004 section 3.2's first
+/// What keeps a traced cluster from being discarded (Wyman 2009, section 3.2's first
 /// condition, and a conservative one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -78,11 +79,11 @@ pub enum ClusterRelevance {
     /// the view plane overlaps the projection of a caster's bounding box. No photon that
     /// can meet a caster is lost: the level metric outputs exactly the dense grid's
     /// photons (bitwise the same atlas), and a caster smaller than a start-grid cell is
-    /// found. The default: 004's own test lost 0.2 to 1.9% of the stored flux on the
+    /// found. The default: Wyman 2009's own test lost 0.2 to 1.9% of the stored flux on the
     /// built-in scenes at 256^2 (`cornell` the most), at the casters' silhouettes.
     #[default]
     Bounds,
-    /// 004's test: kept when at least one of its four photons met a caster. Traces fewer
+    /// Wyman 2009's test: kept when at least one of its four photons met a caster. Traces fewer
     /// photons; loses what the coarse photons straddle.
     Photons,
 }
@@ -106,21 +107,49 @@ pub const LIST_BYTES_PER_ENTRY: u64 = 4;
 /// level's clusters, so that a frame records a bounded number of dispatches.
 pub const MAX_PASSES_PER_LEVEL: u64 = 64;
 
-/// The traversal's parameters (AdaptiveCaustics' fields of the same names).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The traversal's parameters (`traversal` in AdaptiveCaustics' settings).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct TraversalSettings {
     /// The stop metric.
     pub metric: AdaptiveMetric,
-    /// What keeps a cluster from being discarded.
+    /// What keeps a cluster from being discarded: `bounds` (the default) or Wyman 2009's
+    /// `photons`.
     pub relevance: ClusterRelevance,
-    /// Texels a side of the start grid (a power of two; 004 section 4.2: 64).
+    /// Texels a side of the start grid (Wyman 2009, section 4.2: 64, enough photons to
+    /// keep a GPU busy from the first step; a power of two).
     pub start_grid: u32,
-    /// Grid side from which the error metric is checked (004 section 4.2: 512).
+    /// Grid side from which the error metric is checked; coarser levels use the
+    /// traversal-level metric (Wyman 2009, section 4.2: from 512^2 on, since coarse
+    /// photons rarely converge).
     pub error_from_grid: u32,
-    /// The error metric's tolerance (texels a side).
+    /// The error metric's tolerance (texels): a cluster converges when its four photons
+    /// land in a square of at most this many caustic-map texels a side on one receiver,
+    /// and its photons are then splatted over a window that size (Wyman 2009, section
+    /// 3.2.2's alternative: "photon divergence greater than a single texel but less than a
+    /// user-defined tolerance", with its multi-resolution map). 1 (the default) is the
+    /// publication's metric: one texel, and a one-texel splat. At most 4; above 1 only
+    /// with the atlas deposit.
     pub error_texels: u32,
-    /// Device bytes the traversal may hold (004 section 4.3).
+    /// Device bytes the traversal may hold (Wyman 2009, section 4.3): the photon slots of
+    /// a batch (128 bytes per cluster) and one cluster list per level (16 bytes per
+    /// cluster of a batch each), plus the start grid's list. The batch size follows from
+    /// it; the result is bitwise the same for any value. The screen deposit also holds a
+    /// list of the batch's output photons (another 128 bytes per cluster).
     pub max_traversal_bytes: u64,
+}
+
+impl Default for TraversalSettings {
+    fn default() -> Self {
+        TraversalSettings {
+            metric: AdaptiveMetric::Error,
+            relevance: ClusterRelevance::Bounds,
+            start_grid: 64,
+            error_from_grid: 512,
+            error_texels: 1,
+            max_traversal_bytes: 64 << 20,
+        }
+    }
 }
 
 /// How the traversal's device memory is split (from [`TraversalSettings::sizes`]).
@@ -263,7 +292,7 @@ pub struct ScreenTarget {
     pub trace_counters: Buf<u32>,
 }
 
-/// Where the traversal's output photons go (seed 004's "splat into the caustic map", for
+/// Where the traversal's output photons go (Wyman 2009's "splat into the caustic map", for
 /// either technique's map).
 #[derive(Clone, Copy, Debug)]
 pub enum DepositTarget {
@@ -372,7 +401,7 @@ struct LevelRead {
 }
 
 /// What a frame's traversal reads back at the frame's end and how it becomes
-/// [`AdaptiveStats`] (an [`crate::frame::submitted::EndRead`]).
+/// [`AdaptiveStats`] (a [`FrameEnd`]).
 #[derive(Clone, Debug)]
 pub struct TraversalReadback {
     planes: Vec<Vec<LevelRead>>,
@@ -384,13 +413,13 @@ pub struct TraversalReadback {
     kernels: Vec<(usize, u32, &'static str)>,
 }
 
-impl TraversalReadback {
+impl FrameEnd for TraversalReadback {
     /// Puts the traversal's counts and the output photons' accounting into `stats`:
     /// stored, deposited and their flux are the output photons (the traced ones that
     /// were refined instead are not part of the map), emitted the photons traced. Call
     /// after the trace counters went in (`photons_traced_stored` takes their stored
     /// photons). A level's time is its kernels' when `times` holds them in order.
-    pub fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats) {
+    fn apply(&self, readbacks: &[Vec<u8>], times: &[PassTime], stats: &mut FrameStats) {
         let words = |k: usize| -> Vec<u32> {
             readbacks
                 .get(k)
@@ -455,7 +484,7 @@ impl TraversalReadback {
             }
         }
         stats.photons_emitted = a.photons_processed;
-        stats.adaptive = Some(a);
+        a.put(stats);
     }
 }
 
@@ -681,7 +710,7 @@ impl Traversal {
             frame.push(Recording::new(), plane.texels());
         }
         read.output_counters = frame.read_at_end(self.output_counters);
-        frame.end_read(EndRead::Traversal(Box::new(read)));
+        frame.end_read(EndRead::Own(std::sync::Arc::new(read)));
         Ok(())
     }
 }

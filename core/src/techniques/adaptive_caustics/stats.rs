@@ -1,0 +1,65 @@
+//! AdaptiveCaustics' own frame statistics: the photon work of its traversal, per level,
+//! as Wyman 2009's Table 1 counts it. A frame carries them in [`FrameStats::own`] under
+//! [`AdaptiveStats::KEY`].
+
+use crate::frame::stats::FrameStats;
+use serde::{Deserialize, Serialize};
+
+/// The photon work of one adaptive traversal (Wyman 2009, section 3.2, its Table 1's
+/// "photons processed"), summed over the light view planes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AdaptiveStats {
+    /// Every photon traced, at every level.
+    pub photons_processed: u64,
+    /// Photons the tracer stored, at every level (the output ones are `photons_stored`
+    /// of the frame): with the frame's `discarded` path ends they add up to
+    /// `photons_processed`.
+    pub photons_traced_stored: u64,
+    /// Photons the dense grid at the finest level would trace (its texels).
+    pub dense_equivalent_photons: u64,
+    /// Photons traced per level (index 0: the start grid).
+    pub photons_per_level: Vec<u64>,
+    /// Photons deposited (of output clusters), per level.
+    pub photons_output_per_level: Vec<u64>,
+    /// Time of each level's steps (`trace_photons` and `refine_clusters` of its batches
+    /// and of its converged clusters' fresh photons), in ms of the frame's `timing`
+    /// (device timestamps or host wall clock).
+    pub ms_per_level: Vec<f64>,
+    /// Clusters whose photons were deposited.
+    pub clusters_output: u64,
+    /// Clusters none of whose photons met a caster.
+    pub clusters_discarded: u64,
+    /// Clusters refined into four children.
+    pub clusters_refined: u64,
+    /// Clusters that converged before the finest level (the error metric), output from
+    /// four fresh photons each (counted in `clusters_output` too).
+    pub clusters_converged: u64,
+    /// Clusters to be refined whose children did not fit the next level's list (the
+    /// byte limit caps the lists): output at their level from four fresh photons each
+    /// (counted in `clusters_output` too), so that no photon is lost.
+    pub clusters_overflowed: u64,
+    /// Traversal passes that had clusters (a trace and a refinement of one pass of one
+    /// level, or of its converged clusters).
+    pub steps: u32,
+}
+
+impl AdaptiveStats {
+    /// The name of these statistics in [`FrameStats::own`] (and the frame's JSON form).
+    pub const KEY: &'static str = "adaptive";
+
+    /// The traversal's statistics of a frame: `None` for the other techniques and for
+    /// frames without photon work.
+    pub fn of(stats: &FrameStats) -> Option<AdaptiveStats> {
+        stats
+            .own
+            .get(Self::KEY)
+            .and_then(|v| serde_json::from_value(v.clone()).ok())
+    }
+
+    /// Puts these statistics into the frame's.
+    pub fn put(&self, stats: &mut FrameStats) {
+        if let Ok(v) = serde_json::to_value(self) {
+            stats.own.insert(Self::KEY.into(), v);
+        }
+    }
+}
