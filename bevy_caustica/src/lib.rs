@@ -29,7 +29,7 @@ use bevy::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-pub use render::output_name;
+pub use render::added_output;
 
 /// Which of caustica's techniques a camera runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
@@ -76,7 +76,8 @@ pub struct Caustics {
     /// Photons per light per frame, as a square grid of `photons x photons`.
     pub photons: u32,
     /// More of the technique's settings, a JSON object as `caustica::techniques::create`
-    /// takes them (`serde_json::Value::Null`: the defaults), e.g. `{"atlas_size": 1024}`.
+    /// takes them (`serde_json::Value::Null`: the defaults), e.g. `{"atlas": {"atlas_size":
+    /// 1024}}`; the photon grid and the outputs are the plugin's.
     pub settings: serde_json::Value,
     /// A factor on the added light (1: physically as computed).
     pub strength: f32,

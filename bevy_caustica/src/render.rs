@@ -20,46 +20,19 @@ use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::{Camera as CCamera, Material, Object, Scene, Shape};
 use caustica::wgpu;
-use caustica::{FrameTicket, Submission, Technique};
+use caustica::technique_spec::put_setting;
+use caustica::{FrameTicket, Output, Submission, Technique};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::future::Future;
 use std::sync::Arc;
 
 /// The camera-space output of `technique` that the plugin adds to Bevy's image: the
-/// filtered caustics, PhotonGi's filtered indirect light. With [`only_the_added_output`]
-/// and [`encode_added_light`], the one place that names outputs.
-pub fn output_name(technique: CausticsTechnique) -> &'static str {
+/// filtered caustics, PhotonGi's filtered indirect light (with [`settings_json`] and
+/// [`encode_added_light`], the one place that names outputs).
+pub fn added_output(technique: CausticsTechnique) -> Output {
     match technique {
-        CausticsTechnique::PhotonGi => "indirect",
-        _ => "caustics_filtered",
-    }
-}
-
-/// `settings` asking for the output the plugin adds alone (no direct light, no composite:
-/// Bevy does those): every `outputs` in it, a list of output names or the earlier flags.
-fn only_the_added_output(settings: &mut serde_json::Value, technique: CausticsTechnique) {
-    let name = output_name(technique);
-    // the earlier flag of an output (the screen and atlas receivers' `outputs`)
-    let flag = match name {
-        "caustics_filtered" => "filtered_caustics",
-        other => other,
-    };
-    if let Some(o) = settings.as_object_mut() {
-        for (k, x) in o.iter_mut() {
-            match (k.as_str(), x) {
-                ("outputs", serde_json::Value::Array(list)) => {
-                    *list = vec![name.into()];
-                }
-                ("outputs", serde_json::Value::Object(flags)) => {
-                    for (f, on) in flags.iter_mut() {
-                        if on.is_boolean() {
-                            *on = serde_json::Value::Bool(f == flag);
-                        }
-                    }
-                }
-                (_, x) => only_the_added_output(x, technique),
-            }
-        }
+        CausticsTechnique::PhotonGi => Output::FilteredIndirect,
+        _ => Output::FilteredCaustics,
     }
 }
 
@@ -73,7 +46,7 @@ fn encode_added_light(
     encoder: &mut wgpu::CommandEncoder,
 ) -> Result<bool, String> {
     match technique
-        .output_image(output_name(kind))
+        .output_image(added_output(kind))
         .map_err(|e| e.to_string())?
     {
         Some(image) => {
@@ -217,27 +190,20 @@ fn extract_caustica(
     state.cameras = cameras.iter().map(|(e, c)| (e, c.clone())).collect();
 }
 
-/// caustica's settings JSON for `c`: the technique's defaults, the photon grid, only the
-/// output the plugin adds (no direct light or composite: Bevy does those), then the
-/// user's own settings.
+/// caustica's settings JSON for `c`: the user's own settings (laid over the technique's
+/// defaults when it is made), with the camera's photon grid and only the output the
+/// plugin adds (no direct light or composite: Bevy does those).
 fn settings_json(c: &Caustics) -> serde_json::Value {
-    let name = c.technique.registry_name();
-    let mut v = caustica::techniques::TECHNIQUES
-        .iter()
-        .find(|t| t.name == name)
-        .map(|t| (t.default_settings)())
-        .unwrap_or_else(|| serde_json::json!({}));
-    only_the_added_output(&mut v, c.technique);
-    if let Some(o) = v.as_object_mut() {
-        o.insert("photons_w".into(), c.photons.max(1).into());
-        o.insert("photons_h".into(), c.photons.max(1).into());
-    }
-    if let (Some(o), Some(user)) = (v.as_object_mut(), c.settings.as_object()) {
-        for (k, x) in user {
-            o.insert(k.clone(), x.clone());
-        }
-    }
-    v
+    let mut s = c.settings.as_object().cloned().unwrap_or_default();
+    let side = c.photons.max(1);
+    put_setting(&mut s, "frame.photons_w", side.into());
+    put_setting(&mut s, "frame.photons_h", side.into());
+    put_setting(
+        &mut s,
+        "frame.outputs",
+        serde_json::json!([added_output(c.technique)]),
+    );
+    serde_json::Value::Object(s)
 }
 
 fn create_technique(
@@ -547,21 +513,9 @@ fn prepare_caustica(
     if !state.tried_backend {
         state.tried_backend = true;
         let opened = open_backend(&device, &queue);
-        // `WgpuBackend::from_device` installs caustica's own uncaptured-error handler on
-        // the device, in place of Bevy's (even when it then fails): Bevy's validation
-        // errors would fail caustica's next frame, and Bevy would no longer see any.
-        // Every uncaptured error is logged here instead, as Bevy logs them; caustica's
-        // own errors are caught by the error scopes around each caustica call (`scoped`).
-        device
-            .wgpu_device()
-            .on_uncaptured_error(std::sync::Arc::new(|e: wgpu::Error| {
-                let line = match &e {
-                    wgpu::Error::Validation { description, .. }
-                    | wgpu::Error::Internal { description, .. } => description.clone(),
-                    other => other.to_string(),
-                };
-                error!("Caught rendering error: {line}");
-            }));
+        // Bevy's device keeps Bevy's own uncaptured-error handler (caustica installs none
+        // on a host's device); caustica's errors in the plugin's calls are caught by the
+        // error scopes around them (`scoped`).
         match opened {
             Ok(b) => {
                 state.backend = Some(b);

@@ -85,13 +85,11 @@ fn caustica_reference(app: &mut App, cam: Entity, seed: u32) -> Vec<f32> {
         })],
     };
     let mut backend = caustica::backends::wgpu::WgpuBackend::new().expect("a wgpu adapter");
-    let settings = caustica::SspmSettings {
-        photons_w: 256,
-        photons_h: 256,
-        seed,
-        outputs: caustica::Outputs::CAUSTICS_ONLY,
-        ..Default::default()
-    };
+    use caustica::TechniqueSettings;
+    let settings = caustica::SspmSettings::default()
+        .with_photons(256, 256)
+        .with_seed(seed)
+        .with_outputs(caustica::Outputs::CAUSTICS_ONLY);
     let mut t = caustica::Sspm::new(&mut backend, &scene, settings).expect("sspm");
     t.frame(&mut backend, &mut |_| {}).expect("a frame");
     let img = t
