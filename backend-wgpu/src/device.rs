@@ -84,7 +84,7 @@ impl WgpuBackend {
         }))
         .map_err(|e| unavailable(format!("{} refused a device: {e}", info.name)))?;
         let description = format!("{} ({:?}, {})", info.name, info.backend, info.driver_info);
-        let mut b = WgpuBackend::from_device(device, queue, &description)?;
+        let mut b = WgpuBackend::adopt(device, queue, &description, true)?;
         b.device_type = match info.device_type {
             wgpu::DeviceType::DiscreteGpu => DeviceType::DiscreteGpu,
             wgpu::DeviceType::IntegratedGpu => DeviceType::IntegratedGpu,
@@ -95,19 +95,24 @@ impl WgpuBackend {
         Ok(b)
     }
 
-    /// [`WgpuBackend::from_device`]'s body.
+    /// [`WgpuBackend::from_device`]'s body; `own_device`: a device caustica opened
+    /// itself, whose uncaptured errors it collects (a caller's device keeps the caller's
+    /// handler).
     pub(crate) fn adopt(
         device: wgpu::Device,
         queue: wgpu::Queue,
         description: &str,
+        own_device: bool,
     ) -> Result<WgpuBackend, BackendError> {
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
-        let sink = Arc::clone(&uncaptured);
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
-            }
-        }));
+        if own_device {
+            let sink = Arc::clone(&uncaptured);
+            device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                if let Ok(mut v) = sink.lock() {
+                    v.push(e.to_string());
+                }
+            }));
+        }
         let mut pipelines = HashMap::new();
         for (name, _) in shaders::KERNELS {
             if !shaders::VARIANT_KERNELS.contains(name) {

@@ -71,13 +71,16 @@ impl WgpuBackend {
 
     /// Embeds the backend in a caller's renderer: uses the caller's `device` and `queue`
     /// (its features and limits; timestamps when the device has `TIMESTAMP_QUERY`).
-    /// `description` names the device in [`Capabilities`].
+    /// `description` names the device in [`Capabilities`]. The device stays the caller's:
+    /// caustica installs no uncaptured-error handler on it (the caller's own keeps
+    /// receiving the device's errors, caustica's included); caustica's pipeline and buffer
+    /// creation check their own errors with error scopes.
     pub fn from_device(
         device: wgpu::Device,
         queue: wgpu::Queue,
         description: &str,
     ) -> Result<WgpuBackend, BackendError> {
-        backend_lifecycle(|| Self::adopt(device, queue, description))
+        backend_lifecycle(|| Self::adopt(device, queue, description, false))
     }
 
     /// The device and queue in use (for a caller that embeds the backend).
