@@ -256,10 +256,12 @@ fn nest_flat_fields(
             out.insert(k.clone(), v.clone());
             continue;
         }
+        // the earlier flat form held only fields one block deep
         let mut found = Vec::new();
         find_field(base, k, "", &mut found);
+        found.retain(|p| p.matches('.').count() == 1);
         match found.as_slice() {
-            [one] if one.matches('.').count() == 1 => moved.push((one.clone(), v.clone())),
+            [one] => moved.push((one.clone(), v.clone())),
             [] => {
                 out.insert(k.clone(), v.clone()); // `merge` names it as unknown
             }
