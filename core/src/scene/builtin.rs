@@ -297,7 +297,9 @@ pub const POOL_WATER: usize = 5;
 /// light too), irradiance 2. Camera above the water's edge at (-0.5, 1.8, 2.8) looking
 /// down at (0.35, -1, -0.8), fov 50 deg. The water casts every shadow under it, so the
 /// floor shows only the light the waves focus: the caustic network (the wall at -x, which
-/// the sun does not reach, stays dark).
+/// the sun does not reach, stays dark). The camera sees the floor only through the water,
+/// where CausticMap's and AdaptiveCaustics' atlases show caustics; Sspm's screen-space
+/// photons land only on surfaces in direct view, here the deck.
 pub fn pool() -> Scene {
     let (h, depth, deck) = (2.0, 1.0, 0.15);
     let wall_y = (deck - depth) / 2.0;
@@ -317,7 +319,7 @@ pub fn pool() -> Scene {
     let (outer, stone) = (h + 2.0, h + 1.0);
     Scene {
         name: "pool".into(),
-        description: "Swimming pool seen from its edge: waves (IOR 1.33) focus the sun into a caustic network on the floor 1 below (render --animate SECONDS moves them)".into(),
+        description: "Swimming pool seen from its edge: waves (IOR 1.33) focus the sun into a caustic network on the floor 1 below, seen through the water (--technique caustic-map; --animate SECONDS moves the waves)".into(),
         camera: camera(Vec3::new(-0.5, 1.8, 2.8), Vec3::new(0.35, -1.0, -0.8), 50.0),
         materials: BTreeMap::from([
             (
