@@ -237,3 +237,53 @@ fn gltf_scenes_export_render_and_fail_cleanly() {
         "json or gltf",
     );
 }
+
+/// `--animate` needs a height field and a finite time step, and says so in one line.
+#[test]
+fn animate_without_a_height_field_or_with_a_bad_step() {
+    fails_cleanly(
+        &["render", "--scene", "sphere", "--animate", "0.1"],
+        "no height field",
+    );
+    fails_cleanly(&["render", "--scene", "pool", "--animate", "inf"], "finite");
+}
+
+/// `render --animate` writes every frame's composite, and the waves move between them.
+#[test]
+fn animate_writes_every_frame_and_the_waves_move() {
+    let out_dir = std::env::temp_dir().join(format!("caustica-waves-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let out = caustica(&[
+        "render",
+        "--scene",
+        "pool",
+        "--technique",
+        "caustic-map",
+        "--photons",
+        "64x64",
+        "--size",
+        "48x27",
+        "--frames",
+        "3",
+        "--animate",
+        "0.25",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let frames: Vec<Vec<u8>> = (0..3)
+        .map(|f| std::fs::read(out_dir.join(format!("pool_f{f:03}_composite.png"))).expect("frame"))
+        .collect();
+    assert!(
+        frames[0] != frames[1] && frames[1] != frames[2],
+        "the frames are the same"
+    );
+    // the last frame is also the run's composite
+    let last = std::fs::read(out_dir.join("pool_composite.png")).expect("composite");
+    assert!(last == frames[2]);
+    let _ = std::fs::remove_dir_all(&out_dir);
+}

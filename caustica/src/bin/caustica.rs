@@ -153,6 +153,14 @@ enum Command {
         /// new seed.
         #[arg(long, default_value_t = 1)]
         frames: u32,
+        /// Seconds of scene time between frames: the scene's height fields (the `pool`'s
+        /// water) become instances whose waves travel as deep-water waves do
+        /// (`Wave::advanced`), each frame's new surface given to the technique through
+        /// `set_object_vertices` (no rebuild), and every frame's composite is written as
+        /// NAME_fNNN_composite.png. Frames keep one seed and do not accumulate unless the
+        /// settings say so.
+        #[arg(long)]
+        animate: Option<f32>,
         /// Output directory.
         #[arg(long, default_value = "out")]
         out: PathBuf,
@@ -585,6 +593,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             settings,
             filter,
             frames,
+            animate,
             out,
         } => {
             if !technique_names().contains(&technique.as_str()) {
@@ -635,6 +644,30 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             if frames == 0 {
                 return Err("--frames must be at least 1".into());
             }
+            // the height fields that --animate moves, each made an instance
+            let mut animated = Vec::new();
+            if let Some(dt) = animate {
+                if !dt.is_finite() {
+                    return Err("--animate must be a finite number of seconds".into());
+                }
+                for (k, o) in scene.objects.iter_mut().enumerate() {
+                    if matches!(o.shape, caustica::scene::Shape::HeightField { .. }) {
+                        o.transform
+                            .get_or_insert(caustica::scene::Transform::IDENTITY);
+                        animated.push(k);
+                    }
+                }
+                if animated.is_empty() {
+                    return Err(format!(
+                        "--animate: scene '{}' has no height field to animate",
+                        scene.name
+                    )
+                    .into());
+                }
+                if get_setting(&s, "frame.accumulate").is_none() {
+                    put_setting(&mut s, "frame.accumulate", false.into());
+                }
+            }
             let defaults = TECHNIQUES
                 .iter()
                 .find(|t| t.name == technique)
@@ -672,7 +705,14 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             let mut frames_and_images = || -> Result<FrameStats, String> {
                 let mut stats = None;
                 for f in 0..frames {
-                    if f > 0 && !accumulates {
+                    if let (Some(dt), true) = (animate, f > 0) {
+                        for &k in &animated {
+                            let shape = scene.objects[k].shape.advanced(dt * f as f32);
+                            let m = caustica::scene::shapes::tessellate(&shape);
+                            t.set_object_vertices(be.as_mut(), k, &m.positions, &m.normals)
+                                .map_err(|e| e.to_string())?;
+                        }
+                    } else if f > 0 && !accumulates {
                         t.set_seed(base_seed.wrapping_add(f));
                     }
                     stats = Some(
@@ -682,6 +722,13 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                         })
                         .map_err(|e| e.to_string())?,
                     );
+                    if animate.is_some() {
+                        let img = t
+                            .read_output(be.as_mut(), caustica::Output::Composite)
+                            .map_err(|e| e.to_string())?;
+                        let png = out.join(format!("{stem}_f{f:03}_composite.png"));
+                        write_png(&png, &img, exposure)?;
+                    }
                 }
                 let stats = stats.expect("at least one frame");
                 for output in t.outputs().into_iter().filter(|o| o.requested) {

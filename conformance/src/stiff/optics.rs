@@ -18,6 +18,10 @@ use glam::Vec3;
 /// directional light in the xy plane meeting the left face at incidence `i`.
 fn prism_scene(incidence_deg: f32) -> Scene {
     let mut s = sized(builtin::prism(), SIZE);
+    // the prism alone over the sphere scene's 4 x 4 white plane: the built-in scene's room
+    // (the wall with its slit, the ceiling) would shade these lights
+    s.objects.retain(|o| matches!(o.shape, Shape::Prism { .. }));
+    s.objects.insert(0, builtin::sphere().objects[0].clone());
     s.materials.insert("flint".into(), glass(1.5));
     // The left face's outward normal is (-cos 30, sin 30, 0); light travelling along d
     // meets it at incidence i when d = -rotate(n, +-i). Rotating -n by -i (towards -y):

@@ -243,16 +243,84 @@ pub fn cornell() -> Scene {
     }
 }
 
-/// `pool`: a 4 x 4 water surface (IOR 1.33) at y = 0 with three sine waves (amplitudes
-/// 0.02-0.03, wavelengths 0.6-1.3) over a light blue-grey pool floor at y = -1, under a
-/// directional light travelling along (0.15, -1, 0.1), irradiance 2. Camera at (0, 2.6, 3.2)
-/// looking at (0, -0.8, 0), fov 45 deg. The water is a single surface: photons refract
-/// into it and land on the floor.
+/// Object `name` of `material`: the parallelogram `center + s u + t v`, `s, t` in
+/// [-1, 1], facing `u x v`.
+fn rect(name: &str, material: &str, center: Vec3, u: Vec3, v: Vec3) -> Object {
+    obj(name, material, Shape::Quad { center, u, v })
+}
+
+/// Curvature (1/m) of each of the pool's wave crests: `a k^2` with `k = 2 pi / wavelength`.
+const POOL_CREST_CURVATURE: f32 = 1.2;
+
+/// The pool's water at time 0: seven sine waves summed, wavelengths 0.36-1.1 in seven
+/// directions, each of amplitude `1.2 wavelength^2 / (4 pi^2)` (0.004-0.037), so that every
+/// crest has the curvature `kappa = a k^2 = 1.2` per metre. A crest focuses refracted
+/// sunlight about `n / ((n - 1) kappa)` below it: 3.4 m for one wave alone, 1 m or less
+/// where three or more crests add, so the floor 1 below catches the sharp network of their
+/// focal lines.
+fn pool_waves() -> Vec<Wave> {
+    // (wavelength, direction in degrees from +x towards +z, phase)
+    [
+        (1.1f32, 10.0f32, 0.0f32),
+        (0.83, 75.0, 1.3),
+        (0.67, 140.0, 2.1),
+        (0.57, 200.0, 4.0),
+        (0.49, 260.0, 0.7),
+        (0.41, 320.0, 3.3),
+        (0.36, 35.0, 5.1),
+    ]
+    .into_iter()
+    .map(|(wavelength, deg, phase)| {
+        let k = std::f32::consts::TAU / wavelength;
+        let (s, c) = deg.to_radians().sin_cos();
+        Wave {
+            amplitude: POOL_CREST_CURVATURE / (k * k),
+            wavelength,
+            direction: Vec2::new(c, s),
+            phase,
+        }
+    })
+    .collect()
+}
+
+/// Index of the water in [`pool`]'s objects (an instance: its transform is the identity,
+/// so its waves can be moved with `Technique::set_object_vertices`).
+pub const POOL_WATER: usize = 5;
+
+/// `pool`: a basin 4 x 4 and 1 deep: a tiled floor (light blue-grey) at y = -1 inside
+/// four tiled walls rising to a stone deck at y = 0.15 that runs 2 wide around it; the
+/// water (IOR 1.33) is a height field filling the basin exactly (x, z in [-2, 2], 256
+/// quads a side, mean level y = 0) of the seven waves of [`pool_waves`], an instance with
+/// the identity transform ([`POOL_WATER`]) so that a frame loop can move its waves
+/// ([`Wave::advanced`], `Technique::set_object_vertices`). Sun: a directional light
+/// travelling along (0.15, -1, -0.25) (away from the camera, so that the far wall catches
+/// light too), irradiance 2. Camera above the water's edge at (-0.5, 1.8, 2.8) looking
+/// down at (0.35, -1, -0.8), fov 50 deg. The water casts every shadow under it, so the
+/// floor shows only the light the waves focus: the caustic network (the wall at -x, which
+/// the sun does not reach, stays dark). The camera sees the floor only through the water,
+/// where CausticMap's and AdaptiveCaustics' atlases show caustics; Sspm's screen-space
+/// photons land only on surfaces in direct view, here the deck.
 pub fn pool() -> Scene {
+    let (h, depth, deck) = (2.0, 1.0, 0.15);
+    let wall_y = (deck - depth) / 2.0;
+    let wall_h = (deck + depth) / 2.0;
+    let mut water = obj(
+        "water",
+        "water",
+        Shape::HeightField {
+            center: Vec3::ZERO,
+            size: Vec2::splat(2.0 * h),
+            resolution: 256,
+            waves: pool_waves(),
+        },
+    );
+    water.transform = Some(super::Transform::IDENTITY);
+    // the deck's outer edge and the middle of its slabs
+    let (outer, stone) = (h + 2.0, h + 1.0);
     Scene {
         name: "pool".into(),
-        description: "Wavy water surface (IOR 1.33) over a pool floor, sun from above".into(),
-        camera: camera(Vec3::new(0.0, 2.6, 3.2), Vec3::new(0.0, -0.8, 0.0), 45.0),
+        description: "Swimming pool seen from its edge: waves (IOR 1.33) focus the sun into a caustic network on the floor 1 below, seen through the water (--technique caustic-map; --animate SECONDS moves the waves)".into(),
+        camera: camera(Vec3::new(-0.5, 1.8, 2.8), Vec3::new(0.35, -1.0, -0.8), 50.0),
         materials: BTreeMap::from([
             (
                 "tiles".into(),
@@ -260,59 +328,94 @@ pub fn pool() -> Scene {
                     albedo: Vec3::new(0.6, 0.75, 0.8),
                 },
             ),
+            (
+                "stone".into(),
+                Material::Diffuse {
+                    albedo: Vec3::new(0.7, 0.66, 0.6),
+                },
+            ),
             ("water".into(), glass(1.33)),
         ]),
         objects: vec![
-            obj("floor", "tiles", floor(2.5, -1.0)),
-            obj(
-                "water",
-                "water",
-                Shape::HeightField {
-                    center: Vec3::ZERO,
-                    size: Vec2::splat(4.0),
-                    resolution: 160,
-                    waves: vec![
-                        Wave {
-                            amplitude: 0.03,
-                            wavelength: 1.3,
-                            direction: Vec2::new(1.0, 0.3),
-                            phase: 0.0,
-                        },
-                        Wave {
-                            amplitude: 0.02,
-                            wavelength: 0.8,
-                            direction: Vec2::new(-0.4, 1.0),
-                            phase: 1.0,
-                        },
-                        Wave {
-                            amplitude: 0.02,
-                            wavelength: 0.6,
-                            direction: Vec2::new(0.7, -0.7),
-                            phase: 2.0,
-                        },
-                    ],
-                },
-            ),
+            obj("floor", "tiles", floor(h, -depth)),
+            // the walls face the water
+            rect("wall -x", "tiles", Vec3::new(-h, wall_y, 0.0), Vec3::Y * wall_h, Vec3::Z * h),
+            rect("wall +x", "tiles", Vec3::new(h, wall_y, 0.0), Vec3::Z * h, Vec3::Y * wall_h),
+            rect("wall -z", "tiles", Vec3::new(0.0, wall_y, -h), Vec3::X * h, Vec3::Y * wall_h),
+            rect("wall +z", "tiles", Vec3::new(0.0, wall_y, h), Vec3::Y * wall_h, Vec3::X * h),
+            water,
+            // the deck: four slabs around the basin, facing up
+            rect("deck -z", "stone", Vec3::new(0.0, deck, -stone), Vec3::X * outer, -Vec3::Z * (outer - h) * 0.5),
+            rect("deck +z", "stone", Vec3::new(0.0, deck, stone), Vec3::X * outer, -Vec3::Z * (outer - h) * 0.5),
+            rect("deck -x", "stone", Vec3::new(-stone, deck, 0.0), Vec3::X * (outer - h) * 0.5, -Vec3::Z * h),
+            rect("deck +x", "stone", Vec3::new(stone, deck, 0.0), Vec3::X * (outer - h) * 0.5, -Vec3::Z * h),
         ],
         lights: vec![Light::Directional {
-            direction: Vec3::new(0.15, -1.0, 0.1),
+            direction: Vec3::new(0.15, -1.0, -0.25),
             irradiance: Vec3::splat(2.0),
             projection_volume: None,
         }],
     }
 }
 
-/// `prism`: a dispersive glass prism (IOR 1.5 at 550 nm, Cauchy B = 0.04 um^2, side 0.6,
-/// length 1, axis along z, centred at (0, 0.7, 0)) over a 4 x 4 white plane, lit by a
-/// directional light travelling along (1, -0.3, 0) (irradiance 4): the refracted beam
-/// lands on the plane as a spectrum. Camera at (0.6, 3.0, 2.8) looking at (0.6, 0, 0).
+/// The prism's wall with the slit: the plane x = `PRISM_SLIT_X`.
+pub const PRISM_SLIT_X: f32 = -0.4;
+/// Centre height of the prism's slit (y).
+pub const PRISM_SLIT_Y: f32 = 0.7;
+/// Half-height of the prism's slit (scene units).
+pub const PRISM_SLIT_HALF_HEIGHT: f32 = 0.02;
+/// Half-length of the prism's slit along z (scene units).
+pub const PRISM_SLIT_HALF_LENGTH: f32 = 0.35;
+/// The prism's screen: the plane x = `PRISM_SCREEN_X`, facing -x.
+pub const PRISM_SCREEN_X: f32 = 1.5;
+
+/// The direction of the prism's beam: in the xy plane, rising at
+/// `asin(1.5 sin 30 deg) - 30 deg = 18.59 deg`, the angle at which light of index 1.5 (the
+/// flint's at 550 nm, the green channel's) passes the prism at minimum deviation, parallel
+/// to its base inside.
+pub fn prism_beam_direction() -> Vec3 {
+    let rise = (1.5f32 * 0.5).asin() - 30f32.to_radians();
+    Vec3::new(rise.cos(), rise.sin(), 0.0)
+}
+
+/// `prism`: Newton's experiment in a dark room 1.9 x 1.8 x 1.4, open at the front.
+/// A collimated beam ([`prism_beam_direction`], irradiance 4) passes a slit 0.04 x 0.7
+/// (centre y = 0.7, along z) in the left wall (x = -0.4) and meets a dispersive flint
+/// prism (IOR 1.5 at 550 nm, Cauchy B = 0.04 um^2, so 1.462, 1.5 and 1.565 at the
+/// channels' 650, 550 and 450 nm; equilateral, side 0.6, length 1, axis along z, centred
+/// at (0, 0.7, 0), apex up). Each channel leaves at its own angle (15.4, 18.6 and 24.6 deg
+/// below the horizontal) and lands on the white screen that is the right wall (x = 1.5) as
+/// its own band, red highest: three separated bands 0.7 long and 0.04 tall at heights
+/// 0.42, 0.33 and 0.17. The beam's photons start over a box around the slit (the light's
+/// projection volume); the wall shades the room from the rest of the light. A dim room
+/// light under the ceiling (y = 1.4; point, 1 W/sr at (0.8, 1.3, -0.6), behind the prism
+/// so that its shadow falls away from the view) lights the floor, the walls and the
+/// backdrop (the back wall, z = -0.9) that the glass shows, and casts the prism's faint
+/// caustic of its own. Camera at (0.3, 1.05, 2) looking at (0.7, 0.55, -0.1), fov 50 deg.
 pub fn prism() -> Scene {
+    let (xw, xs, zb) = (PRISM_SLIT_X, PRISM_SCREEN_X, -0.9);
+    let (ys, hs, ls) = (PRISM_SLIT_Y, PRISM_SLIT_HALF_HEIGHT, PRISM_SLIT_HALF_LENGTH);
+    let top = 1.4;
+    let (zf, zmid) = (0.9, 0.0);
+    let below = ys - hs;
+    let above = ys + hs;
+    // the left wall around the slit, facing the room (+x)
+    let wall = |name: &str, y0: f32, y1: f32, z0: f32, z1: f32| {
+        rect(
+            name,
+            "grey",
+            Vec3::new(xw, 0.5 * (y0 + y1), 0.5 * (z0 + z1)),
+            Vec3::Y * (0.5 * (y1 - y0)),
+            Vec3::Z * (0.5 * (z1 - z0)),
+        )
+    };
     Scene {
         name: "prism".into(),
-        description: "Dispersive glass prism casting a spectrum".into(),
-        camera: camera(Vec3::new(0.6, 3.0, 2.8), Vec3::new(0.6, 0.0, 0.0), 45.0),
+        description: "Dispersive prism (Cauchy B 0.04) in a dark room: a beam through a slit lands on the screen as three separated bands, red, green and blue, one per dispersion channel (650, 550, 450 nm)".into(),
+        camera: camera(Vec3::new(0.3, 1.05, 2.0), Vec3::new(0.7, 0.55, -0.1), 50.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.8)),
+            ("grey".into(), diffuse(0.5)),
             (
                 "flint".into(),
                 Material::Dielectric {
@@ -323,7 +426,7 @@ pub fn prism() -> Scene {
             ),
         ]),
         objects: vec![
-            obj("plane", "white", floor(2.0, 0.0)),
+            rect("floor", "grey", Vec3::new(0.5, 0.0, 0.2), Vec3::X * 1.5, -Vec3::Z * 1.4),
             obj(
                 "prism",
                 "flint",
@@ -333,12 +436,46 @@ pub fn prism() -> Scene {
                     length: 1.0,
                 },
             ),
+            rect(
+                "screen",
+                "white",
+                Vec3::new(xs, 0.5 * top, zmid),
+                Vec3::Z * zf,
+                Vec3::Y * (0.5 * top),
+            ),
+            rect(
+                "backdrop",
+                "grey",
+                Vec3::new(0.5 * (xw + xs), 0.5 * top, zb),
+                Vec3::X * (0.5 * (xs - xw)),
+                Vec3::Y * (0.5 * top),
+            ),
+            rect(
+                "ceiling",
+                "grey",
+                Vec3::new(0.5 * (xw + xs), top, zmid),
+                Vec3::X * (0.5 * (xs - xw)),
+                Vec3::Z * zf,
+            ),
+            wall("wall below the slit", 0.0, below, -zf, zf),
+            wall("wall above the slit", above, top, -zf, zf),
+            wall("wall behind the slit", below, above, -zf, -ls),
+            wall("wall before the slit", below, above, ls, zf),
         ],
-        lights: vec![Light::Directional {
-            direction: Vec3::new(1.0, -0.3, 0.0),
-            irradiance: Vec3::splat(4.0),
-            projection_volume: None,
-        }],
+        lights: vec![
+            Light::Directional {
+                direction: prism_beam_direction(),
+                irradiance: Vec3::splat(4.0),
+                projection_volume: Some(Aabb {
+                    min: Vec3::new(xw - 0.01, below, -ls),
+                    max: Vec3::new(-0.25, above, ls),
+                }),
+            },
+            Light::Point {
+                position: Vec3::new(0.8, 1.3, -0.6),
+                intensity: Vec3::splat(1.0),
+            },
+        ],
     }
 }
 
