@@ -31,12 +31,12 @@ else
 fi
 
 start=$(date +%s)
-"${cargo[@]}" test "${flags[@]}" --locked --no-run
+"${cargo[@]}" test "${flags[@]}" --no-run
 built=$(date +%s)
-"${cargo[@]}" test "${flags[@]}" --locked -- --test-threads 1
+"${cargo[@]}" test "${flags[@]}" -- --test-threads 1
 tested=$(date +%s)
 # the example, headless and small (its debug build came with the tests)
-"${cargo[@]}" run "${flags[@]}" --locked --example glass_ball -- \
+"${cargo[@]}" run "${flags[@]}" --example glass_ball -- \
     --frames 20 --size 320x192 --out target/ci-glass-ball
 done_at=$(date +%s)
 echo "bevy_caustica: build $((built - start)) s, tests $((tested - built)) s, example $((done_at - tested)) s"
