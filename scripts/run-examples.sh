@@ -20,6 +20,7 @@ mkdir -p out/examples
 run load_gltf out/examples/jelly.gltf 96x54 128
 run embed_wgpu 96x54 128
 run frame_loop 96x54 128 20
+run shape_update cpu 64
 run embed_ash 96x54 64
 run compare_techniques cpu sphere 256
 run sspm_against_light_tracer sphere 48x27 262144 2 64,128 1 mesh hidden

@@ -6,6 +6,7 @@
 //! on the device: a frame's statistics are collected once the device is done, after
 //! Bevy's submission, and handed to the main world's [`CausticaStats`].
 
+use crate::convert::MeshGeometry;
 use crate::world::WorldSnapshot;
 use crate::{CameraCaustics, CausticaStats, Caustics, CausticsStatus, CausticsTechnique};
 use bevy::core_pipeline::schedule::{Core3d, Core3dSystems};
@@ -19,8 +20,8 @@ use bevy::render::view::{ExtractedView, ViewTarget};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderSystems};
 use caustica::backends::wgpu::WgpuBackend;
 use caustica::scene::{Camera as CCamera, Material, Object, Scene, Shape};
-use caustica::wgpu;
 use caustica::technique_spec::put_setting;
+use caustica::wgpu;
 use caustica::{FrameTicket, Output, Submission, Technique};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::future::Future;
@@ -252,12 +253,7 @@ fn scene_of(snapshot: &WorldSnapshot, camera: &CCamera) -> Scene {
         objects.push(Object {
             name: format!("{entity}"),
             material: material_name(i),
-            shape: Shape::Mesh {
-                positions: o.mesh.positions.clone(),
-                normals: o.mesh.normals.clone(),
-                uvs: o.mesh.uvs.clone(),
-                indices: o.mesh.indices.clone(),
-            },
+            shape: mesh_shape(&o.mesh),
             transform: Some(o.transform),
         });
     }
@@ -268,6 +264,16 @@ fn scene_of(snapshot: &WorldSnapshot, camera: &CCamera) -> Scene {
         materials,
         objects,
         lights: snapshot.lights.clone(),
+    }
+}
+
+/// A mesh read from Bevy as caustica's shape.
+fn mesh_shape(m: &MeshGeometry) -> Shape {
+    Shape::Mesh {
+        positions: m.positions.clone(),
+        normals: m.normals.clone(),
+        uvs: m.uvs.clone(),
+        indices: m.indices.clone(),
     }
 }
 
@@ -293,12 +299,10 @@ fn bring_up_to_date(
             a.entities != entities
                 || a.caustics.technique != caustics.technique
                 || a.lights.is_empty() != snapshot.lights.is_empty()
-                || a.objects.iter().zip(&objects).any(|(x, y)| {
-                    !same_kind(&x.material, &y.material)
-                        || (!Arc::ptr_eq(&x.mesh, &y.mesh)
-                            && (x.mesh.positions.len() != y.mesh.positions.len()
-                                || x.mesh.indices != y.mesh.indices))
-                })
+                || a.objects
+                    .iter()
+                    .zip(&objects)
+                    .any(|(x, y)| !same_kind(&x.material, &y.material))
         }
         _ => true,
     };
@@ -321,11 +325,19 @@ fn bring_up_to_date(
             stats.updates += 1;
         }
         for (i, (x, y)) in a.objects.iter().zip(&objects).enumerate() {
-            if !Arc::ptr_eq(&x.mesh, &y.mesh) {
+            if Arc::ptr_eq(&x.mesh, &y.mesh) {
+                continue;
+            }
+            if x.mesh.positions.len() == y.mesh.positions.len() && x.mesh.indices == y.mesh.indices
+            {
                 t.set_object_vertices(backend, i, &y.mesh.positions, &y.mesh.normals)
                     .map_err(e)?;
-                stats.updates += 1;
+            } else {
+                // another topology: that object's BVH alone is built
+                t.set_object_shape(backend, i, &mesh_shape(&y.mesh))
+                    .map_err(e)?;
             }
+            stats.updates += 1;
         }
         let moves: Vec<_> = a
             .objects

@@ -433,6 +433,25 @@ fn every_technique_per_camera_and_scene_changes_through_updates() {
         assert_eq!(s.status, CausticsStatus::Active);
     }
 
+    // the ball's mesh gets other triangles (a coarser sphere): its shape replaced, no
+    // build of the technique
+    let before = (stats(&a, cam_a), stats(&a, cam_b));
+    *a.world_mut()
+        .resource_mut::<Assets<Mesh>>()
+        .get_mut(&mesh)
+        .expect("the ball's mesh") = Sphere::new(0.5).mesh().uv(24, 12);
+    run(&mut a, 0, 3);
+    for (cam, b) in [(cam_a, &before.0), (cam_b, &before.1)] {
+        let s = stats(&a, cam);
+        eprintln!("after the new topology: {}", status_line(&a, cam));
+        assert_eq!(
+            s.builds, b.builds,
+            "a mesh of other triangles rebuilds its shape alone"
+        );
+        assert!(s.updates > b.updates);
+        assert_eq!(s.status, CausticsStatus::Active);
+    }
+
     // the floor turns grey: new material parameters, no build
     let floor_material = {
         let w = a.world_mut();

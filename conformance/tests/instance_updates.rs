@@ -436,3 +436,88 @@ fn deformed_instances_equal_a_fresh_technique_bitwise_for_every_technique() {
         }
     }
 }
+
+/// Replaced shapes (another triangle count: a mesh whose topology changed): for every
+/// technique the frame after `set_object_shape` equals, bitwise, the frame of a technique
+/// created for the changed scene: `sphere`'s glass ball made coarser (a caster), and
+/// `cornell`'s back wall (a CausticMap receiver) made a box, with a ball a cube; a static
+/// object (the floor) may change too. The old shape back gives the first frame again; an
+/// unknown object and an invalid shape are clear errors that change nothing.
+#[test]
+fn replaced_shapes_equal_a_fresh_technique_bitwise_for_every_technique() {
+    let ball = Shape::Sphere {
+        center: Vec3::ZERO,
+        radius: 0.5,
+        segments: 24,
+    };
+    // the static level's floor: a smaller quad
+    let floor_of = |h: f32| Shape::Quad {
+        center: Vec3::ZERO,
+        u: Vec3::new(h, 0.0, 0.0),
+        v: Vec3::new(0.0, 0.0, -h),
+    };
+    let cube = |h: f32| Shape::Cuboid {
+        min: Vec3::splat(-h),
+        max: Vec3::splat(h),
+    };
+    for (bname, mut b) in backends() {
+        let cases = [
+            (
+                "sphere",
+                instanced(small("sphere"), 1),
+                vec![(1, ball.clone()), (0, floor_of(1.5))],
+            ),
+            (
+                "cornell",
+                instanced(instanced(small("cornell"), 2), 5),
+                vec![(2, cube(0.3)), (5, cube(0.2))],
+            ),
+        ];
+        for (sname, scene, changes) in cases {
+            let mut target = scene.clone();
+            for (k, shape) in &changes {
+                target.objects[*k].shape = shape.clone();
+            }
+            for (name, settings) in variants() {
+                let want = fresh_outputs(b.as_mut(), name, &target, &settings);
+                let mut t = create(name, b.as_mut(), &scene, &settings).expect("create");
+                let before = frame_outputs(t.as_mut(), b.as_mut());
+                for (k, shape) in &changes {
+                    t.set_object_shape(b.as_mut(), *k, shape)
+                        .expect("set_object_shape");
+                }
+                let got = frame_outputs(t.as_mut(), b.as_mut());
+                same_as_fresh(
+                    &got,
+                    &want,
+                    &before,
+                    &format!("{bname}/{name}/{sname}: replaced"),
+                );
+                // refused, and nothing changes: an unknown object, a degenerate shape
+                assert!(t.set_object_shape(b.as_mut(), 999, &ball).is_err());
+                let flat = Shape::Sphere {
+                    center: Vec3::ZERO,
+                    radius: 0.0,
+                    segments: 24,
+                };
+                assert!(t.set_object_shape(b.as_mut(), changes[0].0, &flat).is_err());
+                let again = frame_outputs(t.as_mut(), b.as_mut());
+                assert!(
+                    again == want,
+                    "{bname}/{name}/{sname}: a refused replacement changed the frame"
+                );
+                for (k, _) in &changes {
+                    t.set_object_shape(b.as_mut(), *k, &scene.objects[*k].shape)
+                        .expect("shape back");
+                }
+                let back = frame_outputs(t.as_mut(), b.as_mut());
+                assert!(
+                    back == before,
+                    "{bname}/{name}/{sname} ({settings}): shape back, the frame differs from the first"
+                );
+                t.free(b.as_mut()).expect("free");
+            }
+            eprintln!("{bname}: replaced shapes of {sname} equal fresh techniques, bitwise");
+        }
+    }
+}

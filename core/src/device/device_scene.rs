@@ -7,6 +7,7 @@ use crate::device::acceleration::{
     instance_blas_capacity, rebase_blas, tlas_capacity, top_level, Level, RECORD_SLOTS, SLOT_VEC4S,
     TRIANGLE_CORNER_VEC4S,
 };
+use crate::device::bvh_cache::{build_digest, BvhCache, KeptBuild};
 use crate::device::caster_spheres::{placed_ball, CasterSpheres};
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
@@ -273,7 +274,7 @@ impl SceneInstances {
             })
             .collect();
         let object_position = |i: u32| Vec3A::from(local[(i - base) as usize].position);
-        let (ordered, mut nodes, _) = build_bvh(&object_position, tris)?;
+        let (ordered, mut nodes, _) = build_bvh(&object_position, tris, None)?;
         let used = (nodes.len() / SLOT_VEC4S) as u32;
         if used > l.blas_capacity {
             return Err(bad(format!(
@@ -535,6 +536,19 @@ impl DeviceScene {
     /// no triangle, or more than [`MAX_COINCIDENT_TRIANGLES`] triangles with one bounding
     /// box, is an error.
     pub fn build(scene: &Scene, budget: BuildBudget) -> Result<DeviceScene, BuildError> {
+        Self::build_cached(scene, budget, &mut BvhCache::default())
+    }
+
+    /// [`DeviceScene::build`], with each level's BVH taken from `cache` where its input
+    /// (its triangles' positions in its space) is one `cache` kept, built and kept
+    /// otherwise; afterwards `cache` keeps this build's levels alone. The result equals
+    /// [`DeviceScene::build`]'s bitwise: a build of the same input is the same BVH.
+    pub fn build_cached(
+        scene: &Scene,
+        budget: BuildBudget,
+        cache: &mut BvhCache,
+    ) -> Result<DeviceScene, BuildError> {
+        cache.begin_build();
         let names: Vec<&String> = scene.materials.keys().collect();
         let materials = scene.materials.values().map(gpu_material).collect();
         let (mut vertex_total, mut triangle_total) = (0u64, 0u64);
@@ -706,14 +720,14 @@ impl DeviceScene {
         let mut blases: Vec<(Level, BvhBuild, Vec<u32>)> = Vec::new();
         if !static_tris.is_empty() {
             static_level.triangle_count = static_tris.len() as u32;
-            let build = build_bvh(&world_positions, static_tris)?;
+            let build = build_bvh(&world_positions, static_tris, Some(&mut *cache))?;
             blases.push((static_level, build, static_objects));
         }
         for (level, tris) in instances {
             let (base, first) = (level.vertex_base, level.position_base);
             let object_position =
                 |i: u32| Vec3A::from(object_vertices[(i - base + first) as usize].position);
-            let build = build_bvh(&object_position, tris)?;
+            let build = build_bvh(&object_position, tris, Some(&mut *cache))?;
             let k = level.object.unwrap_or(0) as u32;
             let objects = vec![k; build.0.len()];
             blases.push((level, build, objects));
@@ -800,6 +814,7 @@ impl DeviceScene {
         }
         bvh_nodes.resize(total_vec4, [0; 4]);
         let (bounds, caster_bounds) = level_bounds(&levels);
+        cache.finish_build();
         Ok(DeviceScene {
             vertices,
             triangles,
@@ -942,26 +957,50 @@ fn check_coincident(
 /// in the input.
 type BvhBuild = (Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>);
 
-fn build_bvh(p: &dyn Fn(u32) -> Vec3A, tris: Vec<GpuTriangle>) -> Result<BvhBuild, BuildError> {
+fn build_bvh(
+    p: &dyn Fn(u32) -> Vec3A,
+    tris: Vec<GpuTriangle>,
+    cache: Option<&mut BvhCache>,
+) -> Result<BvhBuild, BuildError> {
+    let corners = |t: &GpuTriangle| t.indices.map(p);
+    let kept = match cache {
+        Some(c) => c.get_or_build(build_digest(tris.iter().map(corners)), || {
+            fresh_bvh(&tris, &corners)
+        })?,
+        None => std::sync::Arc::new(fresh_bvh(&tris, &corners)?),
+    };
+    // Reorder triangles into leaf order; leaf slots then index triangles directly.
+    let mut ordered: Vec<GpuTriangle> = Vec::new();
+    reserve(&mut ordered, tris.len() as u64, "BVH-ordered triangles")?;
+    ordered.extend(kept.order.iter().map(|&i| tris[i as usize]));
+    let mut out: Vec<[u32; 4]> = Vec::new();
+    reserve(&mut out, kept.nodes.len() as u64, "BVH nodes")?;
+    out.extend_from_slice(&kept.nodes);
+    Ok((ordered, out, kept.order.clone()))
+}
+
+/// The CWBVH of `tris` (corners by `corners`) and its leaf order.
+fn fresh_bvh(
+    tris: &[GpuTriangle],
+    corners: &dyn Fn(&GpuTriangle) -> [Vec3A; 3],
+) -> Result<KeptBuild, BuildError> {
     let mut obvhs_tris: Vec<Triangle> = Vec::new();
     reserve(&mut obvhs_tris, tris.len() as u64, "BVH build triangles")?;
-    obvhs_tris.extend(tris.iter().map(|t| Triangle {
-        v0: p(t.indices[0]),
-        v1: p(t.indices[1]),
-        v2: p(t.indices[2]),
+    obvhs_tris.extend(tris.iter().map(|t| {
+        let [v0, v1, v2] = corners(t);
+        Triangle { v0, v1, v2 }
     }));
     let mut build_time = Duration::ZERO;
     let bvh = build_cwbvh_from_tris(&obvhs_tris, BvhBuildParams::medium_build(), &mut build_time);
     drop(obvhs_tris);
-    // Reorder triangles into leaf order; leaf slots then index triangles directly.
-    let mut ordered: Vec<GpuTriangle> = Vec::new();
-    reserve(&mut ordered, tris.len() as u64, "BVH-ordered triangles")?;
-    ordered.extend(bvh.primitive_indices.iter().map(|&i| tris[i as usize]));
     let nodes: &[[u32; 4]] = bytemuck::cast_slice::<CwBvhNode, [u32; 4]>(&bvh.nodes);
     let mut out: Vec<[u32; 4]> = Vec::new();
     reserve(&mut out, nodes.len() as u64, "BVH nodes")?;
     out.extend_from_slice(nodes);
-    Ok((ordered, out, bvh.primitive_indices))
+    Ok(KeptBuild {
+        nodes: out,
+        order: bvh.primitive_indices,
+    })
 }
 
 /// A material as the kernels read it.
@@ -1115,6 +1154,60 @@ mod tests {
         assert_eq!(ds.instances, fresh.instances);
     }
 
+    /// A scene built again through the cache with one object's shape replaced (another
+    /// triangle count, so every later level's triangles and vertices shift) builds that
+    /// object's BVH alone and equals a fresh build bitwise; a static object's change
+    /// builds the static level's.
+    #[test]
+    fn a_cached_build_builds_the_changed_level_alone_and_equals_a_fresh_build() {
+        let scene = instanced_cornell();
+        let mut cache = BvhCache::default();
+        let first = DeviceScene::build_cached(&scene, Default::default(), &mut cache).unwrap();
+        // the two balls are the same object-space input: one BVH
+        assert_eq!((cache.built, cache.reused, cache.len()), (2, 1, 2));
+        let same = |a: &DeviceScene, b: &DeviceScene| {
+            assert!(a.vertices == b.vertices, "world vertices");
+            assert!(a.bvh_nodes == b.bvh_nodes, "node buffer");
+            assert_eq!(a.triangles, b.triangles);
+            assert_eq!(a.triangle_objects, b.triangle_objects);
+            assert_eq!(a.instances, b.instances);
+            assert_eq!(a.caster_spheres, b.caster_spheres);
+        };
+        same(
+            &first,
+            &DeviceScene::build(&scene, Default::default()).unwrap(),
+        );
+        let mut changed = scene.clone();
+        changed.objects[5].shape = crate::scene::Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 0.2,
+            segments: 20,
+        };
+        let ds = DeviceScene::build_cached(&changed, Default::default(), &mut cache).unwrap();
+        assert_eq!((cache.built, cache.reused, cache.len()), (3, 3, 3));
+        assert_ne!(ds.triangles.len(), first.triangles.len());
+        same(
+            &ds,
+            &DeviceScene::build(&changed, Default::default()).unwrap(),
+        );
+        // a static object: the static level's BVH alone
+        let mut floor = changed.clone();
+        let k = floor
+            .objects
+            .iter()
+            .position(|o| o.transform.is_none())
+            .unwrap();
+        if let crate::scene::Shape::Quad { center, .. } = &mut floor.objects[k].shape {
+            center.y += 0.01;
+        }
+        let ds = DeviceScene::build_cached(&floor, Default::default(), &mut cache).unwrap();
+        assert_eq!((cache.built, cache.reused), (4, 5));
+        same(
+            &ds,
+            &DeviceScene::build(&floor, Default::default()).unwrap(),
+        );
+    }
+
     #[test]
     fn a_deformed_instance_equals_a_fresh_build_but_for_its_version() {
         let scene = instanced_cornell();
@@ -1221,7 +1314,7 @@ mod tests {
                         material: 0,
                     });
                 }
-                let (_, nodes, _) = build_bvh(&|i| Vec3A::from(p[i as usize]), tris).unwrap();
+                let (_, nodes, _) = build_bvh(&|i| Vec3A::from(p[i as usize]), tris, None).unwrap();
                 let used = (nodes.len() / SLOT_VEC4S) as u32;
                 assert!(
                     used <= instance_blas_capacity(n) && used <= n.max(2) - 1 + (n == 1) as u32,

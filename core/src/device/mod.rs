@@ -4,11 +4,13 @@
 //! the shader crates' layout tests compare with; [`shader_constants`]: the constants the
 //! shaders share with core, listed once; [`shader_layouts`]: the generator of the shaders'
 //! declarations of both; [`device_scene`]: a scene flattened to
-//! those layouts with its two-level CWBVH ([`acceleration`]: how the node buffer holds it); [`handle`]: typed opaque buffer handles; [`launch`]: a
+//! those layouts with its two-level CWBVH ([`acceleration`]: how the node buffer holds it;
+//! [`bvh_cache`]: bottom levels kept between builds); [`handle`]: typed opaque buffer handles; [`launch`]: a
 //! lowered kernel launch; [`error`]: typed failures. Imports only [`crate::math`] and
 //! [`crate::scene`].
 
 pub mod acceleration;
+pub mod bvh_cache;
 pub mod caster_spheres;
 pub mod device_scene;
 pub mod error;

@@ -13,6 +13,7 @@
 //! of its own (a light buffer of a new length is the exception: it is allocated at once).
 
 use crate::backend::{read_buf, Backend};
+use crate::device::bvh_cache::BvhCache;
 use crate::device::caster_spheres::CasterSpheres;
 use crate::device::device_scene::{
     gpu_light, BuildBudget, DeviceScene, InstanceUpdate, SceneInstances,
@@ -71,6 +72,67 @@ pub struct HostState {
     camera: GpuCamera,
 }
 
+/// An uploaded scene: the model, its device buffers and what the host derived from it.
+#[derive(Debug)]
+pub struct SceneUpload {
+    model: Scene,
+    scene: SceneArgs,
+    instances: SceneInstances,
+    geometry: SceneGeometry,
+    receivers: Option<AtlasReceivers>,
+    uploaded: Vec<ResourceId>,
+    uploaded_bytes: u64,
+    uploaded_buffers: Vec<BufferPlan>,
+}
+
+impl SceneUpload {
+    /// Builds `scene` (validated) under `options`, its BVHs through `cache`, and records
+    /// its upload (every buffer checked against the device first).
+    fn build(
+        backend: &mut dyn Backend,
+        scene: &Scene,
+        options: HostOptions,
+        cache: &mut BvhCache,
+    ) -> Result<(SceneUpload, Recording), Error> {
+        let ds = DeviceScene::build_cached(
+            scene,
+            BuildBudget {
+                max_triangles: options.max_triangles,
+            },
+            cache,
+        )?;
+        let features = SceneFeatures::of(scene);
+        let receiver = crate::frame::receivers::atlas::layout::atlas_receivers(scene);
+        let receivers = (options.atlas_receivers
+            && (features.mirrors || features.dielectrics)
+            && receiver.iter().any(|r| *r))
+        .then(|| AtlasReceivers::of(&ds, &receiver));
+        let geometry = SceneGeometry {
+            bounds: ds.bounds,
+            caster_bounds: ds.caster_bounds,
+            caster_spheres: ds.caster_spheres,
+            has_dispersion: ds.has_dispersion,
+            degenerate_triangles: ds.degenerate_triangles,
+            triangles: ds.triangles.len() as u64,
+            caster_boxes: caster_boxes(&ds),
+        };
+        let mut rec = Recording::new();
+        let args = rec.upload_scene(&ds);
+        let alloc = planned_allocation(backend, &rec, None)?;
+        let up = SceneUpload {
+            model: scene.clone(),
+            scene: args,
+            instances: ds.instances,
+            geometry,
+            receivers,
+            uploaded: alloc.owned,
+            uploaded_bytes: alloc.bytes,
+            uploaded_buffers: alloc.buffers,
+        };
+        Ok((up, rec))
+    }
+}
+
 /// The frame host of one technique on one backend.
 #[derive(Debug)]
 pub struct FrameHost {
@@ -85,6 +147,8 @@ pub struct FrameHost {
     uploaded: Vec<ResourceId>,
     uploaded_bytes: u64,
     uploaded_buffers: Vec<BufferPlan>,
+    /// The uploaded scene's BVHs, kept for [`FrameHost::replace_scene`].
+    bvh_cache: BvhCache,
     screen: ScreenTargets,
     pending: Recording,
     /// Some recording of this host has run (else freeing it runs nothing).
@@ -140,46 +204,76 @@ impl FrameHost {
         options: HostOptions,
     ) -> Result<FrameHost, Error> {
         validated(scene)?;
-        let ds = DeviceScene::build(
-            scene,
-            BuildBudget {
-                max_triangles: options.max_triangles,
-            },
-        )?;
-        let features = SceneFeatures::of(scene);
-        let receiver = crate::frame::receivers::atlas::layout::atlas_receivers(scene);
-        let receivers = (options.atlas_receivers
-            && (features.mirrors || features.dielectrics)
-            && receiver.iter().any(|r| *r))
-        .then(|| AtlasReceivers::of(&ds, &receiver));
-        let geometry = SceneGeometry {
-            bounds: ds.bounds,
-            caster_bounds: ds.caster_bounds,
-            caster_spheres: ds.caster_spheres,
-            has_dispersion: ds.has_dispersion,
-            degenerate_triangles: ds.degenerate_triangles,
-            triangles: ds.triangles.len() as u64,
-            caster_boxes: caster_boxes(&ds),
-        };
-        let mut rec = Recording::new();
-        let args = rec.upload_scene(&ds);
-        let alloc = planned_allocation(backend, &rec, None)?;
+        let mut bvh_cache = BvhCache::default();
+        let (up, rec) = SceneUpload::build(backend, scene, options, &mut bvh_cache)?;
         Ok(FrameHost {
-            model: scene.clone(),
-            scene: args,
-            instances: ds.instances,
-            geometry,
-            receivers,
+            model: up.model,
+            scene: up.scene,
+            instances: up.instances,
+            geometry: up.geometry,
+            receivers: up.receivers,
             camera: GpuCamera::from_camera(&scene.camera),
             options,
-            uploaded: alloc.owned,
-            uploaded_bytes: alloc.bytes,
-            uploaded_buffers: alloc.buffers,
+            uploaded: up.uploaded,
+            uploaded_bytes: up.uploaded_bytes,
+            uploaded_buffers: up.uploaded_buffers,
+            bvh_cache,
             screen: ScreenTargets::none(),
             pending: rec,
             on_device: false,
             reference: None,
         })
+    }
+
+    /// Uploads `model` anew in place of the scene (the camera, its images and the
+    /// reference stay): the scene is built with the BVHs of every level whose geometry is
+    /// unchanged taken from the host's cache ([`DeviceScene::build_cached`]), so a scene
+    /// with one object's shape replaced builds that object's BVH alone. The new buffers'
+    /// upload goes with the next frame; the old ones are returned, still allocated, to be
+    /// freed ([`FrameHost::release_scene`]) once the technique is made over the new scene,
+    /// or put back ([`FrameHost::put_back_scene`]). On an error nothing changes.
+    pub fn replace_scene(
+        &mut self,
+        backend: &mut dyn Backend,
+        model: &Scene,
+    ) -> Result<SceneUpload, Error> {
+        validated(model)?;
+        let (mut up, rec) = SceneUpload::build(backend, model, self.options, &mut self.bvh_cache)?;
+        self.pending.steps.extend(rec.steps);
+        self.swap_scene(&mut up);
+        Ok(up)
+    }
+
+    /// Frees a scene [`FrameHost::replace_scene`] replaced, after the frames' work that
+    /// still reads it (the pending writes run first).
+    pub fn release_scene(&mut self, old: SceneUpload) {
+        for id in old.uploaded {
+            self.pending.steps.push(Step::Free { id });
+        }
+    }
+
+    /// Puts back the scene [`FrameHost::replace_scene`] replaced, freeing the new one.
+    pub fn put_back_scene(&mut self, mut old: SceneUpload) {
+        self.swap_scene(&mut old);
+        self.release_scene(old);
+    }
+
+    /// Exchanges the host's scene with `other`.
+    fn swap_scene(&mut self, other: &mut SceneUpload) {
+        std::mem::swap(&mut self.model, &mut other.model);
+        std::mem::swap(&mut self.scene, &mut other.scene);
+        std::mem::swap(&mut self.instances, &mut other.instances);
+        std::mem::swap(&mut self.geometry, &mut other.geometry);
+        std::mem::swap(&mut self.receivers, &mut other.receivers);
+        std::mem::swap(&mut self.uploaded, &mut other.uploaded);
+        std::mem::swap(&mut self.uploaded_bytes, &mut other.uploaded_bytes);
+        std::mem::swap(&mut self.uploaded_buffers, &mut other.uploaded_buffers);
+    }
+
+    /// BVHs built and taken from the host's cache since the host was made (uploads,
+    /// [`FrameHost::replace_scene`]).
+    pub fn bvh_builds(&self) -> (u64, u64) {
+        (self.bvh_cache.built, self.bvh_cache.reused)
     }
 
     /// The scene model as it is now (after every update).

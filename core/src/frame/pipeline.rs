@@ -592,6 +592,32 @@ impl<P: Pipeline> Hosted<P> {
         self.follow(backend, change, state, Some(InstanceUpdate::Deformed(undo)))
     }
 
+    /// Replaces object `object`'s shape for the next frames ([`Technique::set_object_shape`]):
+    /// the scene is uploaded anew with only that object's BVH built (the others from the
+    /// host's cache), and the technique made anew over it with its settings. On an error
+    /// nothing changes.
+    pub fn set_object_shape(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        shape: &crate::scene::Shape,
+    ) -> Result<(), Error> {
+        let model = crate::frame::technique::with_shape(self.host.model(), object, shape)?;
+        let old = self.host.replace_scene(backend, &model)?;
+        let mut old = Some(old);
+        let settings = self.pipeline().settings().clone();
+        let made = self.rebuild(backend, settings, |host, _| {
+            if let Some(old) = old.take() {
+                host.put_back_scene(old);
+            }
+            Ok(())
+        });
+        if let Some(old) = old {
+            self.host.release_scene(old);
+        }
+        made
+    }
+
     /// Replaces the materials' parameters for the next frames without rebuilding
     /// geometry ([`crate::frame::material_update`]). On an error nothing changes.
     pub fn set_materials(
@@ -768,6 +794,15 @@ impl<P: Pipeline> Technique for Hosted<P> {
         normals: &[glam::Vec3],
     ) -> Result<(), Error> {
         Hosted::set_object_vertices(self, backend, object, positions, normals)
+    }
+
+    fn set_object_shape(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        shape: &crate::scene::Shape,
+    ) -> Result<(), Error> {
+        Hosted::set_object_shape(self, backend, object, shape)
     }
 
     fn set_materials(

@@ -109,6 +109,22 @@ pub trait Technique {
         positions: &[glam::Vec3],
         normals: &[glam::Vec3],
     ) -> Result<(), Error>;
+    /// Replaces object `object`'s shape for the next frames: any shape, any triangle count
+    /// (a mesh whose topology changed). Only that object's bottom-level BVH is built; the
+    /// other levels' are taken from the host's cache of the uploaded scene's BVHs. The
+    /// scene's buffers are uploaded anew with the next frame (the old ones freed after
+    /// it) and the technique's own buffers made anew for the new scene, as
+    /// `set_settings` makes them; the next frame equals that of a technique created for
+    /// the changed scene, bitwise. Costs one BVH build, the scene's flattening and upload
+    /// and the technique's creation (Vulkan also builds its driver's acceleration
+    /// structures for the new buffers). A deformation that keeps the mesh's triangles is
+    /// cheaper: `set_object_vertices`. An error leaves the technique as it was.
+    fn set_object_shape(
+        &mut self,
+        backend: &mut dyn Backend,
+        object: usize,
+        shape: &crate::scene::Shape,
+    ) -> Result<(), Error>;
     /// Replaces the materials' parameters for the next frames without rebuilding geometry
     /// (the same names, none switching between diffuse and specular:
     /// [`crate::frame::material_update`]); an error leaves the technique as it was.
@@ -156,6 +172,27 @@ pub fn leaked_buffers() -> u64 {
 fn validated_update(model: crate::scene::Scene) -> Result<crate::scene::Scene, Error> {
     model
         .validate_except_shapes()
+        .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
+    Ok(model)
+}
+
+/// `model` with object `object`'s shape replaced by `shape`, validated (the whole scene:
+/// the new shape's tessellation too): what `set_object_shape` checks first.
+pub fn with_shape(
+    model: &crate::scene::Scene,
+    object: usize,
+    shape: &crate::scene::Shape,
+) -> Result<crate::scene::Scene, Error> {
+    let count = model.objects.len();
+    let mut model = model.clone();
+    let o = model.objects.get_mut(object).ok_or_else(|| {
+        Error::InvalidParameter(format!(
+            "set_object_shape: object {object} does not exist (the scene has {count})"
+        ))
+    })?;
+    o.shape = shape.clone();
+    model
+        .validate()
         .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
     Ok(model)
 }
