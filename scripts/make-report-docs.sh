@@ -23,15 +23,19 @@ run() { echo "+ caustica $*" >&2; "$CAUSTICA" "$@"; }
 report() { local dir=docs/$1; shift; rm -rf "$dir"; run report --backends cpu --cache "$cache" --out "$dir" "$@"; }
 
 images() {
-    # one frame of each technique at 320x180, composed 2x2 into docs/images/techniques.png
+    # each technique on a scene that makes its point, 320x180, composed 2x2 into
+    # docs/images/techniques.png: Sspm the prism's spectrum on its screen; CausticMap the
+    # ball's caustic seen through the ball (its atlas holds the light where the camera
+    # sees it through glass); AdaptiveCaustics the pool floor's caustic network seen
+    # through the water; PhotonGi the Cornell box's colour bleeding
     local out=out/images
     rm -rf "$out"
-    run render --backend cpu --scene sphere --technique sspm --size 320x180 --photons 1024x1024 --out $out/sspm
+    run render --backend cpu --scene prism --technique sspm --size 320x180 --photons 2048x2048 --out $out/sspm
     run render --backend cpu --scene sphere --technique caustic-map --size 320x180 --photons 1024x1024 --out $out/caustic-map
-    run render --backend cpu --scene sphere --technique adaptive-caustics --size 320x180 --photons 1024x1024 --out $out/adaptive-caustics
+    run render --backend cpu --scene pool --technique adaptive-caustics --size 320x180 --photons 1024x1024 --out $out/adaptive-caustics
     run render --backend cpu --scene cornell --technique photon-gi --size 320x180 --photons 2048x2048 --out $out/photon-gi
-    montage $out/sspm/sphere_composite.png $out/caustic-map/sphere_composite.png \
-        $out/adaptive-caustics/sphere_composite.png $out/photon-gi/cornell_composite.png \
+    montage $out/sspm/prism_composite.png $out/caustic-map/sphere_composite.png \
+        $out/adaptive-caustics/pool_composite.png $out/photon-gi/cornell_composite.png \
         -tile 2x2 -geometry +2+2 -background white docs/images/techniques.png
     mogrify -shave 2x2 docs/images/techniques.png  # white 4-pixel gaps, no outer margin
 }
