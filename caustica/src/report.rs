@@ -398,12 +398,12 @@ pub fn run(
                     };
                     let against_tracer = rec.tracer.as_ref().map_or(String::new(), |t| {
                         format!(
-                            "; against the light tracer {:.5} (raw {:.5})",
+                            "; against the light tracer {:.3e} (raw {:.3e})",
                             t.relative_mse, t.raw_relative_mse
                         )
                     });
                     log(&format!(
-                        "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: {:.2} ms, relMSE {:.5} (raw {:.5}) against its own reference{against_tracer}",
+                        "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: {:.2} ms, relMSE {:.3e} (raw {:.3e}) against its own reference{against_tracer}",
                         rec.frame_ms, rec.relative_mse, rec.raw_relative_mse
                     ));
                     records.push(rec);
@@ -434,14 +434,14 @@ fn trace_reference(
         ..plan.tracer.clone()
     };
     log(&format!(
-        "{}: light tracer ({}x{}, {} batches of {} photons per light, {:?} spheres, silhouette \
+        "{}: light tracer ({}x{}, {} batches of {} photons per light, {} spheres, silhouette \
          pixels {})",
         scene.name,
         spec.width,
         spec.height,
         spec.batches,
         spec.photons,
-        spec.spheres,
+        spec.spheres.name(),
         spec.silhouette
     ));
     let (image, info) = light_tracer::load_or_compute(cache, scene, &spec, &mut |k, n, noise| {
@@ -498,15 +498,7 @@ pub fn caption(records: &[Record]) -> String {
             .collect();
         let budgets: Vec<String> = budgets
             .iter()
-            .map(|(p, b, s)| {
-                format!(
-                    "{p} photons in {b} batches, {} spheres",
-                    match s {
-                        SphereModel::Analytic => "analytic",
-                        SphereModel::Mesh => "mesh",
-                    }
-                )
-            })
+            .map(|(p, b, s)| format!("{p} photons in {b} batches, {} spheres", s.name()))
             .collect();
         format!(
             "silhouette pixels {}; {}",

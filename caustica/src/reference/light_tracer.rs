@@ -77,6 +77,16 @@ pub enum SphereModel {
     Mesh,
 }
 
+impl SphereModel {
+    /// The command line's name: `analytic` or `mesh`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SphereModel::Analytic => "analytic",
+            SphereModel::Mesh => "mesh",
+        }
+    }
+}
+
 /// What a pixel whose footprint straddles a silhouette measures: the two definitions
 /// agree on every other pixel (both count only photons on the diffuse surface the
 /// pixel's centre ray sees, over that surface's area at the centre ray), and both leave
@@ -118,7 +128,7 @@ impl SilhouetteDefinition {
         match self {
             SilhouetteDefinition::CentreSurface => {
                 "the radiance of the surface the pixel's centre sees, hidden photons counted \
-                 (the caustic techniques' store test)"
+                 as the caustic techniques' store test counts them"
             }
             SilhouetteDefinition::EyeVisible => {
                 "the flux the eye sees through the pixel's footprint (hidden photons dropped)"
