@@ -18,7 +18,9 @@
 //! a fresh technique per repeat) and is timed to its last frame. Writes one JSON record
 //! per combination and a log-log plot of relative MSE against time per scene.
 
-use crate::reference::light_tracer::{self, LightTracerSpec, SilhouetteDefinition, SphereModel};
+use crate::reference::light_tracer::{
+    self, LightTracerError, LightTracerSpec, SilhouetteDefinition, SphereModel,
+};
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::{bias_variance, peak_ratio, relative_mse, CausticMask};
@@ -30,6 +32,51 @@ use caustica_core::Scene;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// Why a report stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The plan names something that cannot run (a technique spec, its settings).
+    #[error("{0}")]
+    Plan(String),
+    /// A backend did not open.
+    #[error(transparent)]
+    Backend(#[from] crate::BackendError),
+    /// A technique failed to be made, to render or to be read.
+    #[error(transparent)]
+    Technique(#[from] crate::Error),
+    /// A technique's own reference could not be loaded or computed.
+    #[error("{0}")]
+    Reference(String),
+    /// The light-tracer reference could not be loaded or computed.
+    #[error(transparent)]
+    LightTracer(#[from] LightTracerError),
+    /// A technique's image and the light tracer's differ in size (pixels).
+    #[error(
+        "{technique}: a {}x{} estimate against the light tracer's {}x{} image",
+        estimate.0, estimate.1, tracer.0, tracer.1
+    )]
+    SizeMismatch {
+        /// The technique spec.
+        technique: String,
+        /// The estimate's width and height.
+        estimate: (u32, u32),
+        /// The light tracer image's width and height.
+        tracer: (u32, u32),
+    },
+    /// The light tracer's image or noise has a NaN or an infinity.
+    #[error("{scene}: the light tracer's image or its noise is not finite")]
+    NotFinite {
+        /// Scene name.
+        scene: String,
+    },
+}
+
+impl From<ReportError> for String {
+    fn from(e: ReportError) -> String {
+        e.to_string()
+    }
+}
 
 /// One measured combination.
 #[derive(Clone, Debug, Serialize)]
@@ -173,11 +220,11 @@ pub fn run(
     plan: &ReportPlan,
     cache: &Path,
     log: &mut dyn FnMut(&str),
-) -> Result<Vec<Record>, String> {
+) -> Result<Vec<Record>, ReportError> {
     for t in &plan.techniques {
-        technique_spec(t)?;
+        technique_spec(t).map_err(ReportError::Plan)?;
     }
-    let mut cpu = crate::open_backend("cpu").map_err(|e| e.to_string())?;
+    let mut cpu = crate::open_backend("cpu")?;
     let mut records = Vec::new();
     for original in &plan.scenes {
         // one reference per estimator the techniques need (the caustics' for the caustic
@@ -189,7 +236,7 @@ pub fn run(
         // the light tracer's image, computed or loaded once, for the caustic techniques
         let mut traced: Option<Traced> = None;
         for technique in &plan.techniques {
-            let (name, overrides) = technique_spec(technique)?;
+            let (name, overrides) = technique_spec(technique).map_err(ReportError::Plan)?;
             if traced.is_none() && reference::traced_by_light_tracer(name) {
                 traced = Some(trace_reference(plan, original, cache, log)?);
             }
@@ -212,7 +259,8 @@ pub fn run(
                             log(&format!("  reference frame {k}/{max}: noise {noise:.4}"));
                         }
                     },
-                )?;
+                )
+                .map_err(ReportError::Reference)?;
                 log(&format!(
                     "  reference: {} photons over {} frames, noise {:.4}",
                     r.info.photons, r.info.frames, r.info.noise
@@ -248,7 +296,7 @@ pub fn run(
                 None => vec![OWN_FILTER.to_string()],
             };
             for backend_name in &plan.backends {
-                let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
+                let mut backend = crate::open_backend(backend_name)?;
                 let frames_axis: Vec<usize> = if plan.frames.is_empty() {
                     vec![1]
                 } else {
@@ -281,14 +329,12 @@ pub fn run(
                             ));
                             continue;
                         }
-                        Err(e) => return Err(e.to_string()),
+                        Err(e) => return Err(e.into()),
                     };
                     let (filtered_output, raw_output) = sspm.estimate_outputs();
-                    sspm.set_reference(Some(r.image.clone()))
-                        .map_err(|e| e.to_string())?;
+                    sspm.set_reference(Some(r.image.clone()))?;
                     // warm-up frame (pipeline caches, first-touch allocations)
-                    sspm.frame(backend.as_mut(), &mut |_| {})
-                        .map_err(|e| e.to_string())?;
+                    sspm.frame(backend.as_mut(), &mut |_| {})?;
                     let (mut frame_ms, mut rel, mut rmse, mut flip) =
                         (vec![], vec![], vec![], vec![]);
                     let (mut raw_rel, mut peak, mut raw_peak) = (vec![], vec![], vec![]);
@@ -299,19 +345,15 @@ pub fn run(
                     for k in 0..plan.repeats.max(1) {
                         if frames > 1 {
                             // an accumulation of its own from the first frame
-                            sspm.free(backend.as_mut()).map_err(|e| e.to_string())?;
-                            sspm = create(name, backend.as_mut(), &scene, &settings)
-                                .map_err(|e| e.to_string())?;
-                            sspm.set_reference(Some(r.image.clone()))
-                                .map_err(|e| e.to_string())?;
+                            sspm.free(backend.as_mut())?;
+                            sspm = create(name, backend.as_mut(), &scene, &settings)?;
+                            sspm.set_reference(Some(r.image.clone()))?;
                         }
                         sspm.set_seed(k as u32 + 1);
                         let (mut ms, mut pass_sums) = (0.0, BTreeMap::<String, f64>::new());
                         let mut last = None;
                         for _ in 0..frames {
-                            let st = sspm
-                                .frame(backend.as_mut(), &mut |_| {})
-                                .map_err(|e| e.to_string())?;
+                            let st = sspm.frame(backend.as_mut(), &mut |_| {})?;
                             ms += st.frame_ms;
                             for (p, t) in &st.pass_ms {
                                 *pass_sums.entry(p.clone()).or_default() += *t;
@@ -330,21 +372,17 @@ pub fn run(
                                 flip.push(f);
                             }
                         }
-                        let filtered = sspm
-                            .read_output(backend.as_mut(), filtered_output)
-                            .map_err(|e| e.to_string())?;
-                        let raw = sspm
-                            .read_output(backend.as_mut(), raw_output)
-                            .map_err(|e| e.to_string())?;
+                        let filtered = sspm.read_output(backend.as_mut(), filtered_output)?;
+                        let raw = sspm.read_output(backend.as_mut(), raw_output)?;
                         raw_rel.push(relative_mse(&raw, &r.image, &mask));
                         if let Some(t) = tracer {
                             for img in [&filtered, &raw] {
                                 if (img.width, img.height) != (t.image.width, t.image.height) {
-                                    return Err(format!(
-                                        "{technique}: a {}x{} estimate against the light \
-                                         tracer's {}x{} image",
-                                        img.width, img.height, t.image.width, t.image.height
-                                    ));
+                                    return Err(ReportError::SizeMismatch {
+                                        technique: technique.clone(),
+                                        estimate: (img.width, img.height),
+                                        tracer: (t.image.width, t.image.height),
+                                    });
                                 }
                             }
                             tracer_rel.push(relative_mse(&filtered, &t.image, &t.mask));
@@ -356,7 +394,7 @@ pub fn run(
                         (timing, photons, device) =
                             (st.timing.clone(), st.photons_emitted, st.device.clone());
                     }
-                    sspm.free(backend.as_mut()).map_err(|e| e.to_string())?;
+                    sspm.free(backend.as_mut())?;
                     let bv = bias_variance(&images, &r.image, &mask);
                     let rec = Record {
                         scene: scene.name.clone(),
@@ -427,7 +465,7 @@ fn trace_reference(
     scene: &Scene,
     cache: &Path,
     log: &mut dyn FnMut(&str),
-) -> Result<Traced, String> {
+) -> Result<Traced, ReportError> {
     let spec = LightTracerSpec {
         width: plan.reference.width,
         height: plan.reference.height,
@@ -459,10 +497,9 @@ fn trace_reference(
             .iter()
             .any(|p| !p.iter().all(|v| v.is_finite()))
     {
-        return Err(format!(
-            "{}: the light tracer's image or its noise is not finite",
-            scene.name
-        ));
+        return Err(ReportError::NotFinite {
+            scene: scene.name.clone(),
+        });
     }
     Ok(Traced {
         mask: CausticMask::from_reference(&image),

@@ -245,7 +245,8 @@ enum Command {
         /// Image size WxH of the measurements and the references.
         #[arg(long, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
-        /// Relative standard error at which a reference counts as converged.
+        /// Relative standard error at which a technique's own reference counts as
+        /// converged.
         #[arg(long, default_value_t = 0.02)]
         reference_noise: f64,
         /// Frame cap of a reference (1024x1024 photons per frame).
@@ -619,7 +620,8 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             }
             caustica::output::prepare_output_dir(&out)?;
             let cache = cache.unwrap_or_else(|| out.join("references"));
-            let records = caustica::report::run(&plan, &cache, &mut |line| note!("{line}"))?;
+            let records = caustica::report::run(&plan, &cache, &mut |line| note!("{line}"))
+                .map_err(String::from)?;
             // the files first, the table last: a closed stdout loses only the table
             let path = out.join("report.json");
             std::fs::write(
