@@ -69,7 +69,7 @@ photon_gi() {
                 --budgets 128x128,256x256,512x512 --size 160x90 --repeats 3 --reference-noise 0.05)
     report report-photon-gi "${args[@]}" > out/report-photon-gi-table.md
     { echo "Command: \`caustica report ${args[*]} --backends cpu\` ($(date +%F); photon-gi against the"
-      echo "indirect reference, sspm and caustic-map against the caustic reference)."
+      echo "indirect reference, sspm and caustic-map against the light tracer and the caustic reference)."
       echo; cat out/report-photon-gi-table.md; } \
         > docs/report-photon-gi/table.md
 }

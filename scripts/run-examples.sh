@@ -23,5 +23,5 @@ run frame_loop 96x54 128 20
 run shape_update cpu 64
 run embed_ash 96x54 64
 run compare_techniques cpu sphere 256
-run sspm_against_light_tracer sphere 48x27 262144 2 64,128 1 mesh hidden
+run sspm_against_light_tracer sphere 48x27 262144 2 64,128 1 mesh centre-surface
 echo "examples: ok"

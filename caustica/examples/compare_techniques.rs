@@ -1,10 +1,11 @@
 //! Compare caustic estimates by error against run time: Sspm's density-adaptive filter,
 //! its seed's bilateral filter, and (in every record) the unfiltered deposit, at a few
-//! photon budgets, against a converged CPU reference; prints the table `caustica report`
-//! prints. Needs the `report` feature (default).
+//! photon budgets, against the independent f64 light tracer and against Sspm's own
+//! converged estimate; prints the table `caustica report` prints. Needs the `report` feature (default).
 //!
 //! `cargo run --release -p caustica --example compare_techniques -- [BACKEND] [SCENE] [MAX_SIDE]`
 
+use caustica::reference::light_tracer::LightTracerSpec;
 use caustica::reference::ReferenceSpec;
 use caustica::report::{run, table, ReportPlan};
 use caustica::scene::builtin::builtin;
@@ -35,6 +36,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             target_noise: 0.03,
             max_frames: 64,
             ..ReferenceSpec::default()
+        },
+        // the independent reference: 8 batches of 2^20 photons (a few seconds on `sphere`)
+        tracer: LightTracerSpec {
+            photons: 1 << 20,
+            batches: 8,
+            ..LightTracerSpec::default()
         },
     };
     let cache = std::env::temp_dir().join("caustica-example-references");

@@ -2,7 +2,7 @@
 //! against the independent light-tracer reference, at several photon grids:
 //!
 //! `cargo run --release -p caustica --example sspm_against_light_tracer -- SCENE WxH
-//! LT_PHOTONS LT_BATCHES SIDE[,SIDE...] SEEDS [mesh|analytic] [visible|hidden]`
+//! LT_PHOTONS LT_BATCHES SIDE[,SIDE...] SEEDS [mesh|analytic] [eye-visible|centre-surface]`
 //!
 //! prints, per photon grid, the relative L2 error (sqrt of the relative MSE over the
 //! reference's caustic mask) of each seed's frame, and the reference's own noise.
@@ -10,7 +10,7 @@
 use caustica::backends::cpu::CpuBackend;
 use caustica::metrics::{relative_mse, CausticMask};
 use caustica::reference::light_tracer::{
-    load_or_compute, silhouette_pixels, LightTracerSpec, SphereModel,
+    load_or_compute, silhouette_pixels, LightTracerSpec, SilhouetteDefinition, SphereModel,
 };
 use caustica::reference::CAUSTIC_REFERENCE;
 use caustica::techniques::create;
@@ -36,7 +36,9 @@ fn main() -> Result<(), String> {
         } else {
             SphereModel::Mesh
         },
-        count_hidden: arg(7, "visible") == "hidden",
+        silhouette: arg(7, "eye-visible")
+            .parse::<SilhouetteDefinition>()
+            .map_err(|e| e.to_string())?,
         ..LightTracerSpec::default()
     };
     let sides: Vec<u32> = arg(4, "256,512,1024")
@@ -51,8 +53,8 @@ fn main() -> Result<(), String> {
         &mut |k, n, e| eprintln!("light tracer batch {k}/{n}: noise {e:.5}"),
     )?;
     println!(
-        "light tracer ({:?}, count_hidden {}): {} photons, noise {:.5}",
-        spec.spheres, spec.count_hidden, info.photons, info.noise
+        "light tracer ({:?}, silhouette pixels {}): {} photons, noise {:.5}",
+        spec.spheres, spec.silhouette, info.photons, info.noise
     );
     let mask = CausticMask::from_reference(&reference);
     // the same mask without the silhouette pixels, where Sspm's store test keeps photons

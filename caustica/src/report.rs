@@ -1,12 +1,26 @@
 //! Error against run time: for every scene x technique x backend x photon budget x
 //! frames accumulated (any registered technique, created by name), the median time and
 //! per-pass times over repeated runs (device timestamps where the backend has them) and
-//! the error of the filtered caustics against the scene's reference, with bias and
-//! variance over the repeats' seeds. A run of `frames` > 1 accumulates that many frames
-//! of the budget (`accumulate: true`, a fresh technique per repeat) and is timed to its
-//! last frame. Writes one JSON record per combination and a log-log plot of relative MSE
-//! against time per scene.
+//! the error of the technique's filtered and raw estimates against two references of the
+//! same scene and camera:
+//!
+//! - **the independent f64 light tracer** ([`crate::reference::light_tracer`]) for the
+//!   caustic techniques (Sspm, CausticMap, AdaptiveCaustics), with the tracer's own
+//!   relative standard error beside it and its silhouette definition
+//!   ([`SilhouetteDefinition`]) named; PhotonGi's indirect light is outside the tracer's
+//!   path class and has no such column;
+//! - **the technique's own converged estimate** ([`crate::reference`]: the progressive
+//!   mean of the unfiltered estimate, Sspm's raw deposit for the caustic techniques,
+//!   PhotonGi's deposit for PhotonGi), against which the peak ratios, FLIP, bias and
+//!   variance over the repeats' seeds are measured too.
+//!
+//! A run of `frames` > 1 accumulates that many frames of the budget (`accumulate: true`,
+//! a fresh technique per repeat) and is timed to its last frame. Writes one JSON record
+//! per combination and a log-log plot of relative MSE against time per scene.
 
+use crate::reference::light_tracer::{
+    self, LightTracerError, LightTracerSpec, SilhouetteDefinition, SphereModel,
+};
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::{bias_variance, peak_ratio, relative_mse, CausticMask};
@@ -18,6 +32,51 @@ use caustica_core::Scene;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// Why a report stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The plan names something that cannot run (a technique spec, its settings).
+    #[error("{0}")]
+    Plan(String),
+    /// A backend did not open.
+    #[error(transparent)]
+    Backend(#[from] crate::BackendError),
+    /// A technique failed to be made, to render or to be read.
+    #[error(transparent)]
+    Technique(#[from] crate::Error),
+    /// A technique's own reference could not be loaded or computed.
+    #[error("{0}")]
+    Reference(String),
+    /// The light-tracer reference could not be loaded or computed.
+    #[error(transparent)]
+    LightTracer(#[from] LightTracerError),
+    /// A technique's image and the light tracer's differ in size (pixels).
+    #[error(
+        "{technique}: a {}x{} estimate against the light tracer's {}x{} image",
+        estimate.0, estimate.1, tracer.0, tracer.1
+    )]
+    SizeMismatch {
+        /// The technique spec.
+        technique: String,
+        /// The estimate's width and height.
+        estimate: (u32, u32),
+        /// The light tracer image's width and height.
+        tracer: (u32, u32),
+    },
+    /// The light tracer's image or noise has a NaN or an infinity.
+    #[error("{scene}: the light tracer's image or its noise is not finite")]
+    NotFinite {
+        /// Scene name.
+        scene: String,
+    },
+}
+
+impl From<ReportError> for String {
+    fn from(e: ReportError) -> String {
+        e.to_string()
+    }
+}
 
 /// One measured combination.
 #[derive(Clone, Debug, Serialize)]
@@ -74,6 +133,44 @@ pub struct Record {
     pub reference_photons: u64,
     /// Relative standard error the reference reached.
     pub reference_noise: f64,
+    /// The errors against the independent light tracer; `None` for a technique whose
+    /// light the tracer does not cover (PhotonGi's indirect light,
+    /// [`reference::traced_by_light_tracer`]).
+    pub tracer: Option<TracerErrors>,
+}
+
+/// One combination's errors against the independent f64 light tracer's image of the same
+/// scene and camera, over the tracer's caustic pixels (`CausticMask::from_reference` of
+/// its mean).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TracerErrors {
+    /// Median over the repeats of the filtered caustics' relative MSE (dimensionless).
+    pub relative_mse: f64,
+    /// The same for the raw (unfiltered) caustics.
+    pub raw_relative_mse: f64,
+    /// The tracer's relative standard error of the mean (RMS over its caustic pixels of
+    /// the per-pixel standard error from its batches' spread, relative to the RMS of the
+    /// mean): its square is what the tracer's own noise adds to a relative MSE.
+    pub noise: f64,
+    /// Photons the tracer emitted over all batches and lights.
+    pub photons: u64,
+    /// Independent batches behind the error bar.
+    pub batches: u32,
+    /// What a silhouette pixel measures in the tracer's image.
+    pub silhouette: SilhouetteDefinition,
+    /// Spheres as the tracer traced them.
+    pub spheres: SphereModel,
+}
+
+impl Record {
+    /// The headline errors (filtered, raw): against the light tracer where the record has
+    /// them, else against the technique's own reference.
+    pub fn headline_errors(&self) -> (f64, f64) {
+        match &self.tracer {
+            Some(t) => (t.relative_mse, t.raw_relative_mse),
+            None => (self.relative_mse, self.raw_relative_mse),
+        }
+    }
 }
 
 /// What to measure.
@@ -100,8 +197,11 @@ pub struct ReportPlan {
     pub settings: serde_json::Map<String, serde_json::Value>,
     /// Frames measured per combination (after a warm-up).
     pub repeats: usize,
-    /// How references are computed.
+    /// How the techniques' own references are computed.
     pub reference: ReferenceSpec,
+    /// How the light-tracer reference of the caustic techniques is computed (its width
+    /// and height are replaced by `reference`'s, the size every technique renders at).
+    pub tracer: LightTracerSpec,
 }
 
 pub use crate::technique_spec::technique_spec;
@@ -120,11 +220,11 @@ pub fn run(
     plan: &ReportPlan,
     cache: &Path,
     log: &mut dyn FnMut(&str),
-) -> Result<Vec<Record>, String> {
+) -> Result<Vec<Record>, ReportError> {
     for t in &plan.techniques {
-        technique_spec(t)?;
+        technique_spec(t).map_err(ReportError::Plan)?;
     }
-    let mut cpu = crate::open_backend("cpu").map_err(|e| e.to_string())?;
+    let mut cpu = crate::open_backend("cpu")?;
     let mut records = Vec::new();
     for original in &plan.scenes {
         // one reference per estimator the techniques need (the caustics' for the caustic
@@ -133,8 +233,16 @@ pub fn run(
         let mut scene = original.clone();
         scene.camera.width = plan.reference.width;
         scene.camera.height = plan.reference.height;
+        // the light tracer's image, computed or loaded once, for the caustic techniques
+        let mut traced: Option<Traced> = None;
         for technique in &plan.techniques {
-            let (name, overrides) = technique_spec(technique)?;
+            let (name, overrides) = technique_spec(technique).map_err(ReportError::Plan)?;
+            if traced.is_none() && reference::traced_by_light_tracer(name) {
+                traced = Some(trace_reference(plan, original, cache, log)?);
+            }
+            let tracer = traced
+                .as_ref()
+                .filter(|_| reference::traced_by_light_tracer(name));
             let spec = reference::reference_for(name, &plan.reference);
             if !references.iter().any(|r| r.info.spec == spec) {
                 log(&format!(
@@ -151,7 +259,8 @@ pub fn run(
                             log(&format!("  reference frame {k}/{max}: noise {noise:.4}"));
                         }
                     },
-                )?;
+                )
+                .map_err(ReportError::Reference)?;
                 log(&format!(
                     "  reference: {} photons over {} frames, noise {:.4}",
                     r.info.photons, r.info.frames, r.info.noise
@@ -187,7 +296,7 @@ pub fn run(
                 None => vec![OWN_FILTER.to_string()],
             };
             for backend_name in &plan.backends {
-                let mut backend = crate::open_backend(backend_name).map_err(|e| e.to_string())?;
+                let mut backend = crate::open_backend(backend_name)?;
                 let frames_axis: Vec<usize> = if plan.frames.is_empty() {
                     vec![1]
                 } else {
@@ -220,36 +329,31 @@ pub fn run(
                             ));
                             continue;
                         }
-                        Err(e) => return Err(e.to_string()),
+                        Err(e) => return Err(e.into()),
                     };
                     let (filtered_output, raw_output) = sspm.estimate_outputs();
-                    sspm.set_reference(Some(r.image.clone()))
-                        .map_err(|e| e.to_string())?;
+                    sspm.set_reference(Some(r.image.clone()))?;
                     // warm-up frame (pipeline caches, first-touch allocations)
-                    sspm.frame(backend.as_mut(), &mut |_| {})
-                        .map_err(|e| e.to_string())?;
+                    sspm.frame(backend.as_mut(), &mut |_| {})?;
                     let (mut frame_ms, mut rel, mut rmse, mut flip) =
                         (vec![], vec![], vec![], vec![]);
                     let (mut raw_rel, mut peak, mut raw_peak) = (vec![], vec![], vec![]);
+                    let (mut tracer_rel, mut tracer_raw_rel) = (vec![], vec![]);
                     let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
                     let mut images: Vec<Image> = Vec::new();
                     let (mut timing, mut photons, mut device) = (String::new(), 0, String::new());
                     for k in 0..plan.repeats.max(1) {
                         if frames > 1 {
                             // an accumulation of its own from the first frame
-                            sspm.free(backend.as_mut()).map_err(|e| e.to_string())?;
-                            sspm = create(name, backend.as_mut(), &scene, &settings)
-                                .map_err(|e| e.to_string())?;
-                            sspm.set_reference(Some(r.image.clone()))
-                                .map_err(|e| e.to_string())?;
+                            sspm.free(backend.as_mut())?;
+                            sspm = create(name, backend.as_mut(), &scene, &settings)?;
+                            sspm.set_reference(Some(r.image.clone()))?;
                         }
                         sspm.set_seed(k as u32 + 1);
                         let (mut ms, mut pass_sums) = (0.0, BTreeMap::<String, f64>::new());
                         let mut last = None;
                         for _ in 0..frames {
-                            let st = sspm
-                                .frame(backend.as_mut(), &mut |_| {})
-                                .map_err(|e| e.to_string())?;
+                            let st = sspm.frame(backend.as_mut(), &mut |_| {})?;
                             ms += st.frame_ms;
                             for (p, t) in &st.pass_ms {
                                 *pass_sums.entry(p.clone()).or_default() += *t;
@@ -268,20 +372,29 @@ pub fn run(
                                 flip.push(f);
                             }
                         }
-                        let filtered = sspm
-                            .read_output(backend.as_mut(), filtered_output)
-                            .map_err(|e| e.to_string())?;
-                        let raw = sspm
-                            .read_output(backend.as_mut(), raw_output)
-                            .map_err(|e| e.to_string())?;
+                        let filtered = sspm.read_output(backend.as_mut(), filtered_output)?;
+                        let raw = sspm.read_output(backend.as_mut(), raw_output)?;
                         raw_rel.push(relative_mse(&raw, &r.image, &mask));
+                        if let Some(t) = tracer {
+                            for img in [&filtered, &raw] {
+                                if (img.width, img.height) != (t.image.width, t.image.height) {
+                                    return Err(ReportError::SizeMismatch {
+                                        technique: technique.clone(),
+                                        estimate: (img.width, img.height),
+                                        tracer: (t.image.width, t.image.height),
+                                    });
+                                }
+                            }
+                            tracer_rel.push(relative_mse(&filtered, &t.image, &t.mask));
+                            tracer_raw_rel.push(relative_mse(&raw, &t.image, &t.mask));
+                        }
                         peak.push(peak_ratio(&filtered, &r.image, &mask));
                         raw_peak.push(peak_ratio(&raw, &r.image, &mask));
                         images.push(filtered);
                         (timing, photons, device) =
                             (st.timing.clone(), st.photons_emitted, st.device.clone());
                     }
-                    sspm.free(backend.as_mut()).map_err(|e| e.to_string())?;
+                    sspm.free(backend.as_mut())?;
                     let bv = bias_variance(&images, &r.image, &mask);
                     let rec = Record {
                         scene: scene.name.clone(),
@@ -311,9 +424,24 @@ pub fn run(
                         relative_variance: bv.relative_variance,
                         reference_photons: r.info.photons,
                         reference_noise: r.info.noise,
+                        tracer: tracer.map(|t| TracerErrors {
+                            relative_mse: median(&mut tracer_rel),
+                            raw_relative_mse: median(&mut tracer_raw_rel),
+                            noise: t.info.noise,
+                            photons: t.info.photons,
+                            batches: t.info.spec.batches,
+                            silhouette: t.info.spec.silhouette,
+                            spheres: t.info.spec.spheres,
+                        }),
                     };
+                    let against_tracer = rec.tracer.as_ref().map_or(String::new(), |t| {
+                        format!(
+                            "; against the light tracer {:.3e} (raw {:.3e})",
+                            t.relative_mse, t.raw_relative_mse
+                        )
+                    });
                     log(&format!(
-                        "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: {:.2} ms, relMSE {:.5} (raw {:.5})",
+                        "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: {:.2} ms, relMSE {:.3e} (raw {:.3e}) against its own reference{against_tracer}",
                         rec.frame_ms, rec.relative_mse, rec.raw_relative_mse
                     ));
                     records.push(rec);
@@ -324,17 +452,125 @@ pub fn run(
     Ok(records)
 }
 
-/// The records as a Markdown table (the README's): relative MSE of the filtered
-/// caustics and of the raw deposit, their ratio, and the peak ratios.
+/// The light tracer's image of one scene, with its caustic mask.
+struct Traced {
+    image: Image,
+    mask: CausticMask,
+    info: light_tracer::LightTracerInfo,
+}
+
+/// Loads or computes the light-tracer reference of `scene` at the plan's size.
+fn trace_reference(
+    plan: &ReportPlan,
+    scene: &Scene,
+    cache: &Path,
+    log: &mut dyn FnMut(&str),
+) -> Result<Traced, ReportError> {
+    let spec = LightTracerSpec {
+        width: plan.reference.width,
+        height: plan.reference.height,
+        ..plan.tracer.clone()
+    };
+    log(&format!(
+        "{}: light tracer ({}x{}, {} batches of {} photons per light, {} spheres, silhouette \
+         pixels {})",
+        scene.name,
+        spec.width,
+        spec.height,
+        spec.batches,
+        spec.photons,
+        spec.spheres.name(),
+        spec.silhouette
+    ));
+    let (image, info) = light_tracer::load_or_compute(cache, scene, &spec, &mut |k, n, noise| {
+        if k % 4 == 0 || k == n {
+            log(&format!("  light tracer batch {k}/{n}: noise {noise:.5}"));
+        }
+    })?;
+    log(&format!(
+        "  light tracer: {} photons, {} connected, noise {:.5}",
+        info.photons, info.connected, info.noise
+    ));
+    if !info.noise.is_finite()
+        || image
+            .pixels
+            .iter()
+            .any(|p| !p.iter().all(|v| v.is_finite()))
+    {
+        return Err(ReportError::NotFinite {
+            scene: scene.name.clone(),
+        });
+    }
+    Ok(Traced {
+        mask: CausticMask::from_reference(&image),
+        image,
+        info,
+    })
+}
+
+/// A number for a table cell: `-` where there is none or it is not finite.
+fn cell(v: Option<f64>, fmt: fn(f64) -> String) -> String {
+    v.filter(|v| v.is_finite()).map_or("-".into(), fmt)
+}
+
+/// The paragraph above [`table`]'s rows: what each error column is measured against,
+/// and what a silhouette pixel is in the light tracer's image.
+pub fn caption(records: &[Record]) -> String {
+    let mut defs: Vec<SilhouetteDefinition> = Vec::new();
+    let mut budgets: Vec<(u64, u32, SphereModel)> = Vec::new();
+    for t in records.iter().filter_map(|r| r.tracer.as_ref()) {
+        if !defs.contains(&t.silhouette) {
+            defs.push(t.silhouette);
+        }
+        if !budgets.contains(&(t.photons, t.batches, t.spheres)) {
+            budgets.push((t.photons, t.batches, t.spheres));
+        }
+    }
+    let tracer = if defs.is_empty() {
+        "no technique here is one the light tracer covers".to_string()
+    } else {
+        let defs: Vec<String> = defs
+            .iter()
+            .map(|d| format!("{d}: {}", d.describe()))
+            .collect();
+        let budgets: Vec<String> = budgets
+            .iter()
+            .map(|(p, b, s)| format!("{p} photons in {b} batches, {} spheres", s.name()))
+            .collect();
+        format!(
+            "silhouette pixels {}; {}",
+            defs.join("; "),
+            budgets.join("; ")
+        )
+    };
+    format!(
+        "Relative MSE over the reference's caustic pixels. *vs tracer*: against the \
+         independent f64 light tracer's image of the same scene and camera ({tracer}); \
+         *tracer noise²*: the square of its relative standard error, what its own noise \
+         adds to a relative MSE. *vs own*: against the technique's converged unfiltered \
+         estimate (Sspm's raw deposit for the caustic techniques; PhotonGi's deposit for \
+         PhotonGi, whose indirect light the tracer does not cover: `-` in the tracer \
+         columns). Peaks, FLIP, bias and variance are against the own reference.\n"
+    )
+}
+
+/// The records as a Markdown table after its [`caption`]: relative MSE of the filtered
+/// caustics and of the raw deposit against the light tracer (with the tracer's noise)
+/// and against the technique's own reference, their ratio, and the peak ratios.
 pub fn table(records: &[Record]) -> String {
-    let mut s = String::from(
-        "| scene | technique (filter) | backend | photons | frames | ms | relMSE filtered | relMSE raw | \
-         filtered / raw | peak filtered | peak raw | FLIP | bias | variance |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    let mut s = caption(records);
+    s.push_str(
+        "\n| scene | technique (filter) | backend | photons | frames | ms | relMSE vs tracer | \
+         tracer noise² | relMSE vs own | raw vs tracer | raw vs own | filtered / raw (own) | \
+         peak filtered | peak raw | FLIP | bias | variance |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
+    let sci3 = |v: f64| format!("{v:.3e}");
+    let sci2 = |v: f64| format!("{v:.2e}");
     for r in records {
+        let t = r.tracer.as_ref();
         s.push_str(&format!(
-            "| {} | {} ({}) | {} | {} | {} | {:.1} | {:.3e} | {:.3e} | {:.3} | {:.3} | {:.3} | {} | {:+.4} | {:.2e} |\n",
+            "| {} | {} ({}) | {} | {} | {} | {:.1} | {} | {} | {:.3e} | {} | {:.3e} | {:.3} | {:.3} | {:.3} | {} | {:+.4} | {:.2e} |\n",
             r.scene,
             r.technique,
             r.filter,
@@ -342,7 +578,10 @@ pub fn table(records: &[Record]) -> String {
             r.budget,
             r.frames,
             r.frame_ms,
+            cell(t.map(|t| t.relative_mse), sci3),
+            cell(t.map(|t| t.noise * t.noise), sci2),
             r.relative_mse,
+            cell(t.map(|t| t.raw_relative_mse), sci3),
             r.raw_relative_mse,
             if r.raw_relative_mse > 0.0 {
                 r.relative_mse / r.raw_relative_mse
@@ -369,7 +608,9 @@ fn decade_above(x: f64) -> f64 {
 }
 
 /// Log-log plot of relative MSE against frame time, one curve per technique x backend,
-/// for `scene`'s records. Needs a TrueType font (DejaVu Sans from fonts-dejavu-core).
+/// for `scene`'s records: each record's [`Record::headline_errors`] (against the light
+/// tracer for the caustic techniques, against its own reference for PhotonGi), as the
+/// caption says. Needs a TrueType font (DejaVu Sans from fonts-dejavu-core).
 pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> {
     use plotters::prelude::*;
     let font = ["/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"]
@@ -381,7 +622,7 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
         .map_err(|_| "could not load the plot font".to_string())?;
     let rs: Vec<&Record> = records
         .iter()
-        .filter(|r| r.scene == scene && r.frame_ms > 0.0 && r.relative_mse > 0.0)
+        .filter(|r| r.scene == scene && r.frame_ms > 0.0 && r.headline_errors().0 > 0.0)
         .collect();
     if rs.is_empty() {
         return Err(format!(
@@ -392,22 +633,24 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
         (a.min(r.frame_ms), b.max(r.frame_ms))
     });
     let (emin, emax) = rs.iter().fold((f64::MAX, 0.0f64), |(a, b), r| {
-        let raw = if r.raw_relative_mse > 0.0 {
-            r.raw_relative_mse
-        } else {
-            r.relative_mse
-        };
-        (
-            a.min(r.relative_mse).min(raw),
-            b.max(r.relative_mse).max(raw),
-        )
+        let (filtered, raw) = r.headline_errors();
+        let raw = if raw > 0.0 { raw } else { filtered };
+        (a.min(filtered).min(raw), b.max(filtered).max(raw))
     });
+    let traced = rs.iter().filter(|r| r.tracer.is_some()).count();
+    let against = if traced == rs.len() {
+        "against the f64 light tracer"
+    } else if traced == 0 {
+        "against each technique's converged estimate"
+    } else {
+        "against the light tracer (photon-gi: its deposit)"
+    };
     let root = BitMapBackend::new(path, (800, 560)).into_drawing_area();
     let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            format!("{scene}: caustic error against frame time"),
+            format!("{scene}: error {against} by frame time"),
             ("sans-serif", 22),
         )
         .margin(16)
@@ -442,7 +685,7 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
                 format!("{} {} / {}", r.technique, r.filter, r.backend)
             })
             .or_default()
-            .push((r.frame_ms, r.relative_mse, r.raw_relative_mse));
+            .push((r.frame_ms, r.headline_errors().0, r.headline_errors().1));
     }
     for (i, (name, mut all)) in curves.into_iter().enumerate() {
         all.sort_by(|a, b| a.0.total_cmp(&b.0));

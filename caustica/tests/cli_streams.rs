@@ -83,6 +83,10 @@ fn report(out: &Path, cache: Option<&Path>) -> Vec<String> {
         "32x18",
         "--reference-frames",
         "1",
+        "--tracer-photons",
+        "4096",
+        "--tracer-batches",
+        "2",
         "--out",
     ]);
     v.push(out.display().to_string());

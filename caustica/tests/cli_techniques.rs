@@ -52,6 +52,10 @@ fn a_small_report_measures_the_technique_by_name() {
         "64x36",
         "--reference-frames",
         "4",
+        "--tracer-photons",
+        "16384",
+        "--tracer-batches",
+        "2",
         "--out",
         dir.to_str().unwrap(),
     ]);
@@ -68,6 +72,15 @@ fn a_small_report_measures_the_technique_by_name() {
     let rel = r["relative_mse"].as_f64().expect("a number");
     let raw = r["raw_relative_mse"].as_f64().expect("a number");
     assert!(rel.is_finite() && raw.is_finite() && rel >= 0.0, "{r}");
+    // and against the light tracer, whose noise and silhouette definition come with it
+    let tracer = &r["tracer"];
+    assert!(
+        tracer["relative_mse"].as_f64().is_some_and(f64::is_finite),
+        "{r}"
+    );
+    assert!(tracer["noise"].as_f64().is_some_and(f64::is_finite), "{r}");
+    assert_eq!(tracer["silhouette"], "centre_surface");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("silhouette pixels centre-surface"));
     // the frames axis: a single frame and three accumulated, timed to the last
     assert_eq!(r["frames"], 1);
     let three = &records[1];
@@ -96,6 +109,12 @@ fn report_arguments_are_checked_before_any_reference_is_rendered() {
             "--frames: '0' is not a count of at least 1",
         ),
         (vec!["--backends", "bogus"], "unknown backend"),
+        (
+            vec!["--tracer-batches", "1"],
+            "--tracer-batches must be at least 2",
+        ),
+        (vec!["--tracer-spheres", "cube"], "unknown --tracer-spheres"),
+        (vec!["--silhouette", "edge"], "invalid value 'edge'"),
     ] {
         let mut cmd = vec!["report", "--out", d];
         cmd.extend(args.iter().copied());

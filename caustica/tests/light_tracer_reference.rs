@@ -1,7 +1,9 @@
 //! The independent light-tracer reference (`caustica::reference::light_tracer`) against
 //! a closed form and against Sspm's converged raw estimate.
 
-use caustica::reference::light_tracer::{compute, LightTracerSpec, SphereModel};
+use caustica::reference::light_tracer::{
+    compute, LightTracerSpec, SilhouetteDefinition, SphereModel,
+};
 use caustica::reference::{self, ReferenceSpec, CAUSTIC_REFERENCE};
 use caustica_core::frame::metrics::MASK_FRACTION;
 use caustica_core::scene::{builtin, Aabb, Light, Material, Object, Shape};
@@ -49,7 +51,7 @@ fn slab_radiance(sigma: f32) -> (f64, f64, f64) {
         seed: 7,
         spheres: SphereModel::Analytic,
         max_specular: 64,
-        count_hidden: false,
+        silhouette: SilhouetteDefinition::EyeVisible,
     };
     let r = compute(&scene, &spec, &mut |_, _, _| {}).unwrap();
     // the central 8 x 4 pixels see the floor well inside the slab's shadow (fov 10 deg at
@@ -135,7 +137,7 @@ fn slab_transmission_matches_the_closed_form() {
 /// independent noise the expected squared difference is the sum of the variances, so
 /// pure noise gives a ratio near 1, and 3 (9x the expected squared difference, over
 /// dozens of pixels) fails only for a bias of ~2.8 standard errors. No allowance for
-/// the mesh: both see the same triangles. With `count_hidden` (Sspm's definition) the
+/// the mesh: both see the same triangles. With `CentreSurface` (Sspm's definition) the
 /// same bound holds over every caustic pixel, silhouettes included. The analytic sphere
 /// is measured against the same estimate and reported.
 #[test]
@@ -150,7 +152,7 @@ fn sphere_agrees_with_sspm_converged() {
         seed: 1,
         spheres: SphereModel::Mesh,
         max_specular: 64,
-        count_hidden: false,
+        silhouette: SilhouetteDefinition::EyeVisible,
     };
     let lt = compute(&scene, &spec, &mut |_, _, _| {}).unwrap();
     let sspm_spec = ReferenceSpec {
@@ -211,7 +213,7 @@ fn sphere_agrees_with_sspm_converged() {
     let hidden = compute(
         &scene,
         &LightTracerSpec {
-            count_hidden: true,
+            silhouette: SilhouetteDefinition::CentreSurface,
             ..spec.clone()
         },
         &mut |_, _, _| {},
@@ -229,4 +231,55 @@ fn sphere_agrees_with_sspm_converged() {
         rel <= 3.0 * combined,
         "rel L2 {rel} > 3 x combined {combined}"
     );
+}
+
+/// The two silhouette definitions differ only on silhouette pixels: `sphere` at 64x36,
+/// the same photons (same seed) traced for both, so a pixel whose corners and centre see
+/// one object gets the same photons, summed in the same order, bit for bit; on the
+/// silhouette pixels the eye-visible image is at most the centre-surface one (it drops
+/// the photons the ball hides, never adds), and below it on some.
+#[test]
+fn silhouette_definitions_differ_only_on_silhouette_pixels() {
+    let scene = builtin::sphere();
+    let spec = LightTracerSpec {
+        width: 64,
+        height: 36,
+        photons: 1 << 18,
+        batches: 2,
+        ..LightTracerSpec::default()
+    };
+    let trace = |silhouette| {
+        compute(
+            &scene,
+            &LightTracerSpec {
+                silhouette,
+                ..spec.clone()
+            },
+            &mut |_, _, _| {},
+        )
+        .unwrap()
+    };
+    let centre = trace(SilhouetteDefinition::CentreSurface);
+    let eye = trace(SilhouetteDefinition::EyeVisible);
+    assert_eq!(centre.silhouette, eye.silhouette);
+    let (mut silhouettes, mut differing) = (0, 0);
+    for (i, (c, e)) in centre
+        .image
+        .pixels
+        .iter()
+        .zip(&eye.image.pixels)
+        .enumerate()
+    {
+        if !centre.silhouette[i] {
+            assert_eq!(c, e, "pixel {i} is no silhouette pixel");
+            continue;
+        }
+        silhouettes += 1;
+        assert!((0..3).all(|k| e[k] <= c[k]), "pixel {i}: {e:?} > {c:?}");
+        if c != e {
+            differing += 1;
+        }
+    }
+    eprintln!("{differing} of {silhouettes} silhouette pixels differ");
+    assert!(differing > 0, "no silhouette pixel over the caustic");
 }

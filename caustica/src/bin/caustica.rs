@@ -202,16 +202,25 @@ enum Command {
         /// Spheres as the exact sphere (analytic) or the scene's tessellated mesh (mesh).
         #[arg(long, default_value = "analytic")]
         spheres: String,
-        /// Count every photon on the surface a pixel's centre sees, hidden from the eye
-        /// or not (Sspm's store test), instead of only those the eye sees.
-        #[arg(long)]
-        count_hidden: bool,
+        /// What a silhouette pixel measures: centre-surface (default), the radiance of the
+        /// surface the pixel's centre sees, every photon on it counted, hidden from the eye
+        /// or not, as the caustic techniques' store test counts them; eye-visible, the flux
+        /// the eye sees through the pixel's footprint (hidden photons dropped). The two
+        /// differ only in pixels that straddle a silhouette.
+        #[arg(long, default_value = "centre-surface", value_parser = ["centre-surface", "eye-visible"])]
+        silhouette: String,
         /// Cache directory.
         #[arg(long, default_value = "out/references")]
         cache: PathBuf,
     },
     /// Error against run time for every scene x technique x backend x photon budget:
-    /// prints a table, writes report.json and a log-log plot per scene.
+    /// prints a table, writes report.json and a log-log plot per scene. The caustic
+    /// techniques (sspm, caustic-map, adaptive-caustics) are measured against the
+    /// independent f64 light tracer's image of the same scene and camera (`caustica
+    /// reference`), its relative standard error beside each error, and against their own
+    /// converged estimate (Sspm's raw deposit) in a second column; photon-gi against its
+    /// converged deposit only (the tracer covers caustic paths, not indirect light). The
+    /// table's caption names the silhouette definition (--silhouette).
     Report {
         /// Comma-separated scenes (built-in names or scene files).
         #[arg(long, default_value = "sphere,cornell")]
@@ -236,12 +245,33 @@ enum Command {
         /// Image size WxH of the measurements and the references.
         #[arg(long, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
-        /// Relative standard error at which a reference counts as converged.
+        /// Relative standard error at which a technique's own reference counts as
+        /// converged.
         #[arg(long, default_value_t = 0.02)]
         reference_noise: f64,
         /// Frame cap of a reference (1024x1024 photons per frame).
         #[arg(long, default_value_t = 256)]
         reference_frames: u32,
+        /// Photons per light and batch of the light tracer (the default 16 x 4194304
+        /// take about 13 s for `sphere` at 480x270 on two cores; cached).
+        #[arg(long, default_value_t = 1 << 22)]
+        tracer_photons: u64,
+        /// Independent batches of the light tracer (its error bar is their spread; at
+        /// least 2).
+        #[arg(long, default_value_t = 16)]
+        tracer_batches: u32,
+        /// Spheres in the light tracer: the exact sphere (analytic) or the scene's
+        /// tessellated mesh the techniques trace (mesh).
+        #[arg(long, default_value = "analytic")]
+        tracer_spheres: String,
+        /// What a silhouette pixel measures in the light tracer's image: centre-surface
+        /// (default), the radiance of the surface the pixel's centre sees, every photon on
+        /// it counted, hidden from the eye or not, as the caustic techniques' store test
+        /// counts them; eye-visible, the flux the eye sees through the pixel's footprint
+        /// (hidden photons dropped). The two differ only in pixels that straddle a
+        /// silhouette.
+        #[arg(long, default_value = "centre-surface", value_parser = ["centre-surface", "eye-visible"])]
+        silhouette: String,
         /// Reference cache directory (default: OUT/references).
         #[arg(long)]
         cache: Option<PathBuf>,
@@ -295,6 +325,19 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("'{s}': an image side must be at most 16384 pixels"));
     }
     Ok((w, h))
+}
+
+/// `--spheres`: analytic or mesh.
+fn parse_spheres(
+    flag: &str,
+    s: &str,
+) -> Result<caustica::reference::light_tracer::SphereModel, String> {
+    use caustica::reference::light_tracer::SphereModel;
+    match s {
+        "analytic" => Ok(SphereModel::Analytic),
+        "mesh" => Ok(SphereModel::Mesh),
+        other => Err(format!("unknown {flag} '{other}': analytic or mesh")),
+    }
 }
 
 fn main() -> ExitCode {
@@ -448,19 +491,14 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             batches,
             seed,
             spheres,
-            count_hidden,
+            silhouette,
             cache,
         } => {
-            use caustica::reference::light_tracer::{
-                load_or_compute, LightTracerSpec, SphereModel,
-            };
-            let spheres = match spheres.as_str() {
-                "analytic" => SphereModel::Analytic,
-                "mesh" => SphereModel::Mesh,
-                other => {
-                    return Err(format!("unknown --spheres '{other}': analytic or mesh").into())
-                }
-            };
+            use caustica::reference::light_tracer::{load_or_compute, LightTracerSpec};
+            let spheres = parse_spheres("--spheres", &spheres)?;
+            let silhouette = silhouette
+                .parse()
+                .map_err(|e| format!("--silhouette: {e}"))?;
             if batches < 2 || photons == 0 {
                 return Err("--batches must be at least 2 and --photons positive".into());
             }
@@ -472,12 +510,13 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 batches,
                 seed,
                 spheres,
-                count_hidden,
+                silhouette,
                 ..LightTracerSpec::default()
             };
             let (_, info) = load_or_compute(&cache, &scene, &spec, &mut |k, n, noise| {
                 note!("batch {k}/{n}: relative standard error {noise:.5}")
-            })?;
+            })
+            .map_err(String::from)?;
             outln!(
                 console,
                 "{}",
@@ -494,6 +533,10 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             size,
             reference_noise,
             reference_frames,
+            tracer_photons,
+            tracer_batches,
+            tracer_spheres,
+            silhouette,
             cache,
             filters,
             settings,
@@ -533,7 +576,23 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     max_frames: reference_frames,
                     ..Default::default()
                 },
+                tracer: caustica::reference::light_tracer::LightTracerSpec {
+                    width: size.0,
+                    height: size.1,
+                    photons: tracer_photons,
+                    batches: tracer_batches,
+                    spheres: parse_spheres("--tracer-spheres", &tracer_spheres)?,
+                    silhouette: silhouette
+                        .parse()
+                        .map_err(|e| format!("--silhouette: {e}"))?,
+                    ..Default::default()
+                },
             };
+            if tracer_batches < 2 || tracer_photons == 0 {
+                return Err(
+                    "--tracer-batches must be at least 2 and --tracer-photons positive".into(),
+                );
+            }
             if !(reference_noise > 0.0 && reference_noise < 1.0) {
                 return Err("--reference-noise must be in (0, 1)".into());
             }
@@ -561,7 +620,8 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             }
             caustica::output::prepare_output_dir(&out)?;
             let cache = cache.unwrap_or_else(|| out.join("references"));
-            let records = caustica::report::run(&plan, &cache, &mut |line| note!("{line}"))?;
+            let records = caustica::report::run(&plan, &cache, &mut |line| note!("{line}"))
+                .map_err(String::from)?;
             // the files first, the table last: a closed stdout loses only the table
             let path = out.join("report.json");
             std::fs::write(

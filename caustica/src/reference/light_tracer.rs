@@ -17,8 +17,8 @@
 //! whose path met at least one specular surface and first meets a diffuse surface at `x`
 //! is connected to the pinhole camera. It counts for the pixel `P` that `x` projects into
 //! when (a) the surface `P`'s centre ray sees is diffuse and is the object `x` lies on,
-//! (b) nothing lies between `x` and the eye, and (c) the photon arrives on the side of
-//! the surface the eye is on. Then
+//! (b) with [`SilhouetteDefinition::EyeVisible`] only, nothing lies between `x` and the
+//! eye, and (c) the photon arrives on the side of the surface the eye is on. Then
 //!
 //! `L_P = (albedo / pi) x sum_i Phi_i / A_P`,
 //!
@@ -34,10 +34,6 @@
 //! (seed, batch, light, photon, channel), and contributions are summed in photon order,
 //! so the result is the same for any thread count.
 
-// TODO(issue 48): `caustica report` still measures against the techniques' own converged
-// estimates (`reference::load_or_compute`); measuring the filtered outputs and CausticMap's
-// and AdaptiveCaustics' floors against this tracer is not wired in yet.
-
 use super::{paths, read_exr};
 use caustica_core::frame::image::Image;
 use caustica_core::scene::shapes::tessellate;
@@ -46,7 +42,30 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use std::fmt;
 use std::path::Path;
+use std::str::FromStr;
+
+/// Why a light-tracer reference could not be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LightTracerError {
+    /// The settings cannot give an estimate with an error bar.
+    #[error("light tracer settings: {0}")]
+    Settings(String),
+    /// The scene has something the tracer cannot trace.
+    #[error("light tracer scene: {0}")]
+    Scene(String),
+    /// The cache folder or one of its files could not be made, read or written (the
+    /// message names the path).
+    #[error("reference cache {0}")]
+    Cache(String),
+}
+
+impl From<LightTracerError> for String {
+    fn from(e: LightTracerError) -> String {
+        e.to_string()
+    }
+}
 
 /// How spheres are represented.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -56,6 +75,87 @@ pub enum SphereModel {
     Analytic,
     /// The scene's tessellated UV sphere with interpolated normals, as the kernels see it.
     Mesh,
+}
+
+impl SphereModel {
+    /// The command line's name: `analytic` or `mesh`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SphereModel::Analytic => "analytic",
+            SphereModel::Mesh => "mesh",
+        }
+    }
+}
+
+/// What a pixel whose footprint straddles a silhouette measures: the two definitions
+/// agree on every other pixel (both count only photons on the diffuse surface the
+/// pixel's centre ray sees, over that surface's area at the centre ray), and both leave
+/// a pixel whose centre sees no diffuse surface (the glass ball, the sky) empty.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SilhouetteDefinition {
+    /// The radiance of the surface the pixel's centre sees: every photon on that surface
+    /// that projects into the pixel counts, whether the eye sees it or an object in front
+    /// hides it. Sspm's tangent-plane store test counts exactly these (it has no
+    /// visibility test), and CausticMap's and AdaptiveCaustics' atlas lookup at the
+    /// centre ray's hit reads that surface's irradiance: the default, the quantity the
+    /// caustic techniques estimate.
+    #[default]
+    CentreSurface,
+    /// The flux the eye sees through the pixel's footprint: of those photons only the
+    /// ones with nothing between them and the eye, so a silhouette pixel over a caustic
+    /// gets the surface's radiance times the fraction of its footprint the eye sees.
+    EyeVisible,
+}
+
+impl SilhouetteDefinition {
+    /// Both definitions, default first.
+    pub const ALL: [SilhouetteDefinition; 2] = [
+        SilhouetteDefinition::CentreSurface,
+        SilhouetteDefinition::EyeVisible,
+    ];
+
+    /// The command line's name: `centre-surface` or `eye-visible`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SilhouetteDefinition::CentreSurface => "centre-surface",
+            SilhouetteDefinition::EyeVisible => "eye-visible",
+        }
+    }
+
+    /// One line saying what a silhouette pixel measures (for tables and help).
+    pub fn describe(self) -> &'static str {
+        match self {
+            SilhouetteDefinition::CentreSurface => {
+                "the radiance of the surface the pixel's centre sees, hidden photons counted \
+                 as the caustic techniques' store test counts them"
+            }
+            SilhouetteDefinition::EyeVisible => {
+                "the flux the eye sees through the pixel's footprint (hidden photons dropped)"
+            }
+        }
+    }
+}
+
+impl fmt::Display for SilhouetteDefinition {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SilhouetteDefinition {
+    type Err = LightTracerError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        SilhouetteDefinition::ALL
+            .into_iter()
+            .find(|d| d.name() == s)
+            .ok_or_else(|| {
+                LightTracerError::Settings(format!(
+                    "unknown silhouette definition '{s}': centre-surface or eye-visible"
+                ))
+            })
+    }
 }
 
 /// How a light-tracer reference is computed.
@@ -75,11 +175,12 @@ pub struct LightTracerSpec {
     pub spheres: SphereModel,
     /// Specular interactions after which a path is dropped (counted in the info).
     pub max_specular: u32,
-    /// Leave out test (b), the eye's view of the photon: count every photon on the
-    /// surface the pixel's centre sees, hidden or not, as Sspm's tangent-plane store test
-    /// does. The two definitions differ only in pixels that straddle a silhouette.
+    /// What a silhouette pixel measures: with [`SilhouetteDefinition::EyeVisible`] test
+    /// (b), the eye's view of the photon, applies; the default counts every photon on the
+    /// surface the pixel's centre sees, as the caustic techniques do. The two differ only
+    /// in pixels that straddle a silhouette.
     #[serde(default)]
-    pub count_hidden: bool,
+    pub silhouette: SilhouetteDefinition,
 }
 
 impl Default for LightTracerSpec {
@@ -92,7 +193,7 @@ impl Default for LightTracerSpec {
             seed: 1,
             spheres: SphereModel::Analytic,
             max_specular: 64,
-            count_hidden: false,
+            silhouette: SilhouetteDefinition::CentreSurface,
         }
     }
 }
@@ -243,7 +344,7 @@ fn material(m: &Material) -> Mat {
 }
 
 impl Geometry {
-    fn build(scene: &Scene, spheres: SphereModel) -> Result<Geometry, String> {
+    fn build(scene: &Scene, spheres: SphereModel) -> Result<Geometry, LightTracerError> {
         let mut g = Geometry {
             tris: Vec::new(),
             nodes: Vec::new(),
@@ -255,10 +356,9 @@ impl Geometry {
         };
         let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
         for (i, o) in scene.objects.iter().enumerate() {
-            let m = scene
-                .materials
-                .get(&o.material)
-                .ok_or_else(|| format!("object {}: no material {}", o.name, o.material))?;
+            let m = scene.materials.get(&o.material).ok_or_else(|| {
+                LightTracerError::Scene(format!("object {}: no material {}", o.name, o.material))
+            })?;
             g.mats.push(material(m));
             let obj = i as u32;
             if let (Shape::Sphere { center, radius, .. }, SphereModel::Analytic, None) =
@@ -272,7 +372,10 @@ impl Geometry {
                 continue;
             }
             if matches!(o.shape, Shape::ObjFile { .. }) {
-                return Err(format!("object {}: an unloaded obj_file shape", o.name));
+                return Err(LightTracerError::Scene(format!(
+                    "object {}: an unloaded obj_file shape",
+                    o.name
+                )));
             }
             let mut mesh = tessellate(&o.shape);
             if let Some(t) = &o.transform {
@@ -319,7 +422,7 @@ impl Geometry {
             }
         }
         if g.mats.is_empty() {
-            return Err("the scene has no object".into());
+            return Err(LightTracerError::Scene("the scene has no object".into()));
         }
         g.scene_bound = (0.5 * (lo + hi), 0.5 * (hi - lo).length());
         g.eps = 1e-9 * g.scene_bound.1.max(1.0);
@@ -914,7 +1017,11 @@ fn trace(
 
 /// Per pixel of `scene` seen at `spec`'s size: whether its corner rays see another object
 /// than its centre ray (or nothing), as [`LightTracerReference::silhouette`].
-pub fn silhouette_pixels(scene: &Scene, spec: &LightTracerSpec) -> Result<Vec<bool>, String> {
+pub fn silhouette_pixels(
+    scene: &Scene,
+    spec: &LightTracerSpec,
+) -> Result<Vec<bool>, LightTracerError> {
+    validate(spec)?;
     let g = Geometry::build(scene, spec.spheres)?;
     let cam = Cam::new(&scene.camera, spec.width, spec.height);
     Ok(pixel_table(&g, &cam).1)
@@ -935,6 +1042,24 @@ pub fn light_tracer_hash(scene: &Scene, spec: &LightTracerSpec) -> String {
     format!("{h:016x}")
 }
 
+/// Largest image side (pixels), as the scene format's camera.
+const MAX_SIDE: u32 = 16384;
+
+/// Rejects settings that cannot give an estimate with an error bar.
+fn validate(spec: &LightTracerSpec) -> Result<(), LightTracerError> {
+    let bad = |what: &str| Err(LightTracerError::Settings(what.into()));
+    if spec.batches < 2 {
+        return bad("at least 2 batches (the error bar is their spread)");
+    }
+    if spec.photons == 0 {
+        return bad("photons per batch must be positive");
+    }
+    if !(1..=MAX_SIDE).contains(&spec.width) || !(1..=MAX_SIDE).contains(&spec.height) {
+        return bad("the image sides must be 1..=16384 pixels");
+    }
+    Ok(())
+}
+
 /// A work item's (pixel, radiance) contributions in photon order.
 type Contributions = Vec<(u32, [f64; 3])>;
 
@@ -947,10 +1072,8 @@ pub fn compute(
     scene: &Scene,
     spec: &LightTracerSpec,
     progress: &mut dyn FnMut(u32, u32, f64),
-) -> Result<LightTracerReference, String> {
-    if spec.batches < 2 || spec.photons == 0 || spec.width == 0 || spec.height == 0 {
-        return Err("a light-tracer reference needs 2+ batches, photons and pixels".into());
-    }
+) -> Result<LightTracerReference, LightTracerError> {
+    validate(spec)?;
     let g = Geometry::build(scene, spec.spheres)?;
     let cam = Cam::new(&scene.camera, spec.width, spec.height);
     let (table, silhouette) = pixel_table(&g, &cam);
@@ -999,15 +1122,8 @@ pub fn compute(
                                 PathEnd::Truncated => trunc += 1,
                                 PathEnd::Lost => {}
                                 PathEnd::Stored { hit, dir, flux } => {
-                                    let c = connect(
-                                        &g,
-                                        &cam,
-                                        &table,
-                                        &hit,
-                                        dir,
-                                        flux,
-                                        spec.count_hidden,
-                                    );
+                                    let c =
+                                        connect(&g, &cam, &table, &hit, dir, flux, spec.silhouette);
                                     if let Some(c) = c {
                                         out.push(c);
                                     }
@@ -1079,7 +1195,7 @@ fn connect(
     hit: &Hit,
     dir: DVec3,
     flux: [f64; 3],
-    count_hidden: bool,
+    silhouette: SilhouetteDefinition,
 ) -> Option<(u32, [f64; 3])> {
     let p = cam.pixel(hit.p)?;
     let see = table[p]?;
@@ -1094,7 +1210,9 @@ fn connect(
     let dist = to_eye.length();
     let w = to_eye / dist;
     let o = g.offset(hit, w);
-    if !count_hidden && g.intersect(o, w, (cam.pos - o).length()).is_some() {
+    if silhouette == SilhouetteDefinition::EyeVisible
+        && g.intersect(o, w, (cam.pos - o).length()).is_some()
+    {
         return None;
     }
     Some((p as u32, std::array::from_fn(|c| flux[c] * see.scale[c])))
@@ -1107,24 +1225,27 @@ pub fn load_or_compute(
     scene: &Scene,
     spec: &LightTracerSpec,
     progress: &mut dyn FnMut(u32, u32, f64),
-) -> Result<(Image, LightTracerInfo), String> {
+) -> Result<(Image, LightTracerInfo), LightTracerError> {
     let hash = light_tracer_hash(scene, spec);
     let (exr_path, json_path) = paths(dir, &scene.name, &format!("light-tracer-{hash}"));
     let err_path = exr_path.with_extension("stderr.exr");
     if let (Ok(text), true) = (std::fs::read_to_string(&json_path), exr_path.exists()) {
         if let Ok(info) = serde_json::from_str::<LightTracerInfo>(&text) {
             if info.scene_hash == hash {
-                return Ok((read_exr(&exr_path)?, info));
+                return Ok((read_exr(&exr_path).map_err(LightTracerError::Cache)?, info));
             }
         }
     }
+    validate(spec)?;
     // the cache must take the result before the work begins
-    crate::output::prepare_folder(dir).map_err(|e| format!("reference cache {e}"))?;
+    crate::output::prepare_folder(dir).map_err(LightTracerError::Cache)?;
     let r = compute(scene, spec, progress)?;
-    crate::output::write_exr(&exr_path, &r.image)?;
-    crate::output::write_exr(&err_path, &r.std_error)?;
-    let text = serde_json::to_string_pretty(&r.info).map_err(|e| e.to_string())?;
-    std::fs::write(&json_path, text).map_err(|e| format!("{}: {e}", json_path.display()))?;
+    crate::output::write_exr(&exr_path, &r.image).map_err(LightTracerError::Cache)?;
+    crate::output::write_exr(&err_path, &r.std_error).map_err(LightTracerError::Cache)?;
+    let text = serde_json::to_string_pretty(&r.info)
+        .map_err(|e| LightTracerError::Cache(format!("{}: {e}", json_path.display())))?;
+    std::fs::write(&json_path, text)
+        .map_err(|e| LightTracerError::Cache(format!("{}: {e}", json_path.display())))?;
     Ok((r.image, r.info))
 }
 

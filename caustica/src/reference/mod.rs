@@ -57,6 +57,15 @@ pub fn reference_for(technique: &str, spec: &ReferenceSpec) -> ReferenceSpec {
     }
 }
 
+/// Whether the independent light tracer ([`light_tracer`]) estimates the light
+/// `technique` (a registry name) estimates: the caustic techniques' paths (light, one or
+/// more specular events, a diffuse receiver) for `sspm`, `caustic-map` and
+/// `adaptive-caustics`; not PhotonGi's indirect light (every path after the first diffuse
+/// bounce), whose only reference is its own converged deposit ([`INDIRECT_REFERENCE`]).
+pub fn traced_by_light_tracer(technique: &str) -> bool {
+    matches!(technique, "sspm" | "caustic-map" | "adaptive-caustics")
+}
+
 /// The technique spec of the caustic reference: Sspm's raw deposit with the tangent-plane
 /// store test (`depth_tolerance < 0`), which keeps every photon on the surface a pixel's
 /// centre sees; Kim 2019's view-depth test drops photons of surfaces seen at a grazing
