@@ -119,7 +119,7 @@ pub struct Reference {
 /// reference is reused only for exactly the same inputs.
 pub fn scene_hash(scene: &Scene, spec: &ReferenceSpec) -> String {
     let text = format!(
-        "{}|{}x{}|{}|{}|{}",
+        "{}|{}x{}|{}|{}|{}|seeds from {REFERENCE_FIRST_SEED}",
         caustica_core::scene::format::to_json(scene),
         spec.width,
         spec.height,
@@ -202,8 +202,14 @@ pub fn load_or_compute(
     Ok(r)
 }
 
-/// Progressive mean of the raw caustics over frames with seeds 1, 2, ...; `scene_hash`
-/// is recorded in the reference's info.
+/// The seed of a reference's first frame: its frames take seeds from here on, far from
+/// the seeds 1, 2, ... that the frames measured against it take (`caustica report`'s
+/// repeats), so that no measured frame is part of its own reference.
+pub const REFERENCE_FIRST_SEED: u32 = 1 << 20;
+
+/// Progressive mean of the raw caustics over frames with seeds
+/// [`REFERENCE_FIRST_SEED`], `REFERENCE_FIRST_SEED + 1`, ...; `scene_hash` is recorded
+/// in the reference's info.
 pub fn compute(
     scene: &Scene,
     spec: &ReferenceSpec,
@@ -228,7 +234,7 @@ pub fn compute(
     let mut sum2 = vec![[0.0f64; 3]; n];
     let (mut frames, mut photons, mut noise) = (0u32, 0u64, f64::INFINITY);
     while frames < spec.max_frames.max(2) {
-        sspm.set_seed(frames + 1);
+        sspm.set_seed(REFERENCE_FIRST_SEED + frames);
         let stats = sspm
             .frame(backend, &mut |_| {})
             .map_err(|e| e.to_string())?;
