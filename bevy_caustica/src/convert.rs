@@ -98,6 +98,7 @@ pub fn material(m: &MaterialInput) -> (Material, Option<String>) {
                 ior,
                 cauchy_b: 0.0,
                 absorption,
+                ior_model: Default::default(),
             },
             note,
         );

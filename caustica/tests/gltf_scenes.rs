@@ -49,11 +49,13 @@ fn every_built_in_scene_survives_a_gltf_round_trip() {
                         ior: i0,
                         cauchy_b: b0,
                         absorption: a0,
+                        ior_model: Default::default(),
                     },
                     Material::Dielectric {
                         ior: i1,
                         cauchy_b: b1,
                         absorption: a1,
+                        ior_model: Default::default(),
                     },
                 ) => {
                     // ior through n_d and back; B through the Abbe number; sigma through

@@ -23,6 +23,7 @@ fn slab_radiance(sigma: f32) -> (f64, f64, f64) {
             ior: 1.5,
             cauchy_b: 0.0,
             absorption: Vec3::splat(sigma),
+            ior_model: Default::default(),
         },
     );
     let (min, max) = (Vec3::new(-0.5, 1.0, -0.5), Vec3::new(0.5, 1.1, 0.5));

@@ -96,6 +96,7 @@ pub fn dielectric() -> impl Strategy<Value = Material> {
             ior,
             cauchy_b: cauchy_b.unwrap_or(0.0),
             absorption: absorption.unwrap_or(Vec3::ZERO),
+            ior_model: Default::default(),
         })
 }
 

@@ -183,8 +183,8 @@ fn sphere_caustic_flux_matches_numerical_integration() {
     );
 }
 
-/// `prism` splits its beam into three separated bands on the screen, where Snell's law puts
-/// them. Closed form (f64, written here): the beam is parallel and every face flat, so each
+/// `prism` with `frame.dispersion` three bands splits its beam into three separated bands on
+/// the screen, where Snell's law puts them. Closed form (f64, written here): the beam is parallel and every face flat, so each
 /// channel `c` leaves the prism along one direction: incidence `i` on the first face,
 /// `sin r1 = sin i / n_c`, `r2 = A - r1` at the second (apex angle `A` = 60 deg),
 /// `sin e = n_c sin r2`, deviation `D = i + e - A`, with `n_c = a + b / lambda_c^2` (Cauchy,
@@ -295,6 +295,8 @@ fn prism_bands_land_where_snells_law_puts_them() {
         frame: FrameSettings {
             photons_w: 256,
             photons_h: 256,
+            // the publications' three-way split (the spectral default is checked below)
+            dispersion: caustica_core::Dispersion::ThreeBands,
             ..SspmSettings::default().frame
         },
         trace: caustica_core::TraceSettings {

@@ -338,6 +338,7 @@ fn absorbing_ball(sigma: f32) -> Scene {
             ior: 1.5,
             cauchy_b: 0.0,
             absorption: Vec3::splat(sigma),
+            ior_model: Default::default(),
         },
     );
     s
@@ -408,6 +409,7 @@ pub(super) fn dispersion_zero(b: &mut dyn Backend) -> Result<Outcome, String> {
             ior: 1.5,
             cauchy_b: 0.0,
             absorption: Vec3::ZERO,
+            ior_model: Default::default(),
         },
     );
     let mut v = Verdict::new("dispersion B = 0");
@@ -427,6 +429,7 @@ pub(super) fn dispersion_strong(b: &mut dyn Backend) -> Result<Outcome, String> 
             ior: 1.5,
             cauchy_b: 0.3,
             absorption: Vec3::ZERO,
+            ior_model: Default::default(),
         },
     );
     let mut v = Verdict::new("dispersion B = 0.3");
@@ -438,6 +441,7 @@ pub(super) fn dispersion_strong(b: &mut dyn Backend) -> Result<Outcome, String> 
             ior: 1.5,
             cauchy_b: 2.0,
             absorption: Vec3::ZERO,
+            ior_model: Default::default(),
         },
     );
     match bad.validate() {

@@ -73,6 +73,7 @@ fn glass(ior: f32) -> Material {
         ior,
         cauchy_b: 0.0,
         absorption: Vec3::ZERO,
+        ior_model: Default::default(),
     }
 }
 
@@ -422,6 +423,7 @@ pub fn prism() -> Scene {
                     ior: 1.5,
                     cauchy_b: 0.04,
                     absorption: Vec3::ZERO,
+                    ior_model: Default::default(),
                 },
             ),
         ]),
@@ -522,6 +524,7 @@ pub fn jelly() -> Scene {
                     ior: 1.35,
                     cauchy_b: 0.0,
                     absorption: Vec3::new(0.2, 2.5, 3.5),
+                    ior_model: Default::default(),
                 },
             ),
         ]),
