@@ -50,6 +50,7 @@ fn slab_radiance(sigma: f32) -> (f64, f64, f64) {
         seed: 7,
         spheres: SphereModel::Analytic,
         max_specular: 64,
+        dispersion: Default::default(),
         count_hidden: false,
     };
     let r = compute(&scene, &spec, &mut |_, _, _| {}).unwrap();
@@ -151,6 +152,7 @@ fn sphere_agrees_with_sspm_converged() {
         seed: 1,
         spheres: SphereModel::Mesh,
         max_specular: 64,
+        dispersion: Default::default(),
         count_hidden: false,
     };
     let lt = compute(&scene, &spec, &mut |_, _, _| {}).unwrap();
