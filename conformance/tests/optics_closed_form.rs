@@ -768,8 +768,8 @@ fn prism_white_light_keeps_its_flux_per_channel() {
     let bounce_limited = (d.discarded.bounce_limit + p.discarded.bounce_limit) as f64;
     let rounding =
         0.5 * (d.flux_quantum * d.photons_stored as f64 + p.flux_quantum * p.photons_stored as f64);
-    for c in 0..3 {
-        let tol = variation[c] * star * n as f64 * per_photon
+    for (c, v) in variation.iter().enumerate() {
+        let tol = v * star * n as f64 * per_photon
             + bounce_limited * per_photon * MAX_CHANNEL_WEIGHT as f64
             + rounding;
         let diff = d.stored_flux[c] - p.stored_flux[c];
@@ -780,7 +780,7 @@ fn prism_white_light_keeps_its_flux_per_channel() {
             p.stored_flux[c],
             diff / p.stored_flux[c],
             tol / p.stored_flux[c],
-            variation[c]
+            v
         );
         assert!(
             diff.abs() <= tol,
