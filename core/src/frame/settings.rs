@@ -427,6 +427,34 @@ mod tests {
     }
 
     #[test]
+    fn dispersion_is_spectral_by_default_and_reads_from_json() {
+        assert_eq!(FrameSettings::default().dispersion, Dispersion::Spectral);
+        let e: Example = from_json(
+            "example",
+            &Example::default(),
+            &serde_json::json!({ "frame": { "dispersion": "three_bands" } }),
+        )
+        .unwrap();
+        assert_eq!(e.frame.dispersion, Dispersion::ThreeBands);
+        assert_eq!(
+            e.frame.dispersion.kernel_value(),
+            crate::math::spectrum::dispersion_mode::THREE_BANDS
+        );
+        let bad = from_json::<Example>(
+            "example",
+            &Example::default(),
+            &serde_json::json!({ "frame": { "dispersion": "hero" } }),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(bad.contains("hero") && bad.contains("three_bands"), "{bad}");
+        // the quanta's gain
+        assert_eq!(Dispersion::Spectral.flux_gain(false), 1.0);
+        assert_eq!(Dispersion::ThreeBands.flux_gain(true), 3.0);
+        assert_eq!(Dispersion::Spectral.flux_gain(true), 7.0);
+    }
+
+    #[test]
     fn given_fields_lie_over_the_techniques_defaults() {
         let e: Example = from_json(
             "example",
