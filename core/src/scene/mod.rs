@@ -217,16 +217,6 @@ impl Material {
             _ => false,
         }
     }
-
-    /// A non-dispersive dielectric of index `ior` (no absorption).
-    pub fn glass(ior: f32) -> Material {
-        Material::Dielectric {
-            ior,
-            cauchy_b: 0.0,
-            absorption: Vec3::ZERO,
-            ior_model: IorModel::Cauchy,
-        }
-    }
 }
 
 /// A named shape with a material (by name in [`Scene::materials`]).
