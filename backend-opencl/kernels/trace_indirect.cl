@@ -4,7 +4,7 @@
 // its first bounce.
 // Mirror of backend-cpu/src/kernels/trace_indirect.rs (trace_indirect_path, store_indirect) and
 // shaders/wgsl/trace_indirect.wgsl: same random dimensions (per segment: 0, 1 bounce
-// direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Photons are 32-byte slots,
+// direction, 2 roulette, 3 Fresnel, 4 channel of three bands), same decisions. Photons are 32-byte slots,
 // two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
 
 inline void store_indirect(__global const IndirectTraceParams* p, float3 position,
@@ -70,7 +70,8 @@ inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams
     float3 origin = load3(r.origin);
     float3 dir = unpack_unit_vector(r.direction);
     uint bounces = r.bounces;
-    int channel = -1;
+    // the photon's wavelength (micrometres) from its first dispersive surface on
+    float wavelength = 0.0f;
     for (uint segment = 0u; segment < p->max_segments; segment++) {
         Hit hit;
         if (!closest_hit(nodes, node_count, vertices, triangles, origin, dir, INFINITY, &hit)) {
@@ -107,15 +108,12 @@ inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams
             dir = normalize3(reflect(dir, facing));
         } else {
             float ior = m->ior;
-            if (m->cauchy_b != 0.0f) {
-                if (channel < 0) {
-                    // first dispersive surface: keep one channel, x3
-                    channel = min((int)(random_f32(p->seed, index, segment, 4u) * 3.0f), 2);
-                    float one[3] = {0.0f, 0.0f, 0.0f};
-                    one[channel] = (channel == 0 ? flux.x : channel == 1 ? flux.y : flux.z) * 3.0f;
-                    flux = load3(one);
-                }
-                ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
+            if (m->dispersion != 0.0f) {
+                // first dispersive surface: a wavelength and its colour
+                if (wavelength == 0.0f)
+                    wavelength = disperse(&flux, p->dispersion_mode, p->seed, index,
+                                          random_f32(p->seed, index, segment, 4u));
+                ior = dispersive_ior(m->ior, m->dispersion, m->ior_model, wavelength);
             }
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
                                      random_f32(p->seed, index, segment, 3u), p->fresnel_model);

@@ -106,7 +106,8 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
     if (max_element3(flux) <= 0.0f || max_element3(flux) < min_power) return PATH_NEGLIGIBLE;
     // no caster ball on the first segment, so no caster first: no ray traced
     if (!ray_meets_caster_spheres(p, origin, dir)) return PATH_NO_SPECULAR;
-    int channel = -1;
+    // the photon's wavelength (micrometres) from its first dispersive surface on
+    float wavelength = 0.0f;
     for (uint bounce = 0u; bounce < p->max_bounces; bounce++) {
         *rays = bounce + 1u;
         Hit hit;
@@ -136,16 +137,13 @@ inline int trace_photon(SCENE_PARAMS, __global const TraceParams* p, uint index,
             dir = normalize3(reflect(dir, n));
         } else if (DIELECTRIC) {
             float ior = m->ior;
-            if (DISPERSION && m->cauchy_b != 0.0f) {
-                if (channel < 0) {
-                    // First dispersive surface: keep one channel, x3 so that the expected
-                    // flux per channel is unchanged.
-                    channel = min((int)(random_f32(p->seed, index, bounce, 3u) * 3.0f), 2);
-                    float one[3] = {0.0f, 0.0f, 0.0f};
-                    one[channel] = (channel == 0 ? flux.x : channel == 1 ? flux.y : flux.z) * 3.0f;
-                    flux = load3(one);
-                }
-                ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
+            if (DISPERSION && m->dispersion != 0.0f) {
+                // First dispersive surface: a wavelength and its colour; the expected flux
+                // per channel is unchanged.
+                if (wavelength == 0.0f)
+                    wavelength = disperse(&flux, p->dispersion_mode, p->seed, index,
+                                          random_f32(p->seed, index, bounce, 3u));
+                ior = dispersive_ior(m->ior, m->dispersion, m->ior_model, wavelength);
             }
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
                                      random_f32(p->seed, index, bounce, 2u), p->fresnel_model);
@@ -226,16 +224,16 @@ typedef struct {
     float3 dir;
     float3 flux;
     uint bounce;
-    int channel;
+    float wavelength; // micrometres; 0 until the first dispersive surface
 } Branch;
 
-inline Branch branch(float3 origin, float3 dir, float3 flux, uint bounce, int channel) {
+inline Branch branch(float3 origin, float3 dir, float3 flux, uint bounce, float wavelength) {
     Branch b;
     b.origin = origin;
     b.dir = dir;
     b.flux = flux;
     b.bounce = bounce;
-    b.channel = channel;
+    b.wavelength = wavelength;
     return b;
 }
 
@@ -267,7 +265,7 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
     uint budget = clamp(p->split_budget, 1u, (uint)MAX_SPLIT_BRANCHES);
     Branch stack[MAX_SPLIT_BRANCHES];
     uint sp = 0u;
-    stack[sp++] = branch(origin, dir, flux, 0u, -1);
+    stack[sp++] = branch(origin, dir, flux, 0u, 0.0f);
     uint rays = 0u, branches = 1u;
     while (sp > 0u) {
         Branch b = stack[--sp];
@@ -314,29 +312,23 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
             // a dielectric: the lanes this surface continues, each split by its Fresnel
             Branch lanes[3] = {b, b, b};
             uint n_lanes = 1u;
-            if (DISPERSION && m->cauchy_b != 0.0f && b.channel < 0) {
+            if (DISPERSION && m->dispersion != 0.0f && b.wavelength == 0.0f) {
                 if (branches + 2u <= budget) {
                     branches += 2u;
                     n_lanes = 3u;
-                    lanes[0].flux = (float3)(b.flux.x, 0.0f, 0.0f);
-                    lanes[0].channel = 0;
-                    lanes[1].flux = (float3)(0.0f, b.flux.y, 0.0f);
-                    lanes[1].channel = 1;
-                    lanes[2].flux = (float3)(0.0f, 0.0f, b.flux.z);
-                    lanes[2].channel = 2;
+                    for (uint k = 0u; k < 3u; k++)
+                        lanes[k].wavelength =
+                            split_lane(&lanes[k].flux, p->dispersion_mode, p->seed, index, k);
                 } else {
-                    int c = min((int)(random_f32(p->seed, index, bounce, 3u) * 3.0f), 2);
-                    float one[3] = {0.0f, 0.0f, 0.0f};
-                    one[c] = (c == 0 ? b.flux.x : c == 1 ? b.flux.y : b.flux.z) * 3.0f;
-                    lanes[0].flux = load3(one);
-                    lanes[0].channel = c;
+                    lanes[0].wavelength = disperse(&lanes[0].flux, p->dispersion_mode, p->seed,
+                                                   index, random_f32(p->seed, index, bounce, 3u));
                 }
             }
             for (uint k = 0u; k < n_lanes; k++) {
                 Branch lane = lanes[k];
                 float ior = m->ior;
-                if (DISPERSION && m->cauchy_b != 0.0f && lane.channel >= 0)
-                    ior = cauchy_ior(m->ior, m->cauchy_b, CHANNEL_WAVELENGTH_UM[lane.channel]);
+                if (DISPERSION && m->dispersion != 0.0f && lane.wavelength != 0.0f)
+                    ior = dispersive_ior(m->ior, m->dispersion, m->ior_model, lane.wavelength);
                 float eta = entering ? 1.0f / ior : ior;
                 float f = fresnel_reflectance(-dot3(b.dir, facing), eta, p->fresnel_model);
                 float3 reflected = reflect(b.dir, facing);
@@ -365,7 +357,7 @@ inline uint trace_photon_split(SCENE_PARAMS, __global const TraceParams* p, uint
                                                                           : -s.geometric_normal;
                     if (sp < MAX_SPLIT_BRANCHES)
                         stack[sp++] = branch(offset_ray_origin(s.position, side), cdir[j], cf,
-                                             b.bounce, lane.channel);
+                                             b.bounce, lane.wavelength);
                 }
             }
             break;

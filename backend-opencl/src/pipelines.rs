@@ -25,6 +25,7 @@ pub const COMMON: &[(&str, &str)] = &[
     ("rng.cl", include_str!("../kernels/common/rng.cl")),
     ("sampling.cl", include_str!("../kernels/common/sampling.cl")),
     ("optics.cl", include_str!("../kernels/common/optics.cl")),
+    ("spectrum.cl", include_str!("../kernels/common/spectrum.cl")),
     ("packing.cl", include_str!("../kernels/common/packing.cl")),
     ("geometry.cl", include_str!("../kernels/common/geometry.cl")),
     (

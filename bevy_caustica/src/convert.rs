@@ -98,6 +98,7 @@ pub fn material(m: &MaterialInput) -> (Material, Option<String>) {
                 ior,
                 cauchy_b: 0.0,
                 absorption,
+                ior_model: Default::default(),
             },
             note,
         );
@@ -348,7 +349,8 @@ mod tests {
             Material::Dielectric {
                 ior: 1.5,
                 cauchy_b: 0.0,
-                absorption: cg::Vec3::ZERO
+                absorption: cg::Vec3::ZERO,
+                ior_model: Default::default(),
             }
         );
         assert!(note.is_none());

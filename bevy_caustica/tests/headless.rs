@@ -52,6 +52,7 @@ fn caustica_reference(app: &mut App, cam: Entity, seed: u32) -> Vec<f32> {
                     ior: 1.5,
                     cauchy_b: 0.0,
                     absorption: V::ZERO,
+                    ior_model: Default::default(),
                 },
             ),
         ]

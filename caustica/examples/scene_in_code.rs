@@ -35,6 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ior: 1.5,
                 cauchy_b: 0.0,
                 absorption: Vec3::ZERO,
+                ior_model: Default::default(),
             },
         ),
         (

@@ -36,7 +36,11 @@
 //! the `KHR_materials_ior` index (default 1.5) and Beer-Lambert absorption
 //! `sigma = -ln(attenuationColor) / attenuationDistance` per channel from
 //! `KHR_materials_volume` (0 for an infinite distance); `KHR_materials_dispersion`'s
-//! `dispersion = 20 / V_d` (Abbe number) becomes a Cauchy `B` (see [`cauchy_b_from_abbe`]).
+//! `dispersion = 20 / V_d` gives the dielectric the extension's own index model,
+//! [`IorModel::Abbe`] with `V_d` and the `KHR_materials_ior` index as `n_d` (the index at
+//! each wavelength as the extension's formula defines it, `math::optics::abbe_ior`). A
+//! file caustica wrote from a Cauchy glass reads back as that glass (its `B` in
+//! `extras.caustica`, where it agrees with the Abbe number).
 //! Metallic 1 with roughness at most [`MIRROR_MAX_ROUGHNESS`] becomes a mirror of
 //! reflectance `baseColorFactor`; everything else is diffuse with albedo
 //! `baseColorFactor`. What cannot be represented is listed in the warnings, per file:
@@ -47,7 +51,9 @@
 use caustica_core::math::optics::REFERENCE_WAVELENGTH_UM;
 use caustica_core::scene::format::SceneFileError;
 use caustica_core::scene::shapes::tessellate;
-use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape, Transform};
+use caustica_core::scene::{
+    Aabb, Camera, IorModel, Light, Material, Object, Scene, Shape, Transform,
+};
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -745,7 +751,6 @@ fn map_material(m: &gltf::Material, at: &str, warn: &mut Vec<String>) -> Materia
                 .and_then(|d| d.get("dispersion")?.as_f64())
                 .filter(|d| *d > 0.0)
                 .map(|d| (20.0 / d) as f32);
-            let cauchy_b = abbe.map_or(0.0, |v| cauchy_b_from_abbe(n_d, v));
             let absorption = match m.volume() {
                 Some(v) => {
                     let d = v.attenuation_distance();
@@ -771,20 +776,44 @@ fn map_material(m: &gltf::Material, at: &str, warn: &mut Vec<String>) -> Materia
             // caustica's own values (extras.caustica) where the standard fields agree
             let e = caustica_extras(m.extras());
             let e = e.as_ref();
-            let ior = ior_at_reference(n_d, cauchy_b);
-            let ior = match e.and_then(|e| e.get("ior")?.as_f64()) {
-                Some(x) if (x as f32 - ior).abs() <= AGREE * ior => x as f32,
-                _ => ior,
-            };
-            let cauchy_b = match e.and_then(|e| e.get("cauchy_b")?.as_f64()) {
-                Some(x) if (x as f32 - cauchy_b).abs() <= AGREE * cauchy_b.abs() => x as f32,
-                _ => cauchy_b,
-            };
             let absorption = exact_vec3(e, "absorption", absorption);
+            let extra = |key: &str| e.and_then(|e| e.get(key)?.as_f64()).map(|x| x as f32);
+            let agrees = |x: f32, derived: f32| (x - derived).abs() <= AGREE * derived.abs();
+            // a Cauchy glass that caustica wrote: its B agrees with the Abbe number
+            let cauchy = abbe.map_or(0.0, |v| cauchy_b_from_abbe(n_d, v));
+            if let Some(b) = extra("cauchy_b").filter(|b| *b != 0.0 && agrees(*b, cauchy)) {
+                let ior = ior_at_reference(n_d, b);
+                return Material::Dielectric {
+                    ior: extra("ior").filter(|x| agrees(*x, ior)).unwrap_or(ior),
+                    cauchy_b: b,
+                    absorption,
+                    ior_model: IorModel::Cauchy,
+                };
+            }
+            let ior = extra("ior").filter(|x| agrees(*x, n_d)).unwrap_or(n_d);
+            let ior_model = match abbe {
+                Some(v) => IorModel::Abbe {
+                    abbe_number: extra("abbe_number").filter(|x| agrees(*x, v)).unwrap_or(v),
+                },
+                None => IorModel::Cauchy,
+            };
+            if ior_model != IorModel::Cauchy && ior < 1.0 {
+                warn.push(format!(
+                    "{at}: KHR_materials_dispersion with ior {ior} < 1: no dispersion (the \
+                     extension's formula holds for n_d >= 1)"
+                ));
+                return Material::Dielectric {
+                    ior,
+                    cauchy_b: 0.0,
+                    absorption,
+                    ior_model: IorModel::Cauchy,
+                };
+            }
             return Material::Dielectric {
                 ior,
-                cauchy_b,
+                cauchy_b: 0.0,
                 absorption,
+                ior_model,
             };
         }
     }
@@ -1003,15 +1032,21 @@ fn material_json(
             ior,
             cauchy_b,
             absorption,
+            ior_model,
         } => {
             ext.insert("KHR_materials_transmission");
             ext.insert("KHR_materials_ior");
             ext.insert("KHR_materials_volume");
-            // back from 550 nm to the d line
-            let n_d = ior
-                - cauchy_b
-                    * (1.0 / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM)
-                        - 1.0 / (FRAUNHOFER_D_UM * FRAUNHOFER_D_UM));
+            // the Abbe model's index is n_d already; a Cauchy one's goes back from 550 nm
+            // to the d line
+            let n_d = match ior_model {
+                IorModel::Abbe { .. } => *ior,
+                IorModel::Cauchy => {
+                    ior - cauchy_b
+                        * (1.0 / (REFERENCE_WAVELENGTH_UM * REFERENCE_WAVELENGTH_UM)
+                            - 1.0 / (FRAUNHOFER_D_UM * FRAUNHOFER_D_UM))
+                }
+            };
             let mut e = json!({
                 "KHR_materials_transmission": {"transmissionFactor": 1.0},
                 "KHR_materials_ior": {"ior": n_d},
@@ -1023,15 +1058,27 @@ fn material_json(
             } else {
                 e["KHR_materials_volume"] = json!({"thicknessFactor": 1.0});
             }
-            if *cauchy_b > 0.0 {
-                ext.insert("KHR_materials_dispersion");
-                let k = 1.0 / (FRAUNHOFER_F_UM * FRAUNHOFER_F_UM)
-                    - 1.0 / (FRAUNHOFER_C_UM * FRAUNHOFER_C_UM);
-                let abbe = (n_d - 1.0) / (cauchy_b * k);
-                e["KHR_materials_dispersion"] = json!({"dispersion": 20.0 / abbe});
+            let mut extras = json!({"ior": ior, "absorption": absorption.to_array()});
+            match ior_model {
+                IorModel::Abbe { abbe_number } => {
+                    ext.insert("KHR_materials_dispersion");
+                    e["KHR_materials_dispersion"] = json!({"dispersion": 20.0 / abbe_number});
+                    extras["abbe_number"] = json!(abbe_number);
+                }
+                IorModel::Cauchy if *cauchy_b > 0.0 => {
+                    ext.insert("KHR_materials_dispersion");
+                    let k = 1.0 / (FRAUNHOFER_F_UM * FRAUNHOFER_F_UM)
+                        - 1.0 / (FRAUNHOFER_C_UM * FRAUNHOFER_C_UM);
+                    let abbe = (n_d - 1.0) / (cauchy_b * k);
+                    e["KHR_materials_dispersion"] = json!({"dispersion": 20.0 / abbe});
+                    extras["cauchy_b"] = json!(cauchy_b);
+                }
+                IorModel::Cauchy => {
+                    extras["cauchy_b"] = json!(cauchy_b);
+                }
             }
             json!({"name": name, "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0}, "extensions": e,
-                "extras": {"caustica": {"ior": ior, "cauchy_b": cauchy_b, "absorption": absorption.to_array()}}})
+                "extras": {"caustica": extras}})
         }
     }
 }

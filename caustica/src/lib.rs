@@ -94,7 +94,9 @@ pub use caustica_core::frame::image::Image;
 pub use caustica_core::frame::metrics;
 pub use caustica_core::frame::output::{Output, OutputInfo, Outputs};
 pub use caustica_core::frame::plan::FramePlan;
-pub use caustica_core::frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
+pub use caustica_core::frame::settings::{
+    Dispersion, FrameSettings, TechniqueSettings, TraceSettings,
+};
 pub use caustica_core::frame::stats::FrameStats;
 pub use caustica_core::frame::submitted::{FrameTicket, RecordedFrame};
 pub use caustica_core::frame::technique::{Progress, Technique};

@@ -49,15 +49,18 @@ fn every_built_in_scene_survives_a_gltf_round_trip() {
                         ior: i0,
                         cauchy_b: b0,
                         absorption: a0,
+                        ior_model: m0,
                     },
                     Material::Dielectric {
                         ior: i1,
                         cauchy_b: b1,
                         absorption: a1,
+                        ior_model: m1,
                     },
                 ) => {
                     // ior through n_d and back; B through the Abbe number; sigma through
                     // exp and ln: a few ulp each
+                    assert_eq!(m0, m1, "{name}: the index model");
                     assert!(rel(*i0, *i1) < 1e-6, "{name}: ior {i0} vs {i1}");
                     assert!((b0 - b1).abs() <= 1e-5 * b0.abs(), "{name}: B {b0} vs {b1}");
                     for k in 0..3 {
@@ -95,6 +98,45 @@ fn image_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
         }
     }
     (d / n.max(1e-300)).sqrt()
+}
+
+/// KHR_materials_dispersion reads as the extension's own index model: the Abbe number
+/// `V_d = 20 / dispersion` with the `KHR_materials_ior` index as `n_d`; caustica's Abbe
+/// glass writes and reads back as itself, exactly through `extras.caustica` and, without
+/// the extras, through the standard fields to f32 rounding (`20 / (20 / V)`: 2 ulp).
+#[test]
+fn khr_dispersion_is_the_abbe_model() {
+    use caustica::scene::IorModel;
+    let mut s = builtin("prism").unwrap();
+    let abbe = Material::Dielectric {
+        ior: 1.62,
+        cauchy_b: 0.0,
+        absorption: Vec3::ZERO,
+        ior_model: IorModel::Abbe { abbe_number: 36.4 },
+    };
+    s.materials.insert("flint".into(), abbe.clone());
+    let text = scene_to_gltf(&s);
+    assert_eq!(import(&text).scene.materials["flint"], abbe);
+    // the standard fields alone (another exporter's file)
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for m in doc["materials"].as_array_mut().unwrap() {
+        m.as_object_mut().unwrap().remove("extras");
+    }
+    let plain = import(&doc.to_string()).scene;
+    let Material::Dielectric {
+        ior,
+        cauchy_b,
+        ior_model: IorModel::Abbe { abbe_number },
+        ..
+    } = plain.materials["flint"]
+    else {
+        panic!("the Abbe model: {:?}", plain.materials["flint"]);
+    };
+    assert_eq!((ior, cauchy_b), (1.62, 0.0));
+    assert!(
+        (abbe_number - 36.4).abs() <= 4.0 * f32::EPSILON * 36.4,
+        "{abbe_number}"
+    );
 }
 
 #[test]

@@ -25,6 +25,7 @@ fn slab_radiance(sigma: f32) -> (f64, f64, f64) {
             ior: 1.5,
             cauchy_b: 0.0,
             absorption: Vec3::splat(sigma),
+            ior_model: Default::default(),
         },
     );
     let (min, max) = (Vec3::new(-0.5, 1.0, -0.5), Vec3::new(0.5, 1.1, 0.5));
@@ -51,6 +52,7 @@ fn slab_radiance(sigma: f32) -> (f64, f64, f64) {
         seed: 7,
         spheres: SphereModel::Analytic,
         max_specular: 64,
+        dispersion: Default::default(),
         silhouette: SilhouetteDefinition::EyeVisible,
     };
     let r = compute(&scene, &spec, &mut |_, _, _| {}).unwrap();
@@ -152,6 +154,7 @@ fn sphere_agrees_with_sspm_converged() {
         seed: 1,
         spheres: SphereModel::Mesh,
         max_specular: 64,
+        dispersion: Default::default(),
         silhouette: SilhouetteDefinition::EyeVisible,
     };
     let lt = compute(&scene, &spec, &mut |_, _, _| {}).unwrap();

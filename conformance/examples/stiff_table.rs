@@ -126,7 +126,8 @@ naming the case and the backend.
 - photon accounting: path ends add up to the photons emitted, deposit outcomes to the
   photons stored;
 - stored flux <= emitted flux per channel (summed over channels when a dispersive material
-  puts a photon's power into one channel), up to half a flux quantum per stored photon;
+  gives a photon a colour, times the largest gain of a wavelength for spectral photons),
+  up to half a flux quantum per stored photon;
 - no fixed-point saturation;
 - on every backend but cpu: agreement with the CPU backend's frame by
   `techniques::sspm::compare_frames` with the suite's tolerances (G-buffer, photon counts and
@@ -210,5 +211,6 @@ one frame, photons down to 2^-16 of the brightest keep better than 2^-9 relative
 precision, down to 2^-25 they are kept (non-zero); dimmer ones round to zero and are
 counted in `FrameStats::fixed_point_underflow` (`mixed-1e-6-and-1e9`: ratio 1e15).
 Saturation cannot occur: no photon exceeds the frame's brightest (mirrors and Fresnel
-never add power; dispersion's x3 is in the quantum).
+never add power; the gain of a dispersive surface, x7 for a spectral photon's channel and
+x3 for three bands, is in the quantum).
 ";

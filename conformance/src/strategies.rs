@@ -11,15 +11,18 @@
 //! ground or each other (no coplanar or interpenetrating faces, whose closest-hit choice is
 //! an arbitrary tie), and their bounding spheres are at most [`MAX_CASTER_RADIUS`]. The
 //! extreme values a backend must survive are drawn on purpose: IOR exactly 1 (refraction
-//! is the identity), 1.0001 (grazing-angle Fresnel near 0/1), 4 (total internal reflection
-//! nearly everywhere inside), strong absorption, dispersion, equal spot cone angles (a
+//! is the identity), 1.0001 (grazing-angle Fresnel near 0/1), 3.5 and 4 (total internal
+//! reflection nearly everywhere inside), strong absorption, dispersion (Cauchy and the Abbe
+//! model, spectral and three bands), equal spot cone angles (a
 //! hard-edged spot), a directional light exactly along -y (axis-aligned rays).
 //!
 //! Each case renders, so keep case counts small ([`config`]).
 
 use caustica_core::frame::emission::PointEmission;
-use caustica_core::scene::{Aabb, Camera, Light, Material, Object, Scene, Shape};
-use caustica_core::{FrameSettings, GatherFilter, ScreenSettings, SspmSettings, TraceSettings};
+use caustica_core::scene::{Aabb, Camera, IorModel, Light, Material, Object, Scene, Shape};
+use caustica_core::{
+    Dispersion, FrameSettings, GatherFilter, ScreenSettings, SspmSettings, TraceSettings,
+};
 use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -69,12 +72,14 @@ pub fn config() -> Config {
 }
 
 /// Index of refraction: mostly glass-like [1, 2.5], sometimes the extremes 1.0 (no
-/// refraction), 1.0001 (almost none) and 4.0 (beyond any real glass).
+/// refraction), 1.0001 (almost none), 3.5 (silicon in the infrared) and 4.0 (beyond any
+/// real glass).
 pub fn ior() -> impl Strategy<Value = f32> {
     prop_oneof![
         8 => 1.0f32..=2.5,
         1 => Just(1.0f32),
         1 => Just(1.0001f32),
+        1 => Just(3.5f32),
         1 => Just(4.0f32),
     ]
 }
@@ -83,20 +88,34 @@ fn rgb(lo: f32, hi: f32) -> impl Strategy<Value = Vec3> {
     (lo..=hi, lo..=hi, lo..=hi).prop_map(|(r, g, b)| Vec3::new(r, g, b))
 }
 
-/// Smooth dielectric: [`ior`], optional Beer-Lambert absorption (0..5 per scene unit per
-/// channel), optional Cauchy dispersion (B in 0..0.02 um^2; with IOR 1 the red index
-/// 0.98 stays positive, as validation requires).
+/// How a generated dielectric disperses: not at all (6 in 10), Cauchy's B in 0..0.02 um^2
+/// (3 in 10; with IOR 1 the index at 780 nm, 0.967, stays positive, as validation
+/// requires), or the Abbe model (1 in 10) with V_d from 5 (a strong flint, beyond
+/// rutile's 9.8) to 90.
+pub fn dispersion() -> impl Strategy<Value = (f32, IorModel)> {
+    prop_oneof![
+        6 => Just((0.0f32, IorModel::Cauchy)),
+        3 => (0.0f32..0.02).prop_map(|b| (b, IorModel::Cauchy)),
+        1 => (5.0f32..=90.0).prop_map(|abbe_number| (0.0, IorModel::Abbe { abbe_number })),
+    ]
+}
+
+/// Smooth dielectric: [`ior`] (>= 1, as the Abbe model needs), optional Beer-Lambert
+/// absorption (0..5 per scene unit per channel), optional [`dispersion`].
 pub fn dielectric() -> impl Strategy<Value = Material> {
     (
         ior(),
-        prop::option::weighted(0.3, 0.0f32..0.02),
+        dispersion(),
         prop::option::weighted(0.4, rgb(0.0, 5.0)),
     )
-        .prop_map(|(ior, cauchy_b, absorption)| Material::Dielectric {
-            ior,
-            cauchy_b: cauchy_b.unwrap_or(0.0),
-            absorption: absorption.unwrap_or(Vec3::ZERO),
-        })
+        .prop_map(
+            |(ior, (cauchy_b, ior_model), absorption)| Material::Dielectric {
+                ior,
+                cauchy_b,
+                absorption: absorption.unwrap_or(Vec3::ZERO),
+                ior_model,
+            },
+        )
 }
 
 /// Perfect mirror with a per-channel reflectance in [0.3, 1].
@@ -464,6 +483,7 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
         0.003f32..=0.05,
         any::<u32>(),
         prop_oneof![2 => Just(1u32 << 20), 1 => 256u32..=2048],
+        prop_oneof![3 => Just(Dispersion::Spectral), 1 => Just(Dispersion::ThreeBands)],
     );
     let filter = (
         0.02f32..=0.15,
@@ -479,7 +499,17 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
     );
     (photons, filter).prop_map(
         |(
-            (w, h, max_bounces, min_relative_power, point_emission, depth_tolerance, seed, batch),
+            (
+                w,
+                h,
+                max_bounces,
+                min_relative_power,
+                point_emission,
+                depth_tolerance,
+                seed,
+                batch,
+                dispersion,
+            ),
             (
                 roughness,
                 max_radius_px,
@@ -498,6 +528,7 @@ pub fn sspm_settings() -> impl Strategy<Value = SspmSettings> {
                     photons_h: h,
                     max_specular_depth,
                     seed,
+                    dispersion,
                     ..d.frame
                 },
                 trace: TraceSettings {

@@ -277,7 +277,9 @@ fn flux_tolerance(s: &FrameStats, dense: &FrameStats, dispersive: bool) -> f64 {
     let a = &AdaptiveStats::of(s).expect("adaptive stats");
     let finest = a.photons_per_level.len() - 1;
     let emitted: f64 = dense.emitted_flux.iter().sum();
-    let gain = if dispersive { 3.0 } else { 1.0 };
+    // the brightest channel a photon can carry past a dispersive surface (spectral: the
+    // largest weight of a wavelength, the default `frame.dispersion`)
+    let gain = caustica_core::Dispersion::default().flux_gain(dispersive) as f64;
     let phi_f = 2.0 * gain * emitted / dense.photons_emitted.max(1) as f64;
     let mut var = 0.0;
     for (l, &n) in a.photons_output_per_level.iter().enumerate().take(finest) {
@@ -311,9 +313,7 @@ fn the_error_metric_keeps_the_dense_grids_flux() {
                 )
                 .expect("adaptive");
                 let (s, _) = render(b.as_mut(), adaptive);
-                let dispersive = scene.materials.values().any(|m| {
-                matches!(m, caustica_core::scene::Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0)
-            });
+                let dispersive = scene.materials.values().any(|m| m.is_dispersive());
                 let (x, y): (f64, f64) = (s.stored_flux.iter().sum(), ds.stored_flux.iter().sum());
                 let what = format!("{name} / {scene_name} / error_texels {error_texels}");
                 if y == 0.0 {
@@ -426,9 +426,7 @@ fn the_screen_target_deposits_the_traversals_photons() {
             .expect("screen target, error metric");
             let es = e.frame(b.as_mut(), &mut |_| {}).expect("frame");
             e.free(b.as_mut()).expect("free");
-            let dispersive = scene.materials.values().any(|m| {
-                matches!(m, caustica_core::scene::Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0)
-            });
+            let dispersive = scene.materials.values().any(|m| m.is_dispersive());
             let (x, y): (f64, f64) = (es.stored_flux.iter().sum(), s.stored_flux.iter().sum());
             if AdaptiveStats::of(&es).is_none() {
                 // no light reaches a caster: no photon pass runs on either

@@ -32,7 +32,7 @@ pub use frame::output::{Output, Outputs};
 pub use frame::plan::FramePlan;
 pub use frame::receivers::atlas::settings::{AtlasSettings, PlaneSettings};
 pub use frame::receivers::screen::ScreenSettings;
-pub use frame::settings::{FrameSettings, TechniqueSettings, TraceSettings};
+pub use frame::settings::{Dispersion, FrameSettings, TechniqueSettings, TraceSettings};
 pub use frame::stats::FrameStats;
 pub use frame::submitted::{FrameTicket, RecordedFrame};
 pub use frame::technique::{OutputInfo, Progress, Technique};

@@ -23,6 +23,7 @@ pub const COMMON: &[(&str, &str)] = &[
     ("rng", include_str!("../wgsl/common/rng.wgsl")),
     ("sampling", include_str!("../wgsl/common/sampling.wgsl")),
     ("optics", include_str!("../wgsl/common/optics.wgsl")),
+    ("spectrum", include_str!("../wgsl/common/spectrum.wgsl")),
     ("packing", include_str!("../wgsl/common/packing.wgsl")),
     ("geometry", include_str!("../wgsl/common/geometry.wgsl")),
     ("footprint", include_str!("../wgsl/common/footprint.wgsl")),

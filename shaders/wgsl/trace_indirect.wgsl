@@ -1,11 +1,11 @@
-// needs: layout prelude vector rng sampling optics packing geometry footprint fixed_point traversal scene photon_gi
+// needs: layout prelude vector rng sampling optics spectrum packing geometry footprint fixed_point traversal scene photon_gi
 // trace_indirect (Smal 2019, section 24.2.2): photon params.first + coherent_sample_order(i)
 // of the RSM photons is traced with Russian roulette at diffuse bounces and stored (culled
 // to the camera's view and facing side, counted per screen tile) at every diffuse hit
 // after its first bounce.
 // Mirror of backend-cpu/src/kernels/trace_indirect.rs (trace_indirect_path, store_indirect)
 // and backend-opencl/kernels/trace_indirect.cl: same random dimensions (per segment: 0, 1
-// bounce direction, 2 roulette, 3 Fresnel, 4 channel), same decisions. Stored photons are
+// bounce direction, 2 roulette, 3 Fresnel, 4 channel of three bands), same decisions. Stored photons are
 // appended in arrival order (an atomic slot counter): the set equals the CPU's.
 // Photons are 32-byte slots, two vec4<u32> each: GiPhoton (params.store 0) or Photon (1).
 
@@ -91,7 +91,8 @@ fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 
     var origin = r.origin;
     var dir = unpack_unit_vector(r.direction);
     var bounces = r.bounces;
-    var channel = -1;
+    // the photon's wavelength (micrometres) from its first dispersive surface on
+    var wavelength = 0.0;
     for (var segment = 0u; segment < p.max_segments; segment++) {
         var hit: Hit;
         if (!closest_hit(origin, dir, NO_T_MAX, &hit)) {
@@ -128,16 +129,15 @@ fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 
             dir = normalize3(reflect(dir, facing));
         } else {
             var ior = m.ior;
-            if (m.cauchy_b != 0.0) {
-                if (channel < 0) {
-                    // first dispersive surface: keep one channel, x3
-                    channel = min(i32(random_f32(p.seed, index, segment, 4u) * 3.0), 2);
-                    var one = vec3<f32>(0.0, 0.0, 0.0);
-                    one[channel] = select(select(flux.z, flux.y, channel == 1), flux.x,
-                                          channel == 0) * 3.0;
-                    flux = one;
+            if (m.dispersion != 0.0) {
+                if (wavelength == 0.0) {
+                    // first dispersive surface: a wavelength and its colour
+                    let d = disperse(flux, p.dispersion_mode, p.seed, index,
+                                     random_f32(p.seed, index, segment, 4u));
+                    wavelength = d.wavelength;
+                    flux = d.flux;
                 }
-                ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
+                ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, wavelength);
             }
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
                                      random_f32(p.seed, index, segment, 3u), p.fresnel_model);

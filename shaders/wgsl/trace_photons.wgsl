@@ -1,4 +1,4 @@
-// needs: layout prelude vector rng sampling optics packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
+// needs: layout prelude vector rng sampling optics spectrum packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
 // trace_photons (Kim 2019, sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least
@@ -18,7 +18,7 @@ override ABSORPTION: bool = true;
 // and triangle (CausticMap's atlas).
 override SURFACE_STORE: bool = false;
 // Vanderstichelen 2021's deterministic splits (core's TraceVariant::fresnel_split): both Fresnel
-// branches and three one-channel branches at the first dispersive surface, up to
+// branches and three lanes (core's spectrum::split_lane) at the first dispersive surface, up to
 // params.split_budget branches per photon.
 override FRESNEL_SPLIT: bool = false;
 // Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
@@ -128,7 +128,8 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
         // no caster ball on the first segment, so no caster first: no ray traced
         return PATH_NO_SPECULAR;
     }
-    var channel = -1;
+    // the photon's wavelength (micrometres) from its first dispersive surface on
+    var wavelength = 0.0;
     for (var bounce = 0u; bounce < p.max_bounces; bounce++) {
         *rays = bounce + 1u;
         var hit: Hit;
@@ -162,17 +163,16 @@ fn trace_photon(p: TraceParams, index: u32, ph: ptr<function, Photon>,
             dir = normalize3(reflect(dir, n));
         } else if (DIELECTRIC) {
             var ior = m.ior;
-            if (DISPERSION && m.cauchy_b != 0.0) {
-                if (channel < 0) {
-                    // First dispersive surface: keep one channel, x3 so that the expected
+            if (DISPERSION && m.dispersion != 0.0) {
+                if (wavelength == 0.0) {
+                    // First dispersive surface: a wavelength and its colour; the expected
                     // flux per channel is unchanged.
-                    channel = min(i32(random_f32(p.seed, index, bounce, 3u) * 3.0), 2);
-                    var one = vec3<f32>(0.0, 0.0, 0.0);
-                    one[channel] = select(select(flux.z, flux.y, channel == 1), flux.x,
-                                          channel == 0) * 3.0;
-                    flux = one;
+                    let d = disperse(flux, p.dispersion_mode, p.seed, index,
+                                     random_f32(p.seed, index, bounce, 3u));
+                    wavelength = d.wavelength;
+                    flux = d.flux;
                 }
-                ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[channel]);
+                ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, wavelength);
             }
             dir = dielectric_scatter(dir, s.shading_normal, entering, ior,
                                      random_f32(p.seed, index, bounce, 2u), p.fresnel_model);
@@ -261,7 +261,8 @@ struct Branch {
     dir: vec3<f32>,
     flux: vec3<f32>,
     bounce: u32,
-    channel: i32,
+    // micrometres; 0 until the first dispersive surface
+    wavelength: f32,
 }
 
 // One emitted photon with Vanderstichelen 2021's deterministic splits (backend-cpu
@@ -287,7 +288,7 @@ fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) ->
     let budget = clamp(p.split_budget, 1u, MAX_SPLIT_BRANCHES);
     var stack: array<Branch, MAX_SPLIT_BRANCHES>;
     var sp = 0u;
-    stack[sp] = Branch(origin, dir, flux, 0u, -1);
+    stack[sp] = Branch(origin, dir, flux, 0u, 0.0);
     sp += 1u;
     var rays = 0u;
     var branches = 1u;
@@ -334,33 +335,31 @@ fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) ->
                 b.origin = offset_ray_origin(s.position, side);
                 continue;
             }
-            // a dielectric: the lanes this surface continues (one per channel at the first
-            // dispersive surface while the budget allows), each split by its own Fresnel
+            // a dielectric: the lanes this surface continues (three at the first dispersive
+            // surface while the budget allows), each split by its own Fresnel
             var lanes = array<Branch, 3>(b, b, b);
             var n_lanes = 1u;
-            if (DISPERSION && m.cauchy_b != 0.0 && b.channel < 0) {
+            if (DISPERSION && m.dispersion != 0.0 && b.wavelength == 0.0) {
                 if (branches + 2u <= budget) {
                     branches += 2u;
                     n_lanes = 3u;
-                    lanes[0].flux = vec3<f32>(b.flux.x, 0.0, 0.0);
-                    lanes[0].channel = 0;
-                    lanes[1].flux = vec3<f32>(0.0, b.flux.y, 0.0);
-                    lanes[1].channel = 1;
-                    lanes[2].flux = vec3<f32>(0.0, 0.0, b.flux.z);
-                    lanes[2].channel = 2;
+                    for (var k = 0u; k < 3u; k++) {
+                        let d = split_lane(b.flux, p.dispersion_mode, p.seed, index, k);
+                        lanes[k].wavelength = d.wavelength;
+                        lanes[k].flux = d.flux;
+                    }
                 } else {
-                    let c = min(i32(random_f32(p.seed, index, bounce, 3u) * 3.0), 2);
-                    var one = vec3<f32>(0.0, 0.0, 0.0);
-                    one[c] = select(select(b.flux.z, b.flux.y, c == 1), b.flux.x, c == 0) * 3.0;
-                    lanes[0].flux = one;
-                    lanes[0].channel = c;
+                    let d = disperse(b.flux, p.dispersion_mode, p.seed, index,
+                                     random_f32(p.seed, index, bounce, 3u));
+                    lanes[0].wavelength = d.wavelength;
+                    lanes[0].flux = d.flux;
                 }
             }
             for (var k = 0u; k < n_lanes; k++) {
                 let lane = lanes[k];
                 var ior = m.ior;
-                if (DISPERSION && m.cauchy_b != 0.0 && lane.channel >= 0) {
-                    ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[lane.channel]);
+                if (DISPERSION && m.dispersion != 0.0 && lane.wavelength != 0.0) {
+                    ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, lane.wavelength);
                 }
                 let eta = select(ior, 1.0 / ior, entering);
                 let f = fresnel_reflectance(-dot3(b.dir, facing), eta, p.fresnel_model);
@@ -390,7 +389,7 @@ fn trace_photon_split(p: TraceParams, index: u32, splits: ptr<function, u32>) ->
                                       dot3(cdir[j], s.geometric_normal) > 0.0);
                     if (sp < MAX_SPLIT_BRANCHES) {
                         stack[sp] = Branch(offset_ray_origin(s.position, side), cdir[j], cf,
-                                           b.bounce, lane.channel);
+                                           b.bounce, lane.wavelength);
                         sp += 1u;
                     }
                 }

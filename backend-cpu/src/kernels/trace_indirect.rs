@@ -14,9 +14,8 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::{TraceIndirect, VISIBLE_TOLERANCE};
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
-use caustica_core::math::optics::{
-    beer_lambert, cauchy_ior, dielectric_scatter, reflect, CHANNEL_WAVELENGTH_UM,
-};
+use caustica_core::math::optics::{beer_lambert, dielectric_scatter, dispersive_ior, reflect};
+use caustica_core::math::spectrum::disperse;
 use caustica_core::math::packing::{pack_rgb9e5, pack_unit_vector, unpack_unit_vector};
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{coherent_sample_order, cosine_hemisphere, russian_roulette};
@@ -149,7 +148,8 @@ pub fn trace_indirect_path(
     let mut origin = Vec3::from(r.origin);
     let mut dir = unpack_unit_vector(r.direction);
     let mut bounces = r.bounces;
-    let mut channel: Option<usize> = None;
+    // the photon's wavelength (micrometres) from its first dispersive surface on
+    let mut wavelength: Option<f32> = None;
     for segment in 0..p.max_segments {
         c.words[counter::RAYS] += 1;
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
@@ -203,16 +203,16 @@ pub fn trace_indirect_path(
             dir = reflect(dir, facing).normalize();
         } else {
             let mut ior = m.ior;
-            if m.cauchy_b != 0.0 {
-                let ch = *channel.get_or_insert_with(|| {
-                    // first dispersive surface: keep one channel, x3 (expectation kept)
-                    let ch = ((random_f32(p.seed, index, segment, 4) * 3.0) as usize).min(2);
-                    let mut one = [0.0; 3];
-                    one[ch] = flux[ch] * 3.0;
-                    flux = Vec3::from(one);
-                    ch
+            if m.dispersion != 0.0 {
+                let wl = *wavelength.get_or_insert_with(|| {
+                    // first dispersive surface: a wavelength and its colour (expectation
+                    // kept; core's spectrum::disperse)
+                    let xi = random_f32(p.seed, index, segment, 4);
+                    let (wl, f) = disperse(flux, p.dispersion_mode, p.seed, index, xi);
+                    flux = f;
+                    wl
                 });
-                ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[ch]);
+                ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, wl);
             }
             dir = dielectric_scatter(
                 dir,

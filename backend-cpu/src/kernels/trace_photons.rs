@@ -6,8 +6,11 @@
 //! Per interaction: mirrors scale power by their reflectance; dielectrics reflect with
 //! probability equal to the exact Fresnel reflectance and refract otherwise (power kept),
 //! total internal reflection always reflects; Beer-Lambert attenuates power over segments
-//! travelled inside a dielectric; a dispersive dielectric gives the photon one colour
-//! channel (chosen uniformly, power x3 in that channel) and that channel's Cauchy IOR.
+//! travelled inside a dielectric; at its first dispersive dielectric a photon takes a
+//! wavelength and the colour of its power (core's `math::spectrum::disperse`: spectral, a
+//! stratified wavelength with its CIE-matched sRGB weight, or the three-way split, one
+//! channel x3) and refracts from then on with that wavelength's index (`dispersive_ior`:
+//! Cauchy or the Abbe model).
 //! Paths end at a diffuse surface, on escape, at `max_bounces` segments, or when the
 //! largest channel drops below `min_relative_power` of the emitted flux.
 //!
@@ -17,7 +20,8 @@
 //! `surface_store`, the hit's uv and triangle (CausticMap's atlas).
 //!
 //! Random dimensions: bounce 0 dims 0, 1 = grid jitter; bounce b dim 2 = Fresnel choice,
-//! dim 3 = dispersion channel.
+//! dim 3 = dispersion channel (three bands); the spectral wavelength is the photon's point
+//! of the wavelength sequence (`spectral_sample(seed, index)`), no random dimension.
 //!
 //! Variants (compiled, not branched): the const generics `DIELECTRIC`, `DISPERSION` and `ABSORPTION`
 //! compile the dielectric, Cauchy-dispersion and Beer-Lambert code in or out, as the
@@ -39,9 +43,9 @@ use caustica_core::kernels::{AtlasDeposit, FusedDeposit, TracePhotons, TraceVari
 use caustica_core::math::fixed_point::quantize;
 use caustica_core::math::geometry::{offset_ray_origin, ray_meets_caster_spheres};
 use caustica_core::math::optics::{
-    beer_lambert, cauchy_ior, dielectric_scatter, fresnel_reflectance, reflect, refract,
-    CHANNEL_WAVELENGTH_UM,
+    beer_lambert, dielectric_scatter, dispersive_ior, fresnel_reflectance, reflect, refract,
 };
+use caustica_core::math::spectrum::{disperse, split_lane};
 use caustica_core::math::packing::pack_unit_vector;
 use caustica_core::math::photon_clusters::{
     cluster_photon_index, entry_cluster, live_clusters, photon_met_caster, NO_TRIANGLE,
@@ -283,14 +287,14 @@ fn split_batch<const DISPERSION: bool, const ABSORPTION: bool>(
 }
 
 /// A branch of a split photon: where it continues, its flux, the segments traced so far
-/// and its colour channel (-1: all three).
+/// and its wavelength (micrometres; 0 until its first dispersive surface).
 #[derive(Clone, Copy, Debug)]
 struct Branch {
     origin: Vec3,
     dir: Vec3,
     flux: Vec3,
     bounce: u32,
-    channel: i32,
+    wavelength: f32,
 }
 
 /// The photon a path stores at surface `s` of `hit` (world or texture space).
@@ -315,12 +319,14 @@ fn stored_photon(store: u32, s: &SurfacePoint, hit: &Hit, flux: Vec3, dir: Vec3)
 /// One emitted photon with Vanderstichelen 2021's deterministic splits (the variant's `FRESNEL_SPLIT`):
 /// at a dielectric both the reflected branch (flux x R, exact Fresnel) and the refracted
 /// one (x (1 - R)) go on (total internal reflection: the reflected one with all the flux);
-/// at the first dispersive surface three branches go on, one per colour channel with that
-/// channel's flux and Cauchy IOR (each then splits at this surface by its own Fresnel).
+/// at the first dispersive surface three branches go on ([`split_lane`]: three
+/// wavelengths stratified over the spectrum with a third of their weighted flux each, or,
+/// with three bands, one per colour channel with that channel's flux), each with its
+/// wavelength's index, and each then splits at this surface by its own Fresnel.
 /// Branches are walked depth first (last pushed, first popped; children pushed reflected
 /// first); once `split_budget` branches exist, further interactions make Sspm's stochastic
-/// choice instead (same random dimensions: bounce b dim 2 Fresnel, dim 3 channel), so one
-/// photon stores at most `split_budget` photons. Calls `on_end` for every branch's end;
+/// choice instead ([`disperse`]; same random dimensions: bounce b dim 2 Fresnel, dim 3
+/// channel), so one photon stores at most `split_budget` photons. Calls `on_end` for every branch's end;
 /// returns the ray segments traced and the branches added.
 pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
     scene: &SceneView,
@@ -348,7 +354,7 @@ pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
         dir,
         flux,
         bounce: 0,
-        channel: -1,
+        wavelength: 0.0,
     }];
     let (mut rays, mut branches) = (0u32, 1u32);
     'branch: while let Some(mut b) = stack.pop() {
@@ -398,35 +404,27 @@ pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
                     b.origin = offset_ray_origin(s.position, side);
                 }
                 _ => {
-                    // the branches this surface continues: one per channel at the first
-                    // dispersive surface (while the budget allows), else this one
+                    // the branches this surface continues: three at the first dispersive
+                    // surface (while the budget allows), else this one
                     let mut lanes = [b; 3];
                     let mut n_lanes = 1;
-                    if DISPERSION && m.cauchy_b != 0.0 && b.channel < 0 {
+                    if DISPERSION && m.dispersion != 0.0 && b.wavelength == 0.0 {
                         if branches + 2 <= budget {
                             branches += 2;
                             n_lanes = 3;
-                            for (c, lane) in lanes.iter_mut().enumerate() {
-                                let mut one = [0.0; 3];
-                                one[c] = b.flux[c];
-                                lane.flux = Vec3::from(one);
-                                lane.channel = c as i32;
+                            for (k, lane) in lanes.iter_mut().enumerate() {
+                                (lane.wavelength, lane.flux) =
+                                    split_lane(b.flux, p.dispersion_mode, p.seed, index, k as u32);
                             }
                         } else {
-                            let c = ((random_f32(p.seed, index, bounce, 3) * 3.0) as usize).min(2);
-                            let mut one = [0.0; 3];
-                            one[c] = b.flux[c] * 3.0;
-                            lanes[0].flux = Vec3::from(one);
-                            lanes[0].channel = c as i32;
+                            let xi = random_f32(p.seed, index, bounce, 3);
+                            (lanes[0].wavelength, lanes[0].flux) =
+                                disperse(b.flux, p.dispersion_mode, p.seed, index, xi);
                         }
                     }
                     for lane in &lanes[..n_lanes] {
-                        let ior = if DISPERSION && m.cauchy_b != 0.0 && lane.channel >= 0 {
-                            cauchy_ior(
-                                m.ior,
-                                m.cauchy_b,
-                                CHANNEL_WAVELENGTH_UM[lane.channel as usize],
-                            )
+                        let ior = if DISPERSION && m.dispersion != 0.0 && lane.wavelength != 0.0 {
+                            dispersive_ior(m.ior, m.dispersion, m.ior_model, lane.wavelength)
                         } else {
                             m.ior
                         };
@@ -462,7 +460,7 @@ pub fn trace_photon_split<const DISPERSION: bool, const ABSORPTION: bool>(
                                 dir,
                                 flux,
                                 bounce: b.bounce,
-                                channel: lane.channel,
+                                wavelength: lane.wavelength,
                             });
                         }
                     }
@@ -665,7 +663,8 @@ pub fn trace_photon_variant<
         // device::caster_spheres): no ray traced
         return (PathEnd::NoSpecular, 0);
     }
-    let mut channel: Option<usize> = None;
+    // the photon's wavelength (micrometres) from its first dispersive surface on
+    let mut wavelength: Option<f32> = None;
     for bounce in 0..p.max_bounces {
         on_segment(origin, dir);
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
@@ -711,21 +710,20 @@ pub fn trace_photon_variant<
             }
             _ if DIELECTRIC => {
                 let mut ior = m.ior;
-                if DISPERSION && m.cauchy_b != 0.0 {
-                    let c = match channel {
-                        Some(c) => c,
+                if DISPERSION && m.dispersion != 0.0 {
+                    let wl = match wavelength {
+                        Some(wl) => wl,
                         None => {
-                            // First dispersive surface: keep one channel, x3 so that the
+                            // First dispersive surface: a wavelength and its colour; the
                             // expected flux per channel is unchanged.
-                            let c = ((random_f32(p.seed, index, bounce, 3) * 3.0) as usize).min(2);
-                            let mut one = [0.0; 3];
-                            one[c] = flux[c] * 3.0;
-                            flux = Vec3::from(one);
-                            channel = Some(c);
-                            c
+                            let xi = random_f32(p.seed, index, bounce, 3);
+                            let (wl, f) = disperse(flux, p.dispersion_mode, p.seed, index, xi);
+                            flux = f;
+                            wavelength = Some(wl);
+                            wl
                         }
                     };
-                    ior = cauchy_ior(m.ior, m.cauchy_b, CHANNEL_WAVELENGTH_UM[c]);
+                    ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, wl);
                 }
                 dir = dielectric_scatter(
                     dir,

@@ -92,6 +92,65 @@
 #define FRESNEL_SCHLICK 1u
 #define REFERENCE_WAVELENGTH_UM 0.55f
 #define RADIANCE_MAX 3.4028235e38f
+#define KHR_DISPERSION_B_UM2 0.523655f
+#define KHR_DISPERSION_D_TERM 1.5168f
+
+// core::math::optics::ior_model
+#define IOR_MODEL_CAUCHY 0u
+#define IOR_MODEL_ABBE 1u
+
+// core::math::spectrum
+#define SPECTRUM_MIN_UM 0.38f
+#define SPECTRUM_WIDTH_UM 0.4f
+#define SPECTRUM_MAX_UM 0.78f
+#define WAVELENGTH_STEP 0x9e3779b9u
+#define ONE_THIRD 0.33333334f
+#define DISPERSION_SPECTRAL 0u
+#define DISPERSION_THREE_BANDS 1u
+
+// core::math::spectrum::CIE_X_LOBES, CIE_Y_LOBES, CIE_Z_LOBES (Wyman 2013's fit: weight, mean in nm, 1/sigma below and from the mean)
+#define CIE_X0_WEIGHT 0.362f
+#define CIE_X0_MEAN_NM 442.0f
+#define CIE_X0_INV_SIGMA_BELOW 0.0624f
+#define CIE_X0_INV_SIGMA_ABOVE 0.0374f
+#define CIE_X1_WEIGHT 1.056f
+#define CIE_X1_MEAN_NM 599.8f
+#define CIE_X1_INV_SIGMA_BELOW 0.0264f
+#define CIE_X1_INV_SIGMA_ABOVE 0.0323f
+#define CIE_X2_WEIGHT (-0.065f)
+#define CIE_X2_MEAN_NM 501.1f
+#define CIE_X2_INV_SIGMA_BELOW 0.049f
+#define CIE_X2_INV_SIGMA_ABOVE 0.0382f
+#define CIE_Y0_WEIGHT 0.821f
+#define CIE_Y0_MEAN_NM 568.8f
+#define CIE_Y0_INV_SIGMA_BELOW 0.0213f
+#define CIE_Y0_INV_SIGMA_ABOVE 0.0247f
+#define CIE_Y1_WEIGHT 0.286f
+#define CIE_Y1_MEAN_NM 530.9f
+#define CIE_Y1_INV_SIGMA_BELOW 0.0613f
+#define CIE_Y1_INV_SIGMA_ABOVE 0.0322f
+#define CIE_Z0_WEIGHT 1.217f
+#define CIE_Z0_MEAN_NM 437.0f
+#define CIE_Z0_INV_SIGMA_BELOW 0.0845f
+#define CIE_Z0_INV_SIGMA_ABOVE 0.0278f
+#define CIE_Z1_WEIGHT 0.681f
+#define CIE_Z1_MEAN_NM 459.0f
+#define CIE_Z1_INV_SIGMA_BELOW 0.0385f
+#define CIE_Z1_INV_SIGMA_ABOVE 0.0725f
+
+// core::math::spectrum::XYZ_TO_LINEAR_SRGB (row, column) and SPECTRAL_RGB_SCALE
+#define XYZ_TO_SRGB_00 3.2406f
+#define XYZ_TO_SRGB_01 (-1.5372f)
+#define XYZ_TO_SRGB_02 (-0.4986f)
+#define XYZ_TO_SRGB_10 (-0.9689f)
+#define XYZ_TO_SRGB_11 1.8758f
+#define XYZ_TO_SRGB_12 0.0415f
+#define XYZ_TO_SRGB_20 0.0557f
+#define XYZ_TO_SRGB_21 (-0.204f)
+#define XYZ_TO_SRGB_22 1.057f
+#define SPECTRAL_RGB_SCALE_R 2.2722244f
+#define SPECTRAL_RGB_SCALE_G 3.4646618f
+#define SPECTRAL_RGB_SCALE_B 3.660385f
 
 // core::math::geometry
 #define OFFSET_REL 3.0517578e-5f
@@ -165,8 +224,8 @@ typedef struct {
 typedef struct {
     uint kind; // 0
     float ior; // 4
-    float cauchy_b; // 8
-    uint _pad; // 12
+    float dispersion; // 8
+    uint ior_model; // 12
     float color[4]; // 16
     float absorption[4]; // 32
 } GpuMaterial;
@@ -243,8 +302,8 @@ typedef struct {
     uint caster_sphere_count; // 124
     uint jitter_seed; // 128
     uint stratum; // 132
-    uint _pad0; // 136
-    uint _pad1; // 140
+    uint dispersion_mode; // 136
+    uint _pad; // 140
     float caster_spheres[MAX_CASTER_SPHERES][4]; // 144
 } TraceParams;
 
@@ -391,8 +450,8 @@ typedef struct {
     uint fresnel_model; // 92
     float power_scale; // 96
     float flux_quantum; // 100
-    uint _pad0; // 104
-    uint _pad1; // 108
+    uint dispersion_mode; // 104
+    uint _pad; // 108
 } IndirectTraceParams;
 
 // core::device::layout::SplatParams, 128 bytes

@@ -92,6 +92,65 @@ const uint FRESNEL_EXACT = 0u;
 const uint FRESNEL_SCHLICK = 1u;
 const float REFERENCE_WAVELENGTH_UM = 0.55;
 const float RADIANCE_MAX = 3.4028235e38;
+const float KHR_DISPERSION_B_UM2 = 0.523655;
+const float KHR_DISPERSION_D_TERM = 1.5168;
+
+// core::math::optics::ior_model
+const uint IOR_MODEL_CAUCHY = 0u;
+const uint IOR_MODEL_ABBE = 1u;
+
+// core::math::spectrum
+const float SPECTRUM_MIN_UM = 0.38;
+const float SPECTRUM_WIDTH_UM = 0.4;
+const float SPECTRUM_MAX_UM = 0.78;
+const uint WAVELENGTH_STEP = 0x9e3779b9u;
+const float ONE_THIRD = 0.33333334;
+const uint DISPERSION_SPECTRAL = 0u;
+const uint DISPERSION_THREE_BANDS = 1u;
+
+// core::math::spectrum::CIE_X_LOBES, CIE_Y_LOBES, CIE_Z_LOBES (Wyman 2013's fit: weight, mean in nm, 1/sigma below and from the mean)
+const float CIE_X0_WEIGHT = 0.362;
+const float CIE_X0_MEAN_NM = 442.0;
+const float CIE_X0_INV_SIGMA_BELOW = 0.0624;
+const float CIE_X0_INV_SIGMA_ABOVE = 0.0374;
+const float CIE_X1_WEIGHT = 1.056;
+const float CIE_X1_MEAN_NM = 599.8;
+const float CIE_X1_INV_SIGMA_BELOW = 0.0264;
+const float CIE_X1_INV_SIGMA_ABOVE = 0.0323;
+const float CIE_X2_WEIGHT = -0.065;
+const float CIE_X2_MEAN_NM = 501.1;
+const float CIE_X2_INV_SIGMA_BELOW = 0.049;
+const float CIE_X2_INV_SIGMA_ABOVE = 0.0382;
+const float CIE_Y0_WEIGHT = 0.821;
+const float CIE_Y0_MEAN_NM = 568.8;
+const float CIE_Y0_INV_SIGMA_BELOW = 0.0213;
+const float CIE_Y0_INV_SIGMA_ABOVE = 0.0247;
+const float CIE_Y1_WEIGHT = 0.286;
+const float CIE_Y1_MEAN_NM = 530.9;
+const float CIE_Y1_INV_SIGMA_BELOW = 0.0613;
+const float CIE_Y1_INV_SIGMA_ABOVE = 0.0322;
+const float CIE_Z0_WEIGHT = 1.217;
+const float CIE_Z0_MEAN_NM = 437.0;
+const float CIE_Z0_INV_SIGMA_BELOW = 0.0845;
+const float CIE_Z0_INV_SIGMA_ABOVE = 0.0278;
+const float CIE_Z1_WEIGHT = 0.681;
+const float CIE_Z1_MEAN_NM = 459.0;
+const float CIE_Z1_INV_SIGMA_BELOW = 0.0385;
+const float CIE_Z1_INV_SIGMA_ABOVE = 0.0725;
+
+// core::math::spectrum::XYZ_TO_LINEAR_SRGB (row, column) and SPECTRAL_RGB_SCALE
+const float XYZ_TO_SRGB_00 = 3.2406;
+const float XYZ_TO_SRGB_01 = -1.5372;
+const float XYZ_TO_SRGB_02 = -0.4986;
+const float XYZ_TO_SRGB_10 = -0.9689;
+const float XYZ_TO_SRGB_11 = 1.8758;
+const float XYZ_TO_SRGB_12 = 0.0415;
+const float XYZ_TO_SRGB_20 = 0.0557;
+const float XYZ_TO_SRGB_21 = -0.204;
+const float XYZ_TO_SRGB_22 = 1.057;
+const float SPECTRAL_RGB_SCALE_R = 2.2722244;
+const float SPECTRAL_RGB_SCALE_G = 3.4646618;
+const float SPECTRAL_RGB_SCALE_B = 3.660385;
 
 // core::math::geometry
 const float OFFSET_REL = 3.0517578e-5;
@@ -165,8 +224,8 @@ struct GpuTriangle {
 struct GpuMaterial {
     uint kind; // 0
     float ior; // 4
-    float cauchy_b; // 8
-    uint _pad; // 12
+    float dispersion; // 8
+    uint ior_model; // 12
     vec4 color; // 16
     vec4 absorption; // 32
 };
@@ -243,8 +302,8 @@ struct TraceParams {
     uint caster_sphere_count; // 124
     uint jitter_seed; // 128
     uint stratum; // 132
-    uint _pad0; // 136
-    uint _pad1; // 140
+    uint dispersion_mode; // 136
+    uint _pad; // 140
     vec4 caster_spheres[MAX_CASTER_SPHERES]; // 144
 };
 
@@ -391,8 +450,8 @@ struct IndirectTraceParams {
     uint fresnel_model; // 92
     float power_scale; // 96
     float flux_quantum; // 100
-    uint _pad0; // 104
-    uint _pad1; // 108
+    uint dispersion_mode; // 104
+    uint _pad; // 108
 };
 
 // core::device::layout::SplatParams, 128 bytes

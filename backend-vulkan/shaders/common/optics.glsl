@@ -66,6 +66,20 @@ precise float cauchy_ior(float ior, float cauchy_b, float wavelength_um) {
     return a + cauchy_b / (wavelength_um * wavelength_um);
 }
 
+// KHR_materials_dispersion's index from n_d and the Abbe number (core: optics::abbe_ior).
+precise float abbe_ior(float ior_d, float abbe_number, float wavelength_um) {
+    precise float n = ior_d + (ior_d - 1.0) / abbe_number
+                                  * (KHR_DISPERSION_B_UM2 / (wavelength_um * wavelength_um)
+                                     - KHR_DISPERSION_D_TERM);
+    return max(n, 1.0);
+}
+
+// The index of a dispersive dielectric under its model (core: optics::dispersive_ior).
+precise float dispersive_ior(float ior, float dispersion, uint model, float wavelength_um) {
+    if (model == IOR_MODEL_ABBE) return abbe_ior(ior, dispersion, wavelength_um);
+    return cauchy_ior(ior, dispersion, wavelength_um);
+}
+
 // Reflects with probability = Fresnel reflectance of `model` (`xi` uniform in [0, 1)),
 // else refracts.
 precise vec3 dielectric_scatter(vec3 incident, vec3 shading_normal, bool entering, float ior,

@@ -9,8 +9,14 @@
 //! with flux `emitted power over the domain / N`. They are traced through mirrors
 //! (power x reflectance) and dielectrics (exact unpolarised Fresnel: reflect with
 //! probability `R`, refract otherwise, total internal reflection always reflects;
-//! Beer-Lambert over segments inside; with a Cauchy `B` every photon is traced once per
-//! colour channel at that channel's wavelength). Spheres are analytic or, selectably, the
+//! Beer-Lambert over segments inside). In a scene with a dispersive dielectric (a Cauchy
+//! `B`, or KHR_materials_dispersion's Abbe model, each index written out here in f64)
+//! every photon is traced three times: with `spec.dispersion` spectral at three
+//! wavelengths stratified over 380-780 nm (one uniform offset per photon), each carrying a
+//! third of the flux times its colour, the CIE 1931 functions (the same published fit and
+//! sRGB matrix the library defines colour by, evaluated and normalised here in f64:
+//! clipped at 0, each channel's mean over the range 1); with three bands once per colour
+//! channel at that channel's wavelength. Spheres are analytic or, selectably, the
 //! tessellated mesh with interpolated normals the kernels trace.
 //!
 //! Estimator (the quantity Sspm's raw deposit, Kim 2019 Eq. 5, converges to): a photon
@@ -31,13 +37,14 @@
 //! its own seed stream; the image is their mean, the error the standard error of the
 //! mean (RMS over the caustic pixels relative to the RMS of the mean, as the technique
 //! references report). Each photon's random numbers come from SplitMix64 seeded by
-//! (seed, batch, light, photon, channel), and contributions are summed in photon order,
+//! (seed, batch, light, photon, pass), and contributions are summed in photon order,
 //! so the result is the same for any thread count.
 
 use super::{paths, read_exr};
 use caustica_core::frame::image::Image;
+use caustica_core::frame::settings::Dispersion;
 use caustica_core::scene::shapes::tessellate;
-use caustica_core::scene::{Light, Material, Scene, Shape};
+use caustica_core::scene::{IorModel, Light, Material, Scene, Shape};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -175,6 +182,10 @@ pub struct LightTracerSpec {
     pub spheres: SphereModel,
     /// Specular interactions after which a path is dropped (counted in the info).
     pub max_specular: u32,
+    /// How photons through dispersive glass take a colour (as the techniques'
+    /// `frame.dispersion`; default spectral).
+    #[serde(default)]
+    pub dispersion: Dispersion,
     /// What a silhouette pixel measures: with [`SilhouetteDefinition::EyeVisible`] test
     /// (b), the eye's view of the photon, applies; the default counts every photon on the
     /// surface the pixel's centre sees, as the caustic techniques do. The two differ only
@@ -193,6 +204,7 @@ impl Default for LightTracerSpec {
             seed: 1,
             spheres: SphereModel::Analytic,
             max_specular: 64,
+            dispersion: Dispersion::Spectral,
             silhouette: SilhouetteDefinition::CentreSurface,
         }
     }
@@ -265,7 +277,34 @@ impl Rng {
 enum Mat {
     Diffuse([f64; 3]),
     Mirror([f64; 3]),
-    Dielectric { ior: [f64; 3], absorption: [f64; 3] },
+    Dielectric { ior: Index, absorption: [f64; 3] },
+}
+
+/// A dielectric's index against wavelength (micrometres).
+#[derive(Clone, Copy, PartialEq)]
+enum Index {
+    /// Cauchy: `a + b / l^2`.
+    Cauchy { a: f64, b: f64 },
+    /// KHR_materials_dispersion: `max(n_d + (n_d - 1) / v (0.523655 / l^2 - 1.5168), 1)`.
+    Abbe { n_d: f64, v: f64 },
+}
+
+impl Index {
+    /// The index at `l` micrometres; `None`: the nominal index (`ior`).
+    fn at(&self, l: Option<f64>) -> f64 {
+        match (*self, l) {
+            (Index::Cauchy { a, b }, None) => a + b / (NOMINAL_UM * NOMINAL_UM),
+            (Index::Cauchy { a, b }, Some(l)) => a + b / (l * l),
+            (Index::Abbe { n_d, .. }, None) => n_d,
+            (Index::Abbe { n_d, v }, Some(l)) => {
+                (n_d + (n_d - 1.0) / v * (0.523655 / (l * l) - 1.5168)).max(1.0)
+            }
+        }
+    }
+
+    fn dispersive(&self) -> bool {
+        !matches!(self, Index::Cauchy { b, .. } if *b == 0.0)
+    }
 }
 
 struct Tri {
@@ -323,6 +362,58 @@ fn d3(v: glam::Vec3) -> DVec3 {
 const CHANNEL_UM: [f64; 3] = [0.65, 0.55, 0.45];
 const NOMINAL_UM: f64 = 0.55;
 
+/// The linear sRGB weight of a wavelength, in f64: the CIE 1931 2-degree functions in
+/// Wyman 2013's multi-lobe fit (its published coefficients, the data core's
+/// `math::spectrum` holds), the IEC 61966-2-1 matrix, each channel clipped at 0 and scaled
+/// to mean 1 over 380-780 nm (the scale integrated here by the midpoint rule).
+struct SpectralColour {
+    scale: [f64; 3],
+}
+
+impl SpectralColour {
+    fn new() -> SpectralColour {
+        let mut c = SpectralColour { scale: [1.0; 3] };
+        let n = 40_000;
+        let mut mean = [0.0f64; 3];
+        for i in 0..n {
+            let w = c.weight(0.38 + 0.4 * (i as f64 + 0.5) / n as f64);
+            for k in 0..3 {
+                mean[k] += w[k] / n as f64;
+            }
+        }
+        c.scale = mean.map(|m| 1.0 / m);
+        c
+    }
+
+    /// The weight at `l` micrometres.
+    fn weight(&self, l: f64) -> [f64; 3] {
+        use caustica_core::math::spectrum::{
+            CieLobe, CIE_X_LOBES, CIE_Y_LOBES, CIE_Z_LOBES, XYZ_TO_LINEAR_SRGB,
+        };
+        let nm = l * 1000.0;
+        let f = |lobes: &[CieLobe]| -> f64 {
+            lobes
+                .iter()
+                .map(|g| {
+                    let mu = g.mean_nm as f64;
+                    let s = if nm < mu {
+                        g.inv_sigma_below
+                    } else {
+                        g.inv_sigma_above
+                    } as f64;
+                    g.weight as f64 * (-0.5 * ((nm - mu) * s).powi(2)).exp()
+                })
+                .sum()
+        };
+        let xyz = [f(&CIE_X_LOBES), f(&CIE_Y_LOBES), f(&CIE_Z_LOBES)];
+        std::array::from_fn(|r| {
+            let m = XYZ_TO_LINEAR_SRGB[r];
+            let v = m[0] as f64 * xyz[0] + m[1] as f64 * xyz[1] + m[2] as f64 * xyz[2];
+            v.max(0.0) * self.scale[r]
+        })
+    }
+}
+
 fn material(m: &Material) -> Mat {
     let v = |x: glam::Vec3| [x.x as f64, x.y as f64, x.z as f64];
     match m {
@@ -332,11 +423,21 @@ fn material(m: &Material) -> Mat {
             ior,
             cauchy_b,
             absorption,
+            ior_model,
         } => {
             let (n, b) = (*ior as f64, *cauchy_b as f64);
-            let a = n - b / (NOMINAL_UM * NOMINAL_UM);
+            let ior = match ior_model {
+                IorModel::Cauchy => Index::Cauchy {
+                    a: n - b / (NOMINAL_UM * NOMINAL_UM),
+                    b,
+                },
+                IorModel::Abbe { abbe_number } => Index::Abbe {
+                    n_d: n,
+                    v: *abbe_number as f64,
+                },
+            };
             Mat::Dielectric {
-                ior: CHANNEL_UM.map(|l| a + b / (l * l)),
+                ior,
                 absorption: v(*absorption),
             }
         }
@@ -949,14 +1050,14 @@ enum PathEnd {
     Truncated,
 }
 
-/// Traces a photon; `channel` is the wavelength for dispersive dielectrics (None: one
-/// index for all channels, the green one's, which is `ior` without dispersion).
+/// Traces a photon; `wavelength` (micrometres) sets dispersive dielectrics' index (None:
+/// every dielectric's nominal `ior`).
 fn trace(
     g: &Geometry,
     mut o: DVec3,
     mut d: DVec3,
     mut flux: [f64; 3],
-    channel: Option<usize>,
+    wavelength: Option<f64>,
     max_specular: u32,
     rng: &mut Rng,
 ) -> PathEnd {
@@ -996,7 +1097,7 @@ fn trace(
                 if d.dot(n) >= 0.0 {
                     n = if entering { h.ng } else { -h.ng };
                 }
-                let ior = ior[channel.unwrap_or(1)];
+                let ior = ior.at(wavelength);
                 let eta = if entering { 1.0 / ior } else { ior };
                 let (r, t) = fresnel(d, n, eta);
                 match t {
@@ -1081,7 +1182,8 @@ pub fn compute(
     let dispersive = g
         .mats
         .iter()
-        .any(|m| matches!(m, Mat::Dielectric { ior, .. } if ior[0] != ior[2]));
+        .any(|m| matches!(m, Mat::Dielectric { ior, .. } if ior.dispersive()));
+    let colour = SpectralColour::new();
     let n = (spec.width * spec.height) as usize;
     let mut sum = vec![[0.0f64; 3]; n];
     let mut sum2 = vec![[0.0f64; 3]; n];
@@ -1098,27 +1200,35 @@ pub fn compute(
                     let mut trunc = 0u64;
                     let end = ((ci + 1) * CHUNK).min(spec.photons);
                     for i in ci * CHUNK..end {
-                        let passes: &[Option<usize>] = if dispersive {
-                            &[Some(0), Some(1), Some(2)]
-                        } else {
-                            &[None]
-                        };
                         let key = [spec.seed, batch as u64, li as u64, i, 0];
                         let mut rng = Rng::new(key);
                         let Some((o, d, flux)) = light.emit(spec.photons, &mut rng) else {
                             continue;
                         };
-                        for (pi, &ch) in passes.iter().enumerate() {
+                        // (wavelength, flux) of each pass: one without dispersion, else
+                        // three (stratified wavelengths, or the three bands)
+                        let offset = rng.next();
+                        let passes: Vec<(Option<f64>, [f64; 3])> = if !dispersive {
+                            vec![(None, flux)]
+                        } else {
+                            (0..3)
+                                .map(|k| match spec.dispersion {
+                                    Dispersion::ThreeBands => {
+                                        let mut f = [0.0; 3];
+                                        f[k] = flux[k];
+                                        (Some(CHANNEL_UM[k]), f)
+                                    }
+                                    Dispersion::Spectral => {
+                                        let l = 0.38 + 0.4 * (k as f64 + offset) / 3.0;
+                                        let w = colour.weight(l);
+                                        (Some(l), std::array::from_fn(|c| flux[c] * w[c] / 3.0))
+                                    }
+                                })
+                                .collect()
+                        };
+                        for (pi, &(wl, flux)) in passes.iter().enumerate() {
                             let mut rng = Rng::new([key[0], key[1], key[2], key[3], 1 + pi as u64]);
-                            let flux = match ch {
-                                None => flux,
-                                Some(c) => {
-                                    let mut f = [0.0; 3];
-                                    f[c] = flux[c];
-                                    f
-                                }
-                            };
-                            match trace(&g, o, d, flux, ch, spec.max_specular, &mut rng) {
+                            match trace(&g, o, d, flux, wl, spec.max_specular, &mut rng) {
                                 PathEnd::Truncated => trunc += 1,
                                 PathEnd::Lost => {}
                                 PathEnd::Stored { hit, dir, flux } => {

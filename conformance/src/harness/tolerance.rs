@@ -30,6 +30,7 @@
 
 use crate::strategies::MIN_CURVATURE_RADIUS;
 use caustica_core::scene::Scene;
+use caustica_core::Dispersion;
 
 /// f32 unit roundoff, `2^-24`.
 pub const F32_ROUNDOFF: f64 = 5.960_464_477_539_063e-8;
@@ -145,6 +146,82 @@ pub fn photon_flux_match_rel(scene: &Scene, tol: f32) -> f32 {
 /// bound used for flux sums on top of the diverged photons' whole flux.
 pub const PHOTON_FLUX_REL: f64 = 1e-5;
 
+/// Difference of any channel of a spectral photon's flux between two correct backends,
+/// relative to the photon's largest channel, from its colour (`math::spectrum::
+/// wavelength_rgb`): (a) evaluating the weight: each lobe `w exp(-x)` of the fit errs by
+/// `(3 + 2x)` ulp from `exp` (Vulkan's bound; OpenCL's is 3) plus ~4 ulp from its
+/// arguments and products, the matrix rows and scale add a few more, and a channel near
+/// the clip cancels: at most 62 ulp of the largest channel over 380-780 nm (at 712 nm,
+/// where red and green are both small), 7.4e-6; (b) the wavelength itself: `0.38 + 0.4 u`
+/// and `1000 l` may each round differently where a device fuses the multiply-add, <= 2
+/// ulp of the wavelength in nm (9.3e-5 nm at 780 nm), times the weight's steepest
+/// relative slope, 0.149 / nm: 2.8e-5. Together 3.5e-5; 4e-5 bounds it
+/// (`spectral_flux_rel_bounds_the_weights_error` recomputes both from core's constants).
+/// The multiply by the weight and everything after it are [`PHOTON_FLUX_REL`]'s.
+pub const SPECTRAL_FLUX_REL: f64 = 4e-5;
+
+/// The most a spectral photon's channel sum can exceed its emitted channel sum, as a
+/// factor: `max over l of (sum over c of wavelength_rgb(l)_c) / 3` (2.44, blue near 450 nm;
+/// 1 for three bands and without dispersion), over a 0.01 nm grid, times 1.001: between
+/// grid points the weight moves by at most its steepest relative slope (0.149 / nm, see
+/// [`SPECTRAL_FLUX_REL`]) times 0.005 nm, 7.5e-4. Energy is conserved per channel only in
+/// expectation (`math::spectrum`), so a frame's stored channel sum is bounded by its
+/// emitted one times this.
+pub fn spectral_sum_gain() -> f64 {
+    use caustica_core::math::spectrum::{wavelength_at, wavelength_rgb};
+    let n = 40_000;
+    let max = (0..=n)
+        .map(|i| {
+            let w = wavelength_rgb(wavelength_at(i as f32 / n as f32));
+            (w.x + w.y + w.z) as f64 / 3.0
+        })
+        .fold(1.0f64, f64::max);
+    max * 1.001
+}
+
+/// How close two photons' fluxes must be for a match: each channel within `rel` of the
+/// larger of the two values plus `spectral` of the larger photon's largest channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FluxMatch {
+    /// Relative to the channel ([`photon_flux_match_rel`]).
+    pub rel: f32,
+    /// Relative to the photon's largest channel ([`SPECTRAL_FLUX_REL`] where photons take
+    /// a spectral colour, else 0).
+    pub spectral: f32,
+}
+
+impl FluxMatch {
+    /// The tolerance of `scene`'s photons under `dispersion` with position tolerance
+    /// `tol` (scene units).
+    pub fn of(scene: &Scene, dispersion: Dispersion, tol: f32) -> FluxMatch {
+        let spectral = dispersion == Dispersion::Spectral
+            && scene.materials.values().any(|m| m.is_dispersive());
+        FluxMatch {
+            rel: photon_flux_match_rel(scene, tol),
+            spectral: if spectral {
+                SPECTRAL_FLUX_REL as f32
+            } else {
+                0.0
+            },
+        }
+    }
+
+    /// True when fluxes `a` and `b` match.
+    pub fn close(&self, a: [f32; 3], b: [f32; 3]) -> bool {
+        let largest = a.iter().chain(&b).fold(0.0f32, |m, x| m.max(x.abs()));
+        (0..3).all(|c| {
+            (a[c] - b[c]).abs() <= self.rel * a[c].abs().max(b[c].abs()) + self.spectral * largest
+        })
+    }
+
+    /// Bound of the difference of one channel's sum over non-diverged photons whose
+    /// channel sums are at most `channel` and whose sums over all channels are at most
+    /// `all` (every photon's largest channel is at most its channel sum).
+    pub fn sum_bound(&self, channel: f64, all: f64) -> f64 {
+        PHOTON_FLUX_REL * channel + self.spectral as f64 * all
+    }
+}
+
 /// `deposit_screen` on the same photons and G-buffer: fraction of photon-map texels that
 /// must be bitwise equal (99.9%). The sums are integers, so a texel differs only when a
 /// photon's outcome differs: its projected pixel coordinate (two dots and a 2.5-ulp
@@ -246,4 +323,80 @@ pub const DIRECT_AGREEMENT: f64 = 0.99;
 /// `|a - b| <= rel * max(|a|, |b|)`; false for NaN.
 pub(crate) fn within_rel(a: f32, b: f32, rel: f32) -> bool {
     (a - b).abs() <= rel * a.abs().max(b.abs())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use caustica_core::math::spectrum::{
+        CieLobe, CIE_X_LOBES, CIE_Y_LOBES, CIE_Z_LOBES, SPECTRAL_RGB_SCALE, XYZ_TO_LINEAR_SRGB,
+    };
+
+    /// Per function of the fit at `nm`: (value, error bound in ulp-weighted units: the sum
+    /// over its lobes of `|w| exp(-x) (7 + 2x)`).
+    fn lobes(nm: f64, lobes: &[CieLobe]) -> (f64, f64) {
+        lobes.iter().fold((0.0, 0.0), |(v, e), l| {
+            let mu = l.mean_nm as f64;
+            let s = if nm < mu {
+                l.inv_sigma_below
+            } else {
+                l.inv_sigma_above
+            } as f64;
+            let x = 0.5 * ((nm - mu) * s).powi(2);
+            let g = (-x).exp();
+            (
+                v + l.weight as f64 * g,
+                e + (l.weight as f64).abs() * g * (7.0 + 2.0 * x),
+            )
+        })
+    }
+
+    /// (weight per channel, error bound per channel in units of one ulp, 2^-23).
+    fn weight(nm: f64) -> ([f64; 3], [f64; 3]) {
+        let f = [
+            lobes(nm, &CIE_X_LOBES),
+            lobes(nm, &CIE_Y_LOBES),
+            lobes(nm, &CIE_Z_LOBES),
+        ];
+        let w = std::array::from_fn(|c| {
+            let m = XYZ_TO_LINEAR_SRGB[c];
+            let v: f64 = (0..3).map(|j| m[j] as f64 * f[j].0).sum();
+            v.max(0.0) * SPECTRAL_RGB_SCALE[c] as f64
+        });
+        let e = std::array::from_fn(|c| {
+            let m = XYZ_TO_LINEAR_SRGB[c];
+            let v: f64 = (0..3).map(|j| (m[j] as f64).abs() * f[j].1).sum();
+            v * SPECTRAL_RGB_SCALE[c] as f64
+        });
+        (w, e)
+    }
+
+    #[test]
+    fn spectral_flux_rel_bounds_the_weights_error() {
+        let ulp = 2f64.powi(-23);
+        let largest = |v: [f64; 3]| v.iter().fold(0.0f64, |m, x| m.max(*x));
+        let (mut eval, mut slope) = (0.0f64, 0.0f64);
+        for i in 0..=40_000 {
+            let nm = 380.0 + 400.0 * i as f64 / 40_000.0;
+            let (w, e) = weight(nm);
+            if largest(w) == 0.0 {
+                continue;
+            }
+            eval = eval.max(largest(e) / largest(w) * ulp);
+            let h = 1e-3;
+            let (a, b) = (weight(nm - h).0, weight(nm + h).0);
+            let d = (0..3).map(|c| (b[c] - a[c]).abs()).fold(0.0, f64::max) / (2.0 * h);
+            slope = slope.max(d / largest(w));
+        }
+        // two roundings of the wavelength in nm, at most 2 ulp of 780 nm
+        let wavelength = slope * 2.0 * 780.0 * ulp;
+        eprintln!("evaluation {eval:.2e}, wavelength rounding {wavelength:.2e}");
+        assert!(
+            eval + wavelength <= SPECTRAL_FLUX_REL,
+            "{}",
+            eval + wavelength
+        );
+        // and the constant is not loose by more than its rounding up
+        assert!(eval + wavelength > 0.8 * SPECTRAL_FLUX_REL);
+    }
 }

@@ -8,7 +8,7 @@
 //!   entries, so `first` and the list are really read): slot `i` is one photon on both
 //!   backends, so the slots are compared one by one: stored or not, met a caster or not,
 //!   its triangle and the atlas texel under its uv, its flux within
-//!   [`photon_flux_match_rel`]. A path that diverges (the argument of
+//!   [`FluxMatch`]. A path that diverges (the argument of
 //!   [`crate::harness::tolerance::PATH_DIVERGENCE`]) or lands within a rounding of a texel
 //!   edge changes one slot, so at most [`divergence_allowance`] slots may differ. The
 //!   counters (stored, path ends) are the same photons' and get the same allowance.
@@ -32,7 +32,7 @@
 use super::gather_caustic_map::layout;
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
 use crate::harness::tolerance::{
-    divergence_allowance, photon_flux_match_rel, DEPOSIT_PHOTON_CHANGES, PHOTON_POSITION_REL,
+    divergence_allowance, FluxMatch, DEPOSIT_PHOTON_CHANGES, PHOTON_POSITION_REL,
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, read_photon_map, Backend};
@@ -434,7 +434,11 @@ pub fn check_adaptive_caustics(
     let (sb, cb) = run_trace(fx, c, (light, &p, true), &list)?;
     let n = sa.len() as u64;
     let k = divergence_allowance(n);
-    let tol = photon_flux_match_rel(&fx.scene, PHOTON_POSITION_REL * fx.ds.bounds.diagonal());
+    let tol = FluxMatch::of(
+        &fx.scene,
+        fx.settings.frame.dispersion,
+        PHOTON_POSITION_REL * fx.ds.bounds.diagonal(),
+    );
     let same = |a: &Photon, b: &Photon| {
         let stored = a.direction != NO_TRIANGLE;
         stored == (b.direction != NO_TRIANGLE)
@@ -442,10 +446,7 @@ pub fn check_adaptive_caustics(
             && (!stored
                 || (a.direction == b.direction
                     && texel(&l, a) == texel(&l, b)
-                    && (0..3).all(|ch| {
-                        (a.flux[ch] - b.flux[ch]).abs()
-                            <= tol * a.flux[ch].abs().max(b.flux[ch].abs())
-                    })))
+                    && tol.close(a.flux, b.flux)))
     };
     let differ = sa.iter().zip(&sb).filter(|(a, b)| !same(a, b)).count() as u64;
     v.check(differ <= k, || {
@@ -633,15 +634,13 @@ pub fn check_screen_target(
     let n = sa.len() as u64;
     let k = divergence_allowance(n);
     let reach = PHOTON_POSITION_REL * fx.ds.bounds.diagonal();
-    let tol = photon_flux_match_rel(&fx.scene, reach);
+    let tol = FluxMatch::of(&fx.scene, fx.settings.frame.dispersion, reach);
     let stored = |ph: &Photon| slot_stored(ph.flux);
     let same = |a: &Photon, b: &Photon| {
         stored(a) == stored(b)
             && if stored(a) {
                 glam::Vec3::from(a.position).distance(glam::Vec3::from(b.position)) <= reach
-                    && (0..3).all(|ch| {
-                        (a.flux[ch] - b.flux[ch]).abs() <= tol * a.flux[ch].abs().max(b.flux[ch])
-                    })
+                    && tol.close(a.flux, b.flux)
             } else {
                 a.position[2] == b.position[2]
             }

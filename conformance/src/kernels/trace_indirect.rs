@@ -11,7 +11,7 @@
 use super::sample_rsm::*;
 use crate::harness::fixture::{run_and_free, Fixture};
 use crate::harness::tolerance::{
-    divergence_allowance, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL,
+    divergence_allowance, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL, SPECTRAL_FLUX_REL,
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, Backend};
@@ -62,7 +62,8 @@ pub(crate) fn run_trace(
             fresnel_model: 0,
             power_scale,
             flux_quantum: quantum,
-            _pad: [0; 2],
+            dispersion_mode: caustica_core::math::spectrum::dispersion_mode::SPECTRAL,
+            _pad: 0,
         },
         rsm_photons: r,
         photons,
@@ -134,6 +135,17 @@ pub(crate) fn compare_indirect(
             ends(cb)
         )
     });
+    // photons of a spectral colour (dispersive glass) differ by up to SPECTRAL_FLUX_REL of
+    // their largest channel in every channel: of all channels' sum at most
+    let flux_units = |c: &[u32], ch: usize| {
+        join_u64([c[counter::STORED_FLUX + 2 * ch], c[counter::STORED_FLUX + 2 * ch + 1]]) as f64
+    };
+    let all = |c: &[u32]| (0..3).map(|ch| flux_units(c, ch)).sum::<f64>();
+    let spectral = if fx.scene.materials.values().any(|m| m.is_dispersive()) {
+        SPECTRAL_FLUX_REL * all(ca).max(all(cb))
+    } else {
+        0.0
+    };
     for ch in 0..3 {
         let fa = join_u64([
             ca[counter::STORED_FLUX + 2 * ch],
@@ -152,7 +164,7 @@ pub(crate) fn compare_indirect(
             .fold(0.0f32, f32::max) as f64
             * power_scale as f64
             / quantum as f64;
-        let tol = PHOTON_FLUX_REL * fa.max(fb) + allow as f64 * biggest + 3.0;
+        let tol = PHOTON_FLUX_REL * fa.max(fb) + spectral + allow as f64 * biggest + 3.0;
         v.check((fa - fb).abs() <= tol, || {
             format!("light {l}: stored flux channel {ch}: {fa} vs {fb} units")
         });

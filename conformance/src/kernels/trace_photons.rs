@@ -18,7 +18,7 @@ use crate::harness::fixture::Fixture;
 use crate::harness::fixture::{run_and_free, ReferenceInputs};
 use crate::harness::measure::v3;
 use crate::harness::tolerance::{
-    divergence_allowance, photon_flux_match_rel, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL,
+    divergence_allowance, FluxMatch, PHOTON_FLUX_REL, PHOTON_MATCH, PHOTON_POSITION_REL,
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::Backend;
@@ -57,16 +57,12 @@ impl<'a> PhotonGrid<'a> {
         [k.x as i32, k.y as i32, k.z as i32]
     }
 
-    /// True when a photon lies within `tol` of `p` with every flux channel within
-    /// `flux_rel` (relative) of `p`'s.
-    fn has_match(&self, p: &Photon, tol: f32, flux_rel: f32) -> bool {
+    /// True when a photon lies within `tol` of `p` with a flux that `flux` says is close
+    /// to `p`'s.
+    fn has_match(&self, p: &Photon, tol: f32, flux: FluxMatch) -> bool {
         let pos = v3(p.position);
         let k = Self::key(pos, self.cell);
-        let flux_ok = |q: &Photon| {
-            (0..3).all(|c| {
-                (p.flux[c] - q.flux[c]).abs() <= flux_rel * p.flux[c].abs().max(q.flux[c].abs())
-            })
-        };
+        let flux_ok = |q: &Photon| flux.close(p.flux, q.flux);
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
@@ -85,7 +81,7 @@ impl<'a> PhotonGrid<'a> {
 }
 
 /// Number of photons of `a` with no match in `b` (see [`PhotonGrid::has_match`]).
-fn unmatched(a: &[Photon], b: &[Photon], tol: f32, flux_rel: f32) -> u64 {
+fn unmatched(a: &[Photon], b: &[Photon], tol: f32, flux_rel: FluxMatch) -> u64 {
     let grid = PhotonGrid::new(b, tol);
     a.iter()
         .filter(|p| !grid.has_match(p, tol, flux_rel))
@@ -218,7 +214,7 @@ pub fn check_trace(
     }
     let emitted = fx.settings.frame.photons_w as u64 * fx.settings.frame.photons_h as u64;
     let tol = PHOTON_POSITION_REL * fx.ds.bounds.diagonal();
-    let flux_rel = photon_flux_match_rel(&fx.scene, tol);
+    let flux_rel = FluxMatch::of(&fx.scene, fx.settings.frame.dispersion, tol);
     for k in 0..fx.constants.domains.len() {
         let light = fx.constants.domains[k].0;
         let (pa, ca) = fx.run_trace(r, k)?;
@@ -267,7 +263,9 @@ pub fn check_trace(
         let max_photon_flux = fx.constants.max_photon_flux as f64;
         let (fa, fb) = (flux_sum(&pa), flux_sum(&pb));
         for ch in 0..3 {
-            let bound = allow as f64 * max_photon_flux + PHOTON_FLUX_REL * fa[ch].max(fb[ch]);
+            let all = |f: [f64; 3]| f[0] + f[1] + f[2];
+            let bound = allow as f64 * max_photon_flux
+                + flux_rel.sum_bound(fa[ch].max(fb[ch]), all(fa).max(all(fb)));
             v.check((fa[ch] - fb[ch]).abs() <= bound, || {
                 format!(
                     "flux[{ch}] {:.6e} vs cpu {:.6e} (allowed {bound:.3e})",
@@ -284,7 +282,8 @@ pub fn check_trace(
             };
             let dq = (q(&ca) as i64 - q(&cb) as i64).unsigned_abs() as f64;
             let max_q = max_photon_flux / fx.constants.flux_quantum as f64;
-            let bound_q = allow as f64 * max_q + n as f64 * (1.0 + PHOTON_FLUX_REL * max_q);
+            let bound_q = allow as f64 * max_q
+                + n as f64 * (1.0 + (PHOTON_FLUX_REL + 3.0 * flux_rel.spectral as f64) * max_q);
             v.check(dq <= bound_q, || {
                 format!(
                     "stored-flux counter[{ch}] {} vs cpu {} (allowed {bound_q:.3e})",

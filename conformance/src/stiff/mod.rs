@@ -6,9 +6,10 @@
 //! - photon accounting: path ends add up to the photons emitted, deposit outcomes to the
 //!   photons stored;
 //! - stored flux never exceeds emitted flux, per channel (summed over the channels when a
-//!   dispersive material moves a photon's power into one channel: that rule holds per
-//!   channel only in expectation), allowing the fixed-point rounding of half a quantum per
-//!   stored photon;
+//!   dispersive material gives a photon a colour: that rule holds per channel only in
+//!   expectation, and a spectral photon's channel sum is at most the largest gain of a
+//!   wavelength, `tolerance::spectral_sum_gain`), allowing the fixed-point rounding of half
+//!   a quantum per stored photon;
 //! - no fixed-point saturation;
 //! - on a backend other than cpu: the frame agrees with the CPU backend's frame by
 //!   [`compare_frames`], with the suite's tolerances as argued there.
@@ -134,7 +135,11 @@ pub fn catalogue() -> Vec<StiffCase> {
         case!("optics", "dispersion-b0", optics::dispersion_zero,
             "Cauchy B = 0: the material is not dispersive, photons keep all three channels: white light gives bitwise equal stored flux per channel"),
         case!("optics", "dispersion-strong", optics::dispersion_strong,
-            "Cauchy B = 0.3 um^2 (n 1.22..1.99): no NaN, channel-summed stored flux <= emitted; B = 2 (n < 0 in red) rejected by validation"),
+            "Cauchy B = 0.3 um^2 (n 1.51..2.59 over 380-780 nm): no NaN, channel-summed stored flux <= emitted x the largest gain of a wavelength; B = 2 (n < 0 in red) rejected by validation"),
+        case!("optics", "dispersion-abbe-near-1", optics::dispersion_abbe_near_one,
+            "Abbe model n_d 1.0001, V_d 0.5: the index falls to the extension's clamp at 1 from 689 nm on (checked), photons at both ends of the spectrum; no NaN"),
+        case!("optics", "dispersion-abbe-3.5", optics::dispersion_abbe_high_index,
+            "Abbe model n_d 3.5, V_d 10 (n 3.34..4.03, total internal reflection nearly everywhere inside): no NaN; V_d 0, < 0, NaN, 1e-30 (index overflow), B with the Abbe model and n_d < 1 rejected naming the field"),
         case!("screen", "near-plane", screen::near_plane,
             "sphere scene at 1e-9 scale seen from 3e-10 above the caustic (pixel footprint ~1.5e-23 units^2): radiance finite, each pixel's flux L * A * pi / albedo <= stored flux"),
         case!("screen", "far-plane", screen::far_plane,

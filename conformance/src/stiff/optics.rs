@@ -1,5 +1,5 @@
 //! The optics group: total internal reflection, grazing incidence, extreme and unit indices,
-//! nested media, absorption and dispersion.
+//! nested media, absorption and dispersion (Cauchy and the Abbe model, spectral colour).
 
 use super::closed_form::{ball_solid_angle, disk_mean, grid_bound, tessellation_rel};
 use super::runner::{outcome, run_checked, stored_fraction};
@@ -11,7 +11,7 @@ use caustica_core::backend::Backend;
 use caustica_core::device::layout::{gbuffer_flags, GpuCamera};
 use caustica_core::math::optics::fresnel_dielectric;
 use caustica_core::scene::builtin;
-use caustica_core::scene::{Aabb, Light, Material, Scene, Shape};
+use caustica_core::scene::{Aabb, IorModel, Light, Material, Scene, Shape};
 use glam::Vec3;
 
 /// Equilateral glass prism (n 1.5, side 0.6, axis z, centre (0, 0.7, 0)) over the plane,
@@ -338,6 +338,7 @@ fn absorbing_ball(sigma: f32) -> Scene {
             ior: 1.5,
             cauchy_b: 0.0,
             absorption: Vec3::splat(sigma),
+            ior_model: Default::default(),
         },
     );
     s
@@ -408,6 +409,7 @@ pub(super) fn dispersion_zero(b: &mut dyn Backend) -> Result<Outcome, String> {
             ior: 1.5,
             cauchy_b: 0.0,
             absorption: Vec3::ZERO,
+            ior_model: Default::default(),
         },
     );
     let mut v = Verdict::new("dispersion B = 0");
@@ -427,6 +429,7 @@ pub(super) fn dispersion_strong(b: &mut dyn Backend) -> Result<Outcome, String> 
             ior: 1.5,
             cauchy_b: 0.3,
             absorption: Vec3::ZERO,
+            ior_model: Default::default(),
         },
     );
     let mut v = Verdict::new("dispersion B = 0.3");
@@ -438,6 +441,7 @@ pub(super) fn dispersion_strong(b: &mut dyn Backend) -> Result<Outcome, String> 
             ior: 1.5,
             cauchy_b: 2.0,
             absorption: Vec3::ZERO,
+            ior_model: Default::default(),
         },
     );
     match bad.validate() {
@@ -447,6 +451,77 @@ pub(super) fn dispersion_strong(b: &mut dyn Backend) -> Result<Outcome, String> 
                 p.iter().any(|p| p.path == "materials.flint.cauchy_b"),
                 || format!("B = 2 rejected, but not for cauchy_b: {p:?}"),
             );
+        }
+    }
+    let s = f.stats.stored_flux;
+    outcome(
+        format!("stored r {:.3} g {:.3} b {:.3} W", s[0], s[1], s[2]),
+        v,
+    )
+}
+
+/// The prism scene's flint under KHR_materials_dispersion's Abbe model.
+fn abbe_prism(ior: f32, abbe_number: f32) -> Scene {
+    let mut scene = prism_scene(40.0);
+    scene.materials.insert(
+        "flint".into(),
+        Material::Dielectric {
+            ior,
+            cauchy_b: 0.0,
+            absorption: Vec3::ZERO,
+            ior_model: IorModel::Abbe { abbe_number },
+        },
+    );
+    scene
+}
+
+pub(super) fn dispersion_abbe_near_one(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // n_d 1.0001, V_d 0.5: (n_d - 1) / V_d = 2e-4, so n runs from 1.00052 at 380 nm down
+    // through 1 at 689 nm, where the extension's max(., 1) clamps it
+    let scene = abbe_prism(1.0001, 0.5);
+    let n = |um: f32| caustica_core::math::optics::abbe_ior(1.0001, 0.5, um);
+    let mut v = Verdict::new("dispersion abbe n_d 1.0001");
+    v.check(n(0.78) == 1.0 && n(0.38) > 1.0005, || {
+        format!("index {} at 780 nm, {} at 380 nm", n(0.78), n(0.38))
+    });
+    let f = run_checked(b, &scene, &settings(GRID), &mut v)?;
+    v.check(f.stats.photons_stored > 0, || "no photon stored".into());
+    let s = f.stats.stored_flux;
+    outcome(
+        format!("stored r {:.3} g {:.3} b {:.3} W", s[0], s[1], s[2]),
+        v,
+    )
+}
+
+pub(super) fn dispersion_abbe_high_index(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // n_d 3.5, V_d 10: n from 3.34 (780 nm) to 4.03 (380 nm); inside, total internal
+    // reflection beyond 14-17 degrees
+    let scene = abbe_prism(3.5, 10.0);
+    let mut v = Verdict::new("dispersion abbe n_d 3.5");
+    let f = run_checked(b, &scene, &settings(GRID), &mut v)?;
+    v.check(f.stats.photons_stored > 0, || "no photon stored".into());
+    // typed errors for parameters the model cannot take
+    for (ior, abbe, cauchy_b, field) in [
+        (1.5, 0.0, 0.0, "materials.flint.ior_model.abbe_number"),
+        (1.5, -3.0, 0.0, "materials.flint.ior_model.abbe_number"),
+        (1.5, f32::NAN, 0.0, "materials.flint.ior_model.abbe_number"),
+        (1.5, 40.0, 0.01, "materials.flint.cauchy_b"),
+        (0.9, 40.0, 0.0, "materials.flint.ior"),
+        (1.5, 1e-30, 0.0, "materials.flint.ior_model.abbe_number"),
+    ] {
+        let mut bad = abbe_prism(ior, abbe);
+        if let Some(Material::Dielectric { cauchy_b: b, .. }) = bad.materials.get_mut("flint") {
+            *b = cauchy_b;
+        }
+        match bad.validate() {
+            Ok(()) => v.fail(format!("n_d {ior}, V_d {abbe}, B {cauchy_b} accepted")),
+            Err(p) => {
+                v.check(p.iter().any(|p| p.path == field), || {
+                    format!(
+                        "n_d {ior}, V_d {abbe}, B {cauchy_b}: rejected, but not at {field}: {p:?}"
+                    )
+                });
+            }
         }
     }
     let s = f.stats.stored_flux;

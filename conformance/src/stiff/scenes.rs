@@ -27,6 +27,7 @@ pub(super) fn glass(ior: f32) -> Material {
         ior,
         cauchy_b: 0.0,
         absorption: Vec3::ZERO,
+        ior_model: Default::default(),
     }
 }
 

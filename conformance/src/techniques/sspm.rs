@@ -4,7 +4,9 @@
 //! G-buffers agree ([`compare_frames`] argues each bound).
 
 use crate::harness::measure::relative_l2;
-use crate::harness::tolerance::{divergence_allowance, PATH_DIVERGENCE, PHOTON_FLUX_REL};
+use crate::harness::tolerance::{
+    divergence_allowance, PATH_DIVERGENCE, PHOTON_FLUX_REL, SPECTRAL_FLUX_REL,
+};
 use crate::harness::verdict::Verdict;
 use crate::kernels::direct_light::compare_direct;
 use crate::kernels::primary_gbuffer::compare_gbuffers;
@@ -151,9 +153,19 @@ pub fn compare_frames(scene: &Scene, a: &Frame, b: &Frame) -> Verdict {
         },
     );
     let max_photon_flux = sa.flux_quantum * MAX_PHOTON_QUANTA as f64;
+    // photons of a spectral colour (the default on a dispersive scene) differ by up to
+    // SPECTRAL_FLUX_REL of their largest channel in every channel
+    let spectral = if scene.materials.values().any(|m| m.is_dispersive()) {
+        SPECTRAL_FLUX_REL
+    } else {
+        0.0
+    };
+    let all = |f: [f64; 3]| f[0] + f[1] + f[2];
     for ch in 0..3 {
         let (x, y) = (sa.stored_flux[ch], sb.stored_flux[ch]);
-        let bound = allow_stored as f64 * max_photon_flux + PHOTON_FLUX_REL * x.max(y);
+        let bound = allow_stored as f64 * max_photon_flux
+            + PHOTON_FLUX_REL * x.max(y)
+            + spectral * all(sa.stored_flux).max(all(sb.stored_flux));
         v.check((x - y).abs() <= bound, || {
             format!("stored flux[{ch}] {y:.6e}, cpu {x:.6e} (allowed {bound:.3e})")
         });

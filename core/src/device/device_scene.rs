@@ -13,10 +13,11 @@ use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
 };
 use crate::math::geometry::bounding_sphere;
+use crate::math::optics::ior_model;
 use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
 };
-use crate::scene::{shapes::tessellate, Aabb, Light, Material, Scene, Transform};
+use crate::scene::{shapes::tessellate, Aabb, IorModel, Light, Material, Scene, Transform};
 use glam::{Vec3, Vec3A};
 use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode};
 use obvhs::triangle::Triangle;
@@ -44,7 +45,7 @@ pub struct DeviceScene {
     /// Balls around the caustic casters that photons' first segments are tested against
     /// ([`crate::device::caster_spheres`]).
     pub caster_spheres: CasterSpheres,
-    /// True when some dielectric has a non-zero Cauchy B.
+    /// True when some dielectric disperses (a non-zero Cauchy B, or the Abbe model).
     pub has_dispersion: bool,
     /// Triangles dropped because their area is zero in f32.
     pub degenerate_triangles: u64,
@@ -709,10 +710,7 @@ impl DeviceScene {
             .collect();
         check_coincident(scene, &vertices, &all)?;
         drop(all);
-        let has_dispersion = scene
-            .materials
-            .values()
-            .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0));
+        let has_dispersion = scene.materials.values().any(Material::is_dispersive);
         let lights = scene.lights.iter().map(gpu_light).collect();
 
         // the levels' BLASes, static level first, then the instances in object order
@@ -1020,14 +1018,21 @@ pub fn gpu_material(m: &Material) -> GpuMaterial {
             ior,
             cauchy_b,
             absorption,
-        } => GpuMaterial {
-            kind: material_kind::DIELECTRIC,
-            ior: *ior,
-            cauchy_b: *cauchy_b,
-            color: [1.0; 4],
-            absorption: absorption.extend(0.0).to_array(),
-            ..Default::default()
-        },
+            ior_model,
+        } => {
+            let (dispersion, model) = match ior_model {
+                IorModel::Cauchy => (*cauchy_b, ior_model::CAUCHY),
+                IorModel::Abbe { abbe_number } => (*abbe_number, ior_model::ABBE),
+            };
+            GpuMaterial {
+                kind: material_kind::DIELECTRIC,
+                ior: *ior,
+                dispersion,
+                ior_model: model,
+                color: [1.0; 4],
+                absorption: absorption.extend(0.0).to_array(),
+            }
+        }
     }
 }
 

@@ -43,19 +43,22 @@ pub mod material_kind {
     pub const DIELECTRIC: u32 = 2;
 }
 
-/// Material: `color` is the diffuse albedo or the mirror reflectance; `ior`, `cauchy_b`
-/// and `absorption` (1/scene unit) apply to dielectrics.
+/// Material: `color` is the diffuse albedo or the mirror reflectance; `ior`,
+/// `dispersion`, `ior_model` and `absorption` (1/scene unit) apply to dielectrics.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
     /// One of [`material_kind`].
     pub kind: u32,
-    /// Index of refraction at 550 nm relative to the surrounding medium (dielectrics).
+    /// Index of refraction relative to the surrounding medium (dielectrics): at 550 nm
+    /// under the Cauchy model, at the d line (587.56 nm) under the Abbe model.
     pub ior: f32,
-    /// Cauchy coefficient `B` (um^2) of `n(lambda) = A + B / lambda^2`; 0: no dispersion.
-    pub cauchy_b: f32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// How the index varies with wavelength, by `ior_model`: Cauchy's `B` (um^2) of
+    /// `n(lambda) = A + B / lambda^2`, or the Abbe number `V_d` (> 0). 0: no dispersion
+    /// (the kernels test this alone).
+    pub dispersion: f32,
+    /// One of [`ior_model`](crate::math::optics::ior_model) (Cauchy is 0).
+    pub ior_model: u32,
     /// rgb: diffuse albedo or mirror reflectance per channel in [0, 1] (1 for dielectrics); `w` unused.
     pub color: [f32; 4],
     /// rgb: Beer-Lambert absorption coefficient inside a dielectric (1/scene unit); `w` unused.
@@ -637,8 +640,11 @@ pub struct IndirectTraceParams {
     pub power_scale: f32,
     /// Flux quantum (W) of the fixed-point stored-flux counters.
     pub flux_quantum: f32,
+    /// How a photon takes a colour at its first dispersive surface, one of
+    /// [`dispersion_mode`](crate::math::spectrum::dispersion_mode) (0: spectral).
+    pub dispersion_mode: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// Parameters of `splat_photons` (Smal 2019, section 24.3, Eqs. 2-9): the camera, the
@@ -767,8 +773,11 @@ pub struct TraceParams {
     /// point of a low-discrepancy sequence rotated per cell, so the frames' photons
     /// stratify each cell together.
     pub stratum: u32,
+    /// How a photon takes a colour at its first dispersive surface, one of
+    /// [`dispersion_mode`](crate::math::spectrum::dispersion_mode) (0: spectral).
+    pub dispersion_mode: u32,
     /// Padding (the spheres start on 16 bytes).
-    pub _pad: [u32; 2],
+    pub _pad: u32,
     /// Balls around the caustic casters (centre xyz, radius w; world space,
     /// [`crate::device::caster_spheres`]): a photon whose first segment meets none of them
     /// cannot meet a caster first, so it ends as `NO_SPECULAR` with no ray traced

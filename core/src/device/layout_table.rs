@@ -202,7 +202,7 @@ macro_rules! table {
 table! {
     GpuVertex { position, u, normal, v }
     GpuTriangle { indices, material }
-    GpuMaterial { kind, ior, cauchy_b, _pad, color, absorption }
+    GpuMaterial { kind, ior, dispersion, ior_model, color, absorption }
     GpuLight { kind, cos_inner, cos_outer, _pad, position, direction, intensity }
     GpuCamera { position, tan_half_fov_x, forward, tan_half_fov_y, right, width, up, height }
     GBufferTexel { position, depth, normal, geometric_normal, albedo, material, uv, view_distance, flags }
@@ -211,7 +211,7 @@ table! {
     TraceParams {
         light, emission, grid_w, grid_h, first, count, seed, max_bounces,
         origin, axis, rect_u, rect_v, photon_flux, flux_quantum, split_budget, fresnel_model,
-        caster_sphere_count, jitter_seed, stratum, _pad, caster_spheres
+        caster_sphere_count, jitter_seed, stratum, dispersion_mode, _pad, caster_spheres
     }
     DepositParams { camera, flux_quantum, hit_distance_quantum, depth_tolerance, photon_capacity }
     GatherParams {
@@ -239,7 +239,7 @@ table! {
     GiPhoton { position, power, normal, direction, ray_length, tile }
     IndirectTraceParams {
         camera, first, count, seed, max_bounces, max_segments, tile_size, store,
-        fresnel_model, power_scale, flux_quantum, _pad
+        fresnel_model, power_scale, flux_quantum, dispersion_mode, _pad
     }
     SplatParams {
         camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,

@@ -19,11 +19,13 @@ use super::layout::{
     MAX_SPLIT_BRANCHES, NO_MATERIAL, NO_TILE, VISIBLE_TOLERANCE,
 };
 use crate::math::gi_photon::gi_store;
+use crate::math::optics::ior_model;
 use crate::math::photon_clusters::{
     cluster_fate, cluster_metric, cluster_relevance, cluster_target, CLUSTER_ID_MASK,
     MAX_ERROR_TEXELS, NO_TRIANGLE,
 };
 use crate::math::rsm::{rsm_sampling, rsm_texel_kind};
+use crate::math::spectrum::{self, dispersion_mode};
 use crate::math::{density_gather, footprint, geometry, map_gather, optics, sampling};
 use std::mem::offset_of;
 
@@ -218,7 +220,36 @@ pub fn groups() -> Vec<ConstGroup> {
                     optics::REFERENCE_WAVELENGTH_UM
                 ),
                 named!("RADIANCE_MAX", F32, optics::RADIANCE_MAX),
+                named!("KHR_DISPERSION_B_UM2", F32, optics::KHR_DISPERSION_B_UM2),
+                named!("KHR_DISPERSION_D_TERM", F32, optics::KHR_DISPERSION_D_TERM),
             ],
+        ),
+        group(
+            "core::math::optics::ior_model",
+            prefixed!("IOR_MODEL_", U32, ior_model { CAUCHY, ABBE }),
+        ),
+        group(
+            "core::math::spectrum",
+            [
+                vec![
+                    named!("SPECTRUM_MIN_UM", F32, spectrum::SPECTRUM_MIN_UM),
+                    named!("SPECTRUM_WIDTH_UM", F32, spectrum::SPECTRUM_WIDTH_UM),
+                    named!("SPECTRUM_MAX_UM", F32, spectrum::SPECTRUM_MAX_UM),
+                    named!("WAVELENGTH_STEP", U32, spectrum::WAVELENGTH_STEP),
+                    named!("ONE_THIRD", F32, spectrum::ONE_THIRD),
+                ],
+                prefixed!("DISPERSION_", U32, dispersion_mode { SPECTRAL, THREE_BANDS }),
+            ]
+            .concat(),
+        ),
+        group(
+            "core::math::spectrum::CIE_X_LOBES, CIE_Y_LOBES, CIE_Z_LOBES (Wyman 2013's fit: \
+             weight, mean in nm, 1/sigma below and from the mean)",
+            cie_lobe_constants(),
+        ),
+        group(
+            "core::math::spectrum::XYZ_TO_LINEAR_SRGB (row, column) and SPECTRAL_RGB_SCALE",
+            spectral_rgb_constants(),
         ),
         group(
             "core::math::geometry",
@@ -299,6 +330,111 @@ pub fn groups() -> Vec<ConstGroup> {
             prefixed!("GI_STORE_", U32, gi_store { PACKED, FLOAT }),
         ),
     ]
+}
+
+/// The lobes of the colour-matching fit, `CIE_<X|Y|Z><k>_<WEIGHT|MEAN_NM|INV_SIGMA_BELOW|
+/// INV_SIGMA_ABOVE>` (`spectrum::cie_xyz` sums lobe 0, 1, 2 of each function).
+fn cie_lobe_constants() -> Vec<ShaderConst> {
+    const NAMES: [[[&str; 4]; 3]; 3] = [
+        [
+            [
+                "CIE_X0_WEIGHT",
+                "CIE_X0_MEAN_NM",
+                "CIE_X0_INV_SIGMA_BELOW",
+                "CIE_X0_INV_SIGMA_ABOVE",
+            ],
+            [
+                "CIE_X1_WEIGHT",
+                "CIE_X1_MEAN_NM",
+                "CIE_X1_INV_SIGMA_BELOW",
+                "CIE_X1_INV_SIGMA_ABOVE",
+            ],
+            [
+                "CIE_X2_WEIGHT",
+                "CIE_X2_MEAN_NM",
+                "CIE_X2_INV_SIGMA_BELOW",
+                "CIE_X2_INV_SIGMA_ABOVE",
+            ],
+        ],
+        [
+            [
+                "CIE_Y0_WEIGHT",
+                "CIE_Y0_MEAN_NM",
+                "CIE_Y0_INV_SIGMA_BELOW",
+                "CIE_Y0_INV_SIGMA_ABOVE",
+            ],
+            [
+                "CIE_Y1_WEIGHT",
+                "CIE_Y1_MEAN_NM",
+                "CIE_Y1_INV_SIGMA_BELOW",
+                "CIE_Y1_INV_SIGMA_ABOVE",
+            ],
+            ["", "", "", ""],
+        ],
+        [
+            [
+                "CIE_Z0_WEIGHT",
+                "CIE_Z0_MEAN_NM",
+                "CIE_Z0_INV_SIGMA_BELOW",
+                "CIE_Z0_INV_SIGMA_ABOVE",
+            ],
+            [
+                "CIE_Z1_WEIGHT",
+                "CIE_Z1_MEAN_NM",
+                "CIE_Z1_INV_SIGMA_BELOW",
+                "CIE_Z1_INV_SIGMA_ABOVE",
+            ],
+            ["", "", "", ""],
+        ],
+    ];
+    let lobes: [&[spectrum::CieLobe]; 3] = [
+        &spectrum::CIE_X_LOBES,
+        &spectrum::CIE_Y_LOBES,
+        &spectrum::CIE_Z_LOBES,
+    ];
+    let mut out = Vec::new();
+    for (f, lobes) in lobes.iter().enumerate() {
+        for (k, l) in lobes.iter().enumerate() {
+            let values = [l.weight, l.mean_nm, l.inv_sigma_below, l.inv_sigma_above];
+            for (name, v) in NAMES[f][k].iter().zip(values) {
+                out.push(ShaderConst {
+                    name,
+                    value: ShaderValue::F32(v),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// `XYZ_TO_SRGB_<row><column>` and `SPECTRAL_RGB_SCALE_<R|G|B>`.
+fn spectral_rgb_constants() -> Vec<ShaderConst> {
+    const M: [[&str; 3]; 3] = [
+        ["XYZ_TO_SRGB_00", "XYZ_TO_SRGB_01", "XYZ_TO_SRGB_02"],
+        ["XYZ_TO_SRGB_10", "XYZ_TO_SRGB_11", "XYZ_TO_SRGB_12"],
+        ["XYZ_TO_SRGB_20", "XYZ_TO_SRGB_21", "XYZ_TO_SRGB_22"],
+    ];
+    const S: [&str; 3] = [
+        "SPECTRAL_RGB_SCALE_R",
+        "SPECTRAL_RGB_SCALE_G",
+        "SPECTRAL_RGB_SCALE_B",
+    ];
+    let mut out = Vec::new();
+    for (r, row) in spectrum::XYZ_TO_LINEAR_SRGB.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
+            out.push(ShaderConst {
+                name: M[r][c],
+                value: ShaderValue::F32(*v),
+            });
+        }
+    }
+    for (name, v) in S.iter().zip(spectrum::SPECTRAL_RGB_SCALE) {
+        out.push(ShaderConst {
+            name,
+            value: ShaderValue::F32(v),
+        });
+    }
+    out
 }
 
 /// Struct fields whose array length the shaders spell with a shared constant rather than

@@ -41,7 +41,7 @@ pub struct SceneGeometry {
     pub caster_bounds: Aabb,
     /// Balls around the casters that photons' first segments are tested against.
     pub caster_spheres: CasterSpheres,
-    /// Some material disperses (a non-zero Cauchy B).
+    /// Some material disperses (a non-zero Cauchy B, or the Abbe model).
     pub has_dispersion: bool,
     /// Triangles the build dropped for zero area in f32.
     pub degenerate_triangles: u64,

@@ -23,7 +23,7 @@ pub struct MaterialUpdate {
     pub model: Scene,
     /// The material table as the kernels read it (the scene's sorted order).
     pub gpu: Vec<GpuMaterial>,
-    /// Whether any material disperses (a non-zero Cauchy B), as
+    /// Whether any material disperses (a non-zero Cauchy B, or the Abbe model), as
     /// [`crate::device::device_scene::DeviceScene::has_dispersion`] counts it.
     pub has_dispersion: bool,
     /// The scene's features (and dispersion) are unchanged: the plan, the trace variant and
@@ -59,11 +59,7 @@ pub fn material_update(
     model
         .validate_except_shapes()
         .map_err(|p| Error::InvalidScene(format!("{}: {}", p[0].path, p[0].reason)))?;
-    let dispersive = |s: &Scene| {
-        s.materials
-            .values()
-            .any(|m| matches!(m, Material::Dielectric { cauchy_b, .. } if *cauchy_b != 0.0))
-    };
+    let dispersive = |s: &Scene| s.materials.values().any(Material::is_dispersive);
     let has_dispersion = dispersive(&model);
     let same_plan = SceneFeatures::of(&model) == SceneFeatures::of(scene)
         && has_dispersion == dispersive(scene);

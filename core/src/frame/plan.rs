@@ -21,7 +21,7 @@ pub struct SceneFeatures {
     pub mirrors: bool,
     /// Some object is a dielectric.
     pub dielectrics: bool,
-    /// A dielectric with a non-zero Cauchy B.
+    /// A dispersive dielectric (a non-zero Cauchy B, or the Abbe model).
     pub dispersion: bool,
     /// A dielectric with a non-zero absorption coefficient.
     pub absorption: bool,
@@ -34,13 +34,9 @@ impl SceneFeatures {
         for o in &scene.objects {
             match scene.materials.get(&o.material) {
                 Some(Material::Mirror { .. }) => f.mirrors = true,
-                Some(Material::Dielectric {
-                    cauchy_b,
-                    absorption,
-                    ..
-                }) => {
+                Some(m @ Material::Dielectric { absorption, .. }) => {
                     f.dielectrics = true;
-                    f.dispersion |= *cauchy_b != 0.0;
+                    f.dispersion |= m.is_dispersive();
                     f.absorption |= absorption.max_element() > 0.0;
                 }
                 _ => {}

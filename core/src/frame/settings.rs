@@ -66,6 +66,47 @@ pub struct FrameSettings {
     /// Most triangles the tessellated scene may have; checked before anything is
     /// allocated (default [`crate::scene::limits::DEFAULT_MAX_TRIANGLES`], 2^24).
     pub max_triangles: u64,
+    /// How photons through dispersive glass take a colour ([`Dispersion`]; JSON
+    /// `"spectral"`, the default, or `"three_bands"`).
+    pub dispersion: Dispersion,
+}
+
+/// How a photon takes a colour at its first dispersive surface (`frame.dispersion`; the
+/// method is in [`crate::math::spectrum`]'s module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dispersion {
+    /// One wavelength per photon, stratified over 380-780 nm across the photon grid;
+    /// its power becomes linear sRGB through the CIE 1931 colour-matching functions.
+    #[default]
+    Spectral,
+    /// Vanderstichelen 2021's three-way split: each photon keeps one colour channel (x3)
+    /// and refracts with that channel's wavelength (650, 550, 450 nm); for comparison
+    /// with the publications.
+    ThreeBands,
+}
+
+impl Dispersion {
+    /// How much brighter than its emitted flux one channel of a photon can get at a
+    /// dispersive surface (1 when the scene has none, `has_dispersion` false): 3 for the
+    /// three-way split, [`MAX_CHANNEL_WEIGHT`](crate::math::spectrum::MAX_CHANNEL_WEIGHT)
+    /// for spectral photons. The fixed-point quanta allow for it.
+    pub fn flux_gain(self, has_dispersion: bool) -> f32 {
+        match (has_dispersion, self) {
+            (false, _) => 1.0,
+            (true, Dispersion::ThreeBands) => 3.0,
+            (true, Dispersion::Spectral) => crate::math::spectrum::MAX_CHANNEL_WEIGHT,
+        }
+    }
+
+    /// The kernels' `dispersion_mode` value
+    /// ([`dispersion_mode`](crate::math::spectrum::dispersion_mode)).
+    pub fn kernel_value(self) -> u32 {
+        match self {
+            Dispersion::Spectral => crate::math::spectrum::dispersion_mode::SPECTRAL,
+            Dispersion::ThreeBands => crate::math::spectrum::dispersion_mode::THREE_BANDS,
+        }
+    }
 }
 
 impl Default for FrameSettings {
@@ -82,6 +123,7 @@ impl Default for FrameSettings {
             prune: true,
             max_specular_depth: 6,
             max_triangles: crate::scene::limits::DEFAULT_MAX_TRIANGLES,
+            dispersion: Dispersion::Spectral,
         }
     }
 }
@@ -382,6 +424,34 @@ mod tests {
                 own: 3,
             }
         }
+    }
+
+    #[test]
+    fn dispersion_is_spectral_by_default_and_reads_from_json() {
+        assert_eq!(FrameSettings::default().dispersion, Dispersion::Spectral);
+        let e: Example = from_json(
+            "example",
+            &Example::default(),
+            &serde_json::json!({ "frame": { "dispersion": "three_bands" } }),
+        )
+        .unwrap();
+        assert_eq!(e.frame.dispersion, Dispersion::ThreeBands);
+        assert_eq!(
+            e.frame.dispersion.kernel_value(),
+            crate::math::spectrum::dispersion_mode::THREE_BANDS
+        );
+        let bad = from_json::<Example>(
+            "example",
+            &Example::default(),
+            &serde_json::json!({ "frame": { "dispersion": "hero" } }),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(bad.contains("hero") && bad.contains("three_bands"), "{bad}");
+        // the quanta's gain
+        assert_eq!(Dispersion::Spectral.flux_gain(false), 1.0);
+        assert_eq!(Dispersion::ThreeBands.flux_gain(true), 3.0);
+        assert_eq!(Dispersion::Spectral.flux_gain(true), 7.0);
     }
 
     #[test]

@@ -16,12 +16,15 @@ use crate::math::gi_photon::screen_tiles;
 /// `gi_store::FLOAT`), and its screen tile's count in `tile_counts` goes up; then, below `params.max_bounces` diffuse bounces, it survives
 /// Jensen's roulette (`math::rsm::russian_roulette`) and leaves in a cosine direction.
 /// Mirrors scale the flux by their colour; dielectrics reflect or refract by Fresnel
-/// (`math::optics::dielectric_scatter`), with Beer-Lambert inside and, on a dispersive
-/// one, one colour channel kept (x3) and its Cauchy IOR, as `trace_photons` does.
+/// (`math::optics::dielectric_scatter`), with Beer-Lambert inside and, from the first
+/// dispersive one on, a wavelength and its colour (`math::spectrum::disperse` with
+/// `params.dispersion_mode`, the photon's point of the wavelength sequence) and that
+/// wavelength's index (`math::optics::dispersive_ior`), as `trace_photons` does.
 ///
 /// Random dimensions (`rng::random_f32(seed, first + i, segment, d)` for photon
 /// `first + i`): d 0, 1 the bounce direction, d 2 the roulette, d 3 the Fresnel choice, d 4
-/// the channel. GPU thread `t` traces photon `first +
+/// the channel (three bands); a spectral wavelength is `spectrum::spectral_sample(seed,
+/// first + i)`. GPU thread `t` traces photon `first +
 /// math::rsm::coherent_sample_order(t, count)` (a warp's samples near each other); the
 /// CPU traces them in order. A path depends on its photon alone, so only the order of the
 /// appended photons differs.

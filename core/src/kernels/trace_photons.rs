@@ -282,7 +282,9 @@ fn pixels(p: &DepositParams) -> u64 {
 pub struct TraceVariant {
     /// Dielectric interfaces (Fresnel reflect/refract, total internal reflection).
     pub dielectric: bool,
-    /// Cauchy dispersion (one colour channel per photon after its first dispersive hit).
+    /// Dispersion: a photon takes a wavelength (or, with three bands, a colour channel)
+    /// at its first dispersive hit and refracts with its index from then on
+    /// (`math::spectrum::disperse`, `math::optics::dispersive_ior`).
     pub dispersion: bool,
     /// Beer-Lambert absorption inside dielectrics.
     pub absorption: bool,
@@ -291,8 +293,8 @@ pub struct TraceVariant {
     /// caustic atlas, instead of world space (Sspm's screen deposit).
     pub surface_store: bool,
     /// Vanderstichelen 2021's deterministic splits: a dielectric sends both a reflected (flux x R) and
-    /// a refracted (x (1 - R)) branch, and the first dispersive surface three one-channel
-    /// branches, up to `TraceParams::split_budget` branches per emitted photon (beyond it,
+    /// a refracted (x (1 - R)) branch, and the first dispersive surface three branches
+    /// (`math::spectrum::split_lane`), up to `TraceParams::split_budget` branches per emitted photon (beyond it,
     /// the stochastic choice); otherwise Sspm's stochastic Fresnel and channel choices.
     pub fresnel_split: bool,
     /// Wyman 2009's adaptive emission: photons come four by four from a cluster list, and

@@ -16,4 +16,5 @@ pub mod photon_splat;
 pub mod rng;
 pub mod rsm;
 pub mod sampling;
+pub mod spectrum;
 pub mod wavelet_warp;

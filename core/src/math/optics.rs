@@ -116,6 +116,52 @@ pub fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
     a + cauchy_b / (wavelength_um * wavelength_um)
 }
 
+/// Values of [`GpuMaterial::ior_model`](crate::device::layout::GpuMaterial::ior_model):
+/// how a dielectric's index varies with wavelength, and what its `dispersion` parameter
+/// is.
+pub mod ior_model {
+    /// [`cauchy_ior`](super::cauchy_ior): `ior` at 550 nm, `dispersion` = Cauchy's `B`
+    /// (um^2).
+    pub const CAUCHY: u32 = 0;
+    /// [`abbe_ior`](super::abbe_ior) (KHR_materials_dispersion): `ior` = `n_d` at the d
+    /// line (587.56 nm), `dispersion` = the Abbe number `V_d`.
+    pub const ABBE: u32 = 1;
+}
+
+/// KHR_materials_dispersion's `1 / (lambda_F^-2 - lambda_C^-2)` (its 523655 nm^2), in
+/// um^2: the Cauchy `B` of a glass is `(n_d - 1) / V_d` times this.
+pub const KHR_DISPERSION_B_UM2: f32 = 0.523655;
+
+/// KHR_materials_dispersion's `KHR_DISPERSION_B_UM2 / lambda_d^2` (its 1.5168), so that
+/// [`abbe_ior`] is `n_d` at the d line.
+pub const KHR_DISPERSION_D_TERM: f32 = 1.5168;
+
+/// The index at `wavelength_um` (micrometres) of a glass with index `ior_d` at the d line
+/// (587.56 nm) and Abbe number `abbe_number` (`V_d = (n_d - 1) / (n_F - n_C)`), as the
+/// KHR_materials_dispersion specification defines it: the first two terms of Cauchy's
+/// equation through `n_d`, `n_F` and `n_C`,
+/// `n(lambda) = max(n_d + (n_d - 1) / V_d * (523655 nm^2 / lambda^2 - 1.5168), 1)`.
+/// `abbe_number` > 0 (validation); `ior_d` >= 1.
+#[inline]
+pub fn abbe_ior(ior_d: f32, abbe_number: f32, wavelength_um: f32) -> f32 {
+    let n = ior_d
+        + (ior_d - 1.0) / abbe_number
+            * (KHR_DISPERSION_B_UM2 / (wavelength_um * wavelength_um) - KHR_DISPERSION_D_TERM);
+    n.max(1.0)
+}
+
+/// The index at `wavelength_um` (micrometres) of a dispersive dielectric of nominal index
+/// `ior`, dispersion parameter `dispersion` and model `model` (one of [`ior_model`]; any
+/// other value means Cauchy): [`abbe_ior`] or [`cauchy_ior`].
+#[inline]
+pub fn dispersive_ior(ior: f32, dispersion: f32, model: u32, wavelength_um: f32) -> f32 {
+    if model == ior_model::ABBE {
+        abbe_ior(ior, dispersion, wavelength_um)
+    } else {
+        cauchy_ior(ior, dispersion, wavelength_um)
+    }
+}
+
 /// Outcome of a photon meeting a smooth dielectric.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DielectricScatter {
@@ -310,6 +356,29 @@ mod tests {
         assert_eq!(cauchy_ior(1.5, 0.0, 0.45), 1.5);
         assert!((cauchy_ior(1.5, 0.01, 0.55) - 1.5).abs() < 1e-6);
         assert!(cauchy_ior(1.5, 0.01, 0.45) > cauchy_ior(1.5, 0.01, 0.65));
+    }
+
+    #[test]
+    fn abbe_model_is_the_khr_formula() {
+        // BK7: n_d 1.5168, V_d 64.17, so n_F - n_C = 0.5168 / 64.17 = 0.008054 (the
+        // definition of V_d holds for the formula by construction, to its 4-5 digits)
+        let (nd, v) = (1.5168f32, 64.17f32);
+        let (f, d, c) = (0.48613f32, 0.58756f32, 0.65627f32);
+        assert!((abbe_ior(nd, v, d) - nd).abs() < 2e-5);
+        let spread = abbe_ior(nd, v, f) - abbe_ior(nd, v, c);
+        assert!((spread - (nd - 1.0) / v).abs() < 2e-5, "{spread}");
+        // the clamp: never below 1
+        assert_eq!(abbe_ior(1.0, 1e-3, 0.78), 1.0);
+        assert!(abbe_ior(1.05, 0.01, 0.78) >= 1.0);
+        // the model switch
+        assert_eq!(
+            dispersive_ior(1.5, 0.01, ior_model::CAUCHY, 0.45),
+            cauchy_ior(1.5, 0.01, 0.45)
+        );
+        assert_eq!(
+            dispersive_ior(1.5, 40.0, ior_model::ABBE, 0.45),
+            abbe_ior(1.5, 40.0, 0.45)
+        );
     }
 
     #[test]

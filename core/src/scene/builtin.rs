@@ -73,6 +73,7 @@ fn glass(ior: f32) -> Material {
         ior,
         cauchy_b: 0.0,
         absorption: Vec3::ZERO,
+        ior_model: Default::default(),
     }
 }
 
@@ -381,12 +382,14 @@ pub fn prism_beam_direction() -> Vec3 {
 /// `prism`: Newton's experiment in a dark room 1.9 x 1.8 x 1.4, open at the front.
 /// A collimated beam ([`prism_beam_direction`], irradiance 4) passes a slit 0.04 x 0.7
 /// (centre y = 0.7, along z) in the left wall (x = -0.4) and meets a dispersive flint
-/// prism (IOR 1.5 at 550 nm, Cauchy B = 0.04 um^2, so 1.462, 1.5 and 1.565 at the
-/// channels' 650, 550 and 450 nm; equilateral, side 0.6, length 1, axis along z, centred
-/// at (0, 0.7, 0), apex up). Each channel leaves at its own angle (15.4, 18.6 and 24.6 deg
-/// below the horizontal) and lands on the white screen that is the right wall (x = 1.5) as
-/// its own band, red highest: three separated bands 0.7 long and 0.04 tall at heights
-/// 0.42, 0.33 and 0.17. The beam's photons start over a box around the slit (the light's
+/// prism (IOR 1.5 at 550 nm, Cauchy B = 0.04 um^2, so 1.645, 1.565, 1.5, 1.462 and 1.434
+/// at 380, 450, 550, 650 and 780 nm; equilateral, side 0.6, length 1, axis along z,
+/// centred at (0, 0.7, 0), apex up). Each wavelength leaves at its own angle (24.6, 18.6
+/// and 15.4 deg below the horizontal at 450, 550 and 650 nm) and lands on the white screen
+/// that is the right wall (x = 1.5): a continuous spectrum 0.7 long, red highest (650 nm
+/// at height 0.42, 550 nm at 0.33, 450 nm at 0.17), whose deepest violet (below about
+/// 400 nm) passes under the screen onto the floor. With `frame.dispersion` three bands it
+/// is three separated bands 0.04 tall at those three heights. The beam's photons start over a box around the slit (the light's
 /// projection volume); the wall shades the room from the rest of the light. A dim room
 /// light under the ceiling (y = 1.4; point, 1 W/sr at (0.8, 1.3, -0.6), behind the prism
 /// so that its shadow falls away from the view) lights the floor, the walls and the
@@ -411,7 +414,7 @@ pub fn prism() -> Scene {
     };
     Scene {
         name: "prism".into(),
-        description: "Dispersive prism (Cauchy B 0.04) in a dark room: a beam through a slit lands on the screen as three separated bands, red, green and blue, one per dispersion channel (650, 550, 450 nm)".into(),
+        description: "Dispersive prism (Cauchy B 0.04) in a dark room: a beam through a slit lands on the screen as a continuous spectrum, red highest (three separated bands at 650, 550 and 450 nm with the three-band split)".into(),
         camera: camera(Vec3::new(0.3, 1.05, 2.0), Vec3::new(0.7, 0.55, -0.1), 50.0),
         materials: BTreeMap::from([
             ("white".into(), diffuse(0.8)),
@@ -422,6 +425,7 @@ pub fn prism() -> Scene {
                     ior: 1.5,
                     cauchy_b: 0.04,
                     absorption: Vec3::ZERO,
+                    ior_model: Default::default(),
                 },
             ),
         ]),
@@ -522,6 +526,7 @@ pub fn jelly() -> Scene {
                     ior: 1.35,
                     cauchy_b: 0.0,
                     absorption: Vec3::new(0.2, 2.5, 3.5),
+                    ior_model: Default::default(),
                 },
             ),
         ]),

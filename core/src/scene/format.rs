@@ -321,6 +321,51 @@ mod tests {
     }
 
     #[test]
+    fn dielectrics_without_ior_model_are_cauchy_and_abbe_reads() {
+        use crate::scene::{IorModel, Material};
+        let mut text = to_json(&builtin("prism").unwrap());
+        assert!(
+            !text.contains("ior_model"),
+            "Cauchy, the default, is not written"
+        );
+        let s = parse_scene(&text, "p.json").unwrap();
+        let flint = |s: &crate::scene::Scene| s.materials["flint"].clone();
+        assert!(matches!(
+            flint(&s),
+            Material::Dielectric {
+                ior_model: IorModel::Cauchy,
+                ..
+            }
+        ));
+        text = text.replace(
+            "\"cauchy_b\": 0.04",
+            "\"ior_model\": {\"type\": \"abbe\", \"abbe_number\": 30.0}",
+        );
+        let s = parse_scene(&text, "p.json").unwrap();
+        assert_eq!(
+            flint(&s),
+            Material::Dielectric {
+                ior: 1.5,
+                cauchy_b: 0.0,
+                absorption: glam::Vec3::ZERO,
+                ior_model: IorModel::Abbe { abbe_number: 30.0 },
+            }
+        );
+        assert!(s.materials["flint"].is_dispersive());
+        assert_eq!(parse_scene(&to_json(&s), "p.json").unwrap(), s);
+        // an unknown field of the model, and a bad Abbe number, are located errors
+        let bad = text.replace("\"abbe_number\": 30.0", "\"abbe_numbr\": 30.0");
+        let e = parse_scene(&bad, "p.json").unwrap_err();
+        assert!(e.reason.contains("abbe_numbr"), "{e}");
+        let bad = text.replace("\"abbe_number\": 30.0", "\"abbe_number\": -2.0");
+        let e = parse_scene(&bad, "p.json").unwrap_err();
+        assert!(
+            e.reason.contains("materials.flint.ior_model.abbe_number"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn negative_ior_names_its_line() {
         let mut text = to_json(&builtin("sphere").unwrap());
         text = text.replace("\"ior\": 1.5", "\"ior\": -1.5");

@@ -141,21 +141,55 @@ pub enum Material {
         /// Reflectance per channel, in [0, 1].
         reflectance: Vec3,
     },
-    /// Smooth dielectric interface (glass, water). `ior` is the index of refraction at
-    /// 550 nm relative to the surrounding medium (vacuum/air = 1); `cauchy_b` (um^2) makes
-    /// it dispersive, `n(lambda) = A + B / lambda^2` with `A = ior - B / 0.55^2`;
-    /// `absorption` is the Beer-Lambert coefficient per channel per scene unit inside
-    /// the object.
+    /// Smooth dielectric interface (glass, water). `ior` is the index of refraction
+    /// relative to the surrounding medium (vacuum/air = 1) at the reference wavelength of
+    /// `ior_model`; `ior_model` says how it varies with wavelength: Cauchy's
+    /// `n(lambda) = A + B / lambda^2` with `B = cauchy_b` (um^2) and `A = ior - B / 0.55^2`
+    /// (the default), or the Abbe number of KHR_materials_dispersion ([`IorModel`]);
+    /// `absorption` is the Beer-Lambert coefficient per channel per scene unit inside the
+    /// object.
     Dielectric {
-        /// Index of refraction at 550 nm relative to the surrounding medium (> 0).
+        /// Index of refraction relative to the surrounding medium (> 0): at 550 nm under
+        /// the Cauchy model, at the d line (587.56 nm, `n_d`) under the Abbe model.
         ior: f32,
-        /// Cauchy coefficient `B` (um^2); 0 (the default) means no dispersion.
+        /// Cauchy coefficient `B` (um^2) of the Cauchy model; 0 (the default) means no
+        /// dispersion. Must be 0 under the Abbe model.
         #[serde(default, skip_serializing_if = "is_zero")]
         cauchy_b: f32,
         /// Beer-Lambert absorption coefficient per channel (1/scene unit, >= 0; default 0).
         #[serde(default, skip_serializing_if = "is_zero3")]
         absorption: Vec3,
+        /// How the index varies with wavelength (default Cauchy, with `cauchy_b`).
+        #[serde(default, skip_serializing_if = "IorModel::is_cauchy")]
+        ior_model: IorModel,
     },
+}
+
+/// How a dielectric's index of refraction varies with wavelength (`ior_model` of
+/// [`Material::Dielectric`]; JSON `{"type": "cauchy"}` or
+/// `{"type": "abbe", "abbe_number": 64.2}`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum IorModel {
+    /// Cauchy's equation `n(lambda) = A + B / lambda^2` (Vanderstichelen 2021), `ior` at
+    /// 550 nm and `B` = `cauchy_b` ([`crate::math::optics::cauchy_ior`]).
+    #[default]
+    Cauchy,
+    /// The Abbe-number model of KHR_materials_dispersion: `ior` is `n_d` at 587.56 nm and
+    /// `n(lambda) = max(n_d + (n_d - 1) / V_d (523655 nm^2 / lambda^2 - 1.5168), 1)`
+    /// ([`crate::math::optics::abbe_ior`]). glTF's `dispersion` is `20 / V_d`.
+    Abbe {
+        /// The Abbe number `V_d = (n_d - 1) / (n_F - n_C)` (> 0; crown glass ~60, flint
+        /// ~30, rutile 9.8).
+        abbe_number: f32,
+    },
+}
+
+impl IorModel {
+    /// True for the default (Cauchy) model.
+    pub fn is_cauchy(&self) -> bool {
+        *self == IorModel::Cauchy
+    }
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -169,6 +203,19 @@ impl Material {
     /// True for mirrors and dielectrics (surfaces that cast caustics).
     pub fn is_specular(&self) -> bool {
         !matches!(self, Material::Diffuse { .. })
+    }
+
+    /// True for a dielectric whose index varies with wavelength: a Cauchy `cauchy_b` other
+    /// than 0, or the Abbe model.
+    pub fn is_dispersive(&self) -> bool {
+        match self {
+            Material::Dielectric {
+                cauchy_b,
+                ior_model,
+                ..
+            } => *cauchy_b != 0.0 || !ior_model.is_cauchy(),
+            _ => false,
+        }
     }
 }
 

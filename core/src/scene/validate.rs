@@ -5,7 +5,7 @@ use super::limits::{
     MAX_COORDINATE, MAX_INTENSITY, MAX_IOR, MAX_LENGTH, MAX_LIGHTS, MIN_EXTENT_PER_POSITION,
     MIN_IOR, MIN_LENGTH,
 };
-use super::{Light, Material, Scene, Shape};
+use super::{IorModel, Light, Material, Scene, Shape};
 use glam::{Vec2, Vec3};
 
 /// One thing wrong with a scene: `path` names the field (`objects[2].shape.radius`),
@@ -183,6 +183,7 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                 ior,
                 cauchy_b,
                 absorption,
+                ior_model,
             } => {
                 if c.finite(&format!("{p}.ior"), *ior) && !(MIN_IOR..=MAX_IOR).contains(ior) {
                     c.fail(
@@ -193,19 +194,69 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                         ),
                     );
                 }
-                if c.finite(&format!("{p}.cauchy_b"), *cauchy_b) {
-                    // n must stay positive over the visible channels
-                    for wl in crate::math::optics::CHANNEL_WAVELENGTH_UM {
-                        let n = crate::math::optics::cauchy_ior(*ior, *cauchy_b, wl);
-                        if !(MIN_IOR..=MAX_IOR).contains(&n) {
+                // n must stay in range over the sampled spectrum (n is monotonic in the
+                // wavelength under both models, so its ends bound it)
+                let ends = [
+                    crate::math::spectrum::SPECTRUM_MIN_UM,
+                    crate::math::spectrum::SPECTRUM_MAX_UM,
+                ];
+                match ior_model {
+                    IorModel::Cauchy => {
+                        if c.finite(&format!("{p}.cauchy_b"), *cauchy_b) && ior.is_finite() {
+                            for wl in ends {
+                                let n = crate::math::optics::cauchy_ior(*ior, *cauchy_b, wl);
+                                if !(MIN_IOR..=MAX_IOR).contains(&n) {
+                                    c.fail(
+                                        format!("{p}.cauchy_b"),
+                                        format!(
+                                            "makes the index {n:e} at {wl} um, outside \
+                                             [{MIN_IOR:e}, {MAX_IOR:e}]"
+                                        ),
+                                    );
+                                    break;
+                                }
+                            }
+                        }
+                    }
+                    IorModel::Abbe { abbe_number } => {
+                        let at = format!("{p}.ior_model.abbe_number");
+                        if *cauchy_b != 0.0 {
                             c.fail(
                                 format!("{p}.cauchy_b"),
+                                "must be 0 under the Abbe model (the Abbe number sets the \
+                                 dispersion)",
+                            );
+                        }
+                        if ior.is_finite() && *ior < 1.0 {
+                            c.fail(
+                                format!("{p}.ior"),
                                 format!(
-                                    "makes the index {n:e} at {wl} um, outside \
-                                     [{MIN_IOR:e}, {MAX_IOR:e}]"
+                                    "the Abbe model needs n_d >= 1 (KHR_materials_dispersion), \
+                                     got {ior:e}"
                                 ),
                             );
-                            break;
+                        }
+                        if c.finite(&at, *abbe_number) {
+                            if *abbe_number <= 0.0 {
+                                c.fail(
+                                    at,
+                                    format!("must be > 0 (glTF dispersion 20 / V_d), got {abbe_number:e}"),
+                                );
+                            } else if ior.is_finite() {
+                                for wl in ends {
+                                    let n = crate::math::optics::abbe_ior(*ior, *abbe_number, wl);
+                                    if !(MIN_IOR..=MAX_IOR).contains(&n) {
+                                        c.fail(
+                                            at,
+                                            format!(
+                                                "makes the index {n:e} at {wl} um, outside \
+                                                 [{MIN_IOR:e}, {MAX_IOR:e}]"
+                                            ),
+                                        );
+                                        break;
+                                    }
+                                }
+                            }
                         }
                     }
                 }

@@ -92,6 +92,65 @@ const FRESNEL_EXACT: u32 = 0u;
 const FRESNEL_SCHLICK: u32 = 1u;
 const REFERENCE_WAVELENGTH_UM: f32 = 0.55f;
 const RADIANCE_MAX: f32 = 3.4028235e38f;
+const KHR_DISPERSION_B_UM2: f32 = 0.523655f;
+const KHR_DISPERSION_D_TERM: f32 = 1.5168f;
+
+// core::math::optics::ior_model
+const IOR_MODEL_CAUCHY: u32 = 0u;
+const IOR_MODEL_ABBE: u32 = 1u;
+
+// core::math::spectrum
+const SPECTRUM_MIN_UM: f32 = 0.38f;
+const SPECTRUM_WIDTH_UM: f32 = 0.4f;
+const SPECTRUM_MAX_UM: f32 = 0.78f;
+const WAVELENGTH_STEP: u32 = 0x9e3779b9u;
+const ONE_THIRD: f32 = 0.33333334f;
+const DISPERSION_SPECTRAL: u32 = 0u;
+const DISPERSION_THREE_BANDS: u32 = 1u;
+
+// core::math::spectrum::CIE_X_LOBES, CIE_Y_LOBES, CIE_Z_LOBES (Wyman 2013's fit: weight, mean in nm, 1/sigma below and from the mean)
+const CIE_X0_WEIGHT: f32 = 0.362f;
+const CIE_X0_MEAN_NM: f32 = 442.0f;
+const CIE_X0_INV_SIGMA_BELOW: f32 = 0.0624f;
+const CIE_X0_INV_SIGMA_ABOVE: f32 = 0.0374f;
+const CIE_X1_WEIGHT: f32 = 1.056f;
+const CIE_X1_MEAN_NM: f32 = 599.8f;
+const CIE_X1_INV_SIGMA_BELOW: f32 = 0.0264f;
+const CIE_X1_INV_SIGMA_ABOVE: f32 = 0.0323f;
+const CIE_X2_WEIGHT: f32 = -0.065f;
+const CIE_X2_MEAN_NM: f32 = 501.1f;
+const CIE_X2_INV_SIGMA_BELOW: f32 = 0.049f;
+const CIE_X2_INV_SIGMA_ABOVE: f32 = 0.0382f;
+const CIE_Y0_WEIGHT: f32 = 0.821f;
+const CIE_Y0_MEAN_NM: f32 = 568.8f;
+const CIE_Y0_INV_SIGMA_BELOW: f32 = 0.0213f;
+const CIE_Y0_INV_SIGMA_ABOVE: f32 = 0.0247f;
+const CIE_Y1_WEIGHT: f32 = 0.286f;
+const CIE_Y1_MEAN_NM: f32 = 530.9f;
+const CIE_Y1_INV_SIGMA_BELOW: f32 = 0.0613f;
+const CIE_Y1_INV_SIGMA_ABOVE: f32 = 0.0322f;
+const CIE_Z0_WEIGHT: f32 = 1.217f;
+const CIE_Z0_MEAN_NM: f32 = 437.0f;
+const CIE_Z0_INV_SIGMA_BELOW: f32 = 0.0845f;
+const CIE_Z0_INV_SIGMA_ABOVE: f32 = 0.0278f;
+const CIE_Z1_WEIGHT: f32 = 0.681f;
+const CIE_Z1_MEAN_NM: f32 = 459.0f;
+const CIE_Z1_INV_SIGMA_BELOW: f32 = 0.0385f;
+const CIE_Z1_INV_SIGMA_ABOVE: f32 = 0.0725f;
+
+// core::math::spectrum::XYZ_TO_LINEAR_SRGB (row, column) and SPECTRAL_RGB_SCALE
+const XYZ_TO_SRGB_00: f32 = 3.2406f;
+const XYZ_TO_SRGB_01: f32 = -1.5372f;
+const XYZ_TO_SRGB_02: f32 = -0.4986f;
+const XYZ_TO_SRGB_10: f32 = -0.9689f;
+const XYZ_TO_SRGB_11: f32 = 1.8758f;
+const XYZ_TO_SRGB_12: f32 = 0.0415f;
+const XYZ_TO_SRGB_20: f32 = 0.0557f;
+const XYZ_TO_SRGB_21: f32 = -0.204f;
+const XYZ_TO_SRGB_22: f32 = 1.057f;
+const SPECTRAL_RGB_SCALE_R: f32 = 2.2722244f;
+const SPECTRAL_RGB_SCALE_G: f32 = 3.4646618f;
+const SPECTRAL_RGB_SCALE_B: f32 = 3.660385f;
 
 // core::math::geometry
 const OFFSET_REL: f32 = 3.0517578e-5f;
@@ -165,8 +224,8 @@ struct GpuTriangle {
 struct GpuMaterial {
     kind: u32, // 0
     ior: f32, // 4
-    cauchy_b: f32, // 8
-    _pad: u32, // 12
+    dispersion: f32, // 8
+    ior_model: u32, // 12
     color: vec4<f32>, // 16
     absorption: vec4<f32>, // 32
 }
@@ -243,8 +302,8 @@ struct TraceParams {
     caster_sphere_count: u32, // 124
     jitter_seed: u32, // 128
     stratum: u32, // 132
-    _pad0: u32, // 136
-    _pad1: u32, // 140
+    dispersion_mode: u32, // 136
+    _pad: u32, // 140
     caster_spheres: array<vec4<f32>, MAX_CASTER_SPHERES>, // 144
 }
 
@@ -391,8 +450,8 @@ struct IndirectTraceParams {
     fresnel_model: u32, // 92
     power_scale: f32, // 96
     flux_quantum: f32, // 100
-    _pad0: u32, // 104
-    _pad1: u32, // 108
+    dispersion_mode: u32, // 104
+    _pad: u32, // 108
 }
 
 // core::device::layout::SplatParams, 128 bytes

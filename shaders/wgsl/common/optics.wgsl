@@ -69,6 +69,21 @@ fn cauchy_ior(ior: f32, cauchy_b: f32, wavelength_um: f32) -> f32 {
     return a + cauchy_b / (wavelength_um * wavelength_um);
 }
 
+// KHR_materials_dispersion's index from n_d and the Abbe number (core: optics::abbe_ior).
+fn abbe_ior(ior_d: f32, abbe_number: f32, wavelength_um: f32) -> f32 {
+    let n = ior_d + (ior_d - 1.0) / abbe_number
+        * (KHR_DISPERSION_B_UM2 / (wavelength_um * wavelength_um) - KHR_DISPERSION_D_TERM);
+    return max(n, 1.0);
+}
+
+// The index of a dispersive dielectric under its model (core: optics::dispersive_ior).
+fn dispersive_ior(ior: f32, dispersion: f32, model: u32, wavelength_um: f32) -> f32 {
+    if (model == IOR_MODEL_ABBE) {
+        return abbe_ior(ior, dispersion, wavelength_um);
+    }
+    return cauchy_ior(ior, dispersion, wavelength_um);
+}
+
 // Reflects with probability = Fresnel reflectance of `model` (`xi` uniform in [0, 1)),
 // else refracts.
 fn dielectric_scatter(incident: vec3<f32>, shading_normal: vec3<f32>, entering: bool, ior: f32,

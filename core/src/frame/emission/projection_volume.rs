@@ -98,7 +98,9 @@ impl EmissionDomain {
             // a frame on its own: jitter from its seed (an accumulation sets its stratum)
             jitter_seed: seed,
             stratum: 0,
-            _pad: [0; 2],
+            // spectral, the default (a technique sets its `frame.dispersion`)
+            dispersion_mode: crate::math::spectrum::dispersion_mode::SPECTRAL,
+            _pad: 0,
             caster_spheres: [[0.0; 4]; crate::device::layout::MAX_CASTER_SPHERES],
         }
     }

@@ -19,8 +19,9 @@ pub struct ViewPlanes {
     /// Lights that emit nothing, and why.
     pub skipped_lights: Vec<(u32, NoEmission)>,
     /// Flux per fixed-point unit (W), a power of two: the brightest photon (a plane's
-    /// centre texel, x3 where a dispersive material can concentrate it into one channel)
-    /// is 2^24 to 2^25 units.
+    /// centre texel, times the gain of a dispersive surface,
+    /// [`Dispersion::flux_gain`](crate::frame::settings::Dispersion::flux_gain)) is 2^24
+    /// to 2^25 units.
     pub flux_quantum: f32,
     /// Hit distance per fixed-point unit (scene units): the scene diagonal is 2^24 to
     /// 2^25 units.
@@ -68,7 +69,10 @@ impl ViewPlanes {
                 Err(why) => skipped_lights.push((i as u32, why)),
             }
         }
-        let flux_quantum = Self::quantum_for(&planes, has_dispersion, |p| p.resolution);
+        let flux_quantum =
+            Self::quantum_for(&planes, frame.dispersion.flux_gain(has_dispersion), |p| {
+                p.resolution
+            });
         ViewPlanes {
             planes,
             skipped_lights,
@@ -103,14 +107,15 @@ impl ViewPlanes {
     }
 
     /// The flux quantum for photons of `planes` shot on grids of `resolution(plane)`
-    /// texels: the brightest photon (a centre texel's, x3 with dispersion) is 2^24 to
-    /// 2^25 units.
+    /// texels: the brightest photon (a centre texel's, times `dispersion_gain`,
+    /// [`Dispersion::flux_gain`](crate::frame::settings::Dispersion::flux_gain)) is 2^24
+    /// to 2^25 units.
     pub fn quantum_for(
         planes: &[(u32, u32, LightViewPlane)],
-        has_dispersion: bool,
+        dispersion_gain: f32,
         resolution: impl Fn(&LightViewPlane) -> (u32, u32),
     ) -> f32 {
-        let gain = if has_dispersion { 3.0 } else { 1.0 };
+        let gain = dispersion_gain;
         let max_photon_flux = planes
             .iter()
             .map(|(_, _, p)| {

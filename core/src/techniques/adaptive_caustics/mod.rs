@@ -95,7 +95,11 @@ fn view_planes(host: &FrameHost, s: &AdaptiveCausticsSettings) -> Result<ViewPla
         &s.frame,
         &s.planes,
     );
-    fit_planes(&mut planes, &s.traversal(), g.has_dispersion);
+    fit_planes(
+        &mut planes,
+        &s.traversal(),
+        s.frame.dispersion.flux_gain(g.has_dispersion),
+    );
     planes.check_light_flux()?;
     Ok(planes)
 }
@@ -131,6 +135,7 @@ impl AdaptiveCausticsPipeline {
             max_bounces: s.trace.max_bounces,
             min_relative_power: s.trace.min_relative_power,
             fresnel_model: s.planes.fresnel.kernel_value(),
+            dispersion_mode: s.frame.dispersion.kernel_value(),
             caster_spheres: self.planes.caster_spheres,
         };
         let total: u64 = self.planes.planes.iter().map(|(_, _, p)| p.texels()).sum();

@@ -328,6 +328,8 @@ pub struct PhotonOptics {
     pub min_relative_power: f32,
     /// `fresnel_model` of the kernels.
     pub fresnel_model: u32,
+    /// `dispersion_mode` of the kernels (`frame.dispersion`).
+    pub dispersion_mode: u32,
     /// The casters' balls its first segment is tested against
     /// ([`crate::device::caster_spheres`]).
     pub caster_spheres: crate::device::caster_spheres::CasterSpheres,
@@ -814,6 +816,7 @@ impl Traversal {
                 variant,
                 params: TraceParams {
                     fresnel_model: optics.fresnel_model,
+                    dispersion_mode: optics.dispersion_mode,
                     caster_sphere_count: optics.caster_spheres.count,
                     caster_spheres: optics.caster_spheres.spheres,
                     ..at_level.trace_params(
@@ -902,7 +905,7 @@ impl Traversal {
 /// `photons_w` exactly, a cube face's `photons_w / sqrt 6` rounded to the pyramid), and
 /// the flux quantum follows the coarsest photons that can be output (the error metric's
 /// first level, else the finest), so that they cannot saturate the fixed point.
-pub fn fit_planes(emission: &mut ViewPlanes, s: &TraversalSettings, dispersion: bool) {
+pub fn fit_planes(emission: &mut ViewPlanes, s: &TraversalSettings, dispersion_gain: f32) {
     let start = s.start_grid;
     for (_, _, p) in &mut emission.planes {
         let ratio = (p.resolution.0.max(1) as f64 / start as f64).max(1.0);
@@ -917,7 +920,8 @@ pub fn fit_planes(emission: &mut ViewPlanes, s: &TraversalSettings, dispersion: 
         };
         (start << level, start << level)
     };
-    emission.flux_quantum = ViewPlanes::quantum_for(&emission.planes, dispersion, coarsest_output);
+    emission.flux_quantum =
+        ViewPlanes::quantum_for(&emission.planes, dispersion_gain, coarsest_output);
 }
 
 /// A rectangle no cluster overlaps.

@@ -241,6 +241,7 @@ impl CausticMapPipeline {
                     params: TraceParams {
                         split_budget: s.planes.split_budget,
                         fresnel_model: s.planes.fresnel.kernel_value(),
+                        dispersion_mode: s.frame.dispersion.kernel_value(),
                         // the passes of an accumulation stratify each grid cell together
                         jitter_seed: ViewPlanes::plane_seed(s.frame.seed, *light, *k),
                         stratum: self.receiver.pass_index(),

@@ -447,7 +447,8 @@ impl PhotonGiPipeline {
             fresnel_model: self.settings.fresnel_model,
             power_scale: self.photons.power_scale,
             flux_quantum: self.photons.flux_quantum,
-            _pad: [0; 2],
+            dispersion_mode: self.settings.frame.dispersion.kernel_value(),
+            _pad: 0,
         }
     }
 

@@ -25,12 +25,11 @@ pub struct FrameConstants {
     /// Lights in `domains` that emit their whole domain only because pruning is off.
     pub unpruned: Vec<u32>,
     /// Flux of the brightest photon the frame can store (W, one channel): the largest
-    /// per-photon emitted flux, x3 when a dispersive material can concentrate a photon
-    /// into one channel.
+    /// per-photon emitted flux, times the gain of a dispersive surface
+    /// ([`Dispersion::flux_gain`](crate::frame::settings::Dispersion::flux_gain)).
     pub max_photon_flux: f32,
     /// Flux per fixed-point unit (W), a power of two: the brightest photon of the frame
-    /// (x3 when a dispersive material can concentrate a photon into one channel) is
-    /// 2^24 to 2^25 units.
+    /// (with the gain of a dispersive surface) is 2^24 to 2^25 units.
     pub flux_quantum: f32,
     /// Hit distance per fixed-point unit (scene units), a power of two: the scene diagonal
     /// is 2^24 to 2^25 units.
@@ -101,7 +100,7 @@ impl FrameConstants {
             }
         }
         let photons_per_light = settings.frame.photons_w as f32 * settings.frame.photons_h as f32;
-        let dispersion_gain = if has_dispersion { 3.0 } else { 1.0 };
+        let dispersion_gain = settings.frame.dispersion.flux_gain(has_dispersion);
         // Lights that emit only because pruning is off store no photon (that is why the
         // plan prunes them), so the quantum ignores them and stays the pruned frame's:
         // pruning on and off give the same fixed-point sums.
@@ -159,6 +158,7 @@ impl FrameConstants {
             self.flux_quantum,
         );
         self.caster_spheres.apply(&mut p);
+        p.dispersion_mode = settings.frame.dispersion.kernel_value();
         p
     }
 

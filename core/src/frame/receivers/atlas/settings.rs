@@ -11,16 +11,18 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 pub enum FresnelSplit {
     /// Vanderstichelen 2021's intensity split: both the reflected (flux x R) and the refracted (x 1 - R)
-    /// branch are traced, and the first dispersive surface sends three one-channel
-    /// branches, up to `split_budget` branches per photon (the stochastic choice beyond).
+    /// branch are traced, and the first dispersive surface sends three branches (three
+    /// wavelengths stratified over the spectrum, or with `frame.dispersion` three bands
+    /// one colour channel each), up to `split_budget` branches per photon (the stochastic
+    /// choice beyond).
     /// It takes the noise of the Fresnel and channel choices out of the map (on the CPU,
     /// `docs/report-caustic-map`: about 8x less variance at the same photon count, for
     /// about 3x the time), but on the H200 it costs 3 to 6x the trace time (10 to 44 ms
     /// against 3 to 8 ms for 2048^2 photons, H200, 2026-12-01, `docs/caustic-map.md`):
     /// for offline quality, not the real-time default.
     Deterministic,
-    /// Sspm's: reflect with probability R, else refract, flux kept; one channel (x3) per
-    /// photon at the first dispersive surface. One stored photon per emitted photon, the
+    /// Sspm's: reflect with probability R, else refract, flux kept; one wavelength (or,
+    /// with three bands, one channel x3) per photon at the first dispersive surface. One stored photon per emitted photon, the
     /// same expectation as the split. The default, for the real-time budget (see above).
     #[default]
     Stochastic,
