@@ -1,6 +1,9 @@
 //! Optics shared by every backend: reflection, refraction, Fresnel, Beer-Lambert
-//! absorption and Cauchy dispersion (Vanderstichelen 2021, "the material model shared by all
-//! techniques"). Shader ports mirror these functions by name.
+//! absorption and the index of a dispersive dielectric against wavelength, Cauchy's
+//! (Vanderstichelen 2021, "the material model shared by all techniques") or
+//! KHR_materials_dispersion's Abbe-number model (`ior_model`); what wavelength a photon
+//! takes is `math::spectrum`'s. Wavelengths in micrometres. Shader ports mirror these
+//! functions by name.
 //!
 //! Conventions: directions are unit vectors in world space; `incident` points *towards*
 //! the surface (the direction the light travels); `normal` is a unit normal on the side
@@ -100,7 +103,8 @@ pub fn beer_lambert(sigma_a: Vec3, distance: f32) -> Vec3 {
     )
 }
 
-/// Wavelength in micrometres that represents each RGB channel for dispersion.
+/// Wavelength in micrometres that represents each RGB channel under the three-way split
+/// (`frame.dispersion` three bands, Vanderstichelen 2021): red, green, blue.
 pub const CHANNEL_WAVELENGTH_UM: [f32; 3] = [0.65, 0.55, 0.45];
 
 /// Reference wavelength (micrometres) at which a material's nominal `ior` is given.
