@@ -260,6 +260,13 @@ pub trait KernelDecl {
     fn scene(&self) -> Option<&SceneArgs> {
         None
     }
+
+    /// The bytes of the kernel's parameter block, for kernels whose parameters may come
+    /// partly from the device ([`crate::device::launch::ParamPatch`]; `None`: they may
+    /// not).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        None
+    }
 }
 
 /// The launch arguments of one kernel under construction, checked against its declaration:
@@ -487,6 +494,14 @@ macro_rules! kernel_list {
                     $(Kernel::$variant(k) => KernelDecl::scene(k),)*
                 }
             }
+
+            /// The bytes of the kernel's parameter block where its parameters may come
+            /// partly from the device ([`KernelDecl::params_mut`]).
+            pub fn params_mut(&mut self) -> Option<&mut [u8]> {
+                match self {
+                    $(Kernel::$variant(k) => KernelDecl::params_mut(k),)*
+                }
+            }
         }
     };
 }
@@ -610,6 +625,7 @@ impl Kernel {
             workgroup_size: info.workgroup_size,
             args: a.args,
             indirect: a.indirect,
+            patches: Vec::new(),
         }))
     }
 }

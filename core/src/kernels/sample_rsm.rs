@@ -40,6 +40,11 @@ const BINDINGS: &[Binding] = &[
 impl KernelDecl for SampleRsm {
     const INFO: KernelInfo = KernelInfo::compute("sample_rsm", BINDINGS, "PhotonGi");
 
+    /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        Some(bytemuck::bytes_of_mut(&mut self.params))
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         if !p.side.is_power_of_two() || p.face_count == 0 || p.face_count > 6 {

@@ -71,6 +71,11 @@ const BINDINGS: [Binding; 16] = with_scene([
 impl KernelDecl for TraceIndirect {
     const INFO: KernelInfo = KernelInfo::traced("trace_indirect", &BINDINGS, &[], "PhotonGi");
 
+    /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        Some(bytemuck::bytes_of_mut(&mut self.params))
+    }
+
     fn scene(&self) -> Option<&SceneArgs> {
         Some(&self.scene)
     }
