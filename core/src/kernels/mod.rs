@@ -35,6 +35,7 @@ mod refine_clusters;
 mod resolve_caustics;
 mod rsm_importance;
 mod sample_rsm;
+mod select_photon_plan;
 mod shading_normal_correction;
 mod splat_photons;
 mod temporal_blend;
@@ -59,6 +60,7 @@ pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
 pub use rsm_importance::RsmImportance;
 pub use sample_rsm::SampleRsm;
+pub use select_photon_plan::SelectPhotonPlan;
 pub use shading_normal_correction::ShadingNormalCorrection;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
@@ -537,6 +539,7 @@ macro_rules! with_kernels {
             TraceIndirect => trace_indirect,
             SplatPhotons => splat_photons,
             ShadingNormalCorrection => shading_normal_correction,
+            SelectPhotonPlan => select_photon_plan,
         }
     };
 }
@@ -576,6 +579,7 @@ macro_rules! with_shader_kernels {
             sample_rsm,
             trace_indirect,
             splat_photons,
+            select_photon_plan,
         }
     };
 }
