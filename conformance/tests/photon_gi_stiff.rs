@@ -3,9 +3,9 @@
 //!
 //! - **A light whose RSM sees nothing** (a spot aimed into empty space beside the room):
 //!   its RSM, rendered in the first frame before the device selects the photon plan, has
-//!   no texel that leaves flux, so it gets no
-//!   photon (none could carry any) and the plan says so; the room's light gets the whole
-//!   budget and the frame stays finite.
+//!   no texel that leaves flux, so it gets no photon (none could carry any) and the plan
+//!   read back says so; the room's light gets the whole budget and the frame stays
+//!   finite.
 //! - **Albedo-1 walls** (a closed white box of albedo exactly 1): Jensen's roulette never
 //!   ends a path there (survival `max(flux x 1) / max(flux) = 1`), so every path must end
 //!   by the bounce limit, none by roulette, and the image stays finite.

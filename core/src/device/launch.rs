@@ -105,7 +105,7 @@ impl ParamPatch {
     /// inside the block, at least one word.
     pub fn check_block(&self, len: usize) -> Result<(), BackendError> {
         let end = self.offset as u64 + self.bytes();
-        if self.words == 0 || self.offset % 4 != 0 || end > len as u64 {
+        if self.words == 0 || !self.offset.is_multiple_of(4) || end > len as u64 {
             return Err(BackendError::BadArgument(format!(
                 "a parameter patch of {} words at byte {} of a {len}-byte parameter block",
                 self.words, self.offset

@@ -610,7 +610,7 @@ impl PhotonGiPipeline {
 
     /// A patch of `words` parameter words at byte `offset` from the device plan's word
     /// `word`.
-    fn from_plan(&self, offset: usize, word: usize) -> ParamPatch {
+    fn plan_patch(&self, offset: usize, word: usize) -> ParamPatch {
         ParamPatch {
             offset: offset as u32,
             src: self.buffers.plan.id,
@@ -656,7 +656,7 @@ impl PhotonGiPipeline {
                 pyramid: b.rsm.pyramid,
                 photons: b.rsm.photons,
             },
-            vec![self.from_plan(offset_of!(RsmParams, sample_count), count)],
+            vec![self.plan_patch(offset_of!(RsmParams, sample_count), count)],
         );
         rec.kernel_patched(
             TraceIndirect {
@@ -670,12 +670,12 @@ impl PhotonGiPipeline {
                 gbuffer: gbuffer(host),
             },
             vec![
-                self.from_plan(offset_of!(IndirectTraceParams, count), count),
-                self.from_plan(
+                self.plan_patch(offset_of!(IndirectTraceParams, count), count),
+                self.plan_patch(
                     offset_of!(IndirectTraceParams, power_scale),
                     photon_plan_word::POWER_SCALE,
                 ),
-                self.from_plan(
+                self.plan_patch(
                     offset_of!(IndirectTraceParams, flux_quantum),
                     photon_plan_word::FLUX_QUANTUM,
                 ),
@@ -755,11 +755,11 @@ impl PhotonGiPipeline {
                     direction_map: b.direction_map,
                 },
                 vec![
-                    self.from_plan(
+                    self.plan_patch(
                         offset_of!(SplatParams, power_scale),
                         photon_plan_word::POWER_SCALE,
                     ),
-                    self.from_plan(
+                    self.plan_patch(
                         offset_of!(SplatParams, flux_quantum),
                         photon_plan_word::FLUX_QUANTUM,
                     ),
@@ -779,7 +779,7 @@ impl PhotonGiPipeline {
                 photon_map: b.photon_map,
                 out: b.raw,
             },
-            vec![self.from_plan(
+            vec![self.plan_patch(
                 offset_of!(DepositParams, flux_quantum),
                 photon_plan_word::RESOLVE_QUANTUM,
             )],
@@ -983,7 +983,7 @@ impl Pipeline for PhotonGiPipeline {
                         counters: b.counters,
                         photon_map: b.photon_map,
                     },
-                    vec![self.from_plan(
+                    vec![self.plan_patch(
                         offset_of!(DepositParams, flux_quantum),
                         photon_plan_word::FLUX_QUANTUM,
                     )],
