@@ -37,7 +37,7 @@ pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 use crate::backend::Backend;
 use crate::device::device_scene::SceneInstances;
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
-use crate::device::launch::ParamPatch;
+use crate::device::launch::{ParamPatch, DISPATCH_RECORD_WORDS};
 use crate::device::layout::{
     counter, photon_plan_word, CorrectionParams, DepositParams, GpuCamera, IndirectTraceParams,
     PlanParams, RsmParams, SplatParams, NO_PLAN_BIT,
@@ -55,8 +55,8 @@ use crate::frame::screen::{DirectLighting, ScreenNeeds};
 use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    DepositScreen, ResolveCaustics, SampleRsm, SelectPhotonPlan, ShadingNormalCorrection,
-    SplatPhotons, TraceIndirect,
+    DepositScreen, DispatchArgs, DispatchRecord, ResolveCaustics, SampleRsm, SelectPhotonPlan,
+    ShadingNormalCorrection, SplatPhotons, TraceIndirect,
 };
 use crate::math::gi_photon::{gi_store, screen_tiles};
 use crate::recording::Recording;
@@ -128,6 +128,11 @@ struct Buffers {
     table: Buf<u32>,
     /// Lights the plan and table have room for.
     lights: usize,
+    /// Per light `k` the row `[0, every initial photon, 1, photon_plan_word::COUNTS + k]`
+    /// of `dispatch_args` over the plan, and the launch records it writes (the lights'
+    /// `sample_rsm` and `trace_indirect` launches while the plan is on the device only).
+    dispatch_rows: Buf<[u32; 4]>,
+    dispatch: Buf<u32>,
     photons: Buf<[u32; 8]>,
     photon_count: Buf<u32>,
     tile_counts: Buf<u32>,
@@ -217,6 +222,19 @@ impl Buffers {
                 "photon plan table (a row per set of lights seeing something)",
             ),
             lights,
+            dispatch_rows: rec.upload(
+                &(0..lights)
+                    .map(|k| {
+                        let bound = total.min(u32::MAX as u64) as u32;
+                        [0, bound, 1, (photon_plan_word::COUNTS + k) as u32]
+                    })
+                    .collect::<Vec<_>>(),
+                "photon plan launch rows (per light its count's word)",
+            ),
+            dispatch: rec.create(
+                (lights * DISPATCH_RECORD_WORDS) as u32,
+                "photon plan launch records (per light)",
+            ),
             photons: rec.create(capacity.max(1), "indirect photons"),
             photon_count: rec.create(1, "indirect photon count"),
             tile_counts,
@@ -620,19 +638,24 @@ impl PhotonGiPipeline {
     }
 
     /// Records the RSM (unless the buffers hold it: `rendered`) and the trace passes of
-    /// light `r` (the photons go to `b.photons`): `bound` threads each, the light's
-    /// photon count and the quanta from the device plan.
+    /// light `r` (the photons go to `b.photons`): `bound` threads each, or launched
+    /// from the light's record of `b.dispatch` with `bound` as the limit (`indirect`),
+    /// the light's photon count and the quanta from the device plan.
     fn record_light(
         &self,
         rec: &mut Recording,
         host: &FrameHost,
         seeded: &PhotonGiSettings,
         r: &LightRsm,
-        (bound, rendered): (u32, bool),
+        (bound, indirect, rendered): (u32, bool, bool),
         store: u32,
     ) {
         let b = &self.buffers;
         let scene = host.scene();
+        let dispatch = indirect.then_some(DispatchRecord {
+            args: b.dispatch,
+            record: r.light,
+        });
         let params = if rendered {
             rsm::rsm_params(seeded, r)
         } else {
@@ -655,6 +678,7 @@ impl PhotonGiPipeline {
                 texels: b.rsm.texels,
                 pyramid: b.rsm.pyramid,
                 photons: b.rsm.photons,
+                dispatch,
             },
             vec![self.plan_patch(offset_of!(RsmParams, sample_count), count)],
         );
@@ -668,6 +692,7 @@ impl PhotonGiPipeline {
                 tile_counts: b.tile_counts,
                 counters: b.counters,
                 gbuffer: gbuffer(host),
+                dispatch,
             },
             vec![
                 self.plan_patch(offset_of!(IndirectTraceParams, count), count),
@@ -681,6 +706,17 @@ impl PhotonGiPipeline {
                 ),
             ],
         );
+    }
+
+    /// Records the lights' launch records from the device plan's counts (`dispatch_args`
+    /// over every light's row).
+    fn record_launches(&self, rec: &mut Recording) {
+        let b = &self.buffers;
+        rec.kernel(DispatchArgs {
+            table: b.dispatch_rows,
+            counts: b.plan,
+            args: b.dispatch,
+        });
     }
 
     /// Records `select_photon_plan` after light `bit`'s RSM (`r`; `None`: no RSM, the row
@@ -928,7 +964,8 @@ impl Pipeline for PhotonGiPipeline {
         // the light whose RSM the buffers hold after the plan's selection
         let mut held = None;
         let lit = self.table.as_ref().map_or(&[][..], |t| &t.lit[..]);
-        if self.stale && self.table.is_some() {
+        let probed = self.stale && self.table.is_some();
+        if probed {
             let mut rec = Recording::new();
             rec.write(
                 b.plan,
@@ -948,10 +985,14 @@ impl Pipeline for PhotonGiPipeline {
         if reselect {
             self.record_select(frame.rec(), None);
         }
+        // the lights' launches from the plan's counts while the host does not know them
+        let known = self.known || self.table.is_none();
+        if !known && (probed || reselect) {
+            self.record_launches(frame.rec());
+        }
 
         // the lights traced: those with power until the device's plan is known, then
         // those with photons; in reverse, so that the last RSM of the selection is used
-        let known = self.known || self.table.is_none();
         let traced: Vec<u32> = if known {
             rsms.iter()
                 .filter(|r| r.photons > 0)
@@ -964,10 +1005,11 @@ impl Pipeline for PhotonGiPipeline {
         let deposit = self.settings.estimator == IndirectEstimator::Deposit;
         for &i in traced.iter().rev() {
             let r = &rsms[i as usize];
-            // threads: the light's photons where known, else every initial photon (the
-            // kernels leave past the device's count)
+            // threads: the light's photons where known, else the device plan's count
+            // (launched from its record; OpenCL launches the bound, every initial photon,
+            // and the kernels leave past the count)
             let bound = if known { r.photons } else { total };
-            let launch = (bound, held == Some(i));
+            let launch = (bound, !known, held == Some(i));
             held = None;
             let mut rec = Recording::new();
             if deposit {
