@@ -462,29 +462,26 @@ impl PhotonGiPipeline {
             return Ok(Reaction::Rebuild);
         }
         let total = self.settings.total_photons();
-        let table = match self.table.take() {
-            Some(t) if t.holds_for(&lights, total) => Some(t),
-            _ => {
-                self.table_frames = None;
-                PlanTable::new(&lights, total)
-            }
+        // the table holds while the lights' powers do (a move keeps it)
+        let keep = self
+            .table
+            .as_ref()
+            .is_some_and(|t| t.holds_for(&lights, total));
+        let remade = (!keep).then(|| PlanTable::new(&lights, total));
+        let planned = keep || remade.as_ref().is_some_and(Option::is_some);
+        let (photons, known) = if planned {
+            let side = self.settings.rsm_size;
+            let bounds = host.geometry().bounds;
+            (rsm::plan_lights(&lights, total, side, &bounds, &[]), false)
+        } else {
+            let b = &self.buffers.rsm;
+            (rsm::plan_photons(backend, host, b, &self.settings)?, true)
         };
-        let (photons, known) = match &table {
-            Some(_) => {
-                let side = self.settings.rsm_size;
-                let bounds = host.geometry().bounds;
-                (rsm::plan_lights(&lights, total, side, &bounds, &[]), false)
-            }
-            None => match rsm::plan_photons(backend, host, &self.buffers.rsm, &self.settings) {
-                Ok(p) => (p, true),
-                Err(e) => {
-                    self.table_frames = None;
-                    return Err(e);
-                }
-            },
-        };
-        self.stale = table.is_some();
-        self.table = table;
+        if let Some(table) = remade {
+            self.table = table;
+            self.table_frames = None;
+        }
+        self.stale = planned;
         self.known = known;
         self.generation += 1;
         let buffers = self.plan_buffers(host);
