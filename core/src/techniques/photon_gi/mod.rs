@@ -970,11 +970,15 @@ impl Pipeline for PhotonGiPipeline {
                 &[0u32],
                 "photon plan",
             )?;
-            for (k, &i) in lit.iter().enumerate() {
-                let r = &rsms[i as usize];
+            // (the table and the lights' RSMs come from the same lights)
+            for (k, r) in lit
+                .iter()
+                .enumerate()
+                .filter_map(|(k, &i)| Some((k as u32, rsms.get(i as usize)?)))
+            {
                 rsm::record_rsm(&mut rec, host.scene(), &b.rsm, &seeded, r);
-                self.record_select(&mut rec, Some((k as u32, r)));
-                held = Some(i);
+                self.record_select(&mut rec, Some((k, r)));
+                held = Some(r.light);
             }
             reselect = lit.is_empty();
             frame.push(rec, 0);
@@ -1000,8 +1004,8 @@ impl Pipeline for PhotonGiPipeline {
         };
         let total = self.settings.total_photons().min(u32::MAX as u64) as u32;
         let deposit = self.settings.estimator == IndirectEstimator::Deposit;
-        for &i in traced.iter().rev() {
-            let r = &rsms[i as usize];
+        for r in traced.iter().rev().filter_map(|&i| rsms.get(i as usize)) {
+            let i = r.light;
             // threads: the light's photons where known, else the device plan's count
             // (launched from its record; OpenCL launches the bound, every initial photon,
             // and the kernels leave past the count)
