@@ -321,12 +321,13 @@ fn light_plan(
 }
 
 /// The frame plan of `host`'s scene with `s`: the lights' photons and RSMs (`known`: the
-/// device's plan), every pass with its reason, and `buffers`.
+/// device's plan; `planned`: the device selects it from the plan table), every pass with
+/// its reason, and `buffers`.
 fn make_plan(
     host: &FrameHost,
     s: &PhotonGiSettings,
     rsms: &[LightRsm],
-    known: bool,
+    (known, planned): (bool, bool),
     buffers: Vec<BufferPlan>,
     correct: bool,
 ) -> FramePlan {
@@ -367,6 +368,31 @@ fn make_plan(
                 )
             },
             pass("rsm_importance", any, photons),
+            if planned {
+                pass(
+                    "select_photon_plan",
+                    any,
+                    "after each light's RSM in the frame after a light, instance or material \
+                     change: which lights' RSMs see something, decided on the device",
+                )
+            } else {
+                pass(
+                    "select_photon_plan",
+                    false,
+                    "more lights with power than the plan table covers: the host probes \
+                     their RSMs on a change",
+                )
+            },
+            pass(
+                "dispatch_args",
+                planned && any,
+                if planned {
+                    "the lights' launch records from the device plan's counts, until it is \
+                     read back"
+                } else {
+                    "the plan is the host's: the lights launch their photons directly"
+                },
+            ),
             pass("sample_rsm", any, photons),
             pass("trace_indirect", any, photons),
             pass(
@@ -489,7 +515,7 @@ impl PhotonGiPipeline {
             host,
             &self.settings,
             &photons.rsms,
-            known,
+            (known, planned),
             buffers,
             self.correct(),
         );
@@ -519,7 +545,7 @@ impl PhotonGiPipeline {
             host,
             &self.settings,
             &self.photons.rsms,
-            true,
+            (true, true),
             buffers,
             self.correct(),
         );
@@ -868,7 +894,7 @@ impl Pipeline for PhotonGiPipeline {
         let buffers = Buffers::create(&mut rec, camera, &settings, correct, lights);
         let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;
         let mut p = PhotonGiPipeline {
-            plan: make_plan(host, &settings, &[], false, Vec::new(), correct),
+            plan: make_plan(host, &settings, &[], (false, true), Vec::new(), correct),
             settings,
             photons: PhotonPlan {
                 rsms: Vec::new(),
