@@ -1026,7 +1026,7 @@ impl Pipeline for PhotonGiPipeline {
                 .map(|r| r.light)
                 .collect()
         } else {
-            lit.to_vec()
+            self.table.as_ref().map_or(Vec::new(), |t| t.traced.clone())
         };
         let total = self.settings.total_photons().min(u32::MAX as u64) as u32;
         let deposit = self.settings.estimator == IndirectEstimator::Deposit;
@@ -1169,7 +1169,7 @@ struct PlanEnd {
     plan: usize,
     /// The changes followed when the frame was recorded.
     generation: u64,
-    /// The lights with power, bit by bit of the plan's mask (`None`: the plan was the
+    /// The probed lights, bit by bit of the plan's mask (`None`: the plan was the
     /// host's, probed).
     lit: Option<Vec<u32>>,
     /// Per light its RSM faces and whether it sees something in the host's plan.

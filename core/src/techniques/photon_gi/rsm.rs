@@ -186,16 +186,21 @@ pub const MAX_PLANNED_LIGHTS: usize = 8;
 /// Words of a plan table row before the per-light counts.
 const ROW_HEAD: usize = photon_plan_word::COUNTS - photon_plan_word::ROW;
 
-/// The plan of every set of lights with power, as the device selects it
-/// (`select_photon_plan`): row `m` is the plan where exactly the lights with power whose
-/// bits `m` sets see something (bit `k`: the `k`-th light with power, [`PlanTable::lit`]),
+/// The plan of every set of probed lights, as the device selects it
+/// (`select_photon_plan`): row `m` is the plan where exactly the probed lights whose bits
+/// `m` sets see something (bit `k`: the `k`-th, [`PlanTable::lit`]),
 /// laid out as the plan's words from `photon_plan_word::ROW` on: the packed power's unit,
 /// the flux quantum, the resolve's quantum (the flux quantum over the frames an
 /// accumulation holds) as `f32` bits, then each light's photons.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct PlanTable {
-    /// The lights with power, in light order (mask bit `k` is `lit[k]`).
+    /// The lights whose RSM the device probes, in light order (mask bit `k` is
+    /// `lit[k]`): those with photons where every light sees something (a light without
+    /// power gets none; nor does one that the allocation leaves without a photon when
+    /// the lights outnumber the photons, which counts as seeing).
     pub lit: Vec<u32>,
+    /// The lights with photons in some row (traced while the device's row is unknown).
+    pub traced: Vec<u32>,
     /// The lights' powers (W) and the initial photons the table was made for.
     powers: Vec<f64>,
     total: u64,
@@ -206,11 +211,12 @@ pub(super) struct PlanTable {
 
 impl PlanTable {
     /// The table for `lights` and `total` initial photons, or `None` with more than
-    /// [`MAX_PLANNED_LIGHTS`] lights with power.
+    /// [`MAX_PLANNED_LIGHTS`] probed lights.
     pub fn new(lights: &[GpuLight], total: u64) -> Option<PlanTable> {
         let powers: Vec<f64> = lights.iter().map(light_power).collect();
+        let (by_power, _, _) = allocation(&powers, total, &[]);
         let lit: Vec<u32> = (0..lights.len() as u32)
-            .filter(|&i| powers[i as usize] > 0.0)
+            .filter(|&i| by_power[i as usize] > 0)
             .collect();
         if lit.len() > MAX_PLANNED_LIGHTS {
             return None;
@@ -227,9 +233,13 @@ impl PlanTable {
                 row.extend(counts.iter().map(|&n| n as u32));
                 (flux_quantum, row)
             })
+            .collect::<Vec<_>>();
+        let traced = (0..lights.len() as u32)
+            .filter(|&i| rows.iter().any(|(_, row)| row[ROW_HEAD + i as usize] > 0))
             .collect();
         Some(PlanTable {
             lit,
+            traced,
             powers,
             total,
             rows,
@@ -266,14 +276,14 @@ impl PlanTable {
             .collect()
     }
 
-    /// Which lights see something under `mask` (a light without power counts as seeing:
-    /// it gets no photon for that reason, not for its RSM).
+    /// Which lights see something under `mask` (a light that is not probed counts as
+    /// seeing: it gets no photon for its power, not for its RSM).
     pub fn sees(&self, mask: u32) -> Vec<bool> {
         sees_of(mask, &self.lit, self.powers.len())
     }
 }
 
-/// Per light whether it sees something under `mask` over the lights with power `lit`.
+/// Per light whether it sees something under `mask` over the probed lights `lit`.
 fn sees_of(mask: u32, lit: &[u32], lights: usize) -> Vec<bool> {
     let mut sees = vec![true; lights];
     for (k, &i) in lit.iter().enumerate() {
@@ -442,4 +452,69 @@ pub(super) fn host_lights(host: &FrameHost) -> Vec<GpuLight> {
         .iter()
         .map(crate::device::device_scene::gpu_light)
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::geometry::Aabb;
+
+    fn point(i: f32) -> GpuLight {
+        GpuLight {
+            kind: light_kind::POINT,
+            intensity: [i, i, i, 0.0],
+            ..Default::default()
+        }
+    }
+
+    /// Row `m` of the table is the host's plan where the probed lights of `m` see
+    /// something, word for word, for any accumulation length.
+    fn rows_are_the_hosts_plans(lights: &[GpuLight], total: u64) -> PlanTable {
+        let t = PlanTable::new(lights, total).expect("a table");
+        let bounds = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        let rw = t.row_words() as usize;
+        for frames in [1, 3] {
+            let words = t.words(frames);
+            assert_eq!(words.len(), rw << t.lit.len());
+            for mask in 0..1u32 << t.lit.len() {
+                let p = plan_lights(lights, total, 32, &bounds, &t.sees(mask));
+                let row = &words[mask as usize * rw..][..rw];
+                assert_eq!(&plan_words(mask, &p, frames)[1..], row, "mask {mask}");
+                for (i, r) in p.rsms.iter().enumerate() {
+                    assert!(r.photons == 0 || t.traced.contains(&(i as u32)));
+                }
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn every_row_is_the_plan_of_its_lights() {
+        let t = rows_are_the_hosts_plans(&[point(1.0), point(0.0), point(3.0), point(0.5)], 1000);
+        // the light without power is neither probed nor traced
+        assert_eq!(t.lit, vec![0, 2, 3]);
+        assert_eq!(t.traced, vec![0, 2, 3]);
+        // the row where only light 2 sees: every photon is its
+        let row = &t.words(1)[0b010 * t.row_words() as usize..][..t.row_words() as usize];
+        assert_eq!(&row[ROW_HEAD..], &[0, 0, 1000, 0]);
+    }
+
+    #[test]
+    fn a_light_left_without_photons_by_power_is_not_probed() {
+        // two photons over three lights: the dimmest gets none by power and counts as
+        // seeing, but takes a photon where a brighter one is blind
+        let t = rows_are_the_hosts_plans(&[point(5.0), point(1.0), point(4.0)], 2);
+        assert_eq!(t.lit, vec![0, 2]);
+        assert_eq!(t.traced, vec![0, 1, 2]);
+    }
+
+    #[test]
+    fn more_lights_than_the_table_covers_have_none() {
+        let many: Vec<GpuLight> = (0..=MAX_PLANNED_LIGHTS).map(|_| point(1.0)).collect();
+        assert!(PlanTable::new(&many, 1000).is_none());
+        assert!(PlanTable::new(&many[1..], 1000).is_some());
+    }
 }
