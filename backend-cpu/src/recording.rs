@@ -45,6 +45,24 @@ impl CpuBackend {
                 Step::Free { id } => {
                     self.buffers.remove(*id);
                 }
+                Step::Kernel(k) if !k.patches().is_empty() => {
+                    // parameter words from the device: read from host memory now, after
+                    // every earlier step
+                    let patched = k.with_device_params(|id, word, words| {
+                        let bytes = self.get(id)?.bytes();
+                        let (a, b) = (word as usize * 4, (word as usize + words as usize) * 4);
+                        bytes.get(a..b).map(<[u8]>::to_vec).ok_or_else(|| {
+                            BackendError::BadArgument(format!(
+                                "{}: a parameter patch reads words {word}..+{words} of a \
+                                 buffer of {} bytes",
+                                k.name(),
+                                bytes.len()
+                            ))
+                        })
+                    })?;
+                    self.variants.note(&patched)?;
+                    times.push(self.run_timed(&patched)?);
+                }
                 Step::Kernel(k) => {
                     self.variants.note(k)?;
                     times.push(self.run_timed(k)?);

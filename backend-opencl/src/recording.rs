@@ -128,6 +128,26 @@ impl OpenClBackend {
                             .count(),
                         None => 0,
                     };
+                    // parameter words an earlier step wrote on the device, copied into
+                    // the launch's parameter block (the queue is in order)
+                    if let (Some(l), true) = (k.launch()?, blocks > 0) {
+                        for p in &l.patches {
+                            let src = self.buffers.get(p.src)?;
+                            p.check_source(src.bytes)?;
+                            let dst = &mut params[next_param];
+                            unsafe {
+                                self.queue.enqueue_copy_buffer(
+                                    &src.mem,
+                                    dst,
+                                    p.src_offset() as usize,
+                                    p.offset as usize,
+                                    p.bytes() as usize,
+                                    &[],
+                                )
+                            }
+                            .map_err(cl_error("copying parameter words from the device"))?;
+                        }
+                    }
                     let mine = &params[next_param..next_param + blocks];
                     next_param += blocks;
                     if let Some((event, launched)) = run(self, k, mine)? {
@@ -187,6 +207,8 @@ fn run(
         // OpenCL 1.2 has no indirect launch: an indirect kernel runs its recorded bound,
         // and its threads past the device count leave at once
         indirect: _,
+        // copied into the parameter block before the launch (`OpenClBackend::enqueue`)
+        patches: _,
     } = launch;
     let (name, threads, group) = (*name, *threads, *workgroup_size as usize);
     for a in args {

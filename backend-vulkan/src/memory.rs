@@ -289,7 +289,9 @@ impl Arena {
                 size,
                 vk::BufferUsageFlags::UNIFORM_BUFFER
                     | vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_SRC,
+                    | vk::BufferUsageFlags::TRANSFER_SRC
+                    // parameter words copied in from the device (`ParamPatch`)
+                    | vk::BufferUsageFlags::TRANSFER_DST,
                 true,
                 "host arena (parameters and staging)",
             )?);

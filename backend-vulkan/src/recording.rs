@@ -242,6 +242,8 @@ fn record_kernel(
         _ => None,
     };
     let mut descs = Vec::new();
+    // the launch's parameter block (buffer, offset)
+    let mut block = None;
     if let Some(s) = scene {
         let accel = b
             .scenes
@@ -266,21 +268,46 @@ fn record_kernel(
             }
             LaunchArg::Params(p) => {
                 let align = b.ctx.limits.min_uniform_buffer_offset_alignment;
-                match frame.slot.arena.put(p, align) {
-                    Some((buf, at)) => descs.push(Desc::Uniform(buf, at, p.len() as u64)),
+                let (buf, at) = match frame.slot.arena.put(p, align) {
+                    Some(at) => at,
                     None => {
                         let u = Buffer::with_data(
                             &b.ctx,
                             p,
-                            vk::BufferUsageFlags::UNIFORM_BUFFER,
+                            vk::BufferUsageFlags::UNIFORM_BUFFER
+                                | vk::BufferUsageFlags::TRANSFER_DST,
                             "kernel parameters",
                         )?;
-                        descs.push(Desc::Uniform(u.buffer, 0, p.len() as u64));
+                        let buf = u.buffer;
                         frame.retired.push(u);
+                        (buf, 0)
                     }
-                }
+                };
+                descs.push(Desc::Uniform(buf, at, p.len() as u64));
+                block = Some((buf, at));
             }
         }
+    }
+    // parameter words an earlier step wrote on the device, copied into the launch's
+    // uniform block between full barriers (after the writer, before the launch)
+    if let (Some((buf, at)), false) = (block, launch.patches.is_empty()) {
+        barrier(d, frame.cmd);
+        for p in &launch.patches {
+            let src = b.buffers.get(p.src)?;
+            p.check_source(src.bytes)?;
+            unsafe {
+                d.cmd_copy_buffer(
+                    frame.cmd,
+                    src.buffer.buffer,
+                    buf,
+                    &[vk::BufferCopy::default()
+                        .src_offset(p.src_offset())
+                        .dst_offset(at + p.offset as u64)
+                        .size(p.bytes())],
+                )
+            };
+        }
+        barrier(d, frame.cmd);
     }
     if descs.len() != pipeline.bindings.len() {
         return Err(BackendError::Driver(format!(

@@ -144,7 +144,12 @@ fn record(
                 &wgpu::util::BufferInitDescriptor {
                     label: Some("kernel parameters"),
                     contents: p,
-                    usage: wgpu::BufferUsages::UNIFORM,
+                    // words from the device are copied in (`ParamPatch`)
+                    usage: if launch.patches.is_empty() {
+                        wgpu::BufferUsages::UNIFORM
+                    } else {
+                        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST
+                    },
                 },
             )),
             LaunchArg::Count(_) => {}
@@ -152,6 +157,21 @@ fn record(
     }
     if threads == 0 {
         return Ok(());
+    }
+    // parameter words an earlier step wrote on the device, copied into the launch's
+    // uniform block (ordered after every earlier pass of the encoder)
+    if let Some(block) = uniforms.first() {
+        for p in &launch.patches {
+            let src = b.buffers.get(p.src)?;
+            p.check_source(src.bytes)?;
+            enc.copy_buffer_to_buffer(
+                &src.buffer,
+                p.src_offset(),
+                block,
+                p.offset as u64,
+                p.bytes(),
+            );
+        }
     }
     let groups = threads.div_ceil(*workgroup_size as u64);
     let max = b.limits.max_compute_workgroups_per_dimension as u64;

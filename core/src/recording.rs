@@ -6,7 +6,7 @@
 use crate::device::device_scene::DeviceScene;
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, ResourceId, SceneArgs};
-use crate::device::launch::Launch;
+use crate::device::launch::{Launch, LaunchArg, ParamPatch};
 use crate::device::layout::{
     deposit_to_planes, gbuffer_to_planes, DepositTexel, GBufferTexel, DEPOSIT_PLANE_WORDS,
 };
@@ -18,13 +18,90 @@ use crate::kernels::{Kernel, PrepareScene};
 pub struct RecordedKernel {
     kernel: Kernel,
     lowered: Result<Option<Launch>, BackendError>,
+    patches: Vec<ParamPatch>,
+}
+
+/// `kernel`'s launch with `patches` (checked against its one parameter block).
+fn lower(kernel: &Kernel, patches: &[ParamPatch]) -> Result<Option<Launch>, BackendError> {
+    let Some(mut launch) = kernel.launch()? else {
+        return match patches.is_empty() {
+            true => Ok(None),
+            false => Err(BackendError::BadArgument(format!(
+                "{}: a kernel that launches nothing takes no parameter patch",
+                kernel.name()
+            ))),
+        };
+    };
+    if patches.is_empty() {
+        return Ok(Some(launch));
+    }
+    let mut blocks = launch.args.iter().filter_map(|a| match a {
+        LaunchArg::Params(p) => Some(p.len()),
+        _ => None,
+    });
+    let (Some(len), None) = (blocks.next(), blocks.next()) else {
+        return Err(BackendError::BadArgument(format!(
+            "{}: parameter patches need exactly one parameter block",
+            kernel.name()
+        )));
+    };
+    if kernel.clone().params_mut().is_none() {
+        return Err(BackendError::BadArgument(format!(
+            "{}: its parameters cannot come from the device",
+            kernel.name()
+        )));
+    }
+    for p in patches {
+        p.check_block(len)?;
+    }
+    launch.patches = patches.to_vec();
+    Ok(Some(launch))
 }
 
 impl RecordedKernel {
     /// Lowers `kernel` ([`Kernel::launch`]).
     pub fn new(kernel: Kernel) -> RecordedKernel {
-        let lowered = kernel.launch();
-        RecordedKernel { kernel, lowered }
+        RecordedKernel::patched(kernel, Vec::new())
+    }
+
+    /// Lowers `kernel` with parameter words that come from the device ([`ParamPatch`]).
+    pub fn patched(kernel: Kernel, patches: Vec<ParamPatch>) -> RecordedKernel {
+        let lowered = lower(&kernel, &patches);
+        RecordedKernel {
+            kernel,
+            lowered,
+            patches,
+        }
+    }
+
+    /// The parameter words that come from the device.
+    pub fn patches(&self) -> &[ParamPatch] {
+        &self.patches
+    }
+
+    /// The kernel with its patched parameter words read by `read(src, first word, words)`
+    /// (a backend whose buffers are host memory: the CPU), lowered again without patches.
+    pub fn with_device_params(
+        &self,
+        mut read: impl FnMut(ResourceId, u32, u32) -> Result<Vec<u8>, BackendError>,
+    ) -> Result<RecordedKernel, BackendError> {
+        let mut kernel = self.kernel.clone();
+        if let Some(bytes) = kernel.params_mut() {
+            for p in &self.patches {
+                p.check_block(bytes.len())?;
+                let words = read(p.src, p.src_word, p.words)?;
+                if words.len() as u64 != p.bytes() {
+                    return Err(BackendError::BadArgument(format!(
+                        "a parameter patch read {} bytes for {} words",
+                        words.len(),
+                        p.words
+                    )));
+                }
+                let at = p.offset as usize;
+                bytes[at..at + words.len()].copy_from_slice(&words);
+            }
+        }
+        Ok(RecordedKernel::new(kernel))
     }
 
     /// The kernel's launch (`None` for `prepare_scene`), or why its arguments are bad.
@@ -44,7 +121,7 @@ impl RecordedKernel {
     /// such as conformance's mutant backends).
     pub fn modify(&mut self, f: impl FnOnce(&mut Kernel)) {
         f(&mut self.kernel);
-        self.lowered = self.kernel.launch();
+        self.lowered = lower(&self.kernel, &self.patches);
     }
 
     /// The registry name of the kernel.
@@ -343,6 +420,13 @@ impl Recording {
     /// Records a kernel, lowering it once ([`RecordedKernel`]).
     pub fn kernel(&mut self, k: impl Into<Kernel>) {
         self.steps.push(Step::Kernel(RecordedKernel::new(k.into())));
+    }
+
+    /// Records a kernel launch whose parameter words `patches` come from the device
+    /// ([`ParamPatch`]: written by earlier steps, copied there before the launch).
+    pub fn kernel_patched(&mut self, k: impl Into<Kernel>, patches: Vec<ParamPatch>) {
+        self.steps
+            .push(Step::Kernel(RecordedKernel::patched(k.into(), patches)));
     }
 
     /// Records the release of `buf`.

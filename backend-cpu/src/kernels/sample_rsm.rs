@@ -25,6 +25,8 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &SampleRsm) -> Result<(), BackendErro
         texels,
         pyramid,
         photons,
+        // the CPU has no launch grid: the kernel bounds itself by its count
+        dispatch: _,
     } = k;
     let light = *cpu
         .get(lights.id)?

@@ -35,6 +35,8 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
         tile_counts,
         counters,
         gbuffer,
+        // the CPU has no launch grid: the kernel bounds itself by its count
+        dispatch: _,
     } = k;
     let rsm = cpu
         .get(rsm_photons.id)?

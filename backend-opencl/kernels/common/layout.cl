@@ -84,6 +84,17 @@
 #define DISPATCH_THREADS 6
 #define DISPATCH_ITEMS 7
 
+// core::device::layout::photon_plan_word (PhotonGi's photon plan on the device)
+#define PLAN_MASK 0
+#define PLAN_ROW 1
+#define PLAN_POWER_SCALE 1
+#define PLAN_FLUX_QUANTUM 2
+#define PLAN_RESOLVE_QUANTUM 3
+#define PLAN_COUNTS 4
+
+// core::device::layout::NO_PLAN_BIT
+#define NO_PLAN_BIT 0xffffffffu
+
 // core::device::acceleration::instance_flags
 #define INSTANCE_IDENTITY 1u
 
@@ -483,6 +494,14 @@ typedef struct {
     float epsilon; // 12
 } CorrectionParams;
 
+// core::device::layout::PlanParams, 16 bytes
+typedef struct {
+    uint side; // 0
+    uint faces; // 4
+    uint bit; // 8
+    uint row_words; // 12
+} PlanParams;
+
 // core::device::layout::RefineParams, 128 bytes
 typedef struct {
     uint atlas_width; // 0
@@ -530,5 +549,6 @@ __kernel void struct_sizes(__global uint* out) {
     out[20] = sizeof(IndirectTraceParams);
     out[21] = sizeof(SplatParams);
     out[22] = sizeof(CorrectionParams);
-    out[23] = sizeof(RefineParams);
+    out[23] = sizeof(PlanParams);
+    out[24] = sizeof(RefineParams);
 }

@@ -84,6 +84,17 @@ const uint DISPATCH_DEPTH = 5u;
 const uint DISPATCH_THREADS = 6u;
 const uint DISPATCH_ITEMS = 7u;
 
+// core::device::layout::photon_plan_word (PhotonGi's photon plan on the device)
+const uint PLAN_MASK = 0u;
+const uint PLAN_ROW = 1u;
+const uint PLAN_POWER_SCALE = 1u;
+const uint PLAN_FLUX_QUANTUM = 2u;
+const uint PLAN_RESOLVE_QUANTUM = 3u;
+const uint PLAN_COUNTS = 4u;
+
+// core::device::layout::NO_PLAN_BIT
+const uint NO_PLAN_BIT = 0xffffffffu;
+
 // core::device::acceleration::instance_flags
 const uint INSTANCE_IDENTITY = 1u;
 
@@ -481,6 +492,14 @@ struct CorrectionParams {
     uint height; // 4
     float max_stretch; // 8
     float epsilon; // 12
+};
+
+// core::device::layout::PlanParams, 16 bytes
+struct PlanParams {
+    uint side; // 0
+    uint faces; // 4
+    uint bit; // 8
+    uint row_words; // 12
 };
 
 // core::device::layout::RefineParams, 128 bytes

@@ -43,6 +43,7 @@ pub(crate) fn run_sample(
         texels: t,
         pyramid: p,
         photons,
+        dispatch: None,
     });
     run_and_free(b, "sample_rsm", &rec, |b| read_buf(b, photons))
 }

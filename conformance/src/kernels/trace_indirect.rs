@@ -71,6 +71,7 @@ pub(crate) fn run_trace(
         tile_counts: tiles,
         counters,
         gbuffer: g,
+        dispatch: None,
     });
     run_and_free(b, "trace_indirect", &rec, |b| {
         let n = read_buf(b, count)?[0] as usize;

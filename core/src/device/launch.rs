@@ -52,6 +52,67 @@ pub struct Launch {
     /// Where the launch's shape is on the device, when an earlier kernel of the same
     /// recording computes it (`dispatch_args`); `threads` is then its upper bound.
     pub indirect: Option<Indirect>,
+    /// Words of the launch's parameter block that an earlier step of the same recording
+    /// wrote to the device ([`ParamPatch`]): empty for a launch whose parameters the host
+    /// knows whole.
+    pub patches: Vec<ParamPatch>,
+}
+
+/// Parameter words that come from the device: before the launch, `words` 4-byte words of
+/// buffer `src` from word `src_word` on replace the launch's parameter block from byte
+/// `offset` on (the block's only parameter argument). A backend copies them on the
+/// device, ordered after every earlier step (wgpu and Vulkan: a buffer copy into the
+/// launch's uniform block; OpenCL: a copy into its parameter buffer on the in-order
+/// queue; the CPU: the words read from host memory into the typed parameters), so a
+/// kernel reads values that an earlier kernel decided without the host reading them
+/// back. The kernel's code is the same as with host parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ParamPatch {
+    /// First byte of the parameter block replaced (a multiple of 4).
+    pub offset: u32,
+    /// The buffer the words come from.
+    pub src: ResourceId,
+    /// Its first word copied.
+    pub src_word: u32,
+    /// Words copied.
+    pub words: u32,
+}
+
+impl ParamPatch {
+    /// Byte offset of the first word copied in `src`.
+    pub fn src_offset(&self) -> u64 {
+        self.src_word as u64 * 4
+    }
+
+    /// Bytes copied.
+    pub fn bytes(&self) -> u64 {
+        self.words as u64 * 4
+    }
+
+    /// Checks that a source buffer of `held` bytes holds the words copied.
+    pub fn check_source(&self, held: u64) -> Result<(), BackendError> {
+        if self.src_offset() + self.bytes() > held {
+            return Err(BackendError::BadArgument(format!(
+                "a parameter patch reads words {}..{} of a buffer of {held} bytes",
+                self.src_word,
+                self.src_word as u64 + self.words as u64
+            )));
+        }
+        Ok(())
+    }
+
+    /// Checks the patch against a parameter block of `len` bytes: aligned to words,
+    /// inside the block, at least one word.
+    pub fn check_block(&self, len: usize) -> Result<(), BackendError> {
+        let end = self.offset as u64 + self.bytes();
+        if self.words == 0 || !self.offset.is_multiple_of(4) || end > len as u64 {
+            return Err(BackendError::BadArgument(format!(
+                "a parameter patch of {} words at byte {} of a {len}-byte parameter block",
+                self.words, self.offset
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// A launch whose size an earlier kernel wrote to the device: record `record` of the

@@ -705,6 +705,46 @@ pub struct CorrectionParams {
     pub epsilon: f32,
 }
 
+/// Parameters of `select_photon_plan`: the light slot whose RSM the pyramid holds now, and
+/// the plan table's row length ([`photon_plan_word`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PlanParams {
+    /// Texels per RSM face side (a power of two).
+    pub side: u32,
+    /// Faces of the light's RSM in the pyramid (slots `0 .. faces`, at most 6).
+    pub faces: u32,
+    /// The light's bit in the plan mask (its index among the lights with power), or
+    /// [`NO_PLAN_BIT`]: no RSM is noted, the row is selected again.
+    pub bit: u32,
+    /// Words of a plan table row (`photon_plan_word::COUNTS - photon_plan_word::ROW` plus
+    /// one per light).
+    pub row_words: u32,
+}
+
+/// [`PlanParams::bit`] when no light's RSM is noted.
+pub const NO_PLAN_BIT: u32 = u32::MAX;
+
+/// Word indices of PhotonGi's photon plan on the device (`select_photon_plan`'s output;
+/// its later launches read their photon counts and quanta from it through parameter
+/// patches). Words `ROW ..` are a copy of the plan table's row for the mask.
+pub mod photon_plan_word {
+    /// Bit `k` set where the `k`-th light with power has an RSM that sees a texel that
+    /// leaves flux.
+    pub const MASK: usize = 0;
+    /// First word of the selected row.
+    pub const ROW: usize = 1;
+    /// Unit of the packed photon power (W, `f32` bits).
+    pub const POWER_SCALE: usize = 1;
+    /// The photon map's flux quantum (W, `f32` bits).
+    pub const FLUX_QUANTUM: usize = 2;
+    /// The resolve's flux quantum (W, `f32` bits): the flux quantum over the frames an
+    /// accumulation holds.
+    pub const RESOLVE_QUANTUM: usize = 3;
+    /// Light `k`'s initial photons this frame at `COUNTS + k`.
+    pub const COUNTS: usize = 4;
+}
+
 /// Parameters of `caustic_map_lookup`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -1297,6 +1337,7 @@ mod tests {
         assert_eq!(size_of::<GpuMaterial>(), 48);
         assert_eq!(size_of::<GpuLight>(), 64);
         assert_eq!(size_of::<GpuCamera>(), 64);
+        assert_eq!(size_of::<PlanParams>(), 16);
         assert_eq!(size_of::<GBufferTexel>(), 64);
         assert_eq!(size_of::<Photon>(), 32);
         assert_eq!(size_of::<DepositTexel>(), 40);

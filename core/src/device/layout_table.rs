@@ -11,8 +11,8 @@
 use super::layout::{
     AtlasParams, AtrousParams, CorrectionParams, DepositParams, DepositTexel, DirectParams,
     GBufferTexel, GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
-    IndirectTraceParams, MapLookupParams, Photon, RefineParams, RsmParams, RsmPhoton, RsmTexel,
-    SplatParams, TemporalParams, TraceParams,
+    IndirectTraceParams, MapLookupParams, Photon, PlanParams, RefineParams, RsmParams, RsmPhoton,
+    RsmTexel, SplatParams, TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -247,6 +247,7 @@ table! {
         normal_compression, max_stretch, tile_constant, min_splat_px, light_direction, _pad
     }
     CorrectionParams { width, height, max_stretch, epsilon }
+    PlanParams { side, faces, bit, row_words }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
         error_from_level, grid_w, first, count, children_capacity, relevance,

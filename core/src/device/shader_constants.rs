@@ -15,8 +15,8 @@ use super::launch::{
 };
 use super::layout::{
     cluster_count, counter, emission_kind, gather_surface, gbuffer_flags, light_kind,
-    material_kind, DepositTexel, DEPOSIT_TEXEL_WORDS, MAX_CASTER_SPHERES, MAX_SPECULAR_DEPTH,
-    MAX_SPLIT_BRANCHES, NO_MATERIAL, NO_TILE, VISIBLE_TOLERANCE,
+    material_kind, photon_plan_word, DepositTexel, DEPOSIT_TEXEL_WORDS, MAX_CASTER_SPHERES,
+    MAX_SPECULAR_DEPTH, MAX_SPLIT_BRANCHES, NO_MATERIAL, NO_PLAN_BIT, NO_TILE, VISIBLE_TOLERANCE,
 };
 use crate::math::gi_photon::gi_store;
 use crate::math::optics::ior_model;
@@ -204,6 +204,25 @@ pub fn groups() -> Vec<ConstGroup> {
                     ITEMS,
                 }
             ),
+        ),
+        group(
+            "core::device::layout::photon_plan_word (PhotonGi's photon plan on the device)",
+            prefixed!(
+                "PLAN_",
+                Index,
+                photon_plan_word {
+                    MASK,
+                    ROW,
+                    POWER_SCALE,
+                    FLUX_QUANTUM,
+                    RESOLVE_QUANTUM,
+                    COUNTS,
+                }
+            ),
+        ),
+        group(
+            "core::device::layout::NO_PLAN_BIT",
+            vec![named!("NO_PLAN_BIT", U32, NO_PLAN_BIT)],
         ),
         group(
             "core::device::acceleration::instance_flags",

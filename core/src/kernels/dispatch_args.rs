@@ -70,7 +70,8 @@ const BINDINGS: &[Binding] = &[
 ];
 
 impl KernelDecl for DispatchArgs {
-    const INFO: KernelInfo = KernelInfo::compute("dispatch_args", BINDINGS, "AdaptiveCaustics");
+    const INFO: KernelInfo =
+        KernelInfo::compute("dispatch_args", BINDINGS, "AdaptiveCaustics, PhotonGi");
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let rows = self.table.len as u64;

@@ -35,6 +35,7 @@ mod refine_clusters;
 mod resolve_caustics;
 mod rsm_importance;
 mod sample_rsm;
+mod select_photon_plan;
 mod shading_normal_correction;
 mod splat_photons;
 mod temporal_blend;
@@ -59,6 +60,7 @@ pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
 pub use rsm_importance::RsmImportance;
 pub use sample_rsm::SampleRsm;
+pub use select_photon_plan::SelectPhotonPlan;
 pub use shading_normal_correction::ShadingNormalCorrection;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
@@ -258,6 +260,13 @@ pub trait KernelDecl {
     /// The scene a traced kernel traces against (`None` for compute kernels; every
     /// traced kernel overrides it, as a test checks).
     fn scene(&self) -> Option<&SceneArgs> {
+        None
+    }
+
+    /// The bytes of the kernel's parameter block, for kernels whose parameters may come
+    /// partly from the device ([`crate::device::launch::ParamPatch`]; `None`: they may
+    /// not).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
         None
     }
 }
@@ -487,6 +496,14 @@ macro_rules! kernel_list {
                     $(Kernel::$variant(k) => KernelDecl::scene(k),)*
                 }
             }
+
+            /// The bytes of the kernel's parameter block where its parameters may come
+            /// partly from the device ([`KernelDecl::params_mut`]).
+            pub fn params_mut(&mut self) -> Option<&mut [u8]> {
+                match self {
+                    $(Kernel::$variant(k) => KernelDecl::params_mut(k),)*
+                }
+            }
         }
     };
 }
@@ -522,6 +539,7 @@ macro_rules! with_kernels {
             TraceIndirect => trace_indirect,
             SplatPhotons => splat_photons,
             ShadingNormalCorrection => shading_normal_correction,
+            SelectPhotonPlan => select_photon_plan,
         }
     };
 }
@@ -561,6 +579,7 @@ macro_rules! with_shader_kernels {
             sample_rsm,
             trace_indirect,
             splat_photons,
+            select_photon_plan,
         }
     };
 }
@@ -610,6 +629,7 @@ impl Kernel {
             workgroup_size: info.workgroup_size,
             args: a.args,
             indirect: a.indirect,
+            patches: Vec::new(),
         }))
     }
 }

@@ -36,6 +36,11 @@ const BINDINGS: &[Binding] = &[
 impl KernelDecl for ResolveCaustics {
     const INFO: KernelInfo = KernelInfo::compute("resolve_caustics", BINDINGS, "Sspm");
 
+    /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        Some(bytemuck::bytes_of_mut(&mut self.params))
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let n = texels(self.params.camera.width, self.params.camera.height);
         a.params("params", &self.params)?

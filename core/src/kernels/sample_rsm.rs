@@ -27,6 +27,11 @@ pub struct SampleRsm {
     pub pyramid: Buf<f32>,
     /// Output: the photons, at `params.first_sample ..`.
     pub photons: Buf<RsmPhoton>,
+    /// Where the launch's shape is on the device (a `dispatch_args` record of the live
+    /// sample count; `params.sample_count` is then the bound and the kernel's count comes
+    /// from the device too, [`crate::device::launch::ParamPatch`]); `None`: a direct
+    /// launch of `params.sample_count` threads.
+    pub dispatch: Option<super::DispatchRecord>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -39,6 +44,11 @@ const BINDINGS: &[Binding] = &[
 
 impl KernelDecl for SampleRsm {
     const INFO: KernelInfo = KernelInfo::compute("sample_rsm", BINDINGS, "PhotonGi");
+
+    /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        Some(bytemuck::bytes_of_mut(&mut self.params))
+    }
 
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
@@ -63,6 +73,7 @@ impl KernelDecl for SampleRsm {
                 self.photons,
                 (p.first_sample as u64 + p.sample_count as u64) * bytes::RSM_PHOTON,
             )?;
+        a.indirect(self.dispatch)?;
         Ok(Some(p.sample_count as u64))
     }
 }

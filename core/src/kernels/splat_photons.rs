@@ -64,6 +64,11 @@ const BINDINGS: &[Binding] = &[
 impl KernelDecl for SplatPhotons {
     const INFO: KernelInfo = KernelInfo::compute("splat_photons", BINDINGS, "PhotonGi");
 
+    /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        Some(bytemuck::bytes_of_mut(&mut self.params))
+    }
+
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         let c = &p.camera;

@@ -56,6 +56,11 @@ pub struct TraceIndirect {
     /// The camera's G-buffer (planes 0, 1 and 3: position and depth, normal, flags): a
     /// photon is stored only where the camera sees its surface.
     pub gbuffer: GBufferPlanes,
+    /// Where the launch's shape is on the device (a `dispatch_args` record of the live
+    /// photon count; `params.count` is then the bound and the kernel's count comes from
+    /// the device too, [`crate::device::launch::ParamPatch`]); `None`: a direct launch of
+    /// `params.count` threads.
+    pub dispatch: Option<super::DispatchRecord>,
 }
 
 const BINDINGS: [Binding; 16] = with_scene([
@@ -73,6 +78,11 @@ const BINDINGS: [Binding; 16] = with_scene([
 
 impl KernelDecl for TraceIndirect {
     const INFO: KernelInfo = KernelInfo::traced("trace_indirect", &BINDINGS, &[], "PhotonGi");
+
+    /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
+    fn params_mut(&mut self) -> Option<&mut [u8]> {
+        Some(bytemuck::bytes_of_mut(&mut self.params))
+    }
 
     fn scene(&self) -> Option<&SceneArgs> {
         Some(&self.scene)
@@ -101,7 +111,8 @@ impl KernelDecl for TraceIndirect {
                 screen_tiles(c.width, c.height, p.tile_size) as u64 * 4,
             )?
             .buf("counters", self.counters, bytes::COUNTERS)?
-            .gather_gbuffer(&self.gbuffer, c.width as u64 * c.height as u64)?;
+            .gather_gbuffer(&self.gbuffer, c.width as u64 * c.height as u64)?
+            .indirect(self.dispatch)?;
         Ok(Some(p.count as u64))
     }
 }

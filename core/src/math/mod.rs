@@ -12,6 +12,7 @@ pub mod optics;
 pub mod packing;
 pub mod photon_allocation;
 pub mod photon_clusters;
+pub mod photon_plan;
 pub mod photon_splat;
 pub mod rng;
 pub mod rsm;

@@ -84,6 +84,17 @@ const DISPATCH_DEPTH: u32 = 5u;
 const DISPATCH_THREADS: u32 = 6u;
 const DISPATCH_ITEMS: u32 = 7u;
 
+// core::device::layout::photon_plan_word (PhotonGi's photon plan on the device)
+const PLAN_MASK: u32 = 0u;
+const PLAN_ROW: u32 = 1u;
+const PLAN_POWER_SCALE: u32 = 1u;
+const PLAN_FLUX_QUANTUM: u32 = 2u;
+const PLAN_RESOLVE_QUANTUM: u32 = 3u;
+const PLAN_COUNTS: u32 = 4u;
+
+// core::device::layout::NO_PLAN_BIT
+const NO_PLAN_BIT: u32 = 0xffffffffu;
+
 // core::device::acceleration::instance_flags
 const INSTANCE_IDENTITY: u32 = 1u;
 
@@ -481,6 +492,14 @@ struct CorrectionParams {
     height: u32, // 4
     max_stretch: f32, // 8
     epsilon: f32, // 12
+}
+
+// core::device::layout::PlanParams, 16 bytes
+struct PlanParams {
+    side: u32, // 0
+    faces: u32, // 4
+    bit: u32, // 8
+    row_words: u32, // 12
 }
 
 // core::device::layout::RefineParams, 128 bytes

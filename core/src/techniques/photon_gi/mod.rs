@@ -3,20 +3,30 @@
 //! One frame:
 //!
 //! 1. `primary_gbuffer` and `direct_light` from the camera (the frame host's);
-//! 2. per light with photons (allocated over the lights by power,
-//!    [`crate::math::photon_allocation`], leaving out a light whose RSM sees no texel
-//!    that leaves flux: the `rsm` module's probe, at creation and on updates): per RSM face
-//!    `primary_gbuffer` from the light and `rsm_importance` level 0, the pyramid's
-//!    levels, then `sample_rsm` (section 24.2.1) and `trace_indirect` (24.2.2: roulette,
-//!    photons stored after the first bounce, culled to the view, counted per screen tile);
-//! 3. `splat_photons` (24.3) into the screen photon map (and, for Eq. 20, each splat's
+//! 2. the photon plan on the device (in the frame after a change): per light with power
+//!    its RSM (per face `primary_gbuffer` from the light and `rsm_importance` level 0, the
+//!    pyramid's levels) and `select_photon_plan`, which notes whether the RSM sees a texel
+//!    that leaves flux and copies the host's plan row for the lights seen so far (photons
+//!    allocated over them by power, [`crate::math::photon_allocation`]; the `rsm`
+//!    module's plan table);
+//! 3. per light with power (with photons, once the plan is read back): its RSM (kept
+//!    from step 2 for the last light), `sample_rsm` (section 24.2.1) and
+//!    `trace_indirect` (24.2.2: roulette, photons stored after the first bounce, culled
+//!    to the view, counted per screen tile), their photon counts and quanta copied from
+//!    the device plan into their parameters ([`crate::device::launch::ParamPatch`]);
+//! 4. `splat_photons` (24.3) into the screen photon map (and, for Eq. 20, each splat's
 //!    light direction into the direction map), `resolve_caustics` (irradiance times albedo
 //!    / pi: the raw indirect light), `temporal_blend` and `atrous_filter` (24.4, each a
 //!    setting);
-//! 4. `shading_normal_correction` (24.4.3, Eq. 20) where the scene has vertex normals that
+//! 5. `shading_normal_correction` (24.4.3, Eq. 20) where the scene has vertex normals that
 //!    depart from the geometric ones: the splats' power-weighted mean light direction
 //!    against the shading normal instead of the geometric one; then the host's
 //!    `composite` with the direct light.
+//!
+//! A light, instance or material change therefore costs the host the plan's text and the
+//! face cameras (and the table where the lights' powers changed), never a wait: the
+//! frame's statistics and the plan's reasons get the device's counts when the frame's
+//! end is read back.
 
 mod rsm;
 mod settings;
@@ -27,9 +37,10 @@ pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
 use crate::backend::Backend;
 use crate::device::device_scene::SceneInstances;
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
+use crate::device::launch::{ParamPatch, DISPATCH_RECORD_WORDS};
 use crate::device::layout::{
-    counter, CorrectionParams, DepositParams, GpuCamera, IndirectTraceParams, RsmParams,
-    SplatParams,
+    counter, photon_plan_word, CorrectionParams, DepositParams, GpuCamera, IndirectTraceParams,
+    PlanParams, RsmParams, SplatParams, NO_PLAN_BIT,
 };
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
@@ -41,13 +52,20 @@ use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::{BufferPlan, FramePlan, LightPlan, PassPlan, SceneFeatures};
 use crate::frame::screen::{DirectLighting, ScreenNeeds};
+use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    DepositScreen, ResolveCaustics, SampleRsm, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
+    DepositScreen, DispatchArgs, DispatchRecord, ResolveCaustics, SampleRsm, SelectPhotonPlan,
+    ShadingNormalCorrection, SplatPhotons, TraceIndirect,
 };
 use crate::math::gi_photon::{gi_store, screen_tiles};
 use crate::recording::Recording;
-use rsm::{PhotonPlan, RsmBuffers};
+use rsm::{PhotonPlan, PlanTable, RsmBuffers};
+use std::mem::offset_of;
+use std::sync::{Arc, Mutex};
+
+/// Lights the photon plan's device buffers hold at least (more lights make them anew).
+const MIN_LIGHT_CAPACITY: usize = 8;
 
 /// Eq. 20's `epsilon`: keeps the factor finite where the mean light direction grazes the
 /// geometric normal (there `s_max` bounds it anyway).
@@ -103,6 +121,18 @@ fn screen_needs(s: &PhotonGiSettings) -> ScreenNeeds {
 #[derive(Clone, Copy, Debug)]
 struct Buffers {
     rsm: RsmBuffers,
+    /// The photon plan ([`photon_plan_word`]) for [`Buffers::lights`] lights.
+    plan: Buf<u32>,
+    /// The plan table (`rsm::PlanTable`'s words, room for every set of
+    /// [`rsm::MAX_PLANNED_LIGHTS`] lights).
+    table: Buf<u32>,
+    /// Lights the plan and table have room for.
+    lights: usize,
+    /// Per light `k` the row `[0, every initial photon, 1, photon_plan_word::COUNTS + k]`
+    /// of `dispatch_args` over the plan, and the launch records it writes (the lights'
+    /// `sample_rsm` and `trace_indirect` launches while the plan is on the device only).
+    dispatch_rows: Buf<[u32; 4]>,
+    dispatch: Buf<u32>,
     photons: Buf<[u32; 8]>,
     photon_count: Buf<u32>,
     tile_counts: Buf<u32>,
@@ -145,7 +175,10 @@ impl Buffers {
         camera: GpuCamera,
         settings: &PhotonGiSettings,
         correct: bool,
+        lights: usize,
     ) -> Buffers {
+        let lights = lights.max(MIN_LIGHT_CAPACITY);
+        let row = photon_plan_word::COUNTS - photon_plan_word::ROW + lights;
         let pixels = camera.width * camera.height;
         let temporal =
             (settings.frame.temporal && !settings.frame.accumulate).then(|| TemporalBuffers {
@@ -175,11 +208,33 @@ impl Buffers {
         } else {
             raw
         };
-        let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
+        let total = settings.total_photons();
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
         Buffers {
             rsm,
+            plan: rec.create(
+                (photon_plan_word::ROW + row) as u32,
+                "photon plan (mask, quanta, photons per light)",
+            ),
+            table: rec.create(
+                ((1usize << rsm::MAX_PLANNED_LIGHTS) * row) as u32,
+                "photon plan table (a row per set of lights seeing something)",
+            ),
+            lights,
+            dispatch_rows: rec.upload(
+                &(0..lights)
+                    .map(|k| {
+                        let bound = total.min(u32::MAX as u64) as u32;
+                        [0, bound, 1, (photon_plan_word::COUNTS + k) as u32]
+                    })
+                    .collect::<Vec<_>>(),
+                "photon plan launch rows (per light its count's word)",
+            ),
+            dispatch: rec.create(
+                (lights * DISPATCH_RECORD_WORDS) as u32,
+                "photon plan launch records (per light)",
+            ),
             photons: rec.create(capacity.max(1), "indirect photons"),
             photon_count: rec.create(1, "indirect photon count"),
             tile_counts,
@@ -199,8 +254,28 @@ impl Buffers {
 /// filters (temporal, A-Trous) and their history.
 pub struct PhotonGiPipeline {
     settings: PhotonGiSettings,
-    /// The lights' RSMs and photons, the packed power's unit and the flux quantum.
+    /// The lights' RSMs and photons, the packed power's unit and the flux quantum: the
+    /// device's plan where [`PhotonGiPipeline::known`], else the plan where every light
+    /// with power sees something.
     photons: PhotonPlan,
+    /// The plan of every set of lights with power, which the device selects from; `None`
+    /// beyond [`rsm::MAX_PLANNED_LIGHTS`] lights with power (the plan is probed on the
+    /// host then, and known).
+    table: Option<PlanTable>,
+    /// The accumulation's frame count whose resolve quanta the device's table holds
+    /// (`None`: the table is still to be written).
+    table_frames: Option<u32>,
+    /// The next frame renders the lights' RSMs and selects the plan first (a change since
+    /// the last selection).
+    stale: bool,
+    /// [`PhotonGiPipeline::photons`] is the device's plan (read back, or probed on the
+    /// host).
+    known: bool,
+    /// Changes followed so far: a plan read back from a frame recorded before the last
+    /// change is not the current one.
+    generation: u64,
+    /// The latest plan read back at a frame's end: its generation and mask.
+    decided: Arc<Mutex<Option<(u64, u32)>>>,
     /// Scene bounding-box diagonal (scene units): the splat constants scale with it.
     diagonal: f32,
     buffers: Buffers,
@@ -211,12 +286,48 @@ pub struct PhotonGiPipeline {
     accumulated: u32,
 }
 
-/// The frame plan of `host`'s scene with `s`: the lights' photons and RSMs, every pass
-/// with its reason, and `buffers`.
+/// Light `light`'s line in the frame plan: its photons and RSM faces (`faces` of `side`^2),
+/// whether its RSM sees a texel that leaves flux, and whether the device's plan is known
+/// yet (`known`; else the photons are those it gets if every light with power sees
+/// something).
+fn light_plan(
+    light: u32,
+    photons: u32,
+    faces: usize,
+    side: u32,
+    sees: bool,
+    known: bool,
+) -> LightPlan {
+    let reason = if !sees {
+        format!(
+            "no photons: its RSM ({faces} faces of {side}^2) sees no texel that leaves flux \
+             (flux x albedo is zero on every one), so none could carry any; the other \
+             lights share the budget by power"
+        )
+    } else if known {
+        format!("{photons} photons by power, {faces} RSM faces of {side}^2")
+    } else {
+        format!(
+            "{photons} photons by power where every light's RSM sees something, {faces} RSM \
+             faces of {side}^2 (which RSMs see something is decided on the device in the \
+             next frame and read back at its end)"
+        )
+    };
+    LightPlan {
+        light,
+        emits: photons > 0,
+        reason,
+    }
+}
+
+/// The frame plan of `host`'s scene with `s`: the lights' photons and RSMs (`known`: the
+/// device's plan; `planned`: the device selects it from the plan table), every pass with
+/// its reason, and `buffers`.
 fn make_plan(
     host: &FrameHost,
     s: &PhotonGiSettings,
     rsms: &[LightRsm],
+    (known, planned): (bool, bool),
     buffers: Vec<BufferPlan>,
     correct: bool,
 ) -> FramePlan {
@@ -240,26 +351,7 @@ fn make_plan(
         outputs: s.frame.outputs.names(&OUTPUTS),
         lights: rsms
             .iter()
-            .map(|r| LightPlan {
-                light: r.light,
-                emits: r.photons > 0,
-                reason: if r.sees {
-                    format!(
-                        "{} photons by power, {} RSM faces of {}^2",
-                        r.photons,
-                        r.faces.len(),
-                        s.rsm_size
-                    )
-                } else {
-                    format!(
-                        "no photons: its RSM ({} faces of {}^2) sees no texel that \
-                         leaves flux (flux x albedo is zero on every one), so none \
-                         could carry any; the other lights share the budget by power",
-                        r.faces.len(),
-                        s.rsm_size
-                    )
-                },
-            })
+            .map(|r| light_plan(r.light, r.photons, r.faces.len(), s.rsm_size, r.sees, known))
             .collect(),
         trace_variant: None,
         passes: vec![
@@ -276,6 +368,31 @@ fn make_plan(
                 )
             },
             pass("rsm_importance", any, photons),
+            if planned {
+                pass(
+                    "select_photon_plan",
+                    any,
+                    "after each light's RSM in the frame after a light, instance or material \
+                     change: which lights' RSMs see something, decided on the device",
+                )
+            } else {
+                pass(
+                    "select_photon_plan",
+                    false,
+                    "more lights with power than the plan table covers: the host probes \
+                     their RSMs on a change",
+                )
+            },
+            pass(
+                "dispatch_args",
+                planned && any,
+                if planned {
+                    "the lights' launch records from the device plan's counts, until it is \
+                     read back"
+                } else {
+                    "the plan is the host's: the lights launch their photons directly"
+                },
+            ),
             pass("sample_rsm", any, photons),
             pass("trace_indirect", any, photons),
             pass(
@@ -355,16 +472,83 @@ impl PhotonGiPipeline {
         self.buffers.uncorrected.is_some()
     }
 
-    /// Plans the photons anew over the host's scene (its pending writes run first: the
-    /// probe renders the RSMs), with the scene's diagonal, and states it in the plan. On
-    /// an error nothing changes.
-    fn replan(&mut self, backend: &mut dyn Backend, host: &mut FrameHost) -> Result<(), Error> {
-        let photons = rsm::plan_photons(backend, host, &self.buffers.rsm, &self.settings)?;
+    /// Plans the photons anew over the host's scene, with the scene's diagonal, and
+    /// states it in the plan: the face cameras and (where the lights' powers changed) the
+    /// plan table on the host, which lights see something on the device in the next
+    /// frame; beyond [`rsm::MAX_PLANNED_LIGHTS`] lights with power the RSMs are probed on
+    /// the host (a wait). `Rebuild` where the plan's buffers have no room for the lights.
+    /// On an error nothing changes.
+    fn replan(
+        &mut self,
+        backend: &mut dyn Backend,
+        host: &mut FrameHost,
+    ) -> Result<Reaction, Error> {
+        let lights = rsm::host_lights(host);
+        if lights.len() > self.buffers.lights {
+            return Ok(Reaction::Rebuild);
+        }
+        let total = self.settings.total_photons();
+        // the table holds while the lights' powers do (a move keeps it)
+        let keep = self
+            .table
+            .as_ref()
+            .is_some_and(|t| t.holds_for(&lights, total));
+        let remade = (!keep).then(|| PlanTable::new(&lights, total));
+        let planned = keep || remade.as_ref().is_some_and(Option::is_some);
+        let (photons, known) = if planned {
+            let side = self.settings.rsm_size;
+            let bounds = host.geometry().bounds;
+            (rsm::plan_lights(&lights, total, side, &bounds, &[]), false)
+        } else {
+            let b = &self.buffers.rsm;
+            (rsm::plan_photons(backend, host, b, &self.settings)?, true)
+        };
+        if let Some(table) = remade {
+            self.table = table;
+            self.table_frames = None;
+        }
+        self.stale = planned;
+        self.known = known;
+        self.generation += 1;
         let buffers = self.plan_buffers(host);
-        self.plan = make_plan(host, &self.settings, &photons.rsms, buffers, self.correct());
+        self.plan = make_plan(
+            host,
+            &self.settings,
+            &photons.rsms,
+            (known, planned),
+            buffers,
+            self.correct(),
+        );
         self.photons = photons;
         self.diagonal = scene_diagonal(&host.geometry().bounds);
-        Ok(())
+        Ok(Reaction::Kept)
+    }
+
+    /// Takes the device's plan where a frame's end read it back since the last change:
+    /// the host's photons, statistics and plan reasons are then exact before the device
+    /// reports them.
+    fn learn(&mut self, host: &FrameHost) {
+        let decided = self.decided.lock().ok().and_then(|mut d| d.take());
+        let (Some((generation, mask)), Some(table)) = (decided, &self.table) else {
+            return;
+        };
+        if generation != self.generation || self.known {
+            return;
+        }
+        let lights = rsm::host_lights(host);
+        let (side, bounds) = (self.settings.rsm_size, host.geometry().bounds);
+        let total = self.settings.total_photons();
+        self.photons = rsm::plan_lights(&lights, total, side, &bounds, &table.sees(mask));
+        self.known = true;
+        let buffers = self.plan_buffers(host);
+        self.plan = make_plan(
+            host,
+            &self.settings,
+            &self.photons.rsms,
+            (true, true),
+            buffers,
+            self.correct(),
+        );
     }
 
     /// The host's buffers and this technique's, for the plan.
@@ -466,38 +650,114 @@ impl PhotonGiPipeline {
         }
     }
 
-    /// Records the RSM and trace passes of light `r` (the photons go to `b.photons`).
-    fn record_light(&self, rec: &mut Recording, host: &FrameHost, r: &LightRsm, store: u32) {
+    /// A patch of `words` parameter words at byte `offset` from the device plan's word
+    /// `word`.
+    fn plan_patch(&self, offset: usize, word: usize) -> ParamPatch {
+        ParamPatch {
+            offset: offset as u32,
+            src: self.buffers.plan.id,
+            src_word: word as u32,
+            words: 1,
+        }
+    }
+
+    /// Records the RSM (unless the buffers hold it: `rendered`) and the trace passes of
+    /// light `r` (the photons go to `b.photons`): `bound` threads each, or launched
+    /// from the light's record of `b.dispatch` with `bound` as the limit (`indirect`),
+    /// the light's photon count and the quanta from the device plan.
+    fn record_light(
+        &self,
+        rec: &mut Recording,
+        host: &FrameHost,
+        seeded: &PhotonGiSettings,
+        r: &LightRsm,
+        (bound, indirect, rendered): (u32, bool, bool),
+        store: u32,
+    ) {
         let b = &self.buffers;
         let scene = host.scene();
-        let mut seeded = self.settings.clone();
-        seeded.frame.seed = self.frame_seed();
-        let params = rsm::record_rsm(rec, scene, &b.rsm, &seeded, r);
-        rec.kernel(SampleRsm {
-            params: RsmParams {
-                // the orthographic face's plane, for a directional light's photons
-                face_camera: r.faces[0],
-                face: 0,
-                face_count: r.faces.len() as u32,
-                first_sample: 0,
-                sample_count: r.photons,
-                level: 0,
-                ..params
-            },
-            lights: scene.lights,
-            texels: b.rsm.texels,
-            pyramid: b.rsm.pyramid,
-            photons: b.rsm.photons,
+        let dispatch = indirect.then_some(DispatchRecord {
+            args: b.dispatch,
+            record: r.light,
         });
-        rec.kernel(TraceIndirect {
-            scene,
-            params: self.trace_params(host.camera(), 0, r.photons, store),
-            rsm_photons: b.rsm.photons,
-            photons: b.photons,
-            photon_count: b.photon_count,
-            tile_counts: b.tile_counts,
-            counters: b.counters,
-            gbuffer: gbuffer(host),
+        let params = if rendered {
+            rsm::rsm_params(seeded, r)
+        } else {
+            rsm::record_rsm(rec, scene, &b.rsm, seeded, r)
+        };
+        let count = photon_plan_word::COUNTS + r.light as usize;
+        rec.kernel_patched(
+            SampleRsm {
+                params: RsmParams {
+                    // the orthographic face's plane, for a directional light's photons
+                    face_camera: r.faces[0],
+                    face: 0,
+                    face_count: r.faces.len() as u32,
+                    first_sample: 0,
+                    sample_count: bound,
+                    level: 0,
+                    ..params
+                },
+                lights: scene.lights,
+                texels: b.rsm.texels,
+                pyramid: b.rsm.pyramid,
+                photons: b.rsm.photons,
+                dispatch,
+            },
+            vec![self.plan_patch(offset_of!(RsmParams, sample_count), count)],
+        );
+        rec.kernel_patched(
+            TraceIndirect {
+                scene,
+                params: self.trace_params(host.camera(), 0, bound, store),
+                rsm_photons: b.rsm.photons,
+                photons: b.photons,
+                photon_count: b.photon_count,
+                tile_counts: b.tile_counts,
+                counters: b.counters,
+                gbuffer: gbuffer(host),
+                dispatch,
+            },
+            vec![
+                self.plan_patch(offset_of!(IndirectTraceParams, count), count),
+                self.plan_patch(
+                    offset_of!(IndirectTraceParams, power_scale),
+                    photon_plan_word::POWER_SCALE,
+                ),
+                self.plan_patch(
+                    offset_of!(IndirectTraceParams, flux_quantum),
+                    photon_plan_word::FLUX_QUANTUM,
+                ),
+            ],
+        );
+    }
+
+    /// Records the lights' launch records from the device plan's counts (`dispatch_args`
+    /// over every light's row).
+    fn record_launches(&self, rec: &mut Recording) {
+        let b = &self.buffers;
+        rec.kernel(DispatchArgs {
+            table: b.dispatch_rows,
+            counts: b.plan,
+            args: b.dispatch,
+        });
+    }
+
+    /// Records `select_photon_plan` after light `bit`'s RSM (`r`; `None`: no RSM, the row
+    /// selected again).
+    fn record_select(&self, rec: &mut Recording, noted: Option<(u32, &LightRsm)>) {
+        let (bit, faces) = noted.map_or((NO_PLAN_BIT, 0), |(k, r)| (k, r.faces.len() as u32));
+        let row_words = self.table.as_ref().map_or(0, PlanTable::row_words);
+        rec.kernel(SelectPhotonPlan {
+            params: PlanParams {
+                side: self.settings.rsm_size,
+                faces,
+                bit,
+                row_words,
+            },
+            pyramid: self.buffers.rsm.pyramid,
+            table: self.buffers.table,
+            plan: self.buffers.plan,
         });
     }
 
@@ -543,28 +803,47 @@ impl PhotonGiPipeline {
     fn record_resolve(&self, rec: &mut Recording, host: &FrameHost) {
         let (cam, g, b) = (host.camera(), gbuffer(host), &self.buffers);
         if self.settings.estimator != IndirectEstimator::Deposit {
-            rec.kernel(SplatPhotons {
-                params: self.splat_params(cam),
-                gbuffer: g,
-                photons: b.photons.reinterpret(),
-                photon_count: b.photon_count,
-                tile_counts: b.tile_counts,
-                counters: b.counters,
-                photon_map: b.photon_map,
-                direction_map: b.direction_map,
-            });
+            rec.kernel_patched(
+                SplatPhotons {
+                    params: self.splat_params(cam),
+                    gbuffer: g,
+                    photons: b.photons.reinterpret(),
+                    photon_count: b.photon_count,
+                    tile_counts: b.tile_counts,
+                    counters: b.counters,
+                    photon_map: b.photon_map,
+                    direction_map: b.direction_map,
+                },
+                vec![
+                    self.plan_patch(
+                        offset_of!(SplatParams, power_scale),
+                        photon_plan_word::POWER_SCALE,
+                    ),
+                    self.plan_patch(
+                        offset_of!(SplatParams, flux_quantum),
+                        photon_plan_word::FLUX_QUANTUM,
+                    ),
+                ],
+            );
         }
-        // an accumulation's sums read as one frame of all their photons
+        // an accumulation's sums read as one frame of all their photons (the plan's
+        // resolve quantum: its flux quantum over the frames)
         let frames = self.frame_index() + 1;
-        rec.kernel(ResolveCaustics {
-            params: DepositParams {
-                flux_quantum: self.photons.flux_quantum / frames as f32,
-                ..self.deposit_params(cam)
+        rec.kernel_patched(
+            ResolveCaustics {
+                params: DepositParams {
+                    flux_quantum: self.photons.flux_quantum / frames as f32,
+                    ..self.deposit_params(cam)
+                },
+                gbuffer: g,
+                photon_map: b.photon_map,
+                out: b.raw,
             },
-            gbuffer: g,
-            photon_map: b.photon_map,
-            out: b.raw,
-        });
+            vec![self.plan_patch(
+                offset_of!(DepositParams, flux_quantum),
+                photon_plan_word::RESOLVE_QUANTUM,
+            )],
+        );
         self.record_filters(rec, cam, g);
         if let Some(uncorrected) = b.uncorrected {
             rec.kernel(ShadingNormalCorrection {
@@ -601,7 +880,8 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     /// The camera images from the host, then every own buffer (each checked against the
-    /// device first), the lights planned and their RSMs probed.
+    /// device first), the lights planned (which RSMs see something: on the device in the
+    /// first frame, or probed here beyond [`rsm::MAX_PLANNED_LIGHTS`] lights with power).
     fn create(
         backend: &mut dyn Backend,
         host: &mut FrameHost,
@@ -610,31 +890,34 @@ impl Pipeline for PhotonGiPipeline {
         host.make_screen(backend, screen_needs(&settings))?;
         let camera = host.camera();
         let correct = shading_correction(&settings, host.instances());
+        let lights = host.model().lights.len();
         let mut rec = Recording::new();
-        let buffers = Buffers::create(&mut rec, camera, &settings, correct);
-        let mut alloc = allocate(backend, &rec, Some((camera.width, camera.height)))?;
-        let photons = match rsm::plan_photons(backend, host, &buffers.rsm, &settings) {
-            Ok(p) => p,
-            Err(e) => {
-                let _ = alloc.free(backend);
-                return Err(e);
-            }
-        };
-        let buffers_plan = host
-            .buffer_plans()
-            .into_iter()
-            .chain(alloc.buffers.iter().cloned())
-            .collect();
-        let plan = make_plan(host, &settings, &photons.rsms, buffers_plan, correct);
-        Ok(PhotonGiPipeline {
+        let buffers = Buffers::create(&mut rec, camera, &settings, correct, lights);
+        let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;
+        let mut p = PhotonGiPipeline {
+            plan: make_plan(host, &settings, &[], (false, true), Vec::new(), correct),
             settings,
-            photons,
+            photons: PhotonPlan {
+                rsms: Vec::new(),
+                power_scale: 1.0,
+                flux_quantum: 1.0,
+            },
+            table: None,
+            table_frames: None,
+            stale: false,
+            known: false,
+            generation: 0,
+            decided: Arc::new(Mutex::new(None)),
             diagonal: scene_diagonal(&host.geometry().bounds),
             buffers,
-            plan,
-            owned: alloc,
+            owned,
             accumulated: 0,
-        })
+        };
+        if let Err(e) = p.replan(backend, host) {
+            let _ = p.owned.free(backend);
+            return Err(e);
+        }
+        Ok(p)
     }
 
     fn settings(&self) -> &PhotonGiSettings {
@@ -649,14 +932,18 @@ impl Pipeline for PhotonGiPipeline {
     }
 
     /// The frame's recordings in order, each with the photons it traces: visibility and
-    /// clears; per lit light, its photons (deposited at once with the deposit estimator);
-    /// the splat, resolve, filters, Eq. 20's correction and the composite.
+    /// clears; the plan table where it changed; after a change, the lights' RSMs and the
+    /// plan's selection; per light with power (with photons, once the plan is known), its
+    /// photons (deposited at once with the deposit estimator); the splat, resolve,
+    /// filters, Eq. 20's correction and the composite; the plan and the counters read at
+    /// the frame's end.
     fn record(
         &mut self,
         _backend: &mut dyn Backend,
         host: &mut FrameHost,
         frame: &mut FrameBuilder,
     ) -> Result<(), Error> {
+        self.learn(host);
         let rsms = &self.photons.rsms;
         frame.stats.flux_quantum = self.photons.flux_quantum as f64;
         frame.stats.photons_emitted = rsms.iter().map(|r| r.photons as u64).sum();
@@ -664,6 +951,7 @@ impl Pipeline for PhotonGiPipeline {
         let (cam, b) = (host.camera(), self.buffers);
         host.record_visibility(frame.rec());
         let first = self.frame_index() == 0;
+        let frames = self.frame_index() + 1;
         let rec = frame.rec();
         // an accumulating photon map keeps the frames before
         if first {
@@ -676,32 +964,121 @@ impl Pipeline for PhotonGiPipeline {
         rec.clear(b.photon_count);
         rec.clear(b.tile_counts);
 
+        // the plan on the device: the table's row for the lights whose RSM sees
+        // something, or the host's plan where it probed them
+        let mut seeded = self.settings.clone();
+        seeded.frame.seed = self.frame_seed();
+        let mut reselect = false;
+        match &self.table {
+            Some(t) if self.table_frames != Some(frames) => {
+                rec.write(b.table, 0, &t.words(frames), "photon plan table")?;
+                reselect = true;
+            }
+            Some(_) => {}
+            None => rec.write(
+                b.plan,
+                0,
+                &rsm::plan_words(0, &self.photons, frames),
+                "photon plan",
+            )?,
+        }
+        if self.table.is_some() {
+            self.table_frames = Some(frames);
+        }
+        // the light whose RSM the buffers hold after the plan's selection
+        let mut held = None;
+        let lit = self.table.as_ref().map_or(&[][..], |t| &t.lit[..]);
+        let probed = self.stale && self.table.is_some();
+        if probed {
+            let mut rec = Recording::new();
+            rec.write(
+                b.plan,
+                photon_plan_word::MASK as u32,
+                &[0u32],
+                "photon plan",
+            )?;
+            // (the table and the lights' RSMs come from the same lights)
+            for (k, r) in lit
+                .iter()
+                .enumerate()
+                .filter_map(|(k, &i)| Some((k as u32, rsms.get(i as usize)?)))
+            {
+                rsm::record_rsm(&mut rec, host.scene(), &b.rsm, &seeded, r);
+                self.record_select(&mut rec, Some((k, r)));
+                held = Some(r.light);
+            }
+            reselect = lit.is_empty();
+            frame.push(rec, 0);
+        }
+        if reselect {
+            self.record_select(frame.rec(), None);
+        }
+        // the lights' launches from the plan's counts while the host does not know them
+        let known = self.known || self.table.is_none();
+        if !known && (probed || reselect) {
+            self.record_launches(frame.rec());
+        }
+
+        // the lights traced: those with power until the device's plan is known, then
+        // those with photons; in reverse, so that the last RSM of the selection is used
+        let traced: Vec<u32> = if known {
+            rsms.iter()
+                .filter(|r| r.photons > 0)
+                .map(|r| r.light)
+                .collect()
+        } else {
+            self.table.as_ref().map_or(Vec::new(), |t| t.traced.clone())
+        };
+        let total = self.settings.total_photons().min(u32::MAX as u64) as u32;
         let deposit = self.settings.estimator == IndirectEstimator::Deposit;
-        for r in rsms.iter().filter(|r| r.photons > 0) {
+        for r in traced.iter().rev().filter_map(|&i| rsms.get(i as usize)) {
+            let i = r.light;
+            // threads: the light's photons where known, else the device plan's count
+            // (launched from its record; OpenCL launches the bound, every initial photon,
+            // and the kernels leave past the count)
+            let bound = if known { r.photons } else { total };
+            let launch = (bound, !known, held == Some(i));
+            held = None;
             let mut rec = Recording::new();
             if deposit {
                 // each light's float photons deposited before the next light's are traced
                 rec.clear(b.photon_count);
-                self.record_light(&mut rec, host, r, gi_store::FLOAT);
-                rec.kernel(DepositScreen {
-                    params: self.deposit_params(cam),
-                    gbuffer: gbuffer(host),
-                    photons: b.photons.reinterpret(),
-                    photon_count: b.photon_count,
-                    counters: b.counters,
-                    photon_map: b.photon_map,
-                });
+                self.record_light(&mut rec, host, &seeded, r, launch, gi_store::FLOAT);
+                rec.kernel_patched(
+                    DepositScreen {
+                        params: self.deposit_params(cam),
+                        gbuffer: gbuffer(host),
+                        photons: b.photons.reinterpret(),
+                        photon_count: b.photon_count,
+                        counters: b.counters,
+                        photon_map: b.photon_map,
+                    },
+                    vec![self.plan_patch(
+                        offset_of!(DepositParams, flux_quantum),
+                        photon_plan_word::FLUX_QUANTUM,
+                    )],
+                );
             } else {
-                self.record_light(&mut rec, host, r, gi_store::PACKED);
+                self.record_light(&mut rec, host, &seeded, r, launch, gi_store::PACKED);
             }
             frame.stats.batches += 1;
             frame.push(rec, r.photons as u64);
         }
+        self.stale = false;
 
         let mut rec = Recording::new();
         self.record_resolve(&mut rec, host);
         frame.push(rec, 0);
-        frame.counters_at_end(b.counters, self.photons.flux_quantum);
+        let end = PlanEnd {
+            counters: frame.read_at_end(b.counters),
+            plan: frame.read_at_end(b.plan),
+            generation: self.generation,
+            lit: self.table.as_ref().map(|t| t.lit.clone()),
+            lights: rsms.iter().map(|r| (r.faces.len(), r.sees)).collect(),
+            side: self.settings.rsm_size,
+            decided: Arc::clone(&self.decided),
+        };
+        frame.end_read(EndRead::Own(Arc::new(end)));
         // this frame's blend is the next frame's history
         if let Some(t) = &mut self.buffers.temporal {
             t.image.swap();
@@ -742,9 +1119,9 @@ impl Pipeline for PhotonGiPipeline {
             // albedos decide what the RSMs see
             Change::Lights | Change::Instances { .. } | Change::Materials { .. } => {}
         }
-        self.replan(backend, host)?;
+        let reaction = self.replan(backend, host)?;
         self.reset_history();
-        Ok(Reaction::Kept)
+        Ok(reaction)
     }
 
     fn plan(&self) -> &FramePlan {
@@ -783,8 +1160,86 @@ impl Pipeline for PhotonGiPipeline {
     }
 }
 
+/// A frame's end: the device's photon plan and the photon counters, read back, into the
+/// frame's statistics (photons per light, the flux quantum, the plan's lines for the
+/// lights) and, for the next frames' host, into `decided`.
+#[derive(Debug)]
+struct PlanEnd {
+    /// Indices of the counters and of the plan among the frame's readbacks.
+    counters: usize,
+    plan: usize,
+    /// The changes followed when the frame was recorded.
+    generation: u64,
+    /// The probed lights, bit by bit of the plan's mask (`None`: the plan was the
+    /// host's, probed).
+    lit: Option<Vec<u32>>,
+    /// Per light its RSM faces and whether it sees something in the host's plan.
+    lights: Vec<(usize, bool)>,
+    /// RSM side (texels).
+    side: u32,
+    decided: Arc<Mutex<Option<(u64, u32)>>>,
+}
+
+impl FrameEnd for PlanEnd {
+    fn apply(
+        &self,
+        readbacks: &[Vec<u8>],
+        _times: &[crate::backend::PassTime],
+        stats: &mut crate::frame::stats::FrameStats,
+    ) {
+        let words = |at: usize| -> Vec<u32> {
+            readbacks
+                .get(at)
+                .map(|c| bytemuck::pod_collect_to_vec(c))
+                .unwrap_or_default()
+        };
+        let plan = words(self.plan);
+        let word = |w: usize| plan.get(w).copied().unwrap_or(0);
+        let quantum = f32::from_bits(word(photon_plan_word::FLUX_QUANTUM));
+        let mask = word(photon_plan_word::MASK);
+        let counts: Vec<u64> = (0..self.lights.len())
+            .map(|i| word(photon_plan_word::COUNTS + i) as u64)
+            .collect();
+        stats.flux_quantum = quantum as f64;
+        stats.photons_emitted = counts.iter().sum();
+        stats.read_counters(&words(self.counters), quantum);
+        let mut sees: Vec<bool> = self.lights.iter().map(|l| l.1).collect();
+        if let Some(lit) = &self.lit {
+            for (k, &i) in lit.iter().enumerate() {
+                if let Some(s) = sees.get_mut(i as usize) {
+                    *s = mask & (1 << k) != 0;
+                }
+            }
+        }
+        if let Some(p) = &mut stats.plan {
+            p.lights = (0..self.lights.len())
+                .map(|i| {
+                    light_plan(
+                        i as u32,
+                        counts[i] as u32,
+                        self.lights[i].0,
+                        self.side,
+                        sees[i],
+                        true,
+                    )
+                })
+                .collect();
+        }
+        stats.photons_per_light = counts;
+        if self.lit.is_some() {
+            if let Ok(mut d) = self.decided.lock() {
+                if d.is_none_or(|(g, _)| g <= self.generation) {
+                    *d = Some((self.generation, mask));
+                }
+            }
+        }
+    }
+}
+
 impl Hosted<PhotonGiPipeline> {
-    /// The lights' RSMs and photon counts.
+    /// The lights' RSMs and photon counts: the device's plan once a frame's end has
+    /// reported it since the last change (which lights' RSMs see something is decided on
+    /// the device), else the counts where every light with power sees something.
     pub fn light_rsms(&self) -> &[LightRsm] {
         &self.pipeline().photons.rsms
     }

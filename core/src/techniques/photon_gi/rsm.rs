@@ -1,13 +1,19 @@
 //! PhotonGi's reflective shadow maps and photon planning (Smal 2019, section 24.2): each
 //! light's RSM faces ([`rsm_faces`]), the photons allocated over the lights by power
-//! ([`crate::math::photon_allocation`]), and the probe that leaves out a light whose RSM
-//! sees no texel that leaves flux ([`plan_photons`], at creation and on updates, never per
-//! frame).
+//! ([`crate::math::photon_allocation`]) among those whose RSM sees a texel that leaves
+//! flux. Which lights see something is decided on the device: the host tables the plan
+//! of every set of lights with power ([`PlanTable`]), and `select_photon_plan` picks the
+//! row after the lights' RSMs in the frame after a change, so an update reads nothing
+//! back. Beyond [`MAX_PLANNED_LIGHTS`] lights with power the table would be too large:
+//! there the lights' RSMs are probed on the host ([`plan_photons`]), at creation and on
+//! updates.
 
 use super::PhotonGiSettings;
 use crate::backend::{read_buf, Backend};
 use crate::device::handle::{Buf, GBufferPlanes, SceneArgs};
-use crate::device::layout::{light_kind, GpuCamera, GpuLight, RsmParams, RsmPhoton, RsmTexel};
+use crate::device::layout::{
+    light_kind, photon_plan_word, GpuCamera, GpuLight, RsmParams, RsmPhoton, RsmTexel,
+};
 use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::kernels::{PrimaryGbuffer, RsmImportance};
@@ -125,24 +131,36 @@ pub(super) struct PhotonPlan {
     pub flux_quantum: f32,
 }
 
-/// The lights' RSMs and photon counts for `total` initial photons (allocated by power,
-/// Smal 2019, section 24.2, over the lights whose RSM sees something: `sees`, one flag per
-/// light, all true when not yet known), the unit of the packed photon power and the
-/// photon map's flux quantum.
-fn plan_lights(
+/// Photon counts per light for `total` initial photons, allocated by power (Smal 2019,
+/// section 24.2) over the lights whose RSM sees something (`sees`, one flag per light, all
+/// true when not yet known), the unit of the packed photon power and the photon map's
+/// flux quantum.
+fn allocation(powers: &[f64], total: u64, sees: &[bool]) -> (Vec<u64>, f32, f32) {
+    let sees_at = |i: usize| sees.get(i).copied().unwrap_or(true);
+    let powers: Vec<f64> = powers
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| if sees_at(i) { p } else { 0.0 })
+        .collect();
+    let counts = crate::math::photon_allocation::allocate_photons(total, &powers);
+    let emitted: f64 = powers.iter().sum();
+    let power_scale = ((emitted / total as f64) as f32).max(f32::MIN_POSITIVE);
+    // a splat's share of a photon is at least 2^-20 of it in any pixel it reaches
+    let flux_quantum = power_scale * (1.0 / 1_048_576.0);
+    (counts, power_scale, flux_quantum)
+}
+
+/// The lights' RSMs and photon counts for `total` initial photons ([`allocation`] with
+/// `sees`), the unit of the packed photon power and the photon map's flux quantum.
+pub(super) fn plan_lights(
     lights: &[GpuLight],
     total: u64,
     side: u32,
     bounds: &crate::math::geometry::Aabb,
     sees: &[bool],
 ) -> PhotonPlan {
-    let sees_at = |i: usize| sees.get(i).copied().unwrap_or(true);
-    let powers: Vec<f64> = lights
-        .iter()
-        .enumerate()
-        .map(|(i, l)| if sees_at(i) { light_power(l) } else { 0.0 })
-        .collect();
-    let counts = crate::math::photon_allocation::allocate_photons(total, &powers);
+    let powers: Vec<f64> = lights.iter().map(light_power).collect();
+    let (counts, power_scale, flux_quantum) = allocation(&powers, total, sees);
     let rsms = lights
         .iter()
         .zip(&counts)
@@ -151,18 +169,141 @@ fn plan_lights(
             light: i as u32,
             faces: rsm_faces(l, side, bounds),
             photons: n as u32,
-            sees: sees_at(i),
+            sees: sees.get(i).copied().unwrap_or(true),
         })
         .collect();
-    let emitted: f64 = powers.iter().sum();
-    let power_scale = ((emitted / total as f64) as f32).max(f32::MIN_POSITIVE);
-    // a splat's share of a photon is at least 2^-20 of it in any pixel it reaches
-    let flux_quantum = power_scale * (1.0 / 1_048_576.0);
     PhotonPlan {
         rsms,
         power_scale,
         flux_quantum,
     }
+}
+
+/// Most lights with power whose photon plan the device picks: the plan table has a row
+/// for each of the `2^n` sets of them (256 rows of a few words).
+pub const MAX_PLANNED_LIGHTS: usize = 8;
+
+/// Words of a plan table row before the per-light counts.
+const ROW_HEAD: usize = photon_plan_word::COUNTS - photon_plan_word::ROW;
+
+/// The plan of every set of probed lights, as the device selects it
+/// (`select_photon_plan`): row `m` is the plan where exactly the probed lights whose bits
+/// `m` sets see something (bit `k`: the `k`-th, [`PlanTable::lit`]),
+/// laid out as the plan's words from `photon_plan_word::ROW` on: the packed power's unit,
+/// the flux quantum, the resolve's quantum (the flux quantum over the frames an
+/// accumulation holds) as `f32` bits, then each light's photons.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct PlanTable {
+    /// The lights whose RSM the device probes, in light order (mask bit `k` is
+    /// `lit[k]`): those with photons where every light sees something (a light without
+    /// power gets none; nor does one that the allocation leaves without a photon when
+    /// the lights outnumber the photons, which counts as seeing).
+    pub lit: Vec<u32>,
+    /// The lights with photons in some row (traced while the device's row is unknown).
+    pub traced: Vec<u32>,
+    /// The lights' powers (W) and the initial photons the table was made for.
+    powers: Vec<f64>,
+    total: u64,
+    /// Per row: the flux quantum (the resolve's quantum is made from it per frame) and the
+    /// row's words with the resolve's quantum of one frame.
+    rows: Vec<(f32, Vec<u32>)>,
+}
+
+impl PlanTable {
+    /// The table for `lights` and `total` initial photons, or `None` with more than
+    /// [`MAX_PLANNED_LIGHTS`] probed lights.
+    pub fn new(lights: &[GpuLight], total: u64) -> Option<PlanTable> {
+        let powers: Vec<f64> = lights.iter().map(light_power).collect();
+        let (by_power, _, _) = allocation(&powers, total, &[]);
+        let lit: Vec<u32> = (0..lights.len() as u32)
+            .filter(|&i| by_power[i as usize] > 0)
+            .collect();
+        if lit.len() > MAX_PLANNED_LIGHTS {
+            return None;
+        }
+        let rows = (0..1u32 << lit.len())
+            .map(|mask| {
+                let sees = sees_of(mask, &lit, lights.len());
+                let (counts, power_scale, flux_quantum) = allocation(&powers, total, &sees);
+                let mut row = vec![
+                    power_scale.to_bits(),
+                    flux_quantum.to_bits(),
+                    flux_quantum.to_bits(),
+                ];
+                row.extend(counts.iter().map(|&n| n as u32));
+                (flux_quantum, row)
+            })
+            .collect::<Vec<_>>();
+        let traced = (0..lights.len() as u32)
+            .filter(|&i| rows.iter().any(|(_, row)| row[ROW_HEAD + i as usize] > 0))
+            .collect();
+        Some(PlanTable {
+            lit,
+            traced,
+            powers,
+            total,
+            rows,
+        })
+    }
+
+    /// Whether the table still holds for `lights` and `total` (their powers unchanged:
+    /// moving a light keeps it).
+    pub fn holds_for(&self, lights: &[GpuLight], total: u64) -> bool {
+        self.total == total
+            && self.powers.len() == lights.len()
+            && lights
+                .iter()
+                .zip(&self.powers)
+                .all(|(l, &p)| light_power(l).to_bits() == p.to_bits())
+    }
+
+    /// Words of a row.
+    pub fn row_words(&self) -> u32 {
+        (ROW_HEAD + self.powers.len()) as u32
+    }
+
+    /// The table's words with the resolve's quantum of an accumulation of `frames` frames
+    /// (the flux quantum over `frames`, as the host divides it).
+    pub fn words(&self, frames: u32) -> Vec<u32> {
+        let resolve = photon_plan_word::RESOLVE_QUANTUM - photon_plan_word::ROW;
+        self.rows
+            .iter()
+            .flat_map(|(q, row)| {
+                let mut row = row.clone();
+                row[resolve] = (q / frames.max(1) as f32).to_bits();
+                row
+            })
+            .collect()
+    }
+
+    /// Which lights see something under `mask` (a light that is not probed counts as
+    /// seeing: it gets no photon for its power, not for its RSM).
+    pub fn sees(&self, mask: u32) -> Vec<bool> {
+        sees_of(mask, &self.lit, self.powers.len())
+    }
+}
+
+/// Per light whether it sees something under `mask` over the probed lights `lit`.
+fn sees_of(mask: u32, lit: &[u32], lights: usize) -> Vec<bool> {
+    let mut sees = vec![true; lights];
+    for (k, &i) in lit.iter().enumerate() {
+        sees[i as usize] = mask & (1 << k) != 0;
+    }
+    sees
+}
+
+/// The plan's words (from `photon_plan_word::MASK` on) for a plan known on the host:
+/// `mask`, then [`PlanTable`]'s row layout for `plan` with the resolve's quantum of
+/// `frames` frames.
+pub(super) fn plan_words(mask: u32, plan: &PhotonPlan, frames: u32) -> Vec<u32> {
+    let mut w = vec![
+        mask,
+        plan.power_scale.to_bits(),
+        plan.flux_quantum.to_bits(),
+        (plan.flux_quantum / frames.max(1) as f32).to_bits(),
+    ];
+    w.extend(plan.rsms.iter().map(|r| r.photons));
+    w
 }
 
 /// The RSM's device buffers, with room for any light (six faces, every initial photon),
@@ -181,7 +322,7 @@ impl RsmBuffers {
     /// Records the creation of the RSM buffers for `settings`.
     pub fn create(rec: &mut Recording, settings: &PhotonGiSettings) -> RsmBuffers {
         let side = settings.rsm_size;
-        let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
+        let total = settings.total_photons();
         let max_faces = 6u32;
         let max_photons = total.min(u32::MAX as u64) as u32;
         RsmBuffers {
@@ -190,6 +331,17 @@ impl RsmBuffers {
             pyramid: rec.create(max_faces * pyramid_len(side), "RSM importance pyramid"),
             photons: rec.create(max_photons, "RSM photons"),
         }
+    }
+}
+
+/// Light `r`'s RSM parameters common to its passes: light, side, seed, sampling.
+pub(super) fn rsm_params(settings: &PhotonGiSettings, r: &LightRsm) -> RsmParams {
+    RsmParams {
+        light: r.light,
+        side: settings.rsm_size,
+        seed: crate::math::rng::random_u32(settings.frame.seed, r.light, 0, 7),
+        sampling: settings.rsm_sampling.code(),
+        ..Default::default()
     }
 }
 
@@ -203,14 +355,7 @@ pub(super) fn record_rsm(
     r: &LightRsm,
 ) -> RsmParams {
     let side = settings.rsm_size;
-    let seed = crate::math::rng::random_u32(settings.frame.seed, r.light, 0, 7);
-    let mut params = RsmParams {
-        light: r.light,
-        side,
-        seed,
-        sampling: settings.rsm_sampling.code(),
-        ..Default::default()
-    };
+    let mut params = rsm_params(settings, r);
     for (f, face) in r.faces.iter().enumerate() {
         rec.kernel(PrimaryGbuffer {
             scene,
@@ -273,9 +418,9 @@ fn probe_rsms(
 }
 
 /// Allocates the photons over the host's lights by power, among those whose RSM sees
-/// something ([`probe_rsms`]). The RSMs depend on the lights, the geometry and the
-/// albedos only, so this runs at creation and on light, instance and material updates
-/// (after the host's pending scene writes, which it runs first), never per frame.
+/// something ([`probe_rsms`]): the host-side plan where the lights with power are more than
+/// [`MAX_PLANNED_LIGHTS`]. It waits for the device (the host's pending scene writes run
+/// first, then each light's RSM, read back).
 pub(super) fn plan_photons(
     backend: &mut dyn Backend,
     host: &mut FrameHost,
@@ -283,14 +428,9 @@ pub(super) fn plan_photons(
     settings: &PhotonGiSettings,
 ) -> Result<PhotonPlan, Error> {
     host.flush(backend)?;
-    let lights: Vec<GpuLight> = host
-        .model()
-        .lights
-        .iter()
-        .map(crate::device::device_scene::gpu_light)
-        .collect();
+    let lights = host_lights(host);
     let bounds = host.geometry().bounds;
-    let total = settings.frame.photons_w as u64 * settings.frame.photons_h as u64;
+    let total = settings.total_photons();
     let side = settings.rsm_size;
     let by_power = plan_lights(&lights, total, side, &bounds, &[]);
     let sees = probe_rsms(backend, host.scene(), b, settings, &by_power.rsms)?;
@@ -303,4 +443,78 @@ pub(super) fn plan_photons(
         .map(|(r, &s)| s || r.photons == 0)
         .collect();
     Ok(plan_lights(&lights, total, side, &bounds, &sees))
+}
+
+/// The host's lights as the device holds them.
+pub(super) fn host_lights(host: &FrameHost) -> Vec<GpuLight> {
+    host.model()
+        .lights
+        .iter()
+        .map(crate::device::device_scene::gpu_light)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::geometry::Aabb;
+
+    fn point(i: f32) -> GpuLight {
+        GpuLight {
+            kind: light_kind::POINT,
+            intensity: [i, i, i, 0.0],
+            ..Default::default()
+        }
+    }
+
+    /// Row `m` of the table is the host's plan where the probed lights of `m` see
+    /// something, word for word, for any accumulation length.
+    fn rows_are_the_hosts_plans(lights: &[GpuLight], total: u64) -> PlanTable {
+        let t = PlanTable::new(lights, total).expect("a table");
+        let bounds = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        let rw = t.row_words() as usize;
+        for frames in [1, 3] {
+            let words = t.words(frames);
+            assert_eq!(words.len(), rw << t.lit.len());
+            for mask in 0..1u32 << t.lit.len() {
+                let p = plan_lights(lights, total, 32, &bounds, &t.sees(mask));
+                let row = &words[mask as usize * rw..][..rw];
+                assert_eq!(&plan_words(mask, &p, frames)[1..], row, "mask {mask}");
+                for (i, r) in p.rsms.iter().enumerate() {
+                    assert!(r.photons == 0 || t.traced.contains(&(i as u32)));
+                }
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn every_row_is_the_plan_of_its_lights() {
+        let t = rows_are_the_hosts_plans(&[point(1.0), point(0.0), point(3.0), point(0.5)], 1000);
+        // the light without power is neither probed nor traced
+        assert_eq!(t.lit, vec![0, 2, 3]);
+        assert_eq!(t.traced, vec![0, 2, 3]);
+        // the row where only light 2 sees: every photon is its
+        let row = &t.words(1)[0b010 * t.row_words() as usize..][..t.row_words() as usize];
+        assert_eq!(&row[ROW_HEAD..], &[0, 0, 1000, 0]);
+    }
+
+    #[test]
+    fn a_light_left_without_photons_by_power_is_not_probed() {
+        // two photons over three lights: the dimmest gets none by power and counts as
+        // seeing, but takes a photon where a brighter one is blind
+        let t = rows_are_the_hosts_plans(&[point(5.0), point(1.0), point(4.0)], 2);
+        assert_eq!(t.lit, vec![0, 2]);
+        assert_eq!(t.traced, vec![0, 1, 2]);
+    }
+
+    #[test]
+    fn more_lights_than_the_table_covers_have_none() {
+        let many: Vec<GpuLight> = (0..=MAX_PLANNED_LIGHTS).map(|_| point(1.0)).collect();
+        assert!(PlanTable::new(&many, 1000).is_none());
+        assert!(PlanTable::new(&many[1..], 1000).is_some());
+    }
 }

@@ -132,6 +132,11 @@ impl TechniqueSettings for PhotonGiSettings {
 }
 
 impl PhotonGiSettings {
+    /// Initial photons per frame over all lights (`photons_w x photons_h`).
+    pub fn total_photons(&self) -> u64 {
+        self.frame.photons_w as u64 * self.frame.photons_h as u64
+    }
+
     /// Refuses values the kernels cannot run with, each by name.
     pub fn validate(&self) -> Result<(), Error> {
         let bad = |what: &str| Err(Error::InvalidParameter(format!("photon-gi: {what}")));
