@@ -19,6 +19,7 @@ Sections:
   caustic-map  CausticMap's checks and stiff cases; every setting, Fresnel split and gather
   adaptive     AdaptiveCaustics (ADAPTIVE_PARTS=checks,frames by default; table,footprint,screen)
   photon-gi    PhotonGi's checks and stiff cases, its frames at the chapter's two settings
+  dispersion   spectral dispersion against the CPU on every backend, the prism's closed forms
   dynamic      moving lights and instances, deformations, the non-blocking loop (frame_loop)
   traversal    indirect launches checked, AdaptiveCaustics' device traversal timed, host waits
   hang         loops the parallel conformance suite; a hung run's threads are recorded
@@ -33,7 +34,7 @@ CAUSTICA_SKIP_BACKENDS and CAUSTICA_SERIALIZE_DRIVERS pass through to the suite.
 EOF
 }
 case "${1:-}" in ""|-h|--help) usage; exit 0 ;; esac
-SECTIONS="suite frames sspm caustic-map adaptive photon-gi dynamic traversal hang experiment"
+SECTIONS="suite frames sspm caustic-map adaptive photon-gi dispersion dynamic traversal hang experiment"
 for s in "$@"; do case " --build $SECTIONS " in *" $s "*) ;; *) echo "unknown section '$s'" >&2; exit 2 ;; esac; done
 
 # The functions a section runs: its parts' (SUITE_PARTS, ADAPTIVE_PARTS) or its own.
@@ -117,8 +118,10 @@ adaptive_screen() {
 }
 photon_gi() {
     check 200 ./cross_backend photon_gi; check 240 ./photon_gi_frames --nocapture; check 200 ./photon_gi_stiff
+    check 120 ./photon_plan
     bench 240 CAUSTICA_BENCH_SETTINGS="${CAUSTICA_BENCH_SETTINGS:-high,low}" ./photon_gi_frame --bench
 }
+dispersion() { check 300 ./spectral_dispersion; run ./optics_closed_form --nocapture; }
 dynamic() {
     warm_up
     bench 240 CAUSTICA_BENCH_DEFORM=0 ./dynamic_frame --bench; bench 300 ./dynamic_frame --bench
