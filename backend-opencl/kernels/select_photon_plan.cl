@@ -23,15 +23,14 @@ inline bool rsm_sees(__global const float* pyramid, uint side, uint faces) {
 }
 
 __kernel void select_photon_plan(__global const PlanParams* p, __global const float* pyramid,
-                                 uint table_words, __global const uint* table,
-                                 __global uint* plan) {
+                                 __global const uint* table, __global uint* plan) {
     if (get_global_id(0) != 0) return;
     uint mask = plan[PLAN_MASK];
     if (p->bit != NO_PLAN_BIT) mask = note_light(mask, p->bit, rsm_sees(pyramid, p->side, p->faces));
     plan[PLAN_MASK] = mask;
     // photon_plan::plan_row: row `mask` exists where mask < table_words / row_words; a
     // row past the table leaves the plan's row as it was
-    if (p->row_words > 0u && mask < table_words / p->row_words) {
+    if (p->row_words > 0u && mask < p->table_words / p->row_words) {
         uint start = mask * p->row_words;
         for (uint w = 0u; w < p->row_words; w++) plan[PLAN_ROW + w] = table[start + w];
     }

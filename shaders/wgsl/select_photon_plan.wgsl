@@ -4,8 +4,8 @@
 // RSM the pyramid holds sees a texel that leaves flux (photon_plan::rsm_sees,
 // note_light) and copies the plan table's row of the mask into the plan
 // (photon_plan::plan_row). Mirror of backend-cpu/src/kernels/select_photon_plan.rs and
-// backend-opencl/kernels/select_photon_plan.cl. The table's length (the OpenCL
-// `table_words` argument) is its array length.
+// backend-opencl/kernels/select_photon_plan.cl. The table's length is
+// `params.table_words`, never its binding's (wgpu binds at least 64 bytes).
 
 @group(0) @binding(0) var<uniform> params: PlanParams;
 @group(0) @binding(1) var<storage, read> pyramid: array<f32>;
@@ -47,7 +47,8 @@ fn select_photon_plan() {
     // photon_plan::plan_row: row `mask` exists where (mask + 1) row_words <= the
     // table's length, i.e. mask < length / row_words; a row past the table leaves the
     // plan's row as it was
-    if (p.row_words > 0u && mask < arrayLength(&table) / p.row_words) {
+    let table_words = min(p.table_words, arrayLength(&table));
+    if (p.row_words > 0u && mask < table_words / p.row_words) {
         let start = mask * p.row_words;
         for (var w = 0u; w < p.row_words; w++) {
             if (PLAN_ROW + w < arrayLength(&plan)) {

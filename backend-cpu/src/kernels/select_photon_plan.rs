@@ -18,7 +18,9 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &SelectPhotonPlan) -> Result<(), Back
     } else {
         cpu.get(k.pyramid.id)?.as_slice(k.pyramid.len)?
     };
-    let table = cpu.get(k.table.id)?.as_slice::<u32>(k.table.len)?;
+    let table = cpu
+        .get(k.table.id)?
+        .as_slice::<u32>(p.table_words.min(k.table.len))?;
     let mut plan = cpu.get(k.plan.id)?.as_slice::<u32>(k.plan.len)?.to_vec();
     select_photon_plan(p, pyramid, table, &mut plan);
     cpu.put(k.plan.id, &plan)

@@ -494,12 +494,13 @@ typedef struct {
     float epsilon; // 12
 } CorrectionParams;
 
-// core::device::layout::PlanParams, 16 bytes
+// core::device::layout::PlanParams, 20 bytes
 typedef struct {
     uint side; // 0
     uint faces; // 4
     uint bit; // 8
     uint row_words; // 12
+    uint table_words; // 16
 } PlanParams;
 
 // core::device::layout::RefineParams, 128 bytes

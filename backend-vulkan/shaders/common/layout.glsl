@@ -494,12 +494,13 @@ struct CorrectionParams {
     float epsilon; // 12
 };
 
-// core::device::layout::PlanParams, 16 bytes
+// core::device::layout::PlanParams, 20 bytes
 struct PlanParams {
     uint side; // 0
     uint faces; // 4
     uint bit; // 8
     uint row_words; // 12
+    uint table_words; // 16
 };
 
 // core::device::layout::RefineParams, 128 bytes

@@ -720,6 +720,9 @@ pub struct PlanParams {
     /// Words of a plan table row (`photon_plan_word::COUNTS - photon_plan_word::ROW` plus
     /// one per light).
     pub row_words: u32,
+    /// Words of the plan table (a binding's length can be longer than its buffer's
+    /// logical length: wgpu binds at least 64 bytes).
+    pub table_words: u32,
 }
 
 /// [`PlanParams::bit`] when no light's RSM is noted.

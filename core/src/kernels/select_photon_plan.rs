@@ -15,8 +15,9 @@ use crate::math::rsm::pyramid_len;
 /// ([`PlanParams::bit`]), its bit is set if the top of one of the pyramid's faces `0 ..
 /// params.faces` is positive ([`crate::math::photon_plan::rsm_sees`],
 /// [`crate::math::photon_plan::note_light`]); `plan[MASK] = mask` and `plan[ROW ..
-/// ROW + row_words]` = the table's row `mask` ([`crate::math::photon_plan::plan_row`];
-/// a row past the table leaves those words as they were).
+/// ROW + row_words]` = the table's row `mask` ([`crate::math::photon_plan::plan_row`]
+/// over the table's first `params.table_words` words; a row past them leaves those words
+/// as they were).
 #[derive(Clone, Copy, Debug)]
 pub struct SelectPhotonPlan {
     /// The light's bit and faces, the RSM side, the row length.
@@ -34,7 +35,6 @@ pub struct SelectPhotonPlan {
 const BINDINGS: &[Binding] = &[
     bind("params", Params),
     bind("pyramid", Read),
-    bind("table_words", Count),
     bind("table", Read),
     bind("plan", ReadWrite),
 ];
@@ -64,8 +64,7 @@ impl KernelDecl for SelectPhotonPlan {
         };
         a.params("params", p)?
             .buf("pyramid", self.pyramid, pyramid)?
-            .count("table_words", self.table.len)?
-            .buf("table", self.table, 0)?
+            .buf("table", self.table, p.table_words as u64 * 4)?
             .buf(
                 "plan",
                 self.plan,

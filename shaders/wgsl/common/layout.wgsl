@@ -494,12 +494,13 @@ struct CorrectionParams {
     epsilon: f32, // 12
 }
 
-// core::device::layout::PlanParams, 16 bytes
+// core::device::layout::PlanParams, 20 bytes
 struct PlanParams {
     side: u32, // 0
     faces: u32, // 4
     bit: u32, // 8
     row_words: u32, // 12
+    table_words: u32, // 16
 }
 
 // core::device::layout::RefineParams, 128 bytes

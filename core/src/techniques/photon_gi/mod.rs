@@ -754,6 +754,7 @@ impl PhotonGiPipeline {
                 faces,
                 bit,
                 row_words,
+                table_words: self.buffers.table.len,
             },
             pyramid: self.buffers.rsm.pyramid,
             table: self.buffers.table,
