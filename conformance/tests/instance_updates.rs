@@ -9,10 +9,11 @@
 //! static level does.
 
 use caustica_conformance::backends;
+use caustica_conformance::techniques::frame_outputs;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::{Light, Scene, Shape, Transform};
 use caustica_core::techniques::create;
-use caustica_core::{Backend, Technique};
+use caustica_core::Backend;
 use glam::{Quat, Vec3};
 
 fn small(name: &str) -> Scene {
@@ -80,20 +81,6 @@ fn settings_for(name: &str) -> serde_json::Value {
         }),
         _ => serde_json::json!({ "photons_w": 64, "photons_h": 64 }),
     }
-}
-
-/// Every requested camera-space output of one frame, by name.
-fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
-    t.frame(b, &mut |_| {}).expect("frame");
-    t.outputs()
-        .into_iter()
-        .filter(|o| o.requested && o.camera_space)
-        .map(|o| {
-            let img = t.read_output(b, o.output).expect("read");
-            assert!(img.all_finite(), "{}: not finite", o.name);
-            (o.name.to_string(), img.pixels)
-        })
-        .collect()
 }
 
 /// The outputs of the first frame of technique `name` created for `scene`.

@@ -7,6 +7,7 @@
 //! renders of one instant with different seeds.
 
 use caustica_conformance::backends;
+use caustica_conformance::techniques::frame_outputs;
 use caustica_core::scene::builtin::{builtin, POOL_WATER};
 use caustica_core::scene::shapes::tessellate;
 use caustica_core::scene::{Scene, Shape};
@@ -38,20 +39,6 @@ fn move_waves(t: &mut dyn Technique, b: &mut dyn Backend, scene: &Scene, seconds
     let m = tessellate(&scene.objects[POOL_WATER].shape.advanced(seconds));
     t.set_object_vertices(b, POOL_WATER, &m.positions, &m.normals)
         .expect("set_object_vertices");
-}
-
-/// Every requested camera-space output of one frame.
-fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
-    t.frame(b, &mut |_| {}).expect("frame");
-    t.outputs()
-        .into_iter()
-        .filter(|o| o.requested && o.camera_space)
-        .map(|o| {
-            let img = t.read_output(b, o.output).expect("read");
-            assert!(img.all_finite(), "{}: not finite", o.name);
-            (o.name.to_string(), img.pixels)
-        })
-        .collect()
 }
 
 #[test]

@@ -6,6 +6,7 @@
 //! technique dropped without `free` is reported, never silently leaked.
 
 use caustica_conformance::backends;
+use caustica_conformance::techniques::frame_outputs;
 use caustica_core::frame::error::Error;
 use caustica_core::frame::image::Image;
 use caustica_core::frame::output::Output;
@@ -60,25 +61,6 @@ fn variants() -> Vec<(&'static str, serde_json::Value)> {
         }),
     ));
     v
-}
-
-/// Every requested camera-space output of one frame, by name (the others, such as
-/// CausticMap's atlas, are checked for finiteness here).
-fn frame_outputs(t: &mut dyn Technique, b: &mut dyn Backend) -> Vec<(String, Vec<[f32; 4]>)> {
-    t.frame(b, &mut |_| {}).expect("frame");
-    t.outputs()
-        .into_iter()
-        .filter(|o| o.requested)
-        .filter_map(|o| {
-            let img = t.read_output(b, o.output).expect("read");
-            if o.camera_space {
-                Some((o.name.to_string(), img.pixels))
-            } else {
-                assert!(img.all_finite(), "{}: not finite", o.name);
-                None
-            }
-        })
-        .collect()
 }
 
 /// What a host writes once for all four techniques: a frame, then the caustics if the
