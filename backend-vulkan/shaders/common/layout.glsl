@@ -494,13 +494,16 @@ struct CorrectionParams {
     float epsilon; // 12
 };
 
-// core::device::layout::PlanParams, 20 bytes
+// core::device::layout::PlanParams, 32 bytes
 struct PlanParams {
     uint side; // 0
     uint faces; // 4
     uint bit; // 8
     uint row_words; // 12
     uint table_words; // 16
+    uint _pad0; // 20
+    uint _pad1; // 24
+    uint _pad2; // 28
 };
 
 // core::device::layout::RefineParams, 128 bytes

@@ -723,6 +723,8 @@ pub struct PlanParams {
     /// Words of the plan table (a binding's length can be longer than its buffer's
     /// logical length: wgpu binds at least 64 bytes).
     pub table_words: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 3],
 }
 
 /// [`PlanParams::bit`] when no light's RSM is noted.
@@ -1340,7 +1342,7 @@ mod tests {
         assert_eq!(size_of::<GpuMaterial>(), 48);
         assert_eq!(size_of::<GpuLight>(), 64);
         assert_eq!(size_of::<GpuCamera>(), 64);
-        assert_eq!(size_of::<PlanParams>(), 16);
+        assert_eq!(size_of::<PlanParams>(), 32);
         assert_eq!(size_of::<GBufferTexel>(), 64);
         assert_eq!(size_of::<Photon>(), 32);
         assert_eq!(size_of::<DepositTexel>(), 40);

@@ -247,7 +247,7 @@ table! {
         normal_compression, max_stretch, tile_constant, min_splat_px, light_direction, _pad
     }
     CorrectionParams { width, height, max_stretch, epsilon }
-    PlanParams { side, faces, bit, row_words, table_words }
+    PlanParams { side, faces, bit, row_words, table_words, _pad }
     RefineParams {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
         error_from_level, grid_w, first, count, children_capacity, relevance,

@@ -494,13 +494,16 @@ struct CorrectionParams {
     epsilon: f32, // 12
 }
 
-// core::device::layout::PlanParams, 20 bytes
+// core::device::layout::PlanParams, 32 bytes
 struct PlanParams {
     side: u32, // 0
     faces: u32, // 4
     bit: u32, // 8
     row_words: u32, // 12
     table_words: u32, // 16
+    _pad0: u32, // 20
+    _pad1: u32, // 24
+    _pad2: u32, // 28
 }
 
 // core::device::layout::RefineParams, 128 bytes

@@ -755,6 +755,7 @@ impl PhotonGiPipeline {
                 bit,
                 row_words,
                 table_words: self.buffers.table.len,
+                _pad: [0; 3],
             },
             pyramid: self.buffers.rsm.pyramid,
             table: self.buffers.table,
