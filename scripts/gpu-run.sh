@@ -22,6 +22,7 @@ Sections:
   dispersion   spectral dispersion against the CPU on every backend, the prism's closed forms
   dynamic      moving lights and instances, deformations, the non-blocking loop (frame_loop)
   traversal    indirect launches checked, AdaptiveCaustics' device traversal timed, host waits
+               (TRAVERSAL_TIMES_ONLY=1 skips the checks; TRAVERSAL_START_GRIDS="64 16")
   hang         loops the parallel conformance suite; a hung run's threads are recorded
   experiment   kernel variants timed without a rebuild (EXP_* below, CONTRIBUTING.md)
 
@@ -129,8 +130,15 @@ dynamic() {
     run timeout 60 ./frame_loop 1920x1080 2048 100; run timeout 60 ./frame_loop 1920x1080 1024 100
 }
 traversal() {
-    check 120 ./indirect_launches; check 240 ./submitted_frames; check 300 ./adaptive_caustics_frames
-    warm_up; bench 400 CAUSTICA_BENCH_SIZES="${CAUSTICA_BENCH_SIZES:-2048,4096}" ./adaptive_frame
+    if [ -z "${TRAVERSAL_TIMES_ONLY:-}" ]; then
+        check 120 ./indirect_launches; check 240 ./submitted_frames; check 300 ./adaptive_caustics_frames
+    fi
+    warm_up
+    # each start grid (TRAVERSAL_START_GRIDS) a run; each level's time by kernel
+    for g in ${TRAVERSAL_START_GRIDS:-64}; do
+        bench 400 CAUSTICA_BENCH_START_GRID="$g" CAUSTICA_BENCH_KERNELS=1 \
+            CAUSTICA_BENCH_SIZES="${CAUSTICA_BENCH_SIZES:-2048,4096}" ./adaptive_frame
+    done
     run timeout 90 ./frame_loop 1920x1080 2048 60
 }
 hang() {

@@ -103,6 +103,20 @@ pub(crate) fn record_all(
         unsafe { d.cmd_reset_query_pool(frame.cmd, q, 0, 2 * kernels) };
     }
     for step in &rec.steps {
+        // a step that touches the counters whose sums are in the banks reads them whole
+        if let Some(c) = frame.banked_counters {
+            let touches = match step {
+                Step::Create { id, .. }
+                | Step::Upload { id, .. }
+                | Step::Write { id, .. }
+                | Step::Clear { id }
+                | Step::Free { id } => *id == c,
+                Step::Kernel(k) => matches!(k.kernel(), Kernel::PrepareScene(_)),
+            };
+            if touches {
+                flush_counter_banks(b, frame)?;
+            }
+        }
         match step {
             Step::Create { id, bytes, label } => {
                 let buffer = b.new_storage(*bytes, label)?;
@@ -208,6 +222,38 @@ pub(crate) fn record_all(
             }
         }
     }
+    flush_counter_banks(b, frame)
+}
+
+/// Folds the counter banks into the counters buffer they stand for (`reduce_counters`),
+/// where traced launches left sums there. A traced launch adds its counts into the banks
+/// ([`Frame::banked_counters`]); further launches for the same counters add to them, and
+/// they are folded once, before anything else touches that buffer (a launch binding it,
+/// a parameter patch reading it, a write, clear or free), before a traced launch for
+/// other counters, and at the end of the recording: the counts equal a fold after every
+/// launch (the u64 words carry, the u32 words wrap mod 2^32 either way), with one
+/// dispatch instead of one per launch, outside the launches' timestamps.
+pub(crate) fn flush_counter_banks(
+    b: &VulkanBackend,
+    frame: &mut Frame,
+) -> Result<(), BackendError> {
+    let Some(c) = frame.banked_counters.take() else {
+        return Ok(());
+    };
+    let d = &b.ctx.device;
+    barrier(d, frame.cmd);
+    let reduce = &b.pipelines["reduce_counters"];
+    let descs = [
+        Desc::Storage(b.counter_banks.buffer, COUNTER_BANK_BYTES),
+        Desc::Storage(b.buffers.get(c)?.buffer.buffer, 80),
+    ];
+    let set = bind_set(b, frame, reduce, &descs)?;
+    unsafe {
+        d.cmd_bind_pipeline(frame.cmd, reduce.bind_point, reduce.pipeline);
+        d.cmd_bind_descriptor_sets(frame.cmd, reduce.bind_point, reduce.layout, 0, &[set], &[]);
+        d.cmd_dispatch(frame.cmd, 1, 1, 1);
+    }
+    barrier(d, frame.cmd);
     Ok(())
 }
 
@@ -241,6 +287,18 @@ fn record_kernel(
         Kernel::TraceIndirect(TraceIndirect { counters, .. }) => Some(counters.id),
         _ => None,
     };
+    // the banks hold one counters buffer's sums: folded before a launch for other
+    // counters, or one that reads the banked buffer itself
+    if let Some(c) = frame.banked_counters {
+        let binds = launch
+            .args
+            .iter()
+            .any(|a| matches!(a, LaunchArg::Buffer { id, .. } if *id == c))
+            || launch.patches.iter().any(|p| p.src == c);
+        if counters.is_some_and(|k| k != c) || (counters.is_none() && binds) {
+            flush_counter_banks(b, frame)?;
+        }
+    }
     let mut descs = Vec::new();
     // the launch's parameter block (buffer, offset)
     let mut block = None;
@@ -391,19 +449,8 @@ fn record_kernel(
             unsafe { d.cmd_dispatch(frame.cmd, x as u32, y as u32, 1) };
         }
     }
-    if let Some(c) = counters {
-        barrier(d, frame.cmd);
-        let reduce = &b.pipelines["reduce_counters"];
-        let descs = [
-            Desc::Storage(b.counter_banks.buffer, COUNTER_BANK_BYTES),
-            Desc::Storage(b.buffers.get(c)?.buffer.buffer, 80),
-        ];
-        let set = bind_set(b, frame, reduce, &descs)?;
-        unsafe {
-            d.cmd_bind_pipeline(frame.cmd, reduce.bind_point, reduce.pipeline);
-            d.cmd_bind_descriptor_sets(frame.cmd, reduce.bind_point, reduce.layout, 0, &[set], &[]);
-            d.cmd_dispatch(frame.cmd, 1, 1, 1);
-        }
+    if counters.is_some() {
+        frame.banked_counters = counters;
     }
     if let Some(q) = frame.queries {
         unsafe {

@@ -403,6 +403,9 @@ pub struct Frame {
     pub retired_scenes: Vec<SceneAccel>,
     pub queries: Option<vk::QueryPool>,
     pub passes: Vec<&'static str>,
+    /// The counters buffer whose sums are still in the counter banks
+    /// ([`crate::recording::flush_counter_banks`]).
+    pub banked_counters: Option<caustica_core::device::handle::ResourceId>,
     /// The slot's descriptor pool, arena and readback buffer while it runs.
     pub slot: FrameSlot,
 }
@@ -473,6 +476,7 @@ fn record_submission(
         retired_scenes: Vec::new(),
         queries,
         passes: Vec::new(),
+        banked_counters: None,
         slot,
     };
     let recorded = record_all(b, rec, &mut frame, kernels)
@@ -482,6 +486,8 @@ fn record_submission(
         Err(e) => {
             // wait for what was recorded before the frame's objects go
             if frame.cmd != vk::CommandBuffer::null() {
+                // the banks are left zero for the next submission
+                let _ = crate::recording::flush_counter_banks(b, &mut frame);
                 let cmd = std::mem::replace(&mut frame.cmd, vk::CommandBuffer::null());
                 let _ = b.submit_and_wait(cmd);
             }

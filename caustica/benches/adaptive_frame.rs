@@ -13,7 +13,11 @@
 //!
 //! `cargo bench -p caustica --bench adaptive_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
-//! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZES=1024,2048,4096`.
+//! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZES=1024,2048,4096`,
+//! `CAUSTICA_BENCH_SCENES=spot-glass,sphere`, `CAUSTICA_BENCH_START_GRID=64` (the
+//! traversal's start grid), `CAUSTICA_BENCH_KERNELS=1` (each level's time by kernel),
+//! `CAUSTICA_BENCH_PROBES=1` (`0,1`: the adaptive rows with full traces at every level too,
+//! `TraversalSettings::probe_coarse_levels`).
 
 mod common;
 use caustica::scene::builtin::builtin;
@@ -48,6 +52,15 @@ fn main() {
         .filter_map(|s| s.trim().parse().ok())
         .collect();
     let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
+    let scenes = env_or("CAUSTICA_BENCH_SCENES", "spot-glass,sphere");
+    let start_grid: u32 = env_or("CAUSTICA_BENCH_START_GRID", "64")
+        .parse()
+        .unwrap_or(64);
+    let by_kernel = env_or("CAUSTICA_BENCH_KERNELS", "0") == "1";
+    let probe_settings: Vec<bool> = env_or("CAUSTICA_BENCH_PROBES", "1")
+        .split(',')
+        .map(|s| s.trim() != "0")
+        .collect();
     println!(
         "AdaptiveCaustics vs the dense plane, median of {frames} frames after {} ms of warm-up frames",
         warmup_ms()
@@ -65,6 +78,9 @@ fn main() {
             ("spot-glass", EmissionPlane::LightCone),
             ("sphere", EmissionPlane::Casters),
         ] {
+            if !scenes.split(',').any(|s| s.trim() == scene_name) {
+                continue;
+            }
             let mut scene = builtin(scene_name).expect("built-in");
             (scene.camera.width, scene.camera.height) = (1920, 1080);
             for &n in &sizes {
@@ -85,11 +101,28 @@ fn main() {
                     },
                     ..CausticMapSettings::default()
                 };
-                for (label, metric) in [
-                    ("dense", None),
-                    ("level", Some(AdaptiveMetric::Level)),
-                    ("error", Some(AdaptiveMetric::Error)),
-                ] {
+                let mut variants = vec![("dense", None, true)];
+                for probes in probe_settings.iter().copied() {
+                    variants.push((
+                        if probes {
+                            "level"
+                        } else {
+                            "level, full traces"
+                        },
+                        Some(AdaptiveMetric::Level),
+                        probes,
+                    ));
+                    variants.push((
+                        if probes {
+                            "error"
+                        } else {
+                            "error, full traces"
+                        },
+                        Some(AdaptiveMetric::Error),
+                        probes,
+                    ));
+                }
+                for (label, metric, probes) in variants {
                     let made = match metric {
                         None => CausticMap::new(backend.as_mut(), &scene, map.clone())
                             .map(|t| Box::new(t) as Box<dyn Technique>),
@@ -99,6 +132,8 @@ fn main() {
                             AdaptiveCausticsSettings {
                                 traversal: TraversalSettings {
                                     metric,
+                                    start_grid,
+                                    probe_coarse_levels: probes,
                                     max_traversal_bytes: 256 << 20,
                                     ..AdaptiveCausticsSettings::default().traversal
                                 },
@@ -122,13 +157,27 @@ fn main() {
                     let (mut traced, mut steps, mut levels, mut timing) =
                         (0u64, 0u32, Vec::new(), String::new());
                     let mut level_ms: Vec<Vec<f64>> = Vec::new();
+                    let mut kernel_ms: Vec<std::collections::BTreeMap<String, Vec<f64>>> =
+                        Vec::new();
                     let mut failed = false;
+                    let mut traversal_passes = Vec::new();
                     for i in 0..=frames {
                         t.set_seed(1 + i as u32);
                         match t.frame(backend.as_mut(), &mut |_| {}) {
                             Ok(st) if i > 0 => {
                                 timing = st.timing.clone();
                                 frame.push(st.frame_ms);
+                                traversal_passes.push(
+                                    [
+                                        "dispatch_args",
+                                        "trace_photons",
+                                        "refine_clusters",
+                                        "deposit_screen",
+                                    ]
+                                    .iter()
+                                    .filter_map(|p| st.pass_ms.get(*p))
+                                    .sum::<f64>(),
+                                );
                                 work.push(
                                     PHOTON_PASSES
                                         .iter()
@@ -142,6 +191,13 @@ fn main() {
                                     level_ms.resize(a.ms_per_level.len(), Vec::new());
                                     for (v, ms) in level_ms.iter_mut().zip(&a.ms_per_level) {
                                         v.push(*ms);
+                                    }
+                                    kernel_ms
+                                        .resize(a.ms_per_level_kernel.len(), Default::default());
+                                    for (m, k) in kernel_ms.iter_mut().zip(&a.ms_per_level_kernel) {
+                                        for (name, ms) in k {
+                                            m.entry(name.clone()).or_default().push(*ms);
+                                        }
                                     }
                                 }
                             }
@@ -167,6 +223,19 @@ fn main() {
                         median(&mut frame),
                         per_level.join(", ")
                     );
+                    if by_kernel {
+                        println!(
+                            "    photon passes (dispatch_args + trace_photons + refine_clusters): {:.3} ms",
+                            median(&mut traversal_passes)
+                        );
+                        for (level, m) in kernel_ms.iter_mut().enumerate() {
+                            let parts: Vec<String> = m
+                                .iter_mut()
+                                .map(|(name, v)| format!("{name} {:.4}", median(v)))
+                                .collect();
+                            println!("    level {level}: {} ms", parts.join(", "));
+                        }
+                    }
                 }
             }
         }

@@ -9,6 +9,8 @@
 //!   2 and 16 batches (and the error metric, so that converged clusters are resampled)
 //!   give bitwise the same atlas and images: photons are keyed by texel and level, and
 //!   the sums are exact integers.
+//! - **Probe levels change nothing but the path ends** (see
+//!   [`probe_levels_give_the_full_traversals_frame_bitwise`]).
 //! - **The error metric keeps the flux.** Its stored flux equals the dense grid's within
 //!   four standard deviations of their difference, bounded from the stats (see
 //!   [`flux_tolerance`]), with Wyman 2009's one-texel metric and with a 4-texel tolerance whose
@@ -208,6 +210,77 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
                 "{name} / {scene_name}: the limits did not split the traversal: steps {steps:?}"
             );
             eprintln!("{name} / {scene_name}: passes at 1, 2 and 16 parts {steps:?}");
+        }
+    }
+}
+
+/// Probe levels (`probe_coarse_levels`: the photons of levels judged only by whether a
+/// photon met a caster traced to their first surface) change nothing but the path ends:
+/// the same clusters are refined, converged and output, so the atlas and every image are
+/// bitwise a traversal's with full traces at every level, under both metrics, on every
+/// backend; the path ends still account for every photon traced
+/// (`AdaptiveStats::probes_met_caster`), and the probes trace fewer ray segments.
+#[test]
+fn probe_levels_give_the_full_traversals_frame_bitwise() {
+    let settings = |metric, probes| AdaptiveCausticsSettings {
+        traversal: TraversalSettings {
+            metric,
+            start_grid: 16,
+            error_from_grid: 64,
+            probe_coarse_levels: probes,
+            ..AdaptiveCausticsSettings::default().traversal
+        },
+        ..caustica_conformance::adaptive_over(&map(256))
+    };
+    for (name, mut b) in backends() {
+        for scene_name in ["sphere", "cornell"] {
+            let scene = small(scene_name);
+            for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
+                let what = format!("{name} / {scene_name} / {metric:?}");
+                let run = |b: &mut dyn Backend, probes| {
+                    let t =
+                        AdaptiveCaustics::new(b, &scene, settings(metric, probes)).expect("scene");
+                    render(b, t)
+                };
+                let (sf, full) = run(b.as_mut(), false);
+                let (sp, probed) = run(b.as_mut(), true);
+                let (af, ap) = (
+                    AdaptiveStats::of(&sf).expect("adaptive stats"),
+                    AdaptiveStats::of(&sp).expect("adaptive stats"),
+                );
+                if let Some(out) = same_bits(&full, &probed) {
+                    panic!("{what}: {out} differs from the full traversal's");
+                }
+                assert_eq!(sp.stored_flux, sf.stored_flux, "{what}: stored flux");
+                assert_eq!(sp.photons_stored, sf.photons_stored, "{what}");
+                assert_eq!(ap.photons_per_level, af.photons_per_level, "{what}");
+                assert_eq!(ap.clusters_output, af.clusters_output, "{what}");
+                assert_eq!(ap.clusters_converged, af.clusters_converged, "{what}");
+                assert_eq!(af.probes_met_caster, 0, "{what}");
+                assert!(ap.probes_met_caster > 0, "{what}: no probe met a caster");
+                let d = &sp.discarded;
+                let ends = ap.photons_traced_stored
+                    + ap.probes_met_caster
+                    + d.no_specular
+                    + d.escaped
+                    + d.negligible_power
+                    + d.bounce_limit;
+                assert_eq!(
+                    ends,
+                    sp.photons_emitted + sp.photon_splits,
+                    "{what}: path ends"
+                );
+                assert!(
+                    sp.photon_rays_traced < sf.photon_rays_traced,
+                    "{what}: probes traced {} segments, full traces {}",
+                    sp.photon_rays_traced,
+                    sf.photon_rays_traced
+                );
+                eprintln!(
+                    "{what}: ray segments {} with probes, {} with full traces",
+                    sp.photon_rays_traced, sf.photon_rays_traced
+                );
+            }
         }
     }
 }

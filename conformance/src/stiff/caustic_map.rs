@@ -113,9 +113,12 @@ pub(super) fn checked_with(
     }
     let st = &f.stats;
     let d = &st.discarded;
+    // an adaptive traversal's probe photons that met a caster end at their one segment
     let traced_stored = AdaptiveStats::of(st)
         .as_ref()
-        .map_or(st.photons_stored, |a| a.photons_traced_stored);
+        .map_or(st.photons_stored, |a| {
+            a.photons_traced_stored + a.probes_met_caster
+        });
     let ends = traced_stored + d.no_specular + d.escaped + d.negligible_power + d.bounce_limit;
     v.check(ends == st.photons_emitted + st.photon_splits, || {
         format!(

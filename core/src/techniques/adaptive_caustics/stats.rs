@@ -25,6 +25,10 @@ pub struct AdaptiveStats {
     /// and of its converged clusters' fresh photons), in ms of the frame's `timing`
     /// (device timestamps or host wall clock).
     pub ms_per_level: Vec<f64>,
+    /// `ms_per_level` by kernel: per level, each kernel's time summed over its passes
+    /// (`dispatch_args`, `trace_photons`, `refine_clusters`, `deposit_screen`), in ms.
+    #[serde(default)]
+    pub ms_per_level_kernel: Vec<std::collections::BTreeMap<String, f64>>,
     /// Clusters whose photons were deposited.
     pub clusters_output: u64,
     /// Clusters none of whose photons met a caster.
@@ -38,6 +42,12 @@ pub struct AdaptiveStats {
     /// byte limit caps the lists): output at their level from four fresh photons each
     /// (counted in `clusters_output` too), so that no photon is lost.
     pub clusters_overflowed: u64,
+    /// Photons of probe levels ([`TraversalSettings::probe_coarse_levels`](super::TraversalSettings))
+    /// whose first segment met a caster, where their trace stopped: with
+    /// `photons_traced_stored` and the frame's discarded path ends they add up to
+    /// `photons_processed` (and the split branches).
+    #[serde(default)]
+    pub probes_met_caster: u64,
     /// Traversal passes that had clusters (a trace and a refinement of one pass of one
     /// level, or of its converged clusters).
     pub steps: u32,

@@ -137,6 +137,14 @@ pub struct TraversalSettings {
     /// it; the result is bitwise the same for any value. The screen deposit also holds a
     /// list of the batch's output photons (another 128 bytes per cluster).
     pub max_traversal_bytes: u64,
+    /// Trace the photons of *probe levels* to their first surface only: the levels whose
+    /// clusters are judged by whether a photon met a caster alone (below the finest, and
+    /// below `error_from_grid` with the error metric; [`TraversalSettings::is_probe_level`]).
+    /// Whether a photon met a caster is decided by its first segment
+    /// ([`photon_met_caster`](crate::math::photon_clusters::photon_met_caster)), so the
+    /// atlas is bitwise the same either way; a level then costs one segment's traversal
+    /// instead of its longest path's (a glass ball's internal reflections). Default true.
+    pub probe_coarse_levels: bool,
 }
 
 impl Default for TraversalSettings {
@@ -148,6 +156,7 @@ impl Default for TraversalSettings {
             error_from_grid: 512,
             error_texels: 1,
             max_traversal_bytes: 64 << 20,
+            probe_coarse_levels: true,
         }
     }
 }
@@ -173,6 +182,16 @@ impl TraversalSettings {
             l += 1;
         }
         l
+    }
+
+    /// Whether `level` of a pyramid down to `finest` is a probe level: its clusters are
+    /// refined or discarded, never output with its own photons (below the finest level,
+    /// and below the error metric's first level), so only whether a photon met a caster
+    /// counts there.
+    pub fn is_probe_level(&self, level: u32, finest: u32) -> bool {
+        let judged_by_error =
+            self.metric == AdaptiveMetric::Error && level >= self.error_from_level();
+        level < finest && !judged_by_error
     }
 
     /// Clusters of the start grid.
@@ -374,6 +393,8 @@ pub struct Traversal {
     resample_args: Buf<u32>,
     /// Counters of the output (deposited) photons.
     pub output_counters: Buf<u32>,
+    /// Counters of the probe levels' photons (their path ends after one segment).
+    probe_counters: Buf<u32>,
     /// The screen target's output list (four slots per cluster of a pass; one unused
     /// entry with the atlas target) and its count.
     outputs: Buf<Photon>,
@@ -408,6 +429,7 @@ struct LevelRead {
 pub struct TraversalReadback {
     planes: Vec<Vec<LevelRead>>,
     output_counters: usize,
+    probe_counters: usize,
     flux_quantum: f32,
     pass_clusters: u64,
     dense_equivalent: u64,
@@ -436,6 +458,7 @@ impl FrameEnd for TraversalReadback {
         a.photons_per_level.resize(levels, 0);
         a.photons_output_per_level.resize(levels, 0);
         a.ms_per_level.resize(levels, 0.0);
+        a.ms_per_level_kernel.resize(levels, Default::default());
         for plane in &self.planes {
             let mut length = plane.first().map_or(0, |l| l.capacity);
             for l in plane.iter().enumerate() {
@@ -466,8 +489,12 @@ impl FrameEnd for TraversalReadback {
             .iter()
             .all(|&(i, _, name)| times.get(i).is_some_and(|t| t.kernel == name));
         if in_order {
-            for &(i, level, _) in &self.kernels {
-                a.ms_per_level[level as usize] += times[i].seconds * 1e3;
+            for &(i, level, name) in &self.kernels {
+                let ms = times[i].seconds * 1e3;
+                a.ms_per_level[level as usize] += ms;
+                *a.ms_per_level_kernel[level as usize]
+                    .entry(name.to_string())
+                    .or_default() += ms;
             }
         }
         let o = words(self.output_counters);
@@ -484,6 +511,19 @@ impl FrameEnd for TraversalReadback {
                 stats.stored_flux[ch] =
                     o64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
             }
+        }
+        // probe photons: their misses are path ends like any other; those that met a
+        // caster ended at their one segment (`probes_met_caster`)
+        let p = words(self.probe_counters);
+        if p.len() >= counter::WORDS {
+            let w = |i: usize| p[i] as u64;
+            stats.discarded.no_specular += w(counter::NO_SPECULAR);
+            stats.discarded.escaped += w(counter::ESCAPED);
+            stats.discarded.negligible_power += w(counter::NEGLIGIBLE);
+            stats.photon_splits += w(counter::SPLITS);
+            stats.photon_rays_traced +=
+                crate::math::fixed_point::join_u64([p[counter::RAYS], p[counter::RAYS + 1]]);
+            a.probes_met_caster = w(counter::BOUNCE_LIMIT) + w(counter::STORED);
         }
         stats.photons_emitted = a.photons_processed;
         a.put(stats);
@@ -562,6 +602,7 @@ impl Traversal {
             args: rec.create(records, "adaptive dispatch records"),
             resample_args: rec.create(records, "adaptive converged dispatch records"),
             output_counters: rec.create(counter::WORDS as u32, "adaptive output counters"),
+            probe_counters: rec.create(counter::WORDS as u32, "adaptive probe counters"),
             outputs: rec.create(if screen { 4 * c } else { 1 }, "adaptive output photons"),
             output_count: rec.create(1, "adaptive output photon count"),
             no_atlas: screen.then(|| {
@@ -597,9 +638,11 @@ impl Traversal {
     ) -> Result<(), Error> {
         let s = self.settings;
         frame.rec().clear(self.output_counters);
+        frame.rec().clear(self.probe_counters);
         let mut read = TraversalReadback {
             planes: Vec::new(),
             output_counters: 0,
+            probe_counters: 0,
             flux_quantum: target.quanta().0,
             pass_clusters: self.sizes.pass_clusters as u64,
             dense_equivalent: 0,
@@ -650,10 +693,12 @@ impl Traversal {
                     children_capacity: children_capacity as u64,
                 });
                 let c = self.sizes.pass_clusters;
-                // converged clusters (from the error metric's level) and overflowed ones
-                // (capped lists) are output at their level from fresh photons
-                let resample =
-                    level < finest && (level >= s.error_from_level() || self.sizes.lists_capped);
+                // converged clusters (the error metric, from its level) and overflowed
+                // ones (capped lists) are output at their level from fresh photons; no
+                // pass is recorded where neither can occur
+                let converges = s.metric == AdaptiveMetric::Error && level >= s.error_from_level();
+                let resample = level < finest && (converges || self.sizes.lists_capped);
+                let probe = s.probe_coarse_levels && s.is_probe_level(level, finest);
                 for (pass, &(bound, rows)) in self.tables[level as usize].iter().enumerate() {
                     let step = PassArgs {
                         level,
@@ -668,6 +713,7 @@ impl Traversal {
                         children: (children, children_capacity),
                         converged: (self.converged, self.converged_count),
                         counts,
+                        probe,
                     };
                     if resample {
                         frame.rec().clear(self.converged_count);
@@ -693,6 +739,7 @@ impl Traversal {
                             args: self.resample_args,
                             children: (self.no_children, 0),
                             converged: (self.no_converged, self.no_converged_count),
+                            probe: false,
                             ..step
                         };
                         self.record_pass(
@@ -712,6 +759,7 @@ impl Traversal {
             frame.push(Recording::new(), plane.texels());
         }
         read.output_counters = frame.read_at_end(self.output_counters);
+        read.probe_counters = frame.read_at_end(self.probe_counters);
         frame.end_read(EndRead::Own(std::sync::Arc::new(read)));
         Ok(())
     }
@@ -741,6 +789,8 @@ struct PassArgs {
     converged: (Buf<u32>, Buf<u32>),
     /// The level's cluster counts.
     counts: Buf<u32>,
+    /// Trace each photon's first segment only, into the probe counters.
+    probe: bool,
 }
 
 impl Traversal {
@@ -823,14 +873,18 @@ impl Traversal {
                         light,
                         (first, 4 * c),
                         a.seed,
-                        optics.max_bounces,
+                        if a.probe { 1 } else { optics.max_bounces },
                         optics.min_relative_power,
                         flux_quantum,
                     )
                 },
                 photons: self.slots,
                 photon_count: length,
-                counters: target.trace_counters(),
+                counters: if a.probe {
+                    self.probe_counters
+                } else {
+                    target.trace_counters()
+                },
                 clusters: Some(ClusterBatch {
                     list,
                     dispatch: record(0),
