@@ -3,7 +3,8 @@
 // thread per row of `table` ([first, bound, per_item, word]). Mirror of
 // backend-opencl/kernels/dispatch_args.cl and backend-cpu/src/kernels/dispatch_args.rs
 // (core::kernels::dispatch_record). The row count (the OpenCL `rows` argument) is the
-// table's length.
+// table's length, bounded by the records `args` holds: a binding is at least 64 bytes
+// (four rows, two records), so a short table's padding rows must not write past them.
 
 @group(0) @binding(0) var<storage, read> table: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read> counts: array<u32>;
@@ -38,7 +39,7 @@ fn dispatch_record(r: u32, count: u32, first: u32, bound: u32, per_item: u32) {
 }
 
 fn dispatch_args(r: u32) {
-    if (r >= arrayLength(&table)) {
+    if (r >= arrayLength(&table) || r >= arrayLength(&args) / DISPATCH_RECORD_WORDS) {
         return;
     }
     let row = table[r];
