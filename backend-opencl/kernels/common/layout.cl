@@ -448,7 +448,7 @@ typedef struct {
     uint tile; // 28
 } GiPhoton;
 
-// core::device::layout::IndirectTraceParams, 112 bytes
+// core::device::layout::IndirectTraceParams, 128 bytes
 typedef struct {
     GpuCamera camera; // 0
     uint first; // 64
@@ -462,8 +462,22 @@ typedef struct {
     float power_scale; // 96
     float flux_quantum; // 100
     uint dispersion_mode; // 104
-    uint _pad; // 108
+    uint segment_first; // 108
+    uint segment_end; // 112
+    uint _pad0; // 116
+    uint _pad1; // 120
+    uint _pad2; // 124
 } IndirectTraceParams;
+
+// core::device::layout::IndirectPath, 48 bytes
+typedef struct {
+    float origin[3]; // 0
+    uint index; // 12
+    float direction[3]; // 16
+    uint bounces; // 28
+    float flux[3]; // 32
+    float wavelength; // 44
+} IndirectPath;
 
 // core::device::layout::SplatParams, 128 bytes
 typedef struct {
@@ -551,8 +565,9 @@ __kernel void struct_sizes(__global uint* out) {
     out[18] = sizeof(RsmParams);
     out[19] = sizeof(GiPhoton);
     out[20] = sizeof(IndirectTraceParams);
-    out[21] = sizeof(SplatParams);
-    out[22] = sizeof(CorrectionParams);
-    out[23] = sizeof(PlanParams);
-    out[24] = sizeof(RefineParams);
+    out[21] = sizeof(IndirectPath);
+    out[22] = sizeof(SplatParams);
+    out[23] = sizeof(CorrectionParams);
+    out[24] = sizeof(PlanParams);
+    out[25] = sizeof(RefineParams);
 }

@@ -448,7 +448,7 @@ struct GiPhoton {
     uint tile; // 28
 };
 
-// core::device::layout::IndirectTraceParams, 112 bytes
+// core::device::layout::IndirectTraceParams, 128 bytes
 struct IndirectTraceParams {
     GpuCamera camera; // 0
     uint first; // 64
@@ -462,7 +462,21 @@ struct IndirectTraceParams {
     float power_scale; // 96
     float flux_quantum; // 100
     uint dispersion_mode; // 104
-    uint _pad; // 108
+    uint segment_first; // 108
+    uint segment_end; // 112
+    uint _pad0; // 116
+    uint _pad1; // 120
+    uint _pad2; // 124
+};
+
+// core::device::layout::IndirectPath, 48 bytes
+struct IndirectPath {
+    vec3 origin; // 0
+    uint index; // 12
+    vec3 direction; // 16
+    uint bounces; // 28
+    vec3 flux; // 32
+    float wavelength; // 44
 };
 
 // core::device::layout::SplatParams, 128 bytes

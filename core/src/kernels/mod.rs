@@ -65,7 +65,7 @@ pub use shading_normal_correction::ShadingNormalCorrection;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
-pub use trace_indirect::TraceIndirect;
+pub use trace_indirect::{IndirectWave, TraceIndirect, TRACE_INDIRECT_SWITCHES};
 pub use trace_photons::{
     AtlasDeposit, ClusterBatch, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant,
 };
@@ -442,6 +442,7 @@ pub(crate) mod bytes {
     pub const RSM_TEXEL: u64 = size_of::<crate::device::layout::RsmTexel>() as u64;
     pub const RSM_PHOTON: u64 = size_of::<crate::device::layout::RsmPhoton>() as u64;
     pub const GI_PHOTON: u64 = size_of::<crate::device::layout::GiPhoton>() as u64;
+    pub const INDIRECT_PATH: u64 = size_of::<crate::device::layout::IndirectPath>() as u64;
 }
 
 /// Called with the one list ([`with_kernels!`](crate::with_kernels)): generates

@@ -448,7 +448,7 @@ struct GiPhoton {
     tile: u32, // 28
 }
 
-// core::device::layout::IndirectTraceParams, 112 bytes
+// core::device::layout::IndirectTraceParams, 128 bytes
 struct IndirectTraceParams {
     camera: GpuCamera, // 0
     first: u32, // 64
@@ -462,7 +462,21 @@ struct IndirectTraceParams {
     power_scale: f32, // 96
     flux_quantum: f32, // 100
     dispersion_mode: u32, // 104
-    _pad: u32, // 108
+    segment_first: u32, // 108
+    segment_end: u32, // 112
+    _pad0: u32, // 116
+    _pad1: u32, // 120
+    _pad2: u32, // 124
+}
+
+// core::device::layout::IndirectPath, 48 bytes
+struct IndirectPath {
+    origin: vec3<f32>, // 0
+    index: u32, // 12
+    direction: vec3<f32>, // 16
+    bounces: u32, // 28
+    flux: vec3<f32>, // 32
+    wavelength: f32, // 44
 }
 
 // core::device::layout::SplatParams, 128 bytes
