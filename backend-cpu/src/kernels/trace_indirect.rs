@@ -87,7 +87,7 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
     }
     r.counters
         .add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
-    if let Some(w) = waves {
+    if let (Some(w), false) = (waves, r.queued.is_empty()) {
         // the paths still going, appended from the queue's count (a slot past the queue's
         // end is not written, as on the GPU)
         let end = params.segment_end as usize;

@@ -87,8 +87,8 @@ pub struct IndirectWave {
     /// a slot past its end is not written).
     pub paths_out: Buf<IndirectPath>,
     /// Per segment `k` the paths queued for the wave that starts there (the caller
-    /// clears them before the first wave); read at `segment_first`, appended to at
-    /// `segment_end`.
+    /// clears them before the first wave); read at `segment_first` (above 0), appended
+    /// to at `segment_end` (below `max_segments`).
     pub path_counts: Buf<u32>,
 }
 
@@ -153,8 +153,15 @@ impl KernelDecl for TraceIndirect {
                 }
             )));
         }
+        // the queue lengths a wave reads (`segment_first`) and appends to (`segment_end`,
+        // unless it is the paths' last segment)
+        let last_count = if p.segment_end < p.max_segments {
+            p.segment_end
+        } else {
+            p.segment_first
+        };
         if let Some(w) = &self.waves {
-            if w.path_counts.len <= p.segment_end || w.paths_in.len < w.paths_out.len {
+            if w.path_counts.len <= last_count || w.paths_in.len < w.paths_out.len {
                 return Err(BackendError::BadArgument(format!(
                     "trace_indirect: {} path counts for a wave ending at segment {}, queues of \
                      {} and {} paths",
@@ -199,7 +206,7 @@ impl KernelDecl for TraceIndirect {
                         w.paths_out.len as u64 * bytes::INDIRECT_PATH,
                     )?
                     .count("path_capacity", w.paths_out.len)?
-                    .buf("path_counts", w.path_counts, (p.segment_end as u64 + 1) * 4)?;
+                    .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
             }
             // the single launch reads and writes no queue: stand-ins of the same access
             None => {

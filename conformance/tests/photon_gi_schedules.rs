@@ -1,0 +1,91 @@
+//! PhotonGi's two schedules of `trace_indirect` on every backend (`backends()`: all four,
+//! required in CI): the per-bounce waves trace exactly the single launch's paths (each
+//! path's random numbers are keyed by its photon and segment, its state crosses the
+//! queue in full precision), so they store the same photons in another order; the splat
+//! and the deposit sum in exact fixed point, so every image is the single launch's bit
+//! for bit, and so are the photon statistics. Checked on `cornell` and `rooms`, over two
+//! frames (the first selects the photon plan on the device and launches the lights from
+//! it, the second from the plan read back), with the splat, the raw deposit, one wave
+//! per segment and the default waves.
+
+use caustica_conformance::backends;
+use caustica_core::frame::output::Output;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::Scene;
+use caustica_core::techniques::create;
+use caustica_core::Backend;
+
+fn scene(name: &str) -> Scene {
+    let mut s = builtin(name).expect("built-in");
+    (s.camera.width, s.camera.height) = (96, 54);
+    s
+}
+
+/// Per frame: the outputs' bits and the photon statistics.
+type Frames = Vec<(Vec<Vec<u32>>, String)>;
+
+fn frames(b: &mut dyn Backend, scene: &Scene, settings: &serde_json::Value) -> Frames {
+    let mut t = create("photon-gi", b, scene, settings).expect("create");
+    let out = (0..2)
+        .map(|k| {
+            t.set_seed(3 + k);
+            let stats = t.frame(b, &mut |_| {}).expect("frame");
+            let images = [
+                Output::RawIndirect,
+                Output::FilteredIndirect,
+                Output::Composite,
+            ]
+            .map(|o| {
+                let img = t.read_output(b, o).expect("read").pixels;
+                img.iter().flatten().map(|x| x.to_bits()).collect()
+            });
+            let counts = format!(
+                "emitted {} rays {} stored {} discarded {:?}",
+                stats.photons_emitted,
+                stats.photon_rays_traced,
+                stats.photons_stored,
+                stats.discarded
+            );
+            (images.to_vec(), counts)
+        })
+        .collect();
+    t.free(b).expect("free");
+    out
+}
+
+#[test]
+fn waves_render_the_single_launchs_images_bitwise() {
+    let mut failures = Vec::new();
+    for (name, mut b) in backends() {
+        for scene_name in ["cornell", "rooms"] {
+            let s = scene(scene_name);
+            for estimator in ["splat", "deposit"] {
+                let base = serde_json::json!({
+                    "photons_w": 96, "photons_h": 96, "rsm_size": 64, "estimator": estimator,
+                    "indirect_schedule": "single_kernel"
+                });
+                let single = frames(b.as_mut(), &s, &base);
+                for waves in [8, 16] {
+                    let mut w = base.clone();
+                    w["indirect_schedule"] = "waves".into();
+                    w["indirect_waves"] = waves.into();
+                    let waved = frames(b.as_mut(), &s, &w);
+                    for (k, (a, c)) in single.iter().zip(&waved).enumerate() {
+                        let what = format!("{name} {scene_name} {estimator} {waves} waves frame {k}");
+                        if a.1 != c.1 {
+                            failures.push(format!("{what}: statistics {} vs {}", c.1, a.1));
+                        }
+                        for (o, (x, y)) in a.0.iter().zip(&c.0).enumerate() {
+                            let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
+                            if differ > 0 || x.len() != y.len() {
+                                failures.push(format!("{what}: output {o}: {differ} words differ"));
+                            }
+                        }
+                    }
+                    eprintln!("{name} {scene_name} {estimator} {waves} waves: {}", waved[1].1);
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
