@@ -71,7 +71,8 @@ fn waves_render_the_single_launchs_images_bitwise() {
                     w["indirect_waves"] = waves.into();
                     let waved = frames(b.as_mut(), &s, &w);
                     for (k, (a, c)) in single.iter().zip(&waved).enumerate() {
-                        let what = format!("{name} {scene_name} {estimator} {waves} waves frame {k}");
+                        let what =
+                            format!("{name} {scene_name} {estimator} {waves} waves frame {k}");
                         if a.1 != c.1 {
                             failures.push(format!("{what}: statistics {} vs {}", c.1, a.1));
                         }
@@ -82,7 +83,10 @@ fn waves_render_the_single_launchs_images_bitwise() {
                             }
                         }
                     }
-                    eprintln!("{name} {scene_name} {estimator} {waves} waves: {}", waved[1].1);
+                    eprintln!(
+                        "{name} {scene_name} {estimator} {waves} waves: {}",
+                        waved[1].1
+                    );
                 }
             }
         }

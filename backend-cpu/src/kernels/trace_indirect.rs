@@ -15,10 +15,10 @@ use caustica_core::kernels::{TraceIndirect, VISIBLE_TOLERANCE};
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::optics::{beer_lambert, dielectric_scatter, dispersive_ior, reflect};
-use caustica_core::math::spectrum::disperse;
 use caustica_core::math::packing::{pack_rgb9e5, pack_unit_vector, unpack_unit_vector};
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{coherent_sample_order, cosine_hemisphere, russian_roulette};
+use caustica_core::math::spectrum::disperse;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -47,8 +47,9 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
     let queued: Vec<IndirectPath>;
     let source = match waves {
         Some(w) if params.segment_first > 0 => {
-            let live = cpu.get(w.path_counts.id)?.as_slice::<u32>(w.path_counts.len)?
-                [params.segment_first as usize]
+            let live = cpu
+                .get(w.path_counts.id)?
+                .as_slice::<u32>(w.path_counts.len)?[params.segment_first as usize]
                 .min(w.paths_out.len) as usize;
             queued = cpu
                 .get(w.paths_in.id)?
@@ -188,11 +189,11 @@ pub fn trace_indirect(
                 coherent_sample_order(t, threads)
             })
         }
-        IndirectSource::Rsm(_) => crate::traversal_stats::report(
-            "trace_indirect wave 0",
-            threads,
-            |t| coherent_sample_order(t, threads),
-        ),
+        IndirectSource::Rsm(_) => {
+            crate::traversal_stats::report("trace_indirect wave 0", threads, |t| {
+                coherent_sample_order(t, threads)
+            })
+        }
         // (the GPU's queue is in arrival order; the CPU's in photon order)
         IndirectSource::Queue(_) => crate::traversal_stats::report(
             &format!("trace_indirect wave {}", p.segment_first),

@@ -179,8 +179,20 @@ pub fn check_photon_gi(
         let scales = (power_scale, quantum);
         let (phwa, tiwa, cwa) = run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES)?;
         let (phwb, tiwb, cwb) = run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES)?;
-        compare_schedules(&mut v, "reference", l, (&pha, &tia, &ca), (&phwa, &tiwa, &cwa));
-        compare_schedules(&mut v, "candidate", l, (&phb, &tib, &cb), (&phwb, &tiwb, &cwb));
+        compare_schedules(
+            &mut v,
+            "reference",
+            l,
+            (&pha, &tia, &ca),
+            (&phwa, &tiwa, &cwa),
+        );
+        compare_schedules(
+            &mut v,
+            "candidate",
+            l,
+            (&phb, &tib, &cb),
+            (&phwb, &tiwb, &cwb),
+        );
         compare_indirect(
             &mut v,
             fx,

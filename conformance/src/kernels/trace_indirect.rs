@@ -125,7 +125,10 @@ pub(crate) fn run_trace_waves(
                     counts: path_counts,
                     args,
                 });
-                DispatchRecord { args, record: k - 1 }
+                DispatchRecord {
+                    args,
+                    record: k - 1,
+                }
             });
             rec.kernel(TraceIndirect {
                 params: IndirectTraceParams {
@@ -241,7 +244,10 @@ pub(crate) fn compare_indirect(
     // photons of a spectral colour (dispersive glass) differ by up to SPECTRAL_FLUX_REL of
     // their largest channel in every channel: of all channels' sum at most
     let flux_units = |c: &[u32], ch: usize| {
-        join_u64([c[counter::STORED_FLUX + 2 * ch], c[counter::STORED_FLUX + 2 * ch + 1]]) as f64
+        join_u64([
+            c[counter::STORED_FLUX + 2 * ch],
+            c[counter::STORED_FLUX + 2 * ch + 1],
+        ]) as f64
     };
     let all = |c: &[u32]| (0..3).map(|ch| flux_units(c, ch)).sum::<f64>();
     let spectral = if fx.scene.materials.values().any(|m| m.is_dispersive()) {

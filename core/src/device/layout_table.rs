@@ -11,8 +11,8 @@
 use super::layout::{
     AtlasParams, AtrousParams, CorrectionParams, DepositParams, DepositTexel, DirectParams,
     GBufferTexel, GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
-    IndirectPath, IndirectTraceParams, MapLookupParams, Photon, PlanParams, RefineParams, RsmParams, RsmPhoton,
-    RsmTexel, SplatParams, TemporalParams, TraceParams,
+    IndirectPath, IndirectTraceParams, MapLookupParams, Photon, PlanParams, RefineParams,
+    RsmParams, RsmPhoton, RsmTexel, SplatParams, TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;

@@ -165,10 +165,7 @@ impl KernelDecl for TraceIndirect {
                 return Err(BackendError::BadArgument(format!(
                     "trace_indirect: {} path counts for a wave ending at segment {}, queues of \
                      {} and {} paths",
-                    w.path_counts.len,
-                    p.segment_end,
-                    w.paths_in.len,
-                    w.paths_out.len
+                    w.path_counts.len, p.segment_end, w.paths_in.len, w.paths_out.len
                 )));
             }
         }
@@ -200,13 +197,13 @@ impl KernelDecl for TraceIndirect {
                     w.paths_in,
                     w.paths_out.len as u64 * bytes::INDIRECT_PATH,
                 )?
-                    .buf(
-                        "paths_out",
-                        w.paths_out,
-                        w.paths_out.len as u64 * bytes::INDIRECT_PATH,
-                    )?
-                    .count("path_capacity", w.paths_out.len)?
-                    .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
+                .buf(
+                    "paths_out",
+                    w.paths_out,
+                    w.paths_out.len as u64 * bytes::INDIRECT_PATH,
+                )?
+                .count("path_capacity", w.paths_out.len)?
+                .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
             }
             // the single launch reads and writes no queue: stand-ins of the same access
             None => {

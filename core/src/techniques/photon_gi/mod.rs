@@ -249,7 +249,8 @@ impl Buffers {
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
         let bound = total.min(u32::MAX as u64) as u32;
-        let waves = (settings.waves() > 1).then(|| WaveBuffers::create(rec, bound, settings.waves()));
+        let waves =
+            (settings.waves() > 1).then(|| WaveBuffers::create(rec, bound, settings.waves()));
         Buffers {
             rsm,
             plan: rec.create(
