@@ -217,6 +217,13 @@
 #define GI_STORE_PACKED 0u
 #define GI_STORE_FLOAT 1u
 
+// core::math::path_sort
+#define PATH_SORT_BITS 3u
+#define PATH_SORT_BUCKETS 4096
+#define PATH_SORT_HISTOGRAM 0u
+#define PATH_SORT_SCAN 1u
+#define PATH_SORT_SCATTER 2u
+
 // core::device::layout::GpuVertex, 32 bytes
 typedef struct {
     float position[3]; // 0
@@ -479,6 +486,14 @@ typedef struct {
     float wavelength; // 44
 } IndirectPath;
 
+// core::device::layout::PathSortParams, 32 bytes
+typedef struct {
+    float origin_min[3]; // 0
+    uint phase; // 12
+    float origin_scale[3]; // 16
+    uint count_word; // 28
+} PathSortParams;
+
 // core::device::layout::SplatParams, 128 bytes
 typedef struct {
     GpuCamera camera; // 0
@@ -566,8 +581,9 @@ __kernel void struct_sizes(__global uint* out) {
     out[19] = sizeof(GiPhoton);
     out[20] = sizeof(IndirectTraceParams);
     out[21] = sizeof(IndirectPath);
-    out[22] = sizeof(SplatParams);
-    out[23] = sizeof(CorrectionParams);
-    out[24] = sizeof(PlanParams);
-    out[25] = sizeof(RefineParams);
+    out[22] = sizeof(PathSortParams);
+    out[23] = sizeof(SplatParams);
+    out[24] = sizeof(CorrectionParams);
+    out[25] = sizeof(PlanParams);
+    out[26] = sizeof(RefineParams);
 }

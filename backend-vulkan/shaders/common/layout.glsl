@@ -217,6 +217,13 @@ const uint RSM_SAMPLING_UNIFORM = 1u;
 const uint GI_STORE_PACKED = 0u;
 const uint GI_STORE_FLOAT = 1u;
 
+// core::math::path_sort
+const uint PATH_SORT_BITS = 3u;
+const uint PATH_SORT_BUCKETS = 4096u;
+const uint PATH_SORT_HISTOGRAM = 0u;
+const uint PATH_SORT_SCAN = 1u;
+const uint PATH_SORT_SCATTER = 2u;
+
 // core::device::layout::GpuVertex, 32 bytes
 struct GpuVertex {
     vec3 position; // 0
@@ -477,6 +484,14 @@ struct IndirectPath {
     uint bounces; // 28
     vec3 flux; // 32
     float wavelength; // 44
+};
+
+// core::device::layout::PathSortParams, 32 bytes
+struct PathSortParams {
+    vec3 origin_min; // 0
+    uint phase; // 12
+    vec3 origin_scale; // 16
+    uint count_word; // 28
 };
 
 // core::device::layout::SplatParams, 128 bytes

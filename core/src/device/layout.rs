@@ -674,6 +674,21 @@ pub struct IndirectPath {
     pub wavelength: f32,
 }
 
+/// Parameters of `sort_indirect_paths` (the `sorted_waves` schedule's queues sorted by
+/// [`path_sort_key`](crate::math::path_sort::path_sort_key)).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathSortParams {
+    /// The scene box's lower corner (world space): the origin cells start there.
+    pub origin_min: [f32; 3],
+    /// Which launch, one of [`path_sort_phase`](crate::math::path_sort::path_sort_phase).
+    pub phase: u32,
+    /// Origin cells per scene unit along each axis.
+    pub origin_scale: [f32; 3],
+    /// The word of `path_counts` that holds the queue's length.
+    pub count_word: u32,
+}
+
 /// Parameters of `splat_photons` (Smal 2019, section 24.3, Eqs. 2-9): the camera, the
 /// tiles and the kernel's constants
 /// ([`SplatConstants`](crate::math::photon_splat::SplatConstants)).

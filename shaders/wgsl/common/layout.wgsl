@@ -217,6 +217,13 @@ const RSM_SAMPLING_UNIFORM: u32 = 1u;
 const GI_STORE_PACKED: u32 = 0u;
 const GI_STORE_FLOAT: u32 = 1u;
 
+// core::math::path_sort
+const PATH_SORT_BITS: u32 = 3u;
+const PATH_SORT_BUCKETS: u32 = 4096u;
+const PATH_SORT_HISTOGRAM: u32 = 0u;
+const PATH_SORT_SCAN: u32 = 1u;
+const PATH_SORT_SCATTER: u32 = 2u;
+
 // core::device::layout::GpuVertex, 32 bytes
 struct GpuVertex {
     position: vec3<f32>, // 0
@@ -477,6 +484,14 @@ struct IndirectPath {
     bounces: u32, // 28
     flux: vec3<f32>, // 32
     wavelength: f32, // 44
+}
+
+// core::device::layout::PathSortParams, 32 bytes
+struct PathSortParams {
+    origin_min: vec3<f32>, // 0
+    phase: u32, // 12
+    origin_scale: vec3<f32>, // 16
+    count_word: u32, // 28
 }
 
 // core::device::layout::SplatParams, 128 bytes

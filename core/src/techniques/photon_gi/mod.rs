@@ -40,7 +40,7 @@ use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
 use crate::device::launch::{ParamPatch, DISPATCH_RECORD_WORDS};
 use crate::device::layout::{
     counter, photon_plan_word, CorrectionParams, DepositParams, GpuCamera, IndirectPath,
-    IndirectTraceParams, PlanParams, RsmParams, SplatParams, NO_PLAN_BIT,
+    IndirectTraceParams, PathSortParams, PlanParams, RsmParams, SplatParams, NO_PLAN_BIT,
 };
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
@@ -56,9 +56,10 @@ use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
     DepositScreen, DispatchArgs, DispatchRecord, IndirectWave, ResolveCaustics, SampleRsm,
-    SelectPhotonPlan, ShadingNormalCorrection, SplatPhotons, TraceIndirect,
+    SelectPhotonPlan, ShadingNormalCorrection, SortIndirectPaths, SplatPhotons, TraceIndirect,
 };
 use crate::math::gi_photon::{gi_store, screen_tiles};
+use crate::math::path_sort::{path_sort_phase, PATH_SORT_BITS, PATH_SORT_BUCKETS};
 use crate::recording::Recording;
 use rsm::{PhotonPlan, PlanTable, RsmBuffers};
 use std::mem::offset_of;
@@ -153,21 +154,24 @@ struct Buffers {
 }
 
 /// The `waves` schedule's queues: two of every path a light can trace (wave `k` reads
-/// `paths[k % 2]` and appends to the other, so no path is ever lost), the per-segment
-/// queue lengths, and the later waves' launch records (`dispatch_args` over `rows`, row
-/// `k - 1` = `[0, every initial photon, 1, k]` for wave `k`).
+/// `paths[k % 2]` and appends to the other; sorted, every wave appends to `paths[1]`,
+/// which the sort moves into `paths[0]` for the next: no path is ever lost), the
+/// per-segment queue lengths, the later waves' launch records (`dispatch_args` over
+/// `rows`, row `k - 1` = `[0, every initial photon, 1, k]` for wave `k`), and the sort's
+/// buckets (`sorted_waves`).
 #[derive(Clone, Copy, Debug)]
 struct WaveBuffers {
     paths: [Buf<IndirectPath>; 2],
     path_counts: Buf<u32>,
     rows: Buf<[u32; 4]>,
     dispatch: Buf<u32>,
+    buckets: Option<Buf<u32>>,
 }
 
 impl WaveBuffers {
     /// Records the creation of the queues of `waves` waves (more than one) of at most
     /// `total` paths each.
-    fn create(rec: &mut Recording, total: u32, waves: u32) -> WaveBuffers {
+    fn create(rec: &mut Recording, total: u32, waves: u32, sorted: bool) -> WaveBuffers {
         let later = waves - 1;
         WaveBuffers {
             paths: [
@@ -183,6 +187,7 @@ impl WaveBuffers {
                 later * DISPATCH_RECORD_WORDS as u32,
                 "indirect wave launch records",
             ),
+            buckets: sorted.then(|| rec.create(PATH_SORT_BUCKETS, "indirect path sort buckets")),
         }
     }
 }
@@ -249,8 +254,9 @@ impl Buffers {
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
         let bound = total.min(u32::MAX as u64) as u32;
-        let waves =
-            (settings.waves() > 1).then(|| WaveBuffers::create(rec, bound, settings.waves()));
+        let sorted = settings.indirect_schedule == IndirectSchedule::SortedWaves;
+        let waves = (settings.waves() > 1)
+            .then(|| WaveBuffers::create(rec, bound, settings.waves(), sorted));
         Buffers {
             rsm,
             plan: rec.create(
@@ -445,6 +451,17 @@ fn make_plan(
                     "some light has power; its paths in per-bounce waves"
                 } else {
                     photons
+                },
+            ),
+            pass(
+                "sort_indirect_paths",
+                any && s.waves() > 1 && s.indirect_schedule == IndirectSchedule::SortedWaves,
+                if s.indirect_schedule != IndirectSchedule::SortedWaves {
+                    "indirect_schedule is not sorted_waves"
+                } else if s.waves() > 1 {
+                    "each indirect wave's queue in key order (direction octant, origin cell)"
+                } else {
+                    "a single wave: no queue"
                 },
             ),
             pass(
@@ -802,12 +819,21 @@ impl PhotonGiPipeline {
                     counts: w.path_counts,
                     args: w.dispatch,
                 });
-                Some(DispatchRecord {
+                let record = DispatchRecord {
                     args: w.dispatch,
                     record: k - 1,
-                })
+                };
+                if let Some(buckets) = w.buckets {
+                    self.record_sort(rec, host, w, buckets, k, record);
+                }
+                Some(record)
             };
             let end = if k + 1 == waves { max_segments } else { k + 1 };
+            let (paths_in, paths_out) = if w.buckets.is_some() {
+                (w.paths[0], w.paths[1])
+            } else {
+                (w.paths[k as usize % 2], w.paths[(k as usize + 1) % 2])
+            };
             rec.kernel_patched(
                 TraceIndirect {
                     params: IndirectTraceParams {
@@ -817,8 +843,8 @@ impl PhotonGiPipeline {
                     },
                     dispatch,
                     waves: Some(IndirectWave {
-                        paths_in: w.paths[k as usize % 2],
-                        paths_out: w.paths[(k as usize + 1) % 2],
+                        paths_in,
+                        paths_out,
                         path_counts: w.path_counts,
                     }),
                     ..single
@@ -826,6 +852,39 @@ impl PhotonGiPipeline {
                 patches.clone(),
             );
         }
+    }
+
+    /// Records the sort of the queue wave `k` continues (`w.paths[1]`, its length at word
+    /// `k`) into `w.paths[0]`, launched from `record` (its length's launch record).
+    fn record_sort(
+        &self,
+        rec: &mut Recording,
+        host: &FrameHost,
+        w: &WaveBuffers,
+        buckets: Buf<u32>,
+        k: u32,
+        record: DispatchRecord,
+    ) {
+        let b = host.geometry().bounds;
+        let cells = (1u32 << PATH_SORT_BITS) as f32;
+        let extent = (b.max - b.min).max(glam::Vec3::splat(f32::MIN_POSITIVE));
+        let sort = |phase| SortIndirectPaths {
+            params: PathSortParams {
+                origin_min: b.min.to_array(),
+                phase,
+                origin_scale: (cells / extent).to_array(),
+                count_word: k,
+            },
+            paths_in: w.paths[1],
+            path_counts: w.path_counts,
+            paths_out: w.paths[0],
+            buckets,
+            dispatch: Some(record),
+        };
+        rec.clear(buckets);
+        rec.kernel(sort(path_sort_phase::HISTOGRAM));
+        rec.kernel(sort(path_sort_phase::SCAN));
+        rec.kernel(sort(path_sort_phase::SCATTER));
     }
 
     /// Records the lights' launch records from the device plan's counts (`dispatch_args`

@@ -54,6 +54,11 @@ pub enum IndirectSchedule {
     /// launched from that count; the last wave traces the paths to their end. The same
     /// photons as the single launch, in another order: the same image, bit for bit.
     Waves,
+    /// The waves with each queue sorted before its wave (`sort_indirect_paths`: by the
+    /// octant of the path's direction, then a coarse Morton code of its origin,
+    /// `math::path_sort`), so that a warp's paths walk similar parts of the BVH. The same
+    /// image, bit for bit.
+    SortedWaves,
 }
 
 /// Every parameter of the technique.
@@ -162,7 +167,9 @@ impl PhotonGiSettings {
     pub fn waves(&self) -> u32 {
         match self.indirect_schedule {
             IndirectSchedule::SingleKernel => 1,
-            IndirectSchedule::Waves => self.indirect_waves.min(self.max_segments).max(1),
+            IndirectSchedule::Waves | IndirectSchedule::SortedWaves => {
+                self.indirect_waves.min(self.max_segments).max(1)
+            }
         }
     }
 
