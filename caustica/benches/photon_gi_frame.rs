@@ -10,8 +10,9 @@
 //! `cargo bench -p caustica --bench photon_gi_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SETTINGS=high,low`,
-//! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080), `CAUSTICA_BENCH_GI_SCHEDULES=single_kernel,waves`
-//! (`trace_indirect`'s schedules, default `single_kernel`; each timed in turn),
+//! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080),
+//! `CAUSTICA_BENCH_GI_SCHEDULES=single_kernel,waves,sorted_waves` (`trace_indirect`'s
+//! schedules, default `single_kernel`; each timed in turn),
 //! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8).
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
@@ -72,6 +73,7 @@ fn main() {
             let indirect_schedule = match schedule {
                 "single_kernel" => IndirectSchedule::SingleKernel,
                 "waves" => IndirectSchedule::Waves,
+                "sorted_waves" => IndirectSchedule::SortedWaves,
                 other => panic!("unknown schedule {other}"),
             };
             let s = PhotonGiSettings {
