@@ -36,38 +36,37 @@ fn key_of(i: u32) -> u32 {
     return path_sort_key(q.origin, q.direction, params.origin_min, params.origin_scale);
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
-        @builtin(local_invocation_index) li: u32) {
-    let p = params;
-    if (p.phase == PATH_SORT_SCAN) {
-        // each thread sums its run of PATH_SORT_BUCKETS / WORKGROUP_SIZE counts; thread 0
-        // scans the runs; each thread writes its run's first slots
-        let per = u32(PATH_SORT_BUCKETS) / WORKGROUP_SIZE;
-        var sum = 0u;
-        for (var k = 0u; k < per; k++) {
-            sum += atomicLoad(&buckets[li * per + k]);
-        }
-        partial[li] = sum;
-        workgroupBarrier();
-        if (li == 0u) {
-            var run = 0u;
-            for (var t = 0u; t < WORKGROUP_SIZE; t++) {
-                let s = partial[t];
-                partial[t] = run;
-                run += s;
-            }
-        }
-        workgroupBarrier();
-        var first = partial[li];
-        for (var k = 0u; k < per; k++) {
-            let count = atomicLoad(&buckets[li * per + k]);
-            atomicStore(&buckets[li * per + k], first);
-            first += count;
-        }
-        return;
+// PATH_SORT_SCAN (one workgroup): each thread sums its run of PATH_SORT_BUCKETS /
+// WORKGROUP_SIZE counts; thread 0 scans the runs; each thread writes its run's first
+// slots.
+fn path_sort_scan(li: u32) {
+    let per = u32(PATH_SORT_BUCKETS) / WORKGROUP_SIZE;
+    var sum = 0u;
+    for (var k = 0u; k < per; k++) {
+        sum += atomicLoad(&buckets[li * per + k]);
     }
-    let i = (wg.y * nwg.x + wg.x) * 64u + li;
+    partial[li] = sum;
+    workgroupBarrier();
+    if (li == 0u) {
+        var run = 0u;
+        for (var t = 0u; t < WORKGROUP_SIZE; t++) {
+            let s = partial[t];
+            partial[t] = run;
+            run += s;
+        }
+    }
+    workgroupBarrier();
+    var first = partial[li];
+    for (var k = 0u; k < per; k++) {
+        let count = atomicLoad(&buckets[li * per + k]);
+        atomicStore(&buckets[li * per + k], first);
+        first += count;
+    }
+}
+
+// PATH_SORT_HISTOGRAM and PATH_SORT_SCATTER: path `i`'s bucket count, or its slot.
+fn path_sort_path(i: u32) {
+    let p = params;
     if (i >= min(path_counts[p.count_word], arrayLength(&paths_in))) {
         return;
     }
@@ -80,4 +79,17 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3
             paths_out[slot] = paths_in[i];
         }
     }
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    if (params.phase != PATH_SORT_SCAN) {
+        path_sort_path((wg.y * nwg.x + wg.x) * 64u + li);
+    }
+    // the phase is the launch's: a workgroup-uniform exit before the scan's barriers
+    if (params.phase != PATH_SORT_SCAN) {
+        return;
+    }
+    path_sort_scan(li);
 }
