@@ -39,7 +39,10 @@ fn frames(b: &mut dyn Backend, scene: &Scene, settings: &serde_json::Value) -> F
             t.set_seed(3 + k);
             let stats = t.frame(b, &mut |_| {}).expect("frame");
             // every wave is launched from the device's count: no wait inside the frame
-            assert_eq!(stats.host_waits, 0, "{settings}: the frame waited on the device");
+            assert_eq!(
+                stats.host_waits, 0,
+                "{settings}: the frame waited on the device"
+            );
             let images = [
                 Output::RawIndirect,
                 Output::FilteredIndirect,
