@@ -136,11 +136,12 @@ impl KernelDecl for TraceIndirect {
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         let c = &p.camera;
-        let single = p.segment_first == 0 && p.segment_end == p.max_segments;
-        if p.segment_first >= p.segment_end
-            || p.segment_end > p.max_segments
-            || (self.waves.is_none() && !single)
-        {
+        let fits = match self.waves {
+            // the single launch traces every segment of every path
+            None => p.segment_first == 0 && p.segment_end == p.max_segments,
+            Some(_) => p.segment_first < p.segment_end && p.segment_end <= p.max_segments,
+        };
+        if !fits {
             return Err(BackendError::BadArgument(format!(
                 "trace_indirect: segments {} .. {} of {} ({})",
                 p.segment_first,
