@@ -106,7 +106,8 @@ mod enabled {
         eprintln!(
             "traversal stats, {pass}: {} rays; per ray {:.2} node visits, {:.2} triangle \
              tests; steps per ray p50 {} p90 {} p99 {} max {}; warps of 32 in the \
-             GPU's thread order keep {:.1}% of their lanes' slots busy",
+             GPU's thread order keep {:.1}% of their lanes' slots busy ({taken} steps, {} \
+             warp-steps)",
             steps.len(),
             nodes as f64 / rays,
             triangles as f64 / rays,
@@ -115,6 +116,7 @@ mod enabled {
             pct(0.99),
             steps.last().map_or(0, |&s| s),
             100.0 * taken as f64 / warp_slots.max(1) as f64,
+            warp_slots / 32,
         );
     }
 }

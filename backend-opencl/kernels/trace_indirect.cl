@@ -6,6 +6,12 @@
 // shaders/wgsl/trace_indirect.wgsl: same random dimensions (per segment: 0, 1 bounce
 // direction, 2 roulette, 3 Fresnel, 4 channel of three bands), same decisions. Photons are 32-byte slots,
 // two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
+// Compiled variant (not a branch): `-D WAVES=0/1` (core's TRACE_INDIRECT_SWITCHES); 1 traces
+// one wave of segments p->segment_first .. p->segment_end, from the RSM photons or the
+// queued paths, and queues the paths still going.
+#ifndef WAVES
+#define WAVES 0
+#endif
 
 inline void store_indirect(__global const IndirectTraceParams* p, float3 position,
                            float3 geometric_normal, float3 dir, float ray_length, float3 flux,
@@ -57,26 +63,47 @@ inline void store_indirect(__global const IndirectTraceParams* p, float3 positio
     atomic_inc(&tile_counts[tile]);
 }
 
-inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams* p,
-                                RsmPhoton r, uint index, __global uint4* photons,
-                                uint photon_capacity, volatile __global uint* photon_count,
-                                volatile __global uint* tile_counts,
-                                GATHER_GBUFFER_PARAMS(__global const), __local uint* lc) {
-    float3 flux = load3(r.flux);
-    if (!(max_element3(flux) > 0.0f)) {
+// The path of RSM photon `index` before its first segment (backend-cpu
+// trace_indirect.rs::indirect_path_from_rsm); false (counted negligible) without flux.
+inline bool indirect_path_from_rsm(RsmPhoton r, uint index, IndirectPath* path,
+                                   __local uint* lc) {
+    if (!(max_element3(load3(r.flux)) > 0.0f)) {
         atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
-        return 0u;
+        return false;
     }
-    float3 origin = load3(r.origin);
-    float3 dir = unpack_unit_vector(r.direction);
-    uint bounces = r.bounces;
-    // the photon's wavelength (micrometres) from its first dispersive surface on
-    float wavelength = 0.0f;
-    for (uint segment = 0u; segment < p->max_segments; segment++) {
+    store3(path->origin, load3(r.origin));
+    path->index = index;
+    store3(path->direction, unpack_unit_vector(r.direction));
+    path->bounces = r.bounces;
+    store3(path->flux, load3(r.flux));
+    path->wavelength = 0.0f;
+    return true;
+}
+
+// Segments p->segment_first .. p->segment_end of `path` (backend-cpu
+// trace_indirect.rs::trace_indirect_segments); adds the rays traced to *rays and returns
+// whether the path goes on after the last of them (`path` then holds its next segment's
+// state; its end is counted otherwise).
+inline bool trace_indirect_segments(SCENE_PARAMS, __global const IndirectTraceParams* p,
+                                    IndirectPath* path, __global uint4* photons,
+                                    uint photon_capacity, volatile __global uint* photon_count,
+                                    volatile __global uint* tile_counts,
+                                    GATHER_GBUFFER_PARAMS(__global const), __local uint* lc,
+                                    uint* rays) {
+    uint index = path->index;
+    float3 flux = load3(path->flux);
+    float3 origin = load3(path->origin);
+    float3 dir = load3(path->direction);
+    uint bounces = path->bounces;
+    // the photon's wavelength (micrometres) from its first dispersive surface on (0: none
+    // yet)
+    float wavelength = path->wavelength;
+    for (uint segment = p->segment_first; segment < p->segment_end; segment++) {
+        *rays += 1u;
         Hit hit;
         if (!closest_hit(nodes, node_count, vertices, triangles, origin, dir, INFINITY, &hit)) {
             atomic_inc(&lc[COUNTER_ESCAPED]);
-            return segment + 1u;
+            return false;
         }
         SurfacePoint s = hit_surface(vertices, triangles, &hit);
         __global const GpuMaterial* m = &materials[triangles[hit.triangle].material];
@@ -90,13 +117,13 @@ inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams
                                photon_capacity, photon_count, tile_counts, GATHER_GBUFFER_ARGS, lc);
             if (bounces >= p->max_bounces) {
                 atomic_inc(&lc[COUNTER_BOUNCE_LIMIT]);
-                return segment + 1u;
+                return false;
             }
             float4 rr = russian_roulette(flux, load3g(m->color),
                                          random_f32(p->seed, index, segment, 2u));
             if (rr.w == 0.0f) {
                 atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
-                return segment + 1u;
+                return false;
             }
             flux = rr.xyz;
             float2 u = (float2)(random_f32(p->seed, index, segment, 0u),
@@ -120,13 +147,17 @@ inline uint trace_indirect_path(SCENE_PARAMS, __global const IndirectTraceParams
         }
         if (!(max_element3(flux) > 0.0f)) {
             atomic_inc(&lc[COUNTER_NEGLIGIBLE]);
-            return segment + 1u;
+            return false;
         }
         float3 side = dot3(dir, s.geometric_normal) > 0.0f ? s.geometric_normal : -s.geometric_normal;
         origin = offset_ray_origin(s.position, side);
     }
-    atomic_inc(&lc[COUNTER_BOUNCE_LIMIT]);
-    return p->max_segments;
+    store3(path->origin, origin);
+    store3(path->direction, dir);
+    path->bounces = bounces;
+    store3(path->flux, flux);
+    path->wavelength = wavelength;
+    return true;
 }
 
 __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p,
@@ -134,18 +165,43 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
                              uint photon_capacity, volatile __global uint* photon_count,
                              volatile __global uint* tile_counts,
                              volatile __global uint* counters,
-                             GATHER_GBUFFER_PARAMS(__global const)) {
+                             GATHER_GBUFFER_PARAMS(__global const),
+                             __global const IndirectPath* paths_in,
+                             __global IndirectPath* paths_out, uint path_capacity,
+                             volatile __global uint* path_counts) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
-    if (i < p->count) {
+    IndirectPath path;
+    bool live;
+    if (!WAVES || p->segment_first == 0u) {
         // a warp's samples in one small box of the Hammersley square (its RSM photons
         // near each other), not a column across it
-        uint index = p->first + coherent_sample_order(i, p->count);
-        uint rays = trace_indirect_path(SCENE_ARGS, p, rsm_photons[index], index, photons,
-                                        photon_capacity, photon_count, tile_counts,
-                                        GATHER_GBUFFER_ARGS, lc);
+        live = i < p->count;
+        if (live) {
+            uint index = p->first + coherent_sample_order(i, p->count);
+            live = indirect_path_from_rsm(rsm_photons[index], index, &path, lc);
+        }
+    } else {
+        // a later wave: the paths the one before queued
+        live = i < min(path_counts[p->segment_first], path_capacity);
+        if (live) path = paths_in[i];
+    }
+    if (live) {
+        uint rays = 0u;
+        bool going = trace_indirect_segments(SCENE_ARGS, p, &path, photons, photon_capacity,
+                                             photon_count, tile_counts, GATHER_GBUFFER_ARGS,
+                                             lc, &rays);
         atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
+        if (going) {
+            if (!WAVES || p->segment_end >= p->max_segments) {
+                atomic_inc(&lc[COUNTER_BOUNCE_LIMIT]);
+            } else {
+                // the queue holds every path of the launch; a slot past it is not written
+                uint slot = atomic_inc(&path_counts[p->segment_end]);
+                if (slot < path_capacity) paths_out[slot] = path;
+            }
+        }
     }
     counters_flush_local(lc, counters);
 }

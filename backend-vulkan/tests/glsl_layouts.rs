@@ -145,6 +145,8 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
         "IndirectTraceParams",
     ),
     ("trace_indirect.rgen", 6, Holds::Elements, "RsmPhoton"),
+    ("trace_indirect.rgen", 14, Holds::Elements, "IndirectPath"),
+    ("trace_indirect.rgen", 15, Holds::Elements, "IndirectPath"),
 ];
 
 /// Structs of layout.glsl that no stage binds, with the reason. They appear in no SPIR-V
@@ -153,6 +155,11 @@ const BOUND: &[(&str, u32, Holds, &str)] = &[
 /// a struct that layout.glsl does not declare. A struct added to core's table without
 /// a row is accepted (see the module doc).
 const NOT_BOUND: &[(&str, &str)] = &[
+    (
+        "PathSortParams",
+        "sort_indirect_paths runs on Vulkan as a compute pipeline from caustica-shaders' \
+         WGSL, whose layouts that crate's tests check",
+    ),
     (
         "RsmTexel",
         "rsm_importance and sample_rsm run on Vulkan as compute pipelines from \

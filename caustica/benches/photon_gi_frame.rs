@@ -10,11 +10,16 @@
 //! `cargo bench -p caustica --bench photon_gi_frame`
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SETTINGS=high,low`,
-//! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080).
+//! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080),
+//! `CAUSTICA_BENCH_GI_SCHEDULES=single_kernel,waves,sorted_waves` (`trace_indirect`'s
+//! schedules, default `single_kernel`; each timed in turn),
+//! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8).
+//! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
+//! software device traces in seconds.
 
 mod common;
 use caustica::scene::builtin::builtin;
-use caustica::techniques::photon_gi::{PhotonGi, PhotonGiSettings};
+use caustica::techniques::photon_gi::{IndirectSchedule, PhotonGi, PhotonGiSettings};
 use caustica::FrameSettings;
 use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
@@ -31,6 +36,13 @@ fn main() {
         .expect("WxH");
     let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
     let settings = env_or("CAUSTICA_BENCH_SETTINGS", "high,low");
+    let schedules = env_or("CAUSTICA_BENCH_GI_SCHEDULES", "single_kernel");
+    let waves: u32 = env_or(
+        "CAUSTICA_BENCH_GI_WAVES",
+        &PhotonGiSettings::default().indirect_waves.to_string(),
+    )
+    .parse()
+    .expect("waves");
     let mut scene = builtin("rooms").expect("built-in scene");
     (scene.camera.width, scene.camera.height) = (w, h);
     println!(
@@ -45,11 +57,24 @@ fn main() {
                 continue;
             }
         };
-        for setting in settings.split(',').map(str::trim) {
+        let runs = settings.split(',').map(str::trim).flat_map(|setting| {
+            schedules
+                .split(',')
+                .map(str::trim)
+                .map(move |schedule| (setting, schedule))
+        });
+        for (setting, schedule) in runs {
             let (side, bounces) = match setting {
                 "high" => (1732, 3),
                 "low" => (1024, 1),
+                "dev" => (256, 3),
                 other => panic!("unknown setting {other}"),
+            };
+            let indirect_schedule = match schedule {
+                "single_kernel" => IndirectSchedule::SingleKernel,
+                "waves" => IndirectSchedule::Waves,
+                "sorted_waves" => IndirectSchedule::SortedWaves,
+                other => panic!("unknown schedule {other}"),
             };
             let s = PhotonGiSettings {
                 frame: FrameSettings {
@@ -58,7 +83,14 @@ fn main() {
                     ..PhotonGiSettings::default().frame
                 },
                 bounces,
+                indirect_schedule,
+                indirect_waves: waves,
                 ..PhotonGiSettings::default()
+            };
+            let setting = if schedule == "single_kernel" {
+                setting.to_string()
+            } else {
+                format!("{setting}, {schedule} ({waves})")
             };
             let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {
                 Ok(t) => t,

@@ -112,7 +112,8 @@ fn every_backend_dispatches_every_declared_kernel() {
         );
         passes.extend(stats.passes);
         // PhotonGi: the RSM, the warp, the roulette trace and the splat, on `sphere`, whose
-        // ball's smooth normals need Eq. 20's correction (the prism's flat faces do not)
+        // ball's smooth normals need Eq. 20's correction (the prism's flat faces do not),
+        // its paths in sorted waves (`sort_indirect_paths`)
         let gi = PhotonGiSettings {
             frame: FrameSettings {
                 photons_w: 64,
@@ -120,6 +121,7 @@ fn every_backend_dispatches_every_declared_kernel() {
                 ..PhotonGiSettings::default().frame
             },
             rsm_size: 16,
+            indirect_schedule: caustica_core::techniques::photon_gi::IndirectSchedule::SortedWaves,
             ..PhotonGiSettings::default()
         };
         let mut ball = builtin("sphere").expect("built-in scene");

@@ -23,6 +23,14 @@
 @group(0) @binding(11) var<storage, read> gbuffer0: array<vec4<u32>>;
 @group(0) @binding(12) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(13) var<storage, read> gbuffer3: array<vec4<u32>>;
+@group(0) @binding(14) var<storage, read> paths_in: array<IndirectPath>;
+@group(0) @binding(15) var<storage, read_write> paths_out: array<IndirectPath>;
+@group(0) @binding(16) var<storage, read_write> path_counts: array<atomic<u32>>;
+
+// Compiled variant (not a branch; core's TRACE_INDIRECT_SWITCHES): true traces one wave of
+// segments params.segment_first .. segment_end, from the RSM photons or the queued paths,
+// and queues the paths still going.
+override WAVES: bool = false;
 
 // The work-group's counters (fixed_point.wgsl).
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
@@ -81,23 +89,42 @@ fn store_indirect(p: IndirectTraceParams, position: vec3<f32>, geometric_normal:
     atomicAdd(&tile_counts[tile], 1u);
 }
 
-// One path (backend-cpu trace_indirect.rs::trace_indirect_path); returns the segments traced.
-fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 {
-    var flux = r.flux;
-    if (!(max_element3(flux) > 0.0)) {
+// The path of RSM photon `index` before its first segment (backend-cpu
+// trace_indirect.rs::indirect_path_from_rsm); false (counted negligible) without flux.
+fn indirect_path_from_rsm(r: RsmPhoton, index: u32, path: ptr<function, IndirectPath>) -> bool {
+    if (!(max_element3(r.flux) > 0.0)) {
         atomicAdd(&lc[COUNTER_NEGLIGIBLE], 1u);
-        return 0u;
+        return false;
     }
-    var origin = r.origin;
-    var dir = unpack_unit_vector(r.direction);
-    var bounces = r.bounces;
-    // the photon's wavelength (micrometres) from its first dispersive surface on
-    var wavelength = 0.0;
-    for (var segment = 0u; segment < p.max_segments; segment++) {
+    (*path).origin = r.origin;
+    (*path).index = index;
+    (*path).direction = unpack_unit_vector(r.direction);
+    (*path).bounces = r.bounces;
+    (*path).flux = r.flux;
+    (*path).wavelength = 0.0;
+    return true;
+}
+
+// Segments p.segment_first .. p.segment_end of `path` (backend-cpu
+// trace_indirect.rs::trace_indirect_segments); adds the rays traced to *rays and returns
+// whether the path goes on after the last of them (`path` then holds its next segment's
+// state; its end is counted otherwise).
+fn trace_indirect_segments(p: IndirectTraceParams, path: ptr<function, IndirectPath>,
+                           rays: ptr<function, u32>) -> bool {
+    let index = (*path).index;
+    var flux = (*path).flux;
+    var origin = (*path).origin;
+    var dir = (*path).direction;
+    var bounces = (*path).bounces;
+    // the photon's wavelength (micrometres) from its first dispersive surface on (0: none
+    // yet)
+    var wavelength = (*path).wavelength;
+    for (var segment = p.segment_first; segment < p.segment_end; segment++) {
+        *rays += 1u;
         var hit: Hit;
         if (!closest_hit(origin, dir, NO_T_MAX, &hit)) {
             atomicAdd(&lc[COUNTER_ESCAPED], 1u);
-            return segment + 1u;
+            return false;
         }
         let s = hit_surface(hit);
         let m = materials[triangles[hit.triangle].material];
@@ -112,12 +139,12 @@ fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 
             }
             if (bounces >= p.max_bounces) {
                 atomicAdd(&lc[COUNTER_BOUNCE_LIMIT], 1u);
-                return segment + 1u;
+                return false;
             }
             let rr = russian_roulette(flux, m.color.xyz, random_f32(p.seed, index, segment, 2u));
             if (rr.w == 0.0) {
                 atomicAdd(&lc[COUNTER_NEGLIGIBLE], 1u);
-                return segment + 1u;
+                return false;
             }
             flux = rr.xyz;
             let u = vec2<f32>(random_f32(p.seed, index, segment, 0u),
@@ -144,26 +171,56 @@ fn trace_indirect_path(p: IndirectTraceParams, r: RsmPhoton, index: u32) -> u32 
         }
         if (!(max_element3(flux) > 0.0)) {
             atomicAdd(&lc[COUNTER_NEGLIGIBLE], 1u);
-            return segment + 1u;
+            return false;
         }
         let side = select(-s.geometric_normal, s.geometric_normal,
                           dot3(dir, s.geometric_normal) > 0.0);
         origin = offset_ray_origin(s.position, side);
     }
-    atomicAdd(&lc[COUNTER_BOUNCE_LIMIT], 1u);
-    return p.max_segments;
+    (*path).origin = origin;
+    (*path).direction = dir;
+    (*path).bounces = bounces;
+    (*path).flux = flux;
+    (*path).wavelength = wavelength;
+    return true;
 }
 
 // `li`: local invocation index. Every invocation reaches the counter helpers' barriers.
 fn trace_indirect(i: u32, li: u32) {
     counters_clear_local(li);
     let p = params;
-    if (i < p.count) {
+    var path: IndirectPath;
+    var live: bool;
+    if (!WAVES || p.segment_first == 0u) {
         // a warp's samples in one small box of the Hammersley square (its RSM photons
         // near each other), not a column across it
-        let index = p.first + coherent_sample_order(i, p.count);
-        let rays = trace_indirect_path(p, rsm_photons[index], index);
+        live = i < p.count;
+        if (live) {
+            let index = p.first + coherent_sample_order(i, p.count);
+            live = indirect_path_from_rsm(rsm_photons[index], index, &path);
+        }
+    } else {
+        // a later wave: the paths the one before queued
+        live = i < min(atomicLoad(&path_counts[p.segment_first]), arrayLength(&paths_out));
+        if (live) {
+            path = paths_in[i];
+        }
+    }
+    if (live) {
+        var rays = 0u;
+        let going = trace_indirect_segments(p, &path, &rays);
         atomic_add_u64_local(COUNTER_RAYS, rays);
+        if (going) {
+            if (!WAVES || p.segment_end >= p.max_segments) {
+                atomicAdd(&lc[COUNTER_BOUNCE_LIMIT], 1u);
+            } else {
+                // the queue holds every path of the launch; a slot past it is not written
+                let slot = atomicAdd(&path_counts[p.segment_end], 1u);
+                if (slot < arrayLength(&paths_out)) {
+                    paths_out[slot] = path;
+                }
+            }
+        }
     }
     counters_flush_local(li);
 }

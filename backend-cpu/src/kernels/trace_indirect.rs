@@ -9,16 +9,16 @@ use crate::CpuBackend;
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
     counter, gbuffer_flags, material_kind, off_surface, project_to_pixel, GBufferView, GiPhoton,
-    IndirectTraceParams, Photon, RsmPhoton,
+    IndirectPath, IndirectTraceParams, Photon, RsmPhoton,
 };
 use caustica_core::kernels::{TraceIndirect, VISIBLE_TOLERANCE};
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::optics::{beer_lambert, dielectric_scatter, dispersive_ior, reflect};
-use caustica_core::math::spectrum::disperse;
 use caustica_core::math::packing::{pack_rgb9e5, pack_unit_vector, unpack_unit_vector};
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{coherent_sample_order, cosine_hemisphere, russian_roulette};
+use caustica_core::math::spectrum::disperse;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -37,13 +37,35 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
         gbuffer,
         // the CPU has no launch grid: the kernel bounds itself by its count
         dispatch: _,
+        waves,
     } = k;
     let rsm = cpu
         .get(rsm_photons.id)?
         .as_slice::<RsmPhoton>(rsm_photons.len)?;
     let g = cpu.gbuffer(gbuffer)?;
     reserve_temporary::<[u32; 8]>(params.count as u64, "an indirect photon batch")?;
-    let r = trace_indirect(&cpu.view(scene)?, params, rsm, &g, tile_counts.len as usize);
+    let queued: Vec<IndirectPath>;
+    let source = match waves {
+        Some(w) if params.segment_first > 0 => {
+            let live = cpu
+                .get(w.path_counts.id)?
+                .as_slice::<u32>(w.path_counts.len)?[params.segment_first as usize]
+                .min(w.paths_out.len) as usize;
+            queued = cpu
+                .get(w.paths_in.id)?
+                .as_slice::<IndirectPath>(w.paths_in.len)?[..live]
+                .to_vec();
+            IndirectSource::Queue(&queued)
+        }
+        _ => IndirectSource::Rsm(rsm),
+    };
+    let r = trace_indirect(
+        &cpu.view(scene)?,
+        params,
+        source,
+        &g,
+        tile_counts.len as usize,
+    );
     let start = cpu.get(photon_count.id)?.as_slice::<u32>(1)?[0] as usize;
     if start + r.photons.len() > photons.len as usize {
         return Err(BackendError::BadArgument(format!(
@@ -66,11 +88,36 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
     }
     r.counters
         .add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
+    if let (Some(w), false) = (waves, r.queued.is_empty()) {
+        // the paths still going, appended from the queue's count (a slot past the queue's
+        // end is not written, as on the GPU)
+        let end = params.segment_end as usize;
+        let counts = cpu
+            .get_mut(w.path_counts.id)?
+            .as_mut_slice::<u32>(w.path_counts.len)?;
+        let first = counts[end] as usize;
+        counts[end] = counts[end].wrapping_add(r.queued.len() as u32);
+        let out = cpu
+            .get_mut(w.paths_out.id)?
+            .as_mut_slice::<IndirectPath>(w.paths_out.len)?;
+        for (slot, path) in out.iter_mut().skip(first).zip(&r.queued) {
+            *slot = *path;
+        }
+    }
     Ok(())
 }
 
+/// Where a launch's paths come from.
+#[derive(Clone, Copy)]
+pub enum IndirectSource<'a> {
+    /// The RSM photons `p.first .. p.first + p.count` (segment 0).
+    Rsm(&'a [RsmPhoton]),
+    /// The paths an earlier wave queued (thread `t` continues path `t`).
+    Queue(&'a [IndirectPath]),
+}
+
 /// Photons `trace_indirect` stored (32-byte words, in photon order), the per-tile counts
-/// it adds, and its counters.
+/// it adds, its counters and the paths it queued.
 pub struct IndirectResult {
     /// Stored photons (`GiPhoton` or `Photon` bytes as `p.store` says).
     pub photons: Vec<[u32; 8]>,
@@ -78,30 +125,44 @@ pub struct IndirectResult {
     pub tile_counts: Vec<u32>,
     /// The launch's counters.
     pub counters: Counters,
+    /// The paths still going after segment `p.segment_end - 1` (none when it is the
+    /// last), in thread order.
+    pub queued: Vec<IndirectPath>,
 }
 
-/// `trace_indirect` over `rsm[p.first .. p.first + p.count]`.
+/// `trace_indirect` over segments `p.segment_first .. p.segment_end` of `source`'s paths.
 pub fn trace_indirect(
     scene: &SceneView,
     p: &IndirectTraceParams,
-    rsm: &[RsmPhoton],
+    source: IndirectSource,
     gbuffer: &GBufferView,
     tiles: usize,
 ) -> IndirectResult {
     let tile_counts: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(0)).collect();
-    let parts: Vec<(Vec<[u32; 8]>, Counters)> = (0..p.count.div_ceil(256))
+    let threads = match source {
+        IndirectSource::Rsm(_) => p.count,
+        IndirectSource::Queue(q) => q.len() as u32,
+    };
+    let parts: Vec<(Vec<[u32; 8]>, Counters, Vec<IndirectPath>)> = (0..threads.div_ceil(256))
         .into_par_iter()
         .map(|c| {
             let mut out = Vec::new();
+            let mut queued = Vec::new();
             let mut counters = Counters::default();
-            for i in c * 256..((c + 1) * 256).min(p.count) {
-                let index = p.first + i;
+            for i in c * 256..((c + 1) * 256).min(threads) {
+                let path = match source {
+                    IndirectSource::Rsm(rsm) => {
+                        let index = p.first + i;
+                        indirect_path_from_rsm(&rsm[index as usize], index, &mut counters)
+                    }
+                    IndirectSource::Queue(q) => Some(q[i as usize]),
+                };
+                let Some(mut path) = path else { continue };
                 crate::traversal_stats::photon_begins(i);
-                trace_indirect_path(
+                let going = trace_indirect_segments(
                     scene,
                     p,
-                    &rsm[index as usize],
-                    index,
+                    &mut path,
                     gbuffer,
                     &mut |ph, tile| {
                         out.push(ph);
@@ -110,53 +171,94 @@ pub fn trace_indirect(
                     &mut counters,
                 );
                 crate::traversal_stats::photon_ends();
+                if going {
+                    if p.segment_end >= p.max_segments {
+                        counters.bump(counter::BOUNCE_LIMIT);
+                    } else {
+                        queued.push(path);
+                    }
+                }
             }
-            (out, counters)
+            (out, counters, queued)
         })
         .collect();
-    // the GPU ports' thread t traces photon first + coherent_sample_order(t)
-    crate::traversal_stats::report("trace_indirect", p.count, |t| {
-        coherent_sample_order(t, p.count)
-    });
+    match source {
+        // the GPU ports' thread t traces photon first + coherent_sample_order(t)
+        IndirectSource::Rsm(_) if p.segment_end >= p.max_segments => {
+            crate::traversal_stats::report("trace_indirect", threads, |t| {
+                coherent_sample_order(t, threads)
+            })
+        }
+        IndirectSource::Rsm(_) => {
+            crate::traversal_stats::report("trace_indirect wave 0", threads, |t| {
+                coherent_sample_order(t, threads)
+            })
+        }
+        // (the GPU's queue is in arrival order; the CPU's in photon order)
+        IndirectSource::Queue(_) => crate::traversal_stats::report(
+            &format!("trace_indirect wave {}", p.segment_first),
+            threads,
+            |t| t,
+        ),
+    }
     let mut photons = Vec::new();
+    let mut queued = Vec::new();
     let mut counters = Counters::default();
-    for (ph, c) in parts {
+    for (ph, c, q) in parts {
         photons.extend(ph);
+        queued.extend(q);
         counters = counters.merge(c);
     }
     IndirectResult {
         photons,
         tile_counts: tile_counts.into_iter().map(|a| a.into_inner()).collect(),
         counters,
+        queued,
     }
 }
 
-/// One path of `trace_indirect` (photon `index`): calls `store(photon words, tile)` for
-/// every stored photon and counts into `c`.
-pub fn trace_indirect_path(
+/// The path of RSM photon `index` before its first segment; `None` (counted negligible)
+/// for a photon without flux.
+pub fn indirect_path_from_rsm(r: &RsmPhoton, index: u32, c: &mut Counters) -> Option<IndirectPath> {
+    if !(Vec3::from(r.flux).max_element() > 0.0) {
+        c.bump(counter::NEGLIGIBLE);
+        return None;
+    }
+    Some(IndirectPath {
+        origin: r.origin,
+        index,
+        direction: unpack_unit_vector(r.direction).to_array(),
+        bounces: r.bounces,
+        flux: r.flux,
+        wavelength: 0.0,
+    })
+}
+
+/// Segments `p.segment_first .. p.segment_end` of `path` (the single launch: all of
+/// them): calls `store(photon words, tile)` for every stored photon, counts into `c`,
+/// and leaves in `path` what its next segment needs. Returns whether the path goes on
+/// after the last of them (its end counted otherwise).
+pub fn trace_indirect_segments(
     scene: &SceneView,
     p: &IndirectTraceParams,
-    r: &RsmPhoton,
-    index: u32,
+    path: &mut IndirectPath,
     gbuffer: &GBufferView,
     store: &mut impl FnMut([u32; 8], u32),
     c: &mut Counters,
-) {
-    let mut flux = Vec3::from(r.flux);
-    if !(flux.max_element() > 0.0) {
-        c.bump(counter::NEGLIGIBLE);
-        return;
-    }
-    let mut origin = Vec3::from(r.origin);
-    let mut dir = unpack_unit_vector(r.direction);
-    let mut bounces = r.bounces;
-    // the photon's wavelength (micrometres) from its first dispersive surface on
-    let mut wavelength: Option<f32> = None;
-    for segment in 0..p.max_segments {
+) -> bool {
+    let index = path.index;
+    let mut flux = Vec3::from(path.flux);
+    let mut origin = Vec3::from(path.origin);
+    let mut dir = Vec3::from(path.direction);
+    let mut bounces = path.bounces;
+    // the photon's wavelength (micrometres) from its first dispersive surface on (0: none
+    // yet)
+    let mut wavelength = path.wavelength;
+    for segment in p.segment_first..p.segment_end {
         c.words[counter::RAYS] += 1;
         let Some(hit) = scene.closest_hit(origin, dir, f32::INFINITY) else {
             c.bump(counter::ESCAPED);
-            return;
+            return false;
         };
         let (s, m) = scene.surface(&hit);
         let entering = dir.dot(s.geometric_normal) < 0.0;
@@ -184,14 +286,14 @@ pub fn trace_indirect_path(
             }
             if bounces >= p.max_bounces {
                 c.bump(counter::BOUNCE_LIMIT);
-                return;
+                return false;
             }
             let xi = random_f32(p.seed, index, segment, 2);
             match russian_roulette(flux, Vec3::from_slice(&m.color[..3]), xi) {
                 Some(f) => flux = f,
                 None => {
                     c.bump(counter::NEGLIGIBLE);
-                    return;
+                    return false;
                 }
             }
             let u = Vec2::new(
@@ -206,15 +308,15 @@ pub fn trace_indirect_path(
         } else {
             let mut ior = m.ior;
             if m.dispersion != 0.0 {
-                let wl = *wavelength.get_or_insert_with(|| {
+                if wavelength == 0.0 {
                     // first dispersive surface: a wavelength and its colour (expectation
                     // kept; core's spectrum::disperse)
                     let xi = random_f32(p.seed, index, segment, 4);
                     let (wl, f) = disperse(flux, p.dispersion_mode, p.seed, index, xi);
                     flux = f;
-                    wl
-                });
-                ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, wl);
+                    wavelength = wl;
+                }
+                ior = dispersive_ior(m.ior, m.dispersion, m.ior_model, wavelength);
             }
             dir = dielectric_scatter(
                 dir,
@@ -228,7 +330,7 @@ pub fn trace_indirect_path(
         }
         if !(flux.max_element() > 0.0) {
             c.bump(counter::NEGLIGIBLE);
-            return;
+            return false;
         }
         let side = if dir.dot(s.geometric_normal) > 0.0 {
             s.geometric_normal
@@ -237,7 +339,15 @@ pub fn trace_indirect_path(
         };
         origin = offset_ray_origin(s.position, side);
     }
-    c.bump(counter::BOUNCE_LIMIT);
+    *path = IndirectPath {
+        origin: origin.to_array(),
+        index,
+        direction: dir.to_array(),
+        bounces,
+        flux: flux.to_array(),
+        wavelength,
+    };
+    true
 }
 
 /// Stores a photon at a diffuse hit if the camera sees its side and it projects into the

@@ -217,6 +217,13 @@
 #define GI_STORE_PACKED 0u
 #define GI_STORE_FLOAT 1u
 
+// core::math::path_sort
+#define PATH_SORT_BITS 3u
+#define PATH_SORT_BUCKETS 4096
+#define PATH_SORT_HISTOGRAM 0u
+#define PATH_SORT_SCAN 1u
+#define PATH_SORT_SCATTER 2u
+
 // core::device::layout::GpuVertex, 32 bytes
 typedef struct {
     float position[3]; // 0
@@ -448,7 +455,7 @@ typedef struct {
     uint tile; // 28
 } GiPhoton;
 
-// core::device::layout::IndirectTraceParams, 112 bytes
+// core::device::layout::IndirectTraceParams, 128 bytes
 typedef struct {
     GpuCamera camera; // 0
     uint first; // 64
@@ -462,8 +469,30 @@ typedef struct {
     float power_scale; // 96
     float flux_quantum; // 100
     uint dispersion_mode; // 104
-    uint _pad; // 108
+    uint segment_first; // 108
+    uint segment_end; // 112
+    uint _pad0; // 116
+    uint _pad1; // 120
+    uint _pad2; // 124
 } IndirectTraceParams;
+
+// core::device::layout::IndirectPath, 48 bytes
+typedef struct {
+    float origin[3]; // 0
+    uint index; // 12
+    float direction[3]; // 16
+    uint bounces; // 28
+    float flux[3]; // 32
+    float wavelength; // 44
+} IndirectPath;
+
+// core::device::layout::PathSortParams, 32 bytes
+typedef struct {
+    float origin_min[3]; // 0
+    uint phase; // 12
+    float origin_scale[3]; // 16
+    uint count_word; // 28
+} PathSortParams;
 
 // core::device::layout::SplatParams, 128 bytes
 typedef struct {
@@ -551,8 +580,10 @@ __kernel void struct_sizes(__global uint* out) {
     out[18] = sizeof(RsmParams);
     out[19] = sizeof(GiPhoton);
     out[20] = sizeof(IndirectTraceParams);
-    out[21] = sizeof(SplatParams);
-    out[22] = sizeof(CorrectionParams);
-    out[23] = sizeof(PlanParams);
-    out[24] = sizeof(RefineParams);
+    out[21] = sizeof(IndirectPath);
+    out[22] = sizeof(PathSortParams);
+    out[23] = sizeof(SplatParams);
+    out[24] = sizeof(CorrectionParams);
+    out[25] = sizeof(PlanParams);
+    out[26] = sizeof(RefineParams);
 }

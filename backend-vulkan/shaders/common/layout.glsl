@@ -217,6 +217,13 @@ const uint RSM_SAMPLING_UNIFORM = 1u;
 const uint GI_STORE_PACKED = 0u;
 const uint GI_STORE_FLOAT = 1u;
 
+// core::math::path_sort
+const uint PATH_SORT_BITS = 3u;
+const uint PATH_SORT_BUCKETS = 4096u;
+const uint PATH_SORT_HISTOGRAM = 0u;
+const uint PATH_SORT_SCAN = 1u;
+const uint PATH_SORT_SCATTER = 2u;
+
 // core::device::layout::GpuVertex, 32 bytes
 struct GpuVertex {
     vec3 position; // 0
@@ -448,7 +455,7 @@ struct GiPhoton {
     uint tile; // 28
 };
 
-// core::device::layout::IndirectTraceParams, 112 bytes
+// core::device::layout::IndirectTraceParams, 128 bytes
 struct IndirectTraceParams {
     GpuCamera camera; // 0
     uint first; // 64
@@ -462,7 +469,29 @@ struct IndirectTraceParams {
     float power_scale; // 96
     float flux_quantum; // 100
     uint dispersion_mode; // 104
-    uint _pad; // 108
+    uint segment_first; // 108
+    uint segment_end; // 112
+    uint _pad0; // 116
+    uint _pad1; // 120
+    uint _pad2; // 124
+};
+
+// core::device::layout::IndirectPath, 48 bytes
+struct IndirectPath {
+    vec3 origin; // 0
+    uint index; // 12
+    vec3 direction; // 16
+    uint bounces; // 28
+    vec3 flux; // 32
+    float wavelength; // 44
+};
+
+// core::device::layout::PathSortParams, 32 bytes
+struct PathSortParams {
+    vec3 origin_min; // 0
+    uint phase; // 12
+    vec3 origin_scale; // 16
+    uint count_word; // 28
 };
 
 // core::device::layout::SplatParams, 128 bytes

@@ -174,6 +174,34 @@ pub fn check_photon_gi(
             power_scale,
             quantum,
         );
+        // 3'. the same paths in waves: on each backend exactly its single launch's
+        // photons, so against the reference as the single launch
+        let scales = (power_scale, quantum);
+        let (phwa, tiwa, cwa) = run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES)?;
+        let (phwb, tiwb, cwb) = run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES)?;
+        compare_schedules(
+            &mut v,
+            "reference",
+            l,
+            (&pha, &tia, &ca),
+            (&phwa, &tiwa, &cwa),
+        );
+        compare_schedules(
+            &mut v,
+            "candidate",
+            l,
+            (&phb, &tib, &cb),
+            (&phwb, &tiwb, &cwb),
+        );
+        compare_indirect(
+            &mut v,
+            fx,
+            l,
+            (&pha, &tia, &ca),
+            (&phwb, &tiwb, &cwb),
+            power_scale,
+            quantum,
+        );
         // 4. splat_photons on the reference's photons
         let sp = splat_params(fx, power_scale, quantum);
         let (ma, _, da) = run_splat(fx, r, &inputs.gbuffer, &pha, &tia, sp)?;

@@ -4,7 +4,9 @@
 //! multisets (each photon matched by one of the other backend's within
 //! `trace_photons`' position tolerance, with the same tile and power within one rgb9e5
 //! step, but for [`PHOTON_MATCH`]'s share), every path end accounted for, and tile
-//! counts that add up to the stored photons.
+//! counts that add up to the stored photons. The `WAVES` variant ([`run_trace_waves`])
+//! is compared the same way with the reference's single launch, and on every backend
+//! with that backend's single launch exactly ([`compare_schedules`]).
 //!
 //! One link of PhotonGi's chain, [`super::shading_normal_correction::check_photon_gi`].
 
@@ -15,8 +17,11 @@ use crate::harness::tolerance::{
 };
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, Backend};
-use caustica_core::device::layout::{counter, GBufferTexel, GiPhoton, RsmPhoton};
-use caustica_core::kernels::TraceIndirect;
+use caustica_core::device::launch::DISPATCH_RECORD_WORDS;
+use caustica_core::device::layout::{
+    counter, GBufferTexel, GiPhoton, IndirectPath, IndirectTraceParams, RsmPhoton,
+};
+use caustica_core::kernels::{DispatchArgs, DispatchRecord, IndirectWave, TraceIndirect};
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::gi_photon::{gi_store, screen_tiles};
 use caustica_core::math::packing::unpack_unit_vector;
@@ -37,6 +42,27 @@ pub(crate) fn run_trace(
     power_scale: f32,
     quantum: f32,
 ) -> Result<Traced, String> {
+    run_trace_waves(fx, b, rsm, gbuffer, (power_scale, quantum), 1)
+}
+
+/// Segments per path of the checked launches.
+const MAX_SEGMENTS: u32 = 12;
+
+/// Waves of the `WAVES` variant's check: segments 0, 1 and 2 one a wave, the last wave
+/// the rest.
+pub(crate) const WAVES: u32 = 4;
+
+/// [`run_trace`] in `waves` waves (1: the single launch): wave `k` traces segment `k`
+/// (the last the rest of each path), the later waves launched from the queue's length
+/// through `dispatch_args`, as PhotonGi records them.
+pub(crate) fn run_trace_waves(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    rsm: &[RsmPhoton],
+    gbuffer: &[GBufferTexel],
+    (power_scale, quantum): (f32, f32),
+    waves: u32,
+) -> Result<Traced, String> {
     let cam = fx.camera;
     let mut rec = Recording::new();
     let g = rec.upload_gbuffer(gbuffer);
@@ -48,23 +74,27 @@ pub(crate) fn run_trace(
     rec.clear(count);
     rec.clear(tiles);
     rec.clear(counters);
-    rec.kernel(TraceIndirect {
+    let n = rsm.len() as u32;
+    let params = IndirectTraceParams {
+        camera: cam,
+        first: 0,
+        count: n,
+        seed: 77,
+        max_bounces: BOUNCES,
+        max_segments: MAX_SEGMENTS,
+        tile_size: TILE,
+        store: gi_store::PACKED,
+        fresnel_model: 0,
+        power_scale,
+        flux_quantum: quantum,
+        dispersion_mode: caustica_core::math::spectrum::dispersion_mode::SPECTRAL,
+        segment_first: 0,
+        segment_end: MAX_SEGMENTS,
+        _pad: [0; 3],
+    };
+    let single = TraceIndirect {
         scene: fx.args,
-        params: caustica_core::device::layout::IndirectTraceParams {
-            camera: cam,
-            first: 0,
-            count: rsm.len() as u32,
-            seed: 77,
-            max_bounces: BOUNCES,
-            max_segments: 12,
-            tile_size: TILE,
-            store: gi_store::PACKED,
-            fresnel_model: 0,
-            power_scale,
-            flux_quantum: quantum,
-            dispersion_mode: caustica_core::math::spectrum::dispersion_mode::SPECTRAL,
-            _pad: 0,
-        },
+        params,
         rsm_photons: r,
         photons,
         photon_count: count,
@@ -72,7 +102,50 @@ pub(crate) fn run_trace(
         counters,
         gbuffer: g,
         dispatch: None,
-    });
+        waves: None,
+    };
+    if waves <= 1 {
+        rec.kernel(single);
+    } else {
+        let paths = [
+            rec.create::<IndirectPath>(n.max(1), "path queue a"),
+            rec.create::<IndirectPath>(n.max(1), "path queue b"),
+        ];
+        let path_counts = rec.create::<u32>(waves + 1, "paths per wave");
+        let rows = rec.upload(
+            &(1..waves).map(|k| [0, n, 1, k]).collect::<Vec<_>>(),
+            "wave rows",
+        );
+        let args = rec.create::<u32>((waves - 1) * DISPATCH_RECORD_WORDS as u32, "wave records");
+        rec.clear(path_counts);
+        for k in 0..waves {
+            let dispatch = (k > 0).then(|| {
+                rec.kernel(DispatchArgs {
+                    table: rows,
+                    counts: path_counts,
+                    args,
+                });
+                DispatchRecord {
+                    args,
+                    record: k - 1,
+                }
+            });
+            rec.kernel(TraceIndirect {
+                params: IndirectTraceParams {
+                    segment_first: k,
+                    segment_end: if k + 1 == waves { MAX_SEGMENTS } else { k + 1 },
+                    ..params
+                },
+                dispatch,
+                waves: Some(IndirectWave {
+                    paths_in: paths[k as usize % 2],
+                    paths_out: paths[(k as usize + 1) % 2],
+                    path_counts,
+                }),
+                ..single
+            });
+        }
+    }
     run_and_free(b, "trace_indirect", &rec, |b| {
         let n = read_buf(b, count)?[0] as usize;
         let words = read_buf(b, photons)?;
@@ -82,6 +155,38 @@ pub(crate) fn run_trace(
             .collect();
         Ok((ph, read_buf(b, tiles)?, read_buf(b, counters)?))
     })
+}
+
+/// The waves against the single launch on the same backend: the same photons (as a
+/// multiset of their exact words: a path's random numbers are keyed by its photon and
+/// segment and its state crosses the queue in full precision, so nothing may differ but
+/// the order), the same tile counts and the same counters, word for word.
+pub(crate) fn compare_schedules(
+    v: &mut Verdict,
+    backend: &str,
+    l: u32,
+    (pha, tia, ca): (&[GiPhoton], &[u32], &[u32]),
+    (phw, tiw, cw): (&[GiPhoton], &[u32], &[u32]),
+) {
+    let sorted = |p: &[GiPhoton]| {
+        let mut w: Vec<[u32; 8]> = p.iter().map(|x| bytemuck::cast(*x)).collect();
+        w.sort_unstable();
+        w
+    };
+    v.check(sorted(pha) == sorted(phw), || {
+        format!(
+            "light {l}, {backend}: {WAVES} waves store other photons than the single launch \
+             ({} vs {})",
+            phw.len(),
+            pha.len()
+        )
+    });
+    v.check(tia == tiw, || {
+        format!("light {l}, {backend}: the waves' tile counts differ from the single launch's")
+    });
+    v.check(ca == cw, || {
+        format!("light {l}, {backend}: the waves' counters {cw:?} differ from the single launch's {ca:?}")
+    });
 }
 
 /// Point 3 of the module doc: light `l`'s stored photons, tile counts and counters
@@ -139,7 +244,10 @@ pub(crate) fn compare_indirect(
     // photons of a spectral colour (dispersive glass) differ by up to SPECTRAL_FLUX_REL of
     // their largest channel in every channel: of all channels' sum at most
     let flux_units = |c: &[u32], ch: usize| {
-        join_u64([c[counter::STORED_FLUX + 2 * ch], c[counter::STORED_FLUX + 2 * ch + 1]]) as f64
+        join_u64([
+            c[counter::STORED_FLUX + 2 * ch],
+            c[counter::STORED_FLUX + 2 * ch + 1],
+        ]) as f64
     };
     let all = |c: &[u32]| (0..3).map(|ch| flux_units(c, ch)).sum::<f64>();
     let spectral = if fx.scene.materials.values().any(|m| m.is_dispersive()) {

@@ -643,8 +643,50 @@ pub struct IndirectTraceParams {
     /// How a photon takes a colour at its first dispersive surface, one of
     /// [`dispersion_mode`](crate::math::spectrum::dispersion_mode) (0: spectral).
     pub dispersion_mode: u32,
+    /// The launch's first path segment: 0 starts the paths at their RSM photons; `k > 0`
+    /// (the `WAVES` variant's later waves) continues the `IndirectPath`s queued after
+    /// segment `k - 1`.
+    pub segment_first: u32,
+    /// The launch's end segment (exclusive): `max_segments` traces each path to its end;
+    /// less (a wave) queues the paths still going after segment `segment_end - 1`.
+    pub segment_end: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    pub _pad: [u32; 3],
+}
+
+/// A `trace_indirect` path between two waves (the `WAVES` variant): everything its next
+/// segment needs, full precision, so that the waves trace exactly the single launch's
+/// path (Smal 2019, section 24.2.2).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct IndirectPath {
+    /// The next ray's origin (world space, already lifted off its surface).
+    pub origin: [f32; 3],
+    /// The photon's index among the RSM photons (the key of its random numbers).
+    pub index: u32,
+    /// The next ray's unit direction (world space).
+    pub direction: [f32; 3],
+    /// Diffuse bounces made so far (the RSM's included).
+    pub bounces: u32,
+    /// Flux (W per channel).
+    pub flux: [f32; 3],
+    /// Wavelength (micrometres) taken at the first dispersive surface; 0: none yet.
+    pub wavelength: f32,
+}
+
+/// Parameters of `sort_indirect_paths` (the `sorted_waves` schedule's queues sorted by
+/// [`path_sort_key`](crate::math::path_sort::path_sort_key)).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathSortParams {
+    /// The scene box's lower corner (world space): the origin cells start there.
+    pub origin_min: [f32; 3],
+    /// Which launch, one of [`path_sort_phase`](crate::math::path_sort::path_sort_phase).
+    pub phase: u32,
+    /// Origin cells per scene unit along each axis.
+    pub origin_scale: [f32; 3],
+    /// The word of `path_counts` that holds the queue's length.
+    pub count_word: u32,
 }
 
 /// Parameters of `splat_photons` (Smal 2019, section 24.3, Eqs. 2-9): the camera, the

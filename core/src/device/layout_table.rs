@@ -11,8 +11,8 @@
 use super::layout::{
     AtlasParams, AtrousParams, CorrectionParams, DepositParams, DepositTexel, DirectParams,
     GBufferTexel, GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
-    IndirectTraceParams, MapLookupParams, Photon, PlanParams, RefineParams, RsmParams, RsmPhoton,
-    RsmTexel, SplatParams, TemporalParams, TraceParams,
+    IndirectPath, IndirectTraceParams, MapLookupParams, PathSortParams, Photon, PlanParams,
+    RefineParams, RsmParams, RsmPhoton, RsmTexel, SplatParams, TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -239,8 +239,11 @@ table! {
     GiPhoton { position, power, normal, direction, ray_length, tile }
     IndirectTraceParams {
         camera, first, count, seed, max_bounces, max_segments, tile_size, store,
-        fresnel_model, power_scale, flux_quantum, dispersion_mode, _pad
+        fresnel_model, power_scale, flux_quantum, dispersion_mode, segment_first, segment_end,
+        _pad
     }
+    IndirectPath { origin, index, direction, bounces, flux, wavelength }
+    PathSortParams { origin_min, phase, origin_scale, count_word }
     SplatParams {
         camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,
         min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,

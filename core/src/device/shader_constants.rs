@@ -20,6 +20,7 @@ use super::layout::{
 };
 use crate::math::gi_photon::gi_store;
 use crate::math::optics::ior_model;
+use crate::math::path_sort::{path_sort_phase, PATH_SORT_BITS, PATH_SORT_BUCKETS};
 use crate::math::photon_clusters::{
     cluster_fate, cluster_metric, cluster_relevance, cluster_target, CLUSTER_ID_MASK,
     MAX_ERROR_TEXELS, NO_TRIANGLE,
@@ -347,6 +348,25 @@ pub fn groups() -> Vec<ConstGroup> {
         group(
             "core::math::gi_photon::gi_store",
             prefixed!("GI_STORE_", U32, gi_store { PACKED, FLOAT }),
+        ),
+        group(
+            "core::math::path_sort",
+            [
+                vec![
+                    named!("PATH_SORT_BITS", U32, PATH_SORT_BITS),
+                    named!("PATH_SORT_BUCKETS", Index, PATH_SORT_BUCKETS),
+                ],
+                prefixed!(
+                    "PATH_SORT_",
+                    U32,
+                    path_sort_phase {
+                        HISTOGRAM,
+                        SCAN,
+                        SCATTER
+                    }
+                ),
+            ]
+            .concat(),
         ),
     ]
 }

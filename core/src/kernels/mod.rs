@@ -37,6 +37,7 @@ mod rsm_importance;
 mod sample_rsm;
 mod select_photon_plan;
 mod shading_normal_correction;
+mod sort_indirect_paths;
 mod splat_photons;
 mod temporal_blend;
 mod tile_hit_distance;
@@ -62,10 +63,11 @@ pub use rsm_importance::RsmImportance;
 pub use sample_rsm::SampleRsm;
 pub use select_photon_plan::SelectPhotonPlan;
 pub use shading_normal_correction::ShadingNormalCorrection;
+pub use sort_indirect_paths::SortIndirectPaths;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
-pub use trace_indirect::TraceIndirect;
+pub use trace_indirect::{IndirectWave, TraceIndirect, TRACE_INDIRECT_SWITCHES};
 pub use trace_photons::{
     AtlasDeposit, ClusterBatch, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant,
 };
@@ -442,6 +444,7 @@ pub(crate) mod bytes {
     pub const RSM_TEXEL: u64 = size_of::<crate::device::layout::RsmTexel>() as u64;
     pub const RSM_PHOTON: u64 = size_of::<crate::device::layout::RsmPhoton>() as u64;
     pub const GI_PHOTON: u64 = size_of::<crate::device::layout::GiPhoton>() as u64;
+    pub const INDIRECT_PATH: u64 = size_of::<crate::device::layout::IndirectPath>() as u64;
 }
 
 /// Called with the one list ([`with_kernels!`](crate::with_kernels)): generates
@@ -537,6 +540,7 @@ macro_rules! with_kernels {
             RsmImportance => rsm_importance,
             SampleRsm => sample_rsm,
             TraceIndirect => trace_indirect,
+            SortIndirectPaths => sort_indirect_paths,
             SplatPhotons => splat_photons,
             ShadingNormalCorrection => shading_normal_correction,
             SelectPhotonPlan => select_photon_plan,
@@ -578,6 +582,7 @@ macro_rules! with_shader_kernels {
             rsm_importance,
             sample_rsm,
             trace_indirect,
+            sort_indirect_paths,
             splat_photons,
             select_photon_plan,
         }

@@ -4,7 +4,7 @@
 use super::{bind, bytes, with_scene, Args, Binding, BindingKind::*, KernelDecl, KernelInfo};
 use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, SceneArgs};
-use crate::device::layout::{IndirectTraceParams, RsmPhoton};
+use crate::device::layout::{IndirectPath, IndirectTraceParams, RsmPhoton};
 use crate::math::gi_photon::screen_tiles;
 
 /// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s).
@@ -35,6 +35,16 @@ use crate::math::gi_photon::screen_tiles;
 /// `max_segments` segments, `OFF_SCREEN` hits outside the view, `DEPTH_MISMATCH` hits
 /// turned away from the camera or hidden from it, `RAYS`, `STORED_FLUX`, `UNDERFLOW` (a
 /// stored power that packs to zero).
+///
+/// Schedules: a path is traced over segments `params.segment_first .. segment_end`. The
+/// single launch (`waves: None`) traces every path from its RSM photon to its end (0 ..
+/// `max_segments`). The `WAVES` variant ([`IndirectWave`]) traces one wave: from the RSM
+/// photons (`segment_first` 0, threads as above) or from the `path_counts[segment_first]`
+/// paths of `paths_in` (thread `t` takes path `t`), and appends each path still going
+/// after `segment_end - 1` (below `max_segments`) to `paths_out`, its slot from
+/// `path_counts[segment_end]`. A path's random numbers are keyed by its photon and
+/// segment, and its state is carried in full precision, so the waves store exactly the
+/// single launch's photons (in another order) and count the same.
 
 #[derive(Clone, Copy, Debug)]
 pub struct TraceIndirect {
@@ -61,9 +71,31 @@ pub struct TraceIndirect {
     /// the device too, [`crate::device::launch::ParamPatch`]); `None`: a direct launch of
     /// `params.count` threads.
     pub dispatch: Option<super::DispatchRecord>,
+    /// The `WAVES` variant's path queues; `None`: the single launch.
+    pub waves: Option<IndirectWave>,
 }
 
-const BINDINGS: [Binding; 16] = with_scene([
+/// The queues of one wave of `trace_indirect` (the `WAVES` variant).
+#[derive(Clone, Copy, Debug)]
+pub struct IndirectWave {
+    /// The paths this wave continues (`segment_first > 0`; its first
+    /// `min(path_counts[segment_first], path_capacity)` entries; at least as long as
+    /// `paths_out`).
+    pub paths_in: Buf<IndirectPath>,
+    /// Output: the paths still going after the wave, appended from slot
+    /// `path_counts[segment_end]` (sized for every path of the launch, so none is lost;
+    /// a slot past its end is not written).
+    pub paths_out: Buf<IndirectPath>,
+    /// Per segment `k` the paths queued for the wave that starts there (the caller
+    /// clears them before the first wave); read at `segment_first` (above 0), appended
+    /// to at `segment_end` (below `max_segments`).
+    pub path_counts: Buf<u32>,
+}
+
+/// `trace_indirect`'s compiled switches: `WAVES` (1: one wave with path queues).
+pub const TRACE_INDIRECT_SWITCHES: [&str; 1] = ["WAVES"];
+
+const BINDINGS: [Binding; 20] = with_scene([
     bind("params", Params),
     bind("rsm_photons", Read),
     bind("photons", ReadWrite),
@@ -74,10 +106,23 @@ const BINDINGS: [Binding; 16] = with_scene([
     bind("gbuffer0", Read),
     bind("gbuffer1", Read),
     bind("gbuffer3", Read),
+    bind("paths_in", Read),
+    bind("paths_out", ReadWrite),
+    bind("path_capacity", Count),
+    bind("path_counts", ReadWrite),
 ]);
 
 impl KernelDecl for TraceIndirect {
-    const INFO: KernelInfo = KernelInfo::traced("trace_indirect", &BINDINGS, &[], "PhotonGi");
+    const INFO: KernelInfo = KernelInfo::traced(
+        "trace_indirect",
+        &BINDINGS,
+        &TRACE_INDIRECT_SWITCHES,
+        "PhotonGi",
+    );
+
+    fn switch_values(&self) -> Vec<u32> {
+        vec![self.waves.is_some() as u32]
+    }
 
     /// Its parameters may come partly from the device ([`crate::device::launch::ParamPatch`]).
     fn params_mut(&mut self) -> Option<&mut [u8]> {
@@ -91,6 +136,40 @@ impl KernelDecl for TraceIndirect {
     fn lower(&self, a: &mut Args) -> Result<Option<u64>, BackendError> {
         let p = &self.params;
         let c = &p.camera;
+        let fits = match self.waves {
+            // the single launch traces every segment of every path
+            None => p.segment_first == 0 && p.segment_end == p.max_segments,
+            Some(_) => p.segment_first < p.segment_end && p.segment_end <= p.max_segments,
+        };
+        if !fits {
+            return Err(BackendError::BadArgument(format!(
+                "trace_indirect: segments {} .. {} of {} ({})",
+                p.segment_first,
+                p.segment_end,
+                p.max_segments,
+                if self.waves.is_some() {
+                    "a wave"
+                } else {
+                    "the single launch traces them all"
+                }
+            )));
+        }
+        // the queue lengths a wave reads (`segment_first`) and appends to (`segment_end`,
+        // unless it is the paths' last segment)
+        let last_count = if p.segment_end < p.max_segments {
+            p.segment_end
+        } else {
+            p.segment_first
+        };
+        if let Some(w) = &self.waves {
+            if w.path_counts.len <= last_count || w.paths_in.len < w.paths_out.len {
+                return Err(BackendError::BadArgument(format!(
+                    "trace_indirect: {} path counts for a wave ending at segment {}, queues of \
+                     {} and {} paths",
+                    w.path_counts.len, p.segment_end, w.paths_in.len, w.paths_out.len
+                )));
+            }
+        }
         a.scene(&self.scene)?
             .params("params", p)?
             .buf(
@@ -111,8 +190,31 @@ impl KernelDecl for TraceIndirect {
                 screen_tiles(c.width, c.height, p.tile_size) as u64 * 4,
             )?
             .buf("counters", self.counters, bytes::COUNTERS)?
-            .gather_gbuffer(&self.gbuffer, c.width as u64 * c.height as u64)?
-            .indirect(self.dispatch)?;
+            .gather_gbuffer(&self.gbuffer, c.width as u64 * c.height as u64)?;
+        match &self.waves {
+            Some(w) => {
+                a.buf(
+                    "paths_in",
+                    w.paths_in,
+                    w.paths_out.len as u64 * bytes::INDIRECT_PATH,
+                )?
+                .buf(
+                    "paths_out",
+                    w.paths_out,
+                    w.paths_out.len as u64 * bytes::INDIRECT_PATH,
+                )?
+                .count("path_capacity", w.paths_out.len)?
+                .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
+            }
+            // the single launch reads and writes no queue: stand-ins of the same access
+            None => {
+                a.buf("paths_in", self.rsm_photons, 0)?
+                    .buf("paths_out", self.tile_counts, 0)?
+                    .count("path_capacity", 0)?
+                    .buf("path_counts", self.tile_counts, 0)?;
+            }
+        }
+        a.indirect(self.dispatch)?;
         Ok(Some(p.count as u64))
     }
 }

@@ -10,6 +10,7 @@ pub mod irradiance_filter;
 pub mod map_gather;
 pub mod optics;
 pub mod packing;
+pub mod path_sort;
 pub mod photon_allocation;
 pub mod photon_clusters;
 pub mod photon_plan;

@@ -217,6 +217,13 @@ const RSM_SAMPLING_UNIFORM: u32 = 1u;
 const GI_STORE_PACKED: u32 = 0u;
 const GI_STORE_FLOAT: u32 = 1u;
 
+// core::math::path_sort
+const PATH_SORT_BITS: u32 = 3u;
+const PATH_SORT_BUCKETS: u32 = 4096u;
+const PATH_SORT_HISTOGRAM: u32 = 0u;
+const PATH_SORT_SCAN: u32 = 1u;
+const PATH_SORT_SCATTER: u32 = 2u;
+
 // core::device::layout::GpuVertex, 32 bytes
 struct GpuVertex {
     position: vec3<f32>, // 0
@@ -448,7 +455,7 @@ struct GiPhoton {
     tile: u32, // 28
 }
 
-// core::device::layout::IndirectTraceParams, 112 bytes
+// core::device::layout::IndirectTraceParams, 128 bytes
 struct IndirectTraceParams {
     camera: GpuCamera, // 0
     first: u32, // 64
@@ -462,7 +469,29 @@ struct IndirectTraceParams {
     power_scale: f32, // 96
     flux_quantum: f32, // 100
     dispersion_mode: u32, // 104
-    _pad: u32, // 108
+    segment_first: u32, // 108
+    segment_end: u32, // 112
+    _pad0: u32, // 116
+    _pad1: u32, // 120
+    _pad2: u32, // 124
+}
+
+// core::device::layout::IndirectPath, 48 bytes
+struct IndirectPath {
+    origin: vec3<f32>, // 0
+    index: u32, // 12
+    direction: vec3<f32>, // 16
+    bounces: u32, // 28
+    flux: vec3<f32>, // 32
+    wavelength: f32, // 44
+}
+
+// core::device::layout::PathSortParams, 32 bytes
+struct PathSortParams {
+    origin_min: vec3<f32>, // 0
+    phase: u32, // 12
+    origin_scale: vec3<f32>, // 16
+    count_word: u32, // 28
 }
 
 // core::device::layout::SplatParams, 128 bytes

@@ -32,15 +32,15 @@ mod rsm;
 mod settings;
 
 pub use rsm::{rsm_faces, LightRsm};
-pub use settings::{IndirectEstimator, PhotonGiSettings, RsmSampling};
+pub use settings::{IndirectEstimator, IndirectSchedule, PhotonGiSettings, RsmSampling};
 
 use crate::backend::Backend;
 use crate::device::device_scene::SceneInstances;
 use crate::device::handle::{Buf, GBufferPlanes, ImageBuf, PhotonMapPlanes};
 use crate::device::launch::{ParamPatch, DISPATCH_RECORD_WORDS};
 use crate::device::layout::{
-    counter, photon_plan_word, CorrectionParams, DepositParams, GpuCamera, IndirectTraceParams,
-    PlanParams, RsmParams, SplatParams, NO_PLAN_BIT,
+    counter, photon_plan_word, CorrectionParams, DepositParams, GpuCamera, IndirectPath,
+    IndirectTraceParams, PathSortParams, PlanParams, RsmParams, SplatParams, NO_PLAN_BIT,
 };
 use crate::frame::allocation::{allocate, Allocation};
 use crate::frame::error::Error;
@@ -55,10 +55,11 @@ use crate::frame::screen::{DirectLighting, ScreenNeeds};
 use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::frame::temporal::PingPong;
 use crate::kernels::{
-    DepositScreen, DispatchArgs, DispatchRecord, ResolveCaustics, SampleRsm, SelectPhotonPlan,
-    ShadingNormalCorrection, SplatPhotons, TraceIndirect,
+    DepositScreen, DispatchArgs, DispatchRecord, IndirectWave, ResolveCaustics, SampleRsm,
+    SelectPhotonPlan, ShadingNormalCorrection, SortIndirectPaths, SplatPhotons, TraceIndirect,
 };
 use crate::math::gi_photon::{gi_store, screen_tiles};
+use crate::math::path_sort::{path_sort_phase, PATH_SORT_BITS, PATH_SORT_BUCKETS};
 use crate::recording::Recording;
 use rsm::{PhotonPlan, PlanTable, RsmBuffers};
 use std::mem::offset_of;
@@ -148,6 +149,47 @@ struct Buffers {
     indirect: ImageBuf,
     temporal: Option<TemporalBuffers>,
     atrous: Option<AtrousBuffers>,
+    /// The path queues of the `waves` schedule (with more than one wave).
+    waves: Option<WaveBuffers>,
+}
+
+/// The `waves` schedule's queues: two of every path a light can trace (wave `k` reads
+/// `paths[k % 2]` and appends to the other; sorted, every wave appends to `paths[1]`,
+/// which the sort moves into `paths[0]` for the next: no path is ever lost), the
+/// per-segment queue lengths, the later waves' launch records (`dispatch_args` over
+/// `rows`, row `k - 1` = `[0, every initial photon, 1, k]` for wave `k`), and the sort's
+/// buckets (`sorted_waves`).
+#[derive(Clone, Copy, Debug)]
+struct WaveBuffers {
+    paths: [Buf<IndirectPath>; 2],
+    path_counts: Buf<u32>,
+    rows: Buf<[u32; 4]>,
+    dispatch: Buf<u32>,
+    buckets: Option<Buf<u32>>,
+}
+
+impl WaveBuffers {
+    /// Records the creation of the queues of `waves` waves (more than one) of at most
+    /// `total` paths each.
+    fn create(rec: &mut Recording, total: u32, waves: u32, sorted: bool) -> WaveBuffers {
+        let later = waves - 1;
+        WaveBuffers {
+            paths: [
+                rec.create(total.max(1), "indirect path queue a"),
+                rec.create(total.max(1), "indirect path queue b"),
+            ],
+            path_counts: rec.create(waves + 1, "indirect paths per wave"),
+            rows: rec.upload(
+                &(1..waves).map(|k| [0, total, 1, k]).collect::<Vec<_>>(),
+                "indirect wave launch rows (per wave its queue length's word)",
+            ),
+            dispatch: rec.create(
+                later * DISPATCH_RECORD_WORDS as u32,
+                "indirect wave launch records",
+            ),
+            buckets: sorted.then(|| rec.create(PATH_SORT_BUCKETS, "indirect path sort buckets")),
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -211,6 +253,10 @@ impl Buffers {
         let total = settings.total_photons();
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
+        let bound = total.min(u32::MAX as u64) as u32;
+        let sorted = settings.indirect_schedule == IndirectSchedule::SortedWaves;
+        let waves = (settings.waves() > 1)
+            .then(|| WaveBuffers::create(rec, bound, settings.waves(), sorted));
         Buffers {
             rsm,
             plan: rec.create(
@@ -246,6 +292,7 @@ impl Buffers {
             indirect,
             temporal,
             atrous,
+            waves,
         }
     }
 }
@@ -385,8 +432,11 @@ fn make_plan(
             },
             pass(
                 "dispatch_args",
-                planned && any,
-                if planned {
+                (planned || s.waves() > 1) && any,
+                if s.waves() > 1 {
+                    "the indirect waves' launches from their queues' lengths (and the lights' \
+                     from the device plan's counts until it is read back)"
+                } else if planned {
                     "the lights' launch records from the device plan's counts, until it is \
                      read back"
                 } else {
@@ -394,7 +444,26 @@ fn make_plan(
                 },
             ),
             pass("sample_rsm", any, photons),
-            pass("trace_indirect", any, photons),
+            pass(
+                "trace_indirect",
+                any,
+                if s.waves() > 1 {
+                    "some light has power; its paths in per-bounce waves"
+                } else {
+                    photons
+                },
+            ),
+            pass(
+                "sort_indirect_paths",
+                any && s.waves() > 1 && s.indirect_schedule == IndirectSchedule::SortedWaves,
+                if s.indirect_schedule != IndirectSchedule::SortedWaves {
+                    "indirect_schedule is not sorted_waves"
+                } else if s.waves() > 1 {
+                    "each indirect wave's queue in key order (direction octant, origin cell)"
+                } else {
+                    "a single wave: no queue"
+                },
+            ),
             pass(
                 "splat_photons",
                 any && splat,
@@ -632,7 +701,9 @@ impl PhotonGiPipeline {
             power_scale: self.photons.power_scale,
             flux_quantum: self.photons.flux_quantum,
             dispersion_mode: self.settings.frame.dispersion.kernel_value(),
-            _pad: 0,
+            segment_first: 0,
+            segment_end: self.settings.max_segments,
+            _pad: [0; 3],
         }
     }
 
@@ -706,30 +777,114 @@ impl PhotonGiPipeline {
             },
             vec![self.plan_patch(offset_of!(RsmParams, sample_count), count)],
         );
-        rec.kernel_patched(
-            TraceIndirect {
-                scene,
-                params: self.trace_params(host.camera(), 0, bound, store),
-                rsm_photons: b.rsm.photons,
-                photons: b.photons,
-                photon_count: b.photon_count,
-                tile_counts: b.tile_counts,
-                counters: b.counters,
-                gbuffer: gbuffer(host),
-                dispatch,
+        let patches = vec![
+            self.plan_patch(offset_of!(IndirectTraceParams, count), count),
+            self.plan_patch(
+                offset_of!(IndirectTraceParams, power_scale),
+                photon_plan_word::POWER_SCALE,
+            ),
+            self.plan_patch(
+                offset_of!(IndirectTraceParams, flux_quantum),
+                photon_plan_word::FLUX_QUANTUM,
+            ),
+        ];
+        let single = TraceIndirect {
+            scene,
+            params: self.trace_params(host.camera(), 0, bound, store),
+            rsm_photons: b.rsm.photons,
+            photons: b.photons,
+            photon_count: b.photon_count,
+            tile_counts: b.tile_counts,
+            counters: b.counters,
+            gbuffer: gbuffer(host),
+            dispatch,
+            waves: None,
+        };
+        let Some(w) = &b.waves else {
+            rec.kernel_patched(single, patches);
+            return;
+        };
+        // per-bounce waves: wave k traces segment k of the paths queued for it (the last
+        // wave the rest of each path), launched from its queue's length on the device
+        let (waves, max_segments) = (self.settings.waves(), self.settings.max_segments);
+        rec.clear(w.path_counts);
+        for k in 0..waves {
+            let dispatch = if k == 0 {
+                dispatch
+            } else {
+                // every row again: those of earlier waves read final lengths, so their
+                // records are rewritten with the same words
+                rec.kernel(DispatchArgs {
+                    table: w.rows,
+                    counts: w.path_counts,
+                    args: w.dispatch,
+                });
+                let record = DispatchRecord {
+                    args: w.dispatch,
+                    record: k - 1,
+                };
+                if let Some(buckets) = w.buckets {
+                    self.record_sort(rec, host, w, buckets, k, record);
+                }
+                Some(record)
+            };
+            let end = if k + 1 == waves { max_segments } else { k + 1 };
+            let (paths_in, paths_out) = if w.buckets.is_some() {
+                (w.paths[0], w.paths[1])
+            } else {
+                (w.paths[k as usize % 2], w.paths[(k as usize + 1) % 2])
+            };
+            rec.kernel_patched(
+                TraceIndirect {
+                    params: IndirectTraceParams {
+                        segment_first: k,
+                        segment_end: end,
+                        ..single.params
+                    },
+                    dispatch,
+                    waves: Some(IndirectWave {
+                        paths_in,
+                        paths_out,
+                        path_counts: w.path_counts,
+                    }),
+                    ..single
+                },
+                patches.clone(),
+            );
+        }
+    }
+
+    /// Records the sort of the queue wave `k` continues (`w.paths[1]`, its length at word
+    /// `k`) into `w.paths[0]`, launched from `record` (its length's launch record).
+    fn record_sort(
+        &self,
+        rec: &mut Recording,
+        host: &FrameHost,
+        w: &WaveBuffers,
+        buckets: Buf<u32>,
+        k: u32,
+        record: DispatchRecord,
+    ) {
+        let b = host.geometry().bounds;
+        let cells = (1u32 << PATH_SORT_BITS) as f32;
+        let extent = (b.max - b.min).max(glam::Vec3::splat(f32::MIN_POSITIVE));
+        let sort = |phase| SortIndirectPaths {
+            params: PathSortParams {
+                origin_min: b.min.to_array(),
+                phase,
+                origin_scale: (cells / extent).to_array(),
+                count_word: k,
             },
-            vec![
-                self.plan_patch(offset_of!(IndirectTraceParams, count), count),
-                self.plan_patch(
-                    offset_of!(IndirectTraceParams, power_scale),
-                    photon_plan_word::POWER_SCALE,
-                ),
-                self.plan_patch(
-                    offset_of!(IndirectTraceParams, flux_quantum),
-                    photon_plan_word::FLUX_QUANTUM,
-                ),
-            ],
-        );
+            paths_in: w.paths[1],
+            path_counts: w.path_counts,
+            paths_out: w.paths[0],
+            buckets,
+            dispatch: Some(record),
+        };
+        rec.clear(buckets);
+        rec.kernel(sort(path_sort_phase::HISTOGRAM));
+        rec.kernel(sort(path_sort_phase::SCAN));
+        rec.kernel(sort(path_sort_phase::SCATTER));
     }
 
     /// Records the lights' launch records from the device plan's counts (`dispatch_args`

@@ -42,6 +42,25 @@ impl RsmSampling {
     }
 }
 
+/// How `trace_indirect` runs its paths.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IndirectSchedule {
+    /// One launch: a thread follows its path from the RSM photon to its end.
+    #[default]
+    SingleKernel,
+    /// Per-bounce waves: each launch traces one segment of every live path and queues
+    /// the paths that go on (a compacted queue, its count on the device), the next wave
+    /// launched from that count; the last wave traces the paths to their end. The same
+    /// photons as the single launch, in another order: the same image, bit for bit.
+    Waves,
+    /// The waves with each queue sorted before its wave (`sort_indirect_paths`: by the
+    /// octant of the path's direction, then a coarse Morton code of its origin,
+    /// `math::path_sort`), so that a warp's paths walk similar parts of the BVH. The same
+    /// image, bit for bit.
+    SortedWaves,
+}
+
 /// Every parameter of the technique.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -90,6 +109,11 @@ pub struct PhotonGiSettings {
     pub shading_normals: bool,
     /// Reflectance of dielectric interfaces ([`fresnel_model`]).
     pub fresnel_model: u32,
+    /// How the indirect paths are traced (one launch, or per-bounce waves).
+    pub indirect_schedule: IndirectSchedule,
+    /// Waves of the `waves` schedule (1..=64): waves `0 .. n - 1` trace one segment each,
+    /// the last one the rest of every path (at most `max_segments` waves run).
+    pub indirect_waves: u32,
 }
 
 impl Default for PhotonGiSettings {
@@ -117,6 +141,8 @@ impl Default for PhotonGiSettings {
             max_splat_px: 48,
             shading_normals: true,
             fresnel_model: fresnel_model::EXACT,
+            indirect_schedule: IndirectSchedule::SingleKernel,
+            indirect_waves: 8,
         }
     }
 }
@@ -135,6 +161,16 @@ impl PhotonGiSettings {
     /// Initial photons per frame over all lights (`photons_w x photons_h`).
     pub fn total_photons(&self) -> u64 {
         self.frame.photons_w as u64 * self.frame.photons_h as u64
+    }
+
+    /// Launches of `trace_indirect` per light: 1, or the waves (at most one a segment).
+    pub fn waves(&self) -> u32 {
+        match self.indirect_schedule {
+            IndirectSchedule::SingleKernel => 1,
+            IndirectSchedule::Waves | IndirectSchedule::SortedWaves => {
+                self.indirect_waves.min(self.max_segments).max(1)
+            }
+        }
     }
 
     /// Refuses values the kernels cannot run with, each by name.
@@ -181,6 +217,9 @@ impl PhotonGiSettings {
         }
         if !(self.frame.atrous_clip_sigmas > 0.0) {
             return bad("frame.atrous_clip_sigmas must be > 0");
+        }
+        if self.indirect_waves == 0 || self.indirect_waves > 64 {
+            return bad("indirect_waves must be in 1..=64");
         }
         if self.fresnel_model > fresnel_model::SCHLICK {
             return bad("fresnel_model must be 0 (exact) or 1 (Schlick)");

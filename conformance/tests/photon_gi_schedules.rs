@@ -1,0 +1,160 @@
+//! PhotonGi's two schedules of `trace_indirect` on every backend (`backends()`: all four,
+//! required in CI): the per-bounce waves trace exactly the single launch's paths (each
+//! path's random numbers are keyed by its photon and segment, its state crosses the
+//! queue in full precision), so they store the same photons in another order; the splat
+//! and the deposit sum in exact fixed point, so every image is the single launch's bit
+//! for bit, and so are the photon statistics. Checked on `cornell` and `rooms`, over two
+//! frames (the first selects the photon plan on the device and launches the lights from
+//! it, the second from the plan read back), with the splat, the raw deposit, one wave
+//! per segment and the default waves, and the sorted waves; and `sort_indirect_paths`
+//! against the CPU on proptest-drawn queues.
+
+use caustica_conformance::backends;
+use caustica_conformance::harness;
+use caustica_conformance::kernels::sort_indirect_paths::check_sort_indirect_paths;
+use caustica_conformance::strategies;
+use caustica_core::device::layout::IndirectPath;
+use caustica_core::frame::output::Output;
+use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::Scene;
+use caustica_core::techniques::create;
+use caustica_core::Backend;
+use proptest::prelude::*;
+use proptest::test_runner::{TestCaseError, TestRunner};
+use std::cell::RefCell;
+
+fn scene(name: &str) -> Scene {
+    let mut s = builtin(name).expect("built-in");
+    (s.camera.width, s.camera.height) = (96, 54);
+    s
+}
+
+/// Per frame: the outputs' bits and the photon statistics.
+type Frames = Vec<(Vec<Vec<u32>>, String)>;
+
+fn frames(b: &mut dyn Backend, scene: &Scene, settings: &serde_json::Value) -> Frames {
+    let mut t = create("photon-gi", b, scene, settings).expect("create");
+    let out = (0..2)
+        .map(|k| {
+            t.set_seed(3 + k);
+            let stats = t.frame(b, &mut |_| {}).expect("frame");
+            // every wave is launched from the device's count: no wait inside the frame
+            assert_eq!(
+                stats.host_waits, 0,
+                "{settings}: the frame waited on the device"
+            );
+            let images = [
+                Output::RawIndirect,
+                Output::FilteredIndirect,
+                Output::Composite,
+            ]
+            .map(|o| {
+                let img = t.read_output(b, o).expect("read").pixels;
+                img.iter().flatten().map(|x| x.to_bits()).collect()
+            });
+            let counts = format!(
+                "emitted {} rays {} stored {} discarded {:?}",
+                stats.photons_emitted,
+                stats.photon_rays_traced,
+                stats.photons_stored,
+                stats.discarded
+            );
+            (images.to_vec(), counts)
+        })
+        .collect();
+    t.free(b).expect("free");
+    out
+}
+
+#[test]
+fn waves_render_the_single_launchs_images_bitwise() {
+    let mut failures = Vec::new();
+    for (name, mut b) in backends() {
+        for scene_name in ["cornell", "rooms"] {
+            let s = scene(scene_name);
+            for estimator in ["splat", "deposit"] {
+                let base = serde_json::json!({
+                    "photons_w": 96, "photons_h": 96, "rsm_size": 64, "estimator": estimator,
+                    "indirect_schedule": "single_kernel"
+                });
+                let single = frames(b.as_mut(), &s, &base);
+                for (schedule, waves) in [("waves", 8), ("waves", 16), ("sorted_waves", 8)] {
+                    let mut w = base.clone();
+                    w["indirect_schedule"] = schedule.into();
+                    w["indirect_waves"] = waves.into();
+                    let waved = frames(b.as_mut(), &s, &w);
+                    for (k, (a, c)) in single.iter().zip(&waved).enumerate() {
+                        let what =
+                            format!("{name} {scene_name} {estimator} {waves} waves frame {k}");
+                        if a.1 != c.1 {
+                            failures.push(format!("{what}: statistics {} vs {}", c.1, a.1));
+                        }
+                        for (o, (x, y)) in a.0.iter().zip(&c.0).enumerate() {
+                            let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
+                            if differ > 0 || x.len() != y.len() {
+                                failures.push(format!("{what}: output {o}: {differ} words differ"));
+                            }
+                        }
+                    }
+                    eprintln!(
+                        "{name} {scene_name} {estimator} {waves} waves: {}",
+                        waved[1].1
+                    );
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Queued paths: origins in and around a box, directions with every sign (zeros and
+/// negative zeros included), queue lengths from 0 past the queue's capacity.
+fn queues() -> impl Strategy<Value = (Vec<IndirectPath>, u32, ([f32; 3], [f32; 3]))> {
+    let coordinate = prop_oneof![-2.0f32..3.0, Just(0.0f32), Just(-0.0f32), Just(1.0f32)];
+    let v3 = || [coordinate.clone(), coordinate.clone(), coordinate.clone()];
+    let path = (v3(), v3(), 0u32..1 << 20).prop_map(|(origin, direction, index)| IndirectPath {
+        origin,
+        index,
+        direction,
+        bounces: index % 4,
+        flux: [1.0, 0.5, 0.25],
+        wavelength: 0.0,
+    });
+    (
+        proptest::collection::vec(path, 0..600),
+        prop_oneof![Just(0u32), 0u32..700, Just(u32::MAX)],
+        prop_oneof![
+            Just(([0.0f32; 3], [8.0f32; 3])),
+            Just(([-1.0f32, 0.0, -2.0], [2.0f32, 4.0, 1.5]))
+        ],
+    )
+}
+
+#[test]
+fn sort_indirect_paths_matches_cpu_for_any_queue() {
+    let test = "sort_indirect_paths on generated queues";
+    let reference = RefCell::new(harness::reference());
+    for cand in harness::candidates(test) {
+        let name = cand.name.clone();
+        let backend = RefCell::new(cand.backend);
+        let mut runner = TestRunner::new(strategies::config());
+        let result = runner.run(&queues(), |(paths, length, key_box)| {
+            let mut r = reference.borrow_mut();
+            let mut c = backend.borrow_mut();
+            let v = check_sort_indirect_paths(&mut *r, c.as_mut(), &paths, length, key_box)
+                .map_err(TestCaseError::fail)?;
+            if v.passed() {
+                Ok(())
+            } else {
+                Err(TestCaseError::fail(format!("{v}length {length}")))
+            }
+        });
+        if let Err(e) = result {
+            panic!("{name}: {e}");
+        }
+        harness::loud(&format!(
+            "{test}: {name} agrees with the CPU on {} generated queues",
+            strategies::config().cases
+        ));
+    }
+}
