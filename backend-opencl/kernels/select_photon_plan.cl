@@ -17,7 +17,7 @@ inline bool rsm_sees(__global const float* pyramid, uint side, uint faces) {
     uint top = level_offset(side, level_count(side) - 1u);
     bool sees = false;
     for (uint f = 0u; f < min(faces, 6u); f++) {
-        if (pyramid[f * len + top] > 0.0f) sees = true;
+        if (pyramid[f * len + top] >= RSM_SEEN_MIN_TOP) sees = true;
     }
     return sees;
 }

@@ -1,7 +1,8 @@
 //! PhotonGi's photon plan on the device: `select_photon_plan` on every backend against
 //! core's `math::photon_plan` (bitwise: integer words and the sign of `f32` pyramid tops),
 //! with host parameters and with parameters copied in from a device buffer, on
-//! proptest-drawn pyramids (tops zero, negative, subnormal, NaN or positive), masks, bits
+//! proptest-drawn pyramids (tops zero, negative, subnormal, the smallest normal, NaN or
+//! positive), masks, bits
 //! and tables (rows missing past the table's end too).
 
 use caustica_conformance::harness;
@@ -13,13 +14,15 @@ use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
 use std::cell::RefCell;
 
-/// A pyramid top: zero (either sign), negative, subnormal, NaN or positive.
+/// A pyramid top: zero (either sign), negative, subnormal (no flux: a device that flushes
+/// subnormals reads zero), the smallest normal (flux), NaN or positive.
 fn top() -> impl Strategy<Value = f32> {
     prop_oneof![
         Just(0.0f32),
         Just(-0.0f32),
         Just(f32::NAN),
         Just(f32::MIN_POSITIVE * 0.25),
+        Just(f32::MIN_POSITIVE),
         -1e3f32..0.0,
         0.0f32..1e3,
     ]

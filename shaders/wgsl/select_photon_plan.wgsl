@@ -27,7 +27,7 @@ fn rsm_sees(side: u32, faces: u32) -> bool {
     var sees = false;
     for (var f = 0u; f < min(faces, 6u); f++) {
         let at = f * len + top;
-        if (at < arrayLength(&pyramid) && pyramid[at] > 0.0) {
+        if (at < arrayLength(&pyramid) && pyramid[at] >= RSM_SEEN_MIN_TOP) {
             sees = true;
         }
     }

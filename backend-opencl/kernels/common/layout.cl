@@ -95,6 +95,9 @@
 // core::device::layout::NO_PLAN_BIT
 #define NO_PLAN_BIT 0xffffffffu
 
+// core::math::photon_plan
+#define RSM_SEEN_MIN_TOP 1.1754944e-38f
+
 // core::device::acceleration::instance_flags
 #define INSTANCE_IDENTITY 1u
 

@@ -95,6 +95,9 @@ const uint PLAN_COUNTS = 4u;
 // core::device::layout::NO_PLAN_BIT
 const uint NO_PLAN_BIT = 0xffffffffu;
 
+// core::math::photon_plan
+const float RSM_SEEN_MIN_TOP = 1.1754944e-38;
+
 // core::device::acceleration::instance_flags
 const uint INSTANCE_IDENTITY = 1u;
 

@@ -226,6 +226,14 @@ pub fn groups() -> Vec<ConstGroup> {
             vec![named!("NO_PLAN_BIT", U32, NO_PLAN_BIT)],
         ),
         group(
+            "core::math::photon_plan",
+            vec![named!(
+                "RSM_SEEN_MIN_TOP",
+                F32,
+                crate::math::photon_plan::RSM_SEEN_MIN_TOP
+            )],
+        ),
+        group(
             "core::device::acceleration::instance_flags",
             prefixed!("INSTANCE_", U32, instance_flags { IDENTITY }),
         ),

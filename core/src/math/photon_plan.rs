@@ -5,11 +5,18 @@
 //! leaves flux ([`rsm_sees`], [`note_light`]) and copies the row of the lights seen so
 //! far ([`plan_row`]). The shader ports mirror these functions by name.
 
+/// The least pyramid top that counts as flux: the smallest normal `f32`. A subnormal top
+/// counts as zero, as on devices whose shaders flush subnormals to zero (NVIDIA's Vulkan
+/// and wgpu pipelines), where `top > 0` would read it as zero and the CPU as flux; the
+/// same comparison gives every backend the same plan.
+pub const RSM_SEEN_MIN_TOP: f32 = f32::MIN_POSITIVE;
+
 /// Whether a light's RSM sees a texel that leaves flux: the top of some face's importance
 /// pyramid (the sum of its level-0 entries, each zero exactly where the texel's flux x
-/// albedo is zero, under either sampling) is positive. A NaN top is not positive.
+/// albedo is zero, under either sampling) is at least [`RSM_SEEN_MIN_TOP`]. A NaN or
+/// subnormal top does not count.
 pub fn rsm_sees(tops: &[f32]) -> bool {
-    tops.iter().any(|&t| t > 0.0)
+    tops.iter().any(|&t| t >= RSM_SEEN_MIN_TOP)
 }
 
 /// `mask` with bit `bit` set where `sees` (a bit of 32 or more, such as
@@ -34,10 +41,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_light_is_seen_where_a_top_is_positive() {
+    fn a_light_is_seen_where_a_top_is_a_normal_positive_float() {
         assert!(!rsm_sees(&[]));
         assert!(!rsm_sees(&[0.0, -0.0, f32::NAN]));
-        assert!(rsm_sees(&[0.0, f32::MIN_POSITIVE * 0.5]));
+        assert!(!rsm_sees(&[0.0, f32::MIN_POSITIVE * 0.5]));
+        assert!(rsm_sees(&[0.0, f32::MIN_POSITIVE]));
         assert_eq!(note_light(0b100, 0, true), 0b101);
         assert_eq!(note_light(0b100, 0, false), 0b100);
         assert_eq!(note_light(0b100, u32::MAX, true), 0b100);

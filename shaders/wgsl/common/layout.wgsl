@@ -95,6 +95,9 @@ const PLAN_COUNTS: u32 = 4u;
 // core::device::layout::NO_PLAN_BIT
 const NO_PLAN_BIT: u32 = 0xffffffffu;
 
+// core::math::photon_plan
+const RSM_SEEN_MIN_TOP: f32 = 1.1754944e-38f;
+
 // core::device::acceleration::instance_flags
 const INSTANCE_IDENTITY: u32 = 1u;
 
