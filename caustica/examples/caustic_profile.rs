@@ -100,7 +100,9 @@ fn main() {
     if std::env::var("DUMP").is_ok() {
         let xi = &x;
         let lum = |p: [f32; 4]| p[0] + p[1] + p[2];
-        let peak = (0..w * h).max_by(|&a, &b| lum(r.pixels[a]).total_cmp(&lum(r.pixels[b]))).unwrap();
+        let peak = (0..w * h)
+            .max_by(|&a, &b| lum(r.pixels[a]).total_cmp(&lum(r.pixels[b])))
+            .unwrap();
         let (cx, cy) = (peak % w, peak / w);
         println!("peak at ({cx}, {cy}): reference sum rgb, then image / reference");
         for y in cy - 4..=cy + 4 {
@@ -111,7 +113,12 @@ fn main() {
         }
         for y in cy - 4..=cy + 4 {
             let row: Vec<String> = (cx - 4..=cx + 4)
-                .map(|x| format!("{:9.4}", lum(xi.pixels[y * w + x]) / lum(r.pixels[y * w + x])))
+                .map(|x| {
+                    format!(
+                        "{:9.4}",
+                        lum(xi.pixels[y * w + x]) / lum(r.pixels[y * w + x])
+                    )
+                })
                 .collect();
             println!("{}", row.join(" "));
         }

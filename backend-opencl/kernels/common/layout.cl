@@ -191,6 +191,9 @@
 // core::math::map_gather
 #define TILE_FULLY_COVERED 0x80000000u
 #define MAX_FOOTPRINT_TEXELS 32.0f
+#define CENTROID_WORDS 3
+#define CENTROID_SUBTEXELS 256u
+#define CENTROID_MAX_PHOTONS 0x1000000u
 
 // core::math::photon_clusters
 #define NO_TRIANGLE 0xffffffffu

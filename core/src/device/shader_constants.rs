@@ -319,6 +319,9 @@ pub fn groups() -> Vec<ConstGroup> {
             vec![
                 named!("TILE_FULLY_COVERED", U32, map_gather::TILE_FULLY_COVERED),
                 named!("MAX_FOOTPRINT_TEXELS", F32, map_gather::MAX_FOOTPRINT_TEXELS),
+                named!("CENTROID_WORDS", Index, map_gather::CENTROID_WORDS),
+                named!("CENTROID_SUBTEXELS", U32, map_gather::CENTROID_SUBTEXELS),
+                named!("CENTROID_MAX_PHOTONS", U32, map_gather::CENTROID_MAX_PHOTONS),
             ],
         ),
         group(

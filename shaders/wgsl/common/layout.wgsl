@@ -191,6 +191,9 @@ const REACH_TILE: i32 = 8;
 // core::math::map_gather
 const TILE_FULLY_COVERED: u32 = 0x80000000u;
 const MAX_FOOTPRINT_TEXELS: f32 = 32.0f;
+const CENTROID_WORDS: u32 = 3u;
+const CENTROID_SUBTEXELS: u32 = 256u;
+const CENTROID_MAX_PHOTONS: u32 = 0x1000000u;
 
 // core::math::photon_clusters
 const NO_TRIANGLE: u32 = 0xffffffffu;

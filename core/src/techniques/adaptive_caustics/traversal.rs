@@ -268,6 +268,8 @@ pub struct AtlasTarget {
     pub tiles: Buf<AtlasTileTexel>,
     /// The atlas's fixed-point sums.
     pub sums: PhotonMapPlanes,
+    /// The atlas's centroid sums.
+    pub centroids: Buf<u32>,
     /// Atlas side (texels).
     pub atlas_width: u32,
     /// Flux per fixed-point unit (W).
@@ -768,19 +770,25 @@ impl Traversal {
         let (children, capacity) = a.children;
         let c = a.bound;
         let (flux_quantum, hit_distance_quantum) = target.quanta();
-        let (atlas_width, triangle_tiles, tiles, atlas, camera, kind) =
+        let (atlas_width, triangle_tiles, tiles, (atlas, centroids), camera, kind) =
             match (target, self.no_atlas) {
                 (DepositTarget::Atlas(a), _) => (
                     a.atlas_width,
                     a.triangle_tiles,
                     a.tiles,
-                    a.sums,
+                    (a.sums, a.centroids),
                     GpuCamera::default(),
                     cluster_target::ATLAS,
                 ),
-                (DepositTarget::Screen(sc), Some((tt, tl, planes))) => {
-                    (1, tt, tl, planes, sc.deposit.camera, cluster_target::SCREEN)
-                }
+                // the screen target binds no atlas: its centroids alias the counters
+                (DepositTarget::Screen(sc), Some((tt, tl, planes))) => (
+                    1,
+                    tt,
+                    tl,
+                    (planes, self.output_counters),
+                    sc.deposit.camera,
+                    cluster_target::SCREEN,
+                ),
                 (DepositTarget::Screen(_), None) => {
                     return Err(Error::InvalidParameter(
                         "adaptive traversal recorded for the atlas, run for the screen".into(),
@@ -876,6 +884,7 @@ impl Traversal {
                 output_photons: self.outputs,
                 output_count: self.output_count,
                 dispatch: record(1),
+                centroids,
             }
             .into(),
         );
