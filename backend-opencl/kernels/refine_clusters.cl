@@ -122,8 +122,20 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                                  ys[k] < tile.y + tile.z));
         }
         uint spread = all_in ? cluster_spread(xs, ys) : 0xffffffffu;
-        uint fate = cluster_fate(relevant, spread <= max(p->error_texels, 1u), p->level, p->finest,
-                                 p->metric, p->error_from_level);
+        // with error_texels 1 on the atlas, the four also in one convergence cell of their
+        // texel
+        bool one_cell = true;
+        if (!screen && p->error_texels <= 1u && all_in) {
+            uint2 c0 = convergence_cell(
+                centroid_offset(tile, (float2)(slots[0].position[0], slots[0].position[1])));
+            for (uint k = 1u; k < 4u; k++) {
+                uint2 ck = convergence_cell(
+                    centroid_offset(tile, (float2)(slots[k].position[0], slots[k].position[1])));
+                one_cell = one_cell && ck.x == c0.x && ck.y == c0.y;
+            }
+        }
+        uint fate = cluster_fate(relevant, spread <= max(p->error_texels, 1u) && one_cell,
+                                 p->level, p->finest, p->metric, p->error_from_level);
         if (fate == CLUSTER_OUTPUT && p->level < p->finest) {
             // converged early: output later from fresh photons
             atomic_inc(&cluster_counts[CLUSTER_COUNT_CONVERGED]);

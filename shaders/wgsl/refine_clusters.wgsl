@@ -152,7 +152,17 @@ fn refine_clusters(t: u32, li: u32) {
         if (all_in) {
             spread = cluster_spread(xs, ys);
         }
-        let converged_here = spread <= max(p.error_texels, 1u);
+        // with error_texels 1 on the atlas, the four also in one convergence cell of their
+        // texel
+        var one_cell = true;
+        if (!screen && p.error_texels <= 1u && all_in) {
+            let c0 = convergence_cell(centroid_offset(tile, slots[0].position.xy));
+            for (var k = 1u; k < 4u; k++) {
+                let ck = convergence_cell(centroid_offset(tile, slots[k].position.xy));
+                one_cell = one_cell && all(ck == c0);
+            }
+        }
+        let converged_here = spread <= max(p.error_texels, 1u) && one_cell;
         let fate = cluster_fate(relevant, converged_here, p.level, p.finest, p.metric,
                                 p.error_from_level);
         if (fate == CLUSTER_OUTPUT && p.level < p.finest) {

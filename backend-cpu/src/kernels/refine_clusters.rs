@@ -19,7 +19,7 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::RefineClusters;
 use caustica_core::math::photon_clusters::{
     cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
-    cluster_spread, cluster_target, entry_cluster, entry_spread, live_clusters, slot_met_caster,
+    cluster_spread, cluster_target, convergence_cell, entry_cluster, entry_spread, live_clusters, slot_met_caster,
     slot_stored,
 };
 use rayon::prelude::*;
@@ -195,7 +195,19 @@ pub fn refine_clusters(
             } else {
                 u32::MAX
             };
-            let converged = spread <= p.error_texels.max(1);
+            // with error_texels 1 on the atlas, the four also in one convergence cell of
+            // their texel
+            let one_cell = screen
+                || p.error_texels > 1
+                || !all_in
+                || tile.is_none_or(|t| {
+                    let cell = |ph: &Photon| {
+                        let uv = glam::Vec2::new(ph.position[0], ph.position[1]);
+                        convergence_cell(centroid_offset(t, uv))
+                    };
+                    slots.iter().all(|ph| cell(ph) == cell(&slots[0]))
+                });
+            let converged = spread <= p.error_texels.max(1) && one_cell;
             let fate = cluster_fate(
                 relevant,
                 converged,

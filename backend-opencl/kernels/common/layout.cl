@@ -208,6 +208,7 @@
 #define CLUSTER_TARGET_SCREEN 1u
 #define MAX_ERROR_TEXELS 4u
 #define CLUSTER_ID_MASK 0x3fffffffu
+#define CONVERGENCE_CELLS 16u
 
 // core::math::rsm
 #define RSM_TEXEL_NONE 0u

@@ -22,7 +22,7 @@ use crate::math::gi_photon::gi_store;
 use crate::math::optics::ior_model;
 use crate::math::photon_clusters::{
     cluster_fate, cluster_metric, cluster_relevance, cluster_target, CLUSTER_ID_MASK,
-    MAX_ERROR_TEXELS, NO_TRIANGLE,
+    CONVERGENCE_CELLS, MAX_ERROR_TEXELS, NO_TRIANGLE,
 };
 use crate::math::rsm::{rsm_sampling, rsm_texel_kind};
 use crate::math::spectrum::{self, dispersion_mode};
@@ -335,6 +335,7 @@ pub fn groups() -> Vec<ConstGroup> {
                 vec![
                     named!("MAX_ERROR_TEXELS", U32, MAX_ERROR_TEXELS),
                     named!("CLUSTER_ID_MASK", U32, CLUSTER_ID_MASK),
+                    named!("CONVERGENCE_CELLS", U32, CONVERGENCE_CELLS),
                 ],
             ]
             .concat(),

@@ -128,8 +128,10 @@ pub struct TraversalSettings {
     /// and its photons are then splatted over a window that size (Wyman 2009, section
     /// 3.2.2's alternative: "photon divergence greater than a single texel but less than a
     /// user-defined tolerance", with its multi-resolution map). 1 (the default) is the
-    /// publication's metric: one texel, and a one-texel splat. At most 4; above 1 only
-    /// with the atlas deposit.
+    /// publication's metric, one texel, and a one-texel splat, taken on the atlas at the
+    /// texel's centroid resolution: the four photons also in one of the texel's
+    /// [`CONVERGENCE_CELLS`](crate::math::photon_clusters::CONVERGENCE_CELLS)^2 cells. At
+    /// most 4; above 1 only with the atlas deposit.
     pub error_texels: u32,
     /// Device bytes the traversal may hold (Wyman 2009, section 4.3): the photon slots of
     /// a batch (128 bytes per cluster) and one cluster list per level (16 bytes per
