@@ -281,8 +281,8 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
 /// the same (no cluster converged before the finest level: the variance term is 0).
 fn flux_tolerance(s: &FrameStats, dense: &FrameStats, dispersive: bool) -> f64 {
     let rounding = 1.5
-        * (s.photons_stored as f64 * s.flux_quantum as f64
-            + dense.photons_stored as f64 * dense.flux_quantum as f64);
+        * (s.photons_stored as f64 * s.flux_quantum
+            + dense.photons_stored as f64 * dense.flux_quantum);
     rounding + flux_deviation(s, dense, dispersive)
 }
 
