@@ -12,21 +12,46 @@ use caustica_core::device::layout::{
     DEPOSIT_PLANE_WORDS, NO_TILE,
 };
 use caustica_core::math::fixed_point::quantize;
-use caustica_core::math::map_gather::{atlas_texel_index, triangle_reach_bit};
+use caustica_core::math::map_gather::{
+    atlas_texel_index, centroid_offset, triangle_reach_bit, CENTROID_MAX_PHOTONS,
+    CENTROID_SUBTEXELS, CENTROID_WORDS,
+};
 use caustica_core::math::photon_clusters::{footprint_share, footprint_window};
 use glam::Vec2;
 use rayon::prelude::*;
-use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+
+/// The atlas's centroid sums as the deposits add to them
+/// ([`CENTROID_WORDS`] words a texel: offsets along x and y, photons).
+pub type CentroidSums<'a> = &'a [AtomicU32];
+
+/// Adds a photon at `offsets` ([`centroid_offset`]) inside texel `texel` to its centroid
+/// sums; the add that takes the texel to [`CENTROID_MAX_PHOTONS`] photons is counted
+/// saturated (its sums may wrap from there on, and the lookup reads it as uniform).
+pub fn add_centroid(sums: CentroidSums, texel: u32, offsets: [u32; 2], c: &mut Counters) {
+    let i = (texel * CENTROID_WORDS) as usize;
+    sums[i].fetch_add(offsets[0], Ordering::Relaxed);
+    sums[i + 1].fetch_add(offsets[1], Ordering::Relaxed);
+    if sums[i + 2].fetch_add(1, Ordering::Relaxed) == CENTROID_MAX_PHOTONS - 1 {
+        c.bump(counter::SATURATED);
+    }
+}
+
+/// The offsets a photon spread over a footprint window adds to each of its texels: the
+/// texel's middle (its flux is uniform there).
+pub const CENTROID_MIDDLE: [u32; 2] = [CENTROID_SUBTEXELS / 2; 2];
 
 /// Deposits every texture-space photon into the atlas sums (flux r, g, b in flux quanta,
-/// hit distance in its quanta, a count), and returns the counters it adds to (off
-/// screen: the photon's triangle has no tile; deposited; underflow; saturated).
+/// hit distance in its quanta, a count) and its offset inside its texel into the centroid
+/// sums, and returns the counters it adds to (off screen: the photon's triangle has no
+/// tile; deposited; underflow; saturated).
 pub fn deposit_atlas(
     p: &AtlasParams,
     triangle_tiles: &[u32],
     tiles: &[AtlasTileTexel],
     photons: &[Photon],
     map: MapPlanes,
+    centroids: CentroidSums,
 ) -> Counters {
     photons
         .par_chunks(4096)
@@ -41,6 +66,13 @@ pub fn deposit_atlas(
                     (p.flux_quantum, p.hit_distance_quantum),
                     &mut c,
                 );
+                if let (Some(tile), true) = (
+                    atlas_photon_tile(triangle_tiles, tiles, ph),
+                    texel != NO_TILE,
+                ) {
+                    let uv = Vec2::new(ph.position[0], ph.position[1]);
+                    add_centroid(centroids, texel, centroid_offset(tile, uv), &mut c);
+                }
             }
             c
         })
@@ -48,8 +80,8 @@ pub fn deposit_atlas(
 }
 
 /// What [`deposit_atlas_fresh`] returns: the atlas sums, the counters in the device's
-/// word layout ([`counter`]), the triangle reach mask.
-pub type AtlasDepositResult = (Vec<DepositTexel>, Vec<u32>, Vec<u32>);
+/// word layout ([`counter`]), the triangle reach mask, the centroid sums.
+pub type AtlasDepositResult = (Vec<DepositTexel>, Vec<u32>, Vec<u32>, Vec<u32>);
 
 /// [`deposit_atlas`] and [`mark_triangle_reach`] of `photons` into a fresh atlas of
 /// `texels` texels and a fresh reach mask of `reach_words` words: the CPU's deposit of
@@ -66,12 +98,16 @@ pub fn deposit_atlas_fresh(
             .map(|_| AtomicU64::new(0))
             .collect()
     });
+    let centroids: Vec<AtomicU32> = (0..texels * CENTROID_WORDS as usize)
+        .map(|_| AtomicU32::new(0))
+        .collect();
     let c = deposit_atlas(
         p,
         triangle_tiles,
         tiles,
         photons,
         [&planes[0], &planes[1], &planes[2]],
+        &centroids,
     );
     // a u64 of the planes is the (lo, hi) pair of u32 words the devices hold
     let words = planes.map(|plane| {
@@ -91,6 +127,7 @@ pub fn deposit_atlas_fresh(
         deposit_from_planes([&words[0], &words[1], &words[2]]),
         counters,
         reach,
+        centroids.into_iter().map(AtomicU32::into_inner).collect(),
     )
 }
 
@@ -125,9 +162,10 @@ pub fn deposit_atlas_texel(
 /// Adds photon `ph` of a converged cluster to its footprint: the window
 /// ([`footprint_window`]) of side `spread` around atlas texel `texel` in its tile, its flux
 /// units split exactly over the window's texels ([`footprint_share`]), the hit distance
-/// and a count on each; one deposit counted.
+/// and a count on each, and the texels' middles to their centroid sums
+/// ([`CENTROID_MIDDLE`]); one deposit counted.
 pub fn deposit_atlas_footprint(
-    map: &MapPlanes,
+    (map, centroids): (&MapPlanes, CentroidSums),
     (tile, atlas_width, texel, spread): (AtlasTileTexel, u32, u32, u32),
     ph: &Photon,
     (flux_quantum, hit_distance_quantum): (f32, f32),
@@ -157,6 +195,7 @@ pub fn deposit_atlas_footprint(
         for x in x0..=x1 {
             add_photon_map_u64(map, y * atlas_width + x, 6, hd);
             add_photon_map_u64(map, y * atlas_width + x, 8, 1);
+            add_centroid(centroids, y * atlas_width + x, CENTROID_MIDDLE, c);
         }
     }
     c.bump(counter::DEPOSITED);

@@ -4,7 +4,7 @@
 use crate::CpuBackend;
 use caustica_core::backend::{check_write, BackendError};
 use caustica_core::device::handle::ResourceId;
-use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicU32, AtomicU64};
 
 pub(crate) struct Storage {
     words: Vec<u64>,
@@ -98,6 +98,20 @@ impl Storage {
         }
         self.bytes_mut()[..src.len()].copy_from_slice(src);
         Ok(())
+    }
+
+    /// The first `bytes` bytes as 32-bit atomics (shared access: kernels add
+    /// concurrently).
+    pub fn as_atomic_u32(&self, bytes: u64) -> Result<&[AtomicU32], BackendError> {
+        if bytes as usize > self.bytes || !bytes.is_multiple_of(4) {
+            return Err(BackendError::BadArgument("atomic view out of range".into()));
+        }
+        let words: &[u32] = bytemuck::cast_slice(&self.words[..(bytes as usize).div_ceil(8)]);
+        let words = &words[..bytes as usize / 4];
+        // SAFETY: AtomicU32 has the size and alignment of u32 (the storage is u64-aligned);
+        // the slice is only accessed through atomics while this shared borrow lives, and
+        // u32 has no invalid bit patterns.
+        Ok(unsafe { &*(words as *const [u32] as *const [AtomicU32]) })
     }
 
     /// The first `bytes` bytes as atomics (shared access: kernels add concurrently).

@@ -5,7 +5,7 @@
 __kernel void caustic_map_lookup(SCENE_PARAMS, __global const MapLookupParams* p,
                                  __global const uint* triangle_tiles, __global const uint4* tiles,
                                  __global const uint2* texels, __global const float4* map,
-                                 __global float4* out) {
+                                 __global float4* out, __global const uint* centroids) {
     uint i = get_global_id(0);
     uint w = p->camera.width;
     if (i >= w * p->camera.height) return;
@@ -15,6 +15,7 @@ __kernel void caustic_map_lookup(SCENE_PARAMS, __global const MapLookupParams* p
     end.tiles = tiles;
     end.texels = texels;
     end.map = map;
+    end.centroids = centroids;
     end.atlas_width = p->atlas_width;
     end.pixel_angle = 2.0f * p->camera.tan_half_fov_y / (float)p->camera.height;
     end.right = load3g(p->camera.right);

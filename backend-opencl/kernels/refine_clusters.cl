@@ -18,8 +18,10 @@ inline uint atlas_photon_texel(__global const uint* triangle_tiles, __global con
 
 // backend-cpu caustic_map.rs::deposit_atlas_footprint: photon `ph` spread over the window
 // `w` = (x0, x1, y0, y1) of a `width`-wide map, its flux units split exactly
-// (footprint_share), the hit distance and a count on every texel; one deposit counted.
-inline void deposit_photon_footprint(PHOTON_MAP_PARAMS(volatile __global), __local uint* lc,
+// (footprint_share), the hit distance and a count on every texel, and every texel's
+// middle to its centroid sums; one deposit counted.
+inline void deposit_photon_footprint(PHOTON_MAP_PARAMS(volatile __global),
+                                     volatile __global uint* centroids, __local uint* lc,
                                      uint4 w, uint width, const Photon* ph, float flux_quantum,
                                      float hit_distance_quantum) {
     uint n = (w.y - w.x + 1u) * (w.w - w.z + 1u);
@@ -40,6 +42,7 @@ inline void deposit_photon_footprint(PHOTON_MAP_PARAMS(volatile __global), __loc
         for (uint x = w.x; x <= w.y; x++) {
             atomic_add_u64_photon_map(PHOTON_MAP_ARGS, y * width + x, 6u, hd, 0u);
             atomic_add_u64_photon_map(PHOTON_MAP_ARGS, y * width + x, 8u, 1u, 0u);
+            add_centroid(centroids, lc, y * width + x, (uint2)(CENTROID_SUBTEXELS / 2u));
         }
     atomic_inc(&lc[COUNTER_DEPOSITED]);
 }
@@ -78,7 +81,8 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                               volatile __global uint* counters,
                               PHOTON_MAP_PARAMS(volatile __global),
                               __global Photon* output_photons, uint output_capacity,
-                              volatile __global uint* output_count) {
+                              volatile __global uint* output_count,
+                              volatile __global uint* centroids) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint t = get_global_id(0);
@@ -118,8 +122,20 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                                  ys[k] < tile.y + tile.z));
         }
         uint spread = all_in ? cluster_spread(xs, ys) : 0xffffffffu;
-        uint fate = cluster_fate(relevant, spread <= max(p->error_texels, 1u), p->level, p->finest,
-                                 p->metric, p->error_from_level);
+        // with error_texels 1 on the atlas, the four also in one convergence cell of their
+        // texel
+        bool one_cell = true;
+        if (!screen && p->error_texels <= 1u && all_in) {
+            uint2 c0 = convergence_cell(
+                centroid_offset(tile, (float2)(slots[0].position[0], slots[0].position[1])));
+            for (uint k = 1u; k < 4u; k++) {
+                uint2 ck = convergence_cell(
+                    centroid_offset(tile, (float2)(slots[k].position[0], slots[k].position[1])));
+                one_cell = one_cell && ck.x == c0.x && ck.y == c0.y;
+            }
+        }
+        uint fate = cluster_fate(relevant, spread <= max(p->error_texels, 1u) && one_cell,
+                                 p->level, p->finest, p->metric, p->error_from_level);
         if (fate == CLUSTER_OUTPUT && p->level < p->finest) {
             // converged early: output later from fresh photons
             atomic_inc(&cluster_counts[CLUSTER_COUNT_CONVERGED]);
@@ -141,11 +157,15 @@ __kernel void refine_clusters(__global const RefineParams* p, __global const uin
                     uint4 w = footprint_window(texels[k] % p->atlas_width,
                                                texels[k] / p->atlas_width, entry_spread(entry),
                                                tile);
-                    deposit_photon_footprint(PHOTON_MAP_ARGS, lc, w, p->atlas_width, &slots[k],
-                                             p->flux_quantum, p->hit_distance_quantum);
+                    deposit_photon_footprint(PHOTON_MAP_ARGS, centroids, lc, w, p->atlas_width,
+                                             &slots[k], p->flux_quantum, p->hit_distance_quantum);
                 } else {
                     deposit_photon_texel(PHOTON_MAP_ARGS, lc, texels[k], &slots[k],
                                          p->flux_quantum, p->hit_distance_quantum);
+                    if (atlas_photon_tile(triangle_tiles, tiles, &slots[k], &tile))
+                        add_centroid(centroids, lc, texels[k],
+                                     centroid_offset(tile, (float2)(slots[k].position[0],
+                                                                    slots[k].position[1])));
                 }
             }
             atomic_inc(&cluster_counts[CLUSTER_COUNT_OUTPUT]);

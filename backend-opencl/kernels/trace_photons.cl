@@ -42,10 +42,12 @@
 #endif
 
 // The fused deposit's arguments, after `clusters`: the atlas with the photon map's planes
-// (map_gather.cl), then the screen's parameters and G-buffer (planes.cl).
+// (map_gather.cl), then the screen's parameters and G-buffer (planes.cl), then the atlas's
+// centroid sums.
 #define FUSED_DEPOSIT_PARAMS                                                                  \
-    ATLAS_DEPOSIT_PARAMS, __global const DepositParams *dp, GBUFFER_PARAMS(__global const)
-#define FUSED_DEPOSIT_ARGS ATLAS_DEPOSIT_ARGS, dp, GBUFFER_ARGS
+    ATLAS_DEPOSIT_PARAMS, __global const DepositParams *dp, GBUFFER_PARAMS(__global const),  \
+        volatile __global uint *centroids
+#define FUSED_DEPOSIT_ARGS ATLAS_DEPOSIT_ARGS, dp, GBUFFER_ARGS, centroids
 
 #define PATH_STORED 0
 #define PATH_NO_SPECULAR 1
@@ -165,7 +167,7 @@ inline void record_end(int end, const Photon* ph, float flux_quantum, __global P
                        FUSED_DEPOSIT_PARAMS, __local uint* lc) {
     if (end == PATH_STORED) {
         if (FUSED_DEPOSIT && SURFACE_STORE) {
-            deposit_atlas_photon(ATLAS_DEPOSIT_ARGS, lc, ph);
+            deposit_atlas_photon(ATLAS_DEPOSIT_ARGS, centroids, lc, ph);
         } else if (FUSED_DEPOSIT) {
             deposit_screen_photon(SCREEN_DEPOSIT_ARGS, lc, ph);
         } else {

@@ -57,6 +57,10 @@ pub const COMMON: &[(&str, &str)] = &[
     ),
     ("atlas", include_str!("../wgsl/common/atlas.wgsl")),
     (
+        "centroid_add",
+        include_str!("../wgsl/common/centroid_add.wgsl"),
+    ),
+    (
         "atlas_deposit",
         include_str!("../wgsl/common/atlas_deposit.wgsl"),
     ),

@@ -15,6 +15,7 @@
 @group(0) @binding(8) var<storage, read> texels: array<vec2<u32>>;
 @group(0) @binding(9) var<storage, read> map: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read> centroids: array<u32>;
 
 fn atlas_area(i: u32) -> f32 {
     return bitcast<f32>(texels[i].x);
@@ -22,6 +23,11 @@ fn atlas_area(i: u32) -> f32 {
 
 fn map_irradiance(i: u32) -> vec3<f32> {
     return map[i].xyz;
+}
+
+fn atlas_centroid(i: u32) -> vec2<f32> {
+    let k = i * CENTROID_WORDS;
+    return texel_centroid(centroids[k], centroids[k + 1u], centroids[k + 2u]);
 }
 
 // The specular tree's diffuse end (common/specular_tree.wgsl): the caustic map.

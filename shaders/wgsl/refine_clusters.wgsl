@@ -1,4 +1,4 @@
-// needs: layout prelude vector fixed_point atlas photon_map_add photon_clusters scene
+// needs: layout prelude vector fixed_point atlas photon_map_add centroid_add photon_clusters scene
 // refine_clusters (Wyman 2009, section 3.2, AdaptiveCaustics): one thread per traced
 // cluster of the batch. Its four photon slots (trace_photons' ADAPTIVE variant) decide
 // its fate (core::math::photon_clusters::cluster_fate): discarded, output (its stored
@@ -27,6 +27,8 @@
 @group(0) @binding(14) var<storage, read_write> photon_map2: array<atomic<u32>>;
 @group(0) @binding(15) var<storage, read_write> output_photons: array<Photon>;
 @group(0) @binding(16) var<storage, read_write> output_count: array<atomic<u32>>;
+// the atlas's centroid sums (the atlas target; otherwise an alias that nobody touches)
+@group(0) @binding(17) var<storage, read_write> centroids: array<atomic<u32>>;
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
@@ -60,7 +62,8 @@ fn target_texel(ph: Photon, p: RefineParams) -> u32 {
 
 // backend-cpu caustic_map.rs::deposit_atlas_footprint: photon `ph` spread over the window
 // `w` = (x0, x1, y0, y1) of a `width`-wide map, its flux units split exactly
-// (footprint_share), the hit distance and a count on every texel; one deposit counted.
+// (footprint_share), the hit distance and a count on every texel, and every texel's
+// middle to its centroid sums; one deposit counted.
 fn deposit_photon_footprint(w: vec4<u32>, width: u32, ph: Photon, flux_quantum: f32,
                             hit_distance_quantum: f32) {
     let n = (w.y - w.x + 1u) * (w.w - w.z + 1u);
@@ -85,6 +88,7 @@ fn deposit_photon_footprint(w: vec4<u32>, width: u32, ph: Photon, flux_quantum: 
         for (var x = w.x; x <= w.y; x++) {
             atomic_add_u64_photon_map(y * width + x, DEPOSIT_HIT_DISTANCE, hd, 0u);
             atomic_add_u64_photon_map(y * width + x, DEPOSIT_PHOTONS, 1u, 0u);
+            add_centroid(y * width + x, vec2<u32>(CENTROID_SUBTEXELS / 2u));
         }
     }
     atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
@@ -148,7 +152,17 @@ fn refine_clusters(t: u32, li: u32) {
         if (all_in) {
             spread = cluster_spread(xs, ys);
         }
-        let converged_here = spread <= max(p.error_texels, 1u);
+        // with error_texels 1 on the atlas, the four also in one convergence cell of their
+        // texel
+        var one_cell = true;
+        if (!screen && p.error_texels <= 1u && all_in) {
+            let c0 = convergence_cell(centroid_offset(tile, slots[0].position.xy));
+            for (var k = 1u; k < 4u; k++) {
+                let ck = convergence_cell(centroid_offset(tile, slots[k].position.xy));
+                one_cell = one_cell && all(ck == c0);
+            }
+        }
+        let converged_here = spread <= max(p.error_texels, 1u) && one_cell;
         let fate = cluster_fate(relevant, converged_here, p.level, p.finest, p.metric,
                                 p.error_from_level);
         if (fate == CLUSTER_OUTPUT && p.level < p.finest) {
@@ -182,6 +196,9 @@ fn refine_clusters(t: u32, li: u32) {
                                              p.hit_distance_quantum);
                 } else {
                     deposit_photon_texel(texels[k], slots[k], p.flux_quantum, p.hit_distance_quantum);
+                    if (atlas_photon_tile(slots[k], &tile)) {
+                        add_centroid(texels[k], centroid_offset(tile, slots[k].position.xy));
+                    }
                 }
             }
             atomicAdd(&cluster_counts[CLUSTER_COUNT_OUTPUT], 1u);

@@ -1,4 +1,4 @@
-// needs: layout prelude vector rng sampling optics spectrum packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add atlas_deposit screen_deposit
+// needs: layout prelude vector rng sampling optics spectrum packing geometry fixed_point traversal scene photon_clusters atlas gbuffer photon_map_add centroid_add atlas_deposit screen_deposit
 // trace_photons (Kim 2019, sections 30.3.1.1-2): photon tiled_photon_index(first + i) of
 // the light's stratified grid (tile order, sampling.wgsl) is emitted, traced through
 // mirrors and dielectrics and stored where it first meets a diffuse surface after at least
@@ -55,6 +55,8 @@ override FUSED_DEPOSIT: bool = false;
 @group(0) @binding(19) var<storage, read> gbuffer1: array<vec4<u32>>;
 @group(0) @binding(20) var<storage, read> gbuffer2: array<vec4<u32>>;
 @group(0) @binding(21) var<storage, read> gbuffer3: array<vec4<u32>>;
+// the atlas's centroid sums of FUSED_DEPOSIT (otherwise an alias that nobody touches)
+@group(0) @binding(22) var<storage, read_write> centroids: array<atomic<u32>>;
 
 // The work-group's counters (fixed_point.wgsl), OpenCL's `__local uint lc[COUNTER_WORDS]`.
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;

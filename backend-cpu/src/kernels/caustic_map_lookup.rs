@@ -11,7 +11,8 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::CausticMapLookup;
 use caustica_core::math::map_gather::{
-    atlas_texel_index, footprint_extent, footprint_texels, sample_caustic_map,
+    atlas_texel_index, footprint_extent, footprint_texels, sample_caustic_map, texel_centroid,
+    CENTROID_WORDS,
 };
 use caustica_core::math::optics::saturate_radiance3;
 use glam::{Vec2, Vec3};
@@ -29,13 +30,17 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &CausticMapLookup) -> Result<(), Back
         texels,
         map,
         out,
+        centroids,
     } = k;
     let tt = cpu.get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
     let tl = cpu.get(tiles.id)?.as_slice(tiles.len)?;
     let tx = cpu.get(texels.id)?.as_slice(texels.len)?;
     let m = cpu.get(map.id)?.as_slice(map.len)?;
+    let cs = cpu
+        .get(centroids.id)?
+        .as_slice(map.len * CENTROID_WORDS)?;
     reserve_temporary::<[f32; 4]>(out.len as u64, "the caustics image")?;
-    let img = caustic_map_lookup(&cpu.view(scene)?, params, tt, tl, tx, m);
+    let img = caustic_map_lookup(&cpu.view(scene)?, params, tt, tl, tx, (m, cs));
     cpu.put(out.id, &img)
 }
 
@@ -48,7 +53,7 @@ pub fn caustic_map_lookup(
     triangle_tiles: &[u32],
     tiles: &[AtlasTileTexel],
     texels: &[AtlasTexel],
-    map: &[[f32; 4]],
+    (map, centroids): (&[[f32; 4]], &[u32]),
 ) -> Vec<[f32; 4]> {
     let cam = &p.camera;
     let (w, h) = (cam.width, cam.height);
@@ -98,6 +103,10 @@ pub fn caustic_map_lookup(
                         p.atlas_width,
                         |q| Vec3::from_slice(&map[q as usize][..3]),
                         |q| f32::from_bits(texels[q as usize][0]),
+                        |q| {
+                            let i = (q * CENTROID_WORDS) as usize;
+                            texel_centroid(centroids[i], centroids[i + 1], centroids[i + 2])
+                        },
                     );
                     Vec3::from_slice(&m.color[..3]) / PI * e
                 },

@@ -7,8 +7,10 @@ use super::deposit_screen::MapPlanes;
 use super::trace_photons::count_stored;
 use super::Counters;
 use crate::atlas_deposit::{
-    atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint, deposit_atlas_texel,
+    add_centroid, atlas_photon_texel, atlas_photon_tile, deposit_atlas_footprint,
+    deposit_atlas_texel, CentroidSums,
 };
+use caustica_core::math::map_gather::{centroid_offset, CENTROID_WORDS};
 use crate::CpuBackend;
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
@@ -17,7 +19,7 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::RefineClusters;
 use caustica_core::math::photon_clusters::{
     cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
-    cluster_spread, cluster_target, entry_cluster, entry_spread, live_clusters, slot_met_caster,
+    cluster_spread, cluster_target, convergence_cell, entry_cluster, entry_spread, live_clusters, slot_met_caster,
     slot_stored,
 };
 use rayon::prelude::*;
@@ -42,6 +44,7 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &RefineClusters) -> Result<(), Backen
         output_photons,
         output_count,
         dispatch: _,
+        centroids,
     } = k;
     // the pass's live clusters: list_length[0] is its list's length
     let length = cpu.get(list_length.id)?.as_slice::<u32>(1)?[0];
@@ -52,7 +55,14 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &RefineClusters) -> Result<(), Backen
     let tt = cpu.get(triangle_tiles.id)?.as_slice(triangle_tiles.len)?;
     let tl = cpu.get(tiles.id)?.as_slice(tiles.len)?;
     let atomics = cpu.map_atomics(atlas)?;
-    let r = refine_clusters(params, live, list, rects, ph, tt, tl, atomics);
+    let centroid_bytes = if params.deposit_target == cluster_target::ATLAS {
+        let texels = params.atlas_width as u64 * params.atlas_width as u64;
+        4 * CENTROID_WORDS as u64 * texels
+    } else {
+        0
+    };
+    let centroids = cpu.get(centroids.id)?.as_atomic_u32(centroid_bytes)?;
+    let r = refine_clusters(params, live, list, rects, ph, tt, tl, (atomics, centroids));
     r.counters
         .add_to(cpu.get_mut(counters.id)?.as_mut_slice(counters.len)?);
     let mut counts = cpu
@@ -133,7 +143,7 @@ pub fn refine_clusters(
     photons: &[Photon],
     triangle_tiles: &[u32],
     tiles: &[AtlasTileTexel],
-    map: MapPlanes,
+    (map, centroids): (MapPlanes, CentroidSums),
 ) -> Refined {
     let steps: Vec<Step> = (0..live)
         .into_par_iter()
@@ -185,7 +195,19 @@ pub fn refine_clusters(
             } else {
                 u32::MAX
             };
-            let converged = spread <= p.error_texels.max(1);
+            // with error_texels 1 on the atlas, the four also in one convergence cell of
+            // their texel
+            let one_cell = screen
+                || p.error_texels > 1
+                || !all_in
+                || tile.is_none_or(|t| {
+                    let cell = |ph: &Photon| {
+                        let uv = glam::Vec2::new(ph.position[0], ph.position[1]);
+                        convergence_cell(centroid_offset(t, uv))
+                    };
+                    slots.iter().all(|ph| cell(ph) == cell(&slots[0]))
+                });
+            let converged = spread <= p.error_texels.max(1) && one_cell;
             let fate = cluster_fate(
                 relevant,
                 converged,
@@ -211,9 +233,16 @@ pub fn refine_clusters(
                             // a converged cluster's photon covers the cluster's footprint
                             (false, Some(tile)) if entry_spread(entry) > 1 => {
                                 let at = (tile, p.atlas_width, texel, entry_spread(entry));
-                                deposit_atlas_footprint(&map, at, ph, quanta, &mut c);
+                                deposit_atlas_footprint((&map, centroids), at, ph, quanta, &mut c);
                             }
-                            (false, _) => deposit_atlas_texel(&map, texel, ph, quanta, &mut c),
+                            (false, tile) => {
+                                deposit_atlas_texel(&map, texel, ph, quanta, &mut c);
+                                if let (Some(tile), true) = (tile, texel != NO_TILE) {
+                                    let uv = glam::Vec2::new(ph.position[0], ph.position[1]);
+                                    let at = centroid_offset(tile, uv);
+                                    add_centroid(centroids, texel, at, &mut c);
+                                }
+                            }
                         }
                     }
                     Step::Output(c, listed)

@@ -56,6 +56,7 @@ use caustica_core::math::sampling::{
     view_plane_texel_weight,
 };
 use glam::{Vec2, Vec3};
+use caustica_core::math::map_gather::CENTROID_WORDS;
 use rayon::prelude::*;
 
 /// Runs `trace_photons` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
@@ -146,7 +147,11 @@ fn deposit_atlas_photons(
             cpu.get(b.id)?.as_atomic_u64(b.bytes())?,
             cpu.get(c.id)?.as_atomic_u64(c.bytes())?,
         ];
-        atlas_deposit::deposit_atlas(&d.params, tt, tl, ph, atomics)
+        let texels = d.params.width as u64 * d.params.height as u64;
+        let centroids = cpu
+            .get(d.centroids.id)?
+            .as_atomic_u32(4 * CENTROID_WORDS as u64 * texels)?;
+        atlas_deposit::deposit_atlas(&d.params, tt, tl, ph, atomics, centroids)
     };
     let reach = cpu
         .get_mut(d.triangle_reach.id)?

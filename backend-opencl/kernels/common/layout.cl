@@ -194,6 +194,9 @@
 // core::math::map_gather
 #define TILE_FULLY_COVERED 0x80000000u
 #define MAX_FOOTPRINT_TEXELS 32.0f
+#define CENTROID_WORDS 3
+#define CENTROID_SUBTEXELS 256u
+#define CENTROID_MAX_PHOTONS 0x1000000u
 
 // core::math::photon_clusters
 #define NO_TRIANGLE 0xffffffffu
@@ -208,6 +211,7 @@
 #define CLUSTER_TARGET_SCREEN 1u
 #define MAX_ERROR_TEXELS 4u
 #define CLUSTER_ID_MASK 0x3fffffffu
+#define CONVERGENCE_CELLS 16u
 
 // core::math::rsm
 #define RSM_TEXEL_NONE 0u

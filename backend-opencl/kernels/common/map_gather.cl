@@ -8,6 +8,51 @@ inline uint atlas_texel_index(uint4 tile, float2 uv, uint atlas_width) {
     return (tile.y + cy) * atlas_width + tile.x + cx;
 }
 
+// math::map_gather::centroid_offset along one axis: a photon's offset inside its texel
+// (the tile's `side` texels) in 1/CENTROID_SUBTEXELS of a texel, 0..=255; products by
+// powers of two and a floor only, so that every backend computes the same integers.
+inline uint centroid_offset_axis(float u, uint side) {
+    float s = (float)side;
+    uint c = min((uint)fmax(floor(u * s), 0.0f), side - 1u);
+    uint steps = (uint)fmax(floor(u * s * (float)CENTROID_SUBTEXELS), 0.0f);
+    uint base = c * CENTROID_SUBTEXELS;
+    return min(steps >= base ? steps - base : 0u, CENTROID_SUBTEXELS - 1u);
+}
+
+// math::map_gather::centroid_offset: both axes, on tile `tile`.
+inline uint2 centroid_offset(uint4 tile, float2 uv) {
+    return (uint2)(centroid_offset_axis(uv.x, tile.z), centroid_offset_axis(uv.y, tile.z));
+}
+
+// backend-cpu atlas_deposit.rs::add_centroid: a photon at `offsets` inside atlas texel
+// `texel` added to its centroid sums (x offsets, y offsets, photons); the add that takes
+// the texel to CENTROID_MAX_PHOTONS photons counted saturated in `lc`.
+inline void add_centroid(volatile __global uint* centroids, __local uint* lc, uint texel,
+                         uint2 offsets) {
+    uint i = texel * CENTROID_WORDS;
+    atomic_add(&centroids[i], offsets.x);
+    atomic_add(&centroids[i + 1u], offsets.y);
+    if (atomic_inc(&centroids[i + 2u]) == CENTROID_MAX_PHOTONS - 1u)
+        atomic_inc(&lc[COUNTER_SATURATED]);
+}
+
+// core::math::map_gather::texel_centroid: the mean position (texel-local) of a texel's
+// photons from its centroid sums; the texel's middle without photons or past
+// CENTROID_MAX_PHOTONS.
+inline float2 texel_centroid(uint sx, uint sy, uint n) {
+    if (n == 0u || n >= CENTROID_MAX_PHOTONS) return (float2)(0.5f);
+    float nf = (float)n;
+    float d = (float)(n * CENTROID_SUBTEXELS);
+    return (float2)(((float)sx + 0.5f * nf) / d, ((float)sy + 0.5f * nf) / d);
+}
+
+// core::math::map_gather::centroid_share: the share of a texel's flux inside [lo, hi)
+// (texel-local) when it lies uniformly on [c - a, c + a], a = min(c, 1 - c).
+inline float centroid_share(float c, float lo, float hi) {
+    float a = fmax(fmin(c, 1.0f - c), 0.5f / (float)CENTROID_SUBTEXELS);
+    return fmin(fmax(fmin(hi, c + a) - fmax(lo, c - a), 0.0f) / (2.0f * a), 1.0f);
+}
+
 // math::map_gather::triangle_reach_bit: (word, bit) of scene triangle t in a reach mask
 inline uint2 triangle_reach_bit(uint t) { return (uint2)(t >> 5, 1u << (t & 31u)); }
 
@@ -21,9 +66,11 @@ inline uint2 triangle_reach_bit(uint t) { return (uint2)(t >> 5, 1u << (t & 31u)
 
 // One texture-space photon (uv, triangle) into the atlas (backend-cpu caustic_map.rs
 // deposit_atlas and mark_triangle_reach): its triangle's reach bit, then its flux, hit
-// distance and a count in fixed point on the texel under its uv on its triangle's tile,
-// or OFF_SCREEN counted in the work-group's `lc` when the triangle has no tile.
-inline void deposit_atlas_photon(ATLAS_DEPOSIT_PARAMS, __local uint* lc, const Photon* ph) {
+// distance and a count in fixed point on the texel under its uv on its triangle's tile and
+// its offset inside the texel on the texel's centroid sums, or OFF_SCREEN counted in the
+// work-group's `lc` when the triangle has no tile.
+inline void deposit_atlas_photon(ATLAS_DEPOSIT_PARAMS, volatile __global uint* centroids,
+                                 __local uint* lc, const Photon* ph) {
     uint2 reach = triangle_reach_bit(ph->direction);
     // most photons land on a few triangles: a load first, so that a bit already set costs
     // no atomic on the hot word
@@ -36,6 +83,8 @@ inline void deposit_atlas_photon(ATLAS_DEPOSIT_PARAMS, __local uint* lc, const P
                                        ap->width);
         deposit_photon_texel(PHOTON_MAP_ARGS, lc, texel, ph, ap->flux_quantum,
                              ap->hit_distance_quantum);
+        add_centroid(centroids, lc, texel,
+                     centroid_offset(tiles[tile], (float2)(ph->position[0], ph->position[1])));
     }
 }
 
@@ -153,7 +202,8 @@ inline float texel_overlap(uint i, float lo, float hi) {
 }
 
 inline float3 sample_caustic_map(__global const uint2* texels, __global const float4* map,
-                                 uint4 tile, float2 uv, float2 extent, uint atlas_width) {
+                                 __global const uint* centroids, uint4 tile, float2 uv,
+                                 float2 extent, uint atlas_width) {
     float s = (float)tile.z;
     if (extent.x > 0.5f || extent.y > 0.5f) {
         float hx = clampf(extent.x, 0.5f, 0.5f * MAX_FOOTPRINT_TEXELS);
@@ -174,7 +224,11 @@ inline float3 sample_caustic_map(__global const uint2* texels, __global const fl
                 uint i = (tile.y + y) * atlas_width + tile.x + x;
                 float w = texel_overlap(x, lx, ux) * wy;
                 if (atlas_area(texels, i) > 0.0f && w > 0.0f) {
-                    bsum += w * map[i].xyz;
+                    uint k = i * CENTROID_WORDS;
+                    float2 c = texel_centroid(centroids[k], centroids[k + 1u], centroids[k + 2u]);
+                    float share = centroid_share(c.x, lx - (float)x, ux - (float)x) *
+                                  centroid_share(c.y, ly - (float)y, uy - (float)y);
+                    bsum += share * map[i].xyz;
                     bw += w;
                 }
             }

@@ -7,6 +7,12 @@ inline uint cluster_entry(uint cluster, uint spread) {
 
 inline uint entry_cluster(uint entry) { return entry & CLUSTER_ID_MASK; }
 
+// core::math::photon_clusters::convergence_cell: the convergence cell (per axis) of a
+// photon at `offset` (centroid_offset) inside its texel.
+inline uint2 convergence_cell(uint2 offset) {
+    return offset / (CENTROID_SUBTEXELS / CONVERGENCE_CELLS);
+}
+
 // core::math::photon_clusters::live_clusters: entries `first ..` of a list of
 // `list_length`, at most `bound`.
 inline uint live_clusters(uint list_length, uint first, uint bound) {

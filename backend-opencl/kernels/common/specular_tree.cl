@@ -70,6 +70,7 @@ typedef struct {
     __global const uint4* tiles;
     __global const uint2* texels;
     __global const float4* map;
+    __global const uint* centroids;
     uint atlas_width;
     float pixel_angle;
     float3 right;
@@ -82,6 +83,7 @@ inline DiffuseEnd diffuse_end_direct(uint light_count) {
     e.tiles = 0;
     e.texels = 0;
     e.map = 0;
+    e.centroids = 0;
     e.atlas_width = 0u;
     e.pixel_angle = 0.0f;
     e.right = (float3)(0.0f);
@@ -111,7 +113,7 @@ inline float3 diffuse_end(SCENE_PARAMS, const DiffuseEnd* e, const Hit* hit,
         extent = (float2)(0.5f * footprint_texels(e->pixel_angle, distance, cos_in,
                                                   atlas_area(e->texels, texel)));
     }
-    float3 irradiance = sample_caustic_map(e->texels, e->map, t, s->uv, extent,
+    float3 irradiance = sample_caustic_map(e->texels, e->map, e->centroids, t, s->uv, extent,
                                            e->atlas_width);
     return load3g(m->color) / PI_F * irradiance;
 }

@@ -194,6 +194,9 @@ const int REACH_TILE = 8;
 // core::math::map_gather
 const uint TILE_FULLY_COVERED = 0x80000000u;
 const float MAX_FOOTPRINT_TEXELS = 32.0;
+const uint CENTROID_WORDS = 3u;
+const uint CENTROID_SUBTEXELS = 256u;
+const uint CENTROID_MAX_PHOTONS = 0x1000000u;
 
 // core::math::photon_clusters
 const uint NO_TRIANGLE = 0xffffffffu;
@@ -208,6 +211,7 @@ const uint CLUSTER_TARGET_ATLAS = 0u;
 const uint CLUSTER_TARGET_SCREEN = 1u;
 const uint MAX_ERROR_TEXELS = 4u;
 const uint CLUSTER_ID_MASK = 0x3fffffffu;
+const uint CONVERGENCE_CELLS = 16u;
 
 // core::math::rsm
 const uint RSM_TEXEL_NONE = 0u;

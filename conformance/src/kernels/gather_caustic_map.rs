@@ -146,7 +146,7 @@ pub(crate) fn compare_gather(
     let ph = photons(l, 4096);
     // the gather's input: the CPU's deposit of the generated photons (the deposit itself
     // is check_fused_trace's), its reach mask exactly the photons' triangles
-    let (sa, ca, ra) = cpu_deposit(l, &ph);
+    let (sa, ca, ra, _) = cpu_deposit(l, &ph);
     let mut expected = vec![0u32; ra.len()];
     for p in &ph {
         let (word, bit) = triangle_reach_bit(p.direction);

@@ -189,6 +189,8 @@ struct Refined {
     converged: Vec<u32>,
     counters: Vec<u32>,
     atlas: Vec<DepositTexel>,
+    /// The atlas's centroid sums.
+    centroids: Vec<u32>,
     /// The screen target's output photons, sorted by their bits.
     outputs: Vec<Photon>,
 }
@@ -269,6 +271,11 @@ fn run_refine_as(
     let counters = rec.upload(&[0u32; counter::WORDS], "counters");
     let atlas = rec.create_photon_map(atlas_texels);
     rec.clear_photon_map(&atlas);
+    let centroids = rec.create(
+        atlas_texels * caustica_core::math::map_gather::CENTROID_WORDS,
+        "centroid sums",
+    );
+    rec.clear(centroids);
     let output_photons = rec.upload(&vec![Photon::default(); 4 * count as usize], "outputs");
     let output_count = rec.upload(&[0u32], "output count");
     rec.kernel(RefineClusters {
@@ -306,6 +313,7 @@ fn run_refine_as(
         output_photons,
         output_count,
         dispatch: shape,
+        centroids,
     });
     run_and_free(b, "refine_clusters", &rec, |b| {
         let counts = read_buf(b, counts)?;
@@ -341,6 +349,7 @@ fn run_refine_as(
             converged: conv,
             counters: read_buf(b, counters)?,
             atlas: read_photon_map(b, &atlas)?,
+            centroids: read_buf(b, centroids)?,
         })
     })
 }
@@ -389,6 +398,7 @@ fn check_refinement(
         a.counts == b.counts
             && a.counters == b.counters
             && a.atlas == b.atlas
+            && a.centroids == b.centroids
             && a.outputs == b.outputs
             && held_clusters(&a) == held_clusters(&b)
     } else {

@@ -377,6 +377,11 @@ fn run_fused_trace(
         "triangle reach",
     );
     rec.clear(triangle_reach);
+    let centroids = rec.create(
+        l.texels.len() as u32 * caustica_core::math::map_gather::CENTROID_WORDS,
+        "centroid sums",
+    );
+    rec.clear(centroids);
     rec.kernel(TracePhotons {
         scene: fx.args,
         variant,
@@ -394,6 +399,7 @@ fn run_fused_trace(
             tiles,
             triangle_reach,
             sums,
+            centroids,
         })),
     });
     run_and_free(b, "trace_photons (atlas deposit)", &rec, |b| {
@@ -401,6 +407,7 @@ fn run_fused_trace(
             read_photon_map(b, &sums)?,
             read_buf(b, counters)?,
             read_buf(b, triangle_reach)?,
+            read_buf(b, centroids)?,
         ))
     })
 }
@@ -456,8 +463,9 @@ pub fn check_fused_trace(
                 fused_deposit: true,
                 ..variant
             };
-            let (sums, counters, reach) = run_fused_trace(fx, c, &l, k, fused, budget)?;
-            let (es, deposit_counters, er) = cpu_deposit(&l, &photons);
+            let (sums, counters, reach, centroids) =
+                run_fused_trace(fx, c, &l, k, fused, budget)?;
+            let (es, deposit_counters, er, ecentroids) = cpu_deposit(&l, &photons);
             // the trace and the deposit count disjoint words (their sum is the fused one's)
             let ec: Vec<u32> = trace_counters
                 .iter()
@@ -470,6 +478,18 @@ pub fn check_fused_trace(
             });
             v.check(counters == ec, || {
                 format!("{label}: counters differ: expected {ec:?}, fused {counters:?}")
+            });
+            v.check(centroids == ecentroids, || {
+                let differ = ecentroids
+                    .iter()
+                    .zip(&centroids)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                format!(
+                    "{label}: {differ} words of the atlas's centroid sums differ (integer \
+                     atomics of offsets computed by products by powers of two and floors \
+                     must agree bitwise)"
+                )
             });
             let equal = es.iter().zip(&sums).filter(|(a, b)| a == b).count();
             v.check(equal == es.len(), || {

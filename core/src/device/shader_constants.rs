@@ -23,7 +23,7 @@ use crate::math::optics::ior_model;
 use crate::math::path_sort::{path_sort_phase, PATH_SORT_BITS, PATH_SORT_BUCKETS};
 use crate::math::photon_clusters::{
     cluster_fate, cluster_metric, cluster_relevance, cluster_target, CLUSTER_ID_MASK,
-    MAX_ERROR_TEXELS, NO_TRIANGLE,
+    CONVERGENCE_CELLS, MAX_ERROR_TEXELS, NO_TRIANGLE,
 };
 use crate::math::rsm::{rsm_sampling, rsm_texel_kind};
 use crate::math::spectrum::{self, dispersion_mode};
@@ -328,6 +328,9 @@ pub fn groups() -> Vec<ConstGroup> {
             vec![
                 named!("TILE_FULLY_COVERED", U32, map_gather::TILE_FULLY_COVERED),
                 named!("MAX_FOOTPRINT_TEXELS", F32, map_gather::MAX_FOOTPRINT_TEXELS),
+                named!("CENTROID_WORDS", Index, map_gather::CENTROID_WORDS),
+                named!("CENTROID_SUBTEXELS", U32, map_gather::CENTROID_SUBTEXELS),
+                named!("CENTROID_MAX_PHOTONS", U32, map_gather::CENTROID_MAX_PHOTONS),
             ],
         ),
         group(
@@ -341,6 +344,7 @@ pub fn groups() -> Vec<ConstGroup> {
                 vec![
                     named!("MAX_ERROR_TEXELS", U32, MAX_ERROR_TEXELS),
                     named!("CLUSTER_ID_MASK", U32, CLUSTER_ID_MASK),
+                    named!("CONVERGENCE_CELLS", U32, CONVERGENCE_CELLS),
                 ],
             ]
             .concat(),

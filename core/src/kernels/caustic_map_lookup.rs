@@ -12,8 +12,8 @@ use crate::device::layout::{AtlasTexel, AtlasTileTexel, MapLookupParams};
 /// every diffuse surface it ends on the caustic radiance `weight * albedo / pi * E(uv)`,
 /// `E` the caustic map of that surface's receiver tile averaged over the pixel's footprint
 /// rectangle ([`crate::math::map_gather::footprint_extent`],
-/// [`crate::math::map_gather::sample_caustic_map`]; bilinear where the footprint is
-/// smaller than a texel). Output: radiance W/(sr m^2),
+/// [`crate::math::map_gather::sample_caustic_map`], each texel's flux placed by its
+/// photons' centroid; bilinear where the footprint is smaller than a texel). Output: radiance W/(sr m^2),
 /// alpha 1; black where the ray meets nothing.
 #[derive(Clone, Copy, Debug)]
 pub struct CausticMapLookup {
@@ -29,17 +29,21 @@ pub struct CausticMapLookup {
     pub texels: Buf<AtlasTexel>,
     /// The caustic map (irradiance per atlas texel, `gather_caustic_map`).
     pub map: ImageBuf,
+    /// The atlas's centroid sums (`trace_photons`' `centroids`): where in each texel its
+    /// photons lie.
+    pub centroids: Buf<u32>,
     /// Caustic radiance per pixel.
     pub out: ImageBuf,
 }
 
-const BINDINGS: [Binding; 12] = with_scene([
+const BINDINGS: [Binding; 13] = with_scene([
     bind("params", Params),
     bind("triangle_tiles", Read),
     bind("tiles", Read),
     bind("texels", Read),
     bind("map", Read),
     bind("out", ReadWrite),
+    bind("centroids", Read),
 ]);
 
 impl KernelDecl for CausticMapLookup {
@@ -69,7 +73,12 @@ impl KernelDecl for CausticMapLookup {
             .buf("tiles", self.tiles, 0)?
             .buf("texels", self.texels, self.map.len as u64 * 8)?
             .buf("map", self.map, 0)?
-            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?;
+            .buf("out", self.out, n * bytes::IMAGE_TEXEL)?
+            .buf(
+                "centroids",
+                self.centroids,
+                self.map.len as u64 * 4 * crate::math::map_gather::CENTROID_WORDS as u64,
+            )?;
         Ok(Some(n))
     }
 }

@@ -66,6 +66,8 @@ pub struct RefineClusters {
     pub output_count: Buf<u32>,
     /// The launch's shape on the device (its `params.count` the bound), or `None`.
     pub dispatch: Option<DispatchRecord>,
+    /// The atlas's centroid sums (the atlas target; `trace_photons`' `centroids`).
+    pub centroids: Buf<u32>,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -88,6 +90,7 @@ const BINDINGS: &[Binding] = &[
     bind("output_photons", ReadWrite),
     bind("output_capacity", Count),
     bind("output_count", ReadWrite),
+    bind("centroids", ReadWrite),
 ];
 
 impl KernelDecl for RefineClusters {
@@ -144,7 +147,14 @@ impl KernelDecl for RefineClusters {
             .photon_map(&self.atlas, n)?
             .buf("output_photons", self.output_photons, 0)?
             .count("output_capacity", self.output_photons.len)?
-            .buf("output_count", self.output_count, 4)?
+            .buf("output_count", self.output_count, 4)?;
+        let centroid_bytes =
+            if p.deposit_target == crate::math::photon_clusters::cluster_target::ATLAS {
+                4 * crate::math::map_gather::CENTROID_WORDS as u64 * n
+            } else {
+                0
+            };
+        a.buf("centroids", self.centroids, centroid_bytes)?
             .indirect(self.dispatch)?;
         Ok(Some(p.count as u64))
     }

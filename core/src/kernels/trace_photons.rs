@@ -98,9 +98,14 @@ pub struct AtlasDeposit {
     pub triangle_reach: Buf<u32>,
     /// The atlas's fixed-point sums.
     pub sums: PhotonMapPlanes,
+    /// The atlas's centroid sums
+    /// ([`CENTROID_WORDS`](crate::math::map_gather::CENTROID_WORDS) a texel: the photons'
+    /// offsets inside their texel, [`centroid_offset`](crate::math::map_gather::centroid_offset),
+    /// and their count).
+    pub centroids: Buf<u32>,
 }
 
-const BINDINGS: [Binding; 24] = with_scene([
+const BINDINGS: [Binding; 25] = with_scene([
     bind("params", Params),
     bind("photons", ReadWrite),
     bind("photon_capacity", Count),
@@ -119,6 +124,7 @@ const BINDINGS: [Binding; 24] = with_scene([
     bind("gbuffer1", Read),
     bind("gbuffer2", Read),
     bind("gbuffer3", Read),
+    bind("centroids", ReadWrite),
 ]);
 
 impl KernelDecl for TracePhotons {
@@ -258,6 +264,14 @@ impl KernelDecl for TracePhotons {
                 }
             }
         }
+        match atlas {
+            Some(d) => {
+                let texels = super::texels(d.params.width, d.params.height);
+                let words = crate::math::map_gather::CENTROID_WORDS as u64;
+                a.buf("centroids", d.centroids, 4 * words * texels)?
+            }
+            None => a.buf("centroids", self.counters, 0)?,
+        };
         Ok(Some(p.count as u64))
     }
 

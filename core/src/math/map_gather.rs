@@ -103,6 +103,62 @@ pub fn atlas_texel_index(tile: [u32; 4], uv: Vec2, atlas_width: u32) -> u32 {
     (tile[1] + cy) * atlas_width + tile[0] + cx
 }
 
+/// Words per atlas texel of the centroid sums (`AtlasBuffers::centroids`): the sums of
+/// the texel's photons' offsets inside it along x and along y, in 1/[`CENTROID_SUBTEXELS`]
+/// of a texel ([`centroid_offset`]), and their count.
+pub const CENTROID_WORDS: u32 = 3;
+
+/// Steps a photon's offset inside its texel is quantised to, per axis.
+pub const CENTROID_SUBTEXELS: u32 = 256;
+
+/// Photons a texel's centroid sums hold at most: past it (2^24 photons in one texel,
+/// where an offset sum could wrap its 32 bits) the lookup spreads the texel's flux
+/// over its whole area again, and the deposit counts the crossing as saturated.
+pub const CENTROID_MAX_PHOTONS: u32 = 1 << 24;
+
+/// A photon's offset inside its atlas texel at `uv` on tile `tile`, per axis in
+/// 1/[`CENTROID_SUBTEXELS`] of a texel (0..=255): `floor(uv side 256) - 256 texel`,
+/// clamped, with the texel [`atlas_texel_index`]'s (clamped to the tile). Products by
+/// powers of two and a floor only, so that every backend computes the same integers.
+#[inline]
+pub fn centroid_offset(tile: [u32; 4], uv: Vec2) -> [u32; 2] {
+    let s = tile[2] as f32;
+    let q = |u: f32| {
+        let c = ((u * s).floor().max(0.0) as u32).min(tile[2] - 1);
+        let steps = (u * s * CENTROID_SUBTEXELS as f32).floor().max(0.0) as u32;
+        steps
+            .saturating_sub(c * CENTROID_SUBTEXELS)
+            .min(CENTROID_SUBTEXELS - 1)
+    };
+    [q(uv.x), q(uv.y)]
+}
+
+/// The mean position (texel-local, 0..1 per axis) of a texel's photons from its centroid
+/// sums `(sum x, sum y, photons)`: `(sum + n / 2) / (256 n)`, each photon at the middle
+/// of its step; the texel's middle (1/2, 1/2) without photons or past
+/// [`CENTROID_MAX_PHOTONS`].
+#[inline]
+pub fn texel_centroid(sum_x: u32, sum_y: u32, n: u32) -> Vec2 {
+    if n == 0 || n >= CENTROID_MAX_PHOTONS {
+        return Vec2::splat(0.5);
+    }
+    let (nf, d) = (n as f32, (n * CENTROID_SUBTEXELS) as f32);
+    Vec2::new((sum_x as f32 + 0.5 * nf) / d, (sum_y as f32 + 0.5 * nf) / d)
+}
+
+/// The share of a texel's flux inside `[lo, hi)` (texel-local coordinates along one
+/// axis) when it lies uniformly on the widest interval around its photons' mean `c` that
+/// the texel holds, `[c - a, c + a]` with `a = min(c, 1 - c)`: the whole texel for
+/// `c = 1/2` (a texel read as uniform), the half next to a border for photons all on
+/// that half. A focused caustic's edge (a fold, where a ball's marginal rays cross) runs
+/// through texels whose flux lies on one side of it; read as uniform, such a texel hands
+/// flux across the edge to the pixel beyond it wherever a pixel border cuts it.
+#[inline]
+pub fn centroid_share(c: f32, lo: f32, hi: f32) -> f32 {
+    let a = c.min(1.0 - c).max(0.5 / CENTROID_SUBTEXELS as f32);
+    ((hi.min(c + a) - lo.max(c - a)).max(0.0) / (2.0 * a)).min(1.0)
+}
+
 /// The word and the bit of scene triangle `t` in a triangle reach mask (one bit per
 /// triangle, 32 to a `u32` word): the atlas deposit (`trace_photons`' `fused_deposit`) or-s the bit of every photon's triangle
 /// into it.
@@ -314,11 +370,15 @@ fn overlap(i: u32, lo: f32, hi: f32) -> f32 {
 /// The caustic map at `uv` on tile `tile` (atlas `atlas_width` texels wide), averaged over
 /// a pixel's footprint, the axis-aligned rectangle of half-extents `extent` (texels,
 /// [`footprint_extent`]) centred on `uv * side` (texel `i` spans `[i, i + 1)`): where it is
-/// wider than a texel on either axis, the mean of the covered texels (`area(i) > 0`) it
-/// overlaps, each weighted by the area of its overlap (half-extents clamped to
-/// `[1/2, MAX_FOOTPRINT_TEXELS / 2]`, the rectangle to the tile), so that a caustic
-/// sharper than a pixel is integrated over the pixel, as a screen-space deposit integrates
-/// it, not point-sampled; otherwise (both half-extents at most 1/2) bilinear over the four
+/// wider than a texel on either axis, the flux of the covered texels (`area(i) > 0`) it
+/// overlaps over the overlapped area, each texel's irradiance weighted by the share of its
+/// flux inside the rectangle, per axis [`centroid_share`] of its photons' mean
+/// `centroid(i)` ([`texel_centroid`]; a centroid of (1/2, 1/2) gives the overlap's area:
+/// the texel read as uniform), so that a caustic sharper than a pixel is integrated over
+/// the pixel, as a screen-space deposit integrates it, not point-sampled, and the flux of
+/// a texel that a focused caustic's edge crosses stays on its side of the edge
+/// (half-extents clamped to `[1/2, MAX_FOOTPRINT_TEXELS / 2]`, the rectangle to the
+/// tile); otherwise (both half-extents at most 1/2) bilinear over the four
 /// texels around `uv * side - 0.5` (clamped to the tile), each weighted by its bilinear
 /// weight if covered and renormalised by the covered weights. Texels outside the
 /// receiver's UV triangles hold no irradiance and are left out of both. `map(i)` is texel
@@ -330,6 +390,7 @@ pub fn sample_caustic_map(
     atlas_width: u32,
     map: impl Fn(u32) -> Vec3,
     area: impl Fn(u32) -> f32,
+    centroid: impl Fn(u32) -> Vec2,
 ) -> Vec3 {
     let s = tile[2] as f32;
     if extent.x > 0.5 || extent.y > 0.5 {
@@ -348,7 +409,10 @@ pub fn sample_caustic_map(
                 let i = (tile[1] + y) * atlas_width + tile[0] + x;
                 let w = overlap(x, lx, hx) * wy;
                 if area(i) > 0.0 && w > 0.0 {
-                    sum += w * map(i);
+                    let c = centroid(i);
+                    let share = centroid_share(c.x, lx - x as f32, hx - x as f32)
+                        * centroid_share(c.y, ly - y as f32, hy - y as f32);
+                    sum += share * map(i);
                     wsum += w;
                 }
             }
@@ -543,11 +607,70 @@ mod tests {
                     w,
                     |_| Vec3::splat(2.0),
                     |i| area[i as usize],
+                    |_| Vec2::splat(0.5),
                 );
                 assert_eq!(e, Vec3::splat(2.0), "uv ({u}, {v}), footprint {fp}");
             }
         }
         assert_eq!(atlas_texel_index(tile, Vec2::new(1.0, 0.0), w), 8 + 2 + 3);
+    }
+
+    /// A texel read as uniform (no photons' centroid).
+    const MID: fn(u32) -> Vec2 = |_| Vec2::splat(0.5);
+
+    #[test]
+    fn a_texels_centroid_keeps_its_flux_on_its_side_of_a_pixel_border() {
+        // photons only on the left half of texel 8 of a 16-texel row: a footprint whose
+        // border cuts the texel in the middle gets all of its flux on the left, none on
+        // the right; the two footprints together keep the texel's flux
+        let (w, tile) = (16u32, [0u32, 0, 16, 0]);
+        let lit = 8 * 16 + 8;
+        let map = |i: u32| Vec3::splat(if i == lit { 16.0 } else { 0.0 });
+        let n = 1000u32;
+        // offsets 0..=127 in steps: the left half, mean 63.5 / 256 + 1 / 512 = 0.25
+        let left = texel_centroid(63 * n + n / 2, 128 * n - n / 2, n);
+        assert!(
+            (left.x - 0.25).abs() < 1e-3 && (left.y - 0.5).abs() < 1e-3,
+            "{left}"
+        );
+        let centroid = |i: u32| if i == lit { left } else { Vec2::splat(0.5) };
+        let at = |x: f32| {
+            let uv = Vec2::new(x / 16.0, 8.5 / 16.0);
+            sample_caustic_map(tile, uv, Vec2::splat(2.0), w, map, |_| 1.0, centroid).x
+        };
+        // footprints [4.5, 8.5) and [8.5, 12.5) in x, 16 texels each
+        let (l, r) = (at(6.5), at(10.5));
+        assert!((l - 1.0).abs() < 1e-6 && r.abs() < 1e-6, "{l} {r}");
+        // read as uniform, half of it crosses
+        let u = |x: f32| {
+            let uv = Vec2::new(x / 16.0, 8.5 / 16.0);
+            sample_caustic_map(tile, uv, Vec2::splat(2.0), w, map, |_| 1.0, MID).x
+        };
+        assert!((u(6.5) - 0.5).abs() < 1e-6 && (u(10.5) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn centroid_shares_over_a_partition_add_up_to_one() {
+        for k in 0..200u32 {
+            let c = texel_centroid(k * 37 % 256, 0, 1).x;
+            let cuts = [0.0, random_f32(3, k, 0, 0), random_f32(3, k, 1, 0), 1.0];
+            let mut cuts = cuts;
+            cuts.sort_by(f32::total_cmp);
+            let total: f32 = cuts.windows(2).map(|p| centroid_share(c, p[0], p[1])).sum();
+            assert!((total - 1.0).abs() < 1e-5, "c {c}: {total}");
+            assert!(centroid_share(c, -1.0, 2.0) == 1.0);
+        }
+        // no photons, and past the most the sums hold: the texel's middle
+        assert_eq!(texel_centroid(0, 0, 0), Vec2::splat(0.5));
+        assert_eq!(texel_centroid(7, 7, CENTROID_MAX_PHOTONS), Vec2::splat(0.5));
+        // offsets: the step inside the clamped texel
+        let tile = [4u32, 0, 8, 0];
+        assert_eq!(centroid_offset(tile, Vec2::new(0.0, 1.0)), [0, 255]);
+        assert_eq!(
+            centroid_offset(tile, Vec2::new(0.5 / 8.0, 3.25 / 8.0)),
+            [128, 64]
+        );
+        assert_eq!(centroid_offset(tile, Vec2::new(-0.5, 2.0)), [0, 255]);
     }
 
     #[test]
@@ -563,17 +686,17 @@ mod tests {
             }
         };
         let uv = Vec2::new(8.5 / 16.0, 8.5 / 16.0);
-        let point = sample_caustic_map(tile, uv, Vec2::splat(0.5), w, map, |_| 1.0);
-        let wide = sample_caustic_map(tile, uv, Vec2::splat(2.0), w, map, |_| 1.0);
+        let point = sample_caustic_map(tile, uv, Vec2::splat(0.5), w, map, |_| 1.0, MID);
+        let wide = sample_caustic_map(tile, uv, Vec2::splat(2.0), w, map, |_| 1.0, MID);
         assert_eq!(point, Vec3::splat(16.0));
         // the rectangle [6.5, 10.5)^2: 16 texels of area, the lit one inside
         assert_eq!(wide, Vec3::splat(1.0));
         // the rectangle [8.5, 12.5) x [6.5, 10.5): the lit texel [8, 9) half inside
         let off = Vec2::new(10.5 / 16.0, 8.5 / 16.0);
-        let half = sample_caustic_map(tile, off, Vec2::splat(2.0), w, map, |_| 1.0);
+        let half = sample_caustic_map(tile, off, Vec2::splat(2.0), w, map, |_| 1.0, MID);
         assert!((half.x - 0.5).abs() < 1e-6, "{half}");
         // a rectangle, 2 texels wide and 8 tall around the lit texel
-        let tall = sample_caustic_map(tile, uv, Vec2::new(1.0, 4.0), w, map, |_| 1.0);
+        let tall = sample_caustic_map(tile, uv, Vec2::new(1.0, 4.0), w, map, |_| 1.0, MID);
         assert!((tall.x - 1.0).abs() < 1e-6, "{tall}");
         assert!((footprint_texels(0.01, 2.0, 1.0, 1e-4) - 2.0).abs() < 1e-5);
     }

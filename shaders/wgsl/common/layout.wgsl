@@ -194,6 +194,9 @@ const REACH_TILE: i32 = 8;
 // core::math::map_gather
 const TILE_FULLY_COVERED: u32 = 0x80000000u;
 const MAX_FOOTPRINT_TEXELS: f32 = 32.0f;
+const CENTROID_WORDS: u32 = 3u;
+const CENTROID_SUBTEXELS: u32 = 256u;
+const CENTROID_MAX_PHOTONS: u32 = 0x1000000u;
 
 // core::math::photon_clusters
 const NO_TRIANGLE: u32 = 0xffffffffu;
@@ -208,6 +211,7 @@ const CLUSTER_TARGET_ATLAS: u32 = 0u;
 const CLUSTER_TARGET_SCREEN: u32 = 1u;
 const MAX_ERROR_TEXELS: u32 = 4u;
 const CLUSTER_ID_MASK: u32 = 0x3fffffffu;
+const CONVERGENCE_CELLS: u32 = 16u;
 
 // core::math::rsm
 const RSM_TEXEL_NONE: u32 = 0u;

@@ -1,7 +1,26 @@
 // Mirror of core::math::map_gather::sample_caustic_map: the covered texels of a tile
 // over a pixel's footprint rectangle (footprint_extent), or bilinear where it is smaller
-// than a texel. Reads the atlas through functions the kernel module defines: `atlas_area(i)`
-// and `map_irradiance(i)` (W/m^2).
+// than a texel. Reads the atlas through functions the kernel module defines: `atlas_area(i)`,
+// `map_irradiance(i)` (W/m^2) and `atlas_centroid(i)` (texel_centroid).
+
+// core::math::map_gather::texel_centroid: the mean position (texel-local) of a texel's
+// photons from its centroid sums; the texel's middle without photons or past
+// CENTROID_MAX_PHOTONS.
+fn texel_centroid(sx: u32, sy: u32, n: u32) -> vec2<f32> {
+    if (n == 0u || n >= CENTROID_MAX_PHOTONS) {
+        return vec2<f32>(0.5);
+    }
+    let nf = f32(n);
+    let d = f32(n * CENTROID_SUBTEXELS);
+    return vec2<f32>((f32(sx) + 0.5 * nf) / d, (f32(sy) + 0.5 * nf) / d);
+}
+
+// core::math::map_gather::centroid_share: the share of a texel's flux inside [lo, hi)
+// (texel-local) when it lies uniformly on [c - a, c + a], a = min(c, 1 - c).
+fn centroid_share(c: f32, lo: f32, hi: f32) -> f32 {
+    let a = max(min(c, 1.0 - c), 0.5 / f32(CENTROID_SUBTEXELS));
+    return min(max(min(hi, c + a) - max(lo, c - a), 0.0) / (2.0 * a), 1.0);
+}
 
 fn footprint_texels(pixel_angle: f32, distance: f32, cos_in: f32, texel_area: f32) -> f32 {
     let w = pixel_angle * distance;
@@ -90,7 +109,10 @@ fn sample_caustic_map(tile: vec4<u32>, uv: vec2<f32>, extent: vec2<f32>, atlas_w
                 let i = (tile.y + y) * atlas_width + tile.x + x;
                 let w = texel_overlap(x, lx, ux) * wy;
                 if (atlas_area(i) > 0.0 && w > 0.0) {
-                    bsum += w * map_irradiance(i);
+                    let c = atlas_centroid(i);
+                    let share = centroid_share(c.x, lx - f32(x), ux - f32(x))
+                        * centroid_share(c.y, ly - f32(y), uy - f32(y));
+                    bsum += share * map_irradiance(i);
                     bw += w;
                 }
             }

@@ -33,6 +33,12 @@ fn cluster_spread(xs: array<u32, 4>, ys: array<u32, 4>) -> u32 {
     return max(hi.x - lo.x, hi.y - lo.y) + 1u;
 }
 
+// core::math::photon_clusters::convergence_cell: the convergence cell (per axis) of a
+// photon at `offset` (centroid_offset) inside its texel.
+fn convergence_cell(offset: vec2<u32>) -> vec2<u32> {
+    return offset / (CENTROID_SUBTEXELS / CONVERGENCE_CELLS);
+}
+
 // (x0, x1, y0, y1), inclusive
 fn footprint_window(x: u32, y: u32, spread: u32, tile: vec4<u32>) -> vec4<u32> {
     let r = spread / 2u;

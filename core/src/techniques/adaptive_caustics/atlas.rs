@@ -224,6 +224,7 @@ fn atlas_target(receiver: &AtlasReceiver) -> Option<AtlasTarget> {
         triangle_tiles: a.triangle_tiles,
         tiles: a.tiles,
         sums: a.sums,
+        centroids: a.centroids,
         atlas_width: receiver.settings().atlas.atlas_size,
         flux_quantum: quanta.flux_quantum,
         hit_distance_quantum: quanta.hit_distance_quantum,

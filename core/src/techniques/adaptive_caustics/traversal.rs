@@ -128,8 +128,10 @@ pub struct TraversalSettings {
     /// and its photons are then splatted over a window that size (Wyman 2009, section
     /// 3.2.2's alternative: "photon divergence greater than a single texel but less than a
     /// user-defined tolerance", with its multi-resolution map). 1 (the default) is the
-    /// publication's metric: one texel, and a one-texel splat. At most 4; above 1 only
-    /// with the atlas deposit.
+    /// publication's metric, one texel, and a one-texel splat, taken on the atlas at the
+    /// texel's centroid resolution: the four photons also in one of the texel's
+    /// [`CONVERGENCE_CELLS`](crate::math::photon_clusters::CONVERGENCE_CELLS)^2 cells. At
+    /// most 4; above 1 only with the atlas deposit.
     pub error_texels: u32,
     /// Device bytes the traversal may hold (Wyman 2009, section 4.3): the photon slots of
     /// a batch (128 bytes per cluster) and one cluster list per level (16 bytes per
@@ -287,6 +289,8 @@ pub struct AtlasTarget {
     pub tiles: Buf<AtlasTileTexel>,
     /// The atlas's fixed-point sums.
     pub sums: PhotonMapPlanes,
+    /// The atlas's centroid sums.
+    pub centroids: Buf<u32>,
     /// Atlas side (texels).
     pub atlas_width: u32,
     /// Flux per fixed-point unit (W).
@@ -818,19 +822,25 @@ impl Traversal {
         let (children, capacity) = a.children;
         let c = a.bound;
         let (flux_quantum, hit_distance_quantum) = target.quanta();
-        let (atlas_width, triangle_tiles, tiles, atlas, camera, kind) =
+        let (atlas_width, triangle_tiles, tiles, (atlas, centroids), camera, kind) =
             match (target, self.no_atlas) {
                 (DepositTarget::Atlas(a), _) => (
                     a.atlas_width,
                     a.triangle_tiles,
                     a.tiles,
-                    a.sums,
+                    (a.sums, a.centroids),
                     GpuCamera::default(),
                     cluster_target::ATLAS,
                 ),
-                (DepositTarget::Screen(sc), Some((tt, tl, planes))) => {
-                    (1, tt, tl, planes, sc.deposit.camera, cluster_target::SCREEN)
-                }
+                // the screen target binds no atlas: its centroids alias the counters
+                (DepositTarget::Screen(sc), Some((tt, tl, planes))) => (
+                    1,
+                    tt,
+                    tl,
+                    (planes, self.output_counters),
+                    sc.deposit.camera,
+                    cluster_target::SCREEN,
+                ),
                 (DepositTarget::Screen(_), None) => {
                     return Err(Error::InvalidParameter(
                         "adaptive traversal recorded for the atlas, run for the screen".into(),
@@ -930,6 +940,7 @@ impl Traversal {
                 output_photons: self.outputs,
                 output_count: self.output_count,
                 dispatch: record(1),
+                centroids,
             }
             .into(),
         );

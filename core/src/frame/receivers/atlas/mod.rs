@@ -131,6 +131,9 @@ pub struct AtlasBuffers {
     pub texels: Buf<AtlasTexel>,
     /// The fixed-point sums photons deposit into.
     pub sums: PhotonMapPlanes,
+    /// Per texel, where in it its photons lie: the sums of their offsets and their count
+    /// ([`crate::math::map_gather::CENTROID_WORDS`] words), cleared with the sums.
+    pub centroids: Buf<u32>,
     /// The gathered map (irradiance, W/m^2).
     pub map: ImageBuf,
     /// The raw map (N = 1), where asked for.
@@ -332,6 +335,10 @@ impl AtlasReceiver {
             tiles: rec.upload(&tile_buffer(l, self.tiled.len().max(1)), "atlas tiles"),
             texels: rec.upload(&l.texels, "atlas texels"),
             sums: rec.create_photon_map(texels),
+            centroids: rec.create(
+                texels * crate::math::map_gather::CENTROID_WORDS,
+                "atlas centroid sums",
+            ),
             map: rec.create(texels, "caustic map"),
             raw_map: (s.frame.outputs.has(Output::RawCaustics) || !s.frame.prune)
                 .then(|| rec.create(texels, "raw caustic map")),
@@ -552,6 +559,7 @@ impl AtlasReceiver {
             tiles: a.tiles,
             triangle_reach: a.triangle_reach,
             sums: a.sums,
+            centroids: a.centroids,
         })
     }
 
@@ -561,6 +569,7 @@ impl AtlasReceiver {
         if let Some(a) = self.atlas {
             if self.pass_index() == 0 {
                 rec.clear_photon_map(&a.sums);
+                rec.clear(a.centroids);
             }
             rec.clear(a.counters);
             rec.clear(a.triangle_reach);
@@ -658,6 +667,7 @@ impl AtlasReceiver {
                     texels: a.texels,
                     map,
                     out,
+                    centroids: a.centroids,
                 });
             }
         }

@@ -168,12 +168,12 @@ pub struct AtlasSettings {
     pub knn_photons: u32,
     /// Density gather: largest radius (texels).
     pub max_radius_texels: u32,
-    /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), the
-    /// gathered and raw maps (16 B each) and the texel table (8 B); with the density
-    /// gather also its count table (4 B), edge texels and two passes' images (16 B each).
-    /// A larger atlas is a typed out-of-memory error before any work (default 4 GiB: a
-    /// 2048^2 atlas takes 528 MiB with the density gather, 320 MiB with the box; 4096^2
-    /// 2.06 GiB; 16384^2 33 GiB).
+    /// Device memory the atlas may take (bytes): its fixed-point sums (40 B a texel), its
+    /// centroid sums (12 B), the gathered and raw maps (16 B each) and the texel table
+    /// (8 B); with the density gather also its count table (4 B), edge texels and two
+    /// passes' images (16 B each). A larger atlas is a typed out-of-memory error before
+    /// any work (default 4 GiB: a 2048^2 atlas takes 576 MiB with the density gather, 368
+    /// MiB with the box; 4096^2 2.25 GiB; 16384^2 36 GiB).
     pub max_atlas_bytes: u64,
 }
 
@@ -194,9 +194,9 @@ impl Default for AtlasSettings {
 /// and the planned allocation refuse what the device cannot hold).
 pub const MAX_ATLAS_SIZE: u32 = 16384;
 
-/// Device bytes per atlas texel: sums (40), gathered map (16), raw map (16), texel
-/// table (8).
-pub const ATLAS_BYTES_PER_TEXEL: u64 = 80;
+/// Device bytes per atlas texel: sums (40), centroid sums (12), gathered map (16), raw
+/// map (16), texel table (8).
+pub const ATLAS_BYTES_PER_TEXEL: u64 = 92;
 
 /// Device bytes per atlas texel the density gather adds: count table (4), edge texels
 /// (16), the footprint and row-pass images (16 each).
