@@ -23,8 +23,8 @@ use caustica::reference::light_tracer::{
     SphereModel,
 };
 use caustica::reference::CAUSTIC_REFERENCE;
-use caustica::techniques::create;
 use caustica::technique_spec::put_setting;
+use caustica::techniques::create;
 use caustica::Image;
 use std::path::Path;
 
@@ -126,7 +126,12 @@ fn main() -> Result<(), String> {
             Path::new("out/references"),
             &scene,
             &spec,
-            &mut |k, n, e| eprintln!("light tracer ({}) batch {k}/{n}: noise {e:.5}", model.name()),
+            &mut |k, n, e| {
+                eprintln!(
+                    "light tracer ({}) batch {k}/{n}: noise {e:.5}",
+                    model.name()
+                )
+            },
         )?;
         println!(
             "light tracer ({}, silhouette pixels {}): {} photons, noise {:.5}, flux (sum) {:.6e}",
