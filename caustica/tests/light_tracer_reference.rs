@@ -297,7 +297,10 @@ fn silhouette_definitions_differ_only_on_silhouette_pixels() {
 /// let it grow. The filtered output, the density filter, must be no further off than the
 /// raw deposit (its kernel adapts to the photons; at these budgets it smooths the
 /// noise), and both must carry the tracer's flux (the image's radiance summed over every
-/// pixel; the pixels' areas are the same in both) within 0.5%. The 0.3% floor a
+/// pixel; the pixels' areas are the same in both) within 0.5% plus 5 standard deviations
+/// of the Fresnel choices: each of the `side²` photons (all aimed at the ball) reaches
+/// the floor or not, a Bernoulli trial with p ~ 0.9, so the stored flux varies by
+/// `sqrt((1 - p) / (p n)) <= 0.35 / side` relative. The 0.3% floor a
 /// 192-segment ball set at 960x540 is below this size's resolution: docs/sspm.md,
 /// "Against the exact sphere", measures that with `sspm_against_light_tracer`.
 #[test]
@@ -358,13 +361,14 @@ fn sspm_keeps_falling_towards_the_exact_sphere() {
              {f_filtered:.4} (tracer noise {:.4})",
             lt.info.noise
         );
+        let flux_tol = 0.005 + 5.0 * 0.35 / side as f64;
         assert!(
-            (f_raw - 1.0).abs() <= 0.005,
-            "{side}²: raw flux ratio {f_raw}"
+            (f_raw - 1.0).abs() <= flux_tol,
+            "{side}²: raw flux ratio {f_raw} (+- {flux_tol})"
         );
         assert!(
-            (f_filtered - 1.0).abs() <= 0.005,
-            "{side}²: filtered flux ratio {f_filtered}"
+            (f_filtered - 1.0).abs() <= flux_tol,
+            "{side}²: filtered flux ratio {f_filtered} (+- {flux_tol})"
         );
         assert!(
             e_filtered <= e_raw,
