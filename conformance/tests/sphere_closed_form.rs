@@ -55,13 +55,13 @@ fn sphere_caustic_closed_form_matches_the_published_figures() {
 ///   standard deviation sqrt((1 - p) / (p n)) for n photons meeting the ball; 5 sigma;
 ///   for the flux within a radius the same with that radius's p;
 /// - geometry: the ball is a UV sphere of `s` segments (the scene's; 384), its facets
-///   inside the sphere by at most R (1 - cos(pi / s)) (1.7e-5 at 384); its silhouette
-///   loses 2 (1 - cos(pi / s)) (6.7e-5) of the area the rays meet (bounds the total). A
-///   hit point lies on a facet, up to that sag from the sphere, and the interpolated
-///   shading normal there is within ~(2 pi / s)^2 / 8 rad of the true one (3.3e-5); two
-///   refractions turn the ray by at most about twice that, so over the <= 1.3 units to
-///   the plane a landing point moves by at most 1.7e-5 + 1.3 * 6.7e-5 = 1.0e-4 (4e-4 at
-///   192 segments): `shift` = 5e-4 holds for any `s` >= 192. The flux
+///   inside the sphere by at most about R (pi / s)^2 (a triangle's circumcentre; 3.3e-5
+///   at 384); its silhouette loses 2 (1 - cos(pi / s)) (6.7e-5) of the area the rays
+///   meet (bounds the total). A hit point lies on a facet, up to that sag from the sphere, and the
+///   interpolated shading normal there is within ~(2 pi / s)^2 / 8 rad of the true one
+///   (3.3e-5); two refractions turn the ray by at most about twice that, so over the
+///   <= 1.3 units to the plane a landing point moves by at most 3.3e-5 + 1.3 * 6.7e-5 =
+///   1.2e-4 (4.7e-4 at 192 segments): `shift` = 5e-4 holds for any `s` >= 192. The flux
 ///   within r can then change by at most the closed form's flux in the annulus
 ///   r +- shift.
 #[test]
