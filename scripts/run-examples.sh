@@ -24,4 +24,6 @@ run shape_update cpu 64
 run embed_ash 96x54 64
 run compare_techniques cpu sphere 256
 run sspm_against_light_tracer sphere 48x27 262144 2 64,128 1 mesh centre-surface
+run sspm_against_light_tracer sphere 48x27 262144 2 64 1 both centre-surface 2 96
+run ball_tessellation_cost sphere 96x54 64 48,96 cpu 1
 echo "examples: ok"

@@ -411,12 +411,12 @@ fn assert_same_frame(backend: &str, scene: &str, a: &Run, b: &Run) {
 /// (128 MiB) is the real case (`docs/stability.md`).
 #[test]
 fn oversized_buffer_is_a_typed_error_before_any_work() {
-    // large enough that a G-buffer plane is the largest buffer (the sphere's vertices are
-    // 0.6 MB)
+    // large enough that a G-buffer plane (14.7 MB) is the largest buffer (the scene's
+    // largest, of the 384-segment ball, is 8.2 MB)
     let mut scene = small("sphere");
-    scene.camera.width = 640;
-    scene.camera.height = 360;
-    let gbuffer = 640 * 360 * 16;
+    scene.camera.width = 1280;
+    scene.camera.height = 720;
+    let gbuffer = 1280 * 720 * 16;
     let mut b = caustica_conformance::harness::WatchedCpu::new(Some(gbuffer - 1));
     match Sspm::new(&mut b, &scene, settings(true)) {
         Err(caustica_core::Error::Backend(caustica_core::BackendError::OutOfMemory {

@@ -311,9 +311,9 @@ fn an_instance_renders_as_the_same_object_in_the_static_level() {
         );
         // The instance's barycentrics come from object-space coordinates (magnitude <= 0.5)
         // instead of world ones (<= 1.5): each carries a relative error of a few ulps of
-        // the coordinates over the triangle's edge (2 pi 0.5 / 192 = 0.016), about 2^-16;
+        // the coordinates over the triangle's edge (2 pi 0.5 / 384 = 0.008), about 2^-15;
         // the shading normal then moves by that fraction of its change across one triangle
-        // (<= 2 pi / 192 = 0.033 rad), i.e. by ~5e-7 rad, and the radiance (albedo/pi E
+        // (<= 2 pi / 384 = 0.016 rad), i.e. by ~5e-7 rad, and the radiance (albedo/pi E
         // cos) by that fraction of the peak. 2^-13 of the peak is 250x that; a shadow
         // ray flipping at a shadow edge would exceed it (and be worth a look).
         assert!(

@@ -14,7 +14,7 @@ use glam::Vec3;
 /// meridional planes); the mean crossing height must be the ball-lens back focus
 /// f = n R / (2 (n - 1)) = 0.75 below the centre, y = 0.25.
 /// Tolerance 0.01 (1.3% of f): spherical aberration at h = 0.07 R shifts the focus by
-/// ~ (h/R)^2 * f * 0.5 ≈ 0.002 towards the lens; the 192-segment tessellation perturbs
+/// ~ (h/R)^2 * f * 0.5 ≈ 0.002 towards the lens; the 384-segment tessellation perturbs
 /// interpolated normals by < 1e-3 rad, moving crossings by < 0.75 * 2e-3; octahedral
 /// direction packing adds < 1e-4 rad.
 #[test]

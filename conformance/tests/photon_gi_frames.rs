@@ -228,8 +228,8 @@ fn importance_and_uniform_rsm_sampling_agree_in_the_mean() {
 /// receiver) runs `shading_normal_correction`; with the filters off the corrected image is
 /// the raw one times the per-pixel factor, so the ratio of the frames with the correction
 /// on and off is that factor: finite, within `[0, s_max]`, different from 1 somewhere (the
-/// ball) and close to 1 on average (the ball's 192 segments keep the shading normals within
-/// ~1 degree of the geometric ones). A scene of flat faces skips the pass and says why.
+/// ball) and close to 1 on average (the ball's 384 segments keep the shading normals within
+/// ~0.5 degree of the geometric ones). A scene of flat faces skips the pass and says why.
 #[test]
 fn eq20_corrects_the_indirect_light_where_shading_normals_depart() {
     use caustica_core::scene::Material;

@@ -15,6 +15,7 @@ use caustica_conformance::sphere_optics::{
 };
 use caustica_core::math::optics::fresnel_model;
 use caustica_core::scene::builtin::builtin;
+use caustica_core::scene::Shape;
 use caustica_core::techniques::sspm::SspmSettings;
 use caustica_core::{FrameSettings, TraceSettings};
 use caustica_cpu::CpuBackend;
@@ -53,13 +54,14 @@ fn sphere_caustic_closed_form_matches_the_published_figures() {
 ///   Bernoulli trial with p = stored / hitting), so the stored flux has a relative
 ///   standard deviation sqrt((1 - p) / (p n)) for n photons meeting the ball; 5 sigma;
 ///   for the flux within a radius the same with that radius's p;
-/// - geometry: the ball is a UV sphere of 192 segments, its facets inside the sphere by at
-///   most R (1 - cos(pi / 192)) = 6.7e-5; its silhouette loses 2 (1 - cos(pi/192)) =
-///   2.7e-4 of the area the rays meet (bounds the total). A hit point lies on a facet, up
-///   to that sag (6.7e-5) from the sphere, and the interpolated shading normal there is
-///   within ~(pi/96)^2 / 8 = 1.3e-4 rad of the true one; two refractions turn the ray by
-///   at most about twice that, so over the <= 1.3 units to the plane a landing point
-///   moves by at most 6.7e-5 + 1.3 * 2.6e-4 = 4e-4: `shift` = 5e-4 with margin. The flux
+/// - geometry: the ball is a UV sphere of `s` segments (the scene's; 384), its facets
+///   inside the sphere by at most about R (pi / s)^2 (a triangle's circumcentre; 3.3e-5
+///   at 384); its silhouette loses 2 (1 - cos(pi / s)) (6.7e-5) of the area the rays
+///   meet (bounds the total). A hit point lies on a facet, up to that sag from the sphere, and the
+///   interpolated shading normal there is within ~(2 pi / s)^2 / 8 rad of the true one
+///   (3.3e-5); two refractions turn the ray by at most about twice that, so over the
+///   <= 1.3 units to the plane a landing point moves by at most 3.3e-5 + 1.3 * 6.7e-5 =
+///   1.2e-4 (4.7e-4 at 192 segments): `shift` = 5e-4 holds for any `s` >= 192. The flux
 ///   within r can then change by at most the closed form's flux in the annulus
 ///   r +- shift.
 #[test]
@@ -132,7 +134,19 @@ fn check_stored_photons(model: Fresnel) {
         let p = flux / hitting;
         ((1.0 - p) / (p * n_hit)).sqrt()
     };
-    let tess = 2.0 * (1.0 - (PI / 192.0).cos());
+    let segments = scene
+        .objects
+        .iter()
+        .find_map(|o| match o.shape {
+            Shape::Sphere { segments, .. } => Some(segments as f64),
+            _ => None,
+        })
+        .expect("sphere has a ball");
+    assert!(
+        segments >= 192.0,
+        "the shift below assumes at least 192 segments"
+    );
+    let tess = 2.0 * (1.0 - (PI / segments).cos());
     let rel = (stored - a.total) / a.total;
     eprintln!(
         "stored {stored:.5} W vs closed form {:.5} W: {rel:+.2e} (5 sigma {:.1e}, \

@@ -1128,11 +1128,22 @@ pub fn silhouette_pixels(
     Ok(pixel_table(&g, &cam).1)
 }
 
-/// FNV-1a (64 bit) of the scene file text and the light tracer's settings.
+/// FNV-1a (64 bit) of the scene file text and the light tracer's settings. With
+/// [`SphereModel::Analytic`] the spheres the tracer intersects exactly (those without a
+/// transform) are hashed without their tessellation's `segments`, which it never reads:
+/// a finer ball mesh keeps the exact sphere's cached reference.
 pub fn light_tracer_hash(scene: &Scene, spec: &LightTracerSpec) -> String {
+    let mut hashed = scene.clone();
+    if spec.spheres == SphereModel::Analytic {
+        for o in &mut hashed.objects {
+            if let (Shape::Sphere { segments, .. }, None) = (&mut o.shape, &o.transform) {
+                *segments = 0;
+            }
+        }
+    }
     let text = format!(
         "light-tracer|{}|{}",
-        caustica_core::scene::format::to_json(scene),
+        caustica_core::scene::format::to_json(&hashed),
         serde_json::to_string(spec).unwrap_or_default()
     );
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;

@@ -23,6 +23,19 @@ pub(super) fn tessellation_rel(segments: u32) -> f64 {
     2.0 * (1.0 - (std::f64::consts::PI / segments as f64).cos())
 }
 
+/// The segments of `scene`'s first sphere shape (3, the coarsest tessellation, when it has
+/// none: the largest [`tessellation_rel`]).
+pub(super) fn sphere_segments(scene: &caustica_core::scene::Scene) -> u32 {
+    scene
+        .objects
+        .iter()
+        .find_map(|o| match o.shape {
+            caustica_core::scene::Shape::Sphere { segments, .. } => Some(segments.max(3)),
+            _ => None,
+        })
+        .unwrap_or(3)
+}
+
 /// Mean of `g(F(theta))` over a disk of parallel rays hitting a ball (impact parameter
 /// `b = sin(theta)`, uniform in area: weight `2 sin cos dtheta`), in f64.
 pub(super) fn disk_mean(ior: f32, g: impl Fn(f64) -> f64) -> f64 {

@@ -1,7 +1,9 @@
 //! The optics group: total internal reflection, grazing incidence, extreme and unit indices,
 //! nested media, absorption and dispersion (Cauchy and the Abbe model, spectral colour).
 
-use super::closed_form::{ball_solid_angle, disk_mean, grid_bound, tessellation_rel};
+use super::closed_form::{
+    ball_solid_angle, disk_mean, grid_bound, sphere_segments, tessellation_rel,
+};
 use super::runner::{outcome, run_checked, stored_fraction};
 use super::scenes::{ball, glass, obj, settings, sized, sphere_scene};
 use super::{Outcome, GRID, SIZE};
@@ -152,7 +154,8 @@ pub(super) fn ior_one(b: &mut dyn Backend) -> Result<Outcome, String> {
     let omega = ball_solid_angle(0.5, 2.0);
     let expect = 10.0 * omega;
     let per_photon = f.stats.emitted_flux[0] / f.stats.photons_emitted as f64;
-    let tol = grid_bound(grid, grid, 1) * per_photon + tessellation_rel(192) * expect;
+    let tol =
+        grid_bound(grid, grid, 1) * per_photon + tessellation_rel(sphere_segments(&scene)) * expect;
     let got = f.stats.stored_flux[0];
     v.check((got - expect).abs() <= tol, || {
         format!("stored flux {got:.5} W, closed form {expect:.5} +- {tol:.5}")
@@ -356,8 +359,8 @@ pub(super) fn absorption_zero(b: &mut dyn Backend) -> Result<Outcome, String> {
     let omega = ball_solid_angle(0.5, 2.0);
     let t2 = disk_mean(1.5, |fr| (1.0 - fr) * (1.0 - fr));
     let per_photon = f.stats.emitted_flux[0] / f.stats.photons_emitted as f64;
-    let lower =
-        10.0 * omega * t2 * (1.0 - tessellation_rel(192)) - grid_bound(grid, grid, 1) * per_photon;
+    let lower = 10.0 * omega * t2 * (1.0 - tessellation_rel(sphere_segments(&scene)))
+        - grid_bound(grid, grid, 1) * per_photon;
     // The parallel-beam Fresnel average is a lower bound only up to the 14-degree spread:
     // F changes by < 0.02 over that range at these angles, hence the 0.98 factor.
     let lower = 0.98 * lower;
