@@ -12,21 +12,7 @@ use caustica_core::frame::metrics::{relative_mse, CausticMask};
 use glam::Vec3;
 
 fn read_exr(path: &str) -> Image {
-    use exr::prelude::*;
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| {
-            let (w, h) = (res.width(), res.height());
-            (w, vec![[0.0f32; 4]; w * h])
-        },
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a];
-        },
-    )
-    .unwrap_or_else(|e| panic!("{path}: {e}"));
-    let size = img.layer_data.size;
-    let (_, pixels) = img.layer_data.channel_data.pixels;
-    caustica_core::frame::image::Image::new(size.width() as u32, size.height() as u32, pixels)
+    caustica::output::read_exr(std::path::Path::new(path)).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn main() {

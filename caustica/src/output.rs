@@ -3,6 +3,30 @@
 use caustica_core::frame::image::{tone_map, Image};
 use std::path::Path;
 
+/// Reads the first RGBA layer of an OpenEXR file as a linear f32 image (what
+/// [`write_exr`] writes).
+pub fn read_exr(path: &Path) -> Result<Image, String> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| {
+            let (w, h) = (res.width(), res.height());
+            (w, vec![[0.0f32; 4]; w * h])
+        },
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b, a];
+        },
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let size = img.layer_data.size;
+    let (_, pixels) = img.layer_data.channel_data.pixels;
+    Ok(caustica_core::frame::image::Image::new(
+        size.width() as u32,
+        size.height() as u32,
+        pixels,
+    ))
+}
+
 /// Writes a linear RGBA f32 OpenEXR file: RLE-compressed 64x64 tiles stored in increasing
 /// order by one thread, so two identical images give byte-identical files (hash-based
 /// caches and golden files work).

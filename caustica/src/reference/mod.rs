@@ -9,6 +9,7 @@
 
 pub mod light_tracer;
 
+pub(crate) use crate::output::read_exr;
 use caustica_core::frame::image::{luminance, Image};
 use caustica_core::frame::metrics::MASK_FRACTION;
 use caustica_core::techniques::create;
@@ -147,28 +148,6 @@ fn paths(dir: &Path, scene: &str, hash: &str) -> (PathBuf, PathBuf) {
         dir.join(format!("{stem}.exr")),
         dir.join(format!("{stem}.json")),
     )
-}
-
-fn read_exr(path: &Path) -> Result<Image, String> {
-    use exr::prelude::*;
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| {
-            let (w, h) = (res.width(), res.height());
-            (w, vec![[0.0f32; 4]; w * h])
-        },
-        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a];
-        },
-    )
-    .map_err(|e| format!("{}: {e}", path.display()))?;
-    let size = img.layer_data.size;
-    let (_, pixels) = img.layer_data.channel_data.pixels;
-    Ok(caustica_core::frame::image::Image::new(
-        size.width() as u32,
-        size.height() as u32,
-        pixels,
-    ))
 }
 
 /// Loads the cached reference of `scene`, or computes it on `backend` (the CPU backend
