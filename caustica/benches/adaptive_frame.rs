@@ -16,14 +16,14 @@
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SIZES=1024,2048,4096`,
 //! `CAUSTICA_BENCH_SCENES=spot-glass,sphere`, `CAUSTICA_BENCH_START_GRID=64` (the
 //! traversal's start grid), `CAUSTICA_BENCH_KERNELS=1` (each level's time by kernel),
-//! `CAUSTICA_BENCH_PROBES=1` (`0,1`: the adaptive rows with full traces at every level too,
-//! `TraversalSettings::probe_coarse_levels`).
+//! `CAUSTICA_BENCH_PROBES=bounds` (a list of `traced`, `first_segment`, `bounds`: the
+//! adaptive rows under each `TraversalSettings::probe_levels`).
 
 mod common;
 use caustica::scene::builtin::builtin;
 use caustica::techniques::adaptive_caustics::AdaptiveStats;
 use caustica::techniques::adaptive_caustics::{
-    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric,
+    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, ProbeLevels,
 };
 use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica::Technique;
@@ -57,9 +57,13 @@ fn main() {
         .parse()
         .unwrap_or(64);
     let by_kernel = env_or("CAUSTICA_BENCH_KERNELS", "0") == "1";
-    let probe_settings: Vec<bool> = env_or("CAUSTICA_BENCH_PROBES", "1")
+    let probe_settings: Vec<ProbeLevels> = env_or("CAUSTICA_BENCH_PROBES", "bounds")
         .split(',')
-        .map(|s| s.trim() != "0")
+        .map(|s| match s.trim() {
+            "traced" | "0" => ProbeLevels::Traced,
+            "first_segment" | "1" => ProbeLevels::FirstSegment,
+            _ => ProbeLevels::Bounds,
+        })
         .collect();
     println!(
         "AdaptiveCaustics vs the dense plane, median of {frames} frames after {} ms of warm-up frames",
@@ -101,26 +105,15 @@ fn main() {
                     },
                     ..CausticMapSettings::default()
                 };
-                let mut variants = vec![("dense", None, true)];
+                let mut variants = vec![("dense", None, ProbeLevels::Bounds)];
                 for probes in probe_settings.iter().copied() {
-                    variants.push((
-                        if probes {
-                            "level"
-                        } else {
-                            "level, full traces"
-                        },
-                        Some(AdaptiveMetric::Level),
-                        probes,
-                    ));
-                    variants.push((
-                        if probes {
-                            "error"
-                        } else {
-                            "error, full traces"
-                        },
-                        Some(AdaptiveMetric::Error),
-                        probes,
-                    ));
+                    let (level, error) = match probes {
+                        ProbeLevels::Bounds => ("level", "error"),
+                        ProbeLevels::FirstSegment => ("level, probes", "error, probes"),
+                        ProbeLevels::Traced => ("level, full traces", "error, full traces"),
+                    };
+                    variants.push((level, Some(AdaptiveMetric::Level), probes));
+                    variants.push((error, Some(AdaptiveMetric::Error), probes));
                 }
                 for (label, metric, probes) in variants {
                     let made = match metric {
@@ -133,7 +126,7 @@ fn main() {
                                 traversal: TraversalSettings {
                                     metric,
                                     start_grid,
-                                    probe_coarse_levels: probes,
+                                    probe_levels: probes,
                                     max_traversal_bytes: 256 << 20,
                                     ..AdaptiveCausticsSettings::default().traversal
                                 },

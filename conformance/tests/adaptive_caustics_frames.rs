@@ -29,7 +29,7 @@ use caustica_core::scene::builtin::{builtin, BUILTIN_SCENES};
 use caustica_core::scene::Scene;
 use caustica_core::techniques::adaptive_caustics::AdaptiveStats;
 use caustica_core::techniques::adaptive_caustics::{
-    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, MAX_PASSES_PER_LEVEL,
+    AdaptiveCaustics, AdaptiveCausticsSettings, AdaptiveMetric, ProbeLevels, MAX_PASSES_PER_LEVEL,
 };
 use caustica_core::techniques::caustic_map::{CausticMap, CausticMapSettings};
 use caustica_core::techniques::sspm::Output;
@@ -217,20 +217,23 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
     }
 }
 
-/// Probe levels (`probe_coarse_levels`: the photons of levels judged only by whether a
-/// photon met a caster traced to their first surface) change nothing but the path ends:
-/// the same clusters are refined, converged and output, so the atlas and every image are
-/// bitwise a traversal's with full traces at every level, under both metrics, on every
-/// backend; the path ends still account for every photon traced
-/// (`AdaptiveStats::probes_met_caster`), and the probes trace fewer ray segments.
+/// Probe levels (the levels judged only by whether a photon met a caster) change nothing
+/// but the path ends and the work: traced to their first surface
+/// (`ProbeLevels::FirstSegment`) the same clusters are refined, converged and output;
+/// not traced at all (`ProbeLevels::Bounds`, the casters' rectangles seed the first judged
+/// level) the same clusters are output, and only clusters the rectangles exclude, which
+/// would have been discarded, go untraced. So the atlas and every image are bitwise a
+/// traversal's with full traces at every level, under both metrics, on every backend; the
+/// path ends still account for every photon traced (`AdaptiveStats::probes_met_caster`),
+/// the probes trace fewer ray segments and the seed fewer photons.
 #[test]
 fn probe_levels_give_the_full_traversals_frame_bitwise() {
-    let settings = |metric, probes| AdaptiveCausticsSettings {
+    let settings = |metric, probe_levels| AdaptiveCausticsSettings {
         traversal: TraversalSettings {
             metric,
             start_grid: 16,
             error_from_grid: 64,
-            probe_coarse_levels: probes,
+            probe_levels,
             ..AdaptiveCausticsSettings::default().traversal
         },
         ..caustica_conformance::adaptive_over(&map(256))
@@ -239,50 +242,70 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
         for scene_name in ["sphere", "cornell"] {
             let scene = small(scene_name);
             for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
-                let what = format!("{name} / {scene_name} / {metric:?}");
                 let run = |b: &mut dyn Backend, probes| {
                     let t =
                         AdaptiveCaustics::new(b, &scene, settings(metric, probes)).expect("scene");
                     render(b, t)
                 };
-                let (sf, full) = run(b.as_mut(), false);
-                let (sp, probed) = run(b.as_mut(), true);
-                let (af, ap) = (
-                    AdaptiveStats::of(&sf).expect("adaptive stats"),
-                    AdaptiveStats::of(&sp).expect("adaptive stats"),
-                );
-                if let Some(out) = same_bits(&full, &probed) {
-                    panic!("{what}: {out} differs from the full traversal's");
+                let (sf, full) = run(b.as_mut(), ProbeLevels::Traced);
+                let af = AdaptiveStats::of(&sf).expect("adaptive stats");
+                assert_eq!(af.probes_met_caster, 0);
+                assert_eq!(af.levels_seeded, 0);
+                for probes in [ProbeLevels::FirstSegment, ProbeLevels::Bounds] {
+                    let what = format!("{name} / {scene_name} / {metric:?} / {probes:?}");
+                    let (sp, probed) = run(b.as_mut(), probes);
+                    let ap = AdaptiveStats::of(&sp).expect("adaptive stats");
+                    if let Some(out) = same_bits(&full, &probed) {
+                        panic!("{what}: {out} differs from the full traversal's");
+                    }
+                    assert_eq!(sp.stored_flux, sf.stored_flux, "{what}: stored flux");
+                    assert_eq!(sp.photons_stored, sf.photons_stored, "{what}");
+                    assert_eq!(ap.clusters_output, af.clusters_output, "{what}");
+                    assert_eq!(ap.clusters_converged, af.clusters_converged, "{what}");
+                    let d = &sp.discarded;
+                    let ends = ap.photons_traced_stored
+                        + ap.probes_met_caster
+                        + d.no_specular
+                        + d.escaped
+                        + d.negligible_power
+                        + d.bounce_limit;
+                    assert_eq!(
+                        ends,
+                        sp.photons_emitted + sp.photon_splits,
+                        "{what}: path ends"
+                    );
+                    assert!(
+                        sp.photon_rays_traced < sf.photon_rays_traced,
+                        "{what}: {} segments, full traces {}",
+                        sp.photon_rays_traced,
+                        sf.photon_rays_traced
+                    );
+                    if probes == ProbeLevels::FirstSegment {
+                        assert_eq!(ap.photons_per_level, af.photons_per_level, "{what}");
+                        assert!(ap.probes_met_caster > 0, "{what}: no probe met a caster");
+                    } else {
+                        let seeded = ap.levels_seeded as usize;
+                        assert!(seeded > 0 && ap.clusters_seeded > 0, "{what}: no seed");
+                        assert_eq!(ap.probes_met_caster, 0, "{what}");
+                        assert!(ap.photons_per_level[..seeded].iter().all(|&n| n == 0));
+                        for (l, (p, f)) in ap
+                            .photons_per_level
+                            .iter()
+                            .zip(&af.photons_per_level)
+                            .enumerate()
+                        {
+                            assert!(p <= f, "{what}: level {l} traced {p}, full traces {f}");
+                        }
+                        assert!(ap.photons_processed < af.photons_processed, "{what}");
+                    }
+                    eprintln!(
+                        "{what}: {} photons and {} ray segments, full traces {} and {}",
+                        sp.photons_emitted,
+                        sp.photon_rays_traced,
+                        sf.photons_emitted,
+                        sf.photon_rays_traced
+                    );
                 }
-                assert_eq!(sp.stored_flux, sf.stored_flux, "{what}: stored flux");
-                assert_eq!(sp.photons_stored, sf.photons_stored, "{what}");
-                assert_eq!(ap.photons_per_level, af.photons_per_level, "{what}");
-                assert_eq!(ap.clusters_output, af.clusters_output, "{what}");
-                assert_eq!(ap.clusters_converged, af.clusters_converged, "{what}");
-                assert_eq!(af.probes_met_caster, 0, "{what}");
-                assert!(ap.probes_met_caster > 0, "{what}: no probe met a caster");
-                let d = &sp.discarded;
-                let ends = ap.photons_traced_stored
-                    + ap.probes_met_caster
-                    + d.no_specular
-                    + d.escaped
-                    + d.negligible_power
-                    + d.bounce_limit;
-                assert_eq!(
-                    ends,
-                    sp.photons_emitted + sp.photon_splits,
-                    "{what}: path ends"
-                );
-                assert!(
-                    sp.photon_rays_traced < sf.photon_rays_traced,
-                    "{what}: probes traced {} segments, full traces {}",
-                    sp.photon_rays_traced,
-                    sf.photon_rays_traced
-                );
-                eprintln!(
-                    "{what}: ray segments {} with probes, {} with full traces",
-                    sp.photon_rays_traced, sf.photon_rays_traced
-                );
             }
         }
     }

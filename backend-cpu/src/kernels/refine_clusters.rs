@@ -18,7 +18,7 @@ use caustica_core::device::layout::{
 };
 use caustica_core::kernels::RefineClusters;
 use caustica_core::math::photon_clusters::{
-    cluster_entry, cluster_fate, cluster_overlaps_rect, cluster_photon_index, cluster_relevance,
+    cluster_entry, cluster_fate, cluster_overlaps_rects, cluster_photon_index, cluster_relevance,
     cluster_spread, cluster_target, convergence_cell, entry_cluster, entry_spread, live_clusters, slot_met_caster,
     slot_stored,
 };
@@ -167,9 +167,11 @@ pub fn refine_clusters(
                 .iter()
                 .any(|ph| slot_met_caster(ph.flux, ph.position[2]))
                 || (p.relevance == cluster_relevance::BOUNDS
-                    && caster_rects[..p.rect_count as usize]
-                        .iter()
-                        .any(|r| cluster_overlaps_rect(cluster, p.grid_w, *r)));
+                    && cluster_overlaps_rects(
+                        cluster,
+                        p.grid_w,
+                        &caster_rects[..p.rect_count as usize],
+                    ));
             // converged: all four in one square of at most error_texels a side, on one
             // receiver's tile (atlas) or on screen
             let width = if screen {

@@ -563,6 +563,18 @@ typedef struct {
     GpuCamera camera; // 64
 } RefineParams;
 
+// core::device::layout::SeedParams, 32 bytes
+typedef struct {
+    uint grid_w; // 0
+    uint first_x; // 4
+    uint first_y; // 8
+    uint window_w; // 12
+    uint window_h; // 16
+    uint rect_count; // 20
+    uint capacity; // 24
+    uint _pad; // 28
+} SeedParams;
+
 // sizeof of every struct above, in this order (the OpenCL backend's
 // device_struct_sizes; its test compares them with Rust's size_of)
 __kernel void struct_sizes(__global uint* out) {
@@ -593,4 +605,5 @@ __kernel void struct_sizes(__global uint* out) {
     out[24] = sizeof(CorrectionParams);
     out[25] = sizeof(PlanParams);
     out[26] = sizeof(RefineParams);
+    out[27] = sizeof(SeedParams);
 }

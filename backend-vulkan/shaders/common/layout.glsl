@@ -562,3 +562,15 @@ struct RefineParams {
     uint _pad; // 60
     GpuCamera camera; // 64
 };
+
+// core::device::layout::SeedParams, 32 bytes
+struct SeedParams {
+    uint grid_w; // 0
+    uint first_x; // 4
+    uint first_y; // 8
+    uint window_w; // 12
+    uint window_h; // 16
+    uint rect_count; // 20
+    uint capacity; // 24
+    uint _pad; // 28
+};

@@ -475,6 +475,29 @@ pub mod cluster_count {
     pub const WORDS: usize = 8;
 }
 
+/// Parameters of `seed_clusters` (AdaptiveCaustics' bounds seed): the clusters of one
+/// level's grid inside a window, tested against the casters' rectangles.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SeedParams {
+    /// Texels a side of the level's grid (a power of two; clusters are 2x2 texels).
+    pub grid_w: u32,
+    /// The window's first cluster column and row (clusters of the level's grid).
+    pub first_x: u32,
+    /// See `first_x`.
+    pub first_y: u32,
+    /// The window's clusters a row (one thread each).
+    pub window_w: u32,
+    /// The window's rows of clusters.
+    pub window_h: u32,
+    /// Rectangles in `caster_rects` (as `RefineParams::rect_count`).
+    pub rect_count: u32,
+    /// Entries the list holds; appends past it are counted, not written.
+    pub capacity: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: u32,
+}
+
 /// Parameters of `temporal_blend` (Smal 2019, section 24.4.1, Eqs. 10-13): the frame's
 /// camera and the history's, the blend's constants and whether a history exists.
 #[repr(C)]

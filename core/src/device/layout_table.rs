@@ -12,7 +12,8 @@ use super::layout::{
     AtlasParams, AtrousParams, CorrectionParams, DepositParams, DepositTexel, DirectParams,
     GBufferTexel, GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
     IndirectPath, IndirectTraceParams, MapLookupParams, PathSortParams, Photon, PlanParams,
-    RefineParams, RsmParams, RsmPhoton, RsmTexel, SplatParams, TemporalParams, TraceParams,
+    RefineParams, RsmParams, RsmPhoton, RsmTexel, SeedParams, SplatParams, TemporalParams,
+    TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -255,6 +256,9 @@ table! {
         atlas_width, flux_quantum, hit_distance_quantum, level, finest, metric,
         error_from_level, grid_w, first, count, children_capacity, relevance,
         rect_count, deposit_target, error_texels, _pad, camera
+    }
+    SeedParams {
+        grid_w, first_x, first_y, window_w, window_h, rect_count, capacity, _pad
     }
 }
 

@@ -35,6 +35,7 @@ mod refine_clusters;
 mod resolve_caustics;
 mod rsm_importance;
 mod sample_rsm;
+mod seed_clusters;
 mod select_photon_plan;
 mod shading_normal_correction;
 mod sort_indirect_paths;
@@ -61,6 +62,7 @@ pub use refine_clusters::RefineClusters;
 pub use resolve_caustics::ResolveCaustics;
 pub use rsm_importance::RsmImportance;
 pub use sample_rsm::SampleRsm;
+pub use seed_clusters::SeedClusters;
 pub use select_photon_plan::SelectPhotonPlan;
 pub use shading_normal_correction::ShadingNormalCorrection;
 pub use sort_indirect_paths::SortIndirectPaths;
@@ -537,6 +539,7 @@ macro_rules! with_kernels {
             CausticMapLookup => caustic_map_lookup,
             DispatchArgs => dispatch_args,
             RefineClusters => refine_clusters,
+            SeedClusters => seed_clusters,
             RsmImportance => rsm_importance,
             SampleRsm => sample_rsm,
             TraceIndirect => trace_indirect,
@@ -576,6 +579,7 @@ macro_rules! with_shader_kernels {
             caustic_map_lookup,
             dispatch_args,
             refine_clusters,
+            seed_clusters,
             temporal_blend,
             atrous_filter,
             shading_normal_correction,

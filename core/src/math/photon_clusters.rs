@@ -175,6 +175,25 @@ pub fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: [f32; 4]) -> bool 
     x0 <= rect[2] && rect[0] <= x1 && y0 <= rect[3] && rect[1] <= y1
 }
 
+/// The cluster thread `t` of a `seed_clusters` launch tests: row-major over a window
+/// `window_w` clusters wide whose first cluster is column `first_x`, row `first_y` of a
+/// `grid_w` grid (texels a side; clusters are 2x2 texels).
+#[inline]
+pub fn seed_cluster(t: u32, grid_w: u32, first_x: u32, first_y: u32, window_w: u32) -> u32 {
+    let cx = first_x + t % window_w;
+    let cy = first_y + t / window_w;
+    cy * (grid_w / 2) + cx
+}
+
+/// Whether cluster `cluster` of a `grid_w` grid overlaps one of `rects`
+/// ([`cluster_overlaps_rect`]).
+#[inline]
+pub fn cluster_overlaps_rects(cluster: u32, grid_w: u32, rects: &[[f32; 4]]) -> bool {
+    rects
+        .iter()
+        .any(|&r| cluster_overlaps_rect(cluster, grid_w, r))
+}
+
 /// Clusters a traversal pass takes from a list whose length (on the device) is
 /// `list_length`: entries `first ..` of it, at most `bound` (the pass's recorded size).
 /// A list's length may run past its capacity (appends that did not fit are counted, not

@@ -562,3 +562,15 @@ struct RefineParams {
     _pad: u32, // 60
     camera: GpuCamera, // 64
 }
+
+// core::device::layout::SeedParams, 32 bytes
+struct SeedParams {
+    grid_w: u32, // 0
+    first_x: u32, // 4
+    first_y: u32, // 8
+    window_w: u32, // 12
+    window_h: u32, // 16
+    rect_count: u32, // 20
+    capacity: u32, // 24
+    _pad: u32, // 28
+}

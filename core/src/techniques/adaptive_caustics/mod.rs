@@ -34,8 +34,8 @@ pub use settings::{
 };
 pub use stats::AdaptiveStats;
 pub use traversal::{
-    caster_rects, fit_planes, AtlasTarget, DepositTarget, PhotonOptics, ScreenTarget, Traversal,
-    TraversalSettings, EMPTY_RECT,
+    caster_rects, fit_planes, seed_window, AtlasTarget, DepositTarget, PhotonOptics, ProbeLevels,
+    ScreenTarget, Traversal, TraversalSettings, EMPTY_RECT,
 };
 
 use crate::backend::Backend;

@@ -42,12 +42,20 @@ pub struct AdaptiveStats {
     /// byte limit caps the lists): output at their level from four fresh photons each
     /// (counted in `clusters_output` too), so that no photon is lost.
     pub clusters_overflowed: u64,
-    /// Photons of probe levels ([`TraversalSettings::probe_coarse_levels`](super::TraversalSettings))
+    /// Photons of probe levels traced to their first segment
+    /// ([`ProbeLevels::FirstSegment`](super::ProbeLevels))
     /// whose first segment met a caster, where their trace stopped: with
     /// `photons_traced_stored` and the frame's discarded path ends they add up to
     /// `photons_processed` (and the split branches).
     #[serde(default)]
     pub probes_met_caster: u64,
+    /// Probe levels not traced, summed over the planes: the bounds seed listed the next
+    /// level's clusters instead ([`ProbeLevels::Bounds`](super::ProbeLevels)).
+    #[serde(default)]
+    pub levels_seeded: u32,
+    /// Clusters the bounds seed listed (those overlapping a caster's rectangle).
+    #[serde(default)]
+    pub clusters_seeded: u64,
     /// Traversal passes that had clusters (a trace and a refinement of one pass of one
     /// level, or of its converged clusters).
     pub steps: u32,

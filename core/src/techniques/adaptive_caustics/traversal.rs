@@ -32,7 +32,7 @@ use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::launch::DISPATCH_RECORD_WORDS;
 use crate::device::layout::{
     cluster_count, counter, AtlasTileTexel, DepositParams, GpuCamera, Photon, RefineParams,
-    TraceParams,
+    SeedParams, TraceParams,
 };
 use crate::frame::emission::light_view_plane::{LightViewPlane, ViewPlaneProjection};
 use crate::frame::emission::view_planes::ViewPlanes;
@@ -41,8 +41,8 @@ use crate::frame::pipeline::FrameBuilder;
 use crate::frame::stats::FrameStats;
 use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::kernels::{
-    ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, RefineClusters, TracePhotons,
-    TraceVariant,
+    ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, RefineClusters, SeedClusters,
+    TracePhotons, TraceVariant,
 };
 use crate::math::geometry::Aabb;
 use crate::math::photon_clusters::{
@@ -107,6 +107,28 @@ pub const LIST_BYTES_PER_ENTRY: u64 = 4;
 /// level's clusters, so that a frame records a bounded number of dispatches.
 pub const MAX_PASSES_PER_LEVEL: u64 = 64;
 
+/// How the traversal judges its probe levels ([`TraversalSettings::is_probe_level`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProbeLevels {
+    /// Every photon traced to its path's end, as at every other level (Wyman 2009).
+    Traced,
+    /// Each photon traced to its first surface only: whether a photon met a caster is
+    /// decided by its first segment
+    /// ([`photon_met_caster`](crate::math::photon_clusters::photon_met_caster)), so a
+    /// level costs one segment's traversal instead of its longest path's (a glass ball's
+    /// internal reflections).
+    FirstSegment,
+    /// Not traced at all where the casters' rectangles decide alone (the `bounds`
+    /// relevance, whole lists): one `seed_clusters` launch lists the first judged level's
+    /// clusters that overlap a caster's rectangle, which are exactly those the probe
+    /// levels would pass down to be kept ([`crate::kernels::SeedClusters`]). Elsewhere
+    /// (the `photons` relevance, or lists capped by the byte limit) as `first_segment`.
+    /// The default.
+    #[default]
+    Bounds,
+}
+
 /// The traversal's parameters (`traversal` in AdaptiveCaustics' settings).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -139,14 +161,11 @@ pub struct TraversalSettings {
     /// it; the result is bitwise the same for any value. The screen deposit also holds a
     /// list of the batch's output photons (another 128 bytes per cluster).
     pub max_traversal_bytes: u64,
-    /// Trace the photons of *probe levels* to their first surface only: the levels whose
-    /// clusters are judged by whether a photon met a caster alone (below the finest, and
-    /// below `error_from_grid` with the error metric; [`TraversalSettings::is_probe_level`]).
-    /// Whether a photon met a caster is decided by its first segment
-    /// ([`photon_met_caster`](crate::math::photon_clusters::photon_met_caster)), so the
-    /// atlas is bitwise the same either way; a level then costs one segment's traversal
-    /// instead of its longest path's (a glass ball's internal reflections). Default true.
-    pub probe_coarse_levels: bool,
+    /// How the *probe levels* are judged: the levels whose clusters are only refined or
+    /// discarded, by whether a photon met a caster (below the finest, and below
+    /// `error_from_grid` with the error metric; [`TraversalSettings::is_probe_level`]).
+    /// Every choice gives bitwise the same atlas; see [`ProbeLevels`].
+    pub probe_levels: ProbeLevels,
 }
 
 impl Default for TraversalSettings {
@@ -158,7 +177,7 @@ impl Default for TraversalSettings {
             error_from_grid: 512,
             error_texels: 1,
             max_traversal_bytes: 64 << 20,
-            probe_coarse_levels: true,
+            probe_levels: ProbeLevels::Bounds,
         }
     }
 }
@@ -194,6 +213,22 @@ impl TraversalSettings {
         let judged_by_error =
             self.metric == AdaptiveMetric::Error && level >= self.error_from_level();
         level < finest && !judged_by_error
+    }
+
+    /// The level from which the traversal traces, when the bounds seed stands for the
+    /// probe levels above it ([`ProbeLevels::Bounds`]) in a pyramid down to `finest`
+    /// whose lists are whole (`lists_capped` false): the first level that is not a probe
+    /// level, if it is not the start grid. `None`: every level is traced.
+    pub fn seed_level(&self, finest: u32, lists_capped: bool) -> Option<u32> {
+        if self.probe_levels != ProbeLevels::Bounds
+            || self.relevance != ClusterRelevance::Bounds
+            || lists_capped
+        {
+            return None;
+        }
+        (0..=finest)
+            .find(|&l| !self.is_probe_level(l, finest))
+            .filter(|&l| l > 0)
     }
 
     /// Clusters of the start grid.
@@ -425,6 +460,9 @@ struct LevelRead {
     capacity: u64,
     /// Capacity of the next level's list (0 at the plane's finest).
     children_capacity: u64,
+    /// A probe level the bounds seed stood for (nothing traced; the last one's `CHILDREN`
+    /// word holds the seeded list's length).
+    seeded: bool,
 }
 
 /// What a frame's traversal reads back at the frame's end and how it becomes
@@ -469,6 +507,12 @@ impl FrameEnd for TraversalReadback {
                 let (level, read) = l;
                 let c = words(read.counts);
                 let w = |i: usize| c.get(i).copied().unwrap_or(0) as u64;
+                if read.seeded {
+                    a.levels_seeded += 1;
+                    a.clusters_seeded += w(cluster_count::CHILDREN);
+                    length = w(cluster_count::CHILDREN);
+                    continue;
+                }
                 let taken = length.min(read.capacity);
                 let resampled = w(cluster_count::CONVERGED) + w(cluster_count::OVERFLOW);
                 let children = w(cluster_count::CHILDREN).min(read.children_capacity);
@@ -674,9 +718,22 @@ impl Traversal {
                 .rec()
                 .update(self.rects, &rects, "adaptive caster rectangles")?;
             let mut levels = Vec::new();
+            let seed_level = s.seed_level(finest, self.sizes.lists_capped);
             for level in 0..=finest {
                 let counts = self.counts[k][level as usize];
                 frame.rec().clear(counts);
+                if let Some(p) = seed_level.filter(|&p| level < p) {
+                    levels.push(LevelRead {
+                        counts: frame.read_at_end(counts),
+                        capacity: 0,
+                        children_capacity: 0,
+                        seeded: true,
+                    });
+                    if level + 1 == p {
+                        self.record_seed(frame, p, counts, &rects, &mut read);
+                    }
+                    continue;
+                }
                 let (list, length, capacity) = match level {
                     0 => (self.level0, self.level0_length, s.start_clusters()),
                     l => (
@@ -695,6 +752,7 @@ impl Traversal {
                     counts: frame.read_at_end(counts),
                     capacity,
                     children_capacity: children_capacity as u64,
+                    seeded: false,
                 });
                 let c = self.sizes.pass_clusters;
                 // converged clusters (the error metric, from its level) and overflowed
@@ -702,7 +760,8 @@ impl Traversal {
                 // pass is recorded where neither can occur
                 let converges = s.metric == AdaptiveMetric::Error && level >= s.error_from_level();
                 let resample = level < finest && (converges || self.sizes.lists_capped);
-                let probe = s.probe_coarse_levels && s.is_probe_level(level, finest);
+                let probe =
+                    s.probe_levels != ProbeLevels::Traced && s.is_probe_level(level, finest);
                 for (pass, &(bound, rows)) in self.tables[level as usize].iter().enumerate() {
                     let step = PassArgs {
                         level,
@@ -766,6 +825,45 @@ impl Traversal {
         read.probe_counters = frame.read_at_end(self.probe_counters);
         frame.end_read(EndRead::Own(std::sync::Arc::new(read)));
         Ok(())
+    }
+}
+
+impl Traversal {
+    /// Records the bounds seed of level `level`'s list ([`ProbeLevels::Bounds`]): its
+    /// length is word `CHILDREN` of `length` (the level above's counts, cleared), its
+    /// clusters those of the window of `rects` ([`seed_window`]) that overlap one; nothing
+    /// is launched when no rectangle reaches the plane.
+    fn record_seed(
+        &self,
+        frame: &mut FrameBuilder,
+        level: u32,
+        length: Buf<u32>,
+        rects: &[[f32; 4]],
+        read: &mut TraversalReadback,
+    ) {
+        let grid_w = self.settings.start_grid << level;
+        let rects = &rects[..self.caster_boxes.len().min(rects.len())];
+        let [first_x, first_y, window_w, window_h] = seed_window(rects, grid_w);
+        if window_w == 0 || window_h == 0 {
+            return;
+        }
+        read.kernels
+            .push((frame.kernel_index(), level - 1, "seed_clusters"));
+        frame.rec().kernel(SeedClusters {
+            params: SeedParams {
+                grid_w,
+                first_x,
+                first_y,
+                window_w,
+                window_h,
+                rect_count: rects.len() as u32,
+                capacity: self.sizes.list_capacity[level as usize - 1],
+                _pad: 0,
+            },
+            caster_rects: self.rects,
+            list: self.lists[level as usize - 1],
+            list_length: length,
+        });
     }
 }
 
@@ -987,6 +1085,48 @@ pub fn fit_planes(emission: &mut ViewPlanes, s: &TraversalSettings, dispersion_g
     };
     emission.flux_quantum =
         ViewPlanes::quantum_for(&emission.planes, dispersion_gain, coarsest_output);
+}
+
+/// The window `[first_x, first_y, width, height]` (clusters) of a `grid_w` grid that
+/// holds every cluster overlapping one of `rects`
+/// ([`cluster_overlaps_rect`](crate::math::photon_clusters::cluster_overlaps_rect)), for
+/// `seed_clusters`: the rectangles' bounds in cluster units, computed in f64 and widened
+/// by a cluster on every side (the kernel's own test decides; the window only saves
+/// threads). Empty (`width` 0) when no rectangle reaches the plane; the whole grid when a
+/// bound is not a number.
+pub fn seed_window(rects: &[[f32; 4]], grid_w: u32) -> [u32; 4] {
+    let last = ((grid_w / 2).max(1) - 1) as f64;
+    // a cluster (cx, cy) spans x in [cx, cx + 1] * 4 / grid_w - 1 and y in
+    // 1 - [cy + 1, cy] * 4 / grid_w; it overlaps (x0, y0, x1, y1) when its x-span starts
+    // at or before x1 and ends at or after x0 (and alike in y), whatever the corners' order
+    let scale = grid_w as f64 / 4.0;
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for r in rects {
+        let r = r.map(f64::from);
+        if r.iter().any(|x| x.is_nan()) {
+            return [0, 0, last as u32 + 1, last as u32 + 1];
+        }
+        let x = (
+            ((r[0] + 1.0) * scale - 1.0).floor() - 1.0,
+            ((r[2] + 1.0) * scale).ceil() + 1.0,
+        );
+        let y = (
+            ((1.0 - r[3]) * scale - 1.0).floor() - 1.0,
+            ((1.0 - r[1]) * scale).ceil() + 1.0,
+        );
+        let inside = |(a, b): (f64, f64)| a <= b && b >= 0.0 && a <= last;
+        if inside(x) && inside(y) {
+            lo = [lo[0].min(x.0), lo[1].min(y.0)];
+            hi = [hi[0].max(x.1), hi[1].max(y.1)];
+        }
+    }
+    if lo[0] > hi[0] {
+        return [0, 0, 0, 0];
+    }
+    let clamp = |v: f64| v.clamp(0.0, last) as u32;
+    let (x0, y0, x1, y1) = (clamp(lo[0]), clamp(lo[1]), clamp(hi[0]), clamp(hi[1]));
+    [x0, y0, x1 - x0 + 1, y1 - y0 + 1]
 }
 
 /// A rectangle no cluster overlaps.
