@@ -106,7 +106,7 @@ caustic_map() {
         CAUSTICA_BENCH_GATHERS="${CAUSTICA_BENCH_GATHERS:-box,density}" ./caustic_map_frame --bench
 }
 adaptive_checks() {
-    check 200 ./cross_backend adaptive; check 240 ./adaptive_caustics_frames --nocapture
+    check 200 ./cross_backend adaptive; check 60 ./cluster_seed; check 240 ./adaptive_caustics_frames --nocapture
     run timeout 150 env CAUSTICA_REQUIRE_BACKENDS=$ALL STIFF_CASES=small-caster,grazing-caster,light-inside-casters \
         ./stiff_table "$OUT/stiff-adaptive.md"
 }
@@ -136,7 +136,8 @@ dynamic() {
 }
 traversal() {
     if [ -z "${TRAVERSAL_TIMES_ONLY:-}" ]; then
-        check 120 ./indirect_launches; check 240 ./submitted_frames; check 300 ./adaptive_caustics_frames
+        check 120 ./indirect_launches; check 60 ./cluster_seed; check 240 ./submitted_frames
+        check 300 ./adaptive_caustics_frames
     fi
     warm_up
     # each start grid (TRAVERSAL_START_GRIDS) a run; each level's time by kernel
