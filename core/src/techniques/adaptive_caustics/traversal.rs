@@ -213,9 +213,12 @@ impl TraversalSettings {
     /// and below the error metric's first level), so only whether a photon met a caster
     /// counts there.
     pub fn is_probe_level(&self, level: u32, finest: u32) -> bool {
-        let judged_by_error =
-            self.metric == AdaptiveMetric::Error && level >= self.error_from_level();
-        level < finest && !judged_by_error
+        level < finest && !self.converges_at(level)
+    }
+
+    /// Whether clusters of `level` can converge (the error metric, from its first level).
+    pub fn converges_at(&self, level: u32) -> bool {
+        self.metric == AdaptiveMetric::Error && level >= self.error_from_level()
     }
 
     /// The level from which the traversal traces, when the bounds seed stands for the
@@ -761,8 +764,7 @@ impl Traversal {
                 // converged clusters (the error metric, from its level) and overflowed
                 // ones (capped lists) are output at their level from fresh photons; no
                 // pass is recorded where neither can occur
-                let converges = s.metric == AdaptiveMetric::Error && level >= s.error_from_level();
-                let resample = level < finest && (converges || self.sizes.lists_capped);
+                let resample = level < finest && (s.converges_at(level) || self.sizes.lists_capped);
                 let probe =
                     s.probe_levels != ProbeLevels::Traced && s.is_probe_level(level, finest);
                 for (pass, &(bound, rows)) in self.tables[level as usize].iter().enumerate() {
