@@ -21,7 +21,7 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &SeedClusters) -> Result<(), BackendE
         .to_vec();
     let threads = p.window_w as u64 * p.window_h as u64;
     for t in 0..threads as u32 {
-        let cluster = seed_cluster(t, p.grid_w, p.first_x, p.first_y, p.window_w);
+        let cluster = seed_cluster(t, p.grid_w, (p.first_x, p.first_y), (p.window_w, p.window_h));
         if cluster_overlaps_rects(cluster, p.grid_w, &rects) {
             let at = length[0];
             length[0] = at.wrapping_add(1);

@@ -212,6 +212,7 @@
 #define MAX_ERROR_TEXELS 4u
 #define CLUSTER_ID_MASK 0x3fffffffu
 #define CONVERGENCE_CELLS 16u
+#define SEED_TILE 4u
 
 // core::math::rsm
 #define RSM_TEXEL_NONE 0u

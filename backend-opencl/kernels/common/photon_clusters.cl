@@ -80,10 +80,3 @@ inline bool cluster_overlaps_rect(uint cluster, uint grid_w, float4 rect) {
     float y0 = 1.0f - (float)(2u * cy + 2u) * step;
     return x0 <= rect.z && rect.x <= x1 && y0 <= rect.w && rect.y <= y1;
 }
-
-// core::math::photon_clusters::seed_cluster.
-inline uint seed_cluster(uint t, uint grid_w, uint first_x, uint first_y, uint window_w) {
-    uint cx = first_x + t % window_w;
-    uint cy = first_y + t / window_w;
-    return cy * (grid_w / 2u) + cx;
-}

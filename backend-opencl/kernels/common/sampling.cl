@@ -1,16 +1,21 @@
 // Mirror of core/src/sampling.rs: equal-area warps of the unit square.
 
+// core::math::sampling::tiled_index.
+inline uint tiled_index(uint g, uint grid_w, uint grid_h, uint tile) {
+    if (grid_w == 0u || grid_h == 0u || tile == 0u) return g;
+    uint band_y = g / grid_w / tile * tile;
+    uint band_h = min(tile, grid_h - band_y);
+    uint r = g - band_y * grid_w;
+    uint tile_x = r / (tile * band_h) * tile;
+    uint tile_w = min(tile, grid_w - tile_x);
+    uint q = r - tile_x * band_h;
+    return (band_y + q / tile_w) * grid_w + tile_x + q % tile_w;
+}
+
 // core::math::sampling::tiled_photon_index: the row-major grid index of the g-th photon
 // in tile order (8 x 8 tiles, bands of tiles left to right; a warp's photons in one block).
 inline uint tiled_photon_index(uint g, uint grid_w, uint grid_h) {
-    if (grid_w == 0u || grid_h == 0u) return g;
-    uint band_y = g / grid_w / PHOTON_TILE * PHOTON_TILE;
-    uint band_h = min(PHOTON_TILE, grid_h - band_y);
-    uint r = g - band_y * grid_w;
-    uint tile_x = r / (PHOTON_TILE * band_h) * PHOTON_TILE;
-    uint tile_w = min(PHOTON_TILE, grid_w - tile_x);
-    uint q = r - tile_x * band_h;
-    return (band_y + q / tile_w) * grid_w + tile_x + q % tile_w;
+    return tiled_index(g, grid_w, grid_h, PHOTON_TILE);
 }
 
 inline float2 stratified_cell(uint ix, uint iy, uint grid_w, uint grid_h, float2 jitter) {

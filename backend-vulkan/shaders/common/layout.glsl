@@ -212,6 +212,7 @@ const uint CLUSTER_TARGET_SCREEN = 1u;
 const uint MAX_ERROR_TEXELS = 4u;
 const uint CLUSTER_ID_MASK = 0x3fffffffu;
 const uint CONVERGENCE_CELLS = 16u;
+const uint SEED_TILE = 4u;
 
 // core::math::rsm
 const uint RSM_TEXEL_NONE = 0u;

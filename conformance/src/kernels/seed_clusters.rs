@@ -55,7 +55,7 @@ pub fn run_seed_clusters(
 pub fn seeded_clusters(params: &SeedParams, rects: &[[f32; 4]]) -> Vec<u32> {
     let p = params;
     (0..p.window_w * p.window_h)
-        .map(|t| seed_cluster(t, p.grid_w, p.first_x, p.first_y, p.window_w))
+        .map(|t| seed_cluster(t, p.grid_w, (p.first_x, p.first_y), (p.window_w, p.window_h)))
         .filter(|&c| cluster_overlaps_rects(c, p.grid_w, rects))
         .collect()
 }

@@ -23,7 +23,7 @@ use crate::math::optics::ior_model;
 use crate::math::path_sort::{path_sort_phase, PATH_SORT_BITS, PATH_SORT_BUCKETS};
 use crate::math::photon_clusters::{
     cluster_fate, cluster_metric, cluster_relevance, cluster_target, CLUSTER_ID_MASK,
-    CONVERGENCE_CELLS, MAX_ERROR_TEXELS, NO_TRIANGLE,
+    CONVERGENCE_CELLS, MAX_ERROR_TEXELS, NO_TRIANGLE, SEED_TILE,
 };
 use crate::math::rsm::{rsm_sampling, rsm_texel_kind};
 use crate::math::spectrum::{self, dispersion_mode};
@@ -345,6 +345,7 @@ pub fn groups() -> Vec<ConstGroup> {
                     named!("MAX_ERROR_TEXELS", U32, MAX_ERROR_TEXELS),
                     named!("CLUSTER_ID_MASK", U32, CLUSTER_ID_MASK),
                     named!("CONVERGENCE_CELLS", U32, CONVERGENCE_CELLS),
+                    named!("SEED_TILE", U32, SEED_TILE),
                 ],
             ]
             .concat(),

@@ -175,13 +175,26 @@ pub fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: [f32; 4]) -> bool 
     x0 <= rect[2] && rect[0] <= x1 && y0 <= rect[3] && rect[1] <= y1
 }
 
-/// The cluster thread `t` of a `seed_clusters` launch tests: row-major over a window
-/// `window_w` clusters wide whose first cluster is column `first_x`, row `first_y` of a
-/// `grid_w` grid (texels a side; clusters are 2x2 texels).
+/// Side of the tiles (clusters) in which `seed_clusters` takes its window: the seeded list
+/// holds a window's clusters tile by tile, so that the 8 clusters of a trace warp (32
+/// threads, four photons a cluster) are a 4 x 2 block of clusters, 8 x 4 photons, the
+/// shape of the dense trace's warps ([`PHOTON_TILE`](crate::math::sampling::PHOTON_TILE)).
+pub const SEED_TILE: u32 = 4;
+
+/// The cluster thread `t` of a `seed_clusters` launch tests: the `t`-th of a window
+/// `window_w` x `window_h` clusters from cluster column `first_x`, row `first_y` of a
+/// `grid_w` grid (texels a side; clusters are 2x2 texels), in [`SEED_TILE`] tile order
+/// ([`tiled_index`](crate::math::sampling::tiled_index)).
 #[inline]
-pub fn seed_cluster(t: u32, grid_w: u32, first_x: u32, first_y: u32, window_w: u32) -> u32 {
-    let cx = first_x + t % window_w;
-    let cy = first_y + t / window_w;
+pub fn seed_cluster(
+    t: u32,
+    grid_w: u32,
+    (first_x, first_y): (u32, u32),
+    (window_w, window_h): (u32, u32),
+) -> u32 {
+    let i = crate::math::sampling::tiled_index(t, window_w, window_h, SEED_TILE);
+    let cx = first_x + i % window_w;
+    let cy = first_y + i / window_w;
     cy * (grid_w / 2) + cx
 }
 

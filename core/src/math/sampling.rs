@@ -20,17 +20,25 @@ pub const PHOTON_TILE: u32 = 8;
 /// `cornell` (OpenCL, 2048^2 photons).
 #[inline]
 pub fn tiled_photon_index(g: u32, grid_w: u32, grid_h: u32) -> u32 {
-    if grid_w == 0 || grid_h == 0 {
+    tiled_index(g, grid_w, grid_h, PHOTON_TILE)
+}
+
+/// [`tiled_photon_index`] with tiles `tile` cells a side (at least 1): the row-major
+/// index of the `g`-th cell of a `grid_w` x `grid_h` grid taken in bands `tile` rows
+/// high, each band tile by tile, each tile row by row. A bijection of
+/// `0 .. grid_w * grid_h` onto itself.
+#[inline]
+pub fn tiled_index(g: u32, grid_w: u32, grid_h: u32, tile: u32) -> u32 {
+    if grid_w == 0 || grid_h == 0 || tile == 0 {
         return g;
     }
     // every product below is at most g (no overflow for any u32 grid)
-    let band = g / grid_w / PHOTON_TILE;
-    let band_y = band * PHOTON_TILE;
-    let band_h = PHOTON_TILE.min(grid_h - band_y);
+    let band = g / grid_w / tile;
+    let band_y = band * tile;
+    let band_h = tile.min(grid_h - band_y);
     let r = g - band_y * grid_w;
-    let tile = r / (PHOTON_TILE * band_h);
-    let tile_x = tile * PHOTON_TILE;
-    let tile_w = PHOTON_TILE.min(grid_w - tile_x);
+    let tile_x = r / (tile * band_h) * tile;
+    let tile_w = tile.min(grid_w - tile_x);
     let q = r - tile_x * band_h;
     (band_y + q / tile_w) * grid_w + tile_x + q % tile_w
 }
@@ -123,6 +131,17 @@ mod tests {
     /// Tile order is a bijection of the grid's indices for any grid shape, including
     /// partial tiles and bands, and keeps each 64 consecutive photons of a full tile in
     /// one 8 x 8 block.
+    #[test]
+    fn tiled_index_is_a_bijection_for_any_tile() {
+        for tile in [1, 2, 3, 4, 8] {
+            for (w, h) in [(1, 1), (5, 3), (4, 4), (9, 17), (16, 6)] {
+                let mut seen: Vec<u32> = (0..w * h).map(|g| tiled_index(g, w, h, tile)).collect();
+                seen.sort_unstable();
+                assert_eq!(seen, (0..w * h).collect::<Vec<_>>(), "{w}x{h}, tile {tile}");
+            }
+        }
+    }
+
     #[test]
     fn tiled_photon_index_is_a_bijection_with_8x8_tiles() {
         for (w, h) in [

@@ -212,6 +212,7 @@ const CLUSTER_TARGET_SCREEN: u32 = 1u;
 const MAX_ERROR_TEXELS: u32 = 4u;
 const CLUSTER_ID_MASK: u32 = 0x3fffffffu;
 const CONVERGENCE_CELLS: u32 = 16u;
+const SEED_TILE: u32 = 4u;
 
 // core::math::rsm
 const RSM_TEXEL_NONE: u32 = 0u;

@@ -93,10 +93,3 @@ fn cluster_overlaps_rect(cluster: u32, grid_w: u32, rect: vec4<f32>) -> bool {
     let y0 = 1.0f - f32(2u * cy + 2u) * step;
     return x0 <= rect.z && rect.x <= x1 && y0 <= rect.w && rect.y <= y1;
 }
-
-// core::math::photon_clusters::seed_cluster.
-fn seed_cluster(t: u32, grid_w: u32, first_x: u32, first_y: u32, window_w: u32) -> u32 {
-    let cx = first_x + t % window_w;
-    let cy = first_y + t / window_w;
-    return cy * (grid_w / 2u) + cx;
-}

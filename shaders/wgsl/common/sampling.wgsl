@@ -4,14 +4,19 @@
 // core::math::sampling::tiled_photon_index: the row-major grid index of the g-th photon
 // in tile order (8 x 8 tiles, bands of tiles left to right; a warp's photons in one block).
 fn tiled_photon_index(g: u32, grid_w: u32, grid_h: u32) -> u32 {
-    if (grid_w == 0u || grid_h == 0u) {
+    return tiled_index(g, grid_w, grid_h, PHOTON_TILE);
+}
+
+// core::math::sampling::tiled_index.
+fn tiled_index(g: u32, grid_w: u32, grid_h: u32, tile: u32) -> u32 {
+    if (grid_w == 0u || grid_h == 0u || tile == 0u) {
         return g;
     }
-    let band_y = g / grid_w / PHOTON_TILE * PHOTON_TILE;
-    let band_h = min(PHOTON_TILE, grid_h - band_y);
+    let band_y = g / grid_w / tile * tile;
+    let band_h = min(tile, grid_h - band_y);
     let r = g - band_y * grid_w;
-    let tile_x = r / (PHOTON_TILE * band_h) * PHOTON_TILE;
-    let tile_w = min(PHOTON_TILE, grid_w - tile_x);
+    let tile_x = r / (tile * band_h) * tile;
+    let tile_w = min(tile, grid_w - tile_x);
     let q = r - tile_x * band_h;
     return (band_y + q / tile_w) * grid_w + tile_x + q % tile_w;
 }
