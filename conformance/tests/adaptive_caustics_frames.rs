@@ -223,7 +223,8 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
 /// not traced at all (`ProbeLevels::Bounds`, the casters' rectangles seed the first judged
 /// level) the same clusters are output, and only clusters the rectangles exclude, which
 /// would have been discarded, go untraced. So the atlas and every image are bitwise a
-/// traversal's with full traces at every level, under both metrics, on every backend; the
+/// traversal's with full traces at every level, under both metrics, on every backend (and
+/// the screen target's raw caustics with the seed); the
 /// path ends still account for every photon traced (`AdaptiveStats::probes_met_caster`),
 /// the probes trace fewer ray segments and the seed fewer photons.
 #[test]
@@ -308,6 +309,31 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
                 }
             }
         }
+        // the screen target (Sspm's photon map) takes the same clusters' photons
+        let scene = small("sphere");
+        let raw = |b: &mut dyn Backend, probes| {
+            let mut t = AdaptiveCaustics::new(
+                b,
+                &scene,
+                on_screen(settings(AdaptiveMetric::Level, probes)),
+            )
+            .expect("screen target");
+            let s = t.frame(b, &mut |_| {}).expect("frame");
+            let image = t.read_output(b, Output::RawCaustics).expect("raw caustics");
+            t.free(b).expect("free");
+            (s, image)
+        };
+        let (sf, full) = raw(b.as_mut(), ProbeLevels::Traced);
+        let (ss, seeded) = raw(b.as_mut(), ProbeLevels::Bounds);
+        assert!(AdaptiveStats::of(&ss).is_some_and(|a| a.levels_seeded > 0));
+        assert_eq!(
+            ss.stored_flux, sf.stored_flux,
+            "{name} / screen: stored flux"
+        );
+        assert!(
+            same_bits(&[full], &[seeded]).is_none(),
+            "{name} / screen: raw caustics differ from the full traversal's"
+        );
     }
 }
 
