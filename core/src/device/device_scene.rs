@@ -12,7 +12,7 @@ use crate::device::caster_spheres::{placed_ball, CasterSpheres};
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
 };
-use crate::math::geometry::bounding_sphere;
+use crate::math::geometry::{bounding_sphere, AabbA};
 use crate::math::optics::ior_model;
 use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
@@ -340,16 +340,16 @@ impl SceneInstances {
 /// [`placement`]). Also returns the box of the world positions, grown in the same pass.
 pub fn world_vertices(t: &Transform, local: &[GpuVertex]) -> (Vec<GpuVertex>, Aabb) {
     let place = placement(t);
-    let mut b = Aabb::EMPTY;
+    let mut b = AabbA::EMPTY;
     let world = local
         .iter()
         .map(|v| {
             let w = place(v);
-            b.grow(Vec3::from(w.position));
+            b.grow(Vec3A::from(w.position));
             w
         })
         .collect();
-    (world, b)
+    (world, b.aabb())
 }
 
 /// Where `t` places an object-space vertex: its position through `world_from_object`, its
@@ -386,7 +386,7 @@ pub fn placed_vertices(
     unused: &[u32],
 ) -> (Vec<GpuVertex>, Aabb, Aabb) {
     let place = placement(t);
-    let mut used = Aabb::EMPTY;
+    let mut used = AabbA::EMPTY;
     let mut world: Vec<GpuVertex> = Vec::with_capacity(local.len());
     let mut start = 0;
     for end in unused
@@ -398,7 +398,7 @@ pub fn placed_vertices(
         if start <= end {
             world.extend(local[start..end].iter().map(|v| {
                 let w = place(v);
-                used.grow(Vec3::from(w.position));
+                used.grow(Vec3A::from(w.position));
                 w
             }));
         }
@@ -407,6 +407,7 @@ pub fn placed_vertices(
         }
         start = end + 1;
     }
+    let used = used.aabb();
     if unused.is_empty() {
         return (world, used, used);
     }
@@ -418,10 +419,11 @@ pub fn placed_vertices(
     }
     let zero = |v: Vec3| v.cmpeq(Vec3::ZERO).any();
     if zero(all.min) || zero(all.max) {
-        all = Aabb::EMPTY;
+        let mut b = AabbA::EMPTY;
         for w in &world {
-            all.grow(Vec3::from(w.position));
+            b.grow(Vec3A::from(w.position));
         }
+        all = b.aabb();
     }
     (world, all, used)
 }
