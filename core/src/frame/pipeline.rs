@@ -23,7 +23,7 @@ use std::time::Instant;
 
 /// What the host changed before it asks the technique to follow.
 #[derive(Clone, Copy, Debug)]
-pub enum Change<'a> {
+pub enum Change {
     /// The camera moved at the same image size.
     Camera,
     /// The camera moved to a new image size: the host's camera images are made anew; a
@@ -34,8 +34,6 @@ pub enum Change<'a> {
     /// Instances moved or one deformed; `receivers_moved` says whether a receiver of the
     /// atlas moved with them.
     Instances {
-        /// The update written into the scene.
-        update: &'a InstanceUpdate,
         /// A receiver's triangles moved ([`FrameHost::receivers`]).
         receivers_moved: bool,
     },
@@ -558,11 +556,8 @@ impl<P: Pipeline> Hosted<P> {
         // the moved levels (cheap to copy: their vertices and triangles are shared), from
         // which the move back is made if the technique cannot follow
         let mut after = instances.clone();
-        let receivers_moved = self.host.apply_instances(model, instances, &u)?;
-        let change = Change::Instances {
-            update: &u,
-            receivers_moved,
-        };
+        let receivers_moved = self.host.apply_instances(model, instances, u)?;
+        let change = Change::Instances { receivers_moved };
         self.follow(backend, change, state, move || {
             Ok(Some(InstanceUpdate::Moved(after.move_instances(&back)?)))
         })
@@ -587,13 +582,10 @@ impl<P: Pipeline> Hosted<P> {
         let state = self.host.state();
         let receivers_moved = self
             .host
-            .apply_instances(d.model, d.instances.clone(), &d.update)?;
+            .apply_instances(d.model, d.instances.clone(), d.update)?;
         let mut after = d.instances;
         let before = d.before;
-        let change = Change::Instances {
-            update: &d.update,
-            receivers_moved,
-        };
+        let change = Change::Instances { receivers_moved };
         self.follow(backend, change, state, move || {
             Ok(Some(InstanceUpdate::Deformed(
                 after.deform_instance(object, before)?,
