@@ -337,7 +337,7 @@ impl SceneInstances {
 
 /// An instance's world vertices: positions through `world_from_object`, normals through
 /// its inverse transpose, renormalised (the one function a build and a move both use:
-/// [`placement`]). Also returns the box of the world positions, grown in the same pass.
+/// `placement`). Also returns the box of the world positions, grown in the same pass.
 pub fn world_vertices(t: &Transform, local: &[GpuVertex]) -> (Vec<GpuVertex>, Aabb) {
     let place = placement(t);
     let mut b = AabbA::EMPTY;
@@ -372,7 +372,7 @@ fn placement(t: &Transform) -> impl Fn(&GpuVertex) -> GpuVertex {
 /// An instance's world vertices as [`world_vertices`] places them, with the box of all of
 /// them and the box of those its triangles use, in one pass over the vertices (`unused`:
 /// the vertices no triangle uses, as indices into `local`, ascending). Bitwise the boxes
-/// [`world_vertices`] and [`triangle_bounds`] give: the used box grows over the same
+/// [`world_vertices`] and `triangle_bounds` give: the used box grows over the same
 /// vertices in the same order; the whole box is the used one grown by the unused
 /// vertices, whose bounds have the values of a box grown over every vertex in order (a
 /// bound is an extreme value), so the same bits unless a bound is zero (the one value

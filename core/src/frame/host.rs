@@ -565,8 +565,9 @@ impl FrameHost {
 
     /// Applies an instance update already made to `instances` (a copy of the host's) for
     /// `model`, the scene after it: its writes go with the next frame, and the geometry
-    /// (bounds, caster balls and boxes, receivers' triangles) follows. Returns whether a
-    /// receiver of the atlas moved.
+    /// (bounds, caster balls and boxes, receivers' triangles) follows; the update's
+    /// vertices become the writes' data without a copy. Returns whether a receiver of the
+    /// atlas moved. On an error (checked first) nothing changes.
     pub fn apply_instances(
         &mut self,
         model: Scene,
