@@ -24,6 +24,7 @@ Sections:
   dynamic      moving lights and instances, deformations, the non-blocking loop (frame_loop)
   traversal    indirect launches checked, AdaptiveCaustics' device traversal timed, host waits
                (TRAVERSAL_TIMES_ONLY=1 skips the checks; TRAVERSAL_START_GRIDS="64 16")
+  update       an update's host time: update_cost (Vulkan, no frames), frame_loop 1920x1080
   hang         loops the parallel conformance suite; a hung run's threads are recorded
   experiment   kernel variants timed without a rebuild (EXP_* below, CONTRIBUTING.md)
 
@@ -36,7 +37,7 @@ CAUSTICA_SKIP_BACKENDS and CAUSTICA_SERIALIZE_DRIVERS pass through to the suite.
 EOF
 }
 case "${1:-}" in ""|-h|--help) usage; exit 0 ;; esac
-SECTIONS="suite frames sspm caustic-map adaptive photon-gi dispersion dynamic traversal hang experiment"
+SECTIONS="suite frames sspm caustic-map adaptive photon-gi dispersion dynamic traversal update hang experiment"
 for s in "$@"; do case " --build $SECTIONS " in *" $s "*) ;; *) echo "unknown section '$s'" >&2; exit 2 ;; esac; done
 
 # The functions a section runs: its parts' (SUITE_PARTS, ADAPTIVE_PARTS) or its own.
@@ -147,6 +148,7 @@ traversal() {
     done
     run timeout 90 ./frame_loop 1920x1080 2048 60
 }
+update() { run timeout 60 ./update_cost vulkan 200; run timeout 90 ./frame_loop 1920x1080 2048 60; }
 hang() {
     # elfutils' eu-stack from .devbin (the device image has no gdb) names a hung thread's calls
     for f in "$B"/{elfutils,libdw1,libelf1,libasm1}_*.deb; do [ -f "$f" ] && dpkg -x "$f" /tmp/eu; done
@@ -219,7 +221,7 @@ if [ "$1" = "--build" ]; then
     exe() { grep -o '"executable":"[^"]*/'"$1"'-[^"]*"' | tail -n 1 | cut -d'"' -f4; }
     for b in $bins; do
         case $b in
-        embed_*|frame_loop|*_table|backend_diff) cargo build --release --example "$b"; f=$T/examples/$b ;;
+        embed_*|frame_loop|update_cost|*_table|backend_diff) cargo build --release --example "$b"; f=$T/examples/$b ;;
         *_frame) f=$(cargo bench --bench "$b" --no-run --message-format=json | exe "$b") ;;
         *) f=$(cargo test --release --test "$b" --no-run --message-format=json | exe "$b") ;;
         esac

@@ -5,8 +5,9 @@
 //! the technique's filtered light (caustics, or PhotonGi's indirect light:
 //! `Technique::output_image`) written into its texture in the same encoder, and submits
 //! once. Each frame's statistics (pass times, photon counts) are collected a few
-//! frames later, when the device has finished that frame. It prints the update and
-//! record times and the host waits inside `record_frame` per frame (device waits and
+//! frames later, when the device has finished that frame. It prints the update (its
+//! median, then the medians of `set_lights` and of `set_object_transforms` in brackets)
+//! and record times and the host waits inside `record_frame` per frame (device waits and
 //! blocking readbacks a technique still needs while recording).
 //! Run: `cargo run --release -p caustica --example frame_loop -- [WxH] [PHOTONS] [FRAMES]`.
 
@@ -104,6 +105,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 *position += glam::Vec3::new(0.4 * phase.cos(), 0.0, 0.4 * phase.sin());
             }
             t.set_lights(&mut backend, &lights)?;
+            let t_lights = Instant::now();
             let placement = Transform {
                 translation: home + glam::Vec3::new(0.0, 0.15 * phase.sin(), 0.0),
                 rotation: glam::Quat::from_rotation_y(phase),
@@ -126,6 +128,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             in_flight.push_back(recorded.submitted(submission));
             let t2 = Instant::now();
             l.update_ms.push((t1 - t0).as_secs_f64() * 1e3);
+            l.lights_ms.push((t_lights - t0).as_secs_f64() * 1e3);
+            l.moves_ms.push((t1 - t_lights).as_secs_f64() * 1e3);
             l.record_ms.push((t2 - t1).as_secs_f64() * 1e3);
 
             // statistics of earlier frames, if the device has finished them (never waits)
@@ -161,6 +165,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 #[derive(Default)]
 struct Loop {
     update_ms: Vec<f64>,
+    lights_ms: Vec<f64>,
+    moves_ms: Vec<f64>,
     record_ms: Vec<f64>,
     device_ms: Vec<f64>,
     host_waits: Vec<f64>,
@@ -195,11 +201,13 @@ impl Loop {
             )
         };
         let (u_med, u_max) = stat(&mut self.update_ms);
+        let (l_med, _) = stat(&mut self.lights_ms);
+        let (m_med, _) = stat(&mut self.moves_ms);
         let (r_med, r_max) = stat(&mut self.record_ms);
         let (d_med, d_max) = stat(&mut self.device_ms);
         let (w_med, w_max) = stat(&mut self.host_waits);
         println!("{technique}:");
-        println!("  update (set_lights + set_object_transforms), host: median {u_med:.3} ms, max {u_max:.3} ms");
+        println!("  update (set_lights + set_object_transforms), host: median {u_med:.3} ms ({l_med:.3} + {m_med:.3}), max {u_max:.3} ms");
         println!("  frame record + encode + submit, host:             median {r_med:.3} ms, max {r_max:.3} ms");
         println!(
             "  host waits inside record_frame, per frame:        median {w_med:.0}, max {w_max:.0}"

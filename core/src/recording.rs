@@ -130,6 +130,49 @@ impl RecordedKernel {
     }
 }
 
+/// A write's bytes, held as 4-byte words (a write's length is a multiple of 4), so that a
+/// vector of 4-byte-aligned elements becomes one without a copy
+/// ([`Recording::write_owned`]: an instance move's world vertices, megabytes a frame).
+/// Reads as `[u8]`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct WordBytes(Vec<u32>);
+
+impl WordBytes {
+    /// The bytes of `data` (copied; a multiple of 4 bytes long).
+    pub fn copied<T: bytemuck::Pod>(data: &[T]) -> WordBytes {
+        WordBytes(bytemuck::pod_collect_to_vec(data))
+    }
+
+    /// The bytes of `data`, taken over without a copy where its elements are 4-byte
+    /// aligned (else copied; a multiple of 4 bytes long).
+    pub fn owned<T: bytemuck::Pod>(data: Vec<T>) -> WordBytes {
+        match bytemuck::allocation::try_cast_vec::<T, u32>(data) {
+            Ok(words) => WordBytes(words),
+            Err((_, data)) => WordBytes::copied(&data),
+        }
+    }
+}
+
+impl std::ops::Deref for WordBytes {
+    type Target = [u8];
+
+    fn deref(&self) -> &[u8] {
+        bytemuck::cast_slice(&self.0)
+    }
+}
+
+/// Checks a write of `n` elements into `buf` from element `first` on: inside the buffer,
+/// in elements a multiple of 4 bytes long.
+fn check_write<T>(buf: Buf<T>, first: u32, n: usize, label: &str) -> Result<(), BackendError> {
+    if first as u64 + n as u64 > buf.len as u64 || !std::mem::size_of::<T>().is_multiple_of(4) {
+        return Err(BackendError::BadArgument(format!(
+            "{label}: write of {n} elements at {first} into a buffer of {}",
+            buf.len
+        )));
+    }
+    Ok(())
+}
+
 /// One step of a recording.
 // A kernel step carries its lowered launch inline (a few hundred bytes): recordings hold
 // tens of steps, and boxing each kernel would only add an allocation per dispatch.
@@ -163,7 +206,7 @@ pub enum Step {
         /// First byte written.
         offset: u64,
         /// The bytes written there.
-        data: Vec<u8>,
+        data: WordBytes,
         /// Its name, for errors and debuggers.
         label: &'static str,
     },
@@ -272,19 +315,38 @@ impl Recording {
         data: &[T],
         label: &'static str,
     ) -> Result<(), BackendError> {
-        if first as u64 + data.len() as u64 > buf.len as u64
-            || !std::mem::size_of::<T>().is_multiple_of(4)
-        {
-            return Err(BackendError::BadArgument(format!(
-                "{label}: write of {} elements at {first} into a buffer of {}",
-                data.len(),
-                buf.len
-            )));
-        }
+        self.push_write(buf, first, data.len(), label, || WordBytes::copied(data))
+    }
+
+    /// Records a write of `data` into `buf` from element `first` on, as
+    /// [`Recording::write`] does, taking `data` over without a copy (4-byte-aligned
+    /// elements).
+    pub fn write_owned<T: bytemuck::Pod>(
+        &mut self,
+        buf: Buf<T>,
+        first: u32,
+        data: Vec<T>,
+        label: &'static str,
+    ) -> Result<(), BackendError> {
+        let n = data.len();
+        self.push_write(buf, first, n, label, || WordBytes::owned(data))
+    }
+
+    /// Checks a write of `n` elements into `buf` from element `first` on and records it
+    /// with the bytes `data` makes.
+    fn push_write<T: bytemuck::Pod>(
+        &mut self,
+        buf: Buf<T>,
+        first: u32,
+        n: usize,
+        label: &'static str,
+        data: impl FnOnce() -> WordBytes,
+    ) -> Result<(), BackendError> {
+        check_write(buf, first, n, label)?;
         self.steps.push(Step::Write {
             id: buf.id,
             offset: first as u64 * std::mem::size_of::<T>() as u64,
-            data: bytemuck::cast_slice(data).to_vec(),
+            data: data(),
             label,
         });
         Ok(())
@@ -305,12 +367,12 @@ impl Recording {
     }
 
     /// Records the writes of moved instances into the uploaded scene
-    /// ([`crate::device::device_scene::InstanceMove`]: world vertices, the top level) and
-    /// the `prepare_scene` that refits the acceleration structure (Vulkan: its TLAS
-    /// rebuilt in place).
+    /// ([`crate::device::device_scene::InstanceMove`]: world vertices, the top level, taken
+    /// over without a copy) and the `prepare_scene` that refits the acceleration structure
+    /// (Vulkan: its TLAS rebuilt in place).
     pub fn move_instances(
         &mut self,
-        m: &crate::device::device_scene::InstanceMove,
+        m: crate::device::device_scene::InstanceMove,
         scene: &SceneArgs,
     ) -> Result<(), BackendError> {
         // a recording that holds earlier moves not yet run (Sspm's pending updates) keeps
@@ -334,13 +396,13 @@ impl Recording {
             _ => false,
         };
         self.steps.retain(|s| !superseded(s));
-        for (first, v) in &m.vertices {
-            self.write(scene.vertices, *first, v, "moved instance vertices")?;
+        for (first, v) in m.vertices {
+            self.write_owned(scene.vertices, first, v, "moved instance vertices")?;
         }
-        self.write(
+        self.write_owned(
             scene.bvh_nodes,
             0,
-            &m.top_level,
+            m.top_level,
             "top-level BVH and instance records",
         )?;
         self.kernel(PrepareScene { scene: *scene });
@@ -350,25 +412,66 @@ impl Recording {
     /// Records the writes of an instance update into the uploaded scene: a move
     /// ([`Recording::move_instances`]) or a deformation (its triangles, BLAS region and
     /// object-space positions, then the move's writes and the `prepare_scene` after them;
-    /// Vulkan rebuilds the deformed level's BLAS, keeping the others).
+    /// Vulkan rebuilds the deformed level's BLAS, keeping the others). Check it first with
+    /// [`Recording::check_instance_update`] where nothing may change on an error.
     pub fn update_instances(
         &mut self,
+        u: crate::device::device_scene::InstanceUpdate,
+        scene: &SceneArgs,
+    ) -> Result<(), BackendError> {
+        use crate::device::device_scene::InstanceUpdate;
+        match u {
+            InstanceUpdate::Moved(m) => self.move_instances(m, scene),
+            InstanceUpdate::Deformed(d) => {
+                let (first, t) = d.triangles;
+                self.write_owned(scene.triangles, first, t, "deformed instance triangles")?;
+                for (first, n) in d.nodes {
+                    self.write_owned(
+                        scene.bvh_nodes,
+                        first,
+                        n,
+                        "deformed instance BLAS and positions",
+                    )?;
+                }
+                self.move_instances(d.moved, scene)
+            }
+        }
+    }
+
+    /// The error [`Recording::update_instances`] would give for `u`, if any (a write out
+    /// of its buffer), without recording anything.
+    pub fn check_instance_update(
         u: &crate::device::device_scene::InstanceUpdate,
         scene: &SceneArgs,
     ) -> Result<(), BackendError> {
-        if let crate::device::device_scene::InstanceUpdate::Deformed(d) = u {
+        use crate::device::device_scene::InstanceUpdate;
+        if let InstanceUpdate::Deformed(d) = u {
             let (first, t) = &d.triangles;
-            self.write(scene.triangles, *first, t, "deformed instance triangles")?;
+            check_write(
+                scene.triangles,
+                *first,
+                t.len(),
+                "deformed instance triangles",
+            )?;
             for (first, n) in &d.nodes {
-                self.write(
+                check_write(
                     scene.bvh_nodes,
                     *first,
-                    n,
+                    n.len(),
                     "deformed instance BLAS and positions",
                 )?;
             }
         }
-        self.move_instances(u.moved(), scene)
+        let m = u.moved();
+        for (first, v) in &m.vertices {
+            check_write(scene.vertices, *first, v.len(), "moved instance vertices")?;
+        }
+        check_write(
+            scene.bvh_nodes,
+            0,
+            m.top_level.len(),
+            "top-level BVH and instance records",
+        )
     }
 
     /// Records creation of a zeroed G-buffer of `pixels` texels, as its planes.

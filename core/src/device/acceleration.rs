@@ -194,6 +194,10 @@ pub struct Level {
     /// The world-vertex indices those triangles use, each once, ascending (what
     /// `triangle_bounds` is grown over: a third of the triangles' corners).
     pub used_vertices: std::sync::Arc<[u32]>,
+    /// An instance's vertices its triangles leave unused, as indices from `vertex_base`,
+    /// ascending (a move grows the box of the used ones in the pass that places them:
+    /// [`crate::device::device_scene::placed_vertices`]).
+    pub unused_vertices: std::sync::Arc<[u32]>,
     /// An instance's box of the world vertices its triangles use (AdaptiveCaustics' caster
     /// box of the object: `adaptive_caustics::caster_boxes`); empty for the static level.
     pub triangle_bounds: Aabb,

@@ -565,20 +565,21 @@ impl FrameHost {
 
     /// Applies an instance update already made to `instances` (a copy of the host's) for
     /// `model`, the scene after it: its writes go with the next frame, and the geometry
-    /// (bounds, caster balls and boxes, receivers' triangles) follows. Returns whether a
-    /// receiver of the atlas moved.
+    /// (bounds, caster balls and boxes, receivers' triangles) follows; the update's
+    /// vertices become the writes' data without a copy. Returns whether a receiver of the
+    /// atlas moved. On an error (checked first) nothing changes.
     pub fn apply_instances(
         &mut self,
         model: Scene,
         mut instances: SceneInstances,
-        u: &InstanceUpdate,
+        u: InstanceUpdate,
     ) -> Result<bool, Error> {
+        Recording::check_instance_update(&u, &self.scene)?;
         let m = u.moved();
-        self.pending.update_instances(u, &self.scene)?;
         instances.refresh_smooth_normals(m);
         let mut receivers_moved = false;
         if let Some(r) = self.receivers.as_mut() {
-            if let InstanceUpdate::Deformed(d) = u {
+            if let InstanceUpdate::Deformed(d) = &u {
                 // the deformed level's triangles in their new order
                 r.reorder_triangles(d.triangles.0, &d.triangles.1);
             }
@@ -588,6 +589,8 @@ impl FrameHost {
         self.geometry.bounds = m.bounds;
         self.geometry.caster_bounds = m.caster_bounds;
         self.geometry.caster_spheres = m.caster_spheres;
+        // the world vertices go to the device without a copy
+        self.pending.update_instances(u, &self.scene)?;
         self.instances = instances;
         self.model = model;
         Ok(receivers_moved)
@@ -616,7 +619,7 @@ impl FrameHost {
         state: HostState,
         undo: Option<InstanceUpdate>,
     ) -> Result<(), Error> {
-        if let Some(u) = &undo {
+        if let Some(u) = undo {
             self.pending.update_instances(u, &self.scene)?;
         }
         if state.model.lights != self.model.lights {

@@ -23,7 +23,7 @@ use std::time::Instant;
 
 /// What the host changed before it asks the technique to follow.
 #[derive(Clone, Copy, Debug)]
-pub enum Change<'a> {
+pub enum Change {
     /// The camera moved at the same image size.
     Camera,
     /// The camera moved to a new image size: the host's camera images are made anew; a
@@ -34,8 +34,6 @@ pub enum Change<'a> {
     /// Instances moved or one deformed; `receivers_moved` says whether a receiver of the
     /// atlas moved with them.
     Instances {
-        /// The update written into the scene.
-        update: &'a InstanceUpdate,
         /// A receiver's triangles moved ([`FrameHost::receivers`]).
         receivers_moved: bool,
     },
@@ -459,20 +457,21 @@ impl<P: Pipeline> Hosted<P> {
     }
 
     /// Follows a host change: re-planned in place, or the technique's buffers made anew;
-    /// when that fails, the host goes back to `state` (`undo`: the instance update back),
-    /// the technique is made anew over it, and the error is returned.
+    /// when that fails, the host goes back to `state` (`undo` makes the instance update
+    /// back: only then, so that an update that succeeds never computes it), the technique
+    /// is made anew over it, and the error is returned.
     fn follow(
         &mut self,
         backend: &mut dyn Backend,
         change: Change,
         state: HostState,
-        undo: Option<InstanceUpdate>,
+        undo: impl FnOnce() -> Result<Option<InstanceUpdate>, Error>,
     ) -> Result<(), Error> {
         let (host, p) = self.parts();
         let reaction = match p.react(backend, host, change) {
             Ok(r) => r,
             Err(e) => {
-                self.host.restore(backend, state, undo)?;
+                self.host.restore(backend, state, undo()?)?;
                 return Err(e);
             }
         };
@@ -481,7 +480,7 @@ impl<P: Pipeline> Hosted<P> {
         }
         let settings = self.pipeline().settings().clone();
         self.rebuild(backend, settings.clone(), |host, backend| {
-            host.restore(backend, state, undo)
+            host.restore(backend, state, undo()?)
         })
     }
 
@@ -521,7 +520,7 @@ impl<P: Pipeline> Hosted<P> {
         } else {
             Change::Camera
         };
-        self.follow(backend, change, state, None)
+        self.follow(backend, change, state, || Ok(None))
     }
 
     /// Replaces the lights for the next frames (moved, re-powered, added or removed)
@@ -529,7 +528,7 @@ impl<P: Pipeline> Hosted<P> {
     pub fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error> {
         let state = self.host.state();
         self.host.set_lights(backend, lights)?;
-        self.follow(backend, Change::Lights, state, None)
+        self.follow(backend, Change::Lights, state, || Ok(None))
     }
 
     /// Moves instances for the next frames ([`Technique::set_object_transforms`]): no
@@ -554,13 +553,14 @@ impl<P: Pipeline> Hosted<P> {
         let m = instances.move_instances(moves)?;
         let state = self.host.state();
         let u = InstanceUpdate::Moved(m);
-        let receivers_moved = self.host.apply_instances(model, instances.clone(), &u)?;
-        let undo = instances.move_instances(&back)?;
-        let change = Change::Instances {
-            update: &u,
-            receivers_moved,
-        };
-        self.follow(backend, change, state, Some(InstanceUpdate::Moved(undo)))
+        // the moved levels (cheap to copy: their vertices and triangles are shared), from
+        // which the move back is made if the technique cannot follow
+        let mut after = instances.clone();
+        let receivers_moved = self.host.apply_instances(model, instances, u)?;
+        let change = Change::Instances { receivers_moved };
+        self.follow(backend, change, state, move || {
+            Ok(Some(InstanceUpdate::Moved(after.move_instances(&back)?)))
+        })
     }
 
     /// Deforms an instance for the next frames ([`Technique::set_object_vertices`]):
@@ -582,14 +582,15 @@ impl<P: Pipeline> Hosted<P> {
         let state = self.host.state();
         let receivers_moved = self
             .host
-            .apply_instances(d.model, d.instances.clone(), &d.update)?;
+            .apply_instances(d.model, d.instances.clone(), d.update)?;
         let mut after = d.instances;
-        let undo = after.deform_instance(object, d.before)?;
-        let change = Change::Instances {
-            update: &d.update,
-            receivers_moved,
-        };
-        self.follow(backend, change, state, Some(InstanceUpdate::Deformed(undo)))
+        let before = d.before;
+        let change = Change::Instances { receivers_moved };
+        self.follow(backend, change, state, move || {
+            Ok(Some(InstanceUpdate::Deformed(
+                after.deform_instance(object, before)?,
+            )))
+        })
     }
 
     /// Replaces object `object`'s shape for the next frames ([`Technique::set_object_shape`]):
@@ -627,7 +628,7 @@ impl<P: Pipeline> Hosted<P> {
     ) -> Result<(), Error> {
         let state = self.host.state();
         let same_plan = self.host.set_materials(materials)?;
-        self.follow(backend, Change::Materials { same_plan }, state, None)
+        self.follow(backend, Change::Materials { same_plan }, state, || Ok(None))
     }
 
     /// Replaces the settings for the next frames; the next frame equals, bitwise, that of

@@ -305,6 +305,51 @@ pub fn enclosing_ball(balls: &[[f32; 4]]) -> Option<[f32; 4]> {
     Some([c.x, c.y, c.z, round_up_f32(r + reach / 1_048_576.0)])
 }
 
+/// An [`Aabb`] grown in SIMD lanes (`Vec3A`), for the loops that grow a box over many
+/// points: bitwise the box [`Aabb::grow`] grows over the same points in the same order
+/// (each lane keeps the bound where it is below, or above, the point, else takes the
+/// point: `Vec3::min` and `Vec3::max`'s rule, ties and NaN included, on every glam
+/// backend), in about half the time of `Vec3`'s lane-by-lane compares.
+#[derive(Clone, Copy, Debug)]
+pub struct AabbA {
+    min: glam::Vec3A,
+    max: glam::Vec3A,
+}
+
+impl AabbA {
+    /// The empty box ([`Aabb::EMPTY`]).
+    pub const EMPTY: AabbA = AabbA {
+        min: glam::Vec3A::INFINITY,
+        max: glam::Vec3A::NEG_INFINITY,
+    };
+
+    /// Grows the box to contain `p` (as [`Aabb::grow`]). On x86 `Vec3A::min` and `max`
+    /// are MINPS and MAXPS (`a < b ? a : b` and `a > b ? a : b` per lane, the rule
+    /// itself) or glam's scalar fallback (the rule again); elsewhere (NEON's and WASM's
+    /// minimum order zeros and propagate NaN) the rule is written out as a select.
+    #[inline(always)]
+    pub fn grow(&mut self, p: glam::Vec3A) {
+        #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+        {
+            self.min = self.min.min(p);
+            self.max = self.max.max(p);
+        }
+        #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+        {
+            self.min = glam::Vec3A::select(self.min.cmplt(p), self.min, p);
+            self.max = glam::Vec3A::select(self.max.cmpgt(p), self.max, p);
+        }
+    }
+
+    /// The box as an [`Aabb`].
+    pub fn aabb(self) -> Aabb {
+        Aabb {
+            min: self.min.into(),
+            max: self.max.into(),
+        }
+    }
+}
+
 /// Axis-aligned box in world space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -375,6 +420,38 @@ impl Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`AabbA::grow`] grows, bitwise, the box [`Aabb::grow`] grows over the same points
+    /// in the same order: zeros of both signs, infinities and NaN included.
+    #[test]
+    fn a_box_grown_in_lanes_is_the_box_grown_by_vec3() {
+        use proptest::prelude::*;
+        let coordinate = prop_oneof![
+            Just(0.0f32),
+            Just(-0.0f32),
+            Just(f32::NAN),
+            Just(f32::INFINITY),
+            Just(f32::NEG_INFINITY),
+            Just(1.0f32),
+            -2.0f32..2.0
+        ];
+        let points =
+            prop::collection::vec((coordinate.clone(), coordinate.clone(), coordinate), 0..12);
+        proptest!(|(points in points)| {
+            let (mut a, mut b, mut s) = (Aabb::EMPTY, AabbA::EMPTY, AabbA::EMPTY);
+            for (x, y, z) in points {
+                a.grow(Vec3::new(x, y, z));
+                let p = glam::Vec3A::new(x, y, z);
+                b.grow(p);
+                // the select written out for targets other than x86, checked here too
+                s.min = glam::Vec3A::select(s.min.cmplt(p), s.min, p);
+                s.max = glam::Vec3A::select(s.max.cmpgt(p), s.max, p);
+            }
+            let bits = |b: Aabb| [b.min.to_array(), b.max.to_array()].map(|v| v.map(f32::to_bits));
+            prop_assert_eq!(bits(b.aabb()), bits(a));
+            prop_assert_eq!(bits(s.aabb()), bits(a));
+        });
+    }
 
     #[test]
     fn edge_function_is_exactly_antisymmetric_and_the_plain_expression() {
