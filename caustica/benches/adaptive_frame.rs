@@ -62,7 +62,10 @@ fn main() {
         .map(|s| match s.trim() {
             "traced" | "0" => ProbeLevels::Traced,
             "first_segment" | "1" => ProbeLevels::FirstSegment,
-            _ => ProbeLevels::Bounds,
+            "bounds" => ProbeLevels::Bounds,
+            other => {
+                panic!("CAUSTICA_BENCH_PROBES: unknown {other:?} (traced, first_segment, bounds)")
+            }
         })
         .collect();
     println!(

@@ -240,7 +240,8 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
         ..caustica_conformance::adaptive_over(&map(256))
     };
     for (name, mut b) in backends() {
-        for scene_name in ["sphere", "cornell"] {
+        // `sphere-sun`: an orthographic plane
+        for scene_name in ["sphere", "cornell", "sphere-sun"] {
             let scene = small(scene_name);
             for metric in [AdaptiveMetric::Level, AdaptiveMetric::Error] {
                 let run = |b: &mut dyn Backend, probes| {

@@ -267,3 +267,45 @@ pub(super) fn light_inside_casters(b: &mut dyn Backend) -> Result<Outcome, Strin
     screen_target(b, &scene, &s, &a, &mut v)?;
     outcome(format!("six faces, stored {}", a.stats.photons_stored), v)
 }
+
+pub(super) fn far_from_origin(b: &mut dyn Backend) -> Result<Outcome, String> {
+    // a glass cube (it fills its bounding box: photons that graze its edges start on the
+    // rectangle's border) under a sun (its orthographic plane places each photon's origin
+    // in world space), the whole scene moved by 1e4 along every axis, where f32 resolves
+    // 1e-3; the plane over the light's whole footprint, the cube's rectangle a part of it.
+    // The bounds seed lists only clusters that overlap a rectangle, so the rectangles'
+    // padding (which takes that rounding) must keep every cluster whose photons meet the
+    // cube: the seeded level metric stores bitwise the dense grid's photons
+    let mut cube = sphere_scene();
+    cube.objects[1].shape = Shape::Cuboid {
+        min: Vec3::new(-0.4, 0.6, -0.4),
+        max: Vec3::new(0.4, 1.4, 0.4),
+    };
+    cube.lights = vec![Light::Directional {
+        direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
+        irradiance: Vec3::ONE,
+        projection_volume: None,
+    }];
+    let scene = super::scenes::transform_scene(&cube, 1.0, Vec3::splat(1e4));
+    let plane = EmissionPlane::LightCone;
+    let mut v = Verdict::new("far from the origin");
+    let dense = render(b, &scene, &map(256, plane)).map_err(|e| e.to_string())?;
+    v.check(dense.stats.photons_stored > 0, || {
+        "the dense grid stores nothing: the case tests nothing".into()
+    });
+    let a = adaptive(
+        b,
+        &scene,
+        &level(256, plane, ClusterRelevance::Bounds),
+        &mut v,
+    )?;
+    let seeded = AdaptiveStats::of(&a.stats).map_or(0, |s| s.levels_seeded);
+    v.check(seeded > 0, || {
+        "no level seeded: the case tests nothing".into()
+    });
+    equals_dense("level metric", &a, &dense, &mut v);
+    outcome(
+        format!("stored {}, {seeded} levels seeded", a.stats.photons_stored),
+        v,
+    )
+}

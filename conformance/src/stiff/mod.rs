@@ -200,6 +200,8 @@ pub fn catalogue() -> Vec<StiffCase> {
             "Sun 3 degrees above a thin glass slab (R = 0.83): photons stored on the far floor, finite, accounted, agrees with cpu; the level metric equals the dense grid bitwise, the screen target receives the same photons"),
         case!("adaptive-caustics", "light-inside-casters", adaptive_caustics::light_inside_casters,
             "Point light between two glass balls (six cube faces, each its own pyramid rounded to 256^2): finite, accounted, agrees with cpu; equals the dense grid of 256^2 faces bitwise, the screen target receives the same photons"),
+        case!("adaptive-caustics", "far-from-origin", adaptive_caustics::far_from_origin,
+            "A glass cube under a sun, the scene moved by 1e4 (f32 resolves 1e-3 there), the plane over the whole footprint: the casters' rectangles, padded by that rounding, hold every cluster whose photons meet the cube, so the seeded level metric stores bitwise the dense grid's photons; finite, accounted, agrees with cpu"),
     ];
     v.push(StiffCase {
         group: "degenerate",

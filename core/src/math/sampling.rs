@@ -32,7 +32,7 @@ pub fn tiled_index(g: u32, grid_w: u32, grid_h: u32, tile: u32) -> u32 {
     if grid_w == 0 || grid_h == 0 || tile == 0 {
         return g;
     }
-    // every product below is at most g (no overflow for any u32 grid)
+    // band_y * grid_w and tile_x * band_h are at most g; tile * band_h at most tile^2
     let band = g / grid_w / tile;
     let band_y = band * tile;
     let band_h = tile.min(grid_h - band_y);
@@ -128,9 +128,7 @@ pub fn to_world(local: Vec3, n: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
-    /// Tile order is a bijection of the grid's indices for any grid shape, including
-    /// partial tiles and bands, and keeps each 64 consecutive photons of a full tile in
-    /// one 8 x 8 block.
+    /// Tile order of any tile side is a bijection of the grid's indices.
     #[test]
     fn tiled_index_is_a_bijection_for_any_tile() {
         for tile in [1, 2, 3, 4, 8] {
@@ -142,6 +140,9 @@ mod tests {
         }
     }
 
+    /// Tile order is a bijection of the grid's indices for any grid shape, including
+    /// partial tiles and bands, and keeps each 64 consecutive photons of a full tile in
+    /// one 8 x 8 block.
     #[test]
     fn tiled_photon_index_is_a_bijection_with_8x8_tiles() {
         for (w, h) in [

@@ -209,12 +209,20 @@ const SCREEN_FIELDS_NOW_SHARED: [&str; 7] = [
 /// fields sat at the top, the screen's in `screen`), and the screen block's shared fields
 /// (outputs, filters, accumulation) now sit in `frame`: with `deposit: screen` they move
 /// there (unless `frame` or the top level gives them), otherwise they were not read and
-/// are dropped.
+/// are dropped. The traversal's boolean `probe_coarse_levels` is now `probe_levels`
+/// (`true`: `first_segment`, `false`: `traced`).
 pub(super) fn earlier_form(json: &serde_json::Value) -> serde_json::Value {
     let Some(given) = json.as_object() else {
         return json.clone();
     };
     let mut out = given.clone();
+    if let Some(t) = out.get_mut("traversal").and_then(|t| t.as_object_mut()) {
+        if let Some(flag) = t.get("probe_coarse_levels").and_then(|f| f.as_bool()) {
+            t.remove("probe_coarse_levels");
+            let name = if flag { "first_segment" } else { "traced" };
+            t.entry("probe_levels").or_insert(name.into());
+        }
+    }
     if let Some(k) = out.remove("knn_photons") {
         let atlas = out
             .entry("atlas")
@@ -297,6 +305,18 @@ mod tests {
         );
         let e = parse(serde_json::json!({ "photon_w": 512 }));
         assert!(matches!(&e, Err(Error::InvalidParameter(w)) if w.contains("photon_w")));
+        // the probe levels by name, or the older boolean
+        let probes = |v: serde_json::Value| {
+            parse(serde_json::json!({ "traversal": v })).map(|s| s.traversal.probe_levels)
+        };
+        use super::super::ProbeLevels;
+        let named = probes(serde_json::json!({ "probe_levels": "traced" }));
+        assert_eq!(named.unwrap(), ProbeLevels::Traced);
+        let older = probes(serde_json::json!({ "probe_coarse_levels": true }));
+        assert_eq!(older.unwrap(), ProbeLevels::FirstSegment);
+        let older = probes(serde_json::json!({ "probe_coarse_levels": false }));
+        assert_eq!(older.unwrap(), ProbeLevels::Traced);
+        assert!(probes(serde_json::json!({ "probe_levels": "all" })).is_err());
     }
 
     #[test]

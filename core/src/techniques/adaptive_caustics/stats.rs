@@ -26,7 +26,8 @@ pub struct AdaptiveStats {
     /// (device timestamps or host wall clock).
     pub ms_per_level: Vec<f64>,
     /// `ms_per_level` by kernel: per level, each kernel's time summed over its passes
-    /// (`dispatch_args`, `trace_photons`, `refine_clusters`, `deposit_screen`), in ms.
+    /// (`dispatch_args`, `trace_photons`, `refine_clusters`, `deposit_screen`; the bounds
+    /// seed's `seed_clusters` under the last seeded level), in ms.
     #[serde(default)]
     pub ms_per_level_kernel: Vec<std::collections::BTreeMap<String, f64>>,
     /// Clusters whose photons were deposited.

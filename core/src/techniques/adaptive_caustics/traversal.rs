@@ -111,6 +111,9 @@ pub const LIST_BYTES_PER_ENTRY: u64 = 4;
 pub const MAX_PASSES_PER_LEVEL: u64 = 64;
 
 /// How the traversal judges its probe levels ([`TraversalSettings::is_probe_level`]).
+/// Settings files name it (`"traced"`, `"first_segment"`, `"bounds"`); the boolean
+/// `probe_coarse_levels` of earlier files still loads (`true`: `first_segment`, `false`:
+/// `traced`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ProbeLevels {
@@ -1142,9 +1145,13 @@ pub const EMPTY_RECT: [f32; 4] = [2.0, 2.0, -2.0, -2.0];
 /// photon whose ray meets a box starts inside the box's rectangle. Perspective: the
 /// bounding rectangle of the corners' central projections, the whole plane when a corner
 /// lies on or behind the light's side plane, nothing when every corner does;
-/// orthographic: of their parallel projections, nothing when the box lies wholly behind
-/// the plane. Computed in f64 and widened by 1e-5 of the plane and of the bounds (far
-/// above the rounding of the kernels' ray setup, ~1e-7).
+/// orthographic: of their parallel projections, the whole plane when a corner lies behind
+/// it, nothing when every corner does. Computed in f64 and widened by 1e-5 of the plane
+/// and of the bounds (far above the rounding of the kernels' ray setup, ~1e-7) and by the
+/// f32 rounding of positions as far from the origin as the light and the box (16 ulps of
+/// the largest coordinate, seen from the nearest corner), so that a scene far from the
+/// origin, whose rays and triangles the kernels place only to that resolution, loses no
+/// photon that meets a caster: the bounds seed keeps only clusters that overlap.
 pub fn caster_rects(plane: &LightViewPlane, boxes: &[Aabb]) -> Vec<[f32; 4]> {
     let (o, u, v, w) = (
         plane.origin.as_dvec3(),
@@ -1164,13 +1171,17 @@ pub fn caster_rects(plane: &LightViewPlane, boxes: &[Aabb]) -> Vec<[f32; 4]> {
                 f64::NEG_INFINITY,
             ];
             let mut behind = 0;
+            let mut z_min = f64::INFINITY;
+            let mut reach = o.abs().max_element();
             for c in b.corners() {
+                reach = reach.max(c.as_dvec3().abs().max_element());
                 let d = c.as_dvec3() - o;
                 let z = d.dot(w);
                 if z <= 0.0 {
                     behind += 1;
                     continue;
                 }
+                z_min = z_min.min(z);
                 let s = if perspective { z } else { 1.0 };
                 let (x, y) = (d.dot(u) / (s * hx), d.dot(v) / (s * hy));
                 r = [r[0].min(x), r[1].min(y), r[2].max(x), r[3].max(y)];
@@ -1178,10 +1189,14 @@ pub fn caster_rects(plane: &LightViewPlane, boxes: &[Aabb]) -> Vec<[f32; 4]> {
             if behind == 8 {
                 return EMPTY_RECT;
             }
-            if perspective && behind > 0 {
+            if behind > 0 {
                 return [-1e30, -1e30, 1e30, 1e30];
             }
-            let pad = |x: f64| 1e-5 * (1.0 + x.abs());
+            // 16 ulps of the largest coordinate, in the plane's units at the nearest corner
+            let rounding = 16.0 * f32::EPSILON as f64 * reach;
+            let seen_at = if perspective { z_min } else { 1.0 };
+            let absolute = rounding / (seen_at * hx.min(hy)).max(f64::MIN_POSITIVE);
+            let pad = |x: f64| 1e-5 * (1.0 + x.abs()) + absolute;
             [
                 (r[0] - pad(r[0])) as f32,
                 (r[1] - pad(r[1])) as f32,
