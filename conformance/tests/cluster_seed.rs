@@ -9,8 +9,7 @@ use caustica_conformance::strategies;
 use caustica_core::device::layout::SeedParams;
 use caustica_core::techniques::adaptive_caustics::{seed_window, EMPTY_RECT};
 use proptest::prelude::*;
-use proptest::test_runner::{TestCaseError, TestRunner};
-use std::cell::RefCell;
+use proptest::test_runner::TestRunner;
 
 /// A rectangle coordinate: anywhere, on a cluster edge of a 2^k grid (the exact
 /// boundary case), or far outside the plane.
@@ -60,33 +59,11 @@ fn params() -> impl Strategy<Value = SeedParams> {
 
 #[test]
 fn seed_clusters_lists_what_core_keeps() {
-    let test = "seed_clusters on generated grids and rectangles";
-    let reference = RefCell::new(harness::reference());
-    for cand in harness::candidates(test) {
-        let name = cand.name.clone();
-        let backend = RefCell::new(cand.backend);
-        let mut runner = TestRunner::new(strategies::config());
-        let result = runner.run(&(params(), rects()), |(params, rects)| {
-            let mut r = reference.borrow_mut();
-            let mut c = backend.borrow_mut();
-            let v = check_seed_clusters(&mut *r, c.as_mut(), &params, &rects)
-                .map_err(TestCaseError::fail)?;
-            if v.passed() {
-                Ok(())
-            } else {
-                Err(TestCaseError::fail(format!(
-                    "{v}params {params:?}, rects {rects:?}"
-                )))
-            }
-        });
-        if let Err(e) = result {
-            panic!("{name}: {e}");
-        }
-        harness::loud(&format!(
-            "{test}: {name} agrees with core on {} generated cases",
-            strategies::config().cases
-        ));
-    }
+    harness::check_generated(
+        "seed_clusters on generated grids and rectangles",
+        (params(), rects()),
+        |r, c, (params, rects)| check_seed_clusters(r, c, params, rects),
+    );
 }
 
 /// The host's window holds every cluster of the whole grid that the test keeps.

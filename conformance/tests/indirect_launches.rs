@@ -27,33 +27,11 @@ fn rows_and_counts() -> impl Strategy<Value = (Vec<[u32; 4]>, Vec<u32>)> {
 
 #[test]
 fn dispatch_records_match_core_for_any_count() {
-    let test = "dispatch_args on generated rows";
-    let reference = RefCell::new(harness::reference());
-    for cand in harness::candidates(test) {
-        let name = cand.name.clone();
-        let backend = RefCell::new(cand.backend);
-        let mut runner = TestRunner::new(strategies::config());
-        let result = runner.run(&rows_and_counts(), |(rows, counts)| {
-            let mut r = reference.borrow_mut();
-            let mut c = backend.borrow_mut();
-            let v = check_dispatch_args(&mut *r, c.as_mut(), &rows, &counts)
-                .map_err(TestCaseError::fail)?;
-            if v.passed() {
-                Ok(())
-            } else {
-                Err(TestCaseError::fail(format!(
-                    "{v}rows {rows:?}, counts {counts:?}"
-                )))
-            }
-        });
-        if let Err(e) = result {
-            panic!("{name}: {e}");
-        }
-        harness::loud(&format!(
-            "{test}: {name} agrees with core on {} generated cases",
-            strategies::config().cases
-        ));
-    }
+    harness::check_generated(
+        "dispatch_args on generated rows",
+        rows_and_counts(),
+        |r, c, (rows, counts)| check_dispatch_args(r, c, rows, counts),
+    );
 }
 
 #[test]

@@ -12,7 +12,6 @@
 use caustica_conformance::backends;
 use caustica_conformance::harness;
 use caustica_conformance::kernels::sort_indirect_paths::check_sort_indirect_paths;
-use caustica_conformance::strategies;
 use caustica_core::device::layout::IndirectPath;
 use caustica_core::frame::output::Output;
 use caustica_core::scene::builtin::builtin;
@@ -20,8 +19,6 @@ use caustica_core::scene::Scene;
 use caustica_core::techniques::create;
 use caustica_core::Backend;
 use proptest::prelude::*;
-use proptest::test_runner::{TestCaseError, TestRunner};
-use std::cell::RefCell;
 
 fn scene(name: &str) -> Scene {
     let mut s = builtin(name).expect("built-in");
@@ -132,29 +129,9 @@ fn queues() -> impl Strategy<Value = (Vec<IndirectPath>, u32, ([f32; 3], [f32; 3
 
 #[test]
 fn sort_indirect_paths_matches_cpu_for_any_queue() {
-    let test = "sort_indirect_paths on generated queues";
-    let reference = RefCell::new(harness::reference());
-    for cand in harness::candidates(test) {
-        let name = cand.name.clone();
-        let backend = RefCell::new(cand.backend);
-        let mut runner = TestRunner::new(strategies::config());
-        let result = runner.run(&queues(), |(paths, length, key_box)| {
-            let mut r = reference.borrow_mut();
-            let mut c = backend.borrow_mut();
-            let v = check_sort_indirect_paths(&mut *r, c.as_mut(), &paths, length, key_box)
-                .map_err(TestCaseError::fail)?;
-            if v.passed() {
-                Ok(())
-            } else {
-                Err(TestCaseError::fail(format!("{v}length {length}")))
-            }
-        });
-        if let Err(e) = result {
-            panic!("{name}: {e}");
-        }
-        harness::loud(&format!(
-            "{test}: {name} agrees with the CPU on {} generated queues",
-            strategies::config().cases
-        ));
-    }
+    harness::check_generated(
+        "sort_indirect_paths on generated queues",
+        queues(),
+        |r, c, (paths, length, key_box)| check_sort_indirect_paths(r, c, paths, *length, *key_box),
+    );
 }

@@ -139,3 +139,41 @@ pub fn candidates(test: &str) -> Vec<Candidate> {
 pub fn reference() -> CpuBackend {
     CpuBackend::new().expect("the CPU reference backend")
 }
+
+/// Runs `check` (reference, candidate, input) on [`crate::strategies::config`]'s cases of
+/// `inputs` for every candidate against the CPU reference; a failing verdict fails the
+/// test naming the candidate, the verdict and the (shrunk) input. For kernel checks whose
+/// inputs proptest draws (counts from 0 past a bound, generated grids and queues).
+pub fn check_generated<S>(
+    test: &str,
+    inputs: S,
+    check: impl Fn(&mut dyn Backend, &mut dyn Backend, &S::Value) -> Result<super::Verdict, String>,
+) where
+    S: proptest::strategy::Strategy,
+    S::Value: std::fmt::Debug,
+{
+    use proptest::test_runner::{TestCaseError, TestRunner};
+    let config = crate::strategies::config();
+    let reference = std::cell::RefCell::new(reference());
+    for cand in candidates(test) {
+        let backend = std::cell::RefCell::new(cand.backend);
+        let mut runner = TestRunner::new(config.clone());
+        let result = runner.run(&inputs, |input| {
+            let mut r = reference.borrow_mut();
+            let mut c = backend.borrow_mut();
+            let v = check(&mut *r, c.as_mut(), &input).map_err(TestCaseError::fail)?;
+            if v.passed() {
+                Ok(())
+            } else {
+                Err(TestCaseError::fail(format!("{v}input {input:?}")))
+            }
+        });
+        if let Err(e) = result {
+            panic!("{}: {e}", cand.name);
+        }
+        loud(&format!(
+            "{test}: {} agrees on {} generated cases",
+            cand.name, config.cases
+        ));
+    }
+}

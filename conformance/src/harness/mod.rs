@@ -27,7 +27,7 @@ pub mod tolerance;
 pub mod verdict;
 pub mod watched;
 
-pub use candidates::{candidates, loud, reference, Candidate, REFERENCE_BACKEND};
+pub use candidates::{candidates, check_generated, loud, reference, Candidate, REFERENCE_BACKEND};
 pub use cases::{builtin_small, kernel_cases, BUILTIN_SIZE};
 pub use fixture::{Fixture, ReferenceInputs};
 pub use quirks::{quirk, Quirk, QUIRKS};
