@@ -217,6 +217,57 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
     }
 }
 
+/// An accumulation's passes stratify each cell together in the traversal as in the dense
+/// plane (the first pass's jitter seed, each pass's stratum): three accumulated frames of
+/// the level metric are bitwise CausticMap's three, on every backend.
+#[test]
+fn the_level_metric_accumulates_as_the_dense_grid() {
+    let accumulate = |f: FrameSettings| FrameSettings {
+        accumulate: true,
+        prune: false,
+        ..f
+    };
+    for (name, mut b) in backends() {
+        let scene = small("sphere");
+        let every_tile = CausticMapSettings {
+            frame: accumulate(map(128).frame),
+            ..map(128)
+        };
+        let adaptive = AdaptiveCausticsSettings {
+            traversal: TraversalSettings {
+                metric: AdaptiveMetric::Level,
+                start_grid: 32,
+                ..AdaptiveCausticsSettings::default().traversal
+            },
+            ..caustica_conformance::adaptive_over(&map(128))
+        };
+        let adaptive = AdaptiveCausticsSettings {
+            frame: accumulate(adaptive.frame.clone()),
+            ..adaptive
+        };
+        let mut dense = CausticMap::new(b.as_mut(), &scene, every_tile).expect("dense");
+        let mut traversal = AdaptiveCaustics::new(b.as_mut(), &scene, adaptive).expect("adaptive");
+        for frame in 0..3 {
+            let ds = dense.frame(b.as_mut(), &mut |_| {}).expect("frame");
+            let s = traversal.frame(b.as_mut(), &mut |_| {}).expect("frame");
+            assert_eq!(
+                ds.stored_flux, s.stored_flux,
+                "{name}: frame {frame}: stored flux"
+            );
+        }
+        let read = |t: &mut dyn FnMut(Output) -> caustica_core::frame::image::Image| {
+            OUTPUTS.iter().map(|o| t(*o)).collect::<Vec<_>>()
+        };
+        let di = read(&mut |o| dense.read_output(b.as_mut(), o).expect("read"));
+        let ai = read(&mut |o| traversal.read_output(b.as_mut(), o).expect("read"));
+        dense.free(b.as_mut()).expect("free");
+        traversal.free(b.as_mut()).expect("free");
+        if let Some(out) = same_bits(&di, &ai) {
+            panic!("{name}: after three accumulated frames {out} differs from the dense grid's");
+        }
+    }
+}
+
 /// Probe levels (the levels judged only by whether a photon met a caster) change nothing
 /// but the path ends and the work: traced to their first surface
 /// (`ProbeLevels::FirstSegment`) the same clusters are refined, converged and output;

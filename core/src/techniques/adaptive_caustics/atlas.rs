@@ -13,7 +13,6 @@ use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::pipeline::{Change, FrameBuilder, Reaction};
 use crate::frame::plan::{FramePlan, SceneFeatures};
-use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::atlas::{with_atlas, AtlasQuanta, AtlasReceiver};
 use crate::kernels::TraceVariant;
 use crate::recording::Recording;
@@ -141,10 +140,8 @@ impl AdaptiveCausticsPipeline {
                 ));
                 let mut gather = Recording::new();
                 receiver.record_gather(&mut gather);
-                // a new seed for every pass an accumulating atlas adds
-                let seed = accumulation_seed(self.settings.frame.seed, receiver.pass_index());
-                let counters = a.counters;
-                self.traverse(host, frame, &DepositTarget::Atlas(target), counters, seed)?;
+                let (counters, pass) = (a.counters, receiver.pass_index());
+                self.traverse(host, frame, &DepositTarget::Atlas(target), counters, pass)?;
                 frame.rec().steps.extend(gather.steps);
                 if let Target::Atlas { receiver, valid } = &mut self.target {
                     frame.stats.accumulated_frames = receiver.end_photon_pass();

@@ -34,8 +34,8 @@ pub use settings::{
 };
 pub use stats::AdaptiveStats;
 pub use traversal::{
-    caster_rects, fit_planes, seed_window, AtlasTarget, DepositTarget, PhotonOptics, ProbeLevels,
-    ScreenTarget, Traversal, TraversalSettings, EMPTY_RECT,
+    caster_rects, fit_planes, seed_window, AtlasTarget, DepositTarget, PhotonOptics, PlaneSeeds,
+    ProbeLevels, ScreenTarget, Traversal, TraversalSettings, EMPTY_RECT,
 };
 
 use crate::backend::Backend;
@@ -48,6 +48,7 @@ use crate::frame::image::Image;
 use crate::frame::output::{Output, Outputs};
 use crate::frame::pipeline::{Change, FrameBuilder, Hosted, Pipeline, Reaction};
 use crate::frame::plan::FramePlan;
+use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::atlas::AtlasReceiver;
 use crate::frame::receivers::screen::ScreenReceiver;
 use crate::kernels::TraceVariant;
@@ -125,8 +126,11 @@ impl AdaptiveCausticsPipeline {
         frame: &mut FrameBuilder,
         target: &DepositTarget,
         counters: crate::device::handle::Buf<u32>,
-        seed: u32,
+        stratum: u32,
     ) -> Result<(), Error> {
+        // a new seed for every pass an accumulation adds; the passes stratify each cell
+        // together (the first pass's jitter seed, this pass's stratum), as CausticMap's
+        let seed = accumulation_seed(self.settings.frame.seed, stratum);
         let (Some(t), Some(variant)) = (&self.traversal, self.plan.trace_variant) else {
             return Ok(());
         };
@@ -146,7 +150,13 @@ impl AdaptiveCausticsPipeline {
             for c in 0..3 {
                 frame.stats.emitted_flux[c] += flux[c];
             }
-            planes.push((*light, *plane, ViewPlanes::plane_seed(seed, *light, *k)));
+            planes.push(PlaneSeeds {
+                light: *light,
+                plane: *plane,
+                seed: ViewPlanes::plane_seed(seed, *light, *k),
+                jitter_seed: ViewPlanes::plane_seed(s.frame.seed, *light, *k),
+                stratum,
+            });
         }
         // the trace counters go into the statistics first (read at the frame's end like
         // the traversal's counts): the traversal's accounting takes their stored photons

@@ -12,7 +12,6 @@ use crate::frame::error::Error;
 use crate::frame::host::FrameHost;
 use crate::frame::pipeline::FrameBuilder;
 use crate::frame::plan::SceneFeatures;
-use crate::frame::receivers::accumulation_seed;
 use crate::frame::receivers::screen::{plan_frame, Needs, ScreenQuanta, ScreenReceiver};
 use crate::recording::Recording;
 
@@ -134,9 +133,8 @@ impl AdaptiveCausticsPipeline {
             photon_map: map.planes,
             trace_counters: map.counters,
         });
-        // a new seed for every frame an accumulating photon map adds
-        let seed = accumulation_seed(self.settings.frame.seed, receiver.frame_index());
-        self.traverse(host, frame, &target, map.counters, seed)?;
+        let pass = receiver.frame_index();
+        self.traverse(host, frame, &target, map.counters, pass)?;
         let Target::Screen { receiver, .. } = &mut self.target else {
             return Ok(());
         };

@@ -402,6 +402,22 @@ pub struct PhotonOptics {
     pub caster_spheres: crate::device::caster_spheres::CasterSpheres,
 }
 
+/// One light view plane of a frame's traversal and its seeds.
+#[derive(Clone, Copy, Debug)]
+pub struct PlaneSeeds {
+    /// The light's index in the scene.
+    pub light: u32,
+    /// The plane.
+    pub plane: LightViewPlane,
+    /// The pass's seed of the plane (its photons' random numbers).
+    pub seed: u32,
+    /// The first pass's seed of the plane, and this pass's stratum: the passes of an
+    /// accumulation stratify each cell together (`TraceParams::jitter_seed`, `stratum`).
+    pub jitter_seed: u32,
+    /// See `jitter_seed`.
+    pub stratum: u32,
+}
+
 /// The traversal's device buffers and sizes.
 #[derive(Clone, Debug)]
 pub struct Traversal {
@@ -690,7 +706,7 @@ impl Traversal {
         scene: SceneArgs,
         variant: TraceVariant,
         target: &DepositTarget,
-        planes: &[(u32, LightViewPlane, u32)],
+        planes: &[PlaneSeeds],
         optics: PhotonOptics,
     ) -> Result<(), Error> {
         let s = self.settings;
@@ -705,7 +721,8 @@ impl Traversal {
             dense_equivalent: 0,
             kernels: Vec::new(),
         };
-        for (k, (light, plane, plane_seed)) in planes.iter().enumerate() {
+        for (k, seeds) in planes.iter().enumerate() {
+            let (light, plane, plane_seed) = (&seeds.light, &seeds.plane, &seeds.seed);
             let finest = (plane.resolution.0 / s.start_grid).max(1).ilog2();
             if finest > self.finest || (s.start_grid << finest) != plane.resolution.0 {
                 return Err(Error::InvalidParameter(format!(
@@ -775,6 +792,8 @@ impl Traversal {
                         level,
                         grid: s.start_grid << level,
                         seed: cluster_level_seed(*plane_seed, level, finest),
+                        jitter_seed: cluster_level_seed(seeds.jitter_seed, level, finest),
+                        stratum: seeds.stratum,
                         finest,
                         metric: s.metric as u32,
                         list: (list, length, pass as u32 * c),
@@ -802,6 +821,7 @@ impl Traversal {
                     if resample {
                         let again = PassArgs {
                             seed: cluster_resample_seed(*plane_seed, level),
+                            jitter_seed: cluster_resample_seed(seeds.jitter_seed, level),
                             finest: level,
                             metric: cluster_metric::LEVEL,
                             list: (self.converged, self.converged_count, 0),
@@ -881,6 +901,10 @@ struct PassArgs {
     level: u32,
     grid: u32,
     seed: u32,
+    /// The jitter's seed and stratum (an accumulation's passes stratify each cell
+    /// together).
+    jitter_seed: u32,
+    stratum: u32,
     /// The level at which clusters are output (the plane's finest; the pass's own level
     /// when outputting converged clusters from fresh photons).
     finest: u32,
@@ -985,6 +1009,8 @@ impl Traversal {
                     dispersion_mode: optics.dispersion_mode,
                     caster_sphere_count: optics.caster_spheres.count,
                     caster_spheres: optics.caster_spheres.spheres,
+                    jitter_seed: a.jitter_seed,
+                    stratum: a.stratum,
                     ..at_level.trace_params(
                         light,
                         (first, 4 * c),
