@@ -29,7 +29,8 @@
 #endif
 // Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
 // of cluster clusters[p->first + i / 4] of the p->grid_w grid and is written to slot i,
-// stored or not (core's photon_store says how); photon_count is left untouched.
+// stored or not (core's photon_store says how), or with FUSED_DEPOSIT deposited (a level
+// whose every cluster is output); photon_count is left untouched.
 #ifndef ADAPTIVE
 #define ADAPTIVE 0
 #endif
@@ -386,8 +387,13 @@ __kernel void trace_photons(SCENE_PARAMS, __global const TraceParams* p,
             uint rays;
             int end = trace_photon(SCENE_ARGS, p, index, &ph, &rays);
             atomic_add_u64_local(&lc[COUNTER_RAYS], rays);
-            if (i < photon_capacity) photons[i] = cluster_slot(end, rays, &ph);
-            count_end(end, &ph, p->flux_quantum, lc);
+            if (FUSED_DEPOSIT) {
+                // a level whose every cluster is output: deposited, no slot
+                RECORD(end, &ph);
+            } else {
+                if (i < photon_capacity) photons[i] = cluster_slot(end, rays, &ph);
+                count_end(end, &ph, p->flux_quantum, lc);
+            }
         } else if (ADAPTIVE) {
             // past the list's live clusters: nothing to trace
         } else if (FRESNEL_SPLIT) {

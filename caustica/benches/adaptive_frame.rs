@@ -17,7 +17,9 @@
 //! `CAUSTICA_BENCH_SCENES=spot-glass,sphere`, `CAUSTICA_BENCH_START_GRID=64` (the
 //! traversal's start grid), `CAUSTICA_BENCH_KERNELS=1` (each level's time by kernel),
 //! `CAUSTICA_BENCH_PROBES=bounds` (a list of `traced`, `first_segment`, `bounds`: the
-//! adaptive rows under each `TraversalSettings::probe_levels`).
+//! adaptive rows under each `TraversalSettings::probe_levels`), `CAUSTICA_BENCH_FUSED=1` (a
+//! list of 1 and 0: the finest level's trace deposits, `TraversalSettings::fused_finest`,
+//! or writes slots for `refine_clusters`; rows of the latter say "slots").
 
 mod common;
 use caustica::scene::builtin::builtin;
@@ -33,6 +35,7 @@ use caustica::{Output, Outputs};
 use common::{env_or, median, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
+    "seed_clusters",
     "dispatch_args",
     "trace_photons",
     "refine_clusters",
@@ -66,6 +69,14 @@ fn main() {
             other => {
                 panic!("CAUSTICA_BENCH_PROBES: unknown {other:?} (traced, first_segment, bounds)")
             }
+        })
+        .collect();
+    let fused_settings: Vec<bool> = env_or("CAUSTICA_BENCH_FUSED", "1")
+        .split(',')
+        .map(|s| match s.trim() {
+            "1" => true,
+            "0" => false,
+            other => panic!("CAUSTICA_BENCH_FUSED: unknown {other:?} (1, 0)"),
         })
         .collect();
     println!(
@@ -108,17 +119,24 @@ fn main() {
                     },
                     ..CausticMapSettings::default()
                 };
-                let mut variants = vec![("dense", None, ProbeLevels::Bounds)];
+                let mut variants = vec![("dense".to_string(), None, ProbeLevels::Bounds, true)];
                 for probes in probe_settings.iter().copied() {
-                    let (level, error) = match probes {
-                        ProbeLevels::Bounds => ("level", "error"),
-                        ProbeLevels::FirstSegment => ("level, probes", "error, probes"),
-                        ProbeLevels::Traced => ("level, full traces", "error, full traces"),
-                    };
-                    variants.push((level, Some(AdaptiveMetric::Level), probes));
-                    variants.push((error, Some(AdaptiveMetric::Error), probes));
+                    for &fused in &fused_settings {
+                        let (level, error) = match probes {
+                            ProbeLevels::Bounds => ("level", "error"),
+                            ProbeLevels::FirstSegment => ("level, probes", "error, probes"),
+                            ProbeLevels::Traced => ("level, full traces", "error, full traces"),
+                        };
+                        let slots = if fused { "" } else { ", slots" };
+                        for (label, metric) in [
+                            (level, AdaptiveMetric::Level),
+                            (error, AdaptiveMetric::Error),
+                        ] {
+                            variants.push((format!("{label}{slots}"), Some(metric), probes, fused));
+                        }
+                    }
                 }
-                for (label, metric, probes) in variants {
+                for (label, metric, probes, fused) in variants {
                     let made = match metric {
                         None => CausticMap::new(backend.as_mut(), &scene, map.clone())
                             .map(|t| Box::new(t) as Box<dyn Technique>),
@@ -130,6 +148,7 @@ fn main() {
                                     metric,
                                     start_grid,
                                     probe_levels: probes,
+                                    fused_finest: fused,
                                     max_traversal_bytes: 256 << 20,
                                     ..AdaptiveCausticsSettings::default().traversal
                                 },
@@ -165,6 +184,7 @@ fn main() {
                                 frame.push(st.frame_ms);
                                 traversal_passes.push(
                                     [
+                                        "seed_clusters",
                                         "dispatch_args",
                                         "trace_photons",
                                         "refine_clusters",
@@ -221,7 +241,7 @@ fn main() {
                     );
                     if by_kernel {
                         println!(
-                            "    photon passes (dispatch_args + trace_photons + refine_clusters): {:.3} ms",
+                            "    photon passes (seed_clusters + dispatch_args + trace_photons + refine_clusters + deposit_screen): {:.3} ms",
                             median(&mut traversal_passes)
                         );
                         for (level, m) in kernel_ms.iter_mut().enumerate() {

@@ -277,15 +277,18 @@ fn the_level_metric_accumulates_as_the_dense_grid() {
 /// traversal's with full traces at every level, under both metrics, on every backend (and
 /// the screen target's raw caustics with the seed); the
 /// path ends still account for every photon traced (`AdaptiveStats::probes_met_caster`),
-/// the probes trace fewer ray segments and the seed fewer photons.
+/// the probes trace fewer ray segments and the seed fewer photons. The same holds with
+/// the seed when the finest level's trace deposits (`fused_finest`), whose every traced
+/// cluster counts as output.
 #[test]
 fn probe_levels_give_the_full_traversals_frame_bitwise() {
-    let settings = |metric, probe_levels| AdaptiveCausticsSettings {
+    let settings = |metric, (probe_levels, fused_finest)| AdaptiveCausticsSettings {
         traversal: TraversalSettings {
             metric,
             start_grid: 16,
             error_from_grid: 64,
             probe_levels,
+            fused_finest,
             ..AdaptiveCausticsSettings::default().traversal
         },
         ..caustica_conformance::adaptive_over(&map(256))
@@ -300,20 +303,29 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
                         AdaptiveCaustics::new(b, &scene, settings(metric, probes)).expect("scene");
                     render(b, t)
                 };
-                let (sf, full) = run(b.as_mut(), ProbeLevels::Traced);
+                let (sf, full) = run(b.as_mut(), (ProbeLevels::Traced, false));
                 let af = AdaptiveStats::of(&sf).expect("adaptive stats");
                 assert_eq!(af.probes_met_caster, 0);
                 assert_eq!(af.levels_seeded, 0);
-                for probes in [ProbeLevels::FirstSegment, ProbeLevels::Bounds] {
-                    let what = format!("{name} / {scene_name} / {metric:?} / {probes:?}");
-                    let (sp, probed) = run(b.as_mut(), probes);
+                for (probes, fused) in [
+                    (ProbeLevels::FirstSegment, false),
+                    (ProbeLevels::Bounds, false),
+                    (ProbeLevels::Bounds, true),
+                ] {
+                    let what =
+                        format!("{name} / {scene_name} / {metric:?} / {probes:?} / fused {fused}");
+                    let (sp, probed) = run(b.as_mut(), (probes, fused));
                     let ap = AdaptiveStats::of(&sp).expect("adaptive stats");
                     if let Some(out) = same_bits(&full, &probed) {
                         panic!("{what}: {out} differs from the full traversal's");
                     }
                     assert_eq!(sp.stored_flux, sf.stored_flux, "{what}: stored flux");
                     assert_eq!(sp.photons_stored, sf.photons_stored, "{what}");
-                    assert_eq!(ap.clusters_output, af.clusters_output, "{what}");
+                    if fused {
+                        assert!(ap.clusters_output >= af.clusters_output, "{what}");
+                    } else {
+                        assert_eq!(ap.clusters_output, af.clusters_output, "{what}");
+                    }
                     assert_eq!(ap.clusters_converged, af.clusters_converged, "{what}");
                     let d = &sp.discarded;
                     let ends = ap.photons_traced_stored
@@ -361,7 +373,8 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
                 }
             }
         }
-        // the screen target (Sspm's photon map) takes the same clusters' photons
+        // the screen target (Sspm's photon map) takes the same clusters' photons, deposited
+        // by the fused finest level's trace as by `deposit_screen`
         let scene = small("sphere");
         let raw = |b: &mut dyn Backend, probes| {
             let mut t = AdaptiveCaustics::new(
@@ -375,8 +388,8 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
             t.free(b).expect("free");
             (s, image)
         };
-        let (sf, full) = raw(b.as_mut(), ProbeLevels::Traced);
-        let (ss, seeded) = raw(b.as_mut(), ProbeLevels::Bounds);
+        let (sf, full) = raw(b.as_mut(), (ProbeLevels::Traced, false));
+        let (ss, seeded) = raw(b.as_mut(), (ProbeLevels::Bounds, true));
         assert!(AdaptiveStats::of(&ss).is_some_and(|a| a.levels_seeded > 0));
         assert_eq!(
             ss.stored_flux, sf.stored_flux,

@@ -79,10 +79,12 @@ fn every_backend_dispatches_every_declared_kernel() {
             "{name}: caustic map saw no photon"
         );
         passes.extend(stats.passes);
-        // Wyman 2009's traversal: the adaptive trace and refine_clusters
+        // Wyman 2009's traversal: the adaptive trace and refine_clusters (the finest
+        // level's slots judged, not deposited by its trace)
         let adaptive = AdaptiveCausticsSettings {
             traversal: TraversalSettings {
                 start_grid: 16,
+                fused_finest: false,
                 ..AdaptiveCausticsSettings::default().traversal
             },
             ..caustica_conformance::adaptive_over(&CausticMapSettings {

@@ -23,7 +23,8 @@ override SURFACE_STORE: bool = false;
 override FRESNEL_SPLIT: bool = false;
 // Wyman 2009's adaptive emission (core's TraceVariant::adaptive): photon i is photon i % 4
 // of cluster clusters[params.first + i / 4] of the params.grid_w grid and is written to
-// slot i, stored or not (core's photon_store says how); photon_count is left untouched.
+// slot i, stored or not (core's photon_store says how), or with FUSED_DEPOSIT deposited
+// (a level whose every cluster is output); photon_count is left untouched.
 override ADAPTIVE: bool = false;
 // The fused pass (core's TraceVariant::fused_deposit): a stored photon is deposited where
 // its path ends instead of into the photon buffer: with SURFACE_STORE into the caustic
@@ -416,10 +417,15 @@ fn trace_photons(i: u32, li: u32) {
             var rays: u32;
             let end = trace_photon(p, index, &ph, &rays);
             atomic_add_u64_local(COUNTER_RAYS, rays);
-            if (i < arrayLength(&photons)) {
-                photons[i] = cluster_slot(end, rays, ph);
+            if (FUSED_DEPOSIT) {
+                // a level whose every cluster is output: deposited, no slot
+                record_end(end, ph, p.flux_quantum);
+            } else {
+                if (i < arrayLength(&photons)) {
+                    photons[i] = cluster_slot(end, rays, ph);
+                }
+                count_end(end, ph, p.flux_quantum);
             }
-            count_end(end, ph, p.flux_quantum);
         } else if (ADAPTIVE) {
             // past the list's live clusters: nothing to trace
         } else if (FRESNEL_SPLIT) {

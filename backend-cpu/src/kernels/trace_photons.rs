@@ -501,7 +501,8 @@ fn trace_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION:
 /// (`photon_store`'s adaptive slot: an empty slot has zero flux, `direction` =
 /// [`NO_TRIANGLE`] and `position.z` = 1 if the photon met a caster), in texture space
 /// with `variant.surface_store` (the atlas target), else in world space (the screen
-/// target).
+/// target). With `variant.fused_deposit` the result holds the stored photons alone, in
+/// photon order, for the caller to deposit (a level whose every cluster is output).
 pub fn trace_cluster_slots(
     scene: &SceneView,
     p: &TraceParams,
@@ -513,7 +514,7 @@ pub fn trace_cluster_slots(
     } else {
         photon_store::WORLD
     };
-    let c = (clusters, store);
+    let c = (clusters, store, variant.fused_deposit);
     match (variant.dielectric, variant.dispersion, variant.absorption) {
         (false, false, false) => cluster_batch::<false, false, false>(scene, p, c),
         (false, false, true) => cluster_batch::<false, false, true>(scene, p, c),
@@ -554,9 +555,9 @@ pub fn cluster_slot(end: &PathEnd, rays: u32, store: u32) -> Photon {
 fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(
     scene: &SceneView,
     p: &TraceParams,
-    (clusters, store): (&[u32], u32),
+    (clusters, store, fused): (&[u32], u32, bool),
 ) -> TraceResult {
-    let parts: Vec<(Photon, Counters)> = (0..p.count)
+    let parts: Vec<(Option<Photon>, Counters)> = (0..p.count)
         .into_par_iter()
         .map(|i| {
             let cluster = entry_cluster(clusters[(p.first + i / 4) as usize]);
@@ -570,7 +571,11 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
             );
             let mut c = Counters::default();
             c.words[counter::RAYS] += rays as u64;
-            let slot = cluster_slot(&end, rays, store);
+            let slot = match end {
+                PathEnd::Stored(ph) if fused => Some(ph),
+                _ if fused => None,
+                _ => Some(cluster_slot(&end, rays, store)),
+            };
             count_end(end, p, &mut Vec::new(), &mut c);
             (slot, c)
         })
@@ -578,7 +583,7 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
     let mut counters = Counters::default();
     let mut photons = Vec::with_capacity(parts.len());
     for (ph, c) in parts {
-        photons.push(ph);
+        photons.extend(ph);
         counters = counters.merge(c);
     }
     TraceResult { photons, counters }

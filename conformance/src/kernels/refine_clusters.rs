@@ -20,6 +20,10 @@
 //!   texels) splat over several texels: integer decisions and integer atomics, so the cluster counts,
 //!   the child list as a multiset (its order is the atomics' arrival order), the atlas
 //!   sums and the counters must be **bitwise** equal.
+//! - The fused finest level ([`TraversalSettings::fused_finest`](caustica_core::techniques::adaptive_caustics::TraversalSettings::fused_finest): the adaptive trace with
+//!   `fused_deposit`), on the whole list and launched from its record over half of it:
+//!   the atlas sums, centroid sums, reach mask and counters bitwise those of the CPU's
+//!   atlas deposit of the stored slots that the same backend's adaptive trace wrote.
 //! - The screen target ([`check_screen_target`]): the trace in world space (slots
 //!   compared as above, positions within [`PHOTON_POSITION_REL`] of the scene), and
 //!   `refine_clusters` on the CPU's world slots with the fixture's camera. At the finest
@@ -29,7 +33,8 @@
 //!   a photon within a few ulps of a pixel edge may flip a cluster between converged and
 //!   refined: at most [`DEPOSIT_PHOTON_CHANGES`] of the slots (plus 2) may change a fate.
 
-use super::gather_caustic_map::layout;
+use super::gather_caustic_map::{cpu_deposit, layout};
+use super::trace_photons::run_fused_trace_as;
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
 use crate::harness::tolerance::{
     divergence_allowance, FluxMatch, DEPOSIT_PHOTON_CHANGES, PHOTON_POSITION_REL,
@@ -624,7 +629,82 @@ pub fn check_adaptive_caustics(
     v.check(differ <= k, || {
         format!("indirect trace: {differ} of {live} slots differ (allowance {k})")
     });
+    for (what, launch) in [("whole list", ListLaunch::whole(&list)), ("indirect half", half)] {
+        check_fused_clusters(&mut v, what, fx, c, (light, &p, &l), &list, launch)?;
+    }
     Ok(v)
+}
+
+/// The fused finest level on `c`: the adaptive trace with `fused_deposit` over `list`
+/// (launched as `launch`) deposits its stored photons itself. Checked against the CPU's
+/// atlas deposit of the stored slots that `c`'s own adaptive trace wrote (the same code
+/// up to where a stored photon goes): integer atomics of power-of-two quanta, so the
+/// sums, the centroid sums, the reach mask and the counters (the trace's plus the
+/// deposit's) must be **bitwise** equal.
+fn check_fused_clusters(
+    v: &mut Verdict,
+    what: &str,
+    fx: &Fixture,
+    c: &mut dyn Backend,
+    (light, p, l): (u32, &LightViewPlane, &AtlasLayout),
+    list: &[u32],
+    launch: ListLaunch,
+) -> Result<(), String> {
+    let (slots, trace_counters) = run_trace_as(fx, c, (light, p, true), list, launch)?;
+    // a stored slot (of a live cluster: the others stay zero) is the stored photon with
+    // its mark in position.z
+    let live = launch.length.saturating_sub(FIRST).min(list.len() as u32 - FIRST);
+    let stored: Vec<Photon> = slots[..4 * live as usize]
+        .iter()
+        .filter(|s| s.direction != NO_TRIANGLE)
+        .map(|s| Photon {
+            position: [s.position[0], s.position[1], 0.0],
+            ..*s
+        })
+        .collect();
+    let (es, deposit_counters, er, ecentroids) = cpu_deposit(l, &stored);
+    let ec: Vec<u32> = trace_counters
+        .iter()
+        .zip(&deposit_counters)
+        .map(|(t, d)| t.wrapping_add(*d))
+        .collect();
+    let count = 4 * (list.len() as u32 - FIRST);
+    let mut variant = caustica_core::frame::plan::SceneFeatures::of(&fx.scene).trace_variant();
+    variant.surface_store = true;
+    variant.adaptive = true;
+    variant.fused_deposit = true;
+    let (sums, counters, reach, centroids) = run_fused_trace_as(fx, c, l, variant, |rec| {
+        let clusters = rec.upload(list, "clusters");
+        let length = rec.upload(&[launch.length], "cluster list length");
+        let shape = dispatch(rec, launch, length, (count / 4, 4));
+        let params = p.trace_params(light, (FIRST, count), 0xada9, 12, 1e-4, quanta().0);
+        let batch = ClusterBatch {
+            list: clusters,
+            dispatch: shape,
+        };
+        (params, length, Some(batch))
+    })?;
+    v.check(counters == ec, || {
+        format!("fused trace, {what}: counters differ: expected {ec:?}, fused {counters:?}")
+    });
+    v.check(reach == er && centroids == ecentroids, || {
+        format!("fused trace, {what}: the reach mask or the centroid sums differ")
+    });
+    let equal = es.iter().zip(&sums).filter(|(a, b)| a == b).count();
+    v.check(equal == es.len() && sums.len() == es.len(), || {
+        format!(
+            "fused trace, {what}: {} of {} atlas texels differ from the deposit of the \
+             trace's {} stored slots (integer atomics must agree bitwise)",
+            es.len() - equal,
+            es.len(),
+            stored.len()
+        )
+    });
+    v.note(format!(
+        "fused trace, {what}: {} stored photons deposited",
+        stored.len()
+    ));
+    Ok(())
 }
 
 /// The screen target's trace and refinement (see the module doc).

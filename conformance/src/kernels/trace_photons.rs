@@ -26,7 +26,8 @@ use caustica_core::backend::{read_buf, read_photon_map};
 use caustica_core::device::layout::*;
 use caustica_core::device::layout::{counter, Photon};
 use caustica_core::frame::receivers::atlas::layout::{atlas_layout, atlas_receivers, AtlasLayout};
-use caustica_core::kernels::{AtlasDeposit, FusedDeposit, TracePhotons, TraceVariant};
+use caustica_core::device::handle::Buf;
+use caustica_core::kernels::{AtlasDeposit, ClusterBatch, FusedDeposit, TracePhotons, TraceVariant};
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::map_gather::triangle_reach_words;
 use caustica_core::recording::Recording;
@@ -363,10 +364,29 @@ fn run_fused_trace(
     variant: TraceVariant,
     split_budget: u32,
 ) -> Result<Deposit, String> {
+    run_fused_trace_as(fx, b, l, variant, |rec| {
+        let params = TraceParams {
+            split_budget,
+            ..fx.trace_batch(k)
+        };
+        (params, rec.create(1, "photon count"), None)
+    })
+}
+
+/// Runs a fused trace (`variant` with `fused_deposit`) on `b` into a cleared atlas of
+/// layout `l`: `batch` records its inputs and gives its parameters, its `photon_count`
+/// (the adaptive variant's list length) and its cluster list.
+pub(crate) fn run_fused_trace_as(
+    fx: &Fixture,
+    b: &mut dyn Backend,
+    l: &AtlasLayout,
+    variant: TraceVariant,
+    batch: impl FnOnce(&mut Recording) -> (TraceParams, Buf<u32>, Option<ClusterBatch>),
+) -> Result<Deposit, String> {
     let mut rec = Recording::new();
+    let (trace, photon_count, clusters) = batch(&mut rec);
     // the fused pass stores no photon: one slot, as CausticMap has
     let photons = rec.create(1, "photons");
-    let photon_count = rec.create(1, "photon count");
     let counters = rec.create(counter::WORDS as u32, "counters");
     let sums = rec.create_photon_map(l.texels.len() as u32);
     rec.clear_photon_map(&sums);
@@ -385,14 +405,11 @@ fn run_fused_trace(
     rec.kernel(TracePhotons {
         scene: fx.args,
         variant,
-        params: TraceParams {
-            split_budget,
-            ..fx.trace_batch(k)
-        },
+        params: trace,
         photons,
         photon_count,
         counters,
-        clusters: None,
+        clusters,
         deposit: Some(FusedDeposit::Atlas(AtlasDeposit {
             params: params(l, 1, 1),
             triangle_tiles,

@@ -41,13 +41,14 @@ pub struct TracePhotons {
     /// With the `adaptive` variant: the level's cluster list
     /// ([`crate::math::photon_clusters`]); photon `i` of the batch is photon `i % 4` of
     /// cluster `clusters[params.first + i / 4]` of the `params.grid_w` grid, and is
-    /// written to slot `i` of `photons` (`photon_store` says how). Otherwise `None` (the
-    /// binding then aliases the scene's triangles, read by nobody).
+    /// written to slot `i` of `photons` (`photon_store` says how), or deposited with the
+    /// `fused_deposit` variant. Otherwise `None` (the binding then aliases the scene's
+    /// triangles, read by nobody).
     pub clusters: Option<ClusterBatch>,
     /// With the `fused_deposit` variant: where each stored photon is deposited
-    /// ([`FusedDeposit`]); `photons` and `photon_count` are then neither read nor
-    /// written. Otherwise `None` (the bindings then alias buffers of the kernel's other
-    /// arguments, touched by nobody).
+    /// ([`FusedDeposit`]); `photons` is then neither read nor written, nor is
+    /// `photon_count` but for the adaptive variant's list length. Otherwise `None` (the
+    /// bindings then alias buffers of the kernel's other arguments, touched by nobody).
     pub deposit: Option<FusedDeposit>,
 }
 
@@ -164,10 +165,10 @@ impl KernelDecl for TracePhotons {
                 self.variant.fused_deposit && !self.variant.surface_store
             }
         };
-        if !fits || (self.variant.fused_deposit && self.variant.adaptive) {
+        if !fits {
             return Err(BackendError::BadArgument(
-                "trace_photons: the fused_deposit variant (not adaptive) goes with a deposit \
-                 target, the atlas in texture space, the screen in world space"
+                "trace_photons: the fused_deposit variant goes with a deposit target, the \
+                 atlas in texture space, the screen in world space"
                     .into(),
             ));
         }
@@ -312,13 +313,14 @@ pub struct TraceVariant {
     /// the stochastic choice); otherwise Sspm's stochastic Fresnel and channel choices.
     pub fresnel_split: bool,
     /// Wyman 2009's adaptive emission: photons come four by four from a cluster list, and
-    /// each is written to its own slot (stored or not) for `refine_clusters` to judge.
+    /// each is written to its own slot (stored or not) for `refine_clusters` to judge;
+    /// with `fused_deposit` too, each stored photon is deposited instead (a level whose
+    /// every cluster is output: no slots and no `refine_clusters`).
     pub adaptive: bool,
-    /// The fused pass (without `adaptive`): each stored photon is deposited where its
-    /// path ends instead of into the photon buffer, into the caustic atlas with
-    /// `surface_store` (CausticMap; [`AtlasDeposit`]: sums, counters and reach mask), into
-    /// the camera's screen photon map without (Sspm; [`ScreenDeposit`]): no photon
-    /// buffer and no second pass.
+    /// The fused pass: each stored photon is deposited where its path ends instead of
+    /// into the photon buffer, into the caustic atlas with `surface_store` (CausticMap;
+    /// [`AtlasDeposit`]: sums, counters and reach mask), into the camera's screen photon
+    /// map without (Sspm; [`ScreenDeposit`]): no photon buffer and no second pass.
     pub fused_deposit: bool,
 }
 

@@ -222,6 +222,7 @@ fn atlas_target(receiver: &AtlasReceiver) -> Option<AtlasTarget> {
         tiles: a.tiles,
         sums: a.sums,
         centroids: a.centroids,
+        triangle_reach: a.triangle_reach,
         atlas_width: receiver.settings().atlas.atlas_size,
         flux_quantum: quanta.flux_quantum,
         hit_distance_quantum: quanta.hit_distance_quantum,

@@ -30,9 +30,11 @@ pub struct AdaptiveStats {
     /// seed's `seed_clusters` under the last seeded level), in ms.
     #[serde(default)]
     pub ms_per_level_kernel: Vec<std::collections::BTreeMap<String, f64>>,
-    /// Clusters whose photons were deposited.
+    /// Clusters whose photons were deposited (at a level whose trace deposits, every
+    /// cluster traced there: [`TraversalSettings::fused_finest`](super::TraversalSettings)).
     pub clusters_output: u64,
-    /// Clusters none of whose photons met a caster.
+    /// Clusters none of whose photons met a caster (judged by `refine_clusters`; none at
+    /// a level whose trace deposits).
     pub clusters_discarded: u64,
     /// Clusters refined into four children.
     pub clusters_refined: u64,

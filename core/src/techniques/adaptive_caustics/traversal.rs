@@ -31,8 +31,8 @@ use crate::backend::PassTime;
 use crate::device::handle::{Buf, GBufferPlanes, PhotonMapPlanes, SceneArgs};
 use crate::device::launch::DISPATCH_RECORD_WORDS;
 use crate::device::layout::{
-    cluster_count, counter, AtlasTileTexel, DepositParams, GpuCamera, Photon, RefineParams,
-    SeedParams, TraceParams,
+    cluster_count, counter, AtlasParams, AtlasTileTexel, DepositParams, GpuCamera, Photon,
+    RefineParams, SeedParams, TraceParams,
 };
 use crate::frame::emission::light_view_plane::{LightViewPlane, ViewPlaneProjection};
 use crate::frame::emission::view_planes::ViewPlanes;
@@ -41,8 +41,8 @@ use crate::frame::pipeline::FrameBuilder;
 use crate::frame::stats::FrameStats;
 use crate::frame::submitted::{EndRead, FrameEnd};
 use crate::kernels::{
-    ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, RefineClusters, SeedClusters,
-    TracePhotons, TraceVariant,
+    AtlasDeposit, ClusterBatch, DepositScreen, DispatchArgs, DispatchRecord, FusedDeposit,
+    RefineClusters, ScreenDeposit, SeedClusters, TracePhotons, TraceVariant,
 };
 use crate::math::geometry::Aabb;
 use crate::math::photon_clusters::{
@@ -172,6 +172,13 @@ pub struct TraversalSettings {
     /// `error_from_grid` with the error metric; [`TraversalSettings::is_probe_level`]).
     /// Every choice gives bitwise the same atlas; see [`ProbeLevels`].
     pub probe_levels: ProbeLevels,
+    /// The finest level's trace deposits its stored photons itself (`trace_photons`'
+    /// adaptive variant with the fused deposit) instead of writing four slots a cluster
+    /// for `refine_clusters`: every cluster there is output, and one that would be
+    /// discarded holds no stored photon, so the map is bitwise the same either way. Its
+    /// clusters then all count as output ([`super::AdaptiveStats::clusters_output`]).
+    /// The default (`true`).
+    pub fused_finest: bool,
 }
 
 impl Default for TraversalSettings {
@@ -184,6 +191,7 @@ impl Default for TraversalSettings {
             error_texels: 1,
             max_traversal_bytes: 64 << 20,
             probe_levels: ProbeLevels::Bounds,
+            fused_finest: true,
         }
     }
 }
@@ -335,6 +343,9 @@ pub struct AtlasTarget {
     pub sums: PhotonMapPlanes,
     /// The atlas's centroid sums.
     pub centroids: Buf<u32>,
+    /// The atlas's reach mask (one bit a scene triangle; the fused finest level's
+    /// deposit sets it, as CausticMap's does).
+    pub triangle_reach: Buf<u32>,
     /// Atlas side (texels).
     pub atlas_width: u32,
     /// Flux per fixed-point unit (W).
@@ -459,12 +470,33 @@ pub struct Traversal {
     pub output_counters: Buf<u32>,
     /// Counters of the probe levels' photons (their path ends after one segment).
     probe_counters: Buf<u32>,
+    /// Per plane of a frame: counters of the fused finest level's photons (their path
+    /// ends, and the deposit's accounting of the stored ones).
+    fused_counters: Vec<Buf<u32>>,
     /// The screen target's output list (four slots per cluster of a pass; one unused
     /// entry with the atlas target) and its count.
     outputs: Buf<Photon>,
     output_count: Buf<u32>,
     /// Stand-ins for `refine_clusters`' atlas bindings with the screen target.
     no_atlas: Option<(Buf<u32>, Buf<AtlasTileTexel>, PhotonMapPlanes)>,
+}
+
+/// Photon counter words as read back ([`counter`]; missing ones 0), the 64-bit ones
+/// (rays, stored flux) joined at their first word (the second then 0), so that
+/// counters of several buffers add without a carry.
+fn wide_counters(c: &[u32]) -> [u64; counter::WORDS] {
+    let word = |i: usize| c.get(i).copied().unwrap_or(0);
+    let mut w: [u64; counter::WORDS] = std::array::from_fn(|i| word(i) as u64);
+    for i in [
+        counter::RAYS,
+        counter::STORED_FLUX,
+        counter::STORED_FLUX + 2,
+        counter::STORED_FLUX + 4,
+    ] {
+        w[i] = crate::math::fixed_point::join_u64([word(i), word(i + 1)]);
+        w[i + 1] = 0;
+    }
+    w
 }
 
 /// The `dispatch_args` rows of a pass from list entry `first` of `bound` clusters: its
@@ -488,6 +520,9 @@ struct LevelRead {
     /// A probe level the bounds seed stood for (nothing traced; the last one's `CHILDREN`
     /// word holds the seeded list's length).
     seeded: bool,
+    /// Index of the plane's fused-level counters among the frame's readbacks, at a level
+    /// whose trace deposited (no `refine_clusters`: its counts stay clear).
+    fused: Option<usize>,
 }
 
 /// What a frame's traversal reads back at the frame's end and how it becomes
@@ -526,6 +561,8 @@ impl FrameEnd for TraversalReadback {
         a.photons_output_per_level.resize(levels, 0);
         a.ms_per_level.resize(levels, 0.0);
         a.ms_per_level_kernel.resize(levels, Default::default());
+        // the fused levels' counters (path ends and deposit of their stored photons)
+        let mut fused = [0u64; counter::WORDS];
         for plane in &self.planes {
             let mut length = plane.first().map_or(0, |l| l.capacity);
             for l in plane.iter().enumerate() {
@@ -550,6 +587,12 @@ impl FrameEnd for TraversalReadback {
                 a.photons_processed += traced;
                 a.photons_per_level[level] += traced;
                 a.photons_output_per_level[level] += w(cluster_count::OUTPUT_PHOTONS);
+                if let Some(f) = read.fused.map(|i| wide_counters(&words(i))) {
+                    // no refinement: every traced cluster is output
+                    a.clusters_output += taken;
+                    a.photons_output_per_level[level] += f[counter::STORED];
+                    fused.iter_mut().zip(f).for_each(|(s, w)| *s += w);
+                }
                 let passes = taken.div_ceil(self.pass_clusters.max(1))
                     + resampled.div_ceil(self.pass_clusters.max(1));
                 a.steps += passes as u32;
@@ -572,18 +615,27 @@ impl FrameEnd for TraversalReadback {
         }
         let o = words(self.output_counters);
         if o.len() >= counter::WORDS {
-            let o64 = |i: usize| crate::math::fixed_point::join_u64([o[i], o[i + 1]]);
-            a.photons_traced_stored = stats.photons_stored;
-            stats.photons_stored = o[counter::STORED] as u64;
-            stats.photons_deposited = o[counter::DEPOSITED] as u64;
-            stats.discarded.off_screen = o[counter::OFF_SCREEN] as u64;
-            stats.discarded.depth_mismatch = o[counter::DEPTH_MISMATCH] as u64;
-            stats.fixed_point_underflow = o[counter::UNDERFLOW] as u64;
-            stats.fixed_point_saturated = o[counter::SATURATED] as u64;
+            // the output photons: refined clusters' and the fused levels'
+            let mut out = wide_counters(&o);
+            out.iter_mut().zip(fused).for_each(|(s, w)| *s += w);
+            a.photons_traced_stored = stats.photons_stored + fused[counter::STORED];
+            stats.photons_stored = out[counter::STORED];
+            stats.photons_deposited = out[counter::DEPOSITED];
+            stats.discarded.off_screen = out[counter::OFF_SCREEN];
+            stats.discarded.depth_mismatch = out[counter::DEPTH_MISMATCH];
+            stats.fixed_point_underflow = out[counter::UNDERFLOW];
+            stats.fixed_point_saturated = out[counter::SATURATED];
             for ch in 0..3 {
                 stats.stored_flux[ch] =
-                    o64(counter::STORED_FLUX + 2 * ch) as f64 * self.flux_quantum as f64;
+                    out[counter::STORED_FLUX + 2 * ch] as f64 * self.flux_quantum as f64;
             }
+            // the fused levels' other path ends, as the trace counters' of other levels
+            stats.discarded.no_specular += fused[counter::NO_SPECULAR];
+            stats.discarded.escaped += fused[counter::ESCAPED];
+            stats.discarded.negligible_power += fused[counter::NEGLIGIBLE];
+            stats.discarded.bounce_limit += fused[counter::BOUNCE_LIMIT];
+            stats.photon_splits += fused[counter::SPLITS];
+            stats.photon_rays_traced += fused[counter::RAYS];
         }
         // probe photons: their misses are path ends like any other; those that met a
         // caster ended at their one segment (`probes_met_caster`)
@@ -676,6 +728,9 @@ impl Traversal {
             resample_args: rec.create(records, "adaptive converged dispatch records"),
             output_counters: rec.create(counter::WORDS as u32, "adaptive output counters"),
             probe_counters: rec.create(counter::WORDS as u32, "adaptive probe counters"),
+            fused_counters: (0..planes.max(1))
+                .map(|_| rec.create(counter::WORDS as u32, "adaptive fused-level counters"))
+                .collect(),
             outputs: rec.create(if screen { 4 * c } else { 1 }, "adaptive output photons"),
             output_count: rec.create(1, "adaptive output photon count"),
             no_atlas: screen.then(|| {
@@ -754,6 +809,7 @@ impl Traversal {
                         capacity: 0,
                         children_capacity: 0,
                         seeded: true,
+                        fused: None,
                     });
                     if level + 1 == p {
                         self.record_seed(frame, p, counts, &rects, &mut read);
@@ -774,11 +830,17 @@ impl Traversal {
                 } else {
                     (self.no_children, 0)
                 };
+                // the finest level outputs every cluster: its trace may deposit
+                let fused = (s.fused_finest && level == finest).then_some(self.fused_counters[k]);
+                if let Some(c) = fused {
+                    frame.rec().clear(c);
+                }
                 levels.push(LevelRead {
                     counts: frame.read_at_end(counts),
                     capacity,
                     children_capacity: children_capacity as u64,
                     seeded: false,
+                    fused: fused.map(|c| frame.read_at_end(c)),
                 });
                 let c = self.sizes.pass_clusters;
                 // converged clusters (the error metric, from its level) and overflowed
@@ -804,6 +866,7 @@ impl Traversal {
                         converged: (self.converged, self.converged_count),
                         counts,
                         probe,
+                        fused,
                     };
                     if resample {
                         frame.rec().clear(self.converged_count);
@@ -831,6 +894,7 @@ impl Traversal {
                             children: (self.no_children, 0),
                             converged: (self.no_converged, self.no_converged_count),
                             probe: false,
+                            fused: None,
                             ..step
                         };
                         self.record_pass(
@@ -925,6 +989,9 @@ struct PassArgs {
     counts: Buf<u32>,
     /// Trace each photon's first segment only, into the probe counters.
     probe: bool,
+    /// Deposit each stored photon in the trace, with these counters (a level whose
+    /// every cluster is output), instead of slots and `refine_clusters`.
+    fused: Option<Buf<u32>>,
 }
 
 impl Traversal {
@@ -999,11 +1066,38 @@ impl Traversal {
                 record,
             })
         };
+        // the fused level's deposit: the target's sums, as the refinement adds them
+        let deposit = a.fused.map(|_| match target {
+            DepositTarget::Atlas(t) => FusedDeposit::Atlas(AtlasDeposit {
+                params: AtlasParams {
+                    width: t.atlas_width,
+                    height: t.atlas_width,
+                    flux_quantum,
+                    hit_distance_quantum,
+                    photon_capacity: 1,
+                    gather_width: 1,
+                    _pad: [0; 2],
+                },
+                triangle_tiles: t.triangle_tiles,
+                tiles: t.tiles,
+                triangle_reach: t.triangle_reach,
+                sums: t.sums,
+                centroids: t.centroids,
+            }),
+            DepositTarget::Screen(sc) => FusedDeposit::Screen(ScreenDeposit {
+                params: sc.deposit,
+                gbuffer: sc.gbuffer,
+                photon_map: sc.photon_map,
+            }),
+        });
         kernel(
             frame,
             TracePhotons {
                 scene,
-                variant,
+                variant: TraceVariant {
+                    fused_deposit: deposit.is_some(),
+                    ..variant
+                },
                 params: TraceParams {
                     fresnel_model: optics.fresnel_model,
                     dispersion_mode: optics.dispersion_mode,
@@ -1022,19 +1116,22 @@ impl Traversal {
                 },
                 photons: self.slots,
                 photon_count: length,
-                counters: if a.probe {
-                    self.probe_counters
-                } else {
-                    target.trace_counters()
+                counters: match (a.probe, a.fused) {
+                    (true, _) => self.probe_counters,
+                    (false, Some(c)) => c,
+                    (false, None) => target.trace_counters(),
                 },
                 clusters: Some(ClusterBatch {
                     list,
                     dispatch: record(0),
                 }),
-                deposit: None,
+                deposit,
             }
             .into(),
         );
+        if a.fused.is_some() {
+            return Ok(());
+        }
         kernel(
             frame,
             RefineClusters {
