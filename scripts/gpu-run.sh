@@ -19,7 +19,8 @@ Sections:
   caustic-map  CausticMap's checks and stiff cases; every setting, Fresnel split and gather
   adaptive     AdaptiveCaustics (ADAPTIVE_PARTS=checks,frames by default; table,footprint,screen)
   photon-gi    PhotonGi's checks and stiff cases, its frames at the chapter's two settings
-               with each schedule of trace_indirect (CAUSTICA_BENCH_GI_SCHEDULES)
+               with each schedule of trace_indirect (CAUSTICA_BENCH_GI_SCHEDULES,
+               CAUSTICA_BENCH_GI_QUEUE; PHOTON_GI_TIMES_ONLY=1 skips the checks)
   dispersion   spectral dispersion against the CPU on every backend, the prism's closed forms
   dynamic      moving lights and instances, deformations, the non-blocking loop (frame_loop)
   traversal    indirect launches checked, AdaptiveCaustics' device traversal timed, host waits
@@ -120,12 +121,14 @@ adaptive_screen() {
         --budgets 512x512,1024x1024,2048x2048,4096x4096 --repeats 3 --reference-noise 0.01 --out "$OUT/report-adaptive-screen"
 }
 photon_gi() {
-    check 200 ./cross_backend photon_gi; check 240 ./photon_gi_frames --nocapture; check 200 ./photon_gi_stiff
-    check 120 ./photon_plan; check 200 ./photon_gi_schedules --nocapture
-    # trace_indirect's schedules (CAUSTICA_BENCH_GI_SCHEDULES=single_kernel,waves,sorted_waves;
-    # waves CAUSTICA_BENCH_GI_WAVES), each timed at every setting
+    if [ -z "${PHOTON_GI_TIMES_ONLY:-}" ]; then
+        check 200 ./cross_backend photon_gi; check 240 ./photon_gi_frames --nocapture; check 200 ./photon_gi_stiff
+        check 120 ./photon_plan; check 200 ./photon_gi_schedules --nocapture
+    fi
+    # trace_indirect's schedules (CAUSTICA_BENCH_GI_SCHEDULES=auto,single_kernel,waves,sorted_waves;
+    # waves CAUSTICA_BENCH_GI_WAVES, queues CAUSTICA_BENCH_GI_QUEUE), each timed at every setting
     bench 500 CAUSTICA_BENCH_SETTINGS="${CAUSTICA_BENCH_SETTINGS:-high,low}" \
-        CAUSTICA_BENCH_GI_SCHEDULES="${CAUSTICA_BENCH_GI_SCHEDULES:-single_kernel,waves,sorted_waves}" \
+        CAUSTICA_BENCH_GI_SCHEDULES="${CAUSTICA_BENCH_GI_SCHEDULES:-auto,single_kernel,waves,sorted_waves}" \
         ./photon_gi_frame --bench
 }
 dispersion() { check 300 ./spectral_dispersion; run ./optics_closed_form --nocapture; }

@@ -177,9 +177,11 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
     if (!WAVES || p->segment_first == 0u) {
         // a warp's samples in one small box of the Hammersley square (its RSM photons
         // near each other), not a column across it
-        live = i < p->count;
+        // (the launch's chunk of the light's photons)
+        uint n = chunk_photons(p->count, p->chunk_first, p->chunk_size);
+        live = i < n;
         if (live) {
-            uint index = p->first + coherent_sample_order(i, p->count);
+            uint index = p->first + p->chunk_first + coherent_sample_order(i, n);
             live = indirect_path_from_rsm(rsm_photons[index], index, &path, lc);
         }
     } else {

@@ -11,9 +11,10 @@
 //! Environment: `CAUSTICA_BENCH_BACKENDS` (default: every backend that opens here),
 //! `CAUSTICA_BENCH_FRAMES=N` (default 5), `CAUSTICA_BENCH_SETTINGS=high,low`,
 //! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080),
-//! `CAUSTICA_BENCH_GI_SCHEDULES=single_kernel,waves,sorted_waves` (`trace_indirect`'s
-//! schedules, default `single_kernel`; each timed in turn),
-//! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8).
+//! `CAUSTICA_BENCH_GI_SCHEDULES=auto,single_kernel,waves,sorted_waves` (`trace_indirect`'s
+//! schedules, default `auto`, the settings' default; each timed in turn),
+//! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8),
+//! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^20).
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
 
@@ -36,7 +37,13 @@ fn main() {
         .expect("WxH");
     let wanted = env_or("CAUSTICA_BENCH_BACKENDS", &BACKEND_NAMES.join(","));
     let settings = env_or("CAUSTICA_BENCH_SETTINGS", "high,low");
-    let schedules = env_or("CAUSTICA_BENCH_GI_SCHEDULES", "single_kernel");
+    let schedules = env_or("CAUSTICA_BENCH_GI_SCHEDULES", "auto");
+    let queue: u32 = env_or(
+        "CAUSTICA_BENCH_GI_QUEUE",
+        &PhotonGiSettings::default().indirect_queue_paths.to_string(),
+    )
+    .parse()
+    .expect("queue paths");
     let waves: u32 = env_or(
         "CAUSTICA_BENCH_GI_WAVES",
         &PhotonGiSettings::default().indirect_waves.to_string(),
@@ -71,6 +78,7 @@ fn main() {
                 other => panic!("unknown setting {other}"),
             };
             let indirect_schedule = match schedule {
+                "auto" => IndirectSchedule::Auto,
                 "single_kernel" => IndirectSchedule::SingleKernel,
                 "waves" => IndirectSchedule::Waves,
                 "sorted_waves" => IndirectSchedule::SortedWaves,
@@ -85,12 +93,15 @@ fn main() {
                 bounces,
                 indirect_schedule,
                 indirect_waves: waves,
+                indirect_queue_paths: queue,
                 ..PhotonGiSettings::default()
             };
-            let setting = if schedule == "single_kernel" {
-                setting.to_string()
-            } else {
-                format!("{setting}, {schedule} ({waves})")
+            let setting = match s.schedule() {
+                IndirectSchedule::SingleKernel => format!("{setting}, {schedule}: single_kernel"),
+                run => format!(
+                    "{setting}, {schedule}: {} ({waves} waves, queues of {queue} paths)",
+                    serde_json::to_value(run).map_or(String::new(), |v| v.to_string())
+                ),
             };
             let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {
                 Ok(t) => t,

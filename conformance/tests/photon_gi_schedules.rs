@@ -6,8 +6,9 @@
 //! for bit, and so are the photon statistics. Checked on `cornell` and `rooms`, over two
 //! frames (the first selects the photon plan on the device and launches the lights from
 //! it, the second from the plan read back), with the splat, the raw deposit, one wave
-//! per segment and the default waves, and the sorted waves; and `sort_indirect_paths`
-//! against the CPU on proptest-drawn queues.
+//! per segment and the default waves, the sorted waves, and the waves over queues that
+//! hold a fraction of a light's photons (its photons in chunks, the last one partial);
+//! and `sort_indirect_paths` against the CPU on proptest-drawn queues.
 
 use caustica_conformance::backends;
 use caustica_conformance::harness;
@@ -75,14 +76,24 @@ fn waves_render_the_single_launchs_images_bitwise() {
                     "indirect_schedule": "single_kernel"
                 });
                 let single = frames(b.as_mut(), &s, &base);
-                for (schedule, waves) in [("waves", 8), ("waves", 16), ("sorted_waves", 8)] {
+                // (the 96^2 photons of a light in chunks of 1000 and of 4096)
+                for (schedule, waves, queue) in [
+                    ("waves", 8, 1 << 20),
+                    ("waves", 16, 1 << 20),
+                    ("sorted_waves", 8, 1 << 20),
+                    ("waves", 8, 1000),
+                    ("sorted_waves", 8, 4096),
+                ] {
                     let mut w = base.clone();
                     w["indirect_schedule"] = schedule.into();
                     w["indirect_waves"] = waves.into();
+                    w["indirect_queue_paths"] = queue.into();
                     let waved = frames(b.as_mut(), &s, &w);
                     for (k, (a, c)) in single.iter().zip(&waved).enumerate() {
-                        let what =
-                            format!("{name} {scene_name} {estimator} {waves} waves frame {k}");
+                        let what = format!(
+                            "{name} {scene_name} {estimator} {schedule} {waves} queue {queue} \
+                             frame {k}"
+                        );
                         if a.1 != c.1 {
                             failures.push(format!("{what}: statistics {} vs {}", c.1, a.1));
                         }

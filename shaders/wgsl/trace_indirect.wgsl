@@ -194,9 +194,11 @@ fn trace_indirect(i: u32, li: u32) {
     if (!WAVES || p.segment_first == 0u) {
         // a warp's samples in one small box of the Hammersley square (its RSM photons
         // near each other), not a column across it
-        live = i < p.count;
+        // (the launch's chunk of the light's photons)
+        let n = chunk_photons(p.count, p.chunk_first, p.chunk_size);
+        live = i < n;
         if (live) {
-            let index = p.first + coherent_sample_order(i, p.count);
+            let index = p.first + p.chunk_first + coherent_sample_order(i, n);
             live = indirect_path_from_rsm(rsm_photons[index], index, &path);
         }
     } else {

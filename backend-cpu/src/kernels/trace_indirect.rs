@@ -17,7 +17,9 @@ use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::optics::{beer_lambert, dielectric_scatter, dispersive_ior, reflect};
 use caustica_core::math::packing::{pack_rgb9e5, pack_unit_vector, unpack_unit_vector};
 use caustica_core::math::rng::random_f32;
-use caustica_core::math::rsm::{coherent_sample_order, cosine_hemisphere, russian_roulette};
+use caustica_core::math::rsm::{
+    chunk_photons, coherent_sample_order, cosine_hemisphere, russian_roulette,
+};
 use caustica_core::math::spectrum::disperse;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -110,7 +112,8 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
 /// Where a launch's paths come from.
 #[derive(Clone, Copy)]
 pub enum IndirectSource<'a> {
-    /// The RSM photons `p.first .. p.first + p.count` (segment 0).
+    /// The RSM photons `p.first .. p.first + p.count`, the launch's chunk of them
+    /// (segment 0).
     Rsm(&'a [RsmPhoton]),
     /// The paths an earlier wave queued (thread `t` continues path `t`).
     Queue(&'a [IndirectPath]),
@@ -140,7 +143,7 @@ pub fn trace_indirect(
 ) -> IndirectResult {
     let tile_counts: Vec<AtomicU32> = (0..tiles).map(|_| AtomicU32::new(0)).collect();
     let threads = match source {
-        IndirectSource::Rsm(_) => p.count,
+        IndirectSource::Rsm(_) => chunk_photons(p.count, p.chunk_first, p.chunk_size),
         IndirectSource::Queue(q) => q.len() as u32,
     };
     let parts: Vec<(Vec<[u32; 8]>, Counters, Vec<IndirectPath>)> = (0..threads.div_ceil(256))
@@ -152,7 +155,7 @@ pub fn trace_indirect(
             for i in c * 256..((c + 1) * 256).min(threads) {
                 let path = match source {
                     IndirectSource::Rsm(rsm) => {
-                        let index = p.first + i;
+                        let index = p.first + p.chunk_first + i;
                         indirect_path_from_rsm(&rsm[index as usize], index, &mut counters)
                     }
                     IndirectSource::Queue(q) => Some(q[i as usize]),

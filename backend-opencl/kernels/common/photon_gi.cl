@@ -66,6 +66,11 @@ inline float2 hammersley(uint i, uint n, float2 shift) {
     return (float2)(wrap_unit(u.x), wrap_unit(u.y));
 }
 
+// rsm::chunk_photons: the photons of a launch's chunk below count.
+inline uint chunk_photons(uint count, uint chunk_first, uint chunk_size) {
+    return min(count - min(chunk_first, count), chunk_size);
+}
+
 // rsm::coherent_sample_order: the sample thread t of a launch over n samples traces.
 inline uint coherent_sample_order(uint t, uint n) {
     if (n < 64u) return t;

@@ -479,9 +479,9 @@ struct IndirectTraceParams {
     uint dispersion_mode; // 104
     uint segment_first; // 108
     uint segment_end; // 112
-    uint _pad0; // 116
-    uint _pad1; // 120
-    uint _pad2; // 124
+    uint chunk_first; // 116
+    uint chunk_size; // 120
+    uint _pad; // 124
 };
 
 // core::device::layout::IndirectPath, 48 bytes

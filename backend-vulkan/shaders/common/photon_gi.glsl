@@ -20,6 +20,11 @@ precise vec4 russian_roulette(vec3 flux, vec3 albedo, float xi) {
     return vec4(0.0);
 }
 
+// rsm::chunk_photons: the photons of a launch's chunk below count.
+uint chunk_photons(uint count, uint chunk_first, uint chunk_size) {
+    return min(count - min(chunk_first, count), chunk_size);
+}
+
 // rsm::coherent_sample_order: the sample thread t of a launch over n samples traces.
 uint coherent_sample_order(uint t, uint n) {
     if (n < 64u) return t;

@@ -90,7 +90,9 @@ pub(crate) fn run_trace_waves(
         dispersion_mode: caustica_core::math::spectrum::dispersion_mode::SPECTRAL,
         segment_first: 0,
         segment_end: MAX_SEGMENTS,
-        _pad: [0; 3],
+        chunk_first: 0,
+        chunk_size: u32::MAX,
+        _pad: 0,
     };
     let single = TraceIndirect {
         scene: fx.args,

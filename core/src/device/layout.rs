@@ -673,8 +673,14 @@ pub struct IndirectTraceParams {
     /// The launch's end segment (exclusive): `max_segments` traces each path to its end;
     /// less (a wave) queues the paths still going after segment `segment_end - 1`.
     pub segment_end: u32,
+    /// The launch's chunk of the `count` photons (from their start): a launch from the
+    /// RSM photons traces photons `chunk_first .. chunk_first + chunk_size` of them that
+    /// are below `count` ([`crate::math::rsm::chunk_photons`]); 0 and `u32::MAX`: all.
+    pub chunk_first: u32,
+    /// See `chunk_first`.
+    pub chunk_size: u32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 3],
+    pub _pad: u32,
 }
 
 /// A `trace_indirect` path between two waves (the `WAVES` variant): everything its next

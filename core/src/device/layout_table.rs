@@ -241,7 +241,7 @@ table! {
     IndirectTraceParams {
         camera, first, count, seed, max_bounces, max_segments, tile_size, store,
         fresnel_model, power_scale, flux_quantum, dispersion_mode, segment_first, segment_end,
-        _pad
+        chunk_first, chunk_size, _pad
     }
     IndirectPath { origin, index, direction, bounces, flux, wavelength }
     PathSortParams { origin_min, phase, origin_scale, count_word }

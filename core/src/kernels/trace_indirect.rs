@@ -6,8 +6,11 @@ use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, SceneArgs};
 use crate::device::layout::{IndirectPath, IndirectTraceParams, RsmPhoton};
 use crate::math::gi_photon::screen_tiles;
+use crate::math::rsm::chunk_photons;
 
-/// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s).
+/// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s), or
+/// the launch's chunk of them (`chunk_first`, `chunk_size`: [`chunk_photons`], so that a
+/// light's photons can go through the waves in chunks that bounded queues hold).
 /// At a diffuse hit a photon that has bounced diffusely at least once (all do: the RSM
 /// point is the first bounce, or a specular RSM point leads to a later one) is stored
 /// if the hit faces the camera, projects inside its view and the camera sees it there (a
@@ -24,9 +27,9 @@ use crate::math::gi_photon::screen_tiles;
 /// Random dimensions (`rng::random_f32(seed, first + i, segment, d)` for photon
 /// `first + i`): d 0, 1 the bounce direction, d 2 the roulette, d 3 the Fresnel choice, d 4
 /// the channel (three bands); a spectral wavelength is `spectrum::spectral_sample(seed,
-/// first + i)`. GPU thread `t` traces photon `first +
-/// math::rsm::coherent_sample_order(t, count)` (a warp's samples near each other); the
-/// CPU traces them in order. A path depends on its photon alone, so only the order of the
+/// first + i)`. GPU thread `t` traces photon `first + chunk_first +
+/// math::rsm::coherent_sample_order(t, n)` of the chunk's `n` photons (a warp's samples
+/// near each other); the CPU traces them in order. A path depends on its photon alone, so only the order of the
 /// appended photons differs.
 ///
 /// Counters ([`crate::device::layout::counter`], read for this kernel as): `STORED`
@@ -215,6 +218,11 @@ impl KernelDecl for TraceIndirect {
             }
         }
         a.indirect(self.dispatch)?;
-        Ok(Some(p.count as u64))
+        // threads: the chunk's photons, or a later wave's queue at most
+        let threads = match &self.waves {
+            Some(w) if p.segment_first > 0 => p.count.min(w.paths_out.len),
+            _ => chunk_photons(p.count, p.chunk_first, p.chunk_size),
+        };
+        Ok(Some(threads as u64))
     }
 }

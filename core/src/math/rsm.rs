@@ -174,6 +174,14 @@ pub fn coherent_sample_order(t: u32, n: u32) -> u32 {
     ((t & ((1 << hi) - 1)) << k) | (t >> hi)
 }
 
+/// Photons a launch of `trace_indirect` from the RSM photons traces: those of its chunk
+/// `chunk_first .. chunk_first + chunk_size` below `count` (the light's photons); thread
+/// `t` traces photon `chunk_first + coherent_sample_order(t, chunk_photons(..))`.
+#[inline]
+pub fn chunk_photons(count: u32, chunk_first: u32, chunk_size: u32) -> u32 {
+    count.saturating_sub(chunk_first).min(chunk_size)
+}
+
 /// `x` (in `[0, 2)`) wrapped into `[0, 1)`.
 #[inline]
 fn wrap_unit(x: f32) -> f32 {

@@ -479,9 +479,9 @@ struct IndirectTraceParams {
     dispersion_mode: u32, // 104
     segment_first: u32, // 108
     segment_end: u32, // 112
-    _pad0: u32, // 116
-    _pad1: u32, // 120
-    _pad2: u32, // 124
+    chunk_first: u32, // 116
+    chunk_size: u32, // 120
+    _pad: u32, // 124
 }
 
 // core::device::layout::IndirectPath, 48 bytes

@@ -70,6 +70,11 @@ fn hammersley(i: u32, n: u32, shift: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(wrap_unit(u.x), wrap_unit(u.y));
 }
 
+// rsm::chunk_photons: the photons of a launch's chunk below count.
+fn chunk_photons(count: u32, chunk_first: u32, chunk_size: u32) -> u32 {
+    return min(count - min(chunk_first, count), chunk_size);
+}
+
 // rsm::coherent_sample_order: the sample thread t of a launch over n samples traces.
 fn coherent_sample_order(t: u32, n: u32) -> u32 {
     if (n < 64u) {

@@ -153,12 +153,15 @@ struct Buffers {
     waves: Option<WaveBuffers>,
 }
 
-/// The `waves` schedule's queues: two of every path a light can trace (wave `k` reads
-/// `paths[k % 2]` and appends to the other; sorted, every wave appends to `paths[1]`,
-/// which the sort moves into `paths[0]` for the next: no path is ever lost), the
-/// per-segment queue lengths, the later waves' launch records (`dispatch_args` over
-/// `rows`, row `k - 1` = `[0, every initial photon, 1, k]` for wave `k`), and the sort's
-/// buckets (`sorted_waves`).
+/// The `waves` schedule's queues: two of every path of a chunk of a light's photons
+/// (wave `k` reads `paths[k % 2]` and appends to the other; sorted, every wave appends to
+/// `paths[1]`, which the sort moves into `paths[0]` for the next: no path is ever lost),
+/// the per-segment queue lengths, the later waves' launch records (`dispatch_args` over
+/// `rows`, row `k - 1` = `[0, the queue's paths, 1, k]` for wave `k`), and the sort's
+/// buckets (`sorted_waves`). A light's photons go through the waves in `chunks` chunks
+/// of `chunk` photons (`indirect_queue_paths`); with more than one, the chunks' first
+/// waves launch from records of their own (`chunk_rows`: per light `k` and chunk `c`,
+/// row `k * chunks + c` = `[c * chunk, chunk, 1, the light's count]`).
 #[derive(Clone, Copy, Debug)]
 struct WaveBuffers {
     paths: [Buf<IndirectPath>; 2],
@@ -166,14 +169,44 @@ struct WaveBuffers {
     rows: Buf<[u32; 4]>,
     dispatch: Buf<u32>,
     buckets: Option<Buf<u32>>,
+    chunk: u32,
+    chunks: u32,
+    chunk_rows: Option<(Buf<[u32; 4]>, Buf<u32>)>,
 }
 
 impl WaveBuffers {
-    /// Records the creation of the queues of `waves` waves (more than one) of at most
-    /// `total` paths each.
-    fn create(rec: &mut Recording, total: u32, waves: u32, sorted: bool) -> WaveBuffers {
+    /// Records the creation of the queues of `waves` waves (more than one) for lights of
+    /// at most `bound` photons each (`lights` of them), taken in chunks of at most
+    /// `queue_paths` photons.
+    fn create(
+        rec: &mut Recording,
+        (bound, lights): (u32, usize),
+        queue_paths: u32,
+        waves: u32,
+        sorted: bool,
+    ) -> WaveBuffers {
         let later = waves - 1;
+        let total = bound.min(queue_paths).max(1);
+        let chunks = bound.div_ceil(total).max(1);
+        let chunk_rows = (chunks > 1).then(|| {
+            let rows: Vec<[u32; 4]> = (0..lights)
+                .flat_map(|k| {
+                    (0..chunks)
+                        .map(move |c| [c * total, total, 1, (photon_plan_word::COUNTS + k) as u32])
+                })
+                .collect();
+            (
+                rec.upload(&rows, "indirect chunk launch rows (per light and chunk)"),
+                rec.create(
+                    rows.len() as u32 * DISPATCH_RECORD_WORDS as u32,
+                    "indirect chunk launch records",
+                ),
+            )
+        });
         WaveBuffers {
+            chunk: total,
+            chunks,
+            chunk_rows,
             paths: [
                 rec.create(total.max(1), "indirect path queue a"),
                 rec.create(total.max(1), "indirect path queue b"),
@@ -255,8 +288,15 @@ impl Buffers {
         let rsm = RsmBuffers::create(rec, settings);
         let bound = total.min(u32::MAX as u64) as u32;
         let sorted = settings.indirect_schedule == IndirectSchedule::SortedWaves;
-        let waves = (settings.waves() > 1)
-            .then(|| WaveBuffers::create(rec, bound, settings.waves(), sorted));
+        let waves = (settings.waves() > 1).then(|| {
+            WaveBuffers::create(
+                rec,
+                (bound, lights),
+                settings.indirect_queue_paths,
+                settings.waves(),
+                sorted,
+            )
+        });
         Buffers {
             rsm,
             plan: rec.create(
@@ -703,7 +743,9 @@ impl PhotonGiPipeline {
             dispersion_mode: self.settings.frame.dispersion.kernel_value(),
             segment_first: 0,
             segment_end: self.settings.max_segments,
-            _pad: [0; 3],
+            chunk_first: 0,
+            chunk_size: u32::MAX,
+            _pad: 0,
         }
     }
 
@@ -805,12 +847,45 @@ impl PhotonGiPipeline {
             return;
         };
         // per-bounce waves: wave k traces segment k of the paths queued for it (the last
-        // wave the rest of each path), launched from its queue's length on the device
+        // wave the rest of each path), launched from its queue's length on the device;
+        // chunk by chunk of the light's photons when the queues hold fewer
+        for c in 0..w.chunks {
+            // the chunk's first wave: the light's record, or the chunk's own
+            let first_wave = match (dispatch, w.chunk_rows) {
+                (Some(_), Some((_, args))) => Some(DispatchRecord {
+                    args,
+                    record: r.light * w.chunks + c,
+                }),
+                (d, _) => d,
+            };
+            let chunk = TraceIndirect {
+                params: IndirectTraceParams {
+                    chunk_first: c * w.chunk,
+                    chunk_size: w.chunk,
+                    ..single.params
+                },
+                ..single
+            };
+            self.record_waves(rec, host, w, chunk, first_wave, &patches);
+        }
+    }
+
+    /// Records the waves of one chunk of a light's photons (`single`'s parameters, its
+    /// first wave launched from `first_wave`), its queues cleared first.
+    fn record_waves(
+        &self,
+        rec: &mut Recording,
+        host: &FrameHost,
+        w: &WaveBuffers,
+        single: TraceIndirect,
+        first_wave: Option<DispatchRecord>,
+        patches: &[ParamPatch],
+    ) {
         let (waves, max_segments) = (self.settings.waves(), self.settings.max_segments);
         rec.clear(w.path_counts);
         for k in 0..waves {
             let dispatch = if k == 0 {
-                dispatch
+                first_wave
             } else {
                 // every row again: those of earlier waves read final lengths, so their
                 // records are rewritten with the same words
@@ -849,7 +924,7 @@ impl PhotonGiPipeline {
                     }),
                     ..single
                 },
-                patches.clone(),
+                patches.to_vec(),
             );
         }
     }
@@ -896,6 +971,13 @@ impl PhotonGiPipeline {
             counts: b.plan,
             args: b.dispatch,
         });
+        if let Some((table, args)) = b.waves.and_then(|w| w.chunk_rows) {
+            rec.kernel(DispatchArgs {
+                table,
+                counts: b.plan,
+                args,
+            });
+        }
     }
 
     /// Records `select_photon_plan` after light `bit`'s RSM (`r`; `None`: no RSM, the row

@@ -46,8 +46,14 @@ impl RsmSampling {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum IndirectSchedule {
-    /// One launch: a thread follows its path from the RSM photon to its end.
+    /// The faster of the two as measured on GPUs (Vulkan, wgpu and OpenCL alike, H100):
+    /// `waves` from [`AUTO_WAVES_FROM_BOUNCES`] bounces on (Smal 2019's high setting,
+    /// where a warp's longest path is many times its median), `single_kernel` below
+    /// (short paths: the waves' launches and queue traffic cost more than the idle lanes
+    /// they save). The default.
     #[default]
+    Auto,
+    /// One launch: a thread follows its path from the RSM photon to its end.
     SingleKernel,
     /// Per-bounce waves: each launch traces one segment of every live path and queues
     /// the paths that go on (a compacted queue, its count on the device), the next wave
@@ -60,6 +66,9 @@ pub enum IndirectSchedule {
     /// image, bit for bit.
     SortedWaves,
 }
+
+/// Bounces from which the `auto` schedule runs the waves.
+pub const AUTO_WAVES_FROM_BOUNCES: u32 = 3;
 
 /// Every parameter of the technique.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -114,6 +123,11 @@ pub struct PhotonGiSettings {
     /// Waves of the `waves` schedule (1..=64): waves `0 .. n - 1` trace one segment each,
     /// the last one the rest of every path (at most `max_segments` waves run).
     pub indirect_waves: u32,
+    /// Paths each of the waves' two queues holds (48 bytes each): a light's photons go
+    /// through the waves in chunks of at most this many, so that no queue can overflow;
+    /// the image is bitwise the same for any value. Default 2^20 (96 MiB for both
+    /// queues; the default 1024^2 photons in one chunk).
+    pub indirect_queue_paths: u32,
 }
 
 impl Default for PhotonGiSettings {
@@ -141,8 +155,9 @@ impl Default for PhotonGiSettings {
             max_splat_px: 48,
             shading_normals: true,
             fresnel_model: fresnel_model::EXACT,
-            indirect_schedule: IndirectSchedule::SingleKernel,
+            indirect_schedule: IndirectSchedule::Auto,
             indirect_waves: 8,
+            indirect_queue_paths: 1 << 20,
         }
     }
 }
@@ -163,10 +178,22 @@ impl PhotonGiSettings {
         self.frame.photons_w as u64 * self.frame.photons_h as u64
     }
 
-    /// Launches of `trace_indirect` per light: 1, or the waves (at most one a segment).
-    pub fn waves(&self) -> u32 {
+    /// The schedule `indirect_schedule` runs (`auto` resolved by the bounces).
+    pub fn schedule(&self) -> IndirectSchedule {
         match self.indirect_schedule {
-            IndirectSchedule::SingleKernel => 1,
+            IndirectSchedule::Auto if self.bounces >= AUTO_WAVES_FROM_BOUNCES => {
+                IndirectSchedule::Waves
+            }
+            IndirectSchedule::Auto => IndirectSchedule::SingleKernel,
+            s => s,
+        }
+    }
+
+    /// Launches of `trace_indirect` per light and chunk: 1, or the waves (at most one a
+    /// segment).
+    pub fn waves(&self) -> u32 {
+        match self.schedule() {
+            IndirectSchedule::Auto | IndirectSchedule::SingleKernel => 1,
             IndirectSchedule::Waves | IndirectSchedule::SortedWaves => {
                 self.indirect_waves.min(self.max_segments).max(1)
             }
@@ -220,6 +247,9 @@ impl PhotonGiSettings {
         }
         if self.indirect_waves == 0 || self.indirect_waves > 64 {
             return bad("indirect_waves must be in 1..=64");
+        }
+        if self.indirect_queue_paths == 0 || self.indirect_queue_paths > 1 << 28 {
+            return bad("indirect_queue_paths must be in 1..=2^28");
         }
         if self.fresnel_model > fresnel_model::SCHLICK {
             return bad("fresnel_model must be 0 (exact) or 1 (Schlick)");
