@@ -96,11 +96,14 @@ fn main() {
                 indirect_queue_paths: queue,
                 ..PhotonGiSettings::default()
             };
-            let setting = match s.schedule() {
+            let setting = match s.schedule(backend.capabilities().device_type) {
                 IndirectSchedule::SingleKernel => format!("{setting}, {schedule}: single_kernel"),
                 run => format!(
                     "{setting}, {schedule}: {} ({waves} waves, queues of {queue} paths)",
-                    serde_json::to_value(run).map_or(String::new(), |v| v.to_string())
+                    serde_json::to_value(run)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_default()
                 ),
             };
             let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {

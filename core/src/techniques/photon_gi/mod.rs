@@ -1124,8 +1124,10 @@ impl Pipeline for PhotonGiPipeline {
     fn create(
         backend: &mut dyn Backend,
         host: &mut FrameHost,
-        settings: PhotonGiSettings,
+        mut settings: PhotonGiSettings,
     ) -> Result<PhotonGiPipeline, Error> {
+        // `auto` becomes this device's schedule
+        settings.indirect_schedule = settings.schedule(backend.capabilities().device_type);
         host.make_screen(backend, screen_needs(&settings))?;
         let camera = host.camera();
         let correct = shading_correction(&settings, host.instances());

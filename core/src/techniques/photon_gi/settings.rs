@@ -1,6 +1,7 @@
 //! Every parameter of PhotonGi, with its defaults (Smal 2019 where it gives them) and
 //! validation.
 
+use crate::backend::DeviceType;
 use crate::frame::error::Error;
 use crate::frame::settings::{FrameSettings, TechniqueSettings};
 use crate::math::optics::fresnel_model;
@@ -50,7 +51,8 @@ pub enum IndirectSchedule {
     /// `waves` from [`AUTO_WAVES_FROM_BOUNCES`] bounces on (Smal 2019's high setting,
     /// where a warp's longest path is many times its median), `single_kernel` below
     /// (short paths: the waves' launches and queue traffic cost more than the idle lanes
-    /// they save). The default.
+    /// they save), and always on the CPU backend (no lanes to idle). A pipeline resolves
+    /// it by its device when it is made ([`PhotonGiSettings::schedule`]). The default.
     #[default]
     Auto,
     /// One launch: a thread follows its path from the RSM photon to its end.
@@ -178,10 +180,13 @@ impl PhotonGiSettings {
         self.frame.photons_w as u64 * self.frame.photons_h as u64
     }
 
-    /// The schedule `indirect_schedule` runs (`auto` resolved by the bounces).
-    pub fn schedule(&self) -> IndirectSchedule {
+    /// The schedule `indirect_schedule` runs on a device of type `device` (`auto`
+    /// resolved by the bounces and the device).
+    pub fn schedule(&self, device: DeviceType) -> IndirectSchedule {
         match self.indirect_schedule {
-            IndirectSchedule::Auto if self.bounces >= AUTO_WAVES_FROM_BOUNCES => {
+            IndirectSchedule::Auto
+                if self.bounces >= AUTO_WAVES_FROM_BOUNCES && device != DeviceType::Cpu =>
+            {
                 IndirectSchedule::Waves
             }
             IndirectSchedule::Auto => IndirectSchedule::SingleKernel,
@@ -190,9 +195,9 @@ impl PhotonGiSettings {
     }
 
     /// Launches of `trace_indirect` per light and chunk: 1, or the waves (at most one a
-    /// segment).
+    /// segment); `auto` as on a GPU (a pipeline has resolved it by its device).
     pub fn waves(&self) -> u32 {
-        match self.schedule() {
+        match self.schedule(DeviceType::DiscreteGpu) {
             IndirectSchedule::Auto | IndirectSchedule::SingleKernel => 1,
             IndirectSchedule::Waves | IndirectSchedule::SortedWaves => {
                 self.indirect_waves.min(self.max_segments).max(1)
