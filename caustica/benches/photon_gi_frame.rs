@@ -14,7 +14,7 @@
 //! `CAUSTICA_BENCH_GI_SCHEDULES=auto,single_kernel,waves,sorted_waves` (`trace_indirect`'s
 //! schedules, default `auto`, the settings' default; each timed in turn),
 //! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8),
-//! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^20).
+//! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22).
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
 

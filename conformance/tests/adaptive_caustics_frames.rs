@@ -321,6 +321,9 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
                     }
                     assert_eq!(sp.stored_flux, sf.stored_flux, "{what}: stored flux");
                     assert_eq!(sp.photons_stored, sf.photons_stored, "{what}");
+                    // the deposit's accounting: the same photons landed in the same texels
+                    assert_eq!(sp.photons_deposited, sf.photons_deposited, "{what}");
+                    assert_eq!(sp.discarded.off_screen, sf.discarded.off_screen, "{what}");
                     if fused {
                         assert!(ap.clusters_output >= af.clusters_output, "{what}");
                     } else {
@@ -395,6 +398,22 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
             ss.stored_flux, sf.stored_flux,
             "{name} / screen: stored flux"
         );
+        for (fused, full, what) in [
+            (ss.photons_stored, sf.photons_stored, "stored"),
+            (ss.photons_deposited, sf.photons_deposited, "deposited"),
+            (
+                ss.discarded.off_screen,
+                sf.discarded.off_screen,
+                "off screen",
+            ),
+            (
+                ss.discarded.depth_mismatch,
+                sf.discarded.depth_mismatch,
+                "depth mismatch",
+            ),
+        ] {
+            assert_eq!(fused, full, "{name} / screen: {what} photons");
+        }
         assert!(
             same_bits(&[full], &[seeded]).is_none(),
             "{name} / screen: raw caustics differ from the full traversal's"

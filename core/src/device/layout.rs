@@ -675,7 +675,8 @@ pub struct IndirectTraceParams {
     pub segment_end: u32,
     /// The launch's chunk of the `count` photons (from their start): a launch from the
     /// RSM photons traces photons `chunk_first .. chunk_first + chunk_size` of them that
-    /// are below `count` ([`crate::math::rsm::chunk_photons`]); 0 and `u32::MAX`: all.
+    /// are below `count` ([`crate::math::rsm::chunk_photons`]; `chunk_first` 0 with
+    /// `chunk_size` `u32::MAX`: all of them).
     pub chunk_first: u32,
     /// See `chunk_first`.
     pub chunk_size: u32,

@@ -72,7 +72,7 @@ pub struct TraceIndirect {
     /// Where the launch's shape is on the device (a `dispatch_args` record of the live
     /// photon count; `params.count` is then the bound and the kernel's count comes from
     /// the device too, [`crate::device::launch::ParamPatch`]); `None`: a direct launch of
-    /// `params.count` threads.
+    /// the chunk's photons ([`chunk_photons`]; a later wave: no more than its queue holds).
     pub dispatch: Option<super::DispatchRecord>,
     /// The `WAVES` variant's path queues; `None`: the single launch.
     pub waves: Option<IndirectWave>,
@@ -165,6 +165,15 @@ impl KernelDecl for TraceIndirect {
             p.segment_first
         };
         if let Some(w) = &self.waves {
+            // a first wave's paths must fit the queue it appends to
+            let first_wave = chunk_photons(p.count, p.chunk_first, p.chunk_size);
+            if p.segment_first == 0 && first_wave > w.paths_out.len {
+                return Err(BackendError::BadArgument(format!(
+                    "trace_indirect: a first wave of {first_wave} photons over a queue of {} \
+                     paths (a chunk must fit the queues)",
+                    w.paths_out.len
+                )));
+            }
             if w.path_counts.len <= last_count || w.paths_in.len < w.paths_out.len {
                 return Err(BackendError::BadArgument(format!(
                     "trace_indirect: {} path counts for a wave ending at segment {}, queues of \
@@ -218,10 +227,11 @@ impl KernelDecl for TraceIndirect {
             }
         }
         a.indirect(self.dispatch)?;
-        // threads: the chunk's photons, or a later wave's queue at most
+        // threads: the chunk's photons, of which a later wave continues some
+        let threads = chunk_photons(p.count, p.chunk_first, p.chunk_size);
         let threads = match &self.waves {
-            Some(w) if p.segment_first > 0 => p.count.min(w.paths_out.len),
-            _ => chunk_photons(p.count, p.chunk_first, p.chunk_size),
+            Some(w) if p.segment_first > 0 => threads.min(w.paths_out.len),
+            _ => threads,
         };
         Ok(Some(threads as u64))
     }

@@ -343,8 +343,9 @@ pub struct AtlasTarget {
     pub sums: PhotonMapPlanes,
     /// The atlas's centroid sums.
     pub centroids: Buf<u32>,
-    /// The atlas's reach mask (one bit a scene triangle; the fused finest level's
-    /// deposit sets it, as CausticMap's does).
+    /// The atlas's reach mask (one bit a scene triangle). Only the fused finest level's
+    /// deposit sets bits (`refine_clusters` sets none), so the mask is partial and
+    /// AdaptiveCaustics does not read it.
     pub triangle_reach: Buf<u32>,
     /// Atlas side (texels).
     pub atlas_width: u32,

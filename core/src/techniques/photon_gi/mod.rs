@@ -248,7 +248,7 @@ impl Buffers {
     fn create(
         rec: &mut Recording,
         camera: GpuCamera,
-        settings: &PhotonGiSettings,
+        (settings, schedule): (&PhotonGiSettings, IndirectSchedule),
         correct: bool,
         lights: usize,
     ) -> Buffers {
@@ -287,13 +287,13 @@ impl Buffers {
         let capacity = (total * settings.bounces as u64).min(u32::MAX as u64) as u32;
         let rsm = RsmBuffers::create(rec, settings);
         let bound = total.min(u32::MAX as u64) as u32;
-        let sorted = settings.indirect_schedule == IndirectSchedule::SortedWaves;
-        let waves = (settings.waves() > 1).then(|| {
+        let sorted = schedule == IndirectSchedule::SortedWaves;
+        let waves = (settings.waves(schedule) > 1).then(|| {
             WaveBuffers::create(
                 rec,
                 (bound, lights),
                 settings.indirect_queue_paths,
-                settings.waves(),
+                settings.waves(schedule),
                 sorted,
             )
         });
@@ -341,6 +341,9 @@ impl Buffers {
 /// filters (temporal, A-Trous) and their history.
 pub struct PhotonGiPipeline {
     settings: PhotonGiSettings,
+    /// `settings`' schedule of `trace_indirect` on this pipeline's device (`auto`
+    /// resolved).
+    schedule: IndirectSchedule,
     /// The lights' RSMs and photons, the packed power's unit and the flux quantum: the
     /// device's plan where [`PhotonGiPipeline::known`], else the plan where every light
     /// with power sees something.
@@ -412,7 +415,7 @@ fn light_plan(
 /// its reason, and `buffers`.
 fn make_plan(
     host: &FrameHost,
-    s: &PhotonGiSettings,
+    (s, schedule): (&PhotonGiSettings, IndirectSchedule),
     rsms: &[LightRsm],
     (known, planned): (bool, bool),
     buffers: Vec<BufferPlan>,
@@ -472,8 +475,8 @@ fn make_plan(
             },
             pass(
                 "dispatch_args",
-                (planned || s.waves() > 1) && any,
-                if s.waves() > 1 {
+                (planned || s.waves(schedule) > 1) && any,
+                if s.waves(schedule) > 1 {
                     "the indirect waves' launches from their queues' lengths (and the lights' \
                      from the device plan's counts until it is read back)"
                 } else if planned {
@@ -487,7 +490,7 @@ fn make_plan(
             pass(
                 "trace_indirect",
                 any,
-                if s.waves() > 1 {
+                if s.waves(schedule) > 1 {
                     "some light has power; its paths in per-bounce waves"
                 } else {
                     photons
@@ -495,10 +498,10 @@ fn make_plan(
             ),
             pass(
                 "sort_indirect_paths",
-                any && s.waves() > 1 && s.indirect_schedule == IndirectSchedule::SortedWaves,
-                if s.indirect_schedule != IndirectSchedule::SortedWaves {
+                any && s.waves(schedule) > 1 && schedule == IndirectSchedule::SortedWaves,
+                if schedule != IndirectSchedule::SortedWaves {
                     "indirect_schedule is not sorted_waves"
-                } else if s.waves() > 1 {
+                } else if s.waves(schedule) > 1 {
                     "each indirect wave's queue in key order (direction octant, origin cell)"
                 } else {
                     "a single wave: no queue"
@@ -622,7 +625,7 @@ impl PhotonGiPipeline {
         let buffers = self.plan_buffers(host);
         self.plan = make_plan(
             host,
-            &self.settings,
+            (&self.settings, self.schedule),
             &photons.rsms,
             (known, planned),
             buffers,
@@ -652,7 +655,7 @@ impl PhotonGiPipeline {
         let buffers = self.plan_buffers(host);
         self.plan = make_plan(
             host,
-            &self.settings,
+            (&self.settings, self.schedule),
             &self.photons.rsms,
             (true, true),
             buffers,
@@ -848,8 +851,14 @@ impl PhotonGiPipeline {
         };
         // per-bounce waves: wave k traces segment k of the paths queued for it (the last
         // wave the rest of each path), launched from its queue's length on the device;
-        // chunk by chunk of the light's photons when the queues hold fewer
-        for c in 0..w.chunks {
+        // chunk by chunk of the light's photons when the queues hold fewer (every chunk
+        // of the bound where the count is the device's, empty ones launching nothing)
+        let chunks = if indirect {
+            w.chunks
+        } else {
+            bound.div_ceil(w.chunk).clamp(1, w.chunks)
+        };
+        for c in 0..chunks {
             // the chunk's first wave: the light's record, or the chunk's own
             let first_wave = match (dispatch, w.chunk_rows) {
                 (Some(_), Some((_, args))) => Some(DispatchRecord {
@@ -881,7 +890,10 @@ impl PhotonGiPipeline {
         first_wave: Option<DispatchRecord>,
         patches: &[ParamPatch],
     ) {
-        let (waves, max_segments) = (self.settings.waves(), self.settings.max_segments);
+        let (waves, max_segments) = (
+            self.settings.waves(self.schedule),
+            self.settings.max_segments,
+        );
         rec.clear(w.path_counts);
         for k in 0..waves {
             let dispatch = if k == 0 {
@@ -1124,20 +1136,28 @@ impl Pipeline for PhotonGiPipeline {
     fn create(
         backend: &mut dyn Backend,
         host: &mut FrameHost,
-        mut settings: PhotonGiSettings,
+        settings: PhotonGiSettings,
     ) -> Result<PhotonGiPipeline, Error> {
         // `auto` becomes this device's schedule
-        settings.indirect_schedule = settings.schedule(backend.capabilities().device_type);
+        let schedule = settings.schedule(backend.capabilities().device_type);
         host.make_screen(backend, screen_needs(&settings))?;
         let camera = host.camera();
         let correct = shading_correction(&settings, host.instances());
         let lights = host.model().lights.len();
         let mut rec = Recording::new();
-        let buffers = Buffers::create(&mut rec, camera, &settings, correct, lights);
+        let buffers = Buffers::create(&mut rec, camera, (&settings, schedule), correct, lights);
         let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;
         let mut p = PhotonGiPipeline {
-            plan: make_plan(host, &settings, &[], (false, true), Vec::new(), correct),
+            plan: make_plan(
+                host,
+                (&settings, schedule),
+                &[],
+                (false, true),
+                Vec::new(),
+                correct,
+            ),
             settings,
+            schedule,
             photons: PhotonPlan {
                 rsms: Vec::new(),
                 power_scale: 1.0,

@@ -49,10 +49,13 @@ impl RsmSampling {
 pub enum IndirectSchedule {
     /// The faster of the two as measured on GPUs (Vulkan, wgpu and OpenCL alike, H100):
     /// `waves` from [`AUTO_WAVES_FROM_BOUNCES`] bounces on (Smal 2019's high setting,
-    /// where a warp's longest path is many times its median), `single_kernel` below
-    /// (short paths: the waves' launches and queue traffic cost more than the idle lanes
-    /// they save), and always on the CPU backend (no lanes to idle). A pipeline resolves
-    /// it by its device when it is made ([`PhotonGiSettings::schedule`]). The default.
+    /// where a warp's longest path is many times its median) when a light's photons fit
+    /// one chunk of the queues (`indirect_queue_paths`: several chunks each pay the
+    /// waves' small last launches, which cost what they saved), `single_kernel`
+    /// otherwise (short paths: the waves' launches and queue traffic cost more than the
+    /// idle lanes they save), and always on the CPU backend (no lanes to idle). A
+    /// pipeline resolves it by its device when it is made
+    /// ([`PhotonGiSettings::schedule`]). The default.
     #[default]
     Auto,
     /// One launch: a thread follows its path from the RSM photon to its end.
@@ -71,6 +74,10 @@ pub enum IndirectSchedule {
 
 /// Bounces from which the `auto` schedule runs the waves.
 pub const AUTO_WAVES_FROM_BOUNCES: u32 = 3;
+
+/// Most chunks a light's photons take through the waves (`indirect_queue_paths` at
+/// least this fraction of the photons): each chunk records its waves' launches.
+pub const MAX_INDIRECT_CHUNKS: u64 = 64;
 
 /// Every parameter of the technique.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -125,10 +132,11 @@ pub struct PhotonGiSettings {
     /// Waves of the `waves` schedule (1..=64): waves `0 .. n - 1` trace one segment each,
     /// the last one the rest of every path (at most `max_segments` waves run).
     pub indirect_waves: u32,
-    /// Paths each of the waves' two queues holds (48 bytes each): a light's photons go
-    /// through the waves in chunks of at most this many, so that no queue can overflow;
-    /// the image is bitwise the same for any value. Default 2^20 (96 MiB for both
-    /// queues; the default 1024^2 photons in one chunk).
+    /// Most paths each of the waves' two queues holds (48 bytes each; a queue holds no
+    /// more than a light's photons): a light's photons go through the waves in chunks of
+    /// at most this many, so that no queue can overflow; the image is bitwise the same
+    /// for any value. Default 2^22 (Smal 2019's high setting, 1732^2 photons, in one
+    /// chunk: 288 MB for both queues; the default 1024^2 photons: 96 MiB).
     pub indirect_queue_paths: u32,
 }
 
@@ -159,7 +167,7 @@ impl Default for PhotonGiSettings {
             fresnel_model: fresnel_model::EXACT,
             indirect_schedule: IndirectSchedule::Auto,
             indirect_waves: 8,
-            indirect_queue_paths: 1 << 20,
+            indirect_queue_paths: 1 << 22,
         }
     }
 }
@@ -185,7 +193,9 @@ impl PhotonGiSettings {
     pub fn schedule(&self, device: DeviceType) -> IndirectSchedule {
         match self.indirect_schedule {
             IndirectSchedule::Auto
-                if self.bounces >= AUTO_WAVES_FROM_BOUNCES && device != DeviceType::Cpu =>
+                if self.bounces >= AUTO_WAVES_FROM_BOUNCES
+                    && device != DeviceType::Cpu
+                    && self.total_photons() <= self.indirect_queue_paths as u64 =>
             {
                 IndirectSchedule::Waves
             }
@@ -194,10 +204,11 @@ impl PhotonGiSettings {
         }
     }
 
-    /// Launches of `trace_indirect` per light and chunk: 1, or the waves (at most one a
-    /// segment); `auto` as on a GPU (a pipeline has resolved it by its device).
-    pub fn waves(&self) -> u32 {
-        match self.schedule(DeviceType::DiscreteGpu) {
+    /// Launches of `trace_indirect` per light and chunk under `schedule` (resolved,
+    /// [`PhotonGiSettings::schedule`]; `auto` counts as the single kernel): 1, or the
+    /// waves (at most one a segment).
+    pub fn waves(&self, schedule: IndirectSchedule) -> u32 {
+        match schedule {
             IndirectSchedule::Auto | IndirectSchedule::SingleKernel => 1,
             IndirectSchedule::Waves | IndirectSchedule::SortedWaves => {
                 self.indirect_waves.min(self.max_segments).max(1)
@@ -256,9 +267,65 @@ impl PhotonGiSettings {
         if self.indirect_queue_paths == 0 || self.indirect_queue_paths > 1 << 28 {
             return bad("indirect_queue_paths must be in 1..=2^28");
         }
+        if total.div_ceil(self.indirect_queue_paths as u64) > MAX_INDIRECT_CHUNKS {
+            return bad(&format!(
+                "indirect_queue_paths must hold at least 1/{MAX_INDIRECT_CHUNKS} of the photons \
+                 (a light's photons in at most {MAX_INDIRECT_CHUNKS} chunks)"
+            ));
+        }
         if self.fresnel_model > fresnel_model::SCHLICK {
             return bad("fresnel_model must be 0 (exact) or 1 (Schlick)");
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `auto` runs the waves on a GPU from three bounces while a light's photons fit one
+    /// chunk of the queues, the single kernel otherwise and on the CPU backend; a named
+    /// schedule is kept.
+    #[test]
+    fn auto_resolves_by_bounces_device_and_queue() {
+        let high = PhotonGiSettings {
+            bounces: 3,
+            ..Default::default()
+        };
+        let gpu = DeviceType::DiscreteGpu;
+        assert_eq!(high.schedule(gpu), IndirectSchedule::Waves);
+        assert_eq!(
+            high.schedule(DeviceType::SoftwareGpu),
+            IndirectSchedule::Waves
+        );
+        assert_eq!(
+            high.schedule(DeviceType::Cpu),
+            IndirectSchedule::SingleKernel
+        );
+        let low = PhotonGiSettings {
+            bounces: 1,
+            ..high.clone()
+        };
+        assert_eq!(low.schedule(gpu), IndirectSchedule::SingleKernel);
+        let chunked = PhotonGiSettings {
+            indirect_queue_paths: (high.total_photons() - 1) as u32,
+            ..high.clone()
+        };
+        assert_eq!(chunked.schedule(gpu), IndirectSchedule::SingleKernel);
+        for s in [
+            IndirectSchedule::SingleKernel,
+            IndirectSchedule::Waves,
+            IndirectSchedule::SortedWaves,
+        ] {
+            let named = PhotonGiSettings {
+                indirect_schedule: s,
+                ..low.clone()
+            };
+            assert_eq!(named.schedule(DeviceType::Cpu), s);
+        }
+        let json: PhotonGiSettings =
+            serde_json::from_value(serde_json::json!({ "indirect_schedule": "auto" })).unwrap();
+        assert_eq!(json.indirect_schedule, IndirectSchedule::Auto);
     }
 }
