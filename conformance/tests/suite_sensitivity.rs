@@ -480,7 +480,8 @@ impl Mutant {
                     photons,
                     ..
                 }),
-            ) if variant.adaptive => {
+            ) if variant.adaptive && !variant.fused_deposit => {
+                // (the fused finest level writes no slots)
                 let n = params.count as usize;
                 self.modify::<Photon>(photons.id, |v| {
                     for c in v[..n].chunks_mut(4) {
