@@ -562,6 +562,7 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
         .map(|i| {
             let cluster = entry_cluster(clusters[(p.first + i / 4) as usize]);
             let index = cluster_photon_index(cluster, i % 4, p.grid_w);
+            crate::traversal_stats::photon_begins(i);
             let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
                 scene,
                 p,
@@ -569,6 +570,7 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
                 store,
                 &mut |_, _| {},
             );
+            crate::traversal_stats::photon_ends();
             let mut c = Counters::default();
             c.words[counter::RAYS] += rays as u64;
             let slot = match end {
@@ -580,6 +582,8 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
             (slot, c)
         })
         .collect();
+    // thread i traces photon i % 4 of the batch's cluster i / 4, as in the GPU ports
+    crate::traversal_stats::report("trace_photons (adaptive)", p.count, |i| i);
     let mut counters = Counters::default();
     let mut photons = Vec::with_capacity(parts.len());
     for (ph, c) in parts {
