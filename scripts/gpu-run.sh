@@ -30,7 +30,7 @@ Sections:
   experiment   kernel variants timed without a rebuild (EXP_* below, CONTRIBUTING.md)
 
 Variables: BENCH_BACKENDS (vulkan,wgpu,opencl); CAUSTICA_BENCH_* pass through to the
-benches. experiment: EXP_BENCH=sspm|caustic-map|photon-gi, EXP_LANG=opencl|wgsl, EXP_DIR
+benches. experiment: EXP_BENCH=sspm|caustic-map|photon-gi|adaptive, EXP_LANG=opencl|wgsl, EXP_DIR
 (a folder of variant folders of changed kernel files; default .devbin/exp, .devbin/wexp),
 EXP_OPTIONS ("opts;opts": OpenCL build options, each a variant), EXP_SASS=1 (ptxas counts,
 SASS in $OUT/sass.tgz), EXP_FRAMES, EXP_SETTINGS. hang: HANG_RUNS (8), HANG_AFTER (60 s);
@@ -183,6 +183,9 @@ experiment() {
     sspm) cmd+=(CAUSTICA_BENCH_FILTERS=density ${EXP_SETTINGS:+"CAUSTICA_BENCH_SETTINGS=$EXP_SETTINGS"} ./sspm_frame) ;;
     caustic-map) cmd+=(CAUSTICA_BENCH_SETTINGS="${EXP_SETTINGS:-0,1}" CAUSTICA_BENCH_SPLITS=stochastic CAUSTICA_BENCH_GATHERS=box ./caustic_map_frame) ;;
     photon-gi) cmd+=(CAUSTICA_BENCH_SETTINGS="${EXP_SETTINGS:-high,low}" ./photon_gi_frame) ;;
+    # the fused finest level against the slots and the dense trace on `sphere`
+    adaptive) cmd+=(CAUSTICA_BENCH_SCENES=sphere CAUSTICA_BENCH_SIZES="${EXP_SETTINGS:-2048}" \
+        CAUSTICA_BENCH_FUSED=1,0 CAUSTICA_BENCH_KERNELS=1 ./adaptive_frame) ;;
     esac
     rm -rf /tmp/sass && mkdir -p /tmp/sass
     variant() {  # NAME KERNEL_DIR OPTIONS
