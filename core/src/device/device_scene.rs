@@ -12,7 +12,8 @@ use crate::device::caster_spheres::{placed_ball, CasterSpheres};
 use crate::device::layout::{
     light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
 };
-use crate::math::geometry::{bounding_sphere, AabbA};
+pub use crate::device::placement::{placed_vertices, world_vertices};
+use crate::math::geometry::bounding_sphere;
 use crate::math::optics::ior_model;
 use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
@@ -333,99 +334,6 @@ impl SceneInstances {
             ],
         })
     }
-}
-
-/// An instance's world vertices: positions through `world_from_object`, normals through
-/// its inverse transpose, renormalised (the one function a build and a move both use:
-/// `placement`). Also returns the box of the world positions, grown in the same pass.
-pub fn world_vertices(t: &Transform, local: &[GpuVertex]) -> (Vec<GpuVertex>, Aabb) {
-    let place = placement(t);
-    let mut b = AabbA::EMPTY;
-    let world = local
-        .iter()
-        .map(|v| {
-            let w = place(v);
-            b.grow(Vec3A::from(w.position));
-            w
-        })
-        .collect();
-    (world, b.aabb())
-}
-
-/// Where `t` places an object-space vertex: its position through `world_from_object`, its
-/// normal through the inverse transpose, renormalised. A move's cost is mostly this
-/// function: it works in `Vec3A` (SIMD lanes; the same operations in the same order as
-/// `Vec3`, so bitwise the same results, 1.7x faster on the normals' renormalisation).
-#[inline(always)]
-fn placement(t: &Transform) -> impl Fn(&GpuVertex) -> GpuVertex {
-    let m = t.world_from_object();
-    let nm = t.normal_matrix();
-    move |v| GpuVertex {
-        position: Vec3::from(m.transform_point3a(Vec3A::from(v.position))).to_array(),
-        normal: (nm * Vec3A::from(v.normal))
-            .normalize_or(Vec3A::Y)
-            .to_array(),
-        ..*v
-    }
-}
-
-/// An instance's world vertices as [`world_vertices`] places them, with the box of all of
-/// them and the box of those its triangles use, in one pass over the vertices (`unused`:
-/// the vertices no triangle uses, as indices into `local`, ascending). Bitwise the boxes
-/// [`world_vertices`] and `triangle_bounds` give: the used box grows over the same
-/// vertices in the same order; the whole box is the used one grown by the unused
-/// vertices, whose bounds have the values of a box grown over every vertex in order (a
-/// bound is an extreme value), so the same bits unless a bound is zero (the one value
-/// with two bit patterns, where the order decides which one a bound keeps): then it is
-/// grown over every vertex in order. Positions are never NaN (finite vertices through a
-/// finite transform: an overflow gives an infinity of one sign), where the order would
-/// matter too.
-pub fn placed_vertices(
-    t: &Transform,
-    local: &[GpuVertex],
-    unused: &[u32],
-) -> (Vec<GpuVertex>, Aabb, Aabb) {
-    let place = placement(t);
-    let mut used = AabbA::EMPTY;
-    let mut world: Vec<GpuVertex> = Vec::with_capacity(local.len());
-    let mut start = 0;
-    for end in unused
-        .iter()
-        .map(|&u| u as usize)
-        .chain(std::iter::once(local.len()))
-    {
-        let end = end.min(local.len());
-        if start <= end {
-            world.extend(local[start..end].iter().map(|v| {
-                let w = place(v);
-                used.grow(Vec3A::from(w.position));
-                w
-            }));
-        }
-        if end < local.len() {
-            world.push(place(&local[end]));
-        }
-        start = end + 1;
-    }
-    let used = used.aabb();
-    if unused.is_empty() {
-        return (world, used, used);
-    }
-    let mut all = used;
-    for &u in unused {
-        if let Some(w) = world.get(u as usize) {
-            all.grow(Vec3::from(w.position));
-        }
-    }
-    let zero = |v: Vec3| v.cmpeq(Vec3::ZERO).any();
-    if zero(all.min) || zero(all.max) {
-        let mut b = AabbA::EMPTY;
-        for w in &world {
-            b.grow(Vec3A::from(w.position));
-        }
-        all = b.aabb();
-    }
-    (world, all, used)
 }
 
 /// Whether a triangle has a vertex normal more than 1e-4 (per axis) from its geometric

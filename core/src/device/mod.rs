@@ -18,6 +18,7 @@ pub mod handle;
 pub mod launch;
 pub mod layout;
 pub mod layout_table;
+pub mod placement;
 pub mod shader_constants;
 pub mod shader_layouts;
 
