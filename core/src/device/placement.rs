@@ -227,7 +227,8 @@ pub fn placed_vertices(
     let mut used = LaneBox::EMPTY;
     let mut unused_box = LaneBox::EMPTY;
     let mut next_unused = unused.iter().map(|&u| u as usize).peekable();
-    let mut placed: Vec<[GpuVertex; 4]> = Vec::with_capacity(blocks.len() + usize::from(last.is_some()));
+    let mut placed: Vec<[GpuVertex; 4]> =
+        Vec::with_capacity(blocks.len() + usize::from(last.is_some()));
     for (k, block) in blocks.iter().chain(last.as_ref()).enumerate() {
         let (w, p) = place_block(&m, &nm, block);
         placed.push(w);

@@ -261,6 +261,7 @@ pub(super) fn earlier_form(json: &serde_json::Value) -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::techniques::adaptive_caustics::traversal::ProbeLevels;
 
     #[test]
     fn json_lays_blocks_over_the_defaults_and_names_moved_fields() {
@@ -335,8 +336,54 @@ mod tests {
     }
 
     #[test]
-    fn the_passes_and_lists_follow_the_byte_limit() {
+    fn a_traversal_that_writes_no_slots_takes_each_level_in_one_pass() {
         let t = AdaptiveCausticsSettings::default().traversal();
+        // the defaults: the bounds seed down to the finest level, which deposits itself
+        assert!(!t.writes_slots(4) && !t.writes_slots(0));
+        let z = t.sizes(4, true);
+        assert!(!z.slots && !z.lists_capped);
+        assert_eq!(z.pass_clusters as u64, t.dense_clusters(4));
+        // slots where a traced level is judged from them
+        for judged in [
+            TraversalSettings {
+                fused_finest: false,
+                ..t
+            },
+            TraversalSettings {
+                metric: AdaptiveMetric::Error,
+                error_from_grid: t.start_grid << 2,
+                ..t
+            },
+            TraversalSettings {
+                probe_levels: ProbeLevels::FirstSegment,
+                ..t
+            },
+        ] {
+            assert!(judged.writes_slots(4), "{judged:?}");
+            assert!(judged.sizes(4, false).slots);
+        }
+        // the error metric from the finest level on: its levels above are probe levels
+        let late = TraversalSettings {
+            metric: AdaptiveMetric::Error,
+            error_from_grid: t.start_grid << 4,
+            ..t
+        };
+        assert!(!late.writes_slots(4) && late.writes_slots(5));
+        // lists that do not fit: capped, with slots (every level traced)
+        let tight = TraversalSettings {
+            max_traversal_bytes: t.full_list_bytes(4) / 2,
+            ..t
+        };
+        let z = tight.sizes(4, false);
+        assert!(z.lists_capped && z.slots);
+    }
+
+    #[test]
+    fn the_passes_and_lists_follow_the_byte_limit() {
+        let t = TraversalSettings {
+            fused_finest: false,
+            ..AdaptiveCausticsSettings::default().traversal()
+        };
         // whole lists beside passes of 5000 clusters (at least 1/64 of the finest level)
         assert!(5000 >= t.dense_clusters(4).div_ceil(MAX_PASSES_PER_LEVEL));
         let whole = TraversalSettings {

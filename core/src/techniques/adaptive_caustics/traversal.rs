@@ -165,7 +165,9 @@ pub struct TraversalSettings {
     /// a batch (128 bytes per cluster) and one cluster list per level (16 bytes per
     /// cluster of a batch each), plus the start grid's list. The batch size follows from
     /// it; the result is bitwise the same for any value. The screen deposit also holds a
-    /// list of the batch's output photons (another 128 bytes per cluster).
+    /// list of the batch's output photons (another 128 bytes per cluster). Where no
+    /// traced level writes slots ([`TraversalSettings::writes_slots`]: the defaults),
+    /// the lists alone, and each level is one pass.
     pub max_traversal_bytes: u64,
     /// How the *probe levels* are judged: the levels whose clusters are only refined or
     /// discarded, by whether a photon met a caster (below the finest, and below
@@ -207,6 +209,11 @@ pub struct TraversalSizes {
     pub list_capacity: Vec<u32>,
     /// Whether some list holds fewer entries than its level has clusters.
     pub lists_capped: bool,
+    /// Whether a pass holds photon slots (and a converged list, and the screen target's
+    /// output photons): some traced level is judged from its slots
+    /// ([`TraversalSettings::writes_slots`]). Without them a level is one pass of its
+    /// whole list.
+    pub slots: bool,
 }
 
 impl TraversalSettings {
@@ -246,6 +253,16 @@ impl TraversalSettings {
         (0..=finest)
             .find(|&l| !self.is_probe_level(l, finest))
             .filter(|&l| l > 0)
+    }
+
+    /// Whether a traced level of a pyramid down to `finest` writes photon slots for
+    /// `refine_clusters` (with whole lists): every level but a fused finest one does, so
+    /// none does where the bounds seed stands for every level above the finest (the
+    /// level metric, or the error metric from the finest level on) and the finest level
+    /// deposits itself ([`TraversalSettings::fused_finest`]). A plane of a smaller
+    /// pyramid then traces its own finest level alone too.
+    pub fn writes_slots(&self, finest: u32) -> bool {
+        !(self.fused_finest && (finest == 0 || self.seed_level(finest, false) == Some(finest)))
     }
 
     /// Clusters of the start grid.
@@ -300,12 +317,24 @@ impl TraversalSettings {
         let lists = self.full_list_bytes(finest);
         let budget = self.max_traversal_bytes;
         let cap = |c: u64| c.min(u32::MAX as u64 / 4) as u32;
+        let whole = || (1..=finest).map(|l| cap(self.dense_clusters(l))).collect();
+        // the finest level alone, deposited by its trace: a pass holds nothing per
+        // cluster, so a level is one pass (the fewest launches)
+        if !self.writes_slots(finest) && budget >= fixed + lists {
+            return TraversalSizes {
+                pass_clusters: cap(largest),
+                list_capacity: whole(),
+                lists_capped: false,
+                slots: false,
+            };
+        }
         if budget >= fixed + lists + min_pass * per {
             let c = ((budget - fixed - lists) / per).clamp(min_pass, largest);
             return TraversalSizes {
                 pass_clusters: cap(c),
-                list_capacity: (1..=finest).map(|l| cap(self.dense_clusters(l))).collect(),
+                list_capacity: whole(),
                 lists_capped: false,
+                slots: true,
             };
         }
         let rest = budget.saturating_sub(fixed);
@@ -328,6 +357,7 @@ impl TraversalSettings {
             pass_clusters: cap(c),
             list_capacity,
             lists_capped,
+            slots: true,
         }
     }
 }
@@ -677,6 +707,8 @@ impl Traversal {
     ) -> Traversal {
         let sizes = settings.sizes(finest, screen);
         let c = sizes.pass_clusters;
+        // what a pass holds per cluster, where a level writes slots (else stand-ins)
+        let per_cluster = |n: u32| if sizes.slots { n * c } else { 1 };
         let start = settings.start_clusters() as u32;
         let ids: Vec<u32> = (0..start).collect();
         // per level, per pass: its rows (the last pass of a level takes what is left of
@@ -718,11 +750,11 @@ impl Traversal {
                 })
                 .collect(),
             no_children: rec.create(1, "adaptive finest-level child list"),
-            converged: rec.create(c, "adaptive converged clusters"),
+            converged: rec.create(per_cluster(1), "adaptive converged clusters"),
             converged_count: rec.create(1, "adaptive converged count"),
             no_converged: rec.create(1, "adaptive resampled converged list"),
             no_converged_count: rec.create(1, "adaptive resampled converged count"),
-            slots: rec.create(4 * c, "adaptive photon slots"),
+            slots: rec.create(per_cluster(4), "adaptive photon slots"),
             tables,
             converged_rows,
             args: rec.create(records, "adaptive dispatch records"),
@@ -732,7 +764,10 @@ impl Traversal {
             fused_counters: (0..planes.max(1))
                 .map(|_| rec.create(counter::WORDS as u32, "adaptive fused-level counters"))
                 .collect(),
-            outputs: rec.create(if screen { 4 * c } else { 1 }, "adaptive output photons"),
+            outputs: rec.create(
+                if screen { per_cluster(4) } else { 1 },
+                "adaptive output photons",
+            ),
             output_count: rec.create(1, "adaptive output photon count"),
             no_atlas: screen.then(|| {
                 let planes = rec.create_photon_map(1);
