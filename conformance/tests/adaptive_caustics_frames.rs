@@ -192,7 +192,7 @@ fn any_memory_limit_gives_the_same_frame_bitwise() {
                 let t = AdaptiveCaustics::new(b.as_mut(), &scene, settings(bytes)).expect("scene");
                 let (s, i) = render(b.as_mut(), t);
                 let what = format!("{name} / {scene_name}, passes of {c} clusters");
-                let sizes = settings(bytes).traversal_sizes();
+                let sizes = settings(bytes).traversal_sizes(b.capabilities().max_buffer_bytes);
                 assert!(!sizes.lists_capped, "{what}: {sizes:?}");
                 assert_eq!(
                     AdaptiveStats::of(&s)
@@ -444,7 +444,7 @@ fn capped_lists_overflow_counted_and_keep_the_flux() {
         let capped = AdaptiveCaustics::new(b.as_mut(), &scene, settings(bytes)).expect("scene");
         let (sc, img) = render(b.as_mut(), capped);
         let a = AdaptiveStats::of(&sc).expect("adaptive stats");
-        assert!(settings(bytes).traversal_sizes().lists_capped);
+        assert!(settings(bytes).traversal_sizes(u64::MAX).lists_capped);
         assert!(
             a.clusters_overflowed > 0,
             "{name}: nothing overflowed at {bytes} bytes"

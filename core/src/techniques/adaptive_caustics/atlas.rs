@@ -67,6 +67,7 @@ pub(super) fn create(
         .map(|(_, b)| *b)
         .collect();
     let ts = settings.traversal();
+    let max_buffer_bytes = backend.capabilities().max_buffer_bytes;
     let receiver = AtlasReceiver::create(
         backend,
         host,
@@ -79,7 +80,7 @@ pub(super) fn create(
                 &ts,
                 (planes.planes.len(), levels),
                 &boxes,
-                false,
+                (false, max_buffer_bytes),
             ))
         },
     )?;

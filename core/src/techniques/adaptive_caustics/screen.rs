@@ -65,6 +65,7 @@ pub(super) fn create(
     let camera = host.camera();
     let mut rec = Recording::new();
     let receiver = ScreenReceiver::create(&mut rec, camera, &plan, frame, sc, quanta);
+    let max_buffer_bytes = backend.capabilities().max_buffer_bytes;
     let traversal = needs.photons.then(|| {
         let levels = super::finest_level(&planes, settings.traversal.start_grid);
         let boxes: Vec<_> = host
@@ -78,7 +79,7 @@ pub(super) fn create(
             &settings.traversal(),
             (planes.planes.len(), levels),
             &boxes,
-            true,
+            (true, max_buffer_bytes),
         )
     });
     let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;

@@ -186,10 +186,12 @@ impl AdaptiveCausticsSettings {
     }
 
     /// The split of `max_traversal_bytes` into passes and lists
-    /// ([`TraversalSettings::sizes`]) for this photon grid's pyramid.
-    pub fn traversal_sizes(&self) -> TraversalSizes {
+    /// ([`TraversalSettings::sizes`]) for this photon grid's pyramid, on a device whose
+    /// largest buffer holds `max_buffer_bytes`.
+    pub fn traversal_sizes(&self, max_buffer_bytes: u64) -> TraversalSizes {
         let screen = self.deposit == AdaptiveDeposit::Screen;
-        self.traversal().sizes(self.finest_level(), screen)
+        self.traversal()
+            .sizes(self.finest_level(), screen, max_buffer_bytes)
     }
 }
 
@@ -335,12 +337,22 @@ mod tests {
         assert!(s.validate().is_err());
     }
 
+    /// [`TraversalSettings::sizes`] of `t` under a limit of 1 TiB, on a device whose
+    /// largest buffer holds `max_buffer_bytes`.
+    fn huge_sizes(t: &TraversalSettings, max_buffer_bytes: u64) -> TraversalSizes {
+        TraversalSettings {
+            max_traversal_bytes: 1 << 40,
+            ..*t
+        }
+        .sizes(4, false, max_buffer_bytes)
+    }
+
     #[test]
     fn a_traversal_that_writes_no_slots_takes_each_level_in_one_pass() {
         let t = AdaptiveCausticsSettings::default().traversal();
         // the defaults: the bounds seed down to the finest level, which deposits itself
         assert!(!t.writes_slots(4) && !t.writes_slots(0));
-        let z = t.sizes(4, true);
+        let z = t.sizes(4, true, u64::MAX);
         assert!(!z.slots && !z.lists_capped);
         assert_eq!(z.pass_clusters as u64, t.dense_clusters(4));
         // slots where a traced level is judged from them
@@ -360,7 +372,7 @@ mod tests {
             },
         ] {
             assert!(judged.writes_slots(4), "{judged:?}");
-            assert!(judged.sizes(4, false).slots);
+            assert!(judged.sizes(4, false, u64::MAX).slots);
         }
         // the error metric from the finest level on: its levels above are probe levels
         let late = TraversalSettings {
@@ -374,7 +386,7 @@ mod tests {
             max_traversal_bytes: t.full_list_bytes(4) / 2,
             ..t
         };
-        let z = tight.sizes(4, false);
+        let z = tight.sizes(4, false, u64::MAX);
         assert!(z.lists_capped && z.slots);
     }
 
@@ -390,30 +402,46 @@ mod tests {
             max_traversal_bytes: t.bytes_for_pass(4, false, 5000),
             ..t
         };
-        let z = whole.sizes(4, false);
+        let z = whole.sizes(4, false, u64::MAX);
         assert_eq!(z.pass_clusters, 5000);
         assert!(!z.lists_capped);
         assert_eq!(z.list_capacity[3] as u64, t.dense_clusters(4));
         // the screen target's passes also hold four output photons a cluster
-        assert!(whole.sizes(4, true).pass_clusters < 5000);
+        assert!(whole.sizes(4, true, u64::MAX).pass_clusters < 5000);
         // a limit below whole lists caps them, in multiples of 4, and the passes take at
         // most half (or the fewest clusters that keep a level to 64 passes)
         let tight = TraversalSettings {
             max_traversal_bytes: t.full_list_bytes(4) / 2,
             ..t
         };
-        let z = tight.sizes(4, false);
+        let z = tight.sizes(4, false, u64::MAX);
         assert!(z.lists_capped);
         assert!(z.list_capacity.iter().all(|&n| n % 4 == 0 && n >= 4));
         let min_pass = t.dense_clusters(4).div_ceil(MAX_PASSES_PER_LEVEL);
         assert!(z.pass_clusters as u64 <= (tight.max_traversal_bytes / 2 / 132).max(min_pass));
+        // the device's largest buffer bounds a pass's slots and a list
+        let mib = 1u64 << 20;
+        let z = huge_sizes(&t, 4 * mib);
+        assert_eq!(z.pass_clusters as u64, 4 * mib / SLOT_BYTES_PER_CLUSTER);
+        assert!(!z.lists_capped);
+        let entries = t.dense_clusters(4) / 2 / 4 * 4;
+        let z = huge_sizes(&t, entries * LIST_BYTES_PER_ENTRY);
+        assert!(z.lists_capped && z.slots);
+        assert_eq!(z.list_capacity[3] as u64, entries);
+        // and without slots, the list alone
+        let fused = TraversalSettings {
+            fused_finest: true,
+            ..t
+        };
+        assert!(!huge_sizes(&fused, 4 * mib).slots);
+        assert!(huge_sizes(&fused, entries * LIST_BYTES_PER_ENTRY).lists_capped);
         // a huge limit: one pass per level
         let huge = TraversalSettings {
             max_traversal_bytes: 1 << 40,
             ..t
         };
         assert_eq!(
-            huge.sizes(4, false).pass_clusters as u64,
+            huge.sizes(4, false, u64::MAX).pass_clusters as u64,
             t.dense_clusters(4)
         );
     }

@@ -305,22 +305,30 @@ impl TraversalSettings {
             + 4 * LIST_BYTES_PER_ENTRY * finest as u64
     }
 
-    /// The split of `max_traversal_bytes` for pyramids down to level `finest`: whole
-    /// lists when they fit beside passes of at least `1 / MAX_PASSES_PER_LEVEL` of the
-    /// largest level, the passes then as large as the rest allows; else half of the limit
-    /// for the passes and the other half shared by the lists.
-    pub fn sizes(&self, finest: u32, screen: bool) -> TraversalSizes {
+    /// The split of `max_traversal_bytes` for pyramids down to level `finest`, on a device
+    /// whose largest buffer holds `max_buffer_bytes` ([`crate::backend::Capabilities`]):
+    /// whole lists when they fit beside passes of at least `1 / MAX_PASSES_PER_LEVEL` of
+    /// the largest level, the passes then as large as the rest allows; else half of the
+    /// limit for the passes and the other half shared by the lists. No pass's slots (nor
+    /// the screen target's output photons) and no list outgrow the largest buffer: the
+    /// passes are then smaller, and a level whose whole list would not fit one buffer
+    /// caps its list.
+    pub fn sizes(&self, finest: u32, screen: bool, max_buffer_bytes: u64) -> TraversalSizes {
         let largest = self.dense_clusters(finest).max(self.start_clusters());
-        let min_pass = largest.div_ceil(MAX_PASSES_PER_LEVEL);
         let fixed = 4 * self.start_clusters();
         let per = Self::pass_bytes_per_cluster(screen);
         let lists = self.full_list_bytes(finest);
         let budget = self.max_traversal_bytes;
         let cap = |c: u64| c.min(u32::MAX as u64 / 4) as u32;
+        // the most clusters one buffer holds the slots of, and the most entries of a list
+        let buffer_clusters = (max_buffer_bytes / SLOT_BYTES_PER_CLUSTER).max(1);
+        let list_entries = (max_buffer_bytes / LIST_BYTES_PER_ENTRY / 4 * 4).max(4);
+        let min_pass = largest.div_ceil(MAX_PASSES_PER_LEVEL).min(buffer_clusters);
+        let lists_fit = self.dense_clusters(finest) <= list_entries;
         let whole = || (1..=finest).map(|l| cap(self.dense_clusters(l))).collect();
         // the finest level alone, deposited by its trace: a pass holds nothing per
         // cluster, so a level is one pass (the fewest launches)
-        if !self.writes_slots(finest) && budget >= fixed + lists {
+        if !self.writes_slots(finest) && lists_fit && budget >= fixed + lists {
             return TraversalSizes {
                 pass_clusters: cap(largest),
                 list_capacity: whole(),
@@ -328,8 +336,10 @@ impl TraversalSettings {
                 slots: false,
             };
         }
-        if budget >= fixed + lists + min_pass * per {
-            let c = ((budget - fixed - lists) / per).clamp(min_pass, largest);
+        if lists_fit && budget >= fixed + lists + min_pass * per {
+            let c = ((budget - fixed - lists) / per)
+                .clamp(min_pass, largest)
+                .min(buffer_clusters);
             return TraversalSizes {
                 pass_clusters: cap(c),
                 list_capacity: whole(),
@@ -340,6 +350,7 @@ impl TraversalSettings {
         let rest = budget.saturating_sub(fixed);
         let c = (rest / 2 / per)
             .clamp(min_pass.min(largest), largest)
+            .min(buffer_clusters)
             .max(1);
         let share = rest.saturating_sub(c * per) / (LIST_BYTES_PER_ENTRY * finest.max(1) as u64);
         let list_capacity: Vec<u32> = (1..=finest)
@@ -347,7 +358,8 @@ impl TraversalSettings {
                 let n = self
                     .dense_clusters(l)
                     .min(share)
-                    .min(MAX_PASSES_PER_LEVEL * c);
+                    .min(MAX_PASSES_PER_LEVEL * c)
+                    .min(list_entries);
                 cap((n / 4 * 4).max(4))
             })
             .collect();
@@ -697,15 +709,16 @@ impl Traversal {
     }
 
     /// Records the creation of the traversal's buffers for `planes` planes a frame down
-    /// to level `finest`, for the atlas target or (`screen`) the screen target.
+    /// to level `finest`, for the atlas target or (`screen`) the screen target, on a
+    /// device whose largest buffer holds `max_buffer_bytes`.
     pub fn record(
         rec: &mut Recording,
         settings: &TraversalSettings,
         (planes, finest): (usize, u32),
         caster_boxes: &[Aabb],
-        screen: bool,
+        (screen, max_buffer_bytes): (bool, u64),
     ) -> Traversal {
-        let sizes = settings.sizes(finest, screen);
+        let sizes = settings.sizes(finest, screen, max_buffer_bytes);
         let c = sizes.pass_clusters;
         // what a pass holds per cluster, where a level writes slots (else stand-ins)
         let per_cluster = |n: u32| if sizes.slots { n * c } else { 1 };
