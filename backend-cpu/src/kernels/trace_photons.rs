@@ -552,12 +552,22 @@ pub fn cluster_slot(end: &PathEnd, rays: u32, store: u32) -> Photon {
     }
 }
 
+/// Photons of an adaptive batch traced together: their per-photon results (about 200
+/// bytes each with their counters) are held for one chunk at a time.
+const CLUSTER_BATCH_CHUNK: u32 = 1 << 18;
+
 fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTION: bool>(
     scene: &SceneView,
     p: &TraceParams,
     (clusters, store, fused): (&[u32], u32, bool),
 ) -> TraceResult {
-    let parts: Vec<(Option<Photon>, Counters)> = (0..p.count)
+    // in chunks, so that the per-photon results held at once stay bounded however many
+    // clusters a pass takes (a level without slots is one pass)
+    let mut counters = Counters::default();
+    let mut photons = Vec::new();
+    for first in (0..p.count).step_by(CLUSTER_BATCH_CHUNK as usize) {
+        let end = p.count.min(first + CLUSTER_BATCH_CHUNK);
+        let parts: Vec<(Option<Photon>, Counters)> = (first..end)
         .into_par_iter()
         .map(|i| {
             let cluster = entry_cluster(clusters[(p.first + i / 4) as usize]);
@@ -582,14 +592,13 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
             (slot, c)
         })
         .collect();
+        for (ph, c) in parts {
+            photons.extend(ph);
+            counters = counters.merge(c);
+        }
+    }
     // thread i traces photon i % 4 of the batch's cluster i / 4, as in the GPU ports
     crate::traversal_stats::report("trace_photons (adaptive)", p.count, |i| i);
-    let mut counters = Counters::default();
-    let mut photons = Vec::with_capacity(parts.len());
-    for (ph, c) in parts {
-        photons.extend(ph);
-        counters = counters.merge(c);
-    }
     TraceResult { photons, counters }
 }
 

@@ -107,7 +107,8 @@ pub const SLOT_BYTES_PER_CLUSTER: u64 = 128;
 /// Device bytes per entry of a level's cluster list, and of a pass's converged list.
 pub const LIST_BYTES_PER_ENTRY: u64 = 4;
 /// Most passes a level's list is taken in: a pass holds at least 1/64 of the largest
-/// level's clusters, so that a frame records a bounded number of dispatches.
+/// level's clusters (unless the device's largest buffer holds fewer clusters' slots), so
+/// that a frame records a bounded number of dispatches.
 pub const MAX_PASSES_PER_LEVEL: u64 = 64;
 
 /// How the traversal judges its probe levels ([`TraversalSettings::is_probe_level`]).
@@ -201,7 +202,8 @@ impl Default for TraversalSettings {
 /// How the traversal's device memory is split (from [`TraversalSettings::sizes`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TraversalSizes {
-    /// Clusters one pass traces and judges (its photon slots).
+    /// Clusters one pass traces and judges (its photon slots, where it has them: else the
+    /// level's whole list).
     pub pass_clusters: u32,
     /// Entries of the cluster list of each level `1 ..= finest` (index `level - 1`): the
     /// level's every cluster when the lists fit the byte limit beside the passes, else
@@ -517,7 +519,7 @@ pub struct Traversal {
     /// ends, and the deposit's accounting of the stored ones).
     fused_counters: Vec<Buf<u32>>,
     /// The screen target's output list (four slots per cluster of a pass; one unused
-    /// entry with the atlas target) and its count.
+    /// entry with the atlas target or where no level writes slots) and its count.
     outputs: Buf<Photon>,
     output_count: Buf<u32>,
     /// Stand-ins for `refine_clusters`' atlas bindings with the screen target.
