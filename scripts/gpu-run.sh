@@ -34,6 +34,7 @@ benches. experiment: EXP_BENCH=sspm|caustic-map|photon-gi|adaptive, EXP_LANG=ope
 (a folder of variant folders of changed kernel files; default .devbin/exp, .devbin/wexp),
 EXP_OPTIONS ("opts;opts": OpenCL build options, each a variant), EXP_SASS=1 (ptxas counts,
 SASS in $OUT/sass.tgz), EXP_FRAMES, EXP_SETTINGS. hang: HANG_RUNS (8), HANG_AFTER (60 s);
+update: UPDATE_BASE=1 (a baseline's update_cost_base and frame_loop_base in turns);
 CAUSTICA_SKIP_BACKENDS and CAUSTICA_SERIALIZE_DRIVERS pass through to the suite.
 EOF
 }
@@ -151,7 +152,18 @@ traversal() {
     done
     run timeout 90 ./frame_loop 1920x1080 2048 60
 }
-update() { run timeout 60 ./update_cost vulkan 200; run timeout 90 ./frame_loop 1920x1080 2048 60; }
+update() {
+    # UPDATE_BASE=1: also a baseline build's update_cost_base and frame_loop_base (copied
+    # into .devbin by hand), in turns with this build's, twice: host times drift by tens
+    # of percent between runs on one host, so only turns of one run compare
+    local r
+    for r in 1 ${UPDATE_BASE:+2}; do
+        if [ -n "${UPDATE_BASE:-}" ]; then
+            run timeout 60 ./update_cost_base vulkan 200; run timeout 90 ./frame_loop_base 1920x1080 2048 60
+        fi
+        run timeout 60 ./update_cost vulkan 200; run timeout 90 ./frame_loop 1920x1080 2048 60
+    done
+}
 hang() {
     # elfutils' eu-stack from .devbin (the device image has no gdb) names a hung thread's calls
     for f in "$B"/{elfutils,libdw1,libelf1,libasm1}_*.deb; do [ -f "$f" ] && dpkg -x "$f" /tmp/eu; done
