@@ -316,6 +316,20 @@ fn probe_levels_give_the_full_traversals_frame_bitwise() {
                         format!("{name} / {scene_name} / {metric:?} / {probes:?} / fused {fused}");
                     let (sp, probed) = run(b.as_mut(), (probes, fused));
                     let ap = AdaptiveStats::of(&sp).expect("adaptive stats");
+                    // the level metric seeded down to a fused finest level judges nothing
+                    // from slots: the plan leaves refine_clusters out and says why
+                    let slot_free = fused && metric == AdaptiveMetric::Level;
+                    assert_eq!(
+                        sp.passes.iter().any(|p| p.name == "refine_clusters"),
+                        !slot_free,
+                        "{what}: refine_clusters dispatched"
+                    );
+                    assert_eq!(
+                        sp.skipped.iter().any(|p| p.name == "refine_clusters"
+                            && p.reason == TraversalSettings::NO_SLOTS_REASON),
+                        slot_free,
+                        "{what}: the plan's word on refine_clusters"
+                    );
                     if let Some(out) = same_bits(&full, &probed) {
                         panic!("{what}: {out} differs from the full traversal's");
                     }
@@ -591,6 +605,14 @@ fn the_screen_target_deposits_the_traversals_photons() {
                 .expect("raw");
             screen.free(b.as_mut()).expect("free");
             assert_eq!(s.technique, "adaptive-caustics", "{what}");
+            // the default traversal judges nothing from slots: the fused finest level
+            // deposits into the screen itself
+            for pass in ["refine_clusters", "deposit_screen"] {
+                assert!(
+                    !s.passes.iter().any(|p| p.name == pass),
+                    "{what}: {pass} dispatched"
+                );
+            }
             assert_eq!(a.stored_flux, s.stored_flux, "{what}: stored flux");
             assert_eq!(a.photons_stored, s.photons_stored, "{what}: stored photons");
             let (ta, ts) = (AdaptiveStats::of(&a), AdaptiveStats::of(&s));

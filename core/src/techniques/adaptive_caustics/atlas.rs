@@ -33,12 +33,16 @@ fn plan(
         traversal.map_or(0, |t| t.sizes.pass_clusters),
         receiver.stale_words()
     );
-    receiver.plan(
+    let mut plan = receiver.plan(
         host,
         planes.light_plans(),
         &[("trace_photons", why.clone()), ("refine_clusters", why)],
         variant,
-    )
+    );
+    if let Some(t) = traversal {
+        t.leave_out_unused_passes(&mut plan);
+    }
+    plan
 }
 
 /// The atlas target's pipeline over `host` with `planes` (fitted to the pyramid).

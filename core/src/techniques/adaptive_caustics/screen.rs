@@ -82,6 +82,9 @@ pub(super) fn create(
             (true, max_buffer_bytes),
         )
     });
+    if let Some(t) = &traversal {
+        t.leave_out_unused_passes(&mut plan);
+    }
     let owned = allocate(backend, &rec, Some((camera.width, camera.height)))?;
     plan.buffers = host
         .buffer_plans()

@@ -267,6 +267,13 @@ impl TraversalSettings {
         !(self.fused_finest && (finest == 0 || self.seed_level(finest, false) == Some(finest)))
     }
 
+    /// Why no pass judges clusters from slots ([`TraversalSizes::slots`] false): the
+    /// frame plan's reason for leaving `refine_clusters` (and the screen target's
+    /// `deposit_screen`) out.
+    pub const NO_SLOTS_REASON: &'static str =
+        "every traced level deposits itself: the bounds seed stands for the levels above the \
+         finest, whose trace deposits each stored photon (fused_finest)";
+
     /// Clusters of the start grid.
     pub fn start_clusters(&self) -> u64 {
         (self.start_grid as u64 / 2).pow(2)
@@ -707,6 +714,22 @@ impl Traversal {
     pub fn set_caster_boxes(&mut self, boxes: &[Aabb]) {
         if boxes.len() == self.caster_boxes.len() {
             self.caster_boxes = boxes.to_vec();
+        }
+    }
+
+    /// Marks in `plan` the passes this traversal never launches: with no slots,
+    /// `refine_clusters` and `deposit_screen` ([`TraversalSettings::NO_SLOTS_REASON`]).
+    pub fn leave_out_unused_passes(&self, plan: &mut crate::frame::plan::FramePlan) {
+        if self.sizes.slots {
+            return;
+        }
+        for p in plan
+            .passes
+            .iter_mut()
+            .filter(|p| p.runs && (p.name == "refine_clusters" || p.name == "deposit_screen"))
+        {
+            p.runs = false;
+            p.reason = TraversalSettings::NO_SLOTS_REASON.into();
         }
     }
 
