@@ -34,7 +34,9 @@ benches. experiment: EXP_BENCH=sspm|caustic-map|photon-gi|adaptive, EXP_LANG=ope
 (a folder of variant folders of changed kernel files; default .devbin/exp, .devbin/wexp),
 EXP_OPTIONS ("opts;opts": OpenCL build options, each a variant), EXP_SASS=1 (ptxas counts,
 SASS in $OUT/sass.tgz), EXP_FRAMES, EXP_SETTINGS. hang: HANG_RUNS (8), HANG_AFTER (60 s);
-update: UPDATE_BASE=1 (a baseline's update_cost_base and frame_loop_base in turns);
+update: UPDATE_BASE=1 (a baseline build's examples copied as .devbin/update_cost_base and
+.devbin/frame_loop_base after --build, which empties .devbin's gzipped files, or before
+it as plain files, which it strips and gzips; run in turns with this build's);
 CAUSTICA_SKIP_BACKENDS and CAUSTICA_SERIALIZE_DRIVERS pass through to the suite.
 EOF
 }
@@ -153,12 +155,13 @@ traversal() {
     run timeout 90 ./frame_loop 1920x1080 2048 60
 }
 update() {
-    # UPDATE_BASE=1: also a baseline build's update_cost_base and frame_loop_base (copied
-    # into .devbin by hand), in turns with this build's, twice: host times drift by tens
-    # of percent between runs on one host, so only turns of one run compare
-    local r
-    for r in 1 ${UPDATE_BASE:+2}; do
-        if [ -n "${UPDATE_BASE:-}" ]; then
+    # UPDATE_BASE=1: also a baseline build's update_cost_base and frame_loop_base, in
+    # turns with this build's, twice: host times drift by tens of percent between runs on
+    # one host, so only turns of one run compare
+    local r base=""
+    [ "${UPDATE_BASE:-}" = 1 ] && base=1
+    for r in 1 ${base:+2}; do
+        if [ -n "$base" ]; then
             run timeout 60 ./update_cost_base vulkan 200; run timeout 90 ./frame_loop_base 1920x1080 2048 60
         fi
         run timeout 60 ./update_cost vulkan 200; run timeout 90 ./frame_loop 1920x1080 2048 60

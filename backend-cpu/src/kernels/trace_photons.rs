@@ -561,37 +561,38 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
     p: &TraceParams,
     (clusters, store, fused): (&[u32], u32, bool),
 ) -> TraceResult {
+    // thread i: photon i % 4 of the batch's cluster i / 4
+    let trace = |i: u32| -> (Option<Photon>, Counters) {
+        let cluster = entry_cluster(clusters[(p.first + i / 4) as usize]);
+        let index = cluster_photon_index(cluster, i % 4, p.grid_w);
+        crate::traversal_stats::photon_begins(i);
+        let (path_end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
+            scene,
+            p,
+            index,
+            store,
+            &mut |_, _| {},
+        );
+        crate::traversal_stats::photon_ends();
+        let mut c = Counters::default();
+        c.words[counter::RAYS] += rays as u64;
+        let slot = match path_end {
+            PathEnd::Stored(ph) if fused => Some(ph),
+            _ if fused => None,
+            _ => Some(cluster_slot(&path_end, rays, store)),
+        };
+        count_end(path_end, p, &mut Vec::new(), &mut c);
+        (slot, c)
+    };
     // in chunks, so that the per-photon results held at once stay bounded however many
-    // clusters a pass takes (a level without slots is one pass)
+    // clusters a pass takes (a level without slots is one pass); a slot stays at its
+    // thread's index, a fused level keeps its stored photons in thread order
     let mut counters = Counters::default();
-    let mut photons = Vec::new();
+    let mut photons = Vec::with_capacity(if fused { 0 } else { p.count as usize });
     for first in (0..p.count).step_by(CLUSTER_BATCH_CHUNK as usize) {
-        let end = p.count.min(first + CLUSTER_BATCH_CHUNK);
-        let parts: Vec<(Option<Photon>, Counters)> = (first..end)
-        .into_par_iter()
-        .map(|i| {
-            let cluster = entry_cluster(clusters[(p.first + i / 4) as usize]);
-            let index = cluster_photon_index(cluster, i % 4, p.grid_w);
-            crate::traversal_stats::photon_begins(i);
-            let (end, rays) = trace_photon_variant::<DIELECTRIC, DISPERSION, ABSORPTION>(
-                scene,
-                p,
-                index,
-                store,
-                &mut |_, _| {},
-            );
-            crate::traversal_stats::photon_ends();
-            let mut c = Counters::default();
-            c.words[counter::RAYS] += rays as u64;
-            let slot = match end {
-                PathEnd::Stored(ph) if fused => Some(ph),
-                _ if fused => None,
-                _ => Some(cluster_slot(&end, rays, store)),
-            };
-            count_end(end, p, &mut Vec::new(), &mut c);
-            (slot, c)
-        })
-        .collect();
+        let last = p.count.min(first + CLUSTER_BATCH_CHUNK);
+        let parts: Vec<(Option<Photon>, Counters)> =
+            (first..last).into_par_iter().map(trace).collect();
         for (ph, c) in parts {
             photons.extend(ph);
             counters = counters.merge(c);

@@ -167,8 +167,9 @@ impl LaneBox {
     /// The box over all lanes. Bitwise the box [`AabbA`] grows over the same points in
     /// any order unless a bound is zero or a point is NaN: a bound is an extreme value,
     /// and equal values have equal bits but for the zeros' two signs. A scene's
-    /// positions are never NaN: validation bounds coordinates and scales
-    /// (`scene::limits`), so no product overflows into infinity minus infinity.
+    /// positions are never NaN: validation bounds coordinates (`scene::limits::
+    /// MAX_COORDINATE`, 2^40) and scales (`scene::transform::SCALE_RANGE`, up to 2^20), so
+    /// no product overflows and no sum is infinity minus infinity.
     fn aabb(&self) -> Aabb {
         Aabb {
             min: Vec3::new(

@@ -272,7 +272,8 @@ impl TraversalSettings {
     /// `deposit_screen`) out.
     pub const NO_SLOTS_REASON: &'static str =
         "every traced level deposits itself: the bounds seed stands for the levels above the \
-         finest, whose trace deposits each stored photon (fused_finest)";
+         finest (or the start grid is the finest), whose trace deposits each stored photon \
+         (fused_finest)";
 
     /// Clusters of the start grid.
     pub fn start_clusters(&self) -> u64 {
