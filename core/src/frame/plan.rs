@@ -6,9 +6,11 @@
 //! in its own `plan` module and records exactly the planned passes; the plan travels in
 //! [`crate::frame::stats::FrameStats`] (`stats.json`).
 //!
-//! With pruning off every pass runs, every buffer exists, every light with a domain emits
-//! and the kernel variant has every feature: the baseline conformance compares pruning
-//! against.
+//! With pruning off every pass that the scene's content would need runs, every buffer
+//! exists, every light with a domain emits and the kernel variant has every feature: the
+//! baseline conformance compares pruning against. A setting that fuses one pass into
+//! another (Sspm's `fused_deposit`, AdaptiveCaustics' fused finest level) leaves the
+//! fused pass out either way, with its reason.
 
 use crate::kernels::TraceVariant;
 use crate::scene::{Material, Scene};

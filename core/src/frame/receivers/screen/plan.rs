@@ -13,7 +13,8 @@ use crate::scene::Scene;
 pub struct Needs {
     /// `direct_light` runs.
     pub direct_light: bool,
-    /// The photon passes run: `trace_photons`, `deposit_screen`, `resolve_caustics`.
+    /// The photon passes run: `trace_photons`, `deposit_screen` (unless the trace
+    /// deposits itself), `resolve_caustics`.
     pub photons: bool,
     /// The filter runs: `photon_count_table`, `gather_footprint` and `density_gather`
     /// (twice each but the footprint), or `tile_hit_distance` and both
