@@ -235,9 +235,10 @@ if [ "$1" = "--build" ]; then
     T=${CARGO_TARGET_DIR:-target}/release
     mkdir -p .devbin && rm -f .devbin/*.gz
     cargo build --release -p caustica && cp "$T/caustica" .devbin/
-    # every ./binary the sections' functions name (warm_up runs sspm_frame)
+    # every ./binary the sections' functions name (warm_up runs sspm_frame), but a
+    # baseline build's (*_base, copied in by hand)
     bins=$(for s in "$@"; do for f in $(functions "$s"); do declare -f "$f" | grep -q warm_up && echo sspm_frame
-        declare -f "$f" | grep -oE '\./[a-z_]+' | cut -c3-; done; done | { grep -vx caustica || true; } | sort -u)
+        declare -f "$f" | grep -oE '\./[a-z_]+' | cut -c3-; done; done | { grep -vxE 'caustica|.*_base' || true; } | sort -u)
     # the executable cargo names in its JSON messages (a bench's own: deps/<name>-<hash>)
     exe() { grep -o '"executable":"[^"]*/'"$1"'-[^"]*"' | tail -n 1 | cut -d'"' -f4; }
     for b in $bins; do

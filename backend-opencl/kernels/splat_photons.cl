@@ -86,6 +86,14 @@ inline void splat_pixel(__global const SplatParams* p, GBUFFER_PARAMS(__global c
     }
 }
 
+// The photon thread `l` of group `group` splats: every G-th photon from `group` on, G the
+// groups that hold the `stored` photons. Photons stored one after another come from
+// neighbouring paths and splat onto the same pixels; in consecutive groups, which run at
+// once, their atomics would queue on the same words.
+inline uint splat_group_photon(uint group, uint l, uint stored) {
+    return group + l * ((stored + SPLAT_GROUP - 1u) / SPLAT_GROUP);
+}
+
 __kernel void splat_photons(__global const SplatParams* p, GBUFFER_PARAMS(__global const),
                             __global const GiPhoton* photons, uint photon_capacity,
                             __global const uint* photon_count,
@@ -104,7 +112,7 @@ __kernel void splat_photons(__global const SplatParams* p, GBUFFER_PARAMS(__glob
     uint stored = min(photon_count[0], photon_capacity);
     if (get_group_id(0) * SPLAT_GROUP >= stored) return;
     counters_clear_local(lc);
-    uint i = get_global_id(0), l = get_local_id(0);
+    uint l = get_local_id(0), i = splat_group_photon(get_group_id(0), l, stored);
     SplatSetup mine;
     mine.rect = (int4)(0, -1, 0, -1);
     if (i < stored)

@@ -152,17 +152,25 @@ fn splat_pixel(p: SplatParams, j: u32, q: u32) {
     }
 }
 
+// The photon invocation `li` of workgroup `group` splats: every G-th photon from `group` on,
+// G the groups that hold the `stored` photons. Photons stored one after another come from
+// neighbouring paths and splat onto the same pixels; in consecutive groups, which run at
+// once, their atomics would queue on the same words.
+fn splat_group_photon(group: u32, li: u32, stored: u32) -> u32 {
+    return group + li * ((stored + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE);
+}
+
 // A workgroup splats its photons together: each invocation sets up its own photon's splat,
 // then the group walks the run of all its splats' pixels, a pixel per invocation, so that
 // neighbouring invocations test neighbouring pixels of one splat and every invocation
 // gets the same share (a large splat does not hold up the rest of its group). The sums
-// are exact integers, so the order is free. `first`: the group's first photon; `li`: local
+// are exact integers, so the order is free. `group`: the workgroup's index; `li`: local
 // invocation index. Every invocation reaches the barriers.
-fn splat_photons(first: u32, li: u32) {
+fn splat_photons(group: u32, li: u32) {
     let stored = min(photon_count[0], arrayLength(&photons));
     counters_clear_local(li);
     let p = params;
-    let i = first + li;
+    let i = splat_group_photon(group, li, stored);
     var mine = no_splat();
     if (i < stored) {
         mine = splat_setup(p, photons[i]);
@@ -197,14 +205,14 @@ fn splat_photons(first: u32, li: u32) {
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) li: u32) {
-    let first = (wg.y * nwg.x + wg.x) * 64u;
+    let group = wg.y * nwg.x + wg.x;
     // the launch covers the photon buffer's capacity; a group past the stored photons
     // (most of them at 3 bounces) leaves at once, all its invocations alike, before any
     // barrier: the condition reads only workgroup builtins and read-only storage, which
     // WGSL's uniformity analysis holds uniform (wgsl_validate's
     // barriers_in_uniform_control_flow checks that form)
-    if (first >= min(photon_count[0], arrayLength(&photons))) {
+    if (group * 64u >= min(photon_count[0], arrayLength(&photons))) {
         return;
     }
-    splat_photons(first, li);
+    splat_photons(group, li);
 }
