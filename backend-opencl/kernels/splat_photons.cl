@@ -86,10 +86,11 @@ inline void splat_pixel(__global const SplatParams* p, GBUFFER_PARAMS(__global c
     }
 }
 
-// The photon thread `l` of group `group` splats: every G-th photon from `group` on, G the
-// groups that hold the `stored` photons. Photons stored one after another come from
-// neighbouring paths and splat onto the same pixels; in consecutive groups, which run at
-// once, their atomics would queue on the same words.
+// The photon thread `l` of group `group` splats: every G-th photon from `group` on,
+// G = ceil(stored / SPLAT_GROUP) the groups that hold the `stored` photons. Photons stored
+// one after another come from neighbouring paths and splat onto the same pixels: a group
+// of such neighbours would add to the same words over and over, and atomics on one word
+// are served one at a time.
 inline uint splat_group_photon(uint group, uint l, uint stored) {
     return group + l * ((stored + SPLAT_GROUP - 1u) / SPLAT_GROUP);
 }

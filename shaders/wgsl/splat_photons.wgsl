@@ -153,9 +153,10 @@ fn splat_pixel(p: SplatParams, j: u32, q: u32) {
 }
 
 // The photon invocation `li` of workgroup `group` splats: every G-th photon from `group` on,
-// G the groups that hold the `stored` photons. Photons stored one after another come from
-// neighbouring paths and splat onto the same pixels; in consecutive groups, which run at
-// once, their atomics would queue on the same words.
+// G = ceil(stored / 64) the groups that hold the `stored` photons. Photons stored one after
+// another come from neighbouring paths and splat onto the same pixels: a group of 64 such
+// neighbours would add to the same words over and over, and atomics on one word are
+// served one at a time.
 fn splat_group_photon(group: u32, li: u32, stored: u32) -> u32 {
     return group + li * ((stored + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE);
 }
