@@ -15,12 +15,15 @@
 //! schedules, default `auto`, the settings' default; each timed in turn),
 //! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8),
 //! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22).
+//! With waves, `trace_indirect`'s (and the sort's) median per wave follows the passes.
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
 
 mod common;
 use caustica::scene::builtin::builtin;
-use caustica::techniques::photon_gi::{IndirectSchedule, PhotonGi, PhotonGiSettings};
+use caustica::techniques::photon_gi::{
+    IndirectSchedule, PhotonGi, PhotonGiSettings, PhotonGiStats,
+};
 use caustica::FrameSettings;
 use caustica::{open_backend, BACKEND_NAMES};
 use common::{env_or, median, warm_up, warmup_ms};
@@ -118,6 +121,9 @@ fn main() {
                 continue;
             }
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+            // per wave: `trace_indirect`'s and the sort's times, one per frame
+            let (mut wave_trace, mut wave_sort): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
+                Default::default();
             let (mut wall, mut technique) = (Vec::new(), Vec::new());
             let mut timing = String::new();
             let mut stored = 0;
@@ -135,6 +141,15 @@ fn main() {
                 }
                 for (p, v) in &st.pass_ms {
                     passes.entry(p.clone()).or_default().push(*v);
+                }
+                if let Some(gi) = PhotonGiStats::of(&st) {
+                    for (per_wave, ms) in [
+                        (&mut wave_trace, &gi.trace_ms_per_wave),
+                        (&mut wave_sort, &gi.sort_ms_per_wave),
+                    ] {
+                        per_wave.resize(ms.len(), Vec::new());
+                        per_wave.iter_mut().zip(ms).for_each(|(v, &m)| v.push(m));
+                    }
                 }
                 // the camera's G-buffer is one of the primary_gbuffer dispatches: its share
                 // is the mean dispatch times the one camera dispatch (faces are smaller, so
@@ -167,6 +182,15 @@ fn main() {
             );
             for (p, mut v) in passes {
                 println!("  {p:24} {:.3} ms", median(&mut v));
+            }
+            for (what, mut per_wave) in [("trace_indirect", wave_trace), ("sort", wave_sort)] {
+                if !per_wave.is_empty() {
+                    let ms: Vec<String> = per_wave
+                        .iter_mut()
+                        .map(|v| format!("{:.3}", median(v)))
+                        .collect();
+                    println!("  {what} per wave, ms: {}", ms.join(" / "));
+                }
             }
             t.free(backend.as_mut()).expect("free");
         }

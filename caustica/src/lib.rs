@@ -186,7 +186,9 @@ pub use caustica_core::techniques::adaptive_caustics::{
 /// # }
 /// ```
 pub use caustica_core::techniques::photon_gi::PhotonGi;
-pub use caustica_core::techniques::photon_gi::{IndirectEstimator, PhotonGiSettings, RsmSampling};
+pub use caustica_core::techniques::photon_gi::{
+    IndirectEstimator, PhotonGiSettings, PhotonGiStats, RsmSampling,
+};
 
 /// The techniques: the registry ([`techniques::TECHNIQUES`], [`techniques::create`]) and
 /// one module per technique, with everything each exports.

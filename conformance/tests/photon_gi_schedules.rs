@@ -15,9 +15,11 @@ use caustica_conformance::harness;
 use caustica_conformance::kernels::sort_indirect_paths::check_sort_indirect_paths;
 use caustica_core::device::layout::IndirectPath;
 use caustica_core::frame::output::Output;
+use caustica_core::frame::stats::FrameStats;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
 use caustica_core::techniques::create;
+use caustica_core::techniques::photon_gi::PhotonGiStats;
 use caustica_core::Backend;
 use proptest::prelude::*;
 
@@ -41,6 +43,7 @@ fn frames(b: &mut dyn Backend, scene: &Scene, settings: &serde_json::Value) -> F
                 stats.host_waits, 0,
                 "{settings}: the frame waited on the device"
             );
+            check_wave_times(settings, &stats);
             let images = [
                 Output::RawIndirect,
                 Output::FilteredIndirect,
@@ -62,6 +65,44 @@ fn frames(b: &mut dyn Backend, scene: &Scene, settings: &serde_json::Value) -> F
         .collect();
     t.free(b).expect("free");
     out
+}
+
+/// The waves' times in the frame's statistics ([`PhotonGiStats`]): one per wave, adding
+/// up to the frame's `trace_indirect` (and `sort_indirect_paths`) pass; none for the
+/// single kernel.
+fn check_wave_times(settings: &serde_json::Value, stats: &FrameStats) {
+    let gi = PhotonGiStats::of(stats);
+    let schedule = settings["indirect_schedule"].as_str().unwrap_or("auto");
+    if schedule == "single_kernel" {
+        assert_eq!(gi, None, "{settings}: wave times for the single kernel");
+        return;
+    }
+    let gi = gi.unwrap_or_else(|| panic!("{settings}: no wave times"));
+    let asked = settings["indirect_waves"].as_u64().unwrap_or(8) as u32;
+    assert!(
+        gi.waves >= 1 && gi.waves <= asked,
+        "{settings}: {} waves",
+        gi.waves
+    );
+    let adds_up = |per_wave: &[f64], pass: &str| {
+        let whole = stats.pass_ms.get(pass).copied().unwrap_or(0.0);
+        let sum: f64 = per_wave.iter().sum();
+        per_wave.len() == gi.waves as usize && (sum - whole).abs() <= 1e-9 * whole.max(1.0)
+    };
+    assert!(
+        adds_up(&gi.trace_ms_per_wave, "trace_indirect"),
+        "{settings}: {gi:?} against {:?}",
+        stats.pass_ms
+    );
+    if schedule == "sorted_waves" {
+        assert!(
+            adds_up(&gi.sort_ms_per_wave, "sort_indirect_paths") && gi.sort_ms_per_wave[0] == 0.0,
+            "{settings}: {gi:?} against {:?}",
+            stats.pass_ms
+        );
+    } else {
+        assert!(gi.sort_ms_per_wave.is_empty(), "{settings}: {gi:?}");
+    }
 }
 
 #[test]

@@ -120,13 +120,29 @@ pub struct FrameStats {
     /// `Sspm::set_reference` (computed after the frame; not part of `frame_ms`).
     pub error: Option<crate::frame::metrics::ErrorStats>,
     /// A technique's own statistics, by name, in their serialised form (AdaptiveCaustics'
-    /// traversal: `adaptive`, read typed with its `AdaptiveStats::of`); written at the
-    /// top level of the JSON form.
+    /// traversal: `adaptive`, read typed with its `AdaptiveStats::of`; PhotonGi's waves:
+    /// `photon_gi`, `PhotonGiStats::of`); written at the top level of the JSON form
+    /// ([`FrameStats::own_stats`], [`FrameStats::put_own`]).
     #[serde(flatten)]
     pub own: std::collections::BTreeMap<String, serde_json::Value>,
 }
 
 impl FrameStats {
+    /// A technique's own statistics under `key` in [`FrameStats::own`], typed: `None`
+    /// where the frame has none (another technique's frame) or they do not read as `T`.
+    pub fn own_stats<T: serde::de::DeserializeOwned>(&self, key: &str) -> Option<T> {
+        self.own
+            .get(key)
+            .and_then(|v| serde_json::from_value(v.clone()).ok())
+    }
+
+    /// Puts a technique's own statistics into [`FrameStats::own`] under `key`.
+    pub fn put_own<T: Serialize>(&mut self, key: &str, value: &T) {
+        if let Ok(v) = serde_json::to_value(value) {
+            self.own.insert(key.into(), v);
+        }
+    }
+
     /// Adds a kernel time to its pass.
     pub fn add_pass_time(&mut self, name: &str, seconds: f64) {
         let ms = seconds * 1e3;

@@ -71,16 +71,11 @@ impl AdaptiveStats {
     /// The traversal's statistics of a frame: `None` for the other techniques and for
     /// frames without photon work.
     pub fn of(stats: &FrameStats) -> Option<AdaptiveStats> {
-        stats
-            .own
-            .get(Self::KEY)
-            .and_then(|v| serde_json::from_value(v.clone()).ok())
+        stats.own_stats(Self::KEY)
     }
 
     /// Puts these statistics into the frame's.
     pub fn put(&self, stats: &mut FrameStats) {
-        if let Ok(v) = serde_json::to_value(self) {
-            stats.own.insert(Self::KEY.into(), v);
-        }
+        stats.put_own(Self::KEY, self);
     }
 }

@@ -30,9 +30,11 @@
 
 mod rsm;
 mod settings;
+mod stats;
 
 pub use rsm::{rsm_faces, LightRsm};
 pub use settings::{IndirectEstimator, IndirectSchedule, PhotonGiSettings, RsmSampling};
+pub use stats::PhotonGiStats;
 
 use crate::backend::Backend;
 use crate::device::device_scene::SceneInstances;
@@ -1338,6 +1340,9 @@ impl Pipeline for PhotonGiPipeline {
             lights: rsms.iter().map(|r| (r.faces.len(), r.sees)).collect(),
             side: self.settings.rsm_size,
             decided: Arc::clone(&self.decided),
+            waves: b.waves.map_or((0, false), |w| {
+                (self.settings.waves(self.schedule), w.buckets.is_some())
+            }),
         };
         frame.end_read(EndRead::Own(Arc::new(end)));
         // this frame's blend is the next frame's history
@@ -1439,15 +1444,20 @@ struct PlanEnd {
     /// RSM side (texels).
     side: u32,
     decided: Arc<Mutex<Option<(u64, u32)>>>,
+    /// Waves per chunk (0: the single kernel) and whether each queue is sorted.
+    waves: (u32, bool),
 }
 
 impl FrameEnd for PlanEnd {
     fn apply(
         &self,
         readbacks: &[Vec<u8>],
-        _times: &[crate::backend::PassTime],
+        times: &[crate::backend::PassTime],
         stats: &mut crate::frame::stats::FrameStats,
     ) {
+        if let Some(s) = PhotonGiStats::from_times(self.waves.0, self.waves.1, times) {
+            s.put(stats);
+        }
         let words = |at: usize| -> Vec<u32> {
             readbacks
                 .get(at)

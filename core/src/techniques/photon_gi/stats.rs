@@ -1,0 +1,105 @@
+//! PhotonGi's own frame statistics: the time of `trace_indirect`'s per-bounce waves. A
+//! frame carries them in [`FrameStats::own`] under [`PhotonGiStats::KEY`].
+
+use crate::backend::PassTime;
+use crate::frame::stats::FrameStats;
+use serde::{Deserialize, Serialize};
+
+/// Where the per-bounce waves' time goes (`indirect_schedule` `waves` or `sorted_waves`;
+/// a frame of the single kernel has none).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PhotonGiStats {
+    /// Waves per chunk of a light's photons (`indirect_waves`).
+    pub waves: u32,
+    /// `trace_indirect`'s time per wave (index k: segment k of every path still going,
+    /// the last wave the rest of each path), summed over the lights and their chunks, in
+    /// ms of the frame's `timing` (device timestamps or host wall clock).
+    pub trace_ms_per_wave: Vec<f64>,
+    /// `sort_indirect_paths`' time before each wave (its three launches), in ms; index 0
+    /// is 0 (the RSM photons are not sorted); empty without sorting.
+    pub sort_ms_per_wave: Vec<f64>,
+}
+
+impl PhotonGiStats {
+    /// The name of these statistics in [`FrameStats::own`] (and the frame's JSON form).
+    pub const KEY: &'static str = "photon_gi";
+
+    /// The waves' statistics of a frame: `None` for the other techniques and for the
+    /// single kernel.
+    pub fn of(stats: &FrameStats) -> Option<PhotonGiStats> {
+        stats.own_stats(Self::KEY)
+    }
+
+    /// Puts these statistics into the frame's.
+    pub fn put(&self, stats: &mut FrameStats) {
+        stats.put_own(Self::KEY, self);
+    }
+
+    /// The waves' times from a frame's kernel times in recorded order: every chunk
+    /// launches `trace_indirect` once a wave, waves in order, and nothing else launches
+    /// it, so the j-th `trace_indirect` of the frame is wave `j % waves`; a sort belongs
+    /// to the wave after it. `None` without waves, or where the launches do not come in
+    /// whole chunks (times of another shape than the recording's).
+    pub fn from_times(waves: u32, sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
+        let n = waves as usize;
+        if n == 0 {
+            return None;
+        }
+        let mut s = PhotonGiStats {
+            waves,
+            trace_ms_per_wave: vec![0.0; n],
+            sort_ms_per_wave: if sorted { vec![0.0; n] } else { Vec::new() },
+        };
+        let mut traced = 0usize;
+        for t in times {
+            let ms = t.seconds * 1e3;
+            match t.kernel {
+                "trace_indirect" => {
+                    s.trace_ms_per_wave[traced % n] += ms;
+                    traced += 1;
+                }
+                "sort_indirect_paths" if sorted => s.sort_ms_per_wave[traced % n] += ms,
+                _ => {}
+            }
+        }
+        traced.is_multiple_of(n).then_some(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(kernel: &'static str, ms: f64) -> PassTime {
+        PassTime {
+            kernel,
+            seconds: ms * 1e-3,
+        }
+    }
+
+    #[test]
+    fn the_waves_of_every_chunk_add_up_by_wave() {
+        // two chunks of three sorted waves, other kernels between them
+        let mut times = vec![at("sample_rsm", 5.0)];
+        for chunk in 0..2 {
+            let c = chunk as f64;
+            times.push(at("trace_indirect", 1.0 + c));
+            for k in 1..3 {
+                times.push(at("dispatch_args", 7.0));
+                for _ in 0..3 {
+                    times.push(at("sort_indirect_paths", 0.25 * k as f64));
+                }
+                times.push(at("trace_indirect", 10.0 * k as f64 + c));
+            }
+        }
+        times.push(at("splat_photons", 3.0));
+        let s = PhotonGiStats::from_times(3, true, &times).expect("whole chunks");
+        assert_eq!(s.trace_ms_per_wave, vec![3.0, 21.0, 41.0]);
+        assert_eq!(s.sort_ms_per_wave, vec![0.0, 1.5, 3.0]);
+        let unsorted = PhotonGiStats::from_times(3, false, &times).expect("whole chunks");
+        assert!(unsorted.sort_ms_per_wave.is_empty());
+        // a partial chunk: not the recording's shape
+        assert_eq!(PhotonGiStats::from_times(3, false, &times[..3]), None);
+        assert_eq!(PhotonGiStats::from_times(0, false, &times), None);
+    }
+}
