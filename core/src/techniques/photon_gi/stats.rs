@@ -5,11 +5,14 @@ use crate::backend::PassTime;
 use crate::frame::stats::FrameStats;
 use serde::{Deserialize, Serialize};
 
-/// Where the per-bounce waves' time goes (`indirect_schedule` `waves` or `sorted_waves`;
-/// a frame of the single kernel has none).
+/// Where the per-bounce waves' time goes: present where a frame runs waves (`waves` or
+/// `sorted_waves` with more than one wave; `auto` where it resolves to them), absent for
+/// the single kernel and where the frame timed no kernel. Only `trace_indirect`'s and
+/// `sort_indirect_paths`' launches are in it: each later wave's `dispatch_args` and the
+/// sort's bucket clear are not.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PhotonGiStats {
-    /// Waves per chunk of a light's photons (`indirect_waves`).
+    /// Waves per chunk of a light's photons: `indirect_waves`, at most `max_segments`.
     pub waves: u32,
     /// `trace_indirect`'s time per wave (index k: segment k of every path still going,
     /// the last wave the rest of each path), summed over the lights and their chunks, in
@@ -38,8 +41,9 @@ impl PhotonGiStats {
     /// The waves' times from a frame's kernel times in recorded order: every chunk
     /// launches `trace_indirect` once a wave, waves in order, and nothing else launches
     /// it, so the j-th `trace_indirect` of the frame is wave `j % waves`; a sort belongs
-    /// to the wave after it. `None` without waves, or where the launches do not come in
-    /// whole chunks (times of another shape than the recording's).
+    /// to the wave after it. `None` without waves, without any `trace_indirect` time (a
+    /// device that gives no timestamps), or where the launches do not come in whole
+    /// chunks (times of another shape than the recording's).
     pub fn from_times(waves: u32, sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
         let n = waves as usize;
         if n == 0 {
@@ -62,7 +66,7 @@ impl PhotonGiStats {
                 _ => {}
             }
         }
-        traced.is_multiple_of(n).then_some(s)
+        (traced > 0 && traced.is_multiple_of(n)).then_some(s)
     }
 }
 
@@ -101,5 +105,7 @@ mod tests {
         // a partial chunk: not the recording's shape
         assert_eq!(PhotonGiStats::from_times(3, false, &times[..3]), None);
         assert_eq!(PhotonGiStats::from_times(0, false, &times), None);
+        // no kernel timed
+        assert_eq!(PhotonGiStats::from_times(3, true, &[]), None);
     }
 }
