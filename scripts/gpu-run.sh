@@ -250,7 +250,8 @@ if [ "$1" = "--build" ]; then
         [ -n "$f" ] || { echo "cargo named no executable for $b" >&2; exit 1; }
         cp "$f" ".devbin/$b"
     done
-    cd .devbin && for f in *; do case $f in *.deb|*.gz) ;; *) strip "$f"; gzip -9 -f "$f" ;; esac; done
+    # (folders, such as the experiments' variants, stay as they are)
+    cd .devbin && for f in *; do [ -f "$f" ] || continue; case $f in *.deb|*.gz) ;; *) strip "$f"; gzip -9 -f "$f" ;; esac; done
     ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1
     ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2
     case " $* " in *" hang "*) ls elfutils_*.deb >/dev/null 2>&1 || apt-get download elfutils libdw1 libelf1 libasm1 ;; esac
