@@ -109,6 +109,30 @@ pub const RELAXED_DIVISION_KERNELS: &[&str] =
 /// Sspm and CausticMap checks and the stiff catalogue passing against the CPU.
 pub const RELAXED_DIVISION_VARIANTS: &[&str] = &["trace_photons"];
 
+/// Register caps (`-cl-nv-maxrregcount`) for variant kernels' programs on devices that
+/// take NVIDIA's compiler options (`cl_nv_compiler_options`): fewer registers a thread,
+/// more warps resident to hide the traversal's memory latency. `trace_indirect` (its
+/// path queues' waves) uses 96 uncapped; measured on the H200 (Smal 2019's high setting,
+/// `scripts/gpu-run.sh experiment`, the option on every program): 7.10 -> 6.80 ms at 80,
+/// 6.88 at 72, and 6.08 -> 5.93 with the sorted waves, while `direct_light` in the same
+/// run went 0.85 -> 0.95, which is why the cap is the one kernel's.
+pub const REGISTER_CAPS: &[(&str, u32)] = &[("trace_indirect", 80)];
+
+/// NVIDIA's extension that takes `-cl-nv-maxrregcount` and the other `-cl-nv-*` options.
+pub const NV_COMPILER_OPTIONS: &str = "cl_nv_compiler_options";
+
+/// `kernel`'s register cap option ([`REGISTER_CAPS`]) where the device's `extensions`
+/// offer [`NV_COMPILER_OPTIONS`]; empty otherwise.
+pub fn register_cap_option(kernel: &str, extensions: &str) -> String {
+    let nv = extensions
+        .split_whitespace()
+        .any(|e| e == NV_COMPILER_OPTIONS);
+    match REGISTER_CAPS.iter().find(|(k, _)| *k == kernel) {
+        Some((_, cap)) if nv => format!(" -cl-nv-maxrregcount={cap}"),
+        _ => String::new(),
+    }
+}
+
 /// The label [`crate::device::DeviceState::program_for`] keeps the relaxed program under.
 pub const RELAXED_DIVISION_PROGRAM: &str = "relaxed division";
 
@@ -256,7 +280,9 @@ pub fn build_variant(
     } else {
         options(device)
     };
-    let program = build_with(context, device, &src, opts, &defines(constants))?;
+    let extensions = Device::new(device).extensions().unwrap_or_default();
+    let extra = defines(constants) + &register_cap_option(kernel, &extensions);
+    let program = build_with(context, device, &src, opts, &extra)?;
     dump_binary(
         &program,
         device,
@@ -386,6 +412,29 @@ impl OpenClBackend {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A register cap is asked for only of NVIDIA's compiler, and only for a variant
+    /// kernel (the others share the base program, whose kernels the cap would slow).
+    #[test]
+    fn register_caps_only_on_nvidia_and_variant_kernels() {
+        let nv = "cl_khr_fp64 cl_nv_compiler_options cl_khr_int64_base_atomics";
+        assert_eq!(
+            register_cap_option("trace_indirect", nv),
+            " -cl-nv-maxrregcount=80"
+        );
+        assert_eq!(register_cap_option("trace_indirect", "cl_khr_fp64"), "");
+        assert_eq!(
+            register_cap_option("trace_indirect", "cl_nv_compiler_options_x"),
+            ""
+        );
+        assert_eq!(register_cap_option("direct_light", nv), "");
+        // a kernel with switches is always launched with their values, so it is built
+        // in a program of its own (`program_for`), where the cap touches it alone
+        for (k, _) in REGISTER_CAPS {
+            let info = caustica_core::kernels::kernel_info(k).expect("a kernel");
+            assert!(!info.switches.is_empty(), "{k} shares the base program");
+        }
+    }
 
     /// Every registry kernel that launches device code has exactly one kernel file, and
     /// every kernel file is a registry kernel. `prepare_scene` launches nothing here (core
