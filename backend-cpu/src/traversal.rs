@@ -16,7 +16,9 @@ use caustica_core::device::layout::{surface_point, SurfacePoint};
 use caustica_core::device::layout::{GpuLight, GpuMaterial, GpuTriangle, GpuVertex};
 use caustica_core::math::geometry::WatertightRay;
 // `UVec2`: named by obvhs's `traverse!` macro at its call site.
-use caustica_core::device::acceleration::{instance_flags, SLOT_VEC4S};
+use caustica_core::device::acceleration::{
+    instance_flags, SINGLE_LEVEL_MARK, SINGLE_LEVEL_SLOT, SLOT_VEC4S,
+};
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::cwbvh::node::extract_byte64;
 use obvhs::cwbvh::node::CwBvhNode;
@@ -270,6 +272,14 @@ impl SceneView<'_> {
         let mut blas_sp = 0usize;
         let mut object_space = false;
         let mut position_offset = 0u32;
+        // the static level alone: start at its BLAS root with the world ray
+        if let Some(single) = self.nodes.get(SINGLE_LEVEL_SLOT * SLOT_VEC4S) {
+            if single[0] == SINGLE_LEVEL_MARK {
+                in_blas = true;
+                position_offset = single[3];
+                current_group = UVec2::new(single[1], 0x8000_0000);
+            }
+        }
         loop {
             while primitive_group.y != 0 {
                 let bit = firstbithigh(primitive_group.y);

@@ -22,6 +22,26 @@
 
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
+// This invocation's deposits, underflows and saturations, added to `lc` once at its end:
+// a workgroup atomic a covered pixel cost the splat 4% (Smal 2019's high setting on the
+// H200: 3.65 -> 3.51 ms on Vulkan, 3.64 -> 3.54 on wgpu).
+var<private> n_deposited: u32;
+var<private> n_underflow: u32;
+var<private> n_saturated: u32;
+
+// deposit_photon_texel for a splat (no hit distance), counted in the private counters.
+fn deposit_splat_texel(texel: u32, flux: vec3<f32>, flux_quantum: f32) {
+    var units: vec3<u32>;
+    for (var ch = 0u; ch < 3u; ch++) {
+        let q = quantize(flux[ch], flux_quantum);
+        n_underflow += u32(q.underflow);
+        n_saturated += u32(q.saturated);
+        units[ch] = q.units;
+    }
+    add_photon_texel(texel, units, 0u);
+    n_deposited += 1u;
+}
+
 // atomic_add_photon_map on the direction map's plane `at.x`, index `at.y`.
 fn atomic_add_direction_map(at: vec2<u32>, v: u32) -> u32 {
     if (at.x == 0u) {
@@ -139,12 +159,7 @@ fn splat_pixel(p: SplatParams, j: u32, q: u32) {
     let t = gbuffer_from_planes(p0, p1, gbuffer2[q], p3);
     let area = gbuffer_pixel_area(p.camera, q, t);
     let irradiance = setups[j].irradiance;
-    var splat: Photon;
-    splat.position = vec3<f32>(0.0);
-    splat.hit_distance = 0.0;
-    splat.flux = irradiance * area;
-    splat.direction = 0u;
-    deposit_photon_texel(q, splat, p.flux_quantum, 1.0);
+    deposit_splat_texel(q, irradiance * area, p.flux_quantum);
     if (p.light_direction != 0u &&
         shading_normal_departs(t.normal, unpack_unit_vector(t.geometric_normal))) {
         deposit_light_direction(q, light_direction_deposit(irradiance * area, setups[j].to_light),
@@ -199,6 +214,15 @@ fn splat_photons(group: u32, li: u32) {
         let qx = rect.x + i32(at % rw);
         let qy = rect.z + i32(at / rw);
         splat_pixel(p, j, u32(qy * w + qx));
+    }
+    if (n_deposited != 0u) {
+        atomicAdd(&lc[COUNTER_DEPOSITED], n_deposited);
+    }
+    if (n_underflow != 0u) {
+        atomicAdd(&lc[COUNTER_UNDERFLOW], n_underflow);
+    }
+    if (n_saturated != 0u) {
+        atomicAdd(&lc[COUNTER_SATURATED], n_saturated);
     }
     counters_flush_local(li);
 }

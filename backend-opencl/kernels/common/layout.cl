@@ -101,6 +101,10 @@
 // core::device::acceleration::instance_flags
 #define INSTANCE_IDENTITY 1u
 
+// core::device::acceleration
+#define SINGLE_LEVEL_MARK 0x7fc05e1fu
+#define SINGLE_LEVEL_SLOT 1u
+
 // core::math::optics
 #define FRESNEL_EXACT 0u
 #define FRESNEL_SCHLICK 1u

@@ -153,6 +153,16 @@ inline bool traverse_cwbvh(__global const uint4* nodes, uint node_count,
     uint corners = 0u;
     bool found = false;
     float closest = t_max;
+    // the static level alone: start at its BLAS root with the world ray
+    // (core::device::acceleration::SINGLE_LEVEL_MARK)
+    if (node_count > SINGLE_LEVEL_SLOT) {
+        uint4 single = nodes[SINGLE_LEVEL_SLOT * 5u];
+        if (single.x == SINGLE_LEVEL_MARK) {
+            in_blas = true;
+            corners = single.z;
+            current_group = (uint2)(single.y, 0x80000000u);
+        }
+    }
     for (;;) {
         while (primitive_group.y != 0u) {
             uint bit = firstbithigh(primitive_group.y);

@@ -101,6 +101,10 @@ const float RSM_SEEN_MIN_TOP = 1.1754944e-38;
 // core::device::acceleration::instance_flags
 const uint INSTANCE_IDENTITY = 1u;
 
+// core::device::acceleration
+const uint SINGLE_LEVEL_MARK = 0x7fc05e1fu;
+const uint SINGLE_LEVEL_SLOT = 1u;
+
 // core::math::optics
 const uint FRESNEL_EXACT = 0u;
 const uint FRESNEL_SCHLICK = 1u;

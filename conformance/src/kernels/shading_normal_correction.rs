@@ -23,7 +23,9 @@ use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
 use crate::harness::tolerance::DEPOSIT_TEXEL_AGREEMENT;
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, Backend};
-use caustica_core::device::layout::{gbuffer_flags, CorrectionParams, DepositTexel, GBufferTexel};
+use caustica_core::device::layout::{
+    counter, gbuffer_flags, CorrectionParams, DepositTexel, GBufferTexel,
+};
 use caustica_core::kernels::ShadingNormalCorrection;
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::irradiance_filter::shading_normal_departs;
@@ -204,9 +206,20 @@ pub fn check_photon_gi(
         );
         // 4. splat_photons on the reference's photons
         let sp = splat_params(fx, power_scale, quantum);
-        let (ma, _, da) = run_splat(fx, r, &inputs.gbuffer, &pha, &tia, sp)?;
-        let (mb, _, db) = run_splat(fx, c, &inputs.gbuffer, &pha, &tia, sp)?;
+        let (ma, ka, da) = run_splat(fx, r, &inputs.gbuffer, &pha, &tia, sp)?;
+        let (mb, kb, db) = run_splat(fx, c, &inputs.gbuffer, &pha, &tia, sp)?;
         let (same, flux_bad) = splat_agreement((&ma, &da), (&mb, &db));
+        // every splatted pixel is one deposit: each backend's counter is its map's count
+        for (who, m, k) in [("reference", &ma, &ka), ("candidate", &mb, &kb)] {
+            let splats: u64 = m.iter().map(|t| join_u64(t.photons)).sum();
+            v.check(k[counter::DEPOSITED] as u64 == splats, || {
+                format!(
+                    "light {l}: the {who}'s splat counted {} deposits for {splats} splats \
+                     in its map",
+                    k[counter::DEPOSITED]
+                )
+            });
+        }
         // 5. shading_normal_correction on the reference's direction map
         let input: Vec<[f32; 4]> = (0..ma.len())
             .map(|i| [1.0 + (i % 5) as f32, 1.0, 0.5, 0.25])

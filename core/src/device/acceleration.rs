@@ -3,7 +3,7 @@
 //!
 //! | slots                          | what                                                   |
 //! |--------------------------------|--------------------------------------------------------|
-//! | `0 .. C`                       | the top level (TLAS): a CWBVH over the levels' world boxes, root at slot 0, unused slots zero |
+//! | `0 .. C`                       | the top level (TLAS): a CWBVH over the levels' world boxes, root at slot 0, unused slots zero but for the [`SINGLE_LEVEL_MARK`] vector of a scene of the static level alone |
 //! | `C .. C + 2N`                  | one [`InstanceRecord`] (2 slots) per level, in TLAS leaf order |
 //! | then                           | each level's bottom-level CWBVH (BLAS), static level first, each in a region of [`Level::blas_capacity`] slots (an instance's: room for any BVH over its triangles, so that a deformed instance's BLAS is rebuilt in place) |
 //! | then                           | the instances' object-space vertex positions, one `[f32; 4]` each (w = 1) |
@@ -49,6 +49,19 @@ pub mod instance_flags {
     /// its triangles are tested against `vertices`.
     pub const IDENTITY: u32 = 1;
 }
+
+/// First word of slot 1's first vector when the static level is the scene's only level:
+/// `[SINGLE_LEVEL_MARK, blas_root, triangle_corners, position_offset]` (its record's),
+/// so that a traversal starts at that BLAS's root with the world ray instead of visiting
+/// the TLAS's root (a node test of every ray spent on one box) and entering the level.
+/// The hits are the same: the TLAS's box only culls. Slot 1 lies inside the TLAS's
+/// capacity (2 for one level) and is unused by its single node; with more levels it may
+/// hold a TLAS node, whose first word is its box's minimum x, a finite float, never this
+/// NaN's bits (a scene's vertices are finite: `Scene::validate`).
+pub const SINGLE_LEVEL_MARK: u32 = 0x7fc0_5e1f;
+
+/// Slot of the [`SINGLE_LEVEL_MARK`] vector.
+pub const SINGLE_LEVEL_SLOT: usize = 1;
 
 /// One level as the traversal reads it: 10 x `[u32; 4]` (two node slots).
 ///
@@ -294,6 +307,17 @@ pub fn top_level(levels: &[Level]) -> Result<Vec<[u32; 4]>, String> {
     for (p, &l) in bvh.primitive_indices.iter().enumerate() {
         let at = (capacity as usize + 2 * p) * SLOT_VEC4S;
         out[at..at + 10].copy_from_slice(&levels[l as usize].record().encode());
+    }
+    if let [only] = levels {
+        if only.object.is_none() && bvh.nodes.len() == 1 {
+            let r = only.record();
+            out[SINGLE_LEVEL_SLOT * SLOT_VEC4S] = [
+                SINGLE_LEVEL_MARK,
+                r.blas_root,
+                r.triangle_corners,
+                r.position_offset,
+            ];
+        }
     }
     Ok(out)
 }

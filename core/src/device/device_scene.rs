@@ -1105,6 +1105,26 @@ mod tests {
             r.flags,
             crate::device::acceleration::instance_flags::IDENTITY
         );
+        // the traversal starts at the static level's BLAS root: the mark names its
+        // record's root, corners and offset
+        use crate::device::acceleration::{SINGLE_LEVEL_MARK, SINGLE_LEVEL_SLOT};
+        assert_eq!(
+            ds.bvh_nodes[SINGLE_LEVEL_SLOT * SLOT_VEC4S],
+            [
+                SINGLE_LEVEL_MARK,
+                r.blas_root,
+                r.triangle_corners,
+                r.position_offset
+            ]
+        );
+        // with instances the slot is the TLAS's (a node, or zero), never the mark
+        let ds = DeviceScene::build(&instanced_cornell(), Default::default()).unwrap();
+        assert_eq!(ds.instances.levels.len(), 3);
+        assert_ne!(
+            ds.bvh_nodes[SINGLE_LEVEL_SLOT * SLOT_VEC4S][0],
+            SINGLE_LEVEL_MARK
+        );
+        assert!(f32::from_bits(SINGLE_LEVEL_MARK).is_nan());
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! a module's constants take the module's shader prefix (`counter::STORED` is
 //! `COUNTER_STORED`), a lone constant keeps its name.
 
-use super::acceleration::instance_flags;
+use super::acceleration::{self, instance_flags};
 use super::launch::{
     dispatch_word, DEFAULT_WORKGROUP_SIZE, DISPATCH_MAX_GROUPS_X, DISPATCH_RECORD_WORDS,
     DISPATCH_TRACE_WIDTH,
@@ -236,6 +236,13 @@ pub fn groups() -> Vec<ConstGroup> {
         group(
             "core::device::acceleration::instance_flags",
             prefixed!("INSTANCE_", U32, instance_flags { IDENTITY }),
+        ),
+        group(
+            "core::device::acceleration",
+            vec![
+                named!("SINGLE_LEVEL_MARK", U32, acceleration::SINGLE_LEVEL_MARK),
+                named!("SINGLE_LEVEL_SLOT", U32, acceleration::SINGLE_LEVEL_SLOT),
+            ],
         ),
         group(
             "core::math::optics",

@@ -101,6 +101,10 @@ const RSM_SEEN_MIN_TOP: f32 = 1.1754944e-38f;
 // core::device::acceleration::instance_flags
 const INSTANCE_IDENTITY: u32 = 1u;
 
+// core::device::acceleration
+const SINGLE_LEVEL_MARK: u32 = 0x7fc05e1fu;
+const SINGLE_LEVEL_SLOT: u32 = 1u;
+
 // core::math::optics
 const FRESNEL_EXACT: u32 = 0u;
 const FRESNEL_SCHLICK: u32 = 1u;

@@ -44,13 +44,18 @@ fn photon_flux_units(ph: Photon, flux_quantum: f32) -> vec3<u32> {
 
 // backend-cpu deposit_screen.rs::deposit_photon_texel: photon `ph` added to texel `texel`
 // (a screen pixel or an atlas texel): flux per channel, hit distance and a count in fixed
-// point; underflow, saturation and the deposit counted in `lc`. Every low word's add goes
-// out before any carry is looked at, so that their round trips overlap (planes.cl's
-// deposit_photon_texel says what it bought); adding zero changes nothing, a zero hit
-// distance (a splat's) is left out.
+// point; underflow, saturation and the deposit counted in `lc`.
 fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_quantum: f32) {
     let units = photon_flux_units(ph, flux_quantum);
-    let hit = quantize(ph.hit_distance, hit_distance_quantum).units;
+    add_photon_texel(texel, units, quantize(ph.hit_distance, hit_distance_quantum).units);
+    atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
+}
+
+// Texel `texel` += flux `units` per channel, hit distance `hit` and one photon, in fixed
+// point, uncounted. Every low word's add goes out before any carry is looked at, so that
+// their round trips overlap (planes.cl's deposit_photon_texel says what it bought); adding
+// zero changes nothing, a zero hit distance (a splat's) is left out.
+fn add_photon_texel(texel: u32, units: vec3<u32>, hit: u32) {
     let r = deposit_word(texel, DEPOSIT_FLUX);
     let g = deposit_word(texel, DEPOSIT_FLUX + 2u);
     let b = deposit_word(texel, DEPOSIT_FLUX + 4u);
@@ -69,7 +74,6 @@ fn deposit_photon_texel(texel: u32, ph: Photon, flux_quantum: f32, hit_distance_
     add_carry_photon_map(b, u64_carry(old_b, units.z));
     add_carry_photon_map(h, u64_carry(old_h, hit));
     add_carry_photon_map(n, u64_carry(old_n, 1u));
-    atomicAdd(&lc[COUNTER_DEPOSITED], 1u);
 }
 
 // The high word after low word `at` += `carry` (0 or 1).

@@ -187,6 +187,16 @@ fn traverse_cwbvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool,
     var corners = 0u;
     var found = false;
     var closest = t_max;
+    // the static level alone: start at its BLAS root with the world ray
+    // (core::device::acceleration::SINGLE_LEVEL_MARK)
+    if (node_count > SINGLE_LEVEL_SLOT) {
+        let single = nodes[SINGLE_LEVEL_SLOT * 5u];
+        if (single.x == SINGLE_LEVEL_MARK) {
+            in_blas = true;
+            corners = single.z;
+            current_group = vec2<u32>(single.y, 0x80000000u);
+        }
+    }
     loop {
         while (primitive_group.y != 0u) {
             let bit = firstbithigh(primitive_group.y);
