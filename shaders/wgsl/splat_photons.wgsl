@@ -23,7 +23,7 @@
 var<workgroup> lc: array<atomic<u32>, COUNTER_WORDS>;
 
 // This invocation's deposits, underflows and saturations, added to `lc` once at its end:
-// a workgroup atomic a covered pixel cost the splat 4% (Smal 2019's high setting on the
+// a workgroup atomic a covered pixel cost the splat 3-4% (Smal 2019's high setting on the
 // H200: 3.65 -> 3.51 ms on Vulkan, 3.64 -> 3.54 on wgpu).
 var<private> n_deposited: u32;
 var<private> n_underflow: u32;

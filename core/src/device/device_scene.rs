@@ -169,11 +169,10 @@ impl SceneInstances {
 
     /// [`SceneInstances::move_instances`], an instance of over
     /// [`PARALLEL_PLACEMENT_VERTICES`](crate::device::placement::PARALLEL_PLACEMENT_VERTICES)
-    /// vertices placed on rayon's threads where `parallel` holds (the same bits): for a
-    /// host whose cores the device leaves free. Where the device runs on the same cores
-    /// (a software GPU, the CPU backend) its threads would wait for them: on the 2-core
-    /// development machine with lavapipe the frame loop's update took 0.30-1.27 ms
-    /// (medians) placed in parallel against 0.28-0.29 on one thread (docs/performance.md).
+    /// vertices placed on rayon's threads where `parallel` holds (the same bits). A host
+    /// gains only where its cores are free of the device's work and the placement is long
+    /// enough to pay for waking the threads; docs/performance.md, "Dynamic scenes", has
+    /// what was measured (`update_cost` times both).
     pub fn move_instances_with(
         &mut self,
         moves: &[(usize, Transform)],

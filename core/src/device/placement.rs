@@ -433,8 +433,8 @@ mod tests {
         }
 
         /// Placed on rayon's threads in runs, an instance's vertices and both boxes are
-        /// bitwise those of one thread (the runs' ends inside blocks of four, unused
-        /// vertices on both sides of a run's end, the last run short).
+        /// bitwise those of one thread (unused vertices, placed far out, on both sides of
+        /// a run's end; the last run short and its last block padded).
         #[test]
         fn runs_on_threads_place_and_bound_as_one_thread(
             t in transform(),

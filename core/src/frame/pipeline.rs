@@ -549,10 +549,8 @@ impl<P: Pipeline> Hosted<P> {
                 )
             })
             .collect();
-        // a hardware GPU leaves the host's cores to the placement
-        let parallel = backend.capabilities().device_type.is_hardware_gpu();
         let mut instances = self.host.instances().clone();
-        let m = instances.move_instances_with(moves, parallel)?;
+        let m = instances.move_instances(moves)?;
         let state = self.host.state();
         let u = InstanceUpdate::Moved(m);
         // the moved levels (cheap to copy: their vertices and triangles are shared), from
@@ -561,9 +559,7 @@ impl<P: Pipeline> Hosted<P> {
         let receivers_moved = self.host.apply_instances(model, instances, u)?;
         let change = Change::Instances { receivers_moved };
         self.follow(backend, change, state, move || {
-            Ok(Some(InstanceUpdate::Moved(
-                after.move_instances_with(&back, parallel)?,
-            )))
+            Ok(Some(InstanceUpdate::Moved(after.move_instances(&back)?)))
         })
     }
 
