@@ -32,7 +32,8 @@ Sections:
 Variables: BENCH_BACKENDS (vulkan,wgpu,opencl); CAUSTICA_BENCH_* pass through to the
 benches. experiment: EXP_BENCH=sspm|caustic-map|photon-gi|adaptive, EXP_LANG=opencl|wgsl, EXP_DIR
 (a folder of variant folders of changed kernel files; default .devbin/exp, .devbin/wexp),
-EXP_OPTIONS ("opts;opts": OpenCL build options, each a variant), EXP_SASS=1 (ptxas counts,
+EXP_OPTIONS ("opts;opts": OpenCL build options, each a variant), EXP_ENVS ("VAR=VALUE ...;...":
+environments, each a variant, e.g. CAUSTICA_OPENCL_RELAXED=trace_indirect), EXP_SASS=1 (ptxas counts,
 SASS in $OUT/sass.tgz), EXP_FRAMES, EXP_SETTINGS. hang: HANG_RUNS (8), HANG_AFTER (60 s);
 update: UPDATE_BASE=1 (a baseline build's examples copied as .devbin/update_cost_base and
 .devbin/frame_loop_base after --build, which empties .devbin's gzipped files, or before
@@ -203,10 +204,11 @@ experiment() {
         CAUSTICA_BENCH_FUSED=1,0 CAUSTICA_BENCH_KERNELS=1 ./adaptive_frame) ;;
     esac
     rm -rf /tmp/sass && mkdir -p /tmp/sass
-    variant() {  # NAME KERNEL_DIR OPTIONS
+    variant() {  # NAME KERNEL_DIR OPTIONS [VAR=VALUE...]
         local e=(env CAUSTICA_BENCH_BACKENDS="$be" CAUSTICA_BENCH_FRAMES="${EXP_FRAMES:-10}" CAUSTICA_BENCH_WARMUP_MS=1500)
         [ -n "$2" ] && e+=("$var=$2")
         [ -n "$3" ] && e+=("CAUSTICA_OPENCL_OPTIONS=$3")
+        local v; for v in "${@:4}"; do e+=("$v"); done
         [ -n "${EXP_SASS:-}" ] && mkdir -p "/tmp/sass/$1" && e+=("CAUSTICA_OPENCL_DUMP_DIR=/tmp/sass/$1")
         log "experiment: $1"; run timeout 200 "${e[@]}" "${cmd[@]}" --bench
     }
@@ -214,6 +216,9 @@ experiment() {
     for d in "$dir"/*/; do [ -d "$d" ] && variant "$(basename "$d")" "$d" ""; done
     IFS=';' read -ra opts <<< "${EXP_OPTIONS:-}"
     for o in "${opts[@]}"; do variant "options$(echo "$o" | tr -c 'A-Za-z0-9=\n-' _)" "" "$o"; done
+    IFS=';' read -ra envs <<< "${EXP_ENVS:-}"
+    # shellcheck disable=SC2086 # each entry's VAR=VALUE words, split on spaces
+    for v in "${envs[@]}"; do variant "env_$(echo "$v" | tr -c 'A-Za-z0-9=\n-' _)" "" "" $v; done
     [ -n "${EXP_SASS:-}" ] || return 0
     # NVIDIA's program binaries are PTX text with a trailing NUL: ptxas gives registers,
     # stack and spills, cuobjdump the SASS

@@ -133,6 +133,31 @@ pub fn register_cap_option(kernel: &str, extensions: &str) -> String {
     }
 }
 
+/// Developer aid: `CAUSTICA_OPENCL_RELAXED=kernel,...` builds these kernels with OpenCL's
+/// default division bounds too (one without switches in the relaxed-division program, one
+/// with switches in variant programs without `-cl-fp32-correctly-rounded-divide-sqrt`),
+/// so that the lever can be timed on a device without a rebuild (`EXP_ENVS` of
+/// `scripts/gpu-run.sh experiment`). Not for production: the conformance suite checks the
+/// built-in lists ([`RELAXED_DIVISION_KERNELS`], [`RELAXED_DIVISION_VARIANTS`]).
+pub const RELAXED_VAR: &str = "CAUSTICA_OPENCL_RELAXED";
+
+/// Whether [`RELAXED_VAR`] names `kernel`.
+fn relaxed_by_developer(kernel: &str) -> bool {
+    std::env::var(RELAXED_VAR).is_ok_and(|v| names_kernel(&v, kernel))
+}
+
+/// Whether the comma-separated `list` names `kernel`.
+fn names_kernel(list: &str, kernel: &str) -> bool {
+    list.split(',').any(|k| k.trim() == kernel)
+}
+
+/// Whether `kernel`, a kernel without switches, is built in the relaxed-division program.
+fn in_relaxed_program(kernel: &str) -> bool {
+    RELAXED_DIVISION_KERNELS.contains(&kernel)
+        || (relaxed_by_developer(kernel)
+            && caustica_core::kernels::kernel_info(kernel).is_some_and(|i| i.switches.is_empty()))
+}
+
 /// The label [`crate::device::DeviceState::program_for`] keeps the relaxed program under.
 pub const RELAXED_DIVISION_PROGRAM: &str = "relaxed division";
 
@@ -218,7 +243,7 @@ pub fn relaxed_division_source() -> String {
     let mut s = String::new();
     append_common(&mut s);
     for (kernel, text) in KERNELS {
-        if RELAXED_DIVISION_KERNELS.contains(kernel) {
+        if in_relaxed_program(kernel) {
             let file = format!("{kernel}.cl");
             append(&mut s, &file, &file_text(&file, text));
         }
@@ -275,7 +300,7 @@ pub fn build_variant(
 ) -> Result<Program, BackendError> {
     let src = variant_source(kernel)
         .ok_or_else(|| BackendError::Unsupported(format!("{kernel} has no variants")))?;
-    let opts = if RELAXED_DIVISION_VARIANTS.contains(&kernel) {
+    let opts = if RELAXED_DIVISION_VARIANTS.contains(&kernel) || relaxed_by_developer(kernel) {
         base_options()
     } else {
         options(device)
@@ -372,7 +397,7 @@ impl DeviceState {
         kernel: &str,
         constants: &[(&'static str, u32)],
     ) -> Result<Arc<Program>, BackendError> {
-        let relaxed = RELAXED_DIVISION_KERNELS.contains(&kernel);
+        let relaxed = in_relaxed_program(kernel);
         if constants.is_empty() && !relaxed {
             return Ok(Arc::clone(&self.program));
         }
@@ -412,6 +437,18 @@ impl OpenClBackend {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `CAUSTICA_OPENCL_RELAXED`'s list names whole kernel names only.
+    #[test]
+    fn the_relaxed_list_names_whole_kernels() {
+        assert!(names_kernel(
+            "trace_indirect, atrous_filter",
+            "atrous_filter"
+        ));
+        assert!(names_kernel("trace_indirect", "trace_indirect"));
+        assert!(!names_kernel("trace_indirect", "trace"));
+        assert!(!names_kernel("", "trace_indirect"));
+    }
 
     /// A register cap is asked for only of NVIDIA's compiler, and only for a variant
     /// kernel (the others share the base program, whose kernels the cap would slow).
