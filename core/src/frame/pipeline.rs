@@ -550,7 +550,8 @@ impl<P: Pipeline> Hosted<P> {
             })
             .collect();
         let mut instances = self.host.instances().clone();
-        let m = instances.move_instances(moves)?;
+        let parallel = crate::device::placement::parallel_placement();
+        let m = instances.move_instances_with(moves, parallel)?;
         let state = self.host.state();
         let u = InstanceUpdate::Moved(m);
         // the moved levels (cheap to copy: their vertices and triangles are shared), from
@@ -559,7 +560,9 @@ impl<P: Pipeline> Hosted<P> {
         let receivers_moved = self.host.apply_instances(model, instances, u)?;
         let change = Change::Instances { receivers_moved };
         self.follow(backend, change, state, move || {
-            Ok(Some(InstanceUpdate::Moved(after.move_instances(&back)?)))
+            Ok(Some(InstanceUpdate::Moved(
+                after.move_instances_with(&back, parallel)?,
+            )))
         })
     }
 
