@@ -8,7 +8,8 @@
 //! 1. `rsm_importance` ([`super::rsm_importance`]), 2. `sample_rsm`
 //!    ([`super::sample_rsm`]), 3. `trace_indirect` ([`super::trace_indirect`]) and 4.
 //!    `splat_photons` ([`super::splat_photons`]), each on the reference's output of the
-//!    one before, each module saying what it compares and why;
+//!    one before, each module saying what it compares and why (the splat's counters on
+//!    each backend by themselves, [`super::splat_photons::check_splat_counters`]);
 //! 5. `shading_normal_correction` on the reference's splat direction sums
 //!    (`compare_correction`): where Eq. 20 does not apply (no receiver, no splat, or a
 //!    shading normal that does not depart from the geometric one) the input passes
@@ -219,6 +220,17 @@ pub fn check_photon_gi(
                     k[counter::DEPOSITED]
                 )
             });
+        }
+        // 4'. the splat's underflow, saturation and deposit counts, exactly, on each
+        // backend
+        for who in ["reference", "candidate"] {
+            let b: &mut dyn Backend = if who == "reference" { &mut *r } else { &mut *c };
+            let note =
+                check_splat_counters(&mut v, fx, who, b, &inputs.gbuffer, &pha, &tia, sp)?;
+            v.note(format!(
+                "light {l}: {}",
+                note.unwrap_or_else(|| format!("{who}: no clip threshold kept the margin"))
+            ));
         }
         // 5. shading_normal_correction on the reference's direction map
         let input: Vec<[f32; 4]> = (0..ma.len())

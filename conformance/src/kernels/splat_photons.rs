@@ -8,6 +8,11 @@
 //! kernel's normalisations, square roots and divisions, the pixel area's footprint;
 //! rounding to quanta moves each by at most one unit).
 //!
+//! Its counters are checked exactly on each backend by themselves
+//! ([`check_splat_counters`]): underflow and saturation at flux quanta where every
+//! contribution does one or the other, the clipped splats at a threshold no photon's reach
+//! comes near.
+//!
 //! One link of PhotonGi's chain, [`super::shading_normal_correction::check_photon_gi`].
 
 use super::trace_indirect::*;
@@ -131,4 +136,133 @@ pub(crate) fn splat_agreement(
         }
     }
     (same, flux_bad)
+}
+
+/// Relative distance from a splat-clip threshold within which no photon's reach ratio may
+/// lie for [`check_splat_counters`] to expect the count exactly: the ratio `radius /
+/// (near x pixel)` carries ~40 ulp (module doc) ~ 2.4e-6; 1e-4 is 40x that.
+pub const CLIP_MARGIN: f32 = 1e-4;
+
+/// The ratio whose `ceil` plus one is `caustica_cpu`'s `splat_reach_px` (`radius /
+/// (near x pixel)`, infinite where the kernel's sphere reaches the camera plane), computed
+/// as the CPU kernel computes it; `None` where the photon is skipped (no power, off
+/// screen).
+fn reach_ratio(p: &SplatParams, ph: &GiPhoton, tiles: &[u32]) -> Option<f32> {
+    use caustica_core::device::layout::project_to_pixel;
+    use caustica_core::math::packing::{unpack_rgb9e5, unpack_unit_vector};
+    use caustica_core::math::photon_splat::*;
+    let power = unpack_rgb9e5(ph.power) * p.power_scale;
+    if !(power.max_element() > 0.0) {
+        return None;
+    }
+    let pos = glam::Vec3::from(ph.position);
+    let (_, _, z) = project_to_pixel(&p.camera, pos)?;
+    let k = caustica_cpu::kernels::splat_photons::splat_constants(p);
+    let s = (ray_length_scale(ph.ray_length, &k)
+        * density_scale(z, p.tile_constant, tiles[ph.tile as usize], &k))
+    .max(min_splat_scale(
+        z,
+        p.camera.tan_half_fov_y,
+        p.camera.height,
+        p.min_splat_px,
+    ));
+    let n = unpack_unit_vector(ph.normal);
+    let radius = splat_kernel(n, -unpack_unit_vector(ph.direction), s, &k)
+        .axes
+        .max_element();
+    let near = z - radius;
+    if !(near > 0.0) {
+        return Some(f32::INFINITY);
+    }
+    let pixel = 2.0 * p.camera.tan_half_fov_y / p.camera.height as f32;
+    Some(radius / (near * pixel))
+}
+
+/// The splat's `UNDERFLOW`, `SATURATED` and `DEPOSITED` counters on one backend `b`
+/// (`who`), exactly, over `photons` made grey (each photon's largest channel in all
+/// three, so that every contribution is positive in every channel):
+///
+/// - a clip threshold `max_splat_px = T` is chosen where no photon's reach ratio lies
+///   within [`CLIP_MARGIN`] of the clip's boundary (`ceil(x) + 1 > T` iff `x > T - 1`), so
+///   the clipped splats are counted on the host;
+/// - at a flux quantum of 10^6 `power_scale` every channel of every contribution rounds
+///   to zero units: `UNDERFLOW` = 3 `DEPOSITED`, `SATURATED` = the clipped splats;
+/// - at 10^-20 `power_scale` every channel saturates: `SATURATED` = 3 `DEPOSITED` plus
+///   the clipped splats, `UNDERFLOW` = 0; both runs deposit the same splats.
+///
+/// Returns a note, or `None` where no threshold between 2 and 64 keeps the margin.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn check_splat_counters(
+    v: &mut crate::harness::verdict::Verdict,
+    fx: &Fixture,
+    who: &str,
+    b: &mut dyn Backend,
+    gbuffer: &[GBufferTexel],
+    photons: &[GiPhoton],
+    tiles: &[u32],
+    params: SplatParams,
+) -> Result<Option<String>, String> {
+    use caustica_core::math::packing::{pack_rgb9e5, unpack_rgb9e5};
+    let grey: Vec<GiPhoton> = photons
+        .iter()
+        .map(|p| GiPhoton {
+            power: pack_rgb9e5(glam::Vec3::splat(unpack_rgb9e5(p.power).max_element())),
+            ..*p
+        })
+        .collect();
+    let ratios: Vec<f32> = grey
+        .iter()
+        .filter_map(|p| reach_ratio(&params, p, tiles))
+        .collect();
+    // the threshold that splits the splats most evenly, keeping the margin
+    let pick = (2u32..=64)
+        .filter(|&t| {
+            let edge = (t - 1) as f32;
+            ratios
+                .iter()
+                .all(|&x| (x - edge).abs() > CLIP_MARGIN * edge)
+        })
+        .map(|t| {
+            let clipped = ratios.iter().filter(|&&x| x > (t - 1) as f32).count();
+            (clipped.min(ratios.len() - clipped), t, clipped as u64)
+        })
+        .max();
+    let Some((_, t, clipped)) = pick else {
+        return Ok(None);
+    };
+    let run = |b: &mut dyn Backend, quantum: f32| {
+        let p = SplatParams {
+            max_splat_px: t,
+            flux_quantum: quantum,
+            ..params
+        };
+        run_splat(fx, b, gbuffer, &grey, tiles, p).map(|s| s.1)
+    };
+    let under = run(b, 1e6 * params.power_scale)?;
+    let over = run(b, 1e-20 * params.power_scale)?;
+    let word = |k: &[u32], w: usize| k[w] as u64;
+    let deposits = word(&under, counter::DEPOSITED);
+    let checks = [
+        ("underflow at a huge quantum", word(&under, counter::UNDERFLOW), 3 * deposits),
+        ("saturated at a huge quantum", word(&under, counter::SATURATED), clipped),
+        ("underflow at a tiny quantum", word(&over, counter::UNDERFLOW), 0),
+        (
+            "saturated at a tiny quantum",
+            word(&over, counter::SATURATED),
+            3 * deposits + clipped,
+        ),
+        ("deposits at a tiny quantum", word(&over, counter::DEPOSITED), deposits),
+    ];
+    for (what, got, want) in checks {
+        v.check(got == want, || {
+            format!(
+                "the {who}'s splat counters: {what}: {got}, expected {want} ({deposits} \
+                 deposits, {clipped} splats clipped at {t} px)"
+            )
+        });
+    }
+    Ok(Some(format!(
+        "{who}: {deposits} deposits, {clipped} of {} splats clipped at {t} px",
+        ratios.len()
+    )))
 }
