@@ -147,6 +147,7 @@ pub const CLIP_MARGIN: f32 = 1e-4;
 /// (near x pixel)`, infinite where the kernel's sphere reaches the camera plane), computed
 /// as the CPU kernel computes it; `None` where the photon is skipped (no power, off
 /// screen).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // the kernel's NaN handling, as it is written
 fn reach_ratio(p: &SplatParams, ph: &GiPhoton, tiles: &[u32]) -> Option<f32> {
     use caustica_core::device::layout::project_to_pixel;
     use caustica_core::math::packing::{unpack_rgb9e5, unpack_unit_vector};
