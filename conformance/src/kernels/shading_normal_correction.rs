@@ -227,10 +227,7 @@ pub fn check_photon_gi(
             let b: &mut dyn Backend = if who == "reference" { &mut *r } else { &mut *c };
             let note =
                 check_splat_counters(&mut v, fx, who, b, &inputs.gbuffer, &pha, &tia, sp)?;
-            v.note(format!(
-                "light {l}: {}",
-                note.unwrap_or_else(|| format!("{who}: no clip threshold kept the margin"))
-            ));
+            v.note(format!("light {l}: {note}"));
         }
         // 5. shading_normal_correction on the reference's direction map
         let input: Vec<[f32; 4]> = (0..ma.len())

@@ -138,15 +138,24 @@ pub(crate) fn splat_agreement(
     (same, flux_bad)
 }
 
-/// Relative distance from a splat-clip threshold within which no photon's reach ratio may
-/// lie for [`check_splat_counters`] to expect the count exactly: the ratio `radius /
-/// (near x pixel)` carries ~40 ulp (module doc) ~ 2.4e-6; 1e-4 is 40x that.
+/// Relative distance from a clip boundary `T - 1` (pixels) within which no photon's reach
+/// ratio (pixels, [`reach_ratio`]) may lie for [`check_splat_counters`] to count the
+/// clipped splats exactly: the ratio is a few roundings of the kernel's half-axes (its
+/// normalisations, square roots and products, ~40 ulp as the module doc gives for `E x
+/// area`), then `z - radius`, which amplifies that by at most `1 + (T - 1) x pixel`
+/// (`pixel` the footprint per unit depth, ~1e-3), and a division: ~2.4e-6 relative; 1e-4
+/// is 40x that.
 pub const CLIP_MARGIN: f32 = 1e-4;
 
+/// Pixels a photon's projection must keep from the image's edges for
+/// [`check_splat_counters`]: whether it is on screen is then the same on every backend
+/// (its projection carries a few ulp of the image width, ~1e-3 px at 1920).
+pub const EDGE_MARGIN_PX: f32 = 1e-2;
+
 /// The ratio whose `ceil` plus one is `caustica_cpu`'s `splat_reach_px` (`radius /
-/// (near x pixel)`, infinite where the kernel's sphere reaches the camera plane), computed
-/// as the CPU kernel computes it; `None` where the photon is skipped (no power, off
-/// screen).
+/// (near x pixel)`, pixels; infinite where the kernel's sphere reaches the camera plane,
+/// which the kernel's `u32::MAX` reach stands for), computed as the CPU kernel computes
+/// it; `None` where the photon is skipped (no power, behind the camera or off screen).
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // the kernel's NaN handling, as it is written
 fn reach_ratio(p: &SplatParams, ph: &GiPhoton, tiles: &[u32]) -> Option<f32> {
     use caustica_core::device::layout::project_to_pixel;
@@ -181,17 +190,25 @@ fn reach_ratio(p: &SplatParams, ph: &GiPhoton, tiles: &[u32]) -> Option<f32> {
 
 /// The splat's `UNDERFLOW`, `SATURATED` and `DEPOSITED` counters on one backend `b`
 /// (`who`), exactly, over `photons` made grey (each photon's largest channel in all
-/// three, so that every contribution is positive in every channel):
+/// three, so that every contribution is positive in every channel) and kept
+/// [`EDGE_MARGIN_PX`] inside the image or out of it. A contribution is the photon's
+/// packed power (rgb9e5: 6e-8 to 65408) times `power_scale` times a pixel's area over the
+/// kernel's (1e-7 to 1e3), so
 ///
-/// - a clip threshold `max_splat_px = T` is chosen where no photon's reach ratio lies
-///   within [`CLIP_MARGIN`] of the clip's boundary (`ceil(x) + 1 > T` iff `x > T - 1`), so
-///   the clipped splats are counted on the host;
-/// - at a flux quantum of 10^6 `power_scale` every channel of every contribution rounds
-///   to zero units: `UNDERFLOW` = 3 `DEPOSITED`, `SATURATED` = the clipped splats;
-/// - at 10^-20 `power_scale` every channel saturates: `SATURATED` = 3 `DEPOSITED` plus
-///   the clipped splats, `UNDERFLOW` = 0; both runs deposit the same splats.
+/// - at a flux quantum (power units) of `2^40 power_scale` every channel of every
+///   contribution is 5e-27 to 6e-5 units, rounds to zero and is no subnormal a GPU could
+///   flush: `UNDERFLOW` = 3 `DEPOSITED`;
+/// - at `2^-100 power_scale` every channel is over 7e15 units and saturates (a quantum that
+///   flushes to zero gives infinities, which saturate too): `SATURATED` = 3 `DEPOSITED`
+///   more than at the huge quantum, `UNDERFLOW` = 0, and both runs deposit the same
+///   splats;
+/// - the clipped splats are counted on the host at a threshold `max_splat_px = T` where
+///   no photon's reach ratio lies within [`CLIP_MARGIN`] of the clip's boundary
+///   (`ceil(x) + 1 > T` iff `x > T - 1`): `SATURATED` at the huge quantum equals them. Where no
+///   threshold from 2 to 64 keeps the margin, the run takes `params.max_splat_px` and the
+///   clipped splats are not compared.
 ///
-/// Returns a note, or `None` where no threshold between 2 and 64 keeps the margin.
+/// Returns a note.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn check_splat_counters(
     v: &mut crate::harness::verdict::Verdict,
@@ -202,10 +219,20 @@ pub(crate) fn check_splat_counters(
     photons: &[GiPhoton],
     tiles: &[u32],
     params: SplatParams,
-) -> Result<Option<String>, String> {
+) -> Result<String, String> {
+    use caustica_core::device::layout::project_to_screen;
     use caustica_core::math::packing::{pack_rgb9e5, unpack_rgb9e5};
+    let cam = &params.camera;
+    let clear_of_edges = |p: &GiPhoton| {
+        let m = EDGE_MARGIN_PX;
+        project_to_screen(cam, glam::Vec3::from(p.position)).is_some_and(|(x, y, _)| {
+            let away = |c: f32, end: f32| (c - 0.0).abs() > m && (c - end).abs() > m;
+            away(x, cam.width as f32) && away(y, cam.height as f32)
+        })
+    };
     let grey: Vec<GiPhoton> = photons
         .iter()
+        .filter(|p| clear_of_edges(p))
         .map(|p| GiPhoton {
             power: pack_rgb9e5(glam::Vec3::splat(unpack_rgb9e5(p.power).max_element())),
             ..*p
@@ -228,9 +255,7 @@ pub(crate) fn check_splat_counters(
             (clipped.min(ratios.len() - clipped), t, clipped as u64)
         })
         .max();
-    let Some((_, t, clipped)) = pick else {
-        return Ok(None);
-    };
+    let (t, clipped) = pick.map_or((params.max_splat_px, None), |(_, t, c)| (t, Some(c)));
     let run = |b: &mut dyn Backend, quantum: f32| {
         let p = SplatParams {
             max_splat_px: t,
@@ -239,31 +264,40 @@ pub(crate) fn check_splat_counters(
         };
         run_splat(fx, b, gbuffer, &grey, tiles, p).map(|s| s.1)
     };
-    let under = run(b, 1e6 * params.power_scale)?;
-    let over = run(b, 1e-20 * params.power_scale)?;
+    let under = run(b, params.power_scale * 2f32.powi(40))?;
+    let over = run(b, params.power_scale * 2f32.powi(-100))?;
     let word = |k: &[u32], w: usize| k[w] as u64;
     let deposits = word(&under, counter::DEPOSITED);
-    let checks = [
+    let clips = word(&under, counter::SATURATED);
+    let mut checks = vec![
         ("underflow at a huge quantum", word(&under, counter::UNDERFLOW), 3 * deposits),
-        ("saturated at a huge quantum", word(&under, counter::SATURATED), clipped),
         ("underflow at a tiny quantum", word(&over, counter::UNDERFLOW), 0),
         (
             "saturated at a tiny quantum",
             word(&over, counter::SATURATED),
-            3 * deposits + clipped,
+            3 * deposits + clips,
         ),
         ("deposits at a tiny quantum", word(&over, counter::DEPOSITED), deposits),
     ];
+    if let Some(c) = clipped {
+        checks.push(("saturated (clipped) at a huge quantum", clips, c));
+    }
     for (what, got, want) in checks {
         v.check(got == want, || {
             format!(
                 "the {who}'s splat counters: {what}: {got}, expected {want} ({deposits} \
-                 deposits, {clipped} splats clipped at {t} px)"
+                 deposits, {clips} splats clipped at {t} px)"
             )
         });
     }
-    Ok(Some(format!(
-        "{who}: {deposits} deposits, {clipped} of {} splats clipped at {t} px",
-        ratios.len()
-    )))
+    Ok(match clipped {
+        Some(c) => format!(
+            "{who}: {deposits} deposits, {c} of {} splats clipped at {t} px",
+            ratios.len()
+        ),
+        None => format!(
+            "{who}: {deposits} deposits; no clip threshold kept the margin, {clips} splats \
+             clipped at {t} px not compared"
+        ),
+    })
 }

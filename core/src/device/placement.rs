@@ -256,17 +256,21 @@ fn place_run(
 /// wake-up costs more than the loop (a run takes ~20 us on one core).
 pub const PARALLEL_PLACEMENT_VERTICES: usize = 8192;
 
-/// Threads rayon's pool must have before a host's move ([`parallel_placement`]) places an
-/// instance on them: on a host of two cores, one of them busy with a CPU device's or the
-/// host's own work, the threads' wake-up and the shared core cost more than they save
-/// (docs/performance.md, "Dynamic scenes").
+/// Cores a host must have before a move ([`parallel_placement`]) places an instance on
+/// rayon's threads: on a host of two cores the threads' wake-up and the shared core cost
+/// more than they save (docs/performance.md, "Dynamic scenes").
 pub const PARALLEL_PLACEMENT_MIN_THREADS: usize = 4;
 
 /// Whether a move places its instances on rayon's threads
 /// ([`SceneInstances::move_instances_with`](crate::device::device_scene::SceneInstances::move_instances_with)):
-/// where rayon's pool has at least [`PARALLEL_PLACEMENT_MIN_THREADS`] threads.
-pub fn parallel_placement() -> bool {
-    rayon::current_num_threads() >= PARALLEL_PLACEMENT_MIN_THREADS
+/// where the device is a GPU of its own (a CPU device, caustica's or a software GPU's,
+/// keeps the host's cores busy with its own threads) and the host has at least
+/// [`PARALLEL_PLACEMENT_MIN_THREADS`] cores.
+pub fn parallel_placement(device: crate::backend::DeviceType) -> bool {
+    use crate::backend::DeviceType;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    !matches!(device, DeviceType::Cpu | DeviceType::SoftwareGpu)
+        && cores >= PARALLEL_PLACEMENT_MIN_THREADS
 }
 
 /// An instance's world vertices ([`placement`] of each), with the box of all of them and

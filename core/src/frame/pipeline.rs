@@ -550,7 +550,8 @@ impl<P: Pipeline> Hosted<P> {
             })
             .collect();
         let mut instances = self.host.instances().clone();
-        let parallel = crate::device::placement::parallel_placement();
+        let device = backend.capabilities().device_type;
+        let parallel = crate::device::placement::parallel_placement(device);
         let m = instances.move_instances_with(moves, parallel)?;
         let state = self.host.state();
         let u = InstanceUpdate::Moved(m);
