@@ -263,14 +263,12 @@ pub const PARALLEL_PLACEMENT_MIN_THREADS: usize = 4;
 
 /// Whether a move places its instances on rayon's threads
 /// ([`SceneInstances::move_instances_with`](crate::device::device_scene::SceneInstances::move_instances_with)):
-/// where the device is a GPU of its own (a CPU device, caustica's or a software GPU's,
-/// keeps the host's cores busy with its own threads) and the host has at least
-/// [`PARALLEL_PLACEMENT_MIN_THREADS`] cores.
-pub fn parallel_placement(device: crate::backend::DeviceType) -> bool {
-    use crate::backend::DeviceType;
+/// where the device runs elsewhere than on the host's cores (`device_on_host_cores`: a
+/// CPU device, caustica's or a software GPU's, keeps them busy with its own threads) and
+/// the host has at least [`PARALLEL_PLACEMENT_MIN_THREADS`] cores.
+pub fn parallel_placement(device_on_host_cores: bool) -> bool {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    !matches!(device, DeviceType::Cpu | DeviceType::SoftwareGpu)
-        && cores >= PARALLEL_PLACEMENT_MIN_THREADS
+    !device_on_host_cores && cores >= PARALLEL_PLACEMENT_MIN_THREADS
 }
 
 /// An instance's world vertices ([`placement`] of each), with the box of all of them and

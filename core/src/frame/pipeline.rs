@@ -550,8 +550,10 @@ impl<P: Pipeline> Hosted<P> {
             })
             .collect();
         let mut instances = self.host.instances().clone();
+        use crate::backend::DeviceType;
         let device = backend.capabilities().device_type;
-        let parallel = crate::device::placement::parallel_placement(device);
+        let on_host = matches!(device, DeviceType::Cpu | DeviceType::SoftwareGpu);
+        let parallel = crate::device::placement::parallel_placement(on_host);
         let m = instances.move_instances_with(moves, parallel)?;
         let state = self.host.state();
         let u = InstanceUpdate::Moved(m);
