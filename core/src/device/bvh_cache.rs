@@ -38,12 +38,15 @@ pub struct BvhCache {
     pub reused: u64,
 }
 
-/// The digest of a build's input: every triangle's three positions' bits, in order, and the
-/// count.
-pub fn build_digest(triangles: impl Iterator<Item = [Vec3A; 3]>) -> BuildDigest {
+/// The digest of a build's input: the build's kind (`build`: which parameters build it,
+/// [`crate::device::device_scene::LevelBuild`] as a number), every triangle's three
+/// positions' bits, in order, and the count.
+pub fn build_digest(build: u64, triangles: impl Iterator<Item = [Vec3A; 3]>) -> BuildDigest {
     let mut a = std::hash::DefaultHasher::new();
     let mut b = std::hash::DefaultHasher::new();
     b.write_u64(0x9e37_79b9_7f4a_7c15); // a second key: b differs from a from the start
+    a.write_u64(build);
+    b.write_u64(build);
     let mut n = 0u64;
     for t in triangles {
         for p in t {
@@ -107,15 +110,17 @@ mod tests {
     fn digests_tell_inputs_apart() {
         let t = [Vec3A::ZERO, Vec3A::X, Vec3A::Y];
         let u = [Vec3A::ZERO, Vec3A::X, Vec3A::Z];
-        let d = build_digest([t].into_iter());
-        assert_eq!(d, build_digest([t].into_iter()));
-        assert_ne!(d, build_digest([u].into_iter()));
-        assert_ne!(d, build_digest([t, t].into_iter()));
+        let d = build_digest(0, [t].into_iter());
+        assert_eq!(d, build_digest(0, [t].into_iter()));
+        assert_ne!(d, build_digest(0, [u].into_iter()));
+        assert_ne!(d, build_digest(0, [t, t].into_iter()));
         assert_ne!(d[0], d[1]);
         // -0.0 and 0.0 build the same boxes but are other inputs: told apart (a miss
         // only costs a build)
         let z = [Vec3A::new(-0.0, 0.0, 0.0), Vec3A::X, Vec3A::Y];
-        assert_ne!(d, build_digest([z].into_iter()));
+        assert_ne!(d, build_digest(0, [z].into_iter()));
+        // the same triangles built with other parameters
+        assert_ne!(d, build_digest(1, [t].into_iter()));
     }
 
     #[test]

@@ -291,7 +291,8 @@ impl SceneInstances {
             })
             .collect();
         let object_position = |i: u32| Vec3A::from(local[(i - base) as usize].position);
-        let (ordered, mut nodes, _) = build_bvh(&object_position, tris, None)?;
+        let (ordered, mut nodes, _) =
+            build_bvh(&object_position, tris, None, LevelBuild::Instance)?;
         let used = (nodes.len() / SLOT_VEC4S) as u32;
         if used > l.blas_capacity {
             return Err(bad(format!(
@@ -712,14 +713,24 @@ impl DeviceScene {
         let mut blases: Vec<(Level, BvhBuild, Vec<u32>)> = Vec::new();
         if !static_tris.is_empty() {
             static_level.triangle_count = static_tris.len() as u32;
-            let build = build_bvh(&world_positions, static_tris, Some(&mut *cache))?;
+            let build = build_bvh(
+                &world_positions,
+                static_tris,
+                Some(&mut *cache),
+                LevelBuild::Static,
+            )?;
             blases.push((static_level, build, static_objects));
         }
         for (level, tris) in instances {
             let (base, first) = (level.vertex_base, level.position_base);
             let object_position =
                 |i: u32| Vec3A::from(object_vertices[(i - base + first) as usize].position);
-            let build = build_bvh(&object_position, tris, Some(&mut *cache))?;
+            let build = build_bvh(
+                &object_position,
+                tris,
+                Some(&mut *cache),
+                LevelBuild::Instance,
+            )?;
             let k = level.object.unwrap_or(0) as u32;
             let objects = vec![k; build.0.len()];
             blases.push((level, build, objects));
@@ -949,17 +960,51 @@ fn check_coincident(
 /// in the input.
 type BvhBuild = (Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>);
 
+/// How a level's BVH is built: the static level once, when the scene is built, so with
+/// more search for fewer node visits; an instance's as its deformation rebuilds it, every
+/// frame it deforms (a build and a rebuild of one level must be the same build).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LevelBuild {
+    /// The static level: [`STATIC_LEVEL_BUILD`].
+    Static,
+    /// An instance: obvhs's `medium_build`.
+    Instance,
+}
+
+/// The static level's build: obvhs's `medium_build` with PLOC's search over 24 neighbours,
+/// 128-bit sort keys and half the nodes considered for reinsertion (from depth 1). Counted
+/// on the CPU (feature `traversal-stats`), 2.5-3x the build time for 1.6-9% fewer
+/// warp-steps on the built-in scenes (docs/performance.md, "What the kernels do for
+/// speed").
+pub const STATIC_LEVEL_BUILD: BvhBuildParams = BvhBuildParams {
+    ploc_search_distance: obvhs::ploc::PlocSearchDistance::High,
+    search_depth_threshold: 1,
+    reinsertion_batch_ratio: 0.5,
+    sort_precision: obvhs::ploc::SortPrecision::U128,
+    ..BvhBuildParams::medium_build()
+};
+
+impl LevelBuild {
+    fn params(self) -> BvhBuildParams {
+        match self {
+            LevelBuild::Static => STATIC_LEVEL_BUILD,
+            LevelBuild::Instance => BvhBuildParams::medium_build(),
+        }
+    }
+}
+
 fn build_bvh(
     p: &dyn Fn(u32) -> Vec3A,
     tris: Vec<GpuTriangle>,
     cache: Option<&mut BvhCache>,
+    build: LevelBuild,
 ) -> Result<BvhBuild, BuildError> {
     let corners = |t: &GpuTriangle| t.indices.map(p);
     let kept = match cache {
-        Some(c) => c.get_or_build(build_digest(tris.iter().map(corners)), || {
-            fresh_bvh(&tris, &corners)
+        Some(c) => c.get_or_build(build_digest(build as u64, tris.iter().map(corners)), || {
+            fresh_bvh(&tris, &corners, build)
         })?,
-        None => std::sync::Arc::new(fresh_bvh(&tris, &corners)?),
+        None => std::sync::Arc::new(fresh_bvh(&tris, &corners, build)?),
     };
     // Reorder triangles into leaf order; leaf slots then index triangles directly.
     let mut ordered: Vec<GpuTriangle> = Vec::new();
@@ -975,6 +1020,7 @@ fn build_bvh(
 fn fresh_bvh(
     tris: &[GpuTriangle],
     corners: &dyn Fn(&GpuTriangle) -> [Vec3A; 3],
+    build: LevelBuild,
 ) -> Result<KeptBuild, BuildError> {
     let mut obvhs_tris: Vec<Triangle> = Vec::new();
     reserve(&mut obvhs_tris, tris.len() as u64, "BVH build triangles")?;
@@ -983,7 +1029,7 @@ fn fresh_bvh(
         Triangle { v0, v1, v2 }
     }));
     let mut build_time = Duration::ZERO;
-    let bvh = build_cwbvh_from_tris(&obvhs_tris, BvhBuildParams::medium_build(), &mut build_time);
+    let bvh = build_cwbvh_from_tris(&obvhs_tris, build.params(), &mut build_time);
     drop(obvhs_tris);
     let nodes: &[[u32; 4]] = bytemuck::cast_slice::<CwBvhNode, [u32; 4]>(&bvh.nodes);
     let mut out: Vec<[u32; 4]> = Vec::new();
@@ -1333,7 +1379,13 @@ mod tests {
                         material: 0,
                     });
                 }
-                let (_, nodes, _) = build_bvh(&|i| Vec3A::from(p[i as usize]), tris, None).unwrap();
+                let (_, nodes, _) = build_bvh(
+                    &|i| Vec3A::from(p[i as usize]),
+                    tris,
+                    None,
+                    LevelBuild::Instance,
+                )
+                .unwrap();
                 let used = (nodes.len() / SLOT_VEC4S) as u32;
                 assert!(
                     used <= instance_blas_capacity(n) && used <= n.max(2) - 1 + (n == 1) as u32,
