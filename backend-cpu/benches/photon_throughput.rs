@@ -56,11 +56,11 @@ fn bench(c: &mut Criterion) {
                 }
             })
             .collect();
-        // the raw obvhs baseline: its own one-level BVH over the world triangles, leaf
-        // order (its callback's ids)
+        // the raw obvhs baseline: its own one-level BVH over the world triangles (built
+        // as caustica builds a static level), leaf order (its callback's ids)
         let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
             &tris,
-            obvhs::BvhBuildParams::medium_build(),
+            caustica_core::device::device_scene::STATIC_LEVEL_BUILD,
             &mut std::time::Duration::default(),
         );
         let tris: Vec<Triangle> = bvh

@@ -1,9 +1,9 @@
 //! Bottom-level BVHs kept between scene builds, so that a scene built again after one
 //! object changed builds only that object's BVH ([`crate::device::DeviceScene::build_cached`]).
 //!
-//! A BVH build is a function of its input alone: the triangles' positions (the level's
-//! space) in input order. An entry is therefore keyed by a 128-bit digest of exactly that
-//! input, and a hit returns what the build would return (its CWBVH nodes and its leaf order
+//! A BVH build is a function of its parameters (the level's kind) and its input: the
+//! triangles' positions (the level's space) in input order. An entry is therefore keyed by
+//! a 128-bit digest of exactly those, and a hit returns what the build would return (its CWBVH nodes and its leaf order
 //! of the input triangles), bitwise. Two SipHash-1-3 digests under different keys make the
 //! key; a false hit needs a 128-bit collision among the handful of levels a scene has,
 //! probability about `n^2 / 2^129`.

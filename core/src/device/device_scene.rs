@@ -966,16 +966,16 @@ type BvhBuild = (Vec<GpuTriangle>, Vec<[u32; 4]>, Vec<u32>);
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LevelBuild {
     /// The static level: [`STATIC_LEVEL_BUILD`].
-    Static,
+    Static = 0,
     /// An instance: obvhs's `medium_build`.
-    Instance,
+    Instance = 1,
 }
 
-/// The static level's build: obvhs's `medium_build` with PLOC's search over 24 neighbours,
-/// 128-bit sort keys and half the nodes considered for reinsertion (from depth 1). Counted
-/// on the CPU (feature `traversal-stats`), 2.5-3x the build time for 1.6-9% fewer
-/// warp-steps on the built-in scenes (docs/performance.md, "What the kernels do for
-/// speed").
+/// The static level's build: obvhs's `medium_build` with PLOC searching 24 nodes on each
+/// side from its second pass on (`search_depth_threshold` 1), 128-bit sort keys, and
+/// reinsertion over half the nodes (batch ratio 0.5). 2.8-3.9x the build time (obvhs
+/// alone) for 1.6-9.2% fewer warp-steps on the built-in scenes, counted on the CPU
+/// (feature `traversal-stats`; docs/performance.md, "What the kernels do for speed").
 pub const STATIC_LEVEL_BUILD: BvhBuildParams = BvhBuildParams {
     ploc_search_distance: obvhs::ploc::PlocSearchDistance::High,
     search_depth_threshold: 1,
