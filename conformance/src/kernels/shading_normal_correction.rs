@@ -225,8 +225,7 @@ pub fn check_photon_gi(
         // backend
         for who in ["reference", "candidate"] {
             let b: &mut dyn Backend = if who == "reference" { &mut *r } else { &mut *c };
-            let note =
-                check_splat_counters(&mut v, fx, who, b, &inputs.gbuffer, &pha, &tia, sp)?;
+            let note = check_splat_counters(&mut v, fx, who, b, &inputs.gbuffer, &pha, &tia, sp)?;
             v.note(format!("light {l}: {note}"));
         }
         // 5. shading_normal_correction on the reference's direction map

@@ -270,14 +270,26 @@ pub(crate) fn check_splat_counters(
     let deposits = word(&under, counter::DEPOSITED);
     let clips = word(&under, counter::SATURATED);
     let mut checks = vec![
-        ("underflow at a huge quantum", word(&under, counter::UNDERFLOW), 3 * deposits),
-        ("underflow at a tiny quantum", word(&over, counter::UNDERFLOW), 0),
+        (
+            "underflow at a huge quantum",
+            word(&under, counter::UNDERFLOW),
+            3 * deposits,
+        ),
+        (
+            "underflow at a tiny quantum",
+            word(&over, counter::UNDERFLOW),
+            0,
+        ),
         (
             "saturated at a tiny quantum",
             word(&over, counter::SATURATED),
             3 * deposits + clips,
         ),
-        ("deposits at a tiny quantum", word(&over, counter::DEPOSITED), deposits),
+        (
+            "deposits at a tiny quantum",
+            word(&over, counter::DEPOSITED),
+            deposits,
+        ),
     ];
     if let Some(c) = clipped {
         checks.push(("saturated (clipped) at a huge quantum", clips, c));
