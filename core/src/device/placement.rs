@@ -259,16 +259,16 @@ pub const PARALLEL_PLACEMENT_VERTICES: usize = 8192;
 /// Cores a host must have before a move ([`parallel_placement`]) places an instance on
 /// rayon's threads: on a host of two cores the threads' wake-up and the shared core cost
 /// more than they save (docs/performance.md, "Dynamic scenes").
-pub const PARALLEL_PLACEMENT_MIN_THREADS: usize = 4;
+pub const PARALLEL_PLACEMENT_MIN_CORES: usize = 4;
 
 /// Whether a move places its instances on rayon's threads
 /// ([`SceneInstances::move_instances_with`](crate::device::device_scene::SceneInstances::move_instances_with)):
 /// where the device runs elsewhere than on the host's cores (`device_on_host_cores`: a
 /// CPU device, caustica's or a software GPU's, keeps them busy with its own threads) and
-/// the host has at least [`PARALLEL_PLACEMENT_MIN_THREADS`] cores.
+/// the host has at least [`PARALLEL_PLACEMENT_MIN_CORES`] cores.
 pub fn parallel_placement(device_on_host_cores: bool) -> bool {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    !device_on_host_cores && cores >= PARALLEL_PLACEMENT_MIN_THREADS
+    !device_on_host_cores && cores >= PARALLEL_PLACEMENT_MIN_CORES
 }
 
 /// An instance's world vertices ([`placement`] of each), with the box of all of them and
