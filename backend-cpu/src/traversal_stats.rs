@@ -7,8 +7,10 @@
 //! test. The warp estimate takes the GPU's thread order (a pass's `thread -> photon` map),
 //! forms warps of 32 threads and assumes a warp runs each path segment for as long as its
 //! longest lane needs: efficiency = steps taken / (32 x sum over segments of the longest
-//! lane's steps). It leaves out everything but traversal (shading, stores, memory), so it
-//! bounds what regrouping rays could buy, not a time.
+//! lane's steps). Beside it, the warp-steps of a persistent launch whose lanes take the
+//! next ray as theirs ends (`persistent_warp_steps`). Both leave out everything but
+//! traversal (shading, stores, memory), so they bound what regrouping rays could buy, not
+//! a time.
 //!
 //! Printed to stderr after each pass, e.g. `cargo run --release -p caustica --features
 //! caustica-cpu/traversal-stats -- render --scene rooms --technique photon-gi`. Without
@@ -74,6 +76,59 @@ mod enabled {
         step(1);
     }
 
+    /// The lanes a persistent launch would keep resident: an H200's 132 multiprocessors
+    /// with 21 warps each, as many as `trace_indirect`'s 96 registers a thread allow.
+    const PERSISTENT_LANES: usize = 132 * 21 * 32;
+
+    /// Warp-steps of a persistent launch (Aila and Laine 2009's persistent threads with
+    /// their dynamic fetch at every ray): `lanes` threads in warps of 32 step their rays
+    /// together, one step a lane an iteration; a lane whose ray ends takes its path's next
+    /// ray, or the next path of one queue in thread order, for the next iteration. Counts
+    /// traversal steps alone (no shading, fetch or stores): a bound on what refilling
+    /// lanes could save, as the warp-steps of the other schedules are.
+    fn persistent_warp_steps(paths: &[&[u32]], lanes: usize) -> u64 {
+        let mut next = 0usize;
+        // each lane's (path, ray, steps left); a lane without a path is done
+        let mut state: Vec<Option<(usize, usize, u32)>> = vec![None; lanes];
+        let mut take = |next: &mut usize| {
+            while *next < paths.len() {
+                let p = *next;
+                *next += 1;
+                if let Some(&s) = paths[p].first() {
+                    return Some((p, 0, s.max(1)));
+                }
+            }
+            None
+        };
+        for lane in state.iter_mut() {
+            *lane = take(&mut next);
+        }
+        let mut warp_steps = 0u64;
+        loop {
+            let mut any = false;
+            for warp in state.chunks_mut(32) {
+                if !warp.iter().any(Option::is_some) {
+                    continue;
+                }
+                any = true;
+                warp_steps += 1;
+                for lane in warp.iter_mut() {
+                    let Some((p, r, left)) = *lane else { continue };
+                    *lane = if left > 1 {
+                        Some((p, r, left - 1))
+                    } else if let Some(&s) = paths[p].get(r + 1) {
+                        Some((p, r + 1, s.max(1)))
+                    } else {
+                        take(&mut next)
+                    };
+                }
+            }
+            if !any {
+                return warp_steps;
+            }
+        }
+    }
+
     pub fn report(pass: &str, threads: u32, key_of_thread: impl Fn(u32) -> u32) {
         let photons = PHOTONS
             .lock()
@@ -103,11 +158,16 @@ mod enabled {
                 warp_slots += 32 * *longest as u64;
             }
         }
+        let paths: Vec<&[u32]> = (0..threads)
+            .map(|t| photons.get(&key_of_thread(t)).map_or(&[][..], |l| &l[..]))
+            .collect();
+        let persistent = persistent_warp_steps(&paths, PERSISTENT_LANES);
         eprintln!(
             "traversal stats, {pass}: {} rays; per ray {:.2} node visits, {:.2} triangle \
              tests; steps per ray p50 {} p90 {} p99 {} max {}; warps of 32 in the \
              GPU's thread order keep {:.1}% of their lanes' slots busy ({taken} steps, {} \
-             warp-steps)",
+             warp-steps; {persistent} warp-steps as {PERSISTENT_LANES} persistent lanes \
+             that take the next ray as theirs ends)",
             steps.len(),
             nodes as f64 / rays,
             triangles as f64 / rays,
