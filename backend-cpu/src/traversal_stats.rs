@@ -90,7 +90,7 @@ mod enabled {
         let mut next = 0usize;
         // each lane's (path, ray, steps left); a lane without a path is done
         let mut state: Vec<Option<(usize, usize, u32)>> = vec![None; lanes];
-        let mut take = |next: &mut usize| {
+        let take = |next: &mut usize| {
             while *next < paths.len() {
                 let p = *next;
                 *next += 1;
