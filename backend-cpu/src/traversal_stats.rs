@@ -7,8 +7,9 @@
 //! test. The warp estimate takes the GPU's thread order (a pass's `thread -> photon` map),
 //! forms warps of 32 threads and assumes a warp runs each path segment for as long as its
 //! longest lane needs: efficiency = steps taken / (32 x sum over segments of the longest
-//! lane's steps). Beside it, the warp-steps of a persistent launch whose lanes take the
-//! next ray as theirs ends (`persistent_warp_steps`). Both leave out everything but
+//! lane's steps). For `trace_indirect` it also prints the warp-steps of a persistent
+//! launch whose lanes take the next ray as theirs ends (`persistent_warp_steps`). Both
+//! leave out everything but
 //! traversal (shading, stores, memory), so they bound what regrouping rays could buy, not
 //! a time.
 //!
@@ -76,33 +77,37 @@ mod enabled {
         step(1);
     }
 
-    /// The lanes a persistent launch would keep resident: an H200's 132 multiprocessors
-    /// with 21 warps each, as many as `trace_indirect`'s 96 registers a thread allow.
-    const PERSISTENT_LANES: usize = 132 * 21 * 32;
+    /// The next ray of `path` at or after `ray` that takes a step, with its steps (a ray
+    /// of no steps, ended before its traversal began, holds no lane).
+    fn next_ray(path: &[u32], ray: usize) -> Option<(usize, u32)> {
+        (ray..path.len())
+            .find(|&r| path[r] > 0)
+            .map(|r| (r, path[r]))
+    }
 
-    /// Warp-steps of a persistent launch (Aila and Laine 2009's persistent threads with
-    /// their dynamic fetch at every ray): `lanes` threads in warps of 32 step their rays
-    /// together, one step a lane an iteration; a lane whose ray ends takes its path's next
-    /// ray, or the next path of one queue in thread order, for the next iteration. Counts
-    /// traversal steps alone (no shading, fetch or stores): a bound on what refilling
-    /// lanes could save, as the warp-steps of the other schedules are.
+    /// Warp-steps of a persistent launch, an idealised form of Aila and Laine 2009's
+    /// persistent threads with dynamic fetch: `lanes` threads in warps of 32, all warps
+    /// in lockstep, each lane one step of its ray an iteration; a lane whose ray ends
+    /// takes, for the next iteration and at no cost, its path's next ray or else the next
+    /// path of one queue in thread order (lanes in index order). Returns, summed over
+    /// the warps, the iterations in which at least one of a warp's lanes holds a ray.
+    /// Refilling at every ray rather than below a threshold, and free of the shading,
+    /// fetches and stores between rays, it bounds what refilled lanes could save.
     fn persistent_warp_steps(paths: &[&[u32]], lanes: usize) -> u64 {
         let mut next = 0usize;
-        // each lane's (path, ray, steps left); a lane without a path is done
-        let mut state: Vec<Option<(usize, usize, u32)>> = vec![None; lanes];
         let take = |next: &mut usize| {
             while *next < paths.len() {
                 let p = *next;
                 *next += 1;
-                if let Some(&s) = paths[p].first() {
-                    return Some((p, 0, s.max(1)));
+                if let Some((r, s)) = next_ray(paths[p], 0) {
+                    return Some((p, r, s));
                 }
             }
             None
         };
-        for lane in state.iter_mut() {
-            *lane = take(&mut next);
-        }
+        // each lane's (path, ray, steps left); a lane without a path is done
+        let mut state: Vec<Option<(usize, usize, u32)>> =
+            (0..lanes).map(|_| take(&mut next)).collect();
         let mut warp_steps = 0u64;
         loop {
             let mut any = false;
@@ -116,8 +121,8 @@ mod enabled {
                     let Some((p, r, left)) = *lane else { continue };
                     *lane = if left > 1 {
                         Some((p, r, left - 1))
-                    } else if let Some(&s) = paths[p].get(r + 1) {
-                        Some((p, r + 1, s.max(1)))
+                    } else if let Some((r, s)) = next_ray(paths[p], r + 1) {
+                        Some((p, r, s))
                     } else {
                         take(&mut next)
                     };
@@ -129,7 +134,12 @@ mod enabled {
         }
     }
 
-    pub fn report(pass: &str, threads: u32, key_of_thread: impl Fn(u32) -> u32) {
+    pub fn report(
+        pass: &str,
+        threads: u32,
+        persistent_lanes: Option<u32>,
+        key_of_thread: impl Fn(u32) -> u32,
+    ) {
         let photons = PHOTONS
             .lock()
             .unwrap_or_else(|e| e.into_inner())
@@ -158,16 +168,18 @@ mod enabled {
                 warp_slots += 32 * *longest as u64;
             }
         }
-        let paths: Vec<&[u32]> = (0..threads)
-            .map(|t| photons.get(&key_of_thread(t)).map_or(&[][..], |l| &l[..]))
-            .collect();
-        let persistent = persistent_warp_steps(&paths, PERSISTENT_LANES);
+        let persistent = persistent_lanes.map_or(String::new(), |lanes| {
+            let paths: Vec<&[u32]> = (0..threads)
+                .map(|t| photons.get(&key_of_thread(t)).map_or(&[][..], |l| &l[..]))
+                .collect();
+            let w = persistent_warp_steps(&paths, lanes as usize);
+            format!("; {w} warp-steps as {lanes} persistent lanes refilled ray by ray")
+        });
         eprintln!(
             "traversal stats, {pass}: {} rays; per ray {:.2} node visits, {:.2} triangle \
              tests; steps per ray p50 {} p90 {} p99 {} max {}; warps of 32 in the \
              GPU's thread order keep {:.1}% of their lanes' slots busy ({taken} steps, {} \
-             warp-steps; {persistent} warp-steps as {PERSISTENT_LANES} persistent lanes \
-             that take the next ray as theirs ends)",
+             warp-steps{persistent})",
             steps.len(),
             nodes as f64 / rays,
             triangles as f64 / rays,
@@ -219,11 +231,17 @@ pub fn triangle_tested() {
 }
 
 /// Prints the pass's statistics: `threads` GPU threads, thread `t` tracing the photon
-/// filed under `key_of_thread(t)`.
+/// filed under `key_of_thread(t)`; with `persistent_lanes`, also the warp-steps of a
+/// persistent launch of that many lanes over the same paths.
 #[inline(always)]
-pub fn report(pass: &str, threads: u32, key_of_thread: impl Fn(u32) -> u32) {
+pub fn report(
+    pass: &str,
+    threads: u32,
+    persistent_lanes: Option<u32>,
+    key_of_thread: impl Fn(u32) -> u32,
+) {
     #[cfg(feature = "traversal-stats")]
-    enabled::report(pass, threads, key_of_thread);
+    enabled::report(pass, threads, persistent_lanes, key_of_thread);
     #[cfg(not(feature = "traversal-stats"))]
-    let _ = (pass, threads, key_of_thread);
+    let _ = (pass, threads, persistent_lanes, key_of_thread);
 }

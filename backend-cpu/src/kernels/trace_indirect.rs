@@ -25,6 +25,12 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 
+/// The lanes of a persistent `trace_indirect` launch that the traversal statistics model:
+/// an H200's 132 multiprocessors, each with four sub-partitions of 16,384 registers that
+/// hold six warps at the OpenCL port's 80 registers a thread (its register cap), so 24
+/// warps of 32 lanes a multiprocessor.
+const PERSISTENT_LANES: u32 = 132 * 24 * 32;
+
 /// Runs `trace_indirect` on the host ([`super::run`]'s arm): its buffers read from `cpu`,
 /// its results written back.
 pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), BackendError> {
@@ -188,12 +194,12 @@ pub fn trace_indirect(
     match source {
         // the GPU ports' thread t traces photon first + coherent_sample_order(t)
         IndirectSource::Rsm(_) if p.segment_end >= p.max_segments => {
-            crate::traversal_stats::report("trace_indirect", threads, |t| {
+            crate::traversal_stats::report("trace_indirect", threads, Some(PERSISTENT_LANES), |t| {
                 coherent_sample_order(t, threads)
             })
         }
         IndirectSource::Rsm(_) => {
-            crate::traversal_stats::report("trace_indirect wave 0", threads, |t| {
+            crate::traversal_stats::report("trace_indirect wave 0", threads, Some(PERSISTENT_LANES), |t| {
                 coherent_sample_order(t, threads)
             })
         }
@@ -201,6 +207,7 @@ pub fn trace_indirect(
         IndirectSource::Queue(_) => crate::traversal_stats::report(
             &format!("trace_indirect wave {}", p.segment_first),
             threads,
+            Some(PERSISTENT_LANES),
             |t| t,
         ),
     }

@@ -265,7 +265,7 @@ fn batch(
         })
         .collect();
     // thread i traces the i-th photon of the batch here as in the GPU ports
-    crate::traversal_stats::report("trace_photons", p.count, |i| i);
+    crate::traversal_stats::report("trace_photons", p.count, None, |i| i);
     let mut photons = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
     let mut counters = Counters::default();
     for (ph, c) in parts {
@@ -599,7 +599,7 @@ fn cluster_batch<const DIELECTRIC: bool, const DISPERSION: bool, const ABSORPTIO
         }
     }
     // thread i traces photon i % 4 of the batch's cluster i / 4, as in the GPU ports
-    crate::traversal_stats::report("trace_photons (adaptive)", p.count, |i| i);
+    crate::traversal_stats::report("trace_photons (adaptive)", p.count, None, |i| i);
     TraceResult { photons, counters }
 }
 
