@@ -9,9 +9,8 @@
 //! longest lane needs: efficiency = steps taken / (32 x sum over segments of the longest
 //! lane's steps). For `trace_indirect` it also prints the warp-steps of a persistent
 //! launch whose lanes take the next ray as theirs ends (`persistent_warp_steps`). Both
-//! leave out everything but
-//! traversal (shading, stores, memory), so they bound what regrouping rays could buy, not
-//! a time.
+//! leave out everything but traversal (shading, stores, memory), so they bound what
+//! regrouping rays could buy, not a time.
 //!
 //! Printed to stderr after each pass, e.g. `cargo run --release -p caustica --features
 //! caustica-cpu/traversal-stats -- render --scene rooms --technique photon-gi`. Without
@@ -156,12 +155,12 @@ mod enabled {
                 .map_or(0, |&s| s)
         };
         let taken: u64 = steps.iter().map(|&x| x as u64).sum();
+        // each GPU thread's photon's per-ray steps, in thread order
+        let paths: Vec<&[u32]> = (0..threads)
+            .map(|t| photons.get(&key_of_thread(t)).map_or(&[][..], |l| &l[..]))
+            .collect();
         let mut warp_slots = 0u64;
-        let empty = Vec::new();
-        for first in (0..threads).step_by(32) {
-            let lanes: Vec<&Vec<u32>> = (first..(first + 32).min(threads))
-                .map(|t| photons.get(&key_of_thread(t)).unwrap_or(&empty))
-                .collect();
+        for lanes in paths.chunks(32) {
             let segments = lanes.iter().map(|l| l.len()).max().unwrap_or(0);
             for s in 0..segments {
                 let longest = lanes.iter().filter_map(|l| l.get(s)).max().unwrap_or(&0);
@@ -169,9 +168,6 @@ mod enabled {
             }
         }
         let persistent = persistent_lanes.map_or(String::new(), |lanes| {
-            let paths: Vec<&[u32]> = (0..threads)
-                .map(|t| photons.get(&key_of_thread(t)).map_or(&[][..], |l| &l[..]))
-                .collect();
             let w = persistent_warp_steps(&paths, lanes as usize);
             format!("; {w} warp-steps as {lanes} persistent lanes refilled ray by ray")
         });
