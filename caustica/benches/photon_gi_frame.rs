@@ -15,7 +15,8 @@
 //! schedules, default `auto`, the settings' default; each timed in turn),
 //! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8),
 //! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22).
-//! With waves, `trace_indirect`'s (and the sort's) median per wave follows the passes.
+//! With waves, `trace_indirect`'s (and the sort's) median per wave follows the passes,
+//! and the sort's per launch (histogram, scan, scatter; summed over the waves).
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
 
@@ -122,8 +123,12 @@ fn main() {
             }
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             // per wave: `trace_indirect`'s and the sort's times, one per frame
-            let (mut wave_trace, mut wave_sort): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
-                Default::default();
+            // and the sort's time by launch (histogram, scan, scatter) over the waves
+            let (mut wave_trace, mut wave_sort, mut sort_phase): (
+                Vec<Vec<f64>>,
+                Vec<Vec<f64>>,
+                Vec<Vec<f64>>,
+            ) = Default::default();
             let (mut wall, mut technique) = (Vec::new(), Vec::new());
             let mut timing = String::new();
             let mut stored = 0;
@@ -146,6 +151,7 @@ fn main() {
                     for (per_wave, ms) in [
                         (&mut wave_trace, &gi.trace_ms_per_wave),
                         (&mut wave_sort, &gi.sort_ms_per_wave),
+                        (&mut sort_phase, &gi.sort_ms_per_phase),
                     ] {
                         per_wave.resize(ms.len(), Vec::new());
                         per_wave.iter_mut().zip(ms).for_each(|(v, &m)| v.push(m));
@@ -183,13 +189,17 @@ fn main() {
             for (p, mut v) in passes {
                 println!("  {p:24} {:.3} ms", median(&mut v));
             }
-            for (what, mut per_wave) in [("trace_indirect", wave_trace), ("sort", wave_sort)] {
-                if !per_wave.is_empty() {
-                    let ms: Vec<String> = per_wave
+            for (what, mut parts) in [
+                ("trace_indirect per wave", wave_trace),
+                ("sort per wave", wave_sort),
+                ("sort per launch (histogram / scan / scatter)", sort_phase),
+            ] {
+                if !parts.is_empty() {
+                    let ms: Vec<String> = parts
                         .iter_mut()
                         .map(|v| format!("{:.3}", median(v)))
                         .collect();
-                    println!("  {what} per wave, ms: {}", ms.join(" / "));
+                    println!("  {what}, ms: {}", ms.join(" / "));
                 }
             }
             t.free(backend.as_mut()).expect("free");

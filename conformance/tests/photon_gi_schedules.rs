@@ -88,24 +88,30 @@ fn check_wave_times(settings: &serde_json::Value, stats: &FrameStats) {
         "{settings}: {} waves",
         gi.waves
     );
-    let adds_up = |per_wave: &[f64], pass: &str| {
+    let adds_up = |parts: &[f64], pass: &str, len: usize| {
         let whole = stats.pass_ms.get(pass).copied().unwrap_or(0.0);
-        let sum: f64 = per_wave.iter().sum();
-        per_wave.len() == gi.waves as usize && (sum - whole).abs() <= 1e-9 * whole.max(1.0)
+        let sum: f64 = parts.iter().sum();
+        parts.len() == len && (sum - whole).abs() <= 1e-9 * whole.max(1.0)
     };
+    let waves = gi.waves as usize;
     assert!(
-        adds_up(&gi.trace_ms_per_wave, "trace_indirect"),
+        adds_up(&gi.trace_ms_per_wave, "trace_indirect", waves),
         "{settings}: {gi:?} against {:?}",
         stats.pass_ms
     );
     if schedule == "sorted_waves" {
         assert!(
-            adds_up(&gi.sort_ms_per_wave, "sort_indirect_paths") && gi.sort_ms_per_wave[0] == 0.0,
+            adds_up(&gi.sort_ms_per_wave, "sort_indirect_paths", waves)
+                && gi.sort_ms_per_wave[0] == 0.0
+                && adds_up(&gi.sort_ms_per_phase, "sort_indirect_paths", 3),
             "{settings}: {gi:?} against {:?}",
             stats.pass_ms
         );
     } else {
-        assert!(gi.sort_ms_per_wave.is_empty(), "{settings}: {gi:?}");
+        assert!(
+            gi.sort_ms_per_wave.is_empty() && gi.sort_ms_per_phase.is_empty(),
+            "{settings}: {gi:?}"
+        );
     }
 }
 

@@ -21,6 +21,10 @@ pub struct PhotonGiStats {
     /// `sort_indirect_paths`' time before each wave (its three launches), in ms; index 0
     /// is 0 (the RSM photons are not sorted); empty without sorting.
     pub sort_ms_per_wave: Vec<f64>,
+    /// `sort_indirect_paths`' time by launch, summed over the waves, lights and chunks,
+    /// in ms: `[histogram, scan, scatter]` (`math::path_sort::path_sort_phase`'s order);
+    /// empty without sorting.
+    pub sort_ms_per_phase: Vec<f64>,
 }
 
 impl PhotonGiStats {
@@ -41,7 +45,7 @@ impl PhotonGiStats {
     /// The waves' times from a frame's kernel times in recorded order: every chunk
     /// launches `trace_indirect` once a wave, waves in order, and nothing else launches
     /// it, so the j-th `trace_indirect` of the frame is wave `j % waves`; a sort belongs
-    /// to the wave after it. `None` without waves, without any `trace_indirect` time (a
+    /// to the wave after it, and its launches come as histogram, scan, scatter. `None` without waves, without any `trace_indirect` time (a
     /// device that gives no timestamps), or where the launches do not come in whole
     /// chunks (times of another shape than the recording's).
     pub fn from_times(waves: u32, sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
@@ -53,8 +57,9 @@ impl PhotonGiStats {
             waves,
             trace_ms_per_wave: vec![0.0; n],
             sort_ms_per_wave: if sorted { vec![0.0; n] } else { Vec::new() },
+            sort_ms_per_phase: if sorted { vec![0.0; 3] } else { Vec::new() },
         };
-        let mut traced = 0usize;
+        let (mut traced, mut sorts) = (0usize, 0usize);
         for t in times {
             let ms = t.seconds * 1e3;
             match t.kernel {
@@ -62,11 +67,15 @@ impl PhotonGiStats {
                     s.trace_ms_per_wave[traced % n] += ms;
                     traced += 1;
                 }
-                "sort_indirect_paths" if sorted => s.sort_ms_per_wave[traced % n] += ms,
+                "sort_indirect_paths" if sorted => {
+                    s.sort_ms_per_wave[traced % n] += ms;
+                    s.sort_ms_per_phase[sorts % 3] += ms;
+                    sorts += 1;
+                }
                 _ => {}
             }
         }
-        (traced > 0 && traced.is_multiple_of(n)).then_some(s)
+        (traced > 0 && traced.is_multiple_of(n) && sorts.is_multiple_of(3)).then_some(s)
     }
 }
 
@@ -90,8 +99,11 @@ mod tests {
             times.push(at("trace_indirect", 1.0 + c));
             for k in 1..3 {
                 times.push(at("dispatch_args", 7.0));
-                for _ in 0..3 {
-                    times.push(at("sort_indirect_paths", 0.25 * k as f64));
+                for phase in 0..3 {
+                    times.push(at(
+                        "sort_indirect_paths",
+                        0.25 * k as f64 * (phase + 1) as f64,
+                    ));
                 }
                 times.push(at("trace_indirect", 10.0 * k as f64 + c));
             }
@@ -99,9 +111,11 @@ mod tests {
         times.push(at("splat_photons", 3.0));
         let s = PhotonGiStats::from_times(3, true, &times).expect("whole chunks");
         assert_eq!(s.trace_ms_per_wave, vec![3.0, 21.0, 41.0]);
-        assert_eq!(s.sort_ms_per_wave, vec![0.0, 1.5, 3.0]);
+        assert_eq!(s.sort_ms_per_wave, vec![0.0, 3.0, 6.0]);
+        // each phase over both chunks' two sorts: 2 x (0.25 + 0.5) x (phase + 1)
+        assert_eq!(s.sort_ms_per_phase, vec![1.5, 3.0, 4.5]);
         let unsorted = PhotonGiStats::from_times(3, false, &times).expect("whole chunks");
-        assert!(unsorted.sort_ms_per_wave.is_empty());
+        assert!(unsorted.sort_ms_per_wave.is_empty() && unsorted.sort_ms_per_phase.is_empty());
         // a partial chunk: not the recording's shape
         assert_eq!(PhotonGiStats::from_times(3, false, &times[..3]), None);
         assert_eq!(PhotonGiStats::from_times(0, false, &times), None);
