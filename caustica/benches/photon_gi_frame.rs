@@ -124,11 +124,8 @@ fn main() {
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             // per wave: `trace_indirect`'s and the sort's times, one per frame
             // and the sort's time by launch (histogram, scan, scatter) over the waves
-            let (mut wave_trace, mut wave_sort, mut sort_phase): (
-                Vec<Vec<f64>>,
-                Vec<Vec<f64>>,
-                Vec<Vec<f64>>,
-            ) = Default::default();
+            let mut wave_trace: Vec<Vec<f64>> = Vec::new();
+            let (mut wave_sort, mut sort_phase) = (wave_trace.clone(), wave_trace.clone());
             let (mut wall, mut technique) = (Vec::new(), Vec::new());
             let mut timing = String::new();
             let mut stored = 0;
