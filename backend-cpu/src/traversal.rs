@@ -289,10 +289,12 @@ impl SceneView<'_> {
                     // a TLAS leaf: enter the instance whose record is at slot 2 * prim
                     if primitive_group.y != 0 && sp < TRAVERSAL_STACK_SIZE {
                         stack[sp] = primitive_group;
+                        crate::traversal_stats::stack_accessed();
                         sp += 1;
                     }
                     if current_group.y & 0xff00_0000 != 0 && sp < TRAVERSAL_STACK_SIZE {
                         stack[sp] = current_group;
+                        crate::traversal_stats::stack_accessed();
                         sp += 1;
                     }
                     let r = &self.nodes[(2 * prim) as usize * SLOT_VEC4S..][..5];
@@ -355,6 +357,7 @@ impl SceneView<'_> {
                     // a deeper tree than the stack (degenerate input) loses the group
                     // rather than writing out of bounds, as the ports do
                     stack[sp] = current_group;
+                    crate::traversal_stats::stack_accessed();
                     sp += 1;
                 }
                 let slot_index = (child_index_offset - 24) ^ (level.oct_inv4 & 0xff);
@@ -384,6 +387,7 @@ impl SceneView<'_> {
                 }
                 sp -= 1;
                 let g = stack[sp];
+                crate::traversal_stats::stack_accessed();
                 if g.y & 0xff00_0000 != 0 {
                     current_group = g;
                 } else {

@@ -1,6 +1,7 @@
 //! Traversal statistics (developer aid, cargo feature `traversal-stats`, off by default):
-//! how many BVH8 node visits and triangle tests each photon ray of `trace_photons` and
-//! `trace_indirect` costs, and how much of a GPU warp that work would keep busy.
+//! how many BVH8 node visits, triangle tests and stack pushes and pops each photon ray of
+//! `trace_photons` and `trace_indirect` costs, and how much of a GPU warp that work would
+//! keep busy.
 //!
 //! The CPU traversal is the GPU ports' algorithm step for step (same node test, child
 //! order and stack), so its counts are theirs. A *step* is one node visit or one triangle
@@ -11,6 +12,9 @@
 //! launch whose lanes take the next ray as theirs ends (`persistent_warp_steps`). Both
 //! leave out everything but traversal (shading, stores, memory), so they bound what
 //! regrouping rays could buy, not a time.
+//!
+//! `sort_indirect_paths`' histogram also prints how its queue's paths spread over the
+//! sort's buckets, where the GPU's atomics land ([`sort_keys`]).
 //!
 //! Printed to stderr after each pass, e.g. `cargo run --release -p caustica --features
 //! caustica-cpu/traversal-stats -- render --scene rooms --technique photon-gi`. Without
@@ -30,8 +34,9 @@ mod enabled {
 
     /// Every finished photon's per-ray steps, by key, until the pass reports.
     static PHOTONS: Mutex<Option<HashMap<u32, Vec<u32>>>> = Mutex::new(None);
-    /// Node visits and triangle tests of the pass, in that order.
-    static TOTALS: [AtomicU64; 2] = [AtomicU64::new(0), AtomicU64::new(0)];
+    /// Node visits, triangle tests and traversal-stack pushes and pops of the pass, in
+    /// that order.
+    static TOTALS: [AtomicU64; 3] = [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)];
 
     pub fn photon_begins(key: u32) {
         CURRENT.with(|c| *c.borrow_mut() = Some((key, Vec::new())));
@@ -50,6 +55,13 @@ mod enabled {
                 rays.push(0);
             }
         });
+    }
+
+    pub fn stack_accessed() {
+        let counted = CURRENT.with(|c| c.borrow().as_ref().is_some_and(|(_, r)| !r.is_empty()));
+        if counted {
+            TOTALS[2].fetch_add(1, Ordering::Relaxed);
+        }
     }
 
     fn step(kind: usize) {
@@ -133,6 +145,31 @@ mod enabled {
         }
     }
 
+    pub fn sort_keys(count_word: u32, keys: &[u32], buckets: usize) {
+        if keys.is_empty() {
+            return;
+        }
+        let mut counts = vec![0u64; buckets];
+        keys.iter().for_each(|&k| counts[k as usize] += 1);
+        let used = counts.iter().filter(|&&c| c > 0).count();
+        let fullest = counts.iter().max().copied().unwrap_or(0);
+        // distinct keys among each warp's 32 queued paths, in queue order
+        let mut per_warp = 0usize;
+        for warp in keys.chunks(32) {
+            let mut w = warp.to_vec();
+            w.sort_unstable();
+            w.dedup();
+            per_warp += w.len();
+        }
+        eprintln!(
+            "sort stats, queue {count_word}: {} paths in {used} of {buckets} buckets, the \
+             fullest {:.2}% of them; a warp's 32 paths (queue order) in {:.1} buckets",
+            keys.len(),
+            100.0 * fullest as f64 / keys.len() as f64,
+            per_warp as f64 / keys.len().div_ceil(32) as f64,
+        );
+    }
+
     pub fn report(
         pass: &str,
         threads: u32,
@@ -146,6 +183,7 @@ mod enabled {
             .unwrap_or_default();
         let nodes = TOTALS[0].swap(0, Ordering::Relaxed);
         let triangles = TOTALS[1].swap(0, Ordering::Relaxed);
+        let stack = TOTALS[2].swap(0, Ordering::Relaxed);
         let mut steps: Vec<u32> = photons.values().flatten().copied().collect();
         let rays = steps.len().max(1) as f64;
         steps.sort_unstable();
@@ -173,12 +211,13 @@ mod enabled {
         });
         eprintln!(
             "traversal stats, {pass}: {} rays; per ray {:.2} node visits, {:.2} triangle \
-             tests; steps per ray p50 {} p90 {} p99 {} max {}; warps of 32 in the \
-             GPU's thread order keep {:.1}% of their lanes' slots busy ({taken} steps, {} \
-             warp-steps{persistent})",
+             tests, {:.2} stack pushes and pops; steps per ray p50 {} p90 {} p99 {} max {}; \
+             warps of 32 in the GPU's thread order keep {:.1}% of their lanes' slots busy \
+             ({taken} steps, {} warp-steps{persistent})",
             steps.len(),
             nodes as f64 / rays,
             triangles as f64 / rays,
+            stack as f64 / rays,
             pct(0.5),
             pct(0.9),
             pct(0.99),
@@ -226,6 +265,14 @@ pub fn triangle_tested() {
     enabled::triangle_tested();
 }
 
+/// One push or pop of the traversal stack (on a GPU, an access to the thread's local
+/// memory).
+#[inline(always)]
+pub fn stack_accessed() {
+    #[cfg(feature = "traversal-stats")]
+    enabled::stack_accessed();
+}
+
 /// Prints the pass's statistics: `threads` GPU threads, thread `t` tracing the photon
 /// filed under `key_of_thread(t)`; with `persistent_lanes`, also the warp-steps of a
 /// persistent launch of that many lanes over the same paths.
@@ -240,4 +287,16 @@ pub fn report(
     enabled::report(pass, threads, persistent_lanes, key_of_thread);
     #[cfg(not(feature = "traversal-stats"))]
     let _ = (pass, threads, persistent_lanes, key_of_thread);
+}
+
+/// Prints how one queue's paths spread over the sort's buckets (`keys` in queue order,
+/// each below `buckets`; `count_word` names the queue): buckets used, the fullest one's
+/// share, and the buckets a warp's 32 consecutive paths fall in, which is how many
+/// distinct words the GPU's per-path atomics of one warp hit.
+#[inline(always)]
+pub fn sort_keys(count_word: u32, keys: &[u32], buckets: usize) {
+    #[cfg(feature = "traversal-stats")]
+    enabled::sort_keys(count_word, keys, buckets);
+    #[cfg(not(feature = "traversal-stats"))]
+    let _ = (count_word, keys, buckets);
 }

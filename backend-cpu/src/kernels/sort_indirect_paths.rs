@@ -26,7 +26,14 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &SortIndirectPaths) -> Result<(), Bac
         .as_slice::<IndirectPath>(k.paths_in.len)?[..n]
         .to_vec();
     match p.phase {
-        path_sort_phase::HISTOGRAM => path_sort_histogram(p, &paths, &mut buckets),
+        path_sort_phase::HISTOGRAM => {
+            path_sort_histogram(p, &paths, &mut buckets);
+            #[cfg(feature = "traversal-stats")]
+            {
+                let keys: Vec<u32> = paths.iter().map(|q| key(p, q) as u32).collect();
+                crate::traversal_stats::sort_keys(p.count_word, &keys, PATH_SORT_BUCKETS as usize);
+            }
+        }
         path_sort_phase::SCAN => path_sort_scan(&mut buckets),
         _ => {
             let mut out = cpu
