@@ -162,7 +162,7 @@ mod enabled {
             per_warp += w.len();
         }
         eprintln!(
-            "sort stats, queue {count_word}: {} paths in {used} of {buckets} buckets, the \
+            "sort stats, queue of wave {count_word}: {} paths in {used} of {buckets} buckets, the \
              fullest {:.2}% of them; a warp's 32 paths (queue order) in {:.1} buckets",
             keys.len(),
             100.0 * fullest as f64 / keys.len() as f64,
@@ -265,8 +265,8 @@ pub fn triangle_tested() {
     enabled::triangle_tested();
 }
 
-/// One push or pop of the traversal stack (on a GPU, an access to the thread's local
-/// memory).
+/// One push or pop of the traversal stack (on a GPU, an access to the thread's private
+/// stack frame in device memory, through the caches).
 #[inline(always)]
 pub fn stack_accessed() {
     #[cfg(feature = "traversal-stats")]
@@ -290,7 +290,8 @@ pub fn report(
 }
 
 /// Prints how one queue's paths spread over the sort's buckets (`keys` in queue order,
-/// each below `buckets`; `count_word` names the queue): buckets used, the fullest one's
+/// each below `buckets`; `count_word`, the wave the queue feeds, names it; the lines of
+/// several lights and chunks come in recording order): buckets used, the fullest one's
 /// share, and the buckets a warp's 32 consecutive paths fall in, which is how many
 /// distinct words the GPU's per-path atomics of one warp hit.
 #[inline(always)]

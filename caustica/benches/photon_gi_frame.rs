@@ -122,10 +122,11 @@ fn main() {
                 continue;
             }
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-            // per wave: `trace_indirect`'s and the sort's times, one per frame
-            // and the sort's time by launch (histogram, scan, scatter) over the waves
+            // per wave `trace_indirect`'s and the sort's times, and the sort's per launch
+            // (histogram, scan, scatter, over the waves): one entry a frame
             let mut wave_trace: Vec<Vec<f64>> = Vec::new();
-            let (mut wave_sort, mut sort_phase) = (wave_trace.clone(), wave_trace.clone());
+            let mut wave_sort: Vec<Vec<f64>> = Vec::new();
+            let mut sort_phase: Vec<Vec<f64>> = Vec::new();
             let (mut wall, mut technique) = (Vec::new(), Vec::new());
             let mut timing = String::new();
             let mut stored = 0;
@@ -145,13 +146,13 @@ fn main() {
                     passes.entry(p.clone()).or_default().push(*v);
                 }
                 if let Some(gi) = PhotonGiStats::of(&st) {
-                    for (per_wave, ms) in [
+                    for (parts, ms) in [
                         (&mut wave_trace, &gi.trace_ms_per_wave),
                         (&mut wave_sort, &gi.sort_ms_per_wave),
                         (&mut sort_phase, &gi.sort_ms_per_phase),
                     ] {
-                        per_wave.resize(ms.len(), Vec::new());
-                        per_wave.iter_mut().zip(ms).for_each(|(v, &m)| v.push(m));
+                        parts.resize(ms.len(), Vec::new());
+                        parts.iter_mut().zip(ms).for_each(|(v, &m)| v.push(m));
                     }
                 }
                 // the camera's G-buffer is one of the primary_gbuffer dispatches: its share

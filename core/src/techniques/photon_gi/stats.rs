@@ -45,9 +45,10 @@ impl PhotonGiStats {
     /// The waves' times from a frame's kernel times in recorded order: every chunk
     /// launches `trace_indirect` once a wave, waves in order, and nothing else launches
     /// it, so the j-th `trace_indirect` of the frame is wave `j % waves`; a sort belongs
-    /// to the wave after it, and its launches come as histogram, scan, scatter. `None` without waves, without any `trace_indirect` time (a
-    /// device that gives no timestamps), or where the launches do not come in whole
-    /// chunks (times of another shape than the recording's).
+    /// to the wave after it, and its launches come as histogram, scan, scatter. `None`
+    /// without waves, without any `trace_indirect` time (a device that gives no
+    /// timestamps), or where the launches do not come in whole chunks or the sort's in
+    /// whole triples (times of another shape than the recording's).
     pub fn from_times(waves: u32, sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
         let n = waves as usize;
         if n == 0 {
@@ -116,8 +117,15 @@ mod tests {
         assert_eq!(s.sort_ms_per_phase, vec![1.5, 3.0, 4.5]);
         let unsorted = PhotonGiStats::from_times(3, false, &times).expect("whole chunks");
         assert!(unsorted.sort_ms_per_wave.is_empty() && unsorted.sort_ms_per_phase.is_empty());
-        // a partial chunk: not the recording's shape
+        // a partial chunk, or a sort without its scatter: not the recording's shape
         assert_eq!(PhotonGiStats::from_times(3, false, &times[..3]), None);
+        let mut short = times.clone();
+        let last_sort = short
+            .iter()
+            .rposition(|t| t.kernel == "sort_indirect_paths")
+            .expect("a sort");
+        short.remove(last_sort);
+        assert_eq!(PhotonGiStats::from_times(3, true, &short), None);
         assert_eq!(PhotonGiStats::from_times(0, false, &times), None);
         // no kernel timed
         assert_eq!(PhotonGiStats::from_times(3, true, &[]), None);
