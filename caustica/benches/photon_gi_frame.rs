@@ -14,9 +14,11 @@
 //! `CAUSTICA_BENCH_GI_SCHEDULES=auto,single_kernel,waves,sorted_waves` (`trace_indirect`'s
 //! schedules, default `auto`, the settings' default; each timed in turn),
 //! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8),
-//! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22).
+//! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22),
+//! `CAUSTICA_BENCH_GI_WAVES_ABOVE=N` (`auto_waves_above_photons`, default the settings').
 //! With waves, `trace_indirect`'s (and the sort's) median per wave follows the passes,
-//! and the sort's per launch (histogram, scan, scatter; summed over the waves).
+//! and the sort's per launch (histogram, scan, scatter; summed over the waves), and under
+//! `auto` the time of the lights of few photons traced in one launch each.
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
 
@@ -48,6 +50,14 @@ fn main() {
     )
     .parse()
     .expect("queue paths");
+    let waves_above: u32 = env_or(
+        "CAUSTICA_BENCH_GI_WAVES_ABOVE",
+        &PhotonGiSettings::default()
+            .auto_waves_above_photons
+            .to_string(),
+    )
+    .parse()
+    .expect("photons");
     let waves: u32 = env_or(
         "CAUSTICA_BENCH_GI_WAVES",
         &PhotonGiSettings::default().indirect_waves.to_string(),
@@ -98,12 +108,14 @@ fn main() {
                 indirect_schedule,
                 indirect_waves: waves,
                 indirect_queue_paths: queue,
+                auto_waves_above_photons: waves_above,
                 ..PhotonGiSettings::default()
             };
             let setting = match s.schedule(backend.capabilities().device_type) {
                 IndirectSchedule::SingleKernel => format!("{setting}, {schedule}: single_kernel"),
                 run => format!(
-                    "{setting}, {schedule}: {} ({waves} waves, queues of {queue} paths)",
+                    "{setting}, {schedule}: {} ({waves} waves, queues of {queue} paths, \
+                     auto's waves above {waves_above} photons a light)",
                     serde_json::to_value(run)
                         .ok()
                         .and_then(|v| v.as_str().map(str::to_string))
@@ -127,6 +139,8 @@ fn main() {
             let mut wave_trace: Vec<Vec<f64>> = Vec::new();
             let mut wave_sort: Vec<Vec<f64>> = Vec::new();
             let mut sort_phase: Vec<Vec<f64>> = Vec::new();
+            // `trace_indirect` in the lights `auto` traces in one launch each
+            let mut single: Vec<Vec<f64>> = Vec::new();
             let (mut wall, mut technique) = (Vec::new(), Vec::new());
             let mut timing = String::new();
             let mut stored = 0;
@@ -150,6 +164,7 @@ fn main() {
                         (&mut wave_trace, &gi.trace_ms_per_wave),
                         (&mut wave_sort, &gi.sort_ms_per_wave),
                         (&mut sort_phase, &gi.sort_ms_per_phase),
+                        (&mut single, &vec![gi.single_ms]),
                     ] {
                         parts.resize(ms.len(), Vec::new());
                         parts.iter_mut().zip(ms).for_each(|(v, &m)| v.push(m));
@@ -191,6 +206,7 @@ fn main() {
                 ("trace_indirect per wave", wave_trace),
                 ("sort per wave", wave_sort),
                 ("sort per launch (histogram / scan / scatter)", sort_phase),
+                ("trace_indirect in lights of one launch", single),
             ] {
                 if !parts.is_empty() {
                     let ms: Vec<String> = parts

@@ -424,6 +424,13 @@ fn make_plan(
     correct: bool,
 ) -> FramePlan {
     let any = rsms.iter().any(|r| r.photons > 0);
+    // the most launches a chunk of a light's photons takes (1: no light in waves)
+    let waves = rsms
+        .iter()
+        .filter(|r| r.photons > 0)
+        .map(|r| s.light_waves(schedule, known.then_some(r.photons)))
+        .max()
+        .unwrap_or(1);
     let pass = |name: &str, runs: bool, reason: &str| PassPlan {
         name: name.into(),
         runs,
@@ -477,8 +484,8 @@ fn make_plan(
             },
             pass(
                 "dispatch_args",
-                (planned || s.waves(schedule) > 1) && any,
-                if s.waves(schedule) > 1 {
+                (planned || waves > 1) && any,
+                if waves > 1 {
                     "the indirect waves' launches from their queues' lengths (and the lights' \
                      from the device plan's counts until it is read back)"
                 } else if planned {
@@ -492,7 +499,10 @@ fn make_plan(
             pass(
                 "trace_indirect",
                 any,
-                if s.waves(schedule) > 1 {
+                if waves > 1 && s.indirect_schedule == IndirectSchedule::Auto {
+                    "some light has power; its paths in per-bounce waves, a light of at \
+                     most auto_waves_above_photons photons in one launch"
+                } else if waves > 1 {
                     "some light has power; its paths in per-bounce waves"
                 } else {
                     photons
@@ -500,10 +510,10 @@ fn make_plan(
             ),
             pass(
                 "sort_indirect_paths",
-                any && s.waves(schedule) > 1 && schedule == IndirectSchedule::SortedWaves,
+                any && waves > 1 && schedule == IndirectSchedule::SortedWaves,
                 if schedule != IndirectSchedule::SortedWaves {
                     "indirect_schedule is not sorted_waves"
-                } else if s.waves(schedule) > 1 {
+                } else if waves > 1 {
                     "each indirect wave's queue in key order (direction octant, origin cell)"
                 } else {
                     "a single wave: no queue"
@@ -782,7 +792,9 @@ impl PhotonGiPipeline {
     /// Records the RSM (unless the buffers hold it: `rendered`) and the trace passes of
     /// light `r` (the photons go to `b.photons`): `bound` threads each, or launched
     /// from the light's record of `b.dispatch` with `bound` as the limit (`indirect`),
-    /// the light's photon count and the quanta from the device plan.
+    /// the light's photon count and the quanta from the device plan. Returns each
+    /// chunk's launches of `trace_indirect` (1: the single kernel; more: the waves), in
+    /// recorded order.
     fn record_light(
         &self,
         rec: &mut Recording,
@@ -791,7 +803,7 @@ impl PhotonGiPipeline {
         r: &LightRsm,
         (bound, indirect, rendered): (u32, bool, bool),
         store: u32,
-    ) {
+    ) -> Vec<u32> {
         let b = &self.buffers;
         let scene = host.scene();
         let dispatch = indirect.then_some(DispatchRecord {
@@ -847,20 +859,25 @@ impl PhotonGiPipeline {
             dispatch,
             waves: None,
         };
-        let Some(w) = &b.waves else {
+        // the single kernel also for a light of few photons under `auto` (its count
+        // known on the host: `bound`)
+        let waves = self
+            .settings
+            .light_waves(self.schedule, (!indirect).then_some(bound));
+        let Some(w) = b.waves.as_ref().filter(|_| waves > 1) else {
             rec.kernel_patched(single, patches);
-            return;
+            return vec![1];
         };
         // per-bounce waves: wave k traces segment k of the paths queued for it (the last
         // wave the rest of each path), launched from its queue's length on the device;
         // chunk by chunk of the light's photons when the queues hold fewer (every chunk
         // of the bound where the count is the device's, empty ones launching nothing)
-        let chunks = if indirect {
+        let light_chunks = if indirect {
             w.chunks
         } else {
             bound.div_ceil(w.chunk).clamp(1, w.chunks)
         };
-        for c in 0..chunks {
+        for c in 0..light_chunks {
             // the chunk's first wave: the light's record, or the chunk's own
             let first_wave = match (dispatch, w.chunk_rows) {
                 (Some(_), Some((_, args))) => Some(DispatchRecord {
@@ -879,6 +896,7 @@ impl PhotonGiPipeline {
             };
             self.record_waves(rec, host, w, chunk, first_wave, &patches);
         }
+        vec![waves; light_chunks as usize]
     }
 
     /// Records the waves of one chunk of a light's photons (`single`'s parameters, its
@@ -1294,6 +1312,8 @@ impl Pipeline for PhotonGiPipeline {
         };
         let total = self.settings.total_photons().min(u32::MAX as u64) as u32;
         let deposit = self.settings.estimator == IndirectEstimator::Deposit;
+        // each chunk's launches of `trace_indirect`, for the frame's wave statistics
+        let mut chunks = Vec::new();
         for r in traced.iter().rev().filter_map(|&i| rsms.get(i as usize)) {
             let i = r.light;
             // threads: the light's photons where known, else the device plan's count
@@ -1306,7 +1326,14 @@ impl Pipeline for PhotonGiPipeline {
             if deposit {
                 // each light's float photons deposited before the next light's are traced
                 rec.clear(b.photon_count);
-                self.record_light(&mut rec, host, &seeded, r, launch, gi_store::FLOAT);
+                chunks.extend(self.record_light(
+                    &mut rec,
+                    host,
+                    &seeded,
+                    r,
+                    launch,
+                    gi_store::FLOAT,
+                ));
                 rec.kernel_patched(
                     DepositScreen {
                         params: self.deposit_params(cam),
@@ -1322,7 +1349,14 @@ impl Pipeline for PhotonGiPipeline {
                     )],
                 );
             } else {
-                self.record_light(&mut rec, host, &seeded, r, launch, gi_store::PACKED);
+                chunks.extend(self.record_light(
+                    &mut rec,
+                    host,
+                    &seeded,
+                    r,
+                    launch,
+                    gi_store::PACKED,
+                ));
             }
             frame.stats.batches += 1;
             frame.push(rec, r.photons as u64);
@@ -1340,9 +1374,8 @@ impl Pipeline for PhotonGiPipeline {
             lights: rsms.iter().map(|r| (r.faces.len(), r.sees)).collect(),
             side: self.settings.rsm_size,
             decided: Arc::clone(&self.decided),
-            waves: b.waves.map_or((0, false), |w| {
-                (self.settings.waves(self.schedule), w.buckets.is_some())
-            }),
+            chunks,
+            sorted: b.waves.is_some_and(|w| w.buckets.is_some()),
         };
         frame.end_read(EndRead::Own(Arc::new(end)));
         // this frame's blend is the next frame's history
@@ -1444,8 +1477,10 @@ struct PlanEnd {
     /// RSM side (texels).
     side: u32,
     decided: Arc<Mutex<Option<(u64, u32)>>>,
-    /// Waves per chunk (0: the single kernel) and whether each queue is sorted.
-    waves: (u32, bool),
+    /// Each chunk's launches of `trace_indirect` in recorded order (1: a single launch;
+    /// more: waves) and whether each queue is sorted.
+    chunks: Vec<u32>,
+    sorted: bool,
 }
 
 impl FrameEnd for PlanEnd {
@@ -1455,7 +1490,7 @@ impl FrameEnd for PlanEnd {
         times: &[crate::backend::PassTime],
         stats: &mut crate::frame::stats::FrameStats,
     ) {
-        if let Some(s) = PhotonGiStats::from_times(self.waves.0, self.waves.1, times) {
+        if let Some(s) = PhotonGiStats::from_times(&self.chunks, self.sorted, times) {
             s.put(stats);
         }
         let words = |at: usize| -> Vec<u32> {

@@ -53,9 +53,11 @@ pub enum IndirectSchedule {
     /// one chunk of the queues (`indirect_queue_paths`: several chunks each pay the
     /// waves' small last launches, which cost what they saved), `single_kernel`
     /// otherwise (short paths: the waves' launches and queue traffic cost more than the
-    /// idle lanes they save), and always on the CPU backend (no lanes to idle). A
-    /// pipeline resolves it by its device when it is made
-    /// ([`PhotonGiSettings::schedule`]). The default.
+    /// idle lanes they save), and always on the CPU backend (no lanes to idle). Where
+    /// the waves run, a light whose photon count the host knows to be at most
+    /// `auto_waves_above_photons` still takes the single kernel
+    /// ([`PhotonGiSettings::light_waves`]). A pipeline resolves it by its device when it
+    /// is made ([`PhotonGiSettings::schedule`]). The default.
     #[default]
     Auto,
     /// One launch: a thread follows its path from the RSM photon to its end.
@@ -138,6 +140,14 @@ pub struct PhotonGiSettings {
     /// for any value. Default 2^22 (Smal 2019's high setting, 1732^2 photons, in one
     /// chunk: 288 MB for both queues; the default 1024^2 photons: 96 MiB).
     pub indirect_queue_paths: u32,
+    /// Photons of a light above which the `auto` schedule's waves trace it; a light of
+    /// at most this many (its count known on the host) takes the single kernel. Default
+    /// 0: every light in waves. A candidate is 2^17, about what a large GPU runs at once
+    /// (an H100 or H200, 132 multiprocessors: 88,704 threads of `trace_indirect` at its
+    /// 96 registers, 101,376 at 80): a launch of no more photons has every path resident
+    /// from its start, so no warp waits for another's idle lanes and the waves' own
+    /// launches and queue traffic may cost more than they save; not yet timed on a GPU.
+    pub auto_waves_above_photons: u32,
 }
 
 impl Default for PhotonGiSettings {
@@ -168,6 +178,7 @@ impl Default for PhotonGiSettings {
             indirect_schedule: IndirectSchedule::Auto,
             indirect_waves: 8,
             indirect_queue_paths: 1 << 22,
+            auto_waves_above_photons: 0,
         }
     }
 }
@@ -213,6 +224,21 @@ impl PhotonGiSettings {
             IndirectSchedule::Waves | IndirectSchedule::SortedWaves => {
                 self.indirect_waves.min(self.max_segments).max(1)
             }
+        }
+    }
+
+    /// Launches of `trace_indirect` per chunk of a light's photons: [`Self::waves`],
+    /// but 1 under the `auto` schedule for a light of `photons` (`None`: not known on the
+    /// host, the device plan's count) at most `auto_waves_above_photons`.
+    pub fn light_waves(&self, schedule: IndirectSchedule, photons: Option<u32>) -> u32 {
+        match photons {
+            Some(n)
+                if self.indirect_schedule == IndirectSchedule::Auto
+                    && n <= self.auto_waves_above_photons =>
+            {
+                1
+            }
+            _ => self.waves(schedule),
         }
     }
 
@@ -327,5 +353,35 @@ mod tests {
         let json: PhotonGiSettings =
             serde_json::from_value(serde_json::json!({ "indirect_schedule": "auto" })).unwrap();
         assert_eq!(json.indirect_schedule, IndirectSchedule::Auto);
+    }
+
+    /// Under `auto`'s waves a light of known photons up to `auto_waves_above_photons`
+    /// takes the single kernel, an unknown count or a larger one the waves; a named
+    /// schedule keeps its waves for every light.
+    #[test]
+    fn auto_traces_a_light_of_few_photons_in_one_launch() {
+        let auto = PhotonGiSettings {
+            auto_waves_above_photons: 1 << 17,
+            ..Default::default()
+        };
+        assert_eq!(
+            PhotonGiSettings::default().light_waves(IndirectSchedule::Waves, Some(1)),
+            8
+        );
+        let waves = auto.schedule(DeviceType::DiscreteGpu);
+        assert_eq!(waves, IndirectSchedule::Waves);
+        let above = auto.auto_waves_above_photons;
+        assert_eq!(auto.light_waves(waves, Some(above)), 1);
+        assert_eq!(auto.light_waves(waves, Some(0)), 1);
+        assert_eq!(auto.light_waves(waves, Some(above + 1)), 8);
+        assert_eq!(auto.light_waves(waves, None), 8);
+        let single = auto.schedule(DeviceType::Cpu);
+        assert_eq!(auto.light_waves(single, None), 1);
+        let named = PhotonGiSettings {
+            indirect_schedule: IndirectSchedule::SortedWaves,
+            ..auto
+        };
+        let sorted = named.schedule(DeviceType::DiscreteGpu);
+        assert_eq!(named.light_waves(sorted, Some(1)), 8);
     }
 }

@@ -6,8 +6,9 @@ use crate::frame::stats::FrameStats;
 use serde::{Deserialize, Serialize};
 
 /// Where the per-bounce waves' time goes: present where a frame runs waves (`waves` or
-/// `sorted_waves` with more than one wave; `auto` where it resolves to them), absent for
-/// the single kernel and where the frame timed no kernel. Only `trace_indirect`'s and
+/// `sorted_waves` with more than one wave; `auto` where it resolves to them and some
+/// light has more photons than one launch takes), absent for the single kernel and where
+/// the frame timed no kernel. Only `trace_indirect`'s and
 /// `sort_indirect_paths`' launches are in it: each later wave's `dispatch_args` and the
 /// sort's bucket clear are not.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -18,6 +19,10 @@ pub struct PhotonGiStats {
     /// the last wave the rest of each path), summed over the lights and their chunks, in
     /// ms of the frame's `timing` (device timestamps or host wall clock).
     pub trace_ms_per_wave: Vec<f64>,
+    /// `trace_indirect`'s time in the lights that `auto` traced in one launch each
+    /// (photons up to `auto_waves_above_photons`), in ms; 0 without them.
+    #[serde(default)]
+    pub single_ms: f64,
     /// `sort_indirect_paths`' time before each wave (its three launches), in ms; index 0
     /// is 0 (the RSM photons are not sorted); empty without sorting.
     pub sort_ms_per_wave: Vec<f64>,
@@ -42,21 +47,26 @@ impl PhotonGiStats {
         stats.put_own(Self::KEY, self);
     }
 
-    /// The waves' times from a frame's kernel times in recorded order: every chunk
-    /// launches `trace_indirect` once a wave, waves in order, and nothing else launches
-    /// it, so the j-th `trace_indirect` of the frame is wave `j % waves`; a sort belongs
-    /// to the wave after it, and its launches come as histogram, scan, scatter. `None`
-    /// without waves, without any `trace_indirect` time (a device that gives no
-    /// timestamps), or where the launches do not come in whole chunks or the sort's in
-    /// whole triples (times of another shape than the recording's).
-    pub fn from_times(waves: u32, sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
+    /// The waves' times from a frame's kernel times in recorded order. `chunks` lists
+    /// the frame's chunks of a light's photons in recorded order, each by its launches
+    /// of `trace_indirect` (1: the light's single launch; more: its waves, in order), and
+    /// nothing else launches it, so the j-th `trace_indirect` of the frame is known; a
+    /// sort belongs to the wave after it, and its launches come as histogram, scan,
+    /// scatter. `None` without waves, without the recording's `trace_indirect` times (a
+    /// device that gives no timestamps), or where the sort's launches do not come in
+    /// whole triples before waves (times of another shape than the recording's).
+    pub fn from_times(chunks: &[u32], sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
+        let waves = chunks.iter().copied().filter(|&w| w > 1).max()?;
         let n = waves as usize;
-        if n == 0 {
-            return None;
-        }
+        // each launch's wave, `None` for a single launch
+        let launches: Vec<Option<usize>> = chunks
+            .iter()
+            .flat_map(|&w| (0..w as usize).map(move |k| (w > 1).then_some(k)))
+            .collect();
         let mut s = PhotonGiStats {
             waves,
             trace_ms_per_wave: vec![0.0; n],
+            single_ms: 0.0,
             sort_ms_per_wave: if sorted { vec![0.0; n] } else { Vec::new() },
             sort_ms_per_phase: if sorted { vec![0.0; 3] } else { Vec::new() },
         };
@@ -65,18 +75,21 @@ impl PhotonGiStats {
             let ms = t.seconds * 1e3;
             match t.kernel {
                 "trace_indirect" => {
-                    s.trace_ms_per_wave[traced % n] += ms;
+                    match *launches.get(traced)? {
+                        Some(k) => s.trace_ms_per_wave[k] += ms,
+                        None => s.single_ms += ms,
+                    }
                     traced += 1;
                 }
                 "sort_indirect_paths" if sorted => {
-                    s.sort_ms_per_wave[traced % n] += ms;
+                    s.sort_ms_per_wave[(*launches.get(traced)?)?] += ms;
                     s.sort_ms_per_phase[sorts % 3] += ms;
                     sorts += 1;
                 }
                 _ => {}
             }
         }
-        (traced > 0 && traced.is_multiple_of(n) && sorts.is_multiple_of(3)).then_some(s)
+        (traced == launches.len() && sorts.is_multiple_of(3)).then_some(s)
     }
 }
 
@@ -93,10 +106,14 @@ mod tests {
 
     #[test]
     fn the_waves_of_every_chunk_add_up_by_wave() {
-        // two chunks of three sorted waves, other kernels between them
+        // two chunks of three sorted waves, a light's single launch between them, other
+        // kernels between them
         let mut times = vec![at("sample_rsm", 5.0)];
         for chunk in 0..2 {
             let c = chunk as f64;
+            if chunk == 1 {
+                times.push(at("trace_indirect", 100.0));
+            }
             times.push(at("trace_indirect", 1.0 + c));
             for k in 1..3 {
                 times.push(at("dispatch_args", 7.0));
@@ -110,24 +127,31 @@ mod tests {
             }
         }
         times.push(at("splat_photons", 3.0));
-        let s = PhotonGiStats::from_times(3, true, &times).expect("whole chunks");
+        let chunks = [3, 1, 3];
+        let s = PhotonGiStats::from_times(&chunks, true, &times).expect("whole chunks");
+        assert_eq!(s.waves, 3);
         assert_eq!(s.trace_ms_per_wave, vec![3.0, 21.0, 41.0]);
+        assert_eq!(s.single_ms, 100.0);
         assert_eq!(s.sort_ms_per_wave, vec![0.0, 3.0, 6.0]);
         // each phase over both chunks' two sorts: 2 x (0.25 + 0.5) x (phase + 1)
         assert_eq!(s.sort_ms_per_phase, vec![1.5, 3.0, 4.5]);
-        let unsorted = PhotonGiStats::from_times(3, false, &times).expect("whole chunks");
+        let unsorted = PhotonGiStats::from_times(&chunks, false, &times).expect("whole chunks");
         assert!(unsorted.sort_ms_per_wave.is_empty() && unsorted.sort_ms_per_phase.is_empty());
-        // a partial chunk, or a sort without its scatter: not the recording's shape
-        assert_eq!(PhotonGiStats::from_times(3, false, &times[..3]), None);
+        // a partial chunk, a launch more than recorded, a sort before a single launch or
+        // without its scatter: not the recording's shape
+        assert_eq!(PhotonGiStats::from_times(&chunks, false, &times[..3]), None);
+        assert_eq!(PhotonGiStats::from_times(&[3, 3], false, &times), None);
+        assert_eq!(PhotonGiStats::from_times(&[3, 3, 1], true, &times), None);
         let mut short = times.clone();
         let last_sort = short
             .iter()
             .rposition(|t| t.kernel == "sort_indirect_paths")
             .expect("a sort");
         short.remove(last_sort);
-        assert_eq!(PhotonGiStats::from_times(3, true, &short), None);
-        assert_eq!(PhotonGiStats::from_times(0, false, &times), None);
-        // no kernel timed
-        assert_eq!(PhotonGiStats::from_times(3, true, &[]), None);
+        assert_eq!(PhotonGiStats::from_times(&chunks, true, &short), None);
+        // no waves, or no kernel timed
+        assert_eq!(PhotonGiStats::from_times(&[1, 1], false, &times), None);
+        assert_eq!(PhotonGiStats::from_times(&[], false, &times), None);
+        assert_eq!(PhotonGiStats::from_times(&chunks, true, &[]), None);
     }
 }
