@@ -114,12 +114,16 @@ fn main() {
             let setting = match s.schedule(backend.capabilities().device_type) {
                 IndirectSchedule::SingleKernel => format!("{setting}, {schedule}: single_kernel"),
                 run => format!(
-                    "{setting}, {schedule}: {} ({waves} waves, queues of {queue} paths, \
-                     auto's waves above {waves_above} photons a light)",
+                    "{setting}, {schedule}: {} ({waves} waves, queues of {queue} paths{})",
                     serde_json::to_value(run)
                         .ok()
                         .and_then(|v| v.as_str().map(str::to_string))
-                        .unwrap_or_default()
+                        .unwrap_or_default(),
+                    if schedule == "auto" {
+                        format!(", the waves for lights of over {waves_above} photons")
+                    } else {
+                        String::new()
+                    }
                 ),
             };
             let mut t = match PhotonGi::new(backend.as_mut(), &scene, s) {
@@ -208,7 +212,8 @@ fn main() {
                 ("sort per launch (histogram / scan / scatter)", sort_phase),
                 ("trace_indirect in lights of one launch", single),
             ] {
-                if !parts.is_empty() {
+                // (lights in one launch: `auto` with `auto_waves_above_photons` alone)
+                if parts.iter().flatten().any(|&ms| ms != 0.0) {
                     let ms: Vec<String> = parts
                         .iter_mut()
                         .map(|v| format!("{:.3}", median(v)))

@@ -424,13 +424,14 @@ fn make_plan(
     correct: bool,
 ) -> FramePlan {
     let any = rsms.iter().any(|r| r.photons > 0);
-    // the most launches a chunk of a light's photons takes (1: no light in waves)
-    let waves = rsms
+    // each light's launches a chunk of its photons (1: the single kernel)
+    let launches: Vec<u32> = rsms
         .iter()
         .filter(|r| r.photons > 0)
         .map(|r| s.light_waves(schedule, known.then_some(r.photons)))
-        .max()
-        .unwrap_or(1);
+        .collect();
+    let waves = launches.iter().copied().max().unwrap_or(1);
+    let some_single = launches.contains(&1);
     let pass = |name: &str, runs: bool, reason: &str| PassPlan {
         name: name.into(),
         runs,
@@ -484,13 +485,15 @@ fn make_plan(
             },
             pass(
                 "dispatch_args",
-                (planned || waves > 1) && any,
+                ((planned && !known) || waves > 1) && any,
                 if waves > 1 {
                     "the indirect waves' launches from their queues' lengths (and the lights' \
                      from the device plan's counts until it is read back)"
-                } else if planned {
+                } else if planned && !known {
                     "the lights' launch records from the device plan's counts, until it is \
                      read back"
+                } else if planned {
+                    "the device plan is read back: the lights launch their photons directly"
                 } else {
                     "the plan is the host's: the lights launch their photons directly"
                 },
@@ -499,7 +502,7 @@ fn make_plan(
             pass(
                 "trace_indirect",
                 any,
-                if waves > 1 && s.indirect_schedule == IndirectSchedule::Auto {
+                if waves > 1 && some_single {
                     "some light has power; its paths in per-bounce waves, a light of at \
                      most auto_waves_above_photons photons in one launch"
                 } else if waves > 1 {
@@ -894,7 +897,7 @@ impl PhotonGiPipeline {
                 },
                 ..single
             };
-            self.record_waves(rec, host, w, chunk, first_wave, &patches);
+            self.record_waves(rec, host, w, chunk, (first_wave, waves), &patches);
         }
         vec![waves; light_chunks as usize]
     }
@@ -907,13 +910,10 @@ impl PhotonGiPipeline {
         host: &FrameHost,
         w: &WaveBuffers,
         single: TraceIndirect,
-        first_wave: Option<DispatchRecord>,
+        (first_wave, waves): (Option<DispatchRecord>, u32),
         patches: &[ParamPatch],
     ) {
-        let (waves, max_segments) = (
-            self.settings.waves(self.schedule),
-            self.settings.max_segments,
-        );
+        let max_segments = self.settings.max_segments;
         rec.clear(w.path_counts);
         for k in 0..waves {
             let dispatch = if k == 0 {

@@ -141,12 +141,14 @@ pub struct PhotonGiSettings {
     /// chunk: 288 MB for both queues; the default 1024^2 photons: 96 MiB).
     pub indirect_queue_paths: u32,
     /// Photons of a light above which the `auto` schedule's waves trace it; a light of
-    /// at most this many (its count known on the host) takes the single kernel. Default
-    /// 0: every light in waves. A candidate is 2^17, about what a large GPU runs at once
-    /// (an H100 or H200, 132 multiprocessors: 88,704 threads of `trace_indirect` at its
-    /// 96 registers, 101,376 at 80): a launch of no more photons has every path resident
-    /// from its start, so no warp waits for another's idle lanes and the waves' own
-    /// launches and queue traffic may cost more than they save; not yet timed on a GPU.
+    /// at most this many (its count known on the host, from the frame after the plan is
+    /// read back) takes the single kernel, whose program is built at its first use.
+    /// Default 0: every light in waves. A candidate is 2^17, about 1.3 times what a
+    /// large GPU runs at once (an H100 or H200, 132 multiprocessors, workgroups of 64:
+    /// 84,480 threads of `trace_indirect` at its 96 registers, 101,376 at 80): a launch
+    /// of no more photons has (nearly) every path resident from its start, so few warps
+    /// wait for another's idle lanes and the waves' own launches and queue traffic may
+    /// cost more than they save; not yet timed on a GPU.
     pub auto_waves_above_photons: u32,
 }
 

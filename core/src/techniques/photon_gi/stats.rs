@@ -7,13 +7,15 @@ use serde::{Deserialize, Serialize};
 
 /// Where the per-bounce waves' time goes: present where a frame runs waves (`waves` or
 /// `sorted_waves` with more than one wave; `auto` where it resolves to them and some
-/// light has more photons than one launch takes), absent for the single kernel and where
-/// the frame timed no kernel. Only `trace_indirect`'s and
+/// light has more photons than `auto_waves_above_photons` or a count not yet known),
+/// absent for the single kernel (also where `auto` traced every light in one launch) and
+/// where the frame timed no kernel. Only `trace_indirect`'s and
 /// `sort_indirect_paths`' launches are in it: each later wave's `dispatch_args` and the
 /// sort's bucket clear are not.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct PhotonGiStats {
-    /// Waves per chunk of a light's photons: `indirect_waves`, at most `max_segments`.
+    /// Waves per chunk of a light's photons traced in waves: `indirect_waves`, at most
+    /// `max_segments`.
     pub waves: u32,
     /// `trace_indirect`'s time per wave (index k: segment k of every path still going,
     /// the last wave the rest of each path), summed over the lights and their chunks, in
@@ -52,9 +54,10 @@ impl PhotonGiStats {
     /// of `trace_indirect` (1: the light's single launch; more: its waves, in order), and
     /// nothing else launches it, so the j-th `trace_indirect` of the frame is known; a
     /// sort belongs to the wave after it, and its launches come as histogram, scan,
-    /// scatter. `None` without waves, without the recording's `trace_indirect` times (a
-    /// device that gives no timestamps), or where the sort's launches do not come in
-    /// whole triples before waves (times of another shape than the recording's).
+    /// scatter. `None` without waves, where the `trace_indirect` times are not one a
+    /// recorded launch (a device that gives no timestamps), or where the sort's launches
+    /// are not a whole number of triples, each before a wave (times of another shape
+    /// than the recording's).
     pub fn from_times(chunks: &[u32], sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
         let waves = chunks.iter().copied().filter(|&w| w > 1).max()?;
         let n = waves as usize;
