@@ -485,15 +485,13 @@ fn make_plan(
             },
             pass(
                 "dispatch_args",
-                ((planned && !known) || waves > 1) && any,
+                (planned || waves > 1) && any,
                 if waves > 1 {
                     "the indirect waves' launches from their queues' lengths (and the lights' \
                      from the device plan's counts until it is read back)"
-                } else if planned && !known {
+                } else if planned {
                     "the lights' launch records from the device plan's counts, until it is \
                      read back"
-                } else if planned {
-                    "the device plan is read back: the lights launch their photons directly"
                 } else {
                     "the plan is the host's: the lights launch their photons directly"
                 },
