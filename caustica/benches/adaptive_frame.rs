@@ -29,10 +29,10 @@ use caustica::techniques::adaptive_caustics::{
 };
 use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, EmissionPlane};
 use caustica::Technique;
-use caustica::{open_backend, BACKEND_NAMES};
+use caustica::BACKEND_NAMES;
 use caustica::{FrameSettings, PlaneSettings, TraceSettings, TraversalSettings};
 use caustica::{Output, Outputs};
-use common::{env_or, median, warm_up, warmup_ms};
+use common::{env_or, median, opened_backends, warm_up, warmup_ms};
 
 const PHOTON_PASSES: &[&str] = &[
     "seed_clusters",
@@ -83,14 +83,7 @@ fn main() {
         "AdaptiveCaustics vs the dense plane, median of {frames} frames after {} ms of warm-up frames",
         warmup_ms()
     );
-    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let mut backend = match open_backend(name) {
-            Ok(b) => b,
-            Err(e) => {
-                println!("{name}: skipped ({e})");
-                continue;
-            }
-        };
+    for (name, mut backend) in opened_backends(&wanted) {
         let device = backend.capabilities().device;
         for (scene_name, plane) in [
             ("spot-glass", EmissionPlane::LightCone),

@@ -26,10 +26,10 @@ use caustica::scene::builtin::builtin;
 use caustica::scene::limits::tessellated_size;
 use caustica::scene::{Scene, Shape};
 use caustica::techniques::caustic_map::{CausticMap, CausticMapSettings, FresnelSplit, MapGather};
-use caustica::{open_backend, BACKEND_NAMES};
+use caustica::BACKEND_NAMES;
 use caustica::{AtlasSettings, FrameSettings, PlaneSettings, TraceSettings};
 use caustica::{Output, Outputs};
-use common::{env_or, median, warm_up, warmup_ms};
+use common::{env_or, median, opened_backends, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
 const BUDGET_PASSES: &[&str] = &[
@@ -94,14 +94,7 @@ fn main() {
         "CausticMap frame, {side}x{side} photons, median of {frames} frames after {} ms of warm-up frames",
         warmup_ms()
     );
-    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let mut backend = match open_backend(name) {
-            Ok(b) => b,
-            Err(e) => {
-                println!("{name}: skipped ({e})");
-                continue;
-            }
-        };
+    for (name, mut backend) in opened_backends(&wanted) {
         let device = backend.capabilities().device;
         let splits: Vec<FresnelSplit> = env_or("CAUSTICA_BENCH_SPLITS", "deterministic,stochastic")
             .split(',')

@@ -21,8 +21,8 @@ use caustica::glam::{Quat, Vec3};
 use caustica::scene::builtin::builtin;
 use caustica::scene::{Light, Object, Scene, Shape, Transform};
 use caustica::techniques::create;
-use caustica::{open_backend, BACKEND_NAMES};
-use common::{env_or, median};
+use caustica::BACKEND_NAMES;
+use common::{env_or, median, opened_backends};
 use std::time::Instant;
 
 /// `name` with its specular spheres as instances and a static diffuse sphere of
@@ -117,14 +117,7 @@ fn main() {
         "Dynamic Sspm frame, {w}x{h}, {side}x{side} photons, static sphere of {big}x{big} \
          segments, median of {frames} frames after one warm-up"
     );
-    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let mut backend = match open_backend(name) {
-            Ok(b) => b,
-            Err(e) => {
-                println!("{name}: skipped ({e})");
-                continue;
-            }
-        };
+    for (name, mut backend) in opened_backends(&wanted) {
         let device = backend.capabilities().device;
         for scene_name in ["sphere", "cornell"] {
             let scene = dynamic_scene(scene_name, w, h, big);

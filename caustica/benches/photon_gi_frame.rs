@@ -28,8 +28,8 @@ use caustica::techniques::photon_gi::{
     IndirectSchedule, PhotonGi, PhotonGiSettings, PhotonGiStats,
 };
 use caustica::FrameSettings;
-use caustica::{open_backend, BACKEND_NAMES};
-use common::{env_or, median, warm_up, warmup_ms};
+use caustica::BACKEND_NAMES;
+use common::{env_or, median, opened_backends, warm_up, warmup_ms};
 use std::collections::BTreeMap;
 
 fn main() {
@@ -70,14 +70,7 @@ fn main() {
         "PhotonGi frame, rooms, {w}x{h}, median of {frames} frames after {} ms of warm-up frames",
         warmup_ms()
     );
-    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let mut backend = match open_backend(name) {
-            Ok(b) => b,
-            Err(e) => {
-                println!("{name}: skipped ({e})");
-                continue;
-            }
-        };
+    for (name, mut backend) in opened_backends(&wanted) {
         let runs = settings.split(',').map(str::trim).flat_map(|setting| {
             schedules
                 .split(',')

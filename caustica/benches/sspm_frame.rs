@@ -26,8 +26,8 @@
 mod common;
 use caustica::internals::device::device_scene::DeviceScene;
 use caustica::internals::device::layout::GpuCamera;
-use caustica::{open_backend, BACKEND_NAMES};
-use common::{env_or, median, warm_up, warmup_ms};
+use caustica::BACKEND_NAMES;
+use common::{env_or, median, opened_backends, warm_up, warmup_ms};
 
 use caustica::internals::kernels::{DirectLight, PrimaryGbuffer};
 use caustica::internals::recording::Recording;
@@ -81,14 +81,7 @@ fn main() {
     if !extra.is_empty() {
         println!("settings: {}", serde_json::Value::Object(extra.clone()));
     }
-    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let mut backend = match open_backend(name) {
-            Ok(b) => b,
-            Err(e) => {
-                println!("{name}: skipped ({e})");
-                continue;
-            }
-        };
+    for (name, mut backend) in opened_backends(&wanted) {
         let caps = backend.capabilities();
         for (scene_name, filter) in ["sphere", "cornell"]
             .into_iter()

@@ -706,21 +706,7 @@ pub fn trace_photon_variant<
                     // is the only path without a specular interaction
                     return (PathEnd::NoSpecular, bounce + 1);
                 }
-                let ph = if store == photon_store::SURFACE {
-                    Photon {
-                        position: [s.uv.x, s.uv.y, 0.0],
-                        hit_distance: hit.t,
-                        flux: flux.to_array(),
-                        direction: hit.triangle,
-                    }
-                } else {
-                    Photon {
-                        position: s.position.to_array(),
-                        hit_distance: hit.t,
-                        flux: flux.to_array(),
-                        direction: pack_unit_vector(dir),
-                    }
-                };
+                let ph = stored_photon(store, &s, &hit, flux, dir);
                 return (PathEnd::Stored(ph), bounce + 1);
             }
             material_kind::MIRROR => {

@@ -35,3 +35,20 @@ pub fn warm_up<E>(mut frame: impl FnMut() -> Result<(), E>) -> Result<(), E> {
         }
     }
 }
+
+/// The backends named in the comma-separated list `wanted`, each opened as its turn comes
+/// (one device at a time); one that does not open is reported ("skipped") and passed over.
+#[allow(dead_code)]
+pub fn opened_backends(wanted: &str) -> impl Iterator<Item = (&str, Box<dyn caustica::Backend>)> {
+    wanted
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .filter_map(|name| match caustica::open_backend(name) {
+            Ok(b) => Some((name, b)),
+            Err(e) => {
+                println!("{name}: skipped ({e})");
+                None
+            }
+        })
+}
