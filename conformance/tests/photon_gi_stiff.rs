@@ -175,9 +175,44 @@ fn cases() -> Vec<(&'static str, Scene)> {
     ]
 }
 
+const FOUR_PI: f64 = 4.0 * std::f64::consts::PI;
+
+/// Flux is kept along albedo-1 paths: roulette survives with probability 1 and scales
+/// nothing, so each stored photon carries its initial photon's flux, which importance
+/// sampling makes the same for all (a grey light on grey walls: a texel's probability is
+/// its share of the flux), the RSM's arriving flux over the photon count. The RSM's
+/// texels receive the light's `I x 4 pi` (the frame's `emitted_flux`) up to their solid
+/// angles' centre rule, which this computes (`texel_arriving_flux` over the six faces);
+/// the rest is the f32 rounding of a photon's flux (the pyramid's sums and ratios, a few
+/// dozen roundings of 2^-24: 1e-5 covers them) and half a fixed-point quantum a stored
+/// photon.
+fn flux_kept_along_albedo_one_paths(st: &FrameStats, what: &str) {
+    use caustica_core::math::rsm::texel_arriving_flux;
+    let side = RSM_SIZE;
+    let face: f64 = (0..side * side)
+        .map(|k| texel_arriving_flux(Vec3::ONE, 1.0, k % side, k / side, side, 1.0).y as f64)
+        .sum();
+    let rule = (6.0 * face - FOUR_PI).abs() / FOUR_PI;
+    assert_eq!(st.emitted_flux, [FOUR_PI; 3], "{what}");
+    assert!(st.photons_stored > 0, "{what}: nothing stored");
+    let per_photon = st.emitted_flux[1] / st.photons_emitted as f64;
+    for c in 0..3 {
+        let per_stored = st.stored_flux[c] / st.photons_stored as f64;
+        let allow = per_photon * (rule + 1e-5) + 0.5 * st.flux_quantum;
+        assert!(
+            (per_stored - per_photon).abs() <= allow,
+            "{what}: channel {c}: a stored photon carries {per_stored:e} W, an emitted one \
+             {per_photon:e} (allowed {allow:e}: the RSM's solid angles off by {rule:e})"
+        );
+    }
+}
+
+/// RSM side (texels) of the cases' frames.
+const RSM_SIZE: u32 = 32;
+
 fn run(b: &mut dyn Backend, scene: &Scene) -> (FrameStats, Vec<[f32; 4]>) {
     let settings = serde_json::json!({
-        "photons_w": 96, "photons_h": 96, "rsm_size": 32, "bounces": BOUNCES,
+        "photons_w": 96, "photons_h": 96, "rsm_size": RSM_SIZE, "bounces": BOUNCES,
         "temporal": false, "atrous_iterations": 0
     });
     let mut t = create("photon-gi", b, scene, &settings).expect("create");
@@ -200,9 +235,11 @@ fn photon_gi_stiff_cases_on_every_backend() {
             );
             let total: f64 = img.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum();
             eprintln!(
-                "{what}: photons per light {:?}, stored {}, ends: escaped {} roulette {} limit {}, saturated {}, total {total:.4e}",
+                "{what}: photons per light {:?}, stored {}, flux emitted {:?} stored {:?}, ends: escaped {} roulette {} limit {}, saturated {}, total {total:.4e}",
                 st.photons_per_light,
                 st.photons_stored,
+                st.emitted_flux,
+                st.stored_flux,
                 st.discarded.escaped,
                 st.discarded.negligible_power,
                 st.discarded.bounce_limit,
@@ -216,6 +253,8 @@ fn photon_gi_stiff_cases_on_every_backend() {
                     );
                     // the blind spot's RSM is rendered and proven empty: no photon, the
                     // box's light gets the whole budget, the plan says why
+                    // only the lights given photons emit: the box's, 2 W/sr all round
+                    assert_eq!(st.emitted_flux, [2.0 * FOUR_PI; 3], "{what}");
                     assert_eq!(
                         st.photons_per_light,
                         vec![st.photons_emitted, 0],
@@ -246,6 +285,7 @@ fn photon_gi_stiff_cases_on_every_backend() {
                         st.discarded.bounce_limit,
                         st.photons_emitted
                     );
+                    flux_kept_along_albedo_one_paths(&st, &what);
                 }
                 "a light of zero power beside one of 1e9" => {
                     assert_eq!(
@@ -253,6 +293,7 @@ fn photon_gi_stiff_cases_on_every_backend() {
                         "{what}: the dark light got photons"
                     );
                     assert_eq!(st.photons_per_light[1], st.photons_emitted, "{what}");
+                    assert_eq!(st.emitted_flux, [1e9 * FOUR_PI; 3], "{what}");
                     assert!(total > 0.0, "{what}: no light");
                 }
                 _ => {}
@@ -332,7 +373,7 @@ fn a_spot_turned_blind_and_back_equals_a_fresh_technique_bitwise() {
             .push(point(Vec3::new(c(0), c(1), c(2) * 0.5), 0.2));
     }
     let settings = serde_json::json!({
-        "photons_w": 96, "photons_h": 96, "rsm_size": 32, "bounces": BOUNCES,
+        "photons_w": 96, "photons_h": 96, "rsm_size": RSM_SIZE, "bounces": BOUNCES,
         "temporal": false, "atrous_iterations": 0
     });
     for (name, mut b) in backends() {

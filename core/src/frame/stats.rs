@@ -89,7 +89,11 @@ pub struct FrameStats {
     pub photons_deposited: u64,
     /// Photons neither stored nor deposited, by reason.
     pub discarded: Discards,
-    /// Emitted flux (W per channel) over all emission domains.
+    /// Emitted flux (W per channel) over all emission domains: per light given photons,
+    /// its intensity times the solid angle of the domain (a cone, a sphere) or its
+    /// irradiance times the area (a rectangle, PhotonGi's orthographic RSM face), before
+    /// a spot's falloff; PhotonGi's domain is each light's RSM (`I x 4 pi` for a point
+    /// light, the outer cone for a spot).
     pub emitted_flux: [f64; 3],
     /// Flux of the stored photons (W per channel), from the fixed-point counters.
     pub stored_flux: [f64; 3],

@@ -378,6 +378,18 @@ pub struct PhotonGiPipeline {
     accumulated: u32,
 }
 
+/// The frame's emitted flux (W per channel): the flux into their RSMs' faces of the lights
+/// given photons, from (photons, flux) per light.
+fn emitted_flux(lights: impl Iterator<Item = (u64, [f64; 3])>) -> [f64; 3] {
+    let mut sum = [0.0; 3];
+    for (_, flux) in lights.filter(|(photons, _)| *photons > 0) {
+        for (s, f) in sum.iter_mut().zip(flux) {
+            *s += f;
+        }
+    }
+    sum
+}
+
 /// Light `light`'s line in the frame plan: its photons and RSM faces (`faces` of `side`^2),
 /// whether its RSM sees a texel that leaves flux, and whether the device's plan is known
 /// yet (`known`; else the photons are those it gets if every light with power sees
@@ -1227,6 +1239,7 @@ impl Pipeline for PhotonGiPipeline {
         frame.stats.flux_quantum = self.photons.flux_quantum as f64;
         frame.stats.photons_emitted = rsms.iter().map(|r| r.photons as u64).sum();
         frame.stats.photons_per_light = rsms.iter().map(|r| r.photons as u64).collect();
+        frame.stats.emitted_flux = emitted_flux(rsms.iter().map(|r| (r.photons as u64, r.flux)));
         let (cam, b) = (host.camera(), self.buffers);
         host.record_visibility(frame.rec());
         let first = self.frame_index() == 0;
@@ -1370,6 +1383,7 @@ impl Pipeline for PhotonGiPipeline {
             generation: self.generation,
             lit: self.table.as_ref().map(|t| t.lit.clone()),
             lights: rsms.iter().map(|r| (r.faces.len(), r.sees)).collect(),
+            flux: rsms.iter().map(|r| r.flux).collect(),
             side: self.settings.rsm_size,
             decided: Arc::clone(&self.decided),
             chunks,
@@ -1472,6 +1486,8 @@ struct PlanEnd {
     lit: Option<Vec<u32>>,
     /// Per light its RSM faces and whether it sees something in the host's plan.
     lights: Vec<(usize, bool)>,
+    /// Per light its flux into its RSM's faces (W per channel, `rsm::rsm_flux`).
+    flux: Vec<[f64; 3]>,
     /// RSM side (texels).
     side: u32,
     decided: Arc<Mutex<Option<(u64, u32)>>>,
@@ -1506,6 +1522,7 @@ impl FrameEnd for PlanEnd {
             .collect();
         stats.flux_quantum = quantum as f64;
         stats.photons_emitted = counts.iter().sum();
+        stats.emitted_flux = emitted_flux(counts.iter().copied().zip(self.flux.iter().copied()));
         stats.read_counters(&words(self.counters), quantum);
         let mut sees: Vec<bool> = self.lights.iter().map(|l| l.1).collect();
         if let Some(lit) = &self.lit {

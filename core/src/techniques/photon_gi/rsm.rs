@@ -34,6 +34,8 @@ pub struct LightRsm {
     /// albedo is zero: it looks into empty space or onto black surfaces), so that none of
     /// its photons could carry any: it gets no photon, the others share its budget.
     pub sees: bool,
+    /// The light's flux into its RSM's faces (W per channel, [`rsm_flux`]).
+    pub flux: [f64; 3],
 }
 
 /// The faces of a light's RSM (see `crate::math::rsm`): six 90-degree faces around a
@@ -108,6 +110,25 @@ pub fn rsm_faces(
     }
 }
 
+/// The flux light `l` sends into its RSM's `faces` (W per channel), the flux its photons
+/// stand for, as a caustic technique's emission domain's: intensity times the solid angle
+/// of its emission (the whole sphere for a point light and a spot of six faces, the outer
+/// cone for a spot, before its falloff, which only lowers it), or for a directional light
+/// its irradiance times the area of its orthographic face.
+pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
+    let i = Vec3::from_slice(&l.intensity[..3]).as_dvec3();
+    let measure = match (l.kind, faces.first()) {
+        (light_kind::POINT, _) => 4.0 * std::f64::consts::PI,
+        (light_kind::SPOT, _) => {
+            crate::math::sampling::cone_solid_angle(l.cos_outer.clamp(-1.0, 1.0)) as f64
+        }
+        // an orthographic face's half-extents are its negated tangents (GpuCamera::orthographic)
+        (_, Some(f)) => 4.0 * (-f.tan_half_fov_x as f64) * (-f.tan_half_fov_y as f64),
+        (_, None) => 0.0,
+    };
+    (i.max(glam::DVec3::ZERO) * measure).to_array()
+}
+
 /// A light's power for the allocation (Smal 2019, section 24.2): the luminance of its
 /// intensity times the solid angle it emits into (W).
 fn light_power(l: &GpuLight) -> f64 {
@@ -165,11 +186,15 @@ pub(super) fn plan_lights(
         .iter()
         .zip(&counts)
         .enumerate()
-        .map(|(i, (l, &n))| LightRsm {
-            light: i as u32,
-            faces: rsm_faces(l, side, bounds),
-            photons: n as u32,
-            sees: sees.get(i).copied().unwrap_or(true),
+        .map(|(i, (l, &n))| {
+            let faces = rsm_faces(l, side, bounds);
+            LightRsm {
+                light: i as u32,
+                flux: rsm_flux(l, &faces),
+                faces,
+                photons: n as u32,
+                sees: sees.get(i).copied().unwrap_or(true),
+            }
         })
         .collect();
     PhotonPlan {
@@ -516,5 +541,61 @@ mod tests {
         let many: Vec<GpuLight> = (0..=MAX_PLANNED_LIGHTS).map(|_| point(1.0)).collect();
         assert!(PlanTable::new(&many, 1000).is_none());
         assert!(PlanTable::new(&many[1..], 1000).is_some());
+    }
+
+    /// A light's flux into its RSM is what its faces' texels receive: summed over a point
+    /// light's six faces the texels' arriving flux is `I x 4 pi`, a directional light's
+    /// face `E` times its area; a spot's is its outer cone's.
+    #[test]
+    fn rsm_flux_is_what_the_faces_receive() {
+        use crate::math::rsm::{ortho_texel_flux, texel_arriving_flux};
+        let bounds = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        let side = 64;
+        let l = GpuLight {
+            intensity: [1.0, 2.0, 0.5, 0.0],
+            ..point(1.0)
+        };
+        let faces = rsm_faces(&l, side, &bounds);
+        let mut texels = 0.0f64;
+        for _ in &faces {
+            for iy in 0..side {
+                for ix in 0..side {
+                    texels += texel_arriving_flux(Vec3::ONE, 1.0, ix, iy, side, 1.0).x as f64;
+                }
+            }
+        }
+        let flux = rsm_flux(&l, &faces);
+        let four_pi = 4.0 * std::f64::consts::PI;
+        assert!((texels - four_pi).abs() < 1e-3 * four_pi, "{texels}");
+        for (c, i) in [1.0, 2.0, 0.5].into_iter().enumerate() {
+            assert!((flux[c] - i * four_pi).abs() < 1e-9 * four_pi);
+        }
+        let sun = GpuLight {
+            kind: light_kind::DIRECTIONAL,
+            direction: [0.0, -1.0, 0.0, 0.0],
+            ..l
+        };
+        let faces = rsm_faces(&sun, side, &bounds);
+        let half = -faces[0].tan_half_fov_x;
+        let texels = ortho_texel_flux(Vec3::ONE, side, half).x as f64 * (side * side) as f64;
+        let flux = rsm_flux(&sun, &faces);
+        // the face spans the bounds' sphere: half = sqrt(3), area 12
+        assert!((flux[1] - 2.0 * 12.0).abs() < 1e-5 * 24.0, "{flux:?}");
+        assert!((texels - 12.0).abs() < 1e-4 * 12.0, "{texels}");
+        let spot = GpuLight {
+            kind: light_kind::SPOT,
+            direction: [0.0, -1.0, 0.0, 0.0],
+            cos_outer: 0.8,
+            ..l
+        };
+        let flux = rsm_flux(&spot, &rsm_faces(&spot, side, &bounds));
+        let cone = 2.0 * std::f64::consts::PI * (1.0 - 0.8);
+        assert!((flux[0] - cone).abs() < 1e-5 * cone, "{flux:?}");
+        // a light of no intensity emits nothing, whatever its faces
+        let dark = rsm_flux(&point(0.0), &faces);
+        assert_eq!(dark, [0.0; 3]);
     }
 }
