@@ -41,11 +41,13 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), String> {
         line_order: LineOrder::Increasing,
         ..Encoding::FAST_LOSSLESS
     };
-    Image::from_encoded_channels((w, img.height as usize), encoding, channels)
-        .write()
-        .non_parallel()
-        .to_file(path)
-        .map_err(|e| format!("{}: {e}", path.display()))
+    write_whole(path, |partial| {
+        Image::from_encoded_channels((w, img.height as usize), encoding, channels)
+            .write()
+            .non_parallel()
+            .to_file(partial)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
 }
 
 /// A file-name stem made from `name` (a scene name from a scene file, say) that cannot
@@ -120,8 +122,39 @@ pub fn write_png(path: &Path, img: &Image, exposure: f32) -> Result<(), String> 
             tone_map(p[2], exposure),
         ]);
     }
-    buf.save(path)
-        .map_err(|e| format!("{}: {e}", path.display()))
+    // the partial file's name ends as `path`'s, so the format follows the extension
+    write_whole(path, |partial| {
+        buf.save(partial)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
+}
+
+/// Writes a file's bytes through [`write_whole`].
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    write_whole(path, |partial| {
+        std::fs::write(partial, bytes).map_err(|e| format!("{}: {e}", path.display()))
+    })
+}
+
+/// Writes `path` whole or not at all: `write` makes a partial file beside it (a hidden
+/// name that ends as `path`'s), which is renamed over `path` once written; a failed write
+/// (a full disk) removes it, so no truncated file is left under `path` and an earlier one
+/// stays as it was.
+pub fn write_whole(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), String> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file name", path.display()))?;
+    let partial = path.with_file_name(format!(".partial-{}", name.to_string_lossy()));
+    let written = write(&partial).and_then(|()| {
+        std::fs::rename(&partial, path).map_err(|e| format!("{}: {e}", path.display()))
+    });
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    written
 }
 
 #[cfg(test)]

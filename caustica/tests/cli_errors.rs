@@ -287,3 +287,92 @@ fn animate_writes_every_frame_and_the_waves_move() {
     assert!(last == frames[2]);
     let _ = std::fs::remove_dir_all(&out_dir);
 }
+
+#[test]
+fn settings_files_are_read_with_a_limit() {
+    // a pipe that never ends is refused after the limit, not after filling memory
+    fails_cleanly(
+        &["render", "--scene", "cornell", "--settings", "/dev/zero"],
+        "larger than the 16 MiB a settings file may have",
+    );
+}
+
+#[test]
+fn negative_numbers_are_values_not_flags() {
+    fails_cleanly(
+        &["render", "--seed", "-1"],
+        "invalid value '-1' for '--seed",
+    );
+    fails_cleanly(&["render", "--exposure", "-1"], "--exposure");
+    fails_cleanly(
+        &["render", "--frames", "-2"],
+        "invalid value '-2' for '--frames",
+    );
+}
+
+#[test]
+fn light_tracer_bounds_its_photons() {
+    let cache = std::env::temp_dir().join(format!("caustica-cli-rc-{}", std::process::id()));
+    let cache = cache.to_str().expect("a UTF-8 temporary path");
+    fails_cleanly(
+        &[
+            "reference",
+            "--scene",
+            "cornell",
+            "--size",
+            "32x18",
+            "--cache",
+            cache,
+            "--batches",
+            "2",
+            "--photons",
+            "18446744073709551615",
+        ],
+        "photons per batch must be at most 2^40",
+    );
+}
+
+#[test]
+fn an_animation_past_f32_time_is_refused_and_a_long_one_stays_finite() {
+    fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "pool",
+            "--technique",
+            "caustic-map",
+            "--size",
+            "32x18",
+            "--photons",
+            "16x16",
+            "--animate",
+            "3e38",
+            "--frames",
+            "3",
+        ],
+        "--animate",
+    );
+    let dir = std::env::temp_dir().join(format!("caustica-cli-anim-{}", std::process::id()));
+    let out = caustica(&[
+        "render",
+        "--scene",
+        "pool",
+        "--technique",
+        "caustic-map",
+        "--size",
+        "32x18",
+        "--photons",
+        "16x16",
+        "--animate",
+        "3e38",
+        "--frames",
+        "2",
+        "--out",
+        dir.to_str().expect("a UTF-8 temporary path"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

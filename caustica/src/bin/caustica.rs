@@ -131,10 +131,10 @@ enum Command {
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,
         /// Frame seed of the random numbers.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u32>,
         /// Exposure multiplier for the PNG (EXR files are linear and unscaled).
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1.0)]
         exposure: f32,
         /// Settings file (a JSON object of the technique's settings, e.g. `{"frame":
         /// {"seed": 7}, "screen": {"filter": "bilateral"}}`; the flat objects of earlier
@@ -151,7 +151,7 @@ enum Command {
         /// accumulation (`frame.accumulate`, every technique) sums the frames' photons as one
         /// frame of all of them; with `accumulate: false` in the settings each frame gets a
         /// new seed.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
         frames: u32,
         /// Seconds of scene time between frames: the scene's height fields (the `pool`'s
         /// water) become instances whose waves travel as deep-water waves do
@@ -159,7 +159,7 @@ enum Command {
         /// `set_object_vertices` (no rebuild), and every frame's composite is written as
         /// NAME_fNNN_composite.png. Frames keep one seed and do not accumulate unless the
         /// settings say so.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         animate: Option<f32>,
         /// Output directory.
         #[arg(long, default_value = "out")]
@@ -191,13 +191,13 @@ enum Command {
         #[arg(long, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
         /// Photons per light and batch.
-        #[arg(long, default_value_t = 1 << 22)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1 << 22)]
         photons: u64,
         /// Independent batches (the error bar is their spread; at least 2).
-        #[arg(long, default_value_t = 16)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 16)]
         batches: u32,
         /// Seed of the batches' random streams.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
         /// Spheres as the exact sphere (analytic) or the scene's tessellated mesh (mesh).
         #[arg(long, default_value = "analytic")]
@@ -247,18 +247,18 @@ enum Command {
         size: (u32, u32),
         /// Relative standard error at which a technique's own reference counts as
         /// converged.
-        #[arg(long, default_value_t = 0.02)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.02)]
         reference_noise: f64,
         /// Frame cap of a reference (1024x1024 photons per frame).
-        #[arg(long, default_value_t = 256)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 256)]
         reference_frames: u32,
         /// Photons per light and batch of the light tracer (the default 16 x 4194304
         /// take about 13 s for `sphere` at 480x270 on two cores; cached).
-        #[arg(long, default_value_t = 1 << 22)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1 << 22)]
         tracer_photons: u64,
         /// Independent batches of the light tracer (its error bar is their spread; at
         /// least 2).
-        #[arg(long, default_value_t = 16)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 16)]
         tracer_batches: u32,
         /// Spheres in the light tracer: the exact sphere (analytic) or the scene's
         /// tessellated mesh the techniques trace (mesh).
@@ -297,9 +297,26 @@ fn read_settings(
     let Some(p) = path else {
         return Ok(serde_json::Map::new());
     };
-    let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    let f = std::fs::File::open(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut std::io::Read::take(f, MAX_SETTINGS_FILE_BYTES + 1),
+        &mut text,
+    )
+    .map_err(|e| format!("{}: {e}", p.display()))?;
+    if text.len() as u64 > MAX_SETTINGS_FILE_BYTES {
+        return Err(format!(
+            "{}: larger than the {} MiB a settings file may have",
+            p.display(),
+            MAX_SETTINGS_FILE_BYTES >> 20
+        ));
+    }
     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", p.display()))
 }
+
+/// Largest settings file read (bytes): 16 MiB, so that a pipe or /dev/zero is refused
+/// after that many bytes, not after filling memory.
+const MAX_SETTINGS_FILE_BYTES: u64 = 16 << 20;
 
 fn parse_grid(s: &str) -> Result<(u32, u32), String> {
     let (a, b) = s
@@ -624,11 +641,12 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 .map_err(String::from)?;
             // the files first, the table last: a closed stdout loses only the table
             let path = out.join("report.json");
-            std::fs::write(
+            caustica::output::write_file(
                 &path,
-                serde_json::to_string_pretty(&records).map_err(|e| e.to_string())?,
-            )
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+                serde_json::to_string_pretty(&records)
+                    .map_err(|e| e.to_string())?
+                    .as_bytes(),
+            )?;
             for scene in &plan.scenes {
                 let png = out.join(format!(
                     "error_vs_time_{}.png",
@@ -710,6 +728,13 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 if !dt.is_finite() {
                     return Err("--animate must be a finite number of seconds".into());
                 }
+                if !(dt * (frames - 1) as f32).is_finite() {
+                    return Err(format!(
+                        "--animate: {frames} frames {dt} s apart end beyond a finite time \
+                         in seconds (f32)"
+                    )
+                    .into());
+                }
                 for (k, o) in scene.objects.iter_mut().enumerate() {
                     if matches!(o.shape, caustica::scene::Shape::HeightField { .. }) {
                         o.transform
@@ -757,14 +782,20 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             let bar = ProgressBar::new(0);
             bar.set_style(
                 ProgressStyle::with_template(
-                    "{spinner} photons {human_pos}/{human_len} [{bar:30}] {eta}",
+                    "{spinner} {msg}photons {human_pos}/{human_len} [{bar:30}] {eta}",
                 )
                 .expect("valid template")
                 .progress_chars("=> "),
             );
+            // the spinner turns through passes that trace no photons (a large image's
+            // G-buffer, the images' files)
+            bar.enable_steady_tick(std::time::Duration::from_millis(200));
             let mut frames_and_images = || -> Result<FrameStats, String> {
                 let mut stats = None;
                 for f in 0..frames {
+                    if frames > 1 {
+                        bar.set_message(format!("frame {}/{frames}, ", f + 1));
+                    }
                     if let (Some(dt), true) = (animate, f > 0) {
                         for &k in &animated {
                             let shape = scene.objects[k].shape.advanced(dt * f as f32);
@@ -791,6 +822,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     }
                 }
                 let stats = stats.expect("at least one frame");
+                bar.set_message("writing the images, ");
                 for output in t.outputs().into_iter().filter(|o| o.requested) {
                     let name = output.name;
                     let img = t
@@ -811,11 +843,12 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             freed?;
             let doc = serde_json::json!({ "scene": scene.name, "technique": technique, "settings": s, "stats": stats });
             let path = out.join("stats.json");
-            std::fs::write(
+            caustica::output::write_file(
                 &path,
-                serde_json::to_string_pretty(&doc).expect("stats serialise"),
-            )
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+                serde_json::to_string_pretty(&doc)
+                    .map_err(|e| e.to_string())?
+                    .as_bytes(),
+            )?;
             outln!(
                 console,
                 "{}: {} photons emitted, {} stored, {} deposited; {:.1} ms; wrote {}",

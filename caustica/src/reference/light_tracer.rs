@@ -1123,6 +1123,8 @@ pub fn silhouette_pixels(
     spec: &LightTracerSpec,
 ) -> Result<Vec<bool>, LightTracerError> {
     validate(spec)?;
+    let n = (spec.width * spec.height) as usize;
+    check_image_memory(n)?;
     let g = Geometry::build(scene, spec.spheres)?;
     let cam = Cam::new(&scene.camera, spec.width, spec.height);
     Ok(pixel_table(&g, &cam).1)
@@ -1166,10 +1168,46 @@ fn validate(spec: &LightTracerSpec) -> Result<(), LightTracerError> {
     if spec.photons == 0 {
         return bad("photons per batch must be positive");
     }
+    if spec.photons > MAX_PHOTONS {
+        return bad("photons per batch must be at most 2^40 (1.1e12)");
+    }
     if !(1..=MAX_SIDE).contains(&spec.width) || !(1..=MAX_SIDE).contains(&spec.height) {
         return bad("the image sides must be 1..=16384 pixels");
     }
     Ok(())
+}
+
+/// Most photons per batch: 2^40, days of tracing on any host; the memory a batch holds
+/// does not grow with them ([`CHUNK_GROUP`]).
+const MAX_PHOTONS: u64 = 1 << 40;
+
+/// Host bytes the tracer holds per pixel: its pixel table and silhouette flag, the batch's
+/// image and the two sums over batches (f64 RGB each), and the mean and error images.
+const BYTES_PER_PIXEL: usize = std::mem::size_of::<Option<PixelSee>>()
+    + std::mem::size_of::<bool>()
+    + 3 * std::mem::size_of::<[f64; 3]>()
+    + 2 * std::mem::size_of::<[f32; 4]>();
+
+/// Checks that the host can hold the images of `n` pixels before any is made: one
+/// reservation of their total, refused where the allocator cannot give it.
+fn check_image_memory(n: usize) -> Result<(), LightTracerError> {
+    let bytes = n.saturating_mul(BYTES_PER_PIXEL);
+    let mut probe: Vec<u8> = Vec::new();
+    probe.try_reserve_exact(bytes).map_err(|_| {
+        LightTracerError::Settings(format!(
+            "out of memory: the image's {n} pixels need {bytes} bytes of host memory"
+        ))
+    })
+}
+
+/// `n` zeroed f64 RGB pixels, or an out-of-memory error naming `what`.
+fn zeroed_image(n: usize, what: &str) -> Result<Vec<[f64; 3]>, LightTracerError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        LightTracerError::Settings(format!("out of memory allocating the {what} ({n} pixels)"))
+    })?;
+    v.resize(n, [0.0; 3]);
+    Ok(v)
 }
 
 /// A work item's (pixel, radiance) contributions in photon order.
@@ -1177,6 +1215,11 @@ type Contributions = Vec<(u32, [f64; 3])>;
 
 /// Photons per parallel work item.
 const CHUNK: u64 = 8192;
+
+/// Work items traced in parallel before their contributions are added to the image (in
+/// photon order): what a batch holds at once is at most this many items' contributions,
+/// whatever its photon count.
+const CHUNK_GROUP: u64 = 64;
 
 /// Computes the light-tracer reference of `scene` (its camera at `spec`'s size);
 /// `progress(batches_done, batches, noise)` after each batch.
@@ -1186,6 +1229,8 @@ pub fn compute(
     progress: &mut dyn FnMut(u32, u32, f64),
 ) -> Result<LightTracerReference, LightTracerError> {
     validate(spec)?;
+    let n = (spec.width * spec.height) as usize;
+    check_image_memory(n)?;
     let g = Geometry::build(scene, spec.spheres)?;
     let cam = Cam::new(&scene.camera, spec.width, spec.height);
     let (table, silhouette) = pixel_table(&g, &cam);
@@ -1195,72 +1240,83 @@ pub fn compute(
         .iter()
         .any(|m| matches!(m, Mat::Dielectric { ior, .. } if ior.dispersive()));
     let colour = SpectralColour::new();
-    let n = (spec.width * spec.height) as usize;
-    let mut sum = vec![[0.0f64; 3]; n];
-    let mut sum2 = vec![[0.0f64; 3]; n];
+    let mut sum = zeroed_image(n, "sum over batches")?;
+    let mut sum2 = zeroed_image(n, "sum of squares over batches")?;
+    let mut img = zeroed_image(n, "batch image")?;
     let (mut photons, mut connected, mut truncated) = (0u64, 0u64, 0u64);
     let mut noise = f64::INFINITY;
     let chunks = spec.photons.div_ceil(CHUNK);
+    let groups = (0..chunks).step_by(CHUNK_GROUP as usize);
     for batch in 0..spec.batches {
-        let mut img = vec![[0.0f64; 3]; n];
+        img.fill([0.0; 3]);
         for (li, light) in lights.iter().enumerate() {
-            let parts: Vec<(Contributions, u64)> = (0..chunks)
-                .into_par_iter()
-                .map(|ci| {
-                    let mut out = Vec::new();
-                    let mut trunc = 0u64;
-                    let end = ((ci + 1) * CHUNK).min(spec.photons);
-                    for i in ci * CHUNK..end {
-                        let key = [spec.seed, batch as u64, li as u64, i, 0];
-                        let mut rng = Rng::new(key);
-                        let Some((o, d, flux)) = light.emit(spec.photons, &mut rng) else {
-                            continue;
-                        };
-                        // (wavelength, flux) of each pass: one without dispersion, else
-                        // three (stratified wavelengths, or the three bands)
-                        let offset = rng.next();
-                        let passes: Vec<(Option<f64>, [f64; 3])> = if !dispersive {
-                            vec![(None, flux)]
-                        } else {
-                            (0..3)
-                                .map(|k| match spec.dispersion {
-                                    Dispersion::ThreeBands => {
-                                        let mut f = [0.0; 3];
-                                        f[k] = flux[k];
-                                        (Some(CHANNEL_UM[k]), f)
-                                    }
-                                    Dispersion::Spectral => {
-                                        let l = 0.38 + 0.4 * (k as f64 + offset) / 3.0;
-                                        let w = colour.weight(l);
-                                        (Some(l), std::array::from_fn(|c| flux[c] * w[c] / 3.0))
-                                    }
-                                })
-                                .collect()
-                        };
-                        for (pi, &(wl, flux)) in passes.iter().enumerate() {
-                            let mut rng = Rng::new([key[0], key[1], key[2], key[3], 1 + pi as u64]);
-                            match trace(&g, o, d, flux, wl, spec.max_specular, &mut rng) {
-                                PathEnd::Truncated => trunc += 1,
-                                PathEnd::Lost => {}
-                                PathEnd::Stored { hit, dir, flux } => {
-                                    let c =
-                                        connect(&g, &cam, &table, &hit, dir, flux, spec.silhouette);
-                                    if let Some(c) = c {
-                                        out.push(c);
+            for first in groups.clone() {
+                let parts: Vec<(Contributions, u64)> = (first..(first + CHUNK_GROUP).min(chunks))
+                    .into_par_iter()
+                    .map(|ci| {
+                        let mut out = Vec::new();
+                        let mut trunc = 0u64;
+                        let end = ((ci + 1) * CHUNK).min(spec.photons);
+                        for i in ci * CHUNK..end {
+                            let key = [spec.seed, batch as u64, li as u64, i, 0];
+                            let mut rng = Rng::new(key);
+                            let Some((o, d, flux)) = light.emit(spec.photons, &mut rng) else {
+                                continue;
+                            };
+                            // (wavelength, flux) of each pass: one without dispersion, else
+                            // three (stratified wavelengths, or the three bands)
+                            let offset = rng.next();
+                            let passes: Vec<(Option<f64>, [f64; 3])> = if !dispersive {
+                                vec![(None, flux)]
+                            } else {
+                                (0..3)
+                                    .map(|k| match spec.dispersion {
+                                        Dispersion::ThreeBands => {
+                                            let mut f = [0.0; 3];
+                                            f[k] = flux[k];
+                                            (Some(CHANNEL_UM[k]), f)
+                                        }
+                                        Dispersion::Spectral => {
+                                            let l = 0.38 + 0.4 * (k as f64 + offset) / 3.0;
+                                            let w = colour.weight(l);
+                                            (Some(l), std::array::from_fn(|c| flux[c] * w[c] / 3.0))
+                                        }
+                                    })
+                                    .collect()
+                            };
+                            for (pi, &(wl, flux)) in passes.iter().enumerate() {
+                                let mut rng =
+                                    Rng::new([key[0], key[1], key[2], key[3], 1 + pi as u64]);
+                                match trace(&g, o, d, flux, wl, spec.max_specular, &mut rng) {
+                                    PathEnd::Truncated => trunc += 1,
+                                    PathEnd::Lost => {}
+                                    PathEnd::Stored { hit, dir, flux } => {
+                                        let c = connect(
+                                            &g,
+                                            &cam,
+                                            &table,
+                                            &hit,
+                                            dir,
+                                            flux,
+                                            spec.silhouette,
+                                        );
+                                        if let Some(c) = c {
+                                            out.push(c);
+                                        }
                                     }
                                 }
                             }
                         }
-                    }
-                    (out, trunc)
-                })
-                .collect();
-            for (out, trunc) in parts {
-                truncated += trunc;
-                connected += out.len() as u64;
-                for (p, c) in out {
-                    for k in 0..3 {
-                        img[p as usize][k] += c[k];
+                        (out, trunc)
+                    })
+                    .collect();
+                for (out, trunc) in parts {
+                    truncated += trunc;
+                    connected += out.len() as u64;
+                    for (p, c) in out {
+                        for k in 0..3 {
+                            img[p as usize][k] += c[k];
+                        }
                     }
                 }
             }
@@ -1373,6 +1429,15 @@ pub fn load_or_compute(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An image no host can hold is refused before anything is made, with its size.
+    #[test]
+    fn images_past_the_hosts_memory_are_an_error() {
+        let e = check_image_memory(usize::MAX / 4).expect_err("refused");
+        assert!(e.to_string().contains("out of memory"), "{e}");
+        assert!(check_image_memory(480 * 270).is_ok());
+        assert!(zeroed_image(usize::MAX / 4, "test").is_err());
+    }
 
     #[test]
     fn same_result_for_any_thread_count() {

@@ -130,10 +130,12 @@ impl FrameTicket {
 /// A blocking frame's recordings, each with the photons it traces, run as one pipeline:
 /// all submitted without waiting (the device never idles between them, and the host pays
 /// one wait, not one per recording), then waited for in order, `progress` called as each
-/// photon batch completes. The pass times go into `stats`; returns the bytes of
-/// `readbacks` as they were after the last recording and every kernel step's time in
-/// order. On an error every submitted recording is still waited for before it is
-/// returned.
+/// photon batch completes. After each submission the host also looks, without waiting,
+/// whether the oldest ones have finished, so that a backend whose submissions run at once
+/// (the CPU's) or a device that keeps up reports its batches as they end, not all at the
+/// last wait. The pass times go into `stats`; returns the bytes of `readbacks` as they
+/// were after the last recording and every kernel step's time in order. On an error every
+/// submitted recording is still waited for before it is returned.
 pub fn run_pipelined(
     backend: &mut dyn Backend,
     recordings: Vec<(Recording, u64)>,
@@ -143,48 +145,86 @@ pub fn run_pipelined(
 ) -> Result<(Vec<Vec<u8>>, Vec<PassTime>), Error> {
     let total: u64 = recordings.iter().map(|r| r.1).sum();
     let last = recordings.len().saturating_sub(1);
-    let mut submitted: Vec<(Submission, u64)> = Vec::with_capacity(recordings.len());
-    let mut failure = None;
+    let mut pipeline = Pipeline {
+        pending: std::collections::VecDeque::with_capacity(recordings.len()),
+        failure: None,
+        done: 0,
+        total,
+        out: Vec::new(),
+        times: Vec::new(),
+    };
     for (k, (rec, photons)) in recordings.iter().enumerate() {
         let wanted = if k == last { readbacks } else { &[] };
         match backend.submit(rec, wanted) {
-            Ok(s) => submitted.push((s, *photons)),
+            Ok(s) => pipeline.pending.push_back((s, *photons)),
             Err(e) => {
-                failure = Some(Error::from(e));
+                pipeline.failure = Some(Error::from(e));
                 break;
             }
         }
+        pipeline.settle(backend, false, stats, progress);
     }
-    let mut done = 0u64;
-    let mut out = Vec::new();
-    let mut times = Vec::new();
-    let count = submitted.len();
-    for (k, (mut s, photons)) in submitted.into_iter().enumerate() {
-        match backend.poll(&mut s, true) {
-            Ok(Some(f)) if failure.is_none() => {
-                for t in &f.times {
-                    stats.add_pass_time(t.kernel, t.seconds);
+    pipeline.settle(backend, true, stats, progress);
+    match pipeline.failure {
+        Some(e) => Err(e),
+        None => Ok((pipeline.out, pipeline.times)),
+    }
+}
+
+/// [`run_pipelined`]'s submissions not yet finished, oldest first, and what the finished
+/// ones gave.
+struct Pipeline {
+    pending: std::collections::VecDeque<(Submission, u64)>,
+    failure: Option<Error>,
+    /// Photons of the finished submissions, and of all.
+    done: u64,
+    total: u64,
+    /// The readbacks of the last finished submission (the last recording's are the
+    /// frame's) and every kernel step's time in order.
+    out: Vec<Vec<u8>>,
+    times: Vec<PassTime>,
+}
+
+impl Pipeline {
+    /// Takes the finished submissions from the front, in order: all of them, waiting for
+    /// each (`wait`), or those already finished.
+    fn settle(
+        &mut self,
+        backend: &mut dyn Backend,
+        wait: bool,
+        stats: &mut FrameStats,
+        progress: &mut dyn FnMut(Progress),
+    ) {
+        while let Some((s, photons)) = self.pending.front_mut() {
+            let photons = *photons;
+            match backend.poll(s, wait) {
+                Ok(Some(f)) => {
+                    self.pending.pop_front();
+                    if self.failure.is_some() {
+                        continue;
+                    }
+                    for t in &f.times {
+                        stats.add_pass_time(t.kernel, t.seconds);
+                    }
+                    self.times.extend(f.times);
+                    if photons > 0 {
+                        self.done += photons;
+                        progress(Progress {
+                            photons_done: self.done,
+                            photons_total: self.total,
+                        });
+                    }
+                    self.out = f.readbacks;
                 }
-                times.extend(f.times);
-                if photons > 0 {
-                    done += photons;
-                    progress(Progress {
-                        photons_done: done,
-                        photons_total: total,
-                    });
+                Ok(None) if !wait => return,
+                Ok(None) => {
+                    self.pending.pop_front();
                 }
-                if k + 1 == count {
-                    out = f.readbacks;
+                Err(e) => {
+                    self.pending.pop_front();
+                    self.failure.get_or_insert(Error::from(e));
                 }
-            }
-            Ok(_) => {}
-            Err(e) => {
-                failure.get_or_insert(Error::from(e));
             }
         }
-    }
-    match failure {
-        Some(e) => Err(e),
-        None => Ok((out, times)),
     }
 }

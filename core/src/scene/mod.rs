@@ -378,11 +378,17 @@ impl Wave {
     /// finite keeps its phase.
     pub fn advanced(&self, seconds: f32) -> Wave {
         let omega = self.angular_frequency();
-        let phase = if omega.is_finite() {
-            // wrapped to [0, 2 pi) so that long animations keep the phase's precision
-            (self.phase - omega * seconds).rem_euclid(std::f32::consts::TAU)
-        } else {
+        let travelled = omega * seconds;
+        let phase = if !omega.is_finite() || !seconds.is_finite() {
             self.phase
+        } else if travelled.is_finite() {
+            // wrapped to [0, 2 pi) so that long animations keep the phase's precision
+            (self.phase - travelled).rem_euclid(std::f32::consts::TAU)
+        } else {
+            // beyond f32's range (seconds near f32::MAX): wrapped in f64, where the
+            // product stays finite
+            (self.phase as f64 - omega as f64 * seconds as f64).rem_euclid(std::f64::consts::TAU)
+                as f32
         };
         Wave {
             phase,
