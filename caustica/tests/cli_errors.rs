@@ -376,3 +376,24 @@ fn an_animation_past_f32_time_is_refused_and_a_long_one_stays_finite() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn a_flag_of_a_few_values_lists_them_and_a_side_too_large_says_so() {
+    fails_cleanly(
+        &["render", "--filter", "foo"],
+        "possible values: density, bilateral, box",
+    );
+    fails_cleanly(
+        &["reference", "--spheres", "foo"],
+        "possible values: analytic, mesh",
+    );
+    fails_cleanly(
+        &["render", "--photons", "4294967296x1"],
+        "a side must be at most 4294967295",
+    );
+    // usage errors share clap's status
+    assert_eq!(
+        caustica(&["reference", "--spheres", "foo"]).status.code(),
+        Some(2)
+    );
+}

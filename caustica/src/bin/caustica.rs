@@ -200,7 +200,7 @@ enum Command {
         #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
         /// Spheres as the exact sphere (analytic) or the scene's tessellated mesh (mesh).
-        #[arg(long, default_value = "analytic")]
+        #[arg(long, default_value = "analytic", value_parser = ["analytic", "mesh"])]
         spheres: String,
         /// What a silhouette pixel measures: centre-surface (default), the radiance of the
         /// surface the pixel's centre sees, every photon on it counted, hidden from the eye
@@ -262,7 +262,7 @@ enum Command {
         tracer_batches: u32,
         /// Spheres in the light tracer: the exact sphere (analytic) or the scene's
         /// tessellated mesh the techniques trace (mesh).
-        #[arg(long, default_value = "analytic")]
+        #[arg(long, default_value = "analytic", value_parser = ["analytic", "mesh"])]
         tracer_spheres: String,
         /// What a silhouette pixel measures in the light tracer's image: centre-surface
         /// (default), the radiance of the surface the pixel's centre sees, every photon on
@@ -323,9 +323,12 @@ fn parse_grid(s: &str) -> Result<(u32, u32), String> {
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("'{s}' is not WxH (e.g. 1024x1024)"))?;
     let p = |t: &str| {
-        t.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("'{s}' is not WxH with positive integers"))
+        t.trim().parse::<u32>().map_err(|e| match e.kind() {
+            std::num::IntErrorKind::PosOverflow => {
+                format!("'{s}': a side must be at most 4294967295")
+            }
+            _ => format!("'{s}' is not WxH with positive integers"),
+        })
     };
     let (w, h) = (p(a)?, p(b)?);
     if w == 0 || h == 0 {
@@ -420,7 +423,14 @@ fn usage(e: &clap::Error, console: &mut Console) -> ExitCode {
         .next()
         .unwrap_or("bad arguments")
         .trim_start_matches("error: ");
-    note!("error: {first} (see caustica --help)");
+    // clap's list of the values a flag takes is on a later line of its text: kept here
+    let valid = match e.get(clap::error::ContextKind::ValidValue) {
+        Some(clap::error::ContextValue::Strings(v)) if !v.is_empty() => {
+            format!("; possible values: {}", v.join(", "))
+        }
+        _ => String::new(),
+    };
+    note!("error: {first}{valid} (see caustica --help)");
     ExitCode::from(2)
 }
 
@@ -531,7 +541,12 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 ..LightTracerSpec::default()
             };
             let (_, info) = load_or_compute(&cache, &scene, &spec, &mut |k, n, noise| {
-                note!("batch {k}/{n}: relative standard error {noise:.5}")
+                if noise.is_finite() {
+                    note!("batch {k}/{n}: relative standard error {noise:.5}")
+                } else {
+                    // one batch has no spread
+                    note!("batch {k}/{n}: relative standard error n/a (needs 2 batches)")
+                }
             })
             .map_err(String::from)?;
             outln!(
@@ -682,7 +697,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 .into());
             }
             if !(exposure > 0.0 && exposure.is_finite()) {
-                return Err("--exposure must be a positive number".into());
+                return Err("--exposure must be a positive finite number (f32)".into());
             }
             let mut scene = load_scene(&scene)?;
             if let Some((w, h)) = size {
