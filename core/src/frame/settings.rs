@@ -135,8 +135,12 @@ impl FrameSettings {
         if self.outputs.any_of(own) {
             Ok(())
         } else {
+            let asked: Vec<&str> = self.outputs.list().iter().map(|o| o.stem()).collect();
             Err(Error::InvalidParameter(format!(
-                "frame.outputs: at least one of {technique}'s outputs must be requested ({})",
+                "frame.outputs: {} {} not among {technique}'s outputs; request at least one \
+                 of them ({})",
+                asked.join(", "),
+                if asked.len() == 1 { "is" } else { "are" },
                 crate::frame::output::stems(own)
             )))
         }

@@ -284,7 +284,7 @@ impl PhotonGiSettings {
             return bad("density_radius_min must not exceed density_radius_max");
         }
         if !(self.max_stretch >= 1.0 && self.max_stretch.is_finite()) {
-            return bad("max_stretch must be >= 1");
+            return bad("max_stretch must be >= 1 and finite");
         }
         if !(self.frame.atrous_clip_sigmas > 0.0) {
             return bad("frame.atrous_clip_sigmas must be > 0");

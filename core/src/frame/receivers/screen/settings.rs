@@ -114,10 +114,11 @@ impl ScreenSettings {
         if self.max_radius_px > 256 {
             return bad("max_radius_px must be <= 256");
         }
-        if !(self.sigma_depth > 0.0 && self.sigma_depth.is_finite())
-            || !(self.normal_power >= 0.0 && self.normal_power.is_finite())
-        {
-            return bad("sigma_depth must be > 0 and normal_power >= 0");
+        if !(self.sigma_depth > 0.0 && self.sigma_depth.is_finite()) {
+            return bad("sigma_depth must be > 0 and finite");
+        }
+        if !(self.normal_power >= 0.0 && self.normal_power.is_finite()) {
+            return bad("normal_power must be >= 0 and finite");
         }
         if self.tile_size == 0 || self.tile_size > 256 {
             return bad("tile_size must be in 1..=256");
