@@ -3,8 +3,10 @@
 //! warnings of what caustica cannot represent; [`scene_to_gltf`] writes any scene as a
 //! self-contained `.gltf` (one embedded buffer), so caustica's scenes open in other tools.
 //!
-//! **What is read.** The default scene's node hierarchy, with each node's world transform
-//! applied to its meshes (positions by the matrix, normals by its inverse transpose, the
+//! **What is read.** The default scene's node hierarchy (which must be what glTF 2.0
+//! requires, a set of trees: a node with two parents, or one that is its own ancestor,
+//! is an error; walked without recursion, so any depth reads), with each node's world
+//! transform applied to its meshes (positions by the matrix, normals by its inverse transpose, the
 //! winding reversed where the determinant is negative so that normals stay outward).
 //! A mesh node whose world transform is a translation, rotation and scale (any glTF
 //! node's own, and any chain of them without shear) becomes an *instance* per primitive:
@@ -17,7 +19,12 @@
 //! Missing normals are generated as the area-weighted average of the faces around each
 //! vertex (`scene::shapes`); missing UVs are generated as box-projected charts
 //! (`scene::uv_charts`: charts grown over shared edges, split where they would overlap,
-//! packed at one texel density), with a warning naming the mesh. The first perspective camera met in the hierarchy
+//! packed at one texel density), with a warning naming the mesh. Every accessor read is
+//! checked first (POSITION and NORMAL VEC3 of FLOAT, TEXCOORD_0 VEC2 of FLOAT or of
+//! unsigned byte or short, read as normalized, indices SCALAR of unsigned byte, short
+//! or int, each inside its buffer), and the import's size is counted before anything is
+//! read: at most [`MAX_IMPORT_TRIANGLES`] triangles and [`MAX_IMPORT_VERTICES`]
+//! vertices, summed over every node that places a mesh. The first perspective camera met in the hierarchy
 //! (its image size from `extras.caustica`, else 960 pixels wide at its aspect ratio), or
 //! a default camera framing the scene, with a warning; a scene without lights (assets lit
 //! by an environment map) gets a default directional light, with a warning.
@@ -82,6 +89,17 @@ pub const FRAUNHOFER_D_UM: f32 = 0.5876;
 pub const FRAUNHOFER_F_UM: f32 = 0.4861;
 /// Fraunhofer C line (micrometres).
 pub const FRAUNHOFER_C_UM: f32 = 0.6563;
+
+/// Most triangles one glTF import may produce (2^26 = 67 M, four times the default render
+/// budget `max_triangles`, [`caustica_core::scene::limits::DEFAULT_MAX_TRIANGLES`]),
+/// counted from the accessors' sizes before anything is read. A mesh is imported once
+/// per node that places it, so a small file can place one mesh many times; this stops
+/// such a file before it fills memory. The render budget is checked when the scene is
+/// built, as for any scene.
+pub const MAX_IMPORT_TRIANGLES: u64 = 1 << 26;
+/// Most vertices one glTF import may produce (2^26, at most 32 bytes each: position,
+/// normal, UV), counted like [`MAX_IMPORT_TRIANGLES`].
+pub const MAX_IMPORT_VERTICES: u64 = 1 << 26;
 
 /// A glTF file read into a scene, with what it holds that caustica cannot represent.
 #[derive(Clone, Debug)]
@@ -186,9 +204,13 @@ pub fn parse_gltf(
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| fail("the file has no scene".into()))?;
-    for node in scene.nodes() {
-        im.visit(&node, Mat4::IDENTITY).map_err(&fail)?;
-    }
+    // before any traversal: trees only, readable accessors, a bounded import
+    check_hierarchy(&doc, &scene).map_err(&fail)?;
+    check_meshes(&scene).map_err(&fail)?;
+    walk_trees(&scene, Mat4::IDENTITY, &mut |node, parent| {
+        im.visit(node, parent)
+    })
+    .map_err(&fail)?;
     if im.objects.is_empty() {
         return Err(fail("the scene has no triangle mesh".into()));
     }
@@ -279,8 +301,33 @@ fn resolve_buffers(doc: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Vec<u8>>,
                             b.index()
                         )
                     })?;
+                    if uri.contains("://") {
+                        return Err(format!(
+                            "buffers[{}]: '{uri}' is a remote URI; caustica reads files \
+                             beside the glTF file and data: URIs",
+                            b.index()
+                        ));
+                    }
+                    if b.length() as u64 > MAX_BUFFER_BYTES {
+                        return Err(format!(
+                            "buffers[{}] declares {} bytes, more than the {} GiB a buffer may \
+                             have",
+                            b.index(),
+                            b.length(),
+                            MAX_BUFFER_BYTES >> 30
+                        ));
+                    }
                     let p = dir.join(percent_decode(uri));
-                    std::fs::read(&p).map_err(|e| {
+                    // at most the declared length: a pipe or /dev/zero stops there
+                    let read = std::fs::File::open(&p).and_then(|f| {
+                        let mut data = Vec::new();
+                        std::io::Read::read_to_end(
+                            &mut std::io::Read::take(f, b.length() as u64),
+                            &mut data,
+                        )
+                        .map(|_| data)
+                    });
+                    read.map_err(|e| {
                         format!("buffers[{}]: cannot read {}: {e}", b.index(), p.display())
                     })?
                 }
@@ -299,11 +346,15 @@ fn resolve_buffers(doc: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Vec<u8>>,
     Ok(out)
 }
 
+/// Most bytes an external buffer may declare: 4 GiB, more than the largest import
+/// ([`MAX_IMPORT_TRIANGLES`], [`MAX_IMPORT_VERTICES`]) reads.
+const MAX_BUFFER_BYTES: u64 = 4 << 30;
+
 /// Every buffer view inside its buffer, every accessor inside its view: a reader never
 /// reads past the data (the `gltf` crate's validation does not check ranges).
 fn check_accessors(doc: &gltf::Gltf, buffers: &[Vec<u8>]) -> Result<(), String> {
     for v in doc.views() {
-        let end = v.offset() as u64 + v.length() as u64;
+        let end = (v.offset() as u64).saturating_add(v.length() as u64);
         let have = buffers.get(v.buffer().index()).map_or(0, |b| b.len()) as u64;
         if end > have {
             return Err(format!(
@@ -321,12 +372,24 @@ fn check_accessors(doc: &gltf::Gltf, buffers: &[Vec<u8>]) -> Result<(), String> 
             ));
         }
         let Some(v) = a.view() else { continue };
+        let size = a.size() as u64;
+        let stride = v.stride().map_or(size, |s| s as u64);
+        if stride < size {
+            // the `gltf` crate's readers would split an element across strides (a panic)
+            return Err(format!(
+                "accessors[{}]: elements of {size} bytes do not fit the byteStride {stride} of \
+                 bufferViews[{}]",
+                a.index(),
+                v.index()
+            ));
+        }
         if a.count() == 0 {
             continue;
         }
-        let size = a.size() as u64;
-        let stride = v.stride().map_or(size, |s| s as u64);
-        let end = a.offset() as u64 + (a.count() as u64 - 1) * stride + size;
+        // saturating: a count near 2^64 is past any view, not wrapped back into it
+        let end = (a.offset() as u64)
+            .saturating_add((a.count() as u64 - 1).saturating_mul(stride))
+            .saturating_add(size);
         if end > v.length() as u64 {
             return Err(format!(
                 "accessors[{}]: {} elements end at byte {end} of bufferViews[{}], which holds {}",
@@ -338,6 +401,293 @@ fn check_accessors(doc: &gltf::Gltf, buffers: &[Vec<u8>]) -> Result<(), String> 
         }
     }
     Ok(())
+}
+
+/// `nodes[k]`, with the node's name where it has one, as errors and warnings name it.
+fn node_label(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(n) => format!("nodes[{}] '{n}'", node.index()),
+        None => format!("nodes[{}]", node.index()),
+    }
+}
+
+/// `meshes[k]`, with the mesh's name where it has one.
+fn mesh_label(mesh: &gltf::Mesh) -> String {
+    match mesh.name() {
+        Some(n) => format!("meshes[{}] '{n}'", mesh.index()),
+        None => format!("meshes[{}]", mesh.index()),
+    }
+}
+
+/// The label ([`node_label`]) of node `index` of `doc`.
+fn node_label_at(doc: &gltf::Document, index: usize) -> String {
+    doc.nodes()
+        .nth(index)
+        .map_or_else(|| format!("nodes[{index}]"), |n| node_label(&n))
+}
+
+/// Refuses, before anything walks it, a node hierarchy that is not what glTF 2.0
+/// requires, a disjoint union of strict trees: a node that is a child of two nodes (or
+/// listed twice by one), a node that is its own ancestor (a cycle), a root of `scene`
+/// that is another node's child or is listed twice by the scene. A walk of what passes
+/// meets each node once; a cycle would walk forever, and a node shared by the nodes of
+/// each level of a chain would be reached (and its meshes imported) exponentially often.
+fn check_hierarchy(doc: &gltf::Document, scene: &gltf::Scene) -> Result<(), String> {
+    let trees = "glTF node hierarchies are trees";
+    let mut parent: Vec<Option<usize>> = vec![None; doc.nodes().len()];
+    for node in doc.nodes() {
+        for child in node.children() {
+            let c = child.index();
+            let Some(slot) = parent.get_mut(c) else {
+                return Err(format!(
+                    "{} lists a child nodes[{c}] that does not exist",
+                    node_label(&node)
+                ));
+            };
+            match *slot {
+                Some(p) if p == node.index() => {
+                    return Err(format!(
+                        "{} lists {} twice among its children: {trees}",
+                        node_label(&node),
+                        node_label(&child)
+                    ))
+                }
+                Some(p) => {
+                    return Err(format!(
+                        "{} is a child of both {} and {}: {trees}, a node has one parent at most",
+                        node_label(&child),
+                        node_label_at(doc, p),
+                        node_label(&node)
+                    ))
+                }
+                None => *slot = Some(node.index()),
+            }
+        }
+    }
+    // one parent each: from every node, follow the parents until a root or a node an
+    // earlier walk met (which leads to a root); meeting this walk's own trail is a cycle
+    let mut walked_from = vec![usize::MAX; parent.len()];
+    for start in 0..parent.len() {
+        let mut k = start;
+        while walked_from[k] == usize::MAX {
+            walked_from[k] = start;
+            match parent[k] {
+                Some(p) => k = p,
+                None => break,
+            }
+        }
+        if walked_from[k] == start && parent[k].is_some() {
+            return Err(format!(
+                "{} is its own ancestor (its children lead back to it): {trees}",
+                node_label_at(doc, k)
+            ));
+        }
+    }
+    let mut is_root = vec![false; parent.len()];
+    for root in scene.nodes() {
+        let r = root.index();
+        if let Some(Some(p)) = parent.get(r) {
+            return Err(format!(
+                "{} is a root of scenes[{}] and a child of {}: {trees}",
+                node_label(&root),
+                scene.index(),
+                node_label_at(doc, *p)
+            ));
+        }
+        match is_root.get_mut(r) {
+            Some(true) => {
+                return Err(format!(
+                    "scenes[{}] lists {} twice among its nodes",
+                    scene.index(),
+                    node_label(&root)
+                ))
+            }
+            Some(seen) => *seen = true,
+            None => {
+                return Err(format!(
+                    "scenes[{}] lists a node nodes[{r}] that does not exist",
+                    scene.index()
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Visits `scene`'s nodes depth first, each before its children, in the file's order,
+/// with an explicit stack (one entry per level, on the heap: a chain of any depth
+/// cannot overflow the thread's stack). `visit(node, s)` is given what its parent's
+/// visit returned (`root` for the scene's roots); its error ends the walk. The hierarchy
+/// must have passed [`check_hierarchy`] (else a cycle never ends).
+fn walk_trees<'a, S: Copy>(
+    scene: &gltf::Scene<'a>,
+    root: S,
+    visit: &mut impl FnMut(&gltf::Node<'a>, S) -> Result<S, String>,
+) -> Result<(), String> {
+    let mut stack: Vec<(gltf::scene::iter::Children<'a>, S)> = Vec::new();
+    for node in scene.nodes() {
+        let s = visit(&node, root)?;
+        stack.push((node.children(), s));
+        while let Some((children, s)) = stack.last_mut() {
+            let s = *s;
+            match children.next() {
+                Some(child) => {
+                    let c = visit(&child, s)?;
+                    stack.push((child.children(), c));
+                }
+                None => {
+                    stack.pop();
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks, before anything is read, every primitive of the meshes that `scene`'s nodes
+/// place ([`check_primitive`]) and the size of the import: the triangles and vertices
+/// of every placement of a mesh (one per node that has it), summed over the nodes,
+/// within [`MAX_IMPORT_TRIANGLES`] and [`MAX_IMPORT_VERTICES`]. The hierarchy must have
+/// passed [`check_hierarchy`].
+fn check_meshes(scene: &gltf::Scene) -> Result<(), String> {
+    let mut sizes: BTreeMap<usize, (u64, u64)> = BTreeMap::new();
+    let (mut triangles, mut vertices) = (0u64, 0u64);
+    walk_trees(scene, (), &mut |node, ()| {
+        let Some(mesh) = node.mesh() else {
+            return Ok(());
+        };
+        let (t, v) = match sizes.get(&mesh.index()) {
+            Some(size) => *size,
+            None => {
+                let size = mesh_size(&mesh)?;
+                sizes.insert(mesh.index(), size);
+                size
+            }
+        };
+        triangles = triangles.saturating_add(t);
+        vertices = vertices.saturating_add(v);
+        if triangles > MAX_IMPORT_TRIANGLES || vertices > MAX_IMPORT_VERTICES {
+            return Err(format!(
+                "{} places {} ({t} triangles, {v} vertices), which brings the import to {triangles} \
+                 triangles and {vertices} vertices, over the limit of {MAX_IMPORT_TRIANGLES} \
+                 triangles and {MAX_IMPORT_VERTICES} vertices a glTF import may have (a mesh is \
+                 imported once per node that places it)",
+                node_label(node),
+                mesh_label(&mesh)
+            ));
+        }
+        Ok(())
+    })
+}
+
+/// Triangles and vertices one placement of `mesh` imports (as [`Importer::mesh`] reads
+/// it), after checking each primitive ([`check_primitive`]).
+fn mesh_size(mesh: &gltf::Mesh) -> Result<(u64, u64), String> {
+    let (mut triangles, mut vertices) = (0u64, 0u64);
+    for prim in mesh.primitives() {
+        let at = format!("{} primitive {}", mesh_label(mesh), prim.index());
+        let (t, v) = check_primitive(&prim, &at)?;
+        triangles = triangles.saturating_add(t);
+        vertices = vertices.saturating_add(v);
+    }
+    Ok((triangles, vertices))
+}
+
+/// Checks the accessors [`Importer::mesh`] reads from `prim` (named `at` in errors)
+/// before the `gltf` crate's readers see them: they assume glTF's types and panic
+/// (`unreachable!()`) or misread on others. POSITION and NORMAL are VEC3 of FLOAT,
+/// TEXCOORD_0 VEC2 of FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT, the indices SCALAR of
+/// UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT, each with at least one element.
+/// Returns the triangles and vertices the primitive imports (points and lines: no
+/// triangles, and the vertices read before they are skipped; nothing without POSITION).
+fn check_primitive(prim: &gltf::Primitive, at: &str) -> Result<(u64, u64), String> {
+    use gltf::accessor::{DataType as D, Dimensions as Dim};
+    use gltf::mesh::Mode;
+    use gltf::Semantic;
+    let Some(positions) = prim.get(&Semantic::Positions) else {
+        return Ok((0, 0));
+    };
+    check_read_accessor(&positions, at, "POSITION", Dim::Vec3, &[D::F32])?;
+    if let Some(a) = prim.get(&Semantic::Normals) {
+        check_read_accessor(&a, at, "NORMAL", Dim::Vec3, &[D::F32])?;
+    }
+    if let Some(a) = prim.get(&Semantic::TexCoords(0)) {
+        check_read_accessor(&a, at, "TEXCOORD_0", Dim::Vec2, &[D::F32, D::U8, D::U16])?;
+    }
+    let count = match prim.indices() {
+        Some(a) => {
+            check_read_accessor(&a, at, "indices", Dim::Scalar, &[D::U8, D::U16, D::U32])?;
+            a.count()
+        }
+        None => positions.count(),
+    } as u64;
+    let triangles = match prim.mode() {
+        Mode::Triangles => count / 3,
+        Mode::TriangleStrip | Mode::TriangleFan => count.saturating_sub(2),
+        _ => 0,
+    };
+    Ok((triangles, positions.count() as u64))
+}
+
+/// Refuses accessor `a`, read as `what` of the primitive `at`, unless its elements are
+/// `dims` of one of the component types `types` and it has at least one element (the
+/// `gltf` crate's readers assume both).
+fn check_read_accessor(
+    a: &gltf::Accessor,
+    at: &str,
+    what: &str,
+    dims: gltf::accessor::Dimensions,
+    types: &[gltf::accessor::DataType],
+) -> Result<(), String> {
+    if a.dimensions() != dims || !types.contains(&a.data_type()) {
+        let wanted: Vec<&str> = types.iter().map(|t| component_type_name(*t)).collect();
+        let wanted = match wanted.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => wanted.join(""),
+        };
+        return Err(format!(
+            "{at}: {what} accessors[{}] is {} of {}; caustica reads {what} as {} of {}",
+            a.index(),
+            dimensions_name(a.dimensions()),
+            component_type_name(a.data_type()),
+            dimensions_name(dims),
+            wanted
+        ));
+    }
+    if a.count() == 0 {
+        return Err(format!(
+            "{at}: {what} accessors[{}] has no elements (glTF requires a count of at least 1)",
+            a.index()
+        ));
+    }
+    Ok(())
+}
+
+/// glTF's name of a component type (`componentType`).
+fn component_type_name(t: gltf::accessor::DataType) -> &'static str {
+    use gltf::accessor::DataType as D;
+    match t {
+        D::I8 => "BYTE",
+        D::U8 => "UNSIGNED_BYTE",
+        D::I16 => "SHORT",
+        D::U16 => "UNSIGNED_SHORT",
+        D::U32 => "UNSIGNED_INT",
+        D::F32 => "FLOAT",
+    }
+}
+
+/// glTF's name of an accessor's element type (`type`).
+fn dimensions_name(d: gltf::accessor::Dimensions) -> &'static str {
+    use gltf::accessor::Dimensions as Dim;
+    match d {
+        Dim::Scalar => "SCALAR",
+        Dim::Vec2 => "VEC2",
+        Dim::Vec3 => "VEC3",
+        Dim::Vec4 => "VEC4",
+        Dim::Mat2 => "MAT2",
+        Dim::Mat3 => "MAT3",
+        Dim::Mat4 => "MAT4",
+    }
 }
 
 struct Importer<'b> {
@@ -394,13 +744,13 @@ fn instance_placement(node: &gltf::Node, parent: Mat4, world: Mat4) -> Option<Tr
 }
 
 impl Importer<'_> {
-    fn visit(&mut self, node: &gltf::Node, parent: Mat4) -> Result<(), String> {
+    /// Imports what `node` itself holds (its meshes, light and camera; not its children)
+    /// under the world transform `parent`; returns the node's own world transform, the
+    /// one its children are placed under.
+    fn visit(&mut self, node: &gltf::Node, parent: Mat4) -> Result<Mat4, String> {
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
-        let label = match node.name() {
-            Some(n) => format!("nodes[{}] '{n}'", node.index()),
-            None => format!("nodes[{}]", node.index()),
-        };
+        let label = node_label(node);
         if let Some(mesh) = node.mesh() {
             let placement = instance_placement(node, parent, world);
             self.mesh(&mesh, world, placement, &label)?;
@@ -411,10 +761,7 @@ impl Importer<'_> {
         if let Some(cam) = node.camera() {
             self.camera(&cam, world, &label);
         }
-        for child in node.children() {
-            self.visit(&child, world)?;
-        }
-        Ok(())
+        Ok(world)
     }
 
     /// The primitives of `mesh` as objects: instances placed by `placement` (object-space

@@ -48,6 +48,9 @@ pub enum ReportError {
     /// A technique's own reference could not be loaded or computed.
     #[error("{0}")]
     Reference(String),
+    /// The reference cache folder cannot be made or written.
+    #[error("reference cache {0}")]
+    Cache(String),
     /// The light-tracer reference could not be loaded or computed.
     #[error(transparent)]
     LightTracer(#[from] LightTracerError),
@@ -78,7 +81,7 @@ impl From<ReportError> for String {
     }
 }
 
-/// One measured combination.
+/// One combination: measured, or left out with the reason in [`Record::skipped`].
 #[derive(Clone, Debug, Serialize)]
 pub struct Record {
     /// Scene name.
@@ -127,16 +130,26 @@ pub struct Record {
     pub flip: Option<f64>,
     /// Relative bias of the mean over the repeats (seeds 1..=repeats).
     pub relative_bias: f64,
-    /// Relative variance over the repeats.
+    /// Relative variance over the repeats; NaN (`null` in report.json) from a single
+    /// repeat, which has no variance.
     pub relative_variance: f64,
     /// Photons behind the reference.
     pub reference_photons: u64,
-    /// Relative standard error the reference reached.
+    /// Relative standard error the reference reached (NaN, `null` in report.json, for
+    /// a reference in which no pixel carries signal: [`ReferenceInfo::noise`]).
+    ///
+    /// [`ReferenceInfo::noise`]: crate::reference::ReferenceInfo::noise
     pub reference_noise: f64,
     /// The errors against the independent light tracer; `None` for a technique whose
     /// light the tracer does not cover (PhotonGi's indirect light,
-    /// [`reference::traced_by_light_tracer`]).
+    /// [`reference::traced_by_light_tracer`]) and in a skipped record.
     pub tracer: Option<TracerErrors>,
+    /// Why the combination was left out (its reference holds no caustic: nothing to
+    /// measure against; the technique cannot accumulate frames); `None` (absent from
+    /// report.json) for a measured one. A skipped record's measurements are NaN (`null`
+    /// in report.json), its `repeats` 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skipped: Option<String>,
 }
 
 /// One combination's errors against the independent f64 light tracer's image of the same
@@ -186,7 +199,8 @@ pub struct ReportPlan {
     /// Photon grids per light.
     pub budgets: Vec<(u32, u32)>,
     /// Frames accumulated per run (1: single frames; more needs a technique with
-    /// `accumulate`, the others are skipped with a log line).
+    /// `accumulate`, the others are skipped: a log line and a [`Record::skipped`]
+    /// record).
     pub frames: Vec<usize>,
     /// Caustic filters to compare (Sspm's `filter`: density, bilateral; CausticMap's
     /// `gather`: box, density), each measured on its own; a technique runs those it has,
@@ -215,15 +229,315 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// The filter setting of technique `name` (its path and its values, the default first),
+/// `None` for a technique with one filter or an unknown name.
+fn filter_setting(name: &str) -> Option<(&'static str, &'static [&'static str])> {
+    TECHNIQUES
+        .iter()
+        .find(|t| t.name == name)
+        .and_then(|t| t.filter_setting)
+}
+
+/// The filters technique `name` runs of those `asked`: the asked ones it has (Sspm's
+/// `filter`, CausticMap's `gather`), its default filter where it has none of them, and
+/// [`OWN_FILTER`] once for a technique with one filter.
+fn filters_for(name: &str, asked: &[String]) -> Vec<String> {
+    match filter_setting(name) {
+        Some((_, values)) => {
+            let asked: Vec<String> = asked
+                .iter()
+                .filter(|f| values.contains(&f.as_str()))
+                .cloned()
+                .collect();
+            if asked.is_empty() {
+                values.iter().take(1).map(|v| v.to_string()).collect()
+            } else {
+                asked
+            }
+        }
+        None => vec![OWN_FILTER.to_string()],
+    }
+}
+
+/// Every filter name some technique has (`density`, `bilateral`, `box`), each once.
+fn known_filters() -> Vec<&'static str> {
+    let mut known: Vec<&'static str> = Vec::new();
+    for (_, values) in TECHNIQUES.iter().filter_map(|t| t.filter_setting) {
+        for v in values.iter() {
+            if !known.contains(v) {
+                known.push(v);
+            }
+        }
+    }
+    known
+}
+
+/// Every (filter, budget, frames) of one technique and backend, in the order they are
+/// measured (frames of at least 1; a plan without a frames axis measures single frames).
+fn combinations(filters: &[String], plan: &ReportPlan) -> Vec<(String, (u32, u32), usize)> {
+    let frames_axis: Vec<usize> = if plan.frames.is_empty() {
+        vec![1]
+    } else {
+        plan.frames.iter().map(|&n| n.max(1)).collect()
+    };
+    let mut all = Vec::new();
+    for f in filters {
+        for &b in &plan.budgets {
+            for &n in &frames_axis {
+                all.push((f.clone(), b, n));
+            }
+        }
+    }
+    all
+}
+
+/// The settings one combination of technique `name` runs with, a JSON object: the plan's
+/// settings, the technique spec's `overrides` over them, then the photon budget, the
+/// filter (where `name` has a filter setting) and, beyond one frame, accumulation.
+fn combination_settings(
+    plan: &ReportPlan,
+    overrides: &serde_json::Map<String, serde_json::Value>,
+    name: &str,
+    filter: &str,
+    (pw, ph): (u32, u32),
+    frames: usize,
+) -> serde_json::Value {
+    let mut settings = plan.settings.clone();
+    merge_settings(&mut settings, overrides.clone());
+    put_setting(&mut settings, "frame.photons_w", pw.into());
+    put_setting(&mut settings, "frame.photons_h", ph.into());
+    if let Some((path, _)) = filter_setting(name) {
+        put_setting(&mut settings, path, filter.into());
+    }
+    if frames > 1 {
+        put_setting(&mut settings, "frame.accumulate", true.into());
+    }
+    serde_json::Value::Object(settings)
+}
+
+/// Parses and validates `settings` for technique `name` as making it does
+/// ([`caustica_core::techniques::create`]: the pipeline's `parse_settings`, then its
+/// `validate`), without a backend or a scene. A technique this does not know (one
+/// registered later) passes here and is checked when it is made.
+fn check_settings(name: &str, settings: &serde_json::Value) -> Result<(), crate::Error> {
+    use caustica_core::frame::pipeline::Pipeline;
+    use caustica_core::techniques::{adaptive_caustics, caustic_map, photon_gi, sspm};
+    fn parse_and_validate<P: Pipeline>(settings: &serde_json::Value) -> Result<(), crate::Error> {
+        P::validate(&P::parse_settings(settings)?)
+    }
+    match name {
+        "sspm" => parse_and_validate::<sspm::SspmPipeline>(settings),
+        "caustic-map" => parse_and_validate::<caustic_map::CausticMapPipeline>(settings),
+        "adaptive-caustics" => {
+            parse_and_validate::<adaptive_caustics::AdaptiveCausticsPipeline>(settings)
+        }
+        "photon-gi" => parse_and_validate::<photon_gi::PhotonGiPipeline>(settings),
+        _ => Ok(()),
+    }
+}
+
+/// The positions of the first entry of `items` whose `key` equals an earlier entry's, and
+/// of that earlier entry.
+fn first_repeat<T, K: PartialEq>(items: &[T], key: impl Fn(&T) -> K) -> Option<(usize, usize)> {
+    let keys: Vec<K> = items.iter().map(key).collect();
+    (1..keys.len()).find_map(|j| (0..j).find(|&i| keys[i] == keys[j]).map(|i| (i, j)))
+}
+
+/// Checks everything in `plan` that can be checked before any reference is computed, and
+/// returns the first problem, naming the entry or combination:
+///
+/// - no scene twice by name (or by the file name its plot takes): two such scenes'
+///   records could not be told apart and they would write one plot file;
+/// - no technique spec, filter, budget, backend or frames entry twice;
+/// - every filter one that some technique has (a technique without it runs its default);
+/// - a technique spec with settings after a `:` has some (`sspm:` is refused);
+/// - every technique's settings for every filter and budget, and its reference's, parse
+///   and validate as the technique will parse and validate them when it is made;
+/// - a reference has at least 2 frames (its noise is their spread).
+pub fn validate(plan: &ReportPlan) -> Result<(), ReportError> {
+    let plan_err = |m: String| Err(ReportError::Plan(m));
+    if let Some((i, j)) = first_repeat(&plan.scenes, |s| crate::output::file_stem(&s.name)) {
+        let (a, b) = (&plan.scenes[i].name, &plan.scenes[j].name);
+        return plan_err(if a == b {
+            format!(
+                "scenes {} and {} of the list are both named '{a}': their records and plots \
+                 could not be told apart (list a scene once; give different scenes different \
+                 names)",
+                i + 1,
+                j + 1
+            )
+        } else {
+            format!(
+                "scenes '{a}' and '{b}' would write the same plot file error_vs_time_{}.png \
+                 (give them names that differ in letters or digits)",
+                crate::output::file_stem(a)
+            )
+        });
+    }
+    let budgets: Vec<String> = plan
+        .budgets
+        .iter()
+        .map(|(w, h)| format!("{w}x{h}"))
+        .collect();
+    let frames: Vec<String> = plan.frames.iter().map(|n| n.to_string()).collect();
+    for (what, list) in [
+        ("technique", &plan.techniques),
+        ("filter", &plan.filters),
+        ("budget", &budgets),
+        ("backend", &plan.backends),
+        ("frames entry", &frames),
+    ] {
+        if let Some((_, j)) = first_repeat(list, |s| s.clone()) {
+            return plan_err(format!("{what} '{}' is listed twice", list[j]));
+        }
+    }
+    let known = known_filters();
+    if let Some(f) = plan.filters.iter().find(|f| !known.contains(&f.as_str())) {
+        return plan_err(format!(
+            "unknown filter '{f}'; available: {}",
+            known.join(", ")
+        ));
+    }
+    if plan.reference.max_frames < 2 {
+        return plan_err(format!(
+            "a reference needs at least 2 frames, its noise being their spread \
+             (--reference-frames {})",
+            plan.reference.max_frames
+        ));
+    }
+    for t in &plan.techniques {
+        let (name, overrides) = technique_spec(t).map_err(ReportError::Plan)?;
+        if t.split_once(':')
+            .is_some_and(|(_, rest)| rest.trim().is_empty())
+        {
+            return plan_err(format!(
+                "technique '{t}': no settings after ':' (write '{name}' for its default \
+                 settings)"
+            ));
+        }
+        for filter in filters_for(name, &plan.filters) {
+            for &(pw, ph) in &plan.budgets {
+                let settings = combination_settings(plan, &overrides, name, &filter, (pw, ph), 1);
+                check_settings(name, &settings).map_err(|e| {
+                    let filter = if filter == OWN_FILTER {
+                        String::new()
+                    } else {
+                        format!("filter {filter}, ")
+                    };
+                    ReportError::Plan(format!("technique '{t}' ({filter}budget {pw}x{ph}): {e}"))
+                })?;
+            }
+        }
+        let spec = reference::reference_for(name, &plan.reference);
+        let (reference_name, settings) =
+            reference::reference_settings(&spec).map_err(ReportError::Plan)?;
+        check_settings(reference_name, &settings).map_err(|e| {
+            ReportError::Plan(format!(
+                "the reference of technique '{t}' ({}): {e}",
+                spec.technique
+            ))
+        })?;
+    }
+    Ok(())
+}
+
+/// Why technique `name` has nothing to be measured against in `scene`: its own
+/// reference `own` holds no signal, or (for a caustic technique) the light tracer's
+/// image holds none; `None` where they hold some.
+fn nothing_to_measure(
+    scene: &str,
+    name: &str,
+    own: &reference::Reference,
+    tracer: Option<&Traced>,
+) -> Option<String> {
+    if !reference::holds_signal(&own.image) {
+        let light = if reference::traced_by_light_tracer(name) {
+            "caustic"
+        } else {
+            "indirect light"
+        };
+        return Some(format!(
+            "the reference of {scene} holds no {light}: nothing to measure against"
+        ));
+    }
+    match tracer {
+        Some(t) if t.mask.count == 0 => Some(format!(
+            "the light tracer's image of {scene} holds no caustic ({} photons, {} \
+             connected): nothing to measure against",
+            t.info.photons, t.info.connected
+        )),
+        _ => None,
+    }
+}
+
+/// A noise for a log line: the number, or `n/a` where there is none to give (not finite,
+/// or not positive: the light tracer's 0 is an image in which no pixel carries signal).
+fn noise_text(noise: f64, digits: usize) -> String {
+    if noise.is_finite() && noise > 0.0 {
+        format!("{noise:.digits$}")
+    } else {
+        "n/a".into()
+    }
+}
+
+/// One combination's place in the plan: what its record names.
+struct Combination<'a> {
+    /// The scene at the report's size.
+    scene: &'a Scene,
+    technique: &'a str,
+    filter: &'a str,
+    backend: &'a str,
+    budget: (u32, u32),
+    frames: usize,
+}
+
+impl Combination<'_> {
+    /// The record of this combination left out for `reason`: no measurement (NaN, `null`
+    /// in report.json), no repeats.
+    fn skipped(&self, reason: &str, reference_photons: u64) -> Record {
+        Record {
+            scene: self.scene.name.clone(),
+            technique: self.technique.to_string(),
+            filter: self.filter.to_string(),
+            backend: self.backend.to_string(),
+            device: String::new(),
+            budget: format!("{}x{}", self.budget.0, self.budget.1),
+            photons: 0,
+            frames: self.frames,
+            width: self.scene.camera.width,
+            height: self.scene.camera.height,
+            repeats: 0,
+            timing: String::new(),
+            frame_ms: f64::NAN,
+            pass_ms: BTreeMap::new(),
+            relative_mse: f64::NAN,
+            raw_relative_mse: f64::NAN,
+            rmse: f64::NAN,
+            peak_ratio: f64::NAN,
+            raw_peak_ratio: f64::NAN,
+            flip: None,
+            relative_bias: f64::NAN,
+            relative_variance: f64::NAN,
+            reference_photons,
+            reference_noise: f64::NAN,
+            tracer: None,
+            skipped: Some(reason.to_string()),
+        }
+    }
+}
+
 /// Runs the plan; references are cached under `cache`. `log` receives progress lines.
+/// The plan is checked first ([`validate`]) and the cache folder made and tried, before
+/// any reference is computed. A combination with nothing to measure against (a reference
+/// that holds no caustic) or that cannot accumulate its frames is not measured: its
+/// record says why ([`Record::skipped`]), and the others go on.
 pub fn run(
     plan: &ReportPlan,
     cache: &Path,
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Record>, ReportError> {
-    for t in &plan.techniques {
-        technique_spec(t).map_err(ReportError::Plan)?;
-    }
+    validate(plan)?;
+    crate::output::prepare_folder(cache).map_err(ReportError::Cache)?;
     let mut cpu = crate::open_backend("cpu")?;
     let mut records = Vec::new();
     for original in &plan.scenes {
@@ -256,14 +570,24 @@ pub fn run(
                     cpu.as_mut(),
                     &mut |k, max, noise| {
                         if k % 8 == 0 || k == max {
-                            log(&format!("  reference frame {k}/{max}: noise {noise:.4}"));
+                            log(&format!(
+                                "  reference frame {k}/{max}: noise {}",
+                                noise_text(noise, 4)
+                            ));
                         }
                     },
                 )
                 .map_err(ReportError::Reference)?;
+                let empty = if reference::holds_signal(&r.image) {
+                    ""
+                } else {
+                    " (no pixel carries signal)"
+                };
                 log(&format!(
-                    "  reference: {} photons over {} frames, noise {:.4}",
-                    r.info.photons, r.info.frames, r.info.noise
+                    "  reference: {} photons over {} frames, noise {}{empty}",
+                    r.info.photons,
+                    r.info.frames,
+                    noise_text(r.info.noise, 4)
                 ));
                 references.push(r);
             }
@@ -271,55 +595,32 @@ pub fn run(
                 .iter()
                 .find(|r| r.info.spec == spec)
                 .expect("computed above");
-            let mask = CausticMask::from_reference(&r.image);
-            // each technique runs the asked filters it has (Sspm's `filter`, CausticMap's
-            // `gather`), its default filter where it has none of them, and a technique
-            // with one filter runs it once as "own"
-            let filter_setting = TECHNIQUES
-                .iter()
-                .find(|t| t.name == name)
-                .and_then(|t| t.filter_setting);
-            let filters: Vec<String> = match filter_setting {
-                Some((_, values)) => {
-                    let asked: Vec<String> = plan
-                        .filters
-                        .iter()
-                        .filter(|f| values.contains(&f.as_str()))
-                        .cloned()
-                        .collect();
-                    if asked.is_empty() {
-                        vec![values[0].to_string()]
-                    } else {
-                        asked
+            let filters = filters_for(name, &plan.filters);
+            let combos = combinations(&filters, plan);
+            if let Some(reason) = nothing_to_measure(&scene.name, name, r, tracer) {
+                log(&format!("{}: {technique}: skipped: {reason}", scene.name));
+                for backend_name in &plan.backends {
+                    for (filter, budget, frames) in &combos {
+                        let c = Combination {
+                            scene: &scene,
+                            technique,
+                            filter,
+                            backend: backend_name,
+                            budget: *budget,
+                            frames: *frames,
+                        };
+                        records.push(c.skipped(&reason, r.info.photons));
                     }
                 }
-                None => vec![OWN_FILTER.to_string()],
-            };
+                continue;
+            }
+            let mask = CausticMask::from_reference(&r.image);
             for backend_name in &plan.backends {
                 let mut backend = crate::open_backend(backend_name)?;
-                let frames_axis: Vec<usize> = if plan.frames.is_empty() {
-                    vec![1]
-                } else {
-                    plan.frames.clone()
-                };
-                for (filter, &(pw, ph), &frames) in filters.iter().flat_map(|f| {
-                    plan.budgets
-                        .iter()
-                        .flat_map(|b| frames_axis.iter().map(move |n| (b, n)))
-                        .map(move |(b, n)| (f, b, n))
-                }) {
-                    let frames = frames.max(1);
-                    let mut settings = plan.settings.clone();
-                    merge_settings(&mut settings, overrides.clone());
-                    put_setting(&mut settings, "frame.photons_w", pw.into());
-                    put_setting(&mut settings, "frame.photons_h", ph.into());
-                    if let Some((path, _)) = filter_setting {
-                        put_setting(&mut settings, path, filter.as_str().into());
-                    }
-                    if frames > 1 {
-                        put_setting(&mut settings, "frame.accumulate", true.into());
-                    }
-                    let settings = serde_json::Value::Object(settings);
+                for (filter, (pw, ph), frames) in &combos {
+                    let (filter, pw, ph, frames) = (filter, *pw, *ph, *frames);
+                    let settings =
+                        combination_settings(plan, &overrides, name, filter, (pw, ph), frames);
                     let made = create(name, backend.as_mut(), &scene, &settings);
                     let mut sspm = match made {
                         Ok(t) => t,
@@ -327,6 +628,16 @@ pub fn run(
                             log(&format!(
                                 "  {technique}/{filter}/{backend_name} {pw}x{ph} x {frames} frames: skipped ({e})"
                             ));
+                            let c = Combination {
+                                scene: &scene,
+                                technique,
+                                filter,
+                                backend: backend_name,
+                                budget: (pw, ph),
+                                frames,
+                            };
+                            let reason = format!("cannot accumulate {frames} frames: {e}");
+                            records.push(c.skipped(&reason, r.info.photons));
                             continue;
                         }
                         Err(e) => return Err(e.into()),
@@ -421,7 +732,12 @@ pub fn run(
                         raw_peak_ratio: median(&mut raw_peak),
                         flip: (!flip.is_empty()).then(|| median(&mut flip)),
                         relative_bias: bv.relative_bias,
-                        relative_variance: bv.relative_variance,
+                        // one sample has no variance
+                        relative_variance: if images.len() > 1 {
+                            bv.relative_variance
+                        } else {
+                            f64::NAN
+                        },
                         reference_photons: r.info.photons,
                         reference_noise: r.info.noise,
                         tracer: tracer.map(|t| TracerErrors {
@@ -433,6 +749,7 @@ pub fn run(
                             silhouette: t.info.spec.silhouette,
                             spheres: t.info.spec.spheres,
                         }),
+                        skipped: None,
                     };
                     let against_tracer = rec.tracer.as_ref().map_or(String::new(), |t| {
                         format!(
@@ -484,12 +801,23 @@ fn trace_reference(
     ));
     let (image, info) = light_tracer::load_or_compute(cache, scene, &spec, &mut |k, n, noise| {
         if k % 4 == 0 || k == n {
-            log(&format!("  light tracer batch {k}/{n}: noise {noise:.5}"));
+            log(&format!(
+                "  light tracer batch {k}/{n}: noise {}",
+                noise_text(noise, 5)
+            ));
         }
     })?;
+    let mask = CausticMask::from_reference(&image);
+    let empty = if mask.count == 0 {
+        " (no pixel carries signal)"
+    } else {
+        ""
+    };
     log(&format!(
-        "  light tracer: {} photons, {} connected, noise {:.5}",
-        info.photons, info.connected, info.noise
+        "  light tracer: {} photons, {} connected, noise {}{empty}",
+        info.photons,
+        info.connected,
+        noise_text(info.noise, 5)
     ));
     if !info.noise.is_finite()
         || image
@@ -501,16 +829,23 @@ fn trace_reference(
             scene: scene.name.clone(),
         });
     }
-    Ok(Traced {
-        mask: CausticMask::from_reference(&image),
-        image,
-        info,
-    })
+    Ok(Traced { mask, image, info })
 }
 
-/// A number for a table cell: `-` where there is none or it is not finite.
+/// A number for a table cell: `-` where the record has no such column (PhotonGi's
+/// tracer columns), `n/a` where the value is undefined (not finite).
 fn cell(v: Option<f64>, fmt: fn(f64) -> String) -> String {
-    v.filter(|v| v.is_finite()).map_or("-".into(), fmt)
+    v.map_or("-".into(), |v| num(v, fmt))
+}
+
+/// A number for a table cell: `n/a` where it is undefined (not finite: a ratio of two
+/// zeros, the variance of one repeat).
+fn num(v: f64, fmt: fn(f64) -> String) -> String {
+    if v.is_finite() {
+        fmt(v)
+    } else {
+        "n/a".into()
+    }
 }
 
 /// The paragraph above [`table`]'s rows: what each error column is measured against,
@@ -567,33 +902,58 @@ pub fn table(records: &[Record]) -> String {
     );
     let sci3 = |v: f64| format!("{v:.3e}");
     let sci2 = |v: f64| format!("{v:.2e}");
+    let fix1 = |v: f64| format!("{v:.1}");
+    let fix3 = |v: f64| format!("{v:.3}");
+    let signed4 = |v: f64| format!("{v:+.4}");
+    let mut skipped: Vec<String> = Vec::new();
     for r in records {
         let t = r.tracer.as_ref();
+        let cells: Vec<String> = if let Some(why) = &r.skipped {
+            let line = format!("- {} / {}: {why}", r.scene, r.technique);
+            if !skipped.contains(&line) {
+                skipped.push(line);
+            }
+            std::iter::once("skipped".to_string())
+                .chain(std::iter::repeat_n("n/a".to_string(), 11))
+                .collect()
+        } else {
+            let ratio = if r.raw_relative_mse > 0.0 {
+                r.relative_mse / r.raw_relative_mse
+            } else {
+                f64::NAN
+            };
+            vec![
+                num(r.frame_ms, fix1),
+                cell(t.map(|t| t.relative_mse), sci3),
+                cell(t.map(|t| t.noise * t.noise), sci2),
+                num(r.relative_mse, sci3),
+                cell(t.map(|t| t.raw_relative_mse), sci3),
+                num(r.raw_relative_mse, sci3),
+                num(ratio, fix3),
+                num(r.peak_ratio, fix3),
+                num(r.raw_peak_ratio, fix3),
+                r.flip.map_or("-".into(), |f| num(f, fix3)),
+                num(r.relative_bias, signed4),
+                num(r.relative_variance, sci2),
+            ]
+        };
         s.push_str(&format!(
-            "| {} | {} ({}) | {} | {} | {} | {:.1} | {} | {} | {:.3e} | {} | {:.3e} | {:.3} | {:.3} | {:.3} | {} | {:+.4} | {:.2e} |\n",
+            "| {} | {} ({}) | {} | {} | {} | {} |\n",
             r.scene,
             r.technique,
             r.filter,
             r.backend,
             r.budget,
             r.frames,
-            r.frame_ms,
-            cell(t.map(|t| t.relative_mse), sci3),
-            cell(t.map(|t| t.noise * t.noise), sci2),
-            r.relative_mse,
-            cell(t.map(|t| t.raw_relative_mse), sci3),
-            r.raw_relative_mse,
-            if r.raw_relative_mse > 0.0 {
-                r.relative_mse / r.raw_relative_mse
-            } else {
-                f64::NAN
-            },
-            r.peak_ratio,
-            r.raw_peak_ratio,
-            r.flip.map_or("-".into(), |f| format!("{f:.3}")),
-            r.relative_bias,
-            r.relative_variance,
+            cells.join(" | ")
         ));
+    }
+    if !skipped.is_empty() {
+        s.push_str("\nNot measured (`skipped` in report.json):\n");
+        for line in skipped {
+            s.push_str(&line);
+            s.push('\n');
+        }
     }
     s
 }
@@ -622,12 +982,19 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
         .map_err(|_| "could not load the plot font".to_string())?;
     let rs: Vec<&Record> = records
         .iter()
-        .filter(|r| r.scene == scene && r.frame_ms > 0.0 && r.headline_errors().0 > 0.0)
+        .filter(|r| r.scene == scene && r.skipped.is_none())
+        .filter(|r| r.frame_ms > 0.0 && r.headline_errors().0 > 0.0)
         .collect();
     if rs.is_empty() {
-        return Err(format!(
-            "no records with positive time and error for {scene}"
-        ));
+        let why: Vec<&str> = records
+            .iter()
+            .filter(|r| r.scene == scene)
+            .filter_map(|r| r.skipped.as_deref())
+            .collect();
+        return Err(match why.first() {
+            Some(why) => format!("nothing measured for {scene}: {why}"),
+            None => format!("no records with positive time and error for {scene}"),
+        });
     }
     let (tmin, tmax) = rs.iter().fold((f64::MAX, 0.0f64), |(a, b), r| {
         (a.min(r.frame_ms), b.max(r.frame_ms))
@@ -720,4 +1087,141 @@ pub fn plot(records: &[Record], scene: &str, path: &Path) -> Result<(), String> 
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin::builtin;
+
+    /// A tiny plan of `sphere` with Sspm at 16x16 photons.
+    fn plan() -> ReportPlan {
+        ReportPlan {
+            scenes: vec![builtin("sphere").expect("built-in")],
+            techniques: vec!["sspm".into()],
+            backends: vec!["cpu".into()],
+            budgets: vec![(16, 16)],
+            frames: vec![1],
+            filters: vec!["density".into()],
+            settings: serde_json::Map::new(),
+            repeats: 1,
+            reference: ReferenceSpec {
+                width: 32,
+                height: 18,
+                max_frames: 2,
+                ..ReferenceSpec::default()
+            },
+            tracer: LightTracerSpec::default(),
+        }
+    }
+
+    /// The error `validate` gives for `plan` changed by `change`.
+    fn refused(change: impl FnOnce(&mut ReportPlan)) -> String {
+        let mut p = plan();
+        change(&mut p);
+        match validate(&p) {
+            Err(e) => e.to_string(),
+            Ok(()) => panic!("the plan was accepted"),
+        }
+    }
+
+    #[test]
+    fn a_report_plan_is_checked_before_any_work() {
+        assert!(validate(&plan()).is_ok());
+        let e = refused(|p| p.techniques = vec!["sspm:foo=1".into()]);
+        assert!(
+            e.contains("technique 'sspm:foo=1' (filter density, budget 16x16)"),
+            "{e}"
+        );
+        assert!(e.contains("unknown field `foo`"), "{e}");
+        let e = refused(|p| p.techniques = vec!["adaptive-caustics".into()]);
+        assert!(e.contains("times a power of two"), "{e}");
+        let e = refused(|p| p.techniques = vec!["photon-gi:bogus=1".into()]);
+        assert!(
+            e.contains("technique 'photon-gi:bogus=1' (budget 16x16)"),
+            "{e}"
+        );
+        let e = refused(|p| p.techniques = vec!["sspm:".into()]);
+        assert!(e.contains("no settings after ':'"), "{e}");
+        let e = refused(|p| p.filters = vec!["foo".into()]);
+        assert_eq!(
+            e,
+            "unknown filter 'foo'; available: density, bilateral, box"
+        );
+        let e = refused(|p| p.reference.max_frames = 1);
+        assert!(e.contains("at least 2 frames"), "{e}");
+        let e = refused(|p| p.scenes.push(builtin("sphere").expect("built-in")));
+        assert!(
+            e.contains("scenes 1 and 2 of the list are both named 'sphere'"),
+            "{e}"
+        );
+        let e = refused(|p| {
+            let mut other = builtin("cornell").expect("built-in");
+            other.name = "sphere 1".into();
+            p.scenes[0].name = "sphere_1".into();
+            p.scenes.push(other);
+        });
+        assert!(
+            e.contains("would write the same plot file error_vs_time_sphere_1.png"),
+            "{e}"
+        );
+        let e = refused(|p| p.budgets.push((16, 16)));
+        assert_eq!(e, "budget '16x16' is listed twice");
+        let e = refused(|p| {
+            p.settings
+                .insert("frame".into(), serde_json::json!({"seed": "x"}));
+        });
+        assert!(e.contains("technique 'sspm'"), "{e}");
+    }
+
+    /// A measured record of `plan()`'s combination.
+    fn record() -> Record {
+        let scene = builtin("sphere").expect("built-in");
+        let c = Combination {
+            scene: &scene,
+            technique: "sspm",
+            filter: "density",
+            backend: "cpu",
+            budget: (16, 16),
+            frames: 1,
+        };
+        Record {
+            skipped: None,
+            repeats: 1,
+            frame_ms: 1.5,
+            relative_mse: 0.25,
+            raw_relative_mse: 0.0,
+            rmse: 0.1,
+            peak_ratio: 1.0,
+            raw_peak_ratio: 1.0,
+            relative_bias: 0.01,
+            relative_variance: f64::NAN,
+            reference_noise: 0.02,
+            ..c.skipped("", 1)
+        }
+    }
+
+    #[test]
+    fn the_table_has_no_nan() {
+        let measured = record();
+        let mut empty = record();
+        empty.scene = "plain".into();
+        empty.skipped = Some("the reference of plain holds no caustic".into());
+        let text = table(&[measured, empty]);
+        assert!(!text.to_lowercase().contains("nan"), "{text}");
+        let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("| ")).collect();
+        // header, rule, two rows, each with the header's columns
+        assert_eq!(rows.len(), 4, "{text}");
+        let columns = rows[0].matches('|').count();
+        assert!(
+            rows.iter().all(|r| r.matches('|').count() == columns),
+            "{text}"
+        );
+        // filtered / raw of a zero raw error, and one repeat's variance: n/a
+        let cells: Vec<&str> = rows[2].split('|').map(str::trim).collect();
+        assert_eq!(cells[12], "n/a", "{}", rows[2]);
+        assert_eq!(cells[17], "n/a", "{}", rows[2]);
+        assert!(rows[3].contains("| skipped |"), "{}", rows[3]);
+        assert!(text.contains("- plain / sspm: the reference of plain holds no caustic"));
+    }
 }

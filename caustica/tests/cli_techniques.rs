@@ -113,7 +113,10 @@ fn report_arguments_are_checked_before_any_reference_is_rendered() {
             vec!["--tracer-batches", "1"],
             "--tracer-batches must be at least 2",
         ),
-        (vec!["--tracer-spheres", "cube"], "unknown --tracer-spheres"),
+        (
+            vec!["--tracer-spheres", "cube"],
+            "invalid value 'cube' for '--tracer-spheres",
+        ),
         (vec!["--silhouette", "edge"], "invalid value 'edge'"),
     ] {
         let mut cmd = vec!["report", "--out", d];

@@ -11,7 +11,7 @@ pub mod light_tracer;
 
 pub(crate) use crate::output::read_exr;
 use caustica_core::frame::image::{luminance, Image};
-use caustica_core::frame::metrics::MASK_FRACTION;
+use caustica_core::frame::metrics::{CausticMask, MASK_FRACTION};
 use caustica_core::techniques::create;
 use caustica_core::{Backend, Scene};
 use serde::{Deserialize, Serialize};
@@ -104,8 +104,24 @@ pub struct ReferenceInfo {
     pub photons: u64,
     /// Frames averaged.
     pub frames: u32,
-    /// Relative standard error reached.
+    /// Relative standard error reached; NaN (`null` in the sidecar) for a reference in
+    /// which no pixel carries signal ([`holds_signal`]): an empty image has no relative
+    /// error, it is not an exact one.
+    #[serde(deserialize_with = "nan_for_null")]
     pub noise: f64,
+}
+
+/// Reads a number, or `null` as NaN: serde_json writes a NaN (an empty reference's
+/// noise) as `null`, and the sidecar must read back what it wrote.
+fn nan_for_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// Whether any pixel of `image` carries signal: the caustic mask
+/// ([`caustica_core::frame::metrics::CausticMask`]) of an image with no positive
+/// luminance is empty, and errors measured against it would be 0/0.
+pub fn holds_signal(image: &Image) -> bool {
+    CausticMask::from_reference(image).count > 0
 }
 
 /// A converged reference: the mean image (linear radiance) and how it was made.
@@ -188,7 +204,11 @@ pub const REFERENCE_FIRST_SEED: u32 = 1 << 20;
 
 /// Progressive mean of the raw caustics over frames with seeds
 /// [`REFERENCE_FIRST_SEED`], `REFERENCE_FIRST_SEED + 1`, ...; `scene_hash` is recorded
-/// in the reference's info.
+/// in the reference's info. `spec.max_frames` must be at least 2 (the noise is the
+/// spread of the frames). `progress(frames_done, max_frames, noise)` after each frame,
+/// the noise NaN while it is undefined (after one frame, or while no pixel carries
+/// signal). An image still empty after 4 frames holds no caustic and stops there, its
+/// noise NaN ([`ReferenceInfo::noise`]).
 pub fn compute(
     scene: &Scene,
     spec: &ReferenceSpec,
@@ -196,23 +216,24 @@ pub fn compute(
     progress: &mut dyn FnMut(u32, u32, f64),
     scene_hash: String,
 ) -> Result<Reference, String> {
+    if spec.max_frames < 2 {
+        return Err(format!(
+            "a reference needs at least 2 frames, its noise being their spread (max_frames \
+             is {})",
+            spec.max_frames
+        ));
+    }
     let mut scene = scene.clone();
     scene.camera.width = spec.width;
     scene.camera.height = spec.height;
-    // the technique may be a spec with settings (`photon-gi:estimator=deposit+...`)
-    let (name, overrides) = crate::technique_spec::technique_spec(&spec.technique)?;
-    let mut settings = serde_json::Map::new();
-    crate::technique_spec::put_setting(&mut settings, "frame.photons_w", spec.photons_side.into());
-    crate::technique_spec::put_setting(&mut settings, "frame.photons_h", spec.photons_side.into());
-    crate::technique_spec::merge_settings(&mut settings, overrides);
-    let settings = serde_json::Value::Object(settings);
+    let (name, settings) = reference_settings(spec)?;
     let mut sspm = create(name, backend, &scene, &settings).map_err(|e| e.to_string())?;
     let (_, raw_output) = sspm.estimate_outputs();
     let n = (spec.width * spec.height) as usize;
     let mut sum = vec![[0.0f64; 3]; n];
     let mut sum2 = vec![[0.0f64; 3]; n];
-    let (mut frames, mut photons, mut noise) = (0u32, 0u64, f64::INFINITY);
-    while frames < spec.max_frames.max(2) {
+    let (mut frames, mut photons, mut noise) = (0u32, 0u64, None);
+    while frames < spec.max_frames {
         sspm.set_seed(REFERENCE_FIRST_SEED + frames);
         let stats = sspm
             .frame(backend, &mut |_| {})
@@ -229,9 +250,10 @@ pub fn compute(
             }
         }
         frames += 1;
-        noise = relative_standard_error(&sum, &sum2, frames);
-        progress(frames, spec.max_frames, noise);
-        if frames >= 4 && noise <= spec.target_noise {
+        noise = relative_noise(&sum, &sum2, frames);
+        progress(frames, spec.max_frames, noise.unwrap_or(f64::NAN));
+        // an image still empty after 4 frames holds no caustic: more would not change it
+        if frames >= 4 && noise.is_none_or(|n| n <= spec.target_noise) {
             break;
         }
     }
@@ -249,16 +271,41 @@ pub fn compute(
             spec: spec.clone(),
             photons,
             frames,
-            noise,
+            noise: noise.unwrap_or(f64::NAN),
         },
     })
 }
 
-/// RMS standard error of the per-pixel means over the caustic pixels (mask from the
-/// current mean, as metrics::CausticMask), relative to the RMS of the means.
+/// [`relative_noise`] as one number, as the light tracer records it: infinite before 2
+/// samples, 0 where no pixel carries signal (tell an empty image by [`holds_signal`],
+/// not by this 0).
 fn relative_standard_error(sum: &[[f64; 3]], sum2: &[[f64; 3]], k: u32) -> f64 {
+    match relative_noise(sum, sum2, k) {
+        Some(n) => n,
+        None if k < 2 => f64::INFINITY,
+        None => 0.0,
+    }
+}
+
+/// The technique (a registry name) whose frames make the reference `spec`, and the
+/// settings they run with, a JSON object: `spec.technique` may be a spec with settings
+/// (`photon-gi:estimator=deposit+...`), laid over the photon grid of `spec.photons_side`.
+pub fn reference_settings(spec: &ReferenceSpec) -> Result<(&str, serde_json::Value), String> {
+    let (name, overrides) = crate::technique_spec::technique_spec(&spec.technique)?;
+    let mut settings = serde_json::Map::new();
+    crate::technique_spec::put_setting(&mut settings, "frame.photons_w", spec.photons_side.into());
+    crate::technique_spec::put_setting(&mut settings, "frame.photons_h", spec.photons_side.into());
+    crate::technique_spec::merge_settings(&mut settings, overrides);
+    Ok((name, serde_json::Value::Object(settings)))
+}
+
+/// RMS standard error of the per-pixel means over the caustic pixels (mask from the
+/// current mean, as metrics::CausticMask), relative to the RMS of the means, from `k`
+/// samples' per-pixel sums and sums of squares; `None` where it is undefined: fewer than
+/// 2 samples, or no pixel carries signal.
+fn relative_noise(sum: &[[f64; 3]], sum2: &[[f64; 3]], k: u32) -> Option<f64> {
     if k < 2 {
-        return f64::INFINITY;
+        return None;
     }
     let k = k as f64;
     let lum: Vec<f64> = sum
@@ -278,9 +325,39 @@ fn relative_standard_error(sum: &[[f64; 3]], sum2: &[[f64; 3]], k: u32) -> f64 {
             sq += mean * mean;
         }
     }
-    if sq > 0.0 {
-        (var / sq).sqrt()
-    } else {
-        0.0
+    (sq > 0.0).then(|| (var / sq).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_image_has_no_noise_not_a_zero_one() {
+        let (sum, sum2) = (vec![[0.0; 3]; 4], vec![[0.0; 3]; 4]);
+        assert_eq!(relative_noise(&sum, &sum2, 4), None);
+        assert_eq!(relative_noise(&[[1.0; 3]], &[[1.0; 3]], 1), None);
+        // two samples 1 and 3 of one pixel: mean 2, sample variance 2, of the mean 1
+        let n = relative_noise(&[[4.0; 3]], &[[10.0; 3]], 2).expect("defined");
+        assert!((n - 0.5).abs() < 1e-12, "{n}");
+        // the light tracer's number keeps its old meaning
+        assert_eq!(relative_standard_error(&sum, &sum2, 4), 0.0);
+        assert!(!holds_signal(&Image::new(2, 2, vec![[0.0; 4]; 4])));
+    }
+
+    #[test]
+    fn an_empty_reference_reads_back_from_its_sidecar() {
+        let info = ReferenceInfo {
+            scene: "plain".into(),
+            scene_hash: "0".into(),
+            spec: ReferenceSpec::default(),
+            photons: 0,
+            frames: 4,
+            noise: f64::NAN,
+        };
+        let text = serde_json::to_string(&info).expect("serialises");
+        assert!(text.contains("\"noise\":null"), "{text}");
+        let back: ReferenceInfo = serde_json::from_str(&text).expect("reads back");
+        assert!(back.noise.is_nan());
     }
 }
