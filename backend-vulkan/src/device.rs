@@ -202,7 +202,13 @@ impl Context {
                 None,
             )
         }
-        .map_err(|e| unavailable(format!("vkCreateInstance: {e:?}")))?;
+        .map_err(|e| {
+            unavailable(format!(
+                "vkCreateInstance: {e:?} (the Vulkan loader found no usable driver: install a \
+                 GPU driver or Mesa's lavapipe, scripts/install-drivers.sh, and check \
+                 VK_ICD_FILENAMES / VK_DRIVER_FILES if set)"
+            ))
+        })?;
         let validation_log: ValidationLog = Arc::new(Mutex::new(Vec::new()));
         let debug = if use_validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);

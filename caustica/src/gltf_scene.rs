@@ -1033,7 +1033,18 @@ fn caustica_extras(extras: &gltf::json::Extras) -> Option<serde_json::Map<String
 fn map_material(m: &gltf::Material, at: &str, warn: &mut Vec<String>) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let base = pbr.base_color_factor();
-    let color = Vec3::new(base[0], base[1], base[2]).clamp(Vec3::ZERO, Vec3::ONE);
+    let given = Vec3::new(base[0], base[1], base[2]);
+    // NaN clamps to NaN: such a factor becomes 0 (black), said as well
+    let color = Vec3::select(given.cmpeq(given), given, Vec3::ZERO).clamp(Vec3::ZERO, Vec3::ONE);
+    if color != given {
+        // glTF 2.0 bounds baseColorFactor to [0, 1]; an albedo outside it would create or
+        // take energy
+        warn.push(format!(
+            "{at}: baseColorFactor {:?} outside [0, 1], taken as {:?}",
+            given.to_array(),
+            color.to_array()
+        ));
+    }
     let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
     let mut textures = Vec::new();
     if pbr.base_color_texture().is_some() {

@@ -48,6 +48,18 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene, SceneFileError> {
             reason: "glTF needs caustica's `gltf` feature".into(),
         });
     }
+    if ext.as_deref() == Some("obj") {
+        // an OBJ file is a mesh without camera or lights: a scene file places it
+        return Err(SceneFileError {
+            file: path.display().to_string(),
+            line: 0,
+            column: 0,
+            reason: "an OBJ file is a mesh, not a scene: place it in a scene file's \
+                     object as `\"shape\": {\"type\": \"obj_file\", \"path\": ...}` \
+                     (docs/scene-format.md)"
+                .into(),
+        });
+    }
     let text = caustica_core::scene::format::read_scene_text(path)?;
     let file = path.display().to_string();
     #[cfg(feature = "obj")]

@@ -397,3 +397,12 @@ fn a_flag_of_a_few_values_lists_them_and_a_side_too_large_says_so() {
         Some(2)
     );
 }
+
+#[test]
+fn an_obj_file_given_as_a_scene_says_how_to_place_it() {
+    let path = temp_file("ball.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    fails_cleanly(
+        &["render", "--scene", path.to_str().unwrap()],
+        "an OBJ file is a mesh, not a scene",
+    );
+}

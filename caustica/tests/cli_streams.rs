@@ -82,7 +82,7 @@ fn report(out: &Path, cache: Option<&Path>) -> Vec<String> {
         "--size",
         "32x18",
         "--reference-frames",
-        "1",
+        "2",
         "--tracer-photons",
         "4096",
         "--tracer-batches",

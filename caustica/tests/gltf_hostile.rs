@@ -355,3 +355,19 @@ fn one_mesh_placed_by_many_nodes_is_refused_before_it_is_read() {
         ],
     );
 }
+
+#[test]
+fn a_base_colour_outside_zero_one_is_clamped_with_a_warning() {
+    let mut doc = document(json!([{"name": "floor", "mesh": 0}]), json!([0]));
+    doc["materials"] =
+        json!([{"pbrMetallicRoughness": {"baseColorFactor": [5.0, -1.0, 0.5, 1.0]}}]);
+    doc["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let im = load("colour", &doc).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        im.warnings
+            .iter()
+            .any(|w| w.contains("baseColorFactor") && w.contains("outside [0, 1]")),
+        "{:?}",
+        im.warnings
+    );
+}

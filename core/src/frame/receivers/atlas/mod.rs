@@ -226,6 +226,13 @@ fn lay_out(
                 "objects[{receiver}] ('{}'): its UVs cannot address a caustic map: {reason}",
                 host.model().objects[receiver as usize].name
             )),
+            // the atlas is the setting's size: too small a one is the setting's problem
+            layout::AtlasError::TooManyReceivers { receivers, texels } => {
+                Error::InvalidParameter(format!(
+                    "atlas.atlas_size {atlas_size}: the scene's {receivers} receivers need a \
+                     texel each, the atlas has {texels}"
+                ))
+            }
             other => Error::InvalidScene(other.to_string()),
         })
 }
