@@ -137,8 +137,9 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
 }
 
 /// Writes `path` whole or not at all: `write` makes a partial file beside it (a hidden
-/// name that ends as `path`'s), which is renamed over `path` once written; a failed write
-/// (a full disk) removes it, so no truncated file is left under `path` and an earlier one
+/// name of this process and write that ends as `path`'s, so a format follows the
+/// extension), which is synced and renamed over `path` once written; a failed write (a
+/// full disk) removes it, so no truncated file is left under `path` and an earlier one
 /// stays as it was.
 pub fn write_whole(
     path: &Path,
@@ -147,10 +148,25 @@ pub fn write_whole(
     let name = path
         .file_name()
         .ok_or_else(|| format!("{}: not a file name", path.display()))?;
-    let partial = path.with_file_name(format!(".partial-{}", name.to_string_lossy()));
-    let written = write(&partial).and_then(|()| {
-        std::fs::rename(&partial, path).map_err(|e| format!("{}: {e}", path.display()))
-    });
+    // one partial name per process and write, so that two runs writing the same path
+    // (a shared reference cache) do not rename each other's half-written files
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let partial = path.with_file_name(format!(
+        ".partial-{}-{n}-{}",
+        std::process::id(),
+        name.to_string_lossy()
+    ));
+    let written = write(&partial)
+        .and_then(|()| {
+            // on the disk before the name points at it
+            std::fs::File::open(&partial)
+                .and_then(|f| f.sync_all())
+                .map_err(|e| format!("{}: {e}", path.display()))
+        })
+        .and_then(|()| {
+            std::fs::rename(&partial, path).map_err(|e| format!("{}: {e}", path.display()))
+        });
     if written.is_err() {
         let _ = std::fs::remove_file(&partial);
     }
@@ -160,6 +176,29 @@ pub fn write_whole(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A file is replaced whole or left as it was, and no partial file stays behind.
+    #[test]
+    fn files_are_written_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("caustica-whole-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("stats.json");
+        write_file(&path, b"first").unwrap();
+        write_file(&path, b"second").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"second");
+        // a write that fails half-way (a full disk) leaves the earlier file
+        let e = write_whole(&path, |partial| {
+            std::fs::write(partial, b"trunc").unwrap();
+            Err("No space left on device".into())
+        })
+        .unwrap_err();
+        assert!(e.contains("No space"), "{e}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"second");
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(left.len(), 1, "a partial file was left: {left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn stems_stay_inside_the_folder() {

@@ -145,7 +145,7 @@ pub struct Record {
     /// [`reference::traced_by_light_tracer`]) and in a skipped record.
     pub tracer: Option<TracerErrors>,
     /// Why the combination was left out (its reference holds no caustic: nothing to
-    /// measure against; the technique cannot accumulate frames); `None` (absent from
+    /// measure against; the technique could not be made for accumulated frames); `None` (absent from
     /// report.json) for a measured one. A skipped record's measurements are NaN (`null`
     /// in report.json), its `repeats` 0.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -353,9 +353,37 @@ fn first_repeat<T, K: PartialEq>(items: &[T], key: impl Fn(&T) -> K) -> Option<(
 /// - a technique spec with settings after a `:` has some (`sspm:` is refused);
 /// - every technique's settings for every filter and budget, and its reference's, parse
 ///   and validate as the technique will parse and validate them when it is made;
-/// - a reference has at least 2 frames (its noise is their spread).
+/// - a reference has at least 2 frames (its noise is their spread);
+/// - no list is empty, every backend is one caustica has, and the light tracer's settings
+///   (at the references' size) can give an estimate with an error bar.
 pub fn validate(plan: &ReportPlan) -> Result<(), ReportError> {
     let plan_err = |m: String| Err(ReportError::Plan(m));
+    for (what, empty) in [
+        ("scenes", plan.scenes.is_empty()),
+        ("techniques", plan.techniques.is_empty()),
+        ("backends", plan.backends.is_empty()),
+        ("budgets", plan.budgets.is_empty()),
+        ("frames", plan.frames.is_empty()),
+    ] {
+        if empty {
+            return plan_err(format!("the list of {what} is empty: nothing to measure"));
+        }
+    }
+    if let Some(b) = plan
+        .backends
+        .iter()
+        .find(|b| !crate::BACKEND_NAMES.contains(&b.as_str()))
+    {
+        return plan_err(format!(
+            "unknown backend '{b}'; caustica's: {}",
+            crate::BACKEND_NAMES.join(", ")
+        ));
+    }
+    light_tracer::validate(&LightTracerSpec {
+        width: plan.reference.width,
+        height: plan.reference.height,
+        ..plan.tracer.clone()
+    })?;
     if let Some((i, j)) = first_repeat(&plan.scenes, |s| crate::output::file_stem(&s.name)) {
         let (a, b) = (&plan.scenes[i].name, &plan.scenes[j].name);
         return plan_err(if a == b {
@@ -442,14 +470,9 @@ pub fn validate(plan: &ReportPlan) -> Result<(), ReportError> {
 }
 
 /// Why technique `name` has nothing to be measured against in `scene`: its own
-/// reference `own` holds no signal, or (for a caustic technique) the light tracer's
-/// image holds none; `None` where they hold some.
-fn nothing_to_measure(
-    scene: &str,
-    name: &str,
-    own: &reference::Reference,
-    tracer: Option<&Traced>,
-) -> Option<String> {
+/// reference `own` holds no signal; `None` where it holds some. (A light tracer's image
+/// without signal only leaves out the errors against it: [`measured_tracer`].)
+fn nothing_to_measure(scene: &str, name: &str, own: &reference::Reference) -> Option<String> {
     if !reference::holds_signal(&own.image) {
         let light = if reference::traced_by_light_tracer(name) {
             "caustic"
@@ -460,13 +483,27 @@ fn nothing_to_measure(
             "the reference of {scene} holds no {light}: nothing to measure against"
         ));
     }
+    None
+}
+
+/// The light tracer's image to measure against, `None` where it holds no caustic (with a
+/// log line: the errors against it are left out, those against the technique's own
+/// reference are still measured).
+fn measured_tracer<'a>(
+    scene: &str,
+    tracer: Option<&'a Traced>,
+    log: &mut dyn FnMut(&str),
+) -> Option<&'a Traced> {
     match tracer {
-        Some(t) if t.mask.count == 0 => Some(format!(
-            "the light tracer's image of {scene} holds no caustic ({} photons, {} \
-             connected): nothing to measure against",
-            t.info.photons, t.info.connected
-        )),
-        _ => None,
+        Some(t) if t.mask.count == 0 => {
+            log(&format!(
+                "{scene}: the light tracer's image holds no caustic ({} photons, {} \
+                 connected): no errors against it",
+                t.info.photons, t.info.connected
+            ));
+            None
+        }
+        other => other,
     }
 }
 
@@ -529,7 +566,7 @@ impl Combination<'_> {
 /// Runs the plan; references are cached under `cache`. `log` receives progress lines.
 /// The plan is checked first ([`validate`]) and the cache folder made and tried, before
 /// any reference is computed. A combination with nothing to measure against (a reference
-/// that holds no caustic) or that cannot accumulate its frames is not measured: its
+/// that holds no caustic) or that cannot be made for accumulated frames is not measured: its
 /// record says why ([`Record::skipped`]), and the others go on.
 pub fn run(
     plan: &ReportPlan,
@@ -597,7 +634,8 @@ pub fn run(
                 .expect("computed above");
             let filters = filters_for(name, &plan.filters);
             let combos = combinations(&filters, plan);
-            if let Some(reason) = nothing_to_measure(&scene.name, name, r, tracer) {
+            let tracer = measured_tracer(&scene.name, tracer, log);
+            if let Some(reason) = nothing_to_measure(&scene.name, name, r) {
                 log(&format!("{}: {technique}: skipped: {reason}", scene.name));
                 for backend_name in &plan.backends {
                     for (filter, budget, frames) in &combos {
@@ -636,7 +674,7 @@ pub fn run(
                                 budget: (pw, ph),
                                 frames,
                             };
-                            let reason = format!("cannot accumulate {frames} frames: {e}");
+                            let reason = format!("not made for {frames} accumulated frames: {e}");
                             records.push(c.skipped(&reason, r.info.photons));
                             continue;
                         }
@@ -1150,6 +1188,12 @@ mod tests {
         );
         let e = refused(|p| p.reference.max_frames = 1);
         assert!(e.contains("at least 2 frames"), "{e}");
+        let e = refused(|p| p.backends = vec!["quantum".into()]);
+        assert!(e.contains("unknown backend 'quantum'"), "{e}");
+        let e = refused(|p| p.budgets.clear());
+        assert!(e.contains("the list of budgets is empty"), "{e}");
+        let e = refused(|p| p.tracer.photons = u64::MAX);
+        assert!(e.contains("photons per batch must be at most"), "{e}");
         let e = refused(|p| p.scenes.push(builtin("sphere").expect("built-in")));
         assert!(
             e.contains("scenes 1 and 2 of the list are both named 'sphere'"),

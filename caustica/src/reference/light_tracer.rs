@@ -1160,7 +1160,7 @@ pub fn light_tracer_hash(scene: &Scene, spec: &LightTracerSpec) -> String {
 const MAX_SIDE: u32 = 16384;
 
 /// Rejects settings that cannot give an estimate with an error bar.
-fn validate(spec: &LightTracerSpec) -> Result<(), LightTracerError> {
+pub fn validate(spec: &LightTracerSpec) -> Result<(), LightTracerError> {
     let bad = |what: &str| Err(LightTracerError::Settings(what.into()));
     if spec.batches < 2 {
         return bad("at least 2 batches (the error bar is their spread)");
@@ -1216,10 +1216,10 @@ type Contributions = Vec<(u32, [f64; 3])>;
 /// Photons per parallel work item.
 const CHUNK: u64 = 8192;
 
-/// Work items traced in parallel before their contributions are added to the image (in
-/// photon order): what a batch holds at once is at most this many items' contributions,
-/// whatever its photon count.
-const CHUNK_GROUP: u64 = 64;
+/// Work items traced in parallel per rayon thread before their contributions are added
+/// to the image (in photon order): what a batch holds at once is at most this many items'
+/// contributions a thread, whatever its photon count.
+const CHUNK_GROUP: u64 = 16;
 
 /// Computes the light-tracer reference of `scene` (its camera at `spec`'s size);
 /// `progress(batches_done, batches, noise)` after each batch.
@@ -1246,12 +1246,13 @@ pub fn compute(
     let (mut photons, mut connected, mut truncated) = (0u64, 0u64, 0u64);
     let mut noise = f64::INFINITY;
     let chunks = spec.photons.div_ceil(CHUNK);
-    let groups = (0..chunks).step_by(CHUNK_GROUP as usize);
+    let group = CHUNK_GROUP * rayon::current_num_threads().max(1) as u64;
+    let groups = (0..chunks).step_by(group as usize);
     for batch in 0..spec.batches {
         img.fill([0.0; 3]);
         for (li, light) in lights.iter().enumerate() {
             for first in groups.clone() {
-                let parts: Vec<(Contributions, u64)> = (first..(first + CHUNK_GROUP).min(chunks))
+                let parts: Vec<(Contributions, u64)> = (first..(first + group).min(chunks))
                     .into_par_iter()
                     .map(|ci| {
                         let mut out = Vec::new();
@@ -1421,8 +1422,7 @@ pub fn load_or_compute(
     crate::output::write_exr(&err_path, &r.std_error).map_err(LightTracerError::Cache)?;
     let text = serde_json::to_string_pretty(&r.info)
         .map_err(|e| LightTracerError::Cache(format!("{}: {e}", json_path.display())))?;
-    std::fs::write(&json_path, text)
-        .map_err(|e| LightTracerError::Cache(format!("{}: {e}", json_path.display())))?;
+    crate::output::write_file(&json_path, text.as_bytes()).map_err(LightTracerError::Cache)?;
     Ok((r.image, r.info))
 }
 

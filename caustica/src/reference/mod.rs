@@ -193,7 +193,7 @@ pub fn load_or_compute(
     let r = compute(scene, spec, backend, progress, hash)?;
     crate::output::write_exr(&exr_path, &r.image)?;
     let text = serde_json::to_string_pretty(&r.info).map_err(|e| e.to_string())?;
-    std::fs::write(&json_path, text).map_err(|e| format!("{}: {e}", json_path.display()))?;
+    crate::output::write_file(&json_path, text.as_bytes())?;
     Ok(r)
 }
 
@@ -340,7 +340,7 @@ mod tests {
         // two samples 1 and 3 of one pixel: mean 2, sample variance 2, of the mean 1
         let n = relative_noise(&[[4.0; 3]], &[[10.0; 3]], 2).expect("defined");
         assert!((n - 0.5).abs() < 1e-12, "{n}");
-        // the light tracer's number keeps its old meaning
+        // the light tracer's number: 0 for an image without signal
         assert_eq!(relative_standard_error(&sum, &sum2, 4), 0.0);
         assert!(!holds_signal(&Image::new(2, 2, vec![[0.0; 4]; 4])));
     }

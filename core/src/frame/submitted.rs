@@ -145,7 +145,7 @@ pub fn run_pipelined(
 ) -> Result<(Vec<Vec<u8>>, Vec<PassTime>), Error> {
     let total: u64 = recordings.iter().map(|r| r.1).sum();
     let last = recordings.len().saturating_sub(1);
-    let mut pipeline = Pipeline {
+    let mut pipeline = InFlight {
         pending: std::collections::VecDeque::with_capacity(recordings.len()),
         failure: None,
         done: 0,
@@ -163,6 +163,9 @@ pub fn run_pipelined(
             }
         }
         pipeline.settle(backend, false, stats, progress);
+        if pipeline.failure.is_some() {
+            break;
+        }
     }
     pipeline.settle(backend, true, stats, progress);
     match pipeline.failure {
@@ -173,7 +176,7 @@ pub fn run_pipelined(
 
 /// [`run_pipelined`]'s submissions not yet finished, oldest first, and what the finished
 /// ones gave.
-struct Pipeline {
+struct InFlight {
     pending: std::collections::VecDeque<(Submission, u64)>,
     failure: Option<Error>,
     /// Photons of the finished submissions, and of all.
@@ -185,7 +188,7 @@ struct Pipeline {
     times: Vec<PassTime>,
 }
 
-impl Pipeline {
+impl InFlight {
     /// Takes the finished submissions from the front, in order: all of them, waiting for
     /// each (`wait`), or those already finished.
     fn settle(
@@ -219,6 +222,12 @@ impl Pipeline {
                 Ok(None) if !wait => return,
                 Ok(None) => {
                     self.pending.pop_front();
+                }
+                Err(e) if !wait => {
+                    // the submission may still be on the device: the waiting pass polls
+                    // it again
+                    self.failure.get_or_insert(Error::from(e));
+                    return;
                 }
                 Err(e) => {
                     self.pending.pop_front();

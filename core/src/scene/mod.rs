@@ -375,20 +375,16 @@ impl Wave {
 
     /// This wave `seconds` later: travelling along its direction, its phase falls by
     /// `omega t` (`sin(k . x - omega t + phase)`). A wavelength that is not positive and
-    /// finite keeps its phase.
+    /// finite, or a time that is not finite, keeps its phase.
     pub fn advanced(&self, seconds: f32) -> Wave {
         let omega = self.angular_frequency();
-        let travelled = omega * seconds;
-        let phase = if !omega.is_finite() || !seconds.is_finite() {
-            self.phase
-        } else if travelled.is_finite() {
-            // wrapped to [0, 2 pi) so that long animations keep the phase's precision
-            (self.phase - travelled).rem_euclid(std::f32::consts::TAU)
-        } else {
-            // beyond f32's range (seconds near f32::MAX): wrapped in f64, where the
-            // product stays finite
+        let phase = if omega.is_finite() && seconds.is_finite() && self.phase.is_finite() {
+            // in f64, where `omega t` of any finite f32 time stays finite, wrapped to
+            // [0, 2 pi) so that long animations keep the phase's precision
             (self.phase as f64 - omega as f64 * seconds as f64).rem_euclid(std::f64::consts::TAU)
                 as f32
+        } else {
+            self.phase
         };
         Wave {
             phase,

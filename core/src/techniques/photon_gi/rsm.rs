@@ -110,11 +110,13 @@ pub fn rsm_faces(
     }
 }
 
-/// The flux light `l` sends into its RSM's `faces` (W per channel), the flux its photons
-/// stand for, as a caustic technique's emission domain's: intensity times the solid angle
-/// of its emission (the whole sphere for a point light and a spot of six faces, the outer
-/// cone for a spot, before its falloff, which only lowers it), or for a directional light
-/// its irradiance times the area of its orthographic face.
+/// The flux light `l` sends into its RSM's `faces` (W per channel), as a caustic
+/// technique's emission domain's: intensity times the solid angle it emits into (the
+/// whole sphere for a point light, the outer cone for a spot, before the spot's falloff),
+/// or for a directional light its irradiance times the area of its orthographic face.
+/// Its photons carry this flux times the albedo of the surfaces they leave (and a spot's
+/// falloff), so it bounds what they carry, and equals it on albedo-1 walls under a light
+/// without falloff.
 pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
     let i = Vec3::from_slice(&l.intensity[..3]).as_dvec3();
     let measure = match (l.kind, faces.first()) {
@@ -123,8 +125,10 @@ pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
             crate::math::sampling::cone_solid_angle(l.cos_outer.clamp(-1.0, 1.0)) as f64
         }
         // an orthographic face's half-extents are its negated tangents (GpuCamera::orthographic)
-        (_, Some(f)) => 4.0 * (-f.tan_half_fov_x as f64) * (-f.tan_half_fov_y as f64),
-        (_, None) => 0.0,
+        (light_kind::DIRECTIONAL, Some(f)) => {
+            4.0 * (-f.tan_half_fov_x as f64) * (-f.tan_half_fov_y as f64)
+        }
+        _ => 0.0,
     };
     (i.max(glam::DVec3::ZERO) * measure).to_array()
 }
