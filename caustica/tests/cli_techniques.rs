@@ -100,9 +100,9 @@ fn report_arguments_are_checked_before_any_reference_is_rendered() {
     let dir = std::env::temp_dir().join(format!("caustica-report-args-{}", std::process::id()));
     let d = dir.to_str().unwrap();
     for (args, needle) in [
-        (vec!["--scenes", ""], "--scenes lists nothing"),
-        (vec!["--backends", " , "], "--backends lists nothing"),
-        (vec!["--budgets", ""], "--budgets lists nothing"),
+        (vec!["--scenes", ""], "the list of scenes is empty"),
+        (vec!["--backends", " , "], "the list of backends is empty"),
+        (vec!["--budgets", ""], "the list of budgets is empty"),
         (vec!["--repeats", "0"], "--repeats must be at least 1"),
         (
             vec!["--frames", "0"],

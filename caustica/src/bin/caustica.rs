@@ -629,24 +629,13 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 return Err("--reference-noise must be in (0, 1)".into());
             }
             // everything that can be checked is checked before any reference is rendered
-            for (flag, empty) in [
-                ("--scenes", plan.scenes.is_empty()),
-                ("--techniques", plan.techniques.is_empty()),
-                ("--backends", plan.backends.is_empty()),
-                ("--budgets", plan.budgets.is_empty()),
-                ("--frames", plan.frames.is_empty()),
-                ("--filters", plan.filters.is_empty()),
-            ] {
-                if empty {
-                    return Err(format!("{flag} lists nothing").into());
-                }
+            if plan.filters.is_empty() {
+                return Err("--filters lists nothing".into());
             }
             if repeats == 0 {
                 return Err("--repeats must be at least 1".into());
             }
-            for t in &plan.techniques {
-                caustica::report::technique_spec(t)?;
-            }
+            caustica::report::validate(&plan).map_err(String::from)?;
             for b in &plan.backends {
                 open_backend(b).map_err(|e| e.to_string())?;
             }
