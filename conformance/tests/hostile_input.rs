@@ -190,26 +190,6 @@ fn catalogue() -> Vec<Case> {
             Expect::Refused("emits"),
         ),
         (
-            "sun projection volume flat along the light (a wall seen edge-on)",
-            || {
-                let mut s = small("sphere-sun");
-                if let Light::Directional {
-                    direction,
-                    projection_volume,
-                    ..
-                } = &mut s.lights[0]
-                {
-                    *direction = Vec3::NEG_Y;
-                    *projection_volume = Some(caustica_core::scene::Aabb {
-                        min: Vec3::new(0.0, -1.0, -1.0),
-                        max: Vec3::new(0.0, 1.0, 1.0),
-                    });
-                }
-                s
-            },
-            Expect::Refused("flat seen along the light's direction"),
-        ),
-        (
             "sphere radius 1e30",
             || {
                 let mut s = small("sphere");

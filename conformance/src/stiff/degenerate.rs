@@ -132,11 +132,25 @@ pub(super) fn zero_size_lights(b: &mut dyn Backend) -> Result<Outcome, String> {
     let grid = 16;
     let f = run_checked(b, &scene, &settings(grid), &mut v)?;
     let s = &f.stats;
-    // At most the directional and the spot light emit: the zero-power light emits nothing.
-    v.check(s.photons_emitted <= 2 * (grid * grid) as u64, || {
+    // Only the spot emits: the directional light's point-sized volume gives its photons
+    // a rectangle of no area, the zero-power light has nothing to emit; the plan says so.
+    v.check(s.photons_emitted <= (grid * grid) as u64, || {
         format!(
-            "{} photons emitted: the zero-power light emitted",
+            "{} photons emitted: a light without emission emitted",
             s.photons_emitted
+        )
+    });
+    let says = |light: u32, why: &str| {
+        s.plan.as_ref().is_some_and(|p| {
+            p.lights
+                .iter()
+                .any(|l| l.light == light && !l.emits && l.reason.contains(why))
+        })
+    };
+    v.check(says(0, "flat") && says(2, "zero power"), || {
+        format!(
+            "the plan does not say why lights 0 and 2 emit nothing: {:?}",
+            s.plan.as_ref().map(|p| &p.lights)
         )
     });
     outcome(

@@ -167,7 +167,7 @@ pub fn catalogue() -> Vec<StiffCase> {
         case!("degenerate", "nan-normals", degenerate::nan_normals,
             "NaN or zero vertex normals / NaN positions in input: rejected with an error naming the field (objects[i].shape.normals[k])"),
         case!("degenerate", "zero-size-lights", degenerate::zero_size_lights,
-            "Directional light with a point-sized projection volume, spot of 1e-4 deg, zero-power point: no NaN, nothing stored from zero flux, zero-power light skipped"),
+            "Directional light with a point-sized projection volume, spot of 1e-4 deg, zero-power point: no NaN, nothing stored from zero flux, the flat volume's and the zero-power light skipped with their reasons in the plan"),
         case!("degenerate", "image-1x1", degenerate::image_1x1,
             "1x1 image: finite, bounded, agrees with cpu"),
         case!("degenerate", "photons-1", degenerate::photons_1,

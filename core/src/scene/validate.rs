@@ -557,17 +557,6 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                         && !b.max.cmpge(b.min).all()
                     {
                         c.fail(format!("{pv}.max"), "max must not be below min");
-                    } else if b.min.is_finite()
-                        && b.max.is_finite()
-                        && direction.length_squared() > 0.0
-                        && projected_area(b, *direction) <= 0.0
-                    {
-                        c.fail(
-                            pv,
-                            "the box is flat seen along the light's direction: its photons' \
-                             rectangle (Kim 2019, Eq. 3) would have no area, so none would \
-                             be emitted",
-                        );
                     }
                 }
             }
@@ -578,20 +567,6 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
     } else {
         Err(c.problems)
     }
-}
-
-/// Area of box `b`'s shadow on a plane across `direction` (scene units^2): the rectangle
-/// a directional light's photons cover (`frame::emission::projection_volume`).
-fn projected_area(b: &crate::math::geometry::Aabb, direction: Vec3) -> f32 {
-    let (t, u) = crate::math::sampling::orthonormal_basis(unit(direction));
-    let (mut lo, mut hi) = (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN));
-    for c in b.corners() {
-        let p = Vec2::new(c.dot(t), c.dot(u));
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let e = hi - lo;
-    e.x * e.y
 }
 
 /// `v` scaled to unit length without overflow (largest component first).

@@ -116,6 +116,9 @@ pub enum NoEmission {
     /// The light's frustum (spot cone, directional projection volume) misses every
     /// caster.
     MissesCasters,
+    /// A directional light's projection volume is flat seen along its direction: the
+    /// rectangle its photons cover has no area.
+    FlatVolume,
 }
 
 impl NoEmission {
@@ -125,6 +128,9 @@ impl NoEmission {
             NoEmission::NoCasters => "no specular surface (caustic caster) in the scene",
             NoEmission::ZeroPower => "light has zero power",
             NoEmission::MissesCasters => "light frustum misses every caustic caster",
+            NoEmission::FlatVolume => {
+                "projection volume flat seen along the light: its photons' rectangle has no area"
+            }
         }
     }
 }
@@ -297,7 +303,11 @@ pub fn emission_domain(
             if !boxes_overlap(volume, casters) {
                 return Err(NoEmission::MissesCasters);
             }
-            Ok(rectangle_domain(*direction, *irradiance, volume, scene))
+            let d = rectangle_domain(*direction, *irradiance, volume, scene);
+            if !(d.measure > 0.0) {
+                return Err(NoEmission::FlatVolume);
+            }
+            Ok(d)
         }
     }
 }

@@ -73,6 +73,14 @@ pub enum AtlasError {
         /// Texels in the atlas.
         texels: u64,
     },
+    /// A receiver's world area is not a finite number > 0 (its triangles' areas are lost
+    /// to f32 rounding, e.g. an instance scaled far down far from the origin).
+    NoArea {
+        /// Object index of the receiver.
+        receiver: u32,
+        /// Its world area (scene units^2).
+        area: f64,
+    },
     /// A receiver's UVs cannot address a caustic map (named, with the reason).
     BadUvs {
         /// Index of the receiver.
@@ -93,6 +101,11 @@ impl std::fmt::Display for AtlasError {
             AtlasError::BadUvs { receiver, reason } => {
                 write!(f, "caustic atlas: receiver {receiver}: {reason}")
             }
+            AtlasError::NoArea { receiver, area } => write!(
+                f,
+                "caustic atlas: receiver {receiver} has world area {area}, not a finite \
+                 number > 0"
+            ),
         }
     }
 }
@@ -516,6 +529,12 @@ impl AtlasReceivers {
             )));
         }
         let areas: Vec<f64> = slots.iter().map(|&r| self.areas[r]).collect();
+        if let Some(k) = areas.iter().position(|a| !(a.is_finite() && *a > 0.0)) {
+            return Err(AtlasError::NoArea {
+                receiver: receivers[k],
+                area: areas[k],
+            });
+        }
         let plan = plan_atlas(&areas, size)?;
         let atlas_texels = size.0 as usize * size.1 as usize;
         let mut texels: Vec<AtlasTexel> = Vec::new();

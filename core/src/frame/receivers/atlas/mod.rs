@@ -226,6 +226,12 @@ fn lay_out(
                 "objects[{receiver}] ('{}'): its UVs cannot address a caustic map: {reason}",
                 host.model().objects[receiver as usize].name
             )),
+            layout::AtlasError::NoArea { receiver, area } => Error::InvalidScene(format!(
+                "objects[{receiver}] ('{}'): its world area is {area}, not a finite number > \
+                 0 (its triangles' areas lost to f32 rounding where it is placed?), so it can \
+                 hold no caustic map",
+                host.model().objects[receiver as usize].name
+            )),
             // the atlas is the setting's size: too small a one is the setting's problem
             layout::AtlasError::TooManyReceivers { receivers, texels } => {
                 Error::InvalidParameter(format!(
