@@ -334,26 +334,7 @@ fn light_tracer_bounds_its_photons() {
 
 #[test]
 fn an_animation_past_f32_time_is_refused_and_a_long_one_stays_finite() {
-    fails_cleanly(
-        &[
-            "render",
-            "--scene",
-            "pool",
-            "--technique",
-            "caustic-map",
-            "--size",
-            "32x18",
-            "--photons",
-            "16x16",
-            "--animate",
-            "3e38",
-            "--frames",
-            "3",
-        ],
-        "--animate",
-    );
-    let dir = std::env::temp_dir().join(format!("caustica-cli-anim-{}", std::process::id()));
-    let out = caustica(&[
+    let pool = [
         "render",
         "--scene",
         "pool",
@@ -366,10 +347,11 @@ fn an_animation_past_f32_time_is_refused_and_a_long_one_stays_finite() {
         "--animate",
         "3e38",
         "--frames",
-        "2",
-        "--out",
-        dir.to_str().expect("a UTF-8 temporary path"),
-    ]);
+    ];
+    fails_cleanly(&[&pool[..], &["3"]].concat(), "--animate");
+    let dir = std::env::temp_dir().join(format!("caustica-cli-anim-{}", std::process::id()));
+    let dir = dir.to_str().expect("a UTF-8 temporary path");
+    let out = caustica(&[&pool[..], &["2", "--out", dir]].concat());
     assert!(
         out.status.success(),
         "{}",
