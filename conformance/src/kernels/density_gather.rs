@@ -21,9 +21,13 @@ use glam::Vec3;
 
 /// Compares `a` (reference) and `b` per pixel and channel: `|a - b| <= rel * (max(|a|,
 /// |b|) + gathered) + absolute` with `(rel, gathered, absolute) = tol(i, ch)`; alpha must
-/// be bitwise equal when `alpha_exact`, unless the pixel's channels are within `absolute`
-/// of zero on both sides (a GPU that flushed the pixel's subnormal sum to zero writes the
-/// dark pixel's alpha). Records the failures in `v` under `what`.
+/// be bitwise equal when `alpha_exact`, unless the pixel is dark (all channels 0) on one
+/// side and its channels are within the bound on the other. A pass writes the dark pixel
+/// (alpha 0) where its sum is exactly 0, and that test is not continuous: a GPU may flush
+/// a subnormal sum to zero, and a weight at the very edge of a kernel's support (two
+/// nearly equal antiderivatives subtracted) rounds to 0 on one backend and to one ulp on
+/// another, as a fused multiply-add keeps a bit the separate product lost. The channels'
+/// bound holds that difference either way. Records the failures in `v` under `what`.
 pub(crate) fn compare(
     v: &mut Verdict,
     what: &str,
@@ -42,12 +46,11 @@ pub(crate) fn compare(
             let x = if d == 0.0 { 0.0 } else { d / bound };
             e = e.max(if x.is_nan() { f32::INFINITY } else { x });
         }
-        // a side whose sum flushed to zero wrote the dark pixel (alpha 0): allowed where
-        // the other side's channels are all within the absolute allowance
+        // a side whose sum was exactly zero wrote the dark pixel (alpha 0): allowed where
+        // the other side's channels are within their bound (`e <= 1`)
         let dark = |p: &[f32; 4]| p[..3].iter().all(|c| *c == 0.0);
-        let flushed = (dark(&a[i]) || dark(&b[i]))
-            && (0..3).all(|ch| a[i][ch].abs().max(b[i][ch].abs()) <= tol(i, ch).2);
-        if alpha_exact && a[i][3].to_bits() != b[i][3].to_bits() && !flushed {
+        let dark_on_one_side = (dark(&a[i]) || dark(&b[i])) && e <= 1.0;
+        if alpha_exact && a[i][3].to_bits() != b[i][3].to_bits() && !dark_on_one_side {
             e = f32::INFINITY;
         }
         worst = worst.max(e);
