@@ -19,7 +19,7 @@ use caustica_core::frame::stats::FrameStats;
 use caustica_core::scene::builtin::builtin;
 use caustica_core::scene::Scene;
 use caustica_core::techniques::create;
-use caustica_core::techniques::photon_gi::PhotonGiStats;
+use caustica_core::techniques::photon_gi::{PhotonGiSettings, PhotonGiStats};
 use caustica_core::{Backend, DeviceType};
 use proptest::prelude::*;
 
@@ -74,7 +74,9 @@ fn frames(b: &mut dyn Backend, scene: &Scene, settings: &serde_json::Value) -> F
 fn check_wave_times(settings: &serde_json::Value, stats: &FrameStats) {
     let gi = PhotonGiStats::of(stats);
     let schedule = settings["indirect_schedule"].as_str().unwrap_or("auto");
-    let asked = settings["indirect_waves"].as_u64().unwrap_or(8) as u32;
+    let asked = settings["indirect_waves"]
+        .as_u64()
+        .map_or(PhotonGiSettings::default().indirect_waves, |w| w as u32);
     match schedule {
         "waves" | "sorted_waves" if asked > 1 => {}
         "auto" if gi.is_some() => {}

@@ -132,7 +132,11 @@ pub struct PhotonGiSettings {
     /// How the indirect paths are traced (one launch, or per-bounce waves).
     pub indirect_schedule: IndirectSchedule,
     /// Waves of the `waves` schedule (1..=64): waves `0 .. n - 1` trace one segment each,
-    /// the last one the rest of every path (at most `max_segments` waves run).
+    /// the last one the rest of every path (at most `max_segments` waves run). Default 4:
+    /// on the H100 at Smal 2019's high setting `trace_indirect` took 6.16 / 6.18 / 6.19 /
+    /// 6.54 ms with 4 / 5 / 6 / 8 waves on OpenCL and 6.87 / 6.95 / 6.88 / 7.04 on Vulkan
+    /// (docs/photon-gi.md): each wave's launch and queue traffic cost more than the
+    /// shorter warps of a finer split save.
     pub indirect_waves: u32,
     /// Most paths each of the waves' two queues holds (48 bytes each; a queue holds no
     /// more than a light's photons): a light's photons go through the waves in chunks of
@@ -143,12 +147,14 @@ pub struct PhotonGiSettings {
     /// Photons of a light above which the `auto` schedule's waves trace it; a light of
     /// at most this many (its count known on the host, from the frame after the plan is
     /// read back) takes the single kernel, whose program is built at its first use.
-    /// Default 0: every light in waves. A candidate is 2^17, about 1.3 times what a
-    /// large GPU runs at once (an H100 or H200, 132 multiprocessors, workgroups of 64:
-    /// 84,480 threads of `trace_indirect` at its 96 registers, 101,376 at 80): a launch
-    /// of no more photons has (nearly) every path resident from its start, so few warps
-    /// wait for another's idle lanes and the waves' own launches and queue traffic may
-    /// cost more than they save; not yet timed on a GPU.
+    /// Default 2^17, about 1.3 times what a large GPU runs at once (an H100 or H200, 132
+    /// multiprocessors, workgroups of 64: 84,480 threads of `trace_indirect` at its 96
+    /// registers, 101,376 at 80): a launch of no more photons has (nearly) every path
+    /// resident from its start, so few warps wait for another's idle lanes, and the
+    /// waves' own launches and queue traffic cost more than they save. On the H100
+    /// (`rooms`, high setting, 8 waves) `trace_indirect` took 5.99 against 6.54 ms with
+    /// every light in waves on OpenCL and 6.65 against 7.04 on Vulkan (docs/photon-gi.md);
+    /// 0 traces every light in waves.
     pub auto_waves_above_photons: u32,
 }
 
@@ -178,9 +184,9 @@ impl Default for PhotonGiSettings {
             shading_normals: true,
             fresnel_model: fresnel_model::EXACT,
             indirect_schedule: IndirectSchedule::Auto,
-            indirect_waves: 8,
+            indirect_waves: 4,
             indirect_queue_paths: 1 << 22,
-            auto_waves_above_photons: 0,
+            auto_waves_above_photons: 1 << 17,
         }
     }
 }
@@ -363,16 +369,18 @@ mod tests {
     #[test]
     fn auto_traces_a_light_of_few_photons_in_one_launch() {
         let auto = PhotonGiSettings {
-            auto_waves_above_photons: 1 << 17,
+            indirect_waves: 8,
             ..Default::default()
         };
-        assert_eq!(
-            PhotonGiSettings::default().light_waves(IndirectSchedule::Waves, Some(1)),
-            8
-        );
+        let every_light = PhotonGiSettings {
+            auto_waves_above_photons: 0,
+            ..auto.clone()
+        };
         let waves = auto.schedule(DeviceType::DiscreteGpu);
         assert_eq!(waves, IndirectSchedule::Waves);
+        assert_eq!(every_light.light_waves(waves, Some(1)), 8);
         let above = auto.auto_waves_above_photons;
+        assert_eq!(above, 1 << 17);
         assert_eq!(auto.light_waves(waves, Some(above)), 1);
         assert_eq!(auto.light_waves(waves, Some(0)), 1);
         assert_eq!(auto.light_waves(waves, Some(above + 1)), 8);
