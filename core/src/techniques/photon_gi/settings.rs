@@ -133,10 +133,11 @@ pub struct PhotonGiSettings {
     pub indirect_schedule: IndirectSchedule,
     /// Waves of the `waves` schedule (1..=64): waves `0 .. n - 1` trace one segment each,
     /// the last one the rest of every path (at most `max_segments` waves run). Default 4:
-    /// on the H100 at Smal 2019's high setting `trace_indirect` took 6.16 / 6.18 / 6.19 /
-    /// 6.54 ms with 4 / 5 / 6 / 8 waves on OpenCL and 6.87 / 6.95 / 6.88 / 7.04 on Vulkan
-    /// (docs/photon-gi.md): each wave's launch and queue traffic cost more than the
-    /// shorter warps of a finer split save.
+    /// on the H100 at Smal 2019's high setting, with `rooms`' dim light in one launch,
+    /// `trace_indirect` took 7.08 / 6.83 / 5.53 / 5.55 ms with 2 / 3 / 4 / 8 waves on
+    /// OpenCL and 9.04 / 8.65 / 6.73 / 6.61 on Vulkan, and with every light in waves
+    /// 6.16 ms with 4 against 6.54 with 8 on OpenCL (docs/photon-gi.md): past 4 waves a
+    /// wave's launch and queue traffic cost what its shorter warps save.
     pub indirect_waves: u32,
     /// Most paths each of the waves' two queues holds (48 bytes each; a queue holds no
     /// more than a light's photons): a light's photons go through the waves in chunks of
