@@ -89,6 +89,13 @@ pub fn prepare_output_dir(dir: &Path) -> Result<(), String> {
 /// or one of its parents must be, the operating system's error creating it, or that it
 /// is not writable (permissions, a read-only file system).
 pub fn prepare_folder(dir: &Path) -> Result<(), String> {
+    make_folder(dir)?;
+    check_writable(dir)
+}
+
+/// Creates the folder `dir` (and its parents) where it is not there yet; the errors of
+/// [`prepare_folder`] but the last.
+pub fn make_folder(dir: &Path) -> Result<(), String> {
     let shown = dir.display();
     // the nearest part of the path that exists must be a folder
     if let Some(existing) = dir
@@ -104,9 +111,14 @@ pub fn prepare_folder(dir: &Path) -> Result<(), String> {
             });
         }
     }
-    std::fs::create_dir_all(dir).map_err(|e| format!("{shown}: {e}"))?;
+    std::fs::create_dir_all(dir).map_err(|e| format!("{shown}: {e}"))
+}
+
+/// Whether a file can be made in the existing folder `dir` (a probe file, written and
+/// removed); the error names the folder.
+pub fn check_writable(dir: &Path) -> Result<(), String> {
     let probe = dir.join(format!(".caustica-write-test-{}", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| format!("{shown}: not writable: {e}"))?;
+    std::fs::write(&probe, b"").map_err(|e| format!("{}: not writable: {e}", dir.display()))?;
     let _ = std::fs::remove_file(&probe);
     Ok(())
 }

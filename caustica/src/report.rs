@@ -565,7 +565,9 @@ impl Combination<'_> {
 
 /// Runs the plan; references are cached under `cache`. `log` receives progress lines.
 /// The plan is checked first ([`validate`]) and the cache folder made and tried, before
-/// any reference is computed. A combination with nothing to measure against (a reference
+/// any reference is computed; a cache that cannot be written to serves the references it
+/// holds (a line in `log` says so), and one it lacks is refused before its work begins.
+/// A combination with nothing to measure against (a reference
 /// that holds no caustic) or that cannot be made for accumulated frames is not measured: its
 /// record says why ([`Record::skipped`]), and the others go on.
 pub fn run(
@@ -574,7 +576,12 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Record>, ReportError> {
     validate(plan)?;
-    crate::output::prepare_folder(cache).map_err(ReportError::Cache)?;
+    crate::output::make_folder(cache).map_err(ReportError::Cache)?;
+    if let Err(e) = crate::output::check_writable(cache) {
+        log(&format!(
+            "reference cache {e}: only the references it holds can be used"
+        ));
+    }
     let mut cpu = crate::open_backend("cpu")?;
     let mut records = Vec::new();
     for original in &plan.scenes {

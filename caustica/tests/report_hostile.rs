@@ -261,3 +261,45 @@ fn scenes_that_could_not_be_told_apart_are_refused() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A cache that cannot be written to serves the references it holds: the second report
+/// over a read-only cache that the first one filled runs, saying so; the cache is left
+/// as it was. A user who may write anywhere (root) cannot be refused by permissions: the
+/// read-only half is skipped there, with a line saying so.
+#[cfg(unix)]
+#[test]
+fn a_read_only_cache_serves_the_references_it_holds() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch("read-only-cache");
+    let cache = dir.join("cache");
+    let first = report(&dir.join("first"), &cache, &[]);
+    assert!(first.status.success(), "{first:?}");
+    let held: Vec<_> = std::fs::read_dir(&cache).unwrap().collect();
+    assert!(!held.is_empty(), "the first report cached no reference");
+    std::fs::set_permissions(&cache, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if writes_anyway(&cache) {
+        eprintln!("SKIPPING the read-only half: this user writes into a read-only folder (root)");
+    } else {
+        let second = report(&dir.join("second"), &cache, &[]);
+        let err = String::from_utf8_lossy(&second.stderr);
+        assert!(second.status.success(), "{second:?}");
+        assert!(err.contains("not writable"), "{err}");
+        assert_eq!(std::fs::read_dir(&cache).unwrap().count(), held.len());
+        // a reference the cache lacks (another size) is refused naming the cache
+        let third = report(&dir.join("third"), &cache, &["--size", "48x27"]);
+        let err = String::from_utf8_lossy(&third.stderr);
+        assert!(!third.status.success(), "{third:?}");
+        assert!(err.contains("reference cache"), "{err}");
+    }
+    std::fs::set_permissions(&cache, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Whether a file can be made in `dir` whatever its permissions say (root).
+#[cfg(unix)]
+fn writes_anyway(dir: &Path) -> bool {
+    let probe = dir.join("probe");
+    let wrote = std::fs::write(&probe, b"").is_ok();
+    let _ = std::fs::remove_file(&probe);
+    wrote
+}
