@@ -93,6 +93,8 @@ enum Mutation {
     FootprintHigh,
     /// `density_gather` 1e-4 too high.
     DensityGatherHigh,
+    /// `density_gather` passes each lit pixel's radius (its alpha) on one ulp high.
+    DensityGatherRadiusUlp,
     /// `gather_footprint`'s reach-grid entries one tap short: the row pass would miss
     /// each tile's farthest-reaching source's last taps.
     ReachShort,
@@ -441,6 +443,14 @@ impl Mutant {
             (Mutation::DensityGatherHigh, Kernel::DensityGather(DensityGather { out, .. })) => {
                 self.modify(out.id, |v| scale(v, 1.0 + 1e-4))
             }
+            (
+                Mutation::DensityGatherRadiusUlp,
+                Kernel::DensityGather(DensityGather { out, .. }),
+            ) => self.modify::<[f32; 4]>(out.id, |v| {
+                for p in v.iter_mut().filter(|p| p[3] > 0.0) {
+                    p[3] = f32::from_bits(p[3].to_bits() + 1);
+                }
+            }),
             (
                 Mutation::FusedDepositOffByOne,
                 Kernel::TracePhotons(TracePhotons {
@@ -822,6 +832,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
             "photon_count_table + gather_footprint + density_gather",
         ),
         (
+            Mutation::DensityGatherRadiusUlp,
+            "photon_count_table + gather_footprint + density_gather",
+        ),
+        (
             Mutation::ReachShort,
             "photon_count_table + gather_footprint + density_gather",
         ),
@@ -859,6 +873,10 @@ fn each_fault_fails_the_check_of_its_kernel() {
         ),
         (
             Mutation::DensityGatherHigh,
+            "gather_caustic_map + caustic_map_lookup",
+        ),
+        (
+            Mutation::DensityGatherRadiusUlp,
             "gather_caustic_map + caustic_map_lookup",
         ),
         (

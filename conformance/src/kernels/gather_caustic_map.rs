@@ -13,7 +13,7 @@
 //!   `gather_footprint` and both `density_gather` passes as on the screen
 //!   (`check_atlas_density_gather`).
 use caustica_core::AtlasSettings;
-use super::density_gather::{compare, flush_allowance, tap_sum};
+use super::density_gather::{compare, flush_allowance, tap_sum, Alpha};
 use crate::harness::fixture::{run_and_free, Fixture};
 use crate::harness::tolerance::DENSITY_GATHER_REL;
 use crate::harness::tolerance::GATHER_REL;
@@ -301,7 +301,7 @@ pub(crate) fn check_atlas_density_gather(
         &cam,
         (&radius(&fa), &radius(&fb)),
         &|_, _| (DENSITY_GATHER_REL, 0.0, 0.0),
-        false,
+        Alpha::Free,
     );
     compare(
         v,
@@ -309,7 +309,7 @@ pub(crate) fn check_atlas_density_gather(
         &cam,
         (&fa, &fb),
         &|_, _| (DENSITY_GATHER_REL, 0.0, 0.0),
-        false,
+        Alpha::Free,
     );
     // density_gather, rows on the CPU's footprints, columns on the CPU's rows
     let pass = |b: &mut dyn Backend, axis: u32, input: &[[f32; 4]]| {
@@ -343,6 +343,8 @@ pub(crate) fn check_atlas_density_gather(
         let reach = s.atlas.max_radius_texels as i32;
         // flux -> output: 1 for the rows, 1 / area for the columns' irradiance
         let to_output = |i: usize| if axis == 0 { 1.0 } else { 1.0 / edge[i][1] };
+        // the radius a lit pixel of the column pass passes through
+        let lit_radius = |i: usize| input[i][3];
         compare(
             v,
             &format!("atlas density_gather axis {axis}"),
@@ -355,7 +357,11 @@ pub(crate) fn check_atlas_density_gather(
                     flush_allowance(reach, axis, input, i) * to_output(i),
                 )
             },
-            true,
+            if axis == 0 {
+                Alpha::Exact
+            } else {
+                Alpha::ExactOrDark(&lit_radius)
+            },
         );
     }
     v.check(lit > 0, || "the density-gathered atlas is dark".into());

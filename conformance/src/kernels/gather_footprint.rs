@@ -4,7 +4,7 @@
 //! output. Part of the density gather's verdict,
 //! [`super::density_gather::check_density_gather`].
 
-use super::density_gather::compare;
+use super::density_gather::{compare, Alpha};
 use crate::harness::fixture::{Fixture, ReferenceInputs};
 use crate::harness::tolerance::DENSITY_GATHER_REL;
 use crate::harness::verdict::Verdict;
@@ -36,7 +36,7 @@ pub(crate) fn check_footprint(
         &fx.camera,
         (&radius, &radius_b),
         &|_, _| (DENSITY_GATHER_REL, 0.0, 0.0),
-        false,
+        Alpha::Free,
     );
     compare(
         v,
@@ -44,7 +44,7 @@ pub(crate) fn check_footprint(
         &fx.camera,
         (&fa, &fb),
         &|_, _| (DENSITY_GATHER_REL, 0.0, 0.0),
-        false,
+        Alpha::Free,
     );
 
     Ok(())
