@@ -565,9 +565,9 @@ impl Combination<'_> {
 
 /// Runs the plan; references are cached under `cache`. `log` receives progress lines.
 /// The plan is checked first ([`validate`]) and the cache folder made and tried, before
-/// any reference is computed; a cache that cannot be written to serves the references it
-/// holds (a line in `log` says so), and one it lacks is refused before its work begins.
-/// A combination with nothing to measure against (a reference
+/// any reference is computed; a cache that cannot be written to is taken where it holds
+/// every reference the plan needs (a line in `log` says so) and refused, naming the ones
+/// it lacks, where it does not. A combination with nothing to measure against (a reference
 /// that holds no caustic) or that cannot be made for accumulated frames is not measured: its
 /// record says why ([`Record::skipped`]), and the others go on.
 pub fn run(
@@ -578,8 +578,15 @@ pub fn run(
     validate(plan)?;
     crate::output::make_folder(cache).map_err(ReportError::Cache)?;
     if let Err(e) = crate::output::check_writable(cache) {
+        let missing = missing_references(plan, cache)?;
+        if !missing.is_empty() {
+            return Err(ReportError::Cache(format!(
+                "{e}; it lacks {}",
+                missing.join(", ")
+            )));
+        }
         log(&format!(
-            "reference cache {e}: only the references it holds can be used"
+            "reference cache {e}; it holds every reference the plan needs"
         ));
     }
     let mut cpu = crate::open_backend("cpu")?;
@@ -822,17 +829,53 @@ struct Traced {
 }
 
 /// Loads or computes the light-tracer reference of `scene` at the plan's size.
+/// The light tracer's settings of the plan's reference images.
+fn tracer_spec(plan: &ReportPlan) -> LightTracerSpec {
+    LightTracerSpec {
+        width: plan.reference.width,
+        height: plan.reference.height,
+        ..plan.tracer.clone()
+    }
+}
+
+/// The cache files of the references the plan needs that `cache` lacks, each with the
+/// scene and what it is, in the order [`run`] would make them.
+fn missing_references(plan: &ReportPlan, cache: &Path) -> Result<Vec<String>, ReportError> {
+    let mut missing = Vec::new();
+    for scene in &plan.scenes {
+        let mut specs = Vec::new();
+        let mut traced = false;
+        for technique in &plan.techniques {
+            let (name, _) = technique_spec(technique).map_err(ReportError::Plan)?;
+            if !traced && reference::traced_by_light_tracer(name) {
+                traced = true;
+                if let Some(f) = light_tracer::missing_from_cache(cache, scene, &tracer_spec(plan))
+                {
+                    missing.push(format!("{f} ({}: light tracer)", scene.name));
+                }
+            }
+            let spec = reference::reference_for(name, &plan.reference);
+            if !specs.contains(&spec) {
+                if let Some(f) = reference::missing_from_cache(cache, scene, &spec) {
+                    missing.push(format!(
+                        "{f} ({}: reference {})",
+                        scene.name, spec.technique
+                    ));
+                }
+                specs.push(spec);
+            }
+        }
+    }
+    Ok(missing)
+}
+
 fn trace_reference(
     plan: &ReportPlan,
     scene: &Scene,
     cache: &Path,
     log: &mut dyn FnMut(&str),
 ) -> Result<Traced, ReportError> {
-    let spec = LightTracerSpec {
-        width: plan.reference.width,
-        height: plan.reference.height,
-        ..plan.tracer.clone()
-    };
+    let spec = tracer_spec(plan);
     log(&format!(
         "{}: light tracer ({}x{}, {} batches of {} photons per light, {} spheres, silhouette \
          pixels {})",

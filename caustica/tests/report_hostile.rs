@@ -262,36 +262,53 @@ fn scenes_that_could_not_be_told_apart_are_refused() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A cache that cannot be written to serves the references it holds: the second report
-/// over a read-only cache that the first one filled runs, saying so; the cache is left
-/// as it was. A user who may write anywhere (root) cannot be refused by permissions: the
-/// read-only half is skipped there, with a line saying so.
+/// A cache that cannot be written to is taken where it holds every reference the plan
+/// needs: the second report over a read-only cache that the first one filled runs, saying
+/// so, and leaves the cache as it was; a plan needing a reference the cache lacks is
+/// refused before any work, naming it. A user who may write anywhere (root) cannot be
+/// refused by permissions: the read-only half is skipped there, with a line saying so.
 #[cfg(unix)]
 #[test]
 fn a_read_only_cache_serves_the_references_it_holds() {
     use std::os::unix::fs::PermissionsExt;
+    /// Gives the folder its write permission back however the test ends.
+    struct Writable<'a>(&'a Path);
+    impl Drop for Writable<'_> {
+        fn drop(&mut self) {
+            let _ = std::fs::set_permissions(self.0, std::fs::Permissions::from_mode(0o755));
+        }
+    }
     let dir = scratch("read-only-cache");
     let cache = dir.join("cache");
     let first = report(&dir.join("first"), &cache, &[]);
     assert!(first.status.success(), "{first:?}");
-    let held: Vec<_> = std::fs::read_dir(&cache).unwrap().collect();
-    assert!(!held.is_empty(), "the first report cached no reference");
+    let held = std::fs::read_dir(&cache).unwrap().count();
+    assert!(held > 0, "the first report cached no reference");
     std::fs::set_permissions(&cache, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let guard = Writable(&cache);
     if writes_anyway(&cache) {
         eprintln!("SKIPPING the read-only half: this user writes into a read-only folder (root)");
     } else {
         let second = report(&dir.join("second"), &cache, &[]);
         let err = String::from_utf8_lossy(&second.stderr);
         assert!(second.status.success(), "{second:?}");
-        assert!(err.contains("not writable"), "{err}");
-        assert_eq!(std::fs::read_dir(&cache).unwrap().count(), held.len());
-        // a reference the cache lacks (another size) is refused naming the cache
-        let third = report(&dir.join("third"), &cache, &["--size", "48x27"]);
+        assert!(err.contains("holds every reference"), "{err}");
+        assert_eq!(std::fs::read_dir(&cache).unwrap().count(), held);
+        // another scene's references are not there: refused at once, each named
+        let third = report(&dir.join("third"), &cache, &["--scenes", "sphere,ring"]);
         let err = String::from_utf8_lossy(&third.stderr);
         assert!(!third.status.success(), "{third:?}");
-        assert!(err.contains("reference cache"), "{err}");
+        assert!(
+            err.contains("reference cache") && err.contains("it lacks ring-"),
+            "{err}"
+        );
+        assert!(
+            err.contains("ring: light tracer") && !err.contains("(sphere"),
+            "{err}"
+        );
+        assert!(!dir.join("third").join("report.json").exists());
     }
-    std::fs::set_permissions(&cache, std::fs::Permissions::from_mode(0o755)).unwrap();
+    drop(guard);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -40,7 +40,7 @@
 //! (seed, batch, light, photon, pass), and contributions are summed in photon order,
 //! so the result is the same for any thread count.
 
-use super::{paths, read_exr};
+use super::{cached_sidecar, file_name, paths, read_exr};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::settings::Dispersion;
 use caustica_core::scene::shapes::tessellate;
@@ -1396,6 +1396,17 @@ fn connect(
     Some((p as u32, std::array::from_fn(|c| flux[c] * see.scale[c])))
 }
 
+/// The file name of the light-tracer reference of `scene` under `spec` where `dir` lacks
+/// it; `None` where [`load_or_compute`] would load it.
+pub fn missing_from_cache(dir: &Path, scene: &Scene, spec: &LightTracerSpec) -> Option<String> {
+    let hash = light_tracer_hash(scene, spec);
+    let (exr, json) = paths(dir, &scene.name, &format!("light-tracer-{hash}"));
+    match cached_sidecar::<LightTracerInfo>(&exr, &json, &hash, |i| &i.scene_hash) {
+        Some(_) => None,
+        None => Some(file_name(&exr)),
+    }
+}
+
 /// Loads the cached light-tracer reference of `scene` from `dir`, or computes and caches
 /// it (EXR of the mean, EXR of the per-pixel standard error, JSON sidecar).
 pub fn load_or_compute(
@@ -1407,12 +1418,10 @@ pub fn load_or_compute(
     let hash = light_tracer_hash(scene, spec);
     let (exr_path, json_path) = paths(dir, &scene.name, &format!("light-tracer-{hash}"));
     let err_path = exr_path.with_extension("stderr.exr");
-    if let (Ok(text), true) = (std::fs::read_to_string(&json_path), exr_path.exists()) {
-        if let Ok(info) = serde_json::from_str::<LightTracerInfo>(&text) {
-            if info.scene_hash == hash {
-                return Ok((read_exr(&exr_path).map_err(LightTracerError::Cache)?, info));
-            }
-        }
+    if let Some(info) =
+        cached_sidecar::<LightTracerInfo>(&exr_path, &json_path, &hash, |i| &i.scene_hash)
+    {
+        return Ok((read_exr(&exr_path).map_err(LightTracerError::Cache)?, info));
     }
     validate(spec)?;
     // the cache must take the result before the work begins

@@ -158,6 +158,39 @@ pub fn scene_hash(scene: &Scene, spec: &ReferenceSpec) -> String {
     format!("{h:016x}")
 }
 
+/// The sidecar of the cached image `exr` beside it at `json`, where both are there, the
+/// sidecar reads and `hash_of` it is `hash`; `None` where the cache lacks it (or holds
+/// another scene's under the name).
+pub(crate) fn cached_sidecar<T: serde::de::DeserializeOwned>(
+    exr: &Path,
+    json: &Path,
+    hash: &str,
+    hash_of: impl Fn(&T) -> &str,
+) -> Option<T> {
+    let text = std::fs::read_to_string(json).ok()?;
+    let info = serde_json::from_str::<T>(&text).ok()?;
+    (exr.exists() && hash_of(&info) == hash).then_some(info)
+}
+
+/// The file name of the reference of `scene` under `spec` where `dir` lacks it; `None`
+/// where [`load_or_compute`] would load it.
+pub fn missing_from_cache(dir: &Path, scene: &Scene, spec: &ReferenceSpec) -> Option<String> {
+    let hash = scene_hash(scene, spec);
+    let (exr, json) = paths(dir, &scene.name, &hash);
+    match cached_sidecar::<ReferenceInfo>(&exr, &json, &hash, |i| &i.scene_hash) {
+        Some(_) => None,
+        None => Some(file_name(&exr)),
+    }
+}
+
+/// `path`'s last component, for messages.
+pub(crate) fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 fn paths(dir: &Path, scene: &str, hash: &str) -> (PathBuf, PathBuf) {
     let stem = format!("{}-{hash}", crate::output::file_stem(scene));
     (
@@ -178,15 +211,13 @@ pub fn load_or_compute(
 ) -> Result<Reference, String> {
     let hash = scene_hash(scene, spec);
     let (exr_path, json_path) = paths(dir, &scene.name, &hash);
-    if let (Ok(text), true) = (std::fs::read_to_string(&json_path), exr_path.exists()) {
-        if let Ok(info) = serde_json::from_str::<ReferenceInfo>(&text) {
-            if info.scene_hash == hash {
-                return Ok(Reference {
-                    image: read_exr(&exr_path)?,
-                    info,
-                });
-            }
-        }
+    if let Some(info) =
+        cached_sidecar::<ReferenceInfo>(&exr_path, &json_path, &hash, |i| &i.scene_hash)
+    {
+        return Ok(Reference {
+            image: read_exr(&exr_path)?,
+            info,
+        });
     }
     // the cache must take the result before the work begins
     crate::output::prepare_folder(dir).map_err(|e| format!("reference cache {e}"))?;
