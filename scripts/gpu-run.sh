@@ -33,7 +33,7 @@ Variables: BENCH_BACKENDS (vulkan,wgpu,opencl); CAUSTICA_BENCH_* pass through to
 benches. experiment: EXP_BENCH=sspm|caustic-map|photon-gi|adaptive, EXP_LANG=opencl|wgsl, EXP_DIR
 (a folder of variant folders of changed kernel files; default .devbin/exp, .devbin/wexp),
 EXP_OPTIONS ("opts;opts": OpenCL build options, each a variant), EXP_ENVS ("VAR=VALUE ...;...":
-environments, each a variant, e.g. CAUSTICA_OPENCL_RELAXED=trace_indirect), EXP_SASS=1 (ptxas counts,
+environments, each a variant, e.g. CAUSTICA_OPENCL_RELAXED=atrous_filter), EXP_SASS=1 (ptxas counts,
 SASS in $OUT/sass.tgz), EXP_FRAMES, EXP_SETTINGS. hang: HANG_RUNS (8), HANG_AFTER (60 s);
 update: UPDATE_BASE=1 (a baseline build's examples copied as .devbin/update_cost_base and
 .devbin/frame_loop_base after --build, which empties .devbin's gzipped files, or before

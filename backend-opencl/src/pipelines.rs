@@ -100,8 +100,9 @@ pub const VARIANT_KERNELS: &[&str] = &["trace_photons"];
 pub const RELAXED_DIVISION_KERNELS: &[&str] =
     &["gather_footprint", "density_gather", "splat_photons"];
 
-/// Variant kernels ([`VARIANT_KERNELS`]) whose programs are built with OpenCL's default
-/// division bounds, as [`RELAXED_DIVISION_KERNELS`]: `trace_photons`, whose conformance
+/// Kernels with compiled switches (each variant a program of its own, [`build_variant`])
+/// whose programs are built with OpenCL's default division bounds, as
+/// [`RELAXED_DIVISION_KERNELS`]: `trace_photons`, whose conformance
 /// (photons matched within a position tolerance, paths allowed to diverge where a
 /// rounding sends them the other way) is argued for WGSL's and SPIR-V's bounds too. On the
 /// H200 its trace took 2.71 ms against 2.75 on `sphere`, 1.15 against 1.18 on `cornell`
@@ -109,7 +110,10 @@ pub const RELAXED_DIVISION_KERNELS: &[&str] =
 /// Sspm and CausticMap checks and the stiff catalogue passing against the CPU.
 /// `trace_indirect`, whose conformance is argued the same way (stored photons as multisets,
 /// diverged paths allowed): on the H100 at Smal 2019's high setting (`rooms`, 8 waves) it
-/// took 6.10 against 6.49 ms.
+/// took 6.10 against 6.49 ms, with `cross_backend`'s PhotonGi checks (the waves against
+/// the single launch exactly, on the same backend) and `photon_gi_schedules` (the waves'
+/// images bitwise the single launch's), `photon_gi_frames` and `photon_gi_stiff` passing:
+/// both of its variants are built with the same bounds.
 pub const RELAXED_DIVISION_VARIANTS: &[&str] = &["trace_photons", "trace_indirect"];
 
 /// Register caps (`-cl-nv-maxrregcount`) for variant kernels' programs on devices that
@@ -440,6 +444,17 @@ impl OpenClBackend {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A kernel named in [`RELAXED_DIVISION_VARIANTS`] has switches, so its launches go
+    /// through [`build_variant`], where the list is read (a kernel without switches would
+    /// be built in the main program and the entry silently ignored).
+    #[test]
+    fn relaxed_division_variants_have_switches() {
+        for k in RELAXED_DIVISION_VARIANTS {
+            let info = caustica_core::kernels::kernel_info(k);
+            assert!(info.is_some_and(|i| !i.switches.is_empty()), "{k}");
+        }
+    }
 
     /// `CAUSTICA_OPENCL_RELAXED`'s list names whole kernel names only.
     #[test]

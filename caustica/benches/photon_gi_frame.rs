@@ -13,7 +13,7 @@
 //! `CAUSTICA_BENCH_SIZE=WxH` (default 1920x1080),
 //! `CAUSTICA_BENCH_GI_SCHEDULES=auto,single_kernel,waves,sorted_waves` (`trace_indirect`'s
 //! schedules, default `auto`, the settings' default; each timed in turn),
-//! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the setting's 8),
+//! `CAUSTICA_BENCH_GI_WAVES=N` (waves of the `waves` schedule, default the settings' 4),
 //! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22),
 //! `CAUSTICA_BENCH_GI_WAVES_ABOVE=N` (`auto_waves_above_photons`, default the settings').
 //! With waves, `trace_indirect`'s (and the sort's) median per wave follows the passes,
