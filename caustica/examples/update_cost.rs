@@ -1,8 +1,8 @@
 //! The host time of an update, without frames: `frame_loop`'s moves (the light circles,
 //! the `sphere` scene's glass ball bobs and turns as an instance) on a backend, as the
 //! medians of the ball's world vertices alone (`world_vertices`), of the move of the
-//! instances alone (`SceneInstances::move_instances`, on one thread and on rayon's, as
-//! over a hardware GPU) and of each technique's `set_lights` and `set_object_transforms`.
+//! instances alone (`SceneInstances::move_instances`) and of each technique's
+//! `set_lights` and `set_object_transforms`.
 //! Run: `cargo run --release -p caustica --example update_cost -- [BACKEND] [UPDATES]
 //! [TECHNIQUE,...]` (defaults: cpu, 60, the four techniques).
 
@@ -59,7 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .clone();
     // the ball is the scene's one instance: its object-space vertices come first
     let local = instances.object_vertices[..level.vertex_count as usize].to_vec();
-    let (mut placed, mut moved, mut threaded) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut placed, mut moved) = (Vec::new(), Vec::new());
     for f in 0..n {
         let t = Instant::now();
         black_box(world_vertices(&placement(f), black_box(&local)));
@@ -67,17 +67,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = Instant::now();
         black_box(instances.move_instances(&[(ball, placement(f))])?);
         moved.push(ms(t));
-        let t = Instant::now();
-        black_box(instances.move_instances_with(&[(ball, placement(f))], true)?);
-        threaded.push(ms(t));
     }
     println!(
-        "{backend}: the ball's {} vertices placed {:.3} ms, the instances moved {:.3} ms, \
-         {:.3} ms on rayon's threads (medians of {n})",
+        "{backend}: the ball's {} vertices placed {:.3} ms, the instances moved {:.3} ms \
+         (medians of {n})",
         level.vertex_count,
         median(placed),
-        median(moved),
-        median(threaded)
+        median(moved)
     );
 
     for technique in techniques.split(',') {

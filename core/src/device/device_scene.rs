@@ -164,20 +164,6 @@ impl SceneInstances {
         &mut self,
         moves: &[(usize, Transform)],
     ) -> Result<InstanceMove, BuildError> {
-        self.move_instances_with(moves, false)
-    }
-
-    /// [`SceneInstances::move_instances`], an instance of over
-    /// [`PARALLEL_PLACEMENT_VERTICES`](crate::device::placement::PARALLEL_PLACEMENT_VERTICES)
-    /// vertices placed on rayon's threads where `parallel` holds (the same bits). A host
-    /// gains only where its cores are free of the device's work and the placement is long
-    /// enough to pay for waking the threads; docs/performance.md, "Dynamic scenes", has
-    /// what was measured (`update_cost` times both).
-    pub fn move_instances_with(
-        &mut self,
-        moves: &[(usize, Transform)],
-        parallel: bool,
-    ) -> Result<InstanceMove, BuildError> {
         let mut levels = self.levels.clone();
         let mut moved = vec![false; levels.len()];
         for (object, transform) in moves {
@@ -212,8 +198,7 @@ impl SceneInstances {
         for (l, _) in levels.iter_mut().zip(&moved).filter(|(_, m)| **m) {
             let first = (l.position_base - self.positions_vec4) as usize;
             let local = &self.object_vertices[first..first + l.vertex_count as usize];
-            let (world, b, used) =
-                placed_vertices(&l.transform, local, &l.unused_vertices, parallel);
+            let (world, b, used) = placed_vertices(&l.transform, local, &l.unused_vertices);
             check_placed(l.object.unwrap_or(0), &b)?;
             l.caster_bounds = if l.caster_bounds.is_empty() {
                 Aabb::EMPTY
@@ -279,7 +264,7 @@ impl SceneInstances {
                 l.vertex_count
             )));
         }
-        let (world, b, used_box) = placed_vertices(&l.transform, &local, &l.unused_vertices, false);
+        let (world, b, used_box) = placed_vertices(&l.transform, &local, &l.unused_vertices);
         check_placed(object, &b)?;
         let base = l.vertex_base;
         let tris: Vec<GpuTriangle> = l
@@ -1490,7 +1475,7 @@ mod tests {
                     .collect();
                 let unused = unused_vertices(&used, base, local.len());
                 let (world, all) = world_vertices(&t, &local);
-                let (placed, placed_all, placed_used) = placed_vertices(&t, &local, &unused, false);
+                let (placed, placed_all, placed_used) = placed_vertices(&t, &local, &unused);
                 let bits = |b: Aabb| [b.min.to_array(), b.max.to_array()].map(|v| v.map(f32::to_bits));
                 prop_assert!(bytemuck::cast_slice::<_, u32>(&placed) == bytemuck::cast_slice::<_, u32>(&world));
                 prop_assert_eq!(bits(placed_all), bits(all));

@@ -203,19 +203,17 @@ fn grown_in_order<'a>(vertices: impl Iterator<Item = &'a GpuVertex>) -> Aabb {
 
 /// An instance's world vertices ([`placement`] of each), with the box of all of them.
 pub fn world_vertices(t: &Transform, local: &[GpuVertex]) -> (Vec<GpuVertex>, Aabb) {
-    let (world, all, _) = placed_vertices(t, local, &[], false);
+    let (world, all, _) = placed_vertices(t, local, &[]);
     (world, all)
 }
 
-/// Places `local`, whose first vertex is vertex `first` of its instance, into `out`
-/// (its blocks of four, the last padded; `unused`: the instance's unused vertex indices
-/// that fall in this run, ascending). Returns the lane boxes of the used vertices and of
-/// the unused ones.
+/// Places an instance's vertices `local` into `out` (its blocks of four, the last
+/// padded; `unused`: the instance's unused vertex indices, ascending). Returns the lane
+/// boxes of the used vertices and of the unused ones.
 fn place_run(
     m: &Affine3A,
     nm: &Mat3A,
     local: &[GpuVertex],
-    first: usize,
     unused: &[u32],
     out: &mut [[GpuVertex; 4]],
 ) -> (LaneBox, LaneBox) {
@@ -227,7 +225,7 @@ fn place_run(
     // the used vertices' box, and the box of the unused ones (few, if any)
     let mut used = LaneBox::EMPTY;
     let mut unused_box = LaneBox::EMPTY;
-    let mut next_unused = unused.iter().map(|&u| u as usize - first).peekable();
+    let mut next_unused = unused.iter().map(|&u| u as usize).peekable();
     for ((k, block), o) in blocks.iter().chain(last.as_ref()).enumerate().zip(out) {
         let (w, p) = place_block(m, nm, block);
         *o = w;
@@ -251,66 +249,24 @@ fn place_run(
     (used, unused_box)
 }
 
-/// Vertices an instance must have before a move places it on rayon's threads
-/// ([`placed_vertices`] with `parallel`), in runs of this many: below it the threads'
-/// wake-up costs more than the loop (a run takes ~20 us on one core).
-pub const PARALLEL_PLACEMENT_VERTICES: usize = 8192;
-
-/// Cores a host must have before a move ([`parallel_placement`]) places an instance on
-/// rayon's threads: on a host of two cores the threads' wake-up and the shared core cost
-/// more than they save (docs/performance.md, "Dynamic scenes").
-pub const PARALLEL_PLACEMENT_MIN_CORES: usize = 4;
-
-/// Whether a move places its instances on rayon's threads
-/// ([`SceneInstances::move_instances_with`](crate::device::device_scene::SceneInstances::move_instances_with)):
-/// where the device runs elsewhere than on the host's cores (`device_on_host_cores`: a
-/// CPU device, caustica's or a software GPU's, keeps them busy with its own threads) and
-/// the host has at least [`PARALLEL_PLACEMENT_MIN_CORES`] cores.
-pub fn parallel_placement(device_on_host_cores: bool) -> bool {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    !device_on_host_cores && cores >= PARALLEL_PLACEMENT_MIN_CORES
-}
-
 /// An instance's world vertices ([`placement`] of each), with the box of all of them and
 /// the box of those its triangles use, in one pass over the vertices (`unused`: the
 /// vertices no triangle uses, as indices into `local`, ascending; a repeated or
 /// out-of-range index changes nothing). Both boxes are bitwise
 /// those [`AabbA`] grows over the same positions in order (a build's `world_vertices`
 /// and `triangle_bounds`): the lanes' boxes equal them unless a bound is zero, and there
-/// the box is grown again in order. `parallel`: an instance of over
-/// [`PARALLEL_PLACEMENT_VERTICES`] vertices is placed in runs of that many on rayon's
-/// threads, the runs' lane boxes united in order (the same bits: a bound is an extreme
-/// value, and a zero bound is grown again in order as above).
+/// the box is grown again in order. One thread: on rayon's, in runs, the tight loop took
+/// half the time but a host's frame loop, whose pool sleeps between frames, gained
+/// nothing (docs/performance.md, "Dynamic scenes").
 pub fn placed_vertices(
     t: &Transform,
     local: &[GpuVertex],
     unused: &[u32],
-    parallel: bool,
 ) -> (Vec<GpuVertex>, Aabb, Aabb) {
     let m = t.world_from_object();
     let nm = t.normal_matrix();
     let mut placed = vec![[GpuVertex::default(); 4]; local.len().div_ceil(4)];
-    let (used, unused_box) = if parallel && local.len() > PARALLEL_PLACEMENT_VERTICES {
-        use rayon::prelude::*;
-        let boxes: Vec<(LaneBox, LaneBox)> = placed
-            .par_chunks_mut(PARALLEL_PLACEMENT_VERTICES / 4)
-            .enumerate()
-            .map(|(r, out)| {
-                let first = r * PARALLEL_PLACEMENT_VERTICES;
-                let end = local.len().min(first + PARALLEL_PLACEMENT_VERTICES);
-                let lo = unused.partition_point(|&u| (u as usize) < first);
-                let hi = unused.partition_point(|&u| (u as usize) < end);
-                place_run(&m, &nm, &local[first..end], first, &unused[lo..hi], out)
-            })
-            .collect();
-        boxes
-            .iter()
-            .fold((LaneBox::EMPTY, LaneBox::EMPTY), |(u, x), (ru, rx)| {
-                (u.union(ru), x.union(rx))
-            })
-    } else {
-        place_run(&m, &nm, local, 0, unused, &mut placed)
-    };
+    let (used, unused_box) = place_run(&m, &nm, local, unused, &mut placed);
     let mut world: Vec<GpuVertex> = bytemuck::allocation::cast_vec(placed);
     world.truncate(local.len());
     let all = used.union(&unused_box);
@@ -425,7 +381,7 @@ mod tests {
                 .flat_map(|i| std::iter::repeat_n(i, unused_mask[i as usize] as usize))
                 .collect();
             unused.push(local.len() as u32 + 1);
-            let (world, all, used) = placed_vertices(&t, &local, &unused, false);
+            let (world, all, used) = placed_vertices(&t, &local, &unused);
             prop_assert!(
                 bytemuck::cast_slice::<_, u32>(&world) == bytemuck::cast_slice::<_, u32>(&expected)
             );
@@ -445,46 +401,6 @@ mod tests {
                 bytemuck::cast_slice::<_, u32>(&world2) == bytemuck::cast_slice::<_, u32>(&world)
             );
             prop_assert_eq!(bits(all2), bits(all));
-        }
-
-        /// Placed on rayon's threads in runs, an instance's vertices and both boxes are
-        /// bitwise those of one thread (unused vertices, placed far out, on both sides of
-        /// a run's end; the last run short and its last block padded).
-        #[test]
-        fn runs_on_threads_place_and_bound_as_one_thread(
-            t in transform(),
-            seed in prop::collection::vec(
-                ([-2.0f32..2.0, -2.0f32..2.0, -2.0f32..2.0], [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0])
-                    .prop_map(|(position, normal)| GpuVertex { position, u: 0.5, normal, v: 0.25 }),
-                64,
-            ),
-            extra in 1usize..3000,
-            unused_every in 1usize..5000,
-        ) {
-            let n = 2 * PARALLEL_PLACEMENT_VERTICES + extra;
-            let unused: Vec<u32> = (0..n)
-                .filter(|i| i % unused_every == 0 || (i + 1) % PARALLEL_PLACEMENT_VERTICES < 2)
-                .map(|i| i as u32)
-                .collect();
-            // the unused vertices far out, so that a box that takes one in shows it
-            let local: Vec<GpuVertex> = (0..n)
-                .map(|i| {
-                    let mut v = seed[(i * 7 + i / 64) % 64];
-                    if unused.binary_search(&(i as u32)).is_ok() {
-                        v.position = v.position.map(|c| 4.0 * c + 100.0);
-                    }
-                    v
-                })
-                .collect();
-            let one = placed_vertices(&t, &local, &unused, false);
-            let runs = placed_vertices(&t, &local, &unused, true);
-            prop_assert!(
-                bytemuck::cast_slice::<_, u32>(&one.0) == bytemuck::cast_slice::<_, u32>(&runs.0)
-            );
-            prop_assume!(nan_free(&one.0));
-            let bits = |b: Aabb| [b.min.to_array(), b.max.to_array()].map(|v| v.map(f32::to_bits));
-            prop_assert_eq!(bits(one.1), bits(runs.1));
-            prop_assert_eq!(bits(one.2), bits(runs.2));
         }
     }
 }

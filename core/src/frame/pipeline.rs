@@ -550,11 +550,7 @@ impl<P: Pipeline> Hosted<P> {
             })
             .collect();
         let mut instances = self.host.instances().clone();
-        use crate::backend::DeviceType;
-        let device = backend.capabilities().device_type;
-        let on_host = matches!(device, DeviceType::Cpu | DeviceType::SoftwareGpu);
-        let parallel = crate::device::placement::parallel_placement(on_host);
-        let m = instances.move_instances_with(moves, parallel)?;
+        let m = instances.move_instances(moves)?;
         let state = self.host.state();
         let u = InstanceUpdate::Moved(m);
         // the moved levels (cheap to copy: their vertices and triangles are shared), from
@@ -563,9 +559,7 @@ impl<P: Pipeline> Hosted<P> {
         let receivers_moved = self.host.apply_instances(model, instances, u)?;
         let change = Change::Instances { receivers_moved };
         self.follow(backend, change, state, move || {
-            Ok(Some(InstanceUpdate::Moved(
-                after.move_instances_with(&back, parallel)?,
-            )))
+            Ok(Some(InstanceUpdate::Moved(after.move_instances(&back)?)))
         })
     }
 
