@@ -44,6 +44,10 @@ pub const COMMON: &[(&str, &str)] = &[
         include_str!("../wgsl/common/density_gather.wgsl"),
     ),
     (
+        "gather_texel",
+        include_str!("../wgsl/common/gather_texel.wgsl"),
+    ),
+    (
         "source_index",
         include_str!("../wgsl/common/source_index.wgsl"),
     ),

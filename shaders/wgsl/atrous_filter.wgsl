@@ -1,4 +1,4 @@
-// needs: layout prelude vector irradiance_filter
+// needs: layout prelude vector irradiance_filter density_gather gather_texel
 // atrous_filter (Smal 2019, section 24.4.2, Eqs. 14-18): one edge-avoiding A-Trous
 // iteration with variance clipping of its detail coefficient (the contract in
 // core/src/kernels/atrous_filter.rs). Mirror of backend-opencl/kernels/atrous_filter.cl
@@ -11,21 +11,27 @@
 @group(0) @binding(4) var<storage, read> input: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> details: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> edge: array<vec4<f32>>;
 
-fn is_receiver(i: u32) -> bool {
-    return (gbuffer3[i].w & GBUFFER_RECEIVER) != 0u;
+// Pixel i's edge texel: from the G-buffer on iteration 0 (which writes them all), from
+// the edge texels on the later iterations (one 16-byte texel for three planes).
+fn atrous_edge(first: bool, i: u32) -> vec4<f32> {
+    if (first) {
+        return edge_texel(load_gather_texel(i));
+    }
+    return edge[i];
 }
 
 // View depth of receiver (x, y); 0 off the image or on a non-receiver.
-fn atrous_depth(x: i32, y: i32, w: i32, h: i32) -> f32 {
+fn atrous_depth(first: bool, x: i32, y: i32, w: i32, h: i32) -> f32 {
     if (x < 0 || y < 0 || x >= w || y >= h) {
         return 0.0f;
     }
-    let i = u32(y * w + x);
-    if (!is_receiver(i)) {
+    let t = atrous_edge(first, u32(y * w + x));
+    if (!edge_texel_is_receiver(t)) {
         return 0.0f;
     }
-    return bitcast<f32>(gbuffer0[i].w);
+    return t.x;
 }
 
 fn atrous_pixel(j: u32) {
@@ -35,18 +41,23 @@ fn atrous_pixel(j: u32) {
     if (j >= u32(w * h)) {
         return;
     }
+    let first = p.iteration == 0u;
+    let e = atrous_edge(first, j);
+    if (first) {
+        edge[j] = e;
+    }
     let s_i = input[j];
-    if (!is_receiver(j)) {
+    if (!edge_texel_is_receiver(e)) {
         out[j] = s_i;
         details[j] = vec4<f32>(0.0f);
         return;
     }
     let x = i32(j) % w;
     let y = i32(j) / w;
-    let z = bitcast<f32>(gbuffer0[j].w);
-    let n = bitcast<vec3<f32>>(gbuffer1[j].xyz);
-    let g = depth_gradient(z, vec4<f32>(atrous_depth(x - 1, y, w, h), atrous_depth(x + 1, y, w, h),
-                                        atrous_depth(x, y - 1, w, h), atrous_depth(x, y + 1, w, h)));
+    let z = e.x;
+    let n = e.yzw;
+    let g = depth_gradient(z, vec4<f32>(atrous_depth(first, x - 1, y, w, h), atrous_depth(first, x + 1, y, w, h),
+                                        atrous_depth(first, x, y - 1, w, h), atrous_depth(first, x, y + 1, w, h)));
     var sum_w = 0.0f;
     var sum = vec3<f32>(0.0f);
     var sum_sq = vec3<f32>(0.0f);
@@ -60,14 +71,13 @@ fn atrous_pixel(j: u32) {
                 continue;
             }
             let q = u32(qy * w + qx);
-            if (!is_receiver(q)) {
+            let eq = atrous_edge(first, q);
+            if (!edge_texel_is_receiver(eq)) {
                 continue;
             }
-            let zq = bitcast<f32>(gbuffer0[q].w);
-            let nq = bitcast<vec3<f32>>(gbuffer1[q].xyz);
             let step = g.x * f32(dx) + g.y * f32(dy);
-            let wgt = ATROUS_TAPS[kx] * ATROUS_TAPS[ky] * depth_weight(z, zq, step, p.sigma_z, p.epsilon)
-                * normal_weight(n, nq, p.sigma_n);
+            let wgt = ATROUS_TAPS[kx] * ATROUS_TAPS[ky] * depth_weight(z, eq.x, step, p.sigma_z, p.epsilon)
+                * normal_weight(n, eq.yzw, p.sigma_n);
             let v = input[q].xyz;
             sum_w += wgt;
             sum += wgt * v;

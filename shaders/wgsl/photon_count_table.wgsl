@@ -1,4 +1,4 @@
-// needs: layout prelude photon_map
+// needs: layout prelude photon_map gather_texel
 // photon_count_table: one direction of the blocked summed-area table of the photon
 // counts clamped at 9 k (core/src/math/density_gather.rs). Mirror of
 // backend-opencl/kernels/photon_count_table.cl and backend-cpu/src/kernels/
@@ -20,30 +20,6 @@
 fn clamped_photon_count(lo: u32, hi: u32, k: u32) -> u32 {
     let clamp = COUNT_CLAMP_PER_K * k;
     return select(min(lo, clamp), clamp, hi != 0u);
-}
-
-// What the gather needs of a G-buffer texel (planes 0, 1 and 3 only).
-struct GatherTexel {
-    receiver: u32,
-    depth: f32,
-    normal: vec3<f32>,
-}
-
-fn load_gather_texel(i: u32) -> GatherTexel {
-    var t: GatherTexel;
-    t.receiver = gbuffer3[i].w & GBUFFER_RECEIVER;
-    t.depth = bitcast<f32>(gbuffer0[i].w);
-    t.normal = bitcast<vec3<f32>>(gbuffer1[i].xyz);
-    return t;
-}
-
-// A pixel's edge texel: (view depth, normal) of a receiver, the G-buffer's bits; depth
-// EDGE_TEXEL_NOT_RECEIVER elsewhere.
-fn edge_texel(t: GatherTexel) -> vec4<f32> {
-    if (t.receiver != 0u) {
-        return vec4<f32>(t.depth, t.normal);
-    }
-    return vec4<f32>(EDGE_TEXEL_NOT_RECEIVER, 0.0, 0.0, 0.0);
 }
 
 // SCAN_THREADS: the threads of a workgroup (the launch's DEFAULT_WORKGROUP_SIZE);

@@ -7,6 +7,7 @@ use crate::CpuBackend;
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gbuffer_flags, AtrousParams, GBufferView};
 use caustica_core::kernels::AtrousFilter;
+use caustica_core::math::density_gather::{edge_texel, edge_texel_is_receiver};
 use caustica_core::math::irradiance_filter::{
     atrous_final, atrous_offset, clipped_detail, depth_gradient, depth_weight, detail_bound,
     normal_weight, FilterConstants, ATROUS_TAPS,
@@ -23,23 +24,47 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &AtrousFilter) -> Result<(), BackendE
         input,
         details,
         out,
+        edge,
     } = k;
     let g = cpu.gbuffer(gbuffer)?;
     let i = cpu.get(input.id)?.as_slice(input.len)?;
     let d = cpu.get(details.id)?.as_slice(details.len)?;
+    // iteration 0 writes the edge texels from the G-buffer, the later ones read them
+    let edges = if params.iteration == 0 {
+        reserve_temporary::<[f32; 4]>(edge.len as u64, "the A-Trous edge texels")?;
+        edge_texels(g)
+    } else {
+        cpu.get(edge.id)?.as_slice::<[f32; 4]>(edge.len)?.to_vec()
+    };
     reserve_temporary::<[[f32; 4]; 2]>(out.len as u64, "an A-Trous iteration")?;
-    let r = atrous_filter_image(params, g, i, d);
+    let r = atrous_filter_image(params, i, d, &edges);
     let (img, det): (Vec<[f32; 4]>, Vec<[f32; 4]>) = r.into_iter().unzip();
+    if params.iteration == 0 {
+        cpu.put(edge.id, &edges)?;
+    }
     cpu.put(details.id, &det)?;
     cpu.put(out.id, &img)
 }
 
-/// (out, details) per pixel.
+/// Every pixel's edge texel (`math::density_gather::edge_texel`: depth and normal, the
+/// G-buffer's own bits, or the not-a-receiver mark), as iteration 0 writes them.
+pub fn edge_texels(gbuffer: GBufferView) -> Vec<[f32; 4]> {
+    (0..gbuffer.len())
+        .into_par_iter()
+        .map(|i| {
+            let g = gbuffer.load_gbuffer(i);
+            edge_texel(g.flags & gbuffer_flags::RECEIVER != 0, g.depth, g.normal)
+        })
+        .collect()
+}
+
+/// (out, details) per pixel, the taps' depths, normals and receivers read from `edges`
+/// ([`edge_texels`]: the same bits as the G-buffer's).
 pub fn atrous_filter_image(
     p: &AtrousParams,
-    gbuffer: GBufferView,
     input: &[[f32; 4]],
     details: &[[f32; 4]],
+    edges: &[[f32; 4]],
 ) -> Vec<([f32; 4], [f32; 4])> {
     let (w, h) = (p.camera.width as i64, p.camera.height as i64);
     let c = FilterConstants {
@@ -48,13 +73,13 @@ pub fn atrous_filter_image(
         alpha_max: 0.0,
         epsilon: p.epsilon,
     };
-    // (receiver, depth, normal) of pixel (x, y); None off the image or on a non-receiver
+    // (depth, normal) of pixel (x, y); None off the image or on a non-receiver
     let texel = |x: i64, y: i64| {
         if x < 0 || y < 0 || x >= w || y >= h {
             return None;
         }
-        let g = gbuffer.load_gbuffer((y * w + x) as usize);
-        (g.flags & gbuffer_flags::RECEIVER != 0).then(|| (g.depth, Vec3::from(g.normal)))
+        let t = &edges[(y * w + x) as usize];
+        edge_texel_is_receiver(t).then(|| (t[0], Vec3::new(t[1], t[2], t[3])))
     };
     let depth = |x: i64, y: i64| texel(x, y).map_or(0.0, |t| t.0);
     (0..(w * h) as usize)

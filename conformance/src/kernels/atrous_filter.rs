@@ -1,6 +1,7 @@
 //! `atrous_filter` on the same inputs: the reference's G-buffer and filtered caustics,
+//! the first iteration (from the G-buffer; its edge texels, the G-buffer's bits, bitwise),
 //! one inner iteration (taps 2 pixels apart, the detail sum started) and a last one (taps
-//! 4 apart, reading a detail sum), on the same input buffers.
+//! 4 apart, reading a detail sum), these two on the reference's edge texels.
 //!
 //! Tolerances. Each tap's weight is one `exp` and one `pow` (a few ulp on the GPUs, up to
 //! 16 for OpenCL's `pow`, WGSL's through `exp2(log2)`); the 25 weighted sums run in the
@@ -13,7 +14,8 @@
 use crate::harness::fixture::{run_and_free, Fixture, ReferenceInputs};
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, Backend};
-use caustica_core::device::layout::AtrousParams;
+use caustica_core::device::layout::{gbuffer_flags, AtrousParams};
+use caustica_core::math::density_gather::edge_texel;
 use caustica_core::kernels::AtrousFilter;
 use caustica_core::math::irradiance_filter::FilterConstants;
 use caustica_core::recording::Recording;
@@ -22,8 +24,8 @@ use caustica_core::recording::Recording;
 /// doc): 100x the weights' ~1e-5.
 pub const ATROUS_REL: f32 = 1e-3;
 
-/// (output, detail sum) of one iteration.
-type Iteration = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+/// (output, detail sum, edge texels) of one iteration.
+type Iteration = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
 
 fn run(
     fx: &Fixture,
@@ -31,6 +33,7 @@ fn run(
     b: &mut dyn Backend,
     (iteration, last): (u32, bool),
     details: &[[f32; 4]],
+    edges: &[[f32; 4]],
 ) -> Result<Iteration, String> {
     let c = FilterConstants::default();
     let n = inputs.filtered.len() as u32;
@@ -39,6 +42,7 @@ fn run(
     let input = rec.upload(&inputs.filtered, "input");
     let det = rec.upload(details, "details");
     let out = rec.create(n, "out");
+    let edge = rec.upload(edges, "edge texels");
     rec.kernel(AtrousFilter {
         params: AtrousParams {
             camera: fx.camera,
@@ -54,9 +58,10 @@ fn run(
         input,
         details: det,
         out,
+        edge,
     });
     run_and_free(b, "atrous_filter", &rec, |b| {
-        Ok((read_buf(b, out)?, read_buf(b, det)?))
+        Ok((read_buf(b, out)?, read_buf(b, det)?, read_buf(b, edge)?))
     })
 }
 
@@ -75,13 +80,34 @@ pub fn check_atrous_filter(
             .fold(0.0f32, |m, x| m.max(x.abs()))
     };
     let zero = vec![[0.0f32; 4]; n];
-    let first = run(fx, inputs, r, (1, false), &zero)?;
-    for (what, step, details) in [
-        ("inner iteration", (1u32, false), zero.clone()),
-        ("last iteration", (2u32, true), first.1.clone()),
+    // the edge texels iteration 0 must write: the G-buffer's bits
+    let edges: Vec<[f32; 4]> = inputs
+        .gbuffer
+        .iter()
+        .map(|g| edge_texel(g.flags & gbuffer_flags::RECEIVER != 0, g.depth, g.normal))
+        .collect();
+    // (a stale mark where iteration 0 must write, so that a texel it skips shows)
+    let stale = vec![[f32::NAN; 4]; n];
+    for who in ["reference", "candidate"] {
+        let b: &mut dyn Backend = if who == "reference" { &mut *r } else { &mut *c };
+        let written = run(fx, inputs, b, (0, false), &zero, &stale)?.2;
+        let wrong = written
+            .iter()
+            .zip(&edges)
+            .filter(|(x, y)| x.map(f32::to_bits) != y.map(f32::to_bits))
+            .count();
+        v.check(wrong == 0, || {
+            format!("first iteration: {wrong} of {n} edge texels on the {who} are not the G-buffer's bits")
+        });
+    }
+    let first = run(fx, inputs, r, (1, false), &zero, &edges)?;
+    for (what, step, details, edge_in) in [
+        ("first iteration", (0u32, false), zero.clone(), &stale),
+        ("inner iteration", (1u32, false), zero.clone(), &edges),
+        ("last iteration", (2u32, true), first.1.clone(), &edges),
     ] {
-        let a = run(fx, inputs, r, step, &details)?;
-        let b = run(fx, inputs, c, step, &details)?;
+        let a = run(fx, inputs, r, step, &details, edge_in)?;
+        let b = run(fx, inputs, c, step, &details, edge_in)?;
         for (part, x, y) in [("output", &a.0, &b.0), ("detail sum", &a.1, &b.1)] {
             let tol = ATROUS_REL * peak(x).max(peak(&inputs.filtered));
             let differ = x

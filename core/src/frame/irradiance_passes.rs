@@ -53,8 +53,9 @@ pub fn record_temporal_blend(
     });
 }
 
-/// The A-Trous iterations' scratch: two images the iterations alternate between and the
-/// running sum of clipped detail coefficients (Eq. 18).
+/// The A-Trous iterations' scratch: two images the iterations alternate between, the
+/// running sum of clipped detail coefficients (Eq. 18) and the edge texels the first
+/// iteration writes for the others.
 #[derive(Clone, Copy, Debug)]
 pub struct AtrousScratch {
     /// Iteration images, alternately.
@@ -63,6 +64,8 @@ pub struct AtrousScratch {
     pub b: ImageBuf,
     /// Sum of the clipped details.
     pub details: ImageBuf,
+    /// Edge texels (`AtrousFilter::edge`).
+    pub edge: ImageBuf,
 }
 
 /// Records `iterations` A-Trous iterations (Eqs. 14-18) from `input`, the last writing
@@ -103,6 +106,7 @@ pub fn record_atrous(
             input,
             details: scratch.details,
             out: target,
+            edge: scratch.edge,
         });
         input = target;
     }
@@ -164,6 +168,7 @@ impl FilterChain {
                         a: rec.create(pixels, "A-Trous image a"),
                         b: rec.create(pixels, "A-Trous image b"),
                         details: rec.create(pixels, "A-Trous clipped details image"),
+                        edge: rec.create(pixels, "A-Trous edge texels"),
                     },
                 )
             }),

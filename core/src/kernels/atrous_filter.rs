@@ -13,7 +13,10 @@ use crate::device::layout::AtrousParams;
 /// (`clip_sigmas` standard deviations of the taps' `s_i`, weighted alike) and summed into
 /// `details` (iteration 0 starts the sum). `out` is `s_(i+1)`, or on the last iteration
 /// `E_final = s_n - sum_i clamp(d_i, -b_i, b_i)` (Eq. 18). Non-receivers pass `s_i`
-/// through. The alpha channel is `s_i`'s.
+/// through. The alpha channel is `s_i`'s. Iteration 0 reads the taps' depths, normals and
+/// receiver flags from the G-buffer and writes every pixel's edge texel
+/// (`math::density_gather::edge_texel`, the G-buffer's own bits); the later iterations
+/// read the edge texels instead, one 16-byte texel a tap for three G-buffer planes.
 #[derive(Clone, Copy, Debug)]
 pub struct AtrousFilter {
     /// The iteration, its constants and the image size.
@@ -26,6 +29,8 @@ pub struct AtrousFilter {
     pub details: ImageBuf,
     /// `s_(i+1)`, or `E_final` on the last iteration.
     pub out: ImageBuf,
+    /// Edge texels: written by iteration 0, read by the later ones.
+    pub edge: ImageBuf,
 }
 
 const BINDINGS: &[Binding] = &[
@@ -36,6 +41,7 @@ const BINDINGS: &[Binding] = &[
     bind("input", Read),
     bind("details", ReadWrite),
     bind("out", ReadWrite),
+    bind("edge", ReadWrite),
 ];
 
 impl KernelDecl for AtrousFilter {
@@ -53,7 +59,8 @@ impl KernelDecl for AtrousFilter {
             .gather_gbuffer(&self.gbuffer, n)?
             .buf("input", self.input, img)?
             .buf("details", self.details, img)?
-            .buf("out", self.out, img)?;
+            .buf("out", self.out, img)?
+            .buf("edge", self.edge, img)?;
         Ok(Some(n))
     }
 }

@@ -2,9 +2,9 @@
 // backend-opencl/kernels/common/density_gather.cl: the weights of the density-adaptive,
 // scatter-normalised caustic gather. A kernel that needs this file binds the edge
 // texels (`edge`, array<vec4<f32>>). The summed-area table's functions are in
-// photon_table.wgsl, footprint_radius in gather_footprint.wgsl; clamped_photon_count and
-// edge_texel in photon_count_table.wgsl, the one kernel that reads the photon counts and
-// writes the edge texels.
+// photon_table.wgsl, footprint_radius in gather_footprint.wgsl; clamped_photon_count in
+// photon_count_table.wgsl, the one kernel that reads the photon counts and writes the
+// edge texels (edge_texel: gather_texel.wgsl).
 
 // k-NN radius (pixels): the support half-width 0.5 sqrt(k a / c).
 fn knn_radius(k: u32, pixels: u32, photons: u32) -> f32 {

@@ -237,9 +237,7 @@ struct TemporalBuffers {
 #[derive(Clone, Copy, Debug)]
 struct AtrousBuffers {
     input: ImageBuf,
-    a: ImageBuf,
-    b: ImageBuf,
-    details: ImageBuf,
+    scratch: AtrousScratch,
 }
 
 impl Buffers {
@@ -265,9 +263,12 @@ impl Buffers {
             });
         let atrous = (settings.frame.atrous_iterations > 0).then(|| AtrousBuffers {
             input: rec.create(pixels, "A-Trous input image"),
-            a: rec.create(pixels, "A-Trous image a"),
-            b: rec.create(pixels, "A-Trous image b"),
-            details: rec.create(pixels, "A-Trous clipped details"),
+            scratch: AtrousScratch {
+                a: rec.create(pixels, "A-Trous image a"),
+                b: rec.create(pixels, "A-Trous image b"),
+                details: rec.create(pixels, "A-Trous clipped details"),
+                edge: rec.create(pixels, "A-Trous edge texels"),
+            },
         });
         let raw = rec.create(pixels, "raw indirect image");
         let filtered = temporal.is_some() || atrous.is_some();
@@ -1061,16 +1062,11 @@ impl PhotonGiPipeline {
         }
         // with neither filter `indirect` is the raw image's buffer
         if let Some(a) = b.atrous {
-            let scratch = AtrousScratch {
-                a: a.a,
-                b: a.b,
-                details: a.details,
-            };
             record_atrous(
                 rec,
                 cam,
                 gbuffer,
-                scratch,
+                a.scratch,
                 self.settings.frame.atrous_iterations,
                 self.settings.frame.atrous_clip_sigmas,
                 input,
