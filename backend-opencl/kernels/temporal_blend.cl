@@ -22,7 +22,7 @@ __kernel void temporal_blend(__global const TemporalParams* p, GBUFFER_PARAMS(__
     if ((g.flags & GBUFFER_RECEIVER) == 0u) {
         out[j] = cur;
         next_history[j] = cur;
-        next_edge[j] = (float4)(-1.0f, 0.0f, 0.0f, 0.0f);
+        next_edge[j] = (float4)(EDGE_TEXEL_NOT_RECEIVER, 0.0f, 0.0f, 0.0f);
         return;
     }
     int x = (int)j % w, y = (int)j / w;

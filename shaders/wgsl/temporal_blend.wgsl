@@ -39,7 +39,7 @@ fn temporal_blend_pixel(j: u32) {
     if ((g.flags & GBUFFER_RECEIVER) == 0u) {
         out[j] = cur;
         next_history[j] = cur;
-        next_edge[j] = vec4<f32>(-1.0f, 0.0f, 0.0f, 0.0f);
+        next_edge[j] = vec4<f32>(EDGE_TEXEL_NOT_RECEIVER, 0.0f, 0.0f, 0.0f);
         return;
     }
     let x = i32(j) % w;

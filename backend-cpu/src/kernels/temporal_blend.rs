@@ -7,6 +7,7 @@ use crate::CpuBackend;
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{gbuffer_flags, project_to_pixel, GBufferView, TemporalParams};
 use caustica_core::kernels::TemporalBlend;
+use caustica_core::math::density_gather::edge_texel;
 use caustica_core::math::irradiance_filter::{
     blend_with_history, depth_weight, normal_weight, reprojection_depth_step, temporal_alpha,
     FilterConstants,
@@ -39,9 +40,6 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TemporalBlend) -> Result<(), Backend
     cpu.put(next_edge.id, &edge)
 }
 
-/// Depth of an edge texel that is no receiver.
-const NOT_RECEIVER: f32 = -1.0;
-
 /// (blended estimate, edge texel) per pixel.
 pub fn temporal_blend_image(
     p: &TemporalParams,
@@ -73,10 +71,11 @@ pub fn temporal_blend_image(
         .map(|j| {
             let g = gbuffer.load_gbuffer(j);
             let cur = input[j];
-            if g.flags & gbuffer_flags::RECEIVER == 0 {
-                return (cur, [NOT_RECEIVER, 0.0, 0.0, 0.0]);
+            let receiver = g.flags & gbuffer_flags::RECEIVER != 0;
+            let edge = edge_texel(receiver, g.depth, g.normal);
+            if !receiver {
+                return (cur, edge);
             }
-            let edge = [g.depth, g.normal[0], g.normal[1], g.normal[2]];
             let (x, y) = (j as i64 % w, j as i64 / w);
             let mut alpha = 0.0;
             let mut hist = Vec3::ZERO;
