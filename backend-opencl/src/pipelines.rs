@@ -185,6 +185,42 @@ pub const DUMP_DIR_VAR: &str = "CAUSTICA_OPENCL_DUMP_DIR";
 /// [`DUMP_DIR_VAR`] the build log is written beside the binary.
 pub const OPTIONS_VAR: &str = "CAUSTICA_OPENCL_OPTIONS";
 
+/// Developer aid: `CAUSTICA_OPENCL_WORKGROUP_SIZES="kernel=threads,..."` launches the named
+/// kernels with that many threads a workgroup instead of core's `workgroup_size`, so that
+/// a group size can be timed on a device without a rebuild (`scripts/gpu-run.sh
+/// experiment`, `EXP_ENVS`). Only for kernels whose local memory does not depend on the
+/// group's size (`trace_indirect`, `trace_photons`); the conformance suite checks core's
+/// sizes. A malformed entry is an error at launch.
+pub const WORKGROUP_SIZES_VAR: &str = "CAUSTICA_OPENCL_WORKGROUP_SIZES";
+
+/// [`WORKGROUP_SIZES_VAR`]'s value, read once per process (a launch does not read the
+/// environment).
+pub fn workgroup_sizes_env() -> Option<&'static str> {
+    static LIST: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    LIST.get_or_init(|| std::env::var(WORKGROUP_SIZES_VAR).ok())
+        .as_deref()
+}
+
+/// The workgroup size [`WORKGROUP_SIZES_VAR`] names for `kernel` in `list`, if any; an
+/// entry that is not `name=threads` with 1 <= threads <= 1024 is an error.
+pub fn workgroup_size_override(list: &str, kernel: &str) -> Result<Option<u32>, String> {
+    for entry in list.split(',').map(str::trim).filter(|e| !e.is_empty()) {
+        let parsed = entry
+            .split_once('=')
+            .and_then(|(name, n)| Some((name.trim(), n.trim().parse::<u32>().ok()?)))
+            .filter(|(_, n)| (1..=1024).contains(n));
+        let Some((name, threads)) = parsed else {
+            return Err(format!(
+                "{WORKGROUP_SIZES_VAR}: '{entry}' is not kernel=threads (1 to 1024)"
+            ));
+        };
+        if name == kernel {
+            return Ok(Some(threads));
+        }
+    }
+    Ok(None)
+}
+
 /// The text of kernel file `file` (`common/<name>.cl` or `<kernel>.cl`): the override of
 /// [`KERNEL_DIR_VAR`] where one is set and holds the file, else `built_in`.
 fn file_text(file: &str, built_in: &str) -> String {
@@ -453,6 +489,33 @@ mod tests {
         for k in RELAXED_DIVISION_VARIANTS {
             let info = caustica_core::kernels::kernel_info(k);
             assert!(info.is_some_and(|i| !i.switches.is_empty()), "{k}");
+        }
+    }
+
+    /// `CAUSTICA_OPENCL_WORKGROUP_SIZES` names kernels whole and refuses what is not a size.
+    #[test]
+    fn workgroup_size_overrides() {
+        let list = "trace_photons=128, trace_indirect = 256";
+        assert_eq!(
+            workgroup_size_override(list, "trace_indirect"),
+            Ok(Some(256))
+        );
+        assert_eq!(
+            workgroup_size_override(list, "trace_photons"),
+            Ok(Some(128))
+        );
+        assert_eq!(workgroup_size_override(list, "trace"), Ok(None));
+        assert_eq!(workgroup_size_override("", "trace"), Ok(None));
+        for bad in [
+            "trace_indirect",
+            "trace_indirect=0",
+            "trace_indirect=2048",
+            "x=y",
+        ] {
+            assert!(
+                workgroup_size_override(bad, "trace_indirect").is_err(),
+                "{bad}"
+            );
         }
     }
 

@@ -210,7 +210,13 @@ fn run(
         // copied into the parameter block before the launch (`OpenClBackend::enqueue`)
         patches: _,
     } = launch;
-    let (name, threads, group) = (*name, *threads, *workgroup_size as usize);
+    let (name, threads) = (*name, *threads);
+    let group = match crate::pipelines::workgroup_sizes_env() {
+        Some(list) => crate::pipelines::workgroup_size_override(list, name)
+            .map_err(BackendError::BadArgument)?
+            .unwrap_or(*workgroup_size),
+        None => *workgroup_size,
+    } as usize;
     for a in args {
         if let LaunchArg::Buffer { id, .. } = a {
             check_buffer(a, b.buffers.get(*id)?.bytes)?;
