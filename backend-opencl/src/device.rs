@@ -274,6 +274,7 @@ impl OpenClBackend {
             queue,
             buffers: Default::default(),
             variants: Default::default(),
+            kernels: Default::default(),
             submissions: Default::default(),
             free_slots: Vec::new(),
             param_align,

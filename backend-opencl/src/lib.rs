@@ -48,6 +48,12 @@ pub struct OpenClBackend {
     /// Labels of the kernel variants this backend has run (their programs are built once
     /// per device and shared, see `DeviceState::program_for`).
     variants: std::sync::Mutex<std::collections::BTreeSet<String>>,
+    /// Kernel objects by program handle and kernel name, created on first launch and kept
+    /// for the backend's life: arguments are taken at enqueue, so one object serves every
+    /// launch (`recording::run`). Creating one a launch cost the host a driver call, and
+    /// releasing one while its launch was queued made NVIDIA's driver wait for it.
+    kernels:
+        std::sync::Mutex<std::collections::HashMap<(usize, &'static str), opencl3::kernel::Kernel>>,
     /// Submissions not yet collected (`Backend::submit`), and the results of those retired
     /// before they were polled.
     submissions: Submissions<submission::InFlight>,

@@ -27,7 +27,7 @@ impl OpenClBackend {
         readbacks: &[ResourceId],
         layout: &StagingLayout,
         slot: &mut StagingSlot,
-    ) -> Result<(Vec<(&'static str, Event)>, Vec<Launched>, Vec<Buffer<u8>>), BackendError> {
+    ) -> Result<(Vec<(&'static str, Event)>, Vec<Buffer<u8>>), BackendError> {
         slot.prepare(
             &self.queue,
             &self.state.context,
@@ -76,7 +76,6 @@ impl OpenClBackend {
             }
         }
         let mut pending: Vec<(&'static str, Event)> = Vec::new();
-        let mut launches = Vec::new();
         let (mut next_write, mut next_param) = (0usize, 0usize);
         for step in &recording.steps {
             match step {
@@ -150,9 +149,8 @@ impl OpenClBackend {
                     }
                     let mine = &params[next_param..next_param + blocks];
                     next_param += blocks;
-                    if let Some((event, launched)) = run(self, k, mine)? {
+                    if let Some(event) = run(self, k, mine)? {
                         pending.push((k.name(), event));
-                        launches.push(launched);
                     }
                 }
             }
@@ -172,26 +170,22 @@ impl OpenClBackend {
                 .map_err(cl_error("reading a buffer back"))?;
             }
         }
-        Ok((pending, launches, params))
+        Ok((pending, params))
     }
 }
 
-/// What an enqueued launch must keep alive until it has run: its kernel object and
-/// parameter buffers. Releasing them while the launch is queued made NVIDIA's driver wait
-/// for it (measured: a non-blocking submission took the whole frame on the host).
-pub struct Launched {
-    _kernel: ClKernel,
-}
-
-/// Enqueues one registry kernel; returns its profiling event and what must outlive it
-/// (`None` if it did no work).
+/// Enqueues one registry kernel with the backend's kernel object for it (created on its
+/// first launch, `OpenClBackend::kernels`); returns its profiling event (`None` if it did
+/// no work). The submission keeps the parameter buffers until it has run: releasing an
+/// object while its launch is queued made NVIDIA's driver wait for it (measured: a
+/// non-blocking submission took the whole frame on the host).
 /// `params` are the launch's parameter blocks, in argument order, already on the device
 /// (sub-buffers of the submission's staging: [`crate::memory::StagingSlot`]).
 fn run(
     b: &OpenClBackend,
     k: &RecordedKernel,
     params: &[Buffer<u8>],
-) -> Result<Option<(Event, Launched)>, BackendError> {
+) -> Result<Option<Event>, BackendError> {
     let Some(launch) = k.launch()? else {
         return Ok(None);
     };
@@ -226,7 +220,15 @@ fn run(
         return Ok(None);
     }
     let program = b.state.program_for(name, constants)?;
-    let kernel = ClKernel::create(&program, name).map_err(cl_error("creating a kernel"))?;
+    // arguments are set and the launch enqueued under the lock: one object, one launch
+    // at a time
+    let mut kernels = b.kernels.lock().unwrap_or_else(|e| e.into_inner());
+    let kernel = match kernels.entry((program.get() as usize, name)) {
+        std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+        std::collections::hash_map::Entry::Vacant(e) => {
+            e.insert(ClKernel::create(&program, name).map_err(cl_error("creating a kernel"))?)
+        }
+    };
     let mut next_params = params.iter();
     for (index, a) in args.iter().enumerate() {
         let index = index as u32;
@@ -264,5 +266,5 @@ fn run(
         )
     }
     .map_err(cl_error(name))?;
-    Ok(Some((event, Launched { _kernel: kernel })))
+    Ok(Some(event))
 }

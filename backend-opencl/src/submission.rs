@@ -9,7 +9,6 @@
 
 use crate::device::cl_error;
 use crate::memory::StagingSlot;
-use crate::recording::Launched;
 use crate::OpenClBackend;
 use caustica_core::backend::{BackendError, Finished, PassTime, Submission, MAX_FRAMES_IN_FLIGHT};
 use caustica_core::device::handle::ResourceId;
@@ -22,9 +21,7 @@ use opencl3::memory::Buffer;
 pub(crate) struct InFlight {
     /// Kernel names and their profiling events.
     kernels: Vec<(&'static str, Event)>,
-    /// Kernel objects of the launches and the parameters' sub-buffers (released once
-    /// done).
-    _launches: Vec<Launched>,
+    /// The launches' parameter sub-buffers (released once done).
     _params: Vec<Buffer<u8>>,
     /// The staging slot (parameters, write data, readback landing).
     slot: StagingSlot,
@@ -127,7 +124,7 @@ impl OpenClBackend {
         let layout = self.layout(recording, readbacks)?;
         let mut slot = self.take_slot()?;
         let staged = self.enqueue(recording, readbacks, &layout, &mut slot);
-        let (kernels, launches, params) = match staged {
+        let (kernels, params) = match staged {
             Ok(x) => x,
             Err(e) => {
                 // what was enqueued may still read the slot: let it finish first
@@ -153,7 +150,6 @@ impl OpenClBackend {
         };
         Ok(self.submissions.push(InFlight {
             kernels,
-            _launches: launches,
             _params: params,
             slot,
             readbacks: layout.readbacks,
