@@ -19,6 +19,7 @@ typedef struct {
     float3 to_light;
     float3 irradiance;
     int4 rect; // x0, x1, y0, y1 inclusive; empty when x1 < x0
+    SplatRays rays; // the pixels' centre rays, tested before a pixel's G-buffer is read
 } SplatSetup;
 
 inline SplatSetup splat_setup(__global const SplatParams* p, GiPhoton ph,
@@ -45,6 +46,7 @@ inline SplatSetup splat_setup(__global const SplatParams* p, GiPhoton ph,
     s.to_light = to_light;
     s.irradiance = splat_irradiance(power, &k);
     s.rect = splat_screen_rect(&p->camera, pos, &k, px, py, min(reach, p->max_splat_px));
+    s.rays = splat_rays(&p->camera, pos, &k);
     return s;
 }
 
@@ -140,8 +142,11 @@ __kernel void splat_photons(__global const SplatParams* p, GBUFFER_PARAMS(__glob
         uint at = k - starts[j];
         uint rw = (uint)(s.rect.y - s.rect.x + 1);
         int qx = s.rect.x + (int)(at % rw), qy = s.rect.z + (int)(at / rw);
-        splat_pixel(p, GBUFFER_ARGS, &s, (uint)(qy * w + qx), PHOTON_MAP_ARGS, direction_map0,
-                    direction_map1, direction_map2, lc, uncounted);
+        // a pixel whose centre ray misses the kernel's box is turned away before its
+        // G-buffer is read (most of a rectangle's pixels)
+        if (splat_ray_may_hit(&s.rays, &p->camera, (uint)qx, (uint)qy))
+            splat_pixel(p, GBUFFER_ARGS, &s, (uint)(qy * w + qx), PHOTON_MAP_ARGS,
+                        direction_map0, direction_map1, direction_map2, lc, uncounted);
     }
     counters_flush_local(lc, counters);
 }

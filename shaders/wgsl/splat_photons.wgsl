@@ -85,6 +85,8 @@ struct SplatSetup {
     irradiance: vec3<f32>,
     // x0, x1, y0, y1 inclusive; empty when x1 < x0
     rect: vec4<i32>,
+    // the pixels' centre rays, tested before a pixel's G-buffer is read
+    rays: SplatRays,
 }
 
 var<workgroup> setups: array<SplatSetup, WORKGROUP_SIZE>;
@@ -127,6 +129,7 @@ fn splat_setup(p: SplatParams, ph: GiPhoton) -> SplatSetup {
     s.to_light = to_light;
     s.irradiance = splat_irradiance(power, kernel);
     s.rect = splat_screen_rect(p.camera, ph.position, kernel, px, py, min(reach, p.max_splat_px));
+    s.rays = splat_rays(p.camera, ph.position, kernel);
     return s;
 }
 
@@ -213,7 +216,11 @@ fn splat_photons(group: u32, li: u32) {
         let rw = u32(rect.y - rect.x + 1);
         let qx = rect.x + i32(at % rw);
         let qy = rect.z + i32(at / rw);
-        splat_pixel(p, j, u32(qy * w + qx));
+        // a pixel whose centre ray misses the kernel's box is turned away before its
+        // G-buffer is read (most of a rectangle's pixels)
+        if (splat_ray_may_hit(setups[j].rays, p.camera, u32(qx), u32(qy))) {
+            splat_pixel(p, j, u32(qy * w + qx));
+        }
     }
     if (n_deposited != 0u) {
         atomicAdd(&lc[COUNTER_DEPOSITED], n_deposited);

@@ -7,7 +7,8 @@ use super::Counters;
 use crate::CpuBackend;
 use caustica_core::backend::BackendError;
 use caustica_core::device::layout::{
-    counter, gbuffer_flags, gbuffer_pixel_area, project_to_pixel, splat_screen_rect, GBufferView,
+    counter, gbuffer_flags, gbuffer_pixel_area, project_to_pixel, splat_ray_may_hit, splat_rays,
+    splat_screen_rect, GBufferView, SplatRays,
     GiPhoton, Photon, SplatParams,
 };
 use caustica_core::kernels::SplatPhotons;
@@ -106,6 +107,9 @@ struct SplatSetup {
     irradiance: Vec3,
     /// `[x0, x1, y0, y1]`, inclusive.
     rect: [i32; 4],
+    /// The pixels' centre rays in the kernel's frame, tested before a pixel's G-buffer
+    /// is read.
+    rays: SplatRays,
 }
 
 /// A photon's kernel (Eqs. 2-8), irradiance (Eq. 9) and screen rectangle; `None` when it
@@ -139,6 +143,7 @@ fn splat_setup(
         c.bump(counter::SATURATED);
     }
     let rect = splat_screen_rect(&p.camera, pos, &kernel, (px, py), reach.min(p.max_splat_px));
+    let rays = splat_rays(&p.camera, pos, &kernel);
     Some(SplatSetup {
         irradiance: splat_irradiance(power, &kernel),
         ellipsoid: kernel,
@@ -146,6 +151,7 @@ fn splat_setup(
         normal: n,
         to_light,
         rect,
+        rays,
     })
 }
 
@@ -212,7 +218,11 @@ fn splat_photon(
     let w = p.camera.width as i64;
     for qy in y0 as i64..=y1 as i64 {
         for qx in x0 as i64..=x1 as i64 {
-            splat_pixel(p, g, &s, (qy * w + qx) as u32, maps, c);
+            // a pixel whose centre ray misses the kernel's box is turned away before its
+            // G-buffer is read (most of a rectangle's pixels)
+            if splat_ray_may_hit(&s.rays, &p.camera, qx as u32, qy as u32) {
+                splat_pixel(p, g, &s, (qy * w + qx) as u32, maps, c);
+            }
         }
     }
 }

@@ -212,6 +212,12 @@ inline float3 splat_irradiance(float3 power, const SplatKernel* k) {
     return a > 0.0f ? power / a : (float3)(0.0f);
 }
 
+// core::device::layout::splat_box_margin: how far the kernel's box is widened for rounding.
+inline float splat_box_margin(__global const GpuCamera* cam, float3 centre, float3 axes) {
+    return 1e-5f * (max_element3(fabs(centre)) + max_element3(fabs(load3g(cam->position))) +
+                    max_element3(axes));
+}
+
 // core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
 // splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
 // the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
@@ -222,9 +228,7 @@ inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, cons
     int ri = (int)min(r, 1u << 24);
     int4 square = (int4)(max((int)px - ri, 0), min((int)px + ri, w - 1), max((int)py - ri, 0),
                          min((int)py + ri, h - 1));
-    float3 origin = load3g(cam->position);
-    float eps = 1e-5f * (max_element3(fabs(centre)) + max_element3(fabs(origin)) + max_element3(axes));
-    float3 a = axes + (float3)(eps);
+    float3 a = axes + (float3)(splat_box_margin(cam, centre, axes));
     float lo_x = FLT_MAX, hi_x = -FLT_MAX, lo_y = FLT_MAX, hi_y = -FLT_MAX;
     for (uint corner = 0u; corner < 8u; corner++) {
         float sn = (corner & 1u) != 0u ? 1.0f : -1.0f;
@@ -243,6 +247,49 @@ inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, cons
                   (int)clamp(floor(hi_x) + 1.0f, (float)square.x, (float)square.y),
                   (int)clamp(floor(lo_y) - 1.0f, (float)square.z, (float)square.w),
                   (int)clamp(floor(hi_y) + 1.0f, (float)square.z, (float)square.w));
+}
+
+// core::device::layout::SplatRays: the eye (less the centre) and the camera's forward, right
+// and up in the kernel's frame, the widened box's half-extents (half_axes.x < 0: no test).
+typedef struct {
+    float3 eye;
+    float3 forward;
+    float3 right;
+    float3 up;
+    float3 half_axes;
+} SplatRays;
+
+inline float3 splat_frame(const SplatKernel* k, float3 v) {
+    return (float3)(dot3(v, k->n), dot3(v, k->u), dot3(v, k->t));
+}
+
+// core::device::layout::splat_rays.
+inline SplatRays splat_rays(__global const GpuCamera* cam, float3 centre, const SplatKernel* k) {
+    SplatRays r;
+    r.eye = splat_frame(k, load3g(cam->position) - centre);
+    r.forward = splat_frame(k, load3g(cam->forward));
+    r.right = splat_frame(k, load3g(cam->right));
+    r.up = splat_frame(k, load3g(cam->up));
+    r.half_axes = k->axes + (float3)(2.0f * splat_box_margin(cam, centre, k->axes));
+    bool finite = all_finite3(r.eye) && all_finite3(r.forward) && all_finite3(r.right) &&
+                  all_finite3(r.up) && all_finite3(r.half_axes);
+    if (cam->tan_half_fov_x < 0.0f || !finite) r.half_axes = (float3)(-1.0f);
+    return r;
+}
+
+// core::device::layout::splat_ray_may_hit: whether pixel (px, py)'s centre ray's line may
+// meet the widened box (the separating axes e_i x d; see the Rust doc).
+inline bool splat_ray_may_hit(const SplatRays* r, __global const GpuCamera* cam, uint px, uint py) {
+    if (r->half_axes.x < 0.0f) return true;
+    float sx = ((float)px + 0.5f) * (2.0f * cam->tan_half_fov_x / (float)cam->width) -
+               cam->tan_half_fov_x;
+    float sy = cam->tan_half_fov_y -
+               ((float)py + 0.5f) * (2.0f * cam->tan_half_fov_y / (float)cam->height);
+    float3 d = r->forward + sx * r->right + sy * r->up;
+    float3 c = cross3(r->eye, d);
+    float3 a = fabs(d), h = r->half_axes;
+    return fabs(c.x) <= h.y * a.z + h.z * a.y && fabs(c.y) <= h.x * a.z + h.z * a.x &&
+           fabs(c.z) <= h.x * a.y + h.y * a.x;
 }
 
 // layout::gbuffer_pixel_area.

@@ -1194,9 +1194,7 @@ pub fn splat_screen_rect(
         (py - r).max(0),
         (py + r).min(h - 1),
     ];
-    let origin = Vec3::from(cam.position);
-    let eps = 1e-5 * (centre.abs().max_element() + origin.abs().max_element() + axes.max_element());
-    let a = axes + Vec3::splat(eps);
+    let a = axes + Vec3::splat(splat_box_margin(cam, centre, axes));
     let (mut lo_x, mut hi_x, mut lo_y, mut hi_y) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
     for corner in 0..8u32 {
         let sign = |bit: u32| if corner & bit != 0 { 1.0 } else { -1.0 };
@@ -1220,6 +1218,91 @@ pub fn splat_screen_rect(
         bound(lo_y.floor() - 1.0, square[2], square[3]),
         bound(hi_y.floor() + 1.0, square[2], square[3]),
     ]
+}
+
+/// How far [`splat_screen_rect`] and [`splat_rays`] widen a kernel's box (scene units):
+/// `1e-5` of the scene's coordinate magnitude about the splat (its centre's, the eye's
+/// and its largest half-axis), which holds the G-buffer point's rounding (the point of a
+/// pixel's centre ray a splat's pixel test reads) and the tests' own.
+#[inline]
+pub fn splat_box_margin(cam: &GpuCamera, centre: Vec3, axes: Vec3) -> f32 {
+    1e-5 * (centre.abs().max_element()
+        + Vec3::from(cam.position).abs().max_element()
+        + axes.max_element())
+}
+
+/// What `splat_photons` needs to tell, before it loads a pixel's G-buffer, that the
+/// pixel cannot pass its kernel test: the camera's eye and its forward, right and up
+/// vectors in the kernel's frame (coordinates along `k.n`, `k.u`, `k.t` about the
+/// splat's centre), and the half-extents of the kernel's box there, widened twice by
+/// [`splat_box_margin`]. `half_axes.x < 0` turns the test off (every pixel may pass).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SplatRays {
+    /// The eye less the splat's centre, in the kernel's frame (scene units).
+    pub eye: Vec3,
+    /// The camera's unit forward vector in the kernel's frame.
+    pub forward: Vec3,
+    /// The camera's unit right vector in the kernel's frame.
+    pub right: Vec3,
+    /// The camera's unit up vector in the kernel's frame.
+    pub up: Vec3,
+    /// Half-axis lengths of the widened box (scene units); `x < 0`: no test.
+    pub half_axes: Vec3,
+}
+
+/// [`SplatRays`] of kernel `k` about `centre` seen by `cam`; the test is off for an
+/// orthographic camera and where a coordinate is not finite.
+pub fn splat_rays(
+    cam: &GpuCamera,
+    centre: Vec3,
+    k: &crate::math::photon_splat::SplatKernel,
+) -> SplatRays {
+    let frame = |v: Vec3| Vec3::new(v.dot(k.n), v.dot(k.u), v.dot(k.t));
+    let r = SplatRays {
+        eye: frame(Vec3::from(cam.position) - centre),
+        forward: frame(Vec3::from(cam.forward)),
+        right: frame(Vec3::from(cam.right)),
+        up: frame(Vec3::from(cam.up)),
+        half_axes: k.axes + Vec3::splat(2.0 * splat_box_margin(cam, centre, k.axes)),
+    };
+    let finite = [r.eye, r.forward, r.right, r.up, r.half_axes]
+        .iter()
+        .all(|v| v.is_finite());
+    if cam.tan_half_fov_x < 0.0 || !finite {
+        return SplatRays {
+            half_axes: Vec3::splat(-1.0),
+            ..r
+        };
+    }
+    r
+}
+
+/// Whether pixel (`px`, `py`)'s centre ray may meet the kernel's box (`r`): false only
+/// where the ray's line misses the widened box, so no point of the line within the
+/// margin of the kernel, the pixel's G-buffer point included, lies in the kernel
+/// (`splat_photons`' pixel test would fail). The separating-axis test of a line and a
+/// box: a line misses a box exactly when one of the axes `e_i x d` (`e_i` the box's
+/// axes, `d` the line's direction) separates them, and on it the line projects to the
+/// point `|(eye x d)_i|` and the box to the interval of radius `half_j |d_k| + half_k
+/// |d_j|`. No division: `d` = forward + sx right + sy up need not be unit. The line, not
+/// the ray: a box partly behind the eye is tested as well.
+#[inline]
+pub fn splat_ray_may_hit(r: &SplatRays, cam: &GpuCamera, px: u32, py: u32) -> bool {
+    if r.half_axes.x < 0.0 {
+        return true;
+    }
+    // camera_ray's image-plane point, its per-pixel division taken out (the test's margin
+    // holds the different rounding)
+    let sx = (px as f32 + 0.5) * (2.0 * cam.tan_half_fov_x / cam.width as f32) - cam.tan_half_fov_x;
+    let sy =
+        cam.tan_half_fov_y - (py as f32 + 0.5) * (2.0 * cam.tan_half_fov_y / cam.height as f32);
+    let d = r.forward + sx * r.right + sy * r.up;
+    let c = r.eye.cross(d);
+    let a = d.abs();
+    let h = r.half_axes;
+    c.x.abs() <= h.y * a.z + h.z * a.y
+        && c.y.abs() <= h.x * a.z + h.z * a.x
+        && c.z.abs() <= h.x * a.y + h.y * a.x
 }
 
 // ---- functions over the layouts (shader ports mirror them by name)
@@ -1402,6 +1485,89 @@ mod tests {
         assert!(
             narrowed > 100,
             "the rectangle narrowed only {narrowed} squares"
+        );
+    }
+
+    /// `splat_ray_may_hit` never turns away a pixel whose kernel test could pass: for
+    /// every pixel of a splat's rectangle whose centre ray meets the ellipsoid (in f64),
+    /// points along the chord rounded to f32, where the kernel test (in f32) holds them,
+    /// find the pixel let through; and the test turns most other pixels away.
+    #[test]
+    fn a_splats_ray_test_keeps_every_pixel_its_kernel_may_contain() {
+        use crate::math::rng::random_f32;
+        use glam::DVec3;
+        let mut k = 0u32;
+        let mut rnd = || {
+            k += 1;
+            random_f32(0x5b1a8, k, 0, 0)
+        };
+        let (mut tested, mut turned_away, mut held) = (0u32, 0u32, 0u32);
+        for case in 0..300 {
+            let scale = [1e-3f32, 1.0, 1e3][case % 3];
+            let eye = Vec3::new(rnd() - 0.5, rnd() + 0.5, rnd() + 2.0) * scale;
+            let target = Vec3::new(rnd() - 0.5, rnd() * 0.5, rnd() - 0.5) * scale;
+            let cam = GpuCamera::from_camera(&crate::scene::Camera {
+                position: eye,
+                target,
+                up: Vec3::Y,
+                fov_y_deg: 20.0 + 70.0 * rnd(),
+                width: 64 + (rnd() * 400.0) as u32,
+                height: 48 + (rnd() * 300.0) as u32,
+            });
+            let centre = target + (Vec3::new(rnd(), rnd(), rnd()) - 0.5) * scale;
+            let Some((px, py, _)) = project_to_pixel(&cam, centre) else {
+                continue;
+            };
+            let n = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize_or(Vec3::Y);
+            let (u, t) = n.any_orthonormal_pair();
+            // flat (normal compression) to long, and now and then around the eye
+            let reach = if case % 17 == 0 { 4.0 } else { 0.3 };
+            let axes =
+                Vec3::new(0.01 + 0.2 * rnd(), 0.1 + rnd(), 0.1 + 0.5 * rnd()) * reach * scale;
+            let kernel = crate::math::photon_splat::SplatKernel { n, u, t, axes };
+            let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), 40);
+            let rays = splat_rays(&cam, centre, &kernel);
+            let (c64, n64, u64_, t64) =
+                (centre.as_dvec3(), n.as_dvec3(), u.as_dvec3(), t.as_dvec3());
+            let a64 = axes.as_dvec3();
+            for y in rect[2]..=rect[3] {
+                for x in rect[0]..=rect[1] {
+                    let (x, y) = (x as u32, y as u32);
+                    let may = splat_ray_may_hit(&rays, &cam, x, y);
+                    tested += 1;
+                    turned_away += (!may) as u32;
+                    // the centre ray and the ellipsoid in f64: |(o + s d - c) / axes|^2 = 1
+                    let d = camera_ray(&cam, x, y).as_dvec3();
+                    let o = eye.as_dvec3() - c64;
+                    let fr = |v: DVec3| DVec3::new(v.dot(n64), v.dot(u64_), v.dot(t64)) / a64;
+                    let (ol, dl) = (fr(o), fr(d));
+                    let (qa, qb, qc) = (dl.dot(dl), ol.dot(dl), ol.dot(ol) - 1.0);
+                    let disc = qb * qb - qa * qc;
+                    if disc < 0.0 {
+                        continue;
+                    }
+                    let (s0, s1) = ((-qb - disc.sqrt()) / qa, (-qb + disc.sqrt()) / qa);
+                    for f in [0.0, 1e-4, 0.5, 1.0 - 1e-4, 1.0] {
+                        let s = s0 + f * (s1 - s0);
+                        if s <= 0.0 {
+                            continue;
+                        }
+                        let p = (eye.as_dvec3() + d * s).as_vec3();
+                        if kernel.contains(centre, p) {
+                            held += 1;
+                            assert!(
+                                may,
+                                "{case}: pixel ({x}, {y}) turned away, point {p} in the kernel"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(held > 10_000, "only {held} kernel points checked");
+        assert!(
+            turned_away * 4 > tested,
+            "the test turned away {turned_away} of {tested} pixels"
         );
     }
 

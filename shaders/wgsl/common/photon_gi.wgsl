@@ -277,6 +277,58 @@ fn light_direction_deposit(flux: vec3<f32>, to_light: vec3<f32>) -> vec4<f32> {
     return vec4<f32>((to_light + vec3<f32>(1.0)) * (0.5 * w), w);
 }
 
+// core::device::layout::splat_box_margin: how far the kernel's box is widened for rounding.
+fn splat_box_margin(cam: GpuCamera, centre: vec3<f32>, axes: vec3<f32>) -> f32 {
+    return 1e-5 * (max_element3(abs(centre)) + max_element3(abs(cam.position)) +
+                   max_element3(axes));
+}
+
+// core::device::layout::SplatRays: the eye (less the centre) and the camera's forward,
+// right and up in the kernel's frame, the widened box's half-extents (half_axes.x < 0: no test).
+struct SplatRays {
+    eye: vec3<f32>,
+    forward: vec3<f32>,
+    right: vec3<f32>,
+    up: vec3<f32>,
+    half_axes: vec3<f32>,
+}
+
+fn splat_frame(k: SplatKernel, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot3(v, k.n), dot3(v, k.u), dot3(v, k.t));
+}
+
+// core::device::layout::splat_rays.
+fn splat_rays(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel) -> SplatRays {
+    var r: SplatRays;
+    r.eye = splat_frame(k, cam.position - centre);
+    r.forward = splat_frame(k, cam.forward);
+    r.right = splat_frame(k, cam.right);
+    r.up = splat_frame(k, cam.up);
+    r.half_axes = k.axes + vec3<f32>(2.0 * splat_box_margin(cam, centre, k.axes));
+    let finite = all_finite3(r.eye) && all_finite3(r.forward) && all_finite3(r.right) &&
+                 all_finite3(r.up) && all_finite3(r.half_axes);
+    if (cam.tan_half_fov_x < 0.0 || !finite) {
+        r.half_axes = vec3<f32>(-1.0);
+    }
+    return r;
+}
+
+// core::device::layout::splat_ray_may_hit: whether pixel (px, py)'s centre ray's line may
+// meet the widened box (the separating axes e_i x d; see the Rust doc).
+fn splat_ray_may_hit(r: SplatRays, cam: GpuCamera, px: u32, py: u32) -> bool {
+    if (r.half_axes.x < 0.0) {
+        return true;
+    }
+    let sx = (f32(px) + 0.5) * (2.0 * cam.tan_half_fov_x / f32(cam.width)) - cam.tan_half_fov_x;
+    let sy = cam.tan_half_fov_y - (f32(py) + 0.5) * (2.0 * cam.tan_half_fov_y / f32(cam.height));
+    let d = r.forward + sx * r.right + sy * r.up;
+    let c = cross3(r.eye, d);
+    let a = abs(d);
+    let h = r.half_axes;
+    return abs(c.x) <= h.y * a.z + h.z * a.y && abs(c.y) <= h.x * a.z + h.z * a.x &&
+           abs(c.z) <= h.x * a.y + h.y * a.x;
+}
+
 // core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
 // splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
 // the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
@@ -291,9 +343,7 @@ fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, px: u32,
     let ri = i32(min(r, 1u << 24u));
     let square = vec4<i32>(max(i32(px) - ri, 0), min(i32(px) + ri, w - 1),
                            max(i32(py) - ri, 0), min(i32(py) + ri, h - 1));
-    let eps = 1e-5 * (max_element3(abs(centre)) + max_element3(abs(cam.position)) +
-                      max_element3(axes));
-    let a = axes + vec3<f32>(eps);
+    let a = axes + vec3<f32>(splat_box_margin(cam, centre, axes));
     var lo_x = 3.4028235e38;
     var hi_x = -3.4028235e38;
     var lo_y = 3.4028235e38;
