@@ -502,3 +502,27 @@ fn barriers_in_uniform_control_flow() {
         }
     }
 }
+
+/// WebGPU's default `maxComputeWorkgroupStorageSize` (bytes): a host that creates its device
+/// with the default limits (a browser; a renderer that does not ask for the adapter's) can
+/// run every kernel.
+const DEFAULT_WORKGROUP_STORAGE: u32 = 16384;
+
+#[test]
+fn every_kernel_fits_the_default_workgroup_storage() {
+    for k in kernels() {
+        let m = validated_module(k);
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(m.to_ctx()).expect("layouter");
+        let bytes: u32 = m
+            .global_variables
+            .iter()
+            .filter(|(_, g)| g.space == naga::AddressSpace::WorkGroup)
+            .map(|(_, g)| layouter[g.ty].size)
+            .sum();
+        assert!(
+            bytes <= DEFAULT_WORKGROUP_STORAGE,
+            "{k}: {bytes} bytes of workgroup memory, over WebGPU's default {DEFAULT_WORKGROUP_STORAGE}"
+        );
+    }
+}
