@@ -1415,6 +1415,40 @@ mod tests {
         }
     }
 
+    /// A random splat for the rectangle and ray tests: a camera (scene scale `1e-3`, 1 or
+    /// `1e3` by `case`), a kernel centre that projects to pixel `(px, py)` and an
+    /// orthonormal frame with half-axes from flat (normal compression) to long, `reach`
+    /// times the scale; `None` when the centre is off screen.
+    fn random_splat(
+        rnd: &mut impl FnMut() -> f32,
+        case: usize,
+        reach: f32,
+    ) -> Option<(
+        GpuCamera,
+        Vec3,
+        (u32, u32),
+        crate::math::photon_splat::SplatKernel,
+    )> {
+        let scale = [1e-3f32, 1.0, 1e3][case % 3];
+        let eye = Vec3::new(rnd() - 0.5, rnd() + 0.5, rnd() + 2.0) * scale;
+        let target = Vec3::new(rnd() - 0.5, rnd() * 0.5, rnd() - 0.5) * scale;
+        let cam = GpuCamera::from_camera(&crate::scene::Camera {
+            position: eye,
+            target,
+            up: Vec3::Y,
+            fov_y_deg: 20.0 + 70.0 * rnd(),
+            width: 64 + (rnd() * 400.0) as u32,
+            height: 48 + (rnd() * 300.0) as u32,
+        });
+        let centre = target + (Vec3::new(rnd(), rnd(), rnd()) - 0.5) * scale;
+        let (px, py, _) = project_to_pixel(&cam, centre)?;
+        let n = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize_or(Vec3::Y);
+        let (u, t) = n.any_orthonormal_pair();
+        let axes = Vec3::new(0.02 + 0.2 * rnd(), 0.1 + rnd(), 0.1 + 0.5 * rnd()) * reach * scale;
+        let kernel = crate::math::photon_splat::SplatKernel { n, u, t, axes };
+        Some((cam, centre, (px, py), kernel))
+    }
+
     #[test]
     fn a_splats_screen_rect_holds_every_pixel_its_kernel_contains() {
         use crate::math::rng::random_f32;
@@ -1425,27 +1459,11 @@ mod tests {
         };
         let mut narrowed = 0;
         for case in 0..400 {
-            let scale = [1e-3f32, 1.0, 1e3][case % 3];
-            let eye = Vec3::new(rnd() - 0.5, rnd() + 0.5, rnd() + 2.0) * scale;
-            let target = Vec3::new(rnd() - 0.5, rnd() * 0.5, rnd() - 0.5) * scale;
-            let cam = GpuCamera::from_camera(&crate::scene::Camera {
-                position: eye,
-                target,
-                up: Vec3::Y,
-                fov_y_deg: 20.0 + 70.0 * rnd(),
-                width: 64 + (rnd() * 400.0) as u32,
-                height: 48 + (rnd() * 300.0) as u32,
-            });
-            let centre = target + (Vec3::new(rnd(), rnd(), rnd()) - 0.5) * scale;
-            let Some((px, py, _)) = project_to_pixel(&cam, centre) else {
+            let Some((cam, centre, (px, py), kernel)) = random_splat(&mut rnd, case, 0.3) else {
                 continue;
             };
-            // an orthonormal frame and half-axes from flat (normal compression) to long
-            let n = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize_or(Vec3::Y);
-            let (u, t) = n.any_orthonormal_pair();
-            let axes = Vec3::new(0.02 + 0.2 * rnd(), 0.1 + rnd(), 0.1 + 0.5 * rnd()) * 0.3 * scale;
+            let crate::math::photon_splat::SplatKernel { n, u, t, axes } = kernel;
             let r = if case % 4 == 0 { 3 } else { 1 << 20 };
-            let kernel = crate::math::photon_splat::SplatKernel { n, u, t, axes };
             let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), r);
             let (w, h) = (cam.width as i32, cam.height as i32);
             let square = [
@@ -1503,28 +1521,18 @@ mod tests {
         };
         let (mut tested, mut turned_away, mut held) = (0u32, 0u32, 0u32);
         for case in 0..300 {
-            let scale = [1e-3f32, 1.0, 1e3][case % 3];
-            let eye = Vec3::new(rnd() - 0.5, rnd() + 0.5, rnd() + 2.0) * scale;
-            let target = Vec3::new(rnd() - 0.5, rnd() * 0.5, rnd() - 0.5) * scale;
-            let cam = GpuCamera::from_camera(&crate::scene::Camera {
-                position: eye,
-                target,
-                up: Vec3::Y,
-                fov_y_deg: 20.0 + 70.0 * rnd(),
-                width: 64 + (rnd() * 400.0) as u32,
-                height: 48 + (rnd() * 300.0) as u32,
-            });
-            let centre = target + (Vec3::new(rnd(), rnd(), rnd()) - 0.5) * scale;
-            let Some((px, py, _)) = project_to_pixel(&cam, centre) else {
+            // now and then a kernel around the eye
+            let reach = if case % 17 == 0 { 4.0 } else { 0.3 };
+            let Some((cam, centre, (px, py), kernel)) = random_splat(&mut rnd, case, reach) else {
                 continue;
             };
-            let n = (Vec3::new(rnd(), rnd(), rnd()) - 0.5).normalize_or(Vec3::Y);
-            let (u, t) = n.any_orthonormal_pair();
-            // flat (normal compression) to long, and now and then around the eye
-            let reach = if case % 17 == 0 { 4.0 } else { 0.3 };
-            let axes =
-                Vec3::new(0.01 + 0.2 * rnd(), 0.1 + rnd(), 0.1 + 0.5 * rnd()) * reach * scale;
-            let kernel = crate::math::photon_splat::SplatKernel { n, u, t, axes };
+            let (eye, n, u, t, axes) = (
+                Vec3::from(cam.position),
+                kernel.n,
+                kernel.u,
+                kernel.t,
+                kernel.axes,
+            );
             let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), 40);
             let rays = splat_rays(&cam, centre, &kernel);
             let (c64, n64, u64_, t64) =
