@@ -260,8 +260,9 @@ if [ "$1" = "--build" ]; then
     ls ocl-icd-libopencl1_*.deb >/dev/null 2>&1 || apt-get download ocl-icd-libopencl1
     ls libglvnd0_*.deb >/dev/null 2>&1 || apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2
     case " $* " in *" hang "*) ls elfutils_*.deb >/dev/null 2>&1 || apt-get download elfutils libdw1 libelf1 libasm1 ;; esac
-    # the device tool carries .devbin with the repository's tracked files: 64 MiB in all
-    tracked=$(cd .. && git ls-files -z | xargs -0 cat 2>/dev/null | wc -c)
+    # the device tool carries .devbin with the repository's files (tracked, and untracked
+    # but not ignored): 64 MiB in all
+    tracked=$(cd .. && git ls-files -z --cached --others --exclude-standard | xargs -0r cat 2>/dev/null | wc -c || true)
     total=$(( $(du -sb . | cut -f1) + tracked ))
     echo ".devbin and the tracked files: $(( total / 1048576 )) MiB"
     if [ "$total" -gt $(( 64 * 1048576 )) ]; then

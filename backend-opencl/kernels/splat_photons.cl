@@ -45,8 +45,9 @@ inline SplatSetup splat_setup(__global const SplatParams* p, GiPhoton ph,
     s.normal = n;
     s.to_light = to_light;
     s.irradiance = splat_irradiance(power, &k);
-    s.rect = splat_screen_rect(&p->camera, pos, &k, px, py, min(reach, p->max_splat_px));
-    s.rays = splat_rays(&p->camera, pos, &k);
+    s.rect = splat_screen_rect(&p->camera, pos, &k, px, py, min(reach, p->max_splat_px),
+                               p->scene_magnitude);
+    s.rays = splat_rays(&p->camera, pos, &k, p->scene_magnitude);
     return s;
 }
 

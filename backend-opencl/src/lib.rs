@@ -51,7 +51,10 @@ pub struct OpenClBackend {
     /// Kernel objects by program handle and kernel name, created on first launch and kept
     /// for the backend's life: arguments are taken at enqueue, so one object serves every
     /// launch (`recording::run`). Creating one a launch cost the host a driver call, and
-    /// releasing one while its launch was queued made NVIDIA's driver wait for it.
+    /// releasing one while its launch was queued made NVIDIA's driver wait for it. An
+    /// object keeps its last launch's buffers as arguments; OpenCL does not retain them
+    /// for it (a driver that did would keep a freed buffer until that kernel's next
+    /// launch).
     kernels:
         std::sync::Mutex<std::collections::HashMap<(usize, &'static str), opencl3::kernel::Kernel>>,
     /// Submissions not yet collected (`Backend::submit`), and the results of those retired

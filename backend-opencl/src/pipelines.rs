@@ -188,10 +188,14 @@ pub const OPTIONS_VAR: &str = "CAUSTICA_OPENCL_OPTIONS";
 /// Developer aid: `CAUSTICA_OPENCL_WORKGROUP_SIZES="kernel=threads,..."` launches the named
 /// kernels with that many threads a workgroup instead of core's `workgroup_size`, so that
 /// a group size can be timed on a device without a rebuild (`scripts/gpu-run.sh
-/// experiment`, `EXP_ENVS`). Only for kernels whose local memory does not depend on the
-/// group's size (`trace_indirect`, `trace_photons`); the conformance suite checks core's
-/// sizes. A malformed entry is an error at launch.
+/// experiment`, `EXP_ENVS`). Only the kernels of [`WORKGROUP_SIZE_FREE`]; the conformance
+/// suite checks core's sizes. A malformed entry, or another kernel, is an error at launch.
 pub const WORKGROUP_SIZES_VAR: &str = "CAUSTICA_OPENCL_WORKGROUP_SIZES";
+
+/// The kernels whose code and local memory do not depend on their workgroup's size (every
+/// other kernel's arrays, strides or `reqd_work_group_size` are written for
+/// `WORKGROUP_SIZE`).
+pub const WORKGROUP_SIZE_FREE: &[&str] = &["trace_indirect", "trace_photons"];
 
 /// [`WORKGROUP_SIZES_VAR`]'s value, read once per process (a launch does not read the
 /// environment).
@@ -202,7 +206,8 @@ pub fn workgroup_sizes_env() -> Option<&'static str> {
 }
 
 /// The workgroup size [`WORKGROUP_SIZES_VAR`] names for `kernel` in `list`, if any; an
-/// entry that is not `name=threads` with 1 <= threads <= 1024 is an error.
+/// entry that is not `name=threads` with 1 <= threads <= 1024, or names a kernel not in
+/// [`WORKGROUP_SIZE_FREE`], is an error.
 pub fn workgroup_size_override(list: &str, kernel: &str) -> Result<Option<u32>, String> {
     for entry in list.split(',').map(str::trim).filter(|e| !e.is_empty()) {
         let parsed = entry
@@ -214,6 +219,12 @@ pub fn workgroup_size_override(list: &str, kernel: &str) -> Result<Option<u32>, 
                 "{WORKGROUP_SIZES_VAR}: '{entry}' is not kernel=threads (1 to 1024)"
             ));
         };
+        if !WORKGROUP_SIZE_FREE.contains(&name) {
+            return Err(format!(
+                "{WORKGROUP_SIZES_VAR}: '{name}' is written for its own workgroup size; only \
+                 {WORKGROUP_SIZE_FREE:?} take another"
+            ));
+        }
         if name == kernel {
             return Ok(Some(threads));
         }
@@ -492,7 +503,8 @@ mod tests {
         }
     }
 
-    /// `CAUSTICA_OPENCL_WORKGROUP_SIZES` names kernels whole and refuses what is not a size.
+    /// `CAUSTICA_OPENCL_WORKGROUP_SIZES` names kernels whole and refuses what is not a size
+    /// or a kernel written for its own workgroup size.
     #[test]
     fn workgroup_size_overrides() {
         let list = "trace_photons=128, trace_indirect = 256";
@@ -511,6 +523,7 @@ mod tests {
             "trace_indirect=0",
             "trace_indirect=2048",
             "x=y",
+            "splat_photons=128",
         ] {
             assert!(
                 workgroup_size_override(bad, "trace_indirect").is_err(),

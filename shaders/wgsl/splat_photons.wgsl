@@ -128,8 +128,9 @@ fn splat_setup(p: SplatParams, ph: GiPhoton) -> SplatSetup {
     s.normal = n;
     s.to_light = to_light;
     s.irradiance = splat_irradiance(power, kernel);
-    s.rect = splat_screen_rect(p.camera, ph.position, kernel, px, py, min(reach, p.max_splat_px));
-    s.rays = splat_rays(p.camera, ph.position, kernel);
+    s.rect = splat_screen_rect(p.camera, ph.position, kernel, px, py, min(reach, p.max_splat_px),
+                               p.scene_magnitude);
+    s.rays = splat_rays(p.camera, ph.position, kernel, p.scene_magnitude);
     return s;
 }
 

@@ -142,8 +142,15 @@ fn splat_setup(
     if reach > p.max_splat_px {
         c.bump(counter::SATURATED);
     }
-    let rect = splat_screen_rect(&p.camera, pos, &kernel, (px, py), reach.min(p.max_splat_px));
-    let rays = splat_rays(&p.camera, pos, &kernel);
+    let rect = splat_screen_rect(
+        &p.camera,
+        pos,
+        &kernel,
+        (px, py),
+        reach.min(p.max_splat_px),
+        p.scene_magnitude,
+    );
+    let rays = splat_rays(&p.camera, pos, &kernel, p.scene_magnitude);
     Some(SplatSetup {
         irradiance: splat_irradiance(power, &kernel),
         ellipsoid: kernel,
@@ -323,7 +330,8 @@ mod tests {
             tile_constant: 1e-3,
             min_splat_px: 1.5,
             light_direction: 1,
-            _pad: [0; 2],
+            scene_magnitude: 2.0,
+            _pad: [0],
         };
         let photons: Vec<GiPhoton> = (0..4000u32)
             .map(|i| {

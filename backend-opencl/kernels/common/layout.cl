@@ -523,8 +523,8 @@ typedef struct {
     float tile_constant; // 108
     float min_splat_px; // 112
     uint light_direction; // 116
-    uint _pad0; // 120
-    uint _pad1; // 124
+    float scene_magnitude; // 120
+    uint _pad0; // 124
 } SplatParams;
 
 // core::device::layout::CorrectionParams, 16 bytes

@@ -199,10 +199,14 @@ inline SplatKernel splat_kernel(float3 normal, float3 to_light, float s,
 // SplatKernel::ellipse_area.
 inline float ellipse_area(const SplatKernel* k) { return PI_F * k->axes.y * k->axes.z; }
 
+// photon_splat::SplatKernel::frame: v along n, u and t.
+inline float3 splat_frame(const SplatKernel* k, float3 v) {
+    return (float3)(dot3(v, k->n), dot3(v, k->u), dot3(v, k->t));
+}
+
 // SplatKernel::contains.
 inline bool kernel_contains(const SplatKernel* k, float3 centre, float3 p) {
-    float3 d = p - centre;
-    float3 q = (float3)(dot3(d, k->n), dot3(d, k->u), dot3(d, k->t)) / k->axes;
+    float3 q = splat_frame(k, p - centre) / k->axes;
     return dot3(q, q) <= 1.0f;
 }
 
@@ -212,23 +216,25 @@ inline float3 splat_irradiance(float3 power, const SplatKernel* k) {
     return a > 0.0f ? power / a : (float3)(0.0f);
 }
 
-// core::device::layout::splat_box_margin: how far the kernel's box is widened for rounding.
-inline float splat_box_margin(__global const GpuCamera* cam, float3 centre, float3 axes) {
+// core::device::layout::splat_box_margin: how far the kernel's box is widened for rounding
+// (scene: the scene's largest absolute coordinate).
+inline float splat_box_margin(__global const GpuCamera* cam, float3 centre, float3 axes,
+                              float scene) {
     return 1e-5f * (max_element3(fabs(centre)) + max_element3(fabs(load3g(cam->position))) +
-                    max_element3(axes));
+                    max_element3(axes) + scene);
 }
 
 // core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
 // splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
 // the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
 inline int4 splat_screen_rect(__global const GpuCamera* cam, float3 centre, const SplatKernel* k,
-                              uint px, uint py, uint r) {
+                              uint px, uint py, uint r, float scene) {
     float3 n = k->n, u = k->u, t = k->t, axes = k->axes;
     int w = (int)cam->width, h = (int)cam->height;
     int ri = (int)min(r, 1u << 24);
     int4 square = (int4)(max((int)px - ri, 0), min((int)px + ri, w - 1), max((int)py - ri, 0),
                          min((int)py + ri, h - 1));
-    float3 a = axes + (float3)(splat_box_margin(cam, centre, axes));
+    float3 a = axes + (float3)(splat_box_margin(cam, centre, axes, scene));
     float lo_x = FLT_MAX, hi_x = -FLT_MAX, lo_y = FLT_MAX, hi_y = -FLT_MAX;
     for (uint corner = 0u; corner < 8u; corner++) {
         float sn = (corner & 1u) != 0u ? 1.0f : -1.0f;
@@ -259,18 +265,15 @@ typedef struct {
     float3 half_axes;
 } SplatRays;
 
-inline float3 splat_frame(const SplatKernel* k, float3 v) {
-    return (float3)(dot3(v, k->n), dot3(v, k->u), dot3(v, k->t));
-}
-
 // core::device::layout::splat_rays.
-inline SplatRays splat_rays(__global const GpuCamera* cam, float3 centre, const SplatKernel* k) {
+inline SplatRays splat_rays(__global const GpuCamera* cam, float3 centre, const SplatKernel* k,
+                            float scene) {
     SplatRays r;
     r.eye = splat_frame(k, load3g(cam->position) - centre);
     r.forward = splat_frame(k, load3g(cam->forward));
     r.right = splat_frame(k, load3g(cam->right));
     r.up = splat_frame(k, load3g(cam->up));
-    r.half_axes = k->axes + (float3)(2.0f * splat_box_margin(cam, centre, k->axes));
+    r.half_axes = k->axes + (float3)(2.0f * splat_box_margin(cam, centre, k->axes, scene));
     bool finite = all_finite3(r.eye) && all_finite3(r.forward) && all_finite3(r.right) &&
                   all_finite3(r.up) && all_finite3(r.half_axes);
     if (cam->tan_half_fov_x < 0.0f || !finite) r.half_axes = (float3)(-1.0f);
@@ -281,15 +284,15 @@ inline SplatRays splat_rays(__global const GpuCamera* cam, float3 centre, const 
 // meet the widened box (the separating axes e_i x d; see the Rust doc).
 inline bool splat_ray_may_hit(const SplatRays* r, __global const GpuCamera* cam, uint px, uint py) {
     if (r->half_axes.x < 0.0f) return true;
-    float sx = ((float)px + 0.5f) * (2.0f * cam->tan_half_fov_x / (float)cam->width) -
-               cam->tan_half_fov_x;
-    float sy = cam->tan_half_fov_y -
-               ((float)py + 0.5f) * (2.0f * cam->tan_half_fov_y / (float)cam->height);
+    // camera_ray's image-plane point, as camera_ray rounds it
+    float sx = (2.0f * ((float)px + 0.5f) / (float)cam->width - 1.0f) * cam->tan_half_fov_x;
+    float sy = (1.0f - 2.0f * ((float)py + 0.5f) / (float)cam->height) * cam->tan_half_fov_y;
     float3 d = r->forward + sx * r->right + sy * r->up;
     float3 c = cross3(r->eye, d);
     float3 a = fabs(d), h = r->half_axes;
-    return fabs(c.x) <= h.y * a.z + h.z * a.y && fabs(c.y) <= h.x * a.z + h.z * a.x &&
-           fabs(c.z) <= h.x * a.y + h.y * a.x;
+    // "not separated": a NaN from an overflow keeps the pixel
+    return !(fabs(c.x) > h.y * a.z + h.z * a.y || fabs(c.y) > h.x * a.z + h.z * a.x ||
+             fabs(c.z) > h.x * a.y + h.y * a.x);
 }
 
 // layout::gbuffer_pixel_area.

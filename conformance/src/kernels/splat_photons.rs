@@ -51,7 +51,8 @@ pub(crate) fn splat_params(fx: &Fixture, power_scale: f32, quantum: f32) -> Spla
         ),
         min_splat_px: 1.5,
         light_direction: 1,
-        _pad: [0; 2],
+        scene_magnitude: fx.ds.bounds.min.abs().max(fx.ds.bounds.max.abs()).max_element(),
+        _pad: [0],
     }
 }
 

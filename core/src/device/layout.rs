@@ -759,8 +759,11 @@ pub struct SplatParams {
     /// 1: also add each splat's light direction to the direction map (Smal 2019, Eq. 20's
     /// `w_i`, [`crate::math::irradiance_filter::light_direction_deposit`]); 0: leave it.
     pub light_direction: u32,
+    /// The scene's largest absolute coordinate (scene units): it bounds the vertices a
+    /// G-buffer point is interpolated from, so [`splat_box_margin`] holds its rounding.
+    pub scene_magnitude: f32,
     /// Padding to the 16-byte boundary.
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 1],
 }
 
 /// Parameters of `shading_normal_correction` (Smal 2019, Eq. 20).
@@ -1175,8 +1178,8 @@ pub fn project_to_pixel(cam: &GpuCamera, p: Vec3) -> Option<(u32, u32, f32)> {
 /// test only if its G-buffer point (on its centre ray) lies in the ellipsoid, so in the
 /// box; with every corner in front of the camera the box's projection is the convex hull
 /// of its corners' projections, and the point's pixel is within one of the hull's
-/// bounds. The box is widened by `1e-5` of the scene's coordinate magnitude (the G-buffer
-/// point's and the projection's rounding) and the bounds by a pixel on each side. A
+/// bounds. The box is widened by [`splat_box_margin`] (`scene`: the scene's largest
+/// absolute coordinate) and the bounds by a pixel on each side. A
 /// corner at or behind the camera, or a non-finite bound, keeps the square.
 pub fn splat_screen_rect(
     cam: &GpuCamera,
@@ -1184,6 +1187,7 @@ pub fn splat_screen_rect(
     k: &crate::math::photon_splat::SplatKernel,
     (px, py): (u32, u32),
     r: u32,
+    scene: f32,
 ) -> [i32; 4] {
     let (n, u, t, axes) = (k.n, k.u, k.t, k.axes);
     let (w, h) = (cam.width as i32, cam.height as i32);
@@ -1194,7 +1198,7 @@ pub fn splat_screen_rect(
         (py - r).max(0),
         (py + r).min(h - 1),
     ];
-    let a = axes + Vec3::splat(splat_box_margin(cam, centre, axes));
+    let a = axes + Vec3::splat(splat_box_margin(cam, centre, axes, scene));
     let (mut lo_x, mut hi_x, mut lo_y, mut hi_y) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
     for corner in 0..8u32 {
         let sign = |bit: u32| if corner & bit != 0 { 1.0 } else { -1.0 };
@@ -1221,14 +1225,16 @@ pub fn splat_screen_rect(
 }
 
 /// How far [`splat_screen_rect`] and [`splat_rays`] widen a kernel's box (scene units):
-/// `1e-5` of the scene's coordinate magnitude about the splat (its centre's, the eye's
-/// and its largest half-axis), which holds the G-buffer point's rounding (the point of a
-/// pixel's centre ray a splat's pixel test reads) and the tests' own.
+/// `1e-5` of the coordinate magnitudes about the splat (its centre's, the eye's, its
+/// largest half-axis and the scene's largest coordinate `scene`), which holds the G-buffer
+/// point's rounding (a point of a pixel's centre ray interpolated from its triangle's
+/// vertices, a few ulp of their coordinates, which `scene` bounds) and the tests' own.
 #[inline]
-pub fn splat_box_margin(cam: &GpuCamera, centre: Vec3, axes: Vec3) -> f32 {
+pub fn splat_box_margin(cam: &GpuCamera, centre: Vec3, axes: Vec3, scene: f32) -> f32 {
     1e-5 * (centre.abs().max_element()
         + Vec3::from(cam.position).abs().max_element()
-        + axes.max_element())
+        + axes.max_element()
+        + scene)
 }
 
 /// What `splat_photons` needs to tell, before it loads a pixel's G-buffer, that the
@@ -1250,20 +1256,21 @@ pub struct SplatRays {
     pub half_axes: Vec3,
 }
 
-/// [`SplatRays`] of kernel `k` about `centre` seen by `cam`; the test is off for an
-/// orthographic camera and where a coordinate is not finite.
+/// [`SplatRays`] of kernel `k` about `centre` seen by `cam` (`scene`: the scene's largest
+/// absolute coordinate); the test is off for an orthographic camera and where a
+/// coordinate is not finite.
 pub fn splat_rays(
     cam: &GpuCamera,
     centre: Vec3,
     k: &crate::math::photon_splat::SplatKernel,
+    scene: f32,
 ) -> SplatRays {
-    let frame = |v: Vec3| Vec3::new(v.dot(k.n), v.dot(k.u), v.dot(k.t));
     let r = SplatRays {
-        eye: frame(Vec3::from(cam.position) - centre),
-        forward: frame(Vec3::from(cam.forward)),
-        right: frame(Vec3::from(cam.right)),
-        up: frame(Vec3::from(cam.up)),
-        half_axes: k.axes + Vec3::splat(2.0 * splat_box_margin(cam, centre, k.axes)),
+        eye: k.frame(Vec3::from(cam.position) - centre),
+        forward: k.frame(Vec3::from(cam.forward)),
+        right: k.frame(Vec3::from(cam.right)),
+        up: k.frame(Vec3::from(cam.up)),
+        half_axes: k.axes + Vec3::splat(2.0 * splat_box_margin(cam, centre, k.axes, scene)),
     };
     let finite = [r.eye, r.forward, r.right, r.up, r.half_axes]
         .iter()
@@ -1284,25 +1291,25 @@ pub fn splat_rays(
 /// box: a line misses a box exactly when one of the axes `e_i x d` (`e_i` the box's
 /// axes, `d` the line's direction) separates them, and on it the line projects to the
 /// point `|(eye x d)_i|` and the box to the interval of radius `half_j |d_k| + half_k
-/// |d_j|`. No division: `d` = forward + sx right + sy up need not be unit. The line, not
-/// the ray: a box partly behind the eye is tested as well.
+/// |d_j|`. `d` = forward + sx right + sy up, `camera_ray`'s direction before its
+/// normalisation, need not be unit. The line, not the ray: a box partly behind the eye is
+/// tested as well.
 #[inline]
 pub fn splat_ray_may_hit(r: &SplatRays, cam: &GpuCamera, px: u32, py: u32) -> bool {
     if r.half_axes.x < 0.0 {
         return true;
     }
-    // camera_ray's image-plane point, its per-pixel division taken out (the test's margin
-    // holds the different rounding)
-    let sx = (px as f32 + 0.5) * (2.0 * cam.tan_half_fov_x / cam.width as f32) - cam.tan_half_fov_x;
-    let sy =
-        cam.tan_half_fov_y - (py as f32 + 0.5) * (2.0 * cam.tan_half_fov_y / cam.height as f32);
+    // camera_ray's image-plane point, as camera_ray rounds it
+    let sx = (2.0 * (px as f32 + 0.5) / cam.width as f32 - 1.0) * cam.tan_half_fov_x;
+    let sy = (1.0 - 2.0 * (py as f32 + 0.5) / cam.height as f32) * cam.tan_half_fov_y;
     let d = r.forward + sx * r.right + sy * r.up;
     let c = r.eye.cross(d);
     let a = d.abs();
     let h = r.half_axes;
-    c.x.abs() <= h.y * a.z + h.z * a.y
-        && c.y.abs() <= h.x * a.z + h.z * a.x
-        && c.z.abs() <= h.x * a.y + h.y * a.x
+    // "not separated": a NaN from an overflow keeps the pixel
+    !(c.x.abs() > h.y * a.z + h.z * a.y
+        || c.y.abs() > h.x * a.z + h.z * a.x
+        || c.z.abs() > h.x * a.y + h.y * a.x)
 }
 
 // ---- functions over the layouts (shader ports mirror them by name)
@@ -1464,7 +1471,7 @@ mod tests {
             };
             let crate::math::photon_splat::SplatKernel { n, u, t, axes } = kernel;
             let r = if case % 4 == 0 { 3 } else { 1 << 20 };
-            let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), r);
+            let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), r, 0.0);
             let (w, h) = (cam.width as i32, cam.height as i32);
             let square = [
                 (px as i32 - r as i32).max(0),
@@ -1509,7 +1516,11 @@ mod tests {
     /// `splat_ray_may_hit` never turns away a pixel whose kernel test could pass: for
     /// every pixel of a splat's rectangle whose centre ray meets the ellipsoid (in f64),
     /// points along the chord rounded to f32, where the kernel test (in f32) holds them,
-    /// find the pixel let through; and the test turns most other pixels away.
+    /// find the pixel let through; so do the G-buffer's own points, where the centre ray
+    /// (f32) meets a triangle through the kernel's plane whose vertices lie up to 10^4
+    /// kernel scales away (the watertight test's barycentrics, the vertices interpolated:
+    /// the rounding the margin's scene term holds); and the test turns most other pixels
+    /// away.
     #[test]
     fn a_splats_ray_test_keeps_every_pixel_its_kernel_may_contain() {
         use crate::math::rng::random_f32;
@@ -1533,8 +1544,24 @@ mod tests {
                 kernel.t,
                 kernel.axes,
             );
-            let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), 40);
-            let rays = splat_rays(&cam, centre, &kernel);
+            // a triangle in the kernel's plane about its centre, its vertices near (every
+            // third case) or far, and the scene's largest coordinate over them
+            let far = [3.0f32, 300.0, 3e4][case % 3 / 2 + (case % 5 == 0) as usize] * axes.y;
+            let corner = |a: f32| {
+                let (s, c) = a.to_radians().sin_cos();
+                GpuVertex {
+                    position: (centre + (u * c + t * s) * far).to_array(),
+                    normal: n.to_array(),
+                    ..Default::default()
+                }
+            };
+            let tri = [corner(10.0), corner(130.0), corner(250.0)];
+            let scene = tri
+                .iter()
+                .map(|v| Vec3::from(v.position).abs().max_element())
+                .fold(centre.abs().max_element(), f32::max);
+            let rect = splat_screen_rect(&cam, centre, &kernel, (px, py), 40, scene);
+            let rays = splat_rays(&cam, centre, &kernel, scene);
             let (c64, n64, u64_, t64) =
                 (centre.as_dvec3(), n.as_dvec3(), u.as_dvec3(), t.as_dvec3());
             let a64 = axes.as_dvec3();
@@ -1544,8 +1571,29 @@ mod tests {
                     let may = splat_ray_may_hit(&rays, &cam, x, y);
                     tested += 1;
                     turned_away += (!may) as u32;
+                    // the G-buffer's point: the f32 centre ray on the triangle, interpolated
+                    let ray = camera_ray(&cam, x, y);
+                    let [ta, tb, tc] = tri.map(|v| Vec3::from(v.position));
+                    if let Some(h) = crate::math::geometry::intersect_triangle(
+                        eye,
+                        ray,
+                        ta,
+                        tb,
+                        tc,
+                        0.0,
+                        f32::MAX,
+                    ) {
+                        let p = surface_point(&tri[0], &tri[1], &tri[2], h.u, h.v).position;
+                        if kernel.contains(centre, p) {
+                            held += 1;
+                            assert!(
+                                may,
+                                "{case}: pixel ({x}, {y}) turned away, G-buffer point {p} in the kernel"
+                            );
+                        }
+                    }
                     // the centre ray and the ellipsoid in f64: |(o + s d - c) / axes|^2 = 1
-                    let d = camera_ray(&cam, x, y).as_dvec3();
+                    let d = ray.as_dvec3();
                     let o = eye.as_dvec3() - c64;
                     let fr = |v: DVec3| DVec3::new(v.dot(n64), v.dot(u64_), v.dot(t64)) / a64;
                     let (ol, dl) = (fr(o), fr(d));

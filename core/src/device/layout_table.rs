@@ -248,7 +248,8 @@ table! {
     SplatParams {
         camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,
         min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,
-        normal_compression, max_stretch, tile_constant, min_splat_px, light_direction, _pad
+        normal_compression, max_stretch, tile_constant, min_splat_px, light_direction,
+        scene_magnitude, _pad
     }
     CorrectionParams { width, height, max_stretch, epsilon }
     PlanParams { side, faces, bit, row_words, table_words, _pad }

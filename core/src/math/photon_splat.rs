@@ -143,12 +143,17 @@ impl SplatKernel {
         PI * self.axes.y * self.axes.z
     }
 
+    /// `v`'s coordinates in the kernel's frame: along `n`, `u` and `t`.
+    #[inline]
+    pub fn frame(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.n), v.dot(self.u), v.dot(self.t))
+    }
+
     /// Whether point `p` lies inside the ellipsoid centred on `centre` (the photon's
     /// position); the chapter clips by depth against the compressed normal axis, which
     /// this test contains.
     pub fn contains(&self, centre: Vec3, p: Vec3) -> bool {
-        let d = p - centre;
-        let q = Vec3::new(d.dot(self.n), d.dot(self.u), d.dot(self.t)) / self.axes;
+        let q = self.frame(p - centre) / self.axes;
         q.length_squared() <= 1.0
     }
 }

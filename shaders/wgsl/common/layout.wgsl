@@ -523,8 +523,8 @@ struct SplatParams {
     tile_constant: f32, // 108
     min_splat_px: f32, // 112
     light_direction: u32, // 116
-    _pad0: u32, // 120
-    _pad1: u32, // 124
+    scene_magnitude: f32, // 120
+    _pad0: u32, // 124
 }
 
 // core::device::layout::CorrectionParams, 16 bytes

@@ -230,10 +230,14 @@ fn ellipse_area(k: SplatKernel) -> f32 {
     return PI_F * k.axes.y * k.axes.z;
 }
 
+// photon_splat::SplatKernel::frame: v along n, u and t.
+fn splat_frame(k: SplatKernel, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot3(v, k.n), dot3(v, k.u), dot3(v, k.t));
+}
+
 // SplatKernel::contains.
 fn kernel_contains(k: SplatKernel, centre: vec3<f32>, p: vec3<f32>) -> bool {
-    let d = p - centre;
-    let q = vec3<f32>(dot3(d, k.n), dot3(d, k.u), dot3(d, k.t)) / k.axes;
+    let q = splat_frame(k, p - centre) / k.axes;
     return dot3(q, q) <= 1.0;
 }
 
@@ -277,10 +281,11 @@ fn light_direction_deposit(flux: vec3<f32>, to_light: vec3<f32>) -> vec4<f32> {
     return vec4<f32>((to_light + vec3<f32>(1.0)) * (0.5 * w), w);
 }
 
-// core::device::layout::splat_box_margin: how far the kernel's box is widened for rounding.
-fn splat_box_margin(cam: GpuCamera, centre: vec3<f32>, axes: vec3<f32>) -> f32 {
+// core::device::layout::splat_box_margin: how far the kernel's box is widened for rounding
+// (scene: the scene's largest absolute coordinate).
+fn splat_box_margin(cam: GpuCamera, centre: vec3<f32>, axes: vec3<f32>, scene: f32) -> f32 {
     return 1e-5 * (max_element3(abs(centre)) + max_element3(abs(cam.position)) +
-                   max_element3(axes));
+                   max_element3(axes) + scene);
 }
 
 // core::device::layout::SplatRays: the eye (less the centre) and the camera's forward,
@@ -293,18 +298,14 @@ struct SplatRays {
     half_axes: vec3<f32>,
 }
 
-fn splat_frame(k: SplatKernel, v: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(dot3(v, k.n), dot3(v, k.u), dot3(v, k.t));
-}
-
 // core::device::layout::splat_rays.
-fn splat_rays(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel) -> SplatRays {
+fn splat_rays(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, scene: f32) -> SplatRays {
     var r: SplatRays;
     r.eye = splat_frame(k, cam.position - centre);
     r.forward = splat_frame(k, cam.forward);
     r.right = splat_frame(k, cam.right);
     r.up = splat_frame(k, cam.up);
-    r.half_axes = k.axes + vec3<f32>(2.0 * splat_box_margin(cam, centre, k.axes));
+    r.half_axes = k.axes + vec3<f32>(2.0 * splat_box_margin(cam, centre, k.axes, scene));
     let finite = all_finite3(r.eye) && all_finite3(r.forward) && all_finite3(r.right) &&
                  all_finite3(r.up) && all_finite3(r.half_axes);
     if (cam.tan_half_fov_x < 0.0 || !finite) {
@@ -319,21 +320,23 @@ fn splat_ray_may_hit(r: SplatRays, cam: GpuCamera, px: u32, py: u32) -> bool {
     if (r.half_axes.x < 0.0) {
         return true;
     }
-    let sx = (f32(px) + 0.5) * (2.0 * cam.tan_half_fov_x / f32(cam.width)) - cam.tan_half_fov_x;
-    let sy = cam.tan_half_fov_y - (f32(py) + 0.5) * (2.0 * cam.tan_half_fov_y / f32(cam.height));
+    // camera_ray's image-plane point, as camera_ray rounds it
+    let sx = (2.0 * (f32(px) + 0.5) / f32(cam.width) - 1.0) * cam.tan_half_fov_x;
+    let sy = (1.0 - 2.0 * (f32(py) + 0.5) / f32(cam.height)) * cam.tan_half_fov_y;
     let d = r.forward + sx * r.right + sy * r.up;
     let c = cross3(r.eye, d);
     let a = abs(d);
     let h = r.half_axes;
-    return abs(c.x) <= h.y * a.z + h.z * a.y && abs(c.y) <= h.x * a.z + h.z * a.x &&
-           abs(c.z) <= h.x * a.y + h.y * a.x;
+    // "not separated": a NaN from an overflow keeps the pixel
+    return !(abs(c.x) > h.y * a.z + h.z * a.y || abs(c.y) > h.x * a.z + h.z * a.x ||
+             abs(c.z) > h.x * a.y + h.y * a.x);
 }
 
 // core::device::layout::splat_screen_rect: the pixels (x0, x1, y0, y1), inclusive, that
 // splat_photons tests: the square of r pixels around (px, py) in the image, narrowed to
 // the screen bounds of the kernel's box (widened for rounding; see the Rust doc).
 fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, px: u32, py: u32,
-                     r: u32) -> vec4<i32> {
+                     r: u32, scene: f32) -> vec4<i32> {
     let n = k.n;
     let u = k.u;
     let t = k.t;
@@ -343,7 +346,7 @@ fn splat_screen_rect(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, px: u32,
     let ri = i32(min(r, 1u << 24u));
     let square = vec4<i32>(max(i32(px) - ri, 0), min(i32(px) + ri, w - 1),
                            max(i32(py) - ri, 0), min(i32(py) + ri, h - 1));
-    let a = axes + vec3<f32>(splat_box_margin(cam, centre, axes));
+    let a = axes + vec3<f32>(splat_box_margin(cam, centre, axes, scene));
     var lo_x = 3.4028235e38;
     var hi_x = -3.4028235e38;
     var lo_y = 3.4028235e38;

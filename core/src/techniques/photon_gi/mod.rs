@@ -102,6 +102,12 @@ fn scene_diagonal(b: &crate::math::geometry::Aabb) -> f32 {
     (b.max - b.min).length().max(f32::MIN_POSITIVE)
 }
 
+/// The scene box's largest absolute coordinate (scene units; the splat's rounding margin,
+/// `layout::splat_box_margin`).
+fn scene_magnitude(b: &crate::math::geometry::Aabb) -> f32 {
+    b.min.abs().max(b.max.abs()).max_element()
+}
+
 /// The camera images PhotonGi asks the host for: the G-buffer, and as the requested
 /// outputs need them the direct light with its specular chains and the composite.
 fn screen_needs(s: &PhotonGiSettings) -> ScreenNeeds {
@@ -371,6 +377,8 @@ pub struct PhotonGiPipeline {
     decided: Arc<Mutex<Option<(u64, u32)>>>,
     /// Scene bounding-box diagonal (scene units): the splat constants scale with it.
     diagonal: f32,
+    /// The scene box's largest absolute coordinate (scene units).
+    magnitude: f32,
     buffers: Buffers,
     plan: FramePlan,
     /// Its own buffers.
@@ -659,6 +667,7 @@ impl PhotonGiPipeline {
         );
         self.photons = photons;
         self.diagonal = scene_diagonal(&host.geometry().bounds);
+        self.magnitude = scene_magnitude(&host.geometry().bounds);
         Ok(Reaction::Kept)
     }
 
@@ -745,7 +754,8 @@ impl PhotonGiPipeline {
             ),
             min_splat_px: s.min_splat_px,
             light_direction: self.correct() as u32,
-            _pad: [0; 2],
+            scene_magnitude: self.magnitude,
+            _pad: [0],
         }
     }
 
@@ -1196,6 +1206,7 @@ impl Pipeline for PhotonGiPipeline {
             generation: 0,
             decided: Arc::new(Mutex::new(None)),
             diagonal: scene_diagonal(&host.geometry().bounds),
+            magnitude: scene_magnitude(&host.geometry().bounds),
             buffers,
             owned,
             accumulated: 0,
