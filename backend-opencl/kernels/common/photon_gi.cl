@@ -273,7 +273,9 @@ inline SplatRays splat_rays(__global const GpuCamera* cam, float3 centre, const 
     r.forward = splat_frame(k, load3g(cam->forward));
     r.right = splat_frame(k, load3g(cam->right));
     r.up = splat_frame(k, load3g(cam->up));
-    r.half_axes = k->axes + (float3)(2.0f * splat_box_margin(cam, centre, k->axes, scene));
+    // twice the margin, and the image-plane point's rounding (see the Rust doc)
+    r.half_axes = k->axes + (float3)(2.0f * splat_box_margin(cam, centre, k->axes, scene) *
+                                     (1.0f + fabs(cam->tan_half_fov_x) + fabs(cam->tan_half_fov_y)));
     bool finite = all_finite3(r.eye) && all_finite3(r.forward) && all_finite3(r.right) &&
                   all_finite3(r.up) && all_finite3(r.half_axes);
     if (cam->tan_half_fov_x < 0.0f || !finite) r.half_axes = (float3)(-1.0f);
@@ -284,9 +286,11 @@ inline SplatRays splat_rays(__global const GpuCamera* cam, float3 centre, const 
 // meet the widened box (the separating axes e_i x d; see the Rust doc).
 inline bool splat_ray_may_hit(const SplatRays* r, __global const GpuCamera* cam, uint px, uint py) {
     if (r->half_axes.x < 0.0f) return true;
-    // camera_ray's image-plane point, as camera_ray rounds it
-    float sx = (2.0f * ((float)px + 0.5f) / (float)cam->width - 1.0f) * cam->tan_half_fov_x;
-    float sy = (1.0f - 2.0f * ((float)py + 0.5f) / (float)cam->height) * cam->tan_half_fov_y;
+    // camera_ray's image-plane point without its per-pixel division (the margin holds it)
+    float sx = ((float)px + 0.5f) * (2.0f * cam->tan_half_fov_x / (float)cam->width) -
+               cam->tan_half_fov_x;
+    float sy = cam->tan_half_fov_y -
+               ((float)py + 0.5f) * (2.0f * cam->tan_half_fov_y / (float)cam->height);
     float3 d = r->forward + sx * r->right + sy * r->up;
     float3 c = cross3(r->eye, d);
     float3 a = fabs(d), h = r->half_axes;

@@ -1240,8 +1240,12 @@ pub fn splat_box_margin(cam: &GpuCamera, centre: Vec3, axes: Vec3, scene: f32) -
 /// What `splat_photons` needs to tell, before it loads a pixel's G-buffer, that the
 /// pixel cannot pass its kernel test: the camera's eye and its forward, right and up
 /// vectors in the kernel's frame (coordinates along `k.n`, `k.u`, `k.t` about the
-/// splat's centre), and the half-extents of the kernel's box there, widened twice by
-/// [`splat_box_margin`]. `half_axes.x < 0` turns the test off (every pixel may pass).
+/// splat's centre), and the half-extents of the kernel's box there, widened by
+/// [`splat_box_margin`] twice (the G-buffer point's rounding, the test's own) and by
+/// `1 + tan_x + tan_y` more (the test's image-plane point rounds differently from
+/// `camera_ray`'s, by a few ulp of the field of view's tangents, which move the line by
+/// as much times the depth). `half_axes.x < 0` turns the test off (every pixel may
+/// pass).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SplatRays {
     /// The eye less the splat's centre, in the kernel's frame (scene units).
@@ -1270,7 +1274,11 @@ pub fn splat_rays(
         forward: k.frame(Vec3::from(cam.forward)),
         right: k.frame(Vec3::from(cam.right)),
         up: k.frame(Vec3::from(cam.up)),
-        half_axes: k.axes + Vec3::splat(2.0 * splat_box_margin(cam, centre, k.axes, scene)),
+        half_axes: k.axes
+            + Vec3::splat(
+                2.0 * splat_box_margin(cam, centre, k.axes, scene)
+                    * (1.0 + cam.tan_half_fov_x.abs() + cam.tan_half_fov_y.abs()),
+            ),
     };
     let finite = [r.eye, r.forward, r.right, r.up, r.half_axes]
         .iter()
@@ -1299,9 +1307,11 @@ pub fn splat_ray_may_hit(r: &SplatRays, cam: &GpuCamera, px: u32, py: u32) -> bo
     if r.half_axes.x < 0.0 {
         return true;
     }
-    // camera_ray's image-plane point, as camera_ray rounds it
-    let sx = (2.0 * (px as f32 + 0.5) / cam.width as f32 - 1.0) * cam.tan_half_fov_x;
-    let sy = (1.0 - 2.0 * (py as f32 + 0.5) / cam.height as f32) * cam.tan_half_fov_y;
+    // camera_ray's image-plane point without its per-pixel division (the margin's
+    // tangent factor holds the different rounding)
+    let sx = (px as f32 + 0.5) * (2.0 * cam.tan_half_fov_x / cam.width as f32) - cam.tan_half_fov_x;
+    let sy =
+        cam.tan_half_fov_y - (py as f32 + 0.5) * (2.0 * cam.tan_half_fov_y / cam.height as f32);
     let d = r.forward + sx * r.right + sy * r.up;
     let c = r.eye.cross(d);
     let a = d.abs();
@@ -1423,13 +1433,14 @@ mod tests {
     }
 
     /// A random splat for the rectangle and ray tests: a camera (scene scale `1e-3`, 1 or
-    /// `1e3` by `case`), a kernel centre that projects to pixel `(px, py)` and an
+    /// `1e3` by `case`, a vertical field of view of 20 to `fov_max` degrees), a kernel centre that projects to pixel `(px, py)` and an
     /// orthonormal frame with half-axes from flat (normal compression) to long, `reach`
     /// times the scale; `None` when the centre is off screen.
     fn random_splat(
         rnd: &mut impl FnMut() -> f32,
         case: usize,
         reach: f32,
+        fov_max: f32,
     ) -> Option<(
         GpuCamera,
         Vec3,
@@ -1443,7 +1454,7 @@ mod tests {
             position: eye,
             target,
             up: Vec3::Y,
-            fov_y_deg: 20.0 + 70.0 * rnd(),
+            fov_y_deg: 20.0 + (fov_max - 20.0) * rnd(),
             width: 64 + (rnd() * 400.0) as u32,
             height: 48 + (rnd() * 300.0) as u32,
         });
@@ -1466,7 +1477,8 @@ mod tests {
         };
         let mut narrowed = 0;
         for case in 0..400 {
-            let Some((cam, centre, (px, py), kernel)) = random_splat(&mut rnd, case, 0.3) else {
+            let Some((cam, centre, (px, py), kernel)) = random_splat(&mut rnd, case, 0.3, 90.0)
+            else {
                 continue;
             };
             let crate::math::photon_splat::SplatKernel { n, u, t, axes } = kernel;
@@ -1534,7 +1546,12 @@ mod tests {
         for case in 0..300 {
             // now and then a kernel around the eye
             let reach = if case % 17 == 0 { 4.0 } else { 0.3 };
-            let Some((cam, centre, (px, py), kernel)) = random_splat(&mut rnd, case, reach) else {
+            let Some((cam, centre, (px, py), kernel)) = random_splat(
+                &mut rnd,
+                case,
+                reach,
+                if case % 7 == 0 { 178.0 } else { 90.0 },
+            ) else {
                 continue;
             };
             let (eye, n, u, t, axes) = (

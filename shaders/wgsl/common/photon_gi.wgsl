@@ -305,7 +305,9 @@ fn splat_rays(cam: GpuCamera, centre: vec3<f32>, k: SplatKernel, scene: f32) -> 
     r.forward = splat_frame(k, cam.forward);
     r.right = splat_frame(k, cam.right);
     r.up = splat_frame(k, cam.up);
-    r.half_axes = k.axes + vec3<f32>(2.0 * splat_box_margin(cam, centre, k.axes, scene));
+    // twice the margin, and the image-plane point's rounding (see the Rust doc)
+    r.half_axes = k.axes + vec3<f32>(2.0 * splat_box_margin(cam, centre, k.axes, scene) *
+                                     (1.0 + abs(cam.tan_half_fov_x) + abs(cam.tan_half_fov_y)));
     let finite = all_finite3(r.eye) && all_finite3(r.forward) && all_finite3(r.right) &&
                  all_finite3(r.up) && all_finite3(r.half_axes);
     if (cam.tan_half_fov_x < 0.0 || !finite) {
@@ -320,9 +322,9 @@ fn splat_ray_may_hit(r: SplatRays, cam: GpuCamera, px: u32, py: u32) -> bool {
     if (r.half_axes.x < 0.0) {
         return true;
     }
-    // camera_ray's image-plane point, as camera_ray rounds it
-    let sx = (2.0 * (f32(px) + 0.5) / f32(cam.width) - 1.0) * cam.tan_half_fov_x;
-    let sy = (1.0 - 2.0 * (f32(py) + 0.5) / f32(cam.height)) * cam.tan_half_fov_y;
+    // camera_ray's image-plane point without its per-pixel division (the margin holds it)
+    let sx = (f32(px) + 0.5) * (2.0 * cam.tan_half_fov_x / f32(cam.width)) - cam.tan_half_fov_x;
+    let sy = cam.tan_half_fov_y - (f32(py) + 0.5) * (2.0 * cam.tan_half_fov_y / f32(cam.height));
     let d = r.forward + sx * r.right + sy * r.up;
     let c = cross3(r.eye, d);
     let a = abs(d);
