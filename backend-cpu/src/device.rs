@@ -22,6 +22,7 @@ impl CpuBackend {
             pool: Arc::new(pool),
             threads,
             variants: Default::default(),
+            host: crate::memory::HostBudget::now(),
         })
     }
 

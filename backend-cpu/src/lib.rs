@@ -40,6 +40,8 @@ pub struct CpuBackend {
     threads: usize,
     /// Labels of the kernel variants run so far (see [`Backend::variants`]).
     variants: pipelines::Variants,
+    /// The host memory the buffers may still take.
+    host: memory::HostBudget,
 }
 
 impl CpuBackend {

@@ -13,21 +13,85 @@ pub(crate) struct Storage {
 
 const _: () = assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<u64>());
 
+/// The host memory the backend's buffers may take: what the system had available (with
+/// free swap) when the backend opened, less what its buffers hold. A buffer is zeroed by
+/// the allocator (pages the system fills on first touch), so without this count a frame
+/// too large for the host would be killed by the system as its kernels touched the pages,
+/// instead of failing with an error when it is made.
+#[derive(Debug)]
+pub(crate) struct HostBudget {
+    /// Bytes the system had available at open; `None` where it does not say (not Linux).
+    available: Option<u64>,
+    /// Bytes the live buffers hold.
+    held: u64,
+}
+
+impl HostBudget {
+    /// The budget of this moment's available memory (`/proc/meminfo`'s `MemAvailable`
+    /// plus `SwapFree`).
+    pub fn now() -> HostBudget {
+        HostBudget {
+            available: std::fs::read_to_string("/proc/meminfo")
+                .ok()
+                .and_then(|m| meminfo_available(&m)),
+            held: 0,
+        }
+    }
+
+    /// Takes `bytes` for a buffer named `label`, or says why the host cannot hold it.
+    pub fn take(&mut self, bytes: u64, label: &str) -> Result<(), BackendError> {
+        let held = self.held.saturating_add(bytes);
+        if let Some(available) = self.available.filter(|&a| held > a) {
+            return Err(BackendError::OutOfMemory {
+                bytes,
+                what: format!(
+                    "{label} (host memory: the backend's buffers would hold {held} bytes, \
+                     {available} were available when it opened)"
+                ),
+            });
+        }
+        self.held = held;
+        Ok(())
+    }
+
+    /// Gives back a freed buffer's bytes.
+    pub fn give(&mut self, bytes: u64) {
+        self.held = self.held.saturating_sub(bytes);
+    }
+}
+
+/// `MemAvailable` plus `SwapFree` of a `/proc/meminfo` text, in bytes.
+fn meminfo_available(meminfo: &str) -> Option<u64> {
+    let kib = |key: &str| {
+        meminfo
+            .lines()
+            .find_map(|l| l.strip_prefix(key))
+            .and_then(|rest| rest.trim().strip_suffix("kB"))
+            .and_then(|n| n.trim().parse::<u64>().ok())
+    };
+    let available = kib("MemAvailable:")?;
+    Some((available + kib("SwapFree:").unwrap_or(0)).saturating_mul(1024))
+}
+
 impl Storage {
-    /// A zero-filled buffer; allocation failure is a typed out-of-memory error.
+    /// A zero-filled buffer (zeroed by the allocator: its pages are touched when they are
+    /// used); allocation failure is a typed out-of-memory error.
     pub fn zeroed(bytes: u64, label: &str) -> Result<Storage, BackendError> {
         let oom = || BackendError::OutOfMemory {
             bytes,
             what: format!("{label} (host memory)"),
         };
         let n = usize::try_from(bytes.div_ceil(8)).map_err(|_| oom())?;
-        let mut words = Vec::new();
-        words.try_reserve_exact(n).map_err(|_| oom())?;
-        words.resize(n, 0);
+        let words = bytemuck::allocation::try_zeroed_vec::<u64>(n).map_err(|_| oom())?;
         Ok(Storage {
             words,
             bytes: bytes as usize,
         })
+    }
+
+    /// The buffer's size in bytes.
+    pub fn len(&self) -> u64 {
+        self.bytes as u64
     }
 
     pub fn bytes(&self) -> &[u8] {
@@ -128,6 +192,14 @@ impl Storage {
 }
 
 impl CpuBackend {
+    /// Holds `s` as buffer `id` (its bytes taken from [`CpuBackend::host`]); the bytes of
+    /// a buffer it replaces are given back.
+    pub(crate) fn insert_buffer(&mut self, id: ResourceId, s: Storage) {
+        if let Some(old) = self.buffers.insert(id, s) {
+            self.host.give(old.len());
+        }
+    }
+
     /// Buffer `id`.
     pub(crate) fn get(&self, id: ResourceId) -> Result<&Storage, BackendError> {
         self.buffers.get(id)
@@ -153,5 +225,32 @@ impl CpuBackend {
         let mut out = caustica_core::device::host_bytes(src.len() as u64, "reading a buffer back")?;
         out.copy_from_slice(src);
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_budget_reads_meminfo_and_refuses_what_does_not_fit() {
+        let m = "MemTotal:       24000000 kB\nMemFree:  100 kB\nMemAvailable:   2000 kB\nSwapTotal: 0 kB\nSwapFree:        48 kB\n";
+        assert_eq!(meminfo_available(m), Some(2048 * 1024));
+        assert_eq!(meminfo_available("MemTotal: 1 kB\n"), None);
+        let mut b = HostBudget {
+            available: Some(1000),
+            held: 0,
+        };
+        b.take(600, "a").unwrap();
+        let e = b.take(500, "b").unwrap_err().to_string();
+        assert!(e.contains("b (host memory") && e.contains("1100"), "{e}");
+        b.give(600);
+        b.take(1000, "c").unwrap();
+        // where the system does not say, no limit
+        let mut open = HostBudget {
+            available: None,
+            held: 0,
+        };
+        open.take(u64::MAX, "d").unwrap();
     }
 }

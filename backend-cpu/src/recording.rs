@@ -28,12 +28,18 @@ impl CpuBackend {
         for step in &recording.steps {
             match step {
                 Step::Create { id, bytes, label } => {
-                    self.buffers.insert(*id, Storage::zeroed(*bytes, label)?);
+                    self.host.take(*bytes, label)?;
+                    let s =
+                        Storage::zeroed(*bytes, label).inspect_err(|_| self.host.give(*bytes))?;
+                    self.insert_buffer(*id, s);
                 }
                 Step::Upload { id, data, label } => {
-                    let mut s = Storage::zeroed(data.len() as u64, label)?;
+                    let bytes = data.len() as u64;
+                    self.host.take(bytes, label)?;
+                    let mut s =
+                        Storage::zeroed(bytes, label).inspect_err(|_| self.host.give(bytes))?;
                     s.write_all(data)?;
-                    self.buffers.insert(*id, s);
+                    self.insert_buffer(*id, s);
                 }
                 Step::Write {
                     id,
@@ -43,7 +49,9 @@ impl CpuBackend {
                 } => self.get_mut(*id)?.write_at(label, *offset, data)?,
                 Step::Clear { id } => self.get_mut(*id)?.clear(),
                 Step::Free { id } => {
-                    self.buffers.remove(*id);
+                    if let Some(s) = self.buffers.remove(*id) {
+                        self.host.give(s.len());
+                    }
                 }
                 Step::Kernel(k) if !k.patches().is_empty() => {
                     // parameter words from the device: read from host memory now, after

@@ -6,8 +6,11 @@
 //! **What is read.** The default scene's node hierarchy (which must be what glTF 2.0
 //! requires, a set of trees: a node with two parents, or one that is its own ancestor,
 //! is an error; walked without recursion, so any depth reads), with each node's world
-//! transform applied to its meshes (positions by the matrix, normals by its inverse transpose, the
-//! winding reversed where the determinant is negative so that normals stay outward).
+//! transform applied to its meshes (positions by the matrix, normals by its cofactor matrix,
+//! the inverse transpose's direction, which a singular scale also has, renormalised; the
+//! winding reversed where the determinant is negative so that normals stay outward; a
+//! primitive whose normal the transform collapses to no direction gets generated normals,
+//! with a warning).
 //! A mesh node whose world transform is a translation, rotation and scale (any glTF
 //! node's own, and any chain of them without shear) becomes an *instance* per primitive:
 //! its vertices stay in object space under that placement (`Object::transform`), so a
@@ -25,7 +28,9 @@
 //! or int, each inside its buffer), and the import's size is counted before anything is
 //! read: at most [`MAX_IMPORT_TRIANGLES`] triangles and [`MAX_IMPORT_VERTICES`]
 //! vertices, summed over every node that places a mesh. The first perspective camera met in the hierarchy
-//! (its image size from `extras.caustica`, else 960 pixels wide at its aspect ratio), or
+//! (its image size from `extras.caustica`, whose width and height must be whole numbers
+//! in 1..=16384, else [`DEFAULT_IMAGE_WIDTH`] pixels wide at its `aspectRatio`, which
+//! must be positive, the height clamped into 1..=16384 with a warning), or
 //! a default camera framing the scene, with a warning; a scene without lights (assets lit
 //! by an environment map) gets a default directional light, with a warning.
 //!
@@ -57,11 +62,12 @@
 
 use caustica_core::math::optics::REFERENCE_WAVELENGTH_UM;
 use caustica_core::scene::format::SceneFileError;
+use caustica_core::scene::limits::MAX_COORDINATE;
 use caustica_core::scene::shapes::tessellate;
 use caustica_core::scene::{
     Aabb, Camera, IorModel, Light, Material, Object, Scene, Shape, Transform,
 };
-use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
+use glam::{DMat3, Mat3, Mat4, Quat, Vec2, Vec3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -759,7 +765,7 @@ impl Importer<'_> {
             self.light(&light, world, &label);
         }
         if let Some(cam) = node.camera() {
-            self.camera(&cam, world, &label);
+            self.camera(&cam, world, &label)?;
         }
         Ok(world)
     }
@@ -780,8 +786,8 @@ impl Importer<'_> {
         } else {
             world
         };
-        let normal_matrix = Mat3::from_mat4(vertex_matrix).inverse().transpose();
-        let flip = Mat3::from_mat4(vertex_matrix).determinant() < 0.0;
+        let normal_matrix = NormalMatrix::new(Mat3::from_mat4(vertex_matrix));
+        let flip = normal_matrix.mirrors;
         for prim in mesh.primitives() {
             let at = format!("{label} mesh {} primitive {}", mesh.index(), prim.index());
             let reader = prim.reader(|b| self.buffers.get(b.index()).map(|v| v.as_slice()));
@@ -793,11 +799,20 @@ impl Importer<'_> {
                 .map(|p| vertex_matrix.transform_point3(Vec3::from(p)))
                 .collect();
             let n = positions.len();
-            let normals: Vec<Vec3> = match reader.read_normals() {
-                // (no renormalisation here: the upload normalises shading normals)
-                Some(it) => it.map(|v| normal_matrix * Vec3::from(v)).collect(),
+            let mut normals: Vec<Vec3> = match reader.read_normals() {
+                Some(it) => it.map(Vec3::from).collect(),
                 None => Vec::new(),
             };
+            if let Some(k) = normal_matrix.apply(&mut normals) {
+                // the file's normals are fine; the transform flattens this one's direction
+                self.warnings.push(format!(
+                    "{at}: the NORMAL {:?} of vertex {k} has no direction under the node's \
+                     transform, which collapses it (a singular scale): the primitive's \
+                     normals are generated from its faces instead",
+                    normals[k].to_array()
+                ));
+                normals.clear();
+            }
             let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
                 Some(t) => t.into_f32().map(Vec2::from).collect(),
                 None => Vec::new(),
@@ -936,29 +951,54 @@ impl Importer<'_> {
         });
     }
 
-    fn camera(&mut self, cam: &gltf::Camera, world: Mat4, label: &str) {
+    /// The first perspective camera met becomes the scene's (a further one, or an
+    /// orthographic one, is warned and ignored). Errors: an `aspectRatio` that is not
+    /// positive (glTF requires `> 0`) and an `extras.caustica` width or height that is not
+    /// a pixel count in 1..=[`MAX_IMAGE_SIDE`], each naming the camera and the field.
+    fn camera(&mut self, cam: &gltf::Camera, world: Mat4, label: &str) -> Result<(), String> {
         if self.camera.is_some() {
             self.warnings.push(format!(
                 "{label}: a further camera, ignored (the first one is used)"
             ));
-            return;
+            return Ok(());
         }
         let gltf::camera::Projection::Perspective(p) = cam.projection() else {
             self.warnings.push(format!(
                 "{label}: orthographic camera not supported (caustica's camera is a pinhole)"
             ));
-            return;
+            return Ok(());
+        };
+        let at = format!("{label} {}", camera_label(cam));
+        let aspect = match p.aspect_ratio() {
+            Some(a) if !(a.is_finite() && a > 0.0) => {
+                return Err(format!(
+                    "{at}: aspectRatio {a:?} is not a positive number (glTF requires \
+                     aspectRatio > 0 where a perspective camera has one)"
+                ))
+            }
+            Some(a) => a,
+            None => DEFAULT_ASPECT,
         };
         let extras = caustica_extras(cam.extras());
-        let size = extras
-            .as_ref()
-            .and_then(|e| Some((e.get("width")?.as_u64()?, e.get("height")?.as_u64()?)));
-        let (width, height) = match size {
-            Some((w, h)) => (w as u32, h as u32),
-            None => {
-                let aspect = p.aspect_ratio().unwrap_or(16.0 / 9.0);
-                (960, ((960.0 / aspect).round() as u32).max(1))
+        let e = extras.as_ref();
+        let width = e.and_then(|e| e.get("width"));
+        let height = e.and_then(|e| e.get("height"));
+        let (width, height) = match (width, height) {
+            (Some(w), Some(h)) => (
+                extras_pixels(w, &at, "width")?,
+                extras_pixels(h, &at, "height")?,
+            ),
+            // (one without the other: the image keeps the aspect ratio's size)
+            (Some(v), None) | (None, Some(v)) => {
+                let which = if width.is_some() { "width" } else { "height" };
+                extras_pixels(v, &at, which)?;
+                self.warnings.push(format!(
+                    "{at}: extras.caustica.{which} without the other side, ignored: the \
+                     image is sized from the aspect ratio"
+                ));
+                self.size_for_aspect(aspect, &at)
             }
+            (None, None) => self.size_for_aspect(aspect, &at),
         };
         let e = extras.as_ref();
         let position = world.transform_point3(Vec3::ZERO);
@@ -996,6 +1036,139 @@ impl Importer<'_> {
             width,
             height,
         });
+        Ok(())
+    }
+
+    /// The image size of a camera `at` without a size in `extras.caustica`:
+    /// [`DEFAULT_IMAGE_WIDTH`] pixels wide at `aspect` (positive and finite). Where the
+    /// height that gives is outside 1..=[`MAX_IMAGE_SIDE`], it is clamped into it, the
+    /// width taken from the aspect at that height (within the same range), with a warning.
+    fn size_for_aspect(&mut self, aspect: f32, at: &str) -> (u32, u32) {
+        let max = MAX_IMAGE_SIDE as f64;
+        let aspect64 = aspect as f64;
+        let width = DEFAULT_IMAGE_WIDTH as f64;
+        let exact = width / aspect64;
+        let height = exact.round();
+        let (w, h) = if height < 1.0 {
+            // wider than 2 * 960 : 1 - one row, as wide as the aspect asks (within range)
+            (aspect64.round().clamp(width, max), 1.0)
+        } else if height > max {
+            // taller than 960 : 16384 - the most rows, as narrow as the aspect asks
+            ((max * aspect64).round().clamp(1.0, width), max)
+        } else {
+            return (DEFAULT_IMAGE_WIDTH, height as u32);
+        };
+        self.warnings.push(format!(
+            "{at}: aspectRatio {aspect:?} at {DEFAULT_IMAGE_WIDTH} pixels wide needs {exact:.3e} \
+             pixels high, outside 1..={MAX_IMAGE_SIDE}: the image is {w} x {h} instead \
+             (aspect {:.3e})",
+            w / h
+        ));
+        (w as u32, h as u32)
+    }
+}
+
+/// Image width (pixels) of a glTF camera without a size in `extras.caustica`; the height
+/// follows from its `aspectRatio` ([`DEFAULT_ASPECT`] where it has none).
+pub const DEFAULT_IMAGE_WIDTH: u32 = 960;
+/// The aspect ratio (width / height) of a glTF camera without `aspectRatio`: 16:9.
+pub const DEFAULT_ASPECT: f32 = 16.0 / 9.0;
+/// Largest image width or height (pixels) a scene's camera may have (the scene
+/// validator's bound: `camera.width` and `camera.height` in 1..=16384).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// `cameras[k]`, with the camera's name where it has one.
+fn camera_label(cam: &gltf::Camera) -> String {
+    match cam.name() {
+        Some(n) => format!("cameras[{}] '{n}'", cam.index()),
+        None => format!("cameras[{}]", cam.index()),
+    }
+}
+
+/// `extras.caustica.<field>` of camera `at` as a pixel count: a whole number in
+/// 1..=[`MAX_IMAGE_SIDE`] (an integer, or a float with no fraction). Anything else is an
+/// error naming the camera, the field and the value as the file has it (a value past u32
+/// is refused, never wrapped).
+fn extras_pixels(v: &Value, at: &str, field: &str) -> Result<u32, String> {
+    let pixels = v.as_u64().or_else(|| {
+        v.as_f64()
+            .filter(|x| x.fract() == 0.0 && *x >= 0.0 && *x <= u32::MAX as f64)
+            .map(|x| x as u64)
+    });
+    match pixels {
+        Some(n) if (1..=MAX_IMAGE_SIDE as u64).contains(&n) => Ok(n as u32),
+        _ => Err(format!(
+            "{at}: extras.caustica.{field} {v} is not an image size caustica can render: \
+             a whole number of pixels in 1..={MAX_IMAGE_SIDE}"
+        )),
+    }
+}
+
+/// How a static mesh's normals follow the matrix `m` its positions are transformed by:
+/// by `m`'s cofactor matrix (the transpose of its adjugate, `det(m) * m^-T` where `m` is
+/// invertible), times the sign of the determinant where it is not 0, each result scaled
+/// back to unit length. That is the inverse transpose's direction for an invertible
+/// matrix, and it still exists for a singular one (a scale of 0 flattening a mesh into a
+/// plane, or one of 1e-30), whose inverse is infinite or NaN: `cof(m) (a x b) =
+/// (m a) x (m b)`, so a face's normal follows the transformed face. Computed in f64 (the
+/// products of two f32 elements neither overflow nor underflow there).
+struct NormalMatrix {
+    /// The cofactor matrix times the determinant's sign; `None` for the identity (the
+    /// file's normals are kept exactly as they are).
+    cofactor: Option<DMat3>,
+    /// The determinant is negative: a mirroring transform, whose triangles' winding is
+    /// reversed so that their faces keep pointing the way of their normals.
+    mirrors: bool,
+}
+
+impl NormalMatrix {
+    fn new(m: Mat3) -> Self {
+        if m == Mat3::IDENTITY {
+            return Self {
+                cofactor: None,
+                mirrors: false,
+            };
+        }
+        let d = m.as_dmat3();
+        let (x, y, z) = (d.x_axis, d.y_axis, d.z_axis);
+        // the columns of the cofactor matrix: each the cross product of the other two
+        // columns of m
+        let cof = DMat3::from_cols(y.cross(z), z.cross(x), x.cross(y));
+        let det = d.determinant();
+        let sign = if det < 0.0 { -1.0 } else { 1.0 };
+        Self {
+            cofactor: Some(cof * sign),
+            mirrors: det < 0.0,
+        }
+    }
+
+    /// Transforms `normals` in place to unit vectors. A normal the file gives that the
+    /// scene validator refuses (not finite, beyond `MAX_COORDINATE`, or of length under
+    /// 1e-10) is left as the file has it, for the validator to name. Returns the index of
+    /// the first valid normal the transform collapses to no direction (a singular matrix
+    /// along it), leaving `normals` partly transformed: its caller drops them.
+    fn apply(&self, normals: &mut [Vec3]) -> Option<usize> {
+        let cof = self.cofactor?;
+        for (k, n) in normals.iter_mut().enumerate() {
+            let valid = n.is_finite()
+                && n.abs().max_element() <= MAX_COORDINATE
+                && n.length_squared() >= 1e-20;
+            if !valid {
+                continue;
+            }
+            let t = cof * n.as_dvec3();
+            // scaled first: a tiny or huge cofactor keeps its direction
+            let m = t.abs().max_element();
+            if !(m > 0.0 && m.is_finite()) {
+                return Some(k);
+            }
+            let unit = (t / m).normalize().as_vec3();
+            if !(unit.is_finite() && unit.length_squared() > 0.5) {
+                return Some(k);
+            }
+            *n = unit;
+        }
+        None
     }
 }
 

@@ -47,9 +47,8 @@ pub fn put_setting(settings: &mut SettingsMap, path: &str, value: serde_json::Va
             let b = settings
                 .entry(block.to_string())
                 .or_insert_with(|| serde_json::Value::Object(Default::default()));
-            if !b.is_object() {
-                *b = serde_json::Value::Object(Default::default());
-            }
+            // a block given as something else stays as it was given: the technique's
+            // settings reader rejects it, naming it
             if let Some(b) = b.as_object_mut() {
                 b.insert(field.to_string(), value);
             }
@@ -106,5 +105,9 @@ mod tests {
         assert_eq!(get_setting(&s, "frame.seed"), Some(&1.into()));
         assert_eq!(get_setting(&s, "frame.accumulate"), Some(&true.into()));
         assert_eq!(s.get("point_emission"), Some(&"sphere".into()));
+        // a block that is not an object is left for the technique to reject
+        let mut s: SettingsMap = serde_json::from_str(r#"{"frame": 7}"#).unwrap();
+        put_setting(&mut s, "frame.photons_w", 64.into());
+        assert_eq!(s.get("frame"), Some(&7.into()));
     }
 }

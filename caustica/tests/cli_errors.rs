@@ -388,3 +388,130 @@ fn an_obj_file_given_as_a_scene_says_how_to_place_it() {
         "an OBJ file is a mesh, not a scene",
     );
 }
+
+/// A settings file whose block is not an object is refused, naming the block, also where a
+/// flag (`--photons`) sets a field of that block.
+#[test]
+fn a_settings_block_that_is_not_an_object_is_refused() {
+    for (name, text) in [
+        ("frame7.json", r#"{"frame": 7}"#),
+        ("trace.json", r#"{"trace": [1, 2]}"#),
+    ] {
+        let path = temp_file(name, text);
+        fails_cleanly(
+            &[
+                "render",
+                "--scene",
+                "sphere",
+                "--backend",
+                "cpu",
+                "--size",
+                "32x18",
+                "--photons",
+                "16x16",
+                "--settings",
+                path.to_str().unwrap(),
+                "--out",
+                path.with_extension("out").to_str().unwrap(),
+            ],
+            "must be a JSON object",
+        );
+    }
+}
+
+/// Outputs another technique has are named in a warning, not dropped in silence; an
+/// empty list is refused.
+#[test]
+fn outputs_a_technique_lacks_are_named() {
+    let path = temp_file(
+        "outputs.json",
+        r#"{"frame": {"outputs": ["composite", "caustic_atlas", "indirect"]}}"#,
+    );
+    let out_dir = path.with_extension("out");
+    let out = caustica(&[
+        "render",
+        "--scene",
+        "sphere",
+        "--backend",
+        "cpu",
+        "--technique",
+        "sspm",
+        "--size",
+        "32x18",
+        "--photons",
+        "16x16",
+        "--settings",
+        path.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: sspm has no caustic_atlas, indirect output"),
+        "{stderr}"
+    );
+    assert!(out_dir.join("sphere_composite.exr").exists());
+    let empty = temp_file("no_outputs.json", r#"{"frame": {"outputs": []}}"#);
+    fails_cleanly(
+        &[
+            "render",
+            "--scene",
+            "sphere",
+            "--backend",
+            "cpu",
+            "--size",
+            "32x18",
+            "--photons",
+            "16x16",
+            "--settings",
+            empty.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        "frame.outputs is empty",
+    );
+}
+
+/// A frame larger than the host's memory fails with an out-of-memory error when its
+/// buffers are made, before their pages are touched (the system would otherwise kill the
+/// process as the kernels filled them): 16384^2 on the CPU backend needs about 70 GB.
+#[test]
+fn a_cpu_frame_beyond_host_memory_is_an_error_not_a_kill() {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
+    let kib = |key: &str| -> Option<u64> {
+        let line = meminfo.lines().find_map(|l| l.strip_prefix(key))?;
+        line.trim().strip_suffix("kB")?.trim().parse().ok()
+    };
+    let Some(available) = kib("MemAvailable:").map(|a| a + kib("SwapFree:").unwrap_or(0)) else {
+        eprintln!("SKIPPING: no /proc/meminfo here");
+        return;
+    };
+    if available > 48 << 20 {
+        eprintln!("SKIPPING: {available} KiB available: this host could hold the frame");
+        return;
+    }
+    let out = caustica(&[
+        "render",
+        "--scene",
+        "sphere",
+        "--backend",
+        "cpu",
+        "--size",
+        "16384x16384",
+        "--photons",
+        "1x1",
+        "--out",
+        std::env::temp_dir()
+            .join(format!("caustica-16k-{}", std::process::id()))
+            .to_str()
+            .unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "not a clean failure: {stderr}");
+    assert!(
+        stderr.contains("out of memory") && stderr.contains("host memory"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+}

@@ -8,10 +8,13 @@
 //! `load_gltf`, as the CLI reads it.
 #![cfg(feature = "gltf")]
 
+use caustica::glam::Vec3;
 use caustica::gltf_scene::{load_gltf, GltfImport, MAX_IMPORT_TRIANGLES};
 use caustica::scene::format::SceneFileError;
+use caustica::scene::shapes::tessellate;
 use caustica::scene::Shape;
 use serde_json::{json, Value};
+use std::f32::consts::FRAC_1_SQRT_2;
 use std::path::PathBuf;
 
 const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -37,13 +40,17 @@ fn base64(data: &[u8]) -> String {
 /// two triangles by UNSIGNED_INT indices, accessors 0 to 3), placed by the nodes given,
 /// with `roots` the scene's nodes. No light and no camera (the importer adds defaults).
 fn document(nodes: Value, roots: Value) -> Value {
+    document_with_normals(nodes, roots, [[0.0, 1.0, 0.0]; 4])
+}
+
+/// [`document`] with the quad's vertex normals `normals` (accessor 1) instead of +y.
+fn document_with_normals(nodes: Value, roots: Value, normals: [[f32; 3]; 4]) -> Value {
     let positions: [[f32; 3]; 4] = [
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],
         [1.0, 0.0, 1.0],
         [0.0, 0.0, 1.0],
     ];
-    let normals = [[0.0f32, 1.0, 0.0]; 4];
     let uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
     let indices: [u32; 6] = [0, 2, 1, 0, 3, 2];
     let mut bin: Vec<u8> = Vec::new();
@@ -370,4 +377,215 @@ fn a_base_colour_outside_zero_one_is_clamped_with_a_warning() {
         "{:?}",
         im.warnings
     );
+}
+
+/// [`document`] with the quad at the root, a perspective camera 'eye' (`cameras[0]`,
+/// named 'lens', `perspective` and `extras` as given) on a node above it looking at it.
+fn camera_document(perspective: Value, extras: Option<Value>) -> Value {
+    let mut doc = document(
+        json!([
+            {"name": "floor", "mesh": 0},
+            {"name": "eye", "camera": 0, "translation": [0.5, 2.0, 0.5],
+             "rotation": [-FRAC_1_SQRT_2, 0.0, 0.0, FRAC_1_SQRT_2]}
+        ]),
+        json!([0, 1]),
+    );
+    let mut camera = json!({"name": "lens", "type": "perspective", "perspective": perspective});
+    if let Some(e) = extras {
+        camera["extras"] = e;
+    }
+    doc["cameras"] = json!([camera]);
+    doc
+}
+
+#[test]
+fn a_camera_size_in_extras_that_is_no_pixel_count_is_refused_naming_the_field() {
+    let lens = || json!({"yfov": 0.8, "znear": 0.01, "aspectRatio": 1.7});
+    // the audit's case: 2^32 + 64 wrapped to 64 through `as u32`
+    let doc = camera_document(
+        lens(),
+        Some(json!({"caustica": {"width": 4_294_967_360u64, "height": 36}})),
+    );
+    refused(
+        "ext_width_wrap",
+        &doc,
+        &[
+            "nodes[1] 'eye'",
+            "cameras[0] 'lens'",
+            "extras.caustica.width 4294967360",
+            "1..=16384",
+        ],
+    );
+    // zero, negative, fractional, over the limit, not a number: the field named each time
+    for (name, width, height, field) in [
+        (
+            "ext_height_0",
+            json!(64),
+            json!(0),
+            "extras.caustica.height 0",
+        ),
+        (
+            "ext_width_neg",
+            json!(-64),
+            json!(36),
+            "extras.caustica.width -64",
+        ),
+        (
+            "ext_width_frac",
+            json!(64.5),
+            json!(36),
+            "extras.caustica.width 64.5",
+        ),
+        (
+            "ext_height_big",
+            json!(64),
+            json!(16385),
+            "extras.caustica.height 16385",
+        ),
+        (
+            "ext_width_text",
+            json!("64"),
+            json!(36),
+            "extras.caustica.width \"64\"",
+        ),
+    ] {
+        let doc = camera_document(
+            lens(),
+            Some(json!({"caustica": {"width": width, "height": height}})),
+        );
+        refused(name, &doc, &["cameras[0] 'lens'", field]);
+    }
+    // in range (a whole number written as a float too): the size given
+    for (w, h) in [(json!(64), json!(36)), (json!(16384.0), json!(1))] {
+        let doc = camera_document(lens(), Some(json!({"caustica": {"width": w, "height": h}})));
+        let im = load("ext_ok", &doc).unwrap_or_else(|e| panic!("{e}"));
+        let c = &im.scene.camera;
+        assert_eq!(
+            (c.width as u64, c.height as u64),
+            (w.as_f64().unwrap() as u64, h.as_f64().unwrap() as u64)
+        );
+    }
+}
+
+#[test]
+fn an_aspect_ratio_that_is_not_positive_is_refused_and_an_extreme_one_clamped() {
+    let lens = |aspect: Value| json!({"yfov": 0.8, "znear": 0.01, "aspectRatio": aspect});
+    // glTF requires aspectRatio > 0; -2 gave a 960 x 1 image without a word
+    for (name, aspect, shown) in [
+        ("aspect_neg", json!(-2.0), "aspectRatio -2"),
+        ("aspect_zero", json!(0.0), "aspectRatio 0"),
+        // past f32: infinite
+        ("aspect_inf", json!(1e39), "aspectRatio inf"),
+    ] {
+        let doc = camera_document(lens(aspect), None);
+        refused(name, &doc, &["nodes[1] 'eye'", "cameras[0] 'lens'", shown]);
+    }
+    // the importer's own size: 960 wide at the aspect ratio
+    let size = |aspect: f64| {
+        let im = load("aspect", &camera_document(lens(json!(aspect)), None))
+            .unwrap_or_else(|e| panic!("aspectRatio {aspect}: {e}"));
+        let clamped = im
+            .warnings
+            .iter()
+            .any(|w| w.contains("cameras[0] 'lens'") && w.contains("aspectRatio"));
+        (im.scene.camera.width, im.scene.camera.height, clamped)
+    };
+    assert_eq!(size(1.7), (960, 565, false));
+    assert_eq!(size(960.0 / 16384.0), (960, 16384, false));
+    // legal but extreme: within 1..=16384 on both sides, as near the aspect as that
+    // allows, with a warning (0.05 asked for 960 x 19200; 1e-30 for 960 x 9.6e32 pixels,
+    // which the scene's validator refused as a camera height the file does not have)
+    assert_eq!(size(0.05), (819, 16384, true));
+    assert_eq!(size(1e-30), (1, 16384, true));
+    // wide: 960 / 3000 rounds to 0 rows (was silently 960 x 1)
+    assert_eq!(size(3000.0), (3000, 1, true));
+    assert_eq!(size(1e30), (16384, 1, true));
+}
+
+#[test]
+fn normals_under_a_singular_or_near_singular_scale_stay_unit_and_finite() {
+    // the audit's cases: a flat quad squashed further along its normal (scale y 0 gave
+    // NaN normals, 1e-30 normals of 1e30, and the file was refused for its normals); a
+    // mirrored flat one (its winding and normals must agree)
+    for (name, scale) in [
+        ("scale_y0", [1.0f32, 0.0, 1.0]),
+        ("scale_y_tiny", [1.0, 1e-30, 1.0]),
+        ("scale_mirror_y0", [-1.0, 0.0, 1.0]),
+        ("scale_small", [1e-3, 1e-30, 2.0]),
+    ] {
+        let doc = document(
+            json!([{"name": "flat", "mesh": 0, "scale": scale}]),
+            json!([0]),
+        );
+        let im = load(name, &doc).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(im.scene.objects.len(), 1, "{name}");
+        let o = &im.scene.objects[0];
+        let Shape::Mesh {
+            normals,
+            positions,
+            indices,
+            ..
+        } = &o.shape
+        else {
+            panic!("{name}: not a mesh")
+        };
+        assert_eq!(normals.len(), 4, "{name}: the file's normals kept");
+        // the +y normals transformed by the cofactor matrix: still +y, or -y when mirrored
+        let expected = if scale[0] < 0.0 { -Vec3::Y } else { Vec3::Y };
+        for n in normals.iter() {
+            assert!(
+                n.is_finite() && (*n - expected).length() < 1e-6,
+                "{name}: normal {n}"
+            );
+        }
+        // every triangle faces the way its normals point
+        for t in indices.iter() {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let face = (b - a).cross(c - a);
+            assert!(
+                face.dot(normals[t[0] as usize]) > 0.0,
+                "{name}: face {face}"
+            );
+        }
+    }
+    // a normal the scale collapses (+x, on the quad squashed along y): the primitive's
+    // normals are dropped with a warning and generated from its faces
+    let doc = document_with_normals(
+        json!([{"name": "flat", "mesh": 0, "scale": [1.0, 0.0, 1.0]}]),
+        json!([0]),
+        [
+            [0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
+    );
+    let im = load("collapsed", &doc).unwrap_or_else(|e| panic!("collapsed: {e}"));
+    assert!(
+        im.warnings.iter().any(|w| w.contains("nodes[0] 'flat'")
+            && w.contains("primitive 0")
+            && w.contains("NORMAL")),
+        "{:?}",
+        im.warnings
+    );
+    let o = &im.scene.objects[0];
+    let Shape::Mesh { normals, .. } = &o.shape else {
+        panic!("not a mesh")
+    };
+    assert!(normals.is_empty(), "{normals:?}");
+    for n in &tessellate(&o.shape).normals {
+        assert!((*n - Vec3::Y).length() < 1e-6, "generated normal {n}");
+    }
+    // a zero normal in the file is the file's own: refused naming it, as without a scale
+    for (name, scale) in [
+        ("zero_normal_scaled", [1.0f32, 0.0, 1.0]),
+        ("zero_normal", [1.0; 3]),
+    ] {
+        let doc = document_with_normals(
+            json!([{"name": "flat", "mesh": 0, "scale": scale}]),
+            json!([0]),
+            [[0.0, 1.0, 0.0], [0.0; 3], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+        );
+        refused(name, &doc, &["normals[1]", "zero-length direction"]);
+    }
 }

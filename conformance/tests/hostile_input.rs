@@ -235,6 +235,34 @@ fn catalogue() -> Vec<Case> {
             Expect::Refused("f32 resolution"),
         ),
         (
+            "sphere moved below f32 resolution by its transform",
+            || {
+                let mut s = small("sphere");
+                object(&mut s, sphere(Vec3::Y, 0.5, 32));
+                let o = s.objects.last_mut().expect("the sphere");
+                o.transform = Some(caustica_core::scene::Transform {
+                    translation: Vec3::new(1e12, 0.0, 0.0),
+                    ..Default::default()
+                });
+                s
+            },
+            Expect::Refused("f32 resolution"),
+        ),
+        (
+            "sphere scaled below f32 resolution by its transform",
+            || {
+                let mut s = small("sphere");
+                object(&mut s, sphere(Vec3::splat(1e3), 1.0, 32));
+                let o = s.objects.last_mut().expect("the sphere");
+                o.transform = Some(caustica_core::scene::Transform {
+                    scale: Vec3::new(1.0, 1.0, 2f32.powi(-20)),
+                    ..Default::default()
+                });
+                s
+            },
+            Expect::Refused("f32 resolution"),
+        ),
+        (
             "camera at 1e30",
             || {
                 let mut s = small("sphere");

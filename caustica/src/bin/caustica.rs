@@ -775,6 +775,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             caustica::output::prepare_output_dir(&out)?;
             let stem = caustica::output::file_stem(&scene.name);
             let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
+            let asked = get_setting(&s, "frame.outputs").cloned();
             let mut t = create(
                 &technique,
                 be.as_mut(),
@@ -782,6 +783,23 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 &serde_json::Value::Object(s),
             )
             .map_err(|e| e.to_string())?;
+            // a list of outputs may name some another technique has (settings shared
+            // between techniques): say which are not written
+            if let Some(serde_json::Value::Array(asked)) = asked {
+                let own: Vec<&str> = t.outputs().iter().map(|o| o.name).collect();
+                let other: Vec<&str> = asked
+                    .iter()
+                    .filter_map(|v| v.as_str())
+                    .filter(|a| !own.contains(a))
+                    .collect();
+                if !other.is_empty() {
+                    note!(
+                        "warning: {technique} has no {} output ({} are its own); not written",
+                        other.join(", "),
+                        own.join(", ")
+                    );
+                }
+            }
             // the technique is freed whether its frames and images worked or not
             let bar = ProgressBar::new(0);
             bar.set_style(

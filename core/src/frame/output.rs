@@ -280,7 +280,7 @@ impl<'de> Deserialize<'de> for Outputs {
                 Ok(set)
             }
             other => Err(D::Error::custom(format!(
-                "outputs: expected a list of output names ({}), found {other}",
+                "outputs: expected \"all\" or a list of output names ({}), found {other}",
                 stems(&Output::ALL)
             ))),
         }

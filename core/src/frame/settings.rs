@@ -134,6 +134,12 @@ impl FrameSettings {
     pub fn check_outputs(&self, technique: &str, own: &[Output]) -> Result<(), Error> {
         if self.outputs.any_of(own) {
             Ok(())
+        } else if self.outputs == Outputs::NONE {
+            Err(Error::InvalidParameter(format!(
+                "frame.outputs is empty; request at least one of {technique}'s outputs ({}) \
+                 or \"all\"",
+                crate::frame::output::stems(own)
+            )))
         } else {
             let asked: Vec<&str> = self.outputs.list().iter().map(|o| o.stem()).collect();
             Err(Error::InvalidParameter(format!(
@@ -267,7 +273,8 @@ pub trait TechniqueSettings: Sized {
 
 /// Reads settings `T` from a JSON object laid over `defaults` (the technique's): every
 /// field given replaces the default's at the same path, blocks merge field by field, a
-/// field left out keeps the default. A top-level field that is not one of `T`'s but names
+/// field left out keeps the default; a block given as anything but an object is an
+/// error. A top-level field that is not one of `T`'s but names
 /// exactly one field inside a block (the flat form of earlier versions) is read as that
 /// field; an unknown field, or one that names fields of several blocks, is an error
 /// naming its path and the candidates. `technique` names the technique in errors.
@@ -361,6 +368,14 @@ fn merge(
                     // an object over a block merges; anything else replaces
                     Some(slot) if slot.is_object() && v.is_object() => {
                         merge(slot, v, &here, whole)?
+                    }
+                    // (serde would read a list as the block's fields in order, or name
+                    // its Rust type)
+                    Some(slot) if slot.is_object() => {
+                        return Err(format!(
+                            "`{here}` is a block of settings and must be a JSON object of \
+                             its fields, got {v}"
+                        ))
                     }
                     Some(slot) => *slot = v.clone(),
                     None => {
@@ -456,6 +471,23 @@ mod tests {
         assert_eq!(Dispersion::Spectral.flux_gain(false), 1.0);
         assert_eq!(Dispersion::ThreeBands.flux_gain(true), 3.0);
         assert_eq!(Dispersion::Spectral.flux_gain(true), 7.0);
+    }
+
+    #[test]
+    fn a_value_where_a_block_goes_is_named_by_its_path() {
+        for (given, path) in [
+            (serde_json::json!({ "trace": 7 }), "`trace`"),
+            (serde_json::json!({ "frame": [1, 2] }), "`frame`"),
+            (serde_json::json!({ "frame": null, "own": 4 }), "`frame`"),
+        ] {
+            let e = from_json::<Example>("example", &Example::default(), &given)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(path) && e.contains("must be a JSON object") && !e.contains("struct"),
+                "{given}: {e}"
+            );
+        }
     }
 
     #[test]

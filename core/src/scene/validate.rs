@@ -5,7 +5,7 @@ use super::limits::{
     MAX_COORDINATE, MAX_INTENSITY, MAX_IOR, MAX_LENGTH, MAX_LIGHTS, MIN_EXTENT_PER_POSITION,
     MIN_IOR, MIN_LENGTH,
 };
-use super::{IorModel, Light, Material, Scene, Shape};
+use super::{IorModel, Light, Material, Scene, Shape, Transform};
 use glam::{Vec2, Vec3};
 
 /// One thing wrong with a scene: `path` names the field (`objects[2].shape.radius`),
@@ -20,6 +20,8 @@ pub struct Problem {
 
 struct Check {
     problems: Vec<Problem>,
+    /// The transform of the object whose shape is checked (its world placement), if any.
+    transform: Option<Transform>,
 }
 
 impl Check {
@@ -103,7 +105,19 @@ impl Check {
     /// A shape around `center` reaching `reach` from it (both valid) with smallest feature
     /// `extent`: it must stay inside the coordinate bound and span at least 2^-16 of its
     /// centre's largest coordinate (128 f32 ulps there), or its vertices collapse.
+    /// Given in object space, the shape is judged where its object's transform puts it.
     fn placed(&mut self, path: &str, center: Vec3, reach: f32, extent: f32) {
+        let (center, reach, extent) = match &self.transform {
+            Some(t) => {
+                let scale = t.scale.abs();
+                (
+                    t.world_from_object().transform_point3(center),
+                    reach * scale.max_element(),
+                    extent * scale.min_element(),
+                )
+            }
+            None => (center, reach, extent),
+        };
         let c = center.abs().max_element();
         if c + reach > MAX_COORDINATE {
             self.fail(
@@ -146,6 +160,7 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
 pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>> {
     let mut c = Check {
         problems: Vec::new(),
+        transform: None,
     };
     // camera
     let cam = &s.camera;
@@ -275,10 +290,13 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
     }
     for (i, o) in s.objects.iter().enumerate() {
         let p = format!("objects[{i}]");
+        c.transform = None;
         if let Some(reason) = o.transform.as_ref().and_then(|t| t.problem()) {
             c.fail(format!("{p}.transform"), reason);
         } else if let Some(t) = &o.transform {
-            c.coord3(&format!("{p}.transform.translation"), t.translation);
+            if c.coord3(&format!("{p}.transform.translation"), t.translation) {
+                c.transform = Some(*t);
+            }
         }
         if !s.materials.contains_key(&o.material) {
             c.fail(

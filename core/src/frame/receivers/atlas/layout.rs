@@ -388,10 +388,19 @@ pub struct AtlasReceivers {
     scene_triangles: usize,
 }
 
-/// A receiver's world area: the sum of its triangles' areas (scene units^2).
+/// A receiver's world area: the sum of its triangles' areas (scene units^2). A triangle's
+/// cross product is taken in f32 (the layout's bits) and again in f64 where its squared
+/// length overflows f32 (edges beyond ~4e9 units, within the scene's coordinate bound).
 fn world_area(ts: &[ReceiverTriangle]) -> f64 {
     ts.iter()
-        .map(|(_, p, _)| 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64)
+        .map(|(_, p, _)| {
+            let a = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64;
+            if a.is_finite() {
+                return a;
+            }
+            let [p0, p1, p2] = p.map(|v| v.as_dvec3());
+            0.5 * (p1 - p0).cross(p2 - p0).length()
+        })
         .sum()
 }
 
@@ -620,6 +629,20 @@ fn inside_triangle(c: Vec2, t: &[Vec2; 3], twice_area: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_receivers_area_is_finite_where_f32_cross_products_overflow() {
+        let tri = |s: f32| {
+            (
+                0,
+                [Vec3::ZERO, Vec3::new(s, 0.0, 0.0), Vec3::new(0.0, 0.0, -s)],
+                [Vec2::ZERO; 3],
+            )
+        };
+        // the f32 path's bits where it is finite
+        assert_eq!(world_area(&[tri(3.0)]), 4.5);
+        assert_eq!(world_area(&[tri(1e10)]), 0.5 * 1e10f64 * 1e10f64);
+    }
 
     #[test]
     fn triangles_sharing_an_edge_never_both_own_a_point() {
