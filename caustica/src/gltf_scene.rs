@@ -65,7 +65,7 @@ use caustica_core::scene::format::SceneFileError;
 use caustica_core::scene::limits::MAX_COORDINATE;
 use caustica_core::scene::shapes::tessellate;
 use caustica_core::scene::{
-    Aabb, Camera, IorModel, Light, Material, Object, Scene, Shape, Transform,
+    more_problems, Aabb, Camera, IorModel, Light, Material, Object, Scene, Shape, Transform,
 };
 use glam::{DMat3, Mat3, Mat4, Quat, Vec2, Vec3};
 use serde_json::{json, Value};
@@ -143,7 +143,7 @@ pub fn load_gltf(path: &Path) -> Result<GltfImport, SceneFileError> {
     let bytes = caustica_core::scene::format::read_scene_bytes(path)?;
     let name = path
         .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
+        .map(|s| printable(&s.to_string_lossy()))
         .unwrap_or_else(|| "gltf".into());
     parse_gltf(&bytes, &file, &name, path.parent())
 }
@@ -176,13 +176,10 @@ pub fn parse_gltf(
         },
         gltf::Error::Validation(v) => {
             let (path, err) = &v[0];
+            let rest: Vec<String> = v[1..].iter().map(|(p, _)| p.to_string()).collect();
             fail(format!(
                 "invalid glTF at {path}: {err}{}",
-                if v.len() > 1 {
-                    format!(" (and {} more problems)", v.len() - 1)
-                } else {
-                    String::new()
-                }
+                more_problems(&rest)
             ))
         }
         other => fail(format!("not glTF: {other}")),
@@ -253,11 +250,12 @@ pub fn parse_gltf(
             "the imported scene is invalid: {}: {}{}",
             problems[0].path,
             problems[0].reason,
-            if problems.len() > 1 {
-                format!(" (and {} more problems)", problems.len() - 1)
-            } else {
-                String::new()
-            }
+            more_problems(
+                &problems[1..]
+                    .iter()
+                    .map(|p| p.path.as_str())
+                    .collect::<Vec<_>>()
+            )
         )));
     }
     // after validation: every index is in range
@@ -412,15 +410,29 @@ fn check_accessors(doc: &gltf::Gltf, buffers: &[Vec<u8>]) -> Result<(), String> 
 /// `nodes[k]`, with the node's name where it has one, as errors and warnings name it.
 fn node_label(node: &gltf::Node) -> String {
     match node.name() {
-        Some(n) => format!("nodes[{}] '{n}'", node.index()),
+        Some(n) => format!("nodes[{}] '{}'", node.index(), printable(n)),
         None => format!("nodes[{}]", node.index()),
     }
+}
+
+/// A name from the file as caustica's names hold it: each control character (a line
+/// break, a terminal escape) as U+FFFD, so that printing it cannot reach a terminal.
+fn printable(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_control() {
+                char::REPLACEMENT_CHARACTER
+            } else {
+                c
+            }
+        })
+        .collect()
 }
 
 /// `meshes[k]`, with the mesh's name where it has one.
 fn mesh_label(mesh: &gltf::Mesh) -> String {
     match mesh.name() {
-        Some(n) => format!("meshes[{}] '{n}'", mesh.index()),
+        Some(n) => format!("meshes[{}] '{}'", mesh.index(), printable(n)),
         None => format!("meshes[{}]", mesh.index()),
     }
 }
@@ -885,7 +897,7 @@ impl Importer<'_> {
             return n.clone();
         }
         let base = match (m.index(), m.name()) {
-            (_, Some(n)) if !n.is_empty() => n.to_string(),
+            (_, Some(n)) if !n.is_empty() => printable(n),
             (Some(i), _) => format!("material{i}"),
             (None, _) => "default".into(),
         };
@@ -1080,7 +1092,7 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// `cameras[k]`, with the camera's name where it has one.
 fn camera_label(cam: &gltf::Camera) -> String {
     match cam.name() {
-        Some(n) => format!("cameras[{}] '{n}'", cam.index()),
+        Some(n) => format!("cameras[{}] '{}'", cam.index(), printable(n)),
         None => format!("cameras[{}]", cam.index()),
     }
 }

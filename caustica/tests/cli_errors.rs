@@ -515,3 +515,10 @@ fn a_cpu_frame_beyond_host_memory_is_an_error_not_a_kill() {
     );
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
 }
+
+/// A negative size or grid is named as a bad value, not taken for a flag.
+#[test]
+fn a_negative_size_is_a_bad_value() {
+    fails_cleanly(&["render", "--size", "-64x36"], "'-64x36' is not WxH");
+    fails_cleanly(&["render", "--photons", "-1x1"], "'-1x1' is not WxH");
+}

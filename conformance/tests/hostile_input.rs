@@ -263,6 +263,15 @@ fn catalogue() -> Vec<Case> {
             Expect::Refused("f32 resolution"),
         ),
         (
+            "a terminal escape in the scene's name",
+            || {
+                let mut s = small("sphere");
+                s.name = "a\nb\u{1b}[31mRED".into();
+                s
+            },
+            Expect::Refused("control character"),
+        ),
+        (
             "camera at 1e30",
             || {
                 let mut s = small("sphere");

@@ -125,10 +125,10 @@ enum Command {
         #[arg(long, default_value = "cpu")]
         backend: String,
         /// Photon grid per light, WxH (default: the settings file's, else 1024x1024).
-        #[arg(long, value_parser = parse_grid)]
+        #[arg(long, allow_hyphen_values = true, value_parser = parse_grid)]
         photons: Option<(u32, u32)>,
         /// Image size WxH (default: the scene camera's).
-        #[arg(long, value_parser = parse_size)]
+        #[arg(long, allow_hyphen_values = true, value_parser = parse_size)]
         size: Option<(u32, u32)>,
         /// Frame seed of the random numbers.
         #[arg(long, allow_negative_numbers = true)]
@@ -188,7 +188,7 @@ enum Command {
         #[arg(long, default_value = "sphere")]
         scene: String,
         /// Image size WxH.
-        #[arg(long, default_value = "480x270", value_parser = parse_size)]
+        #[arg(long, allow_hyphen_values = true, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
         /// Photons per light and batch.
         #[arg(long, allow_negative_numbers = true, default_value_t = 1 << 22)]
@@ -243,7 +243,7 @@ enum Command {
         #[arg(long, default_value = "1")]
         frames: String,
         /// Image size WxH of the measurements and the references.
-        #[arg(long, default_value = "480x270", value_parser = parse_size)]
+        #[arg(long, allow_hyphen_values = true, default_value = "480x270", value_parser = parse_size)]
         size: (u32, u32),
         /// Relative standard error at which a technique's own reference counts as
         /// converged.

@@ -101,6 +101,19 @@ pub fn parse_scene_resolving(
     file: &str,
     load: &mut dyn FnMut(&str) -> Result<super::Shape, String>,
 ) -> Result<Scene, SceneFileError> {
+    // (serde would read a list as the scene's fields in order)
+    let lead = text.len() - text.trim_start().len();
+    if text[lead..].starts_with('[') {
+        let before = &text[..lead];
+        return Err(SceneFileError {
+            file: file.into(),
+            line: before.matches('\n').count() + 1,
+            column: before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1,
+            reason: "a scene file is a JSON object (`camera`, `materials`, `objects`, \
+                     `lights`), not a list"
+                .into(),
+        });
+    }
     let mut scene: Scene = serde_json::from_str(text).map_err(|e| SceneFileError {
         file: file.into(),
         line: e.line(),
@@ -129,11 +142,8 @@ pub fn parse_scene_resolving(
     if let Err(problems) = scene.validate() {
         let first = &problems[0];
         let (line, column) = locate(text, &first.path).unwrap_or((0, 0));
-        let more = if problems.len() > 1 {
-            format!(" (and {} more problems)", problems.len() - 1)
-        } else {
-            String::new()
-        };
+        let rest: Vec<&str> = problems[1..].iter().map(|p| p.path.as_str()).collect();
+        let more = super::more_problems(&rest);
         return Err(SceneFileError {
             file: file.into(),
             line,
@@ -286,6 +296,13 @@ mod tests {
             let back = parse_scene(&to_json(&s), name).unwrap();
             assert_eq!(back, s, "{name}");
         }
+    }
+
+    #[test]
+    fn a_list_is_no_scene() {
+        let e = parse_scene("\n  [1, 2]", "s.json").unwrap_err();
+        assert!(e.reason.contains("a scene file is a JSON object"), "{e}");
+        assert_eq!((e.line, e.column), (2, 3));
     }
 
     #[test]

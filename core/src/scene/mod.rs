@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 
 pub use crate::math::geometry::Aabb;
 pub use transform::Transform;
-pub use validate::Problem;
+pub use validate::{more_problems, Problem};
 
 /// A complete scene: what the file format holds and what built-in scenes produce.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -18,6 +18,26 @@ pub struct Problem {
     pub reason: String,
 }
 
+/// The tail of a one-line error that names the first of several problems: `""` for none
+/// more, else ` (and 1 more problem: objects[2].shape)` or ` (and 5 more problems:
+/// a, b, c, d, ...)`, naming at most four of the rest by path.
+pub fn more_problems<S: std::fmt::Display>(rest: &[S]) -> String {
+    const NAMED: usize = 4;
+    if rest.is_empty() {
+        return String::new();
+    }
+    let mut names: Vec<String> = rest.iter().take(NAMED).map(|p| p.to_string()).collect();
+    if rest.len() > NAMED {
+        names.push("...".into());
+    }
+    let noun = if rest.len() == 1 {
+        "problem"
+    } else {
+        "problems"
+    };
+    format!(" (and {} more {noun}: {})", rest.len(), names.join(", "))
+}
+
 struct Check {
     problems: Vec<Problem>,
     /// The transform of the object whose shape is checked (its world placement), if any.
@@ -138,6 +158,21 @@ impl Check {
             );
         }
     }
+    /// A name without control characters (a line break or a terminal escape in a name
+    /// would reach whoever prints it).
+    fn printable(&mut self, path: &str, name: &str) {
+        if let Some(ch) = name.chars().find(|ch| ch.is_control()) {
+            self.fail(
+                path,
+                format!(
+                    "'{}' holds the control character {:?}; names are printed, so they \
+                     hold printable characters only",
+                    name.escape_debug(),
+                    ch
+                ),
+            );
+        }
+    }
     /// A non-negative per-channel quantity at most `bound`.
     fn bounded3(&mut self, path: &str, v: Vec3, bound: f32, what: &str) {
         self.nonneg3(path, v);
@@ -162,6 +197,14 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
         problems: Vec::new(),
         transform: None,
     };
+    // names are printed on terminals and in messages
+    c.printable("name", &s.name);
+    for (i, o) in s.objects.iter().enumerate() {
+        c.printable(&format!("objects[{i}].name"), &o.name);
+    }
+    for name in s.materials.keys() {
+        c.printable(&format!("materials['{}']", name.escape_debug()), name);
+    }
     // camera
     let cam = &s.camera;
     c.coord3("camera.position", cam.position);
@@ -601,4 +644,22 @@ fn unit(v: Vec3) -> Vec3 {
 /// `MAX_COORDINATE`.
 fn is_coord3(v: Vec3) -> bool {
     v.is_finite() && v.abs().max_element() <= MAX_COORDINATE
+}
+
+#[cfg(test)]
+mod tests {
+    use super::more_problems;
+
+    #[test]
+    fn further_problems_are_named_by_path() {
+        assert_eq!(more_problems::<&str>(&[]), "");
+        assert_eq!(
+            more_problems(&["objects[2].shape"]),
+            " (and 1 more problem: objects[2].shape)"
+        );
+        assert_eq!(
+            more_problems(&["a", "b", "c", "d", "e"]),
+            " (and 5 more problems: a, b, c, d, ...)"
+        );
+    }
 }
