@@ -522,3 +522,42 @@ fn a_negative_size_is_a_bad_value() {
     fails_cleanly(&["render", "--size", "-64x36"], "'-64x36' is not WxH");
     fails_cleanly(&["render", "--photons", "-1x1"], "'-1x1' is not WxH");
 }
+
+/// A scene problem found when the technique is made names the scene file too.
+#[test]
+fn a_scene_refused_by_the_technique_names_the_file() {
+    let out = caustica(&["scenes", "--export", "sphere"]);
+    let mut s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let material = s["materials"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .next()
+        .unwrap()
+        .clone();
+    s["objects"].as_array_mut().unwrap().push(serde_json::json!({
+        "name": "flat", "material": material,
+        "shape": {"type": "mesh", "positions": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], "indices": [[0, 1, 2]]}
+    }));
+    let path = temp_file("collapsed.json", &s.to_string());
+    let arg = path.to_str().unwrap();
+    let out = caustica(&[
+        "render",
+        "--scene",
+        arg,
+        "--backend",
+        "cpu",
+        "--size",
+        "32x18",
+        "--photons",
+        "16x16",
+        "--out",
+        path.with_extension("out").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("error: {arg}: invalid scene: objects[2].shape")),
+        "{stderr}"
+    );
+}

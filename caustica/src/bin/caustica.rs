@@ -688,7 +688,8 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             if !(exposure > 0.0 && exposure.is_finite()) {
                 return Err("--exposure must be a positive finite number (f32)".into());
             }
-            let mut scene = load_scene(&scene)?;
+            let scene_arg = scene;
+            let mut scene = load_scene(&scene_arg)?;
             if let Some((w, h)) = size {
                 scene.camera.width = w;
                 scene.camera.height = h;
@@ -782,7 +783,11 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 &scene,
                 &serde_json::Value::Object(s),
             )
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| match e {
+                // what only a technique checks (its receivers' UVs, the lights' flux bound)
+                caustica::Error::InvalidScene(_) => format!("{scene_arg}: {e}"),
+                e => e.to_string(),
+            })?;
             // a list of outputs may name some another technique has (settings shared
             // between techniques): say which are not written
             if let Some(serde_json::Value::Array(asked)) = asked {

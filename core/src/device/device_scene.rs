@@ -616,9 +616,11 @@ impl DeviceScene {
                 return Err(BuildError::Scene {
                     path: format!("objects[{k}].shape"),
                     reason: format!(
-                        "all {} triangles have zero area in f32 (the shape collapses to a \
-                         point or a line)",
-                        m.indices.len()
+                        "{} zero area in f32 (the shape collapses to a point or a line)",
+                        match m.indices.len() {
+                            1 => "its one triangle has".to_string(),
+                            n => format!("all {n} triangles have"),
+                        }
                     ),
                 });
             }

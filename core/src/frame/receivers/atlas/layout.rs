@@ -280,9 +280,9 @@ pub fn receiver_owners(
         if twice_uv == 0.0 {
             if a_world > 0.0 {
                 return Err(bad(format!(
-                    "triangle {k} has no UV area (missing or degenerate UVs; \
-                     scene::uv_charts::generate_missing_uvs makes UV charts for a mesh \
-                     without them)"
+                    "triangle {k} has no UV area (missing or degenerate UVs: give the \
+                     mesh UVs that cover it, or none, for which the scene loaders and \
+                     scene::uv_charts::generate_missing_uvs make UV charts)"
                 )));
             }
             continue; // degenerate in the world too: covers nothing
