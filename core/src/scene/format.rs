@@ -87,7 +87,7 @@ pub fn read_scene_text(path: &Path) -> Result<String, SceneFileError> {
 }
 
 /// Parses and validates scene JSON; `file` names the source in errors. On a validation
-/// failure the first problem is reported (with its line) and the count of the others.
+/// failure the first problem is reported (with its line), and the others by path.
 pub fn parse_scene(text: &str, file: &str) -> Result<Scene, SceneFileError> {
     parse_scene_resolving(text, file, &mut |_| {
         Err("OBJ files need caustica's `obj` feature (its scene loader reads them)".into())
