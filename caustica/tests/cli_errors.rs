@@ -389,6 +389,30 @@ fn an_obj_file_given_as_a_scene_says_how_to_place_it() {
     );
 }
 
+/// `render` of `scene` on the CPU backend at 32x18 with 16x16 photons into `out`, then
+/// `more` arguments.
+fn small_render(scene: &str, out: &std::path::Path, more: &[&str]) -> Vec<String> {
+    let out = out.to_str().expect("a UTF-8 temporary path");
+    let base = [
+        "render",
+        "--scene",
+        scene,
+        "--backend",
+        "cpu",
+        "--size",
+        "32x18",
+        "--photons",
+        "16x16",
+        "--out",
+        out,
+    ];
+    base.iter().chain(more).map(|s| s.to_string()).collect()
+}
+
+fn as_strs(args: &[String]) -> Vec<&str> {
+    args.iter().map(String::as_str).collect()
+}
+
 /// A settings file whose block is not an object is refused, naming the block, also where a
 /// flag (`--photons`) sets a field of that block.
 #[test]
@@ -398,24 +422,13 @@ fn a_settings_block_that_is_not_an_object_is_refused() {
         ("trace.json", r#"{"trace": [1, 2]}"#),
     ] {
         let path = temp_file(name, text);
-        fails_cleanly(
-            &[
-                "render",
-                "--scene",
-                "sphere",
-                "--backend",
-                "cpu",
-                "--size",
-                "32x18",
-                "--photons",
-                "16x16",
-                "--settings",
-                path.to_str().unwrap(),
-                "--out",
-                path.with_extension("out").to_str().unwrap(),
-            ],
-            "must be a JSON object",
+        let settings = path.to_str().unwrap();
+        let args = small_render(
+            "sphere",
+            &path.with_extension("out"),
+            &["--settings", settings],
         );
+        fails_cleanly(&as_strs(&args), "must be a JSON object");
     }
 }
 
@@ -428,23 +441,13 @@ fn outputs_a_technique_lacks_are_named() {
         r#"{"frame": {"outputs": ["composite", "caustic_atlas", "indirect"]}}"#,
     );
     let out_dir = path.with_extension("out");
-    let out = caustica(&[
-        "render",
-        "--scene",
+    let settings = path.to_str().unwrap();
+    let args = small_render(
         "sphere",
-        "--backend",
-        "cpu",
-        "--technique",
-        "sspm",
-        "--size",
-        "32x18",
-        "--photons",
-        "16x16",
-        "--settings",
-        path.to_str().unwrap(),
-        "--out",
-        out_dir.to_str().unwrap(),
-    ]);
+        &out_dir,
+        &["--technique", "sspm", "--settings", settings],
+    );
+    let out = caustica(&as_strs(&args));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(
@@ -453,24 +456,8 @@ fn outputs_a_technique_lacks_are_named() {
     );
     assert!(out_dir.join("sphere_composite.exr").exists());
     let empty = temp_file("no_outputs.json", r#"{"frame": {"outputs": []}}"#);
-    fails_cleanly(
-        &[
-            "render",
-            "--scene",
-            "sphere",
-            "--backend",
-            "cpu",
-            "--size",
-            "32x18",
-            "--photons",
-            "16x16",
-            "--settings",
-            empty.to_str().unwrap(),
-            "--out",
-            out_dir.to_str().unwrap(),
-        ],
-        "frame.outputs is empty",
-    );
+    let args = small_render("sphere", &out_dir, &["--settings", empty.to_str().unwrap()]);
+    fails_cleanly(&as_strs(&args), "frame.outputs is empty");
 }
 
 /// A frame larger than the host's memory fails with an out-of-memory error when its
@@ -491,22 +478,10 @@ fn a_cpu_frame_beyond_host_memory_is_an_error_not_a_kill() {
         eprintln!("SKIPPING: {available} KiB available: this host could hold the frame");
         return;
     }
-    let out = caustica(&[
-        "render",
-        "--scene",
-        "sphere",
-        "--backend",
-        "cpu",
-        "--size",
-        "16384x16384",
-        "--photons",
-        "1x1",
-        "--out",
-        std::env::temp_dir()
-            .join(format!("caustica-16k-{}", std::process::id()))
-            .to_str()
-            .unwrap(),
-    ]);
+    let out_dir = std::env::temp_dir().join(format!("caustica-16k-{}", std::process::id()));
+    let mut args = small_render("sphere", &out_dir, &[]);
+    args[6] = "16384x16384".into(); // --size
+    let out = caustica(&as_strs(&args));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "not a clean failure: {stderr}");
     assert!(
@@ -541,19 +516,11 @@ fn a_scene_refused_by_the_technique_names_the_file() {
     }));
     let path = temp_file("collapsed.json", &s.to_string());
     let arg = path.to_str().unwrap();
-    let out = caustica(&[
-        "render",
-        "--scene",
+    let out = caustica(&as_strs(&small_render(
         arg,
-        "--backend",
-        "cpu",
-        "--size",
-        "32x18",
-        "--photons",
-        "16x16",
-        "--out",
-        path.with_extension("out").to_str().unwrap(),
-    ]);
+        &path.with_extension("out"),
+        &[],
+    )));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(
