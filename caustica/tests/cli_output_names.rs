@@ -1,6 +1,7 @@
 //! Nothing a scene file says can make `render` write outside `--out`: scene names with
-//! `..`, absolute paths, separators, NUL and 300 characters become safe file-name stems
-//! (`caustica::output::file_stem`), on every backend that opens here (a backend named in
+//! `..`, absolute paths, separators and 300 characters become safe file-name stems
+//! (`caustica::output::file_stem`), and one with NUL (a control character) is refused, on
+//! every backend that opens here (a backend named in
 //! `CAUSTICA_REQUIRE_BACKENDS` must open). An unwritable `--out` fails before any rendering.
 
 use std::path::{Path, PathBuf};
@@ -78,6 +79,17 @@ fn hostile_scene_names_stay_inside_out_on_every_backend() {
                 );
                 eprintln!("SKIPPING {backend}: {err}");
                 break;
+            }
+            if name.contains('\u{0}') {
+                // a control character is refused before anything is written
+                assert_eq!(r.status.code(), Some(1), "{backend} {name:?}: {err}");
+                assert!(
+                    err.contains("control character"),
+                    "{backend} {name:?}: {err}"
+                );
+                assert!(files_under(&out).is_empty(), "{backend} {name:?}");
+                renders += 1;
+                continue;
             }
             assert!(r.status.success(), "{backend} {name:?}: {err}");
             renders += 1;
