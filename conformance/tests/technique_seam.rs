@@ -595,3 +595,99 @@ fn new_settings_keep_the_uploaded_scene() {
         b.uploads.clear();
     }
 }
+
+/// A reference image is checked whole when it is set (its size, its pixel count, finite
+/// non-negative radiance); a refused one leaves the technique as it was, and a good one
+/// gives the frame's error statistics.
+#[test]
+fn a_reference_image_is_checked_when_it_is_set() {
+    let mut b = caustica_cpu::CpuBackend::new().expect("the CPU backend");
+    let scene = small("sphere");
+    let mut t = create("sspm", &mut b, &scene, &settings()).expect("sspm");
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let n = (w * h) as usize;
+    let image = |pixels: Vec<[f32; 4]>| Image {
+        width: w,
+        height: h,
+        pixels,
+    };
+    for (bad, why) in [
+        (image(vec![[1.0; 4]; 3]), "3 pixels for 64x36"),
+        (image(vec![[f32::NAN, 0.0, 0.0, 1.0]; n]), "pixel 0"),
+        (image(vec![[-1.0, 0.0, 0.0, 1.0]; n]), "pixel 0"),
+        (
+            Image {
+                width: w + 1,
+                height: h,
+                pixels: vec![[0.0; 4]; n],
+            },
+            "65x36",
+        ),
+    ] {
+        let e = t.set_reference(Some(bad)).unwrap_err().to_string();
+        assert!(e.contains("reference") && e.contains(why), "{e}");
+    }
+    let stats = t.frame(&mut b, &mut |_| {}).expect("a frame");
+    assert!(stats.error.is_none(), "no reference was kept");
+    let own = t
+        .read_output(&mut b, Output::FilteredCaustics)
+        .expect("the caustics");
+    t.set_reference(Some(own)).expect("a whole reference");
+    let stats = t.frame(&mut b, &mut |_| {}).expect("a frame");
+    let error = stats.error.expect("error statistics against the reference");
+    assert!(
+        error.relative_mse.is_finite() && error.mask_pixels > 0,
+        "{error:?}"
+    );
+    t.free(&mut b).expect("freed");
+}
+
+/// Between a new image size and the next frame the camera's images are still to be made:
+/// reading one says so (not a missing resource); a new size the host cannot hold is
+/// refused where the technique finds out when it is set, and the technique then renders
+/// at its old size as before, bitwise (CPU backend: its buffers are held within the
+/// host's available memory, so 16384^2 is refused without touching it).
+#[test]
+fn a_resize_reads_after_its_frame_and_a_refused_one_leaves_the_technique_whole() {
+    let mut b = caustica_cpu::CpuBackend::new().expect("the CPU backend");
+    let b: &mut dyn Backend = &mut b;
+    let scene = small("cornell");
+    let mut bigger = scene.camera.clone();
+    (bigger.width, bigger.height) = (80, 50);
+    let mut huge = scene.camera.clone();
+    (huge.width, huge.height) = (16384, 16384);
+    for (name, settings) in variants() {
+        let mut t = create(name, b, &scene, &settings).expect("create");
+        let before = frame_outputs(t.as_mut(), b);
+        match t.set_camera(b, &huge) {
+            Err(e) => {
+                // refused now: the technique is as it was
+                assert!(e.to_string().contains("out of memory"), "{name}: {e}");
+                assert!(
+                    frame_outputs(t.as_mut(), b) == before,
+                    "{name}: changed by a refused resize"
+                );
+            }
+            // (a technique whose own buffers do not grow with the image finds out in the
+            // frame that makes the camera's images)
+            Ok(()) => {
+                let e = t
+                    .frame(b, &mut |_| {})
+                    .expect_err("a frame at 16384^2")
+                    .to_string();
+                assert!(e.contains("out of memory"), "{name}: {e}");
+                t.set_camera(b, &scene.camera).expect("the old size back");
+                frame_outputs(t.as_mut(), b);
+            }
+        }
+        t.set_camera(b, &bigger).expect("resize");
+        let early = t
+            .read_output(b, Output::Composite)
+            .expect_err("no frame yet")
+            .to_string();
+        assert!(early.contains("run a frame"), "{name}: {early}");
+        let after = frame_outputs(t.as_mut(), b);
+        assert!(after.iter().all(|(_, img)| img.len() == 80 * 50), "{name}");
+        t.free(b).expect("free");
+    }
+}

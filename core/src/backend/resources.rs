@@ -81,7 +81,7 @@ mod tests {
         let e = check_write("tlas", 16, 12, 8).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "bad kernel argument: tlas: write of 8 bytes at 12 into a buffer of 16"
+            "bad argument: tlas: write of 8 bytes at 12 into a buffer of 16"
         );
         // an offset near u64::MAX does not wrap around
         assert!(check_write("w", 16, u64::MAX - 2, 8).is_err());

@@ -29,9 +29,10 @@ pub enum BackendError {
     #[error("unknown resource {0:?} (freed or never created)")]
     MissingResource(ResourceId),
     /// An invalid argument: a kernel argument or buffer that does not match the kernel's
-    /// declaration, a size mismatch, a scene used before `prepare_scene`; reported
-    /// instead of an out-of-bounds device access.
-    #[error("bad kernel argument: {0}")]
+    /// declaration, a size mismatch, a scene used before `prepare_scene`, a submission
+    /// collected twice or given to another backend; reported instead of an out-of-bounds
+    /// device access or a wrong result.
+    #[error("bad argument: {0}")]
     BadArgument(String),
     /// The device was lost (driver reset, removal, hang); the backend cannot continue.
     #[error("device lost: {0}")]

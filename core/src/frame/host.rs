@@ -70,6 +70,13 @@ pub struct HostState {
     instances: SceneInstances,
     receivers: Option<AtlasReceivers>,
     camera: GpuCamera,
+    /// The camera's images, and where the pending writes stood (their length, and how
+    /// many times they had been taken): an update whose writes have not run yet is undone
+    /// by dropping them.
+    screen: ScreenTargets,
+    screen_queued: bool,
+    pending_steps: usize,
+    pending_taken: u64,
 }
 
 /// An uploaded scene: the model, its device buffers and what the host derived from it.
@@ -151,6 +158,11 @@ pub struct FrameHost {
     bvh_cache: BvhCache,
     screen: ScreenTargets,
     pending: Recording,
+    /// How many times the pending writes were taken (into a frame, or flushed).
+    pending_taken: u64,
+    /// The camera's images are made by the pending writes (a new size or new needs):
+    /// they exist on the device once the next frame has run.
+    screen_queued: bool,
     /// Some recording of this host has run (else freeing it runs nothing).
     on_device: bool,
     reference: Option<Image>,
@@ -220,6 +232,8 @@ impl FrameHost {
             bvh_cache,
             screen: ScreenTargets::none(),
             pending: rec,
+            pending_taken: 0,
+            screen_queued: false,
             on_device: false,
             reference: None,
         })
@@ -350,6 +364,8 @@ impl FrameHost {
     /// The scene writes of the updates since the last frame (the frame runs them first).
     pub fn take_pending(&mut self) -> Recording {
         self.on_device = true;
+        self.pending_taken += 1;
+        self.screen_queued = false;
         std::mem::take(&mut self.pending)
     }
 
@@ -383,7 +399,14 @@ impl FrameHost {
         }
         self.pending.steps.extend(rec.steps);
         self.screen = targets;
+        self.screen_queued = true;
         Ok(())
+    }
+
+    /// Whether the camera's images are still to be made by the next frame (after a new
+    /// image size or new settings): reading them before it is an error that says so.
+    pub fn screen_queued(&self) -> bool {
+        self.screen_queued
     }
 
     /// Records the G-buffer and the direct light, as the camera's images were made.
@@ -460,14 +483,34 @@ impl FrameHost {
         self.reference.as_ref()
     }
 
-    /// Sets (or clears) the reference image (linear radiance, the camera's size).
+    /// Sets (or clears) the reference image (linear radiance, the camera's size, every
+    /// channel finite and >= 0).
     pub fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
         if let Some(r) = &reference {
+            let bad = |why: String| Err(Error::InvalidParameter(format!("reference: {why}")));
             if (r.width, r.height) != (self.camera.width, self.camera.height) {
-                return Err(Error::InvalidParameter(format!(
-                    "reference is {}x{}, the frame {}x{}",
+                return bad(format!(
+                    "{}x{}, the frame {}x{}",
                     r.width, r.height, self.camera.width, self.camera.height
-                )));
+                ));
+            }
+            if r.pixels.len() as u64 != r.width as u64 * r.height as u64 {
+                return bad(format!(
+                    "{} pixels for {}x{}",
+                    r.pixels.len(),
+                    r.width,
+                    r.height
+                ));
+            }
+            if let Some(k) = r
+                .pixels
+                .iter()
+                .position(|p| !p[..3].iter().all(|c| *c >= 0.0 && c.is_finite()))
+            {
+                return bad(format!(
+                    "pixel {k} is {:?}: a reference is linear radiance, finite and >= 0",
+                    r.pixels[k]
+                ));
             }
         }
         self.reference = reference;
@@ -482,6 +525,10 @@ impl FrameHost {
             instances: self.instances.clone(),
             receivers: self.receivers.clone(),
             camera: self.camera,
+            screen: self.screen.clone(),
+            screen_queued: self.screen_queued,
+            pending_steps: self.pending.steps.len(),
+            pending_taken: self.pending_taken,
         }
     }
 
@@ -619,6 +666,16 @@ impl FrameHost {
         state: HostState,
         undo: Option<InstanceUpdate>,
     ) -> Result<(), Error> {
+        if self.pending_taken == state.pending_taken
+            && self.pending.steps.len() >= state.pending_steps
+        {
+            // none of the update's writes has run: dropped, the camera's images of
+            // `state` (whose freeing was among them) are still the device's; the writes
+            // below then put back values the device still holds
+            self.pending.steps.truncate(state.pending_steps);
+            self.screen = state.screen.clone();
+            self.screen_queued = state.screen_queued;
+        }
         if let Some(u) = undo {
             self.pending.update_instances(u, &self.scene)?;
         }

@@ -72,8 +72,10 @@ pub struct ErrorStats {
     pub mask_pixels: usize,
 }
 
+/// Both images of one size, each holding its `width * height` pixels.
 fn same_size(x: &Image, r: &Image) -> bool {
-    x.width == r.width && x.height == r.height
+    let whole = |i: &Image| i.pixels.len() as u64 == i.width as u64 * i.height as u64;
+    x.width == r.width && x.height == r.height && whole(x) && whole(r)
 }
 
 /// Relative MSE over the mask (0 with an empty or black mask).

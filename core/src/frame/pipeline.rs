@@ -688,6 +688,12 @@ impl<P: Pipeline> Hosted<P> {
     /// Reads `output` back ([`Technique::read_output`]).
     pub fn read_output(&self, backend: &mut dyn Backend, output: Output) -> Result<Image, Error> {
         self.check_output(output)?;
+        if output.camera_space() && self.host.screen_queued() {
+            return Err(Error::InvalidParameter(format!(
+                "output '{output}': the camera's images are made anew by the next frame \
+                 (after a new image size or new settings); run a frame before reading them"
+            )));
+        }
         if output.camera_space() {
             let image = self.pipeline().output_image(&self.host, output);
             self.host.read_output_image(backend, image)

@@ -293,9 +293,6 @@ impl PhotonGiSettings {
         if !(self.max_stretch >= 1.0 && self.max_stretch.is_finite()) {
             return bad("max_stretch must be >= 1 and finite");
         }
-        if !(self.frame.atrous_clip_sigmas > 0.0) {
-            return bad("frame.atrous_clip_sigmas must be > 0");
-        }
         if self.indirect_waves == 0 || self.indirect_waves > 64 {
             return bad("indirect_waves must be in 1..=64");
         }
@@ -322,6 +319,18 @@ mod tests {
     /// `auto` runs the waves on a GPU from three bounces while a light's photons fit one
     /// chunk of the queues, the single kernel otherwise and on the CPU backend; a named
     /// schedule is kept.
+    #[test]
+    fn the_shared_atrous_clip_bounds_hold_here_too() {
+        // 0 keeps no detail, as in every technique; negative or NaN is refused
+        let mut s = PhotonGiSettings::default();
+        s.frame.atrous_clip_sigmas = 0.0;
+        s.validate().unwrap();
+        for bad in [-1.0, f32::NAN, f32::INFINITY] {
+            s.frame.atrous_clip_sigmas = bad;
+            assert!(s.validate().is_err(), "{bad}");
+        }
+    }
+
     #[test]
     fn auto_resolves_by_bounces_device_and_queue() {
         let high = PhotonGiSettings {
