@@ -168,10 +168,19 @@ pub enum LightInput {
     },
 }
 
-/// caustica's light for one of Bevy's (see the module's units).
+/// caustica's light for one of Bevy's (see the module's units). A light dimmer than
+/// caustica's smallest power (`scene::limits::MIN_INTENSITY`, 2^-60 in its brightest
+/// channel: a light fading out) is off (zero power), not an invalid scene.
 pub fn light(l: &LightInput) -> Light {
+    let off_below_bound = |p: cg::Vec3| {
+        if p.max_element() < caustica::scene::limits::MIN_INTENSITY {
+            cg::Vec3::ZERO
+        } else {
+            p
+        }
+    };
     let per_sr = |c: V3, lumens: f32| {
-        v3(c).max(cg::Vec3::ZERO) * lumens.max(0.0) / (4.0 * std::f32::consts::PI)
+        off_below_bound(v3(c).max(cg::Vec3::ZERO) * lumens.max(0.0) / (4.0 * std::f32::consts::PI))
     };
     match *l {
         LightInput::Point {
@@ -205,7 +214,7 @@ pub fn light(l: &LightInput) -> Light {
             direction,
         } => Light::Directional {
             direction: v3(direction),
-            irradiance: v3(color).max(cg::Vec3::ZERO) * illuminance.max(0.0),
+            irradiance: off_below_bound(v3(color).max(cg::Vec3::ZERO) * illuminance.max(0.0)),
             projection_volume: None,
         },
     }
@@ -339,6 +348,25 @@ mod tests {
             attenuation_distance: f32::INFINITY,
             unlit: false,
         }
+    }
+
+    #[test]
+    fn a_light_fading_below_causticas_smallest_power_is_off() {
+        let point = |intensity: f32| {
+            light(&LightInput::Point {
+                color: [1.0; 3],
+                intensity,
+                position: [0.0; 3],
+            })
+        };
+        let Light::Point { intensity, .. } = point(1e-30) else {
+            panic!("a point light")
+        };
+        assert_eq!(intensity, cg::Vec3::ZERO);
+        let Light::Point { intensity, .. } = point(1.0) else {
+            panic!("a point light")
+        };
+        assert!(intensity.max_element() >= caustica::scene::limits::MIN_INTENSITY);
     }
 
     #[test]

@@ -359,3 +359,76 @@ fn no_technique_waits_inside_a_frame() {
         }
     }
 }
+
+/// Every recorded frame carries the updates before it, so frames run in the order
+/// recorded: a frame recorded and dropped unsubmitted, or submitted out of order, makes
+/// the technique's next frame an error that says why, instead of a stale image; frames
+/// submitted in order (and blocking frames between them) run.
+#[test]
+fn frames_run_in_the_order_recorded_or_the_next_one_says_why() {
+    let mut b = caustica_cpu::CpuBackend::new().expect("cpu");
+    let scene = small("sphere");
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
+    let mut t = create("sspm", &mut b, &scene, &settings).expect("create");
+    // in order, with a blocking frame between
+    let r1 = t.record_frame(&mut b).expect("record");
+    let r2 = t.record_frame(&mut b).expect("record");
+    r1.submit(&mut b)
+        .expect("submit")
+        .stats(&mut b, true)
+        .expect("stats");
+    r2.submit(&mut b)
+        .expect("submit")
+        .stats(&mut b, true)
+        .expect("stats");
+    t.frame(&mut b, &mut |_| {})
+        .expect("a blocking frame after them");
+    // a blocking frame while a recorded one waits: out of order
+    let waiting = t.record_frame(&mut b).expect("record");
+    let e = t
+        .frame(&mut b, &mut |_| {})
+        .expect_err("ahead of a recorded frame")
+        .to_string();
+    assert!(e.contains("still to be submitted"), "{e}");
+    drop(waiting);
+    t.free(&mut b).expect("free");
+
+    let mut t = create("sspm", &mut b, &scene, &settings).expect("create");
+    let mut lights = scene.lights.clone();
+    if let caustica_core::scene::Light::Point { position, .. } = &mut lights[0] {
+        *position += Vec3::new(0.3, 0.0, 0.0);
+    }
+    t.set_lights(&mut b, &lights).expect("lights");
+    drop(t.record_frame(&mut b).expect("record")); // the host skipped it
+    for _ in 0..2 {
+        let e = t
+            .frame(&mut b, &mut |_| {})
+            .expect_err("after a dropped frame")
+            .to_string();
+        assert!(e.contains("dropped without being submitted"), "{e}");
+        let e = t
+            .record_frame(&mut b)
+            .expect_err("after a dropped frame")
+            .to_string();
+        assert!(e.contains("make the technique anew"), "{e}");
+    }
+    t.free(&mut b).expect("free");
+
+    let mut t = create("sspm", &mut b, &scene, &settings).expect("create");
+    let r1 = t.record_frame(&mut b).expect("record");
+    let r2 = t.record_frame(&mut b).expect("record");
+    r2.submit(&mut b)
+        .expect("submit")
+        .stats(&mut b, true)
+        .expect("stats");
+    r1.submit(&mut b)
+        .expect("submit")
+        .stats(&mut b, true)
+        .expect("stats");
+    let e = t
+        .record_frame(&mut b)
+        .expect_err("out of order")
+        .to_string();
+    assert!(e.contains("frame 1 was submitted while frame 0"), "{e}");
+    t.free(&mut b).expect("free");
+}

@@ -15,7 +15,7 @@ use crate::frame::image::Image;
 use crate::frame::output::{Output, OutputInfo, Outputs};
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
-use crate::frame::submitted::{EndRead, RecordedFrame};
+use crate::frame::submitted::{EndRead, FrameOrder, RecordedFrame};
 use crate::frame::technique::{Progress, Technique};
 use crate::recording::Recording;
 use crate::scene::{Camera, Light, Scene, Transform};
@@ -227,6 +227,7 @@ impl<'p> FrameBuilder<'p> {
             readbacks: self.readbacks,
             stats: self.stats,
             ends: self.ends,
+            order: None,
         }
     }
 }
@@ -342,6 +343,9 @@ pub trait Pipeline: Sized {
 pub struct Hosted<P: Pipeline> {
     host: FrameHost,
     pipeline: Option<P>,
+    /// The order of its frames, and how many it has recorded or run.
+    order: std::sync::Arc<FrameOrder>,
+    frames: u64,
 }
 
 impl<P: Pipeline> Hosted<P> {
@@ -360,6 +364,8 @@ impl<P: Pipeline> Hosted<P> {
                 let mut t = Hosted {
                     host,
                     pipeline: Some(p),
+                    order: Default::default(),
+                    frames: 0,
                 };
                 // every buffer is checked: the scene goes up now
                 match t.host.flush(backend) {
@@ -426,6 +432,8 @@ impl<P: Pipeline> Hosted<P> {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
+        self.order.run_now(self.frames)?;
+        self.frames += 1;
         let mut frame = self.builder(&*backend, progress);
         let (host, p) = self.parts();
         p.record(backend, host, &mut frame)?;
@@ -447,12 +455,15 @@ impl<P: Pipeline> Hosted<P> {
     /// can record the rest runs here and is counted in [`FrameStats::host_waits`].
     pub fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
         let start = Instant::now();
+        self.order.check()?;
         let mut none = |_: Progress| {};
         let mut frame = self.builder(&*backend, &mut none);
         let (host, p) = self.parts();
         p.record(backend, host, &mut frame)?;
         let mut recorded = frame.recorded();
         recorded.stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        recorded.order = Some((self.order.clone(), self.frames));
+        self.frames += 1;
         Ok(recorded)
     }
 

@@ -24,6 +24,70 @@ pub struct RecordedFrame {
     pub stats: FrameStats,
     /// What goes into the statistics from `readbacks` when the frame completes, in order.
     pub ends: Vec<EndRead>,
+    /// Its place among its technique's frames (set when the technique records it).
+    pub(crate) order: Option<(std::sync::Arc<FrameOrder>, u64)>,
+}
+
+/// The order of a technique's frames: a recorded frame carries the technique's pending
+/// updates (and work a technique does once, such as laying out an atlas), so every frame
+/// must run, in the order recorded. A frame dropped unsubmitted or submitted out of order
+/// is noted here, and the technique's next frame is refused (its device state no longer
+/// follows its updates) instead of rendering a stale scene.
+#[derive(Debug, Default)]
+pub struct FrameOrder {
+    /// The number of the next frame to be submitted.
+    next: std::sync::atomic::AtomicU64,
+    /// What broke the order, if anything did.
+    broken: std::sync::Mutex<Option<String>>,
+}
+
+impl FrameOrder {
+    /// Notes that frame `seq` is submitted now.
+    fn submit(&self, seq: u64) {
+        use std::sync::atomic::Ordering;
+        let next = self.next.swap(seq + 1, Ordering::SeqCst);
+        if next != seq {
+            self.break_with(format!(
+                "frame {seq} was submitted while frame {next} was still to be submitted"
+            ));
+        }
+    }
+
+    fn break_with(&self, why: String) {
+        let mut b = self.broken.lock().unwrap_or_else(|e| e.into_inner());
+        b.get_or_insert(why);
+    }
+
+    /// Frame `seq`, a blocking frame, may run now (every earlier one was submitted, in
+    /// order, and none was dropped); it counts as submitted.
+    pub(crate) fn run_now(&self, seq: u64) -> Result<(), Error> {
+        self.check()?;
+        self.submit(seq);
+        self.check()
+    }
+
+    /// An error if the order was broken.
+    pub(crate) fn check(&self) -> Result<(), Error> {
+        let b = self.broken.lock().unwrap_or_else(|e| e.into_inner());
+        match &*b {
+            Some(why) => Err(Error::InvalidParameter(format!(
+                "{why}: the updates and first-frame work it carried never ran, so the \
+                 technique's device state no longer follows its scene; submit every \
+                 recorded frame in the order recorded, and make the technique anew"
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for RecordedFrame {
+    fn drop(&mut self) {
+        if let Some((order, seq)) = self.order.take() {
+            order.break_with(format!(
+                "frame {seq} was recorded and dropped without being submitted"
+            ));
+        }
+    }
 }
 
 /// Device data a frame reads back at its end, and how it goes into the statistics.
@@ -77,11 +141,14 @@ impl RecordedFrame {
 
     /// The ticket of a frame the host submitted itself (an embedding backend's own
     /// encoding of [`RecordedFrame::recording`], which returned `submission`).
-    pub fn submitted(self, submission: Submission) -> FrameTicket {
+    pub fn submitted(mut self, submission: Submission) -> FrameTicket {
+        if let Some((order, seq)) = self.order.take() {
+            order.submit(seq);
+        }
         FrameTicket {
             submission,
-            stats: self.stats,
-            ends: self.ends,
+            stats: std::mem::take(&mut self.stats),
+            ends: std::mem::take(&mut self.ends),
         }
     }
 }

@@ -11,18 +11,38 @@ pub const FLUX_QUANTA_PER_MAX_PHOTON: f32 = 16_777_216.0;
 /// ... and fewer than this many (2^25); 2^39 such photons fit a 64-bit sum.
 pub const MAX_PHOTON_QUANTA: f32 = 33_554_432.0;
 
+/// The smallest quantum: the smallest normal f32, 2^-126. A subnormal quantum would be
+/// flushed to zero by GPUs (and `2^k` for `k < -126` computed as `1 / 2^-k` is zero once
+/// `2^-k` overflows), making every deposit saturate.
+pub const MIN_FLUX_QUANTUM: f32 = f32::MIN_POSITIVE;
+
+/// The smallest `max_value` whose quantum keeps `max_value / quantum` in `[2^24, 2^25)`:
+/// 2^-102 (its quantum is [`MIN_FLUX_QUANTUM`]). `scene::limits::MIN_INTENSITY` keeps a
+/// valid scene's brightest emitted photon above it.
+pub const MIN_FULL_PRECISION_VALUE: f32 = MIN_FLUX_QUANTUM * FLUX_QUANTA_PER_MAX_PHOTON;
+
 /// The quantum (a power of two) for values up to `max_value`: `max_value / quantum` lies
 /// in `[2^24, 2^25)`. A power of two makes `value / quantum` exact on every device (an
 /// approximate GPU division of a power of two still scales the exponent exactly), so all
 /// backends round `value / quantum` to the same integer, and the sums match bitwise.
 /// Non-positive or non-finite `max_value` gives 1.
+///
+/// The quantum is never below [`MIN_FLUX_QUANTUM`] (2^-126, normal): for `max_value`
+/// below [`MIN_FULL_PRECISION_VALUE`] (2^-102) it is 2^-126 and `max_value` has fewer than
+/// 2^24 units (fewer bits of precision); a value below 2^-127 rounds to no unit, which
+/// [`quantize`] counts as underflow (the frame stats' `fixed_point_underflow`) where the
+/// value itself is normal. Scene validation keeps every light's emitted photons above
+/// that range (`scene::limits::MIN_INTENSITY`) unless its emission domain is tiny.
 pub fn power_of_two_quantum(max_value: f32) -> f32 {
     if !(max_value > 0.0 && max_value.is_finite()) {
         return 1.0;
     }
     // floor(log2(max_value)) from the exponent bits (subnormals count as 2^-127)
     let e = ((max_value.to_bits() >> 23) & 0xff) as i32 - 127;
-    2f32.powi((e - 24).max(-149))
+    if e - 24 < -126 {
+        return MIN_FLUX_QUANTUM;
+    }
+    2f32.powi(e - 24)
 }
 
 /// Outcome of quantizing one value.
@@ -98,5 +118,47 @@ mod tests {
         }
         assert_eq!(power_of_two_quantum(0.0), 1.0);
         assert_eq!(power_of_two_quantum(f32::NAN), 1.0);
+    }
+
+    /// Below 2^-102 the quantum stays 2^-126 (normal) instead of going subnormal or zero:
+    /// the value keeps its units down to 2^-127, and a smaller one counts as underflow.
+    #[test]
+    fn power_of_two_quantum_is_never_subnormal() {
+        assert_eq!(MIN_FULL_PRECISION_VALUE, 2f32.powi(-102));
+        // the last value of full precision, and the first one below
+        let q = power_of_two_quantum(MIN_FULL_PRECISION_VALUE);
+        assert_eq!(q, MIN_FLUX_QUANTUM);
+        assert_eq!(MIN_FULL_PRECISION_VALUE / q, FLUX_QUANTA_PER_MAX_PHOTON);
+        let below = f32::from_bits(MIN_FULL_PRECISION_VALUE.to_bits() - 1);
+        assert_eq!(power_of_two_quantum(below), MIN_FLUX_QUANTUM);
+        for m in [1e-31f32, 1e-35, 1e-38, 1e-40, 1e-45, f32::MIN_POSITIVE] {
+            let q = power_of_two_quantum(m);
+            assert!(q.is_normal() && q == MIN_FLUX_QUANTUM, "{m:e}: {q:e}");
+            // the brightest value keeps its units (no saturation) ...
+            let r = quantize(m, q);
+            assert!(
+                !r.saturated && r.units as f32 <= FLUX_QUANTA_PER_MAX_PHOTON,
+                "{m:e}"
+            );
+            // ... and below half the quantum it is counted as underflow, not dropped silently
+            if m < 0.5 * MIN_FLUX_QUANTUM {
+                assert!(r.underflow && r.units == 0, "{m:e}: {r:?}");
+            } else {
+                assert!(r.units >= 1, "{m:e}: {r:?}");
+            }
+        }
+        // every exponent from the largest f32 down to the smallest subnormal
+        let mut m = f32::MAX;
+        while m > 0.0 {
+            let q = power_of_two_quantum(m);
+            assert!(
+                q.is_normal() && q.to_bits() & 0x7f_ffff == 0,
+                "{m:e}: {q:e}"
+            );
+            if m >= MIN_FULL_PRECISION_VALUE {
+                assert!((FLUX_QUANTA_PER_MAX_PHOTON..MAX_PHOTON_QUANTA).contains(&(m / q)));
+            }
+            m *= 0.5;
+        }
     }
 }

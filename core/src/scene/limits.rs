@@ -24,6 +24,9 @@
 //!   a point light's flux `4 pi I < 2^64` is finite, but a directional light's `E A` over a
 //!   projection area up to `2^84` unit^2 is not, so the flux of each light is checked
 //!   again once its emission domain is known (at most [`MAX_LIGHT_FLUX`]).
+//! - **Intensity** and **irradiance** `>= 2^-60` in the brightest channel unless zero (a
+//!   light that is off): the fixed-point flux quantum stays a normal f32, see
+//!   [`MIN_INTENSITY`].
 //! - **Lights** at most [`MAX_LIGHTS`]: each light costs a photon pass and a shadow ray
 //!   per pixel, so time is linear in lights; 64 bounds a frame at 64 passes.
 //!
@@ -45,6 +48,39 @@ pub const MIN_EXTENT_PER_POSITION: f32 = 1.0 / 65_536.0;
 /// Largest light intensity (W/sr per channel) or irradiance (W per unit^2 per channel):
 /// 2^60, about 1.15e18.
 pub const MAX_INTENSITY: f32 = 1_152_921_504_606_846_976.0;
+/// Smallest non-zero light intensity (W/sr) or irradiance (W per unit^2), in a light's
+/// brightest channel: 2^-60, about 8.67e-19 (a light of zero power is valid: it is
+/// skipped, "light has zero power"). The derivation, from f32 (smallest normal 2^-126):
+///
+/// - A frame sums photon flux in fixed point, in units of a power-of-two quantum
+///   `2^(e - 24)` where `2^e <= F < 2^(e + 1)` and `F` is the frame's brightest emitted
+///   photon flux (`math::fixed_point::power_of_two_quantum`). The quantum is a normal
+///   f32 (GPUs flush subnormals to zero: a zero quantum saturates every deposit) iff
+///   `e - 24 >= -126`, i.e. `F >= 2^-102`
+///   (`math::fixed_point::MIN_FULL_PRECISION_VALUE`).
+/// - A photon's emitted flux is the light's power over its photon count: `I Omega / N`
+///   for a point or spot light (`Omega` the solid angle of its emission cone, `4 pi` for
+///   the whole sphere), `E A / N` for a directional light (`A` its emission rectangle's
+///   area), with `N = photons_w x photons_h < 2^32` (`FrameSettings::validate`).
+///   A dispersive surface's gain (>= 1) only raises `F`.
+/// - At `I = 2^-60` over the whole sphere: `F > 2^-60 * 2^3.65 * 2^-32 = 2^-88.35`, so
+///   `e >= -89` and the quantum is at least 2^-113, thirteen octaves above the smallest
+///   normal. Generally `F >= 2^-102` holds for every light at or above the bound whose
+///   domain is at least `2^-10` (sr, or unit^2 for a rectangle): a cone of half-angle
+///   above about 1 degree (a caster sphere seen from more than 57 radii away gives a
+///   smaller one). Only a brighter-than-the-bound intensity keeps a narrower domain's
+///   quantum normal; below `2^-102` the quantum is clamped to 2^-126 (never subnormal) and
+///   its photons count as `fixed_point_underflow`.
+/// - Absorption, Fresnel weights and roulette shrink a photon's flux after emission; the
+///   quantum, set by the emitted flux, does not see them. With the quantum at least
+///   2^-113, a photon rounds to at least one unit only while its flux is at least half the
+///   quantum (>= 2^-114, normal), so every photon that is stored is a normal f32 and every
+///   smaller one is counted as underflow (a GPU may flush one below 2^-126 to zero
+///   instead: it would have rounded to no unit either way).
+/// - A reader that divides the quantum by the `k` frames or passes of an accumulation
+///   keeps it normal for `k` up to 2^13 at the bound over the whole sphere (2^85 for a
+///   1 W/sr light at 1024^2 photons).
+pub const MIN_INTENSITY: f32 = 1.0 / MAX_INTENSITY;
 /// Smallest index of refraction (2^-20): `eta = n1 / n2` and `eta^2` stay finite.
 pub const MIN_IOR: f32 = 1.0 / 1_048_576.0;
 /// Largest index of refraction (2^20).
@@ -108,8 +144,163 @@ pub fn is_degenerate(m: &TriangleMesh, t: [u32; 3]) -> bool {
 mod tests {
     use super::*;
     use crate::scene::shapes::tessellate;
-    use crate::scene::Wave;
+    use crate::scene::{Light, Wave};
     use glam::{Vec2, Vec3};
+
+    fn with_light(light: Light) -> crate::scene::Scene {
+        let mut s = crate::scene::builtin::builtin("sphere").expect("built-in scene");
+        s.lights = vec![light];
+        s
+    }
+
+    fn point(intensity: Vec3) -> Light {
+        Light::Point {
+            position: Vec3::new(0.0, 3.0, 0.0),
+            intensity,
+        }
+    }
+
+    fn spot(intensity: Vec3) -> Light {
+        Light::Spot {
+            position: Vec3::new(0.0, 3.0, 0.0),
+            direction: -Vec3::Y,
+            intensity,
+            inner_angle_deg: 10.0,
+            outer_angle_deg: 20.0,
+        }
+    }
+
+    fn directional(irradiance: Vec3) -> Light {
+        Light::Directional {
+            direction: -Vec3::Y,
+            irradiance,
+            projection_volume: None,
+        }
+    }
+
+    #[test]
+    fn min_intensity_is_2_pow_minus_60() {
+        assert_eq!(MIN_INTENSITY, 2f32.powi(-60));
+        assert!(MIN_INTENSITY.is_normal());
+    }
+
+    /// A light's power below the bound (brightest channel positive) is refused by name;
+    /// the bound itself, zero (a light that is off) and a dim channel next to a bright one
+    /// are accepted.
+    #[test]
+    fn light_power_below_the_bound_is_refused_by_name() {
+        let below = f32::from_bits(MIN_INTENSITY.to_bits() - 1);
+        type MakeLight = fn(Vec3) -> Light;
+        let lights: [(MakeLight, &str); 3] = [
+            (point, "lights[0].intensity"),
+            (spot, "lights[0].intensity"),
+            (directional, "lights[0].irradiance"),
+        ];
+        for (make, path) in lights {
+            for v in [
+                Vec3::splat(below),
+                Vec3::splat(1e-30),
+                Vec3::new(0.0, f32::from_bits(1), 0.0),
+                Vec3::new(0.0, 0.0, 0.5 * MIN_INTENSITY),
+            ] {
+                let problems = with_light(make(v)).validate().expect_err("refused");
+                assert_eq!(problems.len(), 1, "{v}: {problems:?}");
+                assert_eq!(problems[0].path, path);
+                assert!(
+                    problems[0].reason.contains("below the bound")
+                        && problems[0].reason.contains(&format!("{MIN_INTENSITY:e}")),
+                    "{}",
+                    problems[0].reason
+                );
+            }
+            for v in [
+                Vec3::splat(MIN_INTENSITY),
+                Vec3::new(MIN_INTENSITY, 0.0, 0.0),
+                Vec3::ZERO,
+                Vec3::new(1.0, 1e-30, 0.0),
+                Vec3::splat(MAX_INTENSITY),
+            ] {
+                with_light(make(v))
+                    .validate()
+                    .unwrap_or_else(|p| panic!("{path} = {v}: {p:?}"));
+            }
+        }
+    }
+
+    /// At the bound and the most photons a light may have (`photons_w x photons_h <=
+    /// 2^32 - 1`), the quantum of the brightest emitted photon is a normal f32 with the
+    /// full 2^24 units, for every light kind with a domain of at least 2^-10 (sr or
+    /// unit^2), as `power_of_two_quantum` gets it (Sspm's `FrameConstants`).
+    #[test]
+    fn the_flux_quantum_at_the_bound_is_normal() {
+        use crate::frame::emission::{emission_domain, unpruned_domain, PointEmission};
+        use crate::math::fixed_point::{power_of_two_quantum, FLUX_QUANTA_PER_MAX_PHOTON};
+        use crate::math::geometry::Aabb;
+        // the most photons per light (FrameSettings::validate), as the frame counts them
+        let (w, h) = (65_535u32, 65_537u32);
+        assert_eq!(w as u64 * h as u64, u32::MAX as u64);
+        let photons = w as f32 * h as f32;
+        let quantum_of = |flux: f32| {
+            let per_photon = flux / photons;
+            let q = power_of_two_quantum(per_photon);
+            assert!(q.is_normal() && q > 0.0, "flux {flux:e}: quantum {q:e}");
+            assert!(
+                per_photon / q >= FLUX_QUANTA_PER_MAX_PHOTON,
+                "flux {flux:e}"
+            );
+            q
+        };
+        let i = Vec3::splat(MIN_INTENSITY);
+        let casters = Aabb {
+            min: Vec3::splat(-0.5),
+            max: Vec3::splat(0.5),
+        };
+        let scene = casters.union(Aabb {
+            min: Vec3::splat(-10.0),
+            max: Vec3::splat(10.0),
+        });
+        // the whole sphere: 13 octaves above the smallest normal quantum
+        let d = unpruned_domain(&point(i), scene).unwrap();
+        assert!(quantum_of(d.flux.max_element()) >= 2f32.powi(-113));
+        // caster cones down to about 2^-10 sr (a caster sphere 57 radii away) ...
+        let r = 0.5 * casters.diagonal();
+        for dist in [1.5f32, 3.0, 10.0, 30.0, 56.0] {
+            let light = Light::Point {
+                position: Vec3::new(0.0, dist * r, 0.0),
+                intensity: i,
+            };
+            let d = emission_domain(&light, casters, scene, PointEmission::CasterCone).unwrap();
+            assert!(d.measure >= 2f32.powi(-10), "{dist}: {}", d.measure);
+            quantum_of(d.flux.max_element());
+        }
+        // ... spot cones down to 1.02 degrees ...
+        for outer in [1.02f32, 5.0, 45.0, 90.0, 180.0] {
+            let light = Light::Spot {
+                position: Vec3::new(0.0, 3.0, 0.0),
+                direction: -Vec3::Y,
+                intensity: i,
+                inner_angle_deg: 0.0,
+                outer_angle_deg: outer,
+            };
+            let d = unpruned_domain(&light, scene).unwrap();
+            assert!(d.measure >= 2f32.powi(-10), "{outer}: {}", d.measure);
+            quantum_of(d.flux.max_element());
+        }
+        // ... and directional rectangles down to 2^-10 unit^2
+        for side in [2f32.powi(-5), 1.0, 20.0] {
+            let light = Light::Directional {
+                direction: -Vec3::Y,
+                irradiance: i,
+                projection_volume: Some(Aabb {
+                    min: Vec3::splat(-0.5 * side),
+                    max: Vec3::splat(0.5 * side),
+                }),
+            };
+            let d = emission_domain(&light, casters, scene, PointEmission::CasterCone).unwrap();
+            assert!(d.measure >= 2f32.powi(-10), "{side}: {}", d.measure);
+            quantum_of(d.flux.max_element());
+        }
+    }
 
     #[test]
     fn tessellated_size_is_what_tessellate_makes() {

@@ -3,7 +3,7 @@
 
 use super::limits::{
     MAX_COORDINATE, MAX_INTENSITY, MAX_IOR, MAX_LENGTH, MAX_LIGHTS, MIN_EXTENT_PER_POSITION,
-    MIN_IOR, MIN_LENGTH,
+    MIN_INTENSITY, MIN_IOR, MIN_LENGTH,
 };
 use super::{IorModel, Light, Material, Scene, Shape, Transform};
 use glam::{Vec2, Vec3};
@@ -553,6 +553,21 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
             ),
         );
     }
+    /// A light's intensity or irradiance `v` in `[0, MAX_INTENSITY]`, and, unless zero,
+    /// at least `MIN_INTENSITY` in its brightest channel (the flux quantum stays normal).
+    fn light_power(c: &mut Check, path: &str, v: Vec3, what: &str) {
+        c.bounded3(path, v, MAX_INTENSITY, what);
+        let m = v.max_element();
+        if v.is_finite() && v.min_element() >= 0.0 && m > 0.0 && m < MIN_INTENSITY {
+            c.fail(
+                path,
+                format!(
+                    "{what} {m:e} is below the bound {MIN_INTENSITY:e} (2^-60) that keeps the \
+                     photons' fixed-point flux quantum a normal f32; use 0 for a light that is off"
+                ),
+            );
+        }
+    }
     for (i, l) in s.lights.iter().enumerate() {
         let p = format!("lights[{i}]");
         match l {
@@ -561,12 +576,7 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                 intensity,
             } => {
                 c.coord3(&format!("{p}.position"), *position);
-                c.bounded3(
-                    &format!("{p}.intensity"),
-                    *intensity,
-                    MAX_INTENSITY,
-                    "intensity",
-                );
+                light_power(&mut c, &format!("{p}.intensity"), *intensity, "intensity");
             }
             Light::Spot {
                 position,
@@ -577,12 +587,7 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
             } => {
                 c.coord3(&format!("{p}.position"), *position);
                 c.direction(&format!("{p}.direction"), *direction);
-                c.bounded3(
-                    &format!("{p}.intensity"),
-                    *intensity,
-                    MAX_INTENSITY,
-                    "intensity",
-                );
+                light_power(&mut c, &format!("{p}.intensity"), *intensity, "intensity");
                 if c.finite(&format!("{p}.outer_angle_deg"), *outer_angle_deg)
                     && !(*outer_angle_deg > 0.0 && *outer_angle_deg <= 180.0)
                 {
@@ -606,10 +611,10 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                 projection_volume,
             } => {
                 c.direction(&format!("{p}.direction"), *direction);
-                c.bounded3(
+                light_power(
+                    &mut c,
                     &format!("{p}.irradiance"),
                     *irradiance,
-                    MAX_INTENSITY,
                     "irradiance",
                 );
                 if let Some(b) = projection_volume {
