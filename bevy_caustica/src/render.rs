@@ -784,9 +784,9 @@ fn caustica_view(
         let submission = backend
             .encode(&recorded.recording, &recorded.readbacks, encoder)
             .map_err(|e| e.to_string())?;
-        let drawn = encode_added_light(&**technique, kind, backend, texture, encoder)?;
+        // in Bevy's encoder now: it runs whatever follows
         v.unsubmitted.push(recorded.submitted(submission));
-        Ok(drawn)
+        encode_added_light(&**technique, kind, backend, texture, encoder)
     });
     let record_ms = t0.elapsed().as_secs_f64() * 1e3;
     state.stats.with(main, |c| c.host_record_ms = record_ms);
@@ -842,6 +842,12 @@ fn caustica_view(
                 error!("bevy_caustica: camera {main}: frame failed: {why}; nothing added");
             }
             v.ready = false;
+            // a frame lost after its recording leaves the technique's device state
+            // behind its updates: made anew with the next prepare
+            if let Some(t) = v.technique.take() {
+                let _ = t.free(backend);
+            }
+            v.applied = None;
             state.stats.with(main, |c| {
                 c.status = CausticsStatus::Inactive(format!("frame failed: {why}"))
             });

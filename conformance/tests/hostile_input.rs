@@ -252,10 +252,11 @@ fn catalogue() -> Vec<Case> {
             "sphere scaled below f32 resolution by its transform",
             || {
                 let mut s = small("sphere");
-                object(&mut s, sphere(Vec3::splat(1e3), 1.0, 32));
+                object(&mut s, sphere(Vec3::ZERO, 1.0, 32));
                 let o = s.objects.last_mut().expect("the sphere");
                 o.transform = Some(caustica_core::scene::Transform {
-                    scale: Vec3::new(1.0, 1.0, 2f32.powi(-20)),
+                    translation: Vec3::splat(1e3),
+                    scale: Vec3::splat(2f32.powi(-20)),
                     ..Default::default()
                 });
                 s

@@ -161,7 +161,7 @@ pub struct FrameHost {
     /// How many times the pending writes were taken (into a frame, or flushed).
     pending_taken: u64,
     /// The camera's images are made by the pending writes (a new size or new needs):
-    /// they exist on the device once the next frame has run.
+    /// they exist on the device once the next frame (which takes the writes) runs.
     screen_queued: bool,
     /// Some recording of this host has run (else freeing it runs nothing).
     on_device: bool,

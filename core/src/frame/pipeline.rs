@@ -436,7 +436,13 @@ impl<P: Pipeline> Hosted<P> {
         self.frames += 1;
         let mut frame = self.builder(&*backend, progress);
         let (host, p) = self.parts();
-        p.record(backend, host, &mut frame)?;
+        if let Err(e) = p.record(backend, host, &mut frame) {
+            // the pending writes it took are lost
+            let n = self.frames - 1;
+            self.order
+                .break_with(format!("frame {n} failed while recording ({e})"));
+            return Err(e);
+        }
         let mut stats = frame.run(backend)?;
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = self.host.reference() {
@@ -459,7 +465,14 @@ impl<P: Pipeline> Hosted<P> {
         let mut none = |_: Progress| {};
         let mut frame = self.builder(&*backend, &mut none);
         let (host, p) = self.parts();
-        p.record(backend, host, &mut frame)?;
+        if let Err(e) = p.record(backend, host, &mut frame) {
+            // the pending writes it took are lost
+            let n = self.frames;
+            self.frames += 1;
+            self.order
+                .break_with(format!("frame {n} failed while recording ({e})"));
+            return Err(e);
+        }
         let mut recorded = frame.recorded();
         recorded.stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         recorded.order = Some((self.order.clone(), self.frames));

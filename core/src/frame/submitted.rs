@@ -34,7 +34,7 @@ pub struct RecordedFrame {
 /// is noted here, and the technique's next frame is refused (its device state no longer
 /// follows its updates) instead of rendering a stale scene.
 #[derive(Debug, Default)]
-pub struct FrameOrder {
+pub(crate) struct FrameOrder {
     /// The number of the next frame to be submitted.
     next: std::sync::atomic::AtomicU64,
     /// What broke the order, if anything did.
@@ -53,7 +53,7 @@ impl FrameOrder {
         }
     }
 
-    fn break_with(&self, why: String) {
+    pub(crate) fn break_with(&self, why: String) {
         let mut b = self.broken.lock().unwrap_or_else(|e| e.into_inner());
         b.get_or_insert(why);
     }
@@ -131,9 +131,17 @@ impl EndRead {
 
 impl RecordedFrame {
     /// Submits the frame on `backend` without waiting for it.
-    pub fn submit(self, backend: &mut dyn Backend) -> Result<FrameTicket, Error> {
+    pub fn submit(mut self, backend: &mut dyn Backend) -> Result<FrameTicket, Error> {
         let t0 = std::time::Instant::now();
-        let submission = backend.submit(&self.recording, &self.readbacks)?;
+        let submission = match backend.submit(&self.recording, &self.readbacks) {
+            Ok(s) => s,
+            Err(e) => {
+                if let Some((order, seq)) = self.order.take() {
+                    order.break_with(format!("frame {seq} failed to submit ({e})"));
+                }
+                return Err(e.into());
+            }
+        };
         let mut ticket = self.submitted(submission);
         ticket.stats.frame_ms += t0.elapsed().as_secs_f64() * 1e3;
         Ok(ticket)

@@ -125,15 +125,23 @@ impl Check {
     /// A shape around `center` reaching `reach` from it (both valid) with smallest feature
     /// `extent`: it must stay inside the coordinate bound and span at least 2^-16 of its
     /// centre's largest coordinate (128 f32 ulps there), or its vertices collapse.
-    /// Given in object space, the shape is judged where its object's transform puts it.
+    /// Given in object space, the shape is judged where its object's transform puts it:
+    /// its centre placed, its reach (a largest coordinate, which a rotation can lengthen by
+    /// up to sqrt 3) and its feature (which may lie across the smallest scale's axis or
+    /// not: the largest scale is taken, so a valid shape is never refused) scaled.
     fn placed(&mut self, path: &str, center: Vec3, reach: f32, extent: f32) {
         let (center, reach, extent) = match &self.transform {
             Some(t) => {
-                let scale = t.scale.abs();
+                let scale = t.scale.abs().max_element();
+                let turn = if t.rotation == glam::Quat::IDENTITY {
+                    1.0
+                } else {
+                    3f32.sqrt()
+                };
                 (
                     t.world_from_object().transform_point3(center),
-                    reach * scale.max_element(),
-                    extent * scale.min_element(),
+                    reach * scale * turn,
+                    extent * scale,
                 )
             }
             None => (center, reach, extent),
@@ -449,7 +457,12 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                         c.fail(format!("{sp}.max"), "max must exceed min on every axis");
                     } else {
                         let center = (*min + *max) * 0.5;
-                        c.placed(&sp, center, 0.0, (*max - *min).min_element());
+                        // (its corners are checked coordinates where it is not moved)
+                        let half = match c.transform {
+                            Some(_) => ((*max - *min) * 0.5).max_element(),
+                            None => 0.0,
+                        };
+                        c.placed(&sp, center, half, (*max - *min).min_element());
                     }
                 }
             }
