@@ -389,4 +389,86 @@ mod tests {
         let e = emission_domain(&light, ball(), ball(), PointEmission::CasterCone);
         assert_eq!(e, Err(NoEmission::MissesCasters));
     }
+
+    /// At `scene::limits::MIN_INTENSITY` and the most photons a light may have (`photons_w x photons_h <=
+    /// 2^32 - 1`), the quantum of the brightest emitted photon is a normal f32 with the
+    /// full 2^24 units, for every light kind with a domain of at least 2^-10 (sr or
+    /// unit^2), as `power_of_two_quantum` gets it (Sspm's `FrameConstants`).
+    #[test]
+    fn the_flux_quantum_at_the_bound_is_normal() {
+        use crate::frame::emission::{emission_domain, unpruned_domain, PointEmission};
+        use crate::math::fixed_point::{power_of_two_quantum, FLUX_QUANTA_PER_MAX_PHOTON};
+        use crate::math::geometry::Aabb;
+        use crate::scene::limits::MIN_INTENSITY;
+        use crate::scene::Light;
+        use glam::Vec3;
+        // the most photons per light (FrameSettings::validate), as the frame counts them
+        let (w, h) = (65_535u32, 65_537u32);
+        assert_eq!(w as u64 * h as u64, u32::MAX as u64);
+        let photons = w as f32 * h as f32;
+        let quantum_of = |flux: f32| {
+            let per_photon = flux / photons;
+            let q = power_of_two_quantum(per_photon);
+            assert!(q.is_normal() && q > 0.0, "flux {flux:e}: quantum {q:e}");
+            assert!(
+                per_photon / q >= FLUX_QUANTA_PER_MAX_PHOTON,
+                "flux {flux:e}"
+            );
+            q
+        };
+        let i = Vec3::splat(MIN_INTENSITY);
+        let casters = Aabb {
+            min: Vec3::splat(-0.5),
+            max: Vec3::splat(0.5),
+        };
+        let scene = casters.union(Aabb {
+            min: Vec3::splat(-10.0),
+            max: Vec3::splat(10.0),
+        });
+        // the whole sphere: 13 octaves above the smallest normal quantum
+        let point = Light::Point {
+            position: Vec3::new(0.0, 3.0, 0.0),
+            intensity: i,
+        };
+        let d = unpruned_domain(&point, scene).unwrap();
+        assert!(quantum_of(d.flux.max_element()) >= 2f32.powi(-113));
+        // caster cones down to about 2^-10 sr (a caster sphere 57 radii away) ...
+        let r = 0.5 * casters.diagonal();
+        for dist in [1.5f32, 3.0, 10.0, 30.0, 56.0] {
+            let light = Light::Point {
+                position: Vec3::new(0.0, dist * r, 0.0),
+                intensity: i,
+            };
+            let d = emission_domain(&light, casters, scene, PointEmission::CasterCone).unwrap();
+            assert!(d.measure >= 2f32.powi(-10), "{dist}: {}", d.measure);
+            quantum_of(d.flux.max_element());
+        }
+        // ... spot cones down to 1.02 degrees ...
+        for outer in [1.02f32, 5.0, 45.0, 90.0, 180.0] {
+            let light = Light::Spot {
+                position: Vec3::new(0.0, 3.0, 0.0),
+                direction: -Vec3::Y,
+                intensity: i,
+                inner_angle_deg: 0.0,
+                outer_angle_deg: outer,
+            };
+            let d = unpruned_domain(&light, scene).unwrap();
+            assert!(d.measure >= 2f32.powi(-10), "{outer}: {}", d.measure);
+            quantum_of(d.flux.max_element());
+        }
+        // ... and directional rectangles down to 2^-10 unit^2
+        for side in [2f32.powi(-5), 1.0, 20.0] {
+            let light = Light::Directional {
+                direction: -Vec3::Y,
+                irradiance: i,
+                projection_volume: Some(Aabb {
+                    min: Vec3::splat(-0.5 * side),
+                    max: Vec3::splat(0.5 * side),
+                }),
+            };
+            let d = emission_domain(&light, casters, scene, PointEmission::CasterCone).unwrap();
+            assert!(d.measure >= 2f32.powi(-10), "{side}: {}", d.measure);
+            quantum_of(d.flux.max_element());
+        }
+    }
 }
