@@ -86,7 +86,7 @@ inline void emit_photon(__global const GpuLight* lights, __global const TracePar
         *flux = *flux * view_plane_texel_weight(ix, iy, p->grid_w, p->grid_h, p->rect_u[3],
                                                 p->rect_v[3]);
     } else {
-        *dir = to_world(uniform_cone(u, p->origin[3]), axis);
+        *dir = to_world(uniform_cone(u, p->origin[3], p->axis[3]), axis);
     }
     __global const GpuLight* light = &lights[p->light];
     float falloff = light->kind == LIGHT_SPOT

@@ -102,7 +102,7 @@ fn emit_photon(p: TraceParams, index: u32, origin: ptr<function, vec3<f32>>,
         *dir = view_plane_direction(axis, p.rect_u.xyz, p.rect_v.xyz, u);
         *flux = *flux * view_plane_texel_weight(ix, iy, p.grid_w, p.grid_h, p.rect_u.w, p.rect_v.w);
     } else {
-        *dir = to_world(uniform_cone(u, p.origin.w), axis);
+        *dir = to_world(uniform_cone(u, p.origin.w, p.axis.w), axis);
     }
     let light = lights[p.light];
     var falloff = 1.0;

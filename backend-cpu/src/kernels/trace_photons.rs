@@ -630,7 +630,7 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
         let w = view_plane_texel_weight(ix, iy, p.grid_w, p.grid_h, p.rect_u[3], p.rect_v[3]);
         (dir, flux * w)
     } else {
-        (to_world(uniform_cone(u, p.origin[3]), axis), flux)
+        (to_world(uniform_cone(u, p.origin[3], p.axis[3]), axis), flux)
     };
     let light = &scene.lights[p.light as usize];
     let falloff = if light.kind == light_kind::SPOT {

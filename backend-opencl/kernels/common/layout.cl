@@ -180,6 +180,7 @@
 
 // core::math::sampling
 #define PHOTON_TILE 8u
+#define NARROW_CONE 0.0009765625f
 
 // core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)
 #define R2_STEP_X 0xc13fa9a9u

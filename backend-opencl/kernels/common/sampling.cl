@@ -22,9 +22,18 @@ inline float2 stratified_cell(uint ix, uint iy, uint grid_w, uint grid_h, float2
     return (float2)(((float)ix + jitter.x) / (float)grid_w, ((float)iy + jitter.y) / (float)grid_h);
 }
 
-inline float3 uniform_cone(float2 u, float cos_max) {
-    float cos_t = 1.0f - u.x * (1.0f - cos_max);
-    float sin_t = sqrt(fmax(1.0f - cos_t * cos_t, 0.0f));
+// core::math::sampling::uniform_cone: a narrow cone from 1 - cos_max computed without
+// cancellation (TraceParams::axis.w).
+inline float3 uniform_cone(float2 u, float cos_max, float one_minus_cos) {
+    float cos_t, sin_t;
+    if (one_minus_cos < NARROW_CONE) {
+        float t = u.x * one_minus_cos;
+        cos_t = 1.0f - t;
+        sin_t = sqrt(fmax(t * (2.0f - t), 0.0f));
+    } else {
+        cos_t = 1.0f - u.x * (1.0f - cos_max);
+        sin_t = sqrt(fmax(1.0f - cos_t * cos_t, 0.0f));
+    }
     float phi = TAU_F * u.y;
     return (float3)(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }

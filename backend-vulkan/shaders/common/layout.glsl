@@ -180,6 +180,7 @@ const float MIN_COSINE = 0.0001;
 
 // core::math::sampling
 const uint PHOTON_TILE = 8u;
+const float NARROW_CONE = 0.0009765625;
 
 // core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)
 const uint R2_STEP_X = 0xc13fa9a9u;

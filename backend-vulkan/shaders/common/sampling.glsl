@@ -18,9 +18,18 @@ precise vec2 stratified_cell(uint ix, uint iy, uint grid_w, uint grid_h, vec2 ji
     return vec2((float(ix) + jitter.x) / float(grid_w), (float(iy) + jitter.y) / float(grid_h));
 }
 
-precise vec3 uniform_cone(vec2 u, float cos_max) {
-    float cos_t = 1.0 - u.x * (1.0 - cos_max);
-    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+// core::math::sampling::uniform_cone: a narrow cone from 1 - cos_max computed without
+// cancellation (TraceParams::axis.w).
+precise vec3 uniform_cone(vec2 u, float cos_max, float one_minus_cos) {
+    float cos_t, sin_t;
+    if (one_minus_cos < NARROW_CONE) {
+        float t = u.x * one_minus_cos;
+        cos_t = 1.0 - t;
+        sin_t = sqrt(max(t * (2.0 - t), 0.0));
+    } else {
+        cos_t = 1.0 - u.x * (1.0 - cos_max);
+        sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    }
     float phi = TAU_F * u.y;
     return vec3(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }

@@ -11,9 +11,12 @@ pub(super) fn grid_bound(pw: u32, ph: u32, curves: u32) -> f64 {
     (2 * curves * (pw + ph)) as f64
 }
 
-/// Solid angle (sr) of a ball of radius `r` seen from distance `d` to its centre.
+/// Solid angle (sr) of a ball of radius `r` seen from distance `d` to its centre:
+/// `2 pi (1 - cos)` with `1 - cos = x / (1 + sqrt(1 - x))`, `x = (r / d)^2` (no
+/// cancellation for a far ball).
 pub(super) fn ball_solid_angle(r: f64, d: f64) -> f64 {
-    std::f64::consts::TAU * (1.0 - (1.0 - (r / d).powi(2)).sqrt())
+    let x = (r / d).powi(2);
+    std::f64::consts::TAU * x / (1.0 + (1.0 - x).sqrt())
 }
 
 /// Relative shortfall of a UV sphere of `segments` from its true silhouette: vertices lie

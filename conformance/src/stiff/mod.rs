@@ -122,6 +122,8 @@ pub fn catalogue() -> Vec<StiffCase> {
             "Sun at cos 1e-3 onto a glass slab: Fresnel -> 1, at most (1 - F(1e-3)) = 0.58% of the photons enter, stored <= (1 - F) N + 5 sigma"),
         case!("optics", "ior-1", optics::ior_one,
             "Ball of IOR exactly 1 vanishes: no reflection (no photon lost), stored flux = I * Omega_ball (grid bound); direct light on lit pixels bitwise equal to the scene without the ball (its shadow is filled by the caustic)"),
+        case!("optics", "far-light", optics::far_light,
+            "ior-1's vanishing ball under a point light 2e4 radii above it (caster cone 5e-5 rad, its cosine 1 in f32): stored flux = I * Omega_ball (grid bound), every floor pixel within 0.8 radii of the beam's axis lit and none beyond 1.2"),
         case!("optics", "ior-below-1", optics::ior_below_one,
             "Air bubble (ior 1/1.33) inside a water ball: TIR on entering the bubble, no NaN, stored <= emitted"),
         case!("optics", "ior-4", optics::ior_four,

@@ -190,6 +190,63 @@ pub(super) fn ior_one(b: &mut dyn Backend) -> Result<Outcome, String> {
     outcome(format!("stored {got:.4} W vs I*Omega {expect:.4} W"), v)
 }
 
+/// `ior_one`'s vanishing ball lit by a point light 2e4 radii above it: the caster cone's
+/// half-angle is 5e-5 rad, whose cosine is 1 in f32, so its solid angle and its directions
+/// come from `1 - cos` computed without cancellation (`EmissionDomain::one_minus_cos`).
+/// The intensity grows as the distance squared, so the beam carries `ior_one`'s order of
+/// flux.
+pub(super) fn far_light(b: &mut dyn Backend) -> Result<Outcome, String> {
+    let mut scene = sphere_scene();
+    scene.materials.insert("glass".into(), glass(1.0));
+    let (r, d) = (0.5f64, 1e4f64);
+    let intensity = (10.0 * (d / 2.0).powi(2)) as f32;
+    scene.lights = vec![Light::Point {
+        position: Vec3::new(0.0, 1.0 + d as f32, 0.0),
+        intensity: Vec3::splat(intensity),
+    }];
+    let grid = 256;
+    let st = settings(grid);
+    let mut v = Verdict::new("far light");
+    let f = run_checked(b, &scene, &st, &mut v)?;
+    // I * Omega_ball; the grid's boundary and the tessellation as in ior_one
+    let expect = intensity as f64 * ball_solid_angle(r, d);
+    let per_photon = f.stats.emitted_flux[0] / f.stats.photons_emitted.max(1) as f64;
+    let tol =
+        grid_bound(grid, grid, 1) * per_photon + tessellation_rel(sphere_segments(&scene)) * expect;
+    let got = f.stats.stored_flux[0];
+    v.check((got - expect).abs() <= tol, || {
+        format!("stored flux {got:.5} W, closed form {expect:.5} +- {tol:.5}")
+    });
+    // The beam (radius r (d + 1) / d on the floor) lights every floor pixel within 0.8 r
+    // of its axis, and none beyond 1.2 r: its photons spread over the whole cone.
+    let (mut inside, mut inside_lit, mut outside_lit) = (0, 0, 0);
+    for (g, p) in f.gbuffer.iter().zip(&f.raw.pixels) {
+        if g.flags & gbuffer_flags::RECEIVER == 0 || g.position[1].abs() > 1e-3 {
+            continue;
+        }
+        let off_axis = (g.position[0] as f64).hypot(g.position[2] as f64);
+        let lit = p[..3].iter().any(|&c| c > 0.0);
+        if off_axis < 0.8 * r {
+            inside += 1;
+            inside_lit += lit as u32;
+        } else if off_axis > 1.2 * r {
+            outside_lit += lit as u32;
+        }
+    }
+    v.check(inside >= 10 && inside_lit == inside, || {
+        format!("{inside_lit} of the {inside} floor pixels within 0.8 r of the beam's axis lit")
+    });
+    v.check(outside_lit == 0, || {
+        format!("{outside_lit} floor pixels beyond 1.2 r of the beam's axis lit")
+    });
+    outcome(
+        format!(
+            "stored {got:.4} W vs I*Omega {expect:.4} W, {inside_lit}/{inside} beam pixels lit"
+        ),
+        v,
+    )
+}
+
 fn water_ball_scene() -> Scene {
     let mut s = sphere_scene();
     s.materials.insert("water".into(), glass(1.33));

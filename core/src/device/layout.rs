@@ -865,7 +865,9 @@ pub struct TraceParams {
     pub max_bounces: u32,
     /// Cone apex / rectangle corner (world); `w`: cosine of the cone half-angle.
     pub origin: [f32; 4],
-    /// Cone axis / ray direction (unit, world); `w` unused.
+    /// Cone axis / ray direction (unit, world); for a cone `w` is `1 - cos_max` computed
+    /// without cancellation (what a narrow cone is sampled from,
+    /// [`uniform_cone`](crate::math::sampling::uniform_cone)), otherwise unused.
     pub axis: [f32; 4],
     /// Rectangle edge `u` (world, scene units; whole edge, not half); `w` unused; zero for cones.
     pub rect_u: [f32; 4],

@@ -300,7 +300,10 @@ pub fn groups() -> Vec<ConstGroup> {
         ),
         group(
             "core::math::sampling",
-            vec![named!("PHOTON_TILE", U32, sampling::PHOTON_TILE)],
+            vec![
+                named!("PHOTON_TILE", U32, sampling::PHOTON_TILE),
+                named!("NARROW_CONE", F32, sampling::NARROW_CONE),
+            ],
         ),
         group(
             "core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)",

@@ -63,12 +63,51 @@ pub fn uniform_sphere(u: Vec2) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
-/// Uniform direction in the cone of half-angle `acos(cos_max)` around +z, from `u` in
-/// [0,1)^2: `cos = 1 - u.x (1 - cos_max)`. Solid angle of the cone: `2 pi (1 - cos_max)`.
+/// `1 - cos` of a cone's half-angle below which the cone is narrow: 2^-10 (half-angles
+/// below about 2.56 degrees). A narrow cone is sampled and measured from `1 - cos_max`
+/// computed without cancellation ([`cone_one_minus_cos`]) instead of from `cos_max`.
+///
+/// Why: `cos_max` is an f32 in [0.5, 1] (spacing 2^-24), so `1 - cos_max` carries an
+/// absolute error up to about 2^-24 however it was computed, a relative error of
+/// `2^-24 / (1 - cos_max)`: at the threshold 2^-14 (6e-5), below it growing as the cone
+/// narrows (8% for a caster sphere seen at `r / d = 1e-3`, nothing left once `r / d` is
+/// below 2^-12.5, where `cos_max` rounds to 1). Wider cones keep the `cos_max` forms and
+/// their bits.
+pub const NARROW_CONE: f32 = 1.0 / 1024.0;
+
+/// `1 - cos(theta)` of a cone of half-angle `theta` whose squared sine is `sin2` (in
+/// [0, 1]), without cancellation: `sin2 / (1 + sqrt(1 - sin2))`, within a few ulps.
+/// (A sphere of radius `r` seen from `d` bounds a cone of `sin2 = (r / d)^2`.)
 #[inline]
-pub fn uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
-    let cos_t = 1.0 - u.x * (1.0 - cos_max);
-    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+pub fn cone_one_minus_cos(sin2: f32) -> f32 {
+    sin2 / (1.0 + (1.0 - sin2).max(0.0).sqrt())
+}
+
+/// `1 - cos(theta)` for a half-angle `theta` in radians, without cancellation:
+/// `2 sin^2(theta / 2)`.
+#[inline]
+pub fn one_minus_cos_of_angle(theta: f32) -> f32 {
+    let s = (0.5 * theta).sin();
+    2.0 * s * s
+}
+
+/// Uniform direction in the cone of half-angle `acos(cos_max)` around +z, from `u` in
+/// [0,1)^2: `cos = 1 - u.x (1 - cos_max)`. `one_minus_cos` is `1 - cos_max` computed
+/// without cancellation (the cone's `TraceParams::axis.w`): a narrow cone
+/// ([`NARROW_CONE`]) takes `t = u.x one_minus_cos`, `cos = 1 - t` and `sin = sqrt(t (2 -
+/// t))` from it, so that its directions spread over the whole cone however narrow (from
+/// `cos_max`, whose `1 - cos_max` has cancelled, they fell on a few rings, all on the
+/// axis once `cos_max` rounds to 1); a wider cone keeps `sin = sqrt(1 - cos^2)`. Solid
+/// angle of the cone: [`cone_solid_angle`].
+#[inline]
+pub fn uniform_cone(u: Vec2, cos_max: f32, one_minus_cos: f32) -> Vec3 {
+    let (cos_t, sin_t) = if one_minus_cos < NARROW_CONE {
+        let t = u.x * one_minus_cos;
+        (1.0 - t, (t * (2.0 - t)).max(0.0).sqrt())
+    } else {
+        let cos_t = 1.0 - u.x * (1.0 - cos_max);
+        (cos_t, (1.0 - cos_t * cos_t).max(0.0).sqrt())
+    };
     let phi = std::f32::consts::TAU * u.y;
     Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
 }
@@ -98,10 +137,17 @@ pub fn view_plane_texel_weight(ix: u32, iy: u32, w: u32, h: u32, tan_x: f32, tan
     1.0 / (q * q.sqrt())
 }
 
-/// Solid angle (sr) of a cone with half-angle `acos(cos_max)`.
+/// Solid angle (sr) of a cone with half-angle `acos(cos_max)`, `one_minus_cos` being
+/// `1 - cos_max` computed without cancellation: `2 pi one_minus_cos` for a narrow cone
+/// ([`NARROW_CONE`]), `2 pi (1 - cos_max)` otherwise (the directions [`uniform_cone`]
+/// draws from the same two values cover exactly this cone).
 #[inline]
-pub fn cone_solid_angle(cos_max: f32) -> f32 {
-    std::f32::consts::TAU * (1.0 - cos_max)
+pub fn cone_solid_angle(cos_max: f32, one_minus_cos: f32) -> f32 {
+    if one_minus_cos < NARROW_CONE {
+        std::f32::consts::TAU * one_minus_cos
+    } else {
+        std::f32::consts::TAU * (1.0 - cos_max)
+    }
 }
 
 /// Right-handed orthonormal basis (t, b) completing unit vector `n` (Duff et al. 2017,
@@ -203,10 +249,112 @@ mod tests {
         let cos_max = 0.8f32;
         for i in 0..16 {
             for j in 0..16 {
-                let d = uniform_cone(stratified_cell(i, j, 16, 16, Vec2::splat(0.5)), cos_max);
+                let d = uniform_cone(
+                    stratified_cell(i, j, 16, 16, Vec2::splat(0.5)),
+                    cos_max,
+                    0.2,
+                );
                 assert!(d.z >= cos_max - 1e-6 && (d.length() - 1.0).abs() < 1e-5);
             }
         }
-        assert!((cone_solid_angle(-1.0) - 4.0 * std::f32::consts::PI).abs() < 1e-5);
+        assert!((cone_solid_angle(-1.0, 2.0) - 4.0 * std::f32::consts::PI).abs() < 1e-5);
+    }
+
+    /// `1 - cos` of half-angles from 1e-8 rad to 90 degrees, by squared sine and by angle,
+    /// within 4 ulps of f64; the solid angle within 5; wide cones keep `2 pi (1 - cos_max)`
+    /// bit for bit.
+    #[test]
+    fn narrow_cones_are_measured_without_cancellation() {
+        let ulps = |got: f32, want: f64| {
+            let ulp = 2f64.powi(want.abs().log2().floor() as i32 - 23);
+            (got as f64 - want).abs() / ulp
+        };
+        let n = 2000;
+        for k in 0..=n {
+            // log-spaced half-angles, 1e-8 rad to pi / 2
+            let theta = 1e-8f32 * (std::f32::consts::FRAC_PI_2 / 1e-8).powf(k as f32 / n as f32);
+            let t64 = theta as f64;
+            let want = 2.0 * (0.5 * t64).sin().powi(2);
+            let by_angle = one_minus_cos_of_angle(theta);
+            assert!(
+                ulps(by_angle, want) <= 4.0,
+                "{theta:e}: {by_angle:e} vs {want:e}"
+            );
+            let s2 = theta.sin() * theta.sin();
+            let s2_64 = s2 as f64;
+            let want2 = s2_64 / (1.0 + (1.0 - s2_64).sqrt());
+            let by_sin = cone_one_minus_cos(s2);
+            assert!(
+                ulps(by_sin, want2) <= 4.0,
+                "{theta:e}: {by_sin:e} vs {want2:e}"
+            );
+            let cos_max = theta.cos();
+            let omega = cone_solid_angle(cos_max, by_angle);
+            if by_angle < NARROW_CONE {
+                let exact = std::f64::consts::TAU * want;
+                assert!(
+                    ulps(omega, exact) <= 5.0,
+                    "{theta:e}: {omega:e} vs {exact:e}"
+                );
+            } else {
+                let today = std::f32::consts::TAU * (1.0 - cos_max);
+                assert_eq!(omega.to_bits(), today.to_bits());
+            }
+        }
+        // what the narrow form avoids: at 1e-4 rad the cosine is 1 in f32
+        assert_eq!(1.0 - 1e-4f32.cos(), 0.0);
+        assert!(cone_solid_angle(1e-4f32.cos(), one_minus_cos_of_angle(1e-4)) > 0.0);
+    }
+
+    /// A narrow cone's directions lie inside it, spread over its whole angle (their
+    /// largest angle from the axis within 1% of the half-angle), each of unit length; at
+    /// the threshold both forms agree to the f32 rounding of the wide one.
+    #[test]
+    fn narrow_cone_directions_fill_the_cone() {
+        for theta in [1e-7f32, 1e-5, 1e-3, 0.04] {
+            let h = one_minus_cos_of_angle(theta);
+            assert!(h < NARROW_CONE);
+            let cos_max = theta.cos();
+            let mut widest = 0.0f64;
+            let mut rings = std::collections::BTreeSet::new();
+            for i in 0..32 {
+                for j in 0..32 {
+                    let u = stratified_cell(i, j, 32, 32, Vec2::splat(0.5));
+                    let d = uniform_cone(u, cos_max, h);
+                    assert!((d.length() - 1.0).abs() < 2e-7, "{theta}: {d}");
+                    let sin = (d.x as f64).hypot(d.y as f64);
+                    assert!(
+                        sin <= (theta as f64).sin() * (1.0 + 1e-6),
+                        "{theta}: {sin:e}"
+                    );
+                    widest = widest.max(sin);
+                    rings.insert(sin.to_bits());
+                }
+            }
+            let want = (theta as f64).sin();
+            assert!(
+                widest > 0.99 * want,
+                "{theta}: widest {widest:e} of {want:e}"
+            );
+            assert!(rings.len() >= 32, "{theta}: {} rings", rings.len());
+        }
+        // just above the threshold the wide form: its directions' sines are the exact
+        // ones to its error
+        let theta = 0.046f32;
+        let h = one_minus_cos_of_angle(theta);
+        assert!(h >= NARROW_CONE);
+        for i in 0..16 {
+            let u = Vec2::new((i as f32 + 0.5) / 16.0, 0.3);
+            let wide = uniform_cone(u, theta.cos(), h);
+            let t = u.x as f64 * h as f64;
+            let exact_sin = (t * (2.0 - t)).sqrt();
+            let sin_wide = (wide.x as f64).hypot(wide.y as f64);
+            // sin^2 = 1 - cos^2 off by up to ~3 2^-24, so sin by that over 2 sin
+            let bound = 2.0 * 2f64.powi(-24) / exact_sin + 1e-7;
+            assert!(
+                (sin_wide - exact_sin).abs() < bound,
+                "{i}: {sin_wide} vs {exact_sin}"
+            );
+        }
     }
 }

@@ -180,6 +180,7 @@ const MIN_COSINE: f32 = 0.0001f;
 
 // core::math::sampling
 const PHOTON_TILE: u32 = 8u;
+const NARROW_CONE: f32 = 0.0009765625f;
 
 // core::math::rng::R2_STEP (the R2 sequence's steps, 0.32 fixed point)
 const R2_STEP_X: u32 = 0xc13fa9a9u;

@@ -27,9 +27,19 @@ fn stratified_cell(ix: u32, iy: u32, grid_w: u32, grid_h: u32, jitter: vec2<f32>
 
 // sin and cos: WGSL bounds their error only absolutely (2^-11 on [-pi, pi]); drivers do
 // much better, but not Rust's libm (see prelude.wgsl).
-fn uniform_cone(u: vec2<f32>, cos_max: f32) -> vec3<f32> {
-    let cos_t = 1.0 - u.x * (1.0 - cos_max);
-    let sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+// core::math::sampling::uniform_cone: a narrow cone from 1 - cos_max computed without
+// cancellation (TraceParams::axis.w).
+fn uniform_cone(u: vec2<f32>, cos_max: f32, one_minus_cos: f32) -> vec3<f32> {
+    var cos_t: f32;
+    var sin_t: f32;
+    if (one_minus_cos < NARROW_CONE) {
+        let t = u.x * one_minus_cos;
+        cos_t = 1.0 - t;
+        sin_t = sqrt(max(t * (2.0 - t), 0.0));
+    } else {
+        cos_t = 1.0 - u.x * (1.0 - cos_max);
+        sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    }
     let phi = TAU_F * u.y;
     return vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
 }

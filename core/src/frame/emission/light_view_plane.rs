@@ -38,7 +38,7 @@
 use crate::device::layout::{emission_kind, TraceParams};
 use crate::frame::emission::{emission_domain, EmissionDomain, NoEmission, PointEmission};
 use crate::math::geometry::Aabb;
-use crate::math::sampling::{orthonormal_basis, view_plane_texel_weight};
+use crate::math::sampling::{orthonormal_basis, view_plane_texel_weight, NARROW_CONE};
 use crate::scene::Light;
 use glam::Vec3;
 
@@ -237,11 +237,24 @@ impl LightViewPlane {
 }
 
 /// Perspective plane from `position` along unit `axis` covering the cone of half-angle
-/// `acos(cos_max)` (a square plane whose inscribed circle is the cone).
-fn cone_plane(position: Vec3, axis: Vec3, cos_max: f32, power: Vec3, res: u32) -> LightViewPlane {
+/// `acos(cos_max)` (a square plane whose inscribed circle is the cone); `one_minus_cos`
+/// is `1 - cos_max` computed without cancellation, from which a narrow cone
+/// ([`NARROW_CONE`]) takes its tangent `sqrt(h (2 - h)) / (1 - h)`.
+fn cone_plane(
+    position: Vec3,
+    axis: Vec3,
+    (cos_max, one_minus_cos): (f32, f32),
+    power: Vec3,
+    res: u32,
+) -> LightViewPlane {
     let (u, v) = orthonormal_basis(axis);
-    let c = cos_max.clamp(1e-6, 1.0);
-    let t = (1.0 - c * c).max(0.0).sqrt() / c;
+    let t = if one_minus_cos < NARROW_CONE {
+        let h = one_minus_cos;
+        (h * (2.0 - h)).sqrt() / (1.0 - h)
+    } else {
+        let c = cos_max.clamp(1e-6, 1.0);
+        (1.0 - c * c).max(0.0).sqrt() / c
+    };
     LightViewPlane {
         projection: ViewPlaneProjection::Perspective,
         origin: position,
@@ -322,7 +335,13 @@ fn planes_of_domain(d: &EmissionDomain, light: &Light, res: u32) -> Vec<LightVie
         Light::Point { intensity, .. } | Light::Spot { intensity, .. } => {
             let max_cos = MAX_PLANE_HALF_ANGLE_DEG.to_radians().cos();
             if d.cos_max >= max_cos {
-                vec![cone_plane(d.origin, d.axis, d.cos_max, *intensity, res)]
+                vec![cone_plane(
+                    d.origin,
+                    d.axis,
+                    (d.cos_max, d.one_minus_cos),
+                    *intensity,
+                    res,
+                )]
             } else {
                 let face = ((res as f64 / 6f64.sqrt()).round() as u32).max(1);
                 cube_planes(d.origin, *intensity, face)
@@ -359,7 +378,7 @@ mod tests {
         let p = cone_plane(
             Vec3::ZERO,
             Vec3::Z,
-            60f32.to_radians().cos(),
+            (60f32.to_radians().cos(), 0.5),
             Vec3::ONE,
             256,
         );
@@ -368,6 +387,19 @@ mod tests {
         // midpoint rule: (h^2 / 8)(1 + 2 r^2) with h = 2t / 256 at r <= sqrt(2) t: 3e-4 at
         // the corners, far less on average
         assert!(rel < 2e-5, "relative error {rel}");
+    }
+
+    /// A narrow cone's plane has the cone's tangent within a few ulps (from `1 - cos`;
+    /// the cosine alone rounds to 1 at 1e-4 rad and gave a plane of no extent).
+    #[test]
+    fn a_narrow_cone_plane_has_the_cones_tangent() {
+        for theta in [1e-7f32, 1e-4, 0.01, 0.04] {
+            let h = crate::math::sampling::one_minus_cos_of_angle(theta);
+            let p = cone_plane(Vec3::ZERO, Vec3::Z, (theta.cos(), h), Vec3::ONE, 8);
+            let want = (theta as f64).tan();
+            let rel = (p.half_extent.0 as f64 - want).abs() / want;
+            assert!(rel < 1e-6, "{theta:e}: {} vs {want:e}", p.half_extent.0);
+        }
     }
 
     #[test]
@@ -389,7 +421,8 @@ mod tests {
 
     #[test]
     fn rows_run_down_and_columns_right_as_in_001() {
-        let p = cone_plane(Vec3::ZERO, Vec3::Z, 45f32.to_radians().cos(), Vec3::ONE, 8);
+        let c = 45f32.to_radians().cos();
+        let p = cone_plane(Vec3::ZERO, Vec3::Z, (c, 1.0 - c), Vec3::ONE, 8);
         let top_left = p.texel_direction(0, 0);
         let bottom_right = p.texel_direction(7, 7);
         assert!(top_left.dot(p.u) < 0.0 && top_left.dot(p.v) > 0.0);

@@ -19,7 +19,9 @@
 
 use crate::device::layout::emission_kind;
 use crate::math::geometry::Aabb;
-use crate::math::sampling::{cone_solid_angle, orthonormal_basis};
+use crate::math::sampling::{
+    cone_one_minus_cos, cone_solid_angle, one_minus_cos_of_angle, orthonormal_basis, NARROW_CONE,
+};
 use crate::scene::Light;
 use glam::Vec3;
 
@@ -46,6 +48,10 @@ pub struct EmissionDomain {
     pub axis: Vec3,
     /// Cosine of the cone's half-angle (-1: the whole sphere; 1 for rectangles).
     pub cos_max: f32,
+    /// `1 - cos_max` computed without cancellation (2 for the whole sphere, 0 for
+    /// rectangles): what a narrow cone is sampled and measured from
+    /// ([`NARROW_CONE`](crate::math::sampling::NARROW_CONE)).
+    pub one_minus_cos: f32,
     /// First rectangle edge (world space, scene units; zero for cones).
     pub rect_u: Vec3,
     /// Second rectangle edge (world space, scene units; zero for cones).
@@ -83,7 +89,7 @@ impl EmissionDomain {
             seed,
             max_bounces,
             origin: self.origin.extend(self.cos_max).to_array(),
-            axis: self.axis.extend(0.0).to_array(),
+            axis: self.axis.extend(self.one_minus_cos).to_array(),
             rect_u: self.rect_u.extend(0.0).to_array(),
             rect_v: self.rect_v.extend(0.0).to_array(),
             photon_flux: (self.flux / per_light as f32)
@@ -135,23 +141,70 @@ impl NoEmission {
     }
 }
 
-/// Cone from `apex` that bounds the sphere around `casters` (axis, cosine of the half
-/// angle), or `None` when `apex` is inside that sphere.
-fn caster_cone(apex: Vec3, casters: Aabb) -> Option<(Vec3, f32)> {
+/// A cone's half-angle as its cosine and `1 - cos` computed without cancellation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Cone {
+    cos_max: f32,
+    one_minus_cos: f32,
+}
+
+impl Cone {
+    /// The whole sphere of directions.
+    const SPHERE: Cone = Cone {
+        cos_max: -1.0,
+        one_minus_cos: 2.0,
+    };
+
+    /// A spot light's outer cone, `outer_angle_deg` its half-angle in degrees.
+    fn spot(outer_angle_deg: f32) -> Cone {
+        let a = outer_angle_deg.to_radians();
+        Cone {
+            cos_max: a.cos(),
+            one_minus_cos: one_minus_cos_of_angle(a),
+        }
+    }
+
+    /// The half-angle in radians: `acos(cos_max)`, or for a narrow cone, whose cosine
+    /// has cancelled, `2 asin(sqrt(one_minus_cos / 2))`.
+    fn half_angle(self) -> f32 {
+        if self.one_minus_cos < NARROW_CONE {
+            2.0 * (0.5 * self.one_minus_cos).sqrt().asin()
+        } else {
+            self.cos_max.acos()
+        }
+    }
+}
+
+/// Cone from `apex` that bounds the sphere around `casters` (axis, half-angle), or `None`
+/// when `apex` is inside that sphere. Its `1 - cos` comes from the squared sine `(r /
+/// d)^2`, exact where the cosine has cancelled (a far light, a small caster).
+fn caster_cone(apex: Vec3, casters: Aabb) -> Option<(Vec3, Cone)> {
     let c = casters.center();
     let r = 0.5 * casters.diagonal();
     let to = c - apex;
     let dist = to.length();
-    (dist > r * 1.0001).then(|| (to / dist, (1.0 - (r / dist).powi(2)).max(0.0).sqrt()))
+    (dist > r * 1.0001).then(|| {
+        let sin2 = (r / dist).powi(2);
+        let cone = Cone {
+            cos_max: (1.0 - sin2).max(0.0).sqrt(),
+            one_minus_cos: cone_one_minus_cos(sin2),
+        };
+        (to / dist, cone)
+    })
 }
 
-fn cone_domain(position: Vec3, intensity: Vec3, axis: Vec3, cos_max: f32) -> EmissionDomain {
-    let omega = cone_solid_angle(cos_max);
+fn cone_domain(position: Vec3, intensity: Vec3, axis: Vec3, cone: Cone) -> EmissionDomain {
+    let Cone {
+        cos_max,
+        one_minus_cos,
+    } = cone;
+    let omega = cone_solid_angle(cos_max, one_minus_cos);
     EmissionDomain {
         kind: emission_kind::CONE,
         origin: position,
         axis,
         cos_max,
+        one_minus_cos,
         rect_u: Vec3::ZERO,
         rect_v: Vec3::ZERO,
         measure: omega,
@@ -191,6 +244,7 @@ fn rectangle_domain(
         origin: t * s0 + b * u0 + d * h0,
         axis: d,
         cos_max: 1.0,
+        one_minus_cos: 0.0,
         rect_u,
         rect_v,
         measure: area,
@@ -211,7 +265,7 @@ pub fn unpruned_domain(light: &Light, scene: Aabb) -> Option<EmissionDomain> {
         Light::Point {
             position,
             intensity,
-        } => Some(cone_domain(*position, *intensity, Vec3::Z, -1.0)),
+        } => Some(cone_domain(*position, *intensity, Vec3::Z, Cone::SPHERE)),
         Light::Spot {
             position,
             direction,
@@ -222,7 +276,7 @@ pub fn unpruned_domain(light: &Light, scene: Aabb) -> Option<EmissionDomain> {
             *position,
             *intensity,
             direction.normalize(),
-            outer_angle_deg.to_radians().cos(),
+            Cone::spot(*outer_angle_deg),
         )),
         Light::Directional {
             direction,
@@ -258,10 +312,10 @@ pub fn emission_domain(
             position,
             intensity,
         } => Ok(match caster_cone(*position, casters) {
-            Some((axis, cos_max)) if point == PointEmission::CasterCone => {
-                cone_domain(*position, *intensity, axis, cos_max)
+            Some((axis, cone)) if point == PointEmission::CasterCone => {
+                cone_domain(*position, *intensity, axis, cone)
             }
-            _ => cone_domain(*position, *intensity, Vec3::Z, -1.0),
+            _ => cone_domain(*position, *intensity, Vec3::Z, Cone::SPHERE),
         }),
         Light::Spot {
             position,
@@ -271,25 +325,29 @@ pub fn emission_domain(
             ..
         } => {
             let spot_axis = direction.normalize();
-            let cos_spot = outer_angle_deg.to_radians().cos();
-            let Some((axis, cos_caster)) = caster_cone(*position, casters) else {
+            let spot = Cone::spot(*outer_angle_deg);
+            let Some((axis, caster)) = caster_cone(*position, casters) else {
                 // the light is among the casters: its whole cone may meet one
-                return Ok(cone_domain(*position, *intensity, spot_axis, cos_spot));
+                return Ok(cone_domain(*position, *intensity, spot_axis, spot));
             };
             // Cones miss when the angle between the axes exceeds the sum of the half
             // angles (with a 1e-3 rad margin for f32 acos; a near miss emits).
             let between = spot_axis.dot(axis).clamp(-1.0, 1.0).acos();
-            if between > cos_spot.acos() + cos_caster.acos() + 1e-3 {
+            if between > spot.half_angle() + caster.half_angle() + 1e-3 {
                 return Err(NoEmission::MissesCasters);
             }
-            // Both cones hold every photon that can meet a caster: use the narrower.
-            Ok(
-                if point == PointEmission::CasterCone && cos_caster > cos_spot {
-                    cone_domain(*position, *intensity, axis, cos_caster)
-                } else {
-                    cone_domain(*position, *intensity, spot_axis, cos_spot)
-                },
-            )
+            // Both cones hold every photon that can meet a caster: use the narrower (by
+            // `1 - cos`, which tells narrow cones apart where both cosines round to 1).
+            let caster_narrower = if spot.one_minus_cos.max(caster.one_minus_cos) < NARROW_CONE {
+                caster.one_minus_cos < spot.one_minus_cos
+            } else {
+                caster.cos_max > spot.cos_max
+            };
+            Ok(if point == PointEmission::CasterCone && caster_narrower {
+                cone_domain(*position, *intensity, axis, caster)
+            } else {
+                cone_domain(*position, *intensity, spot_axis, spot)
+            })
         }
         Light::Directional {
             direction,
@@ -364,7 +422,7 @@ mod tests {
         // caster sphere radius sqrt(3)/2 at distance 4
         let want = (1.0 - (0.75f32 / 16.0)).sqrt();
         assert!((d.cos_max - want).abs() < 1e-6, "{}", d.cos_max);
-        assert!((d.flux.x - cone_solid_angle(want)).abs() < 1e-6);
+        assert!((d.flux.x - cone_solid_angle(want, 1.0 - want)).abs() < 1e-6);
         // a narrow spot keeps its own cone
         let d = emission_domain(
             &spot(-Vec3::Y, 5.0),
@@ -374,6 +432,122 @@ mod tests {
         )
         .unwrap();
         assert!((d.cos_max - 5f32.to_radians().cos()).abs() < 1e-6);
+    }
+
+    /// A far point light whose intensity grows as `d^2` sends the same flux into the
+    /// caster cone at every distance (`I Omega -> pi r^2 I / d^2`), within a few ulps of
+    /// the f64 value, where `2 pi (1 - cos_max)` cancelled (+8% at `d = 1000` radii, x6 at
+    /// 5000, zero from 20000); a caster a millionth of the unit four units away emits as
+    /// the unit one does, scaled. The trace's parameters carry the same `1 - cos`.
+    #[test]
+    fn caster_cone_flux_of_a_far_light_falls_as_the_inverse_square() {
+        let r = 0.5 * ball().diagonal();
+        let exact = |d: f32, i: f32| {
+            // the f32 distance and radius as the cone sees them, the rest in f64
+            let x = (r as f64 / d as f64).powi(2);
+            i as f64 * std::f64::consts::TAU * x / (1.0 + (1.0 - x).sqrt())
+        };
+        let far = std::f64::consts::PI * (r as f64).powi(2);
+        for d in [40.0f32, 100.0, 1e3, 5e3, 2e4, 1e5, 1e6, 1e7, 1e9] {
+            let i = d * d;
+            let light = Light::Point {
+                position: Vec3::new(0.0, d, 0.0),
+                intensity: Vec3::splat(i),
+            };
+            let e = emission_domain(&light, ball(), ball(), PointEmission::CasterCone).unwrap();
+            let f = e.flux.x as f64;
+            let rel = (f - exact(d, i)).abs() / exact(d, i);
+            assert!(
+                rel < 6e-7,
+                "d {d}: flux {f:e}, exact {:e}, rel {rel:e}",
+                exact(d, i)
+            );
+            // the same flux at every distance: pi r^2 (times 1 + x/4 + ...)
+            assert!(
+                (f - far).abs() / far < 1e-3 * (40.0 / d as f64).powi(2) + 6e-7,
+                "d {d}"
+            );
+            assert_eq!(e.axis, -Vec3::Y);
+            let p = e.trace_params(0, (4, 4), (0, 16), 1, 1, 0.0, 1.0);
+            assert_eq!(p.axis[3], e.one_minus_cos);
+            assert_eq!(p.origin[3], e.cos_max);
+        }
+        let tiny = Aabb {
+            min: Vec3::splat(-0.5e-6),
+            max: Vec3::splat(0.5e-6),
+        };
+        let light = Light::Point {
+            position: Vec3::new(0.0, 4.0, 0.0),
+            intensity: Vec3::ONE,
+        };
+        let e = emission_domain(&light, tiny, ball(), PointEmission::CasterCone).unwrap();
+        let x = (0.5 * tiny.diagonal() as f64 / 4.0).powi(2);
+        let want = std::f64::consts::TAU * x / (1.0 + (1.0 - x).sqrt());
+        assert!(
+            ((e.flux.x as f64 - want) / want).abs() < 6e-7,
+            "{e:?}, want {want:e}"
+        );
+    }
+
+    /// Wide cones keep today's solid angle bit for bit; a spot narrower than 2.5 degrees
+    /// gets its solid angle without cancellation and, aimed at a narrower caster cone,
+    /// emits into the narrower one even where both cosines round to 1.
+    #[test]
+    fn narrow_cones_get_their_solid_angle_without_cancellation() {
+        let wide = |d: &EmissionDomain| std::f32::consts::TAU * (1.0 - d.cos_max);
+        let d = emission_domain(
+            &spot(-Vec3::Y, 80.0),
+            ball(),
+            ball(),
+            PointEmission::CasterCone,
+        )
+        .unwrap();
+        assert_eq!(d.measure.to_bits(), wide(&d).to_bits());
+        for outer in [20.0f32, 5.0, 180.0] {
+            let d = unpruned_domain(&spot(-Vec3::Y, outer), ball()).unwrap();
+            assert_eq!(d.measure.to_bits(), wide(&d).to_bits(), "{outer}");
+        }
+        let d = unpruned_domain(
+            &Light::Point {
+                position: Vec3::ZERO,
+                intensity: Vec3::ONE,
+            },
+            ball(),
+        )
+        .unwrap();
+        assert_eq!(d.measure, 2.0 * std::f32::consts::TAU);
+        // narrow spots: 4 pi sin^2(theta / 2)
+        for outer in [1.0f32, 0.1, 1e-3, 1e-5] {
+            let d = unpruned_domain(&spot(-Vec3::Y, outer), ball()).unwrap();
+            let t = (outer as f64).to_radians();
+            let want = 2.0 * std::f64::consts::TAU * (0.5 * t).sin().powi(2);
+            let rel = (d.measure as f64 - want).abs() / want;
+            assert!(rel < 1e-6, "{outer} deg: {:e} vs {want:e}", d.measure);
+        }
+        // a 1e-3 degree spot on a ball 1e5 away (caster cone 5e-4 degrees): both cosines
+        // are 1 in f32; the caster cone is the narrower
+        let far_spot = |direction: Vec3| Light::Spot {
+            position: Vec3::new(0.0, 1e5, 0.0),
+            direction,
+            intensity: Vec3::ONE,
+            inner_angle_deg: 0.0,
+            outer_angle_deg: 1e-3,
+        };
+        let d = emission_domain(
+            &far_spot(-Vec3::Y),
+            ball(),
+            ball(),
+            PointEmission::CasterCone,
+        )
+        .unwrap();
+        assert_eq!(d.cos_max, 1.0);
+        let x = (0.5 * ball().diagonal() as f64 / 1e5).powi(2);
+        let want = std::f64::consts::TAU * x / (1.0 + (1.0 - x).sqrt());
+        assert!(((d.measure as f64 - want) / want).abs() < 1e-6, "{d:?}");
+        // and aimed 1 degree away it misses
+        let aside = Vec3::new(1f32.to_radians().tan(), -1.0, 0.0);
+        let e = emission_domain(&far_spot(aside), ball(), ball(), PointEmission::CasterCone);
+        assert_eq!(e, Err(NoEmission::MissesCasters));
     }
 
     #[test]

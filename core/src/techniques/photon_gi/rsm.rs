@@ -122,7 +122,8 @@ pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
     let measure = match (l.kind, faces.first()) {
         (light_kind::POINT, _) => 4.0 * std::f64::consts::PI,
         (light_kind::SPOT, _) => {
-            crate::math::sampling::cone_solid_angle(l.cos_outer.clamp(-1.0, 1.0)) as f64
+            let c = l.cos_outer.clamp(-1.0, 1.0);
+            crate::math::sampling::cone_solid_angle(c, 1.0 - c) as f64
         }
         // an orthographic face's half-extents are its negated tangents (GpuCamera::orthographic)
         (light_kind::DIRECTIONAL, Some(f)) => {
@@ -138,7 +139,7 @@ pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
 fn light_power(l: &GpuLight) -> f64 {
     let i = luminance(Vec3::from_slice(&l.intensity[..3])).max(0.0) as f64;
     let omega = if l.kind == light_kind::SPOT {
-        crate::math::sampling::cone_solid_angle(l.cos_outer) as f64
+        crate::math::sampling::cone_solid_angle(l.cos_outer, 1.0 - l.cos_outer) as f64
     } else {
         4.0 * std::f64::consts::PI
     };
