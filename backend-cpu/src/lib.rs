@@ -54,6 +54,12 @@ impl CpuBackend {
     pub fn with_threads(threads: usize) -> Result<CpuBackend, BackendError> {
         CpuBackend::open(threads)
     }
+
+    /// How many buffers the backend holds now (made and not yet freed): what a leak check
+    /// counts once every technique on it is freed.
+    pub fn buffer_count(&self) -> usize {
+        self.buffers.len()
+    }
 }
 
 /// `submit` and `poll` are the trait's defaults (`submission.rs`).

@@ -1,5 +1,6 @@
 //! glTF 2.0 scenes in and out (the `gltf` feature): [`load_gltf`] reads `.gltf` (buffers
-//! embedded as data URIs or in files beside it) and `.glb` into a [`Scene`] with the
+//! embedded as data URIs or in files beside or below it: a URI that is an absolute path
+//! or climbs out of its folder is refused) and `.glb` into a [`Scene`] with the
 //! warnings of what caustica cannot represent; [`scene_to_gltf`] writes any scene as a
 //! self-contained `.gltf` (one embedded buffer), so caustica's scenes open in other tools.
 //!
@@ -70,7 +71,7 @@ use caustica_core::scene::{
 use glam::{DMat3, Mat3, Mat4, Quat, Vec2, Vec3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Luminous efficacy (lm/W) assumed to turn glTF's photometric light units into watts:
 /// 683, the definition of the candela (see the module doc).
@@ -158,8 +159,8 @@ fn located(file: &str, reason: String) -> SceneFileError {
 }
 
 /// Parses glTF (JSON or GLB bytes) into a scene named `name`; `file` names the source in
-/// errors and warnings, `dir` is where relative buffer URIs are looked up (none: only
-/// embedded buffers).
+/// errors and warnings, `dir` is where relative buffer URIs are looked up, never outside
+/// it (none: only embedded buffers).
 pub fn parse_gltf(
     bytes: &[u8],
     file: &str,
@@ -307,11 +308,21 @@ fn resolve_buffers(doc: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Vec<u8>>,
                     })?;
                     if uri.contains("://") {
                         return Err(format!(
-                            "buffers[{}]: '{uri}' is a remote URI; caustica reads files \
+                            "buffers[{}]: '{}' is a remote URI; caustica reads files \
                              beside the glTF file and data: URIs",
-                            b.index()
+                            b.index(),
+                            printable(uri)
                         ));
                     }
+                    let p = file_in_folder(dir, uri).map_err(|why| {
+                        format!(
+                            "buffers[{}]: '{}' {why}; caustica reads only files beside or \
+                             below the glTF file: put the .bin beside the .gltf and name it \
+                             by a relative path such as 'scene.bin'",
+                            b.index(),
+                            printable(uri)
+                        )
+                    })?;
                     if b.length() as u64 > MAX_BUFFER_BYTES {
                         return Err(format!(
                             "buffers[{}] declares {} bytes, more than the {} GiB a buffer may \
@@ -321,7 +332,6 @@ fn resolve_buffers(doc: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Vec<u8>>,
                             MAX_BUFFER_BYTES >> 30
                         ));
                     }
-                    let p = dir.join(percent_decode(uri));
                     // at most the declared length: a pipe or /dev/zero stops there
                     let read = std::fs::File::open(&p).and_then(|f| {
                         let mut data = Vec::new();
@@ -348,6 +358,47 @@ fn resolve_buffers(doc: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Vec<u8>>,
         out.push(data);
     }
     Ok(out)
+}
+
+/// The file that the relative URI `uri` of an external buffer names in the glTF file's
+/// folder `dir`, or why it names none there (the caller says which buffer).
+///
+/// The URI is judged after percent-decoding (`%2e%2e/` is `../`), with both `/` and `\`
+/// as separators, so that a file names the same file on every system: a leading
+/// separator (`/etc/passwd`, `\\server\share`) or a Windows drive (`C:`, in any segment)
+/// is an absolute path, a first segment with a colon (`file:`) is a URI scheme, and
+/// `..` is refused where it would climb above `dir`. The segments are normalised, not
+/// looked up: empty and `.` segments are skipped and `a/../b.bin`, which stays inside,
+/// is `dir/b.bin`. Symbolic links under `dir` are followed as they are (made by the
+/// folder's owner, not by the file).
+fn file_in_folder(dir: &Path, uri: &str) -> Result<PathBuf, &'static str> {
+    let decoded = percent_decode(uri);
+    if decoded.starts_with(['/', '\\']) {
+        return Err("is an absolute path");
+    }
+    let mut segments: Vec<&str> = Vec::new();
+    for (k, segment) in decoded.split(['/', '\\']).enumerate() {
+        let b = segment.as_bytes();
+        if b.len() >= 2 && b[0].is_ascii_alphabetic() && b[1] == b':' {
+            return Err("is an absolute path (a Windows drive)");
+        }
+        if k == 0 && segment.contains(':') {
+            return Err("has a URI scheme, not a relative path");
+        }
+        match segment {
+            "" | "." => {}
+            ".." => {
+                if segments.pop().is_none() {
+                    return Err("leaves the folder of the glTF file");
+                }
+            }
+            s => segments.push(s),
+        }
+    }
+    if segments.is_empty() {
+        return Err("names no file");
+    }
+    Ok(segments.iter().fold(dir.to_path_buf(), |p, s| p.join(s)))
 }
 
 /// Most bytes an external buffer may declare: 4 GiB, more than the largest import
@@ -1672,14 +1723,17 @@ fn base64_decode(s: &str) -> Option<Vec<u8>> {
     Some(out)
 }
 
+/// `s` with each `%XX` (two hex digits) replaced by its byte, read as UTF-8 (a byte
+/// that is not, as U+FFFD); a `%` without two hex digits after it is kept.
 fn percent_decode(s: &str) -> String {
+    let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
     while i < b.len() {
         if b[i] == b'%' && i + 2 < b.len() {
-            if let Ok(v) = u8::from_str_radix(&s[i + 1..i + 3], 16) {
-                out.push(v);
+            if let (Some(hi), Some(lo)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push(hi << 4 | lo);
                 i += 3;
                 continue;
             }
@@ -1722,5 +1776,154 @@ mod tests {
         assert_eq!(percent_decode("a%20b.bin"), "a b.bin");
         assert_eq!(percent_decode("plain.bin"), "plain.bin");
         assert_eq!(percent_decode("bad%2"), "bad%2");
+        assert_eq!(percent_decode("%2e%2E%2f"), "../");
+        // a `%` before a character of several bytes is kept, not sliced through
+        assert_eq!(percent_decode("%a\u{e9}.bin"), "%a\u{e9}.bin");
+        assert_eq!(percent_decode("%\u{e9}"), "%\u{e9}");
+        assert_eq!(percent_decode("%+1x"), "%+1x");
+    }
+
+    /// A glTF document whose one buffer is the file `uri` (a triangle in y = 0: positions,
+    /// normals and UVs, UNSIGNED_SHORT indices), and that buffer's bytes.
+    fn external_buffer_gltf(uri: &str) -> (String, Vec<u8>) {
+        let mut bin = Vec::new();
+        let floats: [f32; 24] = [
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, // positions
+            0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, // normals
+            0.0, 0.0, 1.0, 0.0, 0.0, 1.0, // uvs
+        ];
+        for f in floats {
+            bin.extend(f.to_le_bytes());
+        }
+        for i in [0u16, 2, 1, 0] {
+            bin.extend(i.to_le_bytes()); // the last one pads to 4 bytes
+        }
+        let doc = json!({
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{
+                "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2},
+                "indices": 3
+            }]}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]},
+                {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"},
+                {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC2"},
+                {"bufferView": 3, "componentType": 5123, "count": 3, "type": "SCALAR"}
+            ],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                {"buffer": 0, "byteOffset": 36, "byteLength": 36},
+                {"buffer": 0, "byteOffset": 72, "byteLength": 24},
+                {"buffer": 0, "byteOffset": 96, "byteLength": 6}
+            ],
+            "buffers": [{"byteLength": bin.len(), "uri": uri}]
+        });
+        (doc.to_string(), bin)
+    }
+
+    /// A fresh folder `<temp>/caustica-gltf-uri-<pid>-<name>` with a `gltf` folder in it.
+    fn uri_test_folder(name: &str) -> std::path::PathBuf {
+        let root =
+            std::env::temp_dir().join(format!("caustica-gltf-uri-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(root.join("gltf")).unwrap();
+        root
+    }
+
+    /// A buffer URI that is an absolute path or that climbs out of the glTF file's folder
+    /// is refused with the buffer named, even where the file it names is there and holds
+    /// a good buffer (`secret.bin`, beside the glTF file's folder).
+    #[test]
+    fn buffer_uris_outside_the_folder_are_refused() {
+        let root = uri_test_folder("outside");
+        let secret = root.join("secret.bin");
+        let (_, bin) = external_buffer_gltf("");
+        std::fs::write(&secret, &bin).unwrap();
+        let absolute = secret.to_string_lossy().replace('%', "%25");
+        let cases: &[(&str, &str)] = &[
+            (&absolute, "absolute path"),
+            ("/etc/passwd", "absolute path"),
+            ("\\\\server\\share\\secret.bin", "absolute path"),
+            ("%2Fetc%2Fpasswd", "absolute path"),
+            ("C:\\secret.bin", "Windows drive"),
+            ("c:/secret.bin", "Windows drive"),
+            ("C:secret.bin", "Windows drive"),
+            ("sub/D:/secret.bin", "Windows drive"),
+            ("file:secret.bin", "URI scheme"),
+            ("../secret.bin", "leaves the folder"),
+            ("..\\secret.bin", "leaves the folder"),
+            ("%2e%2e/secret.bin", "leaves the folder"),
+            ("%2E%2E%2Fsecret.bin", "leaves the folder"),
+            ("sub/../../secret.bin", "leaves the folder"),
+            ("./sub/..\\..\\gltf/../secret.bin", "leaves the folder"),
+            ("", "names no file"),
+            ("sub/..", "names no file"),
+        ];
+        for (uri, why) in cases {
+            let (doc, _) = external_buffer_gltf(uri);
+            let path = root.join("gltf").join("scene.gltf");
+            std::fs::write(&path, doc).unwrap();
+            let e = match load_gltf(&path) {
+                Ok(_) => panic!("{uri:?}: read, expected '{why}'"),
+                Err(e) => e.to_string(),
+            };
+            assert!(e.contains("buffers[0]: '"), "{uri:?}: {e}");
+            assert!(e.contains(why), "{uri:?}: '{why}' missing in: {e}");
+            assert!(
+                e.contains("put the .bin beside the .gltf"),
+                "{uri:?}: no remedy in: {e}"
+            );
+            assert!(!e.contains('\n'), "{uri:?}: not one line: {e}");
+        }
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    /// Relative URIs beside or below the glTF file still load, percent-encoded or not,
+    /// and with `..` that stays inside.
+    #[test]
+    fn buffer_uris_beside_and_below_the_file_load() {
+        let root = uri_test_folder("inside");
+        let dir = root.join("gltf");
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        for (uri, file) in [
+            ("scene.bin", "scene.bin"),
+            ("./scene.bin", "scene.bin"),
+            ("sub/scene.bin", "sub/scene.bin"),
+            ("sub\\scene.bin", "sub/scene.bin"),
+            ("sub%2Fscene.bin", "sub/scene.bin"),
+            ("a/../scene.bin", "scene.bin"),
+            ("sub//x/..//scene.bin", "sub/scene.bin"),
+            ("my%20scene.bin", "my scene.bin"),
+        ] {
+            let (doc, bin) = external_buffer_gltf(uri);
+            std::fs::write(dir.join(file), &bin).unwrap();
+            let path = dir.join("scene.gltf");
+            std::fs::write(&path, doc).unwrap();
+            let im = load_gltf(&path).unwrap_or_else(|e| panic!("{uri:?}: {e}"));
+            assert_eq!(im.scene.objects.len(), 1, "{uri:?}");
+            std::fs::remove_file(dir.join(file)).unwrap();
+        }
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    #[test]
+    fn uri_segments_are_normalised_inside_the_folder() {
+        let dir = Path::new("base");
+        assert_eq!(
+            file_in_folder(dir, "a/./b//c.bin"),
+            Ok(dir.join("a").join("b").join("c.bin"))
+        );
+        assert_eq!(
+            file_in_folder(dir, "a/b/../../c.bin"),
+            Ok(dir.join("c.bin"))
+        );
+        assert_eq!(
+            file_in_folder(dir, "a/b/../../../c.bin"),
+            Err("leaves the folder of the glTF file")
+        );
     }
 }

@@ -1,7 +1,7 @@
 //! Writing frames: linear EXR for data, tone-mapped sRGB PNG for looking, JSON stats.
 
 use caustica_core::frame::image::{tone_map, Image};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Reads the first RGBA layer of an OpenEXR file as a linear f32 image (what
 /// [`write_exr`] writes).
@@ -123,6 +123,33 @@ pub fn check_writable(dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// The names, sorted, of the files in the folder `dir` that a run did not write: every
+/// regular file directly in `dir` whose name is not the file name of one of `written`
+/// (the paths the run wrote there). Subfolders, symbolic links and hidden files (a name
+/// starting with `.`, such as [`write_whole`]'s partial files) are not counted, and
+/// nothing is removed (the folder is the user's): the caller says that these files are
+/// there, so that an earlier run's outputs are not taken for this run's. The error is the
+/// operating system's, listing `dir`.
+pub fn files_not_written(dir: &Path, written: &[PathBuf]) -> std::io::Result<Vec<String>> {
+    let mut stale = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let name = entry.file_name();
+        let regular = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
+        if !regular
+            || name.as_encoded_bytes().starts_with(b".")
+            || written
+                .iter()
+                .any(|w| w.file_name() == Some(name.as_os_str()))
+        {
+            continue;
+        }
+        stale.push(name.to_string_lossy().into_owned());
+    }
+    stale.sort();
+    Ok(stale)
+}
+
 /// Writes a tone-mapped 8-bit sRGB PNG.
 pub fn write_png(path: &Path, img: &Image, exposure: f32) -> Result<(), String> {
     let mut buf = image::RgbImage::new(img.width, img.height);
@@ -209,6 +236,44 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), b"second");
         let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
         assert_eq!(left.len(), 1, "a partial file was left: {left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Only regular, visible files that the run did not write are named, sorted; the
+    /// folder is left as it was.
+    #[test]
+    fn files_not_written_are_the_earlier_runs() {
+        let dir = std::env::temp_dir().join(format!("caustica-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("references")).unwrap();
+        std::fs::write(dir.join("references").join("old.exr"), b"").unwrap();
+        for name in [
+            "sphere_composite.exr",
+            "sphere_composite.png",
+            "stats.json",
+            "sphere_caustic_atlas.exr",
+            "cornell_composite.exr",
+            ".partial-1-0-x.exr",
+            ".DS_Store",
+        ] {
+            std::fs::write(dir.join(name), b"").unwrap();
+        }
+        let written: Vec<PathBuf> = ["sphere_composite.exr", "sphere_composite.png", "stats.json"]
+            .iter()
+            .map(|n| dir.join(n))
+            .collect();
+        assert_eq!(
+            files_not_written(&dir, &written).unwrap(),
+            ["cornell_composite.exr", "sphere_caustic_atlas.exr"]
+        );
+        // everything was written: nothing to say; nothing was removed
+        let mut all = written.clone();
+        all.extend(["sphere_caustic_atlas.exr", "cornell_composite.exr"].map(|n| dir.join(n)));
+        assert!(files_not_written(&dir, &all).unwrap().is_empty());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 8);
+        assert!(dir.join("references").join("old.exr").exists());
+        // a folder that cannot be listed is an error, not a panic
+        assert!(files_not_written(&dir.join("missing"), &written).is_err());
         let _ = std::fs::remove_dir_all(&dir);
     }
 

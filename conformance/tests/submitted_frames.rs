@@ -432,3 +432,79 @@ fn frames_run_in_the_order_recorded_or_the_next_one_says_why() {
     assert!(e.contains("frame 1 was submitted while frame 0"), "{e}");
     t.free(&mut b).expect("free");
 }
+
+/// An update made while a recorded frame waits to be submitted must not run ahead of it:
+/// a new light count is queued behind the frame (its old light buffer, which the frame
+/// uses, freed after it), and the next frame equals a fresh technique's bitwise; an update
+/// that must run on the device at once (making the technique's buffers anew) is refused
+/// until the frame is submitted, and goes through afterwards.
+#[test]
+fn updates_never_run_ahead_of_a_recorded_frame() {
+    let mut b = caustica_cpu::CpuBackend::new().expect("cpu");
+    let scene = small("sphere");
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64 });
+    let mut t = create("sspm", &mut b, &scene, &settings).expect("create");
+    let waiting = t.record_frame(&mut b).expect("record");
+    let mut more = scene.clone();
+    more.lights.push(Light::Point {
+        position: Vec3::new(-0.8, 2.5, 0.4),
+        intensity: Vec3::splat(3.0),
+    });
+    t.set_lights(&mut b, &more.lights)
+        .expect("a new light count waits for the recorded frame");
+    let other = serde_json::json!({ "photons_w": 32, "photons_h": 32 });
+    let e = t
+        .set_settings(&mut b, &other)
+        .expect_err("buffers the recorded frame uses")
+        .to_string();
+    assert!(e.contains("submit the recorded frames first"), "{e}");
+    waiting
+        .submit(&mut b)
+        .expect("the recorded frame runs with its own lights")
+        .stats(&mut b, true)
+        .expect("stats");
+    t.frame(&mut b, &mut |_| {}).expect("frame");
+    let mut fresh = create("sspm", &mut b, &more, &settings).expect("fresh");
+    fresh.frame(&mut b, &mut |_| {}).expect("fresh frame");
+    assert!(
+        outputs(t.as_ref(), &mut b) == outputs(fresh.as_ref(), &mut b),
+        "two lights after a recorded frame differ from a fresh technique's"
+    );
+    t.set_settings(&mut b, &other)
+        .expect("once the frame is submitted");
+    t.frame(&mut b, &mut |_| {}).expect("frame");
+    t.free(&mut b).expect("free");
+    fresh.free(&mut b).expect("free");
+}
+
+/// CausticMap lays its atlas out anew after a receiver moves, with the next frame; made
+/// anew before that frame (new settings), it does not run that stale work into buffers
+/// it freed (which made them again, never to be freed): the frame equals a fresh
+/// technique's over the moved scene, bitwise, and nothing is left once both are freed.
+#[test]
+fn work_deferred_into_a_freed_technique_is_dropped() {
+    let mut b = caustica_cpu::CpuBackend::new().expect("cpu");
+    let mut scene = small("sphere");
+    scene.objects[0].transform = Some(Transform::IDENTITY);
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64, "atlas_size": 128 });
+    let mut t = create("caustic-map", &mut b, &scene, &settings).expect("create");
+    t.frame(&mut b, &mut |_| {}).expect("frame");
+    let lifted = Transform::from_translation(Vec3::new(0.0, 0.05, 0.0));
+    t.set_object_transforms(&mut b, &[(0, lifted)])
+        .expect("the receiver moves");
+    let other = serde_json::json!({ "photons_w": 48, "photons_h": 48, "atlas_size": 128 });
+    t.set_settings(&mut b, &other).expect("new settings");
+    t.frame(&mut b, &mut |_| {})
+        .expect("the frame after the technique was made anew");
+    let mut moved = scene.clone();
+    moved.objects[0].transform = Some(lifted);
+    let mut fresh = create("caustic-map", &mut b, &moved, &other).expect("fresh");
+    fresh.frame(&mut b, &mut |_| {}).expect("fresh frame");
+    assert!(
+        outputs(t.as_ref(), &mut b) == outputs(fresh.as_ref(), &mut b),
+        "differs from a fresh technique over the moved scene"
+    );
+    t.free(&mut b).expect("free");
+    fresh.free(&mut b).expect("free");
+    assert_eq!(b.buffer_count(), 0, "buffers left after both were freed");
+}

@@ -100,6 +100,39 @@ macro_rules! note {
     };
 }
 
+/// After a run has written its files (`written`) into the output folder `out`: one
+/// warning line on stderr naming the files there that the run did not write
+/// ([`caustica::output::files_not_written`]; the first five, then how many more), which
+/// are left as they were, so that an earlier run's outputs are not taken for this one's.
+/// A folder that cannot be listed is passed over: the run's own files are written.
+fn note_files_not_written(out: &Path, written: &[PathBuf]) {
+    const SHOWN: usize = 5;
+    let Ok(stale) = caustica::output::files_not_written(out, written) else {
+        return;
+    };
+    if stale.is_empty() {
+        return;
+    }
+    let mut names = stale
+        .iter()
+        .take(SHOWN)
+        .map(|n| n.escape_debug().to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    if stale.len() > SHOWN {
+        names += &format!(" and {} more", stale.len() - SHOWN);
+    }
+    let (count, was, it_is, it) = match stale.len() {
+        1 => ("1 file".to_string(), "was", "it is", "it"),
+        n => (format!("{n} files"), "were", "they are", "they"),
+    };
+    note!(
+        "warning: {count} in {} {was} not written by this run ({names}): {it_is} from an \
+         earlier run and {was} left as {it} {was}",
+        out.display()
+    );
+}
+
 #[derive(Parser)]
 #[command(
     name = "caustica",
@@ -651,17 +684,22 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     .map_err(|e| e.to_string())?
                     .as_bytes(),
             )?;
+            let mut written = vec![path.clone()];
             for scene in &plan.scenes {
                 let png = out.join(format!(
                     "error_vs_time_{}.png",
                     caustica::output::file_stem(&scene.name)
                 ));
                 match caustica::report::plot(&records, &scene.name, &png) {
-                    Ok(()) => note!("wrote {}", png.display()),
+                    Ok(()) => {
+                        note!("wrote {}", png.display());
+                        written.push(png);
+                    }
                     Err(e) => note!("no plot for {}: {e}", scene.name),
                 }
             }
             note!("wrote {}", path.display());
+            note_files_not_written(&out, &written);
             console.write(format_args!("{}", caustica::report::table(&records)))
         }
         Command::Render {
@@ -805,6 +843,8 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     );
                 }
             }
+            // the files this run writes in `out`, for the warning about the others
+            let mut written = Vec::new();
             // the technique is freed whether its frames and images worked or not
             let bar = ProgressBar::new(0);
             bar.set_style(
@@ -846,6 +886,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                             .map_err(|e| e.to_string())?;
                         let png = out.join(format!("{stem}_f{f:03}_composite.png"));
                         write_png(&png, &img, exposure)?;
+                        written.push(png);
                     }
                 }
                 let stats = stats.expect("at least one frame");
@@ -855,9 +896,13 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     let img = t
                         .read_output(be.as_mut(), output.output)
                         .map_err(|e| e.to_string())?;
-                    write_exr(&out.join(format!("{stem}_{name}.exr")), &img)?;
+                    let exr = out.join(format!("{stem}_{name}.exr"));
+                    write_exr(&exr, &img)?;
+                    written.push(exr);
                     if output.output == caustica::Output::Composite {
-                        write_png(&out.join(format!("{stem}_composite.png")), &img, exposure)?;
+                        let png = out.join(format!("{stem}_composite.png"));
+                        write_png(&png, &img, exposure)?;
+                        written.push(png);
                     }
                 }
                 Ok(stats)
@@ -876,6 +921,8 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                     .map_err(|e| e.to_string())?
                     .as_bytes(),
             )?;
+            written.push(path);
+            note_files_not_written(&out, &written);
             outln!(
                 console,
                 "{}: {} photons emitted, {} stored, {} deposited; {:.1} ms; wrote {}",

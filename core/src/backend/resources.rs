@@ -47,6 +47,16 @@ impl<T> ResourceTable<T> {
         self.map.remove(&id)
     }
 
+    /// How many buffers are held.
+    pub fn len(&self) -> usize {
+        self.map.len()
+    }
+
+    /// Whether no buffer is held.
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
+    }
+
     /// Lets every buffer go.
     pub fn clear(&mut self) {
         self.map.clear();

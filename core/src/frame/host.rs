@@ -27,6 +27,7 @@ use crate::frame::plan::{BufferPlan, FramePlan, SceneFeatures};
 use crate::frame::receivers::atlas::layout::AtlasReceivers;
 use crate::frame::screen::{ScreenNeeds, ScreenTargets};
 use crate::frame::stats::FrameStats;
+use crate::frame::submitted::FrameSequence;
 use crate::math::geometry::Aabb;
 use crate::recording::{Recording, Step};
 use crate::scene::{Camera, Light, Scene};
@@ -77,6 +78,12 @@ pub struct HostState {
     screen_queued: bool,
     pending_steps: usize,
     pending_taken: u64,
+    /// The scene's buffers as they were (a new light count queues a new light buffer,
+    /// which dropping the update's writes never makes).
+    scene: SceneArgs,
+    uploaded: Vec<ResourceId>,
+    uploaded_bytes: u64,
+    uploaded_buffers: Vec<BufferPlan>,
 }
 
 /// An uploaded scene: the model, its device buffers and what the host derived from it.
@@ -166,6 +173,11 @@ pub struct FrameHost {
     /// Some recording of this host has run (else freeing it runs nothing).
     on_device: bool,
     reference: Option<Image>,
+    /// The technique's frames: recorded, run and submitted.
+    sequence: FrameSequence,
+    /// Where the technique's own work lies in `pending` ([`FrameHost::defer`]): ranges of
+    /// steps, which target the technique's buffers and go when it is made anew.
+    deferred: Vec<std::ops::Range<usize>>,
 }
 
 /// The bounding box of every caster object (mirror or dielectric) of `ds`, from its
@@ -236,6 +248,8 @@ impl FrameHost {
             screen_queued: false,
             on_device: false,
             reference: None,
+            sequence: FrameSequence::default(),
+            deferred: Vec::new(),
         })
     }
 
@@ -358,7 +372,38 @@ impl FrameHost {
     /// Appends a technique's own writes of an update (an atlas laid out anew) to the
     /// scene writes the next frame runs first.
     pub fn defer(&mut self, rec: Recording) {
+        let start = self.pending.steps.len();
         self.pending.steps.extend(rec.steps);
+        self.deferred.push(start..self.pending.steps.len());
+    }
+
+    /// The technique's deferred work so far ([`FrameHost::defer`]), to be dropped with
+    /// [`FrameHost::drop_deferred`] once the technique that recorded it is gone.
+    pub(crate) fn take_deferred(&mut self) -> Vec<std::ops::Range<usize>> {
+        std::mem::take(&mut self.deferred)
+    }
+
+    /// Drops the pending steps of `ranges` (from [`FrameHost::take_deferred`]): work a
+    /// freed technique recorded into its own buffers. Ranges that an undo has cut away
+    /// already are skipped; later deferrals move down with the steps.
+    pub(crate) fn drop_deferred(&mut self, mut ranges: Vec<std::ops::Range<usize>>) {
+        ranges.sort_by_key(|r| std::cmp::Reverse(r.start));
+        for r in ranges {
+            if r.end > self.pending.steps.len() || r.is_empty() {
+                continue;
+            }
+            self.pending.steps.drain(r.clone());
+            for d in &mut self.deferred {
+                if d.start >= r.end {
+                    *d = d.start - r.len()..d.end - r.len();
+                }
+            }
+        }
+    }
+
+    /// The technique's frames: how many it recorded or ran, which were submitted.
+    pub(crate) fn sequence(&mut self) -> &mut FrameSequence {
+        &mut self.sequence
     }
 
     /// The scene writes of the updates since the last frame (the frame runs them first).
@@ -366,12 +411,16 @@ impl FrameHost {
         self.on_device = true;
         self.pending_taken += 1;
         self.screen_queued = false;
+        self.deferred.clear();
         std::mem::take(&mut self.pending)
     }
 
     /// Runs the pending scene writes now (a technique whose update reads the device,
-    /// such as PhotonGi's RSM probe, needs the scene as it is after the update).
+    /// such as PhotonGi's RSM probe, needs the scene as it is after the update). Refused
+    /// while a recorded frame waits to be submitted: its own updates must run first.
     pub fn flush(&mut self, backend: &mut dyn Backend) -> Result<(), Error> {
+        self.sequence
+            .check_all_submitted("this update reads the device, so the updates before it")?;
         let pending = self.take_pending();
         if !pending.steps.is_empty() {
             backend.execute(&pending)?;
@@ -529,6 +578,10 @@ impl FrameHost {
             screen_queued: self.screen_queued,
             pending_steps: self.pending.steps.len(),
             pending_taken: self.pending_taken,
+            scene: self.scene,
+            uploaded: self.uploaded.clone(),
+            uploaded_bytes: self.uploaded_bytes,
+            uploaded_buffers: self.uploaded_buffers.clone(),
         }
     }
 
@@ -571,7 +624,8 @@ impl FrameHost {
     }
 
     /// Replaces the lights (validated): written in place with the next frame when their
-    /// number stays, else a light buffer of the new length replaces the old one at once.
+    /// number stays, else a light buffer of the new length replaces the old one with the
+    /// next frame (checked against the device now).
     pub fn set_lights(&mut self, backend: &mut dyn Backend, lights: &[Light]) -> Result<(), Error> {
         let model = crate::frame::technique::with_lights(&self.model, lights)?;
         self.write_lights(backend, lights)?;
@@ -586,14 +640,14 @@ impl FrameHost {
             self.pending.write(self.scene.lights, 0, &gpu, "lights")?;
             return Ok(());
         }
-        // earlier updates' writes into the old buffer first
-        self.flush(backend)?;
+        // made with the next frame's writes, after earlier updates' writes into the old
+        // buffer (which a recorded frame not yet submitted may still use), then freed
         let old = self.scene.lights;
         let mut rec = Recording::new();
         let new = rec.upload(&gpu, "lights");
         let alloc = planned_allocation(backend, &rec, None)?;
         rec.steps.push(Step::Free { id: old.id });
-        backend.execute(&rec)?;
+        self.pending.steps.extend(rec.steps);
         self.scene.lights = new;
         for id in &mut self.uploaded {
             if *id == old.id {
@@ -673,8 +727,13 @@ impl FrameHost {
             // `state` (whose freeing was among them) are still the device's; the writes
             // below then put back values the device still holds
             self.pending.steps.truncate(state.pending_steps);
+            self.deferred.retain(|r| r.end <= state.pending_steps);
             self.screen = state.screen.clone();
             self.screen_queued = state.screen_queued;
+            self.scene = state.scene;
+            self.uploaded = state.uploaded.clone();
+            self.uploaded_bytes = state.uploaded_bytes;
+            self.uploaded_buffers = state.uploaded_buffers.clone();
         }
         if let Some(u) = undo {
             self.pending.update_instances(u, &self.scene)?;

@@ -15,7 +15,7 @@ use crate::frame::image::Image;
 use crate::frame::output::{Output, OutputInfo, Outputs};
 use crate::frame::plan::FramePlan;
 use crate::frame::stats::FrameStats;
-use crate::frame::submitted::{EndRead, FrameOrder, RecordedFrame};
+use crate::frame::submitted::{EndRead, RecordedFrame};
 use crate::frame::technique::{Progress, Technique};
 use crate::recording::Recording;
 use crate::scene::{Camera, Light, Scene, Transform};
@@ -343,9 +343,6 @@ pub trait Pipeline: Sized {
 pub struct Hosted<P: Pipeline> {
     host: FrameHost,
     pipeline: Option<P>,
-    /// The order of its frames, and how many it has recorded or run.
-    order: std::sync::Arc<FrameOrder>,
-    frames: u64,
 }
 
 impl<P: Pipeline> Hosted<P> {
@@ -364,8 +361,6 @@ impl<P: Pipeline> Hosted<P> {
                 let mut t = Hosted {
                     host,
                     pipeline: Some(p),
-                    order: Default::default(),
-                    frames: 0,
                 };
                 // every buffer is checked: the scene goes up now
                 match t.host.flush(backend) {
@@ -432,15 +427,18 @@ impl<P: Pipeline> Hosted<P> {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
-        self.order.run_now(self.frames)?;
-        self.frames += 1;
+        let seq = self.host.sequence();
+        seq.order.run_now(seq.count)?;
+        seq.count += 1;
         let mut frame = self.builder(&*backend, progress);
         let (host, p) = self.parts();
         if let Err(e) = p.record(backend, host, &mut frame) {
             // the pending writes it took are lost
-            let n = self.frames - 1;
-            self.order
-                .break_with(format!("frame {n} failed while recording ({e})"));
+            let seq = self.host.sequence();
+            seq.order.break_with(format!(
+                "frame {} failed while recording ({e})",
+                seq.count - 1
+            ));
             return Err(e);
         }
         let mut stats = frame.run(backend)?;
@@ -461,22 +459,23 @@ impl<P: Pipeline> Hosted<P> {
     /// can record the rest runs here and is counted in [`FrameStats::host_waits`].
     pub fn record_frame(&mut self, backend: &mut dyn Backend) -> Result<RecordedFrame, Error> {
         let start = Instant::now();
-        self.order.check()?;
+        self.host.sequence().order.check()?;
         let mut none = |_: Progress| {};
         let mut frame = self.builder(&*backend, &mut none);
         let (host, p) = self.parts();
-        if let Err(e) = p.record(backend, host, &mut frame) {
+        let recorded = p.record(backend, host, &mut frame);
+        let seq = self.host.sequence();
+        let n = seq.count;
+        seq.count += 1;
+        if let Err(e) = recorded {
             // the pending writes it took are lost
-            let n = self.frames;
-            self.frames += 1;
-            self.order
+            seq.order
                 .break_with(format!("frame {n} failed while recording ({e})"));
             return Err(e);
         }
         let mut recorded = frame.recorded();
         recorded.stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        recorded.order = Some((self.order.clone(), self.frames));
-        self.frames += 1;
+        recorded.order = Some((seq.order.clone(), n));
         Ok(recorded)
     }
 
@@ -517,17 +516,29 @@ impl<P: Pipeline> Hosted<P> {
         settings: P::Settings,
         undo: impl FnOnce(&mut FrameHost, &mut dyn Backend) -> Result<(), Error>,
     ) -> Result<(), Error> {
+        if let Err(e) = self
+            .host
+            .sequence()
+            .check_all_submitted("making the technique's buffers anew (it frees those it has)")
+        {
+            undo(&mut self.host, backend)?;
+            return Err(e);
+        }
         let old = self.pipeline().settings().clone();
+        // the work the technique deferred into its own buffers goes with them
+        let stale = self.host.take_deferred();
         if let Some(mut p) = self.pipeline.take() {
             p.free(backend)?;
         }
         match P::create(backend, &mut self.host, settings) {
             Ok(p) => {
+                self.host.drop_deferred(stale);
                 self.pipeline = Some(p);
                 Ok(())
             }
             Err(e) => {
                 undo(&mut self.host, backend)?;
+                self.host.drop_deferred(stale);
                 self.pipeline = Some(P::create(backend, &mut self.host, old)?);
                 Err(e)
             }
@@ -673,7 +684,12 @@ impl<P: Pipeline> Hosted<P> {
                     .into(),
             ));
         }
-        self.rebuild(backend, settings, |_, _| Ok(()))
+        // a refusal keeps the camera's images (the new settings' needs queued none that
+        // runs) as well as the old settings
+        let state = self.host.state();
+        self.rebuild(backend, settings, |host, backend| {
+            host.restore(backend, state, None)
+        })
     }
 
     /// Sets the frame seed of the next frames.

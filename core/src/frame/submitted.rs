@@ -41,6 +41,32 @@ pub(crate) struct FrameOrder {
     broken: std::sync::Mutex<Option<String>>,
 }
 
+/// A technique's frames: how many it has recorded or run, and their order.
+#[derive(Debug, Default)]
+pub(crate) struct FrameSequence {
+    /// Which of them were submitted, and whether the order broke.
+    pub(crate) order: std::sync::Arc<FrameOrder>,
+    /// How many frames were recorded or run (the next frame's number).
+    pub(crate) count: u64,
+}
+
+impl FrameSequence {
+    /// An error when a recorded frame is not yet submitted: `what` would run on the device
+    /// now, before that frame's work (its updates, or the buffers it uses freed), so the
+    /// frame must be submitted first.
+    pub(crate) fn check_all_submitted(&self, what: &str) -> Result<(), Error> {
+        use std::sync::atomic::Ordering;
+        let next = self.order.next.load(Ordering::SeqCst);
+        if next < self.count {
+            return Err(Error::InvalidParameter(format!(
+                "{what} runs on the device at once, but frame {next} is recorded and not yet \
+                 submitted: submit the recorded frames first"
+            )));
+        }
+        Ok(())
+    }
+}
+
 impl FrameOrder {
     /// Notes that frame `seq` is submitted now.
     fn submit(&self, seq: u64) {
