@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs every example of the facade at a reduced size (CI): each must exit 0. Images go to
-# out/examples/. Usage: scripts/run-examples.sh (after the drivers are installed).
+# Runs the facade's examples listed below at a reduced size (CI): each must exit 0.
+# Images go to out/examples/. Usage: scripts/run-examples.sh (after the drivers are installed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -p caustica --examples

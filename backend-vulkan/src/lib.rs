@@ -101,8 +101,9 @@ impl VulkanBackend {
     /// and a queue of `queue_family` (which must support compute). `device` must have
     /// been created from `physical` with [`DEVICE_EXTENSIONS`] and the features
     /// `bufferDeviceAddress`, `scalarBlockLayout`, `accelerationStructure` and
-    /// `rayTracingPipeline`. The backend submits to `queue` (the caller must not use it
-    /// from another thread meanwhile) and destroys only what it created.
+    /// `rayTracingPipeline`, and `timelineSemaphore` for
+    /// [`VulkanBackend::completion_semaphore`]. The backend submits to `queue` (the caller
+    /// must not use it from another thread meanwhile) and destroys only what it created.
     pub fn from_raw(
         entry: ash::Entry,
         instance: ash::Instance,

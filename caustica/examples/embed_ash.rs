@@ -1,15 +1,17 @@
 //! Embedding caustica in an ash (Vulkan) renderer: the "renderer" creates its own Vulkan
 //! instance and device (with the extensions and features the backend documents), hands
-//! them to `VulkanBackend::from_raw`, renders a frame, drops the backend and then destroys
-//! its own objects, which must still be valid (the backend destroys only what it
-//! created). Exits non-zero if any step fails or no photon is stored.
+//! them to `VulkanBackend::from_raw`, renders a frame with the blocking `frame()`, then
+//! submits one without waiting (`submit_frame`) and waits for it on the backend's timeline
+//! semaphore (`completion_semaphore`, here with `vkWaitSemaphores` on the host), drops the
+//! backend and then destroys its own objects, which must still be valid (the backend
+//! destroys only what it created). Exits non-zero if any step fails or no photon is stored.
 //! Run: `cargo run --release -p caustica --example embed_ash -- [WxH] [PHOTONS]`.
 
 use caustica::ash::{self, vk};
 use caustica::backends::vulkan::{VulkanBackend, DEVICE_EXTENSIONS};
 use caustica::scene::builtin::builtin;
-use caustica::TechniqueSettings;
 use caustica::{Sspm, SspmSettings};
+use caustica::{Technique, TechniqueSettings}; // submit_frame; with_photons
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -50,7 +52,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .queue_priorities(&prio)];
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
         .buffer_device_address(true)
-        .scalar_block_layout(true);
+        .scalar_block_layout(true)
+        // for `completion_semaphore` (a Vulkan 1.2 core feature)
+        .timeline_semaphore(true);
     let mut fas =
         vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
     let mut frt =
@@ -88,8 +92,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "{} photons stored, frame {:.1} ms on the renderer's device",
             stats.photons_stored, stats.frame_ms
         );
+        // a frame loop's path: the timeline semaphore (signalled by every submission made
+        // after this first call) and a frame submitted without waiting
+        let timeline = b.completion_semaphore()?;
+        let mut ticket = s.submit_frame(&mut b)?;
+        let (semaphores, values) = ([timeline], [ticket.submission_id()]);
+        let wait = vk::SemaphoreWaitInfo::default()
+            .semaphores(&semaphores)
+            .values(&values);
+        // at most 10 s (a timeout is an error here, not a hang)
+        unsafe { device.wait_semaphores(&wait, 10_000_000_000) }?;
+        // the frame is done (`true`: the frame slot's fence may signal just after the
+        // semaphore)
+        let submitted = ticket.stats(&mut b, true)?.ok_or("no statistics")?;
+        println!(
+            "{} photons stored, frame recorded and submitted in {:.1} ms of host time",
+            submitted.photons_stored, submitted.frame_ms
+        );
         s.free(&mut b)?;
-        if stats.photons_stored == 0 {
+        if stats.photons_stored == 0 || submitted.photons_stored == 0 {
             return Err("no photon stored".into());
         }
     }

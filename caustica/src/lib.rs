@@ -71,8 +71,9 @@
 
 #![warn(missing_docs)]
 
-/// The README's examples, compiled by `cargo test --doc` (the embedding fragments, marked
-/// `ignore`, are the runnable examples `frame_loop` and `embed_ash`).
+/// The README's examples, compiled by `cargo test --doc` (the embedding fragments are
+/// marked `ignore`: the wgpu and Vulkan ones are taken from the runnable examples
+/// `frame_loop` and `embed_ash`; the OpenCL one has no example program).
 #[cfg(doctest)]
 #[doc = include_str!("../../README.md")]
 pub struct ReadmeExamples;

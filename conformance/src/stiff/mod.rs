@@ -179,7 +179,7 @@ pub fn catalogue() -> Vec<StiffCase> {
         case!("caustic-map", "atlas-1x1", caustic_map::atlas_1x1,
             "CausticMap with a 1x1 atlas (one texel for the floor): finite, accounted, agrees with cpu"),
         case!("caustic-map", "atlas-16384", caustic_map::atlas_16384,
-            "CausticMap with a 16384^2 atlas (33 GiB with the density gather) under the default max_atlas_bytes (4 GiB): a typed OutOfMemory naming the setting, before any work"),
+            "CausticMap with a 16384^2 atlas (36 GiB with the density gather) under the default max_atlas_bytes (4 GiB): a typed OutOfMemory naming the setting, before any work"),
         case!("caustic-map", "grazing-receiver", caustic_map::grazing_receiver,
             "Sun 2 degrees above the floor through the ball: finite, accounted, stored <= emitted, agrees with cpu"),
         case!("caustic-map", "tiny-receiver", caustic_map::tiny_receiver,

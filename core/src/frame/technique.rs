@@ -135,12 +135,16 @@ pub trait Technique {
     ) -> Result<(), Error>;
 
     /// Replaces the technique's settings for the next frames (`settings`: a JSON object
-    /// as [`crate::techniques::create`] takes it; missing fields take their defaults);
-    /// the next frame equals, bitwise, that of a technique created with them. The
-    /// uploaded scene stays (a new `max_triangles` budget builds it anew): Sspm and
-    /// PhotonGi remake their frame buffers, CausticMap and AdaptiveCaustics' atlas target
-    /// their atlas and images; AdaptiveCaustics' screen target may change its screen
-    /// settings only. An error leaves the technique as it was.
+    /// as [`crate::techniques::create`] takes it, laid over the technique's defaults, not
+    /// its current settings: missing fields take their defaults); the next frame equals,
+    /// bitwise, that of a technique created with them. The uploaded scene always stays:
+    /// Sspm and PhotonGi remake their frame buffers, CausticMap and AdaptiveCaustics'
+    /// atlas target their atlas and images; AdaptiveCaustics' screen target may change
+    /// its screen settings only. A `max_triangles` below the scene's triangle count and
+    /// settings that need the atlas receivers the scene was uploaded without are errors
+    /// (create the technique again), as is a call while a recorded frame
+    /// ([`Technique::record_frame`]) is not yet submitted. An error leaves the technique
+    /// as it was.
     fn set_settings(
         &mut self,
         backend: &mut dyn Backend,

@@ -99,9 +99,11 @@ pub enum MapGather {
     /// kernel is normalised over the covered texels of its own tile, so the flux is kept
     /// and no tile border is crossed; a focused caustic where photons are dense is left
     /// as deposited. Flux deposited into a texel whose centre no UV triangle covers (at a
-    /// UV island's edge) is dropped, as the raw map drops it; the box gather spreads it
-    /// into covered neighbours. The default: below the raw map's error at every budget
-    /// on `sphere`, `cornell` and `sphere-sun`, and converging to it
+    /// UV island's edge), which the raw map has no area to show, is added to a covered
+    /// neighbour of the same tile (its heir:
+    /// `crate::math::density_gather::atlas_edge_texels`, `gather_footprint`); the box
+    /// gather spreads it into covered neighbours. The default: below the raw map's error
+    /// at every budget on `sphere`, `cornell` and `sphere-sun`, and converging to it
     /// (`docs/report-caustic-map`); it costs about 1.1 to 1.9 ms on the H200 at a
     /// 2048^2 atlas against the box's 0.25 ms, and 52 more bytes a texel.
     #[default]
