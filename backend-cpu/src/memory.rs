@@ -4,7 +4,8 @@
 use crate::CpuBackend;
 use caustica_core::backend::{check_write, BackendError};
 use caustica_core::device::handle::ResourceId;
-use std::sync::atomic::{AtomicU32, AtomicU64};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
 
 pub(crate) struct Storage {
     words: Vec<u64>,
@@ -13,50 +14,94 @@ pub(crate) struct Storage {
 
 const _: () = assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<u64>());
 
-/// The host memory the backend's buffers may take: what the system had available (with
-/// free swap) when the backend opened, less what its buffers hold. A buffer is zeroed by
-/// the allocator (pages the system fills on first touch), so without this count a frame
-/// too large for the host would be killed by the system as its kernels touched the pages,
-/// instead of failing with an error when it is made.
+/// The host memory that CPU backends' buffers may take together: what the system had
+/// available (with free swap) when the process's first CPU backend opened, less what the
+/// buffers of every CPU backend of the process hold. A buffer is zeroed by the allocator
+/// (pages the system fills on first touch), so without this count a frame too large for
+/// the host would be killed by the system as its kernels touched the pages, instead of
+/// failing with an error when it is made; and since untouched pages still count as
+/// available, two backends that each counted only their own buffers against their own
+/// reading could together take twice what the host has.
+#[derive(Debug)]
+pub(crate) struct SharedBudget {
+    /// Bytes the system had available; `None` where it does not say (not Linux).
+    available: Option<u64>,
+    /// Bytes the live buffers of every backend sharing this budget hold.
+    held: AtomicU64,
+}
+
+impl SharedBudget {
+    fn new(available: Option<u64>) -> Arc<SharedBudget> {
+        Arc::new(SharedBudget {
+            available,
+            held: AtomicU64::new(0),
+        })
+    }
+}
+
+/// One backend's share of a [`SharedBudget`]: what its buffers hold, given back when it is
+/// dropped.
 #[derive(Debug)]
 pub(crate) struct HostBudget {
-    /// Bytes the system had available at open; `None` where it does not say (not Linux).
-    available: Option<u64>,
-    /// Bytes the live buffers hold.
-    held: u64,
+    shared: Arc<SharedBudget>,
+    /// Bytes this backend's live buffers hold.
+    mine: u64,
 }
 
 impl HostBudget {
-    /// The budget of this moment's available memory (`/proc/meminfo`'s `MemAvailable`
-    /// plus `SwapFree`).
+    /// A share of the process's budget (read from `/proc/meminfo`'s `MemAvailable` plus
+    /// `SwapFree` when the first CPU backend opens).
     pub fn now() -> HostBudget {
-        HostBudget {
-            available: std::fs::read_to_string("/proc/meminfo")
-                .ok()
-                .and_then(|m| meminfo_available(&m)),
-            held: 0,
-        }
+        static PROCESS: OnceLock<Arc<SharedBudget>> = OnceLock::new();
+        let shared = PROCESS.get_or_init(|| {
+            SharedBudget::new(
+                std::fs::read_to_string("/proc/meminfo")
+                    .ok()
+                    .and_then(|m| meminfo_available(&m)),
+            )
+        });
+        HostBudget::of(shared.clone())
+    }
+
+    fn of(shared: Arc<SharedBudget>) -> HostBudget {
+        HostBudget { shared, mine: 0 }
     }
 
     /// Takes `bytes` for a buffer named `label`, or says why the host cannot hold it.
     pub fn take(&mut self, bytes: u64, label: &str) -> Result<(), BackendError> {
-        let held = self.held.saturating_add(bytes);
-        if let Some(available) = self.available.filter(|&a| held > a) {
-            return Err(BackendError::OutOfMemory {
-                bytes,
-                what: format!(
-                    "{label} (host memory: the backend's buffers would hold {held} bytes, \
-                     {available} were available when it opened)"
-                ),
-            });
+        let held = &self.shared.held;
+        let mut now = held.load(Ordering::Relaxed);
+        loop {
+            let after = now.saturating_add(bytes);
+            if let Some(available) = self.shared.available.filter(|&a| after > a) {
+                return Err(BackendError::OutOfMemory {
+                    bytes,
+                    what: format!(
+                        "{label} (host memory: the CPU backends' buffers would hold {after} \
+                         bytes, {available} were available when the first one opened)"
+                    ),
+                });
+            }
+            match held.compare_exchange_weak(now, after, Ordering::Relaxed, Ordering::Relaxed) {
+                Ok(_) => break,
+                Err(seen) => now = seen,
+            }
         }
-        self.held = held;
+        self.mine = self.mine.saturating_add(bytes);
         Ok(())
     }
 
     /// Gives back a freed buffer's bytes.
     pub fn give(&mut self, bytes: u64) {
-        self.held = self.held.saturating_sub(bytes);
+        let bytes = bytes.min(self.mine);
+        self.mine -= bytes;
+        self.shared.held.fetch_sub(bytes, Ordering::Relaxed);
+    }
+}
+
+impl Drop for HostBudget {
+    fn drop(&mut self) {
+        self.shared.held.fetch_sub(self.mine, Ordering::Relaxed);
     }
 }
 
@@ -237,20 +282,32 @@ mod tests {
         let m = "MemTotal:       24000000 kB\nMemFree:  100 kB\nMemAvailable:   2000 kB\nSwapTotal: 0 kB\nSwapFree:        48 kB\n";
         assert_eq!(meminfo_available(m), Some(2048 * 1024));
         assert_eq!(meminfo_available("MemTotal: 1 kB\n"), None);
-        let mut b = HostBudget {
-            available: Some(1000),
-            held: 0,
-        };
+        let shared = SharedBudget::new(Some(1000));
+        let mut b = HostBudget::of(shared.clone());
         b.take(600, "a").unwrap();
         let e = b.take(500, "b").unwrap_err().to_string();
         assert!(e.contains("b (host memory") && e.contains("1100"), "{e}");
         b.give(600);
         b.take(1000, "c").unwrap();
+        b.give(1000);
+        // two backends share it: together they hold at most what was available, and a
+        // dropped one gives its bytes back
+        let mut other = HostBudget::of(shared.clone());
+        b.take(700, "d").unwrap();
+        let e = other.take(400, "e").unwrap_err().to_string();
+        assert!(e.contains("1100"), "{e}");
+        other.take(300, "f").unwrap();
+        // a backend gives back no more than it holds
+        other.give(5000);
+        assert_eq!(shared.held.load(Ordering::Relaxed), 700);
+        other.take(300, "g").unwrap();
+        drop(b);
+        assert_eq!(shared.held.load(Ordering::Relaxed), 300);
+        other.take(700, "h").unwrap();
+        drop(other);
+        assert_eq!(shared.held.load(Ordering::Relaxed), 0);
         // where the system does not say, no limit
-        let mut open = HostBudget {
-            available: None,
-            held: 0,
-        };
-        open.take(u64::MAX, "d").unwrap();
+        let mut open = HostBudget::of(SharedBudget::new(None));
+        open.take(u64::MAX, "i").unwrap();
     }
 }

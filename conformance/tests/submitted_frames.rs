@@ -435,9 +435,10 @@ fn frames_run_in_the_order_recorded_or_the_next_one_says_why() {
 
 /// An update made while a recorded frame waits to be submitted must not run ahead of it:
 /// a new light count is queued behind the frame (its old light buffer, which the frame
-/// uses, freed after it), and the next frame equals a fresh technique's bitwise; an update
-/// that must run on the device at once (making the technique's buffers anew) is refused
-/// until the frame is submitted, and goes through afterwards.
+/// uses, freed after it: the frame renders its one light), and the next frame equals a
+/// fresh technique's bitwise; an update that must run on the device at once (making the
+/// technique's buffers anew, CausticMap's caustic images at a new size) is refused until
+/// the frame is submitted, and goes through afterwards.
 #[test]
 fn updates_never_run_ahead_of_a_recorded_frame() {
     let mut b = caustica_cpu::CpuBackend::new().expect("cpu");
@@ -458,11 +459,20 @@ fn updates_never_run_ahead_of_a_recorded_frame() {
         .expect_err("buffers the recorded frame uses")
         .to_string();
     assert!(e.contains("submit the recorded frames first"), "{e}");
-    waiting
+    let own = waiting
         .submit(&mut b)
         .expect("the recorded frame runs with its own lights")
         .stats(&mut b, true)
-        .expect("stats");
+        .expect("stats")
+        .expect("done");
+    let mut one = create("sspm", &mut b, &scene, &settings).expect("one light");
+    let one_light = one.frame(&mut b, &mut |_| {}).expect("frame");
+    assert_eq!(
+        (own.photons_emitted, own.photons_stored),
+        (one_light.photons_emitted, one_light.photons_stored),
+        "the recorded frame did not render its own light"
+    );
+    one.free(&mut b).expect("free");
     t.frame(&mut b, &mut |_| {}).expect("frame");
     let mut fresh = create("sspm", &mut b, &more, &settings).expect("fresh");
     fresh.frame(&mut b, &mut |_| {}).expect("fresh frame");
@@ -475,6 +485,30 @@ fn updates_never_run_ahead_of_a_recorded_frame() {
     t.frame(&mut b, &mut |_| {}).expect("frame");
     t.free(&mut b).expect("free");
     fresh.free(&mut b).expect("free");
+
+    let settings = serde_json::json!({ "photons_w": 64, "photons_h": 64, "atlas_size": 128 });
+    let mut cm = create("caustic-map", &mut b, &scene, &settings).expect("create");
+    cm.frame(&mut b, &mut |_| {}).expect("frame");
+    let waiting = cm.record_frame(&mut b).expect("record");
+    let mut wider = scene.camera.clone();
+    wider.width = 96;
+    wider.height = 54;
+    let e = cm
+        .set_camera(&mut b, &wider)
+        .expect_err("images the recorded frame writes")
+        .to_string();
+    assert!(e.contains("submit the recorded frames first"), "{e}");
+    waiting
+        .submit(&mut b)
+        .expect("the recorded frame, its images whole")
+        .stats(&mut b, true)
+        .expect("stats");
+    cm.set_camera(&mut b, &wider)
+        .expect("once the frame is submitted");
+    cm.frame(&mut b, &mut |_| {})
+        .expect("frame at the new size");
+    cm.free(&mut b).expect("free");
+    assert_eq!(b.buffer_count(), 0, "buffers left");
 }
 
 /// CausticMap lays its atlas out anew after a receiver moves, with the next frame; made

@@ -454,30 +454,14 @@ fn vertex_positions(vertices: &[GpuVertex]) -> Vec<Vec3> {
 
 /// An instance must stay inside the coordinate bound once transformed.
 fn check_placed(object: usize, b: &Aabb) -> Result<(), BuildError> {
-    use crate::scene::limits::{MAX_COORDINATE, MIN_EXTENT_PER_POSITION};
-    let path = || format!("objects[{object}].transform");
     let reach = b.min.abs().max(b.max.abs()).max_element();
-    if !(reach <= MAX_COORDINATE) {
+    if !(reach <= crate::scene::limits::MAX_COORDINATE) {
         return Err(BuildError::Scene {
-            path: path(),
+            path: format!("objects[{object}].transform"),
             reason: format!(
                 "the transformed object reaches {reach:e} from the origin, beyond the \
-                 coordinate bound {MAX_COORDINATE:e}"
-            ),
-        });
-    }
-    // Validation's resolution test, on the placed vertices' box: a move (which validation
-    // does not see) may take an object where f32 no longer tells its vertices apart.
-    let extent = (b.max - b.min).max_element();
-    let at = b.center().abs().max_element();
-    if extent < at * MIN_EXTENT_PER_POSITION {
-        return Err(BuildError::Scene {
-            path: path(),
-            reason: format!(
-                "the transformed object is {extent:e} across at {at:e} from the origin: \
-                 below f32 resolution there (at least 2^-16 of the distance, {:e}, is \
-                 needed or its vertices collapse)",
-                at * MIN_EXTENT_PER_POSITION
+                 coordinate bound {:e}",
+                crate::scene::limits::MAX_COORDINATE
             ),
         });
     }
@@ -1412,20 +1396,13 @@ mod tests {
         let e = ds.move_instances(&[(5, mirror)]).unwrap_err();
         assert!(e.to_string().contains("mirrors"), "{e}");
         assert!(ds.bvh_nodes == before, "a refused move changed the nodes");
-        // moved where f32 no longer tells its vertices apart (validation never sees a
-        // move): refused by the same test, naming the object; beyond the coordinate bound
-        // too
+        // beyond the coordinate bound: refused, naming the object
         let vertices = ds.vertices.clone();
-        for (at, what) in [(1e7f32, "below f32 resolution"), (1e13, "coordinate bound")] {
-            let far = Transform::from_translation(Vec3::splat(at));
-            let e = ds.move_instances(&[(5, far)]).unwrap_err();
-            assert!(e.to_string().contains(what), "{e}");
-            assert!(e.to_string().starts_with("objects[5].transform"), "{e}");
-        }
+        let far = Transform::from_translation(Vec3::splat(1e13));
+        let e = ds.move_instances(&[(5, far)]).unwrap_err();
+        assert!(e.to_string().contains("coordinate bound"), "{e}");
+        assert!(e.to_string().starts_with("objects[5].transform"), "{e}");
         assert!(ds.bvh_nodes == before && ds.vertices == vertices);
-        // where it still resolves, the move is taken
-        ds.move_instances(&[(5, Transform::from_translation(Vec3::splat(1e3)))])
-            .unwrap();
     }
 
     #[test]

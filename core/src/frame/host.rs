@@ -77,6 +77,7 @@ pub struct HostState {
     screen: ScreenTargets,
     screen_queued: bool,
     pending_steps: usize,
+    deferred_steps: usize,
     pending_taken: u64,
     /// The scene's buffers as they were (a new light count queues a new light buffer,
     /// which dropping the update's writes never makes).
@@ -175,9 +176,9 @@ pub struct FrameHost {
     reference: Option<Image>,
     /// The technique's frames: recorded, run and submitted.
     sequence: FrameSequence,
-    /// Where the technique's own work lies in `pending` ([`FrameHost::defer`]): ranges of
-    /// steps, which target the technique's buffers and go when it is made anew.
-    deferred: Vec<std::ops::Range<usize>>,
+    /// The technique's own work for the next frame ([`FrameHost::defer`]), run after
+    /// `pending`: it targets the technique's buffers and goes when it is made anew.
+    deferred: Recording,
 }
 
 /// The bounding box of every caster object (mirror or dielectric) of `ds`, from its
@@ -249,7 +250,7 @@ impl FrameHost {
             on_device: false,
             reference: None,
             sequence: FrameSequence::default(),
-            deferred: Vec::new(),
+            deferred: Recording::new(),
         })
     }
 
@@ -372,33 +373,13 @@ impl FrameHost {
     /// Appends a technique's own writes of an update (an atlas laid out anew) to the
     /// scene writes the next frame runs first.
     pub fn defer(&mut self, rec: Recording) {
-        let start = self.pending.steps.len();
-        self.pending.steps.extend(rec.steps);
-        self.deferred.push(start..self.pending.steps.len());
+        self.deferred.steps.extend(rec.steps);
     }
 
-    /// The technique's deferred work so far ([`FrameHost::defer`]), to be dropped with
-    /// [`FrameHost::drop_deferred`] once the technique that recorded it is gone.
-    pub(crate) fn take_deferred(&mut self) -> Vec<std::ops::Range<usize>> {
-        std::mem::take(&mut self.deferred)
-    }
-
-    /// Drops the pending steps of `ranges` (from [`FrameHost::take_deferred`]): work a
-    /// freed technique recorded into its own buffers. Ranges that an undo has cut away
-    /// already are skipped; later deferrals move down with the steps.
-    pub(crate) fn drop_deferred(&mut self, mut ranges: Vec<std::ops::Range<usize>>) {
-        ranges.sort_by_key(|r| std::cmp::Reverse(r.start));
-        for r in ranges {
-            if r.end > self.pending.steps.len() || r.is_empty() {
-                continue;
-            }
-            self.pending.steps.drain(r.clone());
-            for d in &mut self.deferred {
-                if d.start >= r.end {
-                    *d = d.start - r.len()..d.end - r.len();
-                }
-            }
-        }
+    /// Drops the technique's deferred work ([`FrameHost::defer`]): the technique that
+    /// recorded it is gone, and with it the buffers the work would write.
+    pub(crate) fn drop_deferred(&mut self) {
+        self.deferred.steps.clear();
     }
 
     /// The technique's frames: how many it recorded or ran, which were submitted.
@@ -406,13 +387,21 @@ impl FrameHost {
         &mut self.sequence
     }
 
-    /// The scene writes of the updates since the last frame (the frame runs them first).
+    /// An error when a recorded frame waits to be submitted, for an update (`what`) that
+    /// would run on the device at once ([`FrameSequence::check_all_submitted`]).
+    pub(crate) fn check_all_submitted(&self, what: &str) -> Result<(), Error> {
+        self.sequence.check_all_submitted(what)
+    }
+
+    /// The scene writes of the updates since the last frame, then the technique's
+    /// deferred work (the frame runs them first).
     pub fn take_pending(&mut self) -> Recording {
         self.on_device = true;
         self.pending_taken += 1;
         self.screen_queued = false;
-        self.deferred.clear();
-        std::mem::take(&mut self.pending)
+        let mut pending = std::mem::take(&mut self.pending);
+        pending.steps.append(&mut self.deferred.steps);
+        pending
     }
 
     /// Runs the pending scene writes now (a technique whose update reads the device,
@@ -532,6 +521,11 @@ impl FrameHost {
         self.reference.as_ref()
     }
 
+    /// Drops the reference image (the camera's image size changed).
+    pub(crate) fn drop_reference(&mut self) {
+        self.reference = None;
+    }
+
     /// Sets (or clears) the reference image (linear radiance, the camera's size, every
     /// channel finite and >= 0).
     pub fn set_reference(&mut self, reference: Option<Image>) -> Result<(), Error> {
@@ -577,6 +571,7 @@ impl FrameHost {
             screen: self.screen.clone(),
             screen_queued: self.screen_queued,
             pending_steps: self.pending.steps.len(),
+            deferred_steps: self.deferred.steps.len(),
             pending_taken: self.pending_taken,
             scene: self.scene,
             uploaded: self.uploaded.clone(),
@@ -586,8 +581,8 @@ impl FrameHost {
     }
 
     /// Moves the camera (validated). Returns whether the image size changed; then the
-    /// camera's images are made anew (on an error nothing changes) and the reference is
-    /// dropped.
+    /// camera's images are made anew (on an error nothing changes); the caller drops the
+    /// reference image once the technique follows ([`FrameHost::drop_reference`]).
     pub fn set_camera(
         &mut self,
         backend: &mut dyn Backend,
@@ -603,7 +598,6 @@ impl FrameHost {
                 self.camera = old;
                 return Err(e);
             }
-            self.reference = None;
         }
         self.model = model;
         Ok(resized)
@@ -727,7 +721,7 @@ impl FrameHost {
             // `state` (whose freeing was among them) are still the device's; the writes
             // below then put back values the device still holds
             self.pending.steps.truncate(state.pending_steps);
-            self.deferred.retain(|r| r.end <= state.pending_steps);
+            self.deferred.steps.truncate(state.deferred_steps);
             self.screen = state.screen.clone();
             self.screen_queued = state.screen_queued;
             self.scene = state.scene;

@@ -428,19 +428,11 @@ impl<P: Pipeline> Hosted<P> {
     ) -> Result<FrameStats, Error> {
         let start = Instant::now();
         let seq = self.host.sequence();
-        seq.order.run_now(seq.count)?;
+        let n = seq.count;
+        seq.order.run_now(n)?;
         seq.count += 1;
         let mut frame = self.builder(&*backend, progress);
-        let (host, p) = self.parts();
-        if let Err(e) = p.record(backend, host, &mut frame) {
-            // the pending writes it took are lost
-            let seq = self.host.sequence();
-            seq.order.break_with(format!(
-                "frame {} failed while recording ({e})",
-                seq.count - 1
-            ));
-            return Err(e);
-        }
+        self.record_numbered(backend, &mut frame, n)?;
         let mut stats = frame.run(backend)?;
         stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
         if let Some(r) = self.host.reference() {
@@ -462,21 +454,32 @@ impl<P: Pipeline> Hosted<P> {
         self.host.sequence().order.check()?;
         let mut none = |_: Progress| {};
         let mut frame = self.builder(&*backend, &mut none);
-        let (host, p) = self.parts();
-        let recorded = p.record(backend, host, &mut frame);
-        let seq = self.host.sequence();
-        let n = seq.count;
-        seq.count += 1;
-        if let Err(e) = recorded {
-            // the pending writes it took are lost
-            seq.order
-                .break_with(format!("frame {n} failed while recording ({e})"));
-            return Err(e);
-        }
+        let n = self.host.sequence().count;
+        self.host.sequence().count += 1;
+        self.record_numbered(backend, &mut frame, n)?;
         let mut recorded = frame.recorded();
         recorded.stats.frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        recorded.order = Some((seq.order.clone(), n));
+        recorded.order = Some((self.host.sequence().order.clone(), n));
         Ok(recorded)
+    }
+
+    /// Records frame `n`'s passes into `frame`. A failure loses the pending writes the
+    /// frame took, so it breaks the frame order (the next frame says why).
+    fn record_numbered(
+        &mut self,
+        backend: &mut dyn Backend,
+        frame: &mut FrameBuilder<'_>,
+        n: u64,
+    ) -> Result<(), Error> {
+        let (host, p) = self.parts();
+        let recorded = p.record(backend, host, frame);
+        if let Err(e) = &recorded {
+            self.host
+                .sequence()
+                .order
+                .break_with(format!("frame {n} failed while recording ({e})"));
+        }
+        recorded
     }
 
     /// Follows a host change: re-planned in place, or the technique's buffers made anew;
@@ -518,27 +521,26 @@ impl<P: Pipeline> Hosted<P> {
     ) -> Result<(), Error> {
         if let Err(e) = self
             .host
-            .sequence()
             .check_all_submitted("making the technique's buffers anew (it frees those it has)")
         {
             undo(&mut self.host, backend)?;
             return Err(e);
         }
         let old = self.pipeline().settings().clone();
-        // the work the technique deferred into its own buffers goes with them
-        let stale = self.host.take_deferred();
         if let Some(mut p) = self.pipeline.take() {
             p.free(backend)?;
         }
+        // the work the technique deferred into its own buffers goes with them
+        self.host.drop_deferred();
         match P::create(backend, &mut self.host, settings) {
             Ok(p) => {
-                self.host.drop_deferred(stale);
                 self.pipeline = Some(p);
                 Ok(())
             }
             Err(e) => {
+                // and so does the failed technique's
+                self.host.drop_deferred();
                 undo(&mut self.host, backend)?;
-                self.host.drop_deferred(stale);
                 self.pipeline = Some(P::create(backend, &mut self.host, old)?);
                 Err(e)
             }
@@ -550,12 +552,17 @@ impl<P: Pipeline> Hosted<P> {
     /// (never the uploaded scene) and drops the reference image.
     pub fn set_camera(&mut self, backend: &mut dyn Backend, camera: &Camera) -> Result<(), Error> {
         let state = self.host.state();
-        let change = if self.host.set_camera(backend, camera)? {
+        let resized = self.host.set_camera(backend, camera)?;
+        let change = if resized {
             Change::Resized
         } else {
             Change::Camera
         };
-        self.follow(backend, change, state, || Ok(None))
+        self.follow(backend, change, state, || Ok(None))?;
+        if resized {
+            self.host.drop_reference();
+        }
+        Ok(())
     }
 
     /// Replaces the lights for the next frames (moved, re-powered, added or removed)
@@ -639,6 +646,9 @@ impl<P: Pipeline> Hosted<P> {
         shape: &crate::scene::Shape,
     ) -> Result<(), Error> {
         let model = crate::frame::technique::with_shape(self.host.model(), object, shape)?;
+        self.host.check_all_submitted(
+            "a new shape uploads the scene anew and frees the old one, so it",
+        )?;
         let old = self.host.replace_scene(backend, &model)?;
         let mut old = Some(old);
         let settings = self.pipeline().settings().clone();

@@ -56,6 +56,8 @@ impl FrameSequence {
     /// frame must be submitted first.
     pub(crate) fn check_all_submitted(&self, what: &str) -> Result<(), Error> {
         use std::sync::atomic::Ordering;
+        // a broken order says so first (its frames can never be submitted)
+        self.order.check()?;
         let next = self.order.next.load(Ordering::SeqCst);
         if next < self.count {
             return Err(Error::InvalidParameter(format!(

@@ -536,4 +536,43 @@ mod tests {
         );
         assert!(Camera::from_view_projection(Mat4::ZERO, wide, 128, 64).is_err());
     }
+
+    /// An update's validation (which leaves out the meshes' vertices) judges a moved
+    /// shape as a new scene's does: a sphere moved where f32 no longer resolves it is
+    /// refused by both, naming its shape; a small mesh far away loads as an instance as it
+    /// does in the static level (meshes have no resolution test).
+    #[test]
+    fn a_moved_shape_is_judged_as_a_new_scenes() {
+        let mut s = builtin::builtin("sphere").expect("sphere");
+        let ball = s.objects[1].clone();
+        s.objects[1].transform = Some(Transform::from_translation(Vec3::new(1e7, 0.0, 0.0)));
+        let full = s.validate().expect_err("refused").remove(0);
+        let update = s.validate_except_shapes().expect_err("refused").remove(0);
+        assert_eq!(full.path, "objects[1].shape");
+        assert_eq!(
+            (update.path, update.reason),
+            (full.path, full.reason.clone())
+        );
+        assert!(full.reason.contains("f32 resolution"), "{}", full.reason);
+        // a 1 cm mesh 1000 units out: both accept it
+        s.objects[1] = ball;
+        s.objects.push(Object {
+            name: "part".into(),
+            material: s.objects[0].material.clone(),
+            shape: Shape::Mesh {
+                positions: vec![
+                    Vec3::ZERO,
+                    Vec3::new(0.01, 0.0, 0.0),
+                    Vec3::new(0.0, 0.0, 0.01),
+                ]
+                .into(),
+                normals: Vec::new().into(),
+                uvs: Vec::new().into(),
+                indices: vec![[0, 1, 2]].into(),
+            },
+            transform: Some(Transform::from_translation(Vec3::new(1e3, 0.0, 0.0))),
+        });
+        s.validate().expect("a small mesh far away");
+        s.validate_except_shapes().expect("a small mesh far away");
+    }
 }

@@ -197,9 +197,10 @@ pub(super) fn validate(s: &Scene) -> Result<(), Vec<Problem>> {
     validate_parts(s, true)
 }
 
-/// [`validate`], with the shapes' own checks (every vertex of a mesh) left out when
-/// `shapes` is false: what an update that changes no shape needs (a technique's scene
-/// was validated whole when it was made).
+/// [`validate`], with the meshes' own checks (every vertex) left out when `shapes` is
+/// false: what an update that changes no shape needs (a technique's scene was validated
+/// whole when it was made). The other shapes' checks, a few numbers each, still run: a
+/// moved shape is judged where its new transform puts it, as a new scene would be.
 pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>> {
     let mut c = Check {
         problems: Vec::new(),
@@ -355,7 +356,7 @@ pub(super) fn validate_parts(s: &Scene, shapes: bool) -> Result<(), Vec<Problem>
                 format!("unknown material '{}'", o.material),
             );
         }
-        if !shapes {
+        if !shapes && matches!(o.shape, Shape::Mesh { .. } | Shape::ObjFile { .. }) {
             continue;
         }
         let sp = format!("{p}.shape");

@@ -175,7 +175,9 @@ impl AdaptiveCausticsPipeline {
         change: Change,
     ) -> Result<Reaction, Error> {
         if let (Change::Resized, Target::Atlas { receiver, .. }) = (change, &mut self.target) {
-            // only the camera-sized images: the atlas stays valid
+            // only the camera-sized images: the atlas stays valid; made (and the old ones
+            // freed) at once, so never ahead of a recorded frame that uses them
+            host.check_all_submitted("a new image size makes the caustic images anew")?;
             receiver.make_images(backend, host.camera())?;
             self.replan_atlas(host);
             return Ok(Reaction::Kept);

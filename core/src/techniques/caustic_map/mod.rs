@@ -388,7 +388,9 @@ impl Pipeline for CausticMapPipeline {
         let receivers_moved = match change {
             Change::Camera => return Ok(Reaction::Kept),
             Change::Resized => {
-                // only the camera-sized images: the atlas stays valid
+                // only the camera-sized images: the atlas stays valid; made (and the old
+                // ones freed) at once, so never ahead of a recorded frame that uses them
+                host.check_all_submitted("a new image size makes the caustic images anew")?;
                 self.receiver.make_images(backend, host.camera())?;
                 self.replan(host);
                 return Ok(Reaction::Kept);
