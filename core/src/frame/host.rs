@@ -387,6 +387,12 @@ impl FrameHost {
         &mut self.sequence
     }
 
+    /// Whether every frame before the one being recorded was submitted
+    /// ([`FrameSequence::earlier_frames_submitted`]).
+    pub(crate) fn earlier_frames_submitted(&self) -> bool {
+        self.sequence.earlier_frames_submitted()
+    }
+
     /// An error when a recorded frame waits to be submitted, for an update (`what`) that
     /// would run on the device at once ([`FrameSequence::check_all_submitted`]).
     pub(crate) fn check_all_submitted(&self, what: &str) -> Result<(), Error> {

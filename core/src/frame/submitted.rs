@@ -69,6 +69,15 @@ impl FrameSequence {
     }
 }
 
+impl FrameSequence {
+    /// Whether every frame before the last one recorded or run was submitted: work that a
+    /// frame being recorded submits of its own (a readback of an earlier frame's results)
+    /// then runs after those frames.
+    pub(crate) fn earlier_frames_submitted(&self) -> bool {
+        self.order.next.load(std::sync::atomic::Ordering::SeqCst) + 1 >= self.count
+    }
+}
+
 impl FrameOrder {
     /// Notes that frame `seq` is submitted now.
     fn submit(&self, seq: u64) {

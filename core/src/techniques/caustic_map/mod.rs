@@ -130,7 +130,8 @@ impl CausticMapPipeline {
     }
 
     /// Moves the last photon pass's reach mask along without waiting: submits its
-    /// readback (the pass's frame is ahead of it on the device's queue), or collects it
+    /// readback once the pass's frame is ahead of it on the device's queue (every frame
+    /// before this one submitted; else it waits for a later frame), or collects it
     /// if the device is done; a mask of the current pass whose reached receivers differ
     /// from the tiled ones lays the atlas out for them (recorded into `frame`) and makes
     /// the atlas stale, so this frame traces the same photons into the new tiles.
@@ -145,6 +146,9 @@ impl CausticMapPipeline {
         };
         match std::mem::replace(&mut self.reach, Reach::Idle) {
             Reach::Idle => {}
+            Reach::Wanted(n) if !host.earlier_frames_submitted() => {
+                self.reach = Reach::Wanted(n);
+            }
             Reach::Wanted(n) => {
                 let s = backend.submit(&Recording::new(), &[a.triangle_reach.id])?;
                 self.reach = Reach::Pending(s, n);
