@@ -19,8 +19,7 @@ __kernel void rsm_importance(__global const RsmParams* p, __global const GpuLigh
             float falloff = 1.0f;
             if (light->kind == LIGHT_SPOT) {
                 float3 dir = camera_ray(&p->face_camera, x, y);
-                falloff = spot_falloff(dot3(dir, load3g(light->direction)), light->cos_inner,
-                                       light->cos_outer);
+                falloff = light_spot_falloff(dir, light);
             }
             float3 arriving =
                 light->kind == LIGHT_DIRECTIONAL

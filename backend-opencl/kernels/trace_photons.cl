@@ -90,8 +90,7 @@ inline void emit_photon(__global const GpuLight* lights, __global const TracePar
     }
     __global const GpuLight* light = &lights[p->light];
     float falloff = light->kind == LIGHT_SPOT
-                        ? spot_falloff(dot3(*dir, load3g(light->direction)), light->cos_inner,
-                                       light->cos_outer)
+                        ? light_spot_falloff(*dir, light)
                         : 1.0f;
     *origin = load3g(p->origin);
     *flux = *flux * falloff;

@@ -40,8 +40,7 @@ fn shade_diffuse(light_count: u32, pos: vec3<f32>, n: vec3<f32>, ng: vec3<f32>,
             wi = to / d;
             var falloff = 1.0;
             if (light.kind == LIGHT_SPOT) {
-                falloff = spot_falloff(dot3(-wi, light.direction.xyz), light.cos_inner,
-                                       light.cos_outer);
+                falloff = light_spot_falloff(-wi, light);
             }
             dist = d;
             scale = saturate_radiance(falloff / d2);

@@ -30,8 +30,7 @@ fn rsm_texel(i: u32) {
         var falloff = 1.0;
         if (light.kind == LIGHT_SPOT) {
             let dir = camera_ray(p.face_camera, x, y);
-            falloff = spot_falloff(dot3(dir, light.direction.xyz), light.cos_inner,
-                                   light.cos_outer);
+            falloff = light_spot_falloff(dir, light);
         }
         var arriving: vec3<f32>;
         if (light.kind == LIGHT_DIRECTIONAL) {

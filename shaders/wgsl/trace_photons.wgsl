@@ -107,7 +107,7 @@ fn emit_photon(p: TraceParams, index: u32, origin: ptr<function, vec3<f32>>,
     let light = lights[p.light];
     var falloff = 1.0;
     if (light.kind == LIGHT_SPOT) {
-        falloff = spot_falloff(dot3(*dir, light.direction.xyz), light.cos_inner, light.cos_outer);
+        falloff = light_spot_falloff(*dir, light);
     }
     *origin = p.origin.xyz;
     *flux = *flux * falloff;

@@ -9,7 +9,7 @@ use crate::recording::reserve_temporary;
 use crate::traversal::{Hit, SceneView};
 use crate::CpuBackend;
 use caustica_core::backend::BackendError;
-use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::device::device_scene::light_spot_falloff;
 use caustica_core::device::layout::{
     camera_ray, light_kind, material_kind, DirectParams, GBufferView, GpuMaterial, SurfacePoint,
 };
@@ -92,11 +92,7 @@ pub fn shade_diffuse(scene: &SceneView, pos: Vec3, n: Vec3, ng: Vec3, albedo: Ve
                 let d = d2.sqrt();
                 let wi = to / d;
                 let falloff = if light.kind == light_kind::SPOT {
-                    spot_falloff(
-                        (-wi).dot(Vec3::from_slice(&light.direction[..3])),
-                        light.cos_inner,
-                        light.cos_outer,
-                    )
+                    light_spot_falloff(-wi, light)
                 } else {
                     1.0
                 };

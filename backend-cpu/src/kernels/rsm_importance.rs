@@ -4,7 +4,7 @@
 
 use crate::CpuBackend;
 use caustica_core::backend::BackendError;
-use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::device::device_scene::light_spot_falloff;
 use caustica_core::device::layout::{
     camera_ray, gbuffer_flags, light_kind, GpuLight, RsmParams, RsmTexel, NO_MATERIAL,
 };
@@ -67,12 +67,7 @@ pub fn rsm_texel(
     }
     let (x, y) = (i % p.side, i / p.side);
     let falloff = if light.kind == light_kind::SPOT {
-        let dir = camera_ray(&p.face_camera, x, y);
-        spot_falloff(
-            dir.dot(Vec3::from_slice(&light.direction[..3])),
-            light.cos_inner,
-            light.cos_outer,
-        )
+        light_spot_falloff(camera_ray(&p.face_camera, x, y), light)
     } else {
         1.0
     };

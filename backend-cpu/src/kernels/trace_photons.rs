@@ -34,7 +34,7 @@ use crate::recording::reserve_temporary;
 use crate::traversal::{Hit, SceneView};
 use crate::{atlas_deposit, CpuBackend};
 use caustica_core::backend::BackendError;
-use caustica_core::device::device_scene::spot_falloff;
+use caustica_core::device::device_scene::light_spot_falloff;
 use caustica_core::device::layout::{
     counter, emission_kind, light_kind, material_kind, photon_store, Photon, SurfacePoint,
     TraceParams, MAX_SPLIT_BRANCHES,
@@ -634,11 +634,7 @@ pub fn emit_photon(scene: &SceneView, p: &TraceParams, index: u32) -> (Vec3, Vec
     };
     let light = &scene.lights[p.light as usize];
     let falloff = if light.kind == light_kind::SPOT {
-        spot_falloff(
-            dir.dot(Vec3::from_slice(&light.direction[..3])),
-            light.cos_inner,
-            light.cos_outer,
-        )
+        light_spot_falloff(dir, light)
     } else {
         1.0
     };

@@ -266,7 +266,7 @@ typedef struct {
     uint kind; // 0
     float cos_inner; // 4
     float cos_outer; // 8
-    uint _pad; // 12
+    float one_minus_cos_outer; // 12
     float position[4]; // 16
     float direction[4]; // 32
     float intensity[4]; // 48

@@ -71,6 +71,25 @@ inline float spot_falloff(float cos_theta, float cos_inner, float cos_outer) {
     return t * t * (3.0f - 2.0f * t);
 }
 
+// core::device_scene::spot_falloff_narrow: the smoothstep in h = 1 - cos.
+inline float spot_falloff_narrow(float h, float h_inner, float h_outer) {
+    if (h <= h_inner) return 1.0f;
+    if (h >= h_outer) return 0.0f;
+    float t = clampf((h_outer - h) / (h_outer - h_inner), 0.0f, 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+// core::device_scene::light_spot_falloff: a narrow spot's falloff from
+// h = |dir - axis|^2 / 2, a wider one's from the cosine.
+inline float light_spot_falloff(float3 dir, __global const GpuLight* l) {
+    float3 axis = load3g(l->direction);
+    if (l->one_minus_cos_outer < NARROW_CONE) {
+        float3 d = dir - axis;
+        return spot_falloff_narrow(0.5f * dot3(d, d), l->intensity[3], l->one_minus_cos_outer);
+    }
+    return spot_falloff(dot3(dir, axis), l->cos_inner, l->cos_outer);
+}
+
 inline float3 facing_normal(float3 n, float3 dir) { return dot3(n, dir) > 0.0f ? -n : n; }
 
 // core::device::layout::off_surface: the deposit's surface test (a depth test, or with a

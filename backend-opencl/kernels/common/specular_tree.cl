@@ -28,8 +28,7 @@ inline float3 shade_diffuse(SCENE_PARAMS, uint light_count, float3 pos, float3 n
             float d = sqrt(d2);
             wi = to / d;
             float falloff = light->kind == LIGHT_SPOT
-                                ? spot_falloff(dot3(-wi, load3g(light->direction)),
-                                               light->cos_inner, light->cos_outer)
+                                ? light_spot_falloff(-wi, light)
                                 : 1.0f;
             dist = d;
             scale = saturate_radiance(falloff / d2);

@@ -266,7 +266,7 @@ struct GpuLight {
     uint kind; // 0
     float cos_inner; // 4
     float cos_outer; // 8
-    uint _pad; // 12
+    float one_minus_cos_outer; // 12
     vec4 position; // 16
     vec4 direction; // 32
     vec4 intensity; // 48

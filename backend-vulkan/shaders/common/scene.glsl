@@ -63,6 +63,25 @@ precise float spot_falloff(float cos_theta, float cos_inner, float cos_outer) {
     return t * t * (3.0 - 2.0 * t);
 }
 
+// core::device_scene::spot_falloff_narrow: the smoothstep in h = 1 - cos.
+precise float spot_falloff_narrow(float h, float h_inner, float h_outer) {
+    if (h <= h_inner) return 1.0;
+    if (h >= h_outer) return 0.0;
+    float t = clampf((h_outer - h) / (h_outer - h_inner), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// core::device_scene::light_spot_falloff: a narrow spot's falloff from
+// h = |dir - axis|^2 / 2, a wider one's from the cosine.
+precise float light_spot_falloff(vec3 dir, GpuLight l) {
+    vec3 axis = l.direction.xyz;
+    if (l.one_minus_cos_outer < NARROW_CONE) {
+        precise vec3 d = dir - axis;
+        return spot_falloff_narrow(0.5 * dot3(d, d), l.intensity.w, l.one_minus_cos_outer);
+    }
+    return spot_falloff(dot3(dir, axis), l.cos_inner, l.cos_outer);
+}
+
 vec3 facing_normal(vec3 n, vec3 dir) { return dot3(n, dir) > 0.0 ? -n : n; }
 
 // core::device::layout::off_surface: the deposit's surface test (a depth test, or with a

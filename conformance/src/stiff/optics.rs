@@ -247,6 +247,50 @@ pub(super) fn far_light(b: &mut dyn Backend) -> Result<Outcome, String> {
     )
 }
 
+/// `far_light`'s set-up with a spot of 0.02 degrees (inner 0) aimed down at the ball
+/// from 1000 radii: narrower than the caster cone, so its own cone is emitted, and every
+/// photon passes the vanishing ball. Its cosines are 1 and 1 - 2^-24 in f32: the domain
+/// and the falloff come from `1 - cos` (`GpuLight::one_minus_cos_outer`). Photons are uniform in `h = 1 -
+/// cos` over the cone and the falloff is the smoothstep of `1 - h / h_outer`, whose mean
+/// is 1/2: the stored flux is `I Omega_spot / 2`.
+pub(super) fn narrow_spot(b: &mut dyn Backend) -> Result<Outcome, String> {
+    let mut scene = sphere_scene();
+    scene.materials.insert("glass".into(), glass(1.0));
+    let (d, outer_deg) = (500f64, 0.02f64);
+    let intensity = (10.0 * (d / 2.0).powi(2)) as f32;
+    scene.lights = vec![Light::Spot {
+        position: Vec3::new(0.0, 1.0 + d as f32, 0.0),
+        direction: -Vec3::Y,
+        intensity: Vec3::splat(intensity),
+        inner_angle_deg: 0.0,
+        outer_angle_deg: outer_deg as f32,
+    }];
+    let grid = 256;
+    let st = settings(grid);
+    let mut v = Verdict::new("narrow spot");
+    let f = run_checked(b, &scene, &st, &mut v)?;
+    let h_outer = 2.0 * (0.5 * (outer_deg as f32).to_radians() as f64).sin().powi(2);
+    let omega = std::f64::consts::TAU * h_outer;
+    let emitted = f.stats.emitted_flux[0];
+    v.check(
+        (emitted / (intensity as f64 * omega) - 1.0).abs() < 1e-5,
+        || {
+            format!(
+                "emitted {emitted:e} W, I * Omega_spot {:e}",
+                intensity as f64 * omega
+            )
+        },
+    );
+    // the stratified mean of the smoothstep over 256 strata in h, and the fixed point's
+    // rounding, well inside 1e-3
+    let expect = 0.5 * intensity as f64 * omega;
+    let got = f.stats.stored_flux[0];
+    v.check((got / expect - 1.0).abs() < 1e-3, || {
+        format!("stored flux {got:.5} W, I * Omega_spot / 2 = {expect:.5} W")
+    });
+    outcome(format!("stored {got:.4} W vs I*Omega/2 {expect:.4} W"), v)
+}
+
 fn water_ball_scene() -> Scene {
     let mut s = sphere_scene();
     s.materials.insert("water".into(), glass(1.33));

@@ -15,6 +15,7 @@ use crate::device::layout::{
 pub use crate::device::placement::{placed_vertices, world_vertices};
 use crate::math::geometry::bounding_sphere;
 use crate::math::optics::ior_model;
+use crate::math::sampling::{one_minus_cos_of_angle, NARROW_CONE};
 use crate::scene::limits::{
     is_degenerate, tessellated_size, DEFAULT_MAX_TRIANGLES, MAX_COINCIDENT_TRIANGLES,
 };
@@ -1073,6 +1074,7 @@ pub fn gpu_light(l: &Light) -> GpuLight {
             kind: light_kind::POINT,
             cos_inner: -1.0,
             cos_outer: -1.0,
+            one_minus_cos_outer: 2.0,
             position: position.extend(1.0).to_array(),
             intensity: intensity.extend(0.0).to_array(),
             ..Default::default()
@@ -1087,10 +1089,12 @@ pub fn gpu_light(l: &Light) -> GpuLight {
             kind: light_kind::SPOT,
             cos_inner: inner_angle_deg.to_radians().cos(),
             cos_outer: outer_angle_deg.to_radians().cos(),
+            one_minus_cos_outer: one_minus_cos_of_angle(outer_angle_deg.to_radians()),
             position: position.extend(1.0).to_array(),
             direction: direction.normalize().extend(0.0).to_array(),
-            intensity: intensity.extend(0.0).to_array(),
-            ..Default::default()
+            intensity: intensity
+                .extend(one_minus_cos_of_angle(inner_angle_deg.to_radians()))
+                .to_array(),
         },
         Light::Directional {
             direction,
@@ -1098,6 +1102,7 @@ pub fn gpu_light(l: &Light) -> GpuLight {
             ..
         } => GpuLight {
             kind: light_kind::DIRECTIONAL,
+            one_minus_cos_outer: 2.0,
             direction: direction.normalize().extend(0.0).to_array(),
             intensity: irradiance.extend(0.0).to_array(),
             ..Default::default()
@@ -1116,6 +1121,37 @@ pub fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
         return 0.0;
     }
     let t = ((cos_theta - cos_outer) / (cos_inner - cos_outer)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Spot light `l`'s falloff towards unit direction `dir` (world space): [`spot_falloff`]
+/// of `dir . axis`, or for a spot narrower than [`NARROW_CONE`] (whose cosines round
+/// towards 1, the smoothstep over a few f32 values, or none) the same smoothstep in
+/// `h = 1 - cos`: `h = |dir - axis|^2 / 2` for unit vectors, without cancellation, against
+/// the cone's `1 - cos` ([`GpuLight::one_minus_cos_outer`], `intensity[3]` for the inner
+/// cone).
+#[inline]
+pub fn light_spot_falloff(dir: Vec3, l: &GpuLight) -> f32 {
+    let axis = Vec3::from_slice(&l.direction[..3]);
+    if l.one_minus_cos_outer < NARROW_CONE {
+        let d = dir - axis;
+        let h = 0.5 * (d.x * d.x + d.y * d.y + d.z * d.z);
+        return spot_falloff_narrow(h, l.intensity[3], l.one_minus_cos_outer);
+    }
+    spot_falloff(dir.dot(axis), l.cos_inner, l.cos_outer)
+}
+
+/// [`spot_falloff`] in `h = 1 - cos` (`h_inner <= h_outer`): 1 inside the inner cone, 0
+/// outside the outer, the smoothstep of `(h_outer - h) / (h_outer - h_inner)` between.
+#[inline]
+pub fn spot_falloff_narrow(h: f32, h_inner: f32, h_outer: f32) -> f32 {
+    if h <= h_inner {
+        return 1.0;
+    }
+    if h >= h_outer {
+        return 0.0;
+    }
+    let t = ((h_outer - h) / (h_outer - h_inner)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
 
@@ -1380,6 +1416,54 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A spot wider than `NARROW_CONE` keeps the cosine smoothstep bit for bit; a narrow one
+    /// (0.01 degrees, whose cosines are 1 in f32) falls off over its whole cone as the f64
+    /// smoothstep in `1 - cos` does, within 1e-4.
+    #[test]
+    fn a_narrow_spot_falls_off_over_its_whole_cone() {
+        let spot = |inner: f32, outer: f32| {
+            gpu_light(&Light::Spot {
+                position: Vec3::ZERO,
+                direction: -Vec3::Y,
+                intensity: Vec3::ONE,
+                inner_angle_deg: inner,
+                outer_angle_deg: outer,
+            })
+        };
+        let towards = |theta: f64| Vec3::new(theta.sin() as f32, -(theta.cos() as f32), 0.0);
+        let wide = spot(10.0, 30.0);
+        for k in 0..=40 {
+            let dir = towards((k as f64).to_radians());
+            assert_eq!(
+                light_spot_falloff(dir, &wide).to_bits(),
+                spot_falloff(dir.dot(-Vec3::Y), wide.cos_inner, wide.cos_outer).to_bits()
+            );
+        }
+        let narrow = spot(0.005, 0.01);
+        assert_eq!((narrow.cos_inner, narrow.cos_outer), (1.0, 1.0));
+        let (hi, ho) = (
+            1.0 - 0.005f64.to_radians().cos(),
+            1.0 - 0.01f64.to_radians().cos(),
+        );
+        let mut between = 0;
+        for k in 0..=60 {
+            let theta = (0.012 * k as f64 / 60.0).to_radians();
+            let h = 2.0 * (0.5 * theta).sin().powi(2);
+            let want = if h <= hi {
+                1.0
+            } else if h >= ho {
+                0.0
+            } else {
+                between += 1;
+                let t = (ho - h) / (ho - hi);
+                t * t * (3.0 - 2.0 * t)
+            };
+            let got = light_spot_falloff(towards(theta), &narrow) as f64;
+            assert!((got - want).abs() < 1e-4, "{theta:e} rad: {got} vs {want}");
+        }
+        assert!(between > 20);
     }
 
     #[test]

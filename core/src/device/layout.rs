@@ -77,7 +77,9 @@ pub mod light_kind {
 
 /// Light: `position` (point, spot), unit `direction` the light travels (spot axis,
 /// directional), `intensity` in W/sr (point, spot) or irradiance in W/m^2
-/// (directional); spot cone cosines.
+/// (directional); spot cone cosines, and for a spot narrower than
+/// [`NARROW_CONE`](crate::math::sampling::NARROW_CONE) their `1 - cos` computed without
+/// cancellation ([`light_spot_falloff`](crate::device::device_scene::light_spot_falloff)).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
@@ -87,13 +89,14 @@ pub struct GpuLight {
     pub cos_inner: f32,
     /// Cosine of the spot's outer half-angle (zero intensity outside); -1 for point lights.
     pub cos_outer: f32,
-    /// Padding to the 16-byte boundary.
-    pub _pad: u32,
+    /// `1 - cos_outer` computed without cancellation (spot lights; 2 for the others).
+    pub one_minus_cos_outer: f32,
     /// World-space position, `w = 1` (point and spot lights; unused for directional).
     pub position: [f32; 4],
     /// Unit world-space direction the light travels, `w = 0` (spot axis, directional).
     pub direction: [f32; 4],
-    /// rgb: intensity in W/sr (point, spot) or irradiance in W/m^2 (directional); `w` unused.
+    /// rgb: intensity in W/sr (point, spot) or irradiance in W/m^2 (directional); `w`:
+    /// `1 - cos_inner` computed without cancellation (spot lights; 0 for the others).
     pub intensity: [f32; 4],
 }
 

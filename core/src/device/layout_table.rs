@@ -204,7 +204,7 @@ table! {
     GpuVertex { position, u, normal, v }
     GpuTriangle { indices, material }
     GpuMaterial { kind, ior, dispersion, ior_model, color, absorption }
-    GpuLight { kind, cos_inner, cos_outer, _pad, position, direction, intensity }
+    GpuLight { kind, cos_inner, cos_outer, one_minus_cos_outer, position, direction, intensity }
     GpuCamera { position, tan_half_fov_x, forward, tan_half_fov_y, right, width, up, height }
     GBufferTexel { position, depth, normal, geometric_normal, albedo, material, uv, view_distance, flags }
     Photon { position, hit_distance, flux, direction }

@@ -266,7 +266,7 @@ struct GpuLight {
     kind: u32, // 0
     cos_inner: f32, // 4
     cos_outer: f32, // 8
-    _pad: u32, // 12
+    one_minus_cos_outer: f32, // 12
     position: vec4<f32>, // 16
     direction: vec4<f32>, // 32
     intensity: vec4<f32>, // 48

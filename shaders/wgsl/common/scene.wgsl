@@ -72,6 +72,29 @@ fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
+// core::device_scene::spot_falloff_narrow: the smoothstep in h = 1 - cos.
+fn spot_falloff_narrow(h: f32, h_inner: f32, h_outer: f32) -> f32 {
+    if (h <= h_inner) {
+        return 1.0;
+    }
+    if (h >= h_outer) {
+        return 0.0;
+    }
+    let t = clampf((h_outer - h) / (h_outer - h_inner), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// core::device_scene::light_spot_falloff: a narrow spot's falloff from
+// h = |dir - axis|^2 / 2, a wider one's from the cosine.
+fn light_spot_falloff(dir: vec3<f32>, l: GpuLight) -> f32 {
+    let axis = l.direction.xyz;
+    if (l.one_minus_cos_outer < NARROW_CONE) {
+        let d = dir - axis;
+        return spot_falloff_narrow(0.5 * dot3(d, d), l.intensity.w, l.one_minus_cos_outer);
+    }
+    return spot_falloff(dot3(dir, axis), l.cos_inner, l.cos_outer);
+}
+
 fn facing_normal(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
     return select(n, -n, dot3(n, dir) > 0.0);
 }

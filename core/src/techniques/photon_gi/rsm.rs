@@ -81,7 +81,13 @@ pub fn rsm_faces(
             if cos > 0.5 {
                 let axis = Vec3::from_slice(&light.direction[..3]).normalize();
                 let hint = if axis.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
-                let tan = (1.0 - cos * cos).sqrt() / cos;
+                let h = light.one_minus_cos_outer;
+                let tan = if h < crate::math::sampling::NARROW_CONE {
+                    // a narrow spot: from 1 - cos, whose cosine has cancelled
+                    (h * (2.0 - h)).sqrt() / (1.0 - h)
+                } else {
+                    (1.0 - cos * cos).sqrt() / cos
+                };
                 vec![face(axis, hint, tan)]
             } else {
                 cube()
@@ -123,7 +129,7 @@ pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
         (light_kind::POINT, _) => 4.0 * std::f64::consts::PI,
         (light_kind::SPOT, _) => {
             let c = l.cos_outer.clamp(-1.0, 1.0);
-            crate::math::sampling::cone_solid_angle(c, 1.0 - c) as f64
+            crate::math::sampling::cone_solid_angle(c, l.one_minus_cos_outer) as f64
         }
         // an orthographic face's half-extents are its negated tangents (GpuCamera::orthographic)
         (light_kind::DIRECTIONAL, Some(f)) => {
@@ -139,7 +145,7 @@ pub fn rsm_flux(l: &GpuLight, faces: &[GpuCamera]) -> [f64; 3] {
 fn light_power(l: &GpuLight) -> f64 {
     let i = luminance(Vec3::from_slice(&l.intensity[..3])).max(0.0) as f64;
     let omega = if l.kind == light_kind::SPOT {
-        crate::math::sampling::cone_solid_angle(l.cos_outer, 1.0 - l.cos_outer) as f64
+        crate::math::sampling::cone_solid_angle(l.cos_outer, l.one_minus_cos_outer) as f64
     } else {
         4.0 * std::f64::consts::PI
     };
@@ -492,6 +498,7 @@ mod tests {
     fn point(i: f32) -> GpuLight {
         GpuLight {
             kind: light_kind::POINT,
+            one_minus_cos_outer: 2.0,
             intensity: [i, i, i, 0.0],
             ..Default::default()
         }
@@ -594,6 +601,7 @@ mod tests {
             kind: light_kind::SPOT,
             direction: [0.0, -1.0, 0.0, 0.0],
             cos_outer: 0.8,
+            one_minus_cos_outer: 1.0 - 0.8,
             ..l
         };
         let flux = rsm_flux(&spot, &rsm_faces(&spot, side, &bounds));
