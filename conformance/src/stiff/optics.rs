@@ -190,20 +190,31 @@ pub(super) fn ior_one(b: &mut dyn Backend) -> Result<Outcome, String> {
     outcome(format!("stored {got:.4} W vs I*Omega {expect:.4} W"), v)
 }
 
+/// `ior_one`'s scene (its ball of IOR 1) lit by the light `light` makes at `d` above the
+/// ball's centre, with an intensity that grows as `d^2` from `ior_one`'s 10 W/sr at 2
+/// (the beam through the ball carries the same order of flux); and that intensity.
+fn vanishing_ball_lit_from(d: f64, light: impl Fn(Vec3, Vec3) -> Light) -> (Scene, f32) {
+    let mut scene = sphere_scene();
+    scene.materials.insert("glass".into(), glass(1.0));
+    let intensity = (10.0 * (d / 2.0).powi(2)) as f32;
+    scene.lights = vec![light(
+        Vec3::new(0.0, 1.0 + d as f32, 0.0),
+        Vec3::splat(intensity),
+    )];
+    (scene, intensity)
+}
+
 /// `ior_one`'s vanishing ball lit by a point light 2e4 radii above it: the caster cone's
 /// half-angle is 5e-5 rad, whose cosine is 1 in f32, so its solid angle and its directions
 /// come from `1 - cos` computed without cancellation (`EmissionDomain::one_minus_cos`).
 /// The intensity grows as the distance squared, so the beam carries `ior_one`'s order of
 /// flux.
 pub(super) fn far_light(b: &mut dyn Backend) -> Result<Outcome, String> {
-    let mut scene = sphere_scene();
-    scene.materials.insert("glass".into(), glass(1.0));
     let (r, d) = (0.5f64, 1e4f64);
-    let intensity = (10.0 * (d / 2.0).powi(2)) as f32;
-    scene.lights = vec![Light::Point {
-        position: Vec3::new(0.0, 1.0 + d as f32, 0.0),
-        intensity: Vec3::splat(intensity),
-    }];
+    let (scene, intensity) = vanishing_ball_lit_from(d, |position, intensity| Light::Point {
+        position,
+        intensity,
+    });
     let grid = 256;
     let st = settings(grid);
     let mut v = Verdict::new("far light");
@@ -254,17 +265,14 @@ pub(super) fn far_light(b: &mut dyn Backend) -> Result<Outcome, String> {
 /// cos` over the cone and the falloff is the smoothstep of `1 - h / h_outer`, whose mean
 /// is 1/2: the stored flux is `I Omega_spot / 2`.
 pub(super) fn narrow_spot(b: &mut dyn Backend) -> Result<Outcome, String> {
-    let mut scene = sphere_scene();
-    scene.materials.insert("glass".into(), glass(1.0));
     let (d, outer_deg) = (500f64, 0.02f64);
-    let intensity = (10.0 * (d / 2.0).powi(2)) as f32;
-    scene.lights = vec![Light::Spot {
-        position: Vec3::new(0.0, 1.0 + d as f32, 0.0),
+    let (scene, intensity) = vanishing_ball_lit_from(d, |position, intensity| Light::Spot {
+        position,
         direction: -Vec3::Y,
-        intensity: Vec3::splat(intensity),
+        intensity,
         inner_angle_deg: 0.0,
         outer_angle_deg: outer_deg as f32,
-    }];
+    });
     let grid = 256;
     let st = settings(grid);
     let mut v = Verdict::new("narrow spot");
