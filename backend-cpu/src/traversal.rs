@@ -17,7 +17,7 @@ use caustica_core::device::layout::{GpuLight, GpuMaterial, GpuTriangle, GpuVerte
 use caustica_core::math::geometry::WatertightRay;
 // `UVec2`: named by obvhs's `traverse!` macro at its call site.
 use caustica_core::device::acceleration::{
-    instance_flags, SINGLE_LEVEL_MARK, SINGLE_LEVEL_SLOT, SLOT_VEC4S,
+    culling_component, instance_flags, SINGLE_LEVEL_MARK, SINGLE_LEVEL_SLOT, SLOT_VEC4S,
 };
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::cwbvh::node::extract_byte64;
@@ -118,19 +118,24 @@ pub fn check_nodes(nodes: &[[u32; 4]]) -> Result<(), BackendError> {
     Ok(())
 }
 
-/// The obvhs ray for a traversal. obvhs's `safe_inverse` maps a zero direction component
-/// to +-1/EPSILON (8.4e6), which makes its slab test reject boxes for axis-aligned rays far
-/// from the node origin (seen: a directional light straight down missed everything); a
-/// zero component is replaced by +-1e-30 so its inverse is effectively infinite. Only
-/// node culling sees this ray; triangles are tested with the exact direction.
+/// The obvhs ray for node culling: each direction component raised to at least
+/// `CULLING_MIN_COMPONENT` in magnitude ([`culling_component`]) and its inverse taken
+/// exactly. obvhs's `Ray::new` clamps the inverse of a component of at most 2^-23 to
+/// 2^23 (`safe_inverse`), which culls boxes a ray from a distant light passes through.
+/// Only node culling sees this ray; triangles are tested with the exact direction.
 fn traversal_ray(origin: Vec3, dir: Vec3, t_max: f32) -> Ray {
-    let fix = |c: f32| if c == 0.0 { 1e-30f32.copysign(c) } else { c };
-    Ray::new(
-        Vec3A::from(origin),
-        Vec3A::new(fix(dir.x), fix(dir.y), fix(dir.z)),
-        0.0,
-        t_max,
-    )
+    let direction = Vec3A::new(
+        culling_component(dir.x),
+        culling_component(dir.y),
+        culling_component(dir.z),
+    );
+    Ray {
+        origin: Vec3A::from(origin),
+        direction,
+        inv_direction: Vec3A::ONE / direction,
+        tmin: 0.0,
+        tmax: t_max,
+    }
 }
 
 /// `row.xyz . p + row.w` in the order the ports write it (`x*r.x + y*r.y + z*r.z + r.w`,
@@ -153,11 +158,10 @@ struct LevelRay {
 
 /// The power of two that brings `d`'s largest component into [1, 2) (1 where it is zero or
 /// not finite): an object-space direction is `object_from_world` applied to a unit one, so
-/// its length is about 1 / scale, and obvhs's `safe_inverse` would clamp every component
-/// below 2^-23 of *unit* size, i.e. whole directions of instances scaled by 1e5 (seen: a
-/// glass ball at scale 1e5 missed 4% of its photons). Multiplying by a power of two is
-/// exact, so culling with `d * c` and `t / c` decides as culling with `d` and `t` would
-/// with an unclamped inverse.
+/// its length is about 1 / scale, and `CULLING_MIN_COMPONENT` is a floor for directions
+/// of about unit size (the direction of an instance scaled by 2^64 would be floored
+/// whole). Multiplying by a power of two is exact, so culling with `d * c` and `t / c`
+/// decides as culling with `d` and `t` would with an unfloored inverse.
 #[inline(always)]
 fn culling_scale(d: Vec3) -> f32 {
     let e = (d.abs().max_element().to_bits() >> 23) & 0xff;

@@ -104,6 +104,7 @@
 // core::device::acceleration
 #define SINGLE_LEVEL_MARK 0x7fc05e1fu
 #define SINGLE_LEVEL_SLOT 1u
+#define CULLING_MIN_COMPONENT 5.421011e-20f
 
 // core::math::optics
 #define FRESNEL_EXACT 0u

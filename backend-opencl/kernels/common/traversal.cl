@@ -21,15 +21,12 @@ typedef struct {
     float v;
 } Hit;
 
-// obvhs's `safe_inverse`.
-inline float safe_inverse(float x) {
-    return fabs(x) <= FLT_EPSILON ? (x < 0.0f || (x == 0.0f && signbit(x)) ? -1.0f : 1.0f) / FLT_EPSILON
-                                  : 1.0f / x;
+// core's device::acceleration::culling_component: a direction component as node culling
+// sees it, at least CULLING_MIN_COMPONENT in magnitude (a zero's sign bit kept, so that the
+// slab test's side choice matches the inverse); its inverse is then taken exactly.
+inline float culling_component(float c) {
+    return fabs(c) < CULLING_MIN_COMPONENT ? copysign(CULLING_MIN_COMPONENT, c) : c;
 }
-
-// A zero direction component becomes +-1e-30 (sign kept) for node culling only, as the CPU
-// backend's `traversal_ray`, so that the slab test's side choice matches the inverse.
-inline float traversal_component(float c) { return c == 0.0f ? copysign(1e-30f, c) : c; }
 
 inline uint octant_inv4(float3 d) {
     return (d.x < 0.0f ? 0u : 0x04040404u) | (d.y < 0.0f ? 0u : 0x02020202u) |
@@ -112,17 +109,17 @@ typedef struct {
 inline LevelRay level_ray(float3 origin, float3 dir, float t_scale) {
     LevelRay l;
     l.origin = origin;
-    l.tdir = (float3)(traversal_component(dir.x), traversal_component(dir.y),
-                      traversal_component(dir.z));
-    l.inv_dir = (float3)(safe_inverse(l.tdir.x), safe_inverse(l.tdir.y), safe_inverse(l.tdir.z));
+    l.tdir = (float3)(culling_component(dir.x), culling_component(dir.y),
+                      culling_component(dir.z));
+    l.inv_dir = (float3)(1.0f / l.tdir.x, 1.0f / l.tdir.y, 1.0f / l.tdir.z);
     l.oct_inv4 = octant_inv4(l.tdir);
     l.t_scale = t_scale;
     return l;
 }
 
 // The power of two that brings d's largest component into [1, 2) (the CPU backend's
-// culling_scale: object-space directions are ~1/scale long, and safe_inverse clamps
-// components below 2^-23).
+// culling_scale: object-space directions are ~1/scale long, and CULLING_MIN_COMPONENT is
+// a floor for directions of about unit size).
 inline float culling_scale(float3 d) {
     uint e = (as_uint(fmax(fmax(fabs(d.x), fabs(d.y)), fabs(d.z))) >> 23) & 0xffu;
     if (e == 0u || e >= 254u) return 1.0f;

@@ -104,6 +104,7 @@ const uint INSTANCE_IDENTITY = 1u;
 // core::device::acceleration
 const uint SINGLE_LEVEL_MARK = 0x7fc05e1fu;
 const uint SINGLE_LEVEL_SLOT = 1u;
+const float CULLING_MIN_COMPONENT = 5.421011e-20;
 
 // core::math::optics
 const uint FRESNEL_EXACT = 0u;

@@ -126,6 +126,8 @@ pub fn catalogue() -> Vec<StiffCase> {
             "ior-1's vanishing ball under a point light 2e4 radii above it (caster cone 5e-5 rad, its cosine 1 in f32): stored flux = I * Omega_ball (grid bound), every floor pixel within 0.8 radii of the beam's axis lit and none beyond 1.2"),
         case!("optics", "narrow-spot", optics::narrow_spot,
             "far-light's set-up under a spot of 0.02 degrees 1000 radii away (its cosines 1 and 1 - 2^-24 in f32) aimed at the ball: emitted I * Omega_spot, stored I * Omega_spot / 2 (the smoothstep falloff's mean over the cone) within 1e-3"),
+        case!("optics", "distant-spot", optics::distant_spot,
+            "narrow-spot's set-up from 1e4 and 1e5 units, the cone 0.7 radii wide at the ball (sideways direction components below 2^-23): no photon passes the ball, stored I * Omega_spot / 2 within 1e-3"),
         case!("optics", "ior-below-1", optics::ior_below_one,
             "Air bubble (ior 1/1.33) inside a water ball: TIR on entering the bubble, no NaN, stored <= emitted"),
         case!("optics", "ior-4", optics::ior_four,

@@ -261,11 +261,41 @@ pub(super) fn far_light(b: &mut dyn Backend) -> Result<Outcome, String> {
 /// `far_light`'s set-up with a spot of 0.02 degrees (inner 0) aimed down at the ball
 /// from 1000 radii: narrower than the caster cone, so its own cone is emitted, and every
 /// photon passes the vanishing ball. Its cosines are 1 and 1 - 2^-24 in f32: the domain
-/// and the falloff come from `1 - cos` (`GpuLight::one_minus_cos_outer`). Photons are uniform in `h = 1 -
-/// cos` over the cone and the falloff is the smoothstep of `1 - h / h_outer`, whose mean
-/// is 1/2: the stored flux is `I Omega_spot / 2`.
+/// and the falloff come from `1 - cos` (`GpuLight::one_minus_cos_outer`).
 pub(super) fn narrow_spot(b: &mut dyn Backend) -> Result<Outcome, String> {
-    let (d, outer_deg) = (500f64, 0.02f64);
+    let mut v = Verdict::new("narrow spot");
+    let got = spot_through_ball(b, 500.0, 0.02, &mut v)?;
+    outcome(got, v)
+}
+
+/// Spots 1e4 and 1e5 units above the vanishing ball whose cones span 0.7 of its radius
+/// there: every photon must meet the ball. Their directions' sideways components are
+/// below 2^-23 near the axis, where a clamped inverse in node culling made a ray skip
+/// boxes it passes through (`CULLING_MIN_COMPONENT`).
+pub(super) fn distant_spot(b: &mut dyn Backend) -> Result<Outcome, String> {
+    let mut v = Verdict::new("distant spot");
+    let mut notes = Vec::new();
+    for d in [1e4f64, 1e5] {
+        let outer_deg = (0.35 / d).atan().to_degrees();
+        notes.push(format!(
+            "d {d:e}: {}",
+            spot_through_ball(b, d, outer_deg, &mut v)?
+        ));
+    }
+    outcome(notes.join("; "), v)
+}
+
+/// The vanishing ball under a spot `d` above its centre, aimed down at it, of outer half
+/// angle `outer_deg` (inner 0), narrow enough that the cone falls inside the ball: the
+/// emitted flux is `I Omega_spot`, no photon misses the ball, and the stored flux is
+/// `I Omega_spot / 2` (photons are uniform in `h = 1 - cos` over the cone and the falloff
+/// is the smoothstep of `1 - h / h_outer`, whose mean is 1/2). Returns the summary.
+fn spot_through_ball(
+    b: &mut dyn Backend,
+    d: f64,
+    outer_deg: f64,
+    v: &mut Verdict,
+) -> Result<String, String> {
     let (scene, intensity) = vanishing_ball_lit_from(d, |position, intensity| Light::Spot {
         position,
         direction: -Vec3::Y,
@@ -275,8 +305,7 @@ pub(super) fn narrow_spot(b: &mut dyn Backend) -> Result<Outcome, String> {
     });
     let grid = 256;
     let st = settings(grid);
-    let mut v = Verdict::new("narrow spot");
-    let f = run_checked(b, &scene, &st, &mut v)?;
+    let f = run_checked(b, &scene, &st, v)?;
     let h_outer = 2.0 * (0.5 * (outer_deg as f32).to_radians() as f64).sin().powi(2);
     let omega = std::f64::consts::TAU * h_outer;
     let emitted = f.stats.emitted_flux[0];
@@ -284,19 +313,23 @@ pub(super) fn narrow_spot(b: &mut dyn Backend) -> Result<Outcome, String> {
         (emitted / (intensity as f64 * omega) - 1.0).abs() < 1e-5,
         || {
             format!(
-                "emitted {emitted:e} W, I * Omega_spot {:e}",
+                "d {d:e}: emitted {emitted:e} W, I * Omega_spot {:e}",
                 intensity as f64 * omega
             )
         },
     );
+    let missed = f.stats.discarded.no_specular;
+    v.check(missed == 0, || {
+        format!("d {d:e}: {missed} photons passed the ball without meeting it")
+    });
     // the stratified mean of the smoothstep over 256 strata in h, and the fixed point's
     // rounding, well inside 1e-3
     let expect = 0.5 * intensity as f64 * omega;
     let got = f.stats.stored_flux[0];
     v.check((got / expect - 1.0).abs() < 1e-3, || {
-        format!("stored flux {got:.5} W, I * Omega_spot / 2 = {expect:.5} W")
+        format!("d {d:e}: stored flux {got:.5} W, I * Omega_spot / 2 = {expect:.5} W")
     });
-    outcome(format!("stored {got:.4} W vs I*Omega/2 {expect:.4} W"), v)
+    Ok(format!("stored {got:.4} W vs I*Omega/2 {expect:.4} W"))
 }
 
 fn water_ball_scene() -> Scene {

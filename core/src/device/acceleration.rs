@@ -63,6 +63,32 @@ pub const SINGLE_LEVEL_MARK: u32 = 0x7fc0_5e1f;
 /// Slot of the [`SINGLE_LEVEL_MARK`] vector.
 pub const SINGLE_LEVEL_SLOT: usize = 1;
 
+/// Smallest magnitude of a ray direction component in node culling (2^-64; a unit
+/// direction in world space, in object space one whose largest component is in [1, 2)).
+/// The slab test divides by each component, so a smaller one (a zero included, its sign
+/// kept) is raised to this before its inverse is taken. The inverse is otherwise exact:
+/// clamping it at 2^23, as a component of 2^-23 would give, culls boxes a ray from a
+/// distant light passes through (its slab times along that axis are off by the factor
+/// |c| 2^23). The floor bounds every slab value: a child's quantized bound (255 steps of
+/// its node's power-of-two extent, at most 2^42 for boxes within the coordinate bound
+/// `MAX_COORDINATE` = 2^40) or a distance (at most 2^41) times 2^64 stays below 2^107, so
+/// no product overflows to infinity and no `0 x inf` makes a NaN. What it
+/// changes is below f32's resolution: the ray moves at most `t 2^-64` along that axis,
+/// far less than the rounding `t 2^-24` of any point on it.
+pub const CULLING_MIN_COMPONENT: f32 = 1.0 / 18_446_744_073_709_551_616.0;
+
+/// A direction component as node culling sees it: at least [`CULLING_MIN_COMPONENT`] in
+/// magnitude, sign kept (a zero's sign bit too, so the slab test's side choice matches
+/// the inverse). Mirrored by the ports' `culling_component`.
+#[inline(always)]
+pub fn culling_component(c: f32) -> f32 {
+    if c.abs() < CULLING_MIN_COMPONENT {
+        CULLING_MIN_COMPONENT.copysign(c)
+    } else {
+        c
+    }
+}
+
 /// One level as the traversal reads it: 10 x `[u32; 4]` (two node slots).
 ///
 /// `[0..3]` rows of `object_from_world` (f32 bits; `x' = dot(row.xyz, p) + row.w`);
@@ -328,5 +354,35 @@ pub fn rebase_blas(nodes: &mut [[u32; 4]], first_slot: u32, first_triangle: u32)
     for n in nodes.chunks_exact_mut(SLOT_VEC4S) {
         n[1][0] += first_slot;
         n[1][1] += first_triangle;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn culling_component_floors_keeping_the_sign() {
+        assert_eq!(CULLING_MIN_COMPONENT, 2f32.powi(-64));
+        assert_eq!(culling_component(0.0), CULLING_MIN_COMPONENT);
+        assert_eq!(culling_component(-0.0), -CULLING_MIN_COMPONENT);
+        assert_eq!(culling_component(1e-30), CULLING_MIN_COMPONENT);
+        assert_eq!(culling_component(-1e-30), -CULLING_MIN_COMPONENT);
+        // components a clamped inverse would have changed keep their value
+        for c in [2f32.powi(-64), 1e-7, 2f32.powi(-23), 0.5, -1e-7, -1.0] {
+            assert_eq!(culling_component(c), c);
+        }
+    }
+
+    #[test]
+    fn slab_values_stay_finite_in_the_coordinate_bound() {
+        // the largest power-of-two extent of a node within the coordinate bound (its 255
+        // quantization steps span the box) and the longest distance, times the largest
+        // inverse
+        let span = 2.0 * crate::scene::limits::MAX_COORDINATE;
+        let extent = 2f32.powi((span / 255.0).log2().ceil() as i32);
+        let inv = 1.0 / CULLING_MIN_COMPONENT;
+        let slab = 255.0 * extent * inv + span * inv;
+        assert!(slab.is_finite() && slab < 2f32.powi(107), "{slab:e}");
     }
 }

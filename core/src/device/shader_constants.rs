@@ -242,6 +242,11 @@ pub fn groups() -> Vec<ConstGroup> {
             vec![
                 named!("SINGLE_LEVEL_MARK", U32, acceleration::SINGLE_LEVEL_MARK),
                 named!("SINGLE_LEVEL_SLOT", U32, acceleration::SINGLE_LEVEL_SLOT),
+                named!(
+                    "CULLING_MIN_COMPONENT",
+                    F32,
+                    acceleration::CULLING_MIN_COMPONENT
+                ),
             ],
         ),
         group(

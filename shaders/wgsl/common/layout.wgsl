@@ -104,6 +104,7 @@ const INSTANCE_IDENTITY: u32 = 1u;
 // core::device::acceleration
 const SINGLE_LEVEL_MARK: u32 = 0x7fc05e1fu;
 const SINGLE_LEVEL_SLOT: u32 = 1u;
+const CULLING_MIN_COMPONENT: f32 = 5.421011e-20f;
 
 // core::math::optics
 const FRESNEL_EXACT: u32 = 0u;

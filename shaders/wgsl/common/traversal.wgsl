@@ -18,7 +18,6 @@
 // 1e-4 scale lost their hits (stiff case `scale-1e-4`). Mirrors backend-cpu/src/traversal.rs.
 const CWBVH_T_MIN: f32 = 0.0f;
 const TRAVERSAL_STACK_SIZE: u32 = 32u;
-const FLT_EPSILON: f32 = 0x1p-23f;
 
 struct Hit {
     t: f32,
@@ -27,18 +26,11 @@ struct Hit {
     v: f32,
 }
 
-// obvhs's `safe_inverse`.
-fn safe_inverse(x: f32) -> f32 {
-    if (abs(x) <= FLT_EPSILON) {
-        return select(1.0, -1.0, x < 0.0 || (x == 0.0 && sign_bit_f32(x))) / FLT_EPSILON;
-    }
-    return 1.0 / x;
-}
-
-// A zero direction component becomes +-1e-30 (sign kept) for node culling only, as the CPU
-// backend's `traversal_ray`, so that the slab test's side choice matches the inverse.
-fn traversal_component(c: f32) -> f32 {
-    return select(c, copysign_f32(1e-30f, c), c == 0.0);
+// core's device::acceleration::culling_component: a direction component as node culling
+// sees it, at least CULLING_MIN_COMPONENT in magnitude (a zero's sign bit kept, so that the
+// slab test's side choice matches the inverse); its inverse is then taken exactly.
+fn culling_component(c: f32) -> f32 {
+    return select(c, copysign_f32(CULLING_MIN_COMPONENT, c), abs(c) < CULLING_MIN_COMPONENT);
 }
 
 fn octant_inv4(d: vec3<f32>) -> u32 {
@@ -144,16 +136,15 @@ struct LevelRay {
 }
 
 fn level_ray(origin: vec3<f32>, dir: vec3<f32>, t_scale: f32) -> LevelRay {
-    let tdir = vec3<f32>(traversal_component(dir.x), traversal_component(dir.y),
-                         traversal_component(dir.z));
-    return LevelRay(origin, tdir,
-                    vec3<f32>(safe_inverse(tdir.x), safe_inverse(tdir.y), safe_inverse(tdir.z)),
+    let tdir = vec3<f32>(culling_component(dir.x), culling_component(dir.y),
+                         culling_component(dir.z));
+    return LevelRay(origin, tdir, vec3<f32>(1.0f / tdir.x, 1.0f / tdir.y, 1.0f / tdir.z),
                     octant_inv4(tdir), t_scale);
 }
 
 // The power of two that brings d's largest component into [1, 2) (the CPU backend's
-// culling_scale: object-space directions are ~1/scale long, and safe_inverse clamps
-// components below 2^-23).
+// culling_scale: object-space directions are ~1/scale long, and CULLING_MIN_COMPONENT is
+// a floor for directions of about unit size).
 fn culling_scale(d: vec3<f32>) -> f32 {
     let e = (bitcast<u32>(max(max(abs(d.x), abs(d.y)), abs(d.z))) >> 23u) & 0xffu;
     if (e == 0u || e >= 254u) {

@@ -28,11 +28,6 @@ fn is_nan_f32(x: f32) -> bool {
     return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u;
 }
 
-// C's signbit (true for -0.0 and negative NaNs).
-fn sign_bit_f32(x: f32) -> bool {
-    return (bitcast<u32>(x) & 0x80000000u) != 0u;
-}
-
 // C's copysign: the magnitude of `mag` with the sign bit of `sgn`.
 fn copysign_f32(mag: f32, sgn: f32) -> f32 {
     return bitcast<f32>((bitcast<u32>(mag) & 0x7fffffffu) | (bitcast<u32>(sgn) & 0x80000000u));
