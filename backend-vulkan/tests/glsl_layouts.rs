@@ -187,6 +187,11 @@ const NOT_BOUND: &[(&str, &str)] = &[
          whose layouts that crate's tests check",
     ),
     (
+        "PlacementParams",
+        "place_vertices runs on Vulkan as a compute pipeline from caustica-shaders' WGSL, \
+         whose layouts that crate's tests check",
+    ),
+    (
         "CorrectionParams",
         "shading_normal_correction runs on Vulkan as a compute pipeline from \
          caustica-shaders' WGSL, whose layouts that crate's tests check",

@@ -1,8 +1,9 @@
 //! The host time of an update, without frames: `frame_loop`'s moves (the light circles,
 //! the `sphere` scene's glass ball bobs and turns as an instance) on a backend, as the
-//! medians of the ball's world vertices alone (`world_vertices`), of their box alone (the
-//! positions placed and bounded, nothing written: what the host would still compute if
-//! the device placed the vertices), of the move of the instances alone
+//! medians of the ball's world vertices placed on the host (`world_vertices`, what a
+//! build does), of their boxes alone (`placed_bounds`: the positions placed and bounded
+//! from their coordinate columns, nothing written: what a move computes on the host, the
+//! device placing the vertices), of the move of the instances alone
 //! (`SceneInstances::move_instances`) and of each technique's `set_lights` and
 //! `set_object_transforms`.
 //! Run: `cargo run --release -p caustica --example update_cost -- [BACKEND] [UPDATES]
@@ -10,8 +11,9 @@
 
 use caustica::glam;
 use caustica::scene::builtin::builtin;
-use caustica::scene::{Aabb, Light, Shape, Transform};
+use caustica::scene::{Light, Shape, Transform};
 use caustica_core::device::device_scene::{world_vertices, DeviceScene};
+use caustica_core::device::placement::placed_bounds;
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -23,49 +25,6 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// Milliseconds since `t`.
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
-}
-
-/// The box of the positions `(xs, ys, zs)` (by coordinate) placed by `t`, four at a time:
-/// each coordinate `x_axis * x + y_axis * y + z_axis * z + translation` in glam's order, so
-/// the box of `world_vertices` (whole blocks of four), with nothing written.
-fn positions_box(t: &Transform, (xs, ys, zs): (&[f32], &[f32], &[f32])) -> Aabb {
-    use glam::Vec4;
-    let m = t.world_from_object();
-    let (a, b, c, o) = (
-        m.matrix3.x_axis,
-        m.matrix3.y_axis,
-        m.matrix3.z_axis,
-        m.translation,
-    );
-    let (mut lo, mut hi) = ([Vec4::INFINITY; 3], [Vec4::NEG_INFINITY; 3]);
-    for ((x, y), z) in xs
-        .chunks_exact(4)
-        .zip(ys.chunks_exact(4))
-        .zip(zs.chunks_exact(4))
-    {
-        let (x, y, z) = (
-            Vec4::from_slice(x),
-            Vec4::from_slice(y),
-            Vec4::from_slice(z),
-        );
-        for k in 0..3 {
-            let w = x * a[k] + y * b[k] + z * c[k] + o[k];
-            lo[k] = lo[k].min(w);
-            hi[k] = hi[k].max(w);
-        }
-    }
-    Aabb {
-        min: glam::Vec3::new(
-            lo[0].min_element(),
-            lo[1].min_element(),
-            lo[2].min_element(),
-        ),
-        max: glam::Vec3::new(
-            hi[0].max_element(),
-            hi[1].max_element(),
-            hi[2].max_element(),
-        ),
-    }
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -103,24 +62,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("the ball is an instance")?
         .clone();
     // the ball is the scene's one instance: its object-space vertices come first
-    let local = instances.object_vertices[..level.vertex_count as usize].to_vec();
-    // the positions by coordinate, four to a lane vector (the last repeated to fill the
-    // last four: the same box)
-    let column = |k: usize| -> Vec<f32> {
-        let mut c: Vec<f32> = local.iter().map(|v| v.position[k]).collect();
-        while !c.len().is_multiple_of(4) {
-            c.push(c[c.len() - 1]);
-        }
-        c
-    };
-    let (xs, ys, zs) = (column(0), column(1), column(2));
+    let count = level.vertex_count as usize;
+    let local = instances.object_vertices[..count].to_vec();
     let (mut placed, mut boxed, mut moved) = (Vec::new(), Vec::new(), Vec::new());
     for f in 0..n {
         let t = Instant::now();
         let (_, placed_box) = black_box(world_vertices(&placement(f), black_box(&local)));
         placed.push(ms(t));
         let t = Instant::now();
-        let b = black_box(positions_box(&placement(f), black_box((&xs, &ys, &zs))));
+        let (b, _) = black_box(placed_bounds(
+            &placement(f),
+            black_box(&instances.columns),
+            0..count,
+            &level.unused_vertices,
+        ));
         boxed.push(ms(t));
         if b.min != placed_box.min || b.max != placed_box.max {
             return Err("the positions' box differs from the placement's".into());

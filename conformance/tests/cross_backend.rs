@@ -22,6 +22,7 @@ use caustica_conformance::kernels::{
     density_gather::check_density_gather,
     deposit_screen::{check_deposit, check_fused_screen_trace},
     direct_light::check_direct,
+    place_vertices::check_place_vertices,
     primary_gbuffer::check_gbuffer,
     refine_clusters::{check_adaptive_caustics, check_screen_target},
     shading_normal_correction::check_photon_gi,
@@ -156,6 +157,64 @@ fn temporal_blend_matches_cpu_on_the_same_inputs() {
 #[test]
 fn atrous_filter_matches_cpu_on_the_same_inputs() {
     kernel_test("atrous_filter", &check_atrous_filter);
+}
+
+/// An instance's vertices placed on the device: every position coordinate within
+/// `2 gamma_4` of its terms' magnitudes of the CPU's, normals within the renormalised
+/// bound, u, v and every vertex outside the run bitwise (`kernels::place_vertices` argues
+/// it), for transforms of any rotation, scales from 0.01 to 100, zeros of both signs and
+/// normals of no length, runs from 0 vertices to the whole object at any offset.
+#[test]
+fn place_vertices_matches_cpu_for_any_run() {
+    use caustica_core::device::layout::GpuVertex;
+    use caustica_core::device::placement::placement_params;
+    use caustica_core::scene::Transform;
+    use glam::{Quat, Vec3};
+    use proptest::prelude::*;
+    let coordinate = || prop_oneof![-2.0f32..2.0, Just(0.0f32), Just(-0.0f32), Just(1.0f32)];
+    let v3 = move || [coordinate(), coordinate(), coordinate()];
+    let vertex =
+        (v3(), v3(), -1.0f32..2.0, -1.0f32..2.0).prop_map(|(position, normal, u, v)| GpuVertex {
+            position,
+            u,
+            normal,
+            v,
+        });
+    let transform = (
+        [-50.0f32..50.0, -50.0f32..50.0, -50.0f32..50.0],
+        (-3.2f32..3.2, -3.2f32..3.2),
+        [0.01f32..100.0, 0.01f32..100.0, 0.01f32..100.0],
+    )
+        .prop_map(|(t, (a, b), s)| Transform {
+            translation: Vec3::from(t),
+            rotation: Quat::from_rotation_y(a) * Quat::from_rotation_x(b),
+            scale: Vec3::from(s),
+        });
+    let cases = (
+        transform,
+        proptest::collection::vec(vertex.clone(), 1..300),
+        proptest::collection::vec(vertex, 1..40),
+        (
+            0usize..8,
+            any::<prop::sample::Index>(),
+            any::<prop::sample::Index>(),
+        ),
+    )
+        .prop_map(|(t, object, extra, (first, count, world_at))| {
+            let first = first.min(object.len() - 1);
+            let count = count.index(object.len() - first + 1);
+            // the world buffer: the run somewhere among other vertices
+            let mut world = extra.clone();
+            world.extend(extra.iter().cycle().take(count));
+            let world_first = world_at.index(world.len() - count + 1);
+            let p = placement_params(&t, first as u32, world_first as u32, count as u32);
+            (p, object, world)
+        });
+    harness::check_generated(
+        "place_vertices on generated instances",
+        cases,
+        |r, c, (p, object, world)| check_place_vertices(r, c, p, object, world),
+    );
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Every declared kernel is really dispatched by every backend: two Sspm frames of `prism`
 //! (glass with dispersion) with pruning off, one per caustic filter (density, bilateral),
-//! and one CausticMap frame (a 64x64 atlas), run every pass of the kernel list between them, and each
+//! one CausticMap frame (a 64x64 atlas), one AdaptiveCaustics frame and one PhotonGi frame
+//! after its ball (an instance) moved, run every pass of the kernel list between them, and each
 //! backend's own pass timings must name every kernel that launches work, at least once.
 //! `prepare_scene` launches nothing on the GPU-style backends; that it did its job shows
 //! in the traced kernels having run on the prepared scene (they fail without it).
@@ -126,10 +127,20 @@ fn every_backend_dispatches_every_declared_kernel() {
             indirect_schedule: caustica_core::techniques::photon_gi::IndirectSchedule::SortedWaves,
             ..PhotonGiSettings::default()
         };
+        // and its ball an instance, moved before the frame (`place_vertices`)
         let mut ball = builtin("sphere").expect("built-in scene");
         (ball.camera.width, ball.camera.height) = (64, 36);
+        let caustica_core::scene::Shape::Sphere { center, .. } = &mut ball.objects[1].shape else {
+            panic!("sphere's object 1 is its glass ball");
+        };
+        let home = std::mem::replace(center, glam::Vec3::ZERO);
+        let at =
+            |y: f32| caustica_core::scene::Transform::from_translation(home + glam::Vec3::Y * y);
+        ball.objects[1].transform = Some(at(0.0));
         let mut t = caustica_core::techniques::photon_gi::PhotonGi::new(b.as_mut(), &ball, gi)
             .expect("valid scene");
+        t.set_object_transforms(b.as_mut(), &[(1, at(0.05))])
+            .expect("move");
         let stats = t.frame(b.as_mut(), &mut |_| {}).expect("frame");
         t.free(b.as_mut()).expect("free");
         assert!(

@@ -10,7 +10,7 @@ use crate::device::launch::{Launch, LaunchArg, ParamPatch};
 use crate::device::layout::{
     deposit_to_planes, gbuffer_to_planes, DepositTexel, GBufferTexel, DEPOSIT_PLANE_WORDS,
 };
-use crate::kernels::{Kernel, PrepareScene};
+use crate::kernels::{Kernel, PlaceVertices, PrepareScene};
 
 /// A kernel as recorded: its typed arguments and their lowering, done once when it was
 /// recorded (an argument error surfaces when the recording is executed).
@@ -360,44 +360,59 @@ impl Recording {
             materials: self.upload(&ds.materials, "materials"),
             lights: self.upload(&ds.lights, "lights"),
             bvh_nodes: self.upload(&ds.bvh_nodes, "bvh nodes"),
+            object_vertices: self.upload(&ds.instances.object_vertices, "object vertices"),
             levels: ds.instances.levels.len() as u32,
         };
+        // the instances' world vertices as a move places them, on the device, so that a
+        // moved scene stays bitwise a fresh one where the device rounds otherwise than the
+        // host (the vertices uploaded are the host's placement, for the static level)
+        for p in ds.instances.placements() {
+            self.kernel(PlaceVertices {
+                params: p,
+                object_vertices: scene.object_vertices,
+                vertices: scene.vertices,
+            });
+        }
         self.kernel(PrepareScene { scene });
         scene
     }
 
-    /// Records the writes of moved instances into the uploaded scene
-    /// ([`crate::device::device_scene::InstanceMove`]: world vertices, the top level, taken
-    /// over without a copy) and the `prepare_scene` that refits the acceleration structure
-    /// (Vulkan: its TLAS rebuilt in place).
+    /// Records a move of instances into the uploaded scene
+    /// ([`crate::device::device_scene::InstanceMove`]): `place_vertices` for each moved
+    /// instance, the top level written (taken over without a copy) and the
+    /// `prepare_scene` that refits the acceleration structure (Vulkan: its TLAS rebuilt in
+    /// place).
     pub fn move_instances(
         &mut self,
         m: crate::device::device_scene::InstanceMove,
         scene: &SceneArgs,
     ) -> Result<(), BackendError> {
         // a recording that holds earlier moves not yet run (Sspm's pending updates) keeps
-        // only the latest: the same ranges are written again, and one prepare_scene follows
+        // only the latest: the same runs are placed again, the top level written again,
+        // and one prepare_scene follows
         let superseded = |s: &Step| match s {
             Step::Write {
                 id, offset, data, ..
-            } => {
-                (*id == scene.bvh_nodes.id && *offset == 0 && data.len() == m.top_level.len() * 16)
-                    || (*id == scene.vertices.id
-                        && m.vertices.iter().any(|(first, v)| {
-                            *offset
-                                == *first as u64
-                                    * std::mem::size_of::<crate::device::layout::GpuVertex>() as u64
-                                && data.len() == std::mem::size_of_val(v.as_slice())
-                        }))
-            }
-            Step::Kernel(k) => {
-                matches!(k.kernel(), Kernel::PrepareScene(p) if p.scene.bvh_nodes.id == scene.bvh_nodes.id)
-            }
+            } => *id == scene.bvh_nodes.id && *offset == 0 && data.len() == m.top_level.len() * 16,
+            Step::Kernel(k) => match k.kernel() {
+                Kernel::PrepareScene(p) => p.scene.bvh_nodes.id == scene.bvh_nodes.id,
+                Kernel::PlaceVertices(p) => {
+                    p.vertices.id == scene.vertices.id
+                        && m.placements.iter().any(|q| {
+                            (q.world_first, q.count) == (p.params.world_first, p.params.count)
+                        })
+                }
+                _ => false,
+            },
             _ => false,
         };
         self.steps.retain(|s| !superseded(s));
-        for (first, v) in m.vertices {
-            self.write_owned(scene.vertices, first, v, "moved instance vertices")?;
+        for params in m.placements {
+            self.kernel(PlaceVertices {
+                params,
+                object_vertices: scene.object_vertices,
+                vertices: scene.vertices,
+            });
         }
         self.write_owned(
             scene.bvh_nodes,
@@ -410,10 +425,11 @@ impl Recording {
     }
 
     /// Records the writes of an instance update into the uploaded scene: a move
-    /// ([`Recording::move_instances`]) or a deformation (its triangles, BLAS region and
-    /// object-space positions, then the move's writes and the `prepare_scene` after them;
-    /// Vulkan rebuilds the deformed level's BLAS, keeping the others). Check it first with
-    /// [`Recording::check_instance_update`] where nothing may change on an error.
+    /// ([`Recording::move_instances`]) or a deformation (its object-space vertices,
+    /// triangles, BLAS region and object-space positions, then the move's placement and
+    /// writes and the `prepare_scene` after them; Vulkan rebuilds the deformed level's
+    /// BLAS, keeping the others). Check it first with [`Recording::check_instance_update`]
+    /// where nothing may change on an error.
     pub fn update_instances(
         &mut self,
         u: crate::device::device_scene::InstanceUpdate,
@@ -423,6 +439,13 @@ impl Recording {
         match u {
             InstanceUpdate::Moved(m) => self.move_instances(m, scene),
             InstanceUpdate::Deformed(d) => {
+                let (first, v) = d.object_vertices;
+                self.write_owned(
+                    scene.object_vertices,
+                    first,
+                    v,
+                    "deformed instance object vertices",
+                )?;
                 let (first, t) = d.triangles;
                 self.write_owned(scene.triangles, first, t, "deformed instance triangles")?;
                 for (first, n) in d.nodes {
@@ -438,14 +461,21 @@ impl Recording {
         }
     }
 
-    /// The error [`Recording::update_instances`] would give for `u`, if any (a write out
-    /// of its buffer), without recording anything.
+    /// The error [`Recording::update_instances`] would give for `u`, if any (a write or a
+    /// placement out of its buffer), without recording anything.
     pub fn check_instance_update(
         u: &crate::device::device_scene::InstanceUpdate,
         scene: &SceneArgs,
     ) -> Result<(), BackendError> {
         use crate::device::device_scene::InstanceUpdate;
         if let InstanceUpdate::Deformed(d) = u {
+            let (first, v) = &d.object_vertices;
+            check_write(
+                scene.object_vertices,
+                *first,
+                v.len(),
+                "deformed instance object vertices",
+            )?;
             let (first, t) = &d.triangles;
             check_write(
                 scene.triangles,
@@ -463,8 +493,15 @@ impl Recording {
             }
         }
         let m = u.moved();
-        for (first, v) in &m.vertices {
-            check_write(scene.vertices, *first, v.len(), "moved instance vertices")?;
+        for p in &m.placements {
+            let n = p.count as usize;
+            check_write(scene.vertices, p.world_first, n, "moved instance vertices")?;
+            check_write(
+                scene.object_vertices,
+                p.object_first,
+                n,
+                "moved instance object vertices",
+            )?;
         }
         check_write(
             scene.bvh_nodes,

@@ -529,6 +529,21 @@ typedef struct {
     uint _pad0; // 124
 } SplatParams;
 
+// core::device::layout::PlacementParams, 128 bytes
+typedef struct {
+    float axis_x[4]; // 0
+    float axis_y[4]; // 16
+    float axis_z[4]; // 32
+    float translation[4]; // 48
+    float normal_x[4]; // 64
+    float normal_y[4]; // 80
+    float normal_z[4]; // 96
+    uint object_first; // 112
+    uint world_first; // 116
+    uint count; // 120
+    uint _pad; // 124
+} PlacementParams;
+
 // core::device::layout::CorrectionParams, 16 bytes
 typedef struct {
     uint width; // 0
@@ -609,8 +624,9 @@ __kernel void struct_sizes(__global uint* out) {
     out[21] = sizeof(IndirectPath);
     out[22] = sizeof(PathSortParams);
     out[23] = sizeof(SplatParams);
-    out[24] = sizeof(CorrectionParams);
-    out[25] = sizeof(PlanParams);
-    out[26] = sizeof(RefineParams);
-    out[27] = sizeof(SeedParams);
+    out[24] = sizeof(PlacementParams);
+    out[25] = sizeof(CorrectionParams);
+    out[26] = sizeof(PlanParams);
+    out[27] = sizeof(RefineParams);
+    out[28] = sizeof(SeedParams);
 }

@@ -529,6 +529,21 @@ struct SplatParams {
     uint _pad0; // 124
 };
 
+// core::device::layout::PlacementParams, 128 bytes
+struct PlacementParams {
+    vec4 axis_x; // 0
+    vec4 axis_y; // 16
+    vec4 axis_z; // 32
+    vec4 translation; // 48
+    vec4 normal_x; // 64
+    vec4 normal_y; // 80
+    vec4 normal_z; // 96
+    uint object_first; // 112
+    uint world_first; // 116
+    uint count; // 120
+    uint _pad; // 124
+};
+
 // core::device::layout::CorrectionParams, 16 bytes
 struct CorrectionParams {
     uint width; // 0

@@ -221,13 +221,11 @@ pub struct Level {
     /// Box of its world vertices if its material is specular, else empty.
     pub caster_bounds: Aabb,
     /// Whether a triangle of the level has a vertex normal that departs from its
-    /// geometric normal in world space ([`crate::device::device_scene::smooth_normals`]);
-    /// `None` after the level moved until
-    /// [`crate::device::device_scene::SceneInstances::refresh_smooth_normals`] (only
-    /// PhotonGi needs it, and it costs a move about half its time).
-    pub smooth_normals: Option<bool>,
+    /// geometric normal ([`crate::device::device_scene::smooth_normals`]; an instance's
+    /// in object space, which a move keeps).
+    pub smooth_normals: bool,
     /// An instance's triangles (world-vertex indices; empty for the static level): what
-    /// `smooth_normals` and `triangle_bounds` are recomputed over when it moves.
+    /// `smooth_normals` is recomputed over when it deforms.
     /// (Shared: levels are cloned on every move, their triangles never change.)
     pub triangle_indices: std::sync::Arc<[[u32; 3]]>,
     /// The world-vertex indices those triangles use, each once, ascending (what

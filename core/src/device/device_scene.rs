@@ -10,8 +10,9 @@ use crate::device::acceleration::{
 use crate::device::bvh_cache::{build_digest, BvhCache, KeptBuild};
 use crate::device::caster_spheres::{placed_ball, CasterSpheres};
 use crate::device::layout::{
-    light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
+    light_kind, material_kind, GpuLight, GpuMaterial, GpuTriangle, GpuVertex, PlacementParams,
 };
+use crate::device::placement::{place_vertices, placed_bounds, placement_params, PositionColumns};
 pub use crate::device::placement::{placed_vertices, world_vertices};
 use crate::math::geometry::bounding_sphere;
 use crate::math::optics::ior_model;
@@ -67,9 +68,14 @@ pub struct SceneInstances {
     /// Static level first (if any object has no transform), then the instances in object
     /// order.
     pub levels: Vec<Level>,
-    /// The instances' vertices in object space, level after level.
-    /// (Shared: a technique clones its `SceneInstances` on every move; they never change.)
+    /// The instances' vertices in object space, level after level (the device keeps them
+    /// too, `SceneArgs::object_vertices`, and places them: `place_vertices`).
+    /// (Shared: a technique clones its `SceneInstances` on every move; only a
+    /// deformation changes them.)
     pub object_vertices: std::sync::Arc<[GpuVertex]>,
+    /// Their positions by coordinate: what a move bounds without placing
+    /// ([`crate::device::placement::placed_bounds`]).
+    pub columns: std::sync::Arc<PositionColumns>,
     /// vec4 index in the node buffer where the object-space positions start.
     positions_vec4: u32,
 }
@@ -77,8 +83,9 @@ pub struct SceneInstances {
 /// What moving instances changes ([`SceneInstances::move_instances`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct InstanceMove {
-    /// New world vertices, each run from its first index.
-    pub vertices: Vec<(u32, Vec<GpuVertex>)>,
+    /// The moved instances' placements: `place_vertices` makes their world vertices on
+    /// the device ([`SceneInstances::placed`] on the host, where one needs them).
+    pub placements: Vec<PlacementParams>,
     /// The node buffer's new first vectors (TLAS and records).
     pub top_level: Vec<[u32; 4]>,
     /// The scene's new bounds and caster bounds (world space).
@@ -90,12 +97,15 @@ pub struct InstanceMove {
 }
 
 /// What deforming an instance changes ([`SceneInstances::deform_instance`]): what a move
-/// changes (its world vertices, the top level, the bounds), and its triangles in the new
-/// BLAS's leaf order, its BLAS and its object-space positions.
+/// changes (its placement, the top level, the bounds), its object-space vertices, and its
+/// triangles in the new BLAS's leaf order, its BLAS and its object-space positions.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InstanceDeform {
-    /// The world vertices, top level and bounds.
+    /// The placement, top level and bounds.
     pub moved: InstanceMove,
+    /// Its first object vertex and its new object-space vertices (placed after they are
+    /// written).
+    pub object_vertices: (u32, Vec<GpuVertex>),
     /// The level's first triangle and its triangles in their new order.
     pub triangles: (u32, Vec<GpuTriangle>),
     /// Runs of the node buffer from their first vec4: the new BLAS (at the start of its
@@ -136,31 +146,47 @@ pub fn mesh_vertices(m: &crate::scene::TriangleMesh) -> Vec<GpuVertex> {
 }
 
 impl SceneInstances {
-    /// Whether some level's triangles have smooth normals ([`smooth_normals`]); `None`
-    /// while a moved level's flag awaits [`SceneInstances::refresh_smooth_normals`].
-    pub fn smooth_normals(&self) -> Option<bool> {
-        self.levels
-            .iter()
-            .try_fold(false, |any, l| l.smooth_normals.map(|s| any || s))
+    /// Whether some level's triangles have smooth normals ([`smooth_normals`]).
+    pub fn smooth_normals(&self) -> bool {
+        self.levels.iter().any(|l| l.smooth_normals)
     }
 
-    /// Recomputes the smooth-normal flags of the levels `m` moved, from their new world
-    /// vertices (as the build computes them).
-    pub fn refresh_smooth_normals(&mut self, m: &InstanceMove) {
-        for (first, world) in &m.vertices {
-            if let Some(l) = self.levels.iter_mut().find(|l| l.vertex_base == *first) {
-                let base = l.vertex_base;
-                let run = |i: u32| world[(i - base) as usize];
-                l.smooth_normals = Some(smooth_normals(l.triangle_indices.iter().copied(), &run));
-            }
-        }
+    /// The first object vertex of instance level `l` in [`SceneInstances::object_vertices`].
+    fn object_first(&self, l: &Level) -> u32 {
+        l.position_base - self.positions_vec4
+    }
+
+    /// `place_vertices`' parameters for every instance at its transform, in level order.
+    pub fn placements(&self) -> Vec<PlacementParams> {
+        self.levels
+            .iter()
+            .filter(|l| l.object.is_some())
+            .map(|l| {
+                placement_params(
+                    &l.transform,
+                    self.object_first(l),
+                    l.vertex_base,
+                    l.vertex_count,
+                )
+            })
+            .collect()
+    }
+
+    /// The world vertices placement `p` makes ([`place_vertices`], `place_vertices`'
+    /// definition), on the host: for the host's copy of a scene and for what the host
+    /// follows (receivers of the atlas). Empty where `p` lies outside the object vertices.
+    pub fn placed(&self, p: &PlacementParams) -> Vec<GpuVertex> {
+        let first = p.object_first as usize;
+        self.object_vertices
+            .get(first..first + p.count as usize)
+            .map_or_else(Vec::new, |local| place_vertices(p, local))
     }
 
     /// Moves instances (`(object index, transform)` pairs; the objects must have been
-    /// built with a transform): their world vertices and boxes, the scene's bounds, the
-    /// TLAS and the records are recomputed with the functions the build uses, so the
-    /// result equals a fresh build of the moved scene bitwise. No BLAS changes. On an error
-    /// nothing changes.
+    /// built with a transform): their placements (the device places their world
+    /// vertices), boxes, the scene's bounds, the TLAS and the records are recomputed with
+    /// the functions the build uses, so the result equals a fresh build of the moved scene
+    /// bitwise. No BLAS changes. On an error nothing changes.
     pub fn move_instances(
         &mut self,
         moves: &[(usize, Transform)],
@@ -195,11 +221,12 @@ impl SceneInstances {
             l.transform = *transform;
             moved[k] = true;
         }
-        let mut vertices = Vec::new();
+        let mut placements = Vec::new();
         for (l, _) in levels.iter_mut().zip(&moved).filter(|(_, m)| **m) {
-            let first = (l.position_base - self.positions_vec4) as usize;
-            let local = &self.object_vertices[first..first + l.vertex_count as usize];
-            let (world, b, used) = placed_vertices(&l.transform, local, &l.unused_vertices);
+            // the boxes alone: the device places the vertices (place_vertices)
+            let first = self.object_first(l);
+            let run = first as usize..(first + l.vertex_count) as usize;
+            let (b, used) = placed_bounds(&l.transform, &self.columns, run, &l.unused_vertices);
             check_placed(l.object.unwrap_or(0), &b)?;
             l.caster_bounds = if l.caster_bounds.is_empty() {
                 Aabb::EMPTY
@@ -208,9 +235,13 @@ impl SceneInstances {
             };
             l.world_bounds = b;
             l.caster_balls = placed_balls(l);
-            l.smooth_normals = None; // refresh_smooth_normals, where it is needed
             l.triangle_bounds = used;
-            vertices.push((l.vertex_base, world));
+            placements.push(placement_params(
+                &l.transform,
+                first,
+                l.vertex_base,
+                l.vertex_count,
+            ));
         }
         let top_level = top_level(&levels).map_err(|reason| BuildError::Scene {
             path: "objects".into(),
@@ -220,7 +251,7 @@ impl SceneInstances {
         let caster_spheres = level_caster_spheres(&levels);
         self.levels = levels;
         Ok(InstanceMove {
-            vertices,
+            placements,
             top_level,
             bounds,
             caster_bounds,
@@ -265,7 +296,12 @@ impl SceneInstances {
                 l.vertex_count
             )));
         }
-        let (world, b, used_box) = placed_vertices(&l.transform, &local, &l.unused_vertices);
+        let (b, used_box) = placed_bounds(
+            &l.transform,
+            &PositionColumns::of(&local),
+            0..local.len(),
+            &l.unused_vertices,
+        );
         check_placed(object, &b)?;
         let base = l.vertex_base;
         let tris: Vec<GpuTriangle> = l
@@ -300,8 +336,8 @@ impl SceneInstances {
         }
         l.caster_balls = placed_balls(l);
         l.triangle_bounds = used_box;
-        let run = |i: u32| world[(i - base) as usize];
-        l.smooth_normals = Some(smooth_normals(l.triangle_indices.iter().copied(), &run));
+        let run = |i: u32| local[(i - base) as usize];
+        l.smooth_normals = smooth_normals(l.triangle_indices.iter().copied(), &run);
         l.geometry_version = l.geometry_version.wrapping_add(1);
         let (blas_root, triangle_base, position_base, corners_at) = (
             l.blas_root,
@@ -318,11 +354,17 @@ impl SceneInstances {
         let first = (position_base - self.positions_vec4) as usize;
         let mut object_vertices = self.object_vertices.to_vec();
         object_vertices[first..first + local.len()].copy_from_slice(&local);
+        let mut columns = (*self.columns).clone();
+        columns.set(first, &local);
+        let placement =
+            placement_params(&levels[k].transform, first as u32, base, local.len() as u32);
         self.levels = levels;
         self.object_vertices = object_vertices.into();
+        self.columns = columns.into();
         Ok(InstanceDeform {
+            object_vertices: (first as u32, local),
             moved: InstanceMove {
-                vertices: vec![(base, world)],
+                placements: vec![placement],
                 top_level,
                 bounds,
                 caster_bounds,
@@ -577,7 +619,7 @@ impl DeviceScene {
             position_base: 0,
             world_bounds: Aabb::EMPTY,
             caster_bounds: Aabb::EMPTY,
-            smooth_normals: None,
+            smooth_normals: false,
             triangle_indices: std::sync::Arc::from(Vec::new()),
             used_vertices: std::sync::Arc::from(Vec::new()),
             unused_vertices: std::sync::Arc::from(Vec::new()),
@@ -670,7 +712,7 @@ impl DeviceScene {
                         position_base: object_vertices.len() as u32,
                         world_bounds,
                         caster_bounds: if specular { world_bounds } else { Aabb::EMPTY },
-                        smooth_normals: None,
+                        smooth_normals: false,
                         triangle_indices: tris.iter().map(|t| t.indices).collect(),
                         used_vertices: used.clone().into(),
                         unused_vertices: unused_vertices(&used, base, local.len()).into(),
@@ -754,10 +796,17 @@ impl DeviceScene {
         }
         for l in &mut levels {
             let range = l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize;
-            l.smooth_normals = Some(smooth_normals(
-                triangles[range].iter().map(|t| t.indices),
-                &vertices,
-            ));
+            let corners = triangles[range].iter().map(|t| t.indices);
+            // an instance's in object space, where a move leaves it (a transform keeps a
+            // normal along its face's normal, up to rounding far below the test's 1e-4)
+            l.smooth_normals = match l.object {
+                None => smooth_normals(corners, &vertices),
+                Some(_) => {
+                    let (base, first) = (l.vertex_base, l.position_base);
+                    let local = |i: u32| object_vertices[(i - base + first) as usize];
+                    smooth_normals(corners, &local)
+                }
+            };
             l.triangle_bounds = triangle_bounds(&l.used_vertices, &vertices, 0);
         }
         let positions_vec4 = slot as usize * SLOT_VEC4S;
@@ -820,6 +869,7 @@ impl DeviceScene {
             triangle_objects,
             instances: SceneInstances {
                 levels,
+                columns: PositionColumns::of(&object_vertices).into(),
                 object_vertices: object_vertices.into(),
                 positions_vec4: positions_vec4 as u32,
             },
@@ -830,10 +880,7 @@ impl DeviceScene {
     /// arrays: the result equals a fresh build of the moved scene.
     pub fn move_instances(&mut self, moves: &[(usize, Transform)]) -> Result<(), BuildError> {
         let m = self.instances.move_instances(moves)?;
-        self.instances.refresh_smooth_normals(&m);
-        for (first, v) in &m.vertices {
-            self.vertices[*first as usize..*first as usize + v.len()].copy_from_slice(v);
-        }
+        self.place(&m.placements);
         self.bvh_nodes[..m.top_level.len()].copy_from_slice(&m.top_level);
         self.bounds = m.bounds;
         self.caster_bounds = m.caster_bounds;
@@ -861,9 +908,7 @@ impl DeviceScene {
                 ..(l.blas_root + l.blas_capacity) as usize * SLOT_VEC4S;
             self.bvh_nodes[region].fill([0; 4]);
         }
-        for (first, v) in &d.moved.vertices {
-            self.vertices[*first as usize..*first as usize + v.len()].copy_from_slice(v);
-        }
+        self.place(&d.moved.placements);
         let (first, t) = &d.triangles;
         self.triangles[*first as usize..*first as usize + t.len()].copy_from_slice(t);
         for (first, n) in &d.nodes {
@@ -875,6 +920,15 @@ impl DeviceScene {
         self.caster_bounds = d.moved.caster_bounds;
         self.caster_spheres = d.moved.caster_spheres;
         Ok(())
+    }
+
+    /// Writes the world vertices of `placements` (the host's placement).
+    fn place(&mut self, placements: &[PlacementParams]) {
+        for p in placements {
+            let world = self.instances.placed(p);
+            let first = p.world_first as usize;
+            self.vertices[first..first + world.len()].copy_from_slice(&world);
+        }
     }
 
     /// Number of CWBVH nodes.

@@ -71,6 +71,10 @@ pub struct SceneArgs {
     /// ([`crate::device::acceleration`]: TLAS, instance records, BLASes, object-space
     /// positions).
     pub bvh_nodes: Buf<[u32; 4]>,
+    /// The instances' object-space vertices, level after level
+    /// ([`crate::device::device_scene::SceneInstances::object_vertices`]), which
+    /// `place_vertices` places into `vertices` (no kernel binds it otherwise).
+    pub object_vertices: Buf<GpuVertex>,
     /// How many levels (static level and instances) `bvh_nodes` holds: the TLAS capacity
     /// and the records' place follow from it (read by Vulkan's `prepare_scene`).
     pub levels: u32,

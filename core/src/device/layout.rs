@@ -769,6 +769,38 @@ pub struct SplatParams {
     pub _pad: [u32; 1],
 }
 
+/// Parameters of `place_vertices`: one instance's placement (`world_from_object` and its
+/// normal matrix as columns, [`crate::device::placement::placement_params`]) and the runs
+/// it maps, `count` object-space vertices from `object_first` to world vertices from
+/// `world_first`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PlacementParams {
+    /// `world_from_object`'s first column, the image of the object's x axis (w: 0,
+    /// unused, in every column below).
+    pub axis_x: [f32; 4],
+    /// Its second column (the object's y axis).
+    pub axis_y: [f32; 4],
+    /// Its third column (the object's z axis).
+    pub axis_z: [f32; 4],
+    /// Its translation (scene units).
+    pub translation: [f32; 4],
+    /// The normal matrix's (the inverse transpose of the linear part) first column.
+    pub normal_x: [f32; 4],
+    /// Its second column.
+    pub normal_y: [f32; 4],
+    /// Its third column.
+    pub normal_z: [f32; 4],
+    /// First object-space vertex of the run (index into the object vertices).
+    pub object_first: u32,
+    /// First world vertex of the run (index into the scene's vertices).
+    pub world_first: u32,
+    /// Vertices in the run.
+    pub count: u32,
+    /// Padding.
+    pub _pad: u32,
+}
+
 /// Parameters of `shading_normal_correction` (Smal 2019, Eq. 20).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -11,9 +11,9 @@
 use super::layout::{
     AtlasParams, AtrousParams, CorrectionParams, DepositParams, DepositTexel, DirectParams,
     GBufferTexel, GatherParams, GiPhoton, GpuCamera, GpuLight, GpuMaterial, GpuTriangle, GpuVertex,
-    IndirectPath, IndirectTraceParams, MapLookupParams, PathSortParams, Photon, PlanParams,
-    RefineParams, RsmParams, RsmPhoton, RsmTexel, SeedParams, SplatParams, TemporalParams,
-    TraceParams,
+    IndirectPath, IndirectTraceParams, MapLookupParams, PathSortParams, Photon, PlacementParams,
+    PlanParams, RefineParams, RsmParams, RsmPhoton, RsmTexel, SeedParams, SplatParams,
+    TemporalParams, TraceParams,
 };
 use std::mem::{offset_of, size_of};
 use std::sync::LazyLock;
@@ -250,6 +250,10 @@ table! {
         min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,
         normal_compression, max_stretch, tile_constant, min_splat_px, light_direction,
         scene_magnitude, _pad
+    }
+    PlacementParams {
+        axis_x, axis_y, axis_z, translation, normal_x, normal_y, normal_z, object_first,
+        world_first, count, _pad
     }
     CorrectionParams { width, height, max_stretch, epsilon }
     PlanParams { side, faces, bit, row_words, table_words, _pad }

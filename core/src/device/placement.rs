@@ -5,8 +5,13 @@
 //! at once, one per SIMD lane (`Vec4`), with the same operations in the same order in
 //! each lane as [`placement`] does for one vertex, so the results are bitwise
 //! [`placement`]'s (IEEE-754 rounds each operation by itself; shuffles move bits).
+//!
+//! A move places on the device: `place_vertices` ([`place_vertices`] is its definition,
+//! the CPU backend's kernel) maps the object-space vertices the device keeps through the
+//! [`PlacementParams`] of the instance's transform, and the host computes only what it
+//! needs, the boxes ([`placed_bounds`], from the positions' coordinate columns).
 
-use crate::device::layout::GpuVertex;
+use crate::device::layout::{GpuVertex, PlacementParams};
 use crate::math::geometry::AabbA;
 use crate::scene::{Aabb, Transform};
 use glam::{Affine3A, BVec4A, Mat3A, Mat4, Vec3, Vec3A, Vec4};
@@ -25,6 +30,159 @@ pub fn placement(t: &Transform) -> impl Fn(&GpuVertex) -> GpuVertex {
             .to_array(),
         ..*v
     }
+}
+
+/// The parameters that make `place_vertices` place `count` object-space vertices from
+/// `object_first` by `t`'s [`placement`] into the world vertices from `world_first`.
+pub fn placement_params(
+    t: &Transform,
+    object_first: u32,
+    world_first: u32,
+    count: u32,
+) -> PlacementParams {
+    let m = t.world_from_object();
+    let nm = t.normal_matrix();
+    let col = |c: Vec3A| c.extend(0.0).to_array();
+    PlacementParams {
+        axis_x: col(m.matrix3.x_axis),
+        axis_y: col(m.matrix3.y_axis),
+        axis_z: col(m.matrix3.z_axis),
+        translation: col(m.translation),
+        normal_x: col(nm.x_axis),
+        normal_y: col(nm.y_axis),
+        normal_z: col(nm.z_axis),
+        object_first,
+        world_first,
+        count,
+        _pad: 0,
+    }
+}
+
+/// The placement and normal matrices `p` holds (the columns [`placement_params`] took,
+/// bit for bit).
+pub fn params_matrices(p: &PlacementParams) -> (Affine3A, Mat3A) {
+    let col = |c: [f32; 4]| Vec3A::new(c[0], c[1], c[2]);
+    (
+        Affine3A::from_cols(
+            col(p.axis_x),
+            col(p.axis_y),
+            col(p.axis_z),
+            col(p.translation),
+        ),
+        Mat3A::from_cols(col(p.normal_x), col(p.normal_y), col(p.normal_z)),
+    )
+}
+
+/// `place_vertices`' definition (the CPU backend's kernel; the ports mirror it): the run
+/// `local` (the `count` object-space vertices from `object_first`) placed by `p`, each
+/// vertex as [`placement`] of the transform `p` was made from places it: position
+/// `x_axis x + y_axis y + z_axis z + translation`, normal `normal_x n.x + normal_y n.y +
+/// normal_z n.z` times `1 / sqrt((x^2 + y^2) + z^2)` of itself where that is finite and
+/// positive, else +Y, each operation rounded by itself in that order; u and v kept.
+pub fn place_vertices(p: &PlacementParams, local: &[GpuVertex]) -> Vec<GpuVertex> {
+    let (m, nm) = params_matrices(p);
+    let mut placed = vec![[GpuVertex::default(); 4]; local.len().div_ceil(4)];
+    place_run(&m, &nm, local, &[], &mut placed);
+    let mut world: Vec<GpuVertex> = bytemuck::allocation::cast_vec(placed);
+    world.truncate(local.len());
+    world
+}
+
+/// Object-space positions by coordinate, in the order of the vertices they come from
+/// (`SceneInstances::object_vertices`): what a move bounds ([`placed_bounds`]) without
+/// placing, read four to a lane vector.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PositionColumns {
+    /// x coordinates (object space, scene units).
+    pub x: Vec<f32>,
+    /// y coordinates.
+    pub y: Vec<f32>,
+    /// z coordinates.
+    pub z: Vec<f32>,
+}
+
+impl PositionColumns {
+    /// The columns of `vertices`' positions.
+    pub fn of(vertices: &[GpuVertex]) -> PositionColumns {
+        let column = |k: usize| vertices.iter().map(|v| v.position[k]).collect();
+        PositionColumns {
+            x: column(0),
+            y: column(1),
+            z: column(2),
+        }
+    }
+
+    /// Replaces the positions from `first` with `vertices`'.
+    pub fn set(&mut self, first: usize, vertices: &[GpuVertex]) {
+        for (i, v) in vertices.iter().enumerate() {
+            self.x[first + i] = v.position[0];
+            self.y[first + i] = v.position[1];
+            self.z[first + i] = v.position[2];
+        }
+    }
+}
+
+/// The boxes of an instance's vertices placed by `t` without placing them: `columns`'
+/// positions in `range` (its object-space vertices), `unused` those its triangles leave
+/// out (indices from the range's start, ascending). Returns the box of all of them and
+/// of the used ones, bitwise [`placed_vertices`]' boxes: each coordinate is the same sum
+/// of the same products in the same order, grown in four lanes (a short last block repeats
+/// its last position, which moves no bound) or, where a bound is zero or some vertex is
+/// unused, in order.
+pub fn placed_bounds(
+    t: &Transform,
+    columns: &PositionColumns,
+    range: std::ops::Range<usize>,
+    unused: &[u32],
+) -> (Aabb, Aabb) {
+    let m = t.world_from_object();
+    let (x, y, z) = (
+        &columns.x[range.clone()],
+        &columns.y[range.clone()],
+        &columns.z[range],
+    );
+    let lanes = |c: &[f32], k: usize| {
+        let mut v = [c[(k + 3).min(c.len() - 1)]; 4];
+        let end = c.len().min(k + 4);
+        v[..end - k].copy_from_slice(&c[k..end]);
+        Vec4::from_array(v)
+    };
+    let mut b = LaneBox::EMPTY;
+    for k in (0..x.len()).step_by(4) {
+        let p = mul_lanes(
+            &m.matrix3,
+            &Lanes {
+                x: lanes(x, k),
+                y: lanes(y, k),
+                z: lanes(z, k),
+            },
+        );
+        let t = m.translation;
+        b.grow(&Lanes {
+            x: p.x + t.x,
+            y: p.y + t.y,
+            z: p.z + t.z,
+        });
+    }
+    let position = |i: usize| m.transform_point3a(Vec3A::new(x[i], y[i], z[i]));
+    let mut all = b.aabb();
+    if has_zero_bound(&all) {
+        let mut g = AabbA::EMPTY;
+        (0..x.len()).for_each(|i| g.grow(position(i)));
+        all = g.aabb();
+    }
+    if unused.is_empty() {
+        return (all, all);
+    }
+    let mut g = AabbA::EMPTY;
+    let mut skip = unused.iter().map(|&u| u as usize).peekable();
+    for i in 0..x.len() {
+        while skip.next_if(|&u| u < i).is_some() {}
+        if skip.next_if(|&u| u == i).is_none() {
+            g.grow(position(i));
+        }
+    }
+    (all, g.aabb())
 }
 
 /// Four vertices' positions, one coordinate a vector (lane k: vertex k of a block).
@@ -401,6 +559,20 @@ mod tests {
                 bytemuck::cast_slice::<_, u32>(&world2) == bytemuck::cast_slice::<_, u32>(&world)
             );
             prop_assert_eq!(bits(all2), bits(all));
+            // the device's placement (its parameters, a run inside longer arrays) and the
+            // host's boxes from the coordinate columns alone
+            let mut padded = vec![GpuVertex::default(); 3];
+            padded.extend_from_slice(&local);
+            padded.push(GpuVertex::default());
+            let p = placement_params(&t, 3, 7, local.len() as u32);
+            let placed = place_vertices(&p, &padded[3..3 + local.len()]);
+            prop_assert!(
+                bytemuck::cast_slice::<_, u32>(&placed) == bytemuck::cast_slice::<_, u32>(&world)
+            );
+            let columns = PositionColumns::of(&padded);
+            let (all3, used3) = placed_bounds(&t, &columns, 3..3 + local.len(), &unused);
+            prop_assert_eq!(bits(all3), bits(all));
+            prop_assert_eq!(bits(used3), bits(used));
         }
     }
 }

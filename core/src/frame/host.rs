@@ -666,25 +666,36 @@ impl FrameHost {
 
     /// Applies an instance update already made to `instances` (a copy of the host's) for
     /// `model`, the scene after it: its writes go with the next frame, and the geometry
-    /// (bounds, caster balls and boxes, receivers' triangles) follows; the update's
-    /// vertices become the writes' data without a copy. Returns whether a receiver of the
+    /// (bounds, caster balls and boxes, receivers' triangles) follows; the device places
+    /// the moved instances' vertices. Returns whether a receiver of the
     /// atlas moved. On an error (checked first) nothing changes.
     pub fn apply_instances(
         &mut self,
         model: Scene,
-        mut instances: SceneInstances,
+        instances: SceneInstances,
         u: InstanceUpdate,
     ) -> Result<bool, Error> {
         Recording::check_instance_update(&u, &self.scene)?;
         let m = u.moved();
-        instances.refresh_smooth_normals(m);
         let mut receivers_moved = false;
         if let Some(r) = self.receivers.as_mut() {
             if let InstanceUpdate::Deformed(d) = &u {
                 // the deformed level's triangles in their new order
                 r.reorder_triangles(d.triangles.0, &d.triangles.1);
             }
-            receivers_moved = r.move_vertices(&m.vertices);
+            // the device places every moved instance; the host places the receivers'
+            // again, for their corners and areas
+            let receiver = |l: &&crate::device::acceleration::Level| {
+                l.object.is_some_and(|o| r.objects.contains(&(o as u32)))
+            };
+            let runs: Vec<(u32, Vec<crate::device::layout::GpuVertex>)> = instances
+                .levels
+                .iter()
+                .filter(receiver)
+                .filter_map(|l| m.placements.iter().find(|p| p.world_first == l.vertex_base))
+                .map(|p| (p.world_first, instances.placed(p)))
+                .collect();
+            receivers_moved = r.move_vertices(&runs);
         }
         follow_moved_casters(&mut self.geometry.caster_boxes, &instances.levels);
         self.geometry.bounds = m.bounds;

@@ -29,6 +29,7 @@ mod dispatch_args;
 mod gather_caustic_map;
 mod gather_footprint;
 mod photon_count_table;
+mod place_vertices;
 mod prepare_scene;
 mod primary_gbuffer;
 mod refine_clusters;
@@ -56,6 +57,7 @@ pub use dispatch_args::{dispatch_record, DispatchArgs, DispatchRecord};
 pub use gather_caustic_map::GatherCausticMap;
 pub use gather_footprint::GatherFootprint;
 pub use photon_count_table::PhotonCountTable;
+pub use place_vertices::PlaceVertices;
 pub use prepare_scene::PrepareScene;
 pub use primary_gbuffer::PrimaryGbuffer;
 pub use refine_clusters::RefineClusters;
@@ -522,6 +524,7 @@ macro_rules! with_kernels {
     ($m:ident) => {
         $m! {
             PrepareScene => prepare_scene,
+            PlaceVertices => place_vertices,
             PrimaryGbuffer => primary_gbuffer,
             DirectLight => direct_light,
             TracePhotons => trace_photons,
@@ -564,6 +567,7 @@ crate::with_kernels!(kernel_list);
 macro_rules! with_shader_kernels {
     ($m:ident) => {
         $m! {
+            place_vertices,
             primary_gbuffer,
             direct_light,
             trace_photons,

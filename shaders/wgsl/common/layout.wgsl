@@ -529,6 +529,21 @@ struct SplatParams {
     _pad0: u32, // 124
 }
 
+// core::device::layout::PlacementParams, 128 bytes
+struct PlacementParams {
+    axis_x: vec4<f32>, // 0
+    axis_y: vec4<f32>, // 16
+    axis_z: vec4<f32>, // 32
+    translation: vec4<f32>, // 48
+    normal_x: vec4<f32>, // 64
+    normal_y: vec4<f32>, // 80
+    normal_z: vec4<f32>, // 96
+    object_first: u32, // 112
+    world_first: u32, // 116
+    count: u32, // 120
+    _pad: u32, // 124
+}
+
 // core::device::layout::CorrectionParams, 16 bytes
 struct CorrectionParams {
     width: u32, // 0

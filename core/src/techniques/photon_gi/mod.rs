@@ -91,9 +91,7 @@ pub type PhotonGi = Hosted<PhotonGiPipeline>;
 /// geometric normals agree and the factor is 1 up to `eps`:
 /// [`crate::device::device_scene::smooth_normals`]).
 fn shading_correction(s: &PhotonGiSettings, instances: &SceneInstances) -> bool {
-    s.shading_normals
-        && s.estimator == IndirectEstimator::Splat
-        && instances.smooth_normals().unwrap_or(true)
+    s.shading_normals && s.estimator == IndirectEstimator::Splat && instances.smooth_normals()
 }
 
 /// The length of the scene box's diagonal (scene units; at least the smallest positive

@@ -439,7 +439,8 @@ impl AtlasReceivers {
     }
 
     /// Follows moved instances: `vertices` are runs of new world vertices from their first
-    /// index ([`crate::device::device_scene::InstanceMove::vertices`]). The receivers whose
+    /// index (the receivers' instances placed on the host,
+    /// [`crate::device::device_scene::SceneInstances::placed`]). The receivers whose
     /// triangles use them get their new corners and areas, computed as
     /// [`AtlasReceivers::of`] does, so the layout equals that of a fresh build of the moved
     /// scene. Returns whether any receiver moved.
