@@ -126,9 +126,8 @@ impl PositionColumns {
 /// positions in `range` (its object-space vertices), `unused` those its triangles leave
 /// out (indices from the range's start, ascending). Returns the box of all of them and
 /// of the used ones, bitwise [`placed_vertices`]' boxes: each coordinate is the same sum
-/// of the same products in the same order, grown in four lanes (a short last block repeats
-/// its last position, which moves no bound) or, where a bound is zero or some vertex is
-/// unused, in order.
+/// of the same products in the same order, grown in four lanes as `place_run` grows them
+/// (the unused vertices in lane boxes of their own), and in order where a bound is zero.
 pub fn placed_bounds(
     t: &Transform,
     columns: &PositionColumns,
@@ -141,48 +140,100 @@ pub fn placed_bounds(
         &columns.y[range.clone()],
         &columns.z[range],
     );
-    let lanes = |c: &[f32], k: usize| {
-        let mut v = [c[(k + 3).min(c.len() - 1)]; 4];
-        let end = c.len().min(k + 4);
-        v[..end - k].copy_from_slice(&c[k..end]);
-        Vec4::from_array(v)
-    };
-    let mut b = LaneBox::EMPTY;
-    for k in (0..x.len()).step_by(4) {
+    let n = x.len();
+    let place = |lx: Vec4, ly: Vec4, lz: Vec4| {
         let p = mul_lanes(
             &m.matrix3,
             &Lanes {
-                x: lanes(x, k),
-                y: lanes(y, k),
-                z: lanes(z, k),
+                x: lx,
+                y: ly,
+                z: lz,
             },
         );
         let t = m.translation;
-        b.grow(&Lanes {
+        Lanes {
             x: p.x + t.x,
             y: p.y + t.y,
             z: p.z + t.z,
-        });
-    }
-    let position = |i: usize| m.transform_point3a(Vec3A::new(x[i], y[i], z[i]));
-    let mut all = b.aabb();
-    if has_zero_bound(&all) {
-        let mut g = AabbA::EMPTY;
-        (0..x.len()).for_each(|i| g.grow(position(i)));
-        all = g.aabb();
-    }
-    if unused.is_empty() {
-        return (all, all);
-    }
-    let mut g = AabbA::EMPTY;
-    let mut skip = unused.iter().map(|&u| u as usize).peekable();
-    for i in 0..x.len() {
-        while skip.next_if(|&u| u < i).is_some() {}
-        if skip.next_if(|&u| u == i).is_none() {
-            g.grow(position(i));
+        }
+    };
+    let mut used = LaneBox::EMPTY;
+    let mut unused_box = LaneBox::EMPTY;
+    let mut next_unused = unused.iter().map(|&u| u as usize).peekable();
+    let full = n / 4 * 4;
+    for first in (0..full).step_by(4) {
+        let p = place(
+            Vec4::from_slice(&x[first..]),
+            Vec4::from_slice(&y[first..]),
+            Vec4::from_slice(&z[first..]),
+        );
+        if next_unused.peek().is_none_or(|&u| u >= first + 4) {
+            used.grow(&p);
+        } else {
+            grow_split(
+                &mut used,
+                &mut unused_box,
+                &p,
+                first,
+                first + 4,
+                &mut next_unused,
+            );
         }
     }
-    (all, g.aabb())
+    if full < n {
+        // the last block: its positions, the rest of the lanes masked out
+        let lane = |c: &[f32]| {
+            let mut v = [0.0f32; 4];
+            v[..n - full].copy_from_slice(&c[full..]);
+            Vec4::from_array(v)
+        };
+        let p = place(lane(x), lane(y), lane(z));
+        grow_split(&mut used, &mut unused_box, &p, full, n, &mut next_unused);
+    }
+    let position = |i: usize| m.transform_point3a(Vec3A::new(x[i], y[i], z[i]));
+    let mut all = used.union(&unused_box).aabb();
+    if has_zero_bound(&all) {
+        let mut g = AabbA::EMPTY;
+        (0..n).for_each(|i| g.grow(position(i)));
+        all = g.aabb();
+    }
+    let mut used = used.aabb();
+    if has_zero_bound(&used) {
+        let mut g = AabbA::EMPTY;
+        let mut skip = unused.iter().map(|&u| u as usize).peekable();
+        for i in 0..n {
+            while skip.next_if(|&u| u < i).is_some() {}
+            if skip.next_if(|&u| u == i).is_none() {
+                g.grow(position(i));
+            }
+        }
+        used = g.aabb();
+    }
+    (all, used)
+}
+
+/// Grows `used` with the lanes of vertices `first .. end` (a block of at most four) that
+/// `next_unused` (ascending indices, repeats allowed) does not list, `unused` with those
+/// it does, taking the listed indices below `end` off it.
+fn grow_split(
+    used: &mut LaneBox,
+    unused: &mut LaneBox,
+    p: &Lanes,
+    first: usize,
+    end: usize,
+    next_unused: &mut std::iter::Peekable<impl Iterator<Item = usize>>,
+) {
+    let mut keep = [false; 4];
+    keep[..end - first].fill(true);
+    let mut skip = [false; 4];
+    while let Some(u) = next_unused.next_if(|&u| u < end) {
+        if u >= first {
+            keep[u - first] = false;
+            skip[u - first] = true;
+        }
+    }
+    used.grow_where(p, BVec4A::from_array(keep));
+    unused.grow_where(p, BVec4A::from_array(skip));
 }
 
 /// Four vertices' positions, one coordinate a vector (lane k: vertex k of a block).
@@ -392,17 +443,7 @@ fn place_run(
             used.grow(&p);
             continue;
         }
-        let mut keep = [false; 4];
-        keep[..end - first].fill(true);
-        let mut skip = [false; 4];
-        while let Some(u) = next_unused.next_if(|&u| u < end) {
-            if u >= first {
-                keep[u - first] = false;
-                skip[u - first] = true;
-            }
-        }
-        used.grow_where(&p, BVec4A::from_array(keep));
-        unused_box.grow_where(&p, BVec4A::from_array(skip));
+        grow_split(&mut used, &mut unused_box, &p, first, end, &mut next_unused);
     }
     (used, unused_box)
 }
