@@ -1,8 +1,9 @@
 // place_vertices: an instance's world vertices placed from its object-space vertices (the
 // contract in core/src/kernels/place_vertices.rs). Mirror of core's
 // device::placement::place_vertices (the CPU backend's kernel): the same products and sums
-// in the same order, FP_CONTRACT off and division and sqrt correctly rounded, so the bits
-// are the host's.
+// in the same order with FP_CONTRACT off, so the bits are the host's on a device that
+// divides and takes square roots correctly rounded (the program asks for it where the
+// device offers it) and keeps subnormals.
 
 __kernel void place_vertices(__global const PlacementParams* p,
                              __global const GpuVertex* object_vertices,

@@ -132,7 +132,7 @@ impl RecordedKernel {
 
 /// A write's bytes, held as 4-byte words (a write's length is a multiple of 4), so that a
 /// vector of 4-byte-aligned elements becomes one without a copy
-/// ([`Recording::write_owned`]: an instance move's world vertices, megabytes a frame).
+/// ([`Recording::write_owned`]: a deformed instance's vertices, megabytes at a time).
 /// Reads as `[u8]`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct WordBytes(Vec<u32>);

@@ -71,8 +71,10 @@ pub const SINGLE_LEVEL_SLOT: usize = 1;
 /// distant light passes through (its slab times along that axis are off by the factor
 /// |c| 2^23). The floor bounds every slab value: a child's quantized bound (255 steps of
 /// its node's power-of-two extent, at most 2^42 for boxes within the coordinate bound
-/// `MAX_COORDINATE` = 2^40) or a distance (at most 2^41) times 2^64 stays below 2^107, so
-/// no product overflows to infinity and no `0 x inf` makes a NaN. What it
+/// `MAX_COORDINATE` = 2^40) or a distance (at most 2^41) times 2^64 stays below 2^107 in
+/// world space; in an instance's object space (scales down to 2^-20) a ray's origin
+/// reaches about 2^61 and a slab value 2^125, still finite. So no product overflows to
+/// infinity and no `0 x inf` makes a NaN. What it
 /// changes is below f32's resolution: the ray moves at most `t 2^-64` along that axis,
 /// far less than the rounding `t 2^-24` of any point on it.
 pub const CULLING_MIN_COMPONENT: f32 = 1.0 / 18_446_744_073_709_551_616.0;
@@ -220,20 +222,20 @@ pub struct Level {
     pub world_bounds: Aabb,
     /// Box of its world vertices if its material is specular, else empty.
     pub caster_bounds: Aabb,
-    /// Whether a triangle of the level has a vertex normal that departs from its
-    /// geometric normal ([`crate::device::device_scene::smooth_normals`]; an instance's
-    /// in object space, which a move keeps).
-    pub smooth_normals: bool,
+    /// How far its vertex normals depart from their faces' normals
+    /// ([`crate::device::device_scene::normal_departure`]): the static level's in world
+    /// space, an instance's in object space, which a move keeps ([`Level::smooth_normals`]).
+    pub normal_departure: f32,
     /// An instance's triangles (world-vertex indices; empty for the static level): what
-    /// `smooth_normals` is recomputed over when it deforms.
+    /// `normal_departure` is recomputed over when it deforms.
     /// (Shared: levels are cloned on every move, their triangles never change.)
     pub triangle_indices: std::sync::Arc<[[u32; 3]]>,
     /// The world-vertex indices those triangles use, each once, ascending (what
     /// `triangle_bounds` is grown over: a third of the triangles' corners).
     pub used_vertices: std::sync::Arc<[u32]>,
     /// An instance's vertices its triangles leave unused, as indices from `vertex_base`,
-    /// ascending (a move grows the box of the used ones in the pass that places them:
-    /// [`crate::device::device_scene::placed_vertices`]).
+    /// ascending (a move grows the box of the used ones in the pass that bounds them all:
+    /// [`crate::device::placement::placed_bounds`]).
     pub unused_vertices: std::sync::Arc<[u32]>,
     /// An instance's box of the world vertices its triangles use (AdaptiveCaustics' caster
     /// box of the object: `adaptive_caustics::caster_boxes`); empty for the static level.
@@ -248,6 +250,27 @@ pub struct Level {
 }
 
 impl Level {
+    /// Whether a triangle of the level may have a vertex normal that departs from its
+    /// geometric normal in world space by more than
+    /// [`crate::device::device_scene::NORMAL_DEPARTURE`] (PhotonGi corrects shading
+    /// normals where some level's do). An instance's departure `d` is measured in object
+    /// space: its placement maps normals by the normal matrix `R S^-1` and renormalises
+    /// them, which moves the difference of two unit normals by at most the condition
+    /// number `kappa` (largest over smallest scale; the rotation keeps lengths) in length,
+    /// to first order, and a per-axis difference lies within 1 and `sqrt(3)` of a length:
+    /// the world departure is at most `sqrt(3) kappa d`, what is tested (the rounding of
+    /// either normal, about 1e-7, is far below the threshold).
+    pub fn smooth_normals(&self) -> bool {
+        let stretch = match self.object {
+            None => 1.0,
+            Some(_) => {
+                let s = self.transform.scale.abs();
+                3f32.sqrt() * s.max_element() / s.min_element()
+            }
+        };
+        self.normal_departure * stretch > crate::device::device_scene::NORMAL_DEPARTURE
+    }
+
     /// The record the traversal reads.
     pub fn record(&self) -> InstanceRecord {
         let identity = self.object.is_none();
@@ -382,5 +405,11 @@ mod tests {
         let inv = 1.0 / CULLING_MIN_COMPONENT;
         let slab = 255.0 * extent * inv + span * inv;
         assert!(slab.is_finite() && slab < 2f32.powi(107), "{slab:e}");
+        // in object space: a ray from the far side of the coordinate bound, seen by an
+        // instance scaled by the smallest scale (its object coordinates within the bound)
+        let min_scale = crate::scene::transform::SCALE_RANGE.0;
+        let origin = span / min_scale;
+        let slab = 255.0 * extent * inv + (origin + span) * inv;
+        assert!(slab.is_finite() && slab < 2f32.powi(126), "{slab:e}");
     }
 }

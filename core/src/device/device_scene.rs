@@ -146,9 +146,9 @@ pub fn mesh_vertices(m: &crate::scene::TriangleMesh) -> Vec<GpuVertex> {
 }
 
 impl SceneInstances {
-    /// Whether some level's triangles have smooth normals ([`smooth_normals`]).
+    /// Whether some level's triangles have smooth normals ([`Level::smooth_normals`]).
     pub fn smooth_normals(&self) -> bool {
-        self.levels.iter().any(|l| l.smooth_normals)
+        self.levels.iter().any(Level::smooth_normals)
     }
 
     /// The first object vertex of instance level `l` in [`SceneInstances::object_vertices`].
@@ -264,8 +264,8 @@ impl SceneInstances {
     /// Deforms instance `object` (an object built with a transform): `local` are its new
     /// object-space vertices ([`mesh_vertices`] of its new shape: the same count, the same
     /// triangles). Its BLAS is rebuilt (the one BVH build: no other level's) into its
-    /// reserved region, its triangles reordered as the new BLAS has them, its world
-    /// vertices and boxes, the scene's bounds and the top level recomputed with the
+    /// reserved region, its triangles reordered as the new BLAS has them, its placement
+    /// and boxes, the scene's bounds and the top level recomputed with the
     /// functions the build uses, so the result equals a fresh build of the deformed scene
     /// (the records' `geometry_version` aside). On an error nothing changes.
     pub fn deform_instance(
@@ -337,7 +337,7 @@ impl SceneInstances {
         l.caster_balls = placed_balls(l);
         l.triangle_bounds = used_box;
         let run = |i: u32| local[(i - base) as usize];
-        l.smooth_normals = smooth_normals(l.triangle_indices.iter().copied(), &run);
+        l.normal_departure = normal_departure(l.triangle_indices.iter().copied(), &run);
         l.geometry_version = l.geometry_version.wrapping_add(1);
         let (blas_root, triangle_base, position_base, corners_at) = (
             l.blas_root,
@@ -380,21 +380,28 @@ impl SceneInstances {
     }
 }
 
-/// Whether a triangle has a vertex normal more than 1e-4 (per axis) from its geometric
-/// normal (either side): where none does, shading and geometric normals agree (PhotonGi's
-/// Eq. 20 correction is then 1 up to its epsilon).
-pub fn smooth_normals(
+/// A vertex normal departs from its triangle's geometric normal where the two (unit)
+/// differ by more than this on some axis, on either side ([`normal_departure`]).
+pub const NORMAL_DEPARTURE: f32 = 1e-4;
+
+/// The largest difference, per axis, between a vertex normal and its triangle's geometric
+/// normal, on the nearer side (`n - ng` or `n + ng`), over `triangles`: 0 where every
+/// vertex normal lies along its face's normal.
+pub fn normal_departure(
     triangles: impl Iterator<Item = [u32; 3]>,
     vertex: &dyn VertexLookup,
-) -> bool {
-    let mut triangles = triangles;
-    triangles.any(|t| {
+) -> f32 {
+    triangles.fold(0.0f32, |most, t| {
         let v = t.map(|i| vertex.vertex(i));
         let p = v.map(|v| Vec3::from(v.position));
         let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        v.iter().any(|v| {
+        v.iter().fold(most, |most, v| {
             let n = Vec3::from(v.normal).normalize_or_zero();
-            (n - ng).abs().max_element() > 1e-4 && (n + ng).abs().max_element() > 1e-4
+            let d = (n - ng)
+                .abs()
+                .max_element()
+                .min((n + ng).abs().max_element());
+            most.max(d)
         })
     })
 }
@@ -619,7 +626,7 @@ impl DeviceScene {
             position_base: 0,
             world_bounds: Aabb::EMPTY,
             caster_bounds: Aabb::EMPTY,
-            smooth_normals: false,
+            normal_departure: 0.0,
             triangle_indices: std::sync::Arc::from(Vec::new()),
             used_vertices: std::sync::Arc::from(Vec::new()),
             unused_vertices: std::sync::Arc::from(Vec::new()),
@@ -712,7 +719,7 @@ impl DeviceScene {
                         position_base: object_vertices.len() as u32,
                         world_bounds,
                         caster_bounds: if specular { world_bounds } else { Aabb::EMPTY },
-                        smooth_normals: false,
+                        normal_departure: 0.0,
                         triangle_indices: tris.iter().map(|t| t.indices).collect(),
                         used_vertices: used.clone().into(),
                         unused_vertices: unused_vertices(&used, base, local.len()).into(),
@@ -797,14 +804,14 @@ impl DeviceScene {
         for l in &mut levels {
             let range = l.triangle_base as usize..(l.triangle_base + l.triangle_count) as usize;
             let corners = triangles[range].iter().map(|t| t.indices);
-            // an instance's in object space, where a move leaves it (a transform keeps a
-            // normal along its face's normal, up to rounding far below the test's 1e-4)
-            l.smooth_normals = match l.object {
-                None => smooth_normals(corners, &vertices),
+            // an instance's in object space, which a move keeps (`Level::smooth_normals`
+            // bounds what its transform makes of it)
+            l.normal_departure = match l.object {
+                None => normal_departure(corners, &vertices),
                 Some(_) => {
                     let (base, first) = (l.vertex_base, l.position_base);
                     let local = |i: u32| object_vertices[(i - base + first) as usize];
-                    smooth_normals(corners, &local)
+                    normal_departure(corners, &local)
                 }
             };
             l.triangle_bounds = triangle_bounds(&l.used_vertices, &vertices, 0);
@@ -1228,6 +1235,59 @@ mod tests {
             }
         }
         s
+    }
+
+    /// An instance's smooth-normal test bounds what its transform makes of its object-space
+    /// departure: a quad whose vertex normals lean 5e-5 off its face passes for flat
+    /// unscaled, but a scale of 100 along the face's normal leans them 5e-3 off in world
+    /// space (measured on the placed vertices), which the test must not miss.
+    #[test]
+    fn a_stretched_instance_counts_its_normals_departure() {
+        let mut scene = instanced_cornell();
+        let lean = Vec3::new(5e-5, 1.0, 0.0).normalize();
+        scene.objects[5].shape = crate::scene::Shape::Mesh {
+            positions: vec![
+                Vec3::new(-0.2, 0.0, -0.2),
+                Vec3::new(0.2, 0.0, -0.2),
+                Vec3::new(0.2, 0.0, 0.2),
+                Vec3::new(-0.2, 0.0, 0.2),
+            ]
+            .into(),
+            normals: vec![lean; 4].into(),
+            uvs: Vec::new().into(),
+            indices: vec![[0, 2, 1], [0, 3, 2]].into(),
+        };
+        let level = |ds: &DeviceScene| {
+            ds.instances
+                .levels
+                .iter()
+                .find(|l| l.object == Some(5))
+                .unwrap()
+                .clone()
+        };
+        let world_departure = |ds: &DeviceScene| {
+            let l = level(ds);
+            normal_departure(l.triangle_indices.iter().copied(), &ds.vertices)
+        };
+        let mut ds = DeviceScene::build(&scene, Default::default()).unwrap();
+        assert!(world_departure(&ds) < NORMAL_DEPARTURE);
+        assert!(!level(&ds).smooth_normals());
+        let t = scene.objects[5].transform.unwrap();
+        let stretched = Transform {
+            scale: Vec3::new(1.0, 100.0, 1.0),
+            ..t
+        };
+        ds.move_instances(&[(5, stretched)]).unwrap();
+        assert!(world_departure(&ds) > 10.0 * NORMAL_DEPARTURE);
+        assert!(level(&ds).smooth_normals());
+        // normals along the face stay flat at any scale
+        let crate::scene::Shape::Mesh { normals, .. } = &mut scene.objects[5].shape else {
+            unreachable!()
+        };
+        *normals = vec![Vec3::Y; 4].into();
+        scene.objects[5].transform = Some(stretched);
+        let ds = DeviceScene::build(&scene, Default::default()).unwrap();
+        assert!(!level(&ds).smooth_normals());
     }
 
     #[test]

@@ -770,8 +770,8 @@ pub struct SplatParams {
 }
 
 /// Parameters of `place_vertices`: one instance's placement (`world_from_object` and its
-/// normal matrix as columns, [`crate::device::placement::placement_params`]) and the runs
-/// it maps, `count` object-space vertices from `object_first` to world vertices from
+/// normal matrix as columns, [`crate::device::placement::placement_params`]) and the run
+/// it maps: `count` object-space vertices from `object_first` to world vertices from
 /// `world_first`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

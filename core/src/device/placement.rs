@@ -1,7 +1,8 @@
 //! An instance's vertices placed in the world: positions through `world_from_object`,
-//! normals through its inverse transpose, renormalised. A build places an instance once;
-//! a move ([`crate::device::device_scene::SceneInstances::move_instances`]) places it
-//! every time it moves, so most of a host's update is this loop. It places four vertices
+//! normals through its inverse transpose, renormalised. A build places each instance on
+//! the host (the host's copy of the scene) and on the device; a move
+//! ([`crate::device::device_scene::SceneInstances::move_instances`]) only bounds it on the
+//! host ([`placed_bounds`]). The host's placement puts four vertices
 //! at once, one per SIMD lane (`Vec4`), with the same operations in the same order in
 //! each lane as [`placement`] does for one vertex, so the results are bitwise
 //! [`placement`]'s (IEEE-754 rounds each operation by itself; shuffles move bits).

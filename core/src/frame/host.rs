@@ -701,7 +701,7 @@ impl FrameHost {
         self.geometry.bounds = m.bounds;
         self.geometry.caster_bounds = m.caster_bounds;
         self.geometry.caster_spheres = m.caster_spheres;
-        // the world vertices go to the device without a copy
+        // the device places the moved instances (place_vertices) with the next frame
         self.pending.update_instances(u, &self.scene)?;
         self.instances = instances;
         self.model = model;

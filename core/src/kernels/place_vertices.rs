@@ -12,7 +12,10 @@ use crate::device::layout::{GpuVertex, PlacementParams};
 /// `world_from_object`, normal through the normal matrix and renormalised, +Y where its
 /// length's reciprocal is not finite and positive; u and v kept). Positions in scene units,
 /// object space in, world space out. Reads: the object vertices. Writes: the run of world
-/// vertices, nothing else.
+/// vertices, nothing else. Where a device rounds otherwise than the host (WGSL may fuse a
+/// product into a sum), a vertex may differ from the host's placement, whose boxes the
+/// host keeps, in its last bits: rays meet an instance's triangles at the object-space
+/// positions of the node buffer, so these world vertices only shade the hits.
 #[derive(Clone, Copy, Debug)]
 pub struct PlaceVertices {
     /// The instance's placement and its runs.

@@ -89,7 +89,7 @@ pub type PhotonGi = Hosted<PhotonGiPipeline>;
 /// (the raw deposit has no splats to carry a direction), and a scene where some
 /// triangle's vertex normals depart from its geometric normal (elsewhere the shading and
 /// geometric normals agree and the factor is 1 up to `eps`:
-/// [`crate::device::device_scene::smooth_normals`]).
+/// [`crate::device::acceleration::Level::smooth_normals`]).
 fn shading_correction(s: &PhotonGiSettings, instances: &SceneInstances) -> bool {
     s.shading_normals && s.estimator == IndirectEstimator::Splat && instances.smooth_normals()
 }
