@@ -1628,7 +1628,8 @@ mod tests {
         }
     }
 
-    /// The boxes a move grows in its one pass ([`placed_vertices`]) are, bitwise, the box
+    /// The boxes the host's placement grows in its one pass ([`placed_vertices`], against
+    /// which a move's `placed_bounds` is proptested) are, bitwise, the box
     /// of every world vertex and the box of the used ones as a build grows them
     /// ([`world_vertices`], [`triangle_bounds`]), zero bounds of either sign included.
     mod placed {
