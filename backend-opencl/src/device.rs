@@ -186,8 +186,8 @@ pub fn choose_device() -> Result<(Platform, Device), BackendError> {
         })?;
         return devices.get(n).copied().ok_or_else(|| {
             unavailable(format!(
-                "CAUSTICA_OPENCL_DEVICE={n}, but there are {} devices",
-                devices.len()
+                "CAUSTICA_OPENCL_DEVICE={n}, but the devices are numbered 0 to {}",
+                devices.len().saturating_sub(1)
             ))
         });
     }

@@ -288,8 +288,11 @@ impl Context {
             })?;
             if n >= candidates.len() {
                 return Err(unavailable(format!(
-                    "CAUSTICA_VULKAN_DEVICE={n}, but {} devices have ray tracing",
-                    candidates.len()
+                    "CAUSTICA_VULKAN_DEVICE={n}, but the devices with ray tracing are {}",
+                    match candidates.len() {
+                        0 => "none".to_string(),
+                        k => format!("numbered 0 to {}", k - 1),
+                    }
                 )));
             }
             candidates = vec![candidates[n]];

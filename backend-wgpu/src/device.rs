@@ -62,8 +62,8 @@ impl WgpuBackend {
                 })?;
                 if n >= adapters.len() {
                     return Err(unavailable(format!(
-                        "CAUSTICA_WGPU_ADAPTER={n}, but there are {} adapters",
-                        adapters.len()
+                        "CAUSTICA_WGPU_ADAPTER={n}, but the adapters are numbered 0 to {}",
+                        adapters.len().saturating_sub(1)
                     )));
                 }
                 adapters.swap_remove(n)

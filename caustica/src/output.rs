@@ -111,7 +111,7 @@ pub fn make_folder(dir: &Path) -> Result<(), String> {
             });
         }
     }
-    std::fs::create_dir_all(dir).map_err(|e| format!("{shown}: {e}"))
+    std::fs::create_dir_all(dir).map_err(|e| format!("{shown}: cannot create the folder: {e}"))
 }
 
 /// Whether a file can be made in the existing folder `dir` (a probe file, written and

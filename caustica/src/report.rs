@@ -24,7 +24,7 @@ use crate::reference::light_tracer::{
 use crate::reference::{self, ReferenceSpec};
 use caustica_core::frame::image::Image;
 use caustica_core::frame::metrics::{bias_variance, peak_ratio, relative_mse, CausticMask};
-use caustica_core::techniques::{create, TECHNIQUES};
+use caustica_core::techniques::{create, FilterSetting, TECHNIQUES};
 
 /// The filter label of a technique that has no `filter` setting (its own filter runs).
 pub const OWN_FILTER: &str = "own";
@@ -229,20 +229,37 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-/// The filter setting of technique `name` (its path and its values, the default first),
-/// `None` for a technique with one filter or an unknown name.
-fn filter_setting(name: &str) -> Option<(&'static str, &'static [&'static str])> {
+/// The filter setting of technique `name` under `settings` (its path and its values, the
+/// default first), `None` for a technique with one filter or an unknown name.
+fn filter_setting(
+    name: &str,
+    settings: &serde_json::Map<String, serde_json::Value>,
+) -> Option<FilterSetting> {
     TECHNIQUES
         .iter()
         .find(|t| t.name == name)
-        .and_then(|t| t.filter_setting)
+        .and_then(|t| (t.filter_setting)(settings))
 }
 
-/// The filters technique `name` runs of those `asked`: the asked ones it has (Sspm's
-/// `filter`, CausticMap's `gather`), its default filter where it has none of them, and
-/// [`OWN_FILTER`] once for a technique with one filter.
-fn filters_for(name: &str, asked: &[String]) -> Vec<String> {
-    match filter_setting(name) {
+/// The plan's settings with a technique spec's `overrides` over them.
+fn spec_settings(
+    plan: &ReportPlan,
+    overrides: &serde_json::Map<String, serde_json::Value>,
+) -> serde_json::Map<String, serde_json::Value> {
+    let mut settings = plan.settings.clone();
+    merge_settings(&mut settings, overrides.clone());
+    settings
+}
+
+/// The filters technique `name` runs under `settings` of those `asked`: the asked ones
+/// it has (Sspm's `filter`, CausticMap's `gather`), its default filter where it has none
+/// of them, and [`OWN_FILTER`] once for a technique with one filter.
+fn filters_for(
+    name: &str,
+    settings: &serde_json::Map<String, serde_json::Value>,
+    asked: &[String],
+) -> Vec<String> {
+    match filter_setting(name, settings) {
         Some((_, values)) => {
             let asked: Vec<String> = asked
                 .iter()
@@ -259,10 +276,15 @@ fn filters_for(name: &str, asked: &[String]) -> Vec<String> {
     }
 }
 
-/// Every filter name some technique has (`density`, `bilateral`, `box`), each once.
+/// Every filter name some technique has under its default settings (`density`,
+/// `bilateral`, `box`), each once.
 fn known_filters() -> Vec<&'static str> {
     let mut known: Vec<&'static str> = Vec::new();
-    for (_, values) in TECHNIQUES.iter().filter_map(|t| t.filter_setting) {
+    let defaults = serde_json::Map::new();
+    for (_, values) in TECHNIQUES
+        .iter()
+        .filter_map(|t| (t.filter_setting)(&defaults))
+    {
         for v in values.iter() {
             if !known.contains(v) {
                 known.push(v);
@@ -302,11 +324,10 @@ fn combination_settings(
     (pw, ph): (u32, u32),
     frames: usize,
 ) -> serde_json::Value {
-    let mut settings = plan.settings.clone();
-    merge_settings(&mut settings, overrides.clone());
+    let mut settings = spec_settings(plan, overrides);
     put_setting(&mut settings, "frame.photons_w", pw.into());
     put_setting(&mut settings, "frame.photons_h", ph.into());
-    if let Some((path, _)) = filter_setting(name) {
+    if let Some((path, _)) = filter_setting(name, &spec_settings(plan, overrides)) {
         put_setting(&mut settings, path, filter.into());
     }
     if frames > 1 {
@@ -443,7 +464,7 @@ pub fn validate(plan: &ReportPlan) -> Result<(), ReportError> {
                  settings)"
             ));
         }
-        for filter in filters_for(name, &plan.filters) {
+        for filter in filters_for(name, &spec_settings(plan, &overrides), &plan.filters) {
             for &(pw, ph) in &plan.budgets {
                 let settings = combination_settings(plan, &overrides, name, &filter, (pw, ph), 1);
                 check_settings(name, &settings).map_err(|e| {
@@ -646,7 +667,7 @@ pub fn run(
                 .iter()
                 .find(|r| r.info.spec == spec)
                 .expect("computed above");
-            let filters = filters_for(name, &plan.filters);
+            let filters = filters_for(name, &spec_settings(plan, &overrides), &plan.filters);
             let combos = combinations(&filters, plan);
             let tracer = measured_tracer(&scene.name, tracer, log);
             if let Some(reason) = nothing_to_measure(&scene.name, name, r) {

@@ -234,7 +234,7 @@ fn gltf_scenes_export_render_and_fail_cleanly() {
     fails_cleanly(&["render", "--scene", bad.to_str().unwrap()], "bad.gltf:2:");
     fails_cleanly(
         &["scenes", "--export", "sphere", "--format", "obj"],
-        "json or gltf",
+        "possible values: json, gltf",
     );
 }
 

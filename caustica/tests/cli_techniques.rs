@@ -180,3 +180,52 @@ fn the_settings_files_photon_grid_is_kept_unless_the_flag_is_given() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--filter` sets the filter of the receiver the settings pick: AdaptiveCaustics with
+/// `deposit: screen` takes the screen photon map's filters (`screen.filter`), and its
+/// atlas's gather (`box`) is refused rather than set where nothing reads it.
+#[test]
+fn the_filter_flag_follows_adaptive_caustics_deposit() {
+    let dir = std::env::temp_dir().join(format!("caustica-filter-deposit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let settings = dir.join("settings.json");
+    std::fs::write(&settings, r#"{"deposit": "screen"}"#).unwrap();
+    let out_dir = dir.join("out");
+    let render = |filter: &str| {
+        caustica(&[
+            "render",
+            "--backend",
+            "cpu",
+            "--technique",
+            "adaptive-caustics",
+            "--size",
+            "32x18",
+            "--photons",
+            "64x64",
+            "--settings",
+            settings.to_str().unwrap(),
+            "--filter",
+            filter,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ])
+    };
+    let out = render("bilateral");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("stats.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        s["settings"]["screen"]["filter"].as_str(),
+        Some("bilateral")
+    );
+    let out = render("box");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("filters are density, bilateral"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

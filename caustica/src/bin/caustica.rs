@@ -148,7 +148,8 @@ struct Cli {
 enum Command {
     /// Render one frame of a scene and write EXR images, a PNG and stats.json.
     Render {
-        /// Built-in scene name (see `caustica scenes`) or a scene file (JSON).
+        /// Built-in scene name (see `caustica scenes`) or a scene file (caustica's JSON,
+        /// or glTF 2.0: .gltf or .glb).
         #[arg(long, default_value = "sphere")]
         scene: String,
         /// Technique (see `caustica techniques`).
@@ -167,7 +168,7 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         seed: Option<u32>,
         /// Exposure multiplier for the PNG (EXR files are linear and unscaled).
-        #[arg(long, allow_negative_numbers = true, default_value_t = 1.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1.0, value_parser = parse_exposure)]
         exposure: f32,
         /// Settings file (a JSON object of the technique's settings, e.g. `{"frame":
         /// {"seed": 7}, "screen": {"filter": "bilateral"}}`; the flat objects of earlier
@@ -177,14 +178,16 @@ enum Command {
         /// The technique's caustic filter: Sspm's `screen.filter`, density (default: adapts
         /// to the photons, keeps the flux) or bilateral (Kim 2019's); CausticMap's and
         /// AdaptiveCaustics' `atlas.gather`, density (default) or box (Vanderstichelen
-        /// 2021's 3x3).
+        /// 2021's 3x3); AdaptiveCaustics with `deposit: screen` in the settings file: its
+        /// `screen.filter`, as Sspm's.
         #[arg(long, value_parser = ["density", "bilateral", "box"])]
         filter: Option<String>,
         /// Frames to render; the last is written. Above 1, a technique with progressive
         /// accumulation (`frame.accumulate`, every technique) sums the frames' photons as one
         /// frame of all of them; with `accumulate: false` in the settings each frame gets a
         /// new seed.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1,
+              value_parser = clap::value_parser!(u32).range(1..))]
         frames: u32,
         /// Seconds of scene time between frames: the scene's height fields (the `pool`'s
         /// water) become instances whose waves travel as deep-water waves do
@@ -205,7 +208,7 @@ enum Command {
         export: Option<String>,
         /// Format of --export: json (caustica's scene format) or gltf (glTF 2.0, one
         /// embedded buffer, for other tools).
-        #[arg(long, default_value = "json")]
+        #[arg(long, default_value = "json", value_parser = ["json", "gltf"], requires = "export")]
         format: String,
     },
     /// List every backend, whether it works on this machine, its device type and the
@@ -217,7 +220,8 @@ enum Command {
     /// camera-space caustic radiance and its error bar (docs/performance.md), cached as
     /// EXR (mean, standard error) with a JSON sidecar; prints the sidecar.
     Reference {
-        /// Built-in scene name or a scene file (JSON).
+        /// Built-in scene name or a scene file (caustica's JSON, or glTF 2.0: .gltf or
+        /// .glb).
         #[arg(long, default_value = "sphere")]
         scene: String,
         /// Image size WxH.
@@ -378,6 +382,14 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("'{s}': an image side must be at most 16384 pixels"));
     }
     Ok((w, h))
+}
+
+/// `--exposure`: a positive finite multiplier.
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{s}' is not a positive finite number (f32)")),
+    }
 }
 
 /// `--spheres`: analytic or mesh.
@@ -622,7 +634,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 backends: list(&backends),
                 budgets: list(&budgets)
                     .iter()
-                    .map(|b| parse_grid(b))
+                    .map(|b| parse_grid(b).map_err(|e| format!("--budgets: {e}")))
                     .collect::<Result<_, _>>()?,
                 frames: list(&frames)
                     .iter()
@@ -723,9 +735,6 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 )
                 .into());
             }
-            if !(exposure > 0.0 && exposure.is_finite()) {
-                return Err("--exposure must be a positive finite number (f32)".into());
-            }
             let scene_arg = scene;
             let mut scene = load_scene(&scene_arg)?;
             if let Some((w, h)) = size {
@@ -734,10 +743,11 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             }
             let mut s = read_settings(settings.as_deref())?;
             if let Some(f) = filter {
+                // the setting under the file's settings (AdaptiveCaustics': its deposit's)
                 let setting = TECHNIQUES
                     .iter()
                     .find(|t| t.name == technique)
-                    .and_then(|t| t.filter_setting);
+                    .and_then(|t| (t.filter_setting)(&s));
                 match setting {
                     Some((key, values)) if values.contains(&f.as_str()) => {
                         put_setting(&mut s, key, f.into());
@@ -761,9 +771,6 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             }
             if let Some(seed) = seed {
                 put_setting(&mut s, "frame.seed", seed.into());
-            }
-            if frames == 0 {
-                return Err("--frames must be at least 1".into());
             }
             // the height fields that --animate moves, each made an instance
             let mut animated = Vec::new();
@@ -811,7 +818,6 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 .or_else(|| defaults.as_ref().and_then(|d| d["frame"].get("seed")))
                 .and_then(|v| v.as_u64())
                 .unwrap_or(0) as u32;
-            caustica::output::prepare_output_dir(&out)?;
             let stem = caustica::output::file_stem(&scene.name);
             let mut be = open_backend(&backend).map_err(|e| e.to_string())?;
             let asked = get_setting(&s, "frame.outputs").cloned();
@@ -826,6 +832,11 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 caustica::Error::InvalidScene(_) => format!("{scene_arg}: {e}"),
                 e => e.to_string(),
             })?;
+            // the folder made once the technique is (no empty folder from a failed start)
+            if let Err(e) = caustica::output::prepare_output_dir(&out) {
+                let _ = t.free(be.as_mut());
+                return Err(e.into());
+            }
             // a list of outputs may name some another technique has (settings shared
             // between techniques): say which are not written
             if let Some(serde_json::Value::Array(asked)) = asked {

@@ -31,11 +31,22 @@ pub struct TechniqueEntry {
     pub create: CreateFn,
     /// The default settings (serialised).
     pub default_settings: fn() -> serde_json::Value,
-    /// The setting that picks the caustic filter (its path: `screen.filter`), and its
-    /// values (the first is the default), so that `report` can compare filters; `None`
-    /// where the technique has one filter.
-    pub filter_setting: Option<(&'static str, &'static [&'static str])>,
+    /// The setting that picks the caustic filter under the given settings (a JSON object
+    /// of the technique's settings, missing fields at their defaults): its path
+    /// (`screen.filter`) and its values (the first is the default), so that the command
+    /// line and `report` can set and compare filters; `None` where the technique has one
+    /// filter.
+    pub filter_setting: fn(&serde_json::Map<String, serde_json::Value>) -> Option<FilterSetting>,
 }
+
+/// A technique's filter setting: its path in the settings and its values, the default
+/// first.
+pub type FilterSetting = (&'static str, &'static [&'static str]);
+
+/// The screen photon map's filters (`screen.filter`).
+const SCREEN_FILTER: FilterSetting = ("screen.filter", &["density", "bilateral"]);
+/// The caustic atlas's gathers (`atlas.gather`).
+const ATLAS_GATHER: FilterSetting = ("atlas.gather", &["density", "box"]);
 
 /// Every technique, by name: the registry.
 pub const TECHNIQUES: &[TechniqueEntry] = &[
@@ -46,7 +57,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
         default_settings: || {
             serde_json::to_value(sspm::SspmSettings::default()).unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("screen.filter", &["density", "bilateral"])),
+        filter_setting: |_| Some(SCREEN_FILTER),
     },
     TechniqueEntry {
         name: "caustic-map",
@@ -56,7 +67,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(caustic_map::CausticMapSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("atlas.gather", &["density", "box"])),
+        filter_setting: |_| Some(ATLAS_GATHER),
     },
     TechniqueEntry {
         name: "adaptive-caustics",
@@ -66,7 +77,11 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(adaptive_caustics::AdaptiveCausticsSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: Some(("atlas.gather", &["density", "box"])),
+        // the receiver `deposit` picks: the atlas (default) or the screen photon map
+        filter_setting: |s| match s.get("deposit").and_then(|d| d.as_str()) {
+            Some("screen") => Some(SCREEN_FILTER),
+            _ => Some(ATLAS_GATHER),
+        },
     },
     TechniqueEntry {
         name: "photon-gi",
@@ -77,7 +92,7 @@ pub const TECHNIQUES: &[TechniqueEntry] = &[
             serde_json::to_value(photon_gi::PhotonGiSettings::default())
                 .unwrap_or(serde_json::Value::Null)
         },
-        filter_setting: None,
+        filter_setting: |_| None,
     },
 ];
 
