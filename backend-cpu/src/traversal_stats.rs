@@ -13,8 +13,8 @@
 //! leave out everything but traversal (shading, stores, memory), so they bound what
 //! regrouping rays could buy, not a time.
 //!
-//! `sort_indirect_paths`' histogram also prints how its queue's paths spread over the
-//! sort's buckets, where the GPU's atomics land ([`sort_keys`]).
+//! A `sorted_waves` wave that keys its queue also prints how the queued paths spread
+//! over the sort's buckets, where the GPU's atomics land ([`sort_keys`]).
 //!
 //! Printed to stderr after each pass, e.g. `cargo run --release -p caustica --features
 //! caustica-cpu/traversal-stats -- render --scene rooms --technique photon-gi`. Without

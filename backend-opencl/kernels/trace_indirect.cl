@@ -8,7 +8,8 @@
 // two uint4 each: GiPhoton (p->store 0) or Photon (1), appended in arrival order.
 // Compiled variant (not a branch): `-D WAVES=0/1` (core's TRACE_INDIRECT_SWITCHES); 1 traces
 // one wave of segments p->segment_first .. p->segment_end, from the RSM photons or the
-// queued paths, and queues the paths still going.
+// queued paths (sorted: in sort_indirect_paths' order, p->queue_order), and queues the
+// paths still going (sorted: each with its sort key and rank, p->queue_keys).
 #ifndef WAVES
 #define WAVES 0
 #endif
@@ -168,7 +169,8 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
                              GATHER_GBUFFER_PARAMS(__global const),
                              __global const IndirectPath* paths_in,
                              __global IndirectPath* paths_out, uint path_capacity,
-                             volatile __global uint* path_counts) {
+                             volatile __global uint* path_counts, __global uint2* path_keys,
+                             volatile __global uint* buckets, __global const uint* order) {
     __local uint lc[COUNTER_WORDS];
     counters_clear_local(lc);
     uint i = get_global_id(0);
@@ -187,7 +189,8 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
     } else {
         // a later wave: the paths the one before queued
         live = i < min(path_counts[p->segment_first], path_capacity);
-        if (live) path = paths_in[i];
+        // sorted: the queue in its keys' order (sort_indirect_paths)
+        if (live) path = paths_in[p->queue_order != 0u ? order[i] : i];
     }
     if (live) {
         uint rays = 0u;
@@ -201,7 +204,17 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
             } else {
                 // the queue holds every path of the launch; a slot past it is not written
                 uint slot = atomic_inc(&path_counts[p->segment_end]);
-                if (slot < path_capacity) paths_out[slot] = path;
+                if (slot < path_capacity) {
+                    paths_out[slot] = path;
+                    if (p->queue_keys != 0u) {
+                        // its key and rank among the queue's paths of that key, for the
+                        // sort before the next wave
+                        uint key = path_sort_key(load3(path.origin), load3(path.direction),
+                                                 load3g(p->key_origin_min),
+                                                 load3g(p->key_origin_scale));
+                        path_keys[slot] = (uint2)(key, atomic_inc(&buckets[key]));
+                    }
+                }
             }
         }
     }

@@ -17,7 +17,7 @@
 //! `CAUSTICA_BENCH_GI_QUEUE=N` (`indirect_queue_paths`, default the settings' 2^22),
 //! `CAUSTICA_BENCH_GI_WAVES_ABOVE=N` (`auto_waves_above_photons`, default the settings').
 //! With waves, `trace_indirect`'s (and the sort's) median per wave follows the passes,
-//! and the sort's per launch (histogram, scan, scatter; summed over the waves), and under
+//! and the sort's per launch (scan, scatter; summed over the waves), and under
 //! `auto` the time of the lights of few photons traced in one launch each.
 //! Setting `dev` (256^2 photons, 3 bounces) is the high setting's paths at a size a
 //! software device traces in seconds.
@@ -132,7 +132,7 @@ fn main() {
             }
             let mut passes: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             // per wave `trace_indirect`'s and the sort's times, and the sort's per launch
-            // (histogram, scan, scatter, over the waves): one entry a frame
+            // (scan, scatter, over the waves): one entry a frame
             let mut wave_trace: Vec<Vec<f64>> = Vec::new();
             let mut wave_sort: Vec<Vec<f64>> = Vec::new();
             let mut sort_phase: Vec<Vec<f64>> = Vec::new();
@@ -202,7 +202,7 @@ fn main() {
             for (what, mut parts) in [
                 ("trace_indirect per wave", wave_trace),
                 ("sort per wave", wave_sort),
-                ("sort per launch (histogram / scan / scatter)", sort_phase),
+                ("sort per launch (scan / scatter)", sort_phase),
                 ("trace_indirect in lights of one launch", single),
             ] {
                 // (lights in one launch: `auto` with `auto_waves_above_photons` alone)

@@ -8,6 +8,12 @@
 // bounce direction, 2 roulette, 3 Fresnel, 4 channel of three bands), same decisions. Stored photons are
 // appended in arrival order (an atomic slot counter): the set equals the CPU's.
 // Photons are 32-byte slots, two vec4<u32> each: GiPhoton (params.store 0) or Photon (1).
+// WAVES (the sorted_waves schedule): with params.queue_keys each queued path's sort key
+// (path_sort_key of its next ray under key_origin_min and key_origin_scale, photon_gi.wgsl)
+// and its rank among the queue's paths of that key (an atomic count in `buckets`) are
+// written beside it (path_keys[slot] = (key, rank)), for sort_indirect_paths; with
+// params.queue_order thread i of a later wave continues path order[i] of paths_in
+// (sort_indirect_paths' order), else path i.
 
 @group(0) @binding(0) var<storage, read> vertices: array<GpuVertex>;
 @group(0) @binding(1) var<storage, read> triangles: array<GpuTriangle>;
@@ -26,6 +32,9 @@
 @group(0) @binding(14) var<storage, read> paths_in: array<IndirectPath>;
 @group(0) @binding(15) var<storage, read_write> paths_out: array<IndirectPath>;
 @group(0) @binding(16) var<storage, read_write> path_counts: array<atomic<u32>>;
+@group(0) @binding(17) var<storage, read_write> path_keys: array<vec2<u32>>;
+@group(0) @binding(18) var<storage, read_write> buckets: array<atomic<u32>>;
+@group(0) @binding(19) var<storage, read> order: array<u32>;
 
 // Compiled variant (not a branch; core's TRACE_INDIRECT_SWITCHES): true traces one wave of
 // segments params.segment_first .. segment_end, from the RSM photons or the queued paths,
@@ -202,10 +211,15 @@ fn trace_indirect(i: u32, li: u32) {
             live = indirect_path_from_rsm(rsm_photons[index], index, &path);
         }
     } else {
-        // a later wave: the paths the one before queued
+        // a later wave: the paths the one before queued (in sort_indirect_paths' order
+        // under queue_order)
         live = i < min(atomicLoad(&path_counts[p.segment_first]), arrayLength(&paths_out));
         if (live) {
-            path = paths_in[i];
+            var q = i;
+            if (p.queue_order != 0u) {
+                q = order[i];
+            }
+            path = paths_in[q];
         }
     }
     if (live) {
@@ -220,6 +234,13 @@ fn trace_indirect(i: u32, li: u32) {
                 let slot = atomicAdd(&path_counts[p.segment_end], 1u);
                 if (slot < arrayLength(&paths_out)) {
                     paths_out[slot] = path;
+                    // its next ray's sort key and its rank among the queue's paths of it
+                    if (p.queue_keys != 0u) {
+                        let key = path_sort_key(path.origin, path.direction,
+                                                p.key_origin_min, p.key_origin_scale);
+                        let rank = atomicAdd(&buckets[key], 1u);
+                        path_keys[slot] = vec2<u32>(key, rank);
+                    }
                 }
             }
         }

@@ -1,13 +1,11 @@
-//! `sort_indirect_paths` (PhotonGi's `sorted_waves` schedule): a counting sort of the
-//! queued paths by `caustica_core::math::path_sort::path_sort_key`, one phase a launch as
-//! on the GPU; the paths of one bucket keep their queue order here.
+//! `sort_indirect_paths` (PhotonGi's `sorted_waves` schedule): the order in which the next
+//! wave takes its queued paths, a counting sort of the (key, rank) pairs the queuing wave
+//! wrote (`caustica_core::math::path_sort`), one phase a launch as on the GPU.
 
 use crate::CpuBackend;
 use caustica_core::backend::BackendError;
-use caustica_core::device::layout::{IndirectPath, PathSortParams};
 use caustica_core::kernels::SortIndirectPaths;
-use caustica_core::math::path_sort::{path_sort_key, path_sort_phase, PATH_SORT_BUCKETS};
-use glam::Vec3;
+use caustica_core::math::path_sort::{path_sort_phase, PathKey, PATH_SORT_BUCKETS};
 
 /// Runs one phase of `sort_indirect_paths` on the host ([`super::run`]'s arm): its
 /// buffers read from `cpu`, its results written back.
@@ -16,53 +14,26 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &SortIndirectPaths) -> Result<(), Bac
     let counts = cpu
         .get(k.path_counts.id)?
         .as_slice::<u32>(k.path_counts.len)?;
-    let n = (counts[p.count_word as usize]).min(k.paths_in.len) as usize;
+    let n = (counts[p.count_word as usize]).min(k.path_keys.len) as usize;
     let mut buckets = cpu
         .get(k.buckets.id)?
         .as_slice::<u32>(k.buckets.len)?
         .to_vec();
-    let paths = cpu
-        .get(k.paths_in.id)?
-        .as_slice::<IndirectPath>(k.paths_in.len)?[..n]
+    if p.phase == path_sort_phase::SCAN {
+        path_sort_scan(&mut buckets);
+        return cpu.put(k.buckets.id, &buckets);
+    }
+    let keys = cpu
+        .get(k.path_keys.id)?
+        .as_slice::<PathKey>(k.path_keys.len)?[..n]
         .to_vec();
-    match p.phase {
-        path_sort_phase::HISTOGRAM => {
-            path_sort_histogram(p, &paths, &mut buckets);
-            #[cfg(feature = "traversal-stats")]
-            {
-                let keys: Vec<u32> = paths.iter().map(|q| key(p, q) as u32).collect();
-                crate::traversal_stats::sort_keys(p.count_word, &keys, PATH_SORT_BUCKETS as usize);
-            }
-        }
-        path_sort_phase::SCAN => path_sort_scan(&mut buckets),
-        _ => {
-            let mut out = cpu
-                .get(k.paths_out.id)?
-                .as_slice::<IndirectPath>(k.paths_out.len)?
-                .to_vec();
-            path_sort_scatter(p, &paths, &mut buckets, &mut out);
-            cpu.put(k.paths_out.id, &out)?;
-        }
-    }
-    cpu.put(k.buckets.id, &buckets)
-}
-
-/// The key of `path` under `p`'s box and scale.
-fn key(p: &PathSortParams, path: &IndirectPath) -> usize {
-    path_sort_key(
-        Vec3::from(path.origin),
-        Vec3::from(path.direction),
-        Vec3::from(p.origin_min),
-        Vec3::from(p.origin_scale),
-    ) as usize
-}
-
-/// `HISTOGRAM`: one count per path in its key's bucket (wrapping, as the GPU's atomics).
-pub fn path_sort_histogram(p: &PathSortParams, paths: &[IndirectPath], buckets: &mut [u32]) {
-    for path in paths {
-        let b = &mut buckets[key(p, path)];
-        *b = b.wrapping_add(1);
-    }
+    let mut order = cpu
+        .get(k.order.id)?
+        .as_slice::<u32>(k.order.len)?
+        .to_vec();
+    // slots below the queue's capacity, as on the GPU
+    path_sort_scatter(&keys, &buckets, &mut order[..k.path_keys.len as usize]);
+    cpu.put(k.order.id, &order)
 }
 
 /// `SCAN`: the first [`PATH_SORT_BUCKETS`] counts to their exclusive sums.
@@ -75,19 +46,15 @@ pub fn path_sort_scan(buckets: &mut [u32]) {
     }
 }
 
-/// `SCATTER`: each path to the next slot of its bucket (a slot past `out` is not
-/// written).
-pub fn path_sort_scatter(
-    p: &PathSortParams,
-    paths: &[IndirectPath],
-    buckets: &mut [u32],
-    out: &mut [IndirectPath],
-) {
-    for path in paths {
-        let b = &mut buckets[key(p, path)];
-        if let Some(slot) = out.get_mut(*b as usize) {
-            *slot = *path;
+/// `SCATTER`: path `i`'s queue slot at `order[first[key] + rank]` for its `keys[i]` =
+/// (key, rank); a key past the buckets or a slot past `order` is not written.
+pub fn path_sort_scatter(keys: &[PathKey], first: &[u32], order: &mut [u32]) {
+    for (i, &[key, rank]) in keys.iter().enumerate() {
+        let Some(&f) = first.get(key as usize).filter(|_| key < PATH_SORT_BUCKETS) else {
+            continue;
+        };
+        if let Some(slot) = order.get_mut(f.wrapping_add(rank) as usize) {
+            *slot = i as u32;
         }
-        *b = b.wrapping_add(1);
     }
 }

@@ -11,10 +11,13 @@ use caustica_core::device::layout::{
     counter, gbuffer_flags, material_kind, off_surface, project_to_pixel, GBufferView, GiPhoton,
     IndirectPath, IndirectTraceParams, Photon, RsmPhoton,
 };
-use caustica_core::kernels::{TraceIndirect, VISIBLE_TOLERANCE};
+use caustica_core::kernels::{TraceIndirect, WaveKeys, VISIBLE_TOLERANCE};
 use caustica_core::math::geometry::offset_ray_origin;
 use caustica_core::math::gi_photon::{gi_store, screen_tile};
 use caustica_core::math::optics::{beer_lambert, dielectric_scatter, dispersive_ior, reflect};
+use caustica_core::math::path_sort::{path_sort_key, PathKey};
+#[cfg(feature = "traversal-stats")]
+use caustica_core::math::path_sort::PATH_SORT_BUCKETS;
 use caustica_core::math::packing::{pack_rgb9e5, pack_unit_vector, unpack_unit_vector};
 use caustica_core::math::rng::random_f32;
 use caustica_core::math::rsm::{
@@ -59,10 +62,26 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
                 .get(w.path_counts.id)?
                 .as_slice::<u32>(w.path_counts.len)?[params.segment_first as usize]
                 .min(w.paths_out.len) as usize;
-            queued = cpu
+            let paths = cpu
                 .get(w.paths_in.id)?
-                .as_slice::<IndirectPath>(w.paths_in.len)?[..live]
-                .to_vec();
+                .as_slice::<IndirectPath>(w.paths_in.len)?;
+            queued = match w.keys.filter(|_| params.queue_order != 0) {
+                // sorted: thread t continues path order[t] (sort_indirect_paths')
+                Some(keys) => cpu
+                    .get(keys.order.id)?
+                    .as_slice::<u32>(keys.order.len)?[..live]
+                    .iter()
+                    .map(|&s| {
+                        paths.get(s as usize).copied().ok_or_else(|| {
+                            BackendError::BadArgument(format!(
+                                "trace_indirect: the order names path {s} of a queue of {}",
+                                paths.len()
+                            ))
+                        })
+                    })
+                    .collect::<Result<_, _>>()?,
+                None => paths[..live].to_vec(),
+            };
             IndirectSource::Queue(&queued)
         }
         _ => IndirectSource::Rsm(rsm),
@@ -111,7 +130,46 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
         for (slot, path) in out.iter_mut().skip(first).zip(&r.queued) {
             *slot = *path;
         }
+        if let Some(keys) = w.keys.filter(|_| params.queue_keys != 0) {
+            queue_keys(cpu, params, keys, first, &r.queued)?;
+        }
     }
+    Ok(())
+}
+
+/// `queue_keys`: the sort key of each path queued from slot `first` on (below the
+/// queue's end) and its rank among the queue's paths of that key (`buckets` counting
+/// them, wrapping as the GPU's atomics), in queue order.
+fn queue_keys(
+    cpu: &mut CpuBackend,
+    p: &IndirectTraceParams,
+    keys: WaveKeys,
+    first: usize,
+    queued: &[IndirectPath],
+) -> Result<(), BackendError> {
+    let (lo, scale) = (Vec3::from(p.key_origin_min), Vec3::from(p.key_origin_scale));
+    let stored = queued.len().min((keys.path_keys.len as usize).saturating_sub(first));
+    let key_of: Vec<u32> = queued[..stored]
+        .iter()
+        .map(|q| path_sort_key(Vec3::from(q.origin), Vec3::from(q.direction), lo, scale))
+        .collect();
+    let buckets = cpu
+        .get_mut(keys.buckets.id)?
+        .as_mut_slice::<u32>(keys.buckets.len)?;
+    let ranked: Vec<PathKey> = key_of
+        .iter()
+        .map(|&k| {
+            let b = &mut buckets[k as usize];
+            let rank = *b;
+            *b = b.wrapping_add(1);
+            [k, rank]
+        })
+        .collect();
+    cpu.get_mut(keys.path_keys.id)?
+        .as_mut_slice::<PathKey>(keys.path_keys.len)?[first..first + stored]
+        .copy_from_slice(&ranked);
+    #[cfg(feature = "traversal-stats")]
+    crate::traversal_stats::sort_keys(p.segment_end, &key_of, PATH_SORT_BUCKETS as usize);
     Ok(())
 }
 

@@ -234,9 +234,8 @@
 // core::math::path_sort
 #define PATH_SORT_BITS 3u
 #define PATH_SORT_BUCKETS 4096
-#define PATH_SORT_HISTOGRAM 0u
-#define PATH_SORT_SCAN 1u
-#define PATH_SORT_SCATTER 2u
+#define PATH_SORT_SCAN 0u
+#define PATH_SORT_SCATTER 1u
 
 // core::device::layout::GpuVertex, 32 bytes
 typedef struct {
@@ -469,7 +468,7 @@ typedef struct {
     uint tile; // 28
 } GiPhoton;
 
-// core::device::layout::IndirectTraceParams, 128 bytes
+// core::device::layout::IndirectTraceParams, 160 bytes
 typedef struct {
     GpuCamera camera; // 0
     uint first; // 64
@@ -487,7 +486,11 @@ typedef struct {
     uint segment_end; // 112
     uint chunk_first; // 116
     uint chunk_size; // 120
-    uint _pad; // 124
+    uint queue_keys; // 124
+    float key_origin_min[3]; // 128
+    uint queue_order; // 140
+    float key_origin_scale[3]; // 144
+    uint _pad; // 156
 } IndirectTraceParams;
 
 // core::device::layout::IndirectPath, 48 bytes
@@ -500,12 +503,12 @@ typedef struct {
     float wavelength; // 44
 } IndirectPath;
 
-// core::device::layout::PathSortParams, 32 bytes
+// core::device::layout::PathSortParams, 16 bytes
 typedef struct {
-    float origin_min[3]; // 0
-    uint phase; // 12
-    float origin_scale[3]; // 16
-    uint count_word; // 28
+    uint phase; // 0
+    uint count_word; // 4
+    uint _pad0; // 8
+    uint _pad1; // 12
 } PathSortParams;
 
 // core::device::layout::SplatParams, 128 bytes

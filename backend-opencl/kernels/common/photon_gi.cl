@@ -1,4 +1,4 @@
-// Mirror of core::math::{rsm, gi_photon, photon_splat} and packing's rgb9e5 (PhotonGi,
+// Mirror of core::math::{rsm, gi_photon, photon_splat, path_sort} and packing's rgb9e5 (PhotonGi,
 // Smal 2019), function by function with the same names; shaders/wgsl/common/photon_gi.wgsl
 // is the WGSL twin.
 
@@ -324,4 +324,20 @@ inline float4 light_direction_deposit(float3 flux, float3 to_light) {
     float w = luminance(flux);
     float3 d = (to_light + (float3)(1.0f)) * (0.5f * w);
     return (float4)(d.x, d.y, d.z, w);
+}
+
+// core::math::path_sort::path_sort_key: the direction's octant above the Morton code of
+// the origin's cell (one subtraction and one product per axis, not contracted).
+inline uint path_sort_key(float3 origin, float3 direction, float3 origin_min,
+                          float3 origin_scale) {
+    float top = (float)((1u << PATH_SORT_BITS) - 1u);
+    float3 c = fmin(fmax((origin - origin_min) * origin_scale, (float3)(0.0f)), (float3)(top));
+    uint x = (uint)c.x, y = (uint)c.y, z = (uint)c.z;
+    uint morton = 0u;
+    for (uint b = 0u; b < PATH_SORT_BITS; b++)
+        morton |= ((x >> b) & 1u) << (3u * b) | ((y >> b) & 1u) << (3u * b + 1u) |
+                  ((z >> b) & 1u) << (3u * b + 2u);
+    uint octant = (direction.x < 0.0f ? 1u : 0u) | (direction.y < 0.0f ? 2u : 0u) |
+                  (direction.z < 0.0f ? 4u : 0u);
+    return octant << (3u * PATH_SORT_BITS) | morton;
 }

@@ -234,9 +234,8 @@ const uint GI_STORE_FLOAT = 1u;
 // core::math::path_sort
 const uint PATH_SORT_BITS = 3u;
 const uint PATH_SORT_BUCKETS = 4096u;
-const uint PATH_SORT_HISTOGRAM = 0u;
-const uint PATH_SORT_SCAN = 1u;
-const uint PATH_SORT_SCATTER = 2u;
+const uint PATH_SORT_SCAN = 0u;
+const uint PATH_SORT_SCATTER = 1u;
 
 // core::device::layout::GpuVertex, 32 bytes
 struct GpuVertex {
@@ -469,7 +468,7 @@ struct GiPhoton {
     uint tile; // 28
 };
 
-// core::device::layout::IndirectTraceParams, 128 bytes
+// core::device::layout::IndirectTraceParams, 160 bytes
 struct IndirectTraceParams {
     GpuCamera camera; // 0
     uint first; // 64
@@ -487,7 +486,11 @@ struct IndirectTraceParams {
     uint segment_end; // 112
     uint chunk_first; // 116
     uint chunk_size; // 120
-    uint _pad; // 124
+    uint queue_keys; // 124
+    vec3 key_origin_min; // 128
+    uint queue_order; // 140
+    vec3 key_origin_scale; // 144
+    uint _pad; // 156
 };
 
 // core::device::layout::IndirectPath, 48 bytes
@@ -500,12 +503,12 @@ struct IndirectPath {
     float wavelength; // 44
 };
 
-// core::device::layout::PathSortParams, 32 bytes
+// core::device::layout::PathSortParams, 16 bytes
 struct PathSortParams {
-    vec3 origin_min; // 0
-    uint phase; // 12
-    vec3 origin_scale; // 16
-    uint count_word; // 28
+    uint phase; // 0
+    uint count_word; // 4
+    uint _pad0; // 8
+    uint _pad1; // 12
 };
 
 // core::device::layout::SplatParams, 128 bytes

@@ -1,6 +1,7 @@
-// Mirror of the parts of core::math::{rsm, gi_photon} and packing's rgb9e5 that
-// trace_indirect.rgen needs (PhotonGi, Smal 2019), same names as the Rust, WGSL
-// (shaders/wgsl/common/photon_gi.wgsl) and OpenCL C (kernels/common/photon_gi.cl).
+// Mirror of the parts of core::math::{rsm, gi_photon, path_sort} and packing's rgb9e5
+// that trace_indirect.rgen needs (PhotonGi, Smal 2019), same names as the Rust, WGSL
+// (shaders/wgsl/common/photon_gi.wgsl) and OpenCL C (kernels/common/photon_gi.cl,
+// kernels/sort_indirect_paths.cl).
 
 // rsm::cosine_hemisphere (Malley).
 precise vec3 cosine_hemisphere(vec2 u, vec3 n) {
@@ -67,4 +68,30 @@ uint pack_rgb9e5(vec3 rgb) {
     uint qg = min(uint(fg), 511u);
     uint qb = min(uint(fb), 511u);
     return qr | (qg << 9) | (qb << 18) | (uint(exp_shared) << 27);
+}
+
+// path_sort::path_sort_key's cell along one axis: clamp((o - lo) * s, 0, top), truncated;
+// one subtraction and one product (`precise`: not fused), NaN gives 0 as Rust's
+// f32::max(NaN, 0.0) does (GLSL's max leaves NaN undefined, hence the comparisons).
+uint path_sort_cell(float o, float lo, float s, float top) {
+    precise float c = (o - lo) * s;
+    c = c > 0.0 ? c : 0.0;
+    return uint(c < top ? c : top);
+}
+
+// path_sort::path_sort_key: the octant of `direction` (bit 0 x, 1 y, 2 z set where that
+// component is negative) above the Morton code (x in bit 3b, y 3b + 1, z 3b + 2) of
+// `origin`'s cell, 2^PATH_SORT_BITS a side from origin_min at origin_scale cells per unit.
+uint path_sort_key(vec3 origin, vec3 direction, vec3 origin_min, vec3 origin_scale) {
+    float top = float((1u << PATH_SORT_BITS) - 1u);
+    uint x = path_sort_cell(origin.x, origin_min.x, origin_scale.x, top);
+    uint y = path_sort_cell(origin.y, origin_min.y, origin_scale.y, top);
+    uint z = path_sort_cell(origin.z, origin_min.z, origin_scale.z, top);
+    uint morton = 0u;
+    for (uint b = 0u; b < PATH_SORT_BITS; b++)
+        morton |= ((x >> b) & 1u) << (3u * b) | ((y >> b) & 1u) << (3u * b + 1u) |
+                  ((z >> b) & 1u) << (3u * b + 2u);
+    uint octant = (direction.x < 0.0 ? 1u : 0u) | (direction.y < 0.0 ? 2u : 0u) |
+                  (direction.z < 0.0 ? 4u : 0u);
+    return octant << (3u * PATH_SORT_BITS) | morton;
 }

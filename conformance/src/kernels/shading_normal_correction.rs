@@ -180,8 +180,19 @@ pub fn check_photon_gi(
         // 3'. the same paths in waves: on each backend exactly its single launch's
         // photons, so against the reference as the single launch
         let scales = (power_scale, quantum);
-        let (phwa, tiwa, cwa) = run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES)?;
-        let (phwb, tiwb, cwb) = run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES)?;
+        let (phwa, tiwa, cwa) =
+            run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES, false)?;
+        let (phwb, tiwb, cwb) =
+            run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES, false)?;
+        // and sorted: keyed queues taken in their keys' order, the same photons
+        let sorted_r = run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES, true)?;
+        let sorted_c = run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES, true)?;
+        for (name, single, (phs, tis, cs)) in [
+            ("reference, sorted", (&pha, &tia, &ca), &sorted_r),
+            ("candidate, sorted", (&phb, &tib, &cb), &sorted_c),
+        ] {
+            compare_schedules(&mut v, name, l, (single.0, single.1, single.2), (phs, tis, cs));
+        }
         compare_schedules(
             &mut v,
             "reference",

@@ -1,71 +1,77 @@
-//! `sort_indirect_paths`: integer counts and a key of one subtraction and one product per
-//! axis (exact in every port, no contraction possible), so every backend must put the
-//! same paths in the same buckets: the buckets' ends **bitwise** the CPU's, the sorted
-//! queue a permutation of the input's live paths whose keys (core's
-//! [`path_sort_key`]) never decrease. Within a bucket the order is free (a GPU's atomics),
-//! so the queue is compared bucket by bucket as multisets. Launched as PhotonGi launches
-//! it: the histogram and the scatter from `dispatch_args`' record of the queue's length
-//! (drawn from 0 past the queue's capacity by the proptest in
-//! `conformance/tests/photon_gi_schedules.rs`).
+//! `sort_indirect_paths`: integer sums and integer slots, no atomics and no floating
+//! point, so every backend must leave the **bitwise** same buckets (first slots) and the
+//! bitwise same order (each queued path's slot at its bucket's first slot plus its rank;
+//! a slot no path is placed in keeps what it held). Launched as PhotonGi launches it:
+//! the scatter from `dispatch_args`' record of the queue's length (drawn from 0 past the
+//! queue's capacity by the proptest in `conformance/tests/photon_gi_schedules.rs`), the
+//! keys and the buckets' counts as a queuing wave of `trace_indirect` leaves them (its
+//! own keys are checked with the frames in that file).
 
 use crate::harness::fixture::run_and_free;
 use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, Backend};
 use caustica_core::device::launch::DISPATCH_RECORD_WORDS;
-use caustica_core::device::layout::{IndirectPath, PathSortParams};
+use caustica_core::device::layout::PathSortParams;
 use caustica_core::kernels::{DispatchArgs, DispatchRecord, SortIndirectPaths};
-use caustica_core::math::path_sort::{path_sort_key, path_sort_phase, PATH_SORT_BUCKETS};
+use caustica_core::math::path_sort::{path_sort_phase, PathKey, PATH_SORT_BUCKETS};
 use caustica_core::recording::Recording;
-use glam::Vec3;
 
-/// The sorted queue and the buckets `sort_indirect_paths` leaves on `b` for `paths`
-/// (capacity `paths.len()`, length word `length`).
+/// What an order slot holds before the sort (no path placed there).
+pub const UNPLACED: u32 = u32::MAX;
+
+/// The buckets' counts a queuing wave leaves for `keys`: one per key below
+/// [`PATH_SORT_BUCKETS`].
+pub fn bucket_counts(keys: &[PathKey]) -> Vec<u32> {
+    let mut counts = vec![0u32; PATH_SORT_BUCKETS as usize];
+    for &[k, _] in keys {
+        if let Some(c) = counts.get_mut(k as usize) {
+            *c += 1;
+        }
+    }
+    counts
+}
+
+/// The order and the buckets `sort_indirect_paths` leaves on `b` for a queue of `keys`
+/// (capacity `keys.len()`, length word `length`).
 pub fn run_sort(
     b: &mut dyn Backend,
-    paths: &[IndirectPath],
+    keys: &[PathKey],
     length: u32,
-    (origin_min, origin_scale): ([f32; 3], [f32; 3]),
-) -> Result<(Vec<IndirectPath>, Vec<u32>), String> {
-    let n = paths.len().max(1) as u32;
+) -> Result<(Vec<u32>, Vec<u32>), String> {
+    let n = keys.len().max(1) as u32;
     let mut rec = Recording::new();
-    let paths_in = if paths.is_empty() {
-        rec.create(1, "queued paths")
+    let path_keys = if keys.is_empty() {
+        rec.create(1, "path keys")
     } else {
-        rec.upload(paths, "queued paths")
+        rec.upload(keys, "path keys")
     };
-    let paths_out = rec.create::<IndirectPath>(n, "sorted paths");
+    let order = rec.upload(&vec![UNPLACED; n as usize], "path order");
     // word 1 holds the length (word 0 another wave's)
     let path_counts = rec.upload(&[7u32, length], "queue lengths");
     let rows = rec.upload(&[[0, n, 1, 1]], "sort launch row");
     let args = rec.create::<u32>(DISPATCH_RECORD_WORDS as u32, "sort launch record");
-    let buckets = rec.create::<u32>(PATH_SORT_BUCKETS, "buckets");
-    rec.clear(buckets);
+    let buckets = rec.upload(&bucket_counts(keys), "buckets");
     rec.kernel(DispatchArgs {
         table: rows,
         counts: path_counts,
         args,
     });
-    for phase in [
-        path_sort_phase::HISTOGRAM,
-        path_sort_phase::SCAN,
-        path_sort_phase::SCATTER,
-    ] {
+    for phase in [path_sort_phase::SCAN, path_sort_phase::SCATTER] {
         rec.kernel(SortIndirectPaths {
             params: PathSortParams {
-                origin_min,
                 phase,
-                origin_scale,
                 count_word: 1,
+                _pad: [0; 2],
             },
-            paths_in,
+            path_keys,
             path_counts,
-            paths_out,
+            order,
             buckets,
             dispatch: Some(DispatchRecord { args, record: 0 }),
         });
     }
     run_and_free(b, "sort_indirect_paths", &rec, |b| {
-        Ok((read_buf(b, paths_out)?, read_buf(b, buckets)?))
+        Ok((read_buf(b, order)?, read_buf(b, buckets)?))
     })
 }
 
@@ -73,40 +79,39 @@ pub fn run_sort(
 pub fn check_sort_indirect_paths(
     r: &mut dyn Backend,
     c: &mut dyn Backend,
-    paths: &[IndirectPath],
+    keys: &[PathKey],
     length: u32,
-    key_box: ([f32; 3], [f32; 3]),
 ) -> Result<Verdict, String> {
     let mut v = Verdict::new("sort_indirect_paths");
-    let live = (length as usize).min(paths.len());
-    let key = |p: &IndirectPath| {
-        path_sort_key(
-            Vec3::from(p.origin),
-            Vec3::from(p.direction),
-            Vec3::from(key_box.0),
-            Vec3::from(key_box.1),
-        )
-    };
-    let words = |p: &IndirectPath| bytemuck::cast::<IndirectPath, [u32; 12]>(*p);
-    let mut input: Vec<(u32, [u32; 12])> =
-        paths[..live].iter().map(|p| (key(p), words(p))).collect();
-    input.sort_unstable();
-    let (qa, ba) = run_sort(r, paths, length, key_box)?;
-    let (qb, bb) = run_sort(c, paths, length, key_box)?;
+    let live = (length as usize).min(keys.len());
+    let (oa, ba) = run_sort(r, keys, length)?;
+    let (ob, bb) = run_sort(c, keys, length)?;
     v.check(ba == bb, || {
-        "the buckets' ends differ from the reference's".into()
+        "the buckets' first slots differ from the reference's".into()
     });
-    for (name, q) in [("reference", &qa), ("candidate", &qb)] {
-        let sorted = &q[..live.min(q.len())];
-        v.check(sorted.windows(2).all(|w| key(&w[0]) <= key(&w[1])), || {
-            format!("{name}: the queue is not in key order")
-        });
-        let mut got: Vec<(u32, [u32; 12])> = sorted.iter().map(|p| (key(p), words(p))).collect();
-        got.sort_unstable();
-        v.check(got == input, || {
-            format!("{name}: the sorted queue is not a permutation of the live paths")
-        });
+    v.check(oa == ob, || {
+        let first = oa.iter().zip(&ob).position(|(x, y)| x != y);
+        format!("the order differs from the reference's (first at slot {first:?})")
+    });
+    // the reference itself: every live path of a valid key at first + rank, the keys
+    // along the order never decreasing
+    let mut want = vec![UNPLACED; keys.len().max(1)];
+    for (i, &[k, rank]) in keys[..live].iter().enumerate() {
+        if let Some(&f) = ba.get(k as usize).filter(|_| k < PATH_SORT_BUCKETS) {
+            if let Some(s) = want.get_mut(f.wrapping_add(rank) as usize) {
+                *s = i as u32;
+            }
+        }
     }
-    v.note(format!("{live} of {} paths", paths.len()));
+    v.check(oa == want, || "reference: a path not at its bucket's first slot plus its rank".into());
+    let placed: Vec<u32> = oa
+        .iter()
+        .filter(|&&i| i != UNPLACED)
+        .map(|&i| keys[i as usize][0])
+        .collect();
+    v.check(placed.windows(2).all(|w| w[0] <= w[1]), || {
+        "reference: the order is not in key order".into()
+    });
+    v.note(format!("{live} of {} paths", keys.len()));
     Ok(v)
 }

@@ -4,9 +4,11 @@
 //! multisets (each photon matched by one of the other backend's within
 //! `trace_photons`' position tolerance, with the same tile and power within one rgb9e5
 //! step, but for [`PHOTON_MATCH`]'s share), every path end accounted for, and tile
-//! counts that add up to the stored photons. The `WAVES` variant ([`run_trace_waves`])
-//! is compared the same way with the reference's single launch, and on every backend
-//! with that backend's single launch exactly ([`compare_schedules`]).
+//! counts that add up to the stored photons. The `WAVES` variant ([`run_trace_waves`]),
+//! plain and sorted (each queue keyed by the wave that fills it and taken in
+//! `sort_indirect_paths`' order), is compared the same way with the reference's single
+//! launch, and on every backend with that backend's single launch exactly
+//! ([`compare_schedules`]).
 //!
 //! One link of PhotonGi's chain, [`super::shading_normal_correction::check_photon_gi`].
 
@@ -19,9 +21,13 @@ use crate::harness::verdict::Verdict;
 use caustica_core::backend::{read_buf, Backend};
 use caustica_core::device::launch::DISPATCH_RECORD_WORDS;
 use caustica_core::device::layout::{
-    counter, GBufferTexel, GiPhoton, IndirectPath, IndirectTraceParams, RsmPhoton,
+    counter, GBufferTexel, GiPhoton, IndirectPath, IndirectTraceParams, PathSortParams,
+    RsmPhoton,
 };
-use caustica_core::kernels::{DispatchArgs, DispatchRecord, IndirectWave, TraceIndirect};
+use caustica_core::kernels::{
+    DispatchArgs, DispatchRecord, IndirectWave, SortIndirectPaths, TraceIndirect, WaveKeys,
+};
+use caustica_core::math::path_sort::{path_sort_phase, PathKey, PATH_SORT_BITS, PATH_SORT_BUCKETS};
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::gi_photon::{gi_store, screen_tiles};
 use caustica_core::math::packing::unpack_unit_vector;
@@ -42,7 +48,7 @@ pub(crate) fn run_trace(
     power_scale: f32,
     quantum: f32,
 ) -> Result<Traced, String> {
-    run_trace_waves(fx, b, rsm, gbuffer, (power_scale, quantum), 1)
+    run_trace_waves(fx, b, rsm, gbuffer, (power_scale, quantum), 1, false)
 }
 
 /// Segments per path of the checked launches.
@@ -52,9 +58,15 @@ const MAX_SEGMENTS: u32 = 12;
 /// the rest.
 pub(crate) const WAVES: u32 = 4;
 
+/// Half the side of the sorted waves' key box, centred on the origin (scene units): the
+/// fixtures' scenes lie within it, and a path outside lands in an edge cell.
+const SORT_BOX: f32 = 10.0;
+
 /// [`run_trace`] in `waves` waves (1: the single launch): wave `k` traces segment `k`
 /// (the last the rest of each path), the later waves launched from the queue's length
-/// through `dispatch_args`, as PhotonGi records them.
+/// through `dispatch_args`, as PhotonGi records them; `sorted`: each queue keyed by the
+/// wave that fills it (a box of 8 cells a side over `SORT_BOX`) and taken by the next in
+/// `sort_indirect_paths`' order (the `sorted_waves` schedule).
 pub(crate) fn run_trace_waves(
     fx: &Fixture,
     b: &mut dyn Backend,
@@ -62,6 +74,7 @@ pub(crate) fn run_trace_waves(
     gbuffer: &[GBufferTexel],
     (power_scale, quantum): (f32, f32),
     waves: u32,
+    sorted: bool,
 ) -> Result<Traced, String> {
     let cam = fx.camera;
     let mut rec = Recording::new();
@@ -92,6 +105,10 @@ pub(crate) fn run_trace_waves(
         segment_end: MAX_SEGMENTS,
         chunk_first: 0,
         chunk_size: u32::MAX,
+        queue_keys: 0,
+        key_origin_min: [-SORT_BOX; 3],
+        queue_order: 0,
+        key_origin_scale: [(1u32 << PATH_SORT_BITS) as f32 / (2.0 * SORT_BOX); 3],
         _pad: 0,
     };
     let single = TraceIndirect {
@@ -119,6 +136,11 @@ pub(crate) fn run_trace_waves(
             "wave rows",
         );
         let args = rec.create::<u32>((waves - 1) * DISPATCH_RECORD_WORDS as u32, "wave records");
+        let keys = sorted.then(|| WaveKeys {
+            path_keys: rec.create::<PathKey>(n.max(1), "path keys"),
+            buckets: rec.create::<u32>(PATH_SORT_BUCKETS, "path sort buckets"),
+            order: rec.create::<u32>(n.max(1), "path order"),
+        });
         rec.clear(path_counts);
         for k in 0..waves {
             let dispatch = (k > 0).then(|| {
@@ -132,10 +154,32 @@ pub(crate) fn run_trace_waves(
                     record: k - 1,
                 }
             });
+            if let (Some(w), Some(d)) = (keys, dispatch) {
+                for phase in [path_sort_phase::SCAN, path_sort_phase::SCATTER] {
+                    rec.kernel(SortIndirectPaths {
+                        params: PathSortParams {
+                            phase,
+                            count_word: k,
+                            _pad: [0; 2],
+                        },
+                        path_keys: w.path_keys,
+                        path_counts,
+                        order: w.order,
+                        buckets: w.buckets,
+                        dispatch: Some(d),
+                    });
+                }
+            }
+            let end = if k + 1 == waves { MAX_SEGMENTS } else { k + 1 };
+            if let Some(w) = keys {
+                rec.clear(w.buckets);
+            }
             rec.kernel(TraceIndirect {
                 params: IndirectTraceParams {
                     segment_first: k,
-                    segment_end: if k + 1 == waves { MAX_SEGMENTS } else { k + 1 },
+                    segment_end: end,
+                    queue_keys: (sorted && end < MAX_SEGMENTS) as u32,
+                    queue_order: (sorted && k > 0) as u32,
                     ..params
                 },
                 dispatch,
@@ -143,6 +187,7 @@ pub(crate) fn run_trace_waves(
                     paths_in: paths[k as usize % 2],
                     paths_out: paths[(k as usize + 1) % 2],
                     path_counts,
+                    keys,
                 }),
                 ..single
             });

@@ -683,6 +683,19 @@ pub struct IndirectTraceParams {
     pub chunk_first: u32,
     /// See `chunk_first`.
     pub chunk_size: u32,
+    /// 1 (the `sorted_waves` schedule, a wave that queues paths): each queued path's sort
+    /// key ([`path_sort_key`](crate::math::path_sort::path_sort_key) of its next ray
+    /// under `key_origin_min` and `key_origin_scale`) and its rank among the paths of
+    /// that key are written beside it (`path_keys`), the key's count in `buckets` going
+    /// up; 0: no keys.
+    pub queue_keys: u32,
+    /// The scene box's lower corner (world space) of the sort key's origin cells.
+    pub key_origin_min: [f32; 3],
+    /// 1 (a sorted wave after the first): thread `t` continues path `order[t]` of the
+    /// queue (`sort_indirect_paths`' order of its keys); 0: path `t`.
+    pub queue_order: u32,
+    /// Origin cells per scene unit along each axis of the sort key.
+    pub key_origin_scale: [f32; 3],
     /// Padding to the 16-byte boundary.
     pub _pad: u32,
 }
@@ -707,19 +720,17 @@ pub struct IndirectPath {
     pub wavelength: f32,
 }
 
-/// Parameters of `sort_indirect_paths` (the `sorted_waves` schedule's queues sorted by
-/// [`path_sort_key`](crate::math::path_sort::path_sort_key)).
+/// Parameters of `sort_indirect_paths` (the `sorted_waves` schedule's queues ordered by
+/// the keys `trace_indirect` wrote beside them).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PathSortParams {
-    /// The scene box's lower corner (world space): the origin cells start there.
-    pub origin_min: [f32; 3],
     /// Which launch, one of [`path_sort_phase`](crate::math::path_sort::path_sort_phase).
     pub phase: u32,
-    /// Origin cells per scene unit along each axis.
-    pub origin_scale: [f32; 3],
     /// The word of `path_counts` that holds the queue's length.
     pub count_word: u32,
+    /// Padding to the 16-byte boundary.
+    pub _pad: [u32; 2],
 }
 
 /// Parameters of `splat_photons` (Smal 2019, section 24.3, Eqs. 2-9): the camera, the

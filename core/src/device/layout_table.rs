@@ -241,10 +241,10 @@ table! {
     IndirectTraceParams {
         camera, first, count, seed, max_bounces, max_segments, tile_size, store,
         fresnel_model, power_scale, flux_quantum, dispersion_mode, segment_first, segment_end,
-        chunk_first, chunk_size, _pad
+        chunk_first, chunk_size, queue_keys, key_origin_min, queue_order, key_origin_scale, _pad
     }
     IndirectPath { origin, index, direction, bounces, flux, wavelength }
-    PathSortParams { origin_min, phase, origin_scale, count_word }
+    PathSortParams { phase, count_word, _pad }
     SplatParams {
         camera, tile_size, power_scale, flux_quantum, max_splat_px, max_ray_length,
         min_length_scale, density_radius_min, density_radius_max, photons_per_pixel,

@@ -388,7 +388,6 @@ pub fn groups() -> Vec<ConstGroup> {
                     "PATH_SORT_",
                     U32,
                     path_sort_phase {
-                        HISTOGRAM,
                         SCAN,
                         SCATTER
                     }

@@ -71,7 +71,7 @@ pub use sort_indirect_paths::SortIndirectPaths;
 pub use splat_photons::SplatPhotons;
 pub use temporal_blend::TemporalBlend;
 pub use tile_hit_distance::TileHitDistance;
-pub use trace_indirect::{IndirectWave, TraceIndirect, TRACE_INDIRECT_SWITCHES};
+pub use trace_indirect::{IndirectWave, TraceIndirect, WaveKeys, TRACE_INDIRECT_SWITCHES};
 pub use trace_photons::{
     AtlasDeposit, ClusterBatch, FusedDeposit, ScreenDeposit, TracePhotons, TraceVariant,
 };

@@ -6,6 +6,7 @@ use crate::device::error::BackendError;
 use crate::device::handle::{Buf, GBufferPlanes, SceneArgs};
 use crate::device::layout::{IndirectPath, IndirectTraceParams, RsmPhoton};
 use crate::math::gi_photon::screen_tiles;
+use crate::math::path_sort::{PathKey, PATH_SORT_BUCKETS};
 use crate::math::rsm::chunk_photons;
 
 /// Traces photons `params.first .. first + count` of `rsm_photons` (`sample_rsm`'s), or
@@ -45,7 +46,13 @@ use crate::math::rsm::chunk_photons;
 /// photons (`segment_first` 0, threads as above) or from the `path_counts[segment_first]`
 /// paths of `paths_in` (thread `t` takes path `t`), and appends each path still going
 /// after `segment_end - 1` (below `max_segments`) to `paths_out`, its slot from
-/// `path_counts[segment_end]`. A path's random numbers are keyed by its photon and
+/// `path_counts[segment_end]`. Sorted ([`WaveKeys`], the `sorted_waves` schedule): with
+/// `params.queue_keys` each queued path's key
+/// ([`path_sort_key`](crate::math::path_sort::path_sort_key) of its next ray under
+/// `key_origin_min`, `key_origin_scale`) and its rank among the queue's paths of that
+/// key (the key's count in `buckets`, atomic) go to `path_keys` at its slot; with
+/// `params.queue_order` thread `t` continues path `order[t]` of `paths_in`
+/// (`sort_indirect_paths`'). A path's random numbers are keyed by its photon and
 /// segment, and its state is carried in full precision, so the waves store exactly the
 /// single launch's photons (in another order) and count the same.
 
@@ -93,12 +100,30 @@ pub struct IndirectWave {
     /// clears them before the first wave); read at `segment_first` (above 0), appended
     /// to at `segment_end` (below `max_segments`).
     pub path_counts: Buf<u32>,
+    /// The `sorted_waves` schedule's keys and order (`params.queue_keys`,
+    /// `params.queue_order`); `None`: the paths in queue order, no keys.
+    pub keys: Option<WaveKeys>,
+}
+
+/// What a wave of the `sorted_waves` schedule writes for the sort of its queue and reads
+/// of the sort of its own.
+#[derive(Clone, Copy, Debug)]
+pub struct WaveKeys {
+    /// Output (`queue_keys`): per slot of `paths_out` its path's sort key and rank among
+    /// the queue's paths of that key (as long as `paths_out`).
+    pub path_keys: Buf<PathKey>,
+    /// [`PATH_SORT_BUCKETS`] counts (`queue_keys`): the queued paths of each key (the
+    /// caller clears them before the wave).
+    pub buckets: Buf<u32>,
+    /// `queue_order`: the slots of `paths_in` in the order the wave's threads take them
+    /// (`sort_indirect_paths`'; as long as `paths_out`).
+    pub order: Buf<u32>,
 }
 
 /// `trace_indirect`'s compiled switches: `WAVES` (1: one wave with path queues).
 pub const TRACE_INDIRECT_SWITCHES: [&str; 1] = ["WAVES"];
 
-const BINDINGS: [Binding; 20] = with_scene([
+const BINDINGS: [Binding; 23] = with_scene([
     bind("params", Params),
     bind("rsm_photons", Read),
     bind("photons", ReadWrite),
@@ -113,6 +138,9 @@ const BINDINGS: [Binding; 20] = with_scene([
     bind("paths_out", ReadWrite),
     bind("path_capacity", Count),
     bind("path_counts", ReadWrite),
+    bind("path_keys", ReadWrite),
+    bind("buckets", ReadWrite),
+    bind("order", Read),
 ]);
 
 impl KernelDecl for TraceIndirect {
@@ -217,13 +245,48 @@ impl KernelDecl for TraceIndirect {
                 )?
                 .count("path_capacity", w.paths_out.len)?
                 .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
+                match &w.keys {
+                    Some(k) => {
+                        if k.path_keys.len < w.paths_out.len
+                            || k.order.len < w.paths_out.len
+                            || k.buckets.len < PATH_SORT_BUCKETS
+                        {
+                            return Err(BackendError::BadArgument(format!(
+                                "trace_indirect: {} path keys, {} order slots and {} buckets \
+                                 for queues of {} paths",
+                                k.path_keys.len, k.order.len, k.buckets.len, w.paths_out.len
+                            )));
+                        }
+                        a.buf("path_keys", k.path_keys, w.paths_out.len as u64 * 8)?
+                            .buf("buckets", k.buckets, PATH_SORT_BUCKETS as u64 * 4)?
+                            .buf("order", k.order, w.paths_out.len as u64 * 4)?;
+                    }
+                    None => {
+                        if p.queue_keys != 0 || p.queue_order != 0 {
+                            return Err(BackendError::BadArgument(
+                                "trace_indirect: queue keys or order without their buffers".into(),
+                            ));
+                        }
+                        a.buf("path_keys", self.tile_counts, 0)?
+                            .buf("buckets", self.tile_counts, 0)?
+                            .buf("order", self.rsm_photons, 0)?;
+                    }
+                }
             }
             // the single launch reads and writes no queue: stand-ins of the same access
             None => {
                 a.buf("paths_in", self.rsm_photons, 0)?
                     .buf("paths_out", self.tile_counts, 0)?
                     .count("path_capacity", 0)?
-                    .buf("path_counts", self.tile_counts, 0)?;
+                    .buf("path_counts", self.tile_counts, 0)?
+                    .buf("path_keys", self.tile_counts, 0)?
+                    .buf("buckets", self.tile_counts, 0)?
+                    .buf("order", self.rsm_photons, 0)?;
+                if p.queue_keys != 0 || p.queue_order != 0 {
+                    return Err(BackendError::BadArgument(
+                        "trace_indirect: queue keys or order in the single launch".into(),
+                    ));
+                }
             }
         }
         a.indirect(self.dispatch)?;

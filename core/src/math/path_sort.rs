@@ -12,15 +12,18 @@ pub const PATH_SORT_BITS: u32 = 3;
 /// Buckets of the key: 8 direction octants times `2^(3 PATH_SORT_BITS)` origin cells.
 pub const PATH_SORT_BUCKETS: u32 = 8 << (3 * PATH_SORT_BITS);
 
-/// The launches of `sort_indirect_paths` (`PathSortParams::phase`).
+/// The launches of `sort_indirect_paths` (`PathSortParams::phase`); the buckets' counts
+/// come from the wave that queued the paths (`trace_indirect`'s `queue_keys`).
 pub mod path_sort_phase {
-    /// Each path adds one to its key's bucket.
-    pub const HISTOGRAM: u32 = 0;
     /// One workgroup turns the bucket counts into their first slots (exclusive sums).
-    pub const SCAN: u32 = 1;
-    /// Each path takes the next slot of its bucket in the sorted queue.
-    pub const SCATTER: u32 = 2;
+    pub const SCAN: u32 = 0;
+    /// Each path's queue slot is written at its bucket's first slot plus its rank there.
+    pub const SCATTER: u32 = 1;
 }
+
+/// A queued path's sort key and its rank among the queue's paths of that key
+/// (`trace_indirect`'s `path_keys`, one per queue slot).
+pub type PathKey = [u32; 2];
 
 /// The key of a path at `origin` going `direction`: octant (bit 0 x, 1 y, 2 z set where
 /// that component is negative) above the Morton code (x in bit `3b`, y `3b + 1`, z

@@ -234,9 +234,8 @@ const GI_STORE_FLOAT: u32 = 1u;
 // core::math::path_sort
 const PATH_SORT_BITS: u32 = 3u;
 const PATH_SORT_BUCKETS: u32 = 4096u;
-const PATH_SORT_HISTOGRAM: u32 = 0u;
-const PATH_SORT_SCAN: u32 = 1u;
-const PATH_SORT_SCATTER: u32 = 2u;
+const PATH_SORT_SCAN: u32 = 0u;
+const PATH_SORT_SCATTER: u32 = 1u;
 
 // core::device::layout::GpuVertex, 32 bytes
 struct GpuVertex {
@@ -469,7 +468,7 @@ struct GiPhoton {
     tile: u32, // 28
 }
 
-// core::device::layout::IndirectTraceParams, 128 bytes
+// core::device::layout::IndirectTraceParams, 160 bytes
 struct IndirectTraceParams {
     camera: GpuCamera, // 0
     first: u32, // 64
@@ -487,7 +486,11 @@ struct IndirectTraceParams {
     segment_end: u32, // 112
     chunk_first: u32, // 116
     chunk_size: u32, // 120
-    _pad: u32, // 124
+    queue_keys: u32, // 124
+    key_origin_min: vec3<f32>, // 128
+    queue_order: u32, // 140
+    key_origin_scale: vec3<f32>, // 144
+    _pad: u32, // 156
 }
 
 // core::device::layout::IndirectPath, 48 bytes
@@ -500,12 +503,12 @@ struct IndirectPath {
     wavelength: f32, // 44
 }
 
-// core::device::layout::PathSortParams, 32 bytes
+// core::device::layout::PathSortParams, 16 bytes
 struct PathSortParams {
-    origin_min: vec3<f32>, // 0
-    phase: u32, // 12
-    origin_scale: vec3<f32>, // 16
-    count_word: u32, // 28
+    phase: u32, // 0
+    count_word: u32, // 4
+    _pad0: u32, // 8
+    _pad1: u32, // 12
 }
 
 // core::device::layout::SplatParams, 128 bytes

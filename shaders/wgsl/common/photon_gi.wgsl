@@ -1,6 +1,6 @@
-// Mirror of core::math::{rsm, gi_photon, photon_splat} and packing's rgb9e5 (PhotonGi,
-// Smal 2019), function by function with the same names; backend-opencl/kernels/common/
-// photon_gi.cl is the OpenCL C twin.
+// Mirror of core::math::{rsm, gi_photon, photon_splat, path_sort} and packing's rgb9e5
+// (PhotonGi, Smal 2019), function by function with the same names; backend-opencl/kernels/
+// common/photon_gi.cl is the OpenCL C twin.
 
 // rsm::luminance (Rec. 709).
 // A level-0 texel's pyramid entry: its importance, or 1 under uniform sampling
@@ -127,6 +127,23 @@ fn russian_roulette(flux: vec3<f32>, albedo: vec3<f32>, xi: f32) -> vec4<f32> {
         return vec4<f32>(reflected / q, 1.0);
     }
     return vec4<f32>(0.0);
+}
+
+// core::math::path_sort::path_sort_key (trace_indirect's queue keys, the sorted_waves
+// schedule).
+fn path_sort_key(origin: vec3<f32>, direction: vec3<f32>, origin_min: vec3<f32>,
+                 origin_scale: vec3<f32>) -> u32 {
+    let top = f32((1u << PATH_SORT_BITS) - 1u);
+    let c = vec3<u32>(min(max((origin - origin_min) * origin_scale, vec3<f32>(0.0)),
+                          vec3<f32>(top)));
+    var morton = 0u;
+    for (var b = 0u; b < PATH_SORT_BITS; b++) {
+        morton |= ((c.x >> b) & 1u) << (3u * b) | ((c.y >> b) & 1u) << (3u * b + 1u) |
+                  ((c.z >> b) & 1u) << (3u * b + 2u);
+    }
+    let octant = select(0u, 1u, direction.x < 0.0) | select(0u, 2u, direction.y < 0.0) |
+                 select(0u, 4u, direction.z < 0.0);
+    return octant << (3u * PATH_SORT_BITS) | morton;
 }
 
 // gi_photon::screen_tile.

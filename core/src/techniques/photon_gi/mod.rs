@@ -59,6 +59,7 @@ use crate::frame::temporal::PingPong;
 use crate::kernels::{
     DepositScreen, DispatchArgs, DispatchRecord, IndirectWave, ResolveCaustics, SampleRsm,
     SelectPhotonPlan, ShadingNormalCorrection, SortIndirectPaths, SplatPhotons, TraceIndirect,
+    WaveKeys,
 };
 use crate::math::gi_photon::{gi_store, screen_tiles};
 use crate::math::path_sort::{path_sort_phase, PATH_SORT_BITS, PATH_SORT_BUCKETS};
@@ -160,11 +161,11 @@ struct Buffers {
 }
 
 /// The `waves` schedule's queues: two of every path of a chunk of a light's photons
-/// (wave `k` reads `paths[k % 2]` and appends to the other; sorted, every wave appends to
-/// `paths[1]`, which the sort moves into `paths[0]` for the next: no path is ever lost),
-/// the per-segment queue lengths, the later waves' launch records (`dispatch_args` over
+/// (wave `k` reads `paths[k % 2]` and appends to the other: no path is ever lost), the
+/// per-segment queue lengths, the later waves' launch records (`dispatch_args` over
 /// `rows`, row `k - 1` = `[0, the queue's paths, 1, k]` for wave `k`), and the sort's
-/// buckets (`sorted_waves`). A light's photons go through the waves in `chunks` chunks
+/// keys, buckets and order (`sorted_waves`: a wave keys the paths it queues, the sort
+/// orders the keys, the next wave takes its paths in that order). A light's photons go through the waves in `chunks` chunks
 /// of `chunk` photons (`indirect_queue_paths`); with more than one, the chunks' first
 /// waves launch from records of their own (`chunk_rows`: per light `k` and chunk `c`,
 /// row `k * chunks + c` = `[c * chunk, chunk, 1, the light's count]`).
@@ -174,7 +175,7 @@ struct WaveBuffers {
     path_counts: Buf<u32>,
     rows: Buf<[u32; 4]>,
     dispatch: Buf<u32>,
-    buckets: Option<Buf<u32>>,
+    keys: Option<WaveKeys>,
     chunk: u32,
     chunks: u32,
     chunk_rows: Option<(Buf<[u32; 4]>, Buf<u32>)>,
@@ -226,7 +227,11 @@ impl WaveBuffers {
                 later * DISPATCH_RECORD_WORDS as u32,
                 "indirect wave launch records",
             ),
-            buckets: sorted.then(|| rec.create(PATH_SORT_BUCKETS, "indirect path sort buckets")),
+            keys: sorted.then(|| WaveKeys {
+                path_keys: rec.create(total.max(1), "indirect path sort keys"),
+                buckets: rec.create(PATH_SORT_BUCKETS, "indirect path sort buckets"),
+                order: rec.create(total.max(1), "indirect path order"),
+            }),
         }
     }
 }
@@ -782,6 +787,10 @@ impl PhotonGiPipeline {
             segment_end: self.settings.max_segments,
             chunk_first: 0,
             chunk_size: u32::MAX,
+            queue_keys: 0,
+            key_origin_min: [0.0; 3],
+            queue_order: 0,
+            key_origin_scale: [0.0; 3],
             _pad: 0,
         }
     }
@@ -934,6 +943,13 @@ impl PhotonGiPipeline {
     ) {
         let max_segments = self.settings.max_segments;
         rec.clear(w.path_counts);
+        // sorted: the key's origin cells over the scene's box
+        let (key_origin_min, key_origin_scale) = {
+            let b = host.geometry().bounds;
+            let cells = (1u32 << PATH_SORT_BITS) as f32;
+            let extent = (b.max - b.min).max(glam::Vec3::splat(f32::MIN_POSITIVE));
+            (b.min.to_array(), (cells / extent).to_array())
+        };
         for k in 0..waves {
             let dispatch = if k == 0 {
                 first_wave
@@ -949,29 +965,34 @@ impl PhotonGiPipeline {
                     args: w.dispatch,
                     record: k - 1,
                 };
-                if let Some(buckets) = w.buckets {
-                    self.record_sort(rec, host, w, buckets, k, record);
+                if let Some(keys) = w.keys {
+                    self.record_sort(rec, keys, w.path_counts, k, record);
                 }
                 Some(record)
             };
             let end = if k + 1 == waves { max_segments } else { k + 1 };
-            let (paths_in, paths_out) = if w.buckets.is_some() {
-                (w.paths[0], w.paths[1])
-            } else {
-                (w.paths[k as usize % 2], w.paths[(k as usize + 1) % 2])
-            };
+            let sorted = w.keys.is_some();
+            // the buckets count the keys of the paths this wave queues
+            if let Some(keys) = w.keys.filter(|_| end < max_segments) {
+                rec.clear(keys.buckets);
+            }
             rec.kernel_patched(
                 TraceIndirect {
                     params: IndirectTraceParams {
                         segment_first: k,
                         segment_end: end,
+                        queue_keys: (sorted && end < max_segments) as u32,
+                        key_origin_min,
+                        queue_order: (sorted && k > 0) as u32,
+                        key_origin_scale,
                         ..single.params
                     },
                     dispatch,
                     waves: Some(IndirectWave {
-                        paths_in,
-                        paths_out,
+                        paths_in: w.paths[k as usize % 2],
+                        paths_out: w.paths[(k as usize + 1) % 2],
                         path_counts: w.path_counts,
+                        keys: w.keys,
                     }),
                     ..single
                 },
@@ -980,35 +1001,29 @@ impl PhotonGiPipeline {
         }
     }
 
-    /// Records the sort of the queue wave `k` continues (`w.paths[1]`, its length at word
-    /// `k`) into `w.paths[0]`, launched from `record` (its length's launch record).
+    /// Records the sort of the keys of the queue wave `k` continues (its length at word
+    /// `k` of `path_counts`) into the order that wave takes its paths in, launched from
+    /// `record` (its length's launch record).
     fn record_sort(
         &self,
         rec: &mut Recording,
-        host: &FrameHost,
-        w: &WaveBuffers,
-        buckets: Buf<u32>,
+        keys: WaveKeys,
+        path_counts: Buf<u32>,
         k: u32,
         record: DispatchRecord,
     ) {
-        let b = host.geometry().bounds;
-        let cells = (1u32 << PATH_SORT_BITS) as f32;
-        let extent = (b.max - b.min).max(glam::Vec3::splat(f32::MIN_POSITIVE));
         let sort = |phase| SortIndirectPaths {
             params: PathSortParams {
-                origin_min: b.min.to_array(),
                 phase,
-                origin_scale: (cells / extent).to_array(),
                 count_word: k,
+                _pad: [0; 2],
             },
-            paths_in: w.paths[1],
-            path_counts: w.path_counts,
-            paths_out: w.paths[0],
-            buckets,
+            path_keys: keys.path_keys,
+            path_counts,
+            order: keys.order,
+            buckets: keys.buckets,
             dispatch: Some(record),
         };
-        rec.clear(buckets);
-        rec.kernel(sort(path_sort_phase::HISTOGRAM));
         rec.kernel(sort(path_sort_phase::SCAN));
         rec.kernel(sort(path_sort_phase::SCATTER));
     }
@@ -1392,7 +1407,7 @@ impl Pipeline for PhotonGiPipeline {
             side: self.settings.rsm_size,
             decided: Arc::clone(&self.decided),
             chunks,
-            sorted: b.waves.is_some_and(|w| w.buckets.is_some()),
+            sorted: b.waves.is_some_and(|w| w.keys.is_some()),
         };
         frame.end_read(EndRead::Own(Arc::new(end)));
         // this frame's blend is the next frame's history

@@ -67,10 +67,11 @@ pub enum IndirectSchedule {
     /// launched from that count; the last wave traces the paths to their end. The same
     /// photons as the single launch, in another order: the same image, bit for bit.
     Waves,
-    /// The waves with each queue sorted before its wave (`sort_indirect_paths`: by the
-    /// octant of the path's direction, then a coarse Morton code of its origin,
-    /// `math::path_sort`), so that a warp's paths walk similar parts of the BVH. The same
-    /// image, bit for bit.
+    /// The waves with each queue taken in key order (the octant of the path's direction,
+    /// then a coarse Morton code of its origin, `math::path_sort`), so that a warp's
+    /// paths walk similar parts of the BVH: the queuing wave writes each path's key and
+    /// rank, `sort_indirect_paths` orders them, the next wave reads its paths in that
+    /// order. The same image, bit for bit.
     SortedWaves,
 }
 

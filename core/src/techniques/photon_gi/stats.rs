@@ -3,6 +3,7 @@
 
 use crate::backend::PassTime;
 use crate::frame::stats::FrameStats;
+use crate::math::path_sort::path_sort_phase;
 use serde::{Deserialize, Serialize};
 
 /// Where the per-bounce waves' time goes: present where a frame runs waves (`waves` or
@@ -25,14 +26,17 @@ pub struct PhotonGiStats {
     /// (photons up to `auto_waves_above_photons`), in ms; 0 without them.
     #[serde(default)]
     pub single_ms: f64,
-    /// `sort_indirect_paths`' time before each wave (its three launches), in ms; index 0
+    /// `sort_indirect_paths`' time before each wave (its two launches), in ms; index 0
     /// is 0 (the RSM photons are not sorted); empty without sorting.
     pub sort_ms_per_wave: Vec<f64>,
     /// `sort_indirect_paths`' time by launch, summed over the waves, lights and chunks,
-    /// in ms: `[histogram, scan, scatter]` (`math::path_sort::path_sort_phase`'s order);
+    /// in ms: `[scan, scatter]` (`math::path_sort::path_sort_phase`'s order);
     /// empty without sorting.
     pub sort_ms_per_phase: Vec<f64>,
 }
+
+/// The launches of one sort (`math::path_sort::path_sort_phase`).
+const SORT_PHASES: usize = path_sort_phase::SCATTER as usize + 1;
 
 impl PhotonGiStats {
     /// The name of these statistics in [`FrameStats::own`] (and the frame's JSON form).
@@ -53,11 +57,11 @@ impl PhotonGiStats {
     /// the frame's chunks of a light's photons in recorded order, each by its launches
     /// of `trace_indirect` (1: the light's single launch; more: its waves, in order), and
     /// nothing else launches it, so the j-th `trace_indirect` of the frame is known; a
-    /// sort belongs to the wave after it, and its launches come as histogram, scan,
-    /// scatter. `None` without waves, where the `trace_indirect` times are not one a
-    /// recorded launch (a device that gives no timestamps), or where the sort's launches
-    /// are not a whole number of triples, each before a wave (times of another shape
-    /// than the recording's).
+    /// sort belongs to the wave after it, and its launches come as scan, scatter. `None`
+    /// without waves, where the `trace_indirect` times are not one a recorded launch (a
+    /// device that gives no timestamps), or where the sort's launches are not a whole
+    /// number of pairs, each before a wave (times of another shape than the
+    /// recording's).
     pub fn from_times(chunks: &[u32], sorted: bool, times: &[PassTime]) -> Option<PhotonGiStats> {
         let waves = chunks.iter().copied().filter(|&w| w > 1).max()?;
         let n = waves as usize;
@@ -71,7 +75,11 @@ impl PhotonGiStats {
             trace_ms_per_wave: vec![0.0; n],
             single_ms: 0.0,
             sort_ms_per_wave: if sorted { vec![0.0; n] } else { Vec::new() },
-            sort_ms_per_phase: if sorted { vec![0.0; 3] } else { Vec::new() },
+            sort_ms_per_phase: if sorted {
+                vec![0.0; SORT_PHASES]
+            } else {
+                Vec::new()
+            },
         };
         let (mut traced, mut sorts) = (0usize, 0usize);
         for t in times {
@@ -86,13 +94,13 @@ impl PhotonGiStats {
                 }
                 "sort_indirect_paths" if sorted => {
                     s.sort_ms_per_wave[(*launches.get(traced)?)?] += ms;
-                    s.sort_ms_per_phase[sorts % 3] += ms;
+                    s.sort_ms_per_phase[sorts % SORT_PHASES] += ms;
                     sorts += 1;
                 }
                 _ => {}
             }
         }
-        (traced == launches.len() && sorts.is_multiple_of(3)).then_some(s)
+        (traced == launches.len() && sorts.is_multiple_of(SORT_PHASES)).then_some(s)
     }
 }
 
@@ -120,7 +128,7 @@ mod tests {
             times.push(at("trace_indirect", 1.0 + c));
             for k in 1..3 {
                 times.push(at("dispatch_args", 7.0));
-                for phase in 0..3 {
+                for phase in 0..SORT_PHASES {
                     times.push(at(
                         "sort_indirect_paths",
                         0.25 * k as f64 * (phase + 1) as f64,
@@ -135,9 +143,9 @@ mod tests {
         assert_eq!(s.waves, 3);
         assert_eq!(s.trace_ms_per_wave, vec![3.0, 21.0, 41.0]);
         assert_eq!(s.single_ms, 100.0);
-        assert_eq!(s.sort_ms_per_wave, vec![0.0, 3.0, 6.0]);
+        assert_eq!(s.sort_ms_per_wave, vec![0.0, 1.5, 3.0]);
         // each phase over both chunks' two sorts: 2 x (0.25 + 0.5) x (phase + 1)
-        assert_eq!(s.sort_ms_per_phase, vec![1.5, 3.0, 4.5]);
+        assert_eq!(s.sort_ms_per_phase, vec![1.5, 3.0]);
         let unsorted = PhotonGiStats::from_times(&chunks, false, &times).expect("whole chunks");
         assert!(unsorted.sort_ms_per_wave.is_empty() && unsorted.sort_ms_per_phase.is_empty());
         // a partial chunk, a launch more than recorded, a sort before a single launch or
