@@ -40,7 +40,8 @@ __kernel void sort_indirect_paths(__global const PathSortParams* p,
     uint i = get_global_id(0);
     if (i >= min(path_counts[p->count_word], path_capacity)) return;
     uint2 kr = path_keys[i];
+    // a key a queuing wave did not write (a corrupt queue) is not placed
+    if (kr.x >= (uint)PATH_SORT_BUCKETS) return;
     uint slot = buckets[kr.x] + kr.y;
-    // a key a queuing wave did not write (a corrupt queue) lands past the end, unwritten
-    if (kr.x < (uint)PATH_SORT_BUCKETS && slot < path_capacity) order[slot] = i;
+    if (slot < path_capacity) order[slot] = i;
 }

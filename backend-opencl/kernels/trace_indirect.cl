@@ -189,8 +189,11 @@ __kernel void trace_indirect(SCENE_PARAMS, __global const IndirectTraceParams* p
     } else {
         // a later wave: the paths the one before queued
         live = i < min(path_counts[p->segment_first], path_capacity);
-        // sorted: the queue in its keys' order (sort_indirect_paths)
-        if (live) path = paths_in[p->queue_order != 0u ? order[i] : i];
+        // sorted: the queue in its keys' order (sort_indirect_paths; an entry past the
+        // queue, which no sort writes, is no path)
+        uint q = live && p->queue_order != 0u ? order[i] : i;
+        live = live && q < path_capacity;
+        if (live) path = paths_in[q];
     }
     if (live) {
         uint rays = 0u;

@@ -219,7 +219,11 @@ fn trace_indirect(i: u32, li: u32) {
             if (p.queue_order != 0u) {
                 q = order[i];
             }
-            path = paths_in[q];
+            // an entry past the queue, which no sort writes, is no path
+            live = q < arrayLength(&paths_out);
+            if (live) {
+                path = paths_in[q];
+            }
         }
     }
     if (live) {

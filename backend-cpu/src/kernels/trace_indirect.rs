@@ -66,20 +66,16 @@ pub(crate) fn run(cpu: &mut CpuBackend, k: &TraceIndirect) -> Result<(), Backend
                 .get(w.paths_in.id)?
                 .as_slice::<IndirectPath>(w.paths_in.len)?;
             queued = match w.keys.filter(|_| params.queue_order != 0) {
-                // sorted: thread t continues path order[t] (sort_indirect_paths')
-                Some(keys) => cpu
-                    .get(keys.order.id)?
-                    .as_slice::<u32>(keys.order.len)?[..live]
-                    .iter()
-                    .map(|&s| {
-                        paths.get(s as usize).copied().ok_or_else(|| {
-                            BackendError::BadArgument(format!(
-                                "trace_indirect: the order names path {s} of a queue of {}",
-                                paths.len()
-                            ))
-                        })
-                    })
-                    .collect::<Result<_, _>>()?,
+                // sorted: thread t continues path order[t] (sort_indirect_paths'); an
+                // entry past the queue, which no sort writes, is no path, as on the GPU
+                Some(keys) => {
+                    let capacity = (w.paths_out.len as usize).min(paths.len());
+                    cpu.get(keys.order.id)?
+                        .as_slice::<u32>(keys.order.len)?[..live]
+                        .iter()
+                        .filter_map(|&s| paths[..capacity].get(s as usize).copied())
+                        .collect()
+                }
                 None => paths[..live].to_vec(),
             };
             IndirectSource::Queue(&queued)
@@ -148,7 +144,11 @@ fn queue_keys(
     queued: &[IndirectPath],
 ) -> Result<(), BackendError> {
     let (lo, scale) = (Vec3::from(p.key_origin_min), Vec3::from(p.key_origin_scale));
+    // the slots below the queue's end (`path_keys` is as long as the queue)
     let stored = queued.len().min((keys.path_keys.len as usize).saturating_sub(first));
+    if stored == 0 {
+        return Ok(());
+    }
     let key_of: Vec<u32> = queued[..stored]
         .iter()
         .map(|q| path_sort_key(Vec3::from(q.origin), Vec3::from(q.direction), lo, scale))

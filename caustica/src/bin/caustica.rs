@@ -833,6 +833,7 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
                 e => e.to_string(),
             })?;
             // the folder made once the technique is (no empty folder from a failed start)
+            let made_here = !out.exists();
             if let Err(e) = caustica::output::prepare_output_dir(&out) {
                 let _ = t.free(be.as_mut());
                 return Err(e.into());
@@ -922,6 +923,10 @@ fn run(cli: Cli, console: &mut Console) -> Result<(), Stop> {
             bar.finish_and_clear();
             let s = t.settings_json();
             let freed = t.free(be.as_mut()).map_err(|e| e.to_string());
+            // a render that failed before writing a file leaves no folder it made
+            if rendered.is_err() && made_here {
+                let _ = std::fs::remove_dir(&out);
+            }
             let stats = rendered?;
             freed?;
             let doc = serde_json::json!({ "scene": scene.name, "technique": technique, "settings": s, "stats": stats });

@@ -180,18 +180,25 @@ pub fn check_photon_gi(
         // 3'. the same paths in waves: on each backend exactly its single launch's
         // photons, so against the reference as the single launch
         let scales = (power_scale, quantum);
-        let (phwa, tiwa, cwa) =
+        let ((phwa, tiwa, cwa), _) =
             run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES, false)?;
-        let (phwb, tiwb, cwb) =
+        let ((phwb, tiwb, cwb), _) =
             run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES, false)?;
-        // and sorted: keyed queues taken in their keys' order, the same photons
+        // and sorted: each queue keyed by the wave that fills it and taken in its keys'
+        // order, the same photons; the last keyed queue's keys and order by definition
         let sorted_r = run_trace_waves(fx, r, &sa, &inputs.gbuffer, scales, WAVES, true)?;
         let sorted_c = run_trace_waves(fx, c, &sa, &inputs.gbuffer, scales, WAVES, true)?;
-        for (name, single, (phs, tis, cs)) in [
+        for (name, single, ((phs, tis, cs), queue)) in [
             ("reference, sorted", (&pha, &tia, &ca), &sorted_r),
             ("candidate, sorted", (&phb, &tib, &cb), &sorted_c),
         ] {
             compare_schedules(&mut v, name, l, (single.0, single.1, single.2), (phs, tis, cs));
+            match queue {
+                Some(q) => check_keyed_queue(&mut v, name, l, q),
+                None => {
+                    v.check(false, || format!("light {l}, {name}: no keyed queue"));
+                }
+            }
         }
         compare_schedules(
             &mut v,

@@ -4,8 +4,9 @@
 //! a slot no path is placed in keeps what it held). Launched as PhotonGi launches it:
 //! the scatter from `dispatch_args`' record of the queue's length (drawn from 0 past the
 //! queue's capacity by the proptest in `conformance/tests/photon_gi_schedules.rs`), the
-//! keys and the buckets' counts as a queuing wave of `trace_indirect` leaves them (its
-//! own keys are checked with the frames in that file).
+//! keys and the buckets' counts as a queuing wave of `trace_indirect` leaves them (the
+//! wave's own keys are checked per kernel with the sorted waves of
+//! [`super::trace_indirect`]).
 
 use crate::harness::fixture::run_and_free;
 use crate::harness::verdict::Verdict;
@@ -93,25 +94,37 @@ pub fn check_sort_indirect_paths(
         let first = oa.iter().zip(&ob).position(|(x, y)| x != y);
         format!("the order differs from the reference's (first at slot {first:?})")
     });
-    // the reference itself: every live path of a valid key at first + rank, the keys
-    // along the order never decreasing
+    // the reference itself: the first slots the counts' exclusive sums, every live path
+    // of a valid key at first + rank, the keys along the order never decreasing
+    let first: Vec<u32> = bucket_counts(keys)
+        .iter()
+        .scan(0u32, |sum, &c| {
+            let f = *sum;
+            *sum = sum.wrapping_add(c);
+            Some(f)
+        })
+        .collect();
+    v.check(ba == first, || "reference: the first slots are not the counts' sums".into());
     let mut want = vec![UNPLACED; keys.len().max(1)];
     for (i, &[k, rank]) in keys[..live].iter().enumerate() {
-        if let Some(&f) = ba.get(k as usize).filter(|_| k < PATH_SORT_BUCKETS) {
+        if let Some(&f) = first.get(k as usize) {
             if let Some(s) = want.get_mut(f.wrapping_add(rank) as usize) {
                 *s = i as u32;
             }
         }
     }
-    v.check(oa == want, || "reference: a path not at its bucket's first slot plus its rank".into());
-    let placed: Vec<u32> = oa
+    v.check(oa == want, || {
+        "reference: a path not at its bucket's first slot plus its rank".into()
+    });
+    let placed: Option<Vec<u32>> = oa
         .iter()
         .filter(|&&i| i != UNPLACED)
-        .map(|&i| keys[i as usize][0])
+        .map(|&i| keys.get(i as usize).map(|k| k[0]))
         .collect();
-    v.check(placed.windows(2).all(|w| w[0] <= w[1]), || {
-        "reference: the order is not in key order".into()
-    });
+    v.check(
+        placed.is_some_and(|p| p.windows(2).all(|w| w[0] <= w[1])),
+        || "reference: the order names a path past the queue or is not in key order".into(),
+    );
     v.note(format!("{live} of {} paths", keys.len()));
     Ok(v)
 }

@@ -27,7 +27,10 @@ use caustica_core::device::layout::{
 use caustica_core::kernels::{
     DispatchArgs, DispatchRecord, IndirectWave, SortIndirectPaths, TraceIndirect, WaveKeys,
 };
-use caustica_core::math::path_sort::{path_sort_phase, PathKey, PATH_SORT_BITS, PATH_SORT_BUCKETS};
+use caustica_core::math::path_sort::{
+    path_sort_key, path_sort_phase, PathKey, PATH_SORT_BITS, PATH_SORT_BUCKETS,
+};
+use glam::Vec3;
 use caustica_core::math::fixed_point::join_u64;
 use caustica_core::math::gi_photon::{gi_store, screen_tiles};
 use caustica_core::math::packing::unpack_unit_vector;
@@ -48,7 +51,84 @@ pub(crate) fn run_trace(
     power_scale: f32,
     quantum: f32,
 ) -> Result<Traced, String> {
-    run_trace_waves(fx, b, rsm, gbuffer, (power_scale, quantum), 1, false)
+    run_trace_waves(fx, b, rsm, gbuffer, (power_scale, quantum), 1, false).map(|(t, _)| t)
+}
+
+/// The last queue a sorted run keyed, as its sort left it (read back after the run: the
+/// last wave neither keys nor sorts).
+pub(crate) struct KeyedQueue {
+    /// The queue's paths (its capacity).
+    paths: Vec<IndirectPath>,
+    /// Per slot (key, rank).
+    keys: Vec<PathKey>,
+    /// The queue's length word.
+    length: u32,
+    /// The buckets after the sort's scan: each key's first slot.
+    first: Vec<u32>,
+    /// The sort's order.
+    order: Vec<u32>,
+}
+
+/// The queuing wave's keys and the sort's order of `q` on one backend, against their
+/// definition: each live slot's key [`path_sort_key`] of its path (bitwise: one
+/// subtraction and one product per axis, no contraction), each key's ranks a permutation
+/// of its count, the first slots the counts' exclusive sums, the order a permutation of
+/// the live slots in key order.
+pub(crate) fn check_keyed_queue(v: &mut Verdict, backend: &str, l: u32, q: &KeyedQueue) {
+    let n = (q.length as usize).min(q.paths.len()).min(q.keys.len());
+    let (lo, scale) = sort_box();
+    let mut counts = vec![0u32; PATH_SORT_BUCKETS as usize];
+    let mut keyed = true;
+    for (path, &[k, _]) in q.paths[..n].iter().zip(&q.keys) {
+        let want = path_sort_key(Vec3::from(path.origin), Vec3::from(path.direction), lo, scale);
+        keyed &= k == want;
+        if let Some(c) = counts.get_mut(k as usize) {
+            *c += 1;
+        }
+    }
+    v.check(keyed, || {
+        format!("light {l}, {backend}: a queued path's key is not its path's sort key")
+    });
+    let mut ranks: Vec<(u32, u32)> = q.keys[..n].iter().map(|&[k, r]| (k, r)).collect();
+    ranks.sort_unstable();
+    let dense = ranks.iter().enumerate().all(|(j, &(k, r))| {
+        j == 0 || ranks[j - 1].0 != k || ranks[j - 1].1 + 1 == r
+    }) && ranks.iter().all(|&(k, r)| counts.get(k as usize).is_some_and(|&c| r < c));
+    v.check(dense, || {
+        format!("light {l}, {backend}: a key's ranks are not a permutation of its count")
+    });
+    let mut sum = 0u32;
+    let first: Vec<u32> = counts
+        .iter()
+        .map(|&c| {
+            let f = sum;
+            sum += c;
+            f
+        })
+        .collect();
+    v.check(q.first.get(..first.len()) == Some(&first[..]), || {
+        format!("light {l}, {backend}: the sort's first slots are not the keys' counts' sums")
+    });
+    let order = &q.order[..n.min(q.order.len())];
+    let mut seen = vec![false; n];
+    let permutation = order.iter().all(|&i| {
+        (i as usize) < n && !std::mem::replace(&mut seen[i as usize], true)
+    });
+    v.check(
+        permutation
+            && order.windows(2).all(|w| q.keys[w[0] as usize][0] <= q.keys[w[1] as usize][0]),
+        || format!("light {l}, {backend}: the order is not the live slots in key order"),
+    );
+    v.note(format!("light {l}, {backend}: {n} sorted paths checked"));
+}
+
+/// The sorted waves' key box: origin cells of `2 SORT_BOX / 2^PATH_SORT_BITS` from
+/// `-SORT_BOX` on each axis.
+fn sort_box() -> (Vec3, Vec3) {
+    (
+        Vec3::splat(-SORT_BOX),
+        Vec3::splat((1u32 << PATH_SORT_BITS) as f32 / (2.0 * SORT_BOX)),
+    )
 }
 
 /// Segments per path of the checked launches.
@@ -75,7 +155,7 @@ pub(crate) fn run_trace_waves(
     (power_scale, quantum): (f32, f32),
     waves: u32,
     sorted: bool,
-) -> Result<Traced, String> {
+) -> Result<(Traced, Option<KeyedQueue>), String> {
     let cam = fx.camera;
     let mut rec = Recording::new();
     let g = rec.upload_gbuffer(gbuffer);
@@ -106,9 +186,9 @@ pub(crate) fn run_trace_waves(
         chunk_first: 0,
         chunk_size: u32::MAX,
         queue_keys: 0,
-        key_origin_min: [-SORT_BOX; 3],
+        key_origin_min: sort_box().0.to_array(),
         queue_order: 0,
-        key_origin_scale: [(1u32 << PATH_SORT_BITS) as f32 / (2.0 * SORT_BOX); 3],
+        key_origin_scale: sort_box().1.to_array(),
         _pad: 0,
     };
     let single = TraceIndirect {
@@ -123,6 +203,8 @@ pub(crate) fn run_trace_waves(
         dispatch: None,
         waves: None,
     };
+    // sorted: the last keyed queue (the one the last wave continues), its keys and lengths
+    let mut keyed = None;
     if waves <= 1 {
         rec.kernel(single);
     } else {
@@ -141,6 +223,7 @@ pub(crate) fn run_trace_waves(
             buckets: rec.create::<u32>(PATH_SORT_BUCKETS, "path sort buckets"),
             order: rec.create::<u32>(n.max(1), "path order"),
         });
+        keyed = keys.map(|k| (paths[(waves as usize - 1) % 2], k, path_counts));
         rec.clear(path_counts);
         for k in 0..waves {
             let dispatch = (k > 0).then(|| {
@@ -171,7 +254,8 @@ pub(crate) fn run_trace_waves(
                 }
             }
             let end = if k + 1 == waves { MAX_SEGMENTS } else { k + 1 };
-            if let Some(w) = keys {
+            // the buckets count the keys of the paths this wave queues (none for the last)
+            if let Some(w) = keys.filter(|_| end < MAX_SEGMENTS) {
                 rec.clear(w.buckets);
             }
             rec.kernel(TraceIndirect {
@@ -200,7 +284,17 @@ pub(crate) fn run_trace_waves(
             .iter()
             .map(|w| bytemuck::cast::<[u32; 8], GiPhoton>(*w))
             .collect();
-        Ok((ph, read_buf(b, tiles)?, read_buf(b, counters)?))
+        let queue = match keyed {
+            Some((paths, k, counts)) => Some(KeyedQueue {
+                paths: read_buf(b, paths)?,
+                keys: read_buf(b, k.path_keys)?,
+                length: read_buf(b, counts)?[waves as usize - 1],
+                first: read_buf(b, k.buckets)?,
+                order: read_buf(b, k.order)?,
+            }),
+            None => None,
+        };
+        Ok(((ph, read_buf(b, tiles)?, read_buf(b, counters)?), queue))
     })
 }
 

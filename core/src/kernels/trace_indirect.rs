@@ -110,13 +110,14 @@ pub struct IndirectWave {
 #[derive(Clone, Copy, Debug)]
 pub struct WaveKeys {
     /// Output (`queue_keys`): per slot of `paths_out` its path's sort key and rank among
-    /// the queue's paths of that key (as long as `paths_out`).
+    /// the queue's paths of that key (exactly as long as `paths_out`).
     pub path_keys: Buf<PathKey>,
     /// [`PATH_SORT_BUCKETS`] counts (`queue_keys`): the queued paths of each key (the
     /// caller clears them before the wave).
     pub buckets: Buf<u32>,
     /// `queue_order`: the slots of `paths_in` in the order the wave's threads take them
-    /// (`sort_indirect_paths`'; as long as `paths_out`).
+    /// (`sort_indirect_paths`'; exactly as long as `paths_out`; an entry past the queue
+    /// is no path).
     pub order: Buf<u32>,
 }
 
@@ -247,8 +248,9 @@ impl KernelDecl for TraceIndirect {
                 .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
                 match &w.keys {
                     Some(k) => {
-                        if k.path_keys.len < w.paths_out.len
-                            || k.order.len < w.paths_out.len
+                        // as long as the queue: the sort's capacity is the keys'
+                        if k.path_keys.len != w.paths_out.len
+                            || k.order.len != w.paths_out.len
                             || k.buckets.len < PATH_SORT_BUCKETS
                         {
                             return Err(BackendError::BadArgument(format!(

@@ -165,10 +165,11 @@ struct Buffers {
 /// per-segment queue lengths, the later waves' launch records (`dispatch_args` over
 /// `rows`, row `k - 1` = `[0, the queue's paths, 1, k]` for wave `k`), and the sort's
 /// keys, buckets and order (`sorted_waves`: a wave keys the paths it queues, the sort
-/// orders the keys, the next wave takes its paths in that order). A light's photons go through the waves in `chunks` chunks
-/// of `chunk` photons (`indirect_queue_paths`); with more than one, the chunks' first
-/// waves launch from records of their own (`chunk_rows`: per light `k` and chunk `c`,
-/// row `k * chunks + c` = `[c * chunk, chunk, 1, the light's count]`).
+/// orders the keys, the next wave takes its paths in that order). A light's photons go
+/// through the waves in `chunks` chunks of `chunk` photons (`indirect_queue_paths`);
+/// with more than one, the chunks' first waves launch from records of their own
+/// (`chunk_rows`: per light `k` and chunk `c`, row `k * chunks + c` = `[c * chunk,
+/// chunk, 1, the light's count]`).
 #[derive(Clone, Copy, Debug)]
 struct WaveBuffers {
     paths: [Buf<IndirectPath>; 2],

@@ -144,7 +144,9 @@ pub struct PhotonGiSettings {
     /// more than a light's photons): a light's photons go through the waves in chunks of
     /// at most this many, so that no queue can overflow; the image is bitwise the same
     /// for any value. Default 2^22 (Smal 2019's high setting, 1732^2 photons, in one
-    /// chunk: 288 MB for both queues; the default 1024^2 photons: 96 MiB).
+    /// chunk: 288 MB for both queues; the default 1024^2 photons: 96 MiB); the
+    /// `sorted_waves` schedule adds 12 bytes a path for its keys and order (36 MB at
+    /// 1732^2).
     pub indirect_queue_paths: u32,
     /// Photons of a light above which the `auto` schedule's waves trace it; a light of
     /// at most this many (its count known on the host, from the frame after the plan is
