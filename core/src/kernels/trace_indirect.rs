@@ -246,49 +246,43 @@ impl KernelDecl for TraceIndirect {
                 )?
                 .count("path_capacity", w.paths_out.len)?
                 .buf("path_counts", w.path_counts, (last_count as u64 + 1) * 4)?;
-                match &w.keys {
-                    Some(k) => {
-                        // as long as the queue: the sort's capacity is the keys'
-                        if k.path_keys.len != w.paths_out.len
-                            || k.order.len != w.paths_out.len
-                            || k.buckets.len < PATH_SORT_BUCKETS
-                        {
-                            return Err(BackendError::BadArgument(format!(
-                                "trace_indirect: {} path keys, {} order slots and {} buckets \
-                                 for queues of {} paths",
-                                k.path_keys.len, k.order.len, k.buckets.len, w.paths_out.len
-                            )));
-                        }
-                        a.buf("path_keys", k.path_keys, w.paths_out.len as u64 * 8)?
-                            .buf("buckets", k.buckets, PATH_SORT_BUCKETS as u64 * 4)?
-                            .buf("order", k.order, w.paths_out.len as u64 * 4)?;
-                    }
-                    None => {
-                        if p.queue_keys != 0 || p.queue_order != 0 {
-                            return Err(BackendError::BadArgument(
-                                "trace_indirect: queue keys or order without their buffers".into(),
-                            ));
-                        }
-                        a.buf("path_keys", self.tile_counts, 0)?
-                            .buf("buckets", self.tile_counts, 0)?
-                            .buf("order", self.rsm_photons, 0)?;
-                    }
-                }
             }
             // the single launch reads and writes no queue: stand-ins of the same access
             None => {
                 a.buf("paths_in", self.rsm_photons, 0)?
                     .buf("paths_out", self.tile_counts, 0)?
                     .count("path_capacity", 0)?
-                    .buf("path_counts", self.tile_counts, 0)?
-                    .buf("path_keys", self.tile_counts, 0)?
-                    .buf("buckets", self.tile_counts, 0)?
-                    .buf("order", self.rsm_photons, 0)?;
+                    .buf("path_counts", self.tile_counts, 0)?;
+            }
+        }
+        // the sorted waves' keys and order (stand-ins without them)
+        match self.waves.and_then(|w| w.keys.map(|k| (w, k))) {
+            Some((w, k)) => {
+                // as long as the queue: the sort's capacity is the keys'
+                if k.path_keys.len != w.paths_out.len
+                    || k.order.len != w.paths_out.len
+                    || k.buckets.len < PATH_SORT_BUCKETS
+                {
+                    return Err(BackendError::BadArgument(format!(
+                        "trace_indirect: {} path keys, {} order slots and {} buckets for \
+                         queues of {} paths",
+                        k.path_keys.len, k.order.len, k.buckets.len, w.paths_out.len
+                    )));
+                }
+                a.buf("path_keys", k.path_keys, w.paths_out.len as u64 * 8)?
+                    .buf("buckets", k.buckets, PATH_SORT_BUCKETS as u64 * 4)?
+                    .buf("order", k.order, w.paths_out.len as u64 * 4)?;
+            }
+            None => {
                 if p.queue_keys != 0 || p.queue_order != 0 {
                     return Err(BackendError::BadArgument(
-                        "trace_indirect: queue keys or order in the single launch".into(),
+                        "trace_indirect: queue keys or order without the sorted waves' buffers"
+                            .into(),
                     ));
                 }
+                a.buf("path_keys", self.tile_counts, 0)?
+                    .buf("buckets", self.tile_counts, 0)?
+                    .buf("order", self.rsm_photons, 0)?;
             }
         }
         a.indirect(self.dispatch)?;
